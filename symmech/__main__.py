@@ -1,0 +1,5 @@
+import sys
+
+from symmech.cli import main
+
+sys.exit(main())

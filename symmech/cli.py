@@ -1,0 +1,200 @@
+"""Command-line interface: ``symmech run | codegen | latex | errata | bench``.
+
+Errors a user can fix (:class:`SymmechError`) print as one line on stderr with
+exit status 2, never a traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+import time
+from pathlib import Path
+
+from symmech import __version__
+from symmech.core.scene import SymmechError, load
+
+# Scene ``kind`` -> runtime module with ``run(scene, out_dir) -> summary`` and,
+# optionally, ``precision(scene, out_dir) -> summary`` for `bench precision`.
+KINDS = {
+    "impact": "symmech.grain.impact_scene",
+    "grain": "symmech.grain.motion_scene",
+    "trolley": "symmech.trolley.scene",
+    "mechanism": "symmech.smm.scene",
+}
+
+
+def _kind_module(scene):
+    kind = scene.choice("kind", sorted(KINDS))
+    try:
+        return importlib.import_module(KINDS[kind])
+    except ModuleNotFoundError as exc:
+        if exc.name == KINDS[kind]:
+            raise SymmechError(f"scene kind '{kind}' is not available in this version") from None
+        raise
+
+
+def _write_json(path: Path, data) -> None:
+    path.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n")
+
+
+def cmd_run(ns) -> int:
+    scene = load(ns.scene)
+    module = _kind_module(scene)
+    out = Path(ns.out)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = module.run(scene, out)
+    _write_json(out / "summary.json", summary)
+    for warning in summary.get("warnings", []):
+        print(f"symmech: warning: {warning}", file=sys.stderr)
+    print(f"wrote {out / 'summary.json'}")
+    return 0
+
+
+def cmd_bench(ns) -> int:
+    scene = load(ns.scene)
+    module = _kind_module(scene)
+    if not hasattr(module, "precision"):
+        raise SymmechError(f"scene kind '{scene.str('kind')}' has no precision benchmark")
+    out = Path(ns.out)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = module.precision(scene, out)
+    for path in summary.get("files", []):
+        print(f"wrote {path}")
+    return 0
+
+
+def cmd_codegen(ns) -> int:
+    from symmech.core import emit
+
+    directory = Path(ns.dir) if ns.dir else emit.default_directory()
+    start = time.perf_counter()
+    specs = emit.module_specs()
+    if ns.check:
+        bad = emit.stale(directory, specs)
+        if bad:
+            print("stale generated files (run `make codegen`):", file=sys.stderr)
+            for path in bad:
+                print(f"  {path}", file=sys.stderr)
+            return 1
+        print(f"generated/ is up to date ({len(specs)} modules, {time.perf_counter() - start:.1f} s)")
+        return 0
+    for spec in specs:
+        print(f"wrote {emit.write(spec, directory)}")
+    print(f"codegen: {len(specs)} modules in {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+def _named_matrices() -> dict:
+    from symmech.core import emit
+
+    return {f"{s.name}.{f.name}": f for s in emit.module_specs() for f in s.functions}
+
+
+def _scene_matrices(name: str) -> dict:
+    """``prefix:rest`` names come from ``symmech.<prefix>.latex_matrices(rest)``."""
+    prefix, _, rest = name.partition(":")
+    try:
+        provider = importlib.import_module(f"symmech.{prefix}")
+    except ModuleNotFoundError:
+        raise SymmechError(f"unknown matrix namespace '{prefix}:'") from None
+    if not hasattr(provider, "latex_matrices"):
+        raise SymmechError(f"unknown matrix namespace '{prefix}:'")
+    return provider.latex_matrices(rest)
+
+
+def cmd_latex(ns) -> int:
+    import sympy
+
+    from symmech.core import emit
+
+    if ns.list or not ns.name:
+        for key, nm in _named_matrices().items():
+            eq = f"  eqs. {nm.equations}" if nm.equations else ""
+            print(f"{key:<40} {nm.meaning}{eq}")
+        return 0
+    if ":" in ns.name:
+        matrices = _scene_matrices(ns.name)
+        key = ns.name
+    else:
+        matrices = _named_matrices()
+        key = ns.name
+    if key not in matrices:
+        raise SymmechError(f"no derived matrix named '{ns.name}' (see `symmech latex --list`)")
+    nm = matrices[key]
+    if not ns.cse:
+        print(sympy.latex(nm.matrix if nm.shape else nm.matrix[0, 0]))
+        return 0
+    # The same chunks and CSE symbols as the generated code.
+    for chunk in emit.cse_chunks(nm):
+        for sym, expr in chunk.replacements:
+            print(f"{sympy.latex(sym)} &= {sympy.latex(expr)} \\\\")
+        for index, expr in chunk.elements:
+            sub = ",".join(str(i + 1) for i in index)
+            print(f"{nm.name}_{{{sub}}} &= {sympy.latex(expr)} \\\\")
+    return 0
+
+
+def cmd_errata(ns) -> int:
+    from symmech.core import errata
+
+    records = [errata.evaluate(c) for c in errata.all_checks()]
+    if ns.json:
+        print(json.dumps(records, indent=2))
+    else:
+        print(errata.report(records))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="symmech",
+        description="Symbolic derivations of three mechanics papers, emitted as numpy modules, "
+                    "with simulations and checks against the papers.",
+    )
+    p.add_argument("--version", action="version", version=f"symmech {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run a scene file and write results to a folder")
+    r.add_argument("scene", help="scene file (TOML); see docs/scenes.md")
+    r.add_argument("--out", default="out", help="output folder (default: out)")
+    r.set_defaults(func=cmd_run)
+
+    c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")
+    c.add_argument("--check", action="store_true",
+                   help="write nothing; exit 1 and name the stale files if generated/ is out of date")
+    c.add_argument("--dir", help="target folder (default: the installed symmech.generated folder)")
+    c.set_defaults(func=cmd_codegen)
+
+    lx = sub.add_parser("latex", help="print a derived matrix as LaTeX")
+    lx.add_argument("name", nargs="?", help="matrix name, e.g. grain_impact.H (see --list)")
+    lx.add_argument("--list", action="store_true", help="list every derived matrix")
+    lx.add_argument("--cse", action="store_true",
+                    help="print the common-subexpression form used by the generated code")
+    lx.set_defaults(func=cmd_latex)
+
+    e = sub.add_parser("errata", help="compare the papers' printed formulas with the derivations")
+    e.add_argument("--json", action="store_true", help="print a JSON list of records")
+    e.set_defaults(func=cmd_errata)
+
+    b = sub.add_parser("bench", help="accuracy-versus-time studies")
+    bsub = b.add_subparsers(dest="bench", required=True)
+    bp = bsub.add_parser("precision", help="work-precision diagram (CSV + PNG) for a scene")
+    bp.add_argument("scene", help="scene file (TOML)")
+    bp.add_argument("--out", default="out-precision", help="output folder")
+    bp.set_defaults(func=cmd_bench)
+    return p
+
+
+def main(argv=None) -> int:
+    ns = build_parser().parse_args(argv)
+    try:
+        return ns.func(ns)
+    except SymmechError as exc:
+        print(f"symmech: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,102 @@
+"""Printed formula vs derivation, compared numerically at run time.
+
+Each paper package may have an ``errata`` module with ``checks()`` returning
+:class:`Check` objects: a sampler of seeded random inputs and two numeric
+functions, one evaluating the formula as printed (hand transcription), one the
+derivation. :func:`evaluate` turns a check into a record; nothing in a record
+is typed in, every difference is computed.
+"""
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import pkgutil
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+AGREE_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Check:
+    """One printed formula: ``printed(x)`` and ``derived(x)`` for inputs ``x = sample(rng, n)``.
+
+    ``sample`` returns a dict of arrays with a leading axis of length n; both
+    functions return arrays with that leading axis.
+    """
+
+    seed: str
+    equation: str
+    description: str
+    sample: Callable[[np.random.Generator, int], dict]
+    printed: Callable[[dict], np.ndarray]
+    derived: Callable[[dict], np.ndarray]
+    note: str = ""
+
+
+def evaluate(check: Check, n: int = 200, seed: int = 20261121) -> dict:
+    """Record for ``check``: status, largest relative difference, worst example."""
+    rng = np.random.default_rng(seed)
+    x = check.sample(rng, n)
+    p = np.asarray(check.printed(x), dtype=float).reshape(n, -1)
+    d = np.asarray(check.derived(x), dtype=float).reshape(n, -1)
+    scale = np.maximum(np.abs(d).max(axis=1), np.abs(p).max(axis=1))
+    diff = np.abs(p - d).max(axis=1)
+    rel = np.where(scale > 0, diff / np.where(scale > 0, scale, 1.0), 0.0)
+    rel = np.where(np.isfinite(rel), rel, np.inf)
+    worst = int(np.argmax(rel))
+    max_rel = float(rel[worst])
+    status = "agrees" if max_rel <= AGREE_RTOL else "differs"
+    return {
+        "seed": check.seed,
+        "equation": check.equation,
+        "description": check.description,
+        "status": status,
+        "max_rel_diff": max_rel,
+        "samples": n,
+        "example": {
+            "inputs": {k: np.asarray(v)[worst].tolist() for k, v in x.items()},
+            "printed": p[worst].tolist(),
+            "derived": d[worst].tolist(),
+        },
+        "note": check.note,
+    }
+
+
+def all_checks() -> list[Check]:
+    """Checks from every paper package's ``errata`` module."""
+    import symmech
+
+    checks = []
+    for pkg in sorted(m.name for m in pkgutil.iter_modules(symmech.__path__) if m.ispkg):
+        name = f"symmech.{pkg}.errata"
+        if importlib.util.find_spec(name) is not None:
+            checks.extend(importlib.import_module(name).checks())
+    return checks
+
+
+def report(records: list[dict]) -> str:
+    """Human-readable table of records, with the counterexample of each difference."""
+    lines = []
+    for r in records:
+        lines.append(f"{r['seed']}  {r['equation']:<10} {r['status']:<8} "
+                     f"max rel diff {r['max_rel_diff']:.3g}  {r['description']}")
+        if r["status"] == "differs":
+            ex = r["example"]
+            inputs = ", ".join(f"{k}={_fmt(v)}" for k, v in ex["inputs"].items())
+            lines.append(f"    at {inputs}")
+            lines.append(f"    printed {_fmt(ex['printed'])}")
+            lines.append(f"    derived {_fmt(ex['derived'])}")
+        if r["note"]:
+            lines.append(f"    note: {r['note']}")
+    differs = sum(r["status"] == "differs" for r in records)
+    lines.append(f"{len(records)} formulas checked: {len(records) - differs} agree, {differs} differ")
+    return "\n".join(lines)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    return f"{v:.6g}" if isinstance(v, float) else str(v)

@@ -1,0 +1,139 @@
+"""Scene files (TOML) and their validation.
+
+A scene is read into nested :class:`Section` objects; every read states the
+field's type, range and unit, so a bad value is reported as one line naming the
+dotted field path, the value and the admissible range. Fields a scene sets but
+nobody reads are reported too (:meth:`Section.finish`), which catches typos.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+class SymmechError(Exception):
+    """An error a user can fix; the CLI prints it as one line, no traceback."""
+
+
+class SceneError(SymmechError):
+    """A scene field is missing, mistyped or out of range."""
+
+    def __init__(self, field: str, problem: str):
+        super().__init__(f"scene field '{field}': {problem}")
+        self.field = field
+
+
+_MISSING = object()
+
+
+class Section:
+    """One table of a scene, with typed, range-checked accessors."""
+
+    def __init__(self, data: dict, path: str = ""):
+        if not isinstance(data, dict):
+            raise SceneError(path or "<root>", f"expected a table, got {data!r}")
+        self._data = data
+        self._path = path
+        self._read: set[str] = set()
+
+    def _field(self, key: str) -> str:
+        return f"{self._path}.{key}" if self._path else key
+
+    def has(self, key: str) -> bool:
+        return key in self._data
+
+    def _get(self, key, default):
+        self._read.add(key)
+        if key in self._data:
+            return self._data[key]
+        if default is _MISSING:
+            raise SceneError(self._field(key), "missing (required)")
+        return default
+
+    def section(self, key: str, default=_MISSING) -> "Section":
+        value = self._get(key, default)
+        return value if isinstance(value, Section) else Section(value, self._field(key))
+
+    def float(self, key: str, *, unit: str, default=_MISSING, lo=None, hi=None,
+              lo_open=False, hi_open=False) -> float:
+        """A real number in [lo, hi] (open ends when ``lo_open``/``hi_open``)."""
+        value = self._get(key, default)
+        return _check_real(self._field(key), value, unit, lo, hi, lo_open, hi_open)
+
+    def vector(self, key: str, n: int, *, unit: str, default=_MISSING, lo=None, hi=None,
+               lo_open=False, hi_open=False) -> list[float]:
+        value = self._get(key, default)
+        field = self._field(key)
+        if not isinstance(value, (list, tuple)) or len(value) != n:
+            raise SceneError(field, f"expected a list of {n} numbers [{unit}], got {value!r}")
+        return [_check_real(f"{field}[{i}]", v, unit, lo, hi, lo_open, hi_open)
+                for i, v in enumerate(value)]
+
+    def int(self, key: str, *, default=_MISSING, lo=None, hi=None) -> int:
+        value = self._get(key, default)
+        field = self._field(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise SceneError(field, f"expected an integer, got {value!r}")
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            raise SceneError(field, f"{value} is outside [{lo}, {hi}]")
+        return value
+
+    def bool(self, key: str, *, default=_MISSING) -> bool:
+        value = self._get(key, default)
+        if not isinstance(value, bool):
+            raise SceneError(self._field(key), f"expected true or false, got {value!r}")
+        return value
+
+    def str(self, key: str, *, default=_MISSING) -> str:
+        value = self._get(key, default)
+        if not isinstance(value, str):
+            raise SceneError(self._field(key), f"expected a string, got {value!r}")
+        return value
+
+    def choice(self, key: str, choices, *, default=_MISSING) -> str:
+        value = self.str(key, default=default)
+        if value not in choices:
+            raise SceneError(self._field(key), f"unknown value {value!r}; choose one of {', '.join(choices)}")
+        return value
+
+    def finish(self) -> None:
+        """Reject fields that were set but never read (typos, unknown effects)."""
+        unknown = sorted(set(self._data) - self._read)
+        if unknown:
+            raise SceneError(self._field(unknown[0]), "unknown field")
+
+
+def _check_real(field, value, unit, lo, hi, lo_open, hi_open) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SceneError(field, f"expected a number [{unit}], got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise SceneError(field, f"{value} is not finite")
+    low_bad = lo is not None and (value <= lo if lo_open else value < lo)
+    high_bad = hi is not None and (value >= hi if hi_open else value > hi)
+    if low_bad or high_bad:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        lo_text = "-inf" if lo is None else f"{lo:g}"
+        hi_text = "inf" if hi is None else f"{hi:g}"
+        raise SceneError(field, f"{value:g} {unit} is outside {left}{lo_text}, {hi_text}{right}")
+    return value
+
+
+def load(path) -> Section:
+    """Read a scene file; errors name the file and the TOML problem."""
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise SymmechError(f"scene file not found: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SymmechError(f"scene file {path} is not valid TOML: {exc}") from None
+    return Section(data)
