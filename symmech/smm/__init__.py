@@ -1,0 +1,1 @@
+"""Paper 3 (seed 003): the structural model method (SMM) for lumped-parameter mechanisms."""
