@@ -141,21 +141,30 @@ def default_directory() -> Path:
 def module_specs() -> list[ModuleSpec]:
     """Every ModuleSpec the paper packages declare, sorted by name.
 
-    A paper package ``symmech.<paper>`` declares specs in its ``derive`` and
-    ``printed`` modules through a ``module_specs()`` function.
+    A paper package ``symmech.<paper>`` declares specs in its ``derive*`` and
+    ``printed*`` modules through a ``module_specs()`` function.
     """
-    import symmech
-
     specs = []
-    for pkg in sorted(m.name for m in pkgutil.iter_modules(symmech.__path__) if m.ispkg):
-        for part in ("derive", "printed"):
-            name = f"symmech.{pkg}.{part}"
-            if importlib.util.find_spec(name) is not None:
-                specs.extend(importlib.import_module(name).module_specs())
+    for module in paper_modules(("derive", "printed")):
+        specs.extend(module.module_specs())
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
         raise ValueError(f"duplicate generated module names: {names}")
     return sorted(specs, key=lambda s: s.name)
+
+
+def paper_modules(prefixes: tuple[str, ...]) -> list:
+    """Modules ``symmech.<paper>.<prefix>*`` of every paper package, in name order."""
+    import symmech
+
+    found = []
+    papers = (m.name for m in pkgutil.iter_modules(symmech.__path__) if m.ispkg and m.name != "core")
+    for pkg in sorted(papers):
+        package = importlib.import_module(f"symmech.{pkg}")
+        for m in sorted(pkgutil.iter_modules(package.__path__), key=lambda m: m.name):
+            if m.name.startswith(prefixes):
+                found.append(importlib.import_module(f"symmech.{pkg}.{m.name}"))
+    return found
 
 
 def stale(directory: Path, specs: list[ModuleSpec]) -> list[str]:

@@ -8,9 +8,6 @@ is typed in, every difference is computed.
 """
 from __future__ import annotations
 
-import importlib
-import importlib.util
-import pkgutil
 from dataclasses import dataclass
 from typing import Callable
 
@@ -66,15 +63,10 @@ def evaluate(check: Check, n: int = 200, seed: int = 20261121) -> dict:
 
 
 def all_checks() -> list[Check]:
-    """Checks from every paper package's ``errata`` module."""
-    import symmech
+    """Checks from every paper package's ``errata*`` modules."""
+    from symmech.core.emit import paper_modules
 
-    checks = []
-    for pkg in sorted(m.name for m in pkgutil.iter_modules(symmech.__path__) if m.ispkg):
-        name = f"symmech.{pkg}.errata"
-        if importlib.util.find_spec(name) is not None:
-            checks.extend(importlib.import_module(name).checks())
-    return checks
+    return [c for module in paper_modules(("errata",)) for c in module.checks()]
 
 
 def report(records: list[dict]) -> str:
