@@ -1,0 +1,87 @@
+"""Contact between the ellipsoid and the plane z = 0 of KXYZ.
+
+Accurate mode: the gap is ``h(t) = z_c(t) - |D Q(t)^T e_z|`` (exact support
+distance of the ellipsoid, generated ``grain_motion.support_distance``); the
+first contact is the first root of ``h`` found by scanning at a step and
+refining with Brent's method to ``xtol`` seconds. A grazing contact (``h`` dips
+below zero between two scan points) is caught by minimising ``h`` around every
+discrete local minimum of the scan.
+
+Paper mode, eq. (63): the surface of the body is a set of discrete nodes; the
+contact test uses the node with the smallest z.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from symmech.generated import grain_motion as gm
+
+
+def support_distance(axes, Q):
+    """Centre height at contact |D n'| (...,) [m]; ``axes`` (..., 3) semi-axes [m], ``Q`` (..., 3, 3)."""
+    axes = np.asarray(axes, dtype=float)
+    n = np.asarray(Q)[..., 2, :]
+    return gm.support_distance(axes[..., 0], axes[..., 1], axes[..., 2], n[..., 0], n[..., 1], n[..., 2])
+
+
+def contact_offset(axes, Q):
+    """Offset R (..., 3) [m] of the lowest point from the centre, in KXYZ."""
+    axes = np.asarray(axes, dtype=float)
+    Q = np.asarray(Q, dtype=float)
+    n = Q[..., 2, :]
+    body = gm.contact_offset_body(axes[..., 0], axes[..., 1], axes[..., 2], n[..., 0], n[..., 1], n[..., 2])
+    return np.einsum("...ij,...j->...i", Q, body)
+
+
+def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 32):
+    """First time in (t0, t1] where ``h`` reaches zero from above, or None.
+
+    ``h`` maps an array of times to an array of values (it is scanned ``window``
+    points at a time at spacing ``step``) and a float to a float (Brent refinement
+    to ``xtol`` seconds). ``h(t0)`` may be zero (the grain just left the plane); a
+    root is accepted only after ``h`` has been positive, and ``t0`` itself is
+    returned when ``h`` never becomes positive (the grain did not leave).
+    """
+    start, first = t0, True
+    while True:
+        ts = np.unique(np.minimum(start + step * np.arange(window + 1), t1))
+        hs = np.asarray(h(ts), dtype=float)
+        if first:
+            hs[0] = max(hs[0], 0.0)
+            if hs[0] == 0.0 and hs[1] <= 0.0:
+                # Touching at t0: look for the highest point of the first interval.
+                res = minimize_scalar(lambda s: -h(s), bounds=(ts[0], ts[1]), method="bounded",
+                                      options={"xatol": xtol})
+                return brentq(h, res.x, ts[1], xtol=xtol) if -res.fun > 0.0 else t0
+            first = False
+        neg = np.flatnonzero(hs[1:] <= 0.0)
+        stop = neg[0] + 1 if neg.size else len(ts)
+        inner = np.arange(1, min(stop, len(ts) - 1))
+        for j in inner[(hs[inner] < hs[inner - 1]) & (hs[inner] < hs[inner + 1])]:
+            root = _grazing(h, ts[j - 1], ts[j + 1], xtol)
+            if root is not None:
+                return root
+        if neg.size:
+            return brentq(h, ts[stop - 1], ts[stop], xtol=xtol)
+        if ts[-1] >= t1:
+            return None
+        start = ts[-2]  # overlap so a minimum at the window's edge is seen with both neighbours
+
+
+def _grazing(h, a: float, b: float, xtol: float):
+    """Root of ``h`` in (a, b) when its minimum there is negative, else None."""
+    res = minimize_scalar(h, bounds=(a, b), method="bounded", options={"xatol": xtol})
+    if res.fun >= 0.0 or h(a) <= 0.0:
+        return None
+    return brentq(h, a, res.x, xtol=xtol)
+
+
+def ellipsoid_nodes(axes, count: int) -> np.ndarray:
+    """``count`` nodes (count, 3) [m] on the ellipsoid surface in body axes (Fibonacci lattice)."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    rho = np.sqrt(1.0 - z * z)
+    ang = np.pi * (1.0 + 5.0**0.5) * k
+    unit = np.stack([rho * np.cos(ang), rho * np.sin(ang), z], axis=-1)
+    return unit * np.asarray(axes, dtype=float)

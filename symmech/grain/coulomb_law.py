@@ -1,0 +1,149 @@
+"""Impact laws for the grain at its contact point K, vectorised over grains.
+
+Notation: ``u`` (..., 3) velocity of the body point at K relative to the surface
+[m/s], normal e_z; ``P`` (..., 3) impulse on the body [N s]; ``K`` (..., 3, 3)
+inverse effective mass [1/kg], ``u+ = u- + K P`` with
+``K = (E - m [R]x I_K^-1 [R]x)/m = H/m`` (H the paper's reduction tensor, (2)-(10)).
+
+Energy-consistent law (Chatterjee & Ruina 1998, "A new algebraic rigid-body
+collision law based on impulse space considerations", J. Appl. Mech. 65):
+``P_I = -K^-1 u-`` (perfectly plastic, sticking impulse),
+``P^ = (1 + e_t) P_I + (e_n - e_t)(P_I . n) n``;
+if ``|P^_t| <= mu P^_n`` then ``P = P^``, else ``P = P^_n (n + mu P^_t/|P^_t|)``.
+It never creates energy for 0 <= e_n <= 1, -1 <= e_t <= e_n (tested). For a
+sphere, ``e_n = e``, ``e_t = lambda - 1``, ``mu = inf`` is the printed law
+(normal restitution e, tangential speed times 1 - lambda, same direction).
+
+With the rotation effect off, the grain is a point mass: ``K = E/m`` and the
+printed law is this law with ``e_n = e, e_t = lambda - 1, mu = inf``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from symmech.grain import contact
+
+
+def cross_matrix(r):
+    """[r]x (..., 3, 3) for vectors r (..., 3)."""
+    r = np.asarray(r, dtype=float)
+    z = np.zeros(r.shape[:-1])
+    return np.stack([np.stack([z, -r[..., 2], r[..., 1]], -1),
+                     np.stack([r[..., 2], z, -r[..., 0]], -1),
+                     np.stack([-r[..., 1], r[..., 0], z], -1)], -2)
+
+
+def inverse_effective_mass(mass, inertia, Q, R):
+    """K (..., 3, 3) [1/kg]: mass (...,) kg, inertia (..., 3) principal kg m^2, Q (..., 3, 3), R (..., 3) m."""
+    mass = np.asarray(mass, dtype=float)
+    inv_i = Q @ (np.asarray(inertia, dtype=float)[..., :, None] ** -1 * np.swapaxes(Q, -1, -2))
+    Rx = cross_matrix(R)
+    return np.eye(3) / mass[..., None, None] - Rx @ inv_i @ Rx
+
+
+def coulomb_impulse(K, u, e_n, e_t, mu):
+    """Impulse P (..., 3) [N s] of the Chatterjee-Ruina law; e_n, e_t, mu broadcast over grains."""
+    P_I = -np.linalg.solve(K, u[..., None])[..., 0]
+    e_n, e_t, mu = (np.asarray(x, dtype=float)[..., None] for x in (e_n, e_t, mu))
+    P = (1.0 + e_t) * P_I
+    P[..., 2] += (e_n - e_t)[..., 0] * P_I[..., 2]
+    pt = np.linalg.norm(P[..., :2], axis=-1, keepdims=True)
+    outside = pt > mu * P[..., 2:3]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scaled = np.where(pt > 0, mu * P[..., 2:3] / np.where(pt > 0, pt, 1.0), 0.0)
+    P[..., :2] = np.where(outside, P[..., :2] * scaled, P[..., :2])
+    return P
+
+
+def kinetic_energy(mass, inertia, Q, v, w):
+    """Kinetic energy (...,) [J]; v (..., 3) m/s, w (..., 3) rad/s in KXYZ."""
+    wb = np.einsum("...ji,...j->...i", Q, w)
+    return 0.5 * np.asarray(mass) * np.einsum("...i,...i->...", v, v) + 0.5 * np.einsum(
+        "...i,...i->...", np.asarray(inertia) * wb, wb)
+
+
+def principal_inertia(axes, mass):
+    """Principal moments (..., 3) [kg m^2] of solid ellipsoids: m/5 (b^2+c^2, a^2+c^2, a^2+b^2)."""
+    a2 = np.asarray(axes, dtype=float) ** 2
+    return np.asarray(mass, dtype=float)[..., None] / 5.0 * (a2.sum(axis=-1, keepdims=True) - a2)
+
+
+@dataclass(frozen=True)
+class ImpactLaw:
+    """``kind`` "printed" (e, lam; eqs (14)-(20)) or "coulomb" (e_n, e_t, mu; Chatterjee-Ruina).
+
+    With the Coulomb law and ``check_printed``, the printed law (e = e_n,
+    lam = 1 + e_t) is evaluated too, so the log says whether it would have created energy.
+    """
+
+    kind: str
+    e: float = 0.0
+    lam: float = 0.0
+    e_n: float = 0.0
+    e_t: float = 0.0
+    mu: float = np.inf
+    check_printed: bool = True
+
+    def apply(self, axes, mass, Q, v, w, rotation: bool) -> dict:
+        """Post-impact states and log fields for n grains at their lowest points.
+
+        axes (n, 3) m, mass (n,) kg, Q (n, 3, 3), v (n, 3) m/s, w (n, 3) rad/s in KXYZ.
+        Returns arrays: ``v``, ``w`` (n, 3) after, ``impulse`` (n, 3) N s, ``u_before``,
+        ``u_after`` (n, 3) contact velocities, ``ke_before``, ``ke_after`` (n,) J,
+        ``admissible`` (n,) (no energy created), ``printed_admissible`` (n,) (True/False,
+        or None when not evaluated), ``converged`` (n,), and ``warnings`` (list of str).
+        """
+        n = len(mass)
+        R = contact.contact_offset(axes, Q)
+        inertia = principal_inertia(axes, mass)
+        w = np.asarray(w, dtype=float) if rotation else np.zeros((n, 3))
+        u = v + np.cross(w, R)
+        warnings: list[str] = []
+        converged = np.ones(n, dtype=bool)
+        printed_admissible = [None] * n
+        if not rotation:
+            K = np.eye(3) / np.asarray(mass, dtype=float)[:, None, None]
+        else:
+            K = inverse_effective_mass(mass, inertia, Q, R)
+        if rotation and (self.kind == "printed" or self.check_printed):
+            e, lam = (self.e, self.lam) if self.kind == "printed" else (self.e_n, 1.0 + self.e_t)
+            results = [_printed_impact(axes[i], mass[i], Q[i], v[i], w[i], e, lam) for i in range(n)]
+            printed_admissible = [bool(r.admissible) for r in results]
+            if self.kind == "printed":
+                P = np.array([np.asarray(r.T, dtype=float) for r in results])
+                converged = np.array([bool(r.converged) for r in results])
+                for r in results:
+                    warnings += list(r.warnings)
+                    if not r.converged:
+                        warnings.append(f"printed impact law: solver '{r.solver}' did not converge "
+                                        f"(residual {r.residual:.3g})")
+        if not (rotation and self.kind == "printed"):
+            e_n, e_t, mu = ((self.e, self.lam - 1.0, np.inf) if self.kind == "printed"
+                            else (self.e_n, self.e_t, self.mu))
+            P = coulomb_impulse(K, u, e_n, e_t, mu)
+        v_after = v + P / np.asarray(mass, dtype=float)[:, None]
+        if rotation:
+            I_k = Q @ (inertia[..., :, None] * np.swapaxes(Q, -1, -2))
+            w_after = w + np.linalg.solve(I_k, np.cross(R, P)[..., None])[..., 0]
+        else:
+            w_after = np.zeros((n, 3))
+        ke_before = kinetic_energy(mass, inertia, Q, v, w)
+        ke_after = kinetic_energy(mass, inertia, Q, v_after, w_after)
+        admissible = ke_after <= ke_before * (1.0 + 1e-9)
+        for i in np.flatnonzero(~admissible):
+            warnings.append(f"impact law '{self.kind}' created energy: "
+                            f"{ke_before[i]:.6g} J -> {ke_after[i]:.6g} J")
+        return {"v": v_after, "w": w_after, "impulse": P, "u_before": u,
+                "u_after": v_after + np.cross(w_after, R), "ke_before": ke_before, "ke_after": ke_after,
+                "admissible": admissible, "printed_admissible": printed_admissible,
+                "converged": converged, "warnings": warnings}
+
+
+def _printed_impact(axes, mass, Q, v, w, e: float, lam: float):
+    """The printed law (14)-(20) through the impact solver of issue 2."""
+    from symmech.grain.body import Ellipsoid
+    from symmech.grain.impact import solve_impact
+
+    return solve_impact(Ellipsoid(*axes, mass), Q, v, w, e, lam, solver="robust")

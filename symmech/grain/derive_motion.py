@@ -1,0 +1,242 @@
+"""Layer 1: derivations for the grain's motion between and along impacts (paper 1, eqs (61)-(64)).
+
+Frames. KXYZ is the surface frame: X the longitudinal axis of the working surface,
+Y the transverse axis, Z the outward normal. The frame translates with the surface
+(harmonic vibration) and does not rotate, so relative motion obeys
+r'' = g_K - a_s(t) (+ contact forces).
+
+Inclination, defined unambiguously: alpha is the angle by which the X axis rises
+above the horizontal plane, beta the angle by which the Y axis rises above it
+(positive: the axis points uphill). The unit vertical u (upwards) therefore has
+u.e_X = sin(alpha), u.e_Y = sin(beta), and, being a unit vector with u.e_Z > 0,
+u.e_Z = sqrt(1 - sin^2 alpha - sin^2 beta) = cos(delta), delta the angle of
+steepest slope. Gravity in KXYZ is g_K = -g u.
+
+Orientation: unit quaternion (q0, q1, q2, q3) with body axes as the columns of
+Q(q) in KXYZ (no Euler-angle singularity); the paper's z-x-z Euler angles
+Q = Rz(psi) Rx(theta) Rz(phi) are derived here too, for paper mode.
+"""
+from __future__ import annotations
+
+import sympy as sp
+
+from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
+
+g = sp.Symbol("g", positive=True)
+alpha, beta = sp.symbols("alpha beta", real=True)
+A, phase, t, t0 = sp.symbols("A phase t t0", real=True)
+omega = sp.Symbol("omega", positive=True)
+dX, dY, dZ = sp.symbols("dX dY dZ", real=True)
+a, b, c = sp.symbols("a b c", positive=True)
+q0, q1, q2, q3 = sp.symbols("q0 q1 q2 q3", real=True)
+I1, I2, I3 = sp.symbols("I1 I2 I3", positive=True)
+w1, w2, w3 = sp.symbols("w1 w2 w3", real=True)
+psi, theta, phi = sp.symbols("psi theta phi", real=True)
+psi_d, theta_d, phi_d = sp.symbols("psi_d theta_d phi_d", real=True)
+x0, y0, z0, vx0, vy0, vz0 = sp.symbols("x0 y0 z0 vx0 vy0 vz0", real=True)
+gX, gY, gZ = sp.symbols("gX gY gZ", real=True)
+n1, n2, n3 = sp.symbols("n1 n2 n3", real=True)
+
+_G = [(g, "gravitational acceleration", "m/s^2")]
+_INCL = [(alpha, "rise of the surface X axis above the horizontal", "rad"),
+         (beta, "rise of the surface Y axis above the horizontal", "rad")]
+_VIB = [(A, "vibration amplitude", "m"), (omega, "vibration angular frequency", "rad/s"),
+        (phase, "vibration phase at t = 0", "rad"),
+        (dX, "vibration direction, X component (unit vector)", "1"),
+        (dY, "vibration direction, Y component (unit vector)", "1"),
+        (dZ, "vibration direction, Z component (unit vector)", "1")]
+_AXES = [(a, "semi-axis along body axis 1", "m"), (b, "semi-axis along body axis 2", "m"),
+         (c, "semi-axis along body axis 3", "m")]
+_QUAT = [(q0, "orientation quaternion, scalar part", "1"),
+         (q1, "orientation quaternion, x part", "1"),
+         (q2, "orientation quaternion, y part", "1"),
+         (q3, "orientation quaternion, z part", "1")]
+_NORMAL = [(n1, "plane normal in body axes, component 1 (third row of Q)", "1"),
+           (n2, "plane normal in body axes, component 2", "1"),
+           (n3, "plane normal in body axes, component 3", "1")]
+_INERTIA = [(I1, "principal moment of inertia, body axis 1", "kg*m^2"),
+            (I2, "principal moment of inertia, body axis 2", "kg*m^2"),
+            (I3, "principal moment of inertia, body axis 3", "kg*m^2")]
+_RATES = [(w1, "angular velocity, body axis 1", "rad/s"), (w2, "angular velocity, body axis 2", "rad/s"),
+          (w3, "angular velocity, body axis 3", "rad/s")]
+_EULER = [(psi, "precession angle", "rad"), (theta, "nutation angle", "rad"), (phi, "spin angle", "rad")]
+_STATE0 = [(x0, "relative centre position X at t0", "m"), (y0, "relative centre position Y at t0", "m"),
+           (z0, "relative centre position Z at t0", "m"), (vx0, "relative centre velocity X at t0", "m/s"),
+           (vy0, "relative centre velocity Y at t0", "m/s"), (vz0, "relative centre velocity Z at t0", "m/s")]
+_GK = [(gX, "gravity in KXYZ, X component", "m/s^2"), (gY, "gravity in KXYZ, Y component", "m/s^2"),
+       (gZ, "gravity in KXYZ, Z component", "m/s^2")]
+_TIMES = [(t0, "start time of the flight", "s"), (t, "time", "s")]
+
+
+def gravity_surface_frame() -> sp.Matrix:
+    """g_K (3,) from the definition of alpha, beta: -g times the unit upward vertical in KXYZ."""
+    ux, uy = sp.sin(alpha), sp.sin(beta)
+    uz = sp.Symbol("uz", positive=True)
+    # The vertical is a unit vector with positive normal component: solve |u| = 1 for uz.
+    (uz_value,) = sp.solve(sp.Eq(ux**2 + uy**2 + uz**2, 1), uz)
+    return -g * sp.Matrix([ux, uy, uz_value])
+
+
+def surface_displacement() -> sp.Matrix:
+    """Surface displacement s(t) = A d sin(omega t + phase), (3,) m."""
+    return A * sp.Matrix([dX, dY, dZ]) * sp.sin(omega * t + phase)
+
+
+def surface_kinematics() -> sp.Matrix:
+    """Rows: displacement, velocity, acceleration of the surface frame, (3, 3)."""
+    s = surface_displacement()
+    return sp.Matrix.vstack(s.T, s.diff(t).T, s.diff(t, 2).T)
+
+
+def flight_translation(vibration: bool) -> sp.Matrix:
+    """Exact relative flight of the centre: solve r'' = g_K - s''(t) from (r0, v0) at t0.
+
+    Rows: relative position, relative velocity at time t, (2, 3).
+    """
+    r0 = sp.Matrix([x0, y0, z0])
+    v0 = sp.Matrix([vx0, vy0, vz0])
+    gk = sp.Matrix([gX, gY, gZ])
+    tau = sp.Symbol("tau", real=True)
+    s = surface_displacement() if vibration else sp.zeros(3, 1)
+    acc = gk - s.diff(t, 2)
+    # Integrate twice in closed form (the forcing is a polynomial plus a harmonic).
+    vel = v0 + (acc.subs(t, tau)).applyfunc(lambda e: sp.integrate(e, (tau, t0, t)))
+    pos = r0 + (vel.subs(t, tau)).applyfunc(lambda e: sp.integrate(e, (tau, t0, t)))
+    return sp.Matrix.vstack(pos.T, vel.T)
+
+
+def quaternion_matrix() -> sp.Matrix:
+    """Rotation matrix Q(q) of a unit quaternion, body axes as columns, (3, 3)."""
+    return sp.Matrix([
+        [1 - 2 * (q2**2 + q3**2), 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)],
+        [2 * (q1 * q2 + q0 * q3), 1 - 2 * (q1**2 + q3**2), 2 * (q2 * q3 - q0 * q1)],
+        [2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), 1 - 2 * (q1**2 + q2**2)],
+    ])
+
+
+def support_distance() -> sp.Matrix:
+    """Height of the centre above the plane at contact, |D n'|, (1,) m.
+
+    n' = Q^T e_z is the plane normal in body axes (the third row of Q); the support
+    function of the ellipsoid x^T D^-2 x = 1 in direction n' is |D n'|.
+    """
+    d = sp.diag(a, b, c) * sp.Matrix([n1, n2, n3])
+    return sp.Matrix([sp.sqrt((d.T * d)[0, 0])])
+
+
+def contact_offset_body() -> sp.Matrix:
+    """Offset of the lowest point from the centre in body axes, R' = -D^2 n' / |D n'|, (3,) m.
+
+    The lowest point maximises -n'.x on the ellipsoid: the gradient D^-2 x is parallel to -n'.
+    """
+    return -sp.diag(a**2, b**2, c**2) * sp.Matrix([n1, n2, n3]) / support_distance()[0]
+
+
+def euler_equations() -> sp.Matrix:
+    """Torque-free Euler equations: body angular acceleration (3,) rad/s^2.
+
+    From dL/dt = 0 in the body frame: I w' + w x (I w) = 0.
+    """
+    I = sp.diag(I1, I2, I3)
+    w = sp.Matrix([w1, w2, w3])
+    return -I.inv() * w.cross(I * w)
+
+
+def quaternion_rate() -> sp.Matrix:
+    """q' = q (x) (0, w)/2 for body-frame angular velocity w, (4,) 1/s."""
+    qv = sp.Matrix([q1, q2, q3])
+    w = sp.Matrix([w1, w2, w3])
+    scalar = -qv.dot(w) / 2
+    vector = (q0 * w + qv.cross(w)) / 2
+    return sp.Matrix([scalar, *vector])
+
+
+def invariants() -> sp.Matrix:
+    """Rotational kinetic energy [J] and angular momentum in KXYZ [kg*m^2/s], (4,)."""
+    I = sp.diag(I1, I2, I3)
+    w = sp.Matrix([w1, w2, w3])
+    energy = (w.T * I * w)[0, 0] / 2
+    L = quaternion_matrix() * I * w
+    return sp.Matrix([energy, *L])
+
+
+def _rot(axis: int, angle) -> sp.Matrix:
+    return {0: sp.rot_axis1, 2: sp.rot_axis3}[axis](angle).T
+
+
+def euler_matrix() -> sp.Matrix:
+    """Q = Rz(psi) Rx(theta) Rz(phi) (active rotations), body axes as columns, (3, 3)."""
+    return _rot(2, psi) * _rot(0, theta) * _rot(2, phi)
+
+
+def body_rates_from_euler_rates() -> sp.Matrix:
+    """Body rates (p, q, r) from Euler-angle rates: the 3x3 matrix B with (p,q,r) = B (psi', theta', phi').
+
+    Derived from Q^T Q' = [w]x, not typed in; the generated function returns B.
+    """
+    tt = sp.Symbol("tt", real=True)
+    fs = [sp.Function(n)(tt) for n in ("psi", "theta", "phi")]
+    Qt = euler_matrix().subs({psi: fs[0], theta: fs[1], phi: fs[2]})
+    W = Qt.T * Qt.diff(tt)
+    w = sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])
+    rates = [f.diff(tt) for f in fs]
+    B = w.jacobian(rates)
+    back = {fs[0]: psi, fs[1]: theta, fs[2]: phi}
+    return B.subs(back).applyfunc(_pythagoras)
+
+
+def _pythagoras(expr):
+    """Expand and use sin^2 = 1 - cos^2 for the Euler angles (cheap, exact, deterministic)."""
+    expr = sp.expand(expr)
+    for angle in (psi, theta, phi):
+        expr = sp.expand(expr.subs(sp.sin(angle) ** 2, 1 - sp.cos(angle) ** 2))
+    return expr
+
+
+def euler_rates_from_body_rates() -> sp.Matrix:
+    """(psi', theta', phi') = B^-1 (p, q, r); B is 3x3 with det B = sin(theta), singular at gimbal lock."""
+    B = body_rates_from_euler_rates()
+    # Adjugate over determinant: both small after the Pythagorean reduction.
+    det = _pythagoras(B.det())
+    return ((B.adjugate().applyfunc(_pythagoras) * sp.Matrix([w1, w2, w3])) / det).applyfunc(sp.cancel)
+
+
+def module_specs() -> list[ModuleSpec]:
+    t_args = args_of(_VIB + [(t, "time", "s")])
+    flight_args = args_of(_STATE0 + _GK + _VIB + _TIMES)
+    rigid_args = args_of(_STATE0 + _GK + _TIMES)
+    functions = [
+        NamedMatrix("gravity", gravity_surface_frame(), args_of(_G + _INCL),
+                    "gravity components in the surface frame KXYZ", "m/s^2", "61"),
+        NamedMatrix("surface_kinematics", surface_kinematics(), t_args,
+                    "surface displacement, velocity and acceleration (rows)", "m, m/s, m/s^2", "61"),
+        NamedMatrix("flight_translation", flight_translation(True), flight_args,
+                    "exact relative flight of the centre in the vibrating frame: position, velocity (rows)",
+                    "m, m/s", "61"),
+        NamedMatrix("flight_translation_rigid", flight_translation(False), rigid_args,
+                    "exact relative flight of the centre over a still surface: position, velocity (rows)",
+                    "m, m/s", "61"),
+        NamedMatrix("rotation_matrix", quaternion_matrix(), args_of(_QUAT),
+                    "rotation matrix of a unit quaternion, body axes as columns in KXYZ", "1"),
+        NamedMatrix("support_distance", support_distance(), args_of(_AXES + _NORMAL),
+                    "centre height above the plane when the ellipsoid touches it", "m", "63"),
+        NamedMatrix("contact_offset_body", contact_offset_body(), args_of(_AXES + _NORMAL),
+                    "offset of the lowest point of the ellipsoid from its centre, in body axes", "m", "63"),
+        NamedMatrix("euler_equations", euler_equations(), args_of(_INERTIA + _RATES),
+                    "torque-free Euler equations: body angular acceleration", "rad/s^2", "62"),
+        NamedMatrix("quaternion_rate", quaternion_rate(), args_of(_QUAT + _RATES),
+                    "quaternion rate for body-frame angular velocity", "1/s", "62"),
+        NamedMatrix("rotation_invariants", invariants(), args_of(_INERTIA + _RATES + _QUAT),
+                    "rotational kinetic energy and angular momentum in KXYZ", "J, kg*m^2/s"),
+        NamedMatrix("euler_matrix", euler_matrix(), args_of(_EULER),
+                    "rotation matrix of z-x-z Euler angles, body axes as columns in KXYZ", "1", "62"),
+        NamedMatrix("body_rates", body_rates_from_euler_rates() * sp.Matrix([psi_d, theta_d, phi_d]),
+                    args_of(_EULER + [(psi_d, "precession rate", "rad/s"), (theta_d, "nutation rate", "rad/s"),
+                                      (phi_d, "spin rate", "rad/s")]),
+                    "body angular velocity (p, q, r) from Euler-angle rates", "rad/s", "43"),
+        NamedMatrix("euler_rates", euler_rates_from_body_rates(), args_of(_EULER + _RATES),
+                    "Euler-angle rates (psi', theta', phi') from body rates", "rad/s", "62"),
+    ]
+    return [ModuleSpec("grain_motion", "Grain motion: gravity, surface vibration, exact flight, "
+                       "ellipsoid support distance, torque-free rotation.",
+                       "symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64))", functions)]
