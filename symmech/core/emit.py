@@ -139,6 +139,7 @@ def render(spec: ModuleSpec) -> str:
 
 
 def write(spec: ModuleSpec, directory: Path) -> Path:
+    Path(directory).mkdir(parents=True, exist_ok=True)
     path = Path(directory) / f"{spec.name}.py"
     path.write_text(render(spec))
     return path
