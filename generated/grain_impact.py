@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 5eff440c5223869da129171acfae30e1a2ed497607e5964739f22dd56ac68c90
+# symmech 0.1.0 generated module; inputs sha256 bb2b05738b366868ece0cd6caa04fe298e1aa54d0f40799fa38fa4190547dfbc
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113.txt, eqs (1)-(60), derived in symmech.grain.derive.
@@ -337,7 +337,7 @@ def H(a, b, c, psi, theta, phi):
     return out
 
 
-def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
+def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0):
     """Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu — eqs. (13)-(20).
 
     Parameters
@@ -354,8 +354,6 @@ def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u
         reduction tensor entry yz [1]
     h_zz : array_like
         reduction tensor entry zz [1]
-    m : array_like
-        mass [kg]
     lambda_ : array_like
         tangential reduction factor lambda [1]
     e : array_like
@@ -372,7 +370,7 @@ def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u
     numpy.ndarray, shape (..., 5)
         [kg*m/s (times m^0)]
     """
-    (h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0,), batch = _batch(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    (h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0,), batch = _batch(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty(batch + (5,))
     x0 = h_yz*u_z0
     x1 = h_xx*x0

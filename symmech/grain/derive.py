@@ -220,7 +220,7 @@ def cramer_solution():
 def module_specs() -> list[ModuleSpec]:
     geometry = args_of(GEOMETRY)
     angles = args_of(((theta, "Euler nutation angle", "rad"), (phi, "Euler spin angle", "rad")))
-    impact_args = args_of(H_ENTRIES + IMPACT_STATE)
+    impact_args = args_of(H_ENTRIES + IMPACT_STATE[1:])
     descent_args = args_of(UNKNOWNS + H_ENTRIES + IMPACT_STATE)
     system_args = args_of(((Jx, "principal moment of inertia about X'", "kg*m^2"),
                            (Jy, "principal moment of inertia about Y'", "kg*m^2"),
