@@ -197,11 +197,12 @@ class ImpactBatch:
     iterations: int
 
 
-def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14) -> ImpactBatch:
+def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14, max_iter=12) -> ImpactBatch:
     """Vectorised exact solve of the printed law for N impacts.
 
     H (N,3,3), m scalar or (N,) [kg], e, lam scalars or (N,), uK0 (N,3) [m/s]
-    with uK0[:, 2] < 0. ``tol`` is the Newton step tolerance on mu [rad].
+    with uK0[:, 2] < 0. ``tol`` is the Newton step tolerance on mu [rad] and
+    ``max_iter`` caps the Newton polish of the eigenvalue roots.
     """
     H = np.asarray(H, float)
     uK0 = np.asarray(uK0, float)
@@ -210,7 +211,7 @@ def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14) -> ImpactBatch:
     k = gen.mu_equation(*_h_args(H), lam, e, uK0[:, 0], uK0[:, 1], uK0[:, 2])
     speed_after = (1.0 - lam) * np.hypot(uK0[:, 0], uK0[:, 1])
     stuck = speed_after <= 1e-14 * np.linalg.norm(uK0, axis=1)
-    roots, iterations = _trig_roots(k, tol)
+    roots, iterations = _trig_roots(k, tol, max_iter)
     # Zero tangential speed after: mu is immaterial, one linear solve gives T.
     roots[stuck] = np.nan
     roots[stuck, 0] = 0.0
@@ -304,41 +305,50 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
     """The paper's descent for N impacts; returns (T (N,3), mu (N,), steps (N,), stopped (N,)).
 
     ``variant="paper"`` uses (24)-(27) as printed, ``"paper-corrected"`` the sum of
-    squared residuals and its derived gradient. Start (an assumption; the paper
+    squared residuals and its derived gradient, in dimensionless variables. Start (an assumption; the paper
     gives none): T_x = 0, T_z = -m(1+e)u_Kz(0)/h_zz, mu = direction of the incoming slip.
     ``stopped`` is True where the stop rule Phi <= delta fired before S steps.
     """
     n = len(uK0)
     m, e, lam = (np.broadcast_to(np.asarray(x, float), (n,)) for x in (m, e, lam))
     fixed = (*_h_args(H), m, lam, e, uK0[:, 0], uK0[:, 1], uK0[:, 2])
+    momentum = m * np.linalg.norm(uK0, axis=1)
     if variant == "paper":
-        phi_f, grad_f = printed.functional, printed.gradient
-        delta = options.tol * m * np.linalg.norm(uK0, axis=1)
+        scale, norm = np.ones(n), np.ones(n)  # as printed: raw variables, Phi in N s
+        phi_raw, grad_raw = printed.functional, printed.gradient
     elif variant == "paper-corrected":
-        phi_f, grad_f = gen.descent_functional, gen.descent_gradient
-        delta = options.tol * (m * np.linalg.norm(uK0, axis=1))**2
+        # Impulses in units of m|u_K(0)| and Phi divided by (m|u_K(0)|)^2, so one
+        # step length suits T and mu alike.
+        scale, norm = momentum, momentum**2
+        phi_raw, grad_raw = gen.descent_functional, gen.descent_gradient
     else:
         raise ValueError(f"unknown descent variant {variant!r}")
+    units = np.stack([scale, scale, np.ones(n)], axis=1)
+
+    def phi_f(y):
+        z = y * units
+        return phi_raw(z[:, 0], z[:, 1], z[:, 2], *fixed) / norm
+
+    def grad_f(y):
+        z = y * units
+        return grad_raw(z[:, 0], z[:, 1], z[:, 2], *fixed) * units / norm[:, None]
+
+    delta = options.tol * (momentum if variant == "paper" else np.ones(n))
     x = np.stack([np.zeros(n), -m * (1 + e) * uK0[:, 2] / H[:, 2, 2],
-                  np.arctan2(uK0[:, 1], uK0[:, 0])], axis=1)
+                  np.arctan2(uK0[:, 1], uK0[:, 0])], axis=1) / units
     steps = np.zeros(n, int)
     stopped = np.zeros(n, bool)
     for _ in range(options.max_steps):
-        phi = phi_f(x[:, 0], x[:, 1], x[:, 2], *fixed)
-        stopped |= phi <= delta
+        stopped |= phi_f(x) <= delta
         active = ~stopped
         if not active.any():
             break
-        g = grad_f(x[:, 0], x[:, 1], x[:, 2], *fixed)
-
-        def xi(step):
-            y = x - step[:, None] * g
-            return phi_f(y[:, 0], y[:, 1], y[:, 2], *fixed)
-
-        step = _golden_section(xi, np.zeros(n), np.full(n, options.step_max),
-                               options.line_iterations, options.line_tol)
+        g = grad_f(x)
+        step = _golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
+                               np.full(n, options.step_max), options.line_iterations, options.line_tol)
         x = np.where(active[:, None], x - step[:, None] * g, x)
         steps += active
+    x = x * units
     Tx, Tz, mu = x[:, 0], x[:, 1], x[:, 2]
     T = np.stack([Tx, Tx * np.tan(mu), Tz], axis=1)
     return T, mu, steps, stopped
