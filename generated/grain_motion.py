@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 c34ae7cfd6c4f3065c0bbeaf8ac13a43508eafe20c8dec4dd6f1cf66b52af54e
+# symmech 0.1.0 generated module; inputs sha256 491c437856a0050d68b722748cf64e4202e7e7a30176827491ce3ca2da1e70fd
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -89,16 +89,16 @@ def surface_kinematics(A, omega, phase, dX, dY, dZ, t):
     return out
 
 
-def flight_translation(x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t):
+def flight_translation(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t):
     """exact relative flight of the centre in the vibrating frame: position, velocity (rows) — eqs. 61.
 
     Parameters
     ----------
-    x0 : array_like
+    rx0 : array_like
         relative centre position X at t0 [m]
-    y0 : array_like
+    ry0 : array_like
         relative centre position Y at t0 [m]
-    z0 : array_like
+    rz0 : array_like
         relative centre position Z at t0 [m]
     vx0 : array_like
         relative centre velocity X at t0 [m/s]
@@ -134,52 +134,52 @@ def flight_translation(x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, d
     numpy.ndarray, shape (..., 2, 3)
         [m, m/s]
     """
-    (x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t,), batch = _batch(x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t)
+    (rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t,), batch = _batch(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t)
     out = numpy.empty(batch + (2, 3))
-    x1 = gX*t
-    x2 = t**2
-    x3 = (1/2)*gX
-    x4 = t0**2
-    x5 = omega*t0
-    x6 = phase + x5
-    x7 = numpy.sin(x6)
-    x8 = A*dX
-    x9 = omega*t
-    x10 = phase + x9
-    x11 = numpy.sin(x10)
-    x12 = numpy.cos(x6)
-    x13 = x12*x8
-    x14 = gY*t
-    x15 = (1/2)*gY
-    x16 = A*dY
-    x17 = x12*x16
-    x18 = gZ*t
-    x19 = (1/2)*gZ
-    x20 = A*dZ
-    x21 = x12*x20
-    x22 = omega*x8
-    x23 = numpy.cos(x10)
-    x24 = omega*x16
-    x25 = omega*x20
-    out[..., 0, 0] = t*vx0 - t0*vx0 - t0*x1 + x0 - x11*x8 - x13*x5 + x13*x9 + x2*x3 + x3*x4 + x7*x8
-    out[..., 0, 1] = t*vy0 - t0*vy0 - t0*x14 - x11*x16 + x15*x2 + x15*x4 + x16*x7 - x17*x5 + x17*x9 + y0
-    out[..., 0, 2] = t*vz0 - t0*vz0 - t0*x18 - x11*x20 + x19*x2 + x19*x4 + x20*x7 - x21*x5 + x21*x9 + z0
-    out[..., 1, 0] = -gX*t0 + vx0 + x1 + x12*x22 - x22*x23
-    out[..., 1, 1] = -gY*t0 + vy0 + x12*x24 + x14 - x23*x24
-    out[..., 1, 2] = -gZ*t0 + vz0 + x12*x25 + x18 - x23*x25
+    x0 = gX*t
+    x1 = t**2
+    x2 = (1/2)*gX
+    x3 = t0**2
+    x4 = omega*t0
+    x5 = phase + x4
+    x6 = numpy.sin(x5)
+    x7 = A*dX
+    x8 = omega*t
+    x9 = phase + x8
+    x10 = numpy.sin(x9)
+    x11 = numpy.cos(x5)
+    x12 = x11*x7
+    x13 = gY*t
+    x14 = (1/2)*gY
+    x15 = A*dY
+    x16 = x11*x15
+    x17 = gZ*t
+    x18 = (1/2)*gZ
+    x19 = A*dZ
+    x20 = x11*x19
+    x21 = omega*x7
+    x22 = numpy.cos(x9)
+    x23 = omega*x15
+    x24 = omega*x19
+    out[..., 0, 0] = rx0 + t*vx0 - t0*vx0 - t0*x0 + x1*x2 - x10*x7 - x12*x4 + x12*x8 + x2*x3 + x6*x7
+    out[..., 0, 1] = ry0 + t*vy0 - t0*vy0 - t0*x13 + x1*x14 - x10*x15 + x14*x3 + x15*x6 - x16*x4 + x16*x8
+    out[..., 0, 2] = rz0 + t*vz0 - t0*vz0 - t0*x17 + x1*x18 - x10*x19 + x18*x3 + x19*x6 - x20*x4 + x20*x8
+    out[..., 1, 0] = -gX*t0 + vx0 + x0 + x11*x21 - x21*x22
+    out[..., 1, 1] = -gY*t0 + vy0 + x11*x23 + x13 - x22*x23
+    out[..., 1, 2] = -gZ*t0 + vz0 + x11*x24 + x17 - x22*x24
     return out
 
 
-def flight_translation_rigid(x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
+def flight_translation_rigid(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
     """exact relative flight of the centre over a still surface: position, velocity (rows) — eqs. 61.
 
     Parameters
     ----------
-    x0 : array_like
+    rx0 : array_like
         relative centre position X at t0 [m]
-    y0 : array_like
+    ry0 : array_like
         relative centre position Y at t0 [m]
-    z0 : array_like
+    rz0 : array_like
         relative centre position Z at t0 [m]
     vx0 : array_like
         relative centre velocity X at t0 [m/s]
@@ -203,25 +203,25 @@ def flight_translation_rigid(x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
     numpy.ndarray, shape (..., 2, 3)
         [m, m/s]
     """
-    (x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, t0, t,), batch = _batch(x0, y0, z0, vx0, vy0, vz0, gX, gY, gZ, t0, t)
+    (rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t,), batch = _batch(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t)
     out = numpy.empty(batch + (2, 3))
-    x1 = t**2
-    x2 = (1/2)*gX
-    x3 = t0**2
-    x4 = gX*t0
-    x5 = vx0 - x4
-    x6 = (1/2)*gY
-    x7 = gY*t0
-    x8 = vy0 - x7
-    x9 = (1/2)*gZ
-    x10 = gZ*t0
-    x11 = vz0 - x10
-    out[..., 0, 0] = t*x5 - t0*x5 + x0 + x1*x2 - x2*x3
-    out[..., 0, 1] = t*x8 - t0*x8 + x1*x6 - x3*x6 + y0
-    out[..., 0, 2] = t*x11 - t0*x11 + x1*x9 - x3*x9 + z0
-    out[..., 1, 0] = gX*t + vx0 - x4
-    out[..., 1, 1] = gY*t + vy0 - x7
-    out[..., 1, 2] = gZ*t + vz0 - x10
+    x0 = t**2
+    x1 = (1/2)*gX
+    x2 = t0**2
+    x3 = gX*t0
+    x4 = vx0 - x3
+    x5 = (1/2)*gY
+    x6 = gY*t0
+    x7 = vy0 - x6
+    x8 = (1/2)*gZ
+    x9 = gZ*t0
+    x10 = vz0 - x9
+    out[..., 0, 0] = rx0 + t*x4 - t0*x4 + x0*x1 - x1*x2
+    out[..., 0, 1] = ry0 + t*x7 - t0*x7 + x0*x5 - x2*x5
+    out[..., 0, 2] = rz0 + t*x10 - t0*x10 + x0*x8 - x2*x8
+    out[..., 1, 0] = gX*t + vx0 - x3
+    out[..., 1, 1] = gY*t + vy0 - x6
+    out[..., 1, 2] = gZ*t + vz0 - x9
     return out
 
 
@@ -552,7 +552,7 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     (psi, theta, phi, w1, w2, w3,), batch = _batch(psi, theta, phi, w1, w2, w3)
     out = numpy.empty(batch + (3,))
     x0 = numpy.sin(theta)
-    x1 = x0**(-1.0)
+    x1 = 1/x0
     x2 = numpy.sin(phi)
     x3 = w1*x2
     x4 = numpy.cos(phi)

@@ -7,9 +7,10 @@ inverse effective mass [1/kg], ``u+ = u- + K P`` with
 
 Energy-consistent law (Chatterjee & Ruina 1998, "A new algebraic rigid-body
 collision law based on impulse space considerations", J. Appl. Mech. 65):
-``P_I = -K^-1 u-`` (perfectly plastic, sticking impulse),
-``P^ = (1 + e_t) P_I + (e_n - e_t)(P_I . n) n``;
-if ``|P^_t| <= mu P^_n`` then ``P = P^``, else ``P = P^_n (n + mu P^_t/|P^_t|)``.
+``P_I = -(u_n / K_nn) n`` (frictionless, perfectly plastic), ``P_II = -K^-1 u``
+(perfectly plastic, sticking), ``D = P_II - P_I``, ``P^ = (1 + e_n) P_I + (1 + e_t) D``;
+if ``|P^_t| <= mu P^_n`` then ``P = P^``, else ``P = (1 + e_n) P_I + kappa D`` with
+kappa putting P on the friction cone.
 It never creates energy for 0 <= e_n <= 1, -1 <= e_t <= e_n (tested). For a
 sphere, ``e_n = e``, ``e_t = lambda - 1``, ``mu = inf`` is the printed law
 (normal restitution e, tangential speed times 1 - lambda, same direction).
@@ -24,6 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from symmech.grain import contact
+from symmech.grain.impact import solve_robust_batch
+
+PRINTED_RESIDUAL = 1e-8  # relative residual of (19) below which the printed law counts as solved
 
 
 def cross_matrix(r):
@@ -45,16 +49,19 @@ def inverse_effective_mass(mass, inertia, Q, R):
 
 def coulomb_impulse(K, u, e_n, e_t, mu):
     """Impulse P (..., 3) [N s] of the Chatterjee-Ruina law; e_n, e_t, mu broadcast over grains."""
-    P_I = -np.linalg.solve(K, u[..., None])[..., 0]
     e_n, e_t, mu = (np.asarray(x, dtype=float)[..., None] for x in (e_n, e_t, mu))
-    P = (1.0 + e_t) * P_I
-    P[..., 2] += (e_n - e_t)[..., 0] * P_I[..., 2]
-    pt = np.linalg.norm(P[..., :2], axis=-1, keepdims=True)
-    outside = pt > mu * P[..., 2:3]
+    k_nn = K[..., 2, 2][..., None]
+    P_I = np.zeros_like(u)
+    P_I[..., 2] = -u[..., 2] / k_nn[..., 0]  # frictionless, perfectly plastic
+    D = -np.linalg.solve(K, u[..., None])[..., 0] - P_I  # sticking plastic minus frictionless plastic
+    P = (1.0 + e_n) * P_I + (1.0 + e_t) * D
+    d_t = np.linalg.norm(D[..., :2], axis=-1, keepdims=True)
+    p_t = np.linalg.norm(P[..., :2], axis=-1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
-        scaled = np.where(pt > 0, mu * P[..., 2:3] / np.where(pt > 0, pt, 1.0), 0.0)
-    P[..., :2] = np.where(outside, P[..., :2] * scaled, P[..., :2])
-    return P
+        # Written with 1/mu so that mu = inf (half-space) and mu = 0 (frictionless) are exact limits.
+        outside = np.where(mu > 0, p_t / mu > P[..., 2:3], p_t > 0)
+        kappa = (1.0 + e_n) * P_I[..., 2:3] / (d_t / mu - D[..., 2:3])
+    return np.where(outside, (1.0 + e_n) * P_I + np.where(outside, kappa, 0.0) * D, P)
 
 
 def kinetic_energy(mass, inertia, Q, v, w):
@@ -90,7 +97,9 @@ class ImpactLaw:
         """Post-impact states and log fields for n grains at their lowest points.
 
         axes (n, 3) m, mass (n,) kg, Q (n, 3, 3), v (n, 3) m/s, w (n, 3) rad/s in KXYZ.
-        Returns arrays: ``v``, ``w`` (n, 3) after, ``impulse`` (n, 3) N s, ``u_before``,
+        A contact point that is not approaching the plane gets no impulse. The printed
+        law is solved exactly (issue 2's robust solver, vectorised). Returns arrays:
+        ``v``, ``w`` (n, 3) after, ``impulse`` (n, 3) N s, ``u_before``,
         ``u_after`` (n, 3) contact velocities, ``ke_before``, ``ke_after`` (n,) J,
         ``admissible`` (n,) (no energy created), ``printed_admissible`` (n,) (True/False,
         or None when not evaluated), ``converged`` (n,), and ``warnings`` (list of str).
@@ -107,22 +116,27 @@ class ImpactLaw:
             K = np.eye(3) / np.asarray(mass, dtype=float)[:, None, None]
         else:
             K = inverse_effective_mass(mass, inertia, Q, R)
-        if rotation and (self.kind == "printed" or self.check_printed):
+        approaching = u[:, 2] < 0.0
+        if rotation and (self.kind == "printed" or self.check_printed) and approaching.any():
             e, lam = (self.e, self.lam) if self.kind == "printed" else (self.e_n, 1.0 + self.e_t)
-            results = [_printed_impact(axes[i], mass[i], Q[i], v[i], w[i], e, lam) for i in range(n)]
-            printed_admissible = [bool(r.admissible) for r in results]
+            idx = np.flatnonzero(approaching)
+            m = np.asarray(mass, dtype=float)[idx]
+            printed = solve_robust_batch(m[:, None, None] * K[idx], m, e, lam, u[idx])
+            for j, i in enumerate(idx):
+                printed_admissible[i] = bool(printed.admissible[j])
             if self.kind == "printed":
-                P = np.array([np.asarray(r.T, dtype=float) for r in results])
-                converged = np.array([bool(r.converged) for r in results])
-                for r in results:
-                    warnings += list(r.warnings)
-                    if not r.converged:
-                        warnings.append(f"printed impact law: solver '{r.solver}' did not converge "
-                                        f"(residual {r.residual:.3g})")
-        if not (rotation and self.kind == "printed"):
+                converged[idx] = printed.residual < PRINTED_RESIDUAL
+                for j in np.flatnonzero(~converged[idx]):
+                    warnings.append(f"printed impact law: no solution of (19) (relative residual "
+                                    f"{printed.residual[j]:.3g})")
+        if rotation and self.kind == "printed":
+            P = np.zeros((n, 3))
+            if approaching.any():
+                P[idx] = printed.T
+        else:
             e_n, e_t, mu = ((self.e, self.lam - 1.0, np.inf) if self.kind == "printed"
                             else (self.e_n, self.e_t, self.mu))
-            P = coulomb_impulse(K, u, e_n, e_t, mu)
+            P = np.where(approaching[:, None], coulomb_impulse(K, u, e_n, e_t, mu), 0.0)
         v_after = v + P / np.asarray(mass, dtype=float)[:, None]
         if rotation:
             I_k = Q @ (inertia[..., :, None] * np.swapaxes(Q, -1, -2))
@@ -139,11 +153,3 @@ class ImpactLaw:
                 "u_after": v_after + np.cross(w_after, R), "ke_before": ke_before, "ke_after": ke_after,
                 "admissible": admissible, "printed_admissible": printed_admissible,
                 "converged": converged, "warnings": warnings}
-
-
-def _printed_impact(axes, mass, Q, v, w, e: float, lam: float):
-    """The printed law (14)-(20) through the impact solver of issue 2."""
-    from symmech.grain.body import Ellipsoid
-    from symmech.grain.impact import solve_impact
-
-    return solve_impact(Ellipsoid(*axes, mass), Q, v, w, e, lam, solver="robust")

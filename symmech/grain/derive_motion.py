@@ -33,7 +33,7 @@ I1, I2, I3 = sp.symbols("I1 I2 I3", positive=True)
 w1, w2, w3 = sp.symbols("w1 w2 w3", real=True)
 psi, theta, phi = sp.symbols("psi theta phi", real=True)
 psi_d, theta_d, phi_d = sp.symbols("psi_d theta_d phi_d", real=True)
-x0, y0, z0, vx0, vy0, vz0 = sp.symbols("x0 y0 z0 vx0 vy0 vz0", real=True)
+x0, y0, z0, vx0, vy0, vz0 = sp.symbols("rx0 ry0 rz0 vx0 vy0 vz0", real=True)
 gX, gY, gZ = sp.symbols("gX gY gZ", real=True)
 n1, n2, n3 = sp.symbols("n1 n2 n3", real=True)
 

@@ -9,6 +9,8 @@ One grain alternates between three regimes:
 - sliding: Coulomb stick/slip on the plane (:mod:`symmech.grain.sliding`) until the
   normal force would become negative.
 
+A contact reached without ever separating (a rocking body that presses on the
+plane right after an impact) is persistent contact: the grain lands and slides.
 Lift-off after an impact is judged physically: the grain flies when the normal
 velocity of its contact point after the impact exceeds ``rest_velocity`` (a
 bounce lower than that is the end of chattering: the geometric series of ever
@@ -186,6 +188,11 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:
             time_in["flight"] += st.t - t0
             if not hit:
                 break
+            if st.t == t0:
+                # The grain never left the plane (a rocking body pressing on it): persistent contact.
+                regime = "sliding"
+                st = _land(model, st)
+                continue
             if len(impacts) >= num.max_impacts:
                 warnings.append(f"stopped at t = {st.t:.6g} s after numerics.max_impacts = {num.max_impacts} impacts")
                 break

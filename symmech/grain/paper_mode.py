@@ -30,19 +30,12 @@ import numpy as np
 from symmech.generated import grain_motion as gm
 from symmech.generated import grain_motion_printed as gp
 from symmech.grain import contact
+from symmech.grain.body import euler_from_matrix
 from symmech.grain.motion import Model, Motion, Numerics, State, impact_record, _unique
 from symmech.grain.flight import quaternion_from_matrix
 from symmech.grain.sliding import slide_step
 
 GIMBAL_SIN = 1e-6
-
-
-def euler_angles(Q) -> np.ndarray:
-    """z-x-z angles (psi, theta, phi) (3,) [rad] of a rotation matrix Q = Rz(psi) Rx(theta) Rz(phi)."""
-    theta = np.arccos(np.clip(Q[2, 2], -1.0, 1.0))
-    if abs(np.sin(theta)) < GIMBAL_SIN:
-        return np.array([np.arctan2(Q[1, 0], Q[0, 0]), theta, 0.0])
-    return np.array([np.arctan2(Q[0, 2], -Q[1, 2]), theta, np.arctan2(Q[2, 0], Q[2, 1])])
 
 
 def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0, t_end: float,
@@ -164,7 +157,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, alpha_beta
 
     Q0 = flight.rotation_matrix(start.q)
     r, v, _, rec = simulate_batch(model, num, np.array([model.axes]), np.array([model.mass]),
-                                  start.r[None], start.v[None], euler_angles(Q0)[None], start.w[None],
+                                  start.r[None], start.v[None], euler_from_matrix(Q0)[None], start.w[None],
                                   t_end, record=True, alpha_beta=alpha_beta)
     rows = [start.row("flight")] + rec["rows"]
     final = State(t_end, r[0], v[0], quaternion_from_matrix(rec["Q"][0]), rec["w_body"][0])

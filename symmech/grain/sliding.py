@@ -42,6 +42,11 @@ class Sliding:
         """Tangential driving force per unit mass f(t) (..., 2) [m/s^2]."""
         return np.asarray(self.g_k[:2]) - self.vibration.kinematics(t)[..., 2, :2]
 
+    def forces(self, t):
+        """(f (..., 2), n (...,)) from one evaluation of the surface kinematics."""
+        acc = self.vibration.kinematics(t)[..., 2, :]
+        return np.asarray(self.g_k[:2]) - acc[..., :2], acc[..., 2] - self.g_k[2]
+
     def sticks(self, t) -> bool:
         return float(np.linalg.norm(self.drive(t))) <= self.mu * float(self.normal(t))
 
@@ -101,10 +106,10 @@ def _slip(model: Sliding, t, r, v, t_stop, take, v_eps, tol, out_t, out_r, out_v
 
     def rhs(s, y):
         vel = y[2:]
-        f = model.drive(s)
+        f, n = model.forces(s)
         speed = np.hypot(*vel)
         direction = vel / speed if speed > v_eps else f / max(np.hypot(*f), 1e-300)
-        return np.concatenate([vel, f - model.mu * model.normal(s) * direction])
+        return np.concatenate([vel, f - model.mu * n * direction])
 
     def stops(_s, y):
         return np.hypot(*y[2:]) - v_eps
