@@ -219,7 +219,8 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:
             time_in["sliding"] += res.t - t0
             st = State(res.t, np.array([*res.r, st.r[2]]), np.array([*res.v, 0.0]), st.q, st.w)
             rec.add(st, "sliding")
-            regime = "flight"
+            if res.lifted:
+                regime = "flight"
     rec.add(st, regime)
     return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st)
 

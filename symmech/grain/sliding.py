@@ -10,6 +10,7 @@ and only the tangential motion (x, y) evolves. Per unit mass, in KXYZ:
   driving force    f(t) = g_t - a_s,t(t)                     (tangential, (2,))
   slip             v' = f - mu n v/|v|
   stick            v = 0 while |f| <= mu n; slip starts in the direction of f when |f| > mu n
+                   (below the slip-speed resolution v_eps, friction holds min(mu n, |f|))
 
 The grain leaves the plane (flight with zero relative normal velocity) when
 ``n(t)`` would become negative. With the friction effect off (mu = 0) the
@@ -75,7 +76,10 @@ def slide(model: Sliding, t0: float, r0, v0, t_end: float, sample_times, step: f
     r, v, t = np.asarray(r0, dtype=float), np.asarray(v0, dtype=float), t0
     sample_times = np.asarray(sample_times, dtype=float)
     out_t, out_r, out_v = [], [], []
-    v_eps = tol * (float(np.linalg.norm(model.drive(t0))) + abs(model.g_k[2])) * step
+    # Velocity gained over one scan step: the scale of the slip-speed resolution and of atol.
+    v_scale = (float(np.linalg.norm(model.drive(t0))) + abs(model.g_k[2])) * step
+    v_eps = tol * v_scale
+    atol = tol * v_scale * np.array([step, step, 1.0, 1.0])
     while t < t_stop:
         take = sample_times[(sample_times >= t) & (sample_times < t_stop)]
         if model.mu == 0.0:
@@ -89,34 +93,37 @@ def slide(model: Sliding, t0: float, r0, v0, t_end: float, sample_times, step: f
                                 t, t_stop, step, xtol)
             t_next = t_stop if t_slip is None else t_slip
             if t_next <= t:  # on the verge of slipping: start now
-                t, r, v = _slip(model, t, r, v, t_stop, take, v_eps, tol, out_t, out_r, out_v)
+                t, r, v = _slip(model, t, r, v, t_stop, take, v_eps, tol, atol, out_t, out_r, out_v)
                 continue
             take = take[take < t_next]
             out_t.append(take), out_r.append(np.tile(r, (take.size, 1))), out_v.append(np.zeros((take.size, 2)))
             v, t = np.zeros(2), t_next
         else:
-            t, r, v = _slip(model, t, r, v, t_stop, take, v_eps, tol, out_t, out_r, out_v)
+            t, r, v = _slip(model, t, r, v, t_stop, take, v_eps, tol, atol, out_t, out_r, out_v)
     samples = tuple(np.concatenate(x) if x else np.zeros((0,) + s) for x, s in
                     ((out_t, ()), (out_r, (2,)), (out_v, (2,))))
     return SlideResult(t, r, v, t_lift is not None and t >= t_lift, samples)
 
 
-def _slip(model: Sliding, t, r, v, t_stop, take, v_eps, tol, out_t, out_r, out_v):
+def _slip(model: Sliding, t, r, v, t_stop, take, v_eps, tol, atol, out_t, out_r, out_v):
     """Integrate slipping until the slip speed drops to ``v_eps`` (then stick or reverse) or ``t_stop``."""
 
     def rhs(s, y):
         vel = y[2:]
         f, n = model.forces(s)
         speed = np.hypot(*vel)
-        direction = vel / speed if speed > v_eps else f / max(np.hypot(*f), 1e-300)
-        return np.concatenate([vel, f - model.mu * n * direction])
+        if speed > v_eps:
+            return np.concatenate([vel, f - model.mu * n * vel / speed])
+        # At (numerically) zero slip, static friction holds as much of f as it can.
+        fn = np.hypot(*f)
+        return np.concatenate([vel, f * (1.0 - min(model.mu * n, fn) / max(fn, 1e-300))])
 
     def stops(_s, y):
         return np.hypot(*y[2:]) - v_eps
     stops.terminal, stops.direction = True, -1
 
     sol = solve_ivp(rhs, (t, t_stop), np.concatenate([r, v]), method="DOP853", rtol=tol,
-                    atol=tol * v_eps, events=stops, dense_output=True)
+                    atol=atol, events=stops, dense_output=True)
     if not sol.success:
         raise RuntimeError(f"sliding integration failed: {sol.message}")
     t_end = sol.t[-1]
