@@ -60,6 +60,11 @@ class Model:
     def inertia(self) -> np.ndarray:
         return principal_inertia(self.axes, self.mass)
 
+    def active(self) -> "Model":
+        """The model the simulation runs: parameters of switched-off effects zeroed (no code runs for them)."""
+        vib = self.vibration if self.effects.vibration else replace(self.vibration, amplitude=0.0)
+        return replace(self, vibration=vib, mu=self.mu if self.effects.friction else 0.0)
+
     @property
     def sliding(self) -> Sliding:
         return Sliding(self.g_k, self.vibration, self.mu)
@@ -171,6 +176,7 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
 
 def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:
     """Accurate mode from ``start`` to ``t_end``; the grain starts in flight (or on the plane at rest)."""
+    model = model.active()
     rec = _Recorder(num.sample_interval)
     st = replace(start, r=np.array(start.r, float), v=np.array(start.v, float),
                  q=np.asarray(start.q, float) / np.linalg.norm(start.q), w=np.array(start.w, float))
@@ -210,8 +216,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:
                 st = _land(model, st)
         else:
             t0 = st.t
-            res = slide(model.sliding if model.effects.friction else replace(model.sliding, mu=0.0),
-                        st.t, st.r[:2], st.v[:2], t_end, rec.times(st.t, t_end), num.scan_step, num.tolerance)
+            res = slide(model.sliding, st.t, st.r[:2], st.v[:2], t_end, rec.times(st.t, t_end), num.scan_step, num.tolerance)
             ts, rs, vs = res.samples
             n = len(ts)
             rec.add_many(ts, np.column_stack([rs, np.full(n, st.r[2])]), np.column_stack([vs, np.zeros(n)]),
@@ -235,7 +240,7 @@ def _land(model: Model, st: State) -> State:
 
 def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder):
     """Fly from ``st`` until the first contact (state at contact, True) or ``t_end`` (state, False)."""
-    vib = model.vibration if model.effects.vibration else replace(model.vibration, amplitude=0.0)
+    vib = model.vibration
     rotating = model.effects.rotation and np.any(st.w)
     rot = flight.RotationFlight(model.inertia, st.q, st.w, st.t, num.tolerance, model.period) if rotating else None
 

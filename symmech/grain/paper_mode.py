@@ -12,7 +12,8 @@ Per step dt, for every grain in flight:
 - (63) contact test over ``nodes`` discrete surface nodes: corrected, the lowest
   node reaches the plane (``z_c + min_k z_k <= 0``); as printed ``z_c <= |KC|``;
 - impact at the step time with the scene's impact law (applied at the exact lowest
-  point of the ellipsoid);
+  point of the ellipsoid); corrected, the centre is put back to the height at which
+  the lowest node touches the plane (as printed, the step's penetration stays);
 - (64) lift-off test: corrected, the contact point separates (normal velocity after
   the impact above ``rest_velocity`` and above 2 g dt, the smallest bounce the step
   resolves); as printed, ``z'_c > 0``. Otherwise the grain
@@ -59,8 +60,9 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
     nodes = contact.ellipsoid_nodes(np.ones(3), num.nodes)[None] * axes[:, None, :]  # (n, N, 3)
     sliding = np.zeros(n, dtype=bool)
     count = np.zeros(n, dtype=int)
-    vib = model.vibration if model.effects.vibration else replace(model.vibration, amplitude=0.0)
-    slide_model = replace(model.sliding, vibration=vib, mu=model.mu if model.effects.friction else 0.0)
+    model = model.active()
+    vib = model.vibration
+    slide_model = model.sliding
     warnings: list = []
     if num.as_printed:
         a, b = alpha_beta
@@ -96,11 +98,14 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
                 v[idx] = out["v"]
                 w_body[idx] = np.einsum("nji,nj->ni", Q[idx], out["w"])
                 lifted = out["v"][:, 2] > 0.0 if num.as_printed else out["u_after"][:, 2] > rest
+                if not num.as_printed:
+                    # The impact happens on the plane: undo the penetration of the step.
+                    r[idx, 2] = _node_support(Q[idx], nodes[idx])
                 land = idx[~lifted]
                 sliding[land] = True
                 v[land, 2] = 0.0
                 w_body[land] = 0.0
-                r[land, 2] = -np.min(np.einsum("nij,nkj->nki", Q[land], nodes[land])[..., 2], axis=1)
+                r[land, 2] = _node_support(Q[land], nodes[land])
                 if rotation:
                     rates[idx], bad = _rates(ang[idx], w_body[idx], with_flags=True)
                     if bad.any():
@@ -126,6 +131,11 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
                             .row("sliding" if sliding[0] else "flight"))
     return r, v, count, {"rows": rec_rows, "impacts": rec_impacts, "time_in": time_in,
                          "warnings": _unique(warnings), "Q": Q, "w_body": w_body}
+
+
+def _node_support(Q, nodes):
+    """Centre height (n,) [m] at which the lowest node touches the plane."""
+    return -np.min(np.einsum("nij,nkj->nki", Q, nodes)[..., 2], axis=1)
 
 
 def _rates(ang, w_body, with_flags=False):
