@@ -1,0 +1,100 @@
+"""Closed-form frequencies of small mechanisms vs the SMM matrices."""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.core.scene import Section
+from symmech.smm import numeric
+from symmech.smm.chain import chain_mechanism
+from symmech.smm.model import Effects
+
+from smm_helpers import bar_on_springs, hanging_mass, mech, omega2, param, spring_chain
+
+RTOL = 1e-10
+
+
+def chain(n, ends, motion="axial", tension=0.0, k=150.0, m=0.7, L=0.4):
+    return chain_mechanism(Section({"n": n, "mass": m, "stiffness": k, "spacing": L, "ends": ends,
+                                    "motion": motion, "tension": tension}, "chain"))
+
+
+@pytest.mark.parametrize("n", [1, 3, 7])
+def test_chain_fixed_fixed(n):
+    k, m = 150.0, 0.7
+    expected = [2 * k / m * (1 - math.cos(j * math.pi / (n + 1))) for j in range(1, n + 1)]
+    np.testing.assert_allclose(omega2(chain(n, "fixed-fixed")), expected, rtol=RTOL)
+
+
+@pytest.mark.parametrize("n", [1, 4, 6])
+def test_chain_fixed_free(n):
+    k, m = 150.0, 0.7
+    expected = [2 * k / m * (1 - math.cos((2 * j - 1) * math.pi / (2 * n + 1))) for j in range(1, n + 1)]
+    np.testing.assert_allclose(omega2(chain(n, "fixed-free")), expected, rtol=RTOL)
+
+
+@pytest.mark.parametrize("n", [2, 5])
+def test_chain_free_free(n):
+    k, m = 150.0, 0.7
+    expected = [2 * k / m * (1 - math.cos(j * math.pi / n)) for j in range(0, n)]
+    w2 = omega2(chain(n, "free-free"))
+    assert abs(w2[0]) < 1e-10 * w2[-1]
+    np.testing.assert_allclose(w2[1:], expected[1:], rtol=RTOL)
+
+
+def test_double_pendulum_equal_links():
+    g, l = 9.81, 0.9
+    m = mech({
+        "parameters": {"m": param(1.3, "kg"), "l": param(l, "m"), "g": param(g, "m/s^2")},
+        "coordinates": [{"name": "p1", "type": "angle"}, {"name": "p2", "type": "angle"}],
+        "points": [{"name": "O", "at": [0, 0]},
+                   {"name": "A", "from": "O", "vector": [0, "-l"], "turns": ["p1"]},
+                   {"name": "B", "from": "A", "vector": [0, "-l"], "turns": ["p1", "p2"]}],
+        "bodies": [{"name": "b1", "mass": "m", "com": "A"}, {"name": "b2", "mass": "m", "com": "B"}],
+        "gravity": {"g": "g"},
+    })
+    np.testing.assert_allclose(omega2(m), [g / l * (2 - math.sqrt(2)), g / l * (2 + math.sqrt(2))], rtol=RTOL)
+
+
+def test_bar_on_two_springs_bounce_and_pitch():
+    m, J, k, l = 40.0, 6.0, 2000.0, 0.5
+    w2 = omega2(bar_on_springs(m, J, k, k, l, l))
+    np.testing.assert_allclose(w2, sorted([2 * k / m, 2 * k * l * l / J]), rtol=RTOL)
+
+
+def test_bar_on_two_unequal_springs_coupled():
+    m, J, k1, k2, l1, l2 = 40.0, 6.0, 1500.0, 2600.0, 0.4, 0.7
+    # det(c - w2 a) = 0 for c = [[k1+k2, k2 l2 - k1 l1], [., k1 l1^2 + k2 l2^2]], a = diag(m, J)
+    c11, c12, c22 = k1 + k2, k2 * l2 - k1 * l1, k1 * l1**2 + k2 * l2**2
+    p = c11 / m + c22 / J
+    q = (c11 * c22 - c12**2) / (m * J)
+    expected = [(p - math.sqrt(p * p - 4 * q)) / 2, (p + math.sqrt(p * p - 4 * q)) / 2]
+    np.testing.assert_allclose(omega2(bar_on_springs(m, J, k1, k2, l1, l2)), expected, rtol=RTOL)
+
+
+def test_hanging_mass_sideways_frequency_from_preload_alone():
+    k, mass, l, g = 500.0, 2.0, 0.8, 9.81
+    w2 = omega2(hanging_mass(k, mass, l, g))
+    np.testing.assert_allclose(w2, sorted([g / l, k / mass]), rtol=RTOL)
+    no_preload = omega2(hanging_mass(k, mass, l, g, effects={"preload": False}))
+    np.testing.assert_allclose(no_preload, [0.0, k / mass], atol=1e-9 * k / mass)
+
+
+def test_pretensioned_string_transverse_stiffness_is_all_preload():
+    n, T, m, L = 5, 80.0, 0.3, 0.25
+    string = chain(n, "fixed-fixed", "transverse", tension=T, k=1e4, m=m, L=L)
+    expected = [2 * T / (m * L) * (1 - math.cos(j * math.pi / (n + 1))) for j in range(1, n + 1)]
+    np.testing.assert_allclose(omega2(string), expected, rtol=RTOL)
+    num = numeric.assemble(string, Effects(True, False, True))
+    assert np.abs(num.c.toarray()).max() == 0.0
+
+
+def test_stiffness_times_influence_coefficients_is_identity():
+    """The paper's check (c)(alpha) = E; alpha by unit loads on a chain of springs in series."""
+    ks = [300.0, 120.0, 450.0, 80.0]
+    m = spring_chain([1.0, 2.0, 3.0, 4.0], ks)
+    c = numeric.assemble(m).c.toarray()
+    n = len(ks)
+    # unit load at mass j stretches springs 0..j-1: displacement of mass i = sum_{s <= min(i, j)} 1/k_s
+    alpha = np.array([[sum(1 / ks[s] for s in range(min(i, j) + 1)) for j in range(n)] for i in range(n)])
+    np.testing.assert_allclose(c @ alpha, np.eye(n), atol=1e-12)
