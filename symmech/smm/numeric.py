@@ -189,7 +189,7 @@ def damping_ratios(a, b, c, omega2) -> list:
     out = []
     used = np.zeros(len(lam), bool)
     for w2 in omega2:
-        if w2 <= 1e-12 * max(abs(omega2).max(), 1e-300):
+        if w2 <= 100 * np.finfo(float).eps * max(abs(omega2).max(), 1e-300):
             out.append(None)
             continue
         w = math.sqrt(w2)

@@ -28,6 +28,8 @@ from symmech.smm.chain import chain_mechanism
 SYMBOLIC_LIMIT = 60
 # Warn when the eigenvalue spread costs more than this relative accuracy in omega^2.
 CONDITION_WARN = 1e-8
+# omega^2 within this many machine epsilons of the largest omega^2 counts as a rigid-body mode.
+RIGID_EPS = 100
 
 
 def mechanism(scene: Section) -> Mechanism:
@@ -82,12 +84,14 @@ def run(scene: Section, out: Path) -> dict:
     md = numeric.modes(a, b, c)
     w2 = md.omega2
     wmax = max(abs(w2).max(), 1e-300)
-    rigid = [i for i, x in enumerate(w2) if abs(x) <= 1e-9 * wmax]
-    unstable = [i for i, x in enumerate(w2) if x < -1e-9 * wmax]
+    # rigid-body modes: omega^2 at round-off level of the largest one
+    zero = RIGID_EPS * np.finfo(float).eps * wmax
+    rigid = [i for i, x in enumerate(w2) if abs(x) <= zero]
+    unstable = [i for i, x in enumerate(w2) if x < -zero]
     if unstable:
         warnings.append(f"{len(unstable)} mode(s) have negative omega^2 (unstable equilibrium), "
                         f"lowest {w2[0]:.4g} 1/s^2")
-    elastic = [x for x in w2 if x > 1e-9 * wmax]
+    elastic = [x for x in w2 if x > zero]
     if elastic:
         spread = max(elastic) / min(elastic)
         if spread * np.finfo(float).eps > CONDITION_WARN:
@@ -180,7 +184,10 @@ def _point_force(scene_sec: Section, m: Mechanism) -> np.ndarray:
     point = scene_sec.str("point")
     if point not in m.points:
         raise SceneError(scene_sec._field("point"), f"point '{point}' is not defined")
-    force = np.array(scene_sec.vector("force", 3, unit="N"))
+    raw = scene_sec._data.get("force")
+    force = np.zeros(3)
+    size = len(raw) if isinstance(raw, list) and len(raw) in (2, 3) else 3
+    force[:size] = scene_sec.vector("force", size, unit="N")
     g = forms.Geometry(m, NumericArith(m.values()))
     kin = forms.chain_kinematics(g, point, False)
     Q = np.zeros(n)

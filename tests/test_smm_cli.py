@@ -1,0 +1,84 @@
+"""CLI: runs, latex, and one-line errors naming the element for bad mechanism scenes."""
+import json
+
+import pytest
+
+from symmech.cli import main
+from symmech.core import emit
+from symmech.smm.derive import bundled_scenes, module_specs
+
+BASE = """kind = "mechanism"
+[parameters]
+m = {value = 1.0, unit = "kg"}
+[[coordinates]]
+name = "x"
+type = "slide"
+axis = [1, 0]
+[[points]]
+name = "O"
+at = [0, 0]
+[[points]]
+name = "P"
+from = "O"
+vector = [1, 0]
+slides = ["x"]
+[[bodies]]
+name = "bob"
+mass = "m"
+com = "P"
+[[springs]]
+name = "k1"
+ends = ["O", "P"]
+stiffness = 100.0
+"""
+
+BAD = {
+    "unreachable point": (BASE.replace('from = "O"', 'from = "Q"'), "parent point 'Q' is not defined"),
+    "coordinate moves nothing": (BASE + '[[coordinates]]\nname = "y"\ntype = "slide"\naxis = [0, 1]\n',
+                                 "coordinate 'y' moves nothing"),
+    "zero-length spring": (BASE.replace('vector = [1, 0]', 'vector = [0, 0]'), "spring 'k1': its ends"),
+    "singular mass": (BASE.replace('value = 1.0, unit = "kg"', 'value = 0.0, unit = "kg"'),
+                      "coordinate 'x' moves no mass"),
+    "unknown parameter": (BASE.replace('mass = "m"', 'mass = "mm"'), "body 'bob': unknown parameter 'mm'"),
+    "unknown field": (BASE.replace('stiffness = 100.0', 'stiffness = 100.0\nstifness = 3'),
+                      "springs[0].stifness"),
+    "negative mass": (BASE.replace('value = 1.0, unit = "kg"', 'value = -1.0, unit = "kg"'),
+                      "body 'bob': mass m is negative"),
+    "non-unit axis": (BASE.replace('axis = [1, 0]', 'axis = [2, 0]'), "coordinate 'x': axis"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_scene_one_line_error(case, tmp_path, capsys):
+    text, message = BAD[case]
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert message in err, err
+
+
+def test_run_writes_results(tmp_path, capsys):
+    path = tmp_path / "ok.toml"
+    path.write_text(BASE + "[initial]\nq = [0.01]\nduration = 1.0\n[forcing]\npoint = \"P\"\nforce = [1, 0]\n"
+                           "omega = [0, 20]\n[[dampers]]\nname = \"d\"\nends = [\"O\", \"P\"]\nviscosity = 2.0\n")
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert abs(s["frequencies_rad_s"][0] - 10.0) < 1e-12
+    # zeta = c_d / (2 sqrt(k m)) = 2 / 20
+    assert abs(s["damping_ratios"][0] - 0.1) < 1e-12
+    for f in ("modes.csv", "modes.png", "free_response.csv", "frequency_response.csv", "frequency_response.png"):
+        assert (tmp_path / "o" / f).exists()
+
+
+def test_latex_bundled(capsys):
+    assert main(["latex", "smm:double_pendulum.a"]) == 0
+    assert "l_{2}^{2} m_{2}" in capsys.readouterr().out
+
+
+def test_generated_smm_modules_current(tmp_path):
+    specs = module_specs()
+    assert len(specs) == len(bundled_scenes()) >= 1
+    assert emit.stale(emit.default_directory(), specs) == [] or all(
+        "smm_" not in p for p in emit.stale(emit.default_directory(), specs))
