@@ -49,6 +49,10 @@ class SymbolicArith:
         return sympy.Add(*terms)
 
     @staticmethod
+    def prod(factors):
+        return sympy.Mul(*factors)
+
+    @staticmethod
     def is_zero(x) -> bool:
         return x == 0
 

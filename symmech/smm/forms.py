@@ -21,12 +21,18 @@ from symmech.core.scene import SymmechError
 from symmech.smm.model import GROUND, Effects, Mechanism
 
 
+def turn(e, v, ez: bool):
+    """e x v; ``ez`` marks e = (0, 0, 1), where e x v = (-v_y, v_x, 0) needs no products."""
+    return (-v[1], v[0], 0 * v[2]) if ez else cross(e, v)
+
+
 def cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 def dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    terms = [x * y for x, y in zip(a, b) if not (x == 0 or y == 0)]
+    return sum(terms[1:], terms[0]) if terms else 0 * a[0]
 
 
 def _vsum(ar, vectors):
@@ -55,6 +61,7 @@ class Geometry:
         self.ar = ar
         self.index = {name: i for i, name in enumerate(m.coordinate_names)}
         self.axis = {c.name: tuple(ar(t, f"coordinate '{c.name}'") for t in c.axis) for c in m.coordinates}
+        self.ez = {a: tuple(c.axis) == ("0", "0", "1") for a, c in ((c.name, c) for c in m.coordinates)}
         self.vector = {p.name: tuple(ar(t, f"point '{p.name}'") for t in p.vector) for p in m.points.values()}
 
     def pair(self, a: str, b: str) -> tuple[str, str]:
@@ -83,15 +90,16 @@ def chain_kinematics(g: Geometry, point: str, second: bool) -> PointKinematics:
             slid[s] = slid.get(s, 0) + 1
     D = {}
     for a, vs in turned.items():
-        D[a] = cross(g.axis[a], _vsum(ar, vs))
+        D[a] = turn(g.axis[a], _vsum(ar, vs), g.ez[a])
     for s, n in slid.items():
         u = tuple(n * x for x in g.axis[s])
         D[s] = _vsum(ar, [D[s], u]) if s in D else u
     parts: dict[tuple, list] = {}
     for (a, b), vs in pair_v.items():
-        parts.setdefault(g.pair(a, b), []).append(cross(g.axis[a], cross(g.axis[b], _vsum(ar, vs))))
+        inner = turn(g.axis[b], _vsum(ar, vs), g.ez[b])
+        parts.setdefault(g.pair(a, b), []).append(turn(g.axis[a], inner, g.ez[a]))
     for (a, s), n in pair_s.items():
-        parts.setdefault(g.pair(a, s), []).append(cross(g.axis[a], tuple(n * x for x in g.axis[s])))
+        parts.setdefault(g.pair(a, s), []).append(turn(g.axis[a], tuple(n * x for x in g.axis[s]), g.ez[a]))
     H = {k: _vsum(ar, vs) for k, vs in parts.items()}
     D = {k: v for k, v in D.items() if _nonzero(ar, v)}
     H = {k: v for k, v in H.items() if _nonzero(ar, v)}
@@ -204,9 +212,10 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
             names = sorted(dd, key=idx.get)
             for ii, a in enumerate(names):
                 for bb in names[ii:]:
-                    perp = dot(dd[a], dd[bb]) - dot(e, dd[a]) * dot(e, dd[bb])
+                    ea, eb = dot(e, dd[a]), dot(e, dd[bb])
+                    perp = dot(dd[a], dd[bb]) if ar.is_zero(ea) or ar.is_zero(eb) else dot(dd[a], dd[bb]) - ea * eb
                     if not ar.is_zero(perp):
-                        add(out.preload, (idx[a], idx[bb]), tension * perp / length)
+                        add(out.preload, (idx[a], idx[bb]), ar.prod((tension, perp, 1 / length)))
             for (a, bb), h in hh.items():
                 v = dot(e, h)
                 if not ar.is_zero(v):
@@ -263,7 +272,6 @@ def triple_product(ar, columns, diag, n):
     for (_, col), w in zip(columns, diag):
         items = sorted(col.items())
         for ii, (i, vi) in enumerate(items):
-            wv = w * vi
             for j, vj in items[ii:]:
-                out.setdefault((i, j), []).append(wv * vj)
+                out.setdefault((i, j), []).append(ar.prod((w, vi, vj)))
     return out

@@ -22,6 +22,7 @@ accessors and validates the structure; errors name the element.
 from __future__ import annotations
 
 import ast
+import functools
 import math
 import operator
 from dataclasses import dataclass, field
@@ -186,11 +187,12 @@ _BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
            ast.Div: operator.truediv, ast.Pow: operator.pow}
 
 
-def expression_names(text: str) -> set[str]:
+@functools.lru_cache(maxsize=4096)
+def expression_names(text: str) -> frozenset[str]:
     """Parameter names used by an expression (function names excluded)."""
     tree = _parse(text, "<expression>")
     called = {n.func.id for n in ast.walk(tree) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
-    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} - called - set(_CONSTS)
+    return frozenset({n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} - called - set(_CONSTS))
 
 
 def _parse(text: str, where: str):
@@ -255,6 +257,10 @@ class NumericArith:
     @staticmethod
     def sum(terms):
         return math.fsum(terms)
+
+    @staticmethod
+    def prod(factors):
+        return math.prod(factors)
 
     @staticmethod
     def is_zero(x) -> bool:
@@ -417,7 +423,7 @@ def from_scene(scene: Section) -> Mechanism:
 
 def validate(m: Mechanism) -> None:
     """Structural checks; every error names the element."""
-    names = set(m.coordinate_names)
+    kinds = {c.name: c.kind for c in m.coordinates}
     known = set(m.parameters)
 
     def exprs_ok(where, *texts):
@@ -432,10 +438,10 @@ def validate(m: Mechanism) -> None:
         m.chain(p.name)
         exprs_ok(f"point '{p.name}'", *p.vector)
         for q in p.turns:
-            if q not in names or m.coordinate(q).kind != "angle":
+            if kinds.get(q) != "angle":
                 raise SymmechError(f"point '{p.name}': turns names '{q}', which is not an angle coordinate")
         for q in p.slides:
-            if q not in names or m.coordinate(q).kind != "slide":
+            if kinds.get(q) != "slide":
                 raise SymmechError(f"point '{p.name}': slides names '{q}', which is not a slide coordinate")
         if len(set(p.turns)) != len(p.turns) or len(set(p.slides)) != len(p.slides):
             raise SymmechError(f"point '{p.name}': a coordinate is listed twice")
@@ -447,7 +453,7 @@ def validate(m: Mechanism) -> None:
         if b.turns is None:
             m.bodies[i] = b = Body(b.name, b.mass, b.inertia, b.com, m.points[b.com].turns)
         for q in b.turns:
-            if q not in names or m.coordinate(q).kind != "angle":
+            if kinds.get(q) != "angle":
                 raise SymmechError(f"body '{b.name}': turns names '{q}', which is not an angle coordinate")
     for link in m.springs + m.dampers:
         for end in (link.a, link.b):
