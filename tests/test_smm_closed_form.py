@@ -98,3 +98,25 @@ def test_stiffness_times_influence_coefficients_is_identity():
     # unit load at mass j stretches springs 0..j-1: displacement of mass i = sum_{s <= min(i, j)} 1/k_s
     alpha = np.array([[sum(1 / ks[s] for s in range(min(i, j) + 1)) for j in range(n)] for i in range(n)])
     np.testing.assert_allclose(c @ alpha, np.eye(n), atol=1e-12)
+
+
+def test_equilibrium_found_first(tmp_path):
+    """A mass on a spring of free length l0 drawn at the wrong height: eq. (6) finds
+    l = l0 + m g / k, then the sideways frequency is g / l (preload term) and the vertical k / m."""
+    from symmech.smm.scene import run
+
+    k, mass, l0, g = 400.0, 2.0, 0.5, 9.81
+    d = {"kind": "mechanism",
+         "parameters": {"m": param(mass, "kg"), "k": param(k, "N/m"), "g": param(g, "m/s^2")},
+         "coordinates": [{"name": "x", "type": "slide", "axis": [1, 0]},
+                         {"name": "y", "type": "slide", "axis": [0, 1]}],
+         "points": [{"name": "O", "at": [0, 0]},
+                    {"name": "P", "from": "O", "vector": [0.02, -0.3], "slides": ["x", "y"]}],
+         "bodies": [{"name": "bob", "mass": "m", "com": "P"}],
+         "springs": [{"name": "s", "ends": ["O", "P"], "stiffness": "k", "free_length": l0}],
+         "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": False}}
+    s = run(Section(d), tmp_path)
+    length = l0 + mass * g / k
+    np.testing.assert_allclose(s["omega2_1_per_s2"], sorted([g / length, k / mass]), rtol=1e-9)
+    np.testing.assert_allclose(s["equilibrium"]["q"], [-0.02, 0.3 - length], atol=1e-10)
+    assert s["warnings"] == []
