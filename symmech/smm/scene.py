@@ -282,31 +282,28 @@ def _plots(m: Mechanism, md, omega, response, out: Path) -> list[str]:
     files.append("modes.png")
     if "frf" in response:
         omegas, H = response["frf"]
-        fig, ax = plt.subplots(figsize=(6, 4))
-        for j, name in enumerate(m.coordinate_names[:8]):
-            ax.semilogy(omegas, np.maximum(np.abs(H[:, j]), 1e-300), label=name)
-        ax.set_xlabel("omega [rad/s]")
-        ax.set_ylabel("|q| [m or rad]")
-        ax.set_title(f"{m.name}: frequency response")
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(out / "frequency_response.png", dpi=110)
-        plt.close(fig)
-        files.append("frequency_response.png")
+        files.append(_curves(plt, m, omegas, np.maximum(np.abs(H), 1e-300), True, "omega [rad/s]",
+                             "|q| [m or rad]", "frequency response", out))
     if "free" in response:
         t, q = response["free"]
-        fig, ax = plt.subplots(figsize=(6, 4))
-        for j, name in enumerate(m.coordinate_names[:8]):
-            ax.plot(t, q[:, j], label=name)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("q [m or rad]")
-        ax.set_title(f"{m.name}: free response")
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        fig.savefig(out / "free_response.png", dpi=110)
-        plt.close(fig)
-        files.append("free_response.png")
+        files.append(_curves(plt, m, t, q, False, "t [s]", "q [m or rad]", "free response", out))
     return files
+
+
+def _curves(plt, m: Mechanism, x, ys, log: bool, xlabel: str, ylabel: str, title: str, out: Path) -> str:
+    """One curve per coordinate (first eight) against x; returns the PNG file name."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for j, name in enumerate(m.coordinate_names[:8]):
+        (ax.semilogy if log else ax.plot)(x, ys[:, j], label=name)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(f"{m.name}: {title}")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    name = title.replace(" ", "_") + ".png"
+    fig.savefig(out / name, dpi=110)
+    plt.close(fig)
+    return name
 
 
 def precision(scene: Section, out: Path) -> dict:
