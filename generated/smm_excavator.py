@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 d3b522452c5b9459ebfe2fd225c36614d5b53224a1974ece948166d69b9c0d37
+# symmech 0.1.0 generated module; inputs sha256 d7d23e643232cfc1c764308a16fc3395b9a283806b081d5835c11361fab3d8df
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -265,24 +265,28 @@ def c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     (m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs,), batch = _batch(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
     out = numpy.empty(batch + (5, 5))
     x0 = numpy.sin(delta3)
-    x1 = numpy.cos(delta4)
-    x2 = c3*l3*x0 - c4*l6*x1
-    x3 = numpy.sin(alpha)
-    x4 = l4*x3
-    x5 = numpy.sin(beta)
-    x6 = l5*x5
-    x7 = x4 + x6
-    x8 = numpy.cos(alpha)
-    x9 = l4*x8
-    x10 = numpy.cos(beta)
-    x11 = l5*x10
-    x12 = -x11 - x9
-    x13 = c1*x7
-    x14 = c2*l4*x12*x8 - x13*x4
-    x15 = c2*l5*x10*x12 - x13*x6
-    x16 = l4**2
-    x17 = c1*x4*x6 + c2*x11*x9
-    x18 = l5**2
+    x1 = hs**2/abs(hs)**2
+    x2 = numpy.cos(delta4)
+    x3 = c3*l3*x0*x1 - c4*l6*x1*x2
+    x4 = numpy.sin(alpha)
+    x5 = l4*x4
+    x6 = numpy.sin(beta)
+    x7 = l5*x6
+    x8 = x5 + x7
+    x9 = numpy.cos(alpha)
+    x10 = l4*x9
+    x11 = numpy.cos(beta)
+    x12 = l5*x11
+    x13 = -x10 - x12
+    x14 = h**2
+    x15 = abs(h)**(-2.0)
+    x16 = x14*x15
+    x17 = c1*x16*x8
+    x18 = c2*l4*x13*x14*x15*x9 - x17*x5
+    x19 = c2*l5*x11*x13*x14*x15 - x17*x7
+    x20 = l4**2
+    x21 = c1*x16*x5*x7 + c2*x10*x12*x16
+    x22 = l5**2
     out[..., 0, 0] = 0
     out[..., 0, 1] = 0
     out[..., 0, 2] = 0
@@ -290,24 +294,24 @@ def c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     out[..., 0, 4] = 0
     out[..., 1, 0] = 0
     out[..., 1, 1] = c3 + c4
-    out[..., 1, 2] = x2
+    out[..., 1, 2] = x3
     out[..., 1, 3] = 0
     out[..., 1, 4] = 0
     out[..., 2, 0] = 0
-    out[..., 2, 1] = x2
-    out[..., 2, 2] = c1*x7**2 + c2*x12**2 + c3*l3**2*x0**2 + c4*l6**2*x1**2
-    out[..., 2, 3] = x14
-    out[..., 2, 4] = x15
+    out[..., 2, 1] = x3
+    out[..., 2, 2] = c1*x8**2 + c2*x13**2 + c3*l3**2*x0**2 + c4*l6**2*x2**2
+    out[..., 2, 3] = x18
+    out[..., 2, 4] = x19
     out[..., 3, 0] = 0
     out[..., 3, 1] = 0
-    out[..., 3, 2] = x14
-    out[..., 3, 3] = c1*x16*x3**2 + c2*x16*x8**2
-    out[..., 3, 4] = x17
+    out[..., 3, 2] = x18
+    out[..., 3, 3] = c1*x20*x4**2 + c2*x20*x9**2
+    out[..., 3, 4] = x21
     out[..., 4, 0] = 0
     out[..., 4, 1] = 0
-    out[..., 4, 2] = x15
-    out[..., 4, 3] = x17
-    out[..., 4, 4] = c1*x18*x5**2 + c2*x10**2*x18
+    out[..., 4, 2] = x19
+    out[..., 4, 3] = x21
+    out[..., 4, 4] = c1*x22*x6**2 + c2*x11**2*x22
     return out
 
 

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 629c0bb7d77f4ae469e8df467e7b65b74e0f976dca30c169c4ca22f400eeafab
+# symmech 0.1.0 generated module; inputs sha256 641a11665a417cca9073d0c6d2a0191e62b9192a8eecc5e4533e423d35c39e4d
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -107,7 +107,7 @@ def b(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     x0 = l2**2*mu3
     x1 = Lr**2
     x2 = x1*numpy.sin(alpha)**2
-    x3 = -x0
+    x3 = -h**2*x0/abs(h)**2
     out[..., 0, 0] = mu1*r1**2*x2/(x1*numpy.cos(alpha)**2 + x2) + x0
     out[..., 0, 1] = x3
     out[..., 1, 0] = x3
@@ -157,7 +157,7 @@ def c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     x0 = c3*l2**2
     x1 = Lr**2
     x2 = x1*numpy.sin(alpha)**2
-    x3 = -x0
+    x3 = -h**2*x0/abs(h)**2
     out[..., 0, 0] = c1*r1**2*x2/(x1*numpy.cos(alpha)**2 + x2) + x0
     out[..., 0, 1] = x3
     out[..., 1, 0] = x3

@@ -111,3 +111,50 @@ def test_random_planar_chains_numeric_agreement(d):
         np.testing.assert_allclose(l_, ref, atol=1e-10 * scale, rtol=0)
     np.testing.assert_allclose(np.array(lag["residual"].subs(values).evalf(), dtype=float).ravel(), num.residual,
                                atol=1e-10 * max(1.0, np.abs(num.residual).max()))
+
+
+@st.composite
+def spatial_chains(draw):
+    """Random spatial trees: angles about random unit axes (Table 2 conjugates e x p), ordered
+    rotations, slides, principal moments, preloaded springs, gravity, torsion springs."""
+    unit = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)).filter(
+        lambda v: 0.3 < math.sqrt(sum(x * x for x in v)))
+    n_ang = draw(st.integers(1, 3))
+    coords = []
+    for i in range(n_ang):
+        v = draw(unit)
+        norm = math.sqrt(sum(x * x for x in v))
+        coords.append({"name": f"a{i}", "type": "angle", "axis": [x / norm for x in v]})
+    v = draw(unit)
+    norm = math.sqrt(sum(x * x for x in v))
+    coords.append({"name": "s0", "type": "slide", "axis": [x / norm for x in v]})
+    num = st.floats(-1.2, 1.2).map(lambda x: round(x, 3))
+    points = [{"name": "O", "at": [0, 0, 0]}]
+    for i in range(1, 4):
+        parent = draw(st.sampled_from([p["name"] for p in points]))
+        turns = sorted(draw(st.sets(st.sampled_from([c["name"] for c in coords[:n_ang]]), max_size=n_ang)))
+        points.append({"name": f"P{i}", "from": parent, "turns": turns,
+                       "vector": [draw(num) + 0.2 * i, draw(num), draw(num) - 0.1 * i],
+                       "slides": ["s0"] if draw(st.booleans()) else []})
+    points[-1]["turns"] = sorted(set(points[-1]["turns"]) | {c["name"] for c in coords[:n_ang]})
+    points[-1]["slides"] = ["s0"]
+    names = [p["name"] for p in points[1:]]
+    bodies = [{"name": f"B{i}", "mass": draw(st.floats(0.5, 3.0)),
+               "inertia": [draw(st.floats(0.0, 1.0)) for _ in range(3)], "com": p}
+              for i, p in enumerate(names)]
+    springs = [{"name": f"k{j}", "ends": [draw(st.sampled_from(["O"] + names)), draw(st.sampled_from(names))],
+                "stiffness": draw(st.floats(10, 1000)), "preload": draw(st.floats(-50, 50))} for j in range(2)]
+    v = draw(unit)
+    norm = math.sqrt(sum(x * x for x in v))
+    return {"parameters": {"g": param(9.81, "m/s^2")}, "coordinates": coords, "points": points,
+            "bodies": bodies, "springs": springs,
+            "torsion_springs": [{"name": "t0", "bodies": ["ground", "B2"], "stiffness": 30.0,
+                                 "axis": [x / norm for x in v]}],
+            "torsion_dampers": [{"name": "t1", "bodies": ["B0", "B2"], "viscosity": 2.0}],
+            "gravity": {"g": "g", "direction": [0, 0, -1]}}
+
+
+@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(spatial_chains())
+def test_random_spatial_chains_numeric_agreement(d):
+    test_random_planar_chains_numeric_agreement.hypothesis.inner_test(d)

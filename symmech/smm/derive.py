@@ -19,10 +19,15 @@ import sympy
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
 from symmech.core.scene import SymmechError, load
 from symmech.smm import forms
-from symmech.smm.model import Effects, Mechanism, from_scene
+from symmech.smm.model import Effects, Mechanism, from_scene, interpret
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
+
+
+_SYMPY_FUNCS = {name: getattr(sympy, name) for name in
+                ("sin", "cos", "tan", "sqrt", "asin", "acos", "atan", "atan2", "exp", "log")}
+_SYMPY_CONSTS = {"pi": sympy.pi}
 
 
 class SymbolicArith:
@@ -36,8 +41,8 @@ class SymbolicArith:
 
     def __call__(self, text: str, where: str = "<expression>") -> sympy.Expr:
         if text not in self._cache:
-            local = dict(self.symbols)
-            self._cache[text] = sympy.parse_expr(text, local_dict=local)
+            self._cache[text] = sympy.sympify(interpret(text, self.symbols, where, _SYMPY_FUNCS, _SYMPY_CONSTS,
+                                                        sympy.sympify))
         return self._cache[text]
 
     @staticmethod
@@ -50,7 +55,17 @@ class SymbolicArith:
 
     @staticmethod
     def prod(factors):
-        return sympy.Mul(*factors)
+        # Products of already-canonical sums: skipping Mul's flattening (which compares and
+        # sorts the factors) is what keeps a 32-link chain under a few seconds.
+        factors = [f for f in factors if f != 1]
+        if any(f == 0 for f in factors):
+            return sympy.S.Zero
+        if len(factors) < 2:
+            return factors[0] if factors else sympy.S.One
+        numbers = [f for f in factors if f.is_Number]
+        if len(numbers) > 1 or len(set(factors)) < len(factors):
+            return sympy.Mul(*factors)
+        return sympy.Mul(*factors, evaluate=False)
 
     @staticmethod
     def is_zero(x) -> bool:
@@ -144,8 +159,7 @@ def matrices(m: Mechanism, form: str = "chain", effects: Effects | None = None) 
     """Symbolic a, b, c and their factors for ``m`` (form ``chain`` or ``graph``).
 
     Keys: a, b, c (k x k); L_a, L_c, L_b (k x columns); m_a, c_d, b_d (diagonals);
-    c_preload, c_gravity (k x k second-order stiffness terms of (7)); residual
-    (k x 1, dPi/dq in the configuration, eq. (5)).
+    residual (k x 1, dPi/dq in the configuration, eq. (5)).
     """
     ar = SymbolicArith(m)
     kin = {"chain": forms.chain_kinematics, "graph": graph_kinematics}[form]
@@ -157,11 +171,13 @@ def matrices(m: Mechanism, form: str = "chain", effects: Effects | None = None) 
         "L_b": _factor(n, asm.Lb), "b_d": sympy.diag(*asm.mb) if asm.mb else sympy.zeros(0, 0),
         "a": _dense(n, forms.triple_product(ar, asm.La, asm.ma, n)),
         "b": _dense(n, forms.triple_product(ar, asm.Lb, asm.mb, n)),
-        "c_preload": _dense(n, asm.preload),
-        "c_gravity": _dense(n, asm.gravity),
         "residual": sympy.Matrix([sympy.Add(*asm.residual.get(i, [])) for i in range(n)]),
     }
-    out["c"] = _dense(n, forms.triple_product(ar, asm.Lc, asm.kc, n)) + out["c_preload"] + out["c_gravity"]
+    entries = forms.triple_product(ar, asm.Lc, asm.kc, n)
+    for part in (asm.preload, asm.gravity):
+        for key, terms in part.items():
+            entries.setdefault(key, []).extend(terms)
+    out["c"] = _dense(n, entries)
     out["column_labels"] = {"L_a": [c[0] for c in asm.La], "L_c": [c[0] for c in asm.Lc],
                             "L_b": [c[0] for c in asm.Lb]}
     return out

@@ -75,7 +75,7 @@ def chain_kinematics(g: Geometry, point: str, second: bool) -> PointKinematics:
     r = _vsum(ar, [g.vector[p.name] for p in chain])
     turned: dict[str, list] = {}       # a -> vectors turned by q_a
     slid: dict[str, int] = {}          # s -> number of chain vectors it lengthens
-    pair_v: dict[tuple, list] = {}     # (a, b) in turn order -> vectors turned by both
+    pair_v: dict[tuple, list] = {}     # (a, b) in turn order -> names of vectors turned by both
     pair_s: dict[tuple, int] = {}      # (a, s) -> count
     for p in chain[1:]:
         v = g.vector[p.name]
@@ -83,7 +83,7 @@ def chain_kinematics(g: Geometry, point: str, second: bool) -> PointKinematics:
             turned.setdefault(a, []).append(v)
             if second:
                 for b in p.turns[i:]:
-                    pair_v.setdefault((a, b), []).append(v)
+                    pair_v.setdefault((a, b), []).append(p.name)
                 for s in p.slides:
                     pair_s[(a, s)] = pair_s.get((a, s), 0) + 1
         for s in p.slides:
@@ -95,12 +95,20 @@ def chain_kinematics(g: Geometry, point: str, second: bool) -> PointKinematics:
         u = tuple(n * x for x in g.axis[s])
         D[s] = _vsum(ar, [D[s], u]) if s in D else u
     parts: dict[tuple, list] = {}
+    # with relative angles many pairs turn the same vectors: sum and turn each set once
+    planar = {}
     for (a, b), vs in pair_v.items():
-        inner = turn(g.axis[b], _vsum(ar, vs), g.ez[b])
-        parts.setdefault(g.pair(a, b), []).append(turn(g.axis[a], inner, g.ez[a]))
+        key = tuple(vs)
+        if g.ez[a] and g.ez[b] and key in planar:
+            h = planar[key]
+        else:
+            h = turn(g.axis[a], turn(g.axis[b], _vsum(ar, [g.vector[n] for n in vs]), g.ez[b]), g.ez[a])
+            if g.ez[a] and g.ez[b]:
+                planar[key] = h
+        parts.setdefault(g.pair(a, b), []).append(h)
     for (a, s), n in pair_s.items():
         parts.setdefault(g.pair(a, s), []).append(turn(g.axis[a], tuple(n * x for x in g.axis[s]), g.ez[a]))
-    H = {k: _vsum(ar, vs) for k, vs in parts.items()}
+    H = {k: vs[0] if len(vs) == 1 else _vsum(ar, vs) for k, vs in parts.items()}
     D = {k: v for k, v in D.items() if _nonzero(ar, v)}
     H = {k: v for k, v in H.items() if _nonzero(ar, v)}
     return PointKinematics(r, D, H)
@@ -179,8 +187,11 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
             for a, d in k.D.items():
                 add(out.residual, idx[a], -dot(weight, d))
             if eff.gravity:
+                seen: dict[int, object] = {}  # identical H vectors (shared by many pairs) dotted once
                 for (a, bb), h in k.H.items():
-                    add(out.gravity, (idx[a], idx[bb]), -dot(weight, h))
+                    if id(h) not in seen:
+                        seen[id(h)] = -dot(weight, h)
+                    add(out.gravity, (idx[a], idx[bb]), seen[id(h)])
 
     # springs, eqs. (5), (7), (9)
     for s in m.springs:
@@ -210,14 +221,22 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
         if eff.preload and not ar.is_zero(tension):
             hh = _diff(ar, ka.H, kb.H)
             names = sorted(dd, key=idx.get)
+            along = {a: dot(e, dd[a]) for a in names}
+            t_l = tension / length
+            # T/l (dd_a . dd_b - (e . dd_a)(e . dd_b)): the turn of the spring axis, eq. (7)
             for ii, a in enumerate(names):
                 for bb in names[ii:]:
-                    ea, eb = dot(e, dd[a]), dot(e, dd[bb])
-                    perp = dot(dd[a], dd[bb]) if ar.is_zero(ea) or ar.is_zero(eb) else dot(dd[a], dd[bb]) - ea * eb
-                    if not ar.is_zero(perp):
-                        add(out.preload, (idx[a], idx[bb]), ar.prod((tension, perp, 1 / length)))
+                    terms = [ar.prod((t_l, x, y)) for x, y in zip(dd[a], dd[bb])
+                             if not (ar.is_zero(x) or ar.is_zero(y))]
+                    if not (ar.is_zero(along[a]) or ar.is_zero(along[bb])):
+                        terms.append(-ar.prod((t_l, along[a], along[bb])))
+                    if terms:
+                        out.preload.setdefault((idx[a], idx[bb]), []).extend(terms)
+            seen = {}
             for (a, bb), h in hh.items():
-                v = dot(e, h)
+                if id(h) not in seen:
+                    seen[id(h)] = dot(e, h)
+                v = seen[id(h)]
                 if not ar.is_zero(v):
                     add(out.preload, (idx[a], idx[bb]), tension * v)
 

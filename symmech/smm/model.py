@@ -195,6 +195,7 @@ def expression_names(text: str) -> frozenset[str]:
     return frozenset({n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} - called - set(_CONSTS))
 
 
+@functools.lru_cache(maxsize=4096)
 def _parse(text: str, where: str):
     try:
         return ast.parse(text, mode="eval")
@@ -204,31 +205,40 @@ def _parse(text: str, where: str):
 
 def evaluate(text: str, values: dict[str, float], where: str = "<expression>") -> float:
     """Value of an arithmetic expression of parameters (+ - * / **, sin, cos, sqrt, pi ...)."""
+    try:
+        return float(interpret(text, values, where))
+    except (ZeroDivisionError, ValueError, OverflowError) as exc:
+        raise SymmechError(f"{where}: expression {text!r} cannot be evaluated ({exc})") from None
+
+
+def interpret(text: str, values: dict, where: str = "<expression>", funcs=None, consts=None, number=float):
+    """Walk the expression's syntax tree with the given values, functions, constants and number
+    type (floats by default; ``symmech.smm.derive`` passes sympy's)."""
+    funcs = _FUNCS if funcs is None else funcs
+    consts = _CONSTS if consts is None else consts
 
     def ev(node):
         if isinstance(node, ast.Expression):
             return ev(node.body)
-        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
-            return float(node.value)
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) \
+                and not isinstance(node.value, bool):
+            return number(node.value)
         if isinstance(node, ast.Name):
             if node.id in values:
                 return values[node.id]
-            if node.id in _CONSTS:
-                return _CONSTS[node.id]
+            if node.id in consts:
+                return consts[node.id]
             raise SymmechError(f"{where}: unknown parameter '{node.id}' in {text!r}")
         if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
             return _BINOPS[type(node.op)](ev(node.left), ev(node.right))
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
             v = ev(node.operand)
             return -v if isinstance(node.op, ast.USub) else v
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _FUNCS:
-            return _FUNCS[node.func.id](*(ev(a) for a in node.args))
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in funcs:
+            return funcs[node.func.id](*(ev(a) for a in node.args))
         raise SymmechError(f"{where}: unsupported expression {text!r}")
 
-    try:
-        return float(ev(_parse(text, where)))
-    except (ZeroDivisionError, ValueError, OverflowError) as exc:
-        raise SymmechError(f"{where}: expression {text!r} cannot be evaluated ({exc})") from None
+    return ev(_parse(text, where))
 
 
 def numeric(m: Mechanism) -> "NumericArith":
