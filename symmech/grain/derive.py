@@ -72,19 +72,19 @@ def rotation():
     return rot_z(psi) * rot_x(theta) * rot_z(phi)
 
 
+@functools.cache
 def euler_rate_matrix():
     """W(theta, phi) with body angular velocity omega' = W (theta', psi', phi').
 
-    Derived from the skew matrix Q^T dQ/dt with the angles as functions of time.
+    The rotation Q = Rz(psi) Rx(theta) Rz(phi) turns at psi' about the surface Z,
+    at theta' about the line of nodes Rz(psi) e_x and at phi' about the body z';
+    expressed in body axes these are Rz(phi)^T Rx(theta)^T e_z, Rz(phi)^T e_x and
+    e_z. (The test suite checks W against Q^T dQ/dt by finite differences.)
     """
-    t = sympy.Symbol("t")
-    fs = {s: sympy.Function(s.name)(t) for s in (psi, theta, phi)}
-    Qt = rotation().subs(fs)
-    omega_skew = Qt.T * Qt.diff(t)
-    omega_body = Matrix([omega_skew[2, 1], omega_skew[0, 2], omega_skew[1, 0]])
-    rates = [fs[theta].diff(t), fs[psi].diff(t), fs[phi].diff(t)]
-    W = omega_body.jacobian(rates).subs({v: k for k, v in fs.items()})
-    return W.applyfunc(sympy.trigsimp)  # 3x3 of short trig terms: cheap and readable
+    e_x, e_z = Matrix([1, 0, 0]), Matrix([0, 0, 1])
+    about_psi = rot_z(phi).T * rot_x(theta).T * e_z
+    about_theta = rot_z(phi).T * e_x
+    return Matrix.hstack(about_theta, about_psi, e_z)
 
 
 def gyration_squared():

@@ -148,11 +148,12 @@ def _trig_roots(k, tol, max_iter=12):
     a2c, a2s = k2c * c2 + k2s * s2, -k2c * s2 + k2s * c2
     quartic = np.stack([k0 - a1c + a2c, 2 * a1s - 4 * a2s, 2 * k0 - 6 * a2c,
                         2 * a1s + 4 * a2s, k0 + a1c + a2c], axis=1)
+    solvable = np.abs(quartic[:, 0]) > 0  # False only where F vanishes identically
     companion = np.zeros((n, 4, 4))
-    companion[:, 0, :] = -quartic[:, 1:] / quartic[:, :1]
+    companion[solvable, 0, :] = -quartic[solvable, 1:] / quartic[solvable, :1]
     companion[:, [1, 2, 3], [0, 1, 2]] = 1.0
     t = np.linalg.eigvals(companion)
-    real = np.abs(t.imag) <= 1e-6 * (1.0 + np.abs(t.real))
+    real = (np.abs(t.imag) <= 1e-6 * (1.0 + np.abs(t.real))) & solvable[:, None]
     roots = np.where(real, delta[:, None] + 2 * np.arctan(t.real), np.nan)
 
     iterations = 0
@@ -298,7 +299,7 @@ def _golden_section(xi, lo, hi, iterations, eps):
         lo, hi = np.where(active, new_lo, lo), np.where(active, new_hi, hi)
         l1, l2 = np.where(active, nl1, l1), np.where(active, nl2, l2)
         x1, x2 = np.where(active, nx1, x1), np.where(active, nx2, x2)
-    return 0.5 * (lo + hi)
+    return lo, hi
 
 
 def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptions()):
@@ -344,8 +345,9 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
         if not active.any():
             break
         g = grad_f(x)
-        step = _golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
-                               np.full(n, options.step_max), options.line_iterations, options.line_tol)
+        step = 0.5 * sum(_golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
+                                         np.full(n, options.step_max), options.line_iterations,
+                                         options.line_tol))
         x = np.where(active[:, None], x - step[:, None] * g, x)
         steps += active
     x = x * units
@@ -450,7 +452,7 @@ def solve_impact(body: Ellipsoid, Q, v_c, omega, e: float, lam: float, solver: s
         if not ok:
             warnings.append("scipy.optimize.root reports failure")
     residual = float(residual_19(H, m, e, lam, uK0, T, mu))
-    converged = residual < 1e-8
+    converged = bool(residual < 1e-8)  # False for NaN too
     if not converged:
         warnings.append(f"solver '{solver}' did not solve (19): relative residual {residual:.3g}")
     v_after = v_c + T / m
