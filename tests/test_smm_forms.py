@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 import sympy
-from hypothesis import given, settings, strategies as st, HealthCheck
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from symmech.smm import lagrange, numeric
 from symmech.smm.derive import bundled_scenes, load_mechanism, matrices
@@ -93,12 +93,11 @@ def _spread(d):
     return m
 
 
-@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(planar_chains())
 def test_random_planar_chains_numeric_agreement(d):
     m = _spread(d)
-    if m is None:
-        return
+    assume(m is not None)
     num = numeric.assemble(m)
     graph = matrices(m, "graph")
     lag = lagrange.matrices(m)
@@ -119,7 +118,7 @@ def spatial_chains(draw):
     rotations, slides, principal moments, preloaded springs, gravity, torsion springs."""
     unit = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)).filter(
         lambda v: 0.3 < math.sqrt(sum(x * x for x in v)))
-    n_ang = draw(st.integers(1, 3))
+    n_ang = draw(st.integers(1, 2))
     coords = []
     for i in range(n_ang):
         v = draw(unit)
@@ -130,7 +129,7 @@ def spatial_chains(draw):
     coords.append({"name": "s0", "type": "slide", "axis": [x / norm for x in v]})
     num = st.floats(-1.2, 1.2).map(lambda x: round(x, 3))
     points = [{"name": "O", "at": [0, 0, 0]}]
-    for i in range(1, 4):
+    for i in range(1, 3):
         parent = draw(st.sampled_from([p["name"] for p in points]))
         turns = sorted(draw(st.sets(st.sampled_from([c["name"] for c in coords[:n_ang]]), max_size=n_ang)))
         points.append({"name": f"P{i}", "from": parent, "turns": turns,
@@ -142,19 +141,20 @@ def spatial_chains(draw):
     bodies = [{"name": f"B{i}", "mass": draw(st.floats(0.5, 3.0)),
                "inertia": [draw(st.floats(0.0, 1.0)) for _ in range(3)], "com": p}
               for i, p in enumerate(names)]
-    springs = [{"name": f"k{j}", "ends": [draw(st.sampled_from(["O"] + names)), draw(st.sampled_from(names))],
+    ends = [draw(st.sampled_from([("O", "P1"), ("O", "P2"), ("P1", "P2")])) for _ in range(2)]
+    springs = [{"name": f"k{j}", "ends": list(ends[j]),
                 "stiffness": draw(st.floats(10, 1000)), "preload": draw(st.floats(-50, 50))} for j in range(2)]
     v = draw(unit)
     norm = math.sqrt(sum(x * x for x in v))
     return {"parameters": {"g": param(9.81, "m/s^2")}, "coordinates": coords, "points": points,
             "bodies": bodies, "springs": springs,
-            "torsion_springs": [{"name": "t0", "bodies": ["ground", "B2"], "stiffness": 30.0,
+            "torsion_springs": [{"name": "t0", "bodies": ["ground", "B1"], "stiffness": 30.0,
                                  "axis": [x / norm for x in v]}],
-            "torsion_dampers": [{"name": "t1", "bodies": ["B0", "B2"], "viscosity": 2.0}],
+            "torsion_dampers": [{"name": "t1", "bodies": ["B0", "B1"], "viscosity": 2.0}],
             "gravity": {"g": "g", "direction": [0, 0, -1]}}
 
 
-@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(spatial_chains())
 def test_random_spatial_chains_numeric_agreement(d):
     test_random_planar_chains_numeric_agreement.hypothesis.inner_test(d)
