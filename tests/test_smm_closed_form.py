@@ -120,3 +120,47 @@ def test_equilibrium_found_first(tmp_path):
     np.testing.assert_allclose(s["omega2_1_per_s2"], sorted([g / length, k / mass]), rtol=1e-9)
     np.testing.assert_allclose(s["equilibrium"]["q"], [-0.02, 0.3 - length], atol=1e-10)
     assert s["warnings"] == []
+
+
+def test_preload_from_equilibrium_conditions():
+    """preload = "equilibrium": eq. (5) gives the hanger tension m g, hence omega^2 = g / l sideways."""
+    from symmech.smm.derive import matrices
+    import sympy
+
+    k, mass, l, g = 500.0, 2.0, 0.8, 9.81
+    m = hanging_mass(k, mass, l, g)
+    m.springs[0] = m.springs[0].__class__("hanger", "O", "P", "k", "equilibrium")
+    assert numeric.equilibrium_tensions(m)[0] == {"hanger": pytest.approx(mass * g, rel=1e-14)}
+    np.testing.assert_allclose(omega2(m), sorted([g / l, k / mass]), rtol=RTOL)
+    c = matrices(m)["c"]
+    gs, ls = sympy.Symbol("g", real=True), sympy.Symbol("l", real=True)
+    assert sympy.simplify(c[0, 0] - sympy.Symbol("m", real=True) * gs * ls / sympy.Abs(ls) ** 2) == 0
+
+
+def test_preload_from_equilibrium_refused_when_indeterminate_or_unbalanced():
+    from symmech.core.scene import SymmechError
+
+    two = mech({
+        "parameters": {"g": param(9.81, "m/s^2")},
+        "coordinates": [{"name": "y", "type": "slide", "axis": [0, 1]}],
+        "points": [{"name": "O", "at": [0, 0]}, {"name": "P", "from": "O", "vector": [0, -1], "slides": ["y"]},
+                   {"name": "U", "at": [0, 1]}],
+        "bodies": [{"name": "bob", "mass": 1.0, "com": "P"}],
+        "springs": [{"name": "a", "ends": ["O", "P"], "stiffness": 10.0, "preload": "equilibrium"},
+                    {"name": "b", "ends": ["U", "P"], "stiffness": 10.0, "preload": "equilibrium"}],
+        "gravity": {"g": "g"},
+    })
+    with pytest.raises(SymmechError, match="statically indeterminate"):
+        numeric.equilibrium_tensions(two)
+    side = mech({
+        "parameters": {"g": param(9.81, "m/s^2")},
+        "coordinates": [{"name": "x", "type": "slide", "axis": [1, 0]},
+                        {"name": "y", "type": "slide", "axis": [0, 1]}],
+        "points": [{"name": "O", "at": [0, 0]},
+                   {"name": "P", "from": "O", "vector": [1, 0], "slides": ["x", "y"]}],
+        "bodies": [{"name": "bob", "mass": 1.0, "com": "P"}],
+        "springs": [{"name": "a", "ends": ["O", "P"], "stiffness": 10.0, "preload": "equilibrium"}],
+        "gravity": {"g": "g"},
+    })
+    with pytest.raises(SymmechError, match="cannot balance the loads.*'y'"):
+        numeric.equilibrium_tensions(side)

@@ -163,7 +163,7 @@ def matrices(m: Mechanism, form: str = "chain", effects: Effects | None = None) 
     """
     ar = SymbolicArith(m)
     kin = {"chain": forms.chain_kinematics, "graph": graph_kinematics}[form]
-    asm = forms.assemble(m, ar, kin, effects)
+    asm = forms.assemble(m, ar, kin, effects, equilibrium_tensions(m, ar, kin))
     n = len(asm.coords)
     out = {
         "L_a": _factor(n, asm.La), "m_a": sympy.diag(*asm.ma) if asm.ma else sympy.zeros(0, 0),
@@ -181,6 +181,20 @@ def matrices(m: Mechanism, form: str = "chain", effects: Effects | None = None) 
     out["column_labels"] = {"L_a": [c[0] for c in asm.La], "L_c": [c[0] for c in asm.Lc],
                             "L_b": [c[0] for c in asm.Lb]}
     return out
+
+
+def equilibrium_tensions(m: Mechanism, ar, kinematics=forms.chain_kinematics) -> dict:
+    """Symbolic tensions of ``preload = "equilibrium"`` springs: eq. (5) solved on the
+    independent rows chosen numerically (a u x u system, u = number of such springs)."""
+    from symmech.smm.numeric import equilibrium_tensions as numeric_tensions
+
+    _, rows = numeric_tensions(m)  # also reports an indeterminate or unbalanced system
+    names, cols, r0 = forms.tension_system(m, ar, kinematics)
+    if not names:
+        return {}
+    G = sympy.Matrix([[col.get(i, 0) for col in cols] for i in rows])
+    T = G.LUsolve(sympy.Matrix([-r0.get(i, 0) for i in rows]))
+    return dict(zip(names, T))
 
 
 def parameter_args(m: Mechanism) -> tuple[Arg, ...]:

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from symmech.core.scene import SymmechError
-from symmech.smm.model import GROUND, Effects, Mechanism
+from symmech.smm.model import EQUILIBRIUM, GROUND, Effects, Mechanism
 
 
 def turn(e, v, ez: bool):
@@ -138,14 +138,18 @@ class Assembly:
     tensions: dict = field(default_factory=dict)
 
 
-def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | None = None) -> Assembly:
+def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | None = None,
+             tensions: dict | None = None) -> Assembly:
     """The SMM factors of a, b, c for ``m`` in arithmetic ``ar``.
 
     ``kinematics(geometry, point, second)`` supplies conjugate vectors (the
     vector-chain form by default; ``symmech.smm.derive.graph_kinematics`` is the
-    graph form (11)). ``effects`` defaults to the model's own.
+    graph form (11)). ``effects`` defaults to the model's own. ``tensions`` gives
+    the tension [N] of springs whose preload is ``"equilibrium"`` (see
+    :func:`tension_system`).
     """
     eff = effects or m.effects
+    tensions = tensions or {}
     g = Geometry(m, ar)
     idx = g.index
     out = Assembly(list(m.coordinate_names))
@@ -203,7 +207,11 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
                                "a spring needs a direction")
         e = tuple(x / length for x in d)
         k = ar(s.coef, f"spring '{s.name}'")
-        if s.preload is not None:
+        if s.preload == EQUILIBRIUM:
+            if s.name not in tensions:
+                raise ValueError(f"spring '{s.name}': tension from equilibrium not supplied")
+            tension = tensions[s.name]
+        elif s.preload is not None:
             tension = ar(s.preload, f"spring '{s.name}'")
         elif s.free_length is not None:
             tension = k * (length - ar(s.free_length, f"spring '{s.name}'"))
@@ -258,6 +266,17 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
             out.Lb.append((t.name, _torsion_column(m, g, t)))
             out.mb.append(ar(t.coef, f"torsion damper '{t.name}'"))
     return out
+
+
+def tension_system(m: Mechanism, ar, kinematics=chain_kinematics):
+    """Eq. (5) for the unknown tensions T_u of springs with preload ``"equilibrium"``:
+    G T_u = -r0, with G (k x u) their L_c columns {row: value} and r0 {row: value} the
+    generalized forces of gravity and of the given preloads. Returns (names, G, r0)."""
+    names = [s.name for s in m.springs if s.preload == EQUILIBRIUM]
+    asm = assemble(m, ar, kinematics, Effects(False, False, False), {n: 0 * ar("1") for n in names})
+    columns = dict(zip([c[0] for c in asm.Lc], [c[1] for c in asm.Lc]))
+    r0 = {i: ar.sum(t) for i, t in asm.residual.items()}
+    return names, [columns[n] for n in names], r0
 
 
 def _diff(ar, A: dict, B: dict) -> dict:

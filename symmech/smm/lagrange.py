@@ -11,7 +11,7 @@ from __future__ import annotations
 import sympy
 
 from symmech.smm.derive import SymbolicArith
-from symmech.smm.model import GROUND, Effects, Mechanism
+from symmech.smm.model import EQUILIBRIUM, GROUND, Effects, Mechanism
 
 
 def _rotation(axis, angle) -> sympy.Matrix:
@@ -60,12 +60,15 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         a += W.T * sympy.diag(*[ar(t) for t in b.inertia]) * W
 
     Pi = sympy.S.Zero
+    unknown: dict[str, sympy.Symbol] = {}
     for s in m.springs:
         d = position(s.b) - position(s.a)
         length = sympy.sqrt(d.dot(d))
         l_eq = length.subs(at0)
         k = ar(s.coef)
-        if s.preload is not None:
+        if s.preload == EQUILIBRIUM:
+            tension = unknown.setdefault(s.name, sympy.Symbol(f"T_{s.name}"))
+        elif s.preload is not None:
             tension = ar(s.preload)
         elif s.free_length is not None:
             tension = k * (l_eq - ar(s.free_length))
@@ -87,6 +90,12 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
     grad = sympy.Matrix([Pi.diff(s) for s in q])
     c = sympy.hessian(Pi, q).subs(at0)
     residual = grad.subs(at0)
+    if unknown:  # eq. (5) fixes the tensions left to equilibrium: solve on independent rows
+        from symmech.smm.numeric import equilibrium_tensions
+
+        _, rows = equilibrium_tensions(m)
+        sol = sympy.solve([residual[i] for i in rows], list(unknown.values()), dict=True)[0]
+        c, residual = c.subs(sol), residual.subs(sol)
 
     Phi = sympy.S.Zero
     qd = sympy.symbols(f"qd0:{n}", real=True)

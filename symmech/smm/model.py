@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from symmech.core.scene import SceneError, Section, SymmechError
 
 GROUND = "ground"
+EQUILIBRIUM = "equilibrium"  # a spring preload left to the equilibrium conditions (5)
 
 
 @dataclass(frozen=True)
@@ -469,7 +470,8 @@ def validate(m: Mechanism) -> None:
         for end in (link.a, link.b):
             if end not in m.points:
                 raise SymmechError(f"spring or damper '{link.name}': end point '{end}' is not defined")
-        exprs_ok(f"spring or damper '{link.name}'", link.coef, *(t for t in (link.preload, link.free_length) if t))
+        exprs_ok(f"spring or damper '{link.name}'", link.coef,
+                 *(t for t in (link.preload, link.free_length) if t and t != EQUILIBRIUM))
     for t in m.torsion_springs + m.torsion_dampers:
         for b in (t.a, t.b):
             if b != GROUND and b not in bodies:

@@ -15,7 +15,7 @@ import scipy.sparse
 
 from symmech.core.scene import SymmechError
 from symmech.smm import forms
-from symmech.smm.model import Effects, Mechanism, NumericArith, Point, number_text
+from symmech.smm.model import EQUILIBRIUM, Effects, Mechanism, NumericArith, number_text
 
 
 @dataclass
@@ -45,10 +45,41 @@ def _sparse(n: int, entries: dict) -> scipy.sparse.csr_matrix:
     return scipy.sparse.csr_matrix((np.concatenate([v, v[off]]), (rows, cols)), shape=(n, n))
 
 
+def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
+    """Tensions [N] of the springs with ``preload = "equilibrium"`` from eq. (5), and the
+    indices of coordinates whose equations determine them (independent rows of G)."""
+    ar = NumericArith(m.values())
+    names, cols, r0 = forms.tension_system(m, ar)
+    if not names:
+        return {}, []
+    k = len(m.coordinates)
+    G = np.zeros((k, len(names)))
+    for j, col in enumerate(cols):
+        for i, v in col.items():
+            G[i, j] = v
+    r = np.zeros(k)
+    for i, v in r0.items():
+        r[i] = v
+    rows: list[int] = []
+    for i in range(k):
+        if np.linalg.matrix_rank(G[rows + [i]], tol=1e-10 * max(np.abs(G).max(), 1e-300)) > len(rows):
+            rows.append(i)
+    if len(rows) < len(names):
+        raise SymmechError(f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
+                           "(statically indeterminate); give preload values")
+    T = np.linalg.solve(G[rows], -r[rows])
+    miss = G @ T + r
+    worst = int(np.argmax(np.abs(miss)))
+    if abs(miss[worst]) > 1e-9 * max(np.abs(r).max(), 1.0):
+        raise SymmechError(f"springs {', '.join(names)} cannot balance the loads: dPi/dq = {miss[worst]:.3g} "
+                           f"remains on coordinate '{m.coordinate_names[worst]}'")
+    return dict(zip(names, T.tolist())), rows
+
+
 def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
     """Numeric a, b, c of ``m`` at its parameter values (sparse; O(nonzeros))."""
     ar = NumericArith(m.values())
-    asm = forms.assemble(m, ar, effects=effects)
+    asm = forms.assemble(m, ar, effects=effects, tensions=equilibrium_tensions(m)[0])
     n = len(asm.coords)
     pre = _sparse(n, asm.preload)
     grav = _sparse(n, asm.gravity)
@@ -125,6 +156,9 @@ def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> t
     springs = []
     start = assemble(m, full)
     for s in m.springs:
+        if s.preload == EQUILIBRIUM:
+            raise SymmechError(f"spring '{s.name}': equilibrium.solve needs a preload value or a free length, "
+                               "not preload = \"equilibrium\"")
         if s.preload is not None:
             k = ar(s.coef)
             if k == 0:
