@@ -92,3 +92,30 @@ def test_errata_records_computed():
     assert {r["equation"] for r in records} >= {"5.1 (a)", "5.2 (L_a)"}
     for r in records:
         assert r["status"] == "agrees" and r["max_rel_diff"] < 1e-12, r
+
+
+@pytest.mark.parametrize("path", bundled_scenes(), ids=[p.stem for p in bundled_scenes()])
+def test_bundled_scenes_run_cleanly(path, tmp_path, capsys):
+    assert main(["run", str(path), "--out", str(tmp_path)]) == 0
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["warnings"] == []
+    assert all(w is None or w >= 0 for w in s["frequencies_rad_s"])
+    assert (tmp_path / "modes.png").exists()
+
+
+def test_precision_bench(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text('kind = "mechanism"\n[chain]\nn = 400\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n'
+                    '[precision]\nmodes = 5\n')
+    assert main(["bench", "precision", str(path), "--out", str(tmp_path)]) == 0
+    rows = (tmp_path / "precision.csv").read_text().splitlines()
+    assert rows[1].startswith("dense eigh") and len(rows) == 8
+    # the tightest eigsh tolerance reproduces the dense frequencies
+    assert float(rows[-1].split(",")[3]) < 1e-10
+
+
+def test_latex_chain_scene(tmp_path, capsys):
+    path = tmp_path / "c.toml"
+    path.write_text('kind = "mechanism"\n[chain]\nn = 2\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n')
+    assert main(["latex", f"smm:{path}.c"]) == 0
+    assert "2 k" in capsys.readouterr().out

@@ -243,10 +243,13 @@ def bundled_scenes() -> list[Path]:
 
 
 def load_mechanism(path: Path) -> Mechanism:
+    """The mechanism of a scene file (explicit vector model or a generated ``[chain]``)."""
+    from symmech.smm.chain import chain_mechanism
+
     scene = load(path)
     if scene.str("kind", default="") != "mechanism":
         raise SymmechError(f"{path}: not a mechanism scene")
-    return from_scene(scene)
+    return chain_mechanism(scene.section("chain")) if scene.has("chain") else from_scene(scene)
 
 
 def module_specs() -> list[ModuleSpec]:
