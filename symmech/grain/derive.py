@@ -119,15 +119,18 @@ def reduction_tensor():
 
     m du_C = T, I dw = R x T, du_K = du_C + dw x R with I = m P; writing the
     impulse per unit mass, t = T/m, the mass drops out exactly:
-    du_K = t + (P^-1 (R x t)) x R and H = d(du_K)/dt. P^-1 = Q diag(1/rho^2) Q^T,
-    so no symbolic matrix is inverted.
+    du_K = t + (P^-1 (R x t)) x R and H = d(du_K)/dt. The balance is written in
+    body axes, where P = diag(rho^2) (nothing to invert) and R' = -D^2 n'/|D n'|,
+    then turned to the surface frame: H = Q H' Q^T.
     """
     Q = rotation()
-    R = contact_offset()
+    n_body = Q.T * Matrix([0, 0, 1])
+    D2 = sympy.diag(a**2, b**2, c**2)
+    R_body = -D2 * n_body / contact_height()
     t = Matrix(sympy.symbols("t_x t_y t_z", real=True))
-    inv_P = Q * sympy.diag(*[1 / r for r in gyration_squared()]) * Q.T
-    du_K = t + (inv_P * R.cross(t)).cross(R)
-    return du_K.jacobian(t)
+    inv_P = sympy.diag(*[1 / r for r in gyration_squared()])
+    du_K = t + (inv_P * R_body.cross(t)).cross(R_body)
+    return Q * du_K.jacobian(t) * Q.T
 
 
 def _h_matrix():

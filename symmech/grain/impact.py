@@ -308,7 +308,9 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
     ``variant="paper"`` uses (24)-(27) as printed, ``"paper-corrected"`` the sum of
     squared residuals and its derived gradient, in dimensionless variables. Start (an assumption; the paper
     gives none): T_x = 0, T_z = -m(1+e)u_Kz(0)/h_zz, mu = direction of the incoming slip.
-    ``stopped`` is True where the stop rule Phi <= delta fired before S steps.
+    ``stopped`` is True where the stop rule Phi <= delta fired before S steps. A
+    descent that crosses a pole of tan(mu) diverges; its T is then inf or NaN and
+    its residual of (19) says so.
     """
     n = len(uK0)
     m, e, lam = (np.broadcast_to(np.asarray(x, float), (n,)) for x in (m, e, lam))
@@ -339,17 +341,18 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
                   np.arctan2(uK0[:, 1], uK0[:, 0])], axis=1) / units
     steps = np.zeros(n, int)
     stopped = np.zeros(n, bool)
-    for _ in range(options.max_steps):
-        stopped |= phi_f(x) <= delta
-        active = ~stopped
-        if not active.any():
-            break
-        g = grad_f(x)
-        step = 0.5 * sum(_golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
-                                         np.full(n, options.step_max), options.line_iterations,
-                                         options.line_tol))
-        x = np.where(active[:, None], x - step[:, None] * g, x)
-        steps += active
+    with np.errstate(all="ignore"):  # a descent through a pole of tan(mu) overflows; reported as NaN
+        for _ in range(options.max_steps):
+            stopped |= phi_f(x) <= delta
+            active = ~stopped
+            if not active.any():
+                break
+            g = grad_f(x)
+            step = 0.5 * sum(_golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
+                                             np.full(n, options.step_max), options.line_iterations,
+                                             options.line_tol))
+            x = np.where(active[:, None], x - step[:, None] * g, x)
+            steps += active
     x = x * units
     Tx, Tz, mu = x[:, 0], x[:, 1], x[:, 2]
     T = np.stack([Tx, Tx * np.tan(mu), Tz], axis=1)
