@@ -131,7 +131,7 @@ def main():
     p.add_argument("--quick", action="store_true", help="smaller batches")
     quick = p.parse_args().quick
     bench_H(10**5 if quick else 10**6)
-    bench_solvers(10**4 if quick else 10**5, 200 if quick else 2000, 1000 if quick else 10**4)
+    bench_solvers(10**4 if quick else 10**5, 200 if quick else 2000, 1000 if quick else 2000)
     bench_codegen()
 
 
