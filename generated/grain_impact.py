@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 bc85e1a6861e840983821e6c6844cc31e166e469cf839b87126f7e217c1a2aa9
+# symmech 0.1.0 generated module; inputs sha256 c8c7b717be7c85b005f8e64ec83bb18449b230b2bfe57699c7e813c5a582a5b9
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113.txt, eqs (1)-(60), derived in symmech.grain.derive.
@@ -581,9 +581,9 @@ def euler_rate_system(J_x, J_y, J_z, theta, phi):
     J_z : array_like
         principal moment of inertia about Z' [kg*m^2]
     theta : array_like
-        Euler nutation angle [rad]
+        Euler nutation angle at the impact [rad]
     phi : array_like
-        Euler spin angle [rad]
+        Euler spin angle at the impact [rad]
 
     Returns
     -------
@@ -619,9 +619,9 @@ def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp
     J_z : array_like
         principal moment of inertia about Z' [kg*m^2]
     theta : array_like
-        Euler nutation angle [rad]
+        Euler nutation angle at the impact [rad]
     phi : array_like
-        Euler spin angle [rad]
+        Euler spin angle at the impact [rad]
     R_xp : array_like
         contact offset R in body axes, x' [m]
     R_yp : array_like
