@@ -232,13 +232,14 @@ def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14, max_iter=12) -> ImpactBatch
     big = 10.0 * np.max(np.where(valid, tangential, 0.0), axis=1, keepdims=True) + 1.0
     choice = np.argmin(np.where(valid, rank * big + tangential, np.inf), axis=1)
     pick = (np.arange(n), choice)
-    T = T_all[pick]
+    found = valid.any(axis=1)  # never False in tests; if it were, say so with NaN
+    T = np.where(found[:, None], T_all[pick], np.nan)
     mu = roots[pick]
     mu_stuck = np.arctan2(T[:, 1], T[:, 0])
     mu = np.where(stuck, np.where(np.hypot(T[:, 0], T[:, 1]) > 0, mu_stuck, 0.0), mu)
     residual = residual_19(H, m, e, lam, uK0, T, mu)
     return ImpactBatch(T=T, mu=mu, uK_after=uK1[pick], residual=residual,
-                       admissible=~(gains[pick] | pulls[pick]), energy_created=gains[pick],
+                       admissible=found & ~(gains[pick] | pulls[pick]), energy_created=gains[pick],
                        pulling=pulls[pick], delta_ke=dke[pick],
                        roots_mu=roots, roots_T=T_all, roots_delta_ke=np.where(valid, dke, np.nan),
                        iterations=iterations)
