@@ -232,13 +232,14 @@ def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14, max_iter=12) -> ImpactBatch
     big = 10.0 * np.max(np.where(valid, tangential, 0.0), axis=1, keepdims=True) + 1.0
     choice = np.argmin(np.where(valid, rank * big + tangential, np.inf), axis=1)
     pick = (np.arange(n), choice)
-    T = T_all[pick]
+    found = valid.any(axis=1)  # never False in tests; if it were, say so with NaN
+    T = np.where(found[:, None], T_all[pick], np.nan)
     mu = roots[pick]
     mu_stuck = np.arctan2(T[:, 1], T[:, 0])
     mu = np.where(stuck, np.where(np.hypot(T[:, 0], T[:, 1]) > 0, mu_stuck, 0.0), mu)
     residual = residual_19(H, m, e, lam, uK0, T, mu)
     return ImpactBatch(T=T, mu=mu, uK_after=uK1[pick], residual=residual,
-                       admissible=~(gains[pick] | pulls[pick]), energy_created=gains[pick],
+                       admissible=found & ~(gains[pick] | pulls[pick]), energy_created=gains[pick],
                        pulling=pulls[pick], delta_ke=dke[pick],
                        roots_mu=roots, roots_T=T_all, roots_delta_ke=np.where(valid, dke, np.nan),
                        iterations=iterations)
@@ -308,7 +309,9 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
     ``variant="paper"`` uses (24)-(27) as printed, ``"paper-corrected"`` the sum of
     squared residuals and its derived gradient, in dimensionless variables. Start (an assumption; the paper
     gives none): T_x = 0, T_z = -m(1+e)u_Kz(0)/h_zz, mu = direction of the incoming slip.
-    ``stopped`` is True where the stop rule Phi <= delta fired before S steps.
+    ``stopped`` is True where the stop rule Phi <= delta fired before S steps. A
+    descent that crosses a pole of tan(mu) diverges; its T is then inf or NaN and
+    its residual of (19) says so.
     """
     n = len(uK0)
     m, e, lam = (np.broadcast_to(np.asarray(x, float), (n,)) for x in (m, e, lam))
@@ -339,17 +342,18 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
                   np.arctan2(uK0[:, 1], uK0[:, 0])], axis=1) / units
     steps = np.zeros(n, int)
     stopped = np.zeros(n, bool)
-    for _ in range(options.max_steps):
-        stopped |= phi_f(x) <= delta
-        active = ~stopped
-        if not active.any():
-            break
-        g = grad_f(x)
-        step = 0.5 * sum(_golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
-                                         np.full(n, options.step_max), options.line_iterations,
-                                         options.line_tol))
-        x = np.where(active[:, None], x - step[:, None] * g, x)
-        steps += active
+    with np.errstate(all="ignore"):  # a descent through a pole of tan(mu) overflows; reported as NaN
+        for _ in range(options.max_steps):
+            stopped |= phi_f(x) <= delta
+            active = ~stopped
+            if not active.any():
+                break
+            g = grad_f(x)
+            step = 0.5 * sum(_golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
+                                             np.full(n, options.step_max), options.line_iterations,
+                                             options.line_tol))
+            x = np.where(active[:, None], x - step[:, None] * g, x)
+            steps += active
     x = x * units
     Tx, Tz, mu = x[:, 0], x[:, 1], x[:, 2]
     T = np.stack([Tx, Tx * np.tan(mu), Tz], axis=1)
