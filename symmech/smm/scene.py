@@ -65,9 +65,9 @@ def run(scene: Section, out: Path) -> dict:
     num = numeric.assemble(m)
     a, b, c = (x.toarray() for x in (num.a, num.b, num.c))
     numeric.check_mass(m, a)
-    force_scale = max(np.abs(c).max(), np.abs(a).max() * 1e-300, 1e-300)
+    # dPi/dq [N or N m] against the stiffness scale times 1 m (or 1 rad)
     res = float(np.abs(num.residual).max())
-    if res > 1e-8 * max(force_scale, 1.0):
+    if res > 1e-8 * max(np.abs(c).max(), 1.0):
         worst = m.coordinate_names[int(np.argmax(np.abs(num.residual)))]
         warnings.append(f"the configuration is not an equilibrium: dPi/dq = {res:.3g} on '{worst}' (eq. (5)); "
                         "set [equilibrium] solve = true or fix the preloads")
@@ -112,8 +112,7 @@ def run(scene: Section, out: Path) -> dict:
     files = ["matrices.json", "modes.csv"] + response["files"]
     if make_plots:
         files += _plots(m, md, omega, response, out)
-    for key in ("kind", "name", "description"):
-        scene._read.add(key)
+    _header(scene)
     scene.finish()
     return {
         "mechanism": m.name,
@@ -131,6 +130,13 @@ def run(scene: Section, out: Path) -> dict:
         "files": files,
         "warnings": warnings,
     }
+
+
+def _header(scene: Section) -> None:
+    """Mark the descriptive top-level fields as read (``kind`` and ``name`` are read elsewhere)."""
+    scene.str("kind")
+    scene.str("name", default="")
+    scene.str("description", default="")
 
 
 def _effects_report(m: Mechanism, w2: np.ndarray, warnings: list) -> dict:
@@ -365,6 +371,5 @@ def precision(scene: Section, out: Path) -> dict:
     fig.tight_layout()
     fig.savefig(Path(out) / "precision.png", dpi=110)
     plt.close(fig)
-    for key in ("kind", "name", "description"):
-        scene._read.add(key)
+    _header(scene)
     return {"files": [str(Path(out) / "precision.csv"), str(Path(out) / "precision.png")]}
