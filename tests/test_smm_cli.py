@@ -33,7 +33,9 @@ stiffness = 100.0
 """
 
 BAD = {
-    "unreachable point": (BASE.replace('from = "O"', 'from = "Q"'), "parent point 'Q' is not defined"),
+    "unreachable point": (BASE.replace('from = "O"', 'from = "Q"'),
+                          "point 'P' is not reachable from a fixed root: parent point 'Q'"),
+    "loop": (BASE.replace('from = "O"', 'from = "P"'), "point 'P' is not reachable from a fixed root"),
     "coordinate moves nothing": (BASE + '[[coordinates]]\nname = "y"\ntype = "slide"\naxis = [0, 1]\n',
                                  "coordinate 'y' moves nothing"),
     "zero-length spring": (BASE.replace('vector = [1, 0]', 'vector = [0, 0]'), "spring 'k1': its ends"),

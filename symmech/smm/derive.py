@@ -105,9 +105,8 @@ def graph_kinematics(g: forms.Geometry, point: str, second: bool) -> forms.Point
                  else forms.cross(g.axis[a], tuple(sum(prow.multiply_elementwise(row)) * x for x in g.axis[b])))
             parts.setdefault(g.pair(a, b), []).append(v)
         H = {k: tuple(sympy.Add(*[v[i] for v in vs]) for i in range(3)) for k, vs in parts.items()}
-    nz = lambda v: any(x != 0 for x in v)  # noqa: E731
-    return forms.PointKinematics(tuple(r), {k: v for k, v in D.items() if nz(v)},
-                                 {k: v for k, v in H.items() if nz(v)})
+    return forms.PointKinematics(tuple(r), {k: v for k, v in D.items() if any(x != 0 for x in v)},
+                                 {k: v for k, v in H.items() if any(x != 0 for x in v)})
 
 
 def _structure(g: forms.Geometry) -> dict:

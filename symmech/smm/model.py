@@ -150,10 +150,14 @@ class Mechanism:
         name = point
         while name is not None:
             if name in seen:
-                raise SymmechError(f"point '{point}': its chain of vectors is a loop through '{name}'")
+                raise SymmechError(f"point '{point}' is not reachable from a fixed root: its chain of vectors "
+                                   f"loops through '{name}'")
             seen.add(name)
             if name not in self.points:
-                raise SymmechError(f"point '{out[-1].name}': parent point '{name}' is not defined")
+                if not out:
+                    raise SymmechError(f"point '{name}' is not defined")
+                raise SymmechError(f"point '{point}' is not reachable from a fixed root: parent point '{name}' "
+                                   f"of '{out[-1].name}' is not defined")
             p = self.points[name]
             out.append(p)
             name = p.parent
