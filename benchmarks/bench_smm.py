@@ -182,18 +182,22 @@ def main():
         smm = timed("smm", n, ns.limit)
         row = {}
         for kind in ("lagrange", "kane"):
+            # float seconds, "stopped" past the limit, or "skipped" (an earlier size was stopped)
+            row[kind] = "skipped"
             if alive[kind] and n <= mech_max:
-                row[kind] = timed(kind, n, ns.limit)
-                if row[kind] is None:
-                    alive[kind] = False
-            else:
-                row[kind] = None
+                row[kind] = timed(kind, n, ns.limit) or "stopped"
+                alive[kind] = row[kind] != "stopped"
 
         def fmt(x):
-            return f">{ns.limit:.0f}" if x is None else f"{x:.3f}"
+            if x is None or x == "stopped":
+                return f">{ns.limit:.0f}"
+            return "-" if x == "skipped" else f"{x:.3f}"
 
         def ratio(x):
-            return "-" if x is None or smm is None else f"{x / smm:.0f}x"
+            if smm is None or x == "skipped":
+                return "-"
+            # a method stopped at the limit gives a lower bound on the ratio
+            return f">{ns.limit / smm:.0f}x" if x == "stopped" else f"{x / smm:.0f}x"
         print(f"{n:>4} {fmt(smm):>10} {fmt(row['lagrange']):>13} {fmt(row['kane']):>10} "
               f"{ratio(row['kane']):>10} {ratio(row['lagrange']):>13}", flush=True)
     asm, eig, err = sparse_modes()
