@@ -102,6 +102,19 @@ class Section:
             raise SceneError(self._field(key), f"unknown value {value!r}; choose one of {', '.join(choices)}")
         return value
 
+    def raw(self, key: str, *, default=_MISSING):
+        """The field's TOML value unchecked, for fields whose type the caller validates
+        itself (e.g. a number or an expression string); marks it read."""
+        return self._get(key, default)
+
+    def keys(self) -> list[str]:
+        """The fields this table sets, in file order."""
+        return list(self._data)
+
+    def field(self, key: str) -> str:
+        """Dotted path of ``key`` for error messages."""
+        return self._field(key)
+
     def finish(self) -> None:
         """Reject fields that were set but never read (typos, unknown effects)."""
         unknown = sorted(set(self._data) - self._read)

@@ -27,7 +27,7 @@ def chain_mechanism(sec: Section) -> Mechanism:
     name = sec.str("name", default=f"chain_{n}_{ends}_{motion}")
     sec.finish()
     if motion == "transverse" and ends == "free-free" and n == 1:
-        raise SceneError(sec._field("n"), "a free-free chain needs at least two masses")
+        raise SceneError(sec.field("n"), "a free-free chain needs at least two masses")
     axis = ("1", "0", "0") if motion == "axial" else ("0", "1", "0")
     coords = [Coordinate(f"s{i}", "slide", axis) for i in range(1, n + 1)]
     points = {"O": Point("O", None, ("0", "0", "0"))}

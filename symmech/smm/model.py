@@ -286,7 +286,7 @@ class NumericArith:
 
 def _expr(sec: Section, key: str, *, default=None, where: str) -> str:
     """An expression field: a number or a string expression of parameters."""
-    value = sec._get(key, default) if default is not None else sec._get(key, None)
+    value = sec.raw(key, default=default)
     if value is None:
         raise SceneError(where, "missing (required)")
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
@@ -301,7 +301,7 @@ def number_text(value: float) -> str:
 
 
 def _vector(sec: Section, key: str, where: str, default=None) -> tuple[str, str, str]:
-    value = sec._get(key, default) if default is not None else sec._get(key, None)
+    value = sec.raw(key, default=default)
     if value is None:
         raise SceneError(where, "missing (required)")
     if not isinstance(value, list) or len(value) not in (2, 3):
@@ -315,14 +315,14 @@ def _vector(sec: Section, key: str, where: str, default=None) -> tuple[str, str,
 
 
 def _names(sec: Section, key: str, where: str) -> tuple[str, ...]:
-    value = sec._get(key, [])
+    value = sec.raw(key, default=[])
     if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
         raise SceneError(where, f"expected a list of names, got {value!r}")
     return tuple(value)
 
 
 def _items(scene: Section, key: str) -> list[Section]:
-    raw = scene._get(key, [])
+    raw = scene.raw(key, default=[])
     if not isinstance(raw, list):
         raise SceneError(key, "expected an array of tables ([[" + key + "]])")
     return [Section(item, f"{key}[{i}]") for i, item in enumerate(raw)]
@@ -341,23 +341,22 @@ def from_scene(scene: Section) -> Mechanism:
     name = scene.str("name", default="mechanism")
     params = {}
     psec = scene.section("parameters", default={})
-    for pname in list(psec._data):
-        entry = psec._data[pname]
-        where = f"parameters.{pname}"
+    for pname in psec.keys():
+        entry = psec.raw(pname)
+        where = psec.field(pname)
         if not pname.isidentifier():
             raise SceneError(where, "a parameter name must be an identifier")
         if isinstance(entry, (int, float)) and not isinstance(entry, bool):
             entry = {"value": entry}
         p = Section(entry, where)
-        params[pname] = Parameter(pname, p.float("value", unit=p._data.get("unit", "SI")),
-                                  p.str("unit", default="1"), p.str("meaning", default=pname))
+        unit = p.str("unit", default="1")
+        params[pname] = Parameter(pname, p.float("value", unit=unit), unit, p.str("meaning", default=pname))
         p.finish()
-        psec._read.add(pname)
 
     coords = []
     for c in _items(scene, "coordinates"):
         kind = c.choice("type", ("angle", "slide"))
-        axis = _vector(c, "axis", c._field("axis"), default=[0, 0, 1] if kind == "angle" else None)
+        axis = _vector(c, "axis", c.field("axis"), default=[0, 0, 1] if kind == "angle" else None)
         coords.append(Coordinate(c.str("name"), kind, axis))
         c.finish()
     _unique("coordinate", [c.name for c in coords])
@@ -368,62 +367,62 @@ def from_scene(scene: Section) -> Mechanism:
     for p in _items(scene, "points"):
         pname = p.str("name")
         if p.has("at"):
-            points[pname] = Point(pname, None, _vector(p, "at", p._field("at")))
+            points[pname] = Point(pname, None, _vector(p, "at", p.field("at")))
         else:
-            points[pname] = Point(pname, p.str("from"), _vector(p, "vector", p._field("vector")),
-                                  _names(p, "turns", p._field("turns")), _names(p, "slides", p._field("slides")))
+            points[pname] = Point(pname, p.str("from"), _vector(p, "vector", p.field("vector")),
+                                  _names(p, "turns", p.field("turns")), _names(p, "slides", p.field("slides")))
         p.finish()
     _unique("point", [p for p in points])
 
     bodies = []
     for b in _items(scene, "bodies"):
-        where = b._field("inertia")
-        raw = b._get("inertia", 0.0)
+        where = b.field("inertia")
+        raw = b.raw("inertia", default=0.0)
         if isinstance(raw, list):
             inertia = _vector(b, "inertia", where)
         else:
             inertia = ("0", "0", _expr(b, "inertia", default=0.0, where=where))
         com = b.str("com")
-        turns = b._data.get("turns")
-        bodies.append(Body(b.str("name"), _expr(b, "mass", where=b._field("mass")), inertia, com,
-                           _names(b, "turns", b._field("turns")) if turns is not None else None))
+        turns = b.raw("turns", default=None)
+        bodies.append(Body(b.str("name"), _expr(b, "mass", where=b.field("mass")), inertia, com,
+                           _names(b, "turns", b.field("turns")) if turns is not None else None))
         b.finish()
     _unique("body", [b.name for b in bodies])
 
     springs = []
     for s in _items(scene, "springs"):
-        ends = _names(s, "ends", s._field("ends"))
+        ends = _names(s, "ends", s.field("ends"))
         if len(ends) != 2:
-            raise SceneError(s._field("ends"), f"expected two point names, got {list(ends)!r}")
-        pre = _expr(s, "preload", where=s._field("preload")) if s.has("preload") else None
-        free = _expr(s, "free_length", where=s._field("free_length")) if s.has("free_length") else None
+            raise SceneError(s.field("ends"), f"expected two point names, got {list(ends)!r}")
+        pre = _expr(s, "preload", where=s.field("preload")) if s.has("preload") else None
+        free = _expr(s, "free_length", where=s.field("free_length")) if s.has("free_length") else None
         if pre is not None and free is not None:
-            raise SceneError(s._field("free_length"), "give either preload or free_length, not both")
-        springs.append(Link(s.str("name"), ends[0], ends[1], _expr(s, "stiffness", where=s._field("stiffness")),
+            raise SceneError(s.field("free_length"), "give either preload or free_length, not both")
+        springs.append(Link(s.str("name"), ends[0], ends[1], _expr(s, "stiffness", where=s.field("stiffness")),
                             pre, free))
         s.finish()
     dampers = []
     for d in _items(scene, "dampers"):
-        ends = _names(d, "ends", d._field("ends"))
+        ends = _names(d, "ends", d.field("ends"))
         if len(ends) != 2:
-            raise SceneError(d._field("ends"), f"expected two point names, got {list(ends)!r}")
-        dampers.append(Link(d.str("name"), ends[0], ends[1], _expr(d, "viscosity", where=d._field("viscosity"))))
+            raise SceneError(d.field("ends"), f"expected two point names, got {list(ends)!r}")
+        dampers.append(Link(d.str("name"), ends[0], ends[1], _expr(d, "viscosity", where=d.field("viscosity"))))
         d.finish()
     torsion = {}
     for key, coef in (("torsion_springs", "stiffness"), ("torsion_dampers", "viscosity")):
         torsion[key] = []
         for t in _items(scene, key):
-            bs = _names(t, "bodies", t._field("bodies"))
+            bs = _names(t, "bodies", t.field("bodies"))
             if len(bs) != 2:
-                raise SceneError(t._field("bodies"), f"expected two body names (or 'ground'), got {list(bs)!r}")
-            torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t._field(coef)),
-                                        _vector(t, "axis", t._field("axis"), default=[0, 0, 1])))
+                raise SceneError(t.field("bodies"), f"expected two body names (or 'ground'), got {list(bs)!r}")
+            torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t.field(coef)),
+                                        _vector(t, "axis", t.field("axis"), default=[0, 0, 1])))
             t.finish()
     _unique("spring", [s.name for s in springs + dampers + torsion["torsion_springs"] + torsion["torsion_dampers"]])
 
     g = scene.section("gravity", default={})
-    gravity = _expr(g, "g", default=0.0, where=g._field("g"))
-    gdir = _vector(g, "direction", g._field("direction"), default=[0, -1, 0])
+    gravity = _expr(g, "g", default=0.0, where=g.field("g"))
+    gdir = _vector(g, "direction", g.field("direction"), default=[0, -1, 0])
     g.finish()
     e = scene.section("effects", default={})
     effects = Effects(e.bool("damping", default=True), e.bool("preload", default=True),
