@@ -35,7 +35,7 @@ RIGID_EPS = 100
 def mechanism(scene: Section) -> Mechanism:
     """The scene's mechanism: an explicit vector model or a generated uniform ``[chain]``."""
     if scene.has("chain"):
-        return chain_mechanism(scene.section("chain"), scene.str("name", default=None) or None)
+        return chain_mechanism(scene.section("chain"), scene.str("name", default="") or None)
     return from_scene(scene)
 
 
@@ -330,7 +330,7 @@ def precision(scene: Section, out: Path) -> dict:
     bench.finish()
     exact = None
     if scene.has("chain"):
-        spec = read_chain(scene.section("chain"), scene.str("name", default=None) or None)
+        spec = read_chain(scene.section("chain"), scene.str("name", default="") or None)
         m = build_chain(spec)
         exact = np.array(exact_omega2(spec)[:modes_n])
     else:
