@@ -121,3 +121,15 @@ def test_latex_chain_scene(tmp_path, capsys):
     path.write_text('kind = "mechanism"\n[chain]\nn = 2\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n')
     assert main(["latex", f"smm:{path}.c"]) == 0
     assert "2 k" in capsys.readouterr().out
+
+
+def test_large_run_writes_sparse_matrices_and_refuses_huge(tmp_path, capsys):
+    path = tmp_path / "c.toml"
+    text = 'kind = "mechanism"\n[chain]\nn = 250\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n[output]\nplots = false\n'
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    rows = (tmp_path / "o" / "matrices.csv").read_text().splitlines()
+    assert len(rows) == 1 + 3 * 250 - 2
+    path.write_text(text.replace("n = 250", "n = 3001"))
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "has 3001 coordinates" in capsys.readouterr().err

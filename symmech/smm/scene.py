@@ -26,6 +26,10 @@ from symmech.smm.chain import chain_mechanism
 
 # Above this many coordinates the symbolic matrices are not formed (numeric assembly only).
 SYMBOLIC_LIMIT = 60
+# `run` solves dense problems up to this size; above it matrices.json would be huge too.
+DENSE_RUN_LIMIT = 3000
+# Above this size a, b, c are written as sparse triplets (matrices.csv) instead of matrices.json.
+JSON_LIMIT = 200
 # Warn when the eigenvalue spread costs more than this relative accuracy in omega^2.
 CONDITION_WARN = 1e-8
 # omega^2 within this many machine epsilons of the largest omega^2 counts as a rigid-body mode.
@@ -62,6 +66,10 @@ def run(scene: Section, out: Path) -> dict:
     if solve:
         m, eq_report = numeric.solve_equilibrium(m)
     n = len(m.coordinates)
+    if n > DENSE_RUN_LIMIT:
+        raise SymmechError(f"mechanism '{m.name}' has {n} coordinates; `symmech run` solves the dense eigenproblem "
+                           f"up to {DENSE_RUN_LIMIT}: use `symmech bench precision` (sparse shift-invert) for the "
+                           "lowest modes of larger systems")
     num = numeric.assemble(m)
     a, b, c = (x.toarray() for x in (num.a, num.b, num.c))
     numeric.check_mass(m, a)
@@ -103,13 +111,13 @@ def run(scene: Section, out: Path) -> dict:
     eff_report = _effects_report(m, w2, warnings)
 
     out = Path(out)
-    _write_matrices(out / "matrices.json", m, a, b, c)
+    matrices_file = _write_matrices(out, m, num)
     _write_modes(out / "modes.csv", m, omega, md)
     response = _responses(scene, m, a, b, c, out)
     plots = scene.section("output", default={})
     make_plots = plots.bool("plots", default=True)
     plots.finish()
-    files = ["matrices.json", "modes.csv"] + response["files"]
+    files = [matrices_file, "modes.csv"] + response["files"]
     if make_plots:
         files += _plots(m, md, omega, response, out)
     _header(scene)
@@ -164,13 +172,25 @@ def _effects_report(m: Mechanism, w2: np.ndarray, warnings: list) -> dict:
             "omega2_with_all_effects": w2_full.tolist(), "omega2_relative_change": rel}
 
 
-def _write_matrices(path: Path, m: Mechanism, a, b, c) -> None:
-    path.write_text(json.dumps({
-        "coordinates": m.coordinate_names,
-        "units": [co.unit for co in m.coordinates],
-        "equation": "a q'' + b q' + c q = Q",
-        "parameters": {p.name: {"value": p.value, "unit": p.unit} for p in m.parameters.values()},
-        "a": a.tolist(), "b": b.tolist(), "c": c.tolist()}, indent=1) + "\n")
+def _write_matrices(out: Path, m: Mechanism, num) -> str:
+    """a, b, c as matrices.json (dense) or, above JSON_LIMIT coordinates, matrices.csv (nonzeros)."""
+    if len(m.coordinates) <= JSON_LIMIT:
+        (out / "matrices.json").write_text(json.dumps({
+            "coordinates": m.coordinate_names,
+            "units": [co.unit for co in m.coordinates],
+            "equation": "a q'' + b q' + c q = Q",
+            "parameters": {p.name: {"value": p.value, "unit": p.unit} for p in m.parameters.values()},
+            "a": num.a.toarray().tolist(), "b": num.b.toarray().tolist(), "c": num.c.toarray().tolist()},
+            indent=1) + "\n")
+        return "matrices.json"
+    total = (abs(num.a) + abs(num.b) + abs(num.c)).tocoo()
+    with (out / "matrices.csv").open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["row", "column", "a", "b", "c"])
+        for i, j in sorted(zip(total.row.tolist(), total.col.tolist())):
+            w.writerow([m.coordinate_names[i], m.coordinate_names[j], repr(float(num.a[i, j])),
+                        repr(float(num.b[i, j])), repr(float(num.c[i, j]))])
+    return "matrices.csv"
 
 
 def _write_modes(path: Path, m: Mechanism, omega, md) -> None:
