@@ -158,3 +158,13 @@ def spatial_chains(draw):
 @given(spatial_chains())
 def test_random_spatial_chains_numeric_agreement(d):
     test_random_planar_chains_numeric_agreement.hypothesis.inner_test(d)
+
+
+def test_generated_matrices_hold_only_the_effects_asked_for():
+    """Preload and gravity terms are absent from the symbolic c when the scene drops them."""
+    g = sympy.Symbol("g", real=True)
+    with_all = matrices(hanging_mass())["c"]
+    without = matrices(hanging_mass(effects={"preload": False}))["c"]
+    assert g in with_all.free_symbols
+    assert g not in without.free_symbols
+    assert matrices(hanging_mass(effects={"damping": False}))["b"] == sympy.zeros(2, 2)
