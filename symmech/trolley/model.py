@@ -177,16 +177,19 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
 def small_angle_check(base: Frame, chord: np.ndarray, l: float) -> np.ndarray:
     """Orthogonality defect max|Λ̄ Λ̄ᵀ - E| of the first-order Λ̄ (13) with Δθ from (14), shape (n,).
 
-    Needs the aircraft angles (twist frame); the defect is O(Δθ²) and says when the
-    small-angle correction is out of its range.
+    The aircraft angles are read off the moving frame Λ; the defect is O(Δθ²) and
+    says when the small-angle correction is out of its range. Returns (defect, Δθ).
     """
-    th = base.info["theta"]
-    args = (th[..., 0], th[..., 1], th[..., 2])
-    coef = frm.chord_coefficients(*args, *_cols(chord))
+    lam = base.lam
+    th = (np.arctan2(-lam[..., 2, 1], lam[..., 1, 1]), np.arctan2(-lam[..., 0, 2], lam[..., 0, 0]),
+          np.arcsin(np.clip(lam[..., 0, 1], -1, 1)))
+    coef = frm.chord_coefficients(*th, *_cols(chord))
     rhs = np.stack([l - coef[..., 0, 0], -coef[..., 1, 0], -coef[..., 2, 0]], axis=-1)
-    dtheta = np.linalg.solve(coef[..., 1:], rhs[..., None])[..., 0]
-    bar = frm.Lambda_bar_linear(*args, *_cols(dtheta))
-    return np.abs(bar @ np.swapaxes(bar, -1, -2) - np.eye(3)).max(axis=(-1, -2))
+    # (14) is rank-deficient when the chord has no x3 component (l21 = l30 = 0 and the
+    # roll about the chord is free): take the minimum-norm least-squares Δθ.
+    dtheta = (np.linalg.pinv(coef[..., 1:], rcond=1e-10) @ rhs[..., None])[..., 0]
+    bar = frm.Lambda_bar_linear(*th, *_cols(dtheta))
+    return np.abs(bar @ np.swapaxes(bar, -1, -2) - np.eye(3)).max(axis=(-1, -2)), dtheta
 
 
 def body_motion(frame: Frame, V0, dV0, body: Body) -> dict:
@@ -201,10 +204,11 @@ def body_motion(frame: Frame, V0, dV0, body: Body) -> dict:
     a = dV0[..., None] * alpha + (V0**2)[..., None] * beta
     w = V0[..., None] * frame.W
     dw = dV0[..., None] * frame.W + (V0**2)[..., None] * frame.dW
-    return _dynamics(V, a, w, dw, frame.lam[..., :, 1], body, alpha)
+    return _dynamics(V, a, w, dw, frame.lam, body)
 
 
-def _dynamics(V, a, w, dw, nu, body: Body, alpha=None) -> dict:
+def _dynamics(V, a, w, dw, lam, body: Body) -> dict:
+    nu = lam[..., :, 1]
     common = (body.m, *body.r, *body.inertia, *_cols(a), *_cols(w), *_cols(dw))
     if body.g0 > 0:
         P = dyn.reactions(*common, *_cols(nu), body.g0, body.l, body.ah)
@@ -212,10 +216,7 @@ def _dynamics(V, a, w, dw, nu, body: Body, alpha=None) -> dict:
         P = dyn.reactions_no_gravity(*common, body.l, body.ah)
     g_ref = body.g0 if body.g0 > 0 else 9.80665
     overload = (a + body.g0 * nu) / g_ref
-    out = {"V": V, "a": a, "omega": w, "omega_dot": dw, "P": P, "overload": overload, "nu": nu}
-    if alpha is not None:
-        out["alpha"] = alpha
-    return out
+    return {"V": V, "a": a, "omega": w, "omega_dot": dw, "P": P, "overload": overload, "lam": lam}
 
 
 def paper_lstar(track, s, l: float, mode: str):
@@ -263,7 +264,7 @@ def paper_case(track, s, V0, dV0, body: Body, mode: str, local_curvature: bool,
     r = np.asarray(body.r, dtype=float)
     V = vel + np.cross(W, r)
     a = dvel + np.cross(W, vel) + np.cross(dW, r) + np.cross(W, np.cross(W, r))
-    return _dynamics(V, a, W, dW, lam[..., :, 1], body)
+    return _dynamics(V, a, W, dW, lam, body)
 
 
 def paper_lstar_derivative(track, s, l, mode, lstar, method: str):

@@ -73,6 +73,9 @@ class Track:
 class ExpressionTrack(Track):
     """X0 given by three expressions in ``s`` (arc length) or in ``u`` (any parameter)."""
 
+    exprs = None
+    var = None
+
     def __init__(self, exprs, var, twist_expr, twist_var, field: str, u_range=None):
         import sympy as sp
 
@@ -82,6 +85,7 @@ class ExpressionTrack(Track):
             self._init_u(exprs, var, u_range)
         else:
             self.length = math.inf
+            self.exprs, self.var = exprs, var  # kept for exact (symbolic) references
             ders = [exprs]
             for _ in range(MAX_ORDER):
                 ders.append([sp.diff(e, var) for e in ders[-1]])

@@ -1,0 +1,66 @@
+"""Plots of a trolley run (matplotlib, Agg backend): track, reactions, overloads."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def write_all(setup, res: dict, out: Path) -> list[Path]:
+    """``track.png`` (3-D midline and centre-of-mass path), ``reactions.png``, ``overloads.png``."""
+    plt = _pyplot()
+    files = []
+    first = res[1]
+    s = first["s"]
+    span = np.linspace(s.min(), s.max() + setup.body.l, 600)
+    mid = setup.track.derivatives(span, 0)[0]
+    fig = plt.figure(figsize=(7, 6))
+    ax = fig.add_subplot(projection="3d")
+    # Fixed frame has X2 up: draw X1, X3 horizontal and X2 vertical.
+    ax.plot(mid[:, 0], mid[:, 2], mid[:, 1], color="0.4", lw=1, label="midline X0(s)")
+    for case, r in res.items():
+        path = setup.track.derivatives(r["s"], 0)[0] + np.einsum("nji,j->ni", r["lam"], np.asarray(setup.body.r))
+        ax.plot(path[:, 0], path[:, 2], path[:, 1], lw=1, label=f"centre of mass, case {case}")
+    ax.set_xlabel("X1 [m]")
+    ax.set_ylabel("X3 [m]")
+    ax.set_zlabel("X2 (up) [m]")
+    ax.legend(loc="upper left", fontsize=8)
+    files.append(_save(fig, out / "track.png", plt))
+
+    fig, axes = plt.subplots(len(res), 1, figsize=(8, 3.2 * len(res)), squeeze=False, sharex=True)
+    for ax, (case, r) in zip(axes[:, 0], res.items()):
+        for i in range(6):
+            ax.plot(setup.t, r["P"][:, i], lw=1, label=f"P{i}")
+        ax.set_ylabel(f"case {case}: reaction [N]")
+        ax.legend(ncol=6, fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("t [s]")
+    files.append(_save(fig, out / "reactions.png", plt))
+
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    for i, (ax, (axis, (lo, hi))) in enumerate(zip(axes, setup.comfort.items())):
+        ax.axhspan(lo, hi, color="tab:green", alpha=0.12, label="comfort envelope")
+        for case, r in res.items():
+            ax.plot(setup.t, r["overload"][:, i], lw=1, label=f"case {case}")
+        ax.set_ylabel(f"n along {axis} [g]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[-1].set_xlabel("t [s]")
+    files.append(_save(fig, out / "overloads.png", plt))
+    return files
+
+
+def _save(fig, path: Path, plt) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,305 @@
+"""Scene runner for ``kind = "trolley"``: ``run`` and ``precision`` (see docs/scenes-trolley.md).
+
+Outputs of ``run`` in the folder ``out``: ``case1.csv`` (and ``case2.csv`` with the
+local-curvature effect) with columns t,V1,V2,V3,a1,a2,a3,P0..P5 (SI, body-frame
+components of the centre of mass), ``caseN_overload.csv`` (t, n1, n2, n3 in g),
+``track.png``, ``reactions.png``, ``overloads.png``; the returned dict is the summary.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from symmech.core.scene import SceneError, Section, SymmechError
+from symmech.trolley import model, tables, track as tracks
+
+CSV_COLUMNS = "t,V1,V2,V3,a1,a2,a3,P0,P1,P2,P3,P4,P5"
+G_STANDARD = 9.80665
+# Default comfort envelope [g] per body axis (tangential, normal, lateral).
+COMFORT = {"x1": (-2.0, 2.0), "x2": (-1.5, 6.0), "x3": (-2.0, 2.0)}
+
+
+@dataclass
+class Setup:
+    """Everything a run needs, read and checked from a scene."""
+
+    track: tracks.Track
+    body: model.Body
+    frame: str
+    conventions: str
+    t: np.ndarray
+    speed: object  # callable t -> (V0, dV0) or None with traction
+    traction: object  # callable (t, V0) -> P0 or None
+    v_initial: float
+    s0: float
+    local_curvature: bool
+    fd_order: int
+    fd_step: float
+    lstar_derivative: str
+    small_angle_limit: float
+    comfort: dict
+    paper_tables: bool
+
+
+def _time_functions(sec: Section, field: str, variables: tuple[str, ...]):
+    """Numeric f and df/dt of an expression field in ``variables`` (t first)."""
+    import sympy as sp
+
+    expr, syms = tracks.parse_expression(sec.name(field), sec.str(field), variables, {})
+    f = sp.lambdify(syms, expr, modules="numpy")
+    df = sp.lambdify(syms, sp.diff(expr, syms[0]), modules="numpy")
+    shape = lambda v, *a: np.broadcast_to(np.asarray(v, dtype=float), np.broadcast_shapes(*(np.shape(x) for x in a)))  # noqa: E731
+    return (lambda *a: shape(f(*a), *a)), (lambda *a: shape(df(*a), *a))
+
+
+def read(scene: Section) -> Setup:
+    scene.choice("kind", ("trolley",))
+    conventions = scene.choice("conventions", ("physics", "paper"), default="physics")
+    frame = scene.choice("frame", ("twist", "frenet"), default="twist")
+    track = tracks.build(scene.section("track"))
+
+    eff = scene.section("effects", default={})
+    gravity = eff.bool("gravity", default=True)
+    local_curvature = eff.bool("local_curvature", default=False)
+    traction_on = eff.bool("traction", default=False)
+    eff.finish()
+
+    tr = scene.section("trolley")
+    mass = tr.float("mass", unit="kg", lo=0.0, lo_open=True)
+    com = tr.vector("com", 3, unit="m")
+    inertia = tr.vector("inertia", 6, unit="kg m^2", default=[0.0] * 6)
+    if min(inertia[:3]) < 0:
+        raise SceneError(tr.name("inertia"), f"principal entries {inertia[:3]} must be >= 0 kg m^2")
+    axle = tr.float("axle_distance", unit="m", lo=0.0, lo_open=True)
+    half = tr.float("half_gauge", unit="m", lo=0.0, lo_open=True)
+    tr.finish()
+
+    const = scene.section("constants", default={})
+    g0 = const.float("g0", unit="m/s^2", default=G_STANDARD, lo=0.0, lo_open=True)
+    const.finish()
+
+    tm = scene.section("time")
+    t_end = tm.float("t_end", unit="s", lo=0.0, lo_open=True)
+    steps = tm.int("steps", lo=1, hi=10_000_000)
+    tm.finish()
+
+    mo = scene.section("motion")
+    s0 = mo.float("s0", unit="m", default=0.0, lo=0.0)
+    speed = traction = None
+    v_initial = 0.0
+    if traction_on:
+        if conventions == "paper":
+            raise SceneError("effects.traction", "traction integration is not available with conventions = \"paper\"")
+        traction = _time_functions(mo, "traction", ("t", "v"))[0]
+        v_initial = mo.float("initial_speed", unit="m/s", default=0.0)
+    else:
+        speed = _time_functions(mo, "speed", ("t",))
+    mo.finish()
+
+    num = scene.section("numerics", default={})
+    fd_order = num.int("fd_order", default=4, lo=2, hi=4)
+    if fd_order not in (2, 4):
+        raise SceneError(num.name("fd_order"), f"{fd_order} is not 2 or 4")
+    fd_step = num.float("fd_step", unit="m", default=1e-3, lo=0.0, lo_open=True, hi=0.1 * axle)
+    lstar_derivative = num.choice("lstar_derivative", ("backward", "central2", "central4"), default="backward")
+    small_angle_limit = num.float("small_angle_limit", unit="1", default=0.01, lo=0.0, lo_open=True)
+    num.finish()
+
+    comfort = dict(COMFORT)
+    cf = scene.section("comfort", default={})
+    for axis in COMFORT:
+        lo, hi = cf.vector(axis, 2, unit="g", default=list(COMFORT[axis]))
+        if not lo < hi:
+            raise SceneError(cf.name(axis), f"[{lo:g}, {hi:g}] must be increasing")
+        comfort[axis] = (lo, hi)
+    cf.finish()
+
+    rep = scene.section("report", default={})
+    paper_tables = rep.bool("paper_tables", default=False)
+    rep.finish()
+    scene.finish()
+
+    t = np.linspace(0.0, t_end, steps + 1)
+    body = model.Body(mass, tuple(com), tuple(inertia), axle, half, g0 if gravity else 0.0)
+    return Setup(track, body, frame, conventions, t, speed, traction, v_initial, s0, local_curvature,
+                 fd_order, fd_step, lstar_derivative, small_angle_limit, comfort, paper_tables)
+
+
+def arc_length(setup: Setup) -> np.ndarray:
+    """s(t) = s0 + ∫ V0 dt on the grid, 8-point Gauss-Legendre per step [m]."""
+    t = setup.t
+    nodes, weights = np.polynomial.legendre.leggauss(8)
+    mid, half = (t[1:] + t[:-1]) / 2, (t[1:] - t[:-1]) / 2
+    v = setup.speed[0](mid[:, None] + half[:, None] * nodes)
+    return setup.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
+
+
+def frame_at(setup: Setup, case: int, s) -> model.Frame:
+    if case == 1:
+        return model.moving_frame(setup.track, s, setup.frame)
+    return model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, setup.fd_order, setup.fd_step)
+
+
+def integrate_traction(setup: Setup, case: int):
+    """s, V0, dV0 on the grid from m a1 = P0 - m g0 ν1 along x1 (a1 = α1 V̇0 + β1 V0²)."""
+    from scipy.integrate import solve_ivp
+
+    body = setup.body
+
+    def rates(t, y):
+        fr = frame_at(setup, case, np.array([y[0]]))
+        coef = model.dyn.point_coefficients(*model._cols(fr.e), *model._cols(fr.de), *model._cols(fr.W),
+                                            *model._cols(fr.dW), *body.r)[0]
+        if coef[0] <= 1e-6:
+            raise SymmechError(f"traction: the centre of mass cannot be driven along the track at s = {y[0]:.6g} m "
+                               f"(α1 = {coef[0]:.3g})")
+        p0 = float(setup.traction(t, y[1]))
+        dv = (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - coef[3] * y[1] ** 2) / coef[0]
+        return [y[1], dv]
+
+    sol = solve_ivp(rates, (setup.t[0], setup.t[-1]), [setup.s0, setup.v_initial], method="DOP853",
+                    t_eval=setup.t, rtol=1e-10, atol=1e-10)
+    if sol.status != 0 or not np.all(np.isfinite(sol.y)):
+        raise SymmechError(f"traction integration failed: {sol.message}")
+    s, v = sol.y
+    dv = np.array([rates(ti, [si, vi])[1] for ti, si, vi in zip(setup.t, s, v)])
+    return s, v, dv
+
+
+def compute(setup: Setup, conventions: str | None = None) -> dict:
+    """Results per case: {1: {...}, 2: {...}} with s, V0, dV0 and :func:`model.body_motion` arrays."""
+    conventions = conventions or setup.conventions
+    cases = (1, 2) if setup.local_curvature else (1,)
+    results = {}
+    for case in cases:
+        if setup.traction is not None:
+            s, v0, dv0 = integrate_traction(setup, case)
+        else:
+            s = arc_length(setup)
+            v0, dv0 = setup.speed[0](setup.t), setup.speed[1](setup.t)
+        if conventions == "paper":
+            out = model.paper_case(setup.track, s, v0, dv0, setup.body, setup.frame, case == 2,
+                                   setup.lstar_derivative)
+        else:
+            fr = frame_at(setup, case, s)
+            out = model.body_motion(fr, v0, dv0, setup.body)
+            out["frame"] = fr
+        out.update(s=s, V0=v0, dV0=dv0)
+        results[case] = out
+    return results
+
+
+def _extremes(t, values, names, unit):
+    out = {}
+    for i, name in enumerate(names):
+        col = values[:, i]
+        hi, lo = int(np.argmax(col)), int(np.argmin(col))
+        out[name] = {"max": float(col[hi]), "t_max": float(t[hi]), "min": float(col[lo]), "t_min": float(t[lo]),
+                     "unit": unit}
+    return out
+
+
+def _comfort(t, overload, comfort):
+    out = {}
+    for i, (axis, (lo, hi)) in enumerate(comfort.items()):
+        bad = (overload[:, i] < lo) | (overload[:, i] > hi)
+        out[axis] = {"envelope_g": [lo, hi], "samples_outside": int(bad.sum()),
+                     "first_t_outside": float(t[np.argmax(bad)]) if bad.any() else None}
+    return out
+
+
+def _finite(setup, res):
+    for case, r in res.items():
+        for key in ("V", "a", "P"):
+            if not np.all(np.isfinite(r[key])):
+                i = int(np.argmax(~np.all(np.isfinite(r[key]), axis=-1)))
+                raise SymmechError(f"case {case}: non-finite {key} at t = {setup.t[i]:.6g} s")
+
+
+def paper_table_rows(setup: Setup, paper: dict, physics: dict) -> dict:
+    """Printed Tables 1, 2 beside the paper-conventions and default-physics values."""
+    index = {}
+    for time_ in tables.TIMES:
+        k = int(round(time_ / (setup.t[1] - setup.t[0])))
+        if k >= len(setup.t) or abs(setup.t[k] - time_) > 1e-9:
+            raise SymmechError(f"report.paper_tables: t = {time_:g} s is not a grid point of this scene")
+        index[time_] = k
+    rows, reproduced = [], 0
+    for table, q, case, time_, value, decimals in tables.entries():
+        if case not in paper:
+            continue
+        k = index[time_]
+        pick = lambda r: float(_quantity(r, q)[k])  # noqa: E731
+        got = pick(paper[case])
+        ok = round(got, decimals) == round(value, decimals)
+        reproduced += ok
+        rows.append({"table": table, "quantity": q, "case": case, "t": time_, "printed": value,
+                     "paper_conventions": got, "default_physics": pick(physics[case]),
+                     "reproduced_to_printed_digits": bool(ok)})
+    return {"entries": len(rows), "reproduced": reproduced, "rows": rows}
+
+
+def _quantity(res, name):
+    kind, i = name[0], int(name[1:])
+    if kind == "P":
+        return res["P"][:, i]
+    return res["V" if kind == "V" else "a"][:, i - 1]
+
+
+def run(scene: Section, out: Path) -> dict:
+    start = time.perf_counter()
+    setup = read(scene)
+    res = compute(setup)
+    _finite(setup, res)
+    warnings = []
+    summary = {"kind": "trolley", "conventions": setup.conventions, "frame": setup.frame,
+               "effects": {"gravity": setup.body.g0 > 0, "local_curvature": setup.local_curvature,
+                           "traction": setup.traction is not None},
+               "steps": len(setup.t) - 1, "cases": {}}
+    for case, r in res.items():
+        data = np.column_stack([setup.t, r["V"], r["a"], r["P"]])
+        np.savetxt(out / f"case{case}.csv", data, delimiter=",", header=CSV_COLUMNS, comments="", fmt="%.10g")
+        np.savetxt(out / f"case{case}_overload.csv", np.column_stack([setup.t, r["overload"]]), delimiter=",",
+                   header="t,n1,n2,n3", comments="", fmt="%.10g")
+        info = {
+            "speed": _extremes(setup.t, r["V0"][:, None], ["V0"], "m/s"),
+            "velocity": _extremes(setup.t, r["V"], ["V1", "V2", "V3"], "m/s"),
+            "acceleration": _extremes(setup.t, r["a"], ["a1", "a2", "a3"], "m/s^2"),
+            "reactions": _extremes(setup.t, r["P"], [f"P{i}" for i in range(6)], "N"),
+            "overload": _extremes(setup.t, r["overload"], ["n1", "n2", "n3"], "g"),
+            "comfort": _comfort(setup.t, r["overload"], setup.comfort),
+            "s_end": float(r["s"][-1]),
+        }
+        if case == 2 and setup.conventions == "physics":
+            info.update(_small_angle(setup, r, warnings))
+        summary["cases"][f"case{case}"] = info
+        for axis, c in info["comfort"].items():
+            if c["samples_outside"]:
+                warnings.append(f"case {case}: overload along {axis} leaves the comfort envelope "
+                                f"{c['envelope_g']} g from t = {c['first_t_outside']:.4g} s")
+    if setup.paper_tables:
+        other = compute(setup, "physics" if setup.conventions == "paper" else "paper")
+        paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
+        summary["paper_tables"] = paper_table_rows(setup, paper, physics)
+    from symmech.trolley import plots
+
+    summary["files"] = [str(p) for p in plots.write_all(setup, res, out)]
+    summary["elapsed_s"] = time.perf_counter() - start
+    summary["warnings"] = warnings
+    return summary
+
+
+def _small_angle(setup, r, warnings) -> dict:
+    psi = r["frame"].info["psi"]
+    k = int(np.argmax(psi))
+    defect, _ = model.small_angle_check(r["frame"].info["base"], r["frame"].info["chord"], setup.body.l)
+    j = int(np.argmax(defect))
+    if defect[j] > setup.small_angle_limit:
+        warnings.append(f"case 2: the small-angle correction (13)-(14) is out of its range: orthogonality "
+                        f"defect {defect[j]:.3g} > {setup.small_angle_limit:g} at t = {setup.t[j]:.4g} s "
+                        f"(chord angle {psi[j]:.3g} rad); the exact rotation Λ* is used")
+    return {"chord_angle_max_rad": float(psi[k]), "chord_angle_t_max": float(setup.t[k]),
+            "small_angle_defect_max": float(defect[j])}
