@@ -10,7 +10,20 @@ constant V3 = ϰ r1 / 2 of case 1 confirms 8.017·10⁻³.
 """
 from __future__ import annotations
 
+import math
+
 TIMES = (5.0, 10.0, 15.0)
+
+# The example as a trolley scene (the bundled scenes/trolley_helix*.toml hold the same).
+PAPER_EXAMPLE = {
+    "kind": "trolley", "conventions": "paper", "frame": "frenet",
+    "track": {"type": "helix", "radius": 7.0, "rise": 5 / (2 * math.pi)},
+    "trolley": {"mass": 100.0, "com": [1.0, 0.5, 0.0], "axle_distance": 2.0, "half_gauge": 1.0},
+    "constants": {"g0": 9.81},
+    "motion": {"speed": "3*t + 7*sin(t/2)"},
+    "time": {"t_end": 20.0, "steps": 5000},
+    "effects": {"gravity": True, "local_curvature": True},
+}
 
 # Table 1: kinematic parameters; quantity -> case -> values at TIMES.
 TABLE1 = {
