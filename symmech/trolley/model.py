@@ -82,15 +82,20 @@ def moving_frame(track, s, mode: str) -> Frame:
             raise SymmechError(f"Frenet frame undefined: track curvature is zero at s = {_first_bad(s, bad):.6g} m "
                                "(straight piece or inflection); use frame = \"twist\"")
         n = X[2] / kappa[..., None]
-        # Along a path (monotone s) the normal flips sign across an inflection point.
-        monotone = s.ndim == 1 and (np.all(np.diff(s) >= 0) or np.all(np.diff(s) <= 0))
-        flip = (n[1:] * n[:-1]).sum(-1) < 0 if monotone else np.zeros(0, bool)
+        tau = (cross * X[3]).sum(-1) / kappa**2
+        if s.ndim == 1 and len(s) > 1:
+            # Between close samples the normal turns by at most ~ |Δs| sqrt(κ² + ϰ²); a sign
+            # flip beyond that is an inflection point, where κ passes through zero.
+            rate = np.hypot(kappa, tau)
+            turn = np.abs(np.diff(s)) * np.maximum(rate[1:], rate[:-1])
+            flip = ((n[1:] * n[:-1]).sum(-1) < 0) & (turn < 1.0)
+        else:
+            flip = np.zeros(0, bool)
         if np.any(flip):
             raise SymmechError(f"Frenet frame undefined: the principal normal flips between s = "
                                f"{_first_bad(s[:-1], flip):.6g} m and the next sample (inflection point); "
                                "use frame = \"twist\"")
         lam = np.stack([t, n, np.cross(t, n)], axis=-2)
-        tau = (cross * X[3]).sum(-1) / kappa**2
         dkappa = (X[2] * X[3]).sum(-1) / kappa
         dtau = (cross * X[4]).sum(-1) / kappa**2 - 2 * tau * dkappa / kappa
         zero = np.zeros_like(kappa)
