@@ -126,13 +126,15 @@ def cmd_latex(ns) -> int:
     if not ns.cse:
         print(sympy.latex(nm.matrix if nm.shape else nm.matrix[0, 0]))
         return 0
-    # The same chunks and CSE symbols as the generated code.
+    # The same chunks and CSE symbols as the generated code, shown with the
+    # derivation's own symbols.
+    back = {sympy.Symbol(a.name): a.symbol for a in nm.args}
     for chunk in emit.cse_chunks(nm):
         for sym, expr in chunk.replacements:
-            print(f"{sympy.latex(sym)} &= {sympy.latex(expr)} \\\\")
+            print(f"{sympy.latex(sym)} &= {sympy.latex(expr.xreplace(back))} \\\\")
         for index, expr in chunk.elements:
             sub = ",".join(str(i + 1) for i in index)
-            print(f"{nm.name}_{{{sub}}} &= {sympy.latex(expr)} \\\\")
+            print(f"{nm.name}_{{{sub}}} &= {sympy.latex(expr.xreplace(back))} \\\\")
     return 0
 
 
@@ -194,6 +196,8 @@ def main(argv=None) -> int:
     except SymmechError as exc:
         print(f"symmech: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into `head` and the like
+        return 0
 
 
 if __name__ == "__main__":

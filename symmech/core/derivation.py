@@ -6,6 +6,8 @@ here knows about files, numpy or templates.
 """
 from __future__ import annotations
 
+import keyword
+import re
 from dataclasses import dataclass, field
 
 import sympy
@@ -21,7 +23,9 @@ class Arg:
 
     @property
     def name(self) -> str:
-        return self.symbol.name
+        """Python identifier used in generated code: primes become 'p', keywords get '_'."""
+        name = re.sub(r"\W", "_", self.symbol.name.replace("'", "p"))
+        return name + "_" if keyword.iskeyword(name) else name
 
 
 @dataclass(frozen=True)
@@ -55,6 +59,10 @@ class NamedMatrix:
             raise ValueError(
                 f"{self.name}: free symbols not declared as arguments: {', '.join(missing)}"
             )
+
+    def code_matrix(self) -> sympy.Matrix:
+        """The matrix with every argument symbol renamed to its code name."""
+        return self.matrix.xreplace({a.symbol: sympy.Symbol(a.name) for a in self.args})
 
     @property
     def shape(self) -> tuple[int, ...]:

@@ -16,6 +16,7 @@ import hashlib
 import importlib
 import importlib.resources
 import pkgutil
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,14 +42,18 @@ class Chunk:
 
 
 def cse_chunks(nm: NamedMatrix, chunk_elements: int = CHUNK_ELEMENTS) -> list[Chunk]:
-    """Split ``nm`` into chunks of elements and apply CSE to each chunk."""
-    rows, cols = nm.matrix.shape
+    """Split ``nm`` (arguments under their code names) into chunks and CSE each chunk."""
+    matrix = nm.code_matrix()
+    rows, cols = matrix.shape
     shape = nm.shape
+    clash = {a.name for a in nm.args if re.fullmatch(r"x\d+", a.name)}
+    if clash:
+        raise ValueError(f"{nm.name}: argument names {sorted(clash)} clash with CSE names x0, x1, ...")
     indexed = []
     for i in range(rows):
         for j in range(cols):
             index = {(): (), (rows,): (i,)}.get(shape, (i, j))
-            indexed.append((index, nm.matrix[i, j]))
+            indexed.append((index, matrix[i, j]))
     chunks = []
     counter = 0
     for start in range(0, len(indexed), chunk_elements):
@@ -65,6 +70,12 @@ class _Printer(NumPyPrinter):
 
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "strict": True})
+
+    def _print_Pow(self, expr, rational=False):
+        # x**(-1.0) goes through numpy.power; a division is exact and faster.
+        if expr.exp == -1:
+            return f"1/{self.parenthesize(expr.base, sympy.printing.precedence.PRECEDENCE['Pow'])}"
+        return super()._print_Pow(expr, rational=rational)
 
 
 def _index_text(index: tuple[int, ...]) -> str:
@@ -128,6 +139,7 @@ def render(spec: ModuleSpec) -> str:
 
 
 def write(spec: ModuleSpec, directory: Path) -> Path:
+    Path(directory).mkdir(parents=True, exist_ok=True)
     path = Path(directory) / f"{spec.name}.py"
     path.write_text(render(spec))
     return path
