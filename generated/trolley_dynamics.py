@@ -166,9 +166,9 @@ def reactions(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1,
     x26 = m*r1
     x27 = acc2*x26
     x28 = ah*x27
-    x29 = r2*x2
-    x30 = l*x1
-    x31 = nu2*x30
+    x29 = l*x1
+    x30 = nu2*x29
+    x31 = r2*x2
     x32 = r1*x1
     x33 = nu2*x32
     x34 = ah*x33
@@ -178,15 +178,15 @@ def reactions(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1,
     x38 = w3**2
     x39 = l*x16
     x40 = acc3*x19
-    x41 = nu3*x30
-    x42 = I11*dw1*l - I22*x39 + I33*x39 + dw2*x35 + dw3*x36 + r2*x40 + r2*x41 - r3*x20 - r3*x31 + x14*x36 - x23*x35 + x3*x37 - x37*x38
-    x43 = l**(-1.0)
+    x41 = nu3*x29
+    x42 = I11*dw1*l - I22*x39 + I33*x39 + dw2*x35 + dw3*x36 + r2*x40 + r2*x41 - r3*x20 - r3*x30 + x14*x36 - x23*x35 + x3*x37 - x37*x38
+    x43 = 1/l
     x44 = (1/2)*x43/ah
     x45 = I11*x23 + I12*dw1 + I12*x16 + I13*x38 - I13*x5 + I22*dw2 + I23*dw3 - I23*x14 - I33*x23 - acc3*x26 - nu3*x32 + r3*x0 + r3*x2
     out[..., 0] = x0 + x2
-    out[..., 1] = x44*(ah*x15 + ah*x17 + ah*x18 + ah*x20 + ah*x29 + ah*x31 + ah*x4 - x11 - x13 - x22 - x25 - x28 - x34 + x42 - x7 - x9)
+    out[..., 1] = x44*(ah*x15 + ah*x17 + ah*x18 + ah*x20 + ah*x30 + ah*x31 + ah*x4 - x11 - x13 - x22 - x25 - x28 - x34 + x42 - x7 - x9)
     out[..., 2] = x44*(I11*ah*w1*w2 + I12*ah*x3 + I13*ah*w2*w3 + acc1*ah*m*r2 + acc2*ah*l*m + ah*g0*l*m*nu2 + ah*g0*m*nu1*r2 - x11 - x13 - x22 - x25 - x28 - x34 - x42 - x7 - x9)
-    out[..., 3] = x43*(x10 + x12 - x15 - x17 - x18 + x21 + x24 + x27 - x29 + x33 - x4 + x6 + x8)
+    out[..., 3] = x43*(x10 + x12 - x15 - x17 - x18 + x21 + x24 + x27 - x31 + x33 - x4 + x6 + x8)
     out[..., 4] = x43*(x40 + x41 + x45)
     out[..., 5] = -x43*x45
     return out
@@ -281,7 +281,7 @@ def reactions_no_gravity(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2
     x31 = l*x14
     x32 = acc3*x17
     x33 = I11*dw1*l - I22*x31 + I33*x31 + dw2*x27 + dw3*x28 + r2*x32 - r3*x18 + x1*x29 + x12*x28 - x21*x27 - x29*x30
-    x34 = l**(-1.0)
+    x34 = 1/l
     x35 = (1/2)*x34/ah
     x36 = I11*x21 + I12*dw1 + I12*x14 - I13*x3 + I13*x30 + I22*dw2 + I23*dw3 - I23*x12 - I33*x21 - acc3*x24 + r3*x0
     out[..., 0] = x0

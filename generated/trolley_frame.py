@@ -320,7 +320,7 @@ def angles_from_tangent(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
     """
     (t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3,), batch = _batch(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3)
     out = numpy.empty(batch + (6,))
-    x0 = (t1**2 + t3**2)**(-1.0)
+    x0 = 1/(t1**2 + t3**2)
     x1 = dt1*t3*x0
     x2 = dt3*t1*x0
     x3 = 1 - t2**2
@@ -516,7 +516,7 @@ def chord_rotation(rho1, rho2, rho3):
     """
     (rho1, rho2, rho3,), batch = _batch(rho1, rho2, rho3)
     out = numpy.empty(batch + (3, 3))
-    x0 = (rho1 + 1)**(-1.0)
+    x0 = 1/(rho1 + 1)
     x1 = rho2**2
     x2 = rho3**2
     x3 = -rho2*rho3*x0

@@ -366,7 +366,7 @@ def helix_omega(R, lam):
     """
     (R, lam,), batch = _batch(R, lam)
     out = numpy.empty(batch + (3,))
-    x0 = (R**2 + lam**2)**(-1.0)
+    x0 = 1/(R**2 + lam**2)
     out[..., 0] = lam*x0
     out[..., 1] = 0
     out[..., 2] = R*x0
