@@ -151,13 +151,15 @@ def chord_rotation(track, s, l: float, mode: str):
 
 
 def _stencil(fun, s, h, order: int):
-    """First and second s-derivatives of ``fun`` by central differences of ``order`` 2 or 4."""
+    """First and second s-derivatives of the matrix function ``fun`` (n, 3, 3) by central
+    differences of ``order`` 2 or 4; ``h`` is a step [m], scalar or of the shape of s."""
+    hm = np.asarray(h, dtype=float)[..., None, None]
     if order == 2:
         fp, fm, f0 = fun(s + h), fun(s - h), fun(s)
-        return (fp - fm) / (2 * h), (fp - 2 * f0 + fm) / h**2
+        return (fp - fm) / (2 * hm), (fp - 2 * f0 + fm) / hm**2
     f2p, fp, f0, fm, f2m = (fun(s + k * h) for k in (2, 1, 0, -1, -2))
-    d1 = (-f2p + 8 * fp - 8 * fm + f2m) / (12 * h)
-    d2 = (-f2p + 16 * fp - 30 * f0 + 16 * fm - f2m) / (12 * h**2)
+    d1 = (-f2p + 8 * fp - 8 * fm + f2m) / (12 * hm)
+    d2 = (-f2p + 16 * fp - 30 * f0 + 16 * fm - f2m) / (12 * hm**2)
     return d1, d2
 
 
@@ -292,4 +294,4 @@ def paper_lstar_derivative(track, s, l, mode, lstar, method: str):
     h = np.concatenate([ds[:1], ds]) if len(s) > 1 else np.array([1e-3])
     h = np.maximum(h, 1e-6 * l)
     order = {"central2": 2, "central4": 4}[method]
-    return _stencil(fun, s, h[:, None, None], order)[0]
+    return _stencil(fun, s, h, order)[0]

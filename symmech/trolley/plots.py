@@ -64,3 +64,20 @@ def _save(fig, path: Path, plt) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def work_precision(rows, path: Path) -> Path:
+    """Log error vs log time, one line per method; ``rows`` are (method, steps, time_s, error)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for method in dict.fromkeys(r[0] for r in rows):
+        pts = sorted((r[2], r[3], r[1]) for r in rows if r[0] == method)
+        ax.loglog([p[0] for p in pts], [max(p[1], 1e-16) for p in pts], marker="o", label=method)
+        for t, e, n in pts:
+            ax.annotate(str(n), (t, max(e, 1e-16)), fontsize=6)
+    ax.set_xlabel("time per run [s]")
+    ax.set_ylabel("max |P - P_exact| [N]")
+    ax.set_title("case 2 reactions (paper conventions): dΛ*/ds approximation")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
+    return _save(fig, path, plt)
