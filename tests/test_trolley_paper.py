@@ -78,3 +78,31 @@ def test_errata_records_for_the_trolley():
     tab = next(r for k, r in records.items() if k[1].startswith("printed entries vs paper conventions"))
     assert tab["status"] == "differs"
     assert tab["max_rel_diff"] == pytest.approx((826.967 - 823.275) / 826.967, rel=1e-3)
+
+
+def test_exact_lstar_derivative_agrees_with_fine_differences():
+    import copy
+
+    from symmech.core.scene import Section
+    from symmech.trolley import model, scene
+
+    st = scene.read(Section(copy.deepcopy(tables.PAPER_EXAMPLE)))
+    s = np.linspace(3.0, 400.0, 40)
+    sa = model.chord_point(st.track, s, st.body.l)
+    exact = scene.exact_paper_lstar_derivative(st)(s, sa)
+    fd = model._stencil(lambda x: model.paper_lstar(st.track, x, st.body.l, "frenet")[0], s, 1e-3, 4)[0]
+    np.testing.assert_allclose(fd, exact, atol=1e-9)
+    assert np.abs(exact).max() > 1e-2  # the paper's Λ* does vary along the helix
+
+
+@pytest.mark.slow
+def test_precision_bench_shows_orders_one_two_four(tmp_path):
+    from symmech.core.scene import load
+    from symmech.trolley import scene
+
+    rows = scene.precision(load(SCENES / "trolley_helix_paper.toml"), tmp_path)["rows"]
+    err = {(m, n): e for m, n, _, e in rows}
+    for method, order in (("backward", 1), ("central2", 2), ("central4", 4)):
+        ratio = err[(method, 1000)] / err[(method, 2000)]
+        assert ratio == pytest.approx(2.0**order, rel=0.15)
+    assert (tmp_path / "precision.png").stat().st_size > 0
