@@ -92,7 +92,7 @@ def test_exact_lstar_derivative_agrees_with_fine_differences():
     exact = scene.exact_paper_lstar_derivative(st)(s, sa)
     fd = model._stencil(lambda x: model.paper_lstar(st.track, x, st.body.l, "frenet")[0], s, 1e-3, 4)[0]
     np.testing.assert_allclose(fd, exact, atol=1e-9)
-    assert np.abs(exact).max() > 1e-2  # the paper's Λ* does vary along the helix
+    assert np.abs(exact).max() > 1e-4  # the paper's Λ* does vary along the helix (~3e-4 1/m)
 
 
 @pytest.mark.slow
