@@ -62,6 +62,11 @@ def _cols(v):
     return [v[..., 0], v[..., 1], v[..., 2]]
 
 
+def _mv(m, v):
+    """Matrix (..., 3, 3) times vector (..., 3)."""
+    return np.einsum("...ij,...j->...i", m, v)
+
+
 def _first_bad(s, bad):
     return float(np.asarray(s)[np.argmax(bad)])
 
@@ -144,7 +149,7 @@ def chord_rotation(track, s, l: float, mode: str):
     base = moving_frame(track, s, mode)
     sa = chord_point(track, s, l)
     chord = track.derivatives(sa, 0)[0] - track.derivatives(s, 0)[0]
-    rho = np.einsum("...ij,...j->...i", base.lam, chord) / l
+    rho = _mv(base.lam, chord) / l
     if np.any(rho[..., 0] <= 0):
         raise SymmechError(f"the chord O -> A points backwards at s = {_first_bad(s, rho[..., 0] <= 0):.6g} m")
     return frm.chord_rotation(*_cols(rho)), chord, base
@@ -181,9 +186,8 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
     lt = np.swapaxes(lstar, -1, -2)
     w_rel = _vee(-d1 @ lt)
     dw_rel = _vee(-(d2 @ lt + d1 @ np.swapaxes(d1, -1, -2)))
-    mv = lambda m, v: np.einsum("...ij,...j->...i", m, v)  # noqa: E731
-    W = mv(lstar, base.W) + w_rel
-    dW = mv(d1, base.W) + mv(lstar, base.dW) + dw_rel
+    W = _mv(lstar, base.W) + w_rel
+    dW = _mv(d1, base.W) + _mv(lstar, base.dW) + dw_rel
     info = {"psi": np.arccos(np.clip(lstar[..., 0, 0], -1, 1)), "chord": chord, "base": base}
     return Frame(lstar @ base.lam, lstar[..., :, 0], d1[..., :, 0], W, dW, info)
 
@@ -206,14 +210,19 @@ def small_angle_check(base: Frame, chord: np.ndarray, l: float) -> np.ndarray:
     return np.abs(bar @ np.swapaxes(bar, -1, -2) - np.eye(3)).max(axis=(-1, -2)), dtheta
 
 
+def point_coefficients(frame: Frame, body: Body):
+    """α, β (n, 3) of the centre of mass: V = V0 α, a = V̇0 α + V0² β [1, 1/m]."""
+    coef = dyn.point_coefficients(*_cols(frame.e), *_cols(frame.de), *_cols(frame.W), *_cols(frame.dW), *body.r)
+    return coef[..., :3], coef[..., 3:]
+
+
 def body_motion(frame: Frame, V0, dV0, body: Body) -> dict:
     """V, a (n, 3) of the centre of mass, ω, ω̇, reactions P (n, 6) and overloads (n, 3) [g].
 
     V0 [m/s] and dV0 [m/s²] have shape (n,).
     """
     V0, dV0 = np.asarray(V0, dtype=float), np.asarray(dV0, dtype=float)
-    coef = dyn.point_coefficients(*_cols(frame.e), *_cols(frame.de), *_cols(frame.W), *_cols(frame.dW), *body.r)
-    alpha, beta = coef[..., :3], coef[..., 3:]
+    alpha, beta = point_coefficients(frame, body)
     V = V0[..., None] * alpha
     a = dV0[..., None] * alpha + (V0**2)[..., None] * beta
     w = V0[..., None] * frame.W
@@ -271,9 +280,8 @@ def paper_case(track, s, V0, dV0, body: Body, mode: str, local_curvature: bool,
         if dlstar is None:
             dlstar = paper_lstar_derivative(track, s, body.l, mode, lstar, derivative)
         rate = dlstar * V0[..., None, None]
-        mv = lambda m, v: np.einsum("...ij,...j->...i", m, v)  # noqa: E731
-        vel, dvel = mv(lstar, vel), mv(rate, vel) + mv(lstar, dvel)
-        W, dW = mv(lstar, W), mv(rate, W) + mv(lstar, dW)
+        vel, dvel = _mv(lstar, vel), _mv(rate, vel) + _mv(lstar, dvel)
+        W, dW = _mv(lstar, W), _mv(rate, W) + _mv(lstar, dW)
         lam = lstar @ lam
     r = np.asarray(body.r, dtype=float)
     V = vel + np.cross(W, r)

@@ -49,10 +49,8 @@ def _time_functions(sec: Section, field: str, variables: tuple[str, ...]):
     import sympy as sp
 
     expr, syms = tracks.parse_expression(sec.name(field), sec.str(field), variables, {})
-    f = sp.lambdify(syms, expr, modules="numpy")
-    df = sp.lambdify(syms, sp.diff(expr, syms[0]), modules="numpy")
-    shape = lambda v, *a: np.broadcast_to(np.asarray(v, dtype=float), np.broadcast_shapes(*(np.shape(x) for x in a)))  # noqa: E731
-    return (lambda *a: shape(f(*a), *a)), (lambda *a: shape(df(*a), *a))
+    both = tracks.lambdify_arrays([expr, sp.diff(expr, syms[0])], syms)
+    return (lambda *a: both(*a)[0]), (lambda *a: both(*a)[1])
 
 
 def read(scene: Section) -> Setup:
@@ -151,13 +149,12 @@ def integrate_traction(setup: Setup, case: int):
 
     def rates(t, y):
         fr = frame_at(setup, case, np.array([y[0]]))
-        coef = model.dyn.point_coefficients(*model._cols(fr.e), *model._cols(fr.de), *model._cols(fr.W),
-                                            *model._cols(fr.dW), *body.r)[0]
-        if coef[0] <= 1e-6:
+        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
+        if alpha[0] <= 1e-6:
             raise SymmechError(f"traction: the centre of mass cannot be driven along the track at s = {y[0]:.6g} m "
-                               f"(α1 = {coef[0]:.3g})")
+                               f"(α1 = {alpha[0]:.3g})")
         p0 = float(setup.traction(t, y[1]))
-        dv = (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - coef[3] * y[1] ** 2) / coef[0]
+        dv = (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]
         return [y[1], dv]
 
     sol = solve_ivp(rates, (setup.t[0], setup.t[-1]), [setup.s0, setup.v_initial], method="DOP853",
@@ -334,12 +331,8 @@ def exact_paper_lstar_derivative(setup: Setup):
     lstar = printed_formulas.RODRIGUES.subs(subs)
     dsa = chord.dot(t_o) / chord.dot(t_a)
     total = lstar.diff(s) + lstar.diff(sa) * dsa
-    f = sp.lambdify((s, sa), list(total), modules="numpy")
-
-    def value(s_val, sa_val):
-        out = [np.broadcast_to(np.asarray(v, dtype=float), np.shape(s_val)) for v in f(s_val, sa_val)]
-        return np.stack(out, axis=-1).reshape(np.shape(s_val) + (3, 3))
-    return value
+    f = tracks.lambdify_arrays(list(total), (s, sa))
+    return lambda s_val, sa_val: np.stack(f(s_val, sa_val), axis=-1).reshape(np.shape(s_val) + (3, 3))
 
 
 def precision(scene: Section, out: Path) -> dict:

@@ -43,7 +43,8 @@ def parse_expression(field: str, text: str, variables: tuple[str, ...], constant
     return expr, [names[v] for v in variables]
 
 
-def _lambdify(exprs, symbols):
+def lambdify_arrays(exprs, symbols):
+    """Numeric function of ``symbols`` returning float arrays broadcast to the arguments' shape."""
     import sympy as sp
 
     f = sp.lambdify(symbols, exprs, modules="numpy")
@@ -89,10 +90,10 @@ class ExpressionTrack(Track):
             ders = [exprs]
             for _ in range(MAX_ORDER):
                 ders.append([sp.diff(e, var) for e in ders[-1]])
-            self._f = _lambdify([e for d in ders for e in d], [var])
+            self._f = lambdify_arrays([e for d in ders for e in d], [var])
             self._check_unit_speed()
         tw = sp.sympify(twist_expr)
-        self._tw = _lambdify([tw, sp.diff(tw, twist_var), sp.diff(tw, twist_var, 2)], [twist_var])
+        self._tw = lambdify_arrays([tw, sp.diff(tw, twist_var), sp.diff(tw, twist_var, 2)], [twist_var])
 
     def _init_u(self, exprs, u, u_range):
         import sympy as sp
@@ -101,8 +102,8 @@ class ExpressionTrack(Track):
         ders = [exprs]
         for _ in range(MAX_ORDER):
             ders.append([sp.diff(e, u) / speed for e in ders[-1]])
-        fu = _lambdify([e for d in ders for e in d], [u])
-        speed_f = _lambdify([speed], [u])
+        fu = lambdify_arrays([e for d in ders for e in d], [u])
+        speed_f = lambdify_arrays([speed], [u])
         arc = ArcLength(lambda x: speed_f(x)[0], *u_range, self.field)
         self.length = arc.length
         self._f = lambda s: fu(arc.parameter(np.asarray(s, dtype=float)))
