@@ -174,3 +174,15 @@ def test_motion_leaving_a_table_track_is_a_clear_error():
     pts = [[float(i), 0.0, 0.0] for i in range(10)]
     with pytest.raises(SymmechError, match="the motion leaves the track table"):
         compute(setup(track={"type": "table", "points": pts}, motion={"speed": "10"}))
+
+
+def test_parameter_u_track_gets_arc_length_and_curvature_right():
+    """Horizontal circle traced at a non-uniform rate u ↦ angle u + u²/4: |a3| = v²/R, s(u) = R (u + u²/4)."""
+    radius, v = 15.0, 4.0
+    track = {"type": "expression", "parameter": "u", "u_range": [0.0, 2.0],
+             "x": f"{radius}*sin(u + u**2/4)", "y": "0", "z": f"{radius} - {radius}*cos(u + u**2/4)"}
+    st, res = compute(setup(track=track, motion={"speed": str(v)}, time={"t_end": 5.0, "steps": 50},
+                            effects={"gravity": False}))
+    assert st.track.length == pytest.approx(radius * 3.0, rel=1e-12)
+    np.testing.assert_allclose(res[1]["a"][:, 2], v**2 / radius, rtol=1e-8)
+    np.testing.assert_allclose(res[1]["a"][:, :2], 0.0, atol=1e-8)

@@ -239,6 +239,19 @@ def paper_table_rows(setup: Setup, paper: dict, physics: dict) -> dict:
     return {"entries": len(rows), "reproduced": reproduced, "rows": rows}
 
 
+def _write_paper_tables(tab: dict, path: Path) -> None:
+    """The printed entries beside both computations, as an aligned text table."""
+    lines = [f"{'table':<8} {'qty':<4} {'case':>4} {'t [s]':>6} {'printed':>12} {'paper conv.':>14} "
+             f"{'physics':>14}  reproduced"]
+    for r in tab["rows"]:
+        lines.append(f"{r['table']:<8} {r['quantity']:<4} {r['case']:>4} {r['t']:>6g} {r['printed']:>12.6g} "
+                     f"{r['paper_conventions']:>14.6f} {r['default_physics']:>14.6f}  "
+                     f"{'yes' if r['reproduced_to_printed_digits'] else 'NO'}")
+    lines.append(f"{tab['reproduced']} of {tab['entries']} printed entries reproduced to the printed digits "
+                 "in paper conventions")
+    path.write_text("\n".join(lines) + "\n")
+
+
 def _quantity(res, name):
     kind, i = name[0], int(name[1:])
     if kind == "P":
@@ -281,6 +294,7 @@ def run(scene: Section, out: Path) -> dict:
         other = compute(setup, "physics" if setup.conventions == "paper" else "paper")
         paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
         summary["paper_tables"] = paper_table_rows(setup, paper, physics)
+        _write_paper_tables(summary["paper_tables"], out / "paper_tables.txt")
     from symmech.trolley import plots
 
     summary["files"] = [str(p) for p in plots.write_all(setup, res, out)]
