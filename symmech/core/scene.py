@@ -143,7 +143,8 @@ def _check_real(field, value, unit, lo, hi, lo_open, hi_open) -> float:
         right = ")" if hi_open else "]"
         lo_text = "-inf" if lo is None else f"{lo:g}"
         hi_text = "inf" if hi is None else f"{hi:g}"
-        raise SceneError(field, f"{value:g} {unit} is outside {left}{lo_text}, {hi_text}{right}")
+        unit_text = f" {unit}" if unit else ""
+        raise SceneError(field, f"{value:g}{unit_text} is outside {left}{lo_text}, {hi_text}{right}")
     return value
 
 
