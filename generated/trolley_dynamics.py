@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 0c0f69309f8917dd9efdf2cc3c8d6a78864b59b0cf50d5056cffba0c2312ffc4
+# symmech 0.1.0 generated module; inputs sha256 1ee2156e3f795ed9b9b97de574de1b9ceeb1a39f0c4b27fc2f5bab62a2045c21
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.
@@ -19,7 +19,7 @@ def _batch(*args):
 
 
 def point_coefficients(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3):
-    """[α; β]: velocity V = V0 α and acceleration a = V̇0 α + V0² β of a body point — eqs. V, a below (5); ω = A dθ/ds V0.
+    """[α; β]: velocity V = V0 α and acceleration a = V̇0 α + V0² β of a body point — eqs. V, a0, a (before (1)); ω = A dθ/ds V0.
 
     Parameters
     ----------

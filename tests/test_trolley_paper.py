@@ -106,3 +106,19 @@ def test_precision_bench_shows_orders_one_two_four(tmp_path):
         ratio = err[(method, 1000)] / err[(method, 2000)]
         assert ratio == pytest.approx(2.0**order, rel=0.15)
     assert (tmp_path / "precision.png").stat().st_size > 0
+
+
+def test_tables_need_the_papers_backward_difference():
+    """With a central difference for dΛ*/ds the case 2 binormal entries no longer reproduce."""
+    import copy
+
+    from symmech.core.scene import Section
+    from symmech.trolley import scene
+
+    data = copy.deepcopy(tables.PAPER_EXAMPLE)
+    data["numerics"] = {"lstar_derivative": "central4"}
+    st = scene.read(Section(data))
+    res = scene.compute(st)
+    a3 = res[2]["a"][3750, 2]  # t = 15 s, printed -0.693
+    assert abs(a3 - (-0.693)) > 5e-3
+    assert abs(res[2]["P"][3750, 4] - (-60.946)) > 0.1

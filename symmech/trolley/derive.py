@@ -112,7 +112,7 @@ def point_coefficients() -> NamedMatrix:
         "point_coefficients", sp.Matrix.vstack(alpha, beta),
         e_args + de_args + w_args + dw_args + r_args,
         "[α; β]: velocity V = V0 α and acceleration a = V̇0 α + V0² β of a body point",
-        "1 (α), 1/m (β)", "V, a below (5); ω = A dθ/ds V0")
+        "1 (α), 1/m (β)", "V, a0, a (before (1)); ω = A dθ/ds V0")
 
 
 def reactions(gravity: bool) -> NamedMatrix:
