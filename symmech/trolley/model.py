@@ -80,13 +80,15 @@ def moving_frame(track, s, mode: str) -> Frame:
     e = np.zeros(s.shape + (3,))
     e[..., 0] = 1.0
     if mode == "frenet":
-        cross = np.cross(t, X[2])
-        kappa = np.linalg.norm(X[2], axis=-1)
+        # Remove the tangential part a spline's near-unit speed leaves in X0''.
+        normal = X[2] - (X[2] * t).sum(-1, keepdims=True) * t
+        cross = np.cross(t, normal)
+        kappa = np.linalg.norm(normal, axis=-1)
         bad = kappa < KAPPA_MIN
         if np.any(bad):
             raise SymmechError(f"Frenet frame undefined: track curvature is zero at s = {_first_bad(s, bad):.6g} m "
                                "(straight piece or inflection); use frame = \"twist\"")
-        n = X[2] / kappa[..., None]
+        n = normal / kappa[..., None]
         tau = (cross * X[3]).sum(-1) / kappa**2
         if s.ndim == 1 and len(s) > 1:
             # Between close samples the normal turns by at most ~ |Δs| sqrt(κ² + ϰ²); a sign
@@ -101,7 +103,7 @@ def moving_frame(track, s, mode: str) -> Frame:
                                f"{_first_bad(s[:-1], flip):.6g} m and the next sample (inflection point); "
                                "use frame = \"twist\"")
         lam = np.stack([t, n, np.cross(t, n)], axis=-2)
-        dkappa = (X[2] * X[3]).sum(-1) / kappa
+        dkappa = (normal * X[3]).sum(-1) / kappa
         dtau = (cross * X[4]).sum(-1) / kappa**2 - 2 * tau * dkappa / kappa
         zero = np.zeros_like(kappa)
         W = np.stack([tau, zero, kappa], axis=-1)
@@ -117,7 +119,7 @@ def moving_frame(track, s, mode: str) -> Frame:
     dth = (dth1, ang[..., 2], ang[..., 3])
     ddth = (ddth1, ang[..., 4], ang[..., 5])
     return Frame(frm.Lambda(*th), e, np.zeros_like(e), frm.omega_per_length(*th, *dth),
-                 frm.omega_per_length_rate(*th, *dth, *ddth), {"theta": np.stack(th, axis=-1)})
+                 frm.omega_per_length_rate(*th, *dth, *ddth))
 
 
 def chord_point(track, s, l: float) -> np.ndarray:
