@@ -101,7 +101,7 @@ def test_precision_bench_shows_orders_one_two_four(tmp_path):
     from symmech.trolley import scene
 
     rows = scene.precision(load(SCENES / "trolley_helix_paper.toml"), tmp_path)["rows"]
-    err = {(m, n): e for m, n, _, e in rows}
+    err = {(m, n): e for family, m, n, _, _, e in rows if family == "paper"}
     for method, order in (("backward", 1), ("central2", 2), ("central4", 4)):
         ratio = err[(method, 1000)] / err[(method, 2000)]
         assert ratio == pytest.approx(2.0**order, rel=0.15)
@@ -122,3 +122,24 @@ def test_tables_need_the_papers_backward_difference():
     a3 = res[2]["a"][3750, 2]  # t = 15 s, printed -0.693
     assert abs(a3 - (-0.693)) > 5e-3
     assert abs(res[2]["P"][3750, 4] - (-60.946)) > 0.1
+
+
+def test_exact_case2_derivatives_match_differences_on_a_catenary():
+    """X0(s) = (asinh s, sqrt(1 + s²), 0) has unit speed and curvature 1/(1 + s²), so Λ* varies."""
+    import copy
+
+    from symmech.core.scene import Section
+    from symmech.trolley import model, scene
+
+    data = copy.deepcopy(tables.PAPER_EXAMPLE)
+    data.update(conventions="physics", track={"type": "expression", "x": "asinh(s)", "y": "sqrt(1 + s**2)",
+                                                "z": "0"})
+    data["trolley"]["axle_distance"] = 0.5
+    st = scene.read(Section(data))
+    s = np.linspace(-2.0, 2.0, 21)
+    d1, d2 = scene.exact_lstar_derivatives(st)(s, model.chord_point(st.track, s, 0.5))
+    fun = lambda x: model.chord_rotation(st.track, x, 0.5, "frenet")[0]  # noqa: E731
+    f1, f2 = model._stencil(fun, s, 0.01, 4)
+    assert np.abs(d1).max() > 0.05 and np.abs(d2).max() > 0.05
+    np.testing.assert_allclose(f1, d1, atol=1e-7)
+    np.testing.assert_allclose(f2, d2, atol=1e-6)

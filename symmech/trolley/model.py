@@ -175,16 +175,20 @@ def _vee(m):
     return 0.5 * np.stack([m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]], -1)
 
 
-def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_step: float = 1e-3) -> Frame:
+def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_step: float = 1e-3,
+                          derivatives=None) -> Frame:
     """Case 2 frame (physically consistent): Λ̄ = Λ* Λ with the exact chord rotation Λ*.
 
     Λ*' and Λ*'' (s-derivatives) come from central differences of order ``fd_order``
-    with step ``fd_step`` [m]; the body's angular velocity per unit length is
-    Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
+    with step ``fd_step`` [m], or from ``derivatives(s, s_A) -> (Λ*', Λ*'')`` when
+    given; the body's angular velocity per unit length is Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
     """
     s = np.asarray(s, dtype=float)
     lstar, chord, base = chord_rotation(track, s, l, mode)
-    d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode)[0], s, fd_step, fd_order)
+    if derivatives is None:
+        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode)[0], s, fd_step, fd_order)
+    else:
+        d1, d2 = derivatives(s, chord_point(track, s, l))
     lt = np.swapaxes(lstar, -1, -2)
     w_rel = _vee(-d1 @ lt)
     dw_rel = _vee(-(d2 @ lt + d1 @ np.swapaxes(d1, -1, -2)))

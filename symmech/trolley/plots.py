@@ -67,17 +67,19 @@ def _save(fig, path: Path, plt) -> Path:
 
 
 def work_precision(rows, path: Path) -> Path:
-    """Log error vs log time, one line per method; ``rows`` are (method, steps, time_s, error)."""
+    """Log error vs log time, one line per (family, method); ``rows`` are
+    (family, method, steps, fd_step, time_s, error); points are labelled by their knob."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 5))
-    for method in dict.fromkeys(r[0] for r in rows):
-        pts = sorted((r[2], r[3], r[1]) for r in rows if r[0] == method)
-        ax.loglog([p[0] for p in pts], [max(p[1], 1e-16) for p in pts], marker="o", label=method)
-        for t, e, n in pts:
-            ax.annotate(str(n), (t, max(e, 1e-16)), fontsize=6)
+    for family, method in dict.fromkeys((r[0], r[1]) for r in rows):
+        pts = sorted((r[4], max(r[5], 1e-16), r[3] if r[3] != "" else r[2])
+                     for r in rows if (r[0], r[1]) == (family, method))
+        ax.loglog([p[0] for p in pts], [p[1] for p in pts], marker="o", label=f"{family}: {method}")
+        for t, e, knob in pts:
+            ax.annotate(f"{knob:g}", (t, e), fontsize=6)
     ax.set_xlabel("time per run [s]")
     ax.set_ylabel("max |P - P_exact| [N]")
-    ax.set_title("case 2 reactions (paper conventions): dΛ*/ds approximation")
+    ax.set_title("case 2 reactions: derivatives of Λ* (labels: steps or fd_step [m])")
     ax.grid(alpha=0.3, which="both")
-    ax.legend()
+    ax.legend(fontsize=8)
     return _save(fig, path, plt)

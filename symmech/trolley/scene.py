@@ -101,7 +101,8 @@ def read(scene: Section) -> Setup:
     fd_order = num.int("fd_order", default=4, lo=2, hi=4)
     if fd_order not in (2, 4):
         raise SceneError(num.name("fd_order"), f"{fd_order} is not 2 or 4")
-    fd_step = num.float("fd_step", unit="m", default=1e-3, lo=0.0, lo_open=True, hi=0.1 * axle)
+    # Rounding grows as eps/h² in Λ*'', truncation as h⁴: a few cm balance them.
+    fd_step = num.float("fd_step", unit="m", default=min(0.02, 0.05 * axle), lo=0.0, lo_open=True, hi=0.1 * axle)
     lstar_derivative = num.choice("lstar_derivative", ("backward", "central2", "central4"), default="backward")
     small_angle_limit = num.float("small_angle_limit", unit="1", default=0.01, lo=0.0, lo_open=True)
     num.finish()
@@ -320,15 +321,10 @@ PRECISION_STEPS = (250, 500, 1000, 2000, 5000, 10000, 20000)
 PRECISION_METHODS = ("backward", "central2", "central4")
 
 
-def exact_paper_lstar_derivative(setup: Setup):
-    """dΛ*/ds of the paper's Λ* (ξ = t × ρ, printed Rodrigues) by symbolic differentiation.
-
-    Returns f(s, s_A) -> (n, 3, 3). With s_A(s) from the chord equation, the total
-    derivative is ∂/∂s + ∂/∂s_A · ds_A/ds, ds_A/ds = (ΔR̄·t(s_O)) / (ΔR̄·t(s_A)).
-    """
+def _symbolic_chord(setup: Setup):
+    """Symbols s, s_A, the midline at both, the tangent at O, and d/ds along the chord
+    equation: ∂/∂s + ds_A/ds ∂/∂s_A with ds_A/ds = (ΔR̄·t(s_O)) / (ΔR̄·t(s_A))."""
     import sympy as sp
-
-    from symmech.trolley import printed as printed_formulas
 
     tr = setup.track
     if getattr(tr, "exprs", None) is None:
@@ -336,25 +332,77 @@ def exact_paper_lstar_derivative(setup: Setup):
     s, sa = tr.var, sp.Symbol("s_A", real=True)
     x_o = sp.Matrix(tr.exprs)
     x_a = x_o.subs(s, sa)
-    t_o, t_a = x_o.diff(s), x_a.diff(sa)
     chord = x_a - x_o
+    dsa = chord.dot(x_o.diff(s)) / chord.dot(x_a.diff(sa))
+    total = lambda m: m.diff(s) + m.diff(sa) * dsa  # noqa: E731
+    return s, sa, x_o, chord, total
+
+
+def _matrix_function(matrices, s, sa):
+    """Numeric f(s, s_A) -> tuple of (n, 3, 3) arrays of the sympy 3x3 ``matrices``."""
+    f = tracks.lambdify_arrays([e for m in matrices for e in m], (s, sa))
+
+    def value(s_val, sa_val):
+        flat = np.stack(f(s_val, sa_val), axis=-1)
+        return tuple(flat[..., 9 * k:9 * k + 9].reshape(np.shape(s_val) + (3, 3)) for k in range(len(matrices)))
+    return value
+
+
+def exact_paper_lstar_derivative(setup: Setup):
+    """dΛ*/ds of the paper's Λ* (ξ = t × ρ, printed Rodrigues) by symbolic differentiation.
+
+    Returns f(s, s_A) -> (n, 3, 3), s_A(s) from the chord equation.
+    """
+    import sympy as sp
+
+    from symmech.trolley import printed as printed_formulas
+
+    s, sa, x_o, chord, total = _symbolic_chord(setup)
+    t_o = x_o.diff(s)
     rho = chord / setup.body.l
     xi = t_o.cross(rho)
     subs = {printed_formulas.psi: sp.acos(t_o.dot(rho)), printed_formulas.xi1: xi[0],
             printed_formulas.xi2: xi[1], printed_formulas.xi3: xi[2]}
-    lstar = printed_formulas.RODRIGUES.subs(subs)
-    dsa = chord.dot(t_o) / chord.dot(t_a)
-    total = lstar.diff(s) + lstar.diff(sa) * dsa
-    f = tracks.lambdify_arrays(list(total), (s, sa))
-    return lambda s_val, sa_val: np.stack(f(s_val, sa_val), axis=-1).reshape(np.shape(s_val) + (3, 3))
+    f = _matrix_function([total(printed_formulas.RODRIGUES.subs(subs))], s, sa)
+    return lambda s_val, sa_val: f(s_val, sa_val)[0]
+
+
+def exact_lstar_derivatives(setup: Setup):
+    """Λ*' and Λ*'' of the physically consistent chord rotation, symbolically (Frenet frame).
+
+    Returns f(s, s_A) -> (Λ*', Λ*''), each (n, 3, 3).
+    """
+    import sympy as sp
+
+    from symmech.trolley import derive
+
+    if setup.frame != "frenet":
+        raise SymmechError("bench precision: the exact case 2 reference is built for frame = \"frenet\"")
+    s, sa, x_o, chord, total = _symbolic_chord(setup)
+    t = x_o.diff(s)
+    curv = t.diff(s)
+    n = curv / sp.sqrt(curv.dot(curv))
+    lam = sp.Matrix.vstack(t.T, n.T, t.cross(n).T)
+    rho = lam * chord / setup.body.l
+    spec = derive.chord_rotation()
+    syms = [a.symbol for a in spec.args]
+    lstar = spec.matrix.subs(dict(zip(syms, rho)))
+    d1 = total(lstar)
+    return _matrix_function([d1, total(d1)], s, sa)
+
+
+PRECISION_FD_STEPS = (0.3, 0.1, 0.03, 0.01, 0.003, 0.001, 0.0003)
 
 
 def precision(scene: Section, out: Path) -> dict:
-    """Error of the case-2 reactions in paper conventions vs step count and derivative order.
+    """Work-precision of the derivative approximations, against exact symbolic references.
 
-    The only approximation on the time grid is dΛ*/ds (the paper's backward difference);
-    the reference uses the exact symbolic derivative on the same grid. Writes
-    ``precision.csv`` (method, steps, time_s, max_abs_error_N) and ``precision.png``.
+    Paper conventions, case 2: dΛ*/ds by the paper's backward difference, central2 and
+    central4 between grid points, for ``PRECISION_STEPS`` (the step count is the knob).
+    With ``conventions = "physics"`` also the consistent case 2: Λ*', Λ*'' by central
+    differences of order 2 and 4 for ``PRECISION_FD_STEPS`` on the scene's grid.
+    Writes ``precision.csv`` (family, method, steps, fd_step_m, time_s, max_abs_error_N)
+    and ``precision.png``.
     """
     import dataclasses
 
@@ -366,20 +414,29 @@ def precision(scene: Section, out: Path) -> dict:
     t_end = setup.t[-1]
     for steps in PRECISION_STEPS:
         st = dataclasses.replace(setup, t=np.linspace(0.0, t_end, steps + 1))
-        s = arc_length(st)
-        v0, dv0 = st.speed[0](st.t), st.speed[1](st.t)
+        s, v0, dv0 = arc_length(st), st.speed[0](st.t), st.speed[1](st.t)
         sa = model.chord_point(st.track, s, st.body.l)
         ref = model.paper_case(st.track, s, v0, dv0, st.body, st.frame, True, dlstar=exact(s, sa))["P"]
         for method in PRECISION_METHODS:
             start = time.perf_counter()
             got = model.paper_case(st.track, s, v0, dv0, st.body, st.frame, True, method)["P"]
-            elapsed = time.perf_counter() - start
-            rows.append((method, steps, elapsed, float(np.abs(got - ref).max())))
+            rows.append(("paper", method, steps, "", time.perf_counter() - start, float(np.abs(got - ref).max())))
+    if setup.conventions == "physics":
+        s, v0, dv0 = arc_length(setup), setup.speed[0](setup.t), setup.speed[1](setup.t)
+        case2 = lambda **kw: model.body_motion(  # noqa: E731
+            model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, **kw), v0, dv0, setup.body)["P"]
+        ref = case2(derivatives=exact_lstar_derivatives(setup))
+        for order in (2, 4):
+            for h in PRECISION_FD_STEPS:
+                start = time.perf_counter()
+                got = case2(fd_order=order, fd_step=h)
+                rows.append(("physics", f"central{order}", len(setup.t) - 1, h, time.perf_counter() - start,
+                             float(np.abs(got - ref).max())))
     csv = out / "precision.csv"
     with csv.open("w") as fh:
-        fh.write("method,steps,time_s,max_abs_error_N\n")
-        for method, steps, elapsed, err in rows:
-            fh.write(f"{method},{steps},{elapsed:.6g},{err:.6g}\n")
+        fh.write("family,method,steps,fd_step_m,time_s,max_abs_error_N\n")
+        for family, method, steps, h, elapsed, err in rows:
+            fh.write(f"{family},{method},{steps},{h},{elapsed:.6g},{err:.6g}\n")
     from symmech.trolley import plots
 
     png = plots.work_precision(rows, out / "precision.png")

@@ -17,7 +17,8 @@ from symmech.core.scene import SceneError, Section, SymmechError
 
 MAX_ORDER = 4
 # Functions a scene expression may use; anything else is an error naming the field.
-_FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "sinh", "cosh", "tanh", "atan", "asin", "acos", "pi")
+_FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "sinh", "cosh", "tanh", "asinh", "acosh", "atan", "asin",
+              "acos", "pi")
 
 
 def parse_expression(field: str, text: str, variables: tuple[str, ...], constants: dict):
@@ -31,12 +32,16 @@ def parse_expression(field: str, text: str, variables: tuple[str, ...], constant
     local.update({k: sp.Float(v) for k, v in constants.items()})
     try:
         expr = parse_expr(text, local_dict=local, global_dict={"__builtins__": {}, "Integer": sp.Integer, "Float": sp.Float,
-                                       "Rational": sp.Rational, "Symbol": sp.Symbol, **local},
+                                       "Rational": sp.Rational, "Symbol": sp.Symbol,
+                                       "Function": sp.Function, **local},
                           transformations=standard_transformations)
         expr = sp.sympify(expr)
     except Exception as exc:  # sympy raises many types for bad input
         raise SceneError(field, f"cannot parse {text!r} as an expression in {', '.join(variables)} ({exc})") from None
+    from sympy.core.function import AppliedUndef
+
     unknown = sorted(s.name for s in expr.free_symbols if s.name not in variables)
+    unknown += sorted(str(f.func) for f in expr.atoms(AppliedUndef))
     if unknown:
         raise SceneError(field, f"unknown name(s) {', '.join(unknown)} in {text!r}; "
                                 f"allowed: {', '.join(variables)}, constants and {', '.join(_FUNCTIONS)}")
