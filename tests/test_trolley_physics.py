@@ -136,6 +136,12 @@ def test_gravity_free_variant_matches_full_model_with_zero_gravity():
     nu = list(rng.normal(size=(3, 10)))
     full = model.dyn.reactions(*args, *nu, 0.0, *body)
     np.testing.assert_allclose(model.dyn.reactions_no_gravity(*args, *body), full, atol=1e-12)
+    # The variant carries no gravity terms at all.
+    import inspect
+
+    params = inspect.signature(model.dyn.reactions_no_gravity).parameters
+    assert not {"g0", "nu1", "nu2", "nu3"} & set(params)
+    assert len(params) == len(inspect.signature(model.dyn.reactions).parameters) - 4
 
 
 def test_local_curvature_off_gives_only_case1_equal_to_full_model_case1():
