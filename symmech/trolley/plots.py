@@ -72,8 +72,10 @@ def work_precision(rows, path: Path) -> Path:
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 5))
     for family, method in dict.fromkeys((r[0], r[1]) for r in rows):
-        pts = sorted((r[4], max(r[5], 1e-16), r[3] if r[3] != "" else r[2])
-                     for r in rows if (r[0], r[1]) == (family, method))
+        # In knob order: more steps, or a smaller difference step, along each line.
+        pts = sorted(((r[4], max(r[5], 1e-16), r[3] if r[3] != "" else r[2])
+                      for r in rows if (r[0], r[1]) == (family, method)),
+                     key=lambda p: -p[2] if family == "physics" else p[2])
         ax.loglog([p[0] for p in pts], [p[1] for p in pts], marker="o", label=f"{family}: {method}")
         for t, e, knob in pts:
             ax.annotate(f"{knob:g}", (t, e), fontsize=6)
