@@ -164,3 +164,27 @@ def test_rigid_body_inertia_adds_gyroscopic_moment():
     _, spun = compute({**base, "trolley": {**base["trolley"], "inertia": [0, 0, 40.0, 0, 0, 0]}})
     dw3 = 1.0 / r0  # ω3 = V0/r0, ω̇3 = V̇0/r0
     np.testing.assert_allclose(spun[1]["P"][:, 3] - plain[1]["P"][:, 3], 40.0 * dw3 / 2.0, rtol=1e-10)
+
+
+def test_reactions_balance_force_and_moment_at_the_stated_points():
+    """Reassemble P0…P5 at O, B = (0, 0, -a), C = (0, 0, a), A = (l, 0, 0) and compare with
+    (11) evaluated directly: F = m (a + g0 ν), M = r × F + I ω̇ + ω × I ω."""
+    rng = np.random.default_rng(11)
+    n = 50
+    m, g0, l, ah = 70.0, 9.81, 2.2, 0.7
+    r = rng.normal(size=3)
+    inertia = np.array([5.0, 7.0, 9.0, 0.5, -0.4, 0.3])
+    acc, w, dw = rng.normal(size=(3, n, 3)) * 5
+    nu = rng.normal(size=(n, 3))
+    nu /= np.linalg.norm(nu, axis=1, keepdims=True)
+    P = model.dyn.reactions(m, *r, *inertia, *acc.T, *w.T, *dw.T, *nu.T, g0, l, ah)
+    i11, i22, i33, i12, i23, i13 = inertia
+    icm = np.array([[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]])
+    F = m * (acc + g0 * nu)
+    M = np.cross(r, F) + dw @ icm + np.cross(w, w @ icm)
+    zero = np.zeros(n)
+    forces = [(np.zeros(3), np.stack([P[:, 0], zero, zero], 1)), (np.array([0, 0, -ah]), np.stack([zero, P[:, 1], zero], 1)),
+              (np.array([0, 0, ah]), np.stack([zero, P[:, 2], zero], 1)), (np.array([l, 0, 0]), np.stack([zero, P[:, 3], P[:, 5]], 1)),
+              (np.zeros(3), np.stack([zero, zero, P[:, 4]], 1))]
+    np.testing.assert_allclose(sum(f for _, f in forces), F, atol=1e-9)
+    np.testing.assert_allclose(sum(np.cross(p, f) for p, f in forces), M, atol=1e-9)
