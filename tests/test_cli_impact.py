@@ -37,6 +37,7 @@ def test_default_scene_summary(tmp_path, capsys):
     assert abs(rates["cramer_printed"][2] - rates["from_angular_velocity"][2]) > 1.0
     for key in ("impulse_T", "mu", "centre_velocity_after", "angular_velocity_after", "warnings", "roots"):
         assert key in s
+    assert (tmp_path / "out" / "impact.png").stat().st_size > 10000
 
 
 @pytest.mark.parametrize("solver", ["paper", "paper-corrected", "scipy"])
