@@ -9,7 +9,7 @@ from symmech.core.errata import Check
 from symmech.generated import trolley_frame as frm
 from symmech.generated import trolley_printed as printed
 
-SEED = "002"
+SEED = "002_7fa2a0a5477072ec.txt"  # the seed file the formulas come from
 HELIX = {"R": 7.0, "lam": 5 / (2 * np.pi)}
 
 
