@@ -164,3 +164,35 @@ def test_preload_from_equilibrium_refused_when_indeterminate_or_unbalanced():
     })
     with pytest.raises(SymmechError, match="cannot balance the loads.*'y'"):
         numeric.equilibrium_tensions(side)
+
+
+def test_equilibrium_search_turns_a_pendulum_pulled_by_a_spring(tmp_path):
+    """Pendulum (massless rod l, bob m) pulled sideways by a spring of free length l0 to a wall
+    point W: the equilibrium angle and frequency found by eq. (6) match a direct minimisation
+    of Pi(phi) = -m g l cos(phi) + k/2 (|W - r(phi)| - l0)^2 with Pi'' by finite differences."""
+    import scipy.optimize
+
+    from symmech.smm.scene import run
+
+    mass, l, k, l0, g, d = 1.5, 1.0, 40.0, 0.3, 9.81, 1.2
+    W = np.array([d, -l])
+
+    def pi(phi):
+        r = np.array([l * math.sin(phi), -l * math.cos(phi)])
+        return -mass * g * l * math.cos(phi) + 0.5 * k * (np.linalg.norm(W - r) - l0) ** 2
+
+    phi_star = scipy.optimize.minimize_scalar(pi, bounds=(0.0, 1.2), method="bounded",
+                                              options={"xatol": 1e-12}).x
+    h = 1e-4
+    stiff = (pi(phi_star + h) - 2 * pi(phi_star) + pi(phi_star - h)) / h**2
+    d_ = {"kind": "mechanism",
+          "parameters": {"g": param(g, "m/s^2")},
+          "coordinates": [{"name": "phi", "type": "angle"}],
+          "points": [{"name": "O", "at": [0, 0]}, {"name": "B", "from": "O", "vector": [0, -l], "turns": ["phi"]},
+                     {"name": "W", "at": W.tolist()}],
+          "bodies": [{"name": "bob", "mass": mass, "com": "B"}],
+          "springs": [{"name": "s", "ends": ["B", "W"], "stiffness": k, "free_length": l0}],
+          "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": False}}
+    s = run(Section(d_), tmp_path)
+    assert abs(s["equilibrium"]["q"][0] - phi_star) < 1e-7
+    np.testing.assert_allclose(s["omega2_1_per_s2"][0], stiff / (mass * l * l), rtol=1e-6)

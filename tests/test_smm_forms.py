@@ -74,8 +74,13 @@ def planar_chains(draw):
         springs.append({"name": f"k{j}", "ends": [a, b], "stiffness": draw(st.floats(10, 1000)),
                         "preload": draw(st.floats(-50, 50))})
     dampers = [{"name": "d0", "ends": ["O", names[-1]], "viscosity": draw(st.floats(0.1, 5))}]
+    body = st.sampled_from(["ground"] + [b["name"] for b in bodies])
     return {"parameters": {"g": param(9.81, "m/s^2")}, "coordinates": coords, "points": points,
-            "bodies": bodies, "springs": springs, "dampers": dampers, "gravity": {"g": "g"}}
+            "bodies": bodies, "springs": springs, "dampers": dampers, "gravity": {"g": "g"},
+            "torsion_springs": [{"name": "t0", "bodies": [draw(body), bodies[-1]["name"]],
+                                 "stiffness": draw(st.floats(1, 100))}],
+            "torsion_dampers": [{"name": "t1", "bodies": [draw(body), bodies[0]["name"]],
+                                 "viscosity": draw(st.floats(0.1, 5))}]}
 
 
 def _spread(d):
