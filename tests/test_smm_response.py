@@ -85,3 +85,18 @@ def test_generated_module_batches():
     c = mod.c(m1[:, None], 1.0, np.array([0.5, 1.0]), 1.0, 9.81)
     assert c.shape == (7, 2, 2, 2)
     np.testing.assert_allclose(c[3, 1, 0, 0], 9.81 * (m1[3] * 1.0 + 1.0 * 2.0), rtol=1e-15)
+
+
+def test_overdamped_mode_has_no_ratio_and_warns(tmp_path):
+    """zeta = c/(2 sqrt(k m)) = 2.5 > 1: real eigenvalues, no ratio, a warning."""
+    scene = {"kind": "mechanism",
+             "coordinates": [{"name": "x", "type": "slide", "axis": [1, 0]}],
+             "points": [{"name": "O", "at": [0, 0]}, {"name": "P", "from": "O", "vector": [1, 0], "slides": ["x"]}],
+             "bodies": [{"name": "m", "mass": 1.0, "com": "P"}],
+             "springs": [{"name": "k", "ends": ["O", "P"], "stiffness": 100.0}],
+             "dampers": [{"name": "c", "ends": ["O", "P"], "viscosity": 50.0}],
+             "output": {"plots": False}}
+    s = run(Section(scene), tmp_path)
+    assert s["damping_ratios"] == [None]
+    assert s["frequencies_rad_s"] == [10.0]
+    assert any("overdamped" in w for w in s["warnings"])

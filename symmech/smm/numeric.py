@@ -197,7 +197,8 @@ def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> t
 class Modes:
     """Undamped modes of a q'' + c q = 0: omega2 [1/s^2] ascending, mass-normalised
     shapes (columns, phi^T a phi = I), and damping ratios from the damped state-space
-    eigenvalues (non-proportional damping allowed; None for rigid-body modes)."""
+    eigenvalues (non-proportional damping allowed; None for rigid-body, unstable and
+    overdamped modes)."""
 
     omega2: np.ndarray
     shapes: np.ndarray
@@ -233,9 +234,10 @@ def damping_ratios(a, b, c, omega2) -> list:
             continue
         j = cand[np.argmin(np.abs(np.abs(lam[cand]) - w))]
         used[j] = True
-        # overdamped modes give two real roots; their geometric mean is omega, zeta from the sum
+        # an overdamped mode has two real roots that cannot be told apart from those of other
+        # overdamped modes in general: no ratio (None), the runner warns
         if abs(lam[j].imag) < 1e-12 * abs(lam[j]):
-            out.append(float(-lam[j].real / w) if lam[j].real < 0 else None)
+            out.append(None)
             continue
         out.append(float(-lam[j].real / abs(lam[j])))
     return out

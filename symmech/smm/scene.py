@@ -80,7 +80,8 @@ def run(scene: Section, out: Path) -> dict:
         warnings.append(f"the configuration is not an equilibrium: dPi/dq = {res:.3g} on '{worst}' (eq. (5)); "
                         "set [equilibrium] solve = true or fix the preloads")
     generated = None
-    if n <= SYMBOLIC_LIMIT:
+    # the emitter's template needs at least one argument: all-numeric scenes get no module
+    if n <= SYMBOLIC_LIMIT and m.parameters:
         module, path = _module(m, out)
         values = [p.value for p in m.parameters.values()]
         for key, ref in (("a", a), ("b", b), ("c", c)):
@@ -108,6 +109,10 @@ def run(scene: Section, out: Path) -> dict:
                             "(very stiff springs closing loops?)")
     omega = [math.sqrt(x) if x > 0 and i not in rigid else 0.0 if i in rigid else None
              for i, x in enumerate(w2)]
+    overdamped = [i + 1 for i, z in enumerate(md.zeta) if z is None and omega[i]]
+    if overdamped and np.any(b):
+        warnings.append(f"mode(s) {', '.join(map(str, overdamped))} have real damped eigenvalues (overdamped): "
+                        "no damping ratio reported")
     eff_report = _effects_report(m, w2, warnings)
 
     out = Path(out)
