@@ -2,7 +2,7 @@
 
 Works in any arithmetic ``ar`` (floats via :class:`symmech.smm.model.NumericArith`,
 sympy via ``symmech.smm.derive.SymbolicArith``): ``ar(text)`` evaluates a model
-expression, ``ar.sqrt``, ``ar.is_zero`` and ``ar.sum`` do the rest. No energies,
+expression, ``ar.sqrt``, ``ar.is_zero``, ``ar.sum`` and ``ar.prod`` do the rest. No energies,
 no differentiation: for a chain vector v turned by angle q_a about e_a,
 dv/dq_a = e_a x v (the conjugate vector, Table 1 / Table 2), a slide q_s adds
 its unit vector u_s, and second derivatives are e_a x (e_b x v) and e_a x u_s.
@@ -61,7 +61,7 @@ class Geometry:
         self.ar = ar
         self.index = {name: i for i, name in enumerate(m.coordinate_names)}
         self.axis = {c.name: tuple(ar(t, f"coordinate '{c.name}'") for t in c.axis) for c in m.coordinates}
-        self.ez = {a: tuple(c.axis) == ("0", "0", "1") for a, c in ((c.name, c) for c in m.coordinates)}
+        self.ez = {c.name: tuple(c.axis) == ("0", "0", "1") for c in m.coordinates}
         self.vector = {p.name: tuple(ar(t, f"point '{p.name}'") for t in p.vector) for p in m.points.values()}
 
     def pair(self, a: str, b: str) -> tuple[str, str]:
