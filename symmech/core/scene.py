@@ -53,6 +53,7 @@ class Section:
         return self._field(key)
 
     def keys(self) -> list[str]:
+        """The fields this table sets, in file order."""
         return list(self._data)
 
     def _get(self, key, default):
@@ -127,14 +128,6 @@ class Section:
         """The field's TOML value unchecked, for fields whose type the caller validates
         itself (e.g. a number or an expression string); marks it read."""
         return self._get(key, default)
-
-    def keys(self) -> list[str]:
-        """The fields this table sets, in file order."""
-        return list(self._data)
-
-    def field(self, key: str) -> str:
-        """Dotted path of ``key`` for error messages."""
-        return self._field(key)
 
     def finish(self) -> None:
         """Reject fields that were set but never read (typos, unknown effects)."""

@@ -31,7 +31,7 @@ def read_chain(sec: Section, name: str | None = None) -> dict:
     spec["name"] = sec.str("name", default=name or f"chain_{spec['n']}_{spec['ends']}_{spec['motion']}")
     sec.finish()
     if spec["ends"] == "free-free" and spec["n"] == 1:
-        raise SceneError(sec.field("n"), "a free-free chain needs at least two masses")
+        raise SceneError(sec.name("n"), "a free-free chain needs at least two masses")
     return spec
 
 

@@ -343,7 +343,7 @@ def from_scene(scene: Section) -> Mechanism:
     psec = scene.section("parameters", default={})
     for pname in psec.keys():
         entry = psec.raw(pname)
-        where = psec.field(pname)
+        where = psec.name(pname)
         if not pname.isidentifier():
             raise SceneError(where, "a parameter name must be an identifier")
         if isinstance(entry, (int, float)) and not isinstance(entry, bool):
@@ -356,7 +356,7 @@ def from_scene(scene: Section) -> Mechanism:
     coords = []
     for c in _items(scene, "coordinates"):
         kind = c.choice("type", ("angle", "slide"))
-        axis = _vector(c, "axis", c.field("axis"), default=[0, 0, 1] if kind == "angle" else None)
+        axis = _vector(c, "axis", c.name("axis"), default=[0, 0, 1] if kind == "angle" else None)
         coords.append(Coordinate(c.str("name"), kind, axis))
         c.finish()
     _unique("coordinate", [c.name for c in coords])
@@ -367,16 +367,16 @@ def from_scene(scene: Section) -> Mechanism:
     for p in _items(scene, "points"):
         pname = p.str("name")
         if p.has("at"):
-            points[pname] = Point(pname, None, _vector(p, "at", p.field("at")))
+            points[pname] = Point(pname, None, _vector(p, "at", p.name("at")))
         else:
-            points[pname] = Point(pname, p.str("from"), _vector(p, "vector", p.field("vector")),
-                                  _names(p, "turns", p.field("turns")), _names(p, "slides", p.field("slides")))
+            points[pname] = Point(pname, p.str("from"), _vector(p, "vector", p.name("vector")),
+                                  _names(p, "turns", p.name("turns")), _names(p, "slides", p.name("slides")))
         p.finish()
     _unique("point", [p for p in points])
 
     bodies = []
     for b in _items(scene, "bodies"):
-        where = b.field("inertia")
+        where = b.name("inertia")
         raw = b.raw("inertia", default=0.0)
         if isinstance(raw, list):
             inertia = _vector(b, "inertia", where)
@@ -384,45 +384,45 @@ def from_scene(scene: Section) -> Mechanism:
             inertia = ("0", "0", _expr(b, "inertia", default=0.0, where=where))
         com = b.str("com")
         turns = b.raw("turns", default=None)
-        bodies.append(Body(b.str("name"), _expr(b, "mass", where=b.field("mass")), inertia, com,
-                           _names(b, "turns", b.field("turns")) if turns is not None else None))
+        bodies.append(Body(b.str("name"), _expr(b, "mass", where=b.name("mass")), inertia, com,
+                           _names(b, "turns", b.name("turns")) if turns is not None else None))
         b.finish()
     _unique("body", [b.name for b in bodies])
 
     springs = []
     for s in _items(scene, "springs"):
-        ends = _names(s, "ends", s.field("ends"))
+        ends = _names(s, "ends", s.name("ends"))
         if len(ends) != 2:
-            raise SceneError(s.field("ends"), f"expected two point names, got {list(ends)!r}")
-        pre = _expr(s, "preload", where=s.field("preload")) if s.has("preload") else None
-        free = _expr(s, "free_length", where=s.field("free_length")) if s.has("free_length") else None
+            raise SceneError(s.name("ends"), f"expected two point names, got {list(ends)!r}")
+        pre = _expr(s, "preload", where=s.name("preload")) if s.has("preload") else None
+        free = _expr(s, "free_length", where=s.name("free_length")) if s.has("free_length") else None
         if pre is not None and free is not None:
-            raise SceneError(s.field("free_length"), "give either preload or free_length, not both")
-        springs.append(Link(s.str("name"), ends[0], ends[1], _expr(s, "stiffness", where=s.field("stiffness")),
+            raise SceneError(s.name("free_length"), "give either preload or free_length, not both")
+        springs.append(Link(s.str("name"), ends[0], ends[1], _expr(s, "stiffness", where=s.name("stiffness")),
                             pre, free))
         s.finish()
     dampers = []
     for d in _items(scene, "dampers"):
-        ends = _names(d, "ends", d.field("ends"))
+        ends = _names(d, "ends", d.name("ends"))
         if len(ends) != 2:
-            raise SceneError(d.field("ends"), f"expected two point names, got {list(ends)!r}")
-        dampers.append(Link(d.str("name"), ends[0], ends[1], _expr(d, "viscosity", where=d.field("viscosity"))))
+            raise SceneError(d.name("ends"), f"expected two point names, got {list(ends)!r}")
+        dampers.append(Link(d.str("name"), ends[0], ends[1], _expr(d, "viscosity", where=d.name("viscosity"))))
         d.finish()
     torsion = {}
     for key, coef in (("torsion_springs", "stiffness"), ("torsion_dampers", "viscosity")):
         torsion[key] = []
         for t in _items(scene, key):
-            bs = _names(t, "bodies", t.field("bodies"))
+            bs = _names(t, "bodies", t.name("bodies"))
             if len(bs) != 2:
-                raise SceneError(t.field("bodies"), f"expected two body names (or 'ground'), got {list(bs)!r}")
-            torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t.field(coef)),
-                                        _vector(t, "axis", t.field("axis"), default=[0, 0, 1])))
+                raise SceneError(t.name("bodies"), f"expected two body names (or 'ground'), got {list(bs)!r}")
+            torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t.name(coef)),
+                                        _vector(t, "axis", t.name("axis"), default=[0, 0, 1])))
             t.finish()
     _unique("spring", [s.name for s in springs + dampers + torsion["torsion_springs"] + torsion["torsion_dampers"]])
 
     g = scene.section("gravity", default={})
-    gravity = _expr(g, "g", default=0.0, where=g.field("g"))
-    gdir = _vector(g, "direction", g.field("direction"), default=[0, -1, 0])
+    gravity = _expr(g, "g", default=0.0, where=g.name("g"))
+    gdir = _vector(g, "direction", g.name("direction"), default=[0, -1, 0])
     g.finish()
     e = scene.section("effects", default={})
     effects = Effects(e.bool("damping", default=True), e.bool("preload", default=True),

@@ -218,7 +218,7 @@ def _point_force(scene_sec: Section, m: Mechanism) -> np.ndarray:
         return np.array(scene_sec.vector("Q", n, unit="N or N m"))
     point = scene_sec.str("point")
     if point not in m.points:
-        raise SceneError(scene_sec.field("point"), f"point '{point}' is not defined")
+        raise SceneError(scene_sec.name("point"), f"point '{point}' is not defined")
     raw = scene_sec.raw("force")
     force = np.zeros(3)
     size = len(raw) if isinstance(raw, list) and len(raw) in (2, 3) else 3
@@ -256,7 +256,7 @@ def _responses(scene: Section, m: Mechanism, a, b, c, out: Path) -> dict:
         Q = _point_force(frc, m)
         lo, hi = frc.vector("omega", 2, unit="rad/s", lo=0)
         if hi <= lo:
-            raise SceneError(frc.field("omega"), f"expected [low, high] with low < high, got [{lo}, {hi}]")
+            raise SceneError(frc.name("omega"), f"expected [low, high] with low < high, got [{lo}, {hi}]")
         samples = frc.int("samples", default=400, lo=2, hi=10**6)
         frc.finish()
         omegas = np.linspace(lo, hi, samples)
