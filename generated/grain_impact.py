@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 bb2b05738b366868ece0cd6caa04fe298e1aa54d0f40799fa38fa4190547dfbc
+# symmech 0.1.0 generated module; inputs sha256 c8c7b717be7c85b005f8e64ec83bb18449b230b2bfe57699c7e813c5a582a5b9
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113.txt, eqs (1)-(60), derived in symmech.grain.derive.
@@ -261,79 +261,81 @@ def H(a, b, c, psi, theta, phi):
     """
     (a, b, c, psi, theta, phi,), batch = _batch(a, b, c, psi, theta, phi)
     out = numpy.empty(batch + (3, 3))
-    x0 = numpy.cos(psi)
-    x1 = a**2
-    x2 = (1/5)*x1
-    x3 = b**2
-    x4 = (1/5)*x3
-    x5 = 1/(x2 + x4)
-    x6 = numpy.sin(theta)
-    x7 = x6**2
-    x8 = x5*x7
-    x9 = c**2
-    x10 = (1/5)*x9
-    x11 = 1/(x10 + x4)
-    x12 = numpy.sin(psi)
-    x13 = numpy.cos(phi)
-    x14 = x12*x13
-    x15 = numpy.cos(theta)
-    x16 = numpy.sin(phi)
-    x17 = x0*x16
-    x18 = x14 + x15*x17
-    x19 = 1/(x10 + x2)
-    x20 = x12*x16
-    x21 = -x0*x13*x15 + x20
-    x22 = -x21
-    x23 = x0**2*x8 + x11*x18**2 + x19*x22**2
-    x24 = x15**2
-    x25 = x16**2*x7
-    x26 = x13**2*x7
-    x27 = x1*x25 + x24*x9 + x26*x3
-    x28 = 1/numpy.sqrt(x27)
-    x29 = -x27*x28
-    x30 = x15*x6
-    x31 = x0*x30
-    x32 = x11*x18
-    x33 = x16*x6
-    x34 = x19*x22
-    x35 = x13*x6
-    x36 = -x31*x5 + x32*x33 + x34*x35
-    x37 = x3*x35
-    x38 = x1*x33
-    x39 = -x18*x38 + x21*x37 + x31*x9
-    x40 = x28*x39
-    x41 = x23*x29 - x36*x40
-    x42 = x11*x25 + x19*x26 + x24*x5
-    x43 = x29*x36 - x40*x42
-    x44 = x12*x30
-    x45 = x14*x15 + x17
-    x46 = -x0*x13 + x15*x20
-    x47 = x37*x45 + x38*x46 - x44*x9
-    x48 = -x46
-    x49 = -x45
-    x50 = x11*x33*x48 + x19*x35*x49 + x44*x5
-    x51 = x28*x42*x47 - x29*x50
-    x52 = x28*x47
-    x53 = x36*x52
-    x54 = -x0*x12*x8 + x32*x48 + x34*x49
-    x55 = x29*x54
-    x56 = x53 - x55
-    x57 = -x23*x52 + x28*x39*x54
-    x58 = -x40*x50
-    x59 = -x53 - x58
-    x60 = x55 + x58
-    x61 = x11*x48**2 + x12**2*x8 + x19*x49**2
-    x62 = x28*x47*x50 - x29*x61
-    x63 = x40*x61 - x52*x54
-    out[..., 0, 0] = x29*x41 - x40*x43 + 1
-    out[..., 0, 1] = x29*x56 - x40*x51
-    out[..., 0, 2] = x29*x57 - x40*x59
-    out[..., 1, 0] = x28*x43*x47 - x29*x60
-    out[..., 1, 1] = -x29*x62 + x51*x52 + 1
-    out[..., 1, 2] = x28*x47*x59 - x29*x63
-    out[..., 2, 0] = x28*x39*x60 - x41*x52
-    out[..., 2, 1] = x40*x62 - x52*x56
-    out[..., 2, 2] = x40*x63 - x52*x57 + 1
+    x0 = numpy.cos(phi)
+    x1 = numpy.cos(psi)
+    x2 = numpy.cos(theta)
+    x3 = numpy.sin(phi)
+    x4 = numpy.sin(psi)
+    x5 = x3*x4
+    x6 = x2*x5
+    x7 = x0*x1 - x6
+    x8 = numpy.sin(theta)
+    x9 = x3*x8
+    x10 = a**2
+    x11 = (1/5)*x10
+    x12 = c**2
+    x13 = (1/5)*x12
+    x14 = x2**2
+    x15 = x12*x14
+    x16 = x3**2
+    x17 = x8**2
+    x18 = x16*x17
+    x19 = x10*x18
+    x20 = b**2
+    x21 = x0**2
+    x22 = x17*x21
+    x23 = x20*x22
+    x24 = 1/(x15 + x19 + x23)
+    x25 = x24/(x11 + x13)
+    x26 = x10*x25
+    x27 = x26*x9
+    x28 = x12*x2
+    x29 = x27*x28
+    x30 = x1*x3
+    x31 = x0*x4
+    x32 = x2*x31
+    x33 = -x30 - x32
+    x34 = x0*x8
+    x35 = (1/5)*x20
+    x36 = x24/(x13 + x35)
+    x37 = x20*x36
+    x38 = x34*x37
+    x39 = x28*x38
+    x40 = a**4*x18
+    x41 = b**4*x22
+    x42 = x25*x40 + x36*x41 + 1
+    x43 = -x29*x7 - x33*x39 + x4*x42*x8
+    x44 = x4*x8
+    x45 = x12*x17
+    x46 = x26*x45
+    x47 = x24/(x11 + x35)
+    x48 = x0*x10*x17*x20*x3*x47
+    x49 = c**4*x14
+    x50 = x25*x49 + x41*x47 + 1
+    x51 = -x33*x48 - x46*x6 + x50*x7
+    x52 = x37*x45
+    x53 = x36*x49 + x40*x47 + 1
+    x54 = -x32*x52 + x33*x53 - x48*x7
+    x55 = x1*x8
+    x56 = x2*x30
+    x57 = x31 + x56
+    x58 = x0*x1*x2 - x5
+    x59 = -x29*x57 - x39*x58 - x42*x55
+    x60 = x46*x56 - x48*x58 + x50*x57
+    x61 = x0*x1*x2*x52 - x48*x57 + x53*x58
+    x62 = -x19*x25*x28 + x2*x42 - x23*x28*x36
+    x63 = x10*x20*x47*x8**3
+    x64 = -x15*x27 - x21*x3*x63 + x3*x50*x8
+    x65 = -x0*x16*x63 + x0*x53*x8 - x15*x38
+    out[..., 0, 0] = x33*x54 + x43*x44 + x51*x7
+    out[..., 0, 1] = -x43*x55 + x51*x57 + x54*x58
+    out[..., 0, 2] = x2*x43 + x34*x54 + x51*x9
+    out[..., 1, 0] = x33*x61 + x44*x59 + x60*x7
+    out[..., 1, 1] = -x55*x59 + x57*x60 + x58*x61
+    out[..., 1, 2] = x2*x59 + x34*x61 + x60*x9
+    out[..., 2, 0] = x33*x65 + x44*x62 + x64*x7
+    out[..., 2, 1] = -x55*x62 + x57*x64 + x58*x65
+    out[..., 2, 2] = x2*x62 + x34*x65 + x64*x9
     return out
 
 
@@ -579,9 +581,9 @@ def euler_rate_system(J_x, J_y, J_z, theta, phi):
     J_z : array_like
         principal moment of inertia about Z' [kg*m^2]
     theta : array_like
-        Euler nutation angle [rad]
+        Euler nutation angle at the impact [rad]
     phi : array_like
-        Euler spin angle [rad]
+        Euler spin angle at the impact [rad]
 
     Returns
     -------
@@ -617,9 +619,9 @@ def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp
     J_z : array_like
         principal moment of inertia about Z' [kg*m^2]
     theta : array_like
-        Euler nutation angle [rad]
+        Euler nutation angle at the impact [rad]
     phi : array_like
-        Euler spin angle [rad]
+        Euler spin angle at the impact [rad]
     R_xp : array_like
         contact offset R in body axes, x' [m]
     R_yp : array_like

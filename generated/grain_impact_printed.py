@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 2478050ffc73dcf21ef9b3d72f4971ec010977824e66d6646f8f62e3b4a6b0b3
+# symmech 0.1.0 generated module; inputs sha256 d149220c50b4c5552a6b9758569618f8f23756e91fcf7b730f43bfedb3f414bd
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Source: seed 000_b52a2f612feb4113.txt, eqs (3)-(60), transcribed in symmech.grain.printed.
@@ -90,11 +90,11 @@ def H(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
     Parameters
     ----------
     R_x : array_like
-        contact offset R, X [m]
+        contact offset R, x [m]
     R_y : array_like
-        contact offset R, Y [m]
+        contact offset R, y [m]
     R_z : array_like
-        contact offset R, Z [m]
+        contact offset R, z [m]
     P_xx : array_like
         P = I/m entry xx [m^2]
     P_xy : array_like
@@ -303,7 +303,7 @@ def gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_
     return out
 
 
-def euler_rate_system(J_x, J_y, J_z, theta0, phi0):
+def euler_rate_system(J_x, J_y, J_z, theta, phi):
     """matrix a as printed — eqs. (44)-(52).
 
     Parameters
@@ -314,21 +314,21 @@ def euler_rate_system(J_x, J_y, J_z, theta0, phi0):
         principal moment of inertia about Y' [kg*m^2]
     J_z : array_like
         principal moment of inertia about Z' [kg*m^2]
-    theta0 : array_like
-        pre-impact nutation angle [rad]
-    phi0 : array_like
-        pre-impact spin angle [rad]
+    theta : array_like
+        Euler nutation angle at the impact [rad]
+    phi : array_like
+        Euler spin angle at the impact [rad]
 
     Returns
     -------
     numpy.ndarray, shape (..., 3, 3)
         [kg*m^2]
     """
-    (J_x, J_y, J_z, theta0, phi0,), batch = _batch(J_x, J_y, J_z, theta0, phi0)
+    (J_x, J_y, J_z, theta, phi,), batch = _batch(J_x, J_y, J_z, theta, phi)
     out = numpy.empty(batch + (3, 3))
-    x0 = numpy.cos(phi0)
-    x1 = numpy.sin(phi0)
-    x2 = numpy.sin(theta0)
+    x0 = numpy.cos(phi)
+    x1 = numpy.sin(phi)
+    x2 = numpy.sin(theta)
     out[..., 0, 0] = J_x*x0
     out[..., 0, 1] = J_x*x1*x2
     out[..., 0, 2] = 0
@@ -341,7 +341,7 @@ def euler_rate_system(J_x, J_y, J_z, theta0, phi0):
     return out
 
 
-def euler_rate_rhs(J_x, J_y, J_z, theta0, phi0, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi):
+def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi):
     """right-hand side b as printed — eqs. (53)-(55).
 
     Parameters
@@ -352,10 +352,10 @@ def euler_rate_rhs(J_x, J_y, J_z, theta0, phi0, R_xp, R_yp, R_zp, T_xp, T_yp, T_
         principal moment of inertia about Y' [kg*m^2]
     J_z : array_like
         principal moment of inertia about Z' [kg*m^2]
-    theta0 : array_like
-        pre-impact nutation angle [rad]
-    phi0 : array_like
-        pre-impact spin angle [rad]
+    theta : array_like
+        Euler nutation angle at the impact [rad]
+    phi : array_like
+        Euler spin angle at the impact [rad]
     R_xp : array_like
         contact offset R in body axes, x' [m]
     R_yp : array_like
@@ -380,14 +380,14 @@ def euler_rate_rhs(J_x, J_y, J_z, theta0, phi0, R_xp, R_yp, R_zp, T_xp, T_yp, T_
     numpy.ndarray, shape (..., 3)
         [kg*m^2/s]
     """
-    (J_x, J_y, J_z, theta0, phi0, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi,), batch = _batch(J_x, J_y, J_z, theta0, phi0, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
+    (J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi,), batch = _batch(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
     out = numpy.empty(batch + (3,))
-    x0 = numpy.cos(phi0)
-    x1 = numpy.sin(phi0)
-    x2 = dpsi*numpy.sin(theta0)
+    x0 = numpy.cos(phi)
+    x1 = numpy.sin(phi)
+    x2 = dpsi*numpy.sin(theta)
     out[..., 0] = J_x*(dtheta*x0 + x1*x2) + R_yp*T_zp - R_zp*T_yp
     out[..., 1] = J_y*(-dtheta*x1 + x0*x2) - R_xp*T_zp + R_zp*T_xp
-    out[..., 2] = J_z*(dphi + dtheta*numpy.cos(theta0)) + R_xp*T_yp - R_yp*T_xp
+    out[..., 2] = J_z*(dphi + dtheta*numpy.cos(theta)) + R_xp*T_yp - R_yp*T_xp
     return out
 
 
@@ -444,11 +444,11 @@ def body_components(R_x, R_y, R_z, psi, theta, phi):
     Parameters
     ----------
     R_x : array_like
-        contact offset R, X [m]
+        contact offset R, x [m]
     R_y : array_like
-        contact offset R, Y [m]
+        contact offset R, y [m]
     R_z : array_like
-        contact offset R, Z [m]
+        contact offset R, z [m]
     psi : array_like
         Euler precession angle [rad]
     theta : array_like

@@ -99,9 +99,8 @@ def test_H_plain_lambdify_agrees(configs):
     axes, angles = configs
     f = sympy.lambdify([derive.a, derive.b, derive.c, derive.psi, derive.theta, derive.phi],
                        derive.reduction_tensor(), "numpy")
-    k = slice(0, 300)
-    Hl = np.moveaxis(np.array(f(*axes[k].T, *angles[k].T), dtype=float), -1, 0)
-    Hg = g.H(*axes[k].T, *angles[k].T)
+    Hl = np.moveaxis(np.array(f(*axes.T, *angles.T), dtype=float), -1, 0)
+    Hg = g.H(*axes.T, *angles.T)
     np.testing.assert_allclose(Hg, Hl, rtol=1e-9, atol=1e-9)
 
 

@@ -12,6 +12,7 @@ expression with its argument list.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import importlib.resources
@@ -150,19 +151,25 @@ def default_directory() -> Path:
     return Path(importlib.import_module("symmech.generated").__path__[0])
 
 
-def module_specs() -> list[ModuleSpec]:
-    """Every ModuleSpec the paper packages declare, sorted by name.
-
-    A paper package ``symmech.<paper>`` declares specs in its ``derive*`` and
-    ``printed*`` modules through a ``module_specs()`` function.
-    """
+@functools.cache
+def _all_specs() -> tuple[ModuleSpec, ...]:
     specs = []
     for module in paper_modules(("derive", "printed")):
         specs.extend(module.module_specs())
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
         raise ValueError(f"duplicate generated module names: {names}")
-    return sorted(specs, key=lambda s: s.name)
+    return tuple(sorted(specs, key=lambda s: s.name))
+
+
+def module_specs() -> list[ModuleSpec]:
+    """Every ModuleSpec the paper packages declare, sorted by name.
+
+    A paper package ``symmech.<paper>`` declares specs in its ``derive*`` and
+    ``printed*`` modules through a ``module_specs()`` function. Derivations run
+    once per process.
+    """
+    return list(_all_specs())
 
 
 def paper_modules(prefixes: tuple[str, ...]) -> list:

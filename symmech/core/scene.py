@@ -48,6 +48,14 @@ class Section:
     def has(self, key: str) -> bool:
         return key in self._data
 
+    def name(self, key: str) -> str:
+        """Dotted path of field ``key``, for error messages."""
+        return self._field(key)
+
+    def keys(self) -> list[str]:
+        """The fields this table sets, in file order."""
+        return list(self._data)
+
     def _get(self, key, default):
         self._read.add(key)
         if key in self._data:
@@ -74,6 +82,20 @@ class Section:
             raise SceneError(field, f"expected a list of {n} numbers [{unit}], got {value!r}")
         return [_check_real(f"{field}[{i}]", v, unit, lo, hi, lo_open, hi_open)
                 for i, v in enumerate(value)]
+
+    def rows(self, key: str, n: int, *, unit: str, min_rows: int = 1, default=_MISSING) -> list[list[float]]:
+        """A list of at least ``min_rows`` rows of ``n`` finite numbers (a table of points)."""
+        value = self._get(key, default)
+        field = self._field(key)
+        if not isinstance(value, (list, tuple)) or len(value) < min_rows:
+            raise SceneError(field, f"expected a list of at least {min_rows} rows of {n} numbers [{unit}]")
+        rows = []
+        for i, row in enumerate(value):
+            if not isinstance(row, (list, tuple)) or len(row) != n:
+                raise SceneError(f"{field}[{i}]", f"expected {n} numbers [{unit}], got {row!r}")
+            rows.append([_check_real(f"{field}[{i}][{j}]", v, unit, None, None, False, False)
+                         for j, v in enumerate(row)])
+        return rows
 
     def int(self, key: str, *, default=_MISSING, lo=None, hi=None) -> int:
         value = self._get(key, default)
@@ -102,6 +124,11 @@ class Section:
             raise SceneError(self._field(key), f"unknown value {value!r}; choose one of {', '.join(choices)}")
         return value
 
+    def raw(self, key: str, *, default=_MISSING):
+        """The field's TOML value unchecked, for fields whose type the caller validates
+        itself (e.g. a number or an expression string); marks it read."""
+        return self._get(key, default)
+
     def finish(self) -> None:
         """Reject fields that were set but never read (typos, unknown effects)."""
         unknown = sorted(set(self._data) - self._read)
@@ -122,7 +149,8 @@ def _check_real(field, value, unit, lo, hi, lo_open, hi_open) -> float:
         right = ")" if hi_open else "]"
         lo_text = "-inf" if lo is None else f"{lo:g}"
         hi_text = "inf" if hi is None else f"{hi:g}"
-        raise SceneError(field, f"{value:g} {unit} is outside {left}{lo_text}, {hi_text}{right}")
+        unit_text = f" {unit}" if unit else ""
+        raise SceneError(field, f"{value:g}{unit_text} is outside {left}{lo_text}, {hi_text}{right}")
     return value
 
 

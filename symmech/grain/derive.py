@@ -52,6 +52,25 @@ IMPACT_STATE = ((m, "mass", "kg"), (lam, "tangential reduction factor lambda", "
                 (uz0, "pre-impact contact-point velocity, Z", "m/s"))
 UNKNOWNS = ((Tx, "impulse, X", "N*s"), (Tz, "impulse, Z", "N*s"),
             (mu, "angle of the tangential impulse and velocity from X", "rad"))
+R_surface = Matrix(sympy.symbols("R_x R_y R_z", real=True))  # contact offset, surface frame
+v0 = Matrix(sympy.symbols("v_x0 v_y0 v_z0", real=True))  # centre velocity before the impact
+A_sym = Matrix(3, 3, sympy.symbols("a11 a12 a13 a21 a22 a23 a31 a32 a33", real=True))  # (43)
+b_sym = Matrix(sympy.symbols("b1 b2 b3", real=True))
+R_ARGS = tuple((s, f"contact offset R, {s.name[2]}", "m") for s in R_surface)
+VELOCITY_ARGS = (tuple((s, f"pre-impact centre velocity, {s.name[2]}", "m/s") for s in v0)
+                 + tuple((s, f"impulse, {s.name[2]}", "N*s") for s in (Tx, Ty, Tz)) + ((m, "mass", "kg"),))
+EULER_SYSTEM_ARGS = ((Jx, "principal moment of inertia about X'", "kg*m^2"),
+                     (Jy, "principal moment of inertia about Y'", "kg*m^2"),
+                     (Jz, "principal moment of inertia about Z'", "kg*m^2"),
+                     (theta, "Euler nutation angle at the impact", "rad"),
+                     (phi, "Euler spin angle at the impact", "rad"))
+EULER_RHS_ARGS = (EULER_SYSTEM_ARGS
+                  + tuple((s, f"contact offset R in body axes, {s.name[2]}'", "m") for s in Rb)
+                  + tuple((s, f"impulse T in body axes, {s.name[2]}'", "N*s") for s in Tb)
+                  + ((dtheta, "pre-impact nutation rate", "rad/s"), (dpsi, "pre-impact precession rate", "rad/s"),
+                     (dphi, "pre-impact spin rate", "rad/s")))
+CRAMER_ARGS = (tuple((s, f"coefficient {s.name} of (43)", "kg*m^2") for s in A_sym)
+               + tuple((s, f"right-hand side {s.name} of (43)", "kg*m^2/s") for s in b_sym))
 
 
 def rot_x(angle):
@@ -72,19 +91,19 @@ def rotation():
     return rot_z(psi) * rot_x(theta) * rot_z(phi)
 
 
+@functools.cache
 def euler_rate_matrix():
     """W(theta, phi) with body angular velocity omega' = W (theta', psi', phi').
 
-    Derived from the skew matrix Q^T dQ/dt with the angles as functions of time.
+    The rotation Q = Rz(psi) Rx(theta) Rz(phi) turns at psi' about the surface Z,
+    at theta' about the line of nodes Rz(psi) e_x and at phi' about the body z';
+    expressed in body axes these are Rz(phi)^T Rx(theta)^T e_z, Rz(phi)^T e_x and
+    e_z. (The test suite checks W against Q^T dQ/dt by finite differences.)
     """
-    t = sympy.Symbol("t")
-    fs = {s: sympy.Function(s.name)(t) for s in (psi, theta, phi)}
-    Qt = rotation().subs(fs)
-    omega_skew = Qt.T * Qt.diff(t)
-    omega_body = Matrix([omega_skew[2, 1], omega_skew[0, 2], omega_skew[1, 0]])
-    rates = [fs[theta].diff(t), fs[psi].diff(t), fs[phi].diff(t)]
-    W = omega_body.jacobian(rates).subs({v: k for k, v in fs.items()})
-    return W.applyfunc(sympy.trigsimp)  # 3x3 of short trig terms: cheap and readable
+    e_x, e_z = Matrix([1, 0, 0]), Matrix([0, 0, 1])
+    about_psi = rot_z(phi).T * rot_x(theta).T * e_z
+    about_theta = rot_z(phi).T * e_x
+    return Matrix.hstack(about_theta, about_psi, e_z)
 
 
 def gyration_squared():
@@ -119,15 +138,18 @@ def reduction_tensor():
 
     m du_C = T, I dw = R x T, du_K = du_C + dw x R with I = m P; writing the
     impulse per unit mass, t = T/m, the mass drops out exactly:
-    du_K = t + (P^-1 (R x t)) x R and H = d(du_K)/dt. P^-1 = Q diag(1/rho^2) Q^T,
-    so no symbolic matrix is inverted.
+    du_K = t + (P^-1 (R x t)) x R and H = d(du_K)/dt. The balance is written in
+    body axes, where P = diag(rho^2) (nothing to invert) and R' = -D^2 n'/|D n'|,
+    then turned to the surface frame: H = Q H' Q^T.
     """
     Q = rotation()
-    R = contact_offset()
+    n_body = Q.T * Matrix([0, 0, 1])
+    D2 = sympy.diag(a**2, b**2, c**2)
+    R_body = -D2 * n_body / contact_height()
     t = Matrix(sympy.symbols("t_x t_y t_z", real=True))
-    inv_P = Q * sympy.diag(*[1 / r for r in gyration_squared()]) * Q.T
-    du_K = t + (inv_P * R.cross(t)).cross(R)
-    return du_K.jacobian(t)
+    inv_P = sympy.diag(*[1 / r for r in gyration_squared()])
+    du_K = t + (inv_P * R_body.cross(t)).cross(R_body)
+    return Q * du_K.jacobian(t) * Q.T
 
 
 def _h_matrix():
@@ -206,15 +228,13 @@ def centre_velocity_after(v0, T):
 
 def cramer_solution():
     """Solution of a general 3x3 system a x = b by Cramer's rule, as (58)-(60) intend."""
-    A = Matrix(3, 3, sympy.symbols("a11 a12 a13 a21 a22 a23 a31 a32 a33", real=True))
-    rhs = Matrix(sympy.symbols("b1 b2 b3", real=True))
-    det = A.det()
+    det = A_sym.det()
     cols = []
     for k in range(3):
-        Ak = A.copy()
-        Ak[:, k] = rhs
+        Ak = A_sym.copy()
+        Ak[:, k] = b_sym
         cols.append(Ak.det() / det)
-    return Matrix(cols), A, rhs
+    return Matrix(cols)
 
 
 def module_specs() -> list[ModuleSpec]:
@@ -222,24 +242,6 @@ def module_specs() -> list[ModuleSpec]:
     angles = args_of(((theta, "Euler nutation angle", "rad"), (phi, "Euler spin angle", "rad")))
     impact_args = args_of(H_ENTRIES + IMPACT_STATE[1:])
     descent_args = args_of(UNKNOWNS + H_ENTRIES + IMPACT_STATE)
-    system_args = args_of(((Jx, "principal moment of inertia about X'", "kg*m^2"),
-                           (Jy, "principal moment of inertia about Y'", "kg*m^2"),
-                           (Jz, "principal moment of inertia about Z'", "kg*m^2"))) + angles
-    rhs_args = system_args + args_of(
-        tuple((s, f"contact offset R in body axes, {s.name[2]}'", "m") for s in Rb)
-        + tuple((s, f"impulse T in body axes, {s.name[2]}'", "N*s") for s in Tb)
-        + ((dtheta, "pre-impact nutation rate", "rad/s"), (dpsi, "pre-impact precession rate", "rad/s"),
-           (dphi, "pre-impact spin rate", "rad/s")))
-    x, A, rhs = cramer_solution()
-    R = Matrix(sympy.symbols("R_x R_y R_z", real=True))
-    v0 = Matrix(sympy.symbols("v_x0 v_y0 v_z0", real=True))
-    T = Matrix([Tx, Ty, Tz])
-    R_args = args_of(tuple((s, f"contact offset R, {s.name[2]}", "m") for s in R))
-    velocity_args = args_of(tuple((s, f"pre-impact centre velocity, {s.name[2]}", "m/s") for s in v0)
-                            + tuple((s, f"impulse, {s.name[2]}", "N*s") for s in T)
-                            + ((m, "mass", "kg"),))
-    cramer_args = args_of(tuple((s, f"coefficient {s.name} of (43)", "kg*m^2") for s in A)
-                          + tuple((s, f"right-hand side {s.name} of (43)", "kg*m^2/s") for s in rhs))
     functions = [
         NamedMatrix("rotation", rotation(), args_of(GEOMETRY[3:]),
                     "Q: body axes (columns) in the surface frame, z-x-z Euler angles", "1", "(56)-(57)"),
@@ -263,15 +265,16 @@ def module_specs() -> list[ModuleSpec]:
         NamedMatrix("descent_gradient", descent_gradient(), descent_args,
                     "gradient of the consistent Phi with respect to (T_x, T_z, mu)", "N*s, N^2*s^2/rad",
                     "(25)-(27)"),
-        NamedMatrix("euler_rate_system", euler_rate_system(), system_args,
+        NamedMatrix("euler_rate_system", euler_rate_system(), args_of(EULER_SYSTEM_ARGS),
                     "matrix a of the angular-momentum balance in Euler rates", "kg*m^2", "(43)-(52)"),
-        NamedMatrix("euler_rate_rhs", euler_rate_rhs(), rhs_args,
+        NamedMatrix("euler_rate_rhs", euler_rate_rhs(), args_of(EULER_RHS_ARGS),
                     "right-hand side b of the angular-momentum balance", "kg*m^2/s", "(53)-(55)"),
-        NamedMatrix("body_components", body_components(R), R_args + args_of(GEOMETRY[3:]),
+        NamedMatrix("body_components", body_components(R_surface), args_of(R_ARGS + GEOMETRY[3:]),
                     "R in body axes, Q^T R", "m", "(56)"),
-        NamedMatrix("centre_velocity_after", centre_velocity_after(v0, T), velocity_args,
+        NamedMatrix("centre_velocity_after", centre_velocity_after(v0, Matrix([Tx, Ty, Tz])),
+                    args_of(VELOCITY_ARGS),
                     "centre-of-mass velocity after the impact", "m/s", "(41)"),
-        NamedMatrix("cramer_solution", x, cramer_args,
+        NamedMatrix("cramer_solution", cramer_solution(), args_of(CRAMER_ARGS),
                     "solution (theta', psi', phi') of a x = b by Cramer's rule", "rad/s", "(58)-(60)"),
     ]
     return [ModuleSpec("grain_impact",

@@ -148,11 +148,12 @@ def _trig_roots(k, tol, max_iter=12):
     a2c, a2s = k2c * c2 + k2s * s2, -k2c * s2 + k2s * c2
     quartic = np.stack([k0 - a1c + a2c, 2 * a1s - 4 * a2s, 2 * k0 - 6 * a2c,
                         2 * a1s + 4 * a2s, k0 + a1c + a2c], axis=1)
+    solvable = np.abs(quartic[:, 0]) > 0  # False only where F vanishes identically
     companion = np.zeros((n, 4, 4))
-    companion[:, 0, :] = -quartic[:, 1:] / quartic[:, :1]
+    companion[solvable, 0, :] = -quartic[solvable, 1:] / quartic[solvable, :1]
     companion[:, [1, 2, 3], [0, 1, 2]] = 1.0
     t = np.linalg.eigvals(companion)
-    real = np.abs(t.imag) <= 1e-6 * (1.0 + np.abs(t.real))
+    real = (np.abs(t.imag) <= 1e-6 * (1.0 + np.abs(t.real))) & solvable[:, None]
     roots = np.where(real, delta[:, None] + 2 * np.arctan(t.real), np.nan)
 
     iterations = 0
@@ -231,13 +232,14 @@ def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14, max_iter=12) -> ImpactBatch
     big = 10.0 * np.max(np.where(valid, tangential, 0.0), axis=1, keepdims=True) + 1.0
     choice = np.argmin(np.where(valid, rank * big + tangential, np.inf), axis=1)
     pick = (np.arange(n), choice)
-    T = T_all[pick]
+    found = valid.any(axis=1)  # never False in tests; if it were, say so with NaN
+    T = np.where(found[:, None], T_all[pick], np.nan)
     mu = roots[pick]
     mu_stuck = np.arctan2(T[:, 1], T[:, 0])
     mu = np.where(stuck, np.where(np.hypot(T[:, 0], T[:, 1]) > 0, mu_stuck, 0.0), mu)
     residual = residual_19(H, m, e, lam, uK0, T, mu)
     return ImpactBatch(T=T, mu=mu, uK_after=uK1[pick], residual=residual,
-                       admissible=~(gains[pick] | pulls[pick]), energy_created=gains[pick],
+                       admissible=found & ~(gains[pick] | pulls[pick]), energy_created=gains[pick],
                        pulling=pulls[pick], delta_ke=dke[pick],
                        roots_mu=roots, roots_T=T_all, roots_delta_ke=np.where(valid, dke, np.nan),
                        iterations=iterations)
@@ -298,7 +300,7 @@ def _golden_section(xi, lo, hi, iterations, eps):
         lo, hi = np.where(active, new_lo, lo), np.where(active, new_hi, hi)
         l1, l2 = np.where(active, nl1, l1), np.where(active, nl2, l2)
         x1, x2 = np.where(active, nx1, x1), np.where(active, nx2, x2)
-    return 0.5 * (lo + hi)
+    return lo, hi
 
 
 def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptions()):
@@ -307,7 +309,9 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
     ``variant="paper"`` uses (24)-(27) as printed, ``"paper-corrected"`` the sum of
     squared residuals and its derived gradient, in dimensionless variables. Start (an assumption; the paper
     gives none): T_x = 0, T_z = -m(1+e)u_Kz(0)/h_zz, mu = direction of the incoming slip.
-    ``stopped`` is True where the stop rule Phi <= delta fired before S steps.
+    ``stopped`` is True where the stop rule Phi <= delta fired before S steps. A
+    descent that crosses a pole of tan(mu) diverges; its T is then inf or NaN and
+    its residual of (19) says so.
     """
     n = len(uK0)
     m, e, lam = (np.broadcast_to(np.asarray(x, float), (n,)) for x in (m, e, lam))
@@ -338,16 +342,18 @@ def solve_descent_batch(H, m, e, lam, uK0, variant="paper", options=DescentOptio
                   np.arctan2(uK0[:, 1], uK0[:, 0])], axis=1) / units
     steps = np.zeros(n, int)
     stopped = np.zeros(n, bool)
-    for _ in range(options.max_steps):
-        stopped |= phi_f(x) <= delta
-        active = ~stopped
-        if not active.any():
-            break
-        g = grad_f(x)
-        step = _golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
-                               np.full(n, options.step_max), options.line_iterations, options.line_tol)
-        x = np.where(active[:, None], x - step[:, None] * g, x)
-        steps += active
+    with np.errstate(all="ignore"):  # a descent through a pole of tan(mu) overflows; reported as NaN
+        for _ in range(options.max_steps):
+            stopped |= phi_f(x) <= delta
+            active = ~stopped
+            if not active.any():
+                break
+            g = grad_f(x)
+            step = 0.5 * sum(_golden_section(lambda h: phi_f(x - h[:, None] * g), np.zeros(n),
+                                             np.full(n, options.step_max), options.line_iterations,
+                                             options.line_tol))
+            x = np.where(active[:, None], x - step[:, None] * g, x)
+            steps += active
     x = x * units
     Tx, Tz, mu = x[:, 0], x[:, 1], x[:, 2]
     T = np.stack([Tx, Tx * np.tan(mu), Tz], axis=1)
@@ -450,7 +456,7 @@ def solve_impact(body: Ellipsoid, Q, v_c, omega, e: float, lam: float, solver: s
         if not ok:
             warnings.append("scipy.optimize.root reports failure")
     residual = float(residual_19(H, m, e, lam, uK0, T, mu))
-    converged = residual < 1e-8
+    converged = bool(residual < 1e-8)  # False for NaN too
     if not converged:
         warnings.append(f"solver '{solver}' did not solve (19): relative residual {residual:.3g}")
     v_after = v_c + T / m

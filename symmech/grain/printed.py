@@ -14,9 +14,9 @@ from sympy import Matrix, cos, sin, sqrt, tan
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 from symmech.grain import derive as d
 
-Rx, Ry, Rz = sympy.symbols("R_x R_y R_z", real=True)
+Rx, Ry, Rz = d.R_surface
 p_xx, p_xy, p_xz, p_yy, p_yz, p_zz = sympy.symbols("P_xx P_xy P_xz P_yy P_yz P_zz", real=True)
-theta0, phi0 = sympy.symbols("theta0 phi0", real=True)
+theta0, phi0 = d.theta, d.phi  # the angles at the impact, theta(0) and phi(0) of (44)-(55)
 
 
 def inertia_ratio():
@@ -107,9 +107,8 @@ def euler_rate_rhs():
 
 def cramer_solution():
     """(58)-(60) as printed."""
-    a11, a12, a13, a21, a22, a23, a31, a32, a33 = sympy.symbols(
-        "a11 a12 a13 a21 a22 a23 a31 a32 a33", real=True)
-    b1, b2, b3 = sympy.symbols("b1 b2 b3", real=True)
+    (a11, a12, a13), (a21, a22, a23), (a31, a32, a33) = (d.A_sym.row(i) for i in range(3))
+    b1, b2, b3 = d.b_sym
     den = a11 * (a22 * a33 - a23 * a32) - a21 * (a12 * a33 - a13 * a32) + a31 * (a12 * a23 - a13 * a22)
     return Matrix([
         (b1 * (a22 * a33 - a23 * a32) - b2 * (a12 * a33 - a13 * a32) + b3 * (a12 * a23 - a13 * a22)) / den,
@@ -126,35 +125,17 @@ def body_components():
 
 def centre_velocity_after():
     """(41): u_C = T/m + u_C(0)."""
-    v0 = sympy.symbols("v_x0 v_y0 v_z0", real=True)
     T = (d.Tx, d.Ty, d.Tz)
-    return Matrix([T[k] / d.m + v0[k] for k in range(3)])
+    return Matrix([T[k] / d.m + d.v0[k] for k in range(3)])
 
 
 def module_specs() -> list[ModuleSpec]:
     descent_args = args_of(d.UNKNOWNS + d.H_ENTRIES + d.IMPACT_STATE)
-    R_args = ((Rx, "contact offset R, X", "m"), (Ry, "contact offset R, Y", "m"),
-              (Rz, "contact offset R, Z", "m"))
     P_args = tuple((s, f"P = I/m entry {s.name[2:]}", "m^2") for s in (p_xx, p_xy, p_xz, p_yy, p_yz, p_zz))
-    system_args = args_of(((d.Jx, "principal moment of inertia about X'", "kg*m^2"),
-                           (d.Jy, "principal moment of inertia about Y'", "kg*m^2"),
-                           (d.Jz, "principal moment of inertia about Z'", "kg*m^2"),
-                           (theta0, "pre-impact nutation angle", "rad"),
-                           (phi0, "pre-impact spin angle", "rad")))
-    rhs_args = system_args + args_of(
-        tuple((s, f"contact offset R in body axes, {s.name[2]}'", "m") for s in d.Rb)
-        + tuple((s, f"impulse T in body axes, {s.name[2]}'", "N*s") for s in d.Tb)
-        + ((d.dtheta, "pre-impact nutation rate", "rad/s"), (d.dpsi, "pre-impact precession rate", "rad/s"),
-           (d.dphi, "pre-impact spin rate", "rad/s")))
-    cramer = cramer_solution()
-    cramer_args = args_of(tuple((s, f"coefficient {s.name} of (43)", "kg*m^2")
-                                for s in sympy.ordered(cramer.free_symbols) if s.name.startswith("a"))
-                          + tuple((s, f"right-hand side {s.name} of (43)", "kg*m^2/s")
-                                  for s in sympy.ordered(cramer.free_symbols) if s.name.startswith("b")))
     functions = [
         NamedMatrix("inertia_ratio", inertia_ratio(), args_of(d.GEOMETRY),
                     "P as printed", "m^2", "(11)-(12)"),
-        NamedMatrix("H", reduction_tensor(), args_of(R_args + P_args),
+        NamedMatrix("H", reduction_tensor(), args_of(d.R_ARGS + P_args),
                     "reduction tensor H as printed, from R and P", "1", "(3)-(10)"),
         NamedMatrix("system_19_residual", system_19_residual(), descent_args,
                     "residuals of (19) as printed", "N*s", "(19)"),
@@ -162,18 +143,15 @@ def module_specs() -> list[ModuleSpec]:
                     "Phi as printed (sum of residuals)", "N*s", "(24)"),
         NamedMatrix("gradient", gradient(), descent_args,
                     "grad Phi as printed", "1, 1, N*s/rad", "(25)-(27)"),
-        NamedMatrix("euler_rate_system", euler_rate_system(), system_args,
+        NamedMatrix("euler_rate_system", euler_rate_system(), args_of(d.EULER_SYSTEM_ARGS),
                     "matrix a as printed", "kg*m^2", "(44)-(52)"),
-        NamedMatrix("euler_rate_rhs", euler_rate_rhs(), rhs_args,
+        NamedMatrix("euler_rate_rhs", euler_rate_rhs(), args_of(d.EULER_RHS_ARGS),
                     "right-hand side b as printed", "kg*m^2/s", "(53)-(55)"),
-        NamedMatrix("cramer_solution", cramer, cramer_args,
+        NamedMatrix("cramer_solution", cramer_solution(), args_of(d.CRAMER_ARGS),
                     "Euler rates by Cramer's rule as printed", "rad/s", "(58)-(60)"),
-        NamedMatrix("body_components", body_components(), args_of(R_args + d.GEOMETRY[3:]),
+        NamedMatrix("body_components", body_components(), args_of(d.R_ARGS + d.GEOMETRY[3:]),
                     "R in body axes as printed", "m", "(56)"),
-        NamedMatrix("centre_velocity_after", centre_velocity_after(), args_of(
-            tuple((s, f"pre-impact centre velocity, {s.name[2]}", "m/s")
-                  for s in sympy.symbols("v_x0 v_y0 v_z0", real=True))
-            + tuple((s, f"impulse, {s.name[2]}", "N*s") for s in (d.Tx, d.Ty, d.Tz)) + ((d.m, "mass", "kg"),)),
+        NamedMatrix("centre_velocity_after", centre_velocity_after(), args_of(d.VELOCITY_ARGS),
                     "centre-of-mass velocity after the impact as printed", "m/s", "(41)"),
     ]
     return [ModuleSpec("grain_impact_printed",

@@ -1,1 +1,23 @@
 """Paper 3 (seed 003): the structural model method (SMM) for lumped-parameter mechanisms."""
+from pathlib import Path
+
+
+def latex_matrices(rest: str) -> dict:
+    """Matrices for ``symmech latex smm:<scene>.<name>``.
+
+    ``<scene>`` is a scene file path or the name of a bundled scene
+    (``scenes/smm_<scene>.toml``); ``<name>`` is a, b, c, L_a or L_c.
+    """
+    from symmech.core.scene import SymmechError
+    from symmech.smm.derive import SCENES, load_mechanism, named_matrices
+
+    scene, _, key = rest.rpartition(".")
+    if not scene:
+        raise SymmechError(f"expected smm:<scene>.<matrix>, got 'smm:{rest}'")
+    path = Path(scene)
+    if not path.suffix == ".toml":
+        path = SCENES / f"smm_{scene}.toml"
+    if not path.exists():
+        raise SymmechError(f"no mechanism scene '{scene}' (a .toml path or a bundled name such as "
+                           "'double_pendulum')")
+    return {f"smm:{rest.rpartition('.')[0]}.{k}": nm for k, nm in named_matrices(load_mechanism(path)).items()}

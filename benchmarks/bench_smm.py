@@ -1,0 +1,209 @@
+"""Time to form symbolic a and c: SMM vs sympy.physics.mechanics (Lagrange, Kane) + sparse modes.
+
+System: an n-link planar pendulum hanging in equilibrium, relative joint angles,
+point masses m_i at the link ends, torsion springs k_i at the joints, and a
+vertical spring (stiffness K_i, tension T_i in equilibrium) from each mass to
+the ground below it; gravity g. Each (method, n) runs in a subprocess and is
+stopped past the time limit; larger n are then skipped for that method.
+
+    python benchmarks/bench_smm.py            # n = 2 ... 32
+    python benchmarks/bench_smm.py --quick    # n = 2, 4, 8 (mechanics up to 4)
+"""
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import time
+
+LIMIT = 120.0
+
+
+def smm_mechanism(n: int):
+    from symmech.smm.model import Body, Coordinate, Link, Mechanism, Parameter, Point, Torsion
+
+    params = {}
+    for i in range(n):
+        for name, unit in ((f"m{i}", "kg"), (f"l{i}", "m"), (f"k{i}", "N m/rad"), (f"K{i}", "N/m"),
+                           (f"T{i}", "N"), (f"h{i}", "m")):
+            params[name] = Parameter(name, 1.0, unit, name)
+    params["g"] = Parameter("g", 9.81, "m/s^2", "gravity")
+    coords = [Coordinate(f"q{i}", "angle", ("0", "0", "1")) for i in range(n)]
+    points = {"O": Point("O", None, ("0", "0", "0"))}
+    bodies, springs, torsion = [], [], []
+    depth = "0"
+    for i in range(n):
+        prev = "O" if i == 0 else f"P{i - 1}"
+        points[f"P{i}"] = Point(f"P{i}", prev, ("0", f"-l{i}", "0"), tuple(f"q{j}" for j in range(i + 1)))
+        depth = f"{depth} - l{i}"
+        points[f"G{i}"] = Point(f"G{i}", None, ("0", f"{depth} - h{i}", "0"))
+        bodies.append(Body(f"b{i}", f"m{i}", ("0", "0", "0"), f"P{i}", tuple(f"q{j}" for j in range(i + 1))))
+        springs.append(Link(f"s{i}", f"P{i}", f"G{i}", f"K{i}", f"T{i}"))
+        torsion.append(Torsion(f"t{i}", "ground" if i == 0 else f"b{i - 1}", f"b{i}", f"k{i}", ("0", "0", "1")))
+    return Mechanism(f"pendulum{n}", params, coords, points, bodies, springs, [], torsion, [], "g")
+
+
+def run_smm(n: int):
+    from symmech.smm.derive import matrices
+
+    m = smm_mechanism(n)
+    t0 = time.perf_counter()
+    out = matrices(m)
+    return time.perf_counter() - t0, out["a"], out["c"]
+
+
+def run_mechanics(n: int, method: str):
+    import sympy
+    from sympy.physics import mechanics as me
+
+    t0 = time.perf_counter()
+    q = me.dynamicsymbols(f"q0:{n}")
+    u = me.dynamicsymbols(f"u0:{n}")
+    m = sympy.symbols(f"m0:{n}")
+    l = sympy.symbols(f"l0:{n}")
+    k = sympy.symbols(f"k0:{n}")
+    K = sympy.symbols(f"K0:{n}")
+    T = sympy.symbols(f"T0:{n}")
+    h = sympy.symbols(f"h0:{n}")
+    g = sympy.Symbol("g")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    frames, points, particles = [], [], []
+    prev_f, prev_p, depth = N, O, 0
+    V = 0
+    loads = []
+    for i in range(n):
+        F = prev_f.orientnew(f"F{i}", "Axis", (q[i], prev_f.z))
+        P = prev_p.locatenew(f"P{i}", -l[i] * F.y)
+        P.v2pt_theory(prev_p, N, F)
+        depth -= l[i]
+        anchor = O.locatenew(f"G{i}", (depth - h[i]) * N.y)
+        d = P.pos_from(anchor)
+        length = sympy.sqrt(d.dot(d))
+        stretch = length - h[i]
+        frames.append(F)
+        points.append(P)
+        particles.append(me.Particle(f"pa{i}", P, m[i]))
+        V += m[i] * g * P.pos_from(O).dot(N.y) + k[i] * q[i] ** 2 / 2 + K[i] * stretch**2 / 2 + T[i] * stretch
+        if method == "kane":
+            loads.append((P, -m[i] * g * N.y - (K[i] * stretch + T[i]) * d / length))
+            loads.append((F, -k[i] * q[i] * N.z))
+            if i > 0:
+                loads.append((prev_f, k[i] * q[i] * N.z))
+        prev_f, prev_p = F, P
+    op = {s: 0 for s in q}
+    qd = [s.diff() for s in q]
+    if method == "lagrange":
+        Lg = me.Lagrangian(N, *particles) - V
+        LM = me.LagrangesMethod(Lg, q)
+        LM.form_lagranges_equations()
+        op.update({s: 0 for s in qd})
+        M, A, B = LM.linearize(q_ind=q, qd_ind=qd, op_point=op, A_and_B=False)[:3]
+    else:
+        KM = me.KanesMethod(N, q_ind=q, u_ind=u, kd_eqs=[a - b for a, b in zip(qd, u)])
+        KM.kanes_equations(particles, loads)
+        op.update({s: 0 for s in u})
+        M, A, B = KM.linearize(op_point=op, A_and_B=False)[:3]
+    a = M.subs(op)[n:, n:]
+    c = -A.subs(op)[n:, :n]
+    return time.perf_counter() - t0, a, c
+
+
+def _worker(kind, n, queue):
+    try:
+        sec, a, c = run_smm(n) if kind == "smm" else run_mechanics(n, kind)
+        queue.put((sec, a.shape))
+    except Exception as exc:  # report, do not hide
+        queue.put((None, repr(exc)))
+
+
+def timed(kind: str, n: int, limit: float):
+    queue = mp.Queue()
+    proc = mp.Process(target=_worker, args=(kind, n, queue))
+    proc.start()
+    proc.join(limit)
+    if proc.is_alive():
+        proc.terminate()
+        proc.join()
+        return None
+    sec, info = queue.get()
+    if sec is None:
+        raise RuntimeError(f"{kind} n={n}: {info}")
+    return sec
+
+
+def check_agreement(n: int = 3) -> float:
+    """Largest |SMM - Lagrange| over a and c at random parameter values (sanity, not timing)."""
+    import random
+
+    import sympy
+
+    _, a1, c1 = run_smm(n)
+    _, a2, c2 = run_mechanics(n, "lagrange")
+    rnd = random.Random(1)
+    syms = sorted((a1.free_symbols | c1.free_symbols | a2.free_symbols | c2.free_symbols), key=str)
+    vals = {s: rnd.uniform(0.5, 2.0) for s in syms}
+    by_name = {str(s): v for s, v in vals.items()}
+    sub = {s: by_name[str(s)] for s in syms}
+    diff = (a1.subs(sub) - a2.subs(sub)).norm() + (c1.subs(sub) - c2.subs(sub)).norm()
+    return float(sympy.N(diff))
+
+
+def sparse_modes(n: int = 10000):
+    import numpy as np
+    import scipy.sparse.linalg
+
+    from symmech.core.scene import Section
+    from symmech.smm import numeric
+    from symmech.smm.chain import chain_mechanism
+
+    t0 = time.perf_counter()
+    m = chain_mechanism(Section({"n": n, "mass": 0.1, "stiffness": 1e4, "spacing": 0.01}, "chain"))
+    num = numeric.assemble(m)
+    t1 = time.perf_counter()
+    w = scipy.sparse.linalg.eigsh(num.c.tocsc(), k=10, M=num.a.tocsc(), sigma=0.0, return_eigenvectors=False)
+    t2 = time.perf_counter()
+    exact = [2e5 * (1 - np.cos(j * np.pi / (n + 1))) for j in range(1, 11)]
+    err = float(np.max(np.abs(np.sort(w) - exact) / exact))
+    return t1 - t0, t2 - t1, err
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="small sizes only")
+    p.add_argument("--limit", type=float, default=LIMIT, help="seconds before a method is stopped")
+    ns = p.parse_args()
+    sizes = [2, 4, 8] if ns.quick else [2, 4, 8, 16, 32]
+    mech_max = 4 if ns.quick else 32
+    print(f"SMM vs sympy.physics.mechanics agreement at n=3: max |difference| = {check_agreement():.3g}")
+    print(f"{'n':>4} {'SMM [s]':>10} {'Lagrange [s]':>13} {'Kane [s]':>10} {'Kane/SMM':>10} {'Lagrange/SMM':>13}")
+    alive = {"lagrange": True, "kane": True}
+    for n in sizes:
+        smm = timed("smm", n, ns.limit)
+        row = {}
+        for kind in ("lagrange", "kane"):
+            # float seconds, "stopped" past the limit, or "skipped" (an earlier size was stopped)
+            row[kind] = "skipped"
+            if alive[kind] and n <= mech_max:
+                row[kind] = timed(kind, n, ns.limit) or "stopped"
+                alive[kind] = row[kind] != "stopped"
+
+        def fmt(x):
+            if x is None or x == "stopped":
+                return f">{ns.limit:.0f}"
+            return "-" if x == "skipped" else f"{x:.3f}"
+
+        def ratio(x):
+            if smm is None or x == "skipped":
+                return "-"
+            # a method stopped at the limit gives a lower bound on the ratio
+            return f">{ns.limit / smm:.0f}x" if x == "stopped" else f"{x / smm:.0f}x"
+        print(f"{n:>4} {fmt(smm):>10} {fmt(row['lagrange']):>13} {fmt(row['kane']):>10} "
+              f"{ratio(row['kane']):>10} {ratio(row['lagrange']):>13}", flush=True)
+    asm, eig, err = sparse_modes()
+    print(f"10,000-DOF chain: sparse assembly {asm:.2f} s, lowest 10 modes (eigsh shift-invert) {eig:.2f} s, "
+          f"total {asm + eig:.2f} s, max rel error of omega^2 vs closed form {err:.2g}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,265 @@
+"""Numeric SMM assembly (scipy.sparse), equilibrium search (eq. (6)) and modal analysis.
+
+Equation contract: a q'' + b q' + c q = Q with a, b, c [SI by coordinate kind]
+evaluated at the scene's parameter values; q are the generalized coordinates
+measured from the equilibrium configuration.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse
+
+from symmech.core.scene import SymmechError
+from symmech.smm import forms
+from symmech.smm.model import EQUILIBRIUM, Effects, Mechanism, NumericArith, number_text
+
+
+@dataclass
+class Numeric:
+    """a, b, c (k x k, scipy.sparse CSR) with the parts of c, the equilibrium residual
+    dPi/dq [N or N m] and spring lengths [m] and tensions [N] in the configuration."""
+
+    coords: list[str]
+    a: scipy.sparse.csr_matrix
+    b: scipy.sparse.csr_matrix
+    c: scipy.sparse.csr_matrix
+    c_preload: scipy.sparse.csr_matrix
+    c_gravity: scipy.sparse.csr_matrix
+    residual: np.ndarray
+    lengths: dict
+    tensions: dict
+
+
+def _sparse(n: int, entries: dict) -> scipy.sparse.csr_matrix:
+    if not entries:
+        return scipy.sparse.csr_matrix((n, n))
+    ij = np.array(list(entries.keys()), dtype=np.int64)
+    v = np.array([math.fsum(t) for t in entries.values()])
+    off = ij[:, 0] != ij[:, 1]
+    rows = np.concatenate([ij[:, 0], ij[off, 1]])
+    cols = np.concatenate([ij[:, 1], ij[off, 0]])
+    return scipy.sparse.csr_matrix((np.concatenate([v, v[off]]), (rows, cols)), shape=(n, n))
+
+
+def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
+    """Tensions [N] of the springs with ``preload = "equilibrium"`` from eq. (5), and the
+    indices of coordinates whose equations determine them (independent rows of G)."""
+    ar = NumericArith(m.values())
+    names, cols, r0 = forms.tension_system(m, ar)
+    if not names:
+        return {}, []
+    k = len(m.coordinates)
+    G = np.zeros((k, len(names)))
+    for j, col in enumerate(cols):
+        for i, v in col.items():
+            G[i, j] = v
+    r = np.zeros(k)
+    for i, v in r0.items():
+        r[i] = v
+    rows: list[int] = []
+    for i in range(k):
+        if np.linalg.matrix_rank(G[rows + [i]], tol=1e-10 * max(np.abs(G).max(), 1e-300)) > len(rows):
+            rows.append(i)
+    if len(rows) < len(names):
+        raise SymmechError(f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
+                           "(statically indeterminate); give preload values")
+    T = np.linalg.solve(G[rows], -r[rows])
+    miss = G @ T + r
+    worst = int(np.argmax(np.abs(miss)))
+    if abs(miss[worst]) > 1e-9 * max(np.abs(r).max(), 1.0):
+        raise SymmechError(f"springs {', '.join(names)} cannot balance the loads: dPi/dq = {miss[worst]:.3g} "
+                           f"remains on coordinate '{m.coordinate_names[worst]}'")
+    return dict(zip(names, T.tolist())), rows
+
+
+def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
+    """Numeric a, b, c of ``m`` at its parameter values (sparse; O(nonzeros))."""
+    ar = NumericArith(m.values())
+    asm = forms.assemble(m, ar, effects=effects, tensions=equilibrium_tensions(m)[0])
+    n = len(asm.coords)
+    pre = _sparse(n, asm.preload)
+    grav = _sparse(n, asm.gravity)
+    stiff = _sparse(n, forms.triple_product(ar, asm.Lc, asm.kc, n))
+    res = np.zeros(n)
+    for i, terms in asm.residual.items():
+        res[i] = math.fsum(terms)
+    return Numeric(asm.coords, _sparse(n, forms.triple_product(ar, asm.La, asm.ma, n)),
+                   _sparse(n, forms.triple_product(ar, asm.Lb, asm.mb, n)),
+                   (stiff + pre + grav).tocsr(), pre, grav, res, asm.lengths, asm.tensions)
+
+
+def check_mass(m: Mechanism, a: np.ndarray) -> None:
+    """Raise, naming the coordinate, when the inertia matrix is (numerically) singular."""
+    w, v = np.linalg.eigh(a)
+    scale = max(abs(w).max(), 1e-300)
+    if w[0] <= 1e-12 * scale:
+        worst = m.coordinate_names[int(np.argmax(abs(v[:, 0])))]
+        raise SymmechError(f"inertia matrix is singular (smallest eigenvalue {w[0]:.3g} of {scale:.3g}): "
+                           f"coordinate '{worst}' moves no mass or moment of inertia")
+
+
+# ---------------------------------------------------------------- equilibrium (6)
+
+def _rotation(axis, angle):
+    e = np.asarray(axis, float)
+    K = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def moved(m: Mechanism, dq: np.ndarray) -> Mechanism:
+    """The model redrawn in the configuration q = dq (planar: every angle axis along z)."""
+    values = m.values()
+    ar = NumericArith(values)
+    idx = {c: i for i, c in enumerate(m.coordinate_names)}
+    axes = {c.name: np.array([ar(t) for t in c.axis]) for c in m.coordinates}
+    points = {}
+    for p in m.points.values():
+        v = np.array([ar(t) for t in p.vector])
+        if p.parent is not None:
+            for s in p.slides:
+                v = v + dq[idx[s]] * axes[s]
+            R = np.eye(3)
+            for a in p.turns:
+                R = R @ _rotation(axes[a], dq[idx[a]])
+            v = R @ v
+        points[p.name] = replace(p, vector=tuple(number_text(x) for x in v))
+    coords = []
+    for c in m.coordinates:
+        if c.kind == "slide":  # a slide direction turns with the vector it lengthens
+            host = next(p for p in m.points.values() if c.name in p.slides)
+            R = np.eye(3)
+            for a in host.turns:
+                R = R @ _rotation(axes[a], dq[idx[a]])
+            u = R @ axes[c.name]
+            coords.append(replace(c, axis=tuple(number_text(x) for x in u / np.linalg.norm(u))))
+        else:
+            coords.append(c)
+    return replace(m, points=points, coordinates=coords)
+
+
+def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> tuple[Mechanism, dict]:
+    """Find dPi/dq = 0 (eq. (6)) by Newton's method on the SMM residual and tangent stiffness.
+
+    Springs given by ``preload`` keep their free length l0 = l - T/c. Returns the
+    model redrawn in equilibrium and a report {iterations, residual, q}.
+    """
+    for c in m.coordinates:
+        if c.kind == "angle" and [float(NumericArith(m.values())(t)) for t in c.axis] != [0.0, 0.0, 1.0]:
+            raise SymmechError(f"equilibrium.solve: coordinate '{c.name}' is not a planar angle about z; "
+                               "the equilibrium search handles planar mechanisms only")
+    full = Effects(True, True, True)
+    ar = NumericArith(m.values())
+    springs = []
+    start = assemble(m, full)
+    for s in m.springs:
+        if s.preload == EQUILIBRIUM:
+            raise SymmechError(f"spring '{s.name}': equilibrium.solve needs a preload value or a free length, "
+                               "not preload = \"equilibrium\"")
+        if s.preload is not None:
+            k = ar(s.coef)
+            if k == 0:
+                raise SymmechError(f"spring '{s.name}': a preloaded spring of zero stiffness has no free length")
+            s = replace(s, preload=None, free_length=number_text(start.lengths[s.name] - ar(s.preload) / k))
+        springs.append(s)
+    base = replace(m, springs=springs)
+    q = np.zeros(len(m.coordinates))
+    cur = base
+    num = assemble(cur, full)
+    scale = max(1.0, float(np.abs(num.c.toarray()).max()))
+    norm = float(np.abs(num.residual).max())
+    for it in range(max_iter):
+        if norm <= tol * scale:
+            return cur, {"iterations": it, "residual": norm, "q": q.tolist()}
+        try:
+            step = -np.linalg.solve(num.c.toarray(), num.residual)
+        except np.linalg.LinAlgError:
+            step = -np.linalg.lstsq(num.c.toarray(), num.residual, rcond=None)[0]
+        t = 1.0
+        while t > 1e-6:
+            trial = moved(base, q + t * step)
+            tnum = assemble(trial, full)
+            tnorm = float(np.abs(tnum.residual).max())
+            if tnorm < norm:
+                break
+            t /= 2
+        q, cur, num, norm = q + t * step, trial, tnum, tnorm
+    raise SymmechError(f"equilibrium search did not converge in {max_iter} Newton steps "
+                       f"(residual {norm:.3g}); give the equilibrium configuration in the scene")
+
+
+# ---------------------------------------------------------------- modal analysis
+
+@dataclass
+class Modes:
+    """Undamped modes of a q'' + c q = 0: omega2 [1/s^2] ascending, mass-normalised
+    shapes (columns, phi^T a phi = I), and damping ratios from the damped state-space
+    eigenvalues (non-proportional damping allowed; None for rigid-body, unstable and
+    overdamped modes)."""
+
+    omega2: np.ndarray
+    shapes: np.ndarray
+    zeta: list
+
+
+def modes(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> Modes:
+    w2, phi = scipy.linalg.eigh(c, a)
+    zeta = damping_ratios(a, b, c, w2)
+    return Modes(w2, phi, zeta)
+
+
+def damping_ratios(a, b, c, omega2) -> list:
+    """zeta_r = -Re(lambda)/|lambda| of the state-space eigenvalues, matched to the undamped
+    modes by |lambda| ~ omega (first-order state form, valid for non-proportional b)."""
+    n = a.shape[0]
+    if not np.any(b):
+        return [0.0 if w > 0 else None for w in omega2]
+    ainv = np.linalg.inv(a)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-ainv @ c, -ainv @ b]])
+    lam = np.linalg.eigvals(A)
+    lam = lam[np.argsort(np.abs(lam))]
+    out = []
+    used = np.zeros(len(lam), bool)
+    for w2 in omega2:
+        if w2 <= 100 * np.finfo(float).eps * max(abs(omega2).max(), 1e-300):
+            out.append(None)
+            continue
+        w = math.sqrt(w2)
+        cand = np.where(~used & (lam.imag >= 0))[0]
+        if len(cand) == 0:
+            out.append(None)
+            continue
+        j = cand[np.argmin(np.abs(np.abs(lam[cand]) - w))]
+        used[j] = True
+        # an overdamped mode has two real roots that cannot be told apart from those of other
+        # overdamped modes in general: no ratio (None), the runner warns
+        if abs(lam[j].imag) < 1e-12 * abs(lam[j]):
+            out.append(None)
+            continue
+        out.append(float(-lam[j].real / abs(lam[j])))
+    return out
+
+
+def free_response(a, b, c, q0, v0, t):
+    """q(t) [n_t x k] of a q'' + b q' + c q = 0 from q(0) = q0, q'(0) = v0 on a uniform grid t."""
+    n = a.shape[0]
+    ainv = np.linalg.inv(a)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-ainv @ c, -ainv @ b]])
+    step = scipy.linalg.expm(A * (t[1] - t[0])) if len(t) > 1 else np.eye(2 * n)
+    x = np.concatenate([q0, v0])
+    out = np.empty((len(t), n))
+    for i in range(len(t)):
+        out[i] = x[:n]
+        x = step @ x
+    return out
+
+
+def frequency_response(a, b, c, Q, omegas):
+    """Complex amplitudes q(omega) [len x k] of a q'' + b q' + c q = Q e^{i omega t}."""
+    out = np.empty((len(omegas), a.shape[0]), complex)
+    for i, w in enumerate(omegas):
+        out[i] = np.linalg.solve(c - w * w * a + 1j * w * b, Q)
+    return out

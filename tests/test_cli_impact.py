@@ -1,0 +1,119 @@
+"""The command line on impact scenes: results, one-line errors, latex, errata."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symmech.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT = (ROOT / "scenes" / "impact_default.toml").read_text()
+
+
+def run_scene(tmp_path, text, capsys):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(text)
+    code = main(["run", str(scene), "--out", str(tmp_path / "out")])
+    return code, capsys.readouterr()
+
+
+def test_default_scene_summary(tmp_path, capsys):
+    code, _ = run_scene(tmp_path, DEFAULT, capsys)
+    assert code == 0
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert s["solver"]["name"] == "robust" and s["solver"]["converged"]
+    assert s["solver"]["residual_19"] < 1e-13
+    uK0, uK1 = np.array(s["contact_velocity_before"]), np.array(s["contact_velocity_after"])
+    assert uK1[2] == pytest.approx(-0.5 * uK0[2], rel=1e-12)
+    assert np.hypot(*uK1[:2]) == pytest.approx(0.7 * np.hypot(*uK0[:2]), rel=1e-12)
+    assert s["kinetic_energy_after"] < s["kinetic_energy_before"]
+    rates = s["euler_rates_after"]
+    np.testing.assert_allclose(rates["cramer_derived"], rates["from_angular_velocity"], rtol=1e-10)
+    # The printed (51)/(55) change the spin rate only.
+    np.testing.assert_allclose(rates["cramer_printed"][:2], rates["from_angular_velocity"][:2], rtol=1e-10)
+    assert abs(rates["cramer_printed"][2] - rates["from_angular_velocity"][2]) > 1.0
+    for key in ("impulse_T", "mu", "centre_velocity_after", "angular_velocity_after", "warnings", "roots"):
+        assert key in s
+    assert (tmp_path / "out" / "impact.png").stat().st_size > 10000
+
+
+@pytest.mark.parametrize("solver", ["paper", "paper-corrected", "scipy"])
+def test_every_solver_runs_from_a_scene(tmp_path, capsys, solver):
+    text = DEFAULT.replace('name = "robust"', f'name = "{solver}"\nmax_steps = 20')
+    code, _ = run_scene(tmp_path, text, capsys)
+    assert code == 0
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert s["solver"]["name"] == solver
+    assert s["solver"]["converged"] == (solver == "scipy")
+
+
+@pytest.mark.parametrize("edit, field", [
+    (("mass = 1.0e-5", ""), "body.mass"),
+    (("mass = 1.0e-5", "mass = -1.0"), "body.mass"),
+    (("e = 0.5", "e = 1.5"), "impact.e"),
+    (("lambda = 0.3", "lambda = -0.1"), "impact.lambda"),
+    (("[2.0e-3, 1.5e-3, 1.0e-3]", "[2.0e-3, 0.0, 1.0e-3]"), "body.semi_axes[1]"),
+    (('name = "robust"', 'name = "newton"'), "solver.name"),
+    (("lambda = 0.3", "lambda = 0.3\nlamda = 0.2"), "impact.lamda"),
+    (("velocity = [0.3, 0.1, -0.5]", "velocity = [0.3, 0.1]"), "state.velocity"),
+    (('kind = "impact"', 'kind = "rocket"'), "kind"),
+])
+def test_bad_input_is_one_line_naming_the_field(tmp_path, capsys, edit, field):
+    code, out = run_scene(tmp_path, DEFAULT.replace(*edit), capsys)
+    assert code == 2
+    lines = out.err.strip().splitlines()
+    assert len(lines) == 1 and f"'{field}'" in lines[0] and lines[0].startswith("symmech: error:")
+
+
+def test_separating_contact_point_is_a_clear_error(tmp_path, capsys):
+    code, out = run_scene(tmp_path, DEFAULT.replace("[0.3, 0.1, -0.5]", "[0.3, 0.1, 0.5]"), capsys)
+    assert code == 2 and "not approaching" in out.err
+
+
+def test_cli_process_prints_no_traceback(tmp_path):
+    scene = tmp_path / "bad.toml"
+    scene.write_text(DEFAULT.replace("e = 0.5", "e = 2"))
+    done = subprocess.run([sys.executable, "-m", "symmech", "run", str(scene)], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert done.stderr.strip() == "symmech: error: scene field 'impact.e': 2 is outside [0, 1]"
+    missing = subprocess.run([sys.executable, "-m", "symmech", "run", str(tmp_path / "nope.toml")],
+                             capture_output=True, text=True)
+    assert missing.returncode == 2 and "Traceback" not in missing.stderr
+
+
+def test_latex_list_plain_and_cse(capsys):
+    assert main(["latex", "--list"]) == 0
+    listing = capsys.readouterr().out
+    assert "grain_impact.H " in listing and "grain_impact_printed.functional" in listing
+    assert main(["latex", "grain_impact.euler_rate_matrix"]) == 0
+    assert capsys.readouterr().out.startswith("\\left[\\begin{matrix}\\cos{\\left(\\phi \\right)}")
+    assert main(["latex", "--cse", "grain_impact.H"]) == 0
+    cse = capsys.readouterr().out
+    assert cse.startswith("x_{0} &= ") and "H_{3,3} &= " in cse
+    assert main(["latex", "no.such"]) == 2
+
+
+def test_errata_json_records(capsys):
+    assert main(["errata", "--json"]) == 0
+    records = json.loads(capsys.readouterr().out)
+    grain = {r["equation"]: r for r in records if r["seed"] == "000_b52a2f612feb4113.txt"}
+    for r in grain.values():
+        assert set(r) >= {"seed", "equation", "status", "max_rel_diff", "example"}
+        assert set(r["example"]) == {"inputs", "printed", "derived"}
+    # Misprints found by hand in the paper: the tool must find exactly these.
+    differs = {eq for eq, r in grain.items() if r["status"] == "differs"}
+    assert differs == {"(11)-(12)", "(24)", "(27)", "(51)", "(55)", "(43)-(60)"}
+    assert all(grain[eq]["max_rel_diff"] > 0.1 for eq in differs)
+    assert all(r["max_rel_diff"] < 1e-9 for eq, r in grain.items() if eq not in differs)
+
+
+def test_bench_precision_writes_csv_and_png(tmp_path, capsys):
+    assert main(["bench", "precision", str(ROOT / "scenes" / "impact_default.toml"), "--out", str(tmp_path)]) == 0
+    rows = (tmp_path / "precision_impact.csv").read_text().splitlines()
+    assert rows[0].startswith("# reference: mpmath")
+    robust = [r.split(",") for r in rows[2:] if r.startswith("robust")]
+    assert max(float(r[3]) for r in robust) < 1e-14
+    assert (tmp_path / "precision_impact.png").stat().st_size > 10000

@@ -1,0 +1,135 @@
+"""CLI: runs, latex, and one-line errors naming the element for bad mechanism scenes."""
+import json
+
+import pytest
+
+from symmech.cli import main
+from symmech.core import emit
+from symmech.smm.derive import bundled_scenes, module_specs
+
+BASE = """kind = "mechanism"
+[parameters]
+m = {value = 1.0, unit = "kg"}
+[[coordinates]]
+name = "x"
+type = "slide"
+axis = [1, 0]
+[[points]]
+name = "O"
+at = [0, 0]
+[[points]]
+name = "P"
+from = "O"
+vector = [1, 0]
+slides = ["x"]
+[[bodies]]
+name = "bob"
+mass = "m"
+com = "P"
+[[springs]]
+name = "k1"
+ends = ["O", "P"]
+stiffness = 100.0
+"""
+
+BAD = {
+    "unreachable point": (BASE.replace('from = "O"', 'from = "Q"'),
+                          "point 'P' is not reachable from a fixed root: parent point 'Q'"),
+    "loop": (BASE.replace('from = "O"', 'from = "P"'), "point 'P' is not reachable from a fixed root"),
+    "coordinate moves nothing": (BASE + '[[coordinates]]\nname = "y"\ntype = "slide"\naxis = [0, 1]\n',
+                                 "coordinate 'y' moves nothing"),
+    "zero-length spring": (BASE.replace('vector = [1, 0]', 'vector = [0, 0]'), "spring 'k1': its ends"),
+    "singular mass": (BASE.replace('value = 1.0, unit = "kg"', 'value = 0.0, unit = "kg"'),
+                      "coordinate 'x' moves no mass"),
+    "unknown parameter": (BASE.replace('mass = "m"', 'mass = "mm"'), "body 'bob': unknown parameter 'mm'"),
+    "unknown field": (BASE.replace('stiffness = 100.0', 'stiffness = 100.0\nstifness = 3'),
+                      "springs[0].stifness"),
+    "negative mass": (BASE.replace('value = 1.0, unit = "kg"', 'value = -1.0, unit = "kg"'),
+                      "body 'bob': mass m is negative"),
+    "non-unit axis": (BASE.replace('axis = [1, 0]', 'axis = [2, 0]'), "coordinate 'x': axis"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_scene_one_line_error(case, tmp_path, capsys):
+    text, message = BAD[case]
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert message in err, err
+
+
+def test_run_writes_results(tmp_path, capsys):
+    path = tmp_path / "ok.toml"
+    path.write_text(BASE + "[initial]\nq = [0.01]\nduration = 1.0\n[forcing]\npoint = \"P\"\nforce = [1, 0]\n"
+                           "omega = [0, 20]\n[[dampers]]\nname = \"d\"\nends = [\"O\", \"P\"]\nviscosity = 2.0\n")
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert abs(s["frequencies_rad_s"][0] - 10.0) < 1e-12
+    # zeta = c_d / (2 sqrt(k m)) = 2 / 20
+    assert abs(s["damping_ratios"][0] - 0.1) < 1e-12
+    for f in ("modes.csv", "modes.png", "free_response.csv", "frequency_response.csv", "frequency_response.png"):
+        assert (tmp_path / "o" / f).exists()
+
+
+def test_latex_bundled(capsys):
+    assert main(["latex", "smm:double_pendulum.a"]) == 0
+    assert "l_{2}^{2} m_{2}" in capsys.readouterr().out
+
+
+def test_bundled_scenes_have_modules():
+    """Every bundled mechanism scene declares a generated module (kept current by test_codegen)."""
+    names = {s.name for s in module_specs()}
+    assert {f"smm_{p.stem[4:]}" for p in bundled_scenes()} == names
+    assert all((emit.default_directory() / f"{n}.py").exists() for n in names)
+
+
+def test_errata_records_computed():
+    from symmech.core.errata import evaluate
+    from symmech.smm.errata import checks
+
+    records = [evaluate(c, n=20) for c in checks()]
+    assert {r["equation"] for r in records} >= {"5.1 (a)", "5.2 (L_a)"}
+    for r in records:
+        assert r["status"] == "agrees" and r["max_rel_diff"] < 1e-12, r
+
+
+@pytest.mark.parametrize("path", bundled_scenes(), ids=[p.stem for p in bundled_scenes()])
+def test_bundled_scenes_run_cleanly(path, tmp_path, capsys):
+    assert main(["run", str(path), "--out", str(tmp_path)]) == 0
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["warnings"] == []
+    assert all(w is None or w >= 0 for w in s["frequencies_rad_s"])
+    assert (tmp_path / "modes.png").exists()
+
+
+def test_precision_bench(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text('kind = "mechanism"\n[chain]\nn = 400\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n'
+                    '[precision]\nmodes = 5\n')
+    assert main(["bench", "precision", str(path), "--out", str(tmp_path)]) == 0
+    rows = (tmp_path / "precision.csv").read_text().splitlines()
+    assert rows[1].startswith("dense eigh") and len(rows) == 8
+    # the tightest eigsh tolerance reproduces the dense frequencies
+    assert float(rows[-1].split(",")[3]) < 1e-10
+
+
+def test_latex_chain_scene(tmp_path, capsys):
+    path = tmp_path / "c.toml"
+    path.write_text('kind = "mechanism"\n[chain]\nn = 2\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n')
+    assert main(["latex", f"smm:{path}.c"]) == 0
+    assert "2 k" in capsys.readouterr().out
+
+
+def test_large_run_writes_sparse_matrices_and_refuses_huge(tmp_path, capsys):
+    path = tmp_path / "c.toml"
+    text = 'kind = "mechanism"\n[chain]\nn = 250\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n[output]\nplots = false\n'
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    rows = (tmp_path / "o" / "matrices.csv").read_text().splitlines()
+    assert len(rows) == 1 + 3 * 250 - 2
+    path.write_text(text.replace("n = 250", "n = 3001"))
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "has 3001 coordinates" in capsys.readouterr().err

@@ -1,0 +1,130 @@
+"""Hard cases: stiff loop-closing springs, massless links, rigid-body modes, repeated and
+nearly singular cases."""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.core.scene import Section, SymmechError
+from symmech.smm import numeric
+from symmech.smm.chain import chain_mechanism
+from symmech.smm.scene import run
+
+from smm_helpers import mech, omega2, param, spring_chain
+
+
+def test_stiff_closing_spring_converges_and_warns(tmp_path):
+    """A wall spring K -> infinity clamps the last of three masses: the two lowest frequencies
+    converge to those of a two-mass fixed-fixed chain, and at K/k = 1e13 the tool warns."""
+    k, n = 100.0, 3
+    clamped = [2 * k * (1 - math.cos(j * math.pi / n)) for j in (1, 2)]
+    errors = []
+    for K in (1e3, 1e5, 1e7, 1e9):
+        w2 = omega2(spring_chain([1.0] * n, [k] * n, end_stiffness=K))
+        errors.append(max(abs(w2[:2] - clamped) / clamped))
+    assert all(e2 < e1 / 50 for e1, e2 in zip(errors, errors[1:])), errors
+    assert errors[-1] < 1e-6
+    assert not _run_mech(spring_chain([1.0] * n, [k] * n, end_stiffness=1e5), tmp_path)["warnings"]
+    stiff = _run_mech(spring_chain([1.0] * n, [k] * n, end_stiffness=1e15), tmp_path)
+    assert any("stiffness spread" in x for x in stiff["warnings"]), stiff["warnings"]
+
+
+def _run_mech(m, out):
+    """Run the scene pipeline on a model built in Python."""
+    from symmech.smm import scene as sc
+
+    orig = sc.mechanism
+    sc.mechanism = lambda _scene: m
+    try:
+        return sc.run(Section({"kind": "mechanism", "output": {"plots": False}}), out)
+    finally:
+        sc.mechanism = orig
+
+
+def test_massless_link_between_masses():
+    """A massless rigid link (no body) carries a mass at its end: two-link pendulum, masses at the
+    ends of link 2 and at the joint, link 1 massless except at the joint."""
+    l1, l2, m1, m2, g = 0.6, 0.9, 1.0, 2.0, 9.81
+    m = mech({
+        "parameters": {"g": param(g, "m/s^2")},
+        "coordinates": [{"name": "p1", "type": "angle"}, {"name": "p2", "type": "angle"}],
+        "points": [{"name": "O", "at": [0, 0]},
+                   {"name": "A", "from": "O", "vector": [0, -l1], "turns": ["p1"]},
+                   {"name": "B", "from": "A", "vector": [0, -l2], "turns": ["p2"]}],
+        "bodies": [{"name": "joint", "mass": m1, "com": "A"}, {"name": "tip", "mass": m2, "com": "B"}],
+        "gravity": {"g": "g"},
+    })
+    # absolute angles: a = [[(m1+m2) l1^2, m2 l1 l2], [., m2 l2^2]], c = g diag((m1+m2) l1, m2 l2)
+    a = np.array([[(m1 + m2) * l1**2, m2 * l1 * l2], [m2 * l1 * l2, m2 * l2**2]])
+    c = np.diag([(m1 + m2) * g * l1, m2 * g * l2])
+    expected = np.sort(np.linalg.eigvals(np.linalg.solve(a, c)).real)
+    np.testing.assert_allclose(omega2(m), expected, rtol=1e-10)
+
+
+def test_free_free_rigid_body_mode(tmp_path):
+    scene = {"kind": "mechanism", "chain": {"n": 3, "mass": 2.0, "stiffness": 50.0, "spacing": 1.0,
+                                            "ends": "free-free"}, "output": {"plots": False}}
+    s = run(Section(scene), tmp_path)
+    assert s["rigid_body_modes"] == 1
+    assert s["frequencies_rad_s"][0] == 0.0
+    np.testing.assert_allclose(s["frequencies_rad_s"][1:], [5.0, math.sqrt(75.0)], rtol=1e-10)
+
+
+def test_repeated_frequencies_have_orthonormal_modes():
+    """A mass between four equal springs (x and y): a double frequency sqrt(2k/m)."""
+    k, mass = 300.0, 1.5
+    m = mech({
+        "coordinates": [{"name": "x", "type": "slide", "axis": [1, 0]},
+                        {"name": "y", "type": "slide", "axis": [0, 1]}],
+        "points": [{"name": "O", "at": [0, 0]}, {"name": "P", "from": "O", "vector": [0, 0], "slides": ["x", "y"]},
+                   {"name": "E", "at": [1, 0]}, {"name": "W", "at": [-1, 0]},
+                   {"name": "N", "at": [0, 1]}, {"name": "S", "at": [0, -1]}],
+        "bodies": [{"name": "m", "mass": mass, "com": "P"}],
+        "springs": [{"name": n, "ends": ["P", n], "stiffness": k} for n in "EWNS"],
+    })
+    num = numeric.assemble(m)
+    md = numeric.modes(num.a.toarray(), num.b.toarray(), num.c.toarray())
+    np.testing.assert_allclose(md.omega2, [2 * k / mass] * 2, rtol=1e-12)
+    np.testing.assert_allclose(md.shapes.T @ num.a.toarray() @ md.shapes, np.eye(2), atol=1e-12)
+
+
+def test_nearly_singular_mass_matrix():
+    """A tiny mass gives a high but correct frequency; a vanishing one is refused by name."""
+    k, M, eps = 100.0, 1.0, 1e-6
+    m = spring_chain([M, eps], [k, k])
+    # two masses, springs wall-M and M-eps: exact roots of the characteristic polynomial
+    a = np.diag([M, eps])
+    c = np.array([[2 * k, -k], [-k, k]])
+    expected = np.sort(np.linalg.eigvals(np.linalg.solve(a, c)).real)
+    np.testing.assert_allclose(omega2(m), expected, rtol=1e-8)
+    bad = spring_chain([M, 1e-16], [k, k])
+    with pytest.raises(SymmechError, match="coordinate 's2'"):
+        numeric.check_mass(bad, numeric.assemble(bad).a.toarray())
+
+
+def test_unstable_equilibrium_is_reported(tmp_path):
+    """An inverted pendulum: negative omega^2, reported as unstable, no NaN frequency."""
+    m = mech({
+        "parameters": {"g": param(9.81, "m/s^2")},
+        "coordinates": [{"name": "p", "type": "angle"}],
+        "points": [{"name": "O", "at": [0, 0]}, {"name": "A", "from": "O", "vector": [0, 1.0], "turns": ["p"]}],
+        "bodies": [{"name": "b", "mass": 1.0, "com": "A"}],
+        "gravity": {"g": "g"},
+    })
+    s = _run_mech(m, tmp_path)
+    assert s["frequencies_rad_s"] == [None]
+    assert any("unstable" in w for w in s["warnings"])
+
+
+def test_large_chain_sparse_assembly():
+    """10,000 DOF assemble sparsely; the lowest mode matches the closed form."""
+    import scipy.sparse.linalg
+
+    n, k, mass = 10000, 1e4, 0.1
+    m = chain_mechanism(Section({"n": n, "mass": mass, "stiffness": k, "spacing": 0.01}, "chain"))
+    num = numeric.assemble(m)
+    assert num.c.nnz == 3 * n - 2
+    w = np.sort(scipy.sparse.linalg.eigsh(num.c.tocsc(), k=3, M=num.a.tocsc(), sigma=0.0,
+                                          return_eigenvectors=False))
+    expected = [2 * k / mass * (1 - math.cos(j * math.pi / (n + 1))) for j in (1, 2, 3)]
+    np.testing.assert_allclose(w, expected, rtol=1e-6)
