@@ -1,0 +1,60 @@
+"""The `grain` scene kind through the CLI: files, summary and the precision study."""
+import csv
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from symmech.cli import main
+
+SCENE = Path(__file__).resolve().parents[1] / "scenes" / "grain_default.toml"
+
+
+def short_scene(tmp_path, duration, extra=""):
+    text = re.sub(r"(?m)^duration = .*$", f"duration = {duration}", SCENE.read_text())
+    path = tmp_path / "grain.toml"
+    path.write_text(text + extra)
+    return path
+
+
+def test_run_writes_trajectory_impacts_summary_and_plots(tmp_path):
+    out = tmp_path / "out"
+    assert main(["run", str(short_scene(tmp_path, 0.3)), "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["kind"] == "grain" and summary["bounces"] > 3
+    assert sum(summary["time_fraction"].values()) == pytest.approx(1.0, abs=1e-9)
+    assert summary["impacts_creating_energy"] == 0
+    assert summary["energy_dissipated_by_impacts_J"] > 0
+    for name in ("trajectory.csv", "impacts.csv", "path.png", "velocity.png"):
+        assert (out / name).stat().st_size > 0
+    rows = list(csv.reader(l for l in (out / "impacts.csv").read_text().splitlines() if not l.startswith("#")))
+    assert len(rows) - 1 == summary["bounces"]
+    regimes = {l.rsplit(",", 1)[1] for l in (out / "trajectory.csv").read_text().splitlines()[2:]}
+    assert {"flight", "impact"} <= regimes
+
+
+def test_paper_mode_scene_as_printed(tmp_path):
+    path = short_scene(tmp_path, 0.1)
+    path.write_text(path.read_text().replace('mode = "accurate"', 'mode = "paper"\nas_printed = true\ndt = 4e-5'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["mode"] == "paper" and summary["bounces"] >= 1
+
+
+def test_as_printed_needs_paper_mode(tmp_path, capsys):
+    path = short_scene(tmp_path, 0.1)
+    path.write_text(path.read_text().replace('mode = "accurate"', 'mode = "accurate"\nas_printed = true'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "numerics.as_printed" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_default_scene_and_precision_study(tmp_path):
+    assert main(["run", str(SCENE), "--out", str(tmp_path / "run")]) == 0
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["wall_time_s"] < 30
+    assert main(["bench", "precision", str(SCENE), "--out", str(tmp_path / "wp")]) == 0
+    text = (tmp_path / "wp" / "precision_grain.csv").read_text()
+    assert text.startswith("# reference: accurate mode at tolerance")
+    assert (tmp_path / "wp" / "precision_grain.png").stat().st_size > 0
