@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 491c437856a0050d68b722748cf64e4202e7e7a30176827491ce3ca2da1e70fd
+# symmech 0.1.0 generated module; inputs sha256 bb2cb5b60580ee0e7e904827149b6535011cd2d98d05612a604dae6bd7f0d975
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -9,7 +9,7 @@ Needs numpy only.
 """
 import numpy
 
-__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "euler_matrix", "body_rates", "euler_rates"]
+__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates"]
 
 
 def _batch(*args):
@@ -449,46 +449,6 @@ def rotation_invariants(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
     out[..., 1] = x2*(2*q1*q2 - x1) + x5*(q3*x4 + x3) + x8*(-x6 - x7)
     out[..., 2] = x2*(-x10 - x7) + x5*(2*q2*q3 - x9) + x8*(q2*x4 + x1)
     out[..., 3] = x2*(2*q2*q3 + x9) + x5*(-x10 - x6 + 1) + x8*(2*q1*q3 - x3)
-    return out
-
-
-def euler_matrix(psi, theta, phi):
-    """rotation matrix of z-x-z Euler angles, body axes as columns in KXYZ — eqs. 62.
-
-    Parameters
-    ----------
-    psi : array_like
-        precession angle [rad]
-    theta : array_like
-        nutation angle [rad]
-    phi : array_like
-        spin angle [rad]
-
-    Returns
-    -------
-    numpy.ndarray, shape (..., 3, 3)
-        [1]
-    """
-    (psi, theta, phi,), batch = _batch(psi, theta, phi)
-    out = numpy.empty(batch + (3, 3))
-    x0 = numpy.cos(phi)
-    x1 = numpy.cos(psi)
-    x2 = numpy.cos(theta)
-    x3 = numpy.sin(phi)
-    x4 = numpy.sin(psi)
-    x5 = x3*x4
-    x6 = x1*x3
-    x7 = x0*x4
-    x8 = numpy.sin(theta)
-    out[..., 0, 0] = x0*x1 - x2*x5
-    out[..., 0, 1] = -x2*x7 - x6
-    out[..., 0, 2] = x4*x8
-    out[..., 1, 0] = x2*x6 + x7
-    out[..., 1, 1] = x0*x1*x2 - x5
-    out[..., 1, 2] = -x1*x8
-    out[..., 2, 0] = x3*x8
-    out[..., 2, 1] = x0*x8
-    out[..., 2, 2] = x2
     return out
 
 

@@ -67,7 +67,11 @@ def test_euler_rates_invert_body_rates_and_match_the_planned_convention():
     expected_p = rates[:, 0] * np.sin(th) * np.sin(ph) + rates[:, 1] * np.cos(ph)
     np.testing.assert_allclose(p[:, 0], expected_p, rtol=1e-12)
     np.testing.assert_allclose(gm.euler_rates(*ang.T, *p.T), rates, rtol=1e-10, atol=1e-12)
-    np.testing.assert_allclose(gm.euler_matrix(*ang.T), rotation(ang), atol=1e-14)
+    # Body rates are Q^T Q' of the issue-2 rotation matrix (finite difference in time).
+    h = 1e-6
+    Q0, Q1 = rotation(ang - rates * h), rotation(ang + rates * h)
+    W = np.einsum("nji,njk->nik", rotation(ang), (Q1 - Q0) / (2 * h))
+    np.testing.assert_allclose(np.stack([W[:, 2, 1], W[:, 0, 2], W[:, 1, 0]], 1), p, rtol=1e-6, atol=1e-8)
 
 
 # --------------------------------------------------------------------------- impact laws

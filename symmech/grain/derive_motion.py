@@ -228,8 +228,6 @@ def module_specs() -> list[ModuleSpec]:
                     "quaternion rate for body-frame angular velocity", "1/s", "62"),
         NamedMatrix("rotation_invariants", invariants(), args_of(_INERTIA + _RATES + _QUAT),
                     "rotational kinetic energy and angular momentum in KXYZ", "J, kg*m^2/s"),
-        NamedMatrix("euler_matrix", euler_matrix(), args_of(_EULER),
-                    "rotation matrix of z-x-z Euler angles, body axes as columns in KXYZ", "1", "62"),
         NamedMatrix("body_rates", body_rates_from_euler_rates() * sp.Matrix([psi_d, theta_d, phi_d]),
                     args_of(_EULER + [(psi_d, "precession rate", "rad/s"), (theta_d, "nutation rate", "rad/s"),
                                       (phi_d, "spin rate", "rad/s")]),

@@ -32,6 +32,7 @@ from symmech.generated import grain_motion as gm
 from symmech.generated import grain_motion_printed as gp
 from symmech.grain import contact
 from symmech.grain.body import euler_from_matrix
+from symmech.grain.body import rotation as euler_rotation
 from symmech.grain.motion import Model, Motion, Numerics, State, impact_record, _unique
 from symmech.grain.flight import quaternion_from_matrix
 from symmech.grain.sliding import slide_step
@@ -73,7 +74,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
     rec_rows, rec_impacts, time_in = [], [], {"flight": 0.0, "sliding": 0.0}
     steps = int(round(t_end / num.dt))
     every = max(1, int(round(num.sample_interval / num.dt)))
-    Q = gm.euler_matrix(ang[:, 0], ang[:, 1], ang[:, 2])
+    Q = euler_rotation(ang)
     for k in range(1, steps + 1):
         t = k * num.dt
         a_s = vib.kinematics(t)[2]
@@ -86,7 +87,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
             r[fl] += v[fl] * num.dt
             if rotation:
                 ang[fl] += rates[fl] * num.dt
-                Q[fl] = gm.euler_matrix(ang[fl, 0], ang[fl, 1], ang[fl, 2])
+                Q[fl] = euler_rotation(ang[fl])
             hit = _contacts(model, num, Q, nodes, r, v, w_body, fl, rotation)
             if hit.any():
                 idx = np.flatnonzero(hit)
