@@ -136,7 +136,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
 
 def _node_support(Q, nodes):
     """Centre height (n,) [m] at which the lowest node touches the plane."""
-    return -np.min(np.einsum("nij,nkj->nki", Q, nodes)[..., 2], axis=1)
+    return -np.min((nodes @ Q[:, 2, :, None])[..., 0], axis=1)
 
 
 def _rates(ang, w_body, with_flags=False):
@@ -150,9 +150,9 @@ def _rates(ang, w_body, with_flags=False):
 
 def _contacts(model: Model, num: Numerics, Q, nodes, r, v, w_body, fl, rotation: bool):
     """Grains in flight whose contact test (63) fires while the lowest node approaches the plane."""
-    kc = np.einsum("nij,nkj->nki", Q, nodes)  # node offsets in KXYZ (n, N, 3)
-    low = np.argmin(kc[..., 2], axis=1)
-    KC = kc[np.arange(len(low)), low]
+    z = (nodes @ Q[:, 2, :, None])[..., 0]  # node heights above the centre (n, N)
+    low = np.argmin(z, axis=1)
+    KC = (Q @ nodes[np.arange(len(low)), low][..., None])[..., 0]  # lowest node offset in KXYZ (n, 3)
     if num.as_printed:
         gap = gp.contact_gap(r[:, 2], KC[:, 0], KC[:, 1], KC[:, 2])
     else:
