@@ -255,3 +255,16 @@ def test_paper_mode_as_printed_runs_and_differs_from_corrected():
     corrected = paper_mode.simulate(model, num, st, 2 * T, (0.2, 0.1))
     printed = paper_mode.simulate(model, replace(num, as_printed=True), st, 2 * T, (0.2, 0.1))
     assert np.linalg.norm(printed.final.r - corrected.final.r) > 1e-4
+
+
+def test_constant_euler_rates_of_62_break_angular_momentum_for_an_asymmetric_grain():
+    """(62) keeps the Euler-angle rates of the impact: for an asymmetric grain L drifts by O(1)."""
+    inertia = principal_inertia(np.array([3e-3, 1.5e-3, 1e-3]), 1e-5)
+    ang0 = np.array([0.3, 1.0, 0.5])
+    rates = gm.euler_rates(*ang0, 30.0, -10.0, 50.0)
+    L = []
+    for t in (0.0, 0.02, 0.04):
+        ang = ang0 + rates * t
+        L.append(rotation(ang) @ (inertia * gm.body_rates(*ang, *rates)))
+    drift = max(np.linalg.norm(x - L[0]) for x in L) / np.linalg.norm(L[0])
+    assert drift > 0.1
