@@ -10,7 +10,7 @@ from symmech.cli import main
 from symmech.generated import grain_motion as gm
 from symmech.grain import contact, flight, motion, paper_mode
 from symmech.grain.body import Ellipsoid, rotation
-from symmech.grain.coulomb_law import ImpactLaw, coulomb_impulse, inverse_effective_mass, principal_inertia
+from symmech.grain.coulomb_law import ImpactLaw, inverse_effective_mass, principal_inertia
 from symmech.grain.impact import reduction_tensor, solve_impact
 
 G = 9.81
@@ -103,8 +103,9 @@ def test_coulomb_law_never_creates_energy(e_n, e_t, mu):
     hit = out["u_before"][:, 2] < 0
     assert hit.sum() > 1000
     assert np.all(out["ke_after"][hit] <= out["ke_before"][hit] * (1 + 1e-12))
-    np.testing.assert_allclose(out["u_after"][hit, 2], -e_n * out["u_before"][hit, 2], rtol=1e-9, atol=1e-12) \
-        if mu == np.inf else None
+    # Normal restitution holds exactly inside the cone; on its boundary the contact still separates.
+    if mu == np.inf:
+        np.testing.assert_allclose(out["u_after"][hit, 2], -e_n * out["u_before"][hit, 2], rtol=1e-9, atol=1e-12)
     assert np.all(out["u_after"][hit, 2] >= -1e-12)
 
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from symmech.grain import contact, flight
-from symmech.grain.coulomb_law import ImpactLaw, kinetic_energy, principal_inertia
+from symmech.grain.coulomb_law import ImpactLaw, principal_inertia
 from symmech.grain.sliding import Sliding, slide
 
 REGIMES = ("flight", "impact", "sliding")
@@ -267,9 +267,3 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder):
 
 def _unique(items: list) -> list:
     return list(dict.fromkeys(items))
-
-
-def total_energy(model: Model, st: State) -> float:
-    """Kinetic energy of the relative motion [J] (for invariant checks)."""
-    Q = flight.rotation_matrix(st.q)
-    return float(kinetic_energy(model.mass, model.inertia, Q, st.v, Q @ st.w))

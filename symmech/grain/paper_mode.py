@@ -24,7 +24,6 @@ Grains share the surface and the impact law; they differ in shape, mass and stat
 """
 from __future__ import annotations
 
-from dataclasses import replace
 
 import numpy as np
 
