@@ -269,3 +269,18 @@ def test_constant_euler_rates_of_62_break_angular_momentum_for_an_asymmetric_gra
         L.append(rotation(ang) @ (inertia * gm.body_rates(*ang, *rates)))
     drift = max(np.linalg.norm(x - L[0]) for x in L) / np.linalg.norm(L[0])
     assert drift > 0.1
+
+
+def test_paper_mode_reports_gimbal_lock_instead_of_nan():
+    """theta = 0 (body axis 3 along the normal): the Euler rates of (62) are undefined; warned, no NaN."""
+    model = grain_model(axes=(2e-3, 1.5e-3, 1e-3), mass=1e-5)
+    st = motion.State(0.0, np.array([0.0, 0.0, 3e-3]), np.zeros(3), np.array([1.0, 0, 0, 0]),
+                      np.array([0.0, 0.0, 30.0]))
+    T = model.period
+    res = paper_mode.simulate(model, motion.Numerics(mode="paper", dt=T / 500, nodes=100, sample_interval=T / 5),
+                              st, 2 * T)
+    assert any("gimbal lock" in w for w in res.warnings)
+    assert np.all(np.isfinite(res.trajectory))
+    # Accurate mode (quaternions) has no such singularity.
+    acc = run(model, t_end=2 * T, w=(0.0, 0.0, 30.0))
+    assert not any("gimbal" in w for w in acc.warnings) and np.all(np.isfinite(acc.trajectory))

@@ -37,6 +37,8 @@ from symmech.grain.flight import quaternion_from_matrix
 from symmech.grain.sliding import slide_step
 
 GIMBAL_SIN = 1e-6
+GIMBAL_WARNING = (f"paper mode: Euler angles at gimbal lock (|sin theta| < {GIMBAL_SIN:g}): the rates of (62) "
+                  "are undefined; rotation frozen for that flight")
 
 
 def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0, t_end: float,
@@ -56,14 +58,14 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
     ang = np.array(angles0, dtype=float)
     rotation = model.effects.rotation
     w_body = np.array(w0, dtype=float) if rotation else np.zeros((n, 3))
-    rates = _rates(ang, w_body)
+    rates, bad = _rates(ang, w_body)
     nodes = contact.ellipsoid_nodes(np.ones(3), num.nodes)[None] * axes[:, None, :]  # (n, N, 3)
     sliding = np.zeros(n, dtype=bool)
     count = np.zeros(n, dtype=int)
     model = model.active()
     vib = model.vibration
     slide_model = model.sliding
-    warnings: list = []
+    warnings: list = [GIMBAL_WARNING] if bad.any() else []
     if num.as_printed:
         a, b = alpha_beta
         delta = np.arccos(np.sqrt(max(1.0 - np.sin(a) ** 2 - np.sin(b) ** 2, 0.0)))
@@ -107,10 +109,9 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
                 w_body[land] = 0.0
                 r[land, 2] = _node_support(Q[land], nodes[land])
                 if rotation:
-                    rates[idx], bad = _rates(ang[idx], w_body[idx], with_flags=True)
+                    rates[idx], bad = _rates(ang[idx], w_body[idx])
                     if bad.any():
-                        warnings.append("paper mode: Euler angles at gimbal lock (sin theta < "
-                                        f"{GIMBAL_SIN:g}); rotation frozen for that flight")
+                        warnings.append(GIMBAL_WARNING)
                 if record and hit[0]:
                     q = quaternion_from_matrix(Q[0])
                     b_state = State(t, r[0].copy(), before_v[0], q, before_w[0])
@@ -138,13 +139,14 @@ def _node_support(Q, nodes):
     return -np.min((nodes @ Q[:, 2, :, None])[..., 0], axis=1)
 
 
-def _rates(ang, w_body, with_flags=False):
-    """Euler-angle rates (n, 3) (psi', theta', phi') from body rates; frozen (zero) at gimbal lock."""
+def _rates(ang, w_body):
+    """Euler-angle rates (n, 3) (psi', theta', phi') from body rates, and the grains (n,) at gimbal lock
+    with a nonzero spin (their rates are frozen at zero)."""
     bad = np.abs(np.sin(ang[:, 1])) < GIMBAL_SIN
     safe = np.where(bad, np.pi / 2, ang[:, 1])
     rates = gm.euler_rates(ang[:, 0], safe, ang[:, 2], w_body[:, 0], w_body[:, 1], w_body[:, 2])
     rates[bad] = 0.0
-    return (rates, bad & np.any(w_body != 0, axis=1)) if with_flags else rates
+    return rates, bad & np.any(w_body != 0, axis=1)
 
 
 def _contacts(model: Model, num: Numerics, Q, nodes, r, v, w_body, fl, rotation: bool):
