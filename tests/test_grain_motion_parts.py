@@ -240,9 +240,14 @@ def test_scene_errors_are_one_line_naming_the_field(tmp_path, capsys):
         'semi_axes = [1e-3, 1e-3, 1e-3]\nmass = 1e-5\n[surface]\nalpha_deg = 60.0\nbeta_deg = 60.0': "surface.beta_deg",
         'semi_axes = [1e-3, 1e-3, 1e-3]\nmass = 1e-5\n[initial]\nposition = [0.0, 0.0, 1e-4]': "initial.position",
         'semi_axes = [1e-3, 1e-3, 1e-3]\nmass = 1e-5\n[effects]\nvibrations = false': "effects.vibrations",
+        'semi_axes = [1e-3, 1e-3, 1e-3]\nmass = 1e-5\n[vibration]\nfrequency = 0.0': "vibration.frequency",
+        'semi_axes = [1e-3, 1e-3, 1e-3]\nmass = 1e-5\n[numerics]\nmode = "fast"': "numerics.mode",
+        'semi_axes = [1e-3, 1e-3, 1e-3]\nmass = 1e-5': "impact.mu",
     }
     for body, field in cases.items():
-        base.write_text('kind = "grain"\nduration = 0.01\n[impact]\ne_n = 0.5\ne_t = 0.0\n[body]\n' + body + "\n")
+        law = "mu = -0.5\n" if field == "impact.mu" else ""
+        base.write_text('kind = "grain"\nduration = 0.01\n[impact]\ne_n = 0.5\ne_t = 0.0\n' + law + "[body]\n"
+                        + body + "\n")
         assert main(["run", str(base), "--out", str(tmp_path / "o")]) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and field in err and "Traceback" not in err, err

@@ -111,9 +111,10 @@ def _law(s: Section) -> ImpactLaw:
         law = ImpactLaw("printed", e=s.float("e", unit="", lo=0.0, hi=1.0),
                         lam=s.float("lambda", unit="", lo=0.0, hi=1.0))
     else:
-        mu = s.float("mu", unit="", default=-1.0, lo=-1.0, hi=1e6)
+        # No mu: no Coulomb bound on the tangential impulse.
+        mu = s.float("mu", unit="", lo=0.0, hi=1e6) if s.has("mu") else np.inf
         law = ImpactLaw("coulomb", e_n=s.float("e_n", unit="", lo=0.0, hi=1.0),
-                        e_t=s.float("e_t", unit="", lo=-1.0, hi=1.0), mu=np.inf if mu < 0 else mu,
+                        e_t=s.float("e_t", unit="", lo=-1.0, hi=1.0), mu=mu,
                         check_printed=s.bool("check_printed", default=True))
     s.finish()
     return law
