@@ -56,6 +56,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
     n = len(mass)
     r, v = np.array(r0, dtype=float), np.array(v0, dtype=float)
     ang = np.array(angles0, dtype=float)
+    ang_liftoff, steps_since = ang.copy(), np.zeros(n)  # (62) counts steps s from the last impact
     rotation = model.effects.rotation
     w_body = np.array(w0, dtype=float) if rotation else np.zeros((n, 3))
     rates, bad = _rates(ang, w_body)
@@ -87,7 +88,11 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
             v[fl] += acc * num.dt
             r[fl] += v[fl] * num.dt
             if rotation:
-                ang[fl] += rates[fl] * num.dt
+                steps_since[fl] += 1
+                a0, rt = ang_liftoff[fl], rates[fl]
+                theta, psi, phi = np.moveaxis(gp.euler_angles(a0[:, 1], a0[:, 0], a0[:, 2], rt[:, 1], rt[:, 0],
+                                                              rt[:, 2], steps_since[fl], num.dt), -1, 0)
+                ang[fl] = np.stack([psi, theta, phi], axis=-1)
                 Q[fl] = euler_rotation(ang[fl])
             hit = _contacts(model, num, Q, nodes, r, v, w_body, fl, rotation)
             if hit.any():
@@ -110,6 +115,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
                 r[land, 2] = _node_support(Q[land], nodes[land])
                 if rotation:
                     rates[idx], bad = _rates(ang[idx], w_body[idx])
+                    ang_liftoff[idx], steps_since[idx] = ang[idx], 0
                     if bad.any():
                         warnings.append(GIMBAL_WARNING)
                 if record and hit[0]:
