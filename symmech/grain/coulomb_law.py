@@ -101,8 +101,9 @@ class ImpactLaw:
         law is solved exactly (issue 2's robust solver, vectorised). Returns arrays:
         ``v``, ``w`` (n, 3) after, ``impulse`` (n, 3) N s, ``u_before``,
         ``u_after`` (n, 3) contact velocities, ``ke_before``, ``ke_after`` (n,) J,
-        ``admissible`` (n,) (no energy created), ``printed_admissible`` (n,) (True/False,
-        or None when not evaluated), ``converged`` (n,), and ``warnings`` (list of str).
+        ``admissible`` (n,) (no energy created), ``printed_admissible`` (n,) (the printed
+        law's verdict: a root that neither creates energy nor pulls the grain into the
+        plane; None when not evaluated), ``printed_creates_energy`` (n,) (True/False/None), ``converged`` (n,), and ``warnings`` (list of str).
         """
         n = len(mass)
         R = contact.contact_offset(axes, Q)
@@ -112,6 +113,7 @@ class ImpactLaw:
         warnings: list[str] = []
         converged = np.ones(n, dtype=bool)
         printed_admissible = [None] * n
+        printed_creates = [None] * n
         if not rotation:
             K = np.eye(3) / np.asarray(mass, dtype=float)[:, None, None]
         else:
@@ -124,6 +126,12 @@ class ImpactLaw:
             printed = solve_robust_batch(m[:, None, None] * K[idx], m, e, lam, u[idx])
             for j, i in enumerate(idx):
                 printed_admissible[i] = bool(printed.admissible[j])
+                printed_creates[i] = bool(printed.energy_created[j])
+            if self.kind == "printed":
+                for j in np.flatnonzero(~printed.admissible):
+                    reason = ("creates kinetic energy" if printed.energy_created[j]
+                              else "pulls the grain into the plane (T_z < 0)")
+                    warnings.append(f"printed impact law: no admissible root; the one used {reason}")
             if self.kind == "printed":
                 converged[idx] = printed.residual < PRINTED_RESIDUAL
                 for j in np.flatnonzero(~converged[idx]):
@@ -152,4 +160,5 @@ class ImpactLaw:
         return {"v": v_after, "w": w_after, "impulse": P, "u_before": u,
                 "u_after": v_after + np.cross(w_after, R), "ke_before": ke_before, "ke_after": ke_after,
                 "admissible": admissible, "printed_admissible": printed_admissible,
+                "printed_creates_energy": printed_creates,
                 "converged": converged, "warnings": warnings}

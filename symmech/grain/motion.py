@@ -127,6 +127,7 @@ class Motion:
         dissipated = sum(i["ke_before"] - i["ke_after"] for i in self.impacts)
         created = [i for i in self.impacts if not i["admissible"]]
         printed_bad = sum(1 for i in self.impacts if i["printed_admissible"] is False)
+        printed_energy = sum(1 for i in self.impacts if i["printed_creates_energy"] is True)
         return {
             "duration_s": duration,
             "mean_transport_velocity_m_s": ((self.final.r[:2] - self.start.r[:2]) / duration).tolist(),
@@ -134,7 +135,8 @@ class Motion:
             "time_fraction": {k: v / duration for k, v in self.time_in.items()},
             "energy_dissipated_by_impacts_J": dissipated,
             "impacts_creating_energy": len(created),
-            "impacts_where_printed_law_creates_energy": printed_bad,
+            "impacts_where_printed_law_is_inadmissible": printed_bad,
+            "impacts_where_printed_law_creates_energy": printed_energy,
             **self.extra,
             "warnings": self.warnings,
         }
@@ -171,7 +173,8 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
             "impulse": out["impulse"][i].tolist(), "u_before": out["u_before"][i].tolist(),
             "u_after": out["u_after"][i].tolist(), "ke_before": float(out["ke_before"][i]),
             "ke_after": float(out["ke_after"][i]), "admissible": bool(out["admissible"][i]),
-            "printed_admissible": out["printed_admissible"][i], "converged": bool(out["converged"][i])}
+            "printed_admissible": out["printed_admissible"][i],
+            "printed_creates_energy": out["printed_creates_energy"][i], "converged": bool(out["converged"][i])}
 
 
 def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:

@@ -176,20 +176,22 @@ def _write_trajectory(result: motion.Motion, path: Path) -> None:
 IMPACT_COLUMNS = ("t", "x", "y", "z", "vx_before", "vy_before", "vz_before", "vx_after", "vy_after", "vz_after",
                   "w1_before", "w2_before", "w3_before", "w1_after", "w2_after", "w3_after",
                   "Tx", "Ty", "Tz", "ke_before", "ke_after", "energy_change", "admissible",
-                  "printed_law_admissible", "converged")
+                  "printed_law_admissible", "printed_law_creates_energy", "converged")
 
 
 def _write_impacts(result: motion.Motion, path: Path) -> None:
     with path.open("w", newline="") as fh:
         fh.write("# velocities relative to the surface [m/s], w body-axis rates [rad/s], impulse T [N s], "
-                 "energies [J]; printed_law_admissible: would the printed law have conserved or lost energy\n")
+                 "energies [J]; printed_law_admissible / printed_law_creates_energy: the printed law's verdict at "
+                 "this impact (admissible: no energy created and no pull into the plane)\n")
         writer = csv.writer(fh)
         writer.writerow(IMPACT_COLUMNS)
         for i in result.impacts:
             values = [i["t"], *i["r"], *i["v_before"], *i["v_after"], *i["w_before"], *i["w_after"],
                       *i["impulse"], i["ke_before"], i["ke_after"], i["ke_after"] - i["ke_before"]]
             writer.writerow([f"{x:.12g}" for x in values] +
-                            [i["admissible"], "" if i["printed_admissible"] is None else i["printed_admissible"],
+                            [i["admissible"], *("" if i[k] is None else i[k]
+                                                 for k in ("printed_admissible", "printed_creates_energy")),
                              i["converged"]])
 
 
