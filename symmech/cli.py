@@ -114,15 +114,10 @@ def cmd_latex(ns) -> int:
             eq = f"  eqs. {nm.equations}" if nm.equations else ""
             print(f"{key:<40} {nm.meaning}{eq}")
         return 0
-    if ":" in ns.name:
-        matrices = _scene_matrices(ns.name)
-        key = ns.name
-    else:
-        matrices = _named_matrices()
-        key = ns.name
-    if key not in matrices:
+    matrices = _scene_matrices(ns.name) if ":" in ns.name else _named_matrices()
+    if ns.name not in matrices:
         raise SymmechError(f"no derived matrix named '{ns.name}' (see `symmech latex --list`)")
-    nm = matrices[key]
+    nm = matrices[ns.name]
     if not ns.cse:
         print(sympy.latex(nm.matrix if nm.shape else nm.matrix[0, 0]))
         return 0
