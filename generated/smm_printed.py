@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 417e45897d6b9b6a2083942e951f834c1f9cbe84e88950540ba33b131898a68b
+# symmech 0.1.0 generated module; inputs sha256 b0f300e9facde3b985b1267ddd41c028a347cafefcf18b6df07e648d1d328e94
 """Matrices of the SMM paper's section 5 as printed (legible entries).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -9,7 +9,7 @@ Needs numpy only.
 """
 import numpy
 
-__all__ = ["ex51_a", "ex51_Lc_rope", "ex52_La", "ex52_Lc"]
+__all__ = ["ex51_a", "ex51_Lc_rope", "ex52_La", "ex52_Lc", "ex53_Lc"]
 
 
 def _batch(*args):
@@ -87,7 +87,7 @@ def ex52_La(xM, yM, l4, alpha, l5, beta):
     l5 : array_like
         suspension bar length [m]
     beta : array_like
-        suspension bar inclination [rad]
+        angle (5.2: suspension bar inclination; 5.3: rope to the boom axis in the boom's plane) [rad]
 
     Returns
     -------
@@ -149,7 +149,7 @@ def ex52_Lc(l4, alpha, l5, beta, l3, l6, delta3, delta4):
     l5 : array_like
         suspension bar length [m]
     beta : array_like
-        suspension bar inclination [rad]
+        angle (5.2: suspension bar inclination; 5.3: rope to the boom axis in the boom's plane) [rad]
     l3 : array_like
         A to front support [m]
     l6 : array_like
@@ -184,4 +184,40 @@ def ex52_Lc(l4, alpha, l5, beta, l3, l6, delta3, delta4):
     out[..., 15] = l5*numpy.cos(beta)
     out[..., 16] = 0
     out[..., 17] = 0
+    return out
+
+
+def ex53_Lc(L1, beta, delta):
+    """example 5.3: legible rows (beta1, psi1, phi1) of (L_c) as printed — eqs. 5.3 (L_c).
+
+    Parameters
+    ----------
+    L1 : array_like
+        5.3: boom pivot O1 to the centre of mass and the rope attachment [m]
+    beta : array_like
+        angle (5.2: suspension bar inclination; 5.3: rope to the boom axis in the boom's plane) [rad]
+    delta : array_like
+        5.3: rope angle out of the boom's plane [rad]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3, 4)
+        [m or 1]
+    """
+    (L1, beta, delta,), batch = _batch(L1, beta, delta)
+    out = numpy.empty(batch + (3, 4))
+    x0 = -L1*numpy.sin(beta)*numpy.cos(delta)
+    x1 = L1*numpy.sin(delta)
+    out[..., 0, 0] = x0
+    out[..., 0, 1] = x0
+    out[..., 0, 2] = 0
+    out[..., 0, 3] = 0
+    out[..., 1, 0] = x1
+    out[..., 1, 1] = -x1
+    out[..., 1, 2] = 0
+    out[..., 1, 3] = 0
+    out[..., 2, 0] = 0
+    out[..., 2, 1] = 0
+    out[..., 2, 2] = 1
+    out[..., 2, 3] = 0
     return out

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 13cfd9f0258c5974a19a9f4c35d64a3e6fd182a1df3d88a10a03529e1427ee06
+# symmech 0.1.0 generated module; inputs sha256 bbc3623a7cf7138e1cab90fcdcbc6ab381cfb506563c58a8e5afad7b7c803da1
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -18,7 +18,7 @@ def _batch(*args):
     return arrays, numpy.broadcast_shapes(*(a.shape for a in arrays))
 
 
-def a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g):
+def a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: inertia matrix (a), a q'' + b q' + c q = Q — eqs. (1), (3).
 
     Parameters
@@ -32,15 +32,13 @@ def a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     Jz : array_like
         boom central moment about z1 [kg m^2]
     L1 : array_like
-        pivot O1 to the boom centre of mass S [m]
-    Lt : array_like
-        pivot O1 to the rope attachments along the boom [m]
-    b : array_like
-        half the lateral distance between the two ropes [m]
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
     Lr : array_like
         rope length [m]
-    eps : array_like
-        rope angle to the boom axis [rad]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
     c1 : array_like
         stiffness of each rope [N/m]
     cK : array_like
@@ -56,14 +54,14 @@ def a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     m2 : array_like
         counterweight mass at the console end [kg]
     L2 : array_like
-        console length [m]
+        console length, pivot O to the counterweight [m]
     gamma : array_like
         console angle below the boom axis (backwards) [rad]
     h2 : array_like
         length of the console support spring [m]
     c2 : array_like
         console support stiffness [N/m]
-    delta : array_like
+    theta : array_like
         boom inclination above the horizontal [rad]
     g : array_like
         gravitational acceleration [m/s^2]
@@ -73,7 +71,7 @@ def a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     numpy.ndarray, shape (..., 4, 4)
         [kg, kg m, kg m^2 by coordinate kinds]
     """
-    (m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g)
+    (m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty(batch + (4, 4))
     x0 = e3**2*m3
     x1 = L3*e3*m3
@@ -98,7 +96,7 @@ def a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     return out
 
 
-def b(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g):
+def b(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: damping matrix (b) — eqs. (10).
 
     Parameters
@@ -112,15 +110,13 @@ def b(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     Jz : array_like
         boom central moment about z1 [kg m^2]
     L1 : array_like
-        pivot O1 to the boom centre of mass S [m]
-    Lt : array_like
-        pivot O1 to the rope attachments along the boom [m]
-    b : array_like
-        half the lateral distance between the two ropes [m]
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
     Lr : array_like
         rope length [m]
-    eps : array_like
-        rope angle to the boom axis [rad]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
     c1 : array_like
         stiffness of each rope [N/m]
     cK : array_like
@@ -136,14 +132,14 @@ def b(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     m2 : array_like
         counterweight mass at the console end [kg]
     L2 : array_like
-        console length [m]
+        console length, pivot O to the counterweight [m]
     gamma : array_like
         console angle below the boom axis (backwards) [rad]
     h2 : array_like
         length of the console support spring [m]
     c2 : array_like
         console support stiffness [N/m]
-    delta : array_like
+    theta : array_like
         boom inclination above the horizontal [rad]
     g : array_like
         gravitational acceleration [m/s^2]
@@ -153,7 +149,7 @@ def b(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     numpy.ndarray, shape (..., 4, 4)
         [N s/m, N s, N m s by coordinate kinds]
     """
-    (m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g)
+    (m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty(batch + (4, 4))
     out[..., 0, 0] = 0
     out[..., 0, 1] = 0
@@ -174,7 +170,7 @@ def b(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     return out
 
 
-def c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g):
+def c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: stiffness matrix (c) with the effects the scene asks for — eqs. (7), (9).
 
     Parameters
@@ -188,15 +184,13 @@ def c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     Jz : array_like
         boom central moment about z1 [kg m^2]
     L1 : array_like
-        pivot O1 to the boom centre of mass S [m]
-    Lt : array_like
-        pivot O1 to the rope attachments along the boom [m]
-    b : array_like
-        half the lateral distance between the two ropes [m]
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
     Lr : array_like
         rope length [m]
-    eps : array_like
-        rope angle to the boom axis [rad]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
     c1 : array_like
         stiffness of each rope [N/m]
     cK : array_like
@@ -212,14 +206,14 @@ def c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     m2 : array_like
         counterweight mass at the console end [kg]
     L2 : array_like
-        console length [m]
+        console length, pivot O to the counterweight [m]
     gamma : array_like
         console angle below the boom axis (backwards) [rad]
     h2 : array_like
         length of the console support spring [m]
     c2 : array_like
         console support stiffness [N/m]
-    delta : array_like
+    theta : array_like
         boom inclination above the horizontal [rad]
     g : array_like
         gravitational acceleration [m/s^2]
@@ -229,60 +223,96 @@ def c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma,
     numpy.ndarray, shape (..., 4, 4)
         [N/m, N, N m by coordinate kinds]
     """
-    (m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g)
+    (m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty(batch + (4, 4))
-    x0 = numpy.cos(delta)
+    x0 = numpy.cos(theta)
     x1 = g*x0
     x2 = m3*x1
-    x3 = b**2
-    x4 = Lr**2
-    x5 = numpy.sin(eps)
-    x6 = x5**2
-    x7 = x4*x6
-    x8 = numpy.cos(eps)
-    x9 = x8**2
-    x10 = 1/(x4*x9 + x7)
-    x11 = 1/Lr
-    x12 = 1/x5
-    x13 = L1*m1
-    x14 = g*numpy.sin(delta)
-    x15 = m3*x14
-    x16 = e3*x15
-    x17 = L3*x2 + x1*x13 + x16
-    x18 = x12*x17
-    x19 = 1/Lt
-    x20 = x19*x3
-    x21 = Lr*x17
-    x22 = x10*x21*x5
-    x23 = x10*x20
-    x24 = 2*c1*x10*x3*x4*x5*x8 - x16 - x21*x23*x8
-    x25 = L3*x15 - Lt*x11*x12*x17 + x13*x14 + x18*x8
-    x26 = numpy.cos(gamma)
-    x27 = L2*m2
-    x28 = x26*x27
-    x29 = numpy.sin(gamma)
-    x30 = x27*x29
-    x31 = (-x1*x28 + x14*x30)/x26
-    out[..., 0, 0] = 2*c1*x10*x3*x7 + cK + e3*x2 + x11*x18*x20 - x20*x22
-    out[..., 0, 1] = 0
-    out[..., 0, 2] = x24
+    x3 = numpy.sin(delta)
+    x4 = numpy.sin(beta)
+    x5 = 1/x4
+    x6 = numpy.cos(delta)
+    x7 = 1/x6
+    x8 = L1*m1
+    x9 = x1*x8
+    x10 = L3*x2
+    x11 = numpy.sin(theta)
+    x12 = g*x11
+    x13 = m3*x12
+    x14 = e3*x13
+    x15 = x10 + x14 + x9
+    x16 = (1/2)*x10 + (1/2)*x14 + (1/2)*x9
+    x17 = x16*x5
+    x18 = x3*x7
+    x19 = x17*x18
+    x20 = (1/2)*x15*x3*x5*x7 - x19
+    x21 = -x14
+    x22 = Lr**2
+    x23 = x3**2
+    x24 = x4**2
+    x25 = x6**2
+    x26 = x22*x25
+    x27 = x24*x26
+    x28 = numpy.cos(beta)
+    x29 = x22*x23 + x26*x28**2 + x27
+    x30 = 1/x29
+    x31 = L1*x30
+    x32 = x16*x31
+    x33 = Lr*x6
+    x34 = x33*x4
+    x35 = (1/2)*x15
+    x36 = x31*x35
+    x37 = L1**2
+    x38 = x35*x5
+    x39 = 1/Lr
+    x40 = -1/2*L1*x15*x39*x5*x7 - L1*x16*x39*x5*x7 + L3*x13 + x12*x8 + x17*x28 + x28*x38
+    x41 = Lr*x3
+    x42 = x32*x41 - x36*x41
+    x43 = -L1 + Lr*x28*x6 - a2
+    x44 = x39*x7
+    x45 = x38*x44
+    x46 = x17*x44
+    x47 = numpy.sqrt(x29)
+    x48 = 1/x47
+    x49 = Lr*x4*x43*x48*x6 - x26*x28*x4*x48
+    x50 = x48*x49
+    x51 = 2*c1
+    x52 = L1*x34*x50*x51 - x16*x50 - x35*x50 + x43*x45 + x43*x46
+    x53 = Lr*x23*x31*x7
+    x54 = -x18*x38*x50 + x19*x50
+    x55 = numpy.sin(gamma)
+    x56 = L2*m2
+    x57 = x1*x56
+    x58 = numpy.cos(gamma)
+    x59 = 1/L1
+    x60 = x34*x59
+    x61 = x43**2
+    x62 = x45*x59
+    x63 = x46*x59
+    x64 = x49**2
+    x65 = -x27*x48 - x28*x33*x43*x48
+    x66 = x47*x59
+    x67 = (L2*g*m2*x11*x55 - x15*x44*x49*x5*x66 - x57*x58)/x58
+    out[..., 0, 0] = cK + e3*x2
+    out[..., 0, 1] = x20
+    out[..., 0, 2] = x21
     out[..., 0, 3] = 0
-    out[..., 1, 0] = 0
-    out[..., 1, 1] = 2*Lt**2*c1*x10*x4*x6 - Lt*x22 + e3*g*m3*x0 - x25
-    out[..., 1, 2] = 0
-    out[..., 1, 3] = 0
-    out[..., 2, 0] = x24
-    out[..., 2, 1] = 0
-    out[..., 2, 2] = -Lr*x18*x23*x9 + 2*c1*x10*x3*x4*x9 + x11*x12*x17*x19*x3 - x25
-    out[..., 2, 3] = 0
+    out[..., 1, 0] = x20
+    out[..., 1, 1] = 2*c1*x22*x24*x25*x30*x37 + e3*g*m3*x0 - x32*x34 - x34*x36 - x40
+    out[..., 1, 2] = x42
+    out[..., 1, 3] = x52
+    out[..., 2, 0] = x21
+    out[..., 2, 1] = x42
+    out[..., 2, 2] = 2*c1*x22*x23*x30*x37 - x17*x53 - x38*x53 - x40
+    out[..., 2, 3] = x54
     out[..., 3, 0] = 0
-    out[..., 3, 1] = 0
-    out[..., 3, 2] = 0
-    out[..., 3, 3] = L2**2*c2*x26**2 + L2*x29**2*x31/h2 + x1*x30 + x14*x28 + x29*x31
+    out[..., 3, 1] = x52
+    out[..., 3, 2] = x54
+    out[..., 3, 3] = L2**2*c2*x58**2 + L2*x55**2*x67/h2 + x12*x56*x58 + x16*x60 + x35*x60 + x45*x65*x66 + x47*x63*x65 + x51*x64 + x55*x57 + x55*x67 + x61*x62 + x61*x63 - x62*x64 - x63*x64
     return out
 
 
-def L_a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g):
+def L_a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components — eqs. (3).
 
     Parameters
@@ -296,15 +326,13 @@ def L_a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     Jz : array_like
         boom central moment about z1 [kg m^2]
     L1 : array_like
-        pivot O1 to the boom centre of mass S [m]
-    Lt : array_like
-        pivot O1 to the rope attachments along the boom [m]
-    b : array_like
-        half the lateral distance between the two ropes [m]
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
     Lr : array_like
         rope length [m]
-    eps : array_like
-        rope angle to the boom axis [rad]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
     c1 : array_like
         stiffness of each rope [N/m]
     cK : array_like
@@ -320,14 +348,14 @@ def L_a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     m2 : array_like
         counterweight mass at the console end [kg]
     L2 : array_like
-        console length [m]
+        console length, pivot O to the counterweight [m]
     gamma : array_like
         console angle below the boom axis (backwards) [rad]
     h2 : array_like
         length of the console support spring [m]
     c2 : array_like
         console support stiffness [N/m]
-    delta : array_like
+    theta : array_like
         boom inclination above the horizontal [rad]
     g : array_like
         gravitational acceleration [m/s^2]
@@ -337,7 +365,7 @@ def L_a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     numpy.ndarray, shape (..., 4, 10)
         [m or 1]
     """
-    (m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g)
+    (m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty(batch + (4, 10))
     out[..., 0, 0] = 0
     out[..., 0, 1] = 0
@@ -382,7 +410,7 @@ def L_a(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     return out
 
 
-def L_c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g):
+def L_c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: stiffness transformation matrix (L_c): rows coordinates, columns springs — eqs. (9).
 
     Parameters
@@ -396,15 +424,13 @@ def L_c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     Jz : array_like
         boom central moment about z1 [kg m^2]
     L1 : array_like
-        pivot O1 to the boom centre of mass S [m]
-    Lt : array_like
-        pivot O1 to the rope attachments along the boom [m]
-    b : array_like
-        half the lateral distance between the two ropes [m]
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
     Lr : array_like
         rope length [m]
-    eps : array_like
-        rope angle to the boom axis [rad]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
     c1 : array_like
         stiffness of each rope [N/m]
     cK : array_like
@@ -420,14 +446,14 @@ def L_c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     m2 : array_like
         counterweight mass at the console end [kg]
     L2 : array_like
-        console length [m]
+        console length, pivot O to the counterweight [m]
     gamma : array_like
         console angle below the boom axis (backwards) [rad]
     h2 : array_like
         length of the console support spring [m]
     c2 : array_like
         console support stiffness [N/m]
-    delta : array_like
+    theta : array_like
         boom inclination above the horizontal [rad]
     g : array_like
         gravitational acceleration [m/s^2]
@@ -437,30 +463,33 @@ def L_c(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamm
     numpy.ndarray, shape (..., 4, 4)
         [m or 1]
     """
-    (m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lt, b, Lr, eps, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, delta, g)
+    (m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g,), batch = _batch(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty(batch + (4, 4))
     x0 = Lr**2
-    x1 = numpy.sin(eps)
-    x2 = numpy.cos(eps)
-    x3 = 1/numpy.sqrt(x0*x1**2 + x0*x2**2)
-    x4 = Lr*x1*x3
-    x5 = b*x4
-    x6 = Lt*x4
-    x7 = Lr*b*x2*x3
-    out[..., 0, 0] = -x5
-    out[..., 0, 1] = x5
+    x1 = numpy.sin(delta)
+    x2 = numpy.sin(beta)
+    x3 = numpy.cos(delta)
+    x4 = x0*x3**2
+    x5 = numpy.cos(beta)
+    x6 = 1/numpy.sqrt(x0*x1**2 + x2**2*x4 + x4*x5**2)
+    x7 = L1*x6
+    x8 = Lr*x2*x3*x7
+    x9 = Lr*x1*x7
+    x10 = Lr*x2*x3*x6*(-L1 + Lr*x3*x5 - a2) - x2*x4*x5*x6
+    out[..., 0, 0] = 0
+    out[..., 0, 1] = 0
     out[..., 0, 2] = 0
     out[..., 0, 3] = 1
-    out[..., 1, 0] = x6
-    out[..., 1, 1] = x6
+    out[..., 1, 0] = x8
+    out[..., 1, 1] = x8
     out[..., 1, 2] = 0
     out[..., 1, 3] = 0
-    out[..., 2, 0] = -x7
-    out[..., 2, 1] = x7
+    out[..., 2, 0] = -x9
+    out[..., 2, 1] = x9
     out[..., 2, 2] = 0
     out[..., 2, 3] = 0
-    out[..., 3, 0] = 0
-    out[..., 3, 1] = 0
+    out[..., 3, 0] = x10
+    out[..., 3, 1] = x10
     out[..., 3, 2] = L2*h2*numpy.cos(gamma)/abs(h2)
     out[..., 3, 3] = 0
     return out

@@ -118,6 +118,7 @@ def cmd_latex(ns) -> int:
     if ns.name not in matrices:
         raise SymmechError(f"no derived matrix named '{ns.name}' (see `symmech latex --list`)")
     nm = matrices[ns.name]
+    print(f"% {ns.name}: {nm.meaning}")
     if not ns.cse:
         print(sympy.latex(nm.matrix if nm.shape else nm.matrix[0, 0]))
         return 0

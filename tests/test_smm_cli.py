@@ -77,6 +77,33 @@ def test_run_writes_results(tmp_path, capsys):
 def test_latex_bundled(capsys):
     assert main(["latex", "smm:double_pendulum.a"]) == 0
     assert "l_{2}^{2} m_{2}" in capsys.readouterr().out
+    # spring directions are normalised in the display form: no sqrt, no |h|
+    assert main(["latex", "smm:spatial_boom.L_c"]) == 0
+    out = capsys.readouterr().out
+    assert "sqrt" not in out and "left|" not in out and "> 0" in out.splitlines()[0]
+
+
+@pytest.mark.parametrize("scene, key", [("rotor_boom", "c"), ("spatial_boom", "L_c"), ("spatial_boom", "c")])
+def test_readable_form_equals_derived(scene, key):
+    """The display form is the derived matrix: equal at 50 seeded points with positive parameters
+    (the assumption it states), and it actually got shorter."""
+    import numpy as np
+    import sympy
+
+    from symmech.smm.derive import SCENES, load_mechanism, named_matrices, readable
+
+    m = load_mechanism(SCENES / f"smm_{scene}.toml")
+    nm = named_matrices(m)[key]
+    nice = readable(nm, m.values())
+    syms = [a.symbol for a in nm.args]
+    f, g = (sympy.lambdify(syms, x.matrix, "numpy") for x in (nm, nice))
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        x = [v * rng.uniform(0.5, 1.5) for v in m.values().values()]
+        a, b = np.array(f(*x), float), np.array(g(*x), float)
+        assert np.allclose(a, b, rtol=1e-10, atol=1e-10 * np.abs(a).max())
+    ops = lambda M: sum(sympy.count_ops(e) for e in M)  # noqa: E731
+    assert ops(nice.matrix) < ops(nm.matrix)
 
 
 def test_bundled_scenes_have_modules():

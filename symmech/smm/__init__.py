@@ -6,10 +6,11 @@ def latex_matrices(rest: str) -> dict:
     """Matrices for ``symmech latex smm:<scene>.<name>``.
 
     ``<scene>`` is a scene file path or the name of a bundled scene
-    (``scenes/smm_<scene>.toml``); ``<name>`` is a, b, c, L_a or L_c.
+    (``scenes/smm_<scene>.toml``); ``<name>`` is a, b, c, L_a or L_c. Shown in the readable
+    form of :func:`symmech.smm.derive.readable` (parameters with positive values taken as positive).
     """
     from symmech.core.scene import SymmechError
-    from symmech.smm.derive import SCENES, load_mechanism, named_matrices
+    from symmech.smm.derive import SCENES, load_mechanism, named_matrices, readable
 
     scene, _, key = rest.rpartition(".")
     if not scene:
@@ -20,4 +21,8 @@ def latex_matrices(rest: str) -> dict:
     if not path.exists():
         raise SymmechError(f"no mechanism scene '{scene}' (a .toml path or a bundled name such as "
                            "'double_pendulum')")
-    return {f"smm:{rest.rpartition('.')[0]}.{k}": nm for k, nm in named_matrices(load_mechanism(path)).items()}
+    m = load_mechanism(path)
+    matrices = named_matrices(m)
+    if key not in matrices:
+        raise SymmechError(f"smm:{rest}: no matrix '{key}' (expected one of {', '.join(matrices)})")
+    return {f"smm:{scene}.{key}": readable(matrices[key], m.values())}

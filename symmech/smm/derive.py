@@ -12,6 +12,7 @@ simplified or inverted.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import sympy
@@ -223,6 +224,28 @@ def named_matrices(m: Mechanism) -> dict[str, NamedMatrix]:
             mat = sympy.zeros(mat.shape[0], 1)
         out[key] = NamedMatrix(key, mat, args, f"{m.name}: {meaning}", unit, eqs)
     return out
+
+
+def readable(nm: NamedMatrix, values: dict[str, float], max_ops: int = 150) -> NamedMatrix:
+    """``nm`` tidied for display (``symmech latex``), assuming positive every parameter whose
+    value is positive: square roots of sums (spring lengths) are trig-simplified and elements
+    under ``max_ops`` operations simplified. Generated code keeps the general form, valid for
+    parameters of any sign; the assumption is stated in the returned meaning."""
+    used = nm.matrix.free_symbols
+    positive = {a.symbol: sympy.Symbol(a.name, positive=True) for a in nm.args
+                if a.symbol in used and values[a.name] > 0}
+    back = {v: k for k, v in positive.items()}
+    roots = (sympy.S.Half, -sympy.S.Half, sympy.Rational(-3, 2))
+
+    def tidy(e):
+        e = e.xreplace(positive)
+        e = e.xreplace({p: sympy.Pow(sympy.trigsimp(sympy.factor_terms(p.base)), p.exp)
+                        for p in e.atoms(sympy.Pow) if p.exp in roots and p.base.is_Add})
+        return (sympy.simplify(e) if sympy.count_ops(e) < max_ops else e).xreplace(back)
+
+    names = ", ".join(sorted(s.name for s in positive))
+    meaning = nm.meaning + (f"; shown for {names} > 0" if names else "")
+    return replace(nm, matrix=nm.matrix.applyfunc(tidy), meaning=meaning)
 
 
 def module_name(m: Mechanism) -> str:

@@ -53,4 +53,14 @@ def checks() -> list[Check]:
         Check("003", "5.2 (L_c)", "excavator: legible entries of (L_c)", _sampler("excavator"),
               lambda x: _call("smm_printed", "ex52_Lc", x),
               lambda x: _call("smm_excavator", "L_c", x, lambda L: L[..., list(rows), list(cols)]), note),
+        Check("003", "5.3 (L_c)", "spatial boom: legible rows beta1, psi1, phi1 of (L_c)", _sampler("spatial_boom"),
+              lambda x: _call("smm_printed", "ex53_Lc", x), lambda x: _call("smm_spatial_boom", "L_c", x, _ex53_rows),
+              note + "; the paper projects on the direction to the anchor (rope shortening), symmech "
+              "measures elongation: rope columns compared with opposite sign, which leaves c unchanged"),
     ]
+
+
+def _ex53_rows(L):
+    """Scene rows (phi1, beta1, psi1, phi2) x columns (c1, c1p, c2, cK) -> the printed layout:
+    rows beta1, psi1, phi1; columns c1, c1', c_K, c2; rope columns as shortening."""
+    return L[..., [1, 2, 0], :][..., [0, 1, 3, 2]] * np.array([-1.0, -1.0, 1.0, 1.0])

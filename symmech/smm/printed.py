@@ -14,6 +14,7 @@ from symmech.smm.derive import SOURCE
 
 I1, I2, m2, r1, z2, alpha = sympy.symbols("I1 I2 m2 r1 z2 alpha", real=True)
 xM, yM, l4, l5, beta, l3, l6, delta3, delta4 = sympy.symbols("xM yM l4 l5 beta l3 l6 delta3 delta4", real=True)
+L1, delta = sympy.symbols("L1 delta", real=True)
 
 ARGS = {
     I1: ("moment of inertia of the boom about its pivot", "kg m^2"),
@@ -24,9 +25,11 @@ ARGS = {
     alpha: ("angle (5.1: rope to boom; 5.2: boom inclination)", "rad"),
     xM: ("boom foot from A, horizontal", "m"), yM: ("boom foot from A, vertical", "m"),
     l4: ("boom length", "m"), l5: ("suspension bar length", "m"),
-    beta: ("suspension bar inclination", "rad"),
+    beta: ("angle (5.2: suspension bar inclination; 5.3: rope to the boom axis in the boom's plane)", "rad"),
     l3: ("A to front support", "m"), l6: ("A to rear support", "m"),
     delta3: ("front support angle", "rad"), delta4: ("rear support angle", "rad"),
+    L1: ("5.3: boom pivot O1 to the centre of mass and the rope attachment", "m"),
+    delta: ("5.3: rope angle out of the boom's plane", "rad"),
 }
 
 
@@ -88,6 +91,21 @@ def ex52_Lc() -> NamedMatrix:
                        "example 5.2: legible entries of (L_c) as printed", "m or 1", "5.2 (L_c)")
 
 
+def ex53_Lc() -> NamedMatrix:
+    """5.3, printed (L_c): the three rows whose entries are legible, columns c1, c1', c_K, c2.
+    Their row labels are lost; by the physics they are beta1 (pitch: both ropes alike), psi1
+    (yaw: the ropes opposite) and phi1 (roll about the boom axis: c_K alone). The phi2 row is
+    illegible."""
+    pitch = -L1 * sympy.cos(delta) * sympy.sin(beta)
+    L = sympy.Matrix([
+        [pitch, pitch, 0, 0],
+        [L1 * sympy.sin(delta), -L1 * sympy.sin(delta), 0, 0],
+        [0, 0, 1, 0],
+    ])
+    return NamedMatrix("ex53_Lc", L, _args(L1, beta, delta),
+                       "example 5.3: legible rows (beta1, psi1, phi1) of (L_c) as printed", "m or 1", "5.3 (L_c)")
+
+
 def module_specs() -> list[ModuleSpec]:
     return [ModuleSpec("smm_printed", "Matrices of the SMM paper's section 5 as printed (legible entries).",
-                       SOURCE, (ex51_a(), ex51_Lc_rope(), ex52_La(), ex52_Lc()))]
+                       SOURCE, (ex51_a(), ex51_Lc_rope(), ex52_La(), ex52_Lc(), ex53_Lc()))]
