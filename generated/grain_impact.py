@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 c8c7b717be7c85b005f8e64ec83bb18449b230b2bfe57699c7e813c5a582a5b9
+# symmech 0.1.0 generated module; inputs sha256 9acb5ca139aa2aa30339055ab646207688e11d8f4f3ddcae7d0d346f9c3ba87f
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113.txt, eqs (1)-(60), derived in symmech.grain.derive.

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 d149220c50b4c5552a6b9758569618f8f23756e91fcf7b730f43bfedb3f414bd
+# symmech 0.1.0 generated module; inputs sha256 f3eb632f6cb647626ca411d6b870c56af62d4c71e97b802d3d3fd6cd3bb549e9
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Source: seed 000_b52a2f612feb4113.txt, eqs (3)-(60), transcribed in symmech.grain.printed.

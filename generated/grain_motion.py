@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 bb2cb5b60580ee0e7e904827149b6535011cd2d98d05612a604dae6bd7f0d975
+# symmech 0.1.0 generated module; inputs sha256 d068adcefdfc6473443ab7320365408bff370b93f814566c621c158c87ff0bbe
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).

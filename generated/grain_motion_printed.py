@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 f621bce34cb156321bab744b9c2b1dfacc1f133ba1ccc31ab63e1d8b5d9ef6a0
+# symmech 0.1.0 generated module; inputs sha256 ea77a699a1e68792ba85c76b8531b0ee9ac66f7ca0e841130306b3c7a74e7766
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 
 Source: symmech.grain.printed_motion (paper 1, seed 000, eqs (61)-(63)).

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 0442ebdd2cef3aacfbb7c7bd2841f63769d2d587877ccbfdaaadf047414d9312
+# symmech 0.1.0 generated module; inputs sha256 94adf4aa823f3c445fcb4a4eadeb80be6fe879818de9ebfce08316cfdece469f
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

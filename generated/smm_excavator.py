@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 d7d23e643232cfc1c764308a16fc3395b9a283806b081d5835c11361fab3d8df
+# symmech 0.1.0 generated module; inputs sha256 f9dfee1a7951d468f2c1a3c827d161bb4436c34a16b4ad16409db596580be45f
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 b0f300e9facde3b985b1267ddd41c028a347cafefcf18b6df07e648d1d328e94
+# symmech 0.1.0 generated module; inputs sha256 eff3a63c687d3cf49750fd0671cb85fd29359850d122f6cfc8972f88b07aa8a8
 """Matrices of the SMM paper's section 5 as printed (legible entries).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

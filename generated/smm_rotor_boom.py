@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 641a11665a417cca9073d0c6d2a0191e62b9192a8eecc5e4533e423d35c39e4d
+# symmech 0.1.0 generated module; inputs sha256 012d770a788dcf5ece34aafaffd2a5736312ea685ce2058824d72c73c7f8d29b
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

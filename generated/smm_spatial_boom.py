@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 bbc3623a7cf7138e1cab90fcdcbc6ab381cfb506563c58a8e5afad7b7c803da1
+# symmech 0.1.0 generated module; inputs sha256 82dbe5df73108759b1e44c7ba7a0662c6081bc45a37db40afd9cda400f7c957e
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 1ee2156e3f795ed9b9b97de574de1b9ceeb1a39f0c4b27fc2f5bab62a2045c21
+# symmech 0.1.0 generated module; inputs sha256 94d632f964433bae8297d208cb07fb0efdc7c522ba3ebba286afb312ca639ce5
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 7f4e570d9cb4e02c2bb09b5f0fabd853efedabcb2713ae5035450c489aaad351
+# symmech 0.1.0 generated module; inputs sha256 409195df1991446e506f60a3cd69bb07b9b23583ee1e725f27dee8a46c3f3947
 """Frames, angles and angular velocity of the trolley along the track.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 51c88da13222c45e7bde75ed47ec7131781df47645cd4f1212d1272e22dde84e
+# symmech 0.1.0 generated module; inputs sha256 a964737690e85b61d5a7fa1dab92ae12eae2fc4688db6e9c57f84e739740e8b0
 """The trolley paper's formulas as printed (hand transcription).
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

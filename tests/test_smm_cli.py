@@ -160,3 +160,21 @@ def test_large_run_writes_sparse_matrices_and_refuses_huge(tmp_path, capsys):
     path.write_text(text.replace("n = 250", "n = 3001"))
     assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 2
     assert "has 3001 coordinates" in capsys.readouterr().err
+
+
+def test_parameterless_scene_gets_a_constant_module(tmp_path):
+    """A scene of numbers only still gets its generated module (zero-argument functions)."""
+    import importlib.util
+
+    path = tmp_path / "n.toml"
+    path.write_text('kind = "mechanism"\nname = "numbers"\n[[coordinates]]\nname = "x"\ntype = "slide"\n'
+                    'axis = [1, 0]\n[[points]]\nname = "O"\nat = [0, 0]\n[[points]]\nname = "P"\nfrom = "O"\n'
+                    'vector = [1, 0]\nslides = ["x"]\n[[bodies]]\nname = "bob"\nmass = 2.0\ncom = "P"\n'
+                    '[[springs]]\nname = "k1"\nends = ["O", "P"]\nstiffness = 200.0\n')
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    spec = importlib.util.spec_from_file_location("numbers_module", s["generated_module"])
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert float(module.a()) == 2.0 and float(module.c()) == 200.0 and float(module.b()) == 0.0
+    assert abs(s["frequencies_rad_s"][0] - 10.0) < 1e-12

@@ -99,6 +99,7 @@ def _function_context(nm: NamedMatrix) -> dict:
         "equations": nm.equations,
         "args": nm.args,
         "arglist": ", ".join(a.name for a in nm.args),
+        "chunk_args": ", ".join([a.name for a in nm.args] + ["out"]),
         "shape": nm.shape,
         "shape_text": "(...)" if not nm.shape else "(..., " + ", ".join(map(str, nm.shape)) + ")",
         "chunks": chunks,

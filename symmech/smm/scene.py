@@ -80,8 +80,7 @@ def run(scene: Section, out: Path) -> dict:
         warnings.append(f"the configuration is not an equilibrium: dPi/dq = {res:.3g} on '{worst}' (eq. (5)); "
                         "set [equilibrium] solve = true or fix the preloads")
     generated = None
-    # the emitter's template needs at least one argument: all-numeric scenes get no module
-    if n <= SYMBOLIC_LIMIT and m.parameters:
+    if n <= SYMBOLIC_LIMIT:
         module, path = _module(m, out)
         values = [p.value for p in m.parameters.values()]
         for key, ref in (("a", a), ("b", b), ("c", c)):
