@@ -284,31 +284,37 @@ def _plots(m: Mechanism, md, omega, response, out: Path) -> list[str]:
     files = []
     g = forms.Geometry(m, NumericArith(m.values()))
     kins = {p: forms.chain_kinematics(g, p, False) for p in m.points}
-    pos = {p: np.array(k.r[:2]) for p, k in kins.items()}
-    span = max(1e-9, max(np.ptp(np.array(list(pos.values())), axis=0)))
+    pos = {p: np.array(k.r, float) for p, k in kins.items()}
     shown = min(len(omega), 6)
-    fig, axes = plt.subplots(1, shown, figsize=(3.2 * shown, 3.2), squeeze=False)
-    for i, ax in enumerate(axes[0]):
-        phi = md.shapes[:, i]
-        disp = {p: np.array([sum(phi[g.index[a]] * d[j] for a, d in k.D.items()) for j in range(2)])
-                for p, k in kins.items()}
-        amp = max(1e-300, max(np.linalg.norm(d) for d in disp.values()))
-        scale = 0.15 * span / amp
-        for style, fac in (("0.7", 0.0), ("C0", scale)):
-            for p in m.points.values():
-                if p.parent is not None:
-                    xy = np.array([pos[p.parent] + fac * disp[p.parent], pos[p.name] + fac * disp[p.name]])
-                    ax.plot(xy[:, 0], xy[:, 1], "-", color=style, lw=1.5)
-            for link in m.springs + m.dampers:
-                xy = np.array([pos[link.a] + fac * disp[link.a], pos[link.b] + fac * disp[link.b]])
-                ax.plot(xy[:, 0], xy[:, 1], ":", color=style, lw=1)
-            for bd in m.bodies:
-                xy = pos[bd.com] + fac * disp[bd.com]
-                ax.plot(xy[0], xy[1], "o", color=style, ms=5)
-        w = omega[i]
-        ax.set_title(f"mode {i + 1}: " + ("unstable" if w is None else f"{w / (2 * math.pi):.4g} Hz"), fontsize=9)
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.tick_params(labelsize=7)
+    disps = [{p: np.array([sum(md.shapes[g.index[a], i] * d[j] for a, d in k.D.items()) for j in range(3)])
+              for p, k in kins.items()} for i in range(shown)]
+    spatial = any(abs(v[2]) > 0 for v in pos.values()) or any(abs(v[2]) > 0 for d in disps for v in d.values())
+    # a spatial mechanism is drawn in two projections: top (x-y) and side (x-z)
+    views = [(0, 1, "x-y"), (0, 2, "x-z")] if spatial else [(0, 1, "x-y")]
+    span = max(1e-9, float(np.ptp(np.array(list(pos.values())), axis=0).max()))
+    fig, axes = plt.subplots(len(views), shown, figsize=(3.2 * shown, 3.2 * len(views)), squeeze=False)
+    for row, (h, v, label) in enumerate(views):
+        for i, ax in enumerate(axes[row]):
+            disp = disps[i]
+            amp = max(1e-300, max(np.linalg.norm(d) for d in disp.values()))
+            scale = 0.15 * span / amp
+            for style, fac in (("0.7", 0.0), ("C0", scale)):
+                def at(name):
+                    return (pos[name] + fac * disp[name])[[h, v]]
+                for p in m.points.values():
+                    if p.parent is not None:
+                        xy = np.array([at(p.parent), at(p.name)])
+                        ax.plot(xy[:, 0], xy[:, 1], "-", color=style, lw=1.5)
+                for link in m.springs + m.dampers:
+                    xy = np.array([at(link.a), at(link.b)])
+                    ax.plot(xy[:, 0], xy[:, 1], ":", color=style, lw=1)
+                for bd in m.bodies:
+                    ax.plot(*at(bd.com), "o", color=style, ms=5)
+            w = omega[i]
+            title = f"mode {i + 1}: " + ("unstable" if w is None else f"{w / (2 * math.pi):.4g} Hz")
+            ax.set_title(title + (f" ({label})" if spatial else ""), fontsize=9)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.tick_params(labelsize=7)
     fig.suptitle(f"{m.name}: mode shapes (grey: equilibrium)", fontsize=10)
     fig.tight_layout()
     fig.savefig(out / "modes.png", dpi=110)
