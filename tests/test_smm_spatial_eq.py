@@ -1,0 +1,123 @@
+"""Spatial equilibrium search (eq. (6)), principal axes and torsion-spring preloads.
+
+References are independent of the SMM: the potential and the kinetic energy of the test
+mechanisms are written here directly from rotation matrices (sympy, exact derivatives),
+minimised with scipy, and compared with the model that ``numeric.solve_equilibrium`` redraws."""
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+import sympy
+
+from symmech.core.scene import SymmechError
+from symmech.smm import lagrange, numeric
+from symmech.smm.derive import matrices
+
+from smm_helpers import mech, param
+
+# a body on a spherical-like joint (angles about x, y, z, in this order) with a pendulum-like
+# arm, three springs given by free lengths to ground anchors, skew gravity, a tilted principal
+# frame; a light link turned by the first angle only carries a preloaded torsion spring.
+V_C = (0.1, 0.2, -0.8)                     # O -> centre of mass [m]
+ATTACH = [(0.3, 0.0, 0.1), (-0.2, 0.25, 0.0), (0.0, -0.3, -0.2)]  # C -> spring ends [m]
+ANCHOR = [(0.9, 0.3, -0.5), (-0.7, 0.8, -0.9), (0.2, -0.9, -1.2)]  # ground anchors [m]
+K = [300.0, 200.0, 250.0]                  # [N/m]
+L0 = [0.35, 0.4, 0.3]                      # free lengths [m]
+MASS, G, GDIR = 6.0, 9.81, (2 / 7, -3 / 7, -6 / 7)
+J = (0.4, 0.3, 0.2)                        # principal central moments [kg m^2]
+P_AXES = ((0, 0.6, 0.8), (1, 0, 0), (0, 0.8, -0.6))
+KT, MT, JL = 15.0, 2.0, 0.05               # torsion stiffness [N m/rad], preload [N m], link inertia
+
+
+def _scene(order=("a", "b", "c")):
+    points = [{"name": "O", "at": [0, 0, 0]},
+              {"name": "C", "from": "O", "vector": list(V_C), "turns": list(order)},
+              {"name": "H", "from": "O", "vector": [0.2, 0, 0], "turns": ["a"]}]
+    points += [{"name": f"S{i}", "from": "C", "vector": list(v), "turns": ["a", "b", "c"]}
+               for i, v in enumerate(ATTACH)]
+    points += [{"name": f"G{i}", "at": list(v)} for i, v in enumerate(ANCHOR)]
+    return {
+        "parameters": {"g": param(G, "m/s^2")},
+        "coordinates": [{"name": "a", "type": "angle", "axis": [1, 0, 0]},
+                        {"name": "b", "type": "angle", "axis": [0, 1, 0]},
+                        {"name": "c", "type": "angle", "axis": [0, 0, 1]}],
+        "points": points,
+        "bodies": [{"name": "body", "mass": MASS, "inertia": list(J), "com": "C",
+                    "principal_axes": [list(p) for p in P_AXES]},
+                   {"name": "link", "mass": 0.0, "inertia": [JL, 0, 0], "com": "H"}],
+        "springs": [{"name": f"k{i}", "ends": [f"S{i}", f"G{i}"], "stiffness": K[i], "free_length": L0[i]}
+                    for i in range(3)],
+        "torsion_springs": [{"name": "t", "bodies": ["ground", "link"], "stiffness": KT, "preload": MT,
+                             "axis": [1, 0, 0]}],
+        "gravity": {"g": "g", "direction": list(GDIR)},
+    }
+
+
+def _reference():
+    """q*, omega^2 from Pi and T written directly: R = Rx(a) Ry(b) Rz(c)."""
+    a, b, c = q = sympy.symbols("a b c", real=True)
+    Rx = sympy.Matrix([[1, 0, 0], [0, sympy.cos(a), -sympy.sin(a)], [0, sympy.sin(a), sympy.cos(a)]])
+    Ry = sympy.Matrix([[sympy.cos(b), 0, sympy.sin(b)], [0, 1, 0], [-sympy.sin(b), 0, sympy.cos(b)]])
+    Rz = sympy.Matrix([[sympy.cos(c), -sympy.sin(c), 0], [sympy.sin(c), sympy.cos(c), 0], [0, 0, 1]])
+    R = Rx * Ry * Rz
+    rc = R * sympy.Matrix(V_C)
+    pi = -MASS * G * sympy.Matrix(GDIR).dot(rc) + KT * a**2 / 2 + MT * a
+    for v, w, k, l0 in zip(ATTACH, ANCHOR, K, L0):
+        d = rc + R * sympy.Matrix(v) - sympy.Matrix(w)
+        pi += k * (sympy.sqrt(d.dot(d)) - l0) ** 2 / 2
+    grad = sympy.lambdify([q], [pi.diff(s) for s in q])
+    hess = sympy.lambdify([q], sympy.hessian(pi, q))
+    f = sympy.lambdify([q], pi)
+    res = scipy.optimize.minimize(f, np.zeros(3), jac=lambda x: np.array(grad(x), float),
+                                  hess=lambda x: np.array(hess(x), float), method="trust-exact",
+                                  options={"gtol": 1e-13})
+    qs = res.x
+    Jc = sympy.lambdify([q], rc.jacobian(q))(qs)
+    W = np.zeros((3, 3))
+    for i, s in enumerate(q):
+        Om = np.array(sympy.lambdify([q], R.diff(s) * R.T)(qs), float)
+        W[:, i] = [Om[2, 1], Om[0, 2], Om[1, 0]]
+    RP = np.array(sympy.lambdify([q], R)(qs), float) @ np.array(P_AXES, float).T
+    M = MASS * Jc.T @ Jc + W.T @ RP @ np.diag(J) @ RP.T @ W
+    M[0, 0] += JL
+    return qs, scipy.linalg.eigh(np.array(hess(qs), float), M, eigvals_only=True), np.array(grad(qs), float)
+
+
+def test_spatial_equilibrium_matches_direct_minimisation():
+    q_ref, w2_ref, g_ref = _reference()
+    assert np.abs(g_ref).max() < 1e-9 and np.abs(q_ref).min() > 0.05  # a genuinely turned equilibrium
+    m = mech(_scene())
+    found, report = numeric.solve_equilibrium(m)
+    np.testing.assert_allclose(report["q"], q_ref, atol=1e-9, rtol=0)
+    num = numeric.assemble(found)
+    assert np.abs(num.residual).max() < 1e-9
+    w2 = scipy.linalg.eigh(num.c.toarray(), num.a.toarray(), eigvals_only=True)
+    np.testing.assert_allclose(w2, w2_ref, rtol=1e-8)
+    # the redrawn model (conjugated axes, turned principal axes, torsion moment) by Lagrange's route
+    lag = lagrange.matrices(found)
+    values = {sympy.Symbol(k, real=True): v for k, v in found.values().items()}
+    for key, ref in (("a", num.a.toarray()), ("c", num.c.toarray())):
+        np.testing.assert_allclose(np.array(lag[key].subs(values).evalf(), float), ref,
+                                   atol=1e-10 * np.abs(ref).max(), rtol=0)
+
+
+def test_inconsistent_turn_order_is_refused():
+    m = mech(_scene(order=("a", "c", "b")))  # C turned by a, c, b but the springs' ends by a, b, c
+    with pytest.raises(SymmechError, match="coordinate '[bc]' is preceded by the turns"):
+        numeric.solve_equilibrium(m)
+
+
+def test_spatial_torsion_spring_off_its_axis_is_refused():
+    d = _scene()
+    d["torsion_springs"][0]["bodies"] = ["ground", "body"]
+    with pytest.raises(SymmechError, match="torsion spring 't'.*about the spring axis only"):
+        numeric.solve_equilibrium(mech(d))
+
+
+def test_principal_axes_must_be_orthonormal():
+    d = _scene()
+    d["bodies"][0]["principal_axes"] = [[0, 0.6, 0.8], [1, 0, 0], [0, 0.6, -0.8]]
+    with pytest.raises(SymmechError, match="body 'body': principal_axes must be orthonormal; axis 1 . axis 3"):
+        mech(d)
