@@ -4,6 +4,7 @@ References are independent of the SMM: the potential and the kinetic energy of t
 mechanisms are written here directly from rotation matrices (sympy, exact derivatives),
 minimised with scipy, and compared with the model that ``numeric.solve_equilibrium`` redraws."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -95,8 +96,11 @@ def test_spatial_equilibrium_matches_direct_minimisation():
     assert np.abs(num.residual).max() < 1e-9
     w2 = scipy.linalg.eigh(num.c.toarray(), num.a.toarray(), eigvals_only=True)
     np.testing.assert_allclose(w2, w2_ref, rtol=1e-8)
-    # the redrawn model (conjugated axes, turned principal axes, torsion moment) by Lagrange's route
-    lag = lagrange.matrices(found)
+    # the redrawn model (conjugated axes, turned principal axes, torsion moment, gravity) by
+    # Lagrange's route; its springs are left out to keep sympy fast (checked against q*, omega^2)
+    bare = replace(found, springs=[])
+    lag = lagrange.matrices(bare)
+    num = numeric.assemble(bare)
     values = {sympy.Symbol(k, real=True): v for k, v in found.values().items()}
     for key, ref in (("a", num.a.toarray()), ("c", num.c.toarray())):
         np.testing.assert_allclose(np.array(lag[key].subs(values).evalf(), float), ref,
@@ -121,3 +125,89 @@ def test_principal_axes_must_be_orthonormal():
     d["bodies"][0]["principal_axes"] = [[0, 0.6, 0.8], [1, 0, 0], [0, 0.6, -0.8]]
     with pytest.raises(SymmechError, match="body 'body': principal_axes must be orthonormal; axis 1 . axis 3"):
         mech(d)
+
+
+# ---------------------------------------------------------------- torsion-spring preload
+
+def _pendulum(preload, effects=None, solve=False):
+    """Bob m on a massless rod l drawn at th0 from the downward vertical; torsion spring k
+    (ground -> bob) with moment M0 in the drawn configuration."""
+    d = {"parameters": {"m": param(1.5, "kg"), "l": param(0.8, "m"), "g": param(9.81, "m/s^2"),
+                        "k": param(12.0, "N m/rad"), "th0": param(0.6, "rad")},
+         "coordinates": [{"name": "phi", "type": "angle"}],
+         "points": [{"name": "O", "at": [0, 0]},
+                    {"name": "B", "from": "O", "vector": ["l*sin(th0)", "-l*cos(th0)"], "turns": ["phi"]}],
+         "bodies": [{"name": "bob", "mass": "m", "com": "B"}],
+         "torsion_springs": [{"name": "t", "bodies": ["ground", "bob"], "stiffness": "k", "preload": preload}],
+         "gravity": {"g": "g"}}
+    if effects:
+        d["effects"] = effects
+    return mech(d)
+
+
+def test_preloaded_torsion_spring_holds_a_pendulum_off_vertical():
+    """Pi = -m g l cos(th0 + phi) + k phi^2/2 + M0 phi: dPi/dphi(0) = m g l sin th0 + M0 = 0 for
+    M0 = -m g l sin th0, and omega^2 = (k + m g l cos th0) / (m l^2) (planar: no M0 d2twist term)."""
+    m = _pendulum("-m*g*l*sin(th0)")
+    mass, l, g, k, th0 = 1.5, 0.8, 9.81, 12.0, 0.6
+    num = numeric.assemble(m)
+    assert abs(num.residual[0]) < 1e-13
+    w2 = num.c.toarray()[0, 0] / num.a.toarray()[0, 0]
+    assert w2 == pytest.approx((k + mass * g * l * math.cos(th0)) / (mass * l * l), rel=1e-13)
+    sym = matrices(m)
+    s = {n: sympy.Symbol(n, real=True) for n in ("m", "l", "g", "k", "th0")}
+    assert sympy.simplify(sym["residual"][0]) == 0
+    assert sympy.simplify(sym["c"][0, 0] - s["k"] - s["m"] * s["g"] * s["l"] * sympy.cos(s["th0"])) == 0
+    # an unbalanced moment: dPi/dphi = m g l sin th0 + M0
+    assert numeric.assemble(_pendulum(1.0)).residual[0] == pytest.approx(mass * g * l * math.sin(th0) + 1.0,
+                                                                         rel=1e-14)
+
+
+def test_preloaded_torsion_spring_keeps_its_free_angle_in_the_search():
+    """With M0 = 1 N m the search finds m g l sin(th0 + phi) + k phi + M0 = 0 and
+    omega^2 = (k + m g l cos(th0 + phi)) / (m l^2)."""
+    mass, l, g, k, th0 = 1.5, 0.8, 9.81, 12.0, 0.6
+    found, report = numeric.solve_equilibrium(_pendulum(1.0))
+    phi = scipy.optimize.brentq(lambda p: mass * g * l * math.sin(th0 + p) + k * p + 1.0, -1.5, 0.0, xtol=1e-15)
+    assert abs(report["q"][0] - phi) < 1e-9 and abs(phi) > 0.3
+    num = numeric.assemble(found)
+    assert num.c.toarray()[0, 0] / num.a.toarray()[0, 0] == pytest.approx(
+        (k + mass * g * l * math.cos(th0 + phi)) / (mass * l * l), rel=1e-9)
+
+
+def _spatial_torsion_scene():
+    """Two bodies on compound rotations (relative angles), skew torsion axes, preloaded torsion
+    springs ground -> B, A -> B and B -> A, tilted principal axes (exact rational numbers)."""
+    return mech({
+        "parameters": {"M0": param(3.7, "N m"), "k": param(20.0, "N m/rad"), "g": param(9.81, "m/s^2")},
+        "coordinates": [{"name": "a", "type": "angle", "axis": [1, 0, 0]},
+                        {"name": "b", "type": "angle", "axis": [0, 1, 0]},
+                        {"name": "c", "type": "angle", "axis": [0, "3/5", "4/5"]}],
+        "points": [{"name": "O", "at": [0, 0, 0]},
+                   {"name": "P", "from": "O", "vector": ["3/10", "1/10", -1], "turns": ["a", "b"]},
+                   {"name": "Q", "from": "P", "vector": ["1/5", "1/2", "1/10"], "turns": ["a", "b", "c"]}],
+        "bodies": [{"name": "A", "mass": 2, "inertia": ["1/10", "1/5", "3/10"], "com": "P"},
+                   {"name": "B", "mass": 1, "inertia": ["3/10", "1/5", "1/10"], "com": "Q",
+                    "principal_axes": [[0, "3/5", "4/5"], [1, 0, 0], [0, "4/5", "-3/5"]]}],
+        "torsion_springs": [{"name": "t0", "bodies": ["ground", "B"], "stiffness": "k", "preload": "M0",
+                             "axis": ["12/25", "3/5", "16/25"]},
+                            {"name": "t1", "bodies": ["A", "B"], "stiffness": "k", "preload": "-2*M0",
+                             "axis": [0, "3/5", "4/5"]},
+                            {"name": "t2", "bodies": ["B", "A"], "stiffness": "k", "preload": "M0",
+                             "axis": ["4/5", 0, "3/5"]}],
+        "gravity": {"g": "g", "direction": ["3/5", 0, "-4/5"]}})
+
+
+@pytest.mark.parametrize("effects", [None, {"preload": False}])
+def test_spatial_torsion_preload_chain_graph_lagrange_symbolic(effects):
+    from symmech.smm.model import Effects
+
+    m = _spatial_torsion_scene()
+    eff = Effects(preload=False) if effects else None
+    ch, gr, lg = matrices(m, "chain", eff), matrices(m, "graph", eff), lagrange.matrices(m, eff)
+    for key in ("a", "c", "residual"):
+        for x, y, z in zip(ch[key], gr[key], lg[key]):
+            assert sympy.simplify(x - y) == 0 and sympy.simplify(x - z) == 0, (key, x, z)
+    if eff is None:  # the compound-rotation term M0 d2twist is really there
+        drop = matrices(m, "chain", Effects(preload=False))["c"]
+        assert sympy.simplify(ch["c"][0, 1] - drop[0, 1]) != 0
