@@ -11,12 +11,14 @@ import pytest
 import scipy.linalg
 import scipy.optimize
 import sympy
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from symmech.core.scene import SymmechError
 from symmech.smm import lagrange, numeric
 from symmech.smm.derive import matrices
 
 from smm_helpers import mech, param
+from test_smm_forms import spatial_chains, test_random_planar_chains_numeric_agreement as _numeric_agreement
 
 # a body on a spherical-like joint (angles about x, y, z, in this order) with a pendulum-like
 # arm, three springs given by free lengths to ground anchors, skew gravity, a tilted principal
@@ -211,3 +213,29 @@ def test_spatial_torsion_preload_chain_graph_lagrange_symbolic(effects):
     if eff is None:  # the compound-rotation term M0 d2twist is really there
         drop = matrices(m, "chain", Effects(preload=False))["c"]
         assert sympy.simplify(ch["c"][0, 1] - drop[0, 1]) != 0
+
+
+@st.composite
+def spatial_chains_with_axes(draw):
+    """The random spatial chains of test_smm_forms with tilted principal axes on every body and
+    preloaded torsion springs on compound rotations."""
+    d = draw(spatial_chains())
+    for b in d["bodies"]:
+        v = np.array([draw(st.floats(-1, 1)) for _ in range(3)]) + [0.0, 0.0, 1.5]
+        e = v / np.linalg.norm(v)
+        t = draw(st.floats(0.2, 3.0))
+        Kx = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+        R = np.eye(3) + math.sin(t) * Kx + (1 - math.cos(t)) * Kx @ Kx
+        b["principal_axes"] = R.T.tolist()
+    d["torsion_springs"][0]["preload"] = draw(st.floats(-20, 20))
+    d["torsion_springs"].append({"name": "t2", "bodies": ["B0", "B1"], "stiffness": 5.0,
+                                 "preload": draw(st.floats(-20, 20)), "axis": [0.6, 0, 0.8]})
+    return d
+
+
+@settings(max_examples=6, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(spatial_chains_with_axes())
+def test_random_spatial_chains_with_principal_axes_and_torsion_preload(d):
+    """Chain form (numeric, sparse) = graph form = Lagrange (a, b, c, residual), abs 1e-10 of scale."""
+    _numeric_agreement.hypothesis.inner_test(d)
