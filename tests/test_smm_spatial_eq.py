@@ -220,6 +220,10 @@ def spatial_chains_with_axes(draw):
     """The random spatial chains of test_smm_forms with tilted principal axes on every body and
     preloaded torsion springs on compound rotations."""
     d = draw(spatial_chains())
+    angles = [c for c in d["coordinates"] if c["type"] == "angle"]
+    if len(angles) == 1:  # the M0 d2twist term needs two non-parallel turns
+        d["coordinates"].insert(1, {"name": "a1", "type": "angle", "axis": [0.0, 0.6, -0.8]})
+        d["points"][-1]["turns"].append("a1")
     for b in d["bodies"]:
         v = np.array([draw(st.floats(-1, 1)) for _ in range(3)]) + [0.0, 0.0, 1.5]
         e = v / np.linalg.norm(v)
