@@ -3,6 +3,7 @@
 References are independent of the SMM: the potential and the kinetic energy of the test
 mechanisms are written here directly from rotation matrices (sympy, exact derivatives),
 minimised with scipy, and compared with the model that ``numeric.solve_equilibrium`` redraws."""
+import functools
 import math
 from dataclasses import replace
 
@@ -58,6 +59,7 @@ def _scene(order=("a", "b", "c")):
     }
 
 
+@functools.lru_cache(maxsize=1)
 def _reference():
     """q*, omega^2 from Pi and T written directly: R = Rx(a) Ry(b) Rz(c)."""
     a, b, c = q = sympy.symbols("a b c", real=True)
@@ -243,3 +245,16 @@ def spatial_chains_with_axes(draw):
 def test_random_spatial_chains_with_principal_axes_and_torsion_preload(d):
     """Chain form (numeric, sparse) = graph form = Lagrange (a, b, c, residual), abs 1e-10 of scale."""
     _numeric_agreement.hypothesis.inner_test(d)
+
+
+def test_spatial_scene_run_solves_equilibrium(tmp_path):
+    """`symmech run` path: [equilibrium] solve = true on the spatial scene gives q* and omega."""
+    from symmech.core.scene import Section
+    from symmech.smm.scene import run
+
+    q_ref, w2_ref, _ = _reference()
+    s = run(Section({"kind": "mechanism", **_scene(), "equilibrium": {"solve": True},
+                     "output": {"plots": False}}), tmp_path)
+    np.testing.assert_allclose(s["equilibrium"]["q"], q_ref, atol=1e-9, rtol=0)
+    np.testing.assert_allclose(s["omega2_1_per_s2"], w2_ref, rtol=1e-8)
+    assert not s["warnings"]
