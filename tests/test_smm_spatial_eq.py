@@ -239,7 +239,7 @@ def spatial_chains_with_axes(draw):
     return d
 
 
-@settings(max_examples=3, deadline=None, derandomize=True,
+@settings(max_examples=2, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(spatial_chains_with_axes())
 def test_random_spatial_chains_with_principal_axes_and_torsion_preload(d):
