@@ -258,3 +258,21 @@ def test_spatial_scene_run_solves_equilibrium(tmp_path):
     np.testing.assert_allclose(s["equilibrium"]["q"], q_ref, atol=1e-9, rtol=0)
     np.testing.assert_allclose(s["omega2_1_per_s2"], w2_ref, rtol=1e-8)
     assert not s["warnings"]
+
+
+def test_torsion_preload_from_equilibrium_conditions():
+    """preload = "equilibrium": eq. (5) gives M0 = -m g l sin th0, hence the closed form above;
+    symbolic chain = Lagrange; the search refuses it by name."""
+    mass, l, g, k, th0 = 1.5, 0.8, 9.81, 12.0, 0.6
+    m = _pendulum("equilibrium")
+    tensions, _ = numeric.equilibrium_tensions(m)
+    assert tensions == {"t": pytest.approx(-mass * g * l * math.sin(th0), rel=1e-14)}
+    num = numeric.assemble(m)
+    assert abs(num.residual[0]) < 1e-13
+    assert num.c.toarray()[0, 0] / num.a.toarray()[0, 0] == pytest.approx(
+        (k + mass * g * l * math.cos(th0)) / (mass * l * l), rel=1e-13)
+    ch, lg = matrices(m), lagrange.matrices(m)
+    for key in ("c", "residual"):
+        assert all(sympy.simplify(x - z) == 0 for x, z in zip(ch[key], lg[key]))
+    with pytest.raises(SymmechError, match="torsion spring 't': equilibrium.solve needs a preload value"):
+        numeric.solve_equilibrium(m)

@@ -147,8 +147,8 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
     ``kinematics(geometry, point, second)`` supplies conjugate vectors (the
     vector-chain form by default; ``symmech.smm.derive.graph_kinematics`` is the
     graph form (11)). ``effects`` defaults to the model's own. ``tensions`` gives
-    the tension [N] of springs whose preload is ``"equilibrium"`` (see
-    :func:`tension_system`).
+    the tension [N] of springs (moment [N m] of torsion springs) whose preload is
+    ``"equilibrium"`` (see :func:`tension_system`).
     """
     eff = effects or m.effects
     tensions = tensions or {}
@@ -259,7 +259,12 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
         out.kc.append(ar(t.coef, f"torsion spring '{t.name}'"))
         if t.preload is None:
             continue
-        moment = ar(t.preload, f"torsion spring '{t.name}'")
+        if t.preload == EQUILIBRIUM:
+            if t.name not in tensions:
+                raise ValueError(f"torsion spring '{t.name}': moment from equilibrium not supplied")
+            moment = tensions[t.name]
+        else:
+            moment = ar(t.preload, f"torsion spring '{t.name}'")
         for i, v in col.items():
             add(out.residual, i, moment * v)
         if eff.preload and not ar.is_zero(moment):
@@ -283,10 +288,10 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
 
 
 def tension_system(m: Mechanism, ar, kinematics=chain_kinematics):
-    """Eq. (5) for the unknown tensions T_u of springs with preload ``"equilibrium"``:
-    G T_u = -r0, with G (k x u) their L_c columns {row: value} and r0 {row: value} the
-    generalized forces of gravity and of the given preloads. Returns (names, G, r0)."""
-    names = [s.name for s in m.springs if s.preload == EQUILIBRIUM]
+    """Eq. (5) for the unknown tensions T_u [N] (torsion springs: moments [N m]) of springs with
+    preload ``"equilibrium"``: G T_u = -r0, with G (k x u) their L_c columns {row: value} and r0
+    {row: value} the generalized forces of gravity and of the given preloads. Returns (names, G, r0)."""
+    names = [s.name for s in m.springs + m.torsion_springs if s.preload == EQUILIBRIUM]
     asm = assemble(m, ar, kinematics, Effects(False, False, False), {n: 0 * ar("1") for n in names})
     columns = dict(zip([c[0] for c in asm.Lc], [c[1] for c in asm.Lc]))
     r0 = {i: ar.sum(t) for i, t in asm.residual.items()}

@@ -85,7 +85,9 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         twist = _twist(m, t, rot, axis, ar)
         Pi += ar(t.coef) * twist ** 2 / 2
         if t.preload is not None:  # the moment M0 in equilibrium does work on the twist
-            Pi += ar(t.preload) * (twist if eff.preload else _first_order(twist, q))
+            moment = (unknown.setdefault(t.name, sympy.Symbol(f"M_{t.name}")) if t.preload == EQUILIBRIUM
+                      else ar(t.preload))
+            Pi += moment * (twist if eff.preload else _first_order(twist, q))
     grav = ar(m.gravity)
     gdir = sympy.Matrix([ar(t) for t in m.gravity_direction])
     for b in m.bodies:

@@ -104,7 +104,8 @@ class Torsion:
     ``b`` relative to body ``a`` (``ground`` for the fixed frame) about ``axis``.
 
     ``preload`` (springs only) is the moment [N m] in the equilibrium configuration,
-    acting on the twist axis . vee(R_a^T R_b) (see ``symmech.smm.lagrange._twist``)."""
+    acting on the twist axis . vee(R_a^T R_b) (see ``symmech.smm.lagrange._twist``),
+    or ``"equilibrium"`` (solved from eq. (5) with the springs' tensions)."""
 
     name: str
     a: str
@@ -433,9 +434,6 @@ def from_scene(scene: Section) -> Mechanism:
             pre = None
             if key == "torsion_springs" and t.has("preload"):
                 pre = _expr(t, "preload", where=t.name("preload"))
-                if pre == EQUILIBRIUM:
-                    raise SceneError(t.name("preload"), "a torsion spring preload must be a moment [N m], "
-                                     "not \"equilibrium\"")
             torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t.name(coef)),
                                         _vector(t, "axis", t.name("axis"), default=[0, 0, 1]), pre))
             t.finish()
@@ -500,7 +498,8 @@ def validate(m: Mechanism) -> None:
         for b in (t.a, t.b):
             if b != GROUND and b not in bodies:
                 raise SymmechError(f"torsion element '{t.name}': body '{b}' is not defined")
-        exprs_ok(f"torsion element '{t.name}'", t.coef, *t.axis, *((t.preload,) if t.preload else ()))
+        exprs_ok(f"torsion element '{t.name}'", t.coef, *t.axis,
+                 *((t.preload,) if t.preload and t.preload != EQUILIBRIUM else ()))
     exprs_ok("gravity", m.gravity, *m.gravity_direction)
     used = set()
     for p in m.points.values():

@@ -229,6 +229,10 @@ def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> t
     full = Effects(True, True, True)
     ar = NumericArith(m.values())
     springs = []
+    for t in m.torsion_springs:
+        if t.preload == EQUILIBRIUM:
+            raise SymmechError(f"torsion spring '{t.name}': equilibrium.solve needs a preload value, "
+                               "not preload = \"equilibrium\"")
     moved(m, np.zeros(len(m.coordinates)))  # refuses unsupported models before any work
     start = assemble(m, full)
     for s in m.springs:
