@@ -276,3 +276,10 @@ def test_torsion_preload_from_equilibrium_conditions():
         assert all(sympy.simplify(x - z) == 0 for x, z in zip(ch[key], lg[key]))
     with pytest.raises(SymmechError, match="torsion spring 't': equilibrium.solve needs a preload value"):
         numeric.solve_equilibrium(m)
+
+
+def test_principal_axes_field_shape_is_checked():
+    d = _scene()
+    d["bodies"][0]["principal_axes"] = [[0, 0.6, 0.8], [1, 0, 0]]
+    with pytest.raises(SymmechError, match=r"bodies\[0\].principal_axes.*three axes of 3 components"):
+        mech(d)
