@@ -220,8 +220,10 @@ def test_spatial_torsion_preload_chain_graph_lagrange_symbolic(effects):
 @st.composite
 def spatial_chains_with_axes(draw):
     """The random spatial chains of test_smm_forms with tilted principal axes on every body and
-    preloaded torsion springs on compound rotations."""
+    preloaded torsion springs on compound rotations; their translational springs are dropped
+    (tested there; their square roots are what makes Lagrange's route slow)."""
     d = draw(spatial_chains())
+    d["springs"] = []
     angles = [c for c in d["coordinates"] if c["type"] == "angle"]
     if len(angles) == 1:  # the M0 d2twist term needs two non-parallel turns
         d["coordinates"].insert(1, {"name": "a1", "type": "angle", "axis": [0.0, 0.6, -0.8]})
@@ -239,7 +241,7 @@ def spatial_chains_with_axes(draw):
     return d
 
 
-@settings(max_examples=2, deadline=None, derandomize=True,
+@settings(max_examples=4, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(spatial_chains_with_axes())
 def test_random_spatial_chains_with_principal_axes_and_torsion_preload(d):
