@@ -72,13 +72,15 @@ def _reference():
     for v, w, k, l0 in zip(ATTACH, ANCHOR, K, L0):
         d = rc + R * sympy.Matrix(v) - sympy.Matrix(w)
         pi += k * (sympy.sqrt(d.dot(d)) - l0) ** 2 / 2
-    grad = sympy.lambdify([q], [pi.diff(s) for s in q])
-    hess = sympy.lambdify([q], sympy.hessian(pi, q))
-    f = sympy.lambdify([q], pi)
+    grad = sympy.lambdify([q], [pi.diff(s) for s in q], cse=True)
+    hess = sympy.lambdify([q], sympy.hessian(pi, q), cse=True)
+    f = sympy.lambdify([q], pi, cse=True)
     res = scipy.optimize.minimize(f, np.zeros(3), jac=lambda x: np.array(grad(x), float),
                                   hess=lambda x: np.array(hess(x), float), method="trust-exact",
                                   options={"gtol": 1e-13})
     qs = res.x
+    for _ in range(3):  # polish the minimiser's answer with exact Newton steps
+        qs = qs - np.linalg.solve(np.array(hess(qs), float), np.array(grad(qs), float))
     Jc = sympy.lambdify([q], rc.jacobian(q))(qs)
     W = np.zeros((3, 3))
     for i, s in enumerate(q):
@@ -241,7 +243,7 @@ def spatial_chains_with_axes(draw):
     return d
 
 
-@settings(max_examples=4, deadline=None, derandomize=True,
+@settings(max_examples=3, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(spatial_chains_with_axes())
 def test_random_spatial_chains_with_principal_axes_and_torsion_preload(d):
