@@ -10,8 +10,10 @@ its unit vector u_s, and second derivatives are e_a x (e_b x v) and e_a x u_s.
 Equation contract of the result: a q'' + b q' + c q = Q with
   a = L_a m L_a^T                                   (3)
   c = L_c c_d L_c^T + sum_i T_i d2l_i + sum_j P_j d2y_j   (7), (9)
+      + sum_t M_t d2(twist_t)   (preloaded torsion springs, moment M_t [N m])
   b = L_b mu L_b^T                                  (10)
-where T_i = c_i Delta_i is the spring tension in equilibrium.
+where T_i = c_i Delta_i is the spring tension in equilibrium. The principal central
+moments of a body enter L_a through its principal axes p_k: column entries p_k . e_a.
 """
 from __future__ import annotations
 
@@ -145,8 +147,8 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
     ``kinematics(geometry, point, second)`` supplies conjugate vectors (the
     vector-chain form by default; ``symmech.smm.derive.graph_kinematics`` is the
     graph form (11)). ``effects`` defaults to the model's own. ``tensions`` gives
-    the tension [N] of springs whose preload is ``"equilibrium"`` (see
-    :func:`tension_system`).
+    the tension [N] of springs (moment [N m] of torsion springs) whose preload is
+    ``"equilibrium"`` (see :func:`tension_system`).
     """
     eff = effects or m.effects
     tensions = tensions or {}
@@ -181,8 +183,11 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
                 out.La.append((f"{b.name}.{label}", col))
                 out.ma.append(mass)
         J = [ar(t, f"body '{b.name}'") for t in b.inertia]
+        # rotational columns: principal axis k . e_a (the paper's J_x, J_y, J_z rows), so m stays diagonal
+        P = None if b.axes is None else [tuple(ar(t, f"body '{b.name}'") for t in ax) for ax in b.axes]
         for axis, label in enumerate("xyz"):
-            col = {idx[a]: g.axis[a][axis] for a in b.turns if not ar.is_zero(g.axis[a][axis])}
+            comp = {a: g.axis[a][axis] if P is None else dot(P[axis], g.axis[a]) for a in b.turns}
+            col = {idx[a]: v for a, v in comp.items() if not ar.is_zero(v)}
             if col and not ar.is_zero(J[axis]):
                 out.La.append((f"{b.name}.J{label}", col))
                 out.ma.append(J[axis])
@@ -249,8 +254,22 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
                     add(out.preload, (idx[a], idx[bb]), tension * v)
 
     for t in m.torsion_springs:
-        out.Lc.append((t.name, _torsion_column(m, g, t)))
+        col = _torsion_column(m, g, t)
+        out.Lc.append((t.name, col))
         out.kc.append(ar(t.coef, f"torsion spring '{t.name}'"))
+        if t.preload is None:
+            continue
+        if t.preload == EQUILIBRIUM:
+            if t.name not in tensions:
+                raise ValueError(f"torsion spring '{t.name}': moment from equilibrium not supplied")
+            moment = tensions[t.name]
+        else:
+            moment = ar(t.preload, f"torsion spring '{t.name}'")
+        for i, v in col.items():
+            add(out.residual, i, moment * v)
+        if eff.preload and not ar.is_zero(moment):
+            for key, v in _twist_hessian(m, g, t).items():
+                add(out.preload, key, moment * v)
     if eff.damping:
         for dmp in m.dampers:
             ka, kb = kin(dmp.a), kin(dmp.b)
@@ -269,10 +288,10 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
 
 
 def tension_system(m: Mechanism, ar, kinematics=chain_kinematics):
-    """Eq. (5) for the unknown tensions T_u of springs with preload ``"equilibrium"``:
-    G T_u = -r0, with G (k x u) their L_c columns {row: value} and r0 {row: value} the
-    generalized forces of gravity and of the given preloads. Returns (names, G, r0)."""
-    names = [s.name for s in m.springs if s.preload == EQUILIBRIUM]
+    """Eq. (5) for the unknown tensions T_u [N] (torsion springs: moments [N m]) of springs with
+    preload ``"equilibrium"``: G T_u = -r0, with G (k x u) their L_c columns {row: value} and r0
+    {row: value} the generalized forces of gravity and of the given preloads. Returns (names, G, r0)."""
+    names = [s.name for s in m.springs + m.torsion_springs if s.preload == EQUILIBRIUM]
     asm = assemble(m, ar, kinematics, Effects(False, False, False), {n: 0 * ar("1") for n in names})
     columns = dict(zip([c[0] for c in asm.Lc], [c[1] for c in asm.Lc]))
     r0 = {i: ar.sum(t) for i, t in asm.residual.items()}
@@ -302,6 +321,30 @@ def _torsion_column(m: Mechanism, g: Geometry, t) -> dict:
             col.setdefault(g.index[a], []).append(sign * dot(axis, g.axis[a]))
     col = {i: ar.sum(v) for i, v in col.items()}
     return {i: v for i, v in col.items() if not ar.is_zero(v)}
+
+
+def _twist_hessian(m: Mechanism, g: Geometry, t) -> dict:
+    """d2 twist/dq_i dq_j {(i, j), i < j: value} at q = 0, twist = n . vee(R_a^T R_b).
+
+    R_a^T R_b is the product of rotations R_f(s_f q_f): body a's turns reversed with
+    s = -1, then body b's with s = +1. To second order a product of rotations is
+    I + sum_f s_f q_f [e_f] + sum_f (s_f q_f)^2 [e_f]^2 / 2 + sum_{f<g} s_f s_g q_f q_g [e_f][e_g];
+    [e]^2 is symmetric and the skew part of [e_f][e_g] is [e_f x e_g] / 2, so the q_i q_j
+    coefficient of the twist is sum over factor pairs f < g on (i, j) of s_f s_g n . (e_f x e_g) / 2.
+    A coordinate shared by both bodies pairs with itself only through e x e = 0 (no diagonal)."""
+    ar = g.ar
+    n = tuple(ar(x, f"torsion element '{t.name}'") for x in t.axis)
+    factors = [(-1, a) for a in reversed(m.body_turns(t.a))] + [(1, a) for a in m.body_turns(t.b)]
+    parts: dict = {}
+    for f, (sf, a) in enumerate(factors):
+        for sg, b in factors[f + 1:]:
+            if a == b or (g.ez[a] and g.ez[b]):
+                continue
+            v = dot(n, cross(g.axis[a], g.axis[b]))
+            if not ar.is_zero(v):
+                parts.setdefault(g.pair(a, b), []).append(sf * sg * v / 2)
+    out = {(g.index[a], g.index[b]): ar.sum(v) for (a, b), v in parts.items()}
+    return {k: v for k, v in out.items() if not ar.is_zero(v)}
 
 
 def triple_product(ar, columns, diag, n):

@@ -57,7 +57,9 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         for i, s in enumerate(q):
             Om = (R.diff(s) * R.T).subs(at0)
             W[:, i] = sympy.Matrix([Om[2, 1], Om[0, 2], Om[1, 0]])
-        a += W.T * sympy.diag(*[ar(t) for t in b.inertia]) * W
+        # principal axes (columns of Rp) in equilibrium; the central inertia tensor is Rp diag(J) Rp^T
+        Rp = sympy.Matrix([[ar(t) for t in ax] for ax in b.axes]).T if b.axes else sympy.eye(3)
+        a += W.T * Rp * sympy.diag(*[ar(t) for t in b.inertia]) * Rp.T * W
 
     Pi = sympy.S.Zero
     unknown: dict[str, sympy.Symbol] = {}
@@ -80,7 +82,12 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         if not eff.preload:
             Pi -= tension * stretch - tension * _first_order(stretch, q)
     for t in m.torsion_springs:
-        Pi += ar(t.coef) * _twist(m, t, rot, axis, ar) ** 2 / 2
+        twist = _twist(m, t, rot, axis, ar)
+        Pi += ar(t.coef) * twist ** 2 / 2
+        if t.preload is not None:  # the moment M0 in equilibrium does work on the twist
+            moment = (unknown.setdefault(t.name, sympy.Symbol(f"M_{t.name}")) if t.preload == EQUILIBRIUM
+                      else ar(t.preload))
+            Pi += moment * (twist if eff.preload else _first_order(twist, q))
     grav = ar(m.gravity)
     gdir = sympy.Matrix([ar(t) for t in m.gravity_direction])
     for b in m.bodies:

@@ -25,7 +25,7 @@ import ast
 import functools
 import math
 import operator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from symmech.core.scene import SceneError, Section, SymmechError
 
@@ -69,14 +69,17 @@ class Point:
 
 @dataclass(frozen=True)
 class Body:
-    """A rigid body: mass [kg] at point ``com``, principal central moments [kg m^2] about
-    the global axes in equilibrium, turned by the angle coordinates ``turns``."""
+    """A rigid body: mass [kg] at point ``com``, principal central moments ``inertia``
+    [kg m^2] about its principal axes in equilibrium, turned by the angle coordinates
+    ``turns``. ``axes`` are the three principal axes (orthonormal 3-vectors, global
+    components); None means the global x, y, z."""
 
     name: str
     mass: str
     inertia: tuple[str, str, str]
     com: str
     turns: tuple[str, ...]
+    axes: tuple[tuple[str, str, str], tuple[str, str, str], tuple[str, str, str]] | None = None
 
 
 @dataclass(frozen=True)
@@ -98,13 +101,18 @@ class Link:
 @dataclass(frozen=True)
 class Torsion:
     """A torsion spring [N m/rad] or damper [N m s/rad] acting on the rotation of body
-    ``b`` relative to body ``a`` (``ground`` for the fixed frame) about ``axis``."""
+    ``b`` relative to body ``a`` (``ground`` for the fixed frame) about ``axis``.
+
+    ``preload`` (springs only) is the moment [N m] in the equilibrium configuration,
+    acting on the twist axis . vee(R_a^T R_b) (see ``symmech.smm.lagrange._twist``),
+    or ``"equilibrium"`` (solved from eq. (5) with the springs' tensions)."""
 
     name: str
     a: str
     b: str
     coef: str
     axis: tuple[str, str, str]
+    preload: str | None = None
 
 
 @dataclass(frozen=True)
@@ -384,8 +392,16 @@ def from_scene(scene: Section) -> Mechanism:
             inertia = ("0", "0", _expr(b, "inertia", default=0.0, where=where))
         com = b.str("com")
         turns = b.raw("turns", default=None)
+        axes = None
+        if b.has("principal_axes"):
+            raw = b.raw("principal_axes")
+            where = b.name("principal_axes")
+            if not isinstance(raw, list) or len(raw) != 3 or not all(isinstance(v, list) and len(v) == 3
+                                                                     for v in raw):
+                raise SceneError(where, f"expected three axes of 3 components, got {raw!r}")
+            axes = tuple(_vector(Section({"v": v}, where), "v", f"{where}[{i}]") for i, v in enumerate(raw))
         bodies.append(Body(b.str("name"), _expr(b, "mass", where=b.name("mass")), inertia, com,
-                           _names(b, "turns", b.name("turns")) if turns is not None else None))
+                           _names(b, "turns", b.name("turns")) if turns is not None else None, axes))
         b.finish()
     _unique("body", [b.name for b in bodies])
 
@@ -415,8 +431,11 @@ def from_scene(scene: Section) -> Mechanism:
             bs = _names(t, "bodies", t.name("bodies"))
             if len(bs) != 2:
                 raise SceneError(t.name("bodies"), f"expected two body names (or 'ground'), got {list(bs)!r}")
+            pre = None
+            if key == "torsion_springs" and t.has("preload"):
+                pre = _expr(t, "preload", where=t.name("preload"))
             torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t.name(coef)),
-                                        _vector(t, "axis", t.name("axis"), default=[0, 0, 1])))
+                                        _vector(t, "axis", t.name("axis"), default=[0, 0, 1]), pre))
             t.finish()
     _unique("spring", [s.name for s in springs + dampers + torsion["torsion_springs"] + torsion["torsion_dampers"]])
 
@@ -463,9 +482,9 @@ def validate(m: Mechanism) -> None:
     for i, b in enumerate(m.bodies):
         if b.com not in m.points:
             raise SymmechError(f"body '{b.name}': centre of mass point '{b.com}' is not defined")
-        exprs_ok(f"body '{b.name}'", b.mass, *b.inertia)
+        exprs_ok(f"body '{b.name}'", b.mass, *b.inertia, *(x for ax in b.axes or () for x in ax))
         if b.turns is None:
-            m.bodies[i] = b = Body(b.name, b.mass, b.inertia, b.com, m.points[b.com].turns)
+            m.bodies[i] = b = replace(b, turns=m.points[b.com].turns)
         for q in b.turns:
             if kinds.get(q) != "angle":
                 raise SymmechError(f"body '{b.name}': turns names '{q}', which is not an angle coordinate")
@@ -479,7 +498,8 @@ def validate(m: Mechanism) -> None:
         for b in (t.a, t.b):
             if b != GROUND and b not in bodies:
                 raise SymmechError(f"torsion element '{t.name}': body '{b}' is not defined")
-        exprs_ok(f"torsion element '{t.name}'", t.coef, *t.axis)
+        exprs_ok(f"torsion element '{t.name}'", t.coef, *t.axis,
+                 *((t.preload,) if t.preload and t.preload != EQUILIBRIUM else ()))
     exprs_ok("gravity", m.gravity, *m.gravity_direction)
     used = set()
     for p in m.points.values():
@@ -498,3 +518,11 @@ def validate(m: Mechanism) -> None:
     for b in m.bodies:
         if evaluate(b.mass, values, f"body '{b.name}'") < 0:
             raise SymmechError(f"body '{b.name}': mass {b.mass} is negative")
+        if b.axes is not None:
+            P = [[evaluate(t, values, f"body '{b.name}'") for t in ax] for ax in b.axes]
+            for i in range(3):
+                for j in range(i, 3):
+                    d = sum(x * y for x, y in zip(P[i], P[j]))
+                    if abs(d - (i == j)) > 1e-9:
+                        raise SymmechError(f"body '{b.name}': principal_axes must be orthonormal; axis {i + 1} "
+                                           f". axis {j + 1} = {d:.6g} (expected {int(i == j)})")

@@ -110,50 +110,130 @@ def _rotation(axis, angle):
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
 
 
-def moved(m: Mechanism, dq: np.ndarray) -> Mechanism:
-    """The model redrawn in the configuration q = dq (planar: every angle axis along z)."""
+def _outer_turns(m: Mechanism, spatial: bool) -> dict:
+    """For every coordinate, the angle coordinates turned before it (outermost first).
+
+    Angles: the turns preceding it in every turns list of points and bodies; slides: the
+    turns of the vectors they lengthen. The redrawn axis of a coordinate is its axis turned
+    by these, so they must be the same wherever the coordinate appears; in a planar
+    mechanism rotations commute and only the set matters (angles: nothing does)."""
+    seen: dict[str, tuple] = {}
+
+    def note(c, outer, where):
+        key = tuple(outer) if spatial else frozenset(outer)
+        if c in seen and seen[c][0] != key:
+            raise SymmechError(f"equilibrium.solve: coordinate '{c}' is preceded by the turns "
+                               f"{list(seen[c][2])} in {seen[c][1]} but by {list(outer)} in {where}; the "
+                               "equilibrium search needs every coordinate turned by the same outer angles "
+                               "wherever it appears")
+        seen.setdefault(c, (key, where, tuple(outer)))
+
+    for p in m.points.values():
+        for i, a in enumerate(p.turns):
+            if spatial:
+                note(a, p.turns[:i], f"point '{p.name}'")
+        for s in p.slides:
+            note(s, p.turns, f"point '{p.name}'")
+    for b in m.bodies:
+        for i, a in enumerate(b.turns):
+            if spatial:
+                note(a, b.turns[:i], f"body '{b.name}'")
+    return {c: v[2] for c, v in seen.items()}
+
+
+def _is_spatial(m: Mechanism, ar) -> bool:
+    """True unless all angle axes are parallel (planar: the rotations commute)."""
+    axes = [np.array([ar(t) for t in c.axis]) for c in m.coordinates if c.kind == "angle"]
+    return any(np.linalg.norm(np.cross(axes[0], e)) > 1e-12 for e in axes[1:])
+
+
+def _twist_axis_only(m: Mechanism, ar, t) -> bool:
+    """True when every turn of both bodies of torsion spring ``t`` is about its axis: then the
+    twist is sum(+-q) exactly, for any q."""
+    n = np.array([ar(x) for x in t.axis])
+    return all(np.linalg.norm(np.cross(n, [ar(x) for x in m.coordinate(a).axis])) < 1e-12
+               for a in m.body_turns(t.a) + m.body_turns(t.b))
+
+
+def moved(m: Mechanism, q: np.ndarray) -> Mechanism:
+    """The model ``m`` (drawn at q = 0) redrawn in the configuration q (k,) [rad, m].
+
+    For a vector turned by [a, b, c] (outermost first) rotations about fixed axes give
+    v(q + dq) = R_a(dq_a) R_b'(dq_b) R_c'(dq_c) (R* v0), R* = R_a(q_a) R_b(q_b) R_c(q_c),
+    with the axes conjugated by the outer turns: e_b' = R_a(q_a) e_b, e_c' = R_a(q_a) R_b(q_b) e_c.
+    So the redrawn model has the vectors R* v0, the conjugated axes and the same generalized
+    coordinates shifted by q; this is exact for any q (not only to first order), provided every
+    coordinate has the same outer turns wherever it appears (checked, the error names it).
+    Slide directions and principal axes turn with their host's R*; a torsion spring keeps its
+    free angle: its moment becomes M0 + k twist(q) (only twists about the spring axis alone)."""
     values = m.values()
     ar = NumericArith(values)
     idx = {c: i for i, c in enumerate(m.coordinate_names)}
     axes = {c.name: np.array([ar(t) for t in c.axis]) for c in m.coordinates}
+    spatial = _is_spatial(m, ar)
+    outer = _outer_turns(m, spatial)
+
+    def rot(turns):
+        R = np.eye(3)
+        for a in turns:
+            R = R @ _rotation(axes[a], q[idx[a]])
+        return R
+
+    def text(v):
+        return tuple(number_text(x) for x in v)
+
     points = {}
     for p in m.points.values():
         v = np.array([ar(t) for t in p.vector])
         if p.parent is not None:
             for s in p.slides:
-                v = v + dq[idx[s]] * axes[s]
-            R = np.eye(3)
-            for a in p.turns:
-                R = R @ _rotation(axes[a], dq[idx[a]])
-            v = R @ v
-        points[p.name] = replace(p, vector=tuple(number_text(x) for x in v))
+                v = v + q[idx[s]] * axes[s]
+            v = rot(p.turns) @ v
+        points[p.name] = replace(p, vector=text(v))
     coords = []
     for c in m.coordinates:
-        if c.kind == "slide":  # a slide direction turns with the vector it lengthens
-            host = next(p for p in m.points.values() if c.name in p.slides)
-            R = np.eye(3)
-            for a in host.turns:
-                R = R @ _rotation(axes[a], dq[idx[a]])
-            u = R @ axes[c.name]
-            coords.append(replace(c, axis=tuple(number_text(x) for x in u / np.linalg.norm(u))))
+        if c.kind == "slide" or spatial:
+            u = rot(outer.get(c.name, ())) @ axes[c.name]
+            coords.append(replace(c, axis=text(u / np.linalg.norm(u))))
         else:
             coords.append(c)
-    return replace(m, points=points, coordinates=coords)
+    bodies = []
+    for b in m.bodies:
+        R = rot(b.turns)
+        if b.axes is None and np.array_equal(R, np.eye(3)):
+            bodies.append(b)
+            continue
+        P = np.eye(3) if b.axes is None else np.array([[ar(t) for t in ax] for ax in b.axes])
+        bodies.append(replace(b, axes=tuple(text(R @ p) for p in P)))
+    torsion = []
+    for t in m.torsion_springs:
+        if not _twist_axis_only(m, ar, t):
+            raise SymmechError(f"equilibrium.solve: torsion spring '{t.name}' turns about axes other than its own "
+                               f"axis {[ar(x) for x in t.axis]}; the equilibrium search handles torsion springs "
+                               "whose bodies turn about the spring axis only")
+        n = np.array([ar(x) for x in t.axis])
+        twist = sum(sign * float(n @ axes[a]) * q[idx[a]]
+                    for sign, body in ((1, t.b), (-1, t.a)) for a in m.body_turns(body))
+        moment = (ar(t.preload) if t.preload is not None else 0.0) + ar(t.coef) * twist
+        torsion.append(replace(t, preload=number_text(moment) if moment != 0 or t.preload is not None else None))
+    return replace(m, points=points, coordinates=coords, bodies=bodies, torsion_springs=torsion)
 
 
 def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> tuple[Mechanism, dict]:
     """Find dPi/dq = 0 (eq. (6)) by Newton's method on the SMM residual and tangent stiffness.
 
-    Springs given by ``preload`` keep their free length l0 = l - T/c. Returns the
-    model redrawn in equilibrium and a report {iterations, residual, q}.
+    Springs given by ``preload`` keep their free length l0 = l - T/c, torsion springs their
+    free angle. Returns the model redrawn in equilibrium and a report {iterations,
+    residual [N or N m], q (k,) [rad, m] from the drawn configuration}.
     """
-    for c in m.coordinates:
-        if c.kind == "angle" and [float(NumericArith(m.values())(t)) for t in c.axis] != [0.0, 0.0, 1.0]:
-            raise SymmechError(f"equilibrium.solve: coordinate '{c.name}' is not a planar angle about z; "
-                               "the equilibrium search handles planar mechanisms only")
     full = Effects(True, True, True)
     ar = NumericArith(m.values())
     springs = []
+    for t in m.torsion_springs:
+        if t.preload == EQUILIBRIUM:
+            raise SymmechError(f"torsion spring '{t.name}': equilibrium.solve needs a preload value, "
+                               "not preload = \"equilibrium\"")
+    moved(m, np.zeros(len(m.coordinates)))  # refuses unsupported models before any work
     start = assemble(m, full)
     for s in m.springs:
         if s.preload == EQUILIBRIUM:
@@ -180,6 +260,9 @@ def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> t
             step = -np.linalg.lstsq(num.c.toarray(), num.residual, rcond=None)[0]
         t = 1.0
         while t > 1e-6:
+            # Accumulate q and redraw from the base model: the redraw is exact for any q and the
+            # redrawn model's coordinates are the base ones shifted by q, so the step (computed in
+            # the redrawn model) adds to q; composing redraws would only accumulate round-off.
             trial = moved(base, q + t * step)
             tnum = assemble(trial, full)
             tnorm = float(np.abs(tnum.residual).max())
