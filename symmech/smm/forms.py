@@ -254,7 +254,7 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
                     add(out.preload, (idx[a], idx[bb]), tension * v)
 
     for t in m.torsion_springs:
-        col = _torsion_column(m, g, t)
+        col = torsion_column(m, g, t)
         out.Lc.append((t.name, col))
         out.kc.append(ar(t.coef, f"torsion spring '{t.name}'"))
         if t.preload is None:
@@ -282,7 +282,7 @@ def assemble(m: Mechanism, ar, kinematics=chain_kinematics, effects: Effects | N
             out.Lb.append((dmp.name, {i: v for i, v in col.items() if not ar.is_zero(v)}))
             out.mb.append(ar(dmp.coef, f"damper '{dmp.name}'"))
         for t in m.torsion_dampers:
-            out.Lb.append((t.name, _torsion_column(m, g, t)))
+            out.Lb.append((t.name, torsion_column(m, g, t)))
             out.mb.append(ar(t.coef, f"torsion damper '{t.name}'"))
     return out
 
@@ -311,7 +311,7 @@ def _diff(ar, A: dict, B: dict) -> dict:
     return {k: v for k, v in out.items() if _nonzero(ar, v)}
 
 
-def _torsion_column(m: Mechanism, g: Geometry, t) -> dict:
+def torsion_column(m: Mechanism, g: Geometry, t) -> dict:
     """d(relative rotation of body b w.r.t. a about the axis)/dq: axis . (sum e_b - sum e_a)."""
     ar = g.ar
     axis = tuple(ar(x, f"torsion element '{t.name}'") for x in t.axis)

@@ -206,14 +206,13 @@ def moved(m: Mechanism, q: np.ndarray) -> Mechanism:
         P = np.eye(3) if b.axes is None else np.array([[ar(t) for t in ax] for ax in b.axes])
         bodies.append(replace(b, axes=tuple(text(R @ p) for p in P)))
     torsion = []
+    geometry = forms.Geometry(m, ar) if m.torsion_springs else None
     for t in m.torsion_springs:
         if not _twist_axis_only(m, ar, t):
             raise SymmechError(f"equilibrium.solve: torsion spring '{t.name}' turns about axes other than its own "
                                f"axis {[ar(x) for x in t.axis]}; the equilibrium search handles torsion springs "
                                "whose bodies turn about the spring axis only")
-        n = np.array([ar(x) for x in t.axis])
-        twist = sum(sign * float(n @ axes[a]) * q[idx[a]]
-                    for sign, body in ((1, t.b), (-1, t.a)) for a in m.body_turns(body))
+        twist = sum(v * q[i] for i, v in forms.torsion_column(m, geometry, t).items())
         moment = (ar(t.preload) if t.preload is not None else 0.0) + ar(t.coef) * twist
         torsion.append(replace(t, preload=number_text(moment) if moment != 0 or t.preload is not None else None))
     return replace(m, points=points, coordinates=coords, bodies=bodies, torsion_springs=torsion)
