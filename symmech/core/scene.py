@@ -154,14 +154,18 @@ def _check_real(field, value, unit, lo, hi, lo_open, hi_open) -> float:
     return value
 
 
-def load(path) -> Section:
-    """Read a scene file; errors name the file and the TOML problem."""
+def read_toml(path) -> dict:
+    """The TOML document at ``path``; errors name the file and the TOML problem."""
     path = Path(path)
     try:
         with path.open("rb") as fh:
-            data = tomllib.load(fh)
+            return tomllib.load(fh)
     except FileNotFoundError:
         raise SymmechError(f"scene file not found: {path}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SymmechError(f"scene file {path} is not valid TOML: {exc}") from None
-    return Section(data)
+
+
+def load(path) -> Section:
+    """Read a scene file into a :class:`Section`."""
+    return Section(read_toml(path))

@@ -1,0 +1,44 @@
+"""Run context: progress bars, the wall-time budget and warnings, passed to every ``run``.
+
+Long loops call ``ctx.progress(total, desc)`` (a tqdm bar on a terminal, silent
+otherwise or with ``--quiet``) and ``ctx.tick()`` now and then, which raises a
+one-line SymmechError once the run exceeds ``max_time`` — a run never hangs.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+from symmech.core.scene import SymmechError
+
+DEFAULT_MAX_TIME = 3600.0  # s; the CLI's --max-time
+
+
+@dataclass
+class Context:
+    quiet: bool = False
+    max_time: float = DEFAULT_MAX_TIME
+    warnings: list[str] = field(default_factory=list)
+    started: float = field(default_factory=time.perf_counter)
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.started
+
+    def tick(self, where: str = "") -> None:
+        """Raise if the run has used up its time budget (call it inside long loops)."""
+        if self.elapsed() > self.max_time:
+            at = f" ({where})" if where else ""
+            raise SymmechError(f"run stopped after {self.elapsed():.0f} s: over the time budget "
+                               f"--max-time {self.max_time:g} s{at}; raise --max-time to go on")
+
+    def progress(self, total: float, desc: str, unit: str = "it"):
+        """A tqdm bar (shown only on a terminal and when not quiet); use as a context manager."""
+        from tqdm import tqdm
+
+        show = not self.quiet and sys.stderr.isatty()
+        return tqdm(total=total, desc=desc, unit=unit, disable=not show, leave=False,
+                    mininterval=0.5, delay=2.0)
+
+    def warn(self, message: str) -> None:
+        self.warnings.append(message)

@@ -1,0 +1,98 @@
+"""Scene kinds register themselves here; nothing else lists them.
+
+A paper package declares a kind in a module whose name ends in ``scene``
+(``symmech/<paper>/*scene.py``) by calling :func:`register` at import time. The
+CLI, the Python API, the docs and the fuzzer find every kind through
+:func:`kinds`, which imports those modules on first use — adding a kind touches
+no central list.
+
+The life of a run (see ``symmech.core.pipeline``)::
+
+    resolved = schema.validate(kind.schema, toml_data)   # every field, before any work
+    setup    = kind.prepare(resolved)                     # admissibility, expressions over
+                                                          # their domain; cheap, no I/O
+    cost     = kind.estimate(setup)                       # refuse past --max-time
+    result   = kind.run(setup, context)                   # the computation -> Result
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from symmech.core.schema import Table
+
+_KINDS: dict[str, "Kind"] = {}
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Expected cost of a run, told to the user and checked against ``--max-time``."""
+
+    seconds: float
+    what: str  # e.g. "20000 steps, ~40 impacts"
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One scene kind.
+
+    name      the scene's ``kind`` value
+    summary   one line for ``--help`` and docs
+    schema    the whole scene (including ``kind``) as a declarative Table
+    prepare   resolved scene dict -> setup object; raises SceneError for anything
+              physically inadmissible; evaluates expressions over their domain; no I/O
+    run       (setup, Context) -> symmech.core.results.Result
+    estimate  setup -> Estimate (optional; runs expected to finish in < 2 s may omit it)
+    precision (setup, Context) -> Result of a work-precision study (optional)
+    docs      path of the kind's docs page in the repository (for messages)
+    """
+
+    name: str
+    summary: str
+    schema: Table
+    prepare: Callable[[dict], Any]
+    run: Callable[[Any, Any], Any]
+    estimate: Callable[[Any], Estimate] | None = None
+    precision: Callable[[Any, Any], Any] | None = None
+    docs: str = ""
+
+
+def register(kind: Kind) -> Kind:
+    """Add ``kind`` (called by the kind's own module at import time)."""
+    if _KINDS.get(kind.name, kind) is not kind:
+        raise ValueError(f"scene kind {kind.name!r} registered twice")
+    _KINDS[kind.name] = kind
+    return kind
+
+
+def _discover() -> None:
+    import symmech
+
+    for pkg in pkgutil.iter_modules(symmech.__path__):
+        if not pkg.ispkg or pkg.name in ("core", "generated", "templates", "scenes"):
+            continue
+        package = importlib.import_module(f"symmech.{pkg.name}")
+        for m in pkgutil.iter_modules(package.__path__):
+            if m.name.endswith("scene"):
+                importlib.import_module(f"symmech.{pkg.name}.{m.name}")
+
+
+def kinds() -> dict[str, Kind]:
+    """Every registered kind by name (discovered on first call)."""
+    if not _KINDS:
+        _discover()
+    return dict(sorted(_KINDS.items()))
+
+
+def get(name) -> Kind:
+    """The kind called ``name``; a one-line SceneError naming the field ``kind`` otherwise."""
+    from symmech.core.scene import SceneError
+    from symmech.core.schema import _did_you_mean
+
+    available = kinds()
+    if not isinstance(name, str) or name not in available:
+        raise SceneError("kind", f"unknown scene kind {name!r}{_did_you_mean(name, available)}; "
+                                 f"choose one of {', '.join(available)}")
+    return available[name]
