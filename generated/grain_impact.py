@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 f7082366b4d85ee20ed5aff6207e788e52f0320178c06090c7f9759716f5e7ef
+# symmech 0.1.0 generated module; inputs sha256 b950edf8667c855738c3e2b43fd62255630fce773cdc46ce0a36f4174b9e88e0
+# source key 8c56e774798531b0634b7a1cac5762485ec705ae5b1fedb619520c0c47131ad0
+# body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113, eqs (1)-(60), derived in symmech.grain.derive.

@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 ea77a699a1e68792ba85c76b8531b0ee9ac66f7ca0e841130306b3c7a74e7766
+# symmech 0.1.0 generated module; inputs sha256 d7d94e005126c611255ed96e78258452094436c7e30e39ecf1a9f0e41f6bf30a
+# source key 6f4d34e457fee3b2ba152b5fa313e8bed24c7c2f91889c290a1eea4708bf7eae
+# body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 
 Source: symmech.grain.printed_motion (paper 1, seed 000, eqs (61)-(63)).

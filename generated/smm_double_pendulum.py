@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 94adf4aa823f3c445fcb4a4eadeb80be6fe879818de9ebfce08316cfdece469f
+# symmech 0.1.0 generated module; inputs sha256 b53ecc2d447fe171d819066e99c455499d1a52a756c122883f0cbc7ed623bbf9
+# source key cb66629407ab342bbc3afef127a9b692da8723cdc23b4deef947f7dbbd8aba2a
+# body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

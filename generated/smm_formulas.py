@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 b197487dfaaac300aa03ac5c676a4d283b41efc5c5471cbf14c745558ddbfad6
+# symmech 0.1.0 generated module; inputs sha256 7468d967c79f4ed164a94172a67f5e7eebd3db257cfce13d16d5fae5710f2abc
+# source key 495580154f06f0fe4ea2eb109faf04db4d317da0ca2cccdd70451e5ac02962fd
+# body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

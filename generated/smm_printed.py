@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 1d489a997ef65f752b83386712c41e1cb0a83154145afb4de935d8c3d44cb7be
+# symmech 0.1.0 generated module; inputs sha256 2cf65678f7706f627fad780dcda09a719aa337a7b18daa6fa34ee4a502bedf7c
+# source key 28a40bf7d273386b8efed7388ca7a073e0a126db843147b3268b89603a7195d4
+# body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

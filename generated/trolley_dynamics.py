@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 94d632f964433bae8297d208cb07fb0efdc7c522ba3ebba286afb312ca639ce5
+# symmech 0.1.0 generated module; inputs sha256 e0a18b46139a3e953a5c423d33f3248adb4eb3a7a1d173f0fc7acc6711c318be
+# source key af75f8d518fff5873e2824316cbdc47764db605334884c5dc9a3aa94fc6f5ae5
+# body sha256 bbcbe30261095d717670a542460f278eb8391584a5777a81745e8097dd69981d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 409195df1991446e506f60a3cd69bb07b9b23583ee1e725f27dee8a46c3f3947
+# symmech 0.1.0 generated module; inputs sha256 b2fab2524552c7455f01c02e2ee42b5f32bf724b4f214fb436c4c55f6ed7e338
+# source key af75f8d518fff5873e2824316cbdc47764db605334884c5dc9a3aa94fc6f5ae5
+# body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a964737690e85b61d5a7fa1dab92ae12eae2fc4688db6e9c57f84e739740e8b0
+# symmech 0.1.0 generated module; inputs sha256 4e04f1953169b57ab61f7d12fde6aaa37f9c236c7be96e69ee23ce419f4bf2b0
+# source key 9e19d6e2b9d7b9c43c63ee5f85318ddecc9298e8c788565b2431bb7be1b5b8e5
+# body sha256 7a0f577cdc0f24d2799893cad2e41d7f89fd81d78e3d5f6d5dcdc1c5e98853c0
 """The trolley paper's formulas as printed (hand transcription).
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.
