@@ -44,12 +44,12 @@ class Chunk:
     elements: tuple[tuple[tuple[int, ...], sympy.Expr], ...]  # (index, expr)
 
 
-def cse_chunks(nm: NamedMatrix, chunk_elements: int = CHUNK_ELEMENTS) -> list[Chunk]:
-    """Split ``nm`` (arguments under their code names) into chunks and CSE each chunk."""
+def cse_chunks(nm: NamedMatrix) -> list[Chunk]:
+    """Split ``nm`` (arguments under their code names) into chunks of CHUNK_ELEMENTS and CSE each chunk."""
     clash = {a.name for a in nm.args if re.fullmatch(r"x\d+", a.name)}
     if clash:
         raise ValueError(f"{nm.name}: argument names {sorted(clash)} clash with CSE names x0, x1, ...")
-    return list(_cse_chunks(sympy.ImmutableMatrix(nm.code_matrix()), nm.shape, chunk_elements))
+    return list(_cse_chunks(sympy.ImmutableMatrix(nm.code_matrix()), nm.shape, CHUNK_ELEMENTS))
 
 
 @functools.lru_cache(maxsize=64)  # every target prints the same chunks: CSE once per matrix
