@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5bc9688cacd278f24d88b93a6d4bb0afdf6d5cae7c27b6399ef8df795cd38adf
-# source key 8c56e774798531b0634b7a1cac5762485ec705ae5b1fedb619520c0c47131ad0
+# source key 7c864132b3a0a2bfc089beecad8628b98faa115ecb50ef078294faca4b377ba3
 # body sha256 342dfd9b1bfd4db3dd6bee821f19b5985d11a6319a699aec01fe6f72c2b444a4
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e3f444b899431fc891694bfa871b609fedf9c7a3f51f4e613ebeaa97cd38259a
-# source key 92c8f484f4f5c549edaa60f4c50e0af194e9f6486b30882cc6528c17422a42c2
+# source key cc4d8ea3386bfeaca07edea8b649160069633911a39655a2645b3cf453e1ec6f
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

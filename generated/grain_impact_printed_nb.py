@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 42042211b6bfac4429f3359b7739dc3bcee270e7c2abc0f14eb9014706c07f55
-# source key 92c8f484f4f5c549edaa60f4c50e0af194e9f6486b30882cc6528c17422a42c2
+# source key cc4d8ea3386bfeaca07edea8b649160069633911a39655a2645b3cf453e1ec6f
 # body sha256 a88b772a0fe521e063ab2139be894d506af218de6735f19a249272d84824e12c
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

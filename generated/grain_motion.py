@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 369044f5191cfe51f62a97940be47d357dfb60f7f7dab0290fae4820b6d5eb52
-# source key 74a9b30bac08ce2857ea61bfd75a43b75673d1d3fa608bb904e2e0c68f4a8ec5
+# source key 8fe3b11c1cad732699104779c0809e6ed78c78e7e75a9b32c156a4e8052d8bd7
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8608b575feee2cbf64b590366c88db14689b25b255245ebe4e78cac3420b67eb
-# source key 74a9b30bac08ce2857ea61bfd75a43b75673d1d3fa608bb904e2e0c68f4a8ec5
+# source key 8fe3b11c1cad732699104779c0809e6ed78c78e7e75a9b32c156a4e8052d8bd7
 # body sha256 88240cd03a35ce152407e3520dfd41bea9adcbf7123a92422c49b74337ebcaa7
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d7d94e005126c611255ed96e78258452094436c7e30e39ecf1a9f0e41f6bf30a
-# source key 6f4d34e457fee3b2ba152b5fa313e8bed24c7c2f91889c290a1eea4708bf7eae
+# source key 52eda2103f831e81e540d2e6ef702e9ddc976470cdd72fdd1911209d14644a63
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a97cd8e196a90fff1ed5bcd7d334e36c994a6b675a1deb684885ee9fe7018445
-# source key 6f4d34e457fee3b2ba152b5fa313e8bed24c7c2f91889c290a1eea4708bf7eae
+# source key 52eda2103f831e81e540d2e6ef702e9ddc976470cdd72fdd1911209d14644a63
 # body sha256 c6ddf5bba4de724fb281385832e68d311525a0a950b4b2217e58572a9f25d425
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

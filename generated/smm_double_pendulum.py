@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b53ecc2d447fe171d819066e99c455499d1a52a756c122883f0cbc7ed623bbf9
-# source key cb66629407ab342bbc3afef127a9b692da8723cdc23b4deef947f7dbbd8aba2a
+# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
 # body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7a0be14c1e53d7a2d37ec3fbf74dca19418c12c78f4fe560d34e12a2b98eb7c1
-# source key cb66629407ab342bbc3afef127a9b692da8723cdc23b4deef947f7dbbd8aba2a
+# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
 # body sha256 a30ff96814a588204b2c5c125c76dc95be21ab6574fa2e5fc35cc62ad9aa335f
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cd1c3cf48b8660c6550ff7fbf148706094f97507ad4625cc3847f3b2a8c695e2
-# source key cb66629407ab342bbc3afef127a9b692da8723cdc23b4deef947f7dbbd8aba2a
+# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
 # body sha256 d06e8b7c6e50e2db233bc0c5811c5c81fe348c6044487a6a9ead052596b72749
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7468d967c79f4ed164a94172a67f5e7eebd3db257cfce13d16d5fae5710f2abc
-# source key 495580154f06f0fe4ea2eb109faf04db4d317da0ca2cccdd70451e5ac02962fd
+# source key 623332a7df8016c3a83a3e4b14de398a59faf196df381c9e6d3d506bc329696e
 # body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4bfcbfc12a8f3d171efcc7bbb40d15f7464c90260251aaa76899ad2f0847812e
-# source key 495580154f06f0fe4ea2eb109faf04db4d317da0ca2cccdd70451e5ac02962fd
+# source key 623332a7df8016c3a83a3e4b14de398a59faf196df381c9e6d3d506bc329696e
 # body sha256 a9d961606e6ec24fbe2fef3a543de7aa9e25084c50e3fbfc17036d8a4b20c8fa
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

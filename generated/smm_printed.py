@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2cf65678f7706f627fad780dcda09a719aa337a7b18daa6fa34ee4a502bedf7c
-# source key 28a40bf7d273386b8efed7388ca7a073e0a126db843147b3268b89603a7195d4
+# source key 8fbe8a4830734b7a10eb77ffa35b777fe7e3d97f5d28d84e5cdb4725c3b17751
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d83f3b0912c25e7daa10d0dab27e6cc3f49a82cf7119db7814d242444041cf05
-# source key 28a40bf7d273386b8efed7388ca7a073e0a126db843147b3268b89603a7195d4
+# source key 8fbe8a4830734b7a10eb77ffa35b777fe7e3d97f5d28d84e5cdb4725c3b17751
 # body sha256 9a3569755b99bbeb590ea6ce3e122be3e0fa9ed5192e10af011b88133726186b
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

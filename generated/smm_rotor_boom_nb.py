@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 18e5f1c31138c9440e5389ba70a589b07625328a8ecbe88be1383801e613c010
-# source key cb66629407ab342bbc3afef127a9b692da8723cdc23b4deef947f7dbbd8aba2a
+# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
 # body sha256 7754d3aafc27d14fafcb831749eb14ca656fd6c552dc26ac5c55a4aeb7f9393b
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

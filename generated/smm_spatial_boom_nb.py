@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6c2fcce05fc72581f57d96a566b750d003541665b97408d5ce9f292944a90b4d
-# source key cb66629407ab342bbc3afef127a9b692da8723cdc23b4deef947f7dbbd8aba2a
+# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
 # body sha256 6df94edacd853de412022f723d15f46a89caddd7a181c77bb7b8b05eeb71bff0
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

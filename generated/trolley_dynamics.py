@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e0a18b46139a3e953a5c423d33f3248adb4eb3a7a1d173f0fc7acc6711c318be
-# source key af75f8d518fff5873e2824316cbdc47764db605334884c5dc9a3aa94fc6f5ae5
+# source key 26ccd3bdac09c37f91209b60e905129ea7117548f692682bc0d4a5bd4b010e13
 # body sha256 bbcbe30261095d717670a542460f278eb8391584a5777a81745e8097dd69981d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

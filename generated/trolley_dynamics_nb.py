@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fcac4d039ff3057f666df9ff2b6becfcc0941be1b2850186a6536b06f3a61429
-# source key af75f8d518fff5873e2824316cbdc47764db605334884c5dc9a3aa94fc6f5ae5
+# source key 26ccd3bdac09c37f91209b60e905129ea7117548f692682bc0d4a5bd4b010e13
 # body sha256 b419361723d7622dc7c8b1f9e794b00daa60373ba1d0311fc2a309462a3ad3c3
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4e04f1953169b57ab61f7d12fde6aaa37f9c236c7be96e69ee23ce419f4bf2b0
-# source key 9e19d6e2b9d7b9c43c63ee5f85318ddecc9298e8c788565b2431bb7be1b5b8e5
+# source key e3a8aec66b699c6ff4bfc93e81af12ce3e1883478c052ca73350aeab0affb31a
 # body sha256 7a0f577cdc0f24d2799893cad2e41d7f89fd81d78e3d5f6d5dcdc1c5e98853c0
 """The trolley paper's formulas as printed (hand transcription).
 

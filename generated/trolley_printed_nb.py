@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4e4b0384b7b675df6693d796b7749798dc870c9be87686a5cf08cc5578d07eba
-# source key 9e19d6e2b9d7b9c43c63ee5f85318ddecc9298e8c788565b2431bb7be1b5b8e5
+# source key e3a8aec66b699c6ff4bfc93e81af12ce3e1883478c052ca73350aeab0affb31a
 # body sha256 388d279b0fb782e336c26a3c965db16cd88b7f74cef36f44b17fa415d6649880
 """The trolley paper's formulas as printed (hand transcription).
 
