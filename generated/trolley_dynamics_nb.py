@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 fcac4d039ff3057f666df9ff2b6becfcc0941be1b2850186a6536b06f3a61429
-# source key 26ccd3bdac09c37f91209b60e905129ea7117548f692682bc0d4a5bd4b010e13
-# body sha256 b419361723d7622dc7c8b1f9e794b00daa60373ba1d0311fc2a309462a3ad3c3
+# symmech 0.1.0 generated module; inputs sha256 2b54f4998cde4d01e21abb7a04864e8268ffb5c922ca1cb5ec195fdbd1c7897a
+# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
+# body sha256 195047c1fc756cf5d213eb112bb88caa2abdbf48015daf2a1f97440777e32766
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Compiled twin of `symmech.generated.trolley_dynamics` (the numpy module, the
@@ -26,7 +26,7 @@ import math
 import numba
 import numpy
 
-__all__ = ["point_coefficients", "point_coefficients_scalar", "reactions", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_scalar"]
+__all__ = ["point_coefficients", "point_coefficients_scalar", "reactions", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_scalar", "newton_euler", "newton_euler_scalar"]
 
 
 def _flat(*args):
@@ -367,4 +367,92 @@ def reactions_no_gravity(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2
     arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah)
     out = numpy.empty((math.prod(batch),) + (6,))
     _reactions_no_gravity_loop(*arrays, steps, out)
+    return out.reshape(batch + (6,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, k):
+    x0 = -r1*w2 + r2*w1
+    x1 = r1*w3 - r3*w1
+    x2 = m*(a01 + dw2*r3 - dw3*r2 + w2*x0 - w3*x1)
+    x3 = -r2*w3 + r3*w2
+    x4 = m*(a02 - dw1*r3 + dw3*r1 - w1*x0 + w3*x3)
+    x5 = m*(a03 + dw1*r2 - dw2*r1 + w1*x1 - w2*x3)
+    x6 = I13*w1 + I23*w2 + I33*w3
+    x7 = I12*w1 + I22*w2 + I23*w3
+    x8 = I11*w1 + I12*w2 + I13*w3
+    out[k, 0] = x2
+    out[k, 1] = x4
+    out[k, 2] = x5
+    out[k, 3] = I11*dw1 + I12*dw2 + I13*dw3 + r2*x5 - r3*x4 + w2*x6 - w3*x7
+    out[k, 4] = I12*dw1 + I22*dw2 + I23*dw3 - r1*x5 + r3*x2 - w1*x6 + w3*x8
+    out[k, 5] = I13*dw1 + I23*dw2 + I33*dw3 + r1*x4 - r2*x2 + w1*x7 - w2*x8
+
+
+@numba.njit(cache=True, error_model="numpy")
+def newton_euler_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
+    """[P; M]: resultant force and moment about O of the rigid body (Newton-Euler): floats in, a float64 array (6,) out [N, N m]."""
+    out = numpy.empty((1, 6))
+    _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _newton_euler_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
+    for k in numba.prange(out.shape[0]):
+        _newton_euler_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+
+
+def newton_euler(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
+    """[P; M]: resultant force and moment about O of the rigid body (Newton-Euler) — eqs. (11).
+
+    Parameters
+    ----------
+    m : array_like
+        mass of the body [kg]
+    r1 : array_like
+        centre of mass from O (body frame), component 1 [m]
+    r2 : array_like
+        centre of mass from O (body frame), component 2 [m]
+    r3 : array_like
+        centre of mass from O (body frame), component 3 [m]
+    I11 : array_like
+        central inertia 11 [kg m^2]
+    I22 : array_like
+        central inertia 22 [kg m^2]
+    I33 : array_like
+        central inertia 33 [kg m^2]
+    I12 : array_like
+        central inertia 12 [kg m^2]
+    I23 : array_like
+        central inertia 23 [kg m^2]
+    I13 : array_like
+        central inertia 13 [kg m^2]
+    a01 : array_like
+        acceleration of the reference point O (body frame), component 1 [m/s^2]
+    a02 : array_like
+        acceleration of the reference point O (body frame), component 2 [m/s^2]
+    a03 : array_like
+        acceleration of the reference point O (body frame), component 3 [m/s^2]
+    w1 : array_like
+        angular velocity ω (body frame), component 1 [rad/s]
+    w2 : array_like
+        angular velocity ω (body frame), component 2 [rad/s]
+    w3 : array_like
+        angular velocity ω (body frame), component 3 [rad/s]
+    dw1 : array_like
+        angular acceleration ω̇ (body frame), component 1 [rad/s^2]
+    dw2 : array_like
+        angular acceleration ω̇ (body frame), component 2 [rad/s^2]
+    dw3 : array_like
+        angular acceleration ω̇ (body frame), component 3 [rad/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        [N, N m]
+    """
+    arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
+    out = numpy.empty((math.prod(batch),) + (6,))
+    _newton_euler_loop(*arrays, steps, out)
     return out.reshape(batch + (6,))

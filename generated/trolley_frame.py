@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b2fab2524552c7455f01c02e2ee42b5f32bf724b4f214fb436c4c55f6ed7e338
-# source key 26ccd3bdac09c37f91209b60e905129ea7117548f692682bc0d4a5bd4b010e13
+# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

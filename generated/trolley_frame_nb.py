@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3a3c3291ec3519033215fcbfff5e504153e7d46125043e9aee4bfdc7dbd62191
-# source key 26ccd3bdac09c37f91209b60e905129ea7117548f692682bc0d4a5bd4b010e13
+# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
 # body sha256 8604c2ade7a431fd4885163f147b62e603fd3f91793839dc0a5598e488104118
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 4e4b0384b7b675df6693d796b7749798dc870c9be87686a5cf08cc5578d07eba
-# source key e3a8aec66b699c6ff4bfc93e81af12ce3e1883478c052ca73350aeab0affb31a
-# body sha256 388d279b0fb782e336c26a3c965db16cd88b7f74cef36f44b17fa415d6649880
+# symmech 0.1.0 generated module; inputs sha256 c78f3de8d46015a5ac70412b0a58480e544c6023fb0af2722af3e32049474b9f
+# source key e3045f2d6f1d2f6ebde47645bd4cc2ad986d587b8d46156a85b9ef354c244d67
+# body sha256 56c7bd5ca24f926740e84d574c953a07e25892dff5f8ff57866734a467566d2d
 """The trolley paper's formulas as printed (hand transcription).
 
 Compiled twin of `symmech.generated.trolley_printed` (the numpy module, the
@@ -26,7 +26,7 @@ import math
 import numba
 import numpy
 
-__all__ = ["Lambda", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_scalar", "A", "A_scalar", "chord_coefficients", "chord_coefficients_scalar", "rodrigues", "rodrigues_scalar", "helix_Lambda", "helix_Lambda_scalar", "helix_omega", "helix_omega_scalar"]
+__all__ = ["Lambda", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_scalar", "A", "A_scalar", "chord_coefficients", "chord_coefficients_scalar", "rodrigues", "rodrigues_scalar", "helix_Lambda", "helix_Lambda_scalar", "helix_omega", "helix_omega_scalar", "rigid_body_equations", "rigid_body_equations_scalar"]
 
 
 def _flat(*args):
@@ -562,3 +562,106 @@ def helix_omega(R, lam):
     out = numpy.empty((math.prod(batch),) + (3,))
     _helix_omega_loop(*arrays, steps, out)
     return out.reshape(batch + (3,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, k):
+    x0 = m*r2
+    x1 = w2**2
+    x2 = m*r1
+    x3 = w3**2
+    x4 = w2*x0
+    x5 = m*r3
+    x6 = w3*x5
+    x7 = w1**2
+    x8 = w1*x2
+    x9 = a03*m
+    x10 = a02*m
+    x11 = I12 - r1*x0
+    x12 = I13 - r1*x5
+    x13 = r2**2
+    x14 = r3**2
+    x15 = I11 + m*(x13 + x14)
+    x16 = w2*x12
+    x17 = -w3*x11
+    x18 = I23 - r3*x0
+    x19 = r1**2
+    x20 = I22 + m*(x14 + x19)
+    x21 = I33 + m*(x13 + x19)
+    x22 = a01*m
+    x23 = w1*x18
+    out[k, 0] = a01*m + dw2*m*r3 - dw3*x0 - w1*(-x4 - x6) - x1*x2 - x2*x3
+    out[k, 1] = a02*m - dw1*x5 + dw3*m*r1 - w2*(-x6 - x8) - x0*x3 - x0*x7
+    out[k, 2] = a03*m + dw1*m*r2 - dw2*x2 - w3*(-x4 - x8) - x1*x5 - x5*x7
+    out[k, 3] = dw1*x15 + dw2*x11 + dw3*x12 + r2*x9 - r3*x10 + w1*(x16 + x17) + w2*(w2*x18 - w3*x20) + w3*(w2*x21 - w3*x18)
+    out[k, 4] = dw1*x11 + dw2*x20 + dw3*x18 - r1*x9 + r3*x22 + w1*(-w1*x12 + w3*x15) + w2*(-x17 - x23) + w3*(-w1*x21 + w3*x12)
+    out[k, 5] = dw1*x12 + dw2*x18 + dw3*x21 + r1*x10 - r2*x22 + w1*(w1*x11 - w2*x15) + w2*(w1*x20 - w2*x11) + w3*(-x16 + x23)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rigid_body_equations_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
+    """(11) as printed: [P; M] of the rigid body: floats in, a float64 array (6,) out [N, N m]."""
+    out = numpy.empty((1, 6))
+    _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rigid_body_equations_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
+    for k in numba.prange(out.shape[0]):
+        _rigid_body_equations_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+
+
+def rigid_body_equations(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
+    """(11) as printed: [P; M] of the rigid body — eqs. (11).
+
+    Parameters
+    ----------
+    m : array_like
+        mass of the body [kg]
+    r1 : array_like
+        centre of mass from O (body frame), component 1 [m]
+    r2 : array_like
+        centre of mass from O (body frame), component 2 [m]
+    r3 : array_like
+        centre of mass from O (body frame), component 3 [m]
+    I11 : array_like
+        central inertia 11 [kg m^2]
+    I22 : array_like
+        central inertia 22 [kg m^2]
+    I33 : array_like
+        central inertia 33 [kg m^2]
+    I12 : array_like
+        central inertia 12 [kg m^2]
+    I23 : array_like
+        central inertia 23 [kg m^2]
+    I13 : array_like
+        central inertia 13 [kg m^2]
+    a01 : array_like
+        acceleration of the reference point O (body frame), component 1 [m/s^2]
+    a02 : array_like
+        acceleration of the reference point O (body frame), component 2 [m/s^2]
+    a03 : array_like
+        acceleration of the reference point O (body frame), component 3 [m/s^2]
+    w1 : array_like
+        angular velocity ω (body frame), component 1 [rad/s]
+    w2 : array_like
+        angular velocity ω (body frame), component 2 [rad/s]
+    w3 : array_like
+        angular velocity ω (body frame), component 3 [rad/s]
+    dw1 : array_like
+        angular acceleration ω̇ (body frame), component 1 [rad/s^2]
+    dw2 : array_like
+        angular acceleration ω̇ (body frame), component 2 [rad/s^2]
+    dw3 : array_like
+        angular acceleration ω̇ (body frame), component 3 [rad/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        [N, N m]
+    """
+    arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
+    out = numpy.empty((math.prod(batch),) + (6,))
+    _rigid_body_equations_loop(*arrays, steps, out)
+    return out.reshape(batch + (6,))
