@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b950edf8667c855738c3e2b43fd62255630fce773cdc46ce0a36f4174b9e88e0
-# source key 7c864132b3a0a2bfc089beecad8628b98faa115ecb50ef078294faca4b377ba3
+# symmech 0.1.0 generated module; inputs sha256 6c98bc961d1f7d3d70b488409239fb05fdc4964e89647b8549361f119e78cebb
+# source key 5fb309aeb1413edd7315d0072b2a38d62d4898d9a489e4189c586491e4475baf
 # body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 5bc9688cacd278f24d88b93a6d4bb0afdf6d5cae7c27b6399ef8df795cd38adf
-# source key 7c864132b3a0a2bfc089beecad8628b98faa115ecb50ef078294faca4b377ba3
-# body sha256 342dfd9b1bfd4db3dd6bee821f19b5985d11a6319a699aec01fe6f72c2b444a4
+# symmech 0.1.0 generated module; inputs sha256 48967607d4f9a988e45adc3b73b9f4337a7fa58bbc9b86a3b50c6cf7f07a2851
+# source key 5fb309aeb1413edd7315d0072b2a38d62d4898d9a489e4189c586491e4475baf
+# body sha256 82e540c564786aa398b7345ffb0ed13f03676252df353e34789e1993328a1cf1
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Compiled twin of `symmech.generated.grain_impact` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["rotation", "rotation_scalar", "euler_rate_matrix", "euler_rate_matrix_scalar", "contact_offset", "contact_offset_scalar", "contact_height", "contact_height_scalar", "inertia_ratio", "inertia_ratio_scalar", "H", "H_scalar", "mu_equation", "mu_equation_scalar", "system_19_residual", "system_19_residual_scalar", "descent_functional", "descent_functional_scalar", "descent_gradient", "descent_gradient_scalar", "euler_rate_system", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_scalar", "body_components", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_scalar", "cramer_solution", "cramer_solution_scalar"]
 
@@ -68,8 +72,14 @@ def rotation_scalar(psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _rotation_loop(psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _rotation_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rotation_ploop(psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _rotation_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], out, k)
 
@@ -93,7 +103,7 @@ def rotation(psi, theta, phi):
     """
     arrays, steps, batch = _flat(psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _rotation_loop(*arrays, steps, out)
+    (_rotation_ploop if len(out) >= PARALLEL_BATCH else _rotation_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -121,8 +131,14 @@ def euler_rate_matrix_scalar(theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_rate_matrix_loop(theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _euler_rate_matrix_0(theta[k * steps[0]], phi[k * steps[1]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_rate_matrix_ploop(theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_rate_matrix_0(theta[k * steps[0]], phi[k * steps[1]], out, k)
 
@@ -144,7 +160,7 @@ def euler_rate_matrix(theta, phi):
     """
     arrays, steps, batch = _flat(theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _euler_rate_matrix_loop(*arrays, steps, out)
+    (_euler_rate_matrix_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_matrix_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -182,8 +198,14 @@ def contact_offset_scalar(a, b, c, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _contact_offset_loop(a, b, c, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _contact_offset_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _contact_offset_ploop(a, b, c, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _contact_offset_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -213,7 +235,7 @@ def contact_offset(a, b, c, psi, theta, phi):
     """
     arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _contact_offset_loop(*arrays, steps, out)
+    (_contact_offset_ploop if len(out) >= PARALLEL_BATCH else _contact_offset_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -231,8 +253,14 @@ def contact_height_scalar(a, b, c, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _contact_height_loop(a, b, c, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _contact_height_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _contact_height_ploop(a, b, c, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _contact_height_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -262,7 +290,7 @@ def contact_height(a, b, c, psi, theta, phi):
     """
     arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + ())
-    _contact_height_loop(*arrays, steps, out)
+    (_contact_height_ploop if len(out) >= PARALLEL_BATCH else _contact_height_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -316,8 +344,14 @@ def inertia_ratio_scalar(a, b, c, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _inertia_ratio_loop(a, b, c, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _inertia_ratio_ploop(a, b, c, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -347,7 +381,7 @@ def inertia_ratio(a, b, c, psi, theta, phi):
     """
     arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _inertia_ratio_loop(*arrays, steps, out)
+    (_inertia_ratio_ploop if len(out) >= PARALLEL_BATCH else _inertia_ratio_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -438,8 +472,14 @@ def H_scalar(a, b, c, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _H_loop(a, b, c, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _H_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _H_ploop(a, b, c, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _H_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -469,7 +509,7 @@ def H(a, b, c, psi, theta, phi):
     """
     arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _H_loop(*arrays, steps, out)
+    (_H_ploop if len(out) >= PARALLEL_BATCH else _H_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -505,8 +545,14 @@ def mu_equation_scalar(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _mu_equation_loop(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _mu_equation_0(h_xx[k * steps[0]], h_xy[k * steps[1]], h_xz[k * steps[2]], h_yy[k * steps[3]], h_yz[k * steps[4]], h_zz[k * steps[5]], lambda_[k * steps[6]], e[k * steps[7]], u_x0[k * steps[8]], u_y0[k * steps[9]], u_z0[k * steps[10]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _mu_equation_ploop(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _mu_equation_0(h_xx[k * steps[0]], h_xy[k * steps[1]], h_xz[k * steps[2]], h_yy[k * steps[3]], h_yz[k * steps[4]], h_zz[k * steps[5]], lambda_[k * steps[6]], e[k * steps[7]], u_x0[k * steps[8]], u_y0[k * steps[9]], u_z0[k * steps[10]], out, k)
 
@@ -546,7 +592,7 @@ def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0
     """
     arrays, steps, batch = _flat(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + (5,))
-    _mu_equation_loop(*arrays, steps, out)
+    (_mu_equation_ploop if len(out) >= PARALLEL_BATCH else _mu_equation_loop)(*arrays, steps, out)
     return out.reshape(batch + (5,))
 
 
@@ -570,8 +616,14 @@ def system_19_residual_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _system_19_residual_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _system_19_residual_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
 
@@ -619,7 +671,7 @@ def system_19_residual(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lamb
     """
     arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _system_19_residual_loop(*arrays, steps, out)
+    (_system_19_residual_ploop if len(out) >= PARALLEL_BATCH else _system_19_residual_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -641,8 +693,14 @@ def descent_functional_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _descent_functional_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _descent_functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _descent_functional_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _descent_functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
 
@@ -690,7 +748,7 @@ def descent_functional(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lamb
     """
     arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + ())
-    _descent_functional_loop(*arrays, steps, out)
+    (_descent_functional_ploop if len(out) >= PARALLEL_BATCH else _descent_functional_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -726,8 +784,14 @@ def descent_gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _descent_gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _descent_gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _descent_gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _descent_gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
 
@@ -775,7 +839,7 @@ def descent_gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda
     """
     arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _descent_gradient_loop(*arrays, steps, out)
+    (_descent_gradient_ploop if len(out) >= PARALLEL_BATCH else _descent_gradient_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -803,8 +867,14 @@ def euler_rate_system_scalar(J_x, J_y, J_z, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_rate_system_loop(J_x, J_y, J_z, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_rate_system_ploop(J_x, J_y, J_z, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
 
@@ -832,7 +902,7 @@ def euler_rate_system(J_x, J_y, J_z, theta, phi):
     """
     arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _euler_rate_system_loop(*arrays, steps, out)
+    (_euler_rate_system_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_system_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -854,8 +924,14 @@ def euler_rate_rhs_scalar(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_y
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_rate_rhs_loop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
+    for k in range(out.shape[0]):
+        _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_rate_rhs_ploop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
 
@@ -901,7 +977,7 @@ def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp
     """
     arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _euler_rate_rhs_loop(*arrays, steps, out)
+    (_euler_rate_rhs_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_rhs_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -930,8 +1006,14 @@ def body_components_scalar(R_x, R_y, R_z, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _body_components_loop(R_x, R_y, R_z, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _body_components_ploop(R_x, R_y, R_z, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -961,7 +1043,7 @@ def body_components(R_x, R_y, R_z, psi, theta, phi):
     """
     arrays, steps, batch = _flat(R_x, R_y, R_z, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _body_components_loop(*arrays, steps, out)
+    (_body_components_ploop if len(out) >= PARALLEL_BATCH else _body_components_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -981,8 +1063,14 @@ def centre_velocity_after_scalar(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _centre_velocity_after_loop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
+    for k in range(out.shape[0]):
+        _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _centre_velocity_after_ploop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
     for k in numba.prange(out.shape[0]):
         _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
 
@@ -1014,7 +1102,7 @@ def centre_velocity_after(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     """
     arrays, steps, batch = _flat(v_x0, v_y0, v_z0, T_x, T_y, T_z, m)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _centre_velocity_after_loop(*arrays, steps, out)
+    (_centre_velocity_after_ploop if len(out) >= PARALLEL_BATCH else _centre_velocity_after_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -1043,8 +1131,14 @@ def cramer_solution_scalar(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _cramer_solution_loop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
+    for k in range(out.shape[0]):
+        _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _cramer_solution_ploop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
     for k in numba.prange(out.shape[0]):
         _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
 
@@ -1086,5 +1180,5 @@ def cramer_solution(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
     """
     arrays, steps, batch = _flat(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _cramer_solution_loop(*arrays, steps, out)
+    (_cramer_solution_ploop if len(out) >= PARALLEL_BATCH else _cramer_solution_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))

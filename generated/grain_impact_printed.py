@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 e3f444b899431fc891694bfa871b609fedf9c7a3f51f4e613ebeaa97cd38259a
-# source key cc4d8ea3386bfeaca07edea8b649160069633911a39655a2645b3cf453e1ec6f
+# symmech 0.1.0 generated module; inputs sha256 7d42021e8d4153b349d665efd3e4f21f3b820a298ab8927c357e31b644411614
+# source key db41e0c59f351a788e7cfd252b7653be9646ba6a00f42496ca5c669f840b2bff
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 42042211b6bfac4429f3359b7739dc3bcee270e7c2abc0f14eb9014706c07f55
-# source key cc4d8ea3386bfeaca07edea8b649160069633911a39655a2645b3cf453e1ec6f
-# body sha256 a88b772a0fe521e063ab2139be894d506af218de6735f19a249272d84824e12c
+# symmech 0.1.0 generated module; inputs sha256 0f604619a84e4044b3df823ae5539e13c02a7140c83215025564012610859921
+# source key db41e0c59f351a788e7cfd252b7653be9646ba6a00f42496ca5c669f840b2bff
+# body sha256 f5c89e4d64040f2167608558fdb929bf90d212c1184f9fd117db4eb3a7404131
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Compiled twin of `symmech.generated.grain_impact_printed` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["inertia_ratio", "inertia_ratio_scalar", "H", "H_scalar", "system_19_residual", "system_19_residual_scalar", "functional", "functional_scalar", "gradient", "gradient_scalar", "euler_rate_system", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_scalar", "cramer_solution", "cramer_solution_scalar", "body_components", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_scalar"]
 
@@ -88,8 +92,14 @@ def inertia_ratio_scalar(a, b, c, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _inertia_ratio_loop(a, b, c, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _inertia_ratio_ploop(a, b, c, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -119,7 +129,7 @@ def inertia_ratio(a, b, c, psi, theta, phi):
     """
     arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _inertia_ratio_loop(*arrays, steps, out)
+    (_inertia_ratio_ploop if len(out) >= PARALLEL_BATCH else _inertia_ratio_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -165,8 +175,14 @@ def H_scalar(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _H_loop(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, steps, out):
+    for k in range(out.shape[0]):
+        _H_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], P_xx[k * steps[3]], P_xy[k * steps[4]], P_xz[k * steps[5]], P_yy[k * steps[6]], P_yz[k * steps[7]], P_zz[k * steps[8]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _H_ploop(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, steps, out):
     for k in numba.prange(out.shape[0]):
         _H_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], P_xx[k * steps[3]], P_xy[k * steps[4]], P_xz[k * steps[5]], P_yy[k * steps[6]], P_yz[k * steps[7]], P_zz[k * steps[8]], out, k)
 
@@ -202,7 +218,7 @@ def H(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
     """
     arrays, steps, batch = _flat(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _H_loop(*arrays, steps, out)
+    (_H_ploop if len(out) >= PARALLEL_BATCH else _H_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -224,8 +240,14 @@ def system_19_residual_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _system_19_residual_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _system_19_residual_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
 
@@ -273,7 +295,7 @@ def system_19_residual(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lamb
     """
     arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _system_19_residual_loop(*arrays, steps, out)
+    (_system_19_residual_ploop if len(out) >= PARALLEL_BATCH else _system_19_residual_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -293,8 +315,14 @@ def functional_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambd
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _functional_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _functional_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
 
@@ -342,7 +370,7 @@ def functional(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, 
     """
     arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + ())
-    _functional_loop(*arrays, steps, out)
+    (_functional_ploop if len(out) >= PARALLEL_BATCH else _functional_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -365,8 +393,14 @@ def gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
+    for k in range(out.shape[0]):
+        _gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
     for k in numba.prange(out.shape[0]):
         _gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
 
@@ -414,7 +448,7 @@ def gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_
     """
     arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _gradient_loop(*arrays, steps, out)
+    (_gradient_ploop if len(out) >= PARALLEL_BATCH else _gradient_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -442,8 +476,14 @@ def euler_rate_system_scalar(J_x, J_y, J_z, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_rate_system_loop(J_x, J_y, J_z, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_rate_system_ploop(J_x, J_y, J_z, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
 
@@ -471,7 +511,7 @@ def euler_rate_system(J_x, J_y, J_z, theta, phi):
     """
     arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _euler_rate_system_loop(*arrays, steps, out)
+    (_euler_rate_system_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_system_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -493,8 +533,14 @@ def euler_rate_rhs_scalar(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_y
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_rate_rhs_loop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
+    for k in range(out.shape[0]):
+        _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_rate_rhs_ploop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
 
@@ -540,7 +586,7 @@ def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp
     """
     arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _euler_rate_rhs_loop(*arrays, steps, out)
+    (_euler_rate_rhs_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_rhs_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -563,8 +609,14 @@ def cramer_solution_scalar(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _cramer_solution_loop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
+    for k in range(out.shape[0]):
+        _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _cramer_solution_ploop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
     for k in numba.prange(out.shape[0]):
         _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
 
@@ -606,7 +658,7 @@ def cramer_solution(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
     """
     arrays, steps, batch = _flat(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _cramer_solution_loop(*arrays, steps, out)
+    (_cramer_solution_ploop if len(out) >= PARALLEL_BATCH else _cramer_solution_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -635,8 +687,14 @@ def body_components_scalar(R_x, R_y, R_z, psi, theta, phi):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _body_components_loop(R_x, R_y, R_z, psi, theta, phi, steps, out):
+    for k in range(out.shape[0]):
+        _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _body_components_ploop(R_x, R_y, R_z, psi, theta, phi, steps, out):
     for k in numba.prange(out.shape[0]):
         _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
 
@@ -666,7 +724,7 @@ def body_components(R_x, R_y, R_z, psi, theta, phi):
     """
     arrays, steps, batch = _flat(R_x, R_y, R_z, psi, theta, phi)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _body_components_loop(*arrays, steps, out)
+    (_body_components_ploop if len(out) >= PARALLEL_BATCH else _body_components_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -686,8 +744,14 @@ def centre_velocity_after_scalar(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _centre_velocity_after_loop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
+    for k in range(out.shape[0]):
+        _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _centre_velocity_after_ploop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
     for k in numba.prange(out.shape[0]):
         _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
 
@@ -719,5 +783,5 @@ def centre_velocity_after(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     """
     arrays, steps, batch = _flat(v_x0, v_y0, v_z0, T_x, T_y, T_z, m)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _centre_velocity_after_loop(*arrays, steps, out)
+    (_centre_velocity_after_ploop if len(out) >= PARALLEL_BATCH else _centre_velocity_after_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))

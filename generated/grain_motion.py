@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 369044f5191cfe51f62a97940be47d357dfb60f7f7dab0290fae4820b6d5eb52
-# source key 8fe3b11c1cad732699104779c0809e6ed78c78e7e75a9b32c156a4e8052d8bd7
+# symmech 0.1.0 generated module; inputs sha256 06617b71258c786010e0f8bf154394eb9a49daa2b8031706b8a1088f3b76a3a6
+# source key 9a78d157d470a4181f0f5aa6b9a04c9cb9bd285282d2ba9fd38109dbbaf67204
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 8608b575feee2cbf64b590366c88db14689b25b255245ebe4e78cac3420b67eb
-# source key 8fe3b11c1cad732699104779c0809e6ed78c78e7e75a9b32c156a4e8052d8bd7
-# body sha256 88240cd03a35ce152407e3520dfd41bea9adcbf7123a92422c49b74337ebcaa7
+# symmech 0.1.0 generated module; inputs sha256 97dd8ced7a4b0eee4655892fcc830c6075564a9ef8a9520a06a809d871ba3d05
+# source key 9a78d157d470a4181f0f5aa6b9a04c9cb9bd285282d2ba9fd38109dbbaf67204
+# body sha256 d9584cb5dc88399cbff375b294d0a4e7abcdf17829898c6bcb1edfd7f45e6893
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["gravity", "gravity_scalar", "surface_kinematics", "surface_kinematics_scalar", "flight_translation", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_scalar", "support_distance", "support_distance_scalar", "contact_offset_body", "contact_offset_body_scalar", "euler_equations", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_scalar", "body_rates", "body_rates_scalar", "euler_rates", "euler_rates_scalar"]
 
@@ -53,8 +57,14 @@ def gravity_scalar(g, alpha, beta):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _gravity_loop(g, alpha, beta, steps, out):
+    for k in range(out.shape[0]):
+        _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _gravity_ploop(g, alpha, beta, steps, out):
     for k in numba.prange(out.shape[0]):
         _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], out, k)
 
@@ -78,7 +88,7 @@ def gravity(g, alpha, beta):
     """
     arrays, steps, batch = _flat(g, alpha, beta)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _gravity_loop(*arrays, steps, out)
+    (_gravity_ploop if len(out) >= PARALLEL_BATCH else _gravity_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -110,8 +120,14 @@ def surface_kinematics_scalar(A, omega, phase, dX, dY, dZ, t):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _surface_kinematics_loop(A, omega, phase, dX, dY, dZ, t, steps, out):
+    for k in range(out.shape[0]):
+        _surface_kinematics_0(A[k * steps[0]], omega[k * steps[1]], phase[k * steps[2]], dX[k * steps[3]], dY[k * steps[4]], dZ[k * steps[5]], t[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _surface_kinematics_ploop(A, omega, phase, dX, dY, dZ, t, steps, out):
     for k in numba.prange(out.shape[0]):
         _surface_kinematics_0(A[k * steps[0]], omega[k * steps[1]], phase[k * steps[2]], dX[k * steps[3]], dY[k * steps[4]], dZ[k * steps[5]], t[k * steps[6]], out, k)
 
@@ -143,7 +159,7 @@ def surface_kinematics(A, omega, phase, dX, dY, dZ, t):
     """
     arrays, steps, batch = _flat(A, omega, phase, dX, dY, dZ, t)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _surface_kinematics_loop(*arrays, steps, out)
+    (_surface_kinematics_ploop if len(out) >= PARALLEL_BATCH else _surface_kinematics_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -190,8 +206,14 @@ def flight_translation_scalar(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _flight_translation_loop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, steps, out):
+    for k in range(out.shape[0]):
+        _flight_translation_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], A[k * steps[9]], omega[k * steps[10]], phase[k * steps[11]], dX[k * steps[12]], dY[k * steps[13]], dZ[k * steps[14]], t0[k * steps[15]], t[k * steps[16]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _flight_translation_ploop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, steps, out):
     for k in numba.prange(out.shape[0]):
         _flight_translation_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], A[k * steps[9]], omega[k * steps[10]], phase[k * steps[11]], dX[k * steps[12]], dY[k * steps[13]], dZ[k * steps[14]], t0[k * steps[15]], t[k * steps[16]], out, k)
 
@@ -243,7 +265,7 @@ def flight_translation(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase
     """
     arrays, steps, batch = _flat(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t)
     out = numpy.empty((math.prod(batch),) + (2, 3))
-    _flight_translation_loop(*arrays, steps, out)
+    (_flight_translation_ploop if len(out) >= PARALLEL_BATCH else _flight_translation_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 3))
 
 
@@ -276,8 +298,14 @@ def flight_translation_rigid_scalar(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _flight_translation_rigid_loop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, steps, out):
+    for k in range(out.shape[0]):
+        _flight_translation_rigid_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], t0[k * steps[9]], t[k * steps[10]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _flight_translation_rigid_ploop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, steps, out):
     for k in numba.prange(out.shape[0]):
         _flight_translation_rigid_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], t0[k * steps[9]], t[k * steps[10]], out, k)
 
@@ -317,7 +345,7 @@ def flight_translation_rigid(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
     """
     arrays, steps, batch = _flat(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t)
     out = numpy.empty((math.prod(batch),) + (2, 3))
-    _flight_translation_rigid_loop(*arrays, steps, out)
+    (_flight_translation_rigid_ploop if len(out) >= PARALLEL_BATCH else _flight_translation_rigid_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 3))
 
 
@@ -350,8 +378,14 @@ def rotation_matrix_scalar(q0, q1, q2, q3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _rotation_matrix_loop(q0, q1, q2, q3, steps, out):
+    for k in range(out.shape[0]):
+        _rotation_matrix_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rotation_matrix_ploop(q0, q1, q2, q3, steps, out):
     for k in numba.prange(out.shape[0]):
         _rotation_matrix_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], out, k)
 
@@ -377,7 +411,7 @@ def rotation_matrix(q0, q1, q2, q3):
     """
     arrays, steps, batch = _flat(q0, q1, q2, q3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _rotation_matrix_loop(*arrays, steps, out)
+    (_rotation_matrix_ploop if len(out) >= PARALLEL_BATCH else _rotation_matrix_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -394,8 +428,14 @@ def support_distance_scalar(a, b, c, n1, n2, n3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _support_distance_loop(a, b, c, n1, n2, n3, steps, out):
+    for k in range(out.shape[0]):
+        _support_distance_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _support_distance_ploop(a, b, c, n1, n2, n3, steps, out):
     for k in numba.prange(out.shape[0]):
         _support_distance_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
 
@@ -425,7 +465,7 @@ def support_distance(a, b, c, n1, n2, n3):
     """
     arrays, steps, batch = _flat(a, b, c, n1, n2, n3)
     out = numpy.empty((math.prod(batch),) + ())
-    _support_distance_loop(*arrays, steps, out)
+    (_support_distance_ploop if len(out) >= PARALLEL_BATCH else _support_distance_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -448,8 +488,14 @@ def contact_offset_body_scalar(a, b, c, n1, n2, n3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _contact_offset_body_loop(a, b, c, n1, n2, n3, steps, out):
+    for k in range(out.shape[0]):
+        _contact_offset_body_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _contact_offset_body_ploop(a, b, c, n1, n2, n3, steps, out):
     for k in numba.prange(out.shape[0]):
         _contact_offset_body_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
 
@@ -479,7 +525,7 @@ def contact_offset_body(a, b, c, n1, n2, n3):
     """
     arrays, steps, batch = _flat(a, b, c, n1, n2, n3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _contact_offset_body_loop(*arrays, steps, out)
+    (_contact_offset_body_ploop if len(out) >= PARALLEL_BATCH else _contact_offset_body_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -499,8 +545,14 @@ def euler_equations_scalar(I1, I2, I3, w1, w2, w3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_equations_loop(I1, I2, I3, w1, w2, w3, steps, out):
+    for k in range(out.shape[0]):
+        _euler_equations_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_equations_ploop(I1, I2, I3, w1, w2, w3, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_equations_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
 
@@ -530,7 +582,7 @@ def euler_equations(I1, I2, I3, w1, w2, w3):
     """
     arrays, steps, batch = _flat(I1, I2, I3, w1, w2, w3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _euler_equations_loop(*arrays, steps, out)
+    (_euler_equations_ploop if len(out) >= PARALLEL_BATCH else _euler_equations_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -555,8 +607,14 @@ def quaternion_rate_scalar(q0, q1, q2, q3, w1, w2, w3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _quaternion_rate_loop(q0, q1, q2, q3, w1, w2, w3, steps, out):
+    for k in range(out.shape[0]):
+        _quaternion_rate_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], w1[k * steps[4]], w2[k * steps[5]], w3[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _quaternion_rate_ploop(q0, q1, q2, q3, w1, w2, w3, steps, out):
     for k in numba.prange(out.shape[0]):
         _quaternion_rate_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], w1[k * steps[4]], w2[k * steps[5]], w3[k * steps[6]], out, k)
 
@@ -588,7 +646,7 @@ def quaternion_rate(q0, q1, q2, q3, w1, w2, w3):
     """
     arrays, steps, batch = _flat(q0, q1, q2, q3, w1, w2, w3)
     out = numpy.empty((math.prod(batch),) + (4,))
-    _quaternion_rate_loop(*arrays, steps, out)
+    (_quaternion_rate_ploop if len(out) >= PARALLEL_BATCH else _quaternion_rate_loop)(*arrays, steps, out)
     return out.reshape(batch + (4,))
 
 
@@ -619,8 +677,14 @@ def rotation_invariants_scalar(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _rotation_invariants_loop(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, steps, out):
+    for k in range(out.shape[0]):
+        _rotation_invariants_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], q0[k * steps[6]], q1[k * steps[7]], q2[k * steps[8]], q3[k * steps[9]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rotation_invariants_ploop(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, steps, out):
     for k in numba.prange(out.shape[0]):
         _rotation_invariants_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], q0[k * steps[6]], q1[k * steps[7]], q2[k * steps[8]], q3[k * steps[9]], out, k)
 
@@ -658,7 +722,7 @@ def rotation_invariants(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
     """
     arrays, steps, batch = _flat(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3)
     out = numpy.empty((math.prod(batch),) + (4,))
-    _rotation_invariants_loop(*arrays, steps, out)
+    (_rotation_invariants_ploop if len(out) >= PARALLEL_BATCH else _rotation_invariants_loop)(*arrays, steps, out)
     return out.reshape(batch + (4,))
 
 
@@ -680,8 +744,14 @@ def body_rates_scalar(psi, theta, phi, psi_d, theta_d, phi_d):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _body_rates_loop(psi, theta, phi, psi_d, theta_d, phi_d, steps, out):
+    for k in range(out.shape[0]):
+        _body_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], psi_d[k * steps[3]], theta_d[k * steps[4]], phi_d[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _body_rates_ploop(psi, theta, phi, psi_d, theta_d, phi_d, steps, out):
     for k in numba.prange(out.shape[0]):
         _body_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], psi_d[k * steps[3]], theta_d[k * steps[4]], phi_d[k * steps[5]], out, k)
 
@@ -711,7 +781,7 @@ def body_rates(psi, theta, phi, psi_d, theta_d, phi_d):
     """
     arrays, steps, batch = _flat(psi, theta, phi, psi_d, theta_d, phi_d)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _body_rates_loop(*arrays, steps, out)
+    (_body_rates_ploop if len(out) >= PARALLEL_BATCH else _body_rates_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -737,8 +807,14 @@ def euler_rates_scalar(psi, theta, phi, w1, w2, w3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_rates_loop(psi, theta, phi, w1, w2, w3, steps, out):
+    for k in range(out.shape[0]):
+        _euler_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_rates_ploop(psi, theta, phi, w1, w2, w3, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
 
@@ -768,5 +844,5 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     """
     arrays, steps, batch = _flat(psi, theta, phi, w1, w2, w3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _euler_rates_loop(*arrays, steps, out)
+    (_euler_rates_ploop if len(out) >= PARALLEL_BATCH else _euler_rates_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d7d94e005126c611255ed96e78258452094436c7e30e39ecf1a9f0e41f6bf30a
-# source key 52eda2103f831e81e540d2e6ef702e9ddc976470cdd72fdd1911209d14644a63
+# symmech 0.1.0 generated module; inputs sha256 83d74261c4a1acb120b40e3808aeb11762413f232d9ca6e92e11d304882a03a0
+# source key ffe78a8cee4d87a8c284b602cba4c02f7e8e98304e08d478b04ebfd528f221d9
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

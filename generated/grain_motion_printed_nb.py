@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a97cd8e196a90fff1ed5bcd7d334e36c994a6b675a1deb684885ee9fe7018445
-# source key 52eda2103f831e81e540d2e6ef702e9ddc976470cdd72fdd1911209d14644a63
-# body sha256 c6ddf5bba4de724fb281385832e68d311525a0a950b4b2217e58572a9f25d425
+# symmech 0.1.0 generated module; inputs sha256 0905de148d5e68794decd7a8663a49df601133a3ce2f51f12ac19f9ca79456c3
+# source key ffe78a8cee4d87a8c284b602cba4c02f7e8e98304e08d478b04ebfd528f221d9
+# body sha256 fae55143e1c896ca2fd2f59933392cb91b09c00540ca682c4acc8b2b514dd47e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 
 Compiled twin of `symmech.generated.grain_motion_printed` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["gravity", "gravity_scalar", "flight_step", "flight_step_scalar", "euler_angles", "euler_angles_scalar", "contact_gap", "contact_gap_scalar"]
 
@@ -54,8 +58,14 @@ def gravity_scalar(g, alpha, beta, delta):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _gravity_loop(g, alpha, beta, delta, steps, out):
+    for k in range(out.shape[0]):
+        _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], delta[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _gravity_ploop(g, alpha, beta, delta, steps, out):
     for k in numba.prange(out.shape[0]):
         _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], delta[k * steps[3]], out, k)
 
@@ -81,7 +91,7 @@ def gravity(g, alpha, beta, delta):
     """
     arrays, steps, batch = _flat(g, alpha, beta, delta)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _gravity_loop(*arrays, steps, out)
+    (_gravity_ploop if len(out) >= PARALLEL_BATCH else _gravity_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -107,8 +117,14 @@ def flight_step_scalar(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _flight_step_loop(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, steps, out):
+    for k in range(out.shape[0]):
+        _flight_step_0(vx[k * steps[0]], vy[k * steps[1]], vz[k * steps[2]], x[k * steps[3]], y[k * steps[4]], z[k * steps[5]], ax_vb[k * steps[6]], ay_vb[k * steps[7]], az_vb[k * steps[8]], g[k * steps[9]], alpha[k * steps[10]], beta[k * steps[11]], delta[k * steps[12]], dt[k * steps[13]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _flight_step_ploop(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, steps, out):
     for k in numba.prange(out.shape[0]):
         _flight_step_0(vx[k * steps[0]], vy[k * steps[1]], vz[k * steps[2]], x[k * steps[3]], y[k * steps[4]], z[k * steps[5]], ax_vb[k * steps[6]], ay_vb[k * steps[7]], az_vb[k * steps[8]], g[k * steps[9]], alpha[k * steps[10]], beta[k * steps[11]], delta[k * steps[12]], dt[k * steps[13]], out, k)
 
@@ -154,7 +170,7 @@ def flight_step(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta,
     """
     arrays, steps, batch = _flat(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt)
     out = numpy.empty((math.prod(batch),) + (2, 3))
-    _flight_step_loop(*arrays, steps, out)
+    (_flight_step_ploop if len(out) >= PARALLEL_BATCH else _flight_step_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 3))
 
 
@@ -174,8 +190,14 @@ def euler_angles_scalar(theta, psi, phi, theta_d, psi_d, phi_d, s, dt):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _euler_angles_loop(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, steps, out):
+    for k in range(out.shape[0]):
+        _euler_angles_0(theta[k * steps[0]], psi[k * steps[1]], phi[k * steps[2]], theta_d[k * steps[3]], psi_d[k * steps[4]], phi_d[k * steps[5]], s[k * steps[6]], dt[k * steps[7]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _euler_angles_ploop(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, steps, out):
     for k in numba.prange(out.shape[0]):
         _euler_angles_0(theta[k * steps[0]], psi[k * steps[1]], phi[k * steps[2]], theta_d[k * steps[3]], psi_d[k * steps[4]], phi_d[k * steps[5]], s[k * steps[6]], dt[k * steps[7]], out, k)
 
@@ -209,7 +231,7 @@ def euler_angles(theta, psi, phi, theta_d, psi_d, phi_d, s, dt):
     """
     arrays, steps, batch = _flat(theta, psi, phi, theta_d, psi_d, phi_d, s, dt)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _euler_angles_loop(*arrays, steps, out)
+    (_euler_angles_ploop if len(out) >= PARALLEL_BATCH else _euler_angles_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -226,8 +248,14 @@ def contact_gap_scalar(z_c, KC_x, KC_y, KC_z):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _contact_gap_loop(z_c, KC_x, KC_y, KC_z, steps, out):
+    for k in range(out.shape[0]):
+        _contact_gap_0(z_c[k * steps[0]], KC_x[k * steps[1]], KC_y[k * steps[2]], KC_z[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _contact_gap_ploop(z_c, KC_x, KC_y, KC_z, steps, out):
     for k in numba.prange(out.shape[0]):
         _contact_gap_0(z_c[k * steps[0]], KC_x[k * steps[1]], KC_y[k * steps[2]], KC_z[k * steps[3]], out, k)
 
@@ -253,5 +281,5 @@ def contact_gap(z_c, KC_x, KC_y, KC_z):
     """
     arrays, steps, batch = _flat(z_c, KC_x, KC_y, KC_z)
     out = numpy.empty((math.prod(batch),) + ())
-    _contact_gap_loop(*arrays, steps, out)
+    (_contact_gap_ploop if len(out) >= PARALLEL_BATCH else _contact_gap_loop)(*arrays, steps, out)
     return out.reshape(batch + ())

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b53ecc2d447fe171d819066e99c455499d1a52a756c122883f0cbc7ed623bbf9
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
+# symmech 0.1.0 generated module; inputs sha256 c45266546f2e699f127b32cd34a46ccfb6e3a8c68eb29a62be9c8c0b21898452
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
 # body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

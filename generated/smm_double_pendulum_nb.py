@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 7a0be14c1e53d7a2d37ec3fbf74dca19418c12c78f4fe560d34e12a2b98eb7c1
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
-# body sha256 a30ff96814a588204b2c5c125c76dc95be21ab6574fa2e5fc35cc62ad9aa335f
+# symmech 0.1.0 generated module; inputs sha256 48d92c0f795c74944a9713a19c4f25e3528e8de4978014c5011c623d2e4ec078
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
+# body sha256 f0de801819a68cd9a9d93f004d8e8c69f38dc1dd5596ea49671ffc4611fb46a0
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
 
@@ -56,8 +60,14 @@ def a_scalar(m1, m2, l1, l2, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _a_loop(m1, m2, l1, l2, g, steps, out):
+    for k in range(out.shape[0]):
+        _a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _a_ploop(m1, m2, l1, l2, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
 
@@ -85,7 +95,7 @@ def a(m1, m2, l1, l2, g):
     """
     arrays, steps, batch = _flat(m1, m2, l1, l2, g)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _a_loop(*arrays, steps, out)
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -105,8 +115,14 @@ def b_scalar(m1, m2, l1, l2, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _b_loop(m1, m2, l1, l2, g, steps, out):
+    for k in range(out.shape[0]):
+        _b_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _b_ploop(m1, m2, l1, l2, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _b_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
 
@@ -134,7 +150,7 @@ def b(m1, m2, l1, l2, g):
     """
     arrays, steps, batch = _flat(m1, m2, l1, l2, g)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _b_loop(*arrays, steps, out)
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -156,8 +172,14 @@ def c_scalar(m1, m2, l1, l2, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _c_loop(m1, m2, l1, l2, g, steps, out):
+    for k in range(out.shape[0]):
+        _c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _c_ploop(m1, m2, l1, l2, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
 
@@ -185,7 +207,7 @@ def c(m1, m2, l1, l2, g):
     """
     arrays, steps, batch = _flat(m1, m2, l1, l2, g)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _c_loop(*arrays, steps, out)
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -205,8 +227,14 @@ def L_a_scalar(m1, m2, l1, l2, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_a_loop(m1, m2, l1, l2, g, steps, out):
+    for k in range(out.shape[0]):
+        _L_a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_a_ploop(m1, m2, l1, l2, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
 
@@ -234,7 +262,7 @@ def L_a(m1, m2, l1, l2, g):
     """
     arrays, steps, batch = _flat(m1, m2, l1, l2, g)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _L_a_loop(*arrays, steps, out)
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -252,8 +280,14 @@ def L_c_scalar(m1, m2, l1, l2, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_c_loop(m1, m2, l1, l2, g, steps, out):
+    for k in range(out.shape[0]):
+        _L_c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_c_ploop(m1, m2, l1, l2, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
 
@@ -281,5 +315,5 @@ def L_c(m1, m2, l1, l2, g):
     """
     arrays, steps, batch = _flat(m1, m2, l1, l2, g)
     out = numpy.empty((math.prod(batch),) + (2,))
-    _L_c_loop(*arrays, steps, out)
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
     return out.reshape(batch + (2,))

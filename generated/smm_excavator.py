@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c0d20ccd0206f4cfedb6eb7f5bbf7824adaf06b2244ea39fefd7ae9498e36884
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
+# symmech 0.1.0 generated module; inputs sha256 f5609ce5f56ed1e51cb447ae59c63819d33ecd9a9f0d44a93eae285f7fe96468
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 cd1c3cf48b8660c6550ff7fbf148706094f97507ad4625cc3847f3b2a8c695e2
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
-# body sha256 d06e8b7c6e50e2db233bc0c5811c5c81fe348c6044487a6a9ead052596b72749
+# symmech 0.1.0 generated module; inputs sha256 ddbc3cf39069d4a845041e3c9584dfe5b7e79ac2852f98b7cd51f36823dfb603
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
+# body sha256 0a9acd58cb1b1af3e466323ccbc6805bf672f22d28e89f36b064dd6d75c77b50
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
 
@@ -106,8 +110,14 @@ def a_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _a_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
+    for k in range(out.shape[0]):
+        _a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _a_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
     for k in numba.prange(out.shape[0]):
         _a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
 
@@ -165,7 +175,7 @@ def a(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     """
     arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
     out = numpy.empty((math.prod(batch),) + (5, 5))
-    _a_loop(*arrays, steps, out)
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
     return out.reshape(batch + (5, 5))
 
 
@@ -206,8 +216,14 @@ def b_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _b_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
+    for k in range(out.shape[0]):
+        _b_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _b_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
     for k in numba.prange(out.shape[0]):
         _b_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
 
@@ -265,7 +281,7 @@ def b(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     """
     arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
     out = numpy.empty((math.prod(batch),) + (5, 5))
-    _b_loop(*arrays, steps, out)
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
     return out.reshape(batch + (5, 5))
 
 
@@ -329,8 +345,14 @@ def c_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _c_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
+    for k in range(out.shape[0]):
+        _c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _c_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
     for k in numba.prange(out.shape[0]):
         _c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
 
@@ -388,7 +410,7 @@ def c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     """
     arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
     out = numpy.empty((math.prod(batch),) + (5, 5))
-    _c_loop(*arrays, steps, out)
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
     return out.reshape(batch + (5, 5))
 
 
@@ -442,8 +464,14 @@ def L_a_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_a_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
+    for k in range(out.shape[0]):
+        _L_a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_a_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
 
@@ -501,7 +529,7 @@ def L_a(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delt
     """
     arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
     out = numpy.empty((math.prod(batch),) + (5, 7))
-    _L_a_loop(*arrays, steps, out)
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
     return out.reshape(batch + (5, 7))
 
 
@@ -543,8 +571,14 @@ def L_c_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_c_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
+    for k in range(out.shape[0]):
+        _L_c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_c_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
 
@@ -602,5 +636,5 @@ def L_c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delt
     """
     arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
     out = numpy.empty((math.prod(batch),) + (5, 4))
-    _L_c_loop(*arrays, steps, out)
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
     return out.reshape(batch + (5, 4))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 7468d967c79f4ed164a94172a67f5e7eebd3db257cfce13d16d5fae5710f2abc
-# source key 623332a7df8016c3a83a3e4b14de398a59faf196df381c9e6d3d506bc329696e
+# symmech 0.1.0 generated module; inputs sha256 64ec271b655c82517ae46c36784e304bc5382f7eb8cdc398d2526e5dcb3e5398
+# source key 3cee81d07cbc58a250a49d65cfca53029087c3d705b585caf10d641b769f4382
 # body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 4bfcbfc12a8f3d171efcc7bbb40d15f7464c90260251aaa76899ad2f0847812e
-# source key 623332a7df8016c3a83a3e4b14de398a59faf196df381c9e6d3d506bc329696e
-# body sha256 a9d961606e6ec24fbe2fef3a543de7aa9e25084c50e3fbfc17036d8a4b20c8fa
+# symmech 0.1.0 generated module; inputs sha256 43e2bc591c1768af163bc98721dbd96864b39d4bab0f74d75bfaf7a7a9a6e3b7
+# source key 3cee81d07cbc58a250a49d65cfca53029087c3d705b585caf10d641b769f4382
+# body sha256 525f7ed3995b9d0023bfe2e869bccfdd90795ded2fc5abd062ecdd200af15119
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Compiled twin of `symmech.generated.smm_formulas` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["table2_conjugates", "table2_conjugates_scalar", "spatial_conjugate", "spatial_conjugate_scalar", "length_d2_turn", "length_d2_turn_scalar", "length_d2_two_turns", "length_d2_two_turns_scalar", "length_d2_slide", "length_d2_slide_scalar", "table1_planar", "table1_planar_scalar", "table1_length", "table1_length_scalar", "fig8_c", "fig8_c_scalar", "fig9_c", "fig9_c_scalar", "omega_c_rates", "omega_c_rates_scalar"]
 
@@ -59,8 +63,14 @@ def table2_conjugates_scalar(p_x, p_y, p_z):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _table2_conjugates_loop(p_x, p_y, p_z, steps, out):
+    for k in range(out.shape[0]):
+        _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _table2_conjugates_ploop(p_x, p_y, p_z, steps, out):
     for k in numba.prange(out.shape[0]):
         _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
 
@@ -84,7 +94,7 @@ def table2_conjugates(p_x, p_y, p_z):
     """
     arrays, steps, batch = _flat(p_x, p_y, p_z)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _table2_conjugates_loop(*arrays, steps, out)
+    (_table2_conjugates_ploop if len(out) >= PARALLEL_BATCH else _table2_conjugates_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -103,8 +113,14 @@ def spatial_conjugate_scalar(e_x, e_y, e_z, p_x, p_y, p_z):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _spatial_conjugate_loop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
+    for k in range(out.shape[0]):
+        _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _spatial_conjugate_ploop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
     for k in numba.prange(out.shape[0]):
         _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
 
@@ -134,7 +150,7 @@ def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _spatial_conjugate_loop(*arrays, steps, out)
+    (_spatial_conjugate_ploop if len(out) >= PARALLEL_BATCH else _spatial_conjugate_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -168,8 +184,14 @@ def length_d2_turn_scalar(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_turn_loop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_turn_ploop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
 
@@ -207,7 +229,7 @@ def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_turn_loop(*arrays, steps, out)
+    (_length_d2_turn_ploop if len(out) >= PARALLEL_BATCH else _length_d2_turn_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -240,8 +262,14 @@ def length_d2_two_turns_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_two_turns_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_two_turns_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
 
@@ -285,7 +313,7 @@ def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_two_turns_loop(*arrays, steps, out)
+    (_length_d2_two_turns_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -304,8 +332,14 @@ def length_d2_slide_scalar(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_slide_loop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_slide_ploop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
 
@@ -337,7 +371,7 @@ def length_d2_slide(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     """
     arrays, steps, batch = _flat(s_x, s_y, s_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_slide_loop(*arrays, steps, out)
+    (_length_d2_slide_ploop if len(out) >= PARALLEL_BATCH else _length_d2_slide_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -361,8 +395,14 @@ def table1_planar_scalar(p_x, p_y, s_x, s_y):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _table1_planar_loop(p_x, p_y, s_x, s_y, steps, out):
+    for k in range(out.shape[0]):
+        _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _table1_planar_ploop(p_x, p_y, s_x, s_y, steps, out):
     for k in numba.prange(out.shape[0]):
         _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
 
@@ -388,7 +428,7 @@ def table1_planar(p_x, p_y, s_x, s_y):
     """
     arrays, steps, batch = _flat(p_x, p_y, s_x, s_y)
     out = numpy.empty((math.prod(batch),) + (8,))
-    _table1_planar_loop(*arrays, steps, out)
+    (_table1_planar_ploop if len(out) >= PARALLEL_BATCH else _table1_planar_loop)(*arrays, steps, out)
     return out.reshape(batch + (8,))
 
 
@@ -416,8 +456,14 @@ def table1_length_scalar(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _table1_length_loop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
+    for k in range(out.shape[0]):
+        _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _table1_length_ploop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
 
@@ -449,7 +495,7 @@ def table1_length(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     """
     arrays, steps, batch = _flat(p_x, p_y, s_x, s_y, u_x, u_y, ell)
     out = numpy.empty((math.prod(batch),) + (4,))
-    _table1_length_loop(*arrays, steps, out)
+    (_table1_length_ploop if len(out) >= PARALLEL_BATCH else _table1_length_loop)(*arrays, steps, out)
     return out.reshape(batch + (4,))
 
 
@@ -478,8 +524,14 @@ def fig8_c_scalar(c1, L, alpha, beta, ell, m, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fig8_c_loop(c1, L, alpha, beta, ell, m, g, steps, out):
+    for k in range(out.shape[0]):
+        _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _fig8_c_ploop(c1, L, alpha, beta, ell, m, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
 
@@ -511,7 +563,7 @@ def fig8_c(c1, L, alpha, beta, ell, m, g):
     """
     arrays, steps, batch = _flat(c1, L, alpha, beta, ell, m, g)
     out = numpy.empty((math.prod(batch),) + ())
-    _fig8_c_loop(*arrays, steps, out)
+    (_fig8_c_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -529,8 +581,14 @@ def fig9_c_scalar(c1, Delta, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fig9_c_loop(c1, Delta, ell, steps, out):
+    for k in range(out.shape[0]):
+        _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _fig9_c_ploop(c1, Delta, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
 
@@ -554,7 +612,7 @@ def fig9_c(c1, Delta, ell):
     """
     arrays, steps, batch = _flat(c1, Delta, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _fig9_c_loop(*arrays, steps, out)
+    (_fig9_c_ploop if len(out) >= PARALLEL_BATCH else _fig9_c_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -573,8 +631,14 @@ def omega_c_rates_scalar(beta):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _omega_c_rates_loop(beta, steps, out):
+    for k in range(out.shape[0]):
+        _omega_c_rates_0(beta[k * steps[0]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _omega_c_rates_ploop(beta, steps, out):
     for k in numba.prange(out.shape[0]):
         _omega_c_rates_0(beta[k * steps[0]], out, k)
 
@@ -594,5 +658,5 @@ def omega_c_rates(beta):
     """
     arrays, steps, batch = _flat(beta)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _omega_c_rates_loop(*arrays, steps, out)
+    (_omega_c_rates_ploop if len(out) >= PARALLEL_BATCH else _omega_c_rates_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))

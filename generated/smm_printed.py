@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2cf65678f7706f627fad780dcda09a719aa337a7b18daa6fa34ee4a502bedf7c
-# source key 8fbe8a4830734b7a10eb77ffa35b777fe7e3d97f5d28d84e5cdb4725c3b17751
+# symmech 0.1.0 generated module; inputs sha256 c791c2f4da76007084e7aadb352bf329f603b175468415aff09883f88671af26
+# source key 36bf3516bf79186f8fa4208e88d3ed06f0e52959046c0964c58f0cd07807ad9d
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

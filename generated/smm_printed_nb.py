@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 d83f3b0912c25e7daa10d0dab27e6cc3f49a82cf7119db7814d242444041cf05
-# source key 8fbe8a4830734b7a10eb77ffa35b777fe7e3d97f5d28d84e5cdb4725c3b17751
-# body sha256 9a3569755b99bbeb590ea6ce3e122be3e0fa9ed5192e10af011b88133726186b
+# symmech 0.1.0 generated module; inputs sha256 8601f10615eb66b8023b9aa9b3a9d7a3c48b65b64fd8800aa1dc34afd05b73f7
+# source key 36bf3516bf79186f8fa4208e88d3ed06f0e52959046c0964c58f0cd07807ad9d
+# body sha256 9c3fc8ca0725ee52f7836e6e620a435ce0caf075332d3be9c142cacd68229f96
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 
 Compiled twin of `symmech.generated.smm_printed` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["ex51_a", "ex51_a_scalar", "ex51_Lc_rope", "ex51_Lc_rope_scalar", "ex52_La", "ex52_La_scalar", "ex52_Lc", "ex52_Lc_scalar", "ex53_Lc", "ex53_Lc_scalar", "table2_conjugates", "table2_conjugates_scalar", "spatial_conjugate", "spatial_conjugate_scalar", "length_d2_turn", "length_d2_turn_scalar", "length_d2_two_turns", "length_d2_two_turns_scalar", "length_d2_two_turns_read", "length_d2_two_turns_read_scalar", "length_d2_slide", "length_d2_slide_scalar", "table1_planar", "table1_planar_scalar", "table1_length", "table1_length_scalar", "fig8_c", "fig8_c_scalar", "fig8_c_read", "fig8_c_read_scalar", "fig9_c", "fig9_c_scalar", "omega_c_rates", "omega_c_rates_scalar"]
 
@@ -55,8 +59,14 @@ def ex51_a_scalar(I1, I2, m2, r1, z2):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _ex51_a_loop(I1, I2, m2, r1, z2, steps, out):
+    for k in range(out.shape[0]):
+        _ex51_a_0(I1[k * steps[0]], I2[k * steps[1]], m2[k * steps[2]], r1[k * steps[3]], z2[k * steps[4]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _ex51_a_ploop(I1, I2, m2, r1, z2, steps, out):
     for k in numba.prange(out.shape[0]):
         _ex51_a_0(I1[k * steps[0]], I2[k * steps[1]], m2[k * steps[2]], r1[k * steps[3]], z2[k * steps[4]], out, k)
 
@@ -84,7 +94,7 @@ def ex51_a(I1, I2, m2, r1, z2):
     """
     arrays, steps, batch = _flat(I1, I2, m2, r1, z2)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _ex51_a_loop(*arrays, steps, out)
+    (_ex51_a_ploop if len(out) >= PARALLEL_BATCH else _ex51_a_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -102,8 +112,14 @@ def ex51_Lc_rope_scalar(r1, alpha):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _ex51_Lc_rope_loop(r1, alpha, steps, out):
+    for k in range(out.shape[0]):
+        _ex51_Lc_rope_0(r1[k * steps[0]], alpha[k * steps[1]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _ex51_Lc_rope_ploop(r1, alpha, steps, out):
     for k in numba.prange(out.shape[0]):
         _ex51_Lc_rope_0(r1[k * steps[0]], alpha[k * steps[1]], out, k)
 
@@ -125,7 +141,7 @@ def ex51_Lc_rope(r1, alpha):
     """
     arrays, steps, batch = _flat(r1, alpha)
     out = numpy.empty((math.prod(batch),) + (2,))
-    _ex51_Lc_rope_loop(*arrays, steps, out)
+    (_ex51_Lc_rope_ploop if len(out) >= PARALLEL_BATCH else _ex51_Lc_rope_loop)(*arrays, steps, out)
     return out.reshape(batch + (2,))
 
 
@@ -179,8 +195,14 @@ def ex52_La_scalar(xM, yM, l4, alpha, l5, beta):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _ex52_La_loop(xM, yM, l4, alpha, l5, beta, steps, out):
+    for k in range(out.shape[0]):
+        _ex52_La_0(xM[k * steps[0]], yM[k * steps[1]], l4[k * steps[2]], alpha[k * steps[3]], l5[k * steps[4]], beta[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _ex52_La_ploop(xM, yM, l4, alpha, l5, beta, steps, out):
     for k in numba.prange(out.shape[0]):
         _ex52_La_0(xM[k * steps[0]], yM[k * steps[1]], l4[k * steps[2]], alpha[k * steps[3]], l5[k * steps[4]], beta[k * steps[5]], out, k)
 
@@ -210,7 +232,7 @@ def ex52_La(xM, yM, l4, alpha, l5, beta):
     """
     arrays, steps, batch = _flat(xM, yM, l4, alpha, l5, beta)
     out = numpy.empty((math.prod(batch),) + (5, 7))
-    _ex52_La_loop(*arrays, steps, out)
+    (_ex52_La_ploop if len(out) >= PARALLEL_BATCH else _ex52_La_loop)(*arrays, steps, out)
     return out.reshape(batch + (5, 7))
 
 
@@ -244,8 +266,14 @@ def ex52_Lc_scalar(l4, alpha, l5, beta, l3, l6, delta3, delta4):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _ex52_Lc_loop(l4, alpha, l5, beta, l3, l6, delta3, delta4, steps, out):
+    for k in range(out.shape[0]):
+        _ex52_Lc_0(l4[k * steps[0]], alpha[k * steps[1]], l5[k * steps[2]], beta[k * steps[3]], l3[k * steps[4]], l6[k * steps[5]], delta3[k * steps[6]], delta4[k * steps[7]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _ex52_Lc_ploop(l4, alpha, l5, beta, l3, l6, delta3, delta4, steps, out):
     for k in numba.prange(out.shape[0]):
         _ex52_Lc_0(l4[k * steps[0]], alpha[k * steps[1]], l5[k * steps[2]], beta[k * steps[3]], l3[k * steps[4]], l6[k * steps[5]], delta3[k * steps[6]], delta4[k * steps[7]], out, k)
 
@@ -279,7 +307,7 @@ def ex52_Lc(l4, alpha, l5, beta, l3, l6, delta3, delta4):
     """
     arrays, steps, batch = _flat(l4, alpha, l5, beta, l3, l6, delta3, delta4)
     out = numpy.empty((math.prod(batch),) + (18,))
-    _ex52_Lc_loop(*arrays, steps, out)
+    (_ex52_Lc_ploop if len(out) >= PARALLEL_BATCH else _ex52_Lc_loop)(*arrays, steps, out)
     return out.reshape(batch + (18,))
 
 
@@ -309,8 +337,14 @@ def ex53_Lc_scalar(L1, beta, delta):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _ex53_Lc_loop(L1, beta, delta, steps, out):
+    for k in range(out.shape[0]):
+        _ex53_Lc_0(L1[k * steps[0]], beta[k * steps[1]], delta[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _ex53_Lc_ploop(L1, beta, delta, steps, out):
     for k in numba.prange(out.shape[0]):
         _ex53_Lc_0(L1[k * steps[0]], beta[k * steps[1]], delta[k * steps[2]], out, k)
 
@@ -334,7 +368,7 @@ def ex53_Lc(L1, beta, delta):
     """
     arrays, steps, batch = _flat(L1, beta, delta)
     out = numpy.empty((math.prod(batch),) + (3, 4))
-    _ex53_Lc_loop(*arrays, steps, out)
+    (_ex53_Lc_ploop if len(out) >= PARALLEL_BATCH else _ex53_Lc_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 4))
 
 
@@ -359,8 +393,14 @@ def table2_conjugates_scalar(p_x, p_y, p_z):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _table2_conjugates_loop(p_x, p_y, p_z, steps, out):
+    for k in range(out.shape[0]):
+        _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _table2_conjugates_ploop(p_x, p_y, p_z, steps, out):
     for k in numba.prange(out.shape[0]):
         _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
 
@@ -384,7 +424,7 @@ def table2_conjugates(p_x, p_y, p_z):
     """
     arrays, steps, batch = _flat(p_x, p_y, p_z)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _table2_conjugates_loop(*arrays, steps, out)
+    (_table2_conjugates_ploop if len(out) >= PARALLEL_BATCH else _table2_conjugates_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -403,8 +443,14 @@ def spatial_conjugate_scalar(e_x, e_y, e_z, p_x, p_y, p_z):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _spatial_conjugate_loop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
+    for k in range(out.shape[0]):
+        _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _spatial_conjugate_ploop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
     for k in numba.prange(out.shape[0]):
         _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
 
@@ -434,7 +480,7 @@ def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _spatial_conjugate_loop(*arrays, steps, out)
+    (_spatial_conjugate_ploop if len(out) >= PARALLEL_BATCH else _spatial_conjugate_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -454,8 +500,14 @@ def length_d2_turn_scalar(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_turn_loop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_turn_ploop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
 
@@ -493,7 +545,7 @@ def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_turn_loop(*arrays, steps, out)
+    (_length_d2_turn_ploop if len(out) >= PARALLEL_BATCH else _length_d2_turn_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -523,8 +575,14 @@ def length_d2_two_turns_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_two_turns_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_two_turns_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
 
@@ -568,7 +626,7 @@ def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_two_turns_loop(*arrays, steps, out)
+    (_length_d2_two_turns_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -595,8 +653,14 @@ def length_d2_two_turns_read_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z,
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_two_turns_read_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_two_turns_read_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_two_turns_read_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_two_turns_read_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
 
@@ -640,7 +704,7 @@ def length_d2_two_turns_read(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u
     """
     arrays, steps, batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_two_turns_read_loop(*arrays, steps, out)
+    (_length_d2_two_turns_read_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_read_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -657,8 +721,14 @@ def length_d2_slide_scalar(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _length_d2_slide_loop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
+    for k in range(out.shape[0]):
+        _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _length_d2_slide_ploop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
 
@@ -690,7 +760,7 @@ def length_d2_slide(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     """
     arrays, steps, batch = _flat(s_x, s_y, s_z, u_x, u_y, u_z, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _length_d2_slide_loop(*arrays, steps, out)
+    (_length_d2_slide_ploop if len(out) >= PARALLEL_BATCH else _length_d2_slide_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -714,8 +784,14 @@ def table1_planar_scalar(p_x, p_y, s_x, s_y):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _table1_planar_loop(p_x, p_y, s_x, s_y, steps, out):
+    for k in range(out.shape[0]):
+        _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _table1_planar_ploop(p_x, p_y, s_x, s_y, steps, out):
     for k in numba.prange(out.shape[0]):
         _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
 
@@ -741,7 +817,7 @@ def table1_planar(p_x, p_y, s_x, s_y):
     """
     arrays, steps, batch = _flat(p_x, p_y, s_x, s_y)
     out = numpy.empty((math.prod(batch),) + (8,))
-    _table1_planar_loop(*arrays, steps, out)
+    (_table1_planar_ploop if len(out) >= PARALLEL_BATCH else _table1_planar_loop)(*arrays, steps, out)
     return out.reshape(batch + (8,))
 
 
@@ -764,8 +840,14 @@ def table1_length_scalar(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _table1_length_loop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
+    for k in range(out.shape[0]):
+        _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _table1_length_ploop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
 
@@ -797,7 +879,7 @@ def table1_length(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     """
     arrays, steps, batch = _flat(p_x, p_y, s_x, s_y, u_x, u_y, ell)
     out = numpy.empty((math.prod(batch),) + (4,))
-    _table1_length_loop(*arrays, steps, out)
+    (_table1_length_ploop if len(out) >= PARALLEL_BATCH else _table1_length_loop)(*arrays, steps, out)
     return out.reshape(batch + (4,))
 
 
@@ -820,8 +902,14 @@ def fig8_c_scalar(c1, L, alpha, beta, ell, m, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fig8_c_loop(c1, L, alpha, beta, ell, m, g, steps, out):
+    for k in range(out.shape[0]):
+        _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _fig8_c_ploop(c1, L, alpha, beta, ell, m, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
 
@@ -853,7 +941,7 @@ def fig8_c(c1, L, alpha, beta, ell, m, g):
     """
     arrays, steps, batch = _flat(c1, L, alpha, beta, ell, m, g)
     out = numpy.empty((math.prod(batch),) + ())
-    _fig8_c_loop(*arrays, steps, out)
+    (_fig8_c_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -875,8 +963,14 @@ def fig8_c_read_scalar(c1, L, alpha, beta, ell, m, g):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fig8_c_read_loop(c1, L, alpha, beta, ell, m, g, steps, out):
+    for k in range(out.shape[0]):
+        _fig8_c_read_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _fig8_c_read_ploop(c1, L, alpha, beta, ell, m, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _fig8_c_read_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
 
@@ -908,7 +1002,7 @@ def fig8_c_read(c1, L, alpha, beta, ell, m, g):
     """
     arrays, steps, batch = _flat(c1, L, alpha, beta, ell, m, g)
     out = numpy.empty((math.prod(batch),) + ())
-    _fig8_c_read_loop(*arrays, steps, out)
+    (_fig8_c_read_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_read_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -925,8 +1019,14 @@ def fig9_c_scalar(c1, Delta, ell):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fig9_c_loop(c1, Delta, ell, steps, out):
+    for k in range(out.shape[0]):
+        _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _fig9_c_ploop(c1, Delta, ell, steps, out):
     for k in numba.prange(out.shape[0]):
         _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
 
@@ -950,7 +1050,7 @@ def fig9_c(c1, Delta, ell):
     """
     arrays, steps, batch = _flat(c1, Delta, ell)
     out = numpy.empty((math.prod(batch),) + ())
-    _fig9_c_loop(*arrays, steps, out)
+    (_fig9_c_ploop if len(out) >= PARALLEL_BATCH else _fig9_c_loop)(*arrays, steps, out)
     return out.reshape(batch + ())
 
 
@@ -969,8 +1069,14 @@ def omega_c_rates_scalar(beta):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _omega_c_rates_loop(beta, steps, out):
+    for k in range(out.shape[0]):
+        _omega_c_rates_0(beta[k * steps[0]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _omega_c_rates_ploop(beta, steps, out):
     for k in numba.prange(out.shape[0]):
         _omega_c_rates_0(beta[k * steps[0]], out, k)
 
@@ -990,5 +1096,5 @@ def omega_c_rates(beta):
     """
     arrays, steps, batch = _flat(beta)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _omega_c_rates_loop(*arrays, steps, out)
+    (_omega_c_rates_ploop if len(out) >= PARALLEL_BATCH else _omega_c_rates_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))

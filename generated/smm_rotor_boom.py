@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5a08e86d122cdb90454c04e9b301ead5519f5a7013439eb913d8b1d47666ee47
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
+# symmech 0.1.0 generated module; inputs sha256 9cee10af52e3a6621392f2f2f27e15026592826c7a237d55fe5f12c7287a187e
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
 # body sha256 aee5dbf23a586530a888113236e52e676f91d5a69d4a97696549f4cbbea29ebb
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 18e5f1c31138c9440e5389ba70a589b07625328a8ecbe88be1383801e613c010
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
-# body sha256 7754d3aafc27d14fafcb831749eb14ca656fd6c552dc26ac5c55a4aeb7f9393b
+# symmech 0.1.0 generated module; inputs sha256 3512e01d4010d1127c8f75810d81cd57f659f9bfd2ef6bc60dbd49f5e0ae436c
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
+# body sha256 d94bc504910bc49a0c46f2b4c8e05302b851cd6cbc146a3984f3bbc137001322
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_rotor_boom` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
 
@@ -55,8 +59,14 @@ def a_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _a_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
+    for k in range(out.shape[0]):
+        _a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _a_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
     for k in numba.prange(out.shape[0]):
         _a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
 
@@ -100,7 +110,7 @@ def a(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """
     arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _a_loop(*arrays, steps, out)
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -124,8 +134,14 @@ def b_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _b_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
+    for k in range(out.shape[0]):
+        _b_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _b_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
     for k in numba.prange(out.shape[0]):
         _b_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
 
@@ -169,7 +185,7 @@ def b(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """
     arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _b_loop(*arrays, steps, out)
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -193,8 +209,14 @@ def c_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _c_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
+    for k in range(out.shape[0]):
+        _c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _c_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
     for k in numba.prange(out.shape[0]):
         _c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
 
@@ -238,7 +260,7 @@ def c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """
     arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _c_loop(*arrays, steps, out)
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))
 
 
@@ -260,8 +282,14 @@ def L_a_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_a_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
+    for k in range(out.shape[0]):
+        _L_a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_a_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
 
@@ -305,7 +333,7 @@ def L_a(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """
     arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
     out = numpy.empty((math.prod(batch),) + (2, 3))
-    _L_a_loop(*arrays, steps, out)
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 3))
 
 
@@ -328,8 +356,14 @@ def L_c_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_c_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
+    for k in range(out.shape[0]):
+        _L_c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_c_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
 
@@ -373,5 +407,5 @@ def L_c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """
     arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
     out = numpy.empty((math.prod(batch),) + (2, 2))
-    _L_c_loop(*arrays, steps, out)
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
     return out.reshape(batch + (2, 2))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f11b2b083939596dcfc22f763469737dd89bbd2777c991728d0069702535e993
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
+# symmech 0.1.0 generated module; inputs sha256 b8ac48ce98bb2826f80d5e0f21b315a2aa85160febd3b9547235a22cd25e096e
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
 # body sha256 7e1d4ed34b8463a361ac6dad171df7c1ff947e403ef03b0214d339053944b399
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

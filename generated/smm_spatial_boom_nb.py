@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 6c2fcce05fc72581f57d96a566b750d003541665b97408d5ce9f292944a90b4d
-# source key b823e31781abd0db0bc3c173a6b2947dd3fdcda4978478eef240879dd9f8ac1f
-# body sha256 6df94edacd853de412022f723d15f46a89caddd7a181c77bb7b8b05eeb71bff0
+# symmech 0.1.0 generated module; inputs sha256 476dda095cfd3f2431d9c8553eaff5e3e861fc14783ddeec553e85371ee84152
+# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
+# body sha256 67778c37a4368986c2647313b3f638b88cf930547bdd773b2470f02c0948f2a7
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
 
@@ -70,8 +74,14 @@ def a_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _a_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
+    for k in range(out.shape[0]):
+        _a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _a_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
 
@@ -131,7 +141,7 @@ def a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma
     """
     arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty((math.prod(batch),) + (4, 4))
-    _a_loop(*arrays, steps, out)
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
     return out.reshape(batch + (4, 4))
 
 
@@ -163,8 +173,14 @@ def b_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _b_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
+    for k in range(out.shape[0]):
+        _b_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _b_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _b_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
 
@@ -224,7 +240,7 @@ def b(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma
     """
     arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty((math.prod(batch),) + (4, 4))
-    _b_loop(*arrays, steps, out)
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
     return out.reshape(batch + (4, 4))
 
 
@@ -324,8 +340,14 @@ def c_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _c_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
+    for k in range(out.shape[0]):
+        _c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _c_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
 
@@ -385,7 +407,7 @@ def c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma
     """
     arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty((math.prod(batch),) + (4, 4))
-    _c_loop(*arrays, steps, out)
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
     return out.reshape(batch + (4, 4))
 
 
@@ -441,8 +463,14 @@ def L_a_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_a_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
+    for k in range(out.shape[0]):
+        _L_a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_a_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
 
@@ -502,7 +530,7 @@ def L_a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gam
     """
     arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty((math.prod(batch),) + (4, 10))
-    _L_a_loop(*arrays, steps, out)
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
     return out.reshape(batch + (4, 10))
 
 
@@ -545,8 +573,14 @@ def L_c_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _L_c_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
+    for k in range(out.shape[0]):
+        _L_c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _L_c_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
     for k in numba.prange(out.shape[0]):
         _L_c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
 
@@ -606,5 +640,5 @@ def L_c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gam
     """
     arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
     out = numpy.empty((math.prod(batch),) + (4, 4))
-    _L_c_loop(*arrays, steps, out)
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
     return out.reshape(batch + (4, 4))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3090d9255a133a6b8121e19d8122afeef682af8a2688ce0cc8c99fab961eecf8
-# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
+# symmech 0.1.0 generated module; inputs sha256 f41430d40760c53f80fe09a85a75726acf78b2a25728ab09d82be84256cd5ec2
+# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 2b54f4998cde4d01e21abb7a04864e8268ffb5c922ca1cb5ec195fdbd1c7897a
-# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
-# body sha256 195047c1fc756cf5d213eb112bb88caa2abdbf48015daf2a1f97440777e32766
+# symmech 0.1.0 generated module; inputs sha256 6750ae42e3f560928d1ef0edaa99114a5297fca5e1474a1eb3fe62992ee56977
+# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
+# body sha256 dc16865ff353c888b7d64c22b1c71d6a81e9051c5c88686cd290901ca44f5daa
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Compiled twin of `symmech.generated.trolley_dynamics` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["point_coefficients", "point_coefficients_scalar", "reactions", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_scalar", "newton_euler", "newton_euler_scalar"]
 
@@ -60,8 +64,14 @@ def point_coefficients_scalar(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, d
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _point_coefficients_loop(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, steps, out):
+    for k in range(out.shape[0]):
+        _point_coefficients_0(e1[k * steps[0]], e2[k * steps[1]], e3[k * steps[2]], de1[k * steps[3]], de2[k * steps[4]], de3[k * steps[5]], W1[k * steps[6]], W2[k * steps[7]], W3[k * steps[8]], dW1[k * steps[9]], dW2[k * steps[10]], dW3[k * steps[11]], r1[k * steps[12]], r2[k * steps[13]], r3[k * steps[14]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _point_coefficients_ploop(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, steps, out):
     for k in numba.prange(out.shape[0]):
         _point_coefficients_0(e1[k * steps[0]], e2[k * steps[1]], e3[k * steps[2]], de1[k * steps[3]], de2[k * steps[4]], de3[k * steps[5]], W1[k * steps[6]], W2[k * steps[7]], W3[k * steps[8]], dW1[k * steps[9]], dW2[k * steps[10]], dW3[k * steps[11]], r1[k * steps[12]], r2[k * steps[13]], r3[k * steps[14]], out, k)
 
@@ -109,7 +119,7 @@ def point_coefficients(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1,
     """
     arrays, steps, batch = _flat(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3)
     out = numpy.empty((math.prod(batch),) + (6,))
-    _point_coefficients_loop(*arrays, steps, out)
+    (_point_coefficients_ploop if len(out) >= PARALLEL_BATCH else _point_coefficients_loop)(*arrays, steps, out)
     return out.reshape(batch + (6,))
 
 
@@ -177,8 +187,14 @@ def reactions_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, ac
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _reactions_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, steps, out):
+    for k in range(out.shape[0]):
+        _reactions_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], nu1[k * steps[19]], nu2[k * steps[20]], nu3[k * steps[21]], g0[k * steps[22]], l[k * steps[23]], ah[k * steps[24]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _reactions_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, steps, out):
     for k in numba.prange(out.shape[0]):
         _reactions_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], nu1[k * steps[19]], nu2[k * steps[20]], nu3[k * steps[21]], g0[k * steps[22]], l[k * steps[23]], ah[k * steps[24]], out, k)
 
@@ -246,7 +262,7 @@ def reactions(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1,
     """
     arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah)
     out = numpy.empty((math.prod(batch),) + (6,))
-    _reactions_loop(*arrays, steps, out)
+    (_reactions_ploop if len(out) >= PARALLEL_BATCH else _reactions_loop)(*arrays, steps, out)
     return out.reshape(batch + (6,))
 
 
@@ -305,8 +321,14 @@ def reactions_no_gravity_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _reactions_no_gravity_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, steps, out):
+    for k in range(out.shape[0]):
+        _reactions_no_gravity_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], l[k * steps[19]], ah[k * steps[20]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _reactions_no_gravity_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, steps, out):
     for k in numba.prange(out.shape[0]):
         _reactions_no_gravity_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], l[k * steps[19]], ah[k * steps[20]], out, k)
 
@@ -366,7 +388,7 @@ def reactions_no_gravity(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2
     """
     arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah)
     out = numpy.empty((math.prod(batch),) + (6,))
-    _reactions_no_gravity_loop(*arrays, steps, out)
+    (_reactions_no_gravity_ploop if len(out) >= PARALLEL_BATCH else _reactions_no_gravity_loop)(*arrays, steps, out)
     return out.reshape(batch + (6,))
 
 
@@ -397,8 +419,14 @@ def newton_euler_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _newton_euler_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
+    for k in range(out.shape[0]):
+        _newton_euler_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _newton_euler_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
     for k in numba.prange(out.shape[0]):
         _newton_euler_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
 
@@ -454,5 +482,5 @@ def newton_euler(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1,
     """
     arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
     out = numpy.empty((math.prod(batch),) + (6,))
-    _newton_euler_loop(*arrays, steps, out)
+    (_newton_euler_ploop if len(out) >= PARALLEL_BATCH else _newton_euler_loop)(*arrays, steps, out)
     return out.reshape(batch + (6,))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b2fab2524552c7455f01c02e2ee42b5f32bf724b4f214fb436c4c55f6ed7e338
-# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
+# symmech 0.1.0 generated module; inputs sha256 84a09bd0a2b4b7fd4f67cac85dd1b15cde309b8f397d20c2b8c25f82721c7231
+# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

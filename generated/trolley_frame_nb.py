@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 3a3c3291ec3519033215fcbfff5e504153e7d46125043e9aee4bfdc7dbd62191
-# source key fce5f4b3338c9707b7f957943779bce2c3f265cce822d5aac47f5cf630276086
-# body sha256 8604c2ade7a431fd4885163f147b62e603fd3f91793839dc0a5598e488104118
+# symmech 0.1.0 generated module; inputs sha256 9292a919e71d13d0f17bd0f2cf2062cb3ca64bd5d465850f4e06ff7b0ac3549a
+# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
+# body sha256 60f33bc6a2b90526b034c366ff6e268afd651f6186b8c26f14c8ef5eb8f289dc
 """Frames, angles and angular velocity of the trolley along the track.
 
 Compiled twin of `symmech.generated.trolley_frame` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["Lambda", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_scalar", "A", "A_scalar", "omega_per_length", "omega_per_length_scalar", "omega_per_length_rate", "omega_per_length_rate_scalar", "angles_from_tangent", "angles_from_tangent_scalar", "chord_coefficients", "chord_coefficients_scalar", "Lambda_bar_linear", "Lambda_bar_linear_scalar", "rodrigues", "rodrigues_scalar", "chord_rotation", "chord_rotation_scalar"]
 
@@ -68,8 +72,14 @@ def Lambda_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _Lambda_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _Lambda_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -93,7 +103,7 @@ def Lambda(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _Lambda_loop(*arrays, steps, out)
+    (_Lambda_ploop if len(out) >= PARALLEL_BATCH else _Lambda_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -127,8 +137,14 @@ def dLambda_dth1_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dLambda_dth1_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _dLambda_dth1_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -152,7 +168,7 @@ def dLambda_dth1(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _dLambda_dth1_loop(*arrays, steps, out)
+    (_dLambda_dth1_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth1_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -186,8 +202,14 @@ def dLambda_dth2_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dLambda_dth2_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _dLambda_dth2_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -211,7 +233,7 @@ def dLambda_dth2(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _dLambda_dth2_loop(*arrays, steps, out)
+    (_dLambda_dth2_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth2_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -244,8 +266,14 @@ def dLambda_dth3_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dLambda_dth3_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _dLambda_dth3_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -269,7 +297,7 @@ def dLambda_dth3(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _dLambda_dth3_loop(*arrays, steps, out)
+    (_dLambda_dth3_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth3_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -297,8 +325,14 @@ def A_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _A_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _A_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -322,7 +356,7 @@ def A(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _A_loop(*arrays, steps, out)
+    (_A_ploop if len(out) >= PARALLEL_BATCH else _A_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -344,8 +378,14 @@ def omega_per_length_scalar(th1, th2, th3, dth1, dth2, dth3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _omega_per_length_loop(th1, th2, th3, dth1, dth2, dth3, steps, out):
+    for k in range(out.shape[0]):
+        _omega_per_length_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _omega_per_length_ploop(th1, th2, th3, dth1, dth2, dth3, steps, out):
     for k in numba.prange(out.shape[0]):
         _omega_per_length_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], out, k)
 
@@ -375,7 +415,7 @@ def omega_per_length(th1, th2, th3, dth1, dth2, dth3):
     """
     arrays, steps, batch = _flat(th1, th2, th3, dth1, dth2, dth3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _omega_per_length_loop(*arrays, steps, out)
+    (_omega_per_length_ploop if len(out) >= PARALLEL_BATCH else _omega_per_length_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -401,8 +441,14 @@ def omega_per_length_rate_scalar(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, 
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _omega_per_length_rate_loop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, steps, out):
+    for k in range(out.shape[0]):
+        _omega_per_length_rate_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], ddth1[k * steps[6]], ddth2[k * steps[7]], ddth3[k * steps[8]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _omega_per_length_rate_ploop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, steps, out):
     for k in numba.prange(out.shape[0]):
         _omega_per_length_rate_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], ddth1[k * steps[6]], ddth2[k * steps[7]], ddth3[k * steps[8]], out, k)
 
@@ -438,7 +484,7 @@ def omega_per_length_rate(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3):
     """
     arrays, steps, batch = _flat(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _omega_per_length_rate_loop(*arrays, steps, out)
+    (_omega_per_length_rate_ploop if len(out) >= PARALLEL_BATCH else _omega_per_length_rate_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -466,8 +512,14 @@ def angles_from_tangent_scalar(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _angles_from_tangent_loop(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, steps, out):
+    for k in range(out.shape[0]):
+        _angles_from_tangent_0(t1[k * steps[0]], t2[k * steps[1]], t3[k * steps[2]], dt1[k * steps[3]], dt2[k * steps[4]], dt3[k * steps[5]], ddt1[k * steps[6]], ddt2[k * steps[7]], ddt3[k * steps[8]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _angles_from_tangent_ploop(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, steps, out):
     for k in numba.prange(out.shape[0]):
         _angles_from_tangent_0(t1[k * steps[0]], t2[k * steps[1]], t3[k * steps[2]], dt1[k * steps[3]], dt2[k * steps[4]], dt3[k * steps[5]], ddt1[k * steps[6]], ddt2[k * steps[7]], ddt3[k * steps[8]], out, k)
 
@@ -503,7 +555,7 @@ def angles_from_tangent(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
     """
     arrays, steps, batch = _flat(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3)
     out = numpy.empty((math.prod(batch),) + (6,))
-    _angles_from_tangent_loop(*arrays, steps, out)
+    (_angles_from_tangent_ploop if len(out) >= PARALLEL_BATCH else _angles_from_tangent_loop)(*arrays, steps, out)
     return out.reshape(batch + (6,))
 
 
@@ -552,8 +604,14 @@ def chord_coefficients_scalar(th1, th2, th3, dX1, dX2, dX3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _chord_coefficients_loop(th1, th2, th3, dX1, dX2, dX3, steps, out):
+    for k in range(out.shape[0]):
+        _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _chord_coefficients_ploop(th1, th2, th3, dX1, dX2, dX3, steps, out):
     for k in numba.prange(out.shape[0]):
         _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
 
@@ -583,7 +641,7 @@ def chord_coefficients(th1, th2, th3, dX1, dX2, dX3):
     """
     arrays, steps, batch = _flat(th1, th2, th3, dX1, dX2, dX3)
     out = numpy.empty((math.prod(batch),) + (3, 4))
-    _chord_coefficients_loop(*arrays, steps, out)
+    (_chord_coefficients_ploop if len(out) >= PARALLEL_BATCH else _chord_coefficients_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 4))
 
 
@@ -630,8 +688,14 @@ def Lambda_bar_linear_scalar(th1, th2, th3, dlt1, dlt2, dlt3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _Lambda_bar_linear_loop(th1, th2, th3, dlt1, dlt2, dlt3, steps, out):
+    for k in range(out.shape[0]):
+        _Lambda_bar_linear_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dlt1[k * steps[3]], dlt2[k * steps[4]], dlt3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _Lambda_bar_linear_ploop(th1, th2, th3, dlt1, dlt2, dlt3, steps, out):
     for k in numba.prange(out.shape[0]):
         _Lambda_bar_linear_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dlt1[k * steps[3]], dlt2[k * steps[4]], dlt3[k * steps[5]], out, k)
 
@@ -661,7 +725,7 @@ def Lambda_bar_linear(th1, th2, th3, dlt1, dlt2, dlt3):
     """
     arrays, steps, batch = _flat(th1, th2, th3, dlt1, dlt2, dlt3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _Lambda_bar_linear_loop(*arrays, steps, out)
+    (_Lambda_bar_linear_ploop if len(out) >= PARALLEL_BATCH else _Lambda_bar_linear_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -695,8 +759,14 @@ def rodrigues_scalar(psi, xi1, xi2, xi3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _rodrigues_loop(psi, xi1, xi2, xi3, steps, out):
+    for k in range(out.shape[0]):
+        _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rodrigues_ploop(psi, xi1, xi2, xi3, steps, out):
     for k in numba.prange(out.shape[0]):
         _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
 
@@ -722,7 +792,7 @@ def rodrigues(psi, xi1, xi2, xi3):
     """
     arrays, steps, batch = _flat(psi, xi1, xi2, xi3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _rodrigues_loop(*arrays, steps, out)
+    (_rodrigues_ploop if len(out) >= PARALLEL_BATCH else _rodrigues_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -751,8 +821,14 @@ def chord_rotation_scalar(rho1, rho2, rho3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _chord_rotation_loop(rho1, rho2, rho3, steps, out):
+    for k in range(out.shape[0]):
+        _chord_rotation_0(rho1[k * steps[0]], rho2[k * steps[1]], rho3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _chord_rotation_ploop(rho1, rho2, rho3, steps, out):
     for k in numba.prange(out.shape[0]):
         _chord_rotation_0(rho1[k * steps[0]], rho2[k * steps[1]], rho3[k * steps[2]], out, k)
 
@@ -776,5 +852,5 @@ def chord_rotation(rho1, rho2, rho3):
     """
     arrays, steps, batch = _flat(rho1, rho2, rho3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _chord_rotation_loop(*arrays, steps, out)
+    (_chord_rotation_ploop if len(out) >= PARALLEL_BATCH else _chord_rotation_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 520a7a5808399e71ac02ce78053ed4b8f6f8d89fa3d35374e87c0b8f1852e5f9
-# source key e3045f2d6f1d2f6ebde47645bd4cc2ad986d587b8d46156a85b9ef354c244d67
+# symmech 0.1.0 generated module; inputs sha256 f1977b2d1cb14da4084f32e5a7edfeca51e7e8d7d3146655e2889d0b872611cd
+# source key 9de3118847d3b3af96c9d37b3f85ee0fdd273fd6dc38a86541e5ddb73df3e857
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 c78f3de8d46015a5ac70412b0a58480e544c6023fb0af2722af3e32049474b9f
-# source key e3045f2d6f1d2f6ebde47645bd4cc2ad986d587b8d46156a85b9ef354c244d67
-# body sha256 56c7bd5ca24f926740e84d574c953a07e25892dff5f8ff57866734a467566d2d
+# symmech 0.1.0 generated module; inputs sha256 27ca73ef8c7cd969f7775c23b3bd836df0840cb39f29dc84490f729563605407
+# source key 9de3118847d3b3af96c9d37b3f85ee0fdd273fd6dc38a86541e5ddb73df3e857
+# body sha256 fda5951858e236de9c343a4001876fa21043481f904b7ba0b5919125934a0f93
 """The trolley paper's formulas as printed (hand transcription).
 
 Compiled twin of `symmech.generated.trolley_printed` (the numpy module, the
@@ -14,7 +14,9 @@ For every function f:
 
 * ``f(...)`` has the numpy module's contract (scalars or arrays broadcast over
   a leading batch; float64 result of shape batch + element shape), computed
-  by one fused loop over the batch, parallel over the cores (``prange``).
+  by one fused loop over the batch: serial below PARALLEL_BATCH
+  configurations, where waking threads costs more than it saves, parallel
+  over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
 
@@ -25,6 +27,8 @@ import math
 
 import numba
 import numpy
+
+PARALLEL_BATCH = 20000
 
 __all__ = ["Lambda", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_scalar", "A", "A_scalar", "chord_coefficients", "chord_coefficients_scalar", "rodrigues", "rodrigues_scalar", "helix_Lambda", "helix_Lambda_scalar", "helix_omega", "helix_omega_scalar", "rigid_body_equations", "rigid_body_equations_scalar"]
 
@@ -68,8 +72,14 @@ def Lambda_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _Lambda_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _Lambda_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -93,7 +103,7 @@ def Lambda(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _Lambda_loop(*arrays, steps, out)
+    (_Lambda_ploop if len(out) >= PARALLEL_BATCH else _Lambda_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -127,8 +137,14 @@ def dLambda_dth1_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dLambda_dth1_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _dLambda_dth1_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -152,7 +168,7 @@ def dLambda_dth1(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _dLambda_dth1_loop(*arrays, steps, out)
+    (_dLambda_dth1_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth1_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -186,8 +202,14 @@ def dLambda_dth2_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dLambda_dth2_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _dLambda_dth2_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -211,7 +233,7 @@ def dLambda_dth2(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _dLambda_dth2_loop(*arrays, steps, out)
+    (_dLambda_dth2_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth2_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -244,8 +266,14 @@ def dLambda_dth3_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dLambda_dth3_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _dLambda_dth3_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -269,7 +297,7 @@ def dLambda_dth3(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _dLambda_dth3_loop(*arrays, steps, out)
+    (_dLambda_dth3_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth3_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -297,8 +325,14 @@ def A_scalar(th1, th2, th3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _A_loop(th1, th2, th3, steps, out):
+    for k in range(out.shape[0]):
+        _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _A_ploop(th1, th2, th3, steps, out):
     for k in numba.prange(out.shape[0]):
         _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
 
@@ -322,7 +356,7 @@ def A(th1, th2, th3):
     """
     arrays, steps, batch = _flat(th1, th2, th3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _A_loop(*arrays, steps, out)
+    (_A_ploop if len(out) >= PARALLEL_BATCH else _A_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -370,8 +404,14 @@ def chord_coefficients_scalar(th1, th2, th3, dX1, dX2, dX3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _chord_coefficients_loop(th1, th2, th3, dX1, dX2, dX3, steps, out):
+    for k in range(out.shape[0]):
+        _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _chord_coefficients_ploop(th1, th2, th3, dX1, dX2, dX3, steps, out):
     for k in numba.prange(out.shape[0]):
         _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
 
@@ -401,7 +441,7 @@ def chord_coefficients(th1, th2, th3, dX1, dX2, dX3):
     """
     arrays, steps, batch = _flat(th1, th2, th3, dX1, dX2, dX3)
     out = numpy.empty((math.prod(batch),) + (3, 4))
-    _chord_coefficients_loop(*arrays, steps, out)
+    (_chord_coefficients_ploop if len(out) >= PARALLEL_BATCH else _chord_coefficients_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 4))
 
 
@@ -435,8 +475,14 @@ def rodrigues_scalar(psi, xi1, xi2, xi3):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _rodrigues_loop(psi, xi1, xi2, xi3, steps, out):
+    for k in range(out.shape[0]):
+        _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rodrigues_ploop(psi, xi1, xi2, xi3, steps, out):
     for k in numba.prange(out.shape[0]):
         _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
 
@@ -462,7 +508,7 @@ def rodrigues(psi, xi1, xi2, xi3):
     """
     arrays, steps, batch = _flat(psi, xi1, xi2, xi3)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _rodrigues_loop(*arrays, steps, out)
+    (_rodrigues_ploop if len(out) >= PARALLEL_BATCH else _rodrigues_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -492,8 +538,14 @@ def helix_Lambda_scalar(phi, R, lam):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _helix_Lambda_loop(phi, R, lam, steps, out):
+    for k in range(out.shape[0]):
+        _helix_Lambda_0(phi[k * steps[0]], R[k * steps[1]], lam[k * steps[2]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _helix_Lambda_ploop(phi, R, lam, steps, out):
     for k in numba.prange(out.shape[0]):
         _helix_Lambda_0(phi[k * steps[0]], R[k * steps[1]], lam[k * steps[2]], out, k)
 
@@ -517,7 +569,7 @@ def helix_Lambda(phi, R, lam):
     """
     arrays, steps, batch = _flat(phi, R, lam)
     out = numpy.empty((math.prod(batch),) + (3, 3))
-    _helix_Lambda_loop(*arrays, steps, out)
+    (_helix_Lambda_ploop if len(out) >= PARALLEL_BATCH else _helix_Lambda_loop)(*arrays, steps, out)
     return out.reshape(batch + (3, 3))
 
 
@@ -537,8 +589,14 @@ def helix_omega_scalar(R, lam):
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _helix_omega_loop(R, lam, steps, out):
+    for k in range(out.shape[0]):
+        _helix_omega_0(R[k * steps[0]], lam[k * steps[1]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _helix_omega_ploop(R, lam, steps, out):
     for k in numba.prange(out.shape[0]):
         _helix_omega_0(R[k * steps[0]], lam[k * steps[1]], out, k)
 
@@ -560,7 +618,7 @@ def helix_omega(R, lam):
     """
     arrays, steps, batch = _flat(R, lam)
     out = numpy.empty((math.prod(batch),) + (3,))
-    _helix_omega_loop(*arrays, steps, out)
+    (_helix_omega_ploop if len(out) >= PARALLEL_BATCH else _helix_omega_loop)(*arrays, steps, out)
     return out.reshape(batch + (3,))
 
 
@@ -606,8 +664,14 @@ def rigid_body_equations_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01
     return out[0]
 
 
-@numba.njit(cache=True, error_model="numpy", parallel=True)
+@numba.njit(cache=True, error_model="numpy")
 def _rigid_body_equations_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
+    for k in range(out.shape[0]):
+        _rigid_body_equations_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rigid_body_equations_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
     for k in numba.prange(out.shape[0]):
         _rigid_body_equations_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
 
@@ -663,5 +727,5 @@ def rigid_body_equations(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, 
     """
     arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
     out = numpy.empty((math.prod(batch),) + (6,))
-    _rigid_body_equations_loop(*arrays, steps, out)
+    (_rigid_body_equations_ploop if len(out) >= PARALLEL_BATCH else _rigid_body_equations_loop)(*arrays, steps, out)
     return out.reshape(batch + (6,))

@@ -54,10 +54,12 @@ def grain_configurations(n=1000, seed=11):
     return (*axes.T, *angles.T)
 
 
-def test_impact_tensor_compiled_equals_numpy_at_1000_configurations():
+@pytest.mark.parametrize("parallel_batch", [0, 10**9], ids=["parallel loop", "serial loop"])
+def test_impact_tensor_compiled_equals_numpy_at_1000_configurations(monkeypatch, parallel_batch):
     args = grain_configurations()
     nb = kernels.load("grain_impact")
     assert nb.__name__ == "symmech.generated.grain_impact_nb"
+    monkeypatch.setattr(nb, "PARALLEL_BATCH", parallel_batch)
     assert_close(nb.H(*args), gi.H(*args))
     assert_close(nb.contact_height(*args), gi.contact_height(*args))
     assert_close(nb.rotation(*args[3:]), gi.rotation(*args[3:]))
@@ -116,7 +118,7 @@ def test_chunked_function_compiles_and_matches(tmp_path, monkeypatch):
         emit.write(spec, tmp_path, target)
     monkeypatch.syspath_prepend(str(tmp_path))
     numpy_module, numba_module = importlib.import_module("big_mod"), importlib.import_module("big_mod_nb")
-    assert (tmp_path / "big_mod_nb.py").read_text().count("def _big_") == 4  # 3 chunks + the loop
+    assert (tmp_path / "big_mod_nb.py").read_text().count("def _big_") == 5  # 3 chunks, serial and parallel loops
     s_values, t_values = np.linspace(-2, 2, 9), np.array([0.0, 1.0, 2.0])[:, None]  # t = 1: 1/0
     with np.errstate(divide="ignore", invalid="ignore"):
         assert_close(numba_module.big(s_values, t_values).reshape(27, 3, 3),
