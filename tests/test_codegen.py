@@ -199,8 +199,13 @@ def test_atomic_write_leaves_no_partial_file(tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["m.py"]
 
 
-def test_source_key_follows_imports_and_data():
+def test_source_key_follows_imports_and_data(tmp_path):
     """The key covers what the derivation imports from symmech, and the scenes it reads."""
+    module = tmp_path / "fake.py"
+    module.write_text("import numpy\nfrom . import forms\nfrom ..core import scene\n"
+                      "def f():\n    from symmech.smm.model import Mechanism\n")
+    assert sorted(codegen._imported("symmech.smm.fake", module)) == [
+        "symmech", "symmech.core", "symmech.core.scene", "symmech.smm", "symmech.smm.forms", "symmech.smm.model"]
     assert "symmech.smm.forms" in codegen.closure("symmech.smm.derive")
     assert "symmech.core.scene" in codegen.closure("symmech.smm.derive")
     assert "symmech.grain.body" not in codegen.closure("symmech.grain.derive")

@@ -22,6 +22,7 @@ import functools
 import hashlib
 import importlib
 import importlib.metadata
+import importlib.util
 import pkgutil
 import sys
 import time
@@ -83,9 +84,7 @@ def _imported(module: str, path: Path) -> set[str]:
         if isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                base = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1] + ([base] if base else []))
+            base = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
             names.add(base)
             names.update(f"{base}.{a.name}" for a in node.names)
     found = set()
