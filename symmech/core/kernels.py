@@ -4,7 +4,8 @@
 when numba imports, else a stand-in with the same names built on the numpy
 module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
 float (scalar quantities) or a float64 array of the element shape. Runtime
-code written against ``load`` runs everywhere; only its speed differs.
+code written against ``load`` runs everywhere; only its speed differs. The
+module is verified first (:func:`symmech.core.integrity.verify`).
 """
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import functools
 import importlib
 from types import SimpleNamespace
 
+from symmech.core import integrity
 from symmech.core.integrity import PACKAGE
 
 
@@ -27,12 +29,15 @@ def _scalar_twin(function):
 
 @functools.cache
 def load(name: str):
-    """The numba module ``<name>_nb``, or the numpy stand-in described above."""
+    """The numba module ``<name>_nb``, or the numpy stand-in described above; SymmechError
+    when the module is edited, truncated or stale."""
     try:
+        import numba  # noqa: F401  (the twin needs it; without it the numpy module stands in)
+    except ImportError:
+        integrity.verify(name)
+    else:
+        integrity.verify(f"{name}_nb")
         return importlib.import_module(f"{PACKAGE}.{name}_nb")
-    except ImportError as exc:
-        if not (exc.name or "").startswith(("numba", "llvmlite")):
-            raise
     reference = importlib.import_module(f"{PACKAGE}.{name}")
     names = {}
     for f in reference.__all__:
