@@ -64,6 +64,8 @@ SCHEMA = Table("an impact scene", {
 
 @dataclass(frozen=True)
 class ImpactScene:
+    """A prepared impact: the body, its state before the impact, the printed law's e and λ, the solver."""
+
     body: Ellipsoid
     angles: np.ndarray  # (psi, theta, phi) [rad]
     velocity: np.ndarray  # centre of mass before, surface frame [m/s]
