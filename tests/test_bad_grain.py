@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from badinput import DELETE, assert_rejected, bundled, changed, cli_rejects
+from badinput import DELETE, assert_rejected, bundled, changed, cli_rejects, edited
 from symmech.core import pipeline
 from symmech.core.context import Context
 from symmech.core.scene import SymmechError
@@ -23,10 +23,7 @@ BASE_TEXT = (ROOT / "scenes" / "grain_default.toml").read_text()
 
 
 def edits(*pairs):
-    data = BASE
-    for path, value in pairs:
-        data = changed(data, path, value)
-    return data
+    return edited(BASE, *pairs)
 
 
 MASS = (("body.density", DELETE),)  # a scene that gives the mass directly

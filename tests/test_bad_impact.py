@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from badinput import DELETE, assert_rejected, bundled, changed, cli_rejects
+from badinput import DELETE, assert_rejected, bundled, cli_rejects, edited
 from symmech.core import pipeline
 from symmech.core.context import Context
 from symmech.core.scene import SymmechError
@@ -17,10 +17,7 @@ BASE_TEXT = (ROOT / "scenes" / "impact_default.toml").read_text()
 
 
 def edits(*pairs):
-    data = BASE
-    for path, value in pairs:
-        data = changed(data, path, value)
-    return data
+    return edited(BASE, *pairs)
 
 
 CASES = [
