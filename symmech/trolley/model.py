@@ -247,8 +247,9 @@ def _bisect_jump(track, mode, a, b, frame, k) -> dict:
             a, lam_a, w_a = m, lam_m, w_m
         steps += 1
     jump = lam_b @ lam_a.T
-    if jump[0, 0] < 1 - 1e-6:
-        raise SymmechError(f"the track tangent jumps by {np.degrees(_angle(jump)):.3g} deg near s = {a:.9g} m: "
+    bend = float(np.arccos(np.clip(jump[0, 0], -1.0, 1.0)))
+    if bend > JUMP_FACTOR * (b - a) * max(w_a, w_b) + 1e-6:
+        raise SymmechError(f"the track tangent jumps by {np.degrees(bend):.3g} deg near s = {a:.9g} m: "
                            "the track is not smooth there")
     roll = float(np.degrees(np.arctan2(jump[1, 2], jump[1, 1])))
     kind = "vertical tangent (aircraft angles)" if mode == "twist" else "inflection (principal normal reverses)"

@@ -252,6 +252,12 @@ def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: fl
         for t_val in np.linspace(0.0, t_end, 5):
             expressions.check_domain(field, expr.subs(t, t_val), "v", 0.0, MAX_SPEED, unit="m/s")
     both = tracks.lambdify_arrays([expr, rate], [expressions.symbol(v) for v in variables])
+    if len(variables) == 1:
+        grid = np.linspace(0.0, t_end, 2001)
+        fast = np.abs(both(grid)[0]) > MAX_SPEED
+        if fast.any():
+            raise SceneError(field, f"|V0| = {abs(both(grid)[0][np.argmax(fast)]):.3g} m/s at t = "
+                                    f"{grid[np.argmax(fast)]:.6g} s exceeds {MAX_SPEED:g} m/s")
     return (lambda *a: both(*a)[0]), (lambda *a: both(*a)[1])
 
 
@@ -320,9 +326,10 @@ def _noise_notes(noise: dict, track) -> list[str]:
     if ratio <= NOISE_WARN:
         return []
     return [f"track.points: derived accelerations are dominated by noise: the points scatter by about "
-            f"{noise['point_noise_m']:.2g} m, giving a curvature error of {noise['curvature_error_per_m']:.3g} 1/m "
-            f"against a largest curvature of {noise['curvature_max_per_m']:.3g} 1/m ({100 * ratio:.0f} %); "
-            f"set track.smoothing to about the noise (e.g. {max(noise['point_noise_m'], 1e-6):.2g} m)"]
+            f"{noise['point_noise_m']:.2g} m per coordinate, giving a curvature error of "
+            f"{noise['curvature_error_per_m']:.3g} 1/m against a largest curvature of "
+            f"{noise['curvature_max_per_m']:.3g} 1/m ({100 * ratio:.0f} %); set track.smoothing to at least "
+            f"the RMS distance of the noise, about {2 * math.sqrt(3) * noise['point_noise_m']:.2g} m"]
 
 
 NOISE_WARN = 0.1  # curvature error / largest curvature beyond which a table's accelerations are noise
