@@ -240,7 +240,8 @@ def check_domain(field: str, expr, variable: str, lo: float, hi: float, samples:
     if bad.any():
         k = int(np.argmax(bad))
         what = "is undefined or complex" if np.isnan(values[k]) else "is infinite or overflows"
-        raise SceneError(field, f"{_short(str(expr))} {what} at {variable} = {grid[k]:.6g}"
+        at = _boundary(expr, x, grid[k - 1], grid[k]) if k else grid[k]
+        raise SceneError(field, f"{_short(str(expr))} {what} at {variable} = {at:.6g}"
                                 f"{' ' + unit if unit else ''} (domain [{lo:g}, {hi:g}])")
     for guard, what, strict in _guards(expr) if guards else ():
         if x not in guard.free_symbols:
@@ -257,6 +258,21 @@ def _evaluate(expr, x, grid):
     # numpy's real functions give nan for a complex result and inf for a pole.
     f = sp.lambdify([x], expr, modules="numpy")
     return np.broadcast_to(np.asarray(f(grid), dtype=float), grid.shape)
+
+
+def _boundary(expr, x, good, bad):
+    """Where the expression stops being finite between a good and a bad sample (bisection)."""
+    import sympy as sp
+
+    f = sp.lambdify([x], expr, modules="numpy")
+    with np.errstate(all="ignore"):
+        for _ in range(60):
+            mid = 0.5 * (good + bad)
+            if abs(float(f(mid))) <= MAX_MAGNITUDE:
+                good = mid
+            else:
+                bad = mid
+    return bad
 
 
 def _guards(expr):

@@ -1,0 +1,89 @@
+"""The shared safe expression language: whitelist, size and power bounds, domain checks."""
+import math
+import time
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from symmech.core import expressions as ex
+from symmech.core.scene import SceneError
+
+T = ex.symbol("t")
+
+
+def refused(text, words, variables=("t",), constants=None):
+    with pytest.raises(SceneError) as info:
+        ex.parse("f", text, variables, constants)
+    assert info.value.field == "f" and words in str(info.value), str(info.value)
+    return str(info.value)
+
+
+@pytest.mark.parametrize("text, words", [
+    ("1/0", "division by zero"), ("log(0)*t", "undefined"), ("(-1)**0.5", "complex"),
+    ("sin(1,2)", "sin takes 1 argument"), ("sin(t, k=1)", "sin takes 1"), ("9**9**9", "exponent"),
+    ("10**400", "exponent"), ("(10**100)**100", "overflows"), ("1e400", "overflows"),
+    ("x0*t", "unknown name 'x0'"), ("numpy", "unknown name 'numpy'"), ("__import__('os')", "only the functions"),
+    ("t.real", "attribute access"), ("[t][0]", "subscripts"), ("lambda: t", "lambda"), ("t if t else 1", "if-else"),
+    ("t < 1", "comparisons"), ("2^t", "use ** for powers"), ("'a'", "not a real number"), ("True", "not a real"),
+    ("1j*t", "not a real number"), ("sin", "without arguments"), ("", "empty"), ("t +", "cannot parse"),
+    ("(" * 300 + "t" + ")" * 300, "cannot parse"), ("+".join(["t"] * 300), "syntax nodes"),
+    ("t" * 2001, "characters"), ("E**t + f(t)", "only the functions"),
+])
+def test_refused_without_evaluation(text, words):
+    start = time.perf_counter()
+    refused(text, words)
+    assert time.perf_counter() - start < 1.0
+
+
+def test_accepted_expressions_are_the_sympy_expressions():
+    assert ex.parse("f", "3*t + 7*sin(t/2)", ("t",)) == 3 * T + 7 * sp.sin(T / 2)
+    assert ex.parse("f", "a*t**2", ("t",), {"a": 2.5}) == sp.Float(2.5) * T**2
+    assert ex.parse("f", "pi + E + abs(t) + atan2(t, 1)", ("t",)) == sp.pi + sp.E + sp.Abs(T) + sp.atan(T)
+    assert ex.parse("f", "2**-3", ()) == sp.Rational(1, 8)
+
+
+def test_constant_names_are_checked():
+    for name in ("x0", "x12", "numpy", "np", "math", "__import__", "_a", "sin", "pi", "lambda"):
+        with pytest.raises(SceneError, match="reserved|identifier"):
+            ex.check_name("c." + name, name)
+    with pytest.raises(SceneError, match="already used"):
+        ex.check_name("c.t", "t", ("t",))
+    assert ex.check_name("c.k_1", "k_1") == "k_1"
+
+
+@pytest.mark.parametrize("text, at, words", [
+    ("1/(t-2)", 2.0, "t = 2 s"),
+    ("1/(t-pi)", math.pi, "division by zero"),
+    ("1/(t**2 - 2*t + 1)", 1.0, "t = 1 s"),
+    ("sqrt(t-3)", 0.0, "undefined or complex"),
+    ("log(t-1)", 0.0, "t = 0 s"),
+    ("tan(t)", math.pi / 2, "tan is singular"),
+    ("asin(t/2)", 2.0, ""),
+    ("exp(1000*t)", None, "overflows"),
+    ("(t - 2.000001)**(-1)", 2.000001, "division by zero"),
+    ("log((t - 1.3001)**2)", 1.3001, "log of a non-positive"),
+])
+def test_domain_violations_name_the_parameter_value(text, at, words):
+    expr = ex.parse("motion.speed", text, ("t",))
+    with pytest.raises(SceneError) as info:
+        ex.check_domain("motion.speed", expr, "t", 0.0, 5.0, unit="s")
+    message = str(info.value)
+    assert info.value.field == "motion.speed" and words in message, message
+    if at is not None:
+        value = float(message.split(" t = ")[1].split()[0])
+        assert value == pytest.approx(at, abs=1e-5)
+
+
+def test_a_pole_between_samples_is_found():
+    """The pole lies between the 11 samples: only the guard search finds it."""
+    expr = ex.parse("f", "1/(t - 0.123456789)", ("t",))
+    with pytest.raises(SceneError, match=r"t = 0\.123457"):
+        ex.check_domain("f", expr, "t", 0.0, 1.0, samples=11)
+
+
+def test_regular_expressions_pass_the_domain_check():
+    for text in ("3*t + 7*sin(t/2)", "sqrt(t)", "log(t + 1)", "1/(t + 1)", "abs(t - 2)", "tan(t/4)"):
+        ex.check_domain("f", ex.parse("f", text, ("t",)), "t", 0.0, 5.0)
+    values = np.array([float(ex.parse("f", "sqrt(t)", ("t",)).subs(T, 4.0))])
+    assert values[0] == 2.0
