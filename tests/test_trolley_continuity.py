@@ -129,3 +129,21 @@ def test_docs_field_tables_are_generated_from_the_schema():
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "scenes-trolley.md").read_text()
     assert "<!-- schema:begin -->\n" + markdown(SCHEMA) + "\n<!-- schema:end -->" in text
+
+
+def test_curvature_jump_in_a_table_is_measured_and_warned():
+    """Straight line then a circular arc R = 30 m, exact points 1 m apart: the quintic fit
+    overshoots the arc's curvature by 8.9 % (a3 peaks at 1.089 v²/R); the data's three-point
+    curvatures never exceed 1/R, so the overshoot is found and warned (before: silent)."""
+    radius, v = 30.0, 10.0
+    line = [[x, 0.0, 0.0] for x in np.arange(-30.0, 0.0, 1.0)]
+    arc = [[radius * math.sin(a), 0.0, radius - radius * math.cos(a)] for a in np.arange(0.0, 1.0, 1 / radius)]
+    st, res = compute(setup(track={"type": "table", "points": line + arc}, motion={"speed": str(v), "s0": 5.0},
+                            time={"t_end": 4.0, "steps": 400}, effects={"gravity": False}))
+    peak = np.abs(res[1]["a"][:, 2]).max() / (v**2 / radius) - 1
+    assert peak == pytest.approx(0.089, abs=0.005)
+    assert st.track.noise["curvature_overshoot"] == pytest.approx(peak, abs=0.01)
+    assert any("overshoots the three-point curvature of the points by 8.9 %" in n for n in st.notes)
+    _, smooth = _noisy_circle(0.0)
+    st = prepared(setup(track={"type": "table", "points": smooth}, motion={"speed": "1", "s0": 5.0}))
+    assert st.track.noise["curvature_overshoot"] < 1e-6 and not st.notes

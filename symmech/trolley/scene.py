@@ -26,7 +26,7 @@ COMFORT = {"x1": (-2.0, 2.0), "x2": (-1.5, 6.0), "x3": (-2.0, 2.0)}
 MAX_SPEED = 1e4  # m/s: admissible |V0| (and traction speeds checked up to it)
 MAX_LENGTH = 1e7  # m: coordinates and arc lengths
 # Measured on 2 cores: wall time per grid step and case, and per traction right-hand side.
-SECONDS_PER_STEP = 4e-5
+SECONDS_PER_STEP = 2e-6
 SECONDS_PER_RHS = 2e-4
 
 
@@ -290,7 +290,7 @@ def prepare(scene: dict) -> Setup:
     setup.plan = model.plan_frames(track, lo, hi, setup.frame, num["min_curvature"])
     noise = getattr(track, "noise", None)
     if noise:
-        setup.notes += _noise_notes(noise, track)
+        setup.notes += _noise_notes(noise)
     return setup
 
 
@@ -319,20 +319,27 @@ def _table_grid(setup: Setup) -> None:
                                                     "(use the paper's t_end = 20 s, steps = 5000)")
 
 
-def _noise_notes(noise: dict, track) -> list[str]:
-    """A warning when the curvature error estimated from the table's data is not small."""
+def _noise_notes(noise: dict) -> list[str]:
+    """Warnings when the data say the table's derived accelerations are not to be trusted."""
     ratio = noise["curvature_error_per_m"] / max(noise["curvature_max_per_m"], 1e-300)
     noise["curvature_error_ratio"] = ratio
-    if ratio <= NOISE_WARN:
-        return []
-    return [f"track.points: derived accelerations are dominated by noise: the points scatter by about "
-            f"{noise['point_noise_m']:.2g} m per coordinate, giving a curvature error of "
-            f"{noise['curvature_error_per_m']:.3g} 1/m against a largest curvature of "
-            f"{noise['curvature_max_per_m']:.3g} 1/m ({100 * ratio:.0f} %); set track.smoothing to at least "
-            f"the RMS distance of the noise, about {2 * math.sqrt(3) * noise['point_noise_m']:.2g} m"]
+    notes = []
+    if ratio > NOISE_WARN:
+        notes.append(f"track.points: derived accelerations are dominated by noise: the points scatter by about "
+                     f"{noise['point_noise_m']:.2g} m per coordinate, giving a curvature error of "
+                     f"{noise['curvature_error_per_m']:.3g} 1/m against a largest curvature of "
+                     f"{noise['curvature_max_per_m']:.3g} 1/m ({100 * ratio:.0f} %); set track.smoothing to at "
+                     f"least the RMS distance of the noise, about {2 * math.sqrt(3) * noise['point_noise_m']:.2g} m")
+    elif noise["curvature_overshoot"] > OVERSHOOT_WARN:
+        notes.append(f"track.points: the fitted curvature overshoots the three-point curvature of the points by "
+                     f"{100 * noise['curvature_overshoot']:.1f} % of its largest value near "
+                     f"{noise['overshoot_near_m']:.4g} m along the table (a curvature jump: the spline rings); "
+                     "accelerations there are overestimated by about as much; add points or a transition curve")
+    return notes
 
 
 NOISE_WARN = 0.1  # curvature error / largest curvature beyond which a table's accelerations are noise
+OVERSHOOT_WARN = 0.05  # curvature overshoot (fraction) beyond which a table's fit is said to ring
 
 
 def estimate(setup: Setup) -> registry.Estimate:

@@ -179,9 +179,7 @@ class TableTrack(Track):
 
     ``smoothing`` [m] = 0 interpolates the points; > 0 fits a smoothing quintic spline
     whose RMS distance from the points is ``smoothing`` (the stated tolerance). ``noise``
-    holds the estimates from the data: the point noise σ [m] (from fourth differences),
-    and the curvature error [1/m] of the fit (bootstrap with that noise) beside the
-    largest curvature of the fit.
+    holds the estimates from the data (see :func:`_noise_estimate`).
     """
 
     def __init__(self, points, field: str, max_turn_deg: float, smoothing: float = 0.0):
@@ -249,8 +247,14 @@ def _curvature(spline, u):
 
 
 def _noise_estimate(u, p, smoothing, spline) -> dict:
-    """Point noise σ from the data (fourth differences: std σ √70 for white noise) and the
-    curvature error of the fit, from refits of the fit's points plus that noise."""
+    """What the data say about the fit's curvature.
+
+    point_noise_m: σ from fourth differences (std σ √70 for white noise); curvature_error_per_m:
+    RMS spread of the curvature over refits of the fitted points plus that noise;
+    curvature_overshoot: how far the fit's curvature rises above the three-point
+    (circumscribed-circle) curvature of the neighbouring points, as a fraction of the
+    largest of those — a spline rings at a curvature jump of the data.
+    """
     d4 = np.diff(p, 4, axis=0)
     sigma = float(np.median(np.abs(d4)) / 0.6745 / math.sqrt(70.0)) if len(d4) else 0.0
     fine = np.linspace(u[0], u[-1], 20 * len(u))
@@ -262,9 +266,23 @@ def _noise_estimate(u, p, smoothing, spline) -> dict:
     spread = [_curvature(_fit(u, base + rng.normal(scale=sigma, size=p.shape), smoothing, ""), fine) - kappa
               for _ in range(NOISE_REPLICATES)] if sigma > 0 else [np.zeros_like(fine)]
     err = np.sqrt(np.mean(np.square(spread), axis=0))
+    three = np.concatenate([[0.0], _three_point_curvature(p), [0.0]])
+    near = np.clip(np.searchsorted(u, fine), 1, len(u) - 1)
+    bound = np.max([three[np.clip(near + j, 0, len(u) - 1)] for j in (-2, -1, 0, 1)], axis=0)
+    excess = np.where(inner, kappa - bound, -np.inf)
+    k = int(np.argmax(excess))
     return {"point_noise_m": sigma, "smoothing_m": smoothing,
             "curvature_error_per_m": float(err[inner].max()) if inner.any() else 0.0,
-            "curvature_max_per_m": float(kappa[inner].max()) if inner.any() else 0.0}
+            "curvature_max_per_m": float(kappa[inner].max()) if inner.any() else 0.0,
+            "curvature_overshoot": float(max(excess[k], 0.0) / max(three.max(), 1e-300)),
+            "overshoot_near_m": float(fine[k])}
+
+
+def _three_point_curvature(p):
+    """Curvature of the circle through each three consecutive points (n - 2,) [1/m]."""
+    a, b = p[1:-1] - p[:-2], p[2:] - p[1:-1]
+    twice_area = np.linalg.norm(np.cross(a, b), axis=1)
+    return 2 * twice_area / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1) * np.linalg.norm(a + b, axis=1))
 
 
 def _check_self_intersection(points: np.ndarray, s: np.ndarray, field: str) -> None:
