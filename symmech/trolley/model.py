@@ -164,6 +164,7 @@ CHECK_TURN = 0.2
 JUMP_FACTOR = 1.5
 JUMP_RESOLUTION = 1e-9
 MAX_CHECKS = 200_000
+RMF_NODES = 50_000  # double-reflection nodes (a Python loop: ~1 s)
 
 
 def plan_frames(track, lo: float, hi: float, mode: str, min_curvature: float) -> FramePlan:
@@ -213,6 +214,8 @@ def _check_grid(track, lo, hi, mode):
         steps = np.clip(steps, 1, 1000)
         if steps.max() <= 1:
             break
+        if steps.sum() > MAX_CHECKS:  # refine where needed, within the budget
+            steps = np.maximum(1, (steps * (MAX_CHECKS / steps.sum())).astype(int))
         s = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(s[:-1], s[1:], steps)] + [s[-1:]])
     return s
 
@@ -272,7 +275,7 @@ class RotationMinimising:
     """
 
     def __init__(self, track, s, min_curvature: float):
-        fine = np.linspace(s[0], s[-1], max(20 * len(s), 2001))
+        fine = np.linspace(s[0], s[-1], min(max(20 * len(s), 2001), RMF_NODES))
         X = track.derivatives(fine, 2)
         t = X[1] / np.linalg.norm(X[1], axis=-1, keepdims=True)
         kappa = np.linalg.norm(np.cross(t, X[2]), axis=-1)

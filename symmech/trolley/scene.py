@@ -30,12 +30,12 @@ SECONDS_PER_STEP = 2e-6
 SECONDS_PER_RHS = 2e-4
 
 
-def _expression(variables):
+def _expression(doc, type_doc, default=sc.REQUIRED):
+    """An expression field: syntax and size checked here, names and domain in the table's checks."""
     def parse(path, value):
         expressions.tree(path, value, None)
         return value
-    return sc.Custom(f"expression in {', '.join(variables)}", parse=parse,
-                     type_doc=f"expression in `{'`, `'.join(variables)}`")
+    return sc.Custom(doc, parse=parse, type_doc=type_doc, default=default)
 
 
 def _constants(path, value):
@@ -65,16 +65,18 @@ def _track_expressions(tr, path):
 
 TRACK = sc.Table("the track: midline X0(s) and twist θ1(s)", {
     "type": sc.Choice("how the midline is given", choices=("helix", "expression", "table")),
-    "twist": sc.Custom("twist θ1(s) of the cross-section [rad], differentiated symbolically (frame = \"twist\")",
-                       parse=_expression(("s",)).parse, type_doc="expression in `s`, rad", default="0"),
+    "twist": _expression("twist θ1(s) of the cross-section, differentiated symbolically (frame = \"twist\")",
+                         "expression in `s`, rad", default="0"),
 }, variants=("type", {
     "helix": {
         "radius": sc.Float("helix radius R (axis X3, horizontal)", unit="m", lo=0.0, lo_open=True, hi=1e5),
         "rise": sc.Float("rise λ per radian: X03 = λ φ, φ = s/√(R²+λ²)", unit="m/rad", lo=0.0, hi=1e5),
     },
     "expression": {
-        "x": _expression(("s", "u")), "y": _expression(("s", "u")), "z": _expression(("s", "u")),
-        "parameter": sc.Choice("`s`: the expressions are in arc length (checked |dX0/ds| = 1 within 1e-6); "
+        **{key: _expression(f"X0{i}, the {axis} coordinate of the midline", "expression in `s` or `u` "
+                            "(see `parameter`) and the `constants`, m")
+           for i, (key, axis) in enumerate((("x", "horizontal X1"), ("y", "upward X2"), ("z", "horizontal X3")), 1)},
+        "parameter": sc.Choice("`s`: the expressions are in arc length (checked: ‖dX0/ds‖ = 1 within 1e-6); "
                                "`u`: any parameter, arc length computed", choices=("s", "u"), default="s"),
         "u_range": sc.Vector("parameter range [u0, u1] (s = 0 at u0), with parameter = \"u\"", n=2,
                              lo=-MAX_LENGTH, hi=MAX_LENGTH, default=None),
@@ -87,7 +89,8 @@ TRACK = sc.Table("the track: midline X0(s) and twist θ1(s)", {
         "max_turn_deg": sc.Float("largest turn between successive table segments", unit="deg", lo=0.0,
                                  lo_open=True, hi=90.0, default=20.0),
         "smoothing": sc.Float("fit tolerance: 0 interpolates the points; > 0 fits the smoothest quintic "
-                              "spline within this RMS distance of them (set it to the measurement noise)",
+                              "spline within this RMS distance of them (for a noise σ per coordinate about "
+                              "√3 σ or a little more)",
                               unit="m", lo=0.0, hi=1.0, default=0.0),
     },
 }), checks=(_track_expressions,))
@@ -170,17 +173,16 @@ SCHEMA = sc.Table("a trolley scene", {
         "g0": sc.Float("gravitational acceleration (the paper uses 9.81)", unit="m/s^2", lo=0.0, lo_open=True,
                        hi=100.0, default=G_STANDARD)}, default={}),
     "motion": sc.Table("the drive", {
-        "speed": sc.Custom("V0(t) [m/s], without traction; s(t) = s0 + ∫V0 dt", parse=_expression(("t",)).parse,
-                           type_doc="expression in `t`, m/s", default=None),
-        "traction": sc.Custom("P0(t, v) [N] along x1 at O, with effects.traction",
-                              parse=_expression(("t", "v")).parse, type_doc="expression in `t`, `v`, N",
-                              default=None),
+        "speed": _expression("V0(t), without traction; s(t) = s0 + ∫V0 dt (8-point Gauss per step)",
+                             "expression in `t`, m/s", default=None),
+        "traction": _expression("P0(t, v) along x1 at O, with effects.traction", "expression in `t`, `v`, N",
+                                default=None),
         "initial_speed": sc.Float("V0(0) with traction", unit="m/s", lo=0.0, hi=MAX_SPEED, default=0.0),
         "s0": sc.Float("arc length at t = 0", unit="m", lo=0.0, hi=MAX_LENGTH, default=0.0),
     }),
     "time": sc.Table("the time grid t = 0 … t_end", {
         "t_end": sc.Float("duration", unit="s", lo=0.0, lo_open=True, hi=1e6),
-        "steps": sc.Int("grid intervals", lo=1, hi=10_000_000),
+        "steps": sc.Int("grid intervals (the whole grid is one vectorized batch)", lo=1, hi=1_000_000),
     }),
     "effects": sc.Table("what the model includes", {
         "gravity": sc.Bool("gravity along -X2 (off: the generated reactions_no_gravity)", default=True),
@@ -302,11 +304,11 @@ def _visited(setup: Setup) -> tuple[float, float]:
             raise SceneError("motion.speed", f"the arc length reaches {np.abs(s).max():.3g} m; at most "
                                              f"{MAX_LENGTH:g} m")
         lo, hi = float(s.min()), float(s.max())
-    else:  # traction: the speed is unknown before the run; check ahead of s0 generously
-        lo = setup.s0
-        hi = min(setup.s0 + (setup.v_initial + 10.0) * setup.t[-1], setup.s0 + MAX_LENGTH)
+    else:  # traction: the speed is unknown before the run but bounded by MAX_SPEED
+        span = min(MAX_SPEED * setup.t[-1], MAX_LENGTH)
+        lo, hi = setup.s0 - span, setup.s0 + span
         if math.isfinite(setup.track.length):
-            hi = min(hi, setup.track.length)
+            lo, hi = max(lo, 0.0), min(hi, setup.track.length)
     reach = 2 * setup.fd_step + (1.05 * setup.body.l if setup.local_curvature else 0.0)
     return lo - 2 * setup.fd_step, hi + reach
 
