@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symmech.core import expressions, registry
+from symmech.core.context import Context
 from symmech.core import schema as sc
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
@@ -25,9 +26,12 @@ G_STANDARD = 9.80665
 COMFORT = {"x1": (-2.0, 2.0), "x2": (-1.5, 6.0), "x3": (-2.0, 2.0)}
 MAX_SPEED = 1e4  # m/s: admissible |V0| (and traction speeds checked up to it)
 MAX_LENGTH = 1e7  # m: coordinates and arc lengths
-# Measured on 2 cores: wall time per grid step and case, and per traction right-hand side.
-SECONDS_PER_STEP = 2e-6
+# Measured on 2 cores (helix, 200000 steps): wall time per grid step and frame evaluation,
+# per grid step and case for the CSV files and plots, and per traction right-hand side.
+SECONDS_PER_STEP = 5e-6
+SECONDS_PER_OUTPUT_ROW = 9e-5
 SECONDS_PER_RHS = 2e-4
+MAX_RHS = 2_000_000  # traction right-hand sides before the integration counts as stalled
 
 
 def _expression(doc, type_doc, default=sc.REQUIRED):
@@ -348,8 +352,8 @@ def estimate(setup: Setup) -> registry.Estimate:
     steps = len(setup.t) - 1
     cases = 2 if setup.local_curvature else 1
     runs = cases * (2 if setup.paper_tables else 1) * (6 if setup.local_curvature else 1)
-    seconds = SECONDS_PER_STEP * (steps + 1) * runs
-    what = f"{steps} steps, {cases} case(s)"
+    seconds = (SECONDS_PER_STEP * runs + SECONDS_PER_OUTPUT_ROW * cases) * (steps + 1)
+    what = f"{steps} steps, {cases} case(s) with outputs"
     if setup.traction is not None:
         rhs = 40 * steps + 2000
         seconds += SECONDS_PER_RHS * rhs * cases
@@ -378,12 +382,18 @@ def integrate_traction(setup: Setup, case: int, ctx=None):
     from scipy.integrate import solve_ivp
 
     body = setup.body
-    calls = [0]
+    calls, reached = [0], [setup.t[0]]
+    ctx = ctx or Context(quiet=True)
 
     def rates(t, y):
         calls[0] += 1
-        if ctx is not None and calls[0] % 1000 == 0:
+        if calls[0] % 1000 == 0:
             ctx.tick(f"traction integration at t = {t:.6g} s")
+            if calls[0] > MAX_RHS:
+                raise SymmechError(f"traction integration stalls at t = {t:.6g} s: {calls[0]} evaluations "
+                                   f"(limit {MAX_RHS}); the motion is too stiff or singular there")
+            bar.update(max(t - reached[0], 0.0))
+            reached[0] = max(reached[0], t)
         if not abs(y[1]) <= MAX_SPEED:
             raise SymmechError(f"traction: the speed reaches {y[1]:.6g} m/s at t = {t:.6g} s, beyond "
                                f"{MAX_SPEED:g} m/s (motion.traction)")
@@ -396,8 +406,9 @@ def integrate_traction(setup: Setup, case: int, ctx=None):
         dv = (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]
         return [y[1], dv]
 
-    sol = solve_ivp(rates, (setup.t[0], setup.t[-1]), [setup.s0, setup.v_initial], method="DOP853",
-                    t_eval=setup.t, rtol=1e-10, atol=1e-10)
+    with ctx.progress(setup.t[-1], f"case {case}: traction", unit="s") as bar:
+        sol = solve_ivp(rates, (setup.t[0], setup.t[-1]), [setup.s0, setup.v_initial], method="DOP853",
+                        t_eval=setup.t, rtol=1e-10, atol=1e-10)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise SymmechError(f"traction integration failed: {sol.message}")
     s, v = sol.y
