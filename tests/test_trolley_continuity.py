@@ -147,3 +147,15 @@ def test_curvature_jump_in_a_table_is_measured_and_warned():
     _, smooth = _noisy_circle(0.0)
     st = prepared(setup(track={"type": "table", "points": smooth}, motion={"speed": "1", "s0": 5.0}))
     assert st.track.noise["curvature_overshoot"] < 1e-6 and not st.notes
+
+
+def test_twist_is_honoured_on_a_table_track():
+    """A horizontal circle R = 30 m given as a table, banked by θ1 = atan(v²/(g R)): no lateral
+    load (before: a twist on a table was refused)."""
+    radius, v = 30.0, 12.0
+    _, pts = _noisy_circle(0.0)
+    bank = math.atan(v**2 / (G * radius))
+    st, res = compute(setup(track={"type": "table", "points": pts, "twist": repr(bank)},
+                            motion={"speed": str(v), "s0": 5.0}, time={"t_end": 3.0, "steps": 30}))
+    np.testing.assert_allclose(res[1]["overload"][:, 2], 0.0, atol=1e-4)
+    np.testing.assert_allclose(res[1]["overload"][:, 1], math.hypot(1.0, v**2 / (G * radius)), rtol=1e-4)

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from symmech.core import expressions, registry
-from symmech.core.context import Context
 from symmech.core import schema as sc
+from symmech.core.context import Context
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import model, tables, track as tracks
@@ -164,6 +164,8 @@ def _cross_checks(scene, path):
         raise SceneError("numerics.fd_step", f"{step:g} m is outside (0, {0.1 * axle:g}] m (0.1 axle_distance)")
 
 
+# The whole scene. Other models of the trolley extend it with their own table
+# (``SCHEMA.fields["elastic"] = Table(...)``) and read it from the resolved scene.
 SCHEMA = sc.Table("a trolley scene", {
     "kind": sc.Choice("scene kind", choices=("trolley",)),
     "conventions": sc.Choice("`physics`: the consistent model; `paper`: the paper's conventions (Tables 1, 2)",
@@ -294,6 +296,8 @@ def prepare(scene: dict) -> Setup:
     lo, hi = _visited(setup)
     track.check_domain("track", lo, hi)
     setup.plan = model.plan_frames(track, lo, hi, setup.frame, num["min_curvature"])
+    setup.notes += [f"frame: {e['kind']} at s = {e['s']:.6g} m: {e['action']}" for e in setup.plan.events
+                    if e["kind"] != "fast turn"]
     noise = getattr(track, "noise", None)
     if noise:
         setup.notes += _noise_notes(noise)
