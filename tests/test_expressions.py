@@ -87,3 +87,37 @@ def test_regular_expressions_pass_the_domain_check():
         ex.check_domain("f", ex.parse("f", text, ("t",)), "t", 0.0, 5.0)
     values = np.array([float(ex.parse("f", "sqrt(t)", ("t",)).subs(T, 4.0))])
     assert values[0] == 2.0
+
+
+def _random_expressions():
+    from hypothesis import strategies as st
+
+    leaf = st.sampled_from(["t", "0", "1", "2", "0.5", "-1", "1e300", "1e-300", "9", "100", "101", "pi", "E",
+                            "x0", "numpy", "__import__", "t.real", "'a'", "1j"])
+
+    def grow(inner):
+        binary = st.tuples(inner, st.sampled_from(["+", "-", "*", "/", "**", "^", "%", "//"]), inner).map(
+            lambda p: f"({p[0]}){p[1]}({p[2]})")
+        call = st.tuples(st.sampled_from(list(ex.FUNCTIONS) + ["eval", "exec", "open"]),
+                         st.lists(inner, min_size=0, max_size=3)).map(lambda p: f"{p[0]}({', '.join(p[1])})")
+        return binary | call | inner.map(lambda e: f"-({e})")
+    return st.recursive(leaf, grow, max_leaves=12)
+
+
+def test_fuzzed_expressions_parse_or_fail_with_a_field_error():
+    """Random expressions: a sympy expression that passes the domain check on [0, 5], or a
+    SceneError naming the field — never another exception, never more than 2 s."""
+    from hypothesis import given, settings
+
+    @settings(max_examples=150, deadline=None, derandomize=True)
+    @given(_random_expressions())
+    def check(text):
+        start = time.perf_counter()
+        try:
+            expr = ex.parse("f", text, ("t",))
+            ex.check_domain("f", expr, "t", 0.0, 5.0, samples=201)
+        except SceneError as err:
+            assert err.field == "f" and "\n" not in str(err)
+        assert time.perf_counter() - start < 2.0, text
+
+    check()

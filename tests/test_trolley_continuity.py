@@ -159,3 +159,9 @@ def test_twist_is_honoured_on_a_table_track():
                             motion={"speed": str(v), "s0": 5.0}, time={"t_end": 3.0, "steps": 30}))
     np.testing.assert_allclose(res[1]["overload"][:, 2], 0.0, atol=1e-4)
     np.testing.assert_allclose(res[1]["overload"][:, 1], math.hypot(1.0, v**2 / (G * radius)), rtol=1e-4)
+
+
+def test_a_number_is_a_constant_expression():
+    st = prepared(setup(motion={"speed": 10}, track={"type": "expression", "x": "s", "y": "0", "z": "0",
+                                                   "twist": 0.25}))
+    assert st.speed[0](np.array([1.0]))[0] == 10.0 and st.track.twist(np.array([3.0]))[0][0] == 0.25
