@@ -74,6 +74,7 @@ CASES = [
     ("fd-step-underflow", HELIX, "numerics.fd_step", 1e-308, "numerics.fd_step"),
     ("helix-radius-underflow", HELIX, "track.radius", 1e-308, "track.radius"),
     ("speed-overflow-exp", HELIX, "motion.speed", "exp(50*t)", "motion.speed"),
+    ("track-x-power-tower", EXPR, "track.x", "s + 9**9**9", "track.x"),
     ("track-x-unknown-name", EXPR, "track.y", "q*s", "track.y"),
     ("track-x-not-arc-length", EXPR, "track.x", "2*s", "track.x"),
     ("track-y-log-singular", EXPR, "track.y", "0.01*log(s - 5)", "track.y"),
@@ -126,3 +127,14 @@ steps = 100
 def test_cli_refuses_in_one_line(tmp_path, speed, words):
     line = cli_rejects(tmp_path, SCENE.format(speed=speed), words)
     assert "scene field 'motion.speed'" in line
+
+
+def test_long_run_is_refused_by_its_estimate_before_any_work():
+    from symmech.core import pipeline
+    from symmech.core.context import Context
+    from symmech.core.scene import SymmechError
+
+    scene = pipeline.load(changed(bundled(HELIX), "time.steps", 1_000_000))
+    assert scene.estimate().seconds > 100
+    with pytest.raises(SymmechError, match="exceeds --max-time 10 s"):
+        scene.run(Context(quiet=True, max_time=10.0))
