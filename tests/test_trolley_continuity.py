@@ -165,3 +165,26 @@ def test_a_number_is_a_constant_expression():
     st = prepared(setup(motion={"speed": 10}, track={"type": "expression", "x": "s", "y": "0", "z": "0",
                                                    "twist": 0.25}))
     assert st.speed[0](np.array([1.0]))[0] == 10.0 and st.track.twist(np.array([3.0]))[0][0] == 0.25
+
+
+def test_rotation_minimising_frame_has_no_roll_and_its_stated_angular_velocity():
+    """Forced on the helix (min_curvature above κ): x1 = t, Ω1 = 0, and Ω, Ω' agree with
+    differences of the frame itself (-Λ' Λᵀ = Ω̌ for a passive Λ); |a| of O stays κ v²."""
+    from symmech.trolley import model
+
+    helix = {"type": "helix", "radius": 7.0, "rise": 0.8}
+    v = 6.0
+    st, res = compute(setup(frame="frenet", track=helix, motion={"speed": str(v)}, numerics={"min_curvature": 1.0},
+                            effects={"gravity": False}))
+    assert st.plan.report()["mode"] == "rotation-minimising"
+    s = np.linspace(5.0, 15.0, 11)
+    h = 1e-4
+    frame = model.moving_frame(st.track, s, "frenet", st.plan)
+    plus, minus = (model.moving_frame(st.track, s + d, "frenet", st.plan) for d in (h, -h))
+    skew = -((plus.lam - minus.lam) / (2 * h)) @ np.swapaxes(frame.lam, 1, 2)
+    omega = np.stack([skew[:, 2, 1], skew[:, 0, 2], skew[:, 1, 0]], axis=1)
+    np.testing.assert_allclose(omega, frame.W, atol=1e-6)
+    np.testing.assert_allclose(frame.W[:, 0], 0.0, atol=0)
+    np.testing.assert_allclose((plus.W - minus.W) / (2 * h), frame.dW, atol=1e-6)
+    kappa = 7.0 / (49.0 + 0.64)
+    np.testing.assert_allclose(np.linalg.norm(res[1]["a"], axis=1), kappa * v**2, rtol=1e-9)
