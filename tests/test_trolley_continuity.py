@@ -118,7 +118,7 @@ def test_docs_say_what_a2_is():
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "scenes-trolley.md").read_text()
     assert "normal acceleration of O is κ V0 instead of κ V0² (at t = 10 s: a2" not in text
-    assert "a2 is the x2 component of the acceleration of the centre of mass" in text
+    assert "a2 is\n   the x2 component of the acceleration of the centre of mass" in text
 
 
 def test_docs_field_tables_are_generated_from_the_schema():
