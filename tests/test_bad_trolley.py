@@ -75,6 +75,7 @@ CASES = [
     ("helix-radius-underflow", HELIX, "track.radius", 1e-308, "track.radius"),
     ("speed-overflow-exp", HELIX, "motion.speed", "exp(50*t)", "motion.speed"),
     ("track-x-power-tower", EXPR, "track.x", "s + 9**9**9", "track.x"),
+    ("track-x-derivatives-explode", EXPR, "track.x", "s + 1e-9*" + "**".join(["(s + 2)"] * 12), "track.x"),
     ("track-x-unknown-name", EXPR, "track.y", "q*s", "track.y"),
     ("track-x-not-arc-length", EXPR, "track.x", "2*s", "track.x"),
     ("track-y-log-singular", EXPR, "track.y", "0.01*log(s - 5)", "track.y"),

@@ -121,3 +121,13 @@ def test_fuzzed_expressions_parse_or_fail_with_a_field_error():
         assert time.perf_counter() - start < 2.0, text
 
     check()
+
+
+def test_derivatives_are_bounded_in_size():
+    tower = ex.parse("f", "**".join(["t"] * 12), ("t",))
+    start = time.perf_counter()
+    with pytest.raises(SceneError, match="derivative [1-4] of .* terms"):
+        ex.derivatives("f", tower, "t", 4)
+    assert time.perf_counter() - start < 10.0
+    d = ex.derivatives("f", ex.parse("f", "sin(2*t)", ("t",)), "t", 2)
+    assert d == [sp.sin(2 * T), 2 * sp.cos(2 * T), -4 * sp.sin(2 * T)]

@@ -36,6 +36,7 @@ MAX_CHARS = 2000
 MAX_NODES = 400
 MAX_EXPONENT = 100
 MAX_MAGNITUDE = 1e300
+MAX_DERIVED_NODES = 20_000  # expression-tree nodes a derivative may have (bounds the work on it)
 # Function name -> number of arguments.
 FUNCTIONS = {"sin": 1, "cos": 1, "tan": 1, "exp": 1, "log": 1, "sqrt": 1, "sinh": 1, "cosh": 1, "tanh": 1,
              "asinh": 1, "acosh": 1, "atanh": 1, "asin": 1, "acos": 1, "atan": 1, "atan2": 2, "abs": 1}
@@ -221,6 +222,25 @@ def parse(field: str, text, variables, constants=None):
     if expr.has(sp.I):
         raise SceneError(field, f"{_short(text)} has a complex value ({expr})"[:300])
     return expr
+
+
+def derivatives(field: str, expr, variable: str, order: int, divide=None) -> list:
+    """[expr, d/dx expr, ..., d^order/dx^order expr] (each divided by ``divide`` when given, as
+    for a change of parameter); SceneError naming ``field`` when one grows beyond
+    ``MAX_DERIVED_NODES`` tree nodes — symbolic differentiation of, e.g., a power tower
+    grows without bound."""
+    import sympy as sp
+
+    x = symbol(variable)
+    out = [expr]
+    for k in range(1, order + 1):
+        d = sp.diff(out[-1], x)
+        out.append(d / divide if divide is not None else d)
+        size = sum(1 for _ in sp.preorder_traversal(out[-1]))
+        if size > MAX_DERIVED_NODES:
+            raise SceneError(field, f"derivative {k} of {_short(str(expr))} has {size} terms (at most "
+                                    f"{MAX_DERIVED_NODES}); write the expression more simply")
+    return out
 
 
 def check_domain(field: str, expr, variable: str, lo: float, hi: float, samples: int = 2001,

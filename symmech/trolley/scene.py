@@ -250,11 +250,9 @@ class Setup:
 def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
     """Numeric f and df/dt of an expression field in ``variables`` (t first), checked over
     t ∈ [0, t_end] (and, for traction, v ∈ [0, MAX_SPEED])."""
-    import sympy as sp
-
     expr = expressions.parse(field, text, variables)
     t = expressions.symbol("t")
-    rate = sp.diff(expr, t)
+    rate = expressions.derivatives(field, expr, "t", 1)[1]
     fixed = [{}] if len(variables) == 1 else [{expressions.symbol("v"): v} for v in np.linspace(0, MAX_SPEED, 9)]
     for subs in fixed:
         expressions.check_domain(field, expr.subs(subs), "t", 0.0, t_end, unit="s")

@@ -44,11 +44,8 @@ class Track:
 
     def set_twist(self, expr) -> None:
         """θ1(s) from a sympy expression in ``s`` (differentiated symbolically)."""
-        import sympy as sp
-
-        s = expressions.symbol("s")
         self.twist_expr = expr
-        self._tw = lambdify_arrays([expr, sp.diff(expr, s), sp.diff(expr, s, 2)], [s])
+        self._tw = lambdify_arrays(expressions.derivatives("track.twist", expr, "s", 2), [expressions.symbol("s")])
 
     def twist(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         s = np.asarray(s, dtype=float)
@@ -66,12 +63,9 @@ class Track:
 def _check_with_derivatives(field, expr, var, lo, hi, order, unit):
     """The expression over [lo, hi] with its singularity guards, and its derivatives up to
     ``order`` by dense samples (a derivative can be infinite where the expression is finite)."""
-    import sympy as sp
-
     expressions.check_domain(field, expr, var, lo, hi, unit=unit)
-    x = expressions.symbol(var)
-    for k in range(1, order + 1):
-        expressions.check_domain(field, sp.diff(expr, x, k), var, lo, hi, unit=unit, guards=False)
+    for d in expressions.derivatives(field, expr, var, order)[1:]:
+        expressions.check_domain(field, d, var, lo, hi, unit=unit, guards=False)
 
 
 class ExpressionTrack(Track):
@@ -81,8 +75,6 @@ class ExpressionTrack(Track):
     var = None
 
     def __init__(self, exprs, var: str, field: str, u_range=None):
-        import sympy as sp
-
         self.field = field
         sym = expressions.symbol(var)
         if var == "u":
@@ -91,20 +83,16 @@ class ExpressionTrack(Track):
             self._init_u(exprs, sym, u_range)
         else:
             self.exprs, self.var = exprs, sym  # kept for exact (symbolic) references
-            ders = [exprs]
-            for _ in range(MAX_ORDER):
-                ders.append([sp.diff(e, sym) for e in ders[-1]])
-            self._ders_expr = ders
-            self._f = lambdify_arrays([e for d in ders for e in d], [sym])
+            ders = [expressions.derivatives(f"{field}.{name}", e, "s", MAX_ORDER) for name, e in zip("xyz", exprs)]
+            self._f = lambdify_arrays([ders[i][k] for k in range(MAX_ORDER + 1) for i in range(3)], [sym])
 
     def _init_u(self, exprs, u, u_range):
         import sympy as sp
 
         speed = sp.sqrt(sum(sp.diff(e, u) ** 2 for e in exprs))
-        ders = [exprs]
-        for _ in range(MAX_ORDER):
-            ders.append([sp.diff(e, u) / speed for e in ders[-1]])
-        fu = lambdify_arrays([e for d in ders for e in d], [u])
+        ders = [expressions.derivatives(f"{self.field}.{name}", e, "u", MAX_ORDER, speed)
+                for name, e in zip("xyz", exprs)]
+        fu = lambdify_arrays([ders[i][k] for k in range(MAX_ORDER + 1) for i in range(3)], [u])
         speed_f = lambdify_arrays([speed], [u])
         arc = ArcLength(lambda x: speed_f(x)[0], *u_range, f"{self.field}.u_range")
         self.length = arc.length
