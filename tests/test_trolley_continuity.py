@@ -188,3 +188,15 @@ def test_rotation_minimising_frame_has_no_roll_and_its_stated_angular_velocity()
     np.testing.assert_allclose((plus.W - minus.W) / (2 * h), frame.dW, atol=1e-6)
     kappa = 7.0 / (49.0 + 0.64)
     np.testing.assert_allclose(np.linalg.norm(res[1]["a"], axis=1), kappa * v**2, rtol=1e-9)
+
+
+def test_a_check_sample_on_the_vertical_tangent_does_not_stop_a_run_that_misses_it():
+    """The check grid (201 samples over [-0.04, 25.17] m) lands on s = 4π exactly; the run's
+    samples do not, so the run goes on with the frame rolled back beyond the vertical."""
+    loop = {"type": "expression", "x": "8*sin(s/8)", "y": "8 - 8*cos(s/8)", "z": "0"}
+    span = 2 * (4 * math.pi + 0.04) - 0.04
+    st, res = compute(setup(track=loop, motion={"speed": repr(span - 0.04)}, time={"t_end": 1.0, "steps": 3}))
+    event = st.plan.report()["events"][0]
+    assert event["s"] == pytest.approx(4 * math.pi, abs=3e-3)
+    np.testing.assert_allclose(res[1]["overload"][:, 1], 10.0**0 * (res[1]["V0"] ** 2 / (G * 8.0))
+                               + np.cos(res[1]["s"] / 8.0), atol=1e-9)

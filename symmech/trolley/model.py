@@ -193,6 +193,9 @@ def plan_frames(track, lo: float, hi: float, mode: str, min_curvature: float) ->
                                           f"rotation-minimising frame on [{lo:.6g}, {hi:.6g}] m, started from "
                                           f"{plan.rmf.start}"})
             return plan
+    # A check sample exactly at a singular point (not a run sample) moves off it a little.
+    bad = _raw_frame(track, s, mode)[1]
+    s[bad] += 0.01 * np.diff(s).min()
     frame = moving_frame(track, s, mode)
     turn, predicted = _turns(frame, s)
     for k in np.nonzero(turn > JUMP_FACTOR * predicted + 1e-12)[0]:
