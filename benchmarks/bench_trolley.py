@@ -21,8 +21,8 @@ import sympy as sp
 
 from timing import interleaved, machine, ratio
 
-from symmech.core import kernels
-from symmech.core.scene import Section
+from symmech.core import kernels, pipeline
+from symmech.core.context import Context
 from symmech.generated import trolley_dynamics
 from symmech.generated import trolley_frame
 from symmech.trolley import derive, scene, tables
@@ -110,13 +110,14 @@ def main():
     for conventions in ("paper", "physics"):
         data = copy.deepcopy(tables.PAPER_EXAMPLE)
         data["conventions"] = conventions
-        setup = scene.read(Section(data))
+        setup = pipeline.load(copy.deepcopy(data)).setup
         with tempfile.TemporaryDirectory() as tmp:
-            stats = interleaved({"computation": lambda: scene.compute(setup),
-                                 "whole run": lambda: scene.run(Section(copy.deepcopy(data)), Path(tmp))},
-                                5 if quick else repeats)
+            stats = interleaved({
+                "computation": lambda: scene.compute(setup),
+                "whole run": lambda: pipeline.run_to(copy.deepcopy(data), Path(tmp) / "out", Context(quiet=True)),
+            }, repeats)
         print(f"paper example, 5000 steps, cases 1+2, conventions={conventions}: computation "
-              f"{stats['computation'].text()}; whole run with parsing, CSV and plots {stats['whole run'].text()}")
+              f"{stats['computation'].text()}; whole run with validation, CSV and plots {stats['whole run'].text()}")
 
     n = 10**5 if quick else 10**6
     rng = np.random.default_rng(1)
