@@ -112,7 +112,10 @@ def cmd_codegen(ns) -> int:
         directory = _default_generated()
     if directory.exists() and not directory.is_dir():
         raise SymmechError(f"codegen --dir: {directory} is not a folder")
-    report = codegen.run(directory, check=ns.check)
+    try:
+        report = codegen.run(directory, check=ns.check)
+    except OSError as exc:
+        raise SymmechError(f"codegen --dir: cannot use {exc.filename or directory}: {exc.strerror}") from None
     ran = f"{len(report.derived)} derivation modules run" if report.derived else "nothing derived (cache)"
     if ns.check and report.outdated_keys:
         print(f"note: {len(report.outdated_keys)} files have outdated source keys (output unchanged); "

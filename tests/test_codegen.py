@@ -177,6 +177,26 @@ def test_installed_package_refuses_codegen_without_dir(monkeypatch, capsys):
     assert "not a writable symmech checkout" in err and "--dir" in err
 
 
+def test_unwritable_dir_is_one_line(tmp_path, monkeypatch, capsys):
+    folder = _copy_generated(tmp_path)
+    (folder / "__init__.py").write_text("")
+
+    def refuse(path, text):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(integrity, "write_atomic", refuse)
+    assert main(["codegen", "--dir", str(folder)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert f"cannot use {folder / '__init__.py'}: Permission denied" in err
+
+
+def test_dir_that_is_a_file_is_refused(tmp_path, capsys):
+    (tmp_path / "f").write_text("")
+    assert main(["codegen", "--dir", str(tmp_path / "f")]) == 2
+    assert "is not a folder" in capsys.readouterr().err
+
+
 def test_used_modules_lists_the_recorded_hashes():
     from symmech.generated import grain_impact, trolley_frame  # noqa: F401
 
