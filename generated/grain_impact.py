@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6c98bc961d1f7d3d70b488409239fb05fdc4964e89647b8549361f119e78cebb
-# source key 5fb309aeb1413edd7315d0072b2a38d62d4898d9a489e4189c586491e4475baf
+# symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
+# source key fe4453273afac45f6cb7336db5ff29803c3c533555140791187785115e0a4485
 # body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 48967607d4f9a988e45adc3b73b9f4337a7fa58bbc9b86a3b50c6cf7f07a2851
-# source key 5fb309aeb1413edd7315d0072b2a38d62d4898d9a489e4189c586491e4475baf
-# body sha256 82e540c564786aa398b7345ffb0ed13f03676252df353e34789e1993328a1cf1
+# symmech 0.1.0 generated module; inputs sha256 8f9519d47e865f03b7b3b3e46b31117a938917855098170631fd24454b8b42b8
+# source key fe4453273afac45f6cb7336db5ff29803c3c533555140791187785115e0a4485
+# body sha256 1bc3bfb3ca4f7150b3013dd6e77a60c1b9a73d0e5118957093725da9cb2fdb12
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Compiled twin of `symmech.generated.grain_impact` (the numpy module, the
@@ -43,7 +43,7 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rotation_0(psi, theta, phi, out, k):
+def _rotation_0(psi, theta, phi, out, _k):
     x0 = math.cos(phi)
     x1 = math.cos(psi)
     x2 = math.cos(theta)
@@ -53,15 +53,15 @@ def _rotation_0(psi, theta, phi, out, k):
     x6 = x1*x3
     x7 = x0*x4
     x8 = math.sin(theta)
-    out[k, 0, 0] = x0*x1 - x2*x5
-    out[k, 0, 1] = -x2*x7 - x6
-    out[k, 0, 2] = x4*x8
-    out[k, 1, 0] = x2*x6 + x7
-    out[k, 1, 1] = x0*x1*x2 - x5
-    out[k, 1, 2] = -x1*x8
-    out[k, 2, 0] = x3*x8
-    out[k, 2, 1] = x0*x8
-    out[k, 2, 2] = x2
+    out[_k, 0, 0] = x0*x1 - x2*x5
+    out[_k, 0, 1] = -x2*x7 - x6
+    out[_k, 0, 2] = x4*x8
+    out[_k, 1, 0] = x2*x6 + x7
+    out[_k, 1, 1] = x0*x1*x2 - x5
+    out[_k, 1, 2] = -x1*x8
+    out[_k, 2, 0] = x3*x8
+    out[_k, 2, 1] = x0*x8
+    out[_k, 2, 2] = x2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -73,15 +73,15 @@ def rotation_scalar(psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rotation_loop(psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _rotation_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], out, k)
+def _rotation_loop(psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _rotation_0(psi[_k * _steps[0]], theta[_k * _steps[1]], phi[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rotation_ploop(psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _rotation_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], out, k)
+def _rotation_ploop(psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rotation_0(psi[_k * _steps[0]], theta[_k * _steps[1]], phi[_k * _steps[2]], out, _k)
 
 
 def rotation(psi, theta, phi):
@@ -101,26 +101,26 @@ def rotation(psi, theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_rotation_ploop if len(out) >= PARALLEL_BATCH else _rotation_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_rotation_ploop if len(out) >= PARALLEL_BATCH else _rotation_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_matrix_0(theta, phi, out, k):
+def _euler_rate_matrix_0(theta, phi, out, _k):
     x0 = math.cos(phi)
     x1 = math.sin(phi)
     x2 = math.sin(theta)
-    out[k, 0, 0] = x0
-    out[k, 0, 1] = x1*x2
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = -x1
-    out[k, 1, 1] = x0*x2
-    out[k, 1, 2] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = math.cos(theta)
-    out[k, 2, 2] = 1
+    out[_k, 0, 0] = x0
+    out[_k, 0, 1] = x1*x2
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = -x1
+    out[_k, 1, 1] = x0*x2
+    out[_k, 1, 2] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = math.cos(theta)
+    out[_k, 2, 2] = 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -132,15 +132,15 @@ def euler_rate_matrix_scalar(theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_matrix_loop(theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _euler_rate_matrix_0(theta[k * steps[0]], phi[k * steps[1]], out, k)
+def _euler_rate_matrix_loop(theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_rate_matrix_0(theta[_k * _steps[0]], phi[_k * _steps[1]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_rate_matrix_ploop(theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_rate_matrix_0(theta[k * steps[0]], phi[k * steps[1]], out, k)
+def _euler_rate_matrix_ploop(theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_rate_matrix_0(theta[_k * _steps[0]], phi[_k * _steps[1]], out, _k)
 
 
 def euler_rate_matrix(theta, phi):
@@ -158,14 +158,14 @@ def euler_rate_matrix(theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_euler_rate_matrix_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_matrix_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_euler_rate_matrix_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_matrix_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_offset_0(a, b, c, psi, theta, phi, out, k):
+def _contact_offset_0(a, b, c, psi, theta, phi, out, _k):
     x0 = c**2
     x1 = math.cos(theta)
     x2 = a**2
@@ -185,9 +185,9 @@ def _contact_offset_0(a, b, c, psi, theta, phi, out, k):
     x16 = x12*x7
     x17 = x10*x3
     x18 = x2*x3*x4
-    out[k, 0] = x9*(-x10*x11 + x15*(x1*x14 + x13) + x18*(x1*x17 - x16))
-    out[k, 1] = x9*(x11*x12 + x15*(-x1*x16 + x17) + x18*(-x1*x13 - x14))
-    out[k, 2] = -x8*x9
+    out[_k, 0] = x9*(-x10*x11 + x15*(x1*x14 + x13) + x18*(x1*x17 - x16))
+    out[_k, 1] = x9*(x11*x12 + x15*(-x1*x16 + x17) + x18*(-x1*x13 - x14))
+    out[_k, 2] = -x8*x9
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -199,15 +199,15 @@ def contact_offset_scalar(a, b, c, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_offset_loop(a, b, c, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _contact_offset_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _contact_offset_loop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _contact_offset_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _contact_offset_ploop(a, b, c, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _contact_offset_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _contact_offset_ploop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _contact_offset_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def contact_offset(a, b, c, psi, theta, phi):
@@ -233,16 +233,16 @@ def contact_offset(a, b, c, psi, theta, phi):
     numpy.ndarray, shape (..., 3)
         [m]
     """
-    arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_contact_offset_ploop if len(out) >= PARALLEL_BATCH else _contact_offset_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(a, b, c, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_contact_offset_ploop if len(out) >= PARALLEL_BATCH else _contact_offset_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_height_0(a, b, c, psi, theta, phi, out, k):
+def _contact_height_0(a, b, c, psi, theta, phi, out, _k):
     x0 = math.sin(theta)**2
-    out[k] = math.sqrt(a**2*x0*math.sin(phi)**2 + b**2*x0*math.cos(phi)**2 + c**2*math.cos(theta)**2)
+    out[_k] = math.sqrt(a**2*x0*math.sin(phi)**2 + b**2*x0*math.cos(phi)**2 + c**2*math.cos(theta)**2)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -254,15 +254,15 @@ def contact_height_scalar(a, b, c, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_height_loop(a, b, c, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _contact_height_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _contact_height_loop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _contact_height_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _contact_height_ploop(a, b, c, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _contact_height_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _contact_height_ploop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _contact_height_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def contact_height(a, b, c, psi, theta, phi):
@@ -288,14 +288,14 @@ def contact_height(a, b, c, psi, theta, phi):
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_contact_height_ploop if len(out) >= PARALLEL_BATCH else _contact_height_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(a, b, c, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_contact_height_ploop if len(out) >= PARALLEL_BATCH else _contact_height_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inertia_ratio_0(a, b, c, psi, theta, phi, out, k):
+def _inertia_ratio_0(a, b, c, psi, theta, phi, out, _k):
     x0 = math.sin(psi)
     x1 = (1/5)*a**2
     x2 = (1/5)*b**2
@@ -325,15 +325,15 @@ def _inertia_ratio_0(a, b, c, psi, theta, phi, out, k):
     x26 = x4*x9
     x27 = x0*x24 + x20*x25 + x22*x26
     x28 = -x10*x24 + x15*x21*x26 + x19*x25*x8
-    out[k, 0, 0] = x0**2*x6 + x14**2*x8 + x15*x18**2
-    out[k, 0, 1] = x23
-    out[k, 0, 2] = x27
-    out[k, 1, 0] = x23
-    out[k, 1, 1] = x10**2*x6 + x15*x21**2 + x19**2*x8
-    out[k, 1, 2] = x28
-    out[k, 2, 0] = x27
-    out[k, 2, 1] = x28
-    out[k, 2, 2] = x11**2*x3 + x12**2*x5*x8 + x15*x5*x9**2
+    out[_k, 0, 0] = x0**2*x6 + x14**2*x8 + x15*x18**2
+    out[_k, 0, 1] = x23
+    out[_k, 0, 2] = x27
+    out[_k, 1, 0] = x23
+    out[_k, 1, 1] = x10**2*x6 + x15*x21**2 + x19**2*x8
+    out[_k, 1, 2] = x28
+    out[_k, 2, 0] = x27
+    out[_k, 2, 1] = x28
+    out[_k, 2, 2] = x11**2*x3 + x12**2*x5*x8 + x15*x5*x9**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -345,15 +345,15 @@ def inertia_ratio_scalar(a, b, c, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inertia_ratio_loop(a, b, c, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _inertia_ratio_loop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _inertia_ratio_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _inertia_ratio_ploop(a, b, c, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _inertia_ratio_ploop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _inertia_ratio_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def inertia_ratio(a, b, c, psi, theta, phi):
@@ -379,14 +379,14 @@ def inertia_ratio(a, b, c, psi, theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [m^2]
     """
-    arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_inertia_ratio_ploop if len(out) >= PARALLEL_BATCH else _inertia_ratio_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(a, b, c, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_inertia_ratio_ploop if len(out) >= PARALLEL_BATCH else _inertia_ratio_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _H_0(a, b, c, psi, theta, phi, out, k):
+def _H_0(a, b, c, psi, theta, phi, out, _k):
     x0 = math.cos(phi)
     x1 = math.cos(psi)
     x2 = math.cos(theta)
@@ -453,15 +453,15 @@ def _H_0(a, b, c, psi, theta, phi, out, k):
     x63 = x10*x20*x47*x8**3
     x64 = -x15*x27 - x21*x3*x63 + x3*x50*x8
     x65 = -x0*x16*x63 + x0*x53*x8 - x15*x38
-    out[k, 0, 0] = x33*x54 + x43*x44 + x51*x7
-    out[k, 0, 1] = -x43*x55 + x51*x57 + x54*x58
-    out[k, 0, 2] = x2*x43 + x34*x54 + x51*x9
-    out[k, 1, 0] = x33*x61 + x44*x59 + x60*x7
-    out[k, 1, 1] = -x55*x59 + x57*x60 + x58*x61
-    out[k, 1, 2] = x2*x59 + x34*x61 + x60*x9
-    out[k, 2, 0] = x33*x65 + x44*x62 + x64*x7
-    out[k, 2, 1] = -x55*x62 + x57*x64 + x58*x65
-    out[k, 2, 2] = x2*x62 + x34*x65 + x64*x9
+    out[_k, 0, 0] = x33*x54 + x43*x44 + x51*x7
+    out[_k, 0, 1] = -x43*x55 + x51*x57 + x54*x58
+    out[_k, 0, 2] = x2*x43 + x34*x54 + x51*x9
+    out[_k, 1, 0] = x33*x61 + x44*x59 + x60*x7
+    out[_k, 1, 1] = -x55*x59 + x57*x60 + x58*x61
+    out[_k, 1, 2] = x2*x59 + x34*x61 + x60*x9
+    out[_k, 2, 0] = x33*x65 + x44*x62 + x64*x7
+    out[_k, 2, 1] = -x55*x62 + x57*x64 + x58*x65
+    out[_k, 2, 2] = x2*x62 + x34*x65 + x64*x9
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -473,15 +473,15 @@ def H_scalar(a, b, c, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _H_loop(a, b, c, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _H_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _H_loop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _H_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _H_ploop(a, b, c, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _H_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _H_ploop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _H_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def H(a, b, c, psi, theta, phi):
@@ -507,14 +507,14 @@ def H(a, b, c, psi, theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_H_ploop if len(out) >= PARALLEL_BATCH else _H_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(a, b, c, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_H_ploop if len(out) >= PARALLEL_BATCH else _H_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = h_yz*u_z0
     x1 = h_xx*x0
     x2 = h_zz*u_x0
@@ -530,11 +530,11 @@ def _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u
     x12 = (1/2)*x7
     x13 = x12*x3
     x14 = x12*x6
-    out[k, 0] = 0
-    out[k, 1] = e*h_xy*h_xz*u_z0 - e*x1 + h_xx*h_zz*u_y0 + h_xy*h_xz*u_z0 - h_xy*x2 + h_xz*h_yz*u_x0 - u_y0*x3 - x1
-    out[k, 2] = e*h_xz*h_yy*u_z0 - e*x4 + h_xy*h_zz*u_y0 + h_xz*h_yy*u_z0 - h_yy*x2 + u_x0*x6 - u_y0*x5 - x4
-    out[k, 3] = h_xy*h_zz*x7 - h_xy*lambda_*x8 + h_xz*h_yz*lambda_*x7 - x5*x7
-    out[k, 4] = lambda_*x10 - lambda_*x11 - lambda_*x13 + lambda_*x14 - x10 + x11 + x13 - x14
+    out[_k, 0] = 0
+    out[_k, 1] = e*h_xy*h_xz*u_z0 - e*x1 + h_xx*h_zz*u_y0 + h_xy*h_xz*u_z0 - h_xy*x2 + h_xz*h_yz*u_x0 - u_y0*x3 - x1
+    out[_k, 2] = e*h_xz*h_yy*u_z0 - e*x4 + h_xy*h_zz*u_y0 + h_xz*h_yy*u_z0 - h_yy*x2 + u_x0*x6 - u_y0*x5 - x4
+    out[_k, 3] = h_xy*h_zz*x7 - h_xy*lambda_*x8 + h_xz*h_yz*lambda_*x7 - x5*x7
+    out[_k, 4] = lambda_*x10 - lambda_*x11 - lambda_*x13 + lambda_*x14 - x10 + x11 + x13 - x14
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -546,15 +546,15 @@ def mu_equation_scalar(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _mu_equation_loop(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _mu_equation_0(h_xx[k * steps[0]], h_xy[k * steps[1]], h_xz[k * steps[2]], h_yy[k * steps[3]], h_yz[k * steps[4]], h_zz[k * steps[5]], lambda_[k * steps[6]], e[k * steps[7]], u_x0[k * steps[8]], u_y0[k * steps[9]], u_z0[k * steps[10]], out, k)
+def _mu_equation_loop(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _mu_equation_0(h_xx[_k * _steps[0]], h_xy[_k * _steps[1]], h_xz[_k * _steps[2]], h_yy[_k * _steps[3]], h_yz[_k * _steps[4]], h_zz[_k * _steps[5]], lambda_[_k * _steps[6]], e[_k * _steps[7]], u_x0[_k * _steps[8]], u_y0[_k * _steps[9]], u_z0[_k * _steps[10]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _mu_equation_ploop(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _mu_equation_0(h_xx[k * steps[0]], h_xy[k * steps[1]], h_xz[k * steps[2]], h_yy[k * steps[3]], h_yz[k * steps[4]], h_zz[k * steps[5]], lambda_[k * steps[6]], e[k * steps[7]], u_x0[k * steps[8]], u_y0[k * steps[9]], u_z0[k * steps[10]], out, k)
+def _mu_equation_ploop(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _mu_equation_0(h_xx[_k * _steps[0]], h_xy[_k * _steps[1]], h_xz[_k * _steps[2]], h_yy[_k * _steps[3]], h_yz[_k * _steps[4]], h_zz[_k * _steps[5]], lambda_[_k * _steps[6]], e[_k * _steps[7]], u_x0[_k * _steps[8]], u_y0[_k * _steps[9]], u_z0[_k * _steps[10]], out, _k)
 
 
 def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0):
@@ -590,22 +590,22 @@ def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0
     numpy.ndarray, shape (..., 5)
         [kg*m/s (times m^0)]
     """
-    arrays, steps, batch = _flat(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + (5,))
-    (_mu_equation_ploop if len(out) >= PARALLEL_BATCH else _mu_equation_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5,))
+    _arrays, _steps, _batch = _flat(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + (5,))
+    (_mu_equation_ploop if len(out) >= PARALLEL_BATCH else _mu_equation_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = math.tan(mu)
     x1 = T_x*h_xy
     x2 = 1 - lambda_
     x3 = math.sqrt(u_x0**2 + u_y0**2)
     x4 = T_x*x0
-    out[k, 0] = T_x*h_xx + T_z*h_xz - m*(-u_x0 + x2*x3*math.cos(mu)) + x0*x1
-    out[k, 1] = T_z*h_yz + h_yy*x4 - m*(-u_y0 + x2*x3*math.sin(mu)) + x1
-    out[k, 2] = T_x*h_xz + T_z*h_zz + h_yz*x4 - m*u_z0*(-e - 1)
+    out[_k, 0] = T_x*h_xx + T_z*h_xz - m*(-u_x0 + x2*x3*math.cos(mu)) + x0*x1
+    out[_k, 1] = T_z*h_yz + h_yy*x4 - m*(-u_y0 + x2*x3*math.sin(mu)) + x1
+    out[_k, 2] = T_x*h_xz + T_z*h_zz + h_yz*x4 - m*u_z0*(-e - 1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -617,15 +617,15 @@ def system_19_residual_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _system_19_residual_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _system_19_residual_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _system_19_residual_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _system_19_residual_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _system_19_residual_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _system_19_residual_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 def system_19_residual(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
@@ -669,20 +669,20 @@ def system_19_residual(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lamb
     numpy.ndarray, shape (..., 3)
         [N*s]
     """
-    arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_system_19_residual_ploop if len(out) >= PARALLEL_BATCH else _system_19_residual_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_system_19_residual_ploop if len(out) >= PARALLEL_BATCH else _system_19_residual_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _descent_functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _descent_functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = math.tan(mu)
     x1 = T_x*x0
     x2 = T_x*h_xy
     x3 = 1 - lambda_
     x4 = math.sqrt(u_x0**2 + u_y0**2)
-    out[k] = (T_x*h_xx + T_z*h_xz - m*(-u_x0 + x3*x4*math.cos(mu)) + x0*x2)**2 + (T_x*h_xz + T_z*h_zz + h_yz*x1 - m*u_z0*(-e - 1))**2 + (T_z*h_yz + h_yy*x1 - m*(-u_y0 + x3*x4*math.sin(mu)) + x2)**2
+    out[_k] = (T_x*h_xx + T_z*h_xz - m*(-u_x0 + x3*x4*math.cos(mu)) + x0*x2)**2 + (T_x*h_xz + T_z*h_zz + h_yz*x1 - m*u_z0*(-e - 1))**2 + (T_z*h_yz + h_yy*x1 - m*(-u_y0 + x3*x4*math.sin(mu)) + x2)**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -694,15 +694,15 @@ def descent_functional_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _descent_functional_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _descent_functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _descent_functional_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _descent_functional_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _descent_functional_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _descent_functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _descent_functional_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _descent_functional_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 def descent_functional(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
@@ -746,14 +746,14 @@ def descent_functional(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lamb
     numpy.ndarray, shape (...)
         [N^2*s^2]
     """
-    arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_descent_functional_ploop if len(out) >= PARALLEL_BATCH else _descent_functional_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_descent_functional_ploop if len(out) >= PARALLEL_BATCH else _descent_functional_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _descent_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _descent_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = 2*h_xz
     x1 = math.tan(mu)
     x2 = h_yz*x1
@@ -771,9 +771,9 @@ def _descent_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lam
     x14 = T_x*(x1**2 + 1)
     x15 = x7*x8
     x16 = 2*m
-    out[k, 0] = x12*(2*x10 + x4) + x3*(x0 + 2*x2) + x9*(2*h_xx + x1*x4)
-    out[k, 1] = 2*h_zz*x3 + x0*x9 + x12*x13
-    out[k, 2] = x12*(2*h_yy*x14 - x15*x16*x6) + x13*x14*x3 + x9*(x11*x15*x16 + x14*x4)
+    out[_k, 0] = x12*(2*x10 + x4) + x3*(x0 + 2*x2) + x9*(2*h_xx + x1*x4)
+    out[_k, 1] = 2*h_zz*x3 + x0*x9 + x12*x13
+    out[_k, 2] = x12*(2*h_yy*x14 - x15*x16*x6) + x13*x14*x3 + x9*(x11*x15*x16 + x14*x4)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -785,15 +785,15 @@ def descent_gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _descent_gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _descent_gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _descent_gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _descent_gradient_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _descent_gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _descent_gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _descent_gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _descent_gradient_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 def descent_gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
@@ -837,26 +837,26 @@ def descent_gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda
     numpy.ndarray, shape (..., 3)
         [N*s, N^2*s^2/rad]
     """
-    arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_descent_gradient_ploop if len(out) >= PARALLEL_BATCH else _descent_gradient_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_descent_gradient_ploop if len(out) >= PARALLEL_BATCH else _descent_gradient_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, k):
+def _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, _k):
     x0 = math.cos(phi)
     x1 = math.sin(phi)
     x2 = math.sin(theta)
-    out[k, 0, 0] = J_x*x0
-    out[k, 0, 1] = J_x*x1*x2
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = -J_y*x1
-    out[k, 1, 1] = J_y*x0*x2
-    out[k, 1, 2] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = J_z*math.cos(theta)
-    out[k, 2, 2] = J_z
+    out[_k, 0, 0] = J_x*x0
+    out[_k, 0, 1] = J_x*x1*x2
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = -J_y*x1
+    out[_k, 1, 1] = J_y*x0*x2
+    out[_k, 1, 2] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = J_z*math.cos(theta)
+    out[_k, 2, 2] = J_z
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -868,15 +868,15 @@ def euler_rate_system_scalar(J_x, J_y, J_z, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_system_loop(J_x, J_y, J_z, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
+def _euler_rate_system_loop(J_x, J_y, J_z, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_rate_system_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_rate_system_ploop(J_x, J_y, J_z, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
+def _euler_rate_system_ploop(J_x, J_y, J_z, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_rate_system_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], out, _k)
 
 
 def euler_rate_system(J_x, J_y, J_z, theta, phi):
@@ -900,20 +900,20 @@ def euler_rate_system(J_x, J_y, J_z, theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [kg*m^2]
     """
-    arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_euler_rate_system_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_system_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(J_x, J_y, J_z, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_euler_rate_system_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_system_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, k):
+def _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, _k):
     x0 = math.cos(phi)
     x1 = math.sin(phi)
     x2 = dpsi*math.sin(theta)
-    out[k, 0] = J_x*dtheta*x0 + J_x*x1*x2 + R_yp*T_zp - R_zp*T_yp
-    out[k, 1] = -J_y*dtheta*x1 + J_y*x0*x2 - R_xp*T_zp + R_zp*T_xp
-    out[k, 2] = J_z*dphi + J_z*dpsi*math.cos(theta) + R_xp*T_yp - R_yp*T_xp
+    out[_k, 0] = J_x*dtheta*x0 + J_x*x1*x2 + R_yp*T_zp - R_zp*T_yp
+    out[_k, 1] = -J_y*dtheta*x1 + J_y*x0*x2 - R_xp*T_zp + R_zp*T_xp
+    out[_k, 2] = J_z*dphi + J_z*dpsi*math.cos(theta) + R_xp*T_yp - R_yp*T_xp
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -925,15 +925,15 @@ def euler_rate_rhs_scalar(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_y
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_rhs_loop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
-    for k in range(out.shape[0]):
-        _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
+def _euler_rate_rhs_loop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_rate_rhs_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], R_xp[_k * _steps[5]], R_yp[_k * _steps[6]], R_zp[_k * _steps[7]], T_xp[_k * _steps[8]], T_yp[_k * _steps[9]], T_zp[_k * _steps[10]], dtheta[_k * _steps[11]], dpsi[_k * _steps[12]], dphi[_k * _steps[13]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_rate_rhs_ploop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
+def _euler_rate_rhs_ploop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_rate_rhs_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], R_xp[_k * _steps[5]], R_yp[_k * _steps[6]], R_zp[_k * _steps[7]], T_xp[_k * _steps[8]], T_yp[_k * _steps[9]], T_zp[_k * _steps[10]], dtheta[_k * _steps[11]], dpsi[_k * _steps[12]], dphi[_k * _steps[13]], out, _k)
 
 
 def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi):
@@ -975,14 +975,14 @@ def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp
     numpy.ndarray, shape (..., 3)
         [kg*m^2/s]
     """
-    arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_euler_rate_rhs_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_rhs_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_euler_rate_rhs_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_rhs_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, k):
+def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, _k):
     x0 = math.sin(phi)
     x1 = math.sin(theta)
     x2 = R_z*x1
@@ -993,9 +993,9 @@ def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, k):
     x7 = math.cos(psi)
     x8 = x0*x7
     x9 = x0*x3
-    out[k, 0] = R_x*(x4*x7 - x6*x9) + R_y*(x5 + x6*x8) + x0*x2
-    out[k, 1] = R_x*(-x5*x6 - x8) + R_y*(x4*x6*x7 - x9) + x2*x4
-    out[k, 2] = R_x*x1*x3 - R_y*x1*x7 + R_z*x6
+    out[_k, 0] = R_x*(x4*x7 - x6*x9) + R_y*(x5 + x6*x8) + x0*x2
+    out[_k, 1] = R_x*(-x5*x6 - x8) + R_y*(x4*x6*x7 - x9) + x2*x4
+    out[_k, 2] = R_x*x1*x3 - R_y*x1*x7 + R_z*x6
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1007,15 +1007,15 @@ def body_components_scalar(R_x, R_y, R_z, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _body_components_loop(R_x, R_y, R_z, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _body_components_loop(R_x, R_y, R_z, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _body_components_0(R_x[_k * _steps[0]], R_y[_k * _steps[1]], R_z[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _body_components_ploop(R_x, R_y, R_z, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _body_components_ploop(R_x, R_y, R_z, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _body_components_0(R_x[_k * _steps[0]], R_y[_k * _steps[1]], R_z[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def body_components(R_x, R_y, R_z, psi, theta, phi):
@@ -1041,18 +1041,18 @@ def body_components(R_x, R_y, R_z, psi, theta, phi):
     numpy.ndarray, shape (..., 3)
         [m]
     """
-    arrays, steps, batch = _flat(R_x, R_y, R_z, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_body_components_ploop if len(out) >= PARALLEL_BATCH else _body_components_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(R_x, R_y, R_z, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_body_components_ploop if len(out) >= PARALLEL_BATCH else _body_components_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, k):
+def _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, _k):
     x0 = 1/m
-    out[k, 0] = T_x*x0 + v_x0
-    out[k, 1] = T_y*x0 + v_y0
-    out[k, 2] = T_z*x0 + v_z0
+    out[_k, 0] = T_x*x0 + v_x0
+    out[_k, 1] = T_y*x0 + v_y0
+    out[_k, 2] = T_z*x0 + v_z0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1064,15 +1064,15 @@ def centre_velocity_after_scalar(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _centre_velocity_after_loop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
-    for k in range(out.shape[0]):
-        _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
+def _centre_velocity_after_loop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, _steps, out):
+    for _k in range(out.shape[0]):
+        _centre_velocity_after_0(v_x0[_k * _steps[0]], v_y0[_k * _steps[1]], v_z0[_k * _steps[2]], T_x[_k * _steps[3]], T_y[_k * _steps[4]], T_z[_k * _steps[5]], m[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _centre_velocity_after_ploop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
+def _centre_velocity_after_ploop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _centre_velocity_after_0(v_x0[_k * _steps[0]], v_y0[_k * _steps[1]], v_z0[_k * _steps[2]], T_x[_k * _steps[3]], T_y[_k * _steps[4]], T_z[_k * _steps[5]], m[_k * _steps[6]], out, _k)
 
 
 def centre_velocity_after(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
@@ -1100,14 +1100,14 @@ def centre_velocity_after(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     numpy.ndarray, shape (..., 3)
         [m/s]
     """
-    arrays, steps, batch = _flat(v_x0, v_y0, v_z0, T_x, T_y, T_z, m)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_centre_velocity_after_ploop if len(out) >= PARALLEL_BATCH else _centre_velocity_after_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(v_x0, v_y0, v_z0, T_x, T_y, T_z, m)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_centre_velocity_after_ploop if len(out) >= PARALLEL_BATCH else _centre_velocity_after_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, k):
+def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, _k):
     x0 = a12*a23
     x1 = a13*a32
     x2 = a22*a33
@@ -1118,9 +1118,9 @@ def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, 
     x7 = a11*b3
     x8 = a31*b2
     x9 = a21*b1
-    out[k, 0] = x6*(b1*x2 - b1*x5 + b2*x1 - b2*x3 + b3*x0 - b3*x4)
-    out[k, 1] = x6*(a11*a33*b2 + a13*a21*b3 - a13*x8 + a23*a31*b1 - a23*x7 - a33*x9)
-    out[k, 2] = x6*(-a11*a32*b2 - a12*a21*b3 + a12*x8 - a22*a31*b1 + a22*x7 + a32*x9)
+    out[_k, 0] = x6*(b1*x2 - b1*x5 + b2*x1 - b2*x3 + b3*x0 - b3*x4)
+    out[_k, 1] = x6*(a11*a33*b2 + a13*a21*b3 - a13*x8 + a23*a31*b1 - a23*x7 - a33*x9)
+    out[_k, 2] = x6*(-a11*a32*b2 - a12*a21*b3 + a12*x8 - a22*a31*b1 + a22*x7 + a32*x9)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1132,15 +1132,15 @@ def cramer_solution_scalar(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cramer_solution_loop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
-    for k in range(out.shape[0]):
-        _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
+def _cramer_solution_loop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, _steps, out):
+    for _k in range(out.shape[0]):
+        _cramer_solution_0(a11[_k * _steps[0]], a12[_k * _steps[1]], a13[_k * _steps[2]], a21[_k * _steps[3]], a22[_k * _steps[4]], a23[_k * _steps[5]], a31[_k * _steps[6]], a32[_k * _steps[7]], a33[_k * _steps[8]], b1[_k * _steps[9]], b2[_k * _steps[10]], b3[_k * _steps[11]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _cramer_solution_ploop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
+def _cramer_solution_ploop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _cramer_solution_0(a11[_k * _steps[0]], a12[_k * _steps[1]], a13[_k * _steps[2]], a21[_k * _steps[3]], a22[_k * _steps[4]], a23[_k * _steps[5]], a31[_k * _steps[6]], a32[_k * _steps[7]], a33[_k * _steps[8]], b1[_k * _steps[9]], b2[_k * _steps[10]], b3[_k * _steps[11]], out, _k)
 
 
 def cramer_solution(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
@@ -1178,7 +1178,7 @@ def cramer_solution(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
     numpy.ndarray, shape (..., 3)
         [rad/s]
     """
-    arrays, steps, batch = _flat(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_cramer_solution_ploop if len(out) >= PARALLEL_BATCH else _cramer_solution_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_cramer_solution_ploop if len(out) >= PARALLEL_BATCH else _cramer_solution_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))

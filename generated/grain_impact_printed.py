@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 7d42021e8d4153b349d665efd3e4f21f3b820a298ab8927c357e31b644411614
-# source key db41e0c59f351a788e7cfd252b7653be9646ba6a00f42496ca5c669f840b2bff
+# symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
+# source key bd32f788d2ff1e3400ba25316f82a75b2baafd17936c86562d2db8982fec5378
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

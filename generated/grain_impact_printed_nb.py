@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 0f604619a84e4044b3df823ae5539e13c02a7140c83215025564012610859921
-# source key db41e0c59f351a788e7cfd252b7653be9646ba6a00f42496ca5c669f840b2bff
-# body sha256 f5c89e4d64040f2167608558fdb929bf90d212c1184f9fd117db4eb3a7404131
+# symmech 0.1.0 generated module; inputs sha256 b55f62f91a435a136e485bb722ecad55d1f69194943b533227752894317c4f44
+# source key bd32f788d2ff1e3400ba25316f82a75b2baafd17936c86562d2db8982fec5378
+# body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Compiled twin of `symmech.generated.grain_impact_printed` (the numpy module, the
@@ -43,7 +43,7 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inertia_ratio_0(a, b, c, psi, theta, phi, out, k):
+def _inertia_ratio_0(a, b, c, psi, theta, phi, out, _k):
     x0 = math.sin(psi)
     x1 = (1/5)*a**2
     x2 = (1/5)*b**2
@@ -73,15 +73,15 @@ def _inertia_ratio_0(a, b, c, psi, theta, phi, out, k):
     x26 = x4*x9
     x27 = -(x0*x24 + x20*x25 + x22*x26)**2
     x28 = -(-x10*x24 + x15*x21*x26 + x19*x25*x8)**2
-    out[k, 0, 0] = (x0**2*x6 + x14**2*x8 + x15*x18**2)**2
-    out[k, 0, 1] = x23
-    out[k, 0, 2] = x27
-    out[k, 1, 0] = x23
-    out[k, 1, 1] = (x10**2*x6 + x15*x21**2 + x19**2*x8)**2
-    out[k, 1, 2] = x28
-    out[k, 2, 0] = x27
-    out[k, 2, 1] = x28
-    out[k, 2, 2] = (x11**2*x3 + x12**2*x5*x8 + x15*x5*x9**2)**2
+    out[_k, 0, 0] = (x0**2*x6 + x14**2*x8 + x15*x18**2)**2
+    out[_k, 0, 1] = x23
+    out[_k, 0, 2] = x27
+    out[_k, 1, 0] = x23
+    out[_k, 1, 1] = (x10**2*x6 + x15*x21**2 + x19**2*x8)**2
+    out[_k, 1, 2] = x28
+    out[_k, 2, 0] = x27
+    out[_k, 2, 1] = x28
+    out[_k, 2, 2] = (x11**2*x3 + x12**2*x5*x8 + x15*x5*x9**2)**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -93,15 +93,15 @@ def inertia_ratio_scalar(a, b, c, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inertia_ratio_loop(a, b, c, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _inertia_ratio_loop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _inertia_ratio_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _inertia_ratio_ploop(a, b, c, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _inertia_ratio_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _inertia_ratio_ploop(a, b, c, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _inertia_ratio_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def inertia_ratio(a, b, c, psi, theta, phi):
@@ -127,14 +127,14 @@ def inertia_ratio(a, b, c, psi, theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [m^2]
     """
-    arrays, steps, batch = _flat(a, b, c, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_inertia_ratio_ploop if len(out) >= PARALLEL_BATCH else _inertia_ratio_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(a, b, c, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_inertia_ratio_ploop if len(out) >= PARALLEL_BATCH else _inertia_ratio_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _H_0(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out, k):
+def _H_0(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out, _k):
     x0 = -P_xx*P_yz + P_xy*P_xz
     x1 = P_yz**2
     x2 = P_xy**2
@@ -156,15 +156,15 @@ def _H_0(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out, k):
     x18 = R_x**2*x4
     x19 = P_yy*P_zz - x1
     x20 = R_x*R_y*x14*x4 + R_x*R_z*x11*x4 - x0*x18 - x19*x6
-    out[k, 0, 0] = -2*x0*x6 + x10*x9 + x7*x8 + 1
-    out[k, 0, 1] = x15
-    out[k, 0, 2] = x17
-    out[k, 1, 0] = x15
-    out[k, 1, 1] = x10*x19 - 2*x14*x16 + x18*x7 + 1
-    out[k, 1, 2] = x20
-    out[k, 2, 0] = x17
-    out[k, 2, 1] = x20
-    out[k, 2, 2] = -2*x11*x13 + x18*x9 + x19*x8 + 1
+    out[_k, 0, 0] = -2*x0*x6 + x10*x9 + x7*x8 + 1
+    out[_k, 0, 1] = x15
+    out[_k, 0, 2] = x17
+    out[_k, 1, 0] = x15
+    out[_k, 1, 1] = x10*x19 - 2*x14*x16 + x18*x7 + 1
+    out[_k, 1, 2] = x20
+    out[_k, 2, 0] = x17
+    out[_k, 2, 1] = x20
+    out[_k, 2, 2] = -2*x11*x13 + x18*x9 + x19*x8 + 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -176,15 +176,15 @@ def H_scalar(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _H_loop(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, steps, out):
-    for k in range(out.shape[0]):
-        _H_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], P_xx[k * steps[3]], P_xy[k * steps[4]], P_xz[k * steps[5]], P_yy[k * steps[6]], P_yz[k * steps[7]], P_zz[k * steps[8]], out, k)
+def _H_loop(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, _steps, out):
+    for _k in range(out.shape[0]):
+        _H_0(R_x[_k * _steps[0]], R_y[_k * _steps[1]], R_z[_k * _steps[2]], P_xx[_k * _steps[3]], P_xy[_k * _steps[4]], P_xz[_k * _steps[5]], P_yy[_k * _steps[6]], P_yz[_k * _steps[7]], P_zz[_k * _steps[8]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _H_ploop(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _H_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], P_xx[k * steps[3]], P_xy[k * steps[4]], P_xz[k * steps[5]], P_yy[k * steps[6]], P_yz[k * steps[7]], P_zz[k * steps[8]], out, k)
+def _H_ploop(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _H_0(R_x[_k * _steps[0]], R_y[_k * _steps[1]], R_z[_k * _steps[2]], P_xx[_k * _steps[3]], P_xy[_k * _steps[4]], P_xz[_k * _steps[5]], P_yy[_k * _steps[6]], P_yz[_k * _steps[7]], P_zz[_k * _steps[8]], out, _k)
 
 
 def H(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
@@ -216,20 +216,20 @@ def H(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_H_ploop if len(out) >= PARALLEL_BATCH else _H_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_H_ploop if len(out) >= PARALLEL_BATCH else _H_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = math.tan(mu)
     x1 = 1 - lambda_
     x2 = math.sqrt(u_x0**2 + u_y0**2)
-    out[k, 0] = T_x*(h_xx + h_xy*x0) + T_z*h_xz - m*(-u_x0 + x1*x2*math.cos(mu))
-    out[k, 1] = T_x*(h_xy + h_yy*x0) + T_z*h_yz - m*(-u_y0 + x1*x2*math.sin(mu))
-    out[k, 2] = T_x*(h_xz + h_yz*x0) + T_z*h_zz + m*u_z0*(e + 1)
+    out[_k, 0] = T_x*(h_xx + h_xy*x0) + T_z*h_xz - m*(-u_x0 + x1*x2*math.cos(mu))
+    out[_k, 1] = T_x*(h_xy + h_yy*x0) + T_z*h_yz - m*(-u_y0 + x1*x2*math.sin(mu))
+    out[_k, 2] = T_x*(h_xz + h_yz*x0) + T_z*h_zz + m*u_z0*(e + 1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -241,15 +241,15 @@ def system_19_residual_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _system_19_residual_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _system_19_residual_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _system_19_residual_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _system_19_residual_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _system_19_residual_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _system_19_residual_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _system_19_residual_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 def system_19_residual(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
@@ -293,18 +293,18 @@ def system_19_residual(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lamb
     numpy.ndarray, shape (..., 3)
         [N*s]
     """
-    arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_system_19_residual_ploop if len(out) >= PARALLEL_BATCH else _system_19_residual_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_system_19_residual_ploop if len(out) >= PARALLEL_BATCH else _system_19_residual_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = math.tan(mu)
     x1 = 1 - lambda_
     x2 = math.sqrt(u_x0**2 + u_y0**2)
-    out[k] = -T_x*(h_xx + h_xy*x0) - T_x*(h_xy + h_yy*x0) - T_x*(h_xz + h_yz*x0) - T_z*h_xz - T_z*h_yz - T_z*h_zz - m*u_z0*(e + 1) + m*(-u_x0 + x1*x2*math.cos(mu)) + m*(-u_y0 + x1*x2*math.sin(mu))
+    out[_k] = -T_x*(h_xx + h_xy*x0) - T_x*(h_xy + h_yy*x0) - T_x*(h_xz + h_yz*x0) - T_z*h_xz - T_z*h_yz - T_z*h_zz - m*u_z0*(e + 1) + m*(-u_x0 + x1*x2*math.cos(mu)) + m*(-u_y0 + x1*x2*math.sin(mu))
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -316,15 +316,15 @@ def functional_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambd
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _functional_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _functional_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _functional_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _functional_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _functional_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _functional_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _functional_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 def functional(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
@@ -368,21 +368,21 @@ def functional(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, 
     numpy.ndarray, shape (...)
         [N*s]
     """
-    arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_functional_ploop if len(out) >= PARALLEL_BATCH else _functional_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_functional_ploop if len(out) >= PARALLEL_BATCH else _functional_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, k):
+def _gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
     x0 = math.tan(mu)
     x1 = math.cos(mu)
     x2 = math.sqrt(u_x0**2 + u_y0**2)
     x3 = 1 - lambda_
-    out[k, 0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0
-    out[k, 1] = -h_xz - h_yz - h_zz
-    out[k, 2] = -T_x*(h_yy + h_yz)/x1**2 + m*x1*x2*x3 - m*x2*x3*math.sin(mu)
+    out[_k, 0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0
+    out[_k, 1] = -h_xz - h_yz - h_zz
+    out[_k, 2] = -T_x*(h_yy + h_yz)/x1**2 + m*x1*x2*x3 - m*x2*x3*math.sin(mu)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -394,15 +394,15 @@ def gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in range(out.shape[0]):
-        _gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _gradient_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _gradient_0(T_x[k * steps[0]], T_z[k * steps[1]], mu[k * steps[2]], h_xx[k * steps[3]], h_xy[k * steps[4]], h_xz[k * steps[5]], h_yy[k * steps[6]], h_yz[k * steps[7]], h_zz[k * steps[8]], m[k * steps[9]], lambda_[k * steps[10]], e[k * steps[11]], u_x0[k * steps[12]], u_y0[k * steps[13]], u_z0[k * steps[14]], out, k)
+def _gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _gradient_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
 
 
 def gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
@@ -446,26 +446,26 @@ def gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_
     numpy.ndarray, shape (..., 3)
         [1, 1, N*s/rad]
     """
-    arrays, steps, batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_gradient_ploop if len(out) >= PARALLEL_BATCH else _gradient_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_gradient_ploop if len(out) >= PARALLEL_BATCH else _gradient_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, k):
+def _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, _k):
     x0 = math.cos(phi)
     x1 = math.sin(phi)
     x2 = math.sin(theta)
-    out[k, 0, 0] = J_x*x0
-    out[k, 0, 1] = J_x*x1*x2
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = -J_y*x1
-    out[k, 1, 1] = J_y*x0*x2
-    out[k, 1, 2] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = J_z*x0
-    out[k, 2, 2] = J_z
+    out[_k, 0, 0] = J_x*x0
+    out[_k, 0, 1] = J_x*x1*x2
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = -J_y*x1
+    out[_k, 1, 1] = J_y*x0*x2
+    out[_k, 1, 2] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = J_z*x0
+    out[_k, 2, 2] = J_z
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -477,15 +477,15 @@ def euler_rate_system_scalar(J_x, J_y, J_z, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_system_loop(J_x, J_y, J_z, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
+def _euler_rate_system_loop(J_x, J_y, J_z, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_rate_system_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_rate_system_ploop(J_x, J_y, J_z, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_rate_system_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], out, k)
+def _euler_rate_system_ploop(J_x, J_y, J_z, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_rate_system_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], out, _k)
 
 
 def euler_rate_system(J_x, J_y, J_z, theta, phi):
@@ -509,20 +509,20 @@ def euler_rate_system(J_x, J_y, J_z, theta, phi):
     numpy.ndarray, shape (..., 3, 3)
         [kg*m^2]
     """
-    arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_euler_rate_system_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_system_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(J_x, J_y, J_z, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_euler_rate_system_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_system_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, k):
+def _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, _k):
     x0 = math.cos(phi)
     x1 = math.sin(phi)
     x2 = dpsi*math.sin(theta)
-    out[k, 0] = J_x*(dtheta*x0 + x1*x2) + R_yp*T_zp - R_zp*T_yp
-    out[k, 1] = J_y*(-dtheta*x1 + x0*x2) - R_xp*T_zp + R_zp*T_xp
-    out[k, 2] = J_z*(dphi + dtheta*math.cos(theta)) + R_xp*T_yp - R_yp*T_xp
+    out[_k, 0] = J_x*(dtheta*x0 + x1*x2) + R_yp*T_zp - R_zp*T_yp
+    out[_k, 1] = J_y*(-dtheta*x1 + x0*x2) - R_xp*T_zp + R_zp*T_xp
+    out[_k, 2] = J_z*(dphi + dtheta*math.cos(theta)) + R_xp*T_yp - R_yp*T_xp
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -534,15 +534,15 @@ def euler_rate_rhs_scalar(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_y
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rate_rhs_loop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
-    for k in range(out.shape[0]):
-        _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
+def _euler_rate_rhs_loop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_rate_rhs_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], R_xp[_k * _steps[5]], R_yp[_k * _steps[6]], R_zp[_k * _steps[7]], T_xp[_k * _steps[8]], T_yp[_k * _steps[9]], T_zp[_k * _steps[10]], dtheta[_k * _steps[11]], dpsi[_k * _steps[12]], dphi[_k * _steps[13]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_rate_rhs_ploop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_rate_rhs_0(J_x[k * steps[0]], J_y[k * steps[1]], J_z[k * steps[2]], theta[k * steps[3]], phi[k * steps[4]], R_xp[k * steps[5]], R_yp[k * steps[6]], R_zp[k * steps[7]], T_xp[k * steps[8]], T_yp[k * steps[9]], T_zp[k * steps[10]], dtheta[k * steps[11]], dpsi[k * steps[12]], dphi[k * steps[13]], out, k)
+def _euler_rate_rhs_ploop(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_rate_rhs_0(J_x[_k * _steps[0]], J_y[_k * _steps[1]], J_z[_k * _steps[2]], theta[_k * _steps[3]], phi[_k * _steps[4]], R_xp[_k * _steps[5]], R_yp[_k * _steps[6]], R_zp[_k * _steps[7]], T_xp[_k * _steps[8]], T_yp[_k * _steps[9]], T_zp[_k * _steps[10]], dtheta[_k * _steps[11]], dpsi[_k * _steps[12]], dphi[_k * _steps[13]], out, _k)
 
 
 def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi):
@@ -584,21 +584,21 @@ def euler_rate_rhs(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp
     numpy.ndarray, shape (..., 3)
         [kg*m^2/s]
     """
-    arrays, steps, batch = _flat(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_euler_rate_rhs_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_rhs_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_euler_rate_rhs_ploop if len(out) >= PARALLEL_BATCH else _euler_rate_rhs_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, k):
+def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, _k):
     x0 = a22*a33 - a23*a32
     x1 = a12*a23 - a13*a22
     x2 = a12*a33 - a13*a32
     x3 = 1/(a11*x0 - a21*x2 + a31*x1)
-    out[k, 0] = x3*(b1*x0 - b2*x2 + b3*x1)
-    out[k, 1] = x3*(-b1*(a21*a33 - a23*a31) + b2*(a11*a33 - a13*a31) - b3*(a11*a23 - a13*a21))
-    out[k, 2] = x3*(b1*(a21*a32 - a22*a31) - b2*(a11*a32 - a12*a31) + b3*(a11*a22 - a12*a21))
+    out[_k, 0] = x3*(b1*x0 - b2*x2 + b3*x1)
+    out[_k, 1] = x3*(-b1*(a21*a33 - a23*a31) + b2*(a11*a33 - a13*a31) - b3*(a11*a23 - a13*a21))
+    out[_k, 2] = x3*(b1*(a21*a32 - a22*a31) - b2*(a11*a32 - a12*a31) + b3*(a11*a22 - a12*a21))
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -610,15 +610,15 @@ def cramer_solution_scalar(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cramer_solution_loop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
-    for k in range(out.shape[0]):
-        _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
+def _cramer_solution_loop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, _steps, out):
+    for _k in range(out.shape[0]):
+        _cramer_solution_0(a11[_k * _steps[0]], a12[_k * _steps[1]], a13[_k * _steps[2]], a21[_k * _steps[3]], a22[_k * _steps[4]], a23[_k * _steps[5]], a31[_k * _steps[6]], a32[_k * _steps[7]], a33[_k * _steps[8]], b1[_k * _steps[9]], b2[_k * _steps[10]], b3[_k * _steps[11]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _cramer_solution_ploop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _cramer_solution_0(a11[k * steps[0]], a12[k * steps[1]], a13[k * steps[2]], a21[k * steps[3]], a22[k * steps[4]], a23[k * steps[5]], a31[k * steps[6]], a32[k * steps[7]], a33[k * steps[8]], b1[k * steps[9]], b2[k * steps[10]], b3[k * steps[11]], out, k)
+def _cramer_solution_ploop(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _cramer_solution_0(a11[_k * _steps[0]], a12[_k * _steps[1]], a13[_k * _steps[2]], a21[_k * _steps[3]], a22[_k * _steps[4]], a23[_k * _steps[5]], a31[_k * _steps[6]], a32[_k * _steps[7]], a33[_k * _steps[8]], b1[_k * _steps[9]], b2[_k * _steps[10]], b3[_k * _steps[11]], out, _k)
 
 
 def cramer_solution(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
@@ -656,14 +656,14 @@ def cramer_solution(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
     numpy.ndarray, shape (..., 3)
         [rad/s]
     """
-    arrays, steps, batch = _flat(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_cramer_solution_ploop if len(out) >= PARALLEL_BATCH else _cramer_solution_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_cramer_solution_ploop if len(out) >= PARALLEL_BATCH else _cramer_solution_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, k):
+def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, _k):
     x0 = math.sin(phi)
     x1 = math.sin(theta)
     x2 = R_z*x1
@@ -674,9 +674,9 @@ def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, k):
     x7 = math.cos(psi)
     x8 = x0*x7
     x9 = x0*x3
-    out[k, 0] = R_x*(x4*x7 - x6*x9) + R_y*(x5 + x6*x8) + x0*x2
-    out[k, 1] = R_x*(-x5*x6 - x8) + R_y*(x4*x6*x7 - x9) + x2*x4
-    out[k, 2] = R_x*x1*x3 - R_y*x1*x7 + R_z*x6
+    out[_k, 0] = R_x*(x4*x7 - x6*x9) + R_y*(x5 + x6*x8) + x0*x2
+    out[_k, 1] = R_x*(-x5*x6 - x8) + R_y*(x4*x6*x7 - x9) + x2*x4
+    out[_k, 2] = R_x*x1*x3 - R_y*x1*x7 + R_z*x6
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -688,15 +688,15 @@ def body_components_scalar(R_x, R_y, R_z, psi, theta, phi):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _body_components_loop(R_x, R_y, R_z, psi, theta, phi, steps, out):
-    for k in range(out.shape[0]):
-        _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _body_components_loop(R_x, R_y, R_z, psi, theta, phi, _steps, out):
+    for _k in range(out.shape[0]):
+        _body_components_0(R_x[_k * _steps[0]], R_y[_k * _steps[1]], R_z[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _body_components_ploop(R_x, R_y, R_z, psi, theta, phi, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _body_components_0(R_x[k * steps[0]], R_y[k * steps[1]], R_z[k * steps[2]], psi[k * steps[3]], theta[k * steps[4]], phi[k * steps[5]], out, k)
+def _body_components_ploop(R_x, R_y, R_z, psi, theta, phi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _body_components_0(R_x[_k * _steps[0]], R_y[_k * _steps[1]], R_z[_k * _steps[2]], psi[_k * _steps[3]], theta[_k * _steps[4]], phi[_k * _steps[5]], out, _k)
 
 
 def body_components(R_x, R_y, R_z, psi, theta, phi):
@@ -722,18 +722,18 @@ def body_components(R_x, R_y, R_z, psi, theta, phi):
     numpy.ndarray, shape (..., 3)
         [m]
     """
-    arrays, steps, batch = _flat(R_x, R_y, R_z, psi, theta, phi)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_body_components_ploop if len(out) >= PARALLEL_BATCH else _body_components_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(R_x, R_y, R_z, psi, theta, phi)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_body_components_ploop if len(out) >= PARALLEL_BATCH else _body_components_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, k):
+def _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, _k):
     x0 = 1/m
-    out[k, 0] = T_x*x0 + v_x0
-    out[k, 1] = T_y*x0 + v_y0
-    out[k, 2] = T_z*x0 + v_z0
+    out[_k, 0] = T_x*x0 + v_x0
+    out[_k, 1] = T_y*x0 + v_y0
+    out[_k, 2] = T_z*x0 + v_z0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -745,15 +745,15 @@ def centre_velocity_after_scalar(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _centre_velocity_after_loop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
-    for k in range(out.shape[0]):
-        _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
+def _centre_velocity_after_loop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, _steps, out):
+    for _k in range(out.shape[0]):
+        _centre_velocity_after_0(v_x0[_k * _steps[0]], v_y0[_k * _steps[1]], v_z0[_k * _steps[2]], T_x[_k * _steps[3]], T_y[_k * _steps[4]], T_z[_k * _steps[5]], m[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _centre_velocity_after_ploop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _centre_velocity_after_0(v_x0[k * steps[0]], v_y0[k * steps[1]], v_z0[k * steps[2]], T_x[k * steps[3]], T_y[k * steps[4]], T_z[k * steps[5]], m[k * steps[6]], out, k)
+def _centre_velocity_after_ploop(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _centre_velocity_after_0(v_x0[_k * _steps[0]], v_y0[_k * _steps[1]], v_z0[_k * _steps[2]], T_x[_k * _steps[3]], T_y[_k * _steps[4]], T_z[_k * _steps[5]], m[_k * _steps[6]], out, _k)
 
 
 def centre_velocity_after(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
@@ -781,7 +781,7 @@ def centre_velocity_after(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     numpy.ndarray, shape (..., 3)
         [m/s]
     """
-    arrays, steps, batch = _flat(v_x0, v_y0, v_z0, T_x, T_y, T_z, m)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_centre_velocity_after_ploop if len(out) >= PARALLEL_BATCH else _centre_velocity_after_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(v_x0, v_y0, v_z0, T_x, T_y, T_z, m)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_centre_velocity_after_ploop if len(out) >= PARALLEL_BATCH else _centre_velocity_after_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))

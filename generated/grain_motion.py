@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 06617b71258c786010e0f8bf154394eb9a49daa2b8031706b8a1088f3b76a3a6
-# source key 9a78d157d470a4181f0f5aa6b9a04c9cb9bd285282d2ba9fd38109dbbaf67204
+# symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
+# source key 17811bdf13ef7292756cdde1d459e86bcb99bc77e396dc8f01c356a3de43c3c0
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

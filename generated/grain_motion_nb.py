@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 97dd8ced7a4b0eee4655892fcc830c6075564a9ef8a9520a06a809d871ba3d05
-# source key 9a78d157d470a4181f0f5aa6b9a04c9cb9bd285282d2ba9fd38109dbbaf67204
-# body sha256 d9584cb5dc88399cbff375b294d0a4e7abcdf17829898c6bcb1edfd7f45e6893
+# symmech 0.1.0 generated module; inputs sha256 a0746f401eb0798ca7faf0443507e069f50585bd78ec570baae6f0d3df12ed99
+# source key 17811bdf13ef7292756cdde1d459e86bcb99bc77e396dc8f01c356a3de43c3c0
+# body sha256 326260ca4e3879a6ab5be10effac0b8980cf81d1bd2b5ca13c1076a02d0c380f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -43,10 +43,10 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _gravity_0(g, alpha, beta, out, k):
-    out[k, 0] = -g*math.sin(alpha)
-    out[k, 1] = -g*math.sin(beta)
-    out[k, 2] = -g*math.sqrt(math.cos(alpha)**2 + math.cos(beta)**2 - 1)
+def _gravity_0(g, alpha, beta, out, _k):
+    out[_k, 0] = -g*math.sin(alpha)
+    out[_k, 1] = -g*math.sin(beta)
+    out[_k, 2] = -g*math.sqrt(math.cos(alpha)**2 + math.cos(beta)**2 - 1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -58,15 +58,15 @@ def gravity_scalar(g, alpha, beta):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _gravity_loop(g, alpha, beta, steps, out):
-    for k in range(out.shape[0]):
-        _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], out, k)
+def _gravity_loop(g, alpha, beta, _steps, out):
+    for _k in range(out.shape[0]):
+        _gravity_0(g[_k * _steps[0]], alpha[_k * _steps[1]], beta[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _gravity_ploop(g, alpha, beta, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], out, k)
+def _gravity_ploop(g, alpha, beta, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _gravity_0(g[_k * _steps[0]], alpha[_k * _steps[1]], beta[_k * _steps[2]], out, _k)
 
 
 def gravity(g, alpha, beta):
@@ -86,14 +86,14 @@ def gravity(g, alpha, beta):
     numpy.ndarray, shape (..., 3)
         [m/s^2]
     """
-    arrays, steps, batch = _flat(g, alpha, beta)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_gravity_ploop if len(out) >= PARALLEL_BATCH else _gravity_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(g, alpha, beta)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_gravity_ploop if len(out) >= PARALLEL_BATCH else _gravity_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _surface_kinematics_0(A, omega, phase, dX, dY, dZ, t, out, k):
+def _surface_kinematics_0(A, omega, phase, dX, dY, dZ, t, out, _k):
     x0 = omega*t + phase
     x1 = A*math.sin(x0)
     x2 = dX*x1
@@ -101,15 +101,15 @@ def _surface_kinematics_0(A, omega, phase, dX, dY, dZ, t, out, k):
     x4 = dZ*x1
     x5 = A*omega*math.cos(x0)
     x6 = omega**2
-    out[k, 0, 0] = x2
-    out[k, 0, 1] = x3
-    out[k, 0, 2] = x4
-    out[k, 1, 0] = dX*x5
-    out[k, 1, 1] = dY*x5
-    out[k, 1, 2] = dZ*x5
-    out[k, 2, 0] = -x2*x6
-    out[k, 2, 1] = -x3*x6
-    out[k, 2, 2] = -x4*x6
+    out[_k, 0, 0] = x2
+    out[_k, 0, 1] = x3
+    out[_k, 0, 2] = x4
+    out[_k, 1, 0] = dX*x5
+    out[_k, 1, 1] = dY*x5
+    out[_k, 1, 2] = dZ*x5
+    out[_k, 2, 0] = -x2*x6
+    out[_k, 2, 1] = -x3*x6
+    out[_k, 2, 2] = -x4*x6
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -121,15 +121,15 @@ def surface_kinematics_scalar(A, omega, phase, dX, dY, dZ, t):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _surface_kinematics_loop(A, omega, phase, dX, dY, dZ, t, steps, out):
-    for k in range(out.shape[0]):
-        _surface_kinematics_0(A[k * steps[0]], omega[k * steps[1]], phase[k * steps[2]], dX[k * steps[3]], dY[k * steps[4]], dZ[k * steps[5]], t[k * steps[6]], out, k)
+def _surface_kinematics_loop(A, omega, phase, dX, dY, dZ, t, _steps, out):
+    for _k in range(out.shape[0]):
+        _surface_kinematics_0(A[_k * _steps[0]], omega[_k * _steps[1]], phase[_k * _steps[2]], dX[_k * _steps[3]], dY[_k * _steps[4]], dZ[_k * _steps[5]], t[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _surface_kinematics_ploop(A, omega, phase, dX, dY, dZ, t, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _surface_kinematics_0(A[k * steps[0]], omega[k * steps[1]], phase[k * steps[2]], dX[k * steps[3]], dY[k * steps[4]], dZ[k * steps[5]], t[k * steps[6]], out, k)
+def _surface_kinematics_ploop(A, omega, phase, dX, dY, dZ, t, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _surface_kinematics_0(A[_k * _steps[0]], omega[_k * _steps[1]], phase[_k * _steps[2]], dX[_k * _steps[3]], dY[_k * _steps[4]], dZ[_k * _steps[5]], t[_k * _steps[6]], out, _k)
 
 
 def surface_kinematics(A, omega, phase, dX, dY, dZ, t):
@@ -157,14 +157,14 @@ def surface_kinematics(A, omega, phase, dX, dY, dZ, t):
     numpy.ndarray, shape (..., 3, 3)
         [m, m/s, m/s^2]
     """
-    arrays, steps, batch = _flat(A, omega, phase, dX, dY, dZ, t)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_surface_kinematics_ploop if len(out) >= PARALLEL_BATCH else _surface_kinematics_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(A, omega, phase, dX, dY, dZ, t)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_surface_kinematics_ploop if len(out) >= PARALLEL_BATCH else _surface_kinematics_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _flight_translation_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, out, k):
+def _flight_translation_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, out, _k):
     x0 = gX*t
     x1 = t**2
     x2 = (1/2)*gX
@@ -190,12 +190,12 @@ def _flight_translation_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, ph
     x22 = math.cos(x9)
     x23 = omega*x15
     x24 = omega*x19
-    out[k, 0, 0] = rx0 + t*vx0 - t0*vx0 - t0*x0 + x1*x2 - x10*x7 - x12*x4 + x12*x8 + x2*x3 + x6*x7
-    out[k, 0, 1] = ry0 + t*vy0 - t0*vy0 - t0*x13 + x1*x14 - x10*x15 + x14*x3 + x15*x6 - x16*x4 + x16*x8
-    out[k, 0, 2] = rz0 + t*vz0 - t0*vz0 - t0*x17 + x1*x18 - x10*x19 + x18*x3 + x19*x6 - x20*x4 + x20*x8
-    out[k, 1, 0] = -gX*t0 + vx0 + x0 + x11*x21 - x21*x22
-    out[k, 1, 1] = -gY*t0 + vy0 + x11*x23 + x13 - x22*x23
-    out[k, 1, 2] = -gZ*t0 + vz0 + x11*x24 + x17 - x22*x24
+    out[_k, 0, 0] = rx0 + t*vx0 - t0*vx0 - t0*x0 + x1*x2 - x10*x7 - x12*x4 + x12*x8 + x2*x3 + x6*x7
+    out[_k, 0, 1] = ry0 + t*vy0 - t0*vy0 - t0*x13 + x1*x14 - x10*x15 + x14*x3 + x15*x6 - x16*x4 + x16*x8
+    out[_k, 0, 2] = rz0 + t*vz0 - t0*vz0 - t0*x17 + x1*x18 - x10*x19 + x18*x3 + x19*x6 - x20*x4 + x20*x8
+    out[_k, 1, 0] = -gX*t0 + vx0 + x0 + x11*x21 - x21*x22
+    out[_k, 1, 1] = -gY*t0 + vy0 + x11*x23 + x13 - x22*x23
+    out[_k, 1, 2] = -gZ*t0 + vz0 + x11*x24 + x17 - x22*x24
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -207,15 +207,15 @@ def flight_translation_scalar(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _flight_translation_loop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, steps, out):
-    for k in range(out.shape[0]):
-        _flight_translation_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], A[k * steps[9]], omega[k * steps[10]], phase[k * steps[11]], dX[k * steps[12]], dY[k * steps[13]], dZ[k * steps[14]], t0[k * steps[15]], t[k * steps[16]], out, k)
+def _flight_translation_loop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, _steps, out):
+    for _k in range(out.shape[0]):
+        _flight_translation_0(rx0[_k * _steps[0]], ry0[_k * _steps[1]], rz0[_k * _steps[2]], vx0[_k * _steps[3]], vy0[_k * _steps[4]], vz0[_k * _steps[5]], gX[_k * _steps[6]], gY[_k * _steps[7]], gZ[_k * _steps[8]], A[_k * _steps[9]], omega[_k * _steps[10]], phase[_k * _steps[11]], dX[_k * _steps[12]], dY[_k * _steps[13]], dZ[_k * _steps[14]], t0[_k * _steps[15]], t[_k * _steps[16]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _flight_translation_ploop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _flight_translation_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], A[k * steps[9]], omega[k * steps[10]], phase[k * steps[11]], dX[k * steps[12]], dY[k * steps[13]], dZ[k * steps[14]], t0[k * steps[15]], t[k * steps[16]], out, k)
+def _flight_translation_ploop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _flight_translation_0(rx0[_k * _steps[0]], ry0[_k * _steps[1]], rz0[_k * _steps[2]], vx0[_k * _steps[3]], vy0[_k * _steps[4]], vz0[_k * _steps[5]], gX[_k * _steps[6]], gY[_k * _steps[7]], gZ[_k * _steps[8]], A[_k * _steps[9]], omega[_k * _steps[10]], phase[_k * _steps[11]], dX[_k * _steps[12]], dY[_k * _steps[13]], dZ[_k * _steps[14]], t0[_k * _steps[15]], t[_k * _steps[16]], out, _k)
 
 
 def flight_translation(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t):
@@ -263,14 +263,14 @@ def flight_translation(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase
     numpy.ndarray, shape (..., 2, 3)
         [m, m/s]
     """
-    arrays, steps, batch = _flat(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t)
-    out = numpy.empty((math.prod(batch),) + (2, 3))
-    (_flight_translation_ploop if len(out) >= PARALLEL_BATCH else _flight_translation_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 3))
+    _arrays, _steps, _batch = _flat(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t)
+    out = numpy.empty((math.prod(_batch),) + (2, 3))
+    (_flight_translation_ploop if len(out) >= PARALLEL_BATCH else _flight_translation_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _flight_translation_rigid_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, out, k):
+def _flight_translation_rigid_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, out, _k):
     x0 = t**2
     x1 = (1/2)*gX
     x2 = t0**2
@@ -282,12 +282,12 @@ def _flight_translation_rigid_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t,
     x8 = (1/2)*gZ
     x9 = gZ*t0
     x10 = vz0 - x9
-    out[k, 0, 0] = rx0 + t*x4 - t0*x4 + x0*x1 - x1*x2
-    out[k, 0, 1] = ry0 + t*x7 - t0*x7 + x0*x5 - x2*x5
-    out[k, 0, 2] = rz0 + t*x10 - t0*x10 + x0*x8 - x2*x8
-    out[k, 1, 0] = gX*t + vx0 - x3
-    out[k, 1, 1] = gY*t + vy0 - x6
-    out[k, 1, 2] = gZ*t + vz0 - x9
+    out[_k, 0, 0] = rx0 + t*x4 - t0*x4 + x0*x1 - x1*x2
+    out[_k, 0, 1] = ry0 + t*x7 - t0*x7 + x0*x5 - x2*x5
+    out[_k, 0, 2] = rz0 + t*x10 - t0*x10 + x0*x8 - x2*x8
+    out[_k, 1, 0] = gX*t + vx0 - x3
+    out[_k, 1, 1] = gY*t + vy0 - x6
+    out[_k, 1, 2] = gZ*t + vz0 - x9
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -299,15 +299,15 @@ def flight_translation_rigid_scalar(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _flight_translation_rigid_loop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, steps, out):
-    for k in range(out.shape[0]):
-        _flight_translation_rigid_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], t0[k * steps[9]], t[k * steps[10]], out, k)
+def _flight_translation_rigid_loop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, _steps, out):
+    for _k in range(out.shape[0]):
+        _flight_translation_rigid_0(rx0[_k * _steps[0]], ry0[_k * _steps[1]], rz0[_k * _steps[2]], vx0[_k * _steps[3]], vy0[_k * _steps[4]], vz0[_k * _steps[5]], gX[_k * _steps[6]], gY[_k * _steps[7]], gZ[_k * _steps[8]], t0[_k * _steps[9]], t[_k * _steps[10]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _flight_translation_rigid_ploop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _flight_translation_rigid_0(rx0[k * steps[0]], ry0[k * steps[1]], rz0[k * steps[2]], vx0[k * steps[3]], vy0[k * steps[4]], vz0[k * steps[5]], gX[k * steps[6]], gY[k * steps[7]], gZ[k * steps[8]], t0[k * steps[9]], t[k * steps[10]], out, k)
+def _flight_translation_rigid_ploop(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _flight_translation_rigid_0(rx0[_k * _steps[0]], ry0[_k * _steps[1]], rz0[_k * _steps[2]], vx0[_k * _steps[3]], vy0[_k * _steps[4]], vz0[_k * _steps[5]], gX[_k * _steps[6]], gY[_k * _steps[7]], gZ[_k * _steps[8]], t0[_k * _steps[9]], t[_k * _steps[10]], out, _k)
 
 
 def flight_translation_rigid(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
@@ -343,14 +343,14 @@ def flight_translation_rigid(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
     numpy.ndarray, shape (..., 2, 3)
         [m, m/s]
     """
-    arrays, steps, batch = _flat(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t)
-    out = numpy.empty((math.prod(batch),) + (2, 3))
-    (_flight_translation_rigid_ploop if len(out) >= PARALLEL_BATCH else _flight_translation_rigid_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 3))
+    _arrays, _steps, _batch = _flat(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t)
+    out = numpy.empty((math.prod(_batch),) + (2, 3))
+    (_flight_translation_rigid_ploop if len(out) >= PARALLEL_BATCH else _flight_translation_rigid_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rotation_matrix_0(q0, q1, q2, q3, out, k):
+def _rotation_matrix_0(q0, q1, q2, q3, out, _k):
     x0 = 2*q2**2
     x1 = 2*q3**2 - 1
     x2 = 2*q0
@@ -359,15 +359,15 @@ def _rotation_matrix_0(q0, q1, q2, q3, out, k):
     x5 = 2*q1
     x6 = 2*q1**2
     x7 = q1*x2
-    out[k, 0, 0] = -x0 - x1
-    out[k, 0, 1] = 2*q1*q2 - x3
-    out[k, 0, 2] = q3*x5 + x4
-    out[k, 1, 0] = q2*x5 + x3
-    out[k, 1, 1] = -x1 - x6
-    out[k, 1, 2] = 2*q2*q3 - x7
-    out[k, 2, 0] = 2*q1*q3 - x4
-    out[k, 2, 1] = 2*q2*q3 + x7
-    out[k, 2, 2] = -x0 - x6 + 1
+    out[_k, 0, 0] = -x0 - x1
+    out[_k, 0, 1] = 2*q1*q2 - x3
+    out[_k, 0, 2] = q3*x5 + x4
+    out[_k, 1, 0] = q2*x5 + x3
+    out[_k, 1, 1] = -x1 - x6
+    out[_k, 1, 2] = 2*q2*q3 - x7
+    out[_k, 2, 0] = 2*q1*q3 - x4
+    out[_k, 2, 1] = 2*q2*q3 + x7
+    out[_k, 2, 2] = -x0 - x6 + 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -379,15 +379,15 @@ def rotation_matrix_scalar(q0, q1, q2, q3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rotation_matrix_loop(q0, q1, q2, q3, steps, out):
-    for k in range(out.shape[0]):
-        _rotation_matrix_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], out, k)
+def _rotation_matrix_loop(q0, q1, q2, q3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rotation_matrix_0(q0[_k * _steps[0]], q1[_k * _steps[1]], q2[_k * _steps[2]], q3[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rotation_matrix_ploop(q0, q1, q2, q3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _rotation_matrix_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], out, k)
+def _rotation_matrix_ploop(q0, q1, q2, q3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rotation_matrix_0(q0[_k * _steps[0]], q1[_k * _steps[1]], q2[_k * _steps[2]], q3[_k * _steps[3]], out, _k)
 
 
 def rotation_matrix(q0, q1, q2, q3):
@@ -409,15 +409,15 @@ def rotation_matrix(q0, q1, q2, q3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(q0, q1, q2, q3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_rotation_matrix_ploop if len(out) >= PARALLEL_BATCH else _rotation_matrix_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(q0, q1, q2, q3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_rotation_matrix_ploop if len(out) >= PARALLEL_BATCH else _rotation_matrix_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _support_distance_0(a, b, c, n1, n2, n3, out, k):
-    out[k] = math.sqrt(a**2*n1**2 + b**2*n2**2 + c**2*n3**2)
+def _support_distance_0(a, b, c, n1, n2, n3, out, _k):
+    out[_k] = math.sqrt(a**2*n1**2 + b**2*n2**2 + c**2*n3**2)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -429,15 +429,15 @@ def support_distance_scalar(a, b, c, n1, n2, n3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _support_distance_loop(a, b, c, n1, n2, n3, steps, out):
-    for k in range(out.shape[0]):
-        _support_distance_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
+def _support_distance_loop(a, b, c, n1, n2, n3, _steps, out):
+    for _k in range(out.shape[0]):
+        _support_distance_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], n1[_k * _steps[3]], n2[_k * _steps[4]], n3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _support_distance_ploop(a, b, c, n1, n2, n3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _support_distance_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
+def _support_distance_ploop(a, b, c, n1, n2, n3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _support_distance_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], n1[_k * _steps[3]], n2[_k * _steps[4]], n3[_k * _steps[5]], out, _k)
 
 
 def support_distance(a, b, c, n1, n2, n3):
@@ -463,21 +463,21 @@ def support_distance(a, b, c, n1, n2, n3):
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(a, b, c, n1, n2, n3)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_support_distance_ploop if len(out) >= PARALLEL_BATCH else _support_distance_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(a, b, c, n1, n2, n3)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_support_distance_ploop if len(out) >= PARALLEL_BATCH else _support_distance_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_offset_body_0(a, b, c, n1, n2, n3, out, k):
+def _contact_offset_body_0(a, b, c, n1, n2, n3, out, _k):
     x0 = a**2
     x1 = b**2
     x2 = c**2
     x3 = 1/math.sqrt(n1**2*x0 + n2**2*x1 + n3**2*x2)
-    out[k, 0] = -n1*x0*x3
-    out[k, 1] = -n2*x1*x3
-    out[k, 2] = -n3*x2*x3
+    out[_k, 0] = -n1*x0*x3
+    out[_k, 1] = -n2*x1*x3
+    out[_k, 2] = -n3*x2*x3
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -489,15 +489,15 @@ def contact_offset_body_scalar(a, b, c, n1, n2, n3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_offset_body_loop(a, b, c, n1, n2, n3, steps, out):
-    for k in range(out.shape[0]):
-        _contact_offset_body_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
+def _contact_offset_body_loop(a, b, c, n1, n2, n3, _steps, out):
+    for _k in range(out.shape[0]):
+        _contact_offset_body_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], n1[_k * _steps[3]], n2[_k * _steps[4]], n3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _contact_offset_body_ploop(a, b, c, n1, n2, n3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _contact_offset_body_0(a[k * steps[0]], b[k * steps[1]], c[k * steps[2]], n1[k * steps[3]], n2[k * steps[4]], n3[k * steps[5]], out, k)
+def _contact_offset_body_ploop(a, b, c, n1, n2, n3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _contact_offset_body_0(a[_k * _steps[0]], b[_k * _steps[1]], c[_k * _steps[2]], n1[_k * _steps[3]], n2[_k * _steps[4]], n3[_k * _steps[5]], out, _k)
 
 
 def contact_offset_body(a, b, c, n1, n2, n3):
@@ -523,18 +523,18 @@ def contact_offset_body(a, b, c, n1, n2, n3):
     numpy.ndarray, shape (..., 3)
         [m]
     """
-    arrays, steps, batch = _flat(a, b, c, n1, n2, n3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_contact_offset_body_ploop if len(out) >= PARALLEL_BATCH else _contact_offset_body_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(a, b, c, n1, n2, n3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_contact_offset_body_ploop if len(out) >= PARALLEL_BATCH else _contact_offset_body_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_equations_0(I1, I2, I3, w1, w2, w3, out, k):
+def _euler_equations_0(I1, I2, I3, w1, w2, w3, out, _k):
     x0 = w1*w3
-    out[k, 0] = -(-I2*w2*w3 + I3*w2*w3)/I1
-    out[k, 1] = -(I1*x0 - I3*x0)/I2
-    out[k, 2] = -(-I1*w1*w2 + I2*w1*w2)/I3
+    out[_k, 0] = -(-I2*w2*w3 + I3*w2*w3)/I1
+    out[_k, 1] = -(I1*x0 - I3*x0)/I2
+    out[_k, 2] = -(-I1*w1*w2 + I2*w1*w2)/I3
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -546,15 +546,15 @@ def euler_equations_scalar(I1, I2, I3, w1, w2, w3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_equations_loop(I1, I2, I3, w1, w2, w3, steps, out):
-    for k in range(out.shape[0]):
-        _euler_equations_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
+def _euler_equations_loop(I1, I2, I3, w1, w2, w3, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_equations_0(I1[_k * _steps[0]], I2[_k * _steps[1]], I3[_k * _steps[2]], w1[_k * _steps[3]], w2[_k * _steps[4]], w3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_equations_ploop(I1, I2, I3, w1, w2, w3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_equations_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
+def _euler_equations_ploop(I1, I2, I3, w1, w2, w3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_equations_0(I1[_k * _steps[0]], I2[_k * _steps[1]], I3[_k * _steps[2]], w1[_k * _steps[3]], w2[_k * _steps[4]], w3[_k * _steps[5]], out, _k)
 
 
 def euler_equations(I1, I2, I3, w1, w2, w3):
@@ -580,23 +580,23 @@ def euler_equations(I1, I2, I3, w1, w2, w3):
     numpy.ndarray, shape (..., 3)
         [rad/s^2]
     """
-    arrays, steps, batch = _flat(I1, I2, I3, w1, w2, w3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_euler_equations_ploop if len(out) >= PARALLEL_BATCH else _euler_equations_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(I1, I2, I3, w1, w2, w3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_euler_equations_ploop if len(out) >= PARALLEL_BATCH else _euler_equations_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _quaternion_rate_0(q0, q1, q2, q3, w1, w2, w3, out, k):
+def _quaternion_rate_0(q0, q1, q2, q3, w1, w2, w3, out, _k):
     x0 = (1/2)*w1
     x1 = (1/2)*q2
     x2 = (1/2)*q3
     x3 = (1/2)*q0
     x4 = (1/2)*q1
-    out[k, 0] = -q1*x0 - w2*x1 - w3*x2
-    out[k, 1] = q0*x0 - w2*x2 + w3*x1
-    out[k, 2] = q3*x0 + w2*x3 - w3*x4
-    out[k, 3] = -q2*x0 + w2*x4 + w3*x3
+    out[_k, 0] = -q1*x0 - w2*x1 - w3*x2
+    out[_k, 1] = q0*x0 - w2*x2 + w3*x1
+    out[_k, 2] = q3*x0 + w2*x3 - w3*x4
+    out[_k, 3] = -q2*x0 + w2*x4 + w3*x3
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -608,15 +608,15 @@ def quaternion_rate_scalar(q0, q1, q2, q3, w1, w2, w3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _quaternion_rate_loop(q0, q1, q2, q3, w1, w2, w3, steps, out):
-    for k in range(out.shape[0]):
-        _quaternion_rate_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], w1[k * steps[4]], w2[k * steps[5]], w3[k * steps[6]], out, k)
+def _quaternion_rate_loop(q0, q1, q2, q3, w1, w2, w3, _steps, out):
+    for _k in range(out.shape[0]):
+        _quaternion_rate_0(q0[_k * _steps[0]], q1[_k * _steps[1]], q2[_k * _steps[2]], q3[_k * _steps[3]], w1[_k * _steps[4]], w2[_k * _steps[5]], w3[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _quaternion_rate_ploop(q0, q1, q2, q3, w1, w2, w3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _quaternion_rate_0(q0[k * steps[0]], q1[k * steps[1]], q2[k * steps[2]], q3[k * steps[3]], w1[k * steps[4]], w2[k * steps[5]], w3[k * steps[6]], out, k)
+def _quaternion_rate_ploop(q0, q1, q2, q3, w1, w2, w3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _quaternion_rate_0(q0[_k * _steps[0]], q1[_k * _steps[1]], q2[_k * _steps[2]], q3[_k * _steps[3]], w1[_k * _steps[4]], w2[_k * _steps[5]], w3[_k * _steps[6]], out, _k)
 
 
 def quaternion_rate(q0, q1, q2, q3, w1, w2, w3):
@@ -644,14 +644,14 @@ def quaternion_rate(q0, q1, q2, q3, w1, w2, w3):
     numpy.ndarray, shape (..., 4)
         [1/s]
     """
-    arrays, steps, batch = _flat(q0, q1, q2, q3, w1, w2, w3)
-    out = numpy.empty((math.prod(batch),) + (4,))
-    (_quaternion_rate_ploop if len(out) >= PARALLEL_BATCH else _quaternion_rate_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4,))
+    _arrays, _steps, _batch = _flat(q0, q1, q2, q3, w1, w2, w3)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_quaternion_rate_ploop if len(out) >= PARALLEL_BATCH else _quaternion_rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rotation_invariants_0(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out, k):
+def _rotation_invariants_0(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out, _k):
     x0 = 2*q0
     x1 = q3*x0
     x2 = I2*w2
@@ -663,10 +663,10 @@ def _rotation_invariants_0(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out, k):
     x8 = I1*w1
     x9 = q1*x0
     x10 = 2*q1**2
-    out[k, 0] = (1/2)*I1*w1**2 + (1/2)*I2*w2**2 + (1/2)*I3*w3**2
-    out[k, 1] = x2*(2*q1*q2 - x1) + x5*(q3*x4 + x3) + x8*(-x6 - x7)
-    out[k, 2] = x2*(-x10 - x7) + x5*(2*q2*q3 - x9) + x8*(q2*x4 + x1)
-    out[k, 3] = x2*(2*q2*q3 + x9) + x5*(-x10 - x6 + 1) + x8*(2*q1*q3 - x3)
+    out[_k, 0] = (1/2)*I1*w1**2 + (1/2)*I2*w2**2 + (1/2)*I3*w3**2
+    out[_k, 1] = x2*(2*q1*q2 - x1) + x5*(q3*x4 + x3) + x8*(-x6 - x7)
+    out[_k, 2] = x2*(-x10 - x7) + x5*(2*q2*q3 - x9) + x8*(q2*x4 + x1)
+    out[_k, 3] = x2*(2*q2*q3 + x9) + x5*(-x10 - x6 + 1) + x8*(2*q1*q3 - x3)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -678,15 +678,15 @@ def rotation_invariants_scalar(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rotation_invariants_loop(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, steps, out):
-    for k in range(out.shape[0]):
-        _rotation_invariants_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], q0[k * steps[6]], q1[k * steps[7]], q2[k * steps[8]], q3[k * steps[9]], out, k)
+def _rotation_invariants_loop(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rotation_invariants_0(I1[_k * _steps[0]], I2[_k * _steps[1]], I3[_k * _steps[2]], w1[_k * _steps[3]], w2[_k * _steps[4]], w3[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rotation_invariants_ploop(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _rotation_invariants_0(I1[k * steps[0]], I2[k * steps[1]], I3[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], q0[k * steps[6]], q1[k * steps[7]], q2[k * steps[8]], q3[k * steps[9]], out, k)
+def _rotation_invariants_ploop(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rotation_invariants_0(I1[_k * _steps[0]], I2[_k * _steps[1]], I3[_k * _steps[2]], w1[_k * _steps[3]], w2[_k * _steps[4]], w3[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], out, _k)
 
 
 def rotation_invariants(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
@@ -720,20 +720,20 @@ def rotation_invariants(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
     numpy.ndarray, shape (..., 4)
         [J, kg*m^2/s]
     """
-    arrays, steps, batch = _flat(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3)
-    out = numpy.empty((math.prod(batch),) + (4,))
-    (_rotation_invariants_ploop if len(out) >= PARALLEL_BATCH else _rotation_invariants_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4,))
+    _arrays, _steps, _batch = _flat(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_rotation_invariants_ploop if len(out) >= PARALLEL_BATCH else _rotation_invariants_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _body_rates_0(psi, theta, phi, psi_d, theta_d, phi_d, out, k):
+def _body_rates_0(psi, theta, phi, psi_d, theta_d, phi_d, out, _k):
     x0 = math.cos(phi)
     x1 = math.sin(phi)
     x2 = psi_d*math.sin(theta)
-    out[k, 0] = theta_d*x0 + x1*x2
-    out[k, 1] = -theta_d*x1 + x0*x2
-    out[k, 2] = phi_d + psi_d*math.cos(theta)
+    out[_k, 0] = theta_d*x0 + x1*x2
+    out[_k, 1] = -theta_d*x1 + x0*x2
+    out[_k, 2] = phi_d + psi_d*math.cos(theta)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -745,15 +745,15 @@ def body_rates_scalar(psi, theta, phi, psi_d, theta_d, phi_d):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _body_rates_loop(psi, theta, phi, psi_d, theta_d, phi_d, steps, out):
-    for k in range(out.shape[0]):
-        _body_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], psi_d[k * steps[3]], theta_d[k * steps[4]], phi_d[k * steps[5]], out, k)
+def _body_rates_loop(psi, theta, phi, psi_d, theta_d, phi_d, _steps, out):
+    for _k in range(out.shape[0]):
+        _body_rates_0(psi[_k * _steps[0]], theta[_k * _steps[1]], phi[_k * _steps[2]], psi_d[_k * _steps[3]], theta_d[_k * _steps[4]], phi_d[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _body_rates_ploop(psi, theta, phi, psi_d, theta_d, phi_d, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _body_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], psi_d[k * steps[3]], theta_d[k * steps[4]], phi_d[k * steps[5]], out, k)
+def _body_rates_ploop(psi, theta, phi, psi_d, theta_d, phi_d, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _body_rates_0(psi[_k * _steps[0]], theta[_k * _steps[1]], phi[_k * _steps[2]], psi_d[_k * _steps[3]], theta_d[_k * _steps[4]], phi_d[_k * _steps[5]], out, _k)
 
 
 def body_rates(psi, theta, phi, psi_d, theta_d, phi_d):
@@ -779,14 +779,14 @@ def body_rates(psi, theta, phi, psi_d, theta_d, phi_d):
     numpy.ndarray, shape (..., 3)
         [rad/s]
     """
-    arrays, steps, batch = _flat(psi, theta, phi, psi_d, theta_d, phi_d)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_body_rates_ploop if len(out) >= PARALLEL_BATCH else _body_rates_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(psi, theta, phi, psi_d, theta_d, phi_d)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_body_rates_ploop if len(out) >= PARALLEL_BATCH else _body_rates_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rates_0(psi, theta, phi, w1, w2, w3, out, k):
+def _euler_rates_0(psi, theta, phi, w1, w2, w3, out, _k):
     x0 = math.sin(theta)
     x1 = 1/x0
     x2 = math.sin(phi)
@@ -794,9 +794,9 @@ def _euler_rates_0(psi, theta, phi, w1, w2, w3, out, k):
     x4 = math.cos(phi)
     x5 = w2*x4
     x6 = math.cos(theta)
-    out[k, 0] = x1*(x3 + x5)
-    out[k, 1] = w1*x4 - w2*x2
-    out[k, 2] = x1*(w3*x0 - x3*x6 - x5*x6)
+    out[_k, 0] = x1*(x3 + x5)
+    out[_k, 1] = w1*x4 - w2*x2
+    out[_k, 2] = x1*(w3*x0 - x3*x6 - x5*x6)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -808,15 +808,15 @@ def euler_rates_scalar(psi, theta, phi, w1, w2, w3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_rates_loop(psi, theta, phi, w1, w2, w3, steps, out):
-    for k in range(out.shape[0]):
-        _euler_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
+def _euler_rates_loop(psi, theta, phi, w1, w2, w3, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_rates_0(psi[_k * _steps[0]], theta[_k * _steps[1]], phi[_k * _steps[2]], w1[_k * _steps[3]], w2[_k * _steps[4]], w3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_rates_ploop(psi, theta, phi, w1, w2, w3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_rates_0(psi[k * steps[0]], theta[k * steps[1]], phi[k * steps[2]], w1[k * steps[3]], w2[k * steps[4]], w3[k * steps[5]], out, k)
+def _euler_rates_ploop(psi, theta, phi, w1, w2, w3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_rates_0(psi[_k * _steps[0]], theta[_k * _steps[1]], phi[_k * _steps[2]], w1[_k * _steps[3]], w2[_k * _steps[4]], w3[_k * _steps[5]], out, _k)
 
 
 def euler_rates(psi, theta, phi, w1, w2, w3):
@@ -842,7 +842,7 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     numpy.ndarray, shape (..., 3)
         [rad/s]
     """
-    arrays, steps, batch = _flat(psi, theta, phi, w1, w2, w3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_euler_rates_ploop if len(out) >= PARALLEL_BATCH else _euler_rates_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(psi, theta, phi, w1, w2, w3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_euler_rates_ploop if len(out) >= PARALLEL_BATCH else _euler_rates_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))

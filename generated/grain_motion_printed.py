@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 83d74261c4a1acb120b40e3808aeb11762413f232d9ca6e92e11d304882a03a0
-# source key ffe78a8cee4d87a8c284b602cba4c02f7e8e98304e08d478b04ebfd528f221d9
+# symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
+# source key 618c806b959521becab632a7bcb685bb40e9e0a8be47e65431e01bbfe6550588
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

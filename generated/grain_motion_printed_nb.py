@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 0905de148d5e68794decd7a8663a49df601133a3ce2f51f12ac19f9ca79456c3
-# source key ffe78a8cee4d87a8c284b602cba4c02f7e8e98304e08d478b04ebfd528f221d9
-# body sha256 fae55143e1c896ca2fd2f59933392cb91b09c00540ca682c4acc8b2b514dd47e
+# symmech 0.1.0 generated module; inputs sha256 89d3deefe5bf4a2492d1ac84018a03f8b6108c04fedde4670e81d12c37831c84
+# source key 618c806b959521becab632a7bcb685bb40e9e0a8be47e65431e01bbfe6550588
+# body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 
 Compiled twin of `symmech.generated.grain_motion_printed` (the numpy module, the
@@ -43,11 +43,11 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _gravity_0(g, alpha, beta, delta, out, k):
+def _gravity_0(g, alpha, beta, delta, out, _k):
     x0 = g*math.cos(delta)
-    out[k, 0] = -g*math.sin(beta)
-    out[k, 1] = -x0*math.cos(beta)*math.tan(alpha)
-    out[k, 2] = -x0
+    out[_k, 0] = -g*math.sin(beta)
+    out[_k, 1] = -x0*math.cos(beta)*math.tan(alpha)
+    out[_k, 2] = -x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -59,15 +59,15 @@ def gravity_scalar(g, alpha, beta, delta):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _gravity_loop(g, alpha, beta, delta, steps, out):
-    for k in range(out.shape[0]):
-        _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], delta[k * steps[3]], out, k)
+def _gravity_loop(g, alpha, beta, delta, _steps, out):
+    for _k in range(out.shape[0]):
+        _gravity_0(g[_k * _steps[0]], alpha[_k * _steps[1]], beta[_k * _steps[2]], delta[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _gravity_ploop(g, alpha, beta, delta, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _gravity_0(g[k * steps[0]], alpha[k * steps[1]], beta[k * steps[2]], delta[k * steps[3]], out, k)
+def _gravity_ploop(g, alpha, beta, delta, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _gravity_0(g[_k * _steps[0]], alpha[_k * _steps[1]], beta[_k * _steps[2]], delta[_k * _steps[3]], out, _k)
 
 
 def gravity(g, alpha, beta, delta):
@@ -89,24 +89,24 @@ def gravity(g, alpha, beta, delta):
     numpy.ndarray, shape (..., 3)
         [m/s^2]
     """
-    arrays, steps, batch = _flat(g, alpha, beta, delta)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_gravity_ploop if len(out) >= PARALLEL_BATCH else _gravity_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(g, alpha, beta, delta)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_gravity_ploop if len(out) >= PARALLEL_BATCH else _gravity_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _flight_step_0(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, out, k):
+def _flight_step_0(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, out, _k):
     x0 = dt*(ax_vb - g*math.sin(beta)) + vx
     x1 = g*math.cos(delta)
     x2 = dt*(ay_vb - x1*math.cos(beta)*math.tan(alpha)) + vy
     x3 = dt*(az_vb - x1) + vz
-    out[k, 0, 0] = x0
-    out[k, 0, 1] = x2
-    out[k, 0, 2] = x3
-    out[k, 1, 0] = dt*x0 + x
-    out[k, 1, 1] = dt*x2 + y
-    out[k, 1, 2] = dt*x3 + z
+    out[_k, 0, 0] = x0
+    out[_k, 0, 1] = x2
+    out[_k, 0, 2] = x3
+    out[_k, 1, 0] = dt*x0 + x
+    out[_k, 1, 1] = dt*x2 + y
+    out[_k, 1, 2] = dt*x3 + z
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -118,15 +118,15 @@ def flight_step_scalar(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _flight_step_loop(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, steps, out):
-    for k in range(out.shape[0]):
-        _flight_step_0(vx[k * steps[0]], vy[k * steps[1]], vz[k * steps[2]], x[k * steps[3]], y[k * steps[4]], z[k * steps[5]], ax_vb[k * steps[6]], ay_vb[k * steps[7]], az_vb[k * steps[8]], g[k * steps[9]], alpha[k * steps[10]], beta[k * steps[11]], delta[k * steps[12]], dt[k * steps[13]], out, k)
+def _flight_step_loop(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, _steps, out):
+    for _k in range(out.shape[0]):
+        _flight_step_0(vx[_k * _steps[0]], vy[_k * _steps[1]], vz[_k * _steps[2]], x[_k * _steps[3]], y[_k * _steps[4]], z[_k * _steps[5]], ax_vb[_k * _steps[6]], ay_vb[_k * _steps[7]], az_vb[_k * _steps[8]], g[_k * _steps[9]], alpha[_k * _steps[10]], beta[_k * _steps[11]], delta[_k * _steps[12]], dt[_k * _steps[13]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _flight_step_ploop(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _flight_step_0(vx[k * steps[0]], vy[k * steps[1]], vz[k * steps[2]], x[k * steps[3]], y[k * steps[4]], z[k * steps[5]], ax_vb[k * steps[6]], ay_vb[k * steps[7]], az_vb[k * steps[8]], g[k * steps[9]], alpha[k * steps[10]], beta[k * steps[11]], delta[k * steps[12]], dt[k * steps[13]], out, k)
+def _flight_step_ploop(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _flight_step_0(vx[_k * _steps[0]], vy[_k * _steps[1]], vz[_k * _steps[2]], x[_k * _steps[3]], y[_k * _steps[4]], z[_k * _steps[5]], ax_vb[_k * _steps[6]], ay_vb[_k * _steps[7]], az_vb[_k * _steps[8]], g[_k * _steps[9]], alpha[_k * _steps[10]], beta[_k * _steps[11]], delta[_k * _steps[12]], dt[_k * _steps[13]], out, _k)
 
 
 def flight_step(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt):
@@ -168,18 +168,18 @@ def flight_step(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta,
     numpy.ndarray, shape (..., 2, 3)
         [m/s, m]
     """
-    arrays, steps, batch = _flat(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt)
-    out = numpy.empty((math.prod(batch),) + (2, 3))
-    (_flight_step_ploop if len(out) >= PARALLEL_BATCH else _flight_step_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 3))
+    _arrays, _steps, _batch = _flat(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt)
+    out = numpy.empty((math.prod(_batch),) + (2, 3))
+    (_flight_step_ploop if len(out) >= PARALLEL_BATCH else _flight_step_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_angles_0(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out, k):
+def _euler_angles_0(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out, _k):
     x0 = dt*s
-    out[k, 0] = theta + theta_d*x0
-    out[k, 1] = psi + psi_d*x0
-    out[k, 2] = phi + phi_d*x0
+    out[_k, 0] = theta + theta_d*x0
+    out[_k, 1] = psi + psi_d*x0
+    out[_k, 2] = phi + phi_d*x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -191,15 +191,15 @@ def euler_angles_scalar(theta, psi, phi, theta_d, psi_d, phi_d, s, dt):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _euler_angles_loop(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, steps, out):
-    for k in range(out.shape[0]):
-        _euler_angles_0(theta[k * steps[0]], psi[k * steps[1]], phi[k * steps[2]], theta_d[k * steps[3]], psi_d[k * steps[4]], phi_d[k * steps[5]], s[k * steps[6]], dt[k * steps[7]], out, k)
+def _euler_angles_loop(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, _steps, out):
+    for _k in range(out.shape[0]):
+        _euler_angles_0(theta[_k * _steps[0]], psi[_k * _steps[1]], phi[_k * _steps[2]], theta_d[_k * _steps[3]], psi_d[_k * _steps[4]], phi_d[_k * _steps[5]], s[_k * _steps[6]], dt[_k * _steps[7]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _euler_angles_ploop(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _euler_angles_0(theta[k * steps[0]], psi[k * steps[1]], phi[k * steps[2]], theta_d[k * steps[3]], psi_d[k * steps[4]], phi_d[k * steps[5]], s[k * steps[6]], dt[k * steps[7]], out, k)
+def _euler_angles_ploop(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _euler_angles_0(theta[_k * _steps[0]], psi[_k * _steps[1]], phi[_k * _steps[2]], theta_d[_k * _steps[3]], psi_d[_k * _steps[4]], phi_d[_k * _steps[5]], s[_k * _steps[6]], dt[_k * _steps[7]], out, _k)
 
 
 def euler_angles(theta, psi, phi, theta_d, psi_d, phi_d, s, dt):
@@ -229,15 +229,15 @@ def euler_angles(theta, psi, phi, theta_d, psi_d, phi_d, s, dt):
     numpy.ndarray, shape (..., 3)
         [rad]
     """
-    arrays, steps, batch = _flat(theta, psi, phi, theta_d, psi_d, phi_d, s, dt)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_euler_angles_ploop if len(out) >= PARALLEL_BATCH else _euler_angles_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(theta, psi, phi, theta_d, psi_d, phi_d, s, dt)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_euler_angles_ploop if len(out) >= PARALLEL_BATCH else _euler_angles_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_gap_0(z_c, KC_x, KC_y, KC_z, out, k):
-    out[k] = z_c - math.sqrt(KC_x**2 + KC_y**2 + KC_z**2)
+def _contact_gap_0(z_c, KC_x, KC_y, KC_z, out, _k):
+    out[_k] = z_c - math.sqrt(KC_x**2 + KC_y**2 + KC_z**2)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -249,15 +249,15 @@ def contact_gap_scalar(z_c, KC_x, KC_y, KC_z):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _contact_gap_loop(z_c, KC_x, KC_y, KC_z, steps, out):
-    for k in range(out.shape[0]):
-        _contact_gap_0(z_c[k * steps[0]], KC_x[k * steps[1]], KC_y[k * steps[2]], KC_z[k * steps[3]], out, k)
+def _contact_gap_loop(z_c, KC_x, KC_y, KC_z, _steps, out):
+    for _k in range(out.shape[0]):
+        _contact_gap_0(z_c[_k * _steps[0]], KC_x[_k * _steps[1]], KC_y[_k * _steps[2]], KC_z[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _contact_gap_ploop(z_c, KC_x, KC_y, KC_z, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _contact_gap_0(z_c[k * steps[0]], KC_x[k * steps[1]], KC_y[k * steps[2]], KC_z[k * steps[3]], out, k)
+def _contact_gap_ploop(z_c, KC_x, KC_y, KC_z, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _contact_gap_0(z_c[_k * _steps[0]], KC_x[_k * _steps[1]], KC_y[_k * _steps[2]], KC_z[_k * _steps[3]], out, _k)
 
 
 def contact_gap(z_c, KC_x, KC_y, KC_z):
@@ -279,7 +279,7 @@ def contact_gap(z_c, KC_x, KC_y, KC_z):
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(z_c, KC_x, KC_y, KC_z)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_contact_gap_ploop if len(out) >= PARALLEL_BATCH else _contact_gap_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(z_c, KC_x, KC_y, KC_z)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_contact_gap_ploop if len(out) >= PARALLEL_BATCH else _contact_gap_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 48d92c0f795c74944a9713a19c4f25e3528e8de4978014c5011c623d2e4ec078
-# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
-# body sha256 f0de801819a68cd9a9d93f004d8e8c69f38dc1dd5596ea49671ffc4611fb46a0
+# symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
+# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -43,13 +43,13 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_0(m1, m2, l1, l2, g, out, k):
+def _a_0(m1, m2, l1, l2, g, out, _k):
     x0 = l1 + l2
     x1 = l2*m2*x0
-    out[k, 0, 0] = l1**2*m1 + m2*x0**2
-    out[k, 0, 1] = x1
-    out[k, 1, 0] = x1
-    out[k, 1, 1] = l2**2*m2
+    out[_k, 0, 0] = l1**2*m1 + m2*x0**2
+    out[_k, 0, 1] = x1
+    out[_k, 1, 0] = x1
+    out[_k, 1, 1] = l2**2*m2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -61,15 +61,15 @@ def a_scalar(m1, m2, l1, l2, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_loop(m1, m2, l1, l2, g, steps, out):
-    for k in range(out.shape[0]):
-        _a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _a_loop(m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _a_ploop(m1, m2, l1, l2, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _a_ploop(m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 def a(m1, m2, l1, l2, g):
@@ -93,18 +93,18 @@ def a(m1, m2, l1, l2, g):
     numpy.ndarray, shape (..., 2, 2)
         [kg, kg m, kg m^2 by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, m2, l1, l2, g)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_0(m1, m2, l1, l2, g, out, k):
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = 0
+def _b_0(m1, m2, l1, l2, g, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -116,15 +116,15 @@ def b_scalar(m1, m2, l1, l2, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_loop(m1, m2, l1, l2, g, steps, out):
-    for k in range(out.shape[0]):
-        _b_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _b_loop(m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _b_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _b_ploop(m1, m2, l1, l2, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _b_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _b_ploop(m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _b_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 def b(m1, m2, l1, l2, g):
@@ -148,20 +148,20 @@ def b(m1, m2, l1, l2, g):
     numpy.ndarray, shape (..., 2, 2)
         [N s/m, N s, N m s by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, m2, l1, l2, g)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_0(m1, m2, l1, l2, g, out, k):
+def _c_0(m1, m2, l1, l2, g, out, _k):
     x0 = g*m2
     x1 = l2*x0
-    out[k, 0, 0] = g*l1*m1 + x0*(l1 + l2)
-    out[k, 0, 1] = x1
-    out[k, 1, 0] = x1
-    out[k, 1, 1] = x1
+    out[_k, 0, 0] = g*l1*m1 + x0*(l1 + l2)
+    out[_k, 0, 1] = x1
+    out[_k, 1, 0] = x1
+    out[_k, 1, 1] = x1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -173,15 +173,15 @@ def c_scalar(m1, m2, l1, l2, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_loop(m1, m2, l1, l2, g, steps, out):
-    for k in range(out.shape[0]):
-        _c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _c_loop(m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _c_ploop(m1, m2, l1, l2, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _c_ploop(m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 def c(m1, m2, l1, l2, g):
@@ -205,18 +205,18 @@ def c(m1, m2, l1, l2, g):
     numpy.ndarray, shape (..., 2, 2)
         [N/m, N, N m by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, m2, l1, l2, g)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_0(m1, m2, l1, l2, g, out, k):
-    out[k, 0, 0] = l1
-    out[k, 0, 1] = l1 + l2
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = l2
+def _L_a_0(m1, m2, l1, l2, g, out, _k):
+    out[_k, 0, 0] = l1
+    out[_k, 0, 1] = l1 + l2
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = l2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -228,15 +228,15 @@ def L_a_scalar(m1, m2, l1, l2, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_loop(m1, m2, l1, l2, g, steps, out):
-    for k in range(out.shape[0]):
-        _L_a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _L_a_loop(m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_a_ploop(m1, m2, l1, l2, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_a_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _L_a_ploop(m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 def L_a(m1, m2, l1, l2, g):
@@ -260,16 +260,16 @@ def L_a(m1, m2, l1, l2, g):
     numpy.ndarray, shape (..., 2, 2)
         [m or 1]
     """
-    arrays, steps, batch = _flat(m1, m2, l1, l2, g)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_0(m1, m2, l1, l2, g, out, k):
-    out[k, 0] = 0
-    out[k, 1] = 0
+def _L_c_0(m1, m2, l1, l2, g, out, _k):
+    out[_k, 0] = 0
+    out[_k, 1] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -281,15 +281,15 @@ def L_c_scalar(m1, m2, l1, l2, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_loop(m1, m2, l1, l2, g, steps, out):
-    for k in range(out.shape[0]):
-        _L_c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _L_c_loop(m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_c_ploop(m1, m2, l1, l2, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_c_0(m1[k * steps[0]], m2[k * steps[1]], l1[k * steps[2]], l2[k * steps[3]], g[k * steps[4]], out, k)
+def _L_c_ploop(m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], l1[_k * _steps[2]], l2[_k * _steps[3]], g[_k * _steps[4]], out, _k)
 
 
 def L_c(m1, m2, l1, l2, g):
@@ -313,7 +313,7 @@ def L_c(m1, m2, l1, l2, g):
     numpy.ndarray, shape (..., 2)
         [m or 1]
     """
-    arrays, steps, batch = _flat(m1, m2, l1, l2, g)
-    out = numpy.empty((math.prod(batch),) + (2,))
-    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2,))
+    _arrays, _steps, _batch = _flat(m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (2,))
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2,))

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 ddbc3cf39069d4a845041e3c9584dfe5b7e79ac2852f98b7cd51f36823dfb603
-# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
-# body sha256 0a9acd58cb1b1af3e466323ccbc6805bf672f22d28e89f36b064dd6d75c77b50
+# symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
+# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -43,7 +43,7 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, k):
+def _a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
     x0 = m1 + m2 + m3
     x1 = m1*yM
     x2 = m2*yM
@@ -75,31 +75,31 @@ def _a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, del
     x28 = m2*x25
     x29 = x15*x18 + x22*x6
     x30 = l5**2*m2
-    out[k, 0, 0] = x0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = x3
-    out[k, 0, 3] = x7
-    out[k, 0, 4] = x10
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = x0
-    out[k, 1, 2] = x13
-    out[k, 1, 3] = x16
-    out[k, 1, 4] = x18
-    out[k, 2, 0] = x3
-    out[k, 2, 1] = x13
-    out[k, 2, 2] = I3 + m1*x19 + m1*x20 + m2*x19 + m2*x20
-    out[k, 2, 3] = x21
-    out[k, 2, 4] = x23
-    out[k, 3, 0] = x7
-    out[k, 3, 1] = x16
-    out[k, 3, 2] = x21
-    out[k, 3, 3] = x24*x26 + x24*x28 + x26*x27 + x27*x28
-    out[k, 3, 4] = x29
-    out[k, 4, 0] = x10
-    out[k, 4, 1] = x18
-    out[k, 4, 2] = x23
-    out[k, 4, 3] = x29
-    out[k, 4, 4] = x17**2*x30 + x30*x8**2
+    out[_k, 0, 0] = x0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = x3
+    out[_k, 0, 3] = x7
+    out[_k, 0, 4] = x10
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = x0
+    out[_k, 1, 2] = x13
+    out[_k, 1, 3] = x16
+    out[_k, 1, 4] = x18
+    out[_k, 2, 0] = x3
+    out[_k, 2, 1] = x13
+    out[_k, 2, 2] = I3 + m1*x19 + m1*x20 + m2*x19 + m2*x20
+    out[_k, 2, 3] = x21
+    out[_k, 2, 4] = x23
+    out[_k, 3, 0] = x7
+    out[_k, 3, 1] = x16
+    out[_k, 3, 2] = x21
+    out[_k, 3, 3] = x24*x26 + x24*x28 + x26*x27 + x27*x28
+    out[_k, 3, 4] = x29
+    out[_k, 4, 0] = x10
+    out[_k, 4, 1] = x18
+    out[_k, 4, 2] = x23
+    out[_k, 4, 3] = x29
+    out[_k, 4, 4] = x17**2*x30 + x30*x8**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -111,15 +111,15 @@ def a_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in range(out.shape[0]):
-        _a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _a_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _a_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _a_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 def a(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
@@ -173,39 +173,39 @@ def a(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     numpy.ndarray, shape (..., 5, 5)
         [kg, kg m, kg m^2 by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
-    out = numpy.empty((math.prod(batch),) + (5, 5))
-    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5, 5))
+    _arrays, _steps, _batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (5, 5))
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5, 5))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, k):
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 0, 3] = 0
-    out[k, 0, 4] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 0
-    out[k, 1, 4] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = 0
-    out[k, 2, 3] = 0
-    out[k, 2, 4] = 0
-    out[k, 3, 0] = 0
-    out[k, 3, 1] = 0
-    out[k, 3, 2] = 0
-    out[k, 3, 3] = 0
-    out[k, 3, 4] = 0
-    out[k, 4, 0] = 0
-    out[k, 4, 1] = 0
-    out[k, 4, 2] = 0
-    out[k, 4, 3] = 0
-    out[k, 4, 4] = 0
+def _b_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+    out[_k, 3, 4] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = 0
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -217,15 +217,15 @@ def b_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in range(out.shape[0]):
-        _b_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _b_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _b_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _b_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _b_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _b_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _b_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 def b(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
@@ -279,14 +279,14 @@ def b(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     numpy.ndarray, shape (..., 5, 5)
         [N s/m, N s, N m s by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
-    out = numpy.empty((math.prod(batch),) + (5, 5))
-    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5, 5))
+    _arrays, _steps, _batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (5, 5))
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5, 5))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, k):
+def _c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
     x0 = math.sin(delta3)
     x1 = hs**2/abs(hs)**2
     x2 = math.cos(delta4)
@@ -310,31 +310,31 @@ def _c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, del
     x20 = l4**2
     x21 = c1*x16*x5*x7 + c2*x10*x12*x16
     x22 = l5**2
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 0, 3] = 0
-    out[k, 0, 4] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = c3 + c4
-    out[k, 1, 2] = x3
-    out[k, 1, 3] = 0
-    out[k, 1, 4] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = x3
-    out[k, 2, 2] = c1*x8**2 + c2*x13**2 + c3*l3**2*x0**2 + c4*l6**2*x2**2
-    out[k, 2, 3] = x18
-    out[k, 2, 4] = x19
-    out[k, 3, 0] = 0
-    out[k, 3, 1] = 0
-    out[k, 3, 2] = x18
-    out[k, 3, 3] = c1*x20*x4**2 + c2*x20*x9**2
-    out[k, 3, 4] = x21
-    out[k, 4, 0] = 0
-    out[k, 4, 1] = 0
-    out[k, 4, 2] = x19
-    out[k, 4, 3] = x21
-    out[k, 4, 4] = c1*x22*x6**2 + c2*x11**2*x22
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = c3 + c4
+    out[_k, 1, 2] = x3
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = x3
+    out[_k, 2, 2] = c1*x8**2 + c2*x13**2 + c3*l3**2*x0**2 + c4*l6**2*x2**2
+    out[_k, 2, 3] = x18
+    out[_k, 2, 4] = x19
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = x18
+    out[_k, 3, 3] = c1*x20*x4**2 + c2*x20*x9**2
+    out[_k, 3, 4] = x21
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = x19
+    out[_k, 4, 3] = x21
+    out[_k, 4, 4] = c1*x22*x6**2 + c2*x11**2*x22
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -346,15 +346,15 @@ def c_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in range(out.shape[0]):
-        _c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _c_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _c_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _c_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 def c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
@@ -408,52 +408,52 @@ def c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3
     numpy.ndarray, shape (..., 5, 5)
         [N/m, N, N m by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
-    out = numpy.empty((math.prod(batch),) + (5, 5))
-    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5, 5))
+    _arrays, _steps, _batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (5, 5))
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5, 5))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, k):
+def _L_a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
     x0 = -yM
     x1 = -l4*math.sin(alpha)
     x2 = l4*math.cos(alpha)
-    out[k, 0, 0] = 1
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 1
-    out[k, 0, 3] = 0
-    out[k, 0, 4] = 1
-    out[k, 0, 5] = 0
-    out[k, 0, 6] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = 1
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 1
-    out[k, 1, 4] = 0
-    out[k, 1, 5] = 1
-    out[k, 1, 6] = 0
-    out[k, 2, 0] = x0
-    out[k, 2, 1] = xM
-    out[k, 2, 2] = x0
-    out[k, 2, 3] = xM
-    out[k, 2, 4] = 0
-    out[k, 2, 5] = 0
-    out[k, 2, 6] = 1
-    out[k, 3, 0] = x1
-    out[k, 3, 1] = x2
-    out[k, 3, 2] = x1
-    out[k, 3, 3] = x2
-    out[k, 3, 4] = 0
-    out[k, 3, 5] = 0
-    out[k, 3, 6] = 0
-    out[k, 4, 0] = 0
-    out[k, 4, 1] = 0
-    out[k, 4, 2] = -l5*math.sin(beta)
-    out[k, 4, 3] = l5*math.cos(beta)
-    out[k, 4, 4] = 0
-    out[k, 4, 5] = 0
-    out[k, 4, 6] = 0
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 1
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 1
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 1
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 1
+    out[_k, 1, 6] = 0
+    out[_k, 2, 0] = x0
+    out[_k, 2, 1] = xM
+    out[_k, 2, 2] = x0
+    out[_k, 2, 3] = xM
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 1
+    out[_k, 3, 0] = x1
+    out[_k, 3, 1] = x2
+    out[_k, 3, 2] = x1
+    out[_k, 3, 3] = x2
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = -l5*math.sin(beta)
+    out[_k, 4, 3] = l5*math.cos(beta)
+    out[_k, 4, 4] = 0
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -465,15 +465,15 @@ def L_a_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in range(out.shape[0]):
-        _L_a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _L_a_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_a_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_a_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _L_a_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_a_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 def L_a(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
@@ -527,40 +527,40 @@ def L_a(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delt
     numpy.ndarray, shape (..., 5, 7)
         [m or 1]
     """
-    arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
-    out = numpy.empty((math.prod(batch),) + (5, 7))
-    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5, 7))
+    _arrays, _steps, _batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (5, 7))
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5, 7))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, k):
+def _L_c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
     x0 = hs/abs(hs)
     x1 = l4*math.sin(alpha)
     x2 = l5*math.sin(beta)
     x3 = h/abs(h)
     x4 = l4*math.cos(alpha)
     x5 = l5*math.cos(beta)
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 0, 3] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = x0
-    out[k, 1, 3] = x0
-    out[k, 2, 0] = -x3*(x1 + x2)
-    out[k, 2, 1] = x3*(-x4 - x5)
-    out[k, 2, 2] = l3*x0*math.sin(delta3)
-    out[k, 2, 3] = -l6*x0*math.cos(delta4)
-    out[k, 3, 0] = x1*x3
-    out[k, 3, 1] = x3*x4
-    out[k, 3, 2] = 0
-    out[k, 3, 3] = 0
-    out[k, 4, 0] = x2*x3
-    out[k, 4, 1] = x3*x5
-    out[k, 4, 2] = 0
-    out[k, 4, 3] = 0
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = x0
+    out[_k, 1, 3] = x0
+    out[_k, 2, 0] = -x3*(x1 + x2)
+    out[_k, 2, 1] = x3*(-x4 - x5)
+    out[_k, 2, 2] = l3*x0*math.sin(delta3)
+    out[_k, 2, 3] = -l6*x0*math.cos(delta4)
+    out[_k, 3, 0] = x1*x3
+    out[_k, 3, 1] = x3*x4
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+    out[_k, 4, 0] = x2*x3
+    out[_k, 4, 1] = x3*x5
+    out[_k, 4, 2] = 0
+    out[_k, 4, 3] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -572,15 +572,15 @@ def L_c_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in range(out.shape[0]):
-        _L_c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _L_c_loop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_c_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_c_0(m1[k * steps[0]], m2[k * steps[1]], m3[k * steps[2]], I3[k * steps[3]], xM[k * steps[4]], yM[k * steps[5]], l4[k * steps[6]], alpha[k * steps[7]], l5[k * steps[8]], beta[k * steps[9]], h[k * steps[10]], c1[k * steps[11]], c2[k * steps[12]], c3[k * steps[13]], c4[k * steps[14]], l3[k * steps[15]], delta3[k * steps[16]], l6[k * steps[17]], delta4[k * steps[18]], hs[k * steps[19]], out, k)
+def _L_c_ploop(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_c_0(m1[_k * _steps[0]], m2[_k * _steps[1]], m3[_k * _steps[2]], I3[_k * _steps[3]], xM[_k * _steps[4]], yM[_k * _steps[5]], l4[_k * _steps[6]], alpha[_k * _steps[7]], l5[_k * _steps[8]], beta[_k * _steps[9]], h[_k * _steps[10]], c1[_k * _steps[11]], c2[_k * _steps[12]], c3[_k * _steps[13]], c4[_k * _steps[14]], l3[_k * _steps[15]], delta3[_k * _steps[16]], l6[_k * _steps[17]], delta4[_k * _steps[18]], hs[_k * _steps[19]], out, _k)
 
 
 def L_c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
@@ -634,7 +634,7 @@ def L_c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delt
     numpy.ndarray, shape (..., 5, 4)
         [m or 1]
     """
-    arrays, steps, batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
-    out = numpy.empty((math.prod(batch),) + (5, 4))
-    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5, 4))
+    _arrays, _steps, _batch = _flat(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (5, 4))
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5, 4))

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 43e2bc591c1768af163bc98721dbd96864b39d4bab0f74d75bfaf7a7a9a6e3b7
-# source key 3cee81d07cbc58a250a49d65cfca53029087c3d705b585caf10d641b769f4382
-# body sha256 525f7ed3995b9d0023bfe2e869bccfdd90795ded2fc5abd062ecdd200af15119
+# symmech 0.1.0 generated module; inputs sha256 cda9990b8cf0caf682d7b0c511a12dee929c6f3016d7cba84aaff44696b0138a
+# source key 09edeb663e1ab46caffc8a638ce6b0989122a623f7e643c8b0c2fb226fa5b3ab
+# body sha256 27a7456afbf7375f1d6c735d8f17ed28ca1fc4bd2f24a5f1581832149a61ee93
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Compiled twin of `symmech.generated.smm_formulas` (the numpy module, the
@@ -43,16 +43,16 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table2_conjugates_0(p_x, p_y, p_z, out, k):
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = -p_z
-    out[k, 0, 2] = p_y
-    out[k, 1, 0] = p_z
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = -p_x
-    out[k, 2, 0] = -p_y
-    out[k, 2, 1] = p_x
-    out[k, 2, 2] = 0
+def _table2_conjugates_0(p_x, p_y, p_z, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = -p_z
+    out[_k, 0, 2] = p_y
+    out[_k, 1, 0] = p_z
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = -p_x
+    out[_k, 2, 0] = -p_y
+    out[_k, 2, 1] = p_x
+    out[_k, 2, 2] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -64,15 +64,15 @@ def table2_conjugates_scalar(p_x, p_y, p_z):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table2_conjugates_loop(p_x, p_y, p_z, steps, out):
-    for k in range(out.shape[0]):
-        _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
+def _table2_conjugates_loop(p_x, p_y, p_z, _steps, out):
+    for _k in range(out.shape[0]):
+        _table2_conjugates_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], p_z[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _table2_conjugates_ploop(p_x, p_y, p_z, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
+def _table2_conjugates_ploop(p_x, p_y, p_z, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _table2_conjugates_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], p_z[_k * _steps[2]], out, _k)
 
 
 def table2_conjugates(p_x, p_y, p_z):
@@ -92,17 +92,17 @@ def table2_conjugates(p_x, p_y, p_z):
     numpy.ndarray, shape (..., 3, 3)
         [m]
     """
-    arrays, steps, batch = _flat(p_x, p_y, p_z)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_table2_conjugates_ploop if len(out) >= PARALLEL_BATCH else _table2_conjugates_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(p_x, p_y, p_z)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_table2_conjugates_ploop if len(out) >= PARALLEL_BATCH else _table2_conjugates_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, k):
-    out[k, 0] = e_y*p_z - e_z*p_y
-    out[k, 1] = -e_x*p_z + e_z*p_x
-    out[k, 2] = e_x*p_y - e_y*p_x
+def _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, _k):
+    out[_k, 0] = e_y*p_z - e_z*p_y
+    out[_k, 1] = -e_x*p_z + e_z*p_x
+    out[_k, 2] = e_x*p_y - e_y*p_x
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -114,15 +114,15 @@ def spatial_conjugate_scalar(e_x, e_y, e_z, p_x, p_y, p_z):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _spatial_conjugate_loop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
-    for k in range(out.shape[0]):
-        _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
+def _spatial_conjugate_loop(e_x, e_y, e_z, p_x, p_y, p_z, _steps, out):
+    for _k in range(out.shape[0]):
+        _spatial_conjugate_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _spatial_conjugate_ploop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
+def _spatial_conjugate_ploop(e_x, e_y, e_z, p_x, p_y, p_z, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _spatial_conjugate_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], out, _k)
 
 
 def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
@@ -148,14 +148,14 @@ def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
     numpy.ndarray, shape (..., 3)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_spatial_conjugate_ploop if len(out) >= PARALLEL_BATCH else _spatial_conjugate_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_spatial_conjugate_ploop if len(out) >= PARALLEL_BATCH else _spatial_conjugate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, k):
+def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
     x0 = ell**2
     x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
     x2 = e_x*p_y
@@ -173,7 +173,7 @@ def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, k):
     x14 = e_x**2
     x15 = ell*u_y
     x16 = ell*u_z
-    out[k] = (x10**2 + x13*(e_y*x2 + e_z*x5 - p_x*(x11 + x12)) + x15*(e_x*x3 + e_z*x8 - p_y*(x12 + x14)) - x16*(-e_x*x6 - e_y*x9 + p_z*(x11 + x14)) + x4**2 + x7**2 - (x10*x13 - x15*x7 + x16*x4)**2/x1)/math.sqrt(x1)
+    out[_k] = (x10**2 + x13*(e_y*x2 + e_z*x5 - p_x*(x11 + x12)) + x15*(e_x*x3 + e_z*x8 - p_y*(x12 + x14)) - x16*(-e_x*x6 - e_y*x9 + p_z*(x11 + x14)) + x4**2 + x7**2 - (x10*x13 - x15*x7 + x16*x4)**2/x1)/math.sqrt(x1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -185,15 +185,15 @@ def length_d2_turn_scalar(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_turn_loop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
+def _length_d2_turn_loop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_turn_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], u_x[_k * _steps[6]], u_y[_k * _steps[7]], u_z[_k * _steps[8]], ell[_k * _steps[9]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_turn_ploop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
+def _length_d2_turn_ploop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_turn_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], u_x[_k * _steps[6]], u_y[_k * _steps[7]], u_z[_k * _steps[8]], ell[_k * _steps[9]], out, _k)
 
 
 def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
@@ -227,14 +227,14 @@ def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_turn_ploop if len(out) >= PARALLEL_BATCH else _length_d2_turn_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_turn_ploop if len(out) >= PARALLEL_BATCH else _length_d2_turn_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, k):
+def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
     x0 = ell**2
     x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
     x2 = -e_x*p_y + e_y*p_x
@@ -251,7 +251,7 @@ def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y
     x13 = e_y*f_y
     x14 = ell*u_x
     x15 = ell*u_z
-    out[k] = (ell*u_y*(e_x*f_y*p_x + e_z*x9 + p_y*(-x11 - x12)) + x10*x8 - x14*(-e_y*x3 - e_z*x6 - p_x*(-x12 - x13)) - x15*(-e_x*f_z*p_x - e_y*f_z*p_y - p_z*(-x11 - x13)) + x2*x4 + x5*x7 - (ell*u_y*x5 - x14*x8 - x15*x2)*(ell*u_y*x7 - x10*x14 - x15*x4)/x1)/math.sqrt(x1)
+    out[_k] = (ell*u_y*(e_x*f_y*p_x + e_z*x9 + p_y*(-x11 - x12)) + x10*x8 - x14*(-e_y*x3 - e_z*x6 - p_x*(-x12 - x13)) - x15*(-e_x*f_z*p_x - e_y*f_z*p_y - p_z*(-x11 - x13)) + x2*x4 + x5*x7 - (ell*u_y*x5 - x14*x8 - x15*x2)*(ell*u_y*x7 - x10*x14 - x15*x4)/x1)/math.sqrt(x1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -263,15 +263,15 @@ def length_d2_two_turns_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_two_turns_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+def _length_d2_two_turns_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_two_turns_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], f_x[_k * _steps[3]], f_y[_k * _steps[4]], f_z[_k * _steps[5]], p_x[_k * _steps[6]], p_y[_k * _steps[7]], p_z[_k * _steps[8]], u_x[_k * _steps[9]], u_y[_k * _steps[10]], u_z[_k * _steps[11]], ell[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_two_turns_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+def _length_d2_two_turns_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_two_turns_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], f_x[_k * _steps[3]], f_y[_k * _steps[4]], f_z[_k * _steps[5]], p_x[_k * _steps[6]], p_y[_k * _steps[7]], p_z[_k * _steps[8]], u_x[_k * _steps[9]], u_y[_k * _steps[10]], u_z[_k * _steps[11]], ell[_k * _steps[12]], out, _k)
 
 
 def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
@@ -311,17 +311,17 @@ def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_two_turns_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_two_turns_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, k):
+def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, _k):
     x0 = ell**2
     x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
-    out[k] = (s_x**2 + s_y**2 + s_z**2 - (ell*s_x*u_x + ell*s_y*u_y + ell*s_z*u_z)**2/x1)/math.sqrt(x1)
+    out[_k] = (s_x**2 + s_y**2 + s_z**2 - (ell*s_x*u_x + ell*s_y*u_y + ell*s_z*u_z)**2/x1)/math.sqrt(x1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -333,15 +333,15 @@ def length_d2_slide_scalar(s_x, s_y, s_z, u_x, u_y, u_z, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_slide_loop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
+def _length_d2_slide_loop(s_x, s_y, s_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_slide_0(s_x[_k * _steps[0]], s_y[_k * _steps[1]], s_z[_k * _steps[2]], u_x[_k * _steps[3]], u_y[_k * _steps[4]], u_z[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_slide_ploop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
+def _length_d2_slide_ploop(s_x, s_y, s_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_slide_0(s_x[_k * _steps[0]], s_y[_k * _steps[1]], s_z[_k * _steps[2]], u_x[_k * _steps[3]], u_y[_k * _steps[4]], u_z[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 def length_d2_slide(s_x, s_y, s_z, u_x, u_y, u_z, ell):
@@ -369,22 +369,22 @@ def length_d2_slide(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     numpy.ndarray, shape (...)
         [1/m]
     """
-    arrays, steps, batch = _flat(s_x, s_y, s_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_slide_ploop if len(out) >= PARALLEL_BATCH else _length_d2_slide_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(s_x, s_y, s_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_slide_ploop if len(out) >= PARALLEL_BATCH else _length_d2_slide_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_planar_0(p_x, p_y, s_x, s_y, out, k):
-    out[k, 0] = p_x**2 + p_y**2
-    out[k, 1] = p_x*s_y - p_y*s_x
-    out[k, 2] = s_x**2 + s_y**2
-    out[k, 3] = p_x
-    out[k, 4] = s_y
-    out[k, 5] = -p_y
-    out[k, 6] = s_x
-    out[k, 7] = 0
+def _table1_planar_0(p_x, p_y, s_x, s_y, out, _k):
+    out[_k, 0] = p_x**2 + p_y**2
+    out[_k, 1] = p_x*s_y - p_y*s_x
+    out[_k, 2] = s_x**2 + s_y**2
+    out[_k, 3] = p_x
+    out[_k, 4] = s_y
+    out[_k, 5] = -p_y
+    out[_k, 6] = s_x
+    out[_k, 7] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -396,15 +396,15 @@ def table1_planar_scalar(p_x, p_y, s_x, s_y):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_planar_loop(p_x, p_y, s_x, s_y, steps, out):
-    for k in range(out.shape[0]):
-        _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
+def _table1_planar_loop(p_x, p_y, s_x, s_y, _steps, out):
+    for _k in range(out.shape[0]):
+        _table1_planar_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _table1_planar_ploop(p_x, p_y, s_x, s_y, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
+def _table1_planar_ploop(p_x, p_y, s_x, s_y, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _table1_planar_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], out, _k)
 
 
 def table1_planar(p_x, p_y, s_x, s_y):
@@ -426,14 +426,14 @@ def table1_planar(p_x, p_y, s_x, s_y):
     numpy.ndarray, shape (..., 8)
         [m^2, m or 1]
     """
-    arrays, steps, batch = _flat(p_x, p_y, s_x, s_y)
-    out = numpy.empty((math.prod(batch),) + (8,))
-    (_table1_planar_ploop if len(out) >= PARALLEL_BATCH else _table1_planar_loop)(*arrays, steps, out)
-    return out.reshape(batch + (8,))
+    _arrays, _steps, _batch = _flat(p_x, p_y, s_x, s_y)
+    out = numpy.empty((math.prod(_batch),) + (8,))
+    (_table1_planar_ploop if len(out) >= PARALLEL_BATCH else _table1_planar_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, k):
+def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, _k):
     x0 = ell*u_y
     x1 = ell*u_x
     x2 = p_x*x0 - p_y*x1
@@ -442,10 +442,10 @@ def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, k):
     x5 = 1/math.sqrt(x4)
     x6 = s_x*x1 + s_y*x0
     x7 = 1/x4
-    out[k, 0] = x2*x5
-    out[k, 1] = x5*x6
-    out[k, 2] = x5*(p_x**2 - p_x*x1 + p_y**2 - p_y*x0 - x2**2*x7)
-    out[k, 3] = x5*(s_x**2 + s_y**2 - x6**2*x7)
+    out[_k, 0] = x2*x5
+    out[_k, 1] = x5*x6
+    out[_k, 2] = x5*(p_x**2 - p_x*x1 + p_y**2 - p_y*x0 - x2**2*x7)
+    out[_k, 3] = x5*(s_x**2 + s_y**2 - x6**2*x7)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -457,15 +457,15 @@ def table1_length_scalar(p_x, p_y, s_x, s_y, u_x, u_y, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_length_loop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
-    for k in range(out.shape[0]):
-        _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
+def _table1_length_loop(p_x, p_y, s_x, s_y, u_x, u_y, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _table1_length_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], u_x[_k * _steps[4]], u_y[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _table1_length_ploop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
+def _table1_length_ploop(p_x, p_y, s_x, s_y, u_x, u_y, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _table1_length_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], u_x[_k * _steps[4]], u_y[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 def table1_length(p_x, p_y, s_x, s_y, u_x, u_y, ell):
@@ -493,14 +493,14 @@ def table1_length(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     numpy.ndarray, shape (..., 4)
         [m or 1]
     """
-    arrays, steps, batch = _flat(p_x, p_y, s_x, s_y, u_x, u_y, ell)
-    out = numpy.empty((math.prod(batch),) + (4,))
-    (_table1_length_ploop if len(out) >= PARALLEL_BATCH else _table1_length_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4,))
+    _arrays, _steps, _batch = _flat(p_x, p_y, s_x, s_y, u_x, u_y, ell)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_table1_length_ploop if len(out) >= PARALLEL_BATCH else _table1_length_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, k):
+def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, _k):
     x0 = math.sin(alpha)
     x1 = g*m
     x2 = ell**2
@@ -513,7 +513,7 @@ def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, k):
     x9 = ell*x3
     x10 = x8*x9
     x11 = -L*x10 - L*x7
-    out[k] = -L**2*x1*x8*(L*x0**2 - L*x5*(x10 + x7)**2 + L*x8**2 + x0*x9 - x6*x8)/x11 - L*x0*x1 + c1*x11**2*x5
+    out[_k] = -L**2*x1*x8*(L*x0**2 - L*x5*(x10 + x7)**2 + L*x8**2 + x0*x9 - x6*x8)/x11 - L*x0*x1 + c1*x11**2*x5
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -525,15 +525,15 @@ def fig8_c_scalar(c1, L, alpha, beta, ell, m, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig8_c_loop(c1, L, alpha, beta, ell, m, g, steps, out):
-    for k in range(out.shape[0]):
-        _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+def _fig8_c_loop(c1, L, alpha, beta, ell, m, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _fig8_c_0(c1[_k * _steps[0]], L[_k * _steps[1]], alpha[_k * _steps[2]], beta[_k * _steps[3]], ell[_k * _steps[4]], m[_k * _steps[5]], g[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _fig8_c_ploop(c1, L, alpha, beta, ell, m, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+def _fig8_c_ploop(c1, L, alpha, beta, ell, m, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _fig8_c_0(c1[_k * _steps[0]], L[_k * _steps[1]], alpha[_k * _steps[2]], beta[_k * _steps[3]], ell[_k * _steps[4]], m[_k * _steps[5]], g[_k * _steps[6]], out, _k)
 
 
 def fig8_c(c1, L, alpha, beta, ell, m, g):
@@ -561,16 +561,16 @@ def fig8_c(c1, L, alpha, beta, ell, m, g):
     numpy.ndarray, shape (...)
         [N m]
     """
-    arrays, steps, batch = _flat(c1, L, alpha, beta, ell, m, g)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_fig8_c_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(c1, L, alpha, beta, ell, m, g)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_fig8_c_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig9_c_0(c1, Delta, ell, out, k):
+def _fig9_c_0(c1, Delta, ell, out, _k):
     x0 = abs(ell)
-    out[k] = c1*(Delta - ell + x0)/x0
+    out[_k] = c1*(Delta - ell + x0)/x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -582,15 +582,15 @@ def fig9_c_scalar(c1, Delta, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig9_c_loop(c1, Delta, ell, steps, out):
-    for k in range(out.shape[0]):
-        _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
+def _fig9_c_loop(c1, Delta, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _fig9_c_0(c1[_k * _steps[0]], Delta[_k * _steps[1]], ell[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _fig9_c_ploop(c1, Delta, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
+def _fig9_c_ploop(c1, Delta, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _fig9_c_0(c1[_k * _steps[0]], Delta[_k * _steps[1]], ell[_k * _steps[2]], out, _k)
 
 
 def fig9_c(c1, Delta, ell):
@@ -610,17 +610,17 @@ def fig9_c(c1, Delta, ell):
     numpy.ndarray, shape (...)
         [N/m]
     """
-    arrays, steps, batch = _flat(c1, Delta, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_fig9_c_ploop if len(out) >= PARALLEL_BATCH else _fig9_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(c1, Delta, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_fig9_c_ploop if len(out) >= PARALLEL_BATCH else _fig9_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_c_rates_0(beta, out, k):
-    out[k, 0] = math.sin(beta)
-    out[k, 1] = 0
-    out[k, 2] = 1
+def _omega_c_rates_0(beta, out, _k):
+    out[_k, 0] = math.sin(beta)
+    out[_k, 1] = 0
+    out[_k, 2] = 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -632,15 +632,15 @@ def omega_c_rates_scalar(beta):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_c_rates_loop(beta, steps, out):
-    for k in range(out.shape[0]):
-        _omega_c_rates_0(beta[k * steps[0]], out, k)
+def _omega_c_rates_loop(beta, _steps, out):
+    for _k in range(out.shape[0]):
+        _omega_c_rates_0(beta[_k * _steps[0]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _omega_c_rates_ploop(beta, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _omega_c_rates_0(beta[k * steps[0]], out, k)
+def _omega_c_rates_ploop(beta, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _omega_c_rates_0(beta[_k * _steps[0]], out, _k)
 
 
 def omega_c_rates(beta):
@@ -656,7 +656,7 @@ def omega_c_rates(beta):
     numpy.ndarray, shape (..., 3)
         [1]
     """
-    arrays, steps, batch = _flat(beta)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_omega_c_rates_ploop if len(out) >= PARALLEL_BATCH else _omega_c_rates_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(beta)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_omega_c_rates_ploop if len(out) >= PARALLEL_BATCH else _omega_c_rates_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 8601f10615eb66b8023b9aa9b3a9d7a3c48b65b64fd8800aa1dc34afd05b73f7
-# source key 36bf3516bf79186f8fa4208e88d3ed06f0e52959046c0964c58f0cd07807ad9d
-# body sha256 9c3fc8ca0725ee52f7836e6e620a435ce0caf075332d3be9c142cacd68229f96
+# symmech 0.1.0 generated module; inputs sha256 0438e9b241d29927f55c7c5fb261c8a0a09df42b3d99588419d4867dc53e723c
+# source key 1ac32bdabbd7c06f0ee0661e3ea9607ceb0a5242529983b9e191cfe2edebe790
+# body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 
 Compiled twin of `symmech.generated.smm_printed` (the numpy module, the
@@ -43,12 +43,12 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex51_a_0(I1, I2, m2, r1, z2, out, k):
+def _ex51_a_0(I1, I2, m2, r1, z2, out, _k):
     x0 = -m2*r1*z2
-    out[k, 0, 0] = I1 + m2*r1**2
-    out[k, 0, 1] = x0
-    out[k, 1, 0] = x0
-    out[k, 1, 1] = I2 + m2*z2**2
+    out[_k, 0, 0] = I1 + m2*r1**2
+    out[_k, 0, 1] = x0
+    out[_k, 1, 0] = x0
+    out[_k, 1, 1] = I2 + m2*z2**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -60,15 +60,15 @@ def ex51_a_scalar(I1, I2, m2, r1, z2):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex51_a_loop(I1, I2, m2, r1, z2, steps, out):
-    for k in range(out.shape[0]):
-        _ex51_a_0(I1[k * steps[0]], I2[k * steps[1]], m2[k * steps[2]], r1[k * steps[3]], z2[k * steps[4]], out, k)
+def _ex51_a_loop(I1, I2, m2, r1, z2, _steps, out):
+    for _k in range(out.shape[0]):
+        _ex51_a_0(I1[_k * _steps[0]], I2[_k * _steps[1]], m2[_k * _steps[2]], r1[_k * _steps[3]], z2[_k * _steps[4]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _ex51_a_ploop(I1, I2, m2, r1, z2, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _ex51_a_0(I1[k * steps[0]], I2[k * steps[1]], m2[k * steps[2]], r1[k * steps[3]], z2[k * steps[4]], out, k)
+def _ex51_a_ploop(I1, I2, m2, r1, z2, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _ex51_a_0(I1[_k * _steps[0]], I2[_k * _steps[1]], m2[_k * _steps[2]], r1[_k * _steps[3]], z2[_k * _steps[4]], out, _k)
 
 
 def ex51_a(I1, I2, m2, r1, z2):
@@ -92,16 +92,16 @@ def ex51_a(I1, I2, m2, r1, z2):
     numpy.ndarray, shape (..., 2, 2)
         [kg m^2]
     """
-    arrays, steps, batch = _flat(I1, I2, m2, r1, z2)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_ex51_a_ploop if len(out) >= PARALLEL_BATCH else _ex51_a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(I1, I2, m2, r1, z2)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_ex51_a_ploop if len(out) >= PARALLEL_BATCH else _ex51_a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex51_Lc_rope_0(r1, alpha, out, k):
-    out[k, 0] = -r1*math.sin(alpha)
-    out[k, 1] = 0
+def _ex51_Lc_rope_0(r1, alpha, out, _k):
+    out[_k, 0] = -r1*math.sin(alpha)
+    out[_k, 1] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -113,15 +113,15 @@ def ex51_Lc_rope_scalar(r1, alpha):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex51_Lc_rope_loop(r1, alpha, steps, out):
-    for k in range(out.shape[0]):
-        _ex51_Lc_rope_0(r1[k * steps[0]], alpha[k * steps[1]], out, k)
+def _ex51_Lc_rope_loop(r1, alpha, _steps, out):
+    for _k in range(out.shape[0]):
+        _ex51_Lc_rope_0(r1[_k * _steps[0]], alpha[_k * _steps[1]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _ex51_Lc_rope_ploop(r1, alpha, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _ex51_Lc_rope_0(r1[k * steps[0]], alpha[k * steps[1]], out, k)
+def _ex51_Lc_rope_ploop(r1, alpha, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _ex51_Lc_rope_0(r1[_k * _steps[0]], alpha[_k * _steps[1]], out, _k)
 
 
 def ex51_Lc_rope(r1, alpha):
@@ -139,52 +139,52 @@ def ex51_Lc_rope(r1, alpha):
     numpy.ndarray, shape (..., 2)
         [m]
     """
-    arrays, steps, batch = _flat(r1, alpha)
-    out = numpy.empty((math.prod(batch),) + (2,))
-    (_ex51_Lc_rope_ploop if len(out) >= PARALLEL_BATCH else _ex51_Lc_rope_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2,))
+    _arrays, _steps, _batch = _flat(r1, alpha)
+    out = numpy.empty((math.prod(_batch),) + (2,))
+    (_ex51_Lc_rope_ploop if len(out) >= PARALLEL_BATCH else _ex51_Lc_rope_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex52_La_0(xM, yM, l4, alpha, l5, beta, out, k):
+def _ex52_La_0(xM, yM, l4, alpha, l5, beta, out, _k):
     x0 = -yM
     x1 = -l4*math.sin(alpha)
     x2 = l4*math.cos(alpha)
-    out[k, 0, 0] = 1
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 1
-    out[k, 0, 3] = 0
-    out[k, 0, 4] = 1
-    out[k, 0, 5] = 0
-    out[k, 0, 6] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = 1
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 1
-    out[k, 1, 4] = 0
-    out[k, 1, 5] = 1
-    out[k, 1, 6] = 0
-    out[k, 2, 0] = x0
-    out[k, 2, 1] = xM
-    out[k, 2, 2] = x0
-    out[k, 2, 3] = xM
-    out[k, 2, 4] = 0
-    out[k, 2, 5] = 0
-    out[k, 2, 6] = 1
-    out[k, 3, 0] = x1
-    out[k, 3, 1] = x2
-    out[k, 3, 2] = x1
-    out[k, 3, 3] = x2
-    out[k, 3, 4] = 0
-    out[k, 3, 5] = 0
-    out[k, 3, 6] = 0
-    out[k, 4, 0] = 0
-    out[k, 4, 1] = 0
-    out[k, 4, 2] = -l5*math.sin(beta)
-    out[k, 4, 3] = l5*math.cos(beta)
-    out[k, 4, 4] = 0
-    out[k, 4, 5] = 0
-    out[k, 4, 6] = 0
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 1
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 1
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 1
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 1
+    out[_k, 1, 6] = 0
+    out[_k, 2, 0] = x0
+    out[_k, 2, 1] = xM
+    out[_k, 2, 2] = x0
+    out[_k, 2, 3] = xM
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 1
+    out[_k, 3, 0] = x1
+    out[_k, 3, 1] = x2
+    out[_k, 3, 2] = x1
+    out[_k, 3, 3] = x2
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = -l5*math.sin(beta)
+    out[_k, 4, 3] = l5*math.cos(beta)
+    out[_k, 4, 4] = 0
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -196,15 +196,15 @@ def ex52_La_scalar(xM, yM, l4, alpha, l5, beta):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex52_La_loop(xM, yM, l4, alpha, l5, beta, steps, out):
-    for k in range(out.shape[0]):
-        _ex52_La_0(xM[k * steps[0]], yM[k * steps[1]], l4[k * steps[2]], alpha[k * steps[3]], l5[k * steps[4]], beta[k * steps[5]], out, k)
+def _ex52_La_loop(xM, yM, l4, alpha, l5, beta, _steps, out):
+    for _k in range(out.shape[0]):
+        _ex52_La_0(xM[_k * _steps[0]], yM[_k * _steps[1]], l4[_k * _steps[2]], alpha[_k * _steps[3]], l5[_k * _steps[4]], beta[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _ex52_La_ploop(xM, yM, l4, alpha, l5, beta, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _ex52_La_0(xM[k * steps[0]], yM[k * steps[1]], l4[k * steps[2]], alpha[k * steps[3]], l5[k * steps[4]], beta[k * steps[5]], out, k)
+def _ex52_La_ploop(xM, yM, l4, alpha, l5, beta, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _ex52_La_0(xM[_k * _steps[0]], yM[_k * _steps[1]], l4[_k * _steps[2]], alpha[_k * _steps[3]], l5[_k * _steps[4]], beta[_k * _steps[5]], out, _k)
 
 
 def ex52_La(xM, yM, l4, alpha, l5, beta):
@@ -230,32 +230,32 @@ def ex52_La(xM, yM, l4, alpha, l5, beta):
     numpy.ndarray, shape (..., 5, 7)
         [m or 1]
     """
-    arrays, steps, batch = _flat(xM, yM, l4, alpha, l5, beta)
-    out = numpy.empty((math.prod(batch),) + (5, 7))
-    (_ex52_La_ploop if len(out) >= PARALLEL_BATCH else _ex52_La_loop)(*arrays, steps, out)
-    return out.reshape(batch + (5, 7))
+    _arrays, _steps, _batch = _flat(xM, yM, l4, alpha, l5, beta)
+    out = numpy.empty((math.prod(_batch),) + (5, 7))
+    (_ex52_La_ploop if len(out) >= PARALLEL_BATCH else _ex52_La_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (5, 7))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex52_Lc_0(l4, alpha, l5, beta, l3, l6, delta3, delta4, out, k):
-    out[k, 0] = 0
-    out[k, 1] = 0
-    out[k, 2] = 0
-    out[k, 3] = 0
-    out[k, 4] = 0
-    out[k, 5] = 0
-    out[k, 6] = 1
-    out[k, 7] = 1
-    out[k, 8] = l3*math.sin(delta3)
-    out[k, 9] = -l6*math.cos(delta4)
-    out[k, 10] = l4*math.sin(alpha)
-    out[k, 11] = l4*math.cos(alpha)
-    out[k, 12] = 0
-    out[k, 13] = 0
-    out[k, 14] = l5*math.sin(beta)
-    out[k, 15] = l5*math.cos(beta)
-    out[k, 16] = 0
-    out[k, 17] = 0
+def _ex52_Lc_0(l4, alpha, l5, beta, l3, l6, delta3, delta4, out, _k):
+    out[_k, 0] = 0
+    out[_k, 1] = 0
+    out[_k, 2] = 0
+    out[_k, 3] = 0
+    out[_k, 4] = 0
+    out[_k, 5] = 0
+    out[_k, 6] = 1
+    out[_k, 7] = 1
+    out[_k, 8] = l3*math.sin(delta3)
+    out[_k, 9] = -l6*math.cos(delta4)
+    out[_k, 10] = l4*math.sin(alpha)
+    out[_k, 11] = l4*math.cos(alpha)
+    out[_k, 12] = 0
+    out[_k, 13] = 0
+    out[_k, 14] = l5*math.sin(beta)
+    out[_k, 15] = l5*math.cos(beta)
+    out[_k, 16] = 0
+    out[_k, 17] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -267,15 +267,15 @@ def ex52_Lc_scalar(l4, alpha, l5, beta, l3, l6, delta3, delta4):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex52_Lc_loop(l4, alpha, l5, beta, l3, l6, delta3, delta4, steps, out):
-    for k in range(out.shape[0]):
-        _ex52_Lc_0(l4[k * steps[0]], alpha[k * steps[1]], l5[k * steps[2]], beta[k * steps[3]], l3[k * steps[4]], l6[k * steps[5]], delta3[k * steps[6]], delta4[k * steps[7]], out, k)
+def _ex52_Lc_loop(l4, alpha, l5, beta, l3, l6, delta3, delta4, _steps, out):
+    for _k in range(out.shape[0]):
+        _ex52_Lc_0(l4[_k * _steps[0]], alpha[_k * _steps[1]], l5[_k * _steps[2]], beta[_k * _steps[3]], l3[_k * _steps[4]], l6[_k * _steps[5]], delta3[_k * _steps[6]], delta4[_k * _steps[7]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _ex52_Lc_ploop(l4, alpha, l5, beta, l3, l6, delta3, delta4, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _ex52_Lc_0(l4[k * steps[0]], alpha[k * steps[1]], l5[k * steps[2]], beta[k * steps[3]], l3[k * steps[4]], l6[k * steps[5]], delta3[k * steps[6]], delta4[k * steps[7]], out, k)
+def _ex52_Lc_ploop(l4, alpha, l5, beta, l3, l6, delta3, delta4, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _ex52_Lc_0(l4[_k * _steps[0]], alpha[_k * _steps[1]], l5[_k * _steps[2]], beta[_k * _steps[3]], l3[_k * _steps[4]], l6[_k * _steps[5]], delta3[_k * _steps[6]], delta4[_k * _steps[7]], out, _k)
 
 
 def ex52_Lc(l4, alpha, l5, beta, l3, l6, delta3, delta4):
@@ -305,28 +305,28 @@ def ex52_Lc(l4, alpha, l5, beta, l3, l6, delta3, delta4):
     numpy.ndarray, shape (..., 18)
         [m or 1]
     """
-    arrays, steps, batch = _flat(l4, alpha, l5, beta, l3, l6, delta3, delta4)
-    out = numpy.empty((math.prod(batch),) + (18,))
-    (_ex52_Lc_ploop if len(out) >= PARALLEL_BATCH else _ex52_Lc_loop)(*arrays, steps, out)
-    return out.reshape(batch + (18,))
+    _arrays, _steps, _batch = _flat(l4, alpha, l5, beta, l3, l6, delta3, delta4)
+    out = numpy.empty((math.prod(_batch),) + (18,))
+    (_ex52_Lc_ploop if len(out) >= PARALLEL_BATCH else _ex52_Lc_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (18,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex53_Lc_0(L1, beta, delta, out, k):
+def _ex53_Lc_0(L1, beta, delta, out, _k):
     x0 = -L1*math.sin(beta)*math.cos(delta)
     x1 = L1*math.sin(delta)
-    out[k, 0, 0] = x0
-    out[k, 0, 1] = x0
-    out[k, 0, 2] = 0
-    out[k, 0, 3] = 0
-    out[k, 1, 0] = x1
-    out[k, 1, 1] = -x1
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = 1
-    out[k, 2, 3] = 0
+    out[_k, 0, 0] = x0
+    out[_k, 0, 1] = x0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = x1
+    out[_k, 1, 1] = -x1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 1
+    out[_k, 2, 3] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -338,15 +338,15 @@ def ex53_Lc_scalar(L1, beta, delta):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _ex53_Lc_loop(L1, beta, delta, steps, out):
-    for k in range(out.shape[0]):
-        _ex53_Lc_0(L1[k * steps[0]], beta[k * steps[1]], delta[k * steps[2]], out, k)
+def _ex53_Lc_loop(L1, beta, delta, _steps, out):
+    for _k in range(out.shape[0]):
+        _ex53_Lc_0(L1[_k * _steps[0]], beta[_k * _steps[1]], delta[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _ex53_Lc_ploop(L1, beta, delta, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _ex53_Lc_0(L1[k * steps[0]], beta[k * steps[1]], delta[k * steps[2]], out, k)
+def _ex53_Lc_ploop(L1, beta, delta, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _ex53_Lc_0(L1[_k * _steps[0]], beta[_k * _steps[1]], delta[_k * _steps[2]], out, _k)
 
 
 def ex53_Lc(L1, beta, delta):
@@ -366,23 +366,23 @@ def ex53_Lc(L1, beta, delta):
     numpy.ndarray, shape (..., 3, 4)
         [m or 1]
     """
-    arrays, steps, batch = _flat(L1, beta, delta)
-    out = numpy.empty((math.prod(batch),) + (3, 4))
-    (_ex53_Lc_ploop if len(out) >= PARALLEL_BATCH else _ex53_Lc_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 4))
+    _arrays, _steps, _batch = _flat(L1, beta, delta)
+    out = numpy.empty((math.prod(_batch),) + (3, 4))
+    (_ex53_Lc_ploop if len(out) >= PARALLEL_BATCH else _ex53_Lc_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 4))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table2_conjugates_0(p_x, p_y, p_z, out, k):
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = -p_z
-    out[k, 0, 2] = p_y
-    out[k, 1, 0] = p_z
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = -p_x
-    out[k, 2, 0] = -p_y
-    out[k, 2, 1] = p_x
-    out[k, 2, 2] = 0
+def _table2_conjugates_0(p_x, p_y, p_z, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = -p_z
+    out[_k, 0, 2] = p_y
+    out[_k, 1, 0] = p_z
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = -p_x
+    out[_k, 2, 0] = -p_y
+    out[_k, 2, 1] = p_x
+    out[_k, 2, 2] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -394,15 +394,15 @@ def table2_conjugates_scalar(p_x, p_y, p_z):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table2_conjugates_loop(p_x, p_y, p_z, steps, out):
-    for k in range(out.shape[0]):
-        _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
+def _table2_conjugates_loop(p_x, p_y, p_z, _steps, out):
+    for _k in range(out.shape[0]):
+        _table2_conjugates_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], p_z[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _table2_conjugates_ploop(p_x, p_y, p_z, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _table2_conjugates_0(p_x[k * steps[0]], p_y[k * steps[1]], p_z[k * steps[2]], out, k)
+def _table2_conjugates_ploop(p_x, p_y, p_z, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _table2_conjugates_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], p_z[_k * _steps[2]], out, _k)
 
 
 def table2_conjugates(p_x, p_y, p_z):
@@ -422,17 +422,17 @@ def table2_conjugates(p_x, p_y, p_z):
     numpy.ndarray, shape (..., 3, 3)
         [m]
     """
-    arrays, steps, batch = _flat(p_x, p_y, p_z)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_table2_conjugates_ploop if len(out) >= PARALLEL_BATCH else _table2_conjugates_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(p_x, p_y, p_z)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_table2_conjugates_ploop if len(out) >= PARALLEL_BATCH else _table2_conjugates_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, k):
-    out[k, 0] = e_y*p_z - e_z*p_y
-    out[k, 1] = -e_x*p_z + e_z*p_x
-    out[k, 2] = e_x*p_y - e_y*p_x
+def _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, _k):
+    out[_k, 0] = e_y*p_z - e_z*p_y
+    out[_k, 1] = -e_x*p_z + e_z*p_x
+    out[_k, 2] = e_x*p_y - e_y*p_x
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -444,15 +444,15 @@ def spatial_conjugate_scalar(e_x, e_y, e_z, p_x, p_y, p_z):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _spatial_conjugate_loop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
-    for k in range(out.shape[0]):
-        _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
+def _spatial_conjugate_loop(e_x, e_y, e_z, p_x, p_y, p_z, _steps, out):
+    for _k in range(out.shape[0]):
+        _spatial_conjugate_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _spatial_conjugate_ploop(e_x, e_y, e_z, p_x, p_y, p_z, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _spatial_conjugate_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], out, k)
+def _spatial_conjugate_ploop(e_x, e_y, e_z, p_x, p_y, p_z, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _spatial_conjugate_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], out, _k)
 
 
 def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
@@ -478,18 +478,18 @@ def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
     numpy.ndarray, shape (..., 3)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_spatial_conjugate_ploop if len(out) >= PARALLEL_BATCH else _spatial_conjugate_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_spatial_conjugate_ploop if len(out) >= PARALLEL_BATCH else _spatial_conjugate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, k):
+def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
     x0 = e_x*p_y - e_y*p_x
     x1 = -e_x*p_z + e_z*p_x
     x2 = e_y*p_z - e_z*p_y
-    out[k] = u_x*(e_y*x0 - e_z*x1) + u_y*(-e_x*x0 + e_z*x2) + u_z*(e_x*x1 - e_y*x2) + (x0**2 + x1**2 + x2**2 - (u_x*x2 + u_y*x1 + u_z*x0)**2)/ell
+    out[_k] = u_x*(e_y*x0 - e_z*x1) + u_y*(-e_x*x0 + e_z*x2) + u_z*(e_x*x1 - e_y*x2) + (x0**2 + x1**2 + x2**2 - (u_x*x2 + u_y*x1 + u_z*x0)**2)/ell
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -501,15 +501,15 @@ def length_d2_turn_scalar(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_turn_loop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
+def _length_d2_turn_loop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_turn_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], u_x[_k * _steps[6]], u_y[_k * _steps[7]], u_z[_k * _steps[8]], ell[_k * _steps[9]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_turn_ploop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_turn_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], p_x[k * steps[3]], p_y[k * steps[4]], p_z[k * steps[5]], u_x[k * steps[6]], u_y[k * steps[7]], u_z[k * steps[8]], ell[k * steps[9]], out, k)
+def _length_d2_turn_ploop(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_turn_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], p_x[_k * _steps[3]], p_y[_k * _steps[4]], p_z[_k * _steps[5]], u_x[_k * _steps[6]], u_y[_k * _steps[7]], u_z[_k * _steps[8]], ell[_k * _steps[9]], out, _k)
 
 
 def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
@@ -543,14 +543,14 @@ def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_turn_ploop if len(out) >= PARALLEL_BATCH else _length_d2_turn_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_turn_ploop if len(out) >= PARALLEL_BATCH else _length_d2_turn_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, k):
+def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
     x0 = e_x*p_y - e_y*p_x
     x1 = -e_x*f_z + e_z*f_x
     x2 = -e_x*p_z + e_z*p_x
@@ -564,7 +564,7 @@ def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y
     x10 = f_x*p_z - f_z*p_x
     x11 = -x10
     x12 = u_x*x9 + u_y*x11 + u_z*x7
-    out[k] = u_x*(f_y*x0 - f_z*x2 - p_y*x3 + p_z*x1) + u_y*(-f_x*x0 + f_z*x5 + p_x*x3 - p_z*x4) + u_z*(f_x*x2 - f_y*x5 - p_x*x1 + p_y*x4) + (x11*(-u_y*x12 - x10) + x7*(f_x*p_y - u_z*x12 - x6) + x9*(f_y*p_z - u_x*x12 - x8))/ell
+    out[_k] = u_x*(f_y*x0 - f_z*x2 - p_y*x3 + p_z*x1) + u_y*(-f_x*x0 + f_z*x5 + p_x*x3 - p_z*x4) + u_z*(f_x*x2 - f_y*x5 - p_x*x1 + p_y*x4) + (x11*(-u_y*x12 - x10) + x7*(f_x*p_y - u_z*x12 - x6) + x9*(f_y*p_z - u_x*x12 - x8))/ell
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -576,15 +576,15 @@ def length_d2_two_turns_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_two_turns_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+def _length_d2_two_turns_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_two_turns_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], f_x[_k * _steps[3]], f_y[_k * _steps[4]], f_z[_k * _steps[5]], p_x[_k * _steps[6]], p_y[_k * _steps[7]], p_z[_k * _steps[8]], u_x[_k * _steps[9]], u_y[_k * _steps[10]], u_z[_k * _steps[11]], ell[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_two_turns_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_two_turns_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+def _length_d2_two_turns_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_two_turns_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], f_x[_k * _steps[3]], f_y[_k * _steps[4]], f_z[_k * _steps[5]], p_x[_k * _steps[6]], p_y[_k * _steps[7]], p_z[_k * _steps[8]], u_x[_k * _steps[9]], u_y[_k * _steps[10]], u_z[_k * _steps[11]], ell[_k * _steps[12]], out, _k)
 
 
 def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
@@ -624,14 +624,14 @@ def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_two_turns_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_two_turns_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_two_turns_read_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, k):
+def _length_d2_two_turns_read_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
     x0 = e_x*p_y - e_y*p_x
     x1 = -e_x*f_z + e_z*f_x
     x2 = -e_x*p_z + e_z*p_x
@@ -642,7 +642,7 @@ def _length_d2_two_turns_read_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x
     x7 = f_z*p_y
     x8 = f_x*p_z - f_z*p_x
     x9 = u_x*(f_y*p_z - x7) - u_y*x8 + u_z*(f_x*p_y - x6)
-    out[k] = u_x*(f_y*x0 - f_z*x2 - p_y*x3 + p_z*x1) + u_y*(-f_x*x0 + f_z*x5 + p_x*x3 - p_z*x4) + u_z*(f_x*x2 - f_y*x5 - p_x*x1 + p_y*x4) + (x0*(f_x*p_y - u_z*x9 - x6) + x2*(-u_y*x9 - x8) + x5*(f_y*p_z - u_x*x9 - x7))/ell
+    out[_k] = u_x*(f_y*x0 - f_z*x2 - p_y*x3 + p_z*x1) + u_y*(-f_x*x0 + f_z*x5 + p_x*x3 - p_z*x4) + u_z*(f_x*x2 - f_y*x5 - p_x*x1 + p_y*x4) + (x0*(f_x*p_y - u_z*x9 - x6) + x2*(-u_y*x9 - x8) + x5*(f_y*p_z - u_x*x9 - x7))/ell
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -654,15 +654,15 @@ def length_d2_two_turns_read_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_two_turns_read_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_two_turns_read_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+def _length_d2_two_turns_read_loop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_two_turns_read_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], f_x[_k * _steps[3]], f_y[_k * _steps[4]], f_z[_k * _steps[5]], p_x[_k * _steps[6]], p_y[_k * _steps[7]], p_z[_k * _steps[8]], u_x[_k * _steps[9]], u_y[_k * _steps[10]], u_z[_k * _steps[11]], ell[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_two_turns_read_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_two_turns_read_0(e_x[k * steps[0]], e_y[k * steps[1]], e_z[k * steps[2]], f_x[k * steps[3]], f_y[k * steps[4]], f_z[k * steps[5]], p_x[k * steps[6]], p_y[k * steps[7]], p_z[k * steps[8]], u_x[k * steps[9]], u_y[k * steps[10]], u_z[k * steps[11]], ell[k * steps[12]], out, k)
+def _length_d2_two_turns_read_ploop(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_two_turns_read_0(e_x[_k * _steps[0]], e_y[_k * _steps[1]], e_z[_k * _steps[2]], f_x[_k * _steps[3]], f_y[_k * _steps[4]], f_z[_k * _steps[5]], p_x[_k * _steps[6]], p_y[_k * _steps[7]], p_z[_k * _steps[8]], u_x[_k * _steps[9]], u_y[_k * _steps[10]], u_z[_k * _steps[11]], ell[_k * _steps[12]], out, _k)
 
 
 def length_d2_two_turns_read(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
@@ -702,15 +702,15 @@ def length_d2_two_turns_read(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u
     numpy.ndarray, shape (...)
         [m]
     """
-    arrays, steps, batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_two_turns_read_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_read_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_two_turns_read_ploop if len(out) >= PARALLEL_BATCH else _length_d2_two_turns_read_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, k):
-    out[k] = (1 - (s_x*u_x + s_y*u_y + s_z*u_z)**2)/ell
+def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, _k):
+    out[_k] = (1 - (s_x*u_x + s_y*u_y + s_z*u_z)**2)/ell
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -722,15 +722,15 @@ def length_d2_slide_scalar(s_x, s_y, s_z, u_x, u_y, u_z, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _length_d2_slide_loop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
-    for k in range(out.shape[0]):
-        _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
+def _length_d2_slide_loop(s_x, s_y, s_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _length_d2_slide_0(s_x[_k * _steps[0]], s_y[_k * _steps[1]], s_z[_k * _steps[2]], u_x[_k * _steps[3]], u_y[_k * _steps[4]], u_z[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _length_d2_slide_ploop(s_x, s_y, s_z, u_x, u_y, u_z, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _length_d2_slide_0(s_x[k * steps[0]], s_y[k * steps[1]], s_z[k * steps[2]], u_x[k * steps[3]], u_y[k * steps[4]], u_z[k * steps[5]], ell[k * steps[6]], out, k)
+def _length_d2_slide_ploop(s_x, s_y, s_z, u_x, u_y, u_z, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _length_d2_slide_0(s_x[_k * _steps[0]], s_y[_k * _steps[1]], s_z[_k * _steps[2]], u_x[_k * _steps[3]], u_y[_k * _steps[4]], u_z[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 def length_d2_slide(s_x, s_y, s_z, u_x, u_y, u_z, ell):
@@ -758,22 +758,22 @@ def length_d2_slide(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     numpy.ndarray, shape (...)
         [1/m]
     """
-    arrays, steps, batch = _flat(s_x, s_y, s_z, u_x, u_y, u_z, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_length_d2_slide_ploop if len(out) >= PARALLEL_BATCH else _length_d2_slide_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(s_x, s_y, s_z, u_x, u_y, u_z, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_length_d2_slide_ploop if len(out) >= PARALLEL_BATCH else _length_d2_slide_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_planar_0(p_x, p_y, s_x, s_y, out, k):
-    out[k, 0] = p_x**2 + p_y**2
-    out[k, 1] = p_x*s_y - p_y*s_x
-    out[k, 2] = s_x**2 + s_y**2
-    out[k, 3] = p_x
-    out[k, 4] = s_y
-    out[k, 5] = -p_y
-    out[k, 6] = s_x
-    out[k, 7] = 0
+def _table1_planar_0(p_x, p_y, s_x, s_y, out, _k):
+    out[_k, 0] = p_x**2 + p_y**2
+    out[_k, 1] = p_x*s_y - p_y*s_x
+    out[_k, 2] = s_x**2 + s_y**2
+    out[_k, 3] = p_x
+    out[_k, 4] = s_y
+    out[_k, 5] = -p_y
+    out[_k, 6] = s_x
+    out[_k, 7] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -785,15 +785,15 @@ def table1_planar_scalar(p_x, p_y, s_x, s_y):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_planar_loop(p_x, p_y, s_x, s_y, steps, out):
-    for k in range(out.shape[0]):
-        _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
+def _table1_planar_loop(p_x, p_y, s_x, s_y, _steps, out):
+    for _k in range(out.shape[0]):
+        _table1_planar_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _table1_planar_ploop(p_x, p_y, s_x, s_y, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _table1_planar_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], out, k)
+def _table1_planar_ploop(p_x, p_y, s_x, s_y, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _table1_planar_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], out, _k)
 
 
 def table1_planar(p_x, p_y, s_x, s_y):
@@ -815,21 +815,21 @@ def table1_planar(p_x, p_y, s_x, s_y):
     numpy.ndarray, shape (..., 8)
         [m^2, m or 1]
     """
-    arrays, steps, batch = _flat(p_x, p_y, s_x, s_y)
-    out = numpy.empty((math.prod(batch),) + (8,))
-    (_table1_planar_ploop if len(out) >= PARALLEL_BATCH else _table1_planar_loop)(*arrays, steps, out)
-    return out.reshape(batch + (8,))
+    _arrays, _steps, _batch = _flat(p_x, p_y, s_x, s_y)
+    out = numpy.empty((math.prod(_batch),) + (8,))
+    (_table1_planar_ploop if len(out) >= PARALLEL_BATCH else _table1_planar_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, k):
+def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, _k):
     x0 = p_x*u_y - p_y*u_x
     x1 = s_x*u_x + s_y*u_y
     x2 = 1/ell
-    out[k, 0] = x0
-    out[k, 1] = x1
-    out[k, 2] = -p_x*u_x - p_y*u_y + x2*(p_x**2 + p_y**2 - x0**2)
-    out[k, 3] = x2*(s_x**2 + s_y**2 - x1**2)
+    out[_k, 0] = x0
+    out[_k, 1] = x1
+    out[_k, 2] = -p_x*u_x - p_y*u_y + x2*(p_x**2 + p_y**2 - x0**2)
+    out[_k, 3] = x2*(s_x**2 + s_y**2 - x1**2)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -841,15 +841,15 @@ def table1_length_scalar(p_x, p_y, s_x, s_y, u_x, u_y, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _table1_length_loop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
-    for k in range(out.shape[0]):
-        _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
+def _table1_length_loop(p_x, p_y, s_x, s_y, u_x, u_y, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _table1_length_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], u_x[_k * _steps[4]], u_y[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _table1_length_ploop(p_x, p_y, s_x, s_y, u_x, u_y, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _table1_length_0(p_x[k * steps[0]], p_y[k * steps[1]], s_x[k * steps[2]], s_y[k * steps[3]], u_x[k * steps[4]], u_y[k * steps[5]], ell[k * steps[6]], out, k)
+def _table1_length_ploop(p_x, p_y, s_x, s_y, u_x, u_y, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _table1_length_0(p_x[_k * _steps[0]], p_y[_k * _steps[1]], s_x[_k * _steps[2]], s_y[_k * _steps[3]], u_x[_k * _steps[4]], u_y[_k * _steps[5]], ell[_k * _steps[6]], out, _k)
 
 
 def table1_length(p_x, p_y, s_x, s_y, u_x, u_y, ell):
@@ -877,21 +877,21 @@ def table1_length(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     numpy.ndarray, shape (..., 4)
         [m or 1]
     """
-    arrays, steps, batch = _flat(p_x, p_y, s_x, s_y, u_x, u_y, ell)
-    out = numpy.empty((math.prod(batch),) + (4,))
-    (_table1_length_ploop if len(out) >= PARALLEL_BATCH else _table1_length_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4,))
+    _arrays, _steps, _batch = _flat(p_x, p_y, s_x, s_y, u_x, u_y, ell)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_table1_length_ploop if len(out) >= PARALLEL_BATCH else _table1_length_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, k):
+def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, _k):
     x0 = g*m
     x1 = L*x0*math.sin(alpha)
     x2 = L**2
     x3 = alpha + beta
     x4 = math.sin(x3)
     x5 = math.cos(x3)
-    out[k] = c1*x2*x4**2 + x0*(-L*x5 - x1 + x2*x5**2/ell)*math.cos(alpha)/x4 - x1
+    out[_k] = c1*x2*x4**2 + x0*(-L*x5 - x1 + x2*x5**2/ell)*math.cos(alpha)/x4 - x1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -903,15 +903,15 @@ def fig8_c_scalar(c1, L, alpha, beta, ell, m, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig8_c_loop(c1, L, alpha, beta, ell, m, g, steps, out):
-    for k in range(out.shape[0]):
-        _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+def _fig8_c_loop(c1, L, alpha, beta, ell, m, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _fig8_c_0(c1[_k * _steps[0]], L[_k * _steps[1]], alpha[_k * _steps[2]], beta[_k * _steps[3]], ell[_k * _steps[4]], m[_k * _steps[5]], g[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _fig8_c_ploop(c1, L, alpha, beta, ell, m, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _fig8_c_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+def _fig8_c_ploop(c1, L, alpha, beta, ell, m, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _fig8_c_0(c1[_k * _steps[0]], L[_k * _steps[1]], alpha[_k * _steps[2]], beta[_k * _steps[3]], ell[_k * _steps[4]], m[_k * _steps[5]], g[_k * _steps[6]], out, _k)
 
 
 def fig8_c(c1, L, alpha, beta, ell, m, g):
@@ -939,20 +939,20 @@ def fig8_c(c1, L, alpha, beta, ell, m, g):
     numpy.ndarray, shape (...)
         [N m]
     """
-    arrays, steps, batch = _flat(c1, L, alpha, beta, ell, m, g)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_fig8_c_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(c1, L, alpha, beta, ell, m, g)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_fig8_c_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig8_c_read_0(c1, L, alpha, beta, ell, m, g, out, k):
+def _fig8_c_read_0(c1, L, alpha, beta, ell, m, g, out, _k):
     x0 = g*m
     x1 = L**2
     x2 = alpha + beta
     x3 = math.sin(x2)
     x4 = math.cos(x2)
-    out[k] = -L*x0*math.sin(alpha) + c1*x1*x3**2 + x0*(-L*x4 + x1*x4**2/ell)*math.cos(alpha)/x3
+    out[_k] = -L*x0*math.sin(alpha) + c1*x1*x3**2 + x0*(-L*x4 + x1*x4**2/ell)*math.cos(alpha)/x3
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -964,15 +964,15 @@ def fig8_c_read_scalar(c1, L, alpha, beta, ell, m, g):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig8_c_read_loop(c1, L, alpha, beta, ell, m, g, steps, out):
-    for k in range(out.shape[0]):
-        _fig8_c_read_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+def _fig8_c_read_loop(c1, L, alpha, beta, ell, m, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _fig8_c_read_0(c1[_k * _steps[0]], L[_k * _steps[1]], alpha[_k * _steps[2]], beta[_k * _steps[3]], ell[_k * _steps[4]], m[_k * _steps[5]], g[_k * _steps[6]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _fig8_c_read_ploop(c1, L, alpha, beta, ell, m, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _fig8_c_read_0(c1[k * steps[0]], L[k * steps[1]], alpha[k * steps[2]], beta[k * steps[3]], ell[k * steps[4]], m[k * steps[5]], g[k * steps[6]], out, k)
+def _fig8_c_read_ploop(c1, L, alpha, beta, ell, m, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _fig8_c_read_0(c1[_k * _steps[0]], L[_k * _steps[1]], alpha[_k * _steps[2]], beta[_k * _steps[3]], ell[_k * _steps[4]], m[_k * _steps[5]], g[_k * _steps[6]], out, _k)
 
 
 def fig8_c_read(c1, L, alpha, beta, ell, m, g):
@@ -1000,15 +1000,15 @@ def fig8_c_read(c1, L, alpha, beta, ell, m, g):
     numpy.ndarray, shape (...)
         [N m]
     """
-    arrays, steps, batch = _flat(c1, L, alpha, beta, ell, m, g)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_fig8_c_read_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_read_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(c1, L, alpha, beta, ell, m, g)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_fig8_c_read_ploop if len(out) >= PARALLEL_BATCH else _fig8_c_read_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig9_c_0(c1, Delta, ell, out, k):
-    out[k] = Delta*c1/ell
+def _fig9_c_0(c1, Delta, ell, out, _k):
+    out[_k] = Delta*c1/ell
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1020,15 +1020,15 @@ def fig9_c_scalar(c1, Delta, ell):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fig9_c_loop(c1, Delta, ell, steps, out):
-    for k in range(out.shape[0]):
-        _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
+def _fig9_c_loop(c1, Delta, ell, _steps, out):
+    for _k in range(out.shape[0]):
+        _fig9_c_0(c1[_k * _steps[0]], Delta[_k * _steps[1]], ell[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _fig9_c_ploop(c1, Delta, ell, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _fig9_c_0(c1[k * steps[0]], Delta[k * steps[1]], ell[k * steps[2]], out, k)
+def _fig9_c_ploop(c1, Delta, ell, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _fig9_c_0(c1[_k * _steps[0]], Delta[_k * _steps[1]], ell[_k * _steps[2]], out, _k)
 
 
 def fig9_c(c1, Delta, ell):
@@ -1048,17 +1048,17 @@ def fig9_c(c1, Delta, ell):
     numpy.ndarray, shape (...)
         [N/m]
     """
-    arrays, steps, batch = _flat(c1, Delta, ell)
-    out = numpy.empty((math.prod(batch),) + ())
-    (_fig9_c_ploop if len(out) >= PARALLEL_BATCH else _fig9_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + ())
+    _arrays, _steps, _batch = _flat(c1, Delta, ell)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_fig9_c_ploop if len(out) >= PARALLEL_BATCH else _fig9_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_c_rates_0(beta, out, k):
-    out[k, 0] = math.sin(beta)
-    out[k, 1] = 0
-    out[k, 2] = 1
+def _omega_c_rates_0(beta, out, _k):
+    out[_k, 0] = math.sin(beta)
+    out[_k, 1] = 0
+    out[_k, 2] = 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1070,15 +1070,15 @@ def omega_c_rates_scalar(beta):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_c_rates_loop(beta, steps, out):
-    for k in range(out.shape[0]):
-        _omega_c_rates_0(beta[k * steps[0]], out, k)
+def _omega_c_rates_loop(beta, _steps, out):
+    for _k in range(out.shape[0]):
+        _omega_c_rates_0(beta[_k * _steps[0]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _omega_c_rates_ploop(beta, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _omega_c_rates_0(beta[k * steps[0]], out, k)
+def _omega_c_rates_ploop(beta, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _omega_c_rates_0(beta[_k * _steps[0]], out, _k)
 
 
 def omega_c_rates(beta):
@@ -1094,7 +1094,7 @@ def omega_c_rates(beta):
     numpy.ndarray, shape (..., 3)
         [1]
     """
-    arrays, steps, batch = _flat(beta)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_omega_c_rates_ploop if len(out) >= PARALLEL_BATCH else _omega_c_rates_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(beta)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_omega_c_rates_ploop if len(out) >= PARALLEL_BATCH else _omega_c_rates_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 9cee10af52e3a6621392f2f2f27e15026592826c7a237d55fe5f12c7287a187e
-# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
+# symmech 0.1.0 generated module; inputs sha256 2f18f5aa9207c30543b0cfbf5ad12dbf5c64253a35be355d49d4272388029716
+# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
 # body sha256 aee5dbf23a586530a888113236e52e676f91d5a69d4a97696549f4cbbea29ebb
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

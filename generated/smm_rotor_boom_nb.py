@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 3512e01d4010d1127c8f75810d81cd57f659f9bfd2ef6bc60dbd49f5e0ae436c
-# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
-# body sha256 d94bc504910bc49a0c46f2b4c8e05302b851cd6cbc146a3984f3bbc137001322
+# symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
+# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_rotor_boom` (the numpy module, the
@@ -43,12 +43,12 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, k):
+def _a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
     x0 = -m2*r1*z2
-    out[k, 0, 0] = I1 + m2*r1**2
-    out[k, 0, 1] = x0
-    out[k, 1, 0] = x0
-    out[k, 1, 1] = I2 + m2*z2**2
+    out[_k, 0, 0] = I1 + m2*r1**2
+    out[_k, 0, 1] = x0
+    out[_k, 1, 0] = x0
+    out[_k, 1, 1] = I2 + m2*z2**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -60,15 +60,15 @@ def a_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in range(out.shape[0]):
-        _a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _a_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _a_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _a_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _a_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _a_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 def a(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
@@ -108,22 +108,22 @@ def a(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     numpy.ndarray, shape (..., 2, 2)
         [kg, kg m, kg m^2 by coordinate kinds]
     """
-    arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, k):
+def _b_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
     x0 = l2**2*mu3
     x1 = Lr**2
     x2 = x1*math.sin(alpha)**2
     x3 = -h**2*x0/abs(h)**2
-    out[k, 0, 0] = mu1*r1**2*x2/(x1*math.cos(alpha)**2 + x2) + x0
-    out[k, 0, 1] = x3
-    out[k, 1, 0] = x3
-    out[k, 1, 1] = x0
+    out[_k, 0, 0] = mu1*r1**2*x2/(x1*math.cos(alpha)**2 + x2) + x0
+    out[_k, 0, 1] = x3
+    out[_k, 1, 0] = x3
+    out[_k, 1, 1] = x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -135,15 +135,15 @@ def b_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in range(out.shape[0]):
-        _b_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _b_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _b_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _b_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _b_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _b_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _b_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 def b(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
@@ -183,22 +183,22 @@ def b(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     numpy.ndarray, shape (..., 2, 2)
         [N s/m, N s, N m s by coordinate kinds]
     """
-    arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, k):
+def _c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
     x0 = c3*l2**2
     x1 = Lr**2
     x2 = x1*math.sin(alpha)**2
     x3 = -h**2*x0/abs(h)**2
-    out[k, 0, 0] = c1*r1**2*x2/(x1*math.cos(alpha)**2 + x2) + x0
-    out[k, 0, 1] = x3
-    out[k, 1, 0] = x3
-    out[k, 1, 1] = x0
+    out[_k, 0, 0] = c1*r1**2*x2/(x1*math.cos(alpha)**2 + x2) + x0
+    out[_k, 0, 1] = x3
+    out[_k, 1, 0] = x3
+    out[_k, 1, 1] = x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -210,15 +210,15 @@ def c_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in range(out.shape[0]):
-        _c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _c_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _c_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _c_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _c_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _c_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 def c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
@@ -258,20 +258,20 @@ def c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     numpy.ndarray, shape (..., 2, 2)
         [N/m, N, N m by coordinate kinds]
     """
-    arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, k):
-    out[k, 0, 0] = 1
-    out[k, 0, 1] = r1
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = -z2
-    out[k, 1, 2] = 1
+def _L_a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = r1
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = -z2
+    out[_k, 1, 2] = 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -283,15 +283,15 @@ def L_a_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in range(out.shape[0]):
-        _L_a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _L_a_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_a_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_a_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_a_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _L_a_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_a_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 def L_a(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
@@ -331,21 +331,21 @@ def L_a(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     numpy.ndarray, shape (..., 2, 3)
         [m or 1]
     """
-    arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
-    out = numpy.empty((math.prod(batch),) + (2, 3))
-    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 3))
+    _arrays, _steps, _batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (2, 3))
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, k):
+def _L_c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
     x0 = math.sin(alpha)
     x1 = Lr**2
     x2 = h*l2/abs(h)
-    out[k, 0, 0] = -Lr*r1*x0/math.sqrt(x0**2*x1 + x1*math.cos(alpha)**2)
-    out[k, 0, 1] = -x2
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = x2
+    out[_k, 0, 0] = -Lr*r1*x0/math.sqrt(x0**2*x1 + x1*math.cos(alpha)**2)
+    out[_k, 0, 1] = -x2
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = x2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -357,15 +357,15 @@ def L_c_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in range(out.shape[0]):
-        _L_c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _L_c_loop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_c_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_c_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_c_0(I1[k * steps[0]], r1[k * steps[1]], m2[k * steps[2]], I2[k * steps[3]], z2[k * steps[4]], alpha[k * steps[5]], Lr[k * steps[6]], c1[k * steps[7]], mu1[k * steps[8]], l2[k * steps[9]], h[k * steps[10]], c3[k * steps[11]], mu3[k * steps[12]], out, k)
+def _L_c_ploop(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_c_0(I1[_k * _steps[0]], r1[_k * _steps[1]], m2[_k * _steps[2]], I2[_k * _steps[3]], z2[_k * _steps[4]], alpha[_k * _steps[5]], Lr[_k * _steps[6]], c1[_k * _steps[7]], mu1[_k * _steps[8]], l2[_k * _steps[9]], h[_k * _steps[10]], c3[_k * _steps[11]], mu3[_k * _steps[12]], out, _k)
 
 
 def L_c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
@@ -405,7 +405,7 @@ def L_c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     numpy.ndarray, shape (..., 2, 2)
         [m or 1]
     """
-    arrays, steps, batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
-    out = numpy.empty((math.prod(batch),) + (2, 2))
-    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (2, 2))
+    _arrays, _steps, _batch = _flat(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (2, 2))
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (2, 2))

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 476dda095cfd3f2431d9c8553eaff5e3e861fc14783ddeec553e85371ee84152
-# source key ac671ca90519669e9f88e342109ecdb19908e80323f3aabfff7cc989ad1eefb1
-# body sha256 67778c37a4368986c2647313b3f638b88cf930547bdd773b2470f02c0948f2a7
+# symmech 0.1.0 generated module; inputs sha256 11887439b5f8e7e16d41034d53d8b35c22353b30137a700ff1598244f27105bc
+# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# body sha256 f100a78e25f827b2a6b3ef0686700aadf846aa2cefae05de5c4c1cfbce969792
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -43,27 +43,27 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, k):
+def _a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
     x0 = e3**2*m3
     x1 = L3*e3*m3
     x2 = L1**2*m1 + L3**2*m3
     x3 = L2**2*m2
-    out[k, 0, 0] = Jx + x0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = x1
-    out[k, 0, 3] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = Jy + x0 + x2
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 0
-    out[k, 2, 0] = x1
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = Jz + x2
-    out[k, 2, 3] = 0
-    out[k, 3, 0] = 0
-    out[k, 3, 1] = 0
-    out[k, 3, 2] = 0
-    out[k, 3, 3] = x3*math.sin(gamma)**2 + x3*math.cos(gamma)**2
+    out[_k, 0, 0] = Jx + x0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = x1
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = Jy + x0 + x2
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 2, 0] = x1
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = Jz + x2
+    out[_k, 2, 3] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = x3*math.sin(gamma)**2 + x3*math.cos(gamma)**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -75,15 +75,15 @@ def a_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _a_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in range(out.shape[0]):
-        _a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _a_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _a_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _a_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _a_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _a_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 def a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
@@ -139,30 +139,30 @@ def a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma
     numpy.ndarray, shape (..., 4, 4)
         [kg, kg m, kg m^2 by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
-    out = numpy.empty((math.prod(batch),) + (4, 4))
-    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4, 4))
+    _arrays, _steps, _batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_a_ploop if len(out) >= PARALLEL_BATCH else _a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, k):
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 0, 3] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 0
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = 0
-    out[k, 2, 3] = 0
-    out[k, 3, 0] = 0
-    out[k, 3, 1] = 0
-    out[k, 3, 2] = 0
-    out[k, 3, 3] = 0
+def _b_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -174,15 +174,15 @@ def b_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _b_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in range(out.shape[0]):
-        _b_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _b_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _b_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _b_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _b_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _b_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _b_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 def b(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
@@ -238,14 +238,14 @@ def b(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma
     numpy.ndarray, shape (..., 4, 4)
         [N s/m, N s, N m s by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
-    out = numpy.empty((math.prod(batch),) + (4, 4))
-    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4, 4))
+    _arrays, _steps, _batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_b_ploop if len(out) >= PARALLEL_BATCH else _b_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, k):
+def _c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
     x0 = math.cos(theta)
     x1 = g*x0
     x2 = m3*x1
@@ -314,22 +314,22 @@ def _c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, ga
     x65 = -x27*x48 - x28*x33*x43*x48
     x66 = x47*x59
     x67 = (L2*g*m2*x11*x55 - x15*x44*x49*x5*x66 - x57*x58)/x58
-    out[k, 0, 0] = cK + e3*x2
-    out[k, 0, 1] = x20
-    out[k, 0, 2] = x21
-    out[k, 0, 3] = 0
-    out[k, 1, 0] = x20
-    out[k, 1, 1] = 2*c1*x22*x24*x25*x30*x37 + e3*g*m3*x0 - x32*x34 - x34*x36 - x40
-    out[k, 1, 2] = x42
-    out[k, 1, 3] = x52
-    out[k, 2, 0] = x21
-    out[k, 2, 1] = x42
-    out[k, 2, 2] = 2*c1*x22*x23*x30*x37 - x17*x53 - x38*x53 - x40
-    out[k, 2, 3] = x54
-    out[k, 3, 0] = 0
-    out[k, 3, 1] = x52
-    out[k, 3, 2] = x54
-    out[k, 3, 3] = L2**2*c2*x58**2 + L2*x55**2*x67/h2 + x12*x56*x58 + x16*x60 + x35*x60 + x45*x65*x66 + x47*x63*x65 + x51*x64 + x55*x57 + x55*x67 + x61*x62 + x61*x63 - x62*x64 - x63*x64
+    out[_k, 0, 0] = cK + e3*x2
+    out[_k, 0, 1] = x20
+    out[_k, 0, 2] = x21
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = x20
+    out[_k, 1, 1] = 2*c1*x22*x24*x25*x30*x37 + e3*g*m3*x0 - x32*x34 - x34*x36 - x40
+    out[_k, 1, 2] = x42
+    out[_k, 1, 3] = x52
+    out[_k, 2, 0] = x21
+    out[_k, 2, 1] = x42
+    out[_k, 2, 2] = 2*c1*x22*x23*x30*x37 - x17*x53 - x38*x53 - x40
+    out[_k, 2, 3] = x54
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = x52
+    out[_k, 3, 2] = x54
+    out[_k, 3, 3] = L2**2*c2*x58**2 + L2*x55**2*x67/h2 + x12*x56*x58 + x16*x60 + x35*x60 + x45*x65*x66 + x47*x63*x65 + x51*x64 + x55*x57 + x55*x67 + x61*x62 + x61*x63 - x62*x64 - x63*x64
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -341,15 +341,15 @@ def c_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _c_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in range(out.shape[0]):
-        _c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _c_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _c_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _c_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _c_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _c_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 def c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
@@ -405,54 +405,54 @@ def c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma
     numpy.ndarray, shape (..., 4, 4)
         [N/m, N, N m by coordinate kinds]
     """
-    arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
-    out = numpy.empty((math.prod(batch),) + (4, 4))
-    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4, 4))
+    _arrays, _steps, _batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_c_ploop if len(out) >= PARALLEL_BATCH else _c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, k):
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 1
-    out[k, 0, 3] = 0
-    out[k, 0, 4] = 0
-    out[k, 0, 5] = 0
-    out[k, 0, 6] = 0
-    out[k, 0, 7] = 0
-    out[k, 0, 8] = e3
-    out[k, 0, 9] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = -L1
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 1
-    out[k, 1, 4] = 0
-    out[k, 1, 5] = 0
-    out[k, 1, 6] = 0
-    out[k, 1, 7] = -e3
-    out[k, 1, 8] = 0
-    out[k, 1, 9] = -L3
-    out[k, 2, 0] = L1
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = 0
-    out[k, 2, 3] = 0
-    out[k, 2, 4] = 1
-    out[k, 2, 5] = 0
-    out[k, 2, 6] = 0
-    out[k, 2, 7] = 0
-    out[k, 2, 8] = L3
-    out[k, 2, 9] = 0
-    out[k, 3, 0] = 0
-    out[k, 3, 1] = 0
-    out[k, 3, 2] = 0
-    out[k, 3, 3] = 0
-    out[k, 3, 4] = 0
-    out[k, 3, 5] = -L2*math.sin(gamma)
-    out[k, 3, 6] = L2*math.cos(gamma)
-    out[k, 3, 7] = 0
-    out[k, 3, 8] = 0
-    out[k, 3, 9] = 0
+def _L_a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 1
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 0, 8] = e3
+    out[_k, 0, 9] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = -L1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 1
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 0
+    out[_k, 1, 6] = 0
+    out[_k, 1, 7] = -e3
+    out[_k, 1, 8] = 0
+    out[_k, 1, 9] = -L3
+    out[_k, 2, 0] = L1
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 1
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 0
+    out[_k, 2, 7] = 0
+    out[_k, 2, 8] = L3
+    out[_k, 2, 9] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = -L2*math.sin(gamma)
+    out[_k, 3, 6] = L2*math.cos(gamma)
+    out[_k, 3, 7] = 0
+    out[_k, 3, 8] = 0
+    out[_k, 3, 9] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -464,15 +464,15 @@ def L_a_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_a_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in range(out.shape[0]):
-        _L_a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _L_a_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_a_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_a_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_a_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _L_a_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_a_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 def L_a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
@@ -528,14 +528,14 @@ def L_a(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gam
     numpy.ndarray, shape (..., 4, 10)
         [m or 1]
     """
-    arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
-    out = numpy.empty((math.prod(batch),) + (4, 10))
-    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4, 10))
+    _arrays, _steps, _batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 10))
+    (_L_a_ploop if len(out) >= PARALLEL_BATCH else _L_a_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 10))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, k):
+def _L_c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
     x0 = Lr**2
     x1 = math.sin(delta)
     x2 = math.sin(beta)
@@ -547,22 +547,22 @@ def _L_c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, 
     x8 = Lr*x2*x3*x7
     x9 = Lr*x1*x7
     x10 = Lr*x2*x3*x6*(-L1 + Lr*x3*x5 - a2) - x2*x4*x5*x6
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 0, 3] = 1
-    out[k, 1, 0] = x8
-    out[k, 1, 1] = x8
-    out[k, 1, 2] = 0
-    out[k, 1, 3] = 0
-    out[k, 2, 0] = -x9
-    out[k, 2, 1] = x9
-    out[k, 2, 2] = 0
-    out[k, 2, 3] = 0
-    out[k, 3, 0] = x10
-    out[k, 3, 1] = x10
-    out[k, 3, 2] = L2*h2*math.cos(gamma)/abs(h2)
-    out[k, 3, 3] = 0
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 1
+    out[_k, 1, 0] = x8
+    out[_k, 1, 1] = x8
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 2, 0] = -x9
+    out[_k, 2, 1] = x9
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 3, 0] = x10
+    out[_k, 3, 1] = x10
+    out[_k, 3, 2] = L2*h2*math.cos(gamma)/abs(h2)
+    out[_k, 3, 3] = 0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -574,15 +574,15 @@ def L_c_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _L_c_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in range(out.shape[0]):
-        _L_c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _L_c_loop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _L_c_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _L_c_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _L_c_0(m1[k * steps[0]], Jx[k * steps[1]], Jy[k * steps[2]], Jz[k * steps[3]], L1[k * steps[4]], Lr[k * steps[5]], beta[k * steps[6]], delta[k * steps[7]], c1[k * steps[8]], cK[k * steps[9]], m3[k * steps[10]], L3[k * steps[11]], e3[k * steps[12]], a2[k * steps[13]], m2[k * steps[14]], L2[k * steps[15]], gamma[k * steps[16]], h2[k * steps[17]], c2[k * steps[18]], theta[k * steps[19]], g[k * steps[20]], out, k)
+def _L_c_ploop(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _L_c_0(m1[_k * _steps[0]], Jx[_k * _steps[1]], Jy[_k * _steps[2]], Jz[_k * _steps[3]], L1[_k * _steps[4]], Lr[_k * _steps[5]], beta[_k * _steps[6]], delta[_k * _steps[7]], c1[_k * _steps[8]], cK[_k * _steps[9]], m3[_k * _steps[10]], L3[_k * _steps[11]], e3[_k * _steps[12]], a2[_k * _steps[13]], m2[_k * _steps[14]], L2[_k * _steps[15]], gamma[_k * _steps[16]], h2[_k * _steps[17]], c2[_k * _steps[18]], theta[_k * _steps[19]], g[_k * _steps[20]], out, _k)
 
 
 def L_c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
@@ -638,7 +638,7 @@ def L_c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gam
     numpy.ndarray, shape (..., 4, 4)
         [m or 1]
     """
-    arrays, steps, batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
-    out = numpy.empty((math.prod(batch),) + (4, 4))
-    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*arrays, steps, out)
-    return out.reshape(batch + (4, 4))
+    _arrays, _steps, _batch = _flat(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 6750ae42e3f560928d1ef0edaa99114a5297fca5e1474a1eb3fe62992ee56977
-# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
-# body sha256 dc16865ff353c888b7d64c22b1c71d6a81e9051c5c88686cd290901ca44f5daa
+# symmech 0.1.0 generated module; inputs sha256 1737958e9569beaadf4be1389208bcae79c5859de911013e0a6a467d579f34c7
+# source key 6cf77d539a02d7bd57d3b581fd6371fea02d6f290d6aabf82775c090a99ceac2
+# body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Compiled twin of `symmech.generated.trolley_dynamics` (the numpy module, the
@@ -43,17 +43,17 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _point_coefficients_0(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, out, k):
+def _point_coefficients_0(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, out, _k):
     x0 = W2*r3 - W3*r2
     x1 = W1*r3
     x2 = W1*r2 - W2*r1
     x3 = W3*r1 - x1
-    out[k, 0] = e1 + x0
-    out[k, 1] = W3*r1 + e2 - x1
-    out[k, 2] = e3 + x2
-    out[k, 3] = W2*e3 + W2*x2 - W3*e2 - W3*x3 + dW2*r3 - dW3*r2 + de1
-    out[k, 4] = -W1*e3 - W1*x2 + W3*e1 + W3*x0 - dW1*r3 + dW3*r1 + de2
-    out[k, 5] = W1*e2 + W1*x3 - W2*e1 - W2*x0 + dW1*r2 - dW2*r1 + de3
+    out[_k, 0] = e1 + x0
+    out[_k, 1] = W3*r1 + e2 - x1
+    out[_k, 2] = e3 + x2
+    out[_k, 3] = W2*e3 + W2*x2 - W3*e2 - W3*x3 + dW2*r3 - dW3*r2 + de1
+    out[_k, 4] = -W1*e3 - W1*x2 + W3*e1 + W3*x0 - dW1*r3 + dW3*r1 + de2
+    out[_k, 5] = W1*e2 + W1*x3 - W2*e1 - W2*x0 + dW1*r2 - dW2*r1 + de3
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -65,15 +65,15 @@ def point_coefficients_scalar(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, d
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _point_coefficients_loop(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, steps, out):
-    for k in range(out.shape[0]):
-        _point_coefficients_0(e1[k * steps[0]], e2[k * steps[1]], e3[k * steps[2]], de1[k * steps[3]], de2[k * steps[4]], de3[k * steps[5]], W1[k * steps[6]], W2[k * steps[7]], W3[k * steps[8]], dW1[k * steps[9]], dW2[k * steps[10]], dW3[k * steps[11]], r1[k * steps[12]], r2[k * steps[13]], r3[k * steps[14]], out, k)
+def _point_coefficients_loop(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, _steps, out):
+    for _k in range(out.shape[0]):
+        _point_coefficients_0(e1[_k * _steps[0]], e2[_k * _steps[1]], e3[_k * _steps[2]], de1[_k * _steps[3]], de2[_k * _steps[4]], de3[_k * _steps[5]], W1[_k * _steps[6]], W2[_k * _steps[7]], W3[_k * _steps[8]], dW1[_k * _steps[9]], dW2[_k * _steps[10]], dW3[_k * _steps[11]], r1[_k * _steps[12]], r2[_k * _steps[13]], r3[_k * _steps[14]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _point_coefficients_ploop(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _point_coefficients_0(e1[k * steps[0]], e2[k * steps[1]], e3[k * steps[2]], de1[k * steps[3]], de2[k * steps[4]], de3[k * steps[5]], W1[k * steps[6]], W2[k * steps[7]], W3[k * steps[8]], dW1[k * steps[9]], dW2[k * steps[10]], dW3[k * steps[11]], r1[k * steps[12]], r2[k * steps[13]], r3[k * steps[14]], out, k)
+def _point_coefficients_ploop(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _point_coefficients_0(e1[_k * _steps[0]], e2[_k * _steps[1]], e3[_k * _steps[2]], de1[_k * _steps[3]], de2[_k * _steps[4]], de3[_k * _steps[5]], W1[_k * _steps[6]], W2[_k * _steps[7]], W3[_k * _steps[8]], dW1[_k * _steps[9]], dW2[_k * _steps[10]], dW3[_k * _steps[11]], r1[_k * _steps[12]], r2[_k * _steps[13]], r3[_k * _steps[14]], out, _k)
 
 
 def point_coefficients(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3):
@@ -117,14 +117,14 @@ def point_coefficients(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1,
     numpy.ndarray, shape (..., 6)
         [1 (α), 1/m (β)]
     """
-    arrays, steps, batch = _flat(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3)
-    out = numpy.empty((math.prod(batch),) + (6,))
-    (_point_coefficients_ploop if len(out) >= PARALLEL_BATCH else _point_coefficients_loop)(*arrays, steps, out)
-    return out.reshape(batch + (6,))
+    _arrays, _steps, _batch = _flat(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_point_coefficients_ploop if len(out) >= PARALLEL_BATCH else _point_coefficients_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _reactions_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, out, k):
+def _reactions_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, out, _k):
     x0 = acc1*m
     x1 = g0*m
     x2 = nu1*x1
@@ -171,12 +171,12 @@ def _reactions_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, 
     x43 = 1/l
     x44 = (1/2)*x43/ah
     x45 = I11*x23 + I12*dw1 + I12*x16 + I13*x38 - I13*x5 + I22*dw2 + I23*dw3 - I23*x14 - I33*x23 - acc3*x26 - nu3*x32 + r3*x0 + r3*x2
-    out[k, 0] = x0 + x2
-    out[k, 1] = x44*(ah*x15 + ah*x17 + ah*x18 + ah*x20 + ah*x30 + ah*x31 + ah*x4 - x11 - x13 - x22 - x25 - x28 - x34 + x42 - x7 - x9)
-    out[k, 2] = x44*(I11*ah*w1*w2 + I12*ah*x3 + I13*ah*w2*w3 + acc1*ah*m*r2 + acc2*ah*l*m + ah*g0*l*m*nu2 + ah*g0*m*nu1*r2 - x11 - x13 - x22 - x25 - x28 - x34 - x42 - x7 - x9)
-    out[k, 3] = x43*(x10 + x12 - x15 - x17 - x18 + x21 + x24 + x27 - x31 + x33 - x4 + x6 + x8)
-    out[k, 4] = x43*(x40 + x41 + x45)
-    out[k, 5] = -x43*x45
+    out[_k, 0] = x0 + x2
+    out[_k, 1] = x44*(ah*x15 + ah*x17 + ah*x18 + ah*x20 + ah*x30 + ah*x31 + ah*x4 - x11 - x13 - x22 - x25 - x28 - x34 + x42 - x7 - x9)
+    out[_k, 2] = x44*(I11*ah*w1*w2 + I12*ah*x3 + I13*ah*w2*w3 + acc1*ah*m*r2 + acc2*ah*l*m + ah*g0*l*m*nu2 + ah*g0*m*nu1*r2 - x11 - x13 - x22 - x25 - x28 - x34 - x42 - x7 - x9)
+    out[_k, 3] = x43*(x10 + x12 - x15 - x17 - x18 + x21 + x24 + x27 - x31 + x33 - x4 + x6 + x8)
+    out[_k, 4] = x43*(x40 + x41 + x45)
+    out[_k, 5] = -x43*x45
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -188,15 +188,15 @@ def reactions_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, ac
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _reactions_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, steps, out):
-    for k in range(out.shape[0]):
-        _reactions_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], nu1[k * steps[19]], nu2[k * steps[20]], nu3[k * steps[21]], g0[k * steps[22]], l[k * steps[23]], ah[k * steps[24]], out, k)
+def _reactions_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, _steps, out):
+    for _k in range(out.shape[0]):
+        _reactions_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], acc1[_k * _steps[10]], acc2[_k * _steps[11]], acc3[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], nu1[_k * _steps[19]], nu2[_k * _steps[20]], nu3[_k * _steps[21]], g0[_k * _steps[22]], l[_k * _steps[23]], ah[_k * _steps[24]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _reactions_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _reactions_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], nu1[k * steps[19]], nu2[k * steps[20]], nu3[k * steps[21]], g0[k * steps[22]], l[k * steps[23]], ah[k * steps[24]], out, k)
+def _reactions_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _reactions_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], acc1[_k * _steps[10]], acc2[_k * _steps[11]], acc3[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], nu1[_k * _steps[19]], nu2[_k * _steps[20]], nu3[_k * _steps[21]], g0[_k * _steps[22]], l[_k * _steps[23]], ah[_k * _steps[24]], out, _k)
 
 
 def reactions(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah):
@@ -260,14 +260,14 @@ def reactions(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1,
     numpy.ndarray, shape (..., 6)
         [N]
     """
-    arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah)
-    out = numpy.empty((math.prod(batch),) + (6,))
-    (_reactions_ploop if len(out) >= PARALLEL_BATCH else _reactions_loop)(*arrays, steps, out)
-    return out.reshape(batch + (6,))
+    _arrays, _steps, _batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_reactions_ploop if len(out) >= PARALLEL_BATCH else _reactions_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _reactions_no_gravity_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, out, k):
+def _reactions_no_gravity_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, out, _k):
     x0 = acc1*m
     x1 = w2**2
     x2 = I12*x1
@@ -305,12 +305,12 @@ def _reactions_no_gravity_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, a
     x34 = 1/l
     x35 = (1/2)*x34/ah
     x36 = I11*x21 + I12*dw1 + I12*x14 - I13*x3 + I13*x30 + I22*dw2 + I23*dw3 - I23*x12 - I33*x21 - acc3*x24 + r3*x0
-    out[k, 0] = x0
-    out[k, 1] = x35*(ah*x13 + ah*x15 + ah*x16 + ah*x18 + ah*x2 - x11 - x20 - x23 - x26 + x33 - x5 - x7 - x9)
-    out[k, 2] = x35*(I11*ah*w1*w2 + I12*ah*x1 + I13*ah*w2*w3 + acc1*ah*m*r2 + acc2*ah*l*m - x11 - x20 - x23 - x26 - x33 - x5 - x7 - x9)
-    out[k, 3] = x34*(x10 - x13 - x15 - x16 + x19 - x2 + x22 + x25 + x4 + x6 + x8)
-    out[k, 4] = x34*(x32 + x36)
-    out[k, 5] = -x34*x36
+    out[_k, 0] = x0
+    out[_k, 1] = x35*(ah*x13 + ah*x15 + ah*x16 + ah*x18 + ah*x2 - x11 - x20 - x23 - x26 + x33 - x5 - x7 - x9)
+    out[_k, 2] = x35*(I11*ah*w1*w2 + I12*ah*x1 + I13*ah*w2*w3 + acc1*ah*m*r2 + acc2*ah*l*m - x11 - x20 - x23 - x26 - x33 - x5 - x7 - x9)
+    out[_k, 3] = x34*(x10 - x13 - x15 - x16 + x19 - x2 + x22 + x25 + x4 + x6 + x8)
+    out[_k, 4] = x34*(x32 + x36)
+    out[_k, 5] = -x34*x36
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -322,15 +322,15 @@ def reactions_no_gravity_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _reactions_no_gravity_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, steps, out):
-    for k in range(out.shape[0]):
-        _reactions_no_gravity_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], l[k * steps[19]], ah[k * steps[20]], out, k)
+def _reactions_no_gravity_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, _steps, out):
+    for _k in range(out.shape[0]):
+        _reactions_no_gravity_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], acc1[_k * _steps[10]], acc2[_k * _steps[11]], acc3[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], l[_k * _steps[19]], ah[_k * _steps[20]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _reactions_no_gravity_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _reactions_no_gravity_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], acc1[k * steps[10]], acc2[k * steps[11]], acc3[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], l[k * steps[19]], ah[k * steps[20]], out, k)
+def _reactions_no_gravity_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _reactions_no_gravity_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], acc1[_k * _steps[10]], acc2[_k * _steps[11]], acc3[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], l[_k * _steps[19]], ah[_k * _steps[20]], out, _k)
 
 
 def reactions_no_gravity(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah):
@@ -386,14 +386,14 @@ def reactions_no_gravity(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2
     numpy.ndarray, shape (..., 6)
         [N]
     """
-    arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah)
-    out = numpy.empty((math.prod(batch),) + (6,))
-    (_reactions_no_gravity_ploop if len(out) >= PARALLEL_BATCH else _reactions_no_gravity_loop)(*arrays, steps, out)
-    return out.reshape(batch + (6,))
+    _arrays, _steps, _batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_reactions_no_gravity_ploop if len(out) >= PARALLEL_BATCH else _reactions_no_gravity_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, k):
+def _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, _k):
     x0 = -r1*w2 + r2*w1
     x1 = r1*w3 - r3*w1
     x2 = m*(a01 + dw2*r3 - dw3*r2 + w2*x0 - w3*x1)
@@ -403,12 +403,12 @@ def _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, 
     x6 = I13*w1 + I23*w2 + I33*w3
     x7 = I12*w1 + I22*w2 + I23*w3
     x8 = I11*w1 + I12*w2 + I13*w3
-    out[k, 0] = x2
-    out[k, 1] = x4
-    out[k, 2] = x5
-    out[k, 3] = I11*dw1 + I12*dw2 + I13*dw3 + r2*x5 - r3*x4 + w2*x6 - w3*x7
-    out[k, 4] = I12*dw1 + I22*dw2 + I23*dw3 - r1*x5 + r3*x2 - w1*x6 + w3*x8
-    out[k, 5] = I13*dw1 + I23*dw2 + I33*dw3 + r1*x4 - r2*x2 + w1*x7 - w2*x8
+    out[_k, 0] = x2
+    out[_k, 1] = x4
+    out[_k, 2] = x5
+    out[_k, 3] = I11*dw1 + I12*dw2 + I13*dw3 + r2*x5 - r3*x4 + w2*x6 - w3*x7
+    out[_k, 4] = I12*dw1 + I22*dw2 + I23*dw3 - r1*x5 + r3*x2 - w1*x6 + w3*x8
+    out[_k, 5] = I13*dw1 + I23*dw2 + I33*dw3 + r1*x4 - r2*x2 + w1*x7 - w2*x8
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -420,15 +420,15 @@ def newton_euler_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _newton_euler_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
-    for k in range(out.shape[0]):
-        _newton_euler_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+def _newton_euler_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, _steps, out):
+    for _k in range(out.shape[0]):
+        _newton_euler_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], a01[_k * _steps[10]], a02[_k * _steps[11]], a03[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _newton_euler_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _newton_euler_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+def _newton_euler_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _newton_euler_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], a01[_k * _steps[10]], a02[_k * _steps[11]], a03[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], out, _k)
 
 
 def newton_euler(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
@@ -480,7 +480,7 @@ def newton_euler(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1,
     numpy.ndarray, shape (..., 6)
         [N, N m]
     """
-    arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
-    out = numpy.empty((math.prod(batch),) + (6,))
-    (_newton_euler_ploop if len(out) >= PARALLEL_BATCH else _newton_euler_loop)(*arrays, steps, out)
-    return out.reshape(batch + (6,))
+    _arrays, _steps, _batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_newton_euler_ploop if len(out) >= PARALLEL_BATCH else _newton_euler_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))

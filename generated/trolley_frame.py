@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 84a09bd0a2b4b7fd4f67cac85dd1b15cde309b8f397d20c2b8c25f82721c7231
-# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
+# symmech 0.1.0 generated module; inputs sha256 182cae0d6373a79cfb38f2183d7ff73de58c3f7daf1a30afc7a0f5e37339be98
+# source key 6cf77d539a02d7bd57d3b581fd6371fea02d6f290d6aabf82775c090a99ceac2
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

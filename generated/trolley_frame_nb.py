@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 9292a919e71d13d0f17bd0f2cf2062cb3ca64bd5d465850f4e06ff7b0ac3549a
-# source key 559f972e402074f94f705a648ab3bbd4b66c1846c12ea0d49bf5a424a26504fd
-# body sha256 60f33bc6a2b90526b034c366ff6e268afd651f6186b8c26f14c8ef5eb8f289dc
+# symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
+# source key 6cf77d539a02d7bd57d3b581fd6371fea02d6f290d6aabf82775c090a99ceac2
+# body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 
 Compiled twin of `symmech.generated.trolley_frame` (the numpy module, the
@@ -43,7 +43,7 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _Lambda_0(th1, th2, th3, out, k):
+def _Lambda_0(th1, th2, th3, out, _k):
     x0 = math.cos(th2)
     x1 = math.cos(th3)
     x2 = math.sin(th3)
@@ -53,15 +53,15 @@ def _Lambda_0(th1, th2, th3, out, k):
     x6 = math.cos(th1)
     x7 = x0*x4
     x8 = x3*x6
-    out[k, 0, 0] = x0*x1
-    out[k, 0, 1] = x2
-    out[k, 0, 2] = -x1*x3
-    out[k, 1, 0] = -x0*x2*x6 + x5
-    out[k, 1, 1] = x1*x6
-    out[k, 1, 2] = x2*x8 + x7
-    out[k, 2, 0] = x2*x7 + x8
-    out[k, 2, 1] = -x1*x4
-    out[k, 2, 2] = x0*x6 - x2*x5
+    out[_k, 0, 0] = x0*x1
+    out[_k, 0, 1] = x2
+    out[_k, 0, 2] = -x1*x3
+    out[_k, 1, 0] = -x0*x2*x6 + x5
+    out[_k, 1, 1] = x1*x6
+    out[_k, 1, 2] = x2*x8 + x7
+    out[_k, 2, 0] = x2*x7 + x8
+    out[_k, 2, 1] = -x1*x4
+    out[_k, 2, 2] = x0*x6 - x2*x5
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -73,15 +73,15 @@ def Lambda_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _Lambda_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _Lambda_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _Lambda_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _Lambda_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _Lambda_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _Lambda_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def Lambda(th1, th2, th3):
@@ -101,14 +101,14 @@ def Lambda(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_Lambda_ploop if len(out) >= PARALLEL_BATCH else _Lambda_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_Lambda_ploop if len(out) >= PARALLEL_BATCH else _Lambda_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth1_0(th1, th2, th3, out, k):
+def _dLambda_dth1_0(th1, th2, th3, out, _k):
     x0 = math.sin(th2)
     x1 = math.cos(th1)
     x2 = x0*x1
@@ -118,15 +118,15 @@ def _dLambda_dth1_0(th1, th2, th3, out, k):
     x6 = x4*x5
     x7 = math.cos(th3)
     x8 = x0*x4
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = x2 + x3*x6
-    out[k, 1, 1] = -x4*x7
-    out[k, 1, 2] = x1*x5 - x3*x8
-    out[k, 2, 0] = x1*x3*x5 - x8
-    out[k, 2, 1] = -x1*x7
-    out[k, 2, 2] = -x2*x3 - x6
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = x2 + x3*x6
+    out[_k, 1, 1] = -x4*x7
+    out[_k, 1, 2] = x1*x5 - x3*x8
+    out[_k, 2, 0] = x1*x3*x5 - x8
+    out[_k, 2, 1] = -x1*x7
+    out[_k, 2, 2] = -x2*x3 - x6
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -138,15 +138,15 @@ def dLambda_dth1_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth1_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth1_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _dLambda_dth1_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _dLambda_dth1_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth1_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _dLambda_dth1_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def dLambda_dth1(th1, th2, th3):
@@ -166,14 +166,14 @@ def dLambda_dth1(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1/rad]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_dLambda_dth1_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth1_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_dLambda_dth1_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth1_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth2_0(th1, th2, th3, out, k):
+def _dLambda_dth2_0(th1, th2, th3, out, _k):
     x0 = math.sin(th2)
     x1 = math.cos(th3)
     x2 = math.cos(th2)
@@ -183,15 +183,15 @@ def _dLambda_dth2_0(th1, th2, th3, out, k):
     x6 = math.cos(th1)
     x7 = x0*x6
     x8 = x0*x3
-    out[k, 0, 0] = -x0*x1
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = -x1*x2
-    out[k, 1, 0] = x4 + x5*x7
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = x2*x5*x6 - x8
-    out[k, 2, 0] = x2*x6 - x5*x8
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = -x4*x5 - x7
+    out[_k, 0, 0] = -x0*x1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = -x1*x2
+    out[_k, 1, 0] = x4 + x5*x7
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = x2*x5*x6 - x8
+    out[_k, 2, 0] = x2*x6 - x5*x8
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = -x4*x5 - x7
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -203,15 +203,15 @@ def dLambda_dth2_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth2_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth2_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _dLambda_dth2_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _dLambda_dth2_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth2_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _dLambda_dth2_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def dLambda_dth2(th1, th2, th3):
@@ -231,14 +231,14 @@ def dLambda_dth2(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1/rad]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_dLambda_dth2_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth2_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_dLambda_dth2_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth2_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth3_0(th1, th2, th3, out, k):
+def _dLambda_dth3_0(th1, th2, th3, out, _k):
     x0 = math.sin(th3)
     x1 = math.cos(th2)
     x2 = math.cos(th3)
@@ -247,15 +247,15 @@ def _dLambda_dth3_0(th1, th2, th3, out, k):
     x5 = x2*x4
     x6 = math.sin(th1)
     x7 = x2*x6
-    out[k, 0, 0] = -x0*x1
-    out[k, 0, 1] = x2
-    out[k, 0, 2] = x0*x3
-    out[k, 1, 0] = -x1*x5
-    out[k, 1, 1] = -x0*x4
-    out[k, 1, 2] = x3*x5
-    out[k, 2, 0] = x1*x7
-    out[k, 2, 1] = x0*x6
-    out[k, 2, 2] = -x3*x7
+    out[_k, 0, 0] = -x0*x1
+    out[_k, 0, 1] = x2
+    out[_k, 0, 2] = x0*x3
+    out[_k, 1, 0] = -x1*x5
+    out[_k, 1, 1] = -x0*x4
+    out[_k, 1, 2] = x3*x5
+    out[_k, 2, 0] = x1*x7
+    out[_k, 2, 1] = x0*x6
+    out[_k, 2, 2] = -x3*x7
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -267,15 +267,15 @@ def dLambda_dth3_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth3_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth3_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _dLambda_dth3_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _dLambda_dth3_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth3_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _dLambda_dth3_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def dLambda_dth3(th1, th2, th3):
@@ -295,26 +295,26 @@ def dLambda_dth3(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1/rad]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_dLambda_dth3_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth3_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_dLambda_dth3_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth3_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _A_0(th1, th2, th3, out, k):
+def _A_0(th1, th2, th3, out, _k):
     x0 = math.cos(th1)
     x1 = math.cos(th3)
     x2 = math.sin(th1)
-    out[k, 0, 0] = 1
-    out[k, 0, 1] = math.sin(th3)
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = x0*x1
-    out[k, 1, 2] = x2
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = -x1*x2
-    out[k, 2, 2] = x0
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = math.sin(th3)
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = x0*x1
+    out[_k, 1, 2] = x2
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = -x1*x2
+    out[_k, 2, 2] = x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -326,15 +326,15 @@ def A_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _A_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _A_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _A_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _A_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _A_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _A_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def A(th1, th2, th3):
@@ -354,20 +354,20 @@ def A(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_A_ploop if len(out) >= PARALLEL_BATCH else _A_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_A_ploop if len(out) >= PARALLEL_BATCH else _A_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_per_length_0(th1, th2, th3, dth1, dth2, dth3, out, k):
+def _omega_per_length_0(th1, th2, th3, dth1, dth2, dth3, out, _k):
     x0 = math.sin(th1)
     x1 = math.cos(th1)
     x2 = dth2*math.cos(th3)
-    out[k, 0] = dth1 + dth2*math.sin(th3)
-    out[k, 1] = dth3*x0 + x1*x2
-    out[k, 2] = dth3*x1 - x0*x2
+    out[_k, 0] = dth1 + dth2*math.sin(th3)
+    out[_k, 1] = dth3*x0 + x1*x2
+    out[_k, 2] = dth3*x1 - x0*x2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -379,15 +379,15 @@ def omega_per_length_scalar(th1, th2, th3, dth1, dth2, dth3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_per_length_loop(th1, th2, th3, dth1, dth2, dth3, steps, out):
-    for k in range(out.shape[0]):
-        _omega_per_length_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], out, k)
+def _omega_per_length_loop(th1, th2, th3, dth1, dth2, dth3, _steps, out):
+    for _k in range(out.shape[0]):
+        _omega_per_length_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dth1[_k * _steps[3]], dth2[_k * _steps[4]], dth3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _omega_per_length_ploop(th1, th2, th3, dth1, dth2, dth3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _omega_per_length_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], out, k)
+def _omega_per_length_ploop(th1, th2, th3, dth1, dth2, dth3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _omega_per_length_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dth1[_k * _steps[3]], dth2[_k * _steps[4]], dth3[_k * _steps[5]], out, _k)
 
 
 def omega_per_length(th1, th2, th3, dth1, dth2, dth3):
@@ -413,14 +413,14 @@ def omega_per_length(th1, th2, th3, dth1, dth2, dth3):
     numpy.ndarray, shape (..., 3)
         [rad/m]
     """
-    arrays, steps, batch = _flat(th1, th2, th3, dth1, dth2, dth3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_omega_per_length_ploop if len(out) >= PARALLEL_BATCH else _omega_per_length_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(th1, th2, th3, dth1, dth2, dth3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_omega_per_length_ploop if len(out) >= PARALLEL_BATCH else _omega_per_length_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_per_length_rate_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, out, k):
+def _omega_per_length_rate_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, out, _k):
     x0 = math.sin(th3)
     x1 = math.cos(th3)
     x2 = math.sin(th1)
@@ -428,9 +428,9 @@ def _omega_per_length_rate_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth
     x4 = dth3*x3
     x5 = ddth2*x1
     x6 = dth1*x1
-    out[k, 0] = ddth1 + ddth2*x0 + dth2*dth3*x1
-    out[k, 1] = ddth3*x2 + dth1*x4 + dth2*(-x0*x4 - x2*x6) + x3*x5
-    out[k, 2] = ddth3*x3 - dth1*dth3*x2 + dth2*(dth3*x0*x2 - x3*x6) - x2*x5
+    out[_k, 0] = ddth1 + ddth2*x0 + dth2*dth3*x1
+    out[_k, 1] = ddth3*x2 + dth1*x4 + dth2*(-x0*x4 - x2*x6) + x3*x5
+    out[_k, 2] = ddth3*x3 - dth1*dth3*x2 + dth2*(dth3*x0*x2 - x3*x6) - x2*x5
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -442,15 +442,15 @@ def omega_per_length_rate_scalar(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _omega_per_length_rate_loop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, steps, out):
-    for k in range(out.shape[0]):
-        _omega_per_length_rate_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], ddth1[k * steps[6]], ddth2[k * steps[7]], ddth3[k * steps[8]], out, k)
+def _omega_per_length_rate_loop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, _steps, out):
+    for _k in range(out.shape[0]):
+        _omega_per_length_rate_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dth1[_k * _steps[3]], dth2[_k * _steps[4]], dth3[_k * _steps[5]], ddth1[_k * _steps[6]], ddth2[_k * _steps[7]], ddth3[_k * _steps[8]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _omega_per_length_rate_ploop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _omega_per_length_rate_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dth1[k * steps[3]], dth2[k * steps[4]], dth3[k * steps[5]], ddth1[k * steps[6]], ddth2[k * steps[7]], ddth3[k * steps[8]], out, k)
+def _omega_per_length_rate_ploop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _omega_per_length_rate_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dth1[_k * _steps[3]], dth2[_k * _steps[4]], dth3[_k * _steps[5]], ddth1[_k * _steps[6]], ddth2[_k * _steps[7]], ddth3[_k * _steps[8]], out, _k)
 
 
 def omega_per_length_rate(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3):
@@ -482,26 +482,26 @@ def omega_per_length_rate(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3):
     numpy.ndarray, shape (..., 3)
         [rad/m^2]
     """
-    arrays, steps, batch = _flat(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_omega_per_length_rate_ploop if len(out) >= PARALLEL_BATCH else _omega_per_length_rate_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_omega_per_length_rate_ploop if len(out) >= PARALLEL_BATCH else _omega_per_length_rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _angles_from_tangent_0(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out, k):
+def _angles_from_tangent_0(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out, _k):
     x0 = 1/(t1**2 + t3**2)
     x1 = dt1*t3*x0
     x2 = dt3*t1*x0
     x3 = 1 - t2**2
     x4 = 1/math.sqrt(x3)
     x5 = 2*dt1*t1 + 2*dt3*t3
-    out[k, 0] = math.atan2(-t3, t1)
-    out[k, 1] = math.asin(t2)
-    out[k, 2] = x1 - x2
-    out[k, 3] = dt2*x4
-    out[k, 4] = x0*(ddt1*t3 - ddt3*t1 - x1*x5 + x2*x5)
-    out[k, 5] = x4*(ddt2 + dt2**2*t2/x3)
+    out[_k, 0] = math.atan2(-t3, t1)
+    out[_k, 1] = math.asin(t2)
+    out[_k, 2] = x1 - x2
+    out[_k, 3] = dt2*x4
+    out[_k, 4] = x0*(ddt1*t3 - ddt3*t1 - x1*x5 + x2*x5)
+    out[_k, 5] = x4*(ddt2 + dt2**2*t2/x3)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -513,15 +513,15 @@ def angles_from_tangent_scalar(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _angles_from_tangent_loop(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, steps, out):
-    for k in range(out.shape[0]):
-        _angles_from_tangent_0(t1[k * steps[0]], t2[k * steps[1]], t3[k * steps[2]], dt1[k * steps[3]], dt2[k * steps[4]], dt3[k * steps[5]], ddt1[k * steps[6]], ddt2[k * steps[7]], ddt3[k * steps[8]], out, k)
+def _angles_from_tangent_loop(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, _steps, out):
+    for _k in range(out.shape[0]):
+        _angles_from_tangent_0(t1[_k * _steps[0]], t2[_k * _steps[1]], t3[_k * _steps[2]], dt1[_k * _steps[3]], dt2[_k * _steps[4]], dt3[_k * _steps[5]], ddt1[_k * _steps[6]], ddt2[_k * _steps[7]], ddt3[_k * _steps[8]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _angles_from_tangent_ploop(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _angles_from_tangent_0(t1[k * steps[0]], t2[k * steps[1]], t3[k * steps[2]], dt1[k * steps[3]], dt2[k * steps[4]], dt3[k * steps[5]], ddt1[k * steps[6]], ddt2[k * steps[7]], ddt3[k * steps[8]], out, k)
+def _angles_from_tangent_ploop(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _angles_from_tangent_0(t1[_k * _steps[0]], t2[_k * _steps[1]], t3[_k * _steps[2]], dt1[_k * _steps[3]], dt2[_k * _steps[4]], dt3[_k * _steps[5]], ddt1[_k * _steps[6]], ddt2[_k * _steps[7]], ddt3[_k * _steps[8]], out, _k)
 
 
 def angles_from_tangent(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
@@ -553,14 +553,14 @@ def angles_from_tangent(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
     numpy.ndarray, shape (..., 6)
         [rad, rad/m, rad/m^2]
     """
-    arrays, steps, batch = _flat(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3)
-    out = numpy.empty((math.prod(batch),) + (6,))
-    (_angles_from_tangent_ploop if len(out) >= PARALLEL_BATCH else _angles_from_tangent_loop)(*arrays, steps, out)
-    return out.reshape(batch + (6,))
+    _arrays, _steps, _batch = _flat(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_angles_from_tangent_ploop if len(out) >= PARALLEL_BATCH else _angles_from_tangent_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, k):
+def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, _k):
     x0 = math.sin(th3)
     x1 = dX2*x0
     x2 = math.cos(th2)
@@ -582,18 +582,18 @@ def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, k):
     x18 = -x0*x14 + x2*x8
     x19 = dX1*x17 + dX3*x18 - x10*x7
     x20 = -x16
-    out[k, 0, 0] = x1 + x2*x4 - x5*x6
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = -x2*x6 - x4*x5
-    out[k, 0, 3] = -dX1*x0*x2 + dX3*x0*x5 + x7
-    out[k, 1, 0] = dX1*x16 + dX3*x13 + x9
-    out[k, 1, 1] = x19
-    out[k, 1, 2] = dX1*x13 + dX3*x20
-    out[k, 1, 3] = dX3*x3*x5*x8 - x1*x8 - x15*x4
-    out[k, 2, 0] = x19
-    out[k, 2, 1] = dX1*x20 - dX3*x13 - x9
-    out[k, 2, 2] = dX1*x18 - dX3*x17
-    out[k, 2, 3] = x1*x10 + x11*x4 - x14*x6
+    out[_k, 0, 0] = x1 + x2*x4 - x5*x6
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = -x2*x6 - x4*x5
+    out[_k, 0, 3] = -dX1*x0*x2 + dX3*x0*x5 + x7
+    out[_k, 1, 0] = dX1*x16 + dX3*x13 + x9
+    out[_k, 1, 1] = x19
+    out[_k, 1, 2] = dX1*x13 + dX3*x20
+    out[_k, 1, 3] = dX3*x3*x5*x8 - x1*x8 - x15*x4
+    out[_k, 2, 0] = x19
+    out[_k, 2, 1] = dX1*x20 - dX3*x13 - x9
+    out[_k, 2, 2] = dX1*x18 - dX3*x17
+    out[_k, 2, 3] = x1*x10 + x11*x4 - x14*x6
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -605,15 +605,15 @@ def chord_coefficients_scalar(th1, th2, th3, dX1, dX2, dX3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _chord_coefficients_loop(th1, th2, th3, dX1, dX2, dX3, steps, out):
-    for k in range(out.shape[0]):
-        _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
+def _chord_coefficients_loop(th1, th2, th3, dX1, dX2, dX3, _steps, out):
+    for _k in range(out.shape[0]):
+        _chord_coefficients_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dX1[_k * _steps[3]], dX2[_k * _steps[4]], dX3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _chord_coefficients_ploop(th1, th2, th3, dX1, dX2, dX3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
+def _chord_coefficients_ploop(th1, th2, th3, dX1, dX2, dX3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _chord_coefficients_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dX1[_k * _steps[3]], dX2[_k * _steps[4]], dX3[_k * _steps[5]], out, _k)
 
 
 def chord_coefficients(th1, th2, th3, dX1, dX2, dX3):
@@ -639,14 +639,14 @@ def chord_coefficients(th1, th2, th3, dX1, dX2, dX3):
     numpy.ndarray, shape (..., 3, 4)
         [m]
     """
-    arrays, steps, batch = _flat(th1, th2, th3, dX1, dX2, dX3)
-    out = numpy.empty((math.prod(batch),) + (3, 4))
-    (_chord_coefficients_ploop if len(out) >= PARALLEL_BATCH else _chord_coefficients_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 4))
+    _arrays, _steps, _batch = _flat(th1, th2, th3, dX1, dX2, dX3)
+    out = numpy.empty((math.prod(_batch),) + (3, 4))
+    (_chord_coefficients_ploop if len(out) >= PARALLEL_BATCH else _chord_coefficients_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 4))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _Lambda_bar_linear_0(th1, th2, th3, dlt1, dlt2, dlt3, out, k):
+def _Lambda_bar_linear_0(th1, th2, th3, dlt1, dlt2, dlt3, out, _k):
     x0 = math.cos(th2)
     x1 = math.cos(th3)
     x2 = math.sin(th2)
@@ -669,15 +669,15 @@ def _Lambda_bar_linear_0(th1, th2, th3, dlt1, dlt2, dlt3, out, k):
     x19 = x15*x4
     x20 = x0*x8 - x19
     x21 = -x17
-    out[k, 0, 0] = -dlt2*x3 + x0*x1 - x0*x5
-    out[k, 0, 1] = x4 + x6
-    out[k, 0, 2] = -dlt2*x7 + dlt3*x2*x4 - x3
-    out[k, 1, 0] = dlt1*x12 + dlt2*x13 - x14*x8 + x17
-    out[k, 1, 1] = -dlt1*x18 + x1*x8 - x5*x8
-    out[k, 1, 2] = dlt1*x20 + dlt2*x21 + x13 + x6*x9
-    out[k, 2, 0] = dlt1*x21 + dlt2*x20 + x10*x14 + x12
-    out[k, 2, 1] = -dlt1*x1*x8 + dlt3*x10*x4 - x18
-    out[k, 2, 2] = -dlt1*x13 - dlt2*x12 - x15*x6 + x16 - x19
+    out[_k, 0, 0] = -dlt2*x3 + x0*x1 - x0*x5
+    out[_k, 0, 1] = x4 + x6
+    out[_k, 0, 2] = -dlt2*x7 + dlt3*x2*x4 - x3
+    out[_k, 1, 0] = dlt1*x12 + dlt2*x13 - x14*x8 + x17
+    out[_k, 1, 1] = -dlt1*x18 + x1*x8 - x5*x8
+    out[_k, 1, 2] = dlt1*x20 + dlt2*x21 + x13 + x6*x9
+    out[_k, 2, 0] = dlt1*x21 + dlt2*x20 + x10*x14 + x12
+    out[_k, 2, 1] = -dlt1*x1*x8 + dlt3*x10*x4 - x18
+    out[_k, 2, 2] = -dlt1*x13 - dlt2*x12 - x15*x6 + x16 - x19
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -689,15 +689,15 @@ def Lambda_bar_linear_scalar(th1, th2, th3, dlt1, dlt2, dlt3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _Lambda_bar_linear_loop(th1, th2, th3, dlt1, dlt2, dlt3, steps, out):
-    for k in range(out.shape[0]):
-        _Lambda_bar_linear_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dlt1[k * steps[3]], dlt2[k * steps[4]], dlt3[k * steps[5]], out, k)
+def _Lambda_bar_linear_loop(th1, th2, th3, dlt1, dlt2, dlt3, _steps, out):
+    for _k in range(out.shape[0]):
+        _Lambda_bar_linear_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dlt1[_k * _steps[3]], dlt2[_k * _steps[4]], dlt3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _Lambda_bar_linear_ploop(th1, th2, th3, dlt1, dlt2, dlt3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _Lambda_bar_linear_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dlt1[k * steps[3]], dlt2[k * steps[4]], dlt3[k * steps[5]], out, k)
+def _Lambda_bar_linear_ploop(th1, th2, th3, dlt1, dlt2, dlt3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _Lambda_bar_linear_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dlt1[_k * _steps[3]], dlt2[_k * _steps[4]], dlt3[_k * _steps[5]], out, _k)
 
 
 def Lambda_bar_linear(th1, th2, th3, dlt1, dlt2, dlt3):
@@ -723,14 +723,14 @@ def Lambda_bar_linear(th1, th2, th3, dlt1, dlt2, dlt3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(th1, th2, th3, dlt1, dlt2, dlt3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_Lambda_bar_linear_ploop if len(out) >= PARALLEL_BATCH else _Lambda_bar_linear_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3, dlt1, dlt2, dlt3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_Lambda_bar_linear_ploop if len(out) >= PARALLEL_BATCH else _Lambda_bar_linear_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rodrigues_0(psi, xi1, xi2, xi3, out, k):
+def _rodrigues_0(psi, xi1, xi2, xi3, out, _k):
     x0 = math.cos(psi)
     x1 = 1 - x0
     x2 = math.sin(psi)
@@ -740,15 +740,15 @@ def _rodrigues_0(psi, xi1, xi2, xi3, out, k):
     x6 = x2*xi2
     x7 = x4*xi3
     x8 = x2*xi1
-    out[k, 0, 0] = x0 + x1*xi1**2
-    out[k, 0, 1] = x3 + x5
-    out[k, 0, 2] = -x6 + x7
-    out[k, 1, 0] = -x3 + x5
-    out[k, 1, 1] = x0 + x1*xi2**2
-    out[k, 1, 2] = x1*xi2*xi3 + x8
-    out[k, 2, 0] = x6 + x7
-    out[k, 2, 1] = x1*xi2*xi3 - x8
-    out[k, 2, 2] = x0 + x1*xi3**2
+    out[_k, 0, 0] = x0 + x1*xi1**2
+    out[_k, 0, 1] = x3 + x5
+    out[_k, 0, 2] = -x6 + x7
+    out[_k, 1, 0] = -x3 + x5
+    out[_k, 1, 1] = x0 + x1*xi2**2
+    out[_k, 1, 2] = x1*xi2*xi3 + x8
+    out[_k, 2, 0] = x6 + x7
+    out[_k, 2, 1] = x1*xi2*xi3 - x8
+    out[_k, 2, 2] = x0 + x1*xi3**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -760,15 +760,15 @@ def rodrigues_scalar(psi, xi1, xi2, xi3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rodrigues_loop(psi, xi1, xi2, xi3, steps, out):
-    for k in range(out.shape[0]):
-        _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
+def _rodrigues_loop(psi, xi1, xi2, xi3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rodrigues_0(psi[_k * _steps[0]], xi1[_k * _steps[1]], xi2[_k * _steps[2]], xi3[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rodrigues_ploop(psi, xi1, xi2, xi3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
+def _rodrigues_ploop(psi, xi1, xi2, xi3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rodrigues_0(psi[_k * _steps[0]], xi1[_k * _steps[1]], xi2[_k * _steps[2]], xi3[_k * _steps[3]], out, _k)
 
 
 def rodrigues(psi, xi1, xi2, xi3):
@@ -790,27 +790,27 @@ def rodrigues(psi, xi1, xi2, xi3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(psi, xi1, xi2, xi3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_rodrigues_ploop if len(out) >= PARALLEL_BATCH else _rodrigues_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(psi, xi1, xi2, xi3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_rodrigues_ploop if len(out) >= PARALLEL_BATCH else _rodrigues_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _chord_rotation_0(rho1, rho2, rho3, out, k):
+def _chord_rotation_0(rho1, rho2, rho3, out, _k):
     x0 = 1/(rho1 + 1)
     x1 = rho2**2
     x2 = rho3**2
     x3 = -rho2*rho3*x0
-    out[k, 0, 0] = x0*(-x1 - x2) + 1
-    out[k, 0, 1] = rho2
-    out[k, 0, 2] = rho3
-    out[k, 1, 0] = -rho2
-    out[k, 1, 1] = -x0*x1 + 1
-    out[k, 1, 2] = x3
-    out[k, 2, 0] = -rho3
-    out[k, 2, 1] = x3
-    out[k, 2, 2] = -x0*x2 + 1
+    out[_k, 0, 0] = x0*(-x1 - x2) + 1
+    out[_k, 0, 1] = rho2
+    out[_k, 0, 2] = rho3
+    out[_k, 1, 0] = -rho2
+    out[_k, 1, 1] = -x0*x1 + 1
+    out[_k, 1, 2] = x3
+    out[_k, 2, 0] = -rho3
+    out[_k, 2, 1] = x3
+    out[_k, 2, 2] = -x0*x2 + 1
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -822,15 +822,15 @@ def chord_rotation_scalar(rho1, rho2, rho3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _chord_rotation_loop(rho1, rho2, rho3, steps, out):
-    for k in range(out.shape[0]):
-        _chord_rotation_0(rho1[k * steps[0]], rho2[k * steps[1]], rho3[k * steps[2]], out, k)
+def _chord_rotation_loop(rho1, rho2, rho3, _steps, out):
+    for _k in range(out.shape[0]):
+        _chord_rotation_0(rho1[_k * _steps[0]], rho2[_k * _steps[1]], rho3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _chord_rotation_ploop(rho1, rho2, rho3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _chord_rotation_0(rho1[k * steps[0]], rho2[k * steps[1]], rho3[k * steps[2]], out, k)
+def _chord_rotation_ploop(rho1, rho2, rho3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _chord_rotation_0(rho1[_k * _steps[0]], rho2[_k * _steps[1]], rho3[_k * _steps[2]], out, _k)
 
 
 def chord_rotation(rho1, rho2, rho3):
@@ -850,7 +850,7 @@ def chord_rotation(rho1, rho2, rho3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(rho1, rho2, rho3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_chord_rotation_ploop if len(out) >= PARALLEL_BATCH else _chord_rotation_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(rho1, rho2, rho3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_chord_rotation_ploop if len(out) >= PARALLEL_BATCH else _chord_rotation_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f1977b2d1cb14da4084f32e5a7edfeca51e7e8d7d3146655e2889d0b872611cd
-# source key 9de3118847d3b3af96c9d37b3f85ee0fdd273fd6dc38a86541e5ddb73df3e857
+# symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
+# source key dc81863556b959a17eeafc6ccbbb206e0836b8bdecabdd17a1d878b651f8fe9e
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 27ca73ef8c7cd969f7775c23b3bd836df0840cb39f29dc84490f729563605407
-# source key 9de3118847d3b3af96c9d37b3f85ee0fdd273fd6dc38a86541e5ddb73df3e857
-# body sha256 fda5951858e236de9c343a4001876fa21043481f904b7ba0b5919125934a0f93
+# symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
+# source key dc81863556b959a17eeafc6ccbbb206e0836b8bdecabdd17a1d878b651f8fe9e
+# body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 
 Compiled twin of `symmech.generated.trolley_printed` (the numpy module, the
@@ -43,7 +43,7 @@ def _flat(*args):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _Lambda_0(th1, th2, th3, out, k):
+def _Lambda_0(th1, th2, th3, out, _k):
     x0 = math.cos(th2)
     x1 = math.cos(th3)
     x2 = math.sin(th3)
@@ -53,15 +53,15 @@ def _Lambda_0(th1, th2, th3, out, k):
     x6 = math.cos(th1)
     x7 = x0*x4
     x8 = x3*x6
-    out[k, 0, 0] = x0*x1
-    out[k, 0, 1] = x2
-    out[k, 0, 2] = -x1*x3
-    out[k, 1, 0] = -x0*x2*x6 + x5
-    out[k, 1, 1] = x1*x6
-    out[k, 1, 2] = x2*x8 + x7
-    out[k, 2, 0] = x2*x7 + x8
-    out[k, 2, 1] = -x1*x4
-    out[k, 2, 2] = x0*x6 - x2*x5
+    out[_k, 0, 0] = x0*x1
+    out[_k, 0, 1] = x2
+    out[_k, 0, 2] = -x1*x3
+    out[_k, 1, 0] = -x0*x2*x6 + x5
+    out[_k, 1, 1] = x1*x6
+    out[_k, 1, 2] = x2*x8 + x7
+    out[_k, 2, 0] = x2*x7 + x8
+    out[_k, 2, 1] = -x1*x4
+    out[_k, 2, 2] = x0*x6 - x2*x5
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -73,15 +73,15 @@ def Lambda_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _Lambda_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _Lambda_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _Lambda_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _Lambda_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _Lambda_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _Lambda_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _Lambda_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def Lambda(th1, th2, th3):
@@ -101,14 +101,14 @@ def Lambda(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_Lambda_ploop if len(out) >= PARALLEL_BATCH else _Lambda_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_Lambda_ploop if len(out) >= PARALLEL_BATCH else _Lambda_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth1_0(th1, th2, th3, out, k):
+def _dLambda_dth1_0(th1, th2, th3, out, _k):
     x0 = math.sin(th2)
     x1 = math.cos(th1)
     x2 = x0*x1
@@ -118,15 +118,15 @@ def _dLambda_dth1_0(th1, th2, th3, out, k):
     x6 = x4*x5
     x7 = math.cos(th3)
     x8 = x0*x4
-    out[k, 0, 0] = 0
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = x2 + x3*x6
-    out[k, 1, 1] = -x4*x7
-    out[k, 1, 2] = x1*x5 - x3*x8
-    out[k, 2, 0] = x1*x3*x5 - x8
-    out[k, 2, 1] = -x1*x7
-    out[k, 2, 2] = -x2*x3 - x6
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = x2 + x3*x6
+    out[_k, 1, 1] = -x4*x7
+    out[_k, 1, 2] = x1*x5 - x3*x8
+    out[_k, 2, 0] = x1*x3*x5 - x8
+    out[_k, 2, 1] = -x1*x7
+    out[_k, 2, 2] = -x2*x3 - x6
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -138,15 +138,15 @@ def dLambda_dth1_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth1_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth1_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _dLambda_dth1_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _dLambda_dth1_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _dLambda_dth1_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth1_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _dLambda_dth1_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def dLambda_dth1(th1, th2, th3):
@@ -166,14 +166,14 @@ def dLambda_dth1(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1/rad]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_dLambda_dth1_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth1_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_dLambda_dth1_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth1_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth2_0(th1, th2, th3, out, k):
+def _dLambda_dth2_0(th1, th2, th3, out, _k):
     x0 = math.sin(th2)
     x1 = math.cos(th3)
     x2 = math.cos(th2)
@@ -183,15 +183,15 @@ def _dLambda_dth2_0(th1, th2, th3, out, k):
     x6 = math.cos(th1)
     x7 = x0*x6
     x8 = x0*x3
-    out[k, 0, 0] = -x0*x1
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = -x1*x2
-    out[k, 1, 0] = x4 + x5*x7
-    out[k, 1, 1] = 0
-    out[k, 1, 2] = x2*x5*x6 - x8
-    out[k, 2, 0] = x2*x6 - x5*x8
-    out[k, 2, 1] = 0
-    out[k, 2, 2] = -x4*x5 - x7
+    out[_k, 0, 0] = -x0*x1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = -x1*x2
+    out[_k, 1, 0] = x4 + x5*x7
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = x2*x5*x6 - x8
+    out[_k, 2, 0] = x2*x6 - x5*x8
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = -x4*x5 - x7
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -203,15 +203,15 @@ def dLambda_dth2_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth2_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth2_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _dLambda_dth2_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _dLambda_dth2_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _dLambda_dth2_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth2_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _dLambda_dth2_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def dLambda_dth2(th1, th2, th3):
@@ -231,14 +231,14 @@ def dLambda_dth2(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1/rad]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_dLambda_dth2_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth2_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_dLambda_dth2_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth2_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth3_0(th1, th2, th3, out, k):
+def _dLambda_dth3_0(th1, th2, th3, out, _k):
     x0 = math.sin(th3)
     x1 = math.cos(th2)
     x2 = math.cos(th3)
@@ -247,15 +247,15 @@ def _dLambda_dth3_0(th1, th2, th3, out, k):
     x5 = x2*x4
     x6 = math.sin(th1)
     x7 = x2*x6
-    out[k, 0, 0] = -x0*x1
-    out[k, 0, 1] = x2
-    out[k, 0, 2] = x0*x3
-    out[k, 1, 0] = -x1*x5
-    out[k, 1, 1] = -x0*x4
-    out[k, 1, 2] = x3*x5
-    out[k, 2, 0] = x1*x7
-    out[k, 2, 1] = x0*x6
-    out[k, 2, 2] = -x3*x7
+    out[_k, 0, 0] = -x0*x1
+    out[_k, 0, 1] = x2
+    out[_k, 0, 2] = x0*x3
+    out[_k, 1, 0] = -x1*x5
+    out[_k, 1, 1] = -x0*x4
+    out[_k, 1, 2] = x3*x5
+    out[_k, 2, 0] = x1*x7
+    out[_k, 2, 1] = x0*x6
+    out[_k, 2, 2] = -x3*x7
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -267,15 +267,15 @@ def dLambda_dth3_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dLambda_dth3_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth3_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _dLambda_dth3_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _dLambda_dth3_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _dLambda_dth3_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _dLambda_dth3_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _dLambda_dth3_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def dLambda_dth3(th1, th2, th3):
@@ -295,26 +295,26 @@ def dLambda_dth3(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1/rad]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_dLambda_dth3_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth3_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_dLambda_dth3_ploop if len(out) >= PARALLEL_BATCH else _dLambda_dth3_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _A_0(th1, th2, th3, out, k):
+def _A_0(th1, th2, th3, out, _k):
     x0 = math.cos(th1)
     x1 = math.cos(th3)
     x2 = math.sin(th1)
-    out[k, 0, 0] = 1
-    out[k, 0, 1] = math.sin(th3)
-    out[k, 0, 2] = 0
-    out[k, 1, 0] = 0
-    out[k, 1, 1] = x0*x1
-    out[k, 1, 2] = x2
-    out[k, 2, 0] = 0
-    out[k, 2, 1] = -x1*x2
-    out[k, 2, 2] = x0
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = math.sin(th3)
+    out[_k, 0, 2] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = x0*x1
+    out[_k, 1, 2] = x2
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = -x1*x2
+    out[_k, 2, 2] = x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -326,15 +326,15 @@ def A_scalar(th1, th2, th3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _A_loop(th1, th2, th3, steps, out):
-    for k in range(out.shape[0]):
-        _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _A_loop(th1, th2, th3, _steps, out):
+    for _k in range(out.shape[0]):
+        _A_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _A_ploop(th1, th2, th3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _A_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], out, k)
+def _A_ploop(th1, th2, th3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _A_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], out, _k)
 
 
 def A(th1, th2, th3):
@@ -354,14 +354,14 @@ def A(th1, th2, th3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(th1, th2, th3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_A_ploop if len(out) >= PARALLEL_BATCH else _A_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(th1, th2, th3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_A_ploop if len(out) >= PARALLEL_BATCH else _A_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, k):
+def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, _k):
     x0 = math.sin(th3)
     x1 = dX2*x0
     x2 = math.cos(th2)
@@ -382,18 +382,18 @@ def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, k):
     x17 = x0*x13 + x14
     x18 = -x0*x9 + x10*x2
     x19 = dX1*x17 + dX3*x18 - x7*x8
-    out[k, 0, 0] = x1 + x2*x4 - x5*x6
-    out[k, 0, 1] = 0
-    out[k, 0, 2] = -x2*x6 - x4*x5
-    out[k, 0, 3] = -dX1*x0*x2 + dX3*x0*x5 + x7
-    out[k, 1, 0] = dX1*x12 + x16
-    out[k, 1, 1] = x19
-    out[k, 1, 2] = dX1*x15 - dX3*x12
-    out[k, 1, 3] = dX3*x10*x3*x5 - x1*x10 - x11*x4
-    out[k, 2, 0] = x19
-    out[k, 2, 1] = -dX1*x12 - x16
-    out[k, 2, 2] = dX1*x18 - dX3*x17
-    out[k, 2, 3] = x1*x8 + x13*x4 - x6*x9
+    out[_k, 0, 0] = x1 + x2*x4 - x5*x6
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = -x2*x6 - x4*x5
+    out[_k, 0, 3] = -dX1*x0*x2 + dX3*x0*x5 + x7
+    out[_k, 1, 0] = dX1*x12 + x16
+    out[_k, 1, 1] = x19
+    out[_k, 1, 2] = dX1*x15 - dX3*x12
+    out[_k, 1, 3] = dX3*x10*x3*x5 - x1*x10 - x11*x4
+    out[_k, 2, 0] = x19
+    out[_k, 2, 1] = -dX1*x12 - x16
+    out[_k, 2, 2] = dX1*x18 - dX3*x17
+    out[_k, 2, 3] = x1*x8 + x13*x4 - x6*x9
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -405,15 +405,15 @@ def chord_coefficients_scalar(th1, th2, th3, dX1, dX2, dX3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _chord_coefficients_loop(th1, th2, th3, dX1, dX2, dX3, steps, out):
-    for k in range(out.shape[0]):
-        _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
+def _chord_coefficients_loop(th1, th2, th3, dX1, dX2, dX3, _steps, out):
+    for _k in range(out.shape[0]):
+        _chord_coefficients_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dX1[_k * _steps[3]], dX2[_k * _steps[4]], dX3[_k * _steps[5]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _chord_coefficients_ploop(th1, th2, th3, dX1, dX2, dX3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _chord_coefficients_0(th1[k * steps[0]], th2[k * steps[1]], th3[k * steps[2]], dX1[k * steps[3]], dX2[k * steps[4]], dX3[k * steps[5]], out, k)
+def _chord_coefficients_ploop(th1, th2, th3, dX1, dX2, dX3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _chord_coefficients_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dX1[_k * _steps[3]], dX2[_k * _steps[4]], dX3[_k * _steps[5]], out, _k)
 
 
 def chord_coefficients(th1, th2, th3, dX1, dX2, dX3):
@@ -439,14 +439,14 @@ def chord_coefficients(th1, th2, th3, dX1, dX2, dX3):
     numpy.ndarray, shape (..., 3, 4)
         [m]
     """
-    arrays, steps, batch = _flat(th1, th2, th3, dX1, dX2, dX3)
-    out = numpy.empty((math.prod(batch),) + (3, 4))
-    (_chord_coefficients_ploop if len(out) >= PARALLEL_BATCH else _chord_coefficients_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 4))
+    _arrays, _steps, _batch = _flat(th1, th2, th3, dX1, dX2, dX3)
+    out = numpy.empty((math.prod(_batch),) + (3, 4))
+    (_chord_coefficients_ploop if len(out) >= PARALLEL_BATCH else _chord_coefficients_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 4))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rodrigues_0(psi, xi1, xi2, xi3, out, k):
+def _rodrigues_0(psi, xi1, xi2, xi3, out, _k):
     x0 = math.cos(psi)
     x1 = 1 - x0
     x2 = math.sin(psi)
@@ -456,15 +456,15 @@ def _rodrigues_0(psi, xi1, xi2, xi3, out, k):
     x6 = x2*xi2
     x7 = x4*xi3
     x8 = x2*xi1
-    out[k, 0, 0] = x0 + x1*xi1**2
-    out[k, 0, 1] = x3 + x5
-    out[k, 0, 2] = -x6 + x7
-    out[k, 1, 0] = -x3 + x5
-    out[k, 1, 1] = x0 + x1*xi2**2
-    out[k, 1, 2] = x1*xi2*xi3 + x8
-    out[k, 2, 0] = x6 + x7
-    out[k, 2, 1] = x1*xi2*xi3 - x8
-    out[k, 2, 2] = x0 + x1*xi3**2
+    out[_k, 0, 0] = x0 + x1*xi1**2
+    out[_k, 0, 1] = x3 + x5
+    out[_k, 0, 2] = -x6 + x7
+    out[_k, 1, 0] = -x3 + x5
+    out[_k, 1, 1] = x0 + x1*xi2**2
+    out[_k, 1, 2] = x1*xi2*xi3 + x8
+    out[_k, 2, 0] = x6 + x7
+    out[_k, 2, 1] = x1*xi2*xi3 - x8
+    out[_k, 2, 2] = x0 + x1*xi3**2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -476,15 +476,15 @@ def rodrigues_scalar(psi, xi1, xi2, xi3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rodrigues_loop(psi, xi1, xi2, xi3, steps, out):
-    for k in range(out.shape[0]):
-        _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
+def _rodrigues_loop(psi, xi1, xi2, xi3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rodrigues_0(psi[_k * _steps[0]], xi1[_k * _steps[1]], xi2[_k * _steps[2]], xi3[_k * _steps[3]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rodrigues_ploop(psi, xi1, xi2, xi3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _rodrigues_0(psi[k * steps[0]], xi1[k * steps[1]], xi2[k * steps[2]], xi3[k * steps[3]], out, k)
+def _rodrigues_ploop(psi, xi1, xi2, xi3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rodrigues_0(psi[_k * _steps[0]], xi1[_k * _steps[1]], xi2[_k * _steps[2]], xi3[_k * _steps[3]], out, _k)
 
 
 def rodrigues(psi, xi1, xi2, xi3):
@@ -506,28 +506,28 @@ def rodrigues(psi, xi1, xi2, xi3):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(psi, xi1, xi2, xi3)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_rodrigues_ploop if len(out) >= PARALLEL_BATCH else _rodrigues_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(psi, xi1, xi2, xi3)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_rodrigues_ploop if len(out) >= PARALLEL_BATCH else _rodrigues_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _helix_Lambda_0(phi, R, lam, out, k):
+def _helix_Lambda_0(phi, R, lam, out, _k):
     x0 = math.sin(phi)
     x1 = 1/math.sqrt(R**2 + lam**2)
     x2 = R*x1
     x3 = math.cos(phi)
     x4 = lam*x1
-    out[k, 0, 0] = -x0*x2
-    out[k, 0, 1] = x2*x3
-    out[k, 0, 2] = x4
-    out[k, 1, 0] = -x3
-    out[k, 1, 1] = -x0
-    out[k, 1, 2] = 0
-    out[k, 2, 0] = x0*x4
-    out[k, 2, 1] = -x3*x4
-    out[k, 2, 2] = x2
+    out[_k, 0, 0] = -x0*x2
+    out[_k, 0, 1] = x2*x3
+    out[_k, 0, 2] = x4
+    out[_k, 1, 0] = -x3
+    out[_k, 1, 1] = -x0
+    out[_k, 1, 2] = 0
+    out[_k, 2, 0] = x0*x4
+    out[_k, 2, 1] = -x3*x4
+    out[_k, 2, 2] = x2
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -539,15 +539,15 @@ def helix_Lambda_scalar(phi, R, lam):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _helix_Lambda_loop(phi, R, lam, steps, out):
-    for k in range(out.shape[0]):
-        _helix_Lambda_0(phi[k * steps[0]], R[k * steps[1]], lam[k * steps[2]], out, k)
+def _helix_Lambda_loop(phi, R, lam, _steps, out):
+    for _k in range(out.shape[0]):
+        _helix_Lambda_0(phi[_k * _steps[0]], R[_k * _steps[1]], lam[_k * _steps[2]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _helix_Lambda_ploop(phi, R, lam, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _helix_Lambda_0(phi[k * steps[0]], R[k * steps[1]], lam[k * steps[2]], out, k)
+def _helix_Lambda_ploop(phi, R, lam, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _helix_Lambda_0(phi[_k * _steps[0]], R[_k * _steps[1]], lam[_k * _steps[2]], out, _k)
 
 
 def helix_Lambda(phi, R, lam):
@@ -567,18 +567,18 @@ def helix_Lambda(phi, R, lam):
     numpy.ndarray, shape (..., 3, 3)
         [1]
     """
-    arrays, steps, batch = _flat(phi, R, lam)
-    out = numpy.empty((math.prod(batch),) + (3, 3))
-    (_helix_Lambda_ploop if len(out) >= PARALLEL_BATCH else _helix_Lambda_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3, 3))
+    _arrays, _steps, _batch = _flat(phi, R, lam)
+    out = numpy.empty((math.prod(_batch),) + (3, 3))
+    (_helix_Lambda_ploop if len(out) >= PARALLEL_BATCH else _helix_Lambda_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3, 3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _helix_omega_0(R, lam, out, k):
+def _helix_omega_0(R, lam, out, _k):
     x0 = 1/(R**2 + lam**2)
-    out[k, 0] = lam*x0
-    out[k, 1] = 0
-    out[k, 2] = R*x0
+    out[_k, 0] = lam*x0
+    out[_k, 1] = 0
+    out[_k, 2] = R*x0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -590,15 +590,15 @@ def helix_omega_scalar(R, lam):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _helix_omega_loop(R, lam, steps, out):
-    for k in range(out.shape[0]):
-        _helix_omega_0(R[k * steps[0]], lam[k * steps[1]], out, k)
+def _helix_omega_loop(R, lam, _steps, out):
+    for _k in range(out.shape[0]):
+        _helix_omega_0(R[_k * _steps[0]], lam[_k * _steps[1]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _helix_omega_ploop(R, lam, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _helix_omega_0(R[k * steps[0]], lam[k * steps[1]], out, k)
+def _helix_omega_ploop(R, lam, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _helix_omega_0(R[_k * _steps[0]], lam[_k * _steps[1]], out, _k)
 
 
 def helix_omega(R, lam):
@@ -616,14 +616,14 @@ def helix_omega(R, lam):
     numpy.ndarray, shape (..., 3)
         [rad/m (printed as rad/s)]
     """
-    arrays, steps, batch = _flat(R, lam)
-    out = numpy.empty((math.prod(batch),) + (3,))
-    (_helix_omega_ploop if len(out) >= PARALLEL_BATCH else _helix_omega_loop)(*arrays, steps, out)
-    return out.reshape(batch + (3,))
+    _arrays, _steps, _batch = _flat(R, lam)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_helix_omega_ploop if len(out) >= PARALLEL_BATCH else _helix_omega_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, k):
+def _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, _k):
     x0 = m*r2
     x1 = w2**2
     x2 = m*r1
@@ -648,12 +648,12 @@ def _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a0
     x21 = I33 + m*(x13 + x19)
     x22 = a01*m
     x23 = w1*x18
-    out[k, 0] = a01*m + dw2*m*r3 - dw3*x0 - w1*(-x4 - x6) - x1*x2 - x2*x3
-    out[k, 1] = a02*m - dw1*x5 + dw3*m*r1 - w2*(-x6 - x8) - x0*x3 - x0*x7
-    out[k, 2] = a03*m + dw1*m*r2 - dw2*x2 - w3*(-x4 - x8) - x1*x5 - x5*x7
-    out[k, 3] = dw1*x15 + dw2*x11 + dw3*x12 + r2*x9 - r3*x10 + w1*(x16 + x17) + w2*(w2*x18 - w3*x20) + w3*(w2*x21 - w3*x18)
-    out[k, 4] = dw1*x11 + dw2*x20 + dw3*x18 - r1*x9 + r3*x22 + w1*(-w1*x12 + w3*x15) + w2*(-x17 - x23) + w3*(-w1*x21 + w3*x12)
-    out[k, 5] = dw1*x12 + dw2*x18 + dw3*x21 + r1*x10 - r2*x22 + w1*(w1*x11 - w2*x15) + w2*(w1*x20 - w2*x11) + w3*(-x16 + x23)
+    out[_k, 0] = a01*m + dw2*m*r3 - dw3*x0 - w1*(-x4 - x6) - x1*x2 - x2*x3
+    out[_k, 1] = a02*m - dw1*x5 + dw3*m*r1 - w2*(-x6 - x8) - x0*x3 - x0*x7
+    out[_k, 2] = a03*m + dw1*m*r2 - dw2*x2 - w3*(-x4 - x8) - x1*x5 - x5*x7
+    out[_k, 3] = dw1*x15 + dw2*x11 + dw3*x12 + r2*x9 - r3*x10 + w1*(x16 + x17) + w2*(w2*x18 - w3*x20) + w3*(w2*x21 - w3*x18)
+    out[_k, 4] = dw1*x11 + dw2*x20 + dw3*x18 - r1*x9 + r3*x22 + w1*(-w1*x12 + w3*x15) + w2*(-x17 - x23) + w3*(-w1*x21 + w3*x12)
+    out[_k, 5] = dw1*x12 + dw2*x18 + dw3*x21 + r1*x10 - r2*x22 + w1*(w1*x11 - w2*x15) + w2*(w1*x20 - w2*x11) + w3*(-x16 + x23)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -665,15 +665,15 @@ def rigid_body_equations_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rigid_body_equations_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
-    for k in range(out.shape[0]):
-        _rigid_body_equations_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+def _rigid_body_equations_loop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rigid_body_equations_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], a01[_k * _steps[10]], a02[_k * _steps[11]], a03[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rigid_body_equations_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, steps, out):
-    for k in numba.prange(out.shape[0]):
-        _rigid_body_equations_0(m[k * steps[0]], r1[k * steps[1]], r2[k * steps[2]], r3[k * steps[3]], I11[k * steps[4]], I22[k * steps[5]], I33[k * steps[6]], I12[k * steps[7]], I23[k * steps[8]], I13[k * steps[9]], a01[k * steps[10]], a02[k * steps[11]], a03[k * steps[12]], w1[k * steps[13]], w2[k * steps[14]], w3[k * steps[15]], dw1[k * steps[16]], dw2[k * steps[17]], dw3[k * steps[18]], out, k)
+def _rigid_body_equations_ploop(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rigid_body_equations_0(m[_k * _steps[0]], r1[_k * _steps[1]], r2[_k * _steps[2]], r3[_k * _steps[3]], I11[_k * _steps[4]], I22[_k * _steps[5]], I33[_k * _steps[6]], I12[_k * _steps[7]], I23[_k * _steps[8]], I13[_k * _steps[9]], a01[_k * _steps[10]], a02[_k * _steps[11]], a03[_k * _steps[12]], w1[_k * _steps[13]], w2[_k * _steps[14]], w3[_k * _steps[15]], dw1[_k * _steps[16]], dw2[_k * _steps[17]], dw3[_k * _steps[18]], out, _k)
 
 
 def rigid_body_equations(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
@@ -725,7 +725,7 @@ def rigid_body_equations(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, 
     numpy.ndarray, shape (..., 6)
         [N, N m]
     """
-    arrays, steps, batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
-    out = numpy.empty((math.prod(batch),) + (6,))
-    (_rigid_body_equations_ploop if len(out) >= PARALLEL_BATCH else _rigid_body_equations_loop)(*arrays, steps, out)
-    return out.reshape(batch + (6,))
+    _arrays, _steps, _batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_rigid_body_equations_ploop if len(out) >= PARALLEL_BATCH else _rigid_body_equations_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))

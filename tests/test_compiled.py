@@ -109,11 +109,12 @@ def test_representative_kernels_of_each_paper(module, function):
 
 
 def test_chunked_function_compiles_and_matches(tmp_path, monkeypatch):
-    """A 3x3 output in chunks of 4 elements (three CSE chunks) through the numba template."""
+    """A 3x3 output in chunks of 4 elements (three CSE chunks) through the numba template;
+    arguments named like the numba template's loop index and steps in other tools."""
     monkeypatch.setattr(emit, "CHUNK_ELEMENTS", 4)
-    s, t = sympy.symbols("s t")
+    s, t = sympy.symbols("steps k")
     M = sympy.Matrix(3, 3, lambda i, j: sympy.sin(s) ** (i % 3) * (i + 1) + j * s / (t - 1))
-    spec = ModuleSpec("big_mod", "big", "test", [NamedMatrix("big", M, (Arg(s, "s", "1"), Arg(t, "t", "1")),
+    spec = ModuleSpec("big_mod", "big", "test", [NamedMatrix("big", M, (Arg(s, "s", "1"), Arg(t, "k", "1")),
                                                              "big", "1")])
     for target in emit.TARGETS:
         emit.write(spec, tmp_path, target)

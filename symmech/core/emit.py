@@ -106,13 +106,13 @@ class Target:
     template: str
     printer: type
     element: str
+    reserved: frozenset[str]  # names the template uses beside the arguments
 
 
-NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...")
-NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "k")
+NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...", frozenset({"out", "batch", "numpy"}))
+NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "_k",
+               frozenset({"out", "_k", "_steps", "_arrays", "_batch", "math", "numba", "numpy"}))
 TARGETS = (NUMPY, NUMBA)
-# Names the templates use beside the arguments.
-RESERVED = {"out", "k", "steps", "arrays", "batch", "math", "numba", "numpy"}
 
 
 def _chunk_lines(chunk: Chunk, printer, element: str) -> list[str]:
@@ -123,7 +123,7 @@ def _chunk_lines(chunk: Chunk, printer, element: str) -> list[str]:
 
 
 def _function_context(nm: NamedMatrix, target: Target) -> dict:
-    clash = {a.name for a in nm.args} & RESERVED
+    clash = {a.name for a in nm.args} & target.reserved
     if clash:
         raise ValueError(f"{nm.name}: argument names {sorted(clash)} are reserved by the templates")
     printer = target.printer()
