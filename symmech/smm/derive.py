@@ -18,9 +18,9 @@ from pathlib import Path
 import sympy
 
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
-from symmech.core.scene import SymmechError, load
+from symmech.core.scene import SymmechError, read_toml
 from symmech.smm import forms
-from symmech.smm.model import Effects, Mechanism, from_scene, interpret
+from symmech.smm.model import Effects, Mechanism, interpret
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
@@ -266,12 +266,14 @@ def bundled_scenes() -> list[Path]:
 
 def load_mechanism(path: Path) -> Mechanism:
     """The mechanism of a scene file (explicit vector model or a generated ``[chain]``)."""
-    from symmech.smm.chain import chain_mechanism
+    from symmech.core.schema import validate
+    from symmech.smm.build import model
+    from symmech.smm.schema import SCHEMA
 
-    scene = load(path)
-    if scene.str("kind", default="") != "mechanism":
+    data = read_toml(path)
+    if data.get("kind") != "mechanism":
         raise SymmechError(f"{path}: not a mechanism scene")
-    return chain_mechanism(scene.section("chain")) if scene.has("chain") else from_scene(scene)
+    return model(validate(SCHEMA, data))
 
 
 def module_specs() -> list[ModuleSpec]:

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from symmech.core.scene import SymmechError
+from symmech.core.scene import SceneError, SymmechError
 from symmech.smm import forms
 from symmech.smm.model import EQUILIBRIUM, Effects, Mechanism, NumericArith, number_text
 
@@ -93,12 +93,14 @@ def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
 
 
 def check_mass(m: Mechanism, a: np.ndarray) -> None:
-    """Raise, naming the coordinate, when the inertia matrix is (numerically) singular."""
+    """SceneError naming the coordinate (``coordinates[i]``) when the inertia matrix is
+    (numerically) singular."""
     w, v = np.linalg.eigh(a)
     scale = max(abs(w).max(), 1e-300)
     if w[0] <= 1e-12 * scale:
-        worst = m.coordinate_names[int(np.argmax(abs(v[:, 0])))]
-        raise SymmechError(f"inertia matrix is singular (smallest eigenvalue {w[0]:.3g} of {scale:.3g}): "
+        i = int(np.argmax(abs(v[:, 0])))
+        worst = m.coordinate_names[i]
+        raise SceneError(f"coordinates[{i}]", f"inertia matrix is singular (smallest eigenvalue {w[0]:.3g} of {scale:.3g}): "
                            f"coordinate '{worst}' moves no mass or moment of inertia")
 
 
@@ -278,35 +280,65 @@ def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> t
 @dataclass
 class Modes:
     """Undamped modes of a q'' + c q = 0: omega2 [1/s^2] ascending, mass-normalised
-    shapes (columns, phi^T a phi = I), and damping ratios from the damped state-space
+    shapes (columns, phi^T a phi = I), ``kinds`` per mode (``rigid``, ``elastic``,
+    ``unstable``; see :func:`classify`), damping ratios from the damped state-space
     eigenvalues (non-proportional damping allowed; None for rigid-body, unstable and
-    overdamped modes)."""
+    overdamped modes), the spread max/min of the elastic omega^2 (the lowest lose about
+    log10(spread) digits) and the condition number of the Jacobi-scaled stiffness
+    (its non-zero eigenvalues)."""
 
     omega2: np.ndarray
     shapes: np.ndarray
     zeta: list
+    kinds: list
+    spread: float
+    condition: float
 
 
 def modes(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> Modes:
     w2, phi = scipy.linalg.eigh(c, a)
-    zeta = damping_ratios(a, b, c, w2)
-    return Modes(w2, phi, zeta)
+    kinds, condition = classify(c, w2)
+    elastic = np.abs(w2[np.array(kinds) == "elastic"])
+    spread = float(elastic.max() / elastic.min()) if len(elastic) else 1.0
+    return Modes(w2, phi, damping_ratios(a, b, c, w2, kinds), kinds, spread, condition)
 
 
-def damping_ratios(a, b, c, omega2) -> list:
+def classify(c: np.ndarray, omega2: np.ndarray) -> tuple[list[str], float]:
+    """Kinds of the modes with eigenvalues ``omega2`` (ascending) of (c, a), and the condition
+    number of the scaled stiffness.
+
+    The number of rigid-body modes is the nullity of c (Sylvester's law of inertia), measured on
+    the Jacobi-scaled D c D (D = diag(c)^-1/2): scaling by each coordinate's own stiffness makes a
+    very stiff spring no reason to call a soft but real mode rigid. The null eigenvalues of D c D
+    are those within 10 n eps of its largest; the modes with the smallest |omega^2| are rigid."""
+    n = len(omega2)
+    d = np.abs(np.diag(c))
+    if not np.any(c):
+        return ["rigid"] * n, 1.0
+    scale = 1.0 / np.sqrt(np.maximum(d, np.finfo(float).eps * d.max()))
+    lam = np.abs(scipy.linalg.eigvalsh(scale[:, None] * c * scale[None, :]))
+    tol = 10 * n * np.finfo(float).eps * lam.max()
+    nullity = int(np.sum(lam <= tol))
+    nonzero = lam[lam > tol]
+    rigid = set(np.argsort(np.abs(omega2))[:nullity].tolist())
+    kinds = ["rigid" if i in rigid else "unstable" if x < 0 else "elastic" for i, x in enumerate(omega2)]
+    return kinds, float(nonzero.max() / nonzero.min())
+
+
+def damping_ratios(a, b, c, omega2, kinds) -> list:
     """zeta_r = -Re(lambda)/|lambda| of the state-space eigenvalues, matched to the undamped
     modes by |lambda| ~ omega (first-order state form, valid for non-proportional b)."""
     n = a.shape[0]
     if not np.any(b):
-        return [0.0 if w > 0 else None for w in omega2]
+        return [0.0 if k == "elastic" else None for k in kinds]
     ainv = np.linalg.inv(a)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-ainv @ c, -ainv @ b]])
     lam = np.linalg.eigvals(A)
     lam = lam[np.argsort(np.abs(lam))]
     out = []
     used = np.zeros(len(lam), bool)
-    for w2 in omega2:
-        if w2 <= 100 * np.finfo(float).eps * max(abs(omega2).max(), 1e-300):
+    for w2, kind in zip(omega2, kinds):
+        if kind != "elastic":
             out.append(None)
             continue
         w = math.sqrt(w2)
