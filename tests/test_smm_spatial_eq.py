@@ -129,7 +129,7 @@ def test_spatial_torsion_spring_off_its_axis_is_refused():
 def test_principal_axes_must_be_orthonormal():
     d = _scene()
     d["bodies"][0]["principal_axes"] = [[0, 0.6, 0.8], [1, 0, 0], [0, 0.6, -0.8]]
-    with pytest.raises(SymmechError, match="body 'body': principal_axes must be orthonormal; axis 1 . axis 3"):
+    with pytest.raises(SymmechError, match=r"bodies\[0\].principal_axes': must be orthonormal; axis 1 . axis 3"):
         mech(d)
 
 

@@ -137,18 +137,21 @@ class _Builder:
             self.ranged(f"{where}.mass", b["mass"], *S.MASS_RANGE, "kg", zero_ok=True)
             J = [self.ranged(f"{where}.inertia[{k}]", t, *S.INERTIA_RANGE, "kg m^2", zero_ok=True)
                  for k, t in enumerate(b["inertia"])]
-            spatial = J[0] != 0.0 or J[1] != 0.0
+            # a zero moment is "not modelled" (planar bodies give only J_z): the triangle
+            # inequalities bind a full tensor, all three moments given
             for k in range(3):
-                if spatial and J[k] > (J[(k + 1) % 3] + J[(k + 2) % 3]) * (1 + 1e-12):
+                if all(J) and J[k] > (J[(k + 1) % 3] + J[(k + 2) % 3]) * (1 + 1e-12):
                     raise SceneError(f"{where}.inertia[{k}]", f"{J[k]:g} kg m^2 exceeds the sum of the other two "
                                                               f"principal moments {J[(k + 1) % 3] + J[(k + 2) % 3]:g} "
                                                               "(triangle inequality of an inertia tensor)")
             if b["principal_axes"] is not None:
                 P = [self.vector(f"{where}.principal_axes[{k}]", ax) for k, ax in enumerate(b["principal_axes"])]
                 gram = np.array(P) @ np.array(P).T
-                if np.abs(gram - np.eye(3)).max() > UNIT_TOL:
-                    raise SceneError(f"{where}.principal_axes", f"must be orthonormal; P P^T - I reaches "
-                                                                f"{np.abs(gram - np.eye(3)).max():.3g}")
+                bad = np.argwhere(np.abs(gram - np.eye(3)) > UNIT_TOL)
+                if len(bad):
+                    i, j = sorted(bad[0])
+                    raise SceneError(f"{where}.principal_axes", f"must be orthonormal; axis {i + 1} . axis {j + 1} "
+                                                                f"= {gram[i, j]:.6g} (expected {int(i == j)})")
             turns = points[b["com"]].turns if b["turns"] is None else b["turns"]
             _listed(f"{where}.turns", turns, kinds, "angle")
             out.append(Body(b["name"], b["mass"], b["inertia"], b["com"], turns, b["principal_axes"]))

@@ -195,8 +195,9 @@ SCHEMA = Table("a mechanism scene (structural model method, seed 003)", {
     "bodies": _items("rigid bodies", {
         "name": Str("unique name", pattern=NAME),
         "mass": expr(f"mass [kg]: 0 or in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}]"),
-        "inertia": Custom(f"principal central moments [kg m^2] (one number: about z), each 0 or in "
-                          f"[{INERTIA_RANGE[0]:g}, {INERTIA_RANGE[1]:g}], satisfying the triangle inequalities",
+        "inertia": Custom(f"principal central moments [kg m^2] (one number: about z), each 0 (not "
+                          f"modelled) or in [{INERTIA_RANGE[0]:g}, {INERTIA_RANGE[1]:g}]; three non-zero moments "
+                          "must satisfy the triangle inequalities",
                           parse=lambda p, v: _vector(p, v) if isinstance(v, list) else ("0", "0", _expression(p, v)),
                           type_doc=f"{EXPR}, or 3 of them", default=("0", "0", "0")),
         "principal_axes": Custom("principal central axes in equilibrium (orthonormal, global components)",
