@@ -115,3 +115,34 @@ def test_large_chain_sparse_assembly():
                                           return_eigenvectors=False))
     expected = [2 * k / mass * (1 - math.cos(j * math.pi / (n + 1))) for j in (1, 2, 3)]
     np.testing.assert_allclose(w, expected, rtol=1e-6)
+
+
+@pytest.mark.parametrize("K", [1e16, 1e18])
+def test_stiff_loop_spring_keeps_real_modes_elastic(K):
+    """Issue 13: with a loop-closing spring K >= 1e16 the clamped-chain modes (omega^2 = 100, 300)
+    were reported as rigid-body modes (threshold 100 eps max omega^2 >= 222). Rigid modes are now the
+    nullity of the Jacobi-scaled stiffness: none here; the spread is reported and warned about."""
+    s = run_model(spring_chain([1.0] * 3, [100.0] * 3, end_stiffness=K))
+    assert s["rigid_body_modes"] == 0
+    np.testing.assert_allclose(s["omega2_1_per_s2"][:2], [100.0, 300.0], rtol=1e-10)
+    assert s["frequencies_rad_s"][0] == pytest.approx(10.0, rel=1e-10)
+    assert s["conditioning"]["stiffness_spread"] == pytest.approx(K / 100.0, rel=1e-6)
+    assert s["conditioning"]["scaled_stiffness_condition"] < 10.0
+    assert any("stiffness spread" in w for w in s["warnings"])
+
+
+def test_stiff_spring_beside_a_true_rigid_mode():
+    """Free-free three masses (no wall springs) with a 1e16 spring between masses 2 and 3: exactly one
+    rigid-body mode; the soft mode is omega^2 = k (1/m1 + 1/(m2 + m3)) in the rigid-pair limit."""
+    k, K = 100.0, 1e16
+    m = mech({
+        "coordinates": [{"name": f"s{i}", "type": "slide", "axis": [1, 0]} for i in (1, 2, 3)],
+        "points": [{"name": "O", "at": [0, 0]}] + [{"name": f"P{i}", "from": "O", "vector": [float(i), 0],
+                                                     "slides": [f"s{i}"]} for i in (1, 2, 3)],
+        "bodies": [{"name": f"b{i}", "mass": 1.0, "com": f"P{i}"} for i in (1, 2, 3)],
+        "springs": [{"name": "k", "ends": ["P1", "P2"], "stiffness": k},
+                    {"name": "K", "ends": ["P2", "P3"], "stiffness": K}],
+    })
+    s = run_model(m)
+    assert s["rigid_body_modes"] == 1 and s["frequencies_rad_s"][0] == 0.0
+    np.testing.assert_allclose(s["omega2_1_per_s2"][1], k * (1 + 1 / 2), rtol=1e-9)

@@ -142,9 +142,9 @@ def run(setup: Setup, ctx) -> Result:
                         f"lowest {w2[0]:.4g} 1/s^2")
     eps = np.finfo(float).eps
     if md.spread * eps > CONDITION_WARN:
-        warnings.append(f"stiffness spread omega_max^2/omega_min^2 = {md.spread:.3g}: the lowest frequencies keep "
-                        f"only about {max(0.0, -math.log10(md.spread * eps)):.0f} correct digits (very stiff "
-                        "springs closing loops?)")
+        warnings.append(f"stiffness spread omega_max^2/omega_min^2 = {md.spread:.3g}: the normwise error bound "
+                        f"leaves the lowest frequencies only about {max(0.0, -math.log10(md.spread * eps)):.0f} "
+                        "guaranteed digits (very stiff springs closing loops?)")
     omega = [0.0 if k == "rigid" else math.sqrt(x) if k == "elastic" else None for k, x in zip(cls, w2)]
     overdamped = [i + 1 for i, z in enumerate(md.zeta) if z is None and omega[i]]
     if overdamped and np.any(b):
