@@ -185,7 +185,8 @@ def matrices(m: Mechanism, form: str = "chain", effects: Effects | None = None) 
 
 def equilibrium_tensions(m: Mechanism, ar, kinematics=forms.chain_kinematics) -> dict:
     """Symbolic tensions of ``preload = "equilibrium"`` springs: eq. (5) solved on the
-    independent rows chosen numerically (a u x u system, u = number of such springs)."""
+    independent rows chosen numerically (a u x u system, u = number of such springs), eliminated
+    in the numerically pivoted row order (a round-off entry never becomes a pivot)."""
     from symmech.smm.numeric import equilibrium_tensions as numeric_tensions
 
     _, rows = numeric_tensions(m)  # also reports an indeterminate or unbalanced system

@@ -47,7 +47,8 @@ def _sparse(n: int, entries: dict) -> scipy.sparse.csr_matrix:
 
 def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     """Tensions [N] of the springs with ``preload = "equilibrium"`` from eq. (5), and the
-    indices of coordinates whose equations determine them (independent rows of G)."""
+    indices of coordinates whose equations determine them (independent rows of G), in the
+    row order of Gaussian elimination with partial pivoting at the parameter values."""
     ar = NumericArith(m.values())
     names, cols, r0 = forms.tension_system(m, ar)
     if not names:
@@ -67,6 +68,10 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     if len(rows) < len(names):
         raise SymmechError(f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
                            "(statically indeterminate); give preload values")
+    # the elimination order of partial pivoting: the symbolic solve (symmech.smm.derive) takes the
+    # rows in this order, so it never divides by an entry that is zero up to round-off
+    perm, _, _ = scipy.linalg.lu(G[rows])
+    rows = [rows[i] for i in np.argmax(perm, axis=0)]
     T = np.linalg.solve(G[rows], -r[rows])
     miss = G @ T + r
     worst = int(np.argmax(np.abs(miss)))
