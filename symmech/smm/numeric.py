@@ -14,14 +14,15 @@ import scipy.linalg
 import scipy.sparse
 
 from symmech.core.scene import SceneError, SymmechError
-from symmech.smm import forms
+from symmech.smm import forms, structural
 from symmech.smm.model import EQUILIBRIUM, Effects, Mechanism, NumericArith, number_text
 
 
 @dataclass
 class Numeric:
     """a, b, c (k x k, scipy.sparse CSR) with the parts of c, the equilibrium residual
-    dPi/dq [N or N m] and spring lengths [m] and tensions [N] in the configuration."""
+    dPi/dq [N or N m], spring lengths [m] and tensions [N] in the configuration, and the
+    stiffness factor L_c as rows (springs, then torsion springs) x k."""
 
     coords: list[str]
     a: scipy.sparse.csr_matrix
@@ -32,6 +33,7 @@ class Numeric:
     residual: np.ndarray
     lengths: dict
     tensions: dict
+    L_c: scipy.sparse.csr_matrix
 
 
 def _sparse(n: int, entries: dict) -> scipy.sparse.csr_matrix:
@@ -49,18 +51,15 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     """Tensions [N] of the springs with ``preload = "equilibrium"`` from eq. (5), and the
     indices of coordinates whose equations determine them (independent rows of G), in the
     row order of Gaussian elimination with partial pivoting at the parameter values."""
-    ar = NumericArith(m.values())
-    names, cols, r0 = forms.tension_system(m, ar)
+    names = [s.name for s in m.springs + m.torsion_springs if s.preload == EQUILIBRIUM]
     if not names:
         return {}, []
+    # G: the L_c columns of those springs; r: dPi/dq with their tensions set to zero
+    zero = assemble(m, Effects(False, False, False), {n: 0.0 for n in names})
+    labels = [s.name for s in m.springs + m.torsion_springs]
+    G = zero.L_c[[labels.index(n) for n in names]].toarray().T
+    r = zero.residual
     k = len(m.coordinates)
-    G = np.zeros((k, len(names)))
-    for j, col in enumerate(cols):
-        for i, v in col.items():
-            G[i, j] = v
-    r = np.zeros(k)
-    for i, v in r0.items():
-        r[i] = v
     rows: list[int] = []
     for i in range(k):
         if np.linalg.matrix_rank(G[rows + [i]], tol=1e-10 * max(np.abs(G).max(), 1e-300)) > len(rows):
@@ -81,10 +80,17 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     return dict(zip(names, T.tolist())), rows
 
 
-def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
-    """Numeric a, b, c of ``m`` at its parameter values (sparse; O(nonzeros))."""
+def assemble(m: Mechanism, effects: Effects | None = None, tensions: dict | None = None) -> Numeric:
+    """Numeric a, b, c of ``m`` at its parameter values (sparse). Planar mechanisms: the
+    vectorised graph form (:mod:`symmech.smm.structural`); spatial ones: the term lists of
+    :mod:`symmech.smm.forms`. ``tensions`` defaults to those solved from eq. (5)."""
     ar = NumericArith(m.values())
-    asm = forms.assemble(m, ar, effects=effects, tensions=equilibrium_tensions(m)[0])
+    eff = effects or m.effects
+    if tensions is None:
+        tensions = equilibrium_tensions(m)[0]
+    if structural.applies(m, ar):
+        return Numeric(list(m.coordinate_names), *structural.assemble(m, ar, eff, tensions))
+    asm = forms.assemble(m, ar, effects=eff, tensions=tensions)
     n = len(asm.coords)
     pre = _sparse(n, asm.preload)
     grav = _sparse(n, asm.gravity)
@@ -94,7 +100,15 @@ def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
         res[i] = math.fsum(terms)
     return Numeric(asm.coords, _sparse(n, forms.triple_product(ar, asm.La, asm.ma, n)),
                    _sparse(n, forms.triple_product(ar, asm.Lb, asm.mb, n)),
-                   (stiff + pre + grav).tocsr(), pre, grav, res, asm.lengths, asm.tensions)
+                   (stiff + pre + grav).tocsr(), pre, grav, res, asm.lengths, asm.tensions, _columns(n, asm.Lc))
+
+
+def _columns(n: int, columns: list) -> scipy.sparse.csr_matrix:
+    """Rows (one per column label) of a factor given as [(label, {index: value})]."""
+    r = [j for j, (_, col) in enumerate(columns) for _ in col]
+    c = [i for _, col in columns for i in col]
+    v = [float(x) for _, col in columns for x in col.values()]
+    return scipy.sparse.csr_matrix((v, (r, c)), shape=(len(columns), n))
 
 
 def check_mass(m: Mechanism, a: np.ndarray) -> None:
