@@ -26,6 +26,7 @@ import functools
 import keyword
 import math
 import operator
+import re
 from dataclasses import dataclass, field
 
 from symmech.core.scene import SceneError, SymmechError
@@ -330,6 +331,9 @@ def numeric(m: Mechanism) -> "NumericArith":
     return NumericArith(m.values())
 
 
+_MULTIPLE = re.compile(r"([0-9]{1,9})\*([A-Za-z][A-Za-z0-9_]*)")
+
+
 class NumericArith:
     """Evaluates model expressions to floats (for numeric assembly)."""
 
@@ -341,7 +345,12 @@ class NumericArith:
 
     def __call__(self, text: str, where: str = "<expression>") -> float:
         if text not in self._cache:
-            self._cache[text] = evaluate(text, self.values, where)
+            # integer multiples of a parameter (the 10^5 positions of a generated chain) skip the parser
+            multiple = _MULTIPLE.fullmatch(text)
+            if multiple and multiple[2] in self.values:
+                self._cache[text] = int(multiple[1]) * self.values[multiple[2]]
+            else:
+                self._cache[text] = evaluate(text, self.values, where)
         return self._cache[text]
 
     @staticmethod

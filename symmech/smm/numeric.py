@@ -90,6 +90,11 @@ def assemble(m: Mechanism, effects: Effects | None = None, tensions: dict | None
         tensions = equilibrium_tensions(m)[0]
     if structural.applies(m, ar):
         return Numeric(list(m.coordinate_names), *structural.assemble(m, ar, eff, tensions))
+    return assemble_terms(m, ar, eff, tensions)
+
+
+def assemble_terms(m: Mechanism, ar: NumericArith, eff: Effects, tensions: dict) -> Numeric:
+    """:func:`assemble` from the term lists of :mod:`symmech.smm.forms` (any mechanism)."""
     asm = forms.assemble(m, ar, effects=eff, tensions=tensions)
     n = len(asm.coords)
     pre = _sparse(n, asm.preload)

@@ -34,6 +34,17 @@ def applies(m: Mechanism, ar: NumericArith) -> bool:
     return all(np.linalg.norm(np.cross(axes[0], e)) <= 1e-12 for e in axes[1:])
 
 
+def values(ar: NumericArith, texts: list[str], what: str) -> np.ndarray:
+    """Expressions as floats, each distinct text evaluated once."""
+    known = {t: ar(t, what) for t in set(texts)}
+    return np.array([known[t] for t in texts], dtype=float)
+
+
+def vectors(ar: NumericArith, vecs: list, what: str) -> np.ndarray:
+    """3-vectors of expressions as a (len, 3) array."""
+    return values(ar, [t for v in vecs for t in v], what).reshape(len(vecs), 3)
+
+
 class Graph:
     """The structural matrices of ``m`` evaluated in floats (see the module docstring)."""
 
@@ -44,10 +55,10 @@ class Graph:
         self.cindex = {c.name: i for i, c in enumerate(m.coordinates)}
         k = len(m.coordinates)
         self.k = k
-        self.axes = np.array([[ar(t, f"coordinate '{c.name}'") for t in c.axis] for c in m.coordinates]).reshape(k, 3)
+        self.axes = vectors(ar, [c.axis for c in m.coordinates], "coordinate axes")
         edges = [p for p in self.names if m.points[p].parent is not None]
         eindex = {p: i for i, p in enumerate(edges)}
-        V = np.array([[ar(t, f"point '{p}'") for t in m.points[p].vector] for p in edges]).reshape(len(edges), 3)
+        V = vectors(ar, [m.points[p].vector for p in edges], "point vectors")
         roots = {p: [ar(t, f"point '{p}'") for t in m.points[p].vector]
                  for p in self.names if m.points[p].parent is None}
         rows, cols, root_of = [], [], {}
@@ -102,9 +113,10 @@ class Graph:
 
     def body_turns(self, body_names: list[str]) -> sp.csr_matrix:
         """Incidence (len x k) of the angles turning each body ('ground': none)."""
+        turns = {b.name: b.turns for b in self.m.bodies}
         r, c = [], []
         for i, b in enumerate(body_names):
-            for a in self.m.body_turns(b):
+            for a in turns.get(b, ()):
                 r.append(i)
                 c.append(self.cindex[a])
         return sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(len(body_names), self.k))
@@ -146,20 +158,21 @@ def assemble(m: Mechanism, ar: NumericArith, effects: Effects, tensions: dict):
     npts = len(g.names)
     empty = sp.csr_matrix((k, k))
     # inertia (3): translation of the mass centres, rotation about the principal axes
-    masses = np.array([ar(b.mass, f"body '{b.name}'") for b in m.bodies])
+    masses = values(ar, [b.mass for b in m.bodies], "masses")
     Dm = g.rows([b.com for b in m.bodies]) if m.bodies else [sp.csr_matrix((0, k))] * 3
     a = sum((Dc.T @ sp.diags(masses) @ Dc for Dc in Dm), empty)
     turns = g.body_turns([b.name for b in m.bodies]).tocoo()
     for axis in range(3):
-        J = np.array([ar(b.inertia[axis], f"body '{b.name}'") for b in m.bodies])
-        P = np.array([np.eye(3)[axis] if b.axes is None else [ar(t, f"body '{b.name}'") for t in b.axes[axis]]
-                      for b in m.bodies]).reshape(len(m.bodies), 3)
+        J = values(ar, [b.inertia[axis] for b in m.bodies], "moments of inertia")
+        P = np.tile(np.eye(3)[axis], (len(m.bodies), 1))
+        turned = [i for i, b in enumerate(m.bodies) if b.axes is not None]
+        P[turned] = vectors(ar, [m.bodies[i].axes[axis] for i in turned], "principal axes")
         vals = np.einsum("ij,ij->i", P[turns.row], g.axes[turns.col]) if turns.nnz else np.zeros(0)
         R = sp.csr_matrix((vals, (turns.row, turns.col)), shape=turns.shape)
         a = a + R.T @ sp.diags(J) @ R
     # springs (5), (7), (9)
     e, length, Lc, dd, ia, ib = g.directions(m.springs, "spring")
-    kk = np.array([ar(s.coef, f"spring '{s.name}'") for s in m.springs])
+    kk = values(ar, [s.coef for s in m.springs], "spring stiffnesses")
     T = np.array([_tension(ar, s, kk[i], length[i], tensions) for i, s in enumerate(m.springs)])
     Lt = g.torsion_rows(m.torsion_springs)
     kt = np.array([ar(t.coef, f"torsion spring '{t.name}'") for t in m.torsion_springs])
@@ -184,7 +197,7 @@ def assemble(m: Mechanism, ar: NumericArith, effects: Effects, tensions: dict):
     b = empty
     if effects.damping and (m.dampers or m.torsion_dampers):
         _, _, Lb, *_ = g.directions(m.dampers, "damper")
-        mu = np.array([ar(d.coef, f"damper '{d.name}'") for d in m.dampers])
+        mu = values(ar, [d.coef for d in m.dampers], "damper viscosities")
         Ltd = g.torsion_rows(m.torsion_dampers)
         mut = np.array([ar(t.coef, f"torsion damper '{t.name}'") for t in m.torsion_dampers])
         b = Lb.T @ sp.diags(mu) @ Lb + Ltd.T @ sp.diags(mut) @ Ltd
