@@ -2,6 +2,7 @@
 formulas (seed 003, sections 2-3, Tables 1-2, Figs. 8-9, eqs. (1)-(11)) against derivations."""
 import re
 
+import numpy as np
 import pytest
 
 from symmech.core import errata
@@ -62,3 +63,15 @@ def test_fig8_reading_at_a_hand_point():
     a = b = 0.25 * 3.141592653589793
     expected = c1 * L**2 - m * g * L * 2**-0.5
     assert smm_formulas.fig8_c(c1, L, a, b, ell, m, g) == pytest.approx(expected, rel=1e-12)
+
+
+def test_trolley_rigid_body_equations_11_agree_with_newton_euler():
+    from symmech.trolley import errata as trolley_errata
+
+    (check,) = [c for c in trolley_errata.checks() if c.equation == "(11)"]
+    r = errata.evaluate(check, n=200)
+    assert r["status"] == "agrees" and r["max_rel_diff"] < 1e-12
+    # the sampled motions exercise the gyroscopic terms: without rotation the forces change by > 1 N
+    x = check.sample(np.random.default_rng(0), 5)
+    still = dict(x, w1=0 * x["w1"], w2=0 * x["w2"], w3=0 * x["w3"])
+    assert np.abs(np.asarray(check.printed(x)) - np.asarray(check.printed(still))).max() > 1.0
