@@ -173,8 +173,8 @@ stiffness = 100.0
 
 @pytest.mark.parametrize("mass, words", [
     ("nan", "bodies[0].mass': nan is not finite"),
-    ('"9**9**9"', "bodies[0].mass': a power in an exponent"),
-    ('"1/0"', "bodies[0].mass': expression '1/0' cannot be evaluated"),
+    ('"9**9**9"', "bodies[0].mass': exponent 3.8742e+08 exceeds 100"),
+    ('"1/0"', "bodies[0].mass': division by zero in '1/0'"),
 ], ids=["nan_mass", "tower_of_powers", "division_by_zero"])
 def test_cli_one_line(tmp_path, mass, words):
     cli_rejects(tmp_path, BASE.replace("MASS", mass), words)

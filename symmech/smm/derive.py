@@ -17,6 +17,7 @@ from pathlib import Path
 
 import sympy
 
+from symmech.core import expressions
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
 from symmech.core.scene import SymmechError, read_toml
 from symmech.smm import forms
@@ -26,9 +27,8 @@ SCENES = Path(__file__).resolve().parents[2] / "scenes"
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
 
 
-_SYMPY_FUNCS = {name: getattr(sympy, name) for name in
-                ("sin", "cos", "tan", "sqrt", "asin", "acos", "atan", "atan2", "exp", "log")}
-_SYMPY_CONSTS = {"pi": sympy.pi}
+_SYMPY_FUNCS = {name: sympy.Abs if name == "abs" else getattr(sympy, name) for name in expressions.FUNCTIONS}
+_SYMPY_CONSTS = {"pi": sympy.pi, "E": sympy.E}
 
 
 class SymbolicArith:

@@ -23,13 +23,13 @@ from __future__ import annotations
 
 import ast
 import functools
-import keyword
 import math
 import operator
 import re
 from dataclasses import dataclass, field
 
-from symmech.core.scene import SceneError, SymmechError
+from symmech.core import expressions
+from symmech.core.scene import SymmechError
 
 GROUND = "ground"
 EQUILIBRIUM = "equilibrium"  # a spring preload left to the equilibrium conditions (5)
@@ -194,78 +194,14 @@ class Mechanism:
 
 # ---------------------------------------------------------------- expressions
 
-_FUNCS = {"sin": math.sin, "cos": math.cos, "tan": math.tan, "sqrt": math.sqrt,
-          "asin": math.asin, "acos": math.acos, "atan": math.atan, "atan2": math.atan2,
-          "exp": math.exp, "log": math.log}
-_ARITY = {name: 2 if name == "atan2" else 1 for name in _FUNCS}
-_CONSTS = {"pi": math.pi}
+# The scene expression language is symmech.core.expressions (checked there, in the schema);
+# here it is evaluated in floats (and, in symmech.smm.derive, in sympy).
+_FUNCS = {name: abs if name == "abs" else getattr(math, name) for name in expressions.FUNCTIONS}
+_CONSTS = dict(expressions.CONSTANTS)
 _BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
            ast.Div: operator.truediv, ast.Pow: operator.pow}
-# Names a parameter must not take: the expression language's own, Python's, and those of the
-# generated modules (numpy, the batch helpers; CSE temporaries are x0, x1, ... and refused by pattern).
-RESERVED_NAMES = frozenset(_FUNCS) | frozenset(_CONSTS) | frozenset(keyword.kwlist) | {
-    "numpy", "np", "math", "out", "batch", "inf", "nan", "ground", "equilibrium"}
-MAX_EXPRESSION = 1000   # characters
-MAX_NODES = 300         # syntax-tree nodes
-MAX_EXPONENT = 100      # |literal exponent|; exponents hold no powers, powers nest at most twice
-
-
-def check_expression(path: str, text: str) -> None:
-    """SceneError naming ``path`` unless ``text`` is a bounded arithmetic expression of names:
-    numbers, + - * / **, unary -, the whitelisted functions with their arity, and no power
-    that could blow up exactly (``9**9**9``) when the derivation evaluates it in sympy."""
-    if len(text) > MAX_EXPRESSION:
-        raise SceneError(path, f"expression of {len(text)} characters; at most {MAX_EXPRESSION}")
-    try:
-        tree = ast.parse(text, mode="eval")
-    except (SyntaxError, ValueError):
-        raise SceneError(path, f"cannot read expression {text!r}") from None
-    nodes = list(ast.walk(tree))
-    if len(nodes) > MAX_NODES:
-        raise SceneError(path, f"expression of {len(nodes)} terms; at most {MAX_NODES}")
-    for node in nodes:
-        problem = _node_problem(node)
-        if problem:
-            raise SceneError(path, f"{problem} in {text!r}; allowed: numbers, parameters, + - * / **, "
-                                   f"{', '.join(_FUNCS)}, pi")
-
-
-def _node_problem(node) -> str | None:
-    if isinstance(node, (ast.Expression, ast.Name, ast.Load)) or type(node) in _BINOPS \
-            or isinstance(node, (ast.USub, ast.UAdd, ast.BinOp, ast.UnaryOp)):
-        if isinstance(node, ast.BinOp) and type(node.op) not in _BINOPS:
-            return "unsupported operator"
-        if isinstance(node, ast.UnaryOp) and not isinstance(node.op, (ast.USub, ast.UAdd)):
-            return "unsupported operator"
-        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow):
-            return _power_problem(node)
-        if isinstance(node, ast.Name) and node.id.startswith("_"):
-            return f"name {node.id!r}"
-        return None
-    if isinstance(node, ast.Constant):
-        ok = isinstance(node.value, (int, float)) and not isinstance(node.value, bool)
-        return None if ok and math.isfinite(float(node.value)) else f"constant {node.value!r}"
-    if isinstance(node, ast.Call):
-        name = getattr(node.func, "id", None)
-        if not isinstance(node.func, ast.Name) or name not in _FUNCS:
-            return f"unknown function {ast.unparse(node.func)!r}"
-        if node.keywords or len(node.args) != _ARITY[name]:
-            return f"{name} takes {_ARITY[name]} argument(s)"
-        return None
-    return f"unsupported syntax {type(node).__name__}"
-
-
-def _power_problem(node: ast.BinOp) -> str | None:
-    exponent = node.right
-    if any(isinstance(n, ast.BinOp) and isinstance(n.op, ast.Pow) for n in ast.walk(exponent)):
-        return "a power in an exponent"
-    if any(isinstance(n, ast.Constant) and isinstance(n.value, (int, float)) and abs(n.value) > MAX_EXPONENT
-           for n in ast.walk(exponent)):
-        return f"an exponent beyond {MAX_EXPONENT}"
-    inner = [n for n in ast.walk(node.left) if isinstance(n, ast.BinOp) and isinstance(n.op, ast.Pow)]
-    if any(isinstance(n, ast.BinOp) and isinstance(n.op, ast.Pow) for i in inner for n in ast.walk(i.left)):
-        return "powers nested more than twice"
-    return None
+# Parameter names the generated modules use themselves (beyond the reserved names of expressions)
+GENERATED_NAMES = frozenset({"out", "batch", EQUILIBRIUM})
 
 
 @functools.lru_cache(maxsize=4096)

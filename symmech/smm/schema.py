@@ -8,12 +8,11 @@ stiffnesses) are the ``*_RANGE`` constants, stated in the field docs.
 """
 from __future__ import annotations
 
-import re
-
 from symmech.core.scene import SceneError
 from symmech.core.schema import (Bool, Choice, Custom, Float, Int, Mapping, Str, Table, TableList, Vector,
                                  check_real)
-from symmech.smm.model import EQUILIBRIUM, RESERVED_NAMES, check_expression, number_text
+from symmech.core import expressions
+from symmech.smm.model import EQUILIBRIUM, GENERATED_NAMES, number_text
 
 NAME = r"[A-Za-z][A-Za-z0-9_]{0,63}"
 MASS_RANGE = (1e-12, 1e12)       # kg, or exactly 0 (a link with inertia only)
@@ -27,7 +26,7 @@ MAX_ELEMENTS = 10_000            # points, bodies, springs ... of an explicit mo
 def _expression(path, value) -> str:
     """A number or an expression string of the parameters, as expression text."""
     if isinstance(value, str):
-        check_expression(path, value)
+        expressions.tree(path, value, None)  # names are checked once the parameters are known
         return value
     return number_text(check_real(path, value, "", None, None, False, False))
 
@@ -81,15 +80,12 @@ def _principal_axes(path, value):
     return axes
 
 
-def _parameter_name(path: str, name: str) -> None:
-    if not re.fullmatch(NAME, name) or name in RESERVED_NAMES or re.fullmatch(r"x\d+", name):
-        raise SceneError(path, f"parameter name {name!r} is reserved or not a plain identifier "
-                               f"({NAME}, not x<digits>, not one of {', '.join(sorted(RESERVED_NAMES))})")
-
-
 def _check_parameters(params: dict, path: str) -> None:
     for name in params:
-        _parameter_name(f"{path}.{name}" if path else name, name)
+        field = f"{path}.{name}"
+        expressions.check_name(field, name)
+        if name in GENERATED_NAMES:
+            raise SceneError(field, f"the name {name!r} is reserved (used by the generated modules)")
 
 
 EXPR = "number or expression of the parameters"
