@@ -60,9 +60,12 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     G = zero.L_c[[labels.index(n) for n in names]].toarray().T
     r = zero.residual
     k = len(m.coordinates)
+    # G holds dl/dq: [1] for slides, [m] for angles; round-off is judged against 1 and the spring
+    # lengths, so springs that move with no coordinate (G zero but for round-off) are indeterminate
+    tol = 1e-10 * max(np.abs(G).max(), 1.0, max(zero.lengths.values(), default=0.0))
     rows: list[int] = []
     for i in range(k):
-        if np.linalg.matrix_rank(G[rows + [i]], tol=1e-10 * max(np.abs(G).max(), 1e-300)) > len(rows):
+        if np.linalg.matrix_rank(G[rows + [i]], tol=tol) > len(rows):
             rows.append(i)
     if len(rows) < len(names):
         raise SymmechError(f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
