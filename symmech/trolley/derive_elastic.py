@@ -91,11 +91,11 @@ XI_ARGS = args_of([(XI, "coordinate along the beam x / L", "1")])
 
 
 def beam_functions(support: str) -> list[sp.Expr]:
-    """Polynomial Ritz functions N_k(ξ), k = 1…NMAX, admissible for ``support``:
-    "cantilever" (clamped at ξ = 0): ξ^(k+1); "pinned" (pinned at both ends): ξ^k (1 - ξ)."""
-    if support == "cantilever":
-        return [XI ** (k + 1) for k in range(1, NMAX + 1)]
-    return [XI ** k * (1 - XI) for k in range(1, NMAX + 1)]
+    """Polynomial Ritz functions N_k(ξ), k = 1…NMAX, admissible for ``support``: the shifted
+    Legendre polynomials P_(k-1)(2ξ - 1) (well conditioned, unlike monomials) times ξ² for
+    "cantilever" (clamped at ξ = 0) or ξ (1 - ξ) for "pinned" (pinned at both ends)."""
+    factor = XI ** 2 if support == "cantilever" else XI * (1 - XI)
+    return [sp.expand(factor * sp.legendre(k, 2 * XI - 1)) for k in range(NMAX)]
 
 
 def beam_basis(support: str) -> list[NamedMatrix]:

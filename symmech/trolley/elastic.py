@@ -138,12 +138,14 @@ class Invariants:
     D: np.ndarray
     mass: float
     n_roll: int
+    probe_fields: np.ndarray  # (F, n_probes, 3) field values at the report points
+    probe_points: np.ndarray  # (n_probes, 3) undeformed report points [m]
 
 
-def _beam_samples(beam: Beam):
+def _beam_samples(beam: Beam, probes=()):
     xg, wg = np.polynomial.legendre.leggauss(BEAM_GAUSS)
-    xi = np.concatenate([(xg + 1) / 2, [1.0]])
-    w = np.concatenate([beam.rho_a * beam.length * wg / 2, [beam.tip_mass]])
+    xi = np.concatenate([(xg + 1) / 2, [1.0], probes])
+    w = np.concatenate([beam.rho_a * beam.length * wg / 2, [beam.tip_mass], np.zeros(len(probes))])
     e, _, _ = _frame_of(beam)
     pts = np.asarray(beam.root, float) + np.outer(xi * beam.length, e)
     return pts, w, xi
@@ -157,13 +159,23 @@ def _beam_stiffness(beam: Beam, n: int) -> np.ndarray:
     return np.einsum("p,pk,pl->kl", wg / 2, d2, d2) / beam.length ** 3
 
 
-def invariants(mdl: ElasticModel) -> Invariants:
-    """Fields, pairs and Gram tensors of ``mdl`` (computed once per scene)."""
+def invariants(mdl: ElasticModel, probes=()) -> Invariants:
+    """Fields, pairs and Gram tensors of ``mdl`` (computed once per scene).
+
+    ``probes``: report points, each ``(None, (x1, x2, x3))`` on the trolley [m] or
+    ``(i, ξ)`` on beam i at x/L = ξ; they are massless samples whose field values are kept."""
     cloud, cw = rigid_cloud(mdl.mass, mdl.com, mdl.inertia)
-    parts = [(cloud, cw, None, None)]
-    for beam in mdl.beams:
-        pts, w, xi = _beam_samples(beam)
+    mine = [j for j, (b, _) in enumerate(probes) if b is None]
+    pts0 = np.array([*cloud, *(np.asarray(probes[j][1], float) for j in mine)])
+    parts = [(pts0, np.r_[cw, np.zeros(len(mine))], None, None)]
+    probe_index = {j: 6 + n for n, j in enumerate(mine)}
+    offset = len(pts0)
+    for i, beam in enumerate(mdl.beams):
+        mine = [j for j, (b, _) in enumerate(probes) if b == i]
+        pts, w, xi = _beam_samples(beam, [float(probes[j][1]) for j in mine])
+        probe_index.update({j: offset + len(w) - len(mine) + n for n, j in enumerate(mine)})
         parts.append((pts, w, beam, xi))
+        offset += len(w)
     pts = np.concatenate([p[0] for p in parts])
     w = np.concatenate([p[1] for p in parts])
     n_pts = len(w)
@@ -224,7 +236,8 @@ def invariants(mdl: ElasticModel) -> Invariants:
         n = kb.shape[0]
         sl = slice(base, base + n)
         K[sl, sl] = kb
-    inv = Invariants(names, pairs, G, S1, dA, K, D, float(w.sum()), n_roll)
+    at = [probe_index[j] for j in range(len(probes))]
+    inv = Invariants(names, pairs, G, S1, dA, K, D, float(w.sum()), n_roll, F[:, at, :], pts[at])
     if eff.damping:
         _beam_damping(inv, K_blocks)
     return inv
@@ -313,9 +326,9 @@ class System:
     """Residual R(q, q̇, q̈) = M(q) q̈ + f(q, q̇) of the relative motion, its Jacobians,
     reactions and energies, from the invariants of ``mdl``."""
 
-    def __init__(self, mdl: ElasticModel, inv: Invariants | None = None):
+    def __init__(self, mdl: ElasticModel, probes=()):
         self.mdl = mdl
-        self.inv = inv or invariants(mdl)
+        self.inv = invariants(mdl, probes)
         inv = self.inv
         self.N = len(inv.names)
         self.F = inv.G.shape[0]
@@ -490,3 +503,116 @@ class System:
         omega = np.abs(lam)
         zeta = np.where(omega > 0, -lam.real / np.where(omega > 0, omega, 1.0), 0.0)
         return omega, zeta
+
+
+# ---------------------------------------------------------------- integration along the track
+
+def rigid_body(mdl: ElasticModel) -> model.Body:
+    """The rigid model's body with the total mass, centre of mass and central inertia of
+    trolley, beams and tip masses (undeformed)."""
+    inv = invariants(mdl)
+    m = inv.mass
+    com = inv.S1[0] / m
+    J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
+    I = np.trace(J) * np.eye(3) - J
+    return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)
+
+
+def _state_at(system: System, drive: Drive, t: float, s: float) -> FrameState:
+    V0, dV0 = drive.speed(t)
+    return frame_state(frames(drive, s, system.mdl.l), 0, float(V0), float(dV0))
+
+
+def _dissipation(system: System, q, qd) -> float:
+    """Power of the damping forces [W] (beam d_ij and roller dampers)."""
+    power = qd @ system.inv.D @ qd
+    if system.rollers_on and system.mdl.effects.damping:
+        dd = system.C @ qd[:5]
+        power += float(np.asarray(system.mdl.rollers.damping) @ (dd * dd))
+    return float(power)
+
+
+def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
+             atol_q: float = 1e-12) -> dict:
+    """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0].
+
+    y = [s, q, q̇, E_d]: the arc length [m] (ds/dt = V0), the coordinates, their rates and the
+    dissipated energy [J]. Implicit methods ("Radau", "BDF") use the analytic Jacobian; the
+    returned dict holds arrays with a leading axis n (see :func:`outputs`)."""
+    from scipy.integrate import solve_ivp
+
+    t = np.asarray(t, dtype=float)
+    N = system.N
+    q0 = system.quasi_static(_state_at(system, drive, t[0], drive.s0))
+
+    def rhs(time, y):
+        fs = _state_at(system, drive, time, y[0])
+        q, qd = y[1:1 + N], y[1 + N:1 + 2 * N]
+        return np.r_[drive.speed(time)[0], qd, system.accelerations(fs, q, qd),
+                     _dissipation(system, q, qd)]
+
+    def jac(time, y):
+        fs = _state_at(system, drive, time, y[0])
+        q, qd = y[1:1 + N], y[1 + N:1 + 2 * N]
+        qdd = system.accelerations(fs, q, qd)
+        _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
+        out = np.zeros((2 * N + 2, 2 * N + 2))
+        out[1:1 + N, 1 + N:1 + 2 * N] = np.eye(N)
+        out[1 + N:1 + 2 * N, 1:1 + N] = -np.linalg.solve(M, Rq)
+        out[1 + N:1 + 2 * N, 1 + N:1 + 2 * N] = -np.linalg.solve(M, Rqd)
+        return out
+
+    y0 = np.r_[drive.s0, q0, np.zeros(N), 0.0]
+    atol = np.r_[1e-9, np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
+    kw = {"jac": jac} if method in ("Radau", "BDF", "LSODA") else {}
+    sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, **kw)
+    if sol.status != 0 or not np.all(np.isfinite(sol.y)):
+        raise SymmechError(f"elastic trolley: integration failed at t = {sol.t[-1]:.6g} s ({sol.message})")
+    out = outputs(system, drive, t, sol.y.T)
+    out["nfev"], out["njev"] = sol.nfev, sol.njev
+    return out
+
+
+def outputs(system: System, drive: Drive, t, Y) -> dict:
+    """Per output time: s, V0, dV0, q, q̇, q̈, reactions P (n, 6), resultants F, M (n, 3),
+    roller deflections (n, 5), probe displacements (total and elastic) and overloads
+    (n, n_probes, 3) [m, g], the Jacobi energy h and dissipated energy [J], and the rigid
+    model's reactions and overloads of the centre of mass beside them."""
+    N, inv = system.N, system.inv
+    n = len(t)
+    s, q, qd, ed = Y[:, 0], Y[:, 1:1 + N], Y[:, 1 + N:1 + 2 * N], Y[:, -1]
+    speed = [drive.speed(ti) for ti in t]
+    V0 = np.array([float(v[0]) for v in speed])
+    dV0 = np.array([float(v[1]) for v in speed])
+    fr = frames(drive, s, system.mdl.l)
+    n_probe = inv.probe_fields.shape[1]
+    res = {k: np.zeros((n,) + shape) for k, shape in (
+        ("qdd", (N,)), ("P", (6,)), ("F", (3,)), ("M", (3,)), ("M_contacts", (3,)), ("deflection", (5,)),
+        ("probe_displacement", (n_probe, 3)), ("probe_elastic", (n_probe, 3)), ("probe_overload", (n_probe, 3)),
+        ("h", ()))}
+    g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
+    elastic = np.zeros(system.F, bool)
+    elastic[1 + inv.n_roll:1 + N] = True
+    elastic[1 + N:] = [i >= inv.n_roll for i, _ in inv.pairs]
+    for i in range(n):
+        fs = frame_state(fr, i, V0[i], dV0[i])
+        qdd = system.accelerations(fs, q[i], qd[i])
+        res["qdd"][i] = qdd
+        res["P"][i] = system.reactions(fs, q[i], qd[i], qdd)
+        res["F"][i], res["M"][i] = system.resultants(fs, q[i], qd[i], qdd)
+        res["M_contacts"][i] = system.contact_moment(q[i], res["P"][i, 1:]) if system.rollers_on else 0.0
+        res["deflection"][i] = system.roller_state(q[i], qd[i])[0]
+        rr, A = system.coefficients(q[i])
+        v, acc = qd[i] @ A, qdd @ A + system._p2(qd[i])
+        pos = np.einsum("k,kpi->pi", rr, inv.probe_fields)
+        vel = np.einsum("k,kpi->pi", v, inv.probe_fields)
+        ddu = np.einsum("k,kpi->pi", acc, inv.probe_fields)
+        a = fs.a0 + np.cross(fs.dw, pos) + np.cross(fs.w, np.cross(fs.w, pos)) + 2 * np.cross(fs.w, vel) + ddu
+        res["probe_displacement"][i] = pos - inv.probe_points
+        res["probe_elastic"][i] = np.einsum("k,kpi->pi", np.where(elastic, rr, 0.0), inv.probe_fields)
+        res["probe_overload"][i] = (a + system.mdl.g0 * fs.nu) / g_ref
+        res["h"][i] = system.jacobi_energy(fs, q[i], qd[i])
+    rigid = model.body_motion(fr, V0, dV0, rigid_body(system.mdl))
+    res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, names=list(inv.names),
+               P_rigid=rigid["P"], overload_rigid=rigid["overload"])
+    return res
