@@ -533,8 +533,9 @@ def _dissipation(system: System, q, qd) -> float:
 
 
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
-             atol_q: float = 1e-12) -> dict:
-    """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0].
+             atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
+    """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
+    (plus the offsets ``dq0``, ``dqd0`` of coordinates and rates, when given).
 
     y = [s, q, q̇, E_d]: the arc length [m] (ds/dt = V0), the coordinates, their rates and the
     dissipated energy [J]. Implicit methods ("Radau", "BDF") use the analytic Jacobian; the
@@ -562,7 +563,8 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
         out[1 + N:1 + 2 * N, 1 + N:1 + 2 * N] = -np.linalg.solve(M, Rqd)
         return out
 
-    y0 = np.r_[drive.s0, q0, np.zeros(N), 0.0]
+    zero = np.zeros(N)
+    y0 = np.r_[drive.s0, q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0]
     atol = np.r_[1e-9, np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
     kw = {"jac": jac} if method in ("Radau", "BDF", "LSODA") else {}
     sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, **kw)
