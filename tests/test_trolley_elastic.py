@@ -25,7 +25,9 @@ def straight(speed=0.0):
 
 def circle(radius, speed):
     """Horizontal circle at constant speed: x2 toward the centre, x3 up (Frenet)."""
-    trk = tracks.build(Section({"type": "helix", "radius": radius, "rise": 0.0}, "track"))
+    r = f"{radius!r}"
+    trk = tracks.build(Section({"type": "expression", "x": f"{r}*sin(s/{r})", "y": "0",
+                                "z": f"{r}*cos(s/{r})"}, "track"))
     return el.Drive(trk, "frenet", False, lambda t: (speed, 0.0))
 
 
@@ -240,3 +242,80 @@ def test_rotating_cantilever_follows_southwell(hub):
     # without the ψ fields: no stiffening out of plane, the spurious softening -Ω² in plane
     assert np.allclose(out[False][:, 0], 0.0, atol=1e-6)
     assert np.allclose(out[False][:, 1], -1.0, atol=1e-6)
+
+
+# ---------------------------------------------------------------- along the track
+
+def helix():
+    trk = tracks.build(Section({"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)}, "track"))
+    return el.Drive(trk, "frenet", False, lambda t: (3 * t + 7 * np.sin(t / 2), 3 + 3.5 * np.cos(t / 2)))
+
+
+def test_rigid_limit_on_the_paper_helix():
+    """P0…P5 converge to the rigid model's reactions with the error falling like 1/k."""
+    t = np.linspace(0.0, 10.0, 21)
+    late = t >= 5.0  # after the start transient has been damped out
+    errors = []
+    for k in (1e7, 1e8):
+        mdl = el.ElasticModel(100.0, (1.0, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                              el.Rollers((k,) * 5, (2000.0,) * 5))
+        r = el.simulate(el.System(mdl), helix(), t)
+        scale = np.abs(r["P_rigid"][late]).max()
+        errors.append(np.abs(r["P"][late] - r["P_rigid"][late]).max() / scale)
+    assert errors[1] < 1e-4
+    assert 8 < errors[0] / errors[1] < 12
+
+
+def test_reactions_equal_the_resultants_at_every_step():
+    mdl = el.ElasticModel(100.0, (1.0, 0.5, 0.2), (10.0, 20.0, 15.0, 1.0, 0, 0), 2.0, 1.0, G0,
+                          el.Rollers((1e6, 2e6, 1e6, 1e6, 3e6), (500.0,) * 5),
+                          beams=(el.Beam((0.5, 0.3, 0), (0, 1, 0), (1, 0, 0), 1.0, 5.0, (2e3, 4e3), modes=3),))
+    r = el.simulate(el.System(mdl), helix(), np.linspace(0.0, 2.0, 11))
+    P, F = r["P"], r["F"]
+    scale = np.abs(P).max()
+    # translations: exact (their fields are constant); x1: P0 is defined by it
+    assert np.abs(F[:, 1] - P[:, 1:4].sum(1)).max() < 1e-9 * scale
+    assert np.abs(F[:, 2] - P[:, 4:6].sum(1)).max() < 1e-9 * scale
+    # moments about O of the roller forces at the displaced contacts: exact up to the order of
+    # the quadratic approximation of the rotations
+    theta = np.abs(r["q"][:, 2:5]).max()
+    assert np.abs(r["M"] - r["M_contacts"]).max() < 10 * theta * np.abs(r["M"]).max()
+    assert theta < 1e-2
+
+
+@pytest.mark.parametrize("damped", [False, True])
+def test_jacobi_energy_on_a_uniform_circle(damped):
+    """Steady frame (horizontal circle, constant speed): h = T2 - T0 + Π + V_g is constant
+    without damping and falls by exactly the dissipated energy with it."""
+    c = (300.0,) * 5 if damped else (0.0,) * 5
+    beam = el.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1,
+                   damping_ratio=0.05 if damped else 0.0)
+    mdl = el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                          el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), c), beams=(beam,),
+                          effects=el.Effects(damping=damped))
+    system = el.System(mdl)
+    drive = circle(15.0, 12.0)
+    kick = np.zeros(system.N)
+    kick[[0, 2, 4, 5]] = [1e-3, 2e-3, -1e-3, 5e-3]
+    r = el.simulate(system, drive, np.linspace(0.0, 0.2, 21), rtol=1e-9, dq0=kick)
+    fs = el._state_at(system, drive, 0.0, 0.0)
+    at_rest = system.jacobi_energy(fs, system.quasi_static(fs), np.zeros(system.N))
+    excess = r["h"][0] - at_rest  # the energy of the kick
+    assert excess > 0.1
+    balance = r["h"] + r["dissipated"]
+    assert np.abs(balance - balance[0]).max() < 1e-7 * excess
+    if damped:
+        assert r["h"][0] - r["h"][-1] > 0.3 * excess
+    else:
+        assert r["dissipated"][-1] == 0.0
+
+
+def test_stiff_rollers_need_no_tiny_steps():
+    """k = 1e8 N/m under a 10 kg body: ω ~ 5000 rad/s, yet the implicit integrator takes few steps."""
+    mdl = el.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, G0,
+                          el.Rollers((1e8,) * 5, (1e3,) * 5))
+    system = el.System(mdl)
+    r = el.simulate(system, helix(), np.linspace(0.0, 5.0, 11))
+    fastest = modes_at(system, helix())[0].max()
+    assert fastest > 4000
+    assert r["nfev"] < 2000  # an explicit method would need > fastest * 5 s / 3 ≈ 7000 steps

@@ -27,6 +27,8 @@ class _Numpy:
     @staticmethod
     def matrix(rows):
         flat = [np.asarray(x, dtype=float) for row in rows for x in row]
+        if all(x.ndim == 0 for x in flat):
+            return np.array(rows, dtype=float)
         shape = np.broadcast_shapes(*(x.shape for x in flat))
         out = np.stack([np.broadcast_to(x, shape) for x in flat], axis=-1)
         return out.reshape(shape + (len(rows), len(rows[0])))

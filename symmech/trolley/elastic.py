@@ -523,6 +523,35 @@ def _state_at(system: System, drive: Drive, t: float, s: float) -> FrameState:
     return frame_state(frames(drive, s, system.mdl.l), 0, float(V0), float(dV0))
 
 
+class Timeline:
+    """Arc length s(t) = s0 + ∫ V0 dt (8-point Gauss-Legendre per interval of the grid t and
+    from the last node) and the frame state at t, cached: implicit steps revisit their stage times."""
+
+    NODES = np.polynomial.legendre.leggauss(8)
+
+    def __init__(self, system: System, drive: Drive, t):
+        self.system, self.drive, self.t = system, drive, np.asarray(t, dtype=float)
+        pieces = [self._integral(a, b) for a, b in zip(self.t[:-1], self.t[1:])]
+        self.s_nodes = drive.s0 + np.concatenate([[0.0], np.cumsum(pieces)])
+        self.cache: dict = {}
+
+    def _integral(self, a, b):
+        x, w = self.NODES
+        mid, half = (a + b) / 2, (b - a) / 2
+        return float(sum(wi * float(self.drive.speed(mid + half * xi)[0]) for xi, wi in zip(x, w)) * half)
+
+    def s(self, time: float) -> float:
+        k = max(int(np.searchsorted(self.t, time, side="right")) - 1, 0)
+        return self.s_nodes[k] + self._integral(self.t[k], time)
+
+    def state(self, time: float) -> FrameState:
+        if time not in self.cache:
+            if len(self.cache) > 64:
+                self.cache.clear()
+            self.cache[time] = _state_at(self.system, self.drive, time, self.s(time))
+        return self.cache[time]
+
+
 def _dissipation(system: System, q, qd) -> float:
     """Power of the damping forces [W] (beam d_ij and roller dampers)."""
     power = qd @ system.inv.D @ qd
@@ -537,52 +566,51 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
     (plus the offsets ``dq0``, ``dqd0`` of coordinates and rates, when given).
 
-    y = [s, q, q̇, E_d]: the arc length [m] (ds/dt = V0), the coordinates, their rates and the
-    dissipated energy [J]. Implicit methods ("Radau", "BDF") use the analytic Jacobian; the
+    y = [q, q̇, E_d]: the coordinates, their rates and the dissipated energy [J]; the frame
+    follows s(t) of :class:`Timeline`. Implicit methods ("Radau", "BDF") use the analytic Jacobian; the
     returned dict holds arrays with a leading axis n (see :func:`outputs`)."""
     from scipy.integrate import solve_ivp
 
     t = np.asarray(t, dtype=float)
     N = system.N
-    q0 = system.quasi_static(_state_at(system, drive, t[0], drive.s0))
+    line = Timeline(system, drive, t)
+    q0 = system.quasi_static(line.state(t[0]))
 
     def rhs(time, y):
-        fs = _state_at(system, drive, time, y[0])
-        q, qd = y[1:1 + N], y[1 + N:1 + 2 * N]
-        return np.r_[drive.speed(time)[0], qd, system.accelerations(fs, q, qd),
-                     _dissipation(system, q, qd)]
+        q, qd = y[:N], y[N:2 * N]
+        return np.r_[qd, system.accelerations(line.state(time), q, qd), _dissipation(system, q, qd)]
 
     def jac(time, y):
-        fs = _state_at(system, drive, time, y[0])
-        q, qd = y[1:1 + N], y[1 + N:1 + 2 * N]
+        fs = line.state(time)
+        q, qd = y[:N], y[N:2 * N]
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
-        out = np.zeros((2 * N + 2, 2 * N + 2))
-        out[1:1 + N, 1 + N:1 + 2 * N] = np.eye(N)
-        out[1 + N:1 + 2 * N, 1:1 + N] = -np.linalg.solve(M, Rq)
-        out[1 + N:1 + 2 * N, 1 + N:1 + 2 * N] = -np.linalg.solve(M, Rqd)
+        out = np.zeros((2 * N + 1, 2 * N + 1))
+        out[:N, N:2 * N] = np.eye(N)
+        out[N:2 * N, :N] = -np.linalg.solve(M, Rq)
+        out[N:2 * N, N:2 * N] = -np.linalg.solve(M, Rqd)
         return out
 
     zero = np.zeros(N)
-    y0 = np.r_[drive.s0, q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0]
-    atol = np.r_[1e-9, np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
+    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
     kw = {"jac": jac} if method in ("Radau", "BDF", "LSODA") else {}
     sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, **kw)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise SymmechError(f"elastic trolley: integration failed at t = {sol.t[-1]:.6g} s ({sol.message})")
-    out = outputs(system, drive, t, sol.y.T)
+    out = outputs(system, drive, t, line.s_nodes, sol.y.T)
     out["nfev"], out["njev"] = sol.nfev, sol.njev
     return out
 
 
-def outputs(system: System, drive: Drive, t, Y) -> dict:
+def outputs(system: System, drive: Drive, t, s, Y) -> dict:
     """Per output time: s, V0, dV0, q, q̇, q̈, reactions P (n, 6), resultants F, M (n, 3),
     roller deflections (n, 5), probe displacements (total and elastic) and overloads
     (n, n_probes, 3) [m, g], the Jacobi energy h and dissipated energy [J], and the rigid
     model's reactions and overloads of the centre of mass beside them."""
     N, inv = system.N, system.inv
     n = len(t)
-    s, q, qd, ed = Y[:, 0], Y[:, 1:1 + N], Y[:, 1 + N:1 + 2 * N], Y[:, -1]
+    q, qd, ed = Y[:, :N], Y[:, N:2 * N], Y[:, -1]
     speed = [drive.speed(ti) for ti in t]
     V0 = np.array([float(v[0]) for v in speed])
     dV0 = np.array([float(v[1]) for v in speed])
