@@ -293,6 +293,8 @@ class Drive:
     local_curvature: bool
     speed: object
     s0: float = 0.0
+    fd_order: int = 4
+    fd_step: float = 1e-3
 
 
 @dataclass(frozen=True)
@@ -310,7 +312,7 @@ class FrameState:
 def frames(drive: Drive, s, l: float) -> model.Frame:
     s = np.atleast_1d(np.asarray(s, dtype=float))
     if drive.local_curvature:
-        return model.local_curvature_frame(drive.track, s, l, drive.frame)
+        return model.local_curvature_frame(drive.track, s, l, drive.frame, drive.fd_order, drive.fd_step)
     return model.moving_frame(drive.track, s, drive.frame)
 
 
@@ -524,15 +526,15 @@ def _state_at(system: System, drive: Drive, t: float, s: float) -> FrameState:
 
 
 class Timeline:
-    """Arc length s(t) = s0 + ∫ V0 dt (8-point Gauss-Legendre per interval of the grid t and
-    from the last node) and the frame state at t, cached: implicit steps revisit their stage times."""
+    """Arc length s(t) = s0 + ∫ V0 dt (8-point Gauss-Legendre per interval of the grid t, as the
+    rigid scene computes it, and from the last node) and the frame state at t, cached:
+    implicit steps revisit their stage times."""
 
     NODES = np.polynomial.legendre.leggauss(8)
 
     def __init__(self, system: System, drive: Drive, t):
         self.system, self.drive, self.t = system, drive, np.asarray(t, dtype=float)
-        pieces = [self._integral(a, b) for a, b in zip(self.t[:-1], self.t[1:])]
-        self.s_nodes = drive.s0 + np.concatenate([[0.0], np.cumsum(pieces)])
+        self.s_nodes = arc_length(drive, self.t)
         self.cache: dict = {}
 
     def _integral(self, a, b):
@@ -550,6 +552,15 @@ class Timeline:
                 self.cache.clear()
             self.cache[time] = _state_at(self.system, self.drive, time, self.s(time))
         return self.cache[time]
+
+
+def arc_length(drive: Drive, t) -> np.ndarray:
+    """s on the grid t (n,): s0 + ∫ V0 dt, 8-point Gauss-Legendre per step [m]."""
+    nodes, weights = Timeline.NODES
+    mid, half = (t[1:] + t[:-1]) / 2, (t[1:] - t[:-1]) / 2
+    x = mid[:, None] + half[:, None] * nodes
+    v = np.broadcast_to(np.asarray(drive.speed(x)[0], dtype=float), x.shape)
+    return drive.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
 
 
 def _dissipation(system: System, q, qd) -> float:
