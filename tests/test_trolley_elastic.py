@@ -319,3 +319,28 @@ def test_stiff_rollers_need_no_tiny_steps():
     fastest = modes_at(system, helix())[0].max()
     assert fastest > 4000
     assert r["nfev"] < 2000  # an explicit method would need > fastest * 5 s / 3 ≈ 7000 steps
+
+
+def test_fast_assembly_equals_the_symbolic_lagrange_route():
+    """Invariants + d'Alembert (runtime) vs Lagrange's equations of the generated small model."""
+    from symmech.generated import trolley_elastic_lagrange as lag
+
+    rng = np.random.default_rng(11)
+    m0, com, inertia = 90.0, np.array([0.7, 0.4, -0.2]), np.array([12.0, 18.0, 15.0])
+    rho_a, L, tip, b1, b3, ei = 3.0, 1.4, 1.5, 0.6, 0.3, (2e3, 5e3)
+    k, c, l, ah = np.array([1e5, 2e5, 1.5e5, 3e5, 2.5e5]), np.array([50.0, 80.0, 60.0, 40.0, 70.0]), 2.0, 0.8
+    beam = el.Beam((b1, 0, b3), (0, 1, 0), (1, 0, 0), L, rho_a, ei, "cantilever", 1, tip)
+    system = el.System(el.ElasticModel(m0, tuple(com), (*inertia, 0, 0, 0), l, ah, G0,
+                                       el.Rollers(tuple(k), tuple(c)), (beam,)))
+    flip = np.array([1, 1, 1, 1, 1, 1, -1])  # the runtime's second plane is axis × plane = -x3
+    for _ in range(5):
+        q = rng.normal(size=7) * np.r_[1e-2, 1e-2, 0.05, 0.05, 0.05, 0.1, 0.1]
+        qd, qdd = rng.normal(size=(2, 7))
+        nu = rng.normal(size=3)
+        fs = el.FrameState(rng.normal(size=3) * 10, rng.normal(size=3) * 5, rng.normal(size=3), rng.normal(size=3),
+                           nu / np.linalg.norm(nu))
+        fast = system.evaluate(fs, flip * q, flip * qd, flip * qdd) * flip
+        dv = fs.a0 - np.cross(fs.w, fs.v0)
+        slow = lag.lagrange_residual(*q, *qd, *qdd, *fs.v0, *dv, *fs.w, *fs.dw, *fs.nu, m0, *com, *inertia,
+                                     rho_a, L, tip, b1, b3, *ei, *k, *c, G0, l, ah)
+        assert np.abs(fast - slow).max() < 1e-10 * np.abs(slow).max()

@@ -115,4 +115,94 @@ def beam_basis(support: str) -> list[NamedMatrix]:
 def module_specs() -> list[ModuleSpec]:
     functions = [rigid_fields_matrix(), roller_matrix(), *beam_basis("cantilever"), *beam_basis("pinned")]
     return [ModuleSpec("trolley_elastic", "Rigid fields of the roller DOFs, roller deflections and beam Ritz bases "
-                       "of the elastic trolley.", SOURCE, functions)]
+                       "of the elastic trolley.", SOURCE, functions),
+            ModuleSpec("trolley_elastic_lagrange", "Small elastic trolley by Lagrange's equations (test route).",
+                       SOURCE, [lagrange_model()])]
+
+
+def lagrange_model() -> NamedMatrix:
+    """Second, independent route: the residual of Lagrange's equations of a small model — the
+    five roller DOFs and one mode per plane of a cantilever (N = ξ²) along x2, rooted at
+    (b1, 0, b3), with a tip mass — from its kinetic energy differentiated symbolically.
+
+    The displacement field is the model's own (quadratic rigid fields, beam modes, their axial
+    shortening, rotation-times-mode cross terms), but the equations come from
+    d/dt ∂T/∂q̇ - ∂T/∂q + ∂V/∂q + ∂F/∂q̇ (the total time derivative by the chain rule through
+    q, q̇, the frame velocity v and ω) instead of the invariants and d'Alembert's form. The
+    beam's kinetic energy is integrated by 4-point Gauss (exact: |V|² has degree 6 in ξ)."""
+    names = ["u2", "u3", "th1", "th2", "th3", "w1", "w3"]
+    q = sp.symbols(" ".join(f"q_{n}" for n in names), real=True)
+    qd = sp.symbols(" ".join(f"qd_{n}" for n in names), real=True)
+    qdd = sp.symbols(" ".join(f"qdd_{n}" for n in names), real=True)
+    v, dv = sp.Matrix(sp.symbols("V1:4", real=True)), sp.symbols("dV1:4", real=True)
+    w, dw = sp.Matrix(sp.symbols("om1:4", real=True)), sp.symbols("dom1:4", real=True)
+    m0, rho_a, length, tip = sp.symbols("m0 rho_a L_b m_tip", positive=True)
+    com = sp.Matrix(sp.symbols("c1 c2 c3", real=True))
+    inertia = sp.symbols("I11 I22 I33", positive=True)
+    b1, b3, g0 = sp.symbols("b1 b3 g0", real=True)
+    ei = sp.symbols("EI1 EI3", positive=True)
+    k = sp.symbols("k1:6", positive=True)
+    c = sp.symbols("d1:6", nonnegative=True)
+    nu = sp.Matrix(sp.symbols("nu1:4", real=True))
+    qv, qdv = sp.Matrix(q), sp.Matrix(qd)
+    q0 = dict(zip(Q0, q[:5]))
+
+    def velocity(r):
+        return v + w.cross(r) + r.jacobian(qv) * qdv
+
+    # trolley: r̃ = P ρ + p is affine in ρ, so ∫|V|² dm needs only m, m c and J = ∫ ρ ρᵀ dm
+    r_trolley = (sp.Matrix(X) + quadratic_displacement()).xreplace(q0)
+    vel = velocity(r_trolley)
+    P = vel.jacobian(sp.Matrix(X))
+    p = vel.xreplace({x: 0 for x in X})
+    J = kin.second_moment(sp.diag(*inertia), kin.SYMPY) + m0 * com * com.T
+    T = ((P * J * P.T).trace() + 2 * (p.T * P * com)[0] * m0 + m0 * (p.T * p)[0]) / 2
+    # beam along x2: modes along x1 and x3, axial shortening ½∫ w'² dx, cross terms θ × w
+    e1, e2, e3 = sp.eye(3)[:, 0], sp.eye(3)[:, 1], sp.eye(3)[:, 2]
+    theta = sp.Matrix(q[2:5])
+
+    def beam_point(xi):
+        rho = sp.Matrix([b1, xi * length, b3])
+        wv = (q[5] * e1 + q[6] * e3) * xi ** 2
+        axial = -(q[5] ** 2 + q[6] ** 2) * sp.Rational(4, 3) * xi ** 3 / (2 * length) * e2
+        return rho + quadratic_displacement(rho).xreplace(q0) + wv + theta.cross(wv) + axial
+
+    z = sp.Symbol("z")
+    roots = sp.Poly(sp.legendre(4, z), z).nroots(n=20)
+    dleg = sp.legendre(4, z).diff(z)
+    gauss = [((1 + r) / 2, 1 / ((1 - r ** 2) * dleg.subs(z, r) ** 2)) for r in roots] + [(1, None)]
+    Vg = g0 * (nu.T * (m0 * (r_trolley.jacobian(sp.Matrix(X)) * com + r_trolley.xreplace({x: 0 for x in X}))))[0]
+    for xi, wgt in gauss:
+        mass = tip if wgt is None else rho_a * length * wgt
+        r = beam_point(xi)
+        vb = velocity(r)
+        T += mass * (vb.T * vb)[0] / 2
+        Vg += g0 * mass * (nu.T * r)[0]
+    d = sp.Matrix([quadratic_displacement(point)[axis] for point, axis in ROLLERS]).xreplace(q0)
+    V = sum(ki * di ** 2 for ki, di in zip(k, d)) / 2 + Vg
+    V += (ei[0] * q[5] ** 2 + ei[1] * q[6] ** 2) * 4 / (2 * length ** 3)  # ∫ (N'')² dξ = 4
+    dd = d.jacobian(qv) * qdv
+    rayleigh = sum(ci * x ** 2 for ci, x in zip(c, dd)) / 2
+    rows = []
+    for i in range(7):
+        p_i = T.diff(qd[i])
+        total = sum(p_i.diff(a) * b for a, b in zip(q + qd + tuple(v) + tuple(w), qd + qdd + dv + dw))
+        rows.append(total - T.diff(q[i]) + V.diff(q[i]) + rayleigh.diff(qd[i]))
+    args = args_of([(s, f"coordinate {n}", "m or rad") for s, n in zip(q, names)]
+                   + [(s, f"rate of {n}", "m/s or rad/s") for s, n in zip(qd, names)]
+                   + [(s, f"acceleration of {n}", "m/s^2 or rad/s^2") for s, n in zip(qdd, names)]
+                   + [(s, f"velocity of O, component {i + 1} (frame)", "m/s") for i, s in enumerate(v)]
+                   + [(s, f"d/dt of that component {i + 1}", "m/s^2") for i, s in enumerate(dv)]
+                   + [(s, f"ω component {i + 1}", "rad/s") for i, s in enumerate(w)]
+                   + [(s, f"d/dt of ω component {i + 1}", "rad/s^2") for i, s in enumerate(dw)]
+                   + [(s, f"upward unit vector ν, component {i + 1}", "1") for i, s in enumerate(nu)]
+                   + [(m0, "trolley mass", "kg")] + [(s, f"trolley centre of mass {s}", "m") for s in com]
+                   + [(s, f"trolley central inertia {s}", "kg m^2") for s in inertia]
+                   + [(rho_a, "beam mass per length", "kg/m"), (length, "beam length", "m"),
+                      (tip, "tip mass", "kg"), (b1, "beam root x1", "m"), (b3, "beam root x3", "m")]
+                   + [(s, f"beam bending stiffness {s}", "N m^2") for s in ei]
+                   + [(s, f"roller stiffness {s}", "N/m") for s in k] + [(s, f"roller damping {s}", "N s/m") for s in c]
+                   + [(g0, "gravitational acceleration", "m/s^2")]) + GEOMETRY_ARGS
+    return NamedMatrix("lagrange_residual", sp.Matrix(rows), args,
+                       "d/dt ∂T/∂q̇ - ∂T/∂q + ∂V/∂q + ∂F/∂q̇ of the small elastic trolley (7 coordinates)",
+                       "N or N m", "(1)-(8) by Lagrange's equations")
