@@ -32,6 +32,8 @@ from symmech.generated import trolley_elastic as gen
 from symmech.trolley import model
 
 ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
+# (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
+ROTATION_PAIRS = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
 # Gauss points per beam: exact for the products of two shortening fields of degree 2 NMAX + 1.
 BEAM_GAUSS = 2 * 8 + 4
 
@@ -187,8 +189,8 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
     if eff.rollers and mdl.rollers is not None:
         names += list(ROLLER_NAMES)
         fields += [rigid[:, :, i] for i in range(5)]
-        for col, (i, j) in enumerate(((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))):
-            psi[(i, j)] = rigid[:, :, 5 + col]
+        for col, pair in enumerate(ROTATION_PAIRS):
+            psi[pair] = rigid[:, :, 5 + col]
     n_roll = len(names)
     K_blocks, D_blocks = [], []
     start = 0
@@ -355,16 +357,12 @@ class System:
         rr[1:1 + N] = q
         qi, qj = q[self.pair_i], q[self.pair_j]
         rr[1 + N:] = np.where(self.diag, 0.5, 1.0) * qi * qj
-        A = np.zeros((N, F))
+        A = self._dv(q)
         A[np.arange(N), 1 + np.arange(N)] = 1.0
-        cols = 1 + N + np.arange(len(self.pair_i))
-        np.add.at(A, (self.pair_i, cols), qj)
-        off = ~self.diag
-        np.add.at(A, (self.pair_j[off], cols[off]), qi[off])
         return rr, A
 
     def _dv(self, rate):
-        """(N, F): ∂(Σ_c rate_c φ̃_c)/∂q_b = Σ_c rate_c ψ_cb."""
+        """(N, F): ∂(Σ_c rate_c φ̃_c)/∂q_b = Σ_c rate_c ψ_cb (with rate = q: the ψ part of φ̃_b)."""
         out = np.zeros((self.N, self.F))
         cols = 1 + self.N + np.arange(len(self.pair_i))
         np.add.at(out, (self.pair_i, cols), rate[self.pair_j])
@@ -458,8 +456,7 @@ class System:
         p = self.contacts
         f = gen.rigid_fields(p[:, 0], p[:, 1], p[:, 2])
         u = np.einsum("pik,k->pi", f[:, :, :5], q[:5])
-        pairs = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
-        for col, (i, j) in enumerate(pairs):
+        for col, (i, j) in enumerate(ROTATION_PAIRS):
             u += (0.5 if i == j else 1.0) * q[i] * q[j] * f[:, :, 5 + col]
         return np.cross(p + u, forces[:, None] * self.directions).sum(0)
 
@@ -470,7 +467,7 @@ class System:
         rr, A = self.coefficients(q)
         M = A @ self.Gtr @ A.T
         W = kin.skew(fs.w)
-        first = inv.S1[:].T @ rr
+        first = inv.S1.T @ rr
         J = np.einsum("k,klij,l->ij", rr, inv.G, rr)
         t0 = 0.5 * (inv.mass * fs.v0 @ fs.v0 + 2 * fs.v0 @ np.cross(fs.w, first) + np.sum((W.T @ W) * J))
         d = self.roller_state(q, qd)[0]
