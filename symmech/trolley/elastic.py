@@ -570,13 +570,14 @@ def _dissipation(system: System, q, qd) -> float:
 
 
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
-             atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
+             atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True) -> dict:
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
     (plus the offsets ``dq0``, ``dqd0`` of coordinates and rates, when given).
 
     y = [q, q̇, E_d]: the coordinates, their rates and the dissipated energy [J]; the frame
     follows s(t) of :class:`Timeline`. Implicit methods ("Radau", "BDF") use the analytic Jacobian; the
-    returned dict holds arrays with a leading axis n (see :func:`outputs`)."""
+    returned dict holds arrays with a leading axis n (see :func:`outputs`); without
+    ``analytic_jacobian`` scipy differences the right-hand side instead."""
     from scipy.integrate import solve_ivp
 
     t = np.asarray(t, dtype=float)
@@ -602,7 +603,7 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     zero = np.zeros(N)
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
-    kw = {"jac": jac} if method in ("Radau", "BDF", "LSODA") else {}
+    kw = {"jac": jac} if analytic_jacobian and method in ("Radau", "BDF", "LSODA") else {}
     sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, **kw)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise SymmechError(f"elastic trolley: integration failed at t = {sol.t[-1]:.6g} s ({sol.message})")
