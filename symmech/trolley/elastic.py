@@ -604,7 +604,10 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
     kw = {"jac": jac} if analytic_jacobian and method in ("Radau", "BDF", "LSODA") else {}
-    sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, **kw)
+    # Steps no longer than the output spacing: the outputs come from the dense output, whose
+    # interpolation error the step control does not see (Radau's steps grow to ~0.3 s here).
+    step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
+    sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, max_step=step, **kw)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise SymmechError(f"elastic trolley: integration failed at t = {sol.t[-1]:.6g} s ({sol.message})")
     out = outputs(system, drive, t, line.s_nodes, sol.y.T)
