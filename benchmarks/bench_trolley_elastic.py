@@ -13,14 +13,17 @@ import time
 
 import numpy as np
 
-from symmech.core.scene import Section
+from symmech.core import pipeline
 from symmech.trolley import elastic as el
-from symmech.trolley import track as tracks
+from symmech.trolley import elastic_scene
+
+SCENE = {"kind": "trolley", "frame": "frenet", "track": {"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)},
+         "trolley": {"mass": 10.0, "com": [1.0, 0.5, 0.0], "axle_distance": 2.0, "half_gauge": 1.0},
+         "motion": {"speed": "3*t + 7*sin(t/2)"}, "time": {"t_end": 2.0, "steps": 20}}
 
 
 def setup():
-    trk = tracks.build(Section({"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)}, "track"))
-    drive = el.Drive(trk, "frenet", False, lambda t: (3 * t + 7 * np.sin(t / 2), 3 + 3.5 * np.cos(t / 2)))
+    drive = elastic_scene.drive_of(pipeline.load(SCENE).setup, 1)
     mdl = el.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, 9.81,
                           el.Rollers((1e8,) * 5, (1e3,) * 5))
     return el.System(mdl), drive

@@ -1,16 +1,20 @@
 """Elastic trolley (seed 002, issue 10): derivation, rollers, beams, rigid limit, stiffening, energy."""
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg
 from scipy.optimize import brentq
 
 from symmech.core.errata import evaluate
-from symmech.core.scene import Section
 from symmech.generated import trolley_elastic as gen
 from symmech.generated import trolley_frame as frm
 from symmech.trolley import elastic as el
-from symmech.trolley import errata_elastic
-from symmech.trolley import track as tracks
+from symmech.trolley import elastic_scene, errata_elastic
+
+sys.path.insert(0, str(Path(__file__).parent))
+from trolley_util import prepared, setup as scene_dict  # noqa: E402
 
 RNG = np.random.default_rng(7)
 G0 = 9.81
@@ -18,17 +22,21 @@ G0 = 9.81
 CANTILEVER_BETA = (1.8751040687119611, 4.6940911329741745, 7.8547574382376126)
 
 
+def drive_for(data, case=1):
+    """The elastic model's drive of a trolley scene dict (prepared like `symmech run`)."""
+    return elastic_scene.drive_of(prepared(data), case)
+
+
 def straight(speed=0.0):
-    trk = tracks.build(Section({"type": "expression", "x": "s", "y": "0", "z": "0"}, "track"))
-    return el.Drive(trk, "twist", False, lambda t: (speed, 0.0))
+    return drive_for(scene_dict(motion={"speed": f"{speed!r}"}))
 
 
 def circle(radius, speed):
     """Horizontal circle at constant speed: x2 toward the centre, x3 up (Frenet)."""
     r = f"{radius!r}"
-    trk = tracks.build(Section({"type": "expression", "x": f"{r}*sin(s/{r})", "y": "0",
-                                "z": f"{r}*cos(s/{r})"}, "track"))
-    return el.Drive(trk, "frenet", False, lambda t: (speed, 0.0))
+    return drive_for(scene_dict(frame="frenet", track={"type": "expression", "x": f"{r}*sin(s/{r})", "y": "0",
+                                                       "z": f"{r}*cos(s/{r})"},
+                                motion={"speed": f"{speed!r}"}, time={"t_end": 1.0, "steps": 10}))
 
 
 def modes_at(system, drive, q=None):
@@ -246,9 +254,9 @@ def test_rotating_cantilever_follows_southwell(hub):
 
 # ---------------------------------------------------------------- along the track
 
-def helix():
-    trk = tracks.build(Section({"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)}, "track"))
-    return el.Drive(trk, "frenet", False, lambda t: (3 * t + 7 * np.sin(t / 2), 3 + 3.5 * np.cos(t / 2)))
+def helix(t_end=10.0):
+    return drive_for(scene_dict(frame="frenet", track={"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)},
+                                motion={"speed": "3*t + 7*sin(t/2)"}, time={"t_end": t_end, "steps": 10}))
 
 
 def test_rigid_limit_on_the_paper_helix():

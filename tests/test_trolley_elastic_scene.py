@@ -6,12 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symmech.core.scene import SceneError, Section
+from symmech.core.scene import SceneError
 from symmech.core.schema import validate
 from symmech.trolley import elastic_scene, scene
 
 sys.path.insert(0, str(Path(__file__).parent))
-from trolley_util import setup as scene_dict  # noqa: E402
+from trolley_util import prepared as trolley_setup, setup as scene_dict  # noqa: E402
 
 HELIX = scene_dict(frame="frenet", track={"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)},
                    trolley={"mass": 100.0, "com": [1.0, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
@@ -27,7 +27,7 @@ ELASTIC = {
 
 
 def prepared(elastic, case=2, data=HELIX):
-    st = scene.read(Section(copy.deepcopy(data)))
+    st = trolley_setup(data)
     resolved = validate(elastic_scene.SCHEMA, copy.deepcopy(elastic))
     return st, elastic_scene.prepare(resolved, st.body, elastic_scene.drive_of(st, case), st.t)
 
@@ -56,7 +56,7 @@ def test_full_run_tables_and_summary():
     whole["trolley"] = {**whole["trolley"], "mass": m, "com": com.tolist(),
                         "inertia": [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[1, 2],
                                     inertia[0, 2]]}
-    rigid = scene.compute(scene.read(Section(whole)))[2]["P"]
+    rigid = scene.compute(trolley_setup(whole))[2]["P"]
     assert np.allclose(P.data[:, 8:], rigid, rtol=1e-9, atol=1e-9)
     late = P.column("t") > 1.5
     assert np.abs(P.data[late, 2:8] - rigid[late]).max() < 0.05 * np.abs(rigid).max()
@@ -84,7 +84,7 @@ def test_full_run_tables_and_summary():
 ])
 def test_bad_fields_name_themselves(elastic, field):
     with pytest.raises(SceneError) as err:
-        st = scene.read(Section(copy.deepcopy(HELIX)))
+        st = trolley_setup(HELIX)
         resolved = elastic_scene.SCHEMA.check("elastic", copy.deepcopy(elastic))
         elastic_scene.prepare(resolved, st.body, elastic_scene.drive_of(st, 2), st.t)
     assert str(err.value).startswith(f"scene field '{field}'")

@@ -288,7 +288,8 @@ def roller_energy(rollers: Rollers, d) -> float:
 @dataclass(frozen=True)
 class Drive:
     """The prescribed motion of the frame: track, frame mode ("twist", "frenet"), case 2
-    (``local_curvature``) or 1, speed(t) -> (V0 [m/s], dV0 [m/s²]), start s0 [m]."""
+    (``local_curvature``) or 1, speed(t) -> (V0 [m/s], dV0 [m/s²]), start s0 [m], the
+    case-2 difference order and step [m], and the rigid setup's frame plan."""
 
     track: object
     frame: str
@@ -297,6 +298,7 @@ class Drive:
     s0: float = 0.0
     fd_order: int = 4
     fd_step: float = 1e-3
+    plan: object = None  # model.FramePlan keeping the frame continuous (from the trolley setup)
 
 
 @dataclass(frozen=True)
@@ -314,8 +316,9 @@ class FrameState:
 def frames(drive: Drive, s, l: float) -> model.Frame:
     s = np.atleast_1d(np.asarray(s, dtype=float))
     if drive.local_curvature:
-        return model.local_curvature_frame(drive.track, s, l, drive.frame, drive.fd_order, drive.fd_step)
-    return model.moving_frame(drive.track, s, drive.frame)
+        return model.local_curvature_frame(drive.track, s, l, drive.frame, drive.fd_order, drive.fd_step,
+                                           plan=drive.plan)
+    return model.moving_frame(drive.track, s, drive.frame, drive.plan)
 
 
 def frame_state(fr: model.Frame, i: int, V0: float, dV0: float) -> FrameState:

@@ -224,4 +224,4 @@ def drive_of(trolley_setup, case: int) -> el.Drive:
         raise SceneError("effects.traction", "the elastic model runs with a prescribed speed V0(t) only")
     f, df = trolley_setup.speed
     return el.Drive(trolley_setup.track, trolley_setup.frame, case == 2, lambda t: (f(t), df(t)),
-                    trolley_setup.s0, trolley_setup.fd_order, trolley_setup.fd_step)
+                    trolley_setup.s0, trolley_setup.fd_order, trolley_setup.fd_step, trolley_setup.plan)
