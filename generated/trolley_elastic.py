@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 7e2eb07dafdc52372f6e3e0963dbf0c19cb28fdd45a55771f720764a997db4b7
+# symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
+# source key 03d4a5fc836566463f58b8da3456743a41d3e9a14ca837cae2c9a5cbdebfb741
+# body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.
