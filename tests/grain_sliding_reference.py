@@ -3,13 +3,47 @@
 Flight: r'' = g_K - s''(t) until the relative height returns to the radius (plastic, frictionless
 landing: the normal velocity stops). Sliding: v' = f - mu n v/|v| with stick while |f| <= mu n,
 lift-off when n(t) = 0. Written directly with solve_ivp and terminal events (DOP853, rtol 1e-12),
-sharing no code with symmech's sliding integrator.
+sharing no code with symmech's integrators (only the model builders used by the tests and the benchmark).
 """
 import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
+
+from symmech.generated import grain_motion as gm
+from symmech.grain import flight, motion
+from symmech.grain.coulomb_law import ImpactLaw
+
+G = 9.81
+RADIUS = 1e-3
+
+
+def sphere(mu=0.4, amplitude=0.0, freq=25.0, direction=(0.0, 0.0, 1.0), g_k=(0.0, 0.0, -G), rotation=True,
+           law=None, phase=0.0):
+    vib = flight.Vibration(amplitude, 2 * math.pi * freq, phase, direction)
+    law = law or ImpactLaw("coulomb", e_n=0.0, e_t=-1.0, check_printed=False)
+    return motion.Model((RADIUS,) * 3, 1e-6, g_k, vib, law, mu, motion.Effects(rotation=rotation))
+
+
+def on_plane(v=(0.0, 0.0, 0.0), w=(0.0, 0.0, 0.0), z=RADIUS, t=0.0):
+    return motion.State(t, np.array([0.0, 0.0, z]), np.array(v, float), np.array([1.0, 0, 0, 0]), np.array(w, float))
+
+
+def conveyor(phase, mu=0.4):
+    """Point mass on a 3 degree incline, 30 degree throw at Gamma_v = 1.3: lift-off once a period."""
+    gam = math.radians(30)
+    w = 2 * math.pi * 25
+    amp = 1.3 * G / (w**2 * math.sin(gam))
+    return sphere(mu=mu, amplitude=amp, direction=(math.cos(gam), 0.0, math.sin(gam)),
+                  g_k=tuple(gm.gravity(G, math.radians(3), 0.0)), rotation=False, phase=phase)
+
+
+def population(n, seed):
+    """Surface phases (n,) [rad] and start velocities (n, 2) [m/s]: along X up to 5 cm/s, sideways 1-5 cm/s."""
+    rng = np.random.default_rng(seed)
+    side = rng.uniform(0.01, 0.05, n) * rng.choice([-1, 1], n)
+    return rng.uniform(0, 2 * math.pi, n), np.column_stack([rng.uniform(-0.05, 0.05, n), side])
 
 
 def surface_acc(vib, t):

@@ -12,14 +12,12 @@ import mpmath
 import numpy as np
 import pytest
 
-from grain_sliding_reference import reference
+from grain_sliding_reference import RADIUS, conveyor, on_plane, population, reference, sphere
 from symmech.core.scene import SymmechError, load
 from symmech.generated import grain_motion as gm
 from symmech.grain import flight, motion, motion_scene
-from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
-RADIUS = 1e-3
 
 
 def default_scene(tmp_path, duration, **replace_text):
@@ -29,17 +27,6 @@ def default_scene(tmp_path, duration, **replace_text):
     path = tmp_path / "scene.toml"
     path.write_text(text)
     return motion_scene.parse(load(path))
-
-
-def sphere(mu=0.4, amplitude=0.0, freq=25.0, direction=(0.0, 0.0, 1.0), g_k=(0.0, 0.0, -G), rotation=True,
-           law=None, phase=0.0):
-    vib = flight.Vibration(amplitude, 2 * math.pi * freq, phase, direction)
-    law = law or ImpactLaw("coulomb", e_n=0.0, e_t=-1.0, check_printed=False)
-    return motion.Model((RADIUS,) * 3, 1e-6, g_k, vib, law, mu, motion.Effects(rotation=rotation))
-
-
-def on_plane(v=(0.0, 0.0, 0.0), w=(0.0, 0.0, 0.0), z=RADIUS, t=0.0):
-    return motion.State(t, np.array([0.0, 0.0, z]), np.array(v, float), np.array([1.0, 0, 0, 0]), np.array(w, float))
 
 
 def numerics(model, **kw):
@@ -133,21 +120,6 @@ def test_landing_keeps_the_angular_momentum_about_the_contact():
 
 
 # --------------------------------------------------------------------------- 5. sliding: no stall, no drift
-
-
-def conveyor(phase, mu=0.4):
-    """Point mass on a 3 degree incline, 30 degree throw at Gamma_v = 1.3: lift-off once a period."""
-    gam = math.radians(30)
-    w = 2 * math.pi * 25
-    amp = 1.3 * G / (w**2 * math.sin(gam))
-    return sphere(mu=mu, amplitude=amp, direction=(math.cos(gam), 0.0, math.sin(gam)),
-                  g_k=tuple(gm.gravity(G, math.radians(3), 0.0)), rotation=False, phase=phase)
-
-
-def population(n, seed):
-    rng = np.random.default_rng(seed)
-    side = rng.uniform(0.01, 0.05, n) * rng.choice([-1, 1], n)
-    return rng.uniform(0, 2 * math.pi, n), np.column_stack([rng.uniform(-0.05, 0.05, n), side])
 
 
 def check_population(n, seed, t_end):

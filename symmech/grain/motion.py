@@ -5,17 +5,27 @@ One grain alternates between three regimes:
 - flight: exact translation in the vibrating frame and torque-free rotation to a
   tolerance (:mod:`symmech.grain.flight`), until the exact support distance of the
   ellipsoid reaches the plane (:mod:`symmech.grain.contact`);
-- impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`);
-- sliding: Coulomb stick/slip on the plane (:mod:`symmech.grain.sliding`) until the
-  normal force would become negative.
+- impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`),
+  only for a contact point approaching the plane faster than round-off;
+- sliding: Coulomb stick/slip and rolling on the plane, spin kept
+  (:mod:`symmech.grain.sliding`), until the normal force would become negative.
 
-A contact reached without ever separating (a rocking body that presses on the
-plane right after an impact) is persistent contact: the grain lands and slides.
-Lift-off after an impact is judged physically: the grain flies when the normal
-velocity of its contact point after the impact exceeds ``rest_velocity`` (a
-bounce lower than that is the end of chattering: the geometric series of ever
-smaller bounces is summed into sliding), or when the surface accelerates away
-faster than gravity (normal force negative). Otherwise it slides.
+A flight that starts on the plane (after an impact or a lift-off) must first rise
+above round-off before a contact can be found; one that does not within a scan
+step, or a contact reached without approaching, is a grain resting on the plane:
+it lands and slides. Lift-off after an impact is judged physically: the grain
+flies when the normal velocity of its contact point after the impact exceeds
+``rest_velocity`` (a bounce lower than that is the end of chattering: the
+geometric series of ever smaller bounces is summed into sliding), or when the
+surface accelerates away faster than gravity (normal force negative). Landing
+is a plastic normal impulse at the contact point, which keeps the angular
+momentum about it.
+
+Every run returns an energy budget (absolute kinetic energy plus the potential
+of gravity against the work of the surface and the losses in impacts, landings
+and sliding; its residual measures the numerics), and has guards: a run that
+stops advancing time raises ``SymmechError`` instead of hanging, and an optional
+``on_progress(t_now)`` callback is called at most every 0.2 s of wall time.
 
 Paper mode (the printed fixed-step scheme) lives in :mod:`symmech.grain.paper_mode`.
 """
@@ -35,7 +45,7 @@ REGIMES = ("flight", "impact", "sliding")
 EPS = float(np.finfo(float).eps)
 PROGRESS_INTERVAL = 0.2  # s of wall time between two calls of on_progress
 ENERGY_TOLERANCE = 1e-6  # stated bound on the relative residual of the energy budget
-ZENO_IMPACTS, ZENO_INTERVAL = 100, 1e-4  # this many impacts closer than this many periods: chattering
+ZENO_IMPACTS, ZENO_INTERVAL = 100, 1e-4  # this many impacts within this many periods: chattering
 MAX_IDLE_STEPS = 1000  # stagnation guard: regime changes in a row that do not advance time
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "vx", "vy", "vz", "q0", "q1", "q2", "q3", "wx", "wy", "wz", "regime")
 
@@ -119,7 +129,8 @@ class State:
 @dataclass
 class Motion:
     """Result: ``trajectory`` (n, 15) with :data:`TRAJECTORY_COLUMNS`, ``impacts`` (list of dicts),
-    ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the ``start`` state."""
+    ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the ``start`` state; ``extra`` goes into
+    the summary as it is (accurate mode: ``landings`` and ``energy_budget``, the dict of :meth:`_Budget.report`)."""
 
     trajectory: np.ndarray
     impacts: list
@@ -241,10 +252,11 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progres
     if not model.effects.rotation:
         st.w = np.zeros(3)
     budget = _Budget(model, st)
+    on_plane = _gap(model, st) <= _gap_noise(model, st)
     time_in = dict.fromkeys(("flight", "sliding"), 0.0)
     impacts: list = []
     warnings: list = []
-    regime, on_plane, landings, rapid, idle = "flight", False, 0, 0, 0
+    regime, landings, idle = "flight", 0, 0
     rec.add(st, regime)
     while st.t < t_end:
         progress(st.t)
@@ -254,25 +266,14 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progres
             time_in["flight"] += st.t - t_before
             if status == "end":
                 break
-            u_n = _contact_velocity(model, st)
-            if status == "contact" and u_n < -_velocity_noise(model, st):
+            if status == "contact" and _contact_velocity(model, st) < -_velocity_noise(model, st):
                 if len(impacts) >= num.max_impacts:
                     warnings.append(f"stopped at t = {st.t:.6g} s after numerics.max_impacts = "
                                     f"{num.max_impacts} impacts")
                     break
-                rapid = rapid + 1 if impacts and st.t - impacts[-1]["t"] < ZENO_INTERVAL * model.period else 0
-                before = st
-                st, out = _impact(model, st, warnings)
-                budget.impulse(st.t, out["impulse"][0])
-                budget.impacts += float(out["ke_before"][0] - out["ke_after"][0])
-                rec.add(before, "impact")
-                rec.add(st, "impact")
-                impacts.append(impact_record(st.t, before, st, out))
-                u_n = float(out["u_after"][0, 2])
-                if rapid >= ZENO_IMPACTS and u_n > num.rest_velocity:
-                    warnings.append(f"{ZENO_IMPACTS} impacts closer than {ZENO_INTERVAL:g} periods: "
-                                    "chattering summed into sliding")
-                    u_n = 0.0
+                st, u_n = _bounce(model, num, st, impacts, rec, budget, warnings)
+            else:
+                u_n = 0.0  # touching without approaching: resting on the plane
             # Resting (no separating velocity the numerics resolve) on a plane that pushes: slide.
             on_plane = True
             if u_n <= num.rest_velocity and model.sliding.normal(st.t) > 0:
@@ -292,6 +293,24 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progres
     return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st, extra)
 
 
+def _bounce(model: Model, num: Numerics, st: State, impacts: list, rec: _Recorder, budget: _Budget,
+            warnings: list):
+    """An impact at ``st``, logged and booked: (state after, normal contact velocity after [m/s]; zero when the
+    impacts have become a chattering sequence too dense to follow, which is summed into sliding)."""
+    before = st
+    st, out = _impact(model, st, warnings)
+    budget.impulse(st.t, out["impulse"][0])
+    budget.impacts += float(out["ke_before"][0] - out["ke_after"][0])
+    rec.add(before, "impact")
+    rec.add(st, "impact")
+    impacts.append(impact_record(st.t, before, st, out))
+    times = [i["t"] for i in impacts[-ZENO_IMPACTS:]]
+    if len(times) == ZENO_IMPACTS and times[-1] - times[0] < ZENO_INTERVAL * model.period:
+        warnings.append(f"{ZENO_IMPACTS} impacts within {ZENO_INTERVAL:g} periods: chattering summed into sliding")
+        return st, 0.0
+    return st, float(out["u_after"][0, 2])
+
+
 def _impact(model: Model, st: State, warnings: list):
     """The scene's impact law at the lowest point: (state after, law output)."""
     Q = flight.rotation_matrix(st.q)
@@ -305,6 +324,16 @@ def _contact_velocity(model: Model, st: State) -> float:
     """Normal velocity [m/s] of the body point at the lowest point, relative to the surface."""
     Q = flight.rotation_matrix(st.q)
     return float(st.v[2] + np.cross(Q @ st.w, contact.contact_offset(model.axes, Q))[2])
+
+
+def _gap(model: Model, st: State) -> float:
+    """Height [m] of the lowest point above the plane."""
+    return float(st.r[2] - contact.support_distance(model.axes, flight.rotation_matrix(st.q)))
+
+
+def _gap_noise(model: Model, st: State) -> float:
+    """Round-off level [m] of the gap: a flight from the plane has left it only once above this."""
+    return 64 * EPS * (max(model.axes) + abs(st.r[2]) + model.vibration.amplitude)
 
 
 def _velocity_noise(model: Model, st: State) -> float:
@@ -380,8 +409,7 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
 
     t_from = st.t
     if on_plane:
-        noise = 64 * EPS * (max(model.axes) + abs(st.r[2]) + vib.amplitude)
-        t_from = _rise(gap, st.t, min(num.scan_step, t_end - st.t), noise)
+        t_from = _rise(gap, st.t, min(num.scan_step, t_end - st.t), _gap_noise(model, st))
         if t_from is None:
             return st, "resting"
     tc = contact.first_root(gap, t_from, t_end, num.scan_step, num.tolerance * num.scan_step)

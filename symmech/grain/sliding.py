@@ -128,10 +128,12 @@ class _Contact:
 
     def geometry(self, y):
         """Contact offset R (3,), slip s (2,), slip acceleration of the carried contact point c (2,)."""
-        w, q = y[4:7], y[7:11]
-        R = self.R0 if self.R_body is None else flight.rotation_matrix(q) @ self.R_body
-        s = y[2:4] + np.cross(w, R)[:2]
-        c = np.cross(w, np.cross([0.0, 0.0, w[2]], R))[:2]
+        w = y[4:7]
+        R = self.R0 if self.R_body is None else _rotate(y[7:11], self.R_body)
+        wR = _cross(w, R)
+        s = y[2:4] + wR[:2]
+        # The contact point turns with the spin about the normal: R' = w_z e_z x R.
+        c = _cross(w, (-w[2] * R[1], w[2] * R[0], 0.0))[:2]
         return R, s, c
 
     def B(self, R) -> np.ndarray:
@@ -163,21 +165,30 @@ class _Contact:
         if stick:
             phi = -np.linalg.solve(self.B(R), f + c)
         else:
-            speed = math.hypot(*s)
-            phi = -self.model.mu * n * s / speed if speed > 0.0 else np.zeros(2)
-        force = np.array([phi[0], phi[1], n])
-        w = y[4:7]
-        dq = 0.5 * _quat_mul(np.array([0.0, *w]), y[7:11])
-        return np.concatenate([y[2:4], f + phi, self.M @ np.cross(R, force), dq,
-                               [force @ vel, -(phi @ s)]])
+            speed = math.hypot(s[0], s[1])
+            phi = -self.model.mu * n / speed * s if speed > 0.0 else np.zeros(2)
+        force = (phi[0], phi[1], n)
+        w0, w1, w2 = y[4:7]
+        q0, q1, q2, q3 = y[7:11]
+        dq = 0.5 * np.array([-w0 * q1 - w1 * q2 - w2 * q3, w0 * q0 + w1 * q3 - w2 * q2,
+                             w1 * q0 + w2 * q1 - w0 * q3, w2 * q0 + w0 * q2 - w1 * q1])  # (0, w) (x) q
+        return np.concatenate([y[2:4], f + phi, self.M @ _cross(R, force), dq,
+                               [force[0] * vel[0] + force[1] * vel[1] + n * vel[2], -(phi[0] * s[0] + phi[1] * s[1])]])
+
+
+def _cross(a, b) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _rotate(q, v) -> np.ndarray:
+    """Vector v (3,) rotated by the quaternion q (4,) (normalised on the fly)."""
+    u = q[1:]
+    t = 2.0 * _cross(u, v)
+    return v + (q[0] * t + _cross(u, t)) / float(q @ q)
 
 
 def _cross_matrix(r) -> np.ndarray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
-
-
-def _quat_mul(a, b) -> np.ndarray:
-    return np.array([a[0] * b[0] - a[1:] @ b[1:], *(a[0] * b[1:] + b[0] * a[1:] + np.cross(a[1:], b[1:]))])
 
 
 def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, sample_times, step: float,
