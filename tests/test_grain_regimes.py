@@ -15,7 +15,7 @@ import pytest
 from grain_sliding_reference import RADIUS, conveyor, on_plane, population, reference, sphere
 from symmech.core.scene import SymmechError, load
 from symmech.generated import grain_motion as gm
-from symmech.grain import flight, motion, motion_scene
+from symmech.grain import flight, motion, motion_scene, paper_mode
 
 G = 9.81
 
@@ -177,6 +177,10 @@ def test_progress_is_reported_and_an_exception_in_it_stops_the_run(monkeypatch):
     with pytest.raises(Budget) as info:
         motion.simulate(model, numerics(model), on_plane(v=(0.0, 0.02, 0.0)), 0.2, on_progress=stop)
     assert 0.05 < info.value.args[0] < 0.1
+    with pytest.raises(Budget) as info:  # paper mode: the same contract
+        paper_mode.simulate(model, numerics(model, mode="paper", dt=1e-4, nodes=20), on_plane(), 0.2,
+                            on_progress=stop)
+    assert 0.05 < info.value.args[0] < 0.051
 
 
 def test_stagnating_sliding_is_an_error_not_a_hang(monkeypatch):

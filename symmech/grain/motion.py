@@ -195,7 +195,7 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
             "printed_creates_energy": out["printed_creates_energy"][i], "converged": bool(out["converged"][i])}
 
 
-class _Progress:
+class Progress:
     """Calls ``on_progress(t_now)`` at most every ``PROGRESS_INTERVAL`` seconds of wall time."""
 
     def __init__(self, on_progress):
@@ -245,7 +245,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progres
     0.2 s of wall time; an exception it raises stops the run and propagates unchanged.
     """
     model = model.active()
-    progress = _Progress(on_progress)
+    progress = Progress(on_progress)
     rec = _Recorder(num.sample_interval)
     st = replace(start, r=np.array(start.r, float), v=np.array(start.v, float),
                  q=np.asarray(start.q, float) / np.linalg.norm(start.q), w=np.array(start.w, float))
