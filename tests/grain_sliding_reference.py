@@ -30,13 +30,14 @@ def on_plane(v=(0.0, 0.0, 0.0), w=(0.0, 0.0, 0.0), z=RADIUS, t=0.0):
     return motion.State(t, np.array([0.0, 0.0, z]), np.array(v, float), np.array([1.0, 0, 0, 0]), np.array(w, float))
 
 
-def conveyor(phase, mu=0.4):
-    """Point mass on a 3 degree incline, 30 degree throw at Gamma_v = 1.3: lift-off once a period."""
+def conveyor(phase, mu=0.4, rotation=False):
+    """Point mass (a rolling sphere with ``rotation``) on a 3 degree incline, 30 degree throw at Gamma_v = 1.3:
+    lift-off once a period."""
     gam = math.radians(30)
     w = 2 * math.pi * 25
     amp = 1.3 * G / (w**2 * math.sin(gam))
     return sphere(mu=mu, amplitude=amp, direction=(math.cos(gam), 0.0, math.sin(gam)),
-                  g_k=tuple(gm.gravity(G, math.radians(3), 0.0)), rotation=False, phase=phase)
+                  g_k=tuple(gm.gravity(G, math.radians(3), 0.0)), rotation=rotation, phase=phase)
 
 
 def population(n, seed):
@@ -66,8 +67,8 @@ def reference(g_k, vib, mu, radius, v0, t_end, rtol=1e-12):
             def fly(s, y):
                 return np.concatenate([y[3:], g - surface_acc(vib, s)])
 
-            def land(_s, y):
-                return y[2] - radius
+            def land(_s, y):  # 1e-13 m below: the start on the plane is not itself a landing
+                return y[2] - radius + 1e-13
             land.terminal, land.direction = True, -1
             sol = solve_ivp(fly, (t, t_end), [*r, radius, *v, 0.0], method="DOP853", rtol=rtol, atol=1e-15,
                             events=land)
@@ -81,9 +82,10 @@ def reference(g_k, vib, mu, radius, v0, t_end, rtol=1e-12):
         t_lift = brentq(normal, grid[down[0]], grid[down[0] + 1], xtol=1e-15) if down.size else t_end
         if normal(t) <= 0:
             t_lift = t
+        unstuck = False  # slip onset just located: slip, whatever round-off says at the root
         while t < t_lift:
             speed = math.hypot(*v)
-            if speed < 1e-12 and np.linalg.norm(drive(t)) <= mu * normal(t):
+            if speed < 1e-12 and not unstuck and np.linalg.norm(drive(t)) <= mu * normal(t):
                 ok = [s for s in grid if s > t and s <= t_lift]
                 vals = [mu * normal(s) - np.linalg.norm(drive(s)) for s in ok]
                 cross = next((i for i, x in enumerate(vals) if x < 0), None)
@@ -92,8 +94,9 @@ def reference(g_k, vib, mu, radius, v0, t_end, rtol=1e-12):
                 else:
                     lo = t if cross == 0 else ok[cross - 1]
                     t = brentq(lambda s: mu * normal(s) - np.linalg.norm(drive(s)), lo, ok[cross], xtol=1e-15)
-                v = np.zeros(2)
+                v, unstuck = np.zeros(2), True
                 continue
+            unstuck = False
             ref = v / speed if speed > 0 else drive(t) / np.linalg.norm(drive(t))
 
             def slip(s, y):

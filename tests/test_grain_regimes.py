@@ -38,7 +38,7 @@ def numerics(model, **kw):
 
 
 def test_default_scene_impacts_approach_and_the_energy_budget_closes(tmp_path):
-    """Before: 8 of the first 130 impacts (0.6 s) had a separating contact and zero impulse (noise roots).
+    """Before: 9 of the ~143 impacts of the first 0.6 s had a separating contact and zero impulse (noise roots).
     Energy: input by the surface = change of energy + losses in impacts, landings and sliding."""
     res = motion_scene.simulate(default_scene(tmp_path, 0.6))
     assert len(res.impacts) > 100

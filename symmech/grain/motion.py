@@ -258,6 +258,9 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progres
     warnings: list = []
     regime, landings, idle = "flight", 0, 0
     rec.add(st, regime)
+    if on_plane and _contact_velocity(model, st) <= _velocity_noise(model, st) and model.sliding.normal(st.t) > 0:
+        regime, on_plane = "sliding", False  # released on a plane that pushes: it slides from the start
+        st = _land(model, st, budget)
     while st.t < t_end:
         progress(st.t)
         t_before = st.t
