@@ -232,10 +232,11 @@ class _Budget:
         end = self.energy(st)
         residual = end - self.start - (self.work - self.impacts - self.landings - self.sliding)
         scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
-        return {"start_J": self.start, "end_J": end, "input_by_surface_J": self.work,
-                "lost_in_impacts_J": self.impacts, "lost_at_landings_J": self.landings,
-                "lost_in_sliding_J": self.sliding, "residual_J": residual,
-                "relative_residual": abs(residual) / scale if scale > 0 else 0.0, "tolerance": tolerance}
+        parts = {"start_J": self.start, "end_J": end, "input_by_surface_J": self.work,
+                 "lost_in_impacts_J": self.impacts, "lost_at_landings_J": self.landings,
+                 "lost_in_sliding_J": self.sliding, "residual_J": residual,
+                 "relative_residual": abs(residual) / scale if scale > 0 else 0.0}
+        return {**{k: float(v) for k, v in parts.items()}, "tolerance": tolerance}
 
 
 def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progress=None) -> Motion:
