@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from grain_sliding_reference import RADIUS, conveyor, on_plane, population, reference, sphere
-from symmech.core.scene import SymmechError, load
+from symmech.core import pipeline
+from symmech.core.scene import SymmechError
 from symmech.generated import grain_motion as gm
 from symmech.grain import flight, motion, motion_scene, paper_mode
 
@@ -26,7 +27,7 @@ def default_scene(tmp_path, duration, **replace_text):
         text = text.replace(old, new)
     path = tmp_path / "scene.toml"
     path.write_text(text)
-    return motion_scene.parse(load(path))
+    return pipeline.load(path).setup
 
 
 def numerics(model, **kw):
@@ -165,7 +166,7 @@ def test_progress_is_reported_and_an_exception_in_it_stops_the_run(monkeypatch):
     monkeypatch.setattr(motion, "PROGRESS_INTERVAL", 0.0)
     model = conveyor(0.3)
     seen = []
-    motion.simulate(model, numerics(model), on_plane(v=(0.0, 0.02, 0.0)), 0.2, on_progress=seen.append)
+    motion.simulate(model, numerics(model), on_plane(v=(0.0, 0.02, 0.0)), 0.2, on_step=seen.append)
     assert len(seen) > 10 and seen == sorted(seen) and 0.0 <= seen[0] and seen[-1] <= 0.2
 
     class Budget(Exception):
@@ -175,11 +176,11 @@ def test_progress_is_reported_and_an_exception_in_it_stops_the_run(monkeypatch):
         if t_now > 0.05:
             raise Budget(t_now)
     with pytest.raises(Budget) as info:
-        motion.simulate(model, numerics(model), on_plane(v=(0.0, 0.02, 0.0)), 0.2, on_progress=stop)
+        motion.simulate(model, numerics(model), on_plane(v=(0.0, 0.02, 0.0)), 0.2, on_step=stop)
     assert 0.05 < info.value.args[0] < 0.1
     with pytest.raises(Budget) as info:  # paper mode: the same contract
         paper_mode.simulate(model, numerics(model, mode="paper", dt=1e-4, nodes=20), on_plane(), 0.2,
-                            on_progress=stop)
+                            on_step=stop)
     assert 0.05 < info.value.args[0] < 0.051
 
 

@@ -25,7 +25,7 @@ Every run returns an energy budget (absolute kinetic energy plus the potential
 of gravity against the work of the surface and the losses in impacts, landings
 and sliding; its residual measures the numerics), and has guards: a run that
 stops advancing time raises ``SymmechError`` instead of hanging, and an optional
-``on_progress(t_now)`` callback is called at most every 0.2 s of wall time.
+``on_step(t_now)`` callback is called at most every 0.2 s of wall time.
 
 Paper mode (the printed fixed-step scheme) lives in :mod:`symmech.grain.paper_mode`.
 """
@@ -43,7 +43,7 @@ from symmech.grain.sliding import Body, Sliding, slide
 
 REGIMES = ("flight", "impact", "sliding")
 EPS = float(np.finfo(float).eps)
-PROGRESS_INTERVAL = 0.2  # s of wall time between two calls of on_progress
+PROGRESS_INTERVAL = 0.2  # s of wall time between two calls of on_step
 ENERGY_TOLERANCE = 1e-6  # stated bound on the relative residual of the energy budget
 ZENO_IMPACTS, ZENO_INTERVAL = 100, 1e-4  # this many impacts within this many periods: chattering
 MAX_IDLE_STEPS = 1000  # stagnation guard: regime changes in a row that do not advance time
@@ -196,16 +196,16 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
 
 
 class Progress:
-    """Calls ``on_progress(t_now)`` at most every ``PROGRESS_INTERVAL`` seconds of wall time."""
+    """Calls ``on_step(t_now)`` at most every ``PROGRESS_INTERVAL`` seconds of wall time."""
 
-    def __init__(self, on_progress):
-        self.on_progress = on_progress
+    def __init__(self, on_step):
+        self.on_step = on_step
         self.last = time.monotonic()
 
     def __call__(self, t_now: float) -> None:
-        if self.on_progress is not None and time.monotonic() - self.last >= PROGRESS_INTERVAL:
+        if self.on_step is not None and time.monotonic() - self.last >= PROGRESS_INTERVAL:
             self.last = time.monotonic()
-            self.on_progress(float(t_now))
+            self.on_step(float(t_now))
 
 
 class _Budget:
@@ -239,14 +239,14 @@ class _Budget:
         return {**{k: float(v) for k, v in parts.items()}, "tolerance": tolerance}
 
 
-def simulate(model: Model, num: Numerics, start: State, t_end: float, on_progress=None) -> Motion:
+def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None) -> Motion:
     """Accurate mode from ``start`` to ``t_end`` [s]; the grain starts in flight (or on the plane at rest).
 
-    ``on_progress(t_now: float) -> None`` (optional) is called with the simulated time [s] at most every
+    ``on_step(t_now: float) -> None`` (optional) is called with the simulated time [s] at most every
     0.2 s of wall time; an exception it raises stops the run and propagates unchanged.
     """
     model = model.active()
-    progress = Progress(on_progress)
+    progress = Progress(on_step)
     rec = _Recorder(num.sample_interval)
     st = replace(start, r=np.array(start.r, float), v=np.array(start.v, float),
                  q=np.asarray(start.q, float) / np.linalg.norm(start.q), w=np.array(start.w, float))

@@ -45,16 +45,16 @@ CHART_SIN = 0.1  # |sin theta| below which the angle chart is turned (rates ampl
 
 
 def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0, t_end: float,
-                   record: bool = False, alpha_beta=(0.0, 0.0), on_progress=None):
+                   record: bool = False, alpha_beta=(0.0, 0.0), on_step=None):
     """Paper-mode run of n grains from t = 0 to ``t_end``.
 
     axes (n, 3) m, mass (n,) kg, r0, v0 (n, 3) relative centre position/velocity [m, m/s],
     angles0 (n, 3) Euler angles (psi, theta, phi) [rad], w0 (n, 3) body rates [rad/s].
     ``alpha_beta`` are the inclination angles [rad] for the printed gravity (as printed only).
     Returns (r, v, impacts per grain (n,), records) where records (if ``record``) holds the
-    trajectory rows, impact log and regime times of grain 0. ``on_progress(t_now)``: as in accurate mode.
+    trajectory rows, impact log and regime times of grain 0. ``on_step(t_now)``: as in accurate mode.
     """
-    progress = Progress(on_progress)
+    progress = Progress(on_step)
     axes = np.asarray(axes, dtype=float)
     mass = np.asarray(mass, dtype=float)
     n = len(mass)
@@ -175,7 +175,7 @@ def _contacts(model: Model, num: Numerics, Q, nodes, r, v, w_body, fl, rotation:
 
 
 def simulate(model: Model, num: Numerics, start: State, t_end: float, alpha_beta=(0.0, 0.0),
-             on_progress=None) -> Motion:
+             on_step=None) -> Motion:
     """Paper mode for one grain from ``start`` (at t = 0) to ``t_end``; same result type and progress callback
     as accurate mode."""
     from symmech.grain import flight
@@ -183,7 +183,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, alpha_beta
     Q0 = flight.rotation_matrix(start.q)
     r, v, _, rec = simulate_batch(model, num, np.array([model.axes]), np.array([model.mass]),
                                   start.r[None], start.v[None], euler_from_matrix(Q0)[None], start.w[None],
-                                  t_end, record=True, alpha_beta=alpha_beta, on_progress=on_progress)
+                                  t_end, record=True, alpha_beta=alpha_beta, on_step=on_step)
     rows = [start.row("flight")] + rec["rows"]
     final = State(t_end, r[0], v[0], quaternion_from_matrix(rec["Q"][0]), rec["w_body"][0])
     return Motion(np.array(rows), rec["impacts"], rec["time_in"], rec["warnings"], start, final)
