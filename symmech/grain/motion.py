@@ -196,14 +196,14 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
 
 
 class Progress:
-    """Calls ``on_step(t_now)`` at most every ``PROGRESS_INTERVAL`` seconds of wall time."""
+    """Calls ``on_step(t_now)`` at most every ``PROGRESS_INTERVAL`` seconds of wall time (always when ``final``)."""
 
     def __init__(self, on_step):
         self.on_step = on_step
         self.last = time.monotonic()
 
-    def __call__(self, t_now: float) -> None:
-        if self.on_step is not None and time.monotonic() - self.last >= PROGRESS_INTERVAL:
+    def __call__(self, t_now: float, final: bool = False) -> None:
+        if self.on_step is not None and (final or time.monotonic() - self.last >= PROGRESS_INTERVAL):
             self.last = time.monotonic()
             self.on_step(float(t_now))
 
@@ -243,7 +243,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
     """Accurate mode from ``start`` to ``t_end`` [s]; the grain starts in flight (or on the plane at rest).
 
     ``on_step(t_now: float) -> None`` (optional) is called with the simulated time [s] at most every
-    0.2 s of wall time; an exception it raises stops the run and propagates unchanged.
+    0.2 s of wall time and once at the end; an exception it raises stops the run and propagates unchanged.
     """
     model = model.active()
     progress = Progress(on_step)
@@ -290,8 +290,9 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
                 regime, on_plane = "flight", True
         idle = idle + 1 if st.t == t_before else 0
         if idle > MAX_IDLE_STEPS:
-            raise SymmechError(f"grain motion stagnates at t = {st.t:.9g} s in the {regime} regime "
-                               f"({MAX_IDLE_STEPS} regime changes without advancing time)")
+            raise SymmechError(f"grain: the simulation stopped advancing at t = {st.t:.9g} s ({MAX_IDLE_STEPS} "
+                               f"regime changes without advancing time, {regime} regime)")
+    progress(st.t, final=True)
     rec.add(st, regime)
     extra = {"landings": landings, "energy_budget": budget.report(st, ENERGY_TOLERANCE)}
     return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st, extra)
