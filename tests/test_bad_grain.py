@@ -225,7 +225,8 @@ def test_a_creeping_phase_is_stopped_by_the_time_budget(monkeypatch):
 def test_a_phase_loop_that_stops_advancing_is_reported(monkeypatch):
     """Lift-off and landing at the same instant forever: the stagnation guard names the time."""
     def lift_at_once(model, body, t0, r0, v0, q0, w0, *args):
-        return sliding.SlideResult(t0, np.asarray(r0), np.asarray(v0), np.asarray(w0), np.asarray(q0), True, 0.0, 0.0,
+        return sliding.SlideResult(t0, np.asarray(r0), np.asarray(v0), np.asarray(w0), np.asarray(q0), True,
+                                   0.0, 0.0,
                                    (np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 4)), np.zeros((0, 3))))
 
     monkeypatch.setattr(motion, "slide", lift_at_once)

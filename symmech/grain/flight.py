@@ -4,7 +4,8 @@ Translation is exact: ``r'' = g_K - s''(t)`` integrated in closed form
 (generated ``grain_motion.flight_translation``; the ``_rigid`` variant when the
 vibration effect is off), evaluated in the local time ``t - t0`` from the last
 event with the surface phase at ``t0`` reduced to [0, 2 pi): the expanded
-absolute-time form cancels terms of size ``g t^2`` and loses ~1e-8 m at t = 1e4 s. Rotation is torque-free: body angular velocity ``w``
+absolute-time form cancels terms of size ``g t^2`` and loses ~1e-8 m at t = 1e4 s.
+Rotation is torque-free: body angular velocity ``w``
 (3,) rad/s obeys Euler's equations and the orientation is a unit quaternion
 ``q`` (4,) (no Euler-angle singularity); both are integrated to a tolerance with
 DOP853 and dense output. Angular momentum ``Q I w`` and energy ``w.I w/2`` are
