@@ -27,9 +27,8 @@ def conveyor(**extra):
         "surface": {"g": G, "alpha_deg": 0.0},
         "vibration": {"amplitude": amplitude(1.5), "frequency": FREQ, "direction": "angle", "angle_deg": 30.0},
         "impact": {"law": "printed", "e": 0.0, "lambda": 1.0},
-        "sliding": {"friction": 1e6},
+        "sliding": {"friction": 100.0},
         "effects": {"rotation": False},
-        "initial": {"position": [0.0, 0.0, 1e-3]},
     }
     scene.update(extra)
     return scene
@@ -71,7 +70,7 @@ def test_a_bad_grain_of_the_population_is_named_before_any_work():
     pops = [{"name": "weed", "count": 2, "set": {"body.semi_axes": [1e-3, -1e-3, 1e-3]}}]
     raw = conveyor(population=pops, sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
     with pytest.raises(SceneError) as info:
-        build(raw)
+        sweep.validate(build(raw))
     assert info.value.field == "body.semi_axes[1]"
 
 
@@ -90,3 +89,38 @@ def test_dask_cluster_equals_serial_bit_for_bit():
     for a, b in zip(serial, remote):
         assert a.shape == (2, 2, 2, 3)
         assert np.array_equal(a, b)
+
+
+def test_sweep_writes_tables_with_units_heat_maps_and_the_best_point(tmp_path):
+    import csv
+    import json
+
+    from symmech.core.context import Context
+
+    pops = [{"name": "crop", "count": 1}, {"name": "weed", "count": 1, "set": {"body.semi_axes": [6e-4, 6e-4, 6e-4]}}]
+    raw = conveyor(duration=2 / FREQ, population=pops,
+                   sweep={"x": {"field": "vibration.amplitude", "values": [amplitude(1.2), amplitude(1.8)]},
+                          "y": {"field": "vibration.angle_deg", "values": [20.0, 40.0]}})
+    sweep.run(raw, tmp_path / "out", Context(quiet=True), scheduler="synchronous")
+    out = tmp_path / "out"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["points"] == 4 and summary["populations"] == ["crop", "weed"]
+    best = summary["best_operating_point"]
+    with open(out / "separation.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert list(rows[0])[:3] == ["x [m]", "y [deg]", "gamma [1]"]
+    least = min(float(r["overlap [1]"]) for r in rows)
+    assert best["overlap"] == pytest.approx(least, abs=0)
+    for name in ("crop_mean_vx", "weed_hop_fraction", "separation_overlap"):
+        assert (out / f"{name}.png").stat().st_size > 5000
+
+
+def test_sweep_refuses_past_the_time_budget(tmp_path):
+    from symmech.core.context import Context
+    from symmech.core.scene import SymmechError
+
+    raw = conveyor(duration=100.0, population=[{"name": "many", "count": 1000}],
+                   sweep={"x": {"field": "vibration.frequency", "start": 20.0, "stop": 30.0, "num": 50}})
+    with pytest.raises(SymmechError, match="exceeds --max-time"):
+        sweep.run(raw, tmp_path / "out", Context(quiet=True, max_time=60.0), scheduler="synchronous")
+    assert not (tmp_path / "out").exists()

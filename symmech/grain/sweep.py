@@ -145,7 +145,8 @@ class Plan:
 
 
 def plan(raw: dict, resolved: dict) -> Plan:
-    """Expand the sweep and validate every grain it contains (pipeline.load) before any simulation."""
+    """Expand the sweep into grain scenes (the first grain of each point validated; :func:`validate`
+    checks them all)."""
     from symmech.core import pipeline
 
     sweep = resolved["sweep"]
@@ -174,12 +175,21 @@ def plan(raw: dict, resolved: dict) -> Plan:
                         _set(data, sweep["y"]["field"], float(yv))
                     point.append(data)
                 gamma[i, j] = throw_number(pipeline.load(point[0]).resolved)
-                for data in point[1:]:
-                    pipeline.load(data)  # validates: a bad grain is named before any work
                 row.append(point)
             grid.append(row)
         grains.append(grid)
     return Plan(sweep["x"], sweep["y"], [p["name"] for p in pops], grains, gamma)
+
+
+def validate(p: Plan) -> None:
+    """Validate every grain scene of the plan: a bad grain is named before any simulation."""
+    from symmech.core import pipeline
+
+    for grid in p.grains:
+        for row in grid:
+            for point in row:
+                for data in point:
+                    pipeline.load(data)
 
 
 def throw_number(resolved: dict) -> float:
@@ -199,6 +209,38 @@ def simulate_point(scenes: list[dict]) -> np.ndarray:
         vx, vy = summary["mean_transport_velocity_m_s"]
         out.append((vx, vy, summary["time_fraction"].get("flight", 0.0)))
     return np.array(out)
+
+
+def estimate(p: Plan, workers: int) -> "registry.Estimate":
+    """Cost of the whole sweep: the grain kind's estimate of each population's first grain, times the
+    grains and points, shared by ``workers``."""
+    from symmech.core import pipeline, registry
+
+    seconds = sum(pipeline.load(grid[0][0][0]).estimate().seconds * len(grid[0][0]) * len(grid) * len(grid[0])
+                  for grid in p.grains)
+    grains = sum(len(grid[0][0]) * len(grid) * len(grid[0]) for grid in p.grains)
+    return registry.Estimate(seconds / max(workers, 1), f"{grains} grain runs on {workers} worker(s)")
+
+
+def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None) -> Result:
+    """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write."""
+    import os
+
+    from symmech.core import pipeline
+    from symmech.core.scene import SymmechError, read_toml
+
+    raw = source if isinstance(source, dict) else read_toml(source)
+    scene = pipeline.load(raw)
+    p = plan(raw, scene.resolved)
+    workers = workers or os.cpu_count() or 1
+    cost = estimate(p, 1 if scheduler == "synchronous" else workers)
+    if cost.seconds > ctx.max_time:
+        raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
+                           f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
+    validate(p)
+    res = result(p, compute(p, scheduler, workers))
+    pipeline.write(res, out, scene)
+    return res
 
 
 def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> list:
