@@ -23,7 +23,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector
 from symmech.core.watchdog import watchdog
 from symmech.generated import grain_motion as gm
-from symmech.grain import contact, fields, flight, motion, paper_mode
+from symmech.grain import contact, fields, flight, motion, paper_mode, sweep
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
 
@@ -126,6 +126,8 @@ SCHEMA = Fields("a grain scene", {
         "rotation": Bool("off: no spin, impacts act on a point mass (H = E)", default=True),
         "friction": Bool("off: frictionless sliding (no friction force)", default=True),
     }, default={}),
+    "sweep": sweep.SWEEP,
+    "population": sweep.POPULATIONS,
     "numerics": Fields("numerical choices; T is the vibration period (1 s without vibration)", {
         "mode": Choice("`accurate`: exact flight, root-located events; `paper`: the printed fixed-step scheme",
                        choices=("accurate", "paper"), default="accurate"),
