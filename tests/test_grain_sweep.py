@@ -42,7 +42,7 @@ def test_liftoff_threshold_and_throw_number_over_the_plane():
     raw = conveyor(sweep={"x": {"field": "vibration.amplitude", "values": [amplitude(0.9), amplitude(1.5)]}})
     p = build(raw)
     np.testing.assert_allclose(p.gamma[:, 0], np.array([amplitude(0.9), amplitude(1.5)]) * W**2 / G, rtol=1e-15)
-    st = sweep.statistics(sweep.compute(p, scheduler="synchronous")[0])
+    st = sweep.statistics(sweep.compute(p, scheduler="synchronous")[0][0])
     assert st["flight_fraction"][0, 0] == 0.0 and st["hop_fraction"][0, 0] == 0.0  # below lift-off
     assert st["flight_fraction"][1, 0] > 0.2 and st["mean_vx"][1, 0] > 0.0  # conveyed forward
 
@@ -52,7 +52,7 @@ def test_identical_populations_do_not_separate():
     raw = conveyor(duration=2 / FREQ, population=pops,
                    sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
     p = build(raw)
-    res = sweep.result(p, sweep.compute(p, scheduler="synchronous"))
+    res = sweep.result(p, *sweep.compute(p, scheduler="synchronous"))
     sep = res.tables["separation"]
     assert sep.column("delta_vx")[0] == 0.0
     assert sep.column("overlap")[0] == pytest.approx(1.0, abs=1e-6)
@@ -82,10 +82,10 @@ def test_dask_cluster_equals_serial_bit_for_bit():
                    sweep={"x": {"field": "vibration.amplitude", "values": [amplitude(1.2), amplitude(1.6)]},
                           "y": {"field": "vibration.frequency", "start": 20.0, "stop": 30.0, "num": 2}})
     p = build(raw)
-    serial = sweep.compute(p, scheduler="synchronous")
+    serial, _ = sweep.compute(p, scheduler="synchronous")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None) as cluster:
-        remote = sweep.compute(p, scheduler=cluster.scheduler_address)
+        remote, _ = sweep.compute(p, scheduler=cluster.scheduler_address)
     for a, b in zip(serial, remote):
         assert a.shape == (2, 2, 2, 3)
         assert np.array_equal(a, b)
@@ -124,3 +124,29 @@ def test_sweep_refuses_past_the_time_budget(tmp_path):
     with pytest.raises(SymmechError, match="exceeds --max-time"):
         sweep.run(raw, tmp_path / "out", Context(quiet=True, max_time=60.0), scheduler="synchronous")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
+    from symmech.core.scene import SymmechError
+
+    real = pipeline.Scene.run
+    calls = []
+
+    def flaky(self, ctx=None):
+        calls.append(1)
+        if len(calls) == 2:
+            raise SymmechError("sliding integration stagnates at t = 0.01 s")
+        return real(self, ctx)
+
+    monkeypatch.setattr(pipeline.Scene, "run", flaky)
+    raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
+                   sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
+    p = build(raw)
+    values, failed = sweep.compute(p, scheduler="synchronous")
+    assert [f[:4] for f in failed] == [("a", 0, 0, 1)] and "stagnates" in failed[0][4]
+    res = sweep.result(p, values, failed)
+    table = res.tables["sweep_a"]
+    assert table.column("failed")[0] == 1.0
+    ok = values[0][0, 0, [0, 2], 0]
+    assert table.column("mean_vx")[0] == pytest.approx(ok.mean(), rel=1e-15)
+    assert res.summary["failed_grains"][0]["grain"] == 1 and res.warnings

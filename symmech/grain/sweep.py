@@ -199,16 +199,24 @@ def throw_number(resolved: dict) -> float:
     return vib["amplitude"] * (2 * math.pi * vib["frequency"]) ** 2 / g
 
 
-def simulate_point(scenes: list[dict]) -> np.ndarray:
-    """Per grain: mean transport velocity (X, Y) [m/s] and the fraction of time in flight; shape (n, 3)."""
+def simulate_point(scenes: list[dict]) -> tuple[np.ndarray, list]:
+    """Per grain: mean transport velocity (X, Y) [m/s] and the fraction of time in flight, shape (n, 3);
+    a grain whose simulation stops with an error (e.g. a stagnation guard) gets a row of NaN and its
+    message in the list of (grain index, message) — it is reported, never averaged in."""
     from symmech.core import pipeline
+    from symmech.core.scene import SymmechError
 
-    out = []
-    for data in scenes:
-        summary = pipeline.load(data).run().summary
+    out, failed = [], []
+    for k, data in enumerate(scenes):
+        try:
+            summary = pipeline.load(data).run().summary
+        except SymmechError as exc:
+            out.append((np.nan, np.nan, np.nan))
+            failed.append((k, str(exc)))
+            continue
         vx, vy = summary["mean_transport_velocity_m_s"]
         out.append((vx, vy, summary["time_fraction"].get("flight", 0.0)))
-    return np.array(out)
+    return np.array(out), failed
 
 
 def estimate(p: Plan, workers: int) -> "registry.Estimate":
@@ -238,13 +246,14 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
         raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
     validate(p)
-    res = result(p, compute(p, scheduler, workers))
+    res = result(p, *compute(p, scheduler, workers))
     pipeline.write(res, out, scene)
     return res
 
 
-def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> list:
-    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask.
+def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> tuple[list, list]:
+    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask, and
+    the failed grains as (population, i, j, grain, message).
 
     ``scheduler``: None for a local process pool, "synchronous" for serial, or the
     address of a ``dask.distributed`` scheduler.
@@ -261,18 +270,26 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None)
 
         with Client(scheduler) as client:
             values = client.gather(client.compute(tasks))
-    return [np.array(v) for v in values]
+    arrays = [np.array([[point[0] for point in row] for row in grid]) for grid in values]
+    failed = [(p.names[k], i, j, g, msg) for k, grid in enumerate(values) for i, row in enumerate(grid)
+              for j, point in enumerate(row) for g, msg in point[1]]
+    return arrays, failed
 
 
 def statistics(grid: np.ndarray) -> dict:
     """Mean and spread of the transport velocity and the hopping fraction over the grains."""
-    return {"mean_vx": grid[..., 0].mean(-1), "std_vx": grid[..., 0].std(-1),
-            "mean_vy": grid[..., 1].mean(-1), "std_vy": grid[..., 1].std(-1),
-            "hop_fraction": (grid[..., 2] > 0.5).mean(-1), "flight_fraction": grid[..., 2].mean(-1)}
+    ok = np.isfinite(grid[..., 2])
+    with np.errstate(invalid="ignore", divide="ignore"):  # a point where every grain failed stays NaN
+        hop = np.where(ok, grid[..., 2] > 0.5, 0).sum(-1) / ok.sum(-1)
+        return {"mean_vx": np.nanmean(grid[..., 0], -1), "std_vx": np.nanstd(grid[..., 0], -1),
+                "mean_vy": np.nanmean(grid[..., 1], -1), "std_vy": np.nanstd(grid[..., 1], -1),
+                "hop_fraction": hop, "flight_fraction": np.nanmean(grid[..., 2], -1),
+                "failed": (~ok).sum(-1).astype(float)}
 
 
 def overlap(a: np.ndarray, b: np.ndarray) -> float:
     """Overlap coefficient of two samples of X velocities (area under the lower of their normal fits)."""
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
     mu1, mu2 = a.mean(), b.mean()
     s1, s2 = max(a.std(), 1e-12), max(b.std(), 1e-12)
     lo, hi = min(mu1 - 6 * s1, mu2 - 6 * s2), max(mu1 + 6 * s1, mu2 + 6 * s2)
@@ -299,15 +316,19 @@ STAT_COLUMNS = [Column("mean_vx", "m/s", "mean transport velocity along X"),
                 Column("mean_vy", "m/s", "mean transport velocity along Y"),
                 Column("std_vy", "m/s", "spread of the Y velocity"),
                 Column("hop_fraction", "1", "fraction of grains more than half of the time in flight"),
-                Column("flight_fraction", "1", "mean fraction of time in flight")]
+                Column("flight_fraction", "1", "mean fraction of time in flight"),
+                Column("failed", "1", "grains whose simulation stopped with an error (left out of the statistics)")]
 
 
-def result(p: Plan, values: list) -> Result:
-    """Tables per population (and the separation chart for two), summary and heat-map plots."""
+def result(p: Plan, values: list, failed: list = ()) -> Result:
+    """Tables per population (and the separation chart for two), summary and heat-map plots;
+    ``failed`` grains (from :func:`compute`) are listed in the summary and warned about."""
     cols, base = _point_columns(p)
     tables, summary = {}, {"populations": p.names, "points": int(base.shape[0]),
                            "grains_per_point": [int(v.shape[2]) for v in values],
-                           "swept": [p.x["field"]] + ([p.y["field"]] if p.y else [])}
+                           "swept": [p.x["field"]] + ([p.y["field"]] if p.y else []),
+                           "failed_grains": [{"population": n, "point": [i, j], "grain": g, "error": m}
+                                             for n, i, j, g, m in failed]}
     stats = [statistics(v) for v in values]
     for name, st in zip(p.names, stats):
         data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS])
@@ -328,7 +349,10 @@ def result(p: Plan, values: list) -> Result:
         summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {
             "delta_vx_m_s": float(dvx.ravel()[best]), "overlap": float(ovl.ravel()[best])}
     best_ij = None if len(values) != 2 else divmod(best, values[0].shape[1])
-    return Result("grain_sweep", summary, tables, plots=lambda folder: _plots(p, stats, tables, best_ij, folder))
+    warnings = [f"{len(failed)} grain simulation(s) stopped with an error and are left out of the statistics "
+                f"(summary.json: failed_grains); first: {failed[0][4]}"] if failed else []
+    return Result("grain_sweep", summary, tables, plots=lambda folder: _plots(p, stats, tables, best_ij, folder),
+                  warnings=warnings)
 
 
 def _plots(p: Plan, stats, tables, best, folder) -> list:
