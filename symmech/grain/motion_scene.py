@@ -1,7 +1,7 @@
 """Scene kind ``grain``: the whole motion of a grain on an inclined vibrating surface.
 
 Fields are documented in docs/scenes-grain.md. ``run`` writes ``trajectory.csv``,
-``impacts.csv``, ``path.png``, ``velocity.png`` (and the CLI writes ``summary.json``);
+``impacts.csv``, ``path``, ``velocity`` and ``phase`` plots (PNG + SVG; and the CLI writes ``summary.json``);
 ``precision`` writes a work-precision study (CSV + PNG).
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 from symmech.core import precision as wp
 from symmech.core.scene import SceneError, Section
 from symmech.generated import grain_motion as gm
-from symmech.grain import contact, flight, motion, paper_mode
+from symmech.grain import contact, flight, motion, paper_mode, plots
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
 
@@ -156,10 +156,10 @@ def run(scene: Section, out: Path) -> dict:
     seconds = time.perf_counter() - start
     _write_trajectory(result, out / "trajectory.csv")
     _write_impacts(result, out / "impacts.csv")
-    _plots(sc, result, out)
+    plots.motion_plots(sc, result, out)
     summary = {"kind": "grain", "mode": sc.numerics.mode, "impact_law": sc.model.law.kind,
                "effects": sc.model.effects.__dict__, "wall_time_s": seconds, **result.summary()}
-    summary["files"] = [str(out / n) for n in ("trajectory.csv", "impacts.csv", "path.png", "velocity.png")]
+    summary["files"] = [str(out / n) for n in ("trajectory.csv", "impacts.csv", "path.png", "velocity.png", "phase.png")]
     return summary
 
 
@@ -193,46 +193,6 @@ def _write_impacts(result: motion.Motion, path: Path) -> None:
                             [i["admissible"], *("" if i[k] is None else i[k]
                                                  for k in ("printed_admissible", "printed_creates_energy")),
                              i["converged"]])
-
-
-def _plots(sc: GrainScene, result: motion.Motion, out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    tr = result.trajectory
-    t = tr[:, 0]
-    s = sc.model.vibration.kinematics(t)[..., 0, :]  # surface displacement (n, 3)
-    hits = np.array([i["t"] for i in result.impacts])
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6))
-    ax1.plot(tr[:, 1] + s[:, 0], tr[:, 3] + s[:, 2], lw=0.8, label="centre of mass")
-    ax1.plot(tr[:, 1] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
-    ax1.set_xlabel("X along the surface [m]")
-    ax1.set_ylabel("Z [m]")
-    ax1.set_title("Side view (surface frame at rest position)")
-    ax1.legend(fontsize=8)
-    ax2.plot(t, tr[:, 3], lw=0.8, label="centre height above the surface")
-    if hits.size:
-        ax2.plot(hits, np.interp(hits, t, tr[:, 3]), "r.", ms=3, label="impacts")
-    ax2.set_xlabel("t [s]")
-    ax2.set_ylabel("z relative [m]")
-    ax2.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "path.png", dpi=110)
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(8, 4))
-    for k, name in ((4, "vx"), (5, "vy"), (6, "vz")):
-        ax.plot(t, tr[:, k], lw=0.8, label=f"{name} (relative)")
-    for h in hits[:500]:
-        ax.axvline(h, color="r", lw=0.3, alpha=0.4)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("velocity [m/s]")
-    ax.set_title("Centre velocity relative to the surface; red lines: impacts")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "velocity.png", dpi=110)
-    plt.close(fig)
 
 
 def precision(scene: Section, out: Path) -> dict:
