@@ -116,7 +116,7 @@ def _scene_matrices(name: str) -> dict:
 def cmd_latex(ns) -> int:
     import sympy
 
-    from symmech.core import emit
+    from symmech.core import emit, latex
 
     if ns.list or not ns.name:
         for key, nm in _named_matrices().items():
@@ -127,19 +127,25 @@ def cmd_latex(ns) -> int:
     if ns.name not in matrices:
         raise SymmechError(f"no derived matrix named '{ns.name}' (see `symmech latex --list`)")
     nm = matrices[ns.name]
+    if ns.cse:
+        # The same chunks and CSE symbols as the generated code, shown with the
+        # derivation's own symbols.
+        back = {sympy.Symbol(a.name): a.symbol for a in nm.args}
+        pairs = []
+        for chunk in emit.cse_chunks(nm):
+            pairs += [(sympy.latex(sym), expr.xreplace(back)) for sym, expr in chunk.replacements]
+            pairs += [(latex.entry_tex(nm.name, index), expr.xreplace(back)) for index, expr in chunk.elements]
+    else:
+        pairs = latex.equations(nm)
+    body = latex.lines(pairs)
     print(f"% {ns.name}: {nm.meaning}")
-    if not ns.cse:
-        print(sympy.latex(nm.matrix if nm.shape else nm.matrix[0, 0]))
-        return 0
-    # The same chunks and CSE symbols as the generated code, shown with the
-    # derivation's own symbols.
-    back = {sympy.Symbol(a.name): a.symbol for a in nm.args}
-    for chunk in emit.cse_chunks(nm):
-        for sym, expr in chunk.replacements:
-            print(f"{sympy.latex(sym)} &= {sympy.latex(expr.xreplace(back))} \\\\")
-        for index, expr in chunk.elements:
-            sub = ",".join(str(i + 1) for i in index)
-            print(f"{nm.name}_{{{sub}}} &= {sympy.latex(expr.xreplace(back))} \\\\")
+    print(latex.environment(body))
+    if ns.tex:
+        eqs = f" (eqs. {nm.equations})" if nm.equations else ""
+        description = f"{nm.meaning}{eqs}; unit {nm.unit}" + ("; common subexpressions as in the generated code"
+                                                               if ns.cse else "")
+        Path(ns.tex).write_text(latex.document(f"symmech {__version__}: {ns.name}", [(ns.name, description, body)]))
+        print(f"% wrote {ns.tex}")
     return 0
 
 
@@ -182,6 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     lx.add_argument("--list", action="store_true", help="list every derived matrix")
     lx.add_argument("--cse", action="store_true",
                     help="print the common-subexpression form used by the generated code")
+    lx.add_argument("--tex", metavar="FILE", help="also write a standalone LaTeX document (compiles with pdflatex)")
     lx.set_defaults(func=cmd_latex)
 
     e = sub.add_parser("errata", help="compare the papers' printed formulas with the derivations")
