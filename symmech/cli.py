@@ -1,4 +1,4 @@
-"""Command-line interface: ``symmech run | codegen | latex | errata | bench``.
+"""Command-line interface: ``symmech run | report | codegen | latex | errata | bench``.
 
 Errors a user can fix (:class:`SymmechError`) print as one line on stderr with
 exit status 2, never a traceback.
@@ -47,7 +47,7 @@ def cmd_run(ns) -> int:
     if load(ns.scene).raw("kind", default=None) in registry.kinds():
         pipeline.run_to(ns.scene, Path(ns.out), Context(quiet=ns.quiet, max_time=ns.max_time))
         print(f"wrote {Path(ns.out) / 'summary.json'}")
-        return 0
+        return cmd_report(ns) if ns.report else 0
     # Kinds not yet on the registry keep the old path until they are converted.
     scene = load(ns.scene)
     module = _kind_module(scene)
@@ -58,6 +58,13 @@ def cmd_run(ns) -> int:
     for warning in summary.get("warnings", []):
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {out / 'summary.json'}")
+    return cmd_report(ns) if ns.report else 0
+
+
+def cmd_report(ns) -> int:
+    from symmech import report
+
+    print(f"wrote {report.write(Path(ns.out))}")
     return 0
 
 
@@ -175,7 +182,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bars")
     r.add_argument("--max-time", type=float, default=DEFAULT_MAX_TIME, metavar="SECONDS",
                    help=f"refuse or stop a run expected to take longer (default {DEFAULT_MAX_TIME:g} s)")
+    r.add_argument("--report", action="store_true", help="also write OUT/report.html (see `symmech report`)")
     r.set_defaults(func=cmd_run)
+
+    rp = sub.add_parser("report", help="write a self-contained HTML report of a finished run (OUT/report.html)")
+    rp.add_argument("out", help="the run's output folder (holds summary.json)")
+    rp.set_defaults(func=cmd_report)
 
     c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")
     c.add_argument("--check", action="store_true",
