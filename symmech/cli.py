@@ -53,7 +53,7 @@ def cmd_run(ns) -> int:
     module = _kind_module(scene)
     out = Path(ns.out)
     out.mkdir(parents=True, exist_ok=True)
-    summary = module.run(scene, out)
+    summary = {"kind": scene.raw("kind", default=None), **module.run(scene, out)}
     _write_json(out / "summary.json", summary)
     for warning in summary.get("warnings", []):
         print(f"symmech: warning: {warning}", file=sys.stderr)
