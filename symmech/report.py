@@ -158,21 +158,22 @@ def _figures(out: Path) -> list[tuple[str, str]]:
     return figures
 
 
-def _module_hashes(summary: dict, names: list[str]) -> tuple[dict, str]:
-    """Generated-module hashes: the run's own record, else the installed modules' header lines."""
+def _module_hashes(summary: dict, names: list[str], out: Path) -> tuple[dict, str]:
+    """Generated-module hashes: the run's own record, else the header lines of the modules
+    (a module the run wrote into ``out`` first, then the installed ``symmech.generated``)."""
     if isinstance(summary.get("generated_modules"), dict):
         return summary["generated_modules"], "recorded by the run"
     hashes = {}
     for name in names:
-        try:
+        path = out / f"{name}.py"
+        if not path.exists():
             spec = importlib.util.find_spec(f"symmech.generated.{name}")
-        except ModuleNotFoundError:
-            continue
-        if spec and spec.origin:
-            first = Path(spec.origin).read_text().split("\n", 1)[0]
-            match = re.search(r"inputs sha256 ([0-9a-f]{64})", first)
-            hashes[name] = match.group(1) if match else "unknown"
-    return hashes, "installed modules at report time (the run did not record them)"
+            if spec is None or spec.origin is None:
+                continue
+            path = Path(spec.origin)
+        match = re.search(r"inputs sha256 ([0-9a-f]{64})", path.read_text().split("\n", 1)[0])
+        hashes[name] = match.group(1) if match else "unknown"
+    return hashes, "read from the modules' first lines at report time (the run did not record them)"
 
 
 def render(out: Path) -> str:
@@ -190,7 +191,7 @@ def render(out: Path) -> str:
     package = _paper_package(kind)
     derived = derivations(summary, package)
     checks, results = _split_checks(summary)
-    hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}))
+    hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}), Path(out))
     provenance = [("symmech version of the run", _text(summary.get("symmech_version", "not recorded"))),
                   ("status", _text(summary.get("status", "not recorded"))),
                   ("wall time [s]", _text(summary.get("wall_time_s", summary.get("elapsed_s", "not recorded")))),

@@ -77,6 +77,8 @@ def test_mechanism_report_typesets_the_scene_matrices(reports):
     page = html(reports["mechanism"])
     assert "<code>smm_rotor_boom.c</code>" in page and "<code>smm_rotor_boom.a</code>" in page
     assert "smm_excavator" not in page  # only the run's own mechanism
+    header = (reports["mechanism"] / "smm_rotor_boom.py").read_text().split("\n", 1)[0]
+    assert f"<td>smm_rotor_boom</td><td class=\"num\">{header.rsplit(' ', 1)[1]}</td>" in page
 
 
 def test_missing_summary_is_a_one_line_error(tmp_path, capsys):
