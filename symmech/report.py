@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import base64
 import datetime
+import functools
 import importlib
 import importlib.resources
 import importlib.util
@@ -82,19 +83,37 @@ def _used_modules(summary: dict) -> list[str] | None:
     return None
 
 
-def derivations(summary: dict, package: str | None) -> list[Derivation]:
-    """The derived matrices behind the run: the modules it names, else its paper's derived modules."""
-    from sympy.printing.mathml import mathml
+@functools.cache
+def _module_specs(module: str) -> tuple:
+    """The specs a derivation module declares, derived once per process."""
+    return tuple(importlib.import_module(module).module_specs())
 
+
+def _specs(package: str | None, used: list[str] | None) -> list:
+    """ModuleSpecs of the paper package: those named in ``used`` (derived or printed), else
+    every derived one. Only this package's derivations run, and no more than needed."""
     from symmech.core import emit
 
-    specs = [s for s in emit.module_specs() if package and s.name.startswith(f"{package}_")]
+    if package is None:
+        return []
+    specs = []
+    for module in emit.paper_modules(("derive", "printed") if used else ("derive",)):
+        if module.__name__.startswith(f"symmech.{package}."):
+            specs += [s for s in _module_specs(module.__name__) if not used or s.name in used]
+            if used and set(used) <= {s.name for s in specs}:
+                break
+    return specs
+
+
+def derivations(summary: dict, package: str | None) -> list[Derivation]:
+    """The derived matrices behind the run: the modules it names, else its paper's derived modules
+    (for a mechanism, whose modules are per scene, only the one the run used)."""
+    from sympy.printing.mathml import mathml
+
     used = _used_modules(summary)
-    chosen = [s for s in specs if used is not None and s.name in used]
-    if not chosen and package != "smm":  # mechanism modules are per scene: only the one the run used
-        chosen = [s for s in specs if "printed" not in s.name]
+    specs = [] if package == "smm" and not used else _specs(package, used)
     out = []
-    for spec in chosen:
+    for spec in specs:
         for f in spec.functions:
             expr = f.matrix if f.shape else f.matrix[0, 0]
             typeset = None

@@ -14,7 +14,8 @@ SCENES = ROOT / "scenes"
 RUNS = {
     "impact": ("impact_default.toml", {}, "000"),
     "grain": ("grain_default.toml", {r"(?m)^duration = .*$": "duration = 0.2"}, "000"),
-    "trolley": ("trolley_helix.toml", {}, "002"),
+    "trolley": ("trolley_helix.toml", {r"steps = 5000": "steps = 500", r"paper_tables = true": "paper_tables = false"},
+                "002"),
     "mechanism": ("smm_rotor_boom.toml", {}, "003"),
 }
 
