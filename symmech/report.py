@@ -32,8 +32,8 @@ TEMPLATE = "report.html.j2"
 # is 19,000 characters: MathML of it would be megabytes nobody reads).
 MATHML_LIMIT = 2500
 # Summary keys about where and how the run happened, shown as provenance.
-PROVENANCE = ("symmech_version", "status", "wall_time_s", "elapsed_s", "generated_modules", "generated_module",
-              "scene_file")
+PROVENANCE = ("symmech_version", "status", "wall_time_s", "elapsed_s", "timing_s", "generated_modules",
+              "generated_module", "scene_file")
 SKIPPED = ("kind", "scene", "files", "warnings", *PROVENANCE)
 # Summary keys whose name says they hold a check (a residual, a verdict, a count of violations).
 CHECK_WORDS = ("residual", "converged", "admissible", "creating_energy", "creates_energy", "comfort", "defect",
@@ -181,7 +181,7 @@ def _module_hashes(summary: dict, names: list[str], out: Path) -> tuple[dict, st
     """Generated-module hashes: the run's own record, else the header lines of the modules
     (a module the run wrote into ``out`` first, then the installed ``symmech.generated``)."""
     if isinstance(summary.get("generated_modules"), dict):
-        return summary["generated_modules"], "recorded by the run"
+        return summary["generated_modules"], "sha256 of each module file, recorded by the run"
     hashes = {}
     for name in names:
         path = out / f"{name}.py"
@@ -192,7 +192,15 @@ def _module_hashes(summary: dict, names: list[str], out: Path) -> tuple[dict, st
             path = Path(spec.origin)
         match = re.search(r"inputs sha256 ([0-9a-f]{64})", path.read_text().split("\n", 1)[0])
         hashes[name] = match.group(1) if match else "unknown"
-    return hashes, "read from the modules' first lines at report time (the run did not record them)"
+    return hashes, "inputs sha256 from each module's first line, read at report time (the run recorded none)"
+
+
+def _wall_time(summary: dict) -> str:
+    """The run's wall time: the pipeline's ``timing_s`` phases, else a kind's own figure."""
+    timing = summary.get("timing_s")
+    if isinstance(timing, dict):
+        return ", ".join(f"{phase} {_text(seconds)}" for phase, seconds in timing.items())
+    return _text(summary.get("wall_time_s", summary.get("elapsed_s", "not recorded")))
 
 
 def render(out: Path) -> str:
@@ -213,7 +221,7 @@ def render(out: Path) -> str:
     hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}), Path(out))
     provenance = [("symmech version of the run", _text(summary.get("symmech_version", "not recorded"))),
                   ("status", _text(summary.get("status", "not recorded"))),
-                  ("wall time [s]", _text(summary.get("wall_time_s", summary.get("elapsed_s", "not recorded")))),
+                  ("wall time [s]", _wall_time(summary)),
                   ("scene file", _text(summary.get("scene_file", "not recorded"))),
                   ("report written by", f"symmech {__version__}, Python {platform.python_version()}"),
                   ("report written at", datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))]
