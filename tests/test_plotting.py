@@ -82,6 +82,13 @@ def test_notebook_is_not_headless(monkeypatch):
     assert not plotting._headless()
 
 
+def _columns(path: Path, *names: str) -> list[np.ndarray]:
+    """Numeric columns of a CSV by name (header cells may carry ``[unit]``; ``#`` lines skipped)."""
+    rows = [l.split(",") for l in path.read_text().splitlines() if not l.startswith("#")]
+    header = [h.split(" [")[0] for h in rows[0]]
+    return [np.array([float(r[header.index(n)]) for r in rows[1:]]) for n in names]
+
+
 def _lines(ax):
     return [l for l in ax.get_lines() if len(l.get_xdata())]
 
@@ -91,10 +98,8 @@ def test_grain_impacts_are_markers_and_phase_portrait(tmp_path, figures):
     (tmp_path / "g.toml").write_text(text)
     assert main(["run", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o")]) == 0
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
-    rows = [l.split(",") for l in (tmp_path / "o" / "impacts.csv").read_text().splitlines()[2:]]
-    t_hit = np.array([float(r[0]) for r in rows])
-    z_hit, vz_before, vz_after = (np.array([float(r[k]) for r in rows]) for k in (3, 6, 9))
-    assert summary["bounces"] == len(rows) > 3
+    t_hit, z_hit, vz_before, vz_after = _columns(tmp_path / "o" / "impacts.csv", "t", "z", "vz_before", "vz_after")
+    assert summary["bounces"] == len(t_hit) > 3
     for stem in ("path", "velocity", "phase"):
         assert (tmp_path / "o" / f"{stem}.svg").stat().st_size > 0
     ax = figures["velocity"].axes[0]
@@ -106,7 +111,7 @@ def test_grain_impacts_are_markers_and_phase_portrait(tmp_path, figures):
     np.testing.assert_allclose(markers[0].get_ydata(), vz_after, rtol=1e-9, atol=1e-15)
     phase = figures["phase"].axes[0]
     assert phase.get_xlabel() == "relative height z [m]" and phase.get_ylabel() == "normal velocity v_z [m/s]"
-    trajectory = np.loadtxt(tmp_path / "o" / "trajectory.csv", delimiter=",", skiprows=2, usecols=(3, 6))
+    trajectory = np.column_stack(_columns(tmp_path / "o" / "trajectory.csv", "z", "vz"))
     np.testing.assert_allclose(_lines(phase)[0].get_xydata(), trajectory, rtol=1e-10, atol=1e-15)
     # each impact is a jump at fixed height from the v_z before to the v_z after (impacts.csv)
     before, after = _lines(phase)[1:]
@@ -125,7 +130,7 @@ def _span(patch):
 def test_trolley_overloads_in_g_against_the_envelope(tmp_path, figures):
     assert main(["run", str(SCENES / "trolley_helix.toml"), "--out", str(tmp_path)]) == 0
     fig = figures["overloads"]
-    n1 = np.loadtxt(tmp_path / "case1_overload.csv", delimiter=",", skiprows=1)
+    n1 = np.column_stack(_columns(tmp_path / "case1_overload.csv", "t", "n1", "n2", "n3"))
     envelope = {"x1": (-2, 2), "x2": (-1.5, 6), "x3": (-2, 2)}  # docs/scenes-trolley.md defaults
     for i, (ax, (axis, (lo, hi))) in enumerate(zip(fig.axes, envelope.items())):
         assert ax.get_ylabel() == f"overload n along {axis} [g]"
