@@ -135,7 +135,11 @@ def errata_records(package: str | None) -> list[dict]:
 
 
 def _flatten(value, prefix: str = "") -> list[tuple[str, str]]:
-    """(dotted key, text) rows of a JSON value; long lists are summarised."""
+    """(dotted key, text) rows of a JSON value; long lists are summarised, and a measurement
+    (a dict of scalars with a ``unit``, e.g. extremes and their times) is one row."""
+    if isinstance(value, dict) and "unit" in value and not any(isinstance(v, (dict, list)) for v in value.values()):
+        parts = ", ".join(f"{k} = {_text(v)}" for k, v in value.items() if k != "unit")
+        return [(prefix, f"{parts} (unit {value['unit']})")]
     if isinstance(value, dict):
         rows = []
         for k, v in value.items():

@@ -155,12 +155,14 @@ def test_report_reads_the_pipeline_record(tmp_path):
     summary = {"symmech_version": "0.1.0", "kind": "impact", "status": "ok", "scene_file": "s.toml",
                "timing_s": {"validate": 0.01, "run": 0.5, "write": 0.25, "total": 0.76},
                "generated_modules": {"grain_impact": digest}, "solver": {"residual_19": 2.5e-15},
-               "scene": {"kind": "impact", "impact": {"e": 0.5, "lambda": 0.25}}, "warnings": ["w1"]}
+               "scene": {"kind": "impact", "impact": {"e": 0.5, "lambda": 0.25}}, "warnings": ["w1"],
+               "speed": {"max": 5.0, "t_max": 1.25, "unit": "m/s"}}
     (tmp_path / "summary.json").write_text(json.dumps(summary))
     page = report.render(tmp_path)
     assert '&#34;lambda&#34;: 0.25' in page  # the resolved scene, escaped
     assert "<td>validate 0.01, run 0.5, write 0.25, total 0.76</td>" in page
     assert f'<td>grain_impact</td><td class="num">{digest}</td>' in page
     assert '<td>solver.residual_19</td><td class="num">2.5e-15</td>' in page
+    assert '<td>speed</td><td class="num">max = 5, t_max = 1.25 (unit m/s)</td>' in page
     assert '<div class="warn">w1</div>' in page and "No plots in this folder." in page
     assert "<code>grain_impact.mu_equation</code>" in page and "grain_motion" not in page
