@@ -69,6 +69,18 @@ def cmd_report(ns) -> int:
 
 
 def cmd_bench(ns) -> int:
+    from symmech.core import pipeline, registry
+    from symmech.core.context import Context
+
+    if load(ns.scene).raw("kind", default=None) in registry.kinds():
+        scene = pipeline.load(ns.scene)
+        if scene.kind.precision is None:
+            raise SymmechError(f"scene kind '{scene.kind.name}' has no precision benchmark")
+        result = scene.kind.precision(scene.setup, Context())
+        result.check_finite()
+        pipeline.write(result, Path(ns.out), scene)
+        print(f"wrote {Path(ns.out) / 'summary.json'}")
+        return 0
     scene = load(ns.scene)
     module = _kind_module(scene)
     if not hasattr(module, "precision"):
