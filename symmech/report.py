@@ -230,7 +230,7 @@ def render(out: Path) -> str:
                   ("report written by", f"symmech {__version__}, Python {platform.python_version()}"),
                   ("report written at", datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))]
     env = jinja2.Environment(loader=jinja2.FunctionLoader(
-        lambda name: importlib.resources.files("symmech.templates").joinpath(name).read_text()),
+        lambda name: importlib.resources.files("symmech").joinpath(name).read_text(encoding="utf-8")),
         autoescape=True, trim_blocks=True, lstrip_blocks=True)
     return env.get_template(TEMPLATE).render(
         kind=kind, package=package, out=str(out), summary=summary,
