@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 f0803fca1ecc361c7cd7e10d2adeae87ecc1fa8ae2d621a519715fc353a81745
+# symmech 0.1.0 generated module; inputs sha256 aff6ec374b8789afc4b958a40499bd87d1def6c43e3d77f43184b3558e732ba9
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 f0803fca1ecc361c7cd7e10d2adeae87ecc1fa8ae2d621a519715fc353a81745
+# body sha256 aff6ec374b8789afc4b958a40499bd87d1def6c43e3d77f43184b3558e732ba9
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
@@ -22,6 +22,9 @@ MODULES = {
     'smm_rotor_boom': 'symmech.smm.derive',
     'smm_spatial_boom': 'symmech.smm.derive',
     'trolley_dynamics': 'symmech.trolley.derive',
+    'trolley_elastic': 'symmech.trolley.derive_elastic',
+    'trolley_elastic_lagrange': 'symmech.trolley.derive_elastic',
+    'trolley_elastic_printed': 'symmech.trolley.printed_elastic',
     'trolley_frame': 'symmech.trolley.derive',
     'trolley_printed': 'symmech.trolley.printed',
 }
@@ -35,5 +38,7 @@ INPUTS = {
     'symmech.smm.derive_formulas': (),
     'symmech.smm.printed': (),
     'symmech.trolley.derive': (),
+    'symmech.trolley.derive_elastic': (),
     'symmech.trolley.printed': (),
+    'symmech.trolley.printed_elastic': (),
 }

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2f18f5aa9207c30543b0cfbf5ad12dbf5c64253a35be355d49d4272388029716
-# source key e80997990d1ab0262ef33cbd8dc1bfee4add2d2ec93aeec77029ebad4a274251
+# source key d687e117d406faf52ae7d7ccd7d74dbcb6e5803bf23a1afaa07be06113e06f15
 # body sha256 aee5dbf23a586530a888113236e52e676f91d5a69d4a97696549f4cbbea29ebb
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -78,7 +78,7 @@ def cmd_bench(ns) -> int:
         scene = pipeline.load(ns.scene)
         if scene.kind.precision is None:
             raise SymmechError(f"scene kind '{scene.kind.name}' has no precision benchmark")
-        result = scene.kind.precision(scene.setup, Context())
+        result = scene.kind.precision(scene.setup, Context(quiet=ns.quiet))
         result.check_finite()
         pipeline.write(result, Path(ns.out), scene)
         print(f"wrote {Path(ns.out) / 'summary.json'}")
@@ -255,6 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     bp = bsub.add_parser("precision", help="work-precision diagram (CSV + PNG) for a scene")
     bp.add_argument("scene", help="scene file (TOML)")
     bp.add_argument("--out", default="out-precision", help="output folder")
+    bp.add_argument("--quiet", action="store_true", help="no progress bars")
     bp.set_defaults(func=cmd_bench)
     return p
 

@@ -13,15 +13,14 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core.errata import Check, NotCompared
-from symmech.core.scene import load
 from symmech.smm import SEED
-from symmech.smm.model import from_scene
+from symmech.smm.derive import load_mechanism
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
 
 def _nominal(scene: str) -> dict:
-    return from_scene(load(SCENES / f"smm_{scene}.toml")).values()
+    return load_mechanism(SCENES / f"smm_{scene}.toml").values()
 
 
 def _sampler(scene: str):

@@ -98,6 +98,6 @@ def precision_plot(out: Path, points, modes_n: int, title: str) -> list[Path]:
     for name, sec, err in points:
         ax.loglog(sec, max(err, 1e-17), "o")
         ax.annotate(name, (sec, max(err, 1e-17)), fontsize=7)
-    plotting.set_labels(ax, ("time", "s"), (f"max relative error of the lowest {modes_n} omega", "1"))
+    plotting.set_labels(ax, ("time", "s"), (f"max relative error of the lowest {modes_n} omega^2", "1"))
     ax.set_title(title, fontsize=9)
     return plotting.save(fig, out, "precision")
