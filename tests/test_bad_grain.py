@@ -224,9 +224,10 @@ def test_a_creeping_phase_is_stopped_by_the_time_budget(monkeypatch):
 
 def test_a_phase_loop_that_stops_advancing_is_reported(monkeypatch):
     """Lift-off and landing at the same instant forever: the stagnation guard names the time."""
-    def lift_at_once(model, t0, r0, v0, t_end, *args):
-        return sliding.SlideResult(t0, np.asarray(r0), np.asarray(v0), True, (np.zeros(0), np.zeros((0, 2)),
-                                                                              np.zeros((0, 2))))
+    def lift_at_once(model, body, t0, r0, v0, q0, w0, *args):
+        return sliding.SlideResult(t0, np.asarray(r0), np.asarray(v0), np.asarray(w0), np.asarray(q0), True,
+                                   0.0, 0.0,
+                                   (np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 4)), np.zeros((0, 3))))
 
     monkeypatch.setattr(motion, "slide", lift_at_once)
     scene = pipeline.load(edits(("duration", 0.3), ("vibration.amplitude", 0.0), ("initial.position", DELETE)))
@@ -234,7 +235,8 @@ def test_a_phase_loop_that_stops_advancing_is_reported(monkeypatch):
         scene.run(Context(quiet=True, max_time=60.0))
 
 
-def test_progress_reports_the_simulated_time():
+def test_progress_reports_the_simulated_time(monkeypatch):
+    monkeypatch.setattr(motion, "PROGRESS_INTERVAL", 0.0)  # every phase, not every 0.2 s of wall time
     seen = []
 
     class Bar:

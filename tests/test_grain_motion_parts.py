@@ -171,8 +171,8 @@ def test_effects_off_equal_full_model_with_parameters_zeroed():
     a = run(replace(full, effects=motion.Effects(friction=False)))
     b = run(replace(full, mu=0.0))
     np.testing.assert_allclose(a.final.r, b.final.r, atol=1e-9)
-    # rotation off == a sphere without spin and without tangential impulse (nothing to turn it)
-    smooth = replace(full, law=ImpactLaw("coulomb", e_n=0.4, e_t=0.0, mu=0.0, check_printed=False))
+    # rotation off == a sphere without spin, tangential impulse or sliding friction (nothing to turn it)
+    smooth = replace(full, law=ImpactLaw("coulomb", e_n=0.4, e_t=0.0, mu=0.0, check_printed=False), mu=0.0)
     a = run(replace(smooth, effects=motion.Effects(rotation=False)))
     b = run(smooth)
     np.testing.assert_allclose(a.final.r, b.final.r, atol=1e-10)
@@ -276,16 +276,23 @@ def test_constant_euler_rates_of_62_break_angular_momentum_for_an_asymmetric_gra
     assert drift > 0.1
 
 
-def test_paper_mode_reports_gimbal_lock_instead_of_nan():
-    """theta = 0 (body axis 3 along the normal): the Euler rates of (62) are undefined; warned, no NaN."""
+def test_paper_mode_rotates_a_grain_started_at_gimbal_lock():
+    """theta = 0 (body axis 3 along the normal), where the Euler rates of (62) are singular. Before, paper mode
+    froze the rotation; now a spin about the normal turns the grain exactly (regular precession, for which (62) is
+    exact): Q(t) = Rz(30 t) Q0, and a tumbling start turns by about |w| t without NaN."""
     model = grain_model(axes=(2e-3, 1.5e-3, 1e-3), mass=1e-5)
-    st = motion.State(0.0, np.array([0.0, 0.0, 3e-3]), np.zeros(3), np.array([1.0, 0, 0, 0]),
+    st = motion.State(0.0, np.array([0.0, 0.0, 8e-3]), np.zeros(3), np.array([1.0, 0, 0, 0]),
                       np.array([0.0, 0.0, 30.0]))
     T = model.period
-    res = paper_mode.simulate(model, motion.Numerics(mode="paper", dt=T / 500, nodes=100, sample_interval=T / 5),
-                              st, 2 * T)
-    assert any("gimbal lock" in w for w in res.warnings)
-    assert np.all(np.isfinite(res.trajectory))
-    # Accurate mode (quaternions) has no such singularity.
+    num = motion.Numerics(mode="paper", dt=T / 500, nodes=100, sample_interval=T / 5)
+    res = paper_mode.simulate(model, num, st, T)
+    assert len(res.impacts) == 0 and not res.warnings
+    c, s = math.cos(30 * T), math.sin(30 * T)
+    np.testing.assert_allclose(flight.rotation_matrix(res.final.q), [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-12)
+    tumble = paper_mode.simulate(model, num, replace(st, w=np.array([5.0, -3.0, 30.0])), T)
+    assert np.all(np.isfinite(tumble.trajectory))
+    turned = 2 * math.acos(min(1.0, abs(tumble.final.q[0])))
+    assert turned == pytest.approx(math.sqrt(5**2 + 3**2 + 30**2) * T, rel=0.2)
+    # Accurate mode (quaternions) has no such singularity either.
     acc = run(model, t_end=2 * T, w=(0.0, 0.0, 30.0))
-    assert not any("gimbal" in w for w in acc.warnings) and np.all(np.isfinite(acc.trajectory))
+    assert np.all(np.isfinite(acc.trajectory))

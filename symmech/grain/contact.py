@@ -35,26 +35,17 @@ def contact_offset(axes, Q):
 
 
 def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 32):
-    """First time in (t0, t1] where ``h`` reaches zero from above, or None.
+    """First time in (t0, t1] where ``h`` reaches zero from above, or None; ``h(t0) > 0``.
 
     ``h`` maps an array of times to an array of values (it is scanned ``window``
     points at a time at spacing ``step``) and a float to a float (Brent refinement
-    to ``xtol`` seconds). ``h(t0)`` may be zero (the grain just left the plane); a
-    root is accepted only after ``h`` has been positive, and ``t0`` itself is
-    returned when ``h`` never becomes positive (the grain did not leave).
+    to ``xtol`` seconds). A start on the plane is the caller's to resolve: it must
+    first find a time where the gap has risen above round-off (see ``motion``).
     """
-    start, first = t0, True
+    start = t0
     while True:
         ts = np.unique(np.minimum(start + step * np.arange(window + 1), t1))
         hs = np.asarray(h(ts), dtype=float)
-        if first:
-            hs[0] = max(hs[0], 0.0)
-            if hs[0] == 0.0 and hs[1] <= 0.0:
-                # Touching at t0: look for the highest point of the first interval.
-                res = minimize_scalar(lambda s: -h(s), bounds=(ts[0], ts[1]), method="bounded",
-                                      options={"xatol": xtol})
-                return brentq(h, res.x, ts[1], xtol=xtol) if -res.fun > 0.0 else t0
-            first = False
         neg = np.flatnonzero(hs[1:] <= 0.0)
         stop = neg[0] + 1 if neg.size else len(ts)
         inner = np.arange(1, min(stop, len(ts) - 1))

@@ -5,31 +5,48 @@ One grain alternates between three regimes:
 - flight: exact translation in the vibrating frame and torque-free rotation to a
   tolerance (:mod:`symmech.grain.flight`), until the exact support distance of the
   ellipsoid reaches the plane (:mod:`symmech.grain.contact`);
-- impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`);
-- sliding: Coulomb stick/slip on the plane (:mod:`symmech.grain.sliding`) until the
-  normal force would become negative.
+- impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`),
+  only for a contact point approaching the plane faster than round-off;
+- sliding: Coulomb stick/slip and rolling on the plane, spin kept
+  (:mod:`symmech.grain.sliding`), until the normal force would become negative.
 
-A contact reached without ever separating (a rocking body that presses on the
-plane right after an impact) is persistent contact: the grain lands and slides.
-Lift-off after an impact is judged physically: the grain flies when the normal
-velocity of its contact point after the impact exceeds ``rest_velocity`` (a
-bounce lower than that is the end of chattering: the geometric series of ever
-smaller bounces is summed into sliding), or when the surface accelerates away
-faster than gravity (normal force negative). Otherwise it slides.
+A flight that starts on the plane (after an impact or a lift-off) must first rise
+above round-off before a contact can be found; one that does not within a scan
+step, or a contact reached without approaching, is a grain resting on the plane:
+it lands and slides. Lift-off after an impact is judged physically: the grain
+flies when the normal velocity of its contact point after the impact exceeds
+``rest_velocity`` (a bounce lower than that is the end of chattering: the
+geometric series of ever smaller bounces is summed into sliding), or when the
+surface accelerates away faster than gravity (normal force negative). Landing
+is a plastic normal impulse at the contact point, which keeps the angular
+momentum about it.
+
+Every run returns an energy budget (absolute kinetic energy plus the potential
+of gravity against the work of the surface and the losses in impacts, landings
+and sliding; its residual measures the numerics), and has guards: a run that
+stops advancing time raises ``SymmechError`` instead of hanging, and an optional
+``on_step(t_now)`` callback is called at most every 0.2 s of wall time.
 
 Paper mode (the printed fixed-step scheme) lives in :mod:`symmech.grain.paper_mode`.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from symmech.core.scene import SymmechError
 from symmech.grain import contact, flight
-from symmech.grain.coulomb_law import ImpactLaw, principal_inertia
-from symmech.grain.sliding import Sliding, slide
+from symmech.grain.coulomb_law import ImpactLaw, inverse_effective_mass, kinetic_energy, principal_inertia
+from symmech.grain.sliding import Body, Sliding, slide
 
 REGIMES = ("flight", "impact", "sliding")
+EPS = float(np.finfo(float).eps)
+PROGRESS_INTERVAL = 0.2  # s of wall time between two calls of on_step
+ENERGY_TOLERANCE = 1e-6  # stated bound on the relative residual of the energy budget
+ZENO_IMPACTS, ZENO_INTERVAL = 100, 1e-4  # this many impacts within this many periods: chattering
+MAX_IDLE_STEPS = 1000  # stagnation guard: regime changes in a row that do not advance time
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "vx", "vy", "vz", "q0", "q1", "q2", "q3", "wx", "wy", "wz", "regime")
 
 
@@ -112,7 +129,8 @@ class State:
 @dataclass
 class Motion:
     """Result: ``trajectory`` (n, 15) with :data:`TRAJECTORY_COLUMNS`, ``impacts`` (list of dicts),
-    ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the ``start`` state."""
+    ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the ``start`` state; ``extra`` goes into
+    the summary as it is (accurate mode: ``landings`` and ``energy_budget``, the dict of :meth:`_Budget.report`)."""
 
     trajectory: np.ndarray
     impacts: list
@@ -177,76 +195,208 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
             "printed_creates_energy": out["printed_creates_energy"][i], "converged": bool(out["converged"][i])}
 
 
-def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None) -> Motion:
-    """Accurate mode from ``start`` to ``t_end``; the grain starts in flight (or on the plane at rest).
+class Progress:
+    """Calls ``on_step(t_now)`` at most every ``PROGRESS_INTERVAL`` seconds of wall time (always when ``final``)."""
 
-    ``on_step(t)``, if given, is called at every regime phase (progress, time budget, stagnation)."""
+    def __init__(self, on_step):
+        self.on_step = on_step
+        self.last = time.monotonic()
+
+    def __call__(self, t_now: float, final: bool = False) -> None:
+        if self.on_step is not None and (final or time.monotonic() - self.last >= PROGRESS_INTERVAL):
+            self.last = time.monotonic()
+            self.on_step(float(t_now))
+
+
+class _Budget:
+    """Energy bookkeeping [J] of one run: absolute energy (kinetic in the inertial frame plus potential of
+    gravity) against the work of the surface and the losses in impacts, landings and sliding."""
+
+    def __init__(self, model: Model, st: State):
+        self.model = model
+        self.start = self.energy(st)
+        self.work = self.impacts = self.landings = self.sliding = 0.0
+
+    def energy(self, st: State) -> float:
+        m, vib = self.model, self.model.vibration
+        s = vib.kinematics(st.t)
+        v_abs = st.v + s[1]
+        return (m.mass * (0.5 * float(v_abs @ v_abs) - float(np.asarray(m.g_k) @ (st.r + s[0])))
+                + 0.5 * float(st.w @ (m.inertia * st.w)))
+
+    def impulse(self, t: float, P) -> None:
+        """Work of the moving surface through an impulse P (3,) [N s] on the grain at time t."""
+        self.work += float(np.asarray(P) @ self.model.vibration.kinematics(t)[1])
+
+    def report(self, st: State, tolerance: float) -> dict:
+        end = self.energy(st)
+        residual = end - self.start - (self.work - self.impacts - self.landings - self.sliding)
+        scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
+        parts = {"start_J": self.start, "end_J": end, "input_by_surface_J": self.work,
+                 "lost_in_impacts_J": self.impacts, "lost_at_landings_J": self.landings,
+                 "lost_in_sliding_J": self.sliding, "residual_J": residual,
+                 "relative_residual": abs(residual) / scale if scale > 0 else 0.0}
+        return {**{k: float(v) for k, v in parts.items()}, "tolerance": tolerance}
+
+
+def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None) -> Motion:
+    """Accurate mode from ``start`` to ``t_end`` [s]; the grain starts in flight (or on the plane at rest).
+
+    ``on_step(t_now: float) -> None`` (optional) is called with the simulated time [s] at most every
+    0.2 s of wall time and once at the end; an exception it raises stops the run and propagates unchanged.
+    """
     model = model.active()
+    progress = Progress(on_step)
     rec = _Recorder(num.sample_interval)
     st = replace(start, r=np.array(start.r, float), v=np.array(start.v, float),
                  q=np.asarray(start.q, float) / np.linalg.norm(start.q), w=np.array(start.w, float))
     if not model.effects.rotation:
         st.w = np.zeros(3)
+    budget = _Budget(model, st)
+    on_plane = _gap(model, st) <= _gap_noise(model, st)
     time_in = dict.fromkeys(("flight", "sliding"), 0.0)
     impacts: list = []
     warnings: list = []
-    regime = "flight"
+    regime, landings, idle = "flight", 0, 0
     rec.add(st, regime)
+    if on_plane and _contact_velocity(model, st) <= _velocity_noise(model, st) and model.sliding.normal(st.t) > 0:
+        regime, on_plane = "sliding", False  # released on a plane that pushes: it slides from the start
+        st = _land(model, st, budget)
     while st.t < t_end:
-        if on_step is not None:
-            on_step(st.t)
+        progress(st.t)
+        t_before = st.t
         if regime == "flight":
-            t0 = st.t
-            st, hit = _fly(model, num, st, t_end, rec)
-            time_in["flight"] += st.t - t0
-            if not hit:
+            st, status = _fly(model, num, st, t_end, rec, on_plane)
+            time_in["flight"] += st.t - t_before
+            if status == "end":
                 break
-            if st.t == t0:
-                # The grain never left the plane (a rocking body pressing on it): persistent contact.
-                regime = "sliding"
-                st = _land(model, st)
-                continue
-            if len(impacts) >= num.max_impacts:
-                warnings.append(f"stopped at t = {st.t:.6g} s after numerics.max_impacts = {num.max_impacts} impacts")
-                break
-            before = st
-            Q = flight.rotation_matrix(st.q)
-            out = model.law.apply(np.array([model.axes]), np.array([model.mass]), Q[None], st.v[None],
-                                  (Q @ st.w)[None], model.effects.rotation)
-            warnings += out["warnings"]
-            st = State(st.t, st.r, out["v"][0], st.q, Q.T @ out["w"][0])
-            rec.add(before, "impact")
-            rec.add(st, "impact")
-            impacts.append(impact_record(st.t, before, st, out))
-            if out["u_after"][0, 2] <= num.rest_velocity and model.sliding.normal(st.t) > 0:
-                regime = "sliding"
-                st = _land(model, st)
+            if status == "contact" and _contact_velocity(model, st) < -_velocity_noise(model, st):
+                if len(impacts) >= num.max_impacts:
+                    warnings.append(f"stopped at t = {st.t:.6g} s after numerics.max_impacts = "
+                                    f"{num.max_impacts} impacts")
+                    break
+                st, u_n = _bounce(model, num, st, impacts, rec, budget, warnings)
+            else:
+                u_n = 0.0  # touching without approaching: resting on the plane
+            # Resting (no separating velocity the numerics resolve) on a plane that pushes: slide.
+            on_plane = True
+            if u_n <= num.rest_velocity and model.sliding.normal(st.t) > 0:
+                regime, on_plane, landings = "sliding", False, landings + 1
+                st = _land(model, st, budget)
         else:
-            t0 = st.t
-            res = slide(model.sliding, st.t, st.r[:2], st.v[:2], t_end, rec.times(st.t, t_end), num.scan_step, num.tolerance)
-            ts, rs, vs = res.samples
-            n = len(ts)
-            rec.add_many(ts, np.column_stack([rs, np.full(n, st.r[2])]), np.column_stack([vs, np.zeros(n)]),
-                         np.tile(st.q, (n, 1)), np.zeros((n, 3)), "sliding")
-            time_in["sliding"] += res.t - t0
-            st = State(res.t, np.array([*res.r, st.r[2]]), np.array([*res.v, 0.0]), st.q, st.w)
-            rec.add(st, "sliding")
-            if res.lifted:
-                regime = "flight"
+            st, lifted = _slide(model, num, st, t_end, rec, budget, progress)
+            time_in["sliding"] += st.t - t_before
+            if lifted:
+                regime, on_plane = "flight", True
+        idle = idle + 1 if st.t == t_before else 0
+        if idle > MAX_IDLE_STEPS:
+            raise SymmechError(f"grain: the simulation stopped advancing at t = {st.t:.9g} s ({MAX_IDLE_STEPS} "
+                               f"regime changes without advancing time, {regime} regime)")
+    progress(st.t, final=True)
     rec.add(st, regime)
-    return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st)
+    extra = {"landings": landings, "energy_budget": budget.report(st, ENERGY_TOLERANCE)}
+    return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st, extra)
 
 
-def _land(model: Model, st: State) -> State:
-    """Start sliding: normal velocity and spin stop, the centre sits at the support height."""
+def _bounce(model: Model, num: Numerics, st: State, impacts: list, rec: _Recorder, budget: _Budget,
+            warnings: list):
+    """An impact at ``st``, logged and booked: (state after, normal contact velocity after [m/s]; zero when the
+    impacts have become a chattering sequence too dense to follow, which is summed into sliding)."""
+    before = st
+    st, out = _impact(model, st, warnings)
+    budget.impulse(st.t, out["impulse"][0])
+    budget.impacts += float(out["ke_before"][0] - out["ke_after"][0])
+    rec.add(before, "impact")
+    rec.add(st, "impact")
+    impacts.append(impact_record(st.t, before, st, out))
+    times = [i["t"] for i in impacts[-ZENO_IMPACTS:]]
+    if len(times) == ZENO_IMPACTS and times[-1] - times[0] < ZENO_INTERVAL * model.period:
+        warnings.append(f"{ZENO_IMPACTS} impacts within {ZENO_INTERVAL:g} periods: chattering summed into sliding")
+        return st, 0.0
+    return st, float(out["u_after"][0, 2])
+
+
+def _impact(model: Model, st: State, warnings: list):
+    """The scene's impact law at the lowest point: (state after, law output)."""
     Q = flight.rotation_matrix(st.q)
+    out = model.law.apply(np.array([model.axes]), np.array([model.mass]), Q[None], st.v[None],
+                          (Q @ st.w)[None], model.effects.rotation)
+    warnings += out["warnings"]
+    return State(st.t, st.r, out["v"][0], st.q, Q.T @ out["w"][0]), out
+
+
+def _contact_velocity(model: Model, st: State) -> float:
+    """Normal velocity [m/s] of the body point at the lowest point, relative to the surface."""
+    Q = flight.rotation_matrix(st.q)
+    return float(st.v[2] + np.cross(Q @ st.w, contact.contact_offset(model.axes, Q))[2])
+
+
+def _gap(model: Model, st: State) -> float:
+    """Height [m] of the lowest point above the plane."""
+    return float(st.r[2] - contact.support_distance(model.axes, flight.rotation_matrix(st.q)))
+
+
+def _gap_noise(model: Model, st: State) -> float:
+    """Round-off level [m] of the gap: a flight from the plane has left it only once above this."""
+    return 64 * EPS * (max(model.axes) + abs(st.r[2]) + model.vibration.amplitude)
+
+
+def _velocity_noise(model: Model, st: State) -> float:
+    """Round-off level [m/s] of a contact velocity: an impact must approach faster than this."""
+    vib = model.vibration
+    scale = np.linalg.norm(st.v) + np.linalg.norm(st.w) * max(model.axes) + vib.amplitude * vib.omega
+    return 1e3 * EPS * scale
+
+
+def _land(model: Model, st: State, budget: _Budget) -> State:
+    """Start sliding: a plastic normal impulse at the lowest point stops its normal velocity (angular momentum
+    about the contact is kept); a non-spherical grain also gives up the tilting spin the sliding regime does not
+    model. Both losses are booked as landing loss; the centre sits at the support height."""
+    Q = flight.rotation_matrix(st.q)
+    R = contact.contact_offset(model.axes, Q)
+    w = Q @ st.w
+    rotating = model.effects.rotation
+    K = inverse_effective_mass(model.mass, model.inertia, Q, R) if rotating else np.eye(3) / model.mass
+    P = np.array([0.0, 0.0, -_contact_velocity(model, st) / K[2, 2]])
+    v = st.v + P / model.mass
+    if rotating:
+        w = w + Q @ ((Q.T @ np.cross(R, P)) / model.inertia)
+        if max(model.axes) != min(model.axes):
+            v[2], w[:2] = 0.0, 0.0
+    v[2] = 0.0
+    ke = kinetic_energy(model.mass, model.inertia, Q, np.stack([st.v, v]), np.stack([Q @ st.w, w]))
+    budget.impulse(st.t, model.mass * (v - st.v))
+    budget.landings += float(ke[0] - ke[1])
     r = st.r.copy()
     r[2] = float(contact.support_distance(model.axes, Q))
-    return State(st.t, r, np.array([st.v[0], st.v[1], 0.0]), st.q, np.zeros(3))
+    return State(st.t, r, v, st.q, Q.T @ w)
 
 
-def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder):
-    """Fly from ``st`` until the first contact (state at contact, True) or ``t_end`` (state, False)."""
+def _slide(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, budget: _Budget, progress):
+    """One sliding phase from ``st``: (state at its end, lifted off)."""
+    body = Body(model.axes, model.mass, tuple(model.inertia), model.effects.rotation)
+    Q = flight.rotation_matrix(st.q)
+    res = slide(model.sliding, body, st.t, st.r[:2], st.v[:2], st.q, Q @ st.w, t_end, rec.times(st.t, t_end),
+                num.scan_step, num.tolerance, progress)
+    ts, rs, vs, qs, ws = res.samples
+    n = len(ts)
+    w_body = np.einsum("nji,nj->ni", flight.rotation_matrix(qs), ws) if n else ws
+    rec.add_many(ts, np.column_stack([rs, np.full(n, st.r[2])]), np.column_stack([vs, np.zeros(n)]),
+                 qs, w_body, "sliding")
+    budget.work += res.work
+    budget.sliding += res.dissipated
+    end = State(res.t, np.array([*res.r, st.r[2]]), np.array([*res.v, 0.0]), res.q,
+                flight.rotation_matrix(res.q).T @ res.w)
+    rec.add(end, "sliding")
+    return end, res.lifted
+
+
+def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, on_plane: bool):
+    """Fly from ``st`` until the first contact or ``t_end``: (state, "contact" | "end" | "resting").
+
+    A flight that starts on the plane (after an impact or lift-off) first has to rise above round-off;
+    "resting" says it does not within one scan step.
+    """
     vib = model.vibration
     rotating = model.effects.rotation and np.any(st.w)
     rot = flight.RotationFlight(model.inertia, st.q, st.w, st.t, num.tolerance, model.period) if rotating else None
@@ -262,14 +412,30 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder):
         h = r[..., 2] - contact.support_distance(model.axes, flight.rotation_matrix(orient(t)[0]))
         return h if np.ndim(t) else float(h)
 
-    tc = contact.first_root(gap, st.t, t_end, num.scan_step, num.tolerance * num.scan_step)
+    t_from = st.t
+    if on_plane:
+        t_from = _rise(gap, st.t, min(num.scan_step, t_end - st.t), _gap_noise(model, st))
+        if t_from is None:
+            return st, "resting"
+    tc = contact.first_root(gap, t_from, t_end, num.scan_step, num.tolerance * num.scan_step)
     t_stop = t_end if tc is None else tc
     ts = rec.times(st.t, t_stop)
     ts = np.append(ts[(ts > st.t) & (ts < t_stop)], t_stop)
     r, v = flight.translate(st.r, st.v, model.g_k, vib, st.t, ts)
     q, w = orient(ts)
     rec.add_many(ts[:-1], r[:-1], v[:-1], q[:-1], w[:-1], "flight")
-    return State(t_stop, r[-1], v[-1], q[-1].copy(), w[-1].copy()), tc is not None
+    return State(t_stop, r[-1], v[-1], q[-1].copy(), w[-1].copy()), "end" if tc is None else "contact"
+
+
+def _rise(gap, t0: float, span: float, noise: float):
+    """The latest of ``t0 + span / 2^k`` where the gap exceeds ``noise`` [m], or None."""
+    for k in range(64):
+        t = t0 + span / 2.0**k
+        if t <= t0:
+            break
+        if gap(t) > noise:
+            return t
+    return None
 
 
 def _unique(items: list) -> list:

@@ -23,7 +23,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector
 from symmech.core.watchdog import watchdog
 from symmech.generated import grain_motion as gm
-from symmech.grain import contact, fields, flight, motion, paper_mode, plots
+from symmech.grain import contact, fields, flight, motion, paper_mode, plots, sweep
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
 
@@ -124,8 +124,10 @@ SCHEMA = Fields("a grain scene", {
         "vibration": Bool("off: the surface is still", default=True),
         "inclination": Bool("off: α = β = 0", default=True),
         "rotation": Bool("off: no spin, impacts act on a point mass (H = E)", default=True),
-        "friction": Bool("off: frictionless sliding (exact closed form)", default=True),
+        "friction": Bool("off: frictionless sliding (no friction force)", default=True),
     }, default={}),
+    "sweep": sweep.SWEEP,
+    "population": sweep.POPULATIONS,
     "numerics": Fields("numerical choices; T is the vibration period (1 s without vibration)", {
         "mode": Choice("`accurate`: exact flight, root-located events; `paper`: the printed fixed-step scheme",
                        choices=("accurate", "paper"), default="accurate"),
@@ -290,12 +292,11 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
              on_step=None) -> motion.Motion:
     """Run the scene's grain (optionally with other numerics or duration); returns a Motion.
 
-    ``on_step(t)`` is called at every regime phase of accurate mode (paper mode's fixed
-    steps are bounded by the estimate and the watchdog)."""
+    ``on_step(t)`` [s] is called at most every ``motion.PROGRESS_INTERVAL`` of wall time, in both modes."""
     num = numerics or sc.numerics
     t_end = sc.duration if duration is None else duration
     if num.mode == "paper":
-        return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta)
+        return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
     return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
 
 

@@ -8,7 +8,12 @@ Per step dt, for every grain in flight:
   gravity components as printed, see ``symmech errata``);
 - (62) Euler angles advance with the constant rates obtained at the last impact
   (exact only for regular precession: the error for an asymmetric body does not
-  vanish with dt, measured in the tests);
+  vanish with dt, measured in the tests). The angles are those of a per-grain chart
+  ``Q = C Rot(psi, theta, phi)``: ``C`` is the identity (the paper's angles) until
+  |sin theta| falls below ``CHART_SIN`` where the rates of (62) become singular (the
+  bundled orientation theta = 0 is exactly singular); then the chart is turned so that
+  the grain sits at theta = pi/2 in it. Body rates, hence (62), do not depend on ``C``;
+  the output is the orientation Q itself;
 - (63) contact test over ``nodes`` discrete surface nodes: corrected, the lowest
   node reaches the plane (``z_c + min_k z_k <= 0``); as printed ``z_c <= |KC|``;
 - impact at the step time with the scene's impact law (applied at the exact lowest
@@ -32,41 +37,43 @@ from symmech.generated import grain_motion_printed as gp
 from symmech.grain import contact
 from symmech.grain.body import euler_from_matrix
 from symmech.grain.body import rotation as euler_rotation
-from symmech.grain.motion import Model, Motion, Numerics, State, impact_record, _unique
+from symmech.grain.motion import Model, Motion, Numerics, Progress, State, impact_record, _unique
 from symmech.grain.flight import quaternion_from_matrix
 from symmech.grain.sliding import slide_step
 
-GIMBAL_SIN = 1e-6
-GIMBAL_WARNING = (f"paper mode: Euler angles at gimbal lock (|sin theta| < {GIMBAL_SIN:g}): the rates of (62) "
-                  "are undefined; rotation frozen for that flight")
+CHART_SIN = 0.1  # |sin theta| below which the angle chart is turned (rates amplified by at most 10)
 
 
 def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0, t_end: float,
-                   record: bool = False, alpha_beta=(0.0, 0.0)):
+                   record: bool = False, alpha_beta=(0.0, 0.0), on_step=None):
     """Paper-mode run of n grains from t = 0 to ``t_end``.
 
     axes (n, 3) m, mass (n,) kg, r0, v0 (n, 3) relative centre position/velocity [m, m/s],
     angles0 (n, 3) Euler angles (psi, theta, phi) [rad], w0 (n, 3) body rates [rad/s].
     ``alpha_beta`` are the inclination angles [rad] for the printed gravity (as printed only).
     Returns (r, v, impacts per grain (n,), records) where records (if ``record``) holds the
-    trajectory rows, impact log and regime times of grain 0.
+    trajectory rows, impact log and regime times of grain 0. ``on_step(t_now)``: as in accurate mode.
     """
+    progress = Progress(on_step)
     axes = np.asarray(axes, dtype=float)
     mass = np.asarray(mass, dtype=float)
     n = len(mass)
     r, v = np.array(r0, dtype=float), np.array(v0, dtype=float)
     ang = np.array(angles0, dtype=float)
+    Q = euler_rotation(ang)
+    chart = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+    _rechart(chart, ang, Q, np.arange(n))
     ang_liftoff, steps_since = ang.copy(), np.zeros(n)  # (62) counts steps s from the last impact
     rotation = model.effects.rotation
     w_body = np.array(w0, dtype=float) if rotation else np.zeros((n, 3))
-    rates, bad = _rates(ang, w_body)
+    rates = gm.euler_rates(*ang.T, *w_body.T)
     nodes = contact.ellipsoid_nodes(np.ones(3), num.nodes)[None] * axes[:, None, :]  # (n, N, 3)
     sliding = np.zeros(n, dtype=bool)
     count = np.zeros(n, dtype=int)
     model = model.active()
     vib = model.vibration
     slide_model = model.sliding
-    warnings: list = [GIMBAL_WARNING] if bad.any() else []
+    warnings: list = []
     if num.as_printed:
         a, b = alpha_beta
         delta = np.arccos(np.sqrt(max(1.0 - np.sin(a) ** 2 - np.sin(b) ** 2, 0.0)))
@@ -76,9 +83,9 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
     rec_rows, rec_impacts, time_in = [], [], {"flight": 0.0, "sliding": 0.0}
     steps = int(round(t_end / num.dt))
     every = max(1, int(round(num.sample_interval / num.dt)))
-    Q = euler_rotation(ang)
     for k in range(1, steps + 1):
         t = k * num.dt
+        progress(t)
         a_s = vib.kinematics(t)[2]
         fl = ~sliding
         if record:
@@ -93,7 +100,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
                 theta, psi, phi = np.moveaxis(gp.euler_angles(a0[:, 1], a0[:, 0], a0[:, 2], rt[:, 1], rt[:, 0],
                                                               rt[:, 2], steps_since[fl], num.dt), -1, 0)
                 ang[fl] = np.stack([psi, theta, phi], axis=-1)
-                Q[fl] = euler_rotation(ang[fl])
+                Q[fl] = chart[fl] @ euler_rotation(ang[fl])
             hit = _contacts(model, num, Q, nodes, r, v, w_body, fl, rotation)
             if hit.any():
                 idx = np.flatnonzero(hit)
@@ -114,10 +121,9 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
                 w_body[land] = 0.0
                 r[land, 2] = _node_support(Q[land], nodes[land])
                 if rotation:
-                    rates[idx], bad = _rates(ang[idx], w_body[idx])
+                    _rechart(chart, ang, Q, idx)
+                    rates[idx] = gm.euler_rates(*ang[idx].T, *w_body[idx].T)
                     ang_liftoff[idx], steps_since[idx] = ang[idx], 0
-                    if bad.any():
-                        warnings.append(GIMBAL_WARNING)
                 if record and hit[0]:
                     q = quaternion_from_matrix(Q[0])
                     b_state = State(t, r[0].copy(), before_v[0], q, before_w[0])
@@ -145,14 +151,13 @@ def _node_support(Q, nodes):
     return -np.min((nodes @ Q[:, 2, :, None])[..., 0], axis=1)
 
 
-def _rates(ang, w_body):
-    """Euler-angle rates (n, 3) (psi', theta', phi') from body rates, and the grains (n,) at gimbal lock
-    with a nonzero spin (their rates are frozen at zero)."""
-    bad = np.abs(np.sin(ang[:, 1])) < GIMBAL_SIN
-    safe = np.where(bad, np.pi / 2, ang[:, 1])
-    rates = gm.euler_rates(ang[:, 0], safe, ang[:, 2], w_body[:, 0], w_body[:, 1], w_body[:, 2])
-    rates[bad] = 0.0
-    return rates, bad & np.any(w_body != 0, axis=1)
+def _rechart(chart, ang, Q, idx) -> None:
+    """For grains ``idx`` whose chart angle theta is within ``CHART_SIN`` of gimbal lock, turn the chart
+    (n, 3, 3) in place so that the orientation Q (n, 3, 3) has angles (0, pi/2, 0) in it."""
+    near = idx[np.abs(np.sin(ang[idx, 1])) < CHART_SIN]
+    if near.size:
+        ang[near] = [0.0, np.pi / 2, 0.0]
+        chart[near] = Q[near] @ np.swapaxes(euler_rotation(ang[near]), -1, -2)
 
 
 def _contacts(model: Model, num: Numerics, Q, nodes, r, v, w_body, fl, rotation: bool):
@@ -169,14 +174,16 @@ def _contacts(model: Model, num: Numerics, Q, nodes, r, v, w_body, fl, rotation:
     return fl & (gap <= 0.0) & (u_n < 0.0)
 
 
-def simulate(model: Model, num: Numerics, start: State, t_end: float, alpha_beta=(0.0, 0.0)) -> Motion:
-    """Paper mode for one grain from ``start`` (at t = 0) to ``t_end``; same result type as accurate mode."""
+def simulate(model: Model, num: Numerics, start: State, t_end: float, alpha_beta=(0.0, 0.0),
+             on_step=None) -> Motion:
+    """Paper mode for one grain from ``start`` (at t = 0) to ``t_end``; same result type and progress callback
+    as accurate mode."""
     from symmech.grain import flight
 
     Q0 = flight.rotation_matrix(start.q)
     r, v, _, rec = simulate_batch(model, num, np.array([model.axes]), np.array([model.mass]),
                                   start.r[None], start.v[None], euler_from_matrix(Q0)[None], start.w[None],
-                                  t_end, record=True, alpha_beta=alpha_beta)
+                                  t_end, record=True, alpha_beta=alpha_beta, on_step=on_step)
     rows = [start.row("flight")] + rec["rows"]
     final = State(t_end, r[0], v[0], quaternion_from_matrix(rec["Q"][0]), rec["w_body"][0])
     return Motion(np.array(rows), rec["impacts"], rec["time_in"], rec["warnings"], start, final)

@@ -1,30 +1,46 @@
-"""Sliding regime: the grain stays on the plane and slides with Coulomb friction.
+"""Sliding regime: the grain stays on the plane and slides or rolls with Coulomb friction.
 
-The paper defers this regime to another work; this is our model. While sliding,
-the grain keeps the orientation it landed with and does not rotate (the impact
-that could not lift it off is taken to have stopped its spin; rocking and rolling
-of the ellipsoid are not modelled), so its centre stays at the support height
-and only the tangential motion (x, y) evolves. Per unit mass, in KXYZ:
+The paper defers this regime to another work; this is our model. Per unit mass,
+in KXYZ, with the contact force ``(phi, n)`` (tangential, normal) acting at the
+contact offset ``R`` from the centre:
 
   normal force     n(t) = a_sZ(t) - g_Z                      (>= 0 while on the plane)
   driving force    f(t) = g_t - a_s,t(t)                     (tangential, (2,))
-  slip             v' = f - mu n v/|v|
-  stick            v = 0 while |f| <= mu n; slip starts in the direction of f when |f| > mu n
-                   (below the slip-speed resolution v_eps, friction holds min(mu n, |f|))
+  centre           v' = f + phi
+  spin             w' = M (R x (phi, n))                     (w (3,) rad/s in KXYZ)
+  contact slip     s = v + (w x R)_t,   s' = f + c + B phi,  B = (E - [R]x M [R]x)_tt
 
-The grain leaves the plane (flight with zero relative normal velocity) when
-``n(t)`` would become negative. With the friction effect off (mu = 0) the
-tangential motion is the exact free motion of the flight module.
+The mobility ``M`` (m times the inverse inertia, 1/m^2) says which rotations keep
+the contact: a sphere rolls about any axis (``M = m I^-1``); any other ellipsoid
+keeps its support height only when it turns about the normal (``M = m e_z e_z^T /
+I_zz``; the tilting couples are workless constraint reactions, rocking is not
+modelled); with the rotation effect off ``M = 0`` (a point mass). ``c`` is the
+slip acceleration of a contact point carried round by the spin about the normal.
+
+  slip   phi = -mu n s/|s|
+  stick  phi = -B^-1 (f + c) while |phi| <= mu n (rolling without slip)
+
+Regime changes are events of the integration located by root finding: the slip
+speed reaching ``v_stop`` (then the remaining slip is removed by a friction
+impulse, booked as sliding loss, and the contact sticks or slips on through zero
+along ``f + c``), the stick force reaching the friction cone, and lift-off
+(``n(t)`` reaching zero). Along the way the work of the surface on the grain and
+the energy dissipated by friction are integrated as two quadrature states.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from symmech.grain import flight
+from symmech.core.scene import SymmechError
+from symmech.grain import contact, flight
 from symmech.grain.contact import first_root
+
+MAX_RHS_PER_PHASE = 400_000  # step-count guard: right-hand sides per integration chunk
+MAX_STALLED_EVENTS = 200  # stagnation guard: consecutive events that do not advance time
 
 
 @dataclass(frozen=True)
@@ -43,101 +59,234 @@ class Sliding:
         """Tangential driving force per unit mass f(t) (..., 2) [m/s^2]."""
         return np.asarray(self.g_k[:2]) - self.vibration.kinematics(t)[..., 2, :2]
 
-    def forces(self, t):
-        """(f (..., 2), n (...,)) from one evaluation of the surface kinematics."""
-        acc = self.vibration.kinematics(t)[..., 2, :]
-        return np.asarray(self.g_k[:2]) - acc[..., :2], acc[..., 2] - self.g_k[2]
+    def surface(self, t: float):
+        """Surface velocity (3,) [m/s] and acceleration (3,) [m/s^2] at one time (scalar fast path)."""
+        vib = self.vibration
+        p = vib.omega * t + vib.phase
+        d = np.asarray(vib.direction)
+        return vib.amplitude * vib.omega * math.cos(p) * d, -vib.amplitude * vib.omega**2 * math.sin(p) * d
 
-    def sticks(self, t) -> bool:
-        return float(np.linalg.norm(self.drive(t))) <= self.mu * float(self.normal(t))
+
+@dataclass(frozen=True)
+class Body:
+    """The sliding grain: semi-axes ``axes`` (3,) m, ``mass`` kg, principal ``inertia`` (3,) kg m^2, ``rotation``."""
+
+    axes: tuple
+    mass: float
+    inertia: tuple
+    rotation: bool
+
+    @property
+    def sphere(self) -> bool:
+        return max(self.axes) == min(self.axes)
+
+    def mobility(self, Q) -> np.ndarray:
+        """M (3, 3) [1/m^2]: spin acceleration per unit torque per unit mass, for orientation Q (3, 3)."""
+        if not self.rotation:
+            return np.zeros((3, 3))
+        if self.sphere:
+            return self.mass / self.inertia[0] * np.eye(3)
+        i_zz = float(Q[2] @ (np.asarray(self.inertia) * Q[2]))
+        return np.diag([0.0, 0.0, self.mass / i_zz])
+
+    def kinetic(self, Q, v, w) -> float:
+        """Kinetic energy per unit mass [J/kg] of centre velocity v (3,) and spin w (3,) in KXYZ."""
+        wb = Q.T @ w
+        return 0.5 * float(v @ v) + 0.5 * float(wb @ (np.asarray(self.inertia) * wb)) / self.mass
 
 
 @dataclass
 class SlideResult:
     """End of a sliding phase: time ``t`` [s], tangential position ``r`` (2,) m and velocity ``v`` (2,) m/s,
-    ``lifted`` (left the plane at ``t``), and ``samples`` (times, r (n, 2), v (n, 2)) at the requested times."""
+    spin ``w`` (3,) rad/s in KXYZ, orientation ``q`` (4,), ``lifted`` (left the plane at ``t``), surface work
+    ``work`` and friction loss ``dissipated`` [J], ``samples`` (times, r (n, 2), v (n, 2), q (n, 4), w (n, 3))."""
 
     t: float
     r: np.ndarray
     v: np.ndarray
+    w: np.ndarray
+    q: np.ndarray
     lifted: bool
+    work: float
+    dissipated: float
     samples: tuple
 
 
-def slide(model: Sliding, t0: float, r0, v0, t_end: float, sample_times, step: float, tol: float) -> SlideResult:
-    """Accurate sliding from ``(r0, v0)`` (2,) at ``t0`` until lift-off or ``t_end``.
+class _Contact:
+    """Right-hand side, slip and stick force of the sliding ODE y = (r (2), v (2), w (3), q (4), W, D)."""
 
-    Events (lift-off, stick, slip onset) are roots located with ``first_root`` /
-    solve_ivp events to ``tol`` (relative; times to ``tol * step``).
-    """
-    xtol = tol * step
-    t_lift = first_root(model.normal, t0, t_end, step, xtol) if model.normal(t0) > 0 else t0
-    t_stop = t_end if t_lift is None else t_lift
-    r, v, t = np.asarray(r0, dtype=float), np.asarray(v0, dtype=float), t0
-    sample_times = np.asarray(sample_times, dtype=float)
-    out_t, out_r, out_v = [], [], []
-    # Velocity gained over one scan step: the scale of the slip-speed resolution and of atol.
-    v_scale = (float(np.linalg.norm(model.drive(t0))) + abs(model.g_k[2])) * step
-    v_eps = tol * v_scale
-    atol = tol * v_scale * np.array([step, step, 1.0, 1.0])
-    while t < t_stop:
-        take = sample_times[(sample_times >= t) & (sample_times < t_stop)]
-        if model.mu == 0.0:
-            g3 = np.array([*model.g_k[:2], 0.0])
-            rs, vs = flight.translate(np.append(r, 0.0), np.append(v, 0.0), g3, model.vibration, t, take)
-            out_t.append(take), out_r.append(rs[..., :2]), out_v.append(vs[..., :2])
-            re, ve = flight.translate(np.append(r, 0.0), np.append(v, 0.0), g3, model.vibration, t, t_stop)
-            r, v, t = re[:2], ve[:2], t_stop
-        elif np.linalg.norm(v) <= v_eps and model.sticks(t):
-            t_slip = first_root(lambda s: model.mu * model.normal(s) - np.linalg.norm(model.drive(s), axis=-1),
-                                t, t_stop, step, xtol)
-            t_next = t_stop if t_slip is None else t_slip
-            if t_next <= t:  # on the verge of slipping: start now
-                t, r, v = _slip(model, t, r, v, t_stop, take, v_eps, tol, atol, out_t, out_r, out_v)
-                continue
-            take = take[take < t_next]
-            out_t.append(take), out_r.append(np.tile(r, (take.size, 1))), out_v.append(np.zeros((take.size, 2)))
-            v, t = np.zeros(2), t_next
+    def __init__(self, model: Sliding, body: Body, q0):
+        self.model, self.body = model, body
+        Q0 = flight.rotation_matrix(q0)
+        self.R0 = contact.contact_offset(body.axes, Q0)
+        # Turning about the normal keeps the body-frame normal, hence the body-frame contact point
+        # (a sphere's contact point stays below the centre whatever it turns).
+        self.R_body = None if body.sphere else Q0.T @ self.R0
+        self.M = body.mobility(Q0)
+        self.g = np.asarray(model.g_k, dtype=float)
+        self.nfev = 0
+
+    def geometry(self, y):
+        """Contact offset R (3,), slip s (2,), slip acceleration of the carried contact point c (2,)."""
+        w = y[4:7]
+        R = self.R0 if self.R_body is None else _rotate(y[7:11], self.R_body)
+        wR = _cross(w, R)
+        s = y[2:4] + wR[:2]
+        # The contact point turns with the spin about the normal: R' = w_z e_z x R.
+        c = _cross(w, (-w[2] * R[1], w[2] * R[0], 0.0))[:2]
+        return R, s, c
+
+    def B(self, R) -> np.ndarray:
+        Rx = _cross_matrix(R)
+        return (np.eye(3) - Rx @ self.M @ Rx)[:2, :2]
+
+    def stick_force(self, t, y):
+        """(phi (2,) holding the slip at zero, n) at (t, y)."""
+        _, acc = self.model.surface(t)
+        R, _, c = self.geometry(y)
+        f = self.g[:2] - acc[:2]
+        return -np.linalg.solve(self.B(R), f + c), acc[2] - self.g[2]
+
+    def slip_direction(self, t, y):
+        """Direction (2,) in which a zero slip starts: along f + c."""
+        _, acc = self.model.surface(t)
+        d = self.g[:2] - acc[:2] + self.geometry(y)[2]
+        return d / max(np.hypot(*d), 1e-300)
+
+    def rhs(self, t, y, stick: bool):
+        self.nfev += 1
+        if self.nfev > MAX_RHS_PER_PHASE:
+            raise SymmechError(f"sliding integration stagnates at t = {t:.9g} s "
+                               f"(more than {MAX_RHS_PER_PHASE} evaluations in one chunk)")
+        vel, acc = self.model.surface(t)
+        R, s, c = self.geometry(y)
+        n = acc[2] - self.g[2]
+        f = self.g[:2] - acc[:2]
+        if stick:
+            phi = -np.linalg.solve(self.B(R), f + c)
         else:
-            t, r, v = _slip(model, t, r, v, t_stop, take, v_eps, tol, atol, out_t, out_r, out_v)
-    samples = tuple(np.concatenate(x) if x else np.zeros((0,) + s) for x, s in
-                    ((out_t, ()), (out_r, (2,)), (out_v, (2,))))
-    return SlideResult(t, r, v, t_lift is not None and t >= t_lift, samples)
+            speed = math.hypot(s[0], s[1])
+            phi = -self.model.mu * n / speed * s if speed > 0.0 else np.zeros(2)
+        force = (phi[0], phi[1], n)
+        w0, w1, w2 = y[4:7]
+        q0, q1, q2, q3 = y[7:11]
+        dq = 0.5 * np.array([-w0 * q1 - w1 * q2 - w2 * q3, w0 * q0 + w1 * q3 - w2 * q2,
+                             w1 * q0 + w2 * q1 - w0 * q3, w2 * q0 + w0 * q2 - w1 * q1])  # (0, w) (x) q
+        return np.concatenate([y[2:4], f + phi, self.M @ _cross(R, force), dq,
+                               [force[0] * vel[0] + force[1] * vel[1] + n * vel[2], -(phi[0] * s[0] + phi[1] * s[1])]])
 
 
-def _slip(model: Sliding, t, r, v, t_stop, take, v_eps, tol, atol, out_t, out_r, out_v):
-    """Integrate slipping until the slip speed drops to ``v_eps`` (then stick or reverse) or ``t_stop``."""
+def _cross(a, b) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
-    def rhs(s, y):
-        vel = y[2:]
-        f, n = model.forces(s)
-        speed = np.hypot(*vel)
-        if speed > v_eps:
-            return np.concatenate([vel, f - model.mu * n * vel / speed])
-        # At (numerically) zero slip, static friction holds as much of f as it can.
-        fn = np.hypot(*f)
-        return np.concatenate([vel, f * (1.0 - min(model.mu * n, fn) / max(fn, 1e-300))])
 
-    def stops(_s, y):
-        return np.hypot(*y[2:]) - v_eps
+def _rotate(q, v) -> np.ndarray:
+    """Vector v (3,) rotated by the quaternion q (4,) (normalised on the fly)."""
+    u = q[1:]
+    t = 2.0 * _cross(u, v)
+    return v + (q[0] * t + _cross(u, t)) / float(q @ q)
+
+
+def _cross_matrix(r) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, sample_times, step: float,
+          tol: float, progress=None) -> SlideResult:
+    """Accurate sliding from position ``r0``, velocity ``v0`` (2,), orientation ``q0`` (4,) and spin ``w0`` (3,)
+    (rad/s, KXYZ) at ``t0`` until lift-off or ``t_end``.
+
+    Events are located to ``tol`` (relative; lift-off times to ``tol * step``). ``progress(t)`` is called
+    between integration chunks of one vibration scan window (it may raise to stop the run).
+    """
+    t_lift = first_root(model.normal, t0, t_end, step, tol * step) if model.normal(t0) > 0 else t0
+    t_stop = t_end if t_lift is None else t_lift
+    ode = _Contact(model, body, q0)
+    y = np.concatenate([r0, v0, w0, q0, [0.0, 0.0]]).astype(float)
+    sample_times = np.asarray(sample_times, dtype=float)
+    # Velocity gained over one scan step: the scale of the slip-speed resolution and of atol.
+    v_scale = (float(np.linalg.norm(model.g_k)) + float(np.abs(model.normal(t0)))) * step
+    v_stop = tol * v_scale
+    a_min = min(body.axes)
+    atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min,
+                                     1 / v_scale, 1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
+    chunk = 40 * step
+    pieces, t, stalled = [], t0, 0
+    stick, y = _settle(ode, t, y, v_stop)
+    while t < t_stop:
+        # Without friction there is no stick or slip regime to change.
+        events = None if model.mu == 0.0 else _stick_ends(ode, model.mu) if stick else _slip_stops(ode, y, v_stop)
+        ode.nfev = 0
+        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="DOP853", rtol=tol, atol=atol,
+                        events=events, dense_output=True, args=(stick,))
+        if not sol.success:
+            raise SymmechError(f"sliding integration failed at t = {t:.9g} s: {sol.message}")
+        stalled = stalled + 1 if sol.t[-1] <= t else 0
+        if stalled > MAX_STALLED_EVENTS:
+            raise SymmechError(f"sliding stagnates at t = {t:.9g} s: {MAX_STALLED_EVENTS} regime changes "
+                               "without advancing time")
+        pieces.append((t, sol.t[-1], sol.sol))
+        t, y = sol.t[-1], sol.y[:, -1].copy()
+        if sol.status == 1:  # the stick force reached the cone (slip starts), or the slip speed v_stop
+            stick, y = _settle(ode, t, y, v_stop, may_stick=not stick)
+        if progress is not None:
+            progress(t)
+    samples = _samples(pieces, sample_times[(sample_times >= t0) & (sample_times < t)])
+    return SlideResult(t, y[:2], y[2:4], y[4:7], y[7:11] / np.linalg.norm(y[7:11]), t_lift is not None and
+                       t >= t_lift, body.mass * y[11], body.mass * y[12], samples)
+
+
+def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
+    """At a slip speed within ``v_stop``: remove the slip by a friction impulse and, unless the contact sticks,
+    start slipping at ``2 v_stop`` along ``f + c`` (so the slip speed has to come back down through ``v_stop``
+    to stop again; a slip that starts from exactly zero could chatter about it). The impulses are of order
+    ``v_stop``; their kinetic-energy change is booked in D. Returns (stick, y)."""
+    R, s, _ = ode.geometry(y)
+    if ode.model.mu == 0.0 or math.hypot(*s) > 1.5 * v_stop:
+        return False, y
+    phi, n = ode.stick_force(t, y)
+    stick = may_stick and math.hypot(*phi) <= ode.model.mu * n
+    target = np.zeros(2) if stick else 2.0 * v_stop * ode.slip_direction(t, y)
+    y = y.copy()
+    Q = flight.rotation_matrix(y[7:11])
+    before = ode.body.kinetic(Q, np.append(y[2:4], 0.0), y[4:7])
+    dphi = np.linalg.solve(ode.B(R), target - s)
+    y[2:4] += dphi
+    y[4:7] += ode.M @ np.cross(R, np.append(dphi, 0.0))
+    y[12] += before - ode.body.kinetic(Q, np.append(y[2:4], 0.0), y[4:7])
+    return stick, y
+
+
+def _slip_stops(ode: _Contact, y0, v_stop):
+    """Event: the slip, projected on its direction at the start of the phase, comes down to ``v_stop``.
+    Signed, so a step that carries the slip through zero still brackets the root; a slip that merely turns
+    away also fires it, and the phase restarts with the new direction."""
+    s0 = ode.geometry(y0)[1]
+    ref = s0 / max(math.hypot(*s0), 1e-300)
+
+    def stops(_t, y, *_):
+        return float(ode.geometry(y)[1] @ ref) - v_stop
     stops.terminal, stops.direction = True, -1
+    return stops
 
-    sol = solve_ivp(rhs, (t, t_stop), np.concatenate([r, v]), method="DOP853", rtol=tol,
-                    atol=atol, events=stops, dense_output=True)
-    if not sol.success:
-        raise RuntimeError(f"sliding integration failed: {sol.message}")
-    t_end = sol.t[-1]
-    take = take[take <= t_end]
-    if take.size:
-        y = sol.sol(take)
-        out_t.append(take), out_r.append(y[:2].T), out_v.append(y[2:].T)
-    y = sol.y[:, -1]
-    v = y[2:] if sol.status == 0 else np.zeros(2)
-    # A zero speed that does not stick restarts slipping along the driving force.
-    if sol.status == 1 and not model.sticks(t_end):
-        v = np.zeros(2)
-        t_end = np.nextafter(t_end, np.inf)
-    return t_end, y[:2], v
+
+def _stick_ends(ode: _Contact, mu):
+    def ends(t, y, *_):
+        phi, n = ode.stick_force(t, y)
+        return mu * n - math.hypot(*phi)
+    ends.terminal, ends.direction = True, -1
+    return ends
+
+
+def _samples(pieces, times):
+    """(t (n,), r (n, 2), v (n, 2), q (n, 4), w (n, 3)) from the dense outputs at sorted ``times``."""
+    y = np.empty((len(times), 13))
+    for a, b, dense in pieces:
+        inside = (times >= a) & (times <= b)
+        if inside.any():
+            y[inside] = dense(times[inside]).T
+    q = y[:, 7:11] / np.linalg.norm(y[:, 7:11], axis=1, keepdims=True) if len(times) else y[:, 7:11]
+    return times, y[:, :2], y[:, 2:4], q, y[:, 4:7]
 
 
 def slide_step(model: Sliding, t, v, dt: float):

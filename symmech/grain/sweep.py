@@ -1,0 +1,372 @@
+"""Populations of grains and sweeps over the vibration: the seed cleaner designer's charts.
+
+A grain scene may carry ``[sweep]`` (one or two swept fields of the scene) and
+``[[population]]`` (one or two grain populations: a count, a seed, fields set for
+the population and fields varied per grain). ``symmech sweep SCENE --out DIR``
+runs every grain of every population at every sweep point and reports, per point,
+the mean transport velocity and its spread, the fraction of grains that hop
+(more than half of the time in flight) and the throw number Γ = A ω² / g; with two
+populations also the separation chart: the difference of their mean velocities and
+the overlap of their velocity distributions, with the best operating point marked.
+
+Every grain is an ordinary grain scene (the base scene with the population's and the
+sweep point's fields changed), validated before any simulation. The work runs on
+Dask: a local process pool by default, a ``dask.distributed`` scheduler by address
+with ``--scheduler``; results do not depend on where they ran (tested bit for bit).
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from symmech.core import schema as s
+from symmech.core.results import Column, Result, Table
+from symmech.core.scene import SceneError
+
+FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
+# the fields a sweep may vary, with their units
+SWEPT = {"vibration.amplitude": "m", "vibration.frequency": "Hz", "vibration.angle_deg": "deg",
+         "vibration.phase_deg": "deg", "surface.alpha_deg": "deg", "surface.beta_deg": "deg",
+         "sliding.friction": "1", "impact.e_n": "1", "impact.e_t": "1", "impact.mu": "1", "impact.e": "1",
+         "impact.lambda": "1"}
+
+
+def _values(path, value):
+    if not isinstance(value, list) or not 1 <= len(value) <= 200:
+        raise SceneError(path, f"expected a list of 1 to 200 numbers, got {value!r}")
+    return [s.check_real(f"{path}[{i}]", v, "", None, None, False, False) for i, v in enumerate(value)]
+
+
+def _check_axis(axis: dict, path: str) -> None:
+    if axis["values"] is None and axis["num"] is None:
+        raise SceneError(f"{path}.values", "give values = [...] or start, stop and num")
+    if axis["values"] is None and (axis["start"] is None or axis["stop"] is None):
+        raise SceneError(f"{path}.start", "start and stop are required with num")
+
+
+AXIS = s.Table("a swept field", {
+    "field": s.Choice("the grain-scene field swept (dotted path)", choices=tuple(SWEPT)),
+    "values": s.Custom("explicit values, in the field's unit", parse=_values, type_doc="list of numbers",
+                       default=None),
+    "start": s.Float("first value (with stop, num)", default=None),
+    "stop": s.Float("last value (with start, num)", default=None),
+    "num": s.Int("number of values from start to stop", lo=1, hi=200, default=None),
+    "log": s.Bool("space start..stop logarithmically", default=False),
+}, checks=(_check_axis,))
+
+SWEEP = s.Table("the swept plane (used by `symmech sweep`; `symmech run` ignores it)", {
+    "x": AXIS,
+    "y": s.Table(AXIS.doc, AXIS.fields, checks=AXIS.checks, default=None),
+    "duration": s.Float("simulated time per grain (default: the scene's duration)", unit="s", lo=0.0,
+                        lo_open=True, hi=1e4, default=None),
+}, default=None)
+
+POPULATION = s.Table("a population of grains", {
+    "name": s.Str("name used in the outputs", pattern=r"[A-Za-z][A-Za-z0-9_-]{0,31}"),
+    "count": s.Int("number of grains", lo=1, hi=100_000),
+    "seed": s.Int("random seed of the population", lo=0, hi=2**63 - 1, default=0),
+    "set": s.Mapping("grain-scene fields (dotted paths) with this population's values, e.g. "
+                     "\"body.semi_axes\" = [...]", value=s.Custom("any TOML value", parse=lambda p, v: v),
+                     key_pattern=FIELD_PATH, default={}),
+    "vary": s.Mapping("grain-scene number or vector fields (dotted paths) varied per grain: each component "
+                      "times a uniform factor in [1 - spread, 1 + spread]",
+                      value=s.Float("relative spread", lo=0.0, hi=0.9), key_pattern=FIELD_PATH, default={}),
+    "random_orientation": s.Bool("draw body.orientation uniformly over all rotations", default=False),
+})
+POPULATIONS = s.TableList("one or two grain populations (default: one grain, the scene itself)",
+                          item=POPULATION, min_items=1, max_items=2, default=None)
+
+
+def axis_values(axis: dict) -> np.ndarray:
+    if axis["values"] is not None:
+        return np.array(axis["values"])
+    space = np.geomspace if axis["log"] else np.linspace
+    return space(axis["start"], axis["stop"], axis["num"])
+
+
+def _get(data: dict, path: str):
+    node = data
+    for key in path.split("."):
+        if not isinstance(node, dict) or key not in node:
+            return None
+        node = node[key]
+    return node
+
+
+def _set(data: dict, path: str, value) -> None:
+    *parents, last = path.split(".")
+    node = data
+    for key in parents:
+        node = node.setdefault(key, {})
+    node[last] = value
+
+
+def _scaled(value, factor):
+    if isinstance(value, list):
+        return [v * f for v, f in zip(value, factor)]
+    return value * factor[0]
+
+
+def members(base: dict, population: dict) -> list[dict]:
+    """The raw grain scenes of one population (before the sweep point's fields are set)."""
+    rng = np.random.default_rng(population["seed"])
+    out = []
+    for _ in range(population["count"]):
+        data = copy.deepcopy(base)
+        for path, value in population["set"].items():
+            _set(data, path, copy.deepcopy(value))
+        for path, spread in population["vary"].items():
+            value = _get(data, path)
+            if not isinstance(value, (int, float, list)) or isinstance(value, bool):
+                raise SceneError(f"population.vary.{path}", f"field {path} is not a number or vector in the scene")
+            size = len(value) if isinstance(value, list) else 1
+            _set(data, path, _scaled(value, rng.uniform(1 - spread, 1 + spread, size).tolist()))
+        if population["random_orientation"]:
+            _set(data, "body.orientation", [float(rng.uniform(0, 2 * math.pi)),
+                                            float(math.acos(rng.uniform(-1, 1))),
+                                            float(rng.uniform(0, 2 * math.pi))])
+        out.append(data)
+    return out
+
+
+@dataclass
+class Plan:
+    """Every grain scene of the sweep, validated: ``grains[p][i][j]`` is a list of raw scenes of
+    population p at sweep point (i, j)."""
+
+    x: dict
+    y: dict | None
+    names: list[str]
+    grains: list
+    gamma: np.ndarray  # (nx, ny) throw number at each point
+
+
+def plan(raw: dict, resolved: dict) -> Plan:
+    """Expand the sweep into grain scenes (the first grain of each point validated; :func:`validate`
+    checks them all)."""
+    from symmech.core import pipeline
+
+    sweep = resolved["sweep"]
+    if sweep is None:
+        raise SceneError("sweep", "the scene has no [sweep] table (see docs/scenes-grain.md)")
+    base = {k: v for k, v in copy.deepcopy(raw).items() if k not in ("sweep", "population")}
+    if sweep["duration"] is not None:
+        base["duration"] = sweep["duration"]
+    pops = resolved["population"] or [{"name": "grain", "count": 1, "seed": 0, "set": {}, "vary": {},
+                                       "random_orientation": False}]
+    xs = axis_values(sweep["x"])
+    ys = axis_values(sweep["y"]) if sweep["y"] else np.array([np.nan])
+    gamma = np.empty((len(xs), len(ys)))
+    grains = []
+    for pop in pops:
+        crowd = members(base, pop)
+        grid = []
+        for i, xv in enumerate(xs):
+            row = []
+            for j, yv in enumerate(ys):
+                point = []
+                for member in crowd:
+                    data = copy.deepcopy(member)
+                    _set(data, sweep["x"]["field"], float(xv))
+                    if sweep["y"]:
+                        _set(data, sweep["y"]["field"], float(yv))
+                    point.append(data)
+                gamma[i, j] = throw_number(pipeline.load(point[0]).resolved)
+                row.append(point)
+            grid.append(row)
+        grains.append(grid)
+    return Plan(sweep["x"], sweep["y"], [p["name"] for p in pops], grains, gamma)
+
+
+def validate(p: Plan) -> None:
+    """Validate every grain scene of the plan: a bad grain is named before any simulation."""
+    from symmech.core import pipeline
+
+    for grid in p.grains:
+        for row in grid:
+            for point in row:
+                for data in point:
+                    pipeline.load(data)
+
+
+def throw_number(resolved: dict) -> float:
+    """Γ = A ω² / g of a resolved grain scene (dimensionless)."""
+    vib = resolved["vibration"]
+    g = resolved["surface"]["g"]
+    return vib["amplitude"] * (2 * math.pi * vib["frequency"]) ** 2 / g
+
+
+def simulate_point(scenes: list[dict]) -> np.ndarray:
+    """Per grain: mean transport velocity (X, Y) [m/s] and the fraction of time in flight; shape (n, 3)."""
+    from symmech.core import pipeline
+
+    out = []
+    for data in scenes:
+        summary = pipeline.load(data).run().summary
+        vx, vy = summary["mean_transport_velocity_m_s"]
+        out.append((vx, vy, summary["time_fraction"].get("flight", 0.0)))
+    return np.array(out)
+
+
+def estimate(p: Plan, workers: int) -> "registry.Estimate":
+    """Cost of the whole sweep: the grain kind's estimate of each population's first grain, times the
+    grains and points, shared by ``workers``."""
+    from symmech.core import pipeline, registry
+
+    seconds = sum(pipeline.load(grid[0][0][0]).estimate().seconds * len(grid[0][0]) * len(grid) * len(grid[0])
+                  for grid in p.grains)
+    grains = sum(len(grid[0][0]) * len(grid) * len(grid[0]) for grid in p.grains)
+    return registry.Estimate(seconds / max(workers, 1), f"{grains} grain runs on {workers} worker(s)")
+
+
+def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None) -> Result:
+    """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write."""
+    import os
+
+    from symmech.core import pipeline
+    from symmech.core.scene import SymmechError, read_toml
+
+    raw = source if isinstance(source, dict) else read_toml(source)
+    scene = pipeline.load(raw)
+    p = plan(raw, scene.resolved)
+    workers = workers or os.cpu_count() or 1
+    cost = estimate(p, 1 if scheduler == "synchronous" else workers)
+    if cost.seconds > ctx.max_time:
+        raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
+                           f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
+    validate(p)
+    res = result(p, compute(p, scheduler, workers))
+    pipeline.write(res, out, scene)
+    return res
+
+
+def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> list:
+    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask.
+
+    ``scheduler``: None for a local process pool, "synchronous" for serial, or the
+    address of a ``dask.distributed`` scheduler.
+    """
+    import dask
+
+    tasks = [[[dask.delayed(simulate_point)(point, dask_key_name=f"grain-{k}-{i}-{j}")
+               for j, point in enumerate(row)] for i, row in enumerate(grid)] for k, grid in enumerate(p.grains)]
+    if scheduler in (None, "processes", "synchronous", "threads"):
+        kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
+        (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
+    else:
+        from dask.distributed import Client
+
+        with Client(scheduler) as client:
+            values = client.gather(client.compute(tasks))
+    return [np.array(v) for v in values]
+
+
+def statistics(grid: np.ndarray) -> dict:
+    """Mean and spread of the transport velocity and the hopping fraction over the grains."""
+    return {"mean_vx": grid[..., 0].mean(-1), "std_vx": grid[..., 0].std(-1),
+            "mean_vy": grid[..., 1].mean(-1), "std_vy": grid[..., 1].std(-1),
+            "hop_fraction": (grid[..., 2] > 0.5).mean(-1), "flight_fraction": grid[..., 2].mean(-1)}
+
+
+def overlap(a: np.ndarray, b: np.ndarray) -> float:
+    """Overlap coefficient of two samples of X velocities (area under the lower of their normal fits)."""
+    mu1, mu2 = a.mean(), b.mean()
+    s1, s2 = max(a.std(), 1e-12), max(b.std(), 1e-12)
+    lo, hi = min(mu1 - 6 * s1, mu2 - 6 * s2), max(mu1 + 6 * s1, mu2 + 6 * s2)
+    v = np.linspace(lo, hi, 4001)
+    pdf = lambda mu, sd: np.exp(-0.5 * ((v - mu) / sd) ** 2) / (sd * math.sqrt(2 * math.pi))  # noqa: E731
+    return float(np.trapezoid(np.minimum(pdf(mu1, s1), pdf(mu2, s2)), v))
+
+
+def _column(axis: dict, name: str) -> Column:
+    return Column(name, SWEPT[axis["field"]], f"swept field {axis['field']}")
+
+
+def _point_columns(p: Plan) -> tuple[list[Column], np.ndarray]:
+    xs = axis_values(p.x)
+    ys = axis_values(p.y) if p.y else np.array([np.nan])
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    cols = [_column(p.x, "x")] + ([_column(p.y, "y")] if p.y else []) + [Column("gamma", "1", "throw number A w^2/g")]
+    data = [X.ravel()] + ([Y.ravel()] if p.y else []) + [p.gamma.ravel()]
+    return cols, np.column_stack(data)
+
+
+STAT_COLUMNS = [Column("mean_vx", "m/s", "mean transport velocity along X"),
+                Column("std_vx", "m/s", "spread (standard deviation) of the X velocity over the grains"),
+                Column("mean_vy", "m/s", "mean transport velocity along Y"),
+                Column("std_vy", "m/s", "spread of the Y velocity"),
+                Column("hop_fraction", "1", "fraction of grains more than half of the time in flight"),
+                Column("flight_fraction", "1", "mean fraction of time in flight")]
+
+
+def result(p: Plan, values: list) -> Result:
+    """Tables per population (and the separation chart for two), summary and heat-map plots."""
+    cols, base = _point_columns(p)
+    tables, summary = {}, {"populations": p.names, "points": int(base.shape[0]),
+                           "grains_per_point": [int(v.shape[2]) for v in values],
+                           "swept": [p.x["field"]] + ([p.y["field"]] if p.y else [])}
+    stats = [statistics(v) for v in values]
+    for name, st in zip(p.names, stats):
+        data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS])
+        tables[f"sweep_{name}"] = Table(cols + STAT_COLUMNS, data, f"population {name} over the swept plane")
+    if len(values) == 2:
+        a, b = values
+        ovl = np.array([[overlap(a[i, j, :, 0], b[i, j, :, 0]) for j in range(a.shape[1])]
+                        for i in range(a.shape[0])])
+        dvx = stats[0]["mean_vx"] - stats[1]["mean_vx"]
+        dvy = stats[0]["mean_vy"] - stats[1]["mean_vy"]
+        sep = [Column("delta_vx", "m/s", f"mean X velocity of {p.names[0]} minus {p.names[1]}"),
+               Column("delta_vy", "m/s", "the same along Y"),
+               Column("overlap", "1", "overlap coefficient of the two X-velocity distributions")]
+        tables["separation"] = Table(cols + sep, np.column_stack([base, dvx.ravel(), dvy.ravel(), ovl.ravel()]),
+                                     "separation chart of the two populations")
+        # best operating point: the least overlap, ties broken by the larger velocity difference
+        best = int(np.lexsort((-np.abs(dvx.ravel()), ovl.ravel()))[0])
+        summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {
+            "delta_vx_m_s": float(dvx.ravel()[best]), "overlap": float(ovl.ravel()[best])}
+    best_ij = None if len(values) != 2 else divmod(best, values[0].shape[1])
+    return Result("grain_sweep", summary, tables, plots=lambda folder: _plots(p, stats, tables, best_ij, folder))
+
+
+def _plots(p: Plan, stats, tables, best, folder) -> list:
+    if not p.y:
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    xs, ys = axis_values(p.x), axis_values(p.y)
+    xl = f"{p.x['field']} [{SWEPT[p.x['field']]}]"
+    yl = f"{p.y['field']} [{SWEPT[p.y['field']]}]"
+    charts = [(f"{name}_mean_vx", st["mean_vx"], f"{name}: mean transport velocity [m/s]")
+              for name, st in zip(p.names, stats)]
+    charts += [(f"{name}_hop_fraction", st["hop_fraction"], f"{name}: fraction of grains hopping")
+               for name, st in zip(p.names, stats)]
+    if "separation" in tables:
+        sep = tables["separation"]
+        charts.append(("separation_overlap", sep.column("overlap").reshape(len(xs), len(ys)),
+                       "overlap of the X-velocity distributions (1 = inseparable)"))
+    written = []
+    for name, z, title in charts:
+        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+        mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label=title)
+        if len(xs) > 1 and len(ys) > 1:
+            lines = ax.contour(xs, ys, p.gamma.T, colors="w", linewidths=0.8)
+            ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
+        if name == "separation_overlap" and best is not None:
+            ax.plot(xs[best[0]], ys[best[1]], "r*", ms=14, label="best operating point")
+            ax.legend(fontsize=8, loc="upper right")
+        ax.set_xlabel(xl)
+        ax.set_ylabel(yl)
+        ax.set_title(title, fontsize=9)
+        fig.tight_layout()
+        path = folder / f"{name}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+    return written
