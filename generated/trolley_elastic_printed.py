@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae12fe9b5e046d42178ed66b967e426a934a0cbae1ff3a1956fd93eaa7f1f91a
-# source key 11f3590fb586cd86461cb5c30c84db1ec3c35e8c5c0aa27baa4a9a7016db24c5
+# source key d6f6a633eacf240fb37a63b3779db4d22720f32ad81e75e636b713792a7a6a45
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key 6cf77d539a02d7bd57d3b581fd6371fea02d6f290d6aabf82775c090a99ceac2
+# source key c7f71470f3a977423cddaf9a93933624a73eca54421a88b92fe27066636ad67e
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
-# source key dc81863556b959a17eeafc6ccbbb206e0836b8bdecabdd17a1d878b651f8fe9e
+# source key b16fa5327786b4fb0a9a61a92364a71e043084b792184041d0e9795d9794689d
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 

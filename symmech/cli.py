@@ -1,4 +1,4 @@
-"""Command-line interface: ``symmech run | codegen | latex | errata | bench``.
+"""Command-line interface: ``symmech run | report | codegen | latex | errata | bench``.
 
 Errors a user can fix (:class:`SymmechError`) print as one line on stderr with
 exit status 2, never a traceback.
@@ -49,17 +49,24 @@ def cmd_run(ns) -> int:
     if load(ns.scene).raw("kind", default=None) in registry.kinds():
         pipeline.run_to(ns.scene, Path(ns.out), Context(quiet=ns.quiet, max_time=ns.max_time))
         print(f"wrote {Path(ns.out) / 'summary.json'}")
-        return 0
+        return cmd_report(ns) if ns.report else 0
     # Kinds not yet on the registry keep the old path until they are converted.
     scene = load(ns.scene)
     module = _kind_module(scene)
     out = Path(ns.out)
     out.mkdir(parents=True, exist_ok=True)
-    summary = module.run(scene, out)
+    summary = {"kind": scene.raw("kind", default=None), **module.run(scene, out)}
     _write_json(out / "summary.json", summary)
     for warning in summary.get("warnings", []):
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {out / 'summary.json'}")
+    return cmd_report(ns) if ns.report else 0
+
+
+def cmd_report(ns) -> int:
+    from symmech import report
+
+    print(f"wrote {report.write(Path(ns.out))}")
     return 0
 
 
@@ -155,7 +162,7 @@ def _scene_matrices(name: str) -> dict:
 def cmd_latex(ns) -> int:
     import sympy
 
-    from symmech.core import emit
+    from symmech.core import emit, latex
 
     if ns.list or not ns.name:
         for key, nm in _named_matrices().items():
@@ -166,19 +173,25 @@ def cmd_latex(ns) -> int:
     if ns.name not in matrices:
         raise SymmechError(f"no derived matrix named '{ns.name}' (see `symmech latex --list`)")
     nm = matrices[ns.name]
+    if ns.cse:
+        # The same chunks and CSE symbols as the generated code, shown with the
+        # derivation's own symbols.
+        back = {sympy.Symbol(a.name): a.symbol for a in nm.args}
+        pairs = []
+        for chunk in emit.cse_chunks(nm):
+            pairs += [(sympy.latex(sym), expr.xreplace(back)) for sym, expr in chunk.replacements]
+            pairs += [(latex.entry_tex(nm.name, index), expr.xreplace(back)) for index, expr in chunk.elements]
+    else:
+        pairs = latex.equations(nm)
+    body = latex.lines(pairs)
     print(f"% {ns.name}: {nm.meaning}")
-    if not ns.cse:
-        print(sympy.latex(nm.matrix if nm.shape else nm.matrix[0, 0]))
-        return 0
-    # The same chunks and CSE symbols as the generated code, shown with the
-    # derivation's own symbols.
-    back = {sympy.Symbol(a.name): a.symbol for a in nm.args}
-    for chunk in emit.cse_chunks(nm):
-        for sym, expr in chunk.replacements:
-            print(f"{sympy.latex(sym)} &= {sympy.latex(expr.xreplace(back))} \\\\")
-        for index, expr in chunk.elements:
-            sub = ",".join(str(i + 1) for i in index)
-            print(f"{nm.name}_{{{sub}}} &= {sympy.latex(expr.xreplace(back))} \\\\")
+    print(latex.environment(body))
+    if ns.tex:
+        eqs = f" (eqs. {nm.equations})" if nm.equations else ""
+        description = f"{nm.meaning}{eqs}; unit {nm.unit}" + ("; common subexpressions as in the generated code"
+                                                               if ns.cse else "")
+        Path(ns.tex).write_text(latex.document(f"symmech {__version__}: {ns.name}", [(ns.name, description, body)]))
+        print(f"% wrote {ns.tex}")
     return 0
 
 
@@ -210,7 +223,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bars")
     r.add_argument("--max-time", type=float, default=DEFAULT_MAX_TIME, metavar="SECONDS",
                    help=f"refuse or stop a run expected to take longer (default {DEFAULT_MAX_TIME:g} s)")
+    r.add_argument("--report", action="store_true", help="also write OUT/report.html (see `symmech report`)")
     r.set_defaults(func=cmd_run)
+
+    rp = sub.add_parser("report", help="write a self-contained HTML report of a finished run (OUT/report.html)")
+    rp.add_argument("out", help="the run's output folder (holds summary.json)")
+    rp.set_defaults(func=cmd_report)
 
     c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")
     c.add_argument("--check", action="store_true",
@@ -225,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     lx.add_argument("--list", action="store_true", help="list every derived matrix")
     lx.add_argument("--cse", action="store_true",
                     help="print the common-subexpression form used by the generated code")
+    lx.add_argument("--tex", metavar="FILE", help="also write a standalone LaTeX document (compiles with pdflatex)")
     lx.set_defaults(func=cmd_latex)
 
     e = sub.add_parser("errata", help="compare the papers' printed formulas with the derivations")

@@ -91,10 +91,11 @@ def test_latex_list_plain_and_cse(capsys):
     assert main(["latex", "grain_impact.euler_rate_matrix"]) == 0
     comment, body = capsys.readouterr().out.split("\n", 1)
     assert comment.startswith("% grain_impact.euler_rate_matrix: ")
-    assert body.startswith("\\left[\\begin{matrix}\\cos{\\left(\\phi \\right)}")
+    assert body.startswith("\\begin{aligned}\n\\mathrm{euler\\_rate\\_matrix} &= "
+                           "\\left[\\begin{matrix}\\cos{\\left(\\phi \\right)}")
     assert main(["latex", "--cse", "grain_impact.H"]) == 0
     cse = capsys.readouterr().out.split("\n", 1)[1]
-    assert cse.startswith("x_{0} &= ") and "H_{3,3} &= " in cse
+    assert cse.startswith("\\begin{aligned}\nx_{0} &= ") and "H_{3,3} &= " in cse
     assert main(["latex", "no.such"]) == 2
 
 

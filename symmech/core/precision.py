@@ -37,11 +37,8 @@ def best_time(fn, repeats: int = 5, min_seconds: float = 0.02):
 
 
 def write(rows: list[dict], out: Path, name: str, title: str, reference: str) -> list[Path]:
-    """Write ``name``.csv and ``name``.png into ``out``; returns the two paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """Write ``name``.csv, ``name``.png and ``name``.svg into ``out``; returns the CSV and PNG paths."""
+    from symmech.core import plotting
 
     out = Path(out)
     csv_path, png_path = out / f"{name}.csv", out / f"{name}.png"
@@ -51,18 +48,16 @@ def write(rows: list[dict], out: Path, name: str, title: str, reference: str) ->
         writer.writeheader()
         for row in rows:
             writer.writerow({k: row[k] for k in FIELDS})
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)
+    ax = axes[0, 0]
     for method in dict.fromkeys(r["method"] for r in rows):
         mine = [r for r in rows if r["method"] == method]
         ax.loglog([r["seconds"] for r in mine], [max(r["error"], ERROR_FLOOR) for r in mine],
                   "o-", label=method)
-    ax.set_xlabel("wall time per solve [s]")
-    ax.set_ylabel("relative error")
+    plotting.set_labels(ax, ("wall time per solve", "s"), ("relative error", "1"))
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.text(0.01, 0.01, f"reference: {reference}", fontsize=7)
-    fig.tight_layout()
-    fig.savefig(png_path, dpi=120)
-    plt.close(fig)
+    plotting.save(fig, out, name)
     return [csv_path, png_path]

@@ -60,6 +60,21 @@ class Table:
                 return self.data[:, i]
         raise KeyError(name)
 
+    def to_xarray(self, index: bool = True):
+        """The table as an ``xarray.Dataset``, one variable per column with ``units`` and
+        ``long_name`` attrs. ``index``: the first column is the coordinate (a time series,
+        dimension named after it); otherwise every column is a variable over ``row``."""
+        import xarray as xr
+
+        first = self.columns[0].name
+        dim = first if index else "row"
+        variables = {c.name: (dim, self.data[:, i], {"units": c.unit, "long_name": c.doc or c.name})
+                     for i, c in enumerate(self.columns) if not (index and i == 0)}
+        variables.update({name: (dim, np.asarray(values, dtype=str)) for name, values in self.text.items()})
+        coords = {first: (first, self.data[:, 0], {"units": self.columns[0].unit,
+                                                   "long_name": self.columns[0].doc or first})} if index else {}
+        return xr.Dataset(variables, coords=coords, attrs={"description": self.doc})
+
 
 @dataclass
 class Result:
@@ -72,6 +87,8 @@ class Result:
     plots     callable(folder) -> list of written paths, called by the pipeline
               unless plots are off; draws only what the scene asks for
     warnings  one line each, echoed on stderr and stored in the summary
+    events    name of the table that is the run's event log (one row per event,
+              e.g. impacts), or "" when the kind has none
     """
 
     kind: str
@@ -80,6 +97,26 @@ class Result:
     files: dict[str, str | bytes] = field(default_factory=dict)
     plots: Callable[[Path], list[Path]] | None = None
     warnings: list[str] = field(default_factory=list)
+    events: str = ""
+
+    def to_xarray(self, table: str | None = None):
+        """Table ``table`` (default: the first that is not the event log) as an ``xarray.Dataset``
+        with its first column as the coordinate; the kind, the summary (as JSON) and the
+        warnings are in the Dataset's attrs."""
+        import json
+
+        names = [n for n in self.tables if n != self.events] or list(self.tables)
+        name = table if table is not None else (names[0] if names else None)
+        if name not in self.tables:
+            raise KeyError(f"no table {name!r}; tables: {', '.join(self.tables) or 'none'}")
+        ds = self.tables[name].to_xarray(index=True)
+        ds.attrs.update({"kind": self.kind, "table": name, "warnings": "\n".join(self.warnings),
+                         "summary": json.dumps(self.summary, default=_json_scalar)})
+        return ds
+
+    def event_log(self):
+        """The event log as an ``xarray.Dataset`` over dimension ``row`` (None without one)."""
+        return self.tables[self.events].to_xarray(index=False) if self.events else None
 
     def check_finite(self) -> None:
         """SymmechError naming the quantity (and the row's first-column value) of any NaN/Inf."""
@@ -92,6 +129,11 @@ class Result:
                     f"non-finite result: {name}.{table.columns[col].name} = {table.data[row, col]} "
                     f"at {first.name} = {table.data[row, 0]:g} {first.unit} (row {row})")
         _check_json_finite(self.summary, "summary")
+
+
+def _json_scalar(value):
+    return value.item() if isinstance(value, np.generic) else value.tolist() if isinstance(value, np.ndarray) \
+        else str(value)
 
 
 def _check_json_finite(value, path: str) -> None:

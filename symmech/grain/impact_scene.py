@@ -21,7 +21,7 @@ from symmech.core.schema import Choice, Float, Int, Str, Table
 from symmech.core.watchdog import watchdog
 from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
-from symmech.grain import fields
+from symmech.grain import fields, plots
 from symmech.grain.body import Ellipsoid, euler_from_matrix, rotation
 from symmech.grain.impact import (SOLVERS, DescentOptions, euler_rates, impact_geometry, solve_descent_batch,
                                   solve_impact, solve_robust_batch, solve_scipy)
@@ -126,43 +126,6 @@ def _euler_paths(sc: ImpactScene, Q, R, T, omega_after):
     return out, warning
 
 
-def _plot(path: Path, H, sc: ImpactScene, result) -> None:
-    """F(mu) with every root marked by verdict, and a top view of slip and impulse."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    uK0 = result.uK_before
-    k = gen.mu_equation(H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], sc.lam, sc.e, *uK0)
-    mu = np.linspace(-np.pi, np.pi, 721)
-    F = k[0] + k[1] * np.cos(mu) + k[2] * np.sin(mu) + k[3] * np.cos(2 * mu) + k[4] * np.sin(2 * mu)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
-    left.plot(np.degrees(mu), F, "k-", lw=1)
-    left.axhline(0, color="0.6", lw=0.8)
-    for root in result.roots:
-        bad = root["creates_energy"] or root["pulling"]
-        left.plot(np.degrees(root["mu"]), 0, "x" if bad else "o", ms=9,
-                  color="tab:red" if bad else "tab:green")
-    left.plot(np.degrees(result.mu), 0, "s", mfc="none", ms=14, color="tab:blue", label="chosen root")
-    left.set(xlabel="mu [deg]", ylabel="F(mu)", title="exact scalar equation: o admissible, x not")
-    left.legend(loc="best")
-    scale = max(np.hypot(*uK0[:2]), 1e-12)
-    t_scale = max(np.hypot(*result.T[:2]), 1e-30)
-    for vec, label, color in ((uK0[:2] / scale, "slip before", "tab:orange"),
-                              (result.uK_after[:2] / scale, "slip after", "tab:green"),
-                              (result.T[:2] / t_scale, "tangential impulse (unit)", "tab:blue")):
-        right.annotate("", xy=vec, xytext=(0, 0), arrowprops={"arrowstyle": "->", "color": color, "lw": 2})
-        right.plot([], [], color=color, label=label)
-    right.set(xlim=(-1.2, 1.2), ylim=(-1.2, 1.2), aspect="equal", xlabel="X / |V_K(0)|", ylabel="Y / |V_K(0)|",
-              title="contact point, top view")
-    right.legend(loc="lower left", fontsize=8)
-    right.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
 def run(sc: ImpactScene, ctx: Context) -> Result:
     """Solve the impact: impulse, velocities after, Euler rates three ways, every root, and the plot."""
     Q = rotation(sc.angles)
@@ -190,8 +153,7 @@ def run(sc: ImpactScene, ctx: Context) -> Result:
     }
 
     def draw(folder: Path) -> list[Path]:
-        _plot(folder / "impact.png", H, sc, result)
-        return [folder / "impact.png"]
+        return plots.impact_plot(folder / "impact.png", H, sc, result)
 
     return Result("impact", summary, plots=draw, warnings=list(result.warnings) + ([gimbal] if gimbal else []))
 

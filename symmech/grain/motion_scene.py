@@ -23,7 +23,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector
 from symmech.core.watchdog import watchdog
 from symmech.generated import grain_motion as gm
-from symmech.grain import contact, fields, flight, motion, paper_mode, sweep
+from symmech.grain import contact, fields, flight, motion, paper_mode, plots, sweep
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
 
@@ -332,8 +332,7 @@ def run(sc: GrainScene, ctx: Context) -> Result:
     warnings = summary.pop("warnings")
 
     def draw(folder: Path) -> list[Path]:
-        _plots(sc, m, folder)
-        return [folder / "path.png", folder / "velocity.png"]
+        return plots.motion_plots(sc, m, folder)
 
     return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
                   plots=draw, warnings=warnings)
@@ -371,46 +370,6 @@ def _impacts(m: motion.Motion) -> Table:
     return Table(IMPACTS, np.array(rows).reshape(len(rows), len(IMPACTS)),
                  "one row per impact; admissible: no energy created by this law; printed_law_*: the printed "
                  "law's verdict at this impact (empty when not evaluated)", flags)
-
-
-def _plots(sc: GrainScene, result: motion.Motion, out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    tr = result.trajectory
-    t = tr[:, 0]
-    s = sc.model.vibration.kinematics(t)[..., 0, :]  # surface displacement (n, 3)
-    hits = np.array([i["t"] for i in result.impacts])
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6))
-    ax1.plot(tr[:, 1] + s[:, 0], tr[:, 3] + s[:, 2], lw=0.8, label="centre of mass")
-    ax1.plot(tr[:, 1] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
-    ax1.set_xlabel("X along the surface [m]")
-    ax1.set_ylabel("Z [m]")
-    ax1.set_title("Side view (surface frame at rest position)")
-    ax1.legend(fontsize=8)
-    ax2.plot(t, tr[:, 3], lw=0.8, label="centre height above the surface")
-    if hits.size:
-        ax2.plot(hits, np.interp(hits, t, tr[:, 3]), "r.", ms=3, label="impacts")
-    ax2.set_xlabel("t [s]")
-    ax2.set_ylabel("z relative [m]")
-    ax2.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "path.png", dpi=110)
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(8, 4))
-    for k, name in ((4, "vx"), (5, "vy"), (6, "vz")):
-        ax.plot(t, tr[:, k], lw=0.8, label=f"{name} (relative)")
-    for h in hits[:500]:
-        ax.axvline(h, color="r", lw=0.3, alpha=0.4)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("velocity [m/s]")
-    ax.set_title("Centre velocity relative to the surface; red lines: impacts")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "velocity.png", dpi=110)
-    plt.close(fig)
 
 
 def precision(sc: GrainScene, ctx: Context) -> Result:

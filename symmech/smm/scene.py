@@ -30,6 +30,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.smm import build, numeric
 from symmech.smm.chain import chain_spec, exact_omega2
 from symmech.smm.model import Effects, Mechanism
+from symmech.smm.plots import modes_and_responses, precision_plot
 from symmech.smm.schema import SCHEMA
 
 # Above this many coordinates the symbolic matrices are not formed (numeric assembly only).
@@ -157,7 +158,7 @@ def run(setup: Setup, ctx) -> Result:
     plots = None
     if sc["output"]["plots"]:
         def plots(folder):
-            return _plots(m, md, omega, response, Path(folder))
+            return modes_and_responses(m, md, omega, response, Path(folder))
     summary = {
         "mechanism": m.name,
         "coordinates": [{"name": co.name, "type": co.kind, "unit": co.unit} for co in m.coordinates],
@@ -279,81 +280,6 @@ def _responses(sc: dict, m: Mechanism, a, b, c, tables: dict) -> dict:
     return result
 
 
-def _plots(m: Mechanism, md, omega, response, out: Path) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from symmech.smm import forms
-    from symmech.smm.model import NumericArith
-
-    files = []
-    g = forms.Geometry(m, NumericArith(m.values()))
-    kins = {p: forms.chain_kinematics(g, p, False) for p in m.points}
-    pos = {p: np.array(k.r, float) for p, k in kins.items()}
-    shown = min(len(omega), 6)
-    disps = [{p: np.array([sum(md.shapes[g.index[a], i] * d[j] for a, d in k.D.items()) for j in range(3)])
-              for p, k in kins.items()} for i in range(shown)]
-    spatial = any(abs(v[2]) > 0 for v in pos.values()) or any(abs(v[2]) > 0 for d in disps for v in d.values())
-    # a spatial mechanism is drawn in two projections: top (x-y) and side (x-z)
-    views = [(0, 1, "x-y"), (0, 2, "x-z")] if spatial else [(0, 1, "x-y")]
-    span = max(1e-9, float(np.ptp(np.array(list(pos.values())), axis=0).max()))
-    fig, axes = plt.subplots(len(views), shown, figsize=(3.2 * shown, 3.2 * len(views)), squeeze=False)
-    for row, (h, v, label) in enumerate(views):
-        for i, ax in enumerate(axes[row]):
-            disp = disps[i]
-            amp = max(1e-300, max(np.linalg.norm(d) for d in disp.values()))
-            scale = 0.15 * span / amp
-            for style, fac in (("0.7", 0.0), ("C0", scale)):
-                def at(name):
-                    return (pos[name] + fac * disp[name])[[h, v]]
-                for p in m.points.values():
-                    if p.parent is not None:
-                        xy = np.array([at(p.parent), at(p.name)])
-                        ax.plot(xy[:, 0], xy[:, 1], "-", color=style, lw=1.5)
-                for link in m.springs + m.dampers:
-                    xy = np.array([at(link.a), at(link.b)])
-                    ax.plot(xy[:, 0], xy[:, 1], ":", color=style, lw=1)
-                for bd in m.bodies:
-                    ax.plot(*at(bd.com), "o", color=style, ms=5)
-            w = omega[i]
-            title = f"mode {i + 1}: " + ("unstable" if w is None else f"{w / (2 * math.pi):.4g} Hz")
-            ax.set_title(title + (f" ({label})" if spatial else ""), fontsize=9)
-            ax.set_aspect("equal", adjustable="datalim")
-            ax.tick_params(labelsize=7)
-    fig.suptitle(f"{m.name}: mode shapes (grey: equilibrium)", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out / "modes.png", dpi=110)
-    plt.close(fig)
-    files.append("modes.png")
-    if "frf" in response:
-        omegas, H = response["frf"]
-        files.append(_curves(plt, m, omegas, np.maximum(np.abs(H), 1e-300), True, "omega [rad/s]",
-                             "|q| [m or rad]", "frequency response", out))
-    if "free" in response:
-        t, q = response["free"]
-        files.append(_curves(plt, m, t, q, False, "t [s]", "q [m or rad]", "free response", out))
-    return files
-
-
-def _curves(plt, m: Mechanism, x, ys, log: bool, xlabel: str, ylabel: str, title: str, out: Path) -> str:
-    """One curve per coordinate (first eight) against x; returns the PNG file name."""
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for j, name in enumerate(m.coordinate_names[:8]):
-        (ax.semilogy if log else ax.plot)(x, ys[:, j], label=name)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(f"{m.name}: {title}")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    name = title.replace(" ", "_") + ".png"
-    fig.savefig(out / name, dpi=110)
-    plt.close(fig)
-    return name
-
-
-
 def precision(setup: Setup, ctx) -> Result:
     """Frequencies of the lowest modes: full dense eigenproblem vs eigsh shift-invert at several
     tolerances; table ``precision`` (error vs time) and precision.png. The reference is the closed
@@ -396,22 +322,8 @@ def precision(setup: Setup, ctx) -> Result:
                   f"reference: {reference}", {"method": [r[0] for r in rows]})
 
     def plot(folder):
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(6, 4))
-        for (name, _, sec, _), err in zip(rows, errors):
-            ax.loglog(sec, max(err, 1e-17), "o")
-            ax.annotate(name, (sec, max(err, 1e-17)), fontsize=7)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel(f"max relative error of the lowest {modes_n} omega^2")
-        ax.set_title(f"{m.name}: {n} DOF, assembly {t_asm:.2f} s; reference: {reference}", fontsize=9)
-        fig.tight_layout()
-        fig.savefig(Path(folder) / "precision.png", dpi=110)
-        plt.close(fig)
-        return [Path(folder) / "precision.png"]
+        return precision_plot(Path(folder), [(name, sec, err) for (name, _, sec, _), err in zip(rows, errors)],
+                              modes_n, f"{m.name}: {n} DOF, assembly {t_asm:.2f} s; reference: {reference}")
 
     summary = {"mechanism": m.name, "dof": n, "modes": modes_n, "reference": reference,
                "assembly_seconds": t_asm, "omega2_reference_1_per_s2": np.asarray(ref).tolist()}

@@ -1,0 +1,159 @@
+"""LaTeX people can paste: long expressions broken into aligned lines, matrices entry by entry.
+
+A derived matrix is shown as equations ``lhs &= rhs`` (one per entry when the
+whole matrix is too long for one line). A long right-hand side is broken between
+the terms of a sum, recursing into long factors ``\\bigl( ... \\bigr)``; the lines
+go into an ``aligned`` environment (printed) or ``align*`` (a standalone document,
+which may break across pages). Used by ``symmech latex``; sympy is imported here,
+so runtime modules import this module lazily.
+"""
+from __future__ import annotations
+
+import re
+import unicodedata
+
+import sympy
+
+WIDTH = 110  # characters of LaTeX source per line: about one printed line
+MATRIX_WIDTH = 400  # a whole matrix up to this length is printed as one matrix
+
+
+def name_tex(name: str) -> str:
+    """LaTeX for a matrix name: ``H`` -> ``H``, ``L_c`` -> ``L_{c}``, ``Lambda`` -> ``\\Lambda``,
+    a word such as ``inertia_ratio`` upright."""
+    head = name.split("_", 1)[0]
+    if len(head) == 1 or head.lower() in _GREEK:
+        return sympy.latex(sympy.Symbol(name))
+    return r"\mathrm{" + name.replace("_", r"\_") + "}"
+
+
+_GREEK = {"alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa", "lambda", "mu",
+          "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi", "omega"}
+
+
+def entry_tex(name: str, index: tuple[int, ...]) -> str:
+    base = name_tex(name)
+    if "_" in base and not base.startswith(r"\mathrm"):
+        base = rf"\left({base}\right)"
+    return base + "_{" + ",".join(str(i + 1) for i in index) + "}"
+
+
+def equations(nm) -> list[tuple[str, sympy.Expr]]:
+    """(lhs LaTeX, expression) pairs showing ``nm``: the whole matrix if short, else entry by entry."""
+    matrix = nm.matrix
+    if not nm.shape:
+        return [(name_tex(nm.name), matrix[0, 0])]
+    if len(sympy.latex(matrix)) <= MATRIX_WIDTH:
+        return [(name_tex(nm.name), matrix)]
+    rows, cols = matrix.shape
+    return [(entry_tex(nm.name, (i,) if nm.shape == (rows,) else (i, j)), matrix[i, j])
+            for i in range(rows) for j in range(cols)]
+
+
+def _wrap(head: str, inner: list[str], tail: str) -> list[str]:
+    return [head + inner[0]] + inner[1:-1] + [inner[-1] + tail] if len(inner) > 1 else [head + inner[0] + tail]
+
+
+def chunks(expr) -> list[str]:
+    """Pieces of LaTeX for ``expr`` between which a line may break, in reading order."""
+    if isinstance(expr, sympy.MatrixBase) or len(sympy.latex(expr)) <= WIDTH:
+        return [sympy.latex(expr)]
+    if expr.is_Add:
+        out = []
+        for i, term in enumerate(expr.as_ordered_terms()):
+            if i and term.could_extract_minus_sign():
+                sign, term = "- ", -term
+            else:
+                sign = "+ " if i else ""
+            inner = _term_chunks(term)
+            out += [sign + inner[0]] + inner[1:]
+        return out
+    return _term_chunks(expr)
+
+
+def _term_chunks(term) -> list[str]:
+    """A product or power with a long sum inside, opened as ``\\bigl( ... \\bigr)``; else one piece."""
+    text = sympy.latex(term)
+    if len(text) <= WIDTH:
+        return [text]
+    if term.could_extract_minus_sign():
+        inner = _term_chunks(-term)
+        return ["- " + inner[0]] + inner[1:]
+    if term.is_Mul:
+        numer, denom = sympy.fraction(term)
+        factors = sympy.Mul.make_args(numer)
+        long_sums = [f for f in factors if (f.is_Add or f.is_Pow) and len(sympy.latex(f)) > WIDTH]
+        rest = sympy.Mul(*[f for f in factors if f not in long_sums])
+        out = ["" if rest == 1 else sympy.latex(rest) + " "]
+        if denom != 1:
+            out[0] += r"\frac{1}{" + sympy.latex(denom) + "} "
+        for f in long_sums:
+            inner = _term_chunks(f) if f.is_Pow else _wrap(r"\bigl(", chunks(f), r"\bigr)")
+            out[-1] += inner[0]
+            out += inner[1:]
+        return [c.strip() for c in out if c.strip()]
+    if term.is_Pow and term.base.is_Add:
+        return _wrap(r"\bigl(", chunks(term.base), r"\bigr)^{" + sympy.latex(term.exp) + "}")
+    return [text]
+
+
+def lines(pairs: list[tuple[str, object]], width: int = WIDTH) -> list[str]:
+    """Alignment lines ``lhs &= ...`` and ``&\\quad ...`` (no ``\\\\``) for (lhs, expression) pairs."""
+    out = []
+    for lhs, expr in pairs:
+        line = f"{lhs} &= "
+        first = True
+        for piece in chunks(expr):
+            if not first and len(line) + len(piece) > width:
+                out.append(line.rstrip())
+                line = r"&\quad "
+            line += piece + " "
+            first = False
+        out.append(line.rstrip())
+    return out
+
+
+def environment(body: list[str], env: str = "aligned") -> str:
+    """``body`` lines inside ``\\begin{env}`` ... ``\\end{env}``, separated by ``\\\\``."""
+    return "\n".join([rf"\begin{{{env}}}", " \\\\\n".join(body), rf"\end{{{env}}}"])
+
+
+def text(s: str) -> str:
+    """Plain text for a LaTeX document: special characters escaped, Greek letters in math mode."""
+    special = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_",
+               "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}", "^": r"\textasciicircum{}"}
+    out = []
+    for c in s:
+        if c in special:
+            out.append(special[c])
+        elif ord(c) < 128:
+            out.append(c)
+        else:
+            out.append(_unicode(c))
+    return "".join(out)
+
+
+_SYMBOLS = {"−": "$-$", "·": r"$\cdot$", "×": r"$\times$", "∂": r"$\partial$", "≤": r"$\le$", "≥": r"$\ge$",
+            "→": r"$\to$", "°": r"$^\circ$", "²": r"$^2$", "³": r"$^3$", "ᵀ": r"$^T$", "–": "--", "—": "---",
+            "’": "'", "‘": "`", "“": "``", "”": "''", "…": r"\dots{}", "≈": r"$\approx$", "√": r"$\surd$"}
+
+
+def _unicode(c: str) -> str:
+    if c in _SYMBOLS:
+        return _SYMBOLS[c]
+    m = re.fullmatch(r"GREEK (SMALL|CAPITAL) LETTER (\w+)", unicodedata.name(c, ""))
+    if m:
+        letter = m.group(2).lower().replace("lamda", "lambda")
+        return "$\\" + (letter.capitalize() if m.group(1) == "CAPITAL" else letter) + "$"
+    return "?"
+
+
+def document(title: str, sections: list[tuple[str, str, list[str]]]) -> str:
+    """A standalone article: for each (heading, description, lines) an ``align*`` block."""
+    parts = [r"\documentclass[10pt]{article}", r"\usepackage{amsmath}",
+             r"\usepackage[a4paper,landscape,margin=1.5cm]{geometry}", r"\allowdisplaybreaks",
+             r"\begin{document}", rf"\section*{{{text(title)}}}"]
+    for heading, description, body in sections:
+        parts += [rf"\subsection*{{{text(heading)}}}", text(description), "", environment(body, "align*")]
+    parts.append(r"\end{document}")
+    return "\n".join(parts) + "\n"

@@ -1,0 +1,103 @@
+"""Plots of a mechanism run (style from ``symmech.core.plotting``).
+
+``modes_and_responses`` draws the mode shapes on the mechanism's geometry (links,
+springs and dampers, centres of mass; a spatial mechanism in a top and a side
+projection), with a legend of frequencies, and the frequency and free responses;
+``precision_plot`` draws the eigen-solver study. Each figure is PNG + SVG.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from symmech.core import plotting
+
+MODES_SHOWN = 6
+# largest drawn displacement as a share of the mechanism's extent
+MODE_SCALE = 0.15
+
+
+def _frequency_text(i: int, omega) -> str:
+    w = omega[i]
+    return f"mode {i + 1}: " + ("unstable" if w is None else f"f = {w / (2 * math.pi):.4g} Hz")
+
+
+def _draw(ax, m, at, color: str, label: str) -> None:
+    """The mechanism with point positions ``at(name) -> (2,)``: links solid, springs/dampers dotted."""
+    for p in m.points.values():
+        if p.parent is not None:
+            xy = np.array([at(p.parent), at(p.name)])
+            ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=1.5)
+    for link in m.springs + m.dampers:
+        xy = np.array([at(link.a), at(link.b)])
+        ax.plot(xy[:, 0], xy[:, 1], ":", color=color, lw=1)
+    for bd in m.bodies:
+        ax.plot(*at(bd.com), "o", color=color, ms=5)
+    ax.plot([], [], "-o", color=color, ms=4, label=label)
+
+
+def modes_and_responses(m, md, omega, response, out: Path) -> list[str]:
+    """``modes`` and, when computed, ``frequency_response`` and ``free_response``; returns file names."""
+    from symmech.smm import forms
+    from symmech.smm.model import NumericArith
+
+    g = forms.Geometry(m, NumericArith(m.values()))
+    kins = {p: forms.chain_kinematics(g, p, False) for p in m.points}
+    pos = {p: np.array(k.r, float) for p, k in kins.items()}
+    shown = min(len(omega), MODES_SHOWN)
+    disps = [{p: np.array([sum(md.shapes[g.index[a], i] * d[j] for a, d in k.D.items()) for j in range(3)])
+              for p, k in kins.items()} for i in range(shown)]
+    spatial = any(abs(v[2]) > 0 for v in pos.values()) or any(abs(v[2]) > 0 for d in disps for v in d.values())
+    # a spatial mechanism is drawn in two projections: top (x-y) and side (x-z)
+    views = [(0, 1, "top view"), (0, 2, "side view")] if spatial else [(0, 1, "")]
+    span = max(1e-9, float(np.ptp(np.array(list(pos.values())), axis=0).max()))
+    fig, axes = plotting.figure(len(views), shown, width=3.4 * shown, height=3.6)
+    for row, (h, v, view) in enumerate(views):
+        for i, ax in enumerate(axes[row]):
+            disp = disps[i]
+            amp = max(1e-300, max(np.linalg.norm(d) for d in disp.values()))
+            scale = MODE_SCALE * span / amp
+            _draw(ax, m, lambda n: pos[n][[h, v]], "0.7", "equilibrium")
+            _draw(ax, m, lambda n: (pos[n] + scale * disp[n])[[h, v]], f"C{i}", _frequency_text(i, omega))
+            ax.set_title(f"mode {i + 1}" + (f" ({view})" if view else ""), fontsize=9)
+            plotting.set_labels(ax, ("x", "m"), ("y" if v == 1 else "z", "m"))
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.tick_params(labelsize=7)
+            ax.legend(fontsize=7, loc="best")
+    fig.suptitle(f"{m.name}: mode shapes on the geometry (displacement scaled to "
+                 f"{MODE_SCALE:.0%} of the extent)", fontsize=10)
+    files = plotting.save(fig, out, "modes")
+    if "frf" in response:
+        omegas, H = response["frf"]
+        files += _curves(m, omegas, np.maximum(np.abs(H), 1e-300), True, ("forcing frequency omega", "rad/s"),
+                         ("amplitude |q|", "m or rad"), "frequency response", out)
+    if "free" in response:
+        t, q = response["free"]
+        files += _curves(m, t, q, False, ("time t", "s"), ("coordinate q", "m or rad"), "free response", out)
+    return [p.name for p in files]
+
+
+def _curves(m, x, ys, log: bool, xlabel: tuple, ylabel: tuple, title: str, out: Path) -> list[Path]:
+    """One curve per coordinate (first eight) against x; labels are (quantity, unit) pairs."""
+    fig, axes = plotting.figure(1, 1, width=6.0, height=4.0)
+    ax = axes[0, 0]
+    for j, name in enumerate(m.coordinate_names[:8]):
+        (ax.semilogy if log else ax.plot)(x, ys[:, j], label=name)
+    plotting.set_labels(ax, xlabel, ylabel)
+    ax.set_title(f"{m.name}: {title}")
+    ax.legend(fontsize=8)
+    return plotting.save(fig, out, title.replace(" ", "_"))
+
+
+def precision_plot(out: Path, points, modes_n: int, title: str) -> list[Path]:
+    """Error vs time of eigen-solvers; ``points`` are (method name, seconds, relative error)."""
+    fig, axes = plotting.figure(1, 1, width=6.0, height=4.0)
+    ax = axes[0, 0]
+    for name, sec, err in points:
+        ax.loglog(sec, max(err, 1e-17), "o")
+        ax.annotate(name, (sec, max(err, 1e-17)), fontsize=7)
+    plotting.set_labels(ax, ("time", "s"), (f"max relative error of the lowest {modes_n} omega^2", "1"))
+    ax.set_title(title, fontsize=9)
+    return plotting.save(fig, out, "precision")

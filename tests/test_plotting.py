@@ -1,0 +1,153 @@
+"""The plotting style: labelled axes with units, PNG + SVG, the backend left to matplotlib,
+and what each kind's figures show (impact markers, phase portrait, overloads in g, modes)."""
+import json
+import math
+import re
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symmech.cli import main
+from symmech.core import plotting
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "scenes"
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """Every figure saved during the test, by stem, as it was just before saving."""
+    saved = {}
+    original = plotting.save
+
+    def save(fig, folder, stem):
+        saved[stem] = fig
+        fig.canvas.draw()  # legends and texts laid out; the figure object stays readable after close
+        return original(fig, folder, stem)
+
+    monkeypatch.setattr(plotting, "save", save)
+    return saved
+
+
+def test_save_writes_png_and_svg(tmp_path):
+    fig, axes = plotting.figure()
+    axes[0, 0].plot([0, 1], [0, 2])
+    plotting.set_labels(axes[0, 0], ("time t", "s"), ("distance", "m"))
+    png, svg = plotting.save(fig, tmp_path, "demo")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert ET.parse(svg).getroot().tag.endswith("svg")
+
+
+def test_save_refuses_an_axis_without_a_unit(tmp_path):
+    fig, axes = plotting.figure(1, 2)
+    for ax in axes[0]:
+        plotting.set_labels(ax, ("time t", "s"), ("distance", "m"))
+    axes[0, 1].set_ylabel("distance")
+    with pytest.raises(ValueError, match=r"axes 1 .*y label 'distance'"):
+        plotting.save(fig, tmp_path, "bad")
+    assert not list(tmp_path.iterdir())
+
+
+def test_shared_x_is_labelled_once(tmp_path):
+    fig, axes = plotting.figure(2, 1, sharex=True)
+    for ax in axes[:, 0]:
+        ax.set_ylabel(plotting.label("force", "N"))
+    axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
+    assert plotting.unlabelled(fig) == []
+    axes[-1, 0].set_xlabel("time")
+    assert len(plotting.unlabelled(fig)) == 2
+
+
+@pytest.mark.parametrize("env, backend", [({}, "agg"), ({"MPLBACKEND": "svg"}, "svg"),
+                                          ({"DISPLAY": ":99", "MPLBACKEND": "pdf"}, "pdf")])
+def test_backend_is_left_to_matplotlib(env, backend):
+    """Agg only when headless; a user's or a notebook's choice is kept."""
+    code = "from symmech.core import plotting; import matplotlib; plotting.pyplot(); print(matplotlib.get_backend())"
+    clean = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "MPLBACKEND", "WAYLAND_DISPLAY")}
+    out = subprocess.run([sys.executable, "-c", code], env={**clean, **env}, capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip().lower() == backend
+
+
+def test_notebook_is_not_headless(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.delenv("MPLBACKEND", raising=False)
+    assert plotting._headless()
+    monkeypatch.setitem(sys.modules, "ipykernel", type(sys)("ipykernel"))
+    assert not plotting._headless()
+
+
+def _columns(path: Path, *names: str) -> list[np.ndarray]:
+    """Numeric columns of a CSV by name (header cells may carry ``[unit]``; ``#`` lines skipped)."""
+    rows = [l.split(",") for l in path.read_text().splitlines() if not l.startswith("#")]
+    header = [h.split(" [")[0] for h in rows[0]]
+    return [np.array([float(r[header.index(n)]) for r in rows[1:]]) for n in names]
+
+
+def _lines(ax):
+    return [l for l in ax.get_lines() if len(l.get_xdata())]
+
+
+def test_grain_impacts_are_markers_and_phase_portrait(tmp_path, figures):
+    text = re.sub(r"(?m)^duration = .*$", "duration = 0.3", (SCENES / "grain_default.toml").read_text())
+    (tmp_path / "g.toml").write_text(text)
+    assert main(["run", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o")]) == 0
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    t_hit, z_hit, vz_before, vz_after = _columns(tmp_path / "o" / "impacts.csv", "t", "z", "vz_before", "vz_after")
+    assert summary["bounces"] == len(t_hit) > 3
+    for stem in ("path", "velocity", "phase"):
+        assert (tmp_path / "o" / f"{stem}.svg").stat().st_size > 0
+    ax = figures["velocity"].axes[0]
+    # no vertical lines: every drawn line has distinct x values or is a marker series
+    assert not any(len(l.get_xdata()) == 2 and l.get_xdata()[0] == l.get_xdata()[1] for l in ax.get_lines())
+    markers = [l for l in _lines(ax) if l.get_linestyle() == "None"]
+    assert len(markers) == 1
+    np.testing.assert_allclose(markers[0].get_xdata(), t_hit, rtol=1e-11)
+    np.testing.assert_allclose(markers[0].get_ydata(), vz_after, rtol=1e-9, atol=1e-15)
+    phase = figures["phase"].axes[0]
+    assert phase.get_xlabel() == "relative height z [m]" and phase.get_ylabel() == "normal velocity v_z [m/s]"
+    trajectory = np.column_stack(_columns(tmp_path / "o" / "trajectory.csv", "z", "vz"))
+    np.testing.assert_allclose(_lines(phase)[0].get_xydata(), trajectory, rtol=1e-10, atol=1e-15)
+    # each impact is a jump at fixed height from the v_z before to the v_z after (impacts.csv)
+    before, after = _lines(phase)[1:]
+    np.testing.assert_allclose(before.get_xydata(), np.column_stack([z_hit, vz_before]), rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(after.get_xydata(), np.column_stack([z_hit, vz_after]), rtol=1e-9, atol=1e-15)
+
+
+def _span(patch):
+    """(low, high) data y of an axhspan (a Rectangle from matplotlib 3.9, a Polygon before)."""
+    if hasattr(patch, "get_height"):
+        return patch.get_y(), patch.get_y() + patch.get_height()
+    ys = np.asarray(patch.get_xy())[:, 1]
+    return ys.min(), ys.max()
+
+
+def test_trolley_overloads_in_g_against_the_envelope(tmp_path, figures):
+    assert main(["run", str(SCENES / "trolley_helix.toml"), "--out", str(tmp_path)]) == 0
+    fig = figures["overloads"]
+    n1 = np.column_stack(_columns(tmp_path / "case1_overload.csv", "t", "n1", "n2", "n3"))
+    envelope = {"x1": (-2, 2), "x2": (-1.5, 6), "x3": (-2, 2)}  # docs/scenes-trolley.md defaults
+    for i, (ax, (axis, (lo, hi))) in enumerate(zip(fig.axes, envelope.items())):
+        assert ax.get_ylabel() == f"overload n along {axis} [g]"
+        band = [p for p in ax.patches if p.get_label().startswith("comfort envelope")]
+        assert len(band) == 1
+        assert _span(band[0]) == pytest.approx((lo, hi), abs=1e-12)
+        np.testing.assert_allclose(_lines(ax)[0].get_ydata(), n1[:, i + 1], rtol=1e-9)
+    assert fig.axes[-1].get_xlabel() == "time t [s]"
+
+
+def test_mode_shapes_have_frequency_legends(tmp_path, figures):
+    assert main(["run", str(SCENES / "smm_rotor_boom.toml"), "--out", str(tmp_path)]) == 0
+    hz = json.loads((tmp_path / "summary.json").read_text())["frequencies_hz"]
+    fig = figures["modes"]
+    assert len(fig.axes) == min(len(hz), 6)
+    for i, ax in enumerate(fig.axes):
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert texts == ["equilibrium", f"mode {i + 1}: f = {hz[i]:.4g} Hz"]
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")
+        assert math.isfinite(hz[i]) and hz[i] > 0

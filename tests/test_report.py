@@ -1,0 +1,168 @@
+"""`symmech report`: a self-contained HTML page per run, checked as text and in headless Chromium."""
+import json
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from symmech.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "scenes"
+# kind -> (bundled scene, replacements that keep the run short, seed of its paper)
+RUNS = {
+    "impact": ("impact_default.toml", {}, "000"),
+    "grain": ("grain_default.toml", {r"(?m)^duration = .*$": "duration = 0.2"}, "000"),
+    "trolley": ("trolley_helix.toml", {r"steps = 5000": "steps = 500", r"paper_tables = true": "paper_tables = false"},
+                "002"),
+    "mechanism": ("smm_rotor_boom.toml", {}, "003"),
+}
+
+
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory):
+    """kind -> output folder of a bundled scene run with ``--report``."""
+    base = tmp_path_factory.mktemp("reports")
+    folders = {}
+    for kind, (scene, edits, _) in RUNS.items():
+        text = (SCENES / scene).read_text()
+        for pattern, repl in edits.items():
+            text = re.sub(pattern, repl, text)
+        path = base / scene
+        path.write_text(text)
+        folders[kind] = base / kind
+        assert main(["run", str(path), "--out", str(folders[kind]), "--report"]) == 0
+    return folders
+
+
+def html(folder: Path) -> str:
+    return (folder / "report.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("kind", RUNS)
+def test_report_is_self_contained(reports, kind):
+    page = html(reports[kind])
+    # every src/href is inline data: nothing to fetch when the file is opened offline
+    links = re.findall(r'(?:src|href)="([^"]*)"', page)
+    assert links and all(link.startswith("data:") for link in links)
+    assert "<script" not in page
+    pngs = sorted(p.stem for p in reports[kind].glob("*.png"))
+    assert page.count("<img ") == len(pngs) >= 1
+    assert page.count('src="data:image/svg+xml;base64,') == len(pngs)  # every plot has its SVG twin
+
+
+@pytest.mark.parametrize("kind", RUNS)
+def test_errata_of_the_scene_paper_only(reports, kind):
+    seeds = re.findall(r"<tr><td>(\d{3})[^<]*</td><td>", html(reports[kind]))
+    assert seeds and set(seeds) == {RUNS[kind][2]}
+
+
+def test_impact_report_shows_its_checks_and_derivations(reports):
+    page = html(reports["impact"])
+    summary = json.loads((reports["impact"] / "summary.json").read_text())
+    residual = summary["solver"]["residual_19"]
+    assert re.search(r"<td>solver\.residual_19</td><td class=\"num\">" + re.escape(f"{residual:.6g}"), page)
+    assert "<code>grain_impact.H</code>" in page and "symmech latex grain_impact.H --tex H.tex" in page
+    assert page.count('<math display="block">') >= 10
+
+
+def test_provenance_hashes(reports):
+    """The run's own record of its modules when it made one, else the installed modules' headers."""
+    page = html(reports["trolley"])
+    recorded = json.loads((reports["trolley"] / "summary.json").read_text()).get("generated_modules")
+    if recorded:
+        expected = recorded["trolley_frame"]
+    else:
+        header = (ROOT / "generated" / "trolley_frame.py").read_text().split("\n", 1)[0]
+        expected = re.search(r"inputs sha256 ([0-9a-f]{64})", header).group(1)
+    assert f"<td>trolley_frame</td><td class=\"num\">{expected}</td>" in page
+
+
+def test_mechanism_report_typesets_the_scene_matrices(reports):
+    page = html(reports["mechanism"])
+    assert "<code>smm_rotor_boom.c</code>" in page and "<code>smm_rotor_boom.a</code>" in page
+    assert "smm_excavator" not in page  # only the run's own mechanism
+    header = (reports["mechanism"] / "smm_rotor_boom.py").read_text().split("\n", 1)[0]
+    assert f"<td>smm_rotor_boom</td><td class=\"num\">{header.rsplit(' ', 1)[1]}</td>" in page
+
+
+def test_missing_summary_is_a_one_line_error(tmp_path, capsys):
+    assert main(["report", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "summary.json: no such file" in err
+
+
+# --------------------------------------------------------------------------- in a browser
+
+
+def _chromium() -> str | None:
+    return next((p for p in map(shutil.which, ("chromium", "chromium-browser")) if p), None)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright not installed (.ci/run installs it)")
+    executable = _chromium()
+    if executable is None:
+        pytest.skip("no system Chromium (.ci/run installs Debian's chromium)")
+    with sync_api.sync_playwright() as p:
+        # root in CI: Chromium's sandbox needs an unprivileged user
+        b = p.chromium.launch(executable_path=executable, args=["--no-sandbox"])
+        yield b
+        b.close()
+
+
+MEASURE = """() => {
+  const box = e => { const r = e.getBoundingClientRect(); return [r.width, r.height]; };
+  const maths = [...document.querySelectorAll('math')];
+  const imgs = [...document.querySelectorAll('img')];
+  const frac = document.querySelector('mfrac'), mi = document.querySelector('mi');
+  return {
+    maths: maths.map(box), imgs: imgs.map(e => [e.naturalWidth, ...box(e)]),
+    frac: frac ? box(frac)[1] : null, mi: mi ? box(mi)[1] : null,
+    display: maths.length ? getComputedStyle(maths[0]).display : null,
+  };
+}"""
+
+
+@pytest.mark.parametrize("kind", RUNS)
+def test_report_in_chromium(reports, browser, kind, tmp_path):
+    page = browser.new_page(viewport={"width": 1200, "height": 900})
+    problems = []
+    page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: problems.append(str(e)))
+    page.goto((reports[kind] / "report.html").as_uri(), wait_until="load")
+    found = page.evaluate(MEASURE)
+    shot = tmp_path / f"report_{kind}.png"
+    page.screenshot(path=str(shot), full_page=True)
+    page.close()
+    assert problems == []
+    assert found["maths"] and all(w > 0 and h > 0 for w, h in found["maths"])
+    # laid out as MathML, not as unknown inline tags: a block box, fractions stacked
+    assert found["display"] == "block math"
+    if found["frac"] is not None:
+        assert found["frac"] > 1.5 * found["mi"]
+    assert found["imgs"] and all(n > 0 and w > 100 and h > 100 for n, w, h in found["imgs"])
+    assert shot.stat().st_size > 10_000
+
+
+def test_report_reads_the_pipeline_record(tmp_path):
+    """Fields the validate-first pipeline writes: resolved scene, status, timing, module hashes."""
+    from symmech import report
+
+    digest = "ab" * 32
+    summary = {"symmech_version": "0.1.0", "kind": "impact", "status": "ok", "scene_file": "s.toml",
+               "timing_s": {"validate": 0.01, "run": 0.5, "write": 0.25, "total": 0.76},
+               "generated_modules": {"grain_impact": digest}, "solver": {"residual_19": 2.5e-15},
+               "scene": {"kind": "impact", "impact": {"e": 0.5, "lambda": 0.25}}, "warnings": ["w1"],
+               "speed": {"max": 5.0, "t_max": 1.25, "unit": "m/s"}}
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    page = report.render(tmp_path)
+    assert '&#34;lambda&#34;: 0.25' in page  # the resolved scene, escaped
+    assert "<td>validate 0.01, run 0.5, write 0.25, total 0.76</td>" in page
+    assert f'<td>grain_impact</td><td class="num">{digest}</td>' in page
+    assert '<td>solver.residual_19</td><td class="num">2.5e-15</td>' in page
+    assert '<td>speed</td><td class="num">max = 5, t_max = 1.25 (unit m/s)</td>' in page
+    assert '<div class="warn">w1</div>' in page and "No plots in this folder." in page
+    assert "<code>grain_impact.mu_equation</code>" in page and "grain_motion" not in page
