@@ -8,7 +8,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -40,12 +43,27 @@ def _write_json(path: Path, data) -> None:
     path.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n")
 
 
-def cmd_run(ns) -> int:
-    from symmech.core import pipeline, registry
+def _registered(scene_path: str) -> bool:
+    """Whether the scene's kind runs through the registry (the validate-first pipeline)."""
+    from symmech.core import registry
+    from symmech.core.scene import read_toml
+
+    data = read_toml(scene_path)
+    return not isinstance(data, dict) or data.get("kind") in registry.kinds() or \
+        data.get("kind") not in KINDS
+
+
+def _context(ns):
     from symmech.core.context import Context
 
-    if load(ns.scene).raw("kind", default=None) in registry.kinds():
-        pipeline.run_to(ns.scene, Path(ns.out), Context(quiet=ns.quiet, max_time=ns.max_time))
+    return Context(quiet=ns.quiet, max_time=ns.max_time)
+
+
+def cmd_run(ns) -> int:
+    from symmech.core import pipeline
+
+    if _registered(ns.scene):
+        pipeline.run_to(ns.scene, ns.out, _context(ns), plots=not ns.no_plots)
         print(f"wrote {Path(ns.out) / 'summary.json'}")
         return 0
     # Kinds not yet on the registry keep the old path until they are converted.
@@ -62,6 +80,13 @@ def cmd_run(ns) -> int:
 
 
 def cmd_bench(ns) -> int:
+    from symmech.core import pipeline
+
+    if _registered(ns.scene):
+        _, result = pipeline.run_to(ns.scene, ns.out, _context(ns), study="precision")
+        for name in ["summary.json", *[f"{t}.csv" for t in result.tables], *result.files]:
+            print(f"wrote {Path(ns.out) / name}")
+        return 0
     scene = load(ns.scene)
     module = _kind_module(scene)
     if not hasattr(module, "precision"):
@@ -154,8 +179,33 @@ def cmd_errata(ns) -> int:
     return 0
 
 
+def _seconds(text: str) -> float:
+    """--max-time: a positive finite number of seconds (argparse reports the error)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text} is outside (0, inf) s")
+    return value
+
+
+def _run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quiet", action="store_true", help="no progress bars and no estimate")
+    p.add_argument("--max-time", type=_seconds, default=DEFAULT_MAX_TIME, metavar="SECONDS",
+                   help="refuse a run estimated to take longer, stop one that does "
+                        f"(default {DEFAULT_MAX_TIME:g} s)")
+
+
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line naming the problem and where to find help, exit 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="symmech",
         description="Symbolic derivations of three mechanics papers, emitted as numpy modules, "
                     "with simulations and checks against the papers.",
@@ -166,9 +216,8 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scene file and write results to a folder")
     r.add_argument("scene", help="scene file (TOML); see docs/scenes.md")
     r.add_argument("--out", default="out", help="output folder (default: out)")
-    r.add_argument("--quiet", action="store_true", help="no progress bars")
-    r.add_argument("--max-time", type=float, default=DEFAULT_MAX_TIME, metavar="SECONDS",
-                   help=f"refuse or stop a run expected to take longer (default {DEFAULT_MAX_TIME:g} s)")
+    _run_options(r)
+    r.add_argument("--no-plots", action="store_true", help="write tables and summary only, no plots")
     r.set_defaults(func=cmd_run)
 
     c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")
@@ -193,19 +242,44 @@ def build_parser() -> argparse.ArgumentParser:
     bp = bsub.add_parser("precision", help="work-precision diagram (CSV + PNG) for a scene")
     bp.add_argument("scene", help="scene file (TOML)")
     bp.add_argument("--out", default="out-precision", help="output folder")
+    _run_options(bp)
     bp.set_defaults(func=cmd_bench)
     return p
 
 
+def _on_sigterm(signum, frame):
+    raise KeyboardInterrupt  # clean up like Ctrl-C: temporary folder and lock removed
+
+
 def main(argv=None) -> int:
+    """Run one command; user errors exit 2, Ctrl-C 130, internal errors 3 — one line each."""
     ns = build_parser().parse_args(argv)
+    in_main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
     try:
         return ns.func(ns)
     except SymmechError as exc:
-        print(f"symmech: error: {exc}", file=sys.stderr)
+        print(f"symmech: error: {_one_line(exc)}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        kept = f"; {ns.out} keeps its previous content" if getattr(ns, "out", None) else ""
+        print(f"symmech: interrupted{kept}", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # output piped into `head` and the like
         return 0
+    except Exception as exc:  # a bug: one line, the traceback only on request
+        if os.environ.get("SYMMECH_TRACEBACK"):
+            raise
+        print(f"symmech: internal error: {type(exc).__name__}: {_one_line(exc)} (please report; "
+              "SYMMECH_TRACEBACK=1 shows the traceback)", file=sys.stderr)
+        return 3
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 if __name__ == "__main__":

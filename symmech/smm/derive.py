@@ -18,11 +18,11 @@ from pathlib import Path
 import sympy
 
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
-from symmech.core.scene import SymmechError, load
+from symmech.core.scene import SymmechError, load, scenes_folder
 from symmech.smm import forms
 from symmech.smm.model import Effects, Mechanism, from_scene, interpret
 
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = scenes_folder()
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
 
 

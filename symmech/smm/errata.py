@@ -8,15 +8,14 @@ from __future__ import annotations
 
 import importlib
 import inspect
-from pathlib import Path
 
 import numpy as np
 
 from symmech.core.errata import Check
-from symmech.core.scene import load
+from symmech.core.scene import load, scenes_folder
 from symmech.smm.model import from_scene
 
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = scenes_folder()
 
 
 def _nominal(scene: str) -> dict:
