@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from fuzzscenes import (UNKNOWN_KEY, base_scene, broken_value, put, shorten, sites, tables, toml_data,
+from fuzzscenes import (NAMES, UNKNOWN_KEY, base_scene, broken_value, put, shorten, sites, tables, toml_data,
                         toml_text, valid_value)
 from hypothesis import HealthCheck, find, given, settings
 from hypothesis import strategies as st
@@ -128,7 +128,9 @@ def broken_cases(draw, kind):
     how = draw(st.sampled_from(["value", "value", "value", "unknown", "delete", "toml", "text"]))
     if how == "value":
         site = draw(st.sampled_from([x for x in sites(kind.schema, data) if x.keys != ("kind",)]))
-        if isinstance(site.field, (s.Table, s.TableList, s.Mapping)):
+        if isinstance(site.field, s.Mapping) and draw(st.booleans()):  # names like internal symbols
+            value, certain = {draw(st.sampled_from(NAMES)): draw(valid_value(site.field.value))}, False
+        elif isinstance(site.field, (s.Table, s.TableList, s.Mapping)):
             value, certain = draw(st.sampled_from(["text", 1.5, True, [1]])), True
         else:
             value, certain = draw(broken_value(site.field))

@@ -250,3 +250,24 @@ def test_python_api_is_the_same_path(tmp_path):
     assert result.tables["series"].column("t").tolist() == [0.0, 1.0]
     assert pipeline.write(result, tmp_path / "api", sc, plots=False) == (tmp_path / "api").resolve()
     assert assert_valid_output(tmp_path / "api")["scene_file"] == "<dict>"
+
+
+def test_progress_bar_on_a_terminal_only(monkeypatch):
+    import io
+
+    from symmech.core.context import Context
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr(sys, "stderr", Terminal())
+    with Context().progress(10, "probe", unit="step") as bar:
+        time.sleep(2.1)  # bars appear after 2 s: short runs stay silent
+        bar.update(5)
+    assert "probe" in sys.stderr.getvalue() and "5/10" in sys.stderr.getvalue()
+    with Context(quiet=True).progress(10, "probe") as bar:
+        assert bar.disable
+    monkeypatch.setattr(sys, "stderr", io.StringIO())  # not a terminal
+    with Context().progress(10, "probe") as bar:
+        assert bar.disable
