@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 94d632f964433bae8297d208cb07fb0efdc7c522ba3ebba286afb312ca639ce5
+# symmech 0.1.0 generated module; inputs sha256 ccd7499bac5e805a9620fd2bc4b7e0423fd580387375e27793fe478930ce3570
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.
@@ -9,7 +9,7 @@ Needs numpy only.
 """
 import numpy
 
-__all__ = ["point_coefficients", "reactions", "reactions_no_gravity"]
+__all__ = ["point_coefficients", "reactions", "reactions_no_gravity", "newton_euler"]
 
 
 def _batch(*args):
@@ -290,4 +290,73 @@ def reactions_no_gravity(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2
     out[..., 3] = x34*(x10 - x13 - x15 - x16 + x19 - x2 + x22 + x25 + x4 + x6 + x8)
     out[..., 4] = x34*(x32 + x36)
     out[..., 5] = -x34*x36
+    return out
+
+
+def newton_euler(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
+    """[P; M]: resultant force and moment about O of the rigid body (Newton-Euler) — eqs. (11).
+
+    Parameters
+    ----------
+    m : array_like
+        mass of the body [kg]
+    r1 : array_like
+        centre of mass from O (body frame), component 1 [m]
+    r2 : array_like
+        centre of mass from O (body frame), component 2 [m]
+    r3 : array_like
+        centre of mass from O (body frame), component 3 [m]
+    I11 : array_like
+        central inertia 11 [kg m^2]
+    I22 : array_like
+        central inertia 22 [kg m^2]
+    I33 : array_like
+        central inertia 33 [kg m^2]
+    I12 : array_like
+        central inertia 12 [kg m^2]
+    I23 : array_like
+        central inertia 23 [kg m^2]
+    I13 : array_like
+        central inertia 13 [kg m^2]
+    a01 : array_like
+        acceleration of the reference point O (body frame), component 1 [m/s^2]
+    a02 : array_like
+        acceleration of the reference point O (body frame), component 2 [m/s^2]
+    a03 : array_like
+        acceleration of the reference point O (body frame), component 3 [m/s^2]
+    w1 : array_like
+        angular velocity ω (body frame), component 1 [rad/s]
+    w2 : array_like
+        angular velocity ω (body frame), component 2 [rad/s]
+    w3 : array_like
+        angular velocity ω (body frame), component 3 [rad/s]
+    dw1 : array_like
+        angular acceleration ω̇ (body frame), component 1 [rad/s^2]
+    dw2 : array_like
+        angular acceleration ω̇ (body frame), component 2 [rad/s^2]
+    dw3 : array_like
+        angular acceleration ω̇ (body frame), component 3 [rad/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        [N, N m]
+    """
+    (m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3,), batch = _batch(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
+    out = numpy.empty(batch + (6,))
+    x0 = -r1*w2 + r2*w1
+    x1 = r1*w3 - r3*w1
+    x2 = m*(a01 + dw2*r3 - dw3*r2 + w2*x0 - w3*x1)
+    x3 = -r2*w3 + r3*w2
+    x4 = m*(a02 - dw1*r3 + dw3*r1 - w1*x0 + w3*x3)
+    x5 = m*(a03 + dw1*r2 - dw2*r1 + w1*x1 - w2*x3)
+    x6 = I13*w1 + I23*w2 + I33*w3
+    x7 = I12*w1 + I22*w2 + I23*w3
+    x8 = I11*w1 + I12*w2 + I13*w3
+    out[..., 0] = x2
+    out[..., 1] = x4
+    out[..., 2] = x5
+    out[..., 3] = I11*dw1 + I12*dw2 + I13*dw3 + r2*x5 - r3*x4 + w2*x6 - w3*x7
+    out[..., 4] = I12*dw1 + I22*dw2 + I23*dw3 - r1*x5 + r3*x2 - w1*x6 + w3*x8
+    out[..., 5] = I13*dw1 + I23*dw2 + I33*dw3 + r1*x4 - r2*x2 + w1*x7 - w2*x8
     return out

@@ -1,4 +1,4 @@
-# symmech 0.1.0 generated module; inputs sha256 a964737690e85b61d5a7fa1dab92ae12eae2fc4688db6e9c57f84e739740e8b0
+# symmech 0.1.0 generated module; inputs sha256 ab95df2abf1ab4488a53efa46597960c9bed9ba927e402d8e6d2ca57d8db17f9
 """The trolley paper's formulas as printed (hand transcription).
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.
@@ -9,7 +9,7 @@ Needs numpy only.
 """
 import numpy
 
-__all__ = ["Lambda", "dLambda_dth1", "dLambda_dth2", "dLambda_dth3", "A", "chord_coefficients", "rodrigues", "helix_Lambda", "helix_omega"]
+__all__ = ["Lambda", "dLambda_dth1", "dLambda_dth2", "dLambda_dth3", "A", "chord_coefficients", "rodrigues", "helix_Lambda", "helix_omega", "rigid_body_equations"]
 
 
 def _batch(*args):
@@ -370,4 +370,88 @@ def helix_omega(R, lam):
     out[..., 0] = lam*x0
     out[..., 1] = 0
     out[..., 2] = R*x0
+    return out
+
+
+def rigid_body_equations(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
+    """(11) as printed: [P; M] of the rigid body — eqs. (11).
+
+    Parameters
+    ----------
+    m : array_like
+        mass of the body [kg]
+    r1 : array_like
+        centre of mass from O (body frame), component 1 [m]
+    r2 : array_like
+        centre of mass from O (body frame), component 2 [m]
+    r3 : array_like
+        centre of mass from O (body frame), component 3 [m]
+    I11 : array_like
+        central inertia 11 [kg m^2]
+    I22 : array_like
+        central inertia 22 [kg m^2]
+    I33 : array_like
+        central inertia 33 [kg m^2]
+    I12 : array_like
+        central inertia 12 [kg m^2]
+    I23 : array_like
+        central inertia 23 [kg m^2]
+    I13 : array_like
+        central inertia 13 [kg m^2]
+    a01 : array_like
+        acceleration of the reference point O (body frame), component 1 [m/s^2]
+    a02 : array_like
+        acceleration of the reference point O (body frame), component 2 [m/s^2]
+    a03 : array_like
+        acceleration of the reference point O (body frame), component 3 [m/s^2]
+    w1 : array_like
+        angular velocity ω (body frame), component 1 [rad/s]
+    w2 : array_like
+        angular velocity ω (body frame), component 2 [rad/s]
+    w3 : array_like
+        angular velocity ω (body frame), component 3 [rad/s]
+    dw1 : array_like
+        angular acceleration ω̇ (body frame), component 1 [rad/s^2]
+    dw2 : array_like
+        angular acceleration ω̇ (body frame), component 2 [rad/s^2]
+    dw3 : array_like
+        angular acceleration ω̇ (body frame), component 3 [rad/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        [N, N m]
+    """
+    (m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3,), batch = _batch(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
+    out = numpy.empty(batch + (6,))
+    x0 = m*r2
+    x1 = w2**2
+    x2 = m*r1
+    x3 = w3**2
+    x4 = w2*x0
+    x5 = m*r3
+    x6 = w3*x5
+    x7 = w1**2
+    x8 = w1*x2
+    x9 = a03*m
+    x10 = a02*m
+    x11 = I12 - r1*x0
+    x12 = I13 - r1*x5
+    x13 = r2**2
+    x14 = r3**2
+    x15 = I11 + m*(x13 + x14)
+    x16 = w2*x12
+    x17 = -w3*x11
+    x18 = I23 - r3*x0
+    x19 = r1**2
+    x20 = I22 + m*(x14 + x19)
+    x21 = I33 + m*(x13 + x19)
+    x22 = a01*m
+    x23 = w1*x18
+    out[..., 0] = a01*m + dw2*m*r3 - dw3*x0 - w1*(-x4 - x6) - x1*x2 - x2*x3
+    out[..., 1] = a02*m - dw1*x5 + dw3*m*r1 - w2*(-x6 - x8) - x0*x3 - x0*x7
+    out[..., 2] = a03*m + dw1*m*r2 - dw2*x2 - w3*(-x4 - x8) - x1*x5 - x5*x7
+    out[..., 3] = dw1*x15 + dw2*x11 + dw3*x12 + r2*x9 - r3*x10 + w1*(x16 + x17) + w2*(w2*x18 - w3*x20) + w3*(w2*x21 - w3*x18)
+    out[..., 4] = dw1*x11 + dw2*x20 + dw3*x18 - r1*x9 + r3*x22 + w1*(-w1*x12 + w3*x15) + w2*(-x17 - x23) + w3*(-w1*x21 + w3*x12)
+    out[..., 5] = dw1*x12 + dw2*x18 + dw3*x21 + r1*x10 - r2*x22 + w1*(w1*x11 - w2*x15) + w2*(w1*x20 - w2*x11) + w3*(-x16 + x23)
     return out

@@ -172,10 +172,12 @@ def cmd_errata(ns) -> int:
     from symmech.core import errata
 
     records = [errata.evaluate(c) for c in errata.all_checks()]
+    cov = errata.coverage(records, errata.all_not_compared())
     if ns.json:
-        print(json.dumps(records, indent=2))
+        print(json.dumps({"records": records, "coverage": cov}, indent=2))
     else:
         print(errata.report(records))
+        print(errata.coverage_report(cov))
     return 0
 
 

@@ -100,8 +100,10 @@ def test_latex_list_plain_and_cse(capsys):
 
 def test_errata_json_records(capsys):
     assert main(["errata", "--json"]) == 0
-    records = json.loads(capsys.readouterr().out)
-    grain = {r["equation"]: r for r in records if r["seed"] == "000_b52a2f612feb4113.txt"}
+    records = json.loads(capsys.readouterr().out)["records"]
+    # eqs. (1)-(60): the impact records (the motion ones, (61)-(64), are tested with the motion)
+    grain = {r["equation"]: r for r in records
+             if r["seed"] == "000_b52a2f612feb4113" and r["equation"] not in ("(61)", "(63)")}
     for r in grain.values():
         assert set(r) >= {"seed", "equation", "status", "max_rel_diff", "example"}
         assert set(r["example"]) == {"inputs", "printed", "derived"}

@@ -62,11 +62,45 @@ def evaluate(check: Check, n: int = 200, seed: int = 20261121) -> dict:
     }
 
 
+@dataclass(frozen=True)
+class NotCompared:
+    """A printed item that is inventoried but not compared numerically, and why
+    (illegible in the seed's text, no numeric content, a definition only, ...)."""
+
+    seed: str
+    equation: str
+    description: str
+    reason: str
+
+
 def all_checks() -> list[Check]:
     """Checks from every paper package's ``errata*`` modules."""
     from symmech.core.emit import paper_modules
 
     return [c for module in paper_modules(("errata",)) for c in module.checks()]
+
+
+def all_not_compared() -> list[NotCompared]:
+    """The printed items each paper's ``errata*`` modules list as not compared (``not_compared()``)."""
+    from symmech.core.emit import paper_modules
+
+    return [n for module in paper_modules(("errata",)) if hasattr(module, "not_compared")
+            for n in module.not_compared()]
+
+
+def coverage(records: list[dict], skipped: list[NotCompared]) -> dict:
+    """Per seed: printed items inventoried, compared (agree/differ) and not compared with the reason."""
+    out = {}
+    for r in records:
+        c = out.setdefault(r["seed"], {"compared": 0, "agree": 0, "differ": 0, "not_compared": []})
+        c["compared"] += 1
+        c["agree" if r["status"] == "agrees" else "differ"] += 1
+    for n in skipped:
+        c = out.setdefault(n.seed, {"compared": 0, "agree": 0, "differ": 0, "not_compared": []})
+        c["not_compared"].append({"equation": n.equation, "description": n.description, "reason": n.reason})
+    for c in out.values():
+        c["inventoried"] = c["compared"] + len(c["not_compared"])
+    return dict(sorted(out.items()))
 
 
 def report(records: list[dict]) -> str:
@@ -85,6 +119,16 @@ def report(records: list[dict]) -> str:
             lines.append(f"    note: {r['note']}")
     differs = sum(r["status"] == "differs" for r in records)
     lines.append(f"{len(records)} formulas checked: {len(records) - differs} agree, {differs} differ")
+    return "\n".join(lines)
+
+
+def coverage_report(cov: dict) -> str:
+    """Coverage per seed: what is compared and what is not, with the reason."""
+    lines = []
+    for seed, c in cov.items():
+        lines.append(f"seed {seed}: {c['inventoried']} printed items inventoried, {c['compared']} compared "
+                     f"({c['agree']} agree, {c['differ']} differ), {len(c['not_compared'])} not compared")
+        lines += [f"    not compared {n['equation']}: {n['description']} — {n['reason']}" for n in c["not_compared"]]
     return "\n".join(lines)
 
 

@@ -22,8 +22,7 @@ import sympy
 from sympy import Matrix, cos, sin, sqrt
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
-
-SEED = "000_b52a2f612feb4113.txt"
+from symmech.grain import SEED
 
 a, b, c = sympy.symbols("a b c", positive=True)
 psi, theta, phi = sympy.symbols("psi theta phi", real=True)

@@ -5,7 +5,7 @@ import functools
 
 import numpy as np
 
-from symmech.core.errata import Check
+from symmech.core.errata import Check, NotCompared
 from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
 from symmech.grain import derive
@@ -173,3 +173,22 @@ def checks() -> list[Check]:
               note="inherits the misprints of (51) and (55); the Cramer formulas themselves agree"),
     ]
     return out
+
+
+def not_compared() -> list[NotCompared]:
+    """Printed items of eqs. (1)-(60) that are definitions or procedures rather than formulas to compare."""
+    rows = [
+        ("(1)-(2)", "impulse-momentum balance with the reduction tensor H", "the definition of H; H itself is "
+         "compared as (3)-(10)"),
+        ("(13)-(18)", "impact system: (13) with the law (14)-(17) and (18)", "reduced exactly to (19), compared; "
+         "the robust solver reproduces (14)-(18) exactly at 300 random impacts (tests/test_grain_impact_solver.py)"),
+        ("(20)", "|V_K(0)| = sqrt(x'^2 + y'^2)", "a definition used by (19)"),
+        ("(21)-(23)", "descent: minimiser, step and gradient vector", "a procedure; run as printed by the "
+         "`paper` impact solver, whose failure follows from (24) (compared)"),
+        ("(28)-(40)", "golden-section line search", "a procedure; its contraction 0.618 is fitted in "
+         "tests/test_grain_impact_solver.py"),
+        ("(42)", "angular momentum change = R x T", "used inside (41), (43)-(60), compared as a chain"),
+        ("(57)", "impulse components in body axes (direction cosines)", "a rotation of T; compared inside the "
+         "chain (43)-(60)"),
+    ]
+    return [NotCompared(SEED, eq, text, why) for eq, text, why in rows]

@@ -1,6 +1,8 @@
 """Paper 3 (seed 003): the structural model method (SMM) for lumped-parameter mechanisms."""
 from pathlib import Path
 
+SEED = "003_6166172b9b245651"  # the seed file's stem: how every record names this paper
+
 
 def latex_matrices(rest: str) -> dict:
     """Matrices for ``symmech latex smm:<scene>.<name>``.

@@ -162,6 +162,38 @@ def reactions(gravity: bool) -> NamedMatrix:
         "N", "(11)")
 
 
+RIGID_BODY_ARGS_DOC = (("r", "centre of mass from O (body frame)", "m"),
+                       ("a0", "acceleration of the reference point O (body frame)", "m/s^2"),
+                       ("w", "angular velocity ω (body frame)", "rad/s"),
+                       ("dw", "angular acceleration ω̇ (body frame)", "rad/s^2"))
+
+
+def rigid_body_args():
+    """Symbols and arguments (m, r, central inertia, a0, ω, ω̇) shared by (11) as printed and as derived."""
+    m = sp.Symbol("m", positive=True)
+    vecs = [_vec_args(*doc) for doc in RIGID_BODY_ARGS_DOC]
+    inertia = sp.symbols("I11 I22 I33 I12 I23 I13", real=True)
+    args = args_of([(m, "mass of the body", "kg")]) + vecs[0][1] + args_of(
+        [(s, f"central inertia {s.name[1:]}", "kg m^2") for s in inertia])
+    for _, a in vecs[1:]:
+        args += a
+    i11, i22, i33, i12, i23, i13 = inertia
+    icm = sp.Matrix([[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]])
+    r, a0, w, dw = (sp.Matrix(v) for v, _ in vecs)
+    return m, r, icm, a0, w, dw, args
+
+
+def newton_euler() -> NamedMatrix:
+    """Force and moment about O that move the body, from Newton's and Euler's laws for the centre of
+    mass: F = m a_c with a_c = a0 + ω̇ × r + ω × (ω × r); M_O = r × F + I_c ω̇ + ω × I_c ω."""
+    m, r, icm, a0, w, dw, args = rigid_body_args()
+    force = m * (a0 + dw.cross(r) + w.cross(w.cross(r)))
+    moment = r.cross(force) + icm * dw + w.cross(icm * w)
+    return NamedMatrix("newton_euler", sp.Matrix.vstack(force, moment), args,
+                       "[P; M]: resultant force and moment about O of the rigid body (Newton-Euler)", "N, N m",
+                       "(11)")
+
+
 def chord_coefficients() -> NamedMatrix:
     """[l_i0, l_i1, l_i2, l_i3] of (14): Λ̄ ΔR̄ = [l, 0, 0]ᵀ to first order in Δθ."""
     dX, dX_args = _vec_args("dX", "chord ΔR̄ = R0(s_A) - R0(s_O) (fixed frame)", "m")
@@ -224,7 +256,7 @@ def module_specs() -> list[ModuleSpec]:
     frame += [NamedMatrix("A", angular_velocity_matrix(), ANGLE_ARGS, "A with ω = A θ̇", "1", "ω = A θ̇")]
     frame += omega_functions()
     frame += [angles_from_tangent(), chord_coefficients(), lambda_bar_linear(), rodrigues(), chord_rotation()]
-    dynamics = [point_coefficients(), reactions(True), reactions(False)]
+    dynamics = [point_coefficients(), reactions(True), reactions(False), newton_euler()]
     return [
         ModuleSpec("trolley_frame", "Frames, angles and angular velocity of the trolley along the track.",
                    SOURCE, frame),

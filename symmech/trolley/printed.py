@@ -10,7 +10,7 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
-from symmech.trolley.derive import ANGLE_ARGS, SOURCE, th1, th2, th3
+from symmech.trolley.derive import ANGLE_ARGS, SOURCE, rigid_body_args, skew, th1, th2, th3
 
 s1, s2, s3 = sp.sin(th1), sp.sin(th2), sp.sin(th3)
 c1, c2, c3 = sp.cos(th1), sp.cos(th2), sp.cos(th3)
@@ -90,6 +90,18 @@ RODRIGUES_ARGS = args_of([(psi, "rotation angle Ψ", "rad")]) + args_of(
     [(x, f"rotation axis ξ{i + 1} (as used: ξ = t × ρ)", "1") for i, x in enumerate((xi1, xi2, xi3))])
 
 
+def rigid_body_equations() -> NamedMatrix:
+    """(11): m a0 - Ľ0 ω̇ - ω̌ Ľ0 ω = P; -Ľ0ᵀ a0 + I00 ω̇ + ω̌ I00 ω = M, with Ľ the cross-product
+    matrix, L0 = m r the static moment and I00 = I_c + m(|r|² E - r rᵀ) the inertia about O."""
+    m, r, icm, a0, w, dw, args = rigid_body_args()
+    L0 = skew(m * r)
+    i00 = icm + m * (r.dot(r) * sp.eye(3) - r * r.T)
+    force = m * a0 - L0 * dw - skew(w) * L0 * w
+    moment = -L0.T * a0 + i00 * dw + skew(w) * i00 * w
+    return NamedMatrix("rigid_body_equations", sp.Matrix.vstack(force, moment), args,
+                       "(11) as printed: [P; M] of the rigid body", "N, N m", "(11)")
+
+
 def module_specs() -> list[ModuleSpec]:
     fns = [NamedMatrix("Lambda", LAMBDA, ANGLE_ARGS, "Λ as printed", "1", "Λ")]
     fns += [NamedMatrix(f"dLambda_dth{i + 1}", d, ANGLE_ARGS, f"∂Λ/∂θ{i + 1} as printed", "1/rad", "(13)")
@@ -102,6 +114,7 @@ def module_specs() -> list[ModuleSpec]:
                     "Λ (helix example)"),
         NamedMatrix("helix_omega", HELIX_OMEGA, HELIX_ARGS[1:], "helix ω = ϰ t + κ b as printed",
                     "rad/m (printed as rad/s)", "ω (helix example)"),
+        rigid_body_equations(),
     ]
     return [ModuleSpec("trolley_printed", "The trolley paper's formulas as printed (hand transcription).",
                        SOURCE, fns)]
