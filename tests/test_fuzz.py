@@ -13,10 +13,10 @@ reproducible; ``SYMMECH_FUZZ_RANDOM=1`` explores new ones.
 """
 from __future__ import annotations
 
+import faulthandler
 import io
 import os
 import re
-import signal
 import subprocess
 import sys
 import tempfile
@@ -39,7 +39,7 @@ from symmech.core import schema as s
 
 MAX_TIME = 3.0  # s, --max-time of every case
 SLACK = 15.0  # s past --max-time allowed for validation, writing and the budget check's granularity
-HANG = 120  # s after which a case is stopped and reported as a hang
+HANG = 120  # s after which a case counts as a hang
 FIELD = re.compile(r"scene field '([^']*)'")
 NO_FIELD_OK = ("exceeds --max-time", "over the time budget --max-time", "is not valid TOML",
                "is nested too deeply", "holds an unreadable value", "non-finite result: ")
@@ -60,29 +60,24 @@ def kind_of(name: str) -> registry.Kind:
     return registry.kinds()[name]
 
 
-class Hang(BaseException):
-    """Raised by the alarm in a case that runs past HANG (not an Exception: main lets it through)."""
-
-
 def outcome(text: str) -> tuple[int, str, float, Path]:
-    """(exit status, stderr, wall time [s], output folder) of ``symmech run`` on ``text``."""
+    """(exit status, stderr, wall time [s], output folder) of ``symmech run`` on ``text``.
+
+    A case still running after HANG seconds dumps every thread's stack and ends the
+    test process (faulthandler's watchdog thread: it does not touch SIGALRM, which
+    the kinds' own time-budget watchdog uses).
+    """
     folder = Path(tempfile.mkdtemp(prefix="symmech-fuzz-"))
     (folder / "scene.toml").write_text(text)
     err = io.StringIO()
-
-    def alarm(*_):
-        raise Hang(f"case ran past {HANG} s:\n{text[:2000]}")
-
-    previous = signal.signal(signal.SIGALRM, alarm)
-    signal.alarm(HANG)
+    faulthandler.dump_traceback_later(HANG, exit=True, file=sys.__stderr__)
     start = time.perf_counter()
     try:
         with redirect_stderr(err), redirect_stdout(io.StringIO()):
             code = main(["run", str(folder / "scene.toml"), "--out", str(folder / "out"), "--quiet",
                          "--no-plots", "--max-time", str(MAX_TIME)])
     finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
+        faulthandler.cancel_dump_traceback_later()
     return code, err.getvalue(), time.perf_counter() - start, folder / "out"
 
 

@@ -40,8 +40,8 @@ from symmech.core.scene import SymmechError, check_depth, read_toml
 from symmech.core.schema import validate
 
 # Keys of every summary.json; a kind's own summary keys sit beside them.
-ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "wall_time_s", "timing_s",
-            "generated_modules", "warnings", "files", "scene")
+ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "generated_modules",
+            "warnings", "files", "scene")
 SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
 STALE_EMPTY_LOCK = 10.0  # s; a lock file still without a pid after this is a crashed run's
 
@@ -242,7 +242,7 @@ def _summary(result: Result, scene: Scene, files: list[str], timing: dict) -> di
         raise ValueError(f"kind {result.kind!r} puts reserved keys {clash} in its summary")
     return {"symmech_version": __version__, "kind": result.kind,
             "status": "warnings" if result.warnings else "ok", "scene_file": scene.source,
-            "wall_time_s": sum(timing.values()), "timing_s": timing,
+            "timing_s": {**timing, "total": sum(timing.values())},
             "generated_modules": generated_modules(), **result.summary,
             "warnings": result.warnings, "files": files,
             "scene": json.loads(json.dumps(scene.resolved, default=str))}
