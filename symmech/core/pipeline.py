@@ -209,7 +209,7 @@ def write(result: Result, out, scene: Scene, plots: bool = True) -> Path:
         except OSError as exc:
             raise SymmechError(f"--out {out}: cannot write beside it ({exc.strerror or exc})") from None
         try:
-            files = _write_files(tmp, result, plots)
+            files = write_files(tmp, result, plots)
             timing = {**scene.timing, "write": time.perf_counter() - start}
             summary = _summary(result, scene, files, timing)
             with open(tmp / "summary.json", "w") as fh:
@@ -224,7 +224,8 @@ def write(result: Result, out, scene: Scene, plots: bool = True) -> Path:
     return target
 
 
-def _write_files(folder: Path, result: Result, plots: bool) -> list[str]:
+def write_files(folder: Path, result: Result, plots: bool) -> list[str]:
+    """Tables, extra files and (if ``plots``) plots of ``result`` into ``folder``; their names."""
     for name, table in result.tables.items():
         _write_csv(folder / f"{name}.csv", table)
     for name, content in result.files.items():
