@@ -272,3 +272,18 @@ def test_progress_bar_on_a_terminal_only(monkeypatch):
     monkeypatch.setattr(sys, "stderr", io.StringIO())  # not a terminal
     with Context().progress(10, "probe") as bar:
         assert bar.disable
+
+
+def test_precision_study_as_a_result_follows_the_contract(tmp_path):
+    from symmech.core import precision
+
+    rows = [{"method": "m1", "knob": "steps", "value": v, "error": 10.0 ** -v, "seconds": 1e-3 * v}
+            for v in (1, 2, 3)]
+    result = precision.result("probe", rows, "precision_probe", "probe study", "exact")
+    sc = pipeline.load({"kind": "probe"})
+    pipeline.write(result, tmp_path / "p", sc)
+    s = assert_valid_output(tmp_path / "p")
+    assert s["files"] == ["precision_probe.csv", "precision_probe.png"] and s["reference"] == "exact"
+    lines = (tmp_path / "p" / "precision_probe.csv").read_text().splitlines()
+    assert lines[0] == "value [1],error [1],seconds [s],method,knob"
+    assert lines[2] == "2.0,0.01,0.002,m1,steps"

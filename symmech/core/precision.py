@@ -1,8 +1,10 @@
 """Work-precision diagrams: what accuracy costs in time.
 
-A study is a list of rows ``{"method", "knob", "value", "error", "seconds"}``;
-:func:`write` saves them as CSV and draws log10(error) against log10(seconds),
-one line per method, one marker per knob value.
+A study is a list of rows ``{"method", "knob", "value", "error", "seconds"}``.
+A registered kind's ``precision`` returns :func:`result` (a table with units and
+the diagram, written by the pipeline like any run); :func:`write` is the legacy
+path that writes CSV and diagram itself. The diagram draws log10(error) against
+log10(seconds), one line per method, one marker per knob value.
 """
 from __future__ import annotations
 
@@ -11,6 +13,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from symmech.core.results import Column, Result, Table
 
 FIELDS = ("method", "knob", "value", "error", "seconds")
 ERROR_FLOOR = 1e-17  # errors below double precision are drawn at this floor
@@ -36,21 +40,40 @@ def best_time(fn, repeats: int = 5, min_seconds: float = 0.02):
     return best, result
 
 
+COLUMNS = (Column("value", "1", "the knob's setting"),
+           Column("error", "1", "relative error against the reference"),
+           Column("seconds", "s", "best wall time per call"))
+
+
+def result(kind: str, rows: list[dict], name: str, title: str, reference: str) -> Result:
+    """A study as a :class:`Result` for the pipeline: table ``name`` (value, error, seconds;
+    text columns method and knob), the reference in the summary, the diagram as its plot."""
+    table = Table(COLUMNS, [[r["value"], r["error"], r["seconds"]] for r in rows], doc=title,
+                  text={"method": [r["method"] for r in rows], "knob": [r["knob"] for r in rows]})
+    return Result(kind, {"study": "precision", "reference": reference}, tables={name: table},
+                  plots=lambda folder: [diagram(rows, Path(folder) / f"{name}.png", title, reference)])
+
+
 def write(rows: list[dict], out: Path, name: str, title: str, reference: str) -> list[Path]:
     """Write ``name``.csv and ``name``.png into ``out``; returns the two paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     out = Path(out)
-    csv_path, png_path = out / f"{name}.csv", out / f"{name}.png"
+    csv_path = out / f"{name}.csv"
     with csv_path.open("w", newline="") as fh:
         fh.write(f"# reference: {reference}\n")
         writer = csv.DictWriter(fh, fieldnames=FIELDS)
         writer.writeheader()
         for row in rows:
             writer.writerow({k: row[k] for k in FIELDS})
+    return [csv_path, diagram(rows, out / f"{name}.png", title, reference)]
+
+
+def diagram(rows: list[dict], png_path: Path, title: str, reference: str) -> Path:
+    """log error against log time, one line per method; returns ``png_path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(7, 5))
     for method in dict.fromkeys(r["method"] for r in rows):
         mine = [r for r in rows if r["method"] == method]
@@ -65,4 +88,4 @@ def write(rows: list[dict], out: Path, name: str, title: str, reference: str) ->
     fig.tight_layout()
     fig.savefig(png_path, dpi=120)
     plt.close(fig)
-    return [csv_path, png_path]
+    return png_path
