@@ -9,13 +9,13 @@ JSON Schema is ``symmech/core/output_schema.json``.
 Transactional outputs: ``out`` is replaced as a whole by a complete folder, so a
 failed, interrupted or full-disk run leaves the previous results untouched and
 no file of an earlier scene survives a successful one. A lock file
-``.<out>.lock`` beside ``out`` (created with O_EXCL, holding the owner's pid)
-refuses a second run into the same folder; a lock whose process is gone is stale
-and taken over.
+``.<out>.lock`` beside ``out`` (an flock, naming the owner's pid) refuses a second
+run into the same folder; the kernel releases it when its process dies.
 """
 from __future__ import annotations
 
 import csv
+import fcntl
 import glob
 import hashlib
 import json
@@ -43,7 +43,6 @@ from symmech.core.schema import validate
 ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "generated_modules",
             "warnings", "files", "scene")
 SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
-STALE_EMPTY_LOCK = 10.0  # s; a lock file still without a pid after this is a crashed run's
 
 
 @dataclass
@@ -134,64 +133,51 @@ _HELD: dict[Path, int] = {}  # lock file -> thread holding it (a thread may re-e
 
 @contextmanager
 def locked(out: Path):
-    """Hold ``.<out>.lock`` beside ``out`` while writing it; refuse if another run holds it."""
+    """Hold ``.<out>.lock`` beside ``out`` while writing it; refuse if another run holds it.
+
+    The lock is an flock on that file, so the kernel drops it when its process dies:
+    a lock file left by a killed run is taken over, whatever pid it names.
+    """
     lock = out.parent / f".{out.name}.lock"
     me = threading.get_ident()
     if _HELD.get(lock) == me:
         yield
         return
-    _acquire(lock, out)
+    fd = _acquire(lock, out)
     _HELD[lock] = me
     try:
         yield
     finally:
         del _HELD[lock]
         lock.unlink(missing_ok=True)
+        os.close(fd)
 
 
-def _acquire(lock: Path, out: Path) -> None:
-    owner = f"{os.getpid()} {socket.gethostname()}\n"
-    for _ in range(3):
+def _acquire(lock: Path, out: Path) -> int:
+    """An open descriptor of ``lock`` holding its flock, with our pid and host written in it."""
+    while True:
         try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
-            holder = _live_holder(lock)
-            if holder:
-                raise SymmechError(f"--out {out} is being written by another symmech run ({holder}); "
-                                   f"wait for it, choose another --out, or delete {lock} if no run is "
-                                   "going") from None
-            lock.unlink(missing_ok=True)  # stale: its run died without cleaning up
-            continue
+            fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
         except OSError as exc:
             raise SymmechError(f"--out {out}: cannot create the lock file {lock} "
                                f"({exc.strerror or exc})") from None
-        with os.fdopen(fd, "w") as fh:
-            fh.write(owner)
-        return
-    raise SymmechError(f"--out {out}: could not take the lock {lock} (other runs keep taking it)")
-
-
-def _live_holder(lock: Path) -> str:
-    """'pid N on HOST' if the lock's run may still be going, '' if the lock is stale."""
-    try:
-        text = lock.read_text().split()
-        age = time.time() - lock.stat().st_mtime
-    except (OSError, UnicodeDecodeError):
-        return ""
-    if len(text) != 2 or not text[0].isdigit():
-        return "a run starting now" if age < STALE_EMPTY_LOCK else ""
-    pid, host = int(text[0]), text[1]
-    if host != socket.gethostname():
-        return f"pid {pid} on {host}"  # cannot tell whether a process elsewhere is alive
-    if pid == os.getpid() and lock not in _HELD:
-        return ""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return ""
-    except PermissionError:
-        pass
-    return f"pid {pid}"
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(fd, 200).decode(errors="replace").split()
+            os.close(fd)
+            who = f"pid {holder[0]} on {holder[1]}" if len(holder) == 2 else "starting now"
+            raise SymmechError(f"--out {out} is being written by another symmech run ({who}); "
+                               "wait for it or choose another --out") from None
+        try:
+            current = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            current = False
+        if current:
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()} {socket.gethostname()}\n".encode())
+            return fd
+        os.close(fd)  # its holder removed the file as we opened it: lock the new one
 
 
 def write(result: Result, out, scene: Scene, plots: bool = True) -> Path:
