@@ -287,3 +287,17 @@ def test_precision_study_as_a_result_follows_the_contract(tmp_path):
     lines = (tmp_path / "p" / "precision_probe.csv").read_text().splitlines()
     assert lines[0] == "value [1],error [1],seconds [s],method,knob"
     assert lines[2] == "2.0,0.01,0.002,m1,steps"
+
+
+def test_racing_runs_never_interleave(tmp_path):
+    """Four runs started together into one folder: each writes a whole result or is refused."""
+    out = tmp_path / "out"
+    procs = [subprocess.Popen([*PROBE_CLI, "run", scene(tmp_path, f"s{i}", rows=i + 1, file=f"f{'abcd'[i]}.txt"),
+                               "--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+             for i in range(4)]
+    results = [(p.wait(timeout=120), p.stderr.read()) for p in procs]
+    assert {code for code, _ in results} <= {0, 2} and any(code == 0 for code, _ in results), results
+    assert all("being written by another symmech run" in err for code, err in results if code == 2)
+    s = assert_valid_output(out)
+    assert len((out / "series.csv").read_text().splitlines()) == s["rows"] + 1
+    assert s["files"] == ["a.png", s["scene"]["file"], "series.csv"] and leftovers(out) == []
