@@ -156,25 +156,14 @@ def _settings(examples: int):
 
 
 @pytest.mark.parametrize("profile", PROFILES)
+@pytest.mark.parametrize("cases", ["broken", "valid"])
 @pytest.mark.parametrize("name", KINDS)
-def test_broken_scenes(name, profile):
+def test_fuzzed_scenes(name, cases, profile):
     kind = kind_of(name)
+    strategy, examples = (broken_cases, profile.broken) if cases == "broken" else (valid_cases, profile.valid)
 
-    @_settings(profile.broken)
-    @given(case=broken_cases(kind))
-    def fuzz(case):
-        check(*case)
-
-    fuzz()
-
-
-@pytest.mark.parametrize("profile", PROFILES)
-@pytest.mark.parametrize("name", KINDS)
-def test_valid_scenes(name, profile):
-    kind = kind_of(name)
-
-    @_settings(profile.valid)
-    @given(case=valid_cases(kind))
+    @_settings(examples)
+    @given(case=strategy(kind))
     def fuzz(case):
         check(*case)
 
