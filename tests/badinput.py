@@ -48,6 +48,13 @@ def changed(base: dict, path: str, value) -> dict:
     return data
 
 
+def edited(base: dict, *pairs) -> dict:
+    """``base`` with every ``(dotted path, value)`` of ``pairs`` applied in turn by :func:`changed`."""
+    for path, value in pairs:
+        base = changed(base, path, value)
+    return base
+
+
 def assert_rejected(data: dict, field: str) -> SceneError:
     """``data`` fails validation with a one-line SceneError naming ``field``."""
     with pytest.raises(SymmechError) as info:

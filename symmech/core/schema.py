@@ -245,6 +245,9 @@ class Table(Field):
     def check(self, path, value):
         if not isinstance(value, dict):
             raise SceneError(path or "<scene>", f"expected a table, got {_show(value)}")
+        if self.variants:  # the selector first: an unknown variant is reported, not its fields
+            key = self.variants[0]
+            self.fields[key].resolve(_join(path, key), key in value, value.get(key))
         fields = self.all_fields(value)
         for key in value:
             if key not in fields:

@@ -1,4 +1,9 @@
-"""Scene kind ``impact``: one impact of an ellipsoidal grain (fields in docs/scenes-impact.md)."""
+"""Scene kind ``impact``: one impact of an ellipsoidal grain (fields in docs/scenes-impact.md).
+
+The scene is declared once in :data:`SCHEMA` (the docs' field table is generated
+from it); ``prepare`` checks that the contact point approaches the plane before
+anything is solved; ``precision`` is the solvers' work-precision study.
+"""
 from __future__ import annotations
 
 import math
@@ -8,16 +13,59 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import precision as wp
-from symmech.core.scene import SceneError, Section, SymmechError
+from symmech.core import registry
+from symmech.core.context import Context
+from symmech.core.results import Result
+from symmech.core.scene import SceneError
+from symmech.core.schema import Choice, Float, Int, Str, Table
+from symmech.core.watchdog import watchdog
 from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
+from symmech.grain import fields
 from symmech.grain.body import Ellipsoid, euler_from_matrix, rotation
-from symmech.grain.impact import (SOLVERS, DescentOptions, ImpactError, euler_rates, impact_geometry,
-                                  solve_descent_batch, solve_impact, solve_robust_batch, solve_scipy)
+from symmech.grain.impact import (SOLVERS, DescentOptions, euler_rates, impact_geometry, solve_descent_batch,
+                                  solve_impact, solve_robust_batch, solve_scipy)
+
+# CPU time of the paper's descent per step and per golden-section iteration (measured on the
+# default scene with `paper-corrected`, 200-1000 steps, 60-200 iterations), for the estimate.
+SECONDS_PER_DESCENT_STEP = 3e-3
+SECONDS_PER_LINE_ITERATION = 2e-6
+_DESCENT = DescentOptions()
+
+SCHEMA = Table("an impact scene", {
+    "kind": Choice("selects this kind", choices=("impact",)),
+    "title": Str("free text", default=""),
+    "body": fields.BODY,
+    "state": Table("before the impact, surface frame (X, Y in the plane, Z the outward normal), relative to "
+                   "the surface; the contact point must approach the plane (u_Kz(0) < 0)", {
+        "velocity": fields.velocity("centre-of-mass velocity"),
+        "angular_velocity": fields.angular_velocity("angular velocity", default=[0.0, 0.0, 0.0]),
+    }),
+    "impact": Table("the printed law (14)-(18)", {
+        "e": Float("normal restitution: ż_K = −e ż_K(0) (14)", lo=0.0, hi=1.0),
+        "lambda": Float("tangential reduction: |V_K| = (1 − λ)|V_K(0)| (17)", lo=0.0, hi=1.0),
+    }),
+    "solver": Table("the impact solver", {
+        "name": Choice("see Solvers below", choices=SOLVERS, default="robust"),
+        "tol": Float("Newton tolerance on μ (robust) / `xtol` (scipy)", unit="rad", lo=0.0, lo_open=True, hi=1e-2,
+                     default=1e-14),
+        "max_steps": Int("S, descent steps (paper solvers)", lo=1, hi=1_000_000, default=_DESCENT.max_steps),
+        "descent_tol": Float("δ of the stop rule Φ ≤ δ, relative to m|u_K(0)| (its square for `paper-corrected`)",
+                             lo=0.0, lo_open=True, hi=1.0, default=_DESCENT.tol),
+        "step_max": Float("Δ_max of the line search (29)", lo=0.0, lo_open=True, hi=1e3,
+                          default=_DESCENT.step_max),
+        "line_iterations": Int("R, golden-section iterations", lo=1, hi=1000, default=_DESCENT.line_iterations),
+        "line_tol": Float("ε, golden-section bracket width", lo=0.0, lo_open=True, hi=1.0,
+                          default=_DESCENT.line_tol),
+    }, default={}),
+    "precision": Table("reserved for `symmech bench precision` (no fields yet)", {}, default={}),
+})
 
 
 @dataclass(frozen=True)
 class ImpactScene:
+    """A prepared impact: the body, its state before the impact, the printed law's e and λ, the solver."""
+
     body: Ellipsoid
     angles: np.ndarray  # (psi, theta, phi) [rad]
     velocity: np.ndarray  # centre of mass before, surface frame [m/s]
@@ -29,41 +77,35 @@ class ImpactScene:
     descent: DescentOptions
 
 
-def parse(scene: Section) -> ImpactScene:
-    """Validate an impact scene; every problem names its field."""
-    body = scene.section("body")
-    a, b, c = body.vector("semi_axes", 3, unit="m", lo=0.0, lo_open=True)
-    if body.has("mass") == body.has("density"):
-        raise SceneError("body.mass", "give exactly one of body.mass [kg] or body.density [kg/m^3]")
-    if body.has("mass"):
-        mass = body.float("mass", unit="kg", lo=0.0, lo_open=True)
-    else:
-        mass = body.float("density", unit="kg/m^3", lo=0.0, lo_open=True) * 4.0 / 3.0 * math.pi * a * b * c
-    angles = np.array(body.vector("orientation", 3, unit="rad", default=[0.0, 0.0, 0.0]))
-    body.finish()
-    state = scene.section("state")
-    velocity = np.array(state.vector("velocity", 3, unit="m/s"))
-    angular_velocity = np.array(state.vector("angular_velocity", 3, unit="rad/s", default=[0.0, 0.0, 0.0]))
-    state.finish()
-    law = scene.section("impact")
-    e = law.float("e", unit="", lo=0.0, hi=1.0)
-    lam = law.float("lambda", unit="", lo=0.0, hi=1.0)
-    law.finish()
-    solver = scene.section("solver", default={})
-    name = solver.choice("name", SOLVERS, default="robust")
-    tol = solver.float("tol", unit="rad", default=1e-14, lo=0.0, lo_open=True)
-    defaults = DescentOptions()
-    descent = DescentOptions(
-        max_steps=solver.int("max_steps", default=defaults.max_steps, lo=1),
-        tol=solver.float("descent_tol", unit="", default=defaults.tol, lo=0.0, lo_open=True),
-        step_max=solver.float("step_max", unit="", default=defaults.step_max, lo=0.0, lo_open=True),
-        line_iterations=solver.int("line_iterations", default=defaults.line_iterations, lo=1),
-        line_tol=solver.float("line_tol", unit="", default=defaults.line_tol, lo=0.0, lo_open=True))
-    solver.finish()
-    scene.section("precision", default={})  # read by `bench precision` only
-    scene.str("title", default="")
-    scene.finish()
-    return ImpactScene(Ellipsoid(a, b, c, mass), angles, velocity, angular_velocity, e, lam, name, tol, descent)
+def prepare(r: dict) -> ImpactScene:
+    """The impact of a resolved scene; SceneError unless its contact point approaches the plane."""
+    s = r["solver"]
+    descent = DescentOptions(max_steps=s["max_steps"], tol=s["descent_tol"], step_max=s["step_max"],
+                             line_iterations=s["line_iterations"], line_tol=s["line_tol"])
+    sc = ImpactScene(Ellipsoid(*r["body"]["semi_axes"], fields.body_mass(r["body"])),
+                     np.array(r["body"]["orientation"]), np.array(r["state"]["velocity"]),
+                     np.array(r["state"]["angular_velocity"]), r["impact"]["e"], r["impact"]["lambda"], s["name"],
+                     s["tol"], descent)
+    uK0 = _contact_velocity(sc)
+    if not uK0[2] < 0:
+        raise SceneError("state.velocity", f"the contact point is not approaching the plane: u_Kz(0) = {uK0[2]:.6g} m/s "
+                                           "must be < 0 (velocity + angular_velocity x contact offset)")
+    return sc
+
+
+def _contact_velocity(sc: ImpactScene) -> np.ndarray:
+    """u_K(0) (3,) [m/s]: velocity of the contact point before the impact."""
+    _, R, _ = impact_geometry(sc.body, rotation(sc.angles))
+    return sc.velocity + np.cross(sc.angular_velocity, R)
+
+
+def estimate(sc: ImpactScene) -> registry.Estimate:
+    """The paper's descent costs up to max_steps line searches of line_iterations; the other solvers are instant."""
+    if sc.solver in ("paper", "paper-corrected"):
+        d = sc.descent
+        seconds = d.max_steps * (SECONDS_PER_DESCENT_STEP + d.line_iterations * SECONDS_PER_LINE_ITERATION)
+        return registry.Estimate(seconds, f"up to {d.max_steps} descent steps x {d.line_iterations} line iterations")
+    return registry.Estimate(0.01, "one impact")
 
 
 def _euler_paths(sc: ImpactScene, Q, R, T, omega_after):
@@ -121,20 +163,15 @@ def _plot(path: Path, H, sc: ImpactScene, result) -> None:
     plt.close(fig)
 
 
-def run(scene: Section, out: Path) -> dict:
-    sc = parse(scene)
+def run(sc: ImpactScene, ctx: Context) -> Result:
+    """Solve the impact: impulse, velocities after, Euler rates three ways, every root, and the plot."""
     Q = rotation(sc.angles)
-    try:
+    with watchdog(ctx, where=f"impact solver {sc.solver}"):
         result = solve_impact(sc.body, Q, sc.velocity, sc.angular_velocity, sc.e, sc.lam,
                               solver=sc.solver, descent=sc.descent, tol=sc.tol)
-    except ImpactError as exc:
-        raise SymmechError(f"state: {exc}") from None
     _, R, H = impact_geometry(sc.body, Q)
     rates, gimbal = _euler_paths(sc, Q, R, result.T, result.omega_after)
-    warnings = list(result.warnings) + ([gimbal] if gimbal else [])
-    _plot(out / "impact.png", H, sc, result)
-    return {
-        "kind": "impact",
+    summary = {
         "solver": {"name": result.solver, "iterations": result.iterations,
                    "residual_19": result.residual, "converged": result.converged},
         "impulse_T": result.T.tolist(),
@@ -150,8 +187,13 @@ def run(scene: Section, out: Path) -> dict:
         "kinetic_energy_after": result.ke_after,
         "admissible": result.admissible,
         "roots": result.roots,
-        "warnings": warnings,
     }
+
+    def draw(folder: Path) -> list[Path]:
+        _plot(folder / "impact.png", H, sc, result)
+        return [folder / "impact.png"]
+
+    return Result("impact", summary, plots=draw, warnings=list(result.warnings) + ([gimbal] if gimbal else []))
 
 
 # --------------------------------------------------------------------------- precision
@@ -177,14 +219,10 @@ def _reference(H, m, e, lam, uK0, T, mu, digits=50):
         return np.array([float(tau * mpmath.cos(angle)), float(tau * mpmath.sin(angle)), float(Tz)])
 
 
-def precision(scene: Section, out: Path) -> dict:
+def precision(sc: ImpactScene, ctx: Context) -> Result:
     """Work-precision study of the impact solvers on this scene's impact."""
-    sc = parse(scene)
-    Q = rotation(sc.angles)
-    _, R, H = impact_geometry(sc.body, Q)
-    uK0 = sc.velocity + np.cross(sc.angular_velocity, R)
-    if not uK0[2] < 0:
-        raise SymmechError(f"state: the contact point is not approaching the plane (u_Kz = {uK0[2]:.6g} m/s)")
+    _, _, H = impact_geometry(sc.body, rotation(sc.angles))
+    uK0 = _contact_velocity(sc)
     m = sc.body.mass
     base = solve_robust_batch(H[None], m, sc.e, sc.lam, uK0[None])
     T_ref = _reference(H, m, sc.e, sc.lam, uK0, base.T[0], float(base.mu[0]))
@@ -192,6 +230,7 @@ def precision(scene: Section, out: Path) -> dict:
     rows = []
 
     def add(method, knob, value, fn):
+        ctx.tick(f"impact precision study, {method}")
         seconds, T = wp.best_time(fn, repeats=3)
         rows.append({"method": method, "knob": knob, "value": value, "seconds": seconds,
                      "error": float(np.linalg.norm(T - T_ref) / norm)})
@@ -206,6 +245,13 @@ def precision(scene: Section, out: Path) -> dict:
             options = DescentOptions(max_steps=steps, line_iterations=40)
             add(f"descent ({variant})", "max_steps", steps,
                 lambda: solve_descent_batch(H[None], m, sc.e, sc.lam, uK0[None], variant, options)[0][0])
-    files = wp.write(rows, out, "precision_impact", "Impact solvers: work-precision",
-                     "mpmath.findroot at 50 digits on (19), H taken as exact")
-    return {"files": [str(f) for f in files], "rows": rows}
+    reference = "mpmath.findroot at 50 digits on (19), H taken as exact"
+    # The study's CSV (with its reference line) and diagram are written together by core.precision.
+    return Result("impact", {"study": "precision", "reference": reference, "rows": rows},
+                  plots=lambda folder: wp.write(rows, folder, "precision_impact", "Impact solvers: work-precision",
+                                                reference))
+
+
+registry.register(registry.Kind(
+    name="impact", summary="one impact of an ellipsoidal grain on a plane (seed 000, eqs (1)-(60))",
+    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-impact.md"))

@@ -177,8 +177,10 @@ def impact_record(t: float, before: State, after: State, out: dict, i: int = 0) 
             "printed_creates_energy": out["printed_creates_energy"][i], "converged": bool(out["converged"][i])}
 
 
-def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:
-    """Accurate mode from ``start`` to ``t_end``; the grain starts in flight (or on the plane at rest)."""
+def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None) -> Motion:
+    """Accurate mode from ``start`` to ``t_end``; the grain starts in flight (or on the plane at rest).
+
+    ``on_step(t)``, if given, is called at every regime phase (progress, time budget, stagnation)."""
     model = model.active()
     rec = _Recorder(num.sample_interval)
     st = replace(start, r=np.array(start.r, float), v=np.array(start.v, float),
@@ -191,6 +193,8 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float) -> Motion:
     regime = "flight"
     rec.add(st, regime)
     while st.t < t_end:
+        if on_step is not None:
+            on_step(st.t)
         if regime == "flight":
             t0 = st.t
             st, hit = _fly(model, num, st, t_end, rec)

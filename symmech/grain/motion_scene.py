@@ -1,12 +1,13 @@
 """Scene kind ``grain``: the whole motion of a grain on an inclined vibrating surface.
 
-Fields are documented in docs/scenes-grain.md. ``run`` writes ``trajectory.csv``,
-``impacts.csv``, ``path.png``, ``velocity.png`` (and the CLI writes ``summary.json``);
-``precision`` writes a work-precision study (CSV + PNG).
+The whole scene is declared once in :data:`SCHEMA` (the field tables of
+docs/scenes-grain.md are generated from it). ``prepare`` builds the model and
+checks its physical admissibility, ``estimate`` predicts impacts and wall time
+before anything runs, ``run`` returns the trajectory and impact tables and the
+summary, ``precision`` the work-precision study of ``symmech bench precision``.
 """
 from __future__ import annotations
 
-import csv
 import math
 import time
 from dataclasses import dataclass, replace
@@ -15,184 +16,360 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import precision as wp
-from symmech.core.scene import SceneError, Section
+from symmech.core import registry
+from symmech.core.context import Context
+from symmech.core.results import Column, Result, Table
+from symmech.core.scene import SceneError, SymmechError
+from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector
+from symmech.core.watchdog import watchdog
 from symmech.generated import grain_motion as gm
-from symmech.grain import contact, flight, motion, paper_mode
+from symmech.grain import contact, fields, flight, motion, paper_mode
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
+
+MAX_ROWS = 10_000_000  # trajectory rows a run may record
+MAX_SURFACE_ACCELERATION = 1e6  # m/s^2, peak of the vibrating surface
+UNIT_TOLERANCE = 1e-6  # |d| - 1 of a given vibration direction
+# CPU time of accurate mode per impact (with its flight), per simulated second (sliding,
+# sticking) and per scan step, and of paper mode per fixed step and per node and step:
+# fitted on fifteen variants of the default scene (restitution, amplitude, frequency 25 Hz to
+# 1e5 Hz, effects, tolerance, mode, nodes): never below 0.7 of the measured time, up to 7 times
+# above it (high restitution, where fewer bounces chatter than the geometric series says).
+SECONDS_PER_IMPACT = 6e-3
+SECONDS_PER_SIMULATED_SECOND = 0.8
+SECONDS_PER_SCAN = 6e-5
+SECONDS_PER_PAPER_STEP = 1e-4
+SECONDS_PER_PAPER_NODE_STEP = 5e-9
+STAGNANT_PHASES = 1000  # consecutive regime phases that advance time by less than the event resolution
+
+
+def _not_vertical(surface: dict, path: str) -> None:
+    alpha, beta = math.radians(surface["alpha_deg"]), math.radians(surface["beta_deg"])
+    if math.sin(alpha) ** 2 + math.sin(beta) ** 2 >= 1.0 - 1e-12:
+        raise SceneError(f"{path}.beta_deg", "sin^2(alpha) + sin^2(beta) must be < 1 (the surface would be vertical)")
+
+
+def _admissible_vibration(vib: dict, path: str) -> None:
+    if vib["direction"] == "vector":
+        norm = float(np.linalg.norm(vib["vector"]))
+        if norm == 0.0:
+            raise SceneError(f"{path}.vector", "[0, 0, 0] has no direction; give a unit vector")
+        if abs(norm - 1.0) > UNIT_TOLERANCE:
+            raise SceneError(f"{path}.vector", f"|d| = {norm:.6g} is not a unit vector (tolerance {UNIT_TOLERANCE:g}); "
+                                               "give the magnitude as vibration.amplitude [m]")
+    omega = 2 * math.pi * vib["frequency"]
+    speed, acceleration = vib["amplitude"] * omega, vib["amplitude"] * omega**2
+    if speed > fields.SPEED or acceleration > MAX_SURFACE_ACCELERATION:
+        raise SceneError(f"{path}.amplitude", f"{vib['amplitude']:g} m at {vib['frequency']:g} Hz gives a peak surface "
+                                              f"velocity {speed:.3g} m/s and acceleration {acceleration:.3g} m/s^2; "
+                                              f"admissible up to {fields.SPEED:g} m/s and "
+                                              f"{MAX_SURFACE_ACCELERATION:g} m/s^2")
+
+
+def _as_printed_needs_paper(numerics: dict, path: str) -> None:
+    if numerics["as_printed"] and numerics["mode"] != "paper":
+        raise SceneError(f"{path}.as_printed", "the printed formulas apply to mode = \"paper\" only")
+
+
+SCHEMA = Fields("a grain scene", {
+    "kind": Choice("selects this kind", choices=("grain",)),
+    "title": Str("free text", default=""),
+    "duration": Float("physical time simulated (the estimate refuses runs past `--max-time`)", unit="s",
+                      lo=0.0, lo_open=True, hi=1e4),
+    "body": fields.BODY,
+    "surface": Fields("the inclined working surface", {
+        "g": Float("gravitational acceleration", unit="m/s^2", lo=0.0, lo_open=True, hi=1e3, default=9.81),
+        "alpha_deg": Float("rise of the X axis above the horizontal", unit="deg", lo=-89.0, hi=89.0, default=0.0),
+        "beta_deg": Float("rise of the Y axis above the horizontal; sin²α + sin²β < 1", unit="deg",
+                          lo=-89.0, hi=89.0, default=0.0),
+    }, default={}, checks=(_not_vertical,)),
+    "vibration": Fields("surface displacement s(t) = A d sin(2π f t + phase); peak velocity 2π f A at most "
+                        "100 m/s, peak acceleration (2π f)² A at most 1e6 m/s²", {
+        "amplitude": Float("A", unit="m", lo=0.0, hi=1.0, default=0.0),
+        "frequency": Float("f", unit="Hz", lo=0.0, lo_open=True, hi=1e5, default=1.0),
+        "phase_deg": Float("phase at t = 0", unit="deg", lo=-360.0, hi=360.0, default=0.0),
+        "direction": Choice("d: the true vertical, the surface normal e_Z, in the X-Z plane at `angle_deg`, "
+                            "or a given unit `vector`", choices=("vertical", "normal", "angle", "vector"),
+                            default="vertical"),
+    }, variants=("direction", {
+        "angle": {"angle_deg": Float("d = (cos γ, 0, sin γ), from +X towards +Z (the throw angle)", unit="deg",
+                                     lo=-180.0, hi=180.0, default=90.0)},
+        "vector": {"vector": Vector("d in KXYZ, a unit vector (the magnitude is `amplitude`)", n=3)},
+    }), default={}, checks=(_admissible_vibration,)),
+    "impact": Fields("the impact law", {
+        "law": Choice("`coulomb`: Chatterjee-Ruina with a Coulomb bound; `printed`: (14)-(20) of the paper",
+                      choices=("coulomb", "printed"), default="coulomb"),
+    }, variants=("law", {
+        "printed": {"e": Float("normal restitution: ż_K = −e ż_K(0)", lo=0.0, hi=1.0),
+                    "lambda": Float("tangential speed × (1 − λ)", lo=0.0, hi=1.0)},
+        "coulomb": {"e_n": Float("normal restitution", lo=0.0, hi=1.0),
+                    "e_t": Float("tangential restitution (u_t → −e_t u_t when sticking; the printed law for a "
+                                 "sphere is e_t = λ − 1)", lo=-1.0, hi=1.0),
+                    "mu": Float("friction coefficient bounding the tangential impulse; omitted: no bound",
+                                lo=0.0, hi=1e6, default=None),
+                    "check_printed": Bool("evaluate the printed law (e = e_n, λ = 1 + e_t) at every impact and "
+                                          "log whether it would have created energy", default=True)},
+    })),
+    "sliding": Fields("the sliding regime", {
+        "friction": Float("Coulomb friction coefficient while sliding", lo=0.0, hi=100.0, default=0.5),
+    }, default={}),
+    "initial": Fields("the state at t = 0, relative to the surface (KXYZ)", {
+        "position": Vector("centre position; z at least the support height of the orientation; "
+                           "omitted: resting on the plane at the origin", n=3, unit="m", lo=-100.0, hi=100.0,
+                           default=None),
+        "velocity": fields.velocity("centre velocity", default=[0.0, 0.0, 0.0]),
+        "angular_velocity": fields.angular_velocity("angular velocity", default=[0.0, 0.0, 0.0]),
+    }, default={}),
+    "effects": Fields("switches; an effect that is off runs no code for it", {
+        "vibration": Bool("off: the surface is still", default=True),
+        "inclination": Bool("off: α = β = 0", default=True),
+        "rotation": Bool("off: no spin, impacts act on a point mass (H = E)", default=True),
+        "friction": Bool("off: frictionless sliding (exact closed form)", default=True),
+    }, default={}),
+    "numerics": Fields("numerical choices; T is the vibration period (1 s without vibration)", {
+        "mode": Choice("`accurate`: exact flight, root-located events; `paper`: the printed fixed-step scheme",
+                       choices=("accurate", "paper"), default="accurate"),
+        "tolerance": Float("accurate mode: relative tolerance of rotation, sliding and event times (times to "
+                           "tolerance × scan step)", lo=1e-14, hi=1e-2, default=1e-9),
+        "scan_step": Float("accurate mode: spacing at which contact and lift-off roots are bracketed; "
+                           "omitted: T/40", unit="s", lo=0.0, lo_open=True, hi=1.0, default=None),
+        "dt": Float("paper mode: fixed step Δt of (61)-(62); omitted: T/2000", unit="s", lo=0.0, lo_open=True,
+                    hi=1.0, default=None),
+        "nodes": Int("paper mode: surface nodes of the contact test (63)", lo=6, hi=100000, default=400),
+        "as_printed": Bool("paper mode only: (61), (63), (64) verbatim", default=False),
+        "rest_velocity": Float("a bounce whose contact point leaves slower than this ends the chattering: the "
+                               "grain slides", unit="m/s", lo=0.0, lo_open=True, hi=1.0, default=1e-5),
+        "max_impacts": Int("safety stop (reported as a warning)", lo=1, hi=10_000_000, default=100000),
+        "sample_interval": Float("spacing of trajectory rows (events are always recorded); omitted: T/40; "
+                                 "at most 1e7 rows", unit="s", lo=0.0, lo_open=True, hi=1e4, default=None),
+    }, default={}, checks=(_as_printed_needs_paper,)),
+    "precision": Fields("`symmech bench precision` only", {
+        "duration": Float("simulated time per run; omitted: min(duration, 4T)", unit="s", lo=0.0, lo_open=True,
+                          hi=1e4, default=None),
+        "reference_tolerance": Float("tolerance of the reference (accurate mode, scan step / 4)",
+                                     lo=1e-14, hi=1e-6, default=1e-12),
+    }, default={}),
+})
 
 
 @dataclass(frozen=True)
 class GrainScene:
+    """A prepared grain scene: the model, numerics, start state, ``duration`` [s], inclination
+    ``alpha_beta`` [rad] (for the printed gravity of paper mode) and the resolved ``precision`` table."""
+
     model: motion.Model
     numerics: motion.Numerics
     start: motion.State
     duration: float
-    alpha_beta: tuple  # inclination [rad], for the printed gravity of paper mode as printed
-    precision: Section
+    alpha_beta: tuple
+    precision: dict
 
 
-def parse(scene: Section) -> GrainScene:
-    """Validate a grain scene; every problem names its field."""
-    duration = scene.float("duration", unit="s", lo=0.0, lo_open=True, hi=1e4)
-    scene.str("title", default="")
-    scene.str("kind")
-    effects_s = scene.section("effects", default={})
-    effects = motion.Effects(**{k: effects_s.bool(k, default=True)
-                                for k in ("vibration", "inclination", "rotation", "friction")})
-    effects_s.finish()
+def prepare(r: dict) -> GrainScene:
+    """The model of a resolved grain scene; SceneError for anything physically inadmissible."""
+    effects = motion.Effects(**r["effects"])
+    axes = tuple(r["body"]["semi_axes"])
+    surface = r["surface"]
+    alpha, beta = ((math.radians(surface["alpha_deg"]), math.radians(surface["beta_deg"]))
+                   if effects.inclination else (0.0, 0.0))
+    g_k = tuple(float(x) for x in gm.gravity(surface["g"], alpha, beta))
+    vibration = _vibration(r["vibration"], g_k, effects)
+    mu = r["sliding"]["friction"] if effects.friction else 0.0
+    model = motion.Model(axes, fields.body_mass(r["body"]), g_k, vibration, _law(r["impact"]), mu, effects)
+    numerics = _numerics(r["numerics"], model.period)
+    rows = r["duration"] / numerics.sample_interval
+    if rows > MAX_ROWS:
+        raise SceneError("numerics.sample_interval", f"{numerics.sample_interval:.3g} s gives {rows:.3g} trajectory "
+                                                     f"rows over {r['duration']:g} s; at most {MAX_ROWS:g}")
+    start = _start(r["initial"], axes, r["body"]["orientation"], effects)
+    return GrainScene(model, numerics, start, r["duration"], (alpha, beta), r["precision"])
 
-    body = scene.section("body")
-    axes = tuple(body.vector("semi_axes", 3, unit="m", lo=0.0, lo_open=True, hi=1.0))
-    if body.has("mass") == body.has("density"):
-        raise SceneError("body.mass", "give exactly one of body.mass [kg] or body.density [kg/m^3]")
-    if body.has("mass"):
-        mass = body.float("mass", unit="kg", lo=0.0, lo_open=True)
+
+def _vibration(v: dict, g_k: tuple, effects: motion.Effects) -> flight.Vibration:
+    g = float(np.linalg.norm(g_k))
+    if v["direction"] == "vertical":
+        direction = tuple(-x / g for x in g_k)
+    elif v["direction"] == "normal":
+        direction = (0.0, 0.0, 1.0)
+    elif v["direction"] == "angle":
+        angle = math.radians(v["angle_deg"])
+        direction = (math.cos(angle), 0.0, math.sin(angle))
     else:
-        mass = body.float("density", unit="kg/m^3", lo=0.0, lo_open=True) * 4.0 / 3.0 * math.pi * np.prod(axes)
-    angles = body.vector("orientation", 3, unit="rad", default=[0.0, 0.0, 0.0])
-    body.finish()
+        direction = tuple(float(x) for x in np.asarray(v["vector"]) / np.linalg.norm(v["vector"]))
+    amplitude = v["amplitude"] if effects.vibration else 0.0
+    return flight.Vibration(amplitude, 2 * math.pi * v["frequency"], math.radians(v["phase_deg"]), direction)
 
-    surface = scene.section("surface", default={})
-    g = surface.float("g", unit="m/s^2", default=9.81, lo=0.0, lo_open=True)
-    alpha = math.radians(surface.float("alpha_deg", unit="deg", default=0.0, lo=-89.0, hi=89.0))
-    beta = math.radians(surface.float("beta_deg", unit="deg", default=0.0, lo=-89.0, hi=89.0))
-    surface.finish()
-    if not effects.inclination:
-        alpha = beta = 0.0
-    if math.sin(alpha) ** 2 + math.sin(beta) ** 2 >= 1.0 - 1e-12:
-        raise SceneError("surface.beta_deg", "sin^2(alpha) + sin^2(beta) must be < 1 (the surface would be vertical)")
-    g_k = tuple(float(x) for x in gm.gravity(g, alpha, beta))
 
-    vib_s = scene.section("vibration", default={})
-    amplitude = vib_s.float("amplitude", unit="m", default=0.0, lo=0.0, hi=1.0)
-    frequency = vib_s.float("frequency", unit="Hz", default=1.0, lo=0.0, lo_open=True, hi=1e5)
-    phase = math.radians(vib_s.float("phase_deg", unit="deg", default=0.0))
-    kind = vib_s.choice("direction", ("vertical", "normal", "angle"), default="vertical")
-    angle = math.radians(vib_s.float("angle_deg", unit="deg", default=90.0, lo=-180.0, hi=180.0))
-    vib_s.finish()
-    direction = {"vertical": tuple(-x / g for x in g_k), "normal": (0.0, 0.0, 1.0),
-                 "angle": (math.cos(angle), 0.0, math.sin(angle))}[kind]
-    if not effects.vibration:
-        amplitude = 0.0
-    vibration = flight.Vibration(amplitude, 2 * math.pi * frequency, phase, direction)
+def _law(law: dict) -> ImpactLaw:
+    if law["law"] == "printed":
+        return ImpactLaw("printed", e=law["e"], lam=law["lambda"])
+    return ImpactLaw("coulomb", e_n=law["e_n"], e_t=law["e_t"], mu=np.inf if law["mu"] is None else law["mu"],
+                     check_printed=law["check_printed"])
 
-    law = _law(scene.section("impact"))
-    sliding = scene.section("sliding", default={})
-    mu = sliding.float("friction", unit="", default=0.5, lo=0.0, hi=100.0) if effects.friction else 0.0
-    if not effects.friction:
-        sliding.float("friction", unit="", default=0.0, lo=0.0, hi=100.0)
-    sliding.finish()
 
-    model = motion.Model(axes, mass, g_k, vibration, law, mu, effects)
-    numerics = _numerics(scene.section("numerics", default={}), model)
+def _numerics(n: dict, period: float) -> motion.Numerics:
+    def given(key, default):
+        return default if n[key] is None else n[key]
 
-    init = scene.section("initial", default={})
+    return motion.Numerics(mode=n["mode"], tolerance=n["tolerance"], scan_step=given("scan_step", period / 40),
+                           dt=given("dt", period / 2000), nodes=n["nodes"], as_printed=n["as_printed"],
+                           rest_velocity=n["rest_velocity"], max_impacts=n["max_impacts"],
+                           sample_interval=given("sample_interval", period / 40))
+
+
+def _start(init: dict, axes: tuple, angles: list, effects: motion.Effects) -> motion.State:
     Q0 = rotation(np.array(angles))
     support = float(contact.support_distance(axes, Q0))
-    r0 = np.array(init.vector("position", 3, unit="m", default=[0.0, 0.0, support]))
-    v0 = np.array(init.vector("velocity", 3, unit="m/s", default=[0.0, 0.0, 0.0]))
-    w0 = np.array(init.vector("angular_velocity", 3, unit="rad/s", default=[0.0, 0.0, 0.0]))
-    init.finish()
+    r0 = np.array([0.0, 0.0, support] if init["position"] is None else init["position"])
     if r0[2] < support * (1.0 - 1e-12):
         raise SceneError("initial.position", f"z = {r0[2]:.6g} m puts the grain into the surface; "
                          f"with this orientation the centre must be at z >= {support:.6g} m")
-    if not effects.rotation:
-        w0 = np.zeros(3)
-    start = motion.State(0.0, r0, v0, flight.quaternion_from_matrix(Q0), Q0.T @ w0)
-    prec = scene.section("precision", default={})
-    scene.finish()
-    return GrainScene(model, numerics, start, duration, (alpha, beta), prec)
+    w0 = np.array(init["angular_velocity"]) if effects.rotation else np.zeros(3)
+    return motion.State(0.0, r0, np.array(init["velocity"]), flight.quaternion_from_matrix(Q0), Q0.T @ w0)
 
 
-def _law(s: Section) -> ImpactLaw:
-    kind = s.choice("law", ("printed", "coulomb"), default="coulomb")
-    if kind == "printed":
-        law = ImpactLaw("printed", e=s.float("e", unit="", lo=0.0, hi=1.0),
-                        lam=s.float("lambda", unit="", lo=0.0, hi=1.0))
-    else:
-        # No mu: no Coulomb bound on the tangential impulse.
-        mu = s.float("mu", unit="", lo=0.0, hi=1e6) if s.has("mu") else np.inf
-        law = ImpactLaw("coulomb", e_n=s.float("e_n", unit="", lo=0.0, hi=1.0),
-                        e_t=s.float("e_t", unit="", lo=-1.0, hi=1.0), mu=mu,
-                        check_printed=s.bool("check_printed", default=True))
-    s.finish()
-    return law
+# --------------------------------------------------------------------------- cost
 
 
-def _numerics(s: Section, model: motion.Model) -> motion.Numerics:
-    period = model.period
-    mode = s.choice("mode", ("accurate", "paper"), default="accurate")
-    num = motion.Numerics(
-        mode=mode,
-        tolerance=s.float("tolerance", unit="", default=1e-9, lo=1e-14, hi=1e-2),
-        scan_step=s.float("scan_step", unit="s", default=period / 40, lo=0.0, lo_open=True),
-        dt=s.float("dt", unit="s", default=period / 2000, lo=0.0, lo_open=True),
-        nodes=s.int("nodes", default=400, lo=6, hi=100000),
-        as_printed=s.bool("as_printed", default=False),
-        rest_velocity=s.float("rest_velocity", unit="m/s", default=1e-5, lo=0.0, lo_open=True),
-        max_impacts=s.int("max_impacts", default=100000, lo=1),
-        sample_interval=s.float("sample_interval", unit="s", default=period / 40, lo=0.0, lo_open=True),
-    )
-    s.finish()
-    if num.as_printed and mode != "paper":
-        raise SceneError("numerics.as_printed", "the printed formulas apply to mode = \"paper\" only")
-    return num
+def expected_impacts(sc: GrainScene) -> float:
+    """Impacts expected over the run, from restitution, amplitude, frequency and the drop height.
+
+    A bounce sequence launched at a normal speed v0 decays geometrically (v -> e v) until the
+    contact point leaves slower than ``rest_velocity``: about ln(v_rest / v0) / ln(e) bounces,
+    fewer if the sequence outlasts the time it has. A surface that throws the grain
+    (normal acceleration amplitude over g_n, Gamma > 1) launches a new sequence every period,
+    or every Gamma / pi periods once a throw outlasts a period.
+    """
+    model, num = sc.model.active(), sc.numerics
+    law = model.law
+    e = law.e if law.kind == "printed" else law.e_n
+    g_n = abs(model.g_k[2])
+    vib = model.vibration
+    a_n = vib.amplitude * vib.omega**2 * abs(vib.direction[2])
+    drop = max(float(sc.start.r[2] - contact.support_distance(model.axes, flight.rotation_matrix(sc.start.q))), 0.0)
+    v_drop = math.hypot(sc.start.v[2], math.sqrt(2 * g_n * drop)) + vib.amplitude * vib.omega * abs(vib.direction[2])
+    impacts = _sequence(v_drop, e, g_n, num.rest_velocity, sc.duration)
+    if a_n > g_n:
+        period = sc.model.period
+        v_throw = vib.amplitude * vib.omega * abs(vib.direction[2])
+        launches = sc.duration / period * min(1.0, math.pi * g_n / a_n)
+        impacts += launches * _sequence(v_throw, e, g_n, num.rest_velocity, period)
+    return min(impacts, float(num.max_impacts))
 
 
-def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: float | None = None):
-    """Run the scene's grain (optionally with other numerics or duration); returns a Motion."""
+def _sequence(v0: float, e: float, g: float, v_rest: float, span: float) -> float:
+    """Bounces of a sequence launched at ``v0`` [m/s] with restitution ``e`` within ``span`` [s]."""
+    if v0 <= v_rest or e == 0.0:
+        return 1.0
+    bounces = math.log(v_rest / v0) / math.log(e) if e < 1.0 else math.inf
+    # k bounces last 2 v0 (1 - e^k) / (g (1 - e)); a sequence longer than span is cut there.
+    fits = 1.0 - span * g * (1.0 - e) / (2.0 * v0)
+    if fits > 0.0:
+        bounces = min(bounces, math.log(fits) / math.log(e) if e < 1.0 else span * g / (2.0 * v0))
+    return 1.0 + bounces
+
+
+def estimate(sc: GrainScene) -> registry.Estimate:
+    """Expected wall time: per fixed step in paper mode; per impact, simulated second and scan step in
+    accurate mode."""
+    num = sc.numerics
+    if num.mode == "paper":
+        steps = sc.duration / num.dt
+        seconds = steps * (SECONDS_PER_PAPER_STEP + num.nodes * SECONDS_PER_PAPER_NODE_STEP)
+        return registry.Estimate(seconds, f"{steps:.3g} fixed steps of {num.dt:.3g} s, {num.nodes} nodes")
+    impacts = expected_impacts(sc)
+    scans = sc.duration / num.scan_step
+    seconds = impacts * SECONDS_PER_IMPACT + sc.duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
+    return registry.Estimate(seconds, f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s")
+
+
+# --------------------------------------------------------------------------- run
+
+
+def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: float | None = None,
+             on_step=None) -> motion.Motion:
+    """Run the scene's grain (optionally with other numerics or duration); returns a Motion.
+
+    ``on_step(t)`` is called at every regime phase of accurate mode (paper mode's fixed
+    steps are bounded by the estimate and the watchdog)."""
     num = numerics or sc.numerics
     t_end = sc.duration if duration is None else duration
     if num.mode == "paper":
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta)
-    return motion.simulate(sc.model, num, sc.start, t_end)
+    return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
 
 
-def run(scene: Section, out: Path) -> dict:
-    sc = parse(scene)
-    start = time.perf_counter()
-    result = simulate(sc)
-    seconds = time.perf_counter() - start
-    _write_trajectory(result, out / "trajectory.csv")
-    _write_impacts(result, out / "impacts.csv")
-    _plots(sc, result, out)
-    summary = {"kind": "grain", "mode": sc.numerics.mode, "impact_law": sc.model.law.kind,
-               "effects": sc.model.effects.__dict__, "wall_time_s": seconds, **result.summary()}
-    summary["files"] = [str(out / n) for n in ("trajectory.csv", "impacts.csv", "path.png", "velocity.png")]
-    return summary
+class _Watch:
+    """``on_step`` of a run: progress bar, time budget, and the stagnation guard of the phase loop."""
+
+    def __init__(self, ctx: Context, bar, resolution: float):
+        self.ctx, self.bar, self.resolution = ctx, bar, resolution
+        self.t, self.stalled = 0.0, 0
+
+    def __call__(self, t: float) -> None:
+        self.ctx.tick(f"grain at t = {t:.6g} s")
+        if t - self.t < self.resolution:
+            self.stalled += 1
+            if self.stalled >= STAGNANT_PHASES:
+                raise SymmechError(f"grain: the simulation stopped advancing at t = {t:.9g} s ({self.stalled} "
+                                   f"regime changes within {self.resolution:.3g} s, the event resolution); "
+                                   "please report this scene")
+            return
+        self.bar.update(t - self.t)
+        self.t, self.stalled = t, 0
 
 
-def _write_trajectory(result: motion.Motion, path: Path) -> None:
-    with path.open("w", newline="") as fh:
-        fh.write("# relative to the surface frame KXYZ: r [m], v [m/s], quaternion q (body axes), "
-                 "w [rad/s] in KXYZ; regime 0 flight, 1 impact, 2 sliding\n")
-        writer = csv.writer(fh)
-        writer.writerow(motion.TRAJECTORY_COLUMNS)
-        for row in result.trajectory:
-            writer.writerow([f"{x:.12g}" for x in row[:-1]] + [motion.REGIMES[int(row[-1])]])
+def run(sc: GrainScene, ctx: Context) -> Result:
+    """Simulate the scene: trajectory and impact tables, summary, and the plots."""
+    started = time.perf_counter()
+    with ctx.progress(sc.duration, "grain", unit="s") as bar, watchdog(ctx, where="grain simulation"):
+        m = simulate(sc, on_step=_Watch(ctx, bar, sc.numerics.tolerance * sc.numerics.scan_step))
+    cost = estimate(sc)
+    summary = {"mode": sc.numerics.mode, "impact_law": sc.model.law.kind, "effects": sc.model.effects.__dict__,
+               "wall_time_s": time.perf_counter() - started, "estimate": {"seconds": cost.seconds, "what": cost.what},
+               **m.summary()}
+    warnings = summary.pop("warnings")
+
+    def draw(folder: Path) -> list[Path]:
+        _plots(sc, m, folder)
+        return [folder / "path.png", folder / "velocity.png"]
+
+    return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
+                  plots=draw, warnings=warnings)
 
 
-IMPACT_COLUMNS = ("t", "x", "y", "z", "vx_before", "vy_before", "vz_before", "vx_after", "vy_after", "vz_after",
-                  "w1_before", "w2_before", "w3_before", "w1_after", "w2_after", "w3_after",
-                  "Tx", "Ty", "Tz", "ke_before", "ke_after", "energy_change", "admissible",
-                  "printed_law_admissible", "printed_law_creates_energy", "converged")
+TRAJECTORY = (Column("t", "s", "time"), *(Column(x, "m", f"centre {x}, KXYZ, relative") for x in "xyz"),
+              *(Column(f"v{x}", "m/s", f"centre velocity {x}, relative") for x in "xyz"),
+              *(Column(f"q{i}", "1", "orientation quaternion (scalar first), body axes in KXYZ") for i in range(4)),
+              *(Column(f"w{x}", "rad/s", f"angular velocity {x}, KXYZ") for x in "xyz"))
 
 
-def _write_impacts(result: motion.Motion, path: Path) -> None:
-    with path.open("w", newline="") as fh:
-        fh.write("# velocities relative to the surface [m/s], w body-axis rates [rad/s], impulse T [N s], "
-                 "energies [J]; printed_law_admissible / printed_law_creates_energy: the printed law's verdict at "
-                 "this impact (admissible: no energy created and no pull into the plane)\n")
-        writer = csv.writer(fh)
-        writer.writerow(IMPACT_COLUMNS)
-        for i in result.impacts:
-            values = [i["t"], *i["r"], *i["v_before"], *i["v_after"], *i["w_before"], *i["w_after"],
-                      *i["impulse"], i["ke_before"], i["ke_after"], i["ke_after"] - i["ke_before"]]
-            writer.writerow([f"{x:.12g}" for x in values] +
-                            [i["admissible"], *("" if i[k] is None else i[k]
-                                                 for k in ("printed_admissible", "printed_creates_energy")),
-                             i["converged"]])
+def _trajectory(m: motion.Motion) -> Table:
+    tr = m.trajectory
+    return Table(TRAJECTORY, tr[:, :-1], "rows at the sample interval and at every event; regime: flight, "
+                 "impact (pre and post rows) or sliding", {"regime": [motion.REGIMES[int(c)] for c in tr[:, -1]]})
+
+
+IMPACTS = (Column("t", "s", "impact time"), *(Column(x, "m", f"centre {x}") for x in "xyz"),
+           *(Column(f"v{x}_{when}", "m/s", f"centre velocity {x} {when} the impact, relative")
+             for when in ("before", "after") for x in "xyz"),
+           *(Column(f"w{i}_{when}", "rad/s", f"body-axis rate {i} {when} the impact")
+             for when in ("before", "after") for i in (1, 2, 3)),
+           *(Column(f"T{x}", "N s", f"impulse {x}") for x in "xyz"),
+           Column("ke_before", "J", "kinetic energy before"), Column("ke_after", "J", "kinetic energy after"),
+           Column("energy_change", "J", "ke_after - ke_before"))
+IMPACT_FLAGS = ("admissible", "printed_law_admissible", "printed_law_creates_energy", "converged")
+
+
+def _impacts(m: motion.Motion) -> Table:
+    rows = [[i["t"], *i["r"], *i["v_before"], *i["v_after"], *i["w_before"], *i["w_after"], *i["impulse"],
+             i["ke_before"], i["ke_after"], i["ke_after"] - i["ke_before"]] for i in m.impacts]
+    flags = {name: ["" if i[key] is None else str(i[key]) for i in m.impacts]
+             for name, key in zip(IMPACT_FLAGS, ("admissible", "printed_admissible", "printed_creates_energy",
+                                                 "converged"))}
+    return Table(IMPACTS, np.array(rows).reshape(len(rows), len(IMPACTS)),
+                 "one row per impact; admissible: no energy created by this law; printed_law_*: the printed "
+                 "law's verdict at this impact (empty when not evaluated)", flags)
 
 
 def _plots(sc: GrainScene, result: motion.Motion, out: Path) -> None:
@@ -235,36 +412,40 @@ def _plots(sc: GrainScene, result: motion.Motion, out: Path) -> None:
     plt.close(fig)
 
 
-def precision(scene: Section, out: Path) -> dict:
+def precision(sc: GrainScene, ctx: Context) -> Result:
     """Work-precision study: paper mode over steps and node counts, accurate mode over tolerances."""
-    sc = parse(scene)
     p = sc.precision
-    duration = p.float("duration", unit="s", default=min(sc.duration, 4 * sc.model.period), lo=0.0, lo_open=True)
-    ref_tol = p.float("reference_tolerance", unit="", default=1e-12, lo=1e-14, hi=1e-6)
-    p.finish()
+    duration = min(sc.duration, 4 * sc.model.period) if p["duration"] is None else p["duration"]
+    ref_tol = p["reference_tolerance"]
     acc = replace(sc.numerics, mode="accurate", as_printed=False)
     ref_num = replace(acc, tolerance=ref_tol, scan_step=acc.scan_step / 4)
-    ref = simulate(sc, ref_num, duration).final
-    scale = max(float(np.linalg.norm(ref.r - sc.start.r)), max(sc.model.axes))
+    with watchdog(ctx, where="grain precision study"):
+        ref = simulate(sc, ref_num, duration).final
+        scale = max(float(np.linalg.norm(ref.r - sc.start.r)), max(sc.model.axes))
+        rows = []
 
-    def error(m):
-        return float(np.linalg.norm(m.final.r - ref.r) / scale)
+        def add(method, knob, value, num):
+            ctx.tick(f"grain precision study, {method}")
+            seconds, m = wp.best_time(lambda: simulate(sc, num, duration), repeats=1, min_seconds=0.0)
+            rows.append({"method": method, "knob": knob, "value": value, "seconds": seconds,
+                         "error": float(np.linalg.norm(m.final.r - ref.r) / scale)})
 
-    rows = []
+        for tol in (1e-3, 1e-5, 1e-7, 1e-9):
+            add("accurate (exact flight, root-located contact)", "tolerance", tol, replace(acc, tolerance=tol))
+        paper = replace(sc.numerics, mode="paper", as_printed=False)
+        period = sc.model.period
+        for steps in (100, 300, 1000, 3000):
+            add(f"paper mode, {paper.nodes} nodes", "dt", period / steps, replace(paper, dt=period / steps))
+        for nodes in (50, 200, 800):
+            add("paper mode, dt = T/1000, nodes", "nodes", nodes, replace(paper, dt=period / 1000, nodes=nodes))
+    reference = (f"accurate mode at tolerance {ref_tol:g}, scan step {ref_num.scan_step:.3g} s, "
+                 f"duration {duration:.4g} s")
+    # The study's CSV (with its reference line) and diagram are written together by core.precision.
+    return Result("grain", {"study": "precision", "reference": reference, "rows": rows},
+                  plots=lambda folder: wp.write(rows, folder, "precision_grain",
+                                                "Grain motion: work-precision (final position)", reference))
 
-    def add(method, knob, value, num):
-        seconds, m = wp.best_time(lambda: simulate(sc, num, duration), repeats=1, min_seconds=0.0)
-        rows.append({"method": method, "knob": knob, "value": value, "seconds": seconds, "error": error(m)})
 
-    for tol in (1e-3, 1e-5, 1e-7, 1e-9):
-        add("accurate (exact flight, root-located contact)", "tolerance", tol, replace(acc, tolerance=tol))
-    paper = replace(sc.numerics, mode="paper", as_printed=False)
-    period = sc.model.period
-    for steps in (100, 300, 1000, 3000):
-        add(f"paper mode, {paper.nodes} nodes", "dt", period / steps, replace(paper, dt=period / steps))
-    for nodes in (50, 200, 800):
-        add(f"paper mode, dt = T/1000, nodes", "nodes", nodes, replace(paper, dt=period / 1000, nodes=nodes))
-    files = wp.write(rows, out, "precision_grain", "Grain motion: work-precision (final position)",
-                     f"accurate mode at tolerance {ref_tol:g}, scan step {ref_num.scan_step:.3g} s, "
-                     f"duration {duration:.4g} s")
-    return {"files": [str(f) for f in files], "rows": rows}
+registry.register(registry.Kind(
+    name="grain", summary="the whole motion of a grain on an inclined vibrating surface (seed 000, eqs (61)-(64))",
+    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-grain.md"))
