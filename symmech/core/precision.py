@@ -1,14 +1,12 @@
 """Work-precision diagrams: what accuracy costs in time.
 
 A study is a list of rows ``{"method", "knob", "value", "error", "seconds"}``.
-A registered kind's ``precision`` returns :func:`result` (a table with units and
-the diagram, written by the pipeline like any run); :func:`write` is the legacy
-path that writes CSV and diagram itself. The diagram draws log10(error) against
+A kind's ``precision`` returns :func:`result`: a table with units and the diagram,
+written by the pipeline like any run. The diagram draws log10(error) against
 log10(seconds), one line per method, one marker per knob value.
 """
 from __future__ import annotations
 
-import csv
 import time
 from pathlib import Path
 
@@ -16,7 +14,6 @@ import numpy as np
 
 from symmech.core.results import Column, Result, Table
 
-FIELDS = ("method", "knob", "value", "error", "seconds")
 ERROR_FLOOR = 1e-17  # errors below double precision are drawn at this floor
 
 
@@ -52,19 +49,6 @@ def result(kind: str, rows: list[dict], name: str, title: str, reference: str) -
                   text={"method": [r["method"] for r in rows], "knob": [r["knob"] for r in rows]})
     return Result(kind, {"study": "precision", "reference": reference}, tables={name: table},
                   plots=lambda folder: [diagram(rows, Path(folder) / f"{name}.png", title, reference)])
-
-
-def write(rows: list[dict], out: Path, name: str, title: str, reference: str) -> list[Path]:
-    """Write ``name``.csv and ``name``.png into ``out``; returns the two paths."""
-    out = Path(out)
-    csv_path = out / f"{name}.csv"
-    with csv_path.open("w", newline="") as fh:
-        fh.write(f"# reference: {reference}\n")
-        writer = csv.DictWriter(fh, fieldnames=FIELDS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: row[k] for k in FIELDS})
-    return [csv_path, diagram(rows, out / f"{name}.png", title, reference)]
 
 
 def diagram(rows: list[dict], png_path: Path, title: str, reference: str) -> Path:
