@@ -26,16 +26,14 @@ UNKNOWN_KEY = "zz_not_a_field"
 
 # ---- the base scene of a kind ---------------------------------------------------------
 
-def base_scene(kind) -> dict:
-    """The smallest bundled scene of ``kind`` (as TOML data), or one built from its defaults."""
+def base_scenes(kind) -> list[dict]:
+    """Every bundled scene of ``kind`` (as TOML data), or one built from its defaults."""
     found = []
     for path in sorted(scenes_folder().glob("*.toml")):
         data = tomllib.loads(path.read_text())
         if data.get("kind") == kind.name:
-            found.append((len(path.read_text()), data))
-    if found:
-        return min(found, key=lambda pair: pair[0])[1]
-    return {"kind": kind.name}
+            found.append(data)
+    return found or [{"kind": kind.name}]
 
 
 # ---- walking a scene along its schema -------------------------------------------------

@@ -19,25 +19,28 @@ def _no_constants(name):
 
 
 def assert_valid_output(folder: Path) -> dict:
-    """The folder holds exactly a schema-valid strict-JSON summary and the files it lists,
-    CSV headers carry units and every number is finite. Returns the summary."""
+    """The folder holds exactly a schema-valid strict-JSON summary and the files it lists;
+    every table's CSV has the headers ``name [unit]`` and row count the summary describes,
+    and finite numbers. Returns the summary."""
     folder = Path(folder)
     summary = json.loads((folder / "summary.json").read_text(), parse_constant=_no_constants)
     jsonschema.validate(summary, SCHEMA)
     assert summary["scene"]["kind"] == summary["kind"]
     assert sorted(p.name for p in folder.iterdir()) == sorted(summary["files"] + ["summary.json"])
-    for name in summary["files"]:
-        if name.endswith(".csv"):
-            _check_csv(folder / name)
+    for name, table in summary["tables"].items():
+        assert f"{name}.csv" in summary["files"]
+        _check_csv(folder / f"{name}.csv", table)
     return summary
 
 
-def _check_csv(path: Path) -> None:
+def _check_csv(path: Path, table: dict) -> None:
+    """Headers ``name [unit]`` as the summary describes them, then text columns; finite numbers."""
     with open(path, newline="") as fh:
         rows = list(csv.reader(fh))
-    assert rows, f"{path.name} is empty"
-    numeric = [i for i, cell in enumerate(rows[0]) if HEADER.fullmatch(cell)]
-    assert numeric and numeric == list(range(len(numeric))), f"{path.name}: headers {rows[0]}"
+    numeric = [f"{c['name']} [{c['unit']}]" for c in table["columns"]]
+    assert rows[0] == numeric + table["text_columns"], f"{path.name}: headers {rows[0]}"
+    assert all(HEADER.fullmatch(cell) for cell in numeric), numeric
+    assert len(rows) == table["rows"] + 1, f"{path.name}: {len(rows) - 1} rows, summary says {table['rows']}"
     for row in rows[1:]:
         assert len(row) == len(rows[0]), f"{path.name}: ragged row {row}"
-        assert all(math.isfinite(float(row[i])) for i in numeric), f"{path.name}: {row}"
+        assert all(math.isfinite(float(row[i])) for i in range(len(numeric))), f"{path.name}: {row}"

@@ -76,6 +76,8 @@ def test_summary_records_version_resolved_scene_module_hashes_and_time(tmp_path,
     assert set(timing) == {"validate", "run", "write", "total"}
     assert timing["total"] == pytest.approx(timing["validate"] + timing["run"] + timing["write"], rel=1e-12)
     assert s["files"] == ["a.png", "extra.txt", "series.csv"]
+    assert s["tables"] == {"series": {"rows": 4, "doc": "", "text_columns": [], "columns": [
+        {"name": "t", "unit": "s", "doc": "time"}, {"name": "y", "unit": "m", "doc": "height"}]}}
     assert (out / "series.csv").read_text().splitlines()[0] == "t [s],y [m]"
     assert leftovers(out) == []
 

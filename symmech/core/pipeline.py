@@ -41,7 +41,7 @@ from symmech.core.schema import validate
 
 # Keys of every summary.json; a kind's own summary keys sit beside them.
 ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "generated_modules",
-            "warnings", "files", "scene")
+            "warnings", "files", "tables", "scene")
 SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
 
 
@@ -231,8 +231,15 @@ def _summary(result: Result, scene: Scene, files: list[str], timing: dict) -> di
             "status": "warnings" if result.warnings else "ok", "scene_file": scene.source,
             "timing_s": {**timing, "total": sum(timing.values())},
             "generated_modules": generated_modules(), **result.summary,
-            "warnings": result.warnings, "files": files,
+            "warnings": result.warnings, "files": files, "tables": _describe(result.tables),
             "scene": json.loads(json.dumps(scene.resolved, default=str))}
+
+
+def _describe(tables: dict) -> dict:
+    """What each ``<name>.csv`` holds: rows, numeric columns (name, SI unit, meaning), text columns."""
+    return {name: {"rows": len(t.data), "doc": t.doc, "text_columns": list(t.text),
+                   "columns": [{"name": c.name, "unit": c.unit, "doc": c.doc} for c in t.columns]}
+            for name, t in tables.items()}
 
 
 def generated_modules() -> dict[str, str]:
