@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from symmech.core.scene import Section
+from symmech.core import pipeline
+from symmech.core.context import Context
 from symmech.generated import trolley_dynamics as dyn
 from symmech.generated import trolley_frame as frm
 from symmech.trolley import derive, scene, tables
@@ -109,12 +110,13 @@ def main():
     for conventions in ("paper", "physics"):
         data = copy.deepcopy(tables.PAPER_EXAMPLE)
         data["conventions"] = conventions
-        setup = scene.read(Section(data))
+        setup = pipeline.load(copy.deepcopy(data)).setup
         t = best_of(lambda: scene.compute(setup), repeat=3)
         with tempfile.TemporaryDirectory() as tmp:
-            full = best_of(lambda: scene.run(Section(copy.deepcopy(data)), Path(tmp)), repeat=1)
+            full = best_of(lambda: pipeline.run_to(copy.deepcopy(data), Path(tmp) / "out", Context(quiet=True)),
+                           repeat=1)
         print(f"paper example, 5000 steps, cases 1+2, conventions={conventions}: computation {t * 1e3:.1f} ms, "
-              f"whole run with parsing, CSV and plots {full:.2f} s")
+              f"whole run with validation, CSV and plots {full:.2f} s")
 
     rng = np.random.default_rng(1)
     th = rng.uniform(-1.2, 1.2, (3, N))

@@ -9,6 +9,7 @@ from symmech.cli import main
 from symmech.core import errata
 from symmech.trolley import errata as trolley_errata
 from symmech.trolley import tables
+from trolley_util import prepared
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -42,7 +43,8 @@ def _decimals(row):
 def test_paper_csv_columns_and_a_printed_row(paper_run):
     out, _ = paper_run
     header = (out / "case1.csv").read_text().splitlines()[0]
-    assert header == "t,V1,V2,V3,a1,a2,a3,P0,P1,P2,P3,P4,P5"
+    assert header == ("t [s],V1 [m/s],V2 [m/s],V3 [m/s],a1 [m/s^2],a2 [m/s^2],a3 [m/s^2],"
+                      "P0 [N],P1 [N],P2 [N],P3 [N],P4 [N],P5 [N]")
     data = np.loadtxt(out / "case2.csv", delimiter=",", skiprows=1)
     assert data.shape == (5001, 13)
     row = data[2500]  # t = 10 s; Table 1 and 2, case 2
@@ -83,10 +85,9 @@ def test_errata_records_for_the_trolley():
 def test_exact_lstar_derivative_agrees_with_fine_differences():
     import copy
 
-    from symmech.core.scene import Section
     from symmech.trolley import model, scene
 
-    st = scene.read(Section(copy.deepcopy(tables.PAPER_EXAMPLE)))
+    st = prepared(tables.PAPER_EXAMPLE)
     s = np.linspace(3.0, 400.0, 40)
     sa = model.chord_point(st.track, s, st.body.l)
     exact = scene.exact_paper_lstar_derivative(st)(s, sa)
@@ -97,27 +98,29 @@ def test_exact_lstar_derivative_agrees_with_fine_differences():
 
 @pytest.mark.slow
 def test_precision_bench_shows_orders_one_two_four(tmp_path):
-    from symmech.core.scene import load
+    from symmech.core import pipeline
+    from symmech.core.context import Context
     from symmech.trolley import scene
 
-    rows = scene.precision(load(SCENES / "trolley_helix_paper.toml"), tmp_path)["rows"]
-    err = {(m, n): e for family, m, n, _, _, e in rows if family == "paper"}
+    result = scene.precision(pipeline.load(SCENES / "trolley_helix_paper.toml").setup, Context(quiet=True))
+    table = result.tables["precision"]
+    err = {(m, n): e for family, m, n, e in zip(table.text["family"], table.text["method"], table.column("steps"),
+                                                 table.column("max_abs_error")) if family == "paper"}
     for method, order in (("backward", 1), ("central2", 2), ("central4", 4)):
         ratio = err[(method, 1000)] / err[(method, 2000)]
         assert ratio == pytest.approx(2.0**order, rel=0.15)
-    assert (tmp_path / "precision.png").stat().st_size > 0
+    assert result.plots(tmp_path)[0].stat().st_size > 0
 
 
 def test_tables_need_the_papers_backward_difference():
     """With a central difference for dΛ*/ds the case 2 binormal entries no longer reproduce."""
     import copy
 
-    from symmech.core.scene import Section
     from symmech.trolley import scene
 
     data = copy.deepcopy(tables.PAPER_EXAMPLE)
     data["numerics"] = {"lstar_derivative": "central4"}
-    st = scene.read(Section(data))
+    st = prepared(data)
     res = scene.compute(st)
     a3 = res[2]["a"][3750, 2]  # t = 15 s, printed -0.693
     assert abs(a3 - (-0.693)) > 5e-3
@@ -128,14 +131,13 @@ def test_exact_case2_derivatives_match_differences_on_a_catenary():
     """X0(s) = (asinh s, sqrt(1 + s²), 0) has unit speed and curvature 1/(1 + s²), so Λ* varies."""
     import copy
 
-    from symmech.core.scene import Section
     from symmech.trolley import model, scene
 
     data = copy.deepcopy(tables.PAPER_EXAMPLE)
     data.update(conventions="physics", track={"type": "expression", "x": "asinh(s)", "y": "sqrt(1 + s**2)",
                                                 "z": "0"})
     data["trolley"]["axle_distance"] = 0.5
-    st = scene.read(Section(data))
+    st = prepared(data)
     s = np.linspace(-2.0, 2.0, 21)
     d1, d2 = scene.exact_lstar_derivatives(st)(s, model.chord_point(st.track, s, 0.5))
     fun = lambda x: model.chord_rotation(st.track, x, 0.5, "frenet")[0]  # noqa: E731

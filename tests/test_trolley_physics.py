@@ -161,7 +161,8 @@ def test_rigid_body_inertia_adds_gyroscopic_moment():
     circle = {"type": "expression", "x": f"{r0}*sin(s/{r0})", "y": f"{r0} - {r0}*cos(s/{r0})", "z": "0"}
     base = setup(frame="frenet", track=circle, motion={"speed": f"{v} + t"}, effects={"gravity": False})
     _, plain = compute(base)
-    _, spun = compute({**base, "trolley": {**base["trolley"], "inertia": [0, 0, 40.0, 0, 0, 0]}})
+    # A flat disc (I33 = I11 + I22, admissible): ω stays along x3, so only I33 ω̇3 adds.
+    _, spun = compute({**base, "trolley": {**base["trolley"], "inertia": [20.0, 20.0, 40.0, 0, 0, 0]}})
     dw3 = 1.0 / r0  # ω3 = V0/r0, ω̇3 = V̇0/r0
     np.testing.assert_allclose(spun[1]["P"][:, 3] - plain[1]["P"][:, 3], 40.0 * dw3 / 2.0, rtol=1e-10)
 

@@ -1,7 +1,7 @@
-"""Helpers for the trolley tests: scenes as dicts."""
+"""Helpers for the trolley tests: scenes as dicts, validated and prepared like `symmech run`."""
 import copy
 
-from symmech.core.scene import Section
+from symmech.core import pipeline
 from symmech.trolley import scene
 
 
@@ -24,6 +24,11 @@ def setup(**over):
     return data
 
 
+def prepared(data):
+    """The trolley Setup of a scene dict."""
+    return pipeline.load(copy.deepcopy(data)).setup
+
+
 def compute(data, conventions=None):
-    st = scene.read(Section(copy.deepcopy(data)))
+    st = prepared(data)
     return st, scene.compute(st, conventions)

@@ -62,10 +62,9 @@ def _unit_axis(rng, n):
 
 @functools.lru_cache(maxsize=1)
 def _helix_track():
-    from symmech.core.scene import Section
     from symmech.trolley import track
 
-    return track.build(Section({"type": "helix", "radius": HELIX["R"], "rise": HELIX["lam"]}, "track"))
+    return track.build({"type": "helix", "radius": HELIX["R"], "rise": HELIX["lam"], "twist": "0"})
 
 
 def _helix_points(rng, n):
@@ -87,10 +86,10 @@ def _paper_example(conventions: str):
     """Results of the bundled paper example in ``conventions``, per case."""
     import copy
 
-    from symmech.core.scene import Section
+    from symmech.core import pipeline
     from symmech.trolley import scene, tables
 
-    setup = scene.read(Section(copy.deepcopy(tables.PAPER_EXAMPLE)))
+    setup = pipeline.load(copy.deepcopy(tables.PAPER_EXAMPLE)).setup
     return setup, scene.compute(setup, conventions)
 
 

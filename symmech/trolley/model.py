@@ -71,55 +71,255 @@ def _first_bad(s, bad):
     return float(np.asarray(s)[np.argmax(bad)])
 
 
-def moving_frame(track, s, mode: str) -> Frame:
+def moving_frame(track, s, mode: str, plan: "FramePlan | None" = None) -> Frame:
     """Case 1 frame: x1 along the tangent; ``mode`` "twist" (aircraft angles with the
-    scene's θ1(s)) or "frenet" (x2 along the principal normal)."""
+    track's θ1(s)) or "frenet" (x2 along the principal normal). ``plan`` (from
+    :func:`plan_frames`) makes the frame continuous: rolls after the discontinuities it
+    found, or the rotation-minimising frame where the Frenet frame is undefined."""
     s = np.asarray(s, dtype=float)
+    if plan is not None and plan.rmf is not None:
+        return plan.rmf.frame(track, s)
+    frame, bad, why = _raw_frame(track, s, mode)
+    if np.any(bad):
+        raise SymmechError(why.format(s=_first_bad(s, bad)))
+    return plan.continue_rolls(s, frame) if plan is not None else frame
+
+
+def _raw_frame(track, s, mode):
+    """(Frame, invalid mask, message with {s}) without raising: the pointwise moving frame."""
     X = track.derivatives(s, 4 if mode == "frenet" else 3)
     t = X[1] / np.linalg.norm(X[1], axis=-1, keepdims=True)
     e = np.zeros(s.shape + (3,))
     e[..., 0] = 1.0
+    with np.errstate(all="ignore"):
+        if mode == "frenet":
+            # Remove the tangential part a spline's near-unit speed leaves in X0''.
+            normal = X[2] - (X[2] * t).sum(-1, keepdims=True) * t
+            cross = np.cross(t, normal)
+            kappa = np.linalg.norm(normal, axis=-1)
+            n = normal / kappa[..., None]
+            tau = (cross * X[3]).sum(-1) / kappa**2
+            lam = np.stack([t, n, np.cross(t, n)], axis=-2)
+            dkappa = (normal * X[3]).sum(-1) / kappa
+            dtau = (cross * X[4]).sum(-1) / kappa**2 - 2 * tau * dkappa / kappa
+            zero = np.zeros_like(kappa)
+            frame = Frame(lam, e, np.zeros_like(e), np.stack([tau, zero, kappa], axis=-1),
+                          np.stack([dtau, zero, dkappa], axis=-1))
+            return frame, kappa < KAPPA_MIN, ("Frenet frame undefined: track curvature is zero at s = {s:.6g} m "
+                                              "(straight piece or inflection); use frame = \"twist\"")
+        bad = np.abs(t[..., 1]) > 1 - GIMBAL_MARGIN
+        ang = frm.angles_from_tangent(*_cols(t), *_cols(X[2]), *_cols(X[3]))
+        th1, dth1, ddth1 = track.twist(s)
+        th = (th1, ang[..., 0], ang[..., 1])
+        dth = (dth1, ang[..., 2], ang[..., 3])
+        ddth = (ddth1, ang[..., 4], ang[..., 5])
+        frame = Frame(frm.Lambda(*th), e, np.zeros_like(e), frm.omega_per_length(*th, *dth),
+                      frm.omega_per_length_rate(*th, *dth, *ddth))
+    return frame, bad, ("track tangent is vertical at s = {s:.6g} m: the aircraft angles θ2, θ3 are singular "
+                        "there; use frame = \"frenet\"")
+
+
+def _roll(delta):
+    """Passive rotation (..., 3, 3) by ``delta`` [rad] about x1."""
+    c, s = np.cos(delta), np.sin(delta)
+    out = np.zeros(np.shape(delta) + (3, 3))
+    out[..., 0, 0] = 1.0
+    out[..., 1, 1], out[..., 1, 2], out[..., 2, 1], out[..., 2, 2] = c, s, -s, c
+    return out
+
+
+@dataclass
+class FramePlan:
+    """How the moving frame is kept continuous over the arc lengths a run visits.
+
+    ``at`` (k,) [m] are the frame discontinuities found, ``roll`` (k,) [rad] the roll
+    about x1 added beyond each (cumulative), ``rmf`` a :class:`RotationMinimising`
+    frame replacing the Frenet frame, ``events`` what was found and done, ``checked``
+    the number of arc lengths at which the frame was compared with its neighbours.
+    """
+
+    mode: str
+    at: np.ndarray
+    roll: np.ndarray
+    rmf: "RotationMinimising | None" = None
+    events: list = field(default_factory=list)
+    checked: int = 0
+
+    def continue_rolls(self, s, frame: Frame) -> Frame:
+        if not len(self.at):
+            return frame
+        delta = np.concatenate([[0.0], np.cumsum(self.roll)])[np.searchsorted(self.at, s)]
+        rot = _roll(delta)
+        return Frame(rot @ frame.lam, frame.e, frame.de, _mv(rot, frame.W), _mv(rot, frame.dW), frame.info)
+
+    def report(self) -> dict:
+        return {"mode": "rotation-minimising" if self.rmf is not None else self.mode,
+                "samples_checked": self.checked, "discontinuities_resolved": len(self.at), "events": self.events}
+
+
+# Frame continuity: the largest predicted turn between check samples [rad], the factor by
+# which an observed turn may exceed the predicted one, the bisection resolution
+# (relative) and a bound on the check samples.
+CHECK_TURN = 0.2
+JUMP_FACTOR = 1.5
+JUMP_RESOLUTION = 1e-9
+MAX_CHECKS = 200_000
+RMF_NODES = 50_000  # double-reflection nodes (a Python loop: ~1 s)
+
+
+def plan_frames(track, lo: float, hi: float, mode: str, min_curvature: float) -> FramePlan:
+    """Check the moving frame over s ∈ [lo, hi] [m] and plan how it stays continuous.
+
+    Samples are refined until the frame turns by at most ``CHECK_TURN`` between
+    neighbours as predicted by its angular velocity per length; a turn beyond
+    ``JUMP_FACTOR`` times the prediction is bisected down to ``JUMP_RESOLUTION`` — a
+    jump that persists is a discontinuity (a vertical tangent of the twist frame, an
+    inflection of the Frenet frame), resolved by rolling the frame beyond it back onto
+    its limit before. With ``mode`` "frenet" and a curvature below ``min_curvature``
+    [1/m] anywhere, the Frenet frame is meaningless and the rotation-minimising frame
+    is used instead.
+    """
+    s = _check_grid(track, lo, hi, mode)
+    plan = FramePlan(mode, np.zeros(0), np.zeros(0), checked=len(s))
     if mode == "frenet":
-        # Remove the tangential part a spline's near-unit speed leaves in X0''.
-        normal = X[2] - (X[2] * t).sum(-1, keepdims=True) * t
-        cross = np.cross(t, normal)
-        kappa = np.linalg.norm(normal, axis=-1)
-        bad = kappa < KAPPA_MIN
-        if np.any(bad):
-            raise SymmechError(f"Frenet frame undefined: track curvature is zero at s = {_first_bad(s, bad):.6g} m "
-                               "(straight piece or inflection); use frame = \"twist\"")
-        n = normal / kappa[..., None]
-        tau = (cross * X[3]).sum(-1) / kappa**2
-        if s.ndim == 1 and len(s) > 1:
-            # Between close samples the normal turns by at most ~ |Δs| sqrt(κ² + ϰ²); a sign
-            # flip beyond that is an inflection point, where κ passes through zero.
-            rate = np.hypot(kappa, tau)
-            turn = np.abs(np.diff(s)) * np.maximum(rate[1:], rate[:-1])
-            flip = ((n[1:] * n[:-1]).sum(-1) < 0) & (turn < 1.0)
+        X = track.derivatives(s, 2)
+        t = X[1] / np.linalg.norm(X[1], axis=-1, keepdims=True)
+        kappa = np.linalg.norm(X[2] - (X[2] * t).sum(-1, keepdims=True) * t, axis=-1)
+        if kappa.min() < min_curvature:
+            k = int(np.argmin(kappa))
+            plan.rmf = RotationMinimising(track, s, min_curvature)
+            plan.events.append({"s": float(s[k]), "kind": "Frenet frame undefined",
+                                "action": f"curvature {kappa[k]:.3g} 1/m < min_curvature {min_curvature:g} 1/m: "
+                                          f"rotation-minimising frame on [{lo:.6g}, {hi:.6g}] m, started from "
+                                          f"{plan.rmf.start}"})
+            return plan
+    # A check sample exactly at a singular point (not a run sample) moves off it a little.
+    bad = _raw_frame(track, s, mode)[1]
+    s[bad] += 0.01 * np.diff(s).min()
+    frame = moving_frame(track, s, mode)
+    turn, predicted = _turns(frame, s)
+    for k in np.nonzero(turn > JUMP_FACTOR * predicted + 1e-12)[0]:
+        event = _bisect_jump(track, mode, s[k], s[k + 1], frame, k)
+        plan.events.append(event)
+        if "roll_deg" in event:
+            plan.at = np.append(plan.at, event["s"])
+            plan.roll = np.append(plan.roll, -np.radians(event["roll_deg"]))
+    return plan
+
+
+def _check_grid(track, lo, hi, mode):
+    """Arc lengths over [lo, hi] at which the predicted turn between neighbours is small."""
+    s = np.linspace(lo, hi, 201)
+    while len(s) < MAX_CHECKS:
+        frame, _, _ = _raw_frame(track, s, mode)
+        rate = np.nan_to_num(np.linalg.norm(frame.W, axis=-1), nan=0.0, posinf=0.0)
+        steps = np.ceil(np.diff(s) * np.maximum(rate[1:], rate[:-1]) / CHECK_TURN).astype(int)
+        steps = np.clip(steps, 1, 1000)
+        if steps.max() <= 1:
+            break
+        if steps.sum() > MAX_CHECKS:  # refine where needed, within the budget
+            steps = np.maximum(1, (steps * (MAX_CHECKS / steps.sum())).astype(int))
+        s = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(s[:-1], s[1:], steps)] + [s[-1:]])
+    return s
+
+
+def _turns(frame: Frame, s):
+    """Turn angle between neighbouring frames [rad] and the one predicted by |Ω| Δs."""
+    rel = frame.lam[1:] @ np.swapaxes(frame.lam[:-1], -1, -2)
+    turn = np.arccos(np.clip((np.trace(rel, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0))
+    rate = np.linalg.norm(frame.W, axis=-1)
+    return turn, np.abs(np.diff(s)) * np.maximum(rate[1:], rate[:-1])
+
+
+def _bisect_jump(track, mode, a, b, frame, k) -> dict:
+    """Locate a suspected frame jump in [a, b] by bisection; the event found."""
+    lam_a, lam_b = frame.lam[k], frame.lam[k + 1]
+    w_a, w_b = np.linalg.norm(frame.W[k]), np.linalg.norm(frame.W[k + 1])
+    steps = 0
+    while b - a > JUMP_RESOLUTION * max(1.0, abs(a)):
+        m = 0.5 * (a + b)
+        fm, bad, _ = _raw_frame(track, np.array([m]), mode)
+        if bad[0] or not np.all(np.isfinite(fm.lam)):
+            break  # at the singular point itself: the interval is as small as the frame allows
+        lam_m, w_m = fm.lam[0], np.linalg.norm(fm.W[0])
+        left = _angle(lam_m @ lam_a.T) - JUMP_FACTOR * (m - a) * max(w_a, w_m)
+        right = _angle(lam_b @ lam_m.T) - JUMP_FACTOR * (b - m) * max(w_m, w_b)
+        if max(left, right) <= 1e-12:
+            return {"s": float(m), "kind": "fast turn",
+                    "action": f"resolved by refinement to {b - a:.3g} m: no discontinuity"}
+        if left >= right:
+            b, lam_b, w_b = m, lam_m, w_m
         else:
-            flip = np.zeros(0, bool)
-        if np.any(flip):
-            raise SymmechError(f"Frenet frame undefined: the principal normal flips between s = "
-                               f"{_first_bad(s[:-1], flip):.6g} m and the next sample (inflection point); "
-                               "use frame = \"twist\"")
-        lam = np.stack([t, n, np.cross(t, n)], axis=-2)
-        dkappa = (normal * X[3]).sum(-1) / kappa
-        dtau = (cross * X[4]).sum(-1) / kappa**2 - 2 * tau * dkappa / kappa
-        zero = np.zeros_like(kappa)
-        W = np.stack([tau, zero, kappa], axis=-1)
-        dW = np.stack([dtau, zero, dkappa], axis=-1)
-        return Frame(lam, e, np.zeros_like(e), W, dW)
-    bad = np.abs(t[..., 1]) > 1 - GIMBAL_MARGIN
-    if np.any(bad):
-        raise SymmechError(f"track tangent is vertical at s = {_first_bad(s, bad):.6g} m: the aircraft angles "
-                           "θ2, θ3 are singular there; use frame = \"frenet\"")
-    ang = frm.angles_from_tangent(*_cols(t), *_cols(X[2]), *_cols(X[3]))
-    th1, dth1, ddth1 = track.twist(s)
-    th = (th1, ang[..., 0], ang[..., 1])
-    dth = (dth1, ang[..., 2], ang[..., 3])
-    ddth = (ddth1, ang[..., 4], ang[..., 5])
-    return Frame(frm.Lambda(*th), e, np.zeros_like(e), frm.omega_per_length(*th, *dth),
-                 frm.omega_per_length_rate(*th, *dth, *ddth))
+            a, lam_a, w_a = m, lam_m, w_m
+        steps += 1
+    jump = lam_b @ lam_a.T
+    bend = float(np.arccos(np.clip(jump[0, 0], -1.0, 1.0)))
+    if bend > JUMP_FACTOR * (b - a) * max(w_a, w_b) + 1e-6:
+        raise SymmechError(f"the track tangent jumps by {np.degrees(bend):.3g} deg near s = {a:.9g} m: "
+                           "the track is not smooth there")
+    roll = float(np.degrees(np.arctan2(jump[1, 2], jump[1, 1])))
+    kind = "vertical tangent (aircraft angles)" if mode == "twist" else "inflection (principal normal reverses)"
+    return {"s": float(0.5 * (a + b)), "kind": kind, "roll_deg": roll, "bisections": steps,
+            "action": f"frame rolls by {roll:.1f} deg within {b - a:.3g} m; the frame beyond is rolled back by "
+                      f"{-roll:.1f} deg to stay continuous"}
+
+
+def _angle(rot) -> float:
+    return float(np.arccos(np.clip((np.trace(rot) - 1) / 2, -1.0, 1.0)))
+
+
+class RotationMinimising:
+    """Rotation-minimising (parallel-transport) frame: x1 = t, x2 = n carried without roll.
+
+    Built by double reflection (Wang et al. 2008) on nodes over the checked range; at
+    any arc length the preceding node's normal is carried by one more double
+    reflection. Angular velocity per length Ω = [0, -X0''·x3, X0''·x2] and its
+    derivative [0, -X0'''·x3, X0'''·x2] (unit speed, no roll).
+    """
+
+    def __init__(self, track, s, min_curvature: float):
+        fine = np.linspace(s[0], s[-1], min(max(20 * len(s), 2001), RMF_NODES))
+        X = track.derivatives(fine, 2)
+        t = X[1] / np.linalg.norm(X[1], axis=-1, keepdims=True)
+        kappa = np.linalg.norm(np.cross(t, X[2]), axis=-1)
+        if kappa[0] >= min_curvature:
+            r = X[2][0] - (X[2][0] @ t[0]) * t[0]
+            self.start = f"the principal normal at s = {fine[0]:.6g} m"
+        else:
+            up = np.array([0.0, 1.0, 0.0]) if abs(t[0, 1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            r = up - (up @ t[0]) * t[0]
+            self.start = f"the upward normal at s = {fine[0]:.6g} m"
+        normals = np.empty_like(t)
+        normals[0] = r / np.linalg.norm(r)
+        for j in range(len(fine) - 1):
+            normals[j + 1] = _reflect(X[0][j], X[0][j + 1], t[j], t[j + 1], normals[j])
+        self.nodes, self.points, self.tangents, self.normals = fine, X[0], t, normals
+
+    def frame(self, track, s) -> Frame:
+        X = track.derivatives(s, 3)
+        t = X[1] / np.linalg.norm(X[1], axis=-1, keepdims=True)
+        j = np.clip(np.searchsorted(self.nodes, s) - 1, 0, len(self.nodes) - 1)
+        n = _reflect(self.points[j], X[0], self.tangents[j], t, self.normals[j])
+        n = n - (n * t).sum(-1, keepdims=True) * t
+        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+        b = np.cross(t, n)
+        zero = np.zeros(s.shape)
+        W = np.stack([zero, -(X[2] * b).sum(-1), (X[2] * n).sum(-1)], axis=-1)
+        dW = np.stack([zero, -(X[3] * b).sum(-1), (X[3] * n).sum(-1)], axis=-1)
+        e = np.zeros(s.shape + (3,))
+        e[..., 0] = 1.0
+        return Frame(np.stack([t, n, b], axis=-2), e, np.zeros_like(e), W, dW)
+
+
+def _reflect(x0, x1, t0, t1, r0):
+    """Double reflection: the normal r0 at (x0, t0) carried to (x1, t1); arrays (..., 3)."""
+    def mirror(v, *vectors):
+        c = (v * v).sum(-1, keepdims=True)
+        scale = np.where(c > 0, 2 / np.where(c > 0, c, 1.0), 0.0)
+        return [u - scale * (v * u).sum(-1, keepdims=True) * v for u in vectors]
+
+    r_l, t_l = mirror(x1 - x0, r0, t0)
+    return mirror(t1 - t_l, r_l)[0]
 
 
 def chord_point(track, s, l: float) -> np.ndarray:
@@ -146,9 +346,9 @@ def chord_point(track, s, l: float) -> np.ndarray:
     return sa
 
 
-def chord_rotation(track, s, l: float, mode: str):
+def chord_rotation(track, s, l: float, mode: str, plan=None):
     """Λ* (n, 3, 3) turning x1 onto the chord, the chord ΔR̄ (n, 3) and the moving frame."""
-    base = moving_frame(track, s, mode)
+    base = moving_frame(track, s, mode, plan)
     sa = chord_point(track, s, l)
     chord = track.derivatives(sa, 0)[0] - track.derivatives(s, 0)[0]
     rho = _mv(base.lam, chord) / l
@@ -176,7 +376,7 @@ def _vee(m):
 
 
 def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_step: float = 1e-3,
-                          derivatives=None) -> Frame:
+                          derivatives=None, plan=None) -> Frame:
     """Case 2 frame (physically consistent): Λ̄ = Λ* Λ with the exact chord rotation Λ*.
 
     Λ*' and Λ*'' (s-derivatives) come from central differences of order ``fd_order``
@@ -184,9 +384,9 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
     given; the body's angular velocity per unit length is Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
     """
     s = np.asarray(s, dtype=float)
-    lstar, chord, base = chord_rotation(track, s, l, mode)
+    lstar, chord, base = chord_rotation(track, s, l, mode, plan)
     if derivatives is None:
-        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode)[0], s, fd_step, fd_order)
+        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode, plan)[0], s, fd_step, fd_order)
     else:
         d1, d2 = derivatives(s, chord_point(track, s, l))
     lt = np.swapaxes(lstar, -1, -2)
@@ -248,10 +448,10 @@ def _dynamics(V, a, w, dw, lam, body: Body) -> dict:
     return {"V": V, "a": a, "omega": w, "omega_dot": dw, "P": P, "overload": overload, "lam": lam}
 
 
-def paper_lstar(track, s, l: float, mode: str):
+def paper_lstar(track, s, l: float, mode: str, plan=None):
     """Λ* of the helix example as the paper builds it: ξ = t × ρ in fixed-frame
     components, not normalized (|ξ| = sin Ψ), in the printed Rodrigues matrix."""
-    base = moving_frame(track, s, mode)
+    base = moving_frame(track, s, mode, plan)
     sa = chord_point(track, s, l)
     rho = (track.derivatives(sa, 0)[0] - track.derivatives(s, 0)[0]) / l
     t = base.lam[..., 0, :]
@@ -261,7 +461,7 @@ def paper_lstar(track, s, l: float, mode: str):
 
 
 def paper_case(track, s, V0, dV0, body: Body, mode: str, local_curvature: bool,
-               derivative: str = "backward", dlstar=None) -> dict:
+               derivative: str = "backward", dlstar=None, plan=None) -> dict:
     """The paper's example computation (Tables 1, 2), on a time grid (s, V0, dV0 of shape (n,)).
 
     Conventions (physically inconsistent ones marked *):
@@ -273,7 +473,7 @@ def paper_case(track, s, V0, dV0, body: Body, mode: str, local_curvature: bool,
     * dΛ*/ds by a backward difference between successive grid points (``derivative``
       = "backward"), or "central2"/"central4" with step |V0| Δt, or given as ``dlstar``.
     """
-    base = moving_frame(track, s, mode)
+    base = moving_frame(track, s, mode, plan)
     V0, dV0 = np.asarray(V0, dtype=float), np.asarray(dV0, dtype=float)
     W, dW = base.W, base.dW * V0[..., None]
     vel = np.zeros(V0.shape + (3,))
@@ -282,9 +482,9 @@ def paper_case(track, s, V0, dV0, body: Body, mode: str, local_curvature: bool,
     dvel[..., 0] = dV0
     lam = base.lam
     if local_curvature:
-        lstar, _ = paper_lstar(track, s, body.l, mode)
+        lstar, _ = paper_lstar(track, s, body.l, mode, plan)
         if dlstar is None:
-            dlstar = paper_lstar_derivative(track, s, body.l, mode, lstar, derivative)
+            dlstar = paper_lstar_derivative(track, s, body.l, mode, lstar, derivative, plan)
         rate = dlstar * V0[..., None, None]
         vel, dvel = _mv(lstar, vel), _mv(rate, vel) + _mv(lstar, dvel)
         W, dW = _mv(lstar, W), _mv(rate, W) + _mv(lstar, dW)
@@ -295,9 +495,9 @@ def paper_case(track, s, V0, dV0, body: Body, mode: str, local_curvature: bool,
     return _dynamics(V, a, W, dW, lam, body)
 
 
-def paper_lstar_derivative(track, s, l, mode, lstar, method: str):
+def paper_lstar_derivative(track, s, l, mode, lstar, method: str, plan=None):
     """dΛ*/ds on the grid s (n,) by ``method``: "backward" (the paper's), "central2", "central4"."""
-    fun = lambda x: paper_lstar(track, x, l, mode)[0]  # noqa: E731
+    fun = lambda x: paper_lstar(track, x, l, mode, plan)[0]  # noqa: E731
     ds = np.diff(s)
     if method == "backward":
         out = np.empty_like(lstar)

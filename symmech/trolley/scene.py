@@ -1,38 +1,239 @@
-"""Scene runner for ``kind = "trolley"``: ``run`` and ``precision`` (see docs/scenes-trolley.md).
+"""Scene kind ``trolley``: schema, prepare, estimate, run and precision (see docs/scenes-trolley.md).
 
-Outputs of ``run`` in the folder ``out``: ``case1.csv`` (and ``case2.csv`` with the
-local-curvature effect) with columns t,V1,V2,V3,a1,a2,a3,P0..P5 (SI, body-frame
-components of the centre of mass), ``caseN_overload.csv`` (t, n1, n2, n3 in g),
-``track.png``, ``reactions.png``, ``overloads.png``; the returned dict is the summary.
+``run`` returns a :class:`~symmech.core.results.Result` with the tables ``case1``
+(and ``case2`` with the local-curvature effect): t, V1..V3, a1..a3, P0..P5 (SI,
+body-frame components of the centre of mass), and ``caseN_overload`` (t, n1..n3 in
+g); the plots ``track.png``, ``reactions.png``, ``overloads.png``; with
+``report.paper_tables`` the file ``paper_tables.txt``.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from symmech.core.scene import SceneError, Section, SymmechError
+from symmech.core import expressions, registry
+from symmech.core import schema as sc
+from symmech.core.context import Context
+from symmech.core.results import Column, Result, Table
+from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import model, tables, track as tracks
 
-CSV_COLUMNS = "t,V1,V2,V3,a1,a2,a3,P0,P1,P2,P3,P4,P5"
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
 COMFORT = {"x1": (-2.0, 2.0), "x2": (-1.5, 6.0), "x3": (-2.0, 2.0)}
+MAX_SPEED = 1e4  # m/s: admissible |V0| (and traction speeds checked up to it)
+MAX_LENGTH = 1e7  # m: coordinates and arc lengths
+# Measured on 2 cores (helix, 200000 steps): wall time per grid step and frame evaluation,
+# per grid step and case for the CSV files and plots, and per traction right-hand side.
+SECONDS_PER_STEP = 5e-6
+SECONDS_PER_OUTPUT_ROW = 9e-5
+SECONDS_PER_RHS = 2e-4
+MAX_RHS = 2_000_000  # traction right-hand sides before the integration counts as stalled
+
+
+def _expression(doc, type_doc, default=sc.REQUIRED):
+    """An expression field (a number is a constant expression): syntax and size checked here,
+    names and domain in the table's checks."""
+    def parse(path, value):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            value = repr(sc.check_real(path, value, "", -MAX_LENGTH, MAX_LENGTH, False, False))
+        expressions.tree(path, value, None)
+        return value
+    return sc.Custom(doc, parse=parse, type_doc=type_doc, default=default)
+
+
+def _constants(path, value):
+    if not isinstance(value, dict):
+        raise SceneError(path, f"expected a table of names to numbers, got {value!r}"[:200])
+    return {expressions.check_name(f"{path}.{k}", k, ("s", "u")): sc.check_real(f"{path}.{k}", v, "", -MAX_LENGTH,
+                                                                                MAX_LENGTH, False, False)
+            for k, v in value.items()}
+
+
+def _track_expressions(tr, path):
+    """Parse every expression of the track table with its variable and constants."""
+    var = tr.get("parameter") or "s"
+    constants = tr.get("constants") or {}
+    for key in ("x", "y", "z"):
+        if key in tr:
+            expressions.parse(f"{path}.{key}", tr[key], (var,), constants)
+    expressions.parse(f"{path}.twist", tr["twist"], ("s",), constants)
+    if var == "u":
+        if tr["u_range"] is None:
+            raise SceneError(f"{path}.u_range", "required with parameter = \"u\"")
+        if not tr["u_range"][0] < tr["u_range"][1]:
+            raise SceneError(f"{path}.u_range", f"{tr['u_range']} must be increasing")
+    if tr.get("points") is not None and np.abs(tr["points"]).max() > MAX_LENGTH:
+        raise SceneError(f"{path}.points", f"coordinates beyond {MAX_LENGTH:g} m")
+
+
+TRACK = sc.Table("the track: midline X0(s) and twist θ1(s)", {
+    "type": sc.Choice("how the midline is given", choices=("helix", "expression", "table")),
+    "twist": _expression("twist θ1(s) of the cross-section, differentiated symbolically (frame = \"twist\")",
+                         "expression in `s`, rad", default="0"),
+}, variants=("type", {
+    "helix": {
+        "radius": sc.Float("helix radius R (axis X3, horizontal)", unit="m", lo=0.01, hi=1e5),
+        "rise": sc.Float("rise λ per radian: X03 = λ φ, φ = s/√(R²+λ²)", unit="m/rad", lo=0.0, hi=1e5),
+    },
+    "expression": {
+        **{key: _expression(f"X0{i}, the {axis} coordinate of the midline", "expression in `s` or `u` "
+                            "(see `parameter`) and the `constants`, m")
+           for i, (key, axis) in enumerate((("x", "horizontal X1"), ("y", "upward X2"), ("z", "horizontal X3")), 1)},
+        "parameter": sc.Choice("`s`: the expressions are in arc length (checked: ‖dX0/ds‖ = 1 within 1e-6); "
+                               "`u`: any parameter, arc length computed", choices=("s", "u"), default="s"),
+        "u_range": sc.Vector("parameter range [u0, u1] (s = 0 at u0), with parameter = \"u\"", n=2,
+                             lo=-MAX_LENGTH, hi=MAX_LENGTH, default=None),
+        "constants": sc.Custom("names usable in the expressions", parse=_constants,
+                               type_doc="table of names to numbers", default={}),
+    },
+    "table": {
+        "points": sc.Rows("points [x, y, z] in order along the track; fitted by a quintic spline "
+                          "re-parametrized by arc length", n=3, unit="m", min_rows=6),
+        "max_turn_deg": sc.Float("largest turn between successive table segments", unit="deg", lo=0.0,
+                                 lo_open=True, hi=90.0, default=20.0),
+        "smoothing": sc.Float("fit tolerance: 0 interpolates the points; > 0 fits the smoothest quintic "
+                              "spline within this RMS distance of them (for a noise σ per coordinate about "
+                              "√3 σ or a little more)",
+                              unit="m", lo=0.0, hi=1.0, default=0.0),
+    },
+}), checks=(_track_expressions,))
+
+
+def _inertia(body, path):
+    i11, i22, i33, i12, i23, i13 = body["inertia"]
+    tensor = np.array([[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]])
+    if not tensor.any():
+        return  # a point mass, as in the paper
+    principal = np.linalg.eigvalsh(tensor)
+    scale = np.abs(principal).max()
+    if principal[0] <= 1e-12 * scale:
+        raise SceneError(f"{path}.inertia", f"{body['inertia']} kg m^2 is not positive definite (principal "
+                                            f"moments {', '.join(f'{p:.6g}' for p in principal)}); give all six "
+                                            "zeros for a point mass")
+    if principal[0] + principal[1] < principal[2] * (1 - 1e-12):
+        raise SceneError(f"{path}.inertia", f"principal moments {', '.join(f'{p:.6g}' for p in principal)} "
+                                            "kg m^2 violate the triangle inequality I1 + I2 >= I3 of a rigid body")
+
+
+TROLLEY = sc.Table("the rigid body on the trolley", {
+    "mass": sc.Float("mass of the body (trolley + load)", unit="kg", lo=1e-3, hi=1e7),
+    "com": sc.Vector("centre of mass in the body frame (origin O on the midline at the rear axle)", n=3,
+                     unit="m", lo=-100.0, hi=100.0),
+    "inertia": sc.Vector("central inertia [I11, I22, I33, I12, I23, I13] (tensor entries); all zeros: a point "
+                         "mass, as in the paper; otherwise positive definite with the triangle inequalities", n=6,
+                         unit="kg m^2", lo=-1e9, hi=1e9, default=[0.0] * 6),
+    "axle_distance": sc.Float("l = OA", unit="m", lo=0.01, hi=100.0),
+    "half_gauge": sc.Float("a = OB = OC", unit="m", lo=0.01, hi=10.0),
+}, checks=(_inertia,))
+
+
+def _increasing(table, path):
+    for axis, (lo, hi) in table.items():
+        if not lo < hi:
+            raise SceneError(f"{path}.{axis}", f"[{lo:g}, {hi:g}] g must be increasing")
+
+
+def _fd_order(path, value):
+    if value not in (2, 4) or isinstance(value, bool):
+        raise SceneError(path, f"{value!r} is not 2 or 4")
+    return value
+
+
+def _cross_checks(scene, path):
+    tr, motion, effects = scene["track"], scene["motion"], scene["effects"]
+    if scene["frame"] == "frenet" and tr["twist"].strip() != "0":
+        raise SceneError("track.twist", f"{tr['twist']!r}: the Frenet frame fixes the roll, so a twist cannot be "
+                                        "honoured; use frame = \"twist\" or remove the twist")
+    if effects["traction"]:
+        if scene["conventions"] == "paper":
+            raise SceneError("effects.traction", "traction integration is not available with conventions = "
+                                                 "\"paper\"")
+        if motion["traction"] is None:
+            raise SceneError("motion.traction", "required with effects.traction = true")
+        if motion["speed"] is not None:
+            raise SceneError("motion.speed", "the speed follows from motion.traction with effects.traction = "
+                                             "true; remove it")
+    else:
+        if motion["speed"] is None:
+            raise SceneError("motion.speed", "required (or set effects.traction = true with motion.traction)")
+        if motion["traction"] is not None:
+            raise SceneError("motion.traction", "used only with effects.traction = true")
+    axle, step = scene["trolley"]["axle_distance"], scene["numerics"]["fd_step"]
+    if step is not None and step > 0.1 * axle:
+        raise SceneError("numerics.fd_step", f"{step:g} m is outside (0, {0.1 * axle:g}] m (0.1 axle_distance)")
+
+
+# The whole scene. Other models of the trolley extend it with their own table
+# (``SCHEMA.fields["elastic"] = Table(...)``) and read it from the resolved scene.
+SCHEMA = sc.Table("a trolley scene", {
+    "kind": sc.Choice("scene kind", choices=("trolley",)),
+    "conventions": sc.Choice("`physics`: the consistent model; `paper`: the paper's conventions (Tables 1, 2)",
+                             choices=("physics", "paper"), default="physics"),
+    "frame": sc.Choice("moving frame: `twist` (aircraft angles with the twist θ1(s)) or `frenet` (x2 = principal "
+                       "normal; a rotation-minimising frame where the curvature vanishes)",
+                       choices=("twist", "frenet"), default="twist"),
+    "track": TRACK,
+    "trolley": TROLLEY,
+    "constants": sc.Table("physical constants", {
+        "g0": sc.Float("gravitational acceleration (the paper uses 9.81)", unit="m/s^2", lo=0.0, lo_open=True,
+                       hi=100.0, default=G_STANDARD)}, default={}),
+    "motion": sc.Table("the drive", {
+        "speed": _expression("V0(t), without traction; s(t) = s0 + ∫V0 dt (8-point Gauss per step)",
+                             "expression in `t`, m/s", default=None),
+        "traction": _expression("P0(t, v) along x1 at O, with effects.traction", "expression in `t`, `v`, N",
+                                default=None),
+        "initial_speed": sc.Float("V0(0) with traction", unit="m/s", lo=0.0, hi=MAX_SPEED, default=0.0),
+        "s0": sc.Float("arc length at t = 0", unit="m", lo=0.0, hi=MAX_LENGTH, default=0.0),
+    }),
+    "time": sc.Table("the time grid t = 0 … t_end", {
+        "t_end": sc.Float("duration", unit="s", lo=0.0, lo_open=True, hi=1e6),
+        "steps": sc.Int("grid intervals (the whole grid is one vectorized batch)", lo=1, hi=1_000_000),
+    }),
+    "effects": sc.Table("what the model includes", {
+        "gravity": sc.Bool("gravity along -X2 (off: the generated reactions_no_gravity)", default=True),
+        "local_curvature": sc.Bool("also case 2: the body frame turned onto the chord O→A", default=False),
+        "traction": sc.Bool("integrate the speed from motion.traction (DOP853, rtol 1e-10), per case",
+                            default=False),
+    }, default={}),
+    "numerics": sc.Table("numerical settings", {
+        "fd_order": sc.Custom("order of the central differences for Λ*', Λ*'' in case 2 (physics)",
+                              parse=_fd_order, type_doc="2 or 4", default=4),
+        "fd_step": sc.Float("their step (rounding ~eps/h², truncation ~h⁴); default min(0.02, 0.05 l); at most "
+                            "0.1 l", unit="m", lo=1e-5, hi=10.0, default=None),
+        "lstar_derivative": sc.Choice("dΛ*/ds in paper conventions (the paper's: backward difference)",
+                                      choices=("backward", "central2", "central4"), default="backward"),
+        "small_angle_limit": sc.Float("largest orthogonality defect of the first-order Λ̄ (13)-(14) before a "
+                                      "warning", unit="1", lo=0.0, lo_open=True, hi=1.0, default=0.01),
+        "min_curvature": sc.Float("frame = \"frenet\": below this curvature the principal normal is "
+                                  "meaningless and a rotation-minimising frame is used", unit="1/m", lo=0.0,
+                                  lo_open=True, hi=1.0, default=1e-4),
+    }, default={}),
+    "comfort": sc.Table("comfort envelope of the overloads (leaving it is a warning)", {
+        axis: sc.Vector(f"[lo, hi] along {axis}", n=2, unit="g", lo=-100.0, hi=100.0, default=list(bounds))
+        for axis, bounds in COMFORT.items()}, default={}, checks=(_increasing,)),
+    "report": sc.Table("extra outputs", {
+        "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
+                                default=False)}, default={}),
+}, checks=(_cross_checks,))
+
+
 
 
 @dataclass
 class Setup:
-    """Everything a run needs, read and checked from a scene."""
+    """Everything a run needs, built and checked from the resolved scene."""
 
     track: tracks.Track
     body: model.Body
     frame: str
     conventions: str
     t: np.ndarray
-    speed: object  # callable t -> (V0, dV0) or None with traction
-    traction: object  # callable (t, V0) -> P0 or None
+    speed: object  # (V0(t), dV0/dt(t)) callables, or None with traction
+    traction: object  # callable (t, V0) -> P0, or None
     v_initial: float
     s0: float
     local_curvature: bool
@@ -42,89 +243,127 @@ class Setup:
     small_angle_limit: float
     comfort: dict
     paper_tables: bool
+    plan: model.FramePlan = None
+    notes: list = None
 
 
-def _time_functions(sec: Section, field: str, variables: tuple[str, ...]):
-    """Numeric f and df/dt of an expression field in ``variables`` (t first)."""
-    import sympy as sp
-
-    expr, syms = tracks.parse_expression(sec.name(field), sec.str(field), variables, {})
-    both = tracks.lambdify_arrays([expr, sp.diff(expr, syms[0])], syms)
+def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
+    """Numeric f and df/dt of an expression field in ``variables`` (t first), checked over
+    t ∈ [0, t_end] (and, for traction, v ∈ [0, MAX_SPEED])."""
+    expr = expressions.parse(field, text, variables)
+    t = expressions.symbol("t")
+    rate = expressions.derivatives(field, expr, "t", 1)[1]
+    fixed = [{}] if len(variables) == 1 else [{expressions.symbol("v"): v} for v in np.linspace(0, MAX_SPEED, 9)]
+    for subs in fixed:
+        expressions.check_domain(field, expr.subs(subs), "t", 0.0, t_end, unit="s")
+        expressions.check_domain(field, rate.subs(subs), "t", 0.0, t_end, unit="s", guards=False)
+    if len(variables) == 2:
+        for t_val in np.linspace(0.0, t_end, 5):
+            expressions.check_domain(field, expr.subs(t, t_val), "v", 0.0, MAX_SPEED, unit="m/s")
+    both = tracks.lambdify_arrays([expr, rate], [expressions.symbol(v) for v in variables])
+    if len(variables) == 1:
+        grid = np.linspace(0.0, t_end, 2001)
+        fast = np.abs(both(grid)[0]) > MAX_SPEED
+        if fast.any():
+            raise SceneError(field, f"|V0| = {abs(both(grid)[0][np.argmax(fast)]):.3g} m/s at t = "
+                                    f"{grid[np.argmax(fast)]:.6g} s exceeds {MAX_SPEED:g} m/s")
     return (lambda *a: both(*a)[0]), (lambda *a: both(*a)[1])
 
 
-def read(scene: Section) -> Setup:
-    scene.choice("kind", ("trolley",))
-    conventions = scene.choice("conventions", ("physics", "paper"), default="physics")
-    frame = scene.choice("frame", ("twist", "frenet"), default="twist")
-    track = tracks.build(scene.section("track"))
-
-    eff = scene.section("effects", default={})
-    gravity = eff.bool("gravity", default=True)
-    local_curvature = eff.bool("local_curvature", default=False)
-    traction_on = eff.bool("traction", default=False)
-    eff.finish()
-
-    tr = scene.section("trolley")
-    mass = tr.float("mass", unit="kg", lo=0.0, lo_open=True)
-    com = tr.vector("com", 3, unit="m")
-    inertia = tr.vector("inertia", 6, unit="kg m^2", default=[0.0] * 6)
-    if min(inertia[:3]) < 0:
-        raise SceneError(tr.name("inertia"), f"principal entries {inertia[:3]} must be >= 0 kg m^2")
-    axle = tr.float("axle_distance", unit="m", lo=0.0, lo_open=True)
-    half = tr.float("half_gauge", unit="m", lo=0.0, lo_open=True)
-    tr.finish()
-
-    const = scene.section("constants", default={})
-    g0 = const.float("g0", unit="m/s^2", default=G_STANDARD, lo=0.0, lo_open=True)
-    const.finish()
-
-    tm = scene.section("time")
-    t_end = tm.float("t_end", unit="s", lo=0.0, lo_open=True)
-    steps = tm.int("steps", lo=1, hi=10_000_000)
-    tm.finish()
-
-    mo = scene.section("motion")
-    s0 = mo.float("s0", unit="m", default=0.0, lo=0.0)
+def prepare(scene: dict) -> Setup:
+    """The Setup of a resolved scene: track and body built, every expression checked over
+    the run's time range and the track over the arc lengths the run visits, the frame
+    made continuous along them (see :func:`model.plan_frames`)."""
+    tr_spec, body_spec, motion, num = scene["track"], scene["trolley"], scene["motion"], scene["numerics"]
+    effects = scene["effects"]
+    t_end, steps = scene["time"]["t_end"], scene["time"]["steps"]
+    track = tracks.build(tr_spec)
+    axle = body_spec["axle_distance"]
+    body = model.Body(body_spec["mass"], tuple(body_spec["com"]), tuple(body_spec["inertia"]), axle,
+                      body_spec["half_gauge"], scene["constants"]["g0"] if effects["gravity"] else 0.0)
     speed = traction = None
-    v_initial = 0.0
-    if traction_on:
-        if conventions == "paper":
-            raise SceneError("effects.traction", "traction integration is not available with conventions = \"paper\"")
-        traction = _time_functions(mo, "traction", ("t", "v"))[0]
-        v_initial = mo.float("initial_speed", unit="m/s", default=0.0)
+    if effects["traction"]:
+        traction = _time_functions("motion.traction", motion["traction"], ("t", "v"), t_end)[0]
     else:
-        speed = _time_functions(mo, "speed", ("t",))
-    mo.finish()
+        speed = _time_functions("motion.speed", motion["speed"], ("t",), t_end)
+    setup = Setup(track, body, scene["frame"], scene["conventions"], np.linspace(0.0, t_end, steps + 1), speed,
+                  traction, motion["initial_speed"], motion["s0"], effects["local_curvature"], num["fd_order"],
+                  num["fd_step"] if num["fd_step"] is not None else min(0.02, 0.05 * axle),
+                  num["lstar_derivative"], num["small_angle_limit"],
+                  {axis: tuple(scene["comfort"][axis]) for axis in COMFORT}, scene["report"]["paper_tables"],
+                  notes=[])
+    if setup.paper_tables:
+        _table_grid(setup)
+    lo, hi = _visited(setup)
+    track.check_domain("track", lo, hi)
+    setup.plan = model.plan_frames(track, lo, hi, setup.frame, num["min_curvature"])
+    setup.notes += [f"frame: {e['kind']} at s = {e['s']:.6g} m: {e['action']}" for e in setup.plan.events
+                    if e["kind"] != "fast turn"]
+    noise = getattr(track, "noise", None)
+    if noise:
+        setup.notes += _noise_notes(noise)
+    return setup
 
-    num = scene.section("numerics", default={})
-    fd_order = num.int("fd_order", default=4, lo=2, hi=4)
-    if fd_order not in (2, 4):
-        raise SceneError(num.name("fd_order"), f"{fd_order} is not 2 or 4")
-    # Rounding grows as eps/h² in Λ*'', truncation as h⁴: a few cm balance them.
-    fd_step = num.float("fd_step", unit="m", default=min(0.02, 0.05 * axle), lo=0.0, lo_open=True, hi=0.1 * axle)
-    lstar_derivative = num.choice("lstar_derivative", ("backward", "central2", "central4"), default="backward")
-    small_angle_limit = num.float("small_angle_limit", unit="1", default=0.01, lo=0.0, lo_open=True)
-    num.finish()
 
-    comfort = dict(COMFORT)
-    cf = scene.section("comfort", default={})
-    for axis in COMFORT:
-        lo, hi = cf.vector(axis, 2, unit="g", default=list(COMFORT[axis]))
-        if not lo < hi:
-            raise SceneError(cf.name(axis), f"[{lo:g}, {hi:g}] must be increasing")
-        comfort[axis] = (lo, hi)
-    cf.finish()
+def _visited(setup: Setup) -> tuple[float, float]:
+    """Arc-length range [m] the run evaluates the track on (rear axle, front axle, stencils)."""
+    if setup.speed is not None:
+        s = arc_length(setup)
+        if not np.all(np.abs(s) <= MAX_LENGTH):
+            raise SceneError("motion.speed", f"the arc length reaches {np.abs(s).max():.3g} m; at most "
+                                             f"{MAX_LENGTH:g} m")
+        lo, hi = float(s.min()), float(s.max())
+    else:  # traction: the speed is unknown before the run but bounded by MAX_SPEED
+        span = min(MAX_SPEED * setup.t[-1], MAX_LENGTH)
+        lo, hi = setup.s0 - span, setup.s0 + span
+        if math.isfinite(setup.track.length):
+            lo, hi = max(lo, 0.0), min(hi, setup.track.length)
+    reach = 2 * setup.fd_step + (1.05 * setup.body.l if setup.local_curvature else 0.0)
+    return lo - 2 * setup.fd_step, hi + reach
 
-    rep = scene.section("report", default={})
-    paper_tables = rep.bool("paper_tables", default=False)
-    rep.finish()
-    scene.finish()
 
-    t = np.linspace(0.0, t_end, steps + 1)
-    body = model.Body(mass, tuple(com), tuple(inertia), axle, half, g0 if gravity else 0.0)
-    return Setup(track, body, frame, conventions, t, speed, traction, v_initial, s0, local_curvature,
-                 fd_order, fd_step, lstar_derivative, small_angle_limit, comfort, paper_tables)
+def _table_grid(setup: Setup) -> None:
+    for time_ in tables.TIMES:
+        k = int(round(time_ / (setup.t[1] - setup.t[0])))
+        if k >= len(setup.t) or abs(setup.t[k] - time_) > 1e-9:
+            raise SceneError("report.paper_tables", f"t = {time_:g} s is not a grid point of this scene "
+                                                    "(use the paper's t_end = 20 s, steps = 5000)")
+
+
+def _noise_notes(noise: dict) -> list[str]:
+    """Warnings when the data say the table's derived accelerations are not to be trusted."""
+    ratio = noise["curvature_error_per_m"] / max(noise["curvature_max_per_m"], 1e-300)
+    noise["curvature_error_ratio"] = ratio
+    notes = []
+    if ratio > NOISE_WARN:
+        notes.append(f"track.points: derived accelerations are dominated by noise: the points scatter by about "
+                     f"{noise['point_noise_m']:.2g} m per coordinate, giving a curvature error of "
+                     f"{noise['curvature_error_per_m']:.3g} 1/m against a largest curvature of "
+                     f"{noise['curvature_max_per_m']:.3g} 1/m ({100 * ratio:.0f} %); set track.smoothing to at "
+                     f"least the RMS distance of the noise, about {2 * math.sqrt(3) * noise['point_noise_m']:.2g} m")
+    elif noise["curvature_overshoot"] > OVERSHOOT_WARN:
+        notes.append(f"track.points: the fitted curvature overshoots the three-point curvature of the points by "
+                     f"{100 * noise['curvature_overshoot']:.1f} % of its largest value near "
+                     f"{noise['overshoot_near_m']:.4g} m along the table (a curvature jump: the spline rings); "
+                     "accelerations there are overestimated by about as much; add points or a transition curve")
+    return notes
+
+
+NOISE_WARN = 0.1  # curvature error / largest curvature beyond which a table's accelerations are noise
+OVERSHOOT_WARN = 0.05  # curvature overshoot (fraction) beyond which a table's fit is said to ring
+
+
+def estimate(setup: Setup) -> registry.Estimate:
+    steps = len(setup.t) - 1
+    cases = 2 if setup.local_curvature else 1
+    runs = cases * (2 if setup.paper_tables else 1) * (6 if setup.local_curvature else 1)
+    seconds = (SECONDS_PER_STEP * runs + SECONDS_PER_OUTPUT_ROW * cases) * (steps + 1)
+    what = f"{steps} steps, {cases} case(s) with outputs"
+    if setup.traction is not None:
+        rhs = 40 * steps + 2000
+        seconds += SECONDS_PER_RHS * rhs * cases
+        what += f", ~{rhs} traction evaluations"
+    return registry.Estimate(seconds, what)
 
 
 def arc_length(setup: Setup) -> np.ndarray:
@@ -138,17 +377,31 @@ def arc_length(setup: Setup) -> np.ndarray:
 
 def frame_at(setup: Setup, case: int, s) -> model.Frame:
     if case == 1:
-        return model.moving_frame(setup.track, s, setup.frame)
-    return model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, setup.fd_order, setup.fd_step)
+        return model.moving_frame(setup.track, s, setup.frame, setup.plan)
+    return model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, setup.fd_order, setup.fd_step,
+                                       plan=setup.plan)
 
 
-def integrate_traction(setup: Setup, case: int):
+def integrate_traction(setup: Setup, case: int, ctx=None):
     """s, V0, dV0 on the grid from m a1 = P0 - m g0 ν1 along x1 (a1 = α1 V̇0 + β1 V0²)."""
     from scipy.integrate import solve_ivp
 
     body = setup.body
+    calls, reached = [0], [setup.t[0]]
+    ctx = ctx or Context(quiet=True)
 
     def rates(t, y):
+        calls[0] += 1
+        if calls[0] % 1000 == 0:
+            ctx.tick(f"traction integration at t = {t:.6g} s")
+            if calls[0] > MAX_RHS:
+                raise SymmechError(f"traction integration stalls at t = {t:.6g} s: {calls[0]} evaluations "
+                                   f"(limit {MAX_RHS}); the motion is too stiff or singular there")
+            bar.update(max(t - reached[0], 0.0))
+            reached[0] = max(reached[0], t)
+        if not abs(y[1]) <= MAX_SPEED:
+            raise SymmechError(f"traction: the speed reaches {y[1]:.6g} m/s at t = {t:.6g} s, beyond "
+                               f"{MAX_SPEED:g} m/s (motion.traction)")
         fr = frame_at(setup, case, np.array([y[0]]))
         alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
         if alpha[0] <= 1e-6:
@@ -158,8 +411,9 @@ def integrate_traction(setup: Setup, case: int):
         dv = (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]
         return [y[1], dv]
 
-    sol = solve_ivp(rates, (setup.t[0], setup.t[-1]), [setup.s0, setup.v_initial], method="DOP853",
-                    t_eval=setup.t, rtol=1e-10, atol=1e-10)
+    with ctx.progress(setup.t[-1], f"case {case}: traction", unit="s") as bar:
+        sol = solve_ivp(rates, (setup.t[0], setup.t[-1]), [setup.s0, setup.v_initial], method="DOP853",
+                        t_eval=setup.t, rtol=1e-10, atol=1e-10)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise SymmechError(f"traction integration failed: {sol.message}")
     s, v = sol.y
@@ -167,20 +421,22 @@ def integrate_traction(setup: Setup, case: int):
     return s, v, dv
 
 
-def compute(setup: Setup, conventions: str | None = None) -> dict:
+def compute(setup: Setup, conventions: str | None = None, ctx=None) -> dict:
     """Results per case: {1: {...}, 2: {...}} with s, V0, dV0 and :func:`model.body_motion` arrays."""
     conventions = conventions or setup.conventions
     cases = (1, 2) if setup.local_curvature else (1,)
     results = {}
     for case in cases:
+        if ctx is not None:
+            ctx.tick(f"case {case}")
         if setup.traction is not None:
-            s, v0, dv0 = integrate_traction(setup, case)
+            s, v0, dv0 = integrate_traction(setup, case, ctx)
         else:
             s = arc_length(setup)
             v0, dv0 = setup.speed[0](setup.t), setup.speed[1](setup.t)
         if conventions == "paper":
             out = model.paper_case(setup.track, s, v0, dv0, setup.body, setup.frame, case == 2,
-                                   setup.lstar_derivative)
+                                   setup.lstar_derivative, plan=setup.plan)
         else:
             fr = frame_at(setup, case, s)
             out = model.body_motion(fr, v0, dv0, setup.body)
@@ -209,22 +465,9 @@ def _comfort(t, overload, comfort):
     return out
 
 
-def _finite(setup, res):
-    for case, r in res.items():
-        for key in ("V", "a", "P"):
-            if not np.all(np.isfinite(r[key])):
-                i = int(np.argmax(~np.all(np.isfinite(r[key]), axis=-1)))
-                raise SymmechError(f"case {case}: non-finite {key} at t = {setup.t[i]:.6g} s")
-
-
 def paper_table_rows(setup: Setup, paper: dict, physics: dict) -> dict:
     """Printed Tables 1, 2 beside the paper-conventions and default-physics values."""
-    index = {}
-    for time_ in tables.TIMES:
-        k = int(round(time_ / (setup.t[1] - setup.t[0])))
-        if k >= len(setup.t) or abs(setup.t[k] - time_) > 1e-9:
-            raise SymmechError(f"report.paper_tables: t = {time_:g} s is not a grid point of this scene")
-        index[time_] = k
+    index = {time_: int(round(time_ / (setup.t[1] - setup.t[0]))) for time_ in tables.TIMES}
     rows, reproduced = [], 0
     for table, q, case, time_, value, decimals in tables.entries():
         if case not in paper:
@@ -240,7 +483,7 @@ def paper_table_rows(setup: Setup, paper: dict, physics: dict) -> dict:
     return {"entries": len(rows), "reproduced": reproduced, "rows": rows}
 
 
-def _write_paper_tables(tab: dict, path: Path) -> None:
+def _paper_tables_text(tab: dict) -> str:
     """The printed entries beside both computations, as an aligned text table."""
     lines = [f"{'table':<8} {'qty':<4} {'case':>4} {'t [s]':>6} {'printed':>12} {'paper conv.':>14} "
              f"{'physics':>14}  reproduced"]
@@ -250,7 +493,7 @@ def _write_paper_tables(tab: dict, path: Path) -> None:
                      f"{'yes' if r['reproduced_to_printed_digits'] else 'NO'}")
     lines.append(f"{tab['reproduced']} of {tab['entries']} printed entries reproduced to the printed digits "
                  "in paper conventions")
-    path.write_text("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
 
 
 def _quantity(res, name):
@@ -260,59 +503,83 @@ def _quantity(res, name):
     return res["V" if kind == "V" else "a"][:, i - 1]
 
 
-def run(scene: Section, out: Path) -> dict:
-    start = time.perf_counter()
-    setup = read(scene)
-    res = compute(setup)
-    _finite(setup, res)
-    warnings = []
-    summary = {"kind": "trolley", "conventions": setup.conventions, "frame": setup.frame,
+T = Column("t", "s", "time")
+CASE_COLUMNS = (T, *(Column(f"V{i}", "m/s", f"velocity of the centre of mass along x{i}") for i in (1, 2, 3)),
+                *(Column(f"a{i}", "m/s^2", f"acceleration of the centre of mass along x{i}") for i in (1, 2, 3)),
+                Column("P0", "N", "traction at O along x1"), Column("P1", "N", "rear roller B along x2"),
+                Column("P2", "N", "rear roller C along x2"), Column("P3", "N", "front axle A along x2"),
+                Column("P4", "N", "rear axle O along x3"), Column("P5", "N", "front axle A along x3"))
+OVERLOAD_COLUMNS = (T, *(Column(f"n{i}", "g", f"overload (a + g0 ν)/g0 along x{i}") for i in (1, 2, 3)))
+
+
+def run(setup: Setup, ctx) -> Result:
+    """Cases 1 (and 2) on the grid: tables, summary, plots (nothing written here)."""
+    with np.errstate(all="ignore"):  # a non-finite result is reported once, naming quantity and time
+        res = compute(setup, ctx=ctx)
+    for note in setup.notes:
+        ctx.warn(note)
+    summary = {"conventions": setup.conventions, "frame": setup.frame,
                "effects": {"gravity": setup.body.g0 > 0, "local_curvature": setup.local_curvature,
                            "traction": setup.traction is not None},
-               "steps": len(setup.t) - 1, "cases": {}}
+               "steps": len(setup.t) - 1, "frame_continuity": setup.plan.report(), "cases": {}}
+    if getattr(setup.track, "noise", None):
+        summary["track_noise"] = setup.track.noise
+    result = Result("trolley", summary)
     for case, r in res.items():
-        data = np.column_stack([setup.t, r["V"], r["a"], r["P"]])
-        np.savetxt(out / f"case{case}.csv", data, delimiter=",", header=CSV_COLUMNS, comments="", fmt="%.10g")
-        np.savetxt(out / f"case{case}_overload.csv", np.column_stack([setup.t, r["overload"]]), delimiter=",",
-                   header="t,n1,n2,n3", comments="", fmt="%.10g")
-        info = {
-            "speed": _extremes(setup.t, r["V0"][:, None], ["V0"], "m/s"),
-            "velocity": _extremes(setup.t, r["V"], ["V1", "V2", "V3"], "m/s"),
-            "acceleration": _extremes(setup.t, r["a"], ["a1", "a2", "a3"], "m/s^2"),
-            "reactions": _extremes(setup.t, r["P"], [f"P{i}" for i in range(6)], "N"),
-            "overload": _extremes(setup.t, r["overload"], ["n1", "n2", "n3"], "g"),
-            "comfort": _comfort(setup.t, r["overload"], setup.comfort),
-            "s_end": float(r["s"][-1]),
-        }
-        if case == 2 and setup.conventions == "physics":
-            info.update(_small_angle(setup, r, warnings))
-        summary["cases"][f"case{case}"] = info
-        for axis, c in info["comfort"].items():
-            if c["samples_outside"]:
-                warnings.append(f"case {case}: overload along {axis} leaves the comfort envelope "
-                                f"{c['envelope_g']} g from t = {c['first_t_outside']:.4g} s")
+        _check_finite_case(setup, case, r)
+        result.tables[f"case{case}"] = Table(CASE_COLUMNS, np.column_stack([setup.t, r["V"], r["a"], r["P"]]))
+        result.tables[f"case{case}_overload"] = Table(OVERLOAD_COLUMNS, np.column_stack([setup.t, r["overload"]]))
+        summary["cases"][f"case{case}"] = _case_summary(setup, case, r, ctx)
     if setup.paper_tables:
-        other = compute(setup, "physics" if setup.conventions == "paper" else "paper")
+        other = compute(setup, "physics" if setup.conventions == "paper" else "paper", ctx)
         paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
         summary["paper_tables"] = paper_table_rows(setup, paper, physics)
-        _write_paper_tables(summary["paper_tables"], out / "paper_tables.txt")
-    from symmech.trolley import plots
+        result.files["paper_tables.txt"] = _paper_tables_text(summary["paper_tables"])
 
-    summary["files"] = [str(p) for p in plots.write_all(setup, res, out)]
-    summary["elapsed_s"] = time.perf_counter() - start
-    summary["warnings"] = warnings
-    return summary
+    def draw(folder):
+        from symmech.trolley import plots
+
+        return plots.write_all(setup, res, folder)
+    result.plots = draw
+    return result
 
 
-def _small_angle(setup, r, warnings) -> dict:
+def _check_finite_case(setup, case, r):
+    for key in ("V", "a", "P"):
+        bad = ~np.all(np.isfinite(r[key]), axis=-1)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise SymmechError(f"case {case}: non-finite {key} at t = {setup.t[i]:.6g} s (s = {r['s'][i]:.6g} m)")
+
+
+def _case_summary(setup, case, r, ctx) -> dict:
+    info = {
+        "speed": _extremes(setup.t, r["V0"][:, None], ["V0"], "m/s"),
+        "velocity": _extremes(setup.t, r["V"], ["V1", "V2", "V3"], "m/s"),
+        "acceleration": _extremes(setup.t, r["a"], ["a1", "a2", "a3"], "m/s^2"),
+        "reactions": _extremes(setup.t, r["P"], [f"P{i}" for i in range(6)], "N"),
+        "overload": _extremes(setup.t, r["overload"], ["n1", "n2", "n3"], "g"),
+        "comfort": _comfort(setup.t, r["overload"], setup.comfort),
+        "s_end": float(r["s"][-1]),
+    }
+    if case == 2 and setup.conventions == "physics":
+        info.update(_small_angle(setup, r, ctx))
+    for axis, c in info["comfort"].items():
+        if c["samples_outside"]:
+            ctx.warn(f"case {case}: overload along {axis} leaves the comfort envelope "
+                     f"{c['envelope_g']} g from t = {c['first_t_outside']:.4g} s")
+    return info
+
+
+def _small_angle(setup, r, ctx) -> dict:
     psi = r["frame"].info["psi"]
     k = int(np.argmax(psi))
     defect, _ = model.small_angle_check(r["frame"].info["base"], r["frame"].info["chord"], setup.body.l)
     j = int(np.argmax(defect))
     if defect[j] > setup.small_angle_limit:
-        warnings.append(f"case 2: the small-angle correction (13)-(14) is out of its range: orthogonality "
-                        f"defect {defect[j]:.3g} > {setup.small_angle_limit:g} at t = {setup.t[j]:.4g} s "
-                        f"(chord angle {psi[j]:.3g} rad); the exact rotation Λ* is used")
+        ctx.warn(f"case 2: the small-angle correction (13)-(14) is out of its range: orthogonality "
+                 f"defect {defect[j]:.3g} > {setup.small_angle_limit:g} at t = {setup.t[j]:.4g} s "
+                 f"(chord angle {psi[j]:.3g} rad); the exact rotation Λ* is used")
     return {"chord_angle_max_rad": float(psi[k]), "chord_angle_t_max": float(setup.t[k]),
             "small_angle_defect_max": float(defect[j])}
 
@@ -404,49 +671,57 @@ def _timed(fn, repeat: int = 3):
     return best, result
 
 
-def precision(scene: Section, out: Path) -> dict:
+PRECISION_COLUMNS = (Column("steps", "1", "grid intervals"), Column("fd_step", "m", "difference step (0: grid)"),
+                     Column("time", "s", "best wall time of 3"), Column("max_abs_error", "N", "max |P - P_exact|"))
+
+
+def precision(setup: Setup, ctx) -> Result:
     """Work-precision of the derivative approximations, against exact symbolic references.
 
     Paper conventions, case 2: dΛ*/ds by the paper's backward difference, central2 and
     central4 between grid points, for ``PRECISION_STEPS`` (the step count is the knob).
     With ``conventions = "physics"`` also the consistent case 2: Λ*', Λ*'' by central
     differences of order 2 and 4 for ``PRECISION_FD_STEPS`` on the scene's grid.
-    Writes ``precision.csv`` (family, method, steps, fd_step_m, time_s, max_abs_error_N)
-    and ``precision.png``.
+    Table ``precision`` (text columns family, method) and plot ``precision.png``.
     """
     import dataclasses
 
-    setup = read(scene)
     if not setup.local_curvature or setup.speed is None:
         raise SymmechError("bench precision needs effects.local_curvature = true and a given speed")
     exact = exact_paper_lstar_derivative(setup)
     rows = []
     t_end = setup.t[-1]
     for steps in PRECISION_STEPS:
+        ctx.tick(f"precision at {steps} steps")
         st = dataclasses.replace(setup, t=np.linspace(0.0, t_end, steps + 1))
         s, v0, dv0 = arc_length(st), st.speed[0](st.t), st.speed[1](st.t)
         sa = model.chord_point(st.track, s, st.body.l)
-        ref = model.paper_case(st.track, s, v0, dv0, st.body, st.frame, True, dlstar=exact(s, sa))["P"]
+        case2 = lambda **kw: model.paper_case(st.track, s, v0, dv0, st.body, st.frame, True,  # noqa: E731
+                                              plan=st.plan, **kw)["P"]
+        ref = case2(dlstar=exact(s, sa))
         for method in PRECISION_METHODS:
-            elapsed, got = _timed(lambda: model.paper_case(st.track, s, v0, dv0, st.body, st.frame, True,
-                                                           method)["P"])
+            elapsed, got = _timed(lambda: case2(derivative=method))
             rows.append(("paper", method, steps, "", elapsed, float(np.abs(got - ref).max())))
     if setup.conventions == "physics":
         s, v0, dv0 = arc_length(setup), setup.speed[0](setup.t), setup.speed[1](setup.t)
         case2 = lambda **kw: model.body_motion(  # noqa: E731
-            model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, **kw), v0, dv0, setup.body)["P"]
+            model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, plan=setup.plan, **kw),
+            v0, dv0, setup.body)["P"]
         ref = case2(derivatives=exact_lstar_derivatives(setup))
         for order in (2, 4):
             for h in PRECISION_FD_STEPS:
                 elapsed, got = _timed(lambda: case2(fd_order=order, fd_step=h))
                 rows.append(("physics", f"central{order}", len(setup.t) - 1, h, elapsed,
                              float(np.abs(got - ref).max())))
-    csv = out / "precision.csv"
-    with csv.open("w") as fh:
-        fh.write("family,method,steps,fd_step_m,time_s,max_abs_error_N\n")
-        for family, method, steps, h, elapsed, err in rows:
-            fh.write(f"{family},{method},{steps},{h},{elapsed:.6g},{err:.6g}\n")
-    from symmech.trolley import plots
+    table = Table(PRECISION_COLUMNS, np.array([(r[2], r[3] or 0.0, r[4], r[5]) for r in rows], dtype=float),
+                  text={"family": [r[0] for r in rows], "method": [r[1] for r in rows]})
 
-    png = plots.work_precision(rows, out / "precision.png")
-    return {"files": [str(csv), str(png)], "rows": rows}
+    def draw(folder):
+        from symmech.trolley import plots
+
+        return [plots.work_precision(rows, folder / "precision.png")]
+    return Result("trolley", {"rows": len(rows)}, {"precision": table}, plots=draw)
+
+
+registry.register(registry.Kind("trolley", "a rigid trolley on a curved two-rail track (seed 002)", SCHEMA, prepare,
+                                run, estimate, precision, "docs/scenes-trolley.md"))

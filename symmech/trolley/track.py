@@ -5,7 +5,9 @@ arrays of shape (n, 3) [m, 1, 1/m, 1/m², 1/m³] with respect to the arc length 
 [m], and ``twist(s)``: θ1, dθ1/ds, d²θ1/ds² as arrays of shape (n,) [rad, rad/m,
 rad/m²]. Expression tracks are differentiated symbolically (sympy is imported
 when a scene is read, never at module import); tables are fitted by a quintic
-spline re-parametrized by arc length.
+spline (interpolating, or smoothing within a stated tolerance) re-parametrized by
+arc length, and their measurement noise and its effect on the curvature are
+estimated from the data.
 """
 from __future__ import annotations
 
@@ -13,39 +15,10 @@ import math
 
 import numpy as np
 
-from symmech.core.scene import SceneError, Section, SymmechError
+from symmech.core import expressions
+from symmech.core.scene import SceneError, SymmechError
 
 MAX_ORDER = 4
-# Functions a scene expression may use; anything else is an error naming the field.
-_FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "sinh", "cosh", "tanh", "asinh", "acosh", "atan", "asin",
-              "acos", "pi")
-
-
-def parse_expression(field: str, text: str, variables: tuple[str, ...], constants: dict):
-    """sympy expression of ``text`` in ``variables``; SceneError names ``field`` otherwise."""
-    import sympy as sp
-    from sympy.parsing.sympy_parser import parse_expr, standard_transformations
-
-    names = {v: sp.Symbol(v, real=True) for v in variables}
-    local = {f: getattr(sp, f) for f in _FUNCTIONS}
-    local.update(names)
-    local.update({k: sp.Float(v) for k, v in constants.items()})
-    try:
-        expr = parse_expr(text, local_dict=local, global_dict={"__builtins__": {}, "Integer": sp.Integer, "Float": sp.Float,
-                                       "Rational": sp.Rational, "Symbol": sp.Symbol,
-                                       "Function": sp.Function, **local},
-                          transformations=standard_transformations)
-        expr = sp.sympify(expr)
-    except Exception as exc:  # sympy raises many types for bad input
-        raise SceneError(field, f"cannot parse {text!r} as an expression in {', '.join(variables)} ({exc})") from None
-    from sympy.core.function import AppliedUndef
-
-    unknown = sorted(s.name for s in expr.free_symbols if s.name not in variables)
-    unknown += sorted(str(f.func) for f in expr.atoms(AppliedUndef))
-    if unknown:
-        raise SceneError(field, f"unknown name(s) {', '.join(unknown)} in {text!r}; "
-                                f"allowed: {', '.join(variables)}, constants and {', '.join(_FUNCTIONS)}")
-    return expr, [names[v] for v in variables]
 
 
 def lambdify_arrays(exprs, symbols):
@@ -61,73 +34,97 @@ def lambdify_arrays(exprs, symbols):
 
 
 class Track:
-    """Base: arc-length domain [0, length] (``length`` may be inf)."""
+    """Base: arc-length domain [0, length] (``length`` may be inf) and the twist θ1(s)."""
 
     length = math.inf
+    twist_expr = None
 
     def derivatives(self, s, order: int) -> list[np.ndarray]:
         raise NotImplementedError
 
+    def set_twist(self, expr) -> None:
+        """θ1(s) from a sympy expression in ``s`` (differentiated symbolically)."""
+        self.twist_expr = expr
+        self._tw = lambdify_arrays(expressions.derivatives("track.twist", expr, "s", 2), [expressions.symbol("s")])
+
     def twist(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         s = np.asarray(s, dtype=float)
-        return tuple(np.broadcast_to(np.asarray(v, dtype=float), s.shape) for v in self._twist(s))
+        if self.twist_expr is None:
+            return tuple(np.zeros(s.shape) for _ in range(3))
+        return tuple(self._tw(s))
 
-    def _twist(self, s):
-        return 0.0, 0.0, 0.0
+    def check_domain(self, field: str, lo: float, hi: float) -> None:
+        """SceneError naming ``field`` (the track table) if [lo, hi] [m] leaves the track or an
+        expression of it is singular there."""
+        if self.twist_expr is not None:
+            _check_with_derivatives(f"{field}.twist", self.twist_expr, "s", lo, hi, 2, "m")
+
+
+def _check_with_derivatives(field, expr, var, lo, hi, order, unit):
+    """The expression over [lo, hi] with its singularity guards, and its derivatives up to
+    ``order`` by dense samples (a derivative can be infinite where the expression is finite)."""
+    expressions.check_domain(field, expr, var, lo, hi, unit=unit)
+    for d in expressions.derivatives(field, expr, var, order)[1:]:
+        expressions.check_domain(field, d, var, lo, hi, unit=unit, guards=False)
 
 
 class ExpressionTrack(Track):
-    """X0 given by three expressions in ``s`` (arc length) or in ``u`` (any parameter)."""
+    """X0 given by three sympy expressions in ``s`` (arc length) or in ``u`` (any parameter)."""
 
     exprs = None
     var = None
 
-    def __init__(self, exprs, var, twist_expr, twist_var, field: str, u_range=None):
-        import sympy as sp
-
+    def __init__(self, exprs, var: str, field: str, u_range=None):
         self.field = field
-        exprs = [sp.sympify(e) for e in exprs]
-        if var.name == "u":
-            self._init_u(exprs, var, u_range)
+        sym = expressions.symbol(var)
+        if var == "u":
+            for name, e in zip("xyz", exprs):
+                _check_with_derivatives(f"{field}.{name}", e, "u", *u_range, 1, "")
+            self._init_u(exprs, sym, u_range)
         else:
-            self.length = math.inf
-            self.exprs, self.var = exprs, var  # kept for exact (symbolic) references
-            ders = [exprs]
-            for _ in range(MAX_ORDER):
-                ders.append([sp.diff(e, var) for e in ders[-1]])
-            self._f = lambdify_arrays([e for d in ders for e in d], [var])
-            self._check_unit_speed()
-        tw = sp.sympify(twist_expr)
-        self._tw = lambdify_arrays([tw, sp.diff(tw, twist_var), sp.diff(tw, twist_var, 2)], [twist_var])
+            self.exprs, self.var = exprs, sym  # kept for exact (symbolic) references
+            ders = [expressions.derivatives(f"{field}.{name}", e, "s", MAX_ORDER) for name, e in zip("xyz", exprs)]
+            self._f = lambdify_arrays([ders[i][k] for k in range(MAX_ORDER + 1) for i in range(3)], [sym])
 
     def _init_u(self, exprs, u, u_range):
         import sympy as sp
 
         speed = sp.sqrt(sum(sp.diff(e, u) ** 2 for e in exprs))
-        ders = [exprs]
-        for _ in range(MAX_ORDER):
-            ders.append([sp.diff(e, u) / speed for e in ders[-1]])
-        fu = lambdify_arrays([e for d in ders for e in d], [u])
+        ders = [expressions.derivatives(f"{self.field}.{name}", e, "u", MAX_ORDER, speed)
+                for name, e in zip("xyz", exprs)]
+        fu = lambdify_arrays([ders[i][k] for k in range(MAX_ORDER + 1) for i in range(3)], [u])
         speed_f = lambdify_arrays([speed], [u])
-        arc = ArcLength(lambda x: speed_f(x)[0], *u_range, self.field)
+        arc = ArcLength(lambda x: speed_f(x)[0], *u_range, f"{self.field}.u_range")
         self.length = arc.length
         self._f = lambda s: fu(arc.parameter(np.asarray(s, dtype=float)))
 
-    def _check_unit_speed(self):
-        s = np.linspace(0.0, 50.0, 101)
+    def check_domain(self, field, lo, hi):
+        super().check_domain(field, lo, hi)
+        if self.var is None:  # parameter u: checked over u_range when built
+            return _check_inside(self.length, lo, hi)
+        for name, e in zip("xyz", self.exprs):
+            _check_with_derivatives(f"{field}.{name}", e, "s", lo, hi, MAX_ORDER, "m")
+        s = np.linspace(lo, hi, 2001)
         t = np.stack(self._f(s)[3:6], axis=-1)
-        err = float(np.abs(np.linalg.norm(t, axis=-1) - 1.0).max())
-        if err > 1e-6:
-            raise SceneError(self.field, f"|dX0/ds| deviates from 1 by {err:.3g}: the expressions are not "
-                                         "parametrized by arc length; use parameter = \"u\"")
+        dev = np.abs(np.linalg.norm(t, axis=-1) - 1.0)
+        if dev.max() > 1e-6:
+            raise SceneError(f"{field}.x", f"|dX0/ds| deviates from 1 by {dev.max():.3g} at s = "
+                                           f"{s[np.argmax(dev)]:.6g} m: the expressions are not parametrized "
+                                           "by arc length; use parameter = \"u\"")
 
     def derivatives(self, s, order):
         s = np.asarray(s, dtype=float)
         vals = self._f(s)
         return [np.stack(vals[3 * k:3 * k + 3], axis=-1) for k in range(order + 1)]
 
-    def _twist(self, s):
-        return self._tw(s)
+
+def _check_inside(length, lo, hi, what="track"):
+    # A little room serves the difference stencils at the ends of a finite track.
+    margin = 1e-3 * length
+    if lo < -margin or hi > length + margin:
+        raise SceneError("motion.speed", f"the motion leaves the {what}: s from {lo:.6g} to {hi:.6g} m "
+                                         f"(with the axle distance and difference stencils), track length "
+                                         f"{length:.6g} m")
 
 
 class ArcLength:
@@ -144,7 +141,8 @@ class ArcLength:
         grid = np.linspace(u0, u1, intervals + 1)
         sigma = speed(grid)
         if not np.all(sigma > 1e-12):
-            raise SceneError(field, "dX0/du vanishes: the parametrization is singular there")
+            at = grid[np.argmax(~(sigma > 1e-12))]
+            raise SceneError(field, f"dX0/du vanishes at u = {at:.6g}: the parametrization is singular there")
         nodes, weights = np.polynomial.legendre.leggauss(8)
         mid, half = (grid[1:] + grid[:-1]) / 2, (grid[1:] - grid[:-1]) / 2
         seg = (speed(mid[:, None] + half[:, None] * nodes) * weights).sum(axis=1) * half
@@ -160,25 +158,23 @@ class ArcLength:
         return u
 
 
+# Bootstrap replicates for the curvature error of a fitted table.
+NOISE_REPLICATES = 8
+
+
 class TableTrack(Track):
-    """A smooth track through a table of points (n, 3) [m], in order along the track."""
+    """A smooth track through a table of points (n, 3) [m], in order along the track.
 
-    def __init__(self, points, field: str, max_turn_deg: float):
-        from scipy.interpolate import make_interp_spline
+    ``smoothing`` [m] = 0 interpolates the points; > 0 fits a smoothing quintic spline
+    whose RMS distance from the points is ``smoothing`` (the stated tolerance). ``noise``
+    holds the estimates from the data (see :func:`_noise_estimate`).
+    """
 
+    def __init__(self, points, field: str, max_turn_deg: float, smoothing: float = 0.0):
         p = np.asarray(points, dtype=float)
-        seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
-        if np.any(seg <= 0):
-            i = int(np.argmin(seg))
-            raise SceneError(field, f"points {i} and {i + 1} coincide; a track table needs distinct points")
-        d = np.diff(p, axis=0) / seg[:, None]
-        turn = np.degrees(np.arccos(np.clip((d[1:] * d[:-1]).sum(axis=1), -1.0, 1.0)))
-        if turn.size and turn.max() > max_turn_deg:
-            i = int(np.argmax(turn)) + 1
-            raise SceneError(field, f"track is not smooth: it turns by {turn.max():.1f} deg at point {i} "
-                                    f"(max_turn_deg = {max_turn_deg:g}); add points or smooth the table")
-        u = np.concatenate([[0.0], np.cumsum(seg)])
-        chord_spline = make_interp_spline(u, p, k=5)
+        u = _chord_parameter(p, field, max_turn_deg)
+        chord_spline = _fit(u, p, smoothing, field)
+        self.noise = _noise_estimate(u, p, smoothing, chord_spline)
         dspline = chord_spline.derivative()
         arc = ArcLength(lambda x: np.linalg.norm(dspline(x), axis=-1), u[0], u[-1], field)
         self.length = arc.length
@@ -186,17 +182,95 @@ class TableTrack(Track):
         s = np.linspace(0.0, self.length, n)
         dense = chord_spline(arc.parameter(s))
         _check_self_intersection(dense, s, field)
+        from scipy.interpolate import make_interp_spline
+
         spline = make_interp_spline(s, dense, k=5)
         self._ders = [spline] + [spline.derivative(k) for k in range(1, MAX_ORDER + 1)]
 
+    def check_domain(self, field, lo, hi):
+        super().check_domain(field, lo, hi)
+        _check_inside(self.length, lo, hi, "track table")
+
     def derivatives(self, s, order):
         s = np.asarray(s, dtype=float)
-        # A little extrapolation serves the difference stencils at the ends of the table.
         margin = 1e-3 * self.length
         if np.any(s < -margin) or np.any(s > self.length + margin):
             raise SymmechError(f"the motion leaves the track table: s from {s.min():.6g} to {s.max():.6g} m, "
                                f"track length {self.length:.6g} m")
         return [d(s) for d in self._ders[:order + 1]]
+
+
+def _chord_parameter(p, field, max_turn_deg):
+    """Cumulative chord length u (n,) [m] of the polyline; refuses coinciding points and kinks."""
+    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    if np.any(seg <= 0):
+        i = int(np.argmin(seg))
+        raise SceneError(field, f"points {i} and {i + 1} coincide; a track table needs distinct points")
+    d = np.diff(p, axis=0) / seg[:, None]
+    turn = np.degrees(np.arccos(np.clip((d[1:] * d[:-1]).sum(axis=1), -1.0, 1.0)))
+    if turn.size and turn.max() > max_turn_deg:
+        i = int(np.argmax(turn)) + 1
+        raise SceneError(field, f"track is not smooth: it turns by {turn.max():.1f} deg at point {i} "
+                                f"(max_turn_deg = {max_turn_deg:g}); add points or smooth the table")
+    return np.concatenate([[0.0], np.cumsum(seg)])
+
+
+def _fit(u, p, smoothing, field):
+    """Quintic spline X(u) (a scipy BSpline of values (3,)): through the points, or the
+    smoothest one within RMS distance ``smoothing`` [m] of them."""
+    from scipy.interpolate import BSpline, make_interp_spline, splprep
+
+    if smoothing == 0:
+        return make_interp_spline(u, p, k=5)
+    (knots, coef, k), _ = splprep(p.T, u=u, k=5, s=len(p) * smoothing**2, quiet=2)
+    spline = BSpline(knots, np.array(coef).T, k)
+    if not np.all(np.isfinite(spline(u))):
+        raise SceneError(field.replace("points", "smoothing"), f"no smoothing fit within {smoothing:g} m")
+    return spline
+
+
+def _curvature(spline, u):
+    d1, d2 = spline.derivative(1)(u), spline.derivative(2)(u)
+    return np.linalg.norm(np.cross(d1, d2), axis=-1) / np.linalg.norm(d1, axis=-1) ** 3
+
+
+def _noise_estimate(u, p, smoothing, spline) -> dict:
+    """What the data say about the fit's curvature.
+
+    point_noise_m: σ from fourth differences (std σ √70 for white noise); curvature_error_per_m:
+    RMS spread of the curvature over refits of the fitted points plus that noise;
+    curvature_overshoot: how far the fit's curvature rises above the three-point
+    (circumscribed-circle) curvature of the neighbouring points, as a fraction of the
+    largest of those — a spline rings at a curvature jump of the data.
+    """
+    d4 = np.diff(p, 4, axis=0)
+    sigma = float(np.median(np.abs(d4)) / 0.6745 / math.sqrt(70.0)) if len(d4) else 0.0
+    fine = np.linspace(u[0], u[-1], 20 * len(u))
+    # The ends of a table are poorly determined by any fit; judge the interior.
+    inner = (fine > u[2]) & (fine < u[-3])
+    kappa = _curvature(spline, fine)
+    rng = np.random.default_rng(0)
+    base = spline(u)
+    spread = [_curvature(_fit(u, base + rng.normal(scale=sigma, size=p.shape), smoothing, ""), fine) - kappa
+              for _ in range(NOISE_REPLICATES)] if sigma > 0 else [np.zeros_like(fine)]
+    err = np.sqrt(np.mean(np.square(spread), axis=0))
+    three = np.concatenate([[0.0], _three_point_curvature(p), [0.0]])
+    near = np.clip(np.searchsorted(u, fine), 1, len(u) - 1)
+    bound = np.max([three[np.clip(near + j, 0, len(u) - 1)] for j in (-2, -1, 0, 1)], axis=0)
+    excess = np.where(inner, kappa - bound, -np.inf)
+    k = int(np.argmax(excess))
+    return {"point_noise_m": sigma, "smoothing_m": smoothing,
+            "curvature_error_per_m": float(err[inner].max()) if inner.any() else 0.0,
+            "curvature_max_per_m": float(kappa[inner].max()) if inner.any() else 0.0,
+            "curvature_overshoot": float(max(excess[k], 0.0) / max(three.max(), 1e-300)),
+            "overshoot_near_m": float(fine[k])}
+
+
+def _three_point_curvature(p):
+    """Curvature of the circle through each three consecutive points (n - 2,) [1/m]."""
+    a, b = p[1:-1] - p[:-2], p[2:] - p[1:-1]
+    twice_area = np.linalg.norm(np.cross(a, b), axis=1)
+    return 2 * twice_area / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1) * np.linalg.norm(a + b, axis=1))
 
 
 def _check_self_intersection(points: np.ndarray, s: np.ndarray, field: str) -> None:
@@ -218,38 +292,20 @@ def helix_expressions(radius: float, rise: float) -> list[str]:
     return [f"{radius!r}*cos(s/{root!r})", f"{radius!r}*sin(s/{root!r})", f"{rise!r}*s/{root!r}"]
 
 
-def build(sec: Section) -> Track:
-    """Track from the scene table ``[track]`` (see docs/scenes-trolley.md)."""
-    kind = sec.choice("type", ("helix", "expression", "table"))
-    twist_text = sec.str("twist", default="0")
+def build(spec: dict, field: str = "track") -> Track:
+    """Track from the resolved scene table ``[track]`` (see docs/scenes-trolley.md)."""
+    constants = spec.get("constants") or {}
+    kind = spec["type"]
     if kind == "table":
-        if twist_text != "0":
-            raise SceneError(sec.name("twist"), "a twist is not supported for track tables")
-        points = sec.rows("points", 3, unit="m", min_rows=6)
-        turn = sec.float("max_turn_deg", unit="deg", default=20.0, lo=0.0, hi=90.0, lo_open=True)
-        track = TableTrack(points, sec.name("points"), turn)
-        sec.finish()
-        return track
-    constants = {}
-    if kind == "helix":
-        radius = sec.float("radius", unit="m", lo=0.0, lo_open=True)
-        rise = sec.float("rise", unit="m/rad", lo=0.0)
-        texts, var = helix_expressions(radius, rise), "s"
+        track = TableTrack(spec["points"], f"{field}.points", spec["max_turn_deg"], spec["smoothing"])
     else:
-        if sec.has("constants"):
-            c = sec.section("constants")
-            constants = {k: c.float(k, unit="(scene constant)") for k in c.keys()}
-            c.finish()
-        var = sec.choice("parameter", ("s", "u"), default="s")
-        texts = [sec.str(k) for k in ("x", "y", "z")]
-    parsed = [parse_expression(sec.name(k), t, (var,), constants) for k, t in zip("xyz", texts)]
-    exprs, sym = [e for e, _ in parsed], parsed[0][1][0]
-    twist, (s_sym,) = parse_expression(sec.name("twist"), twist_text, ("s",), constants)
-    u_range = None
-    if var == "u":
-        u_range = sec.vector("u_range", 2, unit="(parameter)")
-        if not u_range[1] > u_range[0]:
-            raise SceneError(sec.name("u_range"), f"{u_range} must be increasing")
-    track = ExpressionTrack(exprs, sym, twist, s_sym, sec.name("x"), u_range)
-    sec.finish()
+        if kind == "helix":
+            texts, var = helix_expressions(spec["radius"], spec["rise"]), "s"
+        else:
+            texts, var = [spec[k] for k in "xyz"], spec["parameter"]
+        exprs = [expressions.parse(f"{field}.{k}", t, (var,), constants) for k, t in zip("xyz", texts)]
+        track = ExpressionTrack(exprs, var, field, spec.get("u_range"))
+    twist = expressions.parse(f"{field}.twist", spec["twist"], ("s",), constants)
+    if twist != 0:
+        track.set_twist(twist)
     return track
