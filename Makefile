@@ -13,9 +13,9 @@ check:
 test:
 	$(PY) -m pytest
 
-# the slow tests .ci/run adds: wheel install outside the checkout, long fuzzing profile
+# the slow tests .ci/run adds: wheel install outside the checkout, every precision study, long fuzzing
 slow:
-	$(PY) -m pytest -m slow tests/test_install.py tests/test_fuzz.py
+	$(PY) -m pytest -m slow tests/test_install.py tests/test_output_contract.py tests/test_fuzz.py
 
 bench:
 	for f in benchmarks/bench_*.py; do $(PY) $$f || exit 1; done

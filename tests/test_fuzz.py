@@ -51,7 +51,7 @@ class Profile:
     valid: int
 
 
-QUICK, LONG = Profile(broken=30, valid=3), Profile(broken=400, valid=25)
+QUICK, LONG = Profile(broken=30, valid=3), Profile(broken=200, valid=15)
 PROFILES = [pytest.param(QUICK, id="quick"), pytest.param(LONG, id="long", marks=pytest.mark.slow)]
 KINDS = sorted(registry.kinds())
 
