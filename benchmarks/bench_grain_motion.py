@@ -1,14 +1,19 @@
 """Grain motion speed: accurate vs paper mode at equal accuracy, batch vs loop, effects switched off.
 
-Run: python benchmarks/bench_grain_motion.py   (prints side-by-side ratios; about a minute)
+Every time is the median of interleaved repeats with min/max (benchmarks/timing.py);
+each method's impact-time error is printed beside its time.
+
+Run: python benchmarks/bench_grain_motion.py [--quick]   (a few minutes; --quick about one)
 """
 from __future__ import annotations
 
+import argparse
 import math
-import time
 from dataclasses import replace
 
 import numpy as np
+
+from timing import interleaved, machine, ratio
 
 from symmech.generated import grain_motion as gm
 from symmech.grain import flight, motion, paper_mode
@@ -31,13 +36,7 @@ def sphere_scene():
     return model, st
 
 
-def timed(fn):
-    start = time.perf_counter()
-    out = fn()
-    return time.perf_counter() - start, out
-
-
-def equal_accuracy():
+def equal_accuracy(repeats):
     model, st = sphere_scene()
     T = model.period
     t_end = 20.5 * T
@@ -51,28 +50,29 @@ def equal_accuracy():
             return math.inf
         return float(np.max(np.abs(got - ref_times)) / T)
 
-    print("one grain, sphere bouncing 20 periods: impact-time error / T vs impacts per second")
-    print(f"{'method':<34}{'error':>10}{'impacts/s':>12}")
-    rows = []
+    print("one grain, sphere bouncing 20 periods: impact-time error / T beside the time per run")
+    runs = {}
     for tol in (1e-4, 1e-6, 1e-8):
-        sec, res = timed(lambda: motion.simulate(model, replace(base, tolerance=tol), st, t_end))
-        rows.append(("accurate", tol, err(res), len(res.impacts) / sec))
+        runs[f"accurate tol={tol:g}"] = lambda tol=tol: motion.simulate(model, replace(base, tolerance=tol), st, t_end)
     for steps in (200, 1000, 5000):
         num = replace(base, mode="paper", dt=T / steps)
-        sec, res = timed(lambda: paper_mode.simulate(model, num, st, t_end))
-        rows.append(("paper", steps, err(res), len(res.impacts) / sec))
-    for kind, knob, e, rate in rows:
-        label = f"accurate tol={knob:g}" if kind == "accurate" else f"paper dt=T/{knob}"
-        print(f"{label:<34}{e:>10.2e}{rate:>12.1f}")
-    # Equal accuracy: the cheapest accurate run that is at least as accurate as the best paper run.
-    best_paper = min((r for r in rows if r[0] == "paper"), key=lambda r: r[2])
-    match = [r for r in rows if r[0] == "accurate" and r[2] <= best_paper[2]]
-    acc = max(match, key=lambda r: r[3])
-    print(f"at error <= {best_paper[2]:.1e}: accurate {acc[3]:.1f} impacts/s vs paper {best_paper[3]:.1f} "
-          f"impacts/s -> ratio {acc[3] / best_paper[3]:.1f}x\n")
+        runs[f"paper dt=T/{steps}"] = lambda num=num: paper_mode.simulate(model, num, st, t_end)
+    stats = interleaved(runs, repeats)
+    errors = {label: err(run()) for label, run in runs.items()}
+    for label, s in stats.items():
+        print(f"  {label:<24} error {errors[label]:9.2e}  {s.text()}")
+    # Equal accuracy: the cheapest accurate run at least as accurate as the most accurate paper run.
+    best_paper = min((k for k in runs if k.startswith("paper")), key=errors.get)
+    match = [k for k in runs if k.startswith("accurate") and errors[k] <= errors[best_paper]]
+    if not match:
+        print(f"no accurate run reaches the best paper error {errors[best_paper]:.1e}\n")
+        return
+    acc = min(match, key=lambda k: stats[k].median)
+    print(f"at error <= {errors[best_paper]:.1e} (accurate {errors[acc]:.1e}): {acc} vs {best_paper}: "
+          f"paper/accurate time {ratio(stats[best_paper], stats[acc])}\n")
 
 
-def batch_vs_loop(n=10_000, loop_sample=100):
+def batch_vs_loop(n, loop_sample, repeats):
     rng = np.random.default_rng(0)
     vib = flight.Vibration(1.0e-3, 2 * math.pi * 25, 0.0, (math.cos(0.5), 0.0, math.sin(0.5)))
     law = ImpactLaw("coulomb", e_n=0.4, e_t=-0.3, mu=0.5, check_printed=False)
@@ -86,24 +86,26 @@ def batch_vs_loop(n=10_000, loop_sample=100):
     T = model.period
     num = motion.Numerics(mode="paper", dt=T / 200, nodes=100)
     t_end = 4 * T
-    sec_batch, (_, _, count, _) = timed(lambda: paper_mode.simulate_batch(model, num, axes, mass, r0, v0, ang, w0,
-                                                                          t_end))
-    k = slice(0, loop_sample)
+
+    def batch():
+        return paper_mode.simulate_batch(model, num, axes, mass, r0, v0, ang, w0, t_end)
 
     def loop():
         return sum(paper_mode.simulate_batch(model, num, axes[i:i + 1], mass[i:i + 1], r0[i:i + 1], v0[i:i + 1],
                                              ang[i:i + 1], w0[i:i + 1], t_end)[2][0]
-                   for i in range(k.start, k.stop))
-    sec_loop, loop_count = timed(loop)
-    per_grain_loop = sec_loop / loop_sample
+                   for i in range(loop_sample))
+
+    stats = interleaved({"batch": batch, "loop": loop}, repeats)
+    count, loop_count = batch()[2], loop()
+    per_batch, per_loop = stats["batch"].median / n, stats["loop"].median / loop_sample
     print(f"batch of {n} grains (paper mode, dt = T/200, 100 nodes, {t_end:.2f} s, {count.sum()} impacts):")
-    print(f"  vectorised: {sec_batch:.2f} s ({sec_batch / n * 1e3:.3f} ms/grain)")
-    print(f"  Python loop over grains: {per_grain_loop * 1e3:.2f} ms/grain (timed on {loop_sample}, "
-          f"{loop_count} impacts; {per_grain_loop * n:.0f} s extrapolated)")
-    print(f"  speed-up: {per_grain_loop * n / sec_batch:.1f}x (target >= 20x)\n")
+    print(f"  vectorised: {stats['batch'].text()} ({per_batch * 1e3:.3f} ms/grain)")
+    print(f"  Python loop over {loop_sample} grains: {stats['loop'].text()} ({per_loop * 1e3:.2f} ms/grain, "
+          f"{loop_count} impacts)")
+    print(f"  per grain, loop/batch: {per_loop / per_batch:.1f}x (target >= 20x)\n")
 
 
-def effects_off():
+def effects_off(duration, repeats):
     vib = flight.Vibration(1.0e-3, 2 * math.pi * 25, 0.0, (math.cos(0.5), 0.0, math.sin(0.5)))
     law = ImpactLaw("coulomb", e_n=0.4, e_t=-0.3, mu=0.5, check_printed=False)
     full = motion.Model((2e-3, 1.2e-3, 1e-3), 1.3e-5, tuple(gm.gravity(G, 0.05, 0.0)), vib, law, 0.5)
@@ -111,20 +113,29 @@ def effects_off():
                       np.array([10.0, -20.0, 5.0]))
     T = full.period
     num = motion.Numerics(tolerance=1e-9, scan_step=T / 40, sample_interval=T / 10)
-    print("accurate mode, 1 s of an ellipsoidal grain: effects switched off (the motion changes with the")
-    print("physics; equal results for zeroed parameters are asserted in tests/test_grain_motion_parts.py)")
-    base, res = timed(lambda: motion.simulate(full, num, st, 1.0))
-    print(f"  {'all effects on':<22}{base:8.2f} s                     ({len(res.impacts)} impacts)")
+    print(f"accurate mode, {duration:g} s of an ellipsoidal grain: effects switched off (the motion changes with")
+    print("the physics; equal results for zeroed parameters are asserted in tests/test_grain_motion_parts.py)")
+    models = {"all effects on": full}
     for name in ("rotation", "friction", "inclination", "vibration"):
         model = replace(full, effects=motion.Effects(**{name: False}))
-        if name == "inclination":
-            model = replace(model, g_k=(0.0, 0.0, -G))
-        sec, res = timed(lambda: motion.simulate(model, num, st, 1.0))
-        print(f"  {name + ' off':<22}{sec:8.2f} s   speed-up {base / sec:.2f}x   ({len(res.impacts)} impacts)")
+        models[f"{name} off"] = replace(model, g_k=(0.0, 0.0, -G)) if name == "inclination" else model
+    runs = {label: (lambda m=m: motion.simulate(m, num, st, duration)) for label, m in models.items()}
+    stats = interleaved(runs, repeats)
+    for label, s in stats.items():
+        impacts = len(runs[label]().impacts)
+        print(f"  {label:<16} {s.text()}  all-on/this {ratio(stats['all effects on'], s)}  ({impacts} impacts)")
     print()
 
 
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="smaller batch, shorter ellipsoid run")
+    quick = p.parse_args().quick
+    print(f"machine: {machine()}")
+    equal_accuracy(5)
+    batch_vs_loop(1000 if quick else 10_000, 20 if quick else 100, 5)
+    effects_off(0.1 if quick else 1.0, 5)
+
+
 if __name__ == "__main__":
-    equal_accuracy()
-    batch_vs_loop()
-    effects_off()
+    main()

@@ -6,50 +6,42 @@ Interleaved repeats of
            checks, the 0.25 s watchdog);
   job      the whole job: read + validate + prepare + estimate + guarded run + finite
            checks + CSV/JSON/plots written into a temporary folder and renamed into place.
-Prints medians with the median absolute deviation, and the ratios to `bare`.
+Prints medians with min/max (benchmarks/timing.py) and the ratios to `bare`.
 
-Usage: python benchmarks/bench_grain_scene.py [--repeats 5] [--scene scenes/grain_default.toml]
+Usage: python benchmarks/bench_grain_scene.py [--quick] [--repeats 5] [--scene scenes/grain_default.toml]
 """
 import argparse
-import statistics
 import tempfile
-import time
+import tomllib
 from pathlib import Path
+
+from timing import interleaved, machine, ratio
 
 from symmech.core import pipeline
 from symmech.core.context import Context
 from symmech.grain import motion_scene
 
 
-def timed(fn) -> float:
-    start = time.perf_counter()
-    fn()
-    return time.perf_counter() - start
-
-
 def main() -> None:
-    p = argparse.ArgumentParser()
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="the scene's first 0.2 s only")
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--scene", default=str(Path(__file__).resolve().parents[1] / "scenes" / "grain_default.toml"))
     ns = p.parse_args()
-    scene = pipeline.load(ns.scene)
+    data = tomllib.loads(Path(ns.scene).read_text())
+    if ns.quick:
+        data["duration"] = min(data.get("duration", 0.2), 0.2)
+    scene = pipeline.load(data)
     out = Path(tempfile.mkdtemp()) / "out"
-    runs = {
+    stats = interleaved({
         "bare": lambda: motion_scene.simulate(scene.setup),
         "guarded": lambda: scene.run(Context(quiet=True)),
-        "job": lambda: pipeline.run_to(ns.scene, out, Context(quiet=True)),
-    }
-    times = {name: [] for name in runs}
-    for _ in range(ns.repeats):
-        for name, fn in runs.items():
-            times[name].append(timed(fn))
-    bare = statistics.median(times["bare"])
-    for name, ts in times.items():
-        median = statistics.median(ts)
-        mad = statistics.median(abs(t - median) for t in ts)
-        print(f"{name:8s} {median:7.3f} s ± {mad:.3f} (median ± MAD of {len(ts)})   ratio to bare {median / bare:.3f}")
-    load = timed(lambda: pipeline.load(ns.scene))
-    print(f"validate + prepare alone: {load * 1e3:.1f} ms")
+        "job": lambda: pipeline.run_to(data, out, Context(quiet=True)),
+        "validate + prepare": lambda: pipeline.load(data),
+    }, ns.repeats)
+    print(f"machine: {machine()}; {ns.scene}, duration {data.get('duration')} s")
+    for name, s in stats.items():
+        print(f"{name:18s} {s.text()}   this/bare {ratio(s, stats['bare'])}")
 
 
 if __name__ == "__main__":

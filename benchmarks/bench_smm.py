@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import statistics
 import time
 
 LIMIT = 120.0
@@ -172,34 +173,40 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="small sizes only")
     p.add_argument("--limit", type=float, default=LIMIT, help="seconds before a method is stopped")
+    p.add_argument("--repeats", type=int, default=5, help="interleaved runs per method and size")
     ns = p.parse_args()
     sizes = [2, 4, 8] if ns.quick else [2, 4, 8, 16, 32]
     mech_max = 4 if ns.quick else 32
     print(f"SMM vs sympy.physics.mechanics agreement at n=3: max |difference| = {check_agreement():.3g}")
-    print(f"{'n':>4} {'SMM [s]':>10} {'Lagrange [s]':>13} {'Kane [s]':>10} {'Kane/SMM':>10} {'Lagrange/SMM':>13}")
+    print(f"medians of {ns.repeats} interleaved runs, each in a fresh process; min-max in brackets")
+    print(f"{'n':>4} {'SMM [s]':>22} {'Lagrange [s]':>22} {'Kane [s]':>22} {'Kane/SMM':>9} {'Lagrange/SMM':>13}")
     alive = {"lagrange": True, "kane": True}
     for n in sizes:
-        smm = timed("smm", n, ns.limit)
-        row = {}
+        kinds = ["smm"] + [k for k in ("lagrange", "kane") if alive[k] and n <= mech_max]
+        runs = {k: [] for k in kinds}
+        for _ in range(ns.repeats):  # rounds: every method once per round
+            for kind in kinds:
+                if None not in runs[kind]:
+                    runs[kind].append(timed(kind, n, ns.limit))
+        # float seconds, None (stopped past the limit in some run) or absent (skipped)
+        med = {k: None if None in v else statistics.median(v) for k, v in runs.items()}
         for kind in ("lagrange", "kane"):
-            # float seconds, "stopped" past the limit, or "skipped" (an earlier size was stopped)
-            row[kind] = "skipped"
-            if alive[kind] and n <= mech_max:
-                row[kind] = timed(kind, n, ns.limit) or "stopped"
-                alive[kind] = row[kind] != "stopped"
+            alive[kind] = alive[kind] and med.get(kind, 0) is not None
 
-        def fmt(x):
-            if x is None or x == "stopped":
+        def fmt(kind):
+            if kind not in runs:
+                return "-"
+            if med[kind] is None:
                 return f">{ns.limit:.0f}"
-            return "-" if x == "skipped" else f"{x:.3f}"
+            return f"{med[kind]:.3f} [{min(runs[kind]):.3f}-{max(runs[kind]):.3f}]"
 
-        def ratio(x):
-            if smm is None or x == "skipped":
+        def ratio(kind):
+            if kind not in runs or med["smm"] is None:
                 return "-"
             # a method stopped at the limit gives a lower bound on the ratio
-            return f">{ns.limit / smm:.0f}x" if x == "stopped" else f"{x / smm:.0f}x"
-        print(f"{n:>4} {fmt(smm):>10} {fmt(row['lagrange']):>13} {fmt(row['kane']):>10} "
-              f"{ratio(row['kane']):>10} {ratio(row['lagrange']):>13}", flush=True)
+            return f">{ns.limit / med['smm']:.0f}x" if med[kind] is None else f"{med[kind] / med['smm']:.0f}x"
+        print(f"{n:>4} {fmt('smm'):>22} {fmt('lagrange'):>22} {fmt('kane'):>22} "
+              f"{ratio('kane'):>9} {ratio('lagrange'):>13}", flush=True)
     asm, eig, err = sparse_modes()
     print(f"10,000-DOF chain: sparse assembly {asm:.2f} s, lowest 10 modes (eigsh shift-invert) {eig:.2f} s, "
           f"total {asm + eig:.2f} s, max rel error of omega^2 vs closed form {err:.2g}")

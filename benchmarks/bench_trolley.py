@@ -1,41 +1,36 @@
 """Trolley speed, measured side by side in one run (ratios, not absolute times).
 
 1. The paper's helix example end to end (5000 steps, cases 1 and 2), both conventions.
-2. 10^6 track points in one batch call: angles θ, dθ/ds, d²θ/ds², V0, V̇0 -> reactions
-   P0…P5 through the generated modules, through a naive ``sympy.lambdify`` of the
-   unsimplified composed expressions, and through hand-written numpy.
-Target: the generated batch call at least 3x faster than naive lambdify.
+2. 10^6 track points (10^5 with --quick) in one batch call: angles θ, dθ/ds,
+   d²θ/ds², V0, V̇0 -> reactions P0…P5 through the generated numpy modules and
+   their numba twins, through ``sympy.lambdify`` of the composed expressions
+   with ``cse=True`` (the strongest lambdify) and without, and hand-written numpy.
+
+Medians of interleaved repeats with min/max (benchmarks/timing.py).
+Usage: python benchmarks/bench_trolley.py [--quick]
 """
 from __future__ import annotations
 
+import argparse
 import copy
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 import sympy as sp
 
-from symmech.core import pipeline
+from timing import interleaved, machine, ratio
+
+from symmech.core import kernels, pipeline
 from symmech.core.context import Context
-from symmech.generated import trolley_dynamics as dyn
-from symmech.generated import trolley_frame as frm
+from symmech.generated import trolley_dynamics
+from symmech.generated import trolley_frame
 from symmech.trolley import derive, scene, tables
 
-N = 1_000_000
 BODY = dict(m=100.0, r=(1.0, 0.5, 0.2), inertia=(10.0, 20.0, 30.0, 1.0, 2.0, 3.0), g0=9.81, l=2.0, ah=1.0)
 
 
-def best_of(fn, repeat=3):
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
-
-
-def generated(th, dth, ddth, v0, dv0):
+def generated(th, dth, ddth, v0, dv0, frm=trolley_frame, dyn=trolley_dynamics):
     lam = frm.Lambda(*th)
     W = frm.omega_per_length(*th, *dth)
     dW = frm.omega_per_length_rate(*th, *dth, *ddth)
@@ -48,8 +43,8 @@ def generated(th, dth, ddth, v0, dv0):
                          BODY["g0"], BODY["l"], BODY["ah"])
 
 
-def composed_expressions():
-    """P0…P5 as one unsimplified sympy expression of θ, θ', θ'', V0, V̇0 (no CSE)."""
+def composed_expressions(cse):
+    """P0…P5 as one unsimplified sympy expression of θ, θ', θ'', V0, V̇0, lambdified."""
     v0, dv0 = sp.symbols("V0 dV0", real=True)
     omega, omega_rate = (nm.matrix for nm in derive.omega_functions())
     coef = derive.point_coefficients()
@@ -75,7 +70,7 @@ def composed_expressions():
         values[f"nu{i + 1}"] = lam[i, 1]
     expr = rx.matrix.subs({names[k]: v for k, v in values.items() if k in names})
     args = list(derive.THETA + derive.DTHETA + derive.DDTHETA) + [v0, dv0]
-    return sp.lambdify(args, list(expr), modules="numpy", cse=False)
+    return sp.lambdify(args, list(expr), modules="numpy", cse=cse)
 
 
 def hand_numpy(th, dth, ddth, v0, dv0):
@@ -107,32 +102,44 @@ def hand_numpy(th, dth, ddth, v0, dv0):
 
 
 def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="10^5 track points, fewer repeats")
+    quick = p.parse_args().quick
+    repeats = 5 if quick else 7
+    print(f"machine: {machine()}")
     for conventions in ("paper", "physics"):
         data = copy.deepcopy(tables.PAPER_EXAMPLE)
         data["conventions"] = conventions
         setup = pipeline.load(copy.deepcopy(data)).setup
-        t = best_of(lambda: scene.compute(setup), repeat=3)
         with tempfile.TemporaryDirectory() as tmp:
-            full = best_of(lambda: pipeline.run_to(copy.deepcopy(data), Path(tmp) / "out", Context(quiet=True)),
-                           repeat=1)
-        print(f"paper example, 5000 steps, cases 1+2, conventions={conventions}: computation {t * 1e3:.1f} ms, "
-              f"whole run with validation, CSV and plots {full:.2f} s")
+            stats = interleaved({
+                "computation": lambda: scene.compute(setup),
+                "whole run": lambda: pipeline.run_to(copy.deepcopy(data), Path(tmp) / "out", Context(quiet=True)),
+            }, repeats)
+        print(f"paper example, 5000 steps, cases 1+2, conventions={conventions}: computation "
+              f"{stats['computation'].text()}; whole run with validation, CSV and plots {stats['whole run'].text()}")
 
+    n = 10**5 if quick else 10**6
     rng = np.random.default_rng(1)
-    th = rng.uniform(-1.2, 1.2, (3, N))
-    dth, ddth = rng.normal(size=(2, 3, N)) * 0.1
-    v0, dv0 = rng.uniform(0, 50, N), rng.normal(size=N)
-    naive = composed_expressions()
+    th = rng.uniform(-1.2, 1.2, (3, n))
+    dth, ddth = rng.normal(size=(2, 3, n)) * 0.1
+    v0, dv0 = rng.uniform(0, 50, n), rng.normal(size=n)
+    lambdified = {cse: composed_expressions(cse) for cse in (True, False)}
+    compiled = {"frm": kernels.load("trolley_frame"), "dyn": kernels.load("trolley_dynamics")}
+    contenders = {
+        "generated numba": lambda: generated(th, dth, ddth, v0, dv0, **compiled),
+        "generated numpy": lambda: generated(th, dth, ddth, v0, dv0),
+        "lambdify(cse=True)": lambda: np.stack(lambdified[True](*th, *dth, *ddth, v0, dv0), axis=1),
+        "lambdify(cse=False)": lambda: np.stack(lambdified[False](*th, *dth, *ddth, v0, dv0), axis=1),
+        "hand-written numpy": lambda: hand_numpy(th, dth, ddth, v0, dv0),
+    }
     ref = generated(th, dth, ddth, v0, dv0)
-    np.testing.assert_allclose(np.stack(naive(*th, *dth, *ddth, v0, dv0), axis=1), ref, rtol=1e-8, atol=1e-6)
-    np.testing.assert_allclose(hand_numpy(th, dth, ddth, v0, dv0), ref, rtol=1e-8, atol=1e-6)
-    t_gen = best_of(lambda: generated(th, dth, ddth, v0, dv0))
-    t_naive = best_of(lambda: naive(*th, *dth, *ddth, v0, dv0))
-    t_hand = best_of(lambda: hand_numpy(th, dth, ddth, v0, dv0))
-    print(f"10^6 track points -> reactions: generated {t_gen * 1e3:.0f} ms, naive lambdify {t_naive * 1e3:.0f} ms, "
-          f"hand numpy {t_hand * 1e3:.0f} ms")
-    print(f"ratios: naive lambdify / generated = {t_naive / t_gen:.2f} (target >= 3), "
-          f"hand numpy / generated = {t_hand / t_gen:.2f}")
+    for fn in contenders.values():  # also compiles the numba kernels outside the timing
+        np.testing.assert_allclose(fn(), ref, rtol=1e-8, atol=1e-6)
+    stats = interleaved(contenders, repeats)
+    print(f"{n:.0e} track points -> reactions, one batch call")
+    for name, st in stats.items():
+        print(f"    {name:22s} {st.text()}  lambdify(cse=True)/this {ratio(stats['lambdify(cse=True)'], st)}")
 
 
 if __name__ == "__main__":

@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 f7082366b4d85ee20ed5aff6207e788e52f0320178c06090c7f9759716f5e7ef
+# symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
+# source key fe4453273afac45f6cb7336db5ff29803c3c533555140791187785115e0a4485
+# body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113, eqs (1)-(60), derived in symmech.grain.derive.

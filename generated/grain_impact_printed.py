@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 048422447a2dfde41fe8659dcd8df42bb88fa303b8db9105dad1a43b482d81c6
+# symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
+# source key bd32f788d2ff1e3400ba25316f82a75b2baafd17936c86562d2db8982fec5378
+# body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Source: seed 000_b52a2f612feb4113, eqs (3)-(60), transcribed in symmech.grain.printed.

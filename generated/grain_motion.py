@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 d068adcefdfc6473443ab7320365408bff370b93f814566c621c158c87ff0bbe
+# symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
+# source key 17811bdf13ef7292756cdde1d459e86bcb99bc77e396dc8f01c356a3de43c3c0
+# body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).

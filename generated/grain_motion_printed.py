@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 ea77a699a1e68792ba85c76b8531b0ee9ac66f7ca0e841130306b3c7a74e7766
+# symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
+# source key 618c806b959521becab632a7bcb685bb40e9e0a8be47e65431e01bbfe6550588
+# body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 
 Source: symmech.grain.printed_motion (paper 1, seed 000, eqs (61)-(63)).

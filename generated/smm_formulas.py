@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 b197487dfaaac300aa03ac5c676a4d283b41efc5c5471cbf14c745558ddbfad6
+# symmech 0.1.0 generated module; inputs sha256 31827bf4de54432aee60e2f483d88627e3b5b6a2cd2dcfa7f887cfa8f374220f
+# source key 09edeb663e1ab46caffc8a638ce6b0989122a623f7e643c8b0c2fb226fa5b3ab
+# body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 1d489a997ef65f752b83386712c41e1cb0a83154145afb4de935d8c3d44cb7be
+# symmech 0.1.0 generated module; inputs sha256 ebd74940209542e869c1a9d5139544a89a0781bf3b3c9e99e8ebf69449a2a8e6
+# source key 1ac32bdabbd7c06f0ee0661e3ea9607ceb0a5242529983b9e191cfe2edebe790
+# body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).

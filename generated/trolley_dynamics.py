@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 ccd7499bac5e805a9620fd2bc4b7e0423fd580387375e27793fe478930ce3570
+# symmech 0.1.0 generated module; inputs sha256 c37fcc7e0909167dad763b47a6ae355e452d497f376d5191c938c94b50c3503f
+# source key 6cf77d539a02d7bd57d3b581fd6371fea02d6f290d6aabf82775c090a99ceac2
+# body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

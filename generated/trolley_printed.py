@@ -1,4 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 ab95df2abf1ab4488a53efa46597960c9bed9ba927e402d8e6d2ca57d8db17f9
+# symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
+# source key dc81863556b959a17eeafc6ccbbb206e0836b8bdecabdd17a1d878b651f8fe9e
+# body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.

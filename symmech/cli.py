@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import json
 import os
 import signal
@@ -99,24 +100,49 @@ def cmd_bench(ns) -> int:
     return 0
 
 
-def cmd_codegen(ns) -> int:
-    from symmech.core import emit
+def _default_generated() -> Path:
+    """The package's generated/ folder when it sits in a writable checkout; SymmechError otherwise."""
+    from symmech.core import codegen
 
-    directory = Path(ns.dir) if ns.dir else emit.default_directory()
-    start = time.perf_counter()
-    specs = emit.module_specs()
+    folder = Path(importlib.util.find_spec("symmech.generated").submodule_search_locations[0])
+    checkout = (folder.name == "generated" and folder.parent == codegen.ROOT
+                and (folder.parent / "pyproject.toml").is_file())
+    if not checkout or not os.access(folder, os.W_OK):
+        raise SymmechError(f"codegen: {folder} is an installed package, not a writable symmech checkout; "
+                           "regenerate into a folder you name with --dir DIR")
+    return folder
+
+
+def cmd_codegen(ns) -> int:
+    from symmech.core import codegen
+
+    if ns.dir:
+        directory = Path(ns.dir)
+    elif ns.check:
+        directory = Path(importlib.util.find_spec("symmech.generated").submodule_search_locations[0])
+    else:
+        directory = _default_generated()
+    if directory.exists() and not directory.is_dir():
+        raise SymmechError(f"codegen --dir: {directory} is not a folder")
+    try:
+        report = codegen.run(directory, check=ns.check)
+    except OSError as exc:
+        raise SymmechError(f"codegen --dir: cannot use {exc.filename or directory}: {exc.strerror}") from None
+    ran = f"{len(report.derived)} derivation modules run" if report.derived else "nothing derived (cache)"
+    if ns.check and report.outdated_keys:
+        print(f"note: {len(report.outdated_keys)} files have outdated source keys (output unchanged); "
+              "`symmech codegen` refreshes them so --check stays fast", file=sys.stderr)
     if ns.check:
-        bad = emit.stale(directory, specs)
-        if bad:
-            print("stale generated files (run `make codegen`):", file=sys.stderr)
-            for path in bad:
+        if report.stale:
+            print("stale generated files (run `symmech codegen`):", file=sys.stderr)
+            for path in report.stale:
                 print(f"  {path}", file=sys.stderr)
             return 1
-        print(f"generated/ is up to date ({len(specs)} modules, {time.perf_counter() - start:.1f} s)")
+        print(f"{directory} is up to date ({ran}, {report.seconds:.1f} s)")
         return 0
-    for spec in specs:
-        print(f"wrote {emit.write(spec, directory)}")
-    print(f"codegen: {len(specs)} modules in {time.perf_counter() - start:.1f} s")
+    for path in report.written:
+        print(f"wrote {path}")
+    print(f"codegen: {len(report.written)} files written, {ran}, {report.seconds:.1f} s")
     return 0
 
 
@@ -224,8 +250,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")
     c.add_argument("--check", action="store_true",
-                   help="write nothing; exit 1 and name the stale files if generated/ is out of date")
-    c.add_argument("--dir", help="target folder (default: the installed symmech.generated folder)")
+                   help="write nothing; exit 1 and name the stale, missing or stray files if generated/ "
+                        "is out of date")
+    c.add_argument("--dir", help="target folder (default: generated/ of the checkout; required when "
+                                 "symmech is installed without -e)")
     c.set_defaults(func=cmd_codegen)
 
     lx = sub.add_parser("latex", help="print a derived matrix as LaTeX")

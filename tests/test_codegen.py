@@ -1,8 +1,12 @@
 """Emission layer: reproducible, checked, sympy-free generated modules."""
+import dataclasses
+import hashlib
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +14,8 @@ import sympy
 
 from symmech import __version__
 from symmech.cli import main
-from symmech.core import emit
+from symmech.core import codegen, emit, integrity
+from symmech.core.scene import SymmechError
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
 
 
@@ -19,36 +24,216 @@ def specs():
     return emit.module_specs()
 
 
+GENERATED = emit.default_directory()
+
+
+def _copy_generated(tmp_path):
+    target = tmp_path / "generated"
+    shutil.copytree(GENERATED, target, ignore=shutil.ignore_patterns("__pycache__"))
+    return target
+
+
 def test_generated_folder_is_up_to_date(specs):
-    assert emit.stale(emit.default_directory(), specs) == []
-
-
-def test_first_line_names_version_and_input_hash(specs):
+    """Every module of both targets is exactly what its derivation renders (the slow path)."""
+    index = codegen.Index.read(GENERATED)
+    assert sorted(index.modules) == sorted(s.name for s in specs)
     for spec in specs:
-        first = (emit.default_directory() / f"{spec.name}.py").read_text().splitlines()[0]
-        assert first == f"# symmech {__version__} generated module; inputs sha256 {emit.inputs_hash(spec)}"
+        producer = index.modules[spec.name]
+        key = codegen.source_key(producer, index.inputs[producer])
+        for target in emit.TARGETS:
+            path = GENERATED / f"{spec.name}{target.suffix}.py"
+            assert path.read_text() == emit.render(spec, target, key), path.name
+
+
+def test_header_names_version_inputs_key_and_body(specs):
+    for spec in specs:
+        for target in emit.TARGETS:
+            text = (GENERATED / f"{spec.name}{target.suffix}.py").read_text()
+            header, body = integrity.split(text)
+            assert header.version == __version__
+            assert header.inputs == emit.inputs_hash(spec, target)
+            assert header.body == hashlib.sha256(body.encode()).hexdigest()
+            assert len(text.splitlines()[0]) < 120
 
 
 def test_render_is_byte_identical_under_another_hash_seed(tmp_path):
-    """A fresh interpreter with a different PYTHONHASHSEED writes the same bytes."""
+    """A fresh interpreter with a different PYTHONHASHSEED writes the same bytes, index included."""
     env = dict(os.environ, PYTHONHASHSEED="12345")
     subprocess.run([sys.executable, "-m", "symmech", "codegen", "--dir", str(tmp_path)],
                    check=True, env=env, capture_output=True)
-    for path in tmp_path.glob("*.py"):
-        assert path.read_bytes() == (emit.default_directory() / path.name).read_bytes(), path.name
+    written = sorted(p.name for p in tmp_path.glob("*.py"))
+    assert written == sorted(p.name for p in GENERATED.glob("*.py"))
+    for name in written:
+        assert (tmp_path / name).read_bytes() == (GENERATED / name).read_bytes(), name
 
 
-def test_check_names_stale_and_stray_files(tmp_path, specs, capsys):
-    spec = specs[0]
-    emit.write(spec, tmp_path)
-    (tmp_path / "__init__.py").write_text("")
-    target = tmp_path / f"{spec.name}.py"
+def test_no_change_check_runs_no_derivation():
+    """The cached path of `codegen --check` and `codegen` imports neither sympy nor numpy."""
+    code = textwrap.dedent("""
+        import sys
+        from symmech.cli import main
+        assert main(["codegen", "--check"]) == 0
+        assert main(["codegen"]) == 0
+        print(sorted(m for m in ("sympy", "numpy", "jinja2") if m in sys.modules))
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "0 files written, nothing derived" in done.stdout
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_check_names_stale_and_stray_files(tmp_path, capsys):
+    folder = _copy_generated(tmp_path)
+    target = folder / "trolley_frame.py"
     target.write_text(target.read_text() + "# edited by hand\n")
-    (tmp_path / "leftover.py").write_text("")
-    bad = emit.stale(tmp_path, [spec])
-    assert bad == [str(target), str(tmp_path / "leftover.py")]
-    assert main(["codegen", "--check", "--dir", str(tmp_path)]) == 1
-    assert str(target) in capsys.readouterr().err
+    (folder / "leftover.py").write_text("")
+    assert main(["codegen", "--check", "--dir", str(folder)]) == 1
+    err = capsys.readouterr().err
+    assert str(target) in err and str(folder / "leftover.py") in err
+    assert str(folder / "trolley_frame_nb.py") not in err
+    assert main(["codegen", "--dir", str(folder)]) == 0
+    assert target.read_bytes() == (GENERATED / "trolley_frame.py").read_bytes()
+    assert (folder / "leftover.py").exists()  # not written by codegen: named, never deleted
+    (folder / "leftover.py").unlink()
+    assert main(["codegen", "--check", "--dir", str(folder)]) == 0
+
+
+def test_changed_derivation_is_caught_and_unchanged_output_passes(tmp_path, monkeypatch, capsys):
+    """A new source key makes codegen derive; only a changed text is stale."""
+    folder = _copy_generated(tmp_path)
+    real_key, real_derive = codegen.source_key, codegen.derive
+    monkeypatch.setattr(codegen, "source_key", lambda p, d: "f" * 64 if p.endswith("trolley.derive")
+                        else real_key(p, d))
+    assert main(["codegen", "--check", "--dir", str(folder)]) == 0
+    assert "outdated source keys" in capsys.readouterr().err
+
+    def derive(producer):
+        specs, data = real_derive(producer)
+        if producer.endswith("trolley.derive"):
+            specs = (dataclasses.replace(specs[0], doc=specs[0].doc + " Changed."),) + specs[1:]
+        return specs, data
+
+    monkeypatch.setattr(codegen, "derive", derive)
+    assert main(["codegen", "--check", "--dir", str(folder)]) == 1
+    stale = [line.strip() for line in capsys.readouterr().err.splitlines() if line.startswith("  ")]
+    assert stale == [str(folder / "trolley_frame.py"), str(folder / "trolley_frame_nb.py")]
+
+
+@pytest.mark.parametrize("damage", ["one byte", "truncated", "no header"])
+def test_verify_refuses_a_damaged_module(tmp_path, monkeypatch, damage):
+    folder = _copy_generated(tmp_path)
+    path = folder / "grain_impact.py"
+    text = path.read_text()
+    header, body = integrity.split(text)
+    assert integrity.problem(path) is None
+    monkeypatch.setattr(integrity, "module_path", lambda name: folder / f"{name}.py")
+    assert integrity.verify("grain_impact") == header.body
+    spot = text.index("x0*x1 - x2*x5")
+    path.write_text({"one byte": text[:spot] + "x0*x1 + x2*x5" + text[spot + 13:],
+                     "truncated": text[:len(text) // 2],
+                     "no header": body}[damage])
+    with pytest.raises(SymmechError, match=r"generated module grain_impact is edited.*regenerate with `symmech codegen`"):
+        integrity.verify("symmech.generated.grain_impact")
+
+
+def test_verify_refuses_a_module_of_another_version(tmp_path, monkeypatch):
+    folder = _copy_generated(tmp_path)
+    path = folder / "trolley_frame.py"
+    path.write_text(path.read_text().replace(f"# symmech {__version__} ", "# symmech 0.0.1 ", 1))
+    monkeypatch.setattr(integrity, "module_path", lambda name: folder / f"{name}.py")
+    with pytest.raises(SymmechError, match="trolley_frame is stale .*0.0.1"):
+        integrity.verify("trolley_frame")
+
+
+def test_deleted_module_is_named_by_check_and_recreated(tmp_path, capsys):
+    folder = _copy_generated(tmp_path)
+    (folder / "smm_printed.py").unlink()
+    (folder / "grain_motion_nb.py").unlink()
+    assert main(["codegen", "--check", "--dir", str(folder)]) == 1
+    err = capsys.readouterr().err
+    assert str(folder / "smm_printed.py") in err and str(folder / "grain_motion_nb.py") in err
+    assert main(["codegen", "--dir", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert "2 files written, 2 derivation modules run" in out
+    for name in ("smm_printed.py", "grain_motion_nb.py"):
+        assert (folder / name).read_bytes() == (GENERATED / name).read_bytes()
+
+
+def test_deleted_index_rebuilds_everything(tmp_path, capsys):
+    folder = _copy_generated(tmp_path)
+    (folder / "__init__.py").unlink()
+    assert main(["codegen", "--check", "--dir", str(folder)]) == 1
+    assert str(folder / "__init__.py") in capsys.readouterr().err
+    assert main(["codegen", "--dir", str(folder)]) == 0
+    assert (folder / "__init__.py").read_bytes() == (GENERATED / "__init__.py").read_bytes()
+
+
+def test_installed_package_refuses_codegen_without_dir(monkeypatch, capsys):
+    """Not a checkout (as after `pip install .`): one line, exit 2, nothing written."""
+    monkeypatch.setattr(codegen, "ROOT", Path("/nonexistent/site-packages"))
+    assert main(["codegen"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "not a writable symmech checkout" in err and "--dir" in err
+
+
+def test_unwritable_dir_is_one_line(tmp_path, monkeypatch, capsys):
+    folder = _copy_generated(tmp_path)
+    (folder / "__init__.py").write_text("")
+
+    def refuse(path, text):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(integrity, "write_atomic", refuse)
+    assert main(["codegen", "--dir", str(folder)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert f"cannot use {folder / '__init__.py'}: Permission denied" in err
+
+
+def test_dir_that_is_a_file_is_refused(tmp_path, capsys):
+    (tmp_path / "f").write_text("")
+    assert main(["codegen", "--dir", str(tmp_path / "f")]) == 2
+    assert "is not a folder" in capsys.readouterr().err
+
+
+def test_used_modules_lists_the_recorded_hashes():
+    from symmech.generated import grain_impact, trolley_frame  # noqa: F401
+
+    used = integrity.used_modules()
+    assert used["grain_impact"] == integrity.verify("grain_impact")
+    assert used["trolley_frame"] == integrity.split((GENERATED / "trolley_frame.py").read_text())[0].body
+
+
+def test_atomic_write_leaves_no_partial_file(tmp_path, monkeypatch):
+    path = tmp_path / "m.py"
+    path.write_text("old")
+
+    def fail(*args):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", fail)
+    with pytest.raises(OSError):
+        integrity.write_atomic(path, "new text")
+    assert path.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["m.py"]
+
+
+def test_source_key_follows_imports_and_data(tmp_path):
+    """The key covers what the derivation imports from symmech, and the scenes it reads."""
+    module = tmp_path / "fake.py"
+    module.write_text("import numpy\nfrom . import forms\nfrom ..core import scene\n"
+                      "def f():\n    from symmech.smm.model import Mechanism\n")
+    assert sorted(codegen._imported("symmech.smm.fake", module)) == [
+        "symmech", "symmech.core", "symmech.core.scene", "symmech.smm", "symmech.smm.forms", "symmech.smm.model"]
+    assert "symmech.smm.forms" in codegen.closure("symmech.smm.derive")
+    assert "symmech.core.scene" in codegen.closure("symmech.smm.derive")
+    assert "symmech.grain.body" not in codegen.closure("symmech.grain.derive")
+    inputs = codegen.Index.read(GENERATED).inputs
+    assert "scenes/smm_excavator.toml" in inputs["symmech.smm.derive"]
+    assert inputs["symmech.grain.derive"] == ()
+    assert codegen.source_key("symmech.smm.derive", inputs["symmech.smm.derive"]) != \
+        codegen.source_key("symmech.smm.derive", inputs["symmech.smm.derive"][:-1])
 
 
 def test_undeclared_symbols_are_named():

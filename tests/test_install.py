@@ -73,10 +73,13 @@ def test_commands_run_outside_the_checkout(installed, args, first_words):
     assert proc.stderr == "" and proc.stdout.startswith(first_words) and len(proc.stdout) > 100
 
 
-def test_codegen_check_in_a_plain_install(installed):
+def test_codegen_in_a_plain_install(installed):
     proc = symmech(installed, "codegen", "--check")
     assert proc.returncode == 0, proc.stderr
     assert "up to date" in proc.stdout
+    proc = symmech(installed, "codegen")  # would write into site-packages: refused in one line
+    assert proc.returncode == 2 and len(proc.stderr.splitlines()) == 1
+    assert "is an installed package" in proc.stderr and "--dir" in proc.stderr
 
 
 @pytest.mark.parametrize("scene", SCENES, ids=[p.stem for p in SCENES])

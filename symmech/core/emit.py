@@ -1,9 +1,11 @@
-"""Layer 2: print derived matrices as numpy code through jinja2 templates.
+"""Layer 2: print derived matrices as code through jinja2 templates.
 
-``render`` returns the text of one generated module, ``write`` writes it and
-``stale`` compares what is on disk with what would be written. The same
-common-subexpression split (:func:`cse_chunks`) feeds the generated code and
-``symmech latex --cse``, so the two visibly match.
+``render`` returns the text of one generated module for a :class:`Target` and
+``write`` writes it atomically (:mod:`symmech.core.codegen` decides what to
+regenerate). Both targets print the same common-subexpression split
+(:func:`cse_chunks`), which ``symmech latex --cse`` shows too: a target is a
+printer (numpy or math calls), a template and the way a chunk line addresses
+an output element, nothing more.
 
 Determinism: elements are split into chunks in matrix order, each chunk is
 CSE'd with ``order="canonical"`` and a fixed symbol stream, and the header
@@ -16,7 +18,6 @@ import functools
 import hashlib
 import importlib
 import importlib.resources
-import pkgutil
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,11 +25,12 @@ from pathlib import Path
 import jinja2
 import sympy
 from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.pycode import PythonCodePrinter
 
 from symmech import __version__
+from symmech.core import integrity
 from symmech.core.derivation import ModuleSpec, NamedMatrix
 
-TEMPLATE = "module.py.j2"
 # Elements per chunk: each chunk is CSE'd on its own and, when a function has
 # more than one, emitted as a private helper so no function body grows huge.
 CHUNK_ELEMENTS = 64
@@ -42,14 +44,17 @@ class Chunk:
     elements: tuple[tuple[tuple[int, ...], sympy.Expr], ...]  # (index, expr)
 
 
-def cse_chunks(nm: NamedMatrix, chunk_elements: int = CHUNK_ELEMENTS) -> list[Chunk]:
-    """Split ``nm`` (arguments under their code names) into chunks and CSE each chunk."""
-    matrix = nm.code_matrix()
-    rows, cols = matrix.shape
-    shape = nm.shape
+def cse_chunks(nm: NamedMatrix) -> list[Chunk]:
+    """Split ``nm`` (arguments under their code names) into chunks of CHUNK_ELEMENTS and CSE each chunk."""
     clash = {a.name for a in nm.args if re.fullmatch(r"x\d+", a.name)}
     if clash:
         raise ValueError(f"{nm.name}: argument names {sorted(clash)} clash with CSE names x0, x1, ...")
+    return list(_cse_chunks(sympy.ImmutableMatrix(nm.code_matrix()), nm.shape, CHUNK_ELEMENTS))
+
+
+@functools.lru_cache(maxsize=64)  # every target prints the same chunks: CSE once per matrix
+def _cse_chunks(matrix: sympy.ImmutableMatrix, shape: tuple[int, ...], chunk_elements: int) -> tuple[Chunk, ...]:
+    rows, cols = matrix.shape
     indexed = []
     for i in range(rows):
         for j in range(cols):
@@ -63,87 +68,133 @@ def cse_chunks(nm: NamedMatrix, chunk_elements: int = CHUNK_ELEMENTS) -> list[Ch
         replacements, reduced = sympy.cse([e for _, e in part], symbols=symbols, order="canonical")
         counter += len(replacements)
         chunks.append(Chunk(tuple(replacements), tuple((idx, e) for (idx, _), e in zip(part, reduced))))
-    return chunks
+    return tuple(chunks)
 
 
-class _Printer(NumPyPrinter):
-    """NumPy printer that refuses to print anything it cannot translate."""
-
-    def __init__(self):
-        super().__init__({"fully_qualified_modules": True, "strict": True})
+class _ExactDivision:
+    """x**(-1) printed as a division: exact and faster than a power call (both targets)."""
 
     def _print_Pow(self, expr, rational=False):
-        # x**(-1.0) goes through numpy.power; a division is exact and faster.
         if expr.exp == -1:
             return f"1/{self.parenthesize(expr.base, sympy.printing.precedence.PRECEDENCE['Pow'])}"
         return super()._print_Pow(expr, rational=rational)
 
 
-def _index_text(index: tuple[int, ...]) -> str:
-    return "[...]" if not index else "[..., " + ", ".join(str(i) for i in index) + "]"
+class _NumPyPrinter(_ExactDivision, NumPyPrinter):
+    """numpy.* calls that broadcast over a batch; refuses anything it cannot translate."""
+
+    def __init__(self):
+        super().__init__({"fully_qualified_modules": True, "strict": True})
 
 
-def _chunk_lines(chunk: Chunk, printer: _Printer) -> list[str]:
+class _MathPrinter(_ExactDivision, PythonCodePrinter):
+    """math.* calls on floats, which numba compiles to plain libm calls."""
+
+    def __init__(self):
+        super().__init__({"fully_qualified_modules": True, "strict": True})
+
+
+@dataclass(frozen=True)
+class Target:
+    """An emission target: the same CSE'd chunks through another printer and template.
+
+    ``element`` addresses one output element in a chunk line: ``...`` (numpy: the
+    whole batch at once) or ``k`` (numba: the k-th configuration of a loop).
+    """
+
+    suffix: str  # module name = spec name + suffix
+    template: str
+    printer: type
+    element: str
+    reserved: frozenset[str]  # names the template uses beside the arguments
+
+
+NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...", frozenset({"out", "batch", "numpy"}))
+NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "_k",
+               frozenset({"out", "_k", "_steps", "_arrays", "_batch", "math", "numba", "numpy"}))
+TARGETS = (NUMPY, NUMBA)
+
+
+def _chunk_lines(chunk: Chunk, printer, element: str) -> list[str]:
     lines = [f"{s} = {printer.doprint(e)}" for s, e in chunk.replacements]
-    lines += [f"out{_index_text(idx)} = {printer.doprint(e)}" for idx, e in chunk.elements]
+    lines += [f"out[{', '.join([element, *map(str, idx)])}] = {printer.doprint(e)}"
+              for idx, e in chunk.elements]
     return lines
 
 
-def _function_context(nm: NamedMatrix) -> dict:
-    printer = _Printer()
-    chunks = [_chunk_lines(c, printer) for c in cse_chunks(nm)]
+def _function_context(nm: NamedMatrix, target: Target) -> dict:
+    clash = {a.name for a in nm.args} & target.reserved
+    if clash:
+        raise ValueError(f"{nm.name}: argument names {sorted(clash)} are reserved by the templates")
+    printer = target.printer()
+    arglist = ", ".join(a.name for a in nm.args)
     return {
         "name": nm.name,
         "meaning": nm.meaning,
         "unit": nm.unit,
         "equations": nm.equations,
         "args": nm.args,
-        "arglist": ", ".join(a.name for a in nm.args),
-        "chunk_args": ", ".join([a.name for a in nm.args] + ["out"]),
+        "arglist": arglist,
         "shape": nm.shape,
         "shape_text": "(...)" if not nm.shape else "(..., " + ", ".join(map(str, nm.shape)) + ")",
-        "chunks": chunks,
+        "chunks": [_chunk_lines(c, printer, target.element) for c in cse_chunks(nm)],
     }
 
 
-def _template_text() -> str:
-    return importlib.resources.files("symmech.templates").joinpath(TEMPLATE).read_text()
+def template_names() -> list[str]:
+    """Every template file, in name order (all of them feed every module's hashes)."""
+    folder = importlib.resources.files("symmech.templates")
+    return sorted(p.name for p in folder.iterdir() if p.name.endswith(".j2"))
 
 
-def inputs_hash(spec: ModuleSpec) -> str:
+def _template_text(name: str) -> str:
+    return importlib.resources.files("symmech.templates").joinpath(name).read_text()
+
+
+def inputs_hash(spec: ModuleSpec, target: Target = NUMPY) -> str:
     """sha256 of everything the module text is made from."""
     h = hashlib.sha256()
-    for part in (__version__, _template_text(), spec.name, spec.doc, spec.source):
+    for part in (__version__, target.suffix, *map(_template_text, template_names()),
+                 spec.name, spec.doc, spec.source):
         h.update(part.encode())
     for f in spec.functions:
         h.update(f"{f.name}|{f.meaning}|{f.unit}|{f.equations}".encode())
         for a in f.args:
             h.update(f"{a.name}|{a.meaning}|{a.unit}".encode())
-        h.update(sympy.srepr(f.matrix).encode())
+        h.update(_srepr_digest(sympy.ImmutableMatrix(f.matrix)))
     return h.hexdigest()
 
 
-def render(spec: ModuleSpec) -> str:
-    """Text of the generated module for ``spec``."""
+@functools.lru_cache(maxsize=256)  # srepr is the slow part and is the same for every target
+def _srepr_digest(matrix: sympy.ImmutableMatrix) -> bytes:
+    return hashlib.sha256(sympy.srepr(sympy.Matrix(matrix)).encode()).digest()
+
+
+# Source key of modules written outside `symmech codegen` (no cache entry).
+NO_KEY = "0" * 64
+
+
+def render(spec: ModuleSpec, target: Target = NUMPY, key: str = NO_KEY) -> str:
+    """Text of the generated module for ``spec`` in ``target``, header included."""
     env = jinja2.Environment(
-        loader=jinja2.FunctionLoader(lambda _name: _template_text()),
+        loader=jinja2.FunctionLoader(_template_text),
         keep_trailing_newline=True,
         trim_blocks=True,
         lstrip_blocks=True,
         undefined=jinja2.StrictUndefined,
     )
-    return env.get_template(TEMPLATE).render(
-        version=__version__,
-        hash=inputs_hash(spec),
+    body = env.get_template(target.template).render(
         spec=spec,
-        functions=[_function_context(f) for f in spec.functions],
+        functions=[_function_context(f, target) for f in spec.functions],
     )
+    return integrity.with_header(body, inputs_hash(spec, target), key)
 
 
-def write(spec: ModuleSpec, directory: Path) -> Path:
+def write(spec: ModuleSpec, directory: Path, target: Target = NUMPY, key: str = NO_KEY) -> Path:
+    """Write the module atomically into ``directory`` (created if needed); its path."""
     Path(directory).mkdir(parents=True, exist_ok=True)
-    path = Path(directory) / f"{spec.name}.py"
-    path.write_text(render(spec))
+    path = Path(directory) / f"{spec.name}{target.suffix}.py"
+    integrity.write_atomic(path, render(spec, target, key))
     return path
 
 
@@ -152,49 +203,24 @@ def default_directory() -> Path:
     return Path(importlib.import_module("symmech.generated").__path__[0])
 
 
-@functools.cache
-def _all_specs() -> tuple[ModuleSpec, ...]:
-    specs = []
-    for module in paper_modules(("derive", "printed")):
-        specs.extend(module.module_specs())
-    names = [s.name for s in specs]
-    if len(set(names)) != len(names):
-        raise ValueError(f"duplicate generated module names: {names}")
-    return tuple(sorted(specs, key=lambda s: s.name))
-
-
 def module_specs() -> list[ModuleSpec]:
     """Every ModuleSpec the paper packages declare, sorted by name.
 
     A paper package ``symmech.<paper>`` declares specs in its ``derive*`` and
     ``printed*`` modules through a ``module_specs()`` function. Derivations run
-    once per process.
+    once per process (:func:`symmech.core.codegen.derive`).
     """
-    return list(_all_specs())
+    from symmech.core import codegen
+
+    specs = [s for producer in codegen.producers() for s in codegen.derive(producer)[0]]
+    names = [s.name for s in specs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"duplicate generated module names: {names}")
+    return sorted(specs, key=lambda s: s.name)
 
 
 def paper_modules(prefixes: tuple[str, ...]) -> list:
-    """Modules ``symmech.<paper>.<prefix>*`` of every paper package, in name order."""
-    import symmech
+    """Modules ``symmech.<paper>.<prefix>*`` of every paper package, imported, in name order."""
+    from symmech.core.codegen import paper_module_names
 
-    found = []
-    papers = (m.name for m in pkgutil.iter_modules(symmech.__path__) if m.ispkg and m.name != "core")
-    for pkg in sorted(papers):
-        package = importlib.import_module(f"symmech.{pkg}")
-        for m in sorted(pkgutil.iter_modules(package.__path__), key=lambda m: m.name):
-            if m.name.startswith(prefixes):
-                found.append(importlib.import_module(f"symmech.{pkg}.{m.name}"))
-    return found
-
-
-def stale(directory: Path, specs: list[ModuleSpec]) -> list[str]:
-    """Files in ``directory`` that differ from what ``specs`` render, or should not be there."""
-    directory = Path(directory)
-    out = []
-    expected = {f"{s.name}.py" for s in specs} | {"__init__.py"}
-    for spec in specs:
-        path = directory / f"{spec.name}.py"
-        if not path.exists() or path.read_text() != render(spec):
-            out.append(str(path))
-    out += sorted(str(p) for p in directory.glob("*.py") if p.name not in expected)
-    return out
+    return [importlib.import_module(name) for name in paper_module_names(prefixes)]

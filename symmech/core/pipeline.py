@@ -17,7 +17,6 @@ from __future__ import annotations
 import csv
 import fcntl
 import glob
-import hashlib
 import json
 import os
 import shutil
@@ -33,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from symmech import __version__
-from symmech.core import registry
+from symmech.core import integrity, registry
 from symmech.core.context import Context
 from symmech.core.results import Result
 from symmech.core.scene import SymmechError, check_depth, read_toml
@@ -230,7 +229,7 @@ def _summary(result: Result, scene: Scene, files: list[str], timing: dict) -> di
     return {"symmech_version": __version__, "kind": result.kind,
             "status": "warnings" if result.warnings else "ok", "scene_file": scene.source,
             "timing_s": {**timing, "total": sum(timing.values())},
-            "generated_modules": generated_modules(), **result.summary,
+            "generated_modules": integrity.used_modules(), **result.summary,
             "warnings": result.warnings, "files": files, "tables": _describe(result.tables),
             "scene": json.loads(json.dumps(scene.resolved, default=str))}
 
@@ -240,13 +239,6 @@ def _describe(tables: dict) -> dict:
     return {name: {"rows": len(t.data), "doc": t.doc, "text_columns": list(t.text),
                    "columns": [{"name": c.name, "unit": c.unit, "doc": c.doc} for c in t.columns]}
             for name, t in tables.items()}
-
-
-def generated_modules() -> dict[str, str]:
-    """sha256 (hex) of the file of every ``symmech.generated`` module loaded, by module name."""
-    loaded = sorted(name for name in list(sys.modules) if name.startswith("symmech.generated."))
-    return {name.rpartition(".")[2]: hashlib.sha256(Path(sys.modules[name].__file__).read_bytes()).hexdigest()
-            for name in loaded}
 
 
 def _json_default(value):

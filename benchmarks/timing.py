@@ -1,0 +1,49 @@
+"""Interleaved repeats for the benchmarks: medians with min/max, never single shots.
+
+Every contender runs once per round, rounds repeat ``repeats`` times, so a
+machine that slows down for a while slows every contender alike.
+"""
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class Stats:
+    median: float
+    low: float
+    high: float
+    n: int
+
+    def text(self, unit: str = "s", scale: float = 1.0) -> str:
+        return (f"{self.median * scale:9.4g} {unit} (min {self.low * scale:.4g}, max {self.high * scale:.4g}, "
+                f"n={self.n})")
+
+
+def interleaved(contenders: dict[str, Callable[[], object]], repeats: int = 5,
+                number: int = 1) -> dict[str, Stats]:
+    """Time each zero-argument callable ``number`` times per round over ``repeats`` rounds; seconds per call."""
+    samples = {name: [] for name in contenders}
+    for _ in range(repeats):
+        for name, fn in contenders.items():
+            start = time.perf_counter()
+            for _ in range(number):
+                fn()
+            samples[name].append((time.perf_counter() - start) / number)
+    return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
+
+
+def ratio(slow: Stats, fast: Stats) -> str:
+    """slow/fast at the medians, with the range from the extremes."""
+    return (f"{slow.median / fast.median:6.2f}x (range {slow.low / fast.high:.2f}-"
+            f"{slow.high / fast.low:.2f})")
+
+
+def machine() -> str:
+    import os
+    import platform
+
+    return f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"

@@ -1,0 +1,284 @@
+"""``symmech codegen``: regenerate ``generated/`` only where its inputs changed.
+
+A *producer* is a module ``symmech.<paper>.derive*`` / ``.printed*`` with
+``module_specs()``; every spec becomes two modules, ``<name>.py`` (numpy, the
+reference) and ``<name>_nb.py`` (numba), see :mod:`symmech.core.emit`.
+
+Cache: each module's header records the *source key* of its producer, a
+sha256 of the symmech and sympy versions, every template, the source text of
+the producer and of the emitter and of every symmech module they import
+(transitively, read with ``ast``, nothing imported), and the data files and
+folders the derivation read (recorded while it ran, listed in the package
+index ``generated/__init__.py``). When the key and the body hash of every
+module of a producer match, the producer is up to date without running sympy;
+otherwise it is derived and rendered, and a module counts as stale only when
+its text (source-key line aside) differs, so a refactor that does not change
+the output costs one slow check, not a failure.
+"""
+from __future__ import annotations
+
+import ast
+import functools
+import hashlib
+import importlib
+import importlib.metadata
+import importlib.util
+import pkgutil
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import symmech
+from symmech import __version__
+from symmech.core import integrity
+
+INDEX = "__init__.py"
+SUFFIXES = ("", "_nb")  # emit.TARGETS' suffixes, repeated here so the fast path needs no sympy
+# The emitter's own files feed every key (not their imports: the error class's module does not shape output).
+EMITTER = ("symmech.core.emit", "symmech.core.integrity", "symmech.core.derivation")
+_PACKAGE_DIR = Path(symmech.__file__).resolve().parent
+ROOT = _PACKAGE_DIR.parent  # the repository in a checkout; data paths are stored relative to it
+_INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by hand).
+
+Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
+reference), ``<name>_nb.py`` is its numba twin (load it through
+``symmech.core.kernels``). Regenerate with ``make codegen``; check with
+``symmech codegen --check``. This index is written by codegen too.
+"""
+'''
+
+
+def paper_module_names(prefixes: tuple[str, ...]) -> list[str]:
+    """Names ``symmech.<paper>.<prefix>*`` of every paper package, in name order; nothing imported."""
+    found = []
+    for pkg in sorted(m.name for m in pkgutil.iter_modules([str(_PACKAGE_DIR)]) if m.ispkg):
+        if pkg in ("core", "generated", "templates"):
+            continue
+        for m in sorted(pkgutil.iter_modules([str(_PACKAGE_DIR / pkg)]), key=lambda m: m.name):
+            if m.name.startswith(prefixes):
+                found.append(f"symmech.{pkg}.{m.name}")
+    return found
+
+
+def producers() -> list[str]:
+    return paper_module_names(("derive", "printed"))
+
+
+# -- source key ---------------------------------------------------------------
+
+def _source_file(module: str) -> Path | None:
+    """File of a symmech module or package, found without importing it."""
+    folder = _PACKAGE_DIR.joinpath(*module.split(".")[1:])
+    for path in (folder / "__init__.py", folder.with_suffix(".py")):
+        if path.is_file():
+            return path
+    return None
+
+
+def _imported(module: str, path: Path) -> set[str]:
+    """symmech modules (and their parent packages) that ``path`` imports anywhere in its text."""
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
+            names.add(base)
+            names.update(f"{base}.{a.name}" for a in node.names)
+    found = set()
+    for name in names:
+        parts = name.split(".")
+        if parts[0] == "symmech":
+            found.update(".".join(parts[:i]) for i in range(1, len(parts) + 1))
+    return {n for n in found if _source_file(n) is not None}
+
+
+def closure(module: str) -> list[str]:
+    """``module`` and every symmech module it imports, transitively, sorted."""
+    seen, todo = set(), [module]
+    while todo:
+        name = todo.pop()
+        if name not in seen:
+            seen.add(name)
+            todo.extend(_imported(name, _source_file(name)) - seen)
+    return sorted(seen)
+
+
+def _templates() -> list[Path]:
+    import symmech.templates
+
+    return sorted(Path(symmech.templates.__path__[0]).glob("*.j2"))
+
+
+def source_key(producer: str, data: tuple[str, ...]) -> str:
+    """Cache key of ``producer``'s modules (see the module docstring)."""
+    h = hashlib.sha256()
+    h.update(f"symmech {__version__} sympy {importlib.metadata.version('sympy')}\n".encode())
+    for path in _templates():
+        h.update(f"template {path.name}\n".encode() + path.read_bytes())
+    for name in sorted(set(closure(producer)) | set(EMITTER)):
+        h.update(f"module {name}\n".encode() + _source_file(name).read_bytes())
+    for rel in data:
+        path = ROOT / rel
+        content = ("\n".join(sorted(p.name for p in path.iterdir())).encode() if path.is_dir()
+                   else path.read_bytes() if path.is_file() else b"<missing>")
+        h.update(f"data {rel}\n".encode() + content)
+    return h.hexdigest()
+
+
+# -- recording the data a derivation reads ------------------------------------
+
+_recorded: list | None = None
+_hooked = False
+
+
+def _audit(event: str, args: tuple) -> None:
+    if _recorded is not None and event in ("open", "os.scandir") and isinstance(args[0], (str, Path)):
+        _recorded.append(args[0])
+
+
+@functools.cache
+def derive(producer: str) -> tuple[tuple, tuple[str, ...]]:
+    """(module specs, data files and folders read) of ``producer``: runs sympy, once per process."""
+    global _recorded, _hooked
+    if not _hooked:
+        sys.addaudithook(_audit)  # audit hooks cannot be removed: installed once, gated by _recorded
+        _hooked = True
+    module = importlib.import_module(producer)
+    _recorded = []
+    try:
+        specs = tuple(module.module_specs())
+    finally:
+        opened, _recorded = _recorded, None
+    data = set()
+    for p in opened:
+        path = Path(p).resolve()
+        if path.suffix not in (".py", ".pyc") and ROOT in path.parents and "__pycache__" not in path.parts:
+            data.add(path.relative_to(ROOT).as_posix())
+    return specs, tuple(sorted(data))
+
+
+# -- the package index ----------------------------------------------------------
+
+@dataclass
+class Index:
+    """``generated/__init__.py``: which producer declares each module, and the data each producer reads."""
+
+    modules: dict[str, str] = field(default_factory=dict)  # spec name -> producer
+    inputs: dict[str, tuple[str, ...]] = field(default_factory=dict)  # producer -> data
+
+    def text(self) -> str:
+        lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module and _nb twin)",
+                 "MODULES = {"]
+        lines += [f"    {n!r}: {p!r}," for n, p in sorted(self.modules.items())]
+        lines += ["}", "# derivation module -> data files and folders its derivation reads (relative to the checkout)",
+                  "INPUTS = {"]
+        lines += [f"    {p!r}: {tuple(d)!r}," for p, d in sorted(self.inputs.items())]
+        body = "\n".join(lines + ["}", ""])
+        return integrity.with_header(body, integrity.sha256(body), "0" * 64)  # no source key: always rebuilt
+
+    @classmethod
+    def read(cls, directory: Path) -> "Index | None":
+        """The index in ``directory``, or None when it is missing, edited or unreadable."""
+        path = Path(directory) / INDEX
+        if integrity.problem(path) is not None:
+            return None
+        values = {}
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name):
+                values[node.targets[0].id] = ast.literal_eval(node.value)
+        return cls(values.get("MODULES", {}), values.get("INPUTS", {}))
+
+    def names(self, producer: str) -> list[str]:
+        return sorted(n for n, p in self.modules.items() if p == producer)
+
+
+# -- plan, check, write -----------------------------------------------------------
+
+def files(name: str) -> list[str]:
+    return [f"{name}{suffix}.py" for suffix in SUFFIXES]
+
+
+def _fresh(directory: Path, index: Index | None, producer: str) -> bool:
+    """True when every module of ``producer`` is intact and carries the current source key."""
+    if index is None or producer not in index.inputs or not index.names(producer):
+        return False
+    key = source_key(producer, index.inputs[producer])
+    for name in index.names(producer):
+        for file in files(name):
+            path = directory / file
+            if integrity.problem(path) is not None:
+                return False
+            with open(path, encoding="utf-8") as f:
+                header, _ = integrity.split("".join(f.readline() for _ in range(integrity.HEADER_LINES)))
+            if header.key != key:
+                return False
+    return True
+
+
+@dataclass
+class Report:
+    stale: list[str]  # files that differ from what codegen writes, are missing or are stray
+    written: list[str]
+    derived: list[str]  # producers that had to run
+    outdated_keys: list[str]  # files whose text is current but whose source key is not
+    seconds: float
+
+
+def _without_key(text: str) -> str:
+    header, body = integrity.split(text)
+    return body if header is None else f"{header.inputs}\n{header.body}\n{body}"
+
+
+def run(directory: Path, check: bool) -> Report:
+    """Compare ``directory`` with the derivations; unless ``check``, write what differs."""
+    start = time.perf_counter()
+    directory = Path(directory)
+    old = Index.read(directory)
+    new = Index()
+    stale, written, derived, outdated = [], [], [], []
+    for producer in producers():
+        if _fresh(directory, old, producer):
+            new.inputs[producer] = old.inputs[producer]
+            new.modules.update((n, producer) for n in old.names(producer))
+            continue
+        from symmech.core import emit  # imports sympy: only when something must be derived
+
+        derived.append(producer)
+        specs, data = derive(producer)
+        new.inputs[producer] = data
+        key = source_key(producer, data)
+        for spec in specs:
+            if spec.name in new.modules:
+                raise ValueError(f"generated module {spec.name} declared by {new.modules[spec.name]} and {producer}")
+            new.modules[spec.name] = producer
+            for target in emit.TARGETS:
+                path = directory / f"{spec.name}{target.suffix}.py"
+                text = emit.render(spec, target, key)
+                current = path.read_text(encoding="utf-8") if path.is_file() else None
+                if current == text:
+                    continue
+                if current is not None and _without_key(current) == _without_key(text):
+                    outdated.append(str(path))
+                else:
+                    stale.append(str(path))
+                if not check:
+                    directory.mkdir(parents=True, exist_ok=True)
+                    integrity.write_atomic(path, text)
+                    written.append(str(path))
+    expected = {INDEX} | {f for n in new.modules for f in files(n)}
+    index_path = directory / INDEX
+    if not index_path.is_file() or index_path.read_text(encoding="utf-8") != new.text():
+        stale.append(str(index_path))
+        if not check:
+            directory.mkdir(parents=True, exist_ok=True)
+            integrity.write_atomic(index_path, new.text())
+            written.append(str(index_path))
+    for path in sorted(p for p in directory.glob("*.py") if p.name not in expected):
+        stale.append(str(path))
+        if not check and integrity.split(path.read_text(encoding="utf-8", errors="replace"))[0] is not None:
+            path.unlink()  # a module codegen wrote whose spec is gone
+            written.append(f"{path} (removed)")
+    return Report(stale, written, derived, outdated, time.perf_counter() - start)

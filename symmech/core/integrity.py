@@ -1,0 +1,131 @@
+"""Integrity of generated modules, checked without sympy.
+
+Every module ``symmech codegen`` writes starts with :data:`HEADER_LINES` lines::
+
+    # symmech VERSION generated module; inputs sha256 I
+    # source key K
+    # body sha256 B
+
+``B`` is the sha256 of the text after the header, so a hand-edited, truncated
+or half-written module is detected by reading the file alone; ``VERSION``
+detects a module left from another symmech release; ``I`` (everything the text
+is made from, needs sympy) and ``K`` (the codegen cache key, see
+:mod:`symmech.core.codegen`) are for ``symmech codegen``. Files are written
+through :func:`write_atomic`, so a reader never sees a partial module.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import re
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from symmech import __version__
+from symmech.core.scene import SymmechError
+
+PACKAGE = "symmech.generated"
+HEADER_LINES = 3
+_HEADER = re.compile(
+    r"# symmech (?P<version>\S+) generated module; inputs sha256 (?P<inputs>[0-9a-f]{64})\n"
+    r"# source key (?P<key>[0-9a-f]{64})\n"
+    r"# body sha256 (?P<body>[0-9a-f]{64})\n"
+)
+
+
+@dataclass(frozen=True)
+class Header:
+    version: str
+    inputs: str
+    key: str
+    body: str
+
+    def text(self) -> str:
+        return (f"# symmech {self.version} generated module; inputs sha256 {self.inputs}\n"
+                f"# source key {self.key}\n"
+                f"# body sha256 {self.body}\n")
+
+
+def sha256(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def with_header(body: str, inputs: str, key: str) -> str:
+    """The full module text: header (recording ``sha256(body)``) then ``body``."""
+    return Header(__version__, inputs, key, sha256(body)).text() + body
+
+
+def split(text: str) -> tuple[Header | None, str]:
+    """(header, body) of a module text; header None when the first lines are not one."""
+    match = _HEADER.match(text)
+    if not match:
+        return None, text
+    return Header(**match.groupdict()), text[match.end():]
+
+
+def problem(path: Path) -> str | None:
+    """Why the generated module at ``path`` cannot be used, or None when it is intact."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return "missing"
+    except (OSError, UnicodeDecodeError) as exc:
+        return f"unreadable ({exc.__class__.__name__})"
+    header, body = split(text)
+    if header is None:
+        return "edited (no symmech header)"
+    if sha256(body) != header.body:
+        return "edited or truncated (body sha256 differs from its header)"
+    if header.version != __version__:
+        return f"stale (written by symmech {header.version}, this is {__version__})"
+    return None
+
+
+def module_path(module_name: str) -> Path:
+    """File of ``symmech.generated.<name>`` (``module_name`` with or without the package)."""
+    name = module_name.removeprefix(PACKAGE + ".")
+    spec = importlib.util.find_spec(f"{PACKAGE}.{name}")
+    if spec is None or spec.origin is None:
+        return Path(importlib.util.find_spec(PACKAGE).submodule_search_locations[0]) / f"{name}.py"
+    return Path(spec.origin)
+
+
+def verify(module_name: str) -> str:
+    """Recorded body sha256 of an intact generated module; SymmechError otherwise."""
+    name = module_name.removeprefix(PACKAGE + ".")
+    path = module_path(name)
+    why = problem(path)
+    if why is not None:
+        raise SymmechError(f"generated module {name} is {why}: regenerate with `symmech codegen`")
+    return split(path.read_text(encoding="utf-8"))[0].body
+
+
+def used_modules() -> dict[str, str]:
+    """{module name: recorded body sha256} of every generated module imported so far."""
+    used = {}
+    for name, module in sorted(sys.modules.items()):
+        path = getattr(module, "__file__", None)
+        if name.startswith(PACKAGE + ".") and path:
+            with open(path, encoding="utf-8") as f:
+                header, _ = split("".join(f.readline() for _ in range(HEADER_LINES)))
+            used[name.removeprefix(PACKAGE + ".")] = header.body if header else "no header"
+    return used
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``path``, then rename it into place."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        os.fchmod(fd, 0o644)  # mkstemp's 0600 would hide the module from other users
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

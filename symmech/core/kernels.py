@@ -1,0 +1,46 @@
+"""Compiled kernels of a generated module, or the numpy reference when numba is absent.
+
+``load("grain_impact")`` returns ``symmech.generated.grain_impact_nb`` (numba)
+when numba imports, else a stand-in with the same names built on the numpy
+module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
+float (scalar quantities) or a float64 array of the element shape. Runtime
+code written against ``load`` runs everywhere; only its speed differs. The
+module is verified first (:func:`symmech.core.integrity.verify`).
+"""
+from __future__ import annotations
+
+import functools
+import importlib
+from types import SimpleNamespace
+
+from symmech.core import integrity
+from symmech.core.integrity import PACKAGE
+
+
+def _scalar_twin(function):
+    def twin(*args):
+        value = function(*args)
+        return float(value) if value.ndim == 0 else value
+
+    twin.__name__ = f"{function.__name__}_scalar"
+    twin.__doc__ = f"{function.__name__} on floats (numpy fallback: numba is not installed)."
+    return twin
+
+
+@functools.cache
+def load(name: str):
+    """The numba module ``<name>_nb``, or the numpy stand-in described above; SymmechError
+    when the module is edited, truncated or stale."""
+    try:
+        import numba  # noqa: F401  (the twin needs it; without it the numpy module stands in)
+    except ImportError:
+        integrity.verify(name)
+    else:
+        integrity.verify(f"{name}_nb")
+        return importlib.import_module(f"{PACKAGE}.{name}_nb")
+    reference = importlib.import_module(f"{PACKAGE}.{name}")
+    names = {}
+    for f in reference.__all__:
+        names[f] = getattr(reference, f)
+        names[f"{f}_scalar"] = _scalar_twin(names[f])
+    return SimpleNamespace(__name__=reference.__name__, __all__=sorted(names), **names)

@@ -1,0 +1,202 @@
+"""The numba target against the numpy reference, at seeded and adversarial points.
+
+Kernels compile on first call (cached beside the modules afterwards); the
+default suite compiles a representative subset, ``-m slow`` every function.
+"""
+import ast
+import importlib
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import sympy
+
+from symmech.core import emit, integrity, kernels
+from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
+from symmech.core.scene import SymmechError
+from symmech.generated import grain_impact as gi
+
+GENERATED = emit.default_directory()
+# Relative to the largest element of the configuration: libm (numba) and numpy's
+# own sin/cos may differ in the last bit, which CSE chains amplify by a few ulp.
+RTOL = 1e-12
+
+
+def assert_close(compiled, reference):
+    """Equal shapes, NaN and inf where the reference has them; elsewhere within RTOL of each
+    configuration's largest finite element."""
+    assert compiled.shape == reference.shape
+    finite = np.isfinite(reference)
+    np.testing.assert_array_equal(np.where(finite, 0, compiled), np.where(finite, 0, reference))
+    flat_c = np.where(finite, compiled, 0).reshape(max(compiled.shape[:1]), -1)
+    flat_r = np.where(finite, reference, 0).reshape(flat_c.shape)
+    scale = np.maximum(np.abs(flat_r).max(axis=1, keepdims=True), 1e-300)
+    error = np.abs(flat_c - flat_r) / scale
+    assert error.max() <= RTOL, f"max relative error {error.max():.2e}"
+
+
+def grain_configurations(n=1000, seed=11):
+    """Semi-axes a >= b >= c [m] and z-x-z angles [rad]: random, spheres, needles, discs, theta 0 and pi."""
+    rng = np.random.default_rng(seed)
+    axes = np.sort(rng.uniform(0.2e-3, 5e-3, (n, 3)), axis=1)[:, ::-1].copy()
+    angles = rng.uniform(-np.pi, np.pi, (n, 3))
+    k = n // 8
+    axes[:k] = 2e-3                                   # spheres
+    axes[k:2 * k] = [10e-3, 0.05e-3, 0.05e-3]         # needles
+    axes[2 * k:3 * k] = [5e-3, 5e-3, 0.02e-3]         # flat discs
+    angles[3 * k:4 * k, 1] = 0.0                      # theta = 0 (gimbal lock of z-x-z)
+    angles[4 * k:5 * k, 1] = np.pi                    # theta = pi
+    angles[5 * k:5 * k + 10] = [[0, 0, 0], [np.pi, np.pi, np.pi], [-np.pi, 0, np.pi],
+                                [np.pi / 2, np.pi / 2, np.pi / 2], [0, np.pi / 2, 0],
+                                [1e-300, 1e-300, 1e-300], [0, 1e-12, 0], [0, np.pi - 1e-12, 0],
+                                [3.0, -0.0, -3.0], [7.0, 2 * np.pi, -7.0]]
+    return (*axes.T, *angles.T)
+
+
+@pytest.mark.parametrize("parallel_batch", [0, 10**9], ids=["parallel loop", "serial loop"])
+def test_impact_tensor_compiled_equals_numpy_at_1000_configurations(monkeypatch, parallel_batch):
+    args = grain_configurations()
+    nb = kernels.load("grain_impact")
+    assert nb.__name__ == "symmech.generated.grain_impact_nb"
+    monkeypatch.setattr(nb, "PARALLEL_BATCH", parallel_batch)
+    assert_close(nb.H(*args), gi.H(*args))
+    assert_close(nb.contact_height(*args), gi.contact_height(*args))
+    assert_close(nb.rotation(*args[3:]), gi.rotation(*args[3:]))
+
+
+def test_scalar_twins_take_floats_and_match_the_reference():
+    args = np.array(grain_configurations(200, seed=5)).T
+    nb = kernels.load("grain_impact")
+    scalar = np.array([nb.H_scalar(*map(float, row)) for row in args])
+    assert_close(scalar, gi.H(*args.T))
+    heights = [nb.contact_height_scalar(*map(float, row)) for row in args]
+    assert all(type(h) is float for h in heights)
+    assert_close(np.array(heights), gi.contact_height(*args.T))
+
+
+def test_batch_wrapper_broadcasts_like_numpy():
+    """Scalars mixed with arrays, a 2-D batch, read-only and empty inputs: the numpy contract."""
+    nb = kernels.load("grain_impact")
+    psi = np.linspace(-3, 3, 12).reshape(3, 4)
+    theta = np.linspace(0, np.pi, 4)                     # broadcasts along the last axis
+    readonly = np.full((3, 4), 0.7)
+    readonly.flags.writeable = False
+    for args in [(2e-3, 1.5e-3, 1e-3, psi, theta, readonly),
+                 (2e-3, 1.5e-3, 1e-3, 0.1, 0.2, 0.3),
+                 (np.full((3, 1), 2e-3), 1.5e-3, 1e-3, psi, 0.2, 0.3),
+                 (2e-3, 1.5e-3, 1e-3, np.empty(0), 0.2, 0.3)]:
+        reference = gi.H(*args)
+        compiled = nb.H(*args)
+        assert compiled.shape == reference.shape
+        np.testing.assert_allclose(compiled, reference, rtol=0, atol=RTOL * 4)
+
+
+@pytest.mark.parametrize("module, function", [
+    ("trolley_frame", "Lambda"),
+    ("grain_motion", "flight_translation"),
+    ("smm_double_pendulum", "c"),
+])
+def test_representative_kernels_of_each_paper(module, function):
+    reference = getattr(importlib.import_module(f"symmech.generated.{module}"), function)
+    compiled = getattr(kernels.load(module), function)
+    n_args = reference.__code__.co_argcount
+    args = np.random.default_rng(3).uniform(0.3, 1.7, (n_args, 64))
+    assert_close(compiled(*args), reference(*args))
+    assert_close(np.array([getattr(kernels.load(module), f"{function}_scalar")(*args[:, k])
+                           for k in range(3)]), reference(*args[:, :3]))
+
+
+def test_chunked_function_compiles_and_matches(tmp_path, monkeypatch):
+    """A 3x3 output in chunks of 4 elements (three CSE chunks) through the numba template;
+    arguments named like the numba template's loop index and steps in other tools."""
+    monkeypatch.setattr(emit, "CHUNK_ELEMENTS", 4)
+    s, t = sympy.symbols("steps k")
+    M = sympy.Matrix(3, 3, lambda i, j: sympy.sin(s) ** (i % 3) * (i + 1) + j * s / (t - 1))
+    spec = ModuleSpec("big_mod", "big", "test", [NamedMatrix("big", M, (Arg(s, "s", "1"), Arg(t, "k", "1")),
+                                                             "big", "1")])
+    for target in emit.TARGETS:
+        emit.write(spec, tmp_path, target)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    numpy_module, numba_module = importlib.import_module("big_mod"), importlib.import_module("big_mod_nb")
+    assert (tmp_path / "big_mod_nb.py").read_text().count("def _big_") == 5  # 3 chunks, serial and parallel loops
+    s_values, t_values = np.linspace(-2, 2, 9), np.array([0.0, 1.0, 2.0])[:, None]  # t = 1: 1/0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        assert_close(numba_module.big(s_values, t_values).reshape(27, 3, 3),
+                     numpy_module.big(s_values, t_values).reshape(27, 3, 3))
+    assert np.isinf(numba_module.big_scalar(0.5, 1.0)[0, 1])  # error_model="numpy": no ZeroDivisionError
+
+
+def test_load_refuses_an_edited_twin(tmp_path, monkeypatch):
+    twin = tmp_path / "grain_impact_nb.py"
+    twin.write_text((GENERATED / "grain_impact_nb.py").read_text().replace("error_model=", "fastmath=True, error_model=", 1))
+    monkeypatch.setattr(integrity, "module_path", lambda name: tmp_path / f"{name}.py")
+    with pytest.raises(SymmechError, match="grain_impact_nb is edited"):
+        kernels.load.__wrapped__("grain_impact")
+
+
+def test_compiled_modules_import_numpy_numba_math_only():
+    files = sorted(GENERATED.glob("*_nb.py"))
+    assert len(files) == len(list(GENERATED.glob("*.py"))) // 2
+    for path in files:
+        imported = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                imported.update(a.name for a in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                imported.add(node.module)
+        assert imported == {"math", "numba", "numpy"}, path.name
+
+
+NUMBA_BLOCKER = textwrap.dedent("""
+    import sys
+    class Block:
+        def find_spec(self, name, path=None, target=None):
+            if name.split(".")[0] in ("numba", "llvmlite"):
+                raise ImportError(f"No module named {name!r}", name=name)
+    sys.meta_path.insert(0, Block())
+""")
+
+
+def test_without_numba_the_numpy_module_stands_in():
+    code = NUMBA_BLOCKER + textwrap.dedent("""
+        import numpy as np
+        from symmech.core import kernels
+        from symmech.generated import grain_impact as gi
+        k = kernels.load("grain_impact")
+        assert k.__name__ == "symmech.generated.grain_impact"
+        H = k.H_scalar(2e-3, 1.5e-3, 1e-3, 0.3, 0.7, 1.1)
+        assert isinstance(H, np.ndarray) and H.shape == (3, 3)
+        assert np.array_equal(H, gi.H(2e-3, 1.5e-3, 1e-3, 0.3, 0.7, 1.1))
+        h = k.contact_height_scalar(2e-3, 1.5e-3, 1e-3, 0.3, 0.7, 1.1)
+        assert type(h) is float and h == float(gi.contact_height(2e-3, 1.5e-3, 1e-3, 0.3, 0.7, 1.1))
+        assert np.array_equal(k.H(2e-3, 1e-3, 1e-3, np.zeros(4), 0.5, 0.5), gi.H(2e-3, 1e-3, 1e-3, np.zeros(4), 0.5, 0.5))
+        try:
+            import symmech.generated.grain_impact_nb
+        except ImportError as exc:
+            assert exc.name == "numba"
+        assert "numba" not in sys.modules
+        print("ok")
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ok"
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore:invalid value encountered")  # NaN outside a domain: compared as NaN
+def test_every_compiled_function_matches_numpy():
+    """All functions of all modules, batch and scalar, at 64 seeded points in [0.3, 1.7]."""
+    rng = np.random.default_rng(17)
+    for path in sorted(GENERATED.glob("*_nb.py")):
+        name = path.stem.removesuffix("_nb")
+        reference = importlib.import_module(f"symmech.generated.{name}")
+        compiled = kernels.load(name)
+        for function in reference.__all__:
+            f = getattr(reference, function)
+            args = rng.uniform(0.3, 1.7, (f.__code__.co_argcount, 64))
+            expected = f(*args)
+            assert_close(getattr(compiled, function)(*args), expected)
+            scalar = getattr(compiled, f"{function}_scalar")(*args[:, 0])
+            assert_close(np.asarray(scalar)[None], expected[:1])
