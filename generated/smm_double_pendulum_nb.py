@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

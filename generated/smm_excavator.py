@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d279abe2b92e25688859d0e030e722fe99a3e3173776098b4ad4a4e4906eb55f
-# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

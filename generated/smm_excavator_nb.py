@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
 # body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

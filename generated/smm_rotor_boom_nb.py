@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1e2a4059b2aecc03a101250b9d07651aaad8117b7c7458db1e236e4286e49ae3
-# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
 # body sha256 7e1d4ed34b8463a361ac6dad171df7c1ff947e403ef03b0214d339053944b399
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

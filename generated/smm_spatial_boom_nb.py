@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11887439b5f8e7e16d41034d53d8b35c22353b30137a700ff1598244f27105bc
-# source key d52b943ace3e5f1dd9af9d32b733aa71c9ee0bfbe19f758d4f5f7d63181c5378
+# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
 # body sha256 f100a78e25f827b2a6b3ef0686700aadf846aa2cefae05de5c4c1cfbce969792
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
