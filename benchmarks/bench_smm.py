@@ -1,4 +1,4 @@
-"""Time to form symbolic a and c: SMM vs sympy.physics.mechanics (Lagrange, Kane) + sparse modes.
+"""Time to form symbolic a and c: SMM vs sympy.physics.mechanics (Lagrange, Kane); SMM at scale.
 
 System: an n-link planar pendulum hanging in equilibrium, relative joint angles,
 point masses m_i at the link ends, torsion springs k_i at the joints, and a
@@ -6,8 +6,12 @@ vertical spring (stiffness K_i, tension T_i in equilibrium) from each mass to
 the ground below it; gravity g. Each (method, n) runs in a subprocess and is
 stopped past the time limit; larger n are then skipped for that method.
 
-    python benchmarks/bench_smm.py            # n = 2 ... 32
-    python benchmarks/bench_smm.py --quick    # n = 2, 4, 8 (mechanics up to 4)
+Then SMM at scale: the n-link pendulum with relative angles (dense a, c) assembled from the
+sparse structural matrices vs the term lists, and the lowest 10 modes of a long chain (time,
+error against the closed form, peak memory).
+
+    python benchmarks/bench_smm.py            # n = 2 ... 32; pendulum 1000, chain 100,000
+    python benchmarks/bench_smm.py --quick    # n = 2, 4, 8 (mechanics up to 4); pendulum 200, chain 20,000
 """
 from __future__ import annotations
 
@@ -150,23 +154,116 @@ def check_agreement(n: int = 3) -> float:
     return float(sympy.N(diff))
 
 
-def sparse_modes(n: int = 10000):
+def pendulum_scene(n: int) -> dict:
+    """n links hanging from O, relative angles (dense a and c), bobs, torsion springs, gravity."""
+    points = [{"name": "O", "at": [0, 0]}]
+    points += [{"name": f"P{i}", "from": "O" if i == 0 else f"P{i - 1}", "vector": [0, "-l"],
+                "turns": [f"q{j}" for j in range(i + 1)]} for i in range(n)]
+    return {"kind": "mechanism", "name": f"pendulum_{n}",
+            "parameters": {"m": {"value": 1.0, "unit": "kg"}, "l": {"value": 0.1, "unit": "m"},
+                           "k": {"value": 50.0, "unit": "N m/rad"}, "g": {"value": 9.81, "unit": "m/s^2"}},
+            "coordinates": [{"name": f"q{i}", "type": "angle"} for i in range(n)], "points": points,
+            "bodies": [{"name": f"b{i}", "mass": "m", "com": f"P{i}"} for i in range(n)],
+            "torsion_springs": [{"name": f"t{i}", "bodies": ["ground" if i == 0 else f"b{i - 1}", f"b{i}"],
+                                 "stiffness": "k"} for i in range(n)],
+            "gravity": {"g": "g"}}
+
+
+def _model(scene: dict):
+    from symmech.core.schema import validate
+    from symmech.smm.build import model
+    from symmech.smm.schema import SCHEMA
+
+    return model(validate(SCHEMA, scene))
+
+
+def dense_pendulum(n: int, form: str) -> tuple[float, float]:
+    """Seconds to build, assemble (``structural`` or ``terms``) and solve all modes of the n-link
+    pendulum, and its omega^2 [1/s^2] (compared between the forms by the caller)."""
+    import numpy as np
+
+    from symmech.smm import numeric
+    from symmech.smm.model import NumericArith
+
+    t0 = time.perf_counter()
+    m = _model(pendulum_scene(n))
+    if form == "structural":
+        num = numeric.assemble(m)
+    else:
+        num = numeric.assemble_terms(m, NumericArith(m.values()), m.effects, {})
+    md = numeric.modes(num.a.toarray(), num.b.toarray(), num.c.toarray())
+    return time.perf_counter() - t0, np.asarray(md.omega2)
+
+
+def long_chain(n: int) -> tuple[float, float]:
+    """Seconds to build, assemble and find the lowest 10 modes of an n-mass fixed-fixed chain (eigsh
+    shift-invert), and the largest relative error of omega^2 against the closed form."""
     import numpy as np
     import scipy.sparse.linalg
 
-    from symmech.core.scene import Section
     from symmech.smm import numeric
-    from symmech.smm.chain import chain_mechanism
 
     t0 = time.perf_counter()
-    m = chain_mechanism(Section({"n": n, "mass": 0.1, "stiffness": 1e4, "spacing": 0.01}, "chain"))
+    m = _model({"kind": "mechanism", "chain": {"n": n, "mass": 0.1, "stiffness": 1e4, "spacing": 0.01}})
     num = numeric.assemble(m)
-    t1 = time.perf_counter()
-    w = scipy.sparse.linalg.eigsh(num.c.tocsc(), k=10, M=num.a.tocsc(), sigma=0.0, return_eigenvectors=False)
-    t2 = time.perf_counter()
-    exact = [2e5 * (1 - np.cos(j * np.pi / (n + 1))) for j in range(1, 11)]
-    err = float(np.max(np.abs(np.sort(w) - exact) / exact))
-    return t1 - t0, t2 - t1, err
+    w = np.sort(scipy.sparse.linalg.eigsh(num.c.tocsc(), k=10, M=num.a.tocsc(), sigma=0.0,
+                                          return_eigenvectors=False))
+    seconds = time.perf_counter() - t0
+    exact = np.array([2e5 * (1 - np.cos(j * np.pi / (n + 1))) for j in range(1, 11)])
+    return seconds, float(np.max(np.abs(w - exact) / exact))
+
+
+def _memory_worker(n, queue):
+    import resource
+
+    seconds, err = long_chain(n)
+    queue.put((seconds, err, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+
+
+def chain_memory(n: int) -> tuple[float, float, float]:
+    """(seconds, error, peak resident MB) of :func:`long_chain` in a fresh process."""
+    queue = mp.Queue()
+    proc = mp.Process(target=_memory_worker, args=(n, queue))
+    proc.start()
+    result = queue.get()
+    proc.join()
+    return result
+
+
+def scale(quick: bool, repeats: int = 5) -> None:
+    """SMM at scale, medians of interleaved repeats (min..max): dense pendulum (structural vs the
+    term lists at a size they finish), long chain's lowest modes and its peak memory."""
+    import numpy as np
+
+    n_dense, n_terms, n_chain = (200, 60, 20_000) if quick else (1000, 120, 100_000)
+    cases = {f"pendulum n={n_dense} structural": lambda: dense_pendulum(n_dense, "structural"),
+             f"pendulum n={n_terms} structural": lambda: dense_pendulum(n_terms, "structural"),
+             f"pendulum n={n_terms} term lists": lambda: dense_pendulum(n_terms, "terms"),
+             f"chain n={n_chain} lowest 10 modes": lambda: long_chain(n_chain)}
+    times = {k: [] for k in cases}
+    outputs = {}
+    for _ in range(repeats):
+        for name, fn in cases.items():
+            sec, out = fn()
+            times[name].append(sec)
+            outputs[name] = out
+    ref = outputs[f"pendulum n={n_terms} term lists"]
+    mine = outputs[f"pendulum n={n_terms} structural"]
+    errors = {f"pendulum n={n_terms} structural": float(np.max(np.abs(mine - ref)) / np.abs(ref).max()),
+              f"pendulum n={n_terms} term lists": 0.0,
+              f"pendulum n={n_dense} structural": float("nan"),
+              f"chain n={n_chain} lowest 10 modes": outputs[f"chain n={n_chain} lowest 10 modes"]}
+    print(f"\nSMM at scale ({repeats} interleaved repeats; build + assembly + eigenproblem)")
+    print(f"{'case':<36} {'median [s]':>11} {'min..max [s]':>17} {'error':>10}")
+    for name, ts in times.items():
+        err = errors[name]
+        print(f"{name:<36} {np.median(ts):>11.3f} {min(ts):>8.3f}..{max(ts):<8.3f} "
+              f"{'-' if err != err else f'{err:.2g}':>10}")
+    ratio = np.median(times[f"pendulum n={n_terms} term lists"]) / np.median(times[f"pendulum n={n_terms} structural"])
+    print(f"structural vs term lists at n={n_terms}: {ratio:.1f}x faster (error column: omega^2 vs term lists "
+          f"relative to max omega^2; chain: vs closed form)")
+    sec, err, mb = chain_memory(n_chain)
+    print(f"chain n={n_chain} in a fresh process: {sec:.2f} s, peak resident memory {mb:.0f} MB, error {err:.2g}")
 
 
 def main():
@@ -207,9 +304,7 @@ def main():
             return f">{ns.limit / med['smm']:.0f}x" if med[kind] is None else f"{med[kind] / med['smm']:.0f}x"
         print(f"{n:>4} {fmt('smm'):>22} {fmt('lagrange'):>22} {fmt('kane'):>22} "
               f"{ratio('kane'):>9} {ratio('lagrange'):>13}", flush=True)
-    asm, eig, err = sparse_modes()
-    print(f"10,000-DOF chain: sparse assembly {asm:.2f} s, lowest 10 modes (eigsh shift-invert) {eig:.2f} s, "
-          f"total {asm + eig:.2f} s, max rel error of omega^2 vs closed form {err:.2g}")
+    scale(ns.quick)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
+# source key 54faeb0a1f0b8fa80ce040aad8e82f619f1ea9960117a63f75908309d537a665
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d279abe2b92e25688859d0e030e722fe99a3e3173776098b4ad4a4e4906eb55f
-# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
+# source key 54faeb0a1f0b8fa80ce040aad8e82f619f1ea9960117a63f75908309d537a665
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

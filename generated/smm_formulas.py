@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31827bf4de54432aee60e2f483d88627e3b5b6a2cd2dcfa7f887cfa8f374220f
-# source key e16e128f34bc09d141321e44030887f25c42d92689cff905f66909066a0c0bf5
+# source key 3a9aba20610ca2d57dbe5067e344590df612054e65cdfbeccdca983986d66888
 # body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

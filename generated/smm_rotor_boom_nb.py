@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key 2c198893db31db5996f6ab216be54c91f8e42de687d0722e4e64f459ad918a3e
+# source key 54faeb0a1f0b8fa80ce040aad8e82f619f1ea9960117a63f75908309d537a665
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

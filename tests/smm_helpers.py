@@ -4,9 +4,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from symmech.core.scene import Section
-from symmech.smm import numeric
-from symmech.smm.model import from_scene
+from symmech.core import pipeline
+from symmech.core.context import Context
+from symmech.core.schema import validate
+from symmech.smm import numeric, scene
+from symmech.smm.build import model
+from symmech.smm.schema import SCHEMA
 
 
 def param(value, unit="1"):
@@ -14,7 +17,26 @@ def param(value, unit="1"):
 
 
 def mech(d: dict):
-    return from_scene(Section({"kind": "mechanism", **d}))
+    """The mechanism of a scene dict (without ``kind``), validated as `symmech run` does."""
+    return model(validate(SCHEMA, {"kind": "mechanism", **d}))
+
+
+def run_scene(d: dict) -> dict:
+    """Summary (with the warnings) of running a scene dict through the pipeline (nothing written)."""
+    result = pipeline.load({"kind": "mechanism", **d}).run(Context(quiet=True))
+    return {**result.summary, "warnings": result.warnings, "result": result}
+
+
+def run_model(m) -> dict:
+    """Summary (with the warnings) of the run of a model built in Python (no responses, no plots)."""
+    resolved = {"equilibrium": {"solve": False}, "initial": None, "forcing": None, "output": {"plots": False}}
+    result = scene.run(scene.Setup(m, len(m.coordinates), resolved), Context(quiet=True))
+    return {**result.summary, "warnings": result.warnings}
+
+
+def chain(**spec):
+    """A generated ``[chain]`` mechanism (fields as in the scene's ``[chain]`` table)."""
+    return model(validate(SCHEMA, {"kind": "mechanism", "chain": spec}))
 
 
 def omega2(m, effects=None):

@@ -4,19 +4,17 @@ import math
 import numpy as np
 import pytest
 
-from symmech.core.scene import Section
 from symmech.smm import numeric
-from symmech.smm.chain import chain_mechanism
 from symmech.smm.model import Effects
 
-from smm_helpers import bar_on_springs, hanging_mass, mech, omega2, param, spring_chain
+from smm_helpers import bar_on_springs, hanging_mass, mech, omega2, param, run_scene, spring_chain
+from smm_helpers import chain as chain_of
 
 RTOL = 1e-10
 
 
 def chain(n, ends, motion="axial", tension=0.0, k=150.0, m=0.7, L=0.4):
-    return chain_mechanism(Section({"n": n, "mass": m, "stiffness": k, "spacing": L, "ends": ends,
-                                    "motion": motion, "tension": tension}, "chain"))
+    return chain_of(n=n, mass=m, stiffness=k, spacing=L, ends=ends, motion=motion, tension=tension)
 
 
 @pytest.mark.parametrize("n", [1, 3, 7])
@@ -100,11 +98,9 @@ def test_stiffness_times_influence_coefficients_is_identity():
     np.testing.assert_allclose(c @ alpha, np.eye(n), atol=1e-12)
 
 
-def test_equilibrium_found_first(tmp_path):
+def test_equilibrium_found_first():
     """A mass on a spring of free length l0 drawn at the wrong height: eq. (6) finds
     l = l0 + m g / k, then the sideways frequency is g / l (preload term) and the vertical k / m."""
-    from symmech.smm.scene import run
-
     k, mass, l0, g = 400.0, 2.0, 0.5, 9.81
     d = {"kind": "mechanism",
          "parameters": {"m": param(mass, "kg"), "k": param(k, "N/m"), "g": param(g, "m/s^2")},
@@ -115,7 +111,7 @@ def test_equilibrium_found_first(tmp_path):
          "bodies": [{"name": "bob", "mass": "m", "com": "P"}],
          "springs": [{"name": "s", "ends": ["O", "P"], "stiffness": "k", "free_length": l0}],
          "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": False}}
-    s = run(Section(d), tmp_path)
+    s = run_scene(d)
     length = l0 + mass * g / k
     np.testing.assert_allclose(s["omega2_1_per_s2"], sorted([g / length, k / mass]), rtol=1e-9)
     np.testing.assert_allclose(s["equilibrium"]["q"], [-0.02, 0.3 - length], atol=1e-10)
@@ -166,13 +162,11 @@ def test_preload_from_equilibrium_refused_when_indeterminate_or_unbalanced():
         numeric.equilibrium_tensions(side)
 
 
-def test_equilibrium_search_turns_a_pendulum_pulled_by_a_spring(tmp_path):
+def test_equilibrium_search_turns_a_pendulum_pulled_by_a_spring():
     """Pendulum (massless rod l, bob m) pulled sideways by a spring of free length l0 to a wall
     point W: the equilibrium angle and frequency found by eq. (6) match a direct minimisation
     of Pi(phi) = -m g l cos(phi) + k/2 (|W - r(phi)| - l0)^2 with Pi'' by finite differences."""
     import scipy.optimize
-
-    from symmech.smm.scene import run
 
     mass, l, k, l0, g, d = 1.5, 1.0, 40.0, 0.3, 9.81, 1.2
     W = np.array([d, -l])
@@ -193,6 +187,6 @@ def test_equilibrium_search_turns_a_pendulum_pulled_by_a_spring(tmp_path):
           "bodies": [{"name": "bob", "mass": mass, "com": "B"}],
           "springs": [{"name": "s", "ends": ["B", "W"], "stiffness": k, "free_length": l0}],
           "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": False}}
-    s = run(Section(d_), tmp_path)
+    s = run_scene(d_)
     assert abs(s["equilibrium"]["q"][0] - phi_star) < 1e-7
     np.testing.assert_allclose(s["omega2_1_per_s2"][0], stiff / (mass * l * l), rtol=1e-6)

@@ -66,20 +66,22 @@ def planar_chains(draw):
         (last["turns"] if name.startswith("a") else last["slides"]).append(name)
     last["turns"].sort()
     names = [p["name"] for p in points[1:]]
-    bodies = [{"name": f"B{i}", "mass": draw(st.floats(0.5, 3.0)), "inertia": draw(st.floats(0.0, 1.0)),
-               "com": p} for i, p in enumerate(names)]
+    bodies = [{"name": f"B{i}", "mass": draw(st.floats(0.5, 3.0)),
+               "inertia": draw(st.one_of(st.just(0.0), st.floats(1e-3, 1.0))), "com": p} for i, p in enumerate(names)]
     springs = []
     for j in range(draw(st.integers(1, 3))):
-        a, b = draw(st.sampled_from(["O"] + names)), draw(st.sampled_from(names))
+        b = draw(st.sampled_from(names))
+        a = draw(st.sampled_from([x for x in ["O"] + names if x != b]))
         springs.append({"name": f"k{j}", "ends": [a, b], "stiffness": draw(st.floats(10, 1000)),
                         "preload": draw(st.floats(-50, 50))})
     dampers = [{"name": "d0", "ends": ["O", names[-1]], "viscosity": draw(st.floats(0.1, 5))}]
-    body = st.sampled_from(["ground"] + [b["name"] for b in bodies])
+    def body(other):
+        return st.sampled_from(["ground"] + [b["name"] for b in bodies if b["name"] != other])
     return {"parameters": {"g": param(9.81, "m/s^2")}, "coordinates": coords, "points": points,
             "bodies": bodies, "springs": springs, "dampers": dampers, "gravity": {"g": "g"},
-            "torsion_springs": [{"name": "t0", "bodies": [draw(body), bodies[-1]["name"]],
+            "torsion_springs": [{"name": "t0", "bodies": [draw(body(bodies[-1]["name"])), bodies[-1]["name"]],
                                  "stiffness": draw(st.floats(1, 100))}],
-            "torsion_dampers": [{"name": "t1", "bodies": [draw(body), bodies[0]["name"]],
+            "torsion_dampers": [{"name": "t1", "bodies": [draw(body(bodies[0]["name"])), bodies[0]["name"]],
                                  "viscosity": draw(st.floats(0.1, 5))}]}
 
 
@@ -143,8 +145,11 @@ def spatial_chains(draw):
     points[-1]["turns"] = sorted(set(points[-1]["turns"]) | {c["name"] for c in coords[:n_ang]})
     points[-1]["slides"] = ["s0"]
     names = [p["name"] for p in points[1:]]
+    # principal moments satisfying the triangle inequalities: J3 between |J1 - J2| and J1 + J2
+    moments = st.tuples(st.floats(0.1, 1.0), st.floats(0.1, 1.0), st.floats(0.0, 1.0)).map(
+        lambda j: [j[0], j[1], abs(j[0] - j[1]) + j[2] * (j[0] + j[1] - abs(j[0] - j[1]))])
     bodies = [{"name": f"B{i}", "mass": draw(st.floats(0.5, 3.0)),
-               "inertia": [draw(st.floats(0.0, 1.0)) for _ in range(3)], "com": p}
+               "inertia": draw(moments), "com": p}
               for i, p in enumerate(names)]
     ends = [draw(st.sampled_from([("O", "P1"), ("O", "P2"), ("P1", "P2")])) for _ in range(2)]
     springs = [{"name": f"k{j}", "ends": list(ends[j]),

@@ -3,11 +3,9 @@ import math
 
 import numpy as np
 
-from symmech.core.scene import Section
 from symmech.smm import numeric
-from symmech.smm.scene import run
 
-from smm_helpers import mech, param
+from smm_helpers import mech, param, run_scene
 
 
 def two_mass_damped(c1=3.0):
@@ -55,7 +53,7 @@ def test_single_dof_free_and_forced_response():
     np.testing.assert_allclose(np.abs(H), 1 / np.sqrt((k - m * w**2) ** 2 + (c * w) ** 2), rtol=1e-12)
 
 
-def test_dropped_gravity_in_pendulum_is_reported(tmp_path):
+def test_dropped_gravity_in_pendulum_is_reported():
     """A pendulum's stiffness is all gravity: dropping it warns and reports the change."""
     scene = {"kind": "mechanism", "parameters": {"g": param(9.81, "m/s^2")},
              "coordinates": [{"name": "p", "type": "angle"}, {"name": "x", "type": "slide", "axis": [1, 0]}],
@@ -66,7 +64,7 @@ def test_dropped_gravity_in_pendulum_is_reported(tmp_path):
              "bodies": [{"name": "cart", "mass": 2.0, "com": "C"}, {"name": "bob", "mass": 1.0, "com": "A"}],
              "springs": [{"name": "k", "ends": ["C", "W"], "stiffness": 300.0}],
              "gravity": {"g": "g"}, "effects": {"gravity": False}, "output": {"plots": False}}
-    s = run(Section(scene), tmp_path)
+    s = run_scene(scene)
     rep = s["neglected_effects"]
     assert rep["dropped"] == ["gravity"]
     assert any("removes" in w and "gravity" in w for w in s["warnings"])
@@ -87,7 +85,7 @@ def test_generated_module_batches():
     np.testing.assert_allclose(c[3, 1, 0, 0], 9.81 * (m1[3] * 1.0 + 1.0 * 2.0), rtol=1e-15)
 
 
-def test_overdamped_mode_has_no_ratio_and_warns(tmp_path):
+def test_overdamped_mode_has_no_ratio_and_warns():
     """zeta = c/(2 sqrt(k m)) = 2.5 > 1: real eigenvalues, no ratio, a warning."""
     scene = {"kind": "mechanism",
              "coordinates": [{"name": "x", "type": "slide", "axis": [1, 0]}],
@@ -96,7 +94,7 @@ def test_overdamped_mode_has_no_ratio_and_warns(tmp_path):
              "springs": [{"name": "k", "ends": ["O", "P"], "stiffness": 100.0}],
              "dampers": [{"name": "c", "ends": ["O", "P"], "viscosity": 50.0}],
              "output": {"plots": False}}
-    s = run(Section(scene), tmp_path)
+    s = run_scene(scene)
     assert s["damping_ratios"] == [None]
     assert s["frequencies_rad_s"] == [10.0]
     assert any("overdamped" in w for w in s["warnings"])

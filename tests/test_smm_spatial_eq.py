@@ -129,7 +129,7 @@ def test_spatial_torsion_spring_off_its_axis_is_refused():
 def test_principal_axes_must_be_orthonormal():
     d = _scene()
     d["bodies"][0]["principal_axes"] = [[0, 0.6, 0.8], [1, 0, 0], [0, 0.6, -0.8]]
-    with pytest.raises(SymmechError, match="body 'body': principal_axes must be orthonormal; axis 1 . axis 3"):
+    with pytest.raises(SymmechError, match=r"bodies\[0\].principal_axes': must be orthonormal; axis 1 . axis 3"):
         mech(d)
 
 
@@ -251,14 +251,12 @@ def test_random_spatial_chains_with_principal_axes_and_torsion_preload(d):
     _numeric_agreement.hypothesis.inner_test(d)
 
 
-def test_spatial_scene_run_solves_equilibrium(tmp_path):
-    """`symmech run` path: [equilibrium] solve = true on the spatial scene gives q* and omega."""
-    from symmech.core.scene import Section
-    from symmech.smm.scene import run
+def test_spatial_scene_run_solves_equilibrium():
+    from smm_helpers import run_scene
 
+    """`symmech run` path: [equilibrium] solve = true on the spatial scene gives q* and omega."""
     q_ref, w2_ref, _ = _reference()
-    s = run(Section({"kind": "mechanism", **_scene(), "equilibrium": {"solve": True},
-                     "output": {"plots": False}}), tmp_path)
+    s = run_scene({**_scene(), "equilibrium": {"solve": True}, "output": {"plots": False}})
     np.testing.assert_allclose(s["equilibrium"]["q"], q_ref, atol=1e-9, rtol=0)
     np.testing.assert_allclose(s["omega2_1_per_s2"], w2_ref, rtol=1e-8)
     assert not s["warnings"]

@@ -10,28 +10,18 @@ from __future__ import annotations
 
 import math
 
-from symmech.core.scene import SceneError, Section
-from symmech.smm.model import Body, Coordinate, Link, Mechanism, Parameter, Point, validate
-
-ENDS = ("fixed-fixed", "fixed-free", "free-free")
+from symmech.core.scene import SceneError
+from symmech.smm.model import Body, Coordinate, Link, Mechanism, Parameter, Point
 
 
-def read_chain(sec: Section, name: str | None = None) -> dict:
-    """The ``[chain]`` fields: n, ends, motion, mass [kg], stiffness [N/m], spacing [m],
-    tension [N], name."""
-    spec = {
-        "n": sec.int("n", lo=1, hi=10**6),
-        "ends": sec.choice("ends", ENDS, default="fixed-fixed"),
-        "motion": sec.choice("motion", ("axial", "transverse"), default="axial"),
-        "mass": sec.float("mass", unit="kg", lo=0, lo_open=True),
-        "stiffness": sec.float("stiffness", unit="N/m", lo=0),
-        "spacing": sec.float("spacing", unit="m", lo=0, lo_open=True),
-        "tension": sec.float("tension", unit="N", default=0.0),
-    }
-    spec["name"] = sec.str("name", default=name or f"chain_{spec['n']}_{spec['ends']}_{spec['motion']}")
-    sec.finish()
+def chain_spec(chain: dict, scene_name: str | None = None) -> dict:
+    """The resolved ``[chain]`` table (see ``symmech.smm.schema``) with its name filled in:
+    n, ends, motion, mass [kg], stiffness [N/m], spacing [m], tension [N], name."""
+    spec = dict(chain)
+    if spec["name"] is None:
+        spec["name"] = scene_name or f"chain_{spec['n']}_{spec['ends']}_{spec['motion']}"
     if spec["ends"] == "free-free" and spec["n"] == 1:
-        raise SceneError(sec.name("n"), "a free-free chain needs at least two masses")
+        raise SceneError("chain.n", "a free-free chain needs at least two masses")
     return spec
 
 
@@ -47,12 +37,8 @@ def exact_omega2(spec: dict) -> list[float]:
     return [2 * s / spec["mass"] * (1 - math.cos(t)) for t in theta]
 
 
-def chain_mechanism(sec: Section, name: str | None = None) -> Mechanism:
-    return build_chain(read_chain(sec, name))
-
-
 def build_chain(spec: dict) -> Mechanism:
-    """The vector model of the chain ``spec`` (see :func:`read_chain`)."""
+    """The vector model of the chain ``spec`` (see :func:`chain_spec`)."""
     n, ends, motion = spec["n"], spec["ends"], spec["motion"]
     params = {
         "m": Parameter("m", spec["mass"], "kg", "mass of each particle"),
@@ -72,6 +58,4 @@ def build_chain(spec: dict) -> Mechanism:
         springs.insert(0, Link("k0", "O", "P1", "k", "T"))
     if ends == "fixed-fixed":
         springs.append(Link(f"k{n}", f"P{n}", "E", "k", "T"))
-    m = Mechanism(spec["name"], params, coords, points, bodies, springs)
-    validate(m)
-    return m
+    return Mechanism(spec["name"], params, coords, points, bodies, springs)

@@ -17,18 +17,18 @@ from pathlib import Path
 
 import sympy
 
+from symmech.core import expressions
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
-from symmech.core.scene import SymmechError, load, scenes_folder
+from symmech.core.scene import SymmechError, read_toml, scenes_folder
 from symmech.smm import forms
-from symmech.smm.model import Effects, Mechanism, from_scene, interpret
+from symmech.smm.model import Effects, Mechanism, interpret
 
 SCENES = scenes_folder()
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
 
 
-_SYMPY_FUNCS = {name: getattr(sympy, name) for name in
-                ("sin", "cos", "tan", "sqrt", "asin", "acos", "atan", "atan2", "exp", "log")}
-_SYMPY_CONSTS = {"pi": sympy.pi}
+_SYMPY_FUNCS = {name: sympy.Abs if name == "abs" else getattr(sympy, name) for name in expressions.FUNCTIONS}
+_SYMPY_CONSTS = {"pi": sympy.pi, "E": sympy.E}
 
 
 class SymbolicArith:
@@ -185,7 +185,8 @@ def matrices(m: Mechanism, form: str = "chain", effects: Effects | None = None) 
 
 def equilibrium_tensions(m: Mechanism, ar, kinematics=forms.chain_kinematics) -> dict:
     """Symbolic tensions of ``preload = "equilibrium"`` springs: eq. (5) solved on the
-    independent rows chosen numerically (a u x u system, u = number of such springs)."""
+    independent rows chosen numerically (a u x u system, u = number of such springs), eliminated
+    in the numerically pivoted row order (a round-off entry never becomes a pivot)."""
     from symmech.smm.numeric import equilibrium_tensions as numeric_tensions
 
     _, rows = numeric_tensions(m)  # also reports an indeterminate or unbalanced system
@@ -266,12 +267,14 @@ def bundled_scenes() -> list[Path]:
 
 def load_mechanism(path: Path) -> Mechanism:
     """The mechanism of a scene file (explicit vector model or a generated ``[chain]``)."""
-    from symmech.smm.chain import chain_mechanism
+    from symmech.core.schema import validate
+    from symmech.smm.build import model
+    from symmech.smm.schema import SCHEMA
 
-    scene = load(path)
-    if scene.str("kind", default="") != "mechanism":
+    data = read_toml(path)
+    if data.get("kind") != "mechanism":
         raise SymmechError(f"{path}: not a mechanism scene")
-    return chain_mechanism(scene.section("chain")) if scene.has("chain") else from_scene(scene)
+    return model(validate(SCHEMA, data))
 
 
 def module_specs() -> list[ModuleSpec]:

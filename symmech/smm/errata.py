@@ -12,15 +12,15 @@ import inspect
 import numpy as np
 
 from symmech.core.errata import Check, NotCompared
-from symmech.core.scene import load, scenes_folder
+from symmech.core.scene import scenes_folder
 from symmech.smm import SEED
-from symmech.smm.model import from_scene
+from symmech.smm.derive import load_mechanism
 
 SCENES = scenes_folder()
 
 
 def _nominal(scene: str) -> dict:
-    return from_scene(load(SCENES / f"smm_{scene}.toml")).values()
+    return load_mechanism(SCENES / f"smm_{scene}.toml").values()
 
 
 def _sampler(scene: str):

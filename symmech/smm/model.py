@@ -16,8 +16,8 @@ list the angles of every body from the root outwards.
 
 All quantities are expression strings of the parameters (SI units): the same
 model is evaluated with floats (:func:`numeric`) or sympy (``symmech.smm.forms``).
-:func:`from_scene` reads a scene through :class:`~symmech.core.scene.Section`
-accessors and validates the structure; errors name the element.
+:func:`symmech.smm.build.mechanism` builds it from a validated scene and checks its
+admissibility; errors name the scene field.
 """
 from __future__ import annotations
 
@@ -25,9 +25,11 @@ import ast
 import functools
 import math
 import operator
-from dataclasses import dataclass, field, replace
+import re
+from dataclasses import dataclass, field
 
-from symmech.core.scene import SceneError, Section, SymmechError
+from symmech.core import expressions
+from symmech.core.scene import SymmechError
 
 GROUND = "ground"
 EQUILIBRIUM = "equilibrium"  # a spring preload left to the equilibrium conditions (5)
@@ -192,12 +194,14 @@ class Mechanism:
 
 # ---------------------------------------------------------------- expressions
 
-_FUNCS = {"sin": math.sin, "cos": math.cos, "tan": math.tan, "sqrt": math.sqrt,
-          "asin": math.asin, "acos": math.acos, "atan": math.atan, "atan2": math.atan2,
-          "exp": math.exp, "log": math.log}
-_CONSTS = {"pi": math.pi}
+# The scene expression language is symmech.core.expressions (checked there, in the schema);
+# here it is evaluated in floats (and, in symmech.smm.derive, in sympy).
+_FUNCS = {name: abs if name == "abs" else getattr(math, name) for name in expressions.FUNCTIONS}
+_CONSTS = dict(expressions.CONSTANTS)
 _BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
            ast.Div: operator.truediv, ast.Pow: operator.pow}
+# Parameter names the generated modules use themselves (beyond the reserved names of expressions)
+GENERATED_NAMES = frozenset({"out", "batch", EQUILIBRIUM})
 
 
 @functools.lru_cache(maxsize=4096)
@@ -217,11 +221,15 @@ def _parse(text: str, where: str):
 
 
 def evaluate(text: str, values: dict[str, float], where: str = "<expression>") -> float:
-    """Value of an arithmetic expression of parameters (+ - * / **, sin, cos, sqrt, pi ...)."""
+    """Value of an arithmetic expression of parameters (+ - * / **, sin, cos, sqrt, pi ...);
+    a division by zero, a domain error, an overflow or a complex value is a SymmechError."""
     try:
-        return float(interpret(text, values, where))
-    except (ZeroDivisionError, ValueError, OverflowError) as exc:
+        value = interpret(text, values, where)
+    except (ZeroDivisionError, ValueError, OverflowError, TypeError) as exc:
         raise SymmechError(f"{where}: expression {text!r} cannot be evaluated ({exc})") from None
+    if isinstance(value, complex) or not math.isfinite(value):
+        raise SymmechError(f"{where}: expression {text!r} evaluates to {value} (not a finite real number)")
+    return float(value)
 
 
 def interpret(text: str, values: dict, where: str = "<expression>", funcs=None, consts=None, number=float):
@@ -259,6 +267,9 @@ def numeric(m: Mechanism) -> "NumericArith":
     return NumericArith(m.values())
 
 
+_MULTIPLE = re.compile(r"([0-9]{1,9})\*([A-Za-z][A-Za-z0-9_]*)")
+
+
 class NumericArith:
     """Evaluates model expressions to floats (for numeric assembly)."""
 
@@ -270,7 +281,12 @@ class NumericArith:
 
     def __call__(self, text: str, where: str = "<expression>") -> float:
         if text not in self._cache:
-            self._cache[text] = evaluate(text, self.values, where)
+            # integer multiples of a parameter (the 10^5 positions of a generated chain) skip the parser
+            multiple = _MULTIPLE.fullmatch(text)
+            if multiple and multiple[2] in self.values:
+                self._cache[text] = int(multiple[1]) * self.values[multiple[2]]
+            else:
+                self._cache[text] = evaluate(text, self.values, where)
         return self._cache[text]
 
     @staticmethod
@@ -290,239 +306,7 @@ class NumericArith:
         return x == 0.0
 
 
-# ---------------------------------------------------------------- scenes
-
-def _expr(sec: Section, key: str, *, default=None, where: str) -> str:
-    """An expression field: a number or a string expression of parameters."""
-    value = sec.raw(key, default=default)
-    if value is None:
-        raise SceneError(where, "missing (required)")
-    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-        raise SceneError(where, f"expected a number or an expression string, got {value!r}")
-    return value if isinstance(value, str) else number_text(value)
-
-
 def number_text(value: float) -> str:
     """A number as expression text; integral values print as integers (exact in sympy)."""
     value = float(value)
     return str(int(value)) if value.is_integer() and abs(value) < 1e15 else repr(value)
-
-
-def _vector(sec: Section, key: str, where: str, default=None) -> tuple[str, str, str]:
-    value = sec.raw(key, default=default)
-    if value is None:
-        raise SceneError(where, "missing (required)")
-    if not isinstance(value, list) or len(value) not in (2, 3):
-        raise SceneError(where, f"expected a list of 2 or 3 components, got {value!r}")
-    comps = []
-    for i, v in enumerate(value):
-        if isinstance(v, bool) or not isinstance(v, (int, float, str)):
-            raise SceneError(f"{where}[{i}]", f"expected a number or an expression string, got {v!r}")
-        comps.append(v if isinstance(v, str) else number_text(v))
-    return tuple(comps + ["0"] * (3 - len(comps)))
-
-
-def _names(sec: Section, key: str, where: str) -> tuple[str, ...]:
-    value = sec.raw(key, default=[])
-    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-        raise SceneError(where, f"expected a list of names, got {value!r}")
-    return tuple(value)
-
-
-def _items(scene: Section, key: str) -> list[Section]:
-    raw = scene.raw(key, default=[])
-    if not isinstance(raw, list):
-        raise SceneError(key, "expected an array of tables ([[" + key + "]])")
-    return [Section(item, f"{key}[{i}]") for i, item in enumerate(raw)]
-
-
-def _unique(kind: str, names: list[str]) -> None:
-    seen = set()
-    for n in names:
-        if n in seen:
-            raise SymmechError(f"{kind} '{n}' is defined twice")
-        seen.add(n)
-
-
-def from_scene(scene: Section) -> Mechanism:
-    """Read and validate the mechanism part of a scene (see docs/scenes-mechanism.md)."""
-    name = scene.str("name", default="mechanism")
-    params = {}
-    psec = scene.section("parameters", default={})
-    for pname in psec.keys():
-        entry = psec.raw(pname)
-        where = psec.name(pname)
-        if not pname.isidentifier():
-            raise SceneError(where, "a parameter name must be an identifier")
-        if isinstance(entry, (int, float)) and not isinstance(entry, bool):
-            entry = {"value": entry}
-        p = Section(entry, where)
-        unit = p.str("unit", default="1")
-        params[pname] = Parameter(pname, p.float("value", unit=unit), unit, p.str("meaning", default=pname))
-        p.finish()
-
-    coords = []
-    for c in _items(scene, "coordinates"):
-        kind = c.choice("type", ("angle", "slide"))
-        axis = _vector(c, "axis", c.name("axis"), default=[0, 0, 1] if kind == "angle" else None)
-        coords.append(Coordinate(c.str("name"), kind, axis))
-        c.finish()
-    _unique("coordinate", [c.name for c in coords])
-    if not coords:
-        raise SceneError("coordinates", "a mechanism needs at least one generalized coordinate")
-
-    points = {}
-    for p in _items(scene, "points"):
-        pname = p.str("name")
-        if p.has("at"):
-            points[pname] = Point(pname, None, _vector(p, "at", p.name("at")))
-        else:
-            points[pname] = Point(pname, p.str("from"), _vector(p, "vector", p.name("vector")),
-                                  _names(p, "turns", p.name("turns")), _names(p, "slides", p.name("slides")))
-        p.finish()
-    _unique("point", [p for p in points])
-
-    bodies = []
-    for b in _items(scene, "bodies"):
-        where = b.name("inertia")
-        raw = b.raw("inertia", default=0.0)
-        if isinstance(raw, list):
-            inertia = _vector(b, "inertia", where)
-        else:
-            inertia = ("0", "0", _expr(b, "inertia", default=0.0, where=where))
-        com = b.str("com")
-        turns = b.raw("turns", default=None)
-        axes = None
-        if b.has("principal_axes"):
-            raw = b.raw("principal_axes")
-            where = b.name("principal_axes")
-            if not isinstance(raw, list) or len(raw) != 3 or not all(isinstance(v, list) and len(v) == 3
-                                                                     for v in raw):
-                raise SceneError(where, f"expected three axes of 3 components, got {raw!r}")
-            axes = tuple(_vector(Section({"v": v}, where), "v", f"{where}[{i}]") for i, v in enumerate(raw))
-        bodies.append(Body(b.str("name"), _expr(b, "mass", where=b.name("mass")), inertia, com,
-                           _names(b, "turns", b.name("turns")) if turns is not None else None, axes))
-        b.finish()
-    _unique("body", [b.name for b in bodies])
-
-    springs = []
-    for s in _items(scene, "springs"):
-        ends = _names(s, "ends", s.name("ends"))
-        if len(ends) != 2:
-            raise SceneError(s.name("ends"), f"expected two point names, got {list(ends)!r}")
-        pre = _expr(s, "preload", where=s.name("preload")) if s.has("preload") else None
-        free = _expr(s, "free_length", where=s.name("free_length")) if s.has("free_length") else None
-        if pre is not None and free is not None:
-            raise SceneError(s.name("free_length"), "give either preload or free_length, not both")
-        springs.append(Link(s.str("name"), ends[0], ends[1], _expr(s, "stiffness", where=s.name("stiffness")),
-                            pre, free))
-        s.finish()
-    dampers = []
-    for d in _items(scene, "dampers"):
-        ends = _names(d, "ends", d.name("ends"))
-        if len(ends) != 2:
-            raise SceneError(d.name("ends"), f"expected two point names, got {list(ends)!r}")
-        dampers.append(Link(d.str("name"), ends[0], ends[1], _expr(d, "viscosity", where=d.name("viscosity"))))
-        d.finish()
-    torsion = {}
-    for key, coef in (("torsion_springs", "stiffness"), ("torsion_dampers", "viscosity")):
-        torsion[key] = []
-        for t in _items(scene, key):
-            bs = _names(t, "bodies", t.name("bodies"))
-            if len(bs) != 2:
-                raise SceneError(t.name("bodies"), f"expected two body names (or 'ground'), got {list(bs)!r}")
-            pre = None
-            if key == "torsion_springs" and t.has("preload"):
-                pre = _expr(t, "preload", where=t.name("preload"))
-            torsion[key].append(Torsion(t.str("name"), bs[0], bs[1], _expr(t, coef, where=t.name(coef)),
-                                        _vector(t, "axis", t.name("axis"), default=[0, 0, 1]), pre))
-            t.finish()
-    _unique("spring", [s.name for s in springs + dampers + torsion["torsion_springs"] + torsion["torsion_dampers"]])
-
-    g = scene.section("gravity", default={})
-    gravity = _expr(g, "g", default=0.0, where=g.name("g"))
-    gdir = _vector(g, "direction", g.name("direction"), default=[0, -1, 0])
-    g.finish()
-    e = scene.section("effects", default={})
-    effects = Effects(e.bool("damping", default=True), e.bool("preload", default=True),
-                      e.bool("gravity", default=True))
-    e.finish()
-
-    m = Mechanism(name, params, coords, points, bodies, springs, dampers,
-                  torsion["torsion_springs"], torsion["torsion_dampers"], gravity, gdir, effects)
-    validate(m)
-    return m
-
-
-def validate(m: Mechanism) -> None:
-    """Structural checks; every error names the element."""
-    kinds = {c.name: c.kind for c in m.coordinates}
-    known = set(m.parameters)
-
-    def exprs_ok(where, *texts):
-        for t in texts:
-            unknown = expression_names(t) - known
-            if unknown:
-                raise SymmechError(f"{where}: unknown parameter '{sorted(unknown)[0]}' in {t!r}")
-
-    for c in m.coordinates:
-        exprs_ok(f"coordinate '{c.name}'", *c.axis)
-    for p in m.points.values():
-        m.chain(p.name)
-        exprs_ok(f"point '{p.name}'", *p.vector)
-        for q in p.turns:
-            if kinds.get(q) != "angle":
-                raise SymmechError(f"point '{p.name}': turns names '{q}', which is not an angle coordinate")
-        for q in p.slides:
-            if kinds.get(q) != "slide":
-                raise SymmechError(f"point '{p.name}': slides names '{q}', which is not a slide coordinate")
-        if len(set(p.turns)) != len(p.turns) or len(set(p.slides)) != len(p.slides):
-            raise SymmechError(f"point '{p.name}': a coordinate is listed twice")
-    bodies = {b.name for b in m.bodies}
-    for i, b in enumerate(m.bodies):
-        if b.com not in m.points:
-            raise SymmechError(f"body '{b.name}': centre of mass point '{b.com}' is not defined")
-        exprs_ok(f"body '{b.name}'", b.mass, *b.inertia, *(x for ax in b.axes or () for x in ax))
-        if b.turns is None:
-            m.bodies[i] = b = replace(b, turns=m.points[b.com].turns)
-        for q in b.turns:
-            if kinds.get(q) != "angle":
-                raise SymmechError(f"body '{b.name}': turns names '{q}', which is not an angle coordinate")
-    for link in m.springs + m.dampers:
-        for end in (link.a, link.b):
-            if end not in m.points:
-                raise SymmechError(f"spring or damper '{link.name}': end point '{end}' is not defined")
-        exprs_ok(f"spring or damper '{link.name}'", link.coef,
-                 *(t for t in (link.preload, link.free_length) if t and t != EQUILIBRIUM))
-    for t in m.torsion_springs + m.torsion_dampers:
-        for b in (t.a, t.b):
-            if b != GROUND and b not in bodies:
-                raise SymmechError(f"torsion element '{t.name}': body '{b}' is not defined")
-        exprs_ok(f"torsion element '{t.name}'", t.coef, *t.axis,
-                 *((t.preload,) if t.preload and t.preload != EQUILIBRIUM else ()))
-    exprs_ok("gravity", m.gravity, *m.gravity_direction)
-    used = set()
-    for p in m.points.values():
-        used |= set(p.turns) | set(p.slides)
-    for b in m.bodies:
-        used |= set(b.turns)
-    for c in m.coordinates:
-        if c.name not in used:
-            raise SymmechError(f"coordinate '{c.name}' moves nothing: no point or body lists it in turns/slides")
-    values = m.values()
-    for c in m.coordinates:
-        axis = [evaluate(t, values, f"coordinate '{c.name}'") for t in c.axis]
-        norm = math.sqrt(sum(a * a for a in axis))
-        if abs(norm - 1.0) > 1e-9:
-            raise SymmechError(f"coordinate '{c.name}': axis {axis} must be a unit vector (length {norm:.6g})")
-    for b in m.bodies:
-        if evaluate(b.mass, values, f"body '{b.name}'") < 0:
-            raise SymmechError(f"body '{b.name}': mass {b.mass} is negative")
-        if b.axes is not None:
-            P = [[evaluate(t, values, f"body '{b.name}'") for t in ax] for ax in b.axes]
-            for i in range(3):
-                for j in range(i, 3):
-                    d = sum(x * y for x, y in zip(P[i], P[j]))
-                    if abs(d - (i == j)) > 1e-9:
-                        raise SymmechError(f"body '{b.name}': principal_axes must be orthonormal; axis {i + 1} "
-                                           f". axis {j + 1} = {d:.6g} (expected {int(i == j)})")

@@ -13,15 +13,16 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from symmech.core.scene import SymmechError
-from symmech.smm import forms
+from symmech.core.scene import SceneError, SymmechError
+from symmech.smm import forms, structural
 from symmech.smm.model import EQUILIBRIUM, Effects, Mechanism, NumericArith, number_text
 
 
 @dataclass
 class Numeric:
     """a, b, c (k x k, scipy.sparse CSR) with the parts of c, the equilibrium residual
-    dPi/dq [N or N m] and spring lengths [m] and tensions [N] in the configuration."""
+    dPi/dq [N or N m], spring lengths [m] and tensions [N] in the configuration, and the
+    stiffness factor L_c as rows (springs, then torsion springs) x k."""
 
     coords: list[str]
     a: scipy.sparse.csr_matrix
@@ -32,6 +33,7 @@ class Numeric:
     residual: np.ndarray
     lengths: dict
     tensions: dict
+    L_c: scipy.sparse.csr_matrix
 
 
 def _sparse(n: int, entries: dict) -> scipy.sparse.csr_matrix:
@@ -47,26 +49,31 @@ def _sparse(n: int, entries: dict) -> scipy.sparse.csr_matrix:
 
 def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     """Tensions [N] of the springs with ``preload = "equilibrium"`` from eq. (5), and the
-    indices of coordinates whose equations determine them (independent rows of G)."""
-    ar = NumericArith(m.values())
-    names, cols, r0 = forms.tension_system(m, ar)
+    indices of coordinates whose equations determine them (independent rows of G), in the
+    row order of Gaussian elimination with partial pivoting at the parameter values."""
+    names = [s.name for s in m.springs + m.torsion_springs if s.preload == EQUILIBRIUM]
     if not names:
         return {}, []
+    # G: the L_c columns of those springs; r: dPi/dq with their tensions set to zero
+    zero = assemble(m, Effects(False, False, False), {n: 0.0 for n in names})
+    labels = [s.name for s in m.springs + m.torsion_springs]
+    G = zero.L_c[[labels.index(n) for n in names]].toarray().T
+    r = zero.residual
     k = len(m.coordinates)
-    G = np.zeros((k, len(names)))
-    for j, col in enumerate(cols):
-        for i, v in col.items():
-            G[i, j] = v
-    r = np.zeros(k)
-    for i, v in r0.items():
-        r[i] = v
+    # G holds dl/dq: [1] for slides, [m] for angles; round-off is judged against 1 and the spring
+    # lengths, so springs that move with no coordinate (G zero but for round-off) are indeterminate
+    tol = 1e-10 * max(np.abs(G).max(), 1.0, max(zero.lengths.values(), default=0.0))
     rows: list[int] = []
     for i in range(k):
-        if np.linalg.matrix_rank(G[rows + [i]], tol=1e-10 * max(np.abs(G).max(), 1e-300)) > len(rows):
+        if np.linalg.matrix_rank(G[rows + [i]], tol=tol) > len(rows):
             rows.append(i)
     if len(rows) < len(names):
         raise SymmechError(f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
                            "(statically indeterminate); give preload values")
+    # the elimination order of partial pivoting: the symbolic solve (symmech.smm.derive) takes the
+    # rows in this order, so it never divides by an entry that is zero up to round-off
+    perm, _, _ = scipy.linalg.lu(G[rows])
+    rows = [rows[i] for i in np.argmax(perm, axis=0)]
     T = np.linalg.solve(G[rows], -r[rows])
     miss = G @ T + r
     worst = int(np.argmax(np.abs(miss)))
@@ -76,10 +83,22 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     return dict(zip(names, T.tolist())), rows
 
 
-def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
-    """Numeric a, b, c of ``m`` at its parameter values (sparse; O(nonzeros))."""
+def assemble(m: Mechanism, effects: Effects | None = None, tensions: dict | None = None) -> Numeric:
+    """Numeric a, b, c of ``m`` at its parameter values (sparse). Planar mechanisms: the
+    vectorised graph form (:mod:`symmech.smm.structural`); spatial ones: the term lists of
+    :mod:`symmech.smm.forms`. ``tensions`` defaults to those solved from eq. (5)."""
     ar = NumericArith(m.values())
-    asm = forms.assemble(m, ar, effects=effects, tensions=equilibrium_tensions(m)[0])
+    eff = effects or m.effects
+    if tensions is None:
+        tensions = equilibrium_tensions(m)[0]
+    if structural.applies(m, ar):
+        return Numeric(list(m.coordinate_names), *structural.assemble(m, ar, eff, tensions))
+    return assemble_terms(m, ar, eff, tensions)
+
+
+def assemble_terms(m: Mechanism, ar: NumericArith, eff: Effects, tensions: dict) -> Numeric:
+    """:func:`assemble` from the term lists of :mod:`symmech.smm.forms` (any mechanism)."""
+    asm = forms.assemble(m, ar, effects=eff, tensions=tensions)
     n = len(asm.coords)
     pre = _sparse(n, asm.preload)
     grav = _sparse(n, asm.gravity)
@@ -89,16 +108,26 @@ def assemble(m: Mechanism, effects: Effects | None = None) -> Numeric:
         res[i] = math.fsum(terms)
     return Numeric(asm.coords, _sparse(n, forms.triple_product(ar, asm.La, asm.ma, n)),
                    _sparse(n, forms.triple_product(ar, asm.Lb, asm.mb, n)),
-                   (stiff + pre + grav).tocsr(), pre, grav, res, asm.lengths, asm.tensions)
+                   (stiff + pre + grav).tocsr(), pre, grav, res, asm.lengths, asm.tensions, _columns(n, asm.Lc))
+
+
+def _columns(n: int, columns: list) -> scipy.sparse.csr_matrix:
+    """Rows (one per column label) of a factor given as [(label, {index: value})]."""
+    r = [j for j, (_, col) in enumerate(columns) for _ in col]
+    c = [i for _, col in columns for i in col]
+    v = [float(x) for _, col in columns for x in col.values()]
+    return scipy.sparse.csr_matrix((v, (r, c)), shape=(len(columns), n))
 
 
 def check_mass(m: Mechanism, a: np.ndarray) -> None:
-    """Raise, naming the coordinate, when the inertia matrix is (numerically) singular."""
+    """SceneError naming the coordinate (``coordinates[i]``) when the inertia matrix is
+    (numerically) singular."""
     w, v = np.linalg.eigh(a)
     scale = max(abs(w).max(), 1e-300)
     if w[0] <= 1e-12 * scale:
-        worst = m.coordinate_names[int(np.argmax(abs(v[:, 0])))]
-        raise SymmechError(f"inertia matrix is singular (smallest eigenvalue {w[0]:.3g} of {scale:.3g}): "
+        i = int(np.argmax(abs(v[:, 0])))
+        worst = m.coordinate_names[i]
+        raise SceneError(f"coordinates[{i}]", f"inertia matrix is singular (smallest eigenvalue {w[0]:.3g} of {scale:.3g}): "
                            f"coordinate '{worst}' moves no mass or moment of inertia")
 
 
@@ -278,35 +307,65 @@ def solve_equilibrium(m: Mechanism, tol: float = 1e-10, max_iter: int = 60) -> t
 @dataclass
 class Modes:
     """Undamped modes of a q'' + c q = 0: omega2 [1/s^2] ascending, mass-normalised
-    shapes (columns, phi^T a phi = I), and damping ratios from the damped state-space
+    shapes (columns, phi^T a phi = I), ``kinds`` per mode (``rigid``, ``elastic``,
+    ``unstable``; see :func:`classify`), damping ratios from the damped state-space
     eigenvalues (non-proportional damping allowed; None for rigid-body, unstable and
-    overdamped modes)."""
+    overdamped modes), the spread max/min of the elastic omega^2 (the lowest lose about
+    log10(spread) digits) and the condition number of the Jacobi-scaled stiffness
+    (its non-zero eigenvalues)."""
 
     omega2: np.ndarray
     shapes: np.ndarray
     zeta: list
+    kinds: list
+    spread: float
+    condition: float
 
 
 def modes(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> Modes:
     w2, phi = scipy.linalg.eigh(c, a)
-    zeta = damping_ratios(a, b, c, w2)
-    return Modes(w2, phi, zeta)
+    kinds, condition = classify(c, w2)
+    elastic = np.abs(w2[np.array(kinds) == "elastic"])
+    spread = float(elastic.max() / elastic.min()) if len(elastic) else 1.0
+    return Modes(w2, phi, damping_ratios(a, b, c, w2, kinds), kinds, spread, condition)
 
 
-def damping_ratios(a, b, c, omega2) -> list:
+def classify(c: np.ndarray, omega2: np.ndarray) -> tuple[list[str], float]:
+    """Kinds of the modes with eigenvalues ``omega2`` (ascending) of (c, a), and the condition
+    number of the scaled stiffness.
+
+    The number of rigid-body modes is the nullity of c (Sylvester's law of inertia), measured on
+    the Jacobi-scaled D c D (D = diag(c)^-1/2): scaling by each coordinate's own stiffness makes a
+    very stiff spring no reason to call a soft but real mode rigid. The null eigenvalues of D c D
+    are those within 10 n eps of its largest; the modes with the smallest |omega^2| are rigid."""
+    n = len(omega2)
+    d = np.abs(np.diag(c))
+    if not np.any(c):
+        return ["rigid"] * n, 1.0
+    scale = 1.0 / np.sqrt(np.maximum(d, np.finfo(float).eps * d.max()))
+    lam = np.abs(scipy.linalg.eigvalsh(scale[:, None] * c * scale[None, :]))
+    tol = 10 * n * np.finfo(float).eps * lam.max()
+    nullity = int(np.sum(lam <= tol))
+    nonzero = lam[lam > tol]
+    rigid = set(np.argsort(np.abs(omega2))[:nullity].tolist())
+    kinds = ["rigid" if i in rigid else "unstable" if x < 0 else "elastic" for i, x in enumerate(omega2)]
+    return kinds, float(nonzero.max() / nonzero.min())
+
+
+def damping_ratios(a, b, c, omega2, kinds) -> list:
     """zeta_r = -Re(lambda)/|lambda| of the state-space eigenvalues, matched to the undamped
     modes by |lambda| ~ omega (first-order state form, valid for non-proportional b)."""
     n = a.shape[0]
     if not np.any(b):
-        return [0.0 if w > 0 else None for w in omega2]
+        return [0.0 if k == "elastic" else None for k in kinds]
     ainv = np.linalg.inv(a)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-ainv @ c, -ainv @ b]])
     lam = np.linalg.eigvals(A)
     lam = lam[np.argsort(np.abs(lam))]
     out = []
     used = np.zeros(len(lam), bool)
-    for w2 in omega2:
-        if w2 <= 100 * np.finfo(float).eps * max(abs(omega2).max(), 1e-300):
+    for w2, kind in zip(omega2, kinds):
+        if kind != "elastic":
             out.append(None)
             continue
         w = math.sqrt(w2)

@@ -1,28 +1,36 @@
-"""Scene runner for ``kind = "mechanism"``: matrices, modes, responses, plots.
+"""Scene kind ``mechanism``: matrices, modes, responses, plots (registered at import).
 
-``run(scene, out)`` writes matrices.json, modes.csv, free_response.csv,
-frequency_response.csv, modes.png, frequency_response.png and the generated
-module of the scene's symbolic matrices (``smm_<name>.py``), and returns the
-summary. ``precision(scene, out)`` compares the full eigenproblem with
-shift-invert Lanczos (``scipy.sparse.linalg.eigsh``) at several tolerances.
+``prepare`` builds the mechanism from the validated scene (``symmech.smm.schema``)
+and checks it (``symmech.smm.build``, numeric assembly and a regular inertia
+matrix); ``run`` returns a Result with the tables ``modes``, ``free_response``,
+``frequency_response``, the files ``matrices.json`` (or ``matrices.csv`` above
+JSON_LIMIT coordinates) and ``smm_<name>.py`` (the scene's symbolic matrices
+emitted with the project emitter). ``precision`` compares the full eigenproblem
+with shift-invert Lanczos (``scipy.sparse.linalg.eigsh``) at several tolerances.
 Equation contract: a q'' + b q' + c q = Q (SI units by coordinate kind).
 """
 from __future__ import annotations
 
 import csv
 import importlib.util
+import io
 import json
 import math
+import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 
-from symmech.core.scene import SceneError, Section, SymmechError
-from symmech.smm import numeric
-from symmech.smm.model import Effects, Mechanism, from_scene
-from symmech.smm.chain import chain_mechanism
+from symmech.core import registry
+from symmech.core.results import Column, Result, Table
+from symmech.core.scene import SceneError, SymmechError
+from symmech.smm import build, numeric
+from symmech.smm.chain import chain_spec, exact_omega2
+from symmech.smm.model import Effects, Mechanism
+from symmech.smm.schema import SCHEMA
 
 # Above this many coordinates the symbolic matrices are not formed (numeric assembly only).
 SYMBOLIC_LIMIT = 60
@@ -32,44 +40,79 @@ DENSE_RUN_LIMIT = 3000
 JSON_LIMIT = 200
 # Warn when the eigenvalue spread costs more than this relative accuracy in omega^2.
 CONDITION_WARN = 1e-8
-# omega^2 within this many machine epsilons of the largest omega^2 counts as a rigid-body mode.
-RIGID_EPS = 100
+FLOP_SECONDS = 1e-10  # rough seconds per dense floating-point operation (LAPACK, 2 cores), for estimates
 
 
-def mechanism(scene: Section) -> Mechanism:
-    """The scene's mechanism: an explicit vector model or a generated uniform ``[chain]``."""
-    if scene.has("chain"):
-        return chain_mechanism(scene.section("chain"), scene.str("name", default="") or None)
-    return from_scene(scene)
+@dataclass
+class Setup:
+    """A validated mechanism scene: the model, its coordinate count and the resolved scene."""
+
+    m: Mechanism
+    n: int
+    scene: dict
 
 
-def _module(m: Mechanism, out: Path):
-    """Render the scene's symbolic matrices with the project emitter and import the module."""
+def prepare(resolved: dict) -> Setup:
+    """Build and check the mechanism; SceneError naming the field for anything inadmissible."""
+    m = build.model(resolved)
+    n = len(m.coordinates)
+    for section, key in (("initial", "q"), ("initial", "qdot"), ("forcing", "Q")):
+        values = (resolved[section] or {}).get(key)
+        if values is not None and len(values) != n:
+            raise SceneError(f"{section}.{key}", f"expected {n} values (one per coordinate), got {len(values)}")
+    forcing = resolved["forcing"]
+    if forcing and forcing["point"] is not None and forcing["point"] not in m.points:
+        raise SceneError("forcing.point", f"point '{forcing['point']}' is not defined")
+    if resolved["chain"] is None and n <= DENSE_RUN_LIMIT:
+        # zero-length elements, indeterminate or unbalanced "equilibrium" preloads, singular inertia
+        numeric.check_mass(m, numeric.assemble(m).a.toarray())
+    return Setup(m, n, resolved)
+
+
+def estimate(setup: Setup) -> registry.Estimate:
+    """Dense eigenproblems, state-space eigenvalues, responses: O(n^3) flops each."""
+    n, sc = setup.n, setup.scene
+    if n > DENSE_RUN_LIMIT:
+        return registry.Estimate(0.0, f"{n} coordinates: refused by `run`")
+    damped = bool(setup.m.dampers or setup.m.torsion_dampers) and sc["effects"]["damping"]
+    flops = 12.0 * n**3 + (80.0 * n**3 if damped else 0.0)
+    if sc["initial"]:
+        flops += 60.0 * n**3 + sc["initial"]["steps"] * 8.0 * n**2
+    if sc["forcing"]:
+        flops += sc["forcing"]["samples"] * 3.0 * n**3
+    seconds = FLOP_SECONDS * flops + (0.05 * n**2 if n <= SYMBOLIC_LIMIT else 0.0)
+    return registry.Estimate(seconds, f"{n} coordinates, dense eigenproblems")
+
+
+def _module_text(m: Mechanism) -> tuple[str, str]:
+    """File name and text of the scene's symbolic matrices rendered with the project emitter."""
     from symmech.core import emit
     from symmech.smm.derive import module_spec
 
     spec = module_spec(m)
-    path = emit.write(spec, out)
-    loader = importlib.util.spec_from_file_location(f"_symmech_scene_{spec.name}", path)
-    module = importlib.util.module_from_spec(loader)
-    loader.loader.exec_module(module)
-    return module, path
+    return f"{spec.name}.py", emit.render(spec)
 
 
-def run(scene: Section, out: Path) -> dict:
-    m = mechanism(scene)
+def _import_text(name: str, text: str):
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / name
+        path.write_text(text)
+        loader = importlib.util.spec_from_file_location(f"_symmech_scene_{path.stem}", path)
+        module = importlib.util.module_from_spec(loader)
+        loader.loader.exec_module(module)
+    return module
+
+
+def run(setup: Setup, ctx) -> Result:
+    m, sc = setup.m, setup.scene
+    if setup.n > DENSE_RUN_LIMIT:
+        raise SymmechError(f"mechanism '{m.name}' has {setup.n} coordinates; `symmech run` solves the dense "
+                           f"eigenproblem up to {DENSE_RUN_LIMIT}: use `symmech bench precision` (sparse "
+                           "shift-invert) for the lowest modes of larger systems")
     warnings: list[str] = []
-    eq = scene.section("equilibrium", default={})
-    solve = eq.bool("solve", default=False)
-    eq.finish()
     eq_report = None
-    if solve:
+    if sc["equilibrium"]["solve"]:
         m, eq_report = numeric.solve_equilibrium(m)
-    n = len(m.coordinates)
-    if n > DENSE_RUN_LIMIT:
-        raise SymmechError(f"mechanism '{m.name}' has {n} coordinates; `symmech run` solves the dense eigenproblem "
-                           f"up to {DENSE_RUN_LIMIT}: use `symmech bench precision` (sparse shift-invert) for the "
-                           "lowest modes of larger systems")
     num = numeric.assemble(m)
     a, b, c = (x.toarray() for x in (num.a, num.b, num.c))
     numeric.check_mass(m, a)
@@ -79,54 +122,43 @@ def run(scene: Section, out: Path) -> dict:
         worst = m.coordinate_names[int(np.argmax(np.abs(num.residual)))]
         warnings.append(f"the configuration is not an equilibrium: dPi/dq = {res:.3g} on '{worst}' (eq. (5)); "
                         "set [equilibrium] solve = true or fix the preloads")
-    generated = None
-    if n <= SYMBOLIC_LIMIT:
-        module, path = _module(m, out)
+    files = {}
+    if setup.n <= SYMBOLIC_LIMIT:
+        name, text = _module_text(m)
+        module = _import_text(name, text)
         values = [p.value for p in m.parameters.values()]
         for key, ref in (("a", a), ("b", b), ("c", c)):
             got = getattr(module, key)(*values)
             if not np.allclose(got, ref, rtol=1e-9, atol=1e-12 * max(np.abs(ref).max(), 1.0)):
                 raise RuntimeError(f"generated {key} disagrees with the numeric assembly")  # a bug, not input
-        generated = str(path)
-
+        files[name] = text
+    ctx.tick("modes")
     md = numeric.modes(a, b, c)
     w2 = md.omega2
-    wmax = max(abs(w2).max(), 1e-300)
-    # rigid-body modes: omega^2 at round-off level of the largest one
-    zero = RIGID_EPS * np.finfo(float).eps * wmax
-    rigid = [i for i, x in enumerate(w2) if abs(x) <= zero]
-    unstable = [i for i, x in enumerate(w2) if x < -zero]
-    if unstable:
-        warnings.append(f"{len(unstable)} mode(s) have negative omega^2 (unstable equilibrium), "
+    cls = md.kinds
+    rigid = [i for i, k in enumerate(cls) if k == "rigid"]
+    if any(k == "unstable" for k in cls):
+        warnings.append(f"{cls.count('unstable')} mode(s) have negative omega^2 (unstable equilibrium), "
                         f"lowest {w2[0]:.4g} 1/s^2")
-    elastic = [x for x in w2 if x > zero]
-    if elastic:
-        spread = max(elastic) / min(elastic)
-        if spread * np.finfo(float).eps > CONDITION_WARN:
-            warnings.append(f"stiffness spread omega_max^2/omega_min^2 = {spread:.3g}: the lowest frequencies keep "
-                            f"only about {max(0.0, -math.log10(spread * np.finfo(float).eps)):.0f} correct digits "
-                            "(very stiff springs closing loops?)")
-    omega = [math.sqrt(x) if x > 0 and i not in rigid else 0.0 if i in rigid else None
-             for i, x in enumerate(w2)]
+    eps = np.finfo(float).eps
+    if md.spread * eps > CONDITION_WARN:
+        warnings.append(f"stiffness spread omega_max^2/omega_min^2 = {md.spread:.3g}: the normwise error bound "
+                        f"leaves the lowest frequencies only about {max(0.0, -math.log10(md.spread * eps)):.0f} "
+                        "guaranteed digits (very stiff springs closing loops?)")
+    omega = [0.0 if k == "rigid" else math.sqrt(x) if k == "elastic" else None for k, x in zip(cls, w2)]
     overdamped = [i + 1 for i, z in enumerate(md.zeta) if z is None and omega[i]]
     if overdamped and np.any(b):
         warnings.append(f"mode(s) {', '.join(map(str, overdamped))} have real damped eigenvalues (overdamped): "
                         "no damping ratio reported")
     eff_report = _effects_report(m, w2, warnings)
-
-    out = Path(out)
-    matrices_file = _write_matrices(out, m, num)
-    _write_modes(out / "modes.csv", m, omega, md)
-    response = _responses(scene, m, a, b, c, out)
-    plots = scene.section("output", default={})
-    make_plots = plots.bool("plots", default=True)
-    plots.finish()
-    files = [matrices_file, "modes.csv"] + response["files"]
-    if make_plots:
-        files += _plots(m, md, omega, response, out)
-    _header(scene)
-    scene.finish()
-    return {
+    files.update(_matrices_file(m, num))
+    tables = {"modes": _modes_table(m, omega, md)}
+    response = _responses(sc, m, a, b, c, tables)
+    plots = None
+    if sc["output"]["plots"]:
+        def plots(folder):
+            return _plots(m, md, omega, response, Path(folder))
+    summary = {
         "mechanism": m.name,
         "coordinates": [{"name": co.name, "type": co.kind, "unit": co.unit} for co in m.coordinates],
         "effects": {"damping": m.effects.damping, "preload": m.effects.preload, "gravity": m.effects.gravity},
@@ -136,19 +168,13 @@ def run(scene: Section, out: Path) -> dict:
         "frequencies_rad_s": omega,
         "frequencies_hz": [None if w is None else w / (2 * math.pi) for w in omega],
         "rigid_body_modes": len(rigid),
+        "conditioning": {"stiffness_spread": md.spread, "scaled_stiffness_condition": md.condition,
+                         "omega2_error_bound_1_per_s2": float(eps * len(w2) * np.abs(w2).max())},
         "damping_ratios": md.zeta,
         "neglected_effects": eff_report,
-        "generated_module": generated,
-        "files": files,
-        "warnings": warnings,
+        "generated_module": next((k for k in files if k.endswith(".py")), None),
     }
-
-
-def _header(scene: Section) -> None:
-    """Mark the descriptive top-level fields as read (``kind`` and ``name`` are read elsewhere)."""
-    scene.str("kind")
-    scene.str("name", default="")
-    scene.str("description", default="")
+    return Result("mechanism", summary, tables, files, plots, warnings)
 
 
 def _effects_report(m: Mechanism, w2: np.ndarray, warnings: list) -> dict:
@@ -176,98 +202,79 @@ def _effects_report(m: Mechanism, w2: np.ndarray, warnings: list) -> dict:
             "omega2_with_all_effects": w2_full.tolist(), "omega2_relative_change": rel}
 
 
-def _write_matrices(out: Path, m: Mechanism, num) -> str:
+def _matrices_file(m: Mechanism, num) -> dict[str, str]:
     """a, b, c as matrices.json (dense) or, above JSON_LIMIT coordinates, matrices.csv (nonzeros)."""
     if len(m.coordinates) <= JSON_LIMIT:
-        (out / "matrices.json").write_text(json.dumps({
+        return {"matrices.json": json.dumps({
             "coordinates": m.coordinate_names,
             "units": [co.unit for co in m.coordinates],
             "equation": "a q'' + b q' + c q = Q",
             "parameters": {p.name: {"value": p.value, "unit": p.unit} for p in m.parameters.values()},
             "a": num.a.toarray().tolist(), "b": num.b.toarray().tolist(), "c": num.c.toarray().tolist()},
-            indent=1) + "\n")
-        return "matrices.json"
+            indent=1) + "\n"}
     total = (abs(num.a) + abs(num.b) + abs(num.c)).tocoo()
-    with (out / "matrices.csv").open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["row", "column", "a", "b", "c"])
-        for i, j in sorted(zip(total.row.tolist(), total.col.tolist())):
-            w.writerow([m.coordinate_names[i], m.coordinate_names[j], repr(float(num.a[i, j])),
-                        repr(float(num.b[i, j])), repr(float(num.c[i, j]))])
-    return "matrices.csv"
+    text = io.StringIO()
+    w = csv.writer(text)
+    w.writerow(["row", "column", "a", "b", "c"])
+    for i, j in sorted(zip(total.row.tolist(), total.col.tolist())):
+        w.writerow([m.coordinate_names[i], m.coordinate_names[j], repr(float(num.a[i, j])),
+                    repr(float(num.b[i, j])), repr(float(num.c[i, j]))])
+    return {"matrices.csv": text.getvalue()}
 
 
-def _write_modes(path: Path, m: Mechanism, omega, md) -> None:
-    with path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["mode", "omega2_1_per_s2", "omega_rad_s", "f_hz", "zeta"] + m.coordinate_names)
-        for i in range(len(omega)):
-            w.writerow([i + 1, repr(float(md.omega2[i])), "" if omega[i] is None else repr(omega[i]),
-                        "" if omega[i] is None else repr(omega[i] / (2 * math.pi)),
-                        "" if md.zeta[i] is None else repr(md.zeta[i])] + [repr(float(x)) for x in md.shapes[:, i]])
+def _coordinate_columns(m: Mechanism, prefix: str = "", unit_of=None) -> list[Column]:
+    return [Column(f"{prefix}{co.name}", unit_of(co) if unit_of else co.unit, f"coordinate {co.name}")
+            for co in m.coordinates]
 
 
-def _point_force(scene_sec: Section, m: Mechanism) -> np.ndarray:
+def _modes_table(m: Mechanism, omega, md) -> Table:
+    """One row per mode: omega^2, omega and f (0 for rigid and unstable modes; see ``class``),
+    the mass-normalised shape (phi^T a phi = 1); text columns class and zeta."""
+    cols = [Column("mode", "1"), Column("omega2", "1/s^2", "eigenvalue of c phi = omega^2 a phi"),
+            Column("omega", "rad/s"), Column("f", "Hz")]
+    cols += _coordinate_columns(m, "phi_", lambda co: f"{co.unit}/sqrt(kg {co.unit}^2)")
+    w = np.array([x or 0.0 for x in omega])
+    data = np.column_stack([np.arange(1, len(w) + 1), md.omega2, w, w / (2 * math.pi), md.shapes.T])
+    return Table(tuple(cols), data, "undamped modes",
+                 {"class": list(md.kinds), "zeta": ["" if z is None else repr(z) for z in md.zeta]})
+
+
+def _point_force(forcing: dict, m: Mechanism) -> np.ndarray:
     """Generalized force of a force F [N] at a point: Q_a = F . dr/dq_a."""
     from symmech.smm import forms
     from symmech.smm.model import NumericArith
 
-    n = len(m.coordinates)
-    if scene_sec.has("Q"):
-        return np.array(scene_sec.vector("Q", n, unit="N or N m"))
-    point = scene_sec.str("point")
-    if point not in m.points:
-        raise SceneError(scene_sec.name("point"), f"point '{point}' is not defined")
-    raw = scene_sec.raw("force")
-    force = np.zeros(3)
-    size = len(raw) if isinstance(raw, list) and len(raw) in (2, 3) else 3
-    force[:size] = scene_sec.vector("force", size, unit="N")
+    if forcing["Q"] is not None:
+        return np.array(forcing["Q"])
     g = forms.Geometry(m, NumericArith(m.values()))
-    kin = forms.chain_kinematics(g, point, False)
-    Q = np.zeros(n)
+    kin = forms.chain_kinematics(g, forcing["point"], False)
+    Q = np.zeros(len(m.coordinates))
     for a, d in kin.D.items():
-        Q[g.index[a]] = float(np.dot(force, d))
+        Q[g.index[a]] = float(np.dot(forcing["force"], d))
     return Q
 
 
-def _responses(scene: Section, m: Mechanism, a, b, c, out: Path) -> dict:
+def _responses(sc: dict, m: Mechanism, a, b, c, tables: dict) -> dict:
+    """Free and frequency responses into ``tables``; returns the curves for the plots."""
     n = len(m.coordinates)
-    files = []
-    result = {"files": files}
-    ini = scene.section("initial", default=None) if scene.has("initial") else None
+    result = {}
+    ini = sc["initial"]
     if ini is not None:
-        q0 = np.array(ini.vector("q", n, unit="m or rad", default=[0.0] * n))
-        v0 = np.array(ini.vector("qdot", n, unit="m/s or rad/s", default=[0.0] * n))
-        duration = ini.float("duration", unit="s", lo=0, lo_open=True)
-        steps = ini.int("steps", default=1000, lo=2, hi=10**6)
-        ini.finish()
-        t = np.linspace(0.0, duration, steps + 1)
+        q0 = np.array(ini["q"] or [0.0] * n)
+        v0 = np.array(ini["qdot"] or [0.0] * n)
+        t = np.linspace(0.0, ini["duration"], ini["steps"] + 1)
         q = numeric.free_response(a, b, c, q0, v0, t)
-        with (out / "free_response.csv").open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["t_s"] + m.coordinate_names)
-            for ti, row in zip(t, q):
-                w.writerow([repr(float(ti))] + [repr(float(x)) for x in row])
-        files.append("free_response.csv")
+        tables["free_response"] = Table((Column("t", "s"), *_coordinate_columns(m)), np.column_stack([t, q]),
+                                        "free response q(t) from the initial state")
         result["free"] = (t, q)
-    frc = scene.section("forcing", default=None) if scene.has("forcing") else None
+    frc = sc["forcing"]
     if frc is not None:
-        Q = _point_force(frc, m)
-        lo, hi = frc.vector("omega", 2, unit="rad/s", lo=0)
-        if hi <= lo:
-            raise SceneError(frc.name("omega"), f"expected [low, high] with low < high, got [{lo}, {hi}]")
-        samples = frc.int("samples", default=400, lo=2, hi=10**6)
-        frc.finish()
-        omegas = np.linspace(lo, hi, samples)
-        H = numeric.frequency_response(a, b, c, Q, omegas)
-        with (out / "frequency_response.csv").open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["omega_rad_s"] + [f"abs_{x}" for x in m.coordinate_names]
-                       + [f"phase_{x}_rad" for x in m.coordinate_names])
-            for wi, row in zip(omegas, H):
-                w.writerow([repr(float(wi))] + [repr(float(abs(x))) for x in row]
-                           + [repr(float(np.angle(x))) for x in row])
-        files.append("frequency_response.csv")
+        omegas = np.linspace(*frc["omega"], frc["samples"])
+        H = numeric.frequency_response(a, b, c, _point_force(frc, m), omegas)
+        cols = (Column("omega", "rad/s"), *_coordinate_columns(m, "abs_"),
+                *_coordinate_columns(m, "phase_", lambda co: "rad"))
+        tables["frequency_response"] = Table(cols, np.column_stack([omegas, np.abs(H), np.angle(H)]),
+                                             "amplitude and phase of q for Q e^{i omega t}")
         result["frf"] = (omegas, H)
     return result
 
@@ -346,71 +353,85 @@ def _curves(plt, m: Mechanism, x, ys, log: bool, xlabel: str, ylabel: str, title
     return name
 
 
-def precision(scene: Section, out: Path) -> dict:
-    """Frequencies of the lowest modes: full dense eigenproblem vs eigsh shift-invert at
-    several tolerances; error vs time as precision.csv and precision.png. The reference is
-    the closed form for ``[chain]`` scenes, else the dense solution (else eigsh at tol 0)."""
-    import scipy.sparse.linalg
 
-    from symmech.smm.chain import build_chain, exact_omega2, read_chain
-
-    bench = scene.section("precision", default={})
-    modes_n = bench.int("modes", default=10, lo=1, hi=200)
-    dense_limit = bench.int("dense_limit", default=3000, lo=2)
-    bench.finish()
+def precision(setup: Setup, ctx) -> Result:
+    """Frequencies of the lowest modes: full dense eigenproblem vs eigsh shift-invert at several
+    tolerances; table ``precision`` (error vs time) and precision.png. The reference is the closed
+    form for ``[chain]`` scenes, else the dense solution (else eigsh at tol 0)."""
+    m, n, sc = setup.m, setup.n, setup.scene
+    modes_n = sc["precision"]["modes"] or max(1, min(10, n - 1))
+    if modes_n > max(1, n - 1):
+        raise SceneError("precision.modes", f"{modes_n} must be below the number of coordinates {n}")
     exact = None
-    if scene.has("chain"):
-        spec = read_chain(scene.section("chain"), scene.str("name", default="") or None)
-        m = build_chain(spec)
-        exact = np.array(exact_omega2(spec)[:modes_n])
-    else:
-        m = mechanism(scene)
+    if sc["chain"] is not None:
+        exact = np.array(exact_omega2(chain_spec(sc["chain"], sc["name"]))[:modes_n])
     t0 = time.perf_counter()
     num = numeric.assemble(m)
     t_asm = time.perf_counter() - t0
-    n = num.a.shape[0]
-    if modes_n >= n:
-        raise SceneError("precision.modes", f"{modes_n} must be below the number of coordinates {n}")
     rows = []
-    if n <= dense_limit:
+    if n <= sc["precision"]["dense_limit"]:
         t0 = time.perf_counter()
         w = scipy.linalg.eigh(num.c.toarray(), num.a.toarray(), eigvals_only=True, subset_by_index=[0, modes_n - 1])
         rows.append(("dense eigh", 0.0, time.perf_counter() - t0, w))
-    # a small negative shift keeps the factorization regular when there are rigid-body modes
-    shift = -1e-6 * float(np.max(num.c.diagonal() / num.a.diagonal()))
-    for tol in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 0.0):
+    # omega^2 scale of the whole spectrum (Gershgorin-like): round-off of a rigid mode's omega^2 is
+    # relative to it. Shift 0 separates the lowest modes best; with rigid-body modes c is singular and a
+    # small negative shift keeps the factorization regular.
+    top = float(np.max(np.abs(num.c.diagonal()) / num.a.diagonal().clip(1e-300)))
+    for tol in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 0.0) if modes_n < n else ():
+        ctx.tick("precision")
         t0 = time.perf_counter()
-        w = scipy.sparse.linalg.eigsh(num.c.tocsc(), k=modes_n, M=num.a.tocsc(), sigma=shift, which="LM",
-                                      tol=tol, return_eigenvectors=False)
-        rows.append((f"eigsh tol={tol:g}", tol, time.perf_counter() - t0, np.sort(w)))
+        w = _eigsh(num, modes_n, tol, -1e-6 * top)
+        rows.append((f"eigsh tol={tol:g}", tol, time.perf_counter() - t0, w))
     reference, ref = (("closed form", exact) if exact is not None
-                      else (rows[0][0], rows[0][3]) if n <= dense_limit else ("eigsh tol=0", rows[-1][3]))
-    ref_w = np.sqrt(np.abs(ref))
-    floor = 1e-12 * ref_w.max()
+                      else (rows[0][0], rows[0][3]) if n <= sc["precision"]["dense_limit"]
+                      else ("eigsh tol=0", rows[-1][3]))
+    floor = 100 * n * np.finfo(float).eps * top
+    errors = [float(np.max(np.abs(w - ref) / np.maximum(np.abs(ref), floor))) for *_, w in rows]
+    table = Table((Column("tol", "1", "eigsh tolerance (0: machine precision)"),
+                   Column("seconds", "s", "wall time of the solve"),
+                   Column("max_rel_error_omega2", "1", f"largest relative error of the lowest {modes_n} omega^2 "
+                          "(rigid modes: relative to 100 n eps max(c_ii/a_ii))"),
+                   Column("assembly_seconds", "s", "sparse assembly of a, c"), Column("dof", "1")),
+                  np.array([[tol, sec, err, t_asm, n] for (_, tol, sec, _), err in zip(rows, errors)]),
+                  f"reference: {reference}", {"method": [r[0] for r in rows]})
 
-    def error(w):
-        return float(np.max(np.abs(np.sqrt(np.abs(w)) - ref_w) / np.maximum(ref_w, floor)))
+    def plot(folder):
+        import matplotlib
 
-    with (Path(out) / "precision.csv").open("w", newline="") as fh:
-        wr = csv.writer(fh)
-        wr.writerow(["method", "tol", "seconds", "max_rel_error_omega", "reference", "assembly_seconds", "dof"])
-        for name, tol, sec, w in rows:
-            wr.writerow([name, tol, repr(sec), repr(error(w)), reference, repr(t_asm), n])
-    import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for (name, _, sec, _), err in zip(rows, errors):
+            ax.loglog(sec, max(err, 1e-17), "o")
+            ax.annotate(name, (sec, max(err, 1e-17)), fontsize=7)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel(f"max relative error of the lowest {modes_n} omega^2")
+        ax.set_title(f"{m.name}: {n} DOF, assembly {t_asm:.2f} s; reference: {reference}", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(Path(folder) / "precision.png", dpi=110)
+        plt.close(fig)
+        return [Path(folder) / "precision.png"]
 
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for name, tol, sec, w in rows:
-        err = error(w)
-        ax.loglog(sec, max(err, 1e-17), "o")
-        ax.annotate(name, (sec, max(err, 1e-17)), fontsize=7)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel(f"max relative error of the lowest {modes_n} omega")
-    ax.set_title(f"{m.name}: {n} DOF, assembly {t_asm:.2f} s; reference: {reference}", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(Path(out) / "precision.png", dpi=110)
-    plt.close(fig)
-    _header(scene)
-    return {"files": [str(Path(out) / "precision.csv"), str(Path(out) / "precision.png")]}
+    summary = {"mechanism": m.name, "dof": n, "modes": modes_n, "reference": reference,
+               "assembly_seconds": t_asm, "omega2_reference_1_per_s2": np.asarray(ref).tolist()}
+    return Result("mechanism", summary, {"precision": table}, plots=plot)
+
+
+def _eigsh(num, k: int, tol: float, fallback: float) -> np.ndarray:
+    """Lowest k omega^2 by shift-invert Lanczos at 0; at ``fallback`` if c is exactly singular."""
+    import scipy.sparse.linalg
+
+    for sigma in (0.0, fallback):
+        try:
+            return np.sort(scipy.sparse.linalg.eigsh(num.c.tocsc(), k=k, M=num.a.tocsc(), sigma=sigma, which="LM",
+                                                     tol=tol, return_eigenvectors=False))
+        except RuntimeError:  # "Factor is exactly singular"
+            continue
+    raise SymmechError("shift-invert Lanczos failed at both shifts (singular c - sigma a)")
+
+
+KIND = registry.register(registry.Kind(
+    name="mechanism", summary="linear(ized) lumped-parameter mechanism: SMM matrices, modes, responses (seed 003)",
+    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision,
+    docs="docs/scenes-mechanism.md"))
