@@ -1,4 +1,4 @@
-.PHONY: install codegen check test bench
+.PHONY: install codegen check test slow bench
 PY ?= python
 
 install:
@@ -12,6 +12,10 @@ check:
 
 test:
 	$(PY) -m pytest
+
+# the slow tests .ci/run adds: wheel install outside the checkout, every precision study, long fuzzing
+slow:
+	$(PY) -m pytest -m slow tests/test_install.py tests/test_output_contract.py tests/test_fuzz.py
 
 bench:
 	for f in benchmarks/bench_*.py; do $(PY) $$f || exit 1; done

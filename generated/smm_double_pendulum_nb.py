@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key a50dbbd01414398c4fe003e30dfab65fb6b5667a0e0cae35703bdb009e42c290
+# source key 33a3b107e33094f7921a22555fb7db2999f283ce7c9f73601c56b98d3095150d
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key a50dbbd01414398c4fe003e30dfab65fb6b5667a0e0cae35703bdb009e42c290
+# source key 33a3b107e33094f7921a22555fb7db2999f283ce7c9f73601c56b98d3095150d
 # body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31827bf4de54432aee60e2f483d88627e3b5b6a2cd2dcfa7f887cfa8f374220f
-# source key 928bc3ad12f89d33c375ca45e4711aecd285fceba5cb192f464616a88dca74ca
+# source key a0247b13baffa447b57fbc9bb8a027b55eff78a1f01ac22a442e93f14aedd1ab
 # body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

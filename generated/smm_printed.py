@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ebd74940209542e869c1a9d5139544a89a0781bf3b3c9e99e8ebf69449a2a8e6
-# source key 46e2d73b1fa56f2d877ed4e0c59b621228dede54161ca494608698ee2d46f88a
+# source key 02def362267654dd53a8d422cbbcbbfe094fa148ad8624dbf2a2c27aaf7fbe9a
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

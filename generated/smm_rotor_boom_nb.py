@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key a50dbbd01414398c4fe003e30dfab65fb6b5667a0e0cae35703bdb009e42c290
+# source key 33a3b107e33094f7921a22555fb7db2999f283ce7c9f73601c56b98d3095150d
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,4 +1,4 @@
-"""Command-line interface: ``symmech run | report | codegen | latex | errata | bench``.
+"""Command-line interface: ``symmech run | sweep | report | codegen | latex | errata | bench``.
 
 Errors a user can fix (:class:`SymmechError`) print as one line on stderr with
 exit status 2, never a traceback.
@@ -10,57 +10,37 @@ import importlib
 import importlib.util
 import json
 import os
+import signal
 import sys
-import time
+import threading
 from pathlib import Path
 
 from symmech import __version__
 from symmech.core.context import DEFAULT_MAX_TIME
-from symmech.core.scene import SymmechError, load
+from symmech.core.scene import SymmechError
 
-# Scene ``kind`` -> runtime module with ``run(scene, out_dir) -> summary`` and,
-# optionally, ``precision(scene, out_dir) -> summary`` for `bench precision`.
-KINDS = {
-    "impact": "symmech.grain.impact_scene",
-    "grain": "symmech.grain.motion_scene",
-    "trolley": "symmech.trolley.scene",
-    "mechanism": "symmech.smm.scene",
-}
+def _context(ns):
+    from symmech.core.context import Context
 
-
-def _kind_module(scene):
-    kind = scene.choice("kind", sorted(KINDS))
-    try:
-        return importlib.import_module(KINDS[kind])
-    except ModuleNotFoundError as exc:
-        if exc.name == KINDS[kind]:
-            raise SymmechError(f"scene kind '{kind}' is not available in this version") from None
-        raise
-
-
-def _write_json(path: Path, data) -> None:
-    path.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n")
+    return Context(quiet=ns.quiet, max_time=ns.max_time)
 
 
 def cmd_run(ns) -> int:
-    from symmech.core import pipeline, registry
-    from symmech.core.context import Context
+    from symmech.core import pipeline
 
-    if load(ns.scene).raw("kind", default=None) in registry.kinds():
-        pipeline.run_to(ns.scene, Path(ns.out), Context(quiet=ns.quiet, max_time=ns.max_time))
-        print(f"wrote {Path(ns.out) / 'summary.json'}")
-        return cmd_report(ns) if ns.report else 0
-    # Kinds not yet on the registry keep the old path until they are converted.
-    scene = load(ns.scene)
-    module = _kind_module(scene)
-    out = Path(ns.out)
-    out.mkdir(parents=True, exist_ok=True)
-    summary = {"kind": scene.raw("kind", default=None), **module.run(scene, out)}
-    _write_json(out / "summary.json", summary)
-    for warning in summary.get("warnings", []):
-        print(f"symmech: warning: {warning}", file=sys.stderr)
-    print(f"wrote {out / 'summary.json'}")
+    pipeline.run_to(ns.scene, ns.out, _context(ns), plots=not ns.no_plots)
+    print(f"wrote {Path(ns.out) / 'summary.json'}")
     return cmd_report(ns) if ns.report else 0
+
+
+def cmd_sweep(ns) -> int:
+    from symmech.grain import sweep
+
+    result = sweep.run(ns.scene, ns.out, _context(ns), scheduler=ns.scheduler, workers=ns.workers)
+    for warning in result.warnings:
+        print(f"symmech: warning: {warning}", file=sys.stderr)
+    print(f"wrote {Path(ns.out) / 'summary.json'}")
+    return 0
 
 
 def cmd_report(ns) -> int:
@@ -71,27 +51,11 @@ def cmd_report(ns) -> int:
 
 
 def cmd_bench(ns) -> int:
-    from symmech.core import pipeline, registry
-    from symmech.core.context import Context
+    from symmech.core import pipeline
 
-    if load(ns.scene).raw("kind", default=None) in registry.kinds():
-        scene = pipeline.load(ns.scene)
-        if scene.kind.precision is None:
-            raise SymmechError(f"scene kind '{scene.kind.name}' has no precision benchmark")
-        result = scene.kind.precision(scene.setup, Context(quiet=ns.quiet))
-        result.check_finite()
-        pipeline.write(result, Path(ns.out), scene)
-        print(f"wrote {Path(ns.out) / 'summary.json'}")
-        return 0
-    scene = load(ns.scene)
-    module = _kind_module(scene)
-    if not hasattr(module, "precision"):
-        raise SymmechError(f"scene kind '{scene.str('kind')}' has no precision benchmark")
-    out = Path(ns.out)
-    out.mkdir(parents=True, exist_ok=True)
-    summary = module.precision(scene, out)
-    for path in summary.get("files", []):
-        print(f"wrote {path}")
+    _, result = pipeline.run_to(ns.scene, ns.out, _context(ns), study="precision")
+    for name in ["summary.json", *[f"{t}.csv" for t in result.tables], *result.files]:
+        print(f"wrote {Path(ns.out) / name}")
     return 0
 
 
@@ -208,8 +172,33 @@ def cmd_errata(ns) -> int:
     return 0
 
 
+def _seconds(text: str) -> float:
+    """--max-time: a positive finite number of seconds (argparse reports the error)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text} is outside (0, inf) s")
+    return value
+
+
+def _run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quiet", action="store_true", help="no progress bars and no estimate")
+    p.add_argument("--max-time", type=_seconds, default=DEFAULT_MAX_TIME, metavar="SECONDS",
+                   help="refuse a run estimated to take longer, stop one that does "
+                        f"(default {DEFAULT_MAX_TIME:g} s)")
+
+
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line naming the problem and where to find help, exit 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="symmech",
         description="Symbolic derivations of three mechanics papers, emitted as numpy modules, "
                     "with simulations and checks against the papers.",
@@ -220,11 +209,20 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scene file and write results to a folder")
     r.add_argument("scene", help="scene file (TOML); see docs/scenes.md")
     r.add_argument("--out", default="out", help="output folder (default: out)")
-    r.add_argument("--quiet", action="store_true", help="no progress bars")
-    r.add_argument("--max-time", type=float, default=DEFAULT_MAX_TIME, metavar="SECONDS",
-                   help=f"refuse or stop a run expected to take longer (default {DEFAULT_MAX_TIME:g} s)")
+    _run_options(r)
+    r.add_argument("--no-plots", action="store_true", help="write tables and summary only, no plots")
     r.add_argument("--report", action="store_true", help="also write OUT/report.html (see `symmech report`)")
     r.set_defaults(func=cmd_run)
+
+    sw = sub.add_parser("sweep", help="grain populations over a swept plane of operating parameters "
+                                      "(the scene's [sweep] and [[population]]; docs/scenes-grain.md)")
+    sw.add_argument("scene", help="grain scene file (TOML) with a [sweep] table")
+    sw.add_argument("--out", default="out-sweep", help="output folder (default: out-sweep)")
+    _run_options(sw)
+    sw.add_argument("--scheduler", metavar="ADDRESS",
+                    help="address of a dask.distributed scheduler (default: a local process pool)")
+    sw.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the CPU count)")
+    sw.set_defaults(func=cmd_sweep)
 
     rp = sub.add_parser("report", help="write a self-contained HTML report of a finished run (OUT/report.html)")
     rp.add_argument("out", help="the run's output folder (holds summary.json)")
@@ -255,20 +253,44 @@ def build_parser() -> argparse.ArgumentParser:
     bp = bsub.add_parser("precision", help="work-precision diagram (CSV + PNG) for a scene")
     bp.add_argument("scene", help="scene file (TOML)")
     bp.add_argument("--out", default="out-precision", help="output folder")
-    bp.add_argument("--quiet", action="store_true", help="no progress bars")
+    _run_options(bp)
     bp.set_defaults(func=cmd_bench)
     return p
 
 
+def _on_sigterm(signum, frame):
+    raise KeyboardInterrupt  # clean up like Ctrl-C: temporary folder and lock removed
+
+
 def main(argv=None) -> int:
+    """Run one command; user errors exit 2, Ctrl-C 130, internal errors 3 — one line each."""
     ns = build_parser().parse_args(argv)
+    in_main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
     try:
         return ns.func(ns)
     except SymmechError as exc:
-        print(f"symmech: error: {exc}", file=sys.stderr)
+        print(f"symmech: error: {_one_line(exc)}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        kept = f"; {ns.out} keeps its previous content" if getattr(ns, "out", None) else ""
+        print(f"symmech: interrupted{kept}", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # output piped into `head` and the like
         return 0
+    except Exception as exc:  # a bug: one line, the traceback only on request
+        if os.environ.get("SYMMECH_TRACEBACK"):
+            raise
+        print(f"symmech: internal error: {type(exc).__name__}: {_one_line(exc)} (please report; "
+              "SYMMECH_TRACEBACK=1 shows the traceback)", file=sys.stderr)
+        return 3
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 if __name__ == "__main__":

@@ -118,7 +118,8 @@ def test_errata_json_records(capsys):
 def test_bench_precision_writes_csv_and_png(tmp_path, capsys):
     assert main(["bench", "precision", str(ROOT / "scenes" / "impact_default.toml"), "--out", str(tmp_path)]) == 0
     rows = (tmp_path / "precision_impact.csv").read_text().splitlines()
-    assert rows[0].startswith("# reference: mpmath")
-    robust = [r.split(",") for r in rows[2:] if r.startswith("robust")]
-    assert max(float(r[3]) for r in robust) < 1e-14
+    assert rows[0] == "value [1],error [1],seconds [s],method,knob"
+    assert json.loads((tmp_path / "summary.json").read_text())["reference"].startswith("mpmath")
+    robust = [r.split(",") for r in rows[1:] if r.split(",")[3].startswith("robust")]
+    assert len(robust) == 4 and max(float(r[1]) for r in robust) < 1e-14
     assert (tmp_path / "precision_impact.png").stat().st_size > 10000

@@ -32,6 +32,7 @@ from pathlib import Path
 import symmech
 from symmech import __version__
 from symmech.core import integrity
+from symmech.core.scene import scenes_folder
 
 INDEX = "__init__.py"
 SUFFIXES = ("", "_nb")  # emit.TARGETS' suffixes, repeated here so the fast path needs no sympy
@@ -121,7 +122,7 @@ def source_key(producer: str, data: tuple[str, ...]) -> str:
     for name in sorted(set(closure(producer)) | set(EMITTER)):
         h.update(f"module {name}\n".encode() + _source_file(name).read_bytes())
     for rel in data:
-        path = ROOT / rel
+        path = _data_path(rel)
         content = ("\n".join(sorted(p.name for p in path.iterdir())).encode() if path.is_dir()
                    else path.read_bytes() if path.is_file() else b"<missing>")
         h.update(f"data {rel}\n".encode() + content)
@@ -155,9 +156,28 @@ def derive(producer: str) -> tuple[tuple, tuple[str, ...]]:
     data = set()
     for p in opened:
         path = Path(p).resolve()
-        if path.suffix not in (".py", ".pyc") and ROOT in path.parents and "__pycache__" not in path.parts:
-            data.add(path.relative_to(ROOT).as_posix())
+        if path.suffix not in (".py", ".pyc") and "__pycache__" not in path.parts:
+            name = _data_name(path)
+            if name is not None:
+                data.add(name)
     return specs, tuple(sorted(data))
+
+
+def _data_name(path: Path) -> str | None:
+    """Checkout-relative name of a data file read by a derivation (None outside the package).
+
+    Bundled scenes install as package data (``symmech/scenes`` in site-packages), so
+    they are named ``scenes/...`` in a checkout and an installed package alike."""
+    scenes = scenes_folder().resolve()
+    if path == scenes or scenes in path.parents:
+        return Path("scenes", path.relative_to(scenes)).as_posix()
+    return path.relative_to(ROOT).as_posix() if ROOT in path.parents else None
+
+
+def _data_path(name: str) -> Path:
+    """The file or folder behind a name of :func:`_data_name`."""
+    head, _, rest = name.partition("/")
+    return scenes_folder() / rest if head == "scenes" else ROOT / name
 
 
 # -- the package index ----------------------------------------------------------

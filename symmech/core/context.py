@@ -41,4 +41,10 @@ class Context:
                     mininterval=0.5, delay=2.0)
 
     def warn(self, message: str) -> None:
+        """Record a warning: echoed on stderr and stored in the summary."""
         self.warnings.append(message)
+
+    def say(self, message: str) -> None:
+        """One line of information on stderr (e.g. the cost estimate), unless quiet."""
+        if not self.quiet:
+            print(f"symmech: {message}", file=sys.stderr)

@@ -1,18 +1,19 @@
 """Work-precision diagrams: what accuracy costs in time.
 
-A study is a list of rows ``{"method", "knob", "value", "error", "seconds"}``;
-:func:`write` saves them as CSV and draws log10(error) against log10(seconds),
-one line per method, one marker per knob value.
+A study is a list of rows ``{"method", "knob", "value", "error", "seconds"}``.
+A kind's ``precision`` returns :func:`result`: a table with units and the diagram,
+written by the pipeline like any run. The diagram draws log10(error) against
+log10(seconds), one line per method, one marker per knob value.
 """
 from __future__ import annotations
 
-import csv
 import time
 from pathlib import Path
 
 import numpy as np
 
-FIELDS = ("method", "knob", "value", "error", "seconds")
+from symmech.core.results import Column, Result, Table
+
 ERROR_FLOOR = 1e-17  # errors below double precision are drawn at this floor
 
 
@@ -36,18 +37,24 @@ def best_time(fn, repeats: int = 5, min_seconds: float = 0.02):
     return best, result
 
 
-def write(rows: list[dict], out: Path, name: str, title: str, reference: str) -> list[Path]:
-    """Write ``name``.csv, ``name``.png and ``name``.svg into ``out``; returns the CSV and PNG paths."""
+COLUMNS = (Column("value", "1", "the knob's setting"),
+           Column("error", "1", "relative error against the reference"),
+           Column("seconds", "s", "best wall time per call"))
+
+
+def result(kind: str, rows: list[dict], name: str, title: str, reference: str) -> Result:
+    """A study as a :class:`Result` for the pipeline: table ``name`` (value, error, seconds;
+    text columns method and knob), the reference in the summary, the diagram as its plot."""
+    table = Table(COLUMNS, [[r["value"], r["error"], r["seconds"]] for r in rows], doc=title,
+                  text={"method": [r["method"] for r in rows], "knob": [r["knob"] for r in rows]})
+    return Result(kind, {"study": "precision", "reference": reference}, tables={name: table},
+                  plots=lambda folder: diagram(rows, Path(folder), name, title, reference))
+
+
+def diagram(rows: list[dict], folder: Path, name: str, title: str, reference: str) -> list[Path]:
+    """log error against log time, one line per method, as ``name``.png and .svg in ``folder``."""
     from symmech.core import plotting
 
-    out = Path(out)
-    csv_path, png_path = out / f"{name}.csv", out / f"{name}.png"
-    with csv_path.open("w", newline="") as fh:
-        fh.write(f"# reference: {reference}\n")
-        writer = csv.DictWriter(fh, fieldnames=FIELDS)
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({k: row[k] for k in FIELDS})
     fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)
     ax = axes[0, 0]
     for method in dict.fromkeys(r["method"] for r in rows):
@@ -59,5 +66,4 @@ def write(rows: list[dict], out: Path, name: str, title: str, reference: str) ->
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.text(0.01, 0.01, f"reference: {reference}", fontsize=7)
-    plotting.save(fig, out, name)
-    return [csv_path, png_path]
+    return plotting.save(fig, folder, name)

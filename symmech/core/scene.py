@@ -7,6 +7,7 @@ nobody reads are reported too (:meth:`Section.finish`), which catches typos.
 """
 from __future__ import annotations
 
+import importlib.resources
 import math
 import sys
 from pathlib import Path
@@ -154,16 +155,68 @@ def _check_real(field, value, unit, lo, hi, lo_open, hi_open) -> float:
     return value
 
 
+# A scene is a small document: these bounds keep a hostile or mistaken file
+# (a log, a binary, a generated monster) from costing time or crashing the parser.
+MAX_SCENE_BYTES = 16 * 2**20
+MAX_DEPTH = 32
+
+
 def read_toml(path) -> dict:
-    """The TOML document at ``path``; errors name the file and the TOML problem."""
+    """The TOML document at ``path``; every problem is one SymmechError naming the file."""
     path = Path(path)
+    if path.is_dir():
+        raise SymmechError(f"scene {path} is a folder; give a TOML file")
     try:
-        with path.open("rb") as fh:
-            return tomllib.load(fh)
+        size = path.stat().st_size
+        if size > MAX_SCENE_BYTES:
+            raise SymmechError(f"scene file {path} has {size} bytes; at most {MAX_SCENE_BYTES} are read")
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise SymmechError(f"scene file not found: {path}") from None
+    except OSError as exc:
+        raise SymmechError(f"cannot read scene file {path}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        raise SymmechError(f"scene file {path} is not UTF-8 text (byte 0x{raw[exc.start]:02x} "
+                           f"on line {line})") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SymmechError(f"scene file {path} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SymmechError(f"scene file {path} is nested too deeply (at most {MAX_DEPTH} levels)") from None
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise SymmechError(f"scene file {path} holds an unreadable value: {exc}") from None
+    check_depth(data)
+    return data
+
+
+def check_depth(data) -> None:
+    """SceneError naming the first field nested deeper than MAX_DEPTH tables/arrays."""
+    stack = [(data, "", 0)]
+    while stack:
+        node, where, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise SceneError(where, f"nested deeper than {MAX_DEPTH} tables or arrays")
+        if isinstance(node, dict):
+            stack += [(v, f"{where}.{k}" if where else str(k), depth + 1) for k, v in node.items()]
+        elif isinstance(node, list):
+            stack += [(v, f"{where}[{i}]", depth + 1) for i, v in enumerate(node)]
+
+
+def scenes_folder() -> Path:
+    """The folder of the bundled example scenes (package data ``symmech.scenes``)."""
+    try:
+        return Path(str(importlib.resources.files("symmech.scenes")))
+    except ModuleNotFoundError:
+        # An editable install made before scenes/ became a package maps no
+        # symmech.scenes; its checkout still has the folder. Reinstall to drop this.
+        checkout = Path(__file__).resolve().parents[2] / "scenes"
+        if checkout.is_dir():
+            return checkout
+        raise
 
 
 def load(path) -> Section:

@@ -208,10 +208,7 @@ def precision(sc: ImpactScene, ctx: Context) -> Result:
             add(f"descent ({variant})", "max_steps", steps,
                 lambda: solve_descent_batch(H[None], m, sc.e, sc.lam, uK0[None], variant, options)[0][0])
     reference = "mpmath.findroot at 50 digits on (19), H taken as exact"
-    # The study's CSV (with its reference line) and diagram are written together by core.precision.
-    return Result("impact", {"study": "precision", "reference": reference, "rows": rows},
-                  plots=lambda folder: wp.write(rows, folder, "precision_impact", "Impact solvers: work-precision",
-                                                reference))
+    return wp.result("impact", rows, "precision_impact", "Impact solvers: work-precision", reference)
 
 
 registry.register(registry.Kind(

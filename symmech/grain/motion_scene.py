@@ -400,10 +400,7 @@ def precision(sc: GrainScene, ctx: Context) -> Result:
             add("paper mode, dt = T/1000, nodes", "nodes", nodes, replace(paper, dt=period / 1000, nodes=nodes))
     reference = (f"accurate mode at tolerance {ref_tol:g}, scan step {ref_num.scan_step:.3g} s, "
                  f"duration {duration:.4g} s")
-    # The study's CSV (with its reference line) and diagram are written together by core.precision.
-    return Result("grain", {"study": "precision", "reference": reference, "rows": rows},
-                  plots=lambda folder: wp.write(rows, folder, "precision_grain",
-                                                "Grain motion: work-precision (final position)", reference))
+    return wp.result("grain", rows, "precision_grain", "Grain motion: work-precision (final position)", reference)
 
 
 registry.register(registry.Kind(

@@ -219,9 +219,9 @@ def simulate_point(scenes: list[dict]) -> tuple[np.ndarray, list]:
     return np.array(out), failed
 
 
-def estimate(p: Plan, workers: int) -> "registry.Estimate":
+def estimate(p: Plan, workers: int):
     """Cost of the whole sweep: the grain kind's estimate of each population's first grain, times the
-    grains and points, shared by ``workers``."""
+    grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
     from symmech.core import pipeline, registry
 
     seconds = sum(pipeline.load(grid[0][0][0]).estimate().seconds * len(grid[0][0]) * len(grid) * len(grid[0])

@@ -19,11 +19,11 @@ import sympy
 
 from symmech.core import expressions
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
-from symmech.core.scene import SymmechError, read_toml
+from symmech.core.scene import SymmechError, read_toml, scenes_folder
 from symmech.smm import forms
 from symmech.smm.model import Effects, Mechanism, interpret
 
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = scenes_folder()
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
 
 

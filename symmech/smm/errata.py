@@ -8,15 +8,15 @@ from __future__ import annotations
 
 import importlib
 import inspect
-from pathlib import Path
 
 import numpy as np
 
 from symmech.core.errata import Check, NotCompared
+from symmech.core.scene import scenes_folder
 from symmech.smm import SEED
 from symmech.smm.derive import load_mechanism
 
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = scenes_folder()
 
 
 def _nominal(scene: str) -> dict:

@@ -67,9 +67,13 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     for i in range(k):
         if np.linalg.matrix_rank(G[rows + [i]], tol=tol) > len(rows):
             rows.append(i)
+    # the field to fix: the preload of the first spring whose tension equilibrium should give
+    fields = {s.name: f"{table}[{i}].preload" for table, springs in
+              (("springs", m.springs), ("torsion_springs", m.torsion_springs)) for i, s in enumerate(springs)}
+    field = fields[names[0]]
     if len(rows) < len(names):
-        raise SymmechError(f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
-                           "(statically indeterminate); give preload values")
+        raise SceneError(field, f"springs {', '.join(names)}: equilibrium (5) does not fix their tensions "
+                                "(statically indeterminate); give preload values")
     # the elimination order of partial pivoting: the symbolic solve (symmech.smm.derive) takes the
     # rows in this order, so it never divides by an entry that is zero up to round-off
     perm, _, _ = scipy.linalg.lu(G[rows])
@@ -78,8 +82,8 @@ def equilibrium_tensions(m: Mechanism) -> tuple[dict, list[int]]:
     miss = G @ T + r
     worst = int(np.argmax(np.abs(miss)))
     if abs(miss[worst]) > 1e-9 * max(np.abs(r).max(), 1.0):
-        raise SymmechError(f"springs {', '.join(names)} cannot balance the loads: dPi/dq = {miss[worst]:.3g} "
-                           f"remains on coordinate '{m.coordinate_names[worst]}'")
+        raise SceneError(field, f"springs {', '.join(names)} cannot balance the loads: dPi/dq = "
+                                f"{miss[worst]:.3g} remains on coordinate '{m.coordinate_names[worst]}'")
     return dict(zip(names, T.tolist())), rows
 
 

@@ -1,0 +1,1 @@
+"""Bundled example scenes (package data, read with importlib.resources)."""
