@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
-# source key e3bb8118a0ffd387d9293074485c23dba95f99f3ec33c0de173541eab95c3724
+# source key 7ee5bf01895bdf9eab8fb0ad595fec7f1623dd536626241a3f906c74c6cff3f0
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

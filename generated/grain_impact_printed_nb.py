@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b55f62f91a435a136e485bb722ecad55d1f69194943b533227752894317c4f44
-# source key e3bb8118a0ffd387d9293074485c23dba95f99f3ec33c0de173541eab95c3724
+# source key 7ee5bf01895bdf9eab8fb0ad595fec7f1623dd536626241a3f906c74c6cff3f0
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

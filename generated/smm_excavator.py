@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d279abe2b92e25688859d0e030e722fe99a3e3173776098b4ad4a4e4906eb55f
-# source key 33a3b107e33094f7921a22555fb7db2999f283ce7c9f73601c56b98d3095150d
+# source key 229793d9a68bee7c4d57e7f8066d4e3e04e097882b360dc51dbe379d04f8cd32
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2f18f5aa9207c30543b0cfbf5ad12dbf5c64253a35be355d49d4272388029716
-# source key 33a3b107e33094f7921a22555fb7db2999f283ce7c9f73601c56b98d3095150d
+# source key 229793d9a68bee7c4d57e7f8066d4e3e04e097882b360dc51dbe379d04f8cd32
 # body sha256 aee5dbf23a586530a888113236e52e676f91d5a69d4a97696549f4cbbea29ebb
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0566a1e91b9d80f150c00d99c388a5d12b0655eb9ba07527dcc709780633583c
-# source key 33a3b107e33094f7921a22555fb7db2999f283ce7c9f73601c56b98d3095150d
+# source key 229793d9a68bee7c4d57e7f8066d4e3e04e097882b360dc51dbe379d04f8cd32
 # body sha256 e54288a6a2a2182e8ca5a42db5f21ae452cee07659143c25eab424394a710b81
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

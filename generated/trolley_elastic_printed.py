@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae12fe9b5e046d42178ed66b967e426a934a0cbae1ff3a1956fd93eaa7f1f91a
-# source key d6f6a633eacf240fb37a63b3779db4d22720f32ad81e75e636b713792a7a6a45
+# source key 8ba71ca7c580570e6cc6a48ce8522dfa0de785e445914842636c0460e3047c49
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6da2a548e042bd45c9880b91eef7d07292eb1054b02b4c2496a1a6204dd4f332
-# source key d6f6a633eacf240fb37a63b3779db4d22720f32ad81e75e636b713792a7a6a45
+# source key 8ba71ca7c580570e6cc6a48ce8522dfa0de785e445914842636c0460e3047c49
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -155,10 +155,8 @@ def run(setup: Setup, ctx) -> Result:
     files.update(_matrices_file(m, num))
     tables = {"modes": _modes_table(m, omega, md)}
     response = _responses(sc, m, a, b, c, tables)
-    plots = None
-    if sc["output"]["plots"]:
-        def plots(folder):
-            return modes_and_responses(m, md, omega, response, Path(folder))
+    plots = (lambda folder: modes_and_responses(m, md, omega, response, Path(folder))) \
+        if sc["output"]["plots"] else None
     summary = {
         "mechanism": m.name,
         "coordinates": [{"name": co.name, "type": co.kind, "unit": co.unit} for co in m.coordinates],

@@ -192,7 +192,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
         for col, pair in enumerate(ROTATION_PAIRS):
             psi[pair] = rigid[:, :, 5 + col]
     n_roll = len(names)
-    K_blocks, D_blocks = [], []
+    K_blocks = []
     start = 0
     for pts_b, w_b, beam, xi in parts:
         if beam is None or not eff.body:

@@ -1,7 +1,6 @@
 """Printed vs derived for the roller section of seed 002: the fields φ0, ψ0 of the five roller DOFs."""
 from __future__ import annotations
 
-import numpy as np
 
 from symmech.core.errata import Check, NotCompared
 from symmech.generated import trolley_elastic as gen
