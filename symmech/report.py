@@ -76,11 +76,11 @@ def _name_mathml(name: str) -> str:
 
 
 def _used_modules(summary: dict) -> list[str] | None:
-    if isinstance(summary.get("generated_modules"), dict):
-        return list(summary["generated_modules"])
+    """The generated modules the run imported, and the one it wrote for its scene (mechanisms)."""
+    used = list(summary["generated_modules"]) if isinstance(summary.get("generated_modules"), dict) else []
     if summary.get("generated_module"):
-        return [Path(summary["generated_module"]).stem]
-    return None
+        used.append(Path(summary["generated_module"]).stem)
+    return used or None
 
 
 @functools.cache
@@ -184,10 +184,9 @@ def _figures(out: Path) -> list[tuple[str, str]]:
 def _module_hashes(summary: dict, names: list[str], out: Path) -> tuple[dict, str]:
     """Generated-module hashes: the run's own record, else the header lines of the modules
     (a module the run wrote into ``out`` first, then the installed ``symmech.generated``)."""
-    if isinstance(summary.get("generated_modules"), dict):
-        return summary["generated_modules"], "sha256 of each module file, recorded by the run"
-    hashes = {}
-    for name in names:
+    recorded = summary.get("generated_modules")
+    hashes = dict(recorded) if isinstance(recorded, dict) else {}
+    for name in (n for n in names if n not in hashes):
         path = out / f"{name}.py"
         if not path.exists():
             spec = importlib.util.find_spec(f"symmech.generated.{name}")
@@ -196,6 +195,9 @@ def _module_hashes(summary: dict, names: list[str], out: Path) -> tuple[dict, st
             path = Path(spec.origin)
         match = re.search(r"inputs sha256 ([0-9a-f]{64})", path.read_text().split("\n", 1)[0])
         hashes[name] = match.group(1) if match else "unknown"
+    if isinstance(recorded, dict):
+        return hashes, ("body sha256 of each imported module, recorded by the run; the scene's own module: "
+                        "inputs sha256 from its first line")
     return hashes, "inputs sha256 from each module's first line, read at report time (the run recorded none)"
 
 

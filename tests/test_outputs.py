@@ -287,7 +287,8 @@ def test_precision_study_as_a_result_follows_the_contract(tmp_path):
     sc = pipeline.load({"kind": "probe"})
     pipeline.write(result, tmp_path / "p", sc)
     s = assert_valid_output(tmp_path / "p")
-    assert s["files"] == ["precision_probe.csv", "precision_probe.png"] and s["reference"] == "exact"
+    assert s["files"] == ["precision_probe.csv", "precision_probe.png", "precision_probe.svg"]
+    assert s["reference"] == "exact"
     lines = (tmp_path / "p" / "precision_probe.csv").read_text().splitlines()
     assert lines[0] == "value [1],error [1],seconds [s],method,knob"
     assert lines[2] == "2.0,0.01,0.002,m1,steps"
