@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
-# source key e5542c90c08958a3f2ebe63cf6cad34df0a02b75ec97000963045ba1d4097350
+# source key aa1105fc29af15dd4cb320828de69fe39b2094a9cfbfb0bc7738fffdfb9dc3c3
 # body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
-# source key 7ee5bf01895bdf9eab8fb0ad595fec7f1623dd536626241a3f906c74c6cff3f0
+# source key aa927b67ce7350e58bef5b100e207984c7e56faa4217dad1166ae6f721a822e1
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

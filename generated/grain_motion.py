@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
-# source key 0ccd47846c9c023f65f1bc22c05e47e631934b552a1a5bed6da1ecf06ffe0009
+# source key 1796e4b9996b79d035c6440813d58aea0dd815f3336ee8743078cdf20516d8eb
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a0746f401eb0798ca7faf0443507e069f50585bd78ec570baae6f0d3df12ed99
-# source key 0ccd47846c9c023f65f1bc22c05e47e631934b552a1a5bed6da1ecf06ffe0009
+# source key 1796e4b9996b79d035c6440813d58aea0dd815f3336ee8743078cdf20516d8eb
 # body sha256 326260ca4e3879a6ab5be10effac0b8980cf81d1bd2b5ca13c1076a02d0c380f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

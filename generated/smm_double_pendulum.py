@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7e93e78145843a772c35a619cd96651bc67db7ef2c00101b789953c240044239
-# source key 229793d9a68bee7c4d57e7f8066d4e3e04e097882b360dc51dbe379d04f8cd32
+# source key ab53725fc6c7f746cdb6cd0b32be45ae2613fb0a9eec383132ab0ce1c4456224
 # body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

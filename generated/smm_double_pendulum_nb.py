@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key 229793d9a68bee7c4d57e7f8066d4e3e04e097882b360dc51dbe379d04f8cd32
+# source key ab53725fc6c7f746cdb6cd0b32be45ae2613fb0a9eec383132ab0ce1c4456224
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cda9990b8cf0caf682d7b0c511a12dee929c6f3016d7cba84aaff44696b0138a
-# source key 6eca11ea1db0504e4941d858cd2d52dd12eb84d7d8570e01c22bb1879fdbe671
+# source key 241e731070553979d575b94e614e6c7d8c68d597ca311552341b108802c76055
 # body sha256 27a7456afbf7375f1d6c735d8f17ed28ca1fc4bd2f24a5f1581832149a61ee93
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

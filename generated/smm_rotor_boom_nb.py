@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key 229793d9a68bee7c4d57e7f8066d4e3e04e097882b360dc51dbe379d04f8cd32
+# source key ab53725fc6c7f746cdb6cd0b32be45ae2613fb0a9eec383132ab0ce1c4456224
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

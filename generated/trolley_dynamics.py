@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c37fcc7e0909167dad763b47a6ae355e452d497f376d5191c938c94b50c3503f
-# source key e8ee37771bfea580fbd85fb7dfaa02c80ef24f23b31841cabc6aad2f46ffbf52
+# source key 2adecf4d73cbff1468c04081420e7ba072c933591a48e4a09a16548250dff6ab
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

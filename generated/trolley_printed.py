@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
-# source key 6bc81156a5ce634177ef97a4d7c912d80a0d15476b87215e2ce21c93857af818
+# source key cd23d57b3940219716b5170239087c3495b8a6ef524fc52bc7f5e00c89ebdb55
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
-# source key 6bc81156a5ce634177ef97a4d7c912d80a0d15476b87215e2ce21c93857af818
+# source key cd23d57b3940219716b5170239087c3495b8a6ef524fc52bc7f5e00c89ebdb55
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 
