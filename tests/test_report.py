@@ -2,6 +2,8 @@
 import json
 import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -22,7 +24,8 @@ RUNS = {
 
 @pytest.fixture(scope="module")
 def reports(tmp_path_factory):
-    """kind -> output folder of a bundled scene run with ``--report``."""
+    """kind -> output folder of a bundled scene run with ``--report``, each in its own process as
+    from the command line (``generated_modules`` lists the modules loaded in the run's process)."""
     base = tmp_path_factory.mktemp("reports")
     folders = {}
     for kind, (scene, edits, _) in RUNS.items():
@@ -32,7 +35,9 @@ def reports(tmp_path_factory):
         path = base / scene
         path.write_text(text)
         folders[kind] = base / kind
-        assert main(["run", str(path), "--out", str(folders[kind]), "--report"]) == 0
+        proc = subprocess.run([sys.executable, "-m", "symmech", "run", str(path), "--out", str(folders[kind]),
+                               "--report", "--quiet"], capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr
     return folders
 
 
