@@ -60,7 +60,7 @@ def overloads(setup, res: dict, out: Path) -> list[Path]:
 def work_precision(rows, path: Path) -> Path:
     """Log error vs log time, one line per (family, method); ``rows`` are
     (family, method, steps, fd_step, time_s, error); points are labelled by their knob.
-    Writes ``path`` (PNG) and its SVG twin; returns ``path``."""
+    Writes ``path`` (PNG) and its SVG twin; returns both paths."""
     fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)
     ax = axes[0, 0]
     for family, method in dict.fromkeys((r[0], r[1]) for r in rows):
@@ -76,4 +76,4 @@ def work_precision(rows, path: Path) -> Path:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     path = Path(path)
-    return plotting.save(fig, path.parent, path.stem)[0]
+    return plotting.save(fig, path.parent, path.stem)
