@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
-# source key cb8708a2a55fe49ca39f588e390a2f8e046b1918db44e8e5ff41cefe146ec4f0
+# source key 95c69d595007862ab014074fe6eb17c58c8ebd4cdb1925707504b154e36665e0
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7e93e78145843a772c35a619cd96651bc67db7ef2c00101b789953c240044239
-# source key ab53725fc6c7f746cdb6cd0b32be45ae2613fb0a9eec383132ab0ce1c4456224
+# source key 18853f81c61dc33f54963875c3a403634fb32b9dde56f2c2b99626a15cc3afd2
 # body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31827bf4de54432aee60e2f483d88627e3b5b6a2cd2dcfa7f887cfa8f374220f
-# source key 241e731070553979d575b94e614e6c7d8c68d597ca311552341b108802c76055
+# source key b99c8e6b59768ca98d932d77a46b158c46b26838d5735f99092fa69c8e09aed9
 # body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

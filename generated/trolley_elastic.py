@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
-# source key d04e6805d5f9c41c8f5eb6192c36fa70c69fc9a860f81845f28fa3c78ccf88eb
+# source key 9aba0e464ad97540f51a2fe711d7f597dd77e9689e21ef067a87e40abe2634f0
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key d04e6805d5f9c41c8f5eb6192c36fa70c69fc9a860f81845f28fa3c78ccf88eb
+# source key 9aba0e464ad97540f51a2fe711d7f597dd77e9689e21ef067a87e40abe2634f0
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3d36cb550fa6b4a03b7339dfae2c309607fdb347cce7909564d1bc8fd0404132
-# source key d04e6805d5f9c41c8f5eb6192c36fa70c69fc9a860f81845f28fa3c78ccf88eb
+# source key 9aba0e464ad97540f51a2fe711d7f597dd77e9689e21ef067a87e40abe2634f0
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -77,14 +77,19 @@ class Field:
 
 
 @dataclass(frozen=True)
-class Float(Field):
-    """A finite real number in a range, in SI ``unit``; integers are accepted."""
+class _Ranged(Field):
+    """A field of numbers in SI ``unit`` within [lo, hi] (open ends with ``lo_open``/``hi_open``)."""
 
     unit: str = ""
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
     hi_open: bool = False
+
+
+@dataclass(frozen=True)
+class Float(_Ranged):
+    """A finite real number in a range, in SI ``unit``; integers are accepted."""
 
     def check(self, path, value):
         return check_real(path, value, self.unit, self.lo, self.hi, self.lo_open, self.hi_open)
@@ -155,15 +160,10 @@ class Choice(Field):
 
 
 @dataclass(frozen=True)
-class Vector(Field):
+class Vector(_Ranged):
     """A list of exactly ``n`` finite numbers, each in the range."""
 
     n: int = 3
-    unit: str = ""
-    lo: float | None = None
-    hi: float | None = None
-    lo_open: bool = False
-    hi_open: bool = False
 
     def check(self, path, value):
         if not isinstance(value, (list, tuple)) or len(value) != self.n:
