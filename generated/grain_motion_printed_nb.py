@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 89d3deefe5bf4a2492d1ac84018a03f8b6108c04fedde4670e81d12c37831c84
-# source key 95c69d595007862ab014074fe6eb17c58c8ebd4cdb1925707504b154e36665e0
+# source key e140f8be5caa15bbc1d0732b910028d052c1d68f72f0bfd89c28ff6abc346a78
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

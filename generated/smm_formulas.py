@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31827bf4de54432aee60e2f483d88627e3b5b6a2cd2dcfa7f887cfa8f374220f
-# source key b99c8e6b59768ca98d932d77a46b158c46b26838d5735f99092fa69c8e09aed9
+# source key 3e0e148950c8462fd2cb443714fb6bb04a65be2b48ec2d8940f1952294e547e6
 # body sha256 9bee7711ea05becd6bd4c15e8ac0d23a91382558e47bc7e5aefb283fc76554a1
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

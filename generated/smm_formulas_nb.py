@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cda9990b8cf0caf682d7b0c511a12dee929c6f3016d7cba84aaff44696b0138a
-# source key b99c8e6b59768ca98d932d77a46b158c46b26838d5735f99092fa69c8e09aed9
+# source key 3e0e148950c8462fd2cb443714fb6bb04a65be2b48ec2d8940f1952294e547e6
 # body sha256 27a7456afbf7375f1d6c735d8f17ed28ca1fc4bd2f24a5f1581832149a61ee93
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key 8653169bfdfc58e82596a41b90bf58fda7f12388435cecae49e3c469a776b1b3
+# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
-# source key 9b5ea5f5c7826edce9cd60f2b33814b1b82bb8894fb2d8fa0e888c8910a6adb9
+# source key 436a7c1c1ff07b3fd5311b85dd622e3c9058e0b8e5570580a82ec88e2d385d90
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

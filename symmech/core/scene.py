@@ -81,12 +81,4 @@ def check_depth(data) -> None:
 
 def scenes_folder() -> Path:
     """The folder of the bundled example scenes (package data ``symmech.scenes``)."""
-    try:
-        return Path(str(importlib.resources.files("symmech.scenes")))
-    except ModuleNotFoundError:
-        # An editable install made before scenes/ became a package maps no
-        # symmech.scenes; its checkout still has the folder. Reinstall to drop this.
-        checkout = Path(__file__).resolve().parents[2] / "scenes"
-        if checkout.is_dir():
-            return checkout
-        raise
+    return Path(str(importlib.resources.files("symmech.scenes")))
