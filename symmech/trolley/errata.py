@@ -185,8 +185,6 @@ def checks() -> list[Check]:
 
 def not_compared() -> list[NotCompared]:
     rows = [
-        ("(1)-(10)", "elastic trolley: fields phi0, psi0, strain energy, equations of motion (6)-(9), gravity (10)",
-         "the general elastic model; compared where the elastic trolley is implemented (errata_elastic)"),
         ("(12)", "theta-bar = theta + Delta theta", "a definition used by (13)-(14)"),
     ]
     return [NotCompared(SEED, eq, text, why) for eq, text, why in rows]
