@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 cda9990b8cf0caf682d7b0c511a12dee929c6f3016d7cba84aaff44696b0138a
-# source key 3e0e148950c8462fd2cb443714fb6bb04a65be2b48ec2d8940f1952294e547e6
-# body sha256 27a7456afbf7375f1d6c735d8f17ed28ca1fc4bd2f24a5f1581832149a61ee93
+# symmech 0.1.0 generated module; inputs sha256 1f1c5ab3fd49ba5c2091686973340de388528a3e64304e379271e561c699e477
+# source key 2b6270e41c74f28f42899d601a94c3593768c6fe4237ecdf8b499e3ed3a9a1ee
+# body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Compiled twin of `symmech.generated.smm_formulas` (the numpy module, the
@@ -162,18 +162,15 @@ def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k)
     x3 = e_y*p_x
     x4 = x2 - x3
     x5 = e_x*p_z
-    x6 = e_z*p_x
-    x7 = x5 - x6
-    x8 = e_y*p_z
-    x9 = e_z*p_y
-    x10 = x8 - x9
-    x11 = e_y**2
-    x12 = e_z**2
-    x13 = ell*u_x
-    x14 = e_x**2
-    x15 = ell*u_y
-    x16 = ell*u_z
-    out[_k] = (x10**2 + x13*(e_y*x2 + e_z*x5 - p_x*(x11 + x12)) + x15*(e_x*x3 + e_z*x8 - p_y*(x12 + x14)) - x16*(-e_x*x6 - e_y*x9 + p_z*(x11 + x14)) + x4**2 + x7**2 - (x10*x13 - x15*x7 + x16*x4)**2/x1)/math.sqrt(x1)
+    x6 = e_z*p_x - x5
+    x7 = e_y*p_z
+    x8 = e_z*p_y
+    x9 = x7 - x8
+    x10 = ell*u_x
+    x11 = ell*u_y
+    x12 = ell*u_z
+    x13 = x10*x9 + x11*x6 + x12*x4
+    out[_k] = (x10*(e_y*x2 + e_z*x5 + p_x*(e_x**2 - 1)) + x11*(e_x*x3 + e_z*x7 + p_y*(e_y**2 - 1)) + x12*(e_x*e_z*p_x + e_y*x8 + p_z*(e_z**2 - 1)) + x4**2 + x6**2 + x9**2 - x13**2/x1)/math.sqrt(x1)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -239,19 +236,21 @@ def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y
     x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
     x2 = -e_x*p_y + e_y*p_x
     x3 = f_x*p_y
-    x4 = f_y*p_x - x3
-    x5 = -e_x*p_z + e_z*p_x
+    x4 = -f_y*p_x + x3
+    x5 = e_x*p_z - e_z*p_x
     x6 = f_x*p_z
-    x7 = f_z*p_x - x6
-    x8 = -e_y*p_z + e_z*p_y
-    x9 = f_y*p_z
-    x10 = f_z*p_y - x9
-    x11 = e_x*f_x
-    x12 = e_z*f_z
-    x13 = e_y*f_y
+    x7 = f_z*p_x
+    x8 = x6 - x7
+    x9 = -e_y*p_z + e_z*p_y
+    x10 = f_y*p_z
+    x11 = -f_z*p_y + x10
+    x12 = e_y*f_y
+    x13 = e_z*f_z
     x14 = ell*u_x
-    x15 = ell*u_z
-    out[_k] = (ell*u_y*(e_x*f_y*p_x + e_z*x9 + p_y*(-x11 - x12)) + x10*x8 - x14*(-e_y*x3 - e_z*x6 - p_x*(-x12 - x13)) - x15*(-e_x*f_z*p_x - e_y*f_z*p_y - p_z*(-x11 - x13)) + x2*x4 + x5*x7 - (ell*u_y*x5 - x14*x8 - x15*x2)*(ell*u_y*x7 - x10*x14 - x15*x4)/x1)/math.sqrt(x1)
+    x15 = e_x*f_x
+    x16 = ell*u_y
+    x17 = ell*u_z
+    out[_k] = (-x11*x9 + x14*(e_y*x3 + e_z*x6 + p_x*(-x12 - x13)) + x16*(e_x*f_y*p_x + e_z*x10 + p_y*(-x13 - x15)) + x17*(e_x*x7 + e_y*f_z*p_y + p_z*(-x12 - x15)) - x2*x4 + x5*x8 + (x11*x14 - x16*x8 + x17*x4)*(x14*x9 + x16*x5 + x17*x2)/x1)/math.sqrt(x1)
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -11,20 +11,16 @@ from __future__ import annotations
 import sympy
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix
+from symmech.core.kinematics import SYMPY, rodrigues
 from symmech.smm import printed as pr
 from symmech.smm.derive import SOURCE
 
 phi, phi2, s = sympy.symbols("phi phi2 s", real=True)
 
 
-def _skew(v: sympy.Matrix) -> sympy.Matrix:
-    return sympy.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-
-
-def _rodrigues(axis: sympy.Matrix, angle) -> sympy.Matrix:
-    """Rotation by ``angle`` about the unit ``axis``."""
-    K = _skew(axis)
-    return sympy.eye(3) + sympy.sin(angle) * K + (1 - sympy.cos(angle)) * K * K
+def _turn(axis, angle) -> sympy.Matrix:
+    """Active rotation by ``angle`` about the unit ``axis`` (Rodrigues)."""
+    return rodrigues(axis, angle, SYMPY)
 
 
 def _at_zero(expr, *symbols):
@@ -36,14 +32,14 @@ def _like(printed: NamedMatrix, matrix, meaning: str) -> NamedMatrix:
 
 
 def table2_conjugates() -> NamedMatrix:
-    rows = [sympy.diff(_rodrigues(sympy.Matrix(e), phi) * pr.P, phi).T
+    rows = [sympy.diff(_turn(sympy.Matrix(e), phi) * pr.P, phi).T
             for e in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]
     return _like(pr.table2_conjugates(), _at_zero(sympy.Matrix.vstack(*rows), phi),
                  "d(R(e, q) p)/dq at q = 0 for e = i, j, k (rows)")
 
 
 def spatial_conjugate() -> NamedMatrix:
-    return _like(pr.spatial_conjugate(), _at_zero(sympy.diff(_rodrigues(pr.E, phi) * pr.P, phi), phi),
+    return _like(pr.spatial_conjugate(), _at_zero(sympy.diff(_turn(pr.E, phi) * pr.P, phi), phi),
                  "d(R(e, q) p)/dq at q = 0")
 
 
@@ -55,12 +51,12 @@ def _length(moving: sympy.Matrix) -> sympy.Expr:
 
 
 def length_d2_turn() -> NamedMatrix:
-    l_ = _length(_rodrigues(pr.E, phi) * pr.P)
+    l_ = _length(_turn(pr.E, phi) * pr.P)
     return _like(pr.length_d2_turn(), [_at_zero(sympy.diff(l_, phi, 2), phi)], "d2|anchor - R(e, q) p|/dq2 at 0")
 
 
 def length_d2_two_turns() -> NamedMatrix:
-    l_ = _length(_rodrigues(pr.E, phi) * _rodrigues(pr.F, phi2) * pr.P)
+    l_ = _length(_turn(pr.E, phi) * _turn(pr.F, phi2) * pr.P)
     return _like(pr.length_d2_two_turns(), [_at_zero(sympy.diff(l_, phi, phi2), phi, phi2)],
                  "d2|anchor - R(e, q1) R(f, q2) p|/dq1 dq2 at 0")
 
@@ -74,7 +70,7 @@ def _planar_point():
     """r(phi, s) = R_k(phi) (p + s s): a chain vector and a slide, both turned by phi."""
     p = sympy.Matrix([pr.px, pr.py, 0])
     sv = sympy.Matrix([pr.sx, pr.sy, 0])
-    return _rodrigues(sympy.Matrix([0, 0, 1]), phi) * (p + s * sv)
+    return _turn(sympy.Matrix([0, 0, 1]), phi) * (p + s * sv)
 
 
 def table1_planar() -> NamedMatrix:
@@ -123,7 +119,7 @@ def omega_c_rates() -> NamedMatrix:
     a, b, c = sympy.symbols("alpha beta gamma", real=True)
     da, db, dc = sympy.symbols("alpha_dot beta_dot gamma_dot", real=True)
     ex, ey, ez = (sympy.Matrix(v) for v in ((1, 0, 0), (0, 1, 0), (0, 0, 1)))
-    Ry, Rz = _rodrigues(ey, b), _rodrigues(ez, c)
+    Ry, Rz = _turn(ey, b), _turn(ez, c)
     w = (Ry * Rz).T * ex * da + Rz.T * ey * db + ez * dc
     row = [sympy.diff(w[2], x) for x in (da, db, dc)]
     return _like(pr.omega_c_rates(), [sympy.simplify(x).subs(b, pr.beta) for x in row],
