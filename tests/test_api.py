@@ -92,8 +92,6 @@ def test_api_matches_the_command_line(tmp_path):
     from symmech.cli import main
 
     scene = Path(__file__).resolve().parents[1] / "scenes" / "trolley_helix.toml"
-    if "trolley" not in registry.kinds():
-        pytest.skip("the trolley kind is not on the registry in this checkout (legacy runner)")
     text = scene.read_text().replace("steps = 5000", "steps = 200").replace("paper_tables = true", "paper_tables = false")
     (tmp_path / "s.toml").write_text(text)
     ds = symmech.load(tmp_path / "s.toml").run().to_xarray("case1")
