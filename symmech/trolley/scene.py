@@ -19,7 +19,7 @@ from symmech.core import schema as sc
 from symmech.core.context import Context
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import model, tables, track as tracks
+from symmech.trolley import elastic_scene, model, tables, track as tracks
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -167,8 +167,8 @@ def _cross_checks(scene, path):
         raise SceneError("numerics.fd_step", f"{step:g} m is outside (0, {0.1 * axle:g}] m (0.1 axle_distance)")
 
 
-# The whole scene. Other models of the trolley extend it with their own table
-# (``SCHEMA.fields["elastic"] = Table(...)``) and read it from the resolved scene.
+# The whole scene; the optional ``[elastic]`` table (docs/scenes-trolley-elastic.md) adds the
+# elastic model beside the rigid one.
 SCHEMA = sc.Table("a trolley scene", {
     "kind": sc.Choice("scene kind", choices=("trolley",)),
     "conventions": sc.Choice("`physics`: the consistent model; `paper`: the paper's conventions (Tables 1, 2)",
@@ -218,6 +218,7 @@ SCHEMA = sc.Table("a trolley scene", {
     "report": sc.Table("extra outputs", {
         "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
                                 default=False)}, default={}),
+    "elastic": elastic_scene.SCHEMA,
 }, checks=(_cross_checks,))
 
 
@@ -245,6 +246,7 @@ class Setup:
     paper_tables: bool
     plan: model.FramePlan = None
     notes: list = None
+    elastic: elastic_scene.Setup | None = None
 
 
 def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
@@ -302,6 +304,11 @@ def prepare(scene: dict) -> Setup:
     noise = getattr(track, "noise", None)
     if noise:
         setup.notes += _noise_notes(noise)
+    if scene["elastic"] is not None:
+        if setup.conventions == "paper":
+            raise SceneError("elastic", "the elastic model needs conventions = \"physics\"")
+        case = 2 if setup.local_curvature else 1
+        setup.elastic = elastic_scene.prepare(scene["elastic"], body, elastic_scene.drive_of(setup, case), setup.t)
     return setup
 
 
@@ -535,11 +542,18 @@ def run(setup: Setup, ctx) -> Result:
         paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
         summary["paper_tables"] = paper_table_rows(setup, paper, physics)
         result.files["paper_tables.txt"] = _paper_tables_text(summary["paper_tables"])
+    elastic = None
+    if setup.elastic is not None:
+        elastic = elastic_scene.run(setup.elastic, ctx, setup.comfort)
+        result.tables.update(elastic.tables)
+        summary.update(elastic.summary)
+        for warning in elastic.warnings:
+            ctx.warn(warning)
 
     def draw(folder):
         from symmech.trolley import plots
 
-        return plots.write_all(setup, res, folder)
+        return plots.write_all(setup, res, folder) + (elastic.plots(folder) if elastic and elastic.plots else [])
     result.plots = draw
     return result
 
