@@ -445,8 +445,9 @@ class System:
         load = fs.a0 + self.mdl.g0 * fs.nu
         first = inv.S1.T
         F = inv.mass * load + B @ (first @ rr) + 2 * W @ (first @ v) + first @ acc
-        J = lambda x, y: np.einsum("k,klij,l->ij", x, inv.G, y)  # noqa: E731  ∫ x yᵀ dm
-        H = J(rr, rr) @ B.T + 2 * J(rr, v) @ W.T + J(rr, acc)
+        X = (rr @ inv.G.reshape(self.F, -1)).reshape(inv.G.shape[1:])  # ∫ r̃ f_lᵀ dm per field l
+        J = lambda y: np.tensordot(y, X, 1)  # noqa: E731  ∫ r̃ yᵀ dm
+        H = J(rr) @ B.T + 2 * J(v) @ W.T + J(acc)
         moment = np.cross(first @ rr, load) - 2 * kin.vee(H)
         return F, moment
 
