@@ -188,3 +188,10 @@ def test_forcing_frequencies_of_a_sinusoidal_curvature():
     assert np.allclose(f[:, 0], V0 / 2.0)
     assert f[:, 1].max() == pytest.approx(V0 * omega0 / (2 * np.pi), rel=1e-12)
     assert f[:, 2].max() == pytest.approx(V0 / lam, rel=1e-12)
+
+
+def test_docs_field_tables_are_generated_from_the_schema():
+    from symmech.core.schema import markdown
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "scenes-trolley-elastic.md").read_text()
+    assert "<!-- schema:begin -->\n" + markdown(elastic_scene.SCHEMA, "elastic") + "\n<!-- schema:end -->" in text

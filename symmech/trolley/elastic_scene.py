@@ -98,8 +98,9 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
     beams = []
     for i, b in enumerate(elastic["beams"]):
         axis, plane = np.asarray(b["axis"]), np.asarray(b["plane"])
-        if np.linalg.norm(axis) == 0 or np.linalg.norm(np.cross(axis, plane)) <= 1e-9 * np.linalg.norm(axis) * \
-                np.linalg.norm(plane):
+        if np.linalg.norm(axis) == 0:
+            raise SceneError(f"{path}.beams[{i}].axis", f"{b['axis']} has no direction")
+        if np.linalg.norm(np.cross(axis, plane)) <= 1e-9 * np.linalg.norm(axis) * np.linalg.norm(plane):
             raise SceneError(f"{path}.beams[{i}].plane", f"{b['plane']} must not be parallel to the axis {b['axis']}")
         beams.append(el.Beam(tuple(b["root"]), tuple(axis), tuple(plane), b["length"], b["mass_per_length"],
                              tuple(b["ei"]), b["support"], b["modes"], b["tip_mass"], b["damping_ratio"]))
@@ -110,6 +111,8 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
             raise SceneError(where, "give either `at` or both `beam` and `xi`")
         if p["beam"] is not None and p["beam"] >= len(beams):
             raise SceneError(f"{where}.beam", f"{p['beam']} is not a beam index ({len(beams)} beams given)")
+        if p["name"] in names:
+            raise SceneError(f"{where}.name", f"{p['name']!r} names an earlier point too")
         probes.append((None, tuple(p["at"])) if p["at"] is not None else (p["beam"], p["xi"]))
         names.append(p["name"])
     rl = None if rollers is None else el.Rollers(tuple(rollers["stiffness"]), tuple(rollers["damping"]),
