@@ -195,3 +195,37 @@ def test_docs_field_tables_are_generated_from_the_schema():
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "scenes-trolley-elastic.md").read_text()
     assert "<!-- schema:begin -->\n" + markdown(elastic_scene.SCHEMA, "elastic") + "\n<!-- schema:end -->" in text
+
+
+# ---------------------------------------------------------------- rigid limit, the paper's body
+
+def test_rigid_limit_with_the_papers_point_mass():
+    """The paper's body (100 kg at c = (1, 0.5, 0), no inertia) as the tip mass of a mast of
+    0.5 m rooted at (1, 0, 0) on a trolley of 1e-9 kg; the mast (ρA = 1e-4 kg/m, tip stiffness
+    3EI/L³ = k) and the rollers stiffen together. On the paper's helix (V0 = 3t + 7 sin(t/2)),
+    after the start transient, the reactions approach the rigid model's with the error ~ 1/k;
+    the extra 5e-5 kg of mast and trolley move the rigid reactions by < 1e-6 (relative)."""
+    from symmech.trolley import model
+    from test_trolley_elastic import helix
+
+    t = np.linspace(0.0, 10.0, 21)
+    late = t >= 5.0
+    drive = helix()
+    L = 0.5
+    paper = None
+    errors = []
+    for k in (1e8, 1e9):
+        mast = el.Beam((1.0, 0.0, 0.0), (0, 1, 0), (1, 0, 0), L, 1e-4, (k * L ** 3 / 3,) * 2, "cantilever", 2, 100.0,
+                       0.05)
+        mdl = el.ElasticModel(1e-9, (0.0, 0.0, 0.0), (0.0,) * 6, 2.0, 1.0, G0, el.Rollers((k,) * 5, (2000.0,) * 5),
+                              (mast,))
+        r = el.simulate(el.System(mdl), drive, t)
+        if paper is None:
+            body = model.Body(100.0, (1.0, 0.5, 0.0), (0.0,) * 6, 2.0, 1.0, G0)
+            paper = model.body_motion(el.frames(drive, r["s"], 2.0), r["V0"], r["dV0"], body)["P"]
+            scale = np.abs(paper[late]).max()
+            assert np.abs(r["P_rigid"] - paper).max() < 1e-6 * scale
+        errors.append(np.abs(r["P"][late] - r["P_rigid"][late]).max() / scale)
+        assert np.abs(r["P"][late] - paper[late]).max() < (errors[-1] + 1e-6) * scale
+    assert errors[1] < 3e-6
+    assert 9 < errors[0] / errors[1] < 11
