@@ -229,3 +229,23 @@ def test_rigid_limit_with_the_papers_point_mass():
         assert np.abs(r["P"][late] - paper[late]).max() < (errors[-1] + 1e-6) * scale
     assert errors[1] < 3e-6
     assert 9 < errors[0] / errors[1] < 11
+
+
+@pytest.mark.slow  # ~15 s of CPU, the reference at rtol 1e-11 most of it
+def test_work_precision_of_the_elastic_model():
+    """`bench precision` on an elastic scene: Radau's error falls with rtol and reaches 1e-7 of
+    the reactions at rtol 1e-8 against the rtol-1e-11 reference; BDF, DOP853 are listed too."""
+    from symmech.core.context import Context
+
+    data = scene_dict(frame="frenet", track=HELIX, trolley=TROLLEY, motion={"speed": "8"},
+                      time={"t_end": 0.5, "steps": 5})
+    st = prepared(data)
+    es = elastic_scene.prepare(validate(elastic_scene.SCHEMA, rollers(1e6)), st.body, elastic_scene.drive_of(st, 1),
+                               st.t)
+    res = elastic_scene.precision(es, Context(quiet=True))
+    table = res.tables["precision_elastic"]
+    methods = table.text["method"]
+    radau = np.array([e for m, e in zip(methods, table.column("error")) if m == "Radau, analytic J"])
+    assert len(radau) == 3 and np.all(np.diff(radau) < 0) and radau[-1] < 1e-7
+    assert {"BDF, analytic J", "Radau, FD J", "DOP853"} <= set(methods)
+    assert np.all(table.column("seconds") > 0)

@@ -314,6 +314,43 @@ def _modes_table(modes: dict, n: int) -> ResultTable:
                                               modes["forcing"]]))
 
 
+PRECISION_RTOLS = (1e-4, 1e-6, 1e-8)
+# (name, simulate options, tolerances): explicit DOP853 is bound by the stability of its steps
+# on stiff rollers (the same time at every rtol on the bundled scene), so it is run once.
+PRECISION_METHODS = (("Radau, analytic J", {"method": "Radau"}, PRECISION_RTOLS),
+                     ("BDF, analytic J", {"method": "BDF"}, PRECISION_RTOLS),
+                     ("Radau, FD J", {"method": "Radau", "analytic_jacobian": False}, PRECISION_RTOLS),
+                     ("DOP853", {"method": "DOP853"}, PRECISION_RTOLS[:1]))
+PRECISION_REFERENCE = {"method": "Radau", "rtol": 1e-11, "atol_q": 1e-17}
+
+
+def precision(setup: Setup, ctx) -> Result:
+    """Work-precision of the elastic model on the scene's grid: integrators (implicit with the
+    analytic or a differenced Jacobian, explicit) over relative tolerances (absolute: rtol x
+    1e-6 m on the coordinates); error max|P - P_ref| / max|P_ref| of the reactions, the
+    reference by Radau at rtol 1e-11 (steps small enough to resolve every mode)."""
+    from symmech.core import precision as wp
+    from symmech.core.scene import SymmechError
+
+    if setup.system is None:
+        raise SymmechError("bench precision of an elastic trolley needs an elastic effect (elastic.effects)")
+    ctx.tick("elastic precision: reference")
+    ref = el.simulate(setup.system, setup.drive, setup.t, **PRECISION_REFERENCE)["P"]
+    scale = max(np.abs(ref).max(), 1e-300)
+    rows = []
+    for name, kw, rtols in PRECISION_METHODS:
+        for rtol in rtols:
+            ctx.tick(f"elastic precision: {name}, rtol {rtol:g}")
+            seconds, out = wp.best_time(lambda: el.simulate(setup.system, setup.drive, setup.t, rtol=rtol,
+                                                            atol_q=rtol * 1e-6, **kw), repeats=1, min_seconds=0.0)
+            rows.append({"method": name, "knob": "rtol", "value": rtol, "seconds": seconds,
+                         "error": float(np.abs(out["P"] - ref).max() / scale)})
+    reference = (f"Radau at rtol {PRECISION_REFERENCE['rtol']:g}, atol {PRECISION_REFERENCE['atol_q']:g} m "
+                 "(coordinates); error max|P - P_ref| / max|P_ref| over the grid")
+    return wp.result("trolley", rows, "precision_elastic", "Elastic trolley: work-precision (reactions P0…P5)",
+                     reference)
+
+
 def drive_of(trolley_setup, case: int) -> el.Drive:
     """The drive of a rigid trolley setup (:class:`symmech.trolley.scene.Setup`) for case 1 or 2:
     its speed V0(t), or its traction P0(t, V0) with the initial speed."""

@@ -691,7 +691,8 @@ PRECISION_COLUMNS = (Column("steps", "1", "grid intervals"), Column("fd_step", "
 
 
 def precision(setup: Setup, ctx) -> Result:
-    """Work-precision of the derivative approximations, against exact symbolic references.
+    """Work-precision of the derivative approximations, against exact symbolic references
+    (with an ``[elastic]`` table: of the elastic model's integrators, :func:`elastic_scene.precision`).
 
     Paper conventions, case 2: dΛ*/ds by the paper's backward difference, central2 and
     central4 between grid points, for ``PRECISION_STEPS`` (the step count is the knob).
@@ -701,6 +702,8 @@ def precision(setup: Setup, ctx) -> Result:
     """
     import dataclasses
 
+    if setup.elastic is not None:
+        return elastic_scene.precision(setup.elastic, ctx)
     if not setup.local_curvature or setup.speed is None:
         raise SymmechError("bench precision needs effects.local_curvature = true and a given speed")
     symbolic = getattr(setup.track, "exprs", None) is not None
