@@ -249,3 +249,27 @@ def test_work_precision_of_the_elastic_model():
     assert len(radau) == 3 and np.all(np.diff(radau) < 0) and radau[-1] < 1e-7
     assert {"BDF, analytic J", "Radau, FD J", "DOP853"} <= set(methods)
     assert np.all(table.column("seconds") > 0)
+
+
+def test_bundled_scene_runs_with_the_elastic_tables_plots_and_summary(tmp_path):
+    """`symmech run scenes/trolley_elastic_helix.toml`: the rigid case tables and the elastic ones
+    side by side; the elastic P*_rigid equal the rigid case 1 of the whole body (mast included)."""
+    from symmech.core import pipeline
+    from symmech.core.context import Context
+
+    sc = pipeline.load(str(Path(__file__).resolve().parents[1] / "scenes" / "trolley_elastic_helix.toml"))
+    assert "elastic model" in sc.estimate().what
+    res = sc.run(Context(quiet=True))
+    assert {"case1", "case1_overload", "elastic_reactions", "roller_deflections", "points", "energy",
+            "modes"} <= set(res.tables)
+    info = res.summary["elastic"]
+    assert set(info["dynamic_amplification"]) == {f"P{i}" for i in range(6)}
+    assert info["energy_residual_relative"] < 1e-6
+    assert set(info["comfort"]) == {"tip", "seat"}
+    P = res.tables["elastic_reactions"]
+    # 100 kg trolley + 6 kg mast + 2 kg tip: the whole body's vertical reactions exceed the trolley's
+    rigid = res.tables["case1"]
+    assert np.all(sum(P.column(f"P{i}_rigid") for i in (1, 2, 3)) > sum(rigid.column(f"P{i}") for i in (1, 2, 3)))
+    files = {p.name for p in res.plots(tmp_path)}
+    assert {"campbell.png", "elastic_reactions.png", "elastic_deflections.png", "elastic_overloads.png",
+            "reactions.png"} <= files

@@ -509,7 +509,11 @@ class System:
         zero = np.zeros(self.N)
         for _ in range(max_iter):
             R, _, Rq, _ = self.evaluate(fs, q, zero, zero, jacobian=True)
-            step = np.linalg.solve(Rq, -R)
+            try:
+                step = np.linalg.solve(Rq, -R)
+            except np.linalg.LinAlgError:
+                raise SymmechError("no quasi-static state of the elastic model: its stiffness is singular (a "
+                                   "free play of the rollers, elastic.rollers.preload < 0, carries no load)") from None
             q = q + step
             if np.abs(step).max() <= tol * max(np.abs(q).max(), 1e-300) or not np.any(R):
                 return q

@@ -4,7 +4,8 @@
 (and ``case2`` with the local-curvature effect): t, V1..V3, a1..a3, P0..P5 (SI,
 body-frame components of the centre of mass), and ``caseN_overload`` (t, n1..n3 in
 g); the plots ``track.png``, ``reactions.png``, ``overloads.png``; with
-``report.paper_tables`` the file ``paper_tables.txt``.
+``report.paper_tables`` the file ``paper_tables.txt``; with an ``[elastic]`` table the
+elastic model's tables, summary, warnings and plots beside them (:mod:`.elastic_scene`).
 """
 from __future__ import annotations
 
@@ -31,6 +32,9 @@ MAX_LENGTH = 1e7  # m: coordinates and arc lengths
 SECONDS_PER_STEP = 5e-6
 SECONDS_PER_OUTPUT_ROW = 9e-5
 SECONDS_PER_RHS = 2e-4
+# Elastic model per grid step (bundled trolley_elastic_helix on 2 shared cores: ~0.1 s; stiff
+# rollers and undamped beams take more, a rough guide for --max-time only).
+SECONDS_PER_ELASTIC_STEP = 0.1
 MAX_RHS = 2_000_000  # traction right-hand sides before the integration counts as stalled
 
 
@@ -370,6 +374,9 @@ def estimate(setup: Setup) -> registry.Estimate:
         rhs = 40 * steps + 2000
         seconds += SECONDS_PER_RHS * rhs * cases
         what += f", ~{rhs} traction evaluations"
+    if setup.elastic is not None and setup.elastic.system is not None:
+        seconds += SECONDS_PER_ELASTIC_STEP * steps
+        what += ", the elastic model"
     return registry.Estimate(seconds, what)
 
 
