@@ -630,6 +630,9 @@ def _dissipation(system: System, q, qd) -> float:
     return float(power)
 
 
+WORK_ATOL = 1e-5  # J, absolute tolerance of the work of the track forces
+
+
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
              atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True) -> dict:
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
@@ -677,7 +680,10 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
 
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0,
                [drive.s0, drive.v_initial] if traction else []]
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, 1e-9, [1e-10, 1e-10] if traction else []]
+    # the work of the track forces is under step control too (left out, the stiff start transient
+    # goes unresolved and the reactions lose two digits), at 1e-5 J: tighter costs steps on stiff
+    # rollers (10 kg on 1e8 N/m: 1761 evaluations at 1e-5 J, 2175 at 1e-9 J) for no gain in P
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, WORK_ATOL, [1e-10, 1e-10] if traction else []]
     kw = {"jac": jac} if analytic_jacobian and not traction and method in ("Radau", "BDF", "LSODA") else {}
     # Steps no longer than the output spacing: the outputs come from the dense output, whose
     # interpolation error the step control does not see (Radau's steps grow to ~0.3 s here).
