@@ -209,13 +209,18 @@ def energy_residual(r) -> np.ndarray:
     return r["E"] - r["E"][0] - r["work"] + r["dissipated"]
 
 
+CURVATURE_RATE_FLOOR = 1e-9  # 1/m: |Ω'|/max|Ω| below this is rounding (a uniform helix), not forcing
+
+
 def forcing_frequencies(l: float, V0, W, dW, W_max: float) -> np.ndarray:
     """(n, 3) [Hz] of :data:`FORCING` at speeds V0 [m/s] (n,), Darboux vectors Ω [rad/m] and Ω'
     [rad/m²] (n, 3): the rear axle meets each track feature l/|V0| after the front one; gravity
     and the frame loads turn in the body frame at |ω| = |V0| |Ω|; the loads vary as Ω does,
     at |V0| |Ω'| / max|Ω| (for Ω = Ω0 sin(2π s/λ) at most |V0|/λ). Zero where undefined."""
     speed = np.abs(np.asarray(V0, float))
-    curvature = speed * np.linalg.norm(dW, axis=-1) / (2 * np.pi * W_max) if W_max > 0 else 0 * speed
+    rate = np.linalg.norm(dW, axis=-1) / W_max if W_max > 0 else 0 * speed
+    rate = np.where(rate > CURVATURE_RATE_FLOOR, rate, 0.0)
+    curvature = speed * rate / (2 * np.pi)
     return np.column_stack([speed / l, speed * np.linalg.norm(W, axis=-1) / (2 * np.pi), curvature])
 
 

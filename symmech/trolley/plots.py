@@ -151,6 +151,9 @@ def campbell(modes: dict, out: Path) -> list[Path]:
             ax.plot(x[order], modes["forcing"][order, j], ls="--", lw=1, label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))
         ax.set_yscale("log")
+        natural = modes["f"][modes["f"] > 0]
+        if natural.size:  # forcing frequencies far below every mode are of no interest
+            ax.set_ylim(natural.min() / 20, natural.max() * 2)
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].legend(fontsize=7)
     axes[0, 0].set_title("Campbell diagram along the track")
