@@ -24,6 +24,7 @@ from typing import Any, Callable
 from symmech.core.schema import Table
 
 _KINDS: dict[str, "Kind"] = {}
+_DISCOVERED = False
 
 
 @dataclass(frozen=True)
@@ -80,9 +81,12 @@ def _discover() -> None:
 
 
 def kinds() -> dict[str, Kind]:
-    """Every registered kind by name (discovered on first call)."""
-    if not _KINDS:
+    """Every registered kind by name (discovered on first call, also when a kind's module was
+    imported directly before)."""
+    global _DISCOVERED
+    if not _DISCOVERED:
         _discover()
+        _DISCOVERED = True
     return dict(sorted(_KINDS.items()))
 
 
