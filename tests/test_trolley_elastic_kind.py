@@ -21,12 +21,12 @@ TROLLEY = {"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 
 HELIX = {"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)}
 
 
-def elastic_run(data, elastic, case=1):
+def elastic_run(data, elastic, case=1, comfort=None):
     """Result of the [elastic] table ``elastic`` on the trolley scene dict ``data``."""
     st = prepared(data)
     es = elastic_scene.prepare(validate(elastic_scene.SCHEMA, copy.deepcopy(elastic)), st.body,
                                elastic_scene.drive_of(st, case), st.t)
-    return elastic_scene.run(es)
+    return elastic_scene.run(es, comfort=comfort)
 
 
 def rollers(k, c=2e3, **numerics):
@@ -137,6 +137,21 @@ def test_sign_change_warning():
     t = surging.tables["elastic_reactions"].column("t")
     rigid = 100 * (G_SCENE * 0.8 - 20 * np.cos(2 * t) * 0.5) / 2.0
     assert np.abs(surging.tables["elastic_reactions"].column("P3_rigid") - rigid).max() < 1e-9 * 1000
+
+
+@pytest.mark.parametrize("x2, warned", [((-1.5, 6.0), False), ((-1.5, 0.9), True)])
+def test_comfort_warning_at_a_report_point(x2, warned):
+    """At rest on a straight level track a seat on the trolley carries 1 g along x2 (and the
+    0.8 m/s² of the speed ramp, 0.0816 g, along x1): inside the default envelope, outside
+    one that ends at 0.9 g."""
+    data = scene_dict(trolley=TROLLEY, motion={"speed": "0.8*t"}, time={"t_end": 0.2, "steps": 2})
+    comfort = {"x1": (-2.0, 2.0), "x2": x2, "x3": (-2.0, 2.0)}
+    res = elastic_run(data, {**rollers(1e9), "points": [{"name": "seat", "at": [1.0, 0.5, 0.0]}]}, comfort=comfort)
+    seat = res.summary["elastic"]["comfort"]["seat"]
+    assert seat["x2"]["min_g"] == pytest.approx(1.0, abs=1e-6)
+    assert seat["x1"]["max_g"] == pytest.approx(0.8 / G_SCENE, abs=1e-6)
+    assert bool(seat["x2"]["samples_outside"]) == warned
+    assert bool([w for w in res.warnings if w.startswith("elastic: overload of point seat along x2")]) == warned
 
 
 def test_opposite_sign_warning_logic():
