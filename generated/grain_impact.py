@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
-# source key 0f554c29353a2b0106440dd9389aa756cf395eb0a5bef4c4717eb0903e9c84ed
+# source key 23c7850817363fa648be5009d22bec7e17b689bc752de0f7f39980b6d85570e6
 # body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
-# source key 795376fa7da06e5747a78602d7d3024cab177f40e9d73e7f7a6883aa5a50366c
+# source key 3d52fd2fded4ae5e203cb261724286b00a77c39215e736ed8ce2c582f9bb81ba
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

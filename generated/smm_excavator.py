@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d279abe2b92e25688859d0e030e722fe99a3e3173776098b4ad4a4e4906eb55f
-# source key ecff9b5d022c785cebe22ccac5f046c6fbf8bbd606cb7ccbce9abcaa12f64795
+# source key 3f046de482df3bc0bf6d45aefe004b0e5b34a6febfdbc2ce530c1ec2f7d08630
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key ecff9b5d022c785cebe22ccac5f046c6fbf8bbd606cb7ccbce9abcaa12f64795
+# source key 3f046de482df3bc0bf6d45aefe004b0e5b34a6febfdbc2ce530c1ec2f7d08630
 # body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 182cae0d6373a79cfb38f2183d7ff73de58c3f7daf1a30afc7a0f5e37339be98
-# source key cc50151fc8951f3efdfbf436ac6fe244e17b33f020ba597f3d9d30c6d3247b35
+# source key abdfacb94601c9f7f67cfc8327178d6dfbbecd5c9ea6bbfc035ff83d345dff20
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key cc50151fc8951f3efdfbf436ac6fe244e17b33f020ba597f3d9d30c6d3247b35
+# source key abdfacb94601c9f7f67cfc8327178d6dfbbecd5c9ea6bbfc035ff83d345dff20
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

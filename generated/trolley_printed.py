@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
-# source key 338c0424d345ae36103f6536b7d6a6d1bb5d5b44bdc2aa36cfb7324c0e5c2cf7
+# source key 169a776de0dd6b1a25981796752c44baecfdd6bc8020912b79093c802e1170be
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

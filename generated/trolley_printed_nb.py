@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
-# source key 338c0424d345ae36103f6536b7d6a6d1bb5d5b44bdc2aa36cfb7324c0e5c2cf7
+# source key 169a776de0dd6b1a25981796752c44baecfdd6bc8020912b79093c802e1170be
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -73,3 +73,22 @@ def test_sequence_numpy_and_sympy_agree(passive):
     num = kin.sequence((0, 1, 2), th, passive=passive)
     sym = np.array(kin.sequence((0, 1, 2), [sp.Float(x) for x in th], kin.SYMPY, passive).evalf(), dtype=float)
     assert np.abs(num - sym).max() < 1e-14
+
+
+def test_single_vectors_and_batches_give_the_same_matrices():
+    """One vector takes the scalar path of the numpy arithmetic, a stack the batch path; rows of the
+    stack must equal the single results bit for bit, and mixed scalar/batch arguments broadcast."""
+    v = RNG.normal(size=(4, 3))
+    angle = RNG.uniform(-3, 3, 4)
+    assert kin.skew(v[0]).shape == (3, 3)
+    for k in range(4):
+        assert np.array_equal(kin.skew(v)[k], kin.skew(v[k]))
+        assert np.array_equal(kin.elementary(1, angle)[k], kin.elementary(1, angle[k]))
+        assert np.array_equal(kin.rodrigues(v[0], angle)[k], kin.rodrigues(v[0], angle[k]))
+    # a stack of three vectors is a (3, 3) batch, not one matrix of scalars
+    assert kin.skew(v[:3]).shape == (3, 3, 3)
+    c, s = np.cos(angle[0]), np.sin(angle[0])
+    assert np.array_equal(kin.elementary(2, angle[0], passive=False), [[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    shift = kin.parallel_axis(np.zeros((3, 3)), np.array([1.0, 2.0]), v[0])
+    d = v[0]
+    assert np.allclose(shift[1], 2 * (d @ d * np.eye(3) - np.outer(d, d)), rtol=1e-15, atol=0)

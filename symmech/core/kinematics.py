@@ -26,9 +26,15 @@ class _Numpy:
 
     @staticmethod
     def matrix(rows):
+        # Scalar entries (the common single-body case, also inside ODE right-hand sides)
+        # take one np.array call; entries with a batch shape give ndim > 2 or are ragged.
+        try:
+            out = np.array(rows, dtype=float)
+        except ValueError:
+            out = None
+        if out is not None and out.ndim == 2:
+            return out
         flat = [np.asarray(x, dtype=float) for row in rows for x in row]
-        if all(x.ndim == 0 for x in flat):
-            return np.array(rows, dtype=float)
         shape = np.broadcast_shapes(*(x.shape for x in flat))
         out = np.stack([np.broadcast_to(x, shape) for x in flat], axis=-1)
         return out.reshape(shape + (len(rows), len(rows[0])))
@@ -47,7 +53,8 @@ class _Numpy:
     @staticmethod
     def vector(v):
         v = np.asarray(v, dtype=float)
-        return [v[..., i] for i in range(3)]
+        # one vector: Python floats, whose arithmetic is several times cheaper than 0-d arrays
+        return v.tolist() if v.ndim == 1 else [v[..., i] for i in range(3)]
 
     @staticmethod
     def matmul(a, b):
