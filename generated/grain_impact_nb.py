@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8f9519d47e865f03b7b3b3e46b31117a938917855098170631fd24454b8b42b8
-# source key 23c7850817363fa648be5009d22bec7e17b689bc752de0f7f39980b6d85570e6
+# source key 8b8912a27f0577208733be4eba7973cf24dd2e80e328d3d3e857ba37cb1f086a
 # body sha256 1bc3bfb3ca4f7150b3013dd6e77a60c1b9a73d0e5118957093725da9cb2fdb12
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key 3f046de482df3bc0bf6d45aefe004b0e5b34a6febfdbc2ce530c1ec2f7d08630
+# source key 0520aa53f9f0c845159ae1607ba88785f8125e530a02b27f6dcd5f86a44a2802
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

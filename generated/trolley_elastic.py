@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
-# source key 1538590132034feac8f856adb473eaa91fd4f67454f3c456c86844d284d717a8
+# source key 76db3a15f065167ed6655200eece12c7947f0b34ccec640ef79923f455d4af51
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

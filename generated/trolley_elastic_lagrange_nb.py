@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key 1538590132034feac8f856adb473eaa91fd4f67454f3c456c86844d284d717a8
+# source key 76db3a15f065167ed6655200eece12c7947f0b34ccec640ef79923f455d4af51
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
-# source key 169a776de0dd6b1a25981796752c44baecfdd6bc8020912b79093c802e1170be
+# source key 2bac715c197f5a6365a6f316e7e5a46b7017711b24fe24ddae954cc21898e0c7
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

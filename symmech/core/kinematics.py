@@ -26,14 +26,10 @@ class _Numpy:
 
     @staticmethod
     def matrix(rows):
-        # Scalar entries (the common single-body case, also inside ODE right-hand sides)
-        # take one np.array call; entries with a batch shape give ndim > 2 or are ragged.
-        try:
-            out = np.array(rows, dtype=float)
-        except ValueError:
-            out = None
-        if out is not None and out.ndim == 2:
-            return out
+        # Float entries (one body, as inside ODE right-hand sides; numpy scalars are floats
+        # too) take one np.array call, several times cheaper than broadcasting.
+        if all(isinstance(x, float) for row in rows for x in row):
+            return np.array(rows)
         flat = [np.asarray(x, dtype=float) for row in rows for x in row]
         shape = np.broadcast_shapes(*(x.shape for x in flat))
         out = np.stack([np.broadcast_to(x, shape) for x in flat], axis=-1)
