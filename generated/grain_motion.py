@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
-# source key 9b04dfd4ccbc46b51302b0c6c51b6985fe752f0eace68318abb3f77f75d80b0c
+# source key b04db0cae8769fee67df8521736a785cb85cfe237ba0ffdd63047ddafd34b435
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

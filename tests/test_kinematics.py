@@ -59,6 +59,8 @@ def test_inertia_transforms_match_a_point_cloud():
     assert np.allclose(kin.parallel_axis(central, m.sum(), com - point), inertia(pts - point), rtol=1e-13)
     J = sum(mi * np.outer(p, p) for mi, p in zip(m, pts - com))
     assert np.allclose(kin.second_moment(central), J, rtol=1e-13)
+    assert np.allclose(kin.inertia_from_second_moment(J), central, rtol=1e-13)
+    assert np.allclose(_sym(kin.inertia_from_second_moment, sp.Matrix(J)), central, rtol=1e-13)
     R = kin.rodrigues(np.array([0.6, 0.0, 0.8]), 1.1)
     assert np.allclose(kin.rotate_tensor(R, central), inertia((pts - com) @ R.T), rtol=1e-13)
     six = [central[0, 0], central[1, 1], central[2, 2], central[0, 1], central[1, 2], central[0, 2]]

@@ -185,6 +185,13 @@ def second_moment(inertia, ar=NUMPY):
     return _combine(ar, _identity_times(ar, half_trace), inertia, 1, -1)
 
 
+def inertia_from_second_moment(second, ar=NUMPY):
+    """I = tr(J) E - J [kg m²] from the second moment J = ∫ r rᵀ dm about the same point
+    (the inverse of :func:`second_moment`)."""
+    e = ar.entries(second)
+    return _combine(ar, _identity_times(ar, e[0][0] + e[1][1] + e[2][2]), second, 1, -1)
+
+
 def parallel_axis(inertia_central, mass, offset, ar=NUMPY):
     """Inertia about a point P from the central inertia, mass [kg] and the centre of mass
     relative to P [m]: I_P = I_C + m (|d|² E - d dᵀ)."""
