@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# source key 6a9caa4758ff3f2a2c7e284095f9fc68fa19d81b612430abddd4b5de56812de5
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 

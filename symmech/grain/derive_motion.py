@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 
 g = sp.Symbol("g", positive=True)
@@ -160,13 +161,9 @@ def invariants() -> sp.Matrix:
     return sp.Matrix([energy, *L])
 
 
-def _rot(axis: int, angle) -> sp.Matrix:
-    return {0: sp.rot_axis1, 2: sp.rot_axis3}[axis](angle).T
-
-
 def euler_matrix() -> sp.Matrix:
     """Q = Rz(psi) Rx(theta) Rz(phi) (active rotations), body axes as columns, (3, 3)."""
-    return _rot(2, psi) * _rot(0, theta) * _rot(2, phi)
+    return kin.sequence((2, 0, 2), (psi, theta, phi), kin.SYMPY, passive=False)
 
 
 def body_rates_from_euler_rates() -> sp.Matrix:
@@ -178,7 +175,7 @@ def body_rates_from_euler_rates() -> sp.Matrix:
     fs = [sp.Function(n)(tt) for n in ("psi", "theta", "phi")]
     Qt = euler_matrix().subs({psi: fs[0], theta: fs[1], phi: fs[2]})
     W = Qt.T * Qt.diff(tt)
-    w = sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])
+    w = kin.vee(W, kin.SYMPY)
     rates = [f.diff(tt) for f in fs]
     B = w.jacobian(rates)
     back = {fs[0]: psi, fs[1]: theta, fs[2]: phi}

@@ -516,7 +516,7 @@ def rigid_body(mdl: ElasticModel) -> model.Body:
     m = inv.mass
     com = inv.S1[0] / m
     J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
-    I = np.trace(J) * np.eye(3) - J
+    I = kin.inertia_from_second_moment(J)
     return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)
 
 
