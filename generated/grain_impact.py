@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
-# source key f0fed572b014cce90928f96452526f782c3d7d1bf2b615078939b4ad9a0273b9
+# source key 945e2ccab2ea7e5d2502359996a87c6fd3736e0b07a1e28f4901cee2316b8170
 # body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8f9519d47e865f03b7b3b3e46b31117a938917855098170631fd24454b8b42b8
-# source key f0fed572b014cce90928f96452526f782c3d7d1bf2b615078939b4ad9a0273b9
+# source key 945e2ccab2ea7e5d2502359996a87c6fd3736e0b07a1e28f4901cee2316b8170
 # body sha256 1bc3bfb3ca4f7150b3013dd6e77a60c1b9a73d0e5118957093725da9cb2fdb12
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

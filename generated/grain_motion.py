@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
-# source key b04db0cae8769fee67df8521736a785cb85cfe237ba0ffdd63047ddafd34b435
+# source key 0a6f99e55b460377f87df1edf29a5c7a05b6dff9e37a2a9a404c3045b9ffe4fe
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a0746f401eb0798ca7faf0443507e069f50585bd78ec570baae6f0d3df12ed99
-# source key b04db0cae8769fee67df8521736a785cb85cfe237ba0ffdd63047ddafd34b435
+# source key 0a6f99e55b460377f87df1edf29a5c7a05b6dff9e37a2a9a404c3045b9ffe4fe
 # body sha256 326260ca4e3879a6ab5be10effac0b8980cf81d1bd2b5ca13c1076a02d0c380f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

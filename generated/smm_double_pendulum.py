@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7e93e78145843a772c35a619cd96651bc67db7ef2c00101b789953c240044239
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

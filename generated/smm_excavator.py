@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d279abe2b92e25688859d0e030e722fe99a3e3173776098b4ad4a4e4906eb55f
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1f1c5ab3fd49ba5c2091686973340de388528a3e64304e379271e561c699e477
-# source key 0ae8f95ec09cfd09f929945a46c963ea6ecfa1c09e898a9b3141a9a5276e34e0
+# source key f65ea08dafa3ca33f70cbae24a38c7e9926a67998c39364c4e5b7920868af787
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0438e9b241d29927f55c7c5fb261c8a0a09df42b3d99588419d4867dc53e723c
-# source key 26efbe5a36a28be0faeb7b4bd0d54d1d69181a5ff8f625b397905ed83373dbac
+# source key 02b0f2113a2433c1930ca2131052cc610de3cd320055ee3b2dc221bb024ae6a7
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2f18f5aa9207c30543b0cfbf5ad12dbf5c64253a35be355d49d4272388029716
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 aee5dbf23a586530a888113236e52e676f91d5a69d4a97696549f4cbbea29ebb
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

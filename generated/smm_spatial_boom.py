@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0c1c37a921438fc47529f9c4fa1349ee759890482042bc514421c406fe58b115
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 c124b9e3f9db2a3a61c40aaa7ea57a2dd46a777e4d6e4a41df9cf47be0db11c0
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

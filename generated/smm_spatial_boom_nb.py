@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0566a1e91b9d80f150c00d99c388a5d12b0655eb9ba07527dcc709780633583c
-# source key e87efefdde884bcc441500d6301280ce4b365dbfeebda8c4e98fee80574cc6aa
+# source key e8aba1d54eed7fb62d5016284e636aae8c96861bfb9374641ec9d606e2452271
 # body sha256 e54288a6a2a2182e8ca5a42db5f21ae452cee07659143c25eab424394a710b81
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c37fcc7e0909167dad763b47a6ae355e452d497f376d5191c938c94b50c3503f
-# source key 93a0791125d7b30e0f899925d432e51a1b5bca93c83a0102276dc79ddb5058c7
+# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1737958e9569beaadf4be1389208bcae79c5859de911013e0a6a467d579f34c7
-# source key 93a0791125d7b30e0f899925d432e51a1b5bca93c83a0102276dc79ddb5058c7
+# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
 # body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

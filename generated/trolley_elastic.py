@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
-# source key 6a9caa4758ff3f2a2c7e284095f9fc68fa19d81b612430abddd4b5de56812de5
+# source key a3cad2ea2cafe29c8417531a521d3b44b27b879c0ee32a38dae1aea87962c19f
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ea77ddc412a8db8c4d5aa3e9eaa9d44bc4df0b6442a7612f2704a521dbca441f
-# source key 6a9caa4758ff3f2a2c7e284095f9fc68fa19d81b612430abddd4b5de56812de5
+# source key a3cad2ea2cafe29c8417531a521d3b44b27b879c0ee32a38dae1aea87962c19f
 # body sha256 6f11d4b3c4ba175a252bcc29cbaeeebe4400a92056f71caa1217d65d6650dd07
 """Small elastic trolley by Lagrange's equations (test route).
 

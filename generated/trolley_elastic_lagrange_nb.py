@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key 6a9caa4758ff3f2a2c7e284095f9fc68fa19d81b612430abddd4b5de56812de5
+# source key a3cad2ea2cafe29c8417531a521d3b44b27b879c0ee32a38dae1aea87962c19f
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 

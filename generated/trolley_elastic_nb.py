@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3d36cb550fa6b4a03b7339dfae2c309607fdb347cce7909564d1bc8fd0404132
-# source key 6a9caa4758ff3f2a2c7e284095f9fc68fa19d81b612430abddd4b5de56812de5
+# source key a3cad2ea2cafe29c8417531a521d3b44b27b879c0ee32a38dae1aea87962c19f
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

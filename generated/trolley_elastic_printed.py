@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae12fe9b5e046d42178ed66b967e426a934a0cbae1ff3a1956fd93eaa7f1f91a
-# source key 249cca65be4a769de4fcfbed74930586a355e88d921e22cb5f92409ed653d596
+# source key 20261b8f91705c63e7026dcf5bb7e44d5be4b3aeeef51841e79042d683aedcab
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6da2a548e042bd45c9880b91eef7d07292eb1054b02b4c2496a1a6204dd4f332
-# source key 249cca65be4a769de4fcfbed74930586a355e88d921e22cb5f92409ed653d596
+# source key 20261b8f91705c63e7026dcf5bb7e44d5be4b3aeeef51841e79042d683aedcab
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 182cae0d6373a79cfb38f2183d7ff73de58c3f7daf1a30afc7a0f5e37339be98
-# source key 93a0791125d7b30e0f899925d432e51a1b5bca93c83a0102276dc79ddb5058c7
+# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

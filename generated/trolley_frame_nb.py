@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key 93a0791125d7b30e0f899925d432e51a1b5bca93c83a0102276dc79ddb5058c7
+# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 
