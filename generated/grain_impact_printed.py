@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
-# source key 64a06140d292500a084c0ee2386f9265a2387863cc576a7f25106d8c7fb8ebbc
+# symmech 0.1.0 generated module; inputs sha256 34cda8e26ab366060690df7ea5239e99f9b21ac4a73ccca191aa9956c1ac3436
+# source key 3ae8b7a04748ff7501930058aba56caed82d97f175a24f7af8d5e2eadfae4167
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b55f62f91a435a136e485bb722ecad55d1f69194943b533227752894317c4f44
-# source key 64a06140d292500a084c0ee2386f9265a2387863cc576a7f25106d8c7fb8ebbc
+# symmech 0.1.0 generated module; inputs sha256 f33d71bba2ca7797688ba8322d5c4b046c87c9256c5a280ce12fef80e524b0c9
+# source key 3ae8b7a04748ff7501930058aba56caed82d97f175a24f7af8d5e2eadfae4167
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
-# source key e140f8be5caa15bbc1d0732b910028d052c1d68f72f0bfd89c28ff6abc346a78
+# symmech 0.1.0 generated module; inputs sha256 464ace2bddb7355f07106c24efcf912f47b1632ed777935062f84c51e67cb9b4
+# source key 96011723c8478a418911fcaf2923df9619c61d735f23c2644fa2a79ac6309b66
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

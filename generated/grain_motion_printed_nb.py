@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 89d3deefe5bf4a2492d1ac84018a03f8b6108c04fedde4670e81d12c37831c84
-# source key e140f8be5caa15bbc1d0732b910028d052c1d68f72f0bfd89c28ff6abc346a78
+# symmech 0.1.0 generated module; inputs sha256 1f51019e122ffeafe63e287be89c3717a85db3c03977219b2f6e5c001d24c999
+# source key 96011723c8478a418911fcaf2923df9619c61d735f23c2644fa2a79ac6309b66
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

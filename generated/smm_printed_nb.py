@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0438e9b241d29927f55c7c5fb261c8a0a09df42b3d99588419d4867dc53e723c
-# source key 2ddff67160dcf76e8ae46d69e73f22535b36d81f6fb84d6e1bebdef808658a1d
+# symmech 0.1.0 generated module; inputs sha256 ff1af275f66bcf1d68d134c00409d09e233e786f862d5d77b2d3f436a408d55e
+# source key 25e449593810244743d8ce449fecd7688ac36d7f5f47474bc20a6b1cc2fa9905
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

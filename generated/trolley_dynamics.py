@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c37fcc7e0909167dad763b47a6ae355e452d497f376d5191c938c94b50c3503f
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 82247488684dc29291eda9164bdf423f04841c7f360f3335cda56da13ddc64eb
+# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1737958e9569beaadf4be1389208bcae79c5859de911013e0a6a467d579f34c7
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 116bc1026230aba336209062122370a159f6adae9a37c0f90a8980ce823b992d
+# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
 # body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

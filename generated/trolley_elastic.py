@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# symmech 0.1.0 generated module; inputs sha256 6e440ee957e3670d8cf9a0ac1ac72a698cf60772a2304595f6b7f1d771b8a784
+# source key e5d1f5e2a11d7d613c8631e564c65616c404b2a9cb5ca5365697e8da2f2cbf9d
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# symmech 0.1.0 generated module; inputs sha256 d7f1d1e0c08dc28914ac7a09dc15c8081cee4a86cb643c21b32ab386ac96e7b8
+# source key e5d1f5e2a11d7d613c8631e564c65616c404b2a9cb5ca5365697e8da2f2cbf9d
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 

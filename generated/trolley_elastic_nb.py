@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3d36cb550fa6b4a03b7339dfae2c309607fdb347cce7909564d1bc8fd0404132
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# symmech 0.1.0 generated module; inputs sha256 134d03b36a74720eb2de4663c22ffd0994f3eac6c924f491016c6756a08ea4b6
+# source key e5d1f5e2a11d7d613c8631e564c65616c404b2a9cb5ca5365697e8da2f2cbf9d
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

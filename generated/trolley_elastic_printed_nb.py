@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6da2a548e042bd45c9880b91eef7d07292eb1054b02b4c2496a1a6204dd4f332
-# source key 7de55436a2f5c97796562755fdfad9a32daf348c01ed26a75a247badecb9bd5d
+# symmech 0.1.0 generated module; inputs sha256 63ab1eb6bde91bfe31d4e37e9847c198cbab15cd44c495de2054b53296348fd2
+# source key 84e611f2347c578cca8bff45f2b58611296da7916a8e1725ffad15a31ed34a7b
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 22bfe0668b7357e62b17796597e7b68b376ada801f1dc493215bd2b40f8c6fb8
+# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

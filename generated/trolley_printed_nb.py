@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
-# source key 436a7c1c1ff07b3fd5311b85dd622e3c9058e0b8e5570580a82ec88e2d385d90
+# symmech 0.1.0 generated module; inputs sha256 d05d1d61357f9995f33282ac461acb363cab50e14616e98f2d168851b46382cd
+# source key a652067caab8cafe1a1f7406bd701f37a701d75cc301a4cc8f00d097f1249828
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 
