@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 909678db84782643bde77a8e2038055fd5fac740b97b7c3493dc263ece4b6580
-# source key 0008e1566a35a3b5320e96c1e31dcf492e1a3b8f252ef040489f9806bb8e0b97
+# symmech 0.1.0 generated module; inputs sha256 2400f1e2afa658ebadbab7e38512fc627a11741e2c85347322d0e87a59165c1b
+# source key d791409fa0d23ad366f09b956b2dba6eab4782b4dc89a3e6a4b268d65530a3f3
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 28770e6bb77a9df03954db1236283b6a5df40c2242a283aeeed6c1c3969dca65
-# source key 0008e1566a35a3b5320e96c1e31dcf492e1a3b8f252ef040489f9806bb8e0b97
+# symmech 0.1.0 generated module; inputs sha256 a19072f73e21ff4c59a532ee3a4b3277a68ae37b07e685b3297ebb4d908a7e37
+# source key d791409fa0d23ad366f09b956b2dba6eab4782b4dc89a3e6a4b268d65530a3f3
 # body sha256 09effaaeaa4a147013f14a64e1e241cb066d5f670cd70e902f4645ea6a5b8f34
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 34cda8e26ab366060690df7ea5239e99f9b21ac4a73ccca191aa9956c1ac3436
-# source key 3ae8b7a04748ff7501930058aba56caed82d97f175a24f7af8d5e2eadfae4167
+# symmech 0.1.0 generated module; inputs sha256 8de60630552116b0e472b0f4aaf8f1b54f2db9377e5be3262540319a4a9f3462
+# source key 74dd70da2cd409a837fd855ccf05a45c33a738fc4fd1edf5cf9434ae76942d5d
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

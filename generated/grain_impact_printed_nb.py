@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f33d71bba2ca7797688ba8322d5c4b046c87c9256c5a280ce12fef80e524b0c9
-# source key 3ae8b7a04748ff7501930058aba56caed82d97f175a24f7af8d5e2eadfae4167
+# symmech 0.1.0 generated module; inputs sha256 ba09ac9a1b5db98a1a6deddbbf95a064521155f4378e573fe732c63bb46845e0
+# source key 74dd70da2cd409a837fd855ccf05a45c33a738fc4fd1edf5cf9434ae76942d5d
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

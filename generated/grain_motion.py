@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4b980c8bb6972d2be818c41774c0b131f6bb80723605444a82272aec4a48b26e
-# source key 08cc3396eecd75a90cdd17978018a30d8741cfbd2347475fa0dd15e495133904
+# symmech 0.1.0 generated module; inputs sha256 4444969f4af88030d3f24fc65006a9d5bc8fd682b046dea4d12afa8637955ae4
+# source key 39b1f9c6f10ec3049c45cbbbbc793a574e8ee685ae89c51d0508f9a9b4a80eb2
 # body sha256 5441f52ec5cdbe84b968e01ca69ba826ecbf9877a52ee0db8aed8069e7271876
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

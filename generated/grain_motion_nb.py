@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 cf01d0d53c6ee00fdd6f67a3b08b900c48867e4c5a67545d2cca126e172c5a48
-# source key 08cc3396eecd75a90cdd17978018a30d8741cfbd2347475fa0dd15e495133904
+# symmech 0.1.0 generated module; inputs sha256 f54293bd1a81f76b0b998b9a2ab4851f96aaa952496b60adaf29eb9230d98227
+# source key 39b1f9c6f10ec3049c45cbbbbc793a574e8ee685ae89c51d0508f9a9b4a80eb2
 # body sha256 bb4a7d650ea4d406f0a5fac2d631cd14f8cff8b91a289ae5b820107d237b2c67
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

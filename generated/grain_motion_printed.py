@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 464ace2bddb7355f07106c24efcf912f47b1632ed777935062f84c51e67cb9b4
-# source key 96011723c8478a418911fcaf2923df9619c61d735f23c2644fa2a79ac6309b66
+# symmech 0.1.0 generated module; inputs sha256 b58c26dbb30af2c6a42154edfcaf35e6b1e19b87026e302e9cab49e54a51ef7d
+# source key b1545994aedd7f8b21d288b2381f3470a8c9bc40dfdebea9d6b496fd4bc10dfa
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

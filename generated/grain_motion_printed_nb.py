@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1f51019e122ffeafe63e287be89c3717a85db3c03977219b2f6e5c001d24c999
-# source key 96011723c8478a418911fcaf2923df9619c61d735f23c2644fa2a79ac6309b66
+# symmech 0.1.0 generated module; inputs sha256 0d004eb7d807da9be00da6d8e8dd429cb1f06868457d737829c2ab1fc28aba96
+# source key b1545994aedd7f8b21d288b2381f3470a8c9bc40dfdebea9d6b496fd4bc10dfa
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

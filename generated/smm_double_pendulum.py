@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 0c9053292511dba3446df6ebd5f75db6962aacd7cdea5f39ee1d64523274292d
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 66d1a7e868590da3c6f2e5a8e74a858c68d2dd13188fcc2332dd78618465768d
+# symmech 0.1.0 generated module; inputs sha256 e4dc8f5cdd686205370b38f1b2ff6f96de9aca44b3b18e57f8103fd436442a8b
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 3472c146dab5c3383f3762d27eba1dd57c306c65ba3883fb6a3a2f5558655cb9
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -284,7 +284,7 @@ def rate_jacobian(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
 
 
 def rate_mass(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

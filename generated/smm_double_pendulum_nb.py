@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 105645ac144f3361ff0064dffd1114a15975664b1f057a0e581565a05b70a303
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 d1ada0a61588c3b6e0b88a7710fdc8420f2c32ea745ab05d7797ba76e60f76c6
+# symmech 0.1.0 generated module; inputs sha256 05cc52ad912700a3053046fc31eef1184e02b05c65747653a23b89b0df450ebf
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 564590c426af01ca45748e8e41bc6fa10315ac7ef650ace7bc69a943df62af48
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -505,7 +505,7 @@ def _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _k):
 
 @numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
-    """M of M y' = F (free of the state): floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
+    """M of M y' = F: floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
     out = numpy.empty((1, 4, 4))
     _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
     return out[0]
@@ -524,7 +524,7 @@ def _rate_mass_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps
 
 
 def rate_mass(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 4bf1559ee6ed55481124d9977fe88f2c77aea5da1a1f83c72673aab8102eb133
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 965251ba6be8d56382834e7c90587df5dbae1ac470277e23f9f50dc1096f1de6
+# symmech 0.1.0 generated module; inputs sha256 f918d746bbab861179ce2c9e163f76a6db88c32ab8562e82792253612680d67c
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 2569e8dbe001b5c7ee93f237c1f689d8763d8592f4d82cb57bc21e5eb112ac23
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -850,7 +850,7 @@ def _rate_jacobian_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, 
 
 
 def rate_mass(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

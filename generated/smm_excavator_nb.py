@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 525c4fc498db48c290e8c09ff840d5c47766c62ee70e339135dbd3aeb4583c33
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 9ed59ee8caf13fbebb20927d2296068a3e8891001c65feb93bdf667616548e6b
+# symmech 0.1.0 generated module; inputs sha256 8cf970d960e864392dd752d93467ac9fa6ef1d386c8c3133a62ba1a3e54f14a9
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 8631b47eb0a0a1b0eb106c4ab47ae76b2ba5d64b4cc68d3c70107b65df50d6a2
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -1185,7 +1185,7 @@ def _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_p
 
 @numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
-    """M of M y' = F (free of the state): floats in, a float64 array (10, 10) out [unit of F / unit of y']."""
+    """M of M y' = F: floats in, a float64 array (10, 10) out [unit of F / unit of y']."""
     out = numpy.empty((1, 10, 10))
     _rate_mass_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
     _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
@@ -1207,7 +1207,7 @@ def _rate_mass_ploop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, 
 
 
 def rate_mass(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 bbbfddd53b9ea87a4591593c05a10161246ef3eb9a9fb4b6ebee97026ce01f06
-# source key 7dd7c6b075b36b6989ae3b1750b0d494f665ce92964951e437f1abaf686b0f02
+# symmech 0.1.0 generated module; inputs sha256 973d7735a49c3aae8030cec2237bb35a0214f14be79afaf879700ddc9450a0e3
+# source key 9c16c01191fec1924733275e975a4bfb5ff378f51b48ec062a4c456e7486645b
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

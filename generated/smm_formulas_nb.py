@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 02f754df36845366e7df2292b95d79b8f1d61fd2c966b57bebe0b686d51bb271
-# source key 7dd7c6b075b36b6989ae3b1750b0d494f665ce92964951e437f1abaf686b0f02
+# symmech 0.1.0 generated module; inputs sha256 da6e37afc0a9f847d5df6c2024fa88c98966cba52a8c0257c53706d3bc3fbeb3
+# source key 9c16c01191fec1924733275e975a4bfb5ff378f51b48ec062a4c456e7486645b
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

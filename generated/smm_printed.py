@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f69ef1cfe91c29fe25fbbbc7d3347c7ad530f058410d83a3251c98159b6f95a9
-# source key 25e449593810244743d8ce449fecd7688ac36d7f5f47474bc20a6b1cc2fa9905
+# symmech 0.1.0 generated module; inputs sha256 61724808885aafe30f41ec8dcc457a73c3f8f45e68949c91e657f384289d2e56
+# source key 830de735f2bf1d709d1fcc4c0b18171caed5b4f8de27509b33499e432f0648b7
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ff1af275f66bcf1d68d134c00409d09e233e786f862d5d77b2d3f436a408d55e
-# source key 25e449593810244743d8ce449fecd7688ac36d7f5f47474bc20a6b1cc2fa9905
+# symmech 0.1.0 generated module; inputs sha256 b149bd396ca316eae918f04b11912fbc844e358e65dcc3a7d092d9837e76f90f
+# source key 830de735f2bf1d709d1fcc4c0b18171caed5b4f8de27509b33499e432f0648b7
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 aee2ebbc272b916597f966213e45b7976ffeb58d2b9b67a7aa2fff8a0bb32aaa
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 1379872d1418f8421f3f84cf32f207c7a16b15a1f7e889e343a5b0ce0e194880
+# symmech 0.1.0 generated module; inputs sha256 312828f77a8ca3473187043ba34328a9edc040dba88a92077d47e10c378bfe3c
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -425,7 +425,7 @@ def rate_jacobian(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, L
 
 
 def rate_mass(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

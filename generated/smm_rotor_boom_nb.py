@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 d0a92152d0d9e55145284a182cea9f4a0907b03c8ca05ae63e1e96a3b353b7cb
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 d35eae7708b50b2d2074d2cdb2c55fe7d2b76a924f0f2cafa11e95f2a5d95110
+# symmech 0.1.0 generated module; inputs sha256 3cf24713aaa8d34148cf9086fc678a6791fdf7ea19c43477242f1f57711760b0
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 55dc9b9127cd991ce5382023f186670759f42937784def862871eb4505520172
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_rotor_boom` (the numpy module, the
@@ -645,7 +645,7 @@ def _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr
 
 @numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
-    """M of M y' = F (free of the state): floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
+    """M of M y' = F: floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
     out = numpy.empty((1, 4, 4))
     _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
     return out[0]
@@ -664,7 +664,7 @@ def _rate_mass_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha
 
 
 def rate_mass(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

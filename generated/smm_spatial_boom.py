@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 6ad072a66ef0698121864b3f92467b39ae19f32cca5eec1e0666179a6723f567
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 ee4dfce66413441e40d378bb126345755ed670db7fd92ad6fea9b9db47399de8
+# symmech 0.1.0 generated module; inputs sha256 78978f8446b96748bda563804493ac823b115cc25de1e92b4aec14ad14dd58a6
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 acb736fcbddaf70d94c49e9cfd5f446a34d08d0247accf834807a01bedce8f79
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -909,7 +909,7 @@ def rate_jacobian(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, q
 
 
 def rate_mass(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

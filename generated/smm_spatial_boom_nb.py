@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 9a30913aa02cacd0e4aaf88baea19c283b2a66ca3d1427c1f288a810748f5e2c
-# source key 1eac606d6be9c3ead89c2885d8135e78044c25ac04a1a3bfd566aadec2263244
-# body sha256 9843921614d60873b0488a8f484c7272a6d5d427815a64f91b74650a158394f9
+# symmech 0.1.0 generated module; inputs sha256 c178a85b8c6038ff0e2be66d37602a0891c14ba622b08ecd1e9647e7ac04d8a4
+# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# body sha256 c4bfb3a9e455ffc8826de6dab6adc692bcba693d830fb1229c09b112fa2e5431
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -1180,7 +1180,7 @@ def _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd
 
 @numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
-    """M of M y' = F (free of the state): floats in, a float64 array (8, 8) out [unit of F / unit of y']."""
+    """M of M y' = F: floats in, a float64 array (8, 8) out [unit of F / unit of y']."""
     out = numpy.empty((1, 8, 8))
     _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
     return out[0]
@@ -1199,7 +1199,7 @@ def _rate_mass_ploop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1
 
 
 def rate_mass(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
-    """M of M y' = F (free of the state).
+    """M of M y' = F.
 
     Parameters
     ----------

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 82247488684dc29291eda9164bdf423f04841c7f360f3335cda56da13ddc64eb
-# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
+# symmech 0.1.0 generated module; inputs sha256 f70841d96b3a30e262cc9abc855630d23ba4a877529fee2e86f8ba85d0413ea9
+# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

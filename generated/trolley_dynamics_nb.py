@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 116bc1026230aba336209062122370a159f6adae9a37c0f90a8980ce823b992d
-# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
+# symmech 0.1.0 generated module; inputs sha256 d0fb1f25b09f42eec5ced3a858ea16c73eff4b4c3f3dee148f85febce1fc7084
+# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
 # body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6e440ee957e3670d8cf9a0ac1ac72a698cf60772a2304595f6b7f1d771b8a784
-# source key e5d1f5e2a11d7d613c8631e564c65616c404b2a9cb5ca5365697e8da2f2cbf9d
+# symmech 0.1.0 generated module; inputs sha256 858312ae35e4bede00096c4a558c14225c01905adec427fa95ed00e8de88cde0
+# source key b9ebf48212313f871c98d8cb2282a4e6d4f1acd418800770abb5ebd8a3982fa2
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

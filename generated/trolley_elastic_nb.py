@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 134d03b36a74720eb2de4663c22ffd0994f3eac6c924f491016c6756a08ea4b6
-# source key e5d1f5e2a11d7d613c8631e564c65616c404b2a9cb5ca5365697e8da2f2cbf9d
+# symmech 0.1.0 generated module; inputs sha256 fb30fb208185e3879baca57f8ae5b6fce449a0ca4049347cb7a0949952cc97a5
+# source key b9ebf48212313f871c98d8cb2282a4e6d4f1acd418800770abb5ebd8a3982fa2
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

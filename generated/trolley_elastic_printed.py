@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b112509a60144f2004422a3d5ee1ff6554f001b7f42e465cffa6b4540ada7430
-# source key 84e611f2347c578cca8bff45f2b58611296da7916a8e1725ffad15a31ed34a7b
+# symmech 0.1.0 generated module; inputs sha256 e8862793514ea847fdfdc7ff2366ebb3ad2a77daab080984120f396ebc882d36
+# source key 5173df24ac316e8f8cccb0ebb843e5a87b7faf823ee1d0a4c0666889b9b7a971
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 63ab1eb6bde91bfe31d4e37e9847c198cbab15cd44c495de2054b53296348fd2
-# source key 84e611f2347c578cca8bff45f2b58611296da7916a8e1725ffad15a31ed34a7b
+# symmech 0.1.0 generated module; inputs sha256 afadce43b91c3d50b5b0d041bb032b3c806743582a00d7c3fa9f50bad65db49b
+# source key 5173df24ac316e8f8cccb0ebb843e5a87b7faf823ee1d0a4c0666889b9b7a971
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

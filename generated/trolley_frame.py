@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 50935287a3829bc483351a78be3c902df200bf3ea619185d2357106ad75dda03
-# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
+# symmech 0.1.0 generated module; inputs sha256 fd60c71f2803b2ac7586e9f15fe933d607a2e2bb79c7d5ddf02bb387956adc7e
+# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 22bfe0668b7357e62b17796597e7b68b376ada801f1dc493215bd2b40f8c6fb8
-# source key acd48fddebe5fccb9c06fcff4e3f48289665aae93b65f1db5415a4b6f92ca9ac
+# symmech 0.1.0 generated module; inputs sha256 9bfca167dc9d552b596c04587bad89113299bf63c8b37eb5d08523f1d1e56eaa
+# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 94ed8e55cd3e032579a3410899bf5b998d469d80992ab28e557fcb2f97bae43b
-# source key a652067caab8cafe1a1f7406bd701f37a701d75cc301a4cc8f00d097f1249828
+# symmech 0.1.0 generated module; inputs sha256 1a65862eb9ba1eb99c5fcdae49e268ddaf307f21cba9f96c74140adcba001f65
+# source key 6714273383637d07a685b9cee238980ae86b7aad885d78d2116c0a44b3b61ee4
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

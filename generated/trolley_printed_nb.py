@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d05d1d61357f9995f33282ac461acb363cab50e14616e98f2d168851b46382cd
-# source key a652067caab8cafe1a1f7406bd701f37a701d75cc301a4cc8f00d097f1249828
+# symmech 0.1.0 generated module; inputs sha256 232331c833ec2fbea0efbfcebbae87be4ed78385543541cde2e8a001a3083139
+# source key 6714273383637d07a685b9cee238980ae86b7aad885d78d2116c0a44b3b61ee4
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 

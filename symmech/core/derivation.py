@@ -114,10 +114,11 @@ class Dynamics:
 
     ``state`` and ``params`` declare the layout of the vectors ``y`` and ``p`` (order,
     meanings, units); ``time`` is the time symbol when the equations depend on it.
-    ``mass`` is the matrix M (None: the identity, ``y' = F``); it must not depend on
-    the state, so the Jacobian ``d(y')/dy = M^-1 dF/dy`` is derived symbolically from
-    ``F`` alone (:meth:`functions`). Nothing is inverted symbolically: the generated
-    ``rhs`` and ``jac`` solve with M numerically.
+    ``mass`` is the matrix M (None: the identity, ``y' = F``). With ``jacobian`` the
+    Jacobian ``d(y')/dy = M^-1 dF/dy`` is derived symbolically from ``F`` alone
+    (:meth:`functions`), which needs M free of the state; ``jacobian=False`` emits
+    ``rhs`` only and admits a state-dependent M. Nothing is inverted symbolically: the
+    generated ``rhs`` and ``jac`` solve with M numerically.
     """
 
     state: tuple[Arg, ...]
@@ -126,6 +127,7 @@ class Dynamics:
     mass: sympy.Matrix | None = None
     time: Arg | None = None
     meaning: str = ""
+    jacobian: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "state", tuple(self.state))
@@ -139,7 +141,7 @@ class Dynamics:
             if self.mass.shape != (n, n):
                 raise ValueError(f"mass matrix has shape {self.mass.shape}, expected ({n}, {n})")
             depends = self.mass.free_symbols & {a.symbol for a in self.state}
-            if depends:
+            if depends and self.jacobian:
                 raise ValueError(f"mass matrix depends on the state: {sorted(s.name for s in depends)}")
 
     @property
@@ -148,14 +150,14 @@ class Dynamics:
         return ((self.time,) if self.time else ()) + self.state + self.params
 
     def functions(self) -> tuple[NamedMatrix, ...]:
-        """``rate`` F (n,), ``rate_jacobian`` dF/dy (n, n) and, with a mass matrix, ``rate_mass`` M."""
+        """``rate`` F (n,), ``rate_jacobian`` dF/dy (n, n) if derived and, with a mass matrix, ``rate_mass`` M."""
         y = sympy.Matrix([a.symbol for a in self.state])
         what = self.meaning or "the state"
         out = [NamedMatrix("rate", self.rate, self.args, f"F of M y' = F: rates of {what}",
-                           "state unit / s (times M)"),
-               NamedMatrix("rate_jacobian", self.rate.jacobian(y), self.args, "dF/dy, rows F, columns y",
-                           "unit of F / unit of y")]
+                           "state unit / s (times M)")]
+        if self.jacobian:
+            out.append(NamedMatrix("rate_jacobian", self.rate.jacobian(y), self.args, "dF/dy, rows F, columns y",
+                                   "unit of F / unit of y"))
         if self.mass is not None:
-            out.append(NamedMatrix("rate_mass", self.mass, self.args, "M of M y' = F (free of the state)",
-                                   "unit of F / unit of y'"))
+            out.append(NamedMatrix("rate_mass", self.mass, self.args, "M of M y' = F", "unit of F / unit of y'"))
         return tuple(out)

@@ -151,6 +151,7 @@ def _dynamics_context(dyn: Dynamics) -> dict:
     return {"state": layout(dyn.state), "params": layout(dyn.params), "state_args": dyn.state,
             "param_args": dyn.params, "n": len(dyn.state),
             "m": len(dyn.params), "call": ", ".join(call), "mass": dyn.mass is not None,
+            "jacobian": dyn.jacobian,
             "time": f"{dyn.time.meaning} [{dyn.time.unit}]" if dyn.time else None, "meaning": dyn.meaning}
 
 
