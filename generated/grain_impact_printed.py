@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 8de60630552116b0e472b0f4aaf8f1b54f2db9377e5be3262540319a4a9f3462
-# source key 74dd70da2cd409a837fd855ccf05a45c33a738fc4fd1edf5cf9434ae76942d5d
+# symmech 0.1.0 generated module; inputs sha256 53145b0320e4d261670d4705523a197d94f37ff476ce0c51e409672f5ea01222
+# source key f0df35dbae4110431cae3dda32229e3d82cea0549d301788e63ad4ca8986f7a7
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

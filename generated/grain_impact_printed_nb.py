@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ba09ac9a1b5db98a1a6deddbbf95a064521155f4378e573fe732c63bb46845e0
-# source key 74dd70da2cd409a837fd855ccf05a45c33a738fc4fd1edf5cf9434ae76942d5d
+# symmech 0.1.0 generated module; inputs sha256 bbe12b8debcbaf1daca5d9e7d5ed7703636701e1462844bf8a196107bca700d9
+# source key f0df35dbae4110431cae3dda32229e3d82cea0549d301788e63ad4ca8986f7a7
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4444969f4af88030d3f24fc65006a9d5bc8fd682b046dea4d12afa8637955ae4
-# source key 39b1f9c6f10ec3049c45cbbbbc793a574e8ee685ae89c51d0508f9a9b4a80eb2
+# symmech 0.1.0 generated module; inputs sha256 34a690084fbd4743d22318487e3e4aaa303487a8650d5770159969e57decd42a
+# source key b2f2b2ec4e7f3eb2b5dd40cb0e5c78112f267f2ecd85cf632146818e9cb791ae
 # body sha256 5441f52ec5cdbe84b968e01ca69ba826ecbf9877a52ee0db8aed8069e7271876
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f54293bd1a81f76b0b998b9a2ab4851f96aaa952496b60adaf29eb9230d98227
-# source key 39b1f9c6f10ec3049c45cbbbbc793a574e8ee685ae89c51d0508f9a9b4a80eb2
+# symmech 0.1.0 generated module; inputs sha256 577293806eb54f23853e08cd12fe4abdfa3673b7c6b278f46d87d7822bd5082b
+# source key b2f2b2ec4e7f3eb2b5dd40cb0e5c78112f267f2ecd85cf632146818e9cb791ae
 # body sha256 bb4a7d650ea4d406f0a5fac2d631cd14f8cff8b91a289ae5b820107d237b2c67
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

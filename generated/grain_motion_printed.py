@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b58c26dbb30af2c6a42154edfcaf35e6b1e19b87026e302e9cab49e54a51ef7d
-# source key b1545994aedd7f8b21d288b2381f3470a8c9bc40dfdebea9d6b496fd4bc10dfa
+# symmech 0.1.0 generated module; inputs sha256 89b728a5b844b0bed8c921fcd49606f295f9a5d7bdfb51f6057579abe0ab02eb
+# source key c5689d9c4cef0b8b810be4bffab9eb586aadbdf024c23fa2a67919bab70d3dab
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0d004eb7d807da9be00da6d8e8dd429cb1f06868457d737829c2ab1fc28aba96
-# source key b1545994aedd7f8b21d288b2381f3470a8c9bc40dfdebea9d6b496fd4bc10dfa
+# symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
+# source key c5689d9c4cef0b8b810be4bffab9eb586aadbdf024c23fa2a67919bab70d3dab
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

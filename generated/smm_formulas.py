@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 973d7735a49c3aae8030cec2237bb35a0214f14be79afaf879700ddc9450a0e3
-# source key 9c16c01191fec1924733275e975a4bfb5ff378f51b48ec062a4c456e7486645b
+# symmech 0.1.0 generated module; inputs sha256 6702698636daff8b11fe5a18bb26f1f1288b12f26d1fee39bbd693aad7699d29
+# source key 55e3aced7c15284d1784c0d629ac56151824ca17b25c565c1e368465f017de91
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

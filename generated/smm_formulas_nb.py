@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 da6e37afc0a9f847d5df6c2024fa88c98966cba52a8c0257c53706d3bc3fbeb3
-# source key 9c16c01191fec1924733275e975a4bfb5ff378f51b48ec062a4c456e7486645b
+# symmech 0.1.0 generated module; inputs sha256 e6f4538a86c71902e002983ce248e4f0ec70d1fe71d32e33fb4d8ac619ead531
+# source key 55e3aced7c15284d1784c0d629ac56151824ca17b25c565c1e368465f017de91
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 312828f77a8ca3473187043ba34328a9edc040dba88a92077d47e10c378bfe3c
-# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# symmech 0.1.0 generated module; inputs sha256 8a21419d6166b7c0762cec35e83835db09f898cdccb4793e3f2045bd00807043
+# source key 7f4c41e0fcdfb9e4bd4f6a9293b497a5338d7c2e898b81fd8a66d984f799e671
 # body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c178a85b8c6038ff0e2be66d37602a0891c14ba622b08ecd1e9647e7ac04d8a4
-# source key c4becde029240631a3478e955179c383b07f4d9348aeb923790d130291e14dc5
+# symmech 0.1.0 generated module; inputs sha256 d58fdcd9c84707a84c094ce3b7754fda878a873e5bb16d52fdb74dbd542fb2b2
+# source key 7f4c41e0fcdfb9e4bd4f6a9293b497a5338d7c2e898b81fd8a66d984f799e671
 # body sha256 c4bfb3a9e455ffc8826de6dab6adc692bcba693d830fb1229c09b112fa2e5431
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f70841d96b3a30e262cc9abc855630d23ba4a877529fee2e86f8ba85d0413ea9
-# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
+# symmech 0.1.0 generated module; inputs sha256 e20b17b5892898dba17e5ac75f81679e95aeacefd3dc389e937e365243be2fb4
+# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d0fb1f25b09f42eec5ced3a858ea16c73eff4b4c3f3dee148f85febce1fc7084
-# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
+# symmech 0.1.0 generated module; inputs sha256 6f527aeedccc184dd310853562ace11dad1caf62c6b35bcace61cdb0e1f4a07f
+# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
 # body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 858312ae35e4bede00096c4a558c14225c01905adec427fa95ed00e8de88cde0
-# source key b9ebf48212313f871c98d8cb2282a4e6d4f1acd418800770abb5ebd8a3982fa2
+# symmech 0.1.0 generated module; inputs sha256 99cc6ce697bf97eb9f10ecde16c2f8c3d6be3b8e0fcdebf4999f6a4af271ec9d
+# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

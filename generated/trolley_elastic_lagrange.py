@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 17449cc2abb4aaf046edb4b8c764592464e515c1afb59e281e3285c8f66c868d
-# source key b9ebf48212313f871c98d8cb2282a4e6d4f1acd418800770abb5ebd8a3982fa2
-# body sha256 26845ebb8e3da8b087f09bc16c0d402073a48eb130d8da2e0c496ec4cfc8aab2
+# symmech 0.1.0 generated module; inputs sha256 951da0274410937f6b098376dd7afba273ae7e0877ddb0c2091d0a9c78e8a31b
+# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
+# body sha256 b725b081d263c108903f24ccf013d3b4db7851e0fa7254921b6e0ef55e4288b0
 """Small elastic trolley by Lagrange's equations (test route).
 
 Source: seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track.
@@ -10,7 +10,7 @@ across arguments) and returns float64 arrays of shape batch + element shape.
 Needs numpy only.
 
 Dynamics of the small elastic trolley of Lagrange's equations in a frame of constant motion:
-``rhs(t, y, p)`` returns y' (M(p) y' = F(t, y, p), solved with M numerically),
+``rhs(t, y, p)`` returns y' (M(y, p) y' = F(t, y, p), solved with M numerically),
 in the form ``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,))`` expects
 (no Jacobian: M depends on the state).
 ``t`` is unused (autonomous equations).

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 cdaecc086e266bcc7d084d0efa94b52bdb5a4ea85e8edd5464e9da1e6daa8d56
-# source key b9ebf48212313f871c98d8cb2282a4e6d4f1acd418800770abb5ebd8a3982fa2
-# body sha256 5737f9cc1651044d1b1d09f5fefc26d07330f90ab3e87cf315fde5c888711e5a
+# symmech 0.1.0 generated module; inputs sha256 7eb462e18633841e5088d44beaa1ae1cbb4a3ac58373922522502b62c260e204
+# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
+# body sha256 c02126a92d6ffb44bf1c7e2652881ff976028ba4a39075a00426f783f7f0167a
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -24,7 +24,7 @@ Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
 
 Dynamics of the small elastic trolley of Lagrange's equations in a frame of constant motion:
-``rhs(t, y, p)`` returns y' (M(p) y' = F(t, y, p), solved with M numerically),
+``rhs(t, y, p)`` returns y' (M(y, p) y' = F(t, y, p), solved with M numerically),
 in the form ``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,))`` expects
 (no Jacobian: M depends on the state).
 ``t`` is unused (autonomous equations).

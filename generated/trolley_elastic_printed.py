@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 e8862793514ea847fdfdc7ff2366ebb3ad2a77daab080984120f396ebc882d36
-# source key 5173df24ac316e8f8cccb0ebb843e5a87b7faf823ee1d0a4c0666889b9b7a971
+# symmech 0.1.0 generated module; inputs sha256 21b7f91ce764ea8ba19a9c33282e93fbdcfd22594ae1460c01ebc2ea36749bb9
+# source key 1a3649c65507b479bfcbf77f1337274b556e1d89566119158063eae6e49c49a2
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

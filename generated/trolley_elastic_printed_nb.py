@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 afadce43b91c3d50b5b0d041bb032b3c806743582a00d7c3fa9f50bad65db49b
-# source key 5173df24ac316e8f8cccb0ebb843e5a87b7faf823ee1d0a4c0666889b9b7a971
+# symmech 0.1.0 generated module; inputs sha256 75604a2c163281d04097df96b46c990933ce43d2ef3307685bbc3a8f3e852afb
+# source key 1a3649c65507b479bfcbf77f1337274b556e1d89566119158063eae6e49c49a2
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 fd60c71f2803b2ac7586e9f15fe933d607a2e2bb79c7d5ddf02bb387956adc7e
-# source key c2e57f706cf415f9b8e7215a6cd9bd041554e5a570e01d2b5f186187c208261d
+# symmech 0.1.0 generated module; inputs sha256 3a2f6dca879e5a476be49cd09d56bd299bd4291d9639bf753b15f09bb57f3d17
+# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

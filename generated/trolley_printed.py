@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1a65862eb9ba1eb99c5fcdae49e268ddaf307f21cba9f96c74140adcba001f65
-# source key 6714273383637d07a685b9cee238980ae86b7aad885d78d2116c0a44b3b61ee4
+# symmech 0.1.0 generated module; inputs sha256 e262c90e7544cd9ce85cc36322a2e868a31eae74a3b20465164b838f1e8b80c0
+# source key 98fa2302a7bce5ac74ab67e824b4fdc59078cf8efff1207590389099e40ce0c3
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 232331c833ec2fbea0efbfcebbae87be4ed78385543541cde2e8a001a3083139
-# source key 6714273383637d07a685b9cee238980ae86b7aad885d78d2116c0a44b3b61ee4
+# symmech 0.1.0 generated module; inputs sha256 d1f3bc39d04ac1f58c991020a88e1c2ee18af864bae4e8866a51f0891f89e9aa
+# source key 98fa2302a7bce5ac74ab67e824b4fdc59078cf8efff1207590389099e40ce0c3
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 

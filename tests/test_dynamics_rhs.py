@@ -30,7 +30,8 @@ DYNAMICS = sorted(name for name, text in TEXTS.items() if "\nSTATE = (" in text)
 WITH_JACOBIAN = [name for name in DYNAMICS if "\ndef jac(" in TEXTS[name]]
 
 
-def test_the_dynamics_modules_are_those_of_the_kinds_that_integrate_odes():
+def test_dynamics_modules_and_those_with_a_jacobian():
+    """Grain flight, the mechanisms' free motion (with jac), the small elastic trolley (M(q): rhs only)."""
     assert WITH_JACOBIAN == DYNAMICS[:-1]
     assert DYNAMICS == ["grain_motion", "smm_double_pendulum", "smm_excavator", "smm_rotor_boom",
                         "smm_spatial_boom", "trolley_elastic_lagrange"]
@@ -70,7 +71,6 @@ def test_jacobian_matches_central_differences(name):
             down[i] -= h
             fd[:, i] = (module.rhs(0.37, up, p) - module.rhs(0.37, down, p)) / (2 * h)
         scale = np.abs(J).max(axis=1, keepdims=True)
-        assert np.abs(J - fd).max() <= 1e-7 * scale.max()
         assert np.all(np.abs(J - fd) <= 1e-7 * scale + 1e-12)
 
 
