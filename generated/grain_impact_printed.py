@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
-# source key 6e46ea967d0c38fe44deb38ac8311acee541ee8ee140bcf21acb3d633a0c38c6
+# symmech 0.1.0 generated module; inputs sha256 53145b0320e4d261670d4705523a197d94f37ff476ce0c51e409672f5ea01222
+# source key f0df35dbae4110431cae3dda32229e3d82cea0549d301788e63ad4ca8986f7a7
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

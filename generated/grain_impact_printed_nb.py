@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b55f62f91a435a136e485bb722ecad55d1f69194943b533227752894317c4f44
-# source key 6e46ea967d0c38fe44deb38ac8311acee541ee8ee140bcf21acb3d633a0c38c6
+# symmech 0.1.0 generated module; inputs sha256 bbe12b8debcbaf1daca5d9e7d5ed7703636701e1462844bf8a196107bca700d9
+# source key f0df35dbae4110431cae3dda32229e3d82cea0549d301788e63ad4ca8986f7a7
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

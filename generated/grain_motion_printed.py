@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
-# source key e3ebc5effa6a8a48d6e1055a25f868e9bd5334b2a836644df1eb77b99d5075d2
+# symmech 0.1.0 generated module; inputs sha256 89b728a5b844b0bed8c921fcd49606f295f9a5d7bdfb51f6057579abe0ab02eb
+# source key c5689d9c4cef0b8b810be4bffab9eb586aadbdf024c23fa2a67919bab70d3dab
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

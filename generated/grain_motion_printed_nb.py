@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 89d3deefe5bf4a2492d1ac84018a03f8b6108c04fedde4670e81d12c37831c84
-# source key e3ebc5effa6a8a48d6e1055a25f868e9bd5334b2a836644df1eb77b99d5075d2
+# symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
+# source key c5689d9c4cef0b8b810be4bffab9eb586aadbdf024c23fa2a67919bab70d3dab
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 89b59c14cdeab31e1fb14aba6def0d39575ea385b6ccc1b544bf885b18e20a93
-# source key f65ea08dafa3ca33f70cbae24a38c7e9926a67998c39364c4e5b7920868af787
+# symmech 0.1.0 generated module; inputs sha256 6702698636daff8b11fe5a18bb26f1f1288b12f26d1fee39bbd693aad7699d29
+# source key 55e3aced7c15284d1784c0d629ac56151824ca17b25c565c1e368465f017de91
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c37fcc7e0909167dad763b47a6ae355e452d497f376d5191c938c94b50c3503f
-# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
+# symmech 0.1.0 generated module; inputs sha256 e20b17b5892898dba17e5ac75f81679e95aeacefd3dc389e937e365243be2fb4
+# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3d36cb550fa6b4a03b7339dfae2c309607fdb347cce7909564d1bc8fd0404132
-# source key a3cad2ea2cafe29c8417531a521d3b44b27b879c0ee32a38dae1aea87962c19f
+# symmech 0.1.0 generated module; inputs sha256 04a0a6e9f74f72f97ffcd296c2c27bdf6b397846839bea65b32f93ef3761baf4
+# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 182cae0d6373a79cfb38f2183d7ff73de58c3f7daf1a30afc7a0f5e37339be98
-# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
+# symmech 0.1.0 generated module; inputs sha256 3a2f6dca879e5a476be49cd09d56bd299bd4291d9639bf753b15f09bb57f3d17
+# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

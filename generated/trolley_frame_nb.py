@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key dfca8edd490ce8c165499456ee6dc1d377125b005fcdc988fff339f58da23c85
+# symmech 0.1.0 generated module; inputs sha256 3404892740907e5ae1cc4ad2798588311a49dd6a2b98a77c4d1624f638771ec9
+# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

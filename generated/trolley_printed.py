@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
-# source key 54427e80182683f220f64fdc95c0953efbc948f4412fee0e79bf2ae0537e0012
+# symmech 0.1.0 generated module; inputs sha256 e262c90e7544cd9ce85cc36322a2e868a31eae74a3b20465164b838f1e8b80c0
+# source key 98fa2302a7bce5ac74ab67e824b4fdc59078cf8efff1207590389099e40ce0c3
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -244,7 +244,7 @@ def module_specs() -> list[ModuleSpec]:
                     "reduction tensor H: m (u_K - u_K(0)) = H T", "1", "(1)-(12)"),
         NamedMatrix("mu_equation", mu_equation(), impact_args,
                     "Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu",
-                    "kg*m/s (times m^0)", "(13)-(20)"),
+                    "m/s", "(13)-(20)"),
         NamedMatrix("system_19_residual", system_19_residual(), descent_args,
                     "residuals of the impact system (19)", "N*s", "(19)"),
         NamedMatrix("descent_functional", descent_functional(), descent_args,

@@ -16,7 +16,7 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.core import kinematics as kin
-from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
+from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix, args_of
 from symmech.trolley.derive import SOURCE
 
 u2, u3, q_th1, q_th2, q_th3 = sp.symbols("u2 u3 q_th1 q_th2 q_th3", real=True)
@@ -117,7 +117,21 @@ def module_specs() -> list[ModuleSpec]:
     return [ModuleSpec("trolley_elastic", "Rigid fields of the roller DOFs, roller deflections and beam Ritz bases "
                        "of the elastic trolley.", SOURCE, functions),
             ModuleSpec("trolley_elastic_lagrange", "Small elastic trolley by Lagrange's equations (test route).",
-                       SOURCE, [lagrange_model()])]
+                       SOURCE, [residual := lagrange_model()], lagrange_dynamics(residual))]
+
+
+def lagrange_dynamics(residual: NamedMatrix) -> Dynamics:
+    """The small model's motion for solve_ivp: y = (q, q̇), M(q) = diag(E, ∂R/∂q̈), F = (q̇, -R at q̈ = 0),
+    R the residual (linear in q̈), with the frame's motion (V, ω, their rates, ν) held at the values
+    of p. M depends on q: rhs only, no Jacobian."""
+    q, qd, qdd, rest = (residual.args[i:j] for i, j in ((0, 7), (7, 14), (14, 21), (21, None)))
+    accelerations = sp.Matrix([a.symbol for a in qdd])
+    mass = residual.matrix.jacobian(accelerations)
+    if mass.free_symbols & set(accelerations):
+        raise ValueError("the Lagrange residual is not linear in the accelerations")
+    rate = sp.Matrix.vstack(sp.Matrix([a.symbol for a in qd]), -residual.matrix.xreplace({s: 0 for s in accelerations}))
+    return Dynamics(q + qd, rest, rate, sp.diag(sp.eye(7), mass), jacobian=False,
+                    meaning="the small elastic trolley of Lagrange's equations in a frame of constant motion")
 
 
 def lagrange_model() -> NamedMatrix:
