@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 538ffd17688bb29255c7478d7057ce5c814a619c245dc1b9f0d38c9270e22050
-# source key d56854013502e4b93d848c8bdbd793ad5faab3f22d58e5b09fe393053dfa747d
+# source key 207f56695cf01158654d61471a6ab78881736eb3f746bfaaa3b68015ba920f92
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 89b728a5b844b0bed8c921fcd49606f295f9a5d7bdfb51f6057579abe0ab02eb
-# source key c5689d9c4cef0b8b810be4bffab9eb586aadbdf024c23fa2a67919bab70d3dab
+# source key a1ed4b39303c1ab71442c1013dad9bd66e6b1e3b3f22fd5f113aac1760d7b69f
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
-# source key c5689d9c4cef0b8b810be4bffab9eb586aadbdf024c23fa2a67919bab70d3dab
+# source key a1ed4b39303c1ab71442c1013dad9bd66e6b1e3b3f22fd5f113aac1760d7b69f
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e20b17b5892898dba17e5ac75f81679e95aeacefd3dc389e937e365243be2fb4
-# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
+# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

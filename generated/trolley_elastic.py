@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 99cc6ce697bf97eb9f10ecde16c2f8c3d6be3b8e0fcdebf4999f6a4af271ec9d
-# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
+# source key 782367dca31412eee80b4152a8cfdffe279fa2c42f7b070843814da7f3a0acad
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

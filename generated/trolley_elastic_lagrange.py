@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 951da0274410937f6b098376dd7afba273ae7e0877ddb0c2091d0a9c78e8a31b
-# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
+# source key 782367dca31412eee80b4152a8cfdffe279fa2c42f7b070843814da7f3a0acad
 # body sha256 b725b081d263c108903f24ccf013d3b4db7851e0fa7254921b6e0ef55e4288b0
 """Small elastic trolley by Lagrange's equations (test route).
 

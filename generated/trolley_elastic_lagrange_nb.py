@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7eb462e18633841e5088d44beaa1ae1cbb4a3ac58373922522502b62c260e204
-# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
+# source key 782367dca31412eee80b4152a8cfdffe279fa2c42f7b070843814da7f3a0acad
 # body sha256 c02126a92d6ffb44bf1c7e2652881ff976028ba4a39075a00426f783f7f0167a
 """Small elastic trolley by Lagrange's equations (test route).
 

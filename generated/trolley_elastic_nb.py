@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 04a0a6e9f74f72f97ffcd296c2c27bdf6b397846839bea65b32f93ef3761baf4
-# source key 314d7249a975aecbe23c6fd7ae5aa2a30709ad91efa45c3566cf3f56dbdbc5a2
+# source key 782367dca31412eee80b4152a8cfdffe279fa2c42f7b070843814da7f3a0acad
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

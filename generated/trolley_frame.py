@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3a2f6dca879e5a476be49cd09d56bd299bd4291d9639bf753b15f09bb57f3d17
-# source key b2611273e2f1a0b6e50cbe33bfdcdef3d7e0218349ff92d47e3d40f6ba163b6d
+# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 
