@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ea77ddc412a8db8c4d5aa3e9eaa9d44bc4df0b6442a7612f2704a521dbca441f
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# source key fc328ce5adcf1c24525d092c5d2901fa6517ee25358cbba065ae8ded150f974c
 # body sha256 6f11d4b3c4ba175a252bcc29cbaeeebe4400a92056f71caa1217d65d6650dd07
 """Small elastic trolley by Lagrange's equations (test route).
 
