@@ -486,7 +486,8 @@ class System:
         J = np.einsum("k,klij,l->ij", rr, inv.G, rr)
         t0 = 0.5 * (inv.mass * fs.v0 @ fs.v0 + 2 * fs.v0 @ np.cross(fs.w, first) + np.sum((W.T @ W) * J))
         d = self.roller_state(q, qd)[0]
-        pi = 0.5 * q @ inv.K @ q + membrane.energy(inv.membrane, q) + (roller_energy(self.mdl.rollers, d) if self.rollers_on else 0.0)
+        pi = 0.5 * q @ inv.K @ q + membrane.energy(inv.membrane, q)
+        pi += roller_energy(self.mdl.rollers, d) if self.rollers_on else 0.0
         return 0.5 * qd @ M @ qd - t0 + pi + self.mdl.g0 * fs.nu @ first
 
     def quasi_static(self, fs: FrameState, q0=None, tol: float = 1e-12, max_iter: int = 50):

@@ -137,7 +137,8 @@ def _check_axial(beam: dict, where: str) -> None:
     if beam["support"] != "pinned":
         raise SceneError(f"{where}.axial", f"`held` needs support = `pinned` (a {beam['support']} has a free end)")
     if beam["ea"] is None:
-        raise SceneError(f"{where}.ea", "missing: held ends (axial = `held`) need the axial stiffness EA in (0, 1e+15] N")
+        raise SceneError(f"{where}.ea", "missing: held ends (axial = `held`) need the axial stiffness EA "
+                                        "in (0, 1e+15] N")
 
 
 def run(setup: Setup, ctx=None) -> Result:
