@@ -224,3 +224,10 @@ def test_clamped_pairs_carry_the_weight_and_open_a_gap(mass):
     gap = np.maximum(-d[:3] - delta, 0.0)
     assert np.allclose(gap, np.maximum(loads / k - 2 * delta, 0.0), rtol=1e-6, atol=1e-12)
     assert (gap > 0).sum() == {500.0: 0, 600.0: 1, 1000.0: 3}[mass]
+
+
+def test_scene_field_docs_match_the_schema():
+    from symmech.core.schema import markdown
+
+    docs = (Path(__file__).parent.parent / "docs" / "scenes-trolley-elastic.md").read_text(encoding="utf-8")
+    assert markdown(elastic_scene.SCHEMA, "elastic") in docs
