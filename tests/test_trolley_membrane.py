@@ -76,6 +76,7 @@ def test_membrane_energy_force_and_stiffness_vs_quadrature():
     system = held_beam(modes)
     blocks = system.inv.membrane
     assert len(blocks) == 1 and np.array_equal(blocks[0].index, np.arange(2 * modes))
+    assert system.inv.names[modes - 1:modes + 1] == [f"beam0_p1_m{modes}", "beam0_p2_m1"]  # one beam, two planes
     zero = np.zeros(system.N)
     h = 1e-7
     for _ in range(4):

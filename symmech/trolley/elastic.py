@@ -203,7 +203,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
     n_roll = len(names)
     K_blocks, held = [], []
     start = 0
-    for pts_b, w_b, beam, xi in parts:
+    for index, (pts_b, w_b, beam, xi) in enumerate(parts):
         if beam is None or not eff.body:
             start += len(w_b)
             continue
@@ -219,7 +219,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
                 f = np.zeros((n_pts, 3))
                 f[sl] = np.outer(basis[:, 0, k], b)
                 fields.append(f)
-                names.append(f"beam{len(K_blocks)}_p{plane + 1}_m{k + 1}")
+                names.append(f"beam{index - 1}_p{plane + 1}_m{k + 1}")  # parts[0] is the trolley
             if eff.stiffening:
                 for k in range(n):
                     for m in range(k, n):
