@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b9a9d93a62bd3d3b6afdfcc17ab671d87d8d1e3b489c1d3c4b157cd8b3295ee8
-# source key fc328ce5adcf1c24525d092c5d2901fa6517ee25358cbba065ae8ded150f974c
+# symmech 0.1.0 generated module; inputs sha256 7cec33512996995084b1f899d9300199827183cc154cf4ff6452938295094023
+# source key 060b200b698e02bee847112fe3e1b921e23c507f144f59e472c1fbf274909bc2
 # body sha256 6df448149002c6da29d0050feefa94d3dec3a9ad3c5ab29282ceede0262577c5
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 
