@@ -22,10 +22,22 @@ slip acceleration of a contact point carried round by the spin about the normal.
 
 Regime changes are events of the integration located by root finding: the slip
 speed reaching ``v_stop`` (then the remaining slip is removed by a friction
-impulse, booked as sliding loss, and the contact sticks or slips on through zero
-along ``f + c``), the stick force reaching the friction cone, and lift-off
-(``n(t)`` reaching zero). Along the way the work of the surface on the grain and
-the energy dissipated by friction are integrated as two quadrature states.
+impulse, booked as sliding loss, and the contact sticks or slips on through zero),
+the stick force reaching the friction cone, and lift-off (``n(t)`` reaching zero).
+A slip starts where the stick force leaves the cone, against that force: along
+``B^-1 (f + c)``, the one direction in which the friction force stays continuous
+(``f + c`` itself only for an isotropic ``B``, a sphere). Along the way the work of
+the surface on the grain and the energy dissipated by friction are integrated as
+two quadrature states.
+
+Stiffness: slipping, the friction force turns the slip direction back at a rate
+``mu n |B| / |s|``; where ``B`` is anisotropic (an ellipsoid whose contact point is
+off the vertical through its centre: ``B = E + (m / I_zz) rho rho^T``, ``rho`` the
+horizontal offset turned by 90 degrees) the friction force also drives the slip
+off its direction, so every slip that starts or stops at a speed near ``v_stop``
+(~1e-11 m/s) is stiff by a factor ~1e11 and an explicit method stalls. Those slip
+phases are integrated with Radau (implicit, order 5); stick phases, spheres and
+point masses with DOP853.
 """
 from __future__ import annotations
 
@@ -125,6 +137,9 @@ class _Contact:
         self.M = body.mobility(Q0)
         self.g = np.asarray(model.g_k, dtype=float)
         self.nfev = 0
+        # Turning about the normal keeps |R_t|, hence the anisotropy of B, for the whole phase.
+        eig = np.linalg.eigvalsh(self.B(self.R0))
+        self.stiff_slip = bool(eig[1] - eig[0] > 1e-12 * eig[1])
 
     def geometry(self, y):
         """Contact offset R (3,), slip s (2,), slip acceleration of the carried contact point c (2,)."""
@@ -148,9 +163,10 @@ class _Contact:
         return -np.linalg.solve(self.B(R), f + c), acc[2] - self.g[2]
 
     def slip_direction(self, t, y):
-        """Direction (2,) in which a zero slip starts: along f + c."""
+        """Direction (2,) in which a zero slip starts: against the stick force, along B^-1 (f + c)."""
         _, acc = self.model.surface(t)
-        d = self.g[:2] - acc[:2] + self.geometry(y)[2]
+        R, _, c = self.geometry(y)
+        d = np.linalg.solve(self.B(R), self.g[:2] - acc[:2] + c)
         return d / max(np.hypot(*d), 1e-300)
 
     def rhs(self, t, y, stick: bool):
@@ -217,7 +233,8 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
         # Without friction there is no stick or slip regime to change.
         events = None if model.mu == 0.0 else _stick_ends(ode, model.mu) if stick else _slip_stops(ode, y, v_stop)
         ode.nfev = 0
-        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="DOP853", rtol=tol, atol=atol,
+        method = "Radau" if ode.stiff_slip and not stick and model.mu > 0.0 else "DOP853"
+        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method=method, rtol=tol, atol=atol,
                         events=events, dense_output=True, args=(stick,))
         if not sol.success:
             raise SymmechError(f"sliding integration failed at t = {t:.9g} s: {sol.message}")
@@ -238,9 +255,9 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
 
 def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
     """At a slip speed within ``v_stop``: remove the slip by a friction impulse and, unless the contact sticks,
-    start slipping at ``2 v_stop`` along ``f + c`` (so the slip speed has to come back down through ``v_stop``
-    to stop again; a slip that starts from exactly zero could chatter about it). The impulses are of order
-    ``v_stop``; their kinetic-energy change is booked in D. Returns (stick, y)."""
+    start slipping at ``2 v_stop`` along :meth:`_Contact.slip_direction` (so the slip speed has to come back
+    down through ``v_stop`` to stop again; a slip that starts from exactly zero could chatter about it). The
+    impulses are of order ``v_stop``; their kinetic-energy change is booked in D. Returns (stick, y)."""
     R, s, _ = ode.geometry(y)
     if ode.model.mu == 0.0 or math.hypot(*s) > 1.5 * v_stop:
         return False, y
