@@ -13,7 +13,11 @@ One grain alternates between three regimes:
 A flight that starts on the plane (after an impact or a lift-off) must first rise
 above round-off before a contact can be found; one that does not within a scan
 step, or a contact reached without approaching, is a grain resting on the plane:
-it lands and slides. Lift-off after an impact is judged physically: the grain
+it lands and slides. On a plane that accelerates away faster than gravity (normal
+force negative) only the rotation of a tumbling ellipsoid can hold it there, at the
+accumulation point of its ever smaller bounces (a rocking contact, not modelled): it
+lands, giving up its tilting spin (counted in ``rocking_contacts``, warned), and
+flies on. Lift-off after an impact is judged physically: the grain
 flies when the normal velocity of its contact point after the impact exceeds
 ``rest_velocity`` (a bounce lower than that is the end of chattering: the
 geometric series of ever smaller bounces is summed into sliding), or when the
