@@ -35,9 +35,11 @@ Stiffness: slipping, the friction force turns the slip direction back at a rate
 off the vertical through its centre: ``B = E + (m / I_zz) rho rho^T``, ``rho`` the
 horizontal offset turned by 90 degrees) the friction force also drives the slip
 off its direction, so every slip that starts or stops at a speed near ``v_stop``
-(~1e-11 m/s) is stiff by a factor ~1e11 and an explicit method stalls. Those slip
-phases are integrated with Radau (implicit, order 5); stick phases, spheres and
-point masses with DOP853.
+(~1e-11 m/s) is stiff by a factor ~1e11 and an explicit method stalls. Such a slip
+is integrated with Radau (implicit, order 5) while its speed is below ``s_stiff =
+tol^(1/8) v_scale`` (where DOP853's accuracy step would exceed its stability limit
+~ |s| / (mu n |B|)), with DOP853 above ``2 s_stiff`` (the switch is an event, the
+band a hysteresis); stick phases, spheres and point masses always with DOP853.
 """
 from __future__ import annotations
 
@@ -53,6 +55,7 @@ from symmech.grain.contact import first_root
 
 MAX_RHS_PER_PHASE = 400_000  # step-count guard: right-hand sides per integration chunk
 MAX_STALLED_EVENTS = 200  # stagnation guard: consecutive events that do not advance time
+SLIP_STIFF_POWER = 0.125  # s_stiff = tol^power v_scale: DOP853 (order 8) steps ~ tol^(1/8) x step
 
 
 @dataclass(frozen=True)
@@ -227,15 +230,18 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min,
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
     chunk = 40 * step
-    pieces, t, stalled = [], t0, 0
+    # Slip speed below which the friction's turning rate ~ mu n / |s| outruns what DOP853 resolves at this
+    # tolerance (a step of ~ tol^(1/8) x step): an anisotropic slip goes implicit there.
+    s_stiff = tol**SLIP_STIFF_POWER * v_scale
+    pieces, t, stalled, implicit = [], t0, 0, False
     stick, y = _settle(ode, t, y, v_stop)
     while t < t_stop:
-        # Without friction there is no stick or slip regime to change.
-        events = None if model.mu == 0.0 else _stick_ends(ode, model.mu) if stick else _slip_stops(ode, y, v_stop)
+        implicit = ode.stiff_slip and not stick and model.mu > 0.0 and (
+            math.hypot(*ode.geometry(y)[1]) < (2.0 if implicit else 1.0) * s_stiff)
+        events = _events(ode, y, stick, v_stop, implicit, s_stiff)
         ode.nfev = 0
-        method = "Radau" if ode.stiff_slip and not stick and model.mu > 0.0 else "DOP853"
-        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method=method, rtol=tol, atol=atol,
-                        events=events, dense_output=True, args=(stick,))
+        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="Radau" if implicit else "DOP853",
+                        rtol=tol, atol=atol, events=events, dense_output=True, args=(stick,))
         if not sol.success:
             raise SymmechError(f"sliding integration failed at t = {t:.9g} s: {sol.message}")
         stalled = stalled + 1 if sol.t[-1] <= t else 0
@@ -244,7 +250,9 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
                                "without advancing time")
         pieces.append((t, sol.t[-1], sol.sol))
         t, y = sol.t[-1], sol.y[:, -1].copy()
-        if sol.status == 1:  # the stick force reached the cone (slip starts), or the slip speed v_stop
+        if sol.status == 1 and len(sol.t_events) > 1 and sol.t_events[1].size:
+            implicit = not implicit  # the slip speed left the hysteresis band [s_stiff, 2 s_stiff]
+        elif sol.status == 1:  # the stick force reached the cone (slip starts), or the slip speed v_stop
             stick, y = _settle(ode, t, y, v_stop, may_stick=not stick)
         if progress is not None:
             progress(t)
@@ -272,6 +280,23 @@ def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
     y[4:7] += ode.M @ np.cross(R, np.append(dphi, 0.0))
     y[12] += before - ode.body.kinetic(Q, np.append(y[2:4], 0.0), y[4:7])
     return stick, y
+
+
+def _events(ode: _Contact, y, stick: bool, v_stop, implicit: bool, s_stiff):
+    """Terminal events of one phase: the stick or slip regime ending and, for an anisotropic slip, the slip speed
+    leaving the band where the integrator changes (rising through 2 s_stiff when implicit, falling through
+    s_stiff when explicit). None without friction (no stick or slip regime to change)."""
+    if ode.model.mu == 0.0:
+        return None
+    if stick:
+        return [_stick_ends(ode, ode.model.mu)]
+    if not ode.stiff_slip:
+        return [_slip_stops(ode, y, v_stop)]
+
+    def switch(_t, y, *_):
+        return math.hypot(*ode.geometry(y)[1]) - (2.0 if implicit else 1.0) * s_stiff
+    switch.terminal, switch.direction = True, 1 if implicit else -1
+    return [_slip_stops(ode, y, v_stop), switch]
 
 
 def _slip_stops(ode: _Contact, y0, v_stop):
