@@ -126,6 +126,10 @@ def turning_ellipsoid(g_k, vib, mu, k, rho0, t_end, h):
     """
     g = np.asarray(g_k, dtype=float)
     x, v, w, psi = np.zeros(2), np.zeros(2), 0.0, 0.0
+
+    def solve(a, b, jr, s):
+        """(a E + b W)^-1 s with W = E + k jr jr^T (Sherman-Morrison)."""
+        return (s - b * k * (jr @ s) / (a + b + b * k * (jr @ jr)) * jr) / (a + b)
     for i in range(int(round(t_end / h))):
         t = (i + 0.5) * h
         a = surface_acc(vib, t)
@@ -134,12 +138,10 @@ def turning_ellipsoid(g_k, vib, mu, k, rho0, t_end, h):
         jr = np.array([-(s * rho0[0] + c * rho0[1]), c * rho0[0] - s * rho0[1]])  # e_z x rho
         v_free = v + h * (g[:2] - a[:2])
         s_free = v_free + w * jr
-        W = np.eye(2) + k * np.outer(jr, jr)
-        P = -np.linalg.solve(W, s_free)
+        P = -solve(0.0, 1.0, jr, s_free)
         if math.hypot(*P) > cone:
-            lam = brentq(lambda lm: math.hypot(*np.linalg.solve(lm * np.eye(2) + cone * W, s_free)) - 1.0,
-                         0.0, math.hypot(*s_free))
-            P = -cone * np.linalg.solve(lam * np.eye(2) + cone * W, s_free)
+            lam = brentq(lambda lm: math.hypot(*solve(lm, cone, jr, s_free)) - 1.0, 0.0, math.hypot(*s_free))
+            P = -cone * solve(lam, cone, jr, s_free)
         v = v_free + P
         w += k * float(jr @ P)
         psi += h * w
