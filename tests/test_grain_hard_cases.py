@@ -15,7 +15,7 @@ import pytest
 from grain_sliding_reference import turning_ellipsoid
 from symmech.core import pipeline
 from symmech.core.scene import read_toml
-from symmech.grain import contact, flight, motion, motion_scene
+from symmech.grain import contact, flight, motion_scene
 
 CROP = {"body.semi_axes": [0.0035082751372901796, 0.0017441483828242994, 0.0013003646915614976],
         "body.orientation": [5.960540267916768, 1.9566358746946042, 2.659838524324996]}
