@@ -205,13 +205,6 @@ def test_forcing_frequencies_of_a_sinusoidal_curvature():
     assert f[:, 2].max() == pytest.approx(V0 / lam, rel=1e-12)
 
 
-def test_docs_field_tables_are_generated_from_the_schema():
-    from symmech.core.schema import markdown
-
-    text = (Path(__file__).resolve().parents[1] / "docs" / "scenes-trolley-elastic.md").read_text()
-    assert "<!-- schema:begin -->\n" + markdown(elastic_scene.SCHEMA, "elastic") + "\n<!-- schema:end -->" in text
-
-
 # ---------------------------------------------------------------- rigid limit, the paper's body
 
 def test_rigid_limit_with_the_papers_point_mass():

@@ -16,6 +16,7 @@ The life of a run (see ``symmech.core.pipeline``)::
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass
@@ -24,7 +25,6 @@ from typing import Any, Callable
 from symmech.core.schema import Table
 
 _KINDS: dict[str, "Kind"] = {}
-_DISCOVERED = False
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,9 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
+@functools.cache
 def _discover() -> None:
+    """Import every ``symmech/<pkg>/*scene.py`` once; importing a kind's module registers it."""
     import symmech
 
     for pkg in pkgutil.iter_modules(symmech.__path__):
@@ -81,12 +83,8 @@ def _discover() -> None:
 
 
 def kinds() -> dict[str, Kind]:
-    """Every registered kind by name (discovered on first call, also when a kind's module was
-    imported directly before)."""
-    global _DISCOVERED
-    if not _DISCOVERED:
-        _discover()
-        _DISCOVERED = True
+    """Every registered kind by name (discovery runs once, even if a kind registered itself before)."""
+    _discover()
     return dict(sorted(_KINDS.items()))
 
 
