@@ -19,11 +19,13 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable
 
 from symmech.core.schema import Table
 
 _KINDS: dict[str, "Kind"] = {}
+_ALL = False  # every scene module imported
 
 
 @dataclass(frozen=True)
@@ -67,22 +69,34 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
-def _discover() -> None:
+def _scene_modules():
+    """Names of every ``symmech.<paper>.*scene`` module, in package order, without importing them."""
     import symmech
 
     for pkg in pkgutil.iter_modules(symmech.__path__):
         if not pkg.ispkg or pkg.name in ("core", "generated", "templates", "scenes"):
             continue
-        package = importlib.import_module(f"symmech.{pkg.name}")
-        for m in pkgutil.iter_modules(package.__path__):
+        path = [str(Path(symmech.__path__[0]) / pkg.name)]
+        for m in pkgutil.iter_modules(path):
             if m.name.endswith("scene"):
-                importlib.import_module(f"symmech.{pkg.name}.{m.name}")
+                yield f"symmech.{pkg.name}.{m.name}"
+
+
+def _discover(until: str | None = None) -> None:
+    """Import scene modules until kind ``until`` is registered (all of them when None): a run
+    imports only its own paper's modules, not every kind's dependencies."""
+    for name in _scene_modules():
+        if until in _KINDS:
+            return
+        importlib.import_module(name)
 
 
 def kinds() -> dict[str, Kind]:
-    """Every registered kind by name (discovered on first call)."""
-    if not _KINDS:
+    """Every registered kind by name (all discovered on first call)."""
+    global _ALL
+    if not _ALL:
         _discover()
+        _ALL = True
     return dict(sorted(_KINDS.items()))
 
 
@@ -91,6 +105,10 @@ def get(name) -> Kind:
     from symmech.core.scene import SceneError
     from symmech.core.schema import _did_you_mean
 
+    if isinstance(name, str):
+        _discover(until=name)
+        if name in _KINDS:
+            return _KINDS[name]
     available = kinds()
     if not isinstance(name, str) or name not in available:
         raise SceneError("kind", f"unknown scene kind {name!r}{_did_you_mean(name, available)}; "

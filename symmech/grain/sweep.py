@@ -358,10 +358,7 @@ def result(p: Plan, values: list, failed: list = ()) -> Result:
 def _plots(p: Plan, stats, tables, best, folder) -> list:
     if not p.y:
         return []
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from symmech.core import plotting
 
     xs, ys = axis_values(p.x), axis_values(p.y)
     xl = f"{p.x['field']} [{SWEPT[p.x['field']]}]"
@@ -376,7 +373,8 @@ def _plots(p: Plan, stats, tables, best, folder) -> list:
                        "overlap of the X-velocity distributions (1 = inseparable)"))
     written = []
     for name, z, title in charts:
-        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+        fig, axes = plotting.figure(1, 1, width=6.4, height=4.8)
+        ax = axes[0, 0]
         mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
         fig.colorbar(mesh, ax=ax, label=title)
         if len(xs) > 1 and len(ys) > 1:
@@ -390,7 +388,6 @@ def _plots(p: Plan, stats, tables, best, folder) -> list:
         ax.set_title(title, fontsize=9)
         fig.tight_layout()
         path = folder / f"{name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        fig.savefig(path, dpi=plotting.DPI)
         written.append(path)
     return written

@@ -1,4 +1,5 @@
-"""Plots of a trolley run (style from ``symmech.core.plotting``): track, reactions, overloads."""
+"""Plots of a trolley run (style from ``symmech.core.plotting``): track, reactions, overloads
+(:data:`FIGURES`; the scene's ``[output]`` table chooses), and the precision study."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,9 +9,18 @@ import numpy as np
 from symmech.core import plotting
 
 
-def write_all(setup, res: dict, out: Path) -> list[Path]:
-    """``track`` (3-D midline and centre-of-mass path), ``reactions``, ``overloads`` (PNG + SVG each)."""
-    files = []
+FIGURES = {"track": "(3-D midline and centre-of-mass path of every case)",
+           "reactions": "(rail reactions P0...P5 over time, one panel per case)",
+           "overloads": "(overloads in g against the comfort envelope)"}
+
+
+def write_all(setup, res: dict, out: Path, output: dict) -> list[Path]:
+    """The figures of :data:`FIGURES` that ``output`` (the scene's ``[output]`` table) asks for."""
+    return plotting.draw({"track": lambda: _track(setup, res), "reactions": lambda: _reactions(setup, res),
+                          "overloads": lambda: _overloads(setup, res)}, output, out)
+
+
+def _track(setup, res: dict):
     first = res[1]
     s = first["s"]
     span = np.linspace(s.min(), s.max() + setup.body.l, 600)
@@ -23,8 +33,10 @@ def write_all(setup, res: dict, out: Path) -> list[Path]:
         ax.plot(path[:, 0], path[:, 2], path[:, 1], lw=1, label=f"centre of mass, case {case}")
     plotting.set_labels(ax, ("X1", "m"), ("X3", "m"), ("X2 (up)", "m"))
     ax.legend(loc="upper left", fontsize=8)
-    files += plotting.save(fig, out, "track")
+    return fig
 
+
+def _reactions(setup, res: dict):
     fig, axes = plotting.figure(len(res), 1, sharex=True)
     for ax, (case, r) in zip(axes[:, 0], res.items()):
         for i in range(6):
@@ -33,12 +45,10 @@ def write_all(setup, res: dict, out: Path) -> list[Path]:
         ax.legend(ncol=6, fontsize=8)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    files += plotting.save(fig, out, "reactions")
-    files += overloads(setup, res, out)
-    return files
+    return fig
 
 
-def overloads(setup, res: dict, out: Path) -> list[Path]:
+def _overloads(setup, res: dict):
     """Overloads n (body axes, in units of g) of every case against the scene's comfort envelope band."""
     fig, axes = plotting.figure(3, 1, height=2.7, sharex=True)
     for i, (ax, (axis, (lo, hi))) in enumerate(zip(axes[:, 0], setup.comfort.items())):
@@ -54,13 +64,13 @@ def overloads(setup, res: dict, out: Path) -> list[Path]:
         ax.legend(fontsize=8, loc="upper right")
     axes[0, 0].set_title("Overloads against the comfort envelope (red: outside)")
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    return plotting.save(fig, out, "overloads")
+    return fig
 
 
 def work_precision(rows, path: Path) -> Path:
     """Log error vs log time, one line per (family, method); ``rows`` are
     (family, method, steps, fd_step, time_s, error); points are labelled by their knob.
-    Writes ``path`` (PNG) and its SVG twin; returns both paths."""
+    Writes ``path`` (PNG); returns it in a list."""
     fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)
     ax = axes[0, 0]
     for family, method in dict.fromkeys((r[0], r[1]) for r in rows):

@@ -19,7 +19,7 @@ from symmech.core import schema as sc
 from symmech.core.context import Context
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import model, tables, track as tracks
+from symmech.trolley import model, plots, tables, track as tracks
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -218,6 +218,7 @@ SCHEMA = sc.Table("a trolley scene", {
     "report": sc.Table("extra outputs", {
         "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
                                 default=False)}, default={}),
+    "output": sc.plot_output(plots.FIGURES, default=tuple(plots.FIGURES)),
 }, checks=(_cross_checks,))
 
 
@@ -245,6 +246,7 @@ class Setup:
     paper_tables: bool
     plan: model.FramePlan = None
     notes: list = None
+    output: dict = None  # the resolved [output] table: plots and formats
 
 
 def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
@@ -291,7 +293,7 @@ def prepare(scene: dict) -> Setup:
                   num["fd_step"] if num["fd_step"] is not None else min(0.02, 0.05 * axle),
                   num["lstar_derivative"], num["small_angle_limit"],
                   {axis: tuple(scene["comfort"][axis]) for axis in COMFORT}, scene["report"]["paper_tables"],
-                  notes=[])
+                  notes=[], output=scene["output"])
     if setup.paper_tables:
         _table_grid(setup)
     lo, hi = _visited(setup)
@@ -537,9 +539,7 @@ def run(setup: Setup, ctx) -> Result:
         result.files["paper_tables.txt"] = _paper_tables_text(summary["paper_tables"])
 
     def draw(folder):
-        from symmech.trolley import plots
-
-        return plots.write_all(setup, res, folder)
+        return plots.write_all(setup, res, folder, setup.output)
     result.plots = draw
     return result
 
@@ -725,8 +725,6 @@ def precision(setup: Setup, ctx) -> Result:
                   text={"family": [r[0] for r in rows], "method": [r[1] for r in rows]})
 
     def draw(folder):
-        from symmech.trolley import plots
-
         return plots.work_precision(rows, folder / "precision.png")
     reference = "exact symbolic derivatives" if symbolic else \
         f"central-4 differences at {TABLE_REFERENCE_STEP:g} m (a point table has no exact derivative)"
