@@ -33,7 +33,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from symmech.core.scene import SymmechError
 from symmech.grain import contact, flight
@@ -211,6 +210,8 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min,
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
     chunk = 40 * step
+    from scipy.integrate import solve_ivp  # here, not at import: a compiled run never loads scipy
+
     pieces, t, stalled = [], t0, 0
     stick, y = _settle(ode, t, y, v_stop)
     while t < t_stop:
