@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a0746f401eb0798ca7faf0443507e069f50585bd78ec570baae6f0d3df12ed99
-# source key ffe4ac5ff7c925347456ed9491fd3e6c443afeb35d830f78d36e3db9fa19fb72
+# source key f63810b147120e31c4c3f797892ef68e75786704d19d4f666818b97706a7f870
 # body sha256 326260ca4e3879a6ab5be10effac0b8980cf81d1bd2b5ca13c1076a02d0c380f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
+# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

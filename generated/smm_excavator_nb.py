@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
+# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
 # body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

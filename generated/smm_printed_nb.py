@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0438e9b241d29927f55c7c5fb261c8a0a09df42b3d99588419d4867dc53e723c
-# source key 2ddff67160dcf76e8ae46d69e73f22535b36d81f6fb84d6e1bebdef808658a1d
+# source key 6a8651333fefff13797cfe3cc0be3d34c57ffb4b6a41a3d3ebef6b18808c04f7
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0566a1e91b9d80f150c00d99c388a5d12b0655eb9ba07527dcc709780633583c
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
+# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
 # body sha256 e54288a6a2a2182e8ca5a42db5f21ae452cee07659143c25eab424394a710b81
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# source key befc8022166e23900be6a9adc17220d2487f3599c2ed77c750d25540d86779af
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
+# source key befc8022166e23900be6a9adc17220d2487f3599c2ed77c750d25540d86779af
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 
