@@ -45,6 +45,7 @@ times = {}
 def stage(name, start):
     times[name] = time.perf_counter() - start
     print(f"STAGE {name}", file=sys.stderr, flush=True)
+print("STAGE start", file=sys.stderr, flush=True)  # imports before here: interpreter and probe, not symmech
 start = time.perf_counter()
 import symmech.cli
 from symmech.core import pipeline, registry
@@ -65,8 +66,9 @@ print(json.dumps({"seconds": times, "plots": [Path(p).name for p in plots]}))
 
 
 def _imports_by_stage(stderr: str) -> dict[str, float]:
-    """Seconds of import (sum of -X importtime self times) per stage marked in ``stderr``."""
-    spent = dict.fromkeys(STAGES, 0.0)
+    """Seconds of import (sum of -X importtime self times) per stage marked in ``stderr``; the
+    imports before the ``start`` mark (interpreter start-up, the probe's own) are left out."""
+    spent = dict.fromkeys(("start", *STAGES), 0.0)
     pending = 0.0
     for line in stderr.splitlines():
         if line.startswith("STAGE "):

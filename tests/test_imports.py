@@ -10,9 +10,10 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-# Packages a grain run must not load: derivations (sympy, jinja2), sweeps (dask, distributed),
-# the xarray API, and pyplot (figures are drawn on the Agg canvas).
-HEAVY = ("sympy", "jinja2", "dask", "distributed", "xarray", "pandas", "matplotlib", "matplotlib.pyplot")
+# Modules a grain run must not load: derivations (sympy, jinja2), sweeps (dask, distributed),
+# the xarray API, pyplot (figures are drawn on the Agg canvas), and the other papers' kinds.
+HEAVY = ("sympy", "jinja2", "dask", "distributed", "xarray", "pandas", "matplotlib", "matplotlib.pyplot",
+         "symmech.smm", "symmech.trolley")
 
 
 def _loaded(tmp_path: Path, *args: str, code: str = "") -> list[str]:

@@ -3,8 +3,9 @@
 A paper package declares a kind in a module whose name ends in ``scene``
 (``symmech/<paper>/*scene.py``) by calling :func:`register` at import time. The
 CLI, the Python API, the docs and the fuzzer find every kind through
-:func:`kinds`, which imports those modules on first use — adding a kind touches
-no central list.
+:func:`kinds`, which imports those modules on first use, or :func:`get`, which
+imports them only until the kind asked for is found (a grain run never loads the
+mechanism's or the trolley's modules) — adding a kind touches no central list.
 
 The life of a run (see ``symmech.core.pipeline``)::
 
