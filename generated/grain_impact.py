@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
-# source key 2f420f71b2c0b1bffe04f6b1aab3efdf4cd6d9dd810be7f485406589b92b8506
+# source key c37c665ebd2028a78430818c33cd21e6afc64e290e5f21b33e397a13b3bdda4e
 # body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

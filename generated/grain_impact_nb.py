@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8f9519d47e865f03b7b3b3e46b31117a938917855098170631fd24454b8b42b8
-# source key 2f420f71b2c0b1bffe04f6b1aab3efdf4cd6d9dd810be7f485406589b92b8506
+# source key c37c665ebd2028a78430818c33cd21e6afc64e290e5f21b33e397a13b3bdda4e
 # body sha256 1bc3bfb3ca4f7150b3013dd6e77a60c1b9a73d0e5118957093725da9cb2fdb12
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
-# source key 303fc73d0d6fbefe94524356648022d75c06232ff8b6b2907fac808099c0bd7b
+# source key 0cd231ca6f3d20ce436a132d591c9fe5b5c434944b9b4391ebdec87919e0561d
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

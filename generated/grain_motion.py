@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 de910fa5a043f4ed5e5be5a6d1c6964a0e5efa23b27d2e9c041843ccd80b5326
-# source key f63810b147120e31c4c3f797892ef68e75786704d19d4f666818b97706a7f870
+# source key cdb90a7edaf4e050cf8359f90d5ebd7b5c0b1a5495627e936015becaf9aacc3c
 # body sha256 78b62aac30612c81b6a5173189423894bf1573304d12da4d154e2538c5d1e977
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

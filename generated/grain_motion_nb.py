@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a0746f401eb0798ca7faf0443507e069f50585bd78ec570baae6f0d3df12ed99
-# source key f63810b147120e31c4c3f797892ef68e75786704d19d4f666818b97706a7f870
+# source key cdb90a7edaf4e050cf8359f90d5ebd7b5c0b1a5495627e936015becaf9aacc3c
 # body sha256 326260ca4e3879a6ab5be10effac0b8980cf81d1bd2b5ca13c1076a02d0c380f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

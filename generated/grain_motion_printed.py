@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
-# source key f72ea7c800da849e158268effa187d487ea2bc3c14c3af6bd5c7fbc0222305bb
+# source key e6436f82b1002bda17e92a2e9c5aab151202a345a3a2af0929ab1afd1c214a1e
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 89d3deefe5bf4a2492d1ac84018a03f8b6108c04fedde4670e81d12c37831c84
-# source key f72ea7c800da849e158268effa187d487ea2bc3c14c3af6bd5c7fbc0222305bb
+# source key e6436f82b1002bda17e92a2e9c5aab151202a345a3a2af0929ab1afd1c214a1e
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7e93e78145843a772c35a619cd96651bc67db7ef2c00101b789953c240044239
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 8897c521ea56fb439a4b158fffb7c514726ba15390bc2dbf2b50c601f25c5344
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

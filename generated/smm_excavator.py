@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d279abe2b92e25688859d0e030e722fe99a3e3173776098b4ad4a4e4906eb55f
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 d205f87e76c0a6295d4da80a289eb708dac865db115541e5f1ffecc407be14bc
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 89b59c14cdeab31e1fb14aba6def0d39575ea385b6ccc1b544bf885b18e20a93
-# source key 293248f6c759ccc610e36669d64b46cf99168c3a8479988ef3412e16209e79fa
+# source key 76f7c1901aa616e999412cf5fbc7b8b7548586ce37d86b59ec11cc099215a1e4
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

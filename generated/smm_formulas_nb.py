@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1f1c5ab3fd49ba5c2091686973340de388528a3e64304e379271e561c699e477
-# source key 293248f6c759ccc610e36669d64b46cf99168c3a8479988ef3412e16209e79fa
+# source key 76f7c1901aa616e999412cf5fbc7b8b7548586ce37d86b59ec11cc099215a1e4
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0438e9b241d29927f55c7c5fb261c8a0a09df42b3d99588419d4867dc53e723c
-# source key 6a8651333fefff13797cfe3cc0be3d34c57ffb4b6a41a3d3ebef6b18808c04f7
+# source key 7e2b4b9232d489c07f749b17818c25d04b93594486aa7c692d65705c5b3b7dda
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2f18f5aa9207c30543b0cfbf5ad12dbf5c64253a35be355d49d4272388029716
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 aee5dbf23a586530a888113236e52e676f91d5a69d4a97696549f4cbbea29ebb
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

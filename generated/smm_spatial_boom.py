@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0c1c37a921438fc47529f9c4fa1349ee759890482042bc514421c406fe58b115
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 c124b9e3f9db2a3a61c40aaa7ea57a2dd46a777e4d6e4a41df9cf47be0db11c0
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

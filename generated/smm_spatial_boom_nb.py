@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0566a1e91b9d80f150c00d99c388a5d12b0655eb9ba07527dcc709780633583c
-# source key 7e84458a5fa0e01c7fa2b5e49fa4ea04ca35e64d32f86a035b737997faca5a4e
+# source key c0177cace4b71acf3a50c41b5fa39bb7a2e4080b60cceeede65be102bc5481da
 # body sha256 e54288a6a2a2182e8ca5a42db5f21ae452cee07659143c25eab424394a710b81
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bb19f022d370ee055a558415fa31b4a48b1c6a5d1e5a98fe612c3cb48c2b7fcb
-# source key 0bab929a22f56c99c1600a517f3c818011afd77ed7924f7cfa6ab2214313a9c1
+# source key 18a74b9e800ff27c251cd725d0975ac1dd289bb44589362bf03835ffde7146e3
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5bcf3b5cfb523baadc2cc65c59a4013b1921167bef4bf0e0deb26712512868ef
-# source key 0bab929a22f56c99c1600a517f3c818011afd77ed7924f7cfa6ab2214313a9c1
+# source key 18a74b9e800ff27c251cd725d0975ac1dd289bb44589362bf03835ffde7146e3
 # body sha256 da8ba89339d4881d2adbed6737dad085aeea1010de6b758a72d44829fa3c22bf
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3225247c23957dfaa6c49fa011b316af3b780a2a62fba83323e0b01d5a94cf73
-# source key befc8022166e23900be6a9adc17220d2487f3599c2ed77c750d25540d86779af
+# source key e4b7fc80dd6d39854e8d076aeee3378f13ec94075aa823a766d6e0f0e8f52731
 # body sha256 3d7959c94818f84ab2a317791dafeac50d0227634918bec7720c49e2c17fbfd9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

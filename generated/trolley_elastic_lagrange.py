@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ea77ddc412a8db8c4d5aa3e9eaa9d44bc4df0b6442a7612f2704a521dbca441f
-# source key befc8022166e23900be6a9adc17220d2487f3599c2ed77c750d25540d86779af
+# source key e4b7fc80dd6d39854e8d076aeee3378f13ec94075aa823a766d6e0f0e8f52731
 # body sha256 6f11d4b3c4ba175a252bcc29cbaeeebe4400a92056f71caa1217d65d6650dd07
 """Small elastic trolley by Lagrange's equations (test route).
 

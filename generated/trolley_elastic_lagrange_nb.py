@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ef580bc0b24998eeeaa4d1be0980fc9c924fed50126cd78a9701e3148f417fe5
-# source key befc8022166e23900be6a9adc17220d2487f3599c2ed77c750d25540d86779af
+# source key e4b7fc80dd6d39854e8d076aeee3378f13ec94075aa823a766d6e0f0e8f52731
 # body sha256 08d3f1b9cf270041c5d4a153c5ec156480804db812488f86da509e944833378a
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3d36cb550fa6b4a03b7339dfae2c309607fdb347cce7909564d1bc8fd0404132
-# source key befc8022166e23900be6a9adc17220d2487f3599c2ed77c750d25540d86779af
+# source key e4b7fc80dd6d39854e8d076aeee3378f13ec94075aa823a766d6e0f0e8f52731
 # body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

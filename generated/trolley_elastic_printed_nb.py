@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6da2a548e042bd45c9880b91eef7d07292eb1054b02b4c2496a1a6204dd4f332
-# source key d31ac6e6a58c3f250ab7858529d2700a6ef6189807f3d2382d5c7e5ccc64ce9f
+# source key 503f02be8d9895108e2b80092b3e68f7b86c21cb8ca2410bbf1f2ee4f64bb3bc
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

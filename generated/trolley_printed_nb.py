@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
-# source key 10d8d75419ac7a644eab1d6bae57217d7c9a0f45d3b08e247209d22499885a96
+# source key 9ca0d0e266d531a4b4fe46c7758f7fc3970195682116ccb7c05f10cefda783f1
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 
