@@ -8,6 +8,8 @@ with ``--no-plots``, and a stage probe (run under ``-X importtime``) that times 
 CLI and the kind, validation, simulation, plots and writing, and attributes every import —
 also the lazy ones inside a stage — to the stage that triggered it.
 
+Part 1b, in one process: every figure the kind can draw, in PNG and in SVG, each alone.
+
 Part 2 (skipped with ``--quick``), in one process: (a) the strongest baseline, ``kind.run``
 on an already prepared scene with its tables, files and plots written straight into an existing
 folder with a plain JSON summary — no reading, validation, finite checks, lock, temporary folder
@@ -117,6 +119,29 @@ def main_job(scene: str, repeats: int) -> None:
               f"   imports {statistics.median(imports):.3f}")
 
 
+def per_figure(scene_file: str, repeats: int) -> None:
+    """Part 1b: each figure of the kind in each format, drawn from one run, interleaved.
+
+    A kind's draw closure reads the scene's resolved ``[output]`` table, so changing that
+    table between calls selects the figure and the format."""
+    scene = pipeline.load(scene_file)
+    result = scene.run(Context(quiet=True))
+    output = scene.resolved["output"]
+    names = scene.kind.schema.fields["output"].fields["plots"].choices
+    with tempfile.TemporaryDirectory() as tmp:
+        def one(name, fmt):
+            def draw():
+                output.update(plots=[name], formats=[fmt])
+                result.plots(Path(tmp))
+            return draw
+
+        result.plots(Path(tmp))  # matplotlib imported outside the timing
+        stats = interleaved({f"{n}.{f}": one(n, f) for n in names for f in ("png", "svg")}, repeats=repeats)
+    print("  each figure, drawn and written alone from one run (in process, matplotlib imported):")
+    for name, st in stats.items():
+        print(f"    {name:<24} {st.text()}")
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("scene", nargs="?", default=str(Path(__file__).parents[1] / "scenes" / "grain_default.toml"))
@@ -125,6 +150,7 @@ def main() -> None:
     p.add_argument("--quick", action="store_true", help="part 1 only (the main job in fresh processes)")
     a = p.parse_args()
     main_job(a.scene, max(5, a.repeats))
+    per_figure(a.scene, max(5, a.repeats))
     if a.quick:
         return
     print("\npart 2: pipeline overhead in one process")
