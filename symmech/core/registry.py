@@ -93,7 +93,7 @@ def _discover(until: str | None = None) -> None:
 
 
 def kinds() -> dict[str, Kind]:
-    """Every registered kind by name (all discovered on first call)."""
+    """Every registered kind by name (discovery of all runs once, even if a kind registered itself before)."""
     global _ALL
     if not _ALL:
         _discover()

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.grain import contact, flight
 from symmech.grain.contact import first_root
@@ -136,7 +137,7 @@ class _Contact:
         return R, s, c
 
     def B(self, R) -> np.ndarray:
-        Rx = _cross_matrix(R)
+        Rx = kin.skew(R)
         return (np.eye(3) - Rx @ self.M @ Rx)[:2, :2]
 
     def stick_force(self, t, y):
@@ -184,10 +185,6 @@ def _rotate(q, v) -> np.ndarray:
     u = q[1:]
     t = 2.0 * _cross(u, v)
     return v + (q[0] * t + _cross(u, t)) / float(q @ q)
-
-
-def _cross_matrix(r) -> np.ndarray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, sample_times, step: float,

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symmech.core import plotting
 from symmech.core import schema as s
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError
@@ -358,36 +359,30 @@ def result(p: Plan, values: list, failed: list = ()) -> Result:
 def _plots(p: Plan, stats, tables, best, folder) -> list:
     if not p.y:
         return []
-    from symmech.core import plotting
-
     xs, ys = axis_values(p.x), axis_values(p.y)
-    xl = f"{p.x['field']} [{SWEPT[p.x['field']]}]"
-    yl = f"{p.y['field']} [{SWEPT[p.y['field']]}]"
-    charts = [(f"{name}_mean_vx", st["mean_vx"], f"{name}: mean transport velocity [m/s]")
+    x_label = (p.x["field"], SWEPT[p.x["field"]])
+    y_label = (p.y["field"], SWEPT[p.y["field"]])
+    charts = [(f"{name}_mean_vx", st["mean_vx"], f"{name}: mean transport velocity", "m/s")
               for name, st in zip(p.names, stats)]
-    charts += [(f"{name}_hop_fraction", st["hop_fraction"], f"{name}: fraction of grains hopping")
+    charts += [(f"{name}_hop_fraction", st["hop_fraction"], f"{name}: fraction of grains hopping", "1")
                for name, st in zip(p.names, stats)]
     if "separation" in tables:
         sep = tables["separation"]
         charts.append(("separation_overlap", sep.column("overlap").reshape(len(xs), len(ys)),
-                       "overlap of the X-velocity distributions (1 = inseparable)"))
+                       "overlap of the X-velocity distributions (1 = inseparable)", "1"))
     written = []
-    for name, z, title in charts:
-        fig, axes = plotting.figure(1, 1, width=6.4, height=4.8)
+    for name, z, title, unit in charts:
+        fig, axes = plotting.figure(width=6.4, height=4.8)
         ax = axes[0, 0]
         mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label=title)
+        fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
         if len(xs) > 1 and len(ys) > 1:
             lines = ax.contour(xs, ys, p.gamma.T, colors="w", linewidths=0.8)
             ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
         if name == "separation_overlap" and best is not None:
             ax.plot(xs[best[0]], ys[best[1]], "r*", ms=14, label="best operating point")
             ax.legend(fontsize=8, loc="upper right")
-        ax.set_xlabel(xl)
-        ax.set_ylabel(yl)
+        plotting.set_labels(ax, x_label, y_label)
         ax.set_title(title, fontsize=9)
-        fig.tight_layout()
-        path = folder / f"{name}.png"
-        fig.savefig(path, dpi=plotting.DPI)
-        written.append(path)
+        written += plotting.save(fig, folder, name)
     return written

@@ -29,7 +29,7 @@ import numpy as np
 from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import model
+from symmech.trolley import membrane, model
 
 ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
 # (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
@@ -44,7 +44,9 @@ class Beam:
     first bending direction ``plane`` (⟂ axis; the second is axis × plane), length [m],
     mass per length ``rho_a`` [kg/m], bending stiffness ``ei`` (EI in the two planes)
     [N m²], ``support`` "cantilever" (clamped at the root) or "pinned" (both ends),
-    ``modes`` Ritz functions per plane, ``tip_mass`` [kg] at the free end."""
+    ``modes`` Ritz functions per plane, ``tip_mass`` [kg] at the free end; a pinned beam's
+    far end slides along the axis (``axial`` "free", inextensible) or is ``"held"`` (immovable
+    supports: the beam stretches, axial stiffness ``ea`` [N], :mod:`symmech.trolley.membrane`)."""
 
     root: tuple
     axis: tuple
@@ -56,6 +58,8 @@ class Beam:
     modes: int = 4
     tip_mass: float = 0.0
     damping_ratio: float = 0.0
+    axial: str = "free"
+    ea: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -75,6 +79,7 @@ class Effects:
     body: bool = True
     stiffening: bool = True
     damping: bool = True
+    membrane: bool = True
 
 
 @dataclass(frozen=True)
@@ -117,10 +122,12 @@ def _frame_of(beam: Beam):
     return e, b1, np.cross(e, b1)
 
 
-def beam_basis(support: str, xi):
-    fun = gen.cantilever_basis if support == "cantilever" else gen.pinned_basis
-    short = gen.cantilever_shortening if support == "cantilever" else gen.pinned_shortening
-    return fun(xi), short(xi)
+def beam_basis(support: str, xi, axial: str = "free"):
+    """[N; N'; N''] (P, 3, NMAX) at ξ (P,) and the axial field -L ψ_kl (P, NMAX, NMAX): the
+    shortening S_kl(ξ) with a free far end, S_kl(ξ) - ξ H_kl with held ends."""
+    if support == "cantilever":
+        return gen.cantilever_basis(xi), gen.cantilever_shortening(xi)
+    return gen.pinned_basis(xi), (-gen.pinned_held_axial(xi) if axial == "held" else gen.pinned_shortening(xi))
 
 
 @dataclass
@@ -129,7 +136,8 @@ class Invariants:
 
     Field index 0 is r itself, 1…N the φ_a, then the ψ of ``pairs`` (a <= b). ``G`` (F, F, 3, 3)
     = Σ w f_k f_lᵀ [kg m^k], ``S1`` (F, 3) = Σ w f_k; ``dA`` (N, N) maps (a, b) to the field
-    index of ψ_ab (or -1); ``K``, ``D`` (N, N) the constant stiffness and damping of the beams."""
+    index of ψ_ab (or -1); ``K``, ``D`` (N, N) the constant stiffness and damping of the beams;
+    ``membrane`` the :class:`~symmech.trolley.membrane.Block` of each beam with held ends."""
 
     names: list
     pairs: list
@@ -142,6 +150,7 @@ class Invariants:
     n_roll: int
     probe_fields: np.ndarray  # (F, n_probes, 3) field values at the report points
     probe_points: np.ndarray  # (n_probes, 3) undeformed report points [m]
+    membrane: tuple = ()
 
 
 def _beam_samples(beam: Beam, probes=()):
@@ -192,14 +201,14 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
         for col, pair in enumerate(ROTATION_PAIRS):
             psi[pair] = rigid[:, :, 5 + col]
     n_roll = len(names)
-    K_blocks = []
+    K_blocks, held = [], []
     start = 0
-    for pts_b, w_b, beam, xi in parts:
+    for index, (pts_b, w_b, beam, xi) in enumerate(parts):
         if beam is None or not eff.body:
             start += len(w_b)
             continue
         e, b1, b2 = _frame_of(beam)
-        basis, short = beam_basis(beam.support, xi)
+        basis, short = beam_basis(beam.support, xi, beam.axial)
         n = beam.modes
         k1 = _beam_stiffness(beam, n)
         sl = slice(start, start + len(w_b))
@@ -210,7 +219,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
                 f = np.zeros((n_pts, 3))
                 f[sl] = np.outer(basis[:, 0, k], b)
                 fields.append(f)
-                names.append(f"beam{len(K_blocks)}_p{plane + 1}_m{k + 1}")
+                names.append(f"beam{index - 1}_p{plane + 1}_m{k + 1}")  # parts[0] is the trolley
             if eff.stiffening:
                 for k in range(n):
                     for m in range(k, n):
@@ -218,6 +227,8 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
                         f[sl] = np.outer(-short[:, k, m] / beam.length, e)
                         psi[(base + k, base + m)] = f
             K_blocks.append((base, ei * k1, beam.damping_ratio))
+        if beam.axial == "held" and eff.membrane:
+            held.append(membrane.block(first, n, beam.ea, beam.length))
         for a in (range(n_roll - 3, n_roll) if n_roll else ()):
             axis = np.eye(3)[a - (n_roll - 3)]
             for c in range(first, len(names)):
@@ -239,7 +250,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
         sl = slice(base, base + n)
         K[sl, sl] = kb
     at = [probe_index[j] for j in range(len(probes))]
-    inv = Invariants(names, pairs, G, S1, dA, K, D, float(w.sum()), n_roll, F[:, at, :], pts[at])
+    inv = Invariants(names, pairs, G, S1, dA, K, D, float(w.sum()), n_roll, F[:, at, :], pts[at], tuple(held))
     if eff.damping:
         _beam_damping(inv, K_blocks)
     return inv
@@ -402,7 +413,7 @@ class System:
         B, W, GB, GW = self._frame_mats(fs)
         load = fs.a0 + g0 * fs.nu
         z = inv.S1 @ load + GB @ rr + 2 * GW @ v + self.Gtr @ acc
-        R = A @ z + inv.K @ q + inv.D @ qd
+        R = A @ z + inv.K @ q + inv.D @ qd + membrane.force(inv.membrane, q)
         d, dd, force, kt = self.roller_state(q, qd)
         if self.rollers_on:
             R[:5] -= self.C.T @ force
@@ -411,7 +422,8 @@ class System:
         M = A @ self.Gtr @ A.T
         zpad = np.append(z, 0.0)
         DV, DQ = self._dv(qd), self._dv(qdd)
-        Rq = zpad[self.inv.dA] + A @ (GB @ A.T + 2 * GW @ DV.T + self.Gtr @ DQ.T) + inv.K
+        Rq = zpad[self.inv.dA] + A @ (GB @ A.T + 2 * GW @ DV.T + self.Gtr @ DQ.T) + inv.K + \
+            membrane.stiffness(inv.membrane, q)
         Rqd = A @ (2 * GW @ A.T + 2 * self.Gtr @ DV.T) + inv.D
         if self.rollers_on:
             Rq[:5, :5] -= self.C.T @ (kt[:, None] * self.C)
@@ -474,7 +486,8 @@ class System:
         J = np.einsum("k,klij,l->ij", rr, inv.G, rr)
         t0 = 0.5 * (inv.mass * fs.v0 @ fs.v0 + 2 * fs.v0 @ np.cross(fs.w, first) + np.sum((W.T @ W) * J))
         d = self.roller_state(q, qd)[0]
-        pi = 0.5 * q @ inv.K @ q + (roller_energy(self.mdl.rollers, d) if self.rollers_on else 0.0)
+        pi = 0.5 * q @ inv.K @ q + membrane.energy(inv.membrane, q)
+        pi += roller_energy(self.mdl.rollers, d) if self.rollers_on else 0.0
         return 0.5 * qd @ M @ qd - t0 + pi + self.mdl.g0 * fs.nu @ first
 
     def quasi_static(self, fs: FrameState, q0=None, tol: float = 1e-12, max_iter: int = 50):
@@ -516,7 +529,7 @@ def rigid_body(mdl: ElasticModel) -> model.Body:
     m = inv.mass
     com = inv.S1[0] / m
     J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
-    I = np.trace(J) * np.eye(3) - J
+    I = kin.inertia_from_second_moment(J)
     return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)
 
 

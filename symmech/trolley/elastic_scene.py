@@ -42,6 +42,10 @@ BEAM = Table("an Euler–Bernoulli beam fixed to the trolley", {
     "tip_mass": Float("point mass at the far end", unit="kg", lo=0.0, hi=1e6, default=0.0),
     "damping_ratio": Float("damping ratio of the first mode of each plane (stiffness-proportional)", unit="1",
                            lo=0.0, hi=1.0, hi_open=True, default=0.0),
+    "axial": Choice("far end of a `pinned` beam along its axis: `free` (slides: inextensible) or `held` "
+                    "(immovable supports: mid-plane stretching, needs `ea`)", choices=("free", "held"),
+                    default="free"),
+    "ea": Float("axial stiffness EA (held ends)", unit="N", lo=0.0, lo_open=True, hi=1e15, default=None),
 })
 
 POINT = Table("a body point whose deflection and overload are reported", {
@@ -57,6 +61,8 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
         "body": Bool("elastic beams (else they are rigid masses)", default=True),
         "stiffening": Bool("quadratic fields ψ_ij of the beams (geometric stiffening)", default=True),
         "damping": Bool("roller and beam damping", default=True),
+        "membrane": Bool("mid-plane stretching of beams with held ends (quartic energy, Duffing stiffening)",
+                         default=True),
     }, default={}),
     "rollers": ROLLERS,
     "beams": TableList("elastic beams on the trolley", item=BEAM, max_items=50, default=[]),
@@ -98,8 +104,10 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
         if np.linalg.norm(axis) == 0 or np.linalg.norm(np.cross(axis, plane)) <= 1e-9 * np.linalg.norm(axis) * \
                 np.linalg.norm(plane):
             raise SceneError(f"{path}.beams[{i}].plane", f"{b['plane']} must not be parallel to the axis {b['axis']}")
+        _check_axial(b, f"{path}.beams[{i}]")
         beams.append(el.Beam(tuple(b["root"]), tuple(axis), tuple(plane), b["length"], b["mass_per_length"],
-                             tuple(b["ei"]), b["support"], b["modes"], b["tip_mass"], b["damping_ratio"]))
+                             tuple(b["ei"]), b["support"], b["modes"], b["tip_mass"], b["damping_ratio"],
+                             b["axial"], b["ea"] or 0.0))
     probes, names = [], []
     for i, p in enumerate(elastic["points"]):
         where = f"{path}.points[{i}]"
@@ -120,6 +128,17 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
     num = elastic["numerics"]
     return Setup(system if system.N else None, drive, body, np.asarray(t, float), names, num["method"], num["rtol"],
                  num["modal_samples"], num["small_rotation"])
+
+
+def _check_axial(beam: dict, where: str) -> None:
+    """Held ends need two supports (``pinned``) and the axial stiffness."""
+    if beam["axial"] != "held":
+        return
+    if beam["support"] != "pinned":
+        raise SceneError(f"{where}.axial", f"`held` needs support = `pinned` (a {beam['support']} has a free end)")
+    if beam["ea"] is None:
+        raise SceneError(f"{where}.ea", "missing: held ends (axial = `held`) need the axial stiffness EA "
+                                        "in (0, 1e+15] N")
 
 
 def run(setup: Setup, ctx=None) -> Result:
