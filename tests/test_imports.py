@@ -46,3 +46,10 @@ def test_grain_run_with_its_default_plot_loads_matplotlib_but_not_pyplot(tmp_pat
     assert _loaded(tmp_path, "run", _short_grain(tmp_path), "--out", "o", "--quiet") == ["matplotlib"]
     assert json.loads((tmp_path / "o" / "summary.json").read_text())["files"] == \
         ["impacts.csv", "path.png", "trajectory.csv"]
+
+
+def test_a_kind_is_found_without_importing_the_other_papers(tmp_path):
+    code = ("import sys; from symmech.core import registry; registry.get('trolley'); "
+            "print(sorted(p for p in ('symmech.grain', 'symmech.smm', 'symmech.trolley') if p in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.stdout.split() == ["['symmech.trolley']"], proc.stderr

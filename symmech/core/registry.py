@@ -85,8 +85,9 @@ def _scene_modules():
 
 def _discover(until: str | None = None) -> None:
     """Import scene modules until kind ``until`` is registered (all of them when None): a run
-    imports only its own paper's modules, not every kind's dependencies."""
-    for name in _scene_modules():
+    imports only its own paper's modules, not every kind's dependencies. Modules whose name
+    contains the kind's (``symmech.trolley.scene`` for ``trolley``) are tried first."""
+    for name in sorted(_scene_modules(), key=lambda module: until is None or until not in module):
         if until in _KINDS:
             return
         importlib.import_module(name)
