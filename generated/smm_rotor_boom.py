@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8a21419d6166b7c0762cec35e83835db09f898cdccb4793e3f2045bd00807043
-# source key aff54c657a0221b578a7c2b482ccf41458ee738bfef6ef4287a48e30bfafcc69
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 75604a2c163281d04097df96b46c990933ce43d2ef3307685bbc3a8f3e852afb
-# source key f8f49a261e0932d3fa2d211baf820823d260a48f522a25abaa74b2d126ceb09f
+# source key 970b5767920189383321f0150f0e80479555575737d48fe5ee2402616fe4520c
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 
