@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
-# source key a1ed4b39303c1ab71442c1013dad9bd66e6b1e3b3f22fd5f113aac1760d7b69f
+# source key 45ca4de7116fae72e6cfeeea2000bdce036545f204233d00bd9ced6d4807814c
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

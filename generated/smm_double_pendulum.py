@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9fb64a867e36829f85d5b9141f7fb32ecc853f73d43b845a07b9c85603bc2467
-# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 3472c146dab5c3383f3762d27eba1dd57c306c65ba3883fb6a3a2f5558655cb9
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

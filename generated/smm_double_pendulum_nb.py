@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 41488fcbdf2e9da48a6d33773be1a3ca65252e71c84174f6b6ab9c653f7fc5d8
-# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 564590c426af01ca45748e8e41bc6fa10315ac7ef650ace7bc69a943df62af48
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

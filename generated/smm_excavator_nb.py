@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 52e93c44b70195877f1c2158a5944c96b75ed449f40b3e23eae65fed7f590953
-# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 8631b47eb0a0a1b0eb106c4ab47ae76b2ba5d64b4cc68d3c70107b65df50d6a2
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6702698636daff8b11fe5a18bb26f1f1288b12f26d1fee39bbd693aad7699d29
-# source key 2a6382d01cd0c2176018e6ccab69be1dbe75ecccb78a970db86290fd04ba4af7
+# source key 28649be8c6649f7382c378143cd472f18d46ae12584efdb2ae4e1bd5409c3621
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8a21419d6166b7c0762cec35e83835db09f898cdccb4793e3f2045bd00807043
-# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

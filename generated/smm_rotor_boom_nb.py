@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 88d5323052d6b9f8d488c2130bfb182127a4030aa837ee83198ba1e7a48d0d67
-# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 55dc9b9127cd991ce5382023f186670759f42937784def862871eb4505520172
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2138f797fa177ced9921cf9626233641a889f291d75400a1368a2ecdece7d21b
-# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# source key ce624b2c4d9d2dcbcdab08ad53ed8d09a6d891506bd7b0887735237858b56bcb
 # body sha256 acb736fcbddaf70d94c49e9cfd5f446a34d08d0247accf834807a01bedce8f79
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

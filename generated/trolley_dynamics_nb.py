@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 6f527aeedccc184dd310853562ace11dad1caf62c6b35bcace61cdb0e1f4a07f
-# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
-# body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
+# symmech 0.1.0 generated module; inputs sha256 ee7a0e278db87017ef25ffe3597b3ef02e18d6b33eba804c8f395f29ac92eef3
+# source key 92d08f4c7550b8814599cbe1276ab1615b46e89bb45efa22e512b47990ab9550
+# body sha256 da8ba89339d4881d2adbed6737dad085aeea1010de6b758a72d44829fa3c22bf
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Compiled twin of `symmech.generated.trolley_dynamics` (the numpy module, the
@@ -30,7 +30,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["point_coefficients", "point_coefficients_scalar", "reactions", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_scalar", "newton_euler", "newton_euler_scalar"]
+__all__ = ["point_coefficients", "point_coefficients_scalar", "reactions", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_scalar", "newton_euler", "newton_euler_scalar", "reactions_along_track", "reactions_along_track_scalar"]
 
 
 def _flat(*args):
@@ -483,4 +483,178 @@ def newton_euler(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1,
     _arrays, _steps, _batch = _flat(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3)
     out = numpy.empty((math.prod(_batch),) + (6,))
     (_newton_euler_ploop if len(out) >= PARALLEL_BATCH else _newton_euler_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (6,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _reactions_along_track_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, out, _k):
+    x0 = math.sin(th3)
+    x1 = g0*m
+    x2 = x0*x1
+    x3 = math.sin(th1)
+    x4 = dth3*x3
+    x5 = math.cos(th1)
+    x6 = math.cos(th3)
+    x7 = dth2*x6
+    x8 = x4 + x5*x7
+    x9 = -dth3*x5 + x3*x7
+    x10 = -x9
+    x11 = r2*x10
+    x12 = V0**2
+    x13 = ddth2*x6
+    x14 = dth1*x6
+    x15 = ddth3*x5 - dth1*x4 + dth2*(dth3*x0*x3 - x14*x5) - x13*x3
+    x16 = dth3*x5
+    x17 = ddth3*x3 + dth1*x16 + dth2*(-x0*x16 - x14*x3) + x13*x5
+    x18 = dth1 + dth2*x0
+    x19 = -r1*x8 + r2*x18
+    x20 = r1*x10 - r3*x18
+    x21 = dV0*(r3*x8 - x11 + 1) + x12*(-r2*x15 + r3*x17 - x10*x20 + x19*x8)
+    x22 = m*x21
+    x23 = ddth1 + ddth2*x0 + dth3*x7
+    x24 = dV0*x18 + x12*x23
+    x25 = I13*x24
+    x26 = ah*x25
+    x27 = dV0*x8 + x12*x17
+    x28 = I23*x27
+    x29 = ah*x28
+    x30 = dV0*x10 + x12*x15
+    x31 = I33*x30
+    x32 = ah*x31
+    x33 = x8**2
+    x34 = I12*x12
+    x35 = x33*x34
+    x36 = r3*x8 - x11
+    x37 = dV0*x20 + x12*(r1*x15 - r3*x23 + x10*x36 - x18*x19 - x9)
+    x38 = l*m
+    x39 = x37*x38
+    x40 = r2*x22
+    x41 = x18**2
+    x42 = x34*x41
+    x43 = ah*x42
+    x44 = m*r1
+    x45 = x37*x44
+    x46 = ah*x45
+    x47 = x12*x18
+    x48 = x47*x8
+    x49 = I11*x48
+    x50 = I13*x12
+    x51 = x10*x8
+    x52 = x50*x51
+    x53 = r2*x2
+    x54 = I22*x48
+    x55 = ah*x54
+    x56 = I23*x12
+    x57 = x18*x56
+    x58 = x10*x57
+    x59 = ah*x58
+    x60 = x1*x6
+    x61 = l*x60
+    x62 = x5*x61
+    x63 = r1*x60
+    x64 = x5*x63
+    x65 = ah*x64
+    x66 = I12*l
+    x67 = I13*l
+    x68 = l*x56
+    x69 = dV0*x19 + x12*(-r1*x17 + r2*x23 + x18*x20 - x36*x8 - x8)
+    x70 = x38*x69
+    x71 = x10**2
+    x72 = l*x12*x51
+    x73 = x10*x47
+    x74 = x3*x61
+    x75 = I11*l*x24 - I22*x72 + I33*x72 + r2*x70 - r2*x74 - r3*x39 - r3*x62 + x27*x66 + x30*x67 + x33*x68 + x48*x67 - x66*x73 - x68*x71
+    x76 = 1/l
+    x77 = (1/2)*x76/ah
+    x78 = I11*x73 + I12*x24 + I22*x27 + I23*x30 - I33*x73 + r3*x2 + r3*x22 + x3*x63 + x34*x51 - x41*x50 - x44*x69 + x50*x71 - x57*x8
+    out[_k, 0] = x2 + x22
+    out[_k, 1] = x77*(ah*x35 + ah*x39 + ah*x40 + ah*x49 + ah*x52 + ah*x53 + ah*x62 - x26 - x29 - x32 - x43 - x46 - x55 - x59 - x65 + x75)
+    out[_k, 2] = x77*(I11*ah*x12*x18*x8 + I12*ah*x12*x33 + I13*ah*x10*x12*x8 + ah*g0*l*m*x5*x6 + ah*g0*m*r2*x0 + ah*l*m*x37 + ah*m*r2*x21 - x26 - x29 - x32 - x43 - x46 - x55 - x59 - x65 - x75)
+    out[_k, 3] = x76*(x25 + x28 + x31 - x35 - x40 + x42 + x45 - x49 - x52 - x53 + x54 + x58 + x64)
+    out[_k, 4] = x76*(x70 - x74 + x78)
+    out[_k, 5] = -x76*x78
+
+
+@numba.njit(cache=True, error_model="numpy")
+def reactions_along_track_scalar(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah):
+    """reactions P0…P5 from θ, dθ/ds, d²θ/ds², V0, V̇0 (the chain fused): floats in, a float64 array (6,) out [N]."""
+    out = numpy.empty((1, 6))
+    _reactions_along_track_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _reactions_along_track_loop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, _steps, out):
+    for _k in range(out.shape[0]):
+        _reactions_along_track_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dth1[_k * _steps[3]], dth2[_k * _steps[4]], dth3[_k * _steps[5]], ddth1[_k * _steps[6]], ddth2[_k * _steps[7]], ddth3[_k * _steps[8]], V0[_k * _steps[9]], dV0[_k * _steps[10]], m[_k * _steps[11]], r1[_k * _steps[12]], r2[_k * _steps[13]], r3[_k * _steps[14]], I11[_k * _steps[15]], I22[_k * _steps[16]], I33[_k * _steps[17]], I12[_k * _steps[18]], I23[_k * _steps[19]], I13[_k * _steps[20]], g0[_k * _steps[21]], l[_k * _steps[22]], ah[_k * _steps[23]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _reactions_along_track_ploop(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _reactions_along_track_0(th1[_k * _steps[0]], th2[_k * _steps[1]], th3[_k * _steps[2]], dth1[_k * _steps[3]], dth2[_k * _steps[4]], dth3[_k * _steps[5]], ddth1[_k * _steps[6]], ddth2[_k * _steps[7]], ddth3[_k * _steps[8]], V0[_k * _steps[9]], dV0[_k * _steps[10]], m[_k * _steps[11]], r1[_k * _steps[12]], r2[_k * _steps[13]], r3[_k * _steps[14]], I11[_k * _steps[15]], I22[_k * _steps[16]], I33[_k * _steps[17]], I12[_k * _steps[18]], I23[_k * _steps[19]], I13[_k * _steps[20]], g0[_k * _steps[21]], l[_k * _steps[22]], ah[_k * _steps[23]], out, _k)
+
+
+def reactions_along_track(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah):
+    """reactions P0…P5 from θ, dθ/ds, d²θ/ds², V0, V̇0 (the chain fused) — eqs. (11) with ω = V0 A dθ/ds.
+
+    Parameters
+    ----------
+    th1 : array_like
+        roll θ1 (twist of the cross-section about the tangent) [rad]
+    th2 : array_like
+        yaw θ2 (about the fixed vertical X2) [rad]
+    th3 : array_like
+        pitch θ3 (slope of the tangent) [rad]
+    dth1 : array_like
+        dθ1/ds [rad/m]
+    dth2 : array_like
+        dθ2/ds [rad/m]
+    dth3 : array_like
+        dθ3/ds [rad/m]
+    ddth1 : array_like
+        d²θ1/ds² [rad/m^2]
+    ddth2 : array_like
+        d²θ2/ds² [rad/m^2]
+    ddth3 : array_like
+        d²θ3/ds² [rad/m^2]
+    V0 : array_like
+        speed V0 of O along the midline [m/s]
+    dV0 : array_like
+        dV0/dt [m/s^2]
+    m : array_like
+        mass of the body [kg]
+    r1 : array_like
+        centre of mass of the body, component 1 [m]
+    r2 : array_like
+        centre of mass of the body, component 2 [m]
+    r3 : array_like
+        centre of mass of the body, component 3 [m]
+    I11 : array_like
+        central inertia 11 [kg m^2]
+    I22 : array_like
+        central inertia 22 [kg m^2]
+    I33 : array_like
+        central inertia 33 [kg m^2]
+    I12 : array_like
+        central inertia 12 [kg m^2]
+    I23 : array_like
+        central inertia 23 [kg m^2]
+    I13 : array_like
+        central inertia 13 [kg m^2]
+    g0 : array_like
+        gravitational acceleration [m/s^2]
+    l : array_like
+        axle distance OA [m]
+    ah : array_like
+        half track gauge OB = OC [m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 6)
+        [N]
+    """
+    _arrays, _steps, _batch = _flat(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah)
+    out = numpy.empty((math.prod(_batch),) + (6,))
+    (_reactions_along_track_ploop if len(out) >= PARALLEL_BATCH else _reactions_along_track_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (6,))

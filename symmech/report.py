@@ -173,11 +173,11 @@ def _split_checks(summary: dict) -> tuple[list, list]:
 def _figures(out: Path) -> list[tuple[str, str]]:
     """(title, data URI) of every plot in ``out``: the SVG when there is one, else the PNG."""
     figures = []
-    for png in sorted(out.glob("*.png")):
-        svg = png.with_suffix(".svg")
-        path, mime = (svg, "image/svg+xml") if svg.exists() else (png, "image/png")
+    for stem in sorted({p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}):
+        svg = out / f"{stem}.svg"
+        path, mime = (svg, "image/svg+xml") if svg.exists() else (out / f"{stem}.png", "image/png")
         data = base64.b64encode(path.read_bytes()).decode("ascii")
-        figures.append((png.stem.replace("_", " "), f"data:{mime};base64,{data}"))
+        figures.append((stem.replace("_", " "), f"data:{mime};base64,{data}"))
     return figures
 
 

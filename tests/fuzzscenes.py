@@ -144,6 +144,8 @@ def valid_value(f: s.Field):
         return st.booleans()
     if isinstance(f, s.Choice):
         return st.sampled_from(f.choices)
+    if isinstance(f, s.Choices):
+        return st.lists(st.sampled_from(f.choices), min_size=f.min_items, max_size=len(f.choices), unique=True)
     if isinstance(f, s.Str):
         return st.from_regex(f.pattern, fullmatch=True) if f.pattern else st.text(max_size=20)
     if isinstance(f, s.Vector):
@@ -171,7 +173,7 @@ def broken_value(f: s.Field):
         wrong += [1.5, math.nan]
     if isinstance(f, s.Vector):
         wrong += [[math.nan] * f.n, [1.0] * (f.n + 1), ["1"] * f.n]
-    certain = st.sampled_from(wrong).map(lambda v: (v, True)) if (numeric or isinstance(f, (s.Vector, s.Bool))) \
+    certain = st.sampled_from(wrong).map(lambda v: (v, True)) if (numeric or isinstance(f, (s.Vector, s.Bool, s.Choices))) \
         else st.nothing()
     edges = []
     if isinstance(f, (s.Float, s.Vector, s.Int)):

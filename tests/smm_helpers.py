@@ -29,7 +29,7 @@ def run_scene(d: dict) -> dict:
 
 def run_model(m) -> dict:
     """Summary (with the warnings) of the run of a model built in Python (no responses, no plots)."""
-    resolved = {"equilibrium": {"solve": False}, "initial": None, "forcing": None, "output": {"plots": False}}
+    resolved = {"equilibrium": {"solve": False}, "initial": None, "forcing": None, "output": {"plots": []}}
     result = scene.run(scene.Setup(m, len(m.coordinates), resolved), Context(quiet=True))
     return {**result.summary, "warnings": result.warnings}
 

@@ -184,5 +184,5 @@ def test_gravity_magnitude_unchanged_by_direction():
     data["coordinates"] = data["coordinates"][:1]
     for direction, vector in (([0, -1], [0, "-l1"]), ([1, 0], ["l1", 0])):
         d = changed(changed(data, "gravity.direction", direction), "points[1].vector", vector)
-        s = pipeline.load(changed(d, "output", {"plots": False})).run(Context(quiet=True)).summary
+        s = pipeline.load(changed(d, "output", {"plots": []})).run(Context(quiet=True)).summary
         assert math.isclose(s["omega2_1_per_s2"][0], 9.81, rel_tol=1e-12)

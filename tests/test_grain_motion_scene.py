@@ -26,8 +26,9 @@ def test_run_writes_trajectory_impacts_summary_and_plots(tmp_path):
     assert sum(summary["time_fraction"].values()) == pytest.approx(1.0, abs=1e-9)
     assert summary["impacts_creating_energy"] == 0
     assert summary["energy_dissipated_by_impacts_J"] > 0
-    for name in ("trajectory.csv", "impacts.csv", "path.png", "velocity.png"):
+    for name in ("trajectory.csv", "impacts.csv", "path.png"):
         assert (out / name).stat().st_size > 0
+    assert summary["files"] == ["impacts.csv", "path.png", "trajectory.csv"]  # default [output]: the path plot
     rows = list(csv.reader(l for l in (out / "impacts.csv").read_text().splitlines() if not l.startswith("#")))
     assert len(rows) - 1 == summary["bounces"]
     regimes = {l.rsplit(",", 1)[1] for l in (out / "trajectory.csv").read_text().splitlines()[2:]}

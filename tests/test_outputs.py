@@ -287,7 +287,7 @@ def test_precision_study_as_a_result_follows_the_contract(tmp_path):
     sc = pipeline.load({"kind": "probe"})
     pipeline.write(result, tmp_path / "p", sc)
     s = assert_valid_output(tmp_path / "p")
-    assert s["files"] == ["precision_probe.csv", "precision_probe.png", "precision_probe.svg"]
+    assert s["files"] == ["precision_probe.csv", "precision_probe.png"]
     assert s["reference"] == "exact"
     lines = (tmp_path / "p" / "precision_probe.csv").read_text().splitlines()
     assert lines[0] == "value [1],error [1],seconds [s],method,knob"

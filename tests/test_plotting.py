@@ -1,7 +1,9 @@
-"""The plotting style: labelled axes with units, PNG + SVG, the backend left to matplotlib,
-and what each kind's figures show (impact markers, phase portrait, overloads in g, modes)."""
+"""The plotting style: labelled axes with units, PNG (and SVG when asked), no pyplot, only the
+plots a scene asks for, and what each kind's figures show (impact markers, phase portrait,
+overloads in g, modes)."""
 import json
 import math
+import os
 import re
 import subprocess
 import sys
@@ -24,10 +26,10 @@ def figures(monkeypatch):
     saved = {}
     original = plotting.save
 
-    def save(fig, folder, stem):
+    def save(fig, folder, stem, formats=("png",)):
         saved[stem] = fig
-        fig.canvas.draw()  # legends and texts laid out; the figure object stays readable after close
-        return original(fig, folder, stem)
+        fig.canvas.draw()  # legends and texts laid out
+        return original(fig, folder, stem, formats)
 
     monkeypatch.setattr(plotting, "save", save)
     return saved
@@ -37,7 +39,7 @@ def test_save_writes_png_and_svg(tmp_path):
     fig, axes = plotting.figure()
     axes[0, 0].plot([0, 1], [0, 2])
     plotting.set_labels(axes[0, 0], ("time t", "s"), ("distance", "m"))
-    png, svg = plotting.save(fig, tmp_path, "demo")
+    png, svg = plotting.save(fig, tmp_path, "demo", ("png", "svg"))
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert ET.parse(svg).getroot().tag.endswith("svg")
 
@@ -62,6 +64,21 @@ def test_shared_x_is_labelled_once(tmp_path):
     assert len(plotting.unlabelled(fig)) == 2
 
 
+def test_drawing_needs_no_pyplot_and_leaves_the_backend_alone(tmp_path):
+    """Figures are drawn on the Agg canvas: pyplot is never imported and the backend a user
+    or a notebook chose (here MPLBACKEND=pdf) is what matplotlib reports afterwards."""
+    code = ("import sys; from pathlib import Path; from symmech.core import plotting; import matplotlib; "
+            "fig, ax = plotting.figure(); ax[0, 0].plot([0, 1]); "
+            "plotting.set_labels(ax[0, 0], ('t', 's'), ('x', 'm')); "
+            f"print(len(plotting.save(fig, Path({str(tmp_path)!r}), 'f', ('png', 'svg'))), "
+            "'matplotlib.pyplot' in sys.modules, matplotlib.get_backend())")
+    env = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    out = subprocess.run([sys.executable, "-c", code], env={**env, "MPLBACKEND": "pdf"}, capture_output=True,
+                         text=True, check=True).stdout
+    assert out.split() == ["2", "False", "pdf"]
+    assert (tmp_path / "f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_a_colorbar_names_its_quantity_and_unit(tmp_path):
     fig, axes = plotting.figure()
     mesh = axes[0, 0].pcolormesh([0.0, 1.0], [0.0, 1.0], np.ones((2, 2)))
@@ -70,7 +87,7 @@ def test_a_colorbar_names_its_quantity_and_unit(tmp_path):
     assert plotting.unlabelled(fig) == ["axes 1 (colorbar): label 'mean velocity'"]
     bar.set_label(plotting.label("mean velocity", "m/s"))
     assert plotting.unlabelled(fig) == []
-    assert [p.suffix for p in plotting.save(fig, tmp_path, "bar")] == [".png", ".svg"]
+    assert [p.suffix for p in plotting.save(fig, tmp_path, "bar", ("png", "svg"))] == [".png", ".svg"]
 
 
 SWEEP_PLOTS = """
@@ -87,33 +104,30 @@ print(matplotlib.get_backend(), " ".join(sorted(p.name for p in paths)))
 
 
 def test_sweep_plots_use_the_plotting_style_and_keep_the_backend(tmp_path):
-    """The sweep's charts go through plotting.save (PNG + SVG, units on every axis and colorbar)
+    """The sweep's charts go through plotting.save (PNG, units on every axis and colorbar)
     and leave a user's backend (MPLBACKEND=svg) as it is."""
     clean = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "MPLBACKEND", "WAYLAND_DISPLAY")}
     out = subprocess.run([sys.executable, "-c", SWEEP_PLOTS.replace("FOLDER", repr(str(tmp_path)))],
                          env={**clean, "MPLBACKEND": "svg"}, capture_output=True, text=True, check=True).stdout
-    assert out.split() == ["svg", "crop_hop_fraction.png", "crop_hop_fraction.svg", "crop_mean_vx.png",
-                           "crop_mean_vx.svg"]
+    assert out.split() == ["svg", "crop_hop_fraction.png", "crop_mean_vx.png"]
 
 
-@pytest.mark.parametrize("env, backend", [({}, "agg"), ({"MPLBACKEND": "svg"}, "svg"),
-                                          ({"DISPLAY": ":99", "MPLBACKEND": "pdf"}, "pdf")])
-def test_backend_is_left_to_matplotlib(env, backend):
-    """Agg only when headless; a user's or a notebook's choice is kept."""
-    code = "from symmech.core import plotting; import matplotlib; plotting.pyplot(); print(matplotlib.get_backend())"
-    clean = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "MPLBACKEND", "WAYLAND_DISPLAY")}
-    out = subprocess.run([sys.executable, "-c", code], env={**clean, **env}, capture_output=True, text=True,
-                         check=True).stdout
-    assert out.strip().lower() == backend
+def test_draw_builds_only_the_asked_plots_in_the_asked_formats(tmp_path):
+    built = []
 
+    def builder(name):
+        def build():
+            built.append(name)
+            fig, axes = plotting.figure()
+            plotting.set_labels(axes[0, 0], ("time t", "s"), (name, "m"))
+            return fig
+        return build
 
-def test_notebook_is_not_headless(monkeypatch):
-    monkeypatch.delenv("DISPLAY", raising=False)
-    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.delenv("MPLBACKEND", raising=False)
-    assert plotting._headless()
-    monkeypatch.setitem(sys.modules, "ipykernel", type(sys)("ipykernel"))
-    assert not plotting._headless()
+    figures = {name: builder(name) for name in ("a", "b", "c")}
+    paths = plotting.draw(figures, {"plots": ["c", "a"], "formats": ["svg"]}, tmp_path)
+    assert built == ["c", "a"]
+    assert [p.name for p in paths] == ["c.svg", "a.svg"] and sorted(os.listdir(tmp_path)) == ["a.svg", "c.svg"]
+    assert plotting.draw({**figures, "b": lambda: None}, {"plots": ["b"], "formats": ["png"]}, tmp_path) == []
 
 
 def _columns(path: Path, *names: str) -> list[np.ndarray]:
@@ -129,7 +143,7 @@ def _lines(ax):
 
 def test_grain_impacts_are_markers_and_phase_portrait(tmp_path, figures):
     text = re.sub(r"(?m)^duration = .*$", "duration = 0.3", (SCENES / "grain_default.toml").read_text())
-    (tmp_path / "g.toml").write_text(text)
+    (tmp_path / "g.toml").write_text(text + '[output]\nplots = ["path", "velocity", "phase"]\nformats = ["png", "svg"]\n')
     assert main(["run", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o")]) == 0
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     t_hit, z_hit, vz_before, vz_after = _columns(tmp_path / "o" / "impacts.csv", "t", "z", "vz_before", "vz_after")

@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
 # kind -> (bundled scene, replacements that keep the run short, seed of its paper)
 RUNS = {
-    "impact": ("impact_default.toml", {}, "000"),
+    "impact": ("impact_default.toml", {r"\Z": '\n[output]\nformats = ["png", "svg"]\n'}, "000"),
     "grain": ("grain_default.toml", {r"(?m)^duration = .*$": "duration = 0.2"}, "000"),
     "trolley": ("trolley_helix.toml", {r"steps = 5000": "steps = 500", r"paper_tables = true": "paper_tables = false"},
                 "002"),
@@ -53,8 +53,12 @@ def test_report_is_self_contained(reports, kind):
     assert links and all(link.startswith("data:") for link in links)
     assert "<script" not in page
     pngs = sorted(p.stem for p in reports[kind].glob("*.png"))
+    svgs = sorted(p.stem for p in reports[kind].glob("*.svg"))
     assert page.count("<img ") == len(pngs) >= 1
-    assert page.count('src="data:image/svg+xml;base64,') == len(pngs)  # every plot has its SVG twin
+    # a plot's SVG when the scene asked for it ([output] formats), its PNG otherwise
+    assert len(svgs) == (len(pngs) if kind == "impact" else 0)
+    assert page.count('src="data:image/svg+xml;base64,') == len(svgs)
+    assert page.count('src="data:image/png;base64,') == len(pngs) - len(svgs)
 
 
 @pytest.mark.parametrize("kind", RUNS)

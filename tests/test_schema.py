@@ -73,3 +73,21 @@ def test_markdown_lists_every_field_and_variant():
     for name in ("`kind`", "`steps`", "`e`", "`mass`", "`k`", "[[springs]]"):
         assert name in text
     assert 'when `law = "printed"`' in text
+
+
+def test_plot_output_validates_names_and_formats():
+    out = s.plot_output({"path": "(a)", "phase": "(b)"}, default=("path",))
+    assert s.validate(s.Table("scene", {"output": out}), {}) == {"output": {"plots": ["path"], "formats": ["png"]}}
+    assert s.validate(out, {"plots": ["phase", "path"], "formats": ["svg", "png"]}) == \
+        {"plots": ["phase", "path"], "formats": ["svg", "png"]}
+    assert s.validate(out, {"plots": []})["plots"] == []
+    for value, message in ((["phsae"], r"'output.plots\[0\]': unknown value 'phsae' \(did you mean 'phase'\?\); "
+                                       "choose from path, phase"),
+                           (["path", "path"], r"'output.plots\[1\]': 'path' is listed twice"),
+                           ("path", r"'output.plots': expected a list of at least 0 of path, phase, got 'path'")):
+        with pytest.raises(SceneError, match=message):
+            s.validate(s.Table("scene", {"output": out}), {"output": {"plots": value}})
+    with pytest.raises(SceneError, match=r"'formats': expected a list of at least 1 of png, svg, got \[\]"):
+        s.validate(out, {"formats": []})
+    with pytest.raises(SceneError, match=r"'formats\[0\]': unknown value 'pdf'"):
+        s.validate(out, {"formats": ["pdf"]})

@@ -171,7 +171,7 @@ def test_latex_chain_scene(tmp_path, capsys):
 
 def test_large_run_writes_sparse_matrices_and_refuses_huge(tmp_path, capsys):
     path = tmp_path / "c.toml"
-    text = 'kind = "mechanism"\n[chain]\nn = 250\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n[output]\nplots = false\n'
+    text = 'kind = "mechanism"\n[chain]\nn = 250\nmass = 1.0\nstiffness = 100.0\nspacing = 1.0\n[output]\nplots = []\n'
     path.write_text(text)
     assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
     rows = (tmp_path / "o" / "matrices.csv").read_text().splitlines()

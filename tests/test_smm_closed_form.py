@@ -110,7 +110,7 @@ def test_equilibrium_found_first():
                     {"name": "P", "from": "O", "vector": [0.02, -0.3], "slides": ["x", "y"]}],
          "bodies": [{"name": "bob", "mass": "m", "com": "P"}],
          "springs": [{"name": "s", "ends": ["O", "P"], "stiffness": "k", "free_length": l0}],
-         "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": False}}
+         "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": []}}
     s = run_scene(d)
     length = l0 + mass * g / k
     np.testing.assert_allclose(s["omega2_1_per_s2"], sorted([g / length, k / mass]), rtol=1e-9)
@@ -186,7 +186,7 @@ def test_equilibrium_search_turns_a_pendulum_pulled_by_a_spring():
                      {"name": "W", "at": W.tolist()}],
           "bodies": [{"name": "bob", "mass": mass, "com": "B"}],
           "springs": [{"name": "s", "ends": ["B", "W"], "stiffness": k, "free_length": l0}],
-          "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": False}}
+          "gravity": {"g": "g"}, "equilibrium": {"solve": True}, "output": {"plots": []}}
     s = run_scene(d_)
     assert abs(s["equilibrium"]["q"][0] - phi_star) < 1e-7
     np.testing.assert_allclose(s["omega2_1_per_s2"][0], stiff / (mass * l * l), rtol=1e-6)

@@ -49,7 +49,7 @@ def test_massless_link_between_masses():
 
 def test_free_free_rigid_body_mode():
     scene = {"kind": "mechanism", "chain": {"n": 3, "mass": 2.0, "stiffness": 50.0, "spacing": 1.0,
-                                            "ends": "free-free"}, "output": {"plots": False}}
+                                            "ends": "free-free"}, "output": {"plots": []}}
     s = run_scene(scene)
     assert s["rigid_body_modes"] == 1
     assert s["frequencies_rad_s"][0] == 0.0

@@ -48,7 +48,7 @@ def random_scene(seed: int) -> dict:
         springs.append({"name": f"k{j}", "ends": [a, b], "stiffness": rng.choice([100.0, 1000.0]),
                         "preload": "equilibrium"})
     return {"parameters": {"g": {"value": 9.81, "unit": "m/s^2"}}, "coordinates": coords, "points": points,
-            "bodies": bodies, "springs": springs, "gravity": {"g": "g"}, "output": {"plots": False}}
+            "bodies": bodies, "springs": springs, "gravity": {"g": "g"}, "output": {"plots": []}}
 
 
 def tension_error(seed: int) -> float | None:

@@ -63,7 +63,7 @@ def test_dropped_gravity_in_pendulum_is_reported():
                         {"name": "W", "at": [1, 0]}],
              "bodies": [{"name": "cart", "mass": 2.0, "com": "C"}, {"name": "bob", "mass": 1.0, "com": "A"}],
              "springs": [{"name": "k", "ends": ["C", "W"], "stiffness": 300.0}],
-             "gravity": {"g": "g"}, "effects": {"gravity": False}, "output": {"plots": False}}
+             "gravity": {"g": "g"}, "effects": {"gravity": False}, "output": {"plots": []}}
     s = run_scene(scene)
     rep = s["neglected_effects"]
     assert rep["dropped"] == ["gravity"]
@@ -93,7 +93,7 @@ def test_overdamped_mode_has_no_ratio_and_warns():
              "bodies": [{"name": "m", "mass": 1.0, "com": "P"}],
              "springs": [{"name": "k", "ends": ["O", "P"], "stiffness": 100.0}],
              "dampers": [{"name": "c", "ends": ["O", "P"], "viscosity": 50.0}],
-             "output": {"plots": False}}
+             "output": {"plots": []}}
     s = run_scene(scene)
     assert s["damping_ratios"] == [None]
     assert s["frequencies_rad_s"] == [10.0]

@@ -256,7 +256,7 @@ def test_spatial_scene_run_solves_equilibrium():
 
     """`symmech run` path: [equilibrium] solve = true on the spatial scene gives q* and omega."""
     q_ref, w2_ref, _ = _reference()
-    s = run_scene({**_scene(), "equilibrium": {"solve": True}, "output": {"plots": False}})
+    s = run_scene({**_scene(), "equilibrium": {"solve": True}, "output": {"plots": []}})
     np.testing.assert_allclose(s["equilibrium"]["q"], q_ref, atol=1e-9, rtol=0)
     np.testing.assert_allclose(s["omega2_1_per_s2"], w2_ref, rtol=1e-8)
     assert not s["warnings"]

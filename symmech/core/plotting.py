@@ -1,43 +1,23 @@
-"""One plotting style for every scene kind: figures, labelled axes, PNG + SVG files.
+"""One plotting style for every scene kind: figures, labelled axes, PNG (and SVG) files.
 
 Every plot of symmech goes through here, so that all of them read alike: each
 axis names a quantity and its unit (``"t [s]"``; :func:`save` refuses a figure
-with an unlabelled axis), and each figure is written twice, as PNG (for a quick
-look) and SVG (inlined by the HTML report).
+with an unlabelled axis), and each figure is written in the formats the scene
+asks for (``[output] formats``: PNG for a quick look, SVG for the HTML report).
 
-The backend is matplotlib's choice (a notebook's inline backend, a GUI on a
-desktop); only without a display and outside a notebook do we select Agg, so a
-headless run never tries to open a window.
+Figures are drawn on matplotlib's ``Figure`` and written by the Agg canvas: no
+pyplot, no backend and no window, in a terminal, a notebook or on a desktop alike.
+:func:`draw` is the one loop of every kind over the plots its scene asks for.
 """
 from __future__ import annotations
 
-import os
 import re
-import sys
 from pathlib import Path
+from typing import Callable
 
 DPI = 110
-FORMATS = ("png", "svg")
+FORMATS = ("png", "svg")  # formats a scene may ask for
 _UNIT = re.compile(r"\[[^\]]+\]\s*$")
-
-
-def _headless() -> bool:
-    if "ipykernel" in sys.modules or os.environ.get("MPLBACKEND"):
-        return False
-    if sys.platform in ("win32", "darwin"):
-        return False
-    return not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
-def pyplot():
-    """``matplotlib.pyplot``, with Agg selected only on a headless machine outside a notebook."""
-    import matplotlib
-
-    if _headless():
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def label(quantity: str, unit: str) -> str:
@@ -47,14 +27,17 @@ def label(quantity: str, unit: str) -> str:
 
 def figure(rows: int = 1, cols: int = 1, *, width: float = 8.0, height: float = 3.2, **kwargs):
     """A figure and a (rows, cols) array of axes; ``height`` [in] per row, ``width`` [in] in all."""
-    plt = pyplot()
-    fig, axes = plt.subplots(rows, cols, figsize=(width, height * rows), squeeze=False, **kwargs)
-    return fig, axes
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height * rows))
+    return fig, fig.subplots(rows, cols, squeeze=False, **kwargs)
 
 
 def figure_3d(width: float = 7.0, height: float = 6.0):
     """A figure with one 3-D axes."""
-    fig = pyplot().figure(figsize=(width, height))
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height))
     return fig, fig.add_subplot(projection="3d")
 
 
@@ -90,18 +73,34 @@ def unlabelled(fig) -> list[str]:
     return bad
 
 
-def save(fig, folder: Path, stem: str) -> list[Path]:
-    """Write ``stem.png`` and ``stem.svg`` into ``folder``, close ``fig``; returns both paths.
+def save(fig, folder: Path, stem: str, formats: tuple[str, ...] = ("png",)) -> list[Path]:
+    """Write ``stem.<format>`` into ``folder`` for each of ``formats``; returns the paths.
 
     A figure with an axis that does not name its quantity and unit is a bug: ValueError.
     """
     bad = unlabelled(fig)
     if bad:
-        pyplot().close(fig)
         raise ValueError(f"plot {stem}: every axis needs 'quantity [unit]': " + "; ".join(bad))
     fig.tight_layout()
-    paths = [Path(folder) / f"{stem}.{ext}" for ext in FORMATS]
+    paths = [Path(folder) / f"{stem}.{ext}" for ext in formats]
     for path in paths:
         fig.savefig(path, dpi=DPI, metadata={"Date": None} if path.suffix == ".svg" else None)
-    pyplot().close(fig)
     return paths
+
+
+def draw(figures: dict[str, Callable[[], object]], output: dict, folder: Path) -> list[Path]:
+    """Build and save the figures a scene asks for.
+
+    ``figures`` maps each plot name of a kind to a zero-argument builder returning a Figure
+    (or None when there is nothing to draw); ``output`` is the scene's resolved ``[output]``
+    table (:func:`symmech.core.schema.plot_output`): ``plots`` (names, in order) and
+    ``formats``. Only the asked figures are built, so an unasked plot costs nothing; an asked
+    name that ``figures`` does not build belongs to another part of the kind's run (e.g. the
+    elastic model's figures beside the rigid ones) and is left to that part.
+    """
+    files = []
+    for name in (n for n in output["plots"] if n in figures):
+        fig = figures[name]()
+        if fig is not None:
+            files += save(fig, folder, name, tuple(output["formats"]))
+    return files

@@ -52,7 +52,7 @@ def result(kind: str, rows: list[dict], name: str, title: str, reference: str) -
 
 
 def diagram(rows: list[dict], folder: Path, name: str, title: str, reference: str) -> list[Path]:
-    """log error against log time, one line per method, as ``name``.png and .svg in ``folder``."""
+    """log error against log time, one line per method, as ``name``.png in ``folder``."""
     from symmech.core import plotting
 
     fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)

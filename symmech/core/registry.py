@@ -3,8 +3,9 @@
 A paper package declares a kind in a module whose name ends in ``scene``
 (``symmech/<paper>/*scene.py``) by calling :func:`register` at import time. The
 CLI, the Python API, the docs and the fuzzer find every kind through
-:func:`kinds`, which imports those modules on first use — adding a kind touches
-no central list.
+:func:`kinds`, which imports those modules on first use, or :func:`get`, which
+imports them only until the kind asked for is found (a grain run never loads the
+mechanism's or the trolley's modules) — adding a kind touches no central list.
 
 The life of a run (see ``symmech.core.pipeline``)::
 
@@ -16,15 +17,16 @@ The life of a run (see ``symmech.core.pipeline``)::
 """
 from __future__ import annotations
 
-import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable
 
 from symmech.core.schema import Table
 
 _KINDS: dict[str, "Kind"] = {}
+_ALL = False  # every scene module imported
 
 
 @dataclass(frozen=True)
@@ -68,23 +70,35 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
-@functools.cache
-def _discover() -> None:
-    """Import every ``symmech/<pkg>/*scene.py`` once; importing a kind's module registers it."""
+def _scene_modules():
+    """Names of every ``symmech.<paper>.*scene`` module, in package order, without importing them."""
     import symmech
 
     for pkg in pkgutil.iter_modules(symmech.__path__):
         if not pkg.ispkg or pkg.name in ("core", "generated", "templates", "scenes"):
             continue
-        package = importlib.import_module(f"symmech.{pkg.name}")
-        for m in pkgutil.iter_modules(package.__path__):
+        path = [str(Path(symmech.__path__[0]) / pkg.name)]
+        for m in pkgutil.iter_modules(path):
             if m.name.endswith("scene"):
-                importlib.import_module(f"symmech.{pkg.name}.{m.name}")
+                yield f"symmech.{pkg.name}.{m.name}"
+
+
+def _discover(until: str | None = None) -> None:
+    """Import scene modules until kind ``until`` is registered (all of them when None): a run
+    imports only its own paper's modules, not every kind's dependencies. Modules whose name
+    contains the kind's (``symmech.trolley.scene`` for ``trolley``) are tried first."""
+    for name in sorted(_scene_modules(), key=lambda module: until is None or until not in module):
+        if until in _KINDS:
+            return
+        importlib.import_module(name)
 
 
 def kinds() -> dict[str, Kind]:
-    """Every registered kind by name (discovery runs once, even if a kind registered itself before)."""
-    _discover()
+    """Every registered kind by name (discovery of all runs once, even if a kind registered itself before)."""
+    global _ALL
+    if not _ALL:
+        _discover()
+        _ALL = True
     return dict(sorted(_KINDS.items()))
 
 
@@ -93,6 +107,10 @@ def get(name) -> Kind:
     from symmech.core.scene import SceneError
     from symmech.core.schema import _did_you_mean
 
+    if isinstance(name, str):
+        _discover(until=name)
+        if name in _KINDS:
+            return _KINDS[name]
     available = kinds()
     if not isinstance(name, str) or name not in available:
         raise SceneError("kind", f"unknown scene kind {name!r}{_did_you_mean(name, available)}; "

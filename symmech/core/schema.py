@@ -160,6 +160,29 @@ class Choice(Field):
 
 
 @dataclass(frozen=True)
+class Choices(Field):
+    """A list of distinct values, each one of ``choices`` (at least ``min_items``), kept in the given order."""
+
+    choices: tuple[str, ...] = ()
+    min_items: int = 0
+
+    def check(self, path, value):
+        if not isinstance(value, (list, tuple)) or len(value) < self.min_items:
+            raise SceneError(path, f"expected a list of at least {self.min_items} of {', '.join(self.choices)}, "
+                                   f"got {_show(value)}")
+        for i, item in enumerate(value):
+            if not isinstance(item, str) or item not in self.choices:
+                raise SceneError(_join(path, i), f"unknown value {_show(item)}{_did_you_mean(item, self.choices)}; "
+                                                 f"choose from {', '.join(self.choices)}")
+            if item in value[:i]:
+                raise SceneError(_join(path, i), f"{item!r} is listed twice")
+        return list(value)
+
+    def type_text(self):
+        return f"list of {self.min_items}+ of " + ", ".join(f"`{c}`" for c in self.choices)
+
+
+@dataclass(frozen=True)
 class Vector(_Ranged):
     """A list of exactly ``n`` finite numbers, each in the range."""
 
@@ -310,6 +333,20 @@ class Mapping(Field):
 
     def type_text(self):
         return f"table of names to {self.value.type_text()}"
+
+
+def plot_output(plots: dict[str, str], default: tuple[str, ...]) -> Table:
+    """The ``[output]`` table of a kind with plots: which of ``plots`` (name -> what it shows) to
+    draw, and in which image formats; every kind declares it through here
+    (:func:`symmech.core.plotting.draw` reads it)."""
+    from symmech.core.plotting import FORMATS
+
+    return Table("which plots `symmech run` draws (`--no-plots`: none)", {
+        "plots": Choices("plots to draw, each `<name>.<format>`: " + "; ".join(f"`{k}` {v}" for k, v in plots.items()),
+                         choices=tuple(plots), default=list(default)),
+        "formats": Choices("image formats; `symmech report` inlines the SVG when there is one, else the PNG",
+                           choices=FORMATS, min_items=1, default=["png"]),
+    }, default={})
 
 
 def validate(schema: Table, data: dict) -> dict:

@@ -13,7 +13,6 @@ contact test uses the node with the smallest z.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from symmech.generated import grain_motion as gm
 
@@ -54,6 +53,8 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
             if root is not None:
                 return root
         if neg.size:
+            from scipy.optimize import brentq  # here, not at import: a compiled run never loads scipy.optimize
+
             return brentq(h, ts[stop - 1], ts[stop], xtol=xtol)
         if ts[-1] >= t1:
             return None
@@ -62,6 +63,8 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
 
 def _grazing(h, a: float, b: float, xtol: float):
     """Root of ``h`` in (a, b) when its minimum there is negative, else None."""
+    from scipy.optimize import brentq, minimize_scalar
+
     res = minimize_scalar(h, bounds=(a, b), method="bounded", options={"xatol": xtol})
     if res.fun >= 0.0 or h(a) <= 0.0:
         return None

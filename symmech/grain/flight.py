@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from symmech.generated import grain_motion as gm
 
@@ -104,6 +103,8 @@ class RotationFlight:
         return np.concatenate([gm.quaternion_rate(*q, *w), gm.euler_equations(*self.inertia, *w)])
 
     def _extend(self, t: float) -> None:
+        from scipy.integrate import solve_ivp  # here, not at import: a compiled run never loads scipy
+
         while self._end < t:
             t_next = max(t, self._end + self.chunk)
             sol = solve_ivp(self._rhs, (self._end, t_next), self._y_end, method="DOP853",

@@ -17,7 +17,7 @@ from symmech.core import registry
 from symmech.core.context import Context
 from symmech.core.results import Result
 from symmech.core.scene import SceneError
-from symmech.core.schema import Choice, Float, Int, Str, Table
+from symmech.core.schema import Choice, Float, Int, Str, Table, plot_output
 from symmech.core.watchdog import watchdog
 from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
@@ -59,6 +59,7 @@ SCHEMA = Table("an impact scene", {
                           default=_DESCENT.line_tol),
     }, default={}),
     "precision": Table("reserved for `symmech bench precision` (no fields yet)", {}, default={}),
+    "output": plot_output(plots.IMPACT, default=tuple(plots.IMPACT)),
 })
 
 
@@ -75,6 +76,7 @@ class ImpactScene:
     solver: str
     tol: float
     descent: DescentOptions
+    output: dict  # the resolved [output] table: plots and formats
 
 
 def prepare(r: dict) -> ImpactScene:
@@ -85,7 +87,7 @@ def prepare(r: dict) -> ImpactScene:
     sc = ImpactScene(Ellipsoid(*r["body"]["semi_axes"], fields.body_mass(r["body"])),
                      np.array(r["body"]["orientation"]), np.array(r["state"]["velocity"]),
                      np.array(r["state"]["angular_velocity"]), r["impact"]["e"], r["impact"]["lambda"], s["name"],
-                     s["tol"], descent)
+                     s["tol"], descent, r["output"])
     uK0 = _contact_velocity(sc)
     if not uK0[2] < 0:
         raise SceneError("state.velocity", f"the contact point is not approaching the plane: u_Kz(0) = {uK0[2]:.6g} m/s "
@@ -153,7 +155,7 @@ def run(sc: ImpactScene, ctx: Context) -> Result:
     }
 
     def draw(folder: Path) -> list[Path]:
-        return plots.impact_plot(folder / "impact.png", H, sc, result)
+        return plots.impact_plots(H, sc, result, folder, sc.output)
 
     return Result("impact", summary, plots=draw, warnings=list(result.warnings) + ([gimbal] if gimbal else []))
 

@@ -20,7 +20,7 @@ from symmech.core import registry
 from symmech.core.context import Context
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
-from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector
+from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector, plot_output
 from symmech.core.watchdog import watchdog
 from symmech.generated import grain_motion as gm
 from symmech.grain import contact, fields, flight, motion, paper_mode, plots, sweep
@@ -151,6 +151,7 @@ SCHEMA = Fields("a grain scene", {
         "reference_tolerance": Float("tolerance of the reference (accurate mode, scan step / 4)",
                                      lo=1e-14, hi=1e-6, default=1e-12),
     }, default={}),
+    "output": plot_output(plots.MOTION, default=("path",)),
 })
 
 
@@ -165,6 +166,7 @@ class GrainScene:
     duration: float
     alpha_beta: tuple
     precision: dict
+    output: dict  # the resolved [output] table: plots and formats
 
 
 def prepare(r: dict) -> GrainScene:
@@ -184,7 +186,7 @@ def prepare(r: dict) -> GrainScene:
         raise SceneError("numerics.sample_interval", f"{numerics.sample_interval:.3g} s gives {rows:.3g} trajectory "
                                                      f"rows over {r['duration']:g} s; at most {MAX_ROWS:g}")
     start = _start(r["initial"], axes, r["body"]["orientation"], effects)
-    return GrainScene(model, numerics, start, r["duration"], (alpha, beta), r["precision"])
+    return GrainScene(model, numerics, start, r["duration"], (alpha, beta), r["precision"], r["output"])
 
 
 def _vibration(v: dict, g_k: tuple, effects: motion.Effects) -> flight.Vibration:
@@ -332,7 +334,7 @@ def run(sc: GrainScene, ctx: Context) -> Result:
     warnings = summary.pop("warnings")
 
     def draw(folder: Path) -> list[Path]:
-        return plots.motion_plots(sc, m, folder)
+        return plots.motion_plots(sc, m, folder, sc.output)
 
     return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
                   plots=draw, warnings=warnings, events="impacts")

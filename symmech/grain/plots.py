@@ -1,9 +1,8 @@
 """Plots of the grain kinds (style from ``symmech.core.plotting``).
 
-``motion_plots`` draws a grain run: ``path`` (side view and height), ``velocity``
-(impacts as markers at the post-impact velocity), ``phase`` (phase portrait of
-the normal motion); ``impact_plot`` draws one impact. Each figure is written as
-PNG and SVG.
+``motion_plots`` draws the figures of a grain run named in :data:`MOTION`,
+``impact_plots`` the figure of one impact (:data:`IMPACT`); a scene's ``[output]``
+table chooses which of them are drawn and in which formats.
 """
 from __future__ import annotations
 
@@ -14,6 +13,11 @@ import numpy as np
 from symmech.core import plotting
 from symmech.generated import grain_impact as gen
 
+MOTION = {"path": "(side view and height over time, impacts marked)",
+          "velocity": "(centre velocity, the velocity just after each impact marked)",
+          "phase": "(phase portrait of the normal motion, height against normal velocity)"}
+IMPACT = {"impact": "(the scalar equation F(mu) with its roots, and a top view of slip and impulse)"}
+
 
 def _impact_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Impact times [s] (n,), positions [m] (n, 3), velocities before and after [m/s] (n, 3)."""
@@ -23,56 +27,64 @@ def _impact_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     return tuple(np.array([i[k] for i in result.impacts], float) for k in ("t", "r", "v_before", "v_after"))
 
 
-def motion_plots(sc, result, out: Path) -> list[Path]:
-    """``path``, ``velocity`` and ``phase`` figures of a grain run (relative to the surface frame)."""
+def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
+    """The figures of :data:`MOTION` that ``output`` (the scene's ``[output]`` table) asks for,
+    of a grain run, relative to the surface frame."""
     tr = result.trajectory
     t = tr[:, 0]
-    s = sc.model.vibration.kinematics(t)[..., 0, :]  # surface displacement (n, 3) [m]
     hits, r_hit, v_before, v_after = _impact_states(result)
     impact_style = {"ls": "none", "marker": "o", "ms": 3, "mfc": "none", "color": "tab:red"}
-    files = []
 
-    fig, axes = plotting.figure(2, 1, height=3.0)
-    side, height = axes[:, 0]
-    side.plot(tr[:, 1] + s[:, 0], tr[:, 3] + s[:, 2], lw=0.8, label="centre of mass")
-    side.plot(tr[:, 1] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
-    plotting.set_labels(side, ("X along the surface", "m"), ("Z", "m"))
-    side.set_title("Side view (surface frame at its rest position)")
-    side.legend(fontsize=8)
-    height.plot(t, tr[:, 3], lw=0.8, label="centre height above the surface")
-    height.plot(hits, r_hit[:, 2], **impact_style, label=f"impacts ({hits.size})")
-    plotting.set_labels(height, ("time t", "s"), ("relative height z", "m"))
-    height.legend(fontsize=8)
-    files += plotting.save(fig, out, "path")
+    def path():
+        s = sc.model.vibration.kinematics(t)[..., 0, :]  # surface displacement (n, 3) [m]
+        fig, axes = plotting.figure(2, 1, height=3.0)
+        side, height = axes[:, 0]
+        side.plot(tr[:, 1] + s[:, 0], tr[:, 3] + s[:, 2], lw=0.8, label="centre of mass")
+        side.plot(tr[:, 1] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
+        plotting.set_labels(side, ("X along the surface", "m"), ("Z", "m"))
+        side.set_title("Side view (surface frame at its rest position)")
+        side.legend(fontsize=8)
+        height.plot(t, tr[:, 3], lw=0.8, label="centre height above the surface")
+        height.plot(hits, r_hit[:, 2], **impact_style, label=f"impacts ({hits.size})")
+        plotting.set_labels(height, ("time t", "s"), ("relative height z", "m"))
+        height.legend(fontsize=8)
+        return fig
 
-    fig, axes = plotting.figure(1, 1, height=4.0)
-    ax = axes[0, 0]
-    for k, name in ((4, "v_x"), (5, "v_y"), (6, "v_z")):
-        ax.plot(t, tr[:, k], lw=0.8, label=f"{name} (relative)")
-    ax.plot(hits, v_after[:, 2], **impact_style, label=f"v_z just after each impact ({hits.size})")
-    plotting.set_labels(ax, ("time t", "s"), ("centre velocity relative to the surface", "m/s"))
-    ax.set_title("Centre velocity relative to the surface")
-    ax.legend(fontsize=8)
-    files += plotting.save(fig, out, "velocity")
+    def velocity():
+        fig, axes = plotting.figure(1, 1, height=4.0)
+        ax = axes[0, 0]
+        for k, name in ((4, "v_x"), (5, "v_y"), (6, "v_z")):
+            ax.plot(t, tr[:, k], lw=0.8, label=f"{name} (relative)")
+        ax.plot(hits, v_after[:, 2], **impact_style, label=f"v_z just after each impact ({hits.size})")
+        plotting.set_labels(ax, ("time t", "s"), ("centre velocity relative to the surface", "m/s"))
+        ax.set_title("Centre velocity relative to the surface")
+        ax.legend(fontsize=8)
+        return fig
 
-    fig, axes = plotting.figure(1, 1, width=6.0, height=5.0)
-    ax = axes[0, 0]
-    ax.plot(tr[:, 3], tr[:, 6], lw=0.6, color="tab:blue", label="flight and sliding")
-    ax.plot(r_hit[:, 2], v_before[:, 2], ls="none", marker="v", ms=4, color="tab:red", label="just before impact")
-    ax.plot(r_hit[:, 2], v_after[:, 2], ls="none", marker="^", ms=4, color="tab:green", label="just after impact")
-    plotting.set_labels(ax, ("relative height z", "m"), ("normal velocity v_z", "m/s"))
-    ax.set_title("Phase portrait of the normal motion")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    files += plotting.save(fig, out, "phase")
-    return files
+    def phase():
+        fig, axes = plotting.figure(1, 1, width=6.0, height=5.0)
+        ax = axes[0, 0]
+        ax.plot(tr[:, 3], tr[:, 6], lw=0.6, color="tab:blue", label="flight and sliding")
+        ax.plot(r_hit[:, 2], v_before[:, 2], ls="none", marker="v", ms=4, color="tab:red",
+                label="just before impact")
+        ax.plot(r_hit[:, 2], v_after[:, 2], ls="none", marker="^", ms=4, color="tab:green",
+                label="just after impact")
+        plotting.set_labels(ax, ("relative height z", "m"), ("normal velocity v_z", "m/s"))
+        ax.set_title("Phase portrait of the normal motion")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        return fig
+
+    return plotting.draw({"path": path, "velocity": velocity, "phase": phase}, output, out)
 
 
-def impact_plot(path: Path, H, sc, result) -> list[Path]:
-    """F(mu) with every root marked by verdict, and a top view of slip and impulse.
+def impact_plots(H, sc, result, out: Path, output: dict) -> list[Path]:
+    """The figure of :data:`IMPACT` if ``output`` (the scene's ``[output]`` table) asks for it."""
+    return plotting.draw({"impact": lambda: _impact_figure(H, sc, result)}, output, out)
 
-    ``path`` names the PNG; its SVG twin is written beside it.
-    """
+
+def _impact_figure(H, sc, result):
+    """F(mu) with every root marked by verdict, and a top view of slip and impulse."""
     uK0 = result.uK_before
     k = gen.mu_equation(H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], sc.lam, sc.e, *uK0)
     mu = np.linspace(-np.pi, np.pi, 721)
@@ -100,5 +112,4 @@ def impact_plot(path: Path, H, sc, result) -> list[Path]:
     plotting.set_labels(right, ("X / |V_K(0)|", "1"), ("Y / |V_K(0)|", "1"))
     right.legend(loc="lower left", fontsize=8)
     right.grid(alpha=0.3)
-    path = Path(path)
-    return plotting.save(fig, path.parent, path.stem)
+    return fig

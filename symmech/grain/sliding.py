@@ -47,7 +47,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
@@ -231,6 +230,8 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     # DOP853 stability-bound there (measured: 1.2e-6 m/s at tol 1e-9 costs DOP853's time within ~30 % where
     # DOP853 does not stall; tol^(1/8) v_scale, 2.8e-3 m/s, costs up to twice as much).
     s_stiff = tol**SLIP_STIFF_POWER * v_scale
+    from scipy.integrate import solve_ivp  # here, not at import: a compiled run never loads scipy
+
     pieces, t, stalled, implicit = [], t0, 0, False
     stick, y = _settle(ode, t, y, v_stop)
     while t < t_stop:

@@ -2,8 +2,9 @@
 
 ``modes_and_responses`` draws the mode shapes on the mechanism's geometry (links,
 springs and dampers, centres of mass; a spatial mechanism in a top and a side
-projection), with a legend of frequencies, and the frequency and free responses;
-``precision_plot`` draws the eigen-solver study. Each figure is PNG + SVG.
+projection), with a legend of frequencies, and the frequency and free responses
+(:data:`FIGURES`; the scene's ``[output]`` table chooses); ``precision_plot`` draws the
+eigen-solver study.
 """
 from __future__ import annotations
 
@@ -38,8 +39,30 @@ def _draw(ax, m, at, color: str, label: str) -> None:
     ax.plot([], [], "-o", color=color, ms=4, label=label)
 
 
-def modes_and_responses(m, md, omega, response, out: Path) -> list[str]:
-    """``modes`` and, when computed, ``frequency_response`` and ``free_response``; returns file names."""
+FIGURES = {"modes": "(the lowest six mode shapes on the geometry)",
+           "frequency_response": "(amplitude per coordinate against forcing frequency, when `[forcing]` asks)",
+           "free_response": "(coordinates against time, when `[initial]` is given)"}
+
+
+def modes_and_responses(m, md, omega, response, out: Path, output: dict) -> list[str]:
+    """The figures of :data:`FIGURES` that ``output`` (the scene's ``[output]`` table) asks for and
+    the run computed; returns file names."""
+    def frf():
+        if "frf" in response:
+            omegas, H = response["frf"]
+            return _curves(m, omegas, np.maximum(np.abs(H), 1e-300), True, ("forcing frequency omega", "rad/s"),
+                           ("amplitude |q|", "m or rad"), "frequency response")
+
+    def free():
+        if "free" in response:
+            t, q = response["free"]
+            return _curves(m, t, q, False, ("time t", "s"), ("coordinate q", "m or rad"), "free response")
+
+    figures = {"modes": lambda: _modes(m, md, omega), "frequency_response": frf, "free_response": free}
+    return [p.name for p in plotting.draw(figures, output, out)]
+
+
+def _modes(m, md, omega):
     from symmech.smm import forms
     from symmech.smm.model import NumericArith
 
@@ -68,18 +91,10 @@ def modes_and_responses(m, md, omega, response, out: Path) -> list[str]:
             ax.legend(fontsize=7, loc="best")
     fig.suptitle(f"{m.name}: mode shapes on the geometry (displacement scaled to "
                  f"{MODE_SCALE:.0%} of the extent)", fontsize=10)
-    files = plotting.save(fig, out, "modes")
-    if "frf" in response:
-        omegas, H = response["frf"]
-        files += _curves(m, omegas, np.maximum(np.abs(H), 1e-300), True, ("forcing frequency omega", "rad/s"),
-                         ("amplitude |q|", "m or rad"), "frequency response", out)
-    if "free" in response:
-        t, q = response["free"]
-        files += _curves(m, t, q, False, ("time t", "s"), ("coordinate q", "m or rad"), "free response", out)
-    return [p.name for p in files]
+    return fig
 
 
-def _curves(m, x, ys, log: bool, xlabel: tuple, ylabel: tuple, title: str, out: Path) -> list[Path]:
+def _curves(m, x, ys, log: bool, xlabel: tuple, ylabel: tuple, title: str):
     """One curve per coordinate (first eight) against x; labels are (quantity, unit) pairs."""
     fig, axes = plotting.figure(1, 1, width=6.0, height=4.0)
     ax = axes[0, 0]
@@ -88,7 +103,7 @@ def _curves(m, x, ys, log: bool, xlabel: tuple, ylabel: tuple, title: str, out: 
     plotting.set_labels(ax, xlabel, ylabel)
     ax.set_title(f"{m.name}: {title}")
     ax.legend(fontsize=8)
-    return plotting.save(fig, out, title.replace(" ", "_"))
+    return fig
 
 
 def precision_plot(out: Path, points, modes_n: int, title: str) -> list[Path]:

@@ -155,7 +155,7 @@ def run(setup: Setup, ctx) -> Result:
     files.update(_matrices_file(m, num))
     tables = {"modes": _modes_table(m, omega, md)}
     response = _responses(sc, m, a, b, c, tables)
-    plots = (lambda folder: modes_and_responses(m, md, omega, response, Path(folder))) \
+    plots = (lambda folder: modes_and_responses(m, md, omega, response, Path(folder), sc["output"])) \
         if sc["output"]["plots"] else None
     summary = {
         "mechanism": m.name,

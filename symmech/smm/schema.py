@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from symmech.core.scene import SceneError
 from symmech.core.schema import (Bool, Choice, Custom, Float, Int, Mapping, Str, Table, TableList, Vector,
-                                 check_real)
+                                 check_real, plot_output)
 from symmech.core import expressions
 from symmech.smm.model import EQUILIBRIUM, GENERATED_NAMES, number_text
+from symmech.smm.plots import FIGURES
 
 NAME = r"[A-Za-z][A-Za-z0-9_]{0,63}"
 MASS_RANGE = (1e-12, 1e12)       # kg, or exactly 0 (a link with inertia only)
@@ -273,7 +274,5 @@ SCHEMA = Table("a mechanism scene (structural model method, seed 003)", {
         "modes": Int("modes compared (default min(10, coordinates - 1))", lo=1, hi=200, default=None),
         "dense_limit": Int("largest size also solved by the dense eigh", lo=2, hi=20_000, default=3000),
     }, default={}),
-    "output": Table("outputs", {
-        "plots": Bool("modes.png and response plots", default=True),
-    }, default={}),
+    "output": plot_output(FIGURES, default=tuple(FIGURES)),
 }, checks=(_chain_or_model, lambda s, _p: _check_parameters(s["parameters"], "parameters")))

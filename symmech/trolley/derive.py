@@ -233,6 +233,36 @@ def omega_functions() -> list[NamedMatrix]:
     return [omega, omega_rate]
 
 
+def reactions_along_track() -> NamedMatrix:
+    """P0…P5 straight from the angles θ, their s-derivatives and V0, V̇0: the chain Ω, Ω' ->
+    point coefficients (e = x1, e' = 0: O moves along the tangent) -> a, ω, ω̇, ν = Λ e2 ->
+    reactions (11), substituted into one expression so the emitter's CSE spans the whole
+    chain and no numpy glue runs between generated calls."""
+    v0, dv0 = sp.symbols("V0 dV0", real=True)
+    omega, omega_rate = (sp.Matrix(nm.matrix) for nm in omega_functions())
+    coef = point_coefficients()
+    fill = dict(zip([a.symbol for a in coef.args[:6]], (1, 0, 0, 0, 0, 0)))
+    fill.update(zip([a.symbol for a in coef.args[6:12]], list(omega) + list(omega_rate)))
+    alpha_beta = coef.matrix.xreplace(fill)  # r stays symbolic: the reactions' own r1..r3
+    rx = reactions(True)
+    acc = dv0 * alpha_beta[:3, :] + v0**2 * alpha_beta[3:, :]
+    nu = rotation_matrix()[:, 1]
+    values = {}
+    for i in range(3):
+        values[f"acc{i + 1}"], values[f"nu{i + 1}"] = acc[i], nu[i]
+        values[f"w{i + 1}"], values[f"dw{i + 1}"] = v0 * omega[i], dv0 * omega[i] + v0**2 * omega_rate[i]
+    by_name = {a.symbol.name: a.symbol for a in rx.args}
+    r_syms = {a.symbol.name: a.symbol for a in coef.args[12:]}
+    expr = rx.matrix.xreplace({by_name[k]: v.xreplace({r_syms[n]: by_name[n] for n in r_syms})
+                               for k, v in values.items()})
+    kept = [a for a in rx.args if a.symbol.name not in values]
+    args = ANGLE_ARGS + DANGLE_ARGS + DDANGLE_ARGS + args_of([
+        (v0, "speed V0 of O along the midline", "m/s"), (dv0, "dV0/dt", "m/s^2")]) + tuple(kept)
+    return NamedMatrix("reactions_along_track", expr, args,
+                       "reactions P0…P5 from θ, dθ/ds, d²θ/ds², V0, V̇0 (the chain fused)", "N",
+                       "(11) with ω = V0 A dθ/ds")
+
+
 def module_specs() -> list[ModuleSpec]:
     lam = rotation_matrix()
     frame = [NamedMatrix("Lambda", lam, ANGLE_ARGS, "rotation matrix Λ (fixed -> moving)", "1", "Λ")]
@@ -241,7 +271,7 @@ def module_specs() -> list[ModuleSpec]:
     frame += [NamedMatrix("A", angular_velocity_matrix(), ANGLE_ARGS, "A with ω = A θ̇", "1", "ω = A θ̇")]
     frame += omega_functions()
     frame += [angles_from_tangent(), chord_coefficients(), lambda_bar_linear(), rodrigues(), chord_rotation()]
-    dynamics = [point_coefficients(), reactions(True), reactions(False), newton_euler()]
+    dynamics = [point_coefficients(), reactions(True), reactions(False), newton_euler(), reactions_along_track()]
     return [
         ModuleSpec("trolley_frame", "Frames, angles and angular velocity of the trolley along the track.",
                    SOURCE, frame),

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import kinematics as kin
+from symmech.core import kinematics as kin, plotting
 from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table, TableList, Vector
@@ -182,10 +182,12 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     summary, warnings = _summary(setup, r, comfort)
     warnings += _warnings(setup, r, modes)
 
-    def draw(folder):
+    def draw(folder, output=None):
+        """The elastic figures ``output`` (an ``[output]`` table) asks for; all of them by default."""
         from symmech.trolley import plots
 
-        return plots.elastic(setup, r, modes, comfort, folder)
+        figures = plots.elastic_figures(setup, r, modes, comfort)
+        return plotting.draw(figures, output or {"plots": list(figures), "formats": ["png"]}, folder)
     return Result("trolley", summary, tables, plots=draw, warnings=warnings)
 
 

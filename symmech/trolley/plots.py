@@ -1,4 +1,5 @@
-"""Plots of a trolley run (style from ``symmech.core.plotting``): track, reactions, overloads."""
+"""Plots of a trolley run (style from ``symmech.core.plotting``): track, reactions, overloads
+(:data:`FIGURES`; the scene's ``[output]`` table chooses), and the precision study."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,9 +9,24 @@ import numpy as np
 from symmech.core import plotting
 
 
-def write_all(setup, res: dict, out: Path) -> list[Path]:
-    """``track`` (3-D midline and centre-of-mass path), ``reactions``, ``overloads`` (PNG + SVG each)."""
-    files = []
+FIGURES = {"track": "(3-D midline and centre-of-mass path of every case)",
+           "reactions": "(rail reactions P0...P5 over time, one panel per case)",
+           "overloads": "(overloads in g against the comfort envelope)",
+           "elastic_reactions": "(elastic model: P0...P5 beside the rigid ones)",
+           "elastic_deflections": "(elastic model: roller deflections and elastic deflection of the report points)",
+           "elastic_overloads": "(elastic model: overloads at the report points against the comfort envelope)",
+           "campbell": "(elastic model: natural frequencies against arc length and speed, with the forcing "
+                       "frequencies)"}
+
+
+def write_all(setup, res: dict, out: Path, output: dict) -> list[Path]:
+    """The rigid model's figures of :data:`FIGURES` that ``output`` (the scene's ``[output]`` table)
+    asks for (the elastic ones: :func:`elastic_figures`)."""
+    return plotting.draw({"track": lambda: _track(setup, res), "reactions": lambda: _reactions(setup, res),
+                          "overloads": lambda: _overloads(setup, res)}, output, out)
+
+
+def _track(setup, res: dict):
     first = res[1]
     s = first["s"]
     span = np.linspace(s.min(), s.max() + setup.body.l, 600)
@@ -23,8 +39,10 @@ def write_all(setup, res: dict, out: Path) -> list[Path]:
         ax.plot(path[:, 0], path[:, 2], path[:, 1], lw=1, label=f"centre of mass, case {case}")
     plotting.set_labels(ax, ("X1", "m"), ("X3", "m"), ("X2 (up)", "m"))
     ax.legend(loc="upper left", fontsize=8)
-    files += plotting.save(fig, out, "track")
+    return fig
 
+
+def _reactions(setup, res: dict):
     fig, axes = plotting.figure(len(res), 1, sharex=True)
     for ax, (case, r) in zip(axes[:, 0], res.items()):
         for i in range(6):
@@ -33,12 +51,10 @@ def write_all(setup, res: dict, out: Path) -> list[Path]:
         ax.legend(ncol=6, fontsize=8)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    files += plotting.save(fig, out, "reactions")
-    files += overloads(setup, res, out)
-    return files
+    return fig
 
 
-def overloads(setup, res: dict, out: Path) -> list[Path]:
+def _overloads(setup, res: dict):
     """Overloads n (body axes, in units of g) of every case against the scene's comfort envelope band."""
     fig, axes = plotting.figure(3, 1, height=2.7, sharex=True)
     for i, (ax, (axis, (lo, hi))) in enumerate(zip(axes[:, 0], setup.comfort.items())):
@@ -54,13 +70,13 @@ def overloads(setup, res: dict, out: Path) -> list[Path]:
         ax.legend(fontsize=8, loc="upper right")
     axes[0, 0].set_title("Overloads against the comfort envelope (red: outside)")
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    return plotting.save(fig, out, "overloads")
+    return fig
 
 
 def work_precision(rows, path: Path) -> Path:
     """Log error vs log time, one line per (family, method); ``rows`` are
     (family, method, steps, fd_step, time_s, error); points are labelled by their knob.
-    Writes ``path`` (PNG) and its SVG twin; returns both paths."""
+    Writes ``path`` (PNG); returns it in a list."""
     fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)
     ax = axes[0, 0]
     for family, method in dict.fromkeys((r[0], r[1]) for r in rows):
@@ -79,11 +95,16 @@ def work_precision(rows, path: Path) -> Path:
     return plotting.save(fig, path.parent, path.stem)
 
 
-def elastic(setup, r: dict, modes: dict | None, comfort: dict | None, out: Path) -> list[Path]:
-    """Plots of the elastic model (``r`` from :func:`symmech.trolley.elastic.simulate`):
-    ``elastic_reactions`` (elastic beside rigid), ``elastic_deflections`` (rollers and report
-    points), ``elastic_overloads`` (report points against the comfort envelope), ``campbell``
-    (natural frequencies against position and speed, with the forcing frequencies)."""
+def elastic_figures(setup, r: dict, modes: dict | None, comfort: dict | None) -> dict:
+    """Builders of the elastic model's figures (``r`` from :func:`symmech.trolley.elastic.simulate`),
+    named as in :data:`FIGURES`; a builder returns None when its figure has nothing to show."""
+    return {"elastic_reactions": lambda: _elastic_reactions(r),
+            "elastic_deflections": lambda: _deflections(setup, r),
+            "elastic_overloads": lambda: _point_overloads(setup, r, comfort) if setup.names and comfort else None,
+            "campbell": lambda: campbell(modes) if modes is not None else None}
+
+
+def _elastic_reactions(r: dict):
     t = r["t"]
     fig, axes = plotting.figure(6, 1, height=1.8, sharex=True)
     for i, ax in enumerate(axes[:, 0]):
@@ -93,16 +114,10 @@ def elastic(setup, r: dict, modes: dict | None, comfort: dict | None, out: Path)
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=8, ncol=2)
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    files = plotting.save(fig, out, "elastic_reactions")
-    files += _deflections(setup, r, out)
-    if setup.names and comfort:
-        files += _point_overloads(setup, r, comfort, out)
-    if modes is not None:
-        files += campbell(modes, out)
-    return files
+    return fig
 
 
-def _deflections(setup, r, out: Path) -> list[Path]:
+def _deflections(setup, r):
     fig, axes = plotting.figure(2, 1, sharex=True)
     if setup.system.rollers_on:
         for i in range(5):
@@ -118,10 +133,10 @@ def _deflections(setup, r, out: Path) -> list[Path]:
     axes[1, 0].set_xlabel(plotting.label("time t", "s"))
     for ax in axes[:, 0]:
         ax.grid(alpha=0.3)
-    return plotting.save(fig, out, "elastic_deflections")
+    return fig
 
 
-def _point_overloads(setup, r, comfort: dict, out: Path) -> list[Path]:
+def _point_overloads(setup, r, comfort: dict):
     fig, axes = plotting.figure(3, 1, height=2.7, sharex=True)
     for k, (ax, (axis, (lo, hi))) in enumerate(zip(axes[:, 0], comfort.items())):
         ax.axhspan(lo, hi, color="tab:green", alpha=0.12, label=f"comfort envelope [{lo:g}, {hi:g}] g")
@@ -132,10 +147,10 @@ def _point_overloads(setup, r, comfort: dict, out: Path) -> list[Path]:
         ax.legend(fontsize=8, loc="upper right")
     axes[0, 0].set_title("Overloads at the report points (elastic model)")
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    return plotting.save(fig, out, "elastic_overloads")
+    return fig
 
 
-def campbell(modes: dict, out: Path) -> list[Path]:
+def campbell(modes: dict):
     """Natural frequencies of the linearisation against arc length and against speed, with
     the forcing frequencies (dashed) that a natural frequency should keep away from."""
     from symmech.trolley.elastic_scene import FORCING
@@ -157,4 +172,4 @@ def campbell(modes: dict, out: Path) -> list[Path]:
         ax.grid(alpha=0.3, which="both")
     axes[0, 0].legend(fontsize=7)
     axes[0, 0].set_title("Campbell diagram along the track")
-    return plotting.save(fig, out, "campbell")
+    return fig

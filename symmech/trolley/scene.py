@@ -20,7 +20,7 @@ from symmech.core import schema as sc
 from symmech.core.context import Context
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import elastic_scene, model, tables, track as tracks
+from symmech.trolley import elastic_scene, model, plots, tables, track as tracks
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -223,6 +223,7 @@ SCHEMA = sc.Table("a trolley scene", {
         "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
                                 default=False)}, default={}),
     "elastic": elastic_scene.SCHEMA,
+    "output": sc.plot_output(plots.FIGURES, default=tuple(plots.FIGURES)),
 }, checks=(_cross_checks,))
 
 
@@ -251,6 +252,7 @@ class Setup:
     plan: model.FramePlan = None
     notes: list = None
     elastic: elastic_scene.Setup | None = None
+    output: dict = None  # the resolved [output] table: plots and formats
 
 
 def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
@@ -297,7 +299,7 @@ def prepare(scene: dict) -> Setup:
                   num["fd_step"] if num["fd_step"] is not None else min(0.02, 0.05 * axle),
                   num["lstar_derivative"], num["small_angle_limit"],
                   {axis: tuple(scene["comfort"][axis]) for axis in COMFORT}, scene["report"]["paper_tables"],
-                  notes=[])
+                  notes=[], output=scene["output"])
     if setup.paper_tables:
         _table_grid(setup)
     lo, hi = _visited(setup)
@@ -558,9 +560,7 @@ def run(setup: Setup, ctx) -> Result:
             ctx.warn(warning)
 
     def draw(folder):
-        from symmech.trolley import plots
-
-        return plots.write_all(setup, res, folder) + (elastic.plots(folder) if elastic and elastic.plots else [])
+        return plots.write_all(setup, res, folder, setup.output) + (elastic.plots(folder, setup.output) if elastic else [])
     result.plots = draw
     return result
 
@@ -749,8 +749,6 @@ def precision(setup: Setup, ctx) -> Result:
                   text={"family": [r[0] for r in rows], "method": [r[1] for r in rows]})
 
     def draw(folder):
-        from symmech.trolley import plots
-
         return plots.work_precision(rows, folder / "precision.png")
     reference = "exact symbolic derivatives" if symbolic else \
         f"central-4 differences at {TABLE_REFERENCE_STEP:g} m (a point table has no exact derivative)"

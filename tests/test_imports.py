@@ -1,0 +1,55 @@
+"""Lazy imports: a command loads only what it needs (the fast main job, issue 14 item 6).
+
+Each case runs in a fresh interpreter and reports which heavy packages ended up in
+``sys.modules``; the expected sets are written out, so a new eager import fails here.
+"""
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+# Modules a grain run must not load: derivations (sympy, jinja2), sweeps (dask, distributed),
+# the xarray API, pyplot (figures are drawn on the Agg canvas), and the other papers' kinds.
+HEAVY = ("sympy", "jinja2", "dask", "distributed", "xarray", "pandas", "matplotlib", "matplotlib.pyplot",
+         "symmech.smm", "symmech.trolley")
+
+
+def _loaded(tmp_path: Path, *args: str, code: str = "") -> list[str]:
+    """The HEAVY modules imported by ``symmech <args>`` (or by ``code``) in a fresh process."""
+    run = code or f"from symmech.cli import main; assert main({list(args)!r}) == 0"
+    probe = f"import json, sys; {run}; print(json.dumps(sorted(m for m in {HEAVY!r} if m in sys.modules)))"
+    proc = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.splitlines()[-1])
+
+
+def _short_grain(tmp_path: Path, output: str = "") -> str:
+    text = re.sub(r"(?m)^duration = .*$", "duration = 0.05", (ROOT / "scenes" / "grain_default.toml").read_text())
+    path = tmp_path / "g.toml"
+    path.write_text(text + output)
+    return str(path)
+
+
+def test_cli_import_loads_no_numerics(tmp_path):
+    code = "import symmech.cli; import sys; assert 'numpy' not in sys.modules and 'scipy' not in sys.modules"
+    assert _loaded(tmp_path, code=code) == []
+
+
+def test_grain_run_without_plots_loads_no_heavy_package(tmp_path):
+    assert _loaded(tmp_path, "run", _short_grain(tmp_path), "--out", "o", "--no-plots", "--quiet") == []
+    assert _loaded(tmp_path, "run", _short_grain(tmp_path, "[output]\nplots = []\n"), "--out", "o2", "--quiet") == []
+
+
+def test_grain_run_with_its_default_plot_loads_matplotlib_but_not_pyplot(tmp_path):
+    assert _loaded(tmp_path, "run", _short_grain(tmp_path), "--out", "o", "--quiet") == ["matplotlib"]
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["files"] == \
+        ["impacts.csv", "path.png", "trajectory.csv"]
+
+
+def test_a_kind_is_found_without_importing_the_other_papers(tmp_path):
+    code = ("import sys; from symmech.core import registry; registry.get('trolley'); "
+            "print(sorted(p for p in ('symmech.grain', 'symmech.smm', 'symmech.trolley') if p in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.stdout.split() == ["['symmech.trolley']"], proc.stderr
