@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bbe12b8debcbaf1daca5d9e7d5ed7703636701e1462844bf8a196107bca700d9
-# source key f3f2014ef7b38b2ae947ee6767d611932086b12f1e95e9b144a4ceeef1f542a4
+# source key 18be85e5e392134f5f5ec49a1bec559926ac0d3659e8f9f5792b0bf633e00187
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 577293806eb54f23853e08cd12fe4abdfa3673b7c6b278f46d87d7822bd5082b
-# source key f4f35717b6650f51e6b16cff614879eec7a8e820f56338a9ee5aff17f6ef89f2
+# source key 1a9bc07be933979fedb023aac678eb173216b60b0c7ec7521a8751cacd2f334b
 # body sha256 bb4a7d650ea4d406f0a5fac2d631cd14f8cff8b91a289ae5b820107d237b2c67
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

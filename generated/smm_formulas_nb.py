@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e6f4538a86c71902e002983ce248e4f0ec70d1fe71d32e33fb4d8ac619ead531
-# source key 28649be8c6649f7382c378143cd472f18d46ae12584efdb2ae4e1bd5409c3621
+# source key f375eb89243bce795c79a8fbfb826ae4ea7bac9adb7901d3a3615c4812c19f9a
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

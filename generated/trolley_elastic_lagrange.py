@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 951da0274410937f6b098376dd7afba273ae7e0877ddb0c2091d0a9c78e8a31b
-# source key 4413003cd87b32588b1d3d5700142cf3ce57663f43a2a633a584fe648375f731
+# source key d8680b9b7253cc3a95d8b912ca84bf3966925a56badb2cf841ebe493b7577fcc
 # body sha256 b725b081d263c108903f24ccf013d3b4db7851e0fa7254921b6e0ef55e4288b0
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7eb462e18633841e5088d44beaa1ae1cbb4a3ac58373922522502b62c260e204
-# source key 4413003cd87b32588b1d3d5700142cf3ce57663f43a2a633a584fe648375f731
+# source key d8680b9b7253cc3a95d8b912ca84bf3966925a56badb2cf841ebe493b7577fcc
 # body sha256 c02126a92d6ffb44bf1c7e2652881ff976028ba4a39075a00426f783f7f0167a
 """Small elastic trolley by Lagrange's equations (test route).
 
