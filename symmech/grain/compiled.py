@@ -13,8 +13,9 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
 - contact: the gap is scanned at ``scan_step`` in windows of 32 points exactly as
   :func:`symmech.grain.contact.first_root`; a sign change is refined by Brent's
   method (scipy's ``brentq``, ported) to ``tolerance * scan_step`` on the time;
-  a scan minimum is searched by golden section (Python: scipy's bounded Brent)
-  for a grazing contact;
+  a scan minimum is searched by the bounded Brent minimiser (scipy's, ported)
+  for a grazing contact; the scan evaluates the gap only up to the first point
+  at or below zero, which is all the Python scan uses of its window;
 - impact: the Chatterjee-Ruina law, and the printed law by the exact reduction
   (the trigonometric equation of ``mu_equation``, roots from a 4x4 companion
   matrix polished by Newton) for the law itself or for its verdict in the log;
@@ -35,10 +36,11 @@ import math
 
 import numba
 import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as dop
 
 from symmech.core import kernels
 from symmech.core.scene import SymmechError
-from symmech.grain import motion
+from symmech.grain import motion, sliding
 
 gm = kernels.load("grain_motion")
 gi = kernels.load("grain_impact")
@@ -57,28 +59,27 @@ C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 
 C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
 N_CARRY = 13
 # Status of a call.
-DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS = 0, 1, 2, 3, 4
+DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = 0, 1, 2, 3, 4, 5, 6
 # Warning codes (rows: code, value, value).
 W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = 1, 2, 3, 4, 5, 6
 IMPACT_WIDTH = 31  # t, r, v before/after, w before/after, impulse, u before/after, ke, flags (4)
 
 PHASES_PER_CALL = 2000
 ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS = motion.ZENO_IMPACTS, motion.ZENO_INTERVAL, motion.MAX_IDLE_STEPS
-GOLDEN_ITER = 200  # golden-section steps at most (a bracket below the float spacing of t stops shrinking)
+BOUNDED_MAXFUN = 500  # function evaluations of the bounded minimiser at most (scipy's default)
 EPS = float(np.finfo(float).eps)
 SCAN_WINDOW = 32
 BRENT_RTOL, BRENT_ITER = 4 * EPS, 100
-MAX_STEPS_PER_PHASE = 2_000_000  # sliding steps between two events: the stagnation guard
+MAX_STEPS_PER_CHUNK = sliding.MAX_RHS_PER_PHASE // 12  # DOP853 steps (12 evaluations) per sliding chunk
+MAX_STALLED_EVENTS = sliding.MAX_STALLED_EVENTS
 ROT, SLIP, STICK = 0, 1, 2  # right-hand sides of the Dormand-Prince stepper
 
-# Dormand-Prince 5(4): nodes, stages, 5th-order weights and (5th - 4th)-order weights.
-DP_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
-DP_A = np.array([[0, 0, 0, 0, 0, 0], [1 / 5, 0, 0, 0, 0, 0], [3 / 40, 9 / 40, 0, 0, 0, 0],
-                 [44 / 45, -56 / 15, 32 / 9, 0, 0, 0],
-                 [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
-                 [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
-                 [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]])
-DP_E = np.array([71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40])
+# DOP853 (Hairer, Norsett & Wanner; the coefficients of scipy's solve_ivp, which the Python loop uses).
+DOP_A, DOP_B, DOP_C = dop.A, dop.B, dop.C
+DOP_E3, DOP_E5, DOP_D = dop.E3, dop.E5, dop.D
+DOP_STAGES, DOP_EXTENDED, DOP_POWER = dop.N_STAGES, dop.N_STAGES_EXTENDED, dop.INTERPOLATOR_POWER
+DOP_EXPONENT = -1.0 / 8.0  # error estimator of order 7
+ROT_WIDTH = 3 + 7 + 7 * 7  # rotation step table row: t_old, t_new, (unused), y_old (7), F (7 x 7)
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 
@@ -150,7 +151,7 @@ def _is_sphere(p):
     return max(p[0], p[1], p[2]) == min(p[0], p[1], p[2])
 
 
-# --------------------------------------------------------------------------- Dormand-Prince 5(4)
+# --------------------------------------------------------------------------- DOP853 (scipy's, ported)
 
 
 @jit
@@ -166,56 +167,94 @@ def _rhs(kind, t, y, sp, out):
 
 
 @jit
-def _dp_step(kind, t, y, h, sp, k):
-    """One Dormand-Prince step of length h from (t, y): (y at t + h, error estimate (n,)); k (7, n) work."""
-    n = y.size
-    _rhs(kind, t, y, sp, k[0])
-    yi = np.empty(n)
-    for s in range(1, 7):
-        yi[:] = y
-        for j in range(s):
-            if DP_A[s, j] != 0.0:
-                yi += h * DP_A[s, j] * k[j]
-        _rhs(kind, t + DP_C[s] * h, yi, sp, k[s])
-    err = np.zeros(n)
-    for j in range(7):
-        err += h * DP_E[j] * k[j]
-    return yi, err  # the 7th stage point is the 5th-order solution
+def _combine(K, a, s, h):
+    """h * sum_j<s a_j K_j."""
+    dy = np.zeros(K.shape[1])
+    for j in range(s):
+        if a[j] != 0.0:
+            dy += a[j] * K[j]
+    return dy * h
 
 
 @jit
-def _err_norm(err, y0, y1, rtol, atol):
-    s = 0.0
-    for i in range(y0.size):
-        sc = atol[i] + rtol * max(abs(y0[i]), abs(y1[i]))
-        s += (err[i] / sc) ** 2
-    return math.sqrt(s / y0.size)
-
-
-@jit
-def _first_step(kind, t, y, sp, rtol, atol, span):
-    """Initial step (Hairer, Norsett & Wanner II.4, as scipy's ``select_initial_step`` for order 5)."""
-    n = y.size
-    f0 = np.empty(n)
-    _rhs(kind, t, y, sp, f0)
-    sc = atol + rtol * np.abs(y)
-    d0 = math.sqrt(np.mean((y / sc) ** 2))
-    d1 = math.sqrt(np.mean((f0 / sc) ** 2))
+def _dop_first_step(kind, t, y, f, t_bound, sp, rtol, atol):
+    """scipy's ``select_initial_step`` for the order-7 error estimator."""
+    span = abs(t_bound - t)
+    if span == 0.0:
+        return 0.0
+    scale = atol + np.abs(y) * rtol
+    d0 = math.sqrt(np.mean((y / scale) ** 2))
+    d1 = math.sqrt(np.mean((f / scale) ** 2))
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, span)
-    f1 = np.empty(n)
-    _rhs(kind, t + h0, y + h0 * f0, sp, f1)
-    d2 = math.sqrt(np.mean(((f1 - f0) / sc) ** 2)) / h0
-    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / 5)
+    f1 = np.empty(y.size)
+    _rhs(kind, t + h0, y + h0 * f, sp, f1)
+    d2 = math.sqrt(np.mean(((f1 - f) / scale) ** 2)) / h0
+    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / 8)
     return min(100 * h0, h1, span)
 
 
 @jit
-def _adapt(h, err):
-    """Next step length after an error norm ``err`` (safety 0.9, growth within [0.2, 10])."""
-    if err == 0.0:
-        return 10.0 * h
-    return h * min(10.0, max(0.2, 0.9 * err ** -0.2))
+def _dop_advance(kind, t, y, f, h_abs, t_bound, sp, rtol, atol, K):
+    """One accepted DOP853 step (scipy's ``RungeKutta._step_impl``): (t_new, y_new, h_abs next, ok).
+    K (16, n) holds the stages; K[12] is f at the new point."""
+    n = y.size
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    h_abs = max(h_abs, min_step)
+    rejected = False
+    while True:
+        if h_abs < min_step:
+            return t, y, h_abs, False
+        t_new = min(t + h_abs, t_bound)
+        h = t_new - t
+        h_abs = abs(h)
+        K[0] = f
+        for s in range(1, DOP_STAGES):
+            _rhs(kind, t + DOP_C[s] * h, y + _combine(K, DOP_A[s], s, h), sp, K[s])
+        y_new = y + _combine(K, DOP_B, DOP_STAGES, h)
+        _rhs(kind, t + h, y_new, sp, K[DOP_STAGES])
+        e5 = np.zeros(n)
+        e3 = np.zeros(n)
+        for j in range(DOP_STAGES + 1):
+            e5 += DOP_E5[j] * K[j]
+            e3 += DOP_E3[j] * K[j]
+        scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
+        n5 = np.sum((e5 / scale) ** 2)
+        n3 = np.sum((e3 / scale) ** 2)
+        err = 0.0 if n5 == 0 and n3 == 0 else abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * n)
+        if err < 1:
+            factor = 10.0 if err == 0 else min(10.0, 0.9 * err ** DOP_EXPONENT)
+            if rejected:
+                factor = min(1.0, factor)
+            return t_new, y_new, h_abs * factor, True
+        h_abs *= max(0.2, 0.9 * err ** DOP_EXPONENT)
+        rejected = True
+
+
+@jit
+def _dop_dense(kind, t_old, h, y_old, y_new, sp, K):
+    """Interpolant coefficients F (7, n) of the last step (scipy's ``DOP853._dense_output_impl``)."""
+    for s in range(DOP_STAGES + 1, DOP_EXTENDED):
+        _rhs(kind, t_old + DOP_C[s] * h, y_old + _combine(K, DOP_A[s], s, h), sp, K[s])
+    F = np.empty((DOP_POWER, y_old.size))
+    dy = y_new - y_old
+    F[0] = dy
+    F[1] = h * K[0] - dy
+    F[2] = 2 * dy - h * (K[DOP_STAGES] + K[0])
+    for i in range(DOP_POWER - 3):
+        F[3 + i] = _combine(K, DOP_D[i], DOP_EXTENDED, h)
+    return F
+
+
+@jit
+def _dense(t, t_old, h, y_old, F):
+    """The DOP853 interpolant at t (``Dop853DenseOutput``)."""
+    x = (t - t_old) / h
+    y = np.zeros(y_old.size)
+    for i in range(DOP_POWER):
+        y += F[DOP_POWER - 1 - i]
+        y *= x if i % 2 == 0 else 1 - x
+    return y + y_old
 
 
 # --------------------------------------------------------------------------- Brent root, golden section
@@ -262,23 +301,70 @@ def _brent(what, a, b, xtol, ctx, steps, nsteps, p):
 
 
 @jit
-def _golden_min(what, a, b, xtol, ctx, steps, nsteps, p):
-    """(x, h(x)) minimising h over [a, b] by golden section to ``xtol`` (guaranteed for a unimodal h)."""
-    r = (math.sqrt(5.0) - 1) / 2
-    x1, x2 = b - r * (b - a), a + r * (b - a)
-    f1, f2 = _h(what, x1, ctx, steps, nsteps, p), _h(what, x2, ctx, steps, nsteps, p)
-    for _ in range(GOLDEN_ITER):
-        if not b - a > xtol:
-            break
-        if f1 <= f2:
-            b, x2, f2 = x2, x1, f1
-            x1 = b - r * (b - a)
-            f1 = _h(what, x1, ctx, steps, nsteps, p)
+def _bounded_min(what, a, b, xatol, ctx, steps, nsteps, p):
+    """(x, h(x)) minimising h over [a, b]: scipy's bounded Brent (``minimize_scalar(method="bounded")``), ported."""
+    sqrt_eps = math.sqrt(2.2e-16)
+    golden_mean = 0.5 * (3.0 - math.sqrt(5.0))
+    fulc = a + golden_mean * (b - a)
+    nfc, xf = fulc, fulc
+    rat = e = 0.0
+    fx = _h(what, xf, ctx, steps, nsteps, p)
+    num = 1
+    ffulc = fnfc = fx
+    xm = 0.5 * (a + b)
+    tol1 = sqrt_eps * abs(xf) + xatol / 3.0
+    tol2 = 2.0 * tol1
+    while abs(xf - xm) > (tol2 - 0.5 * (b - a)):
+        golden = True
+        if abs(e) > tol1:  # parabolic fit
+            golden = False
+            r = (xf - nfc) * (fx - ffulc)
+            q = (xf - fulc) * (fx - fnfc)
+            pp = (xf - fulc) * q - (xf - nfc) * r
+            q = 2.0 * (q - r)
+            if q > 0.0:
+                pp = -pp
+            q = abs(q)
+            r = e
+            e = rat
+            if abs(pp) < abs(0.5 * q * r) and pp > q * (a - xf) and pp < q * (b - xf):
+                rat = pp / q
+                x = xf + rat
+                if (x - a) < tol2 or (b - x) < tol2:
+                    rat = tol1 * (1.0 if xm - xf >= 0 else -1.0)
+            else:
+                golden = True
+        if golden:
+            e = a - xf if xf >= xm else b - xf
+            rat = golden_mean * e
+        si = 1.0 if rat >= 0 else -1.0
+        x = xf + si * max(abs(rat), tol1)
+        fu = _h(what, x, ctx, steps, nsteps, p)
+        num += 1
+        if fu <= fx:
+            if x >= xf:
+                a = xf
+            else:
+                b = xf
+            fulc, ffulc = nfc, fnfc
+            nfc, fnfc = xf, fx
+            xf, fx = x, fu
         else:
-            a, x1, f1 = x1, x2, f2
-            x2 = a + r * (b - a)
-            f2 = _h(what, x2, ctx, steps, nsteps, p)
-    return (x1, f1) if f1 <= f2 else (x2, f2)
+            if x < xf:
+                a = x
+            else:
+                b = x
+            if fu <= fnfc or nfc == xf:
+                fulc, ffulc = nfc, fnfc
+                nfc, fnfc = x, fu
+            elif fu <= ffulc or fulc == xf or fulc == nfc:
+                fulc, ffulc = x, fu
+        xm = 0.5 * (a + b)
+        tol1 = sqrt_eps * abs(xf) + xatol / 3.0
+        tol2 = 2.0 * tol1
+        if num >= BOUNDED_MAXFUN:
+            break
+    return xf, fx
 
 
 # --------------------------------------------------------------------------- functions of time
@@ -287,22 +373,21 @@ GAP, NORMAL, EVENT = 0, 1, 2  # what _h evaluates
 
 
 @jit
-def _orient(t, ctx, steps, nsteps):
-    """(q normalised (4,), w body (3,)) of the flight at t; ``steps`` rows (t_k, q, w) of accepted steps."""
-    if nsteps == 0 or t <= steps[0, 0]:
-        y = ctx[7:14].copy() if nsteps == 0 else steps[0, 1:8].copy()
+def _orient(t, ctx, tab, ntab):
+    """(q normalised (4,), w body (3,)) of the flight at t from the rotation step table ``tab`` (rows
+    t_old, t_new, -, y_old (7), F (7 x 7)): the interpolant of the first step ending at or after t."""
+    if ntab == 0:
+        y = ctx[7:14].copy()
     else:
-        lo, hi = 0, nsteps - 1  # last step start <= t
+        lo, hi = 0, ntab - 1
         while lo < hi:
-            mid = (lo + hi + 1) // 2
-            if steps[mid, 0] <= t:
-                lo = mid
+            mid = (lo + hi) // 2
+            if tab[mid, 1] >= t:
+                hi = mid
             else:
-                hi = mid - 1
-        y = steps[lo, 1:8].copy()
-        tau = t - steps[lo, 0]
-        if tau > 0.0:
-            y = _dp_step(ROT, steps[lo, 0], y, tau, ctx[14:17], np.empty((7, 7)))[0]
+                lo = mid + 1
+        row = tab[lo]
+        y = _dense(t, row[0], row[1] - row[0], row[3:10], row[10:].copy().reshape(DOP_POWER, 7))
     s = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2 + y[3] ** 2)
     y[:4] /= s
     return y[:4], y[4:7]
@@ -344,18 +429,17 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
             if n == 0 or ti > ts[n - 1]:
                 ts[n] = ti
                 n += 1
-        if what == GAP:
+        if what == GAP:  # the rotation is integrated over the window, as the Python scan does
             steps, nsteps = _extend(ts[n - 1], ctx, steps, nsteps, p)
+        stop = n
         for i in range(n):
             hs[i] = _h(what, ts[i], ctx, steps, nsteps, p)
-        stop = n
-        for i in range(1, n):
-            if hs[i] <= 0.0:
+            if i > 0 and hs[i] <= 0.0:
                 stop = i
                 break
         for j in range(1, min(stop, n - 1)):
             if hs[j] < hs[j - 1] and hs[j] < hs[j + 1]:
-                x, fx = _golden_min(what, ts[j - 1], ts[j + 1], xtol, ctx, steps, nsteps, p)
+                x, fx = _bounded_min(what, ts[j - 1], ts[j + 1], xtol, ctx, steps, nsteps, p)
                 if fx < 0.0 and hs[j - 1] > 0.0:
                     return _brent(what, ts[j - 1], x, xtol, ctx, steps, nsteps, p), steps, nsteps
         if stop < n:
@@ -369,47 +453,49 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
 
 
 @jit
-def _extend(t, ctx, steps, nsteps, p):
-    """Integrate the rotation of the flight ctx until t; returns the grown step table and its length."""
+def _extend(t, ctx, tab, ntab, p):
+    """Integrate the rotation of the flight ctx until t (``flight.RotationFlight``: DOP853 in chunks of a
+    period, each a fresh solve); returns the grown step table and its length. ctx[27] = 1 on failure."""
     if ctx[18] == 0.0:
-        return steps, nsteps
-    if nsteps == 0:
-        steps[0, 0] = ctx[0]
-        steps[0, 1:8] = ctx[7:14]
-        steps[0, 8] = 0.0  # length of the step starting here (0: not yet taken)
-        nsteps = 1
+        return tab, ntab
     tol = p[P_TOL]
     atol = np.full(7, tol * 1e-3)
-    k = np.empty((7, 7))
-    last = nsteps - 1
-    h = steps[last, 8] if steps[last, 8] > 0 else _first_step(ROT, steps[last, 0], steps[last, 1:8],
-                                                             ctx[14:17], tol, atol, p[P_PERIOD])
-    while steps[last, 0] < t:
-        y0 = steps[last, 1:8].copy()
-        y1, err = _dp_step(ROT, steps[last, 0], y0, h, ctx[14:17], k)
-        e = _err_norm(err, y0, y1, tol, atol)
-        if e > 1.0:
-            h = _adapt(h, e)
-            continue
-        if nsteps == steps.shape[0]:
-            grown = np.empty((2 * nsteps, 9))
-            grown[:nsteps] = steps
-            steps = grown
-        steps[last, 8] = h
-        steps[nsteps, 0] = steps[last, 0] + h
-        steps[nsteps, 1:8] = y1
-        steps[nsteps, 8] = 0.0
-        last, nsteps = nsteps, nsteps + 1
-        h = _adapt(h, e)
-    steps[last, 8] = h  # proposal for the next extension
-    return steps, nsteps
+    K = np.empty((DOP_EXTENDED, 7))
+    inertia = ctx[14:17].copy()
+    while ctx[19] < t:
+        t_next = max(t, ctx[19] + p[P_PERIOD])
+        tt = ctx[19]
+        y = ctx[20:27].copy()
+        f = np.empty(7)
+        _rhs(ROT, tt, y, inertia, f)
+        h_abs = _dop_first_step(ROT, tt, y, f, t_next, inertia, tol, atol)
+        while tt < t_next:
+            t_new, y_new, h_abs, ok = _dop_advance(ROT, tt, y, f, h_abs, t_next, inertia, tol, atol, K)
+            if not ok:
+                ctx[27] = 1.0
+                return tab, ntab
+            if ntab == tab.shape[0]:
+                grown = np.empty((2 * ntab, ROT_WIDTH))
+                grown[:ntab] = tab
+                tab = grown
+            tab[ntab, 0], tab[ntab, 1], tab[ntab, 2] = tt, t_new, 0.0
+            tab[ntab, 3:10] = y
+            tab[ntab, 10:] = _dop_dense(ROT, tt, t_new - tt, y, y_new, inertia, K).reshape(DOP_POWER * 7)
+            ntab += 1
+            tt, y, f = t_new, y_new, K[DOP_STAGES].copy()
+        ctx[19] = tt
+        ctx[20:27] = y
+    return tab, ntab
 
 
 @jit
 def _flight_ctx(p, y):
-    """Flight record: t0, r0 (3), v0 (3), q0, w0 (7), inertia (3), phase at t0, rotating."""
-    ctx = np.empty(19)
+    """Flight record: t0, r0 (3), v0 (3), q0, w0 (7), inertia (3), phase at t0, rotating, end of the rotation
+    integration and its state (7), failure flag."""
+    ctx = np.zeros(28)
     ctx[:14] = y
+    ctx[19] = y[0]
+    ctx[20:27] = y[7:14]
     ctx[14:17] = p[P_INERTIA:P_INERTIA + 3]
     ctx[17] = (p[P_OMEGA] * y[0] + p[P_PHASE]) % (2 * math.pi)
     rotating = p[P_ROTATION] != 0.0 and (y[11] != 0.0 or y[12] != 0.0 or y[13] != 0.0)
@@ -434,7 +520,7 @@ def _state_at(t, ctx, steps, nsteps, p):
 def _fly(p, y, t_end, on_plane, rows, carry):
     """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, rows)."""
     ctx = _flight_ctx(p, y)
-    steps = np.empty((64, 9))
+    steps = np.empty((64, ROT_WIDTH))
     nsteps = 0
     t_from = y[0]
     scan, xtol = p[P_SCAN], p[P_TOL] * p[P_SCAN]
@@ -453,6 +539,8 @@ def _fly(p, y, t_end, on_plane, rows, carry):
         if math.isnan(t_from):
             return y, 2, rows
     tc, steps, nsteps = _first_root(GAP, t_from, t_end, scan, xtol, ctx, steps, nsteps, p)
+    if ctx[27] != 0.0:
+        return y, 3, rows
     t_stop = t_end if math.isnan(tc) else tc
     k0 = math.ceil(y[0] / p[P_SAMPLE] - 1e-9)
     k1 = math.floor(t_stop / p[P_SAMPLE] - 1e-9)
@@ -839,12 +927,10 @@ def _slide_rhs(t, y, sp, stick, out):
 
 
 @jit
-def _event(t, ctx, steps, p):
-    """Sliding event at t inside the step from ctx = (t_k, y_k (13)) with parameters steps (as sp)."""
-    sp = steps[0]
-    y = _dp_step(int(ctx[14]), ctx[0], ctx[1:14], t - ctx[0], sp, np.empty((7, 13)))[0] if t > ctx[0] \
-        else ctx[1:14].copy()
-    return _event_at(t, y, sp)
+def _event(t, ctx, tab, p):
+    """Sliding event at t inside the step of ctx = (t_old, h, y_old (13), kind, sp) with interpolant tab (F)."""
+    y = _dense(t, ctx[0], ctx[1], ctx[2:15], tab)
+    return _event_at(t, y, ctx[16:16 + N_SLIDE])
 
 
 @jit
@@ -916,9 +1002,9 @@ def _slide(p, y, t_end, rows, carry):
     """One sliding phase from state y (``motion._slide`` with ``sliding.slide``): (state, lifted, rows, status)."""
     t0 = y[0]
     step, tol = p[P_SCAN], p[P_TOL]
-    dummy = np.empty((1, 9))
+    dummy = np.empty((1, ROT_WIDTH))
     if _normal(p, t0) > 0:
-        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(19), dummy, 0, p)[0]
+        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(28), dummy, 0, p)[0]
     else:
         t_lift = t0
     t_stop = t_end if math.isnan(t_lift) else t_lift
@@ -938,14 +1024,15 @@ def _slide(p, y, t_end, rows, carry):
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
     height = y[3]
     stick, z = _settle(t0, z, sp, True)
-    t, h, stalled, status = t0, 0.0, 0, DONE
-    k = np.empty((7, 13))
-    ctx = np.empty(19)
+    t, stalled, status = t0, 0, DONE
+    K = np.empty((DOP_EXTENDED, 13))
+    F = np.empty((DOP_POWER, 13))
+    ctx = np.empty(16 + N_SLIDE)
     sample = p[P_SAMPLE]
     next_k = math.ceil(t0 / sample - 1e-9)
     while t < t_stop and status == DONE:
         kind = STICK if stick else SLIP
-        if p[P_MU] == 0.0:
+        if p[P_MU] == 0.0:  # without friction there is no stick or slip regime to change
             sp[S_EVENT] = EV_NONE
         elif stick:
             sp[S_EVENT] = EV_STICK
@@ -953,45 +1040,41 @@ def _slide(p, y, t_end, rows, carry):
             s0 = _geometry(z, sp)[1]
             nrm = max(math.hypot(s0[0], s0[1]), 1e-300)
             sp[S_EVENT], sp[S_REF], sp[S_REF + 1] = EV_SLIP, s0[0] / nrm, s0[1] / nrm
-        t_phase = t
+        # One integration chunk of 40 scan steps, a fresh solve as in the Python loop.
+        t_phase, t_chunk = t, min(t_stop, t + 40 * step)
         g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
-        # Chunks of 40 scan steps, as the Python loop's integration chunks (the slip reference is renewed).
-        t_chunk = min(t_stop, t + 40 * step)
-        if h == 0.0:
-            h = _first_step(kind, t, z, sp, tol, atol, t_chunk - t)
+        f = np.empty(13)
+        _rhs(kind, t, z, sp, f)
+        h_abs = _dop_first_step(kind, t, z, f, t_chunk, sp, tol, atol)
         fired, count = False, 0
         while t < t_chunk and not fired:
             count += 1
-            if count > MAX_STEPS_PER_PHASE:
+            if count > MAX_STEPS_PER_CHUNK:
                 status = SLIDE_RHS
                 break
-            h = min(h, t_chunk - t)
-            z1, err = _dp_step(kind, t, z, h, sp, k)
-            e = _err_norm(err, z, z1, tol, atol)
-            if e > 1.0:
-                h = _adapt(h, e)
-                continue
-            t1 = t + h if t + h < t_chunk else t_chunk
-            if sp[S_EVENT] != EV_NONE:
-                g_new = _event_at(t1, z1, sp)
-                if g_old >= 0.0 and g_new <= 0.0:
-                    ctx[0] = t
-                    ctx[1:14] = z
-                    ctx[14] = kind
-                    t_ev = _brent(EVENT, t, t1, 4 * EPS, ctx, sp.reshape(1, N_SLIDE), 0, p)
-                    z1 = _dp_step(kind, t, z, t_ev - t, sp, k)[0] if t_ev > t else z.copy()
-                    t1, fired = t_ev, True
-                g_old = g_new
-            while next_k * sample < t1:  # trajectory rows at the sample times inside this step
+            t_new, z_new, h_abs, ok = _dop_advance(kind, t, z, f, h_abs, t_chunk, sp, tol, atol, K)
+            if not ok:
+                status = SLIDE_FAIL
+                break
+            g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
+            fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
+            if fired or next_k * sample < t_new:
+                F = _dop_dense(kind, t, t_new - t, z, z_new, sp, K)
+            t_last = t_new
+            if fired:
+                ctx[0], ctx[1], ctx[15] = t, t_new - t, kind
+                ctx[2:15] = z
+                ctx[16:] = sp
+                t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, 0, p)
+                z_new = _dense(t_last, t, t_new - t, z, F)
+            while next_k * sample < t_last:  # trajectory rows at the sample times inside this step
                 ts = next_k * sample
                 if ts >= t0:
-                    zs = _dp_step(kind, t, z, ts - t, sp, k)[0] if ts > t else z.copy()
-                    rows = _record(rows, carry, _slide_state(ts, zs, height), SLIDING)
+                    rows = _record(rows, carry, _slide_state(ts, _dense(ts, t, t_new - t, z, F), height), SLIDING)
                 next_k += 1
-            t, z = t1, z1
-            h = _adapt(h, e)
+            t, z, f, g_old = t_last, z_new, K[DOP_STAGES].copy(), g_new
         stalled = stalled + 1 if t <= t_phase else 0
-        if stalled > 200:
+        if stalled > MAX_STALLED_EVENTS:
             status = SLIDE_STALLED
         if fired:
             stick, z = _settle(t, z, sp, not stick)
@@ -1041,6 +1124,8 @@ def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
             carry[C_T_FLIGHT] += y[0] - t_before
             if fly_status == 1:
                 return y, rows, imps, warns, DONE
+            if fly_status == 3:
+                return y, rows, imps, warns, ROT_FAIL
             u_n = 0.0
             if fly_status == 0 and _contact_velocity(p, y) < -_velocity_noise(p, y):
                 if carry[C_NIMP] >= p[P_MAX_IMPACTS]:
@@ -1120,13 +1205,18 @@ def _state(y: np.ndarray) -> motion.State:
 
 
 def _raise(status: int, t: float, regime: int) -> None:
+    """The Python loop's errors for the compiled loop's failure codes."""
     if status == STALLED:
         raise SymmechError(f"grain: the simulation stopped advancing at t = {t:.9g} s ({MAX_IDLE_STEPS} regime "
                            f"changes without advancing time, {motion.REGIMES[regime]} regime)")
     if status == SLIDE_STALLED:
-        raise SymmechError(f"sliding stagnates at t = {t:.9g} s: 200 regime changes without advancing time")
-    raise SymmechError(f"sliding integration stagnates at t = {t:.9g} s (more than {MAX_STEPS_PER_PHASE} steps "
-                       "between two events)")
+        raise SymmechError(f"sliding stagnates at t = {t:.9g} s: {MAX_STALLED_EVENTS} regime changes "
+                           "without advancing time")
+    if status == SLIDE_RHS:
+        raise SymmechError(f"sliding integration stagnates at t = {t:.9g} s (more than "
+                           f"{sliding.MAX_RHS_PER_PHASE} evaluations in one chunk)")
+    what = "sliding integration" if status == SLIDE_FAIL else "torque-free rotation"
+    raise SymmechError(f"{what} failed at t = {t:.9g} s: required step size is less than spacing between numbers")
 
 
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
