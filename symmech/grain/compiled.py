@@ -167,13 +167,13 @@ def _rhs(kind, t, y, sp, out):
 
 
 @jit
-def _combine(K, a, s, h):
-    """h * sum_j<s a_j K_j."""
-    dy = np.zeros(K.shape[1])
-    for j in range(s):
-        if a[j] != 0.0:
-            dy += a[j] * K[j]
-    return dy * h
+def _combine(out, y, K, a, s, h):
+    """out = y + h sum_j<s a_j K_j, element by element (no temporaries: this is the hot loop)."""
+    for i in range(K.shape[1]):
+        acc = 0.0
+        for j in range(s):
+            acc += a[j] * K[j, i]
+        out[i] = y[i] + acc * h
 
 
 @jit
@@ -202,6 +202,8 @@ def _dop_advance(kind, t, y, f, h_abs, t_bound, sp, rtol, atol, K):
     min_step = 10 * abs(np.nextafter(t, np.inf) - t)
     h_abs = max(h_abs, min_step)
     rejected = False
+    yi = np.empty(n)
+    y_new = np.empty(n)
     while True:
         if h_abs < min_step:
             return t, y, h_abs, False
@@ -210,17 +212,19 @@ def _dop_advance(kind, t, y, f, h_abs, t_bound, sp, rtol, atol, K):
         h_abs = abs(h)
         K[0] = f
         for s in range(1, DOP_STAGES):
-            _rhs(kind, t + DOP_C[s] * h, y + _combine(K, DOP_A[s], s, h), sp, K[s])
-        y_new = y + _combine(K, DOP_B, DOP_STAGES, h)
+            _combine(yi, y, K, DOP_A[s], s, h)
+            _rhs(kind, t + DOP_C[s] * h, yi, sp, K[s])
+        _combine(y_new, y, K, DOP_B, DOP_STAGES, h)
         _rhs(kind, t + h, y_new, sp, K[DOP_STAGES])
-        e5 = np.zeros(n)
-        e3 = np.zeros(n)
-        for j in range(DOP_STAGES + 1):
-            e5 += DOP_E5[j] * K[j]
-            e3 += DOP_E3[j] * K[j]
-        scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
-        n5 = np.sum((e5 / scale) ** 2)
-        n3 = np.sum((e3 / scale) ** 2)
+        n5 = n3 = 0.0
+        for i in range(n):
+            e5 = e3 = 0.0
+            for j in range(DOP_STAGES + 1):
+                e5 += DOP_E5[j] * K[j, i]
+                e3 += DOP_E3[j] * K[j, i]
+            scale = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+            n5 += (e5 / scale) ** 2
+            n3 += (e3 / scale) ** 2
         err = 0.0 if n5 == 0 and n3 == 0 else abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * n)
         if err < 1:
             factor = 10.0 if err == 0 else min(10.0, 0.9 * err ** DOP_EXPONENT)
@@ -234,27 +238,36 @@ def _dop_advance(kind, t, y, f, h_abs, t_bound, sp, rtol, atol, K):
 @jit
 def _dop_dense(kind, t_old, h, y_old, y_new, sp, K):
     """Interpolant coefficients F (7, n) of the last step (scipy's ``DOP853._dense_output_impl``)."""
+    n = y_old.size
+    yi = np.empty(n)
     for s in range(DOP_STAGES + 1, DOP_EXTENDED):
-        _rhs(kind, t_old + DOP_C[s] * h, y_old + _combine(K, DOP_A[s], s, h), sp, K[s])
-    F = np.empty((DOP_POWER, y_old.size))
-    dy = y_new - y_old
-    F[0] = dy
-    F[1] = h * K[0] - dy
-    F[2] = 2 * dy - h * (K[DOP_STAGES] + K[0])
-    for i in range(DOP_POWER - 3):
-        F[3 + i] = _combine(K, DOP_D[i], DOP_EXTENDED, h)
+        _combine(yi, y_old, K, DOP_A[s], s, h)
+        _rhs(kind, t_old + DOP_C[s] * h, yi, sp, K[s])
+    F = np.empty((DOP_POWER, n))
+    zero = np.zeros(n)
+    for i in range(n):
+        dy = y_new[i] - y_old[i]
+        F[0, i] = dy
+        F[1, i] = h * K[0, i] - dy
+        F[2, i] = 2 * dy - h * (K[DOP_STAGES, i] + K[0, i])
+    for r in range(DOP_POWER - 3):
+        _combine(F[3 + r], zero, K, DOP_D[r], DOP_EXTENDED, h)
     return F
 
 
 @jit
 def _dense(t, t_old, h, y_old, F):
-    """The DOP853 interpolant at t (``Dop853DenseOutput``)."""
+    """The DOP853 interpolant at t (``Dop853DenseOutput``); F (7 n,) the coefficients row by row."""
     x = (t - t_old) / h
-    y = np.zeros(y_old.size)
-    for i in range(DOP_POWER):
-        y += F[DOP_POWER - 1 - i]
-        y *= x if i % 2 == 0 else 1 - x
-    return y + y_old
+    n = y_old.size
+    y = np.empty(n)
+    for i in range(n):
+        acc = 0.0
+        for r in range(DOP_POWER):
+            acc += F[(DOP_POWER - 1 - r) * n + i]
+            acc *= x if r % 2 == 0 else 1 - x
+        y[i] = acc + y_old[i]
+    return y
 
 
 # --------------------------------------------------------------------------- Brent root, golden section
@@ -387,7 +400,7 @@ def _orient(t, ctx, tab, ntab):
             else:
                 lo = mid + 1
         row = tab[lo]
-        y = _dense(t, row[0], row[1] - row[0], row[3:10], row[10:].copy().reshape(DOP_POWER, 7))
+        y = _dense(t, row[0], row[1] - row[0], row[3:10], tab[lo, 10:])
     s = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2 + y[3] ** 2)
     y[:4] /= s
     return y[:4], y[4:7]
@@ -863,21 +876,27 @@ def _slide_surface(sp, t):
 
 
 @jit
+def _offset_now(y, sp):
+    """Contact offset R (3 floats) of the sliding grain: fixed for a sphere, turned with q otherwise."""
+    if sp[S_SPHERE] != 0.0:
+        return sp[S_R0], sp[S_R0 + 1], sp[S_R0 + 2]
+    q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
+    v0, v1, v2 = sp[S_RB], sp[S_RB + 1], sp[S_RB + 2]
+    t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
+    qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
+    return (v0 + (q0 * t0 + u1 * t2 - u2 * t1) / qq, v1 + (q0 * t1 + u2 * t0 - u0 * t2) / qq,
+            v2 + (q0 * t2 + u0 * t1 - u1 * t0) / qq)
+
+
+@jit
 def _geometry(y, sp):
     """Contact offset R (3,), slip s (2,), slip acceleration c (2,) of the carried contact point."""
-    w = y[4:7]
-    if sp[S_SPHERE] != 0.0:
-        R = sp[S_R0:S_R0 + 3].copy()
-    else:
-        q = y[7:11]
-        u = q[1:4]
-        v = sp[S_RB:S_RB + 3]
-        tt = 2.0 * _cross(u, v)
-        R = v + (q[0] * tt + _cross(u, tt)) / (q @ q)
-    wR = _cross(w, R)
-    s = y[2:4] + wR[:2]
-    c = _cross(w, np.array([-w[2] * R[1], w[2] * R[0], 0.0]))[:2]
-    return R, s, c
+    R0, R1, R2 = _offset_now(y, sp)
+    w0, w1, w2 = y[4], y[5], y[6]
+    s = np.array([y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2])
+    # The contact point turns with the spin about the normal: R' = w_z e_z x R; c = (w x R')_t.
+    c = np.array([-w2 * (w2 * R0), w2 * (-w2 * R1)])
+    return np.array([R0, R1, R2]), s, c
 
 
 @jit
@@ -886,50 +905,65 @@ def _mobility(sp):
 
 
 @jit
-def _B(R, sp):
-    Rx = np.array([[0.0, -R[2], R[1]], [R[2], 0.0, -R[0]], [-R[1], R[0], 0.0]])
-    M = _mobility(sp)
-    return (np.eye(3) - Rx @ M @ Rx)[:2, :2].copy()
+def _solve_B(R0, R1, R2, sp, b0, b1):
+    """B^-1 b for B = (E - [R]x M [R]x)_tt (2 x 2, Cramer's rule)."""
+    Rx = ((0.0, -R2, R1), (R2, 0.0, -R0), (-R1, R0, 0.0))
+    B = np.zeros((2, 2))
+    for i in range(2):
+        for j in range(2):
+            acc = 0.0
+            for k in range(3):
+                for m in range(3):
+                    acc += Rx[i][k] * sp[S_M + 3 * k + m] * Rx[m][j]
+            B[i, j] = (1.0 if i == j else 0.0) - acc
+    det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
+    return (B[1, 1] * b0 - B[0, 1] * b1) / det, (B[0, 0] * b1 - B[1, 0] * b0) / det
 
 
 @jit
 def _stick_force(t, y, sp):
     _, acc = _slide_surface(sp, t)
     R, _, c = _geometry(y, sp)
-    f = sp[S_G:S_G + 2] - acc[:2]
-    return -np.linalg.solve(_B(R, sp), f + c), acc[2] - sp[S_G + 2]
+    p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_G] - acc[0] + c[0], sp[S_G + 1] - acc[1] + c[1])
+    return np.array([-p0, -p1]), acc[2] - sp[S_G + 2]
 
 
 @jit
 def _slide_rhs(t, y, sp, stick, out):
-    """Sliding ODE y = (r (2), v (2), w (3) KXYZ, q (4), W, D) (``sliding._Contact.rhs``)."""
-    vel, acc = _slide_surface(sp, t)
-    R, s, c = _geometry(y, sp)
-    n = acc[2] - sp[S_G + 2]
-    f = sp[S_G:S_G + 2] - acc[:2]
-    if stick:
-        phi = -np.linalg.solve(_B(R, sp), f + c)
-    else:
-        speed = math.hypot(s[0], s[1])
-        phi = -sp[S_MU] * n / speed * s if speed > 0.0 else np.zeros(2)
-    force = np.array([phi[0], phi[1], n])
+    """Sliding ODE y = (r (2), v (2), w (3) KXYZ, q (4), W, D) (``sliding._Contact.rhs``), in scalars."""
+    ph = sp[S_OMEGA] * t + sp[S_PHASE]
+    sv = sp[S_AMP] * sp[S_OMEGA] * math.cos(ph)
+    sa = -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(ph)
+    d0, d1, d2 = sp[S_DIR], sp[S_DIR + 1], sp[S_DIR + 2]
+    R0, R1, R2 = _offset_now(y, sp)
     w0, w1, w2 = y[4], y[5], y[6]
+    s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
+    n = sa * d2 - sp[S_G + 2]
+    f0, f1 = sp[S_G] - sa * d0, sp[S_G + 1] - sa * d1
+    if stick:
+        p0, p1 = _solve_B(R0, R1, R2, sp, f0 - w2 * w2 * R0, f1 - w2 * w2 * R1)
+        phi0, phi1 = -p0, -p1
+    else:
+        speed = math.hypot(s0, s1)
+        phi0, phi1 = (-sp[S_MU] * n / speed * s0, -sp[S_MU] * n / speed * s1) if speed > 0.0 else (0.0, 0.0)
+    tx, ty, tz = R1 * n - R2 * phi1, R2 * phi0 - R0 * n, R0 * phi1 - R1 * phi0
     q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
-    out[0:2] = y[2:4]
-    out[2:4] = f + phi
-    out[4:7] = _mobility(sp) @ _cross(R, force)
+    out[0], out[1] = y[2], y[3]
+    out[2], out[3] = f0 + phi0, f1 + phi1
+    for i in range(3):
+        out[4 + i] = sp[S_M + 3 * i] * tx + sp[S_M + 3 * i + 1] * ty + sp[S_M + 3 * i + 2] * tz
     out[7] = 0.5 * (-w0 * q1 - w1 * q2 - w2 * q3)
     out[8] = 0.5 * (w0 * q0 + w1 * q3 - w2 * q2)
     out[9] = 0.5 * (w1 * q0 + w2 * q1 - w0 * q3)
     out[10] = 0.5 * (w2 * q0 + w0 * q2 - w1 * q1)
-    out[11] = force @ vel
-    out[12] = -(phi[0] * s[0] + phi[1] * s[1])
+    out[11] = sv * (phi0 * d0 + phi1 * d1 + n * d2)
+    out[12] = -(phi0 * s0 + phi1 * s1)
 
 
 @jit
 def _event(t, ctx, tab, p):
     """Sliding event at t inside the step of ctx = (t_old, h, y_old (13), kind, sp) with interpolant tab (F)."""
-    y = _dense(t, ctx[0], ctx[1], ctx[2:15], tab)
+    y = _dense(t, ctx[0], ctx[1], ctx[2:15], tab[0])
     return _event_at(t, y, ctx[16:16 + N_SLIDE])
 
 
@@ -967,7 +1001,7 @@ def _settle(t, y, sp, may_stick):
         target = 2.0 * v_stop * d / max(math.hypot(d[0], d[1]), 1e-300)
     y = y.copy()
     before = _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
-    dphi = np.linalg.solve(_B(R, sp), target - s)
+    dphi = np.array(_solve_B(R[0], R[1], R[2], sp, target[0] - s[0], target[1] - s[1]))
     y[2:4] += dphi
     y[4:7] += _mobility(sp) @ _cross(R, np.array([dphi[0], dphi[1], 0.0]))
     y[12] += before - _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
@@ -1026,7 +1060,7 @@ def _slide(p, y, t_end, rows, carry):
     stick, z = _settle(t0, z, sp, True)
     t, stalled, status = t0, 0, DONE
     K = np.empty((DOP_EXTENDED, 13))
-    F = np.empty((DOP_POWER, 13))
+    F = np.empty((1, DOP_POWER * 13))
     ctx = np.empty(16 + N_SLIDE)
     sample = p[P_SAMPLE]
     next_k = math.ceil(t0 / sample - 1e-9)
@@ -1059,18 +1093,18 @@ def _slide(p, y, t_end, rows, carry):
             g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
             fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
             if fired or next_k * sample < t_new:
-                F = _dop_dense(kind, t, t_new - t, z, z_new, sp, K)
+                F = _dop_dense(kind, t, t_new - t, z, z_new, sp, K).reshape(1, DOP_POWER * 13)
             t_last = t_new
             if fired:
                 ctx[0], ctx[1], ctx[15] = t, t_new - t, kind
                 ctx[2:15] = z
                 ctx[16:] = sp
                 t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, 0, p)
-                z_new = _dense(t_last, t, t_new - t, z, F)
+                z_new = _dense(t_last, t, t_new - t, z, F[0])
             while next_k * sample < t_last:  # trajectory rows at the sample times inside this step
                 ts = next_k * sample
                 if ts >= t0:
-                    rows = _record(rows, carry, _slide_state(ts, _dense(ts, t, t_new - t, z, F), height), SLIDING)
+                    rows = _record(rows, carry, _slide_state(ts, _dense(ts, t, t_new - t, z, F[0]), height), SLIDING)
                 next_k += 1
             t, z, f, g_old = t_last, z_new, K[DOP_STAGES].copy(), g_new
         stalled = stalled + 1 if t <= t_phase else 0
