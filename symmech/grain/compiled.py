@@ -28,11 +28,14 @@ Parameters travel in one float64 vector (layout ``P_*`` below), the state as
 (trajectory rows, impact rows, warning codes) and are turned into a
 ``motion.Motion`` with the same structure as the Python loop's. The compiled
 loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
-``on_step`` is called; this does not change the result.
+``on_step`` is called; this does not change the result. ``simulate_many`` runs
+grains on threads (the loop releases the GIL).
 """
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
@@ -1288,3 +1291,11 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
     impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])]]
     return motion.Motion(trajectory, impacts, time_in, list(dict.fromkeys(warnings)), start, final, extra)
+
+
+def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float,
+                  workers: int | None = None) -> list:
+    """Grains with their own models and start states, each as :func:`simulate`, on ``workers`` threads
+    (default: one per core); the compiled loop releases the GIL, so the grains run in parallel."""
+    with ThreadPoolExecutor(workers or os.cpu_count() or 1) as pool:
+        return list(pool.map(lambda ms: simulate(ms[0], num, ms[1], t_end), zip(models, starts)))

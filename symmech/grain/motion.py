@@ -97,9 +97,11 @@ class Numerics:
     """Numerical choices. Accurate mode: ``tolerance`` (relative; times to tolerance x scan step),
     ``scan_step`` [s] for root bracketing. Paper mode: step ``dt`` [s], ``nodes`` on the body surface,
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
-    bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file."""
+    bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
+    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`) or "python" (this loop)."""
 
     mode: str = "accurate"
+    engine: str = "compiled"
     tolerance: float = 1e-9
     scan_step: float = 1e-3
     dt: float = 1e-4
