@@ -425,6 +425,8 @@ def _translate(p, ctx, t):
 def _h(what, t, ctx, steps, nsteps, p):
     """GAP: height [m] of the lowest point in flight; NORMAL: n(t); EVENT: sliding event function."""
     if what == GAP:
+        if ctx[18] == 0.0:  # no rotation in this flight: the support height is the one at its start
+            return _translate(p, ctx, t)[0, 2] - ctx[28]
         q, _ = _orient(t, ctx, steps, nsteps)
         return _translate(p, ctx, t)[0, 2] - _support(p, _rot(q))
     if what == NORMAL:
@@ -507,8 +509,8 @@ def _extend(t, ctx, tab, ntab, p):
 @jit
 def _flight_ctx(p, y):
     """Flight record: t0, r0 (3), v0 (3), q0, w0 (7), inertia (3), phase at t0, rotating, end of the rotation
-    integration and its state (7), failure flag."""
-    ctx = np.zeros(28)
+    integration and its state (7), failure flag, support height at the start."""
+    ctx = np.zeros(29)
     ctx[:14] = y
     ctx[19] = y[0]
     ctx[20:27] = y[7:14]
@@ -516,6 +518,7 @@ def _flight_ctx(p, y):
     ctx[17] = (p[P_OMEGA] * y[0] + p[P_PHASE]) % (2 * math.pi)
     rotating = p[P_ROTATION] != 0.0 and (y[11] != 0.0 or y[12] != 0.0 or y[13] != 0.0)
     ctx[18] = 1.0 if rotating else 0.0
+    ctx[28] = _support(p, _rot(y[7:11]))
     return ctx
 
 
@@ -836,6 +839,17 @@ def _velocity_noise(p, y):
 
 
 @jit
+def _energy(p, y):
+    """Absolute energy [J]: kinetic in the inertial frame plus the potential of gravity (``motion._Budget``)."""
+    s = _surface(p, y[0])
+    v = y[4:7] + s[1]
+    I = p[P_INERTIA:P_INERTIA + 3]
+    w = y[11:14]
+    return (p[P_MASS] * (0.5 * (v @ v) - p[P_G:P_G + 3] @ (y[1:4] + s[0]))
+            + 0.5 * (I[0] * w[0] ** 2 + I[1] * w[1] ** 2 + I[2] * w[2] ** 2))
+
+
+@jit
 def _land(p, y, carry):
     """Start sliding (``motion._land``): plastic normal impulse at the lowest point, tilting spin dropped."""
     Q = _rot(y[7:11])
@@ -1041,7 +1055,7 @@ def _slide(p, y, t_end, rows, carry):
     step, tol = p[P_SCAN], p[P_TOL]
     dummy = np.empty((1, ROT_WIDTH))
     if _normal(p, t0) > 0:
-        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(28), dummy, 0, p)[0]
+        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(29), dummy, 0, p)[0]
     else:
         t_lift = t0
     t_stop = t_end if math.isnan(t_lift) else t_lift
@@ -1227,18 +1241,28 @@ def _flag(x: float):
     return None if x < 0 else bool(x)
 
 
-def _impact_dict(row: np.ndarray) -> dict:
+def _impact_dict(row: list) -> dict:
     """One line of the impact log from a compiled impact row (the keys of ``motion.impact_record``)."""
-    return {"t": float(row[0]), "r": row[1:4].tolist(), "v_before": row[4:7].tolist(),
-            "v_after": row[7:10].tolist(), "w_before": row[10:13].tolist(), "w_after": row[13:16].tolist(),
-            "impulse": row[16:19].tolist(), "u_before": row[19:22].tolist(), "u_after": row[22:25].tolist(),
-            "ke_before": float(row[25]), "ke_after": float(row[26]), "admissible": bool(row[27]),
+    return {"t": row[0], "r": row[1:4], "v_before": row[4:7], "v_after": row[7:10], "w_before": row[10:13],
+            "w_after": row[13:16], "impulse": row[16:19], "u_before": row[19:22], "u_after": row[22:25],
+            "ke_before": row[25], "ke_after": row[26], "admissible": bool(row[27]),
             "printed_admissible": _flag(row[28]), "printed_creates_energy": _flag(row[29]),
             "converged": bool(row[30])}
 
 
 def _state(y: np.ndarray) -> motion.State:
     return motion.State(float(y[0]), y[1:4].copy(), y[4:7].copy(), y[7:11].copy(), y[11:14].copy())
+
+
+class _Budget(motion._Budget):
+    """The Python loop's energy budget, its energies from the compiled kernel."""
+
+    def __init__(self, model: motion.Model, p: np.ndarray, y: np.ndarray):
+        self.p = p
+        super().__init__(model, y)
+
+    def energy(self, y) -> float:
+        return float(_energy(self.p, y))
 
 
 def _raise(status: int, t: float, regime: int) -> None:
@@ -1269,8 +1293,8 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     w0 = np.array(start.w, float) if model.effects.rotation else np.zeros(3)
     q0 = np.asarray(start.q, float) / np.linalg.norm(start.q)
     st = motion.State(start.t, np.array(start.r, float), np.array(start.v, float), q0, w0)
-    budget = motion._Budget(model, st)
     y = np.concatenate([[st.t], st.r, st.v, st.q, st.w])
+    budget = _Budget(model, p, y)
     rows = np.empty((int(max(t_end - st.t, 0.0) / num.sample_interval) + 64, 15))
     imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), np.zeros(N_CARRY)
     y, rows = _start(p, y, rows, carry)
@@ -1281,15 +1305,15 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     if status != DONE:
         _raise(status, float(y[0]), int(carry[C_REGIME]))
     progress(y[0], final=True)
-    final = _state(y)
-    regime = motion.REGIMES[int(carry[C_REGIME])]
-    trajectory = np.vstack([rows[:int(carry[C_ROWS])], final.row(regime)])
+    rows = _record(rows, carry, y, int(carry[C_REGIME]))
+    trajectory = rows[:int(carry[C_ROWS])]
     budget.work, budget.impacts = carry[C_WORK], carry[C_IMPACTS]
     budget.landings, budget.sliding = carry[C_LAND_LOSS], carry[C_SLIDE_LOSS]
     warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_NWARN])]]
-    extra = {"landings": int(carry[C_LANDINGS]), "energy_budget": budget.report(final, motion.ENERGY_TOLERANCE)}
+    extra = {"landings": int(carry[C_LANDINGS]), "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE)}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
-    impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])]]
+    impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])].tolist()]
+    final = _state(y)
     return motion.Motion(trajectory, impacts, time_in, list(dict.fromkeys(warnings)), start, final, extra)
 
 
