@@ -122,15 +122,15 @@ def compiled_sphere(repeats):
     runs = {"compiled accurate tol=1e-10": lambda: compiled.simulate(model, num, st, t_end),
             "Python accurate tol=1e-10": lambda: motion.simulate(model, num, st, t_end),
             "plain Python flight+brentq xtol=1e-12": lambda: exact_flight_brentq(model, st, t_end, 1e-12)}
-    stats = interleaved(runs, repeats, number=5)
-
     def err(out):
         got = np.array(out if isinstance(out, list) else [i["t"] for i in out.impacts])
         return float(np.max(np.abs(got - ref)) / T) if len(got) == len(ref) else math.inf
 
+    errors = {label: err(run()) for label, run in runs.items()}  # also the warm-up (numba cache load)
+    stats = interleaved(runs, repeats, number=10)
     print(f"sphere, {len(ref)} impacts in 20 periods: impact-time error / T beside the time per run")
     for label, s in stats.items():
-        print(f"  {label:<40} error {err(runs[label]()):9.2e}  {s.text('ms', 1e3)}")
+        print(f"  {label:<40} error {errors[label]:9.2e}  {s.text('ms', 1e3)}")
     base_label = "plain Python flight+brentq xtol=1e-12"
     print(f"  compiled vs plain Python: {ratio(stats[base_label], stats['compiled accurate tol=1e-10'])} faster; "
           f"vs the Python loop: {ratio(stats['Python accurate tol=1e-10'], stats['compiled accurate tol=1e-10'])}"
@@ -142,8 +142,8 @@ def compiled_ellipsoid(duration, repeats):
     sc = pipeline.load("scenes/grain_default.toml").setup
     runs = {"compiled": lambda: compiled.simulate(sc.model, sc.numerics, sc.start, duration),
             "Python": lambda: motion.simulate(sc.model, sc.numerics, sc.start, duration)}
+    c, p = runs["compiled"](), runs["Python"]()  # also the warm-up (numba cache load)
     stats = interleaved(runs, repeats)
-    c, p = runs["compiled"](), runs["Python"]()
     n = min(len(c.impacts), len(p.impacts))
     dt = max((abs(a["t"] - b["t"]) for a, b in zip(c.impacts[:n], p.impacts[:n])), default=0.0)
     dr = float(np.linalg.norm(c.final.r - p.final.r))
@@ -173,8 +173,8 @@ def compiled_population(n, duration, repeats):
         with ThreadPoolExecutor(workers) as pool:
             return list(pool.map(lambda k: _grain(sc, k, duration), range(n)))
 
-    stats = interleaved({"1 thread": lambda: run(1), "2 threads": lambda: run(2)}, repeats)
     out = run(2)
+    stats = interleaved({"1 thread": lambda: run(1), "2 threads": lambda: run(2)}, repeats)
     failed = sum(r is None for r in out)
     impacts = sum(len(r.impacts) for r in out if r is not None)
     print(f"population of {n} grains x {duration:g} s (default scene, random height, velocity, spin; "
