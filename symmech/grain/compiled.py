@@ -447,10 +447,10 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
             if n == 0 or ti > ts[n - 1]:
                 ts[n] = ti
                 n += 1
-        if what == GAP:  # the rotation is integrated over the window, as the Python scan does
-            steps, nsteps = _extend(ts[n - 1], ctx, steps, nsteps, p)
         stop = n
         for i in range(n):
+            if what == GAP:  # the Python scan asks for the whole window at once
+                steps, nsteps = _extend(ts[i], ts[n - 1], ctx, steps, nsteps, p)
             hs[i] = _h(what, ts[i], ctx, steps, nsteps, p)
             if i > 0 and hs[i] <= 0.0:
                 stop = i
@@ -471,9 +471,14 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
 
 
 @jit
-def _extend(t, ctx, tab, ntab, p):
-    """Integrate the rotation of the flight ctx until t (``flight.RotationFlight``: DOP853 in chunks of a
-    period, each a fresh solve); returns the grown step table and its length. ctx[27] = 1 on failure."""
+def _extend(t, t_request, ctx, tab, ntab, p):
+    """Integrate the rotation of the flight ctx until it covers t; returns the grown step table and its length.
+
+    ``flight.RotationFlight`` integrates in chunks, each a fresh DOP853 solve from its start to
+    max(t_request, start + period), t_request being the latest time the Python loop asks for at once.
+    The same chunks are solved here, but only as many of their steps as t needs: the step sequence, hence
+    every value, is the Python one. Solver state in ctx: 29 chunk end, 30 step length, 31-37 f, 38 active;
+    ctx[27] = 1 on failure."""
     if ctx[18] == 0.0:
         return tab, ntab
     tol = p[P_TOL]
@@ -481,36 +486,39 @@ def _extend(t, ctx, tab, ntab, p):
     K = np.empty((DOP_EXTENDED, 7))
     inertia = ctx[14:17].copy()
     while ctx[19] < t:
-        t_next = max(t, ctx[19] + p[P_PERIOD])
-        tt = ctx[19]
-        y = ctx[20:27].copy()
-        f = np.empty(7)
-        _rhs(ROT, tt, y, inertia, f)
-        h_abs = _dop_first_step(ROT, tt, y, f, t_next, inertia, tol, atol)
-        while tt < t_next:
-            t_new, y_new, h_abs, ok = _dop_advance(ROT, tt, y, f, h_abs, t_next, inertia, tol, atol, K)
-            if not ok:
-                ctx[27] = 1.0
-                return tab, ntab
-            if ntab == tab.shape[0]:
-                grown = np.empty((2 * ntab, ROT_WIDTH))
-                grown[:ntab] = tab
-                tab = grown
-            tab[ntab, 0], tab[ntab, 1], tab[ntab, 2] = tt, t_new, 0.0
-            tab[ntab, 3:10] = y
-            tab[ntab, 10:] = _dop_dense(ROT, tt, t_new - tt, y, y_new, inertia, K).reshape(DOP_POWER * 7)
-            ntab += 1
-            tt, y, f = t_new, y_new, K[DOP_STAGES].copy()
-        ctx[19] = tt
-        ctx[20:27] = y
+        if ctx[38] == 0.0:  # a new chunk
+            ctx[29] = max(t_request, ctx[19] + p[P_PERIOD])
+            f = np.empty(7)
+            _rhs(ROT, ctx[19], ctx[20:27].copy(), inertia, f)
+            ctx[31:38] = f
+            ctx[30] = _dop_first_step(ROT, ctx[19], ctx[20:27].copy(), f, ctx[29], inertia, tol, atol)
+            ctx[38] = 1.0
+        tt, y, f = ctx[19], ctx[20:27].copy(), ctx[31:38].copy()
+        t_new, y_new, h_abs, ok = _dop_advance(ROT, tt, y, f, ctx[30], ctx[29], inertia, tol, atol, K)
+        if not ok:
+            ctx[27] = 1.0
+            return tab, ntab
+        if ntab == tab.shape[0]:
+            grown = np.empty((2 * ntab, ROT_WIDTH))
+            grown[:ntab] = tab
+            tab = grown
+        tab[ntab, 0], tab[ntab, 1], tab[ntab, 2] = tt, t_new, 0.0
+        tab[ntab, 3:10] = y
+        tab[ntab, 10:] = _dop_dense(ROT, tt, t_new - tt, y, y_new, inertia, K).reshape(DOP_POWER * 7)
+        ntab += 1
+        ctx[19], ctx[30] = t_new, h_abs
+        ctx[20:27] = y_new
+        ctx[31:38] = K[DOP_STAGES]
+        if t_new >= ctx[29]:
+            ctx[38] = 0.0
     return tab, ntab
 
 
 @jit
 def _flight_ctx(p, y):
     """Flight record: t0, r0 (3), v0 (3), q0, w0 (7), inertia (3), phase at t0, rotating, end of the rotation
-    integration and its state (7), failure flag, support height at the start."""
-    ctx = np.zeros(29)
+    integration and its state (7), failure flag, support height at the start, rotation solver state (10)."""
+    ctx = np.zeros(39)
     ctx[:14] = y
     ctx[19] = y[0]
     ctx[20:27] = y[7:14]
@@ -545,7 +553,7 @@ def _fly(p, y, t_end, on_plane, rows, carry):
     scan, xtol = p[P_SCAN], p[P_TOL] * p[P_SCAN]
     if on_plane:
         span = min(scan, t_end - y[0])
-        steps, nsteps = _extend(y[0] + span, ctx, steps, nsteps, p)
+        steps, nsteps = _extend(y[0] + span, y[0] + span, ctx, steps, nsteps, p)
         noise = _gap_noise(p, y)
         t_from = np.nan
         for kk in range(64):
@@ -558,9 +566,10 @@ def _fly(p, y, t_end, on_plane, rows, carry):
         if math.isnan(t_from):
             return y, 2, rows
     tc, steps, nsteps = _first_root(GAP, t_from, t_end, scan, xtol, ctx, steps, nsteps, p)
+    t_stop = t_end if math.isnan(tc) else tc
+    steps, nsteps = _extend(t_stop, t_stop, ctx, steps, nsteps, p)
     if ctx[27] != 0.0:
         return y, 3, rows
-    t_stop = t_end if math.isnan(tc) else tc
     k0 = math.ceil(y[0] / p[P_SAMPLE] - 1e-9)
     k1 = math.floor(t_stop / p[P_SAMPLE] - 1e-9)
     for kk in range(int(k0), int(k1) + 1):
@@ -1055,7 +1064,7 @@ def _slide(p, y, t_end, rows, carry):
     step, tol = p[P_SCAN], p[P_TOL]
     dummy = np.empty((1, ROT_WIDTH))
     if _normal(p, t0) > 0:
-        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(29), dummy, 0, p)[0]
+        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(39), dummy, 0, p)[0]
     else:
         t_lift = t0
     t_stop = t_end if math.isnan(t_lift) else t_lift
