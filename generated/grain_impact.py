@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 f4bdfdad57cae18e0b0848b62b0c87bd5a77d5f051329f1832a0399de8c2b363
-# source key be202e5ae92a440579728642800ee91d8227fd0af5e632effa2939d1d6f72ee0
-# body sha256 bc6927e039c925a32259810d8ff2df16579aebc51d66a2ddbc7982b7eddade83
+# symmech 0.1.0 generated module; inputs sha256 538ffd17688bb29255c7478d7057ce5c814a619c245dc1b9f0d38c9270e22050
+# source key 207f56695cf01158654d61471a6ab78881736eb3f746bfaaa3b68015ba920f92
+# body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Source: seed 000_b52a2f612feb4113, eqs (1)-(60), derived in symmech.grain.derive.
@@ -372,7 +372,7 @@ def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0
     Returns
     -------
     numpy.ndarray, shape (..., 5)
-        [kg*m/s (times m^0)]
+        [m/s]
     """
     (h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0,), batch = _batch(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty(batch + (5,))

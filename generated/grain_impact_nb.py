@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 8f9519d47e865f03b7b3b3e46b31117a938917855098170631fd24454b8b42b8
-# source key be202e5ae92a440579728642800ee91d8227fd0af5e632effa2939d1d6f72ee0
-# body sha256 1bc3bfb3ca4f7150b3013dd6e77a60c1b9a73d0e5118957093725da9cb2fdb12
+# symmech 0.1.0 generated module; inputs sha256 a8080b2f7394ea9786aed107c68527adc79b4c0eaeaff06598e9c7e6257e5f0d
+# source key 207f56695cf01158654d61471a6ab78881736eb3f746bfaaa3b68015ba920f92
+# body sha256 09effaaeaa4a147013f14a64e1e241cb066d5f670cd70e902f4645ea6a5b8f34
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Compiled twin of `symmech.generated.grain_impact` (the numpy module, the
@@ -539,7 +539,7 @@ def _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u
 
 @numba.njit(cache=True, error_model="numpy")
 def mu_equation_scalar(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0):
-    """Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu: floats in, a float64 array (5,) out [kg*m/s (times m^0)]."""
+    """Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu: floats in, a float64 array (5,) out [m/s]."""
     out = numpy.empty((1, 5))
     _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out, 0)
     return out[0]
@@ -588,7 +588,7 @@ def mu_equation(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0
     Returns
     -------
     numpy.ndarray, shape (..., 5)
-        [kg*m/s (times m^0)]
+        [m/s]
     """
     _arrays, _steps, _batch = _flat(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(_batch),) + (5,))

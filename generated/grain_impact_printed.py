@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b46a6327b4b068103dc5e6707b854c1036c5e9e55438eaaf0b137865c58c0d07
-# source key 64a06140d292500a084c0ee2386f9265a2387863cc576a7f25106d8c7fb8ebbc
+# symmech 0.1.0 generated module; inputs sha256 53145b0320e4d261670d4705523a197d94f37ff476ce0c51e409672f5ea01222
+# source key b7bbaddb680259e07fc4594a8bd2e62d0a1da8ed751d5fc1bdc702dac3b678aa
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b55f62f91a435a136e485bb722ecad55d1f69194943b533227752894317c4f44
-# source key 64a06140d292500a084c0ee2386f9265a2387863cc576a7f25106d8c7fb8ebbc
+# symmech 0.1.0 generated module; inputs sha256 bbe12b8debcbaf1daca5d9e7d5ed7703636701e1462844bf8a196107bca700d9
+# source key b7bbaddb680259e07fc4594a8bd2e62d0a1da8ed751d5fc1bdc702dac3b678aa
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a0746f401eb0798ca7faf0443507e069f50585bd78ec570baae6f0d3df12ed99
-# source key ffe4ac5ff7c925347456ed9491fd3e6c443afeb35d830f78d36e3db9fa19fb72
-# body sha256 326260ca4e3879a6ab5be10effac0b8980cf81d1bd2b5ca13c1076a02d0c380f
+# symmech 0.1.0 generated module; inputs sha256 577293806eb54f23853e08cd12fe4abdfa3673b7c6b278f46d87d7822bd5082b
+# source key d8cd5409e8776003d98de799d4d0e144d874cdc703a30fd27537ec82db595d64
+# body sha256 bb4a7d650ea4d406f0a5fac2d631cd14f8cff8b91a289ae5b820107d237b2c67
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -22,6 +22,41 @@ For every function f:
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
+
+Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
+``rhs(t, y, p)`` returns y' (y' = F(t, y, p)),
+``jac(t, y, p)`` its Jacobian dy'/dy (n, n), derived symbolically, in the form
+``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,), jac=jac)`` expects.
+``t`` is the time [s].
+``y`` (n,) = (13,), the state, in the order of ``STATE``:
+    y[0] rx [m] relative centre position X
+    y[1] ry [m] relative centre position Y
+    y[2] rz [m] relative centre position Z
+    y[3] vx [m/s] relative centre velocity X
+    y[4] vy [m/s] relative centre velocity Y
+    y[5] vz [m/s] relative centre velocity Z
+    y[6] q0 [1] orientation quaternion, scalar part
+    y[7] q1 [1] orientation quaternion, x part
+    y[8] q2 [1] orientation quaternion, y part
+    y[9] q3 [1] orientation quaternion, z part
+    y[10] w1 [rad/s] angular velocity, body axis 1
+    y[11] w2 [rad/s] angular velocity, body axis 2
+    y[12] w3 [rad/s] angular velocity, body axis 3
+``p`` (m,) = (12,), the parameters, in the order of ``PARAMS``:
+    p[0] gX [m/s^2] gravity in KXYZ, X component
+    p[1] gY [m/s^2] gravity in KXYZ, Y component
+    p[2] gZ [m/s^2] gravity in KXYZ, Z component
+    p[3] A [m] vibration amplitude
+    p[4] omega [rad/s] vibration angular frequency
+    p[5] phase [rad] vibration phase at t = 0
+    p[6] dX [1] vibration direction, X component (unit vector)
+    p[7] dY [1] vibration direction, Y component (unit vector)
+    p[8] dZ [1] vibration direction, Z component (unit vector)
+    p[9] I1 [kg*m^2] principal moment of inertia, body axis 1
+    p[10] I2 [kg*m^2] principal moment of inertia, body axis 2
+    p[11] I3 [kg*m^2] principal moment of inertia, body axis 3
+``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
 """
 import math
 
@@ -30,7 +65,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_scalar", "surface_kinematics", "surface_kinematics_scalar", "flight_translation", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_scalar", "support_distance", "support_distance_scalar", "contact_offset_body", "contact_offset_body_scalar", "euler_equations", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_scalar", "body_rates", "body_rates_scalar", "euler_rates", "euler_rates_scalar"]
+__all__ = ["gravity", "gravity_scalar", "surface_kinematics", "surface_kinematics_scalar", "flight_translation", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_scalar", "support_distance", "support_distance_scalar", "contact_offset_body", "contact_offset_body_scalar", "euler_equations", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_scalar", "body_rates", "body_rates_scalar", "euler_rates", "euler_rates_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -846,3 +881,475 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     out = numpy.empty((math.prod(_batch),) + (3,))
     (_euler_rates_ploop if len(out) >= PARALLEL_BATCH else _euler_rates_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (3,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+    x0 = A*omega**2*math.sin(omega*t + phase)
+    x1 = (1/2)*w1
+    x2 = (1/2)*q2
+    x3 = (1/2)*q3
+    x4 = (1/2)*q0
+    x5 = (1/2)*q1
+    x6 = w1*w3
+    out[_k, 0] = vx
+    out[_k, 1] = vy
+    out[_k, 2] = vz
+    out[_k, 3] = dX*x0 + gX
+    out[_k, 4] = dY*x0 + gY
+    out[_k, 5] = dZ*x0 + gZ
+    out[_k, 6] = -q1*x1 - w2*x2 - w3*x3
+    out[_k, 7] = q0*x1 - w2*x3 + w3*x2
+    out[_k, 8] = q3*x1 + w2*x4 - w3*x5
+    out[_k, 9] = -q2*x1 + w2*x5 + w3*x4
+    out[_k, 10] = -(-I2*w2*w3 + I3*w2*w3)/I1
+    out[_k, 11] = -(I1*x6 - I3*x6)/I2
+    out[_k, 12] = -(-I1*w1*w2 + I2*w1*w2)/I3
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+    """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)): floats in, a float64 array (13,) out [state unit / s (times M)]."""
+    out = numpy.empty((1, 13))
+    _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+
+
+def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+    """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)).
+
+    Parameters
+    ----------
+    t : array_like
+        time [s]
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    gX : array_like
+        gravity in KXYZ, X component [m/s^2]
+    gY : array_like
+        gravity in KXYZ, Y component [m/s^2]
+    gZ : array_like
+        gravity in KXYZ, Z component [m/s^2]
+    A : array_like
+        vibration amplitude [m]
+    omega : array_like
+        vibration angular frequency [rad/s]
+    phase : array_like
+        vibration phase at t = 0 [rad]
+    dX : array_like
+        vibration direction, X component (unit vector) [1]
+    dY : array_like
+        vibration direction, Y component (unit vector) [1]
+    dZ : array_like
+        vibration direction, Z component (unit vector) [1]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 13)
+        [state unit / s (times M)]
+    """
+    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3)
+    out = numpy.empty((math.prod(_batch),) + (13,))
+    (_rate_ploop if len(out) >= PARALLEL_BATCH else _rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (13,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 1
+    out[_k, 0, 4] = 0
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 0, 8] = 0
+    out[_k, 0, 9] = 0
+    out[_k, 0, 10] = 0
+    out[_k, 0, 11] = 0
+    out[_k, 0, 12] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 1
+    out[_k, 1, 5] = 0
+    out[_k, 1, 6] = 0
+    out[_k, 1, 7] = 0
+    out[_k, 1, 8] = 0
+    out[_k, 1, 9] = 0
+    out[_k, 1, 10] = 0
+    out[_k, 1, 11] = 0
+    out[_k, 1, 12] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 1
+    out[_k, 2, 6] = 0
+    out[_k, 2, 7] = 0
+    out[_k, 2, 8] = 0
+    out[_k, 2, 9] = 0
+    out[_k, 2, 10] = 0
+    out[_k, 2, 11] = 0
+    out[_k, 2, 12] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 3, 7] = 0
+    out[_k, 3, 8] = 0
+    out[_k, 3, 9] = 0
+    out[_k, 3, 10] = 0
+    out[_k, 3, 11] = 0
+    out[_k, 3, 12] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = 0
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = 0
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = 0
+    out[_k, 4, 7] = 0
+    out[_k, 4, 8] = 0
+    out[_k, 4, 9] = 0
+    out[_k, 4, 10] = 0
+    out[_k, 4, 11] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+    x0 = (1/2)*w1
+    x1 = -x0
+    x2 = (1/2)*w2
+    x3 = -x2
+    x4 = (1/2)*w3
+    x5 = -x4
+    x6 = -1/2*q1
+    x7 = (1/2)*q2
+    x8 = -x7
+    x9 = (1/2)*q3
+    x10 = -x9
+    x11 = (1/2)*q0
+    out[_k, 4, 12] = 0
+    out[_k, 5, 0] = 0
+    out[_k, 5, 1] = 0
+    out[_k, 5, 2] = 0
+    out[_k, 5, 3] = 0
+    out[_k, 5, 4] = 0
+    out[_k, 5, 5] = 0
+    out[_k, 5, 6] = 0
+    out[_k, 5, 7] = 0
+    out[_k, 5, 8] = 0
+    out[_k, 5, 9] = 0
+    out[_k, 5, 10] = 0
+    out[_k, 5, 11] = 0
+    out[_k, 5, 12] = 0
+    out[_k, 6, 0] = 0
+    out[_k, 6, 1] = 0
+    out[_k, 6, 2] = 0
+    out[_k, 6, 3] = 0
+    out[_k, 6, 4] = 0
+    out[_k, 6, 5] = 0
+    out[_k, 6, 6] = 0
+    out[_k, 6, 7] = x1
+    out[_k, 6, 8] = x3
+    out[_k, 6, 9] = x5
+    out[_k, 6, 10] = x6
+    out[_k, 6, 11] = x8
+    out[_k, 6, 12] = x10
+    out[_k, 7, 0] = 0
+    out[_k, 7, 1] = 0
+    out[_k, 7, 2] = 0
+    out[_k, 7, 3] = 0
+    out[_k, 7, 4] = 0
+    out[_k, 7, 5] = 0
+    out[_k, 7, 6] = x0
+    out[_k, 7, 7] = 0
+    out[_k, 7, 8] = x4
+    out[_k, 7, 9] = x3
+    out[_k, 7, 10] = x11
+    out[_k, 7, 11] = x10
+    out[_k, 7, 12] = x7
+    out[_k, 8, 0] = 0
+    out[_k, 8, 1] = 0
+    out[_k, 8, 2] = 0
+    out[_k, 8, 3] = 0
+    out[_k, 8, 4] = 0
+    out[_k, 8, 5] = 0
+    out[_k, 8, 6] = x2
+    out[_k, 8, 7] = x5
+    out[_k, 8, 8] = 0
+    out[_k, 8, 9] = x0
+    out[_k, 8, 10] = x9
+    out[_k, 8, 11] = x11
+    out[_k, 8, 12] = x6
+    out[_k, 9, 0] = 0
+    out[_k, 9, 1] = 0
+    out[_k, 9, 2] = 0
+    out[_k, 9, 3] = 0
+    out[_k, 9, 4] = 0
+    out[_k, 9, 5] = 0
+    out[_k, 9, 6] = x4
+    out[_k, 9, 7] = x2
+    out[_k, 9, 8] = x1
+    out[_k, 9, 9] = 0
+    out[_k, 9, 10] = x8
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+    x12 = 1/I1
+    x13 = -I3*w3
+    x14 = I2*w2
+    x15 = 1/I2
+    x16 = I1*w1
+    x17 = 1/I3
+    out[_k, 9, 11] = (1/2)*q1
+    out[_k, 9, 12] = (1/2)*q0
+    out[_k, 10, 0] = 0
+    out[_k, 10, 1] = 0
+    out[_k, 10, 2] = 0
+    out[_k, 10, 3] = 0
+    out[_k, 10, 4] = 0
+    out[_k, 10, 5] = 0
+    out[_k, 10, 6] = 0
+    out[_k, 10, 7] = 0
+    out[_k, 10, 8] = 0
+    out[_k, 10, 9] = 0
+    out[_k, 10, 10] = 0
+    out[_k, 10, 11] = -x12*(-I2*w3 - x13)
+    out[_k, 10, 12] = -x12*(I3*w2 - x14)
+    out[_k, 11, 0] = 0
+    out[_k, 11, 1] = 0
+    out[_k, 11, 2] = 0
+    out[_k, 11, 3] = 0
+    out[_k, 11, 4] = 0
+    out[_k, 11, 5] = 0
+    out[_k, 11, 6] = 0
+    out[_k, 11, 7] = 0
+    out[_k, 11, 8] = 0
+    out[_k, 11, 9] = 0
+    out[_k, 11, 10] = -x15*(I1*w3 + x13)
+    out[_k, 11, 11] = 0
+    out[_k, 11, 12] = -x15*(-I3*w1 + x16)
+    out[_k, 12, 0] = 0
+    out[_k, 12, 1] = 0
+    out[_k, 12, 2] = 0
+    out[_k, 12, 3] = 0
+    out[_k, 12, 4] = 0
+    out[_k, 12, 5] = 0
+    out[_k, 12, 6] = 0
+    out[_k, 12, 7] = 0
+    out[_k, 12, 8] = 0
+    out[_k, 12, 9] = 0
+    out[_k, 12, 10] = -x17*(-I1*w2 + x14)
+    out[_k, 12, 11] = -x17*(I2*w1 - x16)
+    out[_k, 12, 12] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+    """dF/dy, rows F, columns y: floats in, a float64 array (13, 13) out [unit of F / unit of y]."""
+    out = numpy.empty((1, 13, 13))
+    _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_jacobian_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_jacobian_1(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_jacobian_2(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_jacobian_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_jacobian_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_jacobian_1(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_jacobian_2(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+
+
+def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+    """dF/dy, rows F, columns y.
+
+    Parameters
+    ----------
+    t : array_like
+        time [s]
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    gX : array_like
+        gravity in KXYZ, X component [m/s^2]
+    gY : array_like
+        gravity in KXYZ, Y component [m/s^2]
+    gZ : array_like
+        gravity in KXYZ, Z component [m/s^2]
+    A : array_like
+        vibration amplitude [m]
+    omega : array_like
+        vibration angular frequency [rad/s]
+    phase : array_like
+        vibration phase at t = 0 [rad]
+    dX : array_like
+        vibration direction, X component (unit vector) [1]
+    dY : array_like
+        vibration direction, Y component (unit vector) [1]
+    dZ : array_like
+        vibration direction, Z component (unit vector) [1]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 13, 13)
+        [unit of F / unit of y]
+    """
+    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3)
+    out = numpy.empty((math.prod(_batch),) + (13, 13))
+    (_rate_jacobian_ploop if len(out) >= PARALLEL_BATCH else _rate_jacobian_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (13, 13))
+
+
+STATE = (
+    ('rx', 'm', 'relative centre position X'),
+    ('ry', 'm', 'relative centre position Y'),
+    ('rz', 'm', 'relative centre position Z'),
+    ('vx', 'm/s', 'relative centre velocity X'),
+    ('vy', 'm/s', 'relative centre velocity Y'),
+    ('vz', 'm/s', 'relative centre velocity Z'),
+    ('q0', '1', 'orientation quaternion, scalar part'),
+    ('q1', '1', 'orientation quaternion, x part'),
+    ('q2', '1', 'orientation quaternion, y part'),
+    ('q3', '1', 'orientation quaternion, z part'),
+    ('w1', 'rad/s', 'angular velocity, body axis 1'),
+    ('w2', 'rad/s', 'angular velocity, body axis 2'),
+    ('w3', 'rad/s', 'angular velocity, body axis 3'),
+)
+PARAMS = (
+    ('gX', 'm/s^2', 'gravity in KXYZ, X component'),
+    ('gY', 'm/s^2', 'gravity in KXYZ, Y component'),
+    ('gZ', 'm/s^2', 'gravity in KXYZ, Z component'),
+    ('A', 'm', 'vibration amplitude'),
+    ('omega', 'rad/s', 'vibration angular frequency'),
+    ('phase', 'rad', 'vibration phase at t = 0'),
+    ('dX', '1', 'vibration direction, X component (unit vector)'),
+    ('dY', '1', 'vibration direction, Y component (unit vector)'),
+    ('dZ', '1', 'vibration direction, Z component (unit vector)'),
+    ('I1', 'kg*m^2', 'principal moment of inertia, body axis 1'),
+    ('I2', 'kg*m^2', 'principal moment of inertia, body axis 2'),
+    ('I3', 'kg*m^2', 'principal moment of inertia, body axis 3'),
+)
+
+
+def _layout(y, p):
+    """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
+    y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
+    if y.shape[:1] != (13,) or p.shape != (12,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (13,) or (13, k), and (12,)")
+    return y, p
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rhs_scalar(t, y, p):
+    """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
+    return rate_scalar(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_scalar(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
+    return rate_jacobian_scalar(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
+
+
+def rhs(t, y, p):
+    """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    y, p = _layout(y, p)
+    if y.ndim == 1:
+        return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
+    return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def jac(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

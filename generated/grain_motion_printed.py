@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f21fe5b6e28ac2902df588566f1a0b44557b97ebdc97c6c2c13e75138b49edb4
-# source key e140f8be5caa15bbc1d0732b910028d052c1d68f72f0bfd89c28ff6abc346a78
+# symmech 0.1.0 generated module; inputs sha256 89b728a5b844b0bed8c921fcd49606f295f9a5d7bdfb51f6057579abe0ab02eb
+# source key a1ed4b39303c1ab71442c1013dad9bd66e6b1e3b3f22fd5f113aac1760d7b69f
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 89d3deefe5bf4a2492d1ac84018a03f8b6108c04fedde4670e81d12c37831c84
-# source key e140f8be5caa15bbc1d0732b910028d052c1d68f72f0bfd89c28ff6abc346a78
+# symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
+# source key a1ed4b39303c1ab71442c1013dad9bd66e6b1e3b3f22fd5f113aac1760d7b69f
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

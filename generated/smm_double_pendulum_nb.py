@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 8164e5311a57bc64a97be4c5fca17c15bef478921988ebb75c881641bf0cb24a
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
-# body sha256 1dd03d6d20d604f308994307294181bc85f002bcc01322a8f577607a06f29df3
+# symmech 0.1.0 generated module; inputs sha256 41488fcbdf2e9da48a6d33773be1a3ca65252e71c84174f6b6ab9c653f7fc5d8
+# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# body sha256 564590c426af01ca45748e8e41bc6fa10315ac7ef650ace7bc69a943df62af48
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -22,6 +22,25 @@ For every function f:
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
+
+Dynamics of the free motion of 'double_pendulum' about its configuration:
+``rhs(t, y, p)`` returns y' (M(p) y' = F(t, y, p), solved with M numerically),
+``jac(t, y, p)`` its Jacobian dy'/dy (n, n), derived symbolically, in the form
+``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,), jac=jac)`` expects.
+``t`` is unused (autonomous equations).
+``y`` (n,) = (4,), the state, in the order of ``STATE``:
+    y[0] q_phi1 [rad] coordinate phi1 (angle)
+    y[1] q_phi2 [rad] coordinate phi2 (angle)
+    y[2] qd_phi1 [rad/s] rate of phi1
+    y[3] qd_phi2 [rad/s] rate of phi2
+``p`` (m,) = (5,), the parameters, in the order of ``PARAMS``:
+    p[0] m1 [kg] mass of bob 1
+    p[1] m2 [kg] mass of bob 2
+    p[2] l1 [m] length of link 1
+    p[3] l2 [m] length of link 2
+    p[4] g [m/s^2] gravitational acceleration
+``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
 """
 import math
 
@@ -30,7 +49,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
+__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -317,3 +336,272 @@ def L_c(m1, m2, l1, l2, g):
     out = numpy.empty((math.prod(_batch),) + (2,))
     (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (2,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _k):
+    x0 = g*m2
+    x1 = l2*x0
+    x2 = q_phi2*x1
+    out[_k, 0] = qd_phi1
+    out[_k, 1] = qd_phi2
+    out[_k, 2] = -q_phi1*(g*l1*m1 + x0*(l1 + l2)) - x2
+    out[_k, 3] = -q_phi1*x1 - x2
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
+    """F of M y' = F: rates of the free motion of 'double_pendulum' about its configuration: floats in, a float64 array (4,) out [state unit / s (times M)]."""
+    out = numpy.empty((1, 4))
+    _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_loop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], m1[_k * _steps[4]], m2[_k * _steps[5]], l1[_k * _steps[6]], l2[_k * _steps[7]], g[_k * _steps[8]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], m1[_k * _steps[4]], m2[_k * _steps[5]], l1[_k * _steps[6]], l2[_k * _steps[7]], g[_k * _steps[8]], out, _k)
+
+
+def rate(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
+    """F of M y' = F: rates of the free motion of 'double_pendulum' about its configuration.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    m1 : array_like
+        mass of bob 1 [kg]
+    m2 : array_like
+        mass of bob 2 [kg]
+    l1 : array_like
+        length of link 1 [m]
+    l2 : array_like
+        length of link 2 [m]
+    g : array_like
+        gravitational acceleration [m/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        [state unit / s (times M)]
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_rate_ploop if len(out) >= PARALLEL_BATCH else _rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _k):
+    x0 = g*m2
+    x1 = -l2*x0
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 1
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 1
+    out[_k, 2, 0] = -g*l1*m1 - x0*(l1 + l2)
+    out[_k, 2, 1] = x1
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 3, 0] = x1
+    out[_k, 3, 1] = x1
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
+    """dF/dy, rows F, columns y: floats in, a float64 array (4, 4) out [unit of F / unit of y]."""
+    out = numpy.empty((1, 4, 4))
+    _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_loop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_jacobian_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], m1[_k * _steps[4]], m2[_k * _steps[5]], l1[_k * _steps[6]], l2[_k * _steps[7]], g[_k * _steps[8]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_jacobian_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_jacobian_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], m1[_k * _steps[4]], m2[_k * _steps[5]], l1[_k * _steps[6]], l2[_k * _steps[7]], g[_k * _steps[8]], out, _k)
+
+
+def rate_jacobian(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
+    """dF/dy, rows F, columns y.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    m1 : array_like
+        mass of bob 1 [kg]
+    m2 : array_like
+        mass of bob 2 [kg]
+    l1 : array_like
+        length of link 1 [m]
+    l2 : array_like
+        length of link 2 [m]
+    g : array_like
+        gravitational acceleration [m/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4, 4)
+        [unit of F / unit of y]
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_rate_jacobian_ploop if len(out) >= PARALLEL_BATCH else _rate_jacobian_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _k):
+    x0 = l1 + l2
+    x1 = l2*m2*x0
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = l1**2*m1 + m2*x0**2
+    out[_k, 2, 3] = x1
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = x1
+    out[_k, 3, 3] = l2**2*m2
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_mass_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
+    """M of M y' = F: floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
+    out = numpy.empty((1, 4, 4))
+    _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_loop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_mass_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], m1[_k * _steps[4]], m2[_k * _steps[5]], l1[_k * _steps[6]], l2[_k * _steps[7]], g[_k * _steps[8]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_mass_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_mass_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], m1[_k * _steps[4]], m2[_k * _steps[5]], l1[_k * _steps[6]], l2[_k * _steps[7]], g[_k * _steps[8]], out, _k)
+
+
+def rate_mass(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
+    """M of M y' = F.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    m1 : array_like
+        mass of bob 1 [kg]
+    m2 : array_like
+        mass of bob 2 [kg]
+    l1 : array_like
+        length of link 1 [m]
+    l2 : array_like
+        length of link 2 [m]
+    g : array_like
+        gravitational acceleration [m/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4, 4)
+        [unit of F / unit of y']
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_rate_mass_ploop if len(out) >= PARALLEL_BATCH else _rate_mass_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
+
+
+STATE = (
+    ('q_phi1', 'rad', 'coordinate phi1 (angle)'),
+    ('q_phi2', 'rad', 'coordinate phi2 (angle)'),
+    ('qd_phi1', 'rad/s', 'rate of phi1'),
+    ('qd_phi2', 'rad/s', 'rate of phi2'),
+)
+PARAMS = (
+    ('m1', 'kg', 'mass of bob 1'),
+    ('m2', 'kg', 'mass of bob 2'),
+    ('l1', 'm', 'length of link 1'),
+    ('l2', 'm', 'length of link 2'),
+    ('g', 'm/s^2', 'gravitational acceleration'),
+)
+
+
+def _layout(y, p):
+    """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
+    y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
+    if y.shape[:1] != (4,) or p.shape != (5,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (4,) or (4, k), and (5,)")
+    return y, p
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rhs_scalar(t, y, p):
+    """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), rate_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_scalar(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), rate_jacobian_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]))
+
+
+def rhs(t, y, p):
+    """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    y, p = _layout(y, p)
+    if y.ndim == 1:
+        return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
+    return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def jac(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

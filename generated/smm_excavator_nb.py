@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 539c957ecebab1cc9de85336b22ee92f89f10382542567bfba3be958f48df90c
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
-# body sha256 967cddfdbb26c9c427bfea1428f31049e4d41b16b002e969dd9aed1fe6882617
+# symmech 0.1.0 generated module; inputs sha256 52e93c44b70195877f1c2158a5944c96b75ed449f40b3e23eae65fed7f590953
+# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# body sha256 8631b47eb0a0a1b0eb106c4ab47ae76b2ba5d64b4cc68d3c70107b65df50d6a2
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -22,6 +22,46 @@ For every function f:
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
+
+Dynamics of the free motion of 'excavator' about its configuration:
+``rhs(t, y, p)`` returns y' (M(p) y' = F(t, y, p), solved with M numerically),
+``jac(t, y, p)`` its Jacobian dy'/dy (n, n), derived symbolically, in the form
+``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,), jac=jac)`` expects.
+``t`` is unused (autonomous equations).
+``y`` (n,) = (10,), the state, in the order of ``STATE``:
+    y[0] q_s1 [m] coordinate s1 (slide)
+    y[1] q_s2 [m] coordinate s2 (slide)
+    y[2] q_phi3 [rad] coordinate phi3 (angle)
+    y[3] q_phi4 [rad] coordinate phi4 (angle)
+    y[4] q_phi5 [rad] coordinate phi5 (angle)
+    y[5] qd_s1 [m/s] rate of s1
+    y[6] qd_s2 [m/s] rate of s2
+    y[7] qd_phi3 [rad/s] rate of phi3
+    y[8] qd_phi4 [rad/s] rate of phi4
+    y[9] qd_phi5 [rad/s] rate of phi5
+``p`` (m,) = (20,), the parameters, in the order of ``PARAMS``:
+    p[0] m1 [kg] bucket wheel mass at the boom tip B
+    p[1] m2 [kg] mass at the suspension end D
+    p[2] m3 [kg] mass of the machine (body 3), centre of mass A
+    p[3] I3 [kg m^2] central moment of inertia of body 3
+    p[4] xM [m] boom foot M from A, horizontal
+    p[5] yM [m] boom foot M from A, vertical
+    p[6] l4 [m] boom length MB
+    p[7] alpha [rad] boom inclination above horizontal
+    p[8] l5 [m] suspension bar length BD
+    p[9] beta [rad] suspension bar inclination BD above horizontal
+    p[10] h [m] length of the loop-closing springs at D
+    p[11] c1 [N/m] rope stiffness (horizontal at D)
+    p[12] c2 [N/m] artificial loop-closing stiffness (vertical at D)
+    p[13] c3 [N/m] ground support stiffness, front
+    p[14] c4 [N/m] ground support stiffness, rear
+    p[15] l3 [m] distance A to the front support point
+    p[16] delta3 [rad] angle of the front support point from the downward vertical
+    p[17] l6 [m] distance A to the rear support point
+    p[18] delta4 [rad] angle of the rear support point below the backward horizontal
+    p[19] hs [m] length of the ground support springs
+``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
 """
 import math
 
@@ -30,7 +70,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
+__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -638,3 +678,676 @@ def L_c(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delt
     out = numpy.empty((math.prod(_batch),) + (5, 4))
     (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (5, 4))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
+    x0 = math.sin(delta3)
+    x1 = hs**2/abs(hs)**2
+    x2 = math.cos(delta4)
+    x3 = c3*l3*x0*x1 - c4*l6*x1*x2
+    x4 = math.sin(alpha)
+    x5 = l4*x4
+    x6 = math.sin(beta)
+    x7 = l5*x6
+    x8 = x5 + x7
+    x9 = h**2
+    x10 = abs(h)**(-2)
+    x11 = x10*x9
+    x12 = c1*x11*x8
+    x13 = math.cos(alpha)
+    x14 = l4*x13
+    x15 = math.cos(beta)
+    x16 = l5*x15
+    x17 = -x14 - x16
+    x18 = c2*l4*x10*x13*x17*x9 - x12*x5
+    x19 = c2*l5*x10*x15*x17*x9 - x12*x7
+    x20 = l4**2
+    x21 = c1*x11*x5*x7 + c2*x11*x14*x16
+    x22 = l5**2
+    out[_k, 0] = qd_s1
+    out[_k, 1] = qd_s2
+    out[_k, 2] = qd_phi3
+    out[_k, 3] = qd_phi4
+    out[_k, 4] = qd_phi5
+    out[_k, 5] = 0
+    out[_k, 6] = -q_phi3*x3 - q_s2*(c3 + c4)
+    out[_k, 7] = -q_phi3*(c1*x8**2 + c2*x17**2 + c3*l3**2*x0**2 + c4*l6**2*x2**2) - q_phi4*x18 - q_phi5*x19 - q_s2*x3
+    out[_k, 8] = -q_phi3*x18 - q_phi4*(c1*x20*x4**2 + c2*x13**2*x20) - q_phi5*x21
+    out[_k, 9] = -q_phi3*x19 - q_phi4*x21 - q_phi5*(c1*x22*x6**2 + c2*x15**2*x22)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
+    """F of M y' = F: rates of the free motion of 'excavator' about its configuration: floats in, a float64 array (10,) out [state unit / s (times M)]."""
+    out = numpy.empty((1, 10))
+    _rate_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_loop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_0(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_ploop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_0(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+
+
+def rate(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
+    """F of M y' = F: rates of the free motion of 'excavator' about its configuration.
+
+    Parameters
+    ----------
+    q_s1 : array_like
+        coordinate s1 (slide) [m]
+    q_s2 : array_like
+        coordinate s2 (slide) [m]
+    q_phi3 : array_like
+        coordinate phi3 (angle) [rad]
+    q_phi4 : array_like
+        coordinate phi4 (angle) [rad]
+    q_phi5 : array_like
+        coordinate phi5 (angle) [rad]
+    qd_s1 : array_like
+        rate of s1 [m/s]
+    qd_s2 : array_like
+        rate of s2 [m/s]
+    qd_phi3 : array_like
+        rate of phi3 [rad/s]
+    qd_phi4 : array_like
+        rate of phi4 [rad/s]
+    qd_phi5 : array_like
+        rate of phi5 [rad/s]
+    m1 : array_like
+        bucket wheel mass at the boom tip B [kg]
+    m2 : array_like
+        mass at the suspension end D [kg]
+    m3 : array_like
+        mass of the machine (body 3), centre of mass A [kg]
+    I3 : array_like
+        central moment of inertia of body 3 [kg m^2]
+    xM : array_like
+        boom foot M from A, horizontal [m]
+    yM : array_like
+        boom foot M from A, vertical [m]
+    l4 : array_like
+        boom length MB [m]
+    alpha : array_like
+        boom inclination above horizontal [rad]
+    l5 : array_like
+        suspension bar length BD [m]
+    beta : array_like
+        suspension bar inclination BD above horizontal [rad]
+    h : array_like
+        length of the loop-closing springs at D [m]
+    c1 : array_like
+        rope stiffness (horizontal at D) [N/m]
+    c2 : array_like
+        artificial loop-closing stiffness (vertical at D) [N/m]
+    c3 : array_like
+        ground support stiffness, front [N/m]
+    c4 : array_like
+        ground support stiffness, rear [N/m]
+    l3 : array_like
+        distance A to the front support point [m]
+    delta3 : array_like
+        angle of the front support point from the downward vertical [rad]
+    l6 : array_like
+        distance A to the rear support point [m]
+    delta4 : array_like
+        angle of the rear support point below the backward horizontal [rad]
+    hs : array_like
+        length of the ground support springs [m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 10)
+        [state unit / s (times M)]
+    """
+    _arrays, _steps, _batch = _flat(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (10,))
+    (_rate_ploop if len(out) >= PARALLEL_BATCH else _rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (10,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
+    x0 = hs**2
+    x1 = abs(hs)**(-2)
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 0, 5] = 1
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 0, 8] = 0
+    out[_k, 0, 9] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 0
+    out[_k, 1, 6] = 1
+    out[_k, 1, 7] = 0
+    out[_k, 1, 8] = 0
+    out[_k, 1, 9] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 0
+    out[_k, 2, 7] = 1
+    out[_k, 2, 8] = 0
+    out[_k, 2, 9] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 3, 7] = 0
+    out[_k, 3, 8] = 1
+    out[_k, 3, 9] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = 0
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = 0
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = 0
+    out[_k, 4, 7] = 0
+    out[_k, 4, 8] = 0
+    out[_k, 4, 9] = 1
+    out[_k, 5, 0] = 0
+    out[_k, 5, 1] = 0
+    out[_k, 5, 2] = 0
+    out[_k, 5, 3] = 0
+    out[_k, 5, 4] = 0
+    out[_k, 5, 5] = 0
+    out[_k, 5, 6] = 0
+    out[_k, 5, 7] = 0
+    out[_k, 5, 8] = 0
+    out[_k, 5, 9] = 0
+    out[_k, 6, 0] = 0
+    out[_k, 6, 1] = -c3 - c4
+    out[_k, 6, 2] = -c3*l3*x0*x1*math.sin(delta3) + c4*l6*x0*x1*math.cos(delta4)
+    out[_k, 6, 3] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
+    x2 = math.sin(delta3)
+    x3 = hs**2
+    x4 = abs(hs)**(-2)
+    x5 = math.cos(delta4)
+    x6 = math.sin(alpha)
+    x7 = l4*x6
+    x8 = math.sin(beta)
+    x9 = l5*x8
+    x10 = x7 + x9
+    x11 = math.cos(alpha)
+    x12 = l4*x11
+    x13 = math.cos(beta)
+    x14 = l5*x13
+    x15 = -x12 - x14
+    x16 = h**2/abs(h)**2
+    x17 = c1*x10*x16
+    x18 = c2*x15*x16
+    x19 = -x12*x18 + x17*x7
+    x20 = -x14*x18 + x17*x9
+    x21 = l4**2
+    x22 = -c1*x16*x7*x9 - c2*x12*x14*x16
+    x23 = l5**2
+    out[_k, 6, 4] = 0
+    out[_k, 6, 5] = 0
+    out[_k, 6, 6] = 0
+    out[_k, 6, 7] = 0
+    out[_k, 6, 8] = 0
+    out[_k, 6, 9] = 0
+    out[_k, 7, 0] = 0
+    out[_k, 7, 1] = -c3*l3*x2*x3*x4 + c4*l6*x3*x4*x5
+    out[_k, 7, 2] = -c1*x10**2 - c2*x15**2 - c3*l3**2*x2**2 - c4*l6**2*x5**2
+    out[_k, 7, 3] = x19
+    out[_k, 7, 4] = x20
+    out[_k, 7, 5] = 0
+    out[_k, 7, 6] = 0
+    out[_k, 7, 7] = 0
+    out[_k, 7, 8] = 0
+    out[_k, 7, 9] = 0
+    out[_k, 8, 0] = 0
+    out[_k, 8, 1] = 0
+    out[_k, 8, 2] = x19
+    out[_k, 8, 3] = -c1*x21*x6**2 - c2*x11**2*x21
+    out[_k, 8, 4] = x22
+    out[_k, 8, 5] = 0
+    out[_k, 8, 6] = 0
+    out[_k, 8, 7] = 0
+    out[_k, 8, 8] = 0
+    out[_k, 8, 9] = 0
+    out[_k, 9, 0] = 0
+    out[_k, 9, 1] = 0
+    out[_k, 9, 2] = x20
+    out[_k, 9, 3] = x22
+    out[_k, 9, 4] = -c1*x23*x8**2 - c2*x13**2*x23
+    out[_k, 9, 5] = 0
+    out[_k, 9, 6] = 0
+    out[_k, 9, 7] = 0
+    out[_k, 9, 8] = 0
+    out[_k, 9, 9] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
+    """dF/dy, rows F, columns y: floats in, a float64 array (10, 10) out [unit of F / unit of y]."""
+    out = numpy.empty((1, 10, 10))
+    _rate_jacobian_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    _rate_jacobian_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_loop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_jacobian_0(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+        _rate_jacobian_1(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_jacobian_ploop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_jacobian_0(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+        _rate_jacobian_1(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+
+
+def rate_jacobian(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
+    """dF/dy, rows F, columns y.
+
+    Parameters
+    ----------
+    q_s1 : array_like
+        coordinate s1 (slide) [m]
+    q_s2 : array_like
+        coordinate s2 (slide) [m]
+    q_phi3 : array_like
+        coordinate phi3 (angle) [rad]
+    q_phi4 : array_like
+        coordinate phi4 (angle) [rad]
+    q_phi5 : array_like
+        coordinate phi5 (angle) [rad]
+    qd_s1 : array_like
+        rate of s1 [m/s]
+    qd_s2 : array_like
+        rate of s2 [m/s]
+    qd_phi3 : array_like
+        rate of phi3 [rad/s]
+    qd_phi4 : array_like
+        rate of phi4 [rad/s]
+    qd_phi5 : array_like
+        rate of phi5 [rad/s]
+    m1 : array_like
+        bucket wheel mass at the boom tip B [kg]
+    m2 : array_like
+        mass at the suspension end D [kg]
+    m3 : array_like
+        mass of the machine (body 3), centre of mass A [kg]
+    I3 : array_like
+        central moment of inertia of body 3 [kg m^2]
+    xM : array_like
+        boom foot M from A, horizontal [m]
+    yM : array_like
+        boom foot M from A, vertical [m]
+    l4 : array_like
+        boom length MB [m]
+    alpha : array_like
+        boom inclination above horizontal [rad]
+    l5 : array_like
+        suspension bar length BD [m]
+    beta : array_like
+        suspension bar inclination BD above horizontal [rad]
+    h : array_like
+        length of the loop-closing springs at D [m]
+    c1 : array_like
+        rope stiffness (horizontal at D) [N/m]
+    c2 : array_like
+        artificial loop-closing stiffness (vertical at D) [N/m]
+    c3 : array_like
+        ground support stiffness, front [N/m]
+    c4 : array_like
+        ground support stiffness, rear [N/m]
+    l3 : array_like
+        distance A to the front support point [m]
+    delta3 : array_like
+        angle of the front support point from the downward vertical [rad]
+    l6 : array_like
+        distance A to the rear support point [m]
+    delta4 : array_like
+        angle of the rear support point below the backward horizontal [rad]
+    hs : array_like
+        length of the ground support springs [m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 10, 10)
+        [unit of F / unit of y]
+    """
+    _arrays, _steps, _batch = _flat(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (10, 10))
+    (_rate_jacobian_ploop if len(out) >= PARALLEL_BATCH else _rate_jacobian_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (10, 10))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
+    x0 = l4*math.sin(alpha)
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 0, 8] = 0
+    out[_k, 0, 9] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 0
+    out[_k, 1, 6] = 0
+    out[_k, 1, 7] = 0
+    out[_k, 1, 8] = 0
+    out[_k, 1, 9] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 1
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 0
+    out[_k, 2, 7] = 0
+    out[_k, 2, 8] = 0
+    out[_k, 2, 9] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 1
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 3, 7] = 0
+    out[_k, 3, 8] = 0
+    out[_k, 3, 9] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = 0
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = 1
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = 0
+    out[_k, 4, 7] = 0
+    out[_k, 4, 8] = 0
+    out[_k, 4, 9] = 0
+    out[_k, 5, 0] = 0
+    out[_k, 5, 1] = 0
+    out[_k, 5, 2] = 0
+    out[_k, 5, 3] = 0
+    out[_k, 5, 4] = 0
+    out[_k, 5, 5] = m1 + m2 + m3
+    out[_k, 5, 6] = 0
+    out[_k, 5, 7] = -m1*yM - m2*yM
+    out[_k, 5, 8] = -m1*x0 - m2*x0
+    out[_k, 5, 9] = -l5*m2*math.sin(beta)
+    out[_k, 6, 0] = 0
+    out[_k, 6, 1] = 0
+    out[_k, 6, 2] = 0
+    out[_k, 6, 3] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, _k):
+    x1 = m1*xM
+    x2 = m2*xM
+    x3 = x1 + x2
+    x4 = math.cos(alpha)
+    x5 = l4*x4
+    x6 = m2*x5
+    x7 = m1*x5 + x6
+    x8 = math.cos(beta)
+    x9 = l5*m2
+    x10 = x8*x9
+    x11 = m1*yM
+    x12 = m2*yM
+    x13 = xM**2
+    x14 = yM**2
+    x15 = math.sin(alpha)
+    x16 = l4*x15
+    x17 = x1*x5 + x11*x16 + x12*x16 + x2*x5
+    x18 = l5*x8
+    x19 = math.sin(beta)
+    x20 = l5*x12*x19 + x18*x2
+    x21 = x15**2
+    x22 = l4**2
+    x23 = m1*x22
+    x24 = x4**2
+    x25 = m2*x22
+    x26 = x19*x9
+    x27 = x16*x26 + x18*x6
+    x28 = l5**2*m2
+    out[_k, 6, 4] = 0
+    out[_k, 6, 5] = 0
+    out[_k, 6, 6] = m1 + m2 + m3
+    out[_k, 6, 7] = x3
+    out[_k, 6, 8] = x7
+    out[_k, 6, 9] = x10
+    out[_k, 7, 0] = 0
+    out[_k, 7, 1] = 0
+    out[_k, 7, 2] = 0
+    out[_k, 7, 3] = 0
+    out[_k, 7, 4] = 0
+    out[_k, 7, 5] = -x11 - x12
+    out[_k, 7, 6] = x3
+    out[_k, 7, 7] = I3 + m1*x13 + m1*x14 + m2*x13 + m2*x14
+    out[_k, 7, 8] = x17
+    out[_k, 7, 9] = x20
+    out[_k, 8, 0] = 0
+    out[_k, 8, 1] = 0
+    out[_k, 8, 2] = 0
+    out[_k, 8, 3] = 0
+    out[_k, 8, 4] = 0
+    out[_k, 8, 5] = -m1*x16 - m2*x16
+    out[_k, 8, 6] = x7
+    out[_k, 8, 7] = x17
+    out[_k, 8, 8] = x21*x23 + x21*x25 + x23*x24 + x24*x25
+    out[_k, 8, 9] = x27
+    out[_k, 9, 0] = 0
+    out[_k, 9, 1] = 0
+    out[_k, 9, 2] = 0
+    out[_k, 9, 3] = 0
+    out[_k, 9, 4] = 0
+    out[_k, 9, 5] = -x26
+    out[_k, 9, 6] = x10
+    out[_k, 9, 7] = x20
+    out[_k, 9, 8] = x27
+    out[_k, 9, 9] = x19**2*x28 + x28*x8**2
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_mass_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
+    """M of M y' = F: floats in, a float64 array (10, 10) out [unit of F / unit of y']."""
+    out = numpy.empty((1, 10, 10))
+    _rate_mass_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_loop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_mass_0(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+        _rate_mass_1(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_mass_ploop(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_mass_0(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+        _rate_mass_1(q_s1[_k * _steps[0]], q_s2[_k * _steps[1]], q_phi3[_k * _steps[2]], q_phi4[_k * _steps[3]], q_phi5[_k * _steps[4]], qd_s1[_k * _steps[5]], qd_s2[_k * _steps[6]], qd_phi3[_k * _steps[7]], qd_phi4[_k * _steps[8]], qd_phi5[_k * _steps[9]], m1[_k * _steps[10]], m2[_k * _steps[11]], m3[_k * _steps[12]], I3[_k * _steps[13]], xM[_k * _steps[14]], yM[_k * _steps[15]], l4[_k * _steps[16]], alpha[_k * _steps[17]], l5[_k * _steps[18]], beta[_k * _steps[19]], h[_k * _steps[20]], c1[_k * _steps[21]], c2[_k * _steps[22]], c3[_k * _steps[23]], c4[_k * _steps[24]], l3[_k * _steps[25]], delta3[_k * _steps[26]], l6[_k * _steps[27]], delta4[_k * _steps[28]], hs[_k * _steps[29]], out, _k)
+
+
+def rate_mass(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
+    """M of M y' = F.
+
+    Parameters
+    ----------
+    q_s1 : array_like
+        coordinate s1 (slide) [m]
+    q_s2 : array_like
+        coordinate s2 (slide) [m]
+    q_phi3 : array_like
+        coordinate phi3 (angle) [rad]
+    q_phi4 : array_like
+        coordinate phi4 (angle) [rad]
+    q_phi5 : array_like
+        coordinate phi5 (angle) [rad]
+    qd_s1 : array_like
+        rate of s1 [m/s]
+    qd_s2 : array_like
+        rate of s2 [m/s]
+    qd_phi3 : array_like
+        rate of phi3 [rad/s]
+    qd_phi4 : array_like
+        rate of phi4 [rad/s]
+    qd_phi5 : array_like
+        rate of phi5 [rad/s]
+    m1 : array_like
+        bucket wheel mass at the boom tip B [kg]
+    m2 : array_like
+        mass at the suspension end D [kg]
+    m3 : array_like
+        mass of the machine (body 3), centre of mass A [kg]
+    I3 : array_like
+        central moment of inertia of body 3 [kg m^2]
+    xM : array_like
+        boom foot M from A, horizontal [m]
+    yM : array_like
+        boom foot M from A, vertical [m]
+    l4 : array_like
+        boom length MB [m]
+    alpha : array_like
+        boom inclination above horizontal [rad]
+    l5 : array_like
+        suspension bar length BD [m]
+    beta : array_like
+        suspension bar inclination BD above horizontal [rad]
+    h : array_like
+        length of the loop-closing springs at D [m]
+    c1 : array_like
+        rope stiffness (horizontal at D) [N/m]
+    c2 : array_like
+        artificial loop-closing stiffness (vertical at D) [N/m]
+    c3 : array_like
+        ground support stiffness, front [N/m]
+    c4 : array_like
+        ground support stiffness, rear [N/m]
+    l3 : array_like
+        distance A to the front support point [m]
+    delta3 : array_like
+        angle of the front support point from the downward vertical [rad]
+    l6 : array_like
+        distance A to the rear support point [m]
+    delta4 : array_like
+        angle of the rear support point below the backward horizontal [rad]
+    hs : array_like
+        length of the ground support springs [m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 10, 10)
+        [unit of F / unit of y']
+    """
+    _arrays, _steps, _batch = _flat(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs)
+    out = numpy.empty((math.prod(_batch),) + (10, 10))
+    (_rate_mass_ploop if len(out) >= PARALLEL_BATCH else _rate_mass_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (10, 10))
+
+
+STATE = (
+    ('q_s1', 'm', 'coordinate s1 (slide)'),
+    ('q_s2', 'm', 'coordinate s2 (slide)'),
+    ('q_phi3', 'rad', 'coordinate phi3 (angle)'),
+    ('q_phi4', 'rad', 'coordinate phi4 (angle)'),
+    ('q_phi5', 'rad', 'coordinate phi5 (angle)'),
+    ('qd_s1', 'm/s', 'rate of s1'),
+    ('qd_s2', 'm/s', 'rate of s2'),
+    ('qd_phi3', 'rad/s', 'rate of phi3'),
+    ('qd_phi4', 'rad/s', 'rate of phi4'),
+    ('qd_phi5', 'rad/s', 'rate of phi5'),
+)
+PARAMS = (
+    ('m1', 'kg', 'bucket wheel mass at the boom tip B'),
+    ('m2', 'kg', 'mass at the suspension end D'),
+    ('m3', 'kg', 'mass of the machine (body 3), centre of mass A'),
+    ('I3', 'kg m^2', 'central moment of inertia of body 3'),
+    ('xM', 'm', 'boom foot M from A, horizontal'),
+    ('yM', 'm', 'boom foot M from A, vertical'),
+    ('l4', 'm', 'boom length MB'),
+    ('alpha', 'rad', 'boom inclination above horizontal'),
+    ('l5', 'm', 'suspension bar length BD'),
+    ('beta', 'rad', 'suspension bar inclination BD above horizontal'),
+    ('h', 'm', 'length of the loop-closing springs at D'),
+    ('c1', 'N/m', 'rope stiffness (horizontal at D)'),
+    ('c2', 'N/m', 'artificial loop-closing stiffness (vertical at D)'),
+    ('c3', 'N/m', 'ground support stiffness, front'),
+    ('c4', 'N/m', 'ground support stiffness, rear'),
+    ('l3', 'm', 'distance A to the front support point'),
+    ('delta3', 'rad', 'angle of the front support point from the downward vertical'),
+    ('l6', 'm', 'distance A to the rear support point'),
+    ('delta4', 'rad', 'angle of the rear support point below the backward horizontal'),
+    ('hs', 'm', 'length of the ground support springs'),
+)
+
+
+def _layout(y, p):
+    """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
+    y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
+    if y.shape[:1] != (10,) or p.shape != (20,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (10,) or (10, k), and (20,)")
+    return y, p
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rhs_scalar(t, y, p):
+    """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]), rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_scalar(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]), rate_jacobian_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]))
+
+
+def rhs(t, y, p):
+    """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    y, p = _layout(y, p)
+    if y.ndim == 1:
+        return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
+    return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def jac(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 89b59c14cdeab31e1fb14aba6def0d39575ea385b6ccc1b544bf885b18e20a93
-# source key 2b6270e41c74f28f42899d601a94c3593768c6fe4237ecdf8b499e3ed3a9a1ee
+# symmech 0.1.0 generated module; inputs sha256 6702698636daff8b11fe5a18bb26f1f1288b12f26d1fee39bbd693aad7699d29
+# source key 2a6382d01cd0c2176018e6ccab69be1dbe75ecccb78a970db86290fd04ba4af7
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1f1c5ab3fd49ba5c2091686973340de388528a3e64304e379271e561c699e477
-# source key 2b6270e41c74f28f42899d601a94c3593768c6fe4237ecdf8b499e3ed3a9a1ee
+# symmech 0.1.0 generated module; inputs sha256 e6f4538a86c71902e002983ce248e4f0ec70d1fe71d32e33fb4d8ac619ead531
+# source key 2a6382d01cd0c2176018e6ccab69be1dbe75ecccb78a970db86290fd04ba4af7
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ebd74940209542e869c1a9d5139544a89a0781bf3b3c9e99e8ebf69449a2a8e6
-# source key 2ddff67160dcf76e8ae46d69e73f22535b36d81f6fb84d6e1bebdef808658a1d
+# symmech 0.1.0 generated module; inputs sha256 2972638a30e3e2ee276506a4f60c5787ad2df201e4414d5fb26577055e2089dc
+# source key 5dcff3e9ac846011513e9a247787177c47ec980ee7b79e1de7b68ebed70c0c07
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

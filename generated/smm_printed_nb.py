@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0438e9b241d29927f55c7c5fb261c8a0a09df42b3d99588419d4867dc53e723c
-# source key 2ddff67160dcf76e8ae46d69e73f22535b36d81f6fb84d6e1bebdef808658a1d
+# symmech 0.1.0 generated module; inputs sha256 b981c76974e4e8622d2b009c74d9947d7fa23dcbd58def34e55281752e67a031
+# source key 5dcff3e9ac846011513e9a247787177c47ec980ee7b79e1de7b68ebed70c0c07
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

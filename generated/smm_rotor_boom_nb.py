@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 c99c11c550fca1dac5d3ce46b66b41e896499981f29fe6ad03af3430aeb0604b
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
-# body sha256 92695640094d1a2fa7971e54e4392a725909a8bf0bb7c99039662da970f1cca9
+# symmech 0.1.0 generated module; inputs sha256 88d5323052d6b9f8d488c2130bfb182127a4030aa837ee83198ba1e7a48d0d67
+# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# body sha256 55dc9b9127cd991ce5382023f186670759f42937784def862871eb4505520172
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_rotor_boom` (the numpy module, the
@@ -22,6 +22,33 @@ For every function f:
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
+
+Dynamics of the free motion of 'rotor_boom' about its configuration:
+``rhs(t, y, p)`` returns y' (M(p) y' = F(t, y, p), solved with M numerically),
+``jac(t, y, p)`` its Jacobian dy'/dy (n, n), derived symbolically, in the form
+``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,), jac=jac)`` expects.
+``t`` is unused (autonomous equations).
+``y`` (n,) = (4,), the state, in the order of ``STATE``:
+    y[0] q_phi1 [rad] coordinate phi1 (angle)
+    y[1] q_phi2 [rad] coordinate phi2 (angle)
+    y[2] qd_phi1 [rad/s] rate of phi1
+    y[3] qd_phi2 [rad/s] rate of phi2
+``p`` (m,) = (13,), the parameters, in the order of ``PARAMS``:
+    p[0] I1 [kg m^2] moment of inertia of the boom about its pivot O
+    p[1] r1 [m] distance from the boom pivot O to the drive hinge A
+    p[2] m2 [kg] mass of the drive with the bucket wheel
+    p[3] I2 [kg m^2] central moment of inertia of the drive with the wheel
+    p[4] z2 [m] distance from the hinge A back to the drive's centre of mass
+    p[5] alpha [rad] angle between the boom and the suspension rope
+    p[6] Lr [m] length of the suspension rope
+    p[7] c1 [N/m] stiffness of the rope suspension
+    p[8] mu1 [N s/m] viscosity of the rope suspension
+    p[9] l2 [m] arm of the drive suspension from the hinge A
+    p[10] h [m] length of the drive suspension spring
+    p[11] c3 [N/m] stiffness of the drive suspension
+    p[12] mu3 [N s/m] viscosity of the drive suspension
+``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
 """
 import math
 
@@ -30,7 +57,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
+__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -409,3 +436,336 @@ def L_c(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     out = numpy.empty((math.prod(_batch),) + (2, 2))
     (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (2, 2))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
+    x0 = l2**2
+    x1 = c3*x0
+    x2 = q_phi2*x1
+    x3 = mu3*x0
+    x4 = qd_phi2*x3
+    x5 = Lr**2
+    x6 = x5*math.sin(alpha)**2
+    x7 = r1**2*x6/(x5*math.cos(alpha)**2 + x6)
+    out[_k, 0] = qd_phi1
+    out[_k, 1] = qd_phi2
+    out[_k, 2] = -q_phi1*(c1*x7 + x1) - qd_phi1*(mu1*x7 + x3) + x2 + x4
+    out[_k, 3] = q_phi1*x1 + qd_phi1*x3 - x2 - x4
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
+    """F of M y' = F: rates of the free motion of 'rotor_boom' about its configuration: floats in, a float64 array (4,) out [state unit / s (times M)]."""
+    out = numpy.empty((1, 4))
+    _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_loop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], I1[_k * _steps[4]], r1[_k * _steps[5]], m2[_k * _steps[6]], I2[_k * _steps[7]], z2[_k * _steps[8]], alpha[_k * _steps[9]], Lr[_k * _steps[10]], c1[_k * _steps[11]], mu1[_k * _steps[12]], l2[_k * _steps[13]], h[_k * _steps[14]], c3[_k * _steps[15]], mu3[_k * _steps[16]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], I1[_k * _steps[4]], r1[_k * _steps[5]], m2[_k * _steps[6]], I2[_k * _steps[7]], z2[_k * _steps[8]], alpha[_k * _steps[9]], Lr[_k * _steps[10]], c1[_k * _steps[11]], mu1[_k * _steps[12]], l2[_k * _steps[13]], h[_k * _steps[14]], c3[_k * _steps[15]], mu3[_k * _steps[16]], out, _k)
+
+
+def rate(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
+    """F of M y' = F: rates of the free motion of 'rotor_boom' about its configuration.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    I1 : array_like
+        moment of inertia of the boom about its pivot O [kg m^2]
+    r1 : array_like
+        distance from the boom pivot O to the drive hinge A [m]
+    m2 : array_like
+        mass of the drive with the bucket wheel [kg]
+    I2 : array_like
+        central moment of inertia of the drive with the wheel [kg m^2]
+    z2 : array_like
+        distance from the hinge A back to the drive's centre of mass [m]
+    alpha : array_like
+        angle between the boom and the suspension rope [rad]
+    Lr : array_like
+        length of the suspension rope [m]
+    c1 : array_like
+        stiffness of the rope suspension [N/m]
+    mu1 : array_like
+        viscosity of the rope suspension [N s/m]
+    l2 : array_like
+        arm of the drive suspension from the hinge A [m]
+    h : array_like
+        length of the drive suspension spring [m]
+    c3 : array_like
+        stiffness of the drive suspension [N/m]
+    mu3 : array_like
+        viscosity of the drive suspension [N s/m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        [state unit / s (times M)]
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_rate_ploop if len(out) >= PARALLEL_BATCH else _rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
+    x0 = l2**2
+    x1 = c3*x0
+    x2 = Lr**2
+    x3 = x2*math.sin(alpha)**2
+    x4 = r1**2*x3/(x2*math.cos(alpha)**2 + x3)
+    x5 = mu3*x0
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 1
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 1
+    out[_k, 2, 0] = -c1*x4 - x1
+    out[_k, 2, 1] = x1
+    out[_k, 2, 2] = -mu1*x4 - x5
+    out[_k, 2, 3] = x5
+    out[_k, 3, 0] = x1
+    out[_k, 3, 1] = -x1
+    out[_k, 3, 2] = x5
+    out[_k, 3, 3] = -x5
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
+    """dF/dy, rows F, columns y: floats in, a float64 array (4, 4) out [unit of F / unit of y]."""
+    out = numpy.empty((1, 4, 4))
+    _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_loop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_jacobian_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], I1[_k * _steps[4]], r1[_k * _steps[5]], m2[_k * _steps[6]], I2[_k * _steps[7]], z2[_k * _steps[8]], alpha[_k * _steps[9]], Lr[_k * _steps[10]], c1[_k * _steps[11]], mu1[_k * _steps[12]], l2[_k * _steps[13]], h[_k * _steps[14]], c3[_k * _steps[15]], mu3[_k * _steps[16]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_jacobian_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_jacobian_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], I1[_k * _steps[4]], r1[_k * _steps[5]], m2[_k * _steps[6]], I2[_k * _steps[7]], z2[_k * _steps[8]], alpha[_k * _steps[9]], Lr[_k * _steps[10]], c1[_k * _steps[11]], mu1[_k * _steps[12]], l2[_k * _steps[13]], h[_k * _steps[14]], c3[_k * _steps[15]], mu3[_k * _steps[16]], out, _k)
+
+
+def rate_jacobian(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
+    """dF/dy, rows F, columns y.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    I1 : array_like
+        moment of inertia of the boom about its pivot O [kg m^2]
+    r1 : array_like
+        distance from the boom pivot O to the drive hinge A [m]
+    m2 : array_like
+        mass of the drive with the bucket wheel [kg]
+    I2 : array_like
+        central moment of inertia of the drive with the wheel [kg m^2]
+    z2 : array_like
+        distance from the hinge A back to the drive's centre of mass [m]
+    alpha : array_like
+        angle between the boom and the suspension rope [rad]
+    Lr : array_like
+        length of the suspension rope [m]
+    c1 : array_like
+        stiffness of the rope suspension [N/m]
+    mu1 : array_like
+        viscosity of the rope suspension [N s/m]
+    l2 : array_like
+        arm of the drive suspension from the hinge A [m]
+    h : array_like
+        length of the drive suspension spring [m]
+    c3 : array_like
+        stiffness of the drive suspension [N/m]
+    mu3 : array_like
+        viscosity of the drive suspension [N s/m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4, 4)
+        [unit of F / unit of y]
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_rate_jacobian_ploop if len(out) >= PARALLEL_BATCH else _rate_jacobian_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
+    x0 = -m2*r1*z2
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = I1 + m2*r1**2
+    out[_k, 2, 3] = x0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = x0
+    out[_k, 3, 3] = I2 + m2*z2**2
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_mass_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
+    """M of M y' = F: floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
+    out = numpy.empty((1, 4, 4))
+    _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_loop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_mass_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], I1[_k * _steps[4]], r1[_k * _steps[5]], m2[_k * _steps[6]], I2[_k * _steps[7]], z2[_k * _steps[8]], alpha[_k * _steps[9]], Lr[_k * _steps[10]], c1[_k * _steps[11]], mu1[_k * _steps[12]], l2[_k * _steps[13]], h[_k * _steps[14]], c3[_k * _steps[15]], mu3[_k * _steps[16]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_mass_ploop(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_mass_0(q_phi1[_k * _steps[0]], q_phi2[_k * _steps[1]], qd_phi1[_k * _steps[2]], qd_phi2[_k * _steps[3]], I1[_k * _steps[4]], r1[_k * _steps[5]], m2[_k * _steps[6]], I2[_k * _steps[7]], z2[_k * _steps[8]], alpha[_k * _steps[9]], Lr[_k * _steps[10]], c1[_k * _steps[11]], mu1[_k * _steps[12]], l2[_k * _steps[13]], h[_k * _steps[14]], c3[_k * _steps[15]], mu3[_k * _steps[16]], out, _k)
+
+
+def rate_mass(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
+    """M of M y' = F.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    I1 : array_like
+        moment of inertia of the boom about its pivot O [kg m^2]
+    r1 : array_like
+        distance from the boom pivot O to the drive hinge A [m]
+    m2 : array_like
+        mass of the drive with the bucket wheel [kg]
+    I2 : array_like
+        central moment of inertia of the drive with the wheel [kg m^2]
+    z2 : array_like
+        distance from the hinge A back to the drive's centre of mass [m]
+    alpha : array_like
+        angle between the boom and the suspension rope [rad]
+    Lr : array_like
+        length of the suspension rope [m]
+    c1 : array_like
+        stiffness of the rope suspension [N/m]
+    mu1 : array_like
+        viscosity of the rope suspension [N s/m]
+    l2 : array_like
+        arm of the drive suspension from the hinge A [m]
+    h : array_like
+        length of the drive suspension spring [m]
+    c3 : array_like
+        stiffness of the drive suspension [N/m]
+    mu3 : array_like
+        viscosity of the drive suspension [N s/m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4, 4)
+        [unit of F / unit of y']
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3)
+    out = numpy.empty((math.prod(_batch),) + (4, 4))
+    (_rate_mass_ploop if len(out) >= PARALLEL_BATCH else _rate_mass_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4, 4))
+
+
+STATE = (
+    ('q_phi1', 'rad', 'coordinate phi1 (angle)'),
+    ('q_phi2', 'rad', 'coordinate phi2 (angle)'),
+    ('qd_phi1', 'rad/s', 'rate of phi1'),
+    ('qd_phi2', 'rad/s', 'rate of phi2'),
+)
+PARAMS = (
+    ('I1', 'kg m^2', 'moment of inertia of the boom about its pivot O'),
+    ('r1', 'm', 'distance from the boom pivot O to the drive hinge A'),
+    ('m2', 'kg', 'mass of the drive with the bucket wheel'),
+    ('I2', 'kg m^2', 'central moment of inertia of the drive with the wheel'),
+    ('z2', 'm', "distance from the hinge A back to the drive's centre of mass"),
+    ('alpha', 'rad', 'angle between the boom and the suspension rope'),
+    ('Lr', 'm', 'length of the suspension rope'),
+    ('c1', 'N/m', 'stiffness of the rope suspension'),
+    ('mu1', 'N s/m', 'viscosity of the rope suspension'),
+    ('l2', 'm', 'arm of the drive suspension from the hinge A'),
+    ('h', 'm', 'length of the drive suspension spring'),
+    ('c3', 'N/m', 'stiffness of the drive suspension'),
+    ('mu3', 'N s/m', 'viscosity of the drive suspension'),
+)
+
+
+def _layout(y, p):
+    """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
+    y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
+    if y.shape[:1] != (4,) or p.shape != (13,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (4,) or (4, k), and (13,)")
+    return y, p
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rhs_scalar(t, y, p):
+    """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12]), rate_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12]))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_scalar(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12]), rate_jacobian_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12]))
+
+
+def rhs(t, y, p):
+    """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    y, p = _layout(y, p)
+    if y.ndim == 1:
+        return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
+    return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def jac(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

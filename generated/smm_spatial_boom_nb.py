@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 0566a1e91b9d80f150c00d99c388a5d12b0655eb9ba07527dcc709780633583c
-# source key 9d5c127520d7fed625c192f1486c11411abe8742320209c13bcdb1025d05fc00
-# body sha256 e54288a6a2a2182e8ca5a42db5f21ae452cee07659143c25eab424394a710b81
+# symmech 0.1.0 generated module; inputs sha256 d58fdcd9c84707a84c094ce3b7754fda878a873e5bb16d52fdb74dbd542fb2b2
+# source key e915779d5813ee915377df9a5bcb90d36b14e6841f2f8e0a8116e2c47822b42f
+# body sha256 c4bfb3a9e455ffc8826de6dab6adc692bcba693d830fb1229c09b112fa2e5431
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -22,6 +22,45 @@ For every function f:
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
+
+Dynamics of the free motion of 'spatial_boom' about its configuration:
+``rhs(t, y, p)`` returns y' (M(p) y' = F(t, y, p), solved with M numerically),
+``jac(t, y, p)`` its Jacobian dy'/dy (n, n), derived symbolically, in the form
+``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,), jac=jac)`` expects.
+``t`` is unused (autonomous equations).
+``y`` (n,) = (8,), the state, in the order of ``STATE``:
+    y[0] q_phi1 [rad] coordinate phi1 (angle)
+    y[1] q_beta1 [rad] coordinate beta1 (angle)
+    y[2] q_psi1 [rad] coordinate psi1 (angle)
+    y[3] q_phi2 [rad] coordinate phi2 (angle)
+    y[4] qd_phi1 [rad/s] rate of phi1
+    y[5] qd_beta1 [rad/s] rate of beta1
+    y[6] qd_psi1 [rad/s] rate of psi1
+    y[7] qd_phi2 [rad/s] rate of phi2
+``p`` (m,) = (21,), the parameters, in the order of ``PARAMS``:
+    p[0] m1 [kg] boom mass
+    p[1] Jx [kg m^2] boom central moment about its axis x1
+    p[2] Jy [kg m^2] boom central moment about y1
+    p[3] Jz [kg m^2] boom central moment about z1
+    p[4] L1 [m] pivot O1 to the boom centre of mass S (and the rope attachment)
+    p[5] Lr [m] rope length
+    p[6] beta [rad] rope angle to the boom axis, in the boom's plane
+    p[7] delta [rad] rope angle out of the boom's plane (lateral)
+    p[8] c1 [N/m] stiffness of each rope
+    p[9] cK [N m/rad] torsional stiffness of the boom
+    p[10] m3 [kg] trolley mass
+    p[11] L3 [m] pivot O1 to the trolley along the boom
+    p[12] e3 [m] trolley below the boom axis
+    p[13] a2 [m] console pivot O behind O1
+    p[14] m2 [kg] counterweight mass at the console end
+    p[15] L2 [m] console length, pivot O to the counterweight
+    p[16] gamma [rad] console angle below the boom axis (backwards)
+    p[17] h2 [m] length of the console support spring
+    p[18] c2 [N/m] console support stiffness
+    p[19] theta [rad] boom inclination above the horizontal
+    p[20] g [m/s^2] gravitational acceleration
+``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
 """
 import math
 
@@ -30,7 +69,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar"]
+__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -647,3 +686,657 @@ def L_c(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gam
     out = numpy.empty((math.prod(_batch),) + (4, 4))
     (_L_c_ploop if len(out) >= PARALLEL_BATCH else _L_c_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (4, 4))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
+    x0 = math.cos(theta)
+    x1 = g*x0
+    x2 = m3*x1
+    x3 = Lr**2
+    x4 = math.sin(delta)
+    x5 = x4**2
+    x6 = x3*x5
+    x7 = math.sin(beta)
+    x8 = x7**2
+    x9 = math.cos(delta)
+    x10 = x9**2
+    x11 = x10*x3
+    x12 = x11*x8
+    x13 = math.cos(beta)
+    x14 = x11*x13**2 + x12 + x6
+    x15 = math.sqrt(x14)
+    x16 = 1/x15
+    x17 = Lr*x4
+    x18 = x16*x7
+    x19 = -L1 + Lr*x13*x9 - a2
+    x20 = Lr*x16*x19*x7*x9 - x11*x13*x18
+    x21 = 1/x20
+    x22 = math.sin(gamma)
+    x23 = g*math.sin(theta)
+    x24 = L2*m2
+    x25 = x23*x24
+    x26 = math.cos(gamma)
+    x27 = x1*x24
+    x28 = x22*x25 - x26*x27
+    x29 = L1*x21*x28
+    x30 = x16*x17*x29
+    x31 = L1*m1
+    x32 = m3*x23
+    x33 = Lr*x9
+    x34 = (L3*x2 + e3*x32 + x1*x31 - x18*x29*x33)/(x7*x9)
+    x35 = x34*x4
+    x36 = 1/L1
+    x37 = 1/Lr
+    x38 = 1/x4
+    x39 = x30 + x35
+    x40 = (1/2)*x39
+    x41 = x38*x40
+    x42 = x37*x41
+    x43 = x36*x42
+    x44 = x15*x20
+    x45 = x34*x36*x37*x44
+    x46 = x28 - x43*x44 + x45
+    x47 = x21*x46
+    x48 = x16*x47
+    x49 = L1*x48
+    x50 = -x17*x49 + (1/2)*x30 + (1/2)*x35
+    x51 = x7*x9
+    x52 = x33*x7
+    x53 = L1*g*m1*x0 + L3*g*m3*x0 - x41*x51 - x49*x52
+    x54 = 1/x14
+    x55 = L1*x54
+    x56 = x40*x55
+    x57 = L1**2
+    x58 = x47/x14**(3/2)
+    x59 = x3*x4*x51*x57*x58 - x52*x56
+    x60 = 2*c1
+    x61 = x16*x20
+    x62 = x40*x61
+    x63 = x46*x55
+    x64 = L1*x52*x60*x61 + x19*x42 + x19*x49 - x38*x51*x62 - x52*x63
+    x65 = Lr*x10*x41*x8
+    x66 = x13*x33
+    x67 = -1/2*L1*x37*x38*x39 + L3*x32 + x13*x41*x9 - x16*x21*x46*x57 + x23*x31 + x49*x66
+    x68 = x17*x63 - x62
+    x69 = x20**2
+    x70 = x45/x26
+    x71 = x19**2
+    x72 = -x12*x16 - x16*x19*x66
+    out[_k, 0] = qd_phi1
+    out[_k, 1] = qd_beta1
+    out[_k, 2] = qd_psi1
+    out[_k, 3] = qd_phi2
+    out[_k, 4] = -q_beta1*x50 - q_phi1*(cK + e3*x2) - q_psi1*x53
+    out[_k, 5] = -q_beta1*(2*c1*x10*x3*x54*x57*x8 + e3*g*m3*x0 - x12*x57*x58 - x55*x65 - x67) - q_phi1*x50 - q_phi2*x64 - q_psi1*x59
+    out[_k, 6] = -q_beta1*x59 - q_phi1*x53 - q_phi2*x68 - q_psi1*(2*c1*x3*x5*x54*x57 - x17*x56 - x57*x58*x6 - x67)
+    out[_k, 7] = -q_beta1*x64 - q_phi2*(L2**2*c2*x26**2 - L2*x22**2*x70/h2 + x12*x48 + x15*x43*x72 + x22*x27 - x22*x70 + x25*x26 + x36*x65 - x43*x69 + x43*x71 - x46*x61 + x47*x72 + x48*x71 + x60*x69) - q_psi1*x68
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
+    """F of M y' = F: rates of the free motion of 'spatial_boom' about its configuration: floats in, a float64 array (8,) out [state unit / s (times M)]."""
+    out = numpy.empty((1, 8))
+    _rate_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_loop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_0(q_phi1[_k * _steps[0]], q_beta1[_k * _steps[1]], q_psi1[_k * _steps[2]], q_phi2[_k * _steps[3]], qd_phi1[_k * _steps[4]], qd_beta1[_k * _steps[5]], qd_psi1[_k * _steps[6]], qd_phi2[_k * _steps[7]], m1[_k * _steps[8]], Jx[_k * _steps[9]], Jy[_k * _steps[10]], Jz[_k * _steps[11]], L1[_k * _steps[12]], Lr[_k * _steps[13]], beta[_k * _steps[14]], delta[_k * _steps[15]], c1[_k * _steps[16]], cK[_k * _steps[17]], m3[_k * _steps[18]], L3[_k * _steps[19]], e3[_k * _steps[20]], a2[_k * _steps[21]], m2[_k * _steps[22]], L2[_k * _steps[23]], gamma[_k * _steps[24]], h2[_k * _steps[25]], c2[_k * _steps[26]], theta[_k * _steps[27]], g[_k * _steps[28]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_ploop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_0(q_phi1[_k * _steps[0]], q_beta1[_k * _steps[1]], q_psi1[_k * _steps[2]], q_phi2[_k * _steps[3]], qd_phi1[_k * _steps[4]], qd_beta1[_k * _steps[5]], qd_psi1[_k * _steps[6]], qd_phi2[_k * _steps[7]], m1[_k * _steps[8]], Jx[_k * _steps[9]], Jy[_k * _steps[10]], Jz[_k * _steps[11]], L1[_k * _steps[12]], Lr[_k * _steps[13]], beta[_k * _steps[14]], delta[_k * _steps[15]], c1[_k * _steps[16]], cK[_k * _steps[17]], m3[_k * _steps[18]], L3[_k * _steps[19]], e3[_k * _steps[20]], a2[_k * _steps[21]], m2[_k * _steps[22]], L2[_k * _steps[23]], gamma[_k * _steps[24]], h2[_k * _steps[25]], c2[_k * _steps[26]], theta[_k * _steps[27]], g[_k * _steps[28]], out, _k)
+
+
+def rate(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
+    """F of M y' = F: rates of the free motion of 'spatial_boom' about its configuration.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_beta1 : array_like
+        coordinate beta1 (angle) [rad]
+    q_psi1 : array_like
+        coordinate psi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_beta1 : array_like
+        rate of beta1 [rad/s]
+    qd_psi1 : array_like
+        rate of psi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    m1 : array_like
+        boom mass [kg]
+    Jx : array_like
+        boom central moment about its axis x1 [kg m^2]
+    Jy : array_like
+        boom central moment about y1 [kg m^2]
+    Jz : array_like
+        boom central moment about z1 [kg m^2]
+    L1 : array_like
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
+    Lr : array_like
+        rope length [m]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
+    c1 : array_like
+        stiffness of each rope [N/m]
+    cK : array_like
+        torsional stiffness of the boom [N m/rad]
+    m3 : array_like
+        trolley mass [kg]
+    L3 : array_like
+        pivot O1 to the trolley along the boom [m]
+    e3 : array_like
+        trolley below the boom axis [m]
+    a2 : array_like
+        console pivot O behind O1 [m]
+    m2 : array_like
+        counterweight mass at the console end [kg]
+    L2 : array_like
+        console length, pivot O to the counterweight [m]
+    gamma : array_like
+        console angle below the boom axis (backwards) [rad]
+    h2 : array_like
+        length of the console support spring [m]
+    c2 : array_like
+        console support stiffness [N/m]
+    theta : array_like
+        boom inclination above the horizontal [rad]
+    g : array_like
+        gravitational acceleration [m/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8)
+        [state unit / s (times M)]
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (8,))
+    (_rate_ploop if len(out) >= PARALLEL_BATCH else _rate_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
+    x0 = g*math.cos(theta)
+    x1 = m3*x0
+    x2 = e3*x1
+    x3 = Lr**2
+    x4 = math.sin(delta)
+    x5 = x3*x4**2
+    x6 = math.sin(beta)
+    x7 = x6**2
+    x8 = math.cos(delta)
+    x9 = x8**2
+    x10 = x3*x9
+    x11 = x10*x7
+    x12 = math.cos(beta)
+    x13 = x10*x12**2 + x11 + x5
+    x14 = math.sqrt(x13)
+    x15 = 1/x14
+    x16 = Lr*x4
+    x17 = x15*x6
+    x18 = -L1 + Lr*x12*x8 - a2
+    x19 = Lr*x15*x18*x6*x8 - x10*x12*x17
+    x20 = 1/x19
+    x21 = math.sin(gamma)
+    x22 = g*math.sin(theta)
+    x23 = L2*m2
+    x24 = x22*x23
+    x25 = math.cos(gamma)
+    x26 = x0*x23
+    x27 = x21*x24 - x25*x26
+    x28 = L1*x20*x27
+    x29 = x15*x16*x28
+    x30 = 1/x8
+    x31 = 1/x6
+    x32 = L1*m1
+    x33 = x0*x32
+    x34 = L3*x1
+    x35 = m3*x22
+    x36 = Lr*x8
+    x37 = e3*x35 - x17*x28*x36 + x33 + x34
+    x38 = x30*x31*x37
+    x39 = x38*x4
+    x40 = 1/L1
+    x41 = 1/Lr
+    x42 = 1/x4
+    x43 = x29 + x39
+    x44 = (1/2)*x43
+    x45 = x42*x44
+    x46 = x41*x45
+    x47 = x40*x46
+    x48 = x14*x19
+    x49 = x27 + x38*x40*x41*x48 - x47*x48
+    x50 = L1*Lr*x15*x20*x4*x49 - 1/2*x29 - 1/2*x39
+    x51 = x6*x8
+    x52 = x15*x20*x49
+    x53 = L1*x52
+    x54 = x36*x6
+    x55 = -x33 - x34 + x45*x51 + x53*x54
+    x56 = 1/x13
+    x57 = 2*c1
+    x58 = x56*x57
+    x59 = L1**2
+    x60 = x11*x59
+    x61 = x20*x49
+    x62 = x61/x13**(3/2)
+    x63 = L1*x56
+    x64 = Lr*x45*x7*x9
+    x65 = x12*x36
+    x66 = -L1*x46 + L3*x35 + x12*x45*x8 + x22*x32 - x52*x59 + x53*x65
+    x67 = (1/2)*L1*Lr*x43*x56*x6*x8 - x3*x4*x51*x59*x62
+    x68 = L1*Lr*x49*x56*x6*x8 - L1*x15*x19*x54*x57 + (1/2)*x15*x19*x42*x43*x6*x8 - x18*x46 - x18*x53
+    x69 = x5*x59
+    x70 = (1/2)*x15*x19*x43 - x16*x49*x63
+    x71 = x19**2
+    x72 = 1/x25
+    x73 = x18**2
+    x74 = -x11*x15 - x15*x18*x65
+    out[_k, 0, 0] = 0
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 1
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 0
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 1
+    out[_k, 1, 6] = 0
+    out[_k, 1, 7] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 0
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 1
+    out[_k, 2, 7] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 0
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 3, 7] = 1
+    out[_k, 4, 0] = -cK - x2
+    out[_k, 4, 1] = x50
+    out[_k, 4, 2] = x55
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = 0
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = 0
+    out[_k, 4, 7] = 0
+    out[_k, 5, 0] = x50
+    out[_k, 5, 1] = -x2 - x58*x60 + x60*x62 + x63*x64 + x66
+    out[_k, 5, 2] = x67
+    out[_k, 5, 3] = x68
+    out[_k, 5, 4] = 0
+    out[_k, 5, 5] = 0
+    out[_k, 5, 6] = 0
+    out[_k, 5, 7] = 0
+    out[_k, 6, 0] = x55
+    out[_k, 6, 1] = x67
+    out[_k, 6, 2] = x16*x44*x63 - x58*x69 + x62*x69 + x66
+    out[_k, 6, 3] = x70
+    out[_k, 6, 4] = 0
+    out[_k, 6, 5] = 0
+    out[_k, 6, 6] = 0
+    out[_k, 6, 7] = 0
+    out[_k, 7, 0] = 0
+    out[_k, 7, 1] = x68
+    out[_k, 7, 2] = x70
+    out[_k, 7, 3] = -L2**2*c2*x25**2 + L2*x14*x19*x21**2*x30*x31*x37*x40*x41*x72/h2 - x11*x52 + x14*x19*x21*x30*x31*x37*x40*x41*x72 - x14*x47*x74 + x15*x19*x49 - x21*x26 - x24*x25 + (1/2)*x40*x41*x42*x43*x71 - x40*x64 - x47*x73 - x52*x73 - x57*x71 - x61*x74
+    out[_k, 7, 4] = 0
+    out[_k, 7, 5] = 0
+    out[_k, 7, 6] = 0
+    out[_k, 7, 7] = 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
+    """dF/dy, rows F, columns y: floats in, a float64 array (8, 8) out [unit of F / unit of y]."""
+    out = numpy.empty((1, 8, 8))
+    _rate_jacobian_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_jacobian_loop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_jacobian_0(q_phi1[_k * _steps[0]], q_beta1[_k * _steps[1]], q_psi1[_k * _steps[2]], q_phi2[_k * _steps[3]], qd_phi1[_k * _steps[4]], qd_beta1[_k * _steps[5]], qd_psi1[_k * _steps[6]], qd_phi2[_k * _steps[7]], m1[_k * _steps[8]], Jx[_k * _steps[9]], Jy[_k * _steps[10]], Jz[_k * _steps[11]], L1[_k * _steps[12]], Lr[_k * _steps[13]], beta[_k * _steps[14]], delta[_k * _steps[15]], c1[_k * _steps[16]], cK[_k * _steps[17]], m3[_k * _steps[18]], L3[_k * _steps[19]], e3[_k * _steps[20]], a2[_k * _steps[21]], m2[_k * _steps[22]], L2[_k * _steps[23]], gamma[_k * _steps[24]], h2[_k * _steps[25]], c2[_k * _steps[26]], theta[_k * _steps[27]], g[_k * _steps[28]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_jacobian_ploop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_jacobian_0(q_phi1[_k * _steps[0]], q_beta1[_k * _steps[1]], q_psi1[_k * _steps[2]], q_phi2[_k * _steps[3]], qd_phi1[_k * _steps[4]], qd_beta1[_k * _steps[5]], qd_psi1[_k * _steps[6]], qd_phi2[_k * _steps[7]], m1[_k * _steps[8]], Jx[_k * _steps[9]], Jy[_k * _steps[10]], Jz[_k * _steps[11]], L1[_k * _steps[12]], Lr[_k * _steps[13]], beta[_k * _steps[14]], delta[_k * _steps[15]], c1[_k * _steps[16]], cK[_k * _steps[17]], m3[_k * _steps[18]], L3[_k * _steps[19]], e3[_k * _steps[20]], a2[_k * _steps[21]], m2[_k * _steps[22]], L2[_k * _steps[23]], gamma[_k * _steps[24]], h2[_k * _steps[25]], c2[_k * _steps[26]], theta[_k * _steps[27]], g[_k * _steps[28]], out, _k)
+
+
+def rate_jacobian(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
+    """dF/dy, rows F, columns y.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_beta1 : array_like
+        coordinate beta1 (angle) [rad]
+    q_psi1 : array_like
+        coordinate psi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_beta1 : array_like
+        rate of beta1 [rad/s]
+    qd_psi1 : array_like
+        rate of psi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    m1 : array_like
+        boom mass [kg]
+    Jx : array_like
+        boom central moment about its axis x1 [kg m^2]
+    Jy : array_like
+        boom central moment about y1 [kg m^2]
+    Jz : array_like
+        boom central moment about z1 [kg m^2]
+    L1 : array_like
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
+    Lr : array_like
+        rope length [m]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
+    c1 : array_like
+        stiffness of each rope [N/m]
+    cK : array_like
+        torsional stiffness of the boom [N m/rad]
+    m3 : array_like
+        trolley mass [kg]
+    L3 : array_like
+        pivot O1 to the trolley along the boom [m]
+    e3 : array_like
+        trolley below the boom axis [m]
+    a2 : array_like
+        console pivot O behind O1 [m]
+    m2 : array_like
+        counterweight mass at the console end [kg]
+    L2 : array_like
+        console length, pivot O to the counterweight [m]
+    gamma : array_like
+        console angle below the boom axis (backwards) [rad]
+    h2 : array_like
+        length of the console support spring [m]
+    c2 : array_like
+        console support stiffness [N/m]
+    theta : array_like
+        boom inclination above the horizontal [rad]
+    g : array_like
+        gravitational acceleration [m/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8, 8)
+        [unit of F / unit of y]
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (8, 8))
+    (_rate_jacobian_ploop if len(out) >= PARALLEL_BATCH else _rate_jacobian_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8, 8))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, _k):
+    x0 = e3**2*m3
+    x1 = L3*e3*m3
+    x2 = L1**2*m1 + L3**2*m3
+    x3 = L2**2*m2
+    out[_k, 0, 0] = 1
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = 0
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = 0
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 0
+    out[_k, 1, 6] = 0
+    out[_k, 1, 7] = 0
+    out[_k, 2, 0] = 0
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 1
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = 0
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 0
+    out[_k, 2, 7] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = 0
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 1
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = 0
+    out[_k, 3, 6] = 0
+    out[_k, 3, 7] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = 0
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = Jx + x0
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = x1
+    out[_k, 4, 7] = 0
+    out[_k, 5, 0] = 0
+    out[_k, 5, 1] = 0
+    out[_k, 5, 2] = 0
+    out[_k, 5, 3] = 0
+    out[_k, 5, 4] = 0
+    out[_k, 5, 5] = Jy + x0 + x2
+    out[_k, 5, 6] = 0
+    out[_k, 5, 7] = 0
+    out[_k, 6, 0] = 0
+    out[_k, 6, 1] = 0
+    out[_k, 6, 2] = 0
+    out[_k, 6, 3] = 0
+    out[_k, 6, 4] = x1
+    out[_k, 6, 5] = 0
+    out[_k, 6, 6] = Jz + x2
+    out[_k, 6, 7] = 0
+    out[_k, 7, 0] = 0
+    out[_k, 7, 1] = 0
+    out[_k, 7, 2] = 0
+    out[_k, 7, 3] = 0
+    out[_k, 7, 4] = 0
+    out[_k, 7, 5] = 0
+    out[_k, 7, 6] = 0
+    out[_k, 7, 7] = x3*math.sin(gamma)**2 + x3*math.cos(gamma)**2
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_mass_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
+    """M of M y' = F: floats in, a float64 array (8, 8) out [unit of F / unit of y']."""
+    out = numpy.empty((1, 8, 8))
+    _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rate_mass_loop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in range(out.shape[0]):
+        _rate_mass_0(q_phi1[_k * _steps[0]], q_beta1[_k * _steps[1]], q_psi1[_k * _steps[2]], q_phi2[_k * _steps[3]], qd_phi1[_k * _steps[4]], qd_beta1[_k * _steps[5]], qd_psi1[_k * _steps[6]], qd_phi2[_k * _steps[7]], m1[_k * _steps[8]], Jx[_k * _steps[9]], Jy[_k * _steps[10]], Jz[_k * _steps[11]], L1[_k * _steps[12]], Lr[_k * _steps[13]], beta[_k * _steps[14]], delta[_k * _steps[15]], c1[_k * _steps[16]], cK[_k * _steps[17]], m3[_k * _steps[18]], L3[_k * _steps[19]], e3[_k * _steps[20]], a2[_k * _steps[21]], m2[_k * _steps[22]], L2[_k * _steps[23]], gamma[_k * _steps[24]], h2[_k * _steps[25]], c2[_k * _steps[26]], theta[_k * _steps[27]], g[_k * _steps[28]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rate_mass_ploop(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rate_mass_0(q_phi1[_k * _steps[0]], q_beta1[_k * _steps[1]], q_psi1[_k * _steps[2]], q_phi2[_k * _steps[3]], qd_phi1[_k * _steps[4]], qd_beta1[_k * _steps[5]], qd_psi1[_k * _steps[6]], qd_phi2[_k * _steps[7]], m1[_k * _steps[8]], Jx[_k * _steps[9]], Jy[_k * _steps[10]], Jz[_k * _steps[11]], L1[_k * _steps[12]], Lr[_k * _steps[13]], beta[_k * _steps[14]], delta[_k * _steps[15]], c1[_k * _steps[16]], cK[_k * _steps[17]], m3[_k * _steps[18]], L3[_k * _steps[19]], e3[_k * _steps[20]], a2[_k * _steps[21]], m2[_k * _steps[22]], L2[_k * _steps[23]], gamma[_k * _steps[24]], h2[_k * _steps[25]], c2[_k * _steps[26]], theta[_k * _steps[27]], g[_k * _steps[28]], out, _k)
+
+
+def rate_mass(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
+    """M of M y' = F.
+
+    Parameters
+    ----------
+    q_phi1 : array_like
+        coordinate phi1 (angle) [rad]
+    q_beta1 : array_like
+        coordinate beta1 (angle) [rad]
+    q_psi1 : array_like
+        coordinate psi1 (angle) [rad]
+    q_phi2 : array_like
+        coordinate phi2 (angle) [rad]
+    qd_phi1 : array_like
+        rate of phi1 [rad/s]
+    qd_beta1 : array_like
+        rate of beta1 [rad/s]
+    qd_psi1 : array_like
+        rate of psi1 [rad/s]
+    qd_phi2 : array_like
+        rate of phi2 [rad/s]
+    m1 : array_like
+        boom mass [kg]
+    Jx : array_like
+        boom central moment about its axis x1 [kg m^2]
+    Jy : array_like
+        boom central moment about y1 [kg m^2]
+    Jz : array_like
+        boom central moment about z1 [kg m^2]
+    L1 : array_like
+        pivot O1 to the boom centre of mass S (and the rope attachment) [m]
+    Lr : array_like
+        rope length [m]
+    beta : array_like
+        rope angle to the boom axis, in the boom's plane [rad]
+    delta : array_like
+        rope angle out of the boom's plane (lateral) [rad]
+    c1 : array_like
+        stiffness of each rope [N/m]
+    cK : array_like
+        torsional stiffness of the boom [N m/rad]
+    m3 : array_like
+        trolley mass [kg]
+    L3 : array_like
+        pivot O1 to the trolley along the boom [m]
+    e3 : array_like
+        trolley below the boom axis [m]
+    a2 : array_like
+        console pivot O behind O1 [m]
+    m2 : array_like
+        counterweight mass at the console end [kg]
+    L2 : array_like
+        console length, pivot O to the counterweight [m]
+    gamma : array_like
+        console angle below the boom axis (backwards) [rad]
+    h2 : array_like
+        length of the console support spring [m]
+    c2 : array_like
+        console support stiffness [N/m]
+    theta : array_like
+        boom inclination above the horizontal [rad]
+    g : array_like
+        gravitational acceleration [m/s^2]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8, 8)
+        [unit of F / unit of y']
+    """
+    _arrays, _steps, _batch = _flat(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g)
+    out = numpy.empty((math.prod(_batch),) + (8, 8))
+    (_rate_mass_ploop if len(out) >= PARALLEL_BATCH else _rate_mass_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8, 8))
+
+
+STATE = (
+    ('q_phi1', 'rad', 'coordinate phi1 (angle)'),
+    ('q_beta1', 'rad', 'coordinate beta1 (angle)'),
+    ('q_psi1', 'rad', 'coordinate psi1 (angle)'),
+    ('q_phi2', 'rad', 'coordinate phi2 (angle)'),
+    ('qd_phi1', 'rad/s', 'rate of phi1'),
+    ('qd_beta1', 'rad/s', 'rate of beta1'),
+    ('qd_psi1', 'rad/s', 'rate of psi1'),
+    ('qd_phi2', 'rad/s', 'rate of phi2'),
+)
+PARAMS = (
+    ('m1', 'kg', 'boom mass'),
+    ('Jx', 'kg m^2', 'boom central moment about its axis x1'),
+    ('Jy', 'kg m^2', 'boom central moment about y1'),
+    ('Jz', 'kg m^2', 'boom central moment about z1'),
+    ('L1', 'm', 'pivot O1 to the boom centre of mass S (and the rope attachment)'),
+    ('Lr', 'm', 'rope length'),
+    ('beta', 'rad', "rope angle to the boom axis, in the boom's plane"),
+    ('delta', 'rad', "rope angle out of the boom's plane (lateral)"),
+    ('c1', 'N/m', 'stiffness of each rope'),
+    ('cK', 'N m/rad', 'torsional stiffness of the boom'),
+    ('m3', 'kg', 'trolley mass'),
+    ('L3', 'm', 'pivot O1 to the trolley along the boom'),
+    ('e3', 'm', 'trolley below the boom axis'),
+    ('a2', 'm', 'console pivot O behind O1'),
+    ('m2', 'kg', 'counterweight mass at the console end'),
+    ('L2', 'm', 'console length, pivot O to the counterweight'),
+    ('gamma', 'rad', 'console angle below the boom axis (backwards)'),
+    ('h2', 'm', 'length of the console support spring'),
+    ('c2', 'N/m', 'console support stiffness'),
+    ('theta', 'rad', 'boom inclination above the horizontal'),
+    ('g', 'm/s^2', 'gravitational acceleration'),
+)
+
+
+def _layout(y, p):
+    """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
+    y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
+    if y.shape[:1] != (8,) or p.shape != (21,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (8,) or (8, k), and (21,)")
+    return y, p
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rhs_scalar(t, y, p):
+    """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_scalar(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
+    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), rate_jacobian_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]))
+
+
+def rhs(t, y, p):
+    """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    y, p = _layout(y, p)
+    if y.ndim == 1:
+        return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
+    return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def jac(t, y, p):
+    """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c37fcc7e0909167dad763b47a6ae355e452d497f376d5191c938c94b50c3503f
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 e20b17b5892898dba17e5ac75f81679e95aeacefd3dc389e937e365243be2fb4
+# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
 # body sha256 b8c8dddae51b0853d4bae4e7d890888c193e57b457491907d2b67afe4785c2e7
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1737958e9569beaadf4be1389208bcae79c5859de911013e0a6a467d579f34c7
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 6f527aeedccc184dd310853562ace11dad1caf62c6b35bcace61cdb0e1f4a07f
+# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
 # body sha256 1f15f50841523aed001c6d1ffbe3a65f0164c1993cbb80aaeb4e337f0df56458
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

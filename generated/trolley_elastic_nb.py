@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 3d36cb550fa6b4a03b7339dfae2c309607fdb347cce7909564d1bc8fd0404132
-# source key a6f2ca74f7685caa5440a83b6f067d05f8f6d6f2d1ee275314e79839ecf591a9
-# body sha256 6b993687dcb1dc79d334349bb492390cbaa4e1dc72c5ebe63d5e3047211f5124
+# symmech 0.1.0 generated module; inputs sha256 7cec33512996995084b1f899d9300199827183cc154cf4ff6452938295094023
+# source key 060b200b698e02bee847112fe3e1b921e23c507f144f59e472c1fbf274909bc2
+# body sha256 6df448149002c6da29d0050feefa94d3dec3a9ad3c5ab29282ceede0262577c5
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 
 Compiled twin of `symmech.generated.trolley_elastic` (the numpy module, the
@@ -30,7 +30,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["rigid_fields", "rigid_fields_scalar", "roller_matrix", "roller_matrix_scalar", "cantilever_basis", "cantilever_basis_scalar", "cantilever_shortening", "cantilever_shortening_scalar", "pinned_basis", "pinned_basis_scalar", "pinned_shortening", "pinned_shortening_scalar"]
+__all__ = ["rigid_fields", "rigid_fields_scalar", "roller_matrix", "roller_matrix_scalar", "cantilever_basis", "cantilever_basis_scalar", "cantilever_shortening", "cantilever_shortening_scalar", "pinned_basis", "pinned_basis_scalar", "pinned_shortening", "pinned_shortening_scalar", "pinned_slope_gram", "pinned_slope_gram_scalar", "pinned_held_axial", "pinned_held_axial_scalar"]
 
 
 def _flat(*args):
@@ -656,4 +656,266 @@ def pinned_shortening(xi):
     _arrays, _steps, _batch = _flat(xi)
     out = numpy.empty((math.prod(_batch),) + (8, 8))
     (_pinned_shortening_ploop if len(out) >= PARALLEL_BATCH else _pinned_shortening_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8, 8))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pinned_slope_gram_0(out, _k):
+    out[_k, 0, 0] = 1/3
+    out[_k, 0, 1] = 0
+    out[_k, 0, 2] = -1/15
+    out[_k, 0, 3] = 0
+    out[_k, 0, 4] = 0
+    out[_k, 0, 5] = 0
+    out[_k, 0, 6] = 0
+    out[_k, 0, 7] = 0
+    out[_k, 1, 0] = 0
+    out[_k, 1, 1] = 1/5
+    out[_k, 1, 2] = 0
+    out[_k, 1, 3] = -3/35
+    out[_k, 1, 4] = 0
+    out[_k, 1, 5] = 0
+    out[_k, 1, 6] = 0
+    out[_k, 1, 7] = 0
+    out[_k, 2, 0] = -1/15
+    out[_k, 2, 1] = 0
+    out[_k, 2, 2] = 23/105
+    out[_k, 2, 3] = 0
+    out[_k, 2, 4] = -4/35
+    out[_k, 2, 5] = 0
+    out[_k, 2, 6] = 0
+    out[_k, 2, 7] = 0
+    out[_k, 3, 0] = 0
+    out[_k, 3, 1] = -3/35
+    out[_k, 3, 2] = 0
+    out[_k, 3, 3] = 83/315
+    out[_k, 3, 4] = 0
+    out[_k, 3, 5] = -100/693
+    out[_k, 3, 6] = 0
+    out[_k, 3, 7] = 0
+    out[_k, 4, 0] = 0
+    out[_k, 4, 1] = 0
+    out[_k, 4, 2] = -4/35
+    out[_k, 4, 3] = 0
+    out[_k, 4, 4] = 73/231
+    out[_k, 4, 5] = 0
+    out[_k, 4, 6] = -25/143
+    out[_k, 4, 7] = 0
+    out[_k, 5, 0] = 0
+    out[_k, 5, 1] = 0
+    out[_k, 5, 2] = 0
+    out[_k, 5, 3] = -100/693
+    out[_k, 5, 4] = 0
+    out[_k, 5, 5] = 479/1287
+    out[_k, 5, 6] = 0
+    out[_k, 5, 7] = -147/715
+    out[_k, 6, 0] = 0
+    out[_k, 6, 1] = 0
+    out[_k, 6, 2] = 0
+    out[_k, 6, 3] = 0
+    out[_k, 6, 4] = -25/143
+    out[_k, 6, 5] = 0
+    out[_k, 6, 6] = 71/165
+    out[_k, 6, 7] = 0
+    out[_k, 7, 0] = 0
+    out[_k, 7, 1] = 0
+    out[_k, 7, 2] = 0
+    out[_k, 7, 3] = 0
+    out[_k, 7, 4] = 0
+    out[_k, 7, 5] = -147/715
+    out[_k, 7, 6] = 0
+    out[_k, 7, 7] = 541/1105
+
+
+@numba.njit(cache=True, error_model="numpy")
+def pinned_slope_gram_scalar():
+    """mode-slope integrals H_kl = ∫0^1 N_k' N_l' dξ of the pinned functions (Γ_ijkl = H_ij H_kl): floats in, a float64 array (8, 8) out [1]."""
+    out = numpy.empty((1, 8, 8))
+    _pinned_slope_gram_0(out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pinned_slope_gram_loop(_steps, out):
+    for _k in range(out.shape[0]):
+        _pinned_slope_gram_0(out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _pinned_slope_gram_ploop(_steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _pinned_slope_gram_0(out, _k)
+
+
+def pinned_slope_gram():
+    """mode-slope integrals H_kl = ∫0^1 N_k' N_l' dξ of the pinned functions (Γ_ijkl = H_ij H_kl) — eqs. membrane strain energy EA/(8L³) Σ Γ_ijkl q_i q_j q_k q_l.
+
+    Parameters
+    ----------
+    none (the matrix is a constant)
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8, 8)
+        [1]
+    """
+    _arrays, _steps, _batch = _flat()
+    out = numpy.empty((math.prod(_batch),) + (8, 8))
+    (_pinned_slope_gram_ploop if len(out) >= PARALLEL_BATCH else _pinned_slope_gram_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (8, 8))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pinned_held_axial_0(xi, out, _k):
+    x0 = xi**2
+    x1 = xi**3
+    x2 = -xi
+    x3 = xi**4
+    x4 = -4*x0 + 6*x1 - x2 - 3*x3
+    x5 = xi**5
+    x6 = 8*x0 - 64/3*x1 + 24*x3 - 48/5*x5 - 16/15*xi
+    x7 = 14*x0
+    x8 = xi**6
+    x9 = (178/3)*x1 - x2 - 113*x3 + 100*x5 - x7 - 100/3*x8
+    x10 = xi**7
+    x11 = 22*x0 - 138*x1 - 120*x10 + 395*x3 - 578*x5 + 420*x8 - xi
+    x12 = xi**8
+    x13 = -32*x0 + (844/3)*x1 + 1764*x10 - 441*x12 - x2 - 1130*x3 + 2422*x5 - 8596/3*x8
+    x14 = -44*x0
+    x15 = xi**9
+    x16 = -1558/3*x1 - 13848*x10 + 7392*x12 - x14 - 4928/3*x15 + 2793*x3 - 8190*x5 + 13972*x8 - xi
+    x17 = xi**10
+    x18 = -58*x0 + 888*x1 + 76956*x10 - 65571*x12 + 30888*x15 - 30888/5*x17 - x2 - 6174*x3 + (118398/5)*x5 - 54432*x8
+    x19 = -10*x0 + 42*x1 - x2 - 81*x3 + 72*x5 - 24*x8
+    x20 = 16*x0 - 96*x1 - 600/7*x10 + 278*x3 - 2056/5*x5 + 300*x8 - 38/35*xi
+    x21 = -24*x0 + 196*x1 + 1260*x10 - 315*x12 - x2 - 788*x3 + 1710*x5 - 2040*x8
+    x22 = 34*x0
+    x23 = -366*x1 - 9888*x10 + 5292*x12 - 1176*x15 + x22 + 1943*x3 - 5750*x5 + 9912*x8 - xi
+    x24 = -46*x0 + 636*x1 + 54852*x10 - 46977*x12 + 22176*x15 - 22176/5*x17 - x2 - 4308*x3 + (82866/5)*x5 - 38472*x8
+    x25 = xi**11
+    x26 = 60*x0 - 1042*x1 - 241080*x10 + 292644*x12 - 219472*x15 + 92664*x17 - 16848*x25 + 8781*x3 - 42462*x5 + 126756*x8 - xi
+    x27 = -20*x0 + (526/3)*x1 + 1200*x10 - 300*x12 - x2 - 731*x3 + 1612*x5 - 5812/3*x8
+    x28 = 28*x0 - 318*x1 - 65760/7*x10 + 5040*x12 - 1120*x15 + 1769*x3 - 26818/5*x5 + 9360*x8 - 39/35*xi
+    x29 = -38*x0 + (1624/3)*x1 + 51996*x10 - 44751*x12 + 21168*x15 - 21168/5*x17 - x2 - 3854*x3 + (76478/5)*x5 - 108376/3*x8
+    x30 = 50*x0 - 2626/3*x1 - 227760*x10 + 278544*x12 - 629216/3*x15 + 88704*x17 - 16128*x25 + 7731*x3 - 38742*x5 + 118216*x8 - xi
+    x31 = 64*x0
+    x32 = xi**12
+    x33 = 1356*x1 + 839796*x10 - 1363497*x12 + 1448568*x15 - 4846248/5*x17 - x2 + 370656*x25 - 14514*x3 - x31 - 61776*x32 + (446718/5)*x5 - 340620*x8
+    x34 = 516*x1 + 51460*x10 - 44365*x12 + 21000*x15 - 4200*x17 - x2 - x22 - 3748*x3 + 15010*x5 - 35640*x8
+    x35 = -88200*x17 + (176400/11)*x25
+    x36 = -2458/3*x1 - 1577056/7*x10 + 276332*x12 - x14 - 1875664/9*x15 + 7453*x3 - x35 - 37850*x5 + (349136/3)*x8 - 793/693*xi
+    x37 = -56*x0 + (3748/3)*x1 + 830172*x10 - 1353387*x12 + 1441496*x15 - 4829496/5*x17 - x2 + 369600*x25 - 13868*x3 - 61600*x32 + (434486/5)*x5 - 1003816/3*x8
+    x38 = xi**13
+    x39 = 70*x0 - 1842*x1 - 2675400*x10 + 5546844*x12 - 7800072*x15 + 7338144*x17 - 4423008*x25 + 24431*x3 + 1544400*x32 - 237600*x38 - 184802*x5 + 868836*x8 - xi
+    x40 = -52*x0 + 1218*x1 + 829024*x10 - 1353856*x12 + 1443540*x15 - 967848*x17 - x2 + 370440*x25 - 13675*x3 - 61740*x32 + 86200*x5 - 333252*x8
+    x41 = -1776*x1 - 2672448*x10 + 5554962*x12 - 7824796*x15 + 7369320*x17 - 48889680/11*x25 + 23978*x3 + x31 + 1552320*x32 - 3104640/13*x38 - 182900*x5 + 864612*x8 - 168/143*xi
+    x42 = xi**14
+    x43 = -78*x0 + 2518*x1 + 7733376*x10 - 19829196*x12 + 35329548*x15 - 218579208/5*x17 - x2 + 36855720*x25 - 40169*x3 - 20196660*x32 + 6486480*x38 - 926640*x42 + (1821168/5)*x5 - 2063292*x8
+    x44 = -74*x0 + (7438/3)*x1 + 7741776*x10 - 19880364*x12 + 35457212*x15 - 43904280*x17 - x2 + 37031064*x25 - 39833*x3 - 20297956*x32 + 6519744*x38 - 931392*x42 + 362740*x5 - 6183352/3*x8
+    x45 = xi**15
+    x46 = 88*x0 - 3408*x1 - 20505912*x10 + 63487062*x12 - 138958716*x15 + (1083124536/5)*x17 - 2629551984/11*x25 + 64004*x3 + 182469672*x32 - 1191316896/13*x38 + 27243216*x42 - 18162144/5*x45 - 3418828/5*x5 + 4585224*x8 - 862/715*xi
+    x47 = xi**16
+    x48 = -100*x0 + 4542*x1 + 50473920*x10 - 185186388*x12 + 486555444*x15 - 927077688*x17 - x2 + 1283186520*x25 - 98931*x3 - 1277046540*x32 + 890266608*x38 - 412586064*x42 + 114162048*x45 - 14270256*x47 + 1228332*x5 - 9611448*x8
+    out[_k, 0, 0] = 2*x0 - 4/3*x1 - 2/3*xi
+    out[_k, 0, 1] = x4
+    out[_k, 0, 2] = x6
+    out[_k, 0, 3] = x9
+    out[_k, 0, 4] = x11
+    out[_k, 0, 5] = x13
+    out[_k, 0, 6] = x16
+    out[_k, 0, 7] = x18
+    out[_k, 1, 0] = x4
+    out[_k, 1, 1] = 6*x0 - 16*x1 + 18*x3 - 36/5*x5 - 4/5*xi
+    out[_k, 1, 2] = x19
+    out[_k, 1, 3] = x20
+    out[_k, 1, 4] = x21
+    out[_k, 1, 5] = x23
+    out[_k, 1, 6] = x24
+    out[_k, 1, 7] = x26
+    out[_k, 2, 0] = x6
+    out[_k, 2, 1] = x19
+    out[_k, 2, 2] = -268/3*x1 - 576/7*x10 + 264*x3 - 1968/5*x5 + x7 + 288*x8 - 82/105*xi
+    out[_k, 2, 3] = x27
+    out[_k, 2, 4] = x28
+    out[_k, 2, 5] = x29
+    out[_k, 2, 6] = x30
+    out[_k, 2, 7] = x33
+    out[_k, 3, 0] = x9
+    out[_k, 3, 1] = x20
+    out[_k, 3, 2] = x27
+    out[_k, 3, 3] = 26*x0 - 928/3*x1 - 65200/7*x10 + 5000*x12 - 10000/9*x15 + 1738*x3 - 26476/5*x5 + (27800/3)*x8 - 232/315*xi
+    out[_k, 3, 4] = x34
+    out[_k, 3, 5] = x36
+    out[_k, 3, 6] = x37
+    out[_k, 3, 7] = x39
+    out[_k, 4, 0] = x11
+    out[_k, 4, 1] = x21
+    out[_k, 4, 2] = x28
+    out[_k, 4, 3] = x34
+    out[_k, 4, 4] = 42*x0 - 808*x1 - 1574680/7*x10 + 276150*x12 - 625100/3*x15 + 7390*x3 - x35 - 37656*x5 + 116040*x8 - 158/231*xi
+    out[_k, 4, 5] = x40
+    out[_k, 4, 6] = x41
+    out[_k, 4, 7] = x43
+    out[_k, 5, 0] = x13
+    out[_k, 5, 1] = x23
+    out[_k, 5, 2] = x29
+    out[_k, 5, 3] = x36
+    out[_k, 5, 4] = x40
+    out[_k, 5, 5] = 62*x0 - 5284/3*x1 - 2673448*x10 + 5561402*x12 - 70541380/9*x15 + 7384104*x17 - 48996864/11*x25 + 23860*x3 + 1555848*x32 - 3111696/13*x38 - 182444*x5 + (2591792/3)*x8 - 808/1287*xi
+    out[_k, 5, 6] = x44
+    out[_k, 5, 7] = x46
+    out[_k, 6, 0] = x16
+    out[_k, 6, 1] = x24
+    out[_k, 6, 2] = x30
+    out[_k, 6, 3] = x37
+    out[_k, 6, 4] = x41
+    out[_k, 6, 5] = x44
+    out[_k, 6, 6] = 86*x0 - 10168/3*x1 - 20523864*x10 + 63584934*x12 - 417716236/3*x15 + (1085667912/5)*x17 - 2636326224/11*x25 + 63798*x3 + 182966784*x32 - 91897344*x38 + 27320832*x42 - 18213888/5*x45 - 3414096/5*x5 + 4584944*x8 - 94/165*xi
+    out[_k, 6, 7] = x48
+    out[_k, 7, 0] = x18
+    out[_k, 7, 1] = x26
+    out[_k, 7, 2] = x33
+    out[_k, 7, 3] = x39
+    out[_k, 7, 4] = x43
+    out[_k, 7, 5] = x46
+    out[_k, 7, 6] = x48
+    out[_k, 7, 7] = 114*x0 - 5956*x1 - 116516424*x10 + 499007394*x12 - 1545647636*x15 + (17595359496/5)*x17 - 5929199136*x25 + 148764*x3 + 7374390408*x32 - 86851627632/13*x38 + 4285154016*x42 - 9217226304/5*x45 + 477034272*x47 - 10611468/5*x5 + 19145952*x8 - 954068544/17*xi**17 - 564/1105*xi
+
+
+@numba.njit(cache=True, error_model="numpy")
+def pinned_held_axial_scalar(xi):
+    """L ∂²u1/∂q_k∂q_l = ξ H_kl - S_kl(ξ) of the pinned functions with held ends (axial ψ_kl = (ξ H_kl - S_kl)/L): floats in, a float64 array (8, 8) out [1]."""
+    out = numpy.empty((1, 8, 8))
+    _pinned_held_axial_0(xi, out, 0)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pinned_held_axial_loop(xi, _steps, out):
+    for _k in range(out.shape[0]):
+        _pinned_held_axial_0(xi[_k * _steps[0]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _pinned_held_axial_ploop(xi, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _pinned_held_axial_0(xi[_k * _steps[0]], out, _k)
+
+
+def pinned_held_axial(xi):
+    """L ∂²u1/∂q_k∂q_l = ξ H_kl - S_kl(ξ) of the pinned functions with held ends (axial ψ_kl = (ξ H_kl - S_kl)/L) — eqs. ψ_ij with held ends (uniform ε11).
+
+    Parameters
+    ----------
+    xi : array_like
+        coordinate along the beam x / L [1]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8, 8)
+        [1]
+    """
+    _arrays, _steps, _batch = _flat(xi)
+    out = numpy.empty((math.prod(_batch),) + (8, 8))
+    (_pinned_held_axial_ploop if len(out) >= PARALLEL_BATCH else _pinned_held_axial_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (8, 8))

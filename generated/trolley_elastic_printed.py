@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ae12fe9b5e046d42178ed66b967e426a934a0cbae1ff3a1956fd93eaa7f1f91a
-# source key 7de55436a2f5c97796562755fdfad9a32daf348c01ed26a75a247badecb9bd5d
+# symmech 0.1.0 generated module; inputs sha256 21b7f91ce764ea8ba19a9c33282e93fbdcfd22594ae1460c01ebc2ea36749bb9
+# source key 4ddb88450fb5808fe39580b6704324a47384c9075640d4e9082568395d0409a6
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6da2a548e042bd45c9880b91eef7d07292eb1054b02b4c2496a1a6204dd4f332
-# source key 7de55436a2f5c97796562755fdfad9a32daf348c01ed26a75a247badecb9bd5d
+# symmech 0.1.0 generated module; inputs sha256 75604a2c163281d04097df96b46c990933ce43d2ef3307685bbc3a8f3e852afb
+# source key 4ddb88450fb5808fe39580b6704324a47384c9075640d4e9082568395d0409a6
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

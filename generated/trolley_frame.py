@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 182cae0d6373a79cfb38f2183d7ff73de58c3f7daf1a30afc7a0f5e37339be98
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 3a2f6dca879e5a476be49cd09d56bd299bd4291d9639bf753b15f09bb57f3d17
+# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

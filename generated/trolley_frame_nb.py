@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f520d3086a80d9d21d109fa2831fd0edab0079646d40a431beabb9c355012fdd
-# source key 57e471f229858fb24e8d33d96a02c4bd12ad05482ef60947fb932fda85824d6e
+# symmech 0.1.0 generated module; inputs sha256 3404892740907e5ae1cc4ad2798588311a49dd6a2b98a77c4d1624f638771ec9
+# source key 36a20d78850d686a0d55e21a5d19596c3d59d0a38d0228b6328edf7bfe3610f3
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6d37381d1fb50ac89004574f08be775491e9ad004d62f9d638aa0f77f20e7349
-# source key 436a7c1c1ff07b3fd5311b85dd622e3c9058e0b8e5570580a82ec88e2d385d90
+# symmech 0.1.0 generated module; inputs sha256 e262c90e7544cd9ce85cc36322a2e868a31eae74a3b20465164b838f1e8b80c0
+# source key bab46047a838339607633f6b573b7aada4b3f1f8f45cd29b1ca40330f4519ac4
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

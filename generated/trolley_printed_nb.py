@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5a3a587cc87f49160a521252612e0716ae66a257ed75009004bb9a933e9e5250
-# source key 436a7c1c1ff07b3fd5311b85dd622e3c9058e0b8e5570580a82ec88e2d385d90
+# symmech 0.1.0 generated module; inputs sha256 d1f3bc39d04ac1f58c991020a88e1c2ee18af864bae4e8866a51f0891f89e9aa
+# source key bab46047a838339607633f6b573b7aada4b3f1f8f45cd29b1ca40330f4519ac4
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 

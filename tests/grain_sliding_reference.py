@@ -113,3 +113,37 @@ def reference(g_k, vib, mu, radius, v0, t_end, rtol=1e-12):
                 v = np.zeros(2)
         on_plane = t >= t_end
     return r, v
+
+
+def turning_ellipsoid(g_k, vib, mu, k, rho0, t_end, h):
+    """Moreau-Jean time stepping of an ellipsoid that slides on the plane turning about the normal only.
+
+    Per unit mass: v' = f + phi, w' = k (rho x phi)_z, psi' = w, slip s = v + w e_z x rho, rho = Rot(psi) rho0
+    the horizontal offset (2,) [m] of the contact point, k = m / I_zz [1/m^2]. Each step of h [s] applies the
+    friction impulse that solves the cone exactly (stick when the sticking impulse is inside it; otherwise the
+    impulse on the cone opposite to the slip after the step). First order in h; starts at rest at t = 0.
+    Returns the tangential position (2,) and the spin [rad/s] at t_end.
+    """
+    g = np.asarray(g_k, dtype=float)
+    x, v, w, psi = np.zeros(2), np.zeros(2), 0.0, 0.0
+
+    def solve(a, b, jr, s):
+        """(a E + b W)^-1 s with W = E + k jr jr^T (Sherman-Morrison)."""
+        return (s - b * k * (jr @ s) / (a + b + b * k * (jr @ jr)) * jr) / (a + b)
+    for i in range(int(round(t_end / h))):
+        t = (i + 0.5) * h
+        a = surface_acc(vib, t)
+        cone = mu * (a[2] - g[2]) * h
+        c, s = math.cos(psi + 0.5 * h * w), math.sin(psi + 0.5 * h * w)
+        jr = np.array([-(s * rho0[0] + c * rho0[1]), c * rho0[0] - s * rho0[1]])  # e_z x rho
+        v_free = v + h * (g[:2] - a[:2])
+        s_free = v_free + w * jr
+        P = -solve(0.0, 1.0, jr, s_free)
+        if math.hypot(*P) > cone:
+            lam = brentq(lambda lm: math.hypot(*solve(lm, cone, jr, s_free)) - 1.0, 0.0, math.hypot(*s_free))
+            P = -cone * solve(lam, cone, jr, s_free)
+        v = v_free + P
+        w += k * float(jr @ P)
+        psi += h * w
+        x += h * v
+    return x, w

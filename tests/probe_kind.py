@@ -86,7 +86,7 @@ PROBE = Kind("probe", "pipeline test kind", SCHEMA, _prepare, _run,
 
 def install(monkeypatch) -> None:
     """Register the probe beside the real kinds for one test."""
-    registry.kinds()  # discover the real kinds first: discovery runs on an empty registry only
+    registry.kinds()  # discover the real kinds before adding the test kind
     monkeypatch.setitem(registry._KINDS, "probe", PROBE)
 
 

@@ -5,6 +5,8 @@ closed form), so the contract is checked independently of any paper's kind.
 """
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -39,7 +41,7 @@ def _run(setup: dict, ctx) -> Result:
 def oscillator(monkeypatch):
     kind = registry.Kind("test_oscillator", "harmonic oscillator (tests only)", OSCILLATOR,
                          prepare=lambda resolved: dict(resolved), run=_run)
-    registry.kinds()  # discover the real kinds first: discovery runs on an empty registry only
+    registry.kinds()  # discover the real kinds before adding the test kind
     monkeypatch.setitem(registry._KINDS, kind.name, kind)
     return kind
 
@@ -78,8 +80,6 @@ def test_event_log_is_a_table(oscillator):
 
 
 def test_import_stays_light():
-    import subprocess
-    import sys
 
     code = "import symmech, sys; assert 'sympy' not in sys.modules and 'xarray' not in sys.modules; print('ok')"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout == "ok\n"
@@ -103,3 +103,11 @@ def test_api_matches_the_command_line(tmp_path):
     for j, (name, unit) in enumerate(header[1:], start=1):
         assert ds[name].attrs["units"] == unit.rstrip("]")
         np.testing.assert_allclose(ds[name].values, data[:, j], rtol=1e-12, atol=1e-12)
+
+
+def test_discovery_finds_every_kind_after_one_registered_itself():
+    """Importing one kind's module first (as a test or a user script may) must not hide the others."""
+    code = ("import symmech.smm.scene; from symmech.core import registry; "
+            "print(sorted(registry.kinds()))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "['grain', 'impact', 'mechanism', 'trolley']"

@@ -5,9 +5,11 @@ from badinput import DELETE, assert_rejected, bundled, changed, cli_rejects
 
 HELIX = "trolley_helix"
 HILL = "trolley_table_hill"
+ELASTIC = "trolley_elastic_helix"
 EXPR = {"kind": "trolley", "track": {"type": "expression", "x": "s", "y": "0", "z": "0"},
         "trolley": {"mass": 100.0, "com": [0.0, 0.0, 0.0], "axle_distance": 2.0, "half_gauge": 1.0},
         "motion": {"speed": "10"}, "time": {"t_end": 2.0, "steps": 20}}
+TRACTION = {**EXPR, "effects": {"traction": True}, "motion": {"traction": "100"}}
 
 CASES = [
     # types and structure
@@ -58,6 +60,40 @@ CASES = [
     ("table-smoothing-negative", HILL, "track.smoothing", -0.01, "track.smoothing"),
     ("motion-leaves-table", HILL, "time.t_end", 40.0, "motion.speed"),
     ("paper-tables-off-grid", HELIX, "time.steps", 4999, "report.paper_tables"),
+    # the [elastic] table (docs/scenes-trolley-elastic.md)
+    ("elastic-not-a-table", ELASTIC, "elastic", 3, "elastic"),
+    ("elastic-unknown-field-did-you-mean", ELASTIC, "elastic.rolers", {}, "elastic.rolers"),
+    ("elastic-beam-young-modulus-not-a-field", ELASTIC, "elastic.beams[0].E", 2e11, "elastic.beams[0].E"),
+    ("elastic-beam-ei-negative", ELASTIC, "elastic.beams[0].ei", [-2e4, 3e4], "elastic.beams[0].ei[0]"),
+    ("elastic-beam-ei-one-plane", ELASTIC, "elastic.beams[0].ei", [2e4], "elastic.beams[0].ei"),
+    ("elastic-beam-length-zero", ELASTIC, "elastic.beams[0].length", 0.0, "elastic.beams[0].length"),
+    ("elastic-beam-mass-nan", ELASTIC, "elastic.beams[0].mass_per_length", float("nan"),
+     "elastic.beams[0].mass_per_length"),
+    ("elastic-beam-axis-zero", ELASTIC, "elastic.beams[0].axis", [0, 0, 0], "elastic.beams[0].axis"),
+    ("elastic-beam-plane-along-axis", ELASTIC, "elastic.beams[0].plane", [0, 3, 0], "elastic.beams[0].plane"),
+    ("elastic-beam-support-unknown", ELASTIC, "elastic.beams[0].support", "clamped", "elastic.beams[0].support"),
+    ("elastic-beam-modes-nine", ELASTIC, "elastic.beams[0].modes", 9, "elastic.beams[0].modes"),
+    ("elastic-beam-damping-ratio-one", ELASTIC, "elastic.beams[0].damping_ratio", 1.0,
+     "elastic.beams[0].damping_ratio"),
+    ("elastic-roller-stiffness-zero", ELASTIC, "elastic.rollers.stiffness", [1e7, 1e7, 0.0, 1e7, 1e7],
+     "elastic.rollers.stiffness[2]"),
+    ("elastic-roller-stiffness-four", ELASTIC, "elastic.rollers.stiffness", [1e7] * 4, "elastic.rollers.stiffness"),
+    ("elastic-roller-damping-negative", ELASTIC, "elastic.rollers.damping", [-1.0] * 5, "elastic.rollers.damping[0]"),
+    ("elastic-roller-law-unknown", ELASTIC, "elastic.rollers.law", "cubic", "elastic.rollers.law"),
+    ("elastic-rollers-missing", ELASTIC, "elastic.rollers", DELETE, "elastic.rollers"),
+    ("elastic-point-beam-index", ELASTIC, "elastic.points[0].beam", 4, "elastic.points[0].beam"),
+    ("elastic-point-xi-beyond-tip", ELASTIC, "elastic.points[0].xi", 1.5, "elastic.points[0].xi"),
+    ("elastic-point-name-digit", ELASTIC, "elastic.points[1].name", "1seat", "elastic.points[1].name"),
+    ("elastic-point-name-twice", ELASTIC, "elastic.points[1].name", "tip", "elastic.points[1].name"),
+    ("elastic-point-nowhere", ELASTIC, "elastic.points[1].at", DELETE, "elastic.points[1]"),
+    ("elastic-method-unknown", ELASTIC, "elastic.numerics.method", "Euler", "elastic.numerics.method"),
+    ("elastic-resonance-band-zero", ELASTIC, "elastic.numerics.resonance_band", 0.0,
+     "elastic.numerics.resonance_band"),
+    ("elastic-effect-not-bool", ELASTIC, "elastic.effects.body", "yes", "elastic.effects.body"),
+    ("elastic-in-paper-conventions", ELASTIC, "conventions", "paper", "elastic"),
+    ("elastic-rollers-under-a-point-mass", ELASTIC, "trolley.inertia", [0.0] * 6, "trolley.inertia"),
+    ("elastic-traction-without-effects", TRACTION, "elastic", {"effects": {"rollers": False, "body": False}},
+     "elastic.effects"),
     # expressions
     ("speed-1-over-0", HELIX, "motion.speed", "1/0", "motion.speed"),
     ("speed-log0-times-t", HELIX, "motion.speed", "log(0)*t", "motion.speed"),

@@ -151,3 +151,16 @@ def test_mu_equation_is_the_determinant_condition():
         direct = np.linalg.det(np.column_stack([H @ d, H[:, 2], du]))
         F = k[0] + k[1] * np.cos(mu) + k[2] * np.sin(mu) + k[3] * np.cos(2 * mu) + k[4] * np.sin(2 * mu)
         assert F == pytest.approx(direct, rel=1e-12, abs=1e-14)
+
+
+def test_mu_equation_is_a_velocity():
+    """det[H d, H e_z, du]: H and d are dimensionless, du is a velocity, so the coefficients are in m/s:
+    scaling the contact velocity by s scales every coefficient by s (H fixed), and the generated docstring says so."""
+    rng = np.random.default_rng(12)
+    A = rng.normal(size=(3, 3))
+    H = np.eye(3) + A @ A.T
+    h = (H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2])
+    u = np.array([0.4, -0.2, -0.7])
+    k = g.mu_equation(*h, 0.3, 0.6, *u)
+    np.testing.assert_allclose(g.mu_equation(*h, 0.3, 0.6, *(2.5 * u)), 2.5 * k, rtol=1e-13, atol=1e-15)
+    assert "        [m/s]" in g.mu_equation.__doc__

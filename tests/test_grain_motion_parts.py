@@ -296,3 +296,21 @@ def test_paper_mode_rotates_a_grain_started_at_gimbal_lock():
     # Accurate mode (quaternions) has no such singularity either.
     acc = run(model, t_end=2 * T, w=(0.0, 0.0, 30.0))
     assert np.all(np.isfinite(acc.trajectory))
+
+def test_paper_mode_landing_drops_spin_and_says_so():
+    """A sphere spinning at 30 rad/s lands plastically and without friction on a still plate (the impulse passes
+    through the centre: the spin is kept through the impact). Paper-mode sliding is a point mass's: the spin is
+    dropped, and its kinetic energy I w^2 / 2 (I = 2/5 m a^2) is reported with a warning; accurate mode keeps it
+    (a point contact below the centre exerts no couple about the normal)."""
+    law = ImpactLaw("coulomb", e_n=0.0, e_t=0.0, mu=0.0, check_printed=False)
+    model = grain_model(law=law, g_k=(0.0, 0.0, -G), effects=motion.Effects(vibration=False, inclination=False))
+    paper = run(model, t_end=0.1, mode="paper", w=(0.0, 0.0, 30.0))
+    assert paper.trajectory[-1, -1] == motion.REGIMES.index("sliding")
+    np.testing.assert_array_equal(paper.final.w, 0.0)
+    spin_energy = 0.5 * 0.4 * 2e-5 * 1.5e-3**2 * 30.0**2
+    assert paper.summary()["spin_energy_dropped_J"] == pytest.approx(spin_energy, rel=1e-12)
+    assert any("lost spin at landings" in w for w in paper.warnings)
+    accurate = run(model, t_end=0.1, w=(0.0, 0.0, 30.0))
+    np.testing.assert_allclose(flight.rotation_matrix(accurate.final.q) @ accurate.final.w, [0, 0, 30.0],
+                               atol=1e-9)
+    assert "spin_energy_dropped_J" not in accurate.summary()

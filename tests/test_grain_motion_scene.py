@@ -60,3 +60,28 @@ def test_default_scene_and_precision_study(tmp_path):
     reference = json.loads((tmp_path / "wp" / "summary.json").read_text())["reference"]
     assert reference.startswith("accurate mode at tolerance")
     assert (tmp_path / "wp" / "precision_grain.png").stat().st_size > 0
+
+
+def test_api_run_has_the_impacts_as_event_log():
+    """symmech.load(grain scene).run().event_log(): one row per impact, with units, the impact times
+    equal to the trajectory's pre/post impact rows."""
+    import tomllib
+
+    import numpy as np
+
+    import symmech
+    from symmech.core.scene import scenes_folder
+
+    data = tomllib.loads((scenes_folder() / "grain_default.toml").read_text())
+    data["duration"] = 0.1
+    result = symmech.load(data).run()
+    log = result.event_log()
+    assert result.events == "impacts"
+    dissipated = -log["energy_change"].values.sum()
+    assert dissipated == pytest.approx(result.summary["energy_dissipated_by_impacts_J"], rel=1e-12)
+    trajectory = result.tables["trajectory"]
+    impact_rows = np.array(trajectory.text["regime"]) == "impact"
+    np.testing.assert_array_equal(log["t"].values, trajectory.column("t")[impact_rows][::2])
+    assert log.sizes["row"] >= 3
+    assert (log["t"].attrs["units"], log["Tz"].attrs["units"], log["vz_before"].attrs["units"]) == ("s", "N s", "m/s")
+    assert set(log["admissible"].values) <= {"True", "False"}

@@ -82,10 +82,10 @@ def test_dask_cluster_equals_serial_bit_for_bit():
                    sweep={"x": {"field": "vibration.amplitude", "values": [amplitude(1.2), amplitude(1.6)]},
                           "y": {"field": "vibration.frequency", "start": 20.0, "stop": 30.0, "num": 2}})
     p = build(raw)
-    serial, _ = sweep.compute(p, scheduler="synchronous")
+    serial = sweep.compute(p, scheduler="synchronous")[0]
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None) as cluster:
-        remote, _ = sweep.compute(p, scheduler=cluster.scheduler_address)
+        remote = sweep.compute(p, scheduler=cluster.scheduler_address)[0]
     for a, b in zip(serial, remote):
         assert a.shape == (2, 2, 2, 3)
         assert np.array_equal(a, b)
@@ -142,7 +142,7 @@ def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
     raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
                    sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
     p = build(raw)
-    values, failed = sweep.compute(p, scheduler="synchronous")
+    values, failed, warned = sweep.compute(p, scheduler="synchronous")
     assert [f[:4] for f in failed] == [("a", 0, 0, 1)] and "stagnates" in failed[0][4]
     res = sweep.result(p, values, failed)
     table = res.tables["sweep_a"]
@@ -150,3 +150,29 @@ def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
     ok = values[0][0, 0, [0, 2], 0]
     assert table.column("mean_vx")[0] == pytest.approx(ok.mean(), rel=1e-15)
     assert res.summary["failed_grains"][0]["grain"] == 1 and res.warnings
+
+
+def test_a_grain_that_warns_is_averaged_in_and_listed(monkeypatch):
+    """E.g. a rocking contact (issue 13): the grain's result counts, its warnings go to the summary."""
+    real = pipeline.Scene.run
+    calls = []
+
+    def warning(self, ctx=None):
+        calls.append(1)
+        res = real(self, ctx)
+        if len(calls) == 3:
+            res.warnings.append("1 rocking contact(s): ...")
+        return res
+
+    monkeypatch.setattr(pipeline.Scene, "run", warning)
+    raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
+                   sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
+    p = build(raw)
+    values, failed, warned = sweep.compute(p, scheduler="synchronous")
+    assert failed == [] and warned == [("a", 0, 0, 2, ["1 rocking contact(s): ..."])]
+    res = sweep.result(p, values, failed, warned)
+    assert res.tables["sweep_a"].column("failed")[0] == 0.0
+    assert res.tables["sweep_a"].column("mean_vx")[0] == pytest.approx(values[0][0, 0, :, 0].mean(), rel=1e-15)
+    assert res.summary["warned_grains"] == [{"population": "a", "point": [0, 0], "grain": 2,
+                                             "warnings": ["1 rocking contact(s): ..."]}]
+    assert any("ran with warnings" in w for w in res.warnings)

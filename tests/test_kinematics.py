@@ -59,6 +59,8 @@ def test_inertia_transforms_match_a_point_cloud():
     assert np.allclose(kin.parallel_axis(central, m.sum(), com - point), inertia(pts - point), rtol=1e-13)
     J = sum(mi * np.outer(p, p) for mi, p in zip(m, pts - com))
     assert np.allclose(kin.second_moment(central), J, rtol=1e-13)
+    assert np.allclose(kin.inertia_from_second_moment(J), central, rtol=1e-13)
+    assert np.allclose(_sym(kin.inertia_from_second_moment, sp.Matrix(J)), central, rtol=1e-13)
     R = kin.rodrigues(np.array([0.6, 0.0, 0.8]), 1.1)
     assert np.allclose(kin.rotate_tensor(R, central), inertia((pts - com) @ R.T), rtol=1e-13)
     six = [central[0, 0], central[1, 1], central[2, 2], central[0, 1], central[1, 2], central[0, 2]]
@@ -73,3 +75,22 @@ def test_sequence_numpy_and_sympy_agree(passive):
     num = kin.sequence((0, 1, 2), th, passive=passive)
     sym = np.array(kin.sequence((0, 1, 2), [sp.Float(x) for x in th], kin.SYMPY, passive).evalf(), dtype=float)
     assert np.abs(num - sym).max() < 1e-14
+
+
+def test_single_vectors_and_batches_give_the_same_matrices():
+    """One vector takes the scalar path of the numpy arithmetic, a stack the batch path; rows of the
+    stack must equal the single results bit for bit, and mixed scalar/batch arguments broadcast."""
+    v = RNG.normal(size=(4, 3))
+    angle = RNG.uniform(-3, 3, 4)
+    assert kin.skew(v[0]).shape == (3, 3)
+    for k in range(4):
+        assert np.array_equal(kin.skew(v)[k], kin.skew(v[k]))
+        assert np.array_equal(kin.elementary(1, angle)[k], kin.elementary(1, angle[k]))
+        assert np.array_equal(kin.rodrigues(v[0], angle)[k], kin.rodrigues(v[0], angle[k]))
+    # a stack of three vectors is a (3, 3) batch, not one matrix of scalars
+    assert kin.skew(v[:3]).shape == (3, 3, 3)
+    c, s = np.cos(angle[0]), np.sin(angle[0])
+    assert np.array_equal(kin.elementary(2, angle[0], passive=False), [[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    shift = kin.parallel_axis(np.zeros((3, 3)), np.array([1.0, 2.0]), v[0])
+    d = v[0]
+    assert np.allclose(shift[1], 2 * (d @ d * np.eye(3) - np.outer(d, d)), rtol=1e-15, atol=0)

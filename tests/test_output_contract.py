@@ -19,7 +19,7 @@ from symmech.core import registry
 from symmech.core.scene import scenes_folder
 
 QUICK = {"impact_default", "smm_double_pendulum", "smm_excavator", "smm_rotor_boom", "smm_spatial_boom",
-         "trolley_helix"}
+         "trolley_helix", "trolley_elastic_helix"}
 QUICK_PRECISION = {"impact_default", "smm_double_pendulum"}
 
 

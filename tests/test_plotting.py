@@ -62,6 +62,40 @@ def test_shared_x_is_labelled_once(tmp_path):
     assert len(plotting.unlabelled(fig)) == 2
 
 
+def test_a_colorbar_names_its_quantity_and_unit(tmp_path):
+    fig, axes = plotting.figure()
+    mesh = axes[0, 0].pcolormesh([0.0, 1.0], [0.0, 1.0], np.ones((2, 2)))
+    plotting.set_labels(axes[0, 0], ("amplitude", "m"), ("angle", "deg"))
+    bar = fig.colorbar(mesh, ax=axes[0, 0], label="mean velocity")
+    assert plotting.unlabelled(fig) == ["axes 1 (colorbar): label 'mean velocity'"]
+    bar.set_label(plotting.label("mean velocity", "m/s"))
+    assert plotting.unlabelled(fig) == []
+    assert [p.suffix for p in plotting.save(fig, tmp_path, "bar")] == [".png", ".svg"]
+
+
+SWEEP_PLOTS = """
+import numpy as np, matplotlib
+from types import SimpleNamespace
+from symmech.grain import sweep
+axis = lambda field, values: {"field": field, "values": values}
+plan = SimpleNamespace(x=axis("vibration.amplitude", [1e-3, 2e-3]), y=axis("vibration.angle_deg", [20.0, 40.0]),
+                       names=["crop"], gamma=np.array([[0.5, 1.0], [1.5, 2.0]]))
+stats = [{"mean_vx": np.array([[0.1, 0.2], [0.3, 0.4]]), "hop_fraction": np.array([[0.0, 0.5], [1.0, 1.0]])}]
+paths = sweep._plots(plan, stats, {}, None, __import__("pathlib").Path(FOLDER))
+print(matplotlib.get_backend(), " ".join(sorted(p.name for p in paths)))
+"""
+
+
+def test_sweep_plots_use_the_plotting_style_and_keep_the_backend(tmp_path):
+    """The sweep's charts go through plotting.save (PNG + SVG, units on every axis and colorbar)
+    and leave a user's backend (MPLBACKEND=svg) as it is."""
+    clean = {k: v for k, v in __import__("os").environ.items() if k not in ("DISPLAY", "MPLBACKEND", "WAYLAND_DISPLAY")}
+    out = subprocess.run([sys.executable, "-c", SWEEP_PLOTS.replace("FOLDER", repr(str(tmp_path)))],
+                         env={**clean, "MPLBACKEND": "svg"}, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["svg", "crop_hop_fraction.png", "crop_hop_fraction.svg", "crop_mean_vx.png",
+                           "crop_mean_vx.svg"]
+
+
 @pytest.mark.parametrize("env, backend", [({}, "agg"), ({"MPLBACKEND": "svg"}, "svg"),
                                           ({"DISPLAY": ":99", "MPLBACKEND": "pdf"}, "pdf")])
 def test_backend_is_left_to_matplotlib(env, backend):

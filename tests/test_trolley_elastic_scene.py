@@ -67,7 +67,7 @@ def test_full_run_tables_and_summary():
     amp = res.summary["elastic"]["dynamic_amplification"]
     assert 0.9 < amp["P3"] < 1.2
     modes = res.tables["modes"]
-    assert modes.data.shape == (3, 3 + 2 * 9)
+    assert modes.data.shape == (3, 3 + 2 * 9 + 3)
     assert np.all(modes.column("f1") > 0)
 
 

@@ -77,15 +77,21 @@ class NamedMatrix:
 
 @dataclass(frozen=True)
 class ModuleSpec:
-    """A generated module: its name under ``symmech.generated`` and its functions."""
+    """A generated module: its name under ``symmech.generated`` and its functions.
+
+    With ``dynamics`` the module also holds that ODE's ``rate`` functions (appended to
+    ``functions``) and the solve_ivp-style ``rhs``/``jac`` over the declared layout.
+    """
 
     name: str
     doc: str
     source: str
     functions: tuple[NamedMatrix, ...] = field(default_factory=tuple)
+    dynamics: "Dynamics | None" = None  # emitted as rhs(t, y, p), jac(t, y, p), STATE, PARAMS
 
     def __post_init__(self):
-        object.__setattr__(self, "functions", tuple(self.functions))
+        object.__setattr__(self, "functions", tuple(self.functions)
+                           + (self.dynamics.functions() if self.dynamics else ()))
         names = [f.name for f in self.functions]
         if len(set(names)) != len(names):
             raise ValueError(f"module {self.name}: duplicate function names")
@@ -100,3 +106,58 @@ class ModuleSpec:
 def args_of(table) -> tuple[Arg, ...]:
     """Build arguments from ``(symbol, meaning, unit)`` triples."""
     return tuple(Arg(s, meaning, unit) for s, meaning, unit in table)
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """A first-order ODE ``M(t, y, p) y' = F(t, y, p)`` that a module emits as ``rhs(t, y, p)``.
+
+    ``state`` and ``params`` declare the layout of the vectors ``y`` and ``p`` (order,
+    meanings, units); ``time`` is the time symbol when the equations depend on it.
+    ``mass`` is the matrix M (None: the identity, ``y' = F``). With ``jacobian`` the
+    Jacobian ``d(y')/dy = M^-1 dF/dy`` is derived symbolically from ``F`` alone
+    (:meth:`functions`), which needs M free of the state; ``jacobian=False`` emits
+    ``rhs`` only and admits a state-dependent M. Nothing is inverted symbolically: the
+    generated ``rhs`` and ``jac`` solve with M numerically.
+    """
+
+    state: tuple[Arg, ...]
+    params: tuple[Arg, ...]
+    rate: sympy.Matrix
+    mass: sympy.Matrix | None = None
+    time: Arg | None = None
+    meaning: str = ""
+    jacobian: bool = True
+
+    def __post_init__(self):
+        object.__setattr__(self, "state", tuple(self.state))
+        object.__setattr__(self, "params", tuple(self.params))
+        object.__setattr__(self, "rate", sympy.Matrix(self.rate))
+        n = len(self.state)
+        if self.rate.shape != (n, 1):
+            raise ValueError(f"rate has shape {self.rate.shape}, the state has {n} entries")
+        if self.mass is not None:
+            object.__setattr__(self, "mass", sympy.Matrix(self.mass))
+            if self.mass.shape != (n, n):
+                raise ValueError(f"mass matrix has shape {self.mass.shape}, expected ({n}, {n})")
+            depends = self.mass.free_symbols & {a.symbol for a in self.state}
+            if depends and self.jacobian:
+                raise ValueError(f"mass matrix depends on the state: {sorted(s.name for s in depends)}")
+
+    @property
+    def args(self) -> tuple[Arg, ...]:
+        """Arguments of the emitted functions: time (if any), state, parameters."""
+        return ((self.time,) if self.time else ()) + self.state + self.params
+
+    def functions(self) -> tuple[NamedMatrix, ...]:
+        """``rate`` F (n,), ``rate_jacobian`` dF/dy (n, n) if derived and, with a mass matrix, ``rate_mass`` M."""
+        y = sympy.Matrix([a.symbol for a in self.state])
+        what = self.meaning or "the state"
+        out = [NamedMatrix("rate", self.rate, self.args, f"F of M y' = F: rates of {what}",
+                           "state unit / s (times M)")]
+        if self.jacobian:
+            out.append(NamedMatrix("rate_jacobian", self.rate.jacobian(y), self.args, "dF/dy, rows F, columns y",
+                                   "unit of F / unit of y"))
+        if self.mass is not None:
+            out.append(NamedMatrix("rate_mass", self.mass, self.args, "M of M y' = F", "unit of F / unit of y'"))
+        return tuple(out)

@@ -29,7 +29,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from symmech import __version__
 from symmech.core import integrity
-from symmech.core.derivation import ModuleSpec, NamedMatrix
+from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix
 
 # Elements per chunk: each chunk is CSE'd on its own and, when a function has
 # more than one, emitted as a private helper so no function body grows huge.
@@ -141,6 +141,20 @@ def _function_context(nm: NamedMatrix, target: Target) -> dict:
     }
 
 
+def _dynamics_context(dyn: Dynamics) -> dict:
+    """Layout constants and the call of the rate functions from ``(t, y, p)``."""
+    def layout(args):
+        return [repr((a.name, a.unit, a.meaning)) for a in args]
+
+    call = (["t"] if dyn.time else []) + [f"y[{i}]" for i in range(len(dyn.state))] \
+        + [f"p[{i}]" for i in range(len(dyn.params))]
+    return {"state": layout(dyn.state), "params": layout(dyn.params), "state_args": dyn.state,
+            "param_args": dyn.params, "n": len(dyn.state),
+            "m": len(dyn.params), "call": ", ".join(call), "mass": dyn.mass is not None,
+            "jacobian": dyn.jacobian,
+            "time": f"{dyn.time.meaning} [{dyn.time.unit}]" if dyn.time else None, "meaning": dyn.meaning}
+
+
 def template_names() -> list[str]:
     """Every template file, in name order (all of them feed every module's hashes)."""
     folder = importlib.resources.files("symmech.templates")
@@ -162,6 +176,8 @@ def inputs_hash(spec: ModuleSpec, target: Target = NUMPY) -> str:
         for a in f.args:
             h.update(f"{a.name}|{a.meaning}|{a.unit}".encode())
         h.update(_srepr_digest(sympy.ImmutableMatrix(f.matrix)))
+    if spec.dynamics:  # the split of the arguments into t, y and p
+        h.update(repr(_dynamics_context(spec.dynamics)).encode())
     return h.hexdigest()
 
 
@@ -186,6 +202,7 @@ def render(spec: ModuleSpec, target: Target = NUMPY, key: str = NO_KEY) -> str:
     body = env.get_template(target.template).render(
         spec=spec,
         functions=[_function_context(f, target) for f in spec.functions],
+        dynamics=_dynamics_context(spec.dynamics) if spec.dynamics else None,
     )
     return integrity.with_header(body, inputs_hash(spec, target), key)
 

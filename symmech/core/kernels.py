@@ -3,7 +3,8 @@
 ``load("grain_impact")`` returns ``symmech.generated.grain_impact_nb`` (numba)
 when numba imports, else a stand-in with the same names built on the numpy
 module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
-float (scalar quantities) or a float64 array of the element shape. Runtime
+float (scalar quantities) or a float64 array of the element shape (``rhs_scalar``
+and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``). Runtime
 code written against ``load`` runs everywhere; only its speed differs. The
 module is verified first (:func:`symmech.core.integrity.verify`).
 """
@@ -39,7 +40,8 @@ def load(name: str):
         integrity.verify(f"{name}_nb")
         return importlib.import_module(f"{PACKAGE}.{name}_nb")
     reference = importlib.import_module(f"{PACKAGE}.{name}")
-    names = {}
+    # the layout of a dynamics module's rhs(t, y, p)
+    names = {k: getattr(reference, k) for k in ("STATE", "PARAMS") if hasattr(reference, k)}
     for f in reference.__all__:
         names[f] = getattr(reference, f)
         names[f"{f}_scalar"] = _scalar_twin(names[f])

@@ -26,9 +26,11 @@ class _Numpy:
 
     @staticmethod
     def matrix(rows):
+        # Float entries (one body, as inside ODE right-hand sides; numpy scalars are floats
+        # too) take one np.array call, several times cheaper than broadcasting.
+        if all(isinstance(x, float) for row in rows for x in row):
+            return np.array(rows)
         flat = [np.asarray(x, dtype=float) for row in rows for x in row]
-        if all(x.ndim == 0 for x in flat):
-            return np.array(rows, dtype=float)
         shape = np.broadcast_shapes(*(x.shape for x in flat))
         out = np.stack([np.broadcast_to(x, shape) for x in flat], axis=-1)
         return out.reshape(shape + (len(rows), len(rows[0])))
@@ -47,7 +49,8 @@ class _Numpy:
     @staticmethod
     def vector(v):
         v = np.asarray(v, dtype=float)
-        return [v[..., i] for i in range(3)]
+        # one vector: Python floats, whose arithmetic is several times cheaper than 0-d arrays
+        return v.tolist() if v.ndim == 1 else [v[..., i] for i in range(3)]
 
     @staticmethod
     def matmul(a, b):
@@ -180,6 +183,13 @@ def second_moment(inertia, ar=NUMPY):
     e = ar.entries(inertia)
     half_trace = (e[0][0] + e[1][1] + e[2][2]) / 2
     return _combine(ar, _identity_times(ar, half_trace), inertia, 1, -1)
+
+
+def inertia_from_second_moment(second, ar=NUMPY):
+    """I = tr(J) E - J [kg m²] from the second moment J = ∫ r rᵀ dm about the same point
+    (the inverse of :func:`second_moment`)."""
+    e = ar.entries(second)
+    return _combine(ar, _identity_times(ar, e[0][0] + e[1][1] + e[2][2]), second, 1, -1)
 
 
 def parallel_axis(inertia_central, mass, offset, ar=NUMPY):

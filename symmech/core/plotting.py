@@ -75,6 +75,10 @@ def unlabelled(fig) -> list[str]:
     for i, ax in enumerate(fig.axes):
         if not ax.get_visible() or not ax.axison:
             continue
+        if ax.get_label() == "<colorbar>":  # one long axis, labelled by the colorbar's label
+            if not (_UNIT.search(ax.get_xlabel()) or _UNIT.search(ax.get_ylabel())):
+                bad.append(f"axes {i} (colorbar): label {ax.get_ylabel() or ax.get_xlabel()!r}")
+            continue
         # axes sharing x (or y) are labelled once, on the outer one
         checks = {"x": ax.get_shared_x_axes().get_siblings(ax), "y": ax.get_shared_y_axes().get_siblings(ax)}
         if hasattr(ax, "get_zlabel"):

@@ -16,6 +16,7 @@ The life of a run (see ``symmech.core.pipeline``)::
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass
@@ -67,7 +68,9 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
+@functools.cache
 def _discover() -> None:
+    """Import every ``symmech/<pkg>/*scene.py`` once; importing a kind's module registers it."""
     import symmech
 
     for pkg in pkgutil.iter_modules(symmech.__path__):
@@ -80,9 +83,8 @@ def _discover() -> None:
 
 
 def kinds() -> dict[str, Kind]:
-    """Every registered kind by name (discovered on first call)."""
-    if not _KINDS:
-        _discover()
+    """Every registered kind by name (discovery runs once, even if a kind registered itself before)."""
+    _discover()
     return dict(sorted(_KINDS.items()))
 
 

@@ -24,26 +24,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symmech.core import kinematics as kin
 from symmech.grain import contact
 from symmech.grain.impact import solve_robust_batch
 
 PRINTED_RESIDUAL = 1e-8  # relative residual of (19) below which the printed law counts as solved
 
 
-def cross_matrix(r):
-    """[r]x (..., 3, 3) for vectors r (..., 3)."""
-    r = np.asarray(r, dtype=float)
-    z = np.zeros(r.shape[:-1])
-    return np.stack([np.stack([z, -r[..., 2], r[..., 1]], -1),
-                     np.stack([r[..., 2], z, -r[..., 0]], -1),
-                     np.stack([-r[..., 1], r[..., 0], z], -1)], -2)
-
-
 def inverse_effective_mass(mass, inertia, Q, R):
     """K (..., 3, 3) [1/kg]: mass (...,) kg, inertia (..., 3) principal kg m^2, Q (..., 3, 3), R (..., 3) m."""
     mass = np.asarray(mass, dtype=float)
-    inv_i = Q @ (np.asarray(inertia, dtype=float)[..., :, None] ** -1 * np.swapaxes(Q, -1, -2))
-    Rx = cross_matrix(R)
+    inv_i = kin.rotate_tensor(Q, np.eye(3) / np.asarray(inertia, dtype=float)[..., None, :])
+    Rx = kin.skew(R)
     return np.eye(3) / mass[..., None, None] - Rx @ inv_i @ Rx
 
 
@@ -147,7 +139,7 @@ class ImpactLaw:
             P = np.where(approaching[:, None], coulomb_impulse(K, u, e_n, e_t, mu), 0.0)
         v_after = v + P / np.asarray(mass, dtype=float)[:, None]
         if rotation:
-            I_k = Q @ (inertia[..., :, None] * np.swapaxes(Q, -1, -2))
+            I_k = kin.rotate_tensor(Q, inertia[..., None, :] * np.eye(3))
             w_after = w + np.linalg.solve(I_k, np.cross(R, P)[..., None])[..., 0]
         else:
             w_after = np.zeros((n, 3))

@@ -21,6 +21,7 @@ import functools
 import sympy
 from sympy import Matrix, cos, sin, sqrt
 
+from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 from symmech.grain import SEED
 
@@ -72,22 +73,9 @@ CRAMER_ARGS = (tuple((s, f"coefficient {s.name} of (43)", "kg*m^2") for s in A_s
                + tuple((s, f"right-hand side {s.name} of (43)", "kg*m^2/s") for s in b_sym))
 
 
-def rot_x(angle):
-    return Matrix([[1, 0, 0], [0, cos(angle), -sin(angle)], [0, sin(angle), cos(angle)]])
-
-
-def rot_z(angle):
-    return Matrix([[cos(angle), -sin(angle), 0], [sin(angle), cos(angle), 0], [0, 0, 1]])
-
-
-def skew(v):
-    """[v]x, the matrix with [v]x w = v x w."""
-    return Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-
-
 def rotation():
     """Q(psi, theta, phi): body axes as columns in the surface frame."""
-    return rot_z(psi) * rot_x(theta) * rot_z(phi)
+    return kin.sequence((2, 0, 2), (psi, theta, phi), kin.SYMPY, passive=False)
 
 
 @functools.cache
@@ -100,8 +88,9 @@ def euler_rate_matrix():
     e_z. (The test suite checks W against Q^T dQ/dt by finite differences.)
     """
     e_x, e_z = Matrix([1, 0, 0]), Matrix([0, 0, 1])
-    about_psi = rot_z(phi).T * rot_x(theta).T * e_z
-    about_theta = rot_z(phi).T * e_x
+    # the passive matrices are the transposes: Rz(phi)^T Rx(theta)^T = Λz(phi) Λx(theta)
+    about_psi = kin.sequence((0, 2), (theta, phi), kin.SYMPY) * e_z
+    about_theta = kin.elementary(2, phi, kin.SYMPY) * e_x
     return Matrix.hstack(about_theta, about_psi, e_z)
 
 
@@ -112,8 +101,7 @@ def gyration_squared():
 
 def inertia_ratio():
     """P = I/m in the surface frame (11) from the principal radii: Q diag(rho^2) Q^T."""
-    Q = rotation()
-    return Q * sympy.diag(*gyration_squared()) * Q.T
+    return kin.rotate_tensor(rotation(), sympy.diag(*gyration_squared()), kin.SYMPY)
 
 
 def contact_offset():
@@ -148,7 +136,7 @@ def reduction_tensor():
     t = Matrix(sympy.symbols("t_x t_y t_z", real=True))
     inv_P = sympy.diag(*[1 / r for r in gyration_squared()])
     du_K = t + (inv_P * R_body.cross(t)).cross(R_body)
-    return Q * du_K.jacobian(t) * Q.T
+    return kin.rotate_tensor(Q, du_K.jacobian(t), kin.SYMPY)
 
 
 def _h_matrix():
@@ -256,7 +244,7 @@ def module_specs() -> list[ModuleSpec]:
                     "reduction tensor H: m (u_K - u_K(0)) = H T", "1", "(1)-(12)"),
         NamedMatrix("mu_equation", mu_equation(), impact_args,
                     "Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu",
-                    "kg*m/s (times m^0)", "(13)-(20)"),
+                    "m/s", "(13)-(20)"),
         NamedMatrix("system_19_residual", system_19_residual(), descent_args,
                     "residuals of the impact system (19)", "N*s", "(19)"),
         NamedMatrix("descent_functional", descent_functional(), descent_args,

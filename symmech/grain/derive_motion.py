@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
+from symmech.core import kinematics as kin
+from symmech.core.derivation import Arg, Dynamics, ModuleSpec, NamedMatrix, args_of
 
 g = sp.Symbol("g", positive=True)
 alpha, beta = sp.symbols("alpha beta", real=True)
@@ -34,6 +35,7 @@ w1, w2, w3 = sp.symbols("w1 w2 w3", real=True)
 psi, theta, phi = sp.symbols("psi theta phi", real=True)
 psi_d, theta_d, phi_d = sp.symbols("psi_d theta_d phi_d", real=True)
 x0, y0, z0, vx0, vy0, vz0 = sp.symbols("rx0 ry0 rz0 vx0 vy0 vz0", real=True)
+rx, ry, rz, vx, vy, vz = sp.symbols("rx ry rz vx vy vz", real=True)
 gX, gY, gZ = sp.symbols("gX gY gZ", real=True)
 n1, n2, n3 = sp.symbols("n1 n2 n3", real=True)
 
@@ -160,13 +162,9 @@ def invariants() -> sp.Matrix:
     return sp.Matrix([energy, *L])
 
 
-def _rot(axis: int, angle) -> sp.Matrix:
-    return {0: sp.rot_axis1, 2: sp.rot_axis3}[axis](angle).T
-
-
 def euler_matrix() -> sp.Matrix:
     """Q = Rz(psi) Rx(theta) Rz(phi) (active rotations), body axes as columns, (3, 3)."""
-    return _rot(2, psi) * _rot(0, theta) * _rot(2, phi)
+    return kin.sequence((2, 0, 2), (psi, theta, phi), kin.SYMPY, passive=False)
 
 
 def body_rates_from_euler_rates() -> sp.Matrix:
@@ -178,7 +176,7 @@ def body_rates_from_euler_rates() -> sp.Matrix:
     fs = [sp.Function(n)(tt) for n in ("psi", "theta", "phi")]
     Qt = euler_matrix().subs({psi: fs[0], theta: fs[1], phi: fs[2]})
     W = Qt.T * Qt.diff(tt)
-    w = sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])
+    w = kin.vee(W, kin.SYMPY)
     rates = [f.diff(tt) for f in fs]
     B = w.jacobian(rates)
     back = {fs[0]: psi, fs[1]: theta, fs[2]: phi}
@@ -199,6 +197,18 @@ def euler_rates_from_body_rates() -> sp.Matrix:
     # Adjugate over determinant: both small after the Pythagorean reduction.
     det = _pythagoras(B.det())
     return ((B.adjugate().applyfunc(_pythagoras) * sp.Matrix([w1, w2, w3])) / det).applyfunc(sp.cancel)
+
+
+def flight_dynamics() -> Dynamics:
+    """Flight of the rigid grain as an ODE in KXYZ: r' = v, v' = g_K - s''(t), q' = q (x) (0, w)/2,
+    I w' = -w x I w. The run integrates the same equations (translation in closed form)."""
+    state = [(rx, "relative centre position X", "m"), (ry, "relative centre position Y", "m"),
+             (rz, "relative centre position Z", "m"), (vx, "relative centre velocity X", "m/s"),
+             (vy, "relative centre velocity Y", "m/s"), (vz, "relative centre velocity Z", "m/s")] + _QUAT + _RATES
+    acceleration = sp.Matrix([gX, gY, gZ]) - surface_displacement().diff(t, 2)
+    rate = sp.Matrix.vstack(sp.Matrix([vx, vy, vz]), acceleration, quaternion_rate(), euler_equations())
+    return Dynamics(args_of(state), args_of(_GK + _VIB + _INERTIA), rate, time=Arg(t, "time", "s"),
+                    meaning="the grain in flight over the vibrating surface (eqs (61)-(62))")
 
 
 def module_specs() -> list[ModuleSpec]:
@@ -237,4 +247,5 @@ def module_specs() -> list[ModuleSpec]:
     ]
     return [ModuleSpec("grain_motion", "Grain motion: gravity, surface vibration, exact flight, "
                        "ellipsoid support distance, torque-free rotation.",
-                       "symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64))", functions)]
+                       "symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64))", functions,
+                       flight_dynamics())]

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from symmech.core import kinematics as kin
 from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
 from symmech.grain.body import Ellipsoid, euler_from_matrix
@@ -460,7 +461,7 @@ def solve_impact(body: Ellipsoid, Q, v_c, omega, e: float, lam: float, solver: s
     if not converged:
         warnings.append(f"solver '{solver}' did not solve (19): relative residual {residual:.3g}")
     v_after = v_c + T / m
-    inv_inertia = Q @ np.diag(1.0 / body.inertia) @ Q.T
+    inv_inertia = kin.rotate_tensor(Q, np.diag(1.0 / body.inertia))
     omega_after = omega + inv_inertia @ np.cross(R, T)
     uK1 = v_after + np.cross(omega_after, R)
     ke0 = kinetic_energy(body, Q, v_c, omega)

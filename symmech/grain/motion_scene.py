@@ -342,7 +342,7 @@ def run(sc: GrainScene, ctx: Context) -> Result:
         return plots.motion_plots(sc, m, folder)
 
     return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
-                  plots=draw, warnings=warnings)
+                  plots=draw, warnings=warnings, events="impacts")
 
 
 TRAJECTORY = (Column("t", "s", "time"), *(Column(x, "m", f"centre {x}, KXYZ, relative") for x in "xyz"),

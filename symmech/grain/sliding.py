@@ -22,10 +22,24 @@ slip acceleration of a contact point carried round by the spin about the normal.
 
 Regime changes are events of the integration located by root finding: the slip
 speed reaching ``v_stop`` (then the remaining slip is removed by a friction
-impulse, booked as sliding loss, and the contact sticks or slips on through zero
-along ``f + c``), the stick force reaching the friction cone, and lift-off
-(``n(t)`` reaching zero). Along the way the work of the surface on the grain and
-the energy dissipated by friction are integrated as two quadrature states.
+impulse, booked as sliding loss, and the contact sticks or slips on through zero),
+the stick force reaching the friction cone, and lift-off (``n(t)`` reaching zero).
+A slip starts where the stick force leaves the cone, against that force: along
+``B^-1 (f + c)``, the one direction in which the friction force stays continuous
+(``f + c`` itself only for an isotropic ``B``, a sphere). Along the way the work of
+the surface on the grain and the energy dissipated by friction are integrated as
+two quadrature states.
+
+Stiffness: slipping, the friction force turns the slip direction back at a rate
+``mu n |B| / |s|``; where ``B`` is anisotropic (an ellipsoid whose contact point is
+off the vertical through its centre: ``B = E + (m / I_zz) rho rho^T``, ``rho`` the
+horizontal offset turned by 90 degrees) the friction force also drives the slip
+off its direction, so every slip that starts or stops at a speed near ``v_stop``
+(~1e-11 m/s) is stiff by a factor ~1e11 and an explicit method stalls. Such a slip
+is integrated with Radau (implicit, order 5) while its speed is below ``s_stiff =
+tol^(1/2) v_scale`` (where DOP853's stability limit ~ |s| / (mu n |B|) binds; the
+power is measured), with DOP853 above ``2 s_stiff`` (the switch is an event, the
+band a hysteresis); stick phases, spheres and point masses always with DOP853.
 """
 from __future__ import annotations
 
@@ -35,12 +49,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.grain import contact, flight
 from symmech.grain.contact import first_root
 
 MAX_RHS_PER_PHASE = 400_000  # step-count guard: right-hand sides per integration chunk
 MAX_STALLED_EVENTS = 200  # stagnation guard: consecutive events that do not advance time
+SLIP_STIFF_POWER = 0.5  # s_stiff = tol^power v_scale, measured (benchmarks/bench_grain_hard.py)
 
 
 @dataclass(frozen=True)
@@ -125,6 +141,9 @@ class _Contact:
         self.M = body.mobility(Q0)
         self.g = np.asarray(model.g_k, dtype=float)
         self.nfev = 0
+        # Turning about the normal keeps |R_t|, hence the anisotropy of B, for the whole phase.
+        eig = np.linalg.eigvalsh(self.B(self.R0))
+        self.stiff_slip = bool(eig[1] - eig[0] > 1e-12 * eig[1])
 
     def geometry(self, y):
         """Contact offset R (3,), slip s (2,), slip acceleration of the carried contact point c (2,)."""
@@ -137,7 +156,7 @@ class _Contact:
         return R, s, c
 
     def B(self, R) -> np.ndarray:
-        Rx = _cross_matrix(R)
+        Rx = kin.skew(R)
         return (np.eye(3) - Rx @ self.M @ Rx)[:2, :2]
 
     def stick_force(self, t, y):
@@ -148,9 +167,10 @@ class _Contact:
         return -np.linalg.solve(self.B(R), f + c), acc[2] - self.g[2]
 
     def slip_direction(self, t, y):
-        """Direction (2,) in which a zero slip starts: along f + c."""
+        """Direction (2,) in which a zero slip starts: against the stick force, along B^-1 (f + c)."""
         _, acc = self.model.surface(t)
-        d = self.g[:2] - acc[:2] + self.geometry(y)[2]
+        R, _, c = self.geometry(y)
+        d = np.linalg.solve(self.B(R), self.g[:2] - acc[:2] + c)
         return d / max(np.hypot(*d), 1e-300)
 
     def rhs(self, t, y, stick: bool):
@@ -187,10 +207,6 @@ def _rotate(q, v) -> np.ndarray:
     return v + (q[0] * t + _cross(u, t)) / float(q @ q)
 
 
-def _cross_matrix(r) -> np.ndarray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
-
-
 def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, sample_times, step: float,
           tol: float, progress=None) -> SlideResult:
     """Accurate sliding from position ``r0``, velocity ``v0`` (2,), orientation ``q0`` (4,) and spin ``w0`` (3,)
@@ -211,14 +227,19 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min,
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
     chunk = 40 * step
-    pieces, t, stalled = [], t0, 0
+    # Slip speed below which an anisotropic slip goes implicit: the friction's turning rate ~ mu n / |s| makes
+    # DOP853 stability-bound there (measured: 1.2e-6 m/s at tol 1e-9 costs DOP853's time within ~30 % where
+    # DOP853 does not stall; tol^(1/8) v_scale, 2.8e-3 m/s, costs up to twice as much).
+    s_stiff = tol**SLIP_STIFF_POWER * v_scale
+    pieces, t, stalled, implicit = [], t0, 0, False
     stick, y = _settle(ode, t, y, v_stop)
     while t < t_stop:
-        # Without friction there is no stick or slip regime to change.
-        events = None if model.mu == 0.0 else _stick_ends(ode, model.mu) if stick else _slip_stops(ode, y, v_stop)
+        implicit = ode.stiff_slip and not stick and model.mu > 0.0 and (
+            math.hypot(*ode.geometry(y)[1]) < (2.0 if implicit else 1.0) * s_stiff)
+        events = _events(ode, y, stick, v_stop, implicit, s_stiff)
         ode.nfev = 0
-        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="DOP853", rtol=tol, atol=atol,
-                        events=events, dense_output=True, args=(stick,))
+        sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="Radau" if implicit else "DOP853",
+                        rtol=tol, atol=atol, events=events, dense_output=True, args=(stick,))
         if not sol.success:
             raise SymmechError(f"sliding integration failed at t = {t:.9g} s: {sol.message}")
         stalled = stalled + 1 if sol.t[-1] <= t else 0
@@ -227,7 +248,9 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
                                "without advancing time")
         pieces.append((t, sol.t[-1], sol.sol))
         t, y = sol.t[-1], sol.y[:, -1].copy()
-        if sol.status == 1:  # the stick force reached the cone (slip starts), or the slip speed v_stop
+        if sol.status == 1 and len(sol.t_events) > 1 and sol.t_events[1].size:
+            implicit = not implicit  # the slip speed left the hysteresis band [s_stiff, 2 s_stiff]
+        elif sol.status == 1:  # the stick force reached the cone (slip starts), or the slip speed v_stop
             stick, y = _settle(ode, t, y, v_stop, may_stick=not stick)
         if progress is not None:
             progress(t)
@@ -238,9 +261,9 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
 
 def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
     """At a slip speed within ``v_stop``: remove the slip by a friction impulse and, unless the contact sticks,
-    start slipping at ``2 v_stop`` along ``f + c`` (so the slip speed has to come back down through ``v_stop``
-    to stop again; a slip that starts from exactly zero could chatter about it). The impulses are of order
-    ``v_stop``; their kinetic-energy change is booked in D. Returns (stick, y)."""
+    start slipping at ``2 v_stop`` along :meth:`_Contact.slip_direction` (so the slip speed has to come back
+    down through ``v_stop`` to stop again; a slip that starts from exactly zero could chatter about it). The
+    impulses are of order ``v_stop``; their kinetic-energy change is booked in D. Returns (stick, y)."""
     R, s, _ = ode.geometry(y)
     if ode.model.mu == 0.0 or math.hypot(*s) > 1.5 * v_stop:
         return False, y
@@ -255,6 +278,23 @@ def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
     y[4:7] += ode.M @ np.cross(R, np.append(dphi, 0.0))
     y[12] += before - ode.body.kinetic(Q, np.append(y[2:4], 0.0), y[4:7])
     return stick, y
+
+
+def _events(ode: _Contact, y, stick: bool, v_stop, implicit: bool, s_stiff):
+    """Terminal events of one phase: the stick or slip regime ending and, for an anisotropic slip, the slip speed
+    leaving the band where the integrator changes (rising through 2 s_stiff when implicit, falling through
+    s_stiff when explicit). None without friction (no stick or slip regime to change)."""
+    if ode.model.mu == 0.0:
+        return None
+    if stick:
+        return [_stick_ends(ode, ode.model.mu)]
+    if not ode.stiff_slip:
+        return [_slip_stops(ode, y, v_stop)]
+
+    def switch(_t, y, *_):
+        return math.hypot(*ode.geometry(y)[1]) - (2.0 if implicit else 1.0) * s_stiff
+    switch.terminal, switch.direction = True, 1 if implicit else -1
+    return [_slip_stops(ode, y, v_stop), switch]
 
 
 def _slip_stops(ode: _Contact, y0, v_stop):

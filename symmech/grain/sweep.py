@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symmech.core import plotting
 from symmech.core import schema as s
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError
@@ -199,24 +200,28 @@ def throw_number(resolved: dict) -> float:
     return vib["amplitude"] * (2 * math.pi * vib["frequency"]) ** 2 / g
 
 
-def simulate_point(scenes: list[dict]) -> tuple[np.ndarray, list]:
+def simulate_point(scenes: list[dict]) -> tuple[np.ndarray, list, list]:
     """Per grain: mean transport velocity (X, Y) [m/s] and the fraction of time in flight, shape (n, 3);
     a grain whose simulation stops with an error (e.g. a stagnation guard) gets a row of NaN and its
-    message in the list of (grain index, message) — it is reported, never averaged in."""
+    message in the list of (grain index, message) — it is reported, never averaged in. A grain whose run
+    warned (e.g. a rocking contact the model does not follow) is averaged in and listed as (grain index,
+    warnings)."""
     from symmech.core import pipeline
     from symmech.core.scene import SymmechError
 
-    out, failed = [], []
+    out, failed, warned = [], [], []
     for k, data in enumerate(scenes):
         try:
-            summary = pipeline.load(data).run().summary
+            res = pipeline.load(data).run()
         except SymmechError as exc:
             out.append((np.nan, np.nan, np.nan))
             failed.append((k, str(exc)))
             continue
-        vx, vy = summary["mean_transport_velocity_m_s"]
-        out.append((vx, vy, summary["time_fraction"].get("flight", 0.0)))
-    return np.array(out), failed
+        vx, vy = res.summary["mean_transport_velocity_m_s"]
+        out.append((vx, vy, res.summary["time_fraction"].get("flight", 0.0)))
+        if res.warnings:
+            warned.append((k, list(res.warnings)))
+    return np.array(out), failed, warned
 
 
 def estimate(p: Plan, workers: int):
@@ -251,9 +256,10 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     return res
 
 
-def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> tuple[list, list]:
-    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask, and
-    the failed grains as (population, i, j, grain, message).
+def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> tuple[list, list, list]:
+    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask, the failed
+    grains as (population, i, j, grain, message) and the grains that warned as (population, i, j, grain,
+    warnings).
 
     ``scheduler``: None for a local process pool, "synchronous" for serial, or the
     address of a ``dask.distributed`` scheduler.
@@ -271,9 +277,9 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None)
         with Client(scheduler) as client:
             values = client.gather(client.compute(tasks))
     arrays = [np.array([[point[0] for point in row] for row in grid]) for grid in values]
-    failed = [(p.names[k], i, j, g, msg) for k, grid in enumerate(values) for i, row in enumerate(grid)
-              for j, point in enumerate(row) for g, msg in point[1]]
-    return arrays, failed
+    failed, warned = ([(p.names[k], i, j, g, msg) for k, grid in enumerate(values) for i, row in enumerate(grid)
+                       for j, point in enumerate(row) for g, msg in point[which]] for which in (1, 2))
+    return arrays, failed, warned
 
 
 def statistics(grid: np.ndarray) -> dict:
@@ -320,15 +326,17 @@ STAT_COLUMNS = [Column("mean_vx", "m/s", "mean transport velocity along X"),
                 Column("failed", "1", "grains whose simulation stopped with an error (left out of the statistics)")]
 
 
-def result(p: Plan, values: list, failed: list = ()) -> Result:
+def result(p: Plan, values: list, failed: list = (), warned: list = ()) -> Result:
     """Tables per population (and the separation chart for two), summary and heat-map plots;
-    ``failed`` grains (from :func:`compute`) are listed in the summary and warned about."""
+    ``failed`` and ``warned`` grains (from :func:`compute`) are listed in the summary and warned about."""
     cols, base = _point_columns(p)
     tables, summary = {}, {"populations": p.names, "points": int(base.shape[0]),
                            "grains_per_point": [int(v.shape[2]) for v in values],
                            "swept": [p.x["field"]] + ([p.y["field"]] if p.y else []),
                            "failed_grains": [{"population": n, "point": [i, j], "grain": g, "error": m}
-                                             for n, i, j, g, m in failed]}
+                                             for n, i, j, g, m in failed],
+                           "warned_grains": [{"population": n, "point": [i, j], "grain": g, "warnings": m}
+                                             for n, i, j, g, m in warned]}
     stats = [statistics(v) for v in values]
     for name, st in zip(p.names, stats):
         data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS])
@@ -351,6 +359,8 @@ def result(p: Plan, values: list, failed: list = ()) -> Result:
     best_ij = None if len(values) != 2 else divmod(best, values[0].shape[1])
     warnings = [f"{len(failed)} grain simulation(s) stopped with an error and are left out of the statistics "
                 f"(summary.json: failed_grains); first: {failed[0][4]}"] if failed else []
+    warnings += [f"{len(warned)} grain simulation(s) ran with warnings (summary.json: warned_grains); first: "
+                 f"{warned[0][4][0]}"] if warned else []
     return Result("grain_sweep", summary, tables, plots=lambda folder: _plots(p, stats, tables, best_ij, folder),
                   warnings=warnings)
 
@@ -358,39 +368,30 @@ def result(p: Plan, values: list, failed: list = ()) -> Result:
 def _plots(p: Plan, stats, tables, best, folder) -> list:
     if not p.y:
         return []
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     xs, ys = axis_values(p.x), axis_values(p.y)
-    xl = f"{p.x['field']} [{SWEPT[p.x['field']]}]"
-    yl = f"{p.y['field']} [{SWEPT[p.y['field']]}]"
-    charts = [(f"{name}_mean_vx", st["mean_vx"], f"{name}: mean transport velocity [m/s]")
+    x_label = (p.x["field"], SWEPT[p.x["field"]])
+    y_label = (p.y["field"], SWEPT[p.y["field"]])
+    charts = [(f"{name}_mean_vx", st["mean_vx"], f"{name}: mean transport velocity", "m/s")
               for name, st in zip(p.names, stats)]
-    charts += [(f"{name}_hop_fraction", st["hop_fraction"], f"{name}: fraction of grains hopping")
+    charts += [(f"{name}_hop_fraction", st["hop_fraction"], f"{name}: fraction of grains hopping", "1")
                for name, st in zip(p.names, stats)]
     if "separation" in tables:
         sep = tables["separation"]
         charts.append(("separation_overlap", sep.column("overlap").reshape(len(xs), len(ys)),
-                       "overlap of the X-velocity distributions (1 = inseparable)"))
+                       "overlap of the X-velocity distributions (1 = inseparable)", "1"))
     written = []
-    for name, z, title in charts:
-        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for name, z, title, unit in charts:
+        fig, axes = plotting.figure(width=6.4, height=4.8)
+        ax = axes[0, 0]
         mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label=title)
+        fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
         if len(xs) > 1 and len(ys) > 1:
             lines = ax.contour(xs, ys, p.gamma.T, colors="w", linewidths=0.8)
             ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
         if name == "separation_overlap" and best is not None:
             ax.plot(xs[best[0]], ys[best[1]], "r*", ms=14, label="best operating point")
             ax.legend(fontsize=8, loc="upper right")
-        ax.set_xlabel(xl)
-        ax.set_ylabel(yl)
+        plotting.set_labels(ax, x_label, y_label)
         ax.set_title(title, fontsize=9)
-        fig.tight_layout()
-        path = folder / f"{name}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
+        written += plotting.save(fig, folder, name)
     return written

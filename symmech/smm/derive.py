@@ -18,7 +18,7 @@ from pathlib import Path
 import sympy
 
 from symmech.core import expressions
-from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
+from symmech.core.derivation import Arg, Dynamics, ModuleSpec, NamedMatrix
 from symmech.core.scene import SymmechError, read_toml, scenes_folder
 from symmech.smm import forms
 from symmech.smm.model import Effects, Mechanism, interpret
@@ -253,11 +253,25 @@ def module_name(m: Mechanism) -> str:
     return "smm_" + "".join(ch if ch.isalnum() else "_" for ch in m.name.lower())
 
 
+def free_motion(m: Mechanism, nms: dict[str, NamedMatrix]) -> Dynamics:
+    """The free motion a q'' + b q' + c q = 0 as M y' = F: y = (q, q'), M = diag(E, a),
+    F = (q', -(b q' + c q)); the linear motion about the configuration that `run` integrates."""
+    q = [Arg(sympy.Symbol(f"q_{c.name}", real=True), f"coordinate {c.name} ({c.kind})", c.unit)
+         for c in m.coordinates]
+    qd = [Arg(sympy.Symbol(f"qd_{c.name}", real=True), f"rate of {c.name}", f"{c.unit}/s")
+          for c in m.coordinates]
+    qv, qdv = (sympy.Matrix([a.symbol for a in x]) for x in (q, qd))
+    n = len(q)
+    mass = sympy.diag(sympy.eye(n), nms["a"].matrix)
+    rate = sympy.Matrix.vstack(qdv, -(nms["b"].matrix * qdv + nms["c"].matrix * qv))
+    return Dynamics(q + qd, nms["a"].args, rate, mass, meaning=f"the free motion of '{m.name}' about its configuration")
+
+
 def module_spec(m: Mechanism) -> ModuleSpec:
     nms = named_matrices(m)
     doc = (f"Structural model method matrices of the mechanism '{m.name}': "
            f"a q'' + b q' + c q = Q, coordinates ({', '.join(m.coordinate_names)}).")
-    return ModuleSpec(module_name(m), doc, SOURCE, tuple(nms.values()))
+    return ModuleSpec(module_name(m), doc, SOURCE, tuple(nms.values()), free_motion(m, nms))
 
 
 def bundled_scenes() -> list[Path]:

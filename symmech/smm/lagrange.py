@@ -10,14 +10,9 @@ from __future__ import annotations
 
 import sympy
 
+from symmech.core import kinematics as kin
 from symmech.smm.derive import SymbolicArith
 from symmech.smm.model import EQUILIBRIUM, GROUND, Effects, Mechanism
-
-
-def _rotation(axis, angle) -> sympy.Matrix:
-    e = sympy.Matrix(axis)
-    K = sympy.Matrix([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
-    return sympy.eye(3) + sympy.sin(angle) * K + (1 - sympy.cos(angle)) * K * K
 
 
 def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Matrix]:
@@ -32,7 +27,7 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
     def rot(turns):
         R = sympy.eye(3)
         for a in turns:
-            R = R * _rotation(axis[a], qv[a])
+            R = R * kin.rodrigues(axis[a], qv[a], kin.SYMPY)
         return R
 
     def position(point):
@@ -56,10 +51,10 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         W = sympy.zeros(3, n)
         for i, s in enumerate(q):
             Om = (R.diff(s) * R.T).subs(at0)
-            W[:, i] = sympy.Matrix([Om[2, 1], Om[0, 2], Om[1, 0]])
+            W[:, i] = kin.vee(Om, kin.SYMPY)
         # principal axes (columns of Rp) in equilibrium; the central inertia tensor is Rp diag(J) Rp^T
         Rp = sympy.Matrix([[ar(t) for t in ax] for ax in b.axes]).T if b.axes else sympy.eye(3)
-        a += W.T * Rp * sympy.diag(*[ar(t) for t in b.inertia]) * Rp.T * W
+        a += W.T * kin.rotate_tensor(Rp, sympy.diag(*[ar(t) for t in b.inertia]), kin.SYMPY) * W
 
     Pi = sympy.S.Zero
     unknown: dict[str, sympy.Symbol] = {}
@@ -130,6 +125,4 @@ def _twist(m, t, rot, axis, ar):
     """Relative rotation angle (small) of body b w.r.t. body a about the element's axis."""
     Ra = rot(m.body_turns(t.a)) if t.a != GROUND else sympy.eye(3)
     Rb = rot(m.body_turns(t.b)) if t.b != GROUND else sympy.eye(3)
-    Rr = Ra.T * Rb
-    vee = sympy.Matrix([Rr[2, 1] - Rr[1, 2], Rr[0, 2] - Rr[2, 0], Rr[1, 0] - Rr[0, 1]]) / 2
-    return sympy.Matrix([ar(x) for x in t.axis]).dot(vee)
+    return sympy.Matrix([ar(x) for x in t.axis]).dot(kin.vee(Ra.T * Rb, kin.SYMPY))

@@ -13,6 +13,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
+from symmech.core import kinematics as kin
 from symmech.core.scene import SceneError, SymmechError
 from symmech.smm import forms, structural
 from symmech.smm.model import EQUILIBRIUM, Effects, Mechanism, NumericArith, number_text
@@ -137,12 +138,6 @@ def check_mass(m: Mechanism, a: np.ndarray) -> None:
 
 # ---------------------------------------------------------------- equilibrium (6)
 
-def _rotation(axis, angle):
-    e = np.asarray(axis, float)
-    K = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
-    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
-
-
 def _outer_turns(m: Mechanism, spatial: bool) -> dict:
     """For every coordinate, the angle coordinates turned before it (outermost first).
 
@@ -209,7 +204,7 @@ def moved(m: Mechanism, q: np.ndarray) -> Mechanism:
     def rot(turns):
         R = np.eye(3)
         for a in turns:
-            R = R @ _rotation(axes[a], q[idx[a]])
+            R = R @ kin.rodrigues(axes[a], q[idx[a]])
         return R
 
     def text(v):

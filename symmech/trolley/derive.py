@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 
 SOURCE = "seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track"
@@ -32,30 +33,16 @@ DANGLE_ARGS = args_of([(d, f"dθ{i + 1}/ds", "rad/m") for i, d in enumerate(DTHE
 DDANGLE_ARGS = args_of([(d, f"d²θ{i + 1}/ds²", "rad/m^2") for i, d in enumerate(DDTHETA)])
 
 
-def elementary(axis: int, angle) -> sp.Matrix:
-    """Passive rotation by ``angle`` about coordinate axis ``axis`` (0, 1, 2)."""
-    c, s = sp.cos(angle), sp.sin(angle)
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    m = sp.eye(3)
-    m[i, i], m[i, j], m[j, i], m[j, j] = c, s, -s, c
-    return m
-
-
 def rotation_matrix() -> sp.Matrix:
     """Λ(θ1, θ2, θ3) = R1(θ1) R3(θ3) R2(θ2): yaw, then pitch, then roll."""
-    return elementary(0, th1) * elementary(2, th3) * elementary(1, th2)
+    return kin.sequence((1, 2, 0), (th2, th3, th1), kin.SYMPY)
 
 
 def angular_velocity_matrix() -> sp.Matrix:
     """A with ω = A θ̇: each rate about its own intermediate axis, in moving components."""
-    r1, r3 = elementary(0, th1), elementary(2, th3)
+    r1, r3 = kin.elementary(0, th1, kin.SYMPY), kin.elementary(2, th3, kin.SYMPY)
     e = sp.eye(3)
     return sp.Matrix.hstack(e[:, 0], r1 * r3 * e[:, 1], r1 * e[:, 2])
-
-
-def skew(v) -> sp.Matrix:
-    """Matrix of the cross product: skew(a) * b = a × b (the paper's ǎ)."""
-    return sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
 
 def angles_from_tangent():
@@ -130,8 +117,7 @@ def reactions(gravity: bool) -> NamedMatrix:
     dw, dw_args = _vec_args("dw", "angular acceleration ω̇ (body frame)", "rad/s^2")
     nu, nu_args = _vec_args("nu", "upward unit vector ν = Λ [0 1 0]ᵀ (body frame)", "1")
     inertia = sp.symbols("I11 I22 I33 I12 I23 I13", real=True)
-    i11, i22, i33, i12, i23, i13 = inertia
-    icm = sp.Matrix([[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]])
+    icm = kin.inertia_matrix(inertia, kin.SYMPY)
     r, acc, w, dw, nu = (sp.Matrix(v) for v in (r, acc, w, dw, nu))
     # (11) with L0 = m r, I00 = Icm + m(|r|² E - r rᵀ), a0 eliminated through the
     # acceleration of the centre of mass; gravity P_g = -g0 m ν, M_g = r × P_g.
@@ -177,8 +163,7 @@ def rigid_body_args():
         [(s, f"central inertia {s.name[1:]}", "kg m^2") for s in inertia])
     for _, a in vecs[1:]:
         args += a
-    i11, i22, i33, i12, i23, i13 = inertia
-    icm = sp.Matrix([[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]])
+    icm = kin.inertia_matrix(inertia, kin.SYMPY)
     r, a0, w, dw = (sp.Matrix(v) for v, _ in vecs)
     return m, r, icm, a0, w, dw, args
 
@@ -217,8 +202,7 @@ def rodrigues() -> NamedMatrix:
     """Λ* = Rᵀ, R the rotation by Ψ about the unit axis ξ (passive form, as in the paper)."""
     psi = sp.Symbol("psi", real=True)
     xi, xi_args = _vec_args("xi", "unit rotation axis ξ (moving frame)", "1")
-    x = sp.Matrix(xi)
-    active = sp.cos(psi) * sp.eye(3) + sp.sin(psi) * skew(x) + (1 - sp.cos(psi)) * x * x.T
+    active = kin.rodrigues(xi, psi, kin.SYMPY)
     args = args_of([(psi, "rotation angle Ψ", "rad")]) + xi_args
     return NamedMatrix("rodrigues", active.T, args, "Λ* by Rodrigues' formula", "1", "Λ* (helix example)")
 
@@ -231,7 +215,8 @@ def chord_rotation() -> NamedMatrix:
     """
     rho, rho_args = _vec_args("rho", "unit chord direction O->A (moving frame)", "1")
     k = sp.Matrix([0, -rho[2], rho[1]])
-    active = sp.eye(3) + skew(k) + skew(k) * skew(k) / (1 + rho[0])
+    K = kin.skew(k, kin.SYMPY)
+    active = sp.eye(3) + K + K * K / (1 + rho[0])
     return NamedMatrix("chord_rotation", active.T, rho_args,
                        "Λ* (x -> x̄) turning x1 onto the chord", "1", "Λ* = Λ̄ Λᵀ")
 

@@ -9,14 +9,15 @@ expansion of the exact rigid motion to second order,
 derived here (not transcribed) from the rotation sequence of
 :mod:`symmech.core.kinematics`. Beams use polynomial Ritz bases, their quadratic
 fields ψ_kl are the axial shortening ½∫ w'² of an inextensible beam (the part that
-carries geometric stiffening).
+carries geometric stiffening); a pinned beam with held ends stretches instead (uniform
+mid-plane strain, :func:`held_membrane`: the quartic membrane energy).
 """
 from __future__ import annotations
 
 import sympy as sp
 
 from symmech.core import kinematics as kin
-from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
+from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix, args_of
 from symmech.trolley.derive import SOURCE
 
 u2, u3, q_th1, q_th2, q_th3 = sp.symbols("u2 u3 q_th1 q_th2 q_th3", real=True)
@@ -112,12 +113,57 @@ def beam_basis(support: str) -> list[NamedMatrix]:
                         "ψ_ij (quadratic strain ε11 = u1' + ½ w'²)")]
 
 
+def held_membrane(support: str = "pinned") -> list[NamedMatrix]:
+    """Mid-plane stretching of a beam whose ends are held (immovable axial supports at ξ = 0, 1).
+
+    The quadratic strain ε11 = u1'/L + ½ (w'/L)² (primes: d/dξ, w' = Σ q_k N_k' per plane; the
+    two planes add) carries the axial force N = EA ε11. Without axial inertia or load N' = 0:
+    ε11 = ε̄ is uniform, u1(ξ) = L ∫0^ξ (ε̄ - ½ (w'/L)²) dξ, and u1(1) = 0 fixes ε̄. Solved here
+    symbolically for the Ritz functions: ε̄ = Σ q_k q_l H_kl / (2 L²) with the mode-slope
+    integrals H_kl = ∫0^1 N_k' N_l' dξ, the held axial field ψ_kl = ∂²u1/∂q_k∂q_l =
+    (ξ H_kl - S_kl(ξ))/L, and the strain energy ½ EA L ε̄² = EA/(8 L³) Σ Γ_ijkl q_i q_j q_k q_l,
+    Γ_ijkl = H_ij H_kl (the Duffing term of N = EA/(2L) ∫ w'² dx)."""
+    n = beam_functions(support)
+    q = sp.symbols(f"q1:{NMAX + 1}", real=True)
+    length, eps = sp.symbols("L eps", positive=True)
+    slope = sum(qk * f.diff(XI) for qk, f in zip(q, n))
+    integrand = sp.Poly(sp.expand(eps - slope ** 2 / (2 * length ** 2)), XI).integrate().as_expr()
+    u1 = length * (integrand - integrand.subs(XI, 0))
+    eps_held = sp.solve(u1.subs(XI, 1), eps)[0]
+    u1 = sp.expand(u1.subs(eps, eps_held))
+    gram = (sp.hessian(eps_held, q) * length ** 2).applyfunc(sp.simplify)
+    held = (sp.hessian(u1, q) * length).applyfunc(sp.expand)
+    if gram.free_symbols or held.free_symbols - {XI}:
+        raise ValueError("the held-end membrane fields depend on more than ξ")
+    return [NamedMatrix(f"{support}_slope_gram", gram, (),
+                        f"mode-slope integrals H_kl = ∫0^1 N_k' N_l' dξ of the {support} functions "
+                        "(Γ_ijkl = H_ij H_kl)", "1", "membrane strain energy EA/(8L³) Σ Γ_ijkl q_i q_j q_k q_l"),
+            NamedMatrix(f"{support}_held_axial", held, XI_ARGS,
+                        f"L ∂²u1/∂q_k∂q_l = ξ H_kl - S_kl(ξ) of the {support} functions with held ends "
+                        "(axial ψ_kl = (ξ H_kl - S_kl)/L)", "1", "ψ_ij with held ends (uniform ε11)")]
+
+
 def module_specs() -> list[ModuleSpec]:
-    functions = [rigid_fields_matrix(), roller_matrix(), *beam_basis("cantilever"), *beam_basis("pinned")]
+    functions = [rigid_fields_matrix(), roller_matrix(), *beam_basis("cantilever"), *beam_basis("pinned"),
+                 *held_membrane("pinned")]
     return [ModuleSpec("trolley_elastic", "Rigid fields of the roller DOFs, roller deflections and beam Ritz bases "
                        "of the elastic trolley.", SOURCE, functions),
             ModuleSpec("trolley_elastic_lagrange", "Small elastic trolley by Lagrange's equations (test route).",
-                       SOURCE, [lagrange_model()])]
+                       SOURCE, [residual := lagrange_model()], lagrange_dynamics(residual))]
+
+
+def lagrange_dynamics(residual: NamedMatrix) -> Dynamics:
+    """The small model's motion for solve_ivp: y = (q, q̇), M(q) = diag(E, ∂R/∂q̈), F = (q̇, -R at q̈ = 0),
+    R the residual (linear in q̈), with the frame's motion (V, ω, their rates, ν) held at the values
+    of p. M depends on q: rhs only, no Jacobian."""
+    q, qd, qdd, rest = (residual.args[i:j] for i, j in ((0, 7), (7, 14), (14, 21), (21, None)))
+    accelerations = sp.Matrix([a.symbol for a in qdd])
+    mass = residual.matrix.jacobian(accelerations)
+    if mass.free_symbols & set(accelerations):
+        raise ValueError("the Lagrange residual is not linear in the accelerations")
+    rate = sp.Matrix.vstack(sp.Matrix([a.symbol for a in qd]), -residual.matrix.xreplace({s: 0 for s in accelerations}))
+    return Dynamics(q + qd, rest, rate, sp.diag(sp.eye(7), mass), jacobian=False,
+                    meaning="the small elastic trolley of Lagrange's equations in a frame of constant motion")
 
 
 def lagrange_model() -> NamedMatrix:

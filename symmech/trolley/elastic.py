@@ -29,7 +29,7 @@ import numpy as np
 from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import model
+from symmech.trolley import membrane, model
 
 ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
 # (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
@@ -44,7 +44,9 @@ class Beam:
     first bending direction ``plane`` (⟂ axis; the second is axis × plane), length [m],
     mass per length ``rho_a`` [kg/m], bending stiffness ``ei`` (EI in the two planes)
     [N m²], ``support`` "cantilever" (clamped at the root) or "pinned" (both ends),
-    ``modes`` Ritz functions per plane, ``tip_mass`` [kg] at the free end."""
+    ``modes`` Ritz functions per plane, ``tip_mass`` [kg] at the free end; a pinned beam's
+    far end slides along the axis (``axial`` "free", inextensible) or is ``"held"`` (immovable
+    supports: the beam stretches, axial stiffness ``ea`` [N], :mod:`symmech.trolley.membrane`)."""
 
     root: tuple
     axis: tuple
@@ -56,6 +58,8 @@ class Beam:
     modes: int = 4
     tip_mass: float = 0.0
     damping_ratio: float = 0.0
+    axial: str = "free"
+    ea: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -75,6 +79,7 @@ class Effects:
     body: bool = True
     stiffening: bool = True
     damping: bool = True
+    membrane: bool = True
 
 
 @dataclass(frozen=True)
@@ -117,10 +122,12 @@ def _frame_of(beam: Beam):
     return e, b1, np.cross(e, b1)
 
 
-def beam_basis(support: str, xi):
-    fun = gen.cantilever_basis if support == "cantilever" else gen.pinned_basis
-    short = gen.cantilever_shortening if support == "cantilever" else gen.pinned_shortening
-    return fun(xi), short(xi)
+def beam_basis(support: str, xi, axial: str = "free"):
+    """[N; N'; N''] (P, 3, NMAX) at ξ (P,) and the axial field -L ψ_kl (P, NMAX, NMAX): the
+    shortening S_kl(ξ) with a free far end, S_kl(ξ) - ξ H_kl with held ends."""
+    if support == "cantilever":
+        return gen.cantilever_basis(xi), gen.cantilever_shortening(xi)
+    return gen.pinned_basis(xi), (-gen.pinned_held_axial(xi) if axial == "held" else gen.pinned_shortening(xi))
 
 
 @dataclass
@@ -129,7 +136,8 @@ class Invariants:
 
     Field index 0 is r itself, 1…N the φ_a, then the ψ of ``pairs`` (a <= b). ``G`` (F, F, 3, 3)
     = Σ w f_k f_lᵀ [kg m^k], ``S1`` (F, 3) = Σ w f_k; ``dA`` (N, N) maps (a, b) to the field
-    index of ψ_ab (or -1); ``K``, ``D`` (N, N) the constant stiffness and damping of the beams."""
+    index of ψ_ab (or -1); ``K``, ``D`` (N, N) the constant stiffness and damping of the beams;
+    ``membrane`` the :class:`~symmech.trolley.membrane.Block` of each beam with held ends."""
 
     names: list
     pairs: list
@@ -142,6 +150,7 @@ class Invariants:
     n_roll: int
     probe_fields: np.ndarray  # (F, n_probes, 3) field values at the report points
     probe_points: np.ndarray  # (n_probes, 3) undeformed report points [m]
+    membrane: tuple = ()
 
 
 def _beam_samples(beam: Beam, probes=()):
@@ -192,14 +201,14 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
         for col, pair in enumerate(ROTATION_PAIRS):
             psi[pair] = rigid[:, :, 5 + col]
     n_roll = len(names)
-    K_blocks = []
+    K_blocks, held = [], []
     start = 0
-    for pts_b, w_b, beam, xi in parts:
+    for index, (pts_b, w_b, beam, xi) in enumerate(parts):
         if beam is None or not eff.body:
             start += len(w_b)
             continue
         e, b1, b2 = _frame_of(beam)
-        basis, short = beam_basis(beam.support, xi)
+        basis, short = beam_basis(beam.support, xi, beam.axial)
         n = beam.modes
         k1 = _beam_stiffness(beam, n)
         sl = slice(start, start + len(w_b))
@@ -210,7 +219,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
                 f = np.zeros((n_pts, 3))
                 f[sl] = np.outer(basis[:, 0, k], b)
                 fields.append(f)
-                names.append(f"beam{len(K_blocks)}_p{plane + 1}_m{k + 1}")
+                names.append(f"beam{index - 1}_p{plane + 1}_m{k + 1}")  # parts[0] is the trolley
             if eff.stiffening:
                 for k in range(n):
                     for m in range(k, n):
@@ -218,6 +227,8 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
                         f[sl] = np.outer(-short[:, k, m] / beam.length, e)
                         psi[(base + k, base + m)] = f
             K_blocks.append((base, ei * k1, beam.damping_ratio))
+        if beam.axial == "held" and eff.membrane:
+            held.append(membrane.block(first, n, beam.ea, beam.length))
         for a in (range(n_roll - 3, n_roll) if n_roll else ()):
             axis = np.eye(3)[a - (n_roll - 3)]
             for c in range(first, len(names)):
@@ -239,7 +250,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
         sl = slice(base, base + n)
         K[sl, sl] = kb
     at = [probe_index[j] for j in range(len(probes))]
-    inv = Invariants(names, pairs, G, S1, dA, K, D, float(w.sum()), n_roll, F[:, at, :], pts[at])
+    inv = Invariants(names, pairs, G, S1, dA, K, D, float(w.sum()), n_roll, F[:, at, :], pts[at], tuple(held))
     if eff.damping:
         _beam_damping(inv, K_blocks)
     return inv
@@ -287,9 +298,11 @@ def roller_energy(rollers: Rollers, d) -> float:
 
 @dataclass(frozen=True)
 class Drive:
-    """The prescribed motion of the frame: track, frame mode ("twist", "frenet"), case 2
+    """The motion of the frame: track, frame mode ("twist", "frenet"), case 2
     (``local_curvature``) or 1, speed(t) -> (V0 [m/s], dV0 [m/s²]), start s0 [m], the
-    case-2 difference order and step [m], and the rigid setup's frame plan."""
+    case-2 difference order and step [m], and the rigid setup's frame plan. With
+    ``traction`` (t, V0) -> P0 [N] instead of a speed, s and V0 are coordinates (from
+    ``v_initial`` [m/s]) and the x1 balance of the whole body, F1 = P0, is their equation."""
 
     track: object
     frame: str
@@ -299,6 +312,8 @@ class Drive:
     fd_order: int = 4
     fd_step: float = 1e-3
     plan: object = None  # model.FramePlan keeping the frame continuous (from the trolley setup)
+    traction: object = None
+    v_initial: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -402,7 +417,7 @@ class System:
         B, W, GB, GW = self._frame_mats(fs)
         load = fs.a0 + g0 * fs.nu
         z = inv.S1 @ load + GB @ rr + 2 * GW @ v + self.Gtr @ acc
-        R = A @ z + inv.K @ q + inv.D @ qd
+        R = A @ z + inv.K @ q + inv.D @ qd + membrane.force(inv.membrane, q)
         d, dd, force, kt = self.roller_state(q, qd)
         if self.rollers_on:
             R[:5] -= self.C.T @ force
@@ -411,7 +426,8 @@ class System:
         M = A @ self.Gtr @ A.T
         zpad = np.append(z, 0.0)
         DV, DQ = self._dv(qd), self._dv(qdd)
-        Rq = zpad[self.inv.dA] + A @ (GB @ A.T + 2 * GW @ DV.T + self.Gtr @ DQ.T) + inv.K
+        Rq = zpad[self.inv.dA] + A @ (GB @ A.T + 2 * GW @ DV.T + self.Gtr @ DQ.T) + inv.K + \
+            membrane.stiffness(inv.membrane, q)
         Rqd = A @ (2 * GW @ A.T + 2 * self.Gtr @ DV.T) + inv.D
         if self.rollers_on:
             Rq[:5, :5] -= self.C.T @ (kt[:, None] * self.C)
@@ -441,8 +457,9 @@ class System:
         load = fs.a0 + self.mdl.g0 * fs.nu
         first = inv.S1.T
         F = inv.mass * load + B @ (first @ rr) + 2 * W @ (first @ v) + first @ acc
-        J = lambda x, y: np.einsum("k,klij,l->ij", x, inv.G, y)  # noqa: E731  ∫ x yᵀ dm
-        H = J(rr, rr) @ B.T + 2 * J(rr, v) @ W.T + J(rr, acc)
+        X = (rr @ inv.G.reshape(self.F, -1)).reshape(inv.G.shape[1:])  # ∫ r̃ f_lᵀ dm per field l
+        J = lambda y: np.tensordot(y, X, 1)  # noqa: E731  ∫ r̃ yᵀ dm
+        H = J(rr) @ B.T + 2 * J(v) @ W.T + J(acc)
         moment = np.cross(first @ rr, load) - 2 * kin.vee(H)
         return F, moment
 
@@ -473,9 +490,33 @@ class System:
         first = inv.S1.T @ rr
         J = np.einsum("k,klij,l->ij", rr, inv.G, rr)
         t0 = 0.5 * (inv.mass * fs.v0 @ fs.v0 + 2 * fs.v0 @ np.cross(fs.w, first) + np.sum((W.T @ W) * J))
-        d = self.roller_state(q, qd)[0]
-        pi = 0.5 * q @ inv.K @ q + (roller_energy(self.mdl.rollers, d) if self.rollers_on else 0.0)
-        return 0.5 * qd @ M @ qd - t0 + pi + self.mdl.g0 * fs.nu @ first
+        return 0.5 * qd @ M @ qd - t0 + self.potential(q) + self.mdl.g0 * fs.nu @ first
+
+    def potential(self, q) -> float:
+        """Π [J]: beam bending (and membrane) energy and the rollers' potential."""
+        pi = 0.5 * q @ self.inv.K @ q + membrane.energy(self.inv.membrane, q)
+        if self.rollers_on:
+            pi += roller_energy(self.mdl.rollers, self.C @ q[:5])
+        return pi
+
+    def total_energy(self, fs: FrameState, q, qd, height: float) -> float:
+        """E = T + Π + V_g [J] in the fixed frame, O at ``height`` [m] (X2 up): kinetic energy of
+        the absolute velocity v0 + ω × r̃ + u̇, roller and beam potential, gravity."""
+        inv = self.inv
+        rr, A = self.coefficients(q)
+        v = qd @ A
+        Wt = kin.skew(fs.w).T
+        first = inv.S1.T @ rr
+        twice_t = inv.mass * fs.v0 @ fs.v0 + 2 * fs.v0 @ (np.cross(fs.w, first) + inv.S1.T @ v) + \
+            rr @ np.einsum("klij,ij->kl", inv.G, Wt @ Wt.T) @ rr + 2 * rr @ np.einsum("klij,ij->kl", inv.G, Wt) @ v + \
+            v @ self.Gtr @ v
+        return 0.5 * twice_t + self.potential(q) + self.mdl.g0 * (inv.mass * height + fs.nu @ first)
+
+    def track_power(self, fs: FrameState, q, qd, qdd) -> float:
+        """Power [W] of the forces of the track on the body, F·v0 + M_O·ω: they act at points of
+        the rails, which move with the frame, and their resultants are those of (8)."""
+        F, moment = self.resultants(fs, q, qd, qdd)
+        return float(F @ fs.v0 + moment @ fs.w)
 
     def quasi_static(self, fs: FrameState, q0=None, tol: float = 1e-12, max_iter: int = 50):
         """q with R(q, 0, 0) = 0 by Newton's method (the quasi-static state)."""
@@ -483,7 +524,11 @@ class System:
         zero = np.zeros(self.N)
         for _ in range(max_iter):
             R, _, Rq, _ = self.evaluate(fs, q, zero, zero, jacobian=True)
-            step = np.linalg.solve(Rq, -R)
+            try:
+                step = np.linalg.solve(Rq, -R)
+            except np.linalg.LinAlgError:
+                raise SymmechError("no quasi-static state of the elastic model: its stiffness is singular (a "
+                                   "free play of the rollers, elastic.rollers.preload < 0, carries no load)") from None
             q = q + step
             if np.abs(step).max() <= tol * max(np.abs(q).max(), 1e-300) or not np.any(R):
                 return q
@@ -516,7 +561,7 @@ def rigid_body(mdl: ElasticModel) -> model.Body:
     m = inv.mass
     com = inv.S1[0] / m
     J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
-    I = np.trace(J) * np.eye(3) - J
+    I = kin.inertia_from_second_moment(J)
     return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)
 
 
@@ -534,7 +579,7 @@ class Timeline:
 
     def __init__(self, system: System, drive: Drive, t):
         self.system, self.drive, self.t = system, drive, np.asarray(t, dtype=float)
-        self.s_nodes = arc_length(drive, self.t)
+        self.s_nodes = arc_length(drive, self.t) if drive.traction is None else None
         self.cache: dict = {}
 
     def _integral(self, a, b):
@@ -552,6 +597,34 @@ class Timeline:
                 self.cache.clear()
             self.cache[time] = _state_at(self.system, self.drive, time, self.s(time))
         return self.cache[time]
+
+    def traction_states(self, s: float, V0: float) -> tuple[FrameState, FrameState]:
+        """Frame states at arc length s [m], speed V0 [m/s] with V̇0 = 0 and 1 m/s² (the
+        equations are affine in V̇0), cached by s."""
+        if s not in self.cache:
+            if len(self.cache) > 64:
+                self.cache.clear()
+            self.cache[s] = frames(self.drive, s, self.system.mdl.l)
+        fr = self.cache[s]
+        return frame_state(fr, 0, V0, 0.0), frame_state(fr, 0, V0, 1.0)
+
+    def traction_step(self, time: float, y):
+        """(frame state, q̈, V̇0) with traction: M q̈ + b V̇0 = -R0 and F1 = P0(t, V0) solved together
+        (b = ∂R/∂V̇0, F1 the x1 resultant of (8), affine in q̈ and V̇0)."""
+        system, N = self.system, self.system.N
+        q, qd, s, V0 = y[:N], y[N:2 * N], y[-2], y[-1]
+        fs0, fs1 = self.traction_states(float(s), float(V0))
+        zero = np.zeros(N)
+        R0 = system.evaluate(fs0, q, qd, zero)
+        F0 = system.resultants(fs0, q, qd, zero)[0][0]
+        _, A = system.coefficients(q)
+        lhs = np.zeros((N + 1, N + 1))
+        lhs[:N, :N] = system.mass(q)
+        lhs[:N, N] = system.evaluate(fs1, q, qd, zero) - R0
+        lhs[N, :N] = A @ system.inv.S1[:, 0]
+        lhs[N, N] = system.resultants(fs1, q, qd, zero)[0][0] - F0
+        x = np.linalg.solve(lhs, np.r_[-R0, float(self.drive.traction(time, V0)) - F0])
+        return frame_state(self.cache[float(s)], 0, V0, x[N]), x[:N], x[N]
 
 
 def arc_length(drive: Drive, t) -> np.ndarray:
@@ -572,69 +645,97 @@ def _dissipation(system: System, q, qd) -> float:
     return float(power)
 
 
+WORK_ATOL = 1e-5  # J, absolute tolerance of the work of the track forces
+
+
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
              atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True) -> dict:
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
     (plus the offsets ``dq0``, ``dqd0`` of coordinates and rates, when given).
 
-    y = [q, q̇, E_d]: the coordinates, their rates and the dissipated energy [J]; the frame
-    follows s(t) of :class:`Timeline`. Implicit methods ("Radau", "BDF") use the analytic Jacobian; the
-    returned dict holds arrays with a leading axis n (see :func:`outputs`); without
-    ``analytic_jacobian`` scipy differences the right-hand side instead."""
+    y = [q, q̇, E_d, W]: the coordinates, their rates, the dissipated energy and the work of the
+    track forces [J]; with ``drive.traction`` also [s, V0]. The prescribed frame follows s(t) of
+    :class:`Timeline`. Implicit methods ("Radau", "BDF") use the analytic Jacobian (prescribed
+    speed; with traction scipy differences the right-hand side, as without ``analytic_jacobian``).
+    Returns a dict of arrays with a leading axis n (see :func:`outputs`)."""
     from scipy.integrate import solve_ivp
 
     t = np.asarray(t, dtype=float)
     N = system.N
     line = Timeline(system, drive, t)
-    q0 = system.quasi_static(line.state(t[0]))
+    traction = drive.traction is not None
+    zero = np.zeros(N)
+    if traction:  # quasi-static under the acceleration of the whole body by P0 along a level x1
+        fs, _ = line.traction_states(drive.s0, drive.v_initial)
+        dv = float(drive.traction(t[0], drive.v_initial)) / system.inv.mass - system.mdl.g0 * fs.nu[0]
+        q0 = system.quasi_static(frame_state(line.cache[drive.s0], 0, drive.v_initial, dv))
+    else:
+        q0 = system.quasi_static(line.state(t[0]))
 
     def rhs(time, y):
         q, qd = y[:N], y[N:2 * N]
-        return np.r_[qd, system.accelerations(line.state(time), q, qd), _dissipation(system, q, qd)]
+        if traction:
+            fs, qdd, dv = line.traction_step(time, y)
+            tail = [y[-1], dv]
+        else:
+            fs = line.state(time)
+            qdd, tail = system.accelerations(fs, q, qd), []
+        return np.r_[qd, qdd, _dissipation(system, q, qd), system.track_power(fs, q, qd, qdd), tail]
 
     def jac(time, y):
         fs = line.state(time)
         q, qd = y[:N], y[N:2 * N]
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
-        out = np.zeros((2 * N + 1, 2 * N + 1))
+        out = np.zeros((2 * N + 2, 2 * N + 2))
         out[:N, N:2 * N] = np.eye(N)
         out[N:2 * N, :N] = -np.linalg.solve(M, Rq)
         out[N:2 * N, N:2 * N] = -np.linalg.solve(M, Rqd)
         return out
 
-    zero = np.zeros(N)
-    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0]
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9]
-    kw = {"jac": jac} if analytic_jacobian and method in ("Radau", "BDF", "LSODA") else {}
+    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0,
+               [drive.s0, drive.v_initial] if traction else []]
+    # the work of the track forces is under step control too (left out, the stiff start transient
+    # goes unresolved and the reactions lose two digits), at 1e-5 J: tighter costs steps on stiff
+    # rollers (10 kg on 1e8 N/m: 1761 evaluations at 1e-5 J, 2175 at 1e-9 J) for no gain in P
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, WORK_ATOL, [1e-10, 1e-10] if traction else []]
+    kw = {"jac": jac} if analytic_jacobian and not traction and method in ("Radau", "BDF", "LSODA") else {}
     # Steps no longer than the output spacing: the outputs come from the dense output, whose
     # interpolation error the step control does not see (Radau's steps grow to ~0.3 s here).
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
     sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, max_step=step, **kw)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise SymmechError(f"elastic trolley: integration failed at t = {sol.t[-1]:.6g} s ({sol.message})")
-    out = outputs(system, drive, t, line.s_nodes, sol.y.T)
+    Y = sol.y.T
+    if traction:
+        s, V0 = Y[:, -2], Y[:, -1]
+        dV0 = np.array([line.traction_step(ti, yi)[2] for ti, yi in zip(t, Y)])
+        Y = Y[:, :-2]
+    else:
+        s = line.s_nodes
+        speed = [drive.speed(ti) for ti in t]
+        V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
+    out = outputs(system, drive, t, s, V0, dV0, Y)
     out["nfev"], out["njev"] = sol.nfev, sol.njev
     return out
 
 
-def outputs(system: System, drive: Drive, t, s, Y) -> dict:
-    """Per output time: s, V0, dV0, q, q̇, q̈, reactions P (n, 6), resultants F, M (n, 3),
-    roller deflections (n, 5), probe displacements (total and elastic) and overloads
-    (n, n_probes, 3) [m, g], the Jacobi energy h and dissipated energy [J], and the rigid
-    model's reactions and overloads of the centre of mass beside them."""
+def outputs(system: System, drive: Drive, t, s, V0, dV0, Y) -> dict:
+    """Per output time (arrays (n,) of t, s, V0, dV0 and the states Y (n, 2N + 2)): q, q̇, q̈,
+    reactions P (n, 6), resultants F, M (n, 3), roller deflections (n, 5), probe displacements
+    (total and elastic) and overloads (n, n_probes, 3) [m, g], the Jacobi energy h, the total
+    energy E (fixed frame), the dissipated energy and the work of the track forces [J], and the
+    rigid model's reactions and overloads of the centre of mass beside them."""
     N, inv = system.N, system.inv
     n = len(t)
-    q, qd, ed = Y[:, :N], Y[:, N:2 * N], Y[:, -1]
-    speed = [drive.speed(ti) for ti in t]
-    V0 = np.array([float(v[0]) for v in speed])
-    dV0 = np.array([float(v[1]) for v in speed])
+    q, qd, ed, work = Y[:, :N], Y[:, N:2 * N], Y[:, 2 * N], Y[:, 2 * N + 1]
     fr = frames(drive, s, system.mdl.l)
+    height = drive.track.derivatives(s, 0)[0][:, 1]
     n_probe = inv.probe_fields.shape[1]
     res = {k: np.zeros((n,) + shape) for k, shape in (
         ("qdd", (N,)), ("P", (6,)), ("F", (3,)), ("M", (3,)), ("M_contacts", (3,)), ("deflection", (5,)),
         ("probe_displacement", (n_probe, 3)), ("probe_elastic", (n_probe, 3)), ("probe_overload", (n_probe, 3)),
-        ("h", ()))}
+        ("h", ()), ("E", ()))}
     g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
     elastic = np.zeros(system.F, bool)
     elastic[1 + inv.n_roll:1 + N] = True
@@ -657,7 +758,8 @@ def outputs(system: System, drive: Drive, t, s, Y) -> dict:
         res["probe_elastic"][i] = np.einsum("k,kpi->pi", np.where(elastic, rr, 0.0), inv.probe_fields)
         res["probe_overload"][i] = (a + system.mdl.g0 * fs.nu) / g_ref
         res["h"][i] = system.jacobi_energy(fs, q[i], qd[i])
+        res["E"][i] = system.total_energy(fs, q[i], qd[i], height[i])
     rigid = model.body_motion(fr, V0, dV0, rigid_body(system.mdl))
-    res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, names=list(inv.names),
-               P_rigid=rigid["P"], overload_rigid=rigid["overload"])
+    res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, work=work, names=list(inv.names),
+               P_rigid=rigid["P"], overload_rigid=rigid["overload"], W=fr.W, dW=fr.dW)
     return res

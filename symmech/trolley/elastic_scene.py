@@ -42,6 +42,10 @@ BEAM = Table("an Euler–Bernoulli beam fixed to the trolley", {
     "tip_mass": Float("point mass at the far end", unit="kg", lo=0.0, hi=1e6, default=0.0),
     "damping_ratio": Float("damping ratio of the first mode of each plane (stiffness-proportional)", unit="1",
                            lo=0.0, hi=1.0, hi_open=True, default=0.0),
+    "axial": Choice("far end of a `pinned` beam along its axis: `free` (slides: inextensible) or `held` "
+                    "(immovable supports: mid-plane stretching, needs `ea`)", choices=("free", "held"),
+                    default="free"),
+    "ea": Float("axial stiffness EA (held ends)", unit="N", lo=0.0, lo_open=True, hi=1e15, default=None),
 })
 
 POINT = Table("a body point whose deflection and overload are reported", {
@@ -57,6 +61,8 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
         "body": Bool("elastic beams (else they are rigid masses)", default=True),
         "stiffening": Bool("quadratic fields ψ_ij of the beams (geometric stiffening)", default=True),
         "damping": Bool("roller and beam damping", default=True),
+        "membrane": Bool("mid-plane stretching of beams with held ends (quartic energy, Duffing stiffening)",
+                         default=True),
     }, default={}),
     "rollers": ROLLERS,
     "beams": TableList("elastic beams on the trolley", item=BEAM, max_items=50, default=[]),
@@ -68,8 +74,10 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
         "modal_samples": Int("instants of the modal analysis along the track", lo=0, hi=1000, default=20),
         "small_rotation": Float("roller rotation beyond which the quadratic approximation is flagged",
                                 unit="rad", lo=0.0, lo_open=True, hi=1.0, default=0.05),
+        "resonance_band": Float("a natural frequency within this fraction of a forcing frequency is flagged",
+                                unit="1", lo=0.0, lo_open=True, hi=1.0, default=0.1),
     }, default={}),
-})
+}, default=None)
 
 
 @dataclass
@@ -83,6 +91,7 @@ class Setup:
     rtol: float
     modal_samples: int
     small_rotation: float
+    resonance_band: float
 
 
 def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "elastic") -> Setup:
@@ -95,11 +104,14 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
     beams = []
     for i, b in enumerate(elastic["beams"]):
         axis, plane = np.asarray(b["axis"]), np.asarray(b["plane"])
-        if np.linalg.norm(axis) == 0 or np.linalg.norm(np.cross(axis, plane)) <= 1e-9 * np.linalg.norm(axis) * \
-                np.linalg.norm(plane):
+        if np.linalg.norm(axis) == 0:
+            raise SceneError(f"{path}.beams[{i}].axis", f"{b['axis']} has no direction")
+        if np.linalg.norm(np.cross(axis, plane)) <= 1e-9 * np.linalg.norm(axis) * np.linalg.norm(plane):
             raise SceneError(f"{path}.beams[{i}].plane", f"{b['plane']} must not be parallel to the axis {b['axis']}")
+        _check_axial(b, f"{path}.beams[{i}]")
         beams.append(el.Beam(tuple(b["root"]), tuple(axis), tuple(plane), b["length"], b["mass_per_length"],
-                             tuple(b["ei"]), b["support"], b["modes"], b["tip_mass"], b["damping_ratio"]))
+                             tuple(b["ei"]), b["support"], b["modes"], b["tip_mass"], b["damping_ratio"],
+                             b["axial"], b["ea"] or 0.0))
     probes, names = [], []
     for i, p in enumerate(elastic["points"]):
         where = f"{path}.points[{i}]"
@@ -107,6 +119,8 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
             raise SceneError(where, "give either `at` or both `beam` and `xi`")
         if p["beam"] is not None and p["beam"] >= len(beams):
             raise SceneError(f"{where}.beam", f"{p['beam']} is not a beam index ({len(beams)} beams given)")
+        if p["name"] in names:
+            raise SceneError(f"{where}.name", f"{p['name']!r} names an earlier point too")
         probes.append((None, tuple(p["at"])) if p["at"] is not None else (p["beam"], p["xi"]))
         names.append(p["name"])
     rl = None if rollers is None else el.Rollers(tuple(rollers["stiffness"]), tuple(rollers["damping"]),
@@ -118,12 +132,31 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
                                             "inertia of the trolley about every axis")
     system = el.System(mdl, probes)
     num = elastic["numerics"]
+    if not system.N and drive.traction is not None:
+        raise SceneError(f"{path}.effects", "with traction, select at least one elastic effect (rollers or body "
+                                            "with beams): the rigid traction run is the trolley's own")
     return Setup(system if system.N else None, drive, body, np.asarray(t, float), names, num["method"], num["rtol"],
-                 num["modal_samples"], num["small_rotation"])
+                 num["modal_samples"], num["small_rotation"], num["resonance_band"])
 
 
-def run(setup: Setup, ctx=None) -> Result:
-    """Reactions elastic beside rigid, roller and body deflections, overloads, energy and modes."""
+def _check_axial(beam: dict, where: str) -> None:
+    """Held ends need two supports (``pinned``) and the axial stiffness."""
+    if beam["axial"] != "held":
+        return
+    if beam["support"] != "pinned":
+        raise SceneError(f"{where}.axial", f"`held` needs support = `pinned` (a {beam['support']} has a free end)")
+    if beam["ea"] is None:
+        raise SceneError(f"{where}.ea", "missing: held ends (axial = `held`) need the axial stiffness EA "
+                                        "in (0, 1e+15] N")
+
+
+FORCING = (("axle", "axle passing |V0|/l"), ("rotation", "frame rotation |ω|/2π"),
+           ("curvature", "curvature change |V0| |Ω'|/(2π max|Ω|)"))
+
+
+def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
+    """Reactions elastic beside rigid, roller and body deflections, overloads against the
+    ``comfort`` envelope ({axis: (lo, hi)} [g]), energy balance and modes, with plots."""
     t = setup.t
     if setup.system is None:
         # no elastic effect: the rigid model itself, on the rigid scene's grid (bit for bit)
@@ -133,8 +166,10 @@ def run(setup: Setup, ctx=None) -> Result:
         cols = [Column("t", "s")] + [Column(f"P{i}", "N") for i in range(6)]
         return Result("trolley", {"elastic": "no elastic effect selected: rigid model"},
                       {"elastic_reactions": ResultTable(cols, np.column_stack([t, rigid["P"]]))})
+    if ctx is not None:
+        ctx.tick("elastic model")
     r = el.simulate(setup.system, setup.drive, t, setup.method, setup.rtol)
-    warnings = _warnings(setup, r)
+    modes = _modes(setup, r) if setup.modal_samples else None
     tables = {"elastic_reactions": _reactions_table(r), "energy": _energy_table(r)}
     if setup.system.rollers_on:
         tables["roller_deflections"] = ResultTable(
@@ -142,35 +177,106 @@ def run(setup: Setup, ctx=None) -> Result:
             np.column_stack([t, r["deflection"]]))
     if setup.names:
         tables["points"] = _points_table(setup.names, r)
-    if setup.modal_samples:
-        tables["modes"] = _modes_table(setup, r)
+    if modes is not None:
+        tables["modes"] = _modes_table(modes, setup.system.N)
+    summary, warnings = _summary(setup, r, comfort)
+    warnings += _warnings(setup, r, modes)
+
+    def draw(folder):
+        from symmech.trolley import plots
+
+        return plots.elastic(setup, r, modes, comfort, folder)
+    return Result("trolley", summary, tables, plots=draw, warnings=warnings)
+
+
+def _summary(setup: Setup, r, comfort) -> tuple[dict, list]:
     peak = np.abs(r["P"]).max(0)
     peak_rigid = np.abs(r["P_rigid"]).max(0)
-    summary = {"elastic": {
+    residual = energy_residual(r)
+    scale = max(np.abs(r["work"]).max(), np.abs(r["E"] - r["E"][0]).max(), r["dissipated"][-1], 1e-300)
+    info = {
         "coordinates": r["names"],
         "dynamic_amplification": {f"P{i}": float(peak[i] / peak_rigid[i]) if peak_rigid[i] > 0 else None
                                   for i in range(6)},
         "max_roller_deflection_m": float(np.abs(r["deflection"]).max()),
         "max_roller_rotation_rad": float(np.abs(r["q"][:, 2:5]).max()) if setup.system.rollers_on else 0.0,
         "dissipated_J": float(r["dissipated"][-1]),
+        "track_work_J": float(r["work"][-1]),
+        "energy_residual_max_J": float(np.abs(residual).max()),
+        "energy_residual_relative": float(np.abs(residual).max() / scale),
         "function_evaluations": int(r["nfev"]),
-    }}
-    return Result("trolley", summary, tables, warnings=warnings)
+    }
+    warnings = []
+    if comfort and setup.names:
+        info["comfort"] = {}
+        for j, name in enumerate(setup.names):
+            info["comfort"][name] = {}
+            for k, (axis, (lo, hi)) in enumerate(comfort.items()):
+                n = r["probe_overload"][:, j, k]
+                bad = (n < lo) | (n > hi)
+                info["comfort"][name][axis] = {"envelope_g": [lo, hi], "min_g": float(n.min()), "max_g": float(n.max()),
+                                               "samples_outside": int(bad.sum())}
+                if bad.any():
+                    warnings.append(f"elastic: overload of point {name} along {axis} leaves the comfort envelope "
+                                    f"[{lo:g}, {hi:g}] g from t = {r['t'][np.argmax(bad)]:.4g} s")
+    return {"elastic": info}, warnings
 
 
-def _warnings(setup: Setup, r) -> list:
+def energy_residual(r) -> np.ndarray:
+    """E(t) - E(0) - W(t) + E_d(t) [J]: zero when the total energy changes by the work of the
+    track forces W less the dissipated energy E_d (up to the integration error)."""
+    return r["E"] - r["E"][0] - r["work"] + r["dissipated"]
+
+
+CURVATURE_RATE_FLOOR = 1e-9  # 1/m: |Ω'|/max|Ω| below this is rounding (a uniform helix), not forcing
+
+
+def forcing_frequencies(l: float, V0, W, dW, W_max: float) -> np.ndarray:
+    """(n, 3) [Hz] of :data:`FORCING` at speeds V0 [m/s] (n,), Darboux vectors Ω [rad/m] and Ω'
+    [rad/m²] (n, 3): the rear axle meets each track feature l/|V0| after the front one; gravity
+    and the frame loads turn in the body frame at |ω| = |V0| |Ω|; the loads vary as Ω does,
+    at |V0| |Ω'| / max|Ω| (for Ω = Ω0 sin(2π s/λ) at most |V0|/λ). Zero where undefined."""
+    speed = np.abs(np.asarray(V0, float))
+    rate = np.linalg.norm(dW, axis=-1) / W_max if W_max > 0 else 0 * speed
+    rate = np.where(rate > CURVATURE_RATE_FLOOR, rate, 0.0)
+    curvature = speed * rate / (2 * np.pi)
+    return np.column_stack([speed / l, speed * np.linalg.norm(W, axis=-1) / (2 * np.pi), curvature])
+
+
+def _warnings(setup: Setup, r, modes) -> list:
     out = []
     if setup.system.rollers_on:
         rot = np.abs(r["q"][:, 2:5]).max()
         if rot > setup.small_rotation:
             out.append(f"elastic: roller rotation {rot:.3g} rad exceeds {setup.small_rotation:g} rad: the quadratic "
                        "approximation of the rotations is out of its range")
+    threshold = 1e-3 * np.abs(r["P_rigid"]).max()
     for i in range(1, 6):
-        flips = np.sign(r["P"][:, i]) != np.sign(r["P_rigid"][:, i])
-        big = np.abs(r["P"][:, i]) > 1e-3 * np.abs(r["P_rigid"]).max()
-        if np.any(flips & big):
-            k = int(np.argmax(flips & big))
-            out.append(f"elastic: P{i} has the opposite sign of the rigid model's at t = {r['t'][k]:.4g} s")
+        P = r["P"][:, i]
+        flips = (np.sign(P) != np.sign(r["P_rigid"][:, i])) & (np.abs(P) > threshold)
+        if np.any(flips):
+            out.append(f"elastic: P{i} has the opposite sign of the rigid model's at t = "
+                       f"{r['t'][np.argmax(flips)]:.4g} s")
+        elif P.max() > threshold and P.min() < -threshold:
+            k = int(np.argmax(np.sign(P[1:]) != np.sign(P[:-1]))) + 1
+            out.append(f"elastic: P{i} changes sign at t = {r['t'][k]:.4g} s: a roller pressing on one side "
+                       "only would lift off")
+    if modes is not None:
+        out += _resonances(setup, modes)
+    return out
+
+
+def _resonances(setup: Setup, modes) -> list:
+    out = []
+    f, forcing = modes["f"], modes["forcing"]
+    for j, (name, doc) in enumerate(FORCING):
+        fj = forcing[:, j:j + 1]
+        near = (fj > 0) & (f > 0) & (np.abs(f - fj) <= setup.resonance_band * fj)
+        if near.any():
+            i, k = np.argwhere(near)[0]
+            out.append(f"elastic: natural frequency f{k + 1} = {f[i, k]:.4g} Hz is within "
+                       f"{100 * setup.resonance_band:g} % of the {doc} = {fj[i, 0]:.4g} Hz at t = "
+                       f"{modes['t'][i]:.4g} s (s = {modes['s'][i]:.4g} m)")
     return out
 
 
@@ -182,8 +288,12 @@ def _reactions_table(r) -> ResultTable:
 
 def _energy_table(r) -> ResultTable:
     cols = [Column("t", "s"), Column("h", "J", "T2 - T0 + Π + V_g (constant on a steady frame without damping)"),
-            Column("dissipated", "J", "energy dissipated by the dampers")]
-    return ResultTable(cols, np.column_stack([r["t"], r["h"], r["dissipated"]]))
+            Column("E", "J", "total energy T + Π + V_g in the fixed frame"),
+            Column("work", "J", "work of the track forces on the body"),
+            Column("dissipated", "J", "energy dissipated by the dampers"),
+            Column("residual", "J", "E - E(0) - work + dissipated (zero up to the integration error)")]
+    return ResultTable(cols, np.column_stack([r["t"], r["h"], r["E"], r["work"], r["dissipated"],
+                                              energy_residual(r)]))
 
 
 def _points_table(names, r) -> ResultTable:
@@ -201,27 +311,77 @@ def _points_table(names, r) -> ResultTable:
     return ResultTable(cols, np.column_stack(data))
 
 
-def _modes_table(setup: Setup, r) -> ResultTable:
+def _modes(setup: Setup, r) -> dict:
+    """Natural frequencies f (k, N) [Hz] and damping ratios of the linearisation about the
+    quasi-static state at ``modal_samples`` instants, with t, s, V0 and the forcing frequencies."""
     system = setup.system
     idx = np.unique(np.linspace(0, len(r["t"]) - 1, setup.modal_samples).astype(int))
     n = system.N
-    rows = []
     fr = el.frames(setup.drive, r["s"][idx], system.mdl.l)
+    f, zeta = np.zeros((len(idx), n)), np.zeros((len(idx), n))
     for j, i in enumerate(idx):
         fs = el.frame_state(fr, j, r["V0"][i], r["dV0"][i])
         # 2n state-space roots: at least n have Im >= 0 (the first n by modulus are kept)
-        omega, zeta = system.linear_modes(fs, system.quasi_static(fs, r["q"][i]))
-        rows.append(np.r_[r["t"][i], r["s"][i], r["V0"][i], omega[:n] / (2 * np.pi), zeta[:n]])
+        omega, z = system.linear_modes(fs, system.quasi_static(fs, r["q"][i]))
+        f[j], zeta[j] = omega[:n] / (2 * np.pi), z[:n]
+    W_max = float(np.linalg.norm(r["W"], axis=1).max())
+    forcing = forcing_frequencies(system.mdl.l, r["V0"][idx], r["W"][idx], r["dW"][idx], W_max)
+    return {"t": r["t"][idx], "s": r["s"][idx], "V0": r["V0"][idx], "f": f, "zeta": zeta, "forcing": forcing}
+
+
+def _modes_table(modes: dict, n: int) -> ResultTable:
     cols = [Column("t", "s"), Column("s", "m"), Column("V0", "m/s")] + \
            [Column(f"f{k + 1}", "Hz", "natural frequency of the linearisation") for k in range(n)] + \
-           [Column(f"zeta{k + 1}", "1", "damping ratio") for k in range(n)]
-    return ResultTable(cols, np.array(rows))
+           [Column(f"zeta{k + 1}", "1", "damping ratio") for k in range(n)] + \
+           [Column(f"forcing_{name}", "Hz", doc) for name, doc in FORCING]
+    return ResultTable(cols, np.column_stack([modes["t"], modes["s"], modes["V0"], modes["f"], modes["zeta"],
+                                              modes["forcing"]]))
+
+
+PRECISION_RTOLS = (1e-4, 1e-6, 1e-8)
+# (name, simulate options, tolerances): explicit DOP853 is bound by the stability of its steps
+# on stiff rollers (the same time at every rtol on the bundled scene), so it is run once.
+PRECISION_METHODS = (("Radau, analytic J", {"method": "Radau"}, PRECISION_RTOLS),
+                     ("BDF, analytic J", {"method": "BDF"}, PRECISION_RTOLS),
+                     ("Radau, FD J", {"method": "Radau", "analytic_jacobian": False}, PRECISION_RTOLS),
+                     ("DOP853", {"method": "DOP853"}, PRECISION_RTOLS[:1]))
+PRECISION_REFERENCE = {"method": "Radau", "rtol": 1e-11, "atol_q": 1e-17}
+
+
+def precision(setup: Setup, ctx) -> Result:
+    """Work-precision of the elastic model on the scene's grid: integrators (implicit with the
+    analytic or a differenced Jacobian, explicit) over relative tolerances (absolute: rtol x
+    1e-6 m on the coordinates); error max|P - P_ref| / max|P_ref| of the reactions, the
+    reference by Radau at rtol 1e-11 (steps small enough to resolve every mode)."""
+    from symmech.core import precision as wp
+    from symmech.core.scene import SymmechError
+
+    if setup.system is None:
+        raise SymmechError("bench precision of an elastic trolley needs an elastic effect (elastic.effects)")
+    ctx.tick("elastic precision: reference")
+    ref = el.simulate(setup.system, setup.drive, setup.t, **PRECISION_REFERENCE)["P"]
+    scale = max(np.abs(ref).max(), 1e-300)
+    rows = []
+    for name, kw, rtols in PRECISION_METHODS:
+        for rtol in rtols:
+            ctx.tick(f"elastic precision: {name}, rtol {rtol:g}")
+            seconds, out = wp.best_time(lambda: el.simulate(setup.system, setup.drive, setup.t, rtol=rtol,
+                                                            atol_q=rtol * 1e-6, **kw), repeats=1, min_seconds=0.0)
+            rows.append({"method": name, "knob": "rtol", "value": rtol, "seconds": seconds,
+                         "error": float(np.abs(out["P"] - ref).max() / scale)})
+    reference = (f"Radau at rtol {PRECISION_REFERENCE['rtol']:g}, atol {PRECISION_REFERENCE['atol_q']:g} m "
+                 "(coordinates); error max|P - P_ref| / max|P_ref| over the grid")
+    return wp.result("trolley", rows, "precision_elastic", "Elastic trolley: work-precision (reactions P0…P5)",
+                     reference)
 
 
 def drive_of(trolley_setup, case: int) -> el.Drive:
-    """The drive of a rigid trolley setup (:class:`symmech.trolley.scene.Setup`) for case 1 or 2."""
-    if trolley_setup.traction is not None:
-        raise SceneError("effects.traction", "the elastic model runs with a prescribed speed V0(t) only")
-    f, df = trolley_setup.speed
-    return el.Drive(trolley_setup.track, trolley_setup.frame, case == 2, lambda t: (f(t), df(t)),
-                    trolley_setup.s0, trolley_setup.fd_order, trolley_setup.fd_step, trolley_setup.plan)
+    """The drive of a rigid trolley setup (:class:`symmech.trolley.scene.Setup`) for case 1 or 2:
+    its speed V0(t), or its traction P0(t, V0) with the initial speed."""
+    st = trolley_setup
+    if st.traction is not None:
+        return el.Drive(st.track, st.frame, case == 2, None, st.s0, st.fd_order, st.fd_step, st.plan,
+                        traction=st.traction, v_initial=st.v_initial)
+    f, df = st.speed
+    return el.Drive(st.track, st.frame, case == 2, lambda t: (f(t), df(t)), st.s0, st.fd_order, st.fd_step,
+                    st.plan)

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_dynamics as dyn
 from symmech.generated import trolley_frame as frm
@@ -119,15 +120,6 @@ def _raw_frame(track, s, mode):
                         "there; use frame = \"frenet\"")
 
 
-def _roll(delta):
-    """Passive rotation (..., 3, 3) by ``delta`` [rad] about x1."""
-    c, s = np.cos(delta), np.sin(delta)
-    out = np.zeros(np.shape(delta) + (3, 3))
-    out[..., 0, 0] = 1.0
-    out[..., 1, 1], out[..., 1, 2], out[..., 2, 1], out[..., 2, 2] = c, s, -s, c
-    return out
-
-
 @dataclass
 class FramePlan:
     """How the moving frame is kept continuous over the arc lengths a run visits.
@@ -149,7 +141,7 @@ class FramePlan:
         if not len(self.at):
             return frame
         delta = np.concatenate([[0.0], np.cumsum(self.roll)])[np.searchsorted(self.at, s)]
-        rot = _roll(delta)
+        rot = kin.elementary(0, delta)
         return Frame(rot @ frame.lam, frame.e, frame.de, _mv(rot, frame.W), _mv(rot, frame.dW), frame.info)
 
     def report(self) -> dict:
@@ -370,11 +362,6 @@ def _stencil(fun, s, h, order: int):
     return d1, d2
 
 
-def _vee(m):
-    """Vector of the skew part of m: vee(skew(v)) = v."""
-    return 0.5 * np.stack([m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]], -1)
-
-
 def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_step: float = 1e-3,
                           derivatives=None, plan=None) -> Frame:
     """Case 2 frame (physically consistent): Λ̄ = Λ* Λ with the exact chord rotation Λ*.
@@ -390,8 +377,8 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
     else:
         d1, d2 = derivatives(s, chord_point(track, s, l))
     lt = np.swapaxes(lstar, -1, -2)
-    w_rel = _vee(-d1 @ lt)
-    dw_rel = _vee(-(d2 @ lt + d1 @ np.swapaxes(d1, -1, -2)))
+    w_rel = kin.vee(-d1 @ lt)
+    dw_rel = kin.vee(-(d2 @ lt + d1 @ np.swapaxes(d1, -1, -2)))
     W = _mv(lstar, base.W) + w_rel
     dW = _mv(d1, base.W) + _mv(lstar, base.dW) + dw_rel
     info = {"psi": np.arccos(np.clip(lstar[..., 0, 0], -1, 1)), "chord": chord, "base": base}

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import sympy as sp
 
+from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
-from symmech.trolley.derive import ANGLE_ARGS, SOURCE, rigid_body_args, skew, th1, th2, th3
+from symmech.trolley.derive import ANGLE_ARGS, SOURCE, rigid_body_args, th1, th2, th3
 
 s1, s2, s3 = sp.sin(th1), sp.sin(th2), sp.sin(th3)
 c1, c2, c3 = sp.cos(th1), sp.cos(th2), sp.cos(th3)
@@ -94,10 +95,10 @@ def rigid_body_equations() -> NamedMatrix:
     """(11): m a0 - Ľ0 ω̇ - ω̌ Ľ0 ω = P; -Ľ0ᵀ a0 + I00 ω̇ + ω̌ I00 ω = M, with Ľ the cross-product
     matrix, L0 = m r the static moment and I00 = I_c + m(|r|² E - r rᵀ) the inertia about O."""
     m, r, icm, a0, w, dw, args = rigid_body_args()
-    L0 = skew(m * r)
+    L0 = kin.skew(m * r, kin.SYMPY)
     i00 = icm + m * (r.dot(r) * sp.eye(3) - r * r.T)
-    force = m * a0 - L0 * dw - skew(w) * L0 * w
-    moment = -L0.T * a0 + i00 * dw + skew(w) * i00 * w
+    force = m * a0 - L0 * dw - kin.skew(w, kin.SYMPY) * L0 * w
+    moment = -L0.T * a0 + i00 * dw + kin.skew(w, kin.SYMPY) * i00 * w
     return NamedMatrix("rigid_body_equations", sp.Matrix.vstack(force, moment), args,
                        "(11) as printed: [P; M] of the rigid body", "N, N m", "(11)")
 

@@ -4,7 +4,8 @@
 (and ``case2`` with the local-curvature effect): t, V1..V3, a1..a3, P0..P5 (SI,
 body-frame components of the centre of mass), and ``caseN_overload`` (t, n1..n3 in
 g); the plots ``track.png``, ``reactions.png``, ``overloads.png``; with
-``report.paper_tables`` the file ``paper_tables.txt``.
+``report.paper_tables`` the file ``paper_tables.txt``; with an ``[elastic]`` table the
+elastic model's tables, summary, warnings and plots beside them (:mod:`.elastic_scene`).
 """
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from symmech.core import schema as sc
 from symmech.core.context import Context
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import model, tables, track as tracks
+from symmech.trolley import elastic_scene, model, tables, track as tracks
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -31,6 +32,9 @@ MAX_LENGTH = 1e7  # m: coordinates and arc lengths
 SECONDS_PER_STEP = 5e-6
 SECONDS_PER_OUTPUT_ROW = 9e-5
 SECONDS_PER_RHS = 2e-4
+# Elastic model per grid step (bundled trolley_elastic_helix on 2 shared cores: ~0.1 s; stiff
+# rollers and undamped beams take more, a rough guide for --max-time only).
+SECONDS_PER_ELASTIC_STEP = 0.1
 MAX_RHS = 2_000_000  # traction right-hand sides before the integration counts as stalled
 
 
@@ -167,8 +171,8 @@ def _cross_checks(scene, path):
         raise SceneError("numerics.fd_step", f"{step:g} m is outside (0, {0.1 * axle:g}] m (0.1 axle_distance)")
 
 
-# The whole scene. Other models of the trolley extend it with their own table
-# (``SCHEMA.fields["elastic"] = Table(...)``) and read it from the resolved scene.
+# The whole scene; the optional ``[elastic]`` table (docs/scenes-trolley-elastic.md) adds the
+# elastic model beside the rigid one.
 SCHEMA = sc.Table("a trolley scene", {
     "kind": sc.Choice("scene kind", choices=("trolley",)),
     "conventions": sc.Choice("`physics`: the consistent model; `paper`: the paper's conventions (Tables 1, 2)",
@@ -218,6 +222,7 @@ SCHEMA = sc.Table("a trolley scene", {
     "report": sc.Table("extra outputs", {
         "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
                                 default=False)}, default={}),
+    "elastic": elastic_scene.SCHEMA,
 }, checks=(_cross_checks,))
 
 
@@ -245,6 +250,7 @@ class Setup:
     paper_tables: bool
     plan: model.FramePlan = None
     notes: list = None
+    elastic: elastic_scene.Setup | None = None
 
 
 def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
@@ -302,6 +308,11 @@ def prepare(scene: dict) -> Setup:
     noise = getattr(track, "noise", None)
     if noise:
         setup.notes += _noise_notes(noise)
+    if scene["elastic"] is not None:
+        if setup.conventions == "paper":
+            raise SceneError("elastic", "the elastic model needs conventions = \"physics\"")
+        case = 2 if setup.local_curvature else 1
+        setup.elastic = elastic_scene.prepare(scene["elastic"], body, elastic_scene.drive_of(setup, case), setup.t)
     return setup
 
 
@@ -363,6 +374,9 @@ def estimate(setup: Setup) -> registry.Estimate:
         rhs = 40 * steps + 2000
         seconds += SECONDS_PER_RHS * rhs * cases
         what += f", ~{rhs} traction evaluations"
+    if setup.elastic is not None and setup.elastic.system is not None:
+        seconds += SECONDS_PER_ELASTIC_STEP * steps
+        what += ", the elastic model"
     return registry.Estimate(seconds, what)
 
 
@@ -535,11 +549,18 @@ def run(setup: Setup, ctx) -> Result:
         paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
         summary["paper_tables"] = paper_table_rows(setup, paper, physics)
         result.files["paper_tables.txt"] = _paper_tables_text(summary["paper_tables"])
+    elastic = None
+    if setup.elastic is not None:
+        elastic = elastic_scene.run(setup.elastic, ctx, setup.comfort)
+        result.tables.update(elastic.tables)
+        summary.update(elastic.summary)
+        for warning in elastic.warnings:
+            ctx.warn(warning)
 
     def draw(folder):
         from symmech.trolley import plots
 
-        return plots.write_all(setup, res, folder)
+        return plots.write_all(setup, res, folder) + (elastic.plots(folder) if elastic and elastic.plots else [])
     result.plots = draw
     return result
 
@@ -677,7 +698,8 @@ PRECISION_COLUMNS = (Column("steps", "1", "grid intervals"), Column("fd_step", "
 
 
 def precision(setup: Setup, ctx) -> Result:
-    """Work-precision of the derivative approximations, against exact symbolic references.
+    """Work-precision of the derivative approximations, against exact symbolic references
+    (with an ``[elastic]`` table: of the elastic model's integrators, :func:`elastic_scene.precision`).
 
     Paper conventions, case 2: dΛ*/ds by the paper's backward difference, central2 and
     central4 between grid points, for ``PRECISION_STEPS`` (the step count is the knob).
@@ -687,6 +709,8 @@ def precision(setup: Setup, ctx) -> Result:
     """
     import dataclasses
 
+    if setup.elastic is not None:
+        return elastic_scene.precision(setup.elastic, ctx)
     if not setup.local_curvature or setup.speed is None:
         raise SymmechError("bench precision needs effects.local_curvature = true and a given speed")
     symbolic = getattr(setup.track, "exprs", None) is not None
