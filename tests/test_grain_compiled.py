@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from grain_sliding_reference import conveyor, on_plane, sphere
+from test_grain_hard_cases import CROP, WEED, sweep_grain
 from symmech.core import pipeline
 from symmech.core.scene import SceneError
-from symmech.grain import compiled, motion, motion_scene
+from symmech.grain import compiled, contact, flight, motion, motion_scene
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
@@ -133,3 +134,46 @@ def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):
     assert seen[-1] == pytest.approx(0.05) and len(c.impacts) == len(p.impacts) >= 3
     with pytest.raises(SceneError, match="numerics.engine"):
         default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "fortran"'})
+
+
+@pytest.mark.parametrize("fields, amplitude, frequency, t_end", [
+    (CROP, 0.6e-3, 18.0, 0.12), (WEED, 1.0e-3, 18.0, 0.3), (CROP, 1.0e-3, 32.0, 0.04)])
+def test_hard_sweep_grains_match_the_python_loop(fields, amplitude, frequency, t_end):
+    """The grains of tests/test_grain_hard_cases.py: an ellipsoid slipping from rest while turning about the
+    normal (crop, weed: stiff slip, its phases handed to the Python sliding integrator) and a tumbling one held
+    on the plane by its spin (crop at 32 Hz: one rocking contact, landed and flown on in the compiled loop;
+    it also slides and hands over)."""
+    sc = sweep_grain(fields, amplitude, frequency, t_end)
+    c, p = both(sc.model, sc.numerics, sc.start, t_end)
+    assert_same(c, p, 1e-11, 1e-7)
+    assert c.extra["rocking_contacts"] == p.extra["rocking_contacts"] == (1 if frequency == 32.0 else 0)
+    handed = int(c.extra["engine"].split("python for ")[1].split()[0]) if "python" in c.extra["engine"] else 0
+    assert handed > 0  # every slip from rest of these tilted grains turns stiff at once
+    bc, bp = c.extra["energy_budget"], p.extra["energy_budget"]
+    for key in ("input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J", "lost_in_sliding_J"):
+        assert bc[key] == pytest.approx(bp[key], rel=1e-6, abs=1e-15)
+
+
+def test_slip_onset_direction_of_a_turning_ellipsoid():
+    """Slip from rest starts against the stick force, along B^-1 (f + c) (sliding._Contact.slip_direction),
+    not along f + c: the compiled settle impulse, checked on the crop grain at its first slip onset."""
+    sc = sweep_grain(CROP, 0.6e-3, 18.0, 0.12)
+    m = sc.model
+    Q0 = flight.rotation_matrix(sc.start.q)
+    p = compiled.pack(m, sc.numerics)
+    sp = compiled._slide_params(p, Q0, compiled._offset(p, Q0), m.mu)
+    sp[compiled.S_VSTOP] = 1e-11
+    rho = contact.contact_offset(m.axes, Q0)
+    k = m.mass / float(Q0[2] @ (m.inertia * Q0[2]))
+    B = np.eye(2) + k * np.outer([-rho[1], rho[0]], [-rho[1], rho[0]])  # E + (m / I_zz) rho_perp rho_perp^T
+    t = 0.013
+    z = np.zeros(13)
+    z[7:11] = sc.start.q  # at rest, no spin: c = 0
+    stick, z1 = compiled._settle(t, z, sp, False)
+    s = compiled._geometry(z1, sp)[1]
+    f = np.asarray(m.g_k[:2]) - compiled._slide_surface(sp, t)[1][:2]
+    d = np.linalg.solve(B, f)
+    assert not stick and np.linalg.norm(s) == pytest.approx(2e-11, rel=1e-9)
+    np.testing.assert_allclose(s / np.linalg.norm(s), d / np.linalg.norm(d), atol=1e-9)
+    # f + c is another direction (1.9e-3 rad away here), far outside the 1e-9 above
+    assert abs(np.cross(d, f)) > 1e-3 * np.linalg.norm(d) * np.linalg.norm(f)

@@ -60,14 +60,17 @@ FLIGHT, IMPACT, SLIDING = 0, 1, 2  # regime codes, as motion.REGIMES
 # Carry vector: the loop's own state between two calls.
 C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 4, 5
 C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
-N_CARRY = 13
+C_ROCKING, C_V_SCALE = 13, 14  # rocking contacts; velocity scale of a sliding phase handed to Python
+N_CARRY = 15
 # Status of a call.
 DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = 0, 1, 2, 3, 4, 5, 6
+STIFF_SLIP = 7  # a stiff slip begins: the rest of this sliding phase goes to sliding.slide (Radau)
 # Warning codes (rows: code, value, value).
 W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = 1, 2, 3, 4, 5, 6
 IMPACT_WIDTH = 31  # t, r, v before/after, w before/after, impulse, u before/after, ke, flags (4)
 
 PHASES_PER_CALL = 2000
+COLD_COMPILE_SECONDS = 60.0  # CPU time of the first compile (benchmarks/README.md); cached beside the module
 ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS = motion.ZENO_IMPACTS, motion.ZENO_INTERVAL, motion.MAX_IDLE_STEPS
 BOUNDED_MAXFUN = 500  # function evaluations of the bounded minimiser at most (scipy's default)
 EPS = float(np.finfo(float).eps)
@@ -887,11 +890,12 @@ def _land(p, y, carry):
 # --------------------------------------------------------------------------- sliding
 
 # Sliding parameters: g (3), vibration A, omega, phase, d (3), mu, R0 (3), R body (3), sphere, M (9), mass,
-# inertia (3), reference slip direction (2), v_stop, event kind.
+# inertia (3), reference slip direction (2), v_stop, event kind, B anisotropic (stiff slip), stiff slip speed.
 S_G, S_AMP, S_OMEGA, S_PHASE, S_DIR, S_MU, S_R0, S_RB, S_SPHERE, S_M = 0, 3, 4, 5, 6, 9, 10, 13, 16, 17
-S_MASS, S_INERTIA, S_REF, S_VSTOP, S_EVENT = 26, 27, 30, 32, 33
-N_SLIDE = 34
-EV_NONE, EV_SLIP, EV_STICK = 0.0, 1.0, 2.0
+S_MASS, S_INERTIA, S_REF, S_VSTOP, S_EVENT, S_ANISO, S_STIFF = 26, 27, 30, 32, 33, 34, 35
+N_SLIDE = 36
+# Events: none; the slip stops; the stick ends; an anisotropic slip stops or falls below the stiff slip speed.
+EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF = 0.0, 1.0, 2.0, 3.0
 
 
 @jit
@@ -931,8 +935,8 @@ def _mobility(sp):
 
 
 @jit
-def _solve_B(R0, R1, R2, sp, b0, b1):
-    """B^-1 b for B = (E - [R]x M [R]x)_tt (2 x 2, Cramer's rule)."""
+def _B(R0, R1, R2, sp):
+    """B = (E - [R]x M [R]x)_tt (2, 2): the tangential slip response to a tangential impulse per unit mass."""
     Rx = ((0.0, -R2, R1), (R2, 0.0, -R0), (-R1, R0, 0.0))
     B = np.zeros((2, 2))
     for i in range(2):
@@ -942,8 +946,24 @@ def _solve_B(R0, R1, R2, sp, b0, b1):
                 for m in range(3):
                     acc += Rx[i][k] * sp[S_M + 3 * k + m] * Rx[m][j]
             B[i, j] = (1.0 if i == j else 0.0) - acc
+    return B
+
+
+@jit
+def _solve_B(R0, R1, R2, sp, b0, b1):
+    """B^-1 b (Cramer's rule)."""
+    B = _B(R0, R1, R2, sp)
     det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
     return (B[1, 1] * b0 - B[0, 1] * b1) / det, (B[0, 0] * b1 - B[1, 0] * b0) / det
+
+
+@jit
+def _anisotropic(sp):
+    """``sliding._Contact.stiff_slip``: the eigenvalues of the symmetric B at R0 differ by more than 1e-12
+    relative (turning about the normal keeps them for the whole phase)."""
+    B = _B(sp[S_R0], sp[S_R0 + 1], sp[S_R0 + 2], sp)
+    gap = math.hypot(B[0, 0] - B[1, 1], 2.0 * B[1, 0])
+    return gap > 1e-12 * (0.5 * (B[0, 0] + B[1, 1] + gap))
 
 
 @jit
@@ -995,9 +1015,13 @@ def _event(t, ctx, tab, p):
 
 @jit
 def _event_at(t, y, sp):
-    if sp[S_EVENT] == EV_SLIP:
+    if sp[S_EVENT] == EV_SLIP or sp[S_EVENT] == EV_SLIP_STIFF:
         s = _geometry(y, sp)[1]
-        return s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
+        stops = s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
+        if sp[S_EVENT] == EV_SLIP:
+            return stops
+        # The earlier of the two falling events of ``sliding._events`` (slip stops, stiff slip begins).
+        return min(stops, math.hypot(s[0], s[1]) - sp[S_STIFF])
     phi, n = _stick_force(t, y, sp)
     return sp[S_MU] * n - math.hypot(phi[0], phi[1])
 
@@ -1021,10 +1045,11 @@ def _settle(t, y, sp, may_stick):
     phi, n = _stick_force(t, y, sp)
     stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_MU] * n
     target = np.zeros(2)
-    if not stick:
+    if not stick:  # against the stick force: along B^-1 (f + c) (``sliding._Contact.slip_direction``)
         _, acc = _slide_surface(sp, t)
-        d = sp[S_G:S_G + 2] - acc[:2] + _geometry(y, sp)[2]
-        target = 2.0 * v_stop * d / max(math.hypot(d[0], d[1]), 1e-300)
+        c = _geometry(y, sp)[2]
+        d0, d1 = _solve_B(R[0], R[1], R[2], sp, sp[S_G] - acc[0] + c[0], sp[S_G + 1] - acc[1] + c[1])
+        target = 2.0 * v_stop * np.array([d0, d1]) / max(math.hypot(d0, d1), 1e-300)
     y = y.copy()
     before = _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
     dphi = np.array(_solve_B(R[0], R[1], R[2], sp, target[0] - s[0], target[1] - s[1]))
@@ -1054,6 +1079,7 @@ def _slide_params(p, Q0, R0, mu):
     sp[S_M:S_M + 9] = M.reshape(9)
     sp[S_MASS] = p[P_MASS]
     sp[S_INERTIA:S_INERTIA + 3] = p[P_INERTIA:P_INERTIA + 3]
+    sp[S_ANISO] = 1.0 if mu > 0.0 and _anisotropic(sp) else 0.0
     return sp
 
 
@@ -1079,6 +1105,7 @@ def _slide(p, y, t_end, rows, carry):
     g = math.sqrt(p[P_G:P_G + 3] @ p[P_G:P_G + 3])
     v_scale = (g + abs(_normal(p, t0))) * step
     sp[S_VSTOP] = tol * v_scale
+    sp[S_STIFF] = tol**sliding.SLIP_STIFF_POWER * v_scale
     a_min = min(p[0], p[1], p[2])
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min, 1 / v_scale,
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
@@ -1091,15 +1118,11 @@ def _slide(p, y, t_end, rows, carry):
     sample = p[P_SAMPLE]
     next_k = math.ceil(t0 / sample - 1e-9)
     while t < t_stop and status == DONE:
+        if _stiff(z, sp, stick):
+            status = STIFF_SLIP
+            break
         kind = STICK if stick else SLIP
-        if p[P_MU] == 0.0:  # without friction there is no stick or slip regime to change
-            sp[S_EVENT] = EV_NONE
-        elif stick:
-            sp[S_EVENT] = EV_STICK
-        else:
-            s0 = _geometry(z, sp)[1]
-            nrm = max(math.hypot(s0[0], s0[1]), 1e-300)
-            sp[S_EVENT], sp[S_REF], sp[S_REF + 1] = EV_SLIP, s0[0] / nrm, s0[1] / nrm
+        _choose_event(z, sp, stick)
         # One integration chunk of 40 scan steps, a fresh solve as in the Python loop.
         t_phase, t_chunk = t, min(t_stop, t + 40 * step)
         g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
@@ -1136,13 +1159,50 @@ def _slide(p, y, t_end, rows, carry):
         stalled = stalled + 1 if t <= t_phase else 0
         if stalled > MAX_STALLED_EVENTS:
             status = SLIDE_STALLED
-        if fired:
+        if fired and _switched(z, sp):
+            status = STIFF_SLIP
+        elif fired:
             stick, z = _settle(t, z, sp, not stick)
     carry[C_WORK] += p[P_MASS] * z[11]
     carry[C_SLIDE_LOSS] += p[P_MASS] * z[12]
     end = _slide_state(t, z, height)
-    rows = _record(rows, carry, end, SLIDING)
+    if status == STIFF_SLIP:  # the Python side goes on from end (its rows, its end row)
+        carry[C_V_SCALE] = v_scale
+    else:
+        rows = _record(rows, carry, end, SLIDING)
     return end, (not math.isnan(t_lift)) and t >= t_lift, rows, status
+
+
+@jit
+def _choose_event(z, sp, stick):
+    """The terminal event of the next chunk (``sliding._events``) into sp: kind and reference slip direction."""
+    if sp[S_MU] == 0.0:  # without friction there is no stick or slip regime to change
+        sp[S_EVENT] = EV_NONE
+    elif stick:
+        sp[S_EVENT] = EV_STICK
+    else:
+        s0 = _geometry(z, sp)[1]
+        nrm = max(math.hypot(s0[0], s0[1]), 1e-300)
+        sp[S_EVENT] = EV_SLIP_STIFF if sp[S_ANISO] != 0.0 else EV_SLIP
+        sp[S_REF], sp[S_REF + 1] = s0[0] / nrm, s0[1] / nrm
+
+
+@jit
+def _stiff(z, sp, stick):
+    """An anisotropic slip below the stiff slip speed s_stiff: where ``sliding.slide`` goes implicit."""
+    if stick or sp[S_ANISO] == 0.0:
+        return False
+    s = _geometry(z, sp)[1]
+    return math.hypot(s[0], s[1]) < sp[S_STIFF]
+
+
+@jit
+def _switched(z, sp):
+    """At a located ``EV_SLIP_STIFF`` event: the slip speed fell through s_stiff (not the slip stopping)."""
+    if sp[S_EVENT] != EV_SLIP_STIFF:
+        return False
+    s = _geometry(z, sp)[1]
+    return math.hypot(s[0], s[1]) - sp[S_STIFF] <= s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
 
 
 @jit
@@ -1196,6 +1256,9 @@ def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
             if u_n <= p[P_REST] and _normal(p, y[0]) > 0:
                 carry[C_REGIME], carry[C_ON_PLANE] = SLIDING, 0.0
                 carry[C_LANDINGS] += 1
+                y = _land(p, y, carry)
+            elif fly_status == 2:  # held on a plane that pulls away: a rocking contact (not modelled)
+                carry[C_ROCKING] += 1
                 y = _land(p, y, carry)
         else:
             y, lifted, rows, status = _slide(p, y, t_end, rows, carry)
@@ -1289,12 +1352,36 @@ def _raise(status: int, t: float, regime: int) -> None:
     raise SymmechError(f"{what} failed at t = {t:.9g} s: required step size is less than spacing between numbers")
 
 
+def _python_slip(model: motion.Model, num: motion.Numerics, y: np.ndarray, t_end: float, rows: np.ndarray,
+                 carry: np.ndarray, progress):
+    """The rest of a sliding phase whose slip has turned stiff (status ``STIFF_SLIP`` at state y (14,)), by
+    :func:`symmech.grain.sliding.slide` (Radau while stiff) with the phase's velocity scale, booked in rows and
+    carry as ``_slide`` would; returns (y at the phase's end, rows)."""
+    Q = _rot(y[7:11])
+    body = sliding.Body(model.axes, model.mass, tuple(model.inertia), model.effects.rotation)
+    t0 = float(y[0])
+    res = sliding.slide(model.sliding, body, t0, y[1:3], y[4:6], y[7:11], Q @ y[11:14], t_end,
+                        motion._Recorder(num.sample_interval).times(t0, t_end), num.scan_step, num.tolerance,
+                        progress, v_scale=float(carry[C_V_SCALE]), implicit=True)
+    for t, r, v, q, w in zip(*res.samples):
+        rows = _record(rows, carry, _slide_state(t, np.concatenate([r, v, w, q, [0.0, 0.0]]), y[3]), SLIDING)
+    end = _slide_state(res.t, np.concatenate([res.r, res.v, res.w, res.q, [0.0, 0.0]]), y[3])
+    rows = _record(rows, carry, end, SLIDING)
+    carry[C_WORK] += res.work
+    carry[C_SLIDE_LOSS] += res.dissipated
+    carry[C_T_SLIDING] += res.t - t0
+    if res.lifted:
+        carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0
+    return end, rows
+
+
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
              on_step=None) -> motion.Motion:
     """Accurate mode compiled: the contract and the result structure of :func:`symmech.grain.motion.simulate`.
 
     ``on_step(t_now)`` is called between batches of ``PHASES_PER_CALL`` regime phases, at most every 0.2 s
-    of wall time, and once at the end.
+    of wall time, and once at the end. A stiff slip (``STIFF_SLIP``) is handed to the Python sliding
+    integrator for the rest of its phase; ``extra["engine"]`` counts those phases.
     """
     model = model.active()
     progress = motion.Progress(on_step)
@@ -1307,8 +1394,11 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     rows = np.empty((int(max(t_end - st.t, 0.0) / num.sample_interval) + 64, 15))
     imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), np.zeros(N_CARRY)
     y, rows = _start(p, y, rows, carry)
-    status = MORE
-    while status == MORE:
+    status, handed = MORE, 0
+    while status in (MORE, STIFF_SLIP):
+        if status == STIFF_SLIP:
+            y, rows = _python_slip(model, num, y, t_end, rows, carry, progress)
+            handed += 1
         progress(y[0])
         y, rows, imps, warns, status = run_phases(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
@@ -1319,11 +1409,21 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     budget.work, budget.impacts = carry[C_WORK], carry[C_IMPACTS]
     budget.landings, budget.sliding = carry[C_LAND_LOSS], carry[C_SLIDE_LOSS]
     warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_NWARN])]]
-    extra = {"landings": int(carry[C_LANDINGS]), "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE)}
+    if carry[C_ROCKING]:
+        warnings.append(motion.rocking_warning(int(carry[C_ROCKING])))
+    extra = {"landings": int(carry[C_LANDINGS]), "rocking_contacts": int(carry[C_ROCKING]),
+             "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE),
+             "engine": f"compiled; python for {handed} stiff slip phase(s)" if handed else "compiled"}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
     impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])].tolist()]
     final = _state(y)
     return motion.Motion(trajectory, impacts, time_in, list(dict.fromkeys(warnings)), start, final, extra)
+
+
+def cold() -> bool:
+    """Whether the next run compiles the loop: no machine code for it cached for this source yet."""
+    index = getattr(getattr(run_phases, "_cache", None), "_cache_file", None)  # numba's cache (private API)
+    return index is not None and not index._load_index()
 
 
 def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float,

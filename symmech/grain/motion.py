@@ -306,12 +306,16 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
     progress(st.t, final=True)
     rec.add(st, regime)
     if rocking:
-        warnings.append(f"{rocking} rocking contact(s): a tumbling ellipsoid held on the plane by its spin while "
-                        "the surface accelerates away; rocking is not modelled, so its tilting spin was dropped "
-                        "(booked as landing loss) and it flew on")
+        warnings.append(rocking_warning(rocking))
     extra = {"landings": landings, "rocking_contacts": rocking,
              "energy_budget": budget.report(st, ENERGY_TOLERANCE)}
     return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st, extra)
+
+
+def rocking_warning(count: int) -> str:
+    return (f"{count} rocking contact(s): a tumbling ellipsoid held on the plane by its spin while the surface "
+            "accelerates away; rocking is not modelled, so its tilting spin was dropped (booked as landing loss) "
+            "and it flew on")
 
 
 def _bounce(model: Model, num: Numerics, st: State, impacts: list, rec: _Recorder, budget: _Budget,

@@ -285,7 +285,15 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     impacts = expected_impacts(sc)
     scans = sc.duration / num.scan_step
     seconds = impacts * SECONDS_PER_IMPACT + sc.duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
-    return registry.Estimate(seconds, f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s")
+    what = f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s"
+    if num.engine == "compiled":
+        from symmech.grain import compiled  # imports numba: only when the compiled engine runs
+
+        if compiled.cold():
+            return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; compiling the grain engine "
+                                     f"once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
+                                     once=compiled.COLD_COMPILE_SECONDS)
+    return registry.Estimate(seconds, what)
 
 
 # --------------------------------------------------------------------------- run
