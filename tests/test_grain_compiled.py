@@ -176,4 +176,18 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
     assert not stick and np.linalg.norm(s) == pytest.approx(2e-11, rel=1e-9)
     np.testing.assert_allclose(s / np.linalg.norm(s), d / np.linalg.norm(d), atol=1e-9)
     # f + c is another direction (1.9e-3 rad away here), far outside the 1e-9 above
-    assert abs(np.cross(d, f)) > 1e-3 * np.linalg.norm(d) * np.linalg.norm(f)
+    assert abs(d[0] * f[1] - d[1] * f[0]) > 1e-3 * np.linalg.norm(d) * np.linalg.norm(f)
+
+
+def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
+    """A run that will compile the engine says so, and its estimate carries the one-off compile time."""
+    sc = default_scene(tmp_path, 0.05)
+    compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
+    assert not compiled.cold()  # compiled (or loaded) in this process: cached for this source
+    monkeypatch.setattr(compiled, "cold", lambda: False)
+    warm = motion_scene.estimate(sc)
+    monkeypatch.setattr(compiled, "cold", lambda: True)
+    cold = motion_scene.estimate(sc)
+    assert warm.once == 0.0 and "compiling" not in warm.what
+    assert cold.once == compiled.COLD_COMPILE_SECONDS == pytest.approx(cold.seconds - warm.seconds, rel=1e-12)
+    assert "compiling the grain engine once, ~60 s; later runs start in ~1 s" in cold.what

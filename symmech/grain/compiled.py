@@ -56,17 +56,21 @@ P_MU, P_ROTATION, P_TOL, P_SCAN, P_REST, P_MAX_IMPACTS, P_SAMPLE, P_PERIOD = 23,
 N_PARAMS = 31
 LAW_COULOMB, LAW_PRINTED = 0.0, 1.0
 
-FLIGHT, IMPACT, SLIDING = 0, 1, 2  # regime codes, as motion.REGIMES
+# Integer codes are numpy scalars, not Python ints: numba types a Python int constant passed to a jitted
+# function as a literal and compiles that function once more for every such value (83 instead of 61 overloads).
+INT = np.int64
+FLIGHT, IMPACT, SLIDING = INT(0), INT(1), INT(2)  # regime codes, as motion.REGIMES
 # Carry vector: the loop's own state between two calls.
 C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 4, 5
 C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
 C_ROCKING, C_V_SCALE = 13, 14  # rocking contacts; velocity scale of a sliding phase handed to Python
 N_CARRY = 15
 # Status of a call.
-DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = 0, 1, 2, 3, 4, 5, 6
-STIFF_SLIP = 7  # a stiff slip begins: the rest of this sliding phase goes to sliding.slide (Radau)
+DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = (INT(k) for k in range(7))
+STIFF_SLIP = INT(7)  # a stiff slip begins: the rest of this sliding phase goes to sliding.slide (Radau)
 # Warning codes (rows: code, value, value).
-W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = 1, 2, 3, 4, 5, 6
+W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = (
+    INT(k) for k in range(1, 7))
 IMPACT_WIDTH = 31  # t, r, v before/after, w before/after, impulse, u before/after, ke, flags (4)
 
 PHASES_PER_CALL = 2000
@@ -78,12 +82,12 @@ SCAN_WINDOW = 32
 BRENT_RTOL, BRENT_ITER = 4 * EPS, 100
 MAX_STEPS_PER_CHUNK = sliding.MAX_RHS_PER_PHASE // 12  # DOP853 steps (12 evaluations) per sliding chunk
 MAX_STALLED_EVENTS = sliding.MAX_STALLED_EVENTS
-ROT, SLIP, STICK = 0, 1, 2  # right-hand sides of the Dormand-Prince stepper
+ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Prince stepper
 
 # DOP853 (Hairer, Norsett & Wanner; the coefficients of scipy's solve_ivp, which the Python loop uses).
 DOP_A, DOP_B, DOP_C = dop.A, dop.B, dop.C
 DOP_E3, DOP_E5, DOP_D = dop.E3, dop.E5, dop.D
-DOP_STAGES, DOP_EXTENDED, DOP_POWER = dop.N_STAGES, dop.N_STAGES_EXTENDED, dop.INTERPOLATOR_POWER
+DOP_STAGES, DOP_EXTENDED, DOP_POWER = INT(dop.N_STAGES), INT(dop.N_STAGES_EXTENDED), INT(dop.INTERPOLATOR_POWER)
 DOP_EXPONENT = -1.0 / 8.0  # error estimator of order 7
 ROT_WIDTH = 3 + 7 + 7 * 7  # rotation step table row: t_old, t_new, (unused), y_old (7), F (7 x 7)
 
@@ -388,7 +392,7 @@ def _bounded_min(what, a, b, xatol, ctx, steps, nsteps, p):
 
 # --------------------------------------------------------------------------- functions of time
 
-GAP, NORMAL, EVENT = 0, 1, 2  # what _h evaluates
+GAP, NORMAL, EVENT = INT(0), INT(1), INT(2)  # what _h evaluates
 
 
 @jit
@@ -551,7 +555,7 @@ def _fly(p, y, t_end, on_plane, rows, carry):
     """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, rows)."""
     ctx = _flight_ctx(p, y)
     steps = np.empty((64, ROT_WIDTH))
-    nsteps = 0
+    nsteps = INT(0)
     t_from = y[0]
     scan, xtol = p[P_SCAN], p[P_TOL] * p[P_SCAN]
     if on_plane:
@@ -1090,7 +1094,7 @@ def _slide(p, y, t_end, rows, carry):
     step, tol = p[P_SCAN], p[P_TOL]
     dummy = np.empty((1, ROT_WIDTH))
     if _normal(p, t0) > 0:
-        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(39), dummy, 0, p)[0]
+        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(39), dummy, INT(0), p)[0]
     else:
         t_lift = t0
     t_stop = t_end if math.isnan(t_lift) else t_lift
@@ -1148,7 +1152,7 @@ def _slide(p, y, t_end, rows, carry):
                 ctx[0], ctx[1], ctx[15] = t, t_new - t, kind
                 ctx[2:15] = z
                 ctx[16:] = sp
-                t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, 0, p)
+                t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, INT(0), p)
                 z_new = _dense(t_last, t, t_new - t, z, F[0])
             while next_k * sample < t_last:  # trajectory rows at the sample times inside this step
                 ts = next_k * sample
