@@ -190,4 +190,4 @@ def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     cold = motion_scene.estimate(sc)
     assert warm.once == 0.0 and "compiling" not in warm.what
     assert cold.once == compiled.COLD_COMPILE_SECONDS == pytest.approx(cold.seconds - warm.seconds, rel=1e-12)
-    assert "compiling the grain engine once, ~60 s; later runs start in ~1 s" in cold.what
+    assert "compiling the grain engine once, ~45 s; later runs start in ~1 s" in cold.what
