@@ -63,8 +63,9 @@ FLIGHT, IMPACT, SLIDING = INT(0), INT(1), INT(2)  # regime codes, as motion.REGI
 # Carry vector: the loop's own state between two calls.
 C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 4, 5
 C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
-C_ROCKING, C_V_SCALE = 13, 14  # rocking contacts; velocity scale of a sliding phase handed to Python
-N_CARRY = 15
+# Rocking contacts; velocity scale of a sliding phase handed to Python and back (C_RESUME: handed back).
+C_ROCKING, C_V_SCALE, C_RESUME = 13, 14, 15
+N_CARRY = 16
 # Status of a call.
 DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = (INT(k) for k in range(7))
 STIFF_SLIP = INT(7)  # a stiff slip begins: the rest of this sliding phase goes to sliding.slide (Radau)
@@ -1107,7 +1108,8 @@ def _slide(p, y, t_end, rows, carry):
     z[7:11] = y[7:11]
     z[11] = z[12] = 0.0
     g = math.sqrt(p[P_G:P_G + 3] @ p[P_G:P_G + 3])
-    v_scale = (g + abs(_normal(p, t0))) * step
+    v_scale = carry[C_V_SCALE] if carry[C_RESUME] != 0.0 else (g + abs(_normal(p, t0))) * step
+    carry[C_RESUME] = 0.0
     sp[S_VSTOP] = tol * v_scale
     sp[S_STIFF] = tol**sliding.SLIP_STIFF_POWER * v_scale
     a_min = min(p[0], p[1], p[2])
@@ -1358,19 +1360,23 @@ def _raise(status: int, t: float, regime: int) -> None:
 
 def _python_slip(model: motion.Model, num: motion.Numerics, y: np.ndarray, t_end: float, rows: np.ndarray,
                  carry: np.ndarray, progress):
-    """The rest of a sliding phase whose slip has turned stiff (status ``STIFF_SLIP`` at state y (14,)), by
-    :func:`symmech.grain.sliding.slide` (Radau while stiff) with the phase's velocity scale, booked in rows and
-    carry as ``_slide`` would; returns (y at the phase's end, rows)."""
+    """The stiff part of a sliding phase (status ``STIFF_SLIP`` at state y (14,)) by
+    :func:`symmech.grain.sliding.slide` (Radau) with the phase's velocity scale, up to where it would go on
+    with DOP853 (the compiled loop resumes the phase there) or the phase's end; booked in rows and carry as
+    ``_slide`` would; returns (y there, rows)."""
     Q = _rot(y[7:11])
     body = sliding.Body(model.axes, model.mass, tuple(model.inertia), model.effects.rotation)
     t0 = float(y[0])
     res = sliding.slide(model.sliding, body, t0, y[1:3], y[4:6], y[7:11], Q @ y[11:14], t_end,
                         motion._Recorder(num.sample_interval).times(t0, t_end), num.scan_step, num.tolerance,
-                        progress, v_scale=float(carry[C_V_SCALE]), implicit=True)
+                        progress, v_scale=float(carry[C_V_SCALE]), implicit=True, until_explicit=True)
     for t, r, v, q, w in zip(*res.samples):
         rows = _record(rows, carry, _slide_state(t, np.concatenate([r, v, w, q, [0.0, 0.0]]), y[3]), SLIDING)
     end = _slide_state(res.t, np.concatenate([res.r, res.v, res.w, res.q, [0.0, 0.0]]), y[3])
-    rows = _record(rows, carry, end, SLIDING)
+    if not res.lifted and res.t < t_end:  # no longer stiff: the compiled loop goes on with this phase
+        carry[C_RESUME] = 1.0
+    else:
+        rows = _record(rows, carry, end, SLIDING)
     carry[C_WORK] += res.work
     carry[C_SLIDE_LOSS] += res.dissipated
     carry[C_T_SLIDING] += res.t - t0
@@ -1417,7 +1423,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
         warnings.append(motion.rocking_warning(int(carry[C_ROCKING])))
     extra = {"landings": int(carry[C_LANDINGS]), "rocking_contacts": int(carry[C_ROCKING]),
              "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE),
-             "engine": f"compiled; python for {handed} stiff slip phase(s)" if handed else "compiled"}
+             "engine": f"compiled; python for {handed} stiff slip part(s)" if handed else "compiled"}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
     impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])].tolist()]
     final = _state(y)

@@ -208,14 +208,16 @@ def _rotate(q, v) -> np.ndarray:
 
 
 def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, sample_times, step: float,
-          tol: float, progress=None, v_scale: float | None = None, implicit: bool = False) -> SlideResult:
+          tol: float, progress=None, v_scale: float | None = None, implicit: bool = False,
+          until_explicit: bool = False) -> SlideResult:
     """Accurate sliding from position ``r0``, velocity ``v0`` (2,), orientation ``q0`` (4,) and spin ``w0`` (3,)
     (rad/s, KXYZ) at ``t0`` until lift-off or ``t_end``.
 
     Events are located to ``tol`` (relative; lift-off times to ``tol * step``). ``progress(t)`` is called
     between integration chunks of one vibration scan window (it may raise to stop the run). A phase resumed
     part-way (the compiled engine hands over its stiff slips) passes the phase's ``v_scale`` [m/s] (default:
-    the one at ``t0``) and ``implicit=True`` (it resumes where the slip has turned stiff).
+    the one at ``t0``) and ``implicit=True`` (it resumes where the slip has turned stiff); with
+    ``until_explicit`` it returns where the phase would go on with DOP853 (handed back; not lifted, t < t_end).
     """
     t_lift = first_root(model.normal, t0, t_end, step, tol * step) if model.normal(t0) > 0 else t0
     t_stop = t_end if t_lift is None else t_lift
@@ -239,6 +241,8 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     while t < t_stop:
         implicit = ode.stiff_slip and not stick and model.mu > 0.0 and (
             math.hypot(*ode.geometry(y)[1]) < (2.0 if implicit else 1.0) * s_stiff)
+        if until_explicit and not implicit:
+            break
         events = _events(ode, y, stick, v_stop, implicit, s_stiff)
         ode.nfev = 0
         sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="Radau" if implicit else "DOP853",
