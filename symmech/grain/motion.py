@@ -313,6 +313,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
 
 
 def rocking_warning(count: int) -> str:
+    """The warning of ``count`` rocking contacts (both engines word it so)."""
     return (f"{count} rocking contact(s): a tumbling ellipsoid held on the plane by its spin while the surface "
             "accelerates away; rocking is not modelled, so its tilting spin was dropped (booked as landing loss) "
             "and it flew on")
