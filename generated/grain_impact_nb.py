@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a8080b2f7394ea9786aed107c68527adc79b4c0eaeaff06598e9c7e6257e5f0d
-# source key 4dbbfac1e7582f32919755a22f1474d4e49fec4eb081fdb134df04bdf12797f2
+# source key 649565931e890b3de3f5c69df7f654c547314e1267706717eb4b62b0b75aea46
 # body sha256 09effaaeaa4a147013f14a64e1e241cb066d5f670cd70e902f4645ea6a5b8f34
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

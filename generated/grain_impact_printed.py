@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 53145b0320e4d261670d4705523a197d94f37ff476ce0c51e409672f5ea01222
-# source key 18be85e5e392134f5f5ec49a1bec559926ac0d3659e8f9f5792b0bf633e00187
+# source key b411de99d3d4c6f35802d16f7fbfbca028eead6e7a558f94ee1f9c8dc662e48b
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

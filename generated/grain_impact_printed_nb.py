@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bbe12b8debcbaf1daca5d9e7d5ed7703636701e1462844bf8a196107bca700d9
-# source key 18be85e5e392134f5f5ec49a1bec559926ac0d3659e8f9f5792b0bf633e00187
+# source key b411de99d3d4c6f35802d16f7fbfbca028eead6e7a558f94ee1f9c8dc662e48b
 # body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 34a690084fbd4743d22318487e3e4aaa303487a8650d5770159969e57decd42a
-# source key 1a9bc07be933979fedb023aac678eb173216b60b0c7ec7521a8751cacd2f334b
+# source key 32f997d90bb3d1106cb64038c763ec36d4e66b1f3b7aad79e5ea646a9965f5d7
 # body sha256 5441f52ec5cdbe84b968e01ca69ba826ecbf9877a52ee0db8aed8069e7271876
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 577293806eb54f23853e08cd12fe4abdfa3673b7c6b278f46d87d7822bd5082b
-# source key 1a9bc07be933979fedb023aac678eb173216b60b0c7ec7521a8751cacd2f334b
+# source key 32f997d90bb3d1106cb64038c763ec36d4e66b1f3b7aad79e5ea646a9965f5d7
 # body sha256 bb4a7d650ea4d406f0a5fac2d631cd14f8cff8b91a289ae5b820107d237b2c67
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
-# source key 7d7e48c31b532c4ec9d57f626c2fa93fca2be29834531f31a009b2bf259918b4
+# source key d7bede02b2e606aa94e5227768e02d8b4551b2120813a9f70805c203cd428ba8
 # body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

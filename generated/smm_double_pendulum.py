@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9fb64a867e36829f85d5b9141f7fb32ecc853f73d43b845a07b9c85603bc2467
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 3472c146dab5c3383f3762d27eba1dd57c306c65ba3883fb6a3a2f5558655cb9
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 41488fcbdf2e9da48a6d33773be1a3ca65252e71c84174f6b6ab9c653f7fc5d8
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 564590c426af01ca45748e8e41bc6fa10315ac7ef650ace7bc69a943df62af48
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

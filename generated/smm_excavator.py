@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b046839f4fe94d3faaf8e793a35cfeb474f3b5aaa510e065eafae6a36fc289ad
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 2569e8dbe001b5c7ee93f237c1f689d8763d8592f4d82cb57bc21e5eb112ac23
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

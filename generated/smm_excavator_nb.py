@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 52e93c44b70195877f1c2158a5944c96b75ed449f40b3e23eae65fed7f590953
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 8631b47eb0a0a1b0eb106c4ab47ae76b2ba5d64b4cc68d3c70107b65df50d6a2
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

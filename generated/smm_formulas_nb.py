@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e6f4538a86c71902e002983ce248e4f0ec70d1fe71d32e33fb4d8ac619ead531
-# source key f375eb89243bce795c79a8fbfb826ae4ea7bac9adb7901d3a3615c4812c19f9a
+# source key 39fe77d94553d5c75d60071df960f6640223a9eed336393cce39b2ecd330d7a5
 # body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

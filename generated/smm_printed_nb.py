@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b981c76974e4e8622d2b009c74d9947d7fa23dcbd58def34e55281752e67a031
-# source key 25c02ba4244554ff7ec788fb61bb3c67437bdc9abe728685e205009415cbf450
+# source key f04f7adde8e7150c0dbef5c15e4eedba13b4d16a0b1545b3d21a3ccd0e0e58c1
 # body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

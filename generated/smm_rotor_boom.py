@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8a21419d6166b7c0762cec35e83835db09f898cdccb4793e3f2045bd00807043
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

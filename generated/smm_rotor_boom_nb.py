@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 88d5323052d6b9f8d488c2130bfb182127a4030aa837ee83198ba1e7a48d0d67
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 55dc9b9127cd991ce5382023f186670759f42937784def862871eb4505520172
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2138f797fa177ced9921cf9626233641a889f291d75400a1368a2ecdece7d21b
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 acb736fcbddaf70d94c49e9cfd5f446a34d08d0247accf834807a01bedce8f79
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

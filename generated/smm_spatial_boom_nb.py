@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d58fdcd9c84707a84c094ce3b7754fda878a873e5bb16d52fdb74dbd542fb2b2
-# source key bc9bbc846ba41e747a57064b2b826492588a0d096d68116a6cd57e94eb74068a
+# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
 # body sha256 c4bfb3a9e455ffc8826de6dab6adc692bcba693d830fb1229c09b112fa2e5431
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

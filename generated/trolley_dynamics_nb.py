@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ee7a0e278db87017ef25ffe3597b3ef02e18d6b33eba804c8f395f29ac92eef3
-# source key 1ece492248eb5c311252cc0bf833ac05d2498b976bfff644783974dc10690815
+# source key cf7457d82fe14943c6f9091e21aba4929f33c1fc89ac4c19491133a8017a24e3
 # body sha256 da8ba89339d4881d2adbed6737dad085aeea1010de6b758a72d44829fa3c22bf
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c53c1b2c4f4dad08eadca1673d4e9f0b93946951f7f22558fa68d3f169f147d5
-# source key d8680b9b7253cc3a95d8b912ca84bf3966925a56badb2cf841ebe493b7577fcc
+# source key 812af5956ab6dcbdbfc55947a889f12761c09f330745daa31686ada22b3ea145
 # body sha256 e04aa9e277413d9252f4e6774c59b381866659525decb6ba809d38c57b6afca9
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

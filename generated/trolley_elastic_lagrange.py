@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 951da0274410937f6b098376dd7afba273ae7e0877ddb0c2091d0a9c78e8a31b
-# source key d8680b9b7253cc3a95d8b912ca84bf3966925a56badb2cf841ebe493b7577fcc
+# source key 812af5956ab6dcbdbfc55947a889f12761c09f330745daa31686ada22b3ea145
 # body sha256 b725b081d263c108903f24ccf013d3b4db7851e0fa7254921b6e0ef55e4288b0
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7eb462e18633841e5088d44beaa1ae1cbb4a3ac58373922522502b62c260e204
-# source key d8680b9b7253cc3a95d8b912ca84bf3966925a56badb2cf841ebe493b7577fcc
+# source key 812af5956ab6dcbdbfc55947a889f12761c09f330745daa31686ada22b3ea145
 # body sha256 c02126a92d6ffb44bf1c7e2652881ff976028ba4a39075a00426f783f7f0167a
 """Small elastic trolley by Lagrange's equations (test route).
 

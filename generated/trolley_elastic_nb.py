@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7cec33512996995084b1f899d9300199827183cc154cf4ff6452938295094023
-# source key d8680b9b7253cc3a95d8b912ca84bf3966925a56badb2cf841ebe493b7577fcc
+# source key 812af5956ab6dcbdbfc55947a889f12761c09f330745daa31686ada22b3ea145
 # body sha256 6df448149002c6da29d0050feefa94d3dec3a9ad3c5ab29282ceede0262577c5
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 75604a2c163281d04097df96b46c990933ce43d2ef3307685bbc3a8f3e852afb
-# source key b197e9853eb0ea33702c17532ba1c5b6574c8fd86e77e578d129e06e30872158
+# source key fb1bb4bfbf411a0df0f152a0d5233d01134f9f1a590d57d01b82e317c43a4d12
 # body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3a2f6dca879e5a476be49cd09d56bd299bd4291d9639bf753b15f09bb57f3d17
-# source key 1ece492248eb5c311252cc0bf833ac05d2498b976bfff644783974dc10690815
+# source key cf7457d82fe14943c6f9091e21aba4929f33c1fc89ac4c19491133a8017a24e3
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

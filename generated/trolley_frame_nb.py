@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3404892740907e5ae1cc4ad2798588311a49dd6a2b98a77c4d1624f638771ec9
-# source key 1ece492248eb5c311252cc0bf833ac05d2498b976bfff644783974dc10690815
+# source key cf7457d82fe14943c6f9091e21aba4929f33c1fc89ac4c19491133a8017a24e3
 # body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
 """Frames, angles and angular velocity of the trolley along the track.
 

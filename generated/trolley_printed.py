@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e262c90e7544cd9ce85cc36322a2e868a31eae74a3b20465164b838f1e8b80c0
-# source key 77f0f4d305f4e1cae301a530dbfba78d31b4dd85fdfb387c2bf20f2031cc486a
+# source key 485a5fe245a09aadb740a8607ff7fd8d5ec4efe41e46da25a830bea4258a21ff
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

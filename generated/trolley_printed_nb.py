@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d1f3bc39d04ac1f58c991020a88e1c2ee18af864bae4e8866a51f0891f89e9aa
-# source key 77f0f4d305f4e1cae301a530dbfba78d31b4dd85fdfb387c2bf20f2031cc486a
+# source key 485a5fe245a09aadb740a8607ff7fd8d5ec4efe41e46da25a830bea4258a21ff
 # body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
 """The trolley paper's formulas as printed (hand transcription).
 

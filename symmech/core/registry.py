@@ -35,6 +35,7 @@ class Estimate:
 
     seconds: float
     what: str  # e.g. "20000 steps, ~40 impacts"
+    once: float = 0.0  # of the seconds, a one-off cost not repeated by further runs (e.g. a numba compile)
 
 
 @dataclass(frozen=True)

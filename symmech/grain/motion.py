@@ -101,9 +101,11 @@ class Numerics:
     """Numerical choices. Accurate mode: ``tolerance`` (relative; times to tolerance x scan step),
     ``scan_step`` [s] for root bracketing. Paper mode: step ``dt`` [s], ``nodes`` on the body surface,
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
-    bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file."""
+    bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
+    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`) or "python" (this loop)."""
 
     mode: str = "accurate"
+    engine: str = "compiled"
     tolerance: float = 1e-9
     scan_step: float = 1e-3
     dt: float = 1e-4
@@ -304,12 +306,17 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
     progress(st.t, final=True)
     rec.add(st, regime)
     if rocking:
-        warnings.append(f"{rocking} rocking contact(s): a tumbling ellipsoid held on the plane by its spin while "
-                        "the surface accelerates away; rocking is not modelled, so its tilting spin was dropped "
-                        "(booked as landing loss) and it flew on")
+        warnings.append(rocking_warning(rocking))
     extra = {"landings": landings, "rocking_contacts": rocking,
              "energy_budget": budget.report(st, ENERGY_TOLERANCE)}
     return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st, extra)
+
+
+def rocking_warning(count: int) -> str:
+    """The warning of ``count`` rocking contacts (both engines word it so)."""
+    return (f"{count} rocking contact(s): a tumbling ellipsoid held on the plane by its spin while the surface "
+            "accelerates away; rocking is not modelled, so its tilting spin was dropped (booked as landing loss) "
+            "and it flew on")
 
 
 def _bounce(model: Model, num: Numerics, st: State, impacts: list, rec: _Recorder, budget: _Budget,

@@ -131,6 +131,9 @@ SCHEMA = Fields("a grain scene", {
     "numerics": Fields("numerical choices; T is the vibration period (1 s without vibration)", {
         "mode": Choice("`accurate`: exact flight, root-located events; `paper`: the printed fixed-step scheme",
                        choices=("accurate", "paper"), default="accurate"),
+        "engine": Choice("accurate mode: `compiled`, the event loop in numba (symmech.grain.compiled); `python`, "
+                         "the reference loop in Python (same events and results to round-off, ~100x slower)",
+                         choices=("compiled", "python"), default="compiled"),
         "tolerance": Float("accurate mode: relative tolerance of rotation, sliding and event times (times to "
                            "tolerance × scan step)", lo=1e-14, hi=1e-2, default=1e-9),
         "scan_step": Float("accurate mode: spacing at which contact and lift-off roots are bracketed; "
@@ -215,7 +218,7 @@ def _numerics(n: dict, period: float) -> motion.Numerics:
     def given(key, default):
         return default if n[key] is None else n[key]
 
-    return motion.Numerics(mode=n["mode"], tolerance=n["tolerance"], scan_step=given("scan_step", period / 40),
+    return motion.Numerics(mode=n["mode"], engine=n["engine"], tolerance=n["tolerance"], scan_step=given("scan_step", period / 40),
                            dt=given("dt", period / 2000), nodes=n["nodes"], as_printed=n["as_printed"],
                            rest_velocity=n["rest_velocity"], max_impacts=n["max_impacts"],
                            sample_interval=given("sample_interval", period / 40))
@@ -284,7 +287,15 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     impacts = expected_impacts(sc)
     scans = sc.duration / num.scan_step
     seconds = impacts * SECONDS_PER_IMPACT + sc.duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
-    return registry.Estimate(seconds, f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s")
+    what = f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s"
+    if num.engine == "compiled":
+        from symmech.grain import compiled  # imports numba: only when the compiled engine runs
+
+        if compiled.cold():
+            return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; compiling the grain engine "
+                                     f"once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
+                                     once=compiled.COLD_COMPILE_SECONDS)
+    return registry.Estimate(seconds, what)
 
 
 # --------------------------------------------------------------------------- run
@@ -299,6 +310,10 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
     t_end = sc.duration if duration is None else duration
     if num.mode == "paper":
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
+    if num.engine == "compiled":
+        from symmech.grain import compiled  # imports numba: only when the compiled engine runs
+
+        return compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
     return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
 
 

@@ -229,8 +229,10 @@ def estimate(p: Plan, workers: int):
     grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
     from symmech.core import pipeline, registry
 
-    seconds = sum(pipeline.load(grid[0][0][0]).estimate().seconds * len(grid[0][0]) * len(grid) * len(grid[0])
-                  for grid in p.grains)
+    first = [pipeline.load(grid[0][0][0]).estimate() for grid in p.grains]
+    once = max(e.once for e in first)
+    seconds = once + sum((e.seconds - e.once) * len(grid[0][0]) * len(grid) * len(grid[0])
+                         for e, grid in zip(first, p.grains))
     grains = sum(len(grid[0][0]) * len(grid) * len(grid[0]) for grid in p.grains)
     return registry.Estimate(seconds / max(workers, 1), f"{grains} grain runs on {workers} worker(s)")
 

@@ -1,0 +1,1444 @@
+"""Accurate mode compiled: the whole per-grain event loop of :mod:`symmech.grain.motion` in numba.
+
+The loop, its regimes and its rules are those of ``motion.simulate`` (the Python
+loop stays the reference; the tests compare the two), with the physics taken from
+the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
+
+- flight: exact translation of the centre in the local time since the last event
+  (generated ``flight_translation``); torque-free rotation by the Dormand-Prince
+  5(4) pair (order 5, error per step held to ``tolerance`` relative,
+  ``tolerance * 1e-3`` absolute, as the Python DOP853). The orientation at a time
+  inside an accepted step is one Dormand-Prince step of the partial length from
+  the step's start: smooth in time, so the root finders see a smooth gap;
+- contact: the gap is scanned at ``scan_step`` in windows of 32 points exactly as
+  :func:`symmech.grain.contact.first_root`; a sign change is refined by Brent's
+  method (scipy's ``brentq``, ported) to ``tolerance * scan_step`` on the time;
+  a scan minimum is searched by the bounded Brent minimiser (scipy's, ported)
+  for a grazing contact; the scan evaluates the gap only up to the first point
+  at or below zero, which is all the Python scan uses of its window;
+- impact: the Chatterjee-Ruina law, and the printed law by the exact reduction
+  (the trigonometric equation of ``mu_equation``, roots from a 4x4 companion
+  matrix polished by Newton) for the law itself or for its verdict in the log;
+- sliding: the ODE of :mod:`symmech.grain.sliding` (stick, slip, spin about the
+  normal, work and loss as quadratures) by the same Dormand-Prince pair with
+  terminal events located by Brent on the step; lift-off from the root of n(t).
+
+Parameters travel in one float64 vector (layout ``P_*`` below), the state as
+(t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
+(trajectory rows, impact rows, warning codes) and are turned into a
+``motion.Motion`` with the same structure as the Python loop's. The compiled
+loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
+``on_step`` is called; this does not change the result. ``simulate_many`` runs
+grains on threads (the loop releases the GIL).
+"""
+from __future__ import annotations
+
+import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numba
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as dop
+
+from symmech.core import kernels
+from symmech.core.scene import SymmechError
+from symmech.grain import motion, sliding
+
+gm = kernels.load("grain_motion")
+gi = kernels.load("grain_impact")
+
+# Parameter vector layout.
+P_AXES, P_MASS, P_INERTIA, P_G = 0, 3, 4, 7  # (3), (1), (3), (3)
+P_AMP, P_OMEGA, P_PHASE, P_DIR = 10, 11, 12, 13  # surface vibration; direction (3)
+P_LAW, P_EN, P_ET, P_MU_IMPACT, P_E, P_LAM, P_CHECK = 16, 17, 18, 19, 20, 21, 22
+P_MU, P_ROTATION, P_TOL, P_SCAN, P_REST, P_MAX_IMPACTS, P_SAMPLE, P_PERIOD = 23, 24, 25, 26, 27, 28, 29, 30
+N_PARAMS = 31
+LAW_COULOMB, LAW_PRINTED = 0.0, 1.0
+
+# Integer codes are numpy scalars, not Python ints: numba types a Python int constant passed to a jitted
+# function as a literal and compiles that function once more for every such value (83 instead of 61 overloads).
+INT = np.int64
+FLIGHT, IMPACT, SLIDING = INT(0), INT(1), INT(2)  # regime codes, as motion.REGIMES
+# Carry vector: the loop's own state between two calls.
+C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 4, 5
+C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
+# Rocking contacts; velocity scale of a sliding phase handed to Python and back (C_RESUME: handed back).
+C_ROCKING, C_V_SCALE, C_RESUME = 13, 14, 15
+N_CARRY = 16
+# Status of a call.
+DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = (INT(k) for k in range(7))
+STIFF_SLIP = INT(7)  # a stiff slip begins: the rest of this sliding phase goes to sliding.slide (Radau)
+# Warning codes (rows: code, value, value).
+W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = (
+    INT(k) for k in range(1, 7))
+IMPACT_WIDTH = 31  # t, r, v before/after, w before/after, impulse, u before/after, ke, flags (4)
+
+PHASES_PER_CALL = 2000
+COLD_COMPILE_SECONDS = 45.0  # wall time of the first compile, idle machine (benchmarks/bench_grain_compile.py)
+ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS = motion.ZENO_IMPACTS, motion.ZENO_INTERVAL, motion.MAX_IDLE_STEPS
+BOUNDED_MAXFUN = 500  # function evaluations of the bounded minimiser at most (scipy's default)
+EPS = float(np.finfo(float).eps)
+SCAN_WINDOW = 32
+BRENT_RTOL, BRENT_ITER = 4 * EPS, 100
+MAX_STEPS_PER_CHUNK = sliding.MAX_RHS_PER_PHASE // 12  # DOP853 steps (12 evaluations) per sliding chunk
+MAX_STALLED_EVENTS = sliding.MAX_STALLED_EVENTS
+ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Prince stepper
+
+# DOP853 (Hairer, Norsett & Wanner; the coefficients of scipy's solve_ivp, which the Python loop uses).
+DOP_A, DOP_B, DOP_C = dop.A, dop.B, dop.C
+DOP_E3, DOP_E5, DOP_D = dop.E3, dop.E5, dop.D
+DOP_STAGES, DOP_EXTENDED, DOP_POWER = INT(dop.N_STAGES), INT(dop.N_STAGES_EXTENDED), INT(dop.INTERPOLATOR_POWER)
+DOP_EXPONENT = -1.0 / 8.0  # error estimator of order 7
+ROT_WIDTH = 3 + 7 + 7 * 7  # rotation step table row: t_old, t_new, (unused), y_old (7), F (7 x 7)
+
+jit = numba.njit(cache=True, error_model="numpy", nogil=True)
+
+
+# --------------------------------------------------------------------------- small algebra
+
+
+@jit
+def _cross(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+@jit
+def _rot(q):
+    """Q (3, 3) of a quaternion, normalised here (generated ``rotation_matrix``)."""
+    s = math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    return gm.rotation_matrix_scalar(q[0] / s, q[1] / s, q[2] / s, q[3] / s)
+
+
+@jit
+def _offset(p, Q):
+    """Contact offset R (3,) [m] of the lowest point, KXYZ (generated ``contact_offset_body``)."""
+    body = gm.contact_offset_body_scalar(p[0], p[1], p[2], Q[2, 0], Q[2, 1], Q[2, 2])
+    return Q @ body
+
+
+@jit
+def _support(p, Q):
+    return gm.support_distance_scalar(p[0], p[1], p[2], Q[2, 0], Q[2, 1], Q[2, 2])
+
+
+@jit
+def _surface(p, t):
+    """Rows displacement, velocity, acceleration (3, 3) of the surface at t."""
+    return gm.surface_kinematics_scalar(p[P_AMP], p[P_OMEGA], p[P_PHASE], p[P_DIR], p[P_DIR + 1], p[P_DIR + 2], t)
+
+
+@jit
+def _normal(p, t):
+    """Normal force per unit mass n(t) [m/s^2] of a grain on the plane."""
+    return _surface(p, t)[2, 2] - p[P_G + 2]
+
+
+@jit
+def _world_inv_inertia(p, Q):
+    return Q @ np.diag(1.0 / p[P_INERTIA:P_INERTIA + 3]) @ Q.T
+
+
+@jit
+def _inverse_effective_mass(p, Q, R):
+    """K (3, 3) [1/kg], as ``coulomb_law.inverse_effective_mass``; a point mass without rotation."""
+    K = np.eye(3) / p[P_MASS]
+    if p[P_ROTATION] != 0.0:
+        Rx = np.array([[0.0, -R[2], R[1]], [R[2], 0.0, -R[0]], [-R[1], R[0], 0.0]])
+        K = K - Rx @ _world_inv_inertia(p, Q) @ Rx
+    return K
+
+
+@jit
+def _kinetic(p, Q, v, w):
+    """Kinetic energy [J]; v, w (3,) in KXYZ."""
+    wb = Q.T @ w
+    I = p[P_INERTIA:P_INERTIA + 3]
+    return 0.5 * p[P_MASS] * (v @ v) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2)
+
+
+@jit
+def _is_sphere(p):
+    return max(p[0], p[1], p[2]) == min(p[0], p[1], p[2])
+
+
+# --------------------------------------------------------------------------- DOP853 (scipy's, ported)
+
+
+@jit
+def _rhs(kind, t, y, sp, out):
+    """Right-hand side: ``ROT`` torque-free rotation y = (q, w body), sp = inertia; ``SLIP``/``STICK`` sliding."""
+    if kind == ROT:
+        qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
+        wd = gm.euler_equations_scalar(sp[0], sp[1], sp[2], y[4], y[5], y[6])
+        out[:4] = qd
+        out[4:7] = wd
+    else:
+        _slide_rhs(t, y, sp, kind == STICK, out)
+
+
+@jit
+def _combine(out, y, K, a, s, h):
+    """out = y + h sum_j<s a_j K_j, element by element (no temporaries: this is the hot loop)."""
+    for i in range(K.shape[1]):
+        acc = 0.0
+        for j in range(s):
+            acc += a[j] * K[j, i]
+        out[i] = y[i] + acc * h
+
+
+@jit
+def _dop_first_step(kind, t, y, f, t_bound, sp, rtol, atol):
+    """scipy's ``select_initial_step`` for the order-7 error estimator."""
+    span = abs(t_bound - t)
+    if span == 0.0:
+        return 0.0
+    scale = atol + np.abs(y) * rtol
+    d0 = math.sqrt(np.mean((y / scale) ** 2))
+    d1 = math.sqrt(np.mean((f / scale) ** 2))
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, span)
+    f1 = np.empty(y.size)
+    _rhs(kind, t + h0, y + h0 * f, sp, f1)
+    d2 = math.sqrt(np.mean(((f1 - f) / scale) ** 2)) / h0
+    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / 8)
+    return min(100 * h0, h1, span)
+
+
+@jit
+def _dop_advance(kind, t, y, f, h_abs, t_bound, sp, rtol, atol, K):
+    """One accepted DOP853 step (scipy's ``RungeKutta._step_impl``): (t_new, y_new, h_abs next, ok).
+    K (16, n) holds the stages; K[12] is f at the new point."""
+    n = y.size
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    h_abs = max(h_abs, min_step)
+    rejected = False
+    yi = np.empty(n)
+    y_new = np.empty(n)
+    while True:
+        if h_abs < min_step:
+            return t, y, h_abs, False
+        t_new = min(t + h_abs, t_bound)
+        h = t_new - t
+        h_abs = abs(h)
+        K[0] = f
+        for s in range(1, DOP_STAGES):
+            _combine(yi, y, K, DOP_A[s], s, h)
+            _rhs(kind, t + DOP_C[s] * h, yi, sp, K[s])
+        _combine(y_new, y, K, DOP_B, DOP_STAGES, h)
+        _rhs(kind, t + h, y_new, sp, K[DOP_STAGES])
+        n5 = n3 = 0.0
+        for i in range(n):
+            e5 = e3 = 0.0
+            for j in range(DOP_STAGES + 1):
+                e5 += DOP_E5[j] * K[j, i]
+                e3 += DOP_E3[j] * K[j, i]
+            scale = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+            n5 += (e5 / scale) ** 2
+            n3 += (e3 / scale) ** 2
+        err = 0.0 if n5 == 0 and n3 == 0 else abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * n)
+        if err < 1:
+            factor = 10.0 if err == 0 else min(10.0, 0.9 * err ** DOP_EXPONENT)
+            if rejected:
+                factor = min(1.0, factor)
+            return t_new, y_new, h_abs * factor, True
+        h_abs *= max(0.2, 0.9 * err ** DOP_EXPONENT)
+        rejected = True
+
+
+@jit
+def _dop_dense(kind, t_old, h, y_old, y_new, sp, K):
+    """Interpolant coefficients F (7, n) of the last step (scipy's ``DOP853._dense_output_impl``)."""
+    n = y_old.size
+    yi = np.empty(n)
+    for s in range(DOP_STAGES + 1, DOP_EXTENDED):
+        _combine(yi, y_old, K, DOP_A[s], s, h)
+        _rhs(kind, t_old + DOP_C[s] * h, yi, sp, K[s])
+    F = np.empty((DOP_POWER, n))
+    zero = np.zeros(n)
+    for i in range(n):
+        dy = y_new[i] - y_old[i]
+        F[0, i] = dy
+        F[1, i] = h * K[0, i] - dy
+        F[2, i] = 2 * dy - h * (K[DOP_STAGES, i] + K[0, i])
+    for r in range(DOP_POWER - 3):
+        _combine(F[3 + r], zero, K, DOP_D[r], DOP_EXTENDED, h)
+    return F
+
+
+@jit
+def _dense(t, t_old, h, y_old, F):
+    """The DOP853 interpolant at t (``Dop853DenseOutput``); F (7 n,) the coefficients row by row."""
+    x = (t - t_old) / h
+    n = y_old.size
+    y = np.empty(n)
+    for i in range(n):
+        acc = 0.0
+        for r in range(DOP_POWER):
+            acc += F[(DOP_POWER - 1 - r) * n + i]
+            acc *= x if r % 2 == 0 else 1 - x
+        y[i] = acc + y_old[i]
+    return y
+
+
+# --------------------------------------------------------------------------- Brent root, golden section
+
+
+@jit
+def _brent(what, a, b, xtol, ctx, steps, nsteps, p):
+    """Root of ``_h(what, ...)`` in [a, b] with a sign change (scipy's ``brentq``, ported; rtol 4 eps)."""
+    xpre, xcur = a, b
+    fpre, fcur = _h(what, xpre, ctx, steps, nsteps, p), _h(what, xcur, ctx, steps, nsteps, p)
+    xblk = fblk = spre = scur = 0.0
+    if fpre == 0.0:
+        return xpre
+    if fcur == 0.0:
+        return xcur
+    for _ in range(BRENT_ITER):
+        if fpre != 0.0 and fcur != 0.0 and (fpre < 0.0) != (fcur < 0.0):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (xtol + BRENT_RTOL * abs(xcur)) / 2
+        sbis = (xblk - xcur) / 2
+        if fcur == 0.0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
+                spre, scur = scur, stry
+            else:
+                spre = scur = sbis
+        else:
+            spre = scur = sbis
+        xpre, fpre = xcur, fcur
+        xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
+        fcur = _h(what, xcur, ctx, steps, nsteps, p)
+    return xcur
+
+
+@jit
+def _bounded_min(what, a, b, xatol, ctx, steps, nsteps, p):
+    """(x, h(x)) minimising h over [a, b]: scipy's bounded Brent (``minimize_scalar(method="bounded")``), ported."""
+    sqrt_eps = math.sqrt(2.2e-16)
+    golden_mean = 0.5 * (3.0 - math.sqrt(5.0))
+    fulc = a + golden_mean * (b - a)
+    nfc, xf = fulc, fulc
+    rat = e = 0.0
+    fx = _h(what, xf, ctx, steps, nsteps, p)
+    num = 1
+    ffulc = fnfc = fx
+    xm = 0.5 * (a + b)
+    tol1 = sqrt_eps * abs(xf) + xatol / 3.0
+    tol2 = 2.0 * tol1
+    while abs(xf - xm) > (tol2 - 0.5 * (b - a)):
+        golden = True
+        if abs(e) > tol1:  # parabolic fit
+            golden = False
+            r = (xf - nfc) * (fx - ffulc)
+            q = (xf - fulc) * (fx - fnfc)
+            pp = (xf - fulc) * q - (xf - nfc) * r
+            q = 2.0 * (q - r)
+            if q > 0.0:
+                pp = -pp
+            q = abs(q)
+            r = e
+            e = rat
+            if abs(pp) < abs(0.5 * q * r) and pp > q * (a - xf) and pp < q * (b - xf):
+                rat = pp / q
+                x = xf + rat
+                if (x - a) < tol2 or (b - x) < tol2:
+                    rat = tol1 * (1.0 if xm - xf >= 0 else -1.0)
+            else:
+                golden = True
+        if golden:
+            e = a - xf if xf >= xm else b - xf
+            rat = golden_mean * e
+        si = 1.0 if rat >= 0 else -1.0
+        x = xf + si * max(abs(rat), tol1)
+        fu = _h(what, x, ctx, steps, nsteps, p)
+        num += 1
+        if fu <= fx:
+            if x >= xf:
+                a = xf
+            else:
+                b = xf
+            fulc, ffulc = nfc, fnfc
+            nfc, fnfc = xf, fx
+            xf, fx = x, fu
+        else:
+            if x < xf:
+                a = x
+            else:
+                b = x
+            if fu <= fnfc or nfc == xf:
+                fulc, ffulc = nfc, fnfc
+                nfc, fnfc = x, fu
+            elif fu <= ffulc or fulc == xf or fulc == nfc:
+                fulc, ffulc = x, fu
+        xm = 0.5 * (a + b)
+        tol1 = sqrt_eps * abs(xf) + xatol / 3.0
+        tol2 = 2.0 * tol1
+        if num >= BOUNDED_MAXFUN:
+            break
+    return xf, fx
+
+
+# --------------------------------------------------------------------------- functions of time
+
+GAP, NORMAL, EVENT = INT(0), INT(1), INT(2)  # what _h evaluates
+
+
+@jit
+def _orient(t, ctx, tab, ntab):
+    """(q normalised (4,), w body (3,)) of the flight at t from the rotation step table ``tab`` (rows
+    t_old, t_new, -, y_old (7), F (7 x 7)): the interpolant of the first step ending at or after t."""
+    if ntab == 0:
+        y = ctx[7:14].copy()
+    else:
+        lo, hi = 0, ntab - 1
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if tab[mid, 1] >= t:
+                hi = mid
+            else:
+                lo = mid + 1
+        row = tab[lo]
+        y = _dense(t, row[0], row[1] - row[0], row[3:10], tab[lo, 10:])
+    s = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2 + y[3] ** 2)
+    y[:4] /= s
+    return y[:4], y[4:7]
+
+
+@jit
+def _translate(p, ctx, t):
+    """Centre position and velocity rows (2, 3) at t of the flight from ctx = (t0, r0, v0, ...)."""
+    tau = t - ctx[0]
+    if p[P_AMP] == 0.0:
+        return gm.flight_translation_rigid_scalar(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6],
+                                                  p[P_G], p[P_G + 1], p[P_G + 2], 0.0, tau)
+    return gm.flight_translation_scalar(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_G], p[P_G + 1],
+                                        p[P_G + 2], p[P_AMP], p[P_OMEGA], ctx[17], p[P_DIR], p[P_DIR + 1],
+                                        p[P_DIR + 2], 0.0, tau)
+
+
+@jit
+def _h(what, t, ctx, steps, nsteps, p):
+    """GAP: height [m] of the lowest point in flight; NORMAL: n(t); EVENT: sliding event function."""
+    if what == GAP:
+        if ctx[18] == 0.0:  # no rotation in this flight: the support height is the one at its start
+            return _translate(p, ctx, t)[0, 2] - ctx[28]
+        q, _ = _orient(t, ctx, steps, nsteps)
+        return _translate(p, ctx, t)[0, 2] - _support(p, _rot(q))
+    if what == NORMAL:
+        return _normal(p, t)
+    return _event(t, ctx, steps, p)
+
+
+@jit
+def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
+    """First time in (t0, t1] where h reaches zero from above, or NaN (``contact.first_root``, same scan)."""
+    start = t0
+    hs = np.empty(SCAN_WINDOW + 1)
+    ts = np.empty(SCAN_WINDOW + 1)
+    while True:
+        n = 0
+        for i in range(SCAN_WINDOW + 1):
+            ti = min(start + step * i, t1)
+            if n == 0 or ti > ts[n - 1]:
+                ts[n] = ti
+                n += 1
+        stop = n
+        for i in range(n):
+            if what == GAP:  # the Python scan asks for the whole window at once
+                steps, nsteps = _extend(ts[i], ts[n - 1], ctx, steps, nsteps, p)
+            hs[i] = _h(what, ts[i], ctx, steps, nsteps, p)
+            if i > 0 and hs[i] <= 0.0:
+                stop = i
+                break
+        for j in range(1, min(stop, n - 1)):
+            if hs[j] < hs[j - 1] and hs[j] < hs[j + 1]:
+                x, fx = _bounded_min(what, ts[j - 1], ts[j + 1], xtol, ctx, steps, nsteps, p)
+                if fx < 0.0 and hs[j - 1] > 0.0:
+                    return _brent(what, ts[j - 1], x, xtol, ctx, steps, nsteps, p), steps, nsteps
+        if stop < n:
+            return _brent(what, ts[stop - 1], ts[stop], xtol, ctx, steps, nsteps, p), steps, nsteps
+        if ts[n - 1] >= t1:
+            return np.nan, steps, nsteps
+        start = ts[n - 2]
+
+
+# --------------------------------------------------------------------------- flight
+
+
+@jit
+def _extend(t, t_request, ctx, tab, ntab, p):
+    """Integrate the rotation of the flight ctx until it covers t; returns the grown step table and its length.
+
+    ``flight.RotationFlight`` integrates in chunks, each a fresh DOP853 solve from its start to
+    max(t_request, start + period), t_request being the latest time the Python loop asks for at once.
+    The same chunks are solved here, but only as many of their steps as t needs: the step sequence, hence
+    every value, is the Python one. Solver state in ctx: 29 chunk end, 30 step length, 31-37 f, 38 active;
+    ctx[27] = 1 on failure."""
+    if ctx[18] == 0.0:
+        return tab, ntab
+    tol = p[P_TOL]
+    atol = np.full(7, tol * 1e-3)
+    K = np.empty((DOP_EXTENDED, 7))
+    inertia = ctx[14:17].copy()
+    while ctx[19] < t:
+        if ctx[38] == 0.0:  # a new chunk
+            ctx[29] = max(t_request, ctx[19] + p[P_PERIOD])
+            f = np.empty(7)
+            _rhs(ROT, ctx[19], ctx[20:27].copy(), inertia, f)
+            ctx[31:38] = f
+            ctx[30] = _dop_first_step(ROT, ctx[19], ctx[20:27].copy(), f, ctx[29], inertia, tol, atol)
+            ctx[38] = 1.0
+        tt, y, f = ctx[19], ctx[20:27].copy(), ctx[31:38].copy()
+        t_new, y_new, h_abs, ok = _dop_advance(ROT, tt, y, f, ctx[30], ctx[29], inertia, tol, atol, K)
+        if not ok:
+            ctx[27] = 1.0
+            return tab, ntab
+        if ntab == tab.shape[0]:
+            grown = np.empty((2 * ntab, ROT_WIDTH))
+            grown[:ntab] = tab
+            tab = grown
+        tab[ntab, 0], tab[ntab, 1], tab[ntab, 2] = tt, t_new, 0.0
+        tab[ntab, 3:10] = y
+        tab[ntab, 10:] = _dop_dense(ROT, tt, t_new - tt, y, y_new, inertia, K).reshape(DOP_POWER * 7)
+        ntab += 1
+        ctx[19], ctx[30] = t_new, h_abs
+        ctx[20:27] = y_new
+        ctx[31:38] = K[DOP_STAGES]
+        if t_new >= ctx[29]:
+            ctx[38] = 0.0
+    return tab, ntab
+
+
+@jit
+def _flight_ctx(p, y):
+    """Flight record: t0, r0 (3), v0 (3), q0, w0 (7), inertia (3), phase at t0, rotating, end of the rotation
+    integration and its state (7), failure flag, support height at the start, rotation solver state (10)."""
+    ctx = np.zeros(39)
+    ctx[:14] = y
+    ctx[19] = y[0]
+    ctx[20:27] = y[7:14]
+    ctx[14:17] = p[P_INERTIA:P_INERTIA + 3]
+    ctx[17] = (p[P_OMEGA] * y[0] + p[P_PHASE]) % (2 * math.pi)
+    rotating = p[P_ROTATION] != 0.0 and (y[11] != 0.0 or y[12] != 0.0 or y[13] != 0.0)
+    ctx[18] = 1.0 if rotating else 0.0
+    ctx[28] = _support(p, _rot(y[7:11]))
+    return ctx
+
+
+@jit
+def _state_at(t, ctx, steps, nsteps, p):
+    rv = _translate(p, ctx, t)
+    q, w = _orient(t, ctx, steps, nsteps)
+    y = np.empty(14)
+    y[0] = t
+    y[1:4] = rv[0]
+    y[4:7] = rv[1]
+    y[7:11] = q
+    y[11:14] = w
+    return y
+
+
+@jit
+def _fly(p, y, t_end, on_plane, rows, carry):
+    """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, rows)."""
+    ctx = _flight_ctx(p, y)
+    steps = np.empty((64, ROT_WIDTH))
+    nsteps = INT(0)
+    t_from = y[0]
+    scan, xtol = p[P_SCAN], p[P_TOL] * p[P_SCAN]
+    if on_plane:
+        span = min(scan, t_end - y[0])
+        steps, nsteps = _extend(y[0] + span, y[0] + span, ctx, steps, nsteps, p)
+        noise = _gap_noise(p, y)
+        t_from = np.nan
+        for kk in range(64):
+            t = y[0] + span / 2.0 ** kk
+            if t <= y[0]:
+                break
+            if _h(GAP, t, ctx, steps, nsteps, p) > noise:
+                t_from = t
+                break
+        if math.isnan(t_from):
+            return y, 2, rows
+    tc, steps, nsteps = _first_root(GAP, t_from, t_end, scan, xtol, ctx, steps, nsteps, p)
+    t_stop = t_end if math.isnan(tc) else tc
+    steps, nsteps = _extend(t_stop, t_stop, ctx, steps, nsteps, p)
+    if ctx[27] != 0.0:
+        return y, 3, rows
+    k0 = math.ceil(y[0] / p[P_SAMPLE] - 1e-9)
+    k1 = math.floor(t_stop / p[P_SAMPLE] - 1e-9)
+    for kk in range(int(k0), int(k1) + 1):
+        ts = kk * p[P_SAMPLE]
+        if y[0] < ts < t_stop:
+            rows = _record(rows, carry, _state_at(ts, ctx, steps, nsteps, p), FLIGHT)
+    return _state_at(t_stop, ctx, steps, nsteps, p), 1 if math.isnan(tc) else 0, rows
+
+
+# --------------------------------------------------------------------------- records
+
+
+@jit
+def _record(rows, carry, y, regime):
+    """Append the trajectory row of state y (t, r, v, q, w in KXYZ, regime)."""
+    n = int(carry[C_ROWS])
+    if n == rows.shape[0]:
+        grown = np.empty((2 * n, 15))
+        grown[:n] = rows
+        rows = grown
+    rows[n, :11] = y[:11]
+    rows[n, 11:14] = _rot(y[7:11]) @ y[11:14]
+    rows[n, 14] = regime
+    carry[C_ROWS] = n + 1
+    return rows
+
+
+@jit
+def _warn(warns, carry, code, a, b):
+    n = int(carry[C_NWARN])
+    if n == warns.shape[0]:
+        grown = np.empty((2 * n, 3))
+        grown[:n] = warns
+        warns = grown
+    warns[n, 0], warns[n, 1], warns[n, 2] = code, a, b
+    carry[C_NWARN] = n + 1
+    return warns
+
+
+# --------------------------------------------------------------------------- impact laws
+
+
+@jit
+def _coulomb_impulse(K, u, e_n, e_t, mu):
+    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain)."""
+    P_I = np.zeros(3)
+    P_I[2] = -u[2] / K[2, 2]
+    D = -np.linalg.solve(K, u) - P_I
+    P = (1.0 + e_n) * P_I + (1.0 + e_t) * D
+    d_t = math.hypot(D[0], D[1])
+    p_t = math.hypot(P[0], P[1])
+    outside = p_t / mu > P[2] if mu > 0 else p_t > 0
+    if outside:
+        kappa = (1.0 + e_n) * P_I[2] / (d_t / mu - D[2])
+        return (1.0 + e_n) * P_I + kappa * D
+    return P
+
+
+@jit
+def _trig_roots(k, tol, max_iter):
+    """Real roots (4,) (NaN unused) of k0 + k1c cos + k1s sin + k2c cos2 + k2s sin2 (``impact._trig_roots``)."""
+    k0, k1c, k1s, k2c, k2s = k[0], k[1], k[2], k[3], k[4]
+    best, delta = -1.0, 0.0
+    for i in range(5):
+        s = i * (2 * math.pi / 5)
+        m = s + math.pi
+        val = abs(k0 + k1c * math.cos(m) + k1s * math.sin(m) + k2c * math.cos(2 * m) + k2s * math.sin(2 * m))
+        if val > best:
+            best, delta = val, s
+    c1, s1, c2, s2 = math.cos(delta), math.sin(delta), math.cos(2 * delta), math.sin(2 * delta)
+    a1c, a1s = k1c * c1 + k1s * s1, -k1c * s1 + k1s * c1
+    a2c, a2s = k2c * c2 + k2s * s2, -k2c * s2 + k2s * c2
+    quartic = np.array([k0 - a1c + a2c, 2 * a1s - 4 * a2s, 2 * k0 - 6 * a2c, 2 * a1s + 4 * a2s, k0 + a1c + a2c])
+    roots = np.full(4, np.nan)
+    if abs(quartic[0]) > 0:
+        comp = np.zeros((4, 4), dtype=np.complex128)
+        for j in range(4):
+            comp[0, j] = -quartic[j + 1] / quartic[0]
+        comp[1, 0] = comp[2, 1] = comp[3, 2] = 1.0
+        t = np.linalg.eigvals(comp)
+        for j in range(4):
+            if abs(t[j].imag) <= 1e-6 * (1.0 + abs(t[j].real)):
+                roots[j] = delta + 2 * math.atan(t[j].real)
+    for _ in range(max_iter):
+        big = False
+        for j in range(4):
+            r = roots[j]
+            if math.isnan(r):
+                continue
+            f = k0 + k1c * math.cos(r) + k1s * math.sin(r) + k2c * math.cos(2 * r) + k2s * math.sin(2 * r)
+            d = (-k1c * math.sin(r) + k1s * math.cos(r) - 2 * k2c * math.sin(2 * r) + 2 * k2s * math.cos(2 * r))
+            step = 0.0 if d == 0 else f / d
+            roots[j] = r - min(0.5, max(-0.5, step))
+            big = big or abs(step) > tol
+        if not big:
+            break
+    scale = abs(k0) + abs(k1c) + abs(k1s) + abs(k2c) + abs(k2s)
+    for j in range(4):
+        r = roots[j]
+        f = k0 + k1c * math.cos(r) + k1s * math.sin(r) + k2c * math.cos(2 * r) + k2s * math.sin(2 * r)
+        if abs(f) > 1e-9 * scale:
+            roots[j] = np.nan
+        else:
+            roots[j] = (r + math.pi) % (2 * math.pi) - math.pi
+    roots = np.sort(roots)  # NaN last
+    keep = roots.copy()
+    for j in range(1, 4):
+        if roots[j] - roots[j - 1] < 1e-7:  # a double root: two nearly equal eigenvalues
+            keep[j] = np.nan
+    count = 0
+    for j in range(4):
+        count += 0 if math.isnan(keep[j]) else 1
+    if count > 1:
+        last = keep[count - 1]
+        if abs((last - keep[0] + math.pi) % (2 * math.pi) - math.pi) < 1e-7:
+            keep[count - 1] = np.nan
+    return keep
+
+
+@jit
+def _prescribed(u, e, lam, mu):
+    speed = (1.0 - lam) * math.hypot(u[0], u[1])
+    return np.array([speed * math.cos(mu), speed * math.sin(mu), -e * u[2]])
+
+
+@jit
+def _printed(H, m, e, lam, u):
+    """The printed law solved exactly for one impact (``impact.solve_robust_batch``):
+    (T (3,), residual of (19), admissible, creates energy, pulls)."""
+    k = gi.mu_equation_scalar(H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], lam, e, u[0], u[1], u[2])
+    norm_u = math.sqrt(u @ u)
+    stuck = (1.0 - lam) * math.hypot(u[0], u[1]) <= 1e-14 * norm_u
+    roots = np.full(4, np.nan)
+    if stuck:
+        roots[0] = 0.0
+    else:
+        roots = _trig_roots(k, 1e-14, 12)
+    ke_scale = 0.5 * m * (u @ u)
+    Ts = np.zeros((4, 3))
+    score = np.full(4, np.inf)
+    gains = np.zeros(4, dtype=np.bool_)
+    pulls = np.zeros(4, dtype=np.bool_)
+    big = 0.0
+    for j in range(4):
+        mu = 0.0 if math.isnan(roots[j]) else roots[j]
+        du = _prescribed(u, e, lam, mu) - u
+        T = m * np.linalg.solve(H, du)
+        Ts[j] = T
+        gains[j] = 0.5 * (T @ (2 * u + du)) > 1e-9 * ke_scale
+        pulls[j] = T[2] < -1e-12 * math.sqrt(T @ T)
+        if not math.isnan(roots[j]):
+            big = max(big, math.hypot(T[0], T[1]))
+    big = 10.0 * big + 1.0
+    choice, found = 0, False
+    for j in range(4):
+        if not math.isnan(roots[j]):
+            found = True
+            rank = 2.0 if pulls[j] else (1.0 if gains[j] else 0.0)
+            score[j] = rank * big + math.hypot(Ts[j, 0], Ts[j, 1])
+            if score[j] < score[choice]:
+                choice = j
+    T = Ts[choice] if found else np.full(3, np.nan)
+    mu = roots[choice]
+    if stuck:
+        mu = math.atan2(T[1], T[0]) if math.hypot(T[0], T[1]) > 0 else 0.0
+    d0, d1 = math.cos(mu), math.sin(mu)
+    tau = T[0] * d0 + T[1] * d1
+    r = H @ np.array([tau * d0, tau * d1, T[2]]) - m * (_prescribed(u, e, lam, mu) - u)
+    residual = (math.sqrt(r @ r) + abs(T[1] * d0 - T[0] * d1)) / (m * norm_u)
+    bad_gain, bad_pull = gains[choice], pulls[choice]
+    return T, residual, found and not (bad_gain or bad_pull), bad_gain, bad_pull
+
+
+@jit
+def _impact(p, y, warns, carry):
+    """The scene's impact law at the lowest point (``ImpactLaw.apply`` for one grain):
+    (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""
+    Q = _rot(y[7:11])
+    R = _offset(p, Q)
+    m = p[P_MASS]
+    rotating = p[P_ROTATION] != 0.0
+    v = y[4:7].copy()
+    w = Q @ y[11:14] if rotating else np.zeros(3)
+    u = v + _cross(w, R)
+    K = _inverse_effective_mass(p, Q, R)
+    printed = p[P_LAW] == LAW_PRINTED
+    p_adm = p_gain = -1.0
+    converged = 1.0
+    P = np.zeros(3)
+    if u[2] < 0.0:
+        if rotating and (printed or p[P_CHECK] != 0.0):
+            e, lam = (p[P_E], p[P_LAM]) if printed else (p[P_EN], 1.0 + p[P_ET])
+            T, residual, adm, gain, pull = _printed(m * K, m, e, lam, u)
+            p_adm, p_gain = (1.0 if adm else 0.0), (1.0 if gain else 0.0)
+            if printed:
+                if not adm:
+                    warns = _warn(warns, carry, W_PRINTED_ENERGY if gain else W_PRINTED_PULLS, 0.0, 0.0)
+                converged = 1.0 if residual < 1e-8 else 0.0
+                if not residual < 1e-8:
+                    warns = _warn(warns, carry, W_PRINTED_RESIDUAL, residual, 0.0)
+                P = T
+        if not (rotating and printed):
+            if printed:
+                P = _coulomb_impulse(K, u, p[P_E], p[P_LAM] - 1.0, np.inf)
+            else:
+                P = _coulomb_impulse(K, u, p[P_EN], p[P_ET], p[P_MU_IMPACT])
+    v_after = v + P / m
+    w_after = w + _world_inv_inertia(p, Q) @ _cross(R, P) if rotating else np.zeros(3)
+    ke_before, ke_after = _kinetic(p, Q, v, w), _kinetic(p, Q, v_after, w_after)
+    admissible = ke_after <= ke_before * (1.0 + 1e-9)
+    if not admissible:
+        warns = _warn(warns, carry, W_ENERGY, ke_before, ke_after)
+    after = y.copy()
+    after[4:7] = v_after
+    after[11:14] = Q.T @ w_after
+    log = np.empty(IMPACT_WIDTH)
+    log[4:7] = v
+    log[7:10] = v_after
+    log[10:13] = y[11:14]
+    log[13:16] = after[11:14]
+    log[16:19] = P
+    log[19:22] = u
+    log[22:25] = v_after + _cross(w_after, R)
+    log[25], log[26], log[27] = ke_before, ke_after, 1.0 if admissible else 0.0
+    log[28], log[29], log[30] = p_adm, p_gain, converged
+    return after, log, warns
+
+
+@jit
+def _bounce(p, y, rows, imps, warns, carry):
+    """An impact at y, logged and booked: (state after, normal contact velocity after, rows, imps, warns)."""
+    after, log, warns = _impact(p, y, warns, carry)
+    carry[C_WORK] += log[16:19] @ _surface(p, y[0])[1]
+    carry[C_IMPACTS] += log[25] - log[26]
+    rows = _record(rows, carry, y, IMPACT)
+    rows = _record(rows, carry, after, IMPACT)
+    n = int(carry[C_NIMP])
+    if n == imps.shape[0]:
+        grown = np.empty((2 * n, IMPACT_WIDTH))
+        grown[:n] = imps
+        imps = grown
+    log[0] = y[0]
+    log[1:4] = y[1:4]
+    imps[n] = log
+    carry[C_NIMP] = n + 1
+    if n + 1 >= ZENO_IMPACTS and imps[n, 0] - imps[n + 1 - ZENO_IMPACTS, 0] < ZENO_INTERVAL * p[P_PERIOD]:
+        warns = _warn(warns, carry, W_CHATTER, 0.0, 0.0)
+        return after, 0.0, rows, imps, warns
+    return after, log[24], rows, imps, warns
+
+
+# --------------------------------------------------------------------------- contact tests and landing
+
+
+@jit
+def _contact_velocity(p, y):
+    Q = _rot(y[7:11])
+    return y[6] + _cross(Q @ y[11:14], _offset(p, Q))[2]
+
+
+@jit
+def _gap(p, y):
+    return y[3] - _support(p, _rot(y[7:11]))
+
+
+@jit
+def _gap_noise(p, y):
+    return 64 * EPS * (max(p[0], p[1], p[2]) + abs(y[3]) + p[P_AMP])
+
+
+@jit
+def _velocity_noise(p, y):
+    scale = (math.sqrt(y[4:7] @ y[4:7]) + math.sqrt(y[11:14] @ y[11:14]) * max(p[0], p[1], p[2])
+             + p[P_AMP] * p[P_OMEGA])
+    return 1e3 * EPS * scale
+
+
+@jit
+def _energy(p, y):
+    """Absolute energy [J]: kinetic in the inertial frame plus the potential of gravity (``motion._Budget``)."""
+    s = _surface(p, y[0])
+    v = y[4:7] + s[1]
+    I = p[P_INERTIA:P_INERTIA + 3]
+    w = y[11:14]
+    return (p[P_MASS] * (0.5 * (v @ v) - p[P_G:P_G + 3] @ (y[1:4] + s[0]))
+            + 0.5 * (I[0] * w[0] ** 2 + I[1] * w[1] ** 2 + I[2] * w[2] ** 2))
+
+
+@jit
+def _land(p, y, carry):
+    """Start sliding (``motion._land``): plastic normal impulse at the lowest point, tilting spin dropped."""
+    Q = _rot(y[7:11])
+    R = _offset(p, Q)
+    w0 = Q @ y[11:14]
+    rotating = p[P_ROTATION] != 0.0
+    K = _inverse_effective_mass(p, Q, R)
+    P = np.array([0.0, 0.0, -_contact_velocity(p, y) / K[2, 2]])
+    v0 = y[4:7].copy()
+    v = v0 + P / p[P_MASS]
+    w = w0.copy()
+    if rotating:
+        w = w0 + Q @ ((Q.T @ _cross(R, P)) / p[P_INERTIA:P_INERTIA + 3])
+        if not _is_sphere(p):
+            v[2], w[0], w[1] = 0.0, 0.0, 0.0
+    v[2] = 0.0
+    carry[C_WORK] += (p[P_MASS] * (v - v0)) @ _surface(p, y[0])[1]
+    carry[C_LAND_LOSS] += _kinetic(p, Q, v0, w0) - _kinetic(p, Q, v, w)
+    out = y.copy()
+    out[3] = _support(p, Q)
+    out[4:7] = v
+    out[11:14] = Q.T @ w
+    return out
+
+
+# --------------------------------------------------------------------------- sliding
+
+# Sliding parameters: g (3), vibration A, omega, phase, d (3), mu, R0 (3), R body (3), sphere, M (9), mass,
+# inertia (3), reference slip direction (2), v_stop, event kind, B anisotropic (stiff slip), stiff slip speed.
+S_G, S_AMP, S_OMEGA, S_PHASE, S_DIR, S_MU, S_R0, S_RB, S_SPHERE, S_M = 0, 3, 4, 5, 6, 9, 10, 13, 16, 17
+S_MASS, S_INERTIA, S_REF, S_VSTOP, S_EVENT, S_ANISO, S_STIFF = 26, 27, 30, 32, 33, 34, 35
+N_SLIDE = 36
+# Events: none; the slip stops; the stick ends; an anisotropic slip stops or falls below the stiff slip speed.
+EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF = 0.0, 1.0, 2.0, 3.0
+
+
+@jit
+def _slide_surface(sp, t):
+    ph = sp[S_OMEGA] * t + sp[S_PHASE]
+    d = sp[S_DIR:S_DIR + 3]
+    return sp[S_AMP] * sp[S_OMEGA] * math.cos(ph) * d, -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(ph) * d
+
+
+@jit
+def _offset_now(y, sp):
+    """Contact offset R (3 floats) of the sliding grain: fixed for a sphere, turned with q otherwise."""
+    if sp[S_SPHERE] != 0.0:
+        return sp[S_R0], sp[S_R0 + 1], sp[S_R0 + 2]
+    q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
+    v0, v1, v2 = sp[S_RB], sp[S_RB + 1], sp[S_RB + 2]
+    t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
+    qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
+    return (v0 + (q0 * t0 + u1 * t2 - u2 * t1) / qq, v1 + (q0 * t1 + u2 * t0 - u0 * t2) / qq,
+            v2 + (q0 * t2 + u0 * t1 - u1 * t0) / qq)
+
+
+@jit
+def _geometry(y, sp):
+    """Contact offset R (3,), slip s (2,), slip acceleration c (2,) of the carried contact point."""
+    R0, R1, R2 = _offset_now(y, sp)
+    w0, w1, w2 = y[4], y[5], y[6]
+    s = np.array([y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2])
+    # The contact point turns with the spin about the normal: R' = w_z e_z x R; c = (w x R')_t.
+    c = np.array([-w2 * (w2 * R0), w2 * (-w2 * R1)])
+    return np.array([R0, R1, R2]), s, c
+
+
+@jit
+def _mobility(sp):
+    return sp[S_M:S_M + 9].copy().reshape(3, 3)
+
+
+@jit
+def _B(R0, R1, R2, sp):
+    """B = (E - [R]x M [R]x)_tt (2, 2): the tangential slip response to a tangential impulse per unit mass."""
+    Rx = ((0.0, -R2, R1), (R2, 0.0, -R0), (-R1, R0, 0.0))
+    B = np.zeros((2, 2))
+    for i in range(2):
+        for j in range(2):
+            acc = 0.0
+            for k in range(3):
+                for m in range(3):
+                    acc += Rx[i][k] * sp[S_M + 3 * k + m] * Rx[m][j]
+            B[i, j] = (1.0 if i == j else 0.0) - acc
+    return B
+
+
+@jit
+def _solve_B(R0, R1, R2, sp, b0, b1):
+    """B^-1 b (Cramer's rule)."""
+    B = _B(R0, R1, R2, sp)
+    det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
+    return (B[1, 1] * b0 - B[0, 1] * b1) / det, (B[0, 0] * b1 - B[1, 0] * b0) / det
+
+
+@jit
+def _anisotropic(sp):
+    """``sliding._Contact.stiff_slip``: the eigenvalues of the symmetric B at R0 differ by more than 1e-12
+    relative (turning about the normal keeps them for the whole phase)."""
+    B = _B(sp[S_R0], sp[S_R0 + 1], sp[S_R0 + 2], sp)
+    gap = math.hypot(B[0, 0] - B[1, 1], 2.0 * B[1, 0])
+    return gap > 1e-12 * (0.5 * (B[0, 0] + B[1, 1] + gap))
+
+
+@jit
+def _stick_force(t, y, sp):
+    _, acc = _slide_surface(sp, t)
+    R, _, c = _geometry(y, sp)
+    p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_G] - acc[0] + c[0], sp[S_G + 1] - acc[1] + c[1])
+    return np.array([-p0, -p1]), acc[2] - sp[S_G + 2]
+
+
+@jit
+def _slide_rhs(t, y, sp, stick, out):
+    """Sliding ODE y = (r (2), v (2), w (3) KXYZ, q (4), W, D) (``sliding._Contact.rhs``), in scalars."""
+    ph = sp[S_OMEGA] * t + sp[S_PHASE]
+    sv = sp[S_AMP] * sp[S_OMEGA] * math.cos(ph)
+    sa = -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(ph)
+    d0, d1, d2 = sp[S_DIR], sp[S_DIR + 1], sp[S_DIR + 2]
+    R0, R1, R2 = _offset_now(y, sp)
+    w0, w1, w2 = y[4], y[5], y[6]
+    s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
+    n = sa * d2 - sp[S_G + 2]
+    f0, f1 = sp[S_G] - sa * d0, sp[S_G + 1] - sa * d1
+    if stick:
+        p0, p1 = _solve_B(R0, R1, R2, sp, f0 - w2 * w2 * R0, f1 - w2 * w2 * R1)
+        phi0, phi1 = -p0, -p1
+    else:
+        speed = math.hypot(s0, s1)
+        phi0, phi1 = (-sp[S_MU] * n / speed * s0, -sp[S_MU] * n / speed * s1) if speed > 0.0 else (0.0, 0.0)
+    tx, ty, tz = R1 * n - R2 * phi1, R2 * phi0 - R0 * n, R0 * phi1 - R1 * phi0
+    q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
+    out[0], out[1] = y[2], y[3]
+    out[2], out[3] = f0 + phi0, f1 + phi1
+    for i in range(3):
+        out[4 + i] = sp[S_M + 3 * i] * tx + sp[S_M + 3 * i + 1] * ty + sp[S_M + 3 * i + 2] * tz
+    out[7] = 0.5 * (-w0 * q1 - w1 * q2 - w2 * q3)
+    out[8] = 0.5 * (w0 * q0 + w1 * q3 - w2 * q2)
+    out[9] = 0.5 * (w1 * q0 + w2 * q1 - w0 * q3)
+    out[10] = 0.5 * (w2 * q0 + w0 * q2 - w1 * q1)
+    out[11] = sv * (phi0 * d0 + phi1 * d1 + n * d2)
+    out[12] = -(phi0 * s0 + phi1 * s1)
+
+
+@jit
+def _event(t, ctx, tab, p):
+    """Sliding event at t inside the step of ctx = (t_old, h, y_old (13), kind, sp) with interpolant tab (F)."""
+    y = _dense(t, ctx[0], ctx[1], ctx[2:15], tab[0])
+    return _event_at(t, y, ctx[16:16 + N_SLIDE])
+
+
+@jit
+def _event_at(t, y, sp):
+    if sp[S_EVENT] == EV_SLIP or sp[S_EVENT] == EV_SLIP_STIFF:
+        s = _geometry(y, sp)[1]
+        stops = s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
+        if sp[S_EVENT] == EV_SLIP:
+            return stops
+        # The earlier of the two falling events of ``sliding._events`` (slip stops, stiff slip begins).
+        return min(stops, math.hypot(s[0], s[1]) - sp[S_STIFF])
+    phi, n = _stick_force(t, y, sp)
+    return sp[S_MU] * n - math.hypot(phi[0], phi[1])
+
+
+@jit
+def _slide_kinetic(sp, q, v2, w):
+    """Kinetic energy per unit mass [J/kg] of tangential velocity v2 (2,) and spin w (3,) KXYZ."""
+    Q = _rot(q)
+    wb = Q.T @ w
+    I = sp[S_INERTIA:S_INERTIA + 3]
+    return 0.5 * (v2 @ v2) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2) / sp[S_MASS]
+
+
+@jit
+def _settle(t, y, sp, may_stick):
+    """``sliding._settle``: remove a slip within v_stop by a friction impulse; (stick, y)."""
+    R, s, _ = _geometry(y, sp)
+    v_stop = sp[S_VSTOP]
+    if sp[S_MU] == 0.0 or math.hypot(s[0], s[1]) > 1.5 * v_stop:
+        return False, y
+    phi, n = _stick_force(t, y, sp)
+    stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_MU] * n
+    target = np.zeros(2)
+    if not stick:  # against the stick force: along B^-1 (f + c) (``sliding._Contact.slip_direction``)
+        _, acc = _slide_surface(sp, t)
+        c = _geometry(y, sp)[2]
+        d0, d1 = _solve_B(R[0], R[1], R[2], sp, sp[S_G] - acc[0] + c[0], sp[S_G + 1] - acc[1] + c[1])
+        target = 2.0 * v_stop * np.array([d0, d1]) / max(math.hypot(d0, d1), 1e-300)
+    y = y.copy()
+    before = _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
+    dphi = np.array(_solve_B(R[0], R[1], R[2], sp, target[0] - s[0], target[1] - s[1]))
+    y[2:4] += dphi
+    y[4:7] += _mobility(sp) @ _cross(R, np.array([dphi[0], dphi[1], 0.0]))
+    y[12] += before - _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
+    return stick, y
+
+
+@jit
+def _slide_params(p, Q0, R0, mu):
+    sp = np.zeros(N_SLIDE)
+    sp[S_G:S_G + 3] = p[P_G:P_G + 3]
+    sp[S_AMP], sp[S_OMEGA], sp[S_PHASE] = p[P_AMP], p[P_OMEGA], p[P_PHASE]
+    sp[S_DIR:S_DIR + 3] = p[P_DIR:P_DIR + 3]
+    sp[S_MU] = mu
+    sp[S_R0:S_R0 + 3] = R0
+    sp[S_RB:S_RB + 3] = Q0.T @ R0
+    sp[S_SPHERE] = 1.0 if _is_sphere(p) else 0.0
+    M = np.zeros((3, 3))
+    if p[P_ROTATION] != 0.0:
+        if _is_sphere(p):
+            M = p[P_MASS] / p[P_INERTIA] * np.eye(3)
+        else:
+            I = p[P_INERTIA:P_INERTIA + 3]
+            M[2, 2] = p[P_MASS] / (I[0] * Q0[2, 0] ** 2 + I[1] * Q0[2, 1] ** 2 + I[2] * Q0[2, 2] ** 2)
+    sp[S_M:S_M + 9] = M.reshape(9)
+    sp[S_MASS] = p[P_MASS]
+    sp[S_INERTIA:S_INERTIA + 3] = p[P_INERTIA:P_INERTIA + 3]
+    sp[S_ANISO] = 1.0 if mu > 0.0 and _anisotropic(sp) else 0.0
+    return sp
+
+
+@jit
+def _slide(p, y, t_end, rows, carry):
+    """One sliding phase from state y (``motion._slide`` with ``sliding.slide``): (state, lifted, rows, status)."""
+    t0 = y[0]
+    step, tol = p[P_SCAN], p[P_TOL]
+    dummy = np.empty((1, ROT_WIDTH))
+    if _normal(p, t0) > 0:
+        t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(39), dummy, INT(0), p)[0]
+    else:
+        t_lift = t0
+    t_stop = t_end if math.isnan(t_lift) else t_lift
+    Q0 = _rot(y[7:11])
+    sp = _slide_params(p, Q0, _offset(p, Q0), p[P_MU])
+    z = np.empty(13)
+    z[0:2] = y[1:3]
+    z[2:4] = y[4:6]
+    z[4:7] = Q0 @ y[11:14]
+    z[7:11] = y[7:11]
+    z[11] = z[12] = 0.0
+    g = math.sqrt(p[P_G:P_G + 3] @ p[P_G:P_G + 3])
+    v_scale = carry[C_V_SCALE] if carry[C_RESUME] != 0.0 else (g + abs(_normal(p, t0))) * step
+    carry[C_RESUME] = 0.0
+    sp[S_VSTOP] = tol * v_scale
+    sp[S_STIFF] = tol**sliding.SLIP_STIFF_POWER * v_scale
+    a_min = min(p[0], p[1], p[2])
+    atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min, 1 / v_scale,
+                                     1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
+    height = y[3]
+    stick, z = _settle(t0, z, sp, True)
+    t, stalled, status = t0, 0, DONE
+    K = np.empty((DOP_EXTENDED, 13))
+    F = np.empty((1, DOP_POWER * 13))
+    ctx = np.empty(16 + N_SLIDE)
+    sample = p[P_SAMPLE]
+    next_k = math.ceil(t0 / sample - 1e-9)
+    while t < t_stop and status == DONE:
+        if _stiff(z, sp, stick):
+            status = STIFF_SLIP
+            break
+        kind = STICK if stick else SLIP
+        _choose_event(z, sp, stick)
+        # One integration chunk of 40 scan steps, a fresh solve as in the Python loop.
+        t_phase, t_chunk = t, min(t_stop, t + 40 * step)
+        g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
+        f = np.empty(13)
+        _rhs(kind, t, z, sp, f)
+        h_abs = _dop_first_step(kind, t, z, f, t_chunk, sp, tol, atol)
+        fired, count = False, 0
+        while t < t_chunk and not fired:
+            count += 1
+            if count > MAX_STEPS_PER_CHUNK:
+                status = SLIDE_RHS
+                break
+            t_new, z_new, h_abs, ok = _dop_advance(kind, t, z, f, h_abs, t_chunk, sp, tol, atol, K)
+            if not ok:
+                status = SLIDE_FAIL
+                break
+            g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
+            fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
+            if fired or next_k * sample < t_new:
+                F = _dop_dense(kind, t, t_new - t, z, z_new, sp, K).reshape(1, DOP_POWER * 13)
+            t_last = t_new
+            if fired:
+                ctx[0], ctx[1], ctx[15] = t, t_new - t, kind
+                ctx[2:15] = z
+                ctx[16:] = sp
+                t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, INT(0), p)
+                z_new = _dense(t_last, t, t_new - t, z, F[0])
+            while next_k * sample < t_last:  # trajectory rows at the sample times inside this step
+                ts = next_k * sample
+                if ts >= t0:
+                    rows = _record(rows, carry, _slide_state(ts, _dense(ts, t, t_new - t, z, F[0]), height), SLIDING)
+                next_k += 1
+            t, z, f, g_old = t_last, z_new, K[DOP_STAGES].copy(), g_new
+        stalled = stalled + 1 if t <= t_phase else 0
+        if stalled > MAX_STALLED_EVENTS:
+            status = SLIDE_STALLED
+        if fired and _switched(z, sp):
+            status = STIFF_SLIP
+        elif fired:
+            stick, z = _settle(t, z, sp, not stick)
+    carry[C_WORK] += p[P_MASS] * z[11]
+    carry[C_SLIDE_LOSS] += p[P_MASS] * z[12]
+    end = _slide_state(t, z, height)
+    if status == STIFF_SLIP:  # the Python side goes on from end (its rows, its end row)
+        carry[C_V_SCALE] = v_scale
+    else:
+        rows = _record(rows, carry, end, SLIDING)
+    return end, (not math.isnan(t_lift)) and t >= t_lift, rows, status
+
+
+@jit
+def _choose_event(z, sp, stick):
+    """The terminal event of the next chunk (``sliding._events``) into sp: kind and reference slip direction."""
+    if sp[S_MU] == 0.0:  # without friction there is no stick or slip regime to change
+        sp[S_EVENT] = EV_NONE
+    elif stick:
+        sp[S_EVENT] = EV_STICK
+    else:
+        s0 = _geometry(z, sp)[1]
+        nrm = max(math.hypot(s0[0], s0[1]), 1e-300)
+        sp[S_EVENT] = EV_SLIP_STIFF if sp[S_ANISO] != 0.0 else EV_SLIP
+        sp[S_REF], sp[S_REF + 1] = s0[0] / nrm, s0[1] / nrm
+
+
+@jit
+def _stiff(z, sp, stick):
+    """An anisotropic slip below the stiff slip speed s_stiff: where ``sliding.slide`` goes implicit."""
+    if stick or sp[S_ANISO] == 0.0:
+        return False
+    s = _geometry(z, sp)[1]
+    return math.hypot(s[0], s[1]) < sp[S_STIFF]
+
+
+@jit
+def _switched(z, sp):
+    """At a located ``EV_SLIP_STIFF`` event: the slip speed fell through s_stiff (not the slip stopping)."""
+    if sp[S_EVENT] != EV_SLIP_STIFF:
+        return False
+    s = _geometry(z, sp)[1]
+    return math.hypot(s[0], s[1]) - sp[S_STIFF] <= s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
+
+
+@jit
+def _slide_state(t, z, height):
+    """Full state (14,) from the sliding vector z at t (q normalised, w into body axes)."""
+    y = np.empty(14)
+    q = z[7:11] / math.sqrt(z[7:11] @ z[7:11])
+    y[0], y[1], y[2], y[3] = t, z[0], z[1], height
+    y[4], y[5], y[6] = z[2], z[3], 0.0
+    y[7:11] = q
+    y[11:14] = _rot(q).T @ z[4:7]
+    return y
+
+
+# --------------------------------------------------------------------------- the loop
+
+
+@jit
+def _start(p, y, rows, carry):
+    """First row and the release rule of ``motion.simulate``; sets the regime and on_plane in carry."""
+    carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0 if _gap(p, y) <= _gap_noise(p, y) else 0.0
+    rows = _record(rows, carry, y, FLIGHT)
+    if carry[C_ON_PLANE] != 0.0 and _contact_velocity(p, y) <= _velocity_noise(p, y) and _normal(p, y[0]) > 0:
+        carry[C_REGIME], carry[C_ON_PLANE] = SLIDING, 0.0
+        y = _land(p, y, carry)
+    return y, rows
+
+
+@jit
+def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
+    """At most ``max_phases`` regime phases of the loop of ``motion.simulate`` from state y (14,);
+    returns (y, rows, imps, warns, status)."""
+    for _ in range(max_phases):
+        if not y[0] < t_end:
+            return y, rows, imps, warns, DONE
+        t_before = y[0]
+        if carry[C_REGIME] == FLIGHT:
+            y, fly_status, rows = _fly(p, y, t_end, carry[C_ON_PLANE] != 0.0, rows, carry)
+            carry[C_T_FLIGHT] += y[0] - t_before
+            if fly_status == 1:
+                return y, rows, imps, warns, DONE
+            if fly_status == 3:
+                return y, rows, imps, warns, ROT_FAIL
+            u_n = 0.0
+            if fly_status == 0 and _contact_velocity(p, y) < -_velocity_noise(p, y):
+                if carry[C_NIMP] >= p[P_MAX_IMPACTS]:
+                    warns = _warn(warns, carry, W_MAX_IMPACTS, y[0], p[P_MAX_IMPACTS])
+                    return y, rows, imps, warns, DONE
+                y, u_n, rows, imps, warns = _bounce(p, y, rows, imps, warns, carry)
+            carry[C_ON_PLANE] = 1.0
+            if u_n <= p[P_REST] and _normal(p, y[0]) > 0:
+                carry[C_REGIME], carry[C_ON_PLANE] = SLIDING, 0.0
+                carry[C_LANDINGS] += 1
+                y = _land(p, y, carry)
+            elif fly_status == 2:  # held on a plane that pulls away: a rocking contact (not modelled)
+                carry[C_ROCKING] += 1
+                y = _land(p, y, carry)
+        else:
+            y, lifted, rows, status = _slide(p, y, t_end, rows, carry)
+            carry[C_T_SLIDING] += y[0] - t_before
+            if status != DONE:
+                return y, rows, imps, warns, status
+            if lifted:
+                carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0
+        carry[C_IDLE] = carry[C_IDLE] + 1 if y[0] == t_before else 0
+        if carry[C_IDLE] > MAX_IDLE_STEPS:
+            return y, rows, imps, warns, STALLED
+    return y, rows, imps, warns, MORE if y[0] < t_end else DONE
+
+
+# --------------------------------------------------------------------------- Python side
+
+
+def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
+    """The parameter vector (N_PARAMS,) of an active model and its numerics (layout ``P_*``)."""
+    p = np.zeros(N_PARAMS)
+    vib, law = model.vibration, model.law
+    p[P_AXES:P_AXES + 3] = model.axes
+    p[P_MASS] = model.mass
+    p[P_INERTIA:P_INERTIA + 3] = model.inertia
+    p[P_G:P_G + 3] = model.g_k
+    p[P_AMP], p[P_OMEGA], p[P_PHASE] = vib.amplitude, vib.omega, vib.phase
+    p[P_DIR:P_DIR + 3] = vib.direction
+    p[P_LAW] = LAW_PRINTED if law.kind == "printed" else LAW_COULOMB
+    p[P_EN], p[P_ET], p[P_MU_IMPACT], p[P_E], p[P_LAM] = law.e_n, law.e_t, law.mu, law.e, law.lam
+    p[P_CHECK] = float(law.check_printed)
+    p[P_MU], p[P_ROTATION] = model.mu, float(model.effects.rotation)
+    p[P_TOL], p[P_SCAN], p[P_REST] = num.tolerance, num.scan_step, num.rest_velocity
+    p[P_MAX_IMPACTS], p[P_SAMPLE], p[P_PERIOD] = num.max_impacts, num.sample_interval, model.period
+    return p
+
+
+def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:
+    """The text of a warning code, as the Python loop words it."""
+    if code == W_MAX_IMPACTS:
+        return f"stopped at t = {a:.6g} s after numerics.max_impacts = {num.max_impacts} impacts"
+    if code == W_CHATTER:
+        return f"{ZENO_IMPACTS} impacts within {ZENO_INTERVAL:g} periods: chattering summed into sliding"
+    if code in (W_PRINTED_ENERGY, W_PRINTED_PULLS):
+        reason = "creates kinetic energy" if code == W_PRINTED_ENERGY else "pulls the grain into the plane (T_z < 0)"
+        return f"printed impact law: no admissible root; the one used {reason}"
+    if code == W_PRINTED_RESIDUAL:
+        return f"printed impact law: no solution of (19) (relative residual {a:.3g})"
+    return f"impact law '{model.law.kind}' created energy: {a:.6g} J -> {b:.6g} J"
+
+
+def _flag(x: float):
+    return None if x < 0 else bool(x)
+
+
+def _impact_dict(row: list) -> dict:
+    """One line of the impact log from a compiled impact row (the keys of ``motion.impact_record``)."""
+    return {"t": row[0], "r": row[1:4], "v_before": row[4:7], "v_after": row[7:10], "w_before": row[10:13],
+            "w_after": row[13:16], "impulse": row[16:19], "u_before": row[19:22], "u_after": row[22:25],
+            "ke_before": row[25], "ke_after": row[26], "admissible": bool(row[27]),
+            "printed_admissible": _flag(row[28]), "printed_creates_energy": _flag(row[29]),
+            "converged": bool(row[30])}
+
+
+def _state(y: np.ndarray) -> motion.State:
+    return motion.State(float(y[0]), y[1:4].copy(), y[4:7].copy(), y[7:11].copy(), y[11:14].copy())
+
+
+class _Budget(motion._Budget):
+    """The Python loop's energy budget, its energies from the compiled kernel."""
+
+    def __init__(self, model: motion.Model, p: np.ndarray, y: np.ndarray):
+        self.p = p
+        super().__init__(model, y)
+
+    def energy(self, y) -> float:
+        return float(_energy(self.p, y))
+
+
+def _raise(status: int, t: float, regime: int) -> None:
+    """The Python loop's errors for the compiled loop's failure codes."""
+    if status == STALLED:
+        raise SymmechError(f"grain: the simulation stopped advancing at t = {t:.9g} s ({MAX_IDLE_STEPS} regime "
+                           f"changes without advancing time, {motion.REGIMES[regime]} regime)")
+    if status == SLIDE_STALLED:
+        raise SymmechError(f"sliding stagnates at t = {t:.9g} s: {MAX_STALLED_EVENTS} regime changes "
+                           "without advancing time")
+    if status == SLIDE_RHS:
+        raise SymmechError(f"sliding integration stagnates at t = {t:.9g} s (more than "
+                           f"{sliding.MAX_RHS_PER_PHASE} evaluations in one chunk)")
+    what = "sliding integration" if status == SLIDE_FAIL else "torque-free rotation"
+    raise SymmechError(f"{what} failed at t = {t:.9g} s: required step size is less than spacing between numbers")
+
+
+def _python_slip(model: motion.Model, num: motion.Numerics, y: np.ndarray, t_end: float, rows: np.ndarray,
+                 carry: np.ndarray, progress):
+    """The stiff part of a sliding phase (status ``STIFF_SLIP`` at state y (14,)) by
+    :func:`symmech.grain.sliding.slide` (Radau) with the phase's velocity scale, up to where it would go on
+    with DOP853 (the compiled loop resumes the phase there) or the phase's end; booked in rows and carry as
+    ``_slide`` would; returns (y there, rows)."""
+    Q = _rot(y[7:11])
+    body = sliding.Body(model.axes, model.mass, tuple(model.inertia), model.effects.rotation)
+    t0 = float(y[0])
+    res = sliding.slide(model.sliding, body, t0, y[1:3], y[4:6], y[7:11], Q @ y[11:14], t_end,
+                        motion._Recorder(num.sample_interval).times(t0, t_end), num.scan_step, num.tolerance,
+                        progress, v_scale=float(carry[C_V_SCALE]), implicit=True, until_explicit=True)
+    for t, r, v, q, w in zip(*res.samples):
+        rows = _record(rows, carry, _slide_state(t, np.concatenate([r, v, w, q, [0.0, 0.0]]), y[3]), SLIDING)
+    end = _slide_state(res.t, np.concatenate([res.r, res.v, res.w, res.q, [0.0, 0.0]]), y[3])
+    if not res.lifted and res.t < t_end:  # no longer stiff: the compiled loop goes on with this phase
+        carry[C_RESUME] = 1.0
+    else:
+        rows = _record(rows, carry, end, SLIDING)
+    carry[C_WORK] += res.work
+    carry[C_SLIDE_LOSS] += res.dissipated
+    carry[C_T_SLIDING] += res.t - t0
+    if res.lifted:
+        carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0
+    return end, rows
+
+
+def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
+             on_step=None) -> motion.Motion:
+    """Accurate mode compiled: the contract and the result structure of :func:`symmech.grain.motion.simulate`.
+
+    ``on_step(t_now)`` is called between batches of ``PHASES_PER_CALL`` regime phases, at most every 0.2 s
+    of wall time, and once at the end. A stiff slip (``STIFF_SLIP``) is handed to the Python sliding
+    integrator for the rest of its phase; ``extra["engine"]`` counts those phases.
+    """
+    model = model.active()
+    progress = motion.Progress(on_step)
+    p = pack(model, num)
+    w0 = np.array(start.w, float) if model.effects.rotation else np.zeros(3)
+    q0 = np.asarray(start.q, float) / np.linalg.norm(start.q)
+    st = motion.State(start.t, np.array(start.r, float), np.array(start.v, float), q0, w0)
+    y = np.concatenate([[st.t], st.r, st.v, st.q, st.w])
+    budget = _Budget(model, p, y)
+    rows = np.empty((int(max(t_end - st.t, 0.0) / num.sample_interval) + 64, 15))
+    imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), np.zeros(N_CARRY)
+    y, rows = _start(p, y, rows, carry)
+    status, handed = MORE, 0
+    while status in (MORE, STIFF_SLIP):
+        if status == STIFF_SLIP:
+            y, rows = _python_slip(model, num, y, t_end, rows, carry, progress)
+            handed += 1
+        progress(y[0])
+        y, rows, imps, warns, status = run_phases(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
+    if status != DONE:
+        _raise(status, float(y[0]), int(carry[C_REGIME]))
+    progress(y[0], final=True)
+    rows = _record(rows, carry, y, int(carry[C_REGIME]))
+    trajectory = rows[:int(carry[C_ROWS])]
+    budget.work, budget.impacts = carry[C_WORK], carry[C_IMPACTS]
+    budget.landings, budget.sliding = carry[C_LAND_LOSS], carry[C_SLIDE_LOSS]
+    warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_NWARN])]]
+    if carry[C_ROCKING]:
+        warnings.append(motion.rocking_warning(int(carry[C_ROCKING])))
+    extra = {"landings": int(carry[C_LANDINGS]), "rocking_contacts": int(carry[C_ROCKING]),
+             "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE),
+             "engine": f"compiled; python for {handed} stiff slip part(s)" if handed else "compiled"}
+    time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
+    impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])].tolist()]
+    final = _state(y)
+    return motion.Motion(trajectory, impacts, time_in, list(dict.fromkeys(warnings)), start, final, extra)
+
+
+def cold() -> bool:
+    """Whether the next run compiles the loop: no machine code for it cached for this source yet."""
+    index = getattr(getattr(run_phases, "_cache", None), "_cache_file", None)  # numba's cache (private API)
+    return index is not None and not index._load_index()
+
+
+def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float,
+                  workers: int | None = None) -> list:
+    """Grains with their own models and start states, each as :func:`simulate`, on ``workers`` threads
+    (default: one per core); the compiled loop releases the GIL, so the grains run in parallel."""
+    with ThreadPoolExecutor(workers or os.cpu_count() or 1) as pool:
+        return list(pool.map(lambda ms: simulate(ms[0], num, ms[1], t_end), zip(models, starts)))

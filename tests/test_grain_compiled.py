@@ -1,0 +1,193 @@
+"""The compiled accurate-mode grain (symmech.grain.compiled) against the Python loop (the reference) and
+closed forms: same events (impact times, impulses, regime sequence), same final state, same log.
+
+The first run on a machine compiles the loop (about a minute of CPU; cached beside the module after that).
+"""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from grain_sliding_reference import conveyor, on_plane, sphere
+from test_grain_hard_cases import CROP, WEED, sweep_grain
+from symmech.core import pipeline
+from symmech.core.scene import SceneError
+from symmech.grain import compiled, contact, flight, motion, motion_scene
+from symmech.grain.coulomb_law import ImpactLaw
+
+G = 9.81
+
+
+def default_scene(tmp_path, duration, **replace_text):
+    text = open("scenes/grain_default.toml").read().replace("duration = 2.0", f"duration = {duration}")
+    for old, new in replace_text.items():
+        text = text.replace(old, new)
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return pipeline.load(path).setup
+
+
+def both(model, num, start, t_end):
+    return compiled.simulate(model, num, start, t_end), motion.simulate(model, num, start, t_end)
+
+
+def assert_same(c, p, t_tol, state_rtol):
+    """Same event log and regimes; impact times to t_tol [s]; impulses, velocities and final state to state_rtol."""
+    assert len(c.impacts) == len(p.impacts)
+    assert c.extra["landings"] == p.extra["landings"]
+    assert c.warnings == p.warnings
+    assert c.trajectory.shape == p.trajectory.shape
+    assert np.array_equal(c.trajectory[:, -1], p.trajectory[:, -1])  # the regime of every row
+    assert np.max(np.abs(c.trajectory[:, 0] - p.trajectory[:, 0]), initial=0.0) <= t_tol
+    # Impulses and velocities to state_rtol of their largest value in the run (a bounce at the end of a
+    # chattering sequence is 1e-6 of the first; its relative error is that much larger).
+    scales = {k: max((np.abs(i[k]).max() for i in p.impacts), default=1.0) for k in ("impulse", "v_after", "w_after")}
+    for a, b in zip(c.impacts, p.impacts):
+        assert abs(a["t"] - b["t"]) <= t_tol
+        for key, scale in scales.items():
+            assert np.abs(np.subtract(a[key], b[key])).max() <= state_rtol * scale
+        for key in ("admissible", "printed_admissible", "printed_creates_energy", "converged"):
+            assert a[key] == b[key]
+    for key in ("r", "v", "q", "w"):
+        x, y = getattr(c.final, key), getattr(p.final, key)
+        assert np.linalg.norm(x - y) <= state_rtol * max(np.linalg.norm(y), 1e-3)
+    assert c.final.t == pytest.approx(p.final.t, abs=t_tol)
+    for k in p.time_in:
+        assert c.time_in[k] == pytest.approx(p.time_in[k], abs=t_tol)
+
+
+def test_ellipsoid_default_scene_matches_the_python_loop(tmp_path):
+    """Default scene, 0.4 s: ~100 impacts, landings, sliding with spin, lift-offs, the printed law's verdict
+    at every impact. Both loops integrate with DOP853 and locate roots with Brent: impact times agree to
+    1e-11 s (measured 1.2e-13 s over 143 impacts in 0.6 s) and the state to 1e-7 relative."""
+    sc = default_scene(tmp_path, 0.4)
+    c, p = both(sc.model, sc.numerics, sc.start, 0.4)
+    assert len(p.impacts) > 80 and p.extra["landings"] >= 5 and p.time_in["sliding"] > 0.05
+    assert_same(c, p, 1e-11, 1e-7)
+    bc, bp = c.extra["energy_budget"], p.extra["energy_budget"]
+    assert bc["relative_residual"] < 1e-8
+    for key in ("input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J", "lost_in_sliding_J"):
+        assert bc[key] == pytest.approx(bp[key], rel=1e-6, abs=1e-15)
+
+
+def test_ellipsoid_printed_law_matches_the_python_loop(tmp_path):
+    """The printed law solved exactly at every impact (companion-matrix roots), 0.2 s."""
+    sc = default_scene(tmp_path, 0.2)
+    model = replace(sc.model, law=ImpactLaw("printed", e=0.4, lam=0.3))
+    c, p = both(model, sc.numerics, sc.start, 0.2)
+    assert len(p.impacts) > 20
+    assert_same(c, p, 1e-11, 1e-7)
+
+
+def test_sphere_drop_on_a_still_plate_hits_at_the_closed_form_times():
+    """Point-mass sphere dropped from h with e = 0.5: t_1 = sqrt(2h/g), t_(k+1) = t_k + 2 e^k v_1 / g,
+    impulse m (1 + e) e^(k-1) v_1; independent of the Python loop."""
+    e, h, radius, m = 0.5, 0.02, 1e-3, 1e-6
+    law = ImpactLaw("coulomb", e_n=e, e_t=0.0, mu=0.0, check_printed=False)
+    model = replace(sphere(law=law, rotation=False), mass=m)
+    start = on_plane(z=radius + h)
+    num = motion.Numerics(tolerance=1e-12, scan_step=1e-3, sample_interval=0.01, rest_velocity=1e-3)
+    res = compiled.simulate(model, num, start, 0.6)
+    v1 = math.sqrt(2 * G * h)
+    t = [math.sqrt(2 * h / G)]
+    for k in range(1, 8):
+        t.append(t[-1] + 2 * e**k * v1 / G)
+    got = [i["t"] for i in res.impacts[:8]]
+    assert np.max(np.abs(np.subtract(got, t))) < 1e-12
+    for k, i in enumerate(res.impacts[:8]):
+        assert i["impulse"][2] == pytest.approx(m * (1 + e) * e**k * v1, rel=1e-9)
+
+
+def test_rolling_sphere_conveyor_matches_the_python_loop():
+    """Sphere with spin on the 30 degree conveyor (lift-off every period, sliding, stick and slip), 4 periods."""
+    model = conveyor(0.7, rotation=True)
+    T = model.period
+    num = motion.Numerics(tolerance=1e-10, scan_step=T / 40, sample_interval=T / 20)
+    start = on_plane(v=(0.03, -0.02, 0.0), w=(0.0, 0.0, 5.0))
+    c, p = both(model, num, start, 4 * T)
+    assert p.extra["landings"] >= 3 and p.time_in["sliding"] > 0.5 * T
+    assert_same(c, p, 1e-11, 1e-7)
+
+
+def test_batch_on_threads_equals_one_by_one(tmp_path):
+    """simulate_many (threads; the loop releases the GIL) gives each grain bit for bit its serial result."""
+    sc = default_scene(tmp_path, 0.08)
+    starts = [replace(sc.start, v=np.array([0.01 * k, 0.0, 0.0])) for k in range(4)]
+    models = [replace(sc.model, mu=0.3 + 0.1 * k) for k in range(4)]
+    many = compiled.simulate_many(models, sc.numerics, starts, 0.08, workers=2)
+    assert len({len(res.impacts) for res in many}) > 1  # the grains differ
+    for res, model, start in zip(many, models, starts):
+        one = compiled.simulate(model, sc.numerics, start, 0.08)
+        assert np.array_equal(res.trajectory, one.trajectory)
+        assert [i["t"] for i in res.impacts] == [i["t"] for i in one.impacts]
+
+
+def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):
+    sc = default_scene(tmp_path, 0.05)
+    assert sc.numerics.engine == "compiled"
+    python = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "python"'})
+    assert python.numerics.engine == "python"
+    seen = []
+    c = motion_scene.simulate(sc, on_step=seen.append)
+    p = motion_scene.simulate(python)
+    assert seen[-1] == pytest.approx(0.05) and len(c.impacts) == len(p.impacts) >= 3
+    with pytest.raises(SceneError, match="numerics.engine"):
+        default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "fortran"'})
+
+
+@pytest.mark.parametrize("fields, amplitude, frequency, t_end", [
+    (CROP, 0.6e-3, 18.0, 0.12), (WEED, 1.0e-3, 18.0, 0.3), (CROP, 1.0e-3, 32.0, 0.04)])
+def test_hard_sweep_grains_match_the_python_loop(fields, amplitude, frequency, t_end):
+    """The grains of tests/test_grain_hard_cases.py: an ellipsoid slipping from rest while turning about the
+    normal (crop, weed: stiff slip, its phases handed to the Python sliding integrator) and a tumbling one held
+    on the plane by its spin (crop at 32 Hz: one rocking contact, landed and flown on in the compiled loop;
+    it also slides and hands over)."""
+    sc = sweep_grain(fields, amplitude, frequency, t_end)
+    c, p = both(sc.model, sc.numerics, sc.start, t_end)
+    assert_same(c, p, 1e-11, 1e-7)
+    assert c.extra["rocking_contacts"] == p.extra["rocking_contacts"] == (1 if frequency == 32.0 else 0)
+    handed = int(c.extra["engine"].split("python for ")[1].split()[0]) if "python" in c.extra["engine"] else 0
+    assert handed > 0  # every slip from rest of these tilted grains turns stiff at once
+    bc, bp = c.extra["energy_budget"], p.extra["energy_budget"]
+    for key in ("input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J", "lost_in_sliding_J"):
+        assert bc[key] == pytest.approx(bp[key], rel=1e-6, abs=1e-15)
+
+
+def test_slip_onset_direction_of_a_turning_ellipsoid():
+    """Slip from rest starts against the stick force, along B^-1 (f + c) (sliding._Contact.slip_direction),
+    not along f + c: the compiled settle impulse, checked on the crop grain at its first slip onset."""
+    sc = sweep_grain(CROP, 0.6e-3, 18.0, 0.12)
+    m = sc.model
+    Q0 = flight.rotation_matrix(sc.start.q)
+    p = compiled.pack(m, sc.numerics)
+    sp = compiled._slide_params(p, Q0, compiled._offset(p, Q0), m.mu)
+    sp[compiled.S_VSTOP] = 1e-11
+    rho = contact.contact_offset(m.axes, Q0)
+    k = m.mass / float(Q0[2] @ (m.inertia * Q0[2]))
+    B = np.eye(2) + k * np.outer([-rho[1], rho[0]], [-rho[1], rho[0]])  # E + (m / I_zz) rho_perp rho_perp^T
+    t = 0.013
+    z = np.zeros(13)
+    z[7:11] = sc.start.q  # at rest, no spin: c = 0
+    stick, z1 = compiled._settle(t, z, sp, False)
+    s = compiled._geometry(z1, sp)[1]
+    f = np.asarray(m.g_k[:2]) - compiled._slide_surface(sp, t)[1][:2]
+    d = np.linalg.solve(B, f)
+    assert not stick and np.linalg.norm(s) == pytest.approx(2e-11, rel=1e-9)
+    np.testing.assert_allclose(s / np.linalg.norm(s), d / np.linalg.norm(d), atol=1e-9)
+    # f + c is another direction (1.9e-3 rad away here), far outside the 1e-9 above
+    assert abs(d[0] * f[1] - d[1] * f[0]) > 1e-3 * np.linalg.norm(d) * np.linalg.norm(f)
+
+
+def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
+    """A run that will compile the engine says so, and its estimate carries the one-off compile time."""
+    sc = default_scene(tmp_path, 0.05)
+    compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
+    assert not compiled.cold()  # compiled (or loaded) in this process: cached for this source
+    monkeypatch.setattr(compiled, "cold", lambda: False)
+    warm = motion_scene.estimate(sc)
+    monkeypatch.setattr(compiled, "cold", lambda: True)
+    cold = motion_scene.estimate(sc)
+    assert warm.once == 0.0 and "compiling" not in warm.what
+    assert cold.once == compiled.COLD_COMPILE_SECONDS == pytest.approx(cold.seconds - warm.seconds, rel=1e-12)
+    assert "compiling the grain engine once, ~45 s; later runs start in ~1 s" in cold.what
