@@ -38,6 +38,9 @@ UNIT_TOLERANCE = 1e-6  # |d| - 1 of a given vibration direction
 SECONDS_PER_IMPACT = 6e-3
 SECONDS_PER_SIMULATED_SECOND = 0.8
 SECONDS_PER_SCAN = 6e-5
+# The compiled engine's cost as a fraction of the Python loop's: 35x faster measured on the default scene
+# (benchmarks/README.md); a conservative 10x, as stiff slips run on the Python Radau integrator.
+COMPILED_SPEEDUP = 10.0
 SECONDS_PER_PAPER_STEP = 1e-4
 SECONDS_PER_PAPER_NODE_STEP = 5e-9
 STAGNANT_PHASES = 1000  # consecutive regime phases that advance time by less than the event resolution
@@ -278,7 +281,7 @@ def _sequence(v0: float, e: float, g: float, v_rest: float, span: float) -> floa
 
 def estimate(sc: GrainScene) -> registry.Estimate:
     """Expected wall time: per fixed step in paper mode; per impact, simulated second and scan step in
-    accurate mode."""
+    accurate mode (the Python loop's figures, divided by :data:`COMPILED_SPEEDUP` on the compiled engine)."""
     num = sc.numerics
     if num.mode == "paper":
         steps = sc.duration / num.dt
@@ -291,6 +294,7 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     if num.engine == "compiled":
         from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
+        seconds /= COMPILED_SPEEDUP
         if compiled.cold():
             return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; compiling the grain engine "
                                      f"once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
