@@ -11,21 +11,12 @@ import pytest
 
 from grain_sliding_reference import conveyor, on_plane, sphere
 from test_grain_hard_cases import CROP, WEED, sweep_grain
-from symmech.core import pipeline
+from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
 from symmech.grain import compiled, contact, flight, motion, motion_scene
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
-
-
-def default_scene(tmp_path, duration, **replace_text):
-    text = open("scenes/grain_default.toml").read().replace("duration = 2.0", f"duration = {duration}")
-    for old, new in replace_text.items():
-        text = text.replace(old, new)
-    path = tmp_path / "scene.toml"
-    path.write_text(text)
-    return pipeline.load(path).setup
 
 
 def both(model, num, start, t_end):
