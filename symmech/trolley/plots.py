@@ -56,19 +56,26 @@ def _reactions(setup, res: dict):
 
 def _overloads(setup, res: dict):
     """Overloads n (body axes, in units of g) of every case against the scene's comfort envelope band."""
+    curves = {f"case {case}": r["overload"] for case, r in res.items()}
+    return _envelope_panels(setup.t, curves, setup.comfort, "Overloads against the comfort envelope (red: outside)")
+
+
+def _envelope_panels(t, curves: dict, comfort: dict, title: str):
+    """One panel per body axis: each curve's overload (label -> (n, 3) [g]) over the comfort band, with the
+    samples outside the band marked red."""
     fig, axes = plotting.figure(3, 1, height=2.7, sharex=True)
-    for i, (ax, (axis, (lo, hi))) in enumerate(zip(axes[:, 0], setup.comfort.items())):
+    for k, (ax, (axis, (lo, hi))) in enumerate(zip(axes[:, 0], comfort.items())):
         ax.axhspan(lo, hi, color="tab:green", alpha=0.12, label=f"comfort envelope [{lo:g}, {hi:g}] g")
-        for case, r in res.items():
-            n = r["overload"][:, i]
-            ax.plot(setup.t, n, lw=1, label=f"case {case}")
+        for label, overload in curves.items():
+            n = overload[:, k]
+            ax.plot(t, n, lw=1, label=label)
             outside = (n < lo) | (n > hi)
             if outside.any():
-                ax.plot(setup.t[outside], n[outside], ls="none", marker=".", ms=2, alpha=0.5, color="tab:red")
+                ax.plot(t[outside], n[outside], ls="none", marker=".", ms=2, alpha=0.5, color="tab:red")
         ax.set_ylabel(plotting.label(f"overload n along {axis}", "g"))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
-    axes[0, 0].set_title("Overloads against the comfort envelope (red: outside)")
+    axes[0, 0].set_title(title)
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
     return fig
 
@@ -137,17 +144,8 @@ def _deflections(setup, r):
 
 
 def _point_overloads(setup, r, comfort: dict):
-    fig, axes = plotting.figure(3, 1, height=2.7, sharex=True)
-    for k, (ax, (axis, (lo, hi))) in enumerate(zip(axes[:, 0], comfort.items())):
-        ax.axhspan(lo, hi, color="tab:green", alpha=0.12, label=f"comfort envelope [{lo:g}, {hi:g}] g")
-        for j, name in enumerate(setup.names):
-            ax.plot(r["t"], r["probe_overload"][:, j, k], lw=1, label=name)
-        ax.set_ylabel(plotting.label(f"overload n along {axis}", "g"))
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper right")
-    axes[0, 0].set_title("Overloads at the report points (elastic model)")
-    axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
-    return fig
+    curves = {name: r["probe_overload"][:, j] for j, name in enumerate(setup.names)}
+    return _envelope_panels(r["t"], curves, comfort, "Overloads at the report points (elastic model, red: outside)")
 
 
 def campbell(modes: dict):
