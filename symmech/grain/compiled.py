@@ -430,11 +430,17 @@ def _translate(p, ctx, t):
 
 
 @jit
+def _still_gap(p, ctx, t):
+    """The gap [m] of a flight without rotation: the support height is the one at its start."""
+    return _translate(p, ctx, t)[0, 2] - ctx[28]
+
+
+@jit
 def _h(what, t, ctx, steps, nsteps, p):
     """GAP: height [m] of the lowest point in flight; NORMAL: n(t); EVENT: sliding event function."""
     if what == GAP:
-        if ctx[18] == 0.0:  # no rotation in this flight: the support height is the one at its start
-            return _translate(p, ctx, t)[0, 2] - ctx[28]
+        if ctx[18] == 0.0:
+            return _still_gap(p, ctx, t)
         q, _ = _orient(t, ctx, steps, nsteps)
         return _translate(p, ctx, t)[0, 2] - _support(p, _rot(q))
     if what == NORMAL:
@@ -448,6 +454,8 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
     start = t0
     hs = np.empty(SCAN_WINDOW + 1)
     ts = np.empty(SCAN_WINDOW + 1)
+    # Without rotation the scan skips _extend (nothing to do) and calls the gap directly: 35 % of a sphere's scan.
+    rotating, still = what == GAP and ctx[18] != 0.0, what == GAP and ctx[18] == 0.0
     while True:
         n = 0
         for i in range(SCAN_WINDOW + 1):
@@ -457,9 +465,9 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
                 n += 1
         stop = n
         for i in range(n):
-            if what == GAP:  # the Python scan asks for the whole window at once
+            if rotating:  # the Python scan asks for the whole window at once
                 steps, nsteps = _extend(ts[i], ts[n - 1], ctx, steps, nsteps, p)
-            hs[i] = _h(what, ts[i], ctx, steps, nsteps, p)
+            hs[i] = _still_gap(p, ctx, ts[i]) if still else _h(what, ts[i], ctx, steps, nsteps, p)
             if i > 0 and hs[i] <= 0.0:
                 stop = i
                 break
@@ -1279,26 +1287,28 @@ def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
     return y, rows, imps, warns, MORE if y[0] < t_end else DONE
 
 
+@jit
+def run(p, y, t_end, rows, imps, warns, carry, max_phases):
+    """The entry from Python: ``_start`` on a fresh carry (no rows yet), ``run_phases``, and the last row
+    once done, in one call; returns (y, rows, imps, warns, status)."""
+    if carry[C_ROWS] == 0:
+        y, rows = _start(p, y, rows, carry)
+    y, rows, imps, warns, status = run_phases(p, y, t_end, rows, imps, warns, carry, max_phases)
+    if status == DONE:
+        rows = _record(rows, carry, y, int(carry[C_REGIME]))
+    return y, rows, imps, warns, status
+
+
 # --------------------------------------------------------------------------- Python side
 
 
 def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
-    """The parameter vector (N_PARAMS,) of an active model and its numerics (layout ``P_*``)."""
-    p = np.zeros(N_PARAMS)
+    """The parameter vector (N_PARAMS,) of an active model and its numerics (layout ``P_*``, in this order)."""
     vib, law = model.vibration, model.law
-    p[P_AXES:P_AXES + 3] = model.axes
-    p[P_MASS] = model.mass
-    p[P_INERTIA:P_INERTIA + 3] = model.inertia
-    p[P_G:P_G + 3] = model.g_k
-    p[P_AMP], p[P_OMEGA], p[P_PHASE] = vib.amplitude, vib.omega, vib.phase
-    p[P_DIR:P_DIR + 3] = vib.direction
-    p[P_LAW] = LAW_PRINTED if law.kind == "printed" else LAW_COULOMB
-    p[P_EN], p[P_ET], p[P_MU_IMPACT], p[P_E], p[P_LAM] = law.e_n, law.e_t, law.mu, law.e, law.lam
-    p[P_CHECK] = float(law.check_printed)
-    p[P_MU], p[P_ROTATION] = model.mu, float(model.effects.rotation)
-    p[P_TOL], p[P_SCAN], p[P_REST] = num.tolerance, num.scan_step, num.rest_velocity
-    p[P_MAX_IMPACTS], p[P_SAMPLE], p[P_PERIOD] = num.max_impacts, num.sample_interval, model.period
-    return p
+    return np.array([*model.axes, model.mass, *model.inertia, *model.g_k, vib.amplitude, vib.omega, vib.phase,
+                     *vib.direction, LAW_PRINTED if law.kind == "printed" else LAW_COULOMB, law.e_n, law.e_t,
+                     law.mu, law.e, law.lam, law.check_printed, model.mu, model.effects.rotation, num.tolerance,
+                     num.scan_step, num.rest_velocity, num.max_impacts, num.sample_interval, model.period], float)
 
 
 def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:
@@ -1315,21 +1325,17 @@ def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Num
     return f"impact law '{model.law.kind}' created energy: {a:.6g} J -> {b:.6g} J"
 
 
-def _flag(x: float):
-    return None if x < 0 else bool(x)
+FLAGS = (None, False, True)  # a flag column + 1: not checked, no, yes
 
 
-def _impact_dict(row: list) -> dict:
-    """One line of the impact log from a compiled impact row (the keys of ``motion.impact_record``)."""
-    return {"t": row[0], "r": row[1:4], "v_before": row[4:7], "v_after": row[7:10], "w_before": row[10:13],
-            "w_after": row[13:16], "impulse": row[16:19], "u_before": row[19:22], "u_after": row[22:25],
-            "ke_before": row[25], "ke_after": row[26], "admissible": bool(row[27]),
-            "printed_admissible": _flag(row[28]), "printed_creates_energy": _flag(row[29]),
-            "converged": bool(row[30])}
-
-
-def _state(y: np.ndarray) -> motion.State:
-    return motion.State(float(y[0]), y[1:4].copy(), y[4:7].copy(), y[7:11].copy(), y[11:14].copy())
+def _impact_dicts(imps: np.ndarray) -> list:
+    """The impact log (the keys of ``motion.impact_record``) from the compiled impact rows (n, IMPACT_WIDTH)."""
+    flags = (imps[:, 27:31] + 1.0).astype(INT).tolist()
+    return [{"t": row[0], "r": row[1:4], "v_before": row[4:7], "v_after": row[7:10], "w_before": row[10:13],
+             "w_after": row[13:16], "impulse": row[16:19], "u_before": row[19:22], "u_after": row[22:25],
+             "ke_before": row[25], "ke_after": row[26], "admissible": FLAGS[admissible],
+             "printed_admissible": FLAGS[printed], "printed_creates_energy": FLAGS[gain], "converged": FLAGS[conv]}
+            for row, (admissible, printed, gain, conv) in zip(imps.tolist(), flags)]
 
 
 class _Budget(motion._Budget):
@@ -1396,26 +1402,22 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     model = model.active()
     progress = motion.Progress(on_step)
     p = pack(model, num)
-    w0 = np.array(start.w, float) if model.effects.rotation else np.zeros(3)
-    q0 = np.asarray(start.q, float) / np.linalg.norm(start.q)
-    st = motion.State(start.t, np.array(start.r, float), np.array(start.v, float), q0, w0)
-    y = np.concatenate([[st.t], st.r, st.v, st.q, st.w])
+    q = np.asarray(start.q, float)
+    w = start.w if model.effects.rotation else (0.0, 0.0, 0.0)
+    y = np.array([start.t, *start.r, *start.v, *(q / np.linalg.norm(q)), *w], float)
     budget = _Budget(model, p, y)
-    rows = np.empty((int(max(t_end - st.t, 0.0) / num.sample_interval) + 64, 15))
+    rows = np.empty((int(max(t_end - start.t, 0.0) / num.sample_interval) + 64, 15))
     imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), np.zeros(N_CARRY)
-    y, rows = _start(p, y, rows, carry)
     status, handed = MORE, 0
     while status in (MORE, STIFF_SLIP):
         if status == STIFF_SLIP:
             y, rows = _python_slip(model, num, y, t_end, rows, carry, progress)
             handed += 1
         progress(y[0])
-        y, rows, imps, warns, status = run_phases(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
+        y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
         _raise(status, float(y[0]), int(carry[C_REGIME]))
     progress(y[0], final=True)
-    rows = _record(rows, carry, y, int(carry[C_REGIME]))
-    trajectory = rows[:int(carry[C_ROWS])]
     budget.work, budget.impacts = carry[C_WORK], carry[C_IMPACTS]
     budget.landings, budget.sliding = carry[C_LAND_LOSS], carry[C_SLIDE_LOSS]
     warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_NWARN])]]
@@ -1425,14 +1427,14 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
              "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE),
              "engine": f"compiled; python for {handed} stiff slip part(s)" if handed else "compiled"}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
-    impacts = [_impact_dict(row) for row in imps[:int(carry[C_NIMP])].tolist()]
-    final = _state(y)
-    return motion.Motion(trajectory, impacts, time_in, list(dict.fromkeys(warnings)), start, final, extra)
+    final = motion.State(float(y[0]), y[1:4], y[4:7], y[7:11], y[11:14])  # views of y: it is this result's
+    return motion.Motion(rows[:int(carry[C_ROWS])], _impact_dicts(imps[:int(carry[C_NIMP])]), time_in,
+                         list(dict.fromkeys(warnings)), start, final, extra)
 
 
 def cold() -> bool:
     """Whether the next run compiles the loop: no machine code for it cached for this source yet."""
-    index = getattr(getattr(run_phases, "_cache", None), "_cache_file", None)  # numba's cache (private API)
+    index = getattr(getattr(run, "_cache", None), "_cache_file", None)  # numba's cache (private API)
     return index is not None and not index._load_index()
 
 

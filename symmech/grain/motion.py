@@ -83,6 +83,8 @@ class Model:
 
     def active(self) -> "Model":
         """The model the simulation runs: parameters of switched-off effects zeroed (no code runs for them)."""
+        if self.effects.vibration and self.effects.friction:
+            return self  # nothing to zero (a copy costs as much as the rest of a short compiled run's set-up)
         vib = self.vibration if self.effects.vibration else replace(self.vibration, amplitude=0.0)
         return replace(self, vibration=vib, mu=self.mu if self.effects.friction else 0.0)
 
