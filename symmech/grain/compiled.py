@@ -417,22 +417,32 @@ def _orient(t, ctx, tab, ntab):
     return y[:4], y[4:7]
 
 
+@numba.njit(cache=True, error_model="numpy", nogil=True, inline="always")  # inlined: no call in the scan loop
+def _translate_into(p, ctx, t, out):
+    """Centre position and velocity rows out[0] (2, 3) at t of the flight from ctx = (t0, r0, v0, ...)."""
+    tau = t - ctx[0]
+    if p[P_AMP] == 0.0:
+        gm._flight_translation_rigid_0(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6],
+                                       p[P_G], p[P_G + 1], p[P_G + 2], 0.0, tau, out, 0)
+    else:
+        gm._flight_translation_0(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_G], p[P_G + 1], p[P_G + 2],
+                                 p[P_AMP], p[P_OMEGA], ctx[17], p[P_DIR], p[P_DIR + 1], p[P_DIR + 2], 0.0, tau, out, 0)
+
+
 @jit
 def _translate(p, ctx, t):
     """Centre position and velocity rows (2, 3) at t of the flight from ctx = (t0, r0, v0, ...)."""
-    tau = t - ctx[0]
-    if p[P_AMP] == 0.0:
-        return gm.flight_translation_rigid_scalar(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6],
-                                                  p[P_G], p[P_G + 1], p[P_G + 2], 0.0, tau)
-    return gm.flight_translation_scalar(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_G], p[P_G + 1],
-                                        p[P_G + 2], p[P_AMP], p[P_OMEGA], ctx[17], p[P_DIR], p[P_DIR + 1],
-                                        p[P_DIR + 2], 0.0, tau)
+    out = np.empty((1, 2, 3))
+    _translate_into(p, ctx, t, out)
+    return out[0]
 
 
 @jit
-def _still_gap(p, ctx, t):
-    """The gap [m] of a flight without rotation: the support height is the one at its start."""
-    return _translate(p, ctx, t)[0, 2] - ctx[28]
+def _still_gap(p, ctx, t, out):
+    """The gap [m] of a flight without rotation (the support height is the one at its start); out (1, 2, 3)
+    scratch: the scan reuses one, which halves the time of a sphere's scan."""
+    _translate_into(p, ctx, t, out)
+    return out[0, 0, 2] - ctx[28]
 
 
 @jit
@@ -440,7 +450,7 @@ def _h(what, t, ctx, steps, nsteps, p):
     """GAP: height [m] of the lowest point in flight; NORMAL: n(t); EVENT: sliding event function."""
     if what == GAP:
         if ctx[18] == 0.0:
-            return _still_gap(p, ctx, t)
+            return _still_gap(p, ctx, t, np.empty((1, 2, 3)))
         q, _ = _orient(t, ctx, steps, nsteps)
         return _translate(p, ctx, t)[0, 2] - _support(p, _rot(q))
     if what == NORMAL:
@@ -454,7 +464,8 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
     start = t0
     hs = np.empty(SCAN_WINDOW + 1)
     ts = np.empty(SCAN_WINDOW + 1)
-    # Without rotation the scan skips _extend (nothing to do) and calls the gap directly: 35 % of a sphere's scan.
+    out = np.empty((1, 2, 3))
+    # Without rotation the scan skips _extend (nothing to do) and calls the gap directly: 2/3 of a sphere's scan.
     rotating, still = what == GAP and ctx[18] != 0.0, what == GAP and ctx[18] == 0.0
     while True:
         n = 0
@@ -467,7 +478,7 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
         for i in range(n):
             if rotating:  # the Python scan asks for the whole window at once
                 steps, nsteps = _extend(ts[i], ts[n - 1], ctx, steps, nsteps, p)
-            hs[i] = _still_gap(p, ctx, ts[i]) if still else _h(what, ts[i], ctx, steps, nsteps, p)
+            hs[i] = _still_gap(p, ctx, ts[i], out) if still else _h(what, ts[i], ctx, steps, nsteps, p)
             if i > 0 and hs[i] <= 0.0:
                 stop = i
                 break
