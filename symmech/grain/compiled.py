@@ -287,8 +287,9 @@ def _dense(t, t_old, h, y_old, F):
 @jit
 def _brent(what, a, b, xtol, ctx, steps, nsteps, p):
     """Root of ``_h(what, ...)`` in [a, b] with a sign change (scipy's ``brentq``, ported; rtol 4 eps)."""
+    out = np.empty((1, 2, 3))  # scratch of the gap
     xpre, xcur = a, b
-    fpre, fcur = _h(what, xpre, ctx, steps, nsteps, p), _h(what, xcur, ctx, steps, nsteps, p)
+    fpre, fcur = _h(what, xpre, ctx, steps, nsteps, p, out), _h(what, xcur, ctx, steps, nsteps, p, out)
     xblk = fblk = spre = scur = 0.0
     if fpre == 0.0:
         return xpre
@@ -320,7 +321,7 @@ def _brent(what, a, b, xtol, ctx, steps, nsteps, p):
             spre = scur = sbis
         xpre, fpre = xcur, fcur
         xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
-        fcur = _h(what, xcur, ctx, steps, nsteps, p)
+        fcur = _h(what, xcur, ctx, steps, nsteps, p, out)
     return xcur
 
 
@@ -332,7 +333,8 @@ def _bounded_min(what, a, b, xatol, ctx, steps, nsteps, p):
     fulc = a + golden_mean * (b - a)
     nfc, xf = fulc, fulc
     rat = e = 0.0
-    fx = _h(what, xf, ctx, steps, nsteps, p)
+    out = np.empty((1, 2, 3))  # scratch of the gap
+    fx = _h(what, xf, ctx, steps, nsteps, p, out)
     num = 1
     ffulc = fnfc = fx
     xm = 0.5 * (a + b)
@@ -363,7 +365,7 @@ def _bounded_min(what, a, b, xatol, ctx, steps, nsteps, p):
             rat = golden_mean * e
         si = 1.0 if rat >= 0 else -1.0
         x = xf + si * max(abs(rat), tol1)
-        fu = _h(what, x, ctx, steps, nsteps, p)
+        fu = _h(what, x, ctx, steps, nsteps, p, out)
         num += 1
         if fu <= fx:
             if x >= xf:
@@ -446,13 +448,15 @@ def _still_gap(p, ctx, t, out):
 
 
 @jit
-def _h(what, t, ctx, steps, nsteps, p):
-    """GAP: height [m] of the lowest point in flight; NORMAL: n(t); EVENT: sliding event function."""
+def _h(what, t, ctx, steps, nsteps, p, out):
+    """GAP: height [m] of the lowest point in flight (out (1, 2, 3) scratch); NORMAL: n(t); EVENT: sliding
+    event function."""
     if what == GAP:
         if ctx[18] == 0.0:
-            return _still_gap(p, ctx, t, np.empty((1, 2, 3)))
+            return _still_gap(p, ctx, t, out)
         q, _ = _orient(t, ctx, steps, nsteps)
-        return _translate(p, ctx, t)[0, 2] - _support(p, _rot(q))
+        _translate_into(p, ctx, t, out)
+        return out[0, 0, 2] - _support(p, _rot(q))
     if what == NORMAL:
         return _normal(p, t)
     return _event(t, ctx, steps, p)
@@ -478,7 +482,7 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
         for i in range(n):
             if rotating:  # the Python scan asks for the whole window at once
                 steps, nsteps = _extend(ts[i], ts[n - 1], ctx, steps, nsteps, p)
-            hs[i] = _still_gap(p, ctx, ts[i], out) if still else _h(what, ts[i], ctx, steps, nsteps, p)
+            hs[i] = _still_gap(p, ctx, ts[i], out) if still else _h(what, ts[i], ctx, steps, nsteps, p, out)
             if i > 0 and hs[i] <= 0.0:
                 stop = i
                 break
@@ -582,12 +586,13 @@ def _fly(p, y, t_end, on_plane, rows, carry):
         span = min(scan, t_end - y[0])
         steps, nsteps = _extend(y[0] + span, y[0] + span, ctx, steps, nsteps, p)
         noise = _gap_noise(p, y)
+        out = np.empty((1, 2, 3))
         t_from = np.nan
         for kk in range(64):
             t = y[0] + span / 2.0 ** kk
             if t <= y[0]:
                 break
-            if _h(GAP, t, ctx, steps, nsteps, p) > noise:
+            if _h(GAP, t, ctx, steps, nsteps, p, out) > noise:
                 t_from = t
                 break
         if math.isnan(t_from):
