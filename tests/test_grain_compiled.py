@@ -114,6 +114,31 @@ def test_batch_on_threads_equals_one_by_one(tmp_path):
         assert [i["t"] for i in res.impacts] == [i["t"] for i in one.impacts]
 
 
+def test_parameter_vector_layout():
+    """pack lists the fields in the order of the P_* indices; Model.active() zeroes what is switched off and is
+    the model itself when nothing is (pack reads the active model)."""
+    vib = flight.Vibration(1.1e-3, 2 * math.pi * 23.0, 0.7, (0.6, 0.0, 0.8))
+    law = ImpactLaw("printed", e_n=0.41, e_t=-0.31, mu=0.52, e=0.43, lam=1.37, check_printed=True)
+    model = motion.Model((3e-3, 2e-3, 1e-3), 2.5e-5, (0.5, -0.2, -9.7), vib, law, 0.33)
+    num = motion.Numerics(tolerance=1e-8, scan_step=2e-4, rest_velocity=3e-5, max_impacts=77, sample_interval=5e-3)
+    p = compiled.pack(model.active(), num)
+    assert model.active() is model and p.shape == (compiled.N_PARAMS,)
+    expected = {compiled.P_AXES: model.axes, compiled.P_MASS: [2.5e-5], compiled.P_INERTIA: model.inertia,
+                compiled.P_G: model.g_k, compiled.P_AMP: [1.1e-3], compiled.P_OMEGA: [2 * math.pi * 23.0],
+                compiled.P_PHASE: [0.7], compiled.P_DIR: vib.direction, compiled.P_LAW: [compiled.LAW_PRINTED],
+                compiled.P_EN: [0.41], compiled.P_ET: [-0.31], compiled.P_MU_IMPACT: [0.52], compiled.P_E: [0.43],
+                compiled.P_LAM: [1.37], compiled.P_CHECK: [1.0], compiled.P_MU: [0.33], compiled.P_ROTATION: [1.0],
+                compiled.P_TOL: [1e-8], compiled.P_SCAN: [2e-4], compiled.P_REST: [3e-5],
+                compiled.P_MAX_IMPACTS: [77.0], compiled.P_SAMPLE: [5e-3], compiled.P_PERIOD: [1 / 23.0]}
+    for index, values in expected.items():
+        np.testing.assert_allclose(p[index:index + len(values)], values, rtol=1e-15)
+    assert sum(len(v) for v in expected.values()) == compiled.N_PARAMS
+    off = replace(model, effects=motion.Effects(vibration=False, friction=False, rotation=False))
+    p = compiled.pack(off.active(), num)
+    assert p[compiled.P_AMP] == p[compiled.P_MU] == p[compiled.P_ROTATION] == 0.0
+    assert p[compiled.P_OMEGA] == 2 * math.pi * 23.0 and p[compiled.P_MU_IMPACT] == 0.52
+
+
 def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):
     sc = default_scene(tmp_path, 0.05)
     assert sc.numerics.engine == "compiled"
