@@ -3,7 +3,9 @@ closed forms: same events (impact times, impulses, regime sequence), same final 
 
 The first run on a machine compiles the loop (about a minute of CPU; cached beside the module after that).
 """
+import dataclasses
 import math
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -112,6 +114,20 @@ def test_batch_on_threads_equals_one_by_one(tmp_path):
         one = compiled.simulate(model, sc.numerics, start, 0.08)
         assert np.array_equal(res.trajectory, one.trajectory)
         assert [i["t"] for i in res.impacts] == [i["t"] for i in one.impacts]
+
+
+def test_impact_log_built_on_first_use_is_the_same_everywhere(tmp_path):
+    """The lazy impact log: a list of dicts with the Python loop's keys and value types, the same after pickling
+    (before and after first use), through dataclasses.replace and asdict."""
+    sc = default_scene(tmp_path, 0.05)
+    c, p = both(sc.model, sc.numerics, sc.start, 0.05)
+    before = pickle.loads(pickle.dumps(c))
+    log = c.impacts
+    assert type(log) is list and len(log) == len(p.impacts) >= 3 and c.impacts is log
+    for a, b in zip(log, p.impacts):
+        assert list(a) == list(b) and [type(v) for v in a.values()] == [type(v) for v in b.values()]
+    assert before.impacts == pickle.loads(pickle.dumps(c)).impacts == dataclasses.asdict(c)["impacts"] == log
+    assert dataclasses.replace(c, warnings=[]).impacts == log
 
 
 def test_parameter_vector_layout():

@@ -1354,6 +1354,21 @@ def _impact_dicts(imps: np.ndarray) -> list:
             for row, (admissible, printed, gain, conv) in zip(imps.tolist(), flags)]
 
 
+class LazyMotion(motion.Motion):
+    """A ``motion.Motion`` whose impact log is built from the compiled impact rows (n, IMPACT_WIDTH) on first
+    use: a dict per impact costs as much as the compiled loop's work for that impact, and holds the GIL."""
+
+    @property
+    def impacts(self) -> list:
+        if self._impacts is None:
+            self._impacts = _impact_dicts(self._rows)
+        return self._impacts
+
+    @impacts.setter
+    def impacts(self, value) -> None:  # the dataclass __init__ (None from simulate) and assignments
+        self._impacts = value
+
+
 class _Budget(motion._Budget):
     """The Python loop's energy budget, its energies from the compiled kernel."""
 
@@ -1413,7 +1428,8 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
 
     ``on_step(t_now)`` is called between batches of ``PHASES_PER_CALL`` regime phases, at most every 0.2 s
     of wall time, and once at the end. A stiff slip (``STIFF_SLIP``) is handed to the Python sliding
-    integrator for the rest of its phase; ``extra["engine"]`` counts those phases.
+    integrator for the rest of its phase; ``extra["engine"]`` counts those phases. The impact log is built
+    on first use (:class:`LazyMotion`).
     """
     model = model.active()
     progress = motion.Progress(on_step)
@@ -1444,8 +1460,9 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
              "engine": f"compiled; python for {handed} stiff slip part(s)" if handed else "compiled"}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
     final = motion.State(float(y[0]), y[1:4], y[4:7], y[7:11], y[11:14])  # views of y: it is this result's
-    return motion.Motion(rows[:int(carry[C_ROWS])], _impact_dicts(imps[:int(carry[C_NIMP])]), time_in,
-                         list(dict.fromkeys(warnings)), start, final, extra)
+    result = LazyMotion(rows[:int(carry[C_ROWS])], None, time_in, list(dict.fromkeys(warnings)), start, final, extra)
+    result._rows = imps[:int(carry[C_NIMP])]
+    return result
 
 
 def cold() -> bool:
