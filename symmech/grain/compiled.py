@@ -26,7 +26,8 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
 Parameters travel in one float64 vector (layout ``P_*`` below), the state as
 (t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
 (trajectory rows, impact rows, warning codes) and are turned into a
-``motion.Motion`` with the same structure as the Python loop's. The compiled
+``motion.Motion`` with the same structure as the Python loop's (its impact log
+built on first use: ``LazyMotion``). The compiled
 loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
 ``on_step`` is called; this does not change the result. ``simulate_many`` runs
 grains on threads (the loop releases the GIL).
