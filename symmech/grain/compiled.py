@@ -1355,6 +1355,11 @@ def _impact_dicts(imps: np.ndarray) -> list:
             for row, (admissible, printed, gain, conv) in zip(imps.tolist(), flags)]
 
 
+def _state(y: np.ndarray) -> motion.State:
+    """The state (14,) y as a ``motion.State`` of views of y (y belongs to one result)."""
+    return motion.State(float(y[0]), y[1:4], y[4:7], y[7:11], y[11:14])
+
+
 class LazyMotion(motion.Motion):
     """A ``motion.Motion`` whose impact log is built from the compiled impact rows (n, IMPACT_WIDTH) on first
     use: a dict per impact costs as much as the compiled loop's work for that impact, and holds the GIL."""
@@ -1460,7 +1465,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
              "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE),
              "engine": f"compiled; python for {handed} stiff slip part(s)" if handed else "compiled"}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
-    final = motion.State(float(y[0]), y[1:4], y[4:7], y[7:11], y[11:14])  # views of y: it is this result's
+    final = _state(y)
     result = LazyMotion(rows[:int(carry[C_ROWS])], None, time_in, list(dict.fromkeys(warnings)), start, final, extra)
     result._rows = imps[:int(carry[C_NIMP])]
     return result

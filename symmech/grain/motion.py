@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -77,9 +78,11 @@ class Model:
     mu: float
     effects: Effects = Effects()
 
-    @property
+    @cached_property  # every run asks for it (a few us each time)
     def inertia(self) -> np.ndarray:
-        return principal_inertia(self.axes, self.mass)
+        inertia = principal_inertia(self.axes, self.mass)
+        inertia.flags.writeable = False  # shared by all its users
+        return inertia
 
     def active(self) -> "Model":
         """The model the simulation runs: parameters of switched-off effects zeroed (no code runs for them)."""
