@@ -21,7 +21,11 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   matrix polished by Newton) for the law itself or for its verdict in the log;
 - sliding: the ODE of :mod:`symmech.grain.sliding` (stick, slip, spin about the
   normal, work and loss as quadratures) by the same Dormand-Prince pair with
-  terminal events located by Brent on the step; lift-off from the root of n(t).
+  terminal events located by Brent on the step; stiff slips (anisotropic, below
+  the stiff slip speed) by Radau IIA of order 5 (scipy's ``Radau``, ported:
+  step control, simplified Newton on the real / complex split of the collocation
+  system, embedded error estimate, dense output) with the analytic Jacobian of
+  the slip, switching as ``sliding.slide`` does; lift-off from the root of n(t).
 
 Parameters travel in one float64 vector (layout ``P_*`` below), the state as
 (t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
@@ -902,7 +906,8 @@ S6 = 6.0 ** 0.5
 RADAU_C = np.array([(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0])
 RADAU_E = np.array([[-13.0 - 7.0 * S6, -13.0 + 7.0 * S6, -1.0]]) / 3.0  # (1, 3)
 MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
-MU_COMPLEX = complex(3.0 + 0.5 * (3.0 ** (1.0 / 3.0) - 3.0 ** (2.0 / 3.0)), -0.5 * (3.0 ** (5.0 / 6.0) + 3.0 ** (7.0 / 6.0)))
+MU_COMPLEX = complex(3.0 + 0.5 * (3.0 ** (1.0 / 3.0) - 3.0 ** (2.0 / 3.0)),
+                     -0.5 * (3.0 ** (5.0 / 6.0) + 3.0 ** (7.0 / 6.0)))
 RADAU_T = np.array([[0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
                     [0.25021312296533332, 0.20412935229379994, -0.38294211275726192], [1.0, 1.0, 0.0]])
 RADAU_TI = np.array([[4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
@@ -1551,7 +1556,7 @@ def _slide(p, y, t_end, rows, carry):
     ctx = np.empty(16 + N_SLIDE)
     rec = np.array([float(math.ceil(t0 / p[P_SAMPLE] - 1e-9)), p[P_SAMPLE], t0, y[3]])
     while t < t_stop and status == DONE:
-        implicit = _implicit(z, sp, stick, implicit)
+        implicit = _implicit(z, sp, stick, 2.0 if implicit else 1.0)
         _choose_event(z, sp, stick)
         # One integration chunk of 40 scan steps, a fresh solve as in the Python loop.
         t_phase, t_chunk = t, min(t_stop, t + 40 * step)
@@ -1590,13 +1595,13 @@ def _choose_event(z, sp, stick):
 
 
 @jit
-def _implicit(z, sp, stick, implicit):
-    """Whether the next chunk goes implicit (``sliding.slide``): an anisotropic slip below the stiff slip speed
-    s_stiff, or below 2 s_stiff when the last one was implicit (the hysteresis band)."""
+def _implicit(z, sp, stick, band):
+    """Whether the next chunk goes implicit (``sliding.slide``): an anisotropic slip below ``band`` s_stiff
+    (1; 2 when the last chunk was implicit: the hysteresis band)."""
     if stick or sp[S_ANISO] == 0.0:
         return False
     s = _geometry(z, sp)[1]
-    return math.hypot(s[0], s[1]) < (2.0 if implicit else 1.0) * sp[S_STIFF]
+    return math.hypot(s[0], s[1]) < band * sp[S_STIFF]
 
 
 @jit
