@@ -1281,63 +1281,72 @@ def _slide_rhs(t, y, sp, stick, out):
 
 @jit
 def _offset_jac(y, sp):
-    """dR/dq (3, 4) of the contact offset of :func:`_offset_now` (zero for a sphere)."""
+    """dR/dq (3, 4) of the contact offset of :func:`_offset_now` (zero for a sphere), in scalars:
+    R = v + N / |q|^2, N = q0 t + u x t, t = 2 u x v (u the vector part of q, v the body-frame offset)."""
     dR = np.zeros((3, 4))
     if sp[S_SPHERE] != 0.0:
         return dR
-    q0, u = y[7], y[8:11].copy()
-    v = sp[S_RB:S_RB + 3].copy()
-    qq = q0 * q0 + u @ u
-    tt = 2.0 * _cross(u, v)
-    N = q0 * tt + _cross(u, tt)  # R = v + N / qq
-    dR[:, 0] = tt / qq - N * (2.0 * q0 / qq ** 2)
-    for k in range(3):
-        e = np.zeros(3)
-        e[k] = 1.0
-        dt = 2.0 * _cross(e, v)
-        dR[:, 1 + k] = (q0 * dt + _cross(e, tt) + _cross(u, dt)) / qq - N * (2.0 * u[k] / qq ** 2)
+    q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
+    v0, v1, v2 = sp[S_RB], sp[S_RB + 1], sp[S_RB + 2]
+    qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
+    t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
+    N = (q0 * t0 + u1 * t2 - u2 * t1, q0 * t1 + u2 * t0 - u0 * t2, q0 * t2 + u0 * t1 - u1 * t0)
+    T = (t0, t1, t2)
+    u = (u0, u1, u2)
+    for i in range(3):
+        dR[i, 0] = T[i] / qq - N[i] * 2.0 * q0 / qq ** 2
+    for k in range(3):  # dN/du_k = q0 dt + e_k x t + u x dt, dt = 2 e_k x v
+        e = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
+        d0, d1, d2 = 2.0 * (e[1] * v2 - e[2] * v1), 2.0 * (e[2] * v0 - e[0] * v2), 2.0 * (e[0] * v1 - e[1] * v0)
+        dN = (q0 * d0 + e[1] * t2 - e[2] * t1 + u1 * d2 - u2 * d1,
+              q0 * d1 + e[2] * t0 - e[0] * t2 + u2 * d0 - u0 * d2,
+              q0 * d2 + e[0] * t1 - e[1] * t0 + u0 * d1 - u1 * d0)
+        for i in range(3):
+            dR[i, 1 + k] = dN[i] / qq - N[i] * 2.0 * u[k] / qq ** 2
     return dR
 
 
 @jit
 def _slip_jac(t, y, sp, J):
-    """Jacobian d rhs / d y (13, 13) of the slip (``_slide_rhs``, not stuck), analytic: the stiff part is the
-    friction's turning rate mu n / |s| (I - s s^T / |s|^2) through s = v + (w x R)_t, R turning with q."""
+    """Jacobian d rhs / d y (13, 13) of the slip (``_slide_rhs``, not stuck), analytic, column by column: the
+    stiff part is the friction's turning rate mu n / |s| (I - s s^T / |s|^2) through s = v + (w x R)_t, the
+    contact offset R turning with q."""
     J[:] = 0.0
     n = -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(sp[S_OMEGA] * t + sp[S_PHASE]) * sp[S_DIR + 2] - sp[S_G + 2]
     sv = sp[S_AMP] * sp[S_OMEGA] * math.cos(sp[S_OMEGA] * t + sp[S_PHASE])
-    R, s, _ = _geometry(y, sp)
-    w = y[4:7]
-    ds = np.zeros((2, 13))  # ds/dy
-    ds[0, 2], ds[0, 5], ds[0, 6] = 1.0, R[2], -R[1]
-    ds[1, 3], ds[1, 4], ds[1, 6] = 1.0, -R[2], R[0]
+    R0, R1, R2 = _offset_now(y, sp)
+    w0, w1, w2 = y[4], y[5], y[6]
+    s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
+    speed = math.hypot(s0, s1)
+    k, u0, u1 = 0.0, 0.0, 0.0  # no friction force at zero slip
+    if speed > 0.0:
+        k, u0, u1 = -sp[S_MU] * n / speed, s0 / speed, s1 / speed
+    phi0, phi1 = k * s0, k * s1
+    ds = np.zeros((2, 13))  # ds/dy at fixed R
+    ds[0, 2], ds[0, 5], ds[0, 6] = 1.0, R2, -R1
+    ds[1, 3], ds[1, 4], ds[1, 6] = 1.0, -R2, R0
     dR = np.zeros((3, 13))
     dR[:, 7:11] = _offset_jac(y, sp)
-    ds[0] += w[1] * dR[2] - w[2] * dR[1]
-    ds[1] += w[2] * dR[0] - w[0] * dR[2]
-    speed = math.hypot(s[0], s[1])
-    if speed > 0.0:
-        k = -sp[S_MU] * n / speed
-        u0, u1 = s[0] / speed, s[1] / speed
-        phi = k * s
-        dphi0 = k * ((1.0 - u0 * u0) * ds[0] - u0 * u1 * ds[1])
-        dphi1 = k * ((1.0 - u1 * u1) * ds[1] - u0 * u1 * ds[0])
-    else:
-        phi, dphi0, dphi1 = np.zeros(2), np.zeros(13), np.zeros(13)
+    for j in range(13):
+        a0, a1, a2 = dR[0, j], dR[1, j], dR[2, j]
+        ds0, ds1 = ds[0, j] + w1 * a2 - w2 * a1, ds[1, j] + w2 * a0 - w0 * a2
+        dp0, dp1 = k * ((1.0 - u0 * u0) * ds0 - u0 * u1 * ds1), k * ((1.0 - u1 * u1) * ds1 - u0 * u1 * ds0)
+        tau = (a1 * n - a2 * phi1 - R2 * dp1, a2 * phi0 + R2 * dp0 - a0 * n,  # d(R x (phi, n))
+               a0 * phi1 + R0 * dp1 - a1 * phi0 - R1 * dp0)
+        J[2, j], J[3, j] = dp0, dp1
+        for i in range(3):
+            J[4 + i, j] = sp[S_M + 3 * i] * tau[0] + sp[S_M + 3 * i + 1] * tau[1] + sp[S_M + 3 * i + 2] * tau[2]
+        J[11, j] = sv * (sp[S_DIR] * dp0 + sp[S_DIR + 1] * dp1)
+        J[12, j] = -(dp0 * s0 + phi0 * ds0 + dp1 * s1 + phi1 * ds1)
     J[0, 2] = J[1, 3] = 1.0
-    J[2], J[3] = dphi0, dphi1
-    dtau = np.empty((3, 13))  # torque R x (phi, n)
-    dtau[0] = dR[1] * n - dR[2] * phi[1] - R[2] * dphi1
-    dtau[1] = dR[2] * phi[0] + R[2] * dphi0 - dR[0] * n
-    dtau[2] = dR[0] * phi[1] + R[0] * dphi1 - dR[1] * phi[0] - R[1] * dphi0
-    J[4:7] = _mobility(sp) @ dtau
-    q = y[7:11]
-    J[7:11, 4:7] = 0.5 * np.array([[-q[1], -q[2], -q[3]], [q[0], q[3], -q[2]], [-q[3], q[0], q[1]],
-                                   [q[2], -q[1], q[0]]])
-    J[7:11, 7:11] = 0.5 * np.array([[0.0, -w[0], -w[1], -w[2]], [w[0], 0.0, -w[2], w[1]],
-                                    [w[1], w[2], 0.0, -w[0]], [w[2], -w[1], w[0], 0.0]])
-    J[11] = sv * (sp[S_DIR] * dphi0 + sp[S_DIR + 1] * dphi1)
-    J[12] = -(dphi0 * s[0] + phi[0] * ds[0] + dphi1 * s[1] + phi[1] * ds[1])
+    q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
+    dq_dw = ((-q1, -q2, -q3), (q0, q3, -q2), (-q3, q0, q1), (q2, -q1, q0))  # q' = (0, w) (x) q / 2
+    dq_dq = ((0.0, -w0, -w1, -w2), (w0, 0.0, -w2, w1), (w1, w2, 0.0, -w0), (w2, -w1, w0, 0.0))
+    for i in range(4):
+        for j in range(3):
+            J[7 + i, 4 + j] = 0.5 * dq_dw[i][j]
+        for j in range(4):
+            J[7 + i, 7 + j] = 0.5 * dq_dq[i][j]
 
 
 @jit
