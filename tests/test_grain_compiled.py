@@ -172,18 +172,25 @@ def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):
     (CROP, 0.6e-3, 18.0, 0.12), (WEED, 1.0e-3, 18.0, 0.3), (CROP, 1.0e-3, 32.0, 0.04)])
 def test_hard_sweep_grains_match_the_python_loop(fields, amplitude, frequency, t_end):
     """The grains of tests/test_grain_hard_cases.py: an ellipsoid slipping from rest while turning about the
-    normal (crop, weed: stiff slip, its phases handed to the Python sliding integrator) and a tumbling one held
-    on the plane by its spin (crop at 32 Hz: one rocking contact, landed and flown on in the compiled loop;
-    it also slides and hands over)."""
+    normal (crop, weed: stiff slip, integrated by the compiled Radau) and a tumbling one held on the plane by
+    its spin (crop at 32 Hz: one rocking contact, landed and flown on in the compiled loop; it also slides).
+
+    Both loops integrate the stiff slips with Radau IIA to the same tolerance ``tol`` (1e-9), the compiled
+    one with the analytic Jacobian, the Python one with scipy's finite differences: their Newton iterates,
+    hence steps, differ, and so do the results, by the integration error, not by round-off. Each step holds
+    the error to tol relative (position to tol * v_scale * scan_step absolute); over the ~100 steps of a run
+    the states differ by up to 100 tol relative (measured 1.2e-9) and event times by up to 100 tol *
+    scan_step (7.8e-11 s at 32 Hz; measured 3.6e-12 s); the energy quadratures to 1000 tol relative
+    (measured 1.6e-10)."""
     sc = sweep_grain(fields, amplitude, frequency, t_end)
+    tol, step = sc.numerics.tolerance, sc.numerics.scan_step
     c, p = both(sc.model, sc.numerics, sc.start, t_end)
-    assert_same(c, p, 1e-11, 1e-7)
+    assert_same(c, p, 100 * tol * step, 100 * tol)
     assert c.extra["rocking_contacts"] == p.extra["rocking_contacts"] == (1 if frequency == 32.0 else 0)
-    handed = int(c.extra["engine"].split("python for ")[1].split()[0]) if "python" in c.extra["engine"] else 0
-    assert handed > 0  # every slip from rest of these tilted grains turns stiff at once
+    assert c.extra["implicit_slip_steps"] > 0  # every slip from rest of these tilted grains turns stiff at once
     bc, bp = c.extra["energy_budget"], p.extra["energy_budget"]
     for key in ("input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J", "lost_in_sliding_J"):
-        assert bc[key] == pytest.approx(bp[key], rel=1e-6, abs=1e-15)
+        assert bc[key] == pytest.approx(bp[key], rel=1000 * tol, abs=1e-15)
 
 
 def test_slip_onset_direction_of_a_turning_ellipsoid():

@@ -8,6 +8,7 @@ scipy and sympy without downloads) and runs every bundled scene. `.ci/run` runs 
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -90,3 +91,18 @@ def test_every_bundled_scene_runs_from_the_installed_package(installed, scene):
     proc = symmech(installed, "run", installed_scene, "--out", scene.stem, "--quiet", "--max-time", "600")
     assert proc.returncode == 0, proc.stderr
     assert assert_valid_output(work / scene.stem)["kind"] == tomllib.loads(scene.read_text())["kind"]
+
+
+def test_main_job_compiles_and_runs_without_a_c_compiler(installed, tmp_path):
+    """Issue 14: a machine without a C compiler runs everything. The README's main job with only the venv's
+    bin on PATH (no cc, gcc or clang reachable, CC pointing nowhere) and an empty numba cache, so the grain
+    engine is compiled here (numba emits machine code through LLVM, no C toolchain)."""
+    bin_, work = installed
+    assert not any(shutil.which(cc, path=str(bin_)) for cc in ("cc", "gcc", "clang"))
+    env = {**os.environ, "PATH": str(bin_), "CC": str(tmp_path / "no-cc"), "NUMBA_CACHE_DIR": str(tmp_path / "nb")}
+    scene = next((bin_.parent / "lib").glob("python*/site-packages/symmech/scenes/grain_default.toml"))
+    proc = subprocess.run([bin_ / "symmech", "run", scene, "--out", "no_cc", "--quiet"], cwd=work, env=env,
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    summary = assert_valid_output(work / "no_cc")
+    assert summary["kind"] == "grain" and any((tmp_path / "nb").rglob("*.nbi"))  # compiled here, cached there

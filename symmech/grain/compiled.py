@@ -21,7 +21,11 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   matrix polished by Newton) for the law itself or for its verdict in the log;
 - sliding: the ODE of :mod:`symmech.grain.sliding` (stick, slip, spin about the
   normal, work and loss as quadratures) by the same Dormand-Prince pair with
-  terminal events located by Brent on the step; lift-off from the root of n(t).
+  terminal events located by Brent on the step; stiff slips (anisotropic, below
+  the stiff slip speed) by Radau IIA of order 5 (scipy's ``Radau``, ported:
+  step control, simplified Newton on the real / complex split of the collocation
+  system, embedded error estimate, dense output) with the analytic Jacobian of
+  the slip, switching as ``sliding.slide`` does; lift-off from the root of n(t).
 
 Parameters travel in one float64 vector (layout ``P_*`` below), the state as
 (t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
@@ -64,12 +68,11 @@ FLIGHT, IMPACT, SLIDING = INT(0), INT(1), INT(2)  # regime codes, as motion.REGI
 # Carry vector: the loop's own state between two calls.
 C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 4, 5
 C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
-# Rocking contacts; velocity scale of a sliding phase handed to Python and back (C_RESUME: handed back).
-C_ROCKING, C_V_SCALE, C_RESUME = 13, 14, 15
-N_CARRY = 16
+# Rocking contacts; accepted Radau steps of stiff slips.
+C_ROCKING, C_IMPLICIT = 13, 14
+N_CARRY = 15
 # Status of a call.
 DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = (INT(k) for k in range(7))
-STIFF_SLIP = INT(7)  # a stiff slip begins: the rest of this sliding phase goes to sliding.slide (Radau)
 # Warning codes (rows: code, value, value).
 W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = (
     INT(k) for k in range(1, 7))
@@ -168,12 +171,15 @@ def _is_sphere(p):
 
 @jit
 def _rhs(kind, t, y, sp, out):
-    """Right-hand side: ``ROT`` torque-free rotation y = (q, w body), sp = inertia; ``SLIP``/``STICK`` sliding."""
+    """Right-hand side: ``ROT`` torque-free rotation y = (q, w body), sp = inertia; ``SLIP``/``STICK`` sliding;
+    ``PROBE`` the stiff scalar test equation y' = -sp[0] (y - cos t) - sin t of the Radau stepper."""
     if kind == ROT:
         qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
         wd = gm.euler_equations_scalar(sp[0], sp[1], sp[2], y[4], y[5], y[6])
         out[:4] = qd
         out[4:7] = wd
+    elif kind == PROBE:
+        out[0] = -sp[0] * (y[0] - math.cos(t)) - math.sin(t)
     else:
         _slide_rhs(t, y, sp, kind == STICK, out)
 
@@ -189,8 +195,8 @@ def _combine(out, y, K, a, s, h):
 
 
 @jit
-def _dop_first_step(kind, t, y, f, t_bound, sp, rtol, atol):
-    """scipy's ``select_initial_step`` for the order-7 error estimator."""
+def _first_step(kind, t, y, f, t_bound, sp, rtol, atol, power):
+    """scipy's ``select_initial_step``; power = 1 / (order of the error estimator + 1)."""
     span = abs(t_bound - t)
     if span == 0.0:
         return 0.0
@@ -202,7 +208,7 @@ def _dop_first_step(kind, t, y, f, t_bound, sp, rtol, atol):
     f1 = np.empty(y.size)
     _rhs(kind, t + h0, y + h0 * f, sp, f1)
     d2 = math.sqrt(np.mean(((f1 - f) / scale) ** 2)) / h0
-    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** (1 / 8)
+    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** power
     return min(100 * h0, h1, span)
 
 
@@ -523,7 +529,7 @@ def _extend(t, t_request, ctx, tab, ntab, p):
             f = np.empty(7)
             _rhs(ROT, ctx[19], ctx[20:27].copy(), inertia, f)
             ctx[31:38] = f
-            ctx[30] = _dop_first_step(ROT, ctx[19], ctx[20:27].copy(), f, ctx[29], inertia, tol, atol)
+            ctx[30] = _first_step(ROT, ctx[19], ctx[20:27].copy(), f, ctx[29], inertia, tol, atol, -DOP_EXPONENT)
             ctx[38] = 1.0
         tt, y, f = ctx[19], ctx[20:27].copy(), ctx[31:38].copy()
         t_new, y_new, h_abs, ok = _dop_advance(ROT, tt, y, f, ctx[30], ctx[29], inertia, tol, atol, K)
@@ -917,6 +923,267 @@ def _land(p, y, carry):
     return out
 
 
+# --------------------------------------------------------------------------- Radau IIA (scipy's, ported)
+
+# Radau IIA of order 5 (scipy's ``_ivp/radau.py``): nodes, error estimator, the eigen-decomposition of the
+# tableau A = T diag(MU_REAL, MU_COMPLEX, conj) TI, the dense-output matrix (written out: no scipy import).
+S6 = 6.0 ** 0.5
+RADAU_C = np.array([(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0])
+RADAU_E = np.array([[-13.0 - 7.0 * S6, -13.0 + 7.0 * S6, -1.0]]) / 3.0  # (1, 3)
+MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
+MU_COMPLEX = complex(3.0 + 0.5 * (3.0 ** (1.0 / 3.0) - 3.0 ** (2.0 / 3.0)),
+                     -0.5 * (3.0 ** (5.0 / 6.0) + 3.0 ** (7.0 / 6.0)))
+RADAU_T = np.array([[0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
+                    [0.25021312296533332, 0.20412935229379994, -0.38294211275726192], [1.0, 1.0, 0.0]])
+RADAU_TI = np.array([[4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
+                     [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
+                     [0.50287263494578682, -2.57192694985560522, 0.59603920482822492]])
+RADAU_PT = np.array([[13.0 / 3.0 + 7.0 * S6 / 3.0, -23.0 / 3.0 - 22.0 * S6 / 3.0, 10.0 / 3.0 + 5.0 * S6],
+                    [13.0 / 3.0 - 7.0 * S6 / 3.0, -23.0 / 3.0 + 22.0 * S6 / 3.0, 10.0 / 3.0 - 5.0 * S6],
+                    [1.0 / 3.0, -8.0 / 3.0, 10.0 / 3.0]]).T.copy()  # transposed: Q = P^T Z
+NEWTON_MAXITER, RADAU_MIN_FACTOR, RADAU_MAX_FACTOR = 6, 0.2, 10.0
+RADAU_POWER = 1.0 / 4.0  # initial step of the order-3 error estimator
+# Solver state between the steps of one solve (``Radau`` attributes): step, previous step and error norm
+# (-1: none), Jacobian current, LU factors valid, start and length of the last step (its interpolant).
+R_H, R_H_OLD, R_ERR_OLD, R_JAC_CURRENT, R_LU_VALID, R_T_OLD, R_H_LAST = 0, 1, 2, 3, 4, 5, 6
+N_RADAU = 7
+PROBE = INT(3)  # right-hand side kind of the stiff scalar test equation (see _rhs)
+MAX_RADAU_STEPS = sliding.MAX_RHS_PER_PHASE // 4  # Radau steps (at least 4 evaluations) per sliding chunk
+NO_EVENT, REGIME, SWITCH = 0, 1, 2  # how a chunk ends: its end time, a regime event, the integrator switch
+
+
+@jit
+def _lu(A, piv):
+    """LU factorisation with partial pivoting of A (n, n), real or complex, in place; row swaps into piv."""
+    n = A.shape[0]
+    for k in range(n):
+        m = k
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > abs(A[m, k]):
+                m = i
+        piv[k] = m
+        for j in range(n):
+            A[k, j], A[m, j] = A[m, j], A[k, j]
+        for i in range(k + 1, n):
+            A[i, k] /= A[k, k]
+            for j in range(k + 1, n):
+                A[i, j] -= A[i, k] * A[k, j]
+
+
+@jit
+def _lu_solve(LU, piv, b):
+    """x with A x = b from the factors of :func:`_lu`."""
+    n = b.size
+    x = b.copy()
+    for k in range(n):
+        x[k], x[piv[k]] = x[piv[k]], x[k]
+    for i in range(n):
+        for j in range(i):
+            x[i] -= LU[i, j] * x[j]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            x[i] -= LU[i, j] * x[j]
+        x[i] /= LU[i, i]
+    return x
+
+
+@jit
+def _rms(x, scale):
+    """scipy's ``norm(x / scale)``: root mean square of x (..., n) scaled by scale (n,)."""
+    acc = 0.0
+    flat = x.reshape(-1)
+    n = scale.size
+    for i in range(flat.size):
+        acc += (flat[i] / scale[i % n]) ** 2
+    return math.sqrt(acc / flat.size)
+
+
+@jit
+def _mix(A, Z):
+    """A @ Z for a small A (k, 3) and Z (3, n), by loops (no BLAS call for 3 x 13)."""
+    out = np.zeros((A.shape[0], Z.shape[1]))
+    for r in range(A.shape[0]):
+        for j in range(3):
+            for i in range(Z.shape[1]):
+                out[r, i] += A[r, j] * Z[j, i]
+    return out
+
+
+@jit
+def _factor(h, J, LUr, pr, LUc, pc):
+    """LU factors of MU_REAL / h - J and MU_COMPLEX / h - J into LUr, pr, LUc, pc."""
+    n = J.shape[0]
+    for i in range(n):
+        for j in range(n):
+            LUr[i, j] = (MU_REAL / h if i == j else 0.0) - J[i, j]
+            LUc[i, j] = (MU_COMPLEX / h if i == j else 0.0) - J[i, j]
+    _lu(LUr, pr)
+    _lu(LUc, pc)
+
+
+@jit
+def _newton(kind, t, y, h, Z0, scale, tol, sp, LUr, pr, LUc, pc):
+    """The collocation system by simplified Newton on the real / complex split (scipy's
+    ``solve_collocation_system``): (converged, iterations, Z (3, n) the stage increments, rate; -1: none)."""
+    n = y.size
+    W = _mix(RADAU_TI, Z0)
+    Z = Z0.copy()
+    F = np.empty((3, n))
+    dW = np.empty((3, n))
+    Wc = np.empty(n, dtype=np.complex128)
+    norm_old, rate, converged, k = -1.0, -1.0, False, 0
+    for k in range(NEWTON_MAXITER):
+        for i in range(3):
+            _rhs(kind, t + RADAU_C[i] * h, y + Z[i], sp, F[i])
+        if not np.all(np.isfinite(F)):
+            break
+        TF = _mix(RADAU_TI, F)  # rows: the real and the complex part's real and imaginary projections
+        for i in range(n):
+            Wc[i] = complex(TF[1, i], TF[2, i]) - MU_COMPLEX / h * complex(W[1, i], W[2, i])
+        dW[0] = _lu_solve(LUr, pr, TF[0] - MU_REAL / h * W[0])
+        dWc = _lu_solve(LUc, pc, Wc)
+        dW[1], dW[2] = dWc.real, dWc.imag
+        dW_norm = _rms(dW, scale)
+        if norm_old >= 0.0:
+            rate = dW_norm / norm_old
+        if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate) * dW_norm > tol):
+            break
+        W += dW
+        Z = _mix(RADAU_T, W)
+        if dW_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dW_norm < tol):
+            converged = True
+            break
+        norm_old = dW_norm
+    return converged, k + 1, Z, rate
+
+
+@jit
+def _predict_factor(h_abs, h_abs_old, err, err_old):
+    """Step factor from the error norms (scipy's ``predict_factor``, Hairer & Wanner IV.8; -1: none)."""
+    multiplier = 1.0
+    if err_old >= 0.0 and h_abs_old >= 0.0 and err != 0.0:
+        multiplier = h_abs / h_abs_old * (err_old / err) ** 0.25
+    return np.inf if err == 0.0 else min(1.0, multiplier) * err ** -0.25
+
+
+@jit
+def _radau_try(kind, t, y, f, h, sp, rtol, atol, st, J, LUr, pr, LUc, pc, Q):
+    """One attempt at a step of length h from (t, y), f = rhs there: the Newton solve from the last step's
+    interpolant (zero without one), with fresh factors and, if that fails, a fresh Jacobian (scipy's
+    ``_step_impl``). Returns (converged, iterations, rate, Z (3, n))."""
+    if st[R_H_LAST] != 0.0:
+        Z0 = np.empty((3, y.size))
+        for i in range(3):
+            Z0[i] = _radau_dense(t + h * RADAU_C[i], st[R_T_OLD], st[R_H_LAST], Q[0]) - y
+    else:
+        Z0 = np.zeros((3, y.size))
+    scale = atol + np.abs(y) * rtol
+    newton_tol = max(10.0 * EPS / rtol, min(0.03, rtol ** 0.5))
+    while True:
+        if st[R_LU_VALID] == 0.0:
+            _factor(h, J, LUr, pr, LUc, pc)
+            st[R_LU_VALID] = 1.0
+        converged, n_iter, Z, rate = _newton(kind, t, y, h, Z0, scale, newton_tol, sp, LUr, pr, LUc, pc)
+        if converged or st[R_JAC_CURRENT] != 0.0:
+            return converged, n_iter, rate, Z
+        _jac(kind, t, y, sp, J)
+        st[R_JAC_CURRENT], st[R_LU_VALID] = 1.0, 0.0
+
+
+@jit
+def _radau_error(kind, t, y, y_new, f, h, Z, sp, rtol, atol, LUr, pr, rejected):
+    """Norm of the embedded order-3 error estimate, filtered by (MU_REAL / h - J)^-1 (again through f at
+    the filtered point after a rejection, as scipy)."""
+    ZE = _mix(RADAU_E, Z)[0] / h
+    error = _lu_solve(LUr, pr, f + ZE)
+    scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
+    err = _rms(error, scale)
+    if rejected and err > 1.0:
+        fe = np.empty(y.size)
+        _rhs(kind, t, y + error, sp, fe)
+        err = _rms(_lu_solve(LUr, pr, fe + ZE), scale)
+    return err
+
+
+@jit
+def _radau_step(kind, t, y, f, t_bound, sp, rtol, atol, st, J, LUr, pr, LUc, pc, Q):
+    """One accepted Radau step (scipy's ``Radau._step_impl``): (t_new, y_new, f_new, ok). The step's
+    interpolant goes to Q (1, 4 n) (see :func:`_radau_dense`), its start and length to st."""
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    h_abs, h_old, err_old = st[R_H], st[R_H_OLD], st[R_ERR_OLD]
+    if h_abs < min_step:
+        h_abs, h_old, err_old = min_step, -1.0, -1.0
+    rejected = False
+    while True:
+        if h_abs < min_step:
+            return t, y, f, False
+        t_new = min(t + h_abs, t_bound)
+        h = t_new - t
+        h_abs = abs(h)
+        converged, n_iter, rate, Z = _radau_try(kind, t, y, f, h, sp, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
+        if not converged:
+            h_abs *= 0.5
+            st[R_LU_VALID] = 0.0
+            continue
+        y_new = y + Z[2]
+        err = _radau_error(kind, t, y, y_new, f, h, Z, sp, rtol, atol, LUr, pr, rejected)
+        safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
+        if err <= 1.0:
+            break
+        h_abs *= max(RADAU_MIN_FACTOR, safety * _predict_factor(h_abs, h_old, err, err_old))
+        st[R_LU_VALID] = 0.0
+        rejected = True
+    recompute_jac = n_iter > 2 and rate > 1e-3
+    factor = min(RADAU_MAX_FACTOR, safety * _predict_factor(h_abs, h_old, err, err_old))
+    if not recompute_jac and factor < 1.2:
+        factor = 1.0
+    else:
+        st[R_LU_VALID] = 0.0
+    f_new = np.empty(y.size)
+    _rhs(kind, t_new, y_new, sp, f_new)
+    if recompute_jac:
+        _jac(kind, t_new, y_new, sp, J)
+    st[R_JAC_CURRENT] = 1.0 if recompute_jac else 0.0
+    st[R_H_OLD], st[R_ERR_OLD], st[R_H] = st[R_H], err, h_abs * factor
+    st[R_T_OLD], st[R_H_LAST] = t, h
+    n = y.size
+    Q[0, :3 * n] = _mix(RADAU_PT, Z).reshape(3 * n)
+    Q[0, 3 * n:] = y
+    return t_new, y_new, f_new, True
+
+
+@jit
+def _radau_dense(t, t_old, h, Q):
+    """The Radau interpolant at t (``RadauDenseOutput``) from Q (4 n,): the coefficients of x, x^2, x^3
+    (x = (t - t_old) / h) row by row, then y_old."""
+    n = Q.size // 4
+    x = (t - t_old) / h
+    y = np.empty(n)
+    for i in range(n):
+        y[i] = Q[3 * n + i] + x * (Q[i] + x * (Q[n + i] + x * Q[2 * n + i]))
+    return y
+
+
+@jit
+def _jac(kind, t, y, sp, J):
+    """Jacobian d rhs / d y (n, n) into J: the slip (analytic), the ``PROBE`` equation."""
+    if kind == PROBE:
+        J[0, 0] = -sp[0]
+    else:
+        _slip_jac(t, y, sp, J)
+
+
+@jit
+def _radau_start(kind, t, y, f, t_bound, sp, rtol, atol, J):
+    """Solver state (N_RADAU,) of a fresh solve (scipy's ``Radau.__init__``): first step, Jacobian at (t, y)."""
+    st = np.zeros(N_RADAU)
+    st[R_H] = _first_step(kind, t, y, f, t_bound, sp, rtol, atol, RADAU_POWER)
+    st[R_H_OLD] = st[R_ERR_OLD] = -1.0
+    _jac(kind, t, y, sp, J)
+    st[R_JAC_CURRENT] = 1.0
+    return st
+
+
 # --------------------------------------------------------------------------- sliding
 
 # Sliding parameters: g (3), vibration A, omega, phase, d (3), mu, R0 (3), R body (3), sphere, M (9), mass,
@@ -924,8 +1191,9 @@ def _land(p, y, carry):
 S_G, S_AMP, S_OMEGA, S_PHASE, S_DIR, S_MU, S_R0, S_RB, S_SPHERE, S_M = 0, 3, 4, 5, 6, 9, 10, 13, 16, 17
 S_MASS, S_INERTIA, S_REF, S_VSTOP, S_EVENT, S_ANISO, S_STIFF = 26, 27, 30, 32, 33, 34, 35
 N_SLIDE = 36
-# Events: none; the slip stops; the stick ends; an anisotropic slip stops or falls below the stiff slip speed.
-EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF = 0.0, 1.0, 2.0, 3.0
+# Events: none; the slip stops; the stick ends; an anisotropic slip stops or falls below the stiff slip speed
+# (explicit); the slip speed rises through 2 s_stiff (implicit).
+EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF, EV_FAST = 0.0, 1.0, 2.0, 3.0, 4.0
 
 
 @jit
@@ -1037,23 +1305,73 @@ def _slide_rhs(t, y, sp, stick, out):
 
 
 @jit
-def _event(t, ctx, tab, p):
-    """Sliding event at t inside the step of ctx = (t_old, h, y_old (13), kind, sp) with interpolant tab (F)."""
-    y = _dense(t, ctx[0], ctx[1], ctx[2:15], tab[0])
-    return _event_at(t, y, ctx[16:16 + N_SLIDE])
+def _offset_jac(y, sp):
+    """dR/dq (3, 4) of the contact offset of :func:`_offset_now` (zero for a sphere), in scalars:
+    R = v + N / |q|^2, N = q0 t + u x t, t = 2 u x v (u the vector part of q, v the body-frame offset)."""
+    dR = np.zeros((3, 4))
+    if sp[S_SPHERE] != 0.0:
+        return dR
+    q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
+    v0, v1, v2 = sp[S_RB], sp[S_RB + 1], sp[S_RB + 2]
+    qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
+    t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
+    N = (q0 * t0 + u1 * t2 - u2 * t1, q0 * t1 + u2 * t0 - u0 * t2, q0 * t2 + u0 * t1 - u1 * t0)
+    T = (t0, t1, t2)
+    u = (u0, u1, u2)
+    for i in range(3):
+        dR[i, 0] = T[i] / qq - N[i] * 2.0 * q0 / qq ** 2
+    for k in range(3):  # dN/du_k = q0 dt + e_k x t + u x dt, dt = 2 e_k x v
+        e = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
+        d0, d1, d2 = 2.0 * (e[1] * v2 - e[2] * v1), 2.0 * (e[2] * v0 - e[0] * v2), 2.0 * (e[0] * v1 - e[1] * v0)
+        dN = (q0 * d0 + e[1] * t2 - e[2] * t1 + u1 * d2 - u2 * d1,
+              q0 * d1 + e[2] * t0 - e[0] * t2 + u2 * d0 - u0 * d2,
+              q0 * d2 + e[0] * t1 - e[1] * t0 + u0 * d1 - u1 * d0)
+        for i in range(3):
+            dR[i, 1 + k] = dN[i] / qq - N[i] * 2.0 * u[k] / qq ** 2
+    return dR
 
 
 @jit
-def _event_at(t, y, sp):
-    if sp[S_EVENT] == EV_SLIP or sp[S_EVENT] == EV_SLIP_STIFF:
-        s = _geometry(y, sp)[1]
-        stops = s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
-        if sp[S_EVENT] == EV_SLIP:
-            return stops
-        # The earlier of the two falling events of ``sliding._events`` (slip stops, stiff slip begins).
-        return min(stops, math.hypot(s[0], s[1]) - sp[S_STIFF])
-    phi, n = _stick_force(t, y, sp)
-    return sp[S_MU] * n - math.hypot(phi[0], phi[1])
+def _slip_jac(t, y, sp, J):
+    """Jacobian d rhs / d y (13, 13) of the slip (``_slide_rhs``, not stuck), analytic, column by column: the
+    stiff part is the friction's turning rate mu n / |s| (I - s s^T / |s|^2) through s = v + (w x R)_t, the
+    contact offset R turning with q."""
+    J[:] = 0.0
+    n = -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(sp[S_OMEGA] * t + sp[S_PHASE]) * sp[S_DIR + 2] - sp[S_G + 2]
+    sv = sp[S_AMP] * sp[S_OMEGA] * math.cos(sp[S_OMEGA] * t + sp[S_PHASE])
+    R0, R1, R2 = _offset_now(y, sp)
+    w0, w1, w2 = y[4], y[5], y[6]
+    s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
+    speed = math.hypot(s0, s1)
+    k, u0, u1 = 0.0, 0.0, 0.0  # no friction force at zero slip
+    if speed > 0.0:
+        k, u0, u1 = -sp[S_MU] * n / speed, s0 / speed, s1 / speed
+    phi0, phi1 = k * s0, k * s1
+    ds = np.zeros((2, 13))  # ds/dy at fixed R
+    ds[0, 2], ds[0, 5], ds[0, 6] = 1.0, R2, -R1
+    ds[1, 3], ds[1, 4], ds[1, 6] = 1.0, -R2, R0
+    dR = np.zeros((3, 13))
+    dR[:, 7:11] = _offset_jac(y, sp)
+    for j in range(13):
+        a0, a1, a2 = dR[0, j], dR[1, j], dR[2, j]
+        ds0, ds1 = ds[0, j] + w1 * a2 - w2 * a1, ds[1, j] + w2 * a0 - w0 * a2
+        dp0, dp1 = k * ((1.0 - u0 * u0) * ds0 - u0 * u1 * ds1), k * ((1.0 - u1 * u1) * ds1 - u0 * u1 * ds0)
+        tau = (a1 * n - a2 * phi1 - R2 * dp1, a2 * phi0 + R2 * dp0 - a0 * n,  # d(R x (phi, n))
+               a0 * phi1 + R0 * dp1 - a1 * phi0 - R1 * dp0)
+        J[2, j], J[3, j] = dp0, dp1
+        for i in range(3):
+            J[4 + i, j] = sp[S_M + 3 * i] * tau[0] + sp[S_M + 3 * i + 1] * tau[1] + sp[S_M + 3 * i + 2] * tau[2]
+        J[11, j] = sv * (sp[S_DIR] * dp0 + sp[S_DIR + 1] * dp1)
+        J[12, j] = -(dp0 * s0 + phi0 * ds0 + dp1 * s1 + phi1 * ds1)
+    J[0, 2] = J[1, 3] = 1.0
+    q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
+    dq_dw = ((-q1, -q2, -q3), (q0, q3, -q2), (-q3, q0, q1), (q2, -q1, q0))  # q' = (0, w) (x) q / 2
+    dq_dq = ((0.0, -w0, -w1, -w2), (w0, 0.0, -w2, w1), (w1, w2, 0.0, -w0), (w2, -w1, w0, 0.0))
+    for i in range(4):
+        for j in range(3):
+            J[7 + i, 4 + j] = 0.5 * dq_dw[i][j]
+        for j in range(4):
+            J[7 + i, 7 + j] = 0.5 * dq_dq[i][j]
 
 
 @jit
@@ -1114,6 +1432,134 @@ def _slide_params(p, Q0, R0, mu):
 
 
 @jit
+def _interp(t, ctx, tab):
+    """The interpolant at t of the step in ctx = (t_old, h, y_old (13), Radau, sp), coefficients tab[0]."""
+    if ctx[15] != 0.0:
+        return _radau_dense(t, ctx[0], ctx[1], tab[0])
+    return _dense(t, ctx[0], ctx[1], ctx[2:15], tab[0])
+
+
+@jit
+def _step_ctx(ctx, t, h, z, radau):
+    ctx[0], ctx[1], ctx[15] = t, h, radau
+    ctx[2:15] = z
+
+
+@jit
+def _event(t, ctx, tab, p):
+    """Sliding event at t inside the step of ctx (see :func:`_interp`)."""
+    return _event_at(t, _interp(t, ctx, tab), ctx[16:16 + N_SLIDE])
+
+
+@jit
+def _slip_events(y, sp):
+    """(The slip projected on the reference direction minus v_stop, the slip speed)."""
+    s = _geometry(y, sp)[1]
+    return s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP], math.hypot(s[0], s[1])
+
+
+@jit
+def _event_at(t, y, sp):
+    if sp[S_EVENT] == EV_STICK:
+        phi, n = _stick_force(t, y, sp)
+        return sp[S_MU] * n - math.hypot(phi[0], phi[1])
+    stops, speed = _slip_events(y, sp)
+    if sp[S_EVENT] == EV_SLIP:
+        return stops
+    if sp[S_EVENT] == EV_FAST:
+        return speed - 2.0 * sp[S_STIFF]
+    # The earlier of the two falling events of an explicit anisotropic slip (slip stops, turns stiff).
+    return min(stops, speed - sp[S_STIFF])
+
+
+@jit
+def _locate(event, t, t_new, ctx, tab, p):
+    """Time of ``event`` in the step of ctx: Brent on the interpolant to 4 eps (as ``solve_ivp``)."""
+    ctx[16 + S_EVENT] = event
+    return _brent(EVENT, t, t_new, 4 * EPS, ctx, tab, INT(0), p)
+
+
+@jit
+def _sample_rows(rows, carry, rec, t_last, ctx, tab):
+    """Trajectory rows at the sample times before t_last from the step of ctx; rec = (next sample index,
+    sample interval [s], start of the phase [s], height [m]), its index advanced."""
+    while rec[0] * rec[1] < t_last:
+        ts = rec[0] * rec[1]
+        if ts >= rec[2]:
+            rows = _record(rows, carry, _slide_state(ts, _interp(ts, ctx, tab), rec[3]), SLIDING)
+        rec[0] += 1.0
+    return rows
+
+
+@jit
+def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
+    """One integration chunk by DOP853 (a fresh ``solve_ivp`` of the Python loop) until t_chunk or the
+    terminal event of sp: (t, z, event NO_EVENT / REGIME / SWITCH, rows, status)."""
+    tol = p[P_TOL]
+    g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
+    f = np.empty(13)
+    _rhs(kind, t, z, sp, f)
+    h_abs = _first_step(kind, t, z, f, t_chunk, sp, tol, atol, -DOP_EXPONENT)
+    K = np.empty((DOP_EXTENDED, 13))
+    F = np.empty((1, DOP_POWER * 13))
+    ctx[16:] = sp
+    for _ in range(MAX_STEPS_PER_CHUNK):
+        if not t < t_chunk:
+            return t, z, NO_EVENT, rows, DONE
+        t_new, z_new, h_abs, ok = _dop_advance(kind, t, z, f, h_abs, t_chunk, sp, tol, atol, K)
+        if not ok:
+            return t, z, NO_EVENT, rows, SLIDE_FAIL
+        g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
+        fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
+        t_last = t_new
+        if fired or rec[0] * rec[1] < t_new:
+            F[0] = _dop_dense(kind, t, t_new - t, z, z_new, sp, K).reshape(DOP_POWER * 13)
+            _step_ctx(ctx, t, t_new - t, z, 0.0)
+        if fired:
+            t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, INT(0), p)
+            z_new = _dense(t_last, t, t_new - t, z, F[0])
+        rows = _sample_rows(rows, carry, rec, t_last, ctx, F)
+        if fired:
+            return t_last, z_new, SWITCH if _switched(z_new, sp) else REGIME, rows, DONE
+        t, z, f, g_old = t_new, z_new, K[DOP_STAGES].copy(), g_new
+    return t, z, NO_EVENT, rows, DONE if t >= t_chunk else SLIDE_RHS
+
+
+@jit
+def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
+    """One chunk of a stiff slip by Radau (a fresh ``solve_ivp(method="Radau")`` of the Python loop) until
+    t_chunk or the first terminal event: the slip stops (along sp's reference direction) or its speed rises
+    through 2 s_stiff (back to DOP853). Returns (t, z, event, rows, status, accepted steps)."""
+    tol = p[P_TOL]
+    f = np.empty(13)
+    _rhs(SLIP, t, z, sp, f)
+    J, LUr, LUc = np.empty((13, 13)), np.empty((13, 13)), np.empty((13, 13), dtype=np.complex128)
+    pr, pc = np.empty(13, dtype=np.int64), np.empty(13, dtype=np.int64)
+    Q = np.empty((1, 4 * 13))
+    st = _radau_start(SLIP, t, z, f, t_chunk, sp, tol, atol, J)
+    ctx[16:] = sp
+    stops, speed = _slip_events(z, sp)
+    for k in range(MAX_RADAU_STEPS):
+        if not t < t_chunk:
+            return t, z, NO_EVENT, rows, DONE, k
+        t_new, z_new, f, ok = _radau_step(SLIP, t, z, f, t_chunk, sp, tol, atol, st, J, LUr, pr, LUc, pc, Q)
+        if not ok:
+            return t, z, NO_EVENT, rows, SLIDE_FAIL, k
+        stops_new, speed_new = _slip_events(z_new, sp)
+        _step_ctx(ctx, t, t_new - t, z, 1.0)
+        fast, fast_new = speed - 2.0 * sp[S_STIFF], speed_new - 2.0 * sp[S_STIFF]
+        t_stops = _locate(EV_SLIP, t, t_new, ctx, Q, p) if stops >= 0.0 and stops_new <= 0.0 else np.inf
+        t_fast = _locate(EV_FAST, t, t_new, ctx, Q, p) if fast <= 0.0 and fast_new >= 0.0 else np.inf
+        t_last = min(t_stops, t_fast, t_new)
+        rows = _sample_rows(rows, carry, rec, t_last, ctx, Q)
+        if min(t_stops, t_fast) < np.inf:
+            z_last = _radau_dense(t_last, t, t_new - t, Q[0])
+            return t_last, z_last, REGIME if t_stops <= t_fast else SWITCH, rows, DONE, k + 1
+        t, z, stops, speed = t_new, z_new, stops_new, speed_new
+    return t, z, NO_EVENT, rows, DONE if t >= t_chunk else SLIDE_RHS, MAX_RADAU_STEPS
+
+
+@jit
 def _slide(p, y, t_end, rows, carry):
     """One sliding phase from state y (``motion._slide`` with ``sliding.slide``): (state, lifted, rows, status)."""
     t0 = y[0]
@@ -1133,74 +1579,38 @@ def _slide(p, y, t_end, rows, carry):
     z[7:11] = y[7:11]
     z[11] = z[12] = 0.0
     g = math.sqrt(p[P_G:P_G + 3] @ p[P_G:P_G + 3])
-    v_scale = carry[C_V_SCALE] if carry[C_RESUME] != 0.0 else (g + abs(_normal(p, t0))) * step
-    carry[C_RESUME] = 0.0
+    v_scale = (g + abs(_normal(p, t0))) * step
     sp[S_VSTOP] = tol * v_scale
     sp[S_STIFF] = tol**sliding.SLIP_STIFF_POWER * v_scale
     a_min = min(p[0], p[1], p[2])
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min, 1 / v_scale,
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
-    height = y[3]
     stick, z = _settle(t0, z, sp, True)
-    t, stalled, status = t0, 0, DONE
-    K = np.empty((DOP_EXTENDED, 13))
-    F = np.empty((1, DOP_POWER * 13))
+    t, stalled, status, implicit = t0, 0, DONE, False
     ctx = np.empty(16 + N_SLIDE)
-    sample = p[P_SAMPLE]
-    next_k = math.ceil(t0 / sample - 1e-9)
+    rec = np.array([float(math.ceil(t0 / p[P_SAMPLE] - 1e-9)), p[P_SAMPLE], t0, y[3]])
     while t < t_stop and status == DONE:
-        if _stiff(z, sp, stick):
-            status = STIFF_SLIP
-            break
-        kind = STICK if stick else SLIP
+        implicit = _implicit(z, sp, stick, 2.0 if implicit else 1.0)
         _choose_event(z, sp, stick)
         # One integration chunk of 40 scan steps, a fresh solve as in the Python loop.
         t_phase, t_chunk = t, min(t_stop, t + 40 * step)
-        g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
-        f = np.empty(13)
-        _rhs(kind, t, z, sp, f)
-        h_abs = _dop_first_step(kind, t, z, f, t_chunk, sp, tol, atol)
-        fired, count = False, 0
-        while t < t_chunk and not fired:
-            count += 1
-            if count > MAX_STEPS_PER_CHUNK:
-                status = SLIDE_RHS
-                break
-            t_new, z_new, h_abs, ok = _dop_advance(kind, t, z, f, h_abs, t_chunk, sp, tol, atol, K)
-            if not ok:
-                status = SLIDE_FAIL
-                break
-            g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
-            fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
-            if fired or next_k * sample < t_new:
-                F = _dop_dense(kind, t, t_new - t, z, z_new, sp, K).reshape(1, DOP_POWER * 13)
-            t_last = t_new
-            if fired:
-                ctx[0], ctx[1], ctx[15] = t, t_new - t, kind
-                ctx[2:15] = z
-                ctx[16:] = sp
-                t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, INT(0), p)
-                z_new = _dense(t_last, t, t_new - t, z, F[0])
-            while next_k * sample < t_last:  # trajectory rows at the sample times inside this step
-                ts = next_k * sample
-                if ts >= t0:
-                    rows = _record(rows, carry, _slide_state(ts, _dense(ts, t, t_new - t, z, F[0]), height), SLIDING)
-                next_k += 1
-            t, z, f, g_old = t_last, z_new, K[DOP_STAGES].copy(), g_new
+        if implicit:
+            t, z, event, rows, status, n = _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec)
+            carry[C_IMPLICIT] += n
+        else:
+            kind = STICK if stick else SLIP
+            t, z, event, rows, status = _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec)
         stalled = stalled + 1 if t <= t_phase else 0
         if stalled > MAX_STALLED_EVENTS:
             status = SLIDE_STALLED
-        if fired and _switched(z, sp):
-            status = STIFF_SLIP
-        elif fired:
+        if event == SWITCH:  # the slip speed left the hysteresis band [s_stiff, 2 s_stiff]
+            implicit = not implicit
+        elif event == REGIME:  # the stick force reached the cone (slip starts), or the slip speed v_stop
             stick, z = _settle(t, z, sp, not stick)
     carry[C_WORK] += p[P_MASS] * z[11]
     carry[C_SLIDE_LOSS] += p[P_MASS] * z[12]
-    end = _slide_state(t, z, height)
-    if status == STIFF_SLIP:  # the Python side goes on from end (its rows, its end row)
-        carry[C_V_SCALE] = v_scale
-    else:
-        rows = _record(rows, carry, end, SLIDING)
+    end = _slide_state(t, z, y[3])
+    rows = _record(rows, carry, end, SLIDING)
     return end, (not math.isnan(t_lift)) and t >= t_lift, rows, status
 
 
@@ -1219,12 +1629,13 @@ def _choose_event(z, sp, stick):
 
 
 @jit
-def _stiff(z, sp, stick):
-    """An anisotropic slip below the stiff slip speed s_stiff: where ``sliding.slide`` goes implicit."""
+def _implicit(z, sp, stick, band):
+    """Whether the next chunk goes implicit (``sliding.slide``): an anisotropic slip below ``band`` s_stiff
+    (1; 2 when the last chunk was implicit: the hysteresis band)."""
     if stick or sp[S_ANISO] == 0.0:
         return False
     s = _geometry(z, sp)[1]
-    return math.hypot(s[0], s[1]) < sp[S_STIFF]
+    return math.hypot(s[0], s[1]) < band * sp[S_STIFF]
 
 
 @jit
@@ -1401,41 +1812,13 @@ def _raise(status: int, t: float, regime: int) -> None:
     raise SymmechError(f"{what} failed at t = {t:.9g} s: required step size is less than spacing between numbers")
 
 
-def _python_slip(model: motion.Model, num: motion.Numerics, y: np.ndarray, t_end: float, rows: np.ndarray,
-                 carry: np.ndarray, progress):
-    """The stiff part of a sliding phase (status ``STIFF_SLIP`` at state y (14,)) by
-    :func:`symmech.grain.sliding.slide` (Radau) with the phase's velocity scale, up to where it would go on
-    with DOP853 (the compiled loop resumes the phase there) or the phase's end; booked in rows and carry as
-    ``_slide`` would; returns (y there, rows)."""
-    Q = _rot(y[7:11])
-    body = sliding.Body(model.axes, model.mass, tuple(model.inertia), model.effects.rotation)
-    t0 = float(y[0])
-    res = sliding.slide(model.sliding, body, t0, y[1:3], y[4:6], y[7:11], Q @ y[11:14], t_end,
-                        motion._Recorder(num.sample_interval).times(t0, t_end), num.scan_step, num.tolerance,
-                        progress, v_scale=float(carry[C_V_SCALE]), implicit=True, until_explicit=True)
-    for t, r, v, q, w in zip(*res.samples):
-        rows = _record(rows, carry, _slide_state(t, np.concatenate([r, v, w, q, [0.0, 0.0]]), y[3]), SLIDING)
-    end = _slide_state(res.t, np.concatenate([res.r, res.v, res.w, res.q, [0.0, 0.0]]), y[3])
-    if not res.lifted and res.t < t_end:  # no longer stiff: the compiled loop goes on with this phase
-        carry[C_RESUME] = 1.0
-    else:
-        rows = _record(rows, carry, end, SLIDING)
-    carry[C_WORK] += res.work
-    carry[C_SLIDE_LOSS] += res.dissipated
-    carry[C_T_SLIDING] += res.t - t0
-    if res.lifted:
-        carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0
-    return end, rows
-
-
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
              on_step=None) -> motion.Motion:
     """Accurate mode compiled: the contract and the result structure of :func:`symmech.grain.motion.simulate`.
 
     ``on_step(t_now)`` is called between batches of ``PHASES_PER_CALL`` regime phases, at most every 0.2 s
-    of wall time, and once at the end. A stiff slip (``STIFF_SLIP``) is handed to the Python sliding
-    integrator for the rest of its phase; ``extra["engine"]`` counts those phases. The impact log is built
-    on first use (:class:`LazyMotion`).
+    of wall time, and once at the end. ``extra["implicit_slip_steps"]`` counts the Radau steps of stiff slips.
+    The impact log is built on first use (:class:`LazyMotion`).
     """
     model = model.active()
     progress = motion.Progress(on_step)
@@ -1446,11 +1829,8 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     budget = _Budget(model, p, y)
     rows = np.empty((int(max(t_end - start.t, 0.0) / num.sample_interval) + 64, 15))
     imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), np.zeros(N_CARRY)
-    status, handed = MORE, 0
-    while status in (MORE, STIFF_SLIP):
-        if status == STIFF_SLIP:
-            y, rows = _python_slip(model, num, y, t_end, rows, carry, progress)
-            handed += 1
+    status = MORE
+    while status == MORE:
         progress(y[0])
         y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
@@ -1463,7 +1843,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
         warnings.append(motion.rocking_warning(int(carry[C_ROCKING])))
     extra = {"landings": int(carry[C_LANDINGS]), "rocking_contacts": int(carry[C_ROCKING]),
              "energy_budget": budget.report(y, motion.ENERGY_TOLERANCE),
-             "engine": f"compiled; python for {handed} stiff slip part(s)" if handed else "compiled"}
+             "engine": "compiled", "implicit_slip_steps": int(carry[C_IMPLICIT])}
     time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
     final = _state(y)
     result = LazyMotion(rows[:int(carry[C_ROWS])], None, time_in, list(dict.fromkeys(warnings)), start, final, extra)

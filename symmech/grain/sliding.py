@@ -207,16 +207,12 @@ def _rotate(q, v) -> np.ndarray:
 
 
 def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, sample_times, step: float,
-          tol: float, progress=None, v_scale: float | None = None, implicit: bool = False,
-          until_explicit: bool = False) -> SlideResult:
+          tol: float, progress=None) -> SlideResult:
     """Accurate sliding from position ``r0``, velocity ``v0`` (2,), orientation ``q0`` (4,) and spin ``w0`` (3,)
     (rad/s, KXYZ) at ``t0`` until lift-off or ``t_end``.
 
     Events are located to ``tol`` (relative; lift-off times to ``tol * step``). ``progress(t)`` is called
-    between integration chunks of one vibration scan window (it may raise to stop the run). A phase resumed
-    part-way (the compiled engine hands over its stiff slips) passes the phase's ``v_scale`` [m/s] (default:
-    the one at ``t0``) and ``implicit=True`` (it resumes where the slip has turned stiff); with
-    ``until_explicit`` it returns where the phase would go on with DOP853 (handed back; not lifted, t < t_end).
+    between integration chunks of one vibration scan window (it may raise to stop the run).
     """
     t_lift = first_root(model.normal, t0, t_end, step, tol * step) if model.normal(t0) > 0 else t0
     t_stop = t_end if t_lift is None else t_lift
@@ -224,8 +220,7 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     y = np.concatenate([r0, v0, w0, q0, [0.0, 0.0]]).astype(float)
     sample_times = np.asarray(sample_times, dtype=float)
     # Velocity gained over one scan step: the scale of the slip-speed resolution and of atol.
-    if v_scale is None:
-        v_scale = (float(np.linalg.norm(model.g_k)) + float(np.abs(model.normal(t0)))) * step
+    v_scale = (float(np.linalg.norm(model.g_k)) + float(np.abs(model.normal(t0)))) * step
     v_stop = tol * v_scale
     a_min = min(body.axes)
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min,
@@ -237,13 +232,11 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     s_stiff = tol**SLIP_STIFF_POWER * v_scale
     from scipy.integrate import solve_ivp  # here, not at import: a compiled run never loads scipy
 
-    pieces, t, stalled = [], t0, 0
+    pieces, t, stalled, implicit = [], t0, 0, False
     stick, y = _settle(ode, t, y, v_stop)
     while t < t_stop:
         implicit = ode.stiff_slip and not stick and model.mu > 0.0 and (
             math.hypot(*ode.geometry(y)[1]) < (2.0 if implicit else 1.0) * s_stiff)
-        if until_explicit and not implicit:
-            break
         events = _events(ode, y, stick, v_stop, implicit, s_stiff)
         ode.nfev = 0
         sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="Radau" if implicit else "DOP853",
