@@ -6,6 +6,7 @@ exit status 2, never a traceback.
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import importlib.util
 import json
@@ -263,7 +264,11 @@ def _on_sigterm(signum, frame):
 
 
 def main(argv=None) -> int:
-    """Run one command; user errors exit 2, Ctrl-C 130, internal errors 3 — one line each."""
+    """Run one command; user errors exit 2, Ctrl-C 130, internal errors 3 — one line each.
+
+    ``argv`` None: the process's own command line; the process ends after the command, so every object
+    still alive is frozen out of the garbage collector (``gc.freeze``): the interpreter's final collections
+    then skip the hundreds of thousands of objects numba and matplotlib leave (~0.4 s of exit)."""
     ns = build_parser().parse_args(argv)
     in_main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main else None
@@ -287,6 +292,8 @@ def main(argv=None) -> int:
     finally:
         if in_main:
             signal.signal(signal.SIGTERM, previous)
+        if argv is None:
+            gc.freeze()
 
 
 def _one_line(exc: BaseException) -> str:
