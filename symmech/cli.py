@@ -268,8 +268,9 @@ def main(argv=None) -> int:
 
     ``argv`` None: the process's own command line. Its imports (numba, matplotlib) build ~10^5 long-lived
     objects that the garbage collector would walk again and again, so collections start at 10,000 new objects
-    instead of 700 (~0.15 s of a grain run); and as the process ends after the command, every object still
-    alive is frozen out of the collector (``gc.freeze``), which spares the final collections (~0.4 s)."""
+    instead of 700; and as the process ends after the command, every object still alive is frozen out of the
+    collector (``gc.freeze``), which spares the final collections. Together ~0.5-0.75 s of the main job
+    (``benchmarks/bench_pipeline.py``: "gc untuned")."""
     if argv is None:
         gc.set_threshold(10_000)
     ns = build_parser().parse_args(argv)
