@@ -4,9 +4,11 @@ Part 1, the README's main job (``symmech run scenes/grain_default.toml --out DIR
 contender a fresh interpreter, interleaved over ``--repeats`` (>= 5) rounds: ``python -c pass``
 (interpreter start), ``python -c "import numpy, scipy, matplotlib"`` (the baseline of issue 14:
 the main job should take under 3x its time), ``symmech run`` with the scene's default plots and
-with ``--no-plots``, and a stage probe (run under ``-X importtime``) that times imports of the
-CLI and the kind, validation, simulation, plots and writing, and attributes every import —
-also the lazy ones inside a stage — to the stage that triggered it.
+with ``--no-plots``, the same run through ``main(argv)`` called from Python (without the command
+line's garbage-collector tuning: its effect), and a stage probe (run under ``-X importtime``) that
+times imports of the CLI and the kind, validation, simulation, plots and writing, and attributes
+every import — also the lazy ones inside a stage — to the stage that triggered it. The probe calls
+the pipeline itself, so its collections are untuned and its exit is not timed.
 
 Part 1b, in one process: every figure the kind can draw, in PNG and in SVG, each alone.
 
@@ -37,6 +39,8 @@ from symmech.core import pipeline
 from symmech.core.context import Context
 
 STAGES = ("imports", "validate", "simulation", "plots", "writing")
+# symmech run through main(argv): the same command without the command line's gc tuning (cli.main).
+UNTUNED = "import sys; from symmech.cli import main; sys.exit(main(['run', *sys.argv[1:]]))"
 # Runs in a fresh interpreter under -X importtime; marks each stage on stderr so that the
 # import lines that follow belong to it, and prints the stage wall times [s] as JSON.
 PROBE = """
@@ -102,14 +106,18 @@ def main_job(scene: str, repeats: int) -> None:
                                                                 "--quiet"),
             "symmech run SCENE --out DIR --no-plots": fresh("-m", "symmech", "run", scene, "--out", "b",
                                                            "--quiet", "--no-plots"),
+            "same (default plots), gc untuned: main(argv)": fresh("-c", UNTUNED, scene, "--out", "c", "--quiet"),
             "stage probe (under -X importtime)": probe,
         }, repeats=repeats)
     print(f"{machine()}; scene {scene}; {repeats} interleaved rounds, each contender a fresh process")
     for name, st in stats.items():
-        print(f"  {name:<48} {st.text()}")
+        print(f"  {name:<50} {st.text()}")
     base = stats['python -c "import numpy, scipy, matplotlib"']
     for name in ("symmech run SCENE --out DIR (default plots)", "symmech run SCENE --out DIR --no-plots"):
         print(f"  {name} / baseline: {ratio(stats[name], base)}   (target < 3x)")
+    untuned = stats["same (default plots), gc untuned: main(argv)"]
+    print(f"  gc untuned / symmech run (default plots): "
+          f"{ratio(untuned, stats['symmech run SCENE --out DIR (default plots)'])}")
     print(f"  plots drawn by default: {', '.join(probes[0][0]['plots']) or 'none'}")
     print("  stages of the probe: wall median (min, max) [s], of which imports median [s]")
     for stage in STAGES:
