@@ -60,8 +60,9 @@ def test_ellipsoid_default_scene_matches_the_python_loop(tmp_path):
     assert_same(c, p, 1e-11, 1e-7)
     bc, bp = c.extra["energy_budget"], p.extra["energy_budget"]
     assert bc["relative_residual"] < 1e-8
-    for key in ("input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J", "lost_in_sliding_J"):
+    for key in ("input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J", "lost_in_sliding_J", "end_J"):
         assert bc[key] == pytest.approx(bp[key], rel=1e-6, abs=1e-15)
+    assert bc["start_J"] == pytest.approx(bp["start_J"], rel=1e-14)  # the same state, energies in numba / numpy
 
 
 def test_ellipsoid_printed_law_matches_the_python_loop(tmp_path):
