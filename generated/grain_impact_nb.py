@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a8080b2f7394ea9786aed107c68527adc79b4c0eaeaff06598e9c7e6257e5f0d
-# source key 649565931e890b3de3f5c69df7f654c547314e1267706717eb4b62b0b75aea46
-# body sha256 09effaaeaa4a147013f14a64e1e241cb066d5f670cd70e902f4645ea6a5b8f34
+# symmech 0.1.0 generated module; inputs sha256 69e5dbca422a2b8e77878be9ee7055d210d16304efdb28162f9f31623b810b27
+# source key f464ea932e1fd6b0d28ec96bb601179faaf93ff78c7d598d4f23a648aa073b97
+# body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
 Compiled twin of `symmech.generated.grain_impact` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["rotation", "rotation_scalar", "euler_rate_matrix", "euler_rate_matrix_scalar", "contact_offset", "contact_offset_scalar", "contact_height", "contact_height_scalar", "inertia_ratio", "inertia_ratio_scalar", "H", "H_scalar", "mu_equation", "mu_equation_scalar", "system_19_residual", "system_19_residual_scalar", "descent_functional", "descent_functional_scalar", "descent_gradient", "descent_gradient_scalar", "euler_rate_system", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_scalar", "body_components", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_scalar", "cramer_solution", "cramer_solution_scalar"]
+__all__ = ["rotation", "rotation_into", "rotation_scalar", "euler_rate_matrix", "euler_rate_matrix_into", "euler_rate_matrix_scalar", "contact_offset", "contact_offset_into", "contact_offset_scalar", "contact_height", "contact_height_into", "contact_height_scalar", "inertia_ratio", "inertia_ratio_into", "inertia_ratio_scalar", "H", "H_into", "H_scalar", "mu_equation", "mu_equation_into", "mu_equation_scalar", "system_19_residual", "system_19_residual_into", "system_19_residual_scalar", "descent_functional", "descent_functional_into", "descent_functional_scalar", "descent_gradient", "descent_gradient_into", "descent_gradient_scalar", "euler_rate_system", "euler_rate_system_into", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_into", "euler_rate_rhs_scalar", "body_components", "body_components_into", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_into", "centre_velocity_after_scalar", "cramer_solution", "cramer_solution_into", "cramer_solution_scalar"]
 
 
 def _flat(*args):
@@ -65,10 +68,16 @@ def _rotation_0(psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rotation_into(psi, theta, phi, out):
+    """Q: body axes (columns) in the surface frame, z-x-z Euler angles: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _rotation_0(psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rotation_scalar(psi, theta, phi):
     """Q: body axes (columns) in the surface frame, z-x-z Euler angles: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _rotation_0(psi, theta, phi, out, 0)
+    rotation_into(psi, theta, phi, out)
     return out[0]
 
 
@@ -124,10 +133,16 @@ def _euler_rate_matrix_0(theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_rate_matrix_into(theta, phi, out):
+    """W: body angular velocity = W (theta', psi', phi'): floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _euler_rate_matrix_0(theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_rate_matrix_scalar(theta, phi):
     """W: body angular velocity = W (theta', psi', phi'): floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _euler_rate_matrix_0(theta, phi, out, 0)
+    euler_rate_matrix_into(theta, phi, out)
     return out[0]
 
 
@@ -191,10 +206,16 @@ def _contact_offset_0(a, b, c, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def contact_offset_into(a, b, c, psi, theta, phi, out):
+    """R = K - C, centre of mass to lowest point of the ellipsoid, surface frame: floats in, written into out[0] (out: float64 (1, 3)) [m]."""
+    _contact_offset_0(a, b, c, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def contact_offset_scalar(a, b, c, psi, theta, phi):
     """R = K - C, centre of mass to lowest point of the ellipsoid, surface frame: floats in, a float64 array (3,) out [m]."""
     out = numpy.empty((1, 3))
-    _contact_offset_0(a, b, c, psi, theta, phi, out, 0)
+    contact_offset_into(a, b, c, psi, theta, phi, out)
     return out[0]
 
 
@@ -246,10 +267,16 @@ def _contact_height_0(a, b, c, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def contact_height_into(a, b, c, psi, theta, phi, out):
+    """height of the centre above the plane at contact: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _contact_height_0(a, b, c, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def contact_height_scalar(a, b, c, psi, theta, phi):
     """height of the centre above the plane at contact: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _contact_height_0(a, b, c, psi, theta, phi, out, 0)
+    contact_height_into(a, b, c, psi, theta, phi, out)
     return out[0]
 
 
@@ -337,10 +364,16 @@ def _inertia_ratio_0(a, b, c, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def inertia_ratio_into(a, b, c, psi, theta, phi, out):
+    """P = I/m, squared radii of gyration in the surface frame: floats in, written into out[0] (out: float64 (1, 3, 3)) [m^2]."""
+    _inertia_ratio_0(a, b, c, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def inertia_ratio_scalar(a, b, c, psi, theta, phi):
     """P = I/m, squared radii of gyration in the surface frame: floats in, a float64 array (3, 3) out [m^2]."""
     out = numpy.empty((1, 3, 3))
-    _inertia_ratio_0(a, b, c, psi, theta, phi, out, 0)
+    inertia_ratio_into(a, b, c, psi, theta, phi, out)
     return out[0]
 
 
@@ -465,10 +498,16 @@ def _H_0(a, b, c, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def H_into(a, b, c, psi, theta, phi, out):
+    """reduction tensor H: m (u_K - u_K(0)) = H T: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _H_0(a, b, c, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def H_scalar(a, b, c, psi, theta, phi):
     """reduction tensor H: m (u_K - u_K(0)) = H T: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _H_0(a, b, c, psi, theta, phi, out, 0)
+    H_into(a, b, c, psi, theta, phi, out)
     return out[0]
 
 
@@ -538,10 +577,16 @@ def _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u
 
 
 @numba.njit(cache=True, error_model="numpy")
+def mu_equation_into(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out):
+    """Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu: floats in, written into out[0] (out: float64 (1, 5)) [m/s]."""
+    _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def mu_equation_scalar(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0):
     """Fourier coefficients (k0, k1c, k1s, k2c, k2s) of the exact scalar equation in mu: floats in, a float64 array (5,) out [m/s]."""
     out = numpy.empty((1, 5))
-    _mu_equation_0(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    mu_equation_into(h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -609,10 +654,16 @@ def _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, l
 
 
 @numba.njit(cache=True, error_model="numpy")
+def system_19_residual_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """residuals of the impact system (19): floats in, written into out[0] (out: float64 (1, 3)) [N*s]."""
+    _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def system_19_residual_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
     """residuals of the impact system (19): floats in, a float64 array (3,) out [N*s]."""
     out = numpy.empty((1, 3))
-    _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    system_19_residual_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -686,10 +737,16 @@ def _descent_functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, l
 
 
 @numba.njit(cache=True, error_model="numpy")
+def descent_functional_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """sum of squared residuals of (19), the consistent form of Phi: floats in, written into out[0] (out: float64 (1,)) [N^2*s^2]."""
+    _descent_functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def descent_functional_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
     """sum of squared residuals of (19), the consistent form of Phi: floats in, a float out [N^2*s^2]."""
     out = numpy.empty((1,))
-    _descent_functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    descent_functional_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -777,10 +834,16 @@ def _descent_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lam
 
 
 @numba.njit(cache=True, error_model="numpy")
+def descent_gradient_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """gradient of the consistent Phi with respect to (T_x, T_z, mu): floats in, written into out[0] (out: float64 (1, 3)) [N*s, N^2*s^2/rad]."""
+    _descent_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def descent_gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
     """gradient of the consistent Phi with respect to (T_x, T_z, mu): floats in, a float64 array (3,) out [N*s, N^2*s^2/rad]."""
     out = numpy.empty((1, 3))
-    _descent_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    descent_gradient_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -860,10 +923,16 @@ def _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_rate_system_into(J_x, J_y, J_z, theta, phi, out):
+    """matrix a of the angular-momentum balance in Euler rates: floats in, written into out[0] (out: float64 (1, 3, 3)) [kg*m^2]."""
+    _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_rate_system_scalar(J_x, J_y, J_z, theta, phi):
     """matrix a of the angular-momentum balance in Euler rates: floats in, a float64 array (3, 3) out [kg*m^2]."""
     out = numpy.empty((1, 3, 3))
-    _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, 0)
+    euler_rate_system_into(J_x, J_y, J_z, theta, phi, out)
     return out[0]
 
 
@@ -917,10 +986,16 @@ def _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_rate_rhs_into(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out):
+    """right-hand side b of the angular-momentum balance: floats in, written into out[0] (out: float64 (1, 3)) [kg*m^2/s]."""
+    _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_rate_rhs_scalar(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi):
     """right-hand side b of the angular-momentum balance: floats in, a float64 array (3,) out [kg*m^2/s]."""
     out = numpy.empty((1, 3))
-    _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, 0)
+    euler_rate_rhs_into(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out)
     return out[0]
 
 
@@ -999,10 +1074,16 @@ def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def body_components_into(R_x, R_y, R_z, psi, theta, phi, out):
+    """R in body axes, Q^T R: floats in, written into out[0] (out: float64 (1, 3)) [m]."""
+    _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def body_components_scalar(R_x, R_y, R_z, psi, theta, phi):
     """R in body axes, Q^T R: floats in, a float64 array (3,) out [m]."""
     out = numpy.empty((1, 3))
-    _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, 0)
+    body_components_into(R_x, R_y, R_z, psi, theta, phi, out)
     return out[0]
 
 
@@ -1056,10 +1137,16 @@ def _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def centre_velocity_after_into(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out):
+    """centre-of-mass velocity after the impact: floats in, written into out[0] (out: float64 (1, 3)) [m/s]."""
+    _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def centre_velocity_after_scalar(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     """centre-of-mass velocity after the impact: floats in, a float64 array (3,) out [m/s]."""
     out = numpy.empty((1, 3))
-    _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, 0)
+    centre_velocity_after_into(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out)
     return out[0]
 
 
@@ -1124,10 +1211,16 @@ def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def cramer_solution_into(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out):
+    """solution (theta', psi', phi') of a x = b by Cramer's rule: floats in, written into out[0] (out: float64 (1, 3)) [rad/s]."""
+    _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def cramer_solution_scalar(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
     """solution (theta', psi', phi') of a x = b by Cramer's rule: floats in, a float64 array (3,) out [rad/s]."""
     out = numpy.empty((1, 3))
-    _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, 0)
+    cramer_solution_into(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out)
     return out[0]
 
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 bbe12b8debcbaf1daca5d9e7d5ed7703636701e1462844bf8a196107bca700d9
-# source key b411de99d3d4c6f35802d16f7fbfbca028eead6e7a558f94ee1f9c8dc662e48b
-# body sha256 e2edd76bf661a1a746b6fe1ea0adf6ca179f8b762af7cb5a8914ca4a4cc0e8c6
+# symmech 0.1.0 generated module; inputs sha256 43714dadaa94846561333eca8fcf72391c40dfd3a09368aa64844b38ab382f1b
+# source key b920360464ed53b8fbdba243d08417dd34bab69ab3fafb573eff09e43e2537f7
+# body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Compiled twin of `symmech.generated.grain_impact_printed` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["inertia_ratio", "inertia_ratio_scalar", "H", "H_scalar", "system_19_residual", "system_19_residual_scalar", "functional", "functional_scalar", "gradient", "gradient_scalar", "euler_rate_system", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_scalar", "cramer_solution", "cramer_solution_scalar", "body_components", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_scalar"]
+__all__ = ["inertia_ratio", "inertia_ratio_into", "inertia_ratio_scalar", "H", "H_into", "H_scalar", "system_19_residual", "system_19_residual_into", "system_19_residual_scalar", "functional", "functional_into", "functional_scalar", "gradient", "gradient_into", "gradient_scalar", "euler_rate_system", "euler_rate_system_into", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_into", "euler_rate_rhs_scalar", "cramer_solution", "cramer_solution_into", "cramer_solution_scalar", "body_components", "body_components_into", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_into", "centre_velocity_after_scalar"]
 
 
 def _flat(*args):
@@ -85,10 +88,16 @@ def _inertia_ratio_0(a, b, c, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def inertia_ratio_into(a, b, c, psi, theta, phi, out):
+    """P as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [m^2]."""
+    _inertia_ratio_0(a, b, c, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def inertia_ratio_scalar(a, b, c, psi, theta, phi):
     """P as printed: floats in, a float64 array (3, 3) out [m^2]."""
     out = numpy.empty((1, 3, 3))
-    _inertia_ratio_0(a, b, c, psi, theta, phi, out, 0)
+    inertia_ratio_into(a, b, c, psi, theta, phi, out)
     return out[0]
 
 
@@ -168,10 +177,16 @@ def _H_0(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def H_into(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out):
+    """reduction tensor H as printed, from R and P: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _H_0(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def H_scalar(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz):
     """reduction tensor H as printed, from R and P: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _H_0(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out, 0)
+    H_into(R_x, R_y, R_z, P_xx, P_xy, P_xz, P_yy, P_yz, P_zz, out)
     return out[0]
 
 
@@ -233,10 +248,16 @@ def _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, l
 
 
 @numba.njit(cache=True, error_model="numpy")
+def system_19_residual_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """residuals of (19) as printed: floats in, written into out[0] (out: float64 (1, 3)) [N*s]."""
+    _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def system_19_residual_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
     """residuals of (19) as printed: floats in, a float64 array (3,) out [N*s]."""
     out = numpy.empty((1, 3))
-    _system_19_residual_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    system_19_residual_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -308,10 +329,16 @@ def _functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def functional_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """Phi as printed (sum of residuals): floats in, written into out[0] (out: float64 (1,)) [N*s]."""
+    _functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def functional_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
     """Phi as printed (sum of residuals): floats in, a float out [N*s]."""
     out = numpy.empty((1,))
-    _functional_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    functional_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -386,10 +413,16 @@ def _gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e,
 
 
 @numba.njit(cache=True, error_model="numpy")
+def gradient_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """grad Phi as printed: floats in, written into out[0] (out: float64 (1, 3)) [1, 1, N*s/rad]."""
+    _gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
     """grad Phi as printed: floats in, a float64 array (3,) out [1, 1, N*s/rad]."""
     out = numpy.empty((1, 3))
-    _gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+    gradient_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
     return out[0]
 
 
@@ -469,10 +502,16 @@ def _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_rate_system_into(J_x, J_y, J_z, theta, phi, out):
+    """matrix a as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [kg*m^2]."""
+    _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_rate_system_scalar(J_x, J_y, J_z, theta, phi):
     """matrix a as printed: floats in, a float64 array (3, 3) out [kg*m^2]."""
     out = numpy.empty((1, 3, 3))
-    _euler_rate_system_0(J_x, J_y, J_z, theta, phi, out, 0)
+    euler_rate_system_into(J_x, J_y, J_z, theta, phi, out)
     return out[0]
 
 
@@ -526,10 +565,16 @@ def _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_rate_rhs_into(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out):
+    """right-hand side b as printed: floats in, written into out[0] (out: float64 (1, 3)) [kg*m^2/s]."""
+    _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_rate_rhs_scalar(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi):
     """right-hand side b as printed: floats in, a float64 array (3,) out [kg*m^2/s]."""
     out = numpy.empty((1, 3))
-    _euler_rate_rhs_0(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out, 0)
+    euler_rate_rhs_into(J_x, J_y, J_z, theta, phi, R_xp, R_yp, R_zp, T_xp, T_yp, T_zp, dtheta, dpsi, dphi, out)
     return out[0]
 
 
@@ -602,10 +647,16 @@ def _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def cramer_solution_into(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out):
+    """Euler rates by Cramer's rule as printed: floats in, written into out[0] (out: float64 (1, 3)) [rad/s]."""
+    _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def cramer_solution_scalar(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3):
     """Euler rates by Cramer's rule as printed: floats in, a float64 array (3,) out [rad/s]."""
     out = numpy.empty((1, 3))
-    _cramer_solution_0(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out, 0)
+    cramer_solution_into(a11, a12, a13, a21, a22, a23, a31, a32, a33, b1, b2, b3, out)
     return out[0]
 
 
@@ -680,10 +731,16 @@ def _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def body_components_into(R_x, R_y, R_z, psi, theta, phi, out):
+    """R in body axes as printed: floats in, written into out[0] (out: float64 (1, 3)) [m]."""
+    _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def body_components_scalar(R_x, R_y, R_z, psi, theta, phi):
     """R in body axes as printed: floats in, a float64 array (3,) out [m]."""
     out = numpy.empty((1, 3))
-    _body_components_0(R_x, R_y, R_z, psi, theta, phi, out, 0)
+    body_components_into(R_x, R_y, R_z, psi, theta, phi, out)
     return out[0]
 
 
@@ -737,10 +794,16 @@ def _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def centre_velocity_after_into(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out):
+    """centre-of-mass velocity after the impact as printed: floats in, written into out[0] (out: float64 (1, 3)) [m/s]."""
+    _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def centre_velocity_after_scalar(v_x0, v_y0, v_z0, T_x, T_y, T_z, m):
     """centre-of-mass velocity after the impact as printed: floats in, a float64 array (3,) out [m/s]."""
     out = numpy.empty((1, 3))
-    _centre_velocity_after_0(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out, 0)
+    centre_velocity_after_into(v_x0, v_y0, v_z0, T_x, T_y, T_z, m, out)
     return out[0]
 
 

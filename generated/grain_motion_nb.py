@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 577293806eb54f23853e08cd12fe4abdfa3673b7c6b278f46d87d7822bd5082b
-# source key 32f997d90bb3d1106cb64038c763ec36d4e66b1f3b7aad79e5ea646a9965f5d7
-# body sha256 bb4a7d650ea4d406f0a5fac2d631cd14f8cff8b91a289ae5b820107d237b2c67
+# symmech 0.1.0 generated module; inputs sha256 1fa85f8ea266df1d650e9bcf1db715777b104a1e199be3b15ba0bb9822ed263d
+# source key 1b03fc698c1043b7c2128d622fc41f530f80a7d1efbe84321db13629d03506ed
+# body sha256 376c2cd3c66c578aa2dcb517ca10b34323531b6ff2c865677bddde45e17d13d8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -65,7 +68,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_scalar", "surface_kinematics", "surface_kinematics_scalar", "flight_translation", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_scalar", "support_distance", "support_distance_scalar", "contact_offset_body", "contact_offset_body_scalar", "euler_equations", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_scalar", "body_rates", "body_rates_scalar", "euler_rates", "euler_rates_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -85,10 +88,16 @@ def _gravity_0(g, alpha, beta, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def gravity_into(g, alpha, beta, out):
+    """gravity components in the surface frame KXYZ: floats in, written into out[0] (out: float64 (1, 3)) [m/s^2]."""
+    _gravity_0(g, alpha, beta, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def gravity_scalar(g, alpha, beta):
     """gravity components in the surface frame KXYZ: floats in, a float64 array (3,) out [m/s^2]."""
     out = numpy.empty((1, 3))
-    _gravity_0(g, alpha, beta, out, 0)
+    gravity_into(g, alpha, beta, out)
     return out[0]
 
 
@@ -148,10 +157,16 @@ def _surface_kinematics_0(A, omega, phase, dX, dY, dZ, t, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def surface_kinematics_into(A, omega, phase, dX, dY, dZ, t, out):
+    """surface displacement, velocity and acceleration (rows): floats in, written into out[0] (out: float64 (1, 3, 3)) [m, m/s, m/s^2]."""
+    _surface_kinematics_0(A, omega, phase, dX, dY, dZ, t, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def surface_kinematics_scalar(A, omega, phase, dX, dY, dZ, t):
     """surface displacement, velocity and acceleration (rows): floats in, a float64 array (3, 3) out [m, m/s, m/s^2]."""
     out = numpy.empty((1, 3, 3))
-    _surface_kinematics_0(A, omega, phase, dX, dY, dZ, t, out, 0)
+    surface_kinematics_into(A, omega, phase, dX, dY, dZ, t, out)
     return out[0]
 
 
@@ -234,10 +249,16 @@ def _flight_translation_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, ph
 
 
 @numba.njit(cache=True, error_model="numpy")
+def flight_translation_into(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, out):
+    """exact relative flight of the centre in the vibrating frame: position, velocity (rows): floats in, written into out[0] (out: float64 (1, 2, 3)) [m, m/s]."""
+    _flight_translation_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def flight_translation_scalar(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t):
     """exact relative flight of the centre in the vibrating frame: position, velocity (rows): floats in, a float64 array (2, 3) out [m, m/s]."""
     out = numpy.empty((1, 2, 3))
-    _flight_translation_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, out, 0)
+    flight_translation_into(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, A, omega, phase, dX, dY, dZ, t0, t, out)
     return out[0]
 
 
@@ -326,10 +347,16 @@ def _flight_translation_rigid_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t,
 
 
 @numba.njit(cache=True, error_model="numpy")
+def flight_translation_rigid_into(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, out):
+    """exact relative flight of the centre over a still surface: position, velocity (rows): floats in, written into out[0] (out: float64 (1, 2, 3)) [m, m/s]."""
+    _flight_translation_rigid_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def flight_translation_rigid_scalar(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t):
     """exact relative flight of the centre over a still surface: position, velocity (rows): floats in, a float64 array (2, 3) out [m, m/s]."""
     out = numpy.empty((1, 2, 3))
-    _flight_translation_rigid_0(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, out, 0)
+    flight_translation_rigid_into(rx0, ry0, rz0, vx0, vy0, vz0, gX, gY, gZ, t0, t, out)
     return out[0]
 
 
@@ -406,10 +433,16 @@ def _rotation_matrix_0(q0, q1, q2, q3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rotation_matrix_into(q0, q1, q2, q3, out):
+    """rotation matrix of a unit quaternion, body axes as columns in KXYZ: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _rotation_matrix_0(q0, q1, q2, q3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rotation_matrix_scalar(q0, q1, q2, q3):
     """rotation matrix of a unit quaternion, body axes as columns in KXYZ: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _rotation_matrix_0(q0, q1, q2, q3, out, 0)
+    rotation_matrix_into(q0, q1, q2, q3, out)
     return out[0]
 
 
@@ -456,10 +489,16 @@ def _support_distance_0(a, b, c, n1, n2, n3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def support_distance_into(a, b, c, n1, n2, n3, out):
+    """centre height above the plane when the ellipsoid touches it: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _support_distance_0(a, b, c, n1, n2, n3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def support_distance_scalar(a, b, c, n1, n2, n3):
     """centre height above the plane when the ellipsoid touches it: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _support_distance_0(a, b, c, n1, n2, n3, out, 0)
+    support_distance_into(a, b, c, n1, n2, n3, out)
     return out[0]
 
 
@@ -516,10 +555,16 @@ def _contact_offset_body_0(a, b, c, n1, n2, n3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def contact_offset_body_into(a, b, c, n1, n2, n3, out):
+    """offset of the lowest point of the ellipsoid from its centre, in body axes: floats in, written into out[0] (out: float64 (1, 3)) [m]."""
+    _contact_offset_body_0(a, b, c, n1, n2, n3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def contact_offset_body_scalar(a, b, c, n1, n2, n3):
     """offset of the lowest point of the ellipsoid from its centre, in body axes: floats in, a float64 array (3,) out [m]."""
     out = numpy.empty((1, 3))
-    _contact_offset_body_0(a, b, c, n1, n2, n3, out, 0)
+    contact_offset_body_into(a, b, c, n1, n2, n3, out)
     return out[0]
 
 
@@ -573,10 +618,16 @@ def _euler_equations_0(I1, I2, I3, w1, w2, w3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_equations_into(I1, I2, I3, w1, w2, w3, out):
+    """torque-free Euler equations: body angular acceleration: floats in, written into out[0] (out: float64 (1, 3)) [rad/s^2]."""
+    _euler_equations_0(I1, I2, I3, w1, w2, w3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_equations_scalar(I1, I2, I3, w1, w2, w3):
     """torque-free Euler equations: body angular acceleration: floats in, a float64 array (3,) out [rad/s^2]."""
     out = numpy.empty((1, 3))
-    _euler_equations_0(I1, I2, I3, w1, w2, w3, out, 0)
+    euler_equations_into(I1, I2, I3, w1, w2, w3, out)
     return out[0]
 
 
@@ -635,10 +686,16 @@ def _quaternion_rate_0(q0, q1, q2, q3, w1, w2, w3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def quaternion_rate_into(q0, q1, q2, q3, w1, w2, w3, out):
+    """quaternion rate for body-frame angular velocity: floats in, written into out[0] (out: float64 (1, 4)) [1/s]."""
+    _quaternion_rate_0(q0, q1, q2, q3, w1, w2, w3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def quaternion_rate_scalar(q0, q1, q2, q3, w1, w2, w3):
     """quaternion rate for body-frame angular velocity: floats in, a float64 array (4,) out [1/s]."""
     out = numpy.empty((1, 4))
-    _quaternion_rate_0(q0, q1, q2, q3, w1, w2, w3, out, 0)
+    quaternion_rate_into(q0, q1, q2, q3, w1, w2, w3, out)
     return out[0]
 
 
@@ -705,10 +762,16 @@ def _rotation_invariants_0(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rotation_invariants_into(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out):
+    """rotational kinetic energy and angular momentum in KXYZ: floats in, written into out[0] (out: float64 (1, 4)) [J, kg*m^2/s]."""
+    _rotation_invariants_0(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rotation_invariants_scalar(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3):
     """rotational kinetic energy and angular momentum in KXYZ: floats in, a float64 array (4,) out [J, kg*m^2/s]."""
     out = numpy.empty((1, 4))
-    _rotation_invariants_0(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out, 0)
+    rotation_invariants_into(I1, I2, I3, w1, w2, w3, q0, q1, q2, q3, out)
     return out[0]
 
 
@@ -772,10 +835,16 @@ def _body_rates_0(psi, theta, phi, psi_d, theta_d, phi_d, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def body_rates_into(psi, theta, phi, psi_d, theta_d, phi_d, out):
+    """body angular velocity (p, q, r) from Euler-angle rates: floats in, written into out[0] (out: float64 (1, 3)) [rad/s]."""
+    _body_rates_0(psi, theta, phi, psi_d, theta_d, phi_d, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def body_rates_scalar(psi, theta, phi, psi_d, theta_d, phi_d):
     """body angular velocity (p, q, r) from Euler-angle rates: floats in, a float64 array (3,) out [rad/s]."""
     out = numpy.empty((1, 3))
-    _body_rates_0(psi, theta, phi, psi_d, theta_d, phi_d, out, 0)
+    body_rates_into(psi, theta, phi, psi_d, theta_d, phi_d, out)
     return out[0]
 
 
@@ -835,10 +904,16 @@ def _euler_rates_0(psi, theta, phi, w1, w2, w3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_rates_into(psi, theta, phi, w1, w2, w3, out):
+    """Euler-angle rates (psi', theta', phi') from body rates: floats in, written into out[0] (out: float64 (1, 3)) [rad/s]."""
+    _euler_rates_0(psi, theta, phi, w1, w2, w3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_rates_scalar(psi, theta, phi, w1, w2, w3):
     """Euler-angle rates (psi', theta', phi') from body rates: floats in, a float64 array (3,) out [rad/s]."""
     out = numpy.empty((1, 3))
-    _euler_rates_0(psi, theta, phi, w1, w2, w3, out, 0)
+    euler_rates_into(psi, theta, phi, w1, w2, w3, out)
     return out[0]
 
 
@@ -908,10 +983,16 @@ def _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+    """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)): floats in, written into out[0] (out: float64 (1, 13)) [state unit / s (times M)]."""
+    _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
     """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)): floats in, a float64 array (13,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 13))
-    _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    rate_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
     return out[0]
 
 
@@ -1196,12 +1277,18 @@ def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def rate_jacobian_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
-    """dF/dy, rows F, columns y: floats in, a float64 array (13, 13) out [unit of F / unit of y]."""
-    out = numpy.empty((1, 13, 13))
+def rate_jacobian_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+    """dF/dy, rows F, columns y: floats in, written into out[0] (out: float64 (1, 13, 13)) [unit of F / unit of y]."""
     _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
     _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
     _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+    """dF/dy, rows F, columns y: floats in, a float64 array (13, 13) out [unit of F / unit of y]."""
+    out = numpy.empty((1, 13, 13))
+    rate_jacobian_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
     return out[0]
 
 

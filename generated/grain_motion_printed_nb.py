@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 25cebc9645e02ed13cdf5213b894b87ff00a2314f4bfc70d62b1440e0fd44738
-# source key d7bede02b2e606aa94e5227768e02d8b4551b2120813a9f70805c203cd428ba8
-# body sha256 c25b67ffe40fb63c5b6590b62d3658131600cc49827dbd6ad29189aa5df73afa
+# symmech 0.1.0 generated module; inputs sha256 e00f8c1d78fed0c110570ba54b7182a9c3450851b8e93eea497a476f56156478
+# source key 49030f15b39a488c04383f243bfd073c1fc2241522d65d945b3d092d189f1b15
+# body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 
 Compiled twin of `symmech.generated.grain_motion_printed` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_scalar", "flight_step", "flight_step_scalar", "euler_angles", "euler_angles_scalar", "contact_gap", "contact_gap_scalar"]
+__all__ = ["gravity", "gravity_into", "gravity_scalar", "flight_step", "flight_step_into", "flight_step_scalar", "euler_angles", "euler_angles_into", "euler_angles_scalar", "contact_gap", "contact_gap_into", "contact_gap_scalar"]
 
 
 def _flat(*args):
@@ -51,10 +54,16 @@ def _gravity_0(g, alpha, beta, delta, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def gravity_into(g, alpha, beta, delta, out):
+    """gravity terms of (61) as printed: floats in, written into out[0] (out: float64 (1, 3)) [m/s^2]."""
+    _gravity_0(g, alpha, beta, delta, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def gravity_scalar(g, alpha, beta, delta):
     """gravity terms of (61) as printed: floats in, a float64 array (3,) out [m/s^2]."""
     out = numpy.empty((1, 3))
-    _gravity_0(g, alpha, beta, delta, out, 0)
+    gravity_into(g, alpha, beta, delta, out)
     return out[0]
 
 
@@ -110,10 +119,16 @@ def _flight_step_0(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, del
 
 
 @numba.njit(cache=True, error_model="numpy")
+def flight_step_into(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, out):
+    """one step of (61) as printed: new velocity, new position (rows): floats in, written into out[0] (out: float64 (1, 2, 3)) [m/s, m]."""
+    _flight_step_0(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def flight_step_scalar(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt):
     """one step of (61) as printed: new velocity, new position (rows): floats in, a float64 array (2, 3) out [m/s, m]."""
     out = numpy.empty((1, 2, 3))
-    _flight_step_0(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, out, 0)
+    flight_step_into(vx, vy, vz, x, y, z, ax_vb, ay_vb, az_vb, g, alpha, beta, delta, dt, out)
     return out[0]
 
 
@@ -183,10 +198,16 @@ def _euler_angles_0(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def euler_angles_into(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out):
+    """Euler angles with constant rates (62), order theta, psi, phi: floats in, written into out[0] (out: float64 (1, 3)) [rad]."""
+    _euler_angles_0(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def euler_angles_scalar(theta, psi, phi, theta_d, psi_d, phi_d, s, dt):
     """Euler angles with constant rates (62), order theta, psi, phi: floats in, a float64 array (3,) out [rad]."""
     out = numpy.empty((1, 3))
-    _euler_angles_0(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out, 0)
+    euler_angles_into(theta, psi, phi, theta_d, psi_d, phi_d, s, dt, out)
     return out[0]
 
 
@@ -241,10 +262,16 @@ def _contact_gap_0(z_c, KC_x, KC_y, KC_z, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def contact_gap_into(z_c, KC_x, KC_y, KC_z, out):
+    """contact test (63) as a gap z_c - |KC| (contact when <= 0): floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _contact_gap_0(z_c, KC_x, KC_y, KC_z, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def contact_gap_scalar(z_c, KC_x, KC_y, KC_z):
     """contact test (63) as a gap z_c - |KC| (contact when <= 0): floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _contact_gap_0(z_c, KC_x, KC_y, KC_z, out, 0)
+    contact_gap_into(z_c, KC_x, KC_y, KC_z, out)
     return out[0]
 
 

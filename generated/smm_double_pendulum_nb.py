@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 41488fcbdf2e9da48a6d33773be1a3ca65252e71c84174f6b6ab9c653f7fc5d8
-# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
-# body sha256 564590c426af01ca45748e8e41bc6fa10315ac7ef650ace7bc69a943df62af48
+# symmech 0.1.0 generated module; inputs sha256 8f612a4c9ea501fa2869d8e57d5b57f39fcfd2660ff91ae5a4664079fae9f78b
+# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
+# body sha256 0b4734cfd04f5fce556855f1bfcbfb7499e3fca6ab1b295bb3fb4ff18adda2bc
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -49,7 +52,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -72,10 +75,16 @@ def _a_0(m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def a_into(m1, m2, l1, l2, g, out):
+    """double_pendulum: inertia matrix (a), a q'' + b q' + c q = Q: floats in, written into out[0] (out: float64 (1, 2, 2)) [kg, kg m, kg m^2 by coordinate kinds]."""
+    _a_0(m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def a_scalar(m1, m2, l1, l2, g):
     """double_pendulum: inertia matrix (a), a q'' + b q' + c q = Q: floats in, a float64 array (2, 2) out [kg, kg m, kg m^2 by coordinate kinds]."""
     out = numpy.empty((1, 2, 2))
-    _a_0(m1, m2, l1, l2, g, out, 0)
+    a_into(m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -127,10 +136,16 @@ def _b_0(m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def b_into(m1, m2, l1, l2, g, out):
+    """double_pendulum: damping matrix (b): floats in, written into out[0] (out: float64 (1, 2, 2)) [N s/m, N s, N m s by coordinate kinds]."""
+    _b_0(m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def b_scalar(m1, m2, l1, l2, g):
     """double_pendulum: damping matrix (b): floats in, a float64 array (2, 2) out [N s/m, N s, N m s by coordinate kinds]."""
     out = numpy.empty((1, 2, 2))
-    _b_0(m1, m2, l1, l2, g, out, 0)
+    b_into(m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -184,10 +199,16 @@ def _c_0(m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def c_into(m1, m2, l1, l2, g, out):
+    """double_pendulum: stiffness matrix (c) with the effects the scene asks for: floats in, written into out[0] (out: float64 (1, 2, 2)) [N/m, N, N m by coordinate kinds]."""
+    _c_0(m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def c_scalar(m1, m2, l1, l2, g):
     """double_pendulum: stiffness matrix (c) with the effects the scene asks for: floats in, a float64 array (2, 2) out [N/m, N, N m by coordinate kinds]."""
     out = numpy.empty((1, 2, 2))
-    _c_0(m1, m2, l1, l2, g, out, 0)
+    c_into(m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -239,10 +260,16 @@ def _L_a_0(m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_a_into(m1, m2, l1, l2, g, out):
+    """double_pendulum: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, written into out[0] (out: float64 (1, 2, 2)) [m or 1]."""
+    _L_a_0(m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_a_scalar(m1, m2, l1, l2, g):
     """double_pendulum: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, a float64 array (2, 2) out [m or 1]."""
     out = numpy.empty((1, 2, 2))
-    _L_a_0(m1, m2, l1, l2, g, out, 0)
+    L_a_into(m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -292,10 +319,16 @@ def _L_c_0(m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_c_into(m1, m2, l1, l2, g, out):
+    """double_pendulum: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, written into out[0] (out: float64 (1, 2)) [m or 1]."""
+    _L_c_0(m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_c_scalar(m1, m2, l1, l2, g):
     """double_pendulum: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, a float64 array (2,) out [m or 1]."""
     out = numpy.empty((1, 2))
-    _L_c_0(m1, m2, l1, l2, g, out, 0)
+    L_c_into(m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -350,10 +383,16 @@ def _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_into(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out):
+    """F of M y' = F: rates of the free motion of 'double_pendulum' about its configuration: floats in, written into out[0] (out: float64 (1, 4)) [state unit / s (times M)]."""
+    _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
     """F of M y' = F: rates of the free motion of 'double_pendulum' about its configuration: floats in, a float64 array (4,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 4))
-    _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+    rate_into(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -427,10 +466,16 @@ def _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_into(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out):
+    """dF/dy, rows F, columns y: floats in, written into out[0] (out: float64 (1, 4, 4)) [unit of F / unit of y]."""
+    _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_jacobian_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
     """dF/dy, rows F, columns y: floats in, a float64 array (4, 4) out [unit of F / unit of y]."""
     out = numpy.empty((1, 4, 4))
-    _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+    rate_jacobian_into(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out)
     return out[0]
 
 
@@ -504,10 +549,16 @@ def _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_mass_into(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out):
+    """M of M y' = F: floats in, written into out[0] (out: float64 (1, 4, 4)) [unit of F / unit of y']."""
+    _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g):
     """M of M y' = F: floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
     out = numpy.empty((1, 4, 4))
-    _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out, 0)
+    rate_mass_into(q_phi1, q_phi2, qd_phi1, qd_phi2, m1, m2, l1, l2, g, out)
     return out[0]
 
 

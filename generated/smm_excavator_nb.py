@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 52e93c44b70195877f1c2158a5944c96b75ed449f40b3e23eae65fed7f590953
-# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
-# body sha256 8631b47eb0a0a1b0eb106c4ab47ae76b2ba5d64b4cc68d3c70107b65df50d6a2
+# symmech 0.1.0 generated module; inputs sha256 d72732a212b65128b69cf9e38b440bc5a2f028919420b74538c642de8bff5bc7
+# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
+# body sha256 a8fd3b02bde9ef18205b867933f1b047581b0e765ee1c7d25d0928c35e3f198a
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -70,7 +73,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -143,10 +146,16 @@ def _a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, del
 
 
 @numba.njit(cache=True, error_model="numpy")
+def a_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """excavator: inertia matrix (a), a q'' + b q' + c q = Q: floats in, written into out[0] (out: float64 (1, 5, 5)) [kg, kg m, kg m^2 by coordinate kinds]."""
+    _a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def a_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """excavator: inertia matrix (a), a q'' + b q' + c q = Q: floats in, a float64 array (5, 5) out [kg, kg m, kg m^2 by coordinate kinds]."""
     out = numpy.empty((1, 5, 5))
-    _a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    a_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -249,10 +258,16 @@ def _b_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, del
 
 
 @numba.njit(cache=True, error_model="numpy")
+def b_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """excavator: damping matrix (b): floats in, written into out[0] (out: float64 (1, 5, 5)) [N s/m, N s, N m s by coordinate kinds]."""
+    _b_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def b_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """excavator: damping matrix (b): floats in, a float64 array (5, 5) out [N s/m, N s, N m s by coordinate kinds]."""
     out = numpy.empty((1, 5, 5))
-    _b_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    b_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -378,10 +393,16 @@ def _c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, del
 
 
 @numba.njit(cache=True, error_model="numpy")
+def c_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """excavator: stiffness matrix (c) with the effects the scene asks for: floats in, written into out[0] (out: float64 (1, 5, 5)) [N/m, N, N m by coordinate kinds]."""
+    _c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def c_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """excavator: stiffness matrix (c) with the effects the scene asks for: floats in, a float64 array (5, 5) out [N/m, N, N m by coordinate kinds]."""
     out = numpy.empty((1, 5, 5))
-    _c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    c_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -497,10 +518,16 @@ def _L_a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, d
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_a_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """excavator: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, written into out[0] (out: float64 (1, 5, 7)) [m or 1]."""
+    _L_a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_a_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """excavator: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, a float64 array (5, 7) out [m or 1]."""
     out = numpy.empty((1, 5, 7))
-    _L_a_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    L_a_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -604,10 +631,16 @@ def _L_c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, d
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_c_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """excavator: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, written into out[0] (out: float64 (1, 5, 4)) [m or 1]."""
+    _L_c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_c_scalar(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """excavator: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, a float64 array (5, 4) out [m or 1]."""
     out = numpy.empty((1, 5, 4))
-    _L_c_0(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    L_c_into(m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -718,10 +751,16 @@ def _rate_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_into(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """F of M y' = F: rates of the free motion of 'excavator' about its configuration: floats in, written into out[0] (out: float64 (1, 10)) [state unit / s (times M)]."""
+    _rate_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """F of M y' = F: rates of the free motion of 'excavator' about its configuration: floats in, a float64 array (10,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 10))
-    _rate_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    rate_into(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -947,11 +986,17 @@ def _rate_jacobian_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_into(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """dF/dy, rows F, columns y: floats in, written into out[0] (out: float64 (1, 10, 10)) [unit of F / unit of y]."""
+    _rate_jacobian_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    _rate_jacobian_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_jacobian_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """dF/dy, rows F, columns y: floats in, a float64 array (10, 10) out [unit of F / unit of y]."""
     out = numpy.empty((1, 10, 10))
-    _rate_jacobian_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
-    _rate_jacobian_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    rate_jacobian_into(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 
@@ -1184,11 +1229,17 @@ def _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_p
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_mass_into(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out):
+    """M of M y' = F: floats in, written into out[0] (out: float64 (1, 10, 10)) [unit of F / unit of y']."""
+    _rate_mass_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs):
     """M of M y' = F: floats in, a float64 array (10, 10) out [unit of F / unit of y']."""
     out = numpy.empty((1, 10, 10))
-    _rate_mass_0(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
-    _rate_mass_1(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out, 0)
+    rate_mass_into(q_s1, q_s2, q_phi3, q_phi4, q_phi5, qd_s1, qd_s2, qd_phi3, qd_phi4, qd_phi5, m1, m2, m3, I3, xM, yM, l4, alpha, l5, beta, h, c1, c2, c3, c4, l3, delta3, l6, delta4, hs, out)
     return out[0]
 
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6702698636daff8b11fe5a18bb26f1f1288b12f26d1fee39bbd693aad7699d29
-# source key 39fe77d94553d5c75d60071df960f6640223a9eed336393cce39b2ecd330d7a5
+# symmech 0.1.0 generated module; inputs sha256 5e00e95239b914feeff45fa55f61aa6ae4cdfaaa700691445b80c2cb26ae4697
+# source key d0934599e569419a6e8d3123d3c728a7806918224970415560025e2e4c03f058
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 e6f4538a86c71902e002983ce248e4f0ec70d1fe71d32e33fb4d8ac619ead531
-# source key 39fe77d94553d5c75d60071df960f6640223a9eed336393cce39b2ecd330d7a5
-# body sha256 fde6957e1a279f02913a92ecf7997dbc0c4f174e617bed84262d874f7d8d81cc
+# symmech 0.1.0 generated module; inputs sha256 67bed80f534fffc9f9e35ebc3ac08bbb284378132022055a3559249492981dcf
+# source key d0934599e569419a6e8d3123d3c728a7806918224970415560025e2e4c03f058
+# body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Compiled twin of `symmech.generated.smm_formulas` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["table2_conjugates", "table2_conjugates_scalar", "spatial_conjugate", "spatial_conjugate_scalar", "length_d2_turn", "length_d2_turn_scalar", "length_d2_two_turns", "length_d2_two_turns_scalar", "length_d2_slide", "length_d2_slide_scalar", "table1_planar", "table1_planar_scalar", "table1_length", "table1_length_scalar", "fig8_c", "fig8_c_scalar", "fig9_c", "fig9_c_scalar", "omega_c_rates", "omega_c_rates_scalar"]
+__all__ = ["table2_conjugates", "table2_conjugates_into", "table2_conjugates_scalar", "spatial_conjugate", "spatial_conjugate_into", "spatial_conjugate_scalar", "length_d2_turn", "length_d2_turn_into", "length_d2_turn_scalar", "length_d2_two_turns", "length_d2_two_turns_into", "length_d2_two_turns_scalar", "length_d2_slide", "length_d2_slide_into", "length_d2_slide_scalar", "table1_planar", "table1_planar_into", "table1_planar_scalar", "table1_length", "table1_length_into", "table1_length_scalar", "fig8_c", "fig8_c_into", "fig8_c_scalar", "fig9_c", "fig9_c_into", "fig9_c_scalar", "omega_c_rates", "omega_c_rates_into", "omega_c_rates_scalar"]
 
 
 def _flat(*args):
@@ -56,10 +59,16 @@ def _table2_conjugates_0(p_x, p_y, p_z, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def table2_conjugates_into(p_x, p_y, p_z, out):
+    """d(R(e, q) p)/dq at q = 0 for e = i, j, k (rows): floats in, written into out[0] (out: float64 (1, 3, 3)) [m]."""
+    _table2_conjugates_0(p_x, p_y, p_z, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def table2_conjugates_scalar(p_x, p_y, p_z):
     """d(R(e, q) p)/dq at q = 0 for e = i, j, k (rows): floats in, a float64 array (3, 3) out [m]."""
     out = numpy.empty((1, 3, 3))
-    _table2_conjugates_0(p_x, p_y, p_z, out, 0)
+    table2_conjugates_into(p_x, p_y, p_z, out)
     return out[0]
 
 
@@ -106,10 +115,16 @@ def _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def spatial_conjugate_into(e_x, e_y, e_z, p_x, p_y, p_z, out):
+    """d(R(e, q) p)/dq at q = 0: floats in, written into out[0] (out: float64 (1, 3)) [m]."""
+    _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def spatial_conjugate_scalar(e_x, e_y, e_z, p_x, p_y, p_z):
     """d(R(e, q) p)/dq at q = 0: floats in, a float64 array (3,) out [m]."""
     out = numpy.empty((1, 3))
-    _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, 0)
+    spatial_conjugate_into(e_x, e_y, e_z, p_x, p_y, p_z, out)
     return out[0]
 
 
@@ -174,10 +189,16 @@ def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_turn_into(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out):
+    """d2|anchor - R(e, q) p|/dq2 at 0: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_turn_scalar(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """d2|anchor - R(e, q) p|/dq2 at 0: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_turn_into(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -254,10 +275,16 @@ def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_two_turns_into(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out):
+    """d2|anchor - R(e, q1) R(f, q2) p|/dq1 dq2 at 0: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_two_turns_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """d2|anchor - R(e, q1) R(f, q2) p|/dq1 dq2 at 0: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_two_turns_into(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -324,10 +351,16 @@ def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_slide_into(s_x, s_y, s_z, u_x, u_y, u_z, ell, out):
+    """d2|anchor - (p + s s)|/ds2 at 0: floats in, written into out[0] (out: float64 (1,)) [1/m]."""
+    _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_slide_scalar(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     """d2|anchor - (p + s s)|/ds2 at 0: floats in, a float out [1/m]."""
     out = numpy.empty((1,))
-    _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_slide_into(s_x, s_y, s_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -387,10 +420,16 @@ def _table1_planar_0(p_x, p_y, s_x, s_y, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def table1_planar_into(p_x, p_y, s_x, s_y, out):
+    """derivatives of R_k(phi)(p + s s) at 0: floats in, written into out[0] (out: float64 (1, 8)) [m^2, m or 1]."""
+    _table1_planar_0(p_x, p_y, s_x, s_y, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def table1_planar_scalar(p_x, p_y, s_x, s_y):
     """derivatives of R_k(phi)(p + s s) at 0: floats in, a float64 array (8,) out [m^2, m or 1]."""
     out = numpy.empty((1, 8))
-    _table1_planar_0(p_x, p_y, s_x, s_y, out, 0)
+    table1_planar_into(p_x, p_y, s_x, s_y, out)
     return out[0]
 
 
@@ -448,10 +487,16 @@ def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def table1_length_into(p_x, p_y, s_x, s_y, u_x, u_y, ell, out):
+    """derivatives of |R_k(phi)(p + s s) - anchor|: floats in, written into out[0] (out: float64 (1, 4)) [m or 1]."""
+    _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def table1_length_scalar(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     """derivatives of |R_k(phi)(p + s s) - anchor|: floats in, a float64 array (4,) out [m or 1]."""
     out = numpy.empty((1, 4))
-    _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, 0)
+    table1_length_into(p_x, p_y, s_x, s_y, u_x, u_y, ell, out)
     return out[0]
 
 
@@ -516,10 +561,16 @@ def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def fig8_c_into(c1, L, alpha, beta, ell, m, g, out):
+    """d2 Pi/dphi2 of the pendulum on a spring preloaded to equilibrium: floats in, written into out[0] (out: float64 (1,)) [N m]."""
+    _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def fig8_c_scalar(c1, L, alpha, beta, ell, m, g):
     """d2 Pi/dphi2 of the pendulum on a spring preloaded to equilibrium: floats in, a float out [N m]."""
     out = numpy.empty((1,))
-    _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, 0)
+    fig8_c_into(c1, L, alpha, beta, ell, m, g, out)
     return out[0]
 
 
@@ -573,10 +624,16 @@ def _fig9_c_0(c1, Delta, ell, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def fig9_c_into(c1, Delta, ell, out):
+    """d2 Pi/ds2 across a spring of tension c1 Delta: floats in, written into out[0] (out: float64 (1,)) [N/m]."""
+    _fig9_c_0(c1, Delta, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def fig9_c_scalar(c1, Delta, ell):
     """d2 Pi/ds2 across a spring of tension c1 Delta: floats in, a float out [N/m]."""
     out = numpy.empty((1,))
-    _fig9_c_0(c1, Delta, ell, out, 0)
+    fig9_c_into(c1, Delta, ell, out)
     return out[0]
 
 
@@ -623,10 +680,16 @@ def _omega_c_rates_0(beta, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def omega_c_rates_into(beta, out):
+    """d omega_C / d(alpha', beta', gamma') of the Euler-Krylov sequence x-y-z: floats in, written into out[0] (out: float64 (1, 3)) [1]."""
+    _omega_c_rates_0(beta, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def omega_c_rates_scalar(beta):
     """d omega_C / d(alpha', beta', gamma') of the Euler-Krylov sequence x-y-z: floats in, a float64 array (3,) out [1]."""
     out = numpy.empty((1, 3))
-    _omega_c_rates_0(beta, out, 0)
+    omega_c_rates_into(beta, out)
     return out[0]
 
 

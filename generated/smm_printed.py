@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2972638a30e3e2ee276506a4f60c5787ad2df201e4414d5fb26577055e2089dc
-# source key f04f7adde8e7150c0dbef5c15e4eedba13b4d16a0b1545b3d21a3ccd0e0e58c1
+# symmech 0.1.0 generated module; inputs sha256 395be01cb9dc71fec711b2ed792f820a0ab756b0dd07c870d4678174410a0bbc
+# source key e0af024412e9fa65dc1c615f9fdc041347da086df25e0d8c1f39bcadb9e98d94
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 b981c76974e4e8622d2b009c74d9947d7fa23dcbd58def34e55281752e67a031
-# source key f04f7adde8e7150c0dbef5c15e4eedba13b4d16a0b1545b3d21a3ccd0e0e58c1
-# body sha256 1a4d5c9424145c9ba162768af034cd2fe647105f7ccca040fc0df948adf0073c
+# symmech 0.1.0 generated module; inputs sha256 5162ade23d2bc45fe394879ae6ff1f7e5bfe7b620ed415c4cfaa96979a7dc6ac
+# source key e0af024412e9fa65dc1c615f9fdc041347da086df25e0d8c1f39bcadb9e98d94
+# body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 
 Compiled twin of `symmech.generated.smm_printed` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["ex51_a", "ex51_a_scalar", "ex51_Lc_rope", "ex51_Lc_rope_scalar", "ex52_La", "ex52_La_scalar", "ex52_Lc", "ex52_Lc_scalar", "ex53_Lc", "ex53_Lc_scalar", "table2_conjugates", "table2_conjugates_scalar", "spatial_conjugate", "spatial_conjugate_scalar", "length_d2_turn", "length_d2_turn_scalar", "length_d2_two_turns", "length_d2_two_turns_scalar", "length_d2_two_turns_read", "length_d2_two_turns_read_scalar", "length_d2_slide", "length_d2_slide_scalar", "table1_planar", "table1_planar_scalar", "table1_length", "table1_length_scalar", "fig8_c", "fig8_c_scalar", "fig8_c_read", "fig8_c_read_scalar", "fig9_c", "fig9_c_scalar", "omega_c_rates", "omega_c_rates_scalar"]
+__all__ = ["ex51_a", "ex51_a_into", "ex51_a_scalar", "ex51_Lc_rope", "ex51_Lc_rope_into", "ex51_Lc_rope_scalar", "ex52_La", "ex52_La_into", "ex52_La_scalar", "ex52_Lc", "ex52_Lc_into", "ex52_Lc_scalar", "ex53_Lc", "ex53_Lc_into", "ex53_Lc_scalar", "table2_conjugates", "table2_conjugates_into", "table2_conjugates_scalar", "spatial_conjugate", "spatial_conjugate_into", "spatial_conjugate_scalar", "length_d2_turn", "length_d2_turn_into", "length_d2_turn_scalar", "length_d2_two_turns", "length_d2_two_turns_into", "length_d2_two_turns_scalar", "length_d2_two_turns_read", "length_d2_two_turns_read_into", "length_d2_two_turns_read_scalar", "length_d2_slide", "length_d2_slide_into", "length_d2_slide_scalar", "table1_planar", "table1_planar_into", "table1_planar_scalar", "table1_length", "table1_length_into", "table1_length_scalar", "fig8_c", "fig8_c_into", "fig8_c_scalar", "fig8_c_read", "fig8_c_read_into", "fig8_c_read_scalar", "fig9_c", "fig9_c_into", "fig9_c_scalar", "omega_c_rates", "omega_c_rates_into", "omega_c_rates_scalar"]
 
 
 def _flat(*args):
@@ -52,10 +55,16 @@ def _ex51_a_0(I1, I2, m2, r1, z2, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def ex51_a_into(I1, I2, m2, r1, z2, out):
+    """example 5.1: inertia matrix (a) as printed: floats in, written into out[0] (out: float64 (1, 2, 2)) [kg m^2]."""
+    _ex51_a_0(I1, I2, m2, r1, z2, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def ex51_a_scalar(I1, I2, m2, r1, z2):
     """example 5.1: inertia matrix (a) as printed: floats in, a float64 array (2, 2) out [kg m^2]."""
     out = numpy.empty((1, 2, 2))
-    _ex51_a_0(I1, I2, m2, r1, z2, out, 0)
+    ex51_a_into(I1, I2, m2, r1, z2, out)
     return out[0]
 
 
@@ -105,10 +114,16 @@ def _ex51_Lc_rope_0(r1, alpha, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def ex51_Lc_rope_into(r1, alpha, out):
+    """example 5.1: (L_c) column of the rope c_1 as printed: floats in, written into out[0] (out: float64 (1, 2)) [m]."""
+    _ex51_Lc_rope_0(r1, alpha, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def ex51_Lc_rope_scalar(r1, alpha):
     """example 5.1: (L_c) column of the rope c_1 as printed: floats in, a float64 array (2,) out [m]."""
     out = numpy.empty((1, 2))
-    _ex51_Lc_rope_0(r1, alpha, out, 0)
+    ex51_Lc_rope_into(r1, alpha, out)
     return out[0]
 
 
@@ -188,10 +203,16 @@ def _ex52_La_0(xM, yM, l4, alpha, l5, beta, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def ex52_La_into(xM, yM, l4, alpha, l5, beta, out):
+    """example 5.2: (L_a) as printed (conjugate vectors written out): floats in, written into out[0] (out: float64 (1, 5, 7)) [m or 1]."""
+    _ex52_La_0(xM, yM, l4, alpha, l5, beta, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def ex52_La_scalar(xM, yM, l4, alpha, l5, beta):
     """example 5.2: (L_a) as printed (conjugate vectors written out): floats in, a float64 array (5, 7) out [m or 1]."""
     out = numpy.empty((1, 5, 7))
-    _ex52_La_0(xM, yM, l4, alpha, l5, beta, out, 0)
+    ex52_La_into(xM, yM, l4, alpha, l5, beta, out)
     return out[0]
 
 
@@ -259,10 +280,16 @@ def _ex52_Lc_0(l4, alpha, l5, beta, l3, l6, delta3, delta4, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def ex52_Lc_into(l4, alpha, l5, beta, l3, l6, delta3, delta4, out):
+    """example 5.2: legible entries of (L_c) as printed: floats in, written into out[0] (out: float64 (1, 18)) [m or 1]."""
+    _ex52_Lc_0(l4, alpha, l5, beta, l3, l6, delta3, delta4, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def ex52_Lc_scalar(l4, alpha, l5, beta, l3, l6, delta3, delta4):
     """example 5.2: legible entries of (L_c) as printed: floats in, a float64 array (18,) out [m or 1]."""
     out = numpy.empty((1, 18))
-    _ex52_Lc_0(l4, alpha, l5, beta, l3, l6, delta3, delta4, out, 0)
+    ex52_Lc_into(l4, alpha, l5, beta, l3, l6, delta3, delta4, out)
     return out[0]
 
 
@@ -330,10 +357,16 @@ def _ex53_Lc_0(L1, beta, delta, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def ex53_Lc_into(L1, beta, delta, out):
+    """example 5.3: legible rows (beta1, psi1, phi1) of (L_c) as printed: floats in, written into out[0] (out: float64 (1, 3, 4)) [m or 1]."""
+    _ex53_Lc_0(L1, beta, delta, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def ex53_Lc_scalar(L1, beta, delta):
     """example 5.3: legible rows (beta1, psi1, phi1) of (L_c) as printed: floats in, a float64 array (3, 4) out [m or 1]."""
     out = numpy.empty((1, 3, 4))
-    _ex53_Lc_0(L1, beta, delta, out, 0)
+    ex53_Lc_into(L1, beta, delta, out)
     return out[0]
 
 
@@ -386,10 +419,16 @@ def _table2_conjugates_0(p_x, p_y, p_z, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def table2_conjugates_into(p_x, p_y, p_z, out):
+    """Table 2: conjugate vector projections for e = i, j, k as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [m]."""
+    _table2_conjugates_0(p_x, p_y, p_z, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def table2_conjugates_scalar(p_x, p_y, p_z):
     """Table 2: conjugate vector projections for e = i, j, k as printed: floats in, a float64 array (3, 3) out [m]."""
     out = numpy.empty((1, 3, 3))
-    _table2_conjugates_0(p_x, p_y, p_z, out, 0)
+    table2_conjugates_into(p_x, p_y, p_z, out)
     return out[0]
 
 
@@ -436,10 +475,16 @@ def _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def spatial_conjugate_into(e_x, e_y, e_z, p_x, p_y, p_z, out):
+    """section 3: the conjugate vector dp/dq for an axis e, as printed: floats in, written into out[0] (out: float64 (1, 3)) [m]."""
+    _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def spatial_conjugate_scalar(e_x, e_y, e_z, p_x, p_y, p_z):
     """section 3: the conjugate vector dp/dq for an axis e, as printed: floats in, a float64 array (3,) out [m]."""
     out = numpy.empty((1, 3))
-    _spatial_conjugate_0(e_x, e_y, e_z, p_x, p_y, p_z, out, 0)
+    spatial_conjugate_into(e_x, e_y, e_z, p_x, p_y, p_z, out)
     return out[0]
 
 
@@ -493,10 +538,16 @@ def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_turn_into(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out):
+    """section 3: second derivative of a spring length by one turn, as printed: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_turn_scalar(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """section 3: second derivative of a spring length by one turn, as printed: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_turn_into(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -568,10 +619,16 @@ def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_two_turns_into(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out):
+    """section 3: mixed second derivative of a spring length by two turns, as printed: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_two_turns_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """section 3: mixed second derivative of a spring length by two turns, as printed: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_two_turns_into(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -646,10 +703,16 @@ def _length_d2_two_turns_read_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_two_turns_read_into(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out):
+    """section 3: mixed second derivative by two turns, first factor read as p~1: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _length_d2_two_turns_read_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_two_turns_read_scalar(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
     """section 3: mixed second derivative by two turns, first factor read as p~1: floats in, a float out [m]."""
     out = numpy.empty((1,))
-    _length_d2_two_turns_read_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_two_turns_read_into(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -714,10 +777,16 @@ def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def length_d2_slide_into(s_x, s_y, s_z, u_x, u_y, u_z, ell, out):
+    """section 3: second derivative of a spring length by a slide, as printed: floats in, written into out[0] (out: float64 (1,)) [1/m]."""
+    _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def length_d2_slide_scalar(s_x, s_y, s_z, u_x, u_y, u_z, ell):
     """section 3: second derivative of a spring length by a slide, as printed: floats in, a float out [1/m]."""
     out = numpy.empty((1,))
-    _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, 0)
+    length_d2_slide_into(s_x, s_y, s_z, u_x, u_y, u_z, ell, out)
     return out[0]
 
 
@@ -777,10 +846,16 @@ def _table1_planar_0(p_x, p_y, s_x, s_y, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def table1_planar_into(p_x, p_y, s_x, s_y, out):
+    """Table 1, set (p~, s): inertia and gravity entries of a planar chain, as printed: floats in, written into out[0] (out: float64 (1, 8)) [m^2, m or 1]."""
+    _table1_planar_0(p_x, p_y, s_x, s_y, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def table1_planar_scalar(p_x, p_y, s_x, s_y):
     """Table 1, set (p~, s): inertia and gravity entries of a planar chain, as printed: floats in, a float64 array (8,) out [m^2, m or 1]."""
     out = numpy.empty((1, 8))
-    _table1_planar_0(p_x, p_y, s_x, s_y, out, 0)
+    table1_planar_into(p_x, p_y, s_x, s_y, out)
     return out[0]
 
 
@@ -833,10 +908,16 @@ def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def table1_length_into(p_x, p_y, s_x, s_y, u_x, u_y, ell, out):
+    """Table 1, spring-length block: first and second derivatives, as printed (legible entries): floats in, written into out[0] (out: float64 (1, 4)) [m or 1]."""
+    _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def table1_length_scalar(p_x, p_y, s_x, s_y, u_x, u_y, ell):
     """Table 1, spring-length block: first and second derivatives, as printed (legible entries): floats in, a float64 array (4,) out [m or 1]."""
     out = numpy.empty((1, 4))
-    _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, 0)
+    table1_length_into(p_x, p_y, s_x, s_y, u_x, u_y, ell, out)
     return out[0]
 
 
@@ -895,10 +976,16 @@ def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def fig8_c_into(c1, L, alpha, beta, ell, m, g, out):
+    """Fig. 8: stiffness of the pendulum on a preloaded spring, as printed (C2 read as C1): floats in, written into out[0] (out: float64 (1,)) [N m]."""
+    _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def fig8_c_scalar(c1, L, alpha, beta, ell, m, g):
     """Fig. 8: stiffness of the pendulum on a preloaded spring, as printed (C2 read as C1): floats in, a float out [N m]."""
     out = numpy.empty((1,))
-    _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, 0)
+    fig8_c_into(c1, L, alpha, beta, ell, m, g, out)
     return out[0]
 
 
@@ -956,10 +1043,16 @@ def _fig8_c_read_0(c1, L, alpha, beta, ell, m, g, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def fig8_c_read_into(c1, L, alpha, beta, ell, m, g, out):
+    """Fig. 8 without the repeated gravity term inside the bracket: floats in, written into out[0] (out: float64 (1,)) [N m]."""
+    _fig8_c_read_0(c1, L, alpha, beta, ell, m, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def fig8_c_read_scalar(c1, L, alpha, beta, ell, m, g):
     """Fig. 8 without the repeated gravity term inside the bracket: floats in, a float out [N m]."""
     out = numpy.empty((1,))
-    _fig8_c_read_0(c1, L, alpha, beta, ell, m, g, out, 0)
+    fig8_c_read_into(c1, L, alpha, beta, ell, m, g, out)
     return out[0]
 
 
@@ -1012,10 +1105,16 @@ def _fig9_c_0(c1, Delta, ell, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def fig9_c_into(c1, Delta, ell, out):
+    """Fig. 9: lateral stiffness of a mass on a preloaded spring, as printed: floats in, written into out[0] (out: float64 (1,)) [N/m]."""
+    _fig9_c_0(c1, Delta, ell, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def fig9_c_scalar(c1, Delta, ell):
     """Fig. 9: lateral stiffness of a mass on a preloaded spring, as printed: floats in, a float out [N/m]."""
     out = numpy.empty((1,))
-    _fig9_c_0(c1, Delta, ell, out, 0)
+    fig9_c_into(c1, Delta, ell, out)
     return out[0]
 
 
@@ -1062,10 +1161,16 @@ def _omega_c_rates_0(beta, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def omega_c_rates_into(beta, out):
+    """section 3: partial derivatives of omega_C by the angle rates, as printed: floats in, written into out[0] (out: float64 (1, 3)) [1]."""
+    _omega_c_rates_0(beta, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def omega_c_rates_scalar(beta):
     """section 3: partial derivatives of omega_C by the angle rates, as printed: floats in, a float64 array (3,) out [1]."""
     out = numpy.empty((1, 3))
-    _omega_c_rates_0(beta, out, 0)
+    omega_c_rates_into(beta, out)
     return out[0]
 
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 8a21419d6166b7c0762cec35e83835db09f898cdccb4793e3f2045bd00807043
-# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
+# symmech 0.1.0 generated module; inputs sha256 22269db3d7a77a744eadc128e320300db3eb4664ed2af51058d1fdb3c2885a65
+# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
 # body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 88d5323052d6b9f8d488c2130bfb182127a4030aa837ee83198ba1e7a48d0d67
-# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
-# body sha256 55dc9b9127cd991ce5382023f186670759f42937784def862871eb4505520172
+# symmech 0.1.0 generated module; inputs sha256 610fa9c2ca7cf24ada5241c3694eb52e0987c0697de9fb7e63aac89947eb9574
+# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
+# body sha256 c7916726620ce785f769aaf6d8702aea01b19e8baea170be3b4f0ac25506af2f
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_rotor_boom` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -57,7 +60,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -79,10 +82,16 @@ def _a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def a_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """rotor_boom: inertia matrix (a), a q'' + b q' + c q = Q: floats in, written into out[0] (out: float64 (1, 2, 2)) [kg, kg m, kg m^2 by coordinate kinds]."""
+    _a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def a_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """rotor_boom: inertia matrix (a), a q'' + b q' + c q = Q: floats in, a float64 array (2, 2) out [kg, kg m, kg m^2 by coordinate kinds]."""
     out = numpy.empty((1, 2, 2))
-    _a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    a_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -154,10 +163,16 @@ def _b_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def b_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """rotor_boom: damping matrix (b): floats in, written into out[0] (out: float64 (1, 2, 2)) [N s/m, N s, N m s by coordinate kinds]."""
+    _b_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def b_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """rotor_boom: damping matrix (b): floats in, a float64 array (2, 2) out [N s/m, N s, N m s by coordinate kinds]."""
     out = numpy.empty((1, 2, 2))
-    _b_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    b_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -229,10 +244,16 @@ def _c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def c_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """rotor_boom: stiffness matrix (c) with the effects the scene asks for: floats in, written into out[0] (out: float64 (1, 2, 2)) [N/m, N, N m by coordinate kinds]."""
+    _c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def c_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """rotor_boom: stiffness matrix (c) with the effects the scene asks for: floats in, a float64 array (2, 2) out [N/m, N, N m by coordinate kinds]."""
     out = numpy.empty((1, 2, 2))
-    _c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    c_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -302,10 +323,16 @@ def _L_a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_a_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """rotor_boom: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, written into out[0] (out: float64 (1, 2, 3)) [m or 1]."""
+    _L_a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_a_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """rotor_boom: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, a float64 array (2, 3) out [m or 1]."""
     out = numpy.empty((1, 2, 3))
-    _L_a_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    L_a_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -376,10 +403,16 @@ def _L_c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_c_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """rotor_boom: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, written into out[0] (out: float64 (1, 2, 2)) [m or 1]."""
+    _L_c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_c_scalar(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """rotor_boom: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, a float64 array (2, 2) out [m or 1]."""
     out = numpy.empty((1, 2, 2))
-    _L_c_0(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    L_c_into(I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -455,10 +488,16 @@ def _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1,
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_into(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """F of M y' = F: rates of the free motion of 'rotor_boom' about its configuration: floats in, written into out[0] (out: float64 (1, 4)) [state unit / s (times M)]."""
+    _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """F of M y' = F: rates of the free motion of 'rotor_boom' about its configuration: floats in, a float64 array (4,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 4))
-    _rate_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    rate_into(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -552,10 +591,16 @@ def _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_into(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """dF/dy, rows F, columns y: floats in, written into out[0] (out: float64 (1, 4, 4)) [unit of F / unit of y]."""
+    _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_jacobian_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """dF/dy, rows F, columns y: floats in, a float64 array (4, 4) out [unit of F / unit of y]."""
     out = numpy.empty((1, 4, 4))
-    _rate_jacobian_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    rate_jacobian_into(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 
@@ -644,10 +689,16 @@ def _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_mass_into(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out):
+    """M of M y' = F: floats in, written into out[0] (out: float64 (1, 4, 4)) [unit of F / unit of y']."""
+    _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3):
     """M of M y' = F: floats in, a float64 array (4, 4) out [unit of F / unit of y']."""
     out = numpy.empty((1, 4, 4))
-    _rate_mass_0(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out, 0)
+    rate_mass_into(q_phi1, q_phi2, qd_phi1, qd_phi2, I1, r1, m2, I2, z2, alpha, Lr, c1, mu1, l2, h, c3, mu3, out)
     return out[0]
 
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2138f797fa177ced9921cf9626233641a889f291d75400a1368a2ecdece7d21b
-# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
+# symmech 0.1.0 generated module; inputs sha256 bb2d861590a716c46c7bb67f08c457f0389e0ad13c097bd982bc3f6200542da0
+# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
 # body sha256 acb736fcbddaf70d94c49e9cfd5f446a34d08d0247accf834807a01bedce8f79
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

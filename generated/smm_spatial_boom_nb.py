@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 d58fdcd9c84707a84c094ce3b7754fda878a873e5bb16d52fdb74dbd542fb2b2
-# source key 8d323e701a9cf27727bbe44ee8f5ce86f277b0de81388eb4904c783d3148d01f
-# body sha256 c4bfb3a9e455ffc8826de6dab6adc692bcba693d830fb1229c09b112fa2e5431
+# symmech 0.1.0 generated module; inputs sha256 6d9743de28b5baa78582437741b477f296f898d03d94053af69e73465e0e7703
+# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
+# body sha256 4ece90083344f7a50d028b58bb65e43fb51e3085acb00064c2bf59bea9cc240b
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -69,7 +72,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_scalar", "b", "b_scalar", "c", "c_scalar", "L_a", "L_a_scalar", "L_c", "L_c_scalar", "rate", "rate_scalar", "rate_jacobian", "rate_jacobian_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
 
 
 def _flat(*args):
@@ -106,10 +109,16 @@ def _a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, ga
 
 
 @numba.njit(cache=True, error_model="numpy")
+def a_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """spatial_boom: inertia matrix (a), a q'' + b q' + c q = Q: floats in, written into out[0] (out: float64 (1, 4, 4)) [kg, kg m, kg m^2 by coordinate kinds]."""
+    _a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def a_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: inertia matrix (a), a q'' + b q' + c q = Q: floats in, a float64 array (4, 4) out [kg, kg m, kg m^2 by coordinate kinds]."""
     out = numpy.empty((1, 4, 4))
-    _a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    a_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -205,10 +214,16 @@ def _b_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, ga
 
 
 @numba.njit(cache=True, error_model="numpy")
+def b_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """spatial_boom: damping matrix (b): floats in, written into out[0] (out: float64 (1, 4, 4)) [N s/m, N s, N m s by coordinate kinds]."""
+    _b_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def b_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: damping matrix (b): floats in, a float64 array (4, 4) out [N s/m, N s, N m s by coordinate kinds]."""
     out = numpy.empty((1, 4, 4))
-    _b_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    b_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -377,10 +392,16 @@ def _c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, ga
 
 
 @numba.njit(cache=True, error_model="numpy")
+def c_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """spatial_boom: stiffness matrix (c) with the effects the scene asks for: floats in, written into out[0] (out: float64 (1, 4, 4)) [N/m, N, N m by coordinate kinds]."""
+    _c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def c_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: stiffness matrix (c) with the effects the scene asks for: floats in, a float64 array (4, 4) out [N/m, N, N m by coordinate kinds]."""
     out = numpy.empty((1, 4, 4))
-    _c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    c_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -500,10 +521,16 @@ def _L_a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_a_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """spatial_boom: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, written into out[0] (out: float64 (1, 4, 10)) [m or 1]."""
+    _L_a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_a_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: inertia transformation matrix (L_a): rows coordinates, columns mass/inertia components: floats in, a float64 array (4, 10) out [m or 1]."""
     out = numpy.empty((1, 4, 10))
-    _L_a_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    L_a_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -610,10 +637,16 @@ def _L_c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def L_c_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """spatial_boom: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, written into out[0] (out: float64 (1, 4, 4)) [m or 1]."""
+    _L_c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def L_c_scalar(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """spatial_boom: stiffness transformation matrix (L_c): rows coordinates, columns springs: floats in, a float64 array (4, 4) out [m or 1]."""
     out = numpy.empty((1, 4, 4))
-    _L_c_0(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    L_c_into(m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -774,10 +807,16 @@ def _rate_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_into(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """F of M y' = F: rates of the free motion of 'spatial_boom' about its configuration: floats in, written into out[0] (out: float64 (1, 8)) [state unit / s (times M)]."""
+    _rate_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """F of M y' = F: rates of the free motion of 'spatial_boom' about its configuration: floats in, a float64 array (8,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 8))
-    _rate_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    rate_into(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -1012,10 +1051,16 @@ def _rate_jacobian_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_jacobian_into(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """dF/dy, rows F, columns y: floats in, written into out[0] (out: float64 (1, 8, 8)) [unit of F / unit of y]."""
+    _rate_jacobian_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_jacobian_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """dF/dy, rows F, columns y: floats in, a float64 array (8, 8) out [unit of F / unit of y]."""
     out = numpy.empty((1, 8, 8))
-    _rate_jacobian_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    rate_jacobian_into(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 
@@ -1179,10 +1224,16 @@ def _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_mass_into(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out):
+    """M of M y' = F: floats in, written into out[0] (out: float64 (1, 8, 8)) [unit of F / unit of y']."""
+    _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_mass_scalar(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g):
     """M of M y' = F: floats in, a float64 array (8, 8) out [unit of F / unit of y']."""
     out = numpy.empty((1, 8, 8))
-    _rate_mass_0(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out, 0)
+    rate_mass_into(q_phi1, q_beta1, q_psi1, q_phi2, qd_phi1, qd_beta1, qd_psi1, qd_phi2, m1, Jx, Jy, Jz, L1, Lr, beta, delta, c1, cK, m3, L3, e3, a2, m2, L2, gamma, h2, c2, theta, g, out)
     return out[0]
 
 

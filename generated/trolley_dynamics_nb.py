@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 ee7a0e278db87017ef25ffe3597b3ef02e18d6b33eba804c8f395f29ac92eef3
-# source key cf7457d82fe14943c6f9091e21aba4929f33c1fc89ac4c19491133a8017a24e3
-# body sha256 da8ba89339d4881d2adbed6737dad085aeea1010de6b758a72d44829fa3c22bf
+# symmech 0.1.0 generated module; inputs sha256 12bc13b97d74739e79c138eef47c5d94c450f7c3d9f7a30d81adab93dd9dda7f
+# source key 82113aa422ddb931d16fde9a1a75f196fad2c19422967f22449282b7e7dd96f8
+# body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 
 Compiled twin of `symmech.generated.trolley_dynamics` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["point_coefficients", "point_coefficients_scalar", "reactions", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_scalar", "newton_euler", "newton_euler_scalar", "reactions_along_track", "reactions_along_track_scalar"]
+__all__ = ["point_coefficients", "point_coefficients_into", "point_coefficients_scalar", "reactions", "reactions_into", "reactions_scalar", "reactions_no_gravity", "reactions_no_gravity_into", "reactions_no_gravity_scalar", "newton_euler", "newton_euler_into", "newton_euler_scalar", "reactions_along_track", "reactions_along_track_into", "reactions_along_track_scalar"]
 
 
 def _flat(*args):
@@ -57,10 +60,16 @@ def _point_coefficients_0(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def point_coefficients_into(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, out):
+    """[α; β]: velocity V = V0 α and acceleration a = V̇0 α + V0² β of a body point: floats in, written into out[0] (out: float64 (1, 6)) [1 (α), 1/m (β)]."""
+    _point_coefficients_0(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def point_coefficients_scalar(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3):
     """[α; β]: velocity V = V0 α and acceleration a = V̇0 α + V0² β of a body point: floats in, a float64 array (6,) out [1 (α), 1/m (β)]."""
     out = numpy.empty((1, 6))
-    _point_coefficients_0(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, out, 0)
+    point_coefficients_into(e1, e2, e3, de1, de2, de3, W1, W2, W3, dW1, dW2, dW3, r1, r2, r3, out)
     return out[0]
 
 
@@ -180,10 +189,16 @@ def _reactions_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def reactions_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, out):
+    """reactions P0…P5 of the track on the trolley: floats in, written into out[0] (out: float64 (1, 6)) [N]."""
+    _reactions_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def reactions_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah):
     """reactions P0…P5 of the track on the trolley: floats in, a float64 array (6,) out [N]."""
     out = numpy.empty((1, 6))
-    _reactions_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, out, 0)
+    reactions_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, nu1, nu2, nu3, g0, l, ah, out)
     return out[0]
 
 
@@ -314,10 +329,16 @@ def _reactions_no_gravity_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, a
 
 
 @numba.njit(cache=True, error_model="numpy")
+def reactions_no_gravity_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, out):
+    """reactions P0…P5 of the track on the trolley without gravity: floats in, written into out[0] (out: float64 (1, 6)) [N]."""
+    _reactions_no_gravity_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def reactions_no_gravity_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah):
     """reactions P0…P5 of the track on the trolley without gravity: floats in, a float64 array (6,) out [N]."""
     out = numpy.empty((1, 6))
-    _reactions_no_gravity_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, out, 0)
+    reactions_no_gravity_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, acc1, acc2, acc3, w1, w2, w3, dw1, dw2, dw3, l, ah, out)
     return out[0]
 
 
@@ -412,10 +433,16 @@ def _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, 
 
 
 @numba.njit(cache=True, error_model="numpy")
+def newton_euler_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out):
+    """[P; M]: resultant force and moment about O of the rigid body (Newton-Euler): floats in, written into out[0] (out: float64 (1, 6)) [N, N m]."""
+    _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def newton_euler_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
     """[P; M]: resultant force and moment about O of the rigid body (Newton-Euler): floats in, a float64 array (6,) out [N, N m]."""
     out = numpy.empty((1, 6))
-    _newton_euler_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, 0)
+    newton_euler_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out)
     return out[0]
 
 
@@ -576,10 +603,16 @@ def _reactions_along_track_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth
 
 
 @numba.njit(cache=True, error_model="numpy")
+def reactions_along_track_into(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, out):
+    """reactions P0…P5 from θ, dθ/ds, d²θ/ds², V0, V̇0 (the chain fused): floats in, written into out[0] (out: float64 (1, 6)) [N]."""
+    _reactions_along_track_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def reactions_along_track_scalar(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah):
     """reactions P0…P5 from θ, dθ/ds, d²θ/ds², V0, V̇0 (the chain fused): floats in, a float64 array (6,) out [N]."""
     out = numpy.empty((1, 6))
-    _reactions_along_track_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, out, 0)
+    reactions_along_track_into(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, V0, dV0, m, r1, r2, r3, I11, I22, I33, I12, I23, I13, g0, l, ah, out)
     return out[0]
 
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 7eb462e18633841e5088d44beaa1ae1cbb4a3ac58373922522502b62c260e204
-# source key 812af5956ab6dcbdbfc55947a889f12761c09f330745daa31686ada22b3ea145
-# body sha256 c02126a92d6ffb44bf1c7e2652881ff976028ba4a39075a00426f783f7f0167a
+# symmech 0.1.0 generated module; inputs sha256 87562d7ff499b0f4b0f1c5cff909a079c29ca0df1cdec4b0521da601def333ef
+# source key d3d187babda88a7140bbb2fe1a5ebed23a90fa17f777fbae0bbbc8980be150e2
+# body sha256 bc7e7ee308cbd985522da1a5cc9daa4c5c56a6ee7e2a5281dc7fa20d9a22592a
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -96,7 +99,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["lagrange_residual", "lagrange_residual_scalar", "rate", "rate_scalar", "rate_mass", "rate_mass_scalar", "rhs", "rhs_scalar"]
+__all__ = ["lagrange_residual", "lagrange_residual_into", "lagrange_residual_scalar", "rate", "rate_into", "rate_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar"]
 
 
 def _flat(*args):
@@ -1187,10 +1190,16 @@ def _lagrange_residual_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_
 
 
 @numba.njit(cache=True, error_model="numpy")
+def lagrange_residual_into(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, qdd_u2, qdd_u3, qdd_th1, qdd_th2, qdd_th3, qdd_w1, qdd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out):
+    """d/dt ∂T/∂q̇ - ∂T/∂q + ∂V/∂q + ∂F/∂q̇ of the small elastic trolley (7 coordinates): floats in, written into out[0] (out: float64 (1, 7)) [N or N m]."""
+    _lagrange_residual_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, qdd_u2, qdd_u3, qdd_th1, qdd_th2, qdd_th3, qdd_w1, qdd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def lagrange_residual_scalar(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, qdd_u2, qdd_u3, qdd_th1, qdd_th2, qdd_th3, qdd_w1, qdd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah):
     """d/dt ∂T/∂q̇ - ∂T/∂q + ∂V/∂q + ∂F/∂q̇ of the small elastic trolley (7 coordinates): floats in, a float64 array (7,) out [N or N m]."""
     out = numpy.empty((1, 7))
-    _lagrange_residual_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, qdd_u2, qdd_u3, qdd_th1, qdd_th2, qdd_th3, qdd_w1, qdd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
+    lagrange_residual_into(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, qdd_u2, qdd_u3, qdd_th1, qdd_th2, qdd_th3, qdd_w1, qdd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out)
     return out[0]
 
 
@@ -2335,10 +2344,16 @@ def _rate_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, q
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rate_into(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out):
+    """F of M y' = F: rates of the small elastic trolley of Lagrange's equations in a frame of constant motion: floats in, written into out[0] (out: float64 (1, 14)) [state unit / s (times M)]."""
+    _rate_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rate_scalar(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah):
     """F of M y' = F: rates of the small elastic trolley of Lagrange's equations in a frame of constant motion: floats in, a float64 array (14,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 14))
-    _rate_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
+    rate_into(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out)
     return out[0]
 
 
@@ -2987,13 +3002,19 @@ def _rate_mass_3(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_t
 
 
 @numba.njit(cache=True, error_model="numpy")
-def rate_mass_scalar(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah):
-    """M of M y' = F: floats in, a float64 array (14, 14) out [unit of F / unit of y']."""
-    out = numpy.empty((1, 14, 14))
+def rate_mass_into(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out):
+    """M of M y' = F: floats in, written into out[0] (out: float64 (1, 14, 14)) [unit of F / unit of y']."""
     _rate_mass_0(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
     _rate_mass_1(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
     _rate_mass_2(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
     _rate_mass_3(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rate_mass_scalar(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah):
+    """M of M y' = F: floats in, a float64 array (14, 14) out [unit of F / unit of y']."""
+    out = numpy.empty((1, 14, 14))
+    rate_mass_into(q_u2, q_u3, q_th1, q_th2, q_th3, q_w1, q_w3, qd_u2, qd_u3, qd_th1, qd_th2, qd_th3, qd_w1, qd_w3, V1, V2, V3, dV1, dV2, dV3, om1, om2, om3, dom1, dom2, dom3, nu1, nu2, nu3, m0, c1, c2, c3, I11, I22, I33, rho_a, L_b, m_tip, b1, b3, EI1, EI3, k1, k2, k3, k4, k5, d1, d2, d3, d4, d5, g0, l, ah, out)
     return out[0]
 
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 21b7f91ce764ea8ba19a9c33282e93fbdcfd22594ae1460c01ebc2ea36749bb9
-# source key fb1bb4bfbf411a0df0f152a0d5233d01134f9f1a590d57d01b82e317c43a4d12
+# symmech 0.1.0 generated module; inputs sha256 8eceb50ee3e85273f8a756e750b08972f4b035cb38656776ecd09661e09a3f42
+# source key 8123b6c80b5961c917a553c8a95056a9159e219d5c311f61f4b6ce8709e51d45
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

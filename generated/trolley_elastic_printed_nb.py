@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 75604a2c163281d04097df96b46c990933ce43d2ef3307685bbc3a8f3e852afb
-# source key fb1bb4bfbf411a0df0f152a0d5233d01134f9f1a590d57d01b82e317c43a4d12
-# body sha256 0e70bec8dcb33558bc49d67c4b7b7e2eb5480f06a9126b46cb0ab80e24addab1
+# symmech 0.1.0 generated module; inputs sha256 485a22423ffd00132650353ee13c2435cf7052fdafddf93d0e6cdd2cc26e0647
+# source key 8123b6c80b5961c917a553c8a95056a9159e219d5c311f61f4b6ce8709e51d45
+# body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 
 Compiled twin of `symmech.generated.trolley_elastic_printed` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["rigid_fields", "rigid_fields_scalar"]
+__all__ = ["rigid_fields", "rigid_fields_into", "rigid_fields_scalar"]
 
 
 def _flat(*args):
@@ -83,10 +86,16 @@ def _rigid_fields_0(r1, r2, r3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rigid_fields_into(r1, r2, r3, out):
+    """printed [φ0_2 … φ0_6 | ψ0_44 … ψ0_66]: floats in, written into out[0] (out: float64 (1, 3, 11)) [1 (translations), m (rotations)]."""
+    _rigid_fields_0(r1, r2, r3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rigid_fields_scalar(r1, r2, r3):
     """printed [φ0_2 … φ0_6 | ψ0_44 … ψ0_66]: floats in, a float64 array (3, 11) out [1 (translations), m (rotations)]."""
     out = numpy.empty((1, 3, 11))
-    _rigid_fields_0(r1, r2, r3, out, 0)
+    rigid_fields_into(r1, r2, r3, out)
     return out[0]
 
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 3404892740907e5ae1cc4ad2798588311a49dd6a2b98a77c4d1624f638771ec9
-# source key cf7457d82fe14943c6f9091e21aba4929f33c1fc89ac4c19491133a8017a24e3
-# body sha256 f44622c6c930a67451ae447974c940b3b20c352620da0ab7be58201990d3ac2e
+# symmech 0.1.0 generated module; inputs sha256 94a72cbfd6c16fb231d168923b77f2d04676ff8873e62319ebf0bd4112096a6b
+# source key 82113aa422ddb931d16fde9a1a75f196fad2c19422967f22449282b7e7dd96f8
+# body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 
 Compiled twin of `symmech.generated.trolley_frame` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["Lambda", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_scalar", "A", "A_scalar", "omega_per_length", "omega_per_length_scalar", "omega_per_length_rate", "omega_per_length_rate_scalar", "angles_from_tangent", "angles_from_tangent_scalar", "chord_coefficients", "chord_coefficients_scalar", "Lambda_bar_linear", "Lambda_bar_linear_scalar", "rodrigues", "rodrigues_scalar", "chord_rotation", "chord_rotation_scalar"]
+__all__ = ["Lambda", "Lambda_into", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_into", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_into", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_into", "dLambda_dth3_scalar", "A", "A_into", "A_scalar", "omega_per_length", "omega_per_length_into", "omega_per_length_scalar", "omega_per_length_rate", "omega_per_length_rate_into", "omega_per_length_rate_scalar", "angles_from_tangent", "angles_from_tangent_into", "angles_from_tangent_scalar", "chord_coefficients", "chord_coefficients_into", "chord_coefficients_scalar", "Lambda_bar_linear", "Lambda_bar_linear_into", "Lambda_bar_linear_scalar", "rodrigues", "rodrigues_into", "rodrigues_scalar", "chord_rotation", "chord_rotation_into", "chord_rotation_scalar"]
 
 
 def _flat(*args):
@@ -65,10 +68,16 @@ def _Lambda_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def Lambda_into(th1, th2, th3, out):
+    """rotation matrix Λ (fixed -> moving): floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _Lambda_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def Lambda_scalar(th1, th2, th3):
     """rotation matrix Λ (fixed -> moving): floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _Lambda_0(th1, th2, th3, out, 0)
+    Lambda_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -130,10 +139,16 @@ def _dLambda_dth1_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def dLambda_dth1_into(th1, th2, th3, out):
+    """∂Λ/∂θ1: floats in, written into out[0] (out: float64 (1, 3, 3)) [1/rad]."""
+    _dLambda_dth1_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def dLambda_dth1_scalar(th1, th2, th3):
     """∂Λ/∂θ1: floats in, a float64 array (3, 3) out [1/rad]."""
     out = numpy.empty((1, 3, 3))
-    _dLambda_dth1_0(th1, th2, th3, out, 0)
+    dLambda_dth1_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -195,10 +210,16 @@ def _dLambda_dth2_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def dLambda_dth2_into(th1, th2, th3, out):
+    """∂Λ/∂θ2: floats in, written into out[0] (out: float64 (1, 3, 3)) [1/rad]."""
+    _dLambda_dth2_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def dLambda_dth2_scalar(th1, th2, th3):
     """∂Λ/∂θ2: floats in, a float64 array (3, 3) out [1/rad]."""
     out = numpy.empty((1, 3, 3))
-    _dLambda_dth2_0(th1, th2, th3, out, 0)
+    dLambda_dth2_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -259,10 +280,16 @@ def _dLambda_dth3_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def dLambda_dth3_into(th1, th2, th3, out):
+    """∂Λ/∂θ3: floats in, written into out[0] (out: float64 (1, 3, 3)) [1/rad]."""
+    _dLambda_dth3_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def dLambda_dth3_scalar(th1, th2, th3):
     """∂Λ/∂θ3: floats in, a float64 array (3, 3) out [1/rad]."""
     out = numpy.empty((1, 3, 3))
-    _dLambda_dth3_0(th1, th2, th3, out, 0)
+    dLambda_dth3_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -318,10 +345,16 @@ def _A_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def A_into(th1, th2, th3, out):
+    """A with ω = A θ̇: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _A_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def A_scalar(th1, th2, th3):
     """A with ω = A θ̇: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _A_0(th1, th2, th3, out, 0)
+    A_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -371,10 +404,16 @@ def _omega_per_length_0(th1, th2, th3, dth1, dth2, dth3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def omega_per_length_into(th1, th2, th3, dth1, dth2, dth3, out):
+    """Ω = A dθ/ds (ω = V0 Ω): floats in, written into out[0] (out: float64 (1, 3)) [rad/m]."""
+    _omega_per_length_0(th1, th2, th3, dth1, dth2, dth3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def omega_per_length_scalar(th1, th2, th3, dth1, dth2, dth3):
     """Ω = A dθ/ds (ω = V0 Ω): floats in, a float64 array (3,) out [rad/m]."""
     out = numpy.empty((1, 3))
-    _omega_per_length_0(th1, th2, th3, dth1, dth2, dth3, out, 0)
+    omega_per_length_into(th1, th2, th3, dth1, dth2, dth3, out)
     return out[0]
 
 
@@ -434,10 +473,16 @@ def _omega_per_length_rate_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth
 
 
 @numba.njit(cache=True, error_model="numpy")
+def omega_per_length_rate_into(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, out):
+    """dΩ/ds = dA/ds dθ/ds + A d²θ/ds²: floats in, written into out[0] (out: float64 (1, 3)) [rad/m^2]."""
+    _omega_per_length_rate_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def omega_per_length_rate_scalar(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3):
     """dΩ/ds = dA/ds dθ/ds + A d²θ/ds²: floats in, a float64 array (3,) out [rad/m^2]."""
     out = numpy.empty((1, 3))
-    _omega_per_length_rate_0(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, out, 0)
+    omega_per_length_rate_into(th1, th2, th3, dth1, dth2, dth3, ddth1, ddth2, ddth3, out)
     return out[0]
 
 
@@ -505,10 +550,16 @@ def _angles_from_tangent_0(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy")
+def angles_from_tangent_into(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out):
+    """[θ2, θ3, dθ2/ds, dθ3/ds, d²θ2/ds², d²θ3/ds²] from the unit tangent and its derivatives: floats in, written into out[0] (out: float64 (1, 6)) [rad, rad/m, rad/m^2]."""
+    _angles_from_tangent_0(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def angles_from_tangent_scalar(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3):
     """[θ2, θ3, dθ2/ds, dθ3/ds, d²θ2/ds², d²θ3/ds²] from the unit tangent and its derivatives: floats in, a float64 array (6,) out [rad, rad/m, rad/m^2]."""
     out = numpy.empty((1, 6))
-    _angles_from_tangent_0(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out, 0)
+    angles_from_tangent_into(t1, t2, t3, dt1, dt2, dt3, ddt1, ddt2, ddt3, out)
     return out[0]
 
 
@@ -597,10 +648,16 @@ def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def chord_coefficients_into(th1, th2, th3, dX1, dX2, dX3, out):
+    """coefficients l_ij of the linear system for Δθ: floats in, written into out[0] (out: float64 (1, 3, 4)) [m]."""
+    _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def chord_coefficients_scalar(th1, th2, th3, dX1, dX2, dX3):
     """coefficients l_ij of the linear system for Δθ: floats in, a float64 array (3, 4) out [m]."""
     out = numpy.empty((1, 3, 4))
-    _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, 0)
+    chord_coefficients_into(th1, th2, th3, dX1, dX2, dX3, out)
     return out[0]
 
 
@@ -681,10 +738,16 @@ def _Lambda_bar_linear_0(th1, th2, th3, dlt1, dlt2, dlt3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def Lambda_bar_linear_into(th1, th2, th3, dlt1, dlt2, dlt3, out):
+    """Λ̄ to first order in Δθ: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _Lambda_bar_linear_0(th1, th2, th3, dlt1, dlt2, dlt3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def Lambda_bar_linear_scalar(th1, th2, th3, dlt1, dlt2, dlt3):
     """Λ̄ to first order in Δθ: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _Lambda_bar_linear_0(th1, th2, th3, dlt1, dlt2, dlt3, out, 0)
+    Lambda_bar_linear_into(th1, th2, th3, dlt1, dlt2, dlt3, out)
     return out[0]
 
 
@@ -752,10 +815,16 @@ def _rodrigues_0(psi, xi1, xi2, xi3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rodrigues_into(psi, xi1, xi2, xi3, out):
+    """Λ* by Rodrigues' formula: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _rodrigues_0(psi, xi1, xi2, xi3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rodrigues_scalar(psi, xi1, xi2, xi3):
     """Λ* by Rodrigues' formula: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _rodrigues_0(psi, xi1, xi2, xi3, out, 0)
+    rodrigues_into(psi, xi1, xi2, xi3, out)
     return out[0]
 
 
@@ -814,10 +883,16 @@ def _chord_rotation_0(rho1, rho2, rho3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def chord_rotation_into(rho1, rho2, rho3, out):
+    """Λ* (x -> x̄) turning x1 onto the chord: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _chord_rotation_0(rho1, rho2, rho3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def chord_rotation_scalar(rho1, rho2, rho3):
     """Λ* (x -> x̄) turning x1 onto the chord: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _chord_rotation_0(rho1, rho2, rho3, out, 0)
+    chord_rotation_into(rho1, rho2, rho3, out)
     return out[0]
 
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 d1f3bc39d04ac1f58c991020a88e1c2ee18af864bae4e8866a51f0891f89e9aa
-# source key 485a5fe245a09aadb740a8607ff7fd8d5ec4efe41e46da25a830bea4258a21ff
-# body sha256 009db8cfa756461b87a34fd2e3a0f06e5d115ccdbc483a2ea89dd111c4aba6be
+# symmech 0.1.0 generated module; inputs sha256 bf94dec16a13cf86f3f59cc91a6795d665a4d103cc72e36ef485d406394043fb
+# source key c5ac4822b05f89ab34b9490b2531c3de117aa19b514da5ce4f939d6ce3b10bc6
+# body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 
 Compiled twin of `symmech.generated.trolley_printed` (the numpy module, the
@@ -19,6 +19,9 @@ For every function f:
   over the cores (``prange``) from there on.
 * ``f_scalar(...)`` takes floats and returns a float, or a new float64 array
   of the element shape: the per-event call, also callable from other kernels.
+* ``f_into(..., out)`` takes floats and writes into out[0] (out: float64 of
+  shape (1,) + element shape): the allocation-free call for hot loops of
+  other kernels.
 
 Kernels compile on first call and are cached beside this file (``cache=True``);
 division by zero gives inf/nan as in numpy (``error_model="numpy"``).
@@ -30,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["Lambda", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_scalar", "A", "A_scalar", "chord_coefficients", "chord_coefficients_scalar", "rodrigues", "rodrigues_scalar", "helix_Lambda", "helix_Lambda_scalar", "helix_omega", "helix_omega_scalar", "rigid_body_equations", "rigid_body_equations_scalar"]
+__all__ = ["Lambda", "Lambda_into", "Lambda_scalar", "dLambda_dth1", "dLambda_dth1_into", "dLambda_dth1_scalar", "dLambda_dth2", "dLambda_dth2_into", "dLambda_dth2_scalar", "dLambda_dth3", "dLambda_dth3_into", "dLambda_dth3_scalar", "A", "A_into", "A_scalar", "chord_coefficients", "chord_coefficients_into", "chord_coefficients_scalar", "rodrigues", "rodrigues_into", "rodrigues_scalar", "helix_Lambda", "helix_Lambda_into", "helix_Lambda_scalar", "helix_omega", "helix_omega_into", "helix_omega_scalar", "rigid_body_equations", "rigid_body_equations_into", "rigid_body_equations_scalar"]
 
 
 def _flat(*args):
@@ -65,10 +68,16 @@ def _Lambda_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def Lambda_into(th1, th2, th3, out):
+    """Λ as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _Lambda_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def Lambda_scalar(th1, th2, th3):
     """Λ as printed: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _Lambda_0(th1, th2, th3, out, 0)
+    Lambda_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -130,10 +139,16 @@ def _dLambda_dth1_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def dLambda_dth1_into(th1, th2, th3, out):
+    """∂Λ/∂θ1 as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1/rad]."""
+    _dLambda_dth1_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def dLambda_dth1_scalar(th1, th2, th3):
     """∂Λ/∂θ1 as printed: floats in, a float64 array (3, 3) out [1/rad]."""
     out = numpy.empty((1, 3, 3))
-    _dLambda_dth1_0(th1, th2, th3, out, 0)
+    dLambda_dth1_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -195,10 +210,16 @@ def _dLambda_dth2_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def dLambda_dth2_into(th1, th2, th3, out):
+    """∂Λ/∂θ2 as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1/rad]."""
+    _dLambda_dth2_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def dLambda_dth2_scalar(th1, th2, th3):
     """∂Λ/∂θ2 as printed: floats in, a float64 array (3, 3) out [1/rad]."""
     out = numpy.empty((1, 3, 3))
-    _dLambda_dth2_0(th1, th2, th3, out, 0)
+    dLambda_dth2_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -259,10 +280,16 @@ def _dLambda_dth3_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def dLambda_dth3_into(th1, th2, th3, out):
+    """∂Λ/∂θ3 as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1/rad]."""
+    _dLambda_dth3_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def dLambda_dth3_scalar(th1, th2, th3):
     """∂Λ/∂θ3 as printed: floats in, a float64 array (3, 3) out [1/rad]."""
     out = numpy.empty((1, 3, 3))
-    _dLambda_dth3_0(th1, th2, th3, out, 0)
+    dLambda_dth3_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -318,10 +345,16 @@ def _A_0(th1, th2, th3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def A_into(th1, th2, th3, out):
+    """A as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _A_0(th1, th2, th3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def A_scalar(th1, th2, th3):
     """A as printed: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _A_0(th1, th2, th3, out, 0)
+    A_into(th1, th2, th3, out)
     return out[0]
 
 
@@ -397,10 +430,16 @@ def _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def chord_coefficients_into(th1, th2, th3, dX1, dX2, dX3, out):
+    """l_ij as printed: floats in, written into out[0] (out: float64 (1, 3, 4)) [m]."""
+    _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def chord_coefficients_scalar(th1, th2, th3, dX1, dX2, dX3):
     """l_ij as printed: floats in, a float64 array (3, 4) out [m]."""
     out = numpy.empty((1, 3, 4))
-    _chord_coefficients_0(th1, th2, th3, dX1, dX2, dX3, out, 0)
+    chord_coefficients_into(th1, th2, th3, dX1, dX2, dX3, out)
     return out[0]
 
 
@@ -468,10 +507,16 @@ def _rodrigues_0(psi, xi1, xi2, xi3, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rodrigues_into(psi, xi1, xi2, xi3, out):
+    """Λ* as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _rodrigues_0(psi, xi1, xi2, xi3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rodrigues_scalar(psi, xi1, xi2, xi3):
     """Λ* as printed: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _rodrigues_0(psi, xi1, xi2, xi3, out, 0)
+    rodrigues_into(psi, xi1, xi2, xi3, out)
     return out[0]
 
 
@@ -531,10 +576,16 @@ def _helix_Lambda_0(phi, R, lam, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def helix_Lambda_into(phi, R, lam, out):
+    """helix Λ = [t n b]ᵀ as printed: floats in, written into out[0] (out: float64 (1, 3, 3)) [1]."""
+    _helix_Lambda_0(phi, R, lam, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def helix_Lambda_scalar(phi, R, lam):
     """helix Λ = [t n b]ᵀ as printed: floats in, a float64 array (3, 3) out [1]."""
     out = numpy.empty((1, 3, 3))
-    _helix_Lambda_0(phi, R, lam, out, 0)
+    helix_Lambda_into(phi, R, lam, out)
     return out[0]
 
 
@@ -582,10 +633,16 @@ def _helix_omega_0(R, lam, out, _k):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def helix_omega_into(R, lam, out):
+    """helix ω = ϰ t + κ b as printed: floats in, written into out[0] (out: float64 (1, 3)) [rad/m (printed as rad/s)]."""
+    _helix_omega_0(R, lam, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def helix_omega_scalar(R, lam):
     """helix ω = ϰ t + κ b as printed: floats in, a float64 array (3,) out [rad/m (printed as rad/s)]."""
     out = numpy.empty((1, 3))
-    _helix_omega_0(R, lam, out, 0)
+    helix_omega_into(R, lam, out)
     return out[0]
 
 
@@ -657,10 +714,16 @@ def _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a0
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rigid_body_equations_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out):
+    """(11) as printed: [P; M] of the rigid body: floats in, written into out[0] (out: float64 (1, 6)) [N, N m]."""
+    _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rigid_body_equations_scalar(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3):
     """(11) as printed: [P; M] of the rigid body: floats in, a float64 array (6,) out [N, N m]."""
     out = numpy.empty((1, 6))
-    _rigid_body_equations_0(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out, 0)
+    rigid_body_equations_into(m, r1, r2, r3, I11, I22, I33, I12, I23, I13, a01, a02, a03, w1, w2, w3, dw1, dw2, dw3, out)
     return out[0]
 
 

@@ -4,7 +4,8 @@
 when numba imports, else a stand-in with the same names built on the numpy
 module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
 float (scalar quantities) or a float64 array of the element shape (``rhs_scalar``
-and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``). Runtime
+and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``); ``f_into(...,
+out)`` writes it into ``out[0]``. Runtime
 code written against ``load`` runs everywhere; only its speed differs. The
 module is verified first (:func:`symmech.core.integrity.verify`).
 """
@@ -28,6 +29,16 @@ def _scalar_twin(function):
     return twin
 
 
+def _into_twin(function):
+    def twin(*args):
+        *inputs, out = args
+        out[0] = function(*inputs)
+
+    twin.__name__ = f"{function.__name__}_into"
+    twin.__doc__ = f"{function.__name__} on floats into out[0] (numpy fallback: numba is not installed)."
+    return twin
+
+
 @functools.cache
 def load(name: str):
     """The numba module ``<name>_nb``, or the numpy stand-in described above; SymmechError
@@ -45,4 +56,6 @@ def load(name: str):
     for f in reference.__all__:
         names[f] = getattr(reference, f)
         names[f"{f}_scalar"] = _scalar_twin(names[f])
+        if f not in ("rhs", "jac"):  # the vector-state dynamics have no into twin in either target
+            names[f"{f}_into"] = _into_twin(names[f])
     return SimpleNamespace(__name__=reference.__name__, __all__=sorted(names), **names)

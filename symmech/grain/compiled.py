@@ -431,11 +431,11 @@ def _translate_into(p, ctx, t, out):
     """Centre position and velocity rows out[0] (2, 3) at t of the flight from ctx = (t0, r0, v0, ...)."""
     tau = t - ctx[0]
     if p[P_AMP] == 0.0:
-        gm._flight_translation_rigid_0(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6],
-                                       p[P_G], p[P_G + 1], p[P_G + 2], 0.0, tau, out, 0)
+        gm.flight_translation_rigid_into(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6],
+                                       p[P_G], p[P_G + 1], p[P_G + 2], 0.0, tau, out)
     else:
-        gm._flight_translation_0(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_G], p[P_G + 1], p[P_G + 2],
-                                 p[P_AMP], p[P_OMEGA], ctx[17], p[P_DIR], p[P_DIR + 1], p[P_DIR + 2], 0.0, tau, out, 0)
+        gm.flight_translation_into(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_G], p[P_G + 1], p[P_G + 2],
+                                 p[P_AMP], p[P_OMEGA], ctx[17], p[P_DIR], p[P_DIR + 1], p[P_DIR + 2], 0.0, tau, out)
 
 
 @jit

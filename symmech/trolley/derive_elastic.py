@@ -89,26 +89,47 @@ def roller_matrix() -> NamedMatrix:
 
 XI = sp.Symbol("xi", real=True)
 XI_ARGS = args_of([(XI, "coordinate along the beam x / L", "1")])
+U = sp.Symbol("u", real=True)  # 2ξ - 1: the Ritz polynomials' own variable (see beam_functions)
 
 
 def beam_functions(support: str) -> list[sp.Expr]:
-    """Polynomial Ritz functions N_k(ξ), k = 1…NMAX, admissible for ``support``: the shifted
-    Legendre polynomials P_(k-1)(2ξ - 1) (well conditioned, unlike monomials) times ξ² for
-    "cantilever" (clamped at ξ = 0) or ξ (1 - ξ) for "pinned" (pinned at both ends)."""
-    factor = XI ** 2 if support == "cantilever" else XI * (1 - XI)
-    return [sp.expand(factor * sp.legendre(k, 2 * XI - 1)) for k in range(NMAX)]
+    """Polynomial Ritz functions N_k, k = 1…NMAX, admissible for ``support``: the shifted Legendre
+    polynomials P_(k-1)(u) times ξ² for "cantilever" (clamped at ξ = 0) or ξ (1 - ξ) for "pinned"
+    (pinned at both ends), as polynomials in u = 2ξ - 1 (symbol ``U``).
+
+    Expanded in u the coefficients stay small (|u| <= 1 on the beam); expanded in ξ they grow to
+    ~1e7 with alternating signs, and the degree-17 shortening integrals lost up to 1e-4 of their
+    value near ξ = 1 to cancellation."""
+    xi = (1 + U) / 2
+    factor = xi ** 2 if support == "cantilever" else xi * (1 - xi)
+    return [sp.expand(factor * sp.legendre(k, U)) for k in range(NMAX)]
+
+
+def _d_dxi(f: sp.Expr) -> sp.Expr:
+    return sp.expand(2 * f.diff(U))  # du/dξ = 2
+
+
+def _integral_from_0(f: sp.Expr) -> sp.Expr:
+    """∫0^ξ f dξ' of a polynomial in u: ½ ∫_-1^u f du'."""
+    antiderivative = sp.Poly(f, U).integrate().as_expr()
+    return sp.expand((antiderivative - antiderivative.subs(U, -1)) / 2)
+
+
+def _in_xi(m: sp.Matrix) -> sp.Matrix:
+    """A polynomial matrix in u evaluated at u = 2ξ - 1 (kept in u: the generated code forms u once)."""
+    return m.subs(U, 2 * XI - 1)
 
 
 def beam_basis(support: str) -> list[NamedMatrix]:
     """N, dN/dξ, d²N/dξ² (3 x NMAX) and the shortening integrals S_kl(ξ) = ∫0^ξ N_k' N_l' dξ."""
     n = beam_functions(support)
-    rows = sp.Matrix([n, [f.diff(XI) for f in n], [f.diff(XI, 2) for f in n]])
-    t = sp.Symbol("t", real=True)
-    short = sp.Matrix(NMAX, NMAX, lambda i, j: sp.integrate((n[i].diff(XI) * n[j].diff(XI)).subs(XI, t), (t, 0, XI)))
-    return [NamedMatrix(f"{support}_basis", rows, XI_ARGS,
+    slopes = [_d_dxi(f) for f in n]
+    rows = sp.Matrix([n, slopes, [_d_dxi(f) for f in slopes]])
+    short = sp.Matrix(NMAX, NMAX, lambda i, j: _integral_from_0(slopes[i] * slopes[j]))
+    return [NamedMatrix(f"{support}_basis", _in_xi(rows), XI_ARGS,
                         f"[N; N'; N''] of the {support} Ritz functions at ξ (derivatives in ξ)", "1",
                         "u = Σ q_i φ_i"),
-            NamedMatrix(f"{support}_shortening", short, XI_ARGS,
+            NamedMatrix(f"{support}_shortening", _in_xi(short), XI_ARGS,
                         f"S_kl(ξ) = ∫0^ξ N_k' N_l' dξ of the {support} functions (axial ψ_kl = -S_kl/L)", "1",
                         "ψ_ij (quadratic strain ε11 = u1' + ½ w'²)")]
 
@@ -126,19 +147,18 @@ def held_membrane(support: str = "pinned") -> list[NamedMatrix]:
     n = beam_functions(support)
     q = sp.symbols(f"q1:{NMAX + 1}", real=True)
     length, eps = sp.symbols("L eps", positive=True)
-    slope = sum(qk * f.diff(XI) for qk, f in zip(q, n))
-    integrand = sp.Poly(sp.expand(eps - slope ** 2 / (2 * length ** 2)), XI).integrate().as_expr()
-    u1 = length * (integrand - integrand.subs(XI, 0))
-    eps_held = sp.solve(u1.subs(XI, 1), eps)[0]
+    slope = sum(qk * _d_dxi(f) for qk, f in zip(q, n))
+    u1 = length * _integral_from_0(sp.expand(eps - slope ** 2 / (2 * length ** 2)))
+    eps_held = sp.solve(u1.subs(U, 1), eps)[0]
     u1 = sp.expand(u1.subs(eps, eps_held))
     gram = (sp.hessian(eps_held, q) * length ** 2).applyfunc(sp.simplify)
     held = (sp.hessian(u1, q) * length).applyfunc(sp.expand)
-    if gram.free_symbols or held.free_symbols - {XI}:
+    if gram.free_symbols or held.free_symbols - {U}:
         raise ValueError("the held-end membrane fields depend on more than ξ")
     return [NamedMatrix(f"{support}_slope_gram", gram, (),
                         f"mode-slope integrals H_kl = ∫0^1 N_k' N_l' dξ of the {support} functions "
                         "(Γ_ijkl = H_ij H_kl)", "1", "membrane strain energy EA/(8L³) Σ Γ_ijkl q_i q_j q_k q_l"),
-            NamedMatrix(f"{support}_held_axial", held, XI_ARGS,
+            NamedMatrix(f"{support}_held_axial", _in_xi(held), XI_ARGS,
                         f"L ∂²u1/∂q_k∂q_l = ξ H_kl - S_kl(ξ) of the {support} functions with held ends "
                         "(axial ψ_kl = (ξ H_kl - S_kl)/L)", "1", "ψ_ij with held ends (uniform ε11)")]
 
