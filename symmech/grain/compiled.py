@@ -5,11 +5,11 @@ loop stays the reference; the tests compare the two), with the physics taken fro
 the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
 
 - flight: exact translation of the centre in the local time since the last event
-  (generated ``flight_translation``); torque-free rotation by the Dormand-Prince
-  5(4) pair (order 5, error per step held to ``tolerance`` relative,
-  ``tolerance * 1e-3`` absolute, as the Python DOP853). The orientation at a time
-  inside an accepted step is one Dormand-Prince step of the partial length from
-  the step's start: smooth in time, so the root finders see a smooth gap;
+  (generated ``flight_translation_into``); torque-free rotation by DOP853
+  (scipy's, ported: the same steps as the Python loop's ``solve_ivp``, error per
+  step held to ``tolerance`` relative, ``tolerance * 1e-3`` absolute); the
+  orientation inside an accepted step is its 7th-order dense interpolant, smooth
+  in time, so the root finders see a smooth gap;
 - contact: the gap is scanned at ``scan_step`` in windows of 32 points exactly as
   :func:`symmech.grain.contact.first_root`; a sign change is refined by Brent's
   method (scipy's ``brentq``, ported) to ``tolerance * scan_step`` on the time;
@@ -20,7 +20,7 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   (the trigonometric equation of ``mu_equation``, roots from a 4x4 companion
   matrix polished by Newton) for the law itself or for its verdict in the log;
 - sliding: the ODE of :mod:`symmech.grain.sliding` (stick, slip, spin about the
-  normal, work and loss as quadratures) by the same Dormand-Prince pair with
+  normal, work and loss as quadratures) by the same DOP853 with
   terminal events located by Brent on the step; stiff slips (anisotropic, below
   the stiff slip speed) by Radau IIA of order 5 (scipy's ``Radau``, ported:
   step control, simplified Newton on the real / complex split of the collocation
@@ -31,8 +31,7 @@ Parameters travel in one float64 vector (layout ``P_*`` below), the state as
 (t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
 (trajectory rows, impact rows, warning codes) and are turned into a
 ``motion.Motion`` with the same structure as the Python loop's (its impact log
-built on first use: ``LazyMotion``). The compiled
-loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
+built on first use: ``LazyMotion``). The compiled loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
 ``on_step`` is called; this does not change the result. ``simulate_many`` runs
 grains on threads (the loop releases the GIL).
 """
