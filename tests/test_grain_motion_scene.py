@@ -54,7 +54,8 @@ def test_as_printed_needs_paper_mode(tmp_path, capsys):
 def test_default_scene_and_precision_study(tmp_path):
     assert main(["run", str(SCENE), "--out", str(tmp_path / "run")]) == 0
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
-    assert summary["wall_time_s"] < 30 and summary["timing_s"]["total"] < 40
+    # the 2 s run closes its energy books (speed is measured in benchmarks/bench_pipeline.py, not here)
+    assert summary["engine"] == "compiled" and summary["energy_budget"]["relative_residual"] < 1e-9
     assert main(["bench", "precision", str(SCENE), "--out", str(tmp_path / "wp")]) == 0
     text = (tmp_path / "wp" / "precision_grain.csv").read_text()
     assert text.startswith("value [1],error [1],seconds [s],method,knob\n")
