@@ -13,9 +13,10 @@ check:
 test:
 	$(PY) -m pytest
 
-# the slow tests .ci/run adds: wheel install outside the checkout, every precision study, long fuzzing
+# the slow tests .ci/run adds: wheel install outside the checkout, every precision study, long fuzzing,
+# the longer numerical tests
 slow:
-	$(PY) -m pytest -m slow tests/test_install.py tests/test_output_contract.py tests/test_fuzz.py
+	$(PY) -m pytest -m slow
 
 bench:
 	for f in benchmarks/bench_*.py; do $(PY) $$f || exit 1; done
