@@ -38,9 +38,10 @@ UNIT_TOLERANCE = 1e-6  # |d| - 1 of a given vibration direction
 SECONDS_PER_IMPACT = 6e-3
 SECONDS_PER_SIMULATED_SECOND = 0.8
 SECONDS_PER_SCAN = 6e-5
-# The compiled engine's cost as a fraction of the Python loop's: ~160x faster measured on the default scene
-# (2 s, stiff slips in the compiled Radau; benchmarks/bench_grain_motion.py); a conservative 10x.
-COMPILED_SPEEDUP = 10.0
+# The compiled engine's cost as a fraction of the Python loop's: 162x faster measured on the default scene
+# (2 s), 122-288x on the hard grains of tests/test_grain_compiled.py (0.4 s; stiff slips in the compiled
+# Radau; benchmarks/bench_grain_motion.py); a conservative 50x.
+COMPILED_SPEEDUP = 50.0
 SECONDS_PER_PAPER_STEP = 1e-4
 SECONDS_PER_PAPER_NODE_STEP = 5e-9
 STAGNANT_PHASES = 1000  # consecutive regime phases that advance time by less than the event resolution
@@ -136,7 +137,7 @@ SCHEMA = Fields("a grain scene", {
                        choices=("accurate", "paper"), default="accurate"),
         "engine": Choice("accurate mode: `compiled`, the event loop in numba (symmech.grain.compiled); `python`, "
                          "the reference loop in Python (same events, results to round-off or, in stiff slips, "
-                         "to the tolerance; ~100x slower)",
+                         "to the tolerance; 120-290x slower)",
                          choices=("compiled", "python"), default="compiled"),
         "tolerance": Float("accurate mode: relative tolerance of rotation, sliding and event times (times to "
                            "tolerance × scan step)", lo=1e-14, hi=1e-2, default=1e-9),
