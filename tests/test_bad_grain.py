@@ -165,10 +165,11 @@ def test_1000_s_scene_is_refused_at_once_past_max_time(tmp_path):
     scene.write_text(re.sub(r"(?m)^duration = .*$", "duration = 1000.0", BASE_TEXT))
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "symmech", "run", str(scene), "--out", str(tmp_path / "o"),
-                           "--max-time", "60"], capture_output=True, text=True, timeout=120)
+                           "--max-time", "10"], capture_output=True, text=True, timeout=120)
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr
-    assert "estimated run time" in lines[0] and "impacts" in lines[0] and "--max-time 60" in lines[0]
+    # the compiled engine's estimate for 1000 s is ~30 s (1e5 impacts): above 10 s
+    assert "estimated run time" in lines[0] and "impacts" in lines[0] and "--max-time 10" in lines[0]
     assert time.perf_counter() - start < 30
     assert not (tmp_path / "o").exists()
 
