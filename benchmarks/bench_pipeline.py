@@ -85,6 +85,10 @@ def _imports_by_stage(stderr: str) -> dict[str, float]:
     return spent
 
 
+# the libraries the main job cannot do without (numba's BLAS/LAPACK bindings import scipy.linalg)
+FLOOR = "floor: import numba, scipy.linalg, matplotlib figure + Agg"
+
+
 def main_job(scene: str, repeats: int) -> None:
     """Part 1: the main job and its baseline in fresh processes; stages from the probe."""
     scene = str(Path(scene).resolve())
@@ -102,6 +106,7 @@ def main_job(scene: str, repeats: int) -> None:
         stats = interleaved({
             "python -c pass": fresh("-c", "pass"),
             'python -c "import numpy, scipy, matplotlib"': fresh("-c", "import numpy, scipy, matplotlib"),
+            FLOOR: fresh("-c", "import numba, scipy.linalg, matplotlib.figure, matplotlib.backends.backend_agg"),
             "symmech run SCENE --out DIR (default plots)": fresh("-m", "symmech", "run", scene, "--out", "a",
                                                                 "--quiet"),
             "symmech run SCENE --out DIR --no-plots": fresh("-m", "symmech", "run", scene, "--out", "b",
@@ -115,6 +120,7 @@ def main_job(scene: str, repeats: int) -> None:
     base = stats['python -c "import numpy, scipy, matplotlib"']
     for name in ("symmech run SCENE --out DIR (default plots)", "symmech run SCENE --out DIR --no-plots"):
         print(f"  {name} / baseline: {ratio(stats[name], base)}   (target < 3x)")
+    print(f"  floor: importing the libraries the job uses / baseline: {ratio(stats[FLOOR], base)}")
     untuned = stats["same (default plots), gc untuned: main(argv)"]
     print(f"  gc untuned / symmech run (default plots): "
           f"{ratio(untuned, stats['symmech run SCENE --out DIR (default plots)'])}")
