@@ -105,3 +105,14 @@ def test_slip_jacobian_equals_central_differences():
         fd[:, j] = (up - down) / (2 * d)
     assert sp[compiled.S_ANISO] == 1.0 and np.abs(J[2:4, 7:11]).max() > 1.0
     assert np.all(np.abs(J - fd).max(axis=1) <= 1e-7 * np.abs(fd).max(axis=1))
+
+
+def test_tableau_is_scipys_bit_for_bit():
+    """The Radau IIA constants written out in compiled.py (no scipy import at run time) are those of
+    scipy's ``_ivp/radau.py``, to the last bit (an independent transcription of Hairer & Wanner's tableau)."""
+    from scipy.integrate._ivp import radau
+
+    for ours, theirs in ((compiled.RADAU_C, radau.C), (compiled.RADAU_E[0], radau.E), (compiled.RADAU_T, radau.T),
+                         (compiled.RADAU_TI, radau.TI), (compiled.RADAU_PT, radau.P.T)):
+        assert ours.shape == theirs.shape and np.array_equal(ours, theirs)
+    assert compiled.MU_REAL == radau.MU_REAL and compiled.MU_COMPLEX == radau.MU_COMPLEX
