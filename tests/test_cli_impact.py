@@ -84,6 +84,7 @@ def test_cli_process_prints_no_traceback(tmp_path):
     assert missing.returncode == 2 and "Traceback" not in missing.stderr
 
 
+@pytest.mark.xdist_group("derive")  # derives every module: in the worker that already has them
 def test_latex_list_plain_and_cse(capsys):
     assert main(["latex", "--list"]) == 0
     listing = capsys.readouterr().out

@@ -44,7 +44,8 @@ def write(tmp_path, content: bytes):
     (b"kind = [grain", "is not valid TOML: "),
     (b"", "scene field 'kind': unknown scene kind None; choose one of "),
     (b'kind = "prbe"', "unknown scene kind 'prbe' (did you mean 'probe'?); choose one of "),
-])
+], ids=["latin1", "utf16", "deep-array", "deep-table", "array-past-limit", "long-dotted-key", "long-integer",
+        "bad-toml", "empty", "misspelt-kind"])
 def test_unreadable_scene_files(tmp_path, capsys, content, words):
     path = write(tmp_path, content)
     code, line = answer(capsys, ["run", str(path), "--out", str(tmp_path / "out")])

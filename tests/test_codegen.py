@@ -24,6 +24,9 @@ def specs():
     return emit.module_specs()
 
 
+# every derivation runs once per process (codegen.derive caches): one xdist worker derives them all
+pytestmark = pytest.mark.xdist_group("derive")
+
 GENERATED = emit.default_directory()
 
 
@@ -56,6 +59,7 @@ def test_header_names_version_inputs_key_and_body(specs):
             assert len(text.splitlines()[0]) < 120
 
 
+@pytest.mark.slow  # a fresh interpreter derives every module (~30 s)
 def test_render_is_byte_identical_under_another_hash_seed(tmp_path):
     """A fresh interpreter with a different PYTHONHASHSEED writes the same bytes, index included."""
     env = dict(os.environ, PYTHONHASHSEED="12345")

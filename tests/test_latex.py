@@ -7,9 +7,11 @@ import pytest
 import sympy
 
 from symmech.cli import _named_matrices, main
-from symmech.core import latex
+from symmech.core import codegen, latex
 
 MAX_LINE = 2000
+# every derivation runs once per process (codegen.derive caches): one xdist worker derives them all
+pytestmark = pytest.mark.xdist_group("derive")
 
 
 def balanced(text: str) -> None:
@@ -28,12 +30,36 @@ def balanced(text: str) -> None:
     assert text.count(r"\bigl(") == text.count(r"\bigr)")
 
 
-def test_every_derived_matrix_prints_in_short_balanced_lines():
-    for name, nm in _named_matrices().items():
-        text = latex.environment(latex.lines(latex.equations(nm)))
-        balanced(text)
-        longest = max(map(len, text.splitlines()))
-        assert longest <= MAX_LINE, (name, longest)
+# The largest expressions take 10-100 s each to lay out: the slow tier prints them.
+HEAVY = ("trolley_elastic_lagrange.rate", "trolley_elastic_lagrange.lagrange_residual",
+         "trolley_elastic_lagrange.rate_mass", "smm_spatial_boom.rate", "smm_spatial_boom.c",
+         "smm_spatial_boom.rate_jacobian")
+
+
+def _prints_in_short_balanced_lines(name, nm):
+    text = latex.environment(latex.lines(latex.equations(nm)))
+    balanced(text)
+    longest = max(map(len, text.splitlines()))
+    assert longest <= MAX_LINE, (name, longest)
+
+
+@pytest.mark.parametrize("producer", codegen.producers())
+def test_every_derived_matrix_prints_in_short_balanced_lines(producer):
+    names = []
+    for spec in codegen.derive(producer)[0]:
+        for f in spec.functions:
+            name = f"{spec.name}.{f.name}"
+            if name not in HEAVY:
+                _prints_in_short_balanced_lines(name, f)
+                names.append(name)
+    assert names  # every producer declares matrices
+
+
+@pytest.mark.slow
+def test_the_largest_derived_matrices_print_in_short_balanced_lines():
+    matrices = _named_matrices()
+    for name in HEAVY:
+        _prints_in_short_balanced_lines(name, matrices[name])
 
 
 def test_largest_matrix_is_entry_by_entry(capsys):
@@ -92,7 +118,8 @@ def _write_tex(tmp_path, capsys, name, *flags):
     return path
 
 
-@pytest.mark.parametrize("name, flags", [("grain_impact.H", ()), ("smm:spatial_boom.c", ()),
+@pytest.mark.parametrize("name, flags", [("grain_impact.H", ()),
+                                         pytest.param("smm:spatial_boom.c", (), marks=pytest.mark.slow),
                                          ("trolley_frame.Lambda", ("--cse",))])
 def test_standalone_tex_compiles(tmp_path, capsys, name, flags):
     path = _write_tex(tmp_path, capsys, name, *flags)

@@ -73,15 +73,15 @@ def _sweep(seeds):
 
 
 def test_symbolic_tensions_pivot_numerically():
-    errors, bad = _sweep(range(1000))
-    assert len(errors) >= 250, len(errors)   # mechanisms actually compared
+    errors, bad = _sweep(range(300))
+    assert len(errors) >= 75, len(errors)   # mechanisms actually compared
     assert not bad, bad
 
 
 @pytest.mark.slow
 def test_symbolic_tensions_pivot_numerically_many():
-    errors, bad = _sweep(range(1000, 8000))
-    assert len(errors) >= 1500, len(errors)
+    errors, bad = _sweep(range(300, 8000))
+    assert len(errors) >= 1650, len(errors)
     assert not bad, bad
 
 

@@ -291,7 +291,8 @@ def test_reactions_equal_the_resultants_at_every_step():
     assert theta < 1e-2
 
 
-@pytest.mark.parametrize("damped", [False, True])
+# undamped: ~10 s of DOP853 at tight tolerance (slow tier); damped stays in the default tier
+@pytest.mark.parametrize("damped", [pytest.param(False, marks=pytest.mark.slow), True])
 def test_jacobi_energy_on_a_uniform_circle(damped):
     """Steady frame (horizontal circle, constant speed): h = T2 - T0 + Π + V_g is constant
     without damping and falls by exactly the dissipated energy with it."""

@@ -71,6 +71,7 @@ def test_energy_changes_by_the_work_of_the_track_forces(damped):
         assert residual < 1e-10 * work
 
 
+@pytest.mark.slow  # ~20 s on the Python path; the default tier keeps test_membrane_energy_is_conserved_along_the_track
 def test_energy_balance_includes_the_membrane_energy_of_a_held_beam():
     """A pinned beam with held ends (quartic membrane energy) across the trolley, kicked in its
     first mode: the membrane energy swings by ~1 J, the balance still closes to 1e-10 of the work."""
@@ -226,6 +227,7 @@ def test_forcing_frequencies_of_a_sinusoidal_curvature():
 
 # ---------------------------------------------------------------- rigid limit, the paper's body
 
+@pytest.mark.slow  # two 10 s rides with rollers of 1e8-1e9 N/m; the default tier keeps test_rigid_limit_on_the_paper_helix
 def test_rigid_limit_with_the_papers_point_mass():
     """The paper's body (100 kg at c = (1, 0.5, 0), no inertia) as the tip mass of a mast of
     0.5 m rooted at (1, 0, 0) on a trolley of 1e-9 kg; the mast (ρA = 1e-4 kg/m, tip stiffness

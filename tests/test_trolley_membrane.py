@@ -132,6 +132,7 @@ def duffing_exact(eps):
     return np.pi * np.sqrt(1 + eps) / (2 * ellipk(eps / (2 * (1 + eps))))
 
 
+@pytest.mark.slow  # a long free vibration per amplitude
 def test_held_pinned_beam_follows_the_duffing_backbone():
     """w = a(t) sin(πx/L) is exact for held ends (the axial force is uniform): with
     Π = EI π⁴ a²/(4L³) + EA π⁴ a⁴/(32L³) and T = ρAL ȧ²/4, ä + ω0² a (1 + ε (a/â)²) = 0 with
