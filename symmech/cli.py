@@ -112,7 +112,20 @@ def _named_matrices() -> dict:
     return {f"{s.name}.{f.name}": f for s in emit.module_specs() for f in s.functions}
 
 
-def _scene_matrices(name: str) -> dict:
+def _named_matrix(name: str):
+    """The derived matrix ``module.function``; only the producer the generated index names for
+    ``module`` is derived (one paper's derivation, not all of them)."""
+    from symmech.core import codegen
+    from symmech.generated import MODULES
+
+    producer = MODULES.get(name.partition(".")[0])
+    specs = codegen.derive(producer)[0] if producer else ()
+    for f in (f for s in specs for f in s.functions if f"{s.name}.{f.name}" == name):
+        return f
+    raise SymmechError(f"no derived matrix named '{name}' (see `symmech latex --list`)")
+
+
+def _scene_matrix(name: str):
     """``prefix:rest`` names come from ``symmech.<prefix>.latex_matrices(rest)``."""
     prefix, _, rest = name.partition(":")
     try:
@@ -121,7 +134,10 @@ def _scene_matrices(name: str) -> dict:
         raise SymmechError(f"unknown matrix namespace '{prefix}:'") from None
     if not hasattr(provider, "latex_matrices"):
         raise SymmechError(f"unknown matrix namespace '{prefix}:'")
-    return provider.latex_matrices(rest)
+    matrices = provider.latex_matrices(rest)
+    if name not in matrices:
+        raise SymmechError(f"no derived matrix named '{name}' (see `symmech latex --list`)")
+    return matrices[name]
 
 
 def cmd_latex(ns) -> int:
@@ -134,10 +150,7 @@ def cmd_latex(ns) -> int:
             eq = f"  eqs. {nm.equations}" if nm.equations else ""
             print(f"{key:<40} {nm.meaning}{eq}")
         return 0
-    matrices = _scene_matrices(ns.name) if ":" in ns.name else _named_matrices()
-    if ns.name not in matrices:
-        raise SymmechError(f"no derived matrix named '{ns.name}' (see `symmech latex --list`)")
-    nm = matrices[ns.name]
+    nm = _scene_matrix(ns.name) if ":" in ns.name else _named_matrix(ns.name)
     if ns.cse:
         # The same chunks and CSE symbols as the generated code, shown with the
         # derivation's own symbols.
