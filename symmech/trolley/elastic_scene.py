@@ -14,7 +14,7 @@ import numpy as np
 
 from symmech.core import kinematics as kin, plotting
 from symmech.core.results import Column, Result, Table as ResultTable
-from symmech.core.scene import SceneError
+from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table, TableList, Vector
 from symmech.trolley import elastic as el
 from symmech.trolley import model
@@ -169,7 +169,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     if ctx is not None:
         ctx.tick("elastic model")
     r = el.simulate(setup.system, setup.drive, t, setup.method, setup.rtol)
-    modes = _modes(setup, r) if setup.modal_samples else None
+    modes, failed = _modal_analysis(setup, r)
     tables = {"elastic_reactions": _reactions_table(r), "energy": _energy_table(r)}
     if setup.system.rollers_on:
         tables["roller_deflections"] = ResultTable(
@@ -180,7 +180,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     if modes is not None:
         tables["modes"] = _modes_table(modes, setup.system.N)
     summary, warnings = _summary(setup, r, comfort)
-    warnings += _warnings(setup, r, modes)
+    warnings += failed + _warnings(setup, r, modes)
 
     def draw(folder, output=None):
         """The elastic figures ``output`` (an ``[output]`` table) asks for; all of them by default."""
@@ -313,6 +313,18 @@ def _points_table(names, r) -> ResultTable:
     return ResultTable(cols, np.column_stack(data))
 
 
+def _modal_analysis(setup: Setup, r) -> tuple[dict | None, list]:
+    """:func:`_modes` when asked for, and the warning that replaces it when it fails: an
+    auxiliary analysis never discards the finished integration (the modes table and the
+    Campbell plot are then left out)."""
+    if not setup.modal_samples:
+        return None, []
+    try:
+        return _modes(setup, r), []
+    except (SymmechError, np.linalg.LinAlgError, ArithmeticError) as exc:
+        return None, [f"elastic: modal analysis (modes table, Campbell plot) failed and is left out: {exc}"]
+
+
 def _modes(setup: Setup, r) -> dict:
     """Natural frequencies f (k, N) [Hz] and damping ratios of the linearisation about the
     quasi-static state at ``modal_samples`` instants, with t, s, V0 and the forcing frequencies."""
@@ -326,6 +338,9 @@ def _modes(setup: Setup, r) -> dict:
         # 2n state-space roots: at least n have Im >= 0 (the first n by modulus are kept)
         omega, z = system.linear_modes(fs, system.quasi_static(fs, r["q"][i]))
         f[j], zeta[j] = omega[:n] / (2 * np.pi), z[:n]
+    bad = ~(np.isfinite(f).all(1) & np.isfinite(zeta).all(1))
+    if bad.any():
+        raise SymmechError(f"non-finite natural frequencies at t = {r['t'][idx][np.argmax(bad)]:.4g} s")
     W_max = float(np.linalg.norm(r["W"], axis=1).max())
     forcing = forcing_frequencies(system.mdl.l, r["V0"][idx], r["W"][idx], r["dW"][idx], W_max)
     return {"t": r["t"][idx], "s": r["s"][idx], "V0": r["V0"][idx], "f": f, "zeta": zeta, "forcing": forcing}
@@ -356,7 +371,6 @@ def precision(setup: Setup, ctx) -> Result:
     1e-6 m on the coordinates); error max|P - P_ref| / max|P_ref| of the reactions, the
     reference by Radau at rtol 1e-11 (steps small enough to resolve every mode)."""
     from symmech.core import precision as wp
-    from symmech.core.scene import SymmechError
 
     if setup.system is None:
         raise SymmechError("bench precision of an elastic trolley needs an elastic effect (elastic.effects)")

@@ -395,14 +395,14 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
     """Case 2 frame (physically consistent): Λ̄ = Λ* Λ with the exact chord rotation Λ*.
 
     Λ*' and Λ*'' (s-derivatives) come from differences of order ``fd_order`` with step
-    ``fd_step`` [m] (central; one-sided at the ends of ``plan.span``), or from ``derivatives(s, s_A) -> (Λ*', Λ*'')`` when
-    given; the body's angular velocity per unit length is Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
+    ``fd_step`` [m] (central; one-sided at the ends of ``plan.span``), or from
+    ``derivatives(s, s_A) -> (Λ*', Λ*'')`` when given; the body's angular velocity per unit
+    length is Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
     """
     s = np.asarray(s, dtype=float)
     lstar, chord, base = chord_rotation(track, s, l, mode, plan)
     if derivatives is None:
-        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode, plan)[0], s, fd_step, fd_order,
-                          _span(plan))
+        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode, plan)[0], s, fd_step, fd_order, _span(plan))
     else:
         d1, d2 = derivatives(s, chord_point(track, s, l))
     lt = np.swapaxes(lstar, -1, -2)
