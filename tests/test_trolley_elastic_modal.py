@@ -115,3 +115,26 @@ def test_numerical_failures_of_the_modal_analysis_are_warnings_too(tmp_path, mon
     _, res = pipeline.run_to(_scene(), tmp_path / "out", Context(quiet=True), plots=False)
     assert any("modal analysis" in w and str(broken) in w for w in res.warnings)
     assert (tmp_path / "out" / "elastic_reactions.csv").exists()
+
+
+def test_roller_frequencies_closed_form_at_q0_and_the_sagged_states_difference():
+    """docs/trolley-elastic.md: the closed-form roller frequencies (2-DOF bounce/pitch, 3-DOF
+    lateral/roll/yaw, -m g0 c2 on roll and pitch) are those of the linearisation at q = 0, with
+    gravity too (1e-12); the `modes` table linearises about the sagged quasi-static state, whose
+    frequencies differ by first order in the sag: 4.0e-4 at k ~ 1e5 N/m, 10x less at 10x k
+    (the 100 kg trolley of tests/test_trolley_elastic.py, centre of mass 0.5 m high)."""
+    from test_trolley_elastic import closed_form_roller_frequencies, roller_model, straight
+
+    g0, com, inertia = 9.81, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0)
+    differences = []
+    for scale in (1e5, 1e6):
+        k = tuple(scale * np.array([1.0, 1.0, 2.0, 1.5, 1.0]))
+        system = el.System(roller_model(g0, k, com=com, inertia=inertia + (0, 0, 0)))
+        fs = el._state_at(system, straight(), 0.0, 0.0)
+        vertical, lateral = closed_form_roller_frequencies(100.0, com, inertia, k, 2.0, 1.0, g0)
+        closed = np.sort(np.r_[vertical, lateral])
+        np.testing.assert_allclose(system.linear_modes(fs, np.zeros(system.N))[0], closed, rtol=1e-12)
+        sagged = system.linear_modes(fs, system.quasi_static(fs))[0]
+        differences.append(np.abs(sagged / closed - 1).max())
+    assert 3e-4 < differences[0] < 5e-4
+    assert differences[0] / differences[1] == pytest.approx(10.0, rel=0.01)

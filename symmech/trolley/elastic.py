@@ -558,6 +558,26 @@ class System:
         return omega, zeta
 
 
+def beam_mode(system: System, beam: int, plane: int, mode: int) -> np.ndarray:
+    """Coordinates (N,) of mode ``mode`` (1 = lowest) of beam ``beam`` alone, bending in
+    ``plane`` (1: along its ``plane`` direction, 2: axis × plane), on a fixed trolley: the
+    eigenvector of its own Ritz block of M and K (tip mass included), scaled to a largest
+    deflection along the beam of +1 m. Raises KeyError when the model has no such coordinate."""
+    import scipy.linalg
+
+    b = system.mdl.beams[beam]
+    idx = [system.inv.names.index(f"beam{beam}_p{plane}_m{k + 1}") for k in range(b.modes)]
+    block = np.ix_(idx, idx)
+    _, vectors = scipy.linalg.eigh(system.inv.K[block], system.mass(np.zeros(system.N))[block])
+    shape = beam_basis(b.support, np.linspace(0.0, 1.0, MODE_SAMPLES))[0][:, 0, :b.modes] @ vectors[:, mode - 1]
+    out = np.zeros(system.N)
+    out[idx] = vectors[:, mode - 1] / shape[np.argmax(np.abs(shape))]
+    return out
+
+
+MODE_SAMPLES = 2001  # points along a beam at which a mode's largest deflection is found
+
+
 # ---------------------------------------------------------------- integration along the track
 
 def rigid_body(mdl: ElasticModel) -> model.Body:
