@@ -136,3 +136,18 @@ def test_frenet_warning_on_a_straight_table_names_points_on_the_track():
                         time={"t_end": 2.0, "steps": 20}))
     note, = st.notes
     assert "at s = 0 m" in note and "on [0, 8] m" in note
+
+
+@pytest.mark.parametrize("local_curvature", [False, True])
+def test_traction_from_the_first_point_of_a_level_straight_table(local_curvature):
+    """P0 = 50 N on 100 kg from rest at s = 0 of a level straight table (refused before: the
+    stencils reached s = -0.04 m): s = P0 t²/(2m), V0 = P0 t/m (1e-12); the range the run may
+    reach ends at the table's end, less 1.05 times the axle distance in case 2."""
+    pts = [[2.0 * i, 0.0, 0.0] for i in range(12)]
+    st, res = compute(setup(track={"type": "table", "points": pts}, motion={"traction": "50"},
+                            time={"t_end": 4.0, "steps": 8},
+                            effects={"traction": True, "local_curvature": local_curvature}))
+    t = st.t
+    np.testing.assert_allclose(res[1]["s"], 50 * t**2 / 200, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res[1]["V0"], 50 * t / 100, rtol=0, atol=1e-12)
+    assert st.plan.span == (0.0, pytest.approx(22.0 - (2.1 if local_curvature else 0.0), rel=1e-9))
