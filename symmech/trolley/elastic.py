@@ -344,6 +344,10 @@ def frame_state(fr: model.Frame, i: int, V0: float, dV0: float) -> FrameState:
 
 # ---------------------------------------------------------------- equations of motion
 
+# Absolute floor of a converged Newton step [m or rad]: a femtometre (femtoradian) is no deflection.
+Q_FLOOR = 1e-15
+
+
 class System:
     """Residual R(q, q̇, q̈) = M(q) q̈ + f(q, q̇) of the relative motion, its Jacobians,
     reactions and energies, from the invariants of ``mdl``."""
@@ -519,7 +523,9 @@ class System:
         return float(F @ fs.v0 + moment @ fs.w)
 
     def quasi_static(self, fs: FrameState, q0=None, tol: float = 1e-12, max_iter: int = 50):
-        """q with R(q, 0, 0) = 0 by Newton's method (the quasi-static state)."""
+        """q with R(q, 0, 0) = 0 by Newton's method (the quasi-static state): converged when a
+        step is below ``tol`` relative to q or below :data:`Q_FLOOR` (the state q = 0 of an
+        unloaded body is reached only to rounding, where no relative test can pass)."""
         q = np.zeros(self.N) if q0 is None else np.array(q0, float)
         zero = np.zeros(self.N)
         for _ in range(max_iter):
@@ -530,7 +536,7 @@ class System:
                 raise SymmechError("no quasi-static state of the elastic model: its stiffness is singular (a "
                                    "free play of the rollers, elastic.rollers.preload < 0, carries no load)") from None
             q = q + step
-            if np.abs(step).max() <= tol * max(np.abs(q).max(), 1e-300) or not np.any(R):
+            if np.abs(step).max() <= tol * np.abs(q).max() + Q_FLOOR or not np.any(R):
                 return q
         raise SymmechError("no quasi-static state of the elastic model (Newton did not converge in "
                            f"{max_iter} steps; residual {np.abs(R).max():.3g})")
@@ -550,6 +556,26 @@ class System:
         omega = np.abs(lam)
         zeta = np.where(omega > 0, -lam.real / np.where(omega > 0, omega, 1.0), 0.0)
         return omega, zeta
+
+
+def beam_mode(system: System, beam: int, plane: int, mode: int) -> np.ndarray:
+    """Coordinates (N,) of mode ``mode`` (1 = lowest) of beam ``beam`` alone, bending in
+    ``plane`` (1: along its ``plane`` direction, 2: axis × plane), on a fixed trolley: the
+    eigenvector of its own Ritz block of M and K (tip mass included), scaled to a largest
+    deflection along the beam of +1 m. Raises KeyError when the model has no such coordinate."""
+    import scipy.linalg
+
+    b = system.mdl.beams[beam]
+    idx = [system.inv.names.index(f"beam{beam}_p{plane}_m{k + 1}") for k in range(b.modes)]
+    block = np.ix_(idx, idx)
+    _, vectors = scipy.linalg.eigh(system.inv.K[block], system.mass(np.zeros(system.N))[block])
+    shape = beam_basis(b.support, np.linspace(0.0, 1.0, MODE_SAMPLES))[0][:, 0, :b.modes] @ vectors[:, mode - 1]
+    out = np.zeros(system.N)
+    out[idx] = vectors[:, mode - 1] / shape[np.argmax(np.abs(shape))]
+    return out
+
+
+MODE_SAMPLES = 2001  # points along a beam at which a mode's largest deflection is found
 
 
 # ---------------------------------------------------------------- integration along the track

@@ -14,7 +14,7 @@ import numpy as np
 
 from symmech.core import kinematics as kin, plotting
 from symmech.core.results import Column, Result, Table as ResultTable
-from symmech.core.scene import SceneError
+from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table, TableList, Vector
 from symmech.trolley import elastic as el
 from symmech.trolley import model
@@ -48,12 +48,36 @@ BEAM = Table("an Euler–Bernoulli beam fixed to the trolley", {
     "ea": Float("axial stiffness EA (held ends)", unit="N", lo=0.0, lo_open=True, hi=1e15, default=None),
 })
 
+# Largest initial beam deflection, a fraction of its length: the beam model assumes small slopes.
+MAX_INITIAL_DEFLECTION = 0.1
+
 POINT = Table("a body point whose deflection and overload are reported", {
     "name": Str("name used in the column headers", pattern=r"[A-Za-z_][A-Za-z0-9_]*"),
     "at": Vector("a point of the rigid trolley (trolley frame)", n=3, unit="m", lo=-1e3, hi=1e3, default=None),
     "beam": Int("index of the beam (0 = first [[elastic.beams]])", lo=0, hi=99, default=None),
     "xi": Float("position along that beam, x/L", unit="1", lo=0.0, hi=1.0, default=None),
 })
+
+INITIAL_BEAM = Table("a beam deflected in one of its own modes at t = 0", {
+    "beam": Int("index of the beam (0 = first [[elastic.beams]])", lo=0, hi=49),
+    "plane": Int("bending plane: 1 along the beam's `plane`, 2 along axis × plane", lo=1, hi=2),
+    "mode": Int("mode of the beam alone on a fixed trolley (tip mass included) in that plane, 1 = lowest; at "
+                "most the beam's `modes`", lo=1, hi=8, default=1),
+    "amplitude": Float("largest deflection along the beam (positive: along the plane's direction there); "
+                       f"in magnitude at most {MAX_INITIAL_DEFLECTION:g} of the beam's length", unit="m",
+                       lo=-100.0, hi=100.0, default=0.0),
+    "velocity": Float("largest deflection rate along the beam, same shape", unit="m/s", lo=-1e3, hi=1e3,
+                      default=0.0),
+})
+
+INITIAL = Table("the state at t = 0: offsets added to the quasi-static state there (free vibrations)", {
+    "rollers": Vector("roller coordinates u2, u3 [m], θ1, θ2, θ3 [rad] (needs effects.rollers)", n=5,
+                      unit="m or rad", lo=-0.1, hi=0.1, default=[0.0] * 5),
+    "roller_rates": Vector("their rates u̇2, u̇3 [m/s], θ̇1, θ̇2, θ̇3 [rad/s]", n=5, unit="m/s or rad/s",
+                           lo=-100.0, hi=100.0, default=[0.0] * 5),
+    "beams": TableList("beams deflected in their modes (needs effects.body); the modes add up", item=INITIAL_BEAM,
+                       max_items=100, default=[]),
+}, default={})
 
 SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
     "effects": Table("which elastic effects to include", {
@@ -67,6 +91,7 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
     "rollers": ROLLERS,
     "beams": TableList("elastic beams on the trolley", item=BEAM, max_items=50, default=[]),
     "points": TableList("report points", item=POINT, max_items=100, default=[]),
+    "initial": INITIAL,
     "numerics": Table("integration", {
         "method": Choice("integrator (implicit ones use the analytic Jacobian)",
                          choices=("Radau", "BDF", "LSODA", "DOP853", "RK45"), default="Radau"),
@@ -92,6 +117,8 @@ class Setup:
     modal_samples: int
     small_rotation: float
     resonance_band: float
+    dq0: np.ndarray | None = None  # (N,) coordinates at t = 0 beyond the quasi-static state [m, rad]
+    dqd0: np.ndarray | None = None  # (N,) their rates [m/s, rad/s]
 
 
 def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "elastic") -> Setup:
@@ -135,8 +162,43 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
     if not system.N and drive.traction is not None:
         raise SceneError(f"{path}.effects", "with traction, select at least one elastic effect (rollers or body "
                                             "with beams): the rigid traction run is the trolley's own")
+    dq0, dqd0 = _initial(elastic["initial"], system, f"{path}.initial")
     return Setup(system if system.N else None, drive, body, np.asarray(t, float), names, num["method"], num["rtol"],
-                 num["modal_samples"], num["small_rotation"], num["resonance_band"])
+                 num["modal_samples"], num["small_rotation"], num["resonance_band"], dq0, dqd0)
+
+
+def _initial(initial: dict, system: el.System, path: str) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (N,) of the coordinates and of their rates at t = 0 from the resolved
+    ``[elastic.initial]`` table, checked against the model."""
+    dq0, dqd0 = np.zeros(system.N), np.zeros(system.N)
+    for key, target in (("rollers", dq0), ("roller_rates", dqd0)):
+        if any(initial[key]):
+            if not system.rollers_on:
+                raise SceneError(f"{path}.{key}", f"{initial[key]}: the rollers are rigid (effects.rollers = false)")
+            target[:5] = initial[key]
+    seen = set()
+    for i, entry in enumerate(initial["beams"]):
+        where = f"{path}.beams[{i}]"
+        beam, plane, mode = entry["beam"], entry["plane"], entry["mode"]
+        if beam >= len(system.mdl.beams):
+            raise SceneError(f"{where}.beam", f"{beam} is not a beam index ({len(system.mdl.beams)} beams given)")
+        b = system.mdl.beams[beam]
+        if not system.mdl.effects.body:
+            raise SceneError(where, "the beams are rigid (effects.body = false): they have no modes to deflect")
+        if mode > b.modes:
+            raise SceneError(f"{where}.mode", f"{mode} is outside [1, {b.modes}] (the beam's `modes`)")
+        bound = MAX_INITIAL_DEFLECTION * b.length
+        if abs(entry["amplitude"]) > bound:
+            raise SceneError(f"{where}.amplitude", f"{entry['amplitude']:g} m is outside [{-bound:g}, {bound:g}] m "
+                                                   f"({MAX_INITIAL_DEFLECTION:g} of the beam's length: the beam "
+                                                   "model assumes small slopes)")
+        if (beam, plane, mode) in seen:
+            raise SceneError(where, f"beam {beam}, plane {plane}, mode {mode} is given by an earlier entry too")
+        seen.add((beam, plane, mode))
+        shape = el.beam_mode(system, beam, plane, mode)
+        dq0 += entry["amplitude"] * shape
+        dqd0 += entry["velocity"] * shape
+    return dq0, dqd0
 
 
 def _check_axial(beam: dict, where: str) -> None:
@@ -168,8 +230,8 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
                       {"elastic_reactions": ResultTable(cols, np.column_stack([t, rigid["P"]]))})
     if ctx is not None:
         ctx.tick("elastic model")
-    r = el.simulate(setup.system, setup.drive, t, setup.method, setup.rtol)
-    modes = _modes(setup, r) if setup.modal_samples else None
+    r = el.simulate(setup.system, setup.drive, t, setup.method, setup.rtol, dq0=setup.dq0, dqd0=setup.dqd0)
+    modes, failed = _modal_analysis(setup, r)
     tables = {"elastic_reactions": _reactions_table(r), "energy": _energy_table(r)}
     if setup.system.rollers_on:
         tables["roller_deflections"] = ResultTable(
@@ -180,7 +242,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     if modes is not None:
         tables["modes"] = _modes_table(modes, setup.system.N)
     summary, warnings = _summary(setup, r, comfort)
-    warnings += _warnings(setup, r, modes)
+    warnings += failed + _warnings(setup, r, modes)
 
     def draw(folder, output=None):
         """The elastic figures ``output`` (an ``[output]`` table) asks for; all of them by default."""
@@ -313,6 +375,18 @@ def _points_table(names, r) -> ResultTable:
     return ResultTable(cols, np.column_stack(data))
 
 
+def _modal_analysis(setup: Setup, r) -> tuple[dict | None, list]:
+    """:func:`_modes` when asked for, and the warning that replaces it when it fails: an
+    auxiliary analysis never discards the finished integration (the modes table and the
+    Campbell plot are then left out)."""
+    if not setup.modal_samples:
+        return None, []
+    try:
+        return _modes(setup, r), []
+    except (SymmechError, np.linalg.LinAlgError, ArithmeticError) as exc:
+        return None, [f"elastic: modal analysis (modes table, Campbell plot) failed and is left out: {exc}"]
+
+
 def _modes(setup: Setup, r) -> dict:
     """Natural frequencies f (k, N) [Hz] and damping ratios of the linearisation about the
     quasi-static state at ``modal_samples`` instants, with t, s, V0 and the forcing frequencies."""
@@ -326,6 +400,9 @@ def _modes(setup: Setup, r) -> dict:
         # 2n state-space roots: at least n have Im >= 0 (the first n by modulus are kept)
         omega, z = system.linear_modes(fs, system.quasi_static(fs, r["q"][i]))
         f[j], zeta[j] = omega[:n] / (2 * np.pi), z[:n]
+    bad = ~(np.isfinite(f).all(1) & np.isfinite(zeta).all(1))
+    if bad.any():
+        raise SymmechError(f"non-finite natural frequencies at t = {r['t'][idx][np.argmax(bad)]:.4g} s")
     W_max = float(np.linalg.norm(r["W"], axis=1).max())
     forcing = forcing_frequencies(system.mdl.l, r["V0"][idx], r["W"][idx], r["dW"][idx], W_max)
     return {"t": r["t"][idx], "s": r["s"][idx], "V0": r["V0"][idx], "f": f, "zeta": zeta, "forcing": forcing}
@@ -356,19 +433,20 @@ def precision(setup: Setup, ctx) -> Result:
     1e-6 m on the coordinates); error max|P - P_ref| / max|P_ref| of the reactions, the
     reference by Radau at rtol 1e-11 (steps small enough to resolve every mode)."""
     from symmech.core import precision as wp
-    from symmech.core.scene import SymmechError
 
     if setup.system is None:
         raise SymmechError("bench precision of an elastic trolley needs an elastic effect (elastic.effects)")
     ctx.tick("elastic precision: reference")
-    ref = el.simulate(setup.system, setup.drive, setup.t, **PRECISION_REFERENCE)["P"]
+    start = {"dq0": setup.dq0, "dqd0": setup.dqd0}
+    ref = el.simulate(setup.system, setup.drive, setup.t, **PRECISION_REFERENCE, **start)["P"]
     scale = max(np.abs(ref).max(), 1e-300)
     rows = []
     for name, kw, rtols in PRECISION_METHODS:
         for rtol in rtols:
             ctx.tick(f"elastic precision: {name}, rtol {rtol:g}")
             seconds, out = wp.best_time(lambda: el.simulate(setup.system, setup.drive, setup.t, rtol=rtol,
-                                                            atol_q=rtol * 1e-6, **kw), repeats=1, min_seconds=0.0)
+                                                            atol_q=rtol * 1e-6, **kw, **start), repeats=1,
+                                        min_seconds=0.0)
             rows.append({"method": name, "knob": "rtol", "value": rtol, "seconds": seconds,
                          "error": float(np.abs(out["P"] - ref).max() / scale)})
     reference = (f"Radau at rtol {PRECISION_REFERENCE['rtol']:g}, atol {PRECISION_REFERENCE['atol_q']:g} m "

@@ -14,6 +14,7 @@ Arrays have a leading axis of n samples along the track. Frames are passive
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -127,7 +128,9 @@ class FramePlan:
     ``at`` (k,) [m] are the frame discontinuities found, ``roll`` (k,) [rad] the roll
     about x1 added beyond each (cumulative), ``rmf`` a :class:`RotationMinimising`
     frame replacing the Frenet frame, ``events`` what was found and done, ``checked``
-    the number of arc lengths at which the frame was compared with its neighbours.
+    the number of arc lengths at which the frame was compared with its neighbours,
+    ``span`` (lo, hi) [m] the rear-axle arc lengths on which difference stencils may
+    evaluate the frame (the run's own range: one-sided stencils at its ends).
     """
 
     mode: str
@@ -136,6 +139,7 @@ class FramePlan:
     rmf: "RotationMinimising | None" = None
     events: list = field(default_factory=list)
     checked: int = 0
+    span: tuple = (-math.inf, math.inf)
 
     def continue_rolls(self, s, frame: Frame) -> Frame:
         if not len(self.at):
@@ -349,16 +353,40 @@ def chord_rotation(track, s, l: float, mode: str, plan=None):
     return frm.chord_rotation(*_cols(rho)), chord, base
 
 
-def _stencil(fun, s, h, order: int):
-    """First and second s-derivatives of the matrix function ``fun`` (n, 3, 3) by central
-    differences of ``order`` 2 or 4; ``h`` is a step [m], scalar or of the shape of s."""
-    hm = np.asarray(h, dtype=float)[..., None, None]
-    if order == 2:
-        fp, fm, f0 = fun(s + h), fun(s - h), fun(s)
-        return (fp - fm) / (2 * hm), (fp - 2 * f0 + fm) / hm**2
-    f2p, fp, f0, fm, f2m = (fun(s + k * h) for k in (2, 1, 0, -1, -2))
-    d1 = (-f2p + 8 * fp - 8 * fm + f2m) / (12 * hm)
-    d2 = (-f2p + 16 * fp - 30 * f0 + 16 * fm - f2m) / (12 * hm**2)
+def _weights(nodes, k: int) -> np.ndarray:
+    """Weights of the k-th derivative on the integer ``nodes`` (unit step): exact for
+    polynomials of degree < len(nodes)."""
+    nodes = np.asarray(nodes, dtype=float)
+    rhs = np.zeros(len(nodes))
+    rhs[k] = math.factorial(k)
+    return np.linalg.solve(np.vander(nodes, increasing=True).T, rhs)
+
+
+def _stencil(fun, s, h, order: int, span=(-math.inf, math.inf)):
+    """First and second s-derivatives of the matrix function ``fun`` (n, 3, 3) by differences
+    of ``order`` 2 or 4; ``h`` is a step [m], scalar or of the shape of s.
+
+    Every node lies in ``span`` = (lo, hi) [m] (s itself must): central differences where
+    s ± (order/2) h fit, else one-sided ones on order + 2 nodes (truncation error no worse
+    than the central one's); h shrinks where the span is too short for them.
+    """
+    s = np.asarray(s, dtype=float)
+    lo, hi = span
+    n = order + 2
+    h = np.minimum(np.broadcast_to(np.asarray(h, dtype=float), s.shape), (hi - lo) / (2 * (n - 1)))
+    half = order // 2
+    forward, backward = s - half * h < lo, s + half * h > hi
+    layouts = ((~forward & ~backward, np.arange(-half, half + 1)), (forward, np.arange(n)),
+               (backward & ~forward, np.arange(1 - n, 1)))
+    d1 = np.empty(s.shape + (3, 3))
+    d2 = np.empty_like(d1)
+    for mask, nodes in layouts:
+        if not mask.any():
+            continue
+        hm = h[mask][..., None, None]
+        values = [fun(s[mask] + k * h[mask]) for k in nodes]
+        d1[mask] = sum(w * v for w, v in zip(_weights(nodes, 1), values)) / hm
+        d2[mask] = sum(w * v for w, v in zip(_weights(nodes, 2), values)) / hm**2
     return d1, d2
 
 
@@ -366,14 +394,15 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
                           derivatives=None, plan=None) -> Frame:
     """Case 2 frame (physically consistent): Λ̄ = Λ* Λ with the exact chord rotation Λ*.
 
-    Λ*' and Λ*'' (s-derivatives) come from central differences of order ``fd_order``
-    with step ``fd_step`` [m], or from ``derivatives(s, s_A) -> (Λ*', Λ*'')`` when
-    given; the body's angular velocity per unit length is Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
+    Λ*' and Λ*'' (s-derivatives) come from differences of order ``fd_order`` with step
+    ``fd_step`` [m] (central; one-sided at the ends of ``plan.span``), or from
+    ``derivatives(s, s_A) -> (Λ*', Λ*'')`` when given; the body's angular velocity per unit
+    length is Ω̄ = Λ* Ω + vee(-Λ*' Λ*ᵀ).
     """
     s = np.asarray(s, dtype=float)
     lstar, chord, base = chord_rotation(track, s, l, mode, plan)
     if derivatives is None:
-        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode, plan)[0], s, fd_step, fd_order)
+        d1, d2 = _stencil(lambda x: chord_rotation(track, x, l, mode, plan)[0], s, fd_step, fd_order, _span(plan))
     else:
         d1, d2 = derivatives(s, chord_point(track, s, l))
     lt = np.swapaxes(lstar, -1, -2)
@@ -495,4 +524,8 @@ def paper_lstar_derivative(track, s, l, mode, lstar, method: str, plan=None):
     h = np.concatenate([ds[:1], ds]) if len(s) > 1 else np.array([1e-3])
     h = np.maximum(h, 1e-6 * l)
     order = {"central2": 2, "central4": 4}[method]
-    return _stencil(fun, s, h, order)[0]
+    return _stencil(fun, s, h, order, _span(plan))[0]
+
+
+def _span(plan) -> tuple:
+    return plan.span if plan is not None else (-math.inf, math.inf)

@@ -204,7 +204,8 @@ SCHEMA = sc.Table("a trolley scene", {
                             default=False),
     }, default={}),
     "numerics": sc.Table("numerical settings", {
-        "fd_order": sc.Custom("order of the central differences for Λ*', Λ*'' in case 2 (physics)",
+        "fd_order": sc.Custom("order of the differences for Λ*', Λ*'' in case 2 (physics): central, one-sided at the "
+                              "ends of the run",
                               parse=_fd_order, type_doc="2 or 4", default=4),
         "fd_step": sc.Float("their step (rounding ~eps/h², truncation ~h⁴); default min(0.02, 0.05 l); at most "
                             "0.1 l", unit="m", lo=1e-5, hi=10.0, default=None),
@@ -302,9 +303,10 @@ def prepare(scene: dict) -> Setup:
                   notes=[], output=scene["output"])
     if setup.paper_tables:
         _table_grid(setup)
-    lo, hi = _visited(setup)
-    track.check_domain("track", lo, hi)
-    setup.plan = model.plan_frames(track, lo, hi, setup.frame, num["min_curvature"])
+    lo, hi, front = _visited(setup)
+    track.check_domain("track", lo, front)
+    setup.plan = model.plan_frames(track, lo, front, setup.frame, num["min_curvature"])
+    setup.plan.span = (lo, hi)
     setup.notes += [f"frame: {e['kind']} at s = {e['s']:.6g} m: {e['action']}" for e in setup.plan.events
                     if e["kind"] != "fast turn"]
     noise = getattr(track, "noise", None)
@@ -318,8 +320,12 @@ def prepare(scene: dict) -> Setup:
     return setup
 
 
-def _visited(setup: Setup) -> tuple[float, float]:
-    """Arc-length range [m] the run evaluates the track on (rear axle, front axle, stencils)."""
+def _visited(setup: Setup) -> tuple[float, float, float]:
+    """Rear-axle arc lengths (lo, hi) [m] the run evaluates frames on — in case 2 at least
+    two difference stencils wide, so that one-sided stencils fit at its ends — and the
+    farthest arc length [m] it evaluates the track on (the front axle in case 2)."""
+    reach = FRONT_REACH * setup.body.l if setup.local_curvature else 0.0
+    length = setup.track.length
     if setup.speed is not None:
         s = arc_length(setup)
         if not np.all(np.abs(s) <= MAX_LENGTH):
@@ -329,10 +335,29 @@ def _visited(setup: Setup) -> tuple[float, float]:
     else:  # traction: the speed is unknown before the run but bounded by MAX_SPEED
         span = min(MAX_SPEED * setup.t[-1], MAX_LENGTH)
         lo, hi = setup.s0 - span, setup.s0 + span
-        if math.isfinite(setup.track.length):
-            lo, hi = max(lo, 0.0), min(hi, setup.track.length)
-    reach = 2 * setup.fd_step + (1.05 * setup.body.l if setup.local_curvature else 0.0)
-    return lo - 2 * setup.fd_step, hi + reach
+        if math.isfinite(length):
+            lo, hi = max(lo, 0.0), max(min(hi, length - reach), setup.s0)
+    if setup.local_curvature:
+        width = 2 * (setup.fd_order + 1) * setup.fd_step
+        if hi - lo < width:
+            lo = max(0.5 * (lo + hi - width), 0.0) if math.isfinite(length) else 0.5 * (lo + hi - width)
+            hi = lo + width
+        if hi + reach > length and hi + setup.body.l <= length:
+            reach = _front_axle(setup, hi) - hi
+    return lo, hi, hi + reach
+
+
+# The front axle's arc length exceeds the axle distance l by ~κ² l³/24: a bound for moderate curvature.
+FRONT_REACH = 1.05
+
+
+def _front_axle(setup: Setup, s: float) -> float:
+    """Arc length [m] of the front axle when the rear one is at ``s``; beyond the track
+    (where the check refuses it) when the track ends within its reach."""
+    try:
+        return float(model.chord_point(setup.track, np.array([s]), setup.body.l)[0])
+    except SymmechError:
+        return s + FRONT_REACH * setup.body.l
 
 
 def _table_grid(setup: Setup) -> None:

@@ -119,12 +119,11 @@ class ExpressionTrack(Track):
 
 
 def _check_inside(length, lo, hi, what="track"):
-    # A little room serves the difference stencils at the ends of a finite track.
-    margin = 1e-3 * length
+    # The room of rounding only: difference stencils stay inside the run's range (one-sided at its ends).
+    margin = 1e-9 * length
     if lo < -margin or hi > length + margin:
         raise SceneError("motion.speed", f"the motion leaves the {what}: s from {lo:.6g} to {hi:.6g} m "
-                                         f"(with the axle distance and difference stencils), track length "
-                                         f"{length:.6g} m")
+                                         f"(with the front axle in case 2), track length {length:.6g} m")
 
 
 class ArcLength:
