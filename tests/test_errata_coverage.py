@@ -11,6 +11,10 @@ from symmech.smm import errata_general
 STEMS = {"000_b52a2f612feb4113", "002_7fa2a0a5477072ec", "003_6166172b9b245651"}
 
 
+# its module fixture is built once per xdist worker: one worker runs the module
+pytestmark = pytest.mark.xdist_group("test_errata_coverage")
+
+
 @pytest.fixture(scope="module")
 def records():
     return [errata.evaluate(c, n=60) for c in errata.all_checks()]

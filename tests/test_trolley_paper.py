@@ -14,6 +14,10 @@ from trolley_util import prepared
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
 
+# its module fixture is built once per xdist worker: one worker runs the module
+pytestmark = pytest.mark.xdist_group("test_trolley_paper")
+
+
 @pytest.fixture(scope="module")
 def paper_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper")
