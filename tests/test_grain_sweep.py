@@ -74,6 +74,7 @@ def test_a_bad_grain_of_the_population_is_named_before_any_work():
     assert info.value.field == "body.semi_axes[1]"
 
 
+@pytest.mark.compiled_engine
 def test_dask_cluster_equals_serial_bit_for_bit():
     import dask.distributed as distributed
     pops = [{"name": "wheat", "count": 2, "seed": 1, "vary": {"body.density": 0.1}},

@@ -285,44 +285,57 @@ def _sequence(v0: float, e: float, g: float, v_rest: float, span: float) -> floa
 
 def estimate(sc: GrainScene) -> registry.Estimate:
     """Expected wall time: per fixed step in paper mode; per impact, simulated second and scan step in
-    accurate mode (the Python loop's figures, divided by :data:`COMPILED_SPEEDUP` on the compiled engine)."""
+    accurate mode (the Python loop's figures, divided by :data:`COMPILED_SPEEDUP` on the compiled engine)
+    on the engine of :func:`choose_engine`, which the text names with the reason."""
     num = sc.numerics
     if num.mode == "paper":
         steps = sc.duration / num.dt
         seconds = steps * (SECONDS_PER_PAPER_STEP + num.nodes * SECONDS_PER_PAPER_NODE_STEP)
         return registry.Estimate(seconds, f"{steps:.3g} fixed steps of {num.dt:.3g} s, {num.nodes} nodes")
-    impacts = expected_impacts(sc)
-    scans = sc.duration / num.scan_step
-    seconds = impacts * SECONDS_PER_IMPACT + sc.duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
-    what = f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s"
-    engine, why = choose_engine(num)
+    seconds, what = _python_cost(sc, num, sc.duration)
+    engine, why = choose_engine(sc)
     if engine == "python":
         return registry.Estimate(seconds, f"{what}; Python engine: {why}")
     from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
     seconds /= COMPILED_SPEEDUP
     if compiled.cold():
-        return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; compiling the grain engine "
-                                 f"once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
+        return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; {why}; compiling the grain "
+                                 f"engine once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
                                  once=compiled.COLD_COMPILE_SECONDS)
     return registry.Estimate(seconds, f"{what}; compiled engine")
 
 
-def choose_engine(num: motion.Numerics) -> tuple[str, str]:
+def _python_cost(sc: GrainScene, num: motion.Numerics, duration: float) -> tuple[float, str]:
+    """Accurate mode on the Python loop: expected wall time [s] over ``duration`` [s], and what it counts."""
+    impacts = expected_impacts(replace(sc, numerics=num, duration=duration))
+    scans = duration / num.scan_step
+    seconds = impacts * SECONDS_PER_IMPACT + duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
+    return seconds, f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s"
+
+
+def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
+                  duration: float | None = None) -> tuple[str, str]:
     """The engine that runs accurate mode, "compiled" or "python", and why (for the estimate and summary.json).
 
-    ``auto`` takes the compiled engine when numba's cache holds it; else the Python loop, which answers in
-    seconds, while :func:`run` has the compiled engine built in the background for the next run."""
+    ``auto`` takes the compiled engine when numba's cache holds it. Else it takes whichever the estimate says
+    answers first: the Python loop (seconds on a default scene; :func:`simulate` then has the compiled engine
+    built in the background for the next run) or compiling first (~80 s once, then 50x faster)."""
+    num = num or sc.numerics
     if num.engine == "python":
         return "python", 'numerics.engine = "python"'
     from symmech.grain import compiled  # imports numba: only when the compiled engine may run
 
     if num.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
-    if compiled.cold():
-        return "python", ("engine auto: the compiled engine is not built yet on this machine; it is built in the "
-                          "background for the next run (`symmech warm` builds it in the foreground)")
-    return "compiled", "engine auto: the compiled engine is built (numba's cache)"
+    if not compiled.cold():
+        return "compiled", "engine auto: the compiled engine is built (numba's cache)"
+    python = _python_cost(sc, num, sc.duration if duration is None else duration)[0]
+    if python > compiled.COLD_COMPILE_SECONDS + python / COMPILED_SPEEDUP:
+        return "compiled", (f"engine auto: the Python engine would take ~{python:.3g} s, longer than compiling "
+                            "the compiled engine first")
+    return "python", ("engine auto: the compiled engine is not built yet; building it in the background for the "
+                      "next run (`symmech warm` builds it now)")
 
 
 # --------------------------------------------------------------------------- run
@@ -338,7 +351,7 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
     t_end = sc.duration if duration is None else duration
     if num.mode == "paper":
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
-    engine, why = choose_engine(num)
+    engine, why = choose_engine(sc, num, t_end)
     if engine == "compiled":
         from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
