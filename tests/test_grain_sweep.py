@@ -9,6 +9,8 @@ from symmech.core import pipeline
 from symmech.core.scene import SceneError
 from symmech.grain import sweep
 
+# sweep.compute builds the compiled engine before dispatch: ordered last, after the session's build (conftest.py)
+pytestmark = pytest.mark.compiled_engine
 G = 9.81
 FREQ = 25.0
 W = 2 * math.pi * FREQ
@@ -74,7 +76,6 @@ def test_a_bad_grain_of_the_population_is_named_before_any_work():
     assert info.value.field == "body.semi_axes[1]"
 
 
-@pytest.mark.compiled_engine
 def test_dask_cluster_equals_serial_bit_for_bit():
     import dask.distributed as distributed
     pops = [{"name": "wheat", "count": 2, "seed": 1, "vary": {"body.density": 0.1}},
