@@ -14,6 +14,7 @@ def pytest_configure(config):
                                        "the background build started at collection")
 
 
+@pytest.hookimpl(trylast=True)  # after `-m` deselection: no build when no selected test needs it
 def pytest_collection_modifyitems(session, config, items):
     marked = [item for item in items if item.get_closest_marker("compiled_engine")]
     if marked:
