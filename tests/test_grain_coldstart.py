@@ -103,6 +103,15 @@ def test_warm_help_names_the_cache_locations(capsys):
     assert info.value.code == 0 and "NUMBA_CACHE_DIR" in text and "__pycache__" in text
 
 
+@pytest.mark.compiled_engine
+def test_warm_on_a_built_cache_prints_its_location_and_compiles_nothing(capsys):
+    misses = sum(compiled.run.stats.cache_misses.values())
+    assert main(["warm"]) == 0
+    captured = capsys.readouterr()
+    assert f"cache: {compiled.cache_dir()}" in captured.out and "compiling" not in captured.err
+    assert sum(compiled.run.stats.cache_misses.values()) == misses and not compiled.cold()
+
+
 def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path, cold_cache):
     """The sweep builds the engine before dispatch, so its grains run compiled: the estimate is the compiled
     one, with the compile counted once for all grains."""
