@@ -295,14 +295,14 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     seconds, what = _python_cost(sc, num, sc.duration)
     engine, why = choose_engine(sc)
     if engine == "python":
-        return registry.Estimate(seconds, f"{what}; Python engine: {why}")
+        return registry.Estimate(seconds, f"{what}; Python engine ({why})")
     from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
     seconds /= COMPILED_SPEEDUP
     if compiled.cold():
-        return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; {why}; compiling the grain "
-                                 f"engine once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
-                                 once=compiled.COLD_COMPILE_SECONDS)
+        once = compiled.COLD_COMPILE_SECONDS
+        return registry.Estimate(seconds + once, f"{what}; compiled engine ({why}); compiling the grain engine "
+                                 f"once, ~{once:.0f} s; later runs start in ~1 s", once=once)
     return registry.Estimate(seconds, f"{what}; compiled engine")
 
 
@@ -329,12 +329,12 @@ def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
     if num.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
     if not compiled.cold():
-        return "compiled", "engine auto: the compiled engine is built (numba's cache)"
+        return "compiled", "auto: the compiled engine is built (numba's cache)"
     python = _python_cost(sc, num, sc.duration if duration is None else duration)[0]
     if python > compiled.COLD_COMPILE_SECONDS + python / COMPILED_SPEEDUP:
-        return "compiled", (f"engine auto: the Python engine would take ~{python:.3g} s, longer than compiling "
+        return "compiled", (f"auto: the Python engine would take ~{python:.3g} s, longer than compiling "
                             "the compiled engine first")
-    return "python", ("engine auto: the compiled engine is not built yet; building it in the background for the "
+    return "python", ("auto: the compiled engine is not built yet; building it in the background for the "
                       "next run (`symmech warm` builds it now)")
 
 
