@@ -1,4 +1,4 @@
-"""Command-line interface: ``symmech run | sweep | report | codegen | latex | errata | bench``.
+"""Command-line interface: ``symmech run | sweep | warm | report | codegen | latex | errata | bench``.
 
 Errors a user can fix (:class:`SymmechError`) print as one line on stderr with
 exit status 2, never a traceback.
@@ -41,6 +41,20 @@ def cmd_sweep(ns) -> int:
     for warning in result.warnings:
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {Path(ns.out) / 'summary.json'}")
+    return 0
+
+
+def cmd_warm(ns) -> int:
+    import time
+
+    from symmech.grain import compiled
+
+    started = time.perf_counter()
+    say = None if ns.quiet or ns.background else (lambda text: print(f"symmech: {text}", file=sys.stderr))
+    if not compiled.warm(wait=not ns.background, say=say):
+        return 0  # --background: another builder holds the lock
+    if not ns.background:
+        print(f"compiled grain engine ready in {time.perf_counter() - started:.1f} s; cache: {compiled.cache_dir()}")
     return 0
 
 
@@ -237,6 +251,16 @@ def build_parser() -> argparse.ArgumentParser:
                     help="address of a dask.distributed scheduler (default: a local process pool)")
     sw.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the CPU count)")
     sw.set_defaults(func=cmd_sweep)
+
+    w = sub.add_parser("warm", help="compile the grain engine into numba's cache now (for containers, clusters, "
+                                    "CI); prints where the cache is", description="Compile every compiled kernel a "
+                       "grain run may need into numba's cache, once per cache: NUMBA_CACHE_DIR when set, else "
+                       "__pycache__ beside the installed package (numba's user-wide cache when that is read-only). "
+                       "A second `symmech warm` on the same cache waits for the first and then finds it built. "
+                       "Exit 0 once the cache holds the engine.")
+    w.add_argument("--quiet", action="store_true", help="print only the cache location")
+    w.add_argument("--background", action="store_true", help=argparse.SUPPRESS)  # the detached builder of a run
+    w.set_defaults(func=cmd_warm)
 
     rp = sub.add_parser("report", help="write a self-contained HTML report of a finished run (OUT/report.html)")
     rp.add_argument("out", help="the run's output folder (holds summary.json)")

@@ -19,6 +19,7 @@ from symmech.grain import compiled, contact, flight, motion, motion_scene
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
+pytestmark = pytest.mark.compiled_engine  # ordered last, after the session's background build (conftest.py)
 
 
 def both(model, num, start, t_end):
@@ -158,13 +159,14 @@ def test_parameter_vector_layout():
 
 def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):
     sc = default_scene(tmp_path, 0.05)
-    assert sc.numerics.engine == "compiled"
+    assert sc.numerics.engine == "auto"
     python = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "python"'})
     assert python.numerics.engine == "python"
     seen = []
     c = motion_scene.simulate(sc, on_step=seen.append)
     p = motion_scene.simulate(python)
     assert seen[-1] == pytest.approx(0.05) and len(c.impacts) == len(p.impacts) >= 3
+    assert (c.extra["engine"], p.extra["engine"]) == ("compiled", "python")  # auto, on a built engine: compiled
     with pytest.raises(SceneError, match="numerics.engine"):
         default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "fortran"'})
 
@@ -221,7 +223,7 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
 
 def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     """A run that will compile the engine says so, and its estimate carries the one-off compile time."""
-    sc = default_scene(tmp_path, 0.05)
+    sc = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "compiled"'})
     compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
     assert not compiled.cold()  # compiled (or loaded) in this process: cached for this source
     monkeypatch.setattr(compiled, "cold", lambda: False)

@@ -51,6 +51,7 @@ def test_as_printed_needs_paper_mode(tmp_path, capsys):
 
 
 @pytest.mark.slow
+@pytest.mark.compiled_engine
 def test_default_scene_and_precision_study(tmp_path):
     assert main(["run", str(SCENE), "--out", str(tmp_path / "run")]) == 0
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())

@@ -9,6 +9,8 @@ import pytest
 from test_grain_hard_cases import CROP, sweep_grain
 from symmech.grain import compiled, flight
 
+pytestmark = pytest.mark.compiled_engine  # ordered last, after the session's background build (conftest.py)
+
 
 def _buffers(n):
     """Jacobian, LU factors (real, complex), pivots and interpolant of an n-dimensional solve."""

@@ -9,6 +9,8 @@ from symmech.core import pipeline
 from symmech.core.scene import SceneError
 from symmech.grain import sweep
 
+# sweep.compute builds the compiled engine before dispatch: ordered last, after the session's build (conftest.py)
+pytestmark = pytest.mark.compiled_engine
 G = 9.81
 FREQ = 25.0
 W = 2 * math.pi * FREQ

@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 # Modules a grain run must not load: derivations (sympy, jinja2), sweeps (dask, distributed),
 # the xarray API, pyplot (figures are drawn on the Agg canvas), and the other papers' kinds.
@@ -48,6 +50,7 @@ def test_grain_run_with_its_default_plot_loads_matplotlib_but_not_pyplot(tmp_pat
         ["impacts.csv", "path.png", "trajectory.csv"]
 
 
+@pytest.mark.compiled_engine
 def test_compiled_grain_run_loads_no_scipy_integrate_or_optimize(tmp_path):
     """The compiled engine steps with symmech's own DOP853 tableau and root finders: neither the engine's
     import nor a run that stays compiled (0.05 s of the default scene: no stiff slip handed to Radau)

@@ -107,10 +107,11 @@ class Numerics:
     ``scan_step`` [s] for root bracketing. Paper mode: step ``dt`` [s], ``nodes`` on the body surface,
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
-    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`) or "python" (this loop)."""
+    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`), "python" (this loop) or
+    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``)."""
 
     mode: str = "accurate"
-    engine: str = "compiled"
+    engine: str = "auto"
     tolerance: float = 1e-9
     scan_step: float = 1e-3
     dt: float = 1e-4

@@ -135,10 +135,12 @@ SCHEMA = Fields("a grain scene", {
     "numerics": Fields("numerical choices; T is the vibration period (1 s without vibration)", {
         "mode": Choice("`accurate`: exact flight, root-located events; `paper`: the printed fixed-step scheme",
                        choices=("accurate", "paper"), default="accurate"),
-        "engine": Choice("accurate mode: `compiled`, the event loop in numba (symmech.grain.compiled); `python`, "
-                         "the reference loop in Python (same events, results to round-off or, in stiff slips, "
-                         "to the tolerance; 120-290x slower)",
-                         choices=("compiled", "python"), default="compiled"),
+        "engine": Choice("accurate mode: `compiled`, the event loop in numba (symmech.grain.compiled; the first "
+                         "run on a machine compiles it, ~80 s, cached for later runs); `python`, the reference loop "
+                         "in Python (same events, results to round-off or, in stiff slips, to the tolerance; "
+                         "120-290x slower, never compiles); `auto`: `compiled` when it is cached, else `python` "
+                         "while the compiled engine is built in the background for the next run",
+                         choices=("auto", "compiled", "python"), default="auto"),
         "tolerance": Float("accurate mode: relative tolerance of rotation, sliding and event times (times to "
                            "tolerance × scan step)", lo=1e-14, hi=1e-2, default=1e-9),
         "scan_step": Float("accurate mode: spacing at which contact and lift-off roots are bracketed; "
@@ -283,25 +285,57 @@ def _sequence(v0: float, e: float, g: float, v_rest: float, span: float) -> floa
 
 def estimate(sc: GrainScene) -> registry.Estimate:
     """Expected wall time: per fixed step in paper mode; per impact, simulated second and scan step in
-    accurate mode (the Python loop's figures, divided by :data:`COMPILED_SPEEDUP` on the compiled engine)."""
+    accurate mode (the Python loop's figures, divided by :data:`COMPILED_SPEEDUP` on the compiled engine)
+    on the engine of :func:`choose_engine`, which the text names with the reason."""
     num = sc.numerics
     if num.mode == "paper":
         steps = sc.duration / num.dt
         seconds = steps * (SECONDS_PER_PAPER_STEP + num.nodes * SECONDS_PER_PAPER_NODE_STEP)
         return registry.Estimate(seconds, f"{steps:.3g} fixed steps of {num.dt:.3g} s, {num.nodes} nodes")
-    impacts = expected_impacts(sc)
-    scans = sc.duration / num.scan_step
-    seconds = impacts * SECONDS_PER_IMPACT + sc.duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
-    what = f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s"
-    if num.engine == "compiled":
-        from symmech.grain import compiled  # imports numba: only when the compiled engine runs
+    seconds, what = _python_cost(sc, num, sc.duration)
+    engine, why = choose_engine(sc)
+    if engine == "python":
+        return registry.Estimate(seconds, f"{what}; Python engine ({why})")
+    from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
-        seconds /= COMPILED_SPEEDUP
-        if compiled.cold():
-            return registry.Estimate(seconds + compiled.COLD_COMPILE_SECONDS, f"{what}; compiling the grain engine "
-                                     f"once, ~{compiled.COLD_COMPILE_SECONDS:.0f} s; later runs start in ~1 s",
-                                     once=compiled.COLD_COMPILE_SECONDS)
-    return registry.Estimate(seconds, what)
+    seconds /= COMPILED_SPEEDUP
+    if compiled.cold():
+        once = compiled.COLD_COMPILE_SECONDS
+        return registry.Estimate(seconds + once, f"{what}; compiled engine ({why}); compiling the grain engine "
+                                 f"once, ~{once:.0f} s; later runs start in ~1 s", once=once)
+    return registry.Estimate(seconds, f"{what}; compiled engine")
+
+
+def _python_cost(sc: GrainScene, num: motion.Numerics, duration: float) -> tuple[float, str]:
+    """Accurate mode on the Python loop: expected wall time [s] over ``duration`` [s], and what it counts."""
+    impacts = expected_impacts(replace(sc, numerics=num, duration=duration))
+    scans = duration / num.scan_step
+    seconds = impacts * SECONDS_PER_IMPACT + duration * SECONDS_PER_SIMULATED_SECOND + scans * SECONDS_PER_SCAN
+    return seconds, f"~{impacts:.3g} impacts, {scans:.3g} scan steps of {num.scan_step:.3g} s"
+
+
+def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
+                  duration: float | None = None) -> tuple[str, str]:
+    """The engine that runs accurate mode, "compiled" or "python", and why (for the estimate and summary.json).
+
+    ``auto`` takes the compiled engine when numba's cache holds it. Else it takes whichever the estimate says
+    answers first: the Python loop (seconds on a default scene; :func:`simulate` then has the compiled engine
+    built in the background for the next run) or compiling first (~80 s once, then 50x faster)."""
+    num = num or sc.numerics
+    if num.engine == "python":
+        return "python", 'numerics.engine = "python"'
+    from symmech.grain import compiled  # imports numba: only when the compiled engine may run
+
+    if num.engine == "compiled":
+        return "compiled", 'numerics.engine = "compiled"'
+    if not compiled.cold():
+        return "compiled", "auto: the compiled engine is built (numba's cache)"
+    python = _python_cost(sc, num, sc.duration if duration is None else duration)[0]
+    if python > compiled.COLD_COMPILE_SECONDS + python / COMPILED_SPEEDUP:
+        return "compiled", (f"auto: the Python engine would take ~{python:.3g} s, longer than compiling "
+                            "the compiled engine first")
+    return "python", ("auto: the compiled engine is not built yet; building it in the background for the "
+                      "next run (`symmech warm` builds it now)")
 
 
 # --------------------------------------------------------------------------- run
@@ -309,18 +343,29 @@ def estimate(sc: GrainScene) -> registry.Estimate:
 
 def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: float | None = None,
              on_step=None) -> motion.Motion:
-    """Run the scene's grain (optionally with other numerics or duration); returns a Motion.
+    """Run the scene's grain (optionally with other numerics or duration) on the engine of
+    :func:`choose_engine`; returns a Motion whose ``extra`` names the engine and why.
 
     ``on_step(t)`` [s] is called at most every ``motion.PROGRESS_INTERVAL`` of wall time, in both modes."""
     num = numerics or sc.numerics
     t_end = sc.duration if duration is None else duration
     if num.mode == "paper":
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
-    if num.engine == "compiled":
+    engine, why = choose_engine(sc, num, t_end)
+    if engine == "compiled":
         from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
-        return compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
-    return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
+        if compiled.cold():  # compile under the build lock, or load what a concurrent builder made
+            compiled.warm()
+        m = compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
+    else:
+        if num.engine == "auto":
+            from symmech.grain import compiled
+
+            compiled.warm_in_background()
+        m = motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
+    m.extra.update(engine=engine, engine_reason=why)
+    return m
 
 
 class _Watch:
@@ -346,9 +391,9 @@ class _Watch:
 def run(sc: GrainScene, ctx: Context) -> Result:
     """Simulate the scene: trajectory and impact tables, summary, and the plots."""
     started = time.perf_counter()
+    cost = estimate(sc)  # as told before the run (a background build may finish during it)
     with ctx.progress(sc.duration, "grain", unit="s") as bar, watchdog(ctx, where="grain simulation"):
         m = simulate(sc, on_step=_Watch(ctx, bar, sc.numerics.tolerance * sc.numerics.scan_step))
-    cost = estimate(sc)
     summary = {"mode": sc.numerics.mode, "impact_law": sc.model.law.kind, "effects": sc.model.effects.__dict__,
                "wall_time_s": time.perf_counter() - started, "estimate": {"seconds": cost.seconds, "what": cost.what},
                **m.summary()}

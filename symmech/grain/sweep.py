@@ -229,12 +229,39 @@ def estimate(p: Plan, workers: int):
     grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
     from symmech.core import pipeline, registry
 
-    first = [pipeline.load(grid[0][0][0]).estimate() for grid in p.grains]
+    first = [_as_dispatched(grid[0][0][0]).estimate() for grid in p.grains]
     once = max(e.once for e in first)
     seconds = once + sum((e.seconds - e.once) * len(grid[0][0]) * len(grid) * len(grid[0])
                          for e, grid in zip(first, p.grains))
     grains = sum(len(grid[0][0]) * len(grid) * len(grid[0]) for grid in p.grains)
     return registry.Estimate(seconds / max(workers, 1), f"{grains} grain runs on {workers} worker(s)")
+
+
+def _as_dispatched(data: dict):
+    """A grain scene (pipeline.Scene) as the workers run it: engine `auto` runs compiled, since :func:`compute`
+    builds the compiled engine before dispatch."""
+    from dataclasses import replace
+
+    from symmech.core import pipeline
+
+    scene = pipeline.load(data)
+    num = scene.setup.numerics
+    if num.engine == "auto":
+        scene.setup = replace(scene.setup, numerics=replace(num, engine="compiled"))
+    return scene
+
+
+def _compiled_needed(p: Plan) -> bool:
+    """Whether a population's grains run the compiled engine (accurate mode, engine not `python`)."""
+    return any(n.mode == "accurate" and n.engine == "compiled"
+               for n in (_as_dispatched(grid[0][0][0]).setup.numerics for grid in p.grains))
+
+
+def _warm_worker() -> None:
+    """On a dask worker: the compiled engine built once per machine (the others wait on the build lock)."""
+    from symmech.grain import compiled
+
+    compiled.warm()
 
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None) -> Result:
@@ -253,20 +280,29 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
         raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
     validate(p)
-    res = result(p, *compute(p, scheduler, workers))
+    res = result(p, *compute(p, scheduler, workers, say=ctx.say))
     pipeline.write(res, out, scene)
     return res
 
 
-def compute(p: Plan, scheduler: str | None = None, processes: int | None = None) -> tuple[list, list, list]:
+def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
+            say=None) -> tuple[list, list, list]:
     """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask, the failed
     grains as (population, i, j, grain, message) and the grains that warned as (population, i, j, grain,
     warnings).
 
     ``scheduler``: None for a local process pool, "synchronous" for serial, or the
-    address of a ``dask.distributed`` scheduler.
+    address of a ``dask.distributed`` scheduler. Grains on the compiled engine find it built: this process
+    builds it first (in the foreground, ``say(text)`` tells it), and so does each machine of a
+    ``dask.distributed`` cluster, once per machine (the build lock of :func:`symmech.grain.compiled.warm`).
     """
     import dask
+
+    warm = _compiled_needed(p)
+    if warm:
+        from symmech.grain import compiled
+
+        compiled.warm(say=say)
 
     tasks = [[[dask.delayed(simulate_point)(point, dask_key_name=f"grain-{k}-{i}-{j}")
                for j, point in enumerate(row)] for i, row in enumerate(grid)] for k, grid in enumerate(p.grains)]
@@ -277,6 +313,8 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None)
         from dask.distributed import Client
 
         with Client(scheduler) as client:
+            if warm:
+                client.run(_warm_worker)
             values = client.gather(client.compute(tasks))
     arrays = [np.array([[point[0] for point in row] for row in grid]) for grid in values]
     failed, warned = ([(p.names[k], i, j, g, msg) for k, grid in enumerate(values) for i, row in enumerate(grid)

@@ -1,0 +1,210 @@
+"""Fast from the first second (issue 19): engine `auto`, the one background build per cache, `symmech warm`,
+and sweeps that compile once per machine.
+
+The fast tests stand in for numba's cache with ``compiled.cold`` and a temporary lock folder; the slow ones
+compile for real into an empty ``NUMBA_CACHE_DIR`` in fresh processes (minutes of CPU each).
+"""
+import csv
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symmech.cli import main
+from symmech.core import pipeline
+from symmech.grain import compiled, motion_scene, sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "scenes" / "grain_default.toml"
+POPEN = subprocess.Popen  # the real one: the fixture cold_cache replaces it to catch the builder
+
+
+def scene_file(tmp_path: Path, duration: float, engine: str | None = None) -> Path:
+    text = re.sub(r"(?m)^duration = .*$", f"duration = {duration}", SCENE.read_text())
+    if engine:
+        text = text.replace('mode = "accurate"', f'mode = "accurate"\nengine = "{engine}"')
+    path = tmp_path / f"grain_{duration}_{engine}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture
+def cold_cache(tmp_path, monkeypatch):
+    """numba's cache reported empty, the build lock in a temporary folder, and no builder process started:
+    returns the list of builder command lines that would have been started."""
+    started = []
+    monkeypatch.setattr(compiled, "cold", lambda: True)
+    monkeypatch.setattr(compiled, "cache_dir", lambda: tmp_path / "cache")
+    monkeypatch.setattr(compiled.subprocess, "Popen", lambda args, **kw: started.append((args, kw)))
+    return started
+
+
+def test_auto_on_a_cold_cache_answers_with_the_python_engine_and_starts_one_builder(tmp_path, cold_cache):
+    out = tmp_path / "out"
+    assert main(["run", str(scene_file(tmp_path, 0.05)), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["engine"] == "python" and "background" in summary["engine_reason"]
+    assert "Python engine" in summary["estimate"]["what"] and summary["bounces"] >= 3
+    (args, kw), = cold_cache  # one builder: detached in its own session, so Ctrl-C of the run does not reach it
+    assert args[1:] == ["-m", "symmech", "warm", "--background"] and kw["start_new_session"] is True
+
+
+def test_auto_compiles_first_when_the_python_engine_would_take_longer(tmp_path, cold_cache):
+    """1000 s of the default scene: ~1e5 impacts, ~1500 s on the Python loop against 80 s of compilation
+    plus 1/50 of that: auto waits for the compile, as `compiled` does, and the estimate says so."""
+    sc = pipeline.load(scene_file(tmp_path, 1000.0)).setup
+    engine, why = motion_scene.choose_engine(sc)
+    assert engine == "compiled" and "longer than compiling" in why
+    cost = motion_scene.estimate(sc)
+    python = motion_scene.estimate(replace(sc, numerics=replace(sc.numerics, engine="python")))
+    assert cost.once == compiled.COLD_COMPILE_SECONDS
+    assert cost.seconds == pytest.approx(python.seconds / motion_scene.COMPILED_SPEEDUP + cost.once, rel=1e-12)
+    assert cold_cache == []  # nothing built in the background: this run compiles in the foreground
+
+
+def test_explicit_engines_are_kept_whatever_the_cache(tmp_path, cold_cache):
+    for engine in ("python", "compiled"):
+        sc = pipeline.load(scene_file(tmp_path, 0.05, engine)).setup
+        assert motion_scene.choose_engine(sc) == (engine, f'numerics.engine = "{engine}"')
+
+
+def test_the_build_lock_admits_one_builder_and_dies_with_its_holder(tmp_path, cold_cache):
+    """A second builder does not wait (``warm(wait=False)``) and a run starts none while the lock is held; a
+    builder killed with SIGKILL leaves the lock free (flock: the OS releases it)."""
+    lock = tmp_path / "cache" / compiled.LOCK_NAME
+    lock.parent.mkdir()
+    holder = POPEN([sys.executable, "-c", "import fcntl, sys, time; fh = open(sys.argv[1], 'a'); "
+                               "fcntl.flock(fh, fcntl.LOCK_EX); print('held', flush=True); time.sleep(120)",
+                               str(lock)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline() == "held\n"
+        assert compiled.warm(wait=False) is False
+        assert compiled.warm_in_background() is False and cold_cache == []
+    finally:
+        holder.send_signal(signal.SIGKILL)
+        holder.wait(timeout=30)
+    with compiled._build_lock(wait=False) as mine:
+        assert mine
+    assert compiled.warm_in_background() is True and len(cold_cache) == 1
+
+
+def test_warm_help_names_the_cache_locations(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["warm", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert info.value.code == 0 and "NUMBA_CACHE_DIR" in text and "__pycache__" in text
+
+
+@pytest.mark.compiled_engine
+def test_warm_on_a_built_cache_prints_its_location_and_compiles_nothing(capsys):
+    misses = sum(compiled.run.stats.cache_misses.values())
+    assert main(["warm"]) == 0
+    captured = capsys.readouterr()
+    assert f"cache: {compiled.cache_dir()}" in captured.out and "compiling" not in captured.err
+    assert sum(compiled.run.stats.cache_misses.values()) == misses and not compiled.cold()
+
+
+def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path, cold_cache):
+    """The sweep builds the engine before dispatch, so its grains run compiled: the estimate is the compiled
+    one, with the compile counted once for all grains."""
+    raw = {"kind": "grain", "duration": 0.1, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},
+           "impact": {"law": "printed", "e": 0.5, "lambda": 1.0},
+           "population": [{"name": "many", "count": 10}],
+           "sweep": {"x": {"field": "vibration.frequency", "values": [20.0, 30.0]}}}
+    p = sweep.plan(raw, pipeline.load(raw).resolved)
+    assert sweep._compiled_needed(p)
+    cost = sweep.estimate(p, workers=1)
+    grain = pipeline.load(p.grains[0][0][0][0]).setup
+    one = motion_scene.estimate(replace(grain, numerics=replace(grain.numerics, engine="compiled")))
+    assert one.once == compiled.COLD_COMPILE_SECONDS
+    assert cost.seconds == pytest.approx(one.once + 20 * (one.seconds - one.once), rel=1e-12)
+    raw["numerics"] = {"engine": "python"}
+    assert not sweep._compiled_needed(sweep.plan(raw, pipeline.load(raw).resolved))
+
+
+# --------------------------------------------------------------------------- real compiles (slow)
+
+
+def _env(cache: Path) -> dict:
+    return {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+
+
+def _impact_times(out: Path) -> np.ndarray:
+    lines = [line for line in (out / "impacts.csv").read_text().splitlines() if not line.startswith("#")]
+    return np.array([float(row[0]) for row in list(csv.reader(lines))[1:]])
+
+
+def _final_position(out: Path) -> np.ndarray:
+    lines = [line for line in (out / "trajectory.csv").read_text().splitlines() if not line.startswith("#")]
+    return np.array([float(x) for x in lines[-1].split(",")[1:4]])
+
+
+@pytest.mark.slow
+def test_two_concurrent_first_runs_then_a_third_on_the_compiled_engine_that_agrees(tmp_path):
+    """Two first runs at once on an empty cache both answer (Python engine) and the one builder fills the
+    cache without corrupting it; a third run uses the compiled engine: same impacts, times to 1e-11 s and
+    final position to 1e-7 relative (the documented agreement of the two engines, docs/scenes-grain.md)."""
+    cache, scene = tmp_path / "cache", scene_file(tmp_path, 0.6)
+    cmd = [sys.executable, "-m", "symmech", "run", str(scene), "--quiet", "--no-plots", "--out"]
+    first = [subprocess.Popen([*cmd, str(tmp_path / f"run{k}")], env=_env(cache), stderr=subprocess.PIPE,
+                              text=True) for k in (1, 2)]
+    for proc in first:
+        assert proc.wait(timeout=600) == 0, proc.stderr.read()
+    engines = [json.loads((tmp_path / f"run{k}" / "summary.json").read_text())["engine"] for k in (1, 2)]
+    assert engines == ["python", "python"]
+    started = time.perf_counter()
+    warm = subprocess.run([sys.executable, "-m", "symmech", "warm"], env=_env(cache), capture_output=True,
+                          text=True, timeout=1800)  # waits on the lock for the background builder
+    assert warm.returncode == 0 and str(cache) in warm.stdout, warm.stderr
+    assert "compiling" not in warm.stderr, (warm.stderr, time.perf_counter() - started)  # the builder built it
+    assert subprocess.run([*cmd, str(tmp_path / "run3")], env=_env(cache), timeout=600).returncode == 0
+    third = json.loads((tmp_path / "run3" / "summary.json").read_text())
+    assert third["engine"] == "compiled" and "built" in third["engine_reason"]
+    python, fast = _impact_times(tmp_path / "run1"), _impact_times(tmp_path / "run3")
+    assert len(python) == len(fast) > 100 and np.abs(python - fast).max() <= 1e-11
+    r_python, r_fast = _final_position(tmp_path / "run1"), _final_position(tmp_path / "run3")
+    assert np.linalg.norm(r_fast - r_python) <= 1e-7 * np.linalg.norm(r_python)
+    assert np.array_equal(_impact_times(tmp_path / "run2"), python)
+
+
+SWEEP_ON_FRESH_WORKERS = """
+import json, sys
+import dask.distributed as distributed
+from symmech.core import pipeline
+from symmech.grain import compiled, sweep
+
+raw = {"kind": "grain", "duration": 0.08, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},
+       "vibration": {"amplitude": 1e-3, "frequency": 25.0}, "impact": {"law": "printed", "e": 0.5, "lambda": 1.0},
+       "population": [{"name": "a", "count": 2, "vary": {"body.density": 0.1}}],
+       "sweep": {"x": {"field": "vibration.frequency", "values": [20.0, 25.0, 30.0]}}}
+p = sweep.plan(raw, pipeline.load(raw).resolved)
+with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                              dashboard_address=None) as cluster:
+    values = sweep.compute(p, scheduler=cluster.scheduler_address)[0]
+    with distributed.Client(cluster.scheduler_address) as client:
+        workers = client.run(lambda: [sum(compiled.run.stats.cache_misses.values()),
+                                      sum(compiled.run.stats.cache_hits.values())])
+print(json.dumps({"client": sum(compiled.run.stats.cache_misses.values()), "workers": list(workers.values()),
+                  "finite": bool(all(v[..., :2].size and abs(v[..., :2]).max() < 1 for v in values))}))
+"""
+
+
+@pytest.mark.slow
+def test_a_sweep_on_fresh_worker_processes_compiles_once(tmp_path):
+    """Two worker processes that start with an empty cache: the client compiles the engine once before
+    dispatch and both workers load it from the cache (no cache miss, so no compile, in either)."""
+    proc = subprocess.run([sys.executable, "-c", SWEEP_ON_FRESH_WORKERS], env=_env(tmp_path / "cache"),
+                          capture_output=True, text=True, timeout=1800, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    counts = json.loads(proc.stdout.splitlines()[-1])
+    assert counts["client"] == 1 and counts["finite"]
+    assert [misses for misses, _ in counts["workers"]] == [0, 0]
+    assert sum(hits for _, hits in counts["workers"]) >= 1  # the grains ran compiled, loaded from the cache
