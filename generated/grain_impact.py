@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5ce0033743a5a864d2cf2ea102e83b5a3f47aff5ed746be25740afbe4a21b15d
-# source key f464ea932e1fd6b0d28ec96bb601179faaf93ff78c7d598d4f23a648aa073b97
+# symmech 0.1.0 generated module; inputs sha256 1d87f2e6ac3f32d42adc62acc57b355283a1f9c4a2e8c8d1eb4d256bc86215b8
+# source key ec376265481c176eed5b0d45f5ef998c0b5b066ad0ff6de972f51a77bd9ab74b
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

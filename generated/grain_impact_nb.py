@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 69e5dbca422a2b8e77878be9ee7055d210d16304efdb28162f9f31623b810b27
-# source key f464ea932e1fd6b0d28ec96bb601179faaf93ff78c7d598d4f23a648aa073b97
+# symmech 0.1.0 generated module; inputs sha256 28bed7f3ba720545e62aca12c15dae7aa596c253c08e1bb4de7fa87103dca0a2
+# source key ec376265481c176eed5b0d45f5ef998c0b5b066ad0ff6de972f51a77bd9ab74b
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

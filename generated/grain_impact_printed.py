@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 60288f46cf2c497016e4df832fb727b1310effdbcc5010b310be76b28bac0752
-# source key b920360464ed53b8fbdba243d08417dd34bab69ab3fafb573eff09e43e2537f7
+# symmech 0.1.0 generated module; inputs sha256 30a2d883f6953e6ad56e1211ef3a9c419a487d7e4c725d1db16b0b841c5b7872
+# source key b4efdfa5142930da183480e0d8e6ae362cae2a60dc660c608e76747e25cf0135
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4a03cb5778832bf782317a3693541f34564f3599240d3461cb7af2f04c7dc9ba
-# source key d3d187babda88a7140bbb2fe1a5ebed23a90fa17f777fbae0bbbc8980be150e2
+# symmech 0.1.0 generated module; inputs sha256 fcdfb7094737e1b45c7a618a1304975eefad40d7fd39d5c7067daaff1c724de9
+# source key 7debaa856b90ea4ae4d94e2ea678aa1ed36ea7154620b7c607def70dcc5edba9
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

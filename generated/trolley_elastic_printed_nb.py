@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 485a22423ffd00132650353ee13c2435cf7052fdafddf93d0e6cdd2cc26e0647
-# source key 8123b6c80b5961c917a553c8a95056a9159e219d5c311f61f4b6ce8709e51d45
+# symmech 0.1.0 generated module; inputs sha256 a668d3b5544223dbbad4396e231b8f55041c7233ecad679324b1e4fdf9274b55
+# source key b3027e139922030cc2b63435a6885c28e5cc9ac8b4d084052a8af3de37c45028
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 94a72cbfd6c16fb231d168923b77f2d04676ff8873e62319ebf0bd4112096a6b
-# source key 82113aa422ddb931d16fde9a1a75f196fad2c19422967f22449282b7e7dd96f8
+# symmech 0.1.0 generated module; inputs sha256 6ebd344227f204c8db114ef6557fc5feedea7d15d7316a6d2b3754d0435b67c6
+# source key 73fb4a917c8b44c11e7dcfa54f69d2001bddc069e9b547e95da1362bf64e1cbf
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

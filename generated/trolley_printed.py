@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2dadb0bd3d36c6eb2a5467ece50ddd8ee980297de4215e22e738e1924977e496
-# source key c5ac4822b05f89ab34b9490b2531c3de117aa19b514da5ce4f939d6ce3b10bc6
+# symmech 0.1.0 generated module; inputs sha256 375d74a49b434ca0e6302932a45c33203b86f1a358e1c94eb754d3ae0e907386
+# source key fc599c67b4c0b66b2f4c017259d1570793c18e01a2347002bbd433c709fe34cc
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 
