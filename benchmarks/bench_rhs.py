@@ -7,9 +7,9 @@ Jacobian vs scipy's finite differences.
 
 Grain flight (grain_motion, 13 states, 12 parameters), one rhs call at a seeded point, from the same
 sympy derivation (derive_motion.flight_dynamics): JiTCODE's C function, the numba twin (rhs; its kernel
-rhs_scalar; rhs_into stepping an explicit Euler loop compiled with numba, per step; a jitted no-op taking
-the same arguments: the price of any call into numba from Python), sympy.lambdify(cse=True) and the
-numpy module's rhs. Ratios: time / JiTCODE's and time / lambdify's.
+rhs_scalar; rhs_into called from Python into one reused out, and stepping an explicit Euler loop compiled
+with numba, per step; a jitted no-op taking the same arguments: the price of any call into numba from
+Python), sympy.lambdify(cse=True) and the numpy module's rhs. Ratios: time / JiTCODE's, time / lambdify's.
 Per call, numpy vs numba: smm_spatial_boom (8 states, 21 parameters, a mass matrix) at a seeded point.
 Integration: the rotor boom's damped free response (Radau, rtol 1e-9) over the bundled scene's 2 s
 (0.5 s with --quick), with the error against the run's matrix-exponential response.
@@ -93,11 +93,12 @@ def grain_flight(repeats: int) -> None:
     symbols = [dynamics.time.symbol, *(a.symbol for a in dynamics.state), *(a.symbol for a in dynamics.params)]
     lam = sympy.lambdify(symbols, dynamics.rate, modules="numpy", cse=True)
     jit = _jitcode_rhs(dynamics, p)
-    steps, y_euler = 1000, y.copy()
+    steps, y_euler, out = 1000, y.copy(), np.empty((1, len(y)))
     _euler(twin.rhs_into, 0.1, y_euler, p, 1e-9, 1), twin.rhs(0.1, y, p), _noop(0.1, y, p)  # compile outside
     in_loop = "numba rhs_into, per step of a numba loop"
     contenders = {"JiTCODE f (C)": (lambda: jit(0.1, y)) if jit else None,
                   in_loop: lambda: _euler(twin.rhs_into, 0.1, y_euler, p, 1e-9, steps),
+                  "numba rhs_into from Python, out reused": lambda: twin.rhs_into(0.1, y, p, out),
                   "numba: a jitted no-op, same arguments": lambda: _noop(0.1, y, p),
                   "numba rhs_scalar": lambda: twin.rhs_scalar(0.1, y, p),
                   "numba rhs": lambda: twin.rhs(0.1, y, p),

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1d87f2e6ac3f32d42adc62acc57b355283a1f9c4a2e8c8d1eb4d256bc86215b8
-# source key ec376265481c176eed5b0d45f5ef998c0b5b066ad0ff6de972f51a77bd9ab74b
+# symmech 0.1.0 generated module; inputs sha256 550cfe900f4a34aa6ed6222579e4f681c1600a6bc5858b5ea116151965f98a25
+# source key 0563c2614151af42fccfc41329883ec50ab1102e8677c7ecbed93e604991669a
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

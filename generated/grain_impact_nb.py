@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 28bed7f3ba720545e62aca12c15dae7aa596c253c08e1bb4de7fa87103dca0a2
-# source key ec376265481c176eed5b0d45f5ef998c0b5b066ad0ff6de972f51a77bd9ab74b
+# symmech 0.1.0 generated module; inputs sha256 796c0a9cb9c8eeab9fc00251aae95cb8f54abfe2d1dafee8d3b805d6b305af76
+# source key 0563c2614151af42fccfc41329883ec50ab1102e8677c7ecbed93e604991669a
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

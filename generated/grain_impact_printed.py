@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 30a2d883f6953e6ad56e1211ef3a9c419a487d7e4c725d1db16b0b841c5b7872
-# source key b4efdfa5142930da183480e0d8e6ae362cae2a60dc660c608e76747e25cf0135
+# symmech 0.1.0 generated module; inputs sha256 82d5c43febb9cfe706c2f242cbee70de659358b84081ca4466960c383e5449b5
+# source key 6a586082decdc8eb3d5b0f9796b3ff5a04d935ee13ec9fd817600dbca530e0c0
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

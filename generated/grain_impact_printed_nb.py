@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 85280353c38f88ba8a9da00d7e2279705c35cf126d328a84a9dd09fc50e64efe
-# source key b4efdfa5142930da183480e0d8e6ae362cae2a60dc660c608e76747e25cf0135
+# symmech 0.1.0 generated module; inputs sha256 796f894afde18c00e47a634292778a3c2f8846ddde8e52c65ea0a33f97ccce27
+# source key 6a586082decdc8eb3d5b0f9796b3ff5a04d935ee13ec9fd817600dbca530e0c0
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

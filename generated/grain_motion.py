@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ec01ee3ebd25bf6ec230e78f2cbb3936ff5ff96f21123e7fbbcfae45775b7264
-# source key 91f0a00a5554db77f6742d08a6dd3ed72b90b84c7946ad38033abb59b6f4b0e1
+# symmech 0.1.0 generated module; inputs sha256 125780e96894d660bc1a5cc0c627e35ee4b53e6e005b5362facb15b06263a5ba
+# source key f65cf75ebd6c831338e0803f08a05770684ef5fcda6a089d4ec5f2d4af411c65
 # body sha256 5dac3c335227263f1a6b3bda4b98fe2e51fd13666c14fefb3862e2d296086458
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

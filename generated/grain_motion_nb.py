@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 b9e8088744cb00787f7ea50f18dcaadc6f9f9533b940faa985c526f4d8007e42
-# source key 91f0a00a5554db77f6742d08a6dd3ed72b90b84c7946ad38033abb59b6f4b0e1
-# body sha256 3fcb7be1a0b4988f71d2876aa0dd6731c16a051250e014afee5a9ea1651b805e
+# symmech 0.1.0 generated module; inputs sha256 e2d610f2f0f9cb23c00349a333b4806342cc2e88a68a77d8dccf68fa252a4c1d
+# source key f65cf75ebd6c831338e0803f08a05770684ef5fcda6a089d4ec5f2d4af411c65
+# body sha256 858e34452b65597af47f02df44aa9a8cfeedad0f3d33748728bc482f956dd9e1
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -1461,8 +1461,10 @@ def _vectors(y, p) -> bool:
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion
-        return rhs_scalar(float(t), y, p)
+    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
+        out = numpy.empty((1, 13))
+        rhs_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1472,6 +1474,8 @@ def rhs(t, y, p):
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
     if _vectors(y, p):
-        return jac_scalar(float(t), y, p)
+        out = numpy.empty((1, 13, 13))
+        jac_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

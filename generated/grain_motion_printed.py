@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0bec588882c95a51e6e6a3c83ccdef01480d3f522f14460eae5babf974f0dc8d
-# source key 37795295364750c7df7f59c73d7768dac9d831166f059337ba082eed86d5f343
+# symmech 0.1.0 generated module; inputs sha256 cd4a98838bc25057a49b247f01f62a594fb6e8c5b41f44cd58f35da8418ed3f8
+# source key cff0b40d6b5a43580d2a6375d90a2368fc551754783483aefaa3e6118b4f3a50
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

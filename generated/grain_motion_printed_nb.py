@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 81f43fc9d0fa5b92ba712698be3075219834989d0f59b29bd0cc93538ade2e40
-# source key 37795295364750c7df7f59c73d7768dac9d831166f059337ba082eed86d5f343
+# symmech 0.1.0 generated module; inputs sha256 db91d6710a5404bbe77fff21f4ec71f07d38957305bbb80cac757a878130ec2d
+# source key cff0b40d6b5a43580d2a6375d90a2368fc551754783483aefaa3e6118b4f3a50
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

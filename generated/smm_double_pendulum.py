@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 46c7552205ed7477361a79c1ae40a4875de9f7b4de475769ffb25e6fd8317961
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
+# symmech 0.1.0 generated module; inputs sha256 90c6e1d2347fcc6db59dff417876667f709f646bfe9eb5506ee863efb3b29453
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

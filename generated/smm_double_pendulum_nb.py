@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 2999c6b49417becc8126e0ddb0abf6511081d0e27bf22fd2edf62f6470e43a1e
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
-# body sha256 593786799117eaf7fa92d3b2ffc21d327e3d723bd4ae19b9571aa5a6eb48b328
+# symmech 0.1.0 generated module; inputs sha256 9567383a69feb41c1e1fbf6237fa2df561430322a9455ffc18c6daf8beb17284
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
+# body sha256 1cc8699401e159e4223f4c133447d6abc17e254e04d72752860e6960db9ffcb2
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -679,8 +679,10 @@ def _vectors(y, p) -> bool:
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion
-        return rhs_scalar(float(t), y, p)
+    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
+        out = numpy.empty((1, 4))
+        rhs_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -690,6 +692,8 @@ def rhs(t, y, p):
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
     if _vectors(y, p):
-        return jac_scalar(float(t), y, p)
+        out = numpy.empty((1, 4, 4))
+        jac_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

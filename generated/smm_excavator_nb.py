@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 0ffe8569911787493c6bd85a2c33f81452cac726274653ff8d66697b843003e0
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
-# body sha256 88d68ad791df0f2a52c365307de053d9c6591d4921754bc4ade3734363242008
+# symmech 0.1.0 generated module; inputs sha256 a72f608abea6f63aacac2baeae1876d3f256b24dfe72f9fb2911c0e1a2f58c46
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
+# body sha256 1b6c4be271121e8d632b7b2d44e9e41f546171735510217d1217fda23d32935e
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -1425,8 +1425,10 @@ def _vectors(y, p) -> bool:
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion
-        return rhs_scalar(float(t), y, p)
+    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
+        out = numpy.empty((1, 10))
+        rhs_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1436,6 +1438,8 @@ def rhs(t, y, p):
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
     if _vectors(y, p):
-        return jac_scalar(float(t), y, p)
+        out = numpy.empty((1, 10, 10))
+        jac_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 a9caad922f78d0ba56b0e994a041b722eaba1687bfd32a19d01aeec3f25b9bec
-# source key 70b0844f7068d4eeb49a3114db6c4e91a776a25dd74e726ce07615ab0ff70a06
+# symmech 0.1.0 generated module; inputs sha256 5e76c6f35fd77774495a69419d8e08c20c2e1fbd2229d80b1b4bdf39ee49edac
+# source key 0a1027c279fc5c7acf864e0cbf24cea3761b409bb1e7e3afd7ecfae81d40a946
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 188ec56a63022431e882f6c7173c31cb6337e0c5156643a7882a3eb1caee527f
-# source key 70b0844f7068d4eeb49a3114db6c4e91a776a25dd74e726ce07615ab0ff70a06
+# symmech 0.1.0 generated module; inputs sha256 ab303303de5dd172a4b5911971a4b4376b812bc67d467814f85dccfe7b8c7406
+# source key 0a1027c279fc5c7acf864e0cbf24cea3761b409bb1e7e3afd7ecfae81d40a946
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

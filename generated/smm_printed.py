@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 bf9e8a2da542016149b4ec218d58b1b5830132f9859e03e23dc3ebad3445f45a
-# source key cc59f64d20883c97d9499bea26f78da77fb1e63a20c191d5b7f0dba2e6305bd0
+# symmech 0.1.0 generated module; inputs sha256 2fec7726ed2a2e31cd98de60a0afe21c221f089b9c2e3c0f63fbfb9f7ff2d6ef
+# source key b110440028210d8839a9e08b38a1145af2ab088cbbfbf35cdaa82777806778ce
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b510e397c5ec0380afa802cf49eb61654e35d0cdf9a5c88bc4cc3528ffd2e9ec
-# source key cc59f64d20883c97d9499bea26f78da77fb1e63a20c191d5b7f0dba2e6305bd0
+# symmech 0.1.0 generated module; inputs sha256 62ad064cb10529ae11789e353950117e7db399d78b41f04becab80ce044b0a72
+# source key b110440028210d8839a9e08b38a1145af2ab088cbbfbf35cdaa82777806778ce
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 28a71e2c98cb046cef5d9d71f863c741365f67dc0db404c9828d1a2e603d6dfe
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
+# symmech 0.1.0 generated module; inputs sha256 9a2e39a20a4f2c1b31dcb7c41b6a3113d3afd2181c74ad542912a83a6c39d4ae
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 e4b8a915495d3dab7c2268f582072ba6cf98a36fc17155ec5f26f36bbd1dfe7d
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
-# body sha256 b3d765da2bbe1de674cb1213ad734489996a3e5e132555ee355ae55265e2252f
+# symmech 0.1.0 generated module; inputs sha256 2a2a8460c1ba15f7b0e9004cc5c6ce1accc1c023d50047e0bcc5b9e76f8b8c2e
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
+# body sha256 f8c8b3ba94dd5807f628a6893822ba9ea9dd067a72a82b3d0b139a33b455403d
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_rotor_boom` (the numpy module, the
@@ -843,8 +843,10 @@ def _vectors(y, p) -> bool:
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion
-        return rhs_scalar(float(t), y, p)
+    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
+        out = numpy.empty((1, 4))
+        rhs_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -854,6 +856,8 @@ def rhs(t, y, p):
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
     if _vectors(y, p):
-        return jac_scalar(float(t), y, p)
+        out = numpy.empty((1, 4, 4))
+        jac_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

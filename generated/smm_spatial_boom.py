@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6db943214b19e8e543c8cab10dc7c4601b4b2555109fe896f1a0b995ed370105
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
+# symmech 0.1.0 generated module; inputs sha256 541749b3fc76683723ef6d6cec3369c00e54758517bfc72298462bfe94d67bf1
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

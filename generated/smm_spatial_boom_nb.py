@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 942dd94d18935f58cb82d8da95bd0a2474fe0a6ca6afaac677d5fba8cb85fa33
-# source key 86bb601ef9aae834553309f116925946497d603337f22f4caab0739ddc0fa5b0
-# body sha256 6ed01323dbde83717124ee704318d4ab1ce8ee022e32a23687004123b6ff7d5c
+# symmech 0.1.0 generated module; inputs sha256 e339a99d306f9d2dd946c99a235d1c8b8db6bad36dd683494b512ff2ca2490da
+# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
+# body sha256 1fcd01b4c37f109f8319829d56579788ae721381287c5ee3c30fa7c07db59ccb
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -1414,8 +1414,10 @@ def _vectors(y, p) -> bool:
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion
-        return rhs_scalar(float(t), y, p)
+    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
+        out = numpy.empty((1, 8))
+        rhs_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1425,6 +1427,8 @@ def rhs(t, y, p):
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
     if _vectors(y, p):
-        return jac_scalar(float(t), y, p)
+        out = numpy.empty((1, 8, 8))
+        jac_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 04eb62a9cddecee43e9fb87ea6b6187c36220afbfa682eca573d7b2a7a2cd4cf
-# source key 73fb4a917c8b44c11e7dcfa54f69d2001bddc069e9b547e95da1362bf64e1cbf
+# symmech 0.1.0 generated module; inputs sha256 5024e64c6de73ddb53b1290ab788bf411c47be0a3525061aba981b503297d2cb
+# source key 6a56a9008fc736eb6e37d599d5e0c1ec77a0732fd0784aa5bfe492f0023b8b90
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

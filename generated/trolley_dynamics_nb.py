@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 bf1c1e7d3af6f66c1baf6e28d34173f7d9ff419c52aa528cbfacc8d6c5dee33e
-# source key 73fb4a917c8b44c11e7dcfa54f69d2001bddc069e9b547e95da1362bf64e1cbf
+# symmech 0.1.0 generated module; inputs sha256 f7e26cfc730416d0c8f1700fb41d1ef29705a1e6da09ab1d426cad3a14f956ba
+# source key 6a56a9008fc736eb6e37d599d5e0c1ec77a0732fd0784aa5bfe492f0023b8b90
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

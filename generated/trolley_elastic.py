@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 fcdfb7094737e1b45c7a618a1304975eefad40d7fd39d5c7067daaff1c724de9
-# source key 7debaa856b90ea4ae4d94e2ea678aa1ed36ea7154620b7c607def70dcc5edba9
+# symmech 0.1.0 generated module; inputs sha256 2c811c7393012c70efcd6bf936d6e63795a8b4e7947d24f0a7c04e783d2af10d
+# source key f54add246585c304dd222c028eea23dc1b5a2133b3ba607d7eb8a66904c85bbf
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

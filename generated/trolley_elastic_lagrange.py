@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1171140f51d4343e0cbb9913d51f37fd0bcd1182a05ccb0691a6f4148c31147f
-# source key 7debaa856b90ea4ae4d94e2ea678aa1ed36ea7154620b7c607def70dcc5edba9
+# symmech 0.1.0 generated module; inputs sha256 a426ed49a9f0321b72fa82d94fceb3372ab21aad3c21ce38d1da7d6295ae5b4e
+# source key f54add246585c304dd222c028eea23dc1b5a2133b3ba607d7eb8a66904c85bbf
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 7e2ef1c0134c6b2273962ec56aca0eb338724199939d8d1d764d81c4facbd8a7
-# source key 7debaa856b90ea4ae4d94e2ea678aa1ed36ea7154620b7c607def70dcc5edba9
-# body sha256 4438f5b48118918e196176571bff437b174dc0bb5e06c82a01ea6e0b4649c153
+# symmech 0.1.0 generated module; inputs sha256 98f4ea419a9008e1f624f6cf34138107328c715afec8ead4d3ed324a0ea58339
+# source key f54add246585c304dd222c028eea23dc1b5a2133b3ba607d7eb8a66904c85bbf
+# body sha256 c3f7aa1e5867566d37c73db4397dc4d68bf4abd51ae4abcfad131d08dc8ebda5
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -3265,8 +3265,10 @@ def _vectors(y, p) -> bool:
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion
-        return rhs_scalar(float(t), y, p)
+    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
+        out = numpy.empty((1, 14))
+        rhs_into(float(t), y, p, out)
+        return out[0]
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1813a6cfe795a7561bb42dd011c80277c757fe578ab967a4f4bda1e33a4189fb
-# source key 7debaa856b90ea4ae4d94e2ea678aa1ed36ea7154620b7c607def70dcc5edba9
+# symmech 0.1.0 generated module; inputs sha256 0e242d9220644b243253214c896c40ee3c7489623913cc15594c7a4f3349e49a
+# source key f54add246585c304dd222c028eea23dc1b5a2133b3ba607d7eb8a66904c85bbf
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

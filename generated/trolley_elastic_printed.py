@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 da818ab7799e535488ca33be7312677b0402205dceab5f4aa81a7d5c87b75c3f
-# source key b3027e139922030cc2b63435a6885c28e5cc9ac8b4d084052a8af3de37c45028
+# symmech 0.1.0 generated module; inputs sha256 6cfe9fed5b0f2d32e1c0173e64f3da1821f0ff355cc7fb225d02a6dbabe9c67b
+# source key 02b232df201e6511b870451baf33ce914d0a1113a5926e1a0324993fbf275ce6
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

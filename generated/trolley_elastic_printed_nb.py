@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 a668d3b5544223dbbad4396e231b8f55041c7233ecad679324b1e4fdf9274b55
-# source key b3027e139922030cc2b63435a6885c28e5cc9ac8b4d084052a8af3de37c45028
+# symmech 0.1.0 generated module; inputs sha256 2529647f553632cee7f16ebd63a4b49c514ad504cbfa1eaf48f73b2302662d89
+# source key 02b232df201e6511b870451baf33ce914d0a1113a5926e1a0324993fbf275ce6
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 808de69705aeb5e9992754f208358a1c1fee4362c469a6f5a06023b4af4adfef
-# source key 73fb4a917c8b44c11e7dcfa54f69d2001bddc069e9b547e95da1362bf64e1cbf
+# symmech 0.1.0 generated module; inputs sha256 19982b8bdb7ace85608a7fd47cf3b198c57c95c24ae381863b5ddc0c3e3f37fa
+# source key 6a56a9008fc736eb6e37d599d5e0c1ec77a0732fd0784aa5bfe492f0023b8b90
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

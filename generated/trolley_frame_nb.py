@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6ebd344227f204c8db114ef6557fc5feedea7d15d7316a6d2b3754d0435b67c6
-# source key 73fb4a917c8b44c11e7dcfa54f69d2001bddc069e9b547e95da1362bf64e1cbf
+# symmech 0.1.0 generated module; inputs sha256 914c9715d6149be5ea31d1cbbaab8b0c204e52d3d01375ef8a1a1220ec14be9a
+# source key 6a56a9008fc736eb6e37d599d5e0c1ec77a0732fd0784aa5bfe492f0023b8b90
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

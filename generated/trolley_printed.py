@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 375d74a49b434ca0e6302932a45c33203b86f1a358e1c94eb754d3ae0e907386
-# source key fc599c67b4c0b66b2f4c017259d1570793c18e01a2347002bbd433c709fe34cc
+# symmech 0.1.0 generated module; inputs sha256 365b8880fec14559b293cd4babf0bc97f3b5b3a7f9cb4238a37e9df0e72873d5
+# source key 3085a90e18492ac570465825b7517c8266cfa73060d27e02ace938f84d1103df
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d6f479e3cc7f52232c58843dc73c27ad2dcf7a9e466ffaca77783679e6c6555c
-# source key fc599c67b4c0b66b2f4c017259d1570793c18e01a2347002bbd433c709fe34cc
+# symmech 0.1.0 generated module; inputs sha256 6ef985afee99829222508cf7002d38f474da435b0ea148b82b72ad7bd70169a4
+# source key 3085a90e18492ac570465825b7517c8266cfa73060d27e02ace938f84d1103df
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 
