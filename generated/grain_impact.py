@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 550cfe900f4a34aa6ed6222579e4f681c1600a6bc5858b5ea116151965f98a25
-# source key 0563c2614151af42fccfc41329883ec50ab1102e8677c7ecbed93e604991669a
+# symmech 0.1.0 generated module; inputs sha256 31d89fd49c7a3debc209dc334910d1d16b9a284f5b7fdd319e61159aea903296
+# source key 1b69da37568bb10bd8cbcc2a795dcd00cef6da80f595f5038f13b79e41ce4de2
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 e2d610f2f0f9cb23c00349a333b4806342cc2e88a68a77d8dccf68fa252a4c1d
-# source key f65cf75ebd6c831338e0803f08a05770684ef5fcda6a089d4ec5f2d4af411c65
-# body sha256 858e34452b65597af47f02df44aa9a8cfeedad0f3d33748728bc482f956dd9e1
+# symmech 0.1.0 generated module; inputs sha256 2512975f0cc7ff6a11b546c75dc21f87495246a43a262cd329c7c4e859ff46b2
+# source key f937451ff02402073ea8cde161b2c76b10c3dedd89353dc1b2552bad3c4930c5
+# body sha256 906cc9e0586524a0fedec0ce638ac68e8a6a316cef6363533810ca0fd2c51d3d
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -1417,8 +1417,6 @@ def _layout(y, p):
         raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (13,) or (13, k), and (12,)")
     return y, p
 
-_FLOAT64 = numpy.dtype(numpy.float64)
-
 
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
@@ -1452,19 +1450,32 @@ def jac_scalar(t, y, p):
     return out[0]
 
 
-def _vectors(y, p) -> bool:
-    """True when ``y`` (n,) and ``p`` (m,) are float64 arrays the kernels take as they are."""
-    # cheapest tests first; `shape ==` would build tuples, `dtype ==` convert (~0.1 us each)
-    return (type(y) is numpy.ndarray and type(p) is numpy.ndarray and y.dtype is _FLOAT64 and p.dtype is _FLOAT64
-            and y.ndim == 1 and p.ndim == 1 and len(y) == 13 and len(p) == 12)
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
-        out = numpy.empty((1, 13))
-        rhs_into(float(t), y, p, out)
+    out = numpy.empty((1, 13))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1473,9 +1484,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
-    if _vectors(y, p):
-        out = numpy.empty((1, 13, 13))
-        jac_into(float(t), y, p, out)
+    out = numpy.empty((1, 13, 13))
+    try:
+        _jac_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

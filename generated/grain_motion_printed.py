@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 cd4a98838bc25057a49b247f01f62a594fb6e8c5b41f44cd58f35da8418ed3f8
-# source key cff0b40d6b5a43580d2a6375d90a2368fc551754783483aefaa3e6118b4f3a50
+# symmech 0.1.0 generated module; inputs sha256 d59f5a93f87eba20d6c8f625ac0194e64ff4fe16a2841ab97ef2802da9d02820
+# source key 60c62e07614847ae72604fc0cc2256cd6437e356f653c58f8f3d54e780331332
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 9567383a69feb41c1e1fbf6237fa2df561430322a9455ffc18c6daf8beb17284
-# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
-# body sha256 1cc8699401e159e4223f4c133447d6abc17e254e04d72752860e6960db9ffcb2
+# symmech 0.1.0 generated module; inputs sha256 f77b3e0a89d5634cff5b565adfb31ea161b522b7828bd47164493626b03d1f31
+# source key e23fedb28470e080af0699e297a0256ff1d022aeea6e80cec81dde15987f79d1
+# body sha256 9c2027bc7d6b7b94a8984d2692010c64848c9845ef7c4b0c7cf0258cfc8dbeaf
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -633,8 +633,6 @@ def _layout(y, p):
         raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (4,) or (4, k), and (5,)")
     return y, p
 
-_FLOAT64 = numpy.dtype(numpy.float64)
-
 
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
@@ -670,19 +668,32 @@ def jac_scalar(t, y, p):
     return out[0]
 
 
-def _vectors(y, p) -> bool:
-    """True when ``y`` (n,) and ``p`` (m,) are float64 arrays the kernels take as they are."""
-    # cheapest tests first; `shape ==` would build tuples, `dtype ==` convert (~0.1 us each)
-    return (type(y) is numpy.ndarray and type(p) is numpy.ndarray and y.dtype is _FLOAT64 and p.dtype is _FLOAT64
-            and y.ndim == 1 and p.ndim == 1 and len(y) == 4 and len(p) == 5)
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
-        out = numpy.empty((1, 4))
-        rhs_into(float(t), y, p, out)
+    out = numpy.empty((1, 4))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -691,9 +702,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
-    if _vectors(y, p):
-        out = numpy.empty((1, 4, 4))
-        jac_into(float(t), y, p, out)
+    out = numpy.empty((1, 4, 4))
+    try:
+        _jac_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

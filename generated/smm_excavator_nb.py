@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a72f608abea6f63aacac2baeae1876d3f256b24dfe72f9fb2911c0e1a2f58c46
-# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
-# body sha256 1b6c4be271121e8d632b7b2d44e9e41f546171735510217d1217fda23d32935e
+# symmech 0.1.0 generated module; inputs sha256 4f92645085f3f2d7cb92e674d3c7182bd98b7b02bb4e438b4ff6c0d290f6df2a
+# source key e23fedb28470e080af0699e297a0256ff1d022aeea6e80cec81dde15987f79d1
+# body sha256 d544c76fe5fce17c7b9fbe3374d8134576b1221631070497eab3066a92eaea51
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -1379,8 +1379,6 @@ def _layout(y, p):
         raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (10,) or (10, k), and (20,)")
     return y, p
 
-_FLOAT64 = numpy.dtype(numpy.float64)
-
 
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
@@ -1416,19 +1414,32 @@ def jac_scalar(t, y, p):
     return out[0]
 
 
-def _vectors(y, p) -> bool:
-    """True when ``y`` (n,) and ``p`` (m,) are float64 arrays the kernels take as they are."""
-    # cheapest tests first; `shape ==` would build tuples, `dtype ==` convert (~0.1 us each)
-    return (type(y) is numpy.ndarray and type(p) is numpy.ndarray and y.dtype is _FLOAT64 and p.dtype is _FLOAT64
-            and y.ndim == 1 and p.ndim == 1 and len(y) == 10 and len(p) == 20)
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
-        out = numpy.empty((1, 10))
-        rhs_into(float(t), y, p, out)
+    out = numpy.empty((1, 10))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1437,9 +1448,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
-    if _vectors(y, p):
-        out = numpy.empty((1, 10, 10))
-        jac_into(float(t), y, p, out)
+    out = numpy.empty((1, 10, 10))
+    try:
+        _jac_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5e76c6f35fd77774495a69419d8e08c20c2e1fbd2229d80b1b4bdf39ee49edac
-# source key 0a1027c279fc5c7acf864e0cbf24cea3761b409bb1e7e3afd7ecfae81d40a946
+# symmech 0.1.0 generated module; inputs sha256 f3a5e5d3c780e263a6368bc5901fb85321e23627fa47e1f4fd1d8ec21d5664a5
+# source key 9d99f7c18582e0941316358f38e4a5407ad3d295a48df6f27ad7b0173627e0f7
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

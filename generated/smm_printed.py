@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2fec7726ed2a2e31cd98de60a0afe21c221f089b9c2e3c0f63fbfb9f7ff2d6ef
-# source key b110440028210d8839a9e08b38a1145af2ab088cbbfbf35cdaa82777806778ce
+# symmech 0.1.0 generated module; inputs sha256 bdf274d58fdd425298be81b0f700803bce4ca1f0888bcc0eb65f0b361b8ee021
+# source key b045b2388293ad68f892d1b7d926b213082e9a3ae0df82324be041f94785fea3
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

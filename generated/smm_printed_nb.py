@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 62ad064cb10529ae11789e353950117e7db399d78b41f04becab80ce044b0a72
-# source key b110440028210d8839a9e08b38a1145af2ab088cbbfbf35cdaa82777806778ce
+# symmech 0.1.0 generated module; inputs sha256 d426340048fbb21af63f19a9ea420f0385bf1f608a4efbc6af18d52bd4deb2ab
+# source key b045b2388293ad68f892d1b7d926b213082e9a3ae0df82324be041f94785fea3
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

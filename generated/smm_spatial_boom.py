@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 541749b3fc76683723ef6d6cec3369c00e54758517bfc72298462bfe94d67bf1
-# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
+# symmech 0.1.0 generated module; inputs sha256 639bee2faa8d78e3244b09ccc7d4ccc38e299c92b3f9ac1cae43295b84f56d74
+# source key e23fedb28470e080af0699e297a0256ff1d022aeea6e80cec81dde15987f79d1
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

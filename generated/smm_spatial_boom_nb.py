@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 e339a99d306f9d2dd946c99a235d1c8b8db6bad36dd683494b512ff2ca2490da
-# source key 84d8f46de9fe3afb44805620dd59714179119c9fd7cb975468bd263b956846b8
-# body sha256 1fcd01b4c37f109f8319829d56579788ae721381287c5ee3c30fa7c07db59ccb
+# symmech 0.1.0 generated module; inputs sha256 bee1f308f051d1e82555ebbed317d442d83a5f0ecfaac2d9d15d1ae7548d4644
+# source key e23fedb28470e080af0699e297a0256ff1d022aeea6e80cec81dde15987f79d1
+# body sha256 04bf47ab8e9427efc868d6175106ac8ae9d889c2cba8aba24250ac4cc045f3b3
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -1368,8 +1368,6 @@ def _layout(y, p):
         raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (8,) or (8, k), and (21,)")
     return y, p
 
-_FLOAT64 = numpy.dtype(numpy.float64)
-
 
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
@@ -1405,19 +1403,32 @@ def jac_scalar(t, y, p):
     return out[0]
 
 
-def _vectors(y, p) -> bool:
-    """True when ``y`` (n,) and ``p`` (m,) are float64 arrays the kernels take as they are."""
-    # cheapest tests first; `shape ==` would build tuples, `dtype ==` convert (~0.1 us each)
-    return (type(y) is numpy.ndarray and type(p) is numpy.ndarray and y.dtype is _FLOAT64 and p.dtype is _FLOAT64
-            and y.ndim == 1 and p.ndim == 1 and len(y) == 8 and len(p) == 21)
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
-        out = numpy.empty((1, 8))
-        rhs_into(float(t), y, p, out)
+    out = numpy.empty((1, 8))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1426,9 +1437,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
-    if _vectors(y, p):
-        out = numpy.empty((1, 8, 8))
-        jac_into(float(t), y, p, out)
+    out = numpy.empty((1, 8, 8))
+    try:
+        _jac_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5024e64c6de73ddb53b1290ab788bf411c47be0a3525061aba981b503297d2cb
-# source key 6a56a9008fc736eb6e37d599d5e0c1ec77a0732fd0784aa5bfe492f0023b8b90
+# symmech 0.1.0 generated module; inputs sha256 eab1fc0a1d7ae9be5cc072cde93800bc0fcea316a0a455d33f46cf4720e20635
+# source key a9fcbfde83bb07625208f4acd0d2138406d45c124524b08eed3fa192f6fd096d
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f7e26cfc730416d0c8f1700fb41d1ef29705a1e6da09ab1d426cad3a14f956ba
-# source key 6a56a9008fc736eb6e37d599d5e0c1ec77a0732fd0784aa5bfe492f0023b8b90
+# symmech 0.1.0 generated module; inputs sha256 4ba96b685c3fb300c044197e736716aaf27eb9bccaa4c6bfccad56bc3754fed1
+# source key a9fcbfde83bb07625208f4acd0d2138406d45c124524b08eed3fa192f6fd096d
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2c811c7393012c70efcd6bf936d6e63795a8b4e7947d24f0a7c04e783d2af10d
-# source key f54add246585c304dd222c028eea23dc1b5a2133b3ba607d7eb8a66904c85bbf
+# symmech 0.1.0 generated module; inputs sha256 a06ee0e1fdfb5e61431104f0c24929dcf2983057c0a2275f8fb0dc83044e05bf
+# source key 94313847c61ab4e8db5393c438bbd215466ede77d37d7cf06414981822333e6c
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

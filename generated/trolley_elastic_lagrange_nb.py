@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 98f4ea419a9008e1f624f6cf34138107328c715afec8ead4d3ed324a0ea58339
-# source key f54add246585c304dd222c028eea23dc1b5a2133b3ba607d7eb8a66904c85bbf
-# body sha256 c3f7aa1e5867566d37c73db4397dc4d68bf4abd51ae4abcfad131d08dc8ebda5
+# symmech 0.1.0 generated module; inputs sha256 76d8c2a5a7f436516bc6607e27ebd4e94cfbb9b5adcc14971c3fb2708587f0e1
+# source key 94313847c61ab4e8db5393c438bbd215466ede77d37d7cf06414981822333e6c
+# body sha256 2974fc570b22e9bbd1f159d4d42e96888601502e1e1aa253438cc5eb2eb841fe
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -3236,8 +3236,6 @@ def _layout(y, p):
         raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (14,) or (14, k), and (42,)")
     return y, p
 
-_FLOAT64 = numpy.dtype(numpy.float64)
-
 
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
@@ -3256,19 +3254,24 @@ def rhs_scalar(t, y, p):
     return out[0]
 
 
-def _vectors(y, p) -> bool:
-    """True when ``y`` (n,) and ``p`` (m,) are float64 arrays the kernels take as they are."""
-    # cheapest tests first; `shape ==` would build tuples, `dtype ==` convert (~0.1 us each)
-    return (type(y) is numpy.ndarray and type(p) is numpy.ndarray and y.dtype is _FLOAT64 and p.dtype is _FLOAT64
-            and y.ndim == 1 and p.ndim == 1 and len(y) == 14 and len(p) == 42)
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
-    if _vectors(y, p):  # an integrator's per-step call: no conversion, and numpy allocates faster than numba
-        out = numpy.empty((1, 14))
-        rhs_into(float(t), y, p, out)
+    out = numpy.empty((1, 14))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
         return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6cfe9fed5b0f2d32e1c0173e64f3da1821f0ff355cc7fb225d02a6dbabe9c67b
-# source key 02b232df201e6511b870451baf33ce914d0a1113a5926e1a0324993fbf275ce6
+# symmech 0.1.0 generated module; inputs sha256 c8fdfe5db9d4be620f478ba23e350e54ba125b2d2606946b52f1ee80ca7b70fd
+# source key 3df1402a9df052bba5e4bef1101095139c8f143aa00d3166399752ff0fc05ec2
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

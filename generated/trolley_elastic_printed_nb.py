@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2529647f553632cee7f16ebd63a4b49c514ad504cbfa1eaf48f73b2302662d89
-# source key 02b232df201e6511b870451baf33ce914d0a1113a5926e1a0324993fbf275ce6
+# symmech 0.1.0 generated module; inputs sha256 fb81e1a11a927375f6c8de15c980d83fac263088883ed42d20fc96f263fa1206
+# source key 3df1402a9df052bba5e4bef1101095139c8f143aa00d3166399752ff0fc05ec2
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 365b8880fec14559b293cd4babf0bc97f3b5b3a7f9cb4238a37e9df0e72873d5
-# source key 3085a90e18492ac570465825b7517c8266cfa73060d27e02ace938f84d1103df
+# symmech 0.1.0 generated module; inputs sha256 3c6f10277793e72dd6d4c5b6141a03760910996e0d104fe5edacfc805823333d
+# source key ce89011ba0a6672481ad991264c2cf6511d5fcda4183e9f8adfbf181315f0c15
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6ef985afee99829222508cf7002d38f474da435b0ea148b82b72ad7bd70169a4
-# source key 3085a90e18492ac570465825b7517c8266cfa73060d27e02ace938f84d1103df
+# symmech 0.1.0 generated module; inputs sha256 2e97f3a8287377a79c969e28fee789be7e7846e24bcecd30b4cd75d44fb7d366
+# source key ce89011ba0a6672481ad991264c2cf6511d5fcda4183e9f8adfbf181315f0c15
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -125,6 +125,26 @@ def test_into_kernels_from_numba_code_equal_the_numpy_module(name):
         twin.jac_into(0.2, Y[0], p, J[:, :-1])
 
 
+def test_numba_rhs_and_jac_take_what_the_numpy_ones_take():
+    """float64 C vectors go straight to the kernel compiled for them; lists, an int t, a float32 or
+    strided y, a column batch take the converting path; all equal the numpy module to 1e-12, and a wrong
+    length raises the layout's ValueError."""
+    twin = kernels.load("grain_motion")
+    y, p = _point(gm, 8)
+    strided = np.repeat(y, 2)[::2]
+    for t, yy, pp in ((0.1, y, p), (0.1, list(y), list(p)), (1, y, p), (0.1, y.astype(np.float32), p),
+                      (0.1, strided, p), (0.1, np.column_stack([y, 2 * y]), p)):
+        expected = gm.rhs(t, yy, pp)
+        np.testing.assert_allclose(twin.rhs(t, yy, pp), expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+        if np.ndim(yy) == 1:
+            J = gm.jac(t, yy, pp)
+            np.testing.assert_allclose(twin.jac(t, yy, pp), J, rtol=1e-12, atol=1e-12 * np.abs(J).max())
+    for yy, pp in ((y[:-1], p), (y, p[:-1])):
+        for f in (twin.rhs, twin.jac):
+            with pytest.raises(ValueError, match="expected \\(13,\\) or \\(13, k\\), and \\(12,\\)"):
+                f(0.1, yy, pp)
+
+
 @pytest.mark.parametrize("name", WITH_JACOBIAN)
 def test_one_state_on_floats_equals_the_batch_path(name):
     """The numpy module computes one state on Python floats with math, a batch with numpy: jac at y (n,)
