@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c9834763166b2177dfec49f4723c89edb43459f5dbd993b7852e037df6204dfa
-# source key f937451ff02402073ea8cde161b2c76b10c3dedd89353dc1b2552bad3c4930c5
+# source key 8ba80ecc4a144516f72039504d29471c64707f66520bed35aa049b5666bd1a6d
 # body sha256 5dac3c335227263f1a6b3bda4b98fe2e51fd13666c14fefb3862e2d296086458
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

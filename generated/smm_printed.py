@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bdf274d58fdd425298be81b0f700803bce4ca1f0888bcc0eb65f0b361b8ee021
-# source key b045b2388293ad68f892d1b7d926b213082e9a3ae0df82324be041f94785fea3
+# source key 7af5f6aba170f3c5ab5f3d1eeef5f749d359bb5b04657a065ed9c6075334abf5
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

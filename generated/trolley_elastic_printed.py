@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c8fdfe5db9d4be620f478ba23e350e54ba125b2d2606946b52f1ee80ca7b70fd
-# source key 3df1402a9df052bba5e4bef1101095139c8f143aa00d3166399752ff0fc05ec2
+# source key f88efb87f8bd57c6ecdd6deb05c112fb460257928345202fc505f77572698dca
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2e97f3a8287377a79c969e28fee789be7e7846e24bcecd30b4cd75d44fb7d366
-# source key ce89011ba0a6672481ad991264c2cf6511d5fcda4183e9f8adfbf181315f0c15
+# source key 3f7f27dc142120f5d42ff0d47782faf4532f6e13f7dcc6d754c6f1425634b228
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -4,8 +4,9 @@
 ``write`` writes it atomically (:mod:`symmech.core.codegen` decides what to
 regenerate). Both targets print the same common-subexpression split
 (:func:`cse_chunks`), which ``symmech latex --cse`` shows too: a target is a
-printer (numpy or math calls), a template and the way a chunk line addresses
-an output element, nothing more.
+printer (numpy or math calls), a template, the way a chunk line addresses
+an output element, and whether a dynamics module's rates are printed on floats
+too (the numpy module's one-state path), nothing more.
 
 Determinism: elements are split into chunks in matrix order, each chunk is
 CSE'd with ``order="canonical"`` and a fixed symbol stream, and the header
