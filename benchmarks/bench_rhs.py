@@ -105,7 +105,8 @@ def grain_flight(repeats: int) -> None:
                   "lambdify(cse=True)": lambda: lam(0.1, *y, *p),
                   "numpy rhs": lambda: module.rhs(0.1, y, p)}
     reference = module.rate(0.1, *y, *p)
-    results = {"numba rhs": twin.rhs(0.1, y, p), "lambdify(cse=True)": np.ravel(lam(0.1, *y, *p)),
+    twin.rhs_into(0.1, y, p, out)
+    results = {"numba rhs": twin.rhs(0.1, y, p), "numba rhs_into": out.copy(), "lambdify(cse=True)": lam(0.1, *y, *p),
                "numpy rhs": module.rhs(0.1, y, p)} | ({"JiTCODE f (C)": jit(0.1, y)} if jit else {})
     if jit is None:
         print("  JiTCODE not installed (pip install symmech[bench]): its row is skipped")
