@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 1fa85f8ea266df1d650e9bcf1db715777b104a1e199be3b15ba0bb9822ed263d
-# source key 1b03fc698c1043b7c2128d622fc41f530f80a7d1efbe84321db13629d03506ed
-# body sha256 376c2cd3c66c578aa2dcb517ca10b34323531b6ff2c865677bddde45e17d13d8
+# symmech 0.1.0 generated module; inputs sha256 2512975f0cc7ff6a11b546c75dc21f87495246a43a262cd329c7c4e859ff46b2
+# source key 8ba80ecc4a144516f72039504d29471c64707f66520bed35aa049b5666bd1a6d
+# body sha256 906cc9e0586524a0fedec0ce638ac68e8a6a316cef6363533810ca0fd2c51d3d
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -59,7 +59,9 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     p[10] I2 [kg*m^2] principal moment of inertia, body axis 2
     p[11] I3 [kg*m^2] principal moment of inertia, body axis 3
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
-``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in);
+``rhs_into(t, y, p, out)`` and ``jac_into`` write into out[0] like every ``f_into``:
+the calls for integrators compiled with numba.
 """
 import math
 
@@ -68,7 +70,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar"]
 
 
 def _flat(*args):
@@ -1417,19 +1419,63 @@ def _layout(y, p):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rhs_into(t, y, p, out):
+    """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)), nothing allocated."""
+    if y.shape[0] != 13 or p.shape[0] != 12 or out.shape[1] != 13:
+        raise ValueError("rhs_into: y must hold 13 floats, p 12, out (1, 13)")
+    rate_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], out)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rhs_scalar(t, y, p):
     """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
-    return rate_scalar(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
+    out = numpy.empty((1, 13))
+    rhs_into(t, y, p, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_into(t, y, p, out):
+    """dy'/dy at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n, n)), nothing allocated."""
+    if y.shape[0] != 13 or p.shape[0] != 12 or out.shape[1] != 13 or out.shape[2] != 13:
+        raise ValueError("jac_into: y must hold 13 floats, p 12, out (1, 13, 13)")
+    rate_jacobian_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], out)
 
 
 @numba.njit(cache=True, error_model="numpy")
 def jac_scalar(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
-    return rate_jacobian_scalar(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
+    out = numpy.empty((1, 13, 13))
+    jac_into(t, y, p, out)
+    return out[0]
+
+
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    out = numpy.empty((1, 13))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1438,5 +1484,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    out = numpy.empty((1, 13, 13))
+    try:
+        _jac_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

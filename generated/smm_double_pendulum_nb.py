@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 8f612a4c9ea501fa2869d8e57d5b57f39fcfd2660ff91ae5a4664079fae9f78b
-# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
-# body sha256 0b4734cfd04f5fce556855f1bfcbfb7499e3fca6ab1b295bb3fb4ff18adda2bc
+# symmech 0.1.0 generated module; inputs sha256 f77b3e0a89d5634cff5b565adfb31ea161b522b7828bd47164493626b03d1f31
+# source key bbfd75cd1aba65111ddacf131f94c41f240a93bd8f447a61e5244b1b23509d76
+# body sha256 9c2027bc7d6b7b94a8984d2692010c64848c9845ef7c4b0c7cf0258cfc8dbeaf
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -43,7 +43,9 @@ Dynamics of the free motion of 'double_pendulum' about its configuration:
     p[3] l2 [m] length of link 2
     p[4] g [m/s^2] gravitational acceleration
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
-``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in);
+``rhs_into(t, y, p, out)`` and ``jac_into`` write into out[0] like every ``f_into``, allocating only M:
+the calls for integrators compiled with numba.
 """
 import math
 
@@ -52,7 +54,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar"]
 
 
 def _flat(*args):
@@ -633,19 +635,65 @@ def _layout(y, p):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rhs_into(t, y, p, out):
+    """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
+    if y.shape[0] != 4 or p.shape[0] != 5 or out.shape[1] != 4:
+        raise ValueError("rhs_into: y must hold 4 floats, p 5, out (1, 4)")
+    rate_into(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], out)
+    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), out[0])
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rhs_scalar(t, y, p):
     """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
-    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), rate_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]))
+    out = numpy.empty((1, 4))
+    rhs_into(t, y, p, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_into(t, y, p, out):
+    """dy'/dy at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n, n)); allocates M to solve with it."""
+    if y.shape[0] != 4 or p.shape[0] != 5 or out.shape[1] != 4 or out.shape[2] != 4:
+        raise ValueError("jac_into: y must hold 4 floats, p 5, out (1, 4, 4)")
+    rate_jacobian_into(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], out)
+    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), out[0])
 
 
 @numba.njit(cache=True, error_model="numpy")
 def jac_scalar(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
-    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), rate_jacobian_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]))
+    out = numpy.empty((1, 4, 4))
+    jac_into(t, y, p, out)
+    return out[0]
+
+
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    out = numpy.empty((1, 4))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -654,5 +702,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    out = numpy.empty((1, 4, 4))
+    try:
+        _jac_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5e00e95239b914feeff45fa55f61aa6ae4cdfaaa700691445b80c2cb26ae4697
-# source key d0934599e569419a6e8d3123d3c728a7806918224970415560025e2e4c03f058
+# symmech 0.1.0 generated module; inputs sha256 f3a5e5d3c780e263a6368bc5901fb85321e23627fa47e1f4fd1d8ec21d5664a5
+# source key 7dfaa86d1598e9142e4556caf6839918424a083337f1b94a7771ae25f712d66c
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 67bed80f534fffc9f9e35ebc3ac08bbb284378132022055a3559249492981dcf
-# source key d0934599e569419a6e8d3123d3c728a7806918224970415560025e2e4c03f058
+# symmech 0.1.0 generated module; inputs sha256 45fa99d8706f6a7f7931fa35296187c95c7ee42cb036d41646edb6d0104840ad
+# source key 7dfaa86d1598e9142e4556caf6839918424a083337f1b94a7771ae25f712d66c
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

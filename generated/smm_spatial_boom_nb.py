@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 6d9743de28b5baa78582437741b477f296f898d03d94053af69e73465e0e7703
-# source key c9461cbd16c49cef8cae3ab437d3dbef96f0e2dc5c2473952785e68b95ec39b0
-# body sha256 4ece90083344f7a50d028b58bb65e43fb51e3085acb00064c2bf59bea9cc240b
+# symmech 0.1.0 generated module; inputs sha256 bee1f308f051d1e82555ebbed317d442d83a5f0ecfaac2d9d15d1ae7548d4644
+# source key bbfd75cd1aba65111ddacf131f94c41f240a93bd8f447a61e5244b1b23509d76
+# body sha256 04bf47ab8e9427efc868d6175106ac8ae9d889c2cba8aba24250ac4cc045f3b3
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -63,7 +63,9 @@ Dynamics of the free motion of 'spatial_boom' about its configuration:
     p[19] theta [rad] boom inclination above the horizontal
     p[20] g [m/s^2] gravitational acceleration
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
-``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in).
+``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in);
+``rhs_into(t, y, p, out)`` and ``jac_into`` write into out[0] like every ``f_into``, allocating only M:
+the calls for integrators compiled with numba.
 """
 import math
 
@@ -72,7 +74,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar", "jac", "jac_scalar"]
+__all__ = ["a", "a_into", "a_scalar", "b", "b_into", "b_scalar", "c", "c_into", "c_scalar", "L_a", "L_a_into", "L_a_scalar", "L_c", "L_c_into", "L_c_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar"]
 
 
 def _flat(*args):
@@ -1368,19 +1370,65 @@ def _layout(y, p):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rhs_into(t, y, p, out):
+    """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
+    if y.shape[0] != 8 or p.shape[0] != 21 or out.shape[1] != 8:
+        raise ValueError("rhs_into: y must hold 8 floats, p 21, out (1, 8)")
+    rate_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], out)
+    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), out[0])
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rhs_scalar(t, y, p):
     """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
-    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]))
+    out = numpy.empty((1, 8))
+    rhs_into(t, y, p, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def jac_into(t, y, p, out):
+    """dy'/dy at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n, n)); allocates M to solve with it."""
+    if y.shape[0] != 8 or p.shape[0] != 21 or out.shape[1] != 8 or out.shape[2] != 8:
+        raise ValueError("jac_into: y must hold 8 floats, p 21, out (1, 8, 8)")
+    rate_jacobian_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], out)
+    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), out[0])
 
 
 @numba.njit(cache=True, error_model="numpy")
 def jac_scalar(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
-    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), rate_jacobian_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]))
+    out = numpy.empty((1, 8, 8))
+    jac_into(t, y, p, out)
+    return out[0]
+
+
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
+
+
+def _jac_vectors(t, y, p, out):
+    """First call: ``jac_into`` for float64 C vectors only takes this name (as ``_rhs_vectors``)."""
+    global _jac_vectors
+    _jac_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, :, ::1])", cache=True,
+                              error_model="numpy")(jac_into.py_func)
+    _jac_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    out = numpy.empty((1, 8))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
@@ -1389,5 +1437,11 @@ def rhs(t, y, p):
 
 def jac(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    out = numpy.empty((1, 8, 8))
+    try:
+        _jac_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):
+        pass
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 87562d7ff499b0f4b0f1c5cff909a079c29ca0df1cdec4b0521da601def333ef
-# source key d3d187babda88a7140bbb2fe1a5ebed23a90fa17f777fbae0bbbc8980be150e2
-# body sha256 bc7e7ee308cbd985522da1a5cc9daa4c5c56a6ee7e2a5281dc7fa20d9a22592a
+# symmech 0.1.0 generated module; inputs sha256 76d8c2a5a7f436516bc6607e27ebd4e94cfbb9b5adcc14971c3fb2708587f0e1
+# source key 87d1060940646c248da047c34460503de52906105e58a5f0d77677e2094c39f2
+# body sha256 2974fc570b22e9bbd1f159d4d42e96888601502e1e1aa253438cc5eb2eb841fe
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -90,7 +90,9 @@ in the form ``scipy.integrate.solve_ivp(rhs, (t0, t1), y0, args=(p,))`` expects
     p[40] l [m] axle distance OA
     p[41] ah [m] half track gauge OB = OC
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
-``rhs_scalar`` is its kernel (float64 arrays in).
+``rhs_scalar`` is its kernel (float64 arrays in);
+``rhs_into(t, y, p, out)`` write into out[0] like every ``f_into``, allocating only M:
+the calls for integrators compiled with numba.
 """
 import math
 
@@ -99,7 +101,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["lagrange_residual", "lagrange_residual_into", "lagrange_residual_scalar", "rate", "rate_into", "rate_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_scalar"]
+__all__ = ["lagrange_residual", "lagrange_residual_into", "lagrange_residual_scalar", "rate", "rate_into", "rate_scalar", "rate_mass", "rate_mass_into", "rate_mass_scalar", "rhs", "rhs_into", "rhs_scalar"]
 
 
 def _flat(*args):
@@ -3236,13 +3238,40 @@ def _layout(y, p):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def rhs_into(t, y, p, out):
+    """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
+    if y.shape[0] != 14 or p.shape[0] != 42 or out.shape[1] != 14:
+        raise ValueError("rhs_into: y must hold 14 floats, p 42, out (1, 14)")
+    rate_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41], out)
+    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41]), out[0])
+
+
+@numba.njit(cache=True, error_model="numpy")
 def rhs_scalar(t, y, p):
     """y' (n,) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``rhs``."""
-    return numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41]), rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41]))
+    out = numpy.empty((1, 14))
+    rhs_into(t, y, p, out)
+    return out[0]
+
+
+def _rhs_vectors(t, y, p, out):
+    """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
+    name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
+    ``rhs`` converts them; numba checks the types faster than Python would."""
+    global _rhs_vectors
+    _rhs_vectors = numba.njit("void(float64, float64[::1], float64[::1], float64[:, ::1])", cache=True,
+                              error_model="numpy")(rhs_into.py_func)
+    _rhs_vectors(t, y, p, out)
 
 
 def rhs(t, y, p):
     """y' at time ``t`` [s]: ``y`` (n,) or (n, k) (solve_ivp's ``vectorized``), ``p`` (m,); same shape as y."""
+    out = numpy.empty((1, 14))  # numpy allocates faster than numba boxes an array
+    try:  # an integrator's per-step call: float64 vectors of the right lengths, no conversion
+        _rhs_vectors(t, y, p, out)
+        return out[0]
+    except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
+        pass
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)

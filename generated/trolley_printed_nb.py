@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 bf94dec16a13cf86f3f59cc91a6795d665a4d103cc72e36ef485d406394043fb
-# source key c5ac4822b05f89ab34b9490b2531c3de117aa19b514da5ce4f939d6ce3b10bc6
+# symmech 0.1.0 generated module; inputs sha256 2e97f3a8287377a79c969e28fee789be7e7846e24bcecd30b4cd75d44fb7d366
+# source key 3f7f27dc142120f5d42ff0d47782faf4532f6e13f7dcc6d754c6f1425634b228
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

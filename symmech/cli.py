@@ -121,9 +121,9 @@ def cmd_codegen(ns) -> int:
 
 
 def _named_matrices() -> dict:
-    from symmech.core import emit
+    from symmech.core import codegen
 
-    return {f"{s.name}.{f.name}": f for s in emit.module_specs() for f in s.functions}
+    return {f"{s.name}.{f.name}": f for s in codegen.module_specs() for f in s.functions}
 
 
 def _named_matrix(name: str):

@@ -51,17 +51,14 @@ class Derivation:
 
 
 def _paper_package(kind: str) -> str | None:
-    """``grain`` for a kind run by ``symmech.grain.*`` (registered kinds first, then the CLI's table)."""
+    """``grain`` for a kind run by ``symmech.grain.*`` (None for a kind nobody registered)."""
     from symmech.core import registry
 
-    module = None
     try:
         module = registry.kinds()[kind].run.__module__
     except KeyError:
-        from symmech import cli
-
-        module = getattr(cli, "KINDS", {}).get(kind)
-    match = re.fullmatch(r"symmech\.(\w+)\..*", module or "")
+        return None
+    match = re.fullmatch(r"symmech\.(\w+)\..*", module)
     return match.group(1) if match else None
 
 
@@ -92,12 +89,12 @@ def _module_specs(module: str) -> tuple:
 def _specs(package: str | None, used: list[str] | None) -> list:
     """ModuleSpecs of the paper package: those named in ``used`` (derived or printed), else
     every derived one. Only this package's derivations run, and no more than needed."""
-    from symmech.core import emit
+    from symmech.core import codegen
 
     if package is None:
         return []
     specs = []
-    for module in emit.paper_modules(("derive", "printed") if used else ("derive",)):
+    for module in codegen.paper_modules(("derive", "printed") if used else ("derive",)):
         if module.__name__.startswith(f"symmech.{package}."):
             specs += [s for s in _module_specs(module.__name__) if not used or s.name in used]
             if used and set(used) <= {s.name for s in specs}:
@@ -126,11 +123,11 @@ def derivations(summary: dict, package: str | None) -> list[Derivation]:
 
 def errata_records(package: str | None) -> list[dict]:
     """Evaluated errata checks of the paper package (printed formula vs derivation)."""
-    from symmech.core import emit, errata
+    from symmech.core import codegen, errata
 
     if package is None:
         return []
-    modules = [m for m in emit.paper_modules(("errata",)) if m.__name__.startswith(f"symmech.{package}.")]
+    modules = [m for m in codegen.paper_modules(("errata",)) if m.__name__.startswith(f"symmech.{package}.")]
     return [errata.evaluate(c) for m in modules for c in m.checks()]
 
 

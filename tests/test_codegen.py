@@ -21,7 +21,7 @@ from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
 
 @pytest.fixture(scope="module")
 def specs():
-    return emit.module_specs()
+    return codegen.module_specs()
 
 
 # every derivation runs once per process (codegen.derive caches): one xdist worker derives them all

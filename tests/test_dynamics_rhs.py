@@ -12,6 +12,7 @@ import sys
 import textwrap
 import tomllib
 
+import numba
 import numpy as np
 import pytest
 import sympy
@@ -91,6 +92,79 @@ def test_numba_twin_equals_numpy_and_vectorized_equals_columns(name):
     if name in WITH_JACOBIAN:
         J = module.jac(0.2, y, p)
         np.testing.assert_allclose(twin.jac(0.2, y, p), J, rtol=1e-12, atol=1e-12 * np.abs(J).max())
+
+
+@numba.njit
+def _rows_into(rhs_into, t, Y, p, out):
+    """rhs_into called from compiled code: row i of ``out`` (k, n) from row i of ``Y`` (k, n)."""
+    for i in range(Y.shape[0]):
+        rhs_into(t, Y[i], p, out[i:i + 1])
+
+
+@pytest.mark.parametrize("name", WITH_JACOBIAN)
+def test_into_kernels_from_numba_code_equal_the_numpy_module(name):
+    """rhs_into in a numba loop and jac_into write what the numpy module's rhs/jac return (1e-12); wrong
+    lengths of y, p or out raise instead of reading or writing past an array."""
+    module = importlib.import_module(f"symmech.generated.{name}")
+    twin = kernels.load(name)
+    Y = np.array([_point(module, s)[0] for s in range(5, 9)])
+    p = _point(module, 4)[1]
+    out = np.full(Y.shape, np.nan)
+    _rows_into(twin.rhs_into, 0.2, Y, p, out)
+    for y, f in zip(Y, out):
+        expected = module.rhs(0.2, y, p)
+        np.testing.assert_allclose(f, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    J = np.full((1, Y.shape[1], Y.shape[1]), np.nan)
+    twin.jac_into(0.2, Y[0], p, J)
+    expected = module.jac(0.2, Y[0], p)
+    np.testing.assert_allclose(J[0], expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    for args in ((Y[0][:-1], p, out[:1]), (Y[0], p[:-1], out[:1]), (Y[0], p, out[:1, :-1])):
+        with pytest.raises(ValueError, match="rhs_into: y must hold"):
+            twin.rhs_into(0.2, *args)
+    with pytest.raises(ValueError, match="jac_into: y must hold"):
+        twin.jac_into(0.2, Y[0], p, J[:, :-1])
+
+
+def test_numba_rhs_and_jac_take_what_the_numpy_ones_take():
+    """float64 C vectors go straight to the kernel compiled for them; lists, an int t, a float32 or
+    strided y, a column batch take the converting path; all equal the numpy module to 1e-12, and a wrong
+    length raises the layout's ValueError."""
+    twin = kernels.load("grain_motion")
+    y, p = _point(gm, 8)
+    strided = np.repeat(y, 2)[::2]
+    for t, yy, pp in ((0.1, y, p), (0.1, list(y), list(p)), (1, y, p), (0.1, y.astype(np.float32), p),
+                      (0.1, strided, p), (0.1, np.column_stack([y, 2 * y]), p)):
+        expected = gm.rhs(t, yy, pp)
+        np.testing.assert_allclose(twin.rhs(t, yy, pp), expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+        if np.ndim(yy) == 1:
+            J = gm.jac(t, yy, pp)
+            np.testing.assert_allclose(twin.jac(t, yy, pp), J, rtol=1e-12, atol=1e-12 * np.abs(J).max())
+    for yy, pp in ((y[:-1], p), (y, p[:-1])):
+        for f in (twin.rhs, twin.jac):
+            with pytest.raises(ValueError, match="expected \\(13,\\) or \\(13, k\\), and \\(12,\\)"):
+                f(0.1, yy, pp)
+
+
+@pytest.mark.parametrize("name", WITH_JACOBIAN)
+def test_one_state_on_floats_equals_the_batch_path(name):
+    """The numpy module computes one state on Python floats with math, a batch with numpy: jac at y (n,)
+    equals jac at y (n, 1) to 1e-14 (rhs: test_numba_twin_equals_numpy_and_vectorized_equals_columns)."""
+    module = importlib.import_module(f"symmech.generated.{name}")
+    y, p = _point(module, 6)
+    J = module.jac(0.3, y, p)
+    np.testing.assert_allclose(J, module.jac(0.3, y[:, None], p)[0], rtol=1e-14, atol=1e-14 * np.abs(J).max())
+
+
+def test_one_state_where_math_raises_gives_what_numpy_gives():
+    """I1 = 0 divides by zero: math raises, so rhs at one state takes the numpy path (inf/nan where numpy
+    puts them, as before the float path existed) instead of raising ZeroDivisionError."""
+    y, p = _point(gm, 7)
+    p[9] = 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = gm.rhs(0.1, y, p)
+        batch = gm.rhs(0.1, y[:, None], p)[:, 0]
+    assert not np.isfinite(f[10]) and np.isfinite(f[:10]).all()
+    assert np.array_equal(f, batch, equal_nan=True)
 
 
 def test_grain_flight_rates_equal_the_closed_forms():
@@ -294,6 +368,9 @@ def test_without_numba_kernels_load_gives_the_numpy_rhs_and_layouts():
         y, p = np.array([1e-3, 0.0, 0.1, 0.2]), np.linspace(1.0, 2.0, len(rb.PARAMS))
         assert np.array_equal(k.rhs_scalar(0.0, y, p), rb.rhs(0.0, y, p))
         assert np.array_equal(k.jac(0.0, y, p), rb.jac(0.0, y, p))
+        out = np.zeros((1, 4))
+        k.rhs_into(0.0, y, p, out)
+        assert np.array_equal(out[0], rb.rhs(0.0, y, p))
         print("ok")
     """)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

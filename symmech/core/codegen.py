@@ -62,6 +62,11 @@ def paper_module_names(prefixes: tuple[str, ...]) -> list[str]:
     return found
 
 
+def paper_modules(prefixes: tuple[str, ...]) -> list:
+    """Modules ``symmech.<paper>.<prefix>*`` of every paper package, imported, in name order."""
+    return [importlib.import_module(name) for name in paper_module_names(prefixes)]
+
+
 def producers() -> list[str]:
     return paper_module_names(("derive", "printed"))
 
@@ -161,6 +166,16 @@ def derive(producer: str) -> tuple[tuple, tuple[str, ...]]:
             if name is not None:
                 data.add(name)
     return specs, tuple(sorted(data))
+
+
+def module_specs() -> list:
+    """Every ModuleSpec the paper packages declare (their ``derive*`` and ``printed*`` modules'
+    ``module_specs()``), sorted by name; derivations run once per process (:func:`derive`)."""
+    specs = [s for producer in producers() for s in derive(producer)[0]]
+    names = [s.name for s in specs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"duplicate generated module names: {names}")
+    return sorted(specs, key=lambda s: s.name)
 
 
 def _data_name(path: Path) -> str | None:

@@ -4,8 +4,9 @@
 ``write`` writes it atomically (:mod:`symmech.core.codegen` decides what to
 regenerate). Both targets print the same common-subexpression split
 (:func:`cse_chunks`), which ``symmech latex --cse`` shows too: a target is a
-printer (numpy or math calls), a template and the way a chunk line addresses
-an output element, nothing more.
+printer (numpy or math calls), a template, the way a chunk line addresses
+an output element, and whether a dynamics module's rates are printed on floats
+too (the numpy module's one-state path), nothing more.
 
 Determinism: elements are split into chunks in matrix order, each chunk is
 CSE'd with ``order="canonical"`` and a fixed symbol stream, and the header
@@ -18,6 +19,7 @@ import functools
 import hashlib
 import importlib
 import importlib.resources
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -107,11 +109,12 @@ class Target:
     printer: type
     element: str
     reserved: frozenset[str]  # names the template uses beside the arguments
+    float_rates: bool  # a dynamics module's rate functions also on floats with math (rhs/jac at one state)
 
 
-NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...", frozenset({"out", "batch", "numpy"}))
+NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...", frozenset({"out", "batch", "math", "numpy"}), True)
 NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "_k",
-               frozenset({"out", "_k", "_steps", "_arrays", "_batch", "math", "numba", "numpy"}))
+               frozenset({"out", "_k", "_steps", "_arrays", "_batch", "math", "numba", "numpy"}), False)
 TARGETS = (NUMPY, NUMBA)
 
 
@@ -120,6 +123,28 @@ def _chunk_lines(chunk: Chunk, printer, element: str) -> list[str]:
     lines += [f"out[{', '.join([element, *map(str, idx)])}] = {printer.doprint(e)}"
               for idx, e in chunk.elements]
     return lines
+
+
+def _float_lines(chunk: Chunk, printer, shape: tuple[int, ...]) -> list[str]:
+    """Chunk lines on floats into a flat list ``out`` (row-major), zero elements left to its 0.0 fill."""
+    lines = [f"{s} = {printer.doprint(e)}" for s, e in chunk.replacements]
+    lines += [f"out[{_flat_index(idx, shape)}] = {printer.doprint(e)}" for idx, e in chunk.elements if e != 0]
+    return lines
+
+
+def _flat_index(index: tuple[int, ...], shape: tuple[int, ...]) -> int:
+    flat = 0
+    for i, n in zip(index, shape):
+        flat = flat * n + i
+    return flat
+
+
+def _float_context(nm: NamedMatrix) -> dict:
+    """``nm`` on floats with ``math`` (a dynamics module's one-state path): name, arguments, flat size, lines."""
+    printer = _MathPrinter()
+    lines = [line for c in cse_chunks(nm) for line in _float_lines(c, printer, nm.shape)]
+    return {"name": nm.name, "arglist": ", ".join(a.name for a in nm.args), "size": math.prod(nm.shape),
+            "lines": lines}
 
 
 def _function_context(nm: NamedMatrix, target: Target) -> dict:
@@ -203,6 +228,8 @@ def render(spec: ModuleSpec, target: Target = NUMPY, key: str = NO_KEY) -> str:
         spec=spec,
         functions=[_function_context(f, target) for f in spec.functions],
         dynamics=_dynamics_context(spec.dynamics) if spec.dynamics else None,
+        floats={f.name: _float_context(f) for f in spec.functions
+                if target.float_rates and spec.dynamics and f.name in ("rate", "rate_jacobian", "rate_mass")},
     )
     return integrity.with_header(body, inputs_hash(spec, target), key)
 
@@ -218,26 +245,3 @@ def write(spec: ModuleSpec, directory: Path, target: Target = NUMPY, key: str = 
 def default_directory() -> Path:
     """The folder behind ``symmech.generated`` (the repository's ``generated/``)."""
     return Path(importlib.import_module("symmech.generated").__path__[0])
-
-
-def module_specs() -> list[ModuleSpec]:
-    """Every ModuleSpec the paper packages declare, sorted by name.
-
-    A paper package ``symmech.<paper>`` declares specs in its ``derive*`` and
-    ``printed*`` modules through a ``module_specs()`` function. Derivations run
-    once per process (:func:`symmech.core.codegen.derive`).
-    """
-    from symmech.core import codegen
-
-    specs = [s for producer in codegen.producers() for s in codegen.derive(producer)[0]]
-    names = [s.name for s in specs]
-    if len(set(names)) != len(names):
-        raise ValueError(f"duplicate generated module names: {names}")
-    return sorted(specs, key=lambda s: s.name)
-
-
-def paper_modules(prefixes: tuple[str, ...]) -> list:
-    """Modules ``symmech.<paper>.<prefix>*`` of every paper package, imported, in name order."""
-    from symmech.core.codegen import paper_module_names
-
-    return [importlib.import_module(name) for name in paper_module_names(prefixes)]

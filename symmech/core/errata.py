@@ -75,14 +75,14 @@ class NotCompared:
 
 def all_checks() -> list[Check]:
     """Checks from every paper package's ``errata*`` modules."""
-    from symmech.core.emit import paper_modules
+    from symmech.core.codegen import paper_modules
 
     return [c for module in paper_modules(("errata",)) for c in module.checks()]
 
 
 def all_not_compared() -> list[NotCompared]:
     """The printed items each paper's ``errata*`` modules list as not compared (``not_compared()``)."""
-    from symmech.core.emit import paper_modules
+    from symmech.core.codegen import paper_modules
 
     return [n for module in paper_modules(("errata",)) if hasattr(module, "not_compared")
             for n in module.not_compared()]

@@ -56,6 +56,5 @@ def load(name: str):
     for f in reference.__all__:
         names[f] = getattr(reference, f)
         names[f"{f}_scalar"] = _scalar_twin(names[f])
-        if f not in ("rhs", "jac"):  # the vector-state dynamics have no into twin in either target
-            names[f"{f}_into"] = _into_twin(names[f])
+        names[f"{f}_into"] = _into_twin(names[f])
     return SimpleNamespace(__name__=reference.__name__, __all__=sorted(names), **names)

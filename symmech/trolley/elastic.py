@@ -36,6 +36,9 @@ ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
 ROTATION_PAIRS = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
 # Gauss points per beam: exact for the products of two shortening fields of degree 2 NMAX + 1.
 BEAM_GAUSS = 2 * 8 + 4
+# Frequencies that load the body periodically (name, meaning), in the columns of the scene's forcing_frequencies.
+FORCING = (("axle", "axle passing |V0|/l"), ("rotation", "frame rotation |ω|/2π"),
+           ("curvature", "curvature change |V0| |Ω'|/(2π max|Ω|)"))
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table, TableList, Vector
 from symmech.trolley import elastic as el
+from symmech.trolley.elastic import FORCING
 from symmech.trolley import model
 
 ROLLERS = Table("elastic, damped rollers carrying P1…P5 (B, C, A along x2; O, A along x3)", {
@@ -210,10 +211,6 @@ def _check_axial(beam: dict, where: str) -> None:
     if beam["ea"] is None:
         raise SceneError(f"{where}.ea", "missing: held ends (axial = `held`) need the axial stiffness EA "
                                         "in (0, 1e+15] N")
-
-
-FORCING = (("axle", "axle passing |V0|/l"), ("rotation", "frame rotation |ω|/2π"),
-           ("curvature", "curvature change |V0| |Ω'|/(2π max|Ω|)"))
 
 
 def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:

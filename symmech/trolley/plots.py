@@ -151,7 +151,7 @@ def _point_overloads(setup, r, comfort: dict):
 def campbell(modes: dict):
     """Natural frequencies of the linearisation against arc length and against speed, with
     the forcing frequencies (dashed) that a natural frequency should keep away from."""
-    from symmech.trolley.elastic_scene import FORCING
+    from symmech.trolley.elastic import FORCING
 
     fig, axes = plotting.figure(1, 2, width=11.0, height=4.5, sharey=True)
     for ax, key, quantity in ((axes[0, 0], "s", ("arc length s", "m")), (axes[0, 1], "V0", ("speed V0", "m/s"))):
