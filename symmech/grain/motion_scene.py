@@ -18,7 +18,7 @@ import numpy as np
 from symmech.core import precision as wp
 from symmech.core import registry
 from symmech.core.context import Context
-from symmech.core.results import Column, Result, Table
+from symmech.core.results import Check, Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector, plot_output
 from symmech.core.watchdog import watchdog
@@ -353,12 +353,56 @@ def run(sc: GrainScene, ctx: Context) -> Result:
                "wall_time_s": time.perf_counter() - started, "estimate": {"seconds": cost.seconds, "what": cost.what},
                **m.summary()}
     warnings = summary.pop("warnings")
+    checks = _checks(sc, summary, m.impacts)
+    warnings += [f"grain: {c.what} is {c.measured()} ({c.threshold}): set numerics.sample_interval below "
+                 f"{summary['duration_s'] / max(summary['bounces'], 1) / MIN_SAMPLES_PER_IMPACT:.3g} s to see "
+                 "the bounces in the trajectory" for c in checks if c.what == SAMPLING and c.verdict != "pass"]
 
     def draw(folder: Path) -> list[Path]:
         return plots.motion_plots(sc, m, folder, sc.output)
 
     return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
-                  plots=draw, warnings=warnings, events="impacts")
+                  plots=draw, warnings=warnings, events="impacts", headline=_headline(summary), checks=checks)
+
+
+MIN_SAMPLES_PER_IMPACT = 2  # trajectory rows per mean interval between impacts, to draw the bounces
+SAMPLING = "trajectory rows per mean interval between impacts"
+
+
+def _headline(s: dict) -> list[Headline]:
+    """Transport velocity, time shares, impacts, dissipation: the answers of a grain run."""
+    over = f"mean over {s['duration_s']:.4g} s"
+    vx, vy = s["mean_transport_velocity_m_s"]
+    out = [Headline("transport velocity along the slope", vx, "m/s", "net displacement along X / duration", over),
+           Headline("transport velocity across the slope", vy, "m/s", "net displacement along Y / duration", over)]
+    phrase = {"flight": "in flight"}
+    out += [Headline(f"time {phrase.get(regime, regime)}", 100 * share, "%",
+                     f"share of the run spent {phrase.get(regime, regime)}") for regime, share in s["time_fraction"].items()]
+    out += [Headline("impacts", s["bounces"], "1", "rows of impacts.csv"),
+            Headline("energy dissipated by impacts", s["energy_dissipated_by_impacts_J"], "J",
+                     "sum of ke_before - ke_after over impacts.csv")]
+    budget = s.get("energy_budget")
+    if budget:
+        lost = budget["lost_in_impacts_J"] + budget["lost_at_landings_J"] + budget["lost_in_sliding_J"]
+        out.append(Headline("energy dissipated in all", lost, "J", "impacts, landings and sliding friction"))
+    return out
+
+
+def _checks(sc: GrainScene, s: dict, impacts: list) -> list[Check]:
+    out = [at_most("impacts creating energy", s["impacts_creating_energy"], 0),
+           at_most("impacts whose solver did not converge", sum(not i["converged"] for i in impacts), 0)]
+    budget = s.get("energy_budget")
+    if budget:
+        out.insert(0, at_most("energy balance closes (relative residual)", budget["relative_residual"],
+                              budget["tolerance"]))
+    if any(i["printed_creates_energy"] is not None for i in impacts):
+        out.append(at_most("impacts where the printed law would create energy",
+                           s["impacts_where_printed_law_creates_energy"], 0, otherwise="warn"))
+    if s["bounces"]:
+        per_impact = s["duration_s"] / s["bounces"] / sc.numerics.sample_interval
+        out.append(Check(SAMPLING, per_impact, "1", f">= {MIN_SAMPLES_PER_IMPACT}",
+                         "pass" if per_impact >= MIN_SAMPLES_PER_IMPACT else "warn"))
+    return out
 
 
 TRAJECTORY = (Column("t", "s", "time"), *(Column(x, "m", f"centre {x}, KXYZ, relative") for x in "xyz"),

@@ -18,9 +18,9 @@ import numpy as np
 from symmech.core import expressions, registry
 from symmech.core import schema as sc
 from symmech.core.context import Context
-from symmech.core.results import Column, Result, Table
+from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import elastic_scene, model, plots, tables, track as tracks
+from symmech.trolley import elastic_review, elastic_scene, model, plots, tables, track as tracks
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -546,6 +546,14 @@ def run(setup: Setup, ctx) -> Result:
         result.tables[f"case{case}"] = Table(CASE_COLUMNS, np.column_stack([setup.t, r["V"], r["a"], r["P"]]))
         result.tables[f"case{case}_overload"] = Table(OVERLOAD_COLUMNS, np.column_stack([setup.t, r["overload"]]))
         summary["cases"][f"case{case}"] = _case_summary(setup, case, r, ctx)
+        result.headline += _case_headline(setup, case, r)
+        result.checks += [within(f"case {case}: overload n{k + 1} in the comfort envelope", n.min(), n.max(),
+                                 envelope, "g") for k, (n, envelope) in enumerate(zip(r["overload"].T,
+                                                                                      setup.comfort.values()))]
+        if "small_angle_defect_max" in summary["cases"][f"case{case}"]:
+            result.checks.append(at_most(f"case {case}: small-angle correction (13)-(14) in range (defect)",
+                                         summary["cases"][f"case{case}"]["small_angle_defect_max"],
+                                         setup.small_angle_limit, otherwise="warn"))
     if setup.paper_tables:
         other = compute(setup, "physics" if setup.conventions == "paper" else "paper", ctx)
         paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
@@ -556,13 +564,33 @@ def run(setup: Setup, ctx) -> Result:
         elastic = elastic_scene.run(setup.elastic, ctx, setup.comfort)
         result.tables.update(elastic.tables)
         summary.update(elastic.summary)
-        for warning in elastic.warnings:
+        headline, checks, warnings = elastic_review.review(setup.elastic, elastic)
+        result.headline += headline
+        result.checks += checks
+        for warning in elastic.warnings + warnings:
             ctx.warn(warning)
 
     def draw(folder):
         return plots.write_all(setup, res, folder, setup.output) + (elastic.plots(folder, setup.output) if elastic else [])
     result.plots = draw
     return result
+
+
+def _case_headline(setup, case, r) -> list[Headline]:
+    """Peak overloads (against the comfort envelope) and peak reactions of a case, with time and place."""
+    def peak(values):
+        i = int(np.argmax(np.abs(values)))
+        return values[i], f"t = {setup.t[i]:.4g} s, s = {r['s'][i]:.4g} m"
+
+    out = []
+    for k, (axis, (lo, hi)) in enumerate(setup.comfort.items()):
+        value, at = peak(r["overload"][:, k])
+        out.append(Headline(f"case {case}: peak overload n{k + 1}", value, "g",
+                            f"along {axis}; comfort envelope [{lo:g}, {hi:g}] g", at))
+    for j, column in enumerate(CASE_COLUMNS[7:]):
+        value, at = peak(r["P"][:, j])
+        out.append(Headline(f"case {case}: peak reaction {column.name}", value, "N", column.doc, at))
+    return out
 
 
 def _check_finite_case(setup, case, r):
