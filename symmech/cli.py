@@ -29,7 +29,9 @@ def _context(ns):
 def cmd_run(ns) -> int:
     from symmech.core import pipeline
 
-    pipeline.run_to(ns.scene, ns.out, _context(ns), plots=not ns.no_plots)
+    _, result = pipeline.run_to(ns.scene, ns.out, _context(ns), plots=not ns.no_plots)
+    if not ns.quiet and result.brief():
+        print(result.brief())
     print(f"wrote {Path(ns.out) / 'summary.json'}")
     return cmd_report(ns) if ns.report else 0
 

@@ -1,10 +1,13 @@
 """``symmech report OUT``: one self-contained HTML page about a finished run.
 
-Reads ``OUT/summary.json`` and the plots in ``OUT`` and writes ``OUT/report.html``
-with: the resolved scene, the derivations the run used as MathML (browsers render
-it natively), the checks and results with their numbers, the errata of the
-scene's paper, the plots (inline SVG, else PNG, as data URIs) and the provenance
-(version, generated-module hashes, wall time). Nothing is fetched to view it.
+Reads ``OUT/summary.json`` and the plots in ``OUT`` and writes ``OUT/report.html``,
+answers first: the run's headline (its answers in readable units), the checks that
+did not pass beside the warnings, every check as a verdict, the plots (inline SVG,
+else PNG, as data URIs), what accuracy costs (a ``symmech bench precision`` study in
+``OUT`` itself or in ``OUT/precision``), the derivations the run used as MathML
+(browsers render it natively), the errata of the scene's paper, the provenance
+(version, generated-module hashes, wall time), and the raw resolved scene and
+summary, collapsed. Nothing is fetched to view it.
 
 Which derivations and errata belong to a kind is found, not listed: the kind's
 runtime module lives in a paper package ``symmech.<paper>``; its generated
@@ -13,31 +16,29 @@ modules are named ``<paper>_*`` and its errata are ``symmech.<paper>.errata*``.
 from __future__ import annotations
 
 import base64
+import csv
 import datetime
 import functools
 import importlib
 import importlib.resources
 import importlib.util
 import json
+import math
 import platform
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from symmech import __version__
+from symmech.core import units
+from symmech.core.results import VERDICTS, Check
 from symmech.core.scene import SymmechError
 
 TEMPLATE = "report.html.j2"
 # Derivations whose sympy text is longer than this are listed, not typeset (H alone
 # is 19,000 characters: MathML of it would be megabytes nobody reads).
 MATHML_LIMIT = 2500
-# Summary keys about where and how the run happened, shown as provenance.
-PROVENANCE = ("symmech_version", "status", "wall_time_s", "elapsed_s", "timing_s", "generated_modules",
-              "generated_module", "scene_file")
-SKIPPED = ("kind", "scene", "files", "warnings", *PROVENANCE)
-# Summary keys whose name says they hold a check (a residual, a verdict, a count of violations).
-CHECK_WORDS = ("residual", "converged", "admissible", "creating_energy", "creates_energy", "comfort", "defect",
-               "error", "check", "unstable", "rigid_body")
+PRECISION_FOLDER = "precision"  # a study beside the run: `symmech bench precision SCENE --out OUT/precision`
 
 
 @dataclass(frozen=True)
@@ -134,40 +135,73 @@ def errata_records(package: str | None) -> list[dict]:
     return [errata.evaluate(c) for m in modules for c in m.checks()]
 
 
-def _flatten(value, prefix: str = "") -> list[tuple[str, str]]:
-    """(dotted key, text) rows of a JSON value; long lists are summarised, and a measurement
-    (a dict of scalars with a ``unit``, e.g. extremes and their times) is one row."""
-    if isinstance(value, dict) and "unit" in value and not any(isinstance(v, (dict, list)) for v in value.values()):
-        parts = ", ".join(f"{k} = {_text(v)}" for k, v in value.items() if k != "unit")
-        return [(prefix, f"{parts} (unit {value['unit']})")]
-    if isinstance(value, dict):
-        rows = []
-        for k, v in value.items():
-            rows += _flatten(v, f"{prefix}.{k}" if prefix else str(k))
-        return rows
-    if isinstance(value, list) and value and all(isinstance(v, dict) for v in value) and len(value) <= 12:
-        rows = []
-        for i, v in enumerate(value):
-            rows += _flatten(v, f"{prefix}[{i}]")
-        return rows
-    return [(prefix, _text(value))]
-
-
 def _text(value) -> str:
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, list):
-        if len(value) > 12:
-            return f"list of {len(value)} values"
-        return "[" + ", ".join(_text(v) for v in value) + "]"
-    return "null" if value is None else str(value)
+    return f"{value:.6g}" if isinstance(value, float) else "null" if value is None else str(value)
 
 
-def _split_checks(summary: dict) -> tuple[list, list]:
-    """(checks, results): rows of the summary; a row is a check when its key says so."""
-    rows = _flatten({k: v for k, v in summary.items() if k not in SKIPPED})
-    checks = [r for r in rows if any(w in r[0].lower() for w in CHECK_WORDS)]
-    return checks, [r for r in rows if r not in checks]
+def _headline(summary: dict) -> list[dict]:
+    """Rows (name, value in its readable unit, at, meaning) of the summary's headline."""
+    rows = []
+    for h in summary.get("headline", []):
+        value = units.format(h["value"], h["unit"], 4) if h["unit"] != "%" else f"{h['value']:.3g} %"
+        rows.append({"name": h["name"], "value": value, "at": h["at"], "meaning": h["meaning"]})
+    return rows
+
+
+def _checks(summary: dict) -> list[dict]:
+    """Rows (what, measured, threshold, verdict, mark) of the summary's checks, failures first."""
+    order = {"fail": 0, "warn": 1, "pass": 2}
+    rows = []
+    for c in summary.get("checks", []):
+        value = tuple(c["value"]) if isinstance(c["value"], list) else c["value"]
+        check = Check(c["what"], value, c["unit"], c["threshold"], c["verdict"])
+        rows.append({"what": check.what, "measured": check.measured(), "threshold": check.threshold,
+                     "verdict": check.verdict, "mark": VERDICTS[check.verdict]})
+    return sorted(rows, key=lambda r: order[r["verdict"]])
+
+
+def _precision(out: Path, summary: dict) -> dict | None:
+    """The work-precision study in ``out`` (a study folder) or ``out/precision``: its figures and rows,
+    with the rows whose knob has the run's own setting marked (the chosen method's place)."""
+    folder = out if summary.get("study") == "precision" else out / PRECISION_FOLDER
+    try:
+        study = json.loads((folder / "summary.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        return None
+    if study.get("study") != "precision":
+        return None
+    chosen = _settings(summary.get("scene", {})) if folder != out else {}
+    header, rows = [], []
+    for name in list(study.get("tables", {}))[:1]:
+        with open(folder / f"{name}.csv", newline="") as fh:
+            reader = csv.reader(fh)
+            header = next(reader, [])
+            for cells in reader:
+                row = dict(zip(header, cells))
+                knob, value = row.get("knob"), row.get("value [1]")
+                mine = knob in chosen and value is not None and math.isclose(float(value), chosen[knob], rel_tol=1e-9)
+                rows.append({"cells": [_cell(c) for c in cells], "chosen": mine})
+    return {"folder": str(folder), "reference": study.get("reference", ""), "figures": _figures(folder),
+            "header": header, "rows": rows, "own": folder == out}
+
+
+def _cell(text: str) -> str:
+    """A CSV cell for reading: numbers to 3 digits, text as it is."""
+    try:
+        return f"{float(text):.3g}"
+    except ValueError:
+        return text
+
+
+def _settings(scene: dict) -> dict:
+    """{field name: number} of every numeric field of a resolved scene, by its last name."""
+    out = {}
+    for key, value in scene.items():
+        if isinstance(value, dict):
+            out.update(_settings(value))
+        elif isinstance(value, (int, float)) and not isinstance(value, bool):
+            out[key] = float(value)
+    return out
 
 
 def _figures(out: Path) -> list[tuple[str, str]]:
@@ -223,7 +257,7 @@ def render(out: Path) -> str:
     kind = str(summary.get("kind", "unknown"))
     package = _paper_package(kind)
     derived = derivations(summary, package)
-    checks, results = _split_checks(summary)
+    checks = _checks(summary)
     hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}), Path(out))
     provenance = [("symmech version of the run", _text(summary.get("symmech_version", "not recorded"))),
                   ("status", _text(summary.get("status", "not recorded"))),
@@ -236,8 +270,11 @@ def render(out: Path) -> str:
         autoescape=True, trim_blocks=True, lstrip_blocks=True)
     return env.get_template(TEMPLATE).render(
         kind=kind, package=package, out=str(out), summary=summary,
+        title=summary.get("scene", {}).get("title", ""),
         scene=json.dumps(summary["scene"], indent=2) if "scene" in summary else None,
-        derivations=derived, checks=checks, results=results, warnings=summary.get("warnings", []),
+        raw=json.dumps({k: v for k, v in summary.items() if k != "scene"}, indent=2),
+        headline=_headline(summary), checks=checks, attention=[c for c in checks if c["verdict"] != "pass"],
+        precision=_precision(Path(out), summary), derivations=derived, warnings=summary.get("warnings", []),
         errata=errata_records(package), figures=_figures(Path(out)), provenance=provenance,
         hashes=hashes, hash_source=hash_source)
 

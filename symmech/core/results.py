@@ -173,6 +173,14 @@ class Result:
     headline: list[Headline] = field(default_factory=list)
     checks: list[Check] = field(default_factory=list)
 
+    def brief(self) -> str:
+        """The headline and the checks that did not pass, one line each (``symmech run`` prints it)."""
+        lines = [f"  {h.text()}" for h in self.headline]
+        counts = {v: sum(c.verdict == v for c in self.checks) for v in VERDICTS}
+        lines += [f"checks: {counts['pass']} pass, {counts['warn']} warn, {counts['fail']} fail"] if self.checks else []
+        lines += [f"  {c.text()}" for c in self.checks if c.verdict != "pass"]
+        return "\n".join([f"{self.kind}:", *lines]) if lines else ""
+
     def to_xarray(self, table: str | None = None):
         """Table ``table`` (default: the first that is not the event log) as an ``xarray.Dataset``
         with its first column as the coordinate; the kind, the summary (as JSON) and the
