@@ -64,6 +64,8 @@ def _deflections(setup: Setup, tables) -> list[Headline]:
     for name in setup.names:
         e = np.linalg.norm(np.column_stack([tables["points"].column(f"{name}_e{k}") for k in (1, 2, 3)]), axis=1)
         i = int(np.argmax(e))
+        if e[i] == 0:
+            continue  # a point of the rigid trolley: nothing to deflect
         out.append(Headline(f"largest body deflection at {name}", e[i], "m",
                             "length of the elastic deflection of the body at the point", f"t = {t[i]:.4g} s"))
     return out
