@@ -176,11 +176,8 @@ def _precision(out: Path, summary: dict) -> dict | None:
         with open(folder / f"{name}.csv", newline="") as fh:
             reader = csv.reader(fh)
             header = next(reader, [])
-            for cells in reader:
-                row = dict(zip(header, cells))
-                knob, value = row.get("knob"), row.get("value [1]")
-                mine = knob in chosen and value is not None and math.isclose(float(value), chosen[knob], rel_tol=1e-9)
-                rows.append({"cells": [_cell(c) for c in cells], "chosen": mine})
+            rows = [{"cells": [_cell(c) for c in cells], "chosen": _is_chosen(dict(zip(header, cells)), chosen)}
+                    for cells in reader]
     return {"folder": str(folder), "reference": study.get("reference", ""), "figures": _figures(folder),
             "header": header, "rows": rows, "own": folder == out}
 
@@ -194,14 +191,26 @@ def _cell(text: str) -> str:
 
 
 def _settings(scene: dict) -> dict:
-    """{field name: number} of every numeric field of a resolved scene, by its last name."""
+    """{field name: value} of every number and text field of a resolved scene, by its last name."""
     out = {}
     for key, value in scene.items():
         if isinstance(value, dict):
             out.update(_settings(value))
-        elif isinstance(value, (int, float)) and not isinstance(value, bool):
-            out[key] = float(value)
+        elif isinstance(value, (int, float, str)) and not isinstance(value, bool):
+            out[key] = value
     return out
+
+
+def _is_chosen(row: dict, chosen: dict) -> bool:
+    """Is a study row (method, knob, value) the run's own setting: the scene's field named as the knob
+    has the row's value, and the row's method begins with the scene's ``mode`` or ``method``, if any?"""
+    knob, value = row.get("knob"), row.get("value [1]")
+    setting = chosen.get(knob)
+    if value is None or not isinstance(setting, (int, float)) or not math.isclose(float(value), setting,
+                                                                                  rel_tol=1e-9):
+        return False
+    ways = [str(chosen[k]).lower() for k in ("mode", "method") if isinstance(chosen.get(k), str)]
+    return not ways or any(row.get("method", "").lower().startswith(w) for w in ways)
 
 
 def _figures(out: Path) -> list[tuple[str, str]]:
