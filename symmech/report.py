@@ -203,13 +203,14 @@ def _settings(scene: dict) -> dict:
 
 def _is_chosen(row: dict, chosen: dict) -> bool:
     """Is a study row (method, knob, value) the run's own setting: the scene's field named as the knob
-    has the row's value, and the row's method begins with the scene's ``mode`` or ``method``, if any?"""
+    has the row's value, and the row's method begins with the scene's ``mode``, ``method`` or (solver)
+    ``name``, if it has one?"""
     knob, value = row.get("knob"), row.get("value [1]")
     setting = chosen.get(knob)
     if value is None or not isinstance(setting, (int, float)) or not math.isclose(float(value), setting,
                                                                                   rel_tol=1e-9):
         return False
-    ways = [str(chosen[k]).lower() for k in ("mode", "method") if isinstance(chosen.get(k), str)]
+    ways = [str(chosen[k]).lower() for k in ("mode", "method", "name") if isinstance(chosen.get(k), str)]
     return not ways or any(row.get("method", "").lower().startswith(w) for w in ways)
 
 

@@ -206,7 +206,8 @@ def test_mode_shapes_have_frequency_legends(tmp_path, figures):
 @pytest.mark.parametrize("value, unit, text", [
     (-2.0e-4, "m", "-0.2 mm"), (23337.3, "N", "23.3 kN"), (901.8, "N", "902 N"), (0.068, "m/s", "68 mm/s"),
     (7.0e-5, "rad", "0.07 mrad"), (4.0e-3, "s", "4 ms"), (2.27e-5, "J", "22.7 µJ"), (625.0, "m", "625 m"),
-    (4.04, "g", "4.04 g"), (0.45, "1", "0.45"), (3.0e-6, "m^2", "3e-06 m^2"), (0.0, "m", "0 m")])
+    (4.04, "g", "4.04 g"), (0.45, "1", "0.45"), (3.0e-6, "m^2", "3e-06 m^2"), (0.0, "m", "0 m"),
+    (2.0e-3, "m or rad", "0.002 m or rad"), (0.3, "m/s^2", "300 mm/s^2")])
 def test_readable_unit_of_a_value(value, unit, text):
     """Lengths stop at mm and angles at mrad; powers of a unit and units without prefixes keep SI."""
     from symmech.core import units

@@ -15,8 +15,10 @@ PREFIX = {-9: "n", -6: "µ", -3: "m", 0: "", 3: "k", 6: "M", 9: "G"}
 # Lengths stop at mm and angles at mrad, as on an engineering drawing.
 POWERS = {"m": (-3, 0, 3), "s": (-3, 0), "rad": (-3, 0), "N": (-6, -3, 0, 3, 6), "J": (-9, -6, -3, 0, 3, 6),
           "W": (-3, 0, 3, 6), "Pa": (0, 3, 6, 9), "Hz": (0, 3, 6)}
-# The leading unit of a product or quotient ("m/s", "N m", "N s"); a power ("m^2") keeps its scale.
-_HEAD = re.compile(r"^([A-Za-z]+)(?=$|[ /*·])")
+# A product or quotient of SI symbols ("m/s", "N m", "N s/m"), its leading one without a power
+# (a prefix on "m^2" would scale by 1e-6); anything else ("m or rad") keeps its scale.
+_SYMBOL = r"(?:kg|m|s|rad|N|J|W|Pa|Hz|K|A|V)"
+_UNIT = re.compile(rf"^({_SYMBOL})(?:[ /*·]{_SYMBOL}(?:\^-?\d+)?)*$")
 
 
 def scale(magnitude: float, unit: str) -> tuple[float, str]:
@@ -25,7 +27,7 @@ def scale(magnitude: float, unit: str) -> tuple[float, str]:
     The prefix puts ``magnitude`` in [1, 1000) as far as the unit's prefixes reach,
     e.g. ``scale(2.3e-4, "m") == (1e-3, "mm")``, ``scale(23000, "N") == (1e3, "kN")``.
     """
-    head = _HEAD.match(unit)
+    head = _UNIT.match(unit)
     powers = POWERS.get(head.group(1)) if head else None
     if not powers or not math.isfinite(magnitude) or magnitude <= 0:
         return 1.0, unit
