@@ -73,7 +73,8 @@ def test_impact_report_shows_its_checks_and_derivations(reports):
     residual = summary["solver"]["residual_19"]
     # the check as a verdict row: what, measured value, threshold, verdict
     assert re.search(r'<tr class="pass"><td>impact equations \(19\) solved \(relative residual\)</td>'
-                     r'<td class="num">' + re.escape(f"{residual:.3g}") + r'</td><td class="num">&lt;= 1e-08</td>'
+                     r'<td class="num measured">' + re.escape(f"{residual:.3g}") +
+                     r'</td><td class="num">&lt;= 1e-08</td>'
                      r'<td class="verdict">✓ pass</td>', page)
     assert "<code>grain_impact.H</code>" in page and "symmech latex grain_impact.H --tex H.tex" in page
     assert page.count('<math display="block">') >= 10
@@ -169,8 +170,8 @@ def test_report_reads_the_pipeline_record(tmp_path):
                "generated_modules": {"grain_impact": digest}, "solver": {"residual_19": 2.5e-15},
                "headline": [{"name": "normal impulse", "value": 4.768e-6, "unit": "N s", "meaning": "T_z", "at": ""}],
                "checks": [{"what": "energy kept", "value": 0.5, "unit": "1", "threshold": "<= 1", "verdict": "pass"},
-                          {"what": "a made-up bound", "value": [-2.5, 7.0], "unit": "g", "threshold": "within [-1, 6] g",
-                           "verdict": "fail"}],
+                          {"what": "a made-up bound", "value": [-2.5, 7.0], "unit": "g",
+                           "threshold": "within [-1, 6] g", "verdict": "fail"}],
                "scene": {"kind": "impact", "impact": {"e": 0.5, "lambda": 0.25}}, "warnings": ["w1"]}
     (tmp_path / "summary.json").write_text(json.dumps(summary))
     page = report.render(tmp_path)
@@ -179,7 +180,7 @@ def test_report_reads_the_pipeline_record(tmp_path):
     assert f'<td>grain_impact</td><td class="num">{digest}</td>' in page
     assert '<td>normal impulse</td><td class="value">4.768 µN s</td>' in page
     # the failed check: first in the table, marked failed, and at the top beside the warning
-    rows = re.findall(r'<tr class="(\w+)"><td>([^<]*)</td><td class="num">([^<]*)</td>', page)
+    rows = re.findall(r'<tr class="(\w+)"><td>([^<]*)</td><td class="num measured">([^<]*)</td>', page)
     assert rows == [("fail", "a made-up bound", "-2.5 g … 7 g"), ("pass", "energy kept", "0.5")]
     assert '<td class="verdict">✗ fail</td>' in page
     assert page.index("✗ fail:</strong> a made-up bound") < page.index('<div class="warn">w1</div>') < \

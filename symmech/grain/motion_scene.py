@@ -375,9 +375,9 @@ def _headline(s: dict) -> list[Headline]:
     vx, vy = s["mean_transport_velocity_m_s"]
     out = [Headline("transport velocity along the slope", vx, "m/s", "net displacement along X / duration", over),
            Headline("transport velocity across the slope", vy, "m/s", "net displacement along Y / duration", over)]
-    phrase = {"flight": "in flight"}
-    out += [Headline(f"time {phrase.get(regime, regime)}", 100 * share, "%",
-                     f"share of the run spent {phrase.get(regime, regime)}") for regime, share in s["time_fraction"].items()]
+    for regime, share in s["time_fraction"].items():
+        spent = "in flight" if regime == "flight" else regime
+        out.append(Headline(f"time {spent}", 100 * share, "%", f"share of the run spent {spent}"))
     out += [Headline("impacts", s["bounces"], "1", "rows of impacts.csv"),
             Headline("energy dissipated by impacts", s["energy_dissipated_by_impacts_J"], "J",
                      "sum of ke_before - ke_after over impacts.csv")]

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.linalg
 
 from symmech.core import registry
-from symmech.core.results import Check, Column, Headline, Result, Table, at_most
+from symmech.core.results import Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
 from symmech.smm import build, numeric
 from symmech.smm.chain import chain_spec, exact_omega2
@@ -193,7 +193,8 @@ def _headline(m: Mechanism, omega: list, md, tables: dict) -> list[Headline]:
                     "overdamped" if md.zeta[i] is None else f"damping ratio {md.zeta[i]:.3g}")
            for i, w in elastic[:HEADLINE_MODES]]
     if md.kinds.count("rigid"):
-        out.append(Headline("rigid-body modes", md.kinds.count("rigid"), "1", "omega = 0: the mechanism can move freely"))
+        out.append(Headline("rigid-body modes", md.kinds.count("rigid"), "1",
+                            "omega = 0: the mechanism can move freely"))
     if "free_response" in tables:
         q = tables["free_response"]
         values = np.abs(q.data[:, 1:])

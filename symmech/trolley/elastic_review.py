@@ -118,8 +118,8 @@ def _sampling(setup: Setup, modes) -> tuple[Check | None, str | None]:
         return None, None
     rate = (len(setup.t) - 1) / (setup.t[-1] - setup.t[0])
     per_period = rate / top
-    check = Check(SAMPLING, per_period, "1", f">= {SAMPLES_PER_PERIOD} (mode at {top:.4g} Hz, damping < "
-                                             f"{LIGHT_DAMPING:g})", "pass" if per_period >= SAMPLES_PER_PERIOD else "warn")
+    threshold = f">= {SAMPLES_PER_PERIOD} (mode at {top:.4g} Hz, damping < {LIGHT_DAMPING:g})"
+    check = Check(SAMPLING, per_period, "1", threshold, "pass" if per_period >= SAMPLES_PER_PERIOD else "warn")
     if check.verdict == "pass":
         return check, None
     steps = math.ceil(SAMPLES_PER_PERIOD * top * (setup.t[-1] - setup.t[0]))
