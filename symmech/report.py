@@ -178,8 +178,29 @@ def _precision(out: Path, summary: dict) -> dict | None:
             header = next(reader, [])
             rows = [{"cells": [_cell(c) for c in cells], "chosen": _is_chosen(dict(zip(header, cells)), chosen)}
                     for cells in reader]
-    return {"folder": str(folder), "reference": study.get("reference", ""), "figures": _figures(folder),
+    figures = _figures(folder)
+    if any(r["chosen"] for r in rows):
+        figures = _diagram(folder, study, header, rows)
+    return {"folder": str(folder), "reference": study.get("reference", ""), "figures": figures,
             "header": header, "rows": rows, "own": folder == out}
+
+
+def _diagram(folder: Path, study: dict, header: list[str], rows: list[dict]) -> list[tuple[str, str]]:
+    """The study's work-precision diagram drawn again with the run's own setting ringed, as a figure."""
+    import tempfile
+
+    from symmech.core import precision
+
+    name = next(iter(study["tables"]))
+    with open(folder / f"{name}.csv", newline="") as fh:
+        records = [dict(zip(header, cells)) for cells in list(csv.reader(fh))[1:]]
+    points = [{"method": r["method"], "seconds": float(r["seconds [s]"]), "error": float(r["error [1]"])}
+              for r in records]
+    chosen = [p for p, row in zip(points, rows) if row["chosen"]]
+    with tempfile.TemporaryDirectory() as tmp:
+        precision.diagram(points, Path(tmp), name, study["tables"][name].get("doc", name), study.get("reference", ""),
+                          chosen)
+        return _figures(Path(tmp))
 
 
 def _cell(text: str) -> str:

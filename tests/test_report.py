@@ -208,6 +208,7 @@ def test_report_shows_the_precision_study_beside_the_run(tmp_path):
         "1e-09,0.1,0.2,paper mode,tolerance\n")
     page = report.render(tmp_path)
     assert "reference: accurate at 1e-12" in page
+    assert page.count("<img ") == 1  # the study's diagram, drawn again with the run's setting ringed
     chosen = re.findall(r'<tr class="chosen">((?:<td class="num">[^<]*</td>)+)</tr>', page)
     assert chosen == ['<td class="num">1e-09</td><td class="num">2e-08</td><td class="num">0.9</td>'
                       '<td class="num">accurate (exact flight)</td><td class="num">tolerance</td>']
