@@ -143,8 +143,8 @@ def _headline(summary: dict) -> list[dict]:
     """Rows (name, value in its readable unit, at, meaning) of the summary's headline."""
     rows = []
     for h in summary.get("headline", []):
-        value = units.format(h["value"], h["unit"], 4) if h["unit"] != "%" else f"{h['value']:.3g} %"
-        rows.append({"name": h["name"], "value": value, "at": h["at"], "meaning": h["meaning"]})
+        rows.append({"name": h["name"], "value": units.format(h["value"], h["unit"], 4), "at": h["at"],
+                     "meaning": h["meaning"]})
     return rows
 
 
@@ -171,35 +171,30 @@ def _precision(out: Path, summary: dict) -> dict | None:
     if study.get("study") != "precision":
         return None
     chosen = _settings(summary.get("scene", {})) if folder != out else {}
-    header, rows = [], []
-    for name in list(study.get("tables", {}))[:1]:
+    name = next(iter(study.get("tables", {})), None)
+    header, records = [], []
+    if name is not None:
         with open(folder / f"{name}.csv", newline="") as fh:
-            reader = csv.reader(fh)
-            header = next(reader, [])
-            rows = [{"cells": [_cell(c) for c in cells], "chosen": _is_chosen(dict(zip(header, cells)), chosen)}
-                    for cells in reader]
-    figures = _figures(folder)
-    if any(r["chosen"] for r in rows):
-        figures = _diagram(folder, study, header, rows)
-    return {"folder": str(folder), "reference": study.get("reference", ""), "figures": figures,
-            "header": header, "rows": rows, "own": folder == out}
+            header, *records = list(csv.reader(fh))
+    mine = [_is_chosen(dict(zip(header, cells)), chosen) for cells in records]
+    figures = _diagram(study, name, header, records, mine) if any(mine) else _figures(folder)
+    return {"folder": str(folder), "reference": study.get("reference", ""), "figures": figures, "header": header,
+            "rows": [{"cells": [_cell(c) for c in cells], "chosen": m} for cells, m in zip(records, mine)],
+            "own": folder == out}
 
 
-def _diagram(folder: Path, study: dict, header: list[str], rows: list[dict]) -> list[tuple[str, str]]:
+def _diagram(study: dict, name: str, header: list[str], records: list[list[str]], mine: list[bool]) -> list:
     """The study's work-precision diagram drawn again with the run's own setting ringed, as a figure."""
     import tempfile
 
     from symmech.core import precision
 
-    name = next(iter(study["tables"]))
-    with open(folder / f"{name}.csv", newline="") as fh:
-        records = [dict(zip(header, cells)) for cells in list(csv.reader(fh))[1:]]
+    rows = [dict(zip(header, cells)) for cells in records]
     points = [{"method": r["method"], "seconds": float(r["seconds [s]"]), "error": float(r["error [1]"])}
-              for r in records]
-    chosen = [p for p, row in zip(points, rows) if row["chosen"]]
+              for r in rows]
     with tempfile.TemporaryDirectory() as tmp:
         precision.diagram(points, Path(tmp), name, study["tables"][name].get("doc", name), study.get("reference", ""),
-                          chosen)
+                          [p for p, m in zip(points, mine) if m])
         return _figures(Path(tmp))
 
 

@@ -577,19 +577,22 @@ def run(setup: Setup, ctx) -> Result:
 
 
 def _case_headline(setup, case, r) -> list[Headline]:
-    """Peak overloads (against the comfort envelope) and peak reactions of a case, with time and place."""
-    def peak(values):
-        i = int(np.argmax(np.abs(values)))
-        return values[i], f"t = {setup.t[i]:.4g} s, s = {r['s'][i]:.4g} m"
+    """Per axis the overload extreme nearest to (or furthest beyond) the comfort envelope, and the peak
+    reactions of a case, with time and place."""
+    def at(i):
+        return f"t = {setup.t[i]:.4g} s, s = {r['s'][i]:.4g} m"
 
     out = []
     for k, (axis, (lo, hi)) in enumerate(setup.comfort.items()):
-        value, at = peak(r["overload"][:, k])
-        out.append(Headline(f"case {case}: peak overload n{k + 1}", value, "g",
-                            f"along {axis}; comfort envelope [{lo:g}, {hi:g}] g", at))
+        n = r["overload"][:, k]
+        i_max, i_min = int(np.argmax(n)), int(np.argmin(n))
+        i = i_max if hi - n[i_max] <= n[i_min] - lo else i_min  # the smaller margin to the envelope
+        out.append(Headline(f"case {case}: critical overload n{k + 1}", n[i], "g",
+                            f"along {axis}: the extreme nearest to or beyond the comfort envelope [{lo:g}, {hi:g}] g",
+                            at(i)))
     for j, column in enumerate(CASE_COLUMNS[7:]):
-        value, at = peak(r["P"][:, j])
-        out.append(Headline(f"case {case}: peak reaction {column.name}", value, "N", column.doc, at))
+        i = int(np.argmax(np.abs(r["P"][:, j])))
+        out.append(Headline(f"case {case}: peak reaction {column.name}", r["P"][i, j], "N", column.doc, at(i)))
     return out
 
 
