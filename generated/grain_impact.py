@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5ce0033743a5a864d2cf2ea102e83b5a3f47aff5ed746be25740afbe4a21b15d
-# source key f464ea932e1fd6b0d28ec96bb601179faaf93ff78c7d598d4f23a648aa073b97
+# source key 18d1c829fedab6fcca5269f39fc23e133d17cbbf865adb94905573851683c02b
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

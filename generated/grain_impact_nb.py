@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 69e5dbca422a2b8e77878be9ee7055d210d16304efdb28162f9f31623b810b27
-# source key f464ea932e1fd6b0d28ec96bb601179faaf93ff78c7d598d4f23a648aa073b97
+# source key 18d1c829fedab6fcca5269f39fc23e133d17cbbf865adb94905573851683c02b
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 
