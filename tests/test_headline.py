@@ -219,3 +219,20 @@ def test_report_opens_with_the_answers_and_a_failed_check(runs):
     assert "case 1: overload n2 in the comfort envelope" in top and "✗ fail" in top
     assert re.search(r"<td>case 1: peak reaction P3</td><td class=\"value\">23\.\d+ kN</td>", page)
     assert '<details id="summary">' in page and "tables.case1_overload" not in page
+
+
+def test_grain_sampled_too_coarsely_for_its_impacts_warns():
+    """Rows every 20 ms while the grain bounces about every 4 ms: the check warns and the warning
+    names numerics.sample_interval and the interval that would show the bounces."""
+    import tomllib
+
+    from symmech.core import pipeline
+
+    scene = tomllib.loads((SCENES / "grain_default.toml").read_text())
+    scene["duration"] = 0.3
+    scene["numerics"].update(engine="python", sample_interval=0.02)
+    result = pipeline.load(scene).run()
+    bounces = result.summary["bounces"]
+    check = next(c for c in result.checks if c.what == "trajectory rows per mean interval between impacts")
+    assert check.value == pytest.approx(0.3 / bounces / 0.02, rel=1e-12) and check.verdict == "warn"
+    assert any("numerics.sample_interval <= " + f"{0.3 / bounces / 2:.3g} s" in w for w in result.warnings)
