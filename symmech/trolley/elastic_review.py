@@ -85,11 +85,13 @@ def _forcing(modes) -> np.ndarray:
 def _frequencies(modes) -> list[Headline]:
     """The lowest natural frequency, and the forcing frequency that comes nearest to it."""
     f, zeta, forcing = _modal(modes, "f"), _modal(modes, "zeta"), _forcing(modes)
+    if not (f > 0).any():
+        return []  # no oscillating mode (every one overdamped or rigid)
     i, k = np.unravel_index(np.argmin(np.where(f > 0, f, np.inf)), f.shape)
     t, s = modes.column("t"), modes.column("s")
     out = [Headline("lowest natural frequency", f[i, k], "Hz", f"mode {k + 1}, damping ratio {zeta[i, k]:.3g}",
                     f"t = {t[i]:.4g} s, s = {s[i]:.4g} m")]
-    gap = np.where(forcing > 0, np.abs(forcing - f[:, k:k + 1]), np.inf)
+    gap = np.where((forcing > 0) & (f[:, k:k + 1] > 0), np.abs(forcing - f[:, k:k + 1]), np.inf)
     if np.isfinite(gap).any():
         n, j = np.unravel_index(np.argmin(gap), gap.shape)
         out.append(Headline("forcing frequency nearest to it", forcing[n, j], "Hz",
