@@ -49,6 +49,8 @@ def cmd_sweep(ns) -> int:
 def cmd_report(ns) -> int:
     from symmech import report
 
+    if getattr(ns, "precision", False):
+        print(f"wrote {report.run_precision(Path(ns.out), _context(ns))}")
     print(f"wrote {report.write(Path(ns.out))}")
     return 0
 
@@ -229,6 +231,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     rp = sub.add_parser("report", help="write a self-contained HTML report of a finished run (OUT/report.html)")
     rp.add_argument("out", help="the run's output folder (holds summary.json)")
+    rp.add_argument("--precision", action="store_true",
+                    help="first run the scene's work-precision study (`symmech bench precision`) into OUT/precision")
+    _run_options(rp)
     rp.set_defaults(func=cmd_report)
 
     c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")

@@ -269,17 +269,38 @@ def _wall_time(summary: dict) -> str:
     return _text(summary.get("wall_time_s", summary.get("elapsed_s", "not recorded")))
 
 
-def render(out: Path) -> str:
-    """The HTML text of the report on the run in folder ``out``."""
-    import jinja2
-
-    summary_path = Path(out) / "summary.json"
+def _read_summary(out: Path) -> dict:
+    summary_path = out / "summary.json"
     try:
-        summary = json.loads(summary_path.read_text())
+        return json.loads(summary_path.read_text())
     except FileNotFoundError:
         raise SymmechError(f"{summary_path}: no such file (run `symmech run SCENE --out {out}` first)") from None
     except json.JSONDecodeError as exc:
         raise SymmechError(f"{summary_path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+
+
+def run_precision(out: Path, ctx) -> Path:
+    """Run the work-precision study of the run's scene (``symmech bench precision``) into
+    ``out/precision``, where :func:`render` finds it; the scene file the run names if it is still
+    there, else the resolved scene it recorded. Returns the study's folder."""
+    from symmech.core import pipeline
+
+    summary = _read_summary(Path(out))
+    source = summary.get("scene_file")
+    scene = source if source and Path(source).is_file() else summary.get("scene")
+    if not isinstance(scene, (str, dict)):
+        raise SymmechError(f"{out}/summary.json names no scene to study (run `symmech bench precision SCENE "
+                           f"--out {out}/{PRECISION_FOLDER}` instead)")
+    target = Path(out) / PRECISION_FOLDER
+    pipeline.run_to(scene, target, ctx, study="precision")
+    return target
+
+
+def render(out: Path) -> str:
+    """The HTML text of the report on the run in folder ``out``."""
+    import jinja2
+
+    summary = _read_summary(Path(out))
     kind = str(summary.get("kind", "unknown"))
     package = _paper_package(kind)
     derived = derivations(summary, package)

@@ -212,3 +212,17 @@ def test_report_shows_the_precision_study_beside_the_run(tmp_path):
     chosen = re.findall(r'<tr class="chosen">((?:<td class="num">[^<]*</td>)+)</tr>', page)
     assert chosen == ['<td class="num">1e-09</td><td class="num">2e-08</td><td class="num">0.9</td>'
                       '<td class="num">accurate (exact flight)</td><td class="num">tolerance</td>']
+
+
+def test_report_runs_a_precision_study_when_asked(tmp_path):
+    """`symmech report OUT --precision`: the scene's `bench precision` study into OUT/precision, then
+    the report with its diagram and one table row per solver setting of the study's CSV."""
+    out = tmp_path / "impact"
+    assert main(["run", str(SCENES / "impact_default.toml"), "--out", str(out), "--no-plots", "--quiet"]) == 0
+    assert main(["report", str(out), "--precision", "--quiet"]) == 0
+    study = json.loads((out / "precision" / "summary.json").read_text())
+    assert study["study"] == "precision" and study["scene_file"] == str(SCENES / "impact_default.toml")
+    rows = (out / "precision" / "precision_impact.csv").read_text().strip().splitlines()[1:]
+    page = html(out)
+    section = page[page.index('<h2 id="precision">'):page.index('<h2 id="derivations">')]
+    assert section.count("<img ") == 1 and section.count("<tr><td") == len(rows) > 5
