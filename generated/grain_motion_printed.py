@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d59f5a93f87eba20d6c8f625ac0194e64ff4fe16a2841ab97ef2802da9d02820
-# source key 20850ea7a591e6e60bce50715e860db345d4bfdf4adb07ea7b02f30cd0833b81
+# source key 5d521b1afd716da0ff5f181037c0e1c5af5e0b5a76a7a8e3feacf49cee46e487
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f77b3e0a89d5634cff5b565adfb31ea161b522b7828bd47164493626b03d1f31
-# source key bbfd75cd1aba65111ddacf131f94c41f240a93bd8f447a61e5244b1b23509d76
+# source key c7999757c5c53ca0f89747f72facba64607ac99d5bdfa0d388f02a77cd4bc1b3
 # body sha256 9c2027bc7d6b7b94a8984d2692010c64848c9845ef7c4b0c7cf0258cfc8dbeaf
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4f92645085f3f2d7cb92e674d3c7182bd98b7b02bb4e438b4ff6c0d290f6df2a
-# source key bbfd75cd1aba65111ddacf131f94c41f240a93bd8f447a61e5244b1b23509d76
+# source key c7999757c5c53ca0f89747f72facba64607ac99d5bdfa0d388f02a77cd4bc1b3
 # body sha256 d544c76fe5fce17c7b9fbe3374d8134576b1221631070497eab3066a92eaea51
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f3a5e5d3c780e263a6368bc5901fb85321e23627fa47e1f4fd1d8ec21d5664a5
-# source key 7dfaa86d1598e9142e4556caf6839918424a083337f1b94a7771ae25f712d66c
+# source key 836eebe1f9e928745c7312e690b309025b2c36e6e2a4664eb04b24fde49704e6
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 45fa99d8706f6a7f7931fa35296187c95c7ee42cb036d41646edb6d0104840ad
-# source key 7dfaa86d1598e9142e4556caf6839918424a083337f1b94a7771ae25f712d66c
+# source key 836eebe1f9e928745c7312e690b309025b2c36e6e2a4664eb04b24fde49704e6
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

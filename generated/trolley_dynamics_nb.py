@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4ba96b685c3fb300c044197e736716aaf27eb9bccaa4c6bfccad56bc3754fed1
-# source key 6bbf151ed5ab8dc2c081ec17a2bedcff471fe050bddadfeda9bcf0dd9fa9200c
+# source key 458cff90a3475275a83186b3c6749660576c63a05892e6782e742a3f192a8010
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

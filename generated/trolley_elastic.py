@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a06ee0e1fdfb5e61431104f0c24929dcf2983057c0a2275f8fb0dc83044e05bf
-# source key 87d1060940646c248da047c34460503de52906105e58a5f0d77677e2094c39f2
+# source key 4223a5b0e08245db79efe259828ea67846b045d0a3281a96853ebc27f38a0b81
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

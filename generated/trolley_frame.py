@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d9ea43b82555abafafd67490859b6c063ec78f33df919a0071f647ff4740e01
-# source key 6bbf151ed5ab8dc2c081ec17a2bedcff471fe050bddadfeda9bcf0dd9fa9200c
+# source key 458cff90a3475275a83186b3c6749660576c63a05892e6782e742a3f192a8010
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

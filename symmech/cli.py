@@ -29,7 +29,9 @@ def _context(ns):
 def cmd_run(ns) -> int:
     from symmech.core import pipeline
 
-    pipeline.run_to(ns.scene, ns.out, _context(ns), plots=not ns.no_plots)
+    _, result = pipeline.run_to(ns.scene, ns.out, _context(ns), plots=not ns.no_plots)
+    if not ns.quiet and result.brief():
+        print(result.brief())
     print(f"wrote {Path(ns.out) / 'summary.json'}")
     return cmd_report(ns) if ns.report else 0
 
@@ -61,6 +63,8 @@ def cmd_warm(ns) -> int:
 def cmd_report(ns) -> int:
     from symmech import report
 
+    if getattr(ns, "precision", False):
+        print(f"wrote {report.run_precision(Path(ns.out), _context(ns))}")
     print(f"wrote {report.write(Path(ns.out))}")
     return 0
 
@@ -264,6 +268,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     rp = sub.add_parser("report", help="write a self-contained HTML report of a finished run (OUT/report.html)")
     rp.add_argument("out", help="the run's output folder (holds summary.json)")
+    rp.add_argument("--precision", action="store_true",
+                    help="first run the scene's work-precision study (`symmech bench precision`) into OUT/precision")
+    _run_options(rp)
     rp.set_defaults(func=cmd_report)
 
     c = sub.add_parser("codegen", help="regenerate the numeric modules in generated/")

@@ -1,10 +1,13 @@
 """``symmech report OUT``: one self-contained HTML page about a finished run.
 
-Reads ``OUT/summary.json`` and the plots in ``OUT`` and writes ``OUT/report.html``
-with: the resolved scene, the derivations the run used as MathML (browsers render
-it natively), the checks and results with their numbers, the errata of the
-scene's paper, the plots (inline SVG, else PNG, as data URIs) and the provenance
-(version, generated-module hashes, wall time). Nothing is fetched to view it.
+Reads ``OUT/summary.json`` and the plots in ``OUT`` and writes ``OUT/report.html``,
+answers first: the run's headline (its answers in readable units), the checks that
+did not pass beside the warnings, every check as a verdict, the plots (inline SVG,
+else PNG, as data URIs), what accuracy costs (a ``symmech bench precision`` study in
+``OUT`` itself or in ``OUT/precision``), the derivations the run used as MathML
+(browsers render it natively), the errata of the scene's paper, the provenance
+(version, generated-module hashes, wall time), and the raw resolved scene and
+summary, collapsed. Nothing is fetched to view it.
 
 Which derivations and errata belong to a kind is found, not listed: the kind's
 runtime module lives in a paper package ``symmech.<paper>``; its generated
@@ -13,31 +16,29 @@ modules are named ``<paper>_*`` and its errata are ``symmech.<paper>.errata*``.
 from __future__ import annotations
 
 import base64
+import csv
 import datetime
 import functools
 import importlib
 import importlib.resources
 import importlib.util
 import json
+import math
 import platform
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from symmech import __version__
+from symmech.core import units
+from symmech.core.results import VERDICTS, Check
 from symmech.core.scene import SymmechError
 
 TEMPLATE = "report.html.j2"
 # Derivations whose sympy text is longer than this are listed, not typeset (H alone
 # is 19,000 characters: MathML of it would be megabytes nobody reads).
 MATHML_LIMIT = 2500
-# Summary keys about where and how the run happened, shown as provenance.
-PROVENANCE = ("symmech_version", "status", "wall_time_s", "elapsed_s", "timing_s", "generated_modules",
-              "generated_module", "scene_file")
-SKIPPED = ("kind", "scene", "files", "warnings", *PROVENANCE)
-# Summary keys whose name says they hold a check (a residual, a verdict, a count of violations).
-CHECK_WORDS = ("residual", "converged", "admissible", "creating_energy", "creates_energy", "comfort", "defect",
-               "error", "check", "unstable", "rigid_body")
+PRECISION_FOLDER = "precision"  # a study beside the run: `symmech bench precision SCENE --out OUT/precision`
 
 
 @dataclass(frozen=True)
@@ -131,40 +132,99 @@ def errata_records(package: str | None) -> list[dict]:
     return [errata.evaluate(c) for m in modules for c in m.checks()]
 
 
-def _flatten(value, prefix: str = "") -> list[tuple[str, str]]:
-    """(dotted key, text) rows of a JSON value; long lists are summarised, and a measurement
-    (a dict of scalars with a ``unit``, e.g. extremes and their times) is one row."""
-    if isinstance(value, dict) and "unit" in value and not any(isinstance(v, (dict, list)) for v in value.values()):
-        parts = ", ".join(f"{k} = {_text(v)}" for k, v in value.items() if k != "unit")
-        return [(prefix, f"{parts} (unit {value['unit']})")]
-    if isinstance(value, dict):
-        rows = []
-        for k, v in value.items():
-            rows += _flatten(v, f"{prefix}.{k}" if prefix else str(k))
-        return rows
-    if isinstance(value, list) and value and all(isinstance(v, dict) for v in value) and len(value) <= 12:
-        rows = []
-        for i, v in enumerate(value):
-            rows += _flatten(v, f"{prefix}[{i}]")
-        return rows
-    return [(prefix, _text(value))]
-
-
 def _text(value) -> str:
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, list):
-        if len(value) > 12:
-            return f"list of {len(value)} values"
-        return "[" + ", ".join(_text(v) for v in value) + "]"
-    return "null" if value is None else str(value)
+    return f"{value:.6g}" if isinstance(value, float) else "null" if value is None else str(value)
 
 
-def _split_checks(summary: dict) -> tuple[list, list]:
-    """(checks, results): rows of the summary; a row is a check when its key says so."""
-    rows = _flatten({k: v for k, v in summary.items() if k not in SKIPPED})
-    checks = [r for r in rows if any(w in r[0].lower() for w in CHECK_WORDS)]
-    return checks, [r for r in rows if r not in checks]
+def _headline(summary: dict) -> list[dict]:
+    """Rows (name, value in its readable unit, at, meaning) of the summary's headline."""
+    rows = []
+    for h in summary.get("headline", []):
+        rows.append({"name": h["name"], "value": units.format(h["value"], h["unit"], 4), "at": h["at"],
+                     "meaning": h["meaning"]})
+    return rows
+
+
+def _checks(summary: dict) -> list[dict]:
+    """Rows (what, measured, threshold, verdict, mark) of the summary's checks, failures first."""
+    order = {"fail": 0, "warn": 1, "pass": 2}
+    rows = []
+    for c in summary.get("checks", []):
+        value = tuple(c["value"]) if isinstance(c["value"], list) else c["value"]
+        check = Check(c["what"], value, c["unit"], c["threshold"], c["verdict"])
+        rows.append({"what": check.what, "measured": check.measured(), "threshold": check.threshold,
+                     "verdict": check.verdict, "mark": VERDICTS[check.verdict]})
+    return sorted(rows, key=lambda r: order[r["verdict"]])
+
+
+def _precision(out: Path, summary: dict) -> dict | None:
+    """The work-precision study in ``out`` (a study folder) or ``out/precision``: its figures and rows,
+    with the rows whose knob has the run's own setting marked (the chosen method's place)."""
+    folder = out if summary.get("study") == "precision" else out / PRECISION_FOLDER
+    try:
+        study = json.loads((folder / "summary.json").read_text())
+    except (FileNotFoundError, json.JSONDecodeError):
+        return None
+    if study.get("study") != "precision":
+        return None
+    chosen = _settings(summary.get("scene", {})) if folder != out else {}
+    name = next(iter(study.get("tables", {})), None)
+    header, records = [], []
+    if name is not None:
+        with open(folder / f"{name}.csv", newline="") as fh:
+            header, *records = list(csv.reader(fh))
+    mine = [_is_chosen(dict(zip(header, cells)), chosen) for cells in records]
+    figures = _diagram(study, name, header, records, mine) if any(mine) else _figures(folder)
+    return {"folder": str(folder), "reference": study.get("reference", ""), "figures": figures, "header": header,
+            "rows": [{"cells": [_cell(c) for c in cells], "chosen": m} for cells, m in zip(records, mine)],
+            "own": folder == out}
+
+
+def _diagram(study: dict, name: str, header: list[str], records: list[list[str]], mine: list[bool]) -> list:
+    """The study's work-precision diagram drawn again with the run's own setting ringed, as a figure."""
+    import tempfile
+
+    from symmech.core import precision
+
+    rows = [dict(zip(header, cells)) for cells in records]
+    points = [{"method": r["method"], "seconds": float(r["seconds [s]"]), "error": float(r["error [1]"])}
+              for r in rows]
+    with tempfile.TemporaryDirectory() as tmp:
+        precision.diagram(points, Path(tmp), name, study["tables"][name].get("doc", name), study.get("reference", ""),
+                          [p for p, m in zip(points, mine) if m])
+        return _figures(Path(tmp))
+
+
+def _cell(text: str) -> str:
+    """A CSV cell for reading: numbers to 3 digits, text as it is."""
+    try:
+        return f"{float(text):.3g}"
+    except ValueError:
+        return text
+
+
+def _settings(scene: dict) -> dict:
+    """{field name: value} of every number and text field of a resolved scene, by its last name."""
+    out = {}
+    for key, value in scene.items():
+        if isinstance(value, dict):
+            out.update(_settings(value))
+        elif isinstance(value, (int, float, str)) and not isinstance(value, bool):
+            out[key] = value
+    return out
+
+
+def _is_chosen(row: dict, chosen: dict) -> bool:
+    """Is a study row (method, knob, value) the run's own setting: the scene's field named as the knob
+    has the row's value, and the row's method begins with the scene's ``mode``, ``method`` or (solver)
+    ``name``, if it has one?"""
+    knob, value = row.get("knob"), row.get("value [1]")
+    setting = chosen.get(knob)
+    if value is None or not isinstance(setting, (int, float)) or not math.isclose(float(value), setting,
+                                                                                  rel_tol=1e-9):
+        return False
+    ways = [str(chosen[k]).lower() for k in ("mode", "method", "name") if isinstance(chosen.get(k), str)]
+    return not ways or any(row.get("method", "").lower().startswith(w) for w in ways)
 
 
 def _figures(out: Path) -> list[tuple[str, str]]:
@@ -206,21 +266,42 @@ def _wall_time(summary: dict) -> str:
     return _text(summary.get("wall_time_s", summary.get("elapsed_s", "not recorded")))
 
 
-def render(out: Path) -> str:
-    """The HTML text of the report on the run in folder ``out``."""
-    import jinja2
-
-    summary_path = Path(out) / "summary.json"
+def _read_summary(out: Path) -> dict:
+    summary_path = out / "summary.json"
     try:
-        summary = json.loads(summary_path.read_text())
+        return json.loads(summary_path.read_text())
     except FileNotFoundError:
         raise SymmechError(f"{summary_path}: no such file (run `symmech run SCENE --out {out}` first)") from None
     except json.JSONDecodeError as exc:
         raise SymmechError(f"{summary_path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+
+
+def run_precision(out: Path, ctx) -> Path:
+    """Run the work-precision study of the run's scene (``symmech bench precision``) into
+    ``out/precision``, where :func:`render` finds it; the scene file the run names if it is still
+    there, else the resolved scene it recorded. Returns the study's folder."""
+    from symmech.core import pipeline
+
+    summary = _read_summary(Path(out))
+    source = summary.get("scene_file")
+    scene = source if source and Path(source).is_file() else summary.get("scene")
+    if not isinstance(scene, (str, dict)):
+        raise SymmechError(f"{out}/summary.json names no scene to study (run `symmech bench precision SCENE "
+                           f"--out {out}/{PRECISION_FOLDER}` instead)")
+    target = Path(out) / PRECISION_FOLDER
+    pipeline.run_to(scene, target, ctx, study="precision")
+    return target
+
+
+def render(out: Path) -> str:
+    """The HTML text of the report on the run in folder ``out``."""
+    import jinja2
+
+    summary = _read_summary(Path(out))
     kind = str(summary.get("kind", "unknown"))
     package = _paper_package(kind)
     derived = derivations(summary, package)
-    checks, results = _split_checks(summary)
+    checks = _checks(summary)
     hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}), Path(out))
     provenance = [("symmech version of the run", _text(summary.get("symmech_version", "not recorded"))),
                   ("status", _text(summary.get("status", "not recorded"))),
@@ -233,8 +314,11 @@ def render(out: Path) -> str:
         autoescape=True, trim_blocks=True, lstrip_blocks=True)
     return env.get_template(TEMPLATE).render(
         kind=kind, package=package, out=str(out), summary=summary,
+        title=summary.get("scene", {}).get("title", ""),
         scene=json.dumps(summary["scene"], indent=2) if "scene" in summary else None,
-        derivations=derived, checks=checks, results=results, warnings=summary.get("warnings", []),
+        raw=json.dumps({k: v for k, v in summary.items() if k != "scene"}, indent=2),
+        headline=_headline(summary), checks=checks, attention=[c for c in checks if c["verdict"] != "pass"],
+        precision=_precision(Path(out), summary), derivations=derived, warnings=summary.get("warnings", []),
         errata=errata_records(package), figures=_figures(Path(out)), provenance=provenance,
         hashes=hashes, hash_source=hash_source)
 

@@ -158,7 +158,9 @@ def test_grain_impacts_are_markers_and_phase_portrait(tmp_path, figures):
     np.testing.assert_allclose(markers[0].get_xdata(), t_hit, rtol=1e-11)
     np.testing.assert_allclose(markers[0].get_ydata(), vz_after, rtol=1e-9, atol=1e-15)
     phase = figures["phase"].axes[0]
-    assert phase.get_xlabel() == "relative height z [m]" and phase.get_ylabel() == "normal velocity v_z [m/s]"
+    # heights of a few mm and speeds of a few hundred mm/s, shown in a readable scale (the data stay SI)
+    assert phase.get_xlabel() == "relative height z [mm]" and phase.get_ylabel() == "normal velocity v_z [mm/s]"
+    assert phase.xaxis.get_major_formatter()(2e-3, 0) == "2"
     trajectory = np.column_stack(_columns(tmp_path / "o" / "trajectory.csv", "z", "vz"))
     np.testing.assert_allclose(_lines(phase)[0].get_xydata(), trajectory, rtol=1e-10, atol=1e-15)
     # each impact is a jump at fixed height from the v_z before to the v_z after (impacts.csv)
@@ -199,3 +201,32 @@ def test_mode_shapes_have_frequency_legends(tmp_path, figures):
         assert texts == ["equilibrium", f"mode {i + 1}: f = {hz[i]:.4g} Hz"]
         assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")
         assert math.isfinite(hz[i]) and hz[i] > 0
+
+
+@pytest.mark.parametrize("value, unit, text", [
+    (-2.0e-4, "m", "-0.2 mm"), (23337.3, "N", "23.3 kN"), (901.8, "N", "902 N"), (0.068, "m/s", "68 mm/s"),
+    (7.0e-5, "rad", "0.07 mrad"), (4.0e-3, "s", "4 ms"), (2.27e-5, "J", "22.7 µJ"), (625.0, "m", "625 m"),
+    (4.04, "g", "4.04 g"), (0.45, "1", "0.45"), (3.0e-6, "m^2", "3e-06 m^2"), (0.0, "m", "0 m"),
+    (2.0e-3, "m or rad", "0.002 m or rad"), (0.3, "m/s^2", "300 mm/s^2")])
+def test_readable_unit_of_a_value(value, unit, text):
+    """Lengths stop at mm and angles at mrad; powers of a unit and units without prefixes keep SI."""
+    from symmech.core import units
+
+    assert units.format(value, unit) == text
+
+
+def test_plot_axes_in_a_readable_unit(tmp_path):
+    """A roller deflection of 0.2 mm is drawn on an axis in mm (ticks 0.2, not 0.0002); time stays in s,
+    a log axis keeps its unit, and the data themselves stay SI."""
+    fig, axes = plotting.figure(2, 1, sharex=True)
+    axes[0, 0].plot([0.0, 3.0], [0.0, -2.0e-4])
+    plotting.set_labels(axes[0, 0], ("time t", "s"), ("roller deflection d", "m"))
+    axes[1, 0].loglog([1e-4, 1e-2], [1e-9, 1e-3])
+    axes[1, 0].set_ylabel("error [m]")
+    axes[1, 0].set_xlabel("time t [s]")
+    plotting.save(fig, tmp_path, "d")
+    top, bottom = axes[0, 0], axes[1, 0]
+    assert top.get_ylabel() == "roller deflection d [mm]" and bottom.get_ylabel() == "error [m]"
+    assert bottom.get_xlabel() == "time t [s]"
+    assert top.yaxis.get_major_formatter()(-1.5e-4, 0) == "-0.15"
+    np.testing.assert_array_equal(top.get_lines()[0].get_ydata(), [0.0, -2.0e-4])

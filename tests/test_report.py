@@ -71,7 +71,11 @@ def test_impact_report_shows_its_checks_and_derivations(reports):
     page = html(reports["impact"])
     summary = json.loads((reports["impact"] / "summary.json").read_text())
     residual = summary["solver"]["residual_19"]
-    assert re.search(r"<td>solver\.residual_19</td><td class=\"num\">" + re.escape(f"{residual:.6g}"), page)
+    # the check as a verdict row: what, measured value, threshold, verdict
+    assert re.search(r'<tr class="pass"><td>impact equations \(19\) solved \(relative residual\)</td>'
+                     r'<td class="num measured">' + re.escape(f"{residual:.3g}") +
+                     r'</td><td class="num">&lt;= 1e-08</td>'
+                     r'<td class="verdict">✓ pass</td>', page)
     assert "<code>grain_impact.H</code>" in page and "symmech latex grain_impact.H --tex H.tex" in page
     assert page.count('<math display="block">') >= 10
 
@@ -164,14 +168,61 @@ def test_report_reads_the_pipeline_record(tmp_path):
     summary = {"symmech_version": "0.1.0", "kind": "impact", "status": "ok", "scene_file": "s.toml",
                "timing_s": {"validate": 0.01, "run": 0.5, "write": 0.25, "total": 0.76},
                "generated_modules": {"grain_impact": digest}, "solver": {"residual_19": 2.5e-15},
-               "scene": {"kind": "impact", "impact": {"e": 0.5, "lambda": 0.25}}, "warnings": ["w1"],
-               "speed": {"max": 5.0, "t_max": 1.25, "unit": "m/s"}}
+               "headline": [{"name": "normal impulse", "value": 4.768e-6, "unit": "N s", "meaning": "T_z", "at": ""}],
+               "checks": [{"what": "energy kept", "value": 0.5, "unit": "1", "threshold": "<= 1", "verdict": "pass"},
+                          {"what": "a made-up bound", "value": [-2.5, 7.0], "unit": "g",
+                           "threshold": "within [-1, 6] g", "verdict": "fail"}],
+               "scene": {"kind": "impact", "impact": {"e": 0.5, "lambda": 0.25}}, "warnings": ["w1"]}
     (tmp_path / "summary.json").write_text(json.dumps(summary))
     page = report.render(tmp_path)
     assert '&#34;lambda&#34;: 0.25' in page  # the resolved scene, escaped
     assert "<td>validate 0.01, run 0.5, write 0.25, total 0.76</td>" in page
     assert f'<td>grain_impact</td><td class="num">{digest}</td>' in page
-    assert '<td>solver.residual_19</td><td class="num">2.5e-15</td>' in page
-    assert '<td>speed</td><td class="num">max = 5, t_max = 1.25 (unit m/s)</td>' in page
-    assert '<div class="warn">w1</div>' in page and "No plots in this folder." in page
+    assert '<td>normal impulse</td><td class="value">4.768 µN s</td>' in page
+    # the failed check: first in the table, marked failed, and at the top beside the warning
+    rows = re.findall(r'<tr class="(\w+)"><td>([^<]*)</td><td class="num measured">([^<]*)</td>', page)
+    assert rows == [("fail", "a made-up bound", "-2.5 g … 7 g"), ("pass", "energy kept", "0.5")]
+    assert '<td class="verdict">✗ fail</td>' in page
+    assert page.index("✗ fail:</strong> a made-up bound") < page.index('<div class="warn">w1</div>') < \
+        page.index('<h2 id="checks">')
+    assert "Checks: 1 passed,\n0 warned,\n1 failed." in page
+    assert "No plots in this folder." in page
     assert "<code>grain_impact.mu_equation</code>" in page and "grain_motion" not in page
+
+
+def test_report_shows_the_precision_study_beside_the_run(tmp_path):
+    """A `symmech bench precision` study in OUT/precision: its rows in the report, the row at the run's
+    own setting (mode accurate, tolerance 1e-9) highlighted, not the paper-mode row of equal value."""
+    from symmech import report
+
+    (tmp_path / "precision").mkdir()
+    (tmp_path / "summary.json").write_text(json.dumps({
+        "kind": "grain", "headline": [], "checks": [],
+        "scene": {"kind": "grain", "numerics": {"mode": "accurate", "tolerance": 1e-9}}}))
+    (tmp_path / "precision" / "summary.json").write_text(json.dumps({
+        "kind": "grain", "study": "precision", "reference": "accurate at 1e-12", "tables": {"precision_grain": {}}}))
+    (tmp_path / "precision" / "precision_grain.csv").write_text(
+        "value [1],error [1],seconds [s],method,knob\n"
+        "1e-07,3e-06,0.5,accurate (exact flight),tolerance\n"
+        "1e-09,2e-08,0.9,accurate (exact flight),tolerance\n"
+        "1e-09,0.1,0.2,paper mode,tolerance\n")
+    page = report.render(tmp_path)
+    assert "reference: accurate at 1e-12" in page
+    assert page.count("<img ") == 1  # the study's diagram, drawn again with the run's setting ringed
+    chosen = re.findall(r'<tr class="chosen">((?:<td class="num">[^<]*</td>)+)</tr>', page)
+    assert chosen == ['<td class="num">1e-09</td><td class="num">2e-08</td><td class="num">0.9</td>'
+                      '<td class="num">accurate (exact flight)</td><td class="num">tolerance</td>']
+
+
+def test_report_runs_a_precision_study_when_asked(tmp_path):
+    """`symmech report OUT --precision`: the scene's `bench precision` study into OUT/precision, then
+    the report with its diagram and one table row per solver setting of the study's CSV."""
+    out = tmp_path / "impact"
+    assert main(["run", str(SCENES / "impact_default.toml"), "--out", str(out), "--no-plots", "--quiet"]) == 0
+    assert main(["report", str(out), "--precision", "--quiet"]) == 0
+    study = json.loads((out / "precision" / "summary.json").read_text())
+    assert study["study"] == "precision" and study["scene_file"] == str(SCENES / "impact_default.toml")
+    rows = (out / "precision" / "precision_impact.csv").read_text().strip().splitlines()[1:]
+    page = html(out)
+    section = page[page.index('<h2 id="precision">'):page.index('<h2 id="derivations">')]
+    assert section.count("<img ") == 1 and section.count("<tr><td") == len(rows) > 5

@@ -40,7 +40,7 @@ from symmech.core.schema import validate
 
 # Keys of every summary.json; a kind's own summary keys sit beside them.
 ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "generated_modules",
-            "warnings", "files", "tables", "scene")
+            "headline", "checks", "warnings", "files", "tables", "scene")
 SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
 
 
@@ -229,8 +229,9 @@ def _summary(result: Result, scene: Scene, files: list[str], timing: dict) -> di
     return {"symmech_version": __version__, "kind": result.kind,
             "status": "warnings" if result.warnings else "ok", "scene_file": scene.source,
             "timing_s": {**timing, "total": sum(timing.values())},
-            "generated_modules": integrity.used_modules(), **result.summary,
-            "warnings": result.warnings, "files": files, "tables": _describe(result.tables),
+            "generated_modules": integrity.used_modules(),
+            "headline": [h.to_json() for h in result.headline], "checks": [c.to_json() for c in result.checks],
+            **result.summary, "warnings": result.warnings, "files": files, "tables": _describe(result.tables),
             "scene": json.loads(json.dumps(scene.resolved, default=str))}
 
 

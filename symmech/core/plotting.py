@@ -2,8 +2,10 @@
 
 Every plot of symmech goes through here, so that all of them read alike: each
 axis names a quantity and its unit (``"t [s]"``; :func:`save` refuses a figure
-with an unlabelled axis), and each figure is written in the formats the scene
-asks for (``[output] formats``: PNG for a quick look, SVG for the HTML report).
+with an unlabelled axis), shown in a readable scale of it (:func:`readable_units`:
+deflections in mm, reactions in kN; the data stay SI), and each figure is written
+in the formats the scene asks for (``[output] formats``: PNG for a quick look, SVG
+for the HTML report).
 
 Figures are drawn on matplotlib's ``Figure`` and written by the Agg canvas: no
 pyplot, no backend and no window, in a terminal, a notebook or on a desktop alike.
@@ -14,6 +16,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 from typing import Callable
+
+from symmech.core import units
 
 DPI = 110
 FORMATS = ("png", "svg")  # formats a scene may ask for
@@ -73,14 +77,48 @@ def unlabelled(fig) -> list[str]:
     return bad
 
 
+def _siblings(ax, name: str) -> list:
+    if name == "z":
+        return [ax]
+    return getattr(ax, f"get_shared_{name}_axes")().get_siblings(ax)
+
+
+def readable_units(fig) -> None:
+    """Show each linear axis of ``fig`` labelled in an SI unit in a readable scale of it
+    (:func:`symmech.core.units.scale` of the axis limits): tick labels divided by the factor and
+    the label's unit rewritten, e.g. ``"d [m]"`` with ticks 0.0002 -> ``"d [mm]"`` with ticks 0.2."""
+    from matplotlib.ticker import FuncFormatter
+
+    for ax in fig.axes:
+        if ax.get_label() == "<colorbar>":
+            continue
+        for name in ("x", "y", "z") if hasattr(ax, "get_zlabel") else ("x", "y"):
+            if getattr(ax, f"get_{name}scale")() != "linear":
+                continue
+            labelled = [a for a in _siblings(ax, name) if _UNIT.search(getattr(a, f"get_{name}label")())]
+            if not labelled:
+                continue
+            text = getattr(labelled[0], f"get_{name}label")()
+            unit = _UNIT.search(text).group(0).strip()[1:-1]
+            factor, shown = units.scale(max(abs(v) for v in getattr(ax, f"get_{name}lim")()), unit)
+            if factor == 1.0:
+                continue  # already readable, or a unit without prefixes (a rewritten label lands here too)
+            getattr(ax, f"{name}axis").set_major_formatter(FuncFormatter(lambda v, _, f=factor: f"{v / f:g}"))
+            for a in labelled:
+                label_text = getattr(a, f"get_{name}label")()
+                getattr(a, f"set_{name}label")(_UNIT.sub(f"[{shown}]", label_text))
+
+
 def save(fig, folder: Path, stem: str, formats: tuple[str, ...] = ("png",)) -> list[Path]:
     """Write ``stem.<format>`` into ``folder`` for each of ``formats``; returns the paths.
 
     A figure with an axis that does not name its quantity and unit is a bug: ValueError.
+    Axes in SI units are shown in a readable scale (:func:`readable_units`).
     """
     bad = unlabelled(fig)
     if bad:
         raise ValueError(f"plot {stem}: every axis needs 'quantity [unit]': " + "; ".join(bad))
+    readable_units(fig)
     fig.tight_layout()
     paths = [Path(folder) / f"{stem}.{ext}" for ext in formats]
     for path in paths:

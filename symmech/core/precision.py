@@ -51,8 +51,10 @@ def result(kind: str, rows: list[dict], name: str, title: str, reference: str) -
                   plots=lambda folder: diagram(rows, Path(folder), name, title, reference))
 
 
-def diagram(rows: list[dict], folder: Path, name: str, title: str, reference: str) -> list[Path]:
-    """log error against log time, one line per method, as ``name``.png in ``folder``."""
+def diagram(rows: list[dict], folder: Path, name: str, title: str, reference: str,
+            chosen: list[dict] = ()) -> list[Path]:
+    """log error against log time, one line per method, as ``name``.png in ``folder``; the
+    ``chosen`` rows (a run's own setting) ringed."""
     from symmech.core import plotting
 
     fig, axes = plotting.figure(1, 1, width=7.0, height=5.0)
@@ -61,6 +63,9 @@ def diagram(rows: list[dict], folder: Path, name: str, title: str, reference: st
         mine = [r for r in rows if r["method"] == method]
         ax.loglog([r["seconds"] for r in mine], [max(r["error"], ERROR_FLOOR) for r in mine],
                   "o-", label=method)
+    if chosen:
+        ax.loglog([r["seconds"] for r in chosen], [max(r["error"], ERROR_FLOOR) for r in chosen], "o", ms=16,
+                  mfc="none", mec="red", mew=2, label="this run's setting")
     plotting.set_labels(ax, ("wall time per solve", "s"), ("relative error", "1"))
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)

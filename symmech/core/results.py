@@ -1,4 +1,4 @@
-"""What a run returns: named tables with units, a JSON summary, plots and extra files.
+"""What a run returns: named tables with units, a JSON summary, its headline and checks, plots and extra files.
 
 A kind's ``run`` computes and returns a :class:`Result`; it writes nothing. The
 pipeline (``symmech.core.pipeline``) checks every number finite, writes the
@@ -15,7 +15,10 @@ from typing import Callable
 
 import numpy as np
 
+from symmech.core import units
 from symmech.core.scene import SymmechError
+
+VERDICTS = {"pass": "✓", "warn": "!", "fail": "✗"}
 
 
 @dataclass(frozen=True)
@@ -76,12 +79,81 @@ class Table:
         return xr.Dataset(variables, coords=coords, attrs={"description": self.doc})
 
 
+@dataclass(frozen=True)
+class Headline:
+    """One answer of a run, as a person asks for it: name, value in SI ``unit`` ("1" if
+    dimensionless), its one-line meaning and where or when it happens (e.g. "t = 2.8 s")."""
+
+    name: str
+    value: float
+    unit: str
+    meaning: str
+    at: str = ""
+
+    def text(self) -> str:
+        """``"name: 0.235 mm (at t = 2.8 s)"`` in the readable unit."""
+        return f"{self.name}: {units.format(self.value, self.unit)}" + (f" (at {self.at})" if self.at else "")
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "value": float(self.value), "unit": self.unit, "meaning": self.meaning,
+                "at": self.at}
+
+
+@dataclass(frozen=True)
+class Check:
+    """A verdict on the run: ``what`` is checked, the measured ``value`` (a number, or the
+    (min, max) a quantity reached) in SI ``unit``, the ``threshold`` it must meet (text, e.g.
+    "<= 1e-06"), and the ``verdict``: "pass", "warn" or "fail". Build it with :func:`at_most`
+    or :func:`within`, which decide the verdict."""
+
+    what: str
+    value: float | tuple[float, float]
+    unit: str
+    threshold: str
+    verdict: str
+
+    def __post_init__(self):
+        if self.verdict not in VERDICTS:
+            raise ValueError(f"check verdict {self.verdict!r} is not one of {', '.join(VERDICTS)}")
+
+    def measured(self) -> str:
+        """The value in its readable unit; a range as ``"lo … hi"``."""
+        if isinstance(self.value, tuple):
+            return " … ".join(units.format(v, self.unit) for v in self.value)
+        return units.format(self.value, self.unit)
+
+    def text(self) -> str:
+        return f"{VERDICTS[self.verdict]} {self.what}: {self.measured()} ({self.threshold})"
+
+    def to_json(self) -> dict:
+        value = [float(v) for v in self.value] if isinstance(self.value, tuple) else float(self.value)
+        return {"what": self.what, "value": value, "unit": self.unit, "threshold": self.threshold,
+                "verdict": self.verdict}
+
+
+def at_most(what: str, value: float, limit: float, unit: str = "1", otherwise: str = "fail") -> Check:
+    """Passes when ``value <= limit``; else the verdict ``otherwise`` ("fail" or "warn")."""
+    return Check(what, float(value), unit, f"<= {units.format(limit, unit)}",
+                 "pass" if value <= limit else otherwise)
+
+
+def within(what: str, low: float, high: float, envelope: tuple[float, float], unit: str,
+           otherwise: str = "fail") -> Check:
+    """Passes when the range [low, high] a quantity reached lies inside ``envelope``."""
+    lo, hi = envelope
+    return Check(what, (float(low), float(high)), unit,
+                 f"within [{units.format(lo, unit)}, {units.format(hi, unit)}]",
+                 "pass" if lo <= low and high <= hi else otherwise)
+
+
 @dataclass
 class Result:
     """The outcome of one run.
 
     kind      the scene kind
     summary   JSON-able dict of scalars, lists and dicts (finite numbers only)
+    headline  the answers a person reads first (:class:`Headline`), in order
+    checks    verdicts on the run (:class:`Check`): balances, admissibility, envelopes
     tables    name -> Table, written as ``name.csv``
     files     name -> text or bytes written verbatim (e.g. ``matrices.json``)
     plots     callable(folder) -> list of written paths, called by the pipeline
@@ -98,6 +170,16 @@ class Result:
     plots: Callable[[Path], list[Path]] | None = None
     warnings: list[str] = field(default_factory=list)
     events: str = ""
+    headline: list[Headline] = field(default_factory=list)
+    checks: list[Check] = field(default_factory=list)
+
+    def brief(self) -> str:
+        """The headline and the checks that did not pass, one line each (``symmech run`` prints it)."""
+        lines = [f"  {h.text()}" for h in self.headline]
+        counts = {v: sum(c.verdict == v for c in self.checks) for v in VERDICTS}
+        lines += [f"checks: {counts['pass']} pass, {counts['warn']} warn, {counts['fail']} fail"] if self.checks else []
+        lines += [f"  {c.text()}" for c in self.checks if c.verdict != "pass"]
+        return "\n".join([f"{self.kind}:", *lines]) if lines else ""
 
     def to_xarray(self, table: str | None = None):
         """Table ``table`` (default: the first that is not the event log) as an ``xarray.Dataset``
@@ -129,6 +211,8 @@ class Result:
                     f"non-finite result: {name}.{table.columns[col].name} = {table.data[row, col]} "
                     f"at {first.name} = {table.data[row, 0]:g} {first.unit} (row {row})")
         _check_json_finite(self.summary, "summary")
+        _check_json_finite([h.to_json() for h in self.headline], "headline")
+        _check_json_finite([c.to_json() for c in self.checks], "checks")
 
 
 def _json_scalar(value):

@@ -48,6 +48,7 @@ from symmech.grain.body import Ellipsoid, euler_from_matrix
 
 SOLVERS = ("robust", "paper", "paper-corrected", "scipy")
 ENERGY_RTOL = 1e-9  # relative slack before a kinetic-energy gain counts as created energy
+RESIDUAL_TOLERANCE = 1e-8  # relative residual of (19) below which an impact counts as solved
 GIMBAL_WARN = 1e-2  # |sin theta| below this: Euler rates amplified by 1/sin theta, warn
 GIMBAL_UNDEFINED = 1e-9  # |sin theta| below this: psi' and phi' are not defined
 
@@ -457,7 +458,7 @@ def solve_impact(body: Ellipsoid, Q, v_c, omega, e: float, lam: float, solver: s
         if not ok:
             warnings.append("scipy.optimize.root reports failure")
     residual = float(residual_19(H, m, e, lam, uK0, T, mu))
-    converged = bool(residual < 1e-8)  # False for NaN too
+    converged = bool(residual < RESIDUAL_TOLERANCE)  # False for NaN too
     if not converged:
         warnings.append(f"solver '{solver}' did not solve (19): relative residual {residual:.3g}")
     v_after = v_c + T / m

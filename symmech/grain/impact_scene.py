@@ -15,7 +15,7 @@ import numpy as np
 from symmech.core import precision as wp
 from symmech.core import registry
 from symmech.core.context import Context
-from symmech.core.results import Result
+from symmech.core.results import Check, Headline, Result, at_most
 from symmech.core.scene import SceneError
 from symmech.core.schema import Choice, Float, Int, Str, Table, plot_output
 from symmech.core.watchdog import watchdog
@@ -23,8 +23,8 @@ from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
 from symmech.grain import fields, plots
 from symmech.grain.body import Ellipsoid, euler_from_matrix, rotation
-from symmech.grain.impact import (SOLVERS, DescentOptions, euler_rates, impact_geometry, solve_descent_batch,
-                                  solve_impact, solve_robust_batch, solve_scipy)
+from symmech.grain.impact import (ENERGY_RTOL, RESIDUAL_TOLERANCE, SOLVERS, DescentOptions, euler_rates,
+                                  impact_geometry, solve_descent_batch, solve_impact, solve_robust_batch, solve_scipy)
 
 # CPU time of the paper's descent per step and per golden-section iteration (measured on the
 # default scene with `paper-corrected`, 200-1000 steps, 60-200 iterations), for the estimate.
@@ -157,7 +157,28 @@ def run(sc: ImpactScene, ctx: Context) -> Result:
     def draw(folder: Path) -> list[Path]:
         return plots.impact_plots(H, sc, result, folder, sc.output)
 
-    return Result("impact", summary, plots=draw, warnings=list(result.warnings) + ([gimbal] if gimbal else []))
+    return Result("impact", summary, plots=draw, warnings=list(result.warnings) + ([gimbal] if gimbal else []),
+                  headline=_headline(result), checks=_checks(result))
+
+
+def _headline(r) -> list[Headline]:
+    """The impulse and the state just after the impact."""
+    lost = r.ke_before - r.ke_after
+    return [Headline("normal impulse", r.T[2], "N s", "T_z, along the plane's normal"),
+            Headline("tangential impulse", float(np.hypot(r.T[0], r.T[1])), "N s", "|(T_x, T_y)|, friction"),
+            *(Headline(f"centre velocity after, {x}", v, "m/s", "velocity of the centre just after the impact")
+              for x, v in zip("xyz", r.v_c_after)),
+            Headline("angular speed after", float(np.linalg.norm(r.omega_after)), "rad/s", "|omega| after the impact"),
+            Headline("rebound velocity of the contact point", r.uK_after[2], "m/s", "u_Kz after the impact"),
+            Headline("kinetic energy lost", lost, "J", f"{100 * lost / r.ke_before:.3g} % of the energy before")]
+
+
+def _checks(r) -> list[Check]:
+    return [at_most("impact equations (19) solved (relative residual)", r.residual, RESIDUAL_TOLERANCE),
+            at_most("kinetic energy after / before (no energy created)", r.ke_after / r.ke_before,
+                    1 + ENERGY_RTOL),
+            Check("an admissible root: no energy created, no pull into the plane", float(r.admissible), "1",
+                  "= 1 (admissible)", "pass" if r.admissible else "fail")]
 
 
 # --------------------------------------------------------------------------- precision

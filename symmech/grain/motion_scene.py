@@ -18,7 +18,7 @@ import numpy as np
 from symmech.core import precision as wp
 from symmech.core import registry
 from symmech.core.context import Context
-from symmech.core.results import Column, Result, Table
+from symmech.core.results import Check, Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table as Fields, Vector, plot_output
 from symmech.core.watchdog import watchdog
@@ -398,12 +398,65 @@ def run(sc: GrainScene, ctx: Context) -> Result:
                "wall_time_s": time.perf_counter() - started, "estimate": {"seconds": cost.seconds, "what": cost.what},
                **m.summary()}
     warnings = summary.pop("warnings")
+    checks = _checks(summary, m.impacts)
+    if summary["bounces"]:
+        sampling, advice = _sampling(sc, summary)
+        checks.append(sampling)
+        warnings += advice
 
     def draw(folder: Path) -> list[Path]:
         return plots.motion_plots(sc, m, folder, sc.output)
 
     return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
-                  plots=draw, warnings=warnings, events="impacts")
+                  plots=draw, warnings=warnings, events="impacts", headline=_headline(summary), checks=checks)
+
+
+MIN_SAMPLES_PER_IMPACT = 2  # trajectory rows per mean interval between impacts, to draw the bounces
+
+
+def _headline(s: dict) -> list[Headline]:
+    """Transport velocity, time shares, impacts, dissipation: the answers of a grain run."""
+    over = f"mean over {s['duration_s']:.4g} s"
+    vx, vy = s["mean_transport_velocity_m_s"]
+    out = [Headline("transport velocity along the slope", vx, "m/s", "net displacement along X / duration", over),
+           Headline("transport velocity across the slope", vy, "m/s", "net displacement along Y / duration", over)]
+    for regime, share in s["time_fraction"].items():
+        spent = "in flight" if regime == "flight" else regime
+        out.append(Headline(f"time {spent}", 100 * share, "%", f"share of the run spent {spent}"))
+    out += [Headline("impacts", s["bounces"], "1", "rows of impacts.csv"),
+            Headline("energy dissipated by impacts", s["energy_dissipated_by_impacts_J"], "J",
+                     "sum of ke_before - ke_after over impacts.csv")]
+    budget = s.get("energy_budget")
+    if budget:
+        lost = budget["lost_in_impacts_J"] + budget["lost_at_landings_J"] + budget["lost_in_sliding_J"]
+        out.append(Headline("energy dissipated in all", lost, "J", "impacts, landings and sliding friction"))
+    return out
+
+
+def _checks(s: dict, impacts: list) -> list[Check]:
+    out = [at_most("impacts creating energy", s["impacts_creating_energy"], 0),
+           at_most("impacts whose solver did not converge", sum(not i["converged"] for i in impacts), 0)]
+    budget = s.get("energy_budget")
+    if budget:
+        out.insert(0, at_most("energy balance closes (relative residual)", budget["relative_residual"],
+                              budget["tolerance"]))
+    if any(i["printed_creates_energy"] is not None for i in impacts):
+        out.append(at_most("impacts where the printed law would create energy",
+                           s["impacts_where_printed_law_creates_energy"], 0, otherwise="warn"))
+    return out
+
+
+def _sampling(sc: GrainScene, s: dict) -> tuple[Check, list[str]]:
+    """Can the trajectory show the bounces? Its rows per mean interval between impacts, and advice if not."""
+    gap = s["duration_s"] / s["bounces"]
+    per_impact = gap / sc.numerics.sample_interval
+    check = Check("trajectory rows per mean interval between impacts", per_impact, "1",
+                  f">= {MIN_SAMPLES_PER_IMPACT}", "pass" if per_impact >= MIN_SAMPLES_PER_IMPACT else "warn")
+    if check.verdict == "pass":
+        return check, []
+    return check, [f"grain: {s['bounces']} impacts in {s['duration_s']:.4g} s, one every {gap:.3g} s on average, "
+                   f"but trajectory rows every {sc.numerics.sample_interval:.3g} s: set numerics.sample_interval "
+                   f"<= {gap / MIN_SAMPLES_PER_IMPACT:.3g} s to see the bounces"]
 
 
 TRAJECTORY = (Column("t", "s", "time"), *(Column(x, "m", f"centre {x}, KXYZ, relative") for x in "xyz"),

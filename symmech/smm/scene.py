@@ -25,7 +25,7 @@ import numpy as np
 import scipy.linalg
 
 from symmech.core import registry
-from symmech.core.results import Column, Result, Table
+from symmech.core.results import Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
 from symmech.smm import build, numeric
 from symmech.smm.chain import chain_spec, exact_omega2
@@ -41,6 +41,7 @@ DENSE_RUN_LIMIT = 3000
 JSON_LIMIT = 200
 # Warn when the eigenvalue spread costs more than this relative accuracy in omega^2.
 CONDITION_WARN = 1e-8
+EQUILIBRIUM_TOLERANCE = 1e-8  # |dPi/dq| relative to the largest stiffness entry (times 1 m or 1 rad)
 FLOP_SECONDS = 1e-10  # rough seconds per dense floating-point operation (LAPACK, 2 cores), for estimates
 
 
@@ -119,7 +120,9 @@ def run(setup: Setup, ctx) -> Result:
     numeric.check_mass(m, a)
     # dPi/dq [N or N m] against the stiffness scale times 1 m (or 1 rad)
     res = float(np.abs(num.residual).max())
-    if res > 1e-8 * max(np.abs(c).max(), 1.0):
+    equilibrium = at_most("equilibrium: max |dPi/dq| / stiffness scale (eq. (5))", res / max(np.abs(c).max(), 1.0),
+                          EQUILIBRIUM_TOLERANCE, otherwise="warn")
+    if equilibrium.verdict != "pass":
         worst = m.coordinate_names[int(np.argmax(np.abs(num.residual)))]
         warnings.append(f"the configuration is not an equilibrium: dPi/dq = {res:.3g} on '{worst}' (eq. (5)); "
                         "set [equilibrium] solve = true or fix the preloads")
@@ -173,7 +176,41 @@ def run(setup: Setup, ctx) -> Result:
         "neglected_effects": eff_report,
         "generated_module": next((k for k in files if k.endswith(".py")), None),
     }
-    return Result("mechanism", summary, tables, files, plots, warnings)
+    checks = [equilibrium, at_most("unstable modes (negative omega^2)", cls.count("unstable"), 0),
+              at_most("round-off of the lowest omega^2 (stiffness spread x machine epsilon)", md.spread * eps,
+                      CONDITION_WARN, otherwise="warn")]
+    return Result("mechanism", summary, tables, files, plots, warnings, headline=_headline(m, omega, md, tables),
+                  checks=checks)
+
+
+HEADLINE_MODES = 6  # natural frequencies in the headline (all are in modes.csv)
+
+
+def _headline(m: Mechanism, omega: list, md, tables: dict) -> list[Headline]:
+    """The lowest natural frequencies with their damping ratios, rigid-body modes, the largest responses."""
+    elastic = [(i, w) for i, w in enumerate(omega) if w]
+    out = [Headline(f"natural frequency f{i + 1}", w / (2 * math.pi), "Hz",
+                    "overdamped" if md.zeta[i] is None else f"damping ratio {md.zeta[i]:.3g}")
+           for i, w in elastic[:HEADLINE_MODES]]
+    if md.kinds.count("rigid"):
+        out.append(Headline("rigid-body modes", md.kinds.count("rigid"), "1",
+                            "omega = 0: the mechanism can move freely"))
+    if "free_response" in tables:
+        q = tables["free_response"]
+        values = np.abs(q.data[:, 1:])
+        i, j = np.unravel_index(np.argmax(values), values.shape)
+        co = m.coordinates[j]
+        out.append(Headline(f"largest free response, {co.name}", q.data[i, j + 1], co.unit,
+                            "largest |q| of free_response.csv", f"t = {q.data[i, 0]:.4g} s"))
+    if "frequency_response" in tables:
+        h = tables["frequency_response"]
+        amplitude = h.data[:, 1:1 + len(m.coordinates)]
+        i, j = np.unravel_index(np.argmax(amplitude), amplitude.shape)
+        co = m.coordinates[j]
+        out.append(Headline(f"largest frequency response, {co.name}", amplitude[i, j], co.unit,
+                            "amplitude of q for a unit harmonic force (frequency_response.csv)",
+                            f"omega = {h.data[i, 0]:.4g} rad/s ({h.data[i, 0] / (2 * math.pi):.4g} Hz)"))
+    return out
 
 
 def _effects_report(m: Mechanism, w2: np.ndarray, warnings: list) -> dict:

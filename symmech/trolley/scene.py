@@ -18,9 +18,9 @@ import numpy as np
 from symmech.core import expressions, registry
 from symmech.core import schema as sc
 from symmech.core.context import Context
-from symmech.core.results import Column, Result, Table
+from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import elastic_scene, model, plots, tables, track as tracks
+from symmech.trolley import elastic_review, elastic_scene, model, plots, tables, track as tracks
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -571,6 +571,14 @@ def run(setup: Setup, ctx) -> Result:
         result.tables[f"case{case}"] = Table(CASE_COLUMNS, np.column_stack([setup.t, r["V"], r["a"], r["P"]]))
         result.tables[f"case{case}_overload"] = Table(OVERLOAD_COLUMNS, np.column_stack([setup.t, r["overload"]]))
         summary["cases"][f"case{case}"] = _case_summary(setup, case, r, ctx)
+        result.headline += _case_headline(setup, case, r)
+        result.checks += [within(f"case {case}: overload n{k + 1} in the comfort envelope", n.min(), n.max(),
+                                 envelope, "g") for k, (n, envelope) in enumerate(zip(r["overload"].T,
+                                                                                      setup.comfort.values()))]
+        if "small_angle_defect_max" in summary["cases"][f"case{case}"]:
+            result.checks.append(at_most(f"case {case}: small-angle correction (13)-(14) in range (defect)",
+                                         summary["cases"][f"case{case}"]["small_angle_defect_max"],
+                                         setup.small_angle_limit, otherwise="warn"))
     if setup.paper_tables:
         other = compute(setup, "physics" if setup.conventions == "paper" else "paper", ctx)
         paper, physics = (res, other) if setup.conventions == "paper" else (other, res)
@@ -581,13 +589,36 @@ def run(setup: Setup, ctx) -> Result:
         elastic = elastic_scene.run(setup.elastic, ctx, setup.comfort)
         result.tables.update(elastic.tables)
         summary.update(elastic.summary)
-        for warning in elastic.warnings:
+        headline, checks, warnings = elastic_review.review(setup.elastic, elastic)
+        result.headline += headline
+        result.checks += checks
+        for warning in elastic.warnings + warnings:
             ctx.warn(warning)
 
     def draw(folder):
         return plots.write_all(setup, res, folder, setup.output) + (elastic.plots(folder, setup.output) if elastic else [])
     result.plots = draw
     return result
+
+
+def _case_headline(setup, case, r) -> list[Headline]:
+    """Per axis the overload extreme nearest to (or furthest beyond) the comfort envelope, and the peak
+    reactions of a case, with time and place."""
+    def at(i):
+        return f"t = {setup.t[i]:.4g} s, s = {r['s'][i]:.4g} m"
+
+    out = []
+    for k, (axis, (lo, hi)) in enumerate(setup.comfort.items()):
+        n = r["overload"][:, k]
+        i_max, i_min = int(np.argmax(n)), int(np.argmin(n))
+        i = i_max if hi - n[i_max] <= n[i_min] - lo else i_min  # the smaller margin to the envelope
+        out.append(Headline(f"case {case}: critical overload n{k + 1}", n[i], "g",
+                            f"along {axis}: the extreme nearest to or beyond the comfort envelope [{lo:g}, {hi:g}] g",
+                            at(i)))
+    for j, column in enumerate(CASE_COLUMNS[7:]):
+        i = int(np.argmax(np.abs(r["P"][:, j])))
+        out.append(Headline(f"case {case}: peak reaction {column.name}", r["P"][i, j], "N", column.doc, at(i)))
+    return out
 
 
 def _check_finite_case(setup, case, r):
