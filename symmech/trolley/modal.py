@@ -112,10 +112,10 @@ def track(samples) -> tuple[list, list, np.ndarray]:
 
 def curvature_hessian(system: el.System, q: np.ndarray) -> np.ndarray:
     """Hessian (N, N) at q of the bending energy the model leaves out, of the same order as its
-    quadratic axial fields: Π_c = ½ EI ∫ g² dx, g = w1' w1'' + w2' w2'' (the quartic part of
-    ½ EI ∫ κ² for an inextensible beam, κ² = |r''|² = w1''² + w2''² + g² + O(w⁶), primes d/dx),
-    per beam with EI the larger of its two planes (exact for equal planes or bending in one
-    plane, a bound otherwise) [N/m or N m/rad]."""
+    quadratic axial fields [N/m]: Π_c = ½ ∫ g² dx, g = Σ_p √EI_p w_p' w_p'' over the two planes
+    (primes d/dx). For bending in one plane it is the quartic part of ½ EI ∫ κ² of an
+    inextensible beam, κ² = w''²/(1 - w'²) = w''² + w'² w''² + O(w⁶); across the planes it is
+    exact for equal stiffness (κ² = |r''|²) and an estimate otherwise (torsion left out)."""
     H = np.zeros((system.N, system.N))
     if not system.mdl.effects.body:
         return H
@@ -123,18 +123,21 @@ def curvature_hessian(system: el.System, q: np.ndarray) -> np.ndarray:
     xi, wg = (xg + 1) / 2, wg / 2
     names = system.inv.names
     for b, beam in enumerate(system.mdl.beams):
-        basis = el.beam_basis(beam.support, xi)[0][:, :, :beam.modes]
+        n = beam.modes
+        basis = el.beam_basis(beam.support, xi)[0][:, :, :n]
         d1, d2 = basis[:, 1] / beam.length, basis[:, 2] / beam.length ** 2  # (P, n) d/dx, d²/dx²
-        idx = [[names.index(f"beam{b}_p{p}_m{k + 1}") for k in range(beam.modes)] for p in (1, 2)]
-        g = sum((d1 @ q[i]) * (d2 @ q[i]) for i in idx)
-        grad = np.concatenate([d1 * (d2 @ q[i])[:, None] + d2 * (d1 @ q[i])[:, None] for i in idx], axis=1)
+        idx = [[names.index(f"beam{b}_p{p}_m{k + 1}") for k in range(n)] for p in (1, 2)]
+        root = np.sqrt(beam.ei)
+        g = sum(c * (d1 @ q[i]) * (d2 @ q[i]) for c, i in zip(root, idx))
+        grad = np.concatenate([c * (d1 * (d2 @ q[i])[:, None] + d2 * (d1 @ q[i])[:, None])
+                               for c, i in zip(root, idx)], axis=1)
         block = np.einsum("p,pk,pl->kl", wg, grad, grad)
         curl = np.einsum("p,pk,pl->kl", wg * g, d1, d2)
-        for plane in (0, 1):
-            sl = slice(plane * beam.modes, (plane + 1) * beam.modes)
-            block[sl, sl] += curl + curl.T
+        for plane, c in enumerate(root):
+            sl = slice(plane * n, (plane + 1) * n)
+            block[sl, sl] += c * (curl + curl.T)
         flat = idx[0] + idx[1]
-        H[np.ix_(flat, flat)] += max(beam.ei) * beam.length * block
+        H[np.ix_(flat, flat)] += beam.length * block
     return H
 
 
