@@ -109,3 +109,35 @@ def test_rms_shape_of_a_lone_cantilever_mode():
     assert np.abs(shapes[0]).max() == pytest.approx(expected, rel=1e-5)
     share = modal.participation(modal.components(system), system.mass(q), X)
     np.testing.assert_allclose(share.sum(axis=0), 1.0, rtol=1e-12)
+
+
+def test_roller_modes_name_their_dofs_and_shares_of_the_closed_form():
+    """Rollers alone on a straight level track, no gravity (q = 0): bounce/pitch involve u2, θ3
+    only and lateral/roll/yaw u3, θ1, θ2 (the closed-form eigenproblems of
+    tests/test_trolley_elastic.py). Each mode's dominant DOF lies in its own set, and the
+    bounce/pitch shares equal v_a² M_aa / Σ v_b² M_bb of the closed-form eigenvectors v (M_aa:
+    m and the pitch inertia about O) to 1e-9."""
+    import scipy.linalg
+    from test_trolley_elastic import roller_model, straight
+
+    k, com, inertia = (1e6, 1e6, 2e6, 1.5e6, 1e6), (0.8, 0.5, 0.0), (20.0, 30.0, 25.0)
+    system = el.System(roller_model(0.0, k, com=com, inertia=inertia + (0, 0, 0)))
+    fs = el._state_at(system, straight(10.0), 0.0, 0.0)
+    q = np.zeros(system.N)
+    omega, _, X = system.linear_modes(fs, q, shapes=True)
+    comp = modal.components(system)
+    share = modal.participation(comp, system.mass(q), X)
+    m, c = 100.0, np.asarray(com)
+    pitch_inertia = inertia[2] + m * (c @ c - c[2] ** 2)
+    Mv = np.array([[m, m * c[0]], [m * c[0], pitch_inertia]])
+    Kv = np.array([[k[0] + k[1] + k[2], k[2] * 2.0], [k[2] * 2.0, k[2] * 4.0]])
+    w2, v = scipy.linalg.eigh(Kv, Mv)
+    for j in range(2):
+        mode = int(np.argmin(np.abs(omega - np.sqrt(w2[j]))))
+        assert abs(omega[mode] / np.sqrt(w2[j]) - 1) < 1e-12
+        weight = v[:, j] ** 2 * np.array([m, pitch_inertia])
+        np.testing.assert_allclose(share[[0, 4], mode], weight / weight.sum(), rtol=1e-9)
+        assert comp.dof[np.argmax(share[:, mode])] in (1, 5) and share[[1, 2, 3], mode].max() < 1e-20
+    lateral = [i for i in range(5) if share[[1, 2, 3], i].sum() > 0.5]
+    assert len(lateral) == 3 and all(comp.dof[np.argmax(share[:, i])] in (2, 3, 4) for i in lateral)
+    assert comp.labels[:5] == ("roller_u2", "roller_u3", "roller_th1", "roller_th2", "roller_th3")
