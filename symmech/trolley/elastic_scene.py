@@ -362,8 +362,8 @@ def _resonances(setup: Setup, modes) -> list:
         near = (fj > 0) & (f > 0) & (np.abs(f - fj) <= setup.resonance_band * fj)
         if near.any():
             i, k = np.argwhere(near)[0]
-            out.append(f"elastic: natural frequency of mode {k + 1} ({modes['label'][i][k]}) {f[i, k]:.4g} Hz is within "
-                       f"{100 * setup.resonance_band:g} % of the {doc} = {fj[i, 0]:.4g} Hz at t = "
+            out.append(f"elastic: natural frequency of mode {k + 1} ({modes['label'][i][k]}) {f[i, k]:.4g} Hz is "
+                       f"within {100 * setup.resonance_band:g} % of the {doc} = {fj[i, 0]:.4g} Hz at t = "
                        f"{modes['t'][i]:.4g} s (s = {modes['s'][i]:.4g} m)")
     return out
 
@@ -438,23 +438,11 @@ def _modes(setup: Setup, r) -> dict:
         omegas.append(omega[:n])
         zetas.append(z[:n])
     order, shapes, worst = modal.track(samples)
-    out = {key: np.zeros((len(idx), n)) for key in ("f", "zeta", "participation", "group_participation",
-                                                   "curvature_shift")}
-    out.update({key: np.zeros((len(idx), n), int) for key in ("beam", "plane", "mode_number", "dof")})
-    out["label"] = []
-    out["shape"] = np.zeros((len(idx), n, len(setup.names), 3))
-    for j, (q, (M, _), X) in enumerate(zip(states, samples, shapes)):
-        omega = omegas[j][order[j]]
-        out["f"][j], out["zeta"][j] = omega / (2 * np.pi), zetas[j][order[j]]
-        share = modal.participation(comp, M, X)
-        top = np.argmax(share, axis=0)
-        for key in ("beam", "plane", "mode_number", "dof"):
-            out[key][j] = getattr(comp, key)[top]
-        out["participation"][j] = share[top, np.arange(n)]
-        out["group_participation"][j] = [share[comp.group == comp.group[k], m].sum() for m, k in enumerate(top)]
-        out["label"].append([comp.labels[k] for k in top])
-        out["curvature_shift"][j] = modal.curvature_shift(system, q, omega, X)
-        out["shape"][j] = _probe_shapes(system, q, M, X)
+    rows = [_identity(system, comp, q, M, X, omegas[j][order[j]]) for j, (q, (M, _), X)
+            in enumerate(zip(states, samples, shapes))]
+    out = {key: np.array([row[key] for row in rows]) for key in rows[0]}
+    out["label"] = [row["label"] for row in rows]
+    out["zeta"] = np.array([z[o] for z, o in zip(zetas, order)])
     j, k = np.unravel_index(np.argmax(np.abs(out["curvature_shift"])), out["f"].shape)
     out["deflection_shift"] = _deflection_shift(system, el.frame_state(fr, j, r["V0"][idx[j]], r["dV0"][idx[j]]),
                                                 samples[j][0], shapes[j][:, k], out["f"][j, k])
@@ -462,6 +450,20 @@ def _modes(setup: Setup, r) -> dict:
     forcing = forcing_frequencies(system.mdl.l, r["V0"][idx], r["W"][idx], r["dW"][idx], W_max)
     return {**out, "t": r["t"][idx], "s": r["s"][idx], "V0": r["V0"][idx], "forcing": forcing, "mac_min": worst,
             "slope": np.array([modal.beam_slope(system, q) for q in states])}
+
+
+def _identity(system: el.System, comp: modal.Components, q, M, X, omega) -> dict:
+    """Per mode (k,) at one instant (state q, mass M, modes X (N, k) of frequencies ω [rad/s]):
+    f [Hz], the dominant component, its and its group's shares, the left-out curvature shift,
+    and the shapes at the report points (k, P, 3)."""
+    share = modal.participation(comp, M, X)
+    top = np.argmax(share, axis=0)
+    return {"f": omega / (2 * np.pi), "beam": comp.beam[top], "plane": comp.plane[top],
+            "mode_number": comp.mode_number[top], "dof": comp.dof[top],
+            "participation": share[top, np.arange(len(top))],
+            "group_participation": np.array([share[comp.group == comp.group[k], m].sum() for m, k in enumerate(top)]),
+            "label": [comp.labels[k] for k in top], "curvature_shift": modal.curvature_shift(system, q, omega, X),
+            "shape": _probe_shapes(system, q, M, X)}
 
 
 def _deflection_shift(system: el.System, fs: el.FrameState, M, x, f: float) -> float:
@@ -500,7 +502,7 @@ def _modes_table(modes: dict, names: list) -> ResultTable:
                                    "the first sample)"),
             Column("f", "Hz", "natural frequency of the linearisation"), Column("zeta", "1", "damping ratio")] + \
            [Column(key, unit, doc) for key, unit, doc in MODE_KEYS] + \
-           [Column(f"shape_{name}_{k + 1}", "1", "mode shape at the report point along x{k + 1}, relative to the "
+           [Column(f"shape_{name}_{k + 1}", "1", f"mode shape at the report point along x{k + 1}, relative to the "
                    "mode's mass-weighted RMS displacement") for name in names for k in range(3)] + \
            [Column(f"forcing_{name}", "Hz", doc) for name, doc in FORCING]
     data = [rep(modes[key]) for key in ("t", "s", "V0")] + [np.tile(np.arange(1.0, n + 1), n_s)] + \
