@@ -141,3 +141,26 @@ def test_roller_modes_name_their_dofs_and_shares_of_the_closed_form():
     lateral = [i for i in range(5) if share[[1, 2, 3], i].sum() > 0.5]
     assert len(lateral) == 3 and all(comp.dof[np.argmax(share[:, i])] in (2, 3, 4) for i in lateral)
     assert comp.labels[:5] == ("roller_u2", "roller_u3", "roller_th1", "roller_th2", "roller_th3")
+
+
+def test_track_follows_a_permutation_and_flags_shapes_it_cannot_match():
+    """Synthetic samples, M = E: new vectors that are the old ones permuted and turned by
+    complex phases are matched back (order = the permutation, phases undone to 1e-15); three
+    shapes mixed evenly (the 3-point DFT / √3, every MAC 1/3) give a matched MAC of 1/3 and the
+    scene's tracking warning, which the crossing above (MAC > 0.99) does not raise."""
+    eye = np.eye(3)
+    turned = eye[:, [2, 0, 1]] * np.exp(1j * np.array([0.3, -2.0, 1.1]))
+    order, shapes, worst = modal.track([(eye, eye), (eye, turned)])
+    np.testing.assert_array_equal(order[1], [1, 2, 0])
+    np.testing.assert_allclose(shapes[1], eye, atol=1e-15)
+    np.testing.assert_allclose(worst, [1.0], rtol=1e-15)
+    dft = np.exp(2j * np.pi * np.outer(range(3), range(3)) / 3) / np.sqrt(3)
+    _, _, worst = modal.track([(eye, eye), (eye, dft)])
+    np.testing.assert_allclose(worst, [1 / 3], rtol=1e-12)
+    modes = {"t": np.array([0.0, 2.0]), "mac_min": worst, "curvature_shift": np.zeros((2, 3))}
+    warning, = elastic_scene._mode_warnings(modes)
+    assert "between t = 0 s and 2 s (a matched MAC of 0.33)" in warning
+
+
+def test_the_crossing_raises_no_mode_warning(tracked):
+    assert elastic_scene._mode_warnings(tracked[2]) == []
