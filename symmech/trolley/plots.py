@@ -151,8 +151,8 @@ def _point_overloads(setup, r, comfort: dict):
 def campbell(modes: dict):
     """Natural frequencies of the linearisation against arc length and against speed, one line
     per tracked mode (``mode_id``: crossings keep their identity), coloured by the beam plane or
-    the rollers dominating it at the first sample, with the forcing frequencies (dashed) that a
-    natural frequency should keep away from."""
+    the rollers dominating it at the first sample, with the forcing frequencies (black, dashed
+    and dotted) that a natural frequency should keep away from."""
     from symmech.trolley.elastic_scene import FORCING
 
     fig, axes = plotting.figure(1, 2, width=11.0, height=4.5, sharey=True)
@@ -164,8 +164,8 @@ def campbell(modes: dict):
         for k, group in enumerate(groups):
             ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color=colours[group],
                     label=group if groups.index(group) == k else None)
-        for j, (_, doc) in enumerate(FORCING):
-            ax.plot(x[order], modes["forcing"][order, j], ls="--", lw=1, label=doc)
+        for j, ((_, doc), style) in enumerate(zip(FORCING, ("--", ":", "-."))):
+            ax.plot(x[order], modes["forcing"][order, j], ls=style, lw=1, color="k", label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))
         ax.set_yscale("log")
         natural = modes["f"][modes["f"] > 0]
