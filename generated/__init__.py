@@ -1,13 +1,17 @@
-# symmech 0.1.0 generated module; inputs sha256 aff6ec374b8789afc4b958a40499bd87d1def6c43e3d77f43184b3558e732ba9
+# symmech 0.1.0 generated module; inputs sha256 e75bef408eeb1f34ac80ee08085091593158f1df434d56a21aaa08158828d762
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 aff6ec374b8789afc4b958a40499bd87d1def6c43e3d77f43184b3558e732ba9
+# body sha256 e75bef408eeb1f34ac80ee08085091593158f1df434d56a21aaa08158828d762
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
 ``symmech.core.kernels``). Regenerate with ``make codegen``; check with
-``symmech codegen --check``. This index is written by codegen too.
+``symmech codegen --check``. This index is written by codegen too; importing
+it checks the body hash of every module of the package as it is imported.
 """
+from symmech.core import integrity as _integrity
+
+_integrity.guard(__file__)
 
 # spec name -> the derivation module that declares it (numpy module and _nb twin)
 MODULES = {

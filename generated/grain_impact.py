@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5ce0033743a5a864d2cf2ea102e83b5a3f47aff5ed746be25740afbe4a21b15d
-# source key f464ea932e1fd6b0d28ec96bb601179faaf93ff78c7d598d4f23a648aa073b97
+# source key 3d412b8277161e09494df80c4e1bc956e85befcc0884a70537fff6d7da969b47
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

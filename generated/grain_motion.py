@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 73c6521616f02721d8dcebbddfaa45e9626db086b376d7bc4a82da9bc46277ca
-# source key 1b03fc698c1043b7c2128d622fc41f530f80a7d1efbe84321db13629d03506ed
+# source key e3496320f70a1ae807e5ad2317e0a39cba80cdb68c236b9604277df2bbdfeefd
 # body sha256 5441f52ec5cdbe84b968e01ca69ba826ecbf9877a52ee0db8aed8069e7271876
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

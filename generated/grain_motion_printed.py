@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 32677b4d18173d17deb3bcf6e2545227c9d671e098faf60a92fb0188f49c8362
-# source key 49030f15b39a488c04383f243bfd073c1fc2241522d65d945b3d092d189f1b15
+# source key 8e2984c5a638828dc8faddd46d8af6e2af20aadd9c6c2fea77a69a1884b059d8
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e00f8c1d78fed0c110570ba54b7182a9c3450851b8e93eea497a476f56156478
-# source key 49030f15b39a488c04383f243bfd073c1fc2241522d65d945b3d092d189f1b15
+# source key 8e2984c5a638828dc8faddd46d8af6e2af20aadd9c6c2fea77a69a1884b059d8
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e00e95239b914feeff45fa55f61aa6ae4cdfaaa700691445b80c2cb26ae4697
-# source key d0934599e569419a6e8d3123d3c728a7806918224970415560025e2e4c03f058
+# source key 01611681740dbea0096a779b83678861d8a563da64bebe173dd9f57f08ec2b7a
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

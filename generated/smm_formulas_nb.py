@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 67bed80f534fffc9f9e35ebc3ac08bbb284378132022055a3559249492981dcf
-# source key d0934599e569419a6e8d3123d3c728a7806918224970415560025e2e4c03f058
+# source key 01611681740dbea0096a779b83678861d8a563da64bebe173dd9f57f08ec2b7a
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 395be01cb9dc71fec711b2ed792f820a0ab756b0dd07c870d4678174410a0bbc
-# source key e0af024412e9fa65dc1c615f9fdc041347da086df25e0d8c1f39bcadb9e98d94
+# source key b4800523cebc9f8e0a0e3855095003cbd97134c0903c0eb631c7a79f739ec08b
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

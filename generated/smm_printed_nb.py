@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5162ade23d2bc45fe394879ae6ff1f7e5bfe7b620ed415c4cfaa96979a7dc6ac
-# source key e0af024412e9fa65dc1c615f9fdc041347da086df25e0d8c1f39bcadb9e98d94
+# source key b4800523cebc9f8e0a0e3855095003cbd97134c0903c0eb631c7a79f739ec08b
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

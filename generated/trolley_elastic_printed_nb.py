@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 485a22423ffd00132650353ee13c2435cf7052fdafddf93d0e6cdd2cc26e0647
-# source key 8123b6c80b5961c917a553c8a95056a9159e219d5c311f61f4b6ce8709e51d45
+# source key 8f262f1e56eb760298f42c985d47006e4a35e26367b8cf464fc040ad41908544
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

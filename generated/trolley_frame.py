@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6b57c43278f18a0150f388cd86b6a289b2b9246da539e2254987ee1807c240cc
-# source key 82113aa422ddb931d16fde9a1a75f196fad2c19422967f22449282b7e7dd96f8
+# source key ae64e0ae034907acf10899f6ffd3743c01fc14b74e561ec60779cac5ba74f735
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 94a72cbfd6c16fb231d168923b77f2d04676ff8873e62319ebf0bd4112096a6b
-# source key 82113aa422ddb931d16fde9a1a75f196fad2c19422967f22449282b7e7dd96f8
+# source key ae64e0ae034907acf10899f6ffd3743c01fc14b74e561ec60779cac5ba74f735
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

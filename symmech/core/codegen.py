@@ -45,8 +45,12 @@ _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by h
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
 ``symmech.core.kernels``). Regenerate with ``make codegen``; check with
-``symmech codegen --check``. This index is written by codegen too.
+``symmech codegen --check``. This index is written by codegen too; importing
+it checks the body hash of every module of the package as it is imported.
 """
+from symmech.core import integrity as _integrity
+
+_integrity.guard(__file__)
 '''
 
 
