@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 e75bef408eeb1f34ac80ee08085091593158f1df434d56a21aaa08158828d762
+# symmech 0.1.0 generated module; inputs sha256 b44b84f5d936eef31def0141271f4cc5846b0bbc4e252b2765068a0fff01c827
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 e75bef408eeb1f34ac80ee08085091593158f1df434d56a21aaa08158828d762
+# body sha256 b44b84f5d936eef31def0141271f4cc5846b0bbc4e252b2765068a0fff01c827
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
@@ -32,7 +32,7 @@ MODULES = {
     'trolley_frame': 'symmech.trolley.derive',
     'trolley_printed': 'symmech.trolley.printed',
 }
-# derivation module -> data files and folders its derivation reads (relative to the checkout)
+# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)
 INPUTS = {
     'symmech.grain.derive': (),
     'symmech.grain.derive_motion': (),
