@@ -49,7 +49,8 @@ CASES = [
                                                    "stop": 1e9, "num": 3})), "sweep.y"),
     # populations: names, and the fields they set or vary
     ("same-name-twice", edits(("population[1].name", "crop")), "population[1].name"),
-    ("set-list-element", edits(("population[0].set", {"body.semi_axes.x": 1e-3})), "population[0].set.body.semi_axes.x"),
+    ("set-list-element", edits(("population[0].set", {"body.semi_axes.x": 1e-3})),
+     "population[0].set.body.semi_axes.x"),
     ("set-below-a-number", edits(("population[1].set", {"duration.x": 1.0})), "population[1].set.duration.x"),
     ("set-kind", edits(("population[0].set", {"kind": "impact"})), "population[0].set.kind"),
     ("set-the-sweep", edits(("population[0].set", {"sweep.x.field": "impact.mu"})), "population[0].set.sweep.x.field"),
@@ -69,7 +70,8 @@ CASES = [
     ("vary-text", edits(("population[0].vary", {"impact.law": 0.1})), "population[0].vary.impact.law"),
     ("vary-spread-too-large", edits(("population[0].vary", {"body.semi_axes": 0.95})),
      "population[0].vary.body.semi_axes"),
-    ("set-path-not-dotted-name", edits(("population[0].set", {"body..density": 1.0})), "population[0].set.body..density"),
+    ("set-path-not-dotted-name", edits(("population[0].set", {"body..density": 1.0})),
+     "population[0].set.body..density"),
     ("count-zero", edits(("population[0].count", 0)), "population[0].count"),
     ("name-empty", edits(("population[0].name", "")), "population[0].name"),
     ("three-populations", edits(("population", BASE["population"] + [{"name": "chaff", "count": 1}])), "population"),
@@ -133,7 +135,8 @@ def test_command_line_refuses_a_bad_sweep_in_one_line(tmp_path):
 def _one_grain_sweep(tmp_path) -> Path:
     scene = tmp_path / "one.toml"
     scene.write_text('kind = "grain"\nduration = 0.02\n[body]\nsemi_axes = [1e-3, 1e-3, 1e-3]\ndensity = 1200.0\n'
-                     '[vibration]\namplitude = 1e-3\nfrequency = 25.0\n[impact]\nlaw = "printed"\ne = 0.0\nlambda = 1.0\n[numerics]\nengine = "python"\n'
+                     '[vibration]\namplitude = 1e-3\nfrequency = 25.0\n'
+                     '[impact]\nlaw = "printed"\ne = 0.0\nlambda = 1.0\n[numerics]\nengine = "python"\n'
                      '[sweep.x]\nfield = "vibration.amplitude"\nvalues = [1e-3]\n')
     return scene
 

@@ -124,8 +124,8 @@ def test_run_on_an_edited_module_is_one_line_exit_2(tmp_path, scene, name):
 def test_codegen_regenerates_an_edited_module(tmp_path):
     """codegen reads the files it checks without importing them: it names and rewrites an edited module."""
     folder = _edited_copy(tmp_path, "trolley_printed")
-    code = ("from symmech.cli import main\n"
-            f"print(main(['codegen', '--check', '--dir', {str(folder)!r}]), main(['codegen', '--dir', {str(folder)!r}]))")
+    check, write = ["codegen", "--check", "--dir", str(folder)], ["codegen", "--dir", str(folder)]
+    code = f"from symmech.cli import main\nprint(main({check!r}), main({write!r}))"
     proc = _python(folder, code, tmp_path)
     assert proc.stdout.splitlines()[-1] == "1 0", proc.stderr
     assert f"  {folder / 'trolley_printed.py'}" in proc.stderr.splitlines()

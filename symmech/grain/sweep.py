@@ -200,7 +200,7 @@ class Plan:
     names: list[str]
     grains: list
     gamma: np.ndarray  # (nx, ny) throw number at each point
-    populations: list = ()  # the resolved [[population]] tables (errors name their fields)
+    populations: list  # the resolved [[population]] tables (errors name their fields)
 
 
 def plan(raw: dict, resolved: dict) -> Plan:
