@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5ce0033743a5a864d2cf2ea102e83b5a3f47aff5ed746be25740afbe4a21b15d
-# source key 3d412b8277161e09494df80c4e1bc956e85befcc0884a70537fff6d7da969b47
+# source key bd5bf0dd63ba990c047505dff1a98a70fc7ef1edc9ebeaa15b5a0ed26737b6f8
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

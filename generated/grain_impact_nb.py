@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 69e5dbca422a2b8e77878be9ee7055d210d16304efdb28162f9f31623b810b27
-# source key 3d412b8277161e09494df80c4e1bc956e85befcc0884a70537fff6d7da969b47
+# source key bd5bf0dd63ba990c047505dff1a98a70fc7ef1edc9ebeaa15b5a0ed26737b6f8
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

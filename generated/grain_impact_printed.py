@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 60288f46cf2c497016e4df832fb727b1310effdbcc5010b310be76b28bac0752
-# source key b6545e35b7805b9ae1798b3c289a5f32b981a9e5aa5abe11724b326296928ca9
+# source key 83ab6d2472738b3663ea22a1d2fd6b73081a46dcbebf14de35ea6575ade2d529
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 43714dadaa94846561333eca8fcf72391c40dfd3a09368aa64844b38ab382f1b
-# source key b6545e35b7805b9ae1798b3c289a5f32b981a9e5aa5abe11724b326296928ca9
+# source key 83ab6d2472738b3663ea22a1d2fd6b73081a46dcbebf14de35ea6575ade2d529
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 73c6521616f02721d8dcebbddfaa45e9626db086b376d7bc4a82da9bc46277ca
-# source key e3496320f70a1ae807e5ad2317e0a39cba80cdb68c236b9604277df2bbdfeefd
+# source key b3135ce2b7d7eab3fae3f4640af93140375d5d5b1c3195334c07e1fc6d776328
 # body sha256 5441f52ec5cdbe84b968e01ca69ba826ecbf9877a52ee0db8aed8069e7271876
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

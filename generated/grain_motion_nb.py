@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1fa85f8ea266df1d650e9bcf1db715777b104a1e199be3b15ba0bb9822ed263d
-# source key e3496320f70a1ae807e5ad2317e0a39cba80cdb68c236b9604277df2bbdfeefd
+# source key b3135ce2b7d7eab3fae3f4640af93140375d5d5b1c3195334c07e1fc6d776328
 # body sha256 376c2cd3c66c578aa2dcb517ca10b34323531b6ff2c865677bddde45e17d13d8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 32677b4d18173d17deb3bcf6e2545227c9d671e098faf60a92fb0188f49c8362
-# source key 8e2984c5a638828dc8faddd46d8af6e2af20aadd9c6c2fea77a69a1884b059d8
+# source key 6eb1cba2f549cfca13ce7adcf79152c39709a9f3f1316b5213126a724aef9d3e
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e00f8c1d78fed0c110570ba54b7182a9c3450851b8e93eea497a476f56156478
-# source key 8e2984c5a638828dc8faddd46d8af6e2af20aadd9c6c2fea77a69a1884b059d8
+# source key 6eb1cba2f549cfca13ce7adcf79152c39709a9f3f1316b5213126a724aef9d3e
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cfb1f69c81a2d39b76e4d55b84dd1446e45fec46dd62d7105e529a0b1c6a1da6
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 3472c146dab5c3383f3762d27eba1dd57c306c65ba3883fb6a3a2f5558655cb9
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

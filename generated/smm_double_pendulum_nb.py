@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8f612a4c9ea501fa2869d8e57d5b57f39fcfd2660ff91ae5a4664079fae9f78b
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 0b4734cfd04f5fce556855f1bfcbfb7499e3fca6ab1b295bb3fb4ff18adda2bc
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f5c13b9bf82e264844ed9e508a0d90bc826597ef9f4ecd52ff42a9969e74e949
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 2569e8dbe001b5c7ee93f237c1f689d8763d8592f4d82cb57bc21e5eb112ac23
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

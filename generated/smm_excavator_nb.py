@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d72732a212b65128b69cf9e38b440bc5a2f028919420b74538c642de8bff5bc7
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 a8fd3b02bde9ef18205b867933f1b047581b0e765ee1c7d25d0928c35e3f198a
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e00e95239b914feeff45fa55f61aa6ae4cdfaaa700691445b80c2cb26ae4697
-# source key 01611681740dbea0096a779b83678861d8a563da64bebe173dd9f57f08ec2b7a
+# source key 124b4b7938059f4a7aabbe1e6ddbb24694b6dfd7eb6d9e091c2aba0b50580bf8
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

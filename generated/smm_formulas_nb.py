@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 67bed80f534fffc9f9e35ebc3ac08bbb284378132022055a3559249492981dcf
-# source key 01611681740dbea0096a779b83678861d8a563da64bebe173dd9f57f08ec2b7a
+# source key 124b4b7938059f4a7aabbe1e6ddbb24694b6dfd7eb6d9e091c2aba0b50580bf8
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 395be01cb9dc71fec711b2ed792f820a0ab756b0dd07c870d4678174410a0bbc
-# source key b4800523cebc9f8e0a0e3855095003cbd97134c0903c0eb631c7a79f739ec08b
+# source key de2584876ad257d9bcc4f0bd37f476f4d2f8f4769b883564176c2a9a75d712e5
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5162ade23d2bc45fe394879ae6ff1f7e5bfe7b620ed415c4cfaa96979a7dc6ac
-# source key b4800523cebc9f8e0a0e3855095003cbd97134c0903c0eb631c7a79f739ec08b
+# source key de2584876ad257d9bcc4f0bd37f476f4d2f8f4769b883564176c2a9a75d712e5
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

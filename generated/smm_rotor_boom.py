@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22269db3d7a77a744eadc128e320300db3eb4664ed2af51058d1fdb3c2885a65
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 a3799e849c8a110f03d97304fd73403042181491a82bf2af2567b9e0c7397483
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 610fa9c2ca7cf24ada5241c3694eb52e0987c0697de9fb7e63aac89947eb9574
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 c7916726620ce785f769aaf6d8702aea01b19e8baea170be3b4f0ac25506af2f
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bb2d861590a716c46c7bb67f08c457f0389e0ad13c097bd982bc3f6200542da0
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 acb736fcbddaf70d94c49e9cfd5f446a34d08d0247accf834807a01bedce8f79
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d9743de28b5baa78582437741b477f296f898d03d94053af69e73465e0e7703
-# source key 2c613008f5d0d80369985c83e4a5ffc7997aebfe501dd096e6b988b8a0ae8604
+# source key 5c8f542f9174026fbf34969a19a054c6671720c825fdd7008b6d43c7776aa663
 # body sha256 4ece90083344f7a50d028b58bb65e43fb51e3085acb00064c2bf59bea9cc240b
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

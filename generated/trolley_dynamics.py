@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9eb1e22a00fe586359bfed765339a709f929179870fcb99242f1565247f66a26
-# source key ae64e0ae034907acf10899f6ffd3743c01fc14b74e561ec60779cac5ba74f735
+# source key d8fd04819f70e27491bb55d1ac3bc0e23f3d18cdc2d4f5cfe65052df21a8874d
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

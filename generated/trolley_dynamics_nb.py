@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 12bc13b97d74739e79c138eef47c5d94c450f7c3d9f7a30d81adab93dd9dda7f
-# source key ae64e0ae034907acf10899f6ffd3743c01fc14b74e561ec60779cac5ba74f735
+# source key d8fd04819f70e27491bb55d1ac3bc0e23f3d18cdc2d4f5cfe65052df21a8874d
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4a03cb5778832bf782317a3693541f34564f3599240d3461cb7af2f04c7dc9ba
-# source key 81d998511d26f0246beac25ef0a61e3027a7f260ebb3eb922d58f7f0c82b73d4
+# source key 9741c242067cb673a01ba1469fa7309c484a26793894bba9c471fe28cc0d82c8
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

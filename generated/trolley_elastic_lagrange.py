@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11b31f1035cf317c3638ae9cd838944c8a229c1573c1f66842ad6ad8e6d918b1
-# source key 81d998511d26f0246beac25ef0a61e3027a7f260ebb3eb922d58f7f0c82b73d4
+# source key 9741c242067cb673a01ba1469fa7309c484a26793894bba9c471fe28cc0d82c8
 # body sha256 b725b081d263c108903f24ccf013d3b4db7851e0fa7254921b6e0ef55e4288b0
 """Small elastic trolley by Lagrange's equations (test route).
 

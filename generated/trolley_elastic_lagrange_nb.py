@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 87562d7ff499b0f4b0f1c5cff909a079c29ca0df1cdec4b0521da601def333ef
-# source key 81d998511d26f0246beac25ef0a61e3027a7f260ebb3eb922d58f7f0c82b73d4
+# source key 9741c242067cb673a01ba1469fa7309c484a26793894bba9c471fe28cc0d82c8
 # body sha256 bc7e7ee308cbd985522da1a5cc9daa4c5c56a6ee7e2a5281dc7fa20d9a22592a
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d08e2997f4340de022582f5c2c12f87c5551abfbcc93354b9ae992ca4057f1e9
-# source key 81d998511d26f0246beac25ef0a61e3027a7f260ebb3eb922d58f7f0c82b73d4
+# source key 9741c242067cb673a01ba1469fa7309c484a26793894bba9c471fe28cc0d82c8
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8eceb50ee3e85273f8a756e750b08972f4b035cb38656776ecd09661e09a3f42
-# source key 8f262f1e56eb760298f42c985d47006e4a35e26367b8cf464fc040ad41908544
+# source key 2db14d6f9743e1668e234938b92335e2db6b7cae5ddccf9c7d8ca2fcf4a70754
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 485a22423ffd00132650353ee13c2435cf7052fdafddf93d0e6cdd2cc26e0647
-# source key 8f262f1e56eb760298f42c985d47006e4a35e26367b8cf464fc040ad41908544
+# source key 2db14d6f9743e1668e234938b92335e2db6b7cae5ddccf9c7d8ca2fcf4a70754
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

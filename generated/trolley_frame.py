@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6b57c43278f18a0150f388cd86b6a289b2b9246da539e2254987ee1807c240cc
-# source key ae64e0ae034907acf10899f6ffd3743c01fc14b74e561ec60779cac5ba74f735
+# source key d8fd04819f70e27491bb55d1ac3bc0e23f3d18cdc2d4f5cfe65052df21a8874d
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

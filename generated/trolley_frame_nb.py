@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 94a72cbfd6c16fb231d168923b77f2d04676ff8873e62319ebf0bd4112096a6b
-# source key ae64e0ae034907acf10899f6ffd3743c01fc14b74e561ec60779cac5ba74f735
+# source key d8fd04819f70e27491bb55d1ac3bc0e23f3d18cdc2d4f5cfe65052df21a8874d
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

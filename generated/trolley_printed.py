@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2dadb0bd3d36c6eb2a5467ece50ddd8ee980297de4215e22e738e1924977e496
-# source key 042f6bbb9c4544f5ed8486d695ade00a3bfaeaa6d813e18e42fde0750613bfb9
+# source key 6bf4b72473530d6c240fc5777cf0e7e945a1c5712ac77941866d8f59189af534
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

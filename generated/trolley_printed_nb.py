@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bf94dec16a13cf86f3f59cc91a6795d665a4d103cc72e36ef485d406394043fb
-# source key 042f6bbb9c4544f5ed8486d695ade00a3bfaeaa6d813e18e42fde0750613bfb9
+# source key 6bf4b72473530d6c240fc5777cf0e7e945a1c5712ac77941866d8f59189af534
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -153,7 +153,7 @@ class _GeneratedFinder(importlib.abc.MetaPathFinder):
         if not fullname.startswith(PACKAGE + "."):
             return None
         spec = importlib.machinery.PathFinder.find_spec(fullname, path)
-        if spec is not None and type(spec.loader) is importlib.machinery.SourceFileLoader:
+        if spec is not None and spec.origin is not None:  # any file here must be an intact generated module
             spec.loader = _VerifyingLoader(fullname, spec.origin)
         return spec
 
