@@ -1,13 +1,17 @@
-# symmech 0.1.0 generated module; inputs sha256 aff6ec374b8789afc4b958a40499bd87d1def6c43e3d77f43184b3558e732ba9
+# symmech 0.1.0 generated module; inputs sha256 b44b84f5d936eef31def0141271f4cc5846b0bbc4e252b2765068a0fff01c827
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 aff6ec374b8789afc4b958a40499bd87d1def6c43e3d77f43184b3558e732ba9
+# body sha256 b44b84f5d936eef31def0141271f4cc5846b0bbc4e252b2765068a0fff01c827
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
 ``symmech.core.kernels``). Regenerate with ``make codegen``; check with
-``symmech codegen --check``. This index is written by codegen too.
+``symmech codegen --check``. This index is written by codegen too; importing
+it checks the body hash of every module of the package as it is imported.
 """
+from symmech.core import integrity as _integrity
+
+_integrity.guard(__file__)
 
 # spec name -> the derivation module that declares it (numpy module and _nb twin)
 MODULES = {
@@ -28,7 +32,7 @@ MODULES = {
     'trolley_frame': 'symmech.trolley.derive',
     'trolley_printed': 'symmech.trolley.printed',
 }
-# derivation module -> data files and folders its derivation reads (relative to the checkout)
+# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)
 INPUTS = {
     'symmech.grain.derive': (),
     'symmech.grain.derive_motion': (),

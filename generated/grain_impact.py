@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31d89fd49c7a3debc209dc334910d1d16b9a284f5b7fdd319e61159aea903296
-# source key d2b8ab7326bf162d5d27701a09dd60f942cd93bb1ce39198b1c934c9fe6ea824
+# source key dcf6d04b97f5d9962f919c179776a29683de9346583addc9cdb04e93c0ceba21
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c9834763166b2177dfec49f4723c89edb43459f5dbd993b7852e037df6204dfa
-# source key e7b054829d406b28d9f287401a25597293c162af043fe234e1df41c2d94c8e95
+# source key 8523dc29f01b6b4fc1e189cfafad36785bbfde6ccae2f8db3300be147983d642
 # body sha256 5dac3c335227263f1a6b3bda4b98fe2e51fd13666c14fefb3862e2d296086458
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

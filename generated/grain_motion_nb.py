@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2512975f0cc7ff6a11b546c75dc21f87495246a43a262cd329c7c4e859ff46b2
-# source key e7b054829d406b28d9f287401a25597293c162af043fe234e1df41c2d94c8e95
+# source key 8523dc29f01b6b4fc1e189cfafad36785bbfde6ccae2f8db3300be147983d642
 # body sha256 906cc9e0586524a0fedec0ce638ac68e8a6a316cef6363533810ca0fd2c51d3d
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

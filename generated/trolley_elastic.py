@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a06ee0e1fdfb5e61431104f0c24929dcf2983057c0a2275f8fb0dc83044e05bf
-# source key 4223a5b0e08245db79efe259828ea67846b045d0a3281a96853ebc27f38a0b81
+# source key d4f38553046b8209c05c207af26d6106d638aead3212afe39df577516124fece
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fb81e1a11a927375f6c8de15c980d83fac263088883ed42d20fc96f263fa1206
-# source key 2e95cc089d8ce369c897b883b66ff37174652ebb33b52cdad51df3c12622d792
+# source key 24e3e44fc71d8317c812312ac81b87372e6555f0838fa02c4c09ee307753241d
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d9ea43b82555abafafd67490859b6c063ec78f33df919a0071f647ff4740e01
-# source key 458cff90a3475275a83186b3c6749660576c63a05892e6782e742a3f192a8010
+# source key 833138e131d25432a09dc4ca7fd118d732a8f1e852ed524752fde3ccf8b29dd8
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2f6acb933b6778bd5cb1c6a37b0e426505bba6c418778cc038e01b9439f44ff9
-# source key 458cff90a3475275a83186b3c6749660576c63a05892e6782e742a3f192a8010
+# source key 833138e131d25432a09dc4ca7fd118d732a8f1e852ed524752fde3ccf8b29dd8
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

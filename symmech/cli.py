@@ -39,7 +39,8 @@ def cmd_run(ns) -> int:
 def cmd_sweep(ns) -> int:
     from symmech.grain import sweep
 
-    result = sweep.run(ns.scene, ns.out, _context(ns), scheduler=ns.scheduler, workers=ns.workers)
+    result = sweep.run(ns.scene, ns.out, _context(ns), scheduler=ns.scheduler, workers=ns.workers,
+                       connect_timeout=ns.connect_timeout)
     for warning in result.warnings:
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {Path(ns.out) / 'summary.json'}")
@@ -205,7 +206,7 @@ def cmd_errata(ns) -> int:
 
 
 def _seconds(text: str) -> float:
-    """--max-time: a positive finite number of seconds (argparse reports the error)."""
+    """--max-time, --connect-timeout: a positive finite number of seconds (argparse reports the error)."""
     try:
         value = float(text)
     except ValueError:
@@ -253,6 +254,8 @@ def build_parser() -> argparse.ArgumentParser:
     _run_options(sw)
     sw.add_argument("--scheduler", metavar="ADDRESS",
                     help="address of a dask.distributed scheduler (default: a local process pool)")
+    sw.add_argument("--connect-timeout", type=_seconds, default=5.0, metavar="SECONDS",
+                    help="how long the --scheduler address may take to answer (default 5 s)")
     sw.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the CPU count)")
     sw.set_defaults(func=cmd_sweep)
 

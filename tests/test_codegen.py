@@ -1,11 +1,13 @@
 """Emission layer: reproducible, checked, sympy-free generated modules."""
 import dataclasses
 import hashlib
+import importlib.metadata
 import os
 import shutil
 import subprocess
 import sys
 import textwrap
+import types
 from pathlib import Path
 
 import numpy as np
@@ -238,6 +240,30 @@ def test_source_key_follows_imports_and_data(tmp_path):
     assert inputs["symmech.grain.derive"] == ()
     assert codegen.source_key("symmech.smm.derive", inputs["symmech.smm.derive"]) != \
         codegen.source_key("symmech.smm.derive", inputs["symmech.smm.derive"][:-1])
+
+
+def test_a_derivation_records_the_package_data_only(tmp_path, monkeypatch):
+    """What a derivation opens in a virtual environment inside the checkout (a wheel's direct_url.json, read
+    through importlib.metadata) is not an input: only bundled scenes and files of the symmech package are."""
+    checkout = tmp_path / "clone"  # a clone with `python -m venv .venv` inside it
+    metadata = checkout / ".venv/lib/python3.11/site-packages/numpy-2.2.6.dist-info"
+    metadata.mkdir(parents=True)
+    (metadata / "METADATA").write_text("Metadata-Version: 2.1\nName: numpy\nVersion: 2.2.6\n")
+    (metadata / "direct_url.json").write_text("{}")
+    monkeypatch.setattr(codegen, "ROOT", checkout)
+    monkeypatch.syspath_prepend(str(metadata.parent))
+
+    def module_specs():
+        assert importlib.metadata.distribution("numpy").read_text("direct_url.json") == "{}"
+        (codegen.scenes_folder() / "smm_excavator.toml").read_bytes()
+        (Path(codegen.__file__).parent / "output_schema.json").read_bytes()
+        return []
+
+    producer = types.ModuleType("fake_producer")
+    producer.module_specs = module_specs
+    monkeypatch.setitem(sys.modules, "fake_producer", producer)
+    assert codegen.derive.__wrapped__("fake_producer") == \
+        ((), ("scenes/smm_excavator.toml", "symmech/core/output_schema.json"))
 
 
 def test_undeclared_symbols_are_named():

@@ -13,9 +13,8 @@ import numpy as np
 import pytest
 import sympy
 
-from symmech.core import emit, integrity, kernels
+from symmech.core import emit, kernels
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
-from symmech.core.scene import SymmechError
 from symmech.generated import grain_impact as gi
 
 GENERATED = emit.default_directory()
@@ -130,14 +129,6 @@ def test_chunked_function_compiles_and_matches(tmp_path, monkeypatch):
         assert_close(numba_module.big(s_values, t_values).reshape(27, 3, 3),
                      numpy_module.big(s_values, t_values).reshape(27, 3, 3))
     assert np.isinf(numba_module.big_scalar(0.5, 1.0)[0, 1])  # error_model="numpy": no ZeroDivisionError
-
-
-def test_load_refuses_an_edited_twin(tmp_path, monkeypatch):
-    twin = tmp_path / "grain_impact_nb.py"
-    twin.write_text((GENERATED / "grain_impact_nb.py").read_text().replace("error_model=", "fastmath=True, error_model=", 1))
-    monkeypatch.setattr(integrity, "module_path", lambda name: tmp_path / f"{name}.py")
-    with pytest.raises(SymmechError, match="grain_impact_nb is edited"):
-        kernels.load.__wrapped__("grain_impact")
 
 
 def test_compiled_modules_import_numpy_numba_math_only():

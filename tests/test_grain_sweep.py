@@ -73,7 +73,7 @@ def test_a_bad_grain_of_the_population_is_named_before_any_work():
     raw = conveyor(population=pops, sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
     with pytest.raises(SceneError) as info:
         sweep.validate(build(raw))
-    assert info.value.field == "body.semi_axes[1]"
+    assert info.value.field == "population[0].set.body.semi_axes[1]"
 
 
 def test_dask_cluster_equals_serial_bit_for_bit():

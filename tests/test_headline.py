@@ -159,7 +159,7 @@ def test_elastic_headline_from_the_tables(runs, summaries):
     assert h["largest body deflection at tip"]["value"] == pytest.approx(tip, rel=1e-14) and tip > 1e-3
     assert "largest body deflection at seat" not in h  # the seat is on the rigid trolley
     modes = table(folder, "modes")
-    f = np.column_stack([v for k, v in modes.items() if re.fullmatch(r"f\d+", k)])
+    f = modes["f"]  # one row per sample and tracked mode
     assert h["lowest natural frequency"]["value"] == f[f > 0].min()
     # energy balance: max |residual| over the scale of the energy exchanged (energy.csv)
     e = table(folder, "energy")
@@ -171,8 +171,7 @@ def test_elastic_headline_from_the_tables(runs, summaries):
         n = pts[f"seat_n{k}"]
         assert c[f"elastic: overload of seat along {axis} in the comfort envelope"]["value"] == [n.min(), n.max()]
     # 100 steps over 3 s sample at 33.3 Hz: below 4 samples per period of the lightly damped modes
-    zeta = np.column_stack([v for k, v in modes.items() if re.fullmatch(r"zeta\d+", k)])
-    top = f[zeta < 0.1].max()
+    top = f[modes["zeta"] < 0.1].max()
     sampling = c["elastic: output samples per period of the highest lightly damped mode"]
     assert sampling["value"] == pytest.approx(100 / 3.0 / top, rel=1e-12) and sampling["verdict"] == "warn"
     assert any("set time.steps >= " + str(math.ceil(4 * top * 3.0)) in w for w in s["warnings"])

@@ -7,9 +7,10 @@ reference) and ``<name>_nb.py`` (numba), see :mod:`symmech.core.emit`.
 Cache: each module's header records the *source key* of its producer, a
 sha256 of the symmech and sympy versions, every template, the source text of
 the producer and of the emitter and of every symmech module they import
-(transitively, read with ``ast``, nothing imported), and the data files and
-folders the derivation read (recorded while it ran, listed in the package
-index ``generated/__init__.py``). When the key and the body hash of every
+(transitively, read with ``ast``, nothing imported), and the package data
+(bundled scenes, files in ``symmech/``) the derivation read (recorded while it
+ran, listed in the package index ``generated/__init__.py``; nothing else it
+opens counts, so the output never depends on the environment). When the key and the body hash of every
 module of a producer match, the producer is up to date without running sympy;
 otherwise it is derived and rendered, and a module counts as stale only when
 its text (source-key line aside) differs, so a refactor that does not change
@@ -39,14 +40,18 @@ SUFFIXES = ("", "_nb")  # emit.TARGETS' suffixes, repeated here so the fast path
 # The emitter's own files feed every key (not their imports: the error class's module does not shape output).
 EMITTER = ("symmech.core.emit", "symmech.core.integrity", "symmech.core.derivation")
 _PACKAGE_DIR = Path(symmech.__file__).resolve().parent
-ROOT = _PACKAGE_DIR.parent  # the repository in a checkout; data paths are stored relative to it
+ROOT = _PACKAGE_DIR.parent  # the repository in a checkout (where `symmech codegen` writes by default)
 _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
 ``symmech.core.kernels``). Regenerate with ``make codegen``; check with
-``symmech codegen --check``. This index is written by codegen too.
+``symmech codegen --check``. This index is written by codegen too; importing
+it checks the body hash of every module of the package as it is imported.
 """
+from symmech.core import integrity as _integrity
+
+_integrity.guard(__file__)
 '''
 
 
@@ -179,20 +184,25 @@ def module_specs() -> list:
 
 
 def _data_name(path: Path) -> str | None:
-    """Checkout-relative name of a data file read by a derivation (None outside the package).
+    """Name of a data file or folder a derivation read; None when it is not the package's own data.
 
-    Bundled scenes install as package data (``symmech/scenes`` in site-packages), so
-    they are named ``scenes/...`` in a checkout and an installed package alike."""
+    Only the package's data counts: the bundled scenes (``scenes/...``; they install as package
+    data in ``symmech/scenes``, so the name is the same in a checkout and an installed package) and
+    files inside the ``symmech`` package (``symmech/...``). Whatever else a derivation happens to
+    open (a library's metadata in a virtual environment inside the checkout, say) is the
+    environment, not an input: generated code never depends on where or with what symmech is installed."""
     scenes = scenes_folder().resolve()
     if path == scenes or scenes in path.parents:
         return Path("scenes", path.relative_to(scenes)).as_posix()
-    return path.relative_to(ROOT).as_posix() if ROOT in path.parents else None
+    if _PACKAGE_DIR in path.parents:
+        return Path("symmech", path.relative_to(_PACKAGE_DIR)).as_posix()
+    return None
 
 
 def _data_path(name: str) -> Path:
     """The file or folder behind a name of :func:`_data_name`."""
     head, _, rest = name.partition("/")
-    return scenes_folder() / rest if head == "scenes" else ROOT / name
+    return (scenes_folder() if head == "scenes" else _PACKAGE_DIR) / rest
 
 
 # -- the package index ----------------------------------------------------------
@@ -208,7 +218,7 @@ class Index:
         lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module and _nb twin)",
                  "MODULES = {"]
         lines += [f"    {n!r}: {p!r}," for n, p in sorted(self.modules.items())]
-        lines += ["}", "# derivation module -> data files and folders its derivation reads (relative to the checkout)",
+        lines += ["}", "# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)",
                   "INPUTS = {"]
         lines += [f"    {p!r}: {tuple(d)!r}," for p, d in sorted(self.inputs.items())]
         body = "\n".join(lines + ["}", ""])

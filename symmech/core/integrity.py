@@ -12,10 +12,22 @@ detects a module left from another symmech release; ``I`` (everything the text
 is made from, needs sympy) and ``K`` (the codegen cache key, see
 :mod:`symmech.core.codegen`) are for ``symmech codegen``. Files are written
 through :func:`write_atomic`, so a reader never sees a partial module.
+
+Every import of a generated module is checked, by any path (``import
+symmech.generated.X``, ``from symmech.generated import X``,
+``importlib.import_module``, :func:`symmech.core.kernels.load`): the package's
+``__init__.py`` (written by codegen) calls :func:`guard`, which checks the index
+itself and puts a finder first on ``sys.meta_path`` whose loader hashes each
+``symmech.generated.*`` module before executing it. A damaged module raises
+:class:`SymmechError` (the CLI: one line naming the module and ``symmech
+codegen``, exit 2). Each file version (path, mtime, size) is hashed once per
+process.
 """
 from __future__ import annotations
 
 import hashlib
+import importlib.abc
+import importlib.machinery
 import importlib.util
 import os
 import re
@@ -66,22 +78,27 @@ def split(text: str) -> tuple[Header | None, str]:
     return Header(**match.groupdict()), text[match.end():]
 
 
-def problem(path: Path) -> str | None:
-    """Why the generated module at ``path`` cannot be used, or None when it is intact."""
+def _inspect(path: Path) -> tuple[str | None, str | None]:
+    """(recorded body sha256, None) of an intact module; (None, why it cannot be used) otherwise."""
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
-        return "missing"
+        return None, "missing"
     except (OSError, UnicodeDecodeError) as exc:
-        return f"unreadable ({exc.__class__.__name__})"
+        return None, f"unreadable ({exc.__class__.__name__})"
     header, body = split(text)
     if header is None:
-        return "edited (no symmech header)"
+        return None, "edited (no symmech header)"
     if sha256(body) != header.body:
-        return "edited or truncated (body sha256 differs from its header)"
+        return None, "edited or truncated (body sha256 differs from its header)"
     if header.version != __version__:
-        return f"stale (written by symmech {header.version}, this is {__version__})"
-    return None
+        return None, f"stale (written by symmech {header.version}, this is {__version__})"
+    return header.body, None
+
+
+def problem(path: Path) -> str | None:
+    """Why the generated module at ``path`` cannot be used, or None when it is intact."""
+    return _inspect(path)[1]
 
 
 def module_path(module_name: str) -> Path:
@@ -93,14 +110,60 @@ def module_path(module_name: str) -> Path:
     return Path(spec.origin)
 
 
+_verified: dict[tuple[str, int, int], str] = {}  # (path, mtime ns, size) -> body sha256 of an intact file
+
+
+def verify_file(name: str, path: Path) -> str:
+    """Recorded body sha256 of the intact module ``name`` at ``path``; SymmechError otherwise.
+
+    A file is hashed once per process unless it changes (a new mtime or size)."""
+    try:
+        stat = os.stat(path)
+        stamp = (os.fspath(path), stat.st_mtime_ns, stat.st_size)
+    except OSError:
+        stamp = None
+    if stamp in _verified:
+        return _verified[stamp]
+    body, why = _inspect(path)
+    if why is not None:
+        raise SymmechError(f"generated module {name} is {why}: regenerate with `symmech codegen`")
+    if stamp is not None:
+        _verified[stamp] = body
+    return body
+
+
 def verify(module_name: str) -> str:
     """Recorded body sha256 of an intact generated module; SymmechError otherwise."""
     name = module_name.removeprefix(PACKAGE + ".")
-    path = module_path(name)
-    why = problem(path)
-    if why is not None:
-        raise SymmechError(f"generated module {name} is {why}: regenerate with `symmech codegen`")
-    return split(path.read_text(encoding="utf-8"))[0].body
+    return verify_file(name, module_path(name))
+
+
+class _VerifyingLoader(importlib.machinery.SourceFileLoader):
+    """Executes a generated module only after :func:`verify_file` accepted its file."""
+
+    def exec_module(self, module):
+        verify_file(self.name.removeprefix(PACKAGE + "."), Path(self.path))
+        super().exec_module(module)
+
+
+class _GeneratedFinder(importlib.abc.MetaPathFinder):
+    """Finds ``symmech.generated.*`` as the path finder does, with a verifying loader."""
+
+    def find_spec(self, fullname, path, target=None):
+        if not fullname.startswith(PACKAGE + "."):
+            return None
+        spec = importlib.machinery.PathFinder.find_spec(fullname, path)
+        if spec is not None and spec.origin is not None:  # any file here must be an intact generated module
+            spec.loader = _VerifyingLoader(fullname, spec.origin)
+        return spec
+
+
+def guard(index_file: str) -> None:
+    """Called by ``symmech.generated``'s ``__init__``: refuse a damaged index, then verify every module
+    of the package as it is imported (the finder is installed once per process)."""
+    verify_file("__init__", Path(index_file))
+    if not any(isinstance(finder, _GeneratedFinder) for finder in sys.meta_path):
+        sys.meta_path.insert(0, _GeneratedFinder())
 
 
 def used_modules() -> dict[str, str]:

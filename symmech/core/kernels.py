@@ -7,7 +7,8 @@ float (scalar quantities) or a float64 array of the element shape (``rhs_scalar`
 and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``); ``f_into(...,
 out)`` writes it into ``out[0]``. Runtime
 code written against ``load`` runs everywhere; only its speed differs. The
-module is verified first (:func:`symmech.core.integrity.verify`).
+import verifies the module, as every import of ``symmech.generated`` does
+(:mod:`symmech.core.integrity`).
 """
 from __future__ import annotations
 
@@ -15,7 +16,6 @@ import functools
 import importlib
 from types import SimpleNamespace
 
-from symmech.core import integrity
 from symmech.core.integrity import PACKAGE
 
 
@@ -46,9 +46,8 @@ def load(name: str):
     try:
         import numba  # noqa: F401  (the twin needs it; without it the numpy module stands in)
     except ImportError:
-        integrity.verify(name)
+        pass
     else:
-        integrity.verify(f"{name}_nb")
         return importlib.import_module(f"{PACKAGE}.{name}_nb")
     reference = importlib.import_module(f"{PACKAGE}.{name}")
     # the layout of a dynamics module's rhs(t, y, p)

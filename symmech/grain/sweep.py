@@ -27,6 +27,7 @@ from symmech.core import schema as s
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError
 
+CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (--connect-timeout)
 FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
 # the fields a sweep may vary, with their units
 SWEPT = {"vibration.amplitude": "m", "vibration.frequency": "Hz", "vibration.angle_deg": "deg",
@@ -42,10 +43,51 @@ def _values(path, value):
 
 
 def _check_axis(axis: dict, path: str) -> None:
-    if axis["values"] is None and axis["num"] is None:
+    if axis["values"] is not None:
+        for key in ("start", "stop", "num", "log"):
+            if axis[key] is not None and axis[key] is not False:
+                raise SceneError(f"{path}.{key}", "give either values = [...] or start, stop and num, not both")
+        repeated = sorted({v for v in axis["values"] if axis["values"].count(v) > 1})
+        if repeated:
+            raise SceneError(f"{path}.values", f"the values must differ; {repeated[0]:g} repeats")
+        return
+    if axis["num"] is None:
         raise SceneError(f"{path}.values", "give values = [...] or start, stop and num")
-    if axis["values"] is None and (axis["start"] is None or axis["stop"] is None):
-        raise SceneError(f"{path}.start", "start and stop are required with num")
+    for key in ("start", "stop"):
+        if axis[key] is None:
+            raise SceneError(f"{path}.{key}", "start and stop are required with num")
+        if axis["log"] and axis[key] <= 0:
+            raise SceneError(f"{path}.{key}", f"log = true spaces values geometrically: {key} must be > 0, "
+                                              f"got {axis[key]:g}")
+    if axis["num"] > 1 and axis["start"] == axis["stop"]:
+        raise SceneError(f"{path}.stop", f"equals start ({axis['start']:g}): the {axis['num']} values would repeat")
+
+
+def _check_plane(sweep: dict, path: str) -> None:
+    if sweep["y"] is not None and sweep["y"]["field"] == sweep["x"]["field"]:
+        raise SceneError(f"{path}.y.field", f"{sweep['x']['field']} is already swept by {path}.x")
+
+
+# Top-level keys of the grain scene that a population may not set or vary: they are not grain fields.
+NOT_GRAIN_FIELDS = ("kind", "sweep", "population")
+
+
+def _check_population(pop: dict, path: str) -> None:
+    for table in ("set", "vary"):
+        for key in pop[table]:
+            if key.split(".")[0] in NOT_GRAIN_FIELDS:
+                raise SceneError(f"{path}.{table}.{key}", f"{key} is not a grain field a population can change")
+            if pop["random_orientation"] and key == "body.orientation":
+                raise SceneError(f"{path}.{table}.{key}", "random_orientation = true draws body.orientation; "
+                                                          "drop one of the two")
+
+
+def _check_names(pops: list, path: str) -> None:
+    for k, pop in enumerate(pops):
+        first = next(i for i, other in enumerate(pops) if other["name"] == pop["name"])
+        if first != k:
+            raise SceneError(f"{path}[{k}].name", f"{pop['name']!r} is already the name of {path}[{first}] "
+                                                  "(each population writes sweep_<name>.csv)")
 
 
 AXIS = s.Table("a swept field", {
@@ -63,7 +105,7 @@ SWEEP = s.Table("the swept plane (used by `symmech sweep`; `symmech run` ignores
     "y": s.Table(AXIS.doc, AXIS.fields, checks=AXIS.checks, default=None),
     "duration": s.Float("simulated time per grain (default: the scene's duration)", unit="s", lo=0.0,
                         lo_open=True, hi=1e4, default=None),
-}, default=None)
+}, default=None, checks=(_check_plane,))
 
 POPULATION = s.Table("a population of grains", {
     "name": s.Str("name used in the outputs", pattern=r"[A-Za-z][A-Za-z0-9_-]{0,31}"),
@@ -76,9 +118,11 @@ POPULATION = s.Table("a population of grains", {
                       "times a uniform factor in [1 - spread, 1 + spread]",
                       value=s.Float("relative spread", lo=0.0, hi=0.9), key_pattern=FIELD_PATH, default={}),
     "random_orientation": s.Bool("draw body.orientation uniformly over all rotations", default=False),
-})
-POPULATIONS = s.TableList("one or two grain populations (default: one grain, the scene itself)",
-                          item=POPULATION, min_items=1, max_items=2, default=None)
+}, checks=(_check_population,))
+POPULATIONS = s.TableList("one or two grain populations with distinct names (default: one grain, the scene "
+                          "itself)", item=POPULATION, min_items=1, max_items=2, default=None,
+                          checks=(_check_names,))
+MAX_GRAIN_RUNS = 100_000  # grains times points: every grain scene is built and validated before any run
 
 
 def axis_values(axis: dict) -> np.ndarray:
@@ -97,12 +141,22 @@ def _get(data: dict, path: str):
     return node
 
 
-def _set(data: dict, path: str, value) -> None:
+def _set(data: dict, path: str, value, field: str) -> None:
+    """Set the dotted ``path`` of ``data``; a SceneError naming ``field`` when a table on the way is not one."""
     *parents, last = path.split(".")
     node = data
-    for key in parents:
+    for depth, key in enumerate(parents):
         node = node.setdefault(key, {})
+        if not isinstance(node, dict):
+            prefix = ".".join(parents[:depth + 1])
+            raise SceneError(field, f"{prefix} is {s._show(node)} in the scene, not a table: give {prefix} whole")
     node[last] = value
+
+
+def _is_vector(value) -> bool:
+    """A number, or a non-empty list of numbers (what ``vary`` scales)."""
+    items = value if isinstance(value, list) and value else [value]
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items)
 
 
 def _scaled(value, factor):
@@ -111,24 +165,27 @@ def _scaled(value, factor):
     return value * factor[0]
 
 
-def members(base: dict, population: dict) -> list[dict]:
-    """The raw grain scenes of one population (before the sweep point's fields are set)."""
+def members(base: dict, population: dict, field: str = "population[0]") -> list[dict]:
+    """The raw grain scenes of one population (before the sweep point's fields are set); ``field`` names
+    the population in errors."""
     rng = np.random.default_rng(population["seed"])
     out = []
     for _ in range(population["count"]):
         data = copy.deepcopy(base)
         for path, value in population["set"].items():
-            _set(data, path, copy.deepcopy(value))
+            _set(data, path, copy.deepcopy(value), f"{field}.set.{path}")
         for path, spread in population["vary"].items():
             value = _get(data, path)
-            if not isinstance(value, (int, float, list)) or isinstance(value, bool):
-                raise SceneError(f"population.vary.{path}", f"field {path} is not a number or vector in the scene")
+            if not _is_vector(value):
+                found = "missing" if value is None else s._show(value)
+                raise SceneError(f"{field}.vary.{path}", f"varies a number or vector of numbers of the scene; "
+                                                         f"{path} is {found}")
             size = len(value) if isinstance(value, list) else 1
-            _set(data, path, _scaled(value, rng.uniform(1 - spread, 1 + spread, size).tolist()))
+            _set(data, path, _scaled(value, rng.uniform(1 - spread, 1 + spread, size).tolist()), f"{field}.vary.{path}")
         if population["random_orientation"]:
             _set(data, "body.orientation", [float(rng.uniform(0, 2 * math.pi)),
                                             float(math.acos(rng.uniform(-1, 1))),
-                                            float(rng.uniform(0, 2 * math.pi))])
+                                            float(rng.uniform(0, 2 * math.pi))], field)
         out.append(data)
     return out
 
@@ -143,6 +200,7 @@ class Plan:
     names: list[str]
     grains: list
     gamma: np.ndarray  # (nx, ny) throw number at each point
+    populations: list  # the resolved [[population]] tables (errors name their fields)
 
 
 def plan(raw: dict, resolved: dict) -> Plan:
@@ -160,10 +218,11 @@ def plan(raw: dict, resolved: dict) -> Plan:
                                        "random_orientation": False}]
     xs = axis_values(sweep["x"])
     ys = axis_values(sweep["y"]) if sweep["y"] else np.array([np.nan])
+    _check_plan(sweep, pops, len(xs) * len(ys))
     gamma = np.empty((len(xs), len(ys)))
     grains = []
-    for pop in pops:
-        crowd = members(base, pop)
+    for k, pop in enumerate(pops):
+        crowd = members(base, pop, f"population[{k}]")
         grid = []
         for i, xv in enumerate(xs):
             row = []
@@ -171,26 +230,56 @@ def plan(raw: dict, resolved: dict) -> Plan:
                 point = []
                 for member in crowd:
                     data = copy.deepcopy(member)
-                    _set(data, sweep["x"]["field"], float(xv))
+                    _set(data, sweep["x"]["field"], float(xv), "sweep.x.field")
                     if sweep["y"]:
-                        _set(data, sweep["y"]["field"], float(yv))
+                        _set(data, sweep["y"]["field"], float(yv), "sweep.y.field")
                     point.append(data)
-                gamma[i, j] = throw_number(pipeline.load(point[0]).resolved)
+                gamma[i, j] = throw_number(load_grain(point[0], sweep, pop, k).resolved)
                 row.append(point)
             grid.append(row)
         grains.append(grid)
-    return Plan(sweep["x"], sweep["y"], [p["name"] for p in pops], grains, gamma)
+    return Plan(sweep["x"], sweep["y"], [p["name"] for p in pops], grains, gamma, pops)
+
+
+def _check_plan(sweep: dict, pops: list, points: int) -> None:
+    """No population sets or varies a swept field (the sweep would overwrite it), and the plan is bounded."""
+    for k, pop in enumerate(pops):
+        for table in ("set", "vary"):
+            for axis in ("x", "y"):
+                if sweep[axis] is not None and sweep[axis]["field"] in pop[table]:
+                    raise SceneError(f"population[{k}].{table}.{sweep[axis]['field']}",
+                                     f"the field is swept by sweep.{axis}, which sets it at every point")
+    runs = sum(pop["count"] for pop in pops) * points
+    if runs > MAX_GRAIN_RUNS:
+        raise SceneError("population", f"{runs} grain runs (grains of every population times {points} sweep "
+                                       f"points) exceed {MAX_GRAIN_RUNS}; use fewer grains or points")
+
+
+def load_grain(data: dict, sweep: dict, pop: dict, k: int):
+    """``pipeline.load`` of one grain scene of the sweep; its SceneError renamed to the sweep or population
+    field the bad value came from."""
+    from symmech.core import pipeline
+
+    try:
+        return pipeline.load(data)
+    except SceneError as exc:
+        sources = {sweep[a]["field"]: f"sweep.{a}" for a in ("x", "y") if sweep[a] is not None}
+        sources |= {path: f"population[{k}].{table}.{exc.field}" for table in ("set", "vary") for path in pop[table]}
+        if pop["random_orientation"]:
+            sources["body.orientation"] = f"population[{k}].random_orientation"
+        for path, field in sources.items():
+            if exc.field == path or exc.field.startswith((f"{path}.", f"{path}[")):
+                raise SceneError(field, f"{exc.field}: {str(exc).partition(': ')[2]}") from None
+        raise
 
 
 def validate(p: Plan) -> None:
     """Validate every grain scene of the plan: a bad grain is named before any simulation."""
-    from symmech.core import pipeline
-
-    for grid in p.grains:
+    for k, grid in enumerate(p.grains):
         for row in grid:
             for point in row:
                 for data in point:
-                    pipeline.load(data)
+                    load_grain(data, {"x": p.x, "y": p.y}, p.populations[k], k)
 
 
 def throw_number(resolved: dict) -> float:
@@ -264,7 +353,8 @@ def _warm_worker() -> None:
     compiled.warm()
 
 
-def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None) -> Result:
+def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
+        connect_timeout: float = CONNECT_TIMEOUT) -> Result:
     """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write."""
     import os
 
@@ -280,19 +370,20 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
         raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
     validate(p)
-    res = result(p, *compute(p, scheduler, workers, say=ctx.say))
+    res = result(p, *compute(p, scheduler, workers, connect_timeout, say=ctx.say))
     pipeline.write(res, out, scene)
     return res
 
 
 def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
-            say=None) -> tuple[list, list, list]:
+            connect_timeout: float = CONNECT_TIMEOUT, say=None) -> tuple[list, list, list]:
     """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask, the failed
     grains as (population, i, j, grain, message) and the grains that warned as (population, i, j, grain,
     warnings).
 
     ``scheduler``: None for a local process pool, "synchronous" for serial, or the
-    address of a ``dask.distributed`` scheduler. Grains on the compiled engine find it built: this process
+    address of a ``dask.distributed`` scheduler (a SymmechError when none answers within
+    ``connect_timeout`` seconds). Grains on the compiled engine find it built: this process
     builds it first (in the foreground, ``say(text)`` tells it), and so does each machine of a
     ``dask.distributed`` cluster, once per machine (the build lock of :func:`symmech.grain.compiled.warm`).
     """
@@ -310,9 +401,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
         kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
         (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
     else:
-        from dask.distributed import Client
-
-        with Client(scheduler) as client:
+        with _client(scheduler, connect_timeout) as client:
             if warm:
                 client.run(_warm_worker)
             values = client.gather(client.compute(tasks))
@@ -320,6 +409,21 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
     failed, warned = ([(p.names[k], i, j, g, msg) for k, grid in enumerate(values) for i, row in enumerate(grid)
                        for j, point in enumerate(row) for g, msg in point[which]] for which in (1, 2))
     return arrays, failed, warned
+
+
+def _client(address: str, timeout: float):
+    """A ``dask.distributed`` client of the scheduler at ``address``: the user's address, so a
+    scheduler that does not answer within ``timeout`` seconds is a one-line SymmechError."""
+    from dask.distributed import Client
+
+    from symmech.core.scene import SymmechError
+
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, ValueError) as exc:  # OSError: nothing answered; ValueError: not an address
+        raise SymmechError(f"--scheduler {address}: no dask scheduler answered within {timeout:g} s "
+                           f"({' '.join(str(exc).split())}); check that the scheduler is running and reachable "
+                           "at that address (tcp://HOST:PORT), or raise --connect-timeout") from None
 
 
 def statistics(grid: np.ndarray) -> dict:

@@ -544,21 +544,26 @@ class System:
         raise SymmechError("no quasi-static state of the elastic model (Newton did not converge in "
                            f"{max_iter} steps; residual {np.abs(R).max():.3g})")
 
-    def linear_modes(self, fs: FrameState, q):
+    def linear_modes(self, fs: FrameState, q, shapes: bool = False):
         """Natural frequencies [rad/s] and damping ratios of the linearisation at q (q̇ = 0):
         the state-space eigenvalues λ of M x'' + ∂R/∂q̇ x' + ∂R/∂q x = 0 with Im λ >= 0,
-        ω = |λ|, ζ = -Re λ / |λ| (gyroscopic and circulatory frame terms included)."""
+        ω = |λ|, ζ = -Re λ / |λ| (gyroscopic and circulatory frame terms included), sorted by
+        ω; with ``shapes`` also their displacement parts x (N, k) (complex, unit 2-norm)."""
         zero = np.zeros(self.N)
         _, M, Rq, Rqd = self.evaluate(fs, q, zero, zero, jacobian=True)
         Minv = np.linalg.inv(M)
         n = self.N
         state = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Rq, -Minv @ Rqd]])
-        lam = np.linalg.eigvals(state)
-        lam = lam[lam.imag >= -1e-12 * np.abs(lam).max()]
-        lam = lam[np.argsort(np.abs(lam))]
+        lam, vectors = np.linalg.eig(state)
+        keep = np.flatnonzero(lam.imag >= -1e-12 * np.abs(lam).max())
+        keep = keep[np.argsort(np.abs(lam[keep]))]
+        lam = lam[keep]
         omega = np.abs(lam)
         zeta = np.where(omega > 0, -lam.real / np.where(omega > 0, omega, 1.0), 0.0)
-        return omega, zeta
+        if not shapes:
+            return omega, zeta
+        x = vectors[:n, keep]
+        return omega, zeta, x / np.linalg.norm(x, axis=0)
 
 
 def beam_mode(system: System, beam: int, plane: int, mode: int) -> np.ndarray:

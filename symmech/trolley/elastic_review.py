@@ -71,38 +71,40 @@ def _deflections(setup: Setup, tables) -> list[Headline]:
     return out
 
 
-def _modal(modes, prefix: str) -> np.ndarray:
-    """(samples, N) columns f1..fN (prefix "f") or zeta1..zetaN ("zeta") of the modes table."""
-    return np.column_stack([modes.column(c.name) for c in modes.columns
-                            if c.name.startswith(prefix) and c.name[len(prefix):].isdigit()])
+def _per_sample(modes, name: str) -> np.ndarray:
+    """(samples, N) of a column of the modes table (one row per sample and mode_id, samples outer)."""
+    return modes.column(name).reshape(-1, int(modes.column("mode_id").max()))
 
 
 def _forcing(modes) -> np.ndarray:
     """(samples, 3) forcing frequencies [Hz] of :data:`FORCING`; zero where undefined."""
-    return np.column_stack([modes.column(f"forcing_{name}") for name, _ in FORCING])
+    return np.column_stack([_per_sample(modes, f"forcing_{name}")[:, 0] for name, _ in FORCING])
 
 
 def _frequencies(modes) -> list[Headline]:
-    """The lowest natural frequency, and the forcing frequency that comes nearest to it."""
-    f, zeta, forcing = _modal(modes, "f"), _modal(modes, "zeta"), _forcing(modes)
+    """The lowest natural frequency (with the tracked mode it belongs to), and the forcing frequency
+    that comes nearest to that mode."""
+    f, zeta, forcing = _per_sample(modes, "f"), _per_sample(modes, "zeta"), _forcing(modes)
     if not (f > 0).any():
         return []  # no oscillating mode (every one overdamped or rigid)
     i, k = np.unravel_index(np.argmin(np.where(f > 0, f, np.inf)), f.shape)
-    t, s = modes.column("t"), modes.column("s")
-    out = [Headline("lowest natural frequency", f[i, k], "Hz", f"mode {k + 1}, damping ratio {zeta[i, k]:.3g}",
+    t, s = _per_sample(modes, "t")[:, 0], _per_sample(modes, "s")[:, 0]
+    component = modes.text["component"][i * f.shape[1] + k]
+    out = [Headline("lowest natural frequency", f[i, k], "Hz",
+                    f"mode_id {k + 1} ({component}), damping ratio {zeta[i, k]:.3g}",
                     f"t = {t[i]:.4g} s, s = {s[i]:.4g} m")]
     gap = np.where((forcing > 0) & (f[:, k:k + 1] > 0), np.abs(forcing - f[:, k:k + 1]), np.inf)
     if np.isfinite(gap).any():
         n, j = np.unravel_index(np.argmin(gap), gap.shape)
         out.append(Headline("forcing frequency nearest to it", forcing[n, j], "Hz",
-                            f"{FORCING[j][1]}; {100 * forcing[n, j] / f[n, k]:.3g} % of f{k + 1} there",
+                            f"{FORCING[j][1]}; {100 * forcing[n, j] / f[n, k]:.3g} % of mode_id {k + 1} there",
                             f"t = {t[n]:.4g} s, s = {s[n]:.4g} m"))
     return out
 
 
 def _resonance(setup: Setup, modes) -> Check | None:
     """Closest relative distance |f - f_forcing| / f_forcing of any natural to any (defined) forcing frequency."""
-    f, forcing = _modal(modes, "f")[:, :, None], _forcing(modes)[:, None, :]
+    f, forcing = _per_sample(modes, "f")[:, :, None], _forcing(modes)[:, None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
         distance = np.where(forcing > 0, np.abs(f - forcing) / forcing, np.inf)
     closest = float(distance.min())
@@ -114,7 +116,7 @@ def _resonance(setup: Setup, modes) -> Check | None:
 
 def _sampling(setup: Setup, modes) -> tuple[Check | None, str | None]:
     """Can the time series show the lightly damped modes? Samples per period of the highest one."""
-    f, zeta = _modal(modes, "f"), _modal(modes, "zeta")
+    f, zeta = _per_sample(modes, "f"), _per_sample(modes, "zeta")
     top = float(np.where((zeta < LIGHT_DAMPING) & (f > 0), f, 0.0).max())
     if top == 0:
         return None, None

@@ -18,7 +18,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.core.schema import Bool, Choice, Float, Int, Str, Table, TableList, Vector
 from symmech.trolley import elastic as el
 from symmech.trolley.elastic import FORCING
-from symmech.trolley import model
+from symmech.trolley import modal, model
 
 ROLLERS = Table("elastic, damped rollers carrying P1…P5 (B, C, A along x2; O, A along x3)", {
     "law": Choice("force law: `linear` P = -k d - c ḋ; `clamped_pair` two rollers clamping the rail, "
@@ -237,7 +237,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     if setup.names:
         tables["points"] = _points_table(setup.names, r)
     if modes is not None:
-        tables["modes"] = _modes_table(modes, setup.system.N)
+        tables["modes"] = _modes_table(modes, setup.names)
     summary, warnings = _summary(setup, r, comfort)
     warnings += failed + _warnings(setup, r, modes)
 
@@ -323,7 +323,31 @@ def _warnings(setup: Setup, r, modes) -> list:
             out.append(f"elastic: P{i} changes sign at t = {r['t'][k]:.4g} s: a roller pressing on one side "
                        "only would lift off")
     if modes is not None:
-        out += _resonances(setup, modes)
+        out += _resonances(setup, modes) + _mode_warnings(modes)
+    return out
+
+
+TRACKING_MAC = 0.5  # a matched MAC below this between consecutive samples: the identity is uncertain
+CURVATURE_FLAG = 1e-3  # relative frequency change by the left-out curvature energy that is flagged
+
+
+def _mode_warnings(modes) -> list:
+    """Mode tracking left uncertain by sparse samples; frequencies shifted by the quasi-static
+    deflection beyond the model's consistent order (the left-out curvature energy)."""
+    out = []
+    if modes["mac_min"].size and modes["mac_min"].min() < TRACKING_MAC:
+        j = int(np.argmin(modes["mac_min"]))
+        out.append(f"elastic: mode tracking is uncertain between t = {modes['t'][j]:.4g} s and "
+                   f"{modes['t'][j + 1]:.4g} s (a matched MAC of {modes['mac_min'][j]:.2f}): more "
+                   "numerics.modal_samples follow the shapes more closely")
+    shift = np.abs(modes["curvature_shift"])
+    if shift.max() > CURVATURE_FLAG:
+        j, k = np.unravel_index(np.argmax(shift), shift.shape)
+        out.append(f"elastic: the quasi-static beam deflection (slope {modes['slope'][j]:.3g}) shifts mode "
+                   f"{k + 1} ({modes['label'][j][k]}, f = {modes['f'][j, k]:.4g} Hz) at t = {modes['t'][j]:.4g} s "
+                   f"by {100 * modes['deflection_shift']:+.3g} %, beyond the model's consistent order: the nonlinear "
+                   f"curvature energy of that order, left out, would change it by "
+                   f"{100 * modes['curvature_shift'][j, k]:+.3g} % (flagged above {100 * CURVATURE_FLAG:g} %)")
     return out
 
 
@@ -335,8 +359,8 @@ def _resonances(setup: Setup, modes) -> list:
         near = (fj > 0) & (f > 0) & (np.abs(f - fj) <= setup.resonance_band * fj)
         if near.any():
             i, k = np.argwhere(near)[0]
-            out.append(f"elastic: natural frequency f{k + 1} = {f[i, k]:.4g} Hz is within "
-                       f"{100 * setup.resonance_band:g} % of the {doc} = {fj[i, 0]:.4g} Hz at t = "
+            out.append(f"elastic: natural frequency of mode {k + 1} ({modes['label'][i][k]}) {f[i, k]:.4g} Hz is "
+                       f"within {100 * setup.resonance_band:g} % of the {doc} = {fj[i, 0]:.4g} Hz at t = "
                        f"{modes['t'][i]:.4g} s (s = {modes['s'][i]:.4g} m)")
     return out
 
@@ -385,33 +409,104 @@ def _modal_analysis(setup: Setup, r) -> tuple[dict | None, list]:
 
 
 def _modes(setup: Setup, r) -> dict:
-    """Natural frequencies f (k, N) [Hz] and damping ratios of the linearisation about the
-    quasi-static state at ``modal_samples`` instants, with t, s, V0 and the forcing frequencies."""
+    """The linearisation about the quasi-static state at ``modal_samples`` instants, its modes
+    followed by shape (:mod:`symmech.trolley.modal`): per sample (n,) t, s, V0 and the forcing
+    frequencies (n, 3); per sample and mode_id (n, N) the frequency f [Hz], damping ratio,
+    dominant component (beam, plane, mode number, roller DOF, label), its participation and its
+    group's, the left-out curvature energy's relative shift; the shapes at the report points
+    (n, N, P, 3) relative to the mode's mass-weighted RMS displacement; the smallest MAC between
+    consecutive samples (n - 1,) and the largest beam slope of each quasi-static state (n,)."""
     system = setup.system
     idx = np.unique(np.linspace(0, len(r["t"]) - 1, setup.modal_samples).astype(int))
     n = system.N
     fr = el.frames(setup.drive, r["s"][idx], system.mdl.l)
-    f, zeta = np.zeros((len(idx), n)), np.zeros((len(idx), n))
+    comp = modal.components(system)
+    states, samples, omegas, zetas = [], [], [], []
     for j, i in enumerate(idx):
         fs = el.frame_state(fr, j, r["V0"][i], r["dV0"][i])
+        q = system.quasi_static(fs, r["q"][i])
         # 2n state-space roots: at least n have Im >= 0 (the first n by modulus are kept)
-        omega, z = system.linear_modes(fs, system.quasi_static(fs, r["q"][i]))
-        f[j], zeta[j] = omega[:n] / (2 * np.pi), z[:n]
-    bad = ~(np.isfinite(f).all(1) & np.isfinite(zeta).all(1))
-    if bad.any():
-        raise SymmechError(f"non-finite natural frequencies at t = {r['t'][idx][np.argmax(bad)]:.4g} s")
+        omega, z, X = system.linear_modes(fs, q, shapes=True)
+        bad = ~(np.isfinite(omega[:n]).all() & np.isfinite(z[:n]).all() & np.isfinite(X[:, :n]).all())
+        if bad:
+            raise SymmechError(f"non-finite natural frequencies at t = {r['t'][i]:.4g} s")
+        states.append(q)
+        samples.append((system.mass(q), X[:, :n]))
+        omegas.append(omega[:n])
+        zetas.append(z[:n])
+    order, shapes, worst = modal.track(samples)
+    rows = [_identity(system, comp, q, M, X, omegas[j][order[j]]) for j, (q, (M, _), X)
+            in enumerate(zip(states, samples, shapes))]
+    out = {key: np.array([row[key] for row in rows]) for key in rows[0]}
+    out["label"] = [row["label"] for row in rows]
+    out["zeta"] = np.array([z[o] for z, o in zip(zetas, order)])
+    j, k = np.unravel_index(np.argmax(np.abs(out["curvature_shift"])), out["f"].shape)
+    out["deflection_shift"] = _deflection_shift(system, el.frame_state(fr, j, r["V0"][idx[j]], r["dV0"][idx[j]]),
+                                                samples[j][0], shapes[j][:, k], out["f"][j, k])
     W_max = float(np.linalg.norm(r["W"], axis=1).max())
     forcing = forcing_frequencies(system.mdl.l, r["V0"][idx], r["W"][idx], r["dW"][idx], W_max)
-    return {"t": r["t"][idx], "s": r["s"][idx], "V0": r["V0"][idx], "f": f, "zeta": zeta, "forcing": forcing}
+    return {**out, "t": r["t"][idx], "s": r["s"][idx], "V0": r["V0"][idx], "forcing": forcing, "mac_min": worst,
+            "slope": np.array([modal.beam_slope(system, q) for q in states])}
 
 
-def _modes_table(modes: dict, n: int) -> ResultTable:
-    cols = [Column("t", "s"), Column("s", "m"), Column("V0", "m/s")] + \
-           [Column(f"f{k + 1}", "Hz", "natural frequency of the linearisation") for k in range(n)] + \
-           [Column(f"zeta{k + 1}", "1", "damping ratio") for k in range(n)] + \
+def _identity(system: el.System, comp: modal.Components, q, M, X, omega) -> dict:
+    """Per mode (k,) at one instant (state q, mass M, modes X (N, k) of frequencies ω [rad/s]):
+    f [Hz], the dominant component, its and its group's shares, the left-out curvature shift,
+    and the shapes at the report points (k, P, 3)."""
+    share = modal.participation(comp, M, X)
+    top = np.argmax(share, axis=0)
+    return {"f": omega / (2 * np.pi), "beam": comp.beam[top], "plane": comp.plane[top],
+            "mode_number": comp.mode_number[top], "dof": comp.dof[top],
+            "participation": share[top, np.arange(len(top))],
+            "group_participation": np.array([share[comp.group == comp.group[k], m].sum() for m, k in enumerate(top)]),
+            "label": [comp.labels[k] for k in top], "curvature_shift": modal.curvature_shift(system, q, omega, X),
+            "shape": _probe_shapes(system, q, M, X)}
+
+
+def _deflection_shift(system: el.System, fs: el.FrameState, M, x, f: float) -> float:
+    """f / f_0 - 1 of the mode x (N,) of frequency f [Hz]: f_0 the frequency of the mode of the
+    linearisation about the undeformed state (q = 0, same frame) closest to x by MAC."""
+    omega, _, X = system.linear_modes(fs, np.zeros(system.N), shapes=True)
+    best = int(np.argmax(modal.mac(M, x[:, None], X[:, :system.N])[0]))
+    return float(2 * np.pi * f / omega[best] - 1)
+
+
+def _probe_shapes(system: el.System, q, M, X) -> np.ndarray:
+    """Real shapes (k, P, 3) of the modes X (N, k) at the report points, each relative to the
+    mode's mass-weighted RMS displacement √(xᴴ M x / m) of the whole body."""
+    _, A = system.coefficients(q)
+    u = np.einsum("ak,af,fpi->kpi", X, A, system.inv.probe_fields)
+    rms = np.sqrt(np.real(np.einsum("ak,ab,bk->k", X.conj(), M, X)) / system.inv.mass)
+    return np.real(u) / rms[:, None, None]
+
+
+MODE_KEYS = (("beam", "1", "beam of the dominant component (-1: the rollers)"),
+             ("plane", "1", "its bending plane (1: along the beam's plane, 2: axis × plane; 0: rollers)"),
+             ("mode_number", "1", "its mode of the beam alone on a fixed trolley (1 = lowest; 0: rollers)"),
+             ("dof", "1", "roller DOF of the dominant component (1…5: u2, u3, θ1, θ2, θ3; 0: a beam)"),
+             ("participation", "1", "share of the mode's kinetic norm in the dominant component"),
+             ("group_participation", "1", "share in the dominant component's beam plane (or all roller DOFs)"),
+             ("curvature_shift", "1", "relative change of f by the curvature energy the model leaves out "
+                                      "(first order; docs/trolley-elastic.md)"))
+
+
+def _modes_table(modes: dict, names: list) -> ResultTable:
+    """One row per sample and mode_id (samples outer)."""
+    n_s, n = modes["f"].shape
+    rep = lambda a: np.repeat(np.asarray(a), n, axis=0)  # noqa: E731  per sample -> per row
+    cols = [Column("t", "s"), Column("s", "m"), Column("V0", "m/s"),
+            Column("mode_id", "1", "the mode followed along the track by its shape (1…N: frequency order at "
+                                   "the first sample)"),
+            Column("f", "Hz", "natural frequency of the linearisation"), Column("zeta", "1", "damping ratio")] + \
+           [Column(key, unit, doc) for key, unit, doc in MODE_KEYS] + \
+           [Column(f"shape_{name}_{k + 1}", "1", f"mode shape at the report point along x{k + 1}, relative to the "
+                   "mode's mass-weighted RMS displacement") for name in names for k in range(3)] + \
            [Column(f"forcing_{name}", "Hz", doc) for name, doc in FORCING]
-    return ResultTable(cols, np.column_stack([modes["t"], modes["s"], modes["V0"], modes["f"], modes["zeta"],
-                                              modes["forcing"]]))
+    data = [rep(modes[key]) for key in ("t", "s", "V0")] + [np.tile(np.arange(1.0, n + 1), n_s)] + \
+           [modes[key].ravel() for key in ("f", "zeta")] + [modes[key].ravel() for key, _, _ in MODE_KEYS] + \
+           [modes["shape"][:, :, p, k].ravel() for p in range(len(names)) for k in range(3)] + \
+           [rep(modes["forcing"][:, j]) for j in range(len(FORCING))]
+    return ResultTable(cols, np.column_stack(data), text={"component": [x for row in modes["label"] for x in row]})
 
 
 PRECISION_RTOLS = (1e-4, 1e-6, 1e-8)

@@ -149,19 +149,23 @@ def _point_overloads(setup, r, comfort: dict):
 
 
 def campbell(modes: dict):
-    """Natural frequencies of the linearisation against arc length and against speed, with
-    the forcing frequencies (dashed) that a natural frequency should keep away from."""
+    """Natural frequencies of the linearisation against arc length and against speed, one line
+    per tracked mode (``mode_id``: crossings keep their identity), coloured by the beam plane or
+    the rollers dominating it at the first sample, with the forcing frequencies (black, dashed
+    and dotted) that a natural frequency should keep away from."""
     from symmech.trolley.elastic import FORCING
 
     fig, axes = plotting.figure(1, 2, width=11.0, height=4.5, sharey=True)
+    groups = [label.rsplit("_mode", 1)[0] if label.startswith("beam") else "rollers" for label in modes["label"][0]]
+    colours = {g: f"C{i % 10}" for i, g in enumerate(dict.fromkeys(groups))}
     for ax, key, quantity in ((axes[0, 0], "s", ("arc length s", "m")), (axes[0, 1], "V0", ("speed V0", "m/s"))):
         x = modes[key]
         order = np.argsort(x)
-        for k in range(modes["f"].shape[1]):
-            ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color="tab:blue",
-                    label="natural frequencies" if k == 0 else None)
-        for j, (_, doc) in enumerate(FORCING):
-            ax.plot(x[order], modes["forcing"][order, j], ls="--", lw=1, label=doc)
+        for k, group in enumerate(groups):
+            ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color=colours[group],
+                    label=group if groups.index(group) == k else None)
+        for j, ((_, doc), style) in enumerate(zip(FORCING, ("--", ":", "-."))):
+            ax.plot(x[order], modes["forcing"][order, j], ls=style, lw=1, color="k", label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))
         ax.set_yscale("log")
         natural = modes["f"][modes["f"] > 0]
