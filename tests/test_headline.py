@@ -27,6 +27,10 @@ RUNS = {
 }
 
 
+# its module fixtures run scenes: built once per xdist worker, so one worker runs the module
+pytestmark = pytest.mark.xdist_group("test_headline")
+
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     """kind -> (output folder, stdout of `symmech run`)."""

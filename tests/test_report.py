@@ -22,6 +22,10 @@ RUNS = {
 }
 
 
+# its module fixtures run scenes: built once per xdist worker, so one worker runs the module
+pytestmark = pytest.mark.xdist_group("test_report")
+
+
 @pytest.fixture(scope="module")
 def reports(tmp_path_factory):
     """kind -> output folder of a bundled scene run with ``--report``, each in its own process as

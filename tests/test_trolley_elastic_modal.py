@@ -57,7 +57,8 @@ def test_beam_at_the_centre_of_a_circle_runs_and_its_modes_are_the_rotating_cant
     frequencies equal the rotating cantilever's to 1e-5 (measured 2.4e-6, 2.0e-6: the model's
     four Ritz functions per plane); without the rotation they would be 4.7 % and 0.39 % lower."""
     _, res = pipeline.run_to(_scene(), tmp_path / "out", Context(quiet=True), plots=False)
-    assert not res.warnings
+    # the modal analysis warns of nothing; 10 output steps are too few to show the modes, as the run says
+    assert all(w.startswith("elastic: the outputs are sampled at") for w in res.warnings), res.warnings
     modes = res.tables["modes"]
     first = modes.column("mode_id") == 1
     np.testing.assert_allclose(modes.column("s")[first], [0.0, V * 1.0], atol=1e-12)
