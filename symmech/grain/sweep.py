@@ -21,7 +21,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from symmech.core import plotting
 from symmech.core import schema as s
@@ -387,6 +386,8 @@ def _moments(x: np.ndarray):
 
 def mean_interval(x: np.ndarray):
     """Student t interval (lo, hi) of the mean of the samples x (..., n), along the last axis."""
+    from scipy import stats  # on use: its import costs seconds the refusal of a sweep need not pay
+
     n, m, ss = _moments(x)
     h = stats.t.ppf(_Q, n - 1) * np.sqrt(ss / (n - 1) / n)
     return m - h, m + h
@@ -394,12 +395,16 @@ def mean_interval(x: np.ndarray):
 
 def std_interval(x: np.ndarray):
     """Chi-square interval (lo, hi) of the standard deviation of normal samples x (..., n), last axis."""
+    from scipy import stats
+
     n, _, ss = _moments(x)
     return np.sqrt(ss / stats.chi2.ppf(_Q, n - 1)), np.sqrt(ss / stats.chi2.ppf(1 - _Q, n - 1))
 
 
 def proportion_interval(k: np.ndarray, n: np.ndarray):
     """Wilson score interval (lo, hi) of a proportion from k successes in n trials."""
+    from scipy import stats
+
     z = stats.norm.ppf(_Q)
     p = k / n
     centre = (p + z**2 / (2 * n)) / (1 + z**2 / n)
@@ -409,6 +414,8 @@ def proportion_interval(k: np.ndarray, n: np.ndarray):
 
 def difference_interval(a: np.ndarray, b: np.ndarray):
     """Welch t interval (lo, hi) of mean(a) − mean(b) of samples (..., n), along the last axis."""
+    from scipy import stats
+
     (na, ma, ssa), (nb, mb, ssb) = _moments(a), _moments(b)
     va, vb = ssa / (na - 1) / na, ssb / (nb - 1) / nb  # squared standard errors
     df = (va + vb) ** 2 / (va**2 / (na - 1) + vb**2 / (nb - 1))
@@ -437,6 +444,8 @@ def statistics(grid: np.ndarray) -> dict:
 def overlap_normal(m1, s1, m2, s2):
     """Overlap coefficient of the normal densities N(m1, s1²) and N(m2, s2²) (arrays broadcast, s > 0):
     the area under the lower of the two, from the points where they cross."""
+    from scipy import stats
+
     narrow = s1 <= s2
     mn, sn, mw, sw = (np.where(narrow, u, v) for u, v in ((m1, m2), (s1, s2), (m2, m1), (s2, s1)))
     # the narrow density is the higher one where a x² + b x + c < 0, between the roots
@@ -462,6 +471,8 @@ def overlap(a: np.ndarray, b: np.ndarray, axis: int = -1):
 
 def overlap_interval(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -> tuple[float, float]:
     """Bootstrap percentile interval (lo, hi) of :func:`overlap` of two samples (NaN left out)."""
+    from scipy import stats
+
     a, b = a[np.isfinite(a)], b[np.isfinite(b)]
     if min(len(a), len(b)) < 2:
         return math.nan, math.nan
@@ -473,6 +484,8 @@ def overlap_interval(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -> 
 def grains_needed(spread: float, half_width: float) -> int:
     """Smallest number of grains n ≥ 2 whose Student t interval of a mean, for the spread (standard
     deviation) ``spread``, has at most ``half_width`` (same unit) at LEVEL."""
+    from scipy import stats
+
     n = max(2, math.ceil((stats.norm.ppf(_Q) * spread / half_width) ** 2))
     while stats.t.ppf(_Q, n - 1) * spread / math.sqrt(n) > half_width:
         n += 1
@@ -535,7 +548,7 @@ def _separation_columns(names: list[str]) -> list[Column]:
                             f"bootstrap percentile, {RESAMPLES} resamples")]
 
 
-def _best(sep: dict) -> tuple[int, np.ndarray]:
+def best_point(sep: dict) -> tuple[int, np.ndarray]:
     """The best operating point (flat index: the least overlap, ties broken by the larger velocity difference)
     and the mask (nx, ny) of the points not significantly worse: their overlap interval meets the best's."""
     best = int(np.lexsort((-np.abs(sep["delta_vx"].ravel()), sep["overlap"].ravel()))[0])
@@ -593,7 +606,7 @@ def result(p: Plan, values: list, failed: list = (), warned: list = (), half_wid
         sep_cols = _separation_columns(p.names)
         tables["separation"] = Table(cols + sep_cols, np.column_stack([base] + [sep[c.name].ravel() for c in sep_cols]),
                                      "separation chart of the two populations")
-        best, similar = _best(sep)
+        best, similar = best_point(sep)
         at = {c.name: _number(sep[c.name].ravel()[best]) for c in sep_cols}
         summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {
             "delta_vx_m_s": at["delta_vx"], "delta_vx_interval_m_s": [at["delta_vx_lo"], at["delta_vx_hi"]],
