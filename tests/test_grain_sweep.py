@@ -357,3 +357,29 @@ def test_grains_needed_for_a_half_width():
         assert stats.t.ppf(0.975, n - 1) * spread / math.sqrt(n) <= half
         assert n == 2 or stats.t.ppf(0.975, n - 2) * spread / math.sqrt(n - 1) > half
     assert sweep.grains_needed(0.01, 1e-3) == pytest.approx((1.959964 * 0.01 / 1e-3) ** 2, abs=4)
+
+
+@pytest.mark.slow
+def test_the_bundled_separation_sweep_carries_its_intervals(tmp_path):
+    """scenes/grain_separation.toml: 12 x 12 points x 30 grains per population (minutes on 2 cores)."""
+    import json
+
+    from symmech.core.context import Context
+    from symmech.core.scene import scenes_folder
+
+    res = sweep.run(scenes_folder() / "grain_separation.toml", tmp_path / "out", Context(quiet=True, max_time=3600))
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["points"] == 144 and summary["grains_per_point"] == [30, 30]
+    for table in res.tables.values():
+        names = {c.name for c in table.columns}
+        for c in table.columns:
+            if f"{c.name}_lo" in names:
+                v, lo, hi = (table.column(n) for n in (c.name, f"{c.name}_lo", f"{c.name}_hi"))
+                assert np.all(lo <= v + 1e-15) and np.all(v <= hi + 1e-15), c.name
+    best = summary["best_operating_point"]
+    assert best["overlap_interval"][0] <= best["overlap"] <= best["overlap_interval"][1]
+    assert best["delta_vx_interval_m_s"][0] <= best["delta_vx_m_s"] <= best["delta_vx_interval_m_s"][1]
+    assert len(best["points_not_significantly_worse"]) >= 1
+    for name in ("crop", "weed"):
+        assert summary["precision"][name]["grains_needed"] >= 2
+    assert (tmp_path / "out" / "separation_overlap.png").stat().st_size > 5000
