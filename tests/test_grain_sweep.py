@@ -233,7 +233,7 @@ def small_populations(count=3):
 
 
 def test_the_lazy_plan_builds_the_grains_of_the_eager_plan_and_runs_them_bit_for_bit(monkeypatch):
-    raw = conveyor(duration=1 / FREQ, population=small_populations(),
+    raw = conveyor(duration=1 / FREQ, population=small_populations(3),
                    sweep={"x": {"field": "vibration.amplitude", "values": [amplitude(1.2), amplitude(1.6)]},
                           "y": {"field": "vibration.frequency", "values": [FREQ, 1.2 * FREQ]}})
     gamma, eager = eager_plan(raw)
@@ -243,11 +243,15 @@ def test_the_lazy_plan_builds_the_grains_of_the_eager_plan_and_runs_them_bit_for
         assert list(sweep.grains(p, k, i, j)) == eager[k][i][j]
         for start, stop in ((1, 3), (2, 3), (0, 1)):  # any grain from (population, seed, index) alone
             assert list(sweep.grains(p, k, i, j, start, stop)) == eager[k][i][j][start:stop]
-    monkeypatch.setattr(sweep, "CHUNK", 2)  # a point spread over two tasks
-    lazy = sweep.compute(p, scheduler="synchronous")[0]
-    for k, i in np.ndindex(2, 2):  # the eager plan's scenes, simulated as before: one point per task
-        j = i  # two of the four points suffice to compare
-        assert np.array_equal(lazy[k][i, j], sweep.simulate_point(eager[k][i][j])[0])
+    # results: point (1, 1) of each population, spread over two tasks, against the eager plan's grains run
+    # as before (one point per task)
+    monkeypatch.setattr(sweep, "CHUNK", 2)
+    corner = build(conveyor(duration=1 / FREQ, population=small_populations(3),
+                            sweep={"x": {"field": "vibration.amplitude", "values": [amplitude(1.6)]},
+                                   "y": {"field": "vibration.frequency", "values": [1.2 * FREQ]}}))
+    lazy = sweep.compute(corner, scheduler="synchronous")[0]
+    for k in range(2):
+        assert np.array_equal(lazy[k][0, 0], sweep.simulate_point(eager[k][1][1])[0])
 
 
 SWEEP_CHILD = """
