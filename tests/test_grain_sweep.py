@@ -115,6 +115,19 @@ def test_sweep_writes_tables_with_units_heat_maps_and_the_best_point(tmp_path):
     assert best["overlap"] == pytest.approx(least, abs=0)
     for name in ("crop_mean_vx", "weed_hop_fraction", "separation_overlap"):
         assert (out / f"{name}.png").stat().st_size > 5000
+    # one grain per population: no interval, no spread to size a population from (null, not NaN, in JSON)
+    assert best["overlap_interval"] == [None, None] and summary["precision"]["crop"]["grains_needed"] is None
+
+
+def test_the_half_width_option_is_a_positive_speed():
+    from symmech import cli
+
+    parser = cli.build_parser()
+    assert parser.parse_args(["sweep", "s.toml", "--half-width", "5e-4"]).half_width == 5e-4
+    for bad in ("0", "-1e-3", "inf", "fast"):
+        with pytest.raises(SystemExit) as info:
+            parser.parse_args(["sweep", "s.toml", "--half-width", bad])
+        assert info.value.code == 2
 
 
 def test_sweep_refuses_past_the_time_budget(tmp_path):
