@@ -19,6 +19,7 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -172,12 +173,15 @@ class Plan:
     def grain_runs(self) -> int:
         return sum(pop["count"] for pop in self.populations) * self.gamma.size
 
+    @cached_property
+    def values(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """The swept values along x and y (None without y)."""
+        return axis_values(self.x), axis_values(self.y) if self.y else None
+
     def point(self, i: int, j: int) -> dict:
         """The swept fields' values at point (i, j), by dotted path."""
-        values = {self.x["field"]: float(axis_values(self.x)[i])}
-        if self.y:
-            values[self.y["field"]] = float(axis_values(self.y)[j])
-        return values
+        xs, ys = self.values
+        return {self.x["field"]: float(xs[i])} | ({self.y["field"]: float(ys[j])} if self.y else {})
 
 
 def grains(p: Plan, k: int, i: int, j: int, start: int = 0, stop: int | None = None):
@@ -214,12 +218,12 @@ def plan(raw: dict, resolved: dict) -> Plan:
     xs = axis_values(sweep["x"])
     ys = axis_values(sweep["y"]) if sweep["y"] else np.array([np.nan])
     p = Plan(sweep["x"], sweep["y"], [pop["name"] for pop in pops], base, pops, np.empty((len(xs), len(ys))))
-    resolved = [pipeline.load(_first(p, k)).resolved for k in range(len(pops))][-1]
-    for i, j in np.ndindex(*p.shape):  # Γ of the last population's grain 0, as the plan always gave it
-        vib = resolved["vibration"] | {path.split(".", 1)[1]: value for path, value in
-                                        ((sweep["x"]["field"], float(xs[i])), (sweep["y"] and sweep["y"]["field"],
-                                         float(ys[j]))) if path and path.startswith("vibration.")}
-        p.gamma[i, j] = throw_number({"vibration": vib, "surface": resolved["surface"]})
+    for k in range(len(pops)):  # grain 0 of each population validated; Γ from the last one's, as always
+        resolved = pipeline.load(_first(p, k)).resolved
+    for i, j in np.ndindex(*p.shape):
+        swept = {path.removeprefix("vibration."): value for path, value in p.point(i, j).items()
+                 if path.startswith("vibration.")}
+        p.gamma[i, j] = throw_number({"vibration": resolved["vibration"] | swept, "surface": resolved["surface"]})
     return p
 
 
