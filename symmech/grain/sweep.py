@@ -7,10 +7,13 @@ runs every grain of every population at every sweep point and reports, per point
 the mean transport velocity and its spread, the fraction of grains that hop
 (more than half of the time in flight) and the throw number Γ = A ω² / g; with two
 populations also the separation chart: the difference of their mean velocities and
-the overlap of their velocity distributions, with the best operating point marked.
+the overlap of their velocity distributions, with the best operating point marked. Every
+statistic carries its 95 % confidence interval; the points not significantly worse than the
+best are marked, and the summary sizes the populations for a stated precision.
 
 Every grain is an ordinary grain scene (the base scene with the population's and the
-sweep point's fields changed), validated before any simulation. The work runs on
+sweep point's fields changed), validated before any simulation. The plan holds counts,
+not scenes: each task builds its grains from (population, seed, index). The work runs on
 Dask: a local process pool by default, a ``dask.distributed`` scheduler by address
 with ``--scheduler``; results do not depend on where they ran (tested bit for bit).
 """
