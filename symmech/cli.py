@@ -40,7 +40,7 @@ def cmd_sweep(ns) -> int:
     from symmech.grain import sweep
 
     result = sweep.run(ns.scene, ns.out, _context(ns), scheduler=ns.scheduler, workers=ns.workers,
-                       connect_timeout=ns.connect_timeout)
+                       connect_timeout=ns.connect_timeout, half_width=ns.half_width)
     for warning in result.warnings:
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {Path(ns.out) / 'summary.json'}")
@@ -216,6 +216,17 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _speed(text: str) -> float:
+    """--half-width: a positive finite speed in m/s (argparse reports the error)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a speed in m/s, got {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text} is outside (0, inf) m/s")
+    return value
+
+
 def _run_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bars and no estimate")
     p.add_argument("--max-time", type=_seconds, default=DEFAULT_MAX_TIME, metavar="SECONDS",
@@ -257,6 +268,9 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--connect-timeout", type=_seconds, default=5.0, metavar="SECONDS",
                     help="how long the --scheduler address may take to answer (default 5 s)")
     sw.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the CPU count)")
+    sw.add_argument("--half-width", type=_speed, default=1e-3, metavar="M_PER_S",
+                    help="the summary's precision target: grains needed for a mean velocity to within this, at "
+                         "95 %% (default 0.001 m/s)")
     sw.set_defaults(func=cmd_sweep)
 
     w = sub.add_parser("warm", help="compile the grain engine into numba's cache now (for containers, clusters, "

@@ -122,7 +122,7 @@ def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path
     p = sweep.plan(raw, pipeline.load(raw).resolved)
     assert sweep._compiled_needed(p)
     cost = sweep.estimate(p, workers=1)
-    grain = pipeline.load(p.grains[0][0][0][0]).setup
+    grain = pipeline.load(next(sweep.grains(p, 0, 0, 0))).setup
     one = motion_scene.estimate(replace(grain, numerics=replace(grain.numerics, engine="compiled")))
     assert one.once == compiled.COLD_COMPILE_SECONDS
     assert cost.seconds == pytest.approx(one.once + 20 * (one.seconds - one.once), rel=1e-12)

@@ -98,7 +98,7 @@ axis = lambda field, values: {"field": field, "values": values}
 plan = SimpleNamespace(x=axis("vibration.amplitude", [1e-3, 2e-3]), y=axis("vibration.angle_deg", [20.0, 40.0]),
                        names=["crop"], gamma=np.array([[0.5, 1.0], [1.5, 2.0]]))
 stats = [{"mean_vx": np.array([[0.1, 0.2], [0.3, 0.4]]), "hop_fraction": np.array([[0.0, 0.5], [1.0, 1.0]])}]
-paths = sweep._plots(plan, stats, {}, None, __import__("pathlib").Path(FOLDER))
+paths = sweep._plots(plan, stats, {}, None, None, __import__("pathlib").Path(FOLDER))
 print(matplotlib.get_backend(), " ".join(sorted(p.name for p in paths)))
 """
 

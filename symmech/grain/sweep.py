@@ -7,10 +7,13 @@ runs every grain of every population at every sweep point and reports, per point
 the mean transport velocity and its spread, the fraction of grains that hop
 (more than half of the time in flight) and the throw number Γ = A ω² / g; with two
 populations also the separation chart: the difference of their mean velocities and
-the overlap of their velocity distributions, with the best operating point marked.
+the overlap of their velocity distributions, with the best operating point marked. Every
+statistic carries its 95 % confidence interval; the points not significantly worse than the
+best are marked, and the summary sizes the populations for a stated precision.
 
 Every grain is an ordinary grain scene (the base scene with the population's and the
-sweep point's fields changed), validated before any simulation. The work runs on
+sweep point's fields changed), validated before any simulation. The plan holds counts,
+not scenes: each task builds its grains from (population, seed, index). The work runs on
 Dask: a local process pool by default, a ``dask.distributed`` scheduler by address
 with ``--scheduler``; results do not depend on where they ran (tested bit for bit).
 """
@@ -19,6 +22,7 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -122,7 +126,9 @@ POPULATION = s.Table("a population of grains", {
 POPULATIONS = s.TableList("one or two grain populations with distinct names (default: one grain, the scene "
                           "itself)", item=POPULATION, min_items=1, max_items=2, default=None,
                           checks=(_check_names,))
-MAX_GRAIN_RUNS = 100_000  # grains times points: every grain scene is built and validated before any run
+
+
+CHUNK = 500  # grains per task at most: a point of a large population spreads over workers
 
 
 def axis_values(axis: dict) -> np.ndarray:
@@ -165,49 +171,99 @@ def _scaled(value, factor):
     return value * factor[0]
 
 
-def members(base: dict, population: dict, field: str = "population[0]") -> list[dict]:
-    """The raw grain scenes of one population (before the sweep point's fields are set); ``field`` names
-    the population in errors."""
+def _population_base(base: dict, population: dict, field: str) -> tuple[dict, int]:
+    """The base scene with the population's `set` fields, and the number of random doubles each grain
+    draws (one per varied component, three for a random orientation); ``field`` names the population."""
+    data = copy.deepcopy(base)
+    for path, value in population["set"].items():
+        _set(data, path, copy.deepcopy(value), f"{field}.set.{path}")
+    draws = 0
+    for path in population["vary"]:
+        value = _get(data, path)
+        if not _is_vector(value):
+            found = "missing" if value is None else s._show(value)
+            raise SceneError(f"{field}.vary.{path}", f"varies a number or vector of numbers of the scene; "
+                                                     f"{path} is {found}")
+        draws += len(value) if isinstance(value, list) else 1
+    return data, draws + 3 * population["random_orientation"]
+
+
+def members(base: dict, population: dict, start: int = 0, stop: int | None = None, field: str = "population[0]"):
+    """The raw grain scenes ``start..stop`` of one population (before the sweep point's fields are set),
+    one at a time; ``field`` names the population in errors. Grain k is a function of (population, seed,
+    k) alone: its random numbers are the population stream's doubles k·d .. (k+1)·d − 1 (d per grain),
+    reached by advancing the PCG64 generator, the same numbers as drawing the grains 0..k in turn."""
+    data0, draws = _population_base(base, population, field)
     rng = np.random.default_rng(population["seed"])
-    out = []
-    for _ in range(population["count"]):
-        data = copy.deepcopy(base)
-        for path, value in population["set"].items():
-            _set(data, path, copy.deepcopy(value), f"{field}.set.{path}")
+    rng.bit_generator.advance(start * draws)  # PCG64: one step per double drawn
+    for _ in range(start, population["count"] if stop is None else stop):
+        data = copy.deepcopy(data0)
         for path, spread in population["vary"].items():
             value = _get(data, path)
-            if not _is_vector(value):
-                found = "missing" if value is None else s._show(value)
-                raise SceneError(f"{field}.vary.{path}", f"varies a number or vector of numbers of the scene; "
-                                                         f"{path} is {found}")
             size = len(value) if isinstance(value, list) else 1
             _set(data, path, _scaled(value, rng.uniform(1 - spread, 1 + spread, size).tolist()), f"{field}.vary.{path}")
         if population["random_orientation"]:
             _set(data, "body.orientation", [float(rng.uniform(0, 2 * math.pi)),
                                             float(math.acos(rng.uniform(-1, 1))),
                                             float(rng.uniform(0, 2 * math.pi))], field)
-        out.append(data)
-    return out
+        yield data
 
 
 @dataclass
 class Plan:
-    """Every grain scene of the sweep, validated: ``grains[p][i][j]`` is a list of raw scenes of
-    population p at sweep point (i, j)."""
+    """The sweep as counts and recipes, not grain scenes: grain g of population k at point (i, j) is
+    built where it runs, by :func:`grains` from (population, seed, g), so the client's memory does not
+    grow with the number of grains."""
 
     x: dict
     y: dict | None
     names: list[str]
-    grains: list
+    base: dict  # the grain scene without [sweep] and [[population]], the sweep's duration set
+    populations: list[dict]  # resolved [[population]] tables
     gamma: np.ndarray  # (nx, ny) throw number at each point
-    populations: list  # the resolved [[population]] tables (errors name their fields)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(nx, ny): the number of sweep points along x and y (ny = 1 without y)."""
+        return self.gamma.shape
+
+    @property
+    def grain_runs(self) -> int:
+        return sum(pop["count"] for pop in self.populations) * self.gamma.size
+
+    @cached_property
+    def values(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """The swept values along x and y (None without y)."""
+        return axis_values(self.x), axis_values(self.y) if self.y else None
+
+    def point(self, i: int, j: int) -> dict:
+        """The swept fields' values at point (i, j), by dotted path."""
+        xs, ys = self.values
+        return {self.x["field"]: float(xs[i])} | ({self.y["field"]: float(ys[j])} if self.y else {})
+
+
+def grains(p: Plan, k: int, i: int, j: int, start: int = 0, stop: int | None = None):
+    """The raw grain scenes ``start..stop`` of population k at sweep point (i, j), one at a time."""
+    return point_grains(p.base, p.populations[k], p.point(i, j), start, stop, f"population[{k}]")
+
+
+def point_grains(base: dict, population: dict, fields: dict, start: int = 0, stop: int | None = None,
+                 field: str = "population[0]"):
+    """:func:`members` ``start..stop`` with the sweep point's ``fields`` (dotted path: value) set."""
+    for data in members(base, population, start, stop, field):
+        for path, value in fields.items():
+            _set(data, path, value, "sweep")
+        yield data
+
+
+def _first(p: Plan, k: int) -> dict:
+    """Grain 0 of population k at point (0, 0)."""
+    return next(grains(p, k, 0, 0, 0, 1))
 
 
 def plan(raw: dict, resolved: dict) -> Plan:
-    """Expand the sweep into grain scenes (the first grain of each point validated; :func:`validate`
-    checks them all)."""
-    from symmech.core import pipeline
-
+    """The sweep's plan from the scene's counts (cost independent of the number of grains); grain 0 of
+    each population at the first point is validated, :func:`validate` checks them all."""
     sweep = resolved["sweep"]
     if sweep is None:
         raise SceneError("sweep", "the scene has no [sweep] table (see docs/scenes-grain.md)")
@@ -218,41 +274,25 @@ def plan(raw: dict, resolved: dict) -> Plan:
                                        "random_orientation": False}]
     xs = axis_values(sweep["x"])
     ys = axis_values(sweep["y"]) if sweep["y"] else np.array([np.nan])
-    _check_plan(sweep, pops, len(xs) * len(ys))
-    gamma = np.empty((len(xs), len(ys)))
-    grains = []
-    for k, pop in enumerate(pops):
-        crowd = members(base, pop, f"population[{k}]")
-        grid = []
-        for i, xv in enumerate(xs):
-            row = []
-            for j, yv in enumerate(ys):
-                point = []
-                for member in crowd:
-                    data = copy.deepcopy(member)
-                    _set(data, sweep["x"]["field"], float(xv), "sweep.x.field")
-                    if sweep["y"]:
-                        _set(data, sweep["y"]["field"], float(yv), "sweep.y.field")
-                    point.append(data)
-                gamma[i, j] = throw_number(load_grain(point[0], sweep, pop, k).resolved)
-                row.append(point)
-            grid.append(row)
-        grains.append(grid)
-    return Plan(sweep["x"], sweep["y"], [p["name"] for p in pops], grains, gamma, pops)
+    _check_plan(sweep, pops)
+    p = Plan(sweep["x"], sweep["y"], [pop["name"] for pop in pops], base, pops, np.empty((len(xs), len(ys))))
+    for k in range(len(pops)):  # grain 0 of each population validated; Γ from the last one's, as always
+        resolved = load_grain(_first(p, k), sweep, pops[k], k).resolved
+    for i, j in np.ndindex(*p.shape):
+        swept = {path.removeprefix("vibration."): value for path, value in p.point(i, j).items()
+                 if path.startswith("vibration.")}
+        p.gamma[i, j] = throw_number({"vibration": resolved["vibration"] | swept, "surface": resolved["surface"]})
+    return p
 
 
-def _check_plan(sweep: dict, pops: list, points: int) -> None:
-    """No population sets or varies a swept field (the sweep would overwrite it), and the plan is bounded."""
+def _check_plan(sweep: dict, pops: list) -> None:
+    """No population sets or varies a swept field (the sweep would overwrite it)."""
     for k, pop in enumerate(pops):
         for table in ("set", "vary"):
             for axis in ("x", "y"):
                 if sweep[axis] is not None and sweep[axis]["field"] in pop[table]:
                     raise SceneError(f"population[{k}].{table}.{sweep[axis]['field']}",
                                      f"the field is swept by sweep.{axis}, which sets it at every point")
-    runs = sum(pop["count"] for pop in pops) * points
-    if runs > MAX_GRAIN_RUNS:
-        raise SceneError("population", f"{runs} grain runs (grains of every population times {points} sweep "
-                                       f"points) exceed {MAX_GRAIN_RUNS}; use fewer grains or points")
 
 
 def load_grain(data: dict, sweep: dict, pop: dict, k: int):
@@ -274,12 +314,11 @@ def load_grain(data: dict, sweep: dict, pop: dict, k: int):
 
 
 def validate(p: Plan) -> None:
-    """Validate every grain scene of the plan: a bad grain is named before any simulation."""
-    for k, grid in enumerate(p.grains):
-        for row in grid:
-            for point in row:
-                for data in point:
-                    load_grain(data, {"x": p.x, "y": p.y}, p.populations[k], k)
+    """Validate every grain scene of the plan, one at a time: a bad grain is named before any simulation."""
+    for k, pop in enumerate(p.populations):
+        for i, j in np.ndindex(*p.shape):
+            for data in grains(p, k, i, j):
+                load_grain(data, {"x": p.x, "y": p.y}, pop, k)
 
 
 def throw_number(resolved: dict) -> float:
@@ -289,17 +328,17 @@ def throw_number(resolved: dict) -> float:
     return vib["amplitude"] * (2 * math.pi * vib["frequency"]) ** 2 / g
 
 
-def simulate_point(scenes: list[dict]) -> tuple[np.ndarray, list, list]:
-    """Per grain: mean transport velocity (X, Y) [m/s] and the fraction of time in flight, shape (n, 3);
-    a grain whose simulation stops with an error (e.g. a stagnation guard) gets a row of NaN and its
-    message in the list of (grain index, message) — it is reported, never averaged in. A grain whose run
-    warned (e.g. a rocking contact the model does not follow) is averaged in and listed as (grain index,
-    warnings)."""
+def simulate_point(scenes, first: int = 0) -> tuple[np.ndarray, list, list]:
+    """Per grain of the iterable ``scenes`` (numbered from ``first``): mean transport velocity (X, Y) [m/s]
+    and the fraction of time in flight, shape (n, 3); a grain whose simulation stops with an error (e.g. a
+    stagnation guard) gets a row of NaN and its message in the list of (grain index, message) — it is
+    reported, never averaged in. A grain whose run warned (e.g. a rocking contact the model does not
+    follow) is averaged in and listed as (grain index, warnings)."""
     from symmech.core import pipeline
     from symmech.core.scene import SymmechError
 
     out, failed, warned = [], [], []
-    for k, data in enumerate(scenes):
+    for k, data in enumerate(scenes, first):
         try:
             res = pipeline.load(data).run()
         except SymmechError as exc:
@@ -310,20 +349,24 @@ def simulate_point(scenes: list[dict]) -> tuple[np.ndarray, list, list]:
         out.append((vx, vy, res.summary["time_fraction"].get("flight", 0.0)))
         if res.warnings:
             warned.append((k, list(res.warnings)))
-    return np.array(out), failed, warned
+    return np.array(out).reshape(-1, 3), failed, warned
+
+
+def simulate_grains(base: dict, population: dict, fields: dict, start: int, stop: int):
+    """A task: grains ``start..stop`` of a population at one sweep point, built here (:func:`point_grains`)
+    and simulated (:func:`simulate_point`)."""
+    return simulate_point(point_grains(base, population, fields, start, stop), start)
 
 
 def estimate(p: Plan, workers: int):
-    """Cost of the whole sweep: the grain kind's estimate of each population's first grain, times the
-    grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
-    from symmech.core import pipeline, registry
+    """Cost of the whole sweep from its counts: the grain kind's estimate of each population's first grain,
+    times the grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
+    from symmech.core import registry
 
-    first = [_as_dispatched(grid[0][0][0]).estimate() for grid in p.grains]
+    first = [_as_dispatched(_first(p, k)).estimate() for k in range(len(p.populations))]
     once = max(e.once for e in first)
-    seconds = once + sum((e.seconds - e.once) * len(grid[0][0]) * len(grid) * len(grid[0])
-                         for e, grid in zip(first, p.grains))
-    grains = sum(len(grid[0][0]) * len(grid) * len(grid[0]) for grid in p.grains)
-    return registry.Estimate(seconds / max(workers, 1), f"{grains} grain runs on {workers} worker(s)")
+    seconds = once + sum((e.seconds - e.once) * pop["count"] * p.gamma.size for e, pop in zip(first, p.populations))
+    return registry.Estimate(seconds / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)")
 
 
 def _as_dispatched(data: dict):
@@ -343,7 +386,7 @@ def _as_dispatched(data: dict):
 def _compiled_needed(p: Plan) -> bool:
     """Whether a population's grains run the compiled engine (accurate mode, engine not `python`)."""
     return any(n.mode == "accurate" and n.engine == "compiled"
-               for n in (_as_dispatched(grid[0][0][0]).setup.numerics for grid in p.grains))
+               for n in (_as_dispatched(_first(p, k)).setup.numerics for k in range(len(p.populations))))
 
 
 def _warm_worker() -> None:
@@ -354,7 +397,7 @@ def _warm_worker() -> None:
 
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
-        connect_timeout: float = CONNECT_TIMEOUT) -> Result:
+        connect_timeout: float = CONNECT_TIMEOUT, half_width: float = 1e-3) -> Result:
     """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write."""
     import os
 
@@ -370,7 +413,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
         raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
     validate(p)
-    res = result(p, *compute(p, scheduler, workers, connect_timeout, say=ctx.say))
+    res = result(p, *compute(p, scheduler, workers, connect_timeout, say=ctx.say), half_width=half_width)
     pipeline.write(res, out, scene)
     return res
 
@@ -395,8 +438,10 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
         compiled.warm(say=say)
 
-    tasks = [[[dask.delayed(simulate_point)(point, dask_key_name=f"grain-{k}-{i}-{j}")
-               for j, point in enumerate(row)] for i, row in enumerate(grid)] for k, grid in enumerate(p.grains)]
+    jobs = [(k, i, j, start, min(start + CHUNK, pop["count"])) for k, pop in enumerate(p.populations)
+            for i, j in np.ndindex(*p.shape) for start in range(0, pop["count"], CHUNK)]
+    tasks = [dask.delayed(simulate_grains)(p.base, p.populations[k], p.point(i, j), a, b,
+                                           dask_key_name=f"grains-{k}-{i}-{j}-{a}") for k, i, j, a, b in jobs]
     if scheduler in (None, "processes", "synchronous", "threads"):
         kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
         (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
@@ -405,9 +450,12 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
             if warm:
                 client.run(_warm_worker)
             values = client.gather(client.compute(tasks))
-    arrays = [np.array([[point[0] for point in row] for row in grid]) for grid in values]
-    failed, warned = ([(p.names[k], i, j, g, msg) for k, grid in enumerate(values) for i, row in enumerate(grid)
-                       for j, point in enumerate(row) for g, msg in point[which]] for which in (1, 2))
+    arrays = [np.empty(p.shape + (pop["count"], 3)) for pop in p.populations]
+    failed, warned = [], []
+    for (k, i, j, a, b), (rows, fail, warn) in zip(jobs, values):
+        arrays[k][i, j, a:b] = rows
+        failed += [(p.names[k], i, j, g, msg) for g, msg in fail]
+        warned += [(p.names[k], i, j, g, msg) for g, msg in warn]
     return arrays, failed, warned
 
 
@@ -426,26 +474,124 @@ def _client(address: str, timeout: float):
                            "at that address (tcp://HOST:PORT), or raise --connect-timeout") from None
 
 
+LEVEL = 0.95  # confidence level of every interval
+_Q = 0.5 + LEVEL / 2
+RESAMPLES = 999  # bootstrap resamples of the overlap's interval
+
+
+def _moments(x: np.ndarray):
+    """Sample size, mean and sum of squared deviations along the last axis, NaN (failed grains) left out."""
+    n = np.isfinite(x).sum(-1)
+    m = np.nanmean(x, -1)
+    return n, m, np.nansum((x - m[..., None]) ** 2, -1)
+
+
+def mean_interval(x: np.ndarray):
+    """Student t interval (lo, hi) of the mean of the samples x (..., n), along the last axis."""
+    from scipy import stats  # on use: its import costs seconds the refusal of a sweep need not pay
+
+    n, m, ss = _moments(x)
+    h = stats.t.ppf(_Q, n - 1) * np.sqrt(ss / (n - 1) / n)
+    return m - h, m + h
+
+
+def std_interval(x: np.ndarray):
+    """Chi-square interval (lo, hi) of the standard deviation of normal samples x (..., n), last axis."""
+    from scipy import stats
+
+    n, _, ss = _moments(x)
+    return np.sqrt(ss / stats.chi2.ppf(_Q, n - 1)), np.sqrt(ss / stats.chi2.ppf(1 - _Q, n - 1))
+
+
+def proportion_interval(k: np.ndarray, n: np.ndarray):
+    """Wilson score interval (lo, hi) of a proportion from k successes in n trials."""
+    from scipy import stats
+
+    z = stats.norm.ppf(_Q)
+    p = k / n
+    centre = (p + z**2 / (2 * n)) / (1 + z**2 / n)
+    h = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / (1 + z**2 / n)
+    return centre - h, centre + h
+
+
+def difference_interval(a: np.ndarray, b: np.ndarray):
+    """Welch t interval (lo, hi) of mean(a) − mean(b) of samples (..., n), along the last axis."""
+    from scipy import stats
+
+    (na, ma, ssa), (nb, mb, ssb) = _moments(a), _moments(b)
+    va, vb = ssa / (na - 1) / na, ssb / (nb - 1) / nb  # squared standard errors
+    df = (va + vb) ** 2 / (va**2 / (na - 1) + vb**2 / (nb - 1))
+    h = np.where(va + vb > 0, stats.t.ppf(_Q, df) * np.sqrt(va + vb), 0.0)
+    return ma - mb - h, ma - mb + h
+
+
 def statistics(grid: np.ndarray) -> dict:
-    """Mean and spread of the transport velocity and the hopping fraction over the grains."""
+    """Per point of grid (..., grains, 3): mean and spread of the transport velocity, the hopping and
+    flight fractions, each with its LEVEL interval (keys ``<name>_lo``, ``<name>_hi``)."""
     ok = np.isfinite(grid[..., 2])
-    with np.errstate(invalid="ignore", divide="ignore"):  # a point where every grain failed stays NaN
-        hop = np.where(ok, grid[..., 2] > 0.5, 0).sum(-1) / ok.sum(-1)
-        return {"mean_vx": np.nanmean(grid[..., 0], -1), "std_vx": np.nanstd(grid[..., 0], -1),
-                "mean_vy": np.nanmean(grid[..., 1], -1), "std_vy": np.nanstd(grid[..., 1], -1),
-                "hop_fraction": hop, "flight_fraction": np.nanmean(grid[..., 2], -1),
-                "failed": (~ok).sum(-1).astype(float)}
+    with np.errstate(invalid="ignore", divide="ignore"):  # a point with fewer than two grains has no interval
+        hops, n = np.where(ok, grid[..., 2] > 0.5, 0).sum(-1), ok.sum(-1)
+        out = {"mean_vx": np.nanmean(grid[..., 0], -1), "std_vx": np.nanstd(grid[..., 0], -1),
+               "mean_vy": np.nanmean(grid[..., 1], -1), "std_vy": np.nanstd(grid[..., 1], -1),
+               "hop_fraction": hops / n, "flight_fraction": np.nanmean(grid[..., 2], -1),
+               "failed": (~ok).sum(-1).astype(float)}
+        intervals = {"mean_vx": mean_interval(grid[..., 0]), "std_vx": std_interval(grid[..., 0]),
+                     "mean_vy": mean_interval(grid[..., 1]), "std_vy": std_interval(grid[..., 1]),
+                     "hop_fraction": proportion_interval(hops, n), "flight_fraction": mean_interval(grid[..., 2])}
+    for name, (lo, hi) in intervals.items():
+        out[f"{name}_lo"], out[f"{name}_hi"] = lo, hi
+    return out
 
 
-def overlap(a: np.ndarray, b: np.ndarray) -> float:
-    """Overlap coefficient of two samples of X velocities (area under the lower of their normal fits)."""
+def overlap_normal(m1, s1, m2, s2):
+    """Overlap coefficient of the normal densities N(m1, s1²) and N(m2, s2²) (arrays broadcast, s > 0):
+    the area under the lower of the two, from the points where they cross."""
+    from scipy import stats
+
+    narrow = s1 <= s2
+    mn, sn, mw, sw = (np.where(narrow, u, v) for u, v in ((m1, m2), (s1, s2), (m2, m1), (s2, s1)))
+    # the narrow density is the higher one where a x² + b x + c < 0, between the roots
+    a, b = 1 / sn**2 - 1 / sw**2, -2 * (mn / sn**2 - mw / sw**2)
+    c = mn**2 / sn**2 - mw**2 / sw**2 - 2 * np.log(sw / sn)
+    with np.errstate(invalid="ignore", divide="ignore"):  # equal spreads: one root at ±inf (a = 0)
+        q = -0.5 * (b + np.where(b >= 0, 1.0, -1.0) * np.sqrt(np.maximum(b**2 - 4 * a * c, 0.0)))
+        r1, r2 = q / a, c / q
+    x1, x2 = np.minimum(r1, r2), np.maximum(r1, r2)
+    phi = stats.norm.cdf
+    ovl = phi(x2, mw, sw) - phi(x1, mw, sw) + phi(x1, mn, sn) + phi(-x2, -mn, sn)
+    return np.where((mn == mw) & (sn == sw), 1.0, ovl)
+
+
+def overlap(a: np.ndarray, b: np.ndarray, axis: int = -1):
+    """Overlap coefficient of two samples of X velocities along ``axis`` (of their normal fits; NaN, failed
+    grains, left out)."""
+    def fit(x):
+        return np.nanmean(x, axis), np.maximum(np.nanstd(x, axis), 1e-12)
+
+    return overlap_normal(*fit(a), *fit(b))
+
+
+def overlap_interval(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -> tuple[float, float]:
+    """Bootstrap percentile interval (lo, hi) of :func:`overlap` of two samples (NaN left out)."""
+    from scipy import stats
+
     a, b = a[np.isfinite(a)], b[np.isfinite(b)]
-    mu1, mu2 = a.mean(), b.mean()
-    s1, s2 = max(a.std(), 1e-12), max(b.std(), 1e-12)
-    lo, hi = min(mu1 - 6 * s1, mu2 - 6 * s2), max(mu1 + 6 * s1, mu2 + 6 * s2)
-    v = np.linspace(lo, hi, 4001)
-    pdf = lambda mu, sd: np.exp(-0.5 * ((v - mu) / sd) ** 2) / (sd * math.sqrt(2 * math.pi))  # noqa: E731
-    return float(np.trapezoid(np.minimum(pdf(mu1, s1), pdf(mu2, s2)), v))
+    if min(len(a), len(b)) < 2:
+        return math.nan, math.nan
+    res = stats.bootstrap((a, b), overlap, n_resamples=RESAMPLES, confidence_level=LEVEL, method="percentile",
+                          vectorized=True, rng=rng)
+    return float(res.confidence_interval.low), float(res.confidence_interval.high)
+
+
+def grains_needed(spread: float, half_width: float) -> int:
+    """Smallest number of grains n ≥ 2 whose Student t interval of a mean, for the spread (standard
+    deviation) ``spread``, has at most ``half_width`` (same unit) at LEVEL."""
+    from scipy import stats
+
+    n = max(2, math.ceil((stats.norm.ppf(_Q) * spread / half_width) ** 2))
+    while stats.t.ppf(_Q, n - 1) * spread / math.sqrt(n) > half_width:
+        n += 1
+    return n
 
 
 def _column(axis: dict, name: str) -> Column:
@@ -461,18 +607,89 @@ def _point_columns(p: Plan) -> tuple[list[Column], np.ndarray]:
     return cols, np.column_stack(data)
 
 
-STAT_COLUMNS = [Column("mean_vx", "m/s", "mean transport velocity along X"),
-                Column("std_vx", "m/s", "spread (standard deviation) of the X velocity over the grains"),
-                Column("mean_vy", "m/s", "mean transport velocity along Y"),
-                Column("std_vy", "m/s", "spread of the Y velocity"),
-                Column("hop_fraction", "1", "fraction of grains more than half of the time in flight"),
-                Column("flight_fraction", "1", "mean fraction of time in flight"),
-                Column("failed", "1", "grains whose simulation stopped with an error (left out of the statistics)")]
+def _with_interval(column: Column, method: str) -> list[Column]:
+    """The column and the ends of its LEVEL confidence interval (``method``)."""
+    return [column] + [Column(f"{column.name}_{end}", column.unit, f"{word} end of the {LEVEL:.0%} confidence "
+                              f"interval of {column.name} ({method})") for end, word in (("lo", "lower"),
+                                                                                          ("hi", "upper"))]
 
 
-def result(p: Plan, values: list, failed: list = (), warned: list = ()) -> Result:
-    """Tables per population (and the separation chart for two), summary and heat-map plots;
-    ``failed`` and ``warned`` grains (from :func:`compute`) are listed in the summary and warned about."""
+STAT_COLUMNS = [
+    *_with_interval(Column("mean_vx", "m/s", "mean transport velocity along X"), "Student t"),
+    *_with_interval(Column("std_vx", "m/s", "spread (standard deviation) of the X velocity over the grains"),
+                    "chi-square, normal velocities"),
+    *_with_interval(Column("mean_vy", "m/s", "mean transport velocity along Y"), "Student t"),
+    *_with_interval(Column("std_vy", "m/s", "spread of the Y velocity"), "chi-square, normal velocities"),
+    *_with_interval(Column("hop_fraction", "1", "fraction of grains more than half of the time in flight"),
+                    "Wilson score"),
+    *_with_interval(Column("flight_fraction", "1", "mean fraction of time in flight"), "Student t"),
+    Column("failed", "1", "grains whose simulation stopped with an error (left out of the statistics)")]
+
+
+def separation(a: np.ndarray, b: np.ndarray, seed: int = 0) -> dict:
+    """Per point of two populations' grids (nx, ny, grains, 3): the differences of the mean velocities and
+    the overlap of the X-velocity distributions, each with its LEVEL interval (``<name>_lo``, ``_hi``)."""
+    rng = np.random.default_rng(seed)  # the bootstrap's resamples: the same tables on every run
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = {"delta_vx": np.nanmean(a[..., 0], -1) - np.nanmean(b[..., 0], -1),
+               "delta_vy": np.nanmean(a[..., 1], -1) - np.nanmean(b[..., 1], -1),
+               "overlap": overlap(a[..., 0], b[..., 0])}
+        for k in range(2):
+            out[f"{('delta_vx', 'delta_vy')[k]}_lo"], out[f"{('delta_vx', 'delta_vy')[k]}_hi"] = \
+                difference_interval(a[..., k], b[..., k])
+    ends = np.array([[overlap_interval(a[i, j, :, 0], b[i, j, :, 0], rng) for j in range(a.shape[1])]
+                     for i in range(a.shape[0])]).reshape(a.shape[:2] + (2,))
+    out["overlap_lo"], out["overlap_hi"] = ends[..., 0], ends[..., 1]
+    return out
+
+
+def _separation_columns(names: list[str]) -> list[Column]:
+    return [*_with_interval(Column("delta_vx", "m/s", f"mean X velocity of {names[0]} minus {names[1]}"), "Welch t"),
+            *_with_interval(Column("delta_vy", "m/s", "the same along Y"), "Welch t"),
+            *_with_interval(Column("overlap", "1", "overlap coefficient of the two X-velocity distributions"),
+                            f"bootstrap percentile, {RESAMPLES} resamples")]
+
+
+def best_point(sep: dict) -> tuple[int, np.ndarray]:
+    """The best operating point (flat index: the least overlap, ties broken by the larger velocity difference)
+    and the mask (nx, ny) of the points not significantly worse: their overlap interval meets the best's."""
+    best = int(np.lexsort((-np.abs(sep["delta_vx"].ravel()), sep["overlap"].ravel()))[0])
+    return best, sep["overlap_lo"] <= sep["overlap_hi"].ravel()[best]
+
+
+def _number(x) -> float | None:
+    """A summary value: the float, or None where there is none (NaN: too few grains)."""
+    return float(x) if math.isfinite(x) else None
+
+
+def _spread(x: np.ndarray) -> np.ndarray:
+    """Sample standard deviation (ddof 1) along the last axis; NaN below two grains."""
+    n, _, ss = _moments(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.sqrt(ss / (n - 1))
+
+
+def _precision(names: list[str], stats_: list[dict], values: list, best: int | None, half_width: float) -> dict:
+    """How many grains per population a mean X velocity (and the best point's Δv_x) to ± ``half_width`` m/s
+    at LEVEL needs, from the largest observed spread (None below two grains per point)."""
+    def needed(spread):
+        return grains_needed(spread, half_width) if math.isfinite(spread) else None
+
+    out = {"level": LEVEL, "half_width_m_s": half_width}
+    for name, st, v in zip(names, stats_, values):
+        spread = float(np.fmax.reduce(_spread(v[..., 0]), axis=None))
+        out[name] = {"largest_spread_m_s": _number(spread), "grains_needed": needed(spread),
+                     "largest_half_width_m_s": _number(np.fmax.reduce(st["mean_vx_hi"] - st["mean_vx"], axis=None))}
+    if best is not None:  # the same n in both populations: the spread of a difference is the root sum square
+        spread = math.hypot(*(float(_spread(v[..., 0]).ravel()[best]) for v in values))
+        out["delta_vx_at_best"] = {"spread_m_s": _number(spread), "grains_needed": needed(spread)}
+    return out
+
+
+def result(p: Plan, values: list, failed: list = (), warned: list = (), half_width: float = 1e-3) -> Result:
+    """Tables per population (and the separation chart for two), summary and heat-map plots; every statistic
+    with its LEVEL interval; ``failed`` and ``warned`` grains (from :func:`compute`) are listed in the summary
+    and warned about; the summary's ``precision`` sizes the populations for ± ``half_width`` m/s."""
     cols, base = _point_columns(p)
     tables, summary = {}, {"populations": p.names, "points": int(base.shape[0]),
                            "grains_per_point": [int(v.shape[2]) for v in values],
@@ -481,35 +698,37 @@ def result(p: Plan, values: list, failed: list = (), warned: list = ()) -> Resul
                                              for n, i, j, g, m in failed],
                            "warned_grains": [{"population": n, "point": [i, j], "grain": g, "warnings": m}
                                              for n, i, j, g, m in warned]}
-    stats = [statistics(v) for v in values]
-    for name, st in zip(p.names, stats):
+    stats_ = [statistics(v) for v in values]
+    for name, st in zip(p.names, stats_):
         data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS])
         tables[f"sweep_{name}"] = Table(cols + STAT_COLUMNS, data, f"population {name} over the swept plane")
+    best = similar = None
     if len(values) == 2:
-        a, b = values
-        ovl = np.array([[overlap(a[i, j, :, 0], b[i, j, :, 0]) for j in range(a.shape[1])]
-                        for i in range(a.shape[0])])
-        dvx = stats[0]["mean_vx"] - stats[1]["mean_vx"]
-        dvy = stats[0]["mean_vy"] - stats[1]["mean_vy"]
-        sep = [Column("delta_vx", "m/s", f"mean X velocity of {p.names[0]} minus {p.names[1]}"),
-               Column("delta_vy", "m/s", "the same along Y"),
-               Column("overlap", "1", "overlap coefficient of the two X-velocity distributions")]
-        tables["separation"] = Table(cols + sep, np.column_stack([base, dvx.ravel(), dvy.ravel(), ovl.ravel()]),
+        sep = separation(*values)
+        sep_cols = _separation_columns(p.names)
+        tables["separation"] = Table(cols + sep_cols, np.column_stack([base] + [sep[c.name].ravel() for c in sep_cols]),
                                      "separation chart of the two populations")
-        # best operating point: the least overlap, ties broken by the larger velocity difference
-        best = int(np.lexsort((-np.abs(dvx.ravel()), ovl.ravel()))[0])
+        best, similar = best_point(sep)
+        at = {c.name: _number(sep[c.name].ravel()[best]) for c in sep_cols}
         summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {
-            "delta_vx_m_s": float(dvx.ravel()[best]), "overlap": float(ovl.ravel()[best])}
-    best_ij = None if len(values) != 2 else divmod(best, values[0].shape[1])
+            "delta_vx_m_s": at["delta_vx"], "delta_vx_interval_m_s": [at["delta_vx_lo"], at["delta_vx_hi"]],
+            "overlap": at["overlap"], "overlap_interval": [at["overlap_lo"], at["overlap_hi"]],
+            "level": LEVEL, "points_not_significantly_worse": [list(ij) for ij in zip(*map(np.ndarray.tolist,
+                                                                                            np.nonzero(similar)))]}
+    summary["precision"] = _precision(p.names, stats_, values, best, half_width)
     warnings = [f"{len(failed)} grain simulation(s) stopped with an error and are left out of the statistics "
                 f"(summary.json: failed_grains); first: {failed[0][4]}"] if failed else []
     warnings += [f"{len(warned)} grain simulation(s) ran with warnings (summary.json: warned_grains); first: "
                  f"{warned[0][4][0]}"] if warned else []
-    return Result("grain_sweep", summary, tables, plots=lambda folder: _plots(p, stats, tables, best_ij, folder),
-                  warnings=warnings)
+    best_ij = None if best is None else divmod(best, p.shape[1])
+    return Result("grain_sweep", summary, tables,
+                  plots=lambda folder: _plots(p, stats_, tables, best_ij, similar, folder), warnings=warnings)
 
 
-def _plots(p: Plan, stats, tables, best, folder) -> list:
+def _plots(p: Plan, stats, tables, best, similar, folder) -> list:
+    """Heat maps over the plane (two swept fields): per population the mean X velocity and the hopping
+    fraction, for two the overlap with the best point starred and the points whose overlap interval meets
+    the best's (not significantly worse) hatched."""
     if not p.y:
         return []
     xs, ys = axis_values(p.x), axis_values(p.y)
@@ -533,6 +752,8 @@ def _plots(p: Plan, stats, tables, best, folder) -> list:
             lines = ax.contour(xs, ys, p.gamma.T, colors="w", linewidths=0.8)
             ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
         if name == "separation_overlap" and best is not None:
+            ax.pcolor(xs, ys, np.ma.masked_where(~similar.T, similar.T), shading="nearest", hatch="///",
+                      facecolor="none", edgecolor="r", linewidth=0.0, label=f"not significantly worse ({LEVEL:.0%})")
             ax.plot(xs[best[0]], ys[best[1]], "r*", ms=14, label="best operating point")
             ax.legend(fontsize=8, loc="upper right")
         plotting.set_labels(ax, x_label, y_label)
