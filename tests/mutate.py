@@ -1,0 +1,92 @@
+"""Mutation testing by shard: one physics or contract module against the test files that cover it.
+
+    python tests/mutate.py                 every shard in SHARDS, one after the other
+    python tests/mutate.py membrane ...    the named shards (or module paths)
+    python tests/mutate.py --list          the shards
+
+mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
+runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a pyproject.toml made of
+the repository's [tool.mutmut] and [tool.pytest.ini_options] with the shard's module and test files.
+The cache stays there, so a rerun tests only the mutants whose function changed. One worker: the
+machine is shared. Results and the triage of every survivor: docs/mutation.md.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# shard name -> (module to mutate, test files that cover it)
+SHARDS = {
+    "membrane": ("symmech/trolley/membrane.py",
+                 ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py"]),
+    "elastic": ("symmech/trolley/elastic.py",
+                ["tests/test_trolley_elastic.py", "tests/test_trolley_membrane.py", "tests/test_elastic_damping.py"]),
+    "impact": ("symmech/grain/impact.py",
+               ["tests/test_grain_impact_solver.py", "tests/test_grain_impact_derivation.py",
+                "tests/test_bad_impact.py"]),
+    "coulomb": ("symmech/grain/coulomb_law.py",
+                ["tests/test_grain_impact_solver.py", "tests/test_grain_motion_parts.py"]),
+    "smm_forms": ("symmech/smm/forms.py",
+                  ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py"]),
+    "smm_numeric": ("symmech/smm/numeric.py",
+                    ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py"]),
+    "integrity": ("symmech/core/integrity.py",
+                  ["tests/test_codegen.py", "tests/test_output_contract.py"]),
+}
+
+
+def shard_pyproject(module: str, tests: list[str]) -> str:
+    """The shard's pyproject.toml text: [tool.mutmut] narrowed to one module, pytest's settings kept."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))
+    mutmut = dict(project["tool"]["mutmut"], only_mutate=[module], pytest_add_cli_args_test_selection=tests)
+    tables = {"tool.mutmut": mutmut, "tool.pytest.ini_options": project["tool"]["pytest"]["ini_options"]}
+    # JSON strings, lists, numbers and booleans are valid TOML values
+    return "".join(f"[{name}]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in table.items()) + "\n"
+                   for name, table in tables.items())
+
+
+def run_shard(name: str) -> int:
+    """Run one shard in mutants/<name>/; mutmut's exit status."""
+    module, tests = SHARDS[name]
+    folder = ROOT / "mutants" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    settings = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]["mutmut"]
+    for link in ["tests", *settings["source_paths"], *settings["also_copy"]]:
+        if not (folder / link).is_symlink():
+            (folder / link).symlink_to(ROOT / link, target_is_directory=True)
+    (folder / "pyproject.toml").write_text(shard_pyproject(module, tests), "utf-8")
+    mutmut = [str(Path(sys.executable).parent / "mutmut")]
+    print(f"== shard {name}: {module} against {' '.join(tests)}", flush=True)
+    status = subprocess.call(mutmut + ["run", "--max-children", "1"], cwd=folder)
+    subprocess.call(mutmut + ["results"], cwd=folder)
+    subprocess.call(mutmut + ["export-cicd-stats"], cwd=folder, stdout=subprocess.DEVNULL)
+    stats = json.loads((folder / "mutants" / "mutmut-cicd-stats.json").read_text("utf-8"))
+    print(f"== shard {name}: " + ", ".join(f"{k} {v}" for k, v in stats.items()), flush=True)
+    return status
+
+
+def main(argv: list[str]) -> int:
+    if argv == ["--list"]:
+        for name, (module, tests) in SHARDS.items():
+            print(f"{name:12} {module:32} {' '.join(tests)}")
+        return 0
+    by_module = {module: name for name, (module, _) in SHARDS.items()}
+    names = [by_module.get(a, a) for a in argv] or list(SHARDS)
+    unknown = [n for n in names if n not in SHARDS]
+    if unknown:
+        print(f"unknown shard {unknown[0]!r}; shards: {', '.join(SHARDS)}", file=sys.stderr)
+        return 2
+    return max(run_shard(n) for n in names)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
