@@ -33,7 +33,8 @@ SHARDS = {
                  ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py"], ["*"]),
     # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
     "elastic_damping": ("symmech/trolley/elastic.py",
-                        ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py"],
+                        ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",
+                         "tests/test_roller_clamped_pair.py"],
                         ["*.x__beam_damping__*", "*.x_roller_forces__*", "*.x__dissipation__*",
                          "*ǁSystemǁlinear_modes__*"]),
     "impact": ("symmech/grain/impact.py",
