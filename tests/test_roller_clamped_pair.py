@@ -41,3 +41,14 @@ def test_tangent_at_a_kink_is_the_mean_of_its_sides(preload):
                  - el.roller_forces(rollers, d, np.zeros(5), False)[0]) / h
         kt = el.roller_forces(rollers, d, np.zeros(5), False)[1]
         np.testing.assert_allclose(kt, (left + right) / 2, rtol=1e-6)
+
+
+def test_linear_law_ignores_the_preload():
+    """The preload belongs to the clamped pair: the linear law is P = -k d - c ḋ whatever it says."""
+    c = (100.0, 200.0, 300.0, 400.0, 500.0)
+    rollers = el.Rollers(K, c, "linear", (1e-3,) * 5)
+    d, dd = np.array([1e-4, -2e-4, 0.0, 3e-5, -1e-6]), np.array([0.1, -0.2, 0.3, 0.0, 0.05])
+    force, kt = el.roller_forces(rollers, d, dd, True)
+    np.testing.assert_allclose(force, -np.array(K) * d - np.array(c) * dd, rtol=1e-15, atol=0)
+    np.testing.assert_array_equal(kt, -np.array(K))
+    assert el.roller_energy(rollers, d) == pytest.approx(0.5 * np.sum(np.array(K) * d * d), rel=1e-15)
