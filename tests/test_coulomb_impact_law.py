@@ -8,8 +8,11 @@ and v+ = v + P/m, ω+ = ω + I⁻¹ (R × P). A point mass (rotation off) is the
 A contact point that is not approaching the plane gets no impulse."""
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
-from symmech.grain.coulomb_law import ImpactLaw, kinetic_energy, principal_inertia
+from symmech.grain import contact
+from symmech.grain.coulomb_law import (ImpactLaw, coulomb_impulse, inverse_effective_mass, kinetic_energy,
+                                       principal_inertia)
 
 R_BALL, M_BALL = 2e-3, 3e-5
 I_BALL = 0.4 * M_BALL * R_BALL ** 2
@@ -96,3 +99,34 @@ def test_kinetic_energy_and_principal_inertia_of_an_ellipsoid():
     wb = Q.T @ w
     expected = 0.5 * m * (v @ v) + 0.5 * (inertia * wb) @ wb
     assert kinetic_energy(m, inertia, Q, v, w) == pytest.approx(expected, rel=1e-14)
+
+
+def test_sliding_impulse_of_tilted_ellipsoids_lies_on_the_friction_cone():
+    """Non-spherical grains (K couples normal and tangential): the sticking candidate
+    P^ = (1 + e_n) P_I + (1 + e_t) D (P_I = -u_n/K_nn n, D = -K⁻¹u - P_I) is kept inside the cone;
+    outside it P = (1 + e_n) P_I + κ D with |P_t| = μ P_n exactly. Also the law of one grain, unbatched."""
+    rng = np.random.default_rng(5)
+    n, mu = 200, 0.15
+    axes = rng.uniform(0.5e-3, 4e-3, (n, 3))
+    mass = rng.uniform(1e-6, 1e-4, n)
+    Q = Rotation.random(n, random_state=5).as_matrix()
+    K = inverse_effective_mass(mass, principal_inertia(axes, mass), Q, contact.contact_offset(axes, Q))
+    u = rng.normal(size=(n, 3))
+    u[:, 2] = -np.abs(u[:, 2]) - 0.1
+    P = coulomb_impulse(K, u, E_N, E_T, mu)
+    sliding = 0
+    for i in range(n):
+        p_i = np.r_[0.0, 0.0, -u[i, 2] / K[i, 2, 2]]
+        d = -np.linalg.solve(K[i], u[i]) - p_i
+        candidate = (1 + E_N) * p_i + (1 + E_T) * d
+        if np.linalg.norm(candidate[:2]) <= mu * candidate[2]:
+            np.testing.assert_allclose(P[i], candidate, rtol=1e-12, atol=1e-12 * np.abs(candidate).max())
+            continue
+        sliding += 1
+        rest = P[i] - (1 + E_N) * p_i  # along D
+        assert np.linalg.norm(np.cross(rest, d)) < 1e-10 * np.linalg.norm(rest) * np.linalg.norm(d)
+        assert rest @ d > 0
+        assert np.linalg.norm(P[i, :2]) == pytest.approx(mu * P[i, 2], rel=1e-10)
+        assert abs(d[2]) > 1e-3 * np.linalg.norm(d)  # the normal-tangential coupling a sphere lacks
+    assert sliding > n // 4
+    np.testing.assert_allclose(coulomb_impulse(K[0], u[0], E_N, E_T, mu), P[0], rtol=1e-14)
