@@ -89,7 +89,8 @@ def run_shard(name: str) -> int:
         if v != "killed":
             print(f"    {k}: {v}")
     counts = Counter(mine.values())
-    print(f"== shard {name}: {len(mine)} mutants, " + ", ".join(f"{n} {v}" for v, n in counts.most_common()), flush=True)
+    tally = ", ".join(f"{n} {verdict}" for verdict, n in counts.most_common())
+    print(f"== shard {name}: {len(mine)} mutants, {tally}", flush=True)
     return status
 
 

@@ -168,9 +168,10 @@ def test_roller_free_decay_dissipates_what_the_dampers_absorb():
 
 
 def test_free_lateral_slide_has_zero_frequencies_and_real_decay_rates():
-    """No lateral springs (k4 = k5 = 0), lateral dampers only, centre of mass on the rail plane, B and C alike (roll decoupled):
-    u3 and θ2 keep any offset (λ = 0: ω = 0, ζ = 0) and their rates decay at the real rates eig(M⁻¹ D)
-    (ζ = 1, overdamped); the roll I θ1'' + a²(c1 + c2) θ1' + a²(k1 + k2) θ1 = 0 is a closed form."""
+    """No lateral springs (k4 = k5 = 0), lateral dampers only, centre of mass on the rail plane, B and C
+    alike (roll decoupled): u3 and θ2 keep any offset (λ = 0: ω = 0, ζ = 0) and their rates decay at the
+    real rates eig(M⁻¹ D) (ζ = 1, overdamped); the roll I θ1'' + a²(c1 + c2) θ1' + a²(k1 + k2) θ1 = 0 is
+    a closed form."""
     k, c = (1e6, 1e6, 2e6, 0.0, 0.0), (200.0, 200.0, 400.0, 300.0, 500.0)  # B, C alike: roll apart from bounce
     m, com, inertia, l, a = 100.0, np.array([0.8, 0.0, 0.0]), (20.0, 30.0, 25.0), 2.0, 1.0
     system = el.System(el.ElasticModel(m, tuple(com), (*inertia, 0, 0, 0), l, a, 0.0, el.Rollers(k, c)))
