@@ -5,10 +5,11 @@
     python tests/mutate.py --list          the shards
 
 mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
-runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a pyproject.toml made of
-the repository's [tool.mutmut] and [tool.pytest.ini_options] with the shard's module and test files.
-The cache stays there, so a rerun tests only the mutants whose function changed. One worker: the
-machine is shared. Results and the triage of every survivor: docs/mutation.md.
+runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
+pyproject.toml made of the repository's [tool.mutmut] and [tool.pytest.ini_options] with the shard's
+module and test files. The cache stays there, so a rerun tests only the mutants whose function
+changed. One worker: the machine is shared. Results and the triage of every survivor:
+docs/mutation.md (the test files of the shards not run yet are a first choice, to be checked).
 """
 from __future__ import annotations
 
@@ -94,13 +95,19 @@ def run_shard(name: str) -> int:
     return status
 
 
+def shards_named(arg: str) -> list[str]:
+    """The shards an argument names: a shard, or every shard of a module path (itself when neither)."""
+    if arg in SHARDS:
+        return [arg]
+    return [name for name, (module, *_) in SHARDS.items() if module == arg] or [arg]
+
+
 def main(argv: list[str]) -> int:
     if argv == ["--list"]:
         for name, (module, tests, patterns) in SHARDS.items():
             print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
         return 0
-    by_module = {module: name for name, (module, *_) in SHARDS.items()}
-    names = [by_module.get(a, a) for a in argv] or list(SHARDS)
+    names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
     unknown = [n for n in names if n not in SHARDS]
     if unknown:
         print(f"unknown shard {unknown[0]!r}; shards: {', '.join(SHARDS)}", file=sys.stderr)
