@@ -1,4 +1,4 @@
-.PHONY: install codegen check test slow bench
+.PHONY: install codegen check test slow bench mutate
 PY ?= python
 
 install:
@@ -20,3 +20,8 @@ slow:
 
 bench:
 	for f in benchmarks/bench_*.py; do $(PY) $$f || exit 1; done
+
+# mutation testing, not in the default suite: every shard of tests/mutate.py one after the other, or
+# MODULE=symmech/trolley/membrane.py (or a shard name) alone; results and triage in docs/mutation.md
+mutate:
+	$(PY) tests/mutate.py $(MODULE)

@@ -285,7 +285,9 @@ def roller_forces(rollers: Rollers, d, dd, damping: bool):
     pre = np.asarray(rollers.preload, float)
     up, down = pre - d, pre + d
     force = k * (np.maximum(up, 0.0) - np.maximum(down, 0.0)) - c * dd
-    return force, -k * ((up > 0).astype(float) + (down > 0))
+    # a roller just touching counts half (the mean of the slopes beside the kink): with no preload
+    # the pair is exactly -k d, stiffness k at d = 0, not 0
+    return force, -k * (1.0 + (np.sign(up) + np.sign(down)) / 2)
 
 
 def roller_energy(rollers: Rollers, d) -> float:

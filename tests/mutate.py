@@ -1,0 +1,119 @@
+"""Mutation testing by shard: one physics or contract module against the test files that cover it.
+
+    python tests/mutate.py                 every shard in SHARDS, one after the other
+    python tests/mutate.py membrane ...    the named shards (or module paths)
+    python tests/mutate.py --list          the shards
+
+mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
+runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
+pyproject.toml made of the repository's [tool.mutmut] and [tool.pytest.ini_options] with the shard's
+module and test files. The cache stays there, so a rerun tests only the mutants whose function
+changed. One worker: the machine is shared. Results and the triage of every survivor:
+docs/mutation.md (the test files of the shards not run yet are a first choice, to be checked).
+"""
+from __future__ import annotations
+
+import fnmatch
+import json
+import subprocess
+import sys
+from collections import Counter
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
+# mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
+SHARDS = {
+    "membrane": ("symmech/trolley/membrane.py",
+                 ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py"], ["*"]),
+    # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
+    "elastic_damping": ("symmech/trolley/elastic.py",
+                        ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",
+                         "tests/test_roller_clamped_pair.py"],
+                        ["*.x__beam_damping__*", "*.x_roller_forces__*", "*.x__dissipation__*",
+                         "*ǁSystemǁlinear_modes__*"]),
+    "impact": ("symmech/grain/impact.py",
+               ["tests/test_grain_impact_solver.py", "tests/test_grain_impact_derivation.py",
+                "tests/test_bad_impact.py"], ["*"]),
+    "coulomb": ("symmech/grain/coulomb_law.py",
+                ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
+                 "tests/test_coulomb_impact_law.py"],
+                ["*.x_inverse_effective_mass__*", "*.x_coulomb_impulse__*", "*.x_kinetic_energy__*",
+                 "*.x_principal_inertia__*"]),
+    # ImpactLaw.apply: 241 mutants, many in log texts; the grain motion tests take 100 s
+    "coulomb_apply": ("symmech/grain/coulomb_law.py",
+                      ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
+                       "tests/test_coulomb_impact_law.py"], ["*ǁImpactLawǁapply__*"]),
+    "smm_forms": ("symmech/smm/forms.py",
+                  ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py"], ["*"]),
+    "smm_numeric": ("symmech/smm/numeric.py",
+                    ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py"],
+                    ["*"]),
+    "integrity": ("symmech/core/integrity.py",
+                  ["tests/test_codegen.py", "tests/test_output_contract.py"], ["*"]),
+}
+
+
+def shard_pyproject(module: str, tests: list[str]) -> str:
+    """The shard's pyproject.toml text: [tool.mutmut] narrowed to one module, pytest's settings kept."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))
+    mutmut = dict(project["tool"]["mutmut"], only_mutate=[module], pytest_add_cli_args_test_selection=tests)
+    tables = {"tool.mutmut": mutmut, "tool.pytest.ini_options": project["tool"]["pytest"]["ini_options"]}
+    # JSON strings, lists, numbers and booleans are valid TOML values
+    return "".join(f"[{name}]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in table.items()) + "\n"
+                   for name, table in tables.items())
+
+
+def run_shard(name: str) -> int:
+    """Run one shard in mutants/<name>/; mutmut's exit status."""
+    module, tests, patterns = SHARDS[name]
+    folder = ROOT / "mutants" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    settings = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]["mutmut"]
+    for link in ["tests", *settings["source_paths"], *settings["also_copy"]]:
+        if not (folder / link).is_symlink():
+            (folder / link).symlink_to(ROOT / link, target_is_directory=True)
+    (folder / "pyproject.toml").write_text(shard_pyproject(module, tests), "utf-8")
+    mutmut = [str(Path(sys.executable).parent / "mutmut")]
+    print(f"== shard {name}: {module} against {' '.join(tests)}", flush=True)
+    status = subprocess.call(mutmut + ["run", "--max-children", "1", *patterns], cwd=folder)
+    listing = subprocess.run(mutmut + ["results", "--all", "true"], cwd=folder, capture_output=True, text=True).stdout
+    verdicts = dict(line.strip().rsplit(": ", 1) for line in listing.splitlines() if ": " in line)
+    mine = {k: v for k, v in verdicts.items() if any(fnmatch.fnmatchcase(k, p) for p in patterns)}
+    for k, v in mine.items():
+        if v != "killed":
+            print(f"    {k}: {v}")
+    counts = Counter(mine.values())
+    tally = ", ".join(f"{n} {verdict}" for verdict, n in counts.most_common())
+    print(f"== shard {name}: {len(mine)} mutants, {tally}", flush=True)
+    return status
+
+
+def shards_named(arg: str) -> list[str]:
+    """The shards an argument names: a shard, or every shard of a module path (itself when neither)."""
+    if arg in SHARDS:
+        return [arg]
+    return [name for name, (module, *_) in SHARDS.items() if module == arg] or [arg]
+
+
+def main(argv: list[str]) -> int:
+    if argv == ["--list"]:
+        for name, (module, tests, patterns) in SHARDS.items():
+            print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
+        return 0
+    names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
+    unknown = [n for n in names if n not in SHARDS]
+    if unknown:
+        print(f"unknown shard {unknown[0]!r}; shards: {', '.join(SHARDS)}", file=sys.stderr)
+        return 2
+    return max(run_shard(n) for n in names)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
