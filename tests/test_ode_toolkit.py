@@ -6,6 +6,9 @@ the exact free response of the mechanism run.
 The stiff test problem is Prothero-Robinson: y' = -lam (y - cos t) - sin t, y(0) = 1, solution cos t for
 every lam."""
 import math
+import os
+import subprocess
+import sys
 import tomllib
 
 import numba
@@ -275,3 +278,34 @@ def test_integrate_refuses_bad_requests():
         ode.integrate("smm_rotor_boom", p, y0, t[::-1])
     with pytest.raises(SymmechError, match="3 steps did not reach"):
         ode.integrate("smm_rotor_boom", p, y0, t, max_steps=3)
+
+
+CACHED_CALLER = '''
+import numba, numpy as np
+from symmech.core import ode
+
+@numba.njit(cache=True)
+def decay(t, y, args, out):
+    out[0] = -args[0] * y[0]
+
+_advance = ode.steppers(decay, decay).dop_advance
+
+@numba.njit(cache=True)
+def caller(y):
+    K, f = np.empty((ode.DOP_EXTENDED, 1)), -y
+    return _advance(0.0, y, f, 0.1, 1.0, np.array([1.0]), 1e-6, np.array([1e-9]), K)[1][0]
+'''
+
+
+def test_a_cached_caller_of_the_toolkit_loads_from_the_cache_in_a_fresh_process(tmp_path):
+    """The design decision of core.ode (its docstring): a cached jitted function calling the toolkit's closures
+    is compiled once and served from numba's cache in the next process (no miss, one hit), with the same value,
+    e^-0.1 to the step's tolerance."""
+    (tmp_path / "cached_caller.py").write_text(CACHED_CALLER)
+    code = ("import cached_caller as c, numpy as np; v = c.caller(np.array([1.0])); "
+            "print(v, sum(c.caller.stats.cache_hits.values()), sum(c.caller.stats.cache_misses.values()))")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": str(tmp_path)}
+    runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+            .stdout.split() for _ in range(2)]
+    assert runs[0][1:] == ["0", "1"] and runs[1][1:] == ["1", "0"]
+    assert float(runs[1][0]) == float(runs[0][0]) == pytest.approx(math.exp(-0.1), abs=1e-6)
