@@ -27,6 +27,10 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   system, embedded error estimate, dense output) with the analytic Jacobian of
   the slip, switching as ``sliding.slide`` does; lift-off from the root of n(t).
 
+The generic integrators and root finders (DOP853, Radau IIA with dense output, Brent) are those of
+:mod:`symmech.core.ode`, compiled here for the rotation and sliding right-hand sides (``_rhs``, ``_jac``)
+and the functions of time (``_h``); this module keeps the physics and the event logic.
+
 Parameters travel in one float64 vector (layout ``P_*`` below), the state as
 (t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
 (trajectory rows, impact rows, warning codes) and are turned into a
@@ -50,8 +54,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from symmech.core import dop853 as dop
-from symmech.core import kernels
+from symmech.core import kernels, ode
 from symmech.core.scene import SymmechError
 from symmech.grain import motion, sliding
 
@@ -86,19 +89,13 @@ IMPACT_WIDTH = 31  # t, r, v before/after, w before/after, impulse, u before/aft
 PHASES_PER_CALL = 2000
 COLD_COMPILE_SECONDS = 80.0  # wall time of the first compile, idle machine: 78 s (benchmarks/bench_grain_compile.py)
 ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS = motion.ZENO_IMPACTS, motion.ZENO_INTERVAL, motion.MAX_IDLE_STEPS
-BOUNDED_MAXFUN = 500  # function evaluations of the bounded minimiser at most (scipy's default)
 EPS = float(np.finfo(float).eps)
 SCAN_WINDOW = 32
-BRENT_RTOL, BRENT_ITER = 4 * EPS, 100
 MAX_STEPS_PER_CHUNK = sliding.MAX_RHS_PER_PHASE // 12  # DOP853 steps (12 evaluations) per sliding chunk
 MAX_STALLED_EVENTS = sliding.MAX_STALLED_EVENTS
 ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Prince stepper
 
-# DOP853 (core.dop853: the coefficients of scipy's solve_ivp, which the Python loop uses, bit for bit).
-DOP_A, DOP_B, DOP_C = dop.A, dop.B, dop.C
-DOP_E3, DOP_E5, DOP_D = dop.E3, dop.E5, dop.D
-DOP_STAGES, DOP_EXTENDED, DOP_POWER = INT(dop.N_STAGES), INT(dop.N_STAGES_EXTENDED), INT(dop.INTERPOLATOR_POWER)
-DOP_EXPONENT = -1.0 / 8.0  # error estimator of order 7
+DOP_STAGES, DOP_EXTENDED, DOP_POWER, DOP_EXPONENT = ode.DOP_STAGES, ode.DOP_EXTENDED, ode.DOP_POWER, ode.DOP_EXPONENT
 ROT_WIDTH = 3 + 7 + 7 * 7  # rotation step table row: t_old, t_new, (unused), y_old (7), F (7 x 7)
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
@@ -171,238 +168,34 @@ def _is_sphere(p):
     return max(p[0], p[1], p[2]) == min(p[0], p[1], p[2])
 
 
-# --------------------------------------------------------------------------- DOP853 (scipy's, ported)
+# --------------------------------------------------------------------------- right-hand sides (core.ode steppers)
 
 
 @jit
-def _rhs(kind, t, y, sp, out):
-    """Right-hand side: ``ROT`` torque-free rotation y = (q, w body), sp = inertia; ``SLIP``/``STICK`` sliding;
-    ``PROBE`` the stiff scalar test equation y' = -sp[0] (y - cos t) - sin t of the Radau stepper."""
+def _rhs(t, y, args, out):
+    """Right-hand side of the toolkit's steppers, args = (kind, sp): ``ROT`` torque-free rotation y = (q, w
+    body), sp = inertia; ``SLIP``/``STICK`` sliding, sp the sliding parameters."""
+    kind, sp = args
     if kind == ROT:
         qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
         wd = gm.euler_equations_scalar(sp[0], sp[1], sp[2], y[4], y[5], y[6])
         out[:4] = qd
         out[4:7] = wd
-    elif kind == PROBE:
-        out[0] = -sp[0] * (y[0] - math.cos(t)) - math.sin(t)
     else:
         _slide_rhs(t, y, sp, kind == STICK, out)
 
 
 @jit
-def _combine(out, y, K, a, s, h):
-    """out = y + h sum_j<s a_j K_j, element by element (no temporaries: this is the hot loop)."""
-    for i in range(K.shape[1]):
-        acc = 0.0
-        for j in range(s):
-            acc += a[j] * K[j, i]
-        out[i] = y[i] + acc * h
+def _jac(t, y, args, J):
+    """Jacobian d rhs / d y (13, 13) into J of the slip (analytic), args = (kind, sp): the only stiff one."""
+    _slip_jac(t, y, args[1], J)
 
 
-@jit
-def _first_step(kind, t, y, f, t_bound, sp, rtol, atol, power):
-    """scipy's ``select_initial_step``; power = 1 / (order of the error estimator + 1)."""
-    span = abs(t_bound - t)
-    if span == 0.0:
-        return 0.0
-    scale = atol + np.abs(y) * rtol
-    d0 = math.sqrt(np.mean((y / scale) ** 2))
-    d1 = math.sqrt(np.mean((f / scale) ** 2))
-    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    h0 = min(h0, span)
-    f1 = np.empty(y.size)
-    _rhs(kind, t + h0, y + h0 * f, sp, f1)
-    d2 = math.sqrt(np.mean(((f1 - f) / scale) ** 2)) / h0
-    h1 = max(1e-6, h0 * 1e-3) if d1 <= 1e-15 and d2 <= 1e-15 else (0.01 / max(d1, d2)) ** power
-    return min(100 * h0, h1, span)
-
-
-@jit
-def _dop_advance(kind, t, y, f, h_abs, t_bound, sp, rtol, atol, K):
-    """One accepted DOP853 step (scipy's ``RungeKutta._step_impl``): (t_new, y_new, h_abs next, ok).
-    K (16, n) holds the stages; K[12] is f at the new point."""
-    n = y.size
-    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
-    h_abs = max(h_abs, min_step)
-    rejected = False
-    yi = np.empty(n)
-    y_new = np.empty(n)
-    while True:
-        if h_abs < min_step:
-            return t, y, h_abs, False
-        t_new = min(t + h_abs, t_bound)
-        h = t_new - t
-        h_abs = abs(h)
-        K[0] = f
-        for s in range(1, DOP_STAGES):
-            _combine(yi, y, K, DOP_A[s], s, h)
-            _rhs(kind, t + DOP_C[s] * h, yi, sp, K[s])
-        _combine(y_new, y, K, DOP_B, DOP_STAGES, h)
-        _rhs(kind, t + h, y_new, sp, K[DOP_STAGES])
-        n5 = n3 = 0.0
-        for i in range(n):
-            e5 = e3 = 0.0
-            for j in range(DOP_STAGES + 1):
-                e5 += DOP_E5[j] * K[j, i]
-                e3 += DOP_E3[j] * K[j, i]
-            scale = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
-            n5 += (e5 / scale) ** 2
-            n3 += (e3 / scale) ** 2
-        err = 0.0 if n5 == 0 and n3 == 0 else abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * n)
-        if err < 1:
-            factor = 10.0 if err == 0 else min(10.0, 0.9 * err ** DOP_EXPONENT)
-            if rejected:
-                factor = min(1.0, factor)
-            return t_new, y_new, h_abs * factor, True
-        h_abs *= max(0.2, 0.9 * err ** DOP_EXPONENT)
-        rejected = True
-
-
-@jit
-def _dop_dense(kind, t_old, h, y_old, y_new, sp, K):
-    """Interpolant coefficients F (7, n) of the last step (scipy's ``DOP853._dense_output_impl``)."""
-    n = y_old.size
-    yi = np.empty(n)
-    for s in range(DOP_STAGES + 1, DOP_EXTENDED):
-        _combine(yi, y_old, K, DOP_A[s], s, h)
-        _rhs(kind, t_old + DOP_C[s] * h, yi, sp, K[s])
-    F = np.empty((DOP_POWER, n))
-    zero = np.zeros(n)
-    for i in range(n):
-        dy = y_new[i] - y_old[i]
-        F[0, i] = dy
-        F[1, i] = h * K[0, i] - dy
-        F[2, i] = 2 * dy - h * (K[DOP_STAGES, i] + K[0, i])
-    for r in range(DOP_POWER - 3):
-        _combine(F[3 + r], zero, K, DOP_D[r], DOP_EXTENDED, h)
-    return F
-
-
-@jit
-def _dense(t, t_old, h, y_old, F):
-    """The DOP853 interpolant at t (``Dop853DenseOutput``); F (7 n,) the coefficients row by row."""
-    x = (t - t_old) / h
-    n = y_old.size
-    y = np.empty(n)
-    for i in range(n):
-        acc = 0.0
-        for r in range(DOP_POWER):
-            acc += F[(DOP_POWER - 1 - r) * n + i]
-            acc *= x if r % 2 == 0 else 1 - x
-        y[i] = acc + y_old[i]
-    return y
-
-
-# --------------------------------------------------------------------------- Brent root, golden section
-
-
-@jit
-def _brent(what, a, b, xtol, ctx, steps, nsteps, p):
-    """Root of ``_h(what, ...)`` in [a, b] with a sign change (scipy's ``brentq``, ported; rtol 4 eps)."""
-    out = np.empty((1, 2, 3))  # scratch of the gap
-    xpre, xcur = a, b
-    fpre, fcur = _h(what, xpre, ctx, steps, nsteps, p, out), _h(what, xcur, ctx, steps, nsteps, p, out)
-    xblk = fblk = spre = scur = 0.0
-    if fpre == 0.0:
-        return xpre
-    if fcur == 0.0:
-        return xcur
-    for _ in range(BRENT_ITER):
-        if fpre != 0.0 and fcur != 0.0 and (fpre < 0.0) != (fcur < 0.0):
-            xblk, fblk = xpre, fpre
-            spre = scur = xcur - xpre
-        if abs(fblk) < abs(fcur):
-            xpre, xcur, xblk = xcur, xblk, xcur
-            fpre, fcur, fblk = fcur, fblk, fcur
-        delta = (xtol + BRENT_RTOL * abs(xcur)) / 2
-        sbis = (xblk - xcur) / 2
-        if fcur == 0.0 or abs(sbis) < delta:
-            return xcur
-        if abs(spre) > delta and abs(fcur) < abs(fpre):
-            if xpre == xblk:
-                stry = -fcur * (xcur - xpre) / (fcur - fpre)
-            else:
-                dpre = (fpre - fcur) / (xpre - xcur)
-                dblk = (fblk - fcur) / (xblk - xcur)
-                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
-            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
-                spre, scur = scur, stry
-            else:
-                spre = scur = sbis
-        else:
-            spre = scur = sbis
-        xpre, fpre = xcur, fcur
-        xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
-        fcur = _h(what, xcur, ctx, steps, nsteps, p, out)
-    return xcur
-
-
-@jit
-def _bounded_min(what, a, b, xatol, ctx, steps, nsteps, p):
-    """(x, h(x)) minimising h over [a, b]: scipy's bounded Brent (``minimize_scalar(method="bounded")``), ported."""
-    sqrt_eps = math.sqrt(2.2e-16)
-    golden_mean = 0.5 * (3.0 - math.sqrt(5.0))
-    fulc = a + golden_mean * (b - a)
-    nfc, xf = fulc, fulc
-    rat = e = 0.0
-    out = np.empty((1, 2, 3))  # scratch of the gap
-    fx = _h(what, xf, ctx, steps, nsteps, p, out)
-    num = 1
-    ffulc = fnfc = fx
-    xm = 0.5 * (a + b)
-    tol1 = sqrt_eps * abs(xf) + xatol / 3.0
-    tol2 = 2.0 * tol1
-    while abs(xf - xm) > (tol2 - 0.5 * (b - a)):
-        golden = True
-        if abs(e) > tol1:  # parabolic fit
-            golden = False
-            r = (xf - nfc) * (fx - ffulc)
-            q = (xf - fulc) * (fx - fnfc)
-            pp = (xf - fulc) * q - (xf - nfc) * r
-            q = 2.0 * (q - r)
-            if q > 0.0:
-                pp = -pp
-            q = abs(q)
-            r = e
-            e = rat
-            if abs(pp) < abs(0.5 * q * r) and pp > q * (a - xf) and pp < q * (b - xf):
-                rat = pp / q
-                x = xf + rat
-                if (x - a) < tol2 or (b - x) < tol2:
-                    rat = tol1 * (1.0 if xm - xf >= 0 else -1.0)
-            else:
-                golden = True
-        if golden:
-            e = a - xf if xf >= xm else b - xf
-            rat = golden_mean * e
-        si = 1.0 if rat >= 0 else -1.0
-        x = xf + si * max(abs(rat), tol1)
-        fu = _h(what, x, ctx, steps, nsteps, p, out)
-        num += 1
-        if fu <= fx:
-            if x >= xf:
-                a = xf
-            else:
-                b = xf
-            fulc, ffulc = nfc, fnfc
-            nfc, fnfc = xf, fx
-            xf, fx = x, fu
-        else:
-            if x < xf:
-                a = x
-            else:
-                b = x
-            if fu <= fnfc or nfc == xf:
-                fulc, ffulc = nfc, fnfc
-                nfc, fnfc = x, fu
-            elif fu <= ffulc or fulc == xf or fulc == nfc:
-                fulc, ffulc = x, fu
-        xm = 0.5 * (a + b)
-        tol1 = sqrt_eps * abs(xf) + xatol / 3.0
-        tol2 = 2.0 * tol1
-        if num >= BOUNDED_MAXFUN:
-            break
-    return xf, fx
+# The generic DOP853, Radau IIA and Brent code of core.ode, compiled for these right-hand sides.
+_steps = ode.steppers(_rhs, _jac)
+_first_step, _dop_advance, _dop_dense = _steps.first_step, _steps.dop_advance, _steps.dop_dense
+_radau_start, _radau_step = _steps.radau_start, _steps.radau_step
+_dense, _radau_dense = ode.dop_dense_at, ode.radau_dense_at
 
 
 # --------------------------------------------------------------------------- functions of time
@@ -475,6 +268,17 @@ def _h(what, t, ctx, steps, nsteps, p, out):
 
 
 @jit
+def _h_args(t, args):
+    """``_h`` at t with args = (what, ctx, steps, nsteps, p, out): the function of the root finders."""
+    what, ctx, steps, nsteps, p, out = args
+    return _h(what, t, ctx, steps, nsteps, p, out)
+
+
+_roots = ode.roots(_h_args)  # core.ode's Brent root finder and bounded minimiser of _h
+_brentq, _bounded_min = _roots.brentq, _roots.bounded_min
+
+
+@jit
 def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
     """First time in (t0, t1] where h reaches zero from above, or NaN (``contact.first_root``, same scan)."""
     start = t0
@@ -500,11 +304,11 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
                 break
         for j in range(1, min(stop, n - 1)):
             if hs[j] < hs[j - 1] and hs[j] < hs[j + 1]:
-                x, fx = _bounded_min(what, ts[j - 1], ts[j + 1], xtol, ctx, steps, nsteps, p)
+                x, fx = _bounded_min(ts[j - 1], ts[j + 1], xtol, (what, ctx, steps, nsteps, p, out))
                 if fx < 0.0 and hs[j - 1] > 0.0:
-                    return _brent(what, ts[j - 1], x, xtol, ctx, steps, nsteps, p), steps, nsteps
+                    return _brentq(ts[j - 1], x, xtol, (what, ctx, steps, nsteps, p, out)), steps, nsteps
         if stop < n:
-            return _brent(what, ts[stop - 1], ts[stop], xtol, ctx, steps, nsteps, p), steps, nsteps
+            return _brentq(ts[stop - 1], ts[stop], xtol, (what, ctx, steps, nsteps, p, out)), steps, nsteps
         if ts[n - 1] >= t1:
             return np.nan, steps, nsteps
         start = ts[n - 2]
@@ -532,12 +336,12 @@ def _extend(t, t_request, ctx, tab, ntab, p):
         if ctx[38] == 0.0:  # a new chunk
             ctx[29] = max(t_request, ctx[19] + p[P_PERIOD])
             f = np.empty(7)
-            _rhs(ROT, ctx[19], ctx[20:27].copy(), inertia, f)
+            _rhs(ctx[19], ctx[20:27].copy(), (ROT, inertia), f)
             ctx[31:38] = f
-            ctx[30] = _first_step(ROT, ctx[19], ctx[20:27].copy(), f, ctx[29], inertia, tol, atol, -DOP_EXPONENT)
+            ctx[30] = _first_step(ctx[19], ctx[20:27].copy(), f, ctx[29], (ROT, inertia), tol, atol, -DOP_EXPONENT)
             ctx[38] = 1.0
         tt, y, f = ctx[19], ctx[20:27].copy(), ctx[31:38].copy()
-        t_new, y_new, h_abs, ok = _dop_advance(ROT, tt, y, f, ctx[30], ctx[29], inertia, tol, atol, K)
+        t_new, y_new, h_abs, ok = _dop_advance(tt, y, f, ctx[30], ctx[29], (ROT, inertia), tol, atol, K)
         if not ok:
             ctx[27] = 1.0
             return tab, ntab
@@ -547,7 +351,7 @@ def _extend(t, t_request, ctx, tab, ntab, p):
             tab = grown
         tab[ntab, 0], tab[ntab, 1], tab[ntab, 2] = tt, t_new, 0.0
         tab[ntab, 3:10] = y
-        tab[ntab, 10:] = _dop_dense(ROT, tt, t_new - tt, y, y_new, inertia, K).reshape(DOP_POWER * 7)
+        tab[ntab, 10:] = _dop_dense(tt, t_new - tt, y, y_new, (ROT, inertia), K).reshape(DOP_POWER * 7)
         ntab += 1
         ctx[19], ctx[30] = t_new, h_abs
         ctx[20:27] = y_new
@@ -928,265 +732,8 @@ def _land(p, y, carry):
     return out
 
 
-# --------------------------------------------------------------------------- Radau IIA (scipy's, ported)
-
-# Radau IIA of order 5 (scipy's ``_ivp/radau.py``): nodes, error estimator, the eigen-decomposition of the
-# tableau A = T diag(MU_REAL, MU_COMPLEX, conj) TI, the dense-output matrix (written out: no scipy import).
-S6 = 6.0 ** 0.5
-RADAU_C = np.array([(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0])
-RADAU_E = np.array([[-13.0 - 7.0 * S6, -13.0 + 7.0 * S6, -1.0]]) / 3.0  # (1, 3)
-MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
-MU_COMPLEX = complex(3.0 + 0.5 * (3.0 ** (1.0 / 3.0) - 3.0 ** (2.0 / 3.0)),
-                     -0.5 * (3.0 ** (5.0 / 6.0) + 3.0 ** (7.0 / 6.0)))
-RADAU_T = np.array([[0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
-                    [0.25021312296533332, 0.20412935229379994, -0.38294211275726192], [1.0, 1.0, 0.0]])
-RADAU_TI = np.array([[4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
-                     [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
-                     [0.50287263494578682, -2.57192694985560522, 0.59603920482822492]])
-RADAU_PT = np.array([[13.0 / 3.0 + 7.0 * S6 / 3.0, -23.0 / 3.0 - 22.0 * S6 / 3.0, 10.0 / 3.0 + 5.0 * S6],
-                    [13.0 / 3.0 - 7.0 * S6 / 3.0, -23.0 / 3.0 + 22.0 * S6 / 3.0, 10.0 / 3.0 - 5.0 * S6],
-                    [1.0 / 3.0, -8.0 / 3.0, 10.0 / 3.0]]).T.copy()  # transposed: Q = P^T Z
-NEWTON_MAXITER, RADAU_MIN_FACTOR, RADAU_MAX_FACTOR = 6, 0.2, 10.0
-RADAU_POWER = 1.0 / 4.0  # initial step of the order-3 error estimator
-# Solver state between the steps of one solve (``Radau`` attributes): step, previous step and error norm
-# (-1: none), Jacobian current, LU factors valid, start and length of the last step (its interpolant).
-R_H, R_H_OLD, R_ERR_OLD, R_JAC_CURRENT, R_LU_VALID, R_T_OLD, R_H_LAST = 0, 1, 2, 3, 4, 5, 6
-N_RADAU = 7
-PROBE = INT(3)  # right-hand side kind of the stiff scalar test equation (see _rhs)
 MAX_RADAU_STEPS = sliding.MAX_RHS_PER_PHASE // 4  # Radau steps (at least 4 evaluations) per sliding chunk
 NO_EVENT, REGIME, SWITCH = 0, 1, 2  # how a chunk ends: its end time, a regime event, the integrator switch
-
-
-@jit
-def _lu(A, piv):
-    """LU factorisation with partial pivoting of A (n, n), real or complex, in place; row swaps into piv."""
-    n = A.shape[0]
-    for k in range(n):
-        m = k
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > abs(A[m, k]):
-                m = i
-        piv[k] = m
-        for j in range(n):
-            A[k, j], A[m, j] = A[m, j], A[k, j]
-        for i in range(k + 1, n):
-            A[i, k] /= A[k, k]
-            for j in range(k + 1, n):
-                A[i, j] -= A[i, k] * A[k, j]
-
-
-@jit
-def _lu_solve(LU, piv, b):
-    """x with A x = b from the factors of :func:`_lu`."""
-    n = b.size
-    x = b.copy()
-    for k in range(n):
-        x[k], x[piv[k]] = x[piv[k]], x[k]
-    for i in range(n):
-        for j in range(i):
-            x[i] -= LU[i, j] * x[j]
-    for i in range(n - 1, -1, -1):
-        for j in range(i + 1, n):
-            x[i] -= LU[i, j] * x[j]
-        x[i] /= LU[i, i]
-    return x
-
-
-@jit
-def _rms(x, scale):
-    """scipy's ``norm(x / scale)``: root mean square of x (..., n) scaled by scale (n,)."""
-    acc = 0.0
-    flat = x.reshape(-1)
-    n = scale.size
-    for i in range(flat.size):
-        acc += (flat[i] / scale[i % n]) ** 2
-    return math.sqrt(acc / flat.size)
-
-
-@jit
-def _mix(A, Z):
-    """A @ Z for a small A (k, 3) and Z (3, n), by loops (no BLAS call for 3 x 13)."""
-    out = np.zeros((A.shape[0], Z.shape[1]))
-    for r in range(A.shape[0]):
-        for j in range(3):
-            for i in range(Z.shape[1]):
-                out[r, i] += A[r, j] * Z[j, i]
-    return out
-
-
-@jit
-def _factor(h, J, LUr, pr, LUc, pc):
-    """LU factors of MU_REAL / h - J and MU_COMPLEX / h - J into LUr, pr, LUc, pc."""
-    n = J.shape[0]
-    for i in range(n):
-        for j in range(n):
-            LUr[i, j] = (MU_REAL / h if i == j else 0.0) - J[i, j]
-            LUc[i, j] = (MU_COMPLEX / h if i == j else 0.0) - J[i, j]
-    _lu(LUr, pr)
-    _lu(LUc, pc)
-
-
-@jit
-def _newton(kind, t, y, h, Z0, scale, tol, sp, LUr, pr, LUc, pc):
-    """The collocation system by simplified Newton on the real / complex split (scipy's
-    ``solve_collocation_system``): (converged, iterations, Z (3, n) the stage increments, rate; -1: none)."""
-    n = y.size
-    W = _mix(RADAU_TI, Z0)
-    Z = Z0.copy()
-    F = np.empty((3, n))
-    dW = np.empty((3, n))
-    Wc = np.empty(n, dtype=np.complex128)
-    norm_old, rate, converged, k = -1.0, -1.0, False, 0
-    for k in range(NEWTON_MAXITER):
-        for i in range(3):
-            _rhs(kind, t + RADAU_C[i] * h, y + Z[i], sp, F[i])
-        if not np.all(np.isfinite(F)):
-            break
-        TF = _mix(RADAU_TI, F)  # rows: the real and the complex part's real and imaginary projections
-        for i in range(n):
-            Wc[i] = complex(TF[1, i], TF[2, i]) - MU_COMPLEX / h * complex(W[1, i], W[2, i])
-        dW[0] = _lu_solve(LUr, pr, TF[0] - MU_REAL / h * W[0])
-        dWc = _lu_solve(LUc, pc, Wc)
-        dW[1], dW[2] = dWc.real, dWc.imag
-        dW_norm = _rms(dW, scale)
-        if norm_old >= 0.0:
-            rate = dW_norm / norm_old
-        if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate) * dW_norm > tol):
-            break
-        W += dW
-        Z = _mix(RADAU_T, W)
-        if dW_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dW_norm < tol):
-            converged = True
-            break
-        norm_old = dW_norm
-    return converged, k + 1, Z, rate
-
-
-@jit
-def _predict_factor(h_abs, h_abs_old, err, err_old):
-    """Step factor from the error norms (scipy's ``predict_factor``, Hairer & Wanner IV.8; -1: none)."""
-    multiplier = 1.0
-    if err_old >= 0.0 and h_abs_old >= 0.0 and err != 0.0:
-        multiplier = h_abs / h_abs_old * (err_old / err) ** 0.25
-    return np.inf if err == 0.0 else min(1.0, multiplier) * err ** -0.25
-
-
-@jit
-def _radau_try(kind, t, y, f, h, sp, rtol, atol, st, J, LUr, pr, LUc, pc, Q):
-    """One attempt at a step of length h from (t, y), f = rhs there: the Newton solve from the last step's
-    interpolant (zero without one), with fresh factors and, if that fails, a fresh Jacobian (scipy's
-    ``_step_impl``). Returns (converged, iterations, rate, Z (3, n))."""
-    if st[R_H_LAST] != 0.0:
-        Z0 = np.empty((3, y.size))
-        for i in range(3):
-            Z0[i] = _radau_dense(t + h * RADAU_C[i], st[R_T_OLD], st[R_H_LAST], Q[0]) - y
-    else:
-        Z0 = np.zeros((3, y.size))
-    scale = atol + np.abs(y) * rtol
-    newton_tol = max(10.0 * EPS / rtol, min(0.03, rtol ** 0.5))
-    while True:
-        if st[R_LU_VALID] == 0.0:
-            _factor(h, J, LUr, pr, LUc, pc)
-            st[R_LU_VALID] = 1.0
-        converged, n_iter, Z, rate = _newton(kind, t, y, h, Z0, scale, newton_tol, sp, LUr, pr, LUc, pc)
-        if converged or st[R_JAC_CURRENT] != 0.0:
-            return converged, n_iter, rate, Z
-        _jac(kind, t, y, sp, J)
-        st[R_JAC_CURRENT], st[R_LU_VALID] = 1.0, 0.0
-
-
-@jit
-def _radau_error(kind, t, y, y_new, f, h, Z, sp, rtol, atol, LUr, pr, rejected):
-    """Norm of the embedded order-3 error estimate, filtered by (MU_REAL / h - J)^-1 (again through f at
-    the filtered point after a rejection, as scipy)."""
-    ZE = _mix(RADAU_E, Z)[0] / h
-    error = _lu_solve(LUr, pr, f + ZE)
-    scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
-    err = _rms(error, scale)
-    if rejected and err > 1.0:
-        fe = np.empty(y.size)
-        _rhs(kind, t, y + error, sp, fe)
-        err = _rms(_lu_solve(LUr, pr, fe + ZE), scale)
-    return err
-
-
-@jit
-def _radau_step(kind, t, y, f, t_bound, sp, rtol, atol, st, J, LUr, pr, LUc, pc, Q):
-    """One accepted Radau step (scipy's ``Radau._step_impl``): (t_new, y_new, f_new, ok). The step's
-    interpolant goes to Q (1, 4 n) (see :func:`_radau_dense`), its start and length to st."""
-    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
-    h_abs, h_old, err_old = st[R_H], st[R_H_OLD], st[R_ERR_OLD]
-    if h_abs < min_step:
-        h_abs, h_old, err_old = min_step, -1.0, -1.0
-    rejected = False
-    while True:
-        if h_abs < min_step:
-            return t, y, f, False
-        t_new = min(t + h_abs, t_bound)
-        h = t_new - t
-        h_abs = abs(h)
-        converged, n_iter, rate, Z = _radau_try(kind, t, y, f, h, sp, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
-        if not converged:
-            h_abs *= 0.5
-            st[R_LU_VALID] = 0.0
-            continue
-        y_new = y + Z[2]
-        err = _radau_error(kind, t, y, y_new, f, h, Z, sp, rtol, atol, LUr, pr, rejected)
-        safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
-        if err <= 1.0:
-            break
-        h_abs *= max(RADAU_MIN_FACTOR, safety * _predict_factor(h_abs, h_old, err, err_old))
-        st[R_LU_VALID] = 0.0
-        rejected = True
-    recompute_jac = n_iter > 2 and rate > 1e-3
-    factor = min(RADAU_MAX_FACTOR, safety * _predict_factor(h_abs, h_old, err, err_old))
-    if not recompute_jac and factor < 1.2:
-        factor = 1.0
-    else:
-        st[R_LU_VALID] = 0.0
-    f_new = np.empty(y.size)
-    _rhs(kind, t_new, y_new, sp, f_new)
-    if recompute_jac:
-        _jac(kind, t_new, y_new, sp, J)
-    st[R_JAC_CURRENT] = 1.0 if recompute_jac else 0.0
-    st[R_H_OLD], st[R_ERR_OLD], st[R_H] = st[R_H], err, h_abs * factor
-    st[R_T_OLD], st[R_H_LAST] = t, h
-    n = y.size
-    Q[0, :3 * n] = _mix(RADAU_PT, Z).reshape(3 * n)
-    Q[0, 3 * n:] = y
-    return t_new, y_new, f_new, True
-
-
-@jit
-def _radau_dense(t, t_old, h, Q):
-    """The Radau interpolant at t (``RadauDenseOutput``) from Q (4 n,): the coefficients of x, x^2, x^3
-    (x = (t - t_old) / h) row by row, then y_old."""
-    n = Q.size // 4
-    x = (t - t_old) / h
-    y = np.empty(n)
-    for i in range(n):
-        y[i] = Q[3 * n + i] + x * (Q[i] + x * (Q[n + i] + x * Q[2 * n + i]))
-    return y
-
-
-@jit
-def _jac(kind, t, y, sp, J):
-    """Jacobian d rhs / d y (n, n) into J: the slip (analytic), the ``PROBE`` equation."""
-    if kind == PROBE:
-        J[0, 0] = -sp[0]
-    else:
-        _slip_jac(t, y, sp, J)
-
-
-@jit
-def _radau_start(kind, t, y, f, t_bound, sp, rtol, atol, J):
-    """Solver state (N_RADAU,) of a fresh solve (scipy's ``Radau.__init__``): first step, Jacobian at (t, y)."""
-    st = np.zeros(N_RADAU)
-    st[R_H] = _first_step(kind, t, y, f, t_bound, sp, rtol, atol, RADAU_POWER)
-    st[R_H_OLD] = st[R_ERR_OLD] = -1.0
-    _jac(kind, t, y, sp, J)
-    st[R_JAC_CURRENT] = 1.0
-    return st
 
 
 # --------------------------------------------------------------------------- sliding
@@ -1481,7 +1028,7 @@ def _event_at(t, y, sp):
 def _locate(event, t, t_new, ctx, tab, p):
     """Time of ``event`` in the step of ctx: Brent on the interpolant to 4 eps (as ``solve_ivp``)."""
     ctx[16 + S_EVENT] = event
-    return _brent(EVENT, t, t_new, 4 * EPS, ctx, tab, INT(0), p)
+    return _brentq(t, t_new, 4 * EPS, (EVENT, ctx, tab, INT(0), p, np.empty((1, 2, 3))))
 
 
 @jit
@@ -1503,25 +1050,25 @@ def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     tol = p[P_TOL]
     g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
     f = np.empty(13)
-    _rhs(kind, t, z, sp, f)
-    h_abs = _first_step(kind, t, z, f, t_chunk, sp, tol, atol, -DOP_EXPONENT)
+    _rhs(t, z, (kind, sp), f)
+    h_abs = _first_step(t, z, f, t_chunk, (kind, sp), tol, atol, -DOP_EXPONENT)
     K = np.empty((DOP_EXTENDED, 13))
     F = np.empty((1, DOP_POWER * 13))
     ctx[16:] = sp
     for _ in range(MAX_STEPS_PER_CHUNK):
         if not t < t_chunk:
             return t, z, NO_EVENT, rows, DONE
-        t_new, z_new, h_abs, ok = _dop_advance(kind, t, z, f, h_abs, t_chunk, sp, tol, atol, K)
+        t_new, z_new, h_abs, ok = _dop_advance(t, z, f, h_abs, t_chunk, (kind, sp), tol, atol, K)
         if not ok:
             return t, z, NO_EVENT, rows, SLIDE_FAIL
         g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
         fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
         t_last = t_new
         if fired or rec[0] * rec[1] < t_new:
-            F[0] = _dop_dense(kind, t, t_new - t, z, z_new, sp, K).reshape(DOP_POWER * 13)
+            F[0] = _dop_dense(t, t_new - t, z, z_new, (kind, sp), K).reshape(DOP_POWER * 13)
             _step_ctx(ctx, t, t_new - t, z, 0.0)
         if fired:
-            t_last = _brent(EVENT, t, t_new, 4 * EPS, ctx, F, INT(0), p)
+            t_last = _brentq(t, t_new, 4 * EPS, (EVENT, ctx, F, INT(0), p, np.empty((1, 2, 3))))
             z_new = _dense(t_last, t, t_new - t, z, F[0])
         rows = _sample_rows(rows, carry, rec, t_last, ctx, F)
         if fired:
@@ -1537,17 +1084,17 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     through 2 s_stiff (back to DOP853). Returns (t, z, event, rows, status, accepted steps)."""
     tol = p[P_TOL]
     f = np.empty(13)
-    _rhs(SLIP, t, z, sp, f)
+    _rhs(t, z, (SLIP, sp), f)
     J, LUr, LUc = np.empty((13, 13)), np.empty((13, 13)), np.empty((13, 13), dtype=np.complex128)
     pr, pc = np.empty(13, dtype=np.int64), np.empty(13, dtype=np.int64)
     Q = np.empty((1, 4 * 13))
-    st = _radau_start(SLIP, t, z, f, t_chunk, sp, tol, atol, J)
+    st = _radau_start(t, z, f, t_chunk, (SLIP, sp), tol, atol, J)
     ctx[16:] = sp
     stops, speed = _slip_events(z, sp)
     for k in range(MAX_RADAU_STEPS):
         if not t < t_chunk:
             return t, z, NO_EVENT, rows, DONE, k
-        t_new, z_new, f, ok = _radau_step(SLIP, t, z, f, t_chunk, sp, tol, atol, st, J, LUr, pr, LUc, pc, Q)
+        t_new, z_new, f, ok = _radau_step(t, z, f, t_chunk, (SLIP, sp), tol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             return t, z, NO_EVENT, rows, SLIDE_FAIL, k
         stops_new, speed_new = _slip_events(z_new, sp)

@@ -1,0 +1,79 @@
+"""The compiled grain engine of this tree against another source tree (``--before DIR``, e.g. a ``git archive``
+of an earlier commit), in CPU seconds (user + sys of fresh processes: the shared machine's wall time is
+noise): the cold compile (empty ``NUMBA_CACHE_DIR`` each time), the warm run of the whole default scene (best
+of 3 calls per process, each tree on its own persistent cache), interleaved; then whether the two trees'
+results (trajectory and impact rows) are equal bit for bit.
+
+    git archive HEAD~3 | tar -x -C /tmp/before
+    python benchmarks/bench_grain_before.py --before /tmp/before --cold 3 --warm 5
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parents[1]
+SETUP = ("import time, numpy as np; from symmech.core import pipeline; from symmech.grain import compiled; "
+         "sc = pipeline.load('scenes/grain_default.toml').setup; ")
+COLD = SETUP + "compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)"
+WARM = SETUP + ("compiled.simulate(sc.model, sc.numerics, sc.start, 0.01); ts = []\n"
+                "for _ in range(3):\n"
+                "    c = time.process_time(); r = compiled.simulate(sc.model, sc.numerics, sc.start, "
+                "sc.start.t + sc.duration); ts.append(time.process_time() - c)\n"
+                "print(min(ts)); np.save(OUT + '_rows.npy', r.trajectory); np.save(OUT + '_imps.npy', r._rows)")
+
+
+def child(tree: Path, code: str, cache: str) -> tuple[float, str]:
+    """(CPU seconds, stdout) of ``code`` in a fresh process on ``tree`` with numba's cache in ``cache``."""
+    env = {**os.environ, "PYTHONPATH": str(tree), "NUMBA_CACHE_DIR": cache}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = subprocess.run([sys.executable, "-c", code], cwd=tree, env=env, check=True, capture_output=True,
+                         text=True).stdout
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime, out
+
+
+def summary(xs: list) -> str:
+    if not xs:
+        return "(not run)"
+    return f"{statistics.median(xs):.4g} s (min {min(xs):.4g}, max {max(xs):.4g}, n={len(xs)})"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", type=Path, required=True)
+    ap.add_argument("--cold", type=int, default=3)
+    ap.add_argument("--warm", type=int, default=5)
+    ns = ap.parse_args()
+    trees = {"this": HERE, "before": ns.before.resolve()}
+    cold = {k: [] for k in trees}
+    for _ in range(ns.cold):
+        for name, tree in trees.items():
+            with tempfile.TemporaryDirectory() as cache:
+                cold[name].append(child(tree, COLD, cache)[0])
+    with tempfile.TemporaryDirectory() as work:
+        warm = {k: [] for k in trees}
+        for _ in range(ns.warm):
+            for name, tree in trees.items():
+                code = f"OUT = {str(Path(work) / name)!r}\n" + WARM
+                warm[name].append(float(child(tree, code, str(Path(work) / f"cache_{name}"))[1]))
+        equal = all(np.array_equal(np.load(Path(work) / f"this_{k}.npy").view(np.int64),
+                                   np.load(Path(work) / f"before_{k}.npy").view(np.int64)) for k in ("rows", "imps"))
+    for name in trees:
+        print(f"{name:<7} cold compile {summary(cold[name])} CPU; warm default scene {summary(warm[name])} CPU")
+    if ns.cold:
+        print(f"this / before cold: {statistics.median(cold['this']) / statistics.median(cold['before']):.3f}")
+    print(f"this / before warm: {statistics.median(warm['this']) / statistics.median(warm['before']):.3f}; "
+          f"results bit for bit equal: {equal}")
+
+
+if __name__ == "__main__":
+    main()

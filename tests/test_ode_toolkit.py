@@ -1,0 +1,311 @@
+"""The compiled ODE toolkit (symmech.core.ode): scipy's DOP853, Radau IIA and Brent ported to numba, on their
+own: tableaux bit-equal to scipy's, empirical orders of convergence, scipy's step counts on stiff and non-stiff
+problems, and a generated dynamics module integrated end to end (``ode.integrate``) against ``solve_ivp`` and
+the exact free response of the mechanism run.
+
+The stiff test problem is Prothero-Robinson: y' = -lam (y - cos t) - sin t, y(0) = 1, solution cos t for
+every lam."""
+import math
+import os
+import subprocess
+import sys
+import tomllib
+
+import numba
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, minimize_scalar
+
+import symmech
+from symmech.core import ode
+from symmech.core.scene import SymmechError, scenes_folder
+from symmech.generated import smm_rotor_boom
+
+
+@numba.njit
+def probe(t, y, args, out):
+    out[0] = -args[0] * (y[0] - math.cos(t)) - math.sin(t)
+
+
+@numba.njit
+def probe_jac(t, y, args, J):
+    J[0, 0] = -args[0]
+
+
+@numba.njit
+def oscillator(t, y, args, out):
+    """y'' = -y as y = (x, x')."""
+    out[0], out[1] = y[1], -y[0]
+
+
+@numba.njit
+def no_jac(t, y, args, J):
+    J[:] = 0.0
+
+
+PROBE = ode.steppers(probe, probe_jac)
+OSC = ode.steppers(oscillator, no_jac)
+
+
+def adaptive(lam, t_end, rtol, atol):
+    """Accepted steps and the largest error |y - cos t| at their ends of an adaptive Radau solve."""
+    args, y, t, f = np.array([lam]), np.array([1.0]), 0.0, np.empty(1)
+    probe(t, y, args, f)
+    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(1)
+    st = PROBE.radau_start(t, y, f, t_end, args, rtol, np.array([atol]), J)
+    steps, err = 0, 0.0
+    while t < t_end:
+        t, y, f, ok = PROBE.radau_step(t, y, f, t_end, args, rtol, np.array([atol]), st, J, LUr, pr, LUc, pc, Q)
+        assert ok
+        steps += 1
+        err = max(err, abs(y[0] - math.cos(t)))
+    return steps, err
+
+
+def fixed_radau(lam, n, t_end=1.0):
+    """|y(t_end) - cos t_end| after n equal Radau steps (one collocation solve each, exact Jacobian)."""
+    args, y, f, h = np.array([lam]), np.array([1.0]), np.empty(1), t_end / n
+    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(1)
+    J[0, 0] = -lam
+    st = np.zeros(ode.N_RADAU)  # no previous step: the Newton solve starts from zero increments
+    st[ode.R_JAC_CURRENT] = 1.0
+    for k in range(n):
+        probe(k * h, y, args, f)
+        ok, _, _, Z = PROBE.radau_try(k * h, y, f, h, args, 1e-12, np.array([1e-12]), st, J, LUr, pr, LUc, pc, Q)
+        assert ok
+        y = y + Z[2]
+    return abs(y[0] - math.cos(t_end))
+
+
+def fixed_dop853(n, t_end=4.0):
+    """|y(t_end) - (cos, -sin)(t_end)| of the oscillator from (1, 0) after n equal DOP853 steps (an atol of
+    1e30 accepts every step at the length asked for)."""
+    y, f, h, t = np.array([1.0, 0.0]), np.empty(2), t_end / n, 0.0
+    K, atol = np.empty((ode.DOP_EXTENDED, 2)), np.full(2, 1e30)
+    oscillator(t, y, None, f)
+    for _ in range(n):
+        t_new, y, _, ok = OSC.dop_advance(t, y, f, h, t_end, None, 1e-3, atol, K)
+        assert ok and t_new == pytest.approx(t + h, rel=1e-14)
+        t, f = t_new, K[ode.DOP_STAGES].copy()
+    return np.abs(y - (math.cos(t_end), -math.sin(t_end))).max()
+
+
+def test_radau_tableau_is_scipys_bit_for_bit():
+    """The Radau IIA constants written out in core.ode (no scipy import at run time) are those of scipy's
+    ``_ivp/radau.py``, to the last bit."""
+    from scipy.integrate._ivp import radau
+
+    for ours, theirs in ((ode.RADAU_C, radau.C), (ode.RADAU_E[0], radau.E), (ode.RADAU_T, radau.T),
+                         (ode.RADAU_TI, radau.TI), (ode.RADAU_PT, radau.P.T)):
+        assert ours.shape == theirs.shape and np.array_equal(ours, theirs)
+    assert ode.MU_REAL == radau.MU_REAL and ode.MU_COMPLEX == radau.MU_COMPLEX
+
+
+def test_radau_collocation_conditions():
+    """The Radau IIA tableau A = T diag(MU_REAL, MU_COMPLEX, conj)^-1 TI (the eigen-decomposition of A^-1)
+    satisfies the simplifying conditions C(3): sum_j a_ij c_j^(k-1) = c_i^k / k, k = 1..3, to 1e-14."""
+    lam = np.diag([ode.MU_REAL, ode.MU_COMPLEX.real, ode.MU_COMPLEX.real]).astype(complex)
+    lam[1, 2], lam[2, 1] = -ode.MU_COMPLEX.imag, ode.MU_COMPLEX.imag  # the real form of the complex pair
+    A = np.linalg.inv(ode.RADAU_T @ lam.real @ ode.RADAU_TI)
+    c = ode.RADAU_C
+    for k in range(1, 4):
+        np.testing.assert_allclose(A @ c ** (k - 1), c ** k / k, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8])
+def test_radau_stiff_prothero_robinson_within_the_tolerance(rtol):
+    """lam = 1e6 over 10 s: the error stays below 2 rtol at every step end (the equation contracts at rate
+    lam, so the global error is about the last local error; measured 0.6 rtol at rtol 1e-6), in fewer than
+    100 steps (an explicit method would need ~1e7)."""
+    steps, err = adaptive(1e6, 10.0, rtol, 1e-3 * rtol)
+    assert err <= 2 * rtol
+    assert steps < 100
+
+
+def test_radau_takes_scipys_steps():
+    """Same algorithm as scipy's Radau with the same (exact) Jacobian: the same number of accepted steps and
+    the same largest error to 1e-6 relative (round-off through the step-size control)."""
+    steps, err = adaptive(1e6, 10.0, 1e-6, 1e-9)
+    ref = solve_ivp(lambda t, y: -1e6 * (y - np.cos(t)) - np.sin(t), (0.0, 10.0), [1.0], method="Radau",
+                    rtol=1e-6, atol=1e-9, jac=lambda t, y: np.array([[-1e6]]))
+    assert steps == len(ref.t) - 1
+    assert err == pytest.approx(np.max(np.abs(ref.y[0] - np.cos(ref.t))), rel=1e-6)
+
+
+@pytest.mark.parametrize("lam, order", [(1.0, 5.0), (1e6, 3.0)])
+def test_radau_empirical_order_with_fixed_steps(lam, order):
+    """Fixed steps h = 1/4 ... 1/64 over [0, 1], the slope of log error against log h: order 5 (2s - 1,
+    Radau IIA with s = 3) on the non-stiff equation; on the stiff one (h lam >= 1.6e4) the order drops to the
+    stage order 3 (Prothero-Robinson order reduction, Hairer & Wanner II, IV.15). Measured 4.99 and 3.05."""
+    hs = [2.0**-k for k in range(2, 7)]
+    errors = [fixed_radau(lam, 2**k) for k in range(2, 7)]
+    assert np.polyfit(np.log(hs), np.log(errors), 1)[0] == pytest.approx(order, abs=0.15)
+
+
+def test_dop853_empirical_order_with_fixed_steps():
+    """The oscillator over [0, 4] in 4 ... 16 equal steps: the global error falls as h^8 (slope of log error
+    against log h within 0.3 of 8; the errors stay above round-off: measured 7.9e-10 at 8 steps, 2.8e-12 at
+    16, 1.1e-14 at 32, where round-off starts)."""
+    ns = [4, 8, 16]
+    errors = [fixed_dop853(n) for n in ns]
+    assert min(errors) > 1e-12
+    assert np.polyfit(np.log(4.0 / np.array(ns)), np.log(errors), 1)[0] == pytest.approx(8.0, abs=0.3)
+
+
+@pytest.mark.parametrize("method", ["DOP853", "Radau"])
+def test_whole_solve_takes_scipys_steps_with_dense_output(method):
+    """The whole compiled solve of the non-stiff oscillator over 20 s (DOP853) and of the stiff probe over
+    10 s (Radau): scipy's accepted steps, and the dense output at 57 requested times within 1e-12 (DOP853) and
+    1e-9 (Radau: the Newton iteration's round-off through the step control) of solve_ivp's at the same times,
+    and near the exact solution cos t."""
+    if method == "DOP853":
+        t_eval = np.linspace(0.0, 20.0, 57)
+        steps, y0, args, ref_kw = ode.make(oscillator, no_jac), np.array([1.0, 0.0]), None, {}
+        fun = lambda t, y: [y[1], -y[0]]  # noqa: E731
+    else:
+        t_eval = np.linspace(0.0, 10.0, 57)
+        steps, y0, args = ode.make(probe, probe_jac), np.array([1.0]), np.array([1e6])
+        fun = lambda t, y: -1e6 * (y - np.cos(t)) - np.sin(t)  # noqa: E731
+        ref_kw = {"jac": lambda t, y: np.array([[-1e6]])}
+    atol = np.full(y0.size, 1e-11)
+    Y, n_steps, nfev, status = steps.solve(ode.METHODS[method], 0.0, y0, t_eval, args, 1e-8, atol, 100000)
+    assert status == ode.SUCCESS
+    ref = solve_ivp(fun, (0.0, t_eval[-1]), y0, method=method, rtol=1e-8, atol=1e-11, **ref_kw)
+    dense = solve_ivp(fun, (0.0, t_eval[-1]), y0, method=method, rtol=1e-8, atol=1e-11, t_eval=t_eval, **ref_kw)
+    assert n_steps == len(ref.t) - 1
+    np.testing.assert_allclose(Y.T, dense.y, rtol=0, atol=1e-12 if method == "DOP853" else 1e-9)
+    # The exact solution: DOP853's interpolant is of order 7; Radau's is cubic over steps of ~0.5 s of a stiff
+    # solve (measured 1.3e-3 between step ends, as scipy's).
+    np.testing.assert_allclose(Y[:, 0], np.cos(t_eval), rtol=0, atol=1e-6 if method == "DOP853" else 3e-3)
+
+
+@numba.njit
+def kepler(x, args):
+    return x - args[0] * math.sin(x) - args[1]
+
+
+@numba.njit
+def bowl(x, args):
+    return (x - args[0]) ** 2 + math.cos(3.0 * x) * 0.01
+
+
+KEPLER, BOWL = ode.roots(kepler), ode.roots(bowl)
+
+
+def test_brentq_and_bounded_min_equal_scipys():
+    """Kepler's equation E - e sin E = M (e 0.3, M 1.2) and a bumpy bowl on [0, 5]: the root equals scipy's
+    brentq (same xtol, rtol 4 eps) to 1e-15 and has residual below 1e-14; the minimiser returns scipy's
+    bounded-Brent minimum to 1e-12 (xatol 1e-12)."""
+    args = np.array([0.3, 1.2])
+    root = KEPLER.brentq(0.0, math.pi, 1e-15, args)
+    assert root == pytest.approx(brentq(lambda x: x - 0.3 * math.sin(x) - 1.2, 0.0, math.pi, xtol=1e-15),
+                                 abs=1e-15)
+    assert abs(kepler(root, args)) < 1e-14
+    x, fx = BOWL.bounded_min(0.0, 5.0, 1e-12, np.array([2.0]))
+    ref = minimize_scalar(lambda x: (x - 2.0) ** 2 + math.cos(3.0 * x) * 0.01, bounds=(0.0, 5.0),
+                          method="bounded", options={"xatol": 1e-12})
+    assert x == pytest.approx(ref.x, abs=1e-12) and fx == pytest.approx(ref.fun, abs=1e-14)
+
+
+# --------------------------------------------------------------------------- a generated module end to end
+
+
+def _rotor_boom():
+    """The bundled rotor boom: parameters (13,), initial state (4,), the run's free response (times, q)."""
+    scene = symmech.load(tomllib.loads((scenes_folder() / "smm_rotor_boom.toml").read_text()))
+    table = scene.run().tables["free_response"]
+    m = scene.setup.m
+    p = np.array([m.parameters[name].value for name, _, _ in smm_rotor_boom.PARAMS])
+    ini = scene.resolved["initial"]
+    y0 = np.concatenate([ini["q"], ini["qdot"] or np.zeros(len(ini["q"]))])
+    return p, y0, table.data[:, 0], table.data[:, 1:]
+
+
+@pytest.mark.parametrize("method, rtol, tol", [("DOP853", 1e-11, 1e-9), ("Radau", 1e-9, 1e-8)])
+def test_integrate_generated_module_equals_solve_ivp_and_the_exact_response(method, rtol, tol):
+    """The rotor boom's damped free response, compiled end to end (generated rhs, Radau with the generated
+    jac), at the run's output times: within tol of the run's exact matrix exponential (as solve_ivp is in
+    test_dynamics_rhs); within 1e-10 (DOP853, in scipy's accepted steps) / tol (Radau, within 2 % of scipy's
+    steps) of solve_ivp on the numpy rhs at the same times, relative to each state's largest value (measured
+    3e-11 and 3e-10: the numba and LAPACK solves of the mass matrix round differently)."""
+    p, y0, t, q_run = _rotor_boom()
+    atol = rtol * 1e-3 * np.abs(y0).max()
+    sol = ode.integrate("smm_rotor_boom", p, y0, t, t0=t[0], method=method, rtol=rtol, atol=atol)
+    implicit = {"jac": smm_rotor_boom.jac} if method == "Radau" else {}
+    ref = solve_ivp(smm_rotor_boom.rhs, (t[0], t[-1]), y0, method=method, t_eval=t, args=(p,), rtol=rtol,
+                    atol=atol, **implicit)
+    steps = solve_ivp(smm_rotor_boom.rhs, (t[0], t[-1]), y0, method=method, args=(p,), rtol=rtol, atol=atol,
+                      **implicit)
+    n = q_run.shape[1]
+    assert sol.y.shape == (2 * n, t.size)
+    if method == "DOP853":
+        assert sol.steps == len(steps.t) - 1
+    else:  # the Newton iteration's convergence rate steers the step: round-off moves it (measured 2483 / 2457)
+        assert sol.steps == pytest.approx(len(steps.t) - 1, rel=0.02)
+    relative = np.abs(sol.y - ref.y).max(axis=1) / np.abs(ref.y).max(axis=1)
+    assert np.all(relative < (1e-10 if method == "DOP853" else tol))
+    np.testing.assert_array_less(np.abs(sol.y[:n].T - q_run).max(axis=0), tol * np.abs(q_run).max(axis=0))
+
+
+def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
+    """The rotor boom with the drive suspension's viscosity mu3 raised 1e4 times: a mode decaying at
+    3.6e4 1/s beside the 11 rad/s oscillation (eigenvalues of the generated jac). Radau with the generated jac
+    needs under a tenth of DOP853's steps (measured 921 against 11399, as scipy's) and agrees with DOP853 at
+    21 requested times to 1e-6 of each state's largest value (both at rtol 1e-8; measured 6e-10 in the
+    coordinates, 3.5e-7 in the rate of the stiff one), and with scipy's Radau on the numpy rhs and jac to
+    1e-6."""
+    p, y0, _, _ = _rotor_boom()
+    p[12] *= 1e4
+    assert np.linalg.eigvals(smm_rotor_boom.jac(0.0, y0, p)).real.min() < -3e4
+    t = np.linspace(0.0, 2.0, 21)
+    radau = ode.integrate("smm_rotor_boom", p, y0, t, method="Radau", rtol=1e-8, atol=1e-14)
+    dop = ode.integrate("smm_rotor_boom", p, y0, t, method="DOP853", rtol=1e-8, atol=1e-14)
+    ref = solve_ivp(smm_rotor_boom.rhs, (0.0, 2.0), y0, method="Radau", t_eval=t, args=(p,), rtol=1e-8,
+                    atol=1e-14, jac=smm_rotor_boom.jac)
+    assert radau.steps < dop.steps / 10
+    scale = np.abs(dop.y).max(axis=1)
+    assert np.all(np.abs(radau.y - dop.y).max(axis=1) < 1e-6 * scale)
+    assert np.all(np.abs(radau.y - ref.y).max(axis=1) < 1e-6 * scale)
+
+
+def test_integrate_refuses_bad_requests():
+    """An unknown method, decreasing times and a step budget too small are errors, not silent results."""
+    p, y0, t, _ = _rotor_boom()
+    with pytest.raises(SymmechError, match="method 'RK45'"):
+        ode.integrate("smm_rotor_boom", p, y0, t, method="RK45")
+    with pytest.raises(SymmechError, match="increasing"):
+        ode.integrate("smm_rotor_boom", p, y0, t[::-1])
+    with pytest.raises(SymmechError, match="3 steps did not reach"):
+        ode.integrate("smm_rotor_boom", p, y0, t, max_steps=3)
+
+
+CACHED_CALLER = '''
+import numba, numpy as np
+from symmech.core import ode
+
+@numba.njit(cache=True)
+def decay(t, y, args, out):
+    out[0] = -args[0] * y[0]
+
+_advance = ode.steppers(decay, decay).dop_advance
+
+@numba.njit(cache=True)
+def caller(y):
+    K, f = np.empty((ode.DOP_EXTENDED, 1)), -y
+    return _advance(0.0, y, f, 0.1, 1.0, np.array([1.0]), 1e-6, np.array([1e-9]), K)[1][0]
+'''
+
+
+def test_a_cached_caller_of_the_toolkit_loads_from_the_cache_in_a_fresh_process(tmp_path):
+    """The design decision of core.ode (its docstring): a cached jitted function calling the toolkit's closures
+    is compiled once and served from numba's cache in the next process (no miss, one hit), with the same value,
+    e^-0.1 to the step's tolerance."""
+    (tmp_path / "cached_caller.py").write_text(CACHED_CALLER)
+    code = ("import cached_caller as c, numpy as np; v = c.caller(np.array([1.0])); "
+            "print(v, sum(c.caller.stats.cache_hits.values()), sum(c.caller.stats.cache_misses.values()))")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": str(tmp_path)}
+    runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+            .stdout.split() for _ in range(2)]
+    assert runs[0][1:] == ["0", "1"] and runs[1][1:] == ["1", "0"]
+    assert float(runs[1][0]) == float(runs[0][0]) == pytest.approx(math.exp(-0.1), abs=1e-6)
