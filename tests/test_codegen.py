@@ -38,6 +38,7 @@ def _copy_generated(tmp_path):
     return target
 
 
+@pytest.mark.slow  # renders every module (~40 s); the default tier checks the cache keys (codegen --check)
 def test_generated_folder_is_up_to_date(specs):
     """Every module of both targets is exactly what its derivation renders (the slow path)."""
     index = codegen.Index.read(GENERATED)

@@ -75,8 +75,9 @@ def test_jacobian_matches_central_differences(name):
         assert np.all(np.abs(J - fd) <= 1e-7 * scale + 1e-12)
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "trolley_elastic_lagrange" else n
-                                  for n in DYNAMICS])  # compiling the Lagrange model takes ~40 s
+# compiling a twin takes 5-40 s: the default tier checks the grain's and the rotor boom's, the slow tier all
+@pytest.mark.parametrize("name", [n if n in ("grain_motion", "smm_rotor_boom") else pytest.param(n, marks=pytest.mark.slow)
+                                  for n in DYNAMICS])
 def test_numba_twin_equals_numpy_and_vectorized_equals_columns(name):
     module = importlib.import_module(f"symmech.generated.{name}")
     twin = kernels.load(name)

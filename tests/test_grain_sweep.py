@@ -195,6 +195,10 @@ def test_a_grain_that_warns_is_averaged_in_and_listed(monkeypatch):
 
 # --- issue 22 items 2-3: a lazy plan, and statistics with confidence intervals -----------------------------
 
+def _eager_set(data: dict, path: str, value) -> None:
+    sweep._set(data, path, value, "eager plan")
+
+
 def eager_plan(raw):
     """Reference: the plan as symmech built it before issue 22 (every grain scene of the sweep in memory,
     the grains of a population drawn in turn from one generator); scenes[k][i][j] lists population k's
@@ -212,13 +216,13 @@ def eager_plan(raw):
         for _ in range(pop["count"]):
             data = copy.deepcopy(base)
             for path, value in pop["set"].items():
-                sweep._set(data, path, copy.deepcopy(value))
+                _eager_set(data, path, copy.deepcopy(value))
             for path, spread in pop["vary"].items():
                 value = sweep._get(data, path)
                 size = len(value) if isinstance(value, list) else 1
-                sweep._set(data, path, sweep._scaled(value, rng.uniform(1 - spread, 1 + spread, size).tolist()))
+                _eager_set(data, path, sweep._scaled(value, rng.uniform(1 - spread, 1 + spread, size).tolist()))
             if pop["random_orientation"]:
-                sweep._set(data, "body.orientation", [float(rng.uniform(0, 2 * math.pi)),
+                _eager_set(data, "body.orientation", [float(rng.uniform(0, 2 * math.pi)),
                                                       float(math.acos(rng.uniform(-1, 1))),
                                                       float(rng.uniform(0, 2 * math.pi))])
             crowd.append(data)
@@ -228,9 +232,9 @@ def eager_plan(raw):
             for j, yv in enumerate(ys):
                 point = copy.deepcopy(crowd)
                 for data in point:
-                    sweep._set(data, sw["x"]["field"], float(xv))
+                    _eager_set(data, sw["x"]["field"], float(xv))
                     if sw["y"]:
-                        sweep._set(data, sw["y"]["field"], float(yv))
+                        _eager_set(data, sw["y"]["field"], float(yv))
                 gamma[i, j] = sweep.throw_number(pipeline.load(point[0]).resolved)
                 row.append(point)
             grid.append(row)

@@ -123,6 +123,7 @@ def test_radau_stiff_prothero_robinson_within_the_tolerance(rtol):
     assert steps < 100
 
 
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
 def test_radau_takes_scipys_steps():
     """Same algorithm as scipy's Radau with the same (exact) Jacobian: the same number of accepted steps and
     the same largest error to 1e-6 relative (round-off through the step-size control)."""
@@ -153,7 +154,7 @@ def test_dop853_empirical_order_with_fixed_steps():
     assert np.polyfit(np.log(4.0 / np.array(ns)), np.log(errors), 1)[0] == pytest.approx(8.0, abs=0.3)
 
 
-@pytest.mark.parametrize("method", ["DOP853", "Radau"])
+@pytest.mark.parametrize("method", ["DOP853", pytest.param("Radau", marks=pytest.mark.slow)])
 def test_whole_solve_takes_scipys_steps_with_dense_output(method):
     """The whole compiled solve of the non-stiff oscillator over 20 s (DOP853) and of the stiff probe over
     10 s (Radau): scipy's accepted steps, and the dense output at 57 requested times within 1e-12 (DOP853) and
@@ -222,7 +223,8 @@ def _rotor_boom():
     return p, y0, table.data[:, 0], table.data[:, 1:]
 
 
-@pytest.mark.parametrize("method, rtol, tol", [("DOP853", 1e-11, 1e-9), ("Radau", 1e-9, 1e-8)])
+@pytest.mark.parametrize("method, rtol, tol", [("DOP853", 1e-11, 1e-9),
+                                              pytest.param("Radau", 1e-9, 1e-8, marks=pytest.mark.slow)])
 def test_integrate_generated_module_equals_solve_ivp_and_the_exact_response(method, rtol, tol):
     """The rotor boom's damped free response, compiled end to end (generated rhs, Radau with the generated
     jac), at the run's output times: within tol of the run's exact matrix exponential (as solve_ivp is in
@@ -248,6 +250,7 @@ def test_integrate_generated_module_equals_solve_ivp_and_the_exact_response(meth
     np.testing.assert_array_less(np.abs(sol.y[:n].T - q_run).max(axis=0), tol * np.abs(q_run).max(axis=0))
 
 
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
 def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     """The rotor boom with the drive suspension's viscosity mu3 raised 1e4 times: a mode decaying at
     3.6e4 1/s beside the 11 rad/s oscillation (eigenvalues of the generated jac). Radau with the generated jac
@@ -269,6 +272,7 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     assert np.all(np.abs(radau.y - ref.y).max(axis=1) < 1e-6 * scale)
 
 
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
 def test_integrate_refuses_bad_requests():
     """An unknown method, decreasing times and a step budget too small are errors, not silent results."""
     p, y0, t, _ = _rotor_boom()
@@ -297,6 +301,7 @@ def caller(y):
 '''
 
 
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
 def test_a_cached_caller_of_the_toolkit_loads_from_the_cache_in_a_fresh_process(tmp_path):
     """The design decision of core.ode (its docstring): a cached jitted function calling the toolkit's closures
     is compiled once and served from numba's cache in the next process (no miss, one hit), with the same value,
