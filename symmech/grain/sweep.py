@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field as dataclass_field, replace
 from functools import cached_property
 
 import numpy as np
@@ -221,6 +221,7 @@ class Plan:
     base: dict  # the grain scene without [sweep] and [[population]], the sweep's duration set
     populations: list[dict]  # resolved [[population]] tables
     gamma: np.ndarray  # (nx, ny) throw number at each point
+    first: list = dataclass_field(default_factory=list)  # grain 0 of each population at (0, 0), dispatched
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -276,8 +277,9 @@ def plan(raw: dict, resolved: dict) -> Plan:
     ys = axis_values(sweep["y"]) if sweep["y"] else np.array([np.nan])
     _check_plan(sweep, pops)
     p = Plan(sweep["x"], sweep["y"], [pop["name"] for pop in pops], base, pops, np.empty((len(xs), len(ys))))
-    for k in range(len(pops)):  # grain 0 of each population validated; Γ from the last one's, as always
-        resolved = load_grain(_first(p, k), sweep, pops[k], k).resolved
+    # grain 0 of each population validated (kept for the estimate); Γ from the last one's, as always
+    p.first = [_as_dispatched(load_grain(_first(p, k), sweep, pops[k], k)) for k in range(len(pops))]
+    resolved = p.first[-1].resolved
     for i, j in np.ndindex(*p.shape):
         swept = {path.removeprefix("vibration."): value for path, value in p.point(i, j).items()
                  if path.startswith("vibration.")}
@@ -363,20 +365,15 @@ def estimate(p: Plan, workers: int):
     times the grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
     from symmech.core import registry
 
-    first = [_as_dispatched(_first(p, k)).estimate() for k in range(len(p.populations))]
+    first = [scene.estimate() for scene in p.first]
     once = max(e.once for e in first)
     seconds = once + sum((e.seconds - e.once) * pop["count"] * p.gamma.size for e, pop in zip(first, p.populations))
     return registry.Estimate(seconds / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)")
 
 
-def _as_dispatched(data: dict):
-    """A grain scene (pipeline.Scene) as the workers run it: engine `auto` runs compiled, since :func:`compute`
-    builds the compiled engine before dispatch."""
-    from dataclasses import replace
-
-    from symmech.core import pipeline
-
-    scene = pipeline.load(data)
+def _as_dispatched(scene):
+    """A loaded grain scene (pipeline.Scene) as the workers run it: engine `auto` runs compiled, since
+    :func:`compute` builds the compiled engine before dispatch."""
     num = scene.setup.numerics
     if num.engine == "auto":
         scene.setup = replace(scene.setup, numerics=replace(num, engine="compiled"))
@@ -386,7 +383,7 @@ def _as_dispatched(data: dict):
 def _compiled_needed(p: Plan) -> bool:
     """Whether a population's grains run the compiled engine (accurate mode, engine not `python`)."""
     return any(n.mode == "accurate" and n.engine == "compiled"
-               for n in (_as_dispatched(_first(p, k)).setup.numerics for k in range(len(p.populations))))
+               for n in (scene.setup.numerics for scene in p.first))
 
 
 def _warm_worker() -> None:
