@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d59f5a93f87eba20d6c8f625ac0194e64ff4fe16a2841ab97ef2802da9d02820
-# source key ea16c2665b8c036d12a6669f9046fbff7476a9b299e86f452fb54a8a912c9e09
+# source key e09e66a119d2ad9393230cef772b89b939036f11f452a0d7284825e9042f6871
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3d1ad7b3b0d73f926ff39bfea453ff538e7ddf78ecfc98138043e0f503b29c75
-# source key ea16c2665b8c036d12a6669f9046fbff7476a9b299e86f452fb54a8a912c9e09
+# source key e09e66a119d2ad9393230cef772b89b939036f11f452a0d7284825e9042f6871
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

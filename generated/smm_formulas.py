@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f3a5e5d3c780e263a6368bc5901fb85321e23627fa47e1f4fd1d8ec21d5664a5
-# source key a161b2d44e0f6589395f6f121616a6a9f446abb05aff3ca0f16739f8a32ab508
+# source key f2ae9594e324785f40ded753acf1b958e54dc415932caf2ccf97839575d3ed67
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

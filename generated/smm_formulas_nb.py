@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 45fa99d8706f6a7f7931fa35296187c95c7ee42cb036d41646edb6d0104840ad
-# source key a161b2d44e0f6589395f6f121616a6a9f446abb05aff3ca0f16739f8a32ab508
+# source key f2ae9594e324785f40ded753acf1b958e54dc415932caf2ccf97839575d3ed67
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

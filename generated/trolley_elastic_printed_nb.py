@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fb81e1a11a927375f6c8de15c980d83fac263088883ed42d20fc96f263fa1206
-# source key 24e3e44fc71d8317c812312ac81b87372e6555f0838fa02c4c09ee307753241d
+# source key 1270cbf7ec06e82a7f028748abf454e4f1389d8bf4d0a0357fb52a2b09d03a7d
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

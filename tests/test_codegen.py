@@ -127,29 +127,27 @@ def test_changed_derivation_is_caught_and_unchanged_output_passes(tmp_path, monk
 
 
 @pytest.mark.parametrize("damage", ["one byte", "truncated", "no header"])
-def test_verify_refuses_a_damaged_module(tmp_path, monkeypatch, damage):
+def test_verify_refuses_a_damaged_module(tmp_path, damage):
     folder = _copy_generated(tmp_path)
     path = folder / "grain_impact.py"
     text = path.read_text()
     header, body = integrity.split(text)
     assert integrity.problem(path) is None
-    monkeypatch.setattr(integrity, "module_path", lambda name: folder / f"{name}.py")
-    assert integrity.verify("grain_impact") == header.body
+    assert integrity.verify_file("grain_impact", path) == header.body
     spot = text.index("x0*x1 - x2*x5")
     path.write_text({"one byte": text[:spot] + "x0*x1 + x2*x5" + text[spot + 13:],
                      "truncated": text[:len(text) // 2],
                      "no header": body}[damage])
     with pytest.raises(SymmechError, match=r"generated module grain_impact is edited.*regenerate with `symmech codegen`"):
-        integrity.verify("symmech.generated.grain_impact")
+        integrity.verify_file("grain_impact", path)
 
 
-def test_verify_refuses_a_module_of_another_version(tmp_path, monkeypatch):
+def test_verify_refuses_a_module_of_another_version(tmp_path):
     folder = _copy_generated(tmp_path)
     path = folder / "trolley_frame.py"
     path.write_text(path.read_text().replace(f"# symmech {__version__} ", "# symmech 0.0.1 ", 1))
-    monkeypatch.setattr(integrity, "module_path", lambda name: folder / f"{name}.py")
     with pytest.raises(SymmechError, match="trolley_frame is stale .*0.0.1"):
-        integrity.verify("trolley_frame")
+        integrity.verify_file("trolley_frame", path)
 
 
 def test_deleted_module_is_named_by_check_and_recreated(tmp_path, capsys):
@@ -209,7 +207,7 @@ def test_used_modules_lists_the_recorded_hashes():
     from symmech.generated import grain_impact, trolley_frame  # noqa: F401
 
     used = integrity.used_modules()
-    assert used["grain_impact"] == integrity.verify("grain_impact")
+    assert used["grain_impact"] == integrity.verify_file("grain_impact", GENERATED / "grain_impact.py")
     assert used["trolley_frame"] == integrity.split((GENERATED / "trolley_frame.py").read_text())[0].body
 
 

@@ -28,7 +28,6 @@ from __future__ import annotations
 import hashlib
 import importlib.abc
 import importlib.machinery
-import importlib.util
 import os
 import re
 import sys
@@ -101,15 +100,6 @@ def problem(path: Path) -> str | None:
     return _inspect(path)[1]
 
 
-def module_path(module_name: str) -> Path:
-    """File of ``symmech.generated.<name>`` (``module_name`` with or without the package)."""
-    name = module_name.removeprefix(PACKAGE + ".")
-    spec = importlib.util.find_spec(f"{PACKAGE}.{name}")
-    if spec is None or spec.origin is None:
-        return Path(importlib.util.find_spec(PACKAGE).submodule_search_locations[0]) / f"{name}.py"
-    return Path(spec.origin)
-
-
 _verified: dict[tuple[str, int, int], str] = {}  # (path, mtime ns, size) -> body sha256 of an intact file
 
 
@@ -130,12 +120,6 @@ def verify_file(name: str, path: Path) -> str:
     if stamp is not None:
         _verified[stamp] = body
     return body
-
-
-def verify(module_name: str) -> str:
-    """Recorded body sha256 of an intact generated module; SymmechError otherwise."""
-    name = module_name.removeprefix(PACKAGE + ".")
-    return verify_file(name, module_path(name))
 
 
 class _VerifyingLoader(importlib.machinery.SourceFileLoader):
