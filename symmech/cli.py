@@ -37,10 +37,11 @@ def cmd_run(ns) -> int:
 
 
 def cmd_sweep(ns) -> int:
-    from symmech.grain import sweep
+    from symmech.core import sweep
 
+    options = {"half_width": ns.half_width} if ns.half_width is not None else {}
     result = sweep.run(ns.scene, ns.out, _context(ns), scheduler=ns.scheduler, workers=ns.workers,
-                       connect_timeout=ns.connect_timeout, half_width=ns.half_width)
+                       connect_timeout=ns.connect_timeout, **options)
     for warning in result.warnings:
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {Path(ns.out) / 'summary.json'}")
@@ -258,9 +259,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--report", action="store_true", help="also write OUT/report.html (see `symmech report`)")
     r.set_defaults(func=cmd_run)
 
-    sw = sub.add_parser("sweep", help="grain populations over a swept plane of operating parameters "
-                                      "(the scene's [sweep] and [[population]]; docs/scenes-grain.md)")
-    sw.add_argument("scene", help="grain scene file (TOML) with a [sweep] table")
+    sw = sub.add_parser("sweep", help="a scene over a swept plane of its fields (the scene's [sweep]): grain "
+                                      "populations (docs/scenes-grain.md), trolley designs "
+                                      "(docs/scenes-trolley.md)")
+    sw.add_argument("scene", help="grain or trolley scene file (TOML) with a [sweep] table")
     sw.add_argument("--out", default="out-sweep", help="output folder (default: out-sweep)")
     _run_options(sw)
     sw.add_argument("--scheduler", metavar="ADDRESS",
@@ -268,9 +270,9 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--connect-timeout", type=_seconds, default=5.0, metavar="SECONDS",
                     help="how long the --scheduler address may take to answer (default 5 s)")
     sw.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the CPU count)")
-    sw.add_argument("--half-width", type=_speed, default=1e-3, metavar="M_PER_S",
-                    help="the summary's precision target: grains needed for a mean velocity to within this, at "
-                         "95 %% (default 0.001 m/s)")
+    sw.add_argument("--half-width", type=_speed, metavar="M_PER_S",
+                    help="grain sweeps: the summary's precision target, grains needed for a mean velocity to "
+                         "within this, at 95 %% (default 0.001 m/s)")
     sw.set_defaults(func=cmd_sweep)
 
     w = sub.add_parser("warm", help="compile the grain engine into numba's cache now (for containers, clusters, "

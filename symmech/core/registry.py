@@ -50,6 +50,8 @@ class Kind:
     run       (setup, Context) -> symmech.core.results.Result
     estimate  setup -> Estimate (optional; runs expected to finish in < 2 s may omit it)
     precision (setup, Context) -> Result of a work-precision study (optional)
+    sweep     (raw scene dict, out folder, Context, **options) -> Result: ``symmech sweep`` over the
+              scene's ``[sweep]`` table, written into the folder (optional; symmech.core.sweep)
     docs      path of the kind's docs page in the repository (for messages)
     """
 
@@ -61,6 +63,7 @@ class Kind:
     estimate: Callable[[Any], Estimate] | None = None
     precision: Callable[[Any, Any], Any] | None = None
     docs: str = ""
+    sweep: Callable[..., Any] | None = None
 
 
 def register(kind: Kind) -> Kind:

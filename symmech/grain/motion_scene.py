@@ -526,4 +526,5 @@ def precision(sc: GrainScene, ctx: Context) -> Result:
 
 registry.register(registry.Kind(
     name="grain", summary="the whole motion of a grain on an inclined vibrating surface (seed 000, eqs (61)-(64))",
-    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-grain.md"))
+    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-grain.md",
+    sweep=sweep.run))

@@ -27,49 +27,17 @@ from functools import cached_property
 import numpy as np
 
 from symmech.core import plotting
+from symmech.core import sweep as core_sweep
 from symmech.core import schema as s
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError
+from symmech.core.sweep import CONNECT_TIMEOUT, FIELD_PATH, axis_values, get as _get, put as _set
 
-CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (--connect-timeout)
-FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
 # the fields a sweep may vary, with their units
 SWEPT = {"vibration.amplitude": "m", "vibration.frequency": "Hz", "vibration.angle_deg": "deg",
          "vibration.phase_deg": "deg", "surface.alpha_deg": "deg", "surface.beta_deg": "deg",
          "sliding.friction": "1", "impact.e_n": "1", "impact.e_t": "1", "impact.mu": "1", "impact.e": "1",
          "impact.lambda": "1"}
-
-
-def _values(path, value):
-    if not isinstance(value, list) or not 1 <= len(value) <= 200:
-        raise SceneError(path, f"expected a list of 1 to 200 numbers, got {value!r}")
-    return [s.check_real(f"{path}[{i}]", v, "", None, None, False, False) for i, v in enumerate(value)]
-
-
-def _check_axis(axis: dict, path: str) -> None:
-    if axis["values"] is not None:
-        for key in ("start", "stop", "num", "log"):
-            if axis[key] is not None and axis[key] is not False:
-                raise SceneError(f"{path}.{key}", "give either values = [...] or start, stop and num, not both")
-        repeated = sorted({v for v in axis["values"] if axis["values"].count(v) > 1})
-        if repeated:
-            raise SceneError(f"{path}.values", f"the values must differ; {repeated[0]:g} repeats")
-        return
-    if axis["num"] is None:
-        raise SceneError(f"{path}.values", "give values = [...] or start, stop and num")
-    for key in ("start", "stop"):
-        if axis[key] is None:
-            raise SceneError(f"{path}.{key}", "start and stop are required with num")
-        if axis["log"] and axis[key] <= 0:
-            raise SceneError(f"{path}.{key}", f"log = true spaces values geometrically: {key} must be > 0, "
-                                              f"got {axis[key]:g}")
-    if axis["num"] > 1 and axis["start"] == axis["stop"]:
-        raise SceneError(f"{path}.stop", f"equals start ({axis['start']:g}): the {axis['num']} values would repeat")
-
-
-def _check_plane(sweep: dict, path: str) -> None:
-    if sweep["y"] is not None and sweep["y"]["field"] == sweep["x"]["field"]:
-        raise SceneError(f"{path}.y.field", f"{sweep['x']['field']} is already swept by {path}.x")
 
 
 # Top-level keys of the grain scene that a population may not set or vary: they are not grain fields.
@@ -94,22 +62,13 @@ def _check_names(pops: list, path: str) -> None:
                                                   "(each population writes sweep_<name>.csv)")
 
 
-AXIS = s.Table("a swept field", {
-    "field": s.Choice("the grain-scene field swept (dotted path)", choices=tuple(SWEPT)),
-    "values": s.Custom("explicit values, in the field's unit", parse=_values, type_doc="list of numbers",
-                       default=None),
-    "start": s.Float("first value (with stop, num)", default=None),
-    "stop": s.Float("last value (with start, num)", default=None),
-    "num": s.Int("number of values from start to stop", lo=1, hi=200, default=None),
-    "log": s.Bool("space start..stop logarithmically", default=False),
-}, checks=(_check_axis,))
+AXIS = core_sweep.axis_table(s.Choice("the grain-scene field swept (dotted path)", choices=tuple(SWEPT)))
 
 SWEEP = s.Table("the swept plane (used by `symmech sweep`; `symmech run` ignores it)", {
-    "x": AXIS,
-    "y": s.Table(AXIS.doc, AXIS.fields, checks=AXIS.checks, default=None),
+    **core_sweep.plane_fields(AXIS),
     "duration": s.Float("simulated time per grain (default: the scene's duration)", unit="s", lo=0.0,
                         lo_open=True, hi=1e4, default=None),
-}, default=None, checks=(_check_plane,))
+}, default=None, checks=(core_sweep.check_plane,))
 
 POPULATION = s.Table("a population of grains", {
     "name": s.Str("name used in the outputs", pattern=r"[A-Za-z][A-Za-z0-9_-]{0,31}"),
@@ -129,34 +88,6 @@ POPULATIONS = s.TableList("one or two grain populations with distinct names (def
 
 
 CHUNK = 500  # grains per task at most: a point of a large population spreads over workers
-
-
-def axis_values(axis: dict) -> np.ndarray:
-    if axis["values"] is not None:
-        return np.array(axis["values"])
-    space = np.geomspace if axis["log"] else np.linspace
-    return space(axis["start"], axis["stop"], axis["num"])
-
-
-def _get(data: dict, path: str):
-    node = data
-    for key in path.split("."):
-        if not isinstance(node, dict) or key not in node:
-            return None
-        node = node[key]
-    return node
-
-
-def _set(data: dict, path: str, value, field: str) -> None:
-    """Set the dotted ``path`` of ``data``; a SceneError naming ``field`` when a table on the way is not one."""
-    *parents, last = path.split(".")
-    node = data
-    for depth, key in enumerate(parents):
-        node = node.setdefault(key, {})
-        if not isinstance(node, dict):
-            prefix = ".".join(parents[:depth + 1])
-            raise SceneError(field, f"{prefix} is {s._show(node)} in the scene, not a table: give {prefix} whole")
-    node[last] = value
 
 
 def _is_vector(value) -> bool:
@@ -394,38 +325,34 @@ def _warm_worker() -> None:
 
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
-        connect_timeout: float = CONNECT_TIMEOUT, half_width: float = 1e-3) -> Result:
-    """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write."""
-    import os
-
+        connect_timeout: float = CONNECT_TIMEOUT, half_width: float | None = None) -> Result:
+    """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write;
+    ``half_width`` [m/s] the summary's precision target (default 1 mm/s)."""
     from symmech.core import pipeline
-    from symmech.core.scene import SymmechError, read_toml
+    from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
     scene = pipeline.load(raw)
     p = plan(raw, scene.resolved)
-    workers = workers or os.cpu_count() or 1
-    cost = estimate(p, 1 if scheduler == "synchronous" else workers)
-    if cost.seconds > ctx.max_time:
-        raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
-                           f"{ctx.max_time:g} s; raise --max-time, or give --scheduler ADDRESS of a larger cluster")
+    processes = core_sweep.workers(workers, scheduler)
+    core_sweep.refuse(estimate(p, processes), ctx)
     validate(p)
-    res = result(p, *compute(p, scheduler, workers, connect_timeout, say=ctx.say), half_width=half_width)
+    res = result(p, *compute(p, scheduler, processes, connect_timeout, say=ctx.say, ctx=ctx),
+                 half_width=1e-3 if half_width is None else half_width)
     pipeline.write(res, out, scene)
     return res
 
 
 def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
-            connect_timeout: float = CONNECT_TIMEOUT, say=None) -> tuple[list, list, list]:
-    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask, the failed
-    grains as (population, i, j, grain, message) and the grains that warned as (population, i, j, grain,
-    warnings).
+            connect_timeout: float = CONNECT_TIMEOUT, say=None, ctx=None) -> tuple[list, list, list]:
+    """Per population, an array (nx, ny, grains, 3) of :func:`simulate_point` results, on Dask
+    (:func:`symmech.core.sweep.compute`: ``scheduler``, ``processes``, ``connect_timeout``, progress on
+    ``ctx``), the failed grains as (population, i, j, grain, message) and the grains that warned as
+    (population, i, j, grain, warnings).
 
-    ``scheduler``: None for a local process pool, "synchronous" for serial, or the
-    address of a ``dask.distributed`` scheduler (a SymmechError when none answers within
-    ``connect_timeout`` seconds). Grains on the compiled engine find it built: this process
-    builds it first (in the foreground, ``say(text)`` tells it), and so does each machine of a
-    ``dask.distributed`` cluster, once per machine (the build lock of :func:`symmech.grain.compiled.warm`).
+    Grains on the compiled engine find it built: this process builds it first (in the foreground,
+    ``say(text)`` tells it), and so does each machine of a ``dask.distributed`` cluster, once per
+    machine (the build lock of :func:`symmech.grain.compiled.warm`).
     """
     import dask
 
@@ -439,14 +366,8 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
             for i, j in np.ndindex(*p.shape) for start in range(0, pop["count"], CHUNK)]
     tasks = [dask.delayed(simulate_grains)(p.base, p.populations[k], p.point(i, j), a, b,
                                            dask_key_name=f"grains-{k}-{i}-{j}-{a}") for k, i, j, a, b in jobs]
-    if scheduler in (None, "processes", "synchronous", "threads"):
-        kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
-        (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
-    else:
-        with _client(scheduler, connect_timeout) as client:
-            if warm:
-                client.run(_warm_worker)
-            values = client.gather(client.compute(tasks))
+    values = core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
+                                on_workers=_warm_worker if warm else None)
     arrays = [np.empty(p.shape + (pop["count"], 3)) for pop in p.populations]
     failed, warned = [], []
     for (k, i, j, a, b), (rows, fail, warn) in zip(jobs, values):
@@ -454,21 +375,6 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
         failed += [(p.names[k], i, j, g, msg) for g, msg in fail]
         warned += [(p.names[k], i, j, g, msg) for g, msg in warn]
     return arrays, failed, warned
-
-
-def _client(address: str, timeout: float):
-    """A ``dask.distributed`` client of the scheduler at ``address``: the user's address, so a
-    scheduler that does not answer within ``timeout`` seconds is a one-line SymmechError."""
-    from dask.distributed import Client
-
-    from symmech.core.scene import SymmechError
-
-    try:
-        return Client(address, timeout=timeout)
-    except (OSError, ValueError) as exc:  # OSError: nothing answered; ValueError: not an address
-        raise SymmechError(f"--scheduler {address}: no dask scheduler answered within {timeout:g} s "
-                           f"({' '.join(str(exc).split())}); check that the scheduler is running and reachable "
-                           "at that address (tcp://HOST:PORT), or raise --connect-timeout") from None
 
 
 LEVEL = 0.95  # confidence level of every interval

@@ -1,0 +1,188 @@
+"""What every ``symmech sweep`` shares: the axes of a swept plane, dotted paths into a scene, the cost
+refusal, and the dispatch of the point tasks on Dask with a progress bar.
+
+A scene kind offers a sweep by registering ``sweep`` with its :class:`~symmech.core.registry.Kind`
+(``sweep(raw, out, ctx, **options) -> Result``); :func:`run` reads the scene, finds its kind and
+calls it, so no central list names the kinds that sweep. The work runs on Dask: a local process
+pool by default, serial with ``scheduler="synchronous"``, or a ``dask.distributed`` scheduler
+by address (``--scheduler``); the results do not depend on where they ran.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from symmech.core import schema as s
+from symmech.core.scene import SceneError, SymmechError
+
+CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (--connect-timeout)
+FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
+MAX_VALUES = 200  # values per axis
+
+
+def _values(path, value):
+    if not isinstance(value, list) or not 1 <= len(value) <= MAX_VALUES:
+        raise SceneError(path, f"expected a list of 1 to {MAX_VALUES} numbers, got {value!r}")
+    return [s.check_real(f"{path}[{i}]", v, "", None, None, False, False) for i, v in enumerate(value)]
+
+
+def check_axis(axis: dict, path: str) -> None:
+    """Values, or start, stop and num (log spacing with positive ends), never both; no repeats."""
+    if axis["values"] is not None:
+        for key in ("start", "stop", "num", "log"):
+            if axis[key] is not None and axis[key] is not False:
+                raise SceneError(f"{path}.{key}", "give either values = [...] or start, stop and num, not both")
+        repeated = sorted({v for v in axis["values"] if axis["values"].count(v) > 1})
+        if repeated:
+            raise SceneError(f"{path}.values", f"the values must differ; {repeated[0]:g} repeats")
+        return
+    if axis["num"] is None:
+        raise SceneError(f"{path}.values", "give values = [...] or start, stop and num")
+    for key in ("start", "stop"):
+        if axis[key] is None:
+            raise SceneError(f"{path}.{key}", "start and stop are required with num")
+        if axis["log"] and axis[key] <= 0:
+            raise SceneError(f"{path}.{key}", f"log = true spaces values geometrically: {key} must be > 0, "
+                                              f"got {axis[key]:g}")
+    if axis["num"] > 1 and axis["start"] == axis["stop"]:
+        raise SceneError(f"{path}.stop", f"equals start ({axis['start']:g}): the {axis['num']} values would repeat")
+
+
+def check_plane(sweep: dict, path: str) -> None:
+    """The y axis sweeps another field than x."""
+    if sweep["y"] is not None and sweep["y"]["field"] == sweep["x"]["field"]:
+        raise SceneError(f"{path}.y.field", f"{sweep['x']['field']} is already swept by {path}.x")
+
+
+def axis_table(field: s.Field, extra: dict | None = None) -> s.Table:
+    """The schema of one swept axis: ``field`` (what may be swept, the kind's own), its values, and
+    the kind's ``extra`` keys."""
+    return s.Table("a swept field", {
+        "field": field,
+        "values": s.Custom("explicit values, in the field's unit", parse=_values, type_doc="list of numbers",
+                           default=None),
+        "start": s.Float("first value (with stop, num)", default=None),
+        "stop": s.Float("last value (with start, num)", default=None),
+        "num": s.Int("number of values from start to stop", lo=1, hi=MAX_VALUES, default=None),
+        "log": s.Bool("space start..stop logarithmically", default=False),
+        **(extra or {}),
+    }, checks=(check_axis,))
+
+
+def plane_fields(axis: s.Table) -> dict:
+    """The ``x`` (required) and ``y`` (optional) axes of a ``[sweep]`` table."""
+    return {"x": axis, "y": s.Table(axis.doc, axis.fields, checks=axis.checks, default=None)}
+
+
+def axis_values(axis: dict) -> np.ndarray:
+    """The values of a resolved axis table, in its field's unit."""
+    if axis["values"] is not None:
+        return np.array(axis["values"])
+    space = np.geomspace if axis["log"] else np.linspace
+    return space(axis["start"], axis["stop"], axis["num"])
+
+
+def get(data: dict, path: str):
+    """The value at the dotted ``path`` of ``data``; None when it is missing."""
+    node = data
+    for key in path.split("."):
+        if not isinstance(node, dict) or key not in node:
+            return None
+        node = node[key]
+    return node
+
+
+def put(data: dict, path: str, value, field: str) -> None:
+    """Set the dotted ``path`` of ``data``; a SceneError naming ``field`` when a table on the way is not one."""
+    *parents, last = path.split(".")
+    node = data
+    for depth, key in enumerate(parents):
+        node = node.setdefault(key, {})
+        if not isinstance(node, dict):
+            prefix = ".".join(parents[:depth + 1])
+            raise SceneError(field, f"{prefix} is {s._show(node)} in the scene, not a table: give {prefix} whole")
+    node[last] = value
+
+
+def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster") -> None:
+    """Refuse a sweep whose estimate (a ``registry.Estimate``) exceeds ``--max-time``; tell it otherwise."""
+    if cost.seconds > ctx.max_time:
+        raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
+                           f"{ctx.max_time:g} s; raise --max-time, or {advice}")
+    ctx.say(f"estimated sweep time {cost.seconds:.3g} s ({cost.what})")
+
+
+def workers(count: int | None, scheduler: str | None) -> int:
+    """The worker processes a sweep's estimate divides by: 1 when serial, else ``count`` or the CPU count."""
+    return 1 if scheduler == "synchronous" else count or os.cpu_count() or 1
+
+
+def compute(tasks: list, scheduler: str | None = None, processes: int | None = None,
+            connect_timeout: float = CONNECT_TIMEOUT, ctx=None, on_workers=None) -> list:
+    """The values of the ``dask.delayed`` ``tasks``, in order, with a progress bar on ``ctx`` (a Context).
+
+    ``scheduler``: None for a local process pool of ``processes`` workers, "synchronous" for serial,
+    "threads", or the address of a ``dask.distributed`` scheduler (a SymmechError when none answers
+    within ``connect_timeout`` seconds); there ``on_workers()`` runs on every worker first."""
+    import dask
+
+    from symmech.core.context import Context
+
+    ctx = ctx or Context(quiet=True)
+    with ctx.progress(len(tasks), "sweep points", unit="task") as bar:
+        if scheduler in (None, "processes", "synchronous", "threads"):
+            kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
+            with _ticks(bar, {t.key for t in tasks}):
+                (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
+            return values
+        from dask.distributed import as_completed
+
+        with client(scheduler, connect_timeout) as c:
+            if on_workers is not None:
+                c.run(on_workers)
+            futures = c.compute(tasks)
+            for _ in as_completed(futures):
+                bar.update(1)
+            return c.gather(futures)
+
+
+def _ticks(bar, keys):
+    """A dask local-scheduler callback that advances ``bar`` once per finished task of ``keys``."""
+    from dask.callbacks import Callback
+
+    class Ticks(Callback):
+        def _posttask(self, key, result, dsk, state, worker_id):
+            if key in keys:
+                bar.update(1)
+
+    return Ticks()
+
+
+def client(address: str, timeout: float):
+    """A ``dask.distributed`` client of the scheduler at ``address``: the user's address, so a
+    scheduler that does not answer within ``timeout`` seconds is a one-line SymmechError."""
+    from dask.distributed import Client
+
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, ValueError) as exc:  # OSError: nothing answered; ValueError: not an address
+        raise SymmechError(f"--scheduler {address}: no dask scheduler answered within {timeout:g} s "
+                           f"({' '.join(str(exc).split())}); check that the scheduler is running and reachable "
+                           "at that address (tcp://HOST:PORT), or raise --connect-timeout") from None
+
+
+def run(source, out, ctx, **options):
+    """``symmech sweep``: the sweep its scene kind registered, on the scene ``source`` (a TOML path or a
+    dict as TOML gives it), written into ``out``; a SceneError naming ``kind`` when the kind has none."""
+    from symmech.core import registry
+    from symmech.core.scene import read_toml
+
+    raw = source if isinstance(source, dict) else read_toml(source)
+    if not isinstance(raw, dict):
+        raise SymmechError("a scene must be a table of fields")
+    kind = registry.get(raw.get("kind"))
+    if kind.sweep is None:
+        having = [k.name for k in registry.kinds().values() if k.sweep is not None]
+        raise SceneError("kind", f"scene kind '{kind.name}' has no sweep (kinds with one: {', '.join(having)})")
+    return kind.sweep(raw, out, ctx, **options)
