@@ -21,6 +21,7 @@ from symmech.core.context import Context
 from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import elastic_review, elastic_scene, model, plots, tables, track as tracks
+from symmech.trolley import sweep as design_sweep
 
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
@@ -49,12 +50,15 @@ def _expression(doc, type_doc, default=sc.REQUIRED):
     return sc.Custom(doc, parse=parse, type_doc=type_doc, default=default)
 
 
-def _constants(path, value):
-    if not isinstance(value, dict):
-        raise SceneError(path, f"expected a table of names to numbers, got {value!r}"[:200])
-    return {expressions.check_name(f"{path}.{k}", k, ("s", "u")): sc.check_real(f"{path}.{k}", v, "", -MAX_LENGTH,
-                                                                                MAX_LENGTH, False, False)
-            for k, v in value.items()}
+def _constants_of(variables: tuple[str, ...]):
+    """The parser of a table of names (not ``variables``) to numbers."""
+    def parse(path, value):
+        if not isinstance(value, dict):
+            raise SceneError(path, f"expected a table of names to numbers, got {value!r}"[:200])
+        return {expressions.check_name(f"{path}.{k}", k, variables): sc.check_real(f"{path}.{k}", v, "", -MAX_LENGTH,
+                                                                                  MAX_LENGTH, False, False)
+                for k, v in value.items()}
+    return parse
 
 
 def _track_expressions(tr, path):
@@ -91,7 +95,7 @@ TRACK = sc.Table("the track: midline X0(s) and twist θ1(s)", {
                                "`u`: any parameter, arc length computed", choices=("s", "u"), default="s"),
         "u_range": sc.Vector("parameter range [u0, u1] (s = 0 at u0), with parameter = \"u\"", n=2,
                              lo=-MAX_LENGTH, hi=MAX_LENGTH, default=None),
-        "constants": sc.Custom("names usable in the expressions", parse=_constants,
+        "constants": sc.Custom("names usable in the expressions", parse=_constants_of(("s", "u")),
                                type_doc="table of names to numbers", default={}),
     },
     "table": {
@@ -192,6 +196,8 @@ SCHEMA = sc.Table("a trolley scene", {
                                 default=None),
         "initial_speed": sc.Float("V0(0) with traction", unit="m/s", lo=0.0, hi=MAX_SPEED, default=0.0),
         "s0": sc.Float("arc length at t = 0", unit="m", lo=0.0, hi=MAX_LENGTH, default=0.0),
+        "constants": sc.Custom("names usable in `speed` and `traction` (e.g. for `symmech sweep` to vary)",
+                               parse=_constants_of(("t", "v")), type_doc="table of names to numbers", default={}),
     }),
     "time": sc.Table("the time grid t = 0 … t_end", {
         "t_end": sc.Float("duration", unit="s", lo=0.0, lo_open=True, hi=1e6),
@@ -224,6 +230,7 @@ SCHEMA = sc.Table("a trolley scene", {
         "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
                                 default=False)}, default={}),
     "elastic": elastic_scene.SCHEMA,
+    "sweep": design_sweep.SWEEP,
     "output": sc.plot_output(plots.FIGURES, default=tuple(plots.FIGURES)),
 }, checks=(_cross_checks,))
 
@@ -256,10 +263,10 @@ class Setup:
     output: dict = None  # the resolved [output] table: plots and formats
 
 
-def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float):
-    """Numeric f and df/dt of an expression field in ``variables`` (t first), checked over
-    t ∈ [0, t_end] (and, for traction, v ∈ [0, MAX_SPEED])."""
-    expr = expressions.parse(field, text, variables)
+def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float, constants: dict):
+    """Numeric f and df/dt of an expression field in ``variables`` (t first) and ``constants`` (name:
+    number), checked over t ∈ [0, t_end] (and, for traction, v ∈ [0, MAX_SPEED])."""
+    expr = expressions.parse(field, text, variables, constants)
     t = expressions.symbol("t")
     rate = expressions.derivatives(field, expr, "t", 1)[1]
     fixed = [{}] if len(variables) == 1 else [{expressions.symbol("v"): v} for v in np.linspace(0, MAX_SPEED, 9)]
@@ -292,9 +299,10 @@ def prepare(scene: dict) -> Setup:
                       body_spec["half_gauge"], scene["constants"]["g0"] if effects["gravity"] else 0.0)
     speed = traction = None
     if effects["traction"]:
-        traction = _time_functions("motion.traction", motion["traction"], ("t", "v"), t_end)[0]
+        traction = _time_functions("motion.traction", motion["traction"], ("t", "v"), t_end,
+                                   motion["constants"])[0]
     else:
-        speed = _time_functions("motion.speed", motion["speed"], ("t",), t_end)
+        speed = _time_functions("motion.speed", motion["speed"], ("t",), t_end, motion["constants"])
     setup = Setup(track, body, scene["frame"], scene["conventions"], np.linspace(0.0, t_end, steps + 1), speed,
                   traction, motion["initial_speed"], motion["s0"], effects["local_curvature"], num["fd_order"],
                   num["fd_step"] if num["fd_step"] is not None else min(0.02, 0.05 * axle),
@@ -812,4 +820,5 @@ def precision(setup: Setup, ctx) -> Result:
 
 
 registry.register(registry.Kind("trolley", "a rigid trolley on a curved two-rail track (seed 002)", SCHEMA, prepare,
-                                run, estimate, precision, "docs/scenes-trolley.md"))
+                                run, estimate, precision, "docs/scenes-trolley.md",
+                                design_sweep.run))

@@ -1,0 +1,458 @@
+"""Design sweeps of a trolley (rigid, or with the ``[elastic]`` table): ``symmech sweep SCENE --out DIR``.
+
+A trolley scene's ``[sweep]`` names one or two swept fields (:data:`FIELDS`: a speed scale or a
+constant of the speed expression, the roller stiffness or damping, a beam's stiffness, tip mass or
+damping, the body's mass, a comfort limit) and optional reaction limits. Every point of the plane
+is the scene with those fields set, run through the scene's own path (``pipeline.load(...).run()``:
+whatever engine the trolley kind uses runs the points), and reduced to its design numbers
+(:func:`point_metrics`): peak reactions, their dynamic amplification (elastic / rigid peak of the
+elastic model), the largest roller and body deflections, each report point's comfort margin and
+the closest resonance. Every point scene is validated before any run; a bad swept value is named
+by its axis (``sweep.x``), in one line.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import re
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from symmech.core import plotting
+from symmech.core import schema as s
+from symmech.core import sweep as core_sweep
+from symmech.core.results import Column, Result, Table
+from symmech.core.scene import SceneError
+
+AXES = ("x1", "x2", "x3")
+# (pattern of a swept field, its unit, what setting it does); NAME, I and the axis are the field's own
+FIELDS = (
+    (r"motion\.speed_scale", "1", "multiplies the speed expression: V0(t) → value × V0(t)"),
+    (r"motion\.constants\.[A-Za-z_][A-Za-z0-9_]*", "1", "sets the constant NAME of motion.constants (the "
+                                                          "axis's `unit` labels it)"),
+    (r"trolley\.mass", "kg", "sets the body's mass"),
+    (r"elastic\.rollers\.stiffness", "N/m", "sets the stiffness of all five rollers"),
+    (r"elastic\.rollers\.stiffness_scale", "1", "multiplies the five roller stiffnesses"),
+    (r"elastic\.rollers\.damping", "N s/m", "sets the damping of all five rollers"),
+    (r"elastic\.rollers\.damping_scale", "1", "multiplies the five roller dampings"),
+    (r"elastic\.beams\[[0-9]+\]\.ei_scale", "1", "multiplies beam I's bending stiffness in both planes"),
+    (r"elastic\.beams\[[0-9]+\]\.tip_mass", "kg", "sets beam I's tip mass"),
+    (r"elastic\.beams\[[0-9]+\]\.damping_ratio", "1", "sets beam I's damping ratio"),
+    (r"comfort\.x[123]\.(lo|hi)", "g", "sets the lower or upper end of the comfort envelope along that axis"),
+)
+FIELD_NAMES = ("motion.speed_scale", "motion.constants.NAME", "trolley.mass", "elastic.rollers.stiffness",
+               "elastic.rollers.stiffness_scale", "elastic.rollers.damping", "elastic.rollers.damping_scale",
+               "elastic.beams[I].ei_scale", "elastic.beams[I].tip_mass", "elastic.beams[I].damping_ratio",
+               "comfort.x1.lo (x1, x2, x3; lo, hi)")
+REACTIONS = tuple(f"P{i}" for i in range(6))
+
+
+def _field(path, value):
+    if not isinstance(value, str) or not any(re.fullmatch(p, value) for p, _, _ in FIELDS):
+        raise SceneError(path, f"{s._show(value)} is not a field a trolley sweep can vary; choose one of "
+                               f"{', '.join(FIELD_NAMES)}")
+    return value
+
+
+def unit_of(axis: dict) -> str:
+    """The unit of a resolved axis's field (a motion constant's: the axis's ``unit``, default "1")."""
+    if axis["field"].startswith("motion.constants."):
+        return axis["unit"] or "1"
+    return next(unit for pattern, unit, _ in FIELDS if re.fullmatch(pattern, axis["field"]))
+
+
+def _check_unit(axis: dict, path: str) -> None:
+    if axis["unit"] is not None and not axis["field"].startswith("motion.constants."):
+        raise SceneError(f"{path}.unit", f"{axis['field']} has its own unit ({unit_of(axis)}); `unit` labels a "
+                                         "motion constant only")
+
+
+_AXIS = core_sweep.axis_table(
+    s.Custom("the trolley-scene field swept (see the list of swept fields)", parse=_field, type_doc="dotted path"),
+    {"unit": s.Str("unit of a swept motion constant, for the labels and CSV headers", default=None)})
+AXIS = s.Table(_AXIS.doc, _AXIS.fields, checks=_AXIS.checks + (_check_unit,))
+
+SWEEP = s.Table("the swept plane of a design sweep (used by `symmech sweep`; `symmech run` ignores it)", {
+    **core_sweep.plane_fields(AXIS),
+    "limits": s.Table("stated limits of the peak reactions |P0|…|P5| (a point beyond one is outside the "
+                      "admissible region)", {name: s.Float(f"largest admissible |{name}|", unit="N", lo=0.0,
+                                                           lo_open=True, hi=1e12, default=None)
+                                             for name in REACTIONS}, default={}),
+}, default=None, checks=(core_sweep.check_plane,))
+
+
+def edits(field: str, resolved: dict, value: float, where: str) -> list[tuple[tuple, object]]:
+    """The raw-scene entries (keys path, value) that setting the swept ``field`` to ``value`` writes, from the
+    base scene's ``resolved`` fields; a SceneError naming ``where`` (the axis's field) when the scene has
+    nothing the field could change."""
+    head, _, rest = field.partition(".")
+    if field == "motion.speed_scale":
+        if resolved["motion"]["speed"] is None:
+            raise SceneError(where, "motion.speed_scale multiplies motion.speed; this scene is driven by "
+                                    "motion.traction")
+        return [(("motion", "speed"), f"({value!r})*({resolved['motion']['speed']})")]
+    if head == "motion":
+        name = rest.removeprefix("constants.")
+        if name not in resolved["motion"]["constants"]:
+            have = ", ".join(resolved["motion"]["constants"]) or "none"
+            raise SceneError(where, f"{field}: the scene's motion.constants has no {name!r} (it has: {have})")
+        return [(("motion", "constants", name), value)]
+    if head == "comfort":
+        axis, end = rest.split(".")
+        envelope = list(resolved["comfort"][axis])
+        envelope[("lo", "hi").index(end)] = value
+        return [(("comfort", axis), envelope)]
+    if head == "trolley":
+        return [(("trolley", "mass"), value)]
+    if resolved["elastic"] is None:
+        raise SceneError(where, f"{field}: the scene has no [elastic] table")
+    if rest.startswith("rollers."):
+        if resolved["elastic"]["rollers"] is None:
+            raise SceneError(where, f"{field}: the scene has no [elastic.rollers] table")
+        key, scale = rest.removeprefix("rollers.").removesuffix("_scale"), rest.endswith("_scale")
+        base = resolved["elastic"]["rollers"][key]
+        return [(("elastic", "rollers", key), [b * value for b in base] if scale else [value] * 5)]
+    index, key = re.fullmatch(r"beams\[([0-9]+)\]\.(\w+)", rest).groups()
+    beams = resolved["elastic"]["beams"]
+    if int(index) >= len(beams):
+        raise SceneError(where, f"{field}: beam {index} is not a beam index ({len(beams)} beams given)")
+    if key == "ei_scale":
+        return [(("elastic", "beams", int(index), "ei"), [e * value for e in beams[int(index)]["ei"]])]
+    return [(("elastic", "beams", int(index), key), value)]
+
+
+def _target(keys: tuple) -> str:
+    """The dotted field name of a keys path, as the scene's errors name it (``elastic.beams[0].ei``)."""
+    out = ""
+    for key in keys:
+        out += f"[{key}]" if isinstance(key, int) else (f".{key}" if out else key)
+    return out
+
+
+def _write(data: dict, keys: tuple, value) -> None:
+    node = data
+    for key in keys[:-1]:
+        node = node.setdefault(key, {}) if isinstance(key, str) else node[key]
+    node[keys[-1]] = value
+
+
+@dataclass
+class Plan:
+    """The sweep's plane over a base trolley scene: point (i, j) is ``base`` with :meth:`point`'s edits."""
+
+    x: dict
+    y: dict | None
+    base: dict  # the raw scene without [sweep]
+    resolved: dict  # the base scene's resolved fields
+    limits: dict  # {"P3": N, ...}: the stated reaction limits
+
+    @property
+    def values(self) -> tuple[np.ndarray, np.ndarray]:
+        """The swept values along x and y ([nan] without y)."""
+        return core_sweep.axis_values(self.x), core_sweep.axis_values(self.y) if self.y else np.array([np.nan])
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return tuple(len(v) for v in self.values)
+
+    @property
+    def axes(self) -> list[tuple[str, dict]]:
+        return [("x", self.x)] + ([("y", self.y)] if self.y else [])
+
+    def point(self, i: int, j: int) -> dict:
+        """The raw scene of point (i, j)."""
+        data = copy.deepcopy(self.base)
+        for (name, axis), value in zip(self.axes, (self.values[0][i], self.values[1][j])):
+            for keys, v in edits(axis["field"], self.resolved, float(value), f"sweep.{name}.field"):
+                _write(data, keys, v)
+        return data
+
+    def load(self, i: int, j: int):
+        """``pipeline.load`` of point (i, j); its SceneError renamed to the axis whose value it refuses."""
+        from symmech.core import pipeline
+
+        try:
+            return pipeline.load(self.point(i, j))
+        except SceneError as exc:
+            xs, ys = self.values
+            for (name, axis), value in zip(self.axes, (xs[i], ys[j])):
+                targets = [_target(keys) for keys, _ in edits(axis["field"], self.resolved, float(value), "")]
+                if any(exc.field == t or exc.field.startswith((f"{t}.", f"{t}[")) for t in targets):
+                    raise SceneError(f"sweep.{name}", f"{axis['field']} = {value:g}: {exc.field}: "
+                                                      f"{str(exc).partition(': ')[2]}") from None
+            raise
+
+
+def plan(raw: dict, resolved: dict) -> Plan:
+    """The plan of a trolley scene with a ``[sweep]`` table; the swept fields checked against the scene."""
+    sweep = resolved["sweep"]
+    if sweep is None:
+        raise SceneError("sweep", "the scene has no [sweep] table (see docs/scenes-trolley.md)")
+    base = {k: v for k, v in copy.deepcopy(raw).items() if k != "sweep"}
+    limits = {k: v for k, v in sweep["limits"].items() if v is not None}
+    p = Plan(sweep["x"], sweep["y"], base, resolved, limits)
+    for name, axis in p.axes:
+        edits(axis["field"], resolved, float(core_sweep.axis_values(axis)[0]), f"sweep.{name}.field")
+    return p
+
+
+def validate(p: Plan) -> None:
+    """Load every point scene (schema, prepare): a bad swept value is named before any run."""
+    for i, j in np.ndindex(*p.shape):
+        p.load(i, j)
+
+
+def comfort_margin(overload: np.ndarray, envelope: dict) -> float:
+    """The least signed distance [g] of the overloads ``overload`` (n, 3) [g] to the box ``envelope``
+    ({axis: (lo, hi)} along x1, x2, x3): inside, the distance to the nearest face (> 0); outside, minus
+    the Euclidean distance to the box."""
+    lo, hi = (np.array([envelope[a][k] for a in AXES]) for k in (0, 1))
+    excess = np.maximum(np.maximum(lo - overload, overload - hi), 0.0)
+    outside = np.sqrt((excess**2).sum(-1))
+    inside = np.minimum(overload - lo, hi - overload).min(-1)
+    return float(np.where(outside > 0, -outside, inside).min())
+
+
+def _peaks(table: Table, suffix: str = "") -> np.ndarray:
+    return np.array([np.abs(table.column(f"{name}{suffix}")).max() for name in REACTIONS])
+
+
+def point_metrics(res: Result, comfort: dict) -> tuple[list[Column], list[float], dict[str, str]]:
+    """The design numbers of one trolley run ``res`` (its tables) with the comfort envelope ``comfort``:
+    columns, values and text values (the closest resonance's forcing and mode)."""
+    t = res.tables
+    elastic = "elastic_reactions" in t and "P0_rigid" in [c.name for c in t["elastic_reactions"].columns]
+    case = "case2" if "case2" in t else "case1"
+    peak = _peaks(t["elastic_reactions"]) if elastic else _peaks(t[case])
+    model = "elastic model" if elastic else "rigid model"
+    out = [(Column(f"peak_{n}", "N", f"largest |{n}| ({model})"), p) for n, p in zip(REACTIONS, peak)]
+    out.append((Column("peak_reaction_max", "N", f"largest |P1…P5| ({model})"), peak[1:].max()))
+    text = {}
+    if elastic:
+        rigid = _peaks(t["elastic_reactions"], "_rigid")
+        amp = np.divide(peak, rigid, out=np.full(6, np.nan), where=rigid > 0)
+        out += [(Column(f"amplification_{n}", "1", f"dynamic amplification: elastic / rigid peak |{n}|"), a)
+                for n, a in zip(REACTIONS, amp)]
+        out.append((Column("amplification_max", "1", "largest dynamic amplification of P0…P5"), np.nanmax(amp)))
+    if "roller_deflections" in t:
+        d = t["roller_deflections"].data[:, 1:]
+        out.append((Column("roller_deflection_max", "m", "largest roller deflection |d1…d5|"), np.abs(d).max()))
+    names = [c.name[:-3] for c in t["points"].columns if c.name.endswith("_n1")] if "points" in t else []
+    if names:
+        pts = t["points"]
+        e = np.array([np.linalg.norm(np.column_stack([pts.column(f"{n}_e{k}") for k in (1, 2, 3)]), axis=1)
+                      for n in names])
+        out.append((Column("body_deflection_max", "m", "largest elastic deflection of a report point"), e.max()))
+        series = {n: np.column_stack([pts.column(f"{n}_n{k}") for k in (1, 2, 3)]) for n in names}
+    else:
+        series = {"com": t[f"{case}_overload"].data[:, 1:4]}
+    margins = {n: comfort_margin(v, comfort) for n, v in series.items()}
+    where = "report point" if names else "centre of mass (rigid model)"
+    out += [(Column(f"comfort_margin_{n}", "g", f"least distance of the {where} {n}'s overload to the comfort "
+                    "envelope (< 0: outside)"), m) for n, m in margins.items()]
+    out.append((Column("comfort_margin", "g", "least comfort margin of all points"), min(margins.values())))
+    if "modes" in t:
+        resonance, text = _closest_resonance(t["modes"])
+        out += resonance
+    cols, values = zip(*out)
+    return list(cols), [float(v) for v in values], text
+
+
+def _closest_resonance(modes: Table) -> tuple[list, dict]:
+    """The (sample, mode, forcing) of the modes table whose natural frequency is nearest, relatively, to a
+    positive forcing frequency."""
+    from symmech.trolley.elastic import FORCING
+
+    f = modes.column("f")[:, None]
+    forcing = np.column_stack([modes.column(f"forcing_{name}") for name, _ in FORCING])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        detuning = np.where((forcing > 0) & (f > 0), np.abs(f / forcing - 1), np.inf)
+    row, k = np.unravel_index(int(np.argmin(detuning)), detuning.shape)
+    found = np.isfinite(detuning[row, k])
+    pick = lambda v: v if found else math.nan  # noqa: E731  no positive forcing at all: no resonance
+    out = [(Column("resonance_detuning", "1", "closest resonance: |f / f_forcing - 1|"), pick(detuning[row, k])),
+           (Column("resonance_f", "Hz", "its natural frequency"), pick(f[row, 0])),
+           (Column("resonance_forcing_f", "Hz", "its forcing frequency"), pick(forcing[row, k])),
+           (Column("resonance_mode", "1", "its mode_id (the modes table's)"), pick(modes.column("mode_id")[row])),
+           (Column("resonance_t", "s", "when it is closest"), pick(modes.column("t")[row])),
+           (Column("resonance_s", "m", "where on the track it is closest"), pick(modes.column("s")[row]))]
+    text = {"resonance_forcing": FORCING[k][0] if found else "none",
+            "resonance_component": modes.text["component"][row] if found else "none"}
+    return out, text
+
+
+def evaluate(data: dict, max_time: float):
+    """A task: the point scene ``data`` run through the scene's own path and reduced to its design numbers
+    (:func:`point_metrics`); ("failed", message) when the run stops with a user error."""
+    from symmech.core import pipeline
+    from symmech.core.context import Context
+    from symmech.core.scene import SymmechError
+
+    try:
+        scene = pipeline.load(data)
+        res = scene.run(Context(quiet=True, max_time=max_time))
+    except SymmechError as exc:
+        return "failed", str(exc)
+    return "ok", *point_metrics(res, scene.setup.comfort), res.warnings
+
+
+def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
+        connect_timeout: float = core_sweep.CONNECT_TIMEOUT) -> Result:
+    """``symmech sweep`` of a trolley scene: validate every point, estimate from the first point's run,
+    compute the rest, write."""
+    from symmech.core import pipeline
+    from symmech.core.scene import read_toml
+
+    raw = source if isinstance(source, dict) else read_toml(source)
+    scene = pipeline.load(raw)
+    p = plan(raw, scene.resolved)
+    validate(p)
+    outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx)
+    res = result(p, outcomes)
+    pipeline.write(res, out, scene)
+    return res
+
+
+def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
+            connect_timeout: float = core_sweep.CONNECT_TIMEOUT, ctx=None) -> list:
+    """The outcome of :func:`evaluate` per point, x-major: point (0, 0) here, timed for the estimate (refused
+    past ``ctx.max_time``), the others on Dask (:func:`symmech.core.sweep.compute`)."""
+    import dask
+
+    from symmech.core import registry
+    from symmech.core.context import Context
+
+    ctx = ctx or Context(quiet=True)
+    started = time.perf_counter()
+    first = evaluate(p.point(0, 0), ctx.max_time)
+    points = int(np.prod(p.shape))
+    seconds = (time.perf_counter() - started) * (points - 1) / processes
+    core_sweep.refuse(registry.Estimate(seconds, f"{points} points at {time.perf_counter() - started:.3g} s "
+                                                 f"(the first one's) on {processes} worker(s)"), ctx)
+    tasks = [dask.delayed(evaluate)(p.point(i, j), ctx.max_time, dask_key_name=f"point-{i}-{j}")
+             for i, j in list(np.ndindex(*p.shape))[1:]]
+    return [first] + list(core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx))
+
+
+# Charts over the plane: (column, title, whether larger is worse)
+CHARTS = (("comfort_margin", "least comfort margin", False),
+          ("amplification_max", "largest dynamic amplification of the reactions", True),
+          ("peak_reaction_max", "largest roller reaction |P1…P5|", True),
+          ("roller_deflection_max", "largest roller deflection", True),
+          ("body_deflection_max", "largest body deflection", True),
+          ("resonance_detuning", "closest resonance |f / f_forcing - 1|", False))
+
+
+def _number(x) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _worst_best(values: np.ndarray, larger_is_worse: bool) -> tuple[int, int]:
+    """Flat indices of the worst and best finite values (NaN, failed points, left out)."""
+    v = np.where(np.isfinite(values), values, np.nan)
+    hi, lo = int(np.nanargmax(v)), int(np.nanargmin(v))
+    return (hi, lo) if larger_is_worse else (lo, hi)
+
+
+def admissible(table: Table, limits: dict) -> np.ndarray:
+    """Per row: comfort margin ≥ 0 and every stated reaction limit kept (False for a failed point)."""
+    ok = table.column("comfort_margin") >= 0
+    for name, limit in limits.items():
+        ok &= table.column(f"peak_{name}") <= limit
+    return ok
+
+
+def result(p: Plan, outcomes: list) -> Result:
+    """Table ``sweep`` (one row per point, x-major), summary (worst and best point, per chart metric too,
+    the admissible points, failed and warned points) and the charts."""
+    xs, ys = p.values
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    base_cols = [Column(name, unit_of(axis), f"swept field {axis['field']}") for name, axis in p.axes]
+    base = np.column_stack([X.ravel()] + ([Y.ravel()] if p.y else []))
+    done = [o for o in outcomes if o[0] == "ok"]
+    if not done:
+        raise SceneError("sweep", f"every point failed; first: {outcomes[0][1]}")
+    cols, _, text0, _ = done[0][1:]
+    rows = np.array([o[2] if o[0] == "ok" else [math.nan] * len(cols) for o in outcomes])
+    text = {key: [o[3][key] if o[0] == "ok" else "failed" for o in outcomes] for key in text0}
+    metric = Table(cols, rows)
+    ok = admissible(metric, p.limits)
+    table = Table(base_cols + cols + [Column("admissible", "1", "1: comfort margin ≥ 0 and the reactions within "
+                                                                 "the stated limits")],
+                  np.column_stack([base, rows, ok.astype(float)]), "design numbers over the swept plane", text)
+
+    def at(k: int) -> dict:
+        point = {"index": [int(v) for v in np.unravel_index(k, p.shape)][:len(p.axes)]}
+        point |= {c.name: float(base[k, n]) for n, c in enumerate(base_cols)}
+        point |= {c.name: _number(rows[k, n]) for n, c in enumerate(cols)} | {key: text[key][k] for key in text}
+        return point | {"admissible": bool(ok[k])}
+
+    names = [c.name for c in cols]
+    extremes = {}
+    for name, _, larger in CHARTS:
+        if name in names:
+            worst, best = _worst_best(metric.column(name), larger)
+            extremes[name] = {"worst": at(worst), "best": at(best)}
+    failed = [{"index": list(np.unravel_index(k, p.shape))[:len(p.axes)], "error": o[1]}
+              for k, o in enumerate(outcomes) if o[0] != "ok"]
+    warned = [{"index": list(np.unravel_index(k, p.shape))[:len(p.axes)], "warnings": len(o[4]), "first": o[4][0]}
+              for k, o in enumerate(outcomes) if o[0] == "ok" and o[4]]
+    summary = {"points": len(outcomes), "swept": [axis["field"] for _, axis in p.axes],
+               "units": [unit_of(axis) for _, axis in p.axes], "limits_N": p.limits,
+               "criterion": "comfort_margin: the worst point has the least, the best the largest",
+               "worst_point": extremes["comfort_margin"]["worst"], "best_point": extremes["comfort_margin"]["best"],
+               "extremes": extremes, "admissible_points": int(ok.sum()),
+               "failed_points": [{**f, "index": [int(v) for v in f["index"]]} for f in failed],
+               "warned_points": [{**w, "index": [int(v) for v in w["index"]]} for w in warned]}
+    warnings = [f"{len(failed)} point(s) stopped with an error (summary.json: failed_points); first: "
+                f"{failed[0]['error']}"] if failed else []
+    return Result("trolley_sweep", summary, {"sweep": table}, warnings=warnings,
+                  plots=lambda folder: _plots(p, table, ok, extremes, folder))
+
+
+def _plots(p: Plan, table: Table, ok: np.ndarray, extremes: dict, folder) -> list:
+    """One chart per design number over the plane (a heat map over x and y, a line over x alone), with the
+    worst (✕) and best (★) points marked and the admissible region outlined."""
+    xs, ys = p.values
+    x_label = (p.x["field"], unit_of(p.x))
+    written = []
+    for name, title, _ in CHARTS:
+        if name not in extremes:
+            continue
+        col = next(c for c in table.columns if c.name == name)
+        z = table.column(name).reshape(p.shape)
+        worst, best = (extremes[name][k]["index"] for k in ("worst", "best"))
+        fig, axes = plotting.figure(width=6.4, height=4.8)
+        ax = axes[0, 0]
+        if p.y:
+            _plane(fig, ax, xs, ys, z, ok.reshape(p.shape), title, col.unit)
+            ax.plot(xs[worst[0]], ys[worst[1]], "rX", ms=12, mec="k", label="worst")
+            ax.plot(xs[best[0]], ys[best[1]], "w*", ms=15, mec="k", label="best")
+            plotting.set_labels(ax, x_label, (p.y["field"], unit_of(p.y)))
+        else:
+            ax.plot(xs, z[:, 0], "o-", color="C0")
+            ax.fill_between(xs, 0, 1, where=ok, transform=ax.get_xaxis_transform(), color="C2", alpha=0.15,
+                            step="mid", label="admissible")
+            ax.plot(xs[worst[0]], z[worst[0], 0], "rX", ms=12, mec="k", label="worst")
+            ax.plot(xs[best[0]], z[best[0], 0], "*", color="gold", ms=15, mec="k", label="best")
+            plotting.set_labels(ax, x_label, (title, col.unit))
+        ax.legend(fontsize=8, loc="best")
+        ax.set_title(title, fontsize=9)
+        written += plotting.save(fig, folder, f"sweep_{name}")
+    return written
+
+
+def _plane(fig, ax, xs, ys, z, ok, title, unit) -> None:
+    """Heat map of z (nx, ny) with the border of the admissible points ``ok`` drawn around them."""
+    from matplotlib.lines import Line2D
+
+    mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
+    if ok.any() and not ok.all() and len(xs) > 1 and len(ys) > 1:
+        ax.contour(xs, ys, ok.T.astype(float), levels=[0.5], colors="w", linewidths=2.0)
+        ax.add_line(Line2D([], [], color="w", lw=2.0, label="admissible region border"))
+    if not ok.all():
+        ax.pcolor(xs, ys, np.ma.masked_where(ok.T, ~ok.T), shading="nearest", hatch="//", facecolor="none",
+                  edgecolor="0.3", linewidth=0.0, label="outside the admissible region")
