@@ -285,14 +285,19 @@ def _closest_resonance(modes: Table) -> tuple[list, dict]:
 
 def evaluate(data: dict, max_time: float):
     """A task: the point scene ``data`` run through the scene's own path and reduced to its design numbers
-    (:func:`point_metrics`); ("failed", message) when the run stops with a user error."""
+    (:func:`point_metrics`); ("failed", message) when the run stops with a user error. BLAS runs on one
+    thread, as on a dask worker: a multi-threaded product rounds differently, and the numbers of a point
+    must not depend on where it ran (nor a process pool oversubscribe the cores)."""
+    from threadpoolctl import threadpool_limits
+
     from symmech.core import pipeline
     from symmech.core.context import Context
     from symmech.core.scene import SymmechError
 
     try:
-        scene = pipeline.load(data)
-        res = scene.run(Context(quiet=True, max_time=max_time))
+        with threadpool_limits(limits=1):
+            scene = pipeline.load(data)
+            res = scene.run(Context(quiet=True, max_time=max_time))
     except SymmechError as exc:
         return "failed", str(exc)
     return "ok", *point_metrics(res, scene.setup.comfort), res.warnings
