@@ -25,7 +25,7 @@ def assert_valid_output(folder: Path) -> dict:
     folder = Path(folder)
     summary = json.loads((folder / "summary.json").read_text(), parse_constant=_no_constants)
     jsonschema.validate(summary, SCHEMA)
-    assert summary["scene"]["kind"] == summary["kind"]
+    assert summary["kind"] in (summary["scene"]["kind"], f"{summary['scene']['kind']}_sweep")  # a run, a sweep
     assert sorted(p.name for p in folder.iterdir()) == sorted(summary["files"] + ["summary.json"])
     for name, table in summary["tables"].items():
         assert f"{name}.csv" in summary["files"]

@@ -76,8 +76,9 @@ AXIS = s.Table(_AXIS.doc, _AXIS.fields, checks=_AXIS.checks + (_check_unit,))
 
 SWEEP = s.Table("the swept plane of a design sweep (used by `symmech sweep`; `symmech run` ignores it)", {
     **core_sweep.plane_fields(AXIS),
-    "limits": s.Table("stated limits of the peak reactions |P0|…|P5| (a point beyond one is outside the "
-                      "admissible region)", {name: s.Float(f"largest admissible |{name}|", unit="N", lo=0.0,
+    "limits": s.Table("stated limits of the peak reactions (largest magnitudes) of P0…P5; a point beyond "
+                      "one is outside the admissible region", {name: s.Float(f"largest admissible magnitude of "
+                                                                             f"{name}", unit="N", lo=0.0,
                                                            lo_open=True, hi=1e12, default=None)
                                              for name in REACTIONS}, default={}),
 }, default=None, checks=(core_sweep.check_plane,))
