@@ -439,8 +439,7 @@ def _plots(p: Plan, table: Table, ok: np.ndarray, extremes: dict, folder) -> lis
             plotting.set_labels(ax, x_label, (p.y["field"], unit_of(p.y)))
         else:
             ax.plot(xs, z[:, 0], "o-", color="C0")
-            ax.fill_between(xs, 0, 1, where=ok, transform=ax.get_xaxis_transform(), color="C2", alpha=0.15,
-                            step="mid", label="admissible")
+            _admissible_cells(ax, xs, ok)
             ax.plot(xs[worst[0]], z[worst[0], 0], "rX", ms=12, mec="k", label="worst")
             ax.plot(xs[best[0]], z[best[0], 0], "*", color="gold", ms=15, mec="k", label="best")
             plotting.set_labels(ax, x_label, (title, col.unit))
@@ -448,6 +447,15 @@ def _plots(p: Plan, table: Table, ok: np.ndarray, extremes: dict, folder) -> lis
         ax.set_title(title, fontsize=9)
         written += plotting.save(fig, folder, f"sweep_{name}")
     return written
+
+
+def _admissible_cells(ax, xs, ok) -> None:
+    """Shade the admissible points' cells (to the midpoints of their neighbours) along x."""
+    mid = (xs[1:] + xs[:-1]) / 2 if len(xs) > 1 else np.array([])
+    edges = np.concatenate([[xs[0] - (mid[0] - xs[0] if len(mid) else 0.5)], mid,
+                            [xs[-1] + (xs[-1] - mid[-1] if len(mid) else 0.5)]])
+    for n, k in enumerate(np.flatnonzero(ok)):
+        ax.axvspan(edges[k], edges[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
 
 
 def _plane(fig, ax, xs, ys, z, ok, title, unit) -> None:
