@@ -167,6 +167,8 @@ def test_command_line_refuses_a_kind_without_sweep_and_a_bad_sweep(tmp_path, cap
     err = capsys.readouterr().err
     assert err.startswith("symmech: error: scene field 'sweep.x': motion.speed_scale = 100000: motion.speed: ")
     assert len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
+    assert cli.main(["sweep", str(bad), "--out", str(tmp_path / "o"), "--half-width", "0.01"]) == 2
+    assert capsys.readouterr().err == "symmech: error: --half-width does not apply to a sweep of a trolley scene\n"
 
 
 @pytest.mark.slow

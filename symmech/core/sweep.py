@@ -9,6 +9,7 @@ by address (``--scheduler``); the results do not depend on where they ran.
 """
 from __future__ import annotations
 
+import inspect
 import os
 
 import numpy as np
@@ -174,7 +175,8 @@ def client(address: str, timeout: float):
 
 def run(source, out, ctx, **options):
     """``symmech sweep``: the sweep its scene kind registered, on the scene ``source`` (a TOML path or a
-    dict as TOML gives it), written into ``out``; a SceneError naming ``kind`` when the kind has none."""
+    dict as TOML gives it), written into ``out``; a SceneError naming ``kind`` when the kind has none, a
+    SymmechError naming an option (``--half-width``) its sweep does not take."""
     from symmech.core import registry
     from symmech.core.scene import read_toml
 
@@ -185,4 +187,8 @@ def run(source, out, ctx, **options):
     if kind.sweep is None:
         having = [k.name for k in registry.kinds().values() if k.sweep is not None]
         raise SceneError("kind", f"scene kind '{kind.name}' has no sweep (kinds with one: {', '.join(having)})")
+    accepted = inspect.signature(kind.sweep).parameters
+    for name in options:
+        if name not in accepted:
+            raise SymmechError(f"--{name.replace('_', '-')} does not apply to a sweep of a {kind.name} scene")
     return kind.sweep(raw, out, ctx, **options)
