@@ -69,7 +69,7 @@ def test_comfort_margin_of_hand_built_overloads():
     assert sweep.comfort_margin(corner, envelope) == pytest.approx(-0.5, abs=1e-15)
 
 
-def test_rigid_comfort_margin_against_the_swept_upper_limit():
+def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path):
     """The rigid helix's largest normal overload n2 is the only one beyond an upper limit set below it, so
     the margin is that limit minus max n2 (a direct run's), and the point is not admissible."""
     n2 = pipeline.load(RIGID).run().tables["case1_overload"].column("n2")
@@ -80,6 +80,8 @@ def test_rigid_comfort_margin_against_the_swept_upper_limit():
     assert margin[0] == pytest.approx(limit - n2.max(), rel=1e-12)
     assert list(res.tables["sweep"].column("admissible")) == [0.0, 1.0]
     assert res.summary["worst_point"]["x"] == limit and res.summary["best_point"]["x"] == 6.0
+    # a line over x (no y): one chart per number the rigid model has
+    assert sorted(p.name for p in res.plots(tmp_path)) == ["sweep_comfort_margin.png", "sweep_peak_reaction_max.png"]
 
 
 def axis(**fields):
