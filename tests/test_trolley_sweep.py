@@ -12,7 +12,6 @@ from badinput import DELETE, SCENES, bundled, edited
 from outcontract import assert_valid_output
 from symmech import cli
 from symmech.core import pipeline
-from symmech.core.context import Context
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import sweep
 
