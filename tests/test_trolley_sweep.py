@@ -184,3 +184,9 @@ def test_local_cluster_equals_serial_bit_for_bit():
         remote = sweep.compute(p, scheduler=cluster.scheduler_address, processes=2)
     a, b = sweep.result(p, serial).tables["sweep"], sweep.result(p, remote).tables["sweep"]
     assert a.data.shape == (4, 28) and np.array_equal(a.data, b.data) and a.text == b.text
+
+
+def test_chart_cells_sit_midway_between_the_swept_values():
+    np.testing.assert_allclose(sweep.edges(np.array([1.0, 2.0, 4.0]), False), [0.5, 1.5, 3.0, 5.0], rtol=1e-15)
+    np.testing.assert_allclose(sweep.edges(np.array([1.0, 10.0, 100.0]), True), 10 ** np.array([-0.5, 0.5, 1.5, 2.5]),
+                               rtol=1e-14)

@@ -433,40 +433,55 @@ def _plots(p: Plan, table: Table, ok: np.ndarray, extremes: dict, folder) -> lis
         fig, axes = plotting.figure(width=6.4, height=4.8)
         ax = axes[0, 0]
         if p.y:
-            _plane(fig, ax, xs, ys, z, ok.reshape(p.shape), title, col.unit)
+            _plane(fig, ax, (xs, edges(xs, p.x["log"])), (ys, edges(ys, p.y["log"])), z, ok.reshape(p.shape),
+                   title, col.unit)
             ax.plot(xs[worst[0]], ys[worst[1]], "rX", ms=12, mec="k", label="worst")
             ax.plot(xs[best[0]], ys[best[1]], "w*", ms=15, mec="k", label="best")
             plotting.set_labels(ax, x_label, (p.y["field"], unit_of(p.y)))
         else:
             ax.plot(xs, z[:, 0], "o-", color="C0")
-            _admissible_cells(ax, xs, ok)
+            _admissible_cells(ax, xs, ok, p.x["log"])
             ax.plot(xs[worst[0]], z[worst[0], 0], "rX", ms=12, mec="k", label="worst")
             ax.plot(xs[best[0]], z[best[0], 0], "*", color="gold", ms=15, mec="k", label="best")
             plotting.set_labels(ax, x_label, (title, col.unit))
+        for axis, scale in ((p.x, ax.set_xscale), (p.y, ax.set_yscale)):
+            if axis and axis["log"]:
+                scale("log")
         ax.legend(fontsize=8, loc="best")
         ax.set_title(title, fontsize=9)
         written += plotting.save(fig, folder, f"sweep_{name}")
     return written
 
 
-def _admissible_cells(ax, xs, ok) -> None:
-    """Shade the admissible points' cells (to the midpoints of their neighbours) along x."""
-    mid = (xs[1:] + xs[:-1]) / 2 if len(xs) > 1 else np.array([])
-    edges = np.concatenate([[xs[0] - (mid[0] - xs[0] if len(mid) else 0.5)], mid,
-                            [xs[-1] + (xs[-1] - mid[-1] if len(mid) else 0.5)]])
+def edges(values: np.ndarray, log: bool) -> np.ndarray:
+    """Cell edges (n + 1,) around the swept ``values`` (n,): midway between neighbours (geometrically on a
+    log axis), the end cells as wide as their neighbours' halves (one value: ±50 %)."""
+    v = np.log(values) if log else np.asarray(values, float)
+    mid = (v[1:] + v[:-1]) / 2
+    first, last = (v[0] - (mid[0] - v[0]), v[-1] + (v[-1] - mid[-1])) if len(v) > 1 else \
+        (v[0] - 0.5 * abs(v[0] or 1), v[0] + 0.5 * abs(v[0] or 1))
+    out = np.concatenate([[first], mid, [last]])
+    return np.exp(out) if log else out
+
+
+def _admissible_cells(ax, xs, ok, log) -> None:
+    """Shade the admissible points' cells along x."""
+    e = edges(xs, log)
     for n, k in enumerate(np.flatnonzero(ok)):
-        ax.axvspan(edges[k], edges[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
+        ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
 
 
-def _plane(fig, ax, xs, ys, z, ok, title, unit) -> None:
-    """Heat map of z (nx, ny) with the border of the admissible points ``ok`` drawn around them."""
+def _plane(fig, ax, x, y, z, ok, title, unit) -> None:
+    """Heat map of z (nx, ny) over the cells of x and y (each: values, cell edges) with the border of the
+    admissible points ``ok`` drawn around them and the others hatched."""
     from matplotlib.lines import Line2D
 
-    mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
+    (xs, xe), (ys, ye) = x, y
+    mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
     if ok.any() and not ok.all() and len(xs) > 1 and len(ys) > 1:
         ax.contour(xs, ys, ok.T.astype(float), levels=[0.5], colors="w", linewidths=2.0)
         ax.add_line(Line2D([], [], color="w", lw=2.0, label="admissible region border"))
     if not ok.all():
-        ax.pcolor(xs, ys, np.ma.masked_where(ok.T, ~ok.T), shading="nearest", hatch="//", facecolor="none",
+        ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
                   edgecolor="0.3", linewidth=0.0, label="outside the admissible region")
