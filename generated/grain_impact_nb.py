@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d67426092e6d8f1f8eff3ffe308451cc1d5e04c6678ee39ed83ff8c05dfff7c9
-# source key 0541965be05cd37abdac33c45517fea68614c6dc481de4e0275c185c08739d3a
+# source key 56a69026cd2db19689760d5cb065ee3167219d9fb9b3cab659cda9574d0d9af0
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

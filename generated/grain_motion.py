@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c9834763166b2177dfec49f4723c89edb43459f5dbd993b7852e037df6204dfa
-# source key fd7fe32942b40aaf1a497170e72df28b4ad6b3ea18383e3bc2ce8bca975a500e
+# source key 3d73ce10b5d0b0f15112a81ffdc6a1b1b4cc2535d5ff723bb64f9ce2c58c1945
 # body sha256 5dac3c335227263f1a6b3bda4b98fe2e51fd13666c14fefb3862e2d296086458
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

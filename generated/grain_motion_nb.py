@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2512975f0cc7ff6a11b546c75dc21f87495246a43a262cd329c7c4e859ff46b2
-# source key fd7fe32942b40aaf1a497170e72df28b4ad6b3ea18383e3bc2ce8bca975a500e
+# source key 3d73ce10b5d0b0f15112a81ffdc6a1b1b4cc2535d5ff723bb64f9ce2c58c1945
 # body sha256 906cc9e0586524a0fedec0ce638ac68e8a6a316cef6363533810ca0fd2c51d3d
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

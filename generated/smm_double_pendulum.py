@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 963ee0eea65bc31e6ee80ba6d17459ee49bd1bcafe21731e21af3aa75da5578c
-# source key 4663ce8a766607b9af01da7a6a707f66430415eb942a3d145bd72ce811581c4e
+# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e1800a7416650af54b8b2cc42ff98925735fa40505135eae4a7c1bf45fb1f304
-# source key 4663ce8a766607b9af01da7a6a707f66430415eb942a3d145bd72ce811581c4e
+# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4f92645085f3f2d7cb92e674d3c7182bd98b7b02bb4e438b4ff6c0d290f6df2a
-# source key 4663ce8a766607b9af01da7a6a707f66430415eb942a3d145bd72ce811581c4e
+# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
 # body sha256 d544c76fe5fce17c7b9fbe3374d8134576b1221631070497eab3066a92eaea51
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 45fa99d8706f6a7f7931fa35296187c95c7ee42cb036d41646edb6d0104840ad
-# source key f2ae9594e324785f40ded753acf1b958e54dc415932caf2ccf97839575d3ed67
+# source key 8c9657f36ddffb3a5c65bd74e12172bfef1f9a5fecdcbfe125279875747ee50f
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

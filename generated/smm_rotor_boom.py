@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d56c1ec312a052d3168d7fa195fca5eb79ba8a9f461ccf93019e51369e5b8075
-# source key 4663ce8a766607b9af01da7a6a707f66430415eb942a3d145bd72ce811581c4e
+# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

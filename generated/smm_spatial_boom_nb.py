@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bee1f308f051d1e82555ebbed317d442d83a5f0ecfaac2d9d15d1ae7548d4644
-# source key 4663ce8a766607b9af01da7a6a707f66430415eb942a3d145bd72ce811581c4e
+# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
 # body sha256 04bf47ab8e9427efc868d6175106ac8ae9d889c2cba8aba24250ac4cc045f3b3
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

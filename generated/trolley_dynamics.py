@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 eab1fc0a1d7ae9be5cc072cde93800bc0fcea316a0a455d33f46cf4720e20635
-# source key a4858896510268353fe1560619892fc7145276fa73d649fb208823c423f8100c
+# source key a3c8fe281959f170c0fef89c9dc25ae4f2c413100fc406dcff3a4ec948efabac
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4ba96b685c3fb300c044197e736716aaf27eb9bccaa4c6bfccad56bc3754fed1
-# source key a4858896510268353fe1560619892fc7145276fa73d649fb208823c423f8100c
+# source key a3c8fe281959f170c0fef89c9dc25ae4f2c413100fc406dcff3a4ec948efabac
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

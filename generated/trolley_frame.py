@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6d9ea43b82555abafafd67490859b6c063ec78f33df919a0071f647ff4740e01
-# source key a4858896510268353fe1560619892fc7145276fa73d649fb208823c423f8100c
+# source key a3c8fe281959f170c0fef89c9dc25ae4f2c413100fc406dcff3a4ec948efabac
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 
