@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 fb81e1a11a927375f6c8de15c980d83fac263088883ed42d20fc96f263fa1206
-# source key 1270cbf7ec06e82a7f028748abf454e4f1389d8bf4d0a0357fb52a2b09d03a7d
+# symmech 0.1.0 generated module; inputs sha256 ad2d8b22f82c5d3949726461c67cc7565028dfe8bc4645087deed048c76e91d5
+# source key ac9adb6b0233c2819fe6d8b7a817df85529eeb1db7987de877d5701d14741cfc
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 
