@@ -520,17 +520,17 @@ def _make_solve(rhs, jac, events):
             h = t_new - t
             events(t_new, y_new, args, g_new)
             n_active = 0
-            for i in range(n_ev):
+            for i in range(n_ev):  # active: a sign change in the event's direction; at[i] its time, found below
                 up, down = g_old[i] <= 0.0 <= g_new[i], g_old[i] >= 0.0 >= g_new[i]
                 at[i] = np.inf
                 if (up and direction[i] >= 0) or (down and direction[i] <= 0):
+                    at[i] = t
                     n_active += 1
             t_stop, stopped = t_new, False
             if n_active > 0 or (k < t_eval.size and t_eval[k] <= t_new):
                 F = dop_dense(t, h, y, y_new, cargs, K).reshape(-1) if method == DOP853 else Q[0]
                 for i in range(n_ev):
-                    up, down = g_old[i] <= 0.0 <= g_new[i], g_old[i] >= 0.0 >= g_new[i]
-                    if (up and direction[i] >= 0) or (down and direction[i] <= 0):
+                    if at[i] == t:
                         at[i] = brentq(t, t_new, 4 * EPS, (method, t, h, y, F, args, i, g_work))
                 for i in np.argsort(at)[:n_active]:  # in time order, up to the first terminal one
                     if m == ev_t.size:
