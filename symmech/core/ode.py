@@ -7,8 +7,9 @@ with the tableaux of :mod:`symmech.core.dop853` and the Radau constants below (b
 right-hand side agree to round-off.
 
 A right-hand side is a jitted ``rhs(t, y, args, out)`` writing y' (n,) into out (n,) (the form of the
-generated ``rhs_into`` kernels); a Jacobian ``jac(t, y, args, J)`` writes dy'/dy (n, n) into J; ``args`` is
-anything numba types (an array, a tuple). A root finder's function is ``f(x, args) -> float``.
+generated ``rhs_into`` kernels); a Jacobian ``jac(t, y, args, J)`` writes dy'/dy (n, n) into J; event
+functions ``events(t, y, args, g)`` write g (k,), whose zeros a whole solve locates as ``solve_ivp`` does;
+``args`` is anything numba types (an array, a tuple). A root finder's function is ``f(x, args) -> float``.
 
 **How the right-hand side reaches the compiled code** (measured with numba 0.68 in fresh processes on an
 empty ``NUMBA_CACHE_DIR``, run twice, ``dispatcher.stats.cache_hits / cache_misses``): a jitted function that
