@@ -186,8 +186,11 @@ def test_grain_flight_rates_equal_the_closed_forms():
 
 def test_grain_flight_contact_event_is_the_gap_over_the_plane():
     """g = rz - |D n'| with n' the third row of Q(q / |q|) (the generated rotation_matrix and support_distance,
-    eq (63)), also for a quaternion off unit length; spinning about the plane normal (q = 1) it is rz - c."""
+    eq (63)), also for a quaternion off unit length, in both targets; spinning about the plane normal (q = 1)
+    it is rz - c."""
     assert [e[:4] for e in gm.EVENTS] == [("contact", -1, True, "m")]
+    twin = kernels.load("grain_motion")
+    assert twin.EVENTS == gm.EVENTS
     y, p = _point(gm, 6)
     a, b, c = p[12:15]
     for scale in (1.0, 1.3):
@@ -196,6 +199,7 @@ def test_grain_flight_contact_event_is_the_gap_over_the_plane():
         n_body = gm.rotation_matrix(*(y[6:10] / np.linalg.norm(y[6:10])))[2]
         expected = y[2] - gm.support_distance(a, b, c, *n_body)
         np.testing.assert_allclose(gm.events(0.1, yy, p), [expected], rtol=1e-14)
+        np.testing.assert_allclose(twin.events(0.1, yy, p), [expected], rtol=1e-14)
     upright = np.concatenate([y[:6], [1.0, 0.0, 0.0, 0.0], y[10:]])
     np.testing.assert_allclose(gm.events(0.1, upright, p), [y[2] - c], rtol=1e-15)
     batch = gm.events(0.1, np.column_stack([y, upright]), p)
