@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 36a14559c7cf07a008c5f1f4c7ca8eb5761394fdd7c570367d0377b6d295cb7b
-# source key 8bcb32c9d927f84356327f2184da4b7cdfb2c4ddc216b367dcfff0f51f799a07
+# symmech 0.1.0 generated module; inputs sha256 ad1e7a04e99e8d02e9149bb85485a3a79a3891e0965e47ab7dba593c9f8a1727
+# source key 30083a25a61345eece4ebd5edb0b1c3e11732789fcaefd6976d54794f9d9458a
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 c9834763166b2177dfec49f4723c89edb43459f5dbd993b7852e037df6204dfa
-# source key 3d73ce10b5d0b0f15112a81ffdc6a1b1b4cc2535d5ff723bb64f9ce2c58c1945
-# body sha256 5dac3c335227263f1a6b3bda4b98fe2e51fd13666c14fefb3862e2d296086458
+# symmech 0.1.0 generated module; inputs sha256 521e5f8eeca8e45a0275455a73dd4746e687a79eaba7cb2019c0e3088246beeb
+# source key 0acb91cb06d11a2005c83d198d10e71282956e6f650a66a0a97ed116b850ab74
+# body sha256 5775910594b16de5a683ddb99e9a3721e5988baf4dcf2833baae0429e1b21927
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -28,7 +28,7 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     y[10] w1 [rad/s] angular velocity, body axis 1
     y[11] w2 [rad/s] angular velocity, body axis 2
     y[12] w3 [rad/s] angular velocity, body axis 3
-``p`` (m,) = (12,), the parameters, in the order of ``PARAMS``:
+``p`` (m,) = (15,), the parameters, in the order of ``PARAMS``:
     p[0] gX [m/s^2] gravity in KXYZ, X component
     p[1] gY [m/s^2] gravity in KXYZ, Y component
     p[2] gZ [m/s^2] gravity in KXYZ, Z component
@@ -41,13 +41,19 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     p[9] I1 [kg*m^2] principal moment of inertia, body axis 1
     p[10] I2 [kg*m^2] principal moment of inertia, body axis 2
     p[11] I3 [kg*m^2] principal moment of inertia, body axis 3
+    p[12] a [m] semi-axis along body axis 1
+    p[13] b [m] semi-axis along body axis 2
+    p[14] c [m] semi-axis along body axis 3
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``events(t, y, p)`` returns the event functions g (k,) = (1,), in the order of ``EVENTS``
+(``(name, direction, terminal, SI unit, meaning)``; ``symmech.core.ode.integrate`` locates their zeros):
+    g[0] contact [m] gap between the ellipsoid's lowest point and the plane (direction -1, terminal)
 """
 import math
 
 import numpy
 
-__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates", "rate", "rate_jacobian", "rhs", "jac"]
+__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates", "rate", "rate_jacobian", "event_values", "rhs", "jac", "events"]
 
 
 def _batch(*args):
@@ -562,7 +568,7 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     return out
 
 
-def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)).
 
     Parameters
@@ -619,13 +625,19 @@ def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, o
         principal moment of inertia, body axis 2 [kg*m^2]
     I3 : array_like
         principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
 
     Returns
     -------
     numpy.ndarray, shape (..., 13)
         [state unit / s (times M)]
     """
-    (t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3,), batch = _batch(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3)
+    (t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c,), batch = _batch(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
     out = numpy.empty(batch + (13,))
     x0 = A*omega**2*numpy.sin(omega*t + phase)
     x1 = (1/2)*w1
@@ -650,7 +662,7 @@ def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, o
     return out
 
 
-def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """dF/dy, rows F, columns y.
 
     Parameters
@@ -707,21 +719,27 @@ def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY,
         principal moment of inertia, body axis 2 [kg*m^2]
     I3 : array_like
         principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
 
     Returns
     -------
     numpy.ndarray, shape (..., 13, 13)
         [unit of F / unit of y]
     """
-    (t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3,), batch = _batch(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3)
+    (t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c,), batch = _batch(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
     out = numpy.empty(batch + (13, 13))
-    _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
-    _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
-    _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
+    _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out)
+    _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out)
+    _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out)
     return out
 
 
-def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out):
     out[..., 0, 0] = 0
     out[..., 0, 1] = 0
     out[..., 0, 2] = 0
@@ -788,7 +806,7 @@ def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
     out[..., 4, 11] = 0
 
 
-def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out):
     x0 = (1/2)*w1
     x1 = -x0
     x2 = (1/2)*w2
@@ -867,7 +885,7 @@ def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
     out[..., 9, 10] = x8
 
 
-def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out):
     x12 = 1/I1
     x13 = -I3*w3
     x14 = I2*w2
@@ -917,7 +935,87 @@ def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
     out[..., 12, 12] = 0
 
 
-def _rate_floats(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def event_values(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
+    """event functions g, one row per event: contact.
+
+    Parameters
+    ----------
+    t : array_like
+        time [s]
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    gX : array_like
+        gravity in KXYZ, X component [m/s^2]
+    gY : array_like
+        gravity in KXYZ, Y component [m/s^2]
+    gZ : array_like
+        gravity in KXYZ, Z component [m/s^2]
+    A : array_like
+        vibration amplitude [m]
+    omega : array_like
+        vibration angular frequency [rad/s]
+    phase : array_like
+        vibration phase at t = 0 [rad]
+    dX : array_like
+        vibration direction, X component (unit vector) [1]
+    dY : array_like
+        vibration direction, Y component (unit vector) [1]
+    dZ : array_like
+        vibration direction, Z component (unit vector) [1]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        [m]
+    """
+    (t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c,), batch = _batch(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
+    out = numpy.empty(batch + ())
+    x0 = 2*q0
+    x1 = q1**2
+    x2 = q2**2
+    x3 = q0**2 + q3**2
+    x4 = (x1 + x2 + x3)**(-2.0)
+    out[...] = rz - numpy.sqrt(a**2*x4*(2*q1*q3 - q2*x0)**2 + b**2*x4*(q1*x0 + 2*q2*q3)**2 + c**2*x4*(-x1 - x2 + x3)**2)
+    return out
+
+
+def _rate_floats(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """``rate`` at one point: floats in, a list of its 13 entries (row by row) out."""
     out = [0.0] * 13
     x0 = A*omega**2*math.sin(omega*t + phase)
@@ -943,7 +1041,7 @@ def _rate_floats(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, 
     return out
 
 
-def _rate_jacobian_floats(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def _rate_jacobian_floats(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """``rate_jacobian`` at one point: floats in, a list of its 169 entries (row by row) out."""
     out = [0.0] * 169
     out[3] = 1
@@ -1028,14 +1126,20 @@ PARAMS = (
     ('I1', 'kg*m^2', 'principal moment of inertia, body axis 1'),
     ('I2', 'kg*m^2', 'principal moment of inertia, body axis 2'),
     ('I3', 'kg*m^2', 'principal moment of inertia, body axis 3'),
+    ('a', 'm', 'semi-axis along body axis 1'),
+    ('b', 'm', 'semi-axis along body axis 2'),
+    ('c', 'm', 'semi-axis along body axis 3'),
+)
+EVENTS = (  # (name, direction, terminal, SI unit, meaning) per row of events(t, y, p)
+    ('contact', -1, True, 'm', "gap between the ellipsoid's lowest point and the plane"),
 )
 
 
 def _layout(y, p):
     """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
     y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
-    if y.shape[:1] != (13,) or p.shape != (12,):
-        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (13,) or (13, k), and (12,)")
+    if y.shape[:1] != (13,) or p.shape != (15,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (13,) or (13, k), and (15,)")
     return y, p
 
 
@@ -1056,7 +1160,7 @@ def rhs(t, y, p):
         f = _one_state(_rate_floats, t, ys, ps)
         if f is not None:
             return f
-    f = rate(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
+    f = rate(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14])
     return numpy.moveaxis(f, -1, 0)
 
 
@@ -1068,4 +1172,11 @@ def jac(t, y, p):
         dfdy = _one_state(_rate_jacobian_floats, t, ys, ps)
         if dfdy is not None:
             return dfdy.reshape(13, 13)
-    return rate_jacobian(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11])
+    return rate_jacobian(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14])
+
+
+def events(t, y, p):
+    """The event functions g (k,) at time ``t`` [s], state ``y`` (n,) ((k, K) for y (n, K)), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    g = numpy.asarray(event_values(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14]), dtype=numpy.float64)
+    return numpy.moveaxis(g.reshape(y.shape[1:] + (1,)), -1, 0)

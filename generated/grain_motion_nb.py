@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 2512975f0cc7ff6a11b546c75dc21f87495246a43a262cd329c7c4e859ff46b2
-# source key 3d73ce10b5d0b0f15112a81ffdc6a1b1b4cc2535d5ff723bb64f9ce2c58c1945
-# body sha256 906cc9e0586524a0fedec0ce638ac68e8a6a316cef6363533810ca0fd2c51d3d
+# symmech 0.1.0 generated module; inputs sha256 69b468d66e8ebcca483e990d361deef29c19a28c0491e2020f0fcb4aaf612d8a
+# source key 0acb91cb06d11a2005c83d198d10e71282956e6f650a66a0a97ed116b850ab74
+# body sha256 e931fb9afba5395969a7876b247ff65287ca9e7477bfbca3d5e2fbb78e154c07
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -45,7 +45,7 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     y[10] w1 [rad/s] angular velocity, body axis 1
     y[11] w2 [rad/s] angular velocity, body axis 2
     y[12] w3 [rad/s] angular velocity, body axis 3
-``p`` (m,) = (12,), the parameters, in the order of ``PARAMS``:
+``p`` (m,) = (15,), the parameters, in the order of ``PARAMS``:
     p[0] gX [m/s^2] gravity in KXYZ, X component
     p[1] gY [m/s^2] gravity in KXYZ, Y component
     p[2] gZ [m/s^2] gravity in KXYZ, Z component
@@ -58,7 +58,13 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     p[9] I1 [kg*m^2] principal moment of inertia, body axis 1
     p[10] I2 [kg*m^2] principal moment of inertia, body axis 2
     p[11] I3 [kg*m^2] principal moment of inertia, body axis 3
+    p[12] a [m] semi-axis along body axis 1
+    p[13] b [m] semi-axis along body axis 2
+    p[14] c [m] semi-axis along body axis 3
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
+``events(t, y, p)`` returns the event functions g (k,) = (1,), in the order of ``EVENTS``
+(``(name, direction, terminal, SI unit, meaning)``; ``symmech.core.ode.integrate`` locates their zeros):
+    g[0] contact [m] gap between the ellipsoid's lowest point and the plane (direction -1, terminal)
 ``rhs_scalar`` and ``jac_scalar`` are their kernels (float64 arrays in);
 ``rhs_into(t, y, p, out)`` and ``jac_into`` write into out[0] like every ``f_into``:
 the calls for integrators compiled with numba.
@@ -70,7 +76,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar"]
+__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "event_values", "event_values_into", "event_values_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar", "events", "events_into"]
 
 
 def _flat(*args):
@@ -961,7 +967,7 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+def _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, _k):
     x0 = A*omega**2*math.sin(omega*t + phase)
     x1 = (1/2)*w1
     x2 = (1/2)*q2
@@ -985,32 +991,32 @@ def _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A
 
 
 @numba.njit(cache=True, error_model="numpy")
-def rate_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+def rate_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out):
     """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)): floats in, written into out[0] (out: float64 (1, 13)) [state unit / s (times M)]."""
-    _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    _rate_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, 0)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def rate_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def rate_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)): floats in, a float64 array (13,) out [state unit / s (times M)]."""
     out = numpy.empty((1, 13))
-    rate_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
+    rate_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out)
     return out[0]
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rate_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+def _rate_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, _steps, out):
     for _k in range(out.shape[0]):
-        _rate_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rate_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+def _rate_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, _steps, out):
     for _k in numba.prange(out.shape[0]):
-        _rate_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
 
 
-def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)).
 
     Parameters
@@ -1067,20 +1073,26 @@ def rate(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, o
         principal moment of inertia, body axis 2 [kg*m^2]
     I3 : array_like
         principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
 
     Returns
     -------
     numpy.ndarray, shape (..., 13)
         [state unit / s (times M)]
     """
-    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3)
+    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
     out = numpy.empty((math.prod(_batch),) + (13,))
     (_rate_ploop if len(out) >= PARALLEL_BATCH else _rate_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (13,))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, _k):
     out[_k, 0, 0] = 0
     out[_k, 0, 1] = 0
     out[_k, 0, 2] = 0
@@ -1148,7 +1160,7 @@ def _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, _k):
     x0 = (1/2)*w1
     x1 = -x0
     x2 = (1/2)*w2
@@ -1228,7 +1240,7 @@ def _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, _k):
+def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, _k):
     x12 = 1/I1
     x13 = -I3*w3
     x14 = I2*w2
@@ -1279,38 +1291,38 @@ def _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
 
 
 @numba.njit(cache=True, error_model="numpy")
-def rate_jacobian_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out):
+def rate_jacobian_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out):
     """dF/dy, rows F, columns y: floats in, written into out[0] (out: float64 (1, 13, 13)) [unit of F / unit of y]."""
-    _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
-    _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
-    _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out, 0)
+    _rate_jacobian_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, 0)
+    _rate_jacobian_1(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, 0)
+    _rate_jacobian_2(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, 0)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def rate_jacobian_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def rate_jacobian_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """dF/dy, rows F, columns y: floats in, a float64 array (13, 13) out [unit of F / unit of y]."""
     out = numpy.empty((1, 13, 13))
-    rate_jacobian_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, out)
+    rate_jacobian_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out)
     return out[0]
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rate_jacobian_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+def _rate_jacobian_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, _steps, out):
     for _k in range(out.shape[0]):
-        _rate_jacobian_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
-        _rate_jacobian_1(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
-        _rate_jacobian_2(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_jacobian_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
+        _rate_jacobian_1(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
+        _rate_jacobian_2(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _rate_jacobian_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, _steps, out):
+def _rate_jacobian_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, _steps, out):
     for _k in numba.prange(out.shape[0]):
-        _rate_jacobian_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
-        _rate_jacobian_1(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
-        _rate_jacobian_2(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], out, _k)
+        _rate_jacobian_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
+        _rate_jacobian_1(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
+        _rate_jacobian_2(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
 
 
-def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3):
+def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
     """dF/dy, rows F, columns y.
 
     Parameters
@@ -1367,16 +1379,133 @@ def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY,
         principal moment of inertia, body axis 2 [kg*m^2]
     I3 : array_like
         principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
 
     Returns
     -------
     numpy.ndarray, shape (..., 13, 13)
         [unit of F / unit of y]
     """
-    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3)
+    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
     out = numpy.empty((math.prod(_batch),) + (13, 13))
     (_rate_jacobian_ploop if len(out) >= PARALLEL_BATCH else _rate_jacobian_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (13, 13))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _event_values_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, _k):
+    x0 = 2*q0
+    x1 = q1**2
+    x2 = q2**2
+    x3 = q0**2 + q3**2
+    x4 = (x1 + x2 + x3)**(-2)
+    out[_k] = rz - math.sqrt(a**2*x4*(2*q1*q3 - q2*x0)**2 + b**2*x4*(q1*x0 + 2*q2*q3)**2 + c**2*x4*(-x1 - x2 + x3)**2)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def event_values_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out):
+    """event functions g, one row per event: contact: floats in, written into out[0] (out: float64 (1,)) [m]."""
+    _event_values_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def event_values_scalar(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
+    """event functions g, one row per event: contact: floats in, a float out [m]."""
+    out = numpy.empty((1,))
+    event_values_into(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _event_values_loop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, _steps, out):
+    for _k in range(out.shape[0]):
+        _event_values_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _event_values_ploop(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _event_values_0(t[_k * _steps[0]], rx[_k * _steps[1]], ry[_k * _steps[2]], rz[_k * _steps[3]], vx[_k * _steps[4]], vy[_k * _steps[5]], vz[_k * _steps[6]], q0[_k * _steps[7]], q1[_k * _steps[8]], q2[_k * _steps[9]], q3[_k * _steps[10]], w1[_k * _steps[11]], w2[_k * _steps[12]], w3[_k * _steps[13]], gX[_k * _steps[14]], gY[_k * _steps[15]], gZ[_k * _steps[16]], A[_k * _steps[17]], omega[_k * _steps[18]], phase[_k * _steps[19]], dX[_k * _steps[20]], dY[_k * _steps[21]], dZ[_k * _steps[22]], I1[_k * _steps[23]], I2[_k * _steps[24]], I3[_k * _steps[25]], a[_k * _steps[26]], b[_k * _steps[27]], c[_k * _steps[28]], out, _k)
+
+
+def event_values(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c):
+    """event functions g, one row per event: contact.
+
+    Parameters
+    ----------
+    t : array_like
+        time [s]
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    gX : array_like
+        gravity in KXYZ, X component [m/s^2]
+    gY : array_like
+        gravity in KXYZ, Y component [m/s^2]
+    gZ : array_like
+        gravity in KXYZ, Z component [m/s^2]
+    A : array_like
+        vibration amplitude [m]
+    omega : array_like
+        vibration angular frequency [rad/s]
+    phase : array_like
+        vibration phase at t = 0 [rad]
+    dX : array_like
+        vibration direction, X component (unit vector) [1]
+    dY : array_like
+        vibration direction, Y component (unit vector) [1]
+    dZ : array_like
+        vibration direction, Z component (unit vector) [1]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        [m]
+    """
+    _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
+    out = numpy.empty((math.prod(_batch),) + ())
+    (_event_values_ploop if len(out) >= PARALLEL_BATCH else _event_values_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + ())
 
 
 STATE = (
@@ -1407,23 +1536,29 @@ PARAMS = (
     ('I1', 'kg*m^2', 'principal moment of inertia, body axis 1'),
     ('I2', 'kg*m^2', 'principal moment of inertia, body axis 2'),
     ('I3', 'kg*m^2', 'principal moment of inertia, body axis 3'),
+    ('a', 'm', 'semi-axis along body axis 1'),
+    ('b', 'm', 'semi-axis along body axis 2'),
+    ('c', 'm', 'semi-axis along body axis 3'),
+)
+EVENTS = (  # (name, direction, terminal, SI unit, meaning) per row of events(t, y, p)
+    ('contact', -1, True, 'm', "gap between the ellipsoid's lowest point and the plane"),
 )
 
 
 def _layout(y, p):
     """``y`` (n,) or (n, k) and ``p`` (m,) as float64 arrays; ValueError on a wrong length."""
     y, p = numpy.asarray(y, dtype=numpy.float64), numpy.ascontiguousarray(p, dtype=numpy.float64)
-    if y.shape[:1] != (13,) or p.shape != (12,):
-        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (13,) or (13, k), and (12,)")
+    if y.shape[:1] != (13,) or p.shape != (15,):
+        raise ValueError(f"y has shape {y.shape}, p {p.shape}: expected (13,) or (13, k), and (15,)")
     return y, p
 
 
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
     """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)), nothing allocated."""
-    if y.shape[0] != 13 or p.shape[0] != 12 or out.shape[1] != 13:
-        raise ValueError("rhs_into: y must hold 13 floats, p 12, out (1, 13)")
-    rate_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], out)
+    if y.shape[0] != 13 or p.shape[0] != 15 or out.shape[1] != 13:
+        raise ValueError("rhs_into: y must hold 13 floats, p 15, out (1, 13)")
+    rate_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], out)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1437,9 +1572,9 @@ def rhs_scalar(t, y, p):
 @numba.njit(cache=True, error_model="numpy")
 def jac_into(t, y, p, out):
     """dy'/dy at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n, n)), nothing allocated."""
-    if y.shape[0] != 13 or p.shape[0] != 12 or out.shape[1] != 13 or out.shape[2] != 13:
-        raise ValueError("jac_into: y must hold 13 floats, p 12, out (1, 13, 13)")
-    rate_jacobian_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], out)
+    if y.shape[0] != 13 or p.shape[0] != 15 or out.shape[1] != 13 or out.shape[2] != 13:
+        raise ValueError("jac_into: y must hold 13 floats, p 15, out (1, 13, 13)")
+    rate_jacobian_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], out)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1447,6 +1582,22 @@ def jac_scalar(t, y, p):
     """dy'/dy (n, n) at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,): the kernel of ``jac``."""
     out = numpy.empty((1, 13, 13))
     jac_into(t, y, p, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def events_into(t, y, p, out):
+    """The event functions g at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, k)), nothing allocated."""
+    if y.shape[0] != 13 or p.shape[0] != 15 or out.shape[1] != 1:
+        raise ValueError("events_into: y must hold 13 floats, p 15, out (1, 1)")
+    event_values_into(t, y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], out[:, 0])
+
+
+def events(t, y, p):
+    """The event functions g (k,) at time ``t`` [s], state ``y`` (n,), parameters ``p`` (m,)."""
+    y, p = _layout(y, p)
+    out = numpy.empty((1, 1))
+    events_into(float(t), numpy.ascontiguousarray(y), p, out)
     return out[0]
 
 

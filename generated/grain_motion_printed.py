@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d59f5a93f87eba20d6c8f625ac0194e64ff4fe16a2841ab97ef2802da9d02820
-# source key c8d9508a4ef2c1d6737a4f48bb5a4f0b6d46bb510e9a26e5b05ada4cb2469e69
+# symmech 0.1.0 generated module; inputs sha256 ac659f17304a15ed389a951a172c60817f2c88973dc351dcfed15a59d80e4508
+# source key 0da271e4fc8b5268d542c782baaf9b788a4cc66aed37cf1ea2aa7ae74f7a7794
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

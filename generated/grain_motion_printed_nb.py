@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3d1ad7b3b0d73f926ff39bfea453ff538e7ddf78ecfc98138043e0f503b29c75
-# source key c8d9508a4ef2c1d6737a4f48bb5a4f0b6d46bb510e9a26e5b05ada4cb2469e69
+# symmech 0.1.0 generated module; inputs sha256 a22309b38bd455261bd0c7e85167e46994fea191434b69e7e4cf1e8df0e61144
+# source key 0da271e4fc8b5268d542c782baaf9b788a4cc66aed37cf1ea2aa7ae74f7a7794
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

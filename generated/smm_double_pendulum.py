@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 963ee0eea65bc31e6ee80ba6d17459ee49bd1bcafe21731e21af3aa75da5578c
-# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
+# symmech 0.1.0 generated module; inputs sha256 cfb45ad98d4eaed7be2339e7aa8ae80bb9ae41374c702fb044287491417a95cc
+# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

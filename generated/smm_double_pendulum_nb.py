@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f77b3e0a89d5634cff5b565adfb31ea161b522b7828bd47164493626b03d1f31
-# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
+# symmech 0.1.0 generated module; inputs sha256 4512473cd9d0051fd60f0bc6d25ee22b6adb187869b40c5c127d53d0954e33f4
+# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
 # body sha256 9c2027bc7d6b7b94a8984d2692010c64848c9845ef7c4b0c7cf0258cfc8dbeaf
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4f92645085f3f2d7cb92e674d3c7182bd98b7b02bb4e438b4ff6c0d290f6df2a
-# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
+# symmech 0.1.0 generated module; inputs sha256 23b920eadda24d85b78c8a7a6433fb8fdefafc33c54d426f7a868dbe1567edc2
+# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
 # body sha256 d544c76fe5fce17c7b9fbe3374d8134576b1221631070497eab3066a92eaea51
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d56c1ec312a052d3168d7fa195fca5eb79ba8a9f461ccf93019e51369e5b8075
-# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
+# symmech 0.1.0 generated module; inputs sha256 4e7e7e695a8497f75034ae1bee862f0b7aa4a3f2a7a20c7167bd8a2ded2656b9
+# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

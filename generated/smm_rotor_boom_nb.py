@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 af5ea622cd99013fee0e943ffbdf1e48fffed63d646a9174b3d3ba8d758772c0
-# source key 85c33677a65c7e9e72199365b26b59e03125f75282e16ee8664032f4a4bd40bd
+# symmech 0.1.0 generated module; inputs sha256 ad2960243a79b1fc9e572ff5bd52fcf67abdcef30b031ec4a542ba6530eb8c1b
+# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
 # body sha256 6f95b396ece06dc40ac0b65a2631b5864d2d21cd104805fc81a45a64c4ee5156
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

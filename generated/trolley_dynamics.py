@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 eab1fc0a1d7ae9be5cc072cde93800bc0fcea316a0a455d33f46cf4720e20635
-# source key a3c8fe281959f170c0fef89c9dc25ae4f2c413100fc406dcff3a4ec948efabac
+# symmech 0.1.0 generated module; inputs sha256 ce21e38b8fcd640bb0249a9ee077dc1b39651edaba47c2d25135bff9cb19636c
+# source key a23ee225b78552a1d74ba22ad911b1c73082df022b0a2162f87e072e43de589c
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

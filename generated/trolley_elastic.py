@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 a06ee0e1fdfb5e61431104f0c24929dcf2983057c0a2275f8fb0dc83044e05bf
-# source key 40bbec42d39feca9973704bd6c0dcc9f12919a875ee6fef634ed166a00859bb3
+# symmech 0.1.0 generated module; inputs sha256 6ea5309488c4b53f822d3bab1ca9889b0cf81feccd7e9b9ae6b6fea0f28082f3
+# source key 55860e760cdd33f0a4b0653309cf2330b2cd8fdfc150653e2ba1e7e61ec90156
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f3a85c67e798bba71ea6de6370c9f85cd3377c4dc28592051ac8990e1e2297ca
-# source key 40bbec42d39feca9973704bd6c0dcc9f12919a875ee6fef634ed166a00859bb3
+# symmech 0.1.0 generated module; inputs sha256 c778268079af9b6d010e95a345e0f1efebfb3264acae880a0790200634f9e087
+# source key 55860e760cdd33f0a4b0653309cf2330b2cd8fdfc150653e2ba1e7e61ec90156
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

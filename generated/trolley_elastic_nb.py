@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 48c0838f686052cf067c340e357ddb75d3426fb695ff8f9b0a39e1856bc4b074
-# source key 40bbec42d39feca9973704bd6c0dcc9f12919a875ee6fef634ed166a00859bb3
+# symmech 0.1.0 generated module; inputs sha256 f1613db6d7a681fbc52ede0df62ac95e69c2044a9fa6463a23287a260ea54752
+# source key 55860e760cdd33f0a4b0653309cf2330b2cd8fdfc150653e2ba1e7e61ec90156
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

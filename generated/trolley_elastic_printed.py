@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c8fdfe5db9d4be620f478ba23e350e54ba125b2d2606946b52f1ee80ca7b70fd
-# source key 76fa00a13d565abd1ad04e2b99b404f86abe5a4180e28a4e6bad1edd3962b138
+# symmech 0.1.0 generated module; inputs sha256 0e9999104d9d98db61a63c7043dc5e90093194c207e703947a17839b08c1a1c5
+# source key ac9adb6b0233c2819fe6d8b7a817df85529eeb1db7987de877d5701d14741cfc
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

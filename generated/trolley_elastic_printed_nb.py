@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 fb81e1a11a927375f6c8de15c980d83fac263088883ed42d20fc96f263fa1206
-# source key 76fa00a13d565abd1ad04e2b99b404f86abe5a4180e28a4e6bad1edd3962b138
+# symmech 0.1.0 generated module; inputs sha256 ad2d8b22f82c5d3949726461c67cc7565028dfe8bc4645087deed048c76e91d5
+# source key ac9adb6b0233c2819fe6d8b7a817df85529eeb1db7987de877d5701d14741cfc
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

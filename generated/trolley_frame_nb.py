@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2f6acb933b6778bd5cb1c6a37b0e426505bba6c418778cc038e01b9439f44ff9
-# source key a3c8fe281959f170c0fef89c9dc25ae4f2c413100fc406dcff3a4ec948efabac
+# symmech 0.1.0 generated module; inputs sha256 69511c88946b9984e570c1abe8fc7c0f7981b501a6812645cf71354a4e130bee
+# source key a23ee225b78552a1d74ba22ad911b1c73082df022b0a2162f87e072e43de589c
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2e97f3a8287377a79c969e28fee789be7e7846e24bcecd30b4cd75d44fb7d366
-# source key 9fe4fc436242802b8a9889c46299796a49fed10fe2627716845888419ee31968
+# symmech 0.1.0 generated module; inputs sha256 17964483cb2026ee969111d4b561f617879fe6c5c2fa86f8bff4454e3fedf68b
+# source key c890ff0571d1fdc086ab5403fc39e2522cf46b4fd640e83b50443494e992bc7b
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

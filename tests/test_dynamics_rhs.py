@@ -142,7 +142,7 @@ def test_numba_rhs_and_jac_take_what_the_numpy_ones_take():
             np.testing.assert_allclose(twin.jac(t, yy, pp), J, rtol=1e-12, atol=1e-12 * np.abs(J).max())
     for yy, pp in ((y[:-1], p), (y, p[:-1])):
         for f in (twin.rhs, twin.jac):
-            with pytest.raises(ValueError, match="expected \\(13,\\) or \\(13, k\\), and \\(12,\\)"):
+            with pytest.raises(ValueError, match="expected \\(13,\\) or \\(13, k\\), and \\(15,\\)"):
                 f(0.1, yy, pp)
 
 
@@ -182,6 +182,28 @@ def test_grain_flight_rates_equal_the_closed_forms():
     I1, I2, I3 = inertia
     euler = [(I2 - I3) * w[1] * w[2] / I1, (I3 - I1) * w[2] * w[0] / I2, (I1 - I2) * w[0] * w[1] / I3]
     np.testing.assert_allclose(f[10:13], euler, rtol=1e-13, atol=1e-15)
+
+
+def test_grain_flight_contact_event_is_the_gap_over_the_plane():
+    """g = rz - |D n'| with n' the third row of Q(q / |q|) (the generated rotation_matrix and support_distance,
+    eq (63)), also for a quaternion off unit length, in both targets; spinning about the plane normal (q = 1)
+    it is rz - c."""
+    assert [e[:4] for e in gm.EVENTS] == [("contact", -1, True, "m")]
+    twin = kernels.load("grain_motion")
+    assert twin.EVENTS == gm.EVENTS
+    y, p = _point(gm, 6)
+    a, b, c = p[12:15]
+    for scale in (1.0, 1.3):
+        yy = y.copy()
+        yy[6:10] = scale * y[6:10] / np.linalg.norm(y[6:10])
+        n_body = gm.rotation_matrix(*(y[6:10] / np.linalg.norm(y[6:10])))[2]
+        expected = y[2] - gm.support_distance(a, b, c, *n_body)
+        np.testing.assert_allclose(gm.events(0.1, yy, p), [expected], rtol=1e-14)
+        np.testing.assert_allclose(twin.events(0.1, yy, p), [expected], rtol=1e-14)
+    upright = np.concatenate([y[:6], [1.0, 0.0, 0.0, 0.0], y[10:]])
+    np.testing.assert_allclose(gm.events(0.1, upright, p), [y[2] - c], rtol=1e-15)
+    batch = gm.events(0.1, np.column_stack([y, upright]), p)
+    np.testing.assert_allclose(batch[0], [gm.events(0.1, y, p)[0], y[2] - c], rtol=1e-14)
 
 
 def _bundled(name):
@@ -236,7 +258,7 @@ def test_solve_ivp_on_the_generated_rhs_matches_the_grain_flights():
     table = scene.run().tables["trajectory"]
     model = scene.setup.model
     vib = model.vibration
-    p = np.concatenate([model.g_k, [vib.amplitude, vib.omega, vib.phase], vib.direction, model.inertia])
+    p = np.concatenate([model.g_k, [vib.amplitude, vib.omega, vib.phase], vib.direction, model.inertia, model.axes])
     regime = np.array(table.text["regime"])
     starts = [0] + [i + 1 for i in range(len(regime) - 1) if regime[i] == regime[i + 1] == "impact"]
     flights = 0
@@ -257,6 +279,8 @@ def test_solve_ivp_on_the_generated_rhs_matches_the_grain_flights():
         assert np.abs(y[:, 3:6] - v).max() < 1e-11
         assert np.abs(y[:, 6:10] - q).max() < 1e-8
         assert np.abs(y[:, 10:13] - w_body).max() < 1e-8 * np.abs(w_body).max()
+        # the generated contact event is zero where the run found the impact (its root to ~1e-12 m)
+        assert abs(gm.events(t[-1], np.concatenate([r[-1], v[-1], q[-1], w_body[-1]]), p)[0]) < 1e-10
         flights += 1
     assert flights >= 10
 

@@ -314,3 +314,85 @@ def test_a_cached_caller_of_the_toolkit_loads_from_the_cache_in_a_fresh_process(
             .stdout.split() for _ in range(2)]
     assert runs[0][1:] == ["0", "1"] and runs[1][1:] == ["1", "0"]
     assert float(runs[1][0]) == float(runs[0][0]) == pytest.approx(math.exp(-0.1), abs=1e-6)
+
+
+# --------------------------------------------------------------------------- events
+
+
+@numba.njit
+def spring(t, y, args, out):
+    """x'' = -w^2 x as y = (x, x'), w = args[0]."""
+    out[0], out[1] = y[1], -args[0] ** 2 * y[0]
+
+
+@numba.njit
+def spring_events(t, y, args, g):
+    """g0 = x (zero crossings), g1 = x' + w / 2 (the velocity passing -w / 2)."""
+    g[0], g[1] = y[0], y[1] + args[0] / 2
+
+
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.parametrize("method", ["DOP853", "Radau"])
+def test_events_of_an_oscillator_at_its_zero_crossings_and_as_solve_ivp_finds_them(method):
+    """x = cos(w t): zeros at (j + 1/2) pi / w within 1e-9 s (rtol 1e-10; measured 3e-11, the solve's phase
+    error); the falling ones only (direction -1) at (2j + 1/2) pi / w; DOP853's equal solve_ivp's to 1e-12 s
+    (the same steps and interpolant; measured 2e-15). A terminal x' = -w/2 (first at t = pi / (6 w)) stops the
+    solve there: the rows of t_eval after it stay NaN, its state is (cos, -w sin) at pi / (6 w) to 1e-8."""
+    w, t_eval = 3.0, np.linspace(0.0, 5.0, 11)
+    solve = ode.make(spring, no_jac, spring_events).solve_events
+    run = lambda direction, terminal: solve(ode.METHODS[method], 0.0, np.array([1.0, 0.0]), t_eval,  # noqa: E731
+                                            np.array([w]), 1e-10, np.full(2, 1e-12), 100000, np.array(direction),
+                                            np.array(terminal))
+    Y, _, _, status, filled, at, which, states = run([0.0, 1.0], [False, False])
+    assert status == ode.SUCCESS and filled == t_eval.size and not np.isnan(Y).any()
+    zeros = at[which == 0]
+    np.testing.assert_allclose(zeros, (np.arange(5) + 0.5) * np.pi / w, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(states[which == 0][:, 0], 0.0, atol=1e-9)
+    if method == "DOP853":
+        ref = solve_ivp(lambda t, y: [y[1], -w * w * y[0]], (0.0, 5.0), [1.0, 0.0], method="DOP853", rtol=1e-10,
+                        atol=1e-12, events=lambda t, y: y[0])
+        np.testing.assert_allclose(zeros, ref.t_events[0], rtol=0, atol=1e-12)
+    falling = run([-1.0, 1.0], [False, False])
+    np.testing.assert_allclose(falling[5][falling[6] == 0], (2 * np.arange(3) + 0.5) * np.pi / w, atol=1e-9)
+    Y, _, _, status, filled, at, which, states = run([0.0, 0.0], [False, True])
+    t_stop = np.pi / (6 * w)
+    assert status == ode.TERMINATED and list(which) == [1] and at[0] == pytest.approx(t_stop, abs=1e-9)
+    np.testing.assert_allclose(states[0], [math.cos(w * t_stop), -w * math.sin(w * t_stop)], atol=1e-8)
+    assert filled == 1 and not np.isnan(Y[0]).any() and np.isnan(Y[1:]).all()
+
+
+@pytest.mark.slow  # compiles the toolkit for the grain flight (not cacheable across processes, core/ode.py)
+def test_integrate_ends_a_grain_flight_at_contact():
+    """The grain flight module declares its terminal contact event. Spinning about the plane normal over a
+    still plane, the gap is rz - c and the contact time is the free-flight closed form
+    (vz + sqrt(vz^2 + 2 g (z0 - c))) / g, within 1e-12 s; tumbling over the vibrating plane, the contact
+    and the states at t_eval equal solve_ivp's with the module's events as a terminal falling event to 1e-12
+    s and 1e-12 of each state's largest value (the same steps; measured 2e-16 s, 3e-13)."""
+    from symmech.generated import grain_motion as gm
+
+    a, b, c, mass = 2e-3, 1.4e-3, 1e-3, 1e-5
+    inertia = [mass * (b * b + c * c) / 5, mass * (a * a + c * c) / 5, mass * (a * a + b * b) / 5]
+    g, t = 9.81, np.linspace(0.0, 1.0, 101)
+    still = np.array([0.0, 0.0, -g, 0.0, 100.0, 0.0, 0.0, 0.0, 1.0, *inertia, a, b, c])
+    spin = np.array([0.0, 0.0, 0.05, 0.3, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 200.0])
+    sol = ode.integrate("grain_motion", still, spin, t, rtol=1e-10, atol=1e-12)
+    t_contact = (1.0 + math.sqrt(1.0 + 2 * g * (0.05 - c))) / g
+    assert sol.terminated_by == "contact" and sol.t_events["contact"] == pytest.approx([t_contact], abs=1e-12)
+    assert sol.y_events["contact"][0, 2] == pytest.approx(c, abs=1e-12)
+    assert np.array_equal(sol.t, t[t <= t_contact]) and sol.y.shape == (13, sol.t.size)
+    shaking = np.array([0.0, -1.2, -9.73, 0.5e-3, 2 * np.pi * 25, 0.3, 0.0, 0.6, 0.8, *inertia, a, b, c])
+    q = np.array([0.9, 0.1, -0.3, 0.2]) / np.linalg.norm([0.9, 0.1, -0.3, 0.2])
+    tumbling = np.concatenate([[0.0, 0.0, 0.05, 0.4, 0.1, 1.0], q, [40.0, -25.0, 60.0]])
+    sol = ode.integrate("grain_motion", shaking, tumbling, t, rtol=1e-10, atol=1e-12)
+
+    def contact(t, y, p):
+        return gm.events(t, y, p)[0]
+    contact.terminal, contact.direction = True, -1
+    ref = solve_ivp(gm.rhs, (0.0, 1.0), tumbling, method="DOP853", t_eval=t, args=(shaking,), rtol=1e-10,
+                    atol=1e-12, events=contact)
+    assert ref.status == 1 and sol.terminated_by == "contact"
+    np.testing.assert_allclose(sol.t_events["contact"], ref.t_events[0], rtol=0, atol=1e-12)
+    assert np.array_equal(sol.t, ref.t)
+    scale = np.abs(ref.y).max(axis=1, keepdims=True)
+    assert np.all(np.abs(sol.y - ref.y) <= 1e-12 * scale)
+    assert np.all(np.abs(sol.y_events["contact"] - ref.y_events[0]) <= 1e-12 * scale.T)

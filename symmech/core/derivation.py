@@ -109,6 +109,25 @@ def args_of(table) -> tuple[Arg, ...]:
 
 
 @dataclass(frozen=True)
+class Event:
+    """A physical event of a :class:`Dynamics`: where the scalar ``g(t, y, p)`` [``unit``] crosses zero, located
+    by the integration (``solve_ivp``'s event attributes): ``direction`` +1 only where g rises through zero, -1
+    only where it falls, 0 both; ``terminal``: the motion the equations describe ends there (e.g. a flight at
+    contact). ``name`` is a Python identifier."""
+
+    name: str
+    g: sympy.Expr
+    meaning: str
+    unit: str
+    direction: int = 0
+    terminal: bool = False
+
+    def __post_init__(self):
+        if not self.name.isidentifier() or self.direction not in (-1, 0, 1):
+            raise ValueError(f"event {self.name!r}: a Python identifier and a direction -1, 0 or 1")
+
+
+@dataclass(frozen=True)
 class Dynamics:
     """A first-order ODE ``M(t, y, p) y' = F(t, y, p)`` that a module emits as ``rhs(t, y, p)``.
 
@@ -128,8 +147,10 @@ class Dynamics:
     time: Arg | None = None
     meaning: str = ""
     jacobian: bool = True
+    events: tuple[Event, ...] = ()
 
     def __post_init__(self):
+        object.__setattr__(self, "events", tuple(self.events))
         object.__setattr__(self, "state", tuple(self.state))
         object.__setattr__(self, "params", tuple(self.params))
         object.__setattr__(self, "rate", sympy.Matrix(self.rate))
@@ -150,7 +171,8 @@ class Dynamics:
         return ((self.time,) if self.time else ()) + self.state + self.params
 
     def functions(self) -> tuple[NamedMatrix, ...]:
-        """``rate`` F (n,), ``rate_jacobian`` dF/dy (n, n) if derived and, with a mass matrix, ``rate_mass`` M."""
+        """``rate`` F (n,), ``rate_jacobian`` dF/dy (n, n) if derived, with a mass matrix ``rate_mass`` M, with
+        events ``event_values`` g (k,)."""
         y = sympy.Matrix([a.symbol for a in self.state])
         what = self.meaning or "the state"
         out = [NamedMatrix("rate", self.rate, self.args, f"F of M y' = F: rates of {what}",
@@ -160,4 +182,8 @@ class Dynamics:
                                    "unit of F / unit of y"))
         if self.mass is not None:
             out.append(NamedMatrix("rate_mass", self.mass, self.args, "M of M y' = F", "unit of F / unit of y'"))
+        if self.events:
+            out.append(NamedMatrix("event_values", sympy.Matrix([e.g for e in self.events]), self.args,
+                                   "event functions g, one row per event: " + ", ".join(e.name for e in self.events),
+                                   ", ".join(e.unit for e in self.events)))
         return tuple(out)

@@ -177,7 +177,9 @@ def _dynamics_context(dyn: Dynamics) -> dict:
             "param_args": dyn.params, "n": len(dyn.state),
             "m": len(dyn.params), "call": ", ".join(call), "mass": dyn.mass is not None,
             "jacobian": dyn.jacobian,
-            "time": f"{dyn.time.meaning} [{dyn.time.unit}]" if dyn.time else None, "meaning": dyn.meaning}
+            "time": f"{dyn.time.meaning} [{dyn.time.unit}]" if dyn.time else None, "meaning": dyn.meaning,
+            "events": [repr((e.name, e.direction, e.terminal, e.unit, e.meaning)) for e in dyn.events],
+            "event_args": dyn.events}
 
 
 def template_names() -> list[str]:

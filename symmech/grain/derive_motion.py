@@ -21,7 +21,7 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.core import kinematics as kin
-from symmech.core.derivation import Arg, Dynamics, ModuleSpec, NamedMatrix, args_of
+from symmech.core.derivation import Arg, Dynamics, Event, ModuleSpec, NamedMatrix, args_of
 
 g = sp.Symbol("g", positive=True)
 alpha, beta = sp.symbols("alpha beta", real=True)
@@ -199,16 +199,29 @@ def euler_rates_from_body_rates() -> sp.Matrix:
     return ((B.adjugate().applyfunc(_pythagoras) * sp.Matrix([w1, w2, w3])) / det).applyfunc(sp.cancel)
 
 
+def contact_gap() -> sp.Expr:
+    """Height of the ellipsoid's lowest point above the plane Z = 0, rz - |D n'| [m] (eq (63)), n' the third
+    row of Q(q / |q|): exact also for a quaternion that drifted off unit length in an integration."""
+    norm2 = q0**2 + q1**2 + q2**2 + q3**2
+    n_body = [2 * (q1 * q3 - q0 * q2) / norm2, 2 * (q2 * q3 + q0 * q1) / norm2,
+              (q0**2 - q1**2 - q2**2 + q3**2) / norm2]
+    return rz - support_distance()[0].subs(dict(zip((n1, n2, n3), n_body)))
+
+
 def flight_dynamics() -> Dynamics:
     """Flight of the rigid grain as an ODE in KXYZ: r' = v, v' = g_K - s''(t), q' = q (x) (0, w)/2,
-    I w' = -w x I w. The run integrates the same equations (translation in closed form)."""
+    I w' = -w x I w, ending where the ellipsoid touches the plane (the terminal event ``contact``: the gap
+    falls through zero). The run integrates the same equations (translation in closed form). The semi-axes
+    enter the event only."""
     state = [(rx, "relative centre position X", "m"), (ry, "relative centre position Y", "m"),
              (rz, "relative centre position Z", "m"), (vx, "relative centre velocity X", "m/s"),
              (vy, "relative centre velocity Y", "m/s"), (vz, "relative centre velocity Z", "m/s")] + _QUAT + _RATES
     acceleration = sp.Matrix([gX, gY, gZ]) - surface_displacement().diff(t, 2)
     rate = sp.Matrix.vstack(sp.Matrix([vx, vy, vz]), acceleration, quaternion_rate(), euler_equations())
-    return Dynamics(args_of(state), args_of(_GK + _VIB + _INERTIA), rate, time=Arg(t, "time", "s"),
-                    meaning="the grain in flight over the vibrating surface (eqs (61)-(62))")
+    contact = Event("contact", contact_gap(), "gap between the ellipsoid's lowest point and the plane", "m",
+                    direction=-1, terminal=True)
+    return Dynamics(args_of(state), args_of(_GK + _VIB + _INERTIA + _AXES), rate, time=Arg(t, "time", "s"),
+                    meaning="the grain in flight over the vibrating surface (eqs (61)-(62))", events=(contact,))
 
 
 def module_specs() -> list[ModuleSpec]:

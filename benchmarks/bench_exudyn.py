@@ -1,0 +1,136 @@
+"""A clamped beam on a body rotating at constant rate: symmech's elastic trolley against Exudyn.
+
+    python benchmarks/bench_exudyn.py [--repeats 7]
+    pip install symmech[bench]          # the optional peer Exudyn (pip wheel)
+
+The beam: a cantilever L = 1 m, rho A = 1 kg/m, EI = 1 N m^2 (first frequency w0 = 3.516 rad/s), clamped
+radially at the centre of a body spinning at Omega = 0.5 w0 about an axis normal to the beam. Its flapwise
+(out-of-plane) bending obeys EI w'''' - (T w')' + rho A w'' = 0 with the centrifugal tension
+T(x) = rho A Omega^2 (L^2 - x^2) / 2 (no Coriolis term out of the plane), so:
+
+- symmech: the elastic trolley model with this beam (8 Ritz functions per plane, the psi fields of the
+  centrifugal stiffening on, no rollers) on a level circle of radius R = 10 m at the speed Omega R, the
+  root at the circle's centre: ``System.linear_modes`` at that frame state (chordwise and flapwise);
+- Exudyn: ANCF Cable2D elements (EA = 1e6 N: inextensible to 1e-6), clamped, the centrifugal load as
+  consistent nodal forces, a static solve and the eigenvalues of the pre-stressed beam
+  (``ComputeODE2Eigenvalues``): the flapwise frequencies (a planar model of the out-of-plane bending);
+- the closed form: Southwell's coefficient K = 1.1933 (Rayleigh, exact cantilever mode) as Omega -> 0:
+  w^2 = w0^2 + K Omega^2 flapwise, w0^2 + (K - 1) Omega^2 chordwise.
+
+Printed: w / w0 and (w^2 - w0^2) / Omega^2 of each, the time each takes for that answer (interleaved
+medians, timing.py), symmech's set-up (the model, the drive) apart. The transient is not compared yet.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+from timing import interleaved, machine, ratio
+
+from symmech.core import pipeline
+from symmech.trolley import elastic as el
+from symmech.trolley import elastic_scene
+
+L, RHO_A, EI, EA = 1.0, 1.0, 1.0, 1e6
+W0 = float(1.8751040687119611 ** 2 * np.sqrt(EI / (RHO_A * L ** 4)))
+OMEGA, RADIUS, SOUTHWELL = 0.5 * W0, 10.0, 1.1933
+
+
+def symmech_model():
+    """The elastic system (the beam on a trolley with rigid rollers) and its frame state on the circle."""
+    beam = el.Beam((0, RADIUS, 0), (0, -1, 0), (0, 0, 1), L, RHO_A, (EI, EI), "cantilever", 8)
+    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
+                          el.Effects(rollers=False, stiffening=True))
+    r = f"{RADIUS!r}"
+    scene = {"kind": "trolley", "frame": "frenet",
+             "track": {"type": "expression", "x": f"{r}*sin(s/{r})", "y": "0", "z": f"{r}*cos(s/{r})"},
+             "trolley": {"mass": 100.0, "com": [0.0, 0.0, 0.0], "axle_distance": 2.0, "half_gauge": 1.0},
+             "motion": {"speed": repr(float(OMEGA * RADIUS))}, "time": {"t_end": 1.0, "steps": 10},
+             "effects": {"gravity": True, "local_curvature": False}}
+    system = el.System(mdl)
+    drive = elastic_scene.drive_of(pipeline.load(scene).setup, 1)
+    return system, el._state_at(system, drive, 0.0, 0.0)
+
+
+def symmech_frequencies(system, fs):
+    """Chordwise and flapwise first frequencies [rad/s] (chordwise lies below once spinning)."""
+    w = np.sort(system.linear_modes(fs, np.zeros(system.N))[0])
+    return w[0], w[1]
+
+
+def exudyn_flapwise(elements: int) -> float:
+    """First flapwise frequency [rad/s]: the pre-stressed ANCF cantilever's lowest eigenvalue."""
+    import exudyn as exu
+    from exudyn.itemInterface import (CoordinateConstraint, Force, MarkerNodeCoordinate, MarkerNodePosition,
+                                      NodePoint2DSlope1, NodePointGround, ObjectANCFCable2D)
+
+    mbs = exu.SystemContainer().AddSystem()
+    ground = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+    le = L / elements
+    nodes = [mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[i * le, 0, 1, 0])) for i in range(elements + 1)]
+    for i in range(elements):
+        mbs.AddObject(ObjectANCFCable2D(nodeNumbers=[nodes[i], nodes[i + 1]], length=le, massPerLength=RHO_A,
+                                        bendingStiffness=EI, axialStiffness=EA))
+    for k in (0, 1, 3):  # clamped: position and the slope's lateral component
+        mbs.AddObject(CoordinateConstraint(markerNumbers=[ground, mbs.AddMarker(
+            MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=k))]))
+    for i in range(1, elements + 1):  # rho A Omega^2 x on the hat function of node i (the linear interpolant)
+        share = i * le * le if i < elements else (i * le) * le / 2 - le * le / 6
+        marker = mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[i]))
+        mbs.AddLoad(Force(markerNumber=marker, loadVector=[RHO_A * OMEGA ** 2 * share, 0, 0]))
+    mbs.Assemble()
+    settings = exu.SimulationSettings()
+    settings.staticSolver.verboseMode = 0
+    settings.solution.file.write = False  # Exudyn writes solution/ into the working folder otherwise
+    settings.staticSolver.newton.relativeTolerance = 1e-10
+    settings.staticSolver.newton.absoluteTolerance = 1e-6
+    settings.linearSolver.solverType = exu.LinearSolverType.EigenDense
+    mbs.SolveStatic(settings, updateInitialValues=True)
+    values, _ = mbs.ComputeODE2Eigenvalues(computeComplexEigenvalues=False, useAbsoluteValues=True)
+    return float(np.sqrt(np.sort(np.abs(values))[0]))
+
+
+def coefficient(w: float) -> float:
+    return (w * w - W0 * W0) / OMEGA ** 2
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    repeats = parser.parse_args().repeats
+    print(f"{machine()}; load average {os.getloadavg()[0]:.1f} at the start")
+    start = time.perf_counter()
+    system, fs = symmech_model()
+    print(f"symmech set-up (model, drive, frame state): {time.perf_counter() - start:.2f} s")
+    chord, flap = symmech_frequencies(system, fs)
+    print(f"Omega = {OMEGA / W0:g} w0, w0 = {W0:.6f} rad/s; Southwell (Omega -> 0): K = {SOUTHWELL} flapwise, "
+          f"K - 1 = {SOUTHWELL - 1:.4f} chordwise")
+    print(f"  symmech  flapwise w/w0 {flap / W0:.6f}, coefficient {coefficient(flap):.5f}; chordwise w/w0 "
+          f"{chord / W0:.6f}, coefficient {coefficient(chord):.5f}")
+    contenders = {"symmech linear_modes": lambda: symmech_frequencies(system, fs)}
+    try:
+        import exudyn
+    except ImportError:
+        print("Exudyn not installed (pip install symmech[bench]): its rows are skipped")
+    else:
+        w = {}
+        for elements in (8, 16, 32, 64):
+            w[elements] = exudyn_flapwise(elements)
+            print(f"  Exudyn {exudyn.__version__} ANCF, {elements:2d} elements: flapwise w/w0 {w[elements] / W0:.7f}, "
+                  f"coefficient {coefficient(w[elements]):.5f}, relative to symmech {w[elements] / flap - 1:+.1e}")
+        limit = (4 * w[64] - w[32]) / 3  # the element's error falls like h^2
+        print(f"  Exudyn, Richardson from 32 and 64 elements: w/w0 {limit / W0:.7f}, symmech relative to it "
+              f"{flap / limit - 1:+.1e}")
+        for elements in (16, 32, 64):
+            contenders[f"Exudyn {elements} elements, static + eigenvalues"] = lambda e=elements: exudyn_flapwise(e)
+    stats = interleaved(contenders, repeats)
+    print(f"time for the answer (load average {os.getloadavg()[0]:.1f} at the end):")
+    for name, s in stats.items():
+        versus = f"  {ratio(s, stats['symmech linear_modes'])} symmech's time" if len(stats) > 1 else ""
+        print(f"  {name:42s} {s.text('ms', 1e3)}{versus}")
+
+
+if __name__ == "__main__":
+    main()
