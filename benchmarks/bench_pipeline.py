@@ -87,6 +87,10 @@ def _imports_by_stage(stderr: str) -> dict[str, float]:
 
 # the libraries the main job cannot do without (numba's BLAS/LAPACK bindings import scipy.linalg)
 FLOOR = "floor: import numba, scipy.linalg, matplotlib figure + Agg"
+# ... and numba's CPU target set up, as loading any cached compiled function does first (its typing and
+# lowering registries: numba.np.arraymath, linalg, ...): the floor of a run on the cached engine
+FLOOR_LOAD = "floor + numba's target set up (any cache load)"
+FLOOR_IMPORTS = "import numba, scipy.linalg, matplotlib.figure, matplotlib.backends.backend_agg"
 
 
 def main_job(scene: str, repeats: int) -> None:
@@ -106,7 +110,8 @@ def main_job(scene: str, repeats: int) -> None:
         stats = interleaved({
             "python -c pass": fresh("-c", "pass"),
             'python -c "import numpy, scipy, matplotlib"': fresh("-c", "import numpy, scipy, matplotlib"),
-            FLOOR: fresh("-c", "import numba, scipy.linalg, matplotlib.figure, matplotlib.backends.backend_agg"),
+            FLOOR: fresh("-c", FLOOR_IMPORTS),
+            FLOOR_LOAD: fresh("-c", FLOOR_IMPORTS + "; numba.core.registry.cpu_target.target_context.refresh()"),
             "symmech run SCENE --out DIR (default plots)": fresh("-m", "symmech", "run", scene, "--out", "a",
                                                                 "--quiet"),
             "symmech run SCENE --out DIR --no-plots": fresh("-m", "symmech", "run", scene, "--out", "b",
@@ -121,6 +126,7 @@ def main_job(scene: str, repeats: int) -> None:
     for name in ("symmech run SCENE --out DIR (default plots)", "symmech run SCENE --out DIR --no-plots"):
         print(f"  {name} / baseline: {ratio(stats[name], base)}   (target < 3x)")
     print(f"  floor: importing the libraries the job uses / baseline: {ratio(stats[FLOOR], base)}")
+    print(f"  floor with numba's target set up / baseline: {ratio(stats[FLOOR_LOAD], base)}")
     untuned = stats["same (default plots), gc untuned: main(argv)"]
     print(f"  gc untuned / symmech run (default plots): "
           f"{ratio(untuned, stats['symmech run SCENE --out DIR (default plots)'])}")

@@ -18,7 +18,6 @@ from __future__ import annotations
 import base64
 import csv
 import datetime
-import functools
 import importlib
 import importlib.resources
 import importlib.util
@@ -81,15 +80,10 @@ def _used_modules(summary: dict) -> list[str] | None:
     return used or None
 
 
-@functools.cache
-def _module_specs(module: str) -> tuple:
-    """The specs a derivation module declares, derived once per process."""
-    return tuple(importlib.import_module(module).module_specs())
-
-
 def _specs(package: str | None, used: list[str] | None) -> list:
     """ModuleSpecs of the paper package: those named in ``used`` (derived or printed), else
-    every derived one. Only this package's derivations run, and no more than needed."""
+    every derived one. Only this package's derivations run, and no more than needed, each once per
+    process and shared with ``codegen`` and ``latex`` (:func:`symmech.core.codegen.derive`)."""
     from symmech.core import codegen
 
     if package is None:
@@ -97,7 +91,7 @@ def _specs(package: str | None, used: list[str] | None) -> list:
     specs = []
     for module in codegen.paper_modules(("derive", "printed") if used else ("derive",)):
         if module.__name__.startswith(f"symmech.{package}."):
-            specs += [s for s in _module_specs(module.__name__) if not used or s.name in used]
+            specs += [s for s in codegen.derive(module.__name__)[0] if not used or s.name in used]
             if used and set(used) <= {s.name for s in specs}:
                 break
     return specs

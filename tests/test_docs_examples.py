@@ -12,6 +12,7 @@ def _blocks(page: str) -> list[str]:
     return re.findall(r"```python\n(.*?)```", (ROOT / "docs" / page).read_text(encoding="utf-8"), flags=re.S)
 
 
+@pytest.mark.xdist_group("twins")  # compiles the twins test_dynamics_rhs compiles: once, in one worker
 def test_python_api_examples_run_and_use_the_compiled_twins(monkeypatch):
     """The first two blocks are programs (the third, the toolkit's, runs in the slow tier; the fourth is a
     fragment of a derivation). The rotor boom's

@@ -29,6 +29,10 @@ from symmech.smm import numeric
 TEXTS = {p.stem: p.read_text() for p in emit.default_directory().glob("*.py") if not p.stem.endswith("_nb")}
 DYNAMICS = sorted(name for name, text in TEXTS.items() if "\nSTATE = (" in text)
 WITH_JACOBIAN = [name for name in DYNAMICS if "\ndef jac(" in TEXTS[name]]
+# twins compiled in the default tier (each 3-10 s of CPU); the slow tier compiles every one
+QUICK_TWINS = ("grain_motion", "smm_rotor_boom")
+# the twins numba compiles here are those of docs/python-api.md's example: one worker compiles them once
+pytestmark = pytest.mark.xdist_group("twins")
 
 
 def test_dynamics_modules_and_those_with_a_jacobian():
@@ -76,7 +80,7 @@ def test_jacobian_matches_central_differences(name):
 
 
 # compiling a twin takes 5-40 s: the default tier checks the grain's and the rotor boom's, the slow tier all
-@pytest.mark.parametrize("name", [n if n in ("grain_motion", "smm_rotor_boom") else pytest.param(n, marks=pytest.mark.slow)
+@pytest.mark.parametrize("name", [n if n in QUICK_TWINS else pytest.param(n, marks=pytest.mark.slow)
                                   for n in DYNAMICS])
 def test_numba_twin_equals_numpy_and_vectorized_equals_columns(name):
     module = importlib.import_module(f"symmech.generated.{name}")
@@ -102,7 +106,8 @@ def _rows_into(rhs_into, t, Y, p, out):
         rhs_into(t, Y[i], p, out[i:i + 1])
 
 
-@pytest.mark.parametrize("name", WITH_JACOBIAN)
+@pytest.mark.parametrize("name", [n if n in QUICK_TWINS else pytest.param(n, marks=pytest.mark.slow)
+                                  for n in WITH_JACOBIAN])
 def test_into_kernels_from_numba_code_equal_the_numpy_module(name):
     """rhs_into in a numba loop and jac_into write what the numpy module's rhs/jac return (1e-12); wrong
     lengths of y, p or out raise instead of reading or writing past an array."""
@@ -304,7 +309,10 @@ def _oscillator():
     return ModuleSpec("test_oscillator", "Forced oscillator (tests).", "tests", (), dyn)
 
 
-@pytest.mark.parametrize("target", emit.TARGETS, ids=["numpy", "numba"])
+# the numba target compiles the emitted module (~10 s of CPU): slow tier; the default tier checks that
+# target's dynamics functions on the generated twins (test_numba_twin_equals_numpy..., test_into_kernels...)
+@pytest.mark.parametrize("target", [emit.TARGETS[0], pytest.param(emit.TARGETS[1], marks=pytest.mark.slow)],
+                         ids=["numpy", "numba"])
 def test_declared_dynamics_integrate_to_the_closed_form(tmp_path, target):
     """x(t) = (x0 - F0/(k - m W^2)) cos(w0 t) + F0/(k - m W^2) cos(W t) from rest at x0; solve_ivp on the
     emitted rhs/jac (Radau) within 1e-8 of the amplitude over 5 periods."""

@@ -27,8 +27,9 @@ RUNS = {
 }
 
 
-# its module fixtures run scenes: built once per xdist worker, so one worker runs the module
-pytestmark = pytest.mark.xdist_group("test_headline")
+# its module fixtures run scenes (built once per xdist worker, so one worker runs the module), and the
+# report derives the trolley paper: in the worker that already has every derivation (codegen.derive caches)
+pytestmark = pytest.mark.xdist_group("derive")
 
 
 @pytest.fixture(scope="module")

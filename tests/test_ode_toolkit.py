@@ -113,6 +113,7 @@ def test_radau_collocation_conditions():
         np.testing.assert_allclose(A @ c ** (k - 1), c ** k / k, rtol=0, atol=1e-14)
 
 
+@pytest.mark.slow  # compiles its own adaptive Radau closures (~10 s of CPU; not cacheable across processes)
 @pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8])
 def test_radau_stiff_prothero_robinson_within_the_tolerance(rtol):
     """lam = 1e6 over 10 s: the error stays below 2 rtol at every step end (the equation contracts at rate
@@ -154,7 +155,8 @@ def test_dop853_empirical_order_with_fixed_steps():
     assert np.polyfit(np.log(4.0 / np.array(ns)), np.log(errors), 1)[0] == pytest.approx(8.0, abs=0.3)
 
 
-@pytest.mark.parametrize("method", ["DOP853", pytest.param("Radau", marks=pytest.mark.slow)])
+@pytest.mark.slow  # compiles its own whole-solve closures (~14 s of CPU; not cacheable across processes)
+@pytest.mark.parametrize("method", ["DOP853", "Radau"])
 def test_whole_solve_takes_scipys_steps_with_dense_output(method):
     """The whole compiled solve of the non-stiff oscillator over 20 s (DOP853) and of the stiff probe over
     10 s (Radau): scipy's accepted steps, and the dense output at 57 requested times within 1e-12 (DOP853) and
@@ -223,8 +225,8 @@ def _rotor_boom():
     return p, y0, table.data[:, 0], table.data[:, 1:]
 
 
-@pytest.mark.parametrize("method, rtol, tol", [("DOP853", 1e-11, 1e-9),
-                                              pytest.param("Radau", 1e-9, 1e-8, marks=pytest.mark.slow)])
+@pytest.mark.slow  # compiles the toolkit for the module in each process (~23 s of CPU)
+@pytest.mark.parametrize("method, rtol, tol", [("DOP853", 1e-11, 1e-9), ("Radau", 1e-9, 1e-8)])
 def test_integrate_generated_module_equals_solve_ivp_and_the_exact_response(method, rtol, tol):
     """The rotor boom's damped free response, compiled end to end (generated rhs, Radau with the generated
     jac), at the run's output times: within tol of the run's exact matrix exponential (as solve_ivp is in
