@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 521e5f8eeca8e45a0275455a73dd4746e687a79eaba7cb2019c0e3088246beeb
-# source key 0acb91cb06d11a2005c83d198d10e71282956e6f650a66a0a97ed116b850ab74
+# source key b9ac73d9267638dc828c1af759966694e3b00f3e5c149f2a049fb9ca7bb5ab29
 # body sha256 5775910594b16de5a683ddb99e9a3721e5988baf4dcf2833baae0429e1b21927
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 69b468d66e8ebcca483e990d361deef29c19a28c0491e2020f0fcb4aaf612d8a
-# source key 0acb91cb06d11a2005c83d198d10e71282956e6f650a66a0a97ed116b850ab74
+# source key b9ac73d9267638dc828c1af759966694e3b00f3e5c149f2a049fb9ca7bb5ab29
 # body sha256 e931fb9afba5395969a7876b247ff65287ca9e7477bfbca3d5e2fbb78e154c07
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a22309b38bd455261bd0c7e85167e46994fea191434b69e7e4cf1e8df0e61144
-# source key 0da271e4fc8b5268d542c782baaf9b788a4cc66aed37cf1ea2aa7ae74f7a7794
+# source key 6fca70262266c3e49ee49fbb90fc9be460fc6c602041bed533fb190cc46406b9
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cfb45ad98d4eaed7be2339e7aa8ae80bb9ae41374c702fb044287491417a95cc
-# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
+# source key 19b6a797f1eab13fe20165743c22d1e35d0312f761e92233b82aa5cad167e289
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

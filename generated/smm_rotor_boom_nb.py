@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad2960243a79b1fc9e572ff5bd52fcf67abdcef30b031ec4a542ba6530eb8c1b
-# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
+# source key 19b6a797f1eab13fe20165743c22d1e35d0312f761e92233b82aa5cad167e289
 # body sha256 6f95b396ece06dc40ac0b65a2631b5864d2d21cd104805fc81a45a64c4ee5156
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7747298412790c6d75713e1fea470f6df7614ea969f60d1865f7ac7ca9bdd63d
-# source key 88104f1144d07a3c185f57888ddcd22d8308ec763a350efde4b5582d05baf549
+# source key 19b6a797f1eab13fe20165743c22d1e35d0312f761e92233b82aa5cad167e289
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ce21e38b8fcd640bb0249a9ee077dc1b39651edaba47c2d25135bff9cb19636c
-# source key a23ee225b78552a1d74ba22ad911b1c73082df022b0a2162f87e072e43de589c
+# source key 05f662e271c5712da60714b7f4c46951fc746bd3eea31fc3b82cc9eb6f65545e
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f1613db6d7a681fbc52ede0df62ac95e69c2044a9fa6463a23287a260ea54752
-# source key 55860e760cdd33f0a4b0653309cf2330b2cd8fdfc150653e2ba1e7e61ec90156
+# source key 47b18d32d3491a1a171cedc3b32fe64f8f5cb84de5dd95807a96ac968ee7040a
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

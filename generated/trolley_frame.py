@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1c2d2886c81e60ceedb628c02335727c708157ad98c6d9b541ba7379d878ba95
-# source key a23ee225b78552a1d74ba22ad911b1c73082df022b0a2162f87e072e43de589c
+# source key 05f662e271c5712da60714b7f4c46951fc746bd3eea31fc3b82cc9eb6f65545e
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 
