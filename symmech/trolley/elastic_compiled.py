@@ -1,0 +1,518 @@
+"""The elastic trolley compiled: the assembly of :class:`symmech.trolley.elastic.System` in numba,
+integrated by the toolkit's Radau IIA (:mod:`symmech.core.ode`) with the analytic Jacobian.
+
+The physics is that of ``System.evaluate`` / ``resultants`` (the Python engine stays the reference; the
+tests compare the two): per state the coefficient vectors over the fields (rr, and v = q̇ A, the
+ψ part of A held as a sparse list of entries), two passes over the Gram tensor G (X_k = Σ_l G_kl rr_l,
+Y_k = Σ_l G_kl v_l) give the residual R, the resultants F, M_O (track power) and the mass matrix; the
+Jacobian forms G:B and G:W explicitly.
+
+**The frame along the track.** The right-hand side needs, at any stage time t, the load a0 + g0 ν, ω,
+ω̇ and v0 (body components). They come from Python (``model.moving_frame`` or ``local_curvature_frame``
+of any track, the user's V0(t)) and cannot be called per stage, so :func:`frame_table` tabulates these 12
+channels once per run on a grid of t, vectorised, as a cubic spline (scipy's ``CubicSpline``, evaluated
+here), refining every interval whose midpoint value differs from the exact one by more than the bound
+(:data:`INTERP_FRACTION` x rtol of the channel group's scale, at least :data:`INTERP_FLOOR`); the
+reached error is returned and reported. Where the exact values carry rounding noise that no refinement
+removes (case 2's second differences of Λ*), the refinement stops once halving the intervals no longer
+reduces the error, provided the error is at most :data:`INTERP_NOISE`; otherwise the run falls back to
+the Python engine and says why (:func:`symmech.trolley.elastic.simulate`). The outputs at the grid times
+use the exact frame.
+
+The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
+and inlined into the cached entry :func:`_solve`, so a second process loads the whole solve from numba's
+cache (see :mod:`symmech.core.ode`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from symmech.core import ode
+from symmech.trolley import elastic as el
+
+jit = numba.njit(cache=True, error_model="numpy", nogil=True)
+
+# Frame channels of the table (columns): load a0 + g0 ν [m/s²], ω [rad/s], ω̇ [rad/s²], v0 [m/s].
+LOAD, OMEGA, DOMEGA, V0 = 0, 3, 6, 9
+N_CHANNELS = 12
+# Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
+INTERP_FRACTION = 1e-3
+INTERP_FLOOR = 1e-13
+# Largest relative error accepted when refinement stops reducing it (noise in the exact frame values).
+INTERP_NOISE = 1e-9
+MAX_TABLE_NODES = 1 << 20
+# Model flags (the float vector ``flags``): N, F, mass, g0, rollers on, law (0 linear, 1 clamped pair).
+F_N, F_F, F_MASS, F_G0, F_ROLLERS, F_LAW = range(6)
+MAX_STEPS = 50_000_000
+
+
+# --------------------------------------------------------------------------- small pieces
+
+@jit
+def _channels(tab, t, out):
+    """The 12 frame channels at t [s] from the spline table tab = (nodes (n,), coefficients (4, n - 1, 12))."""
+    tk, c = tab
+    i = np.searchsorted(tk, t, side="right") - 1
+    i = min(max(i, 0), tk.size - 2)
+    x = t - tk[i]
+    for j in range(N_CHANNELS):
+        out[j] = ((c[0, i, j] * x + c[1, i, j]) * x + c[2, i, j]) * x + c[3, i, j]
+
+
+@jit
+def _frame_mats(ch):
+    """B = skew(ω̇) + skew(ω)² and W = skew(ω) (3, 3) from the channels ch (12,)."""
+    w, dw = ch[OMEGA:OMEGA + 3], ch[DOMEGA:DOMEGA + 3]
+    W = np.zeros((3, 3))
+    W[0, 1], W[0, 2], W[1, 2] = -w[2], w[1], -w[0]
+    W[1, 0], W[2, 0], W[2, 1] = w[2], -w[1], w[0]
+    B = W @ W
+    B[0, 1] -= dw[2]
+    B[0, 2] += dw[1]
+    B[1, 2] -= dw[0]
+    B[1, 0] += dw[2]
+    B[2, 0] -= dw[1]
+    B[2, 1] += dw[0]
+    return B, W
+
+
+@jit
+def _times_a(mdl, y, x):
+    """y A(x) (F,): the coefficient vector of Σ_b y_b φ̃_b with φ̃_b = φ_b + Σ_c x_c ψ_bc, y and x (N,)."""
+    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
+    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    out = np.zeros(f)
+    for b in range(n):
+        out[1 + b] = y[b]
+        for e in range(ptr[b], ptr[b + 1]):
+            out[col[e]] += y[b] * x[qi[e]]
+    return out
+
+
+@jit
+def _a_times(mdl, q, z):
+    """A(q) z (N,) for z (F,)."""
+    n = int(mdl[0][F_N])
+    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    out = np.empty(n)
+    for b in range(n):
+        acc = z[1 + b]
+        for e in range(ptr[b], ptr[b + 1]):
+            acc += q[qi[e]] * z[col[e]]
+        out[b] = acc
+    return out
+
+
+@jit
+def _a_cols(mdl, q, Z):
+    """Z A(q)ᵀ (k, N) for Z (k, F): column b gathers Z[:, 1 + b] and the ψ columns of row b."""
+    n = int(mdl[0][F_N])
+    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    out = np.empty((Z.shape[0], n))
+    for b in range(n):
+        out[:, b] = Z[:, 1 + b]
+        for e in range(ptr[b], ptr[b + 1]):
+            out[:, b] += q[qi[e]] * Z[:, col[e]]
+    return out
+
+
+@jit
+def _rr(mdl, q):
+    """Coefficients (F,) of r̃ = r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the fields."""
+    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
+    pi, pj = mdl[4], mdl[5]
+    out = np.zeros(f)
+    out[0] = 1.0
+    out[1:1 + n] = q
+    for p in range(pi.size):
+        out[1 + n + p] = (0.5 if pi[p] == pj[p] else 1.0) * q[pi[p]] * q[pj[p]]
+    return out
+
+
+@jit
+def _gram_pass(G, x):
+    """X (F, 3, 3) with X_k = Σ_l G_kl x_l."""
+    f = x.size
+    X = np.zeros((f, 3, 3))
+    for k in range(f):
+        for l in range(f):
+            xl = x[l]
+            if xl != 0.0:
+                for i in range(3):
+                    for j in range(3):
+                        X[k, i, j] += G[k, l, i, j] * xl
+    return X
+
+
+@jit
+def _contract(G, M):
+    """G:M (F, F), (G:M)_kl = Σ_ij G_klij M_ij."""
+    f = G.shape[0]
+    out = np.zeros((f, f))
+    for k in range(f):
+        for l in range(f):
+            acc = 0.0
+            for i in range(3):
+                for j in range(3):
+                    acc += G[k, l, i, j] * M[i, j]
+            out[k, l] = acc
+    return out
+
+
+@jit
+def _rollers(mdl, q, qd):
+    """Roller deflections d, forces P1…P5 [N] and tangent stiffness dP/dd [N/m] (elastic.roller_forces)."""
+    C, roll, law = mdl[8], mdl[9], mdl[0][F_LAW]
+    d, dd = C @ q[:5], C @ qd[:5]
+    k, c, pre = roll[0], roll[1], roll[2]
+    if law == 0.0:
+        return d, -k * d - c * dd, -k
+    up, down = pre - d, pre + d
+    force = k * (np.maximum(up, 0.0) - np.maximum(down, 0.0)) - c * dd
+    return d, force, -k * (1.0 + (np.sign(up) + np.sign(down)) / 2)
+
+
+@jit
+def _membrane(mdl, q, R, Rq, stiffness):
+    """Adds the held beams' membrane force to R (N,) and, with ``stiffness``, its Hessian to Rq (N, N)."""
+    idx, size, H, cm = mdl[10], mdl[11], mdl[12], mdl[13]
+    for b in range(size.size):
+        m = size[b]
+        x = np.empty(m)
+        for i in range(m):
+            x[i] = q[idx[b, i]]
+        Hb = H[b, :m, :m]
+        hx = Hb @ x
+        quad = x @ hx
+        for i in range(m):
+            R[idx[b, i]] += 4 * cm[b] * quad * hx[i]
+            if stiffness:
+                for j in range(m):
+                    Rq[idx[b, i], idx[b, j]] += 4 * cm[b] * (quad * Hb[i, j] + 2 * hx[i] * hx[j])
+
+
+# --------------------------------------------------------------------------- the state's terms
+
+@jit
+def _terms(mdl, ch, q, qd):
+    """(R0 (N,) the residual at q̈ = 0, M (N, N), rr, v, p2 (F,), X (F, 3, 3), B, W) at one state."""
+    flags, G, Gtr, S1, K, D = mdl[0], mdl[6], mdl[7], mdl[14], mdl[15], mdl[16]
+    rr = _rr(mdl, q)
+    v = _times_a(mdl, qd, q)
+    p2 = _times_a(mdl, qd, qd)
+    p2[:1 + q.size] = 0.0
+    B, W = _frame_mats(ch)
+    X = _gram_pass(G, rr)
+    Y = _gram_pass(G, v)
+    load = ch[LOAD:LOAD + 3]
+    z = S1 @ load + Gtr @ p2
+    for k in range(rr.size):
+        acc = 0.0
+        for i in range(3):
+            for j in range(3):
+                acc += B[i, j] * X[k, i, j] + 2.0 * W[i, j] * Y[k, i, j]
+        z[k] += acc
+    R = _a_times(mdl, q, z) + K @ q + D @ qd
+    _membrane(mdl, q, R, R.reshape(1, -1), False)
+    if flags[F_ROLLERS] != 0.0:
+        _, force, _ = _rollers(mdl, q, qd)
+        R[:5] -= mdl[8].T @ force
+    U = _a_cols(mdl, q, Gtr)  # Gtr Aᵀ (F, N)
+    M = _a_cols(mdl, q, U.T.copy())  # A Gtr Aᵀ (symmetric)
+    return R, M, rr, v, p2, X, B, W, z
+
+
+@jit
+def _resultants(mdl, ch, rr, v, acc, X, B, W):
+    """Force F and moment M_O (3,) of ∫ (a - g) dm (System.resultants); acc (F,) the coefficients of ü."""
+    flags, S1 = mdl[0], mdl[14]
+    load = ch[LOAD:LOAD + 3]
+    first, fv, fa = S1.T @ rr, S1.T @ v, S1.T @ acc
+    F = flags[F_MASS] * load + B @ first + 2.0 * W @ fv + fa
+    # J(y) = Σ_kl rr_k y_l G_kl = Σ_l y_l X_lᵀ (G_kl = G_lkᵀ)
+    Jr, Jv, Ja = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
+    for l in range(rr.size):
+        Xt = X[l].T
+        Jr += rr[l] * Xt
+        Jv += v[l] * Xt
+        Ja += acc[l] * Xt
+    H = Jr @ B.T + 2.0 * Jv @ W.T + Ja
+    moment = np.cross(first, load) - np.array([H[2, 1] - H[1, 2], H[0, 2] - H[2, 0], H[1, 0] - H[0, 1]])
+    return F, moment
+
+
+@jit
+def _accelerations(mdl, ch, q, qd):
+    """q̈ (N,) and the terms of :func:`_terms` at the state."""
+    R, M, rr, v, p2, X, B, W, z = _terms(mdl, ch, q, qd)
+    qdd = -np.linalg.solve(M, R)
+    return qdd, M, rr, v, p2, X, B, W, z
+
+
+@jit
+def _rhs(t, y, args, out):
+    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model tuple, spline table, calls (1,))."""
+    mdl, tab, calls = args
+    calls[0] += 1.0
+    n = int(mdl[0][F_N])
+    ch = np.empty(N_CHANNELS)
+    _channels(tab, t, ch)
+    q, qd = y[:n], y[n:2 * n]
+    qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
+    acc = _times_a(mdl, qdd, q) + p2
+    F, moment = _resultants(mdl, ch, rr, v, acc, X, B, W)
+    out[:n] = qd
+    out[n:2 * n] = qdd
+    out[2 * n] = _dissipation(mdl, qd)
+    out[2 * n + 1] = F @ ch[V0:V0 + 3] + moment @ ch[OMEGA:OMEGA + 3]
+
+
+@jit
+def _dissipation(mdl, qd):
+    """Power of the damping forces [W] (beam D and roller dampers)."""
+    power = qd @ mdl[16] @ qd
+    if mdl[0][F_ROLLERS] != 0.0:
+        dd = mdl[8] @ qd[:5]
+        power += mdl[9][1] @ (dd * dd)
+    return power
+
+
+@jit
+def _jacobians(mdl, ch, q, qd):
+    """M, ∂R/∂q, ∂R/∂q̇ (N, N) at the state, q̈ from the equations (System.evaluate with ``jacobian``)."""
+    flags, G, Gtr, K, D, C, dA = mdl[0], mdl[6], mdl[7], mdl[15], mdl[16], mdl[8], mdl[17]
+    n = q.size
+    qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
+    z = z + Gtr @ _times_a(mdl, qdd, q)  # z at the state's q̈
+    GB, GW = _contract(G, B), _contract(G, W)
+    # T = GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ (F, N): DV, DQ the ψ parts of A at q̇, q̈
+    T = _a_cols(mdl, q, GB)
+    T2 = _a_cols(mdl, qd, 2.0 * GW)
+    T3 = _a_cols(mdl, qdd, Gtr)
+    S = _a_cols(mdl, q, 2.0 * GW)
+    S2 = _a_cols(mdl, qd, 2.0 * Gtr)
+    for b in range(n):  # the identity columns of A are not in DV, DQ
+        T2[:, b] -= 2.0 * GW[:, 1 + b]
+        T3[:, b] -= Gtr[:, 1 + b]
+        S2[:, b] -= 2.0 * Gtr[:, 1 + b]
+    Rq = _a_cols(mdl, q, (T + T2 + T3).T.copy()).T + K
+    Rqd = _a_cols(mdl, q, (S + S2).T.copy()).T + D
+    for a in range(n):
+        for b in range(n):
+            if dA[a, b] >= 0:
+                Rq[a, b] += z[dA[a, b]]
+    R0 = np.zeros(n)
+    _membrane(mdl, q, R0, Rq, True)
+    if flags[F_ROLLERS] != 0.0:
+        _, _, kt = _rollers(mdl, q, qd)
+        c = mdl[9][1]
+        for i in range(5):
+            for j in range(5):
+                for r in range(5):
+                    Rq[i, j] -= C[r, i] * kt[r] * C[r, j]
+                    Rqd[i, j] += C[r, i] * c[r] * C[r, j]
+    return M, Rq, Rqd
+
+
+@jit
+def _jac(t, y, args, J):
+    """dy'/dy (2 N + 2, 2 N + 2): the rows of q and q̇ (those of E_d and W zero, as the Python engine's)."""
+    mdl, tab, _ = args
+    n = int(mdl[0][F_N])
+    ch = np.empty(N_CHANNELS)
+    _channels(tab, t, ch)
+    M, Rq, Rqd = _jacobians(mdl, ch, y[:n], y[n:2 * n])
+    J[:] = 0.0
+    for i in range(n):
+        J[i, n + i] = 1.0
+    J[n:2 * n, :n] = -np.linalg.solve(M, Rq)
+    J[n:2 * n, n:2 * n] = -np.linalg.solve(M, Rqd)
+
+
+_steps = ode.steppers(_rhs, _jac)
+_radau_start, _radau_step = _steps.radau_start, _steps.radau_step  # globals numba types (not the namespace)
+
+
+@jit
+def _solve(mdl, tab, y0, t_eval, rtol, atol, max_step):
+    """Radau IIA from (t_eval[0], y0) over t_eval (k,), steps at most ``max_step`` [s] (scipy's rule: a longer
+    step is cut and its error history forgotten); returns (Y (k, n) the dense output at t_eval, accepted
+    steps, rhs evaluations, status of :mod:`symmech.core.ode`)."""
+    n, t_end = y0.size, t_eval[-1]
+    Y = np.full((t_eval.size, n), np.nan)
+    calls = np.zeros(1)
+    args = (mdl, tab, calls)
+    t, y, f = t_eval[0], y0.copy(), np.empty(n)
+    _rhs(t, y, args, f)
+    Y[0] = y
+    k = 1
+    J, LUr, LUc = np.empty((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
+    pr, pc = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    Q = np.empty((1, 4 * n))
+    st = _radau_start(t, y, f, t_end, args, rtol, atol, J)
+    for step in range(MAX_STEPS):
+        if not t < t_end:
+            return Y, step, int(calls[0]), ode.SUCCESS
+        if st[ode.R_H] > max_step:
+            st[ode.R_H], st[ode.R_H_OLD], st[ode.R_ERR_OLD] = max_step, -1.0, -1.0
+        t_new, y_new, f_new, ok = _radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
+        if not ok:
+            return Y, step, int(calls[0]), ode.STEP_TOO_SMALL
+        while k < t_eval.size and t_eval[k] <= t_new:
+            Y[k] = ode.radau_dense_at(t_eval[k], t, t_new - t, Q[0])
+            k += 1
+        t, y, f = t_new, y_new, f_new
+    return Y, MAX_STEPS, int(calls[0]), ode.TOO_MANY_STEPS
+
+
+@jit
+def _outputs(mdl, chs, Y):
+    """Per output row i (channels chs (k, 12) of the exact frame, states Y (k, 2 N + 2)): q̈ (k, N), the
+    resultants F, M_O (k, 3) and the coefficient vectors rr, v, ü (k, F) for the energies and probes."""
+    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
+    k = Y.shape[0]
+    qdd_out, F_out, M_out = np.empty((k, n)), np.empty((k, 3)), np.empty((k, 3))
+    rr_out, v_out, acc_out = np.empty((k, f)), np.empty((k, f)), np.empty((k, f))
+    for i in range(k):
+        q, qd = Y[i, :n], Y[i, n:2 * n]
+        qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, chs[i], q, qd)
+        acc = _times_a(mdl, qdd, q) + p2
+        F_out[i], M_out[i] = _resultants(mdl, chs[i], rr, v, acc, X, B, W)
+        qdd_out[i], rr_out[i], v_out[i], acc_out[i] = qdd, rr, v, acc
+    return qdd_out, F_out, M_out, rr_out, v_out, acc_out
+
+
+# --------------------------------------------------------------------------- from the Python model
+
+
+def pack(system) -> tuple:
+    """The model tuple the kernels take, from a :class:`symmech.trolley.elastic.System`."""
+    inv, mdl = system.inv, system.mdl
+    n, f = system.N, system.F
+    rows = [[] for _ in range(n)]  # the ψ entries of A: (column, index of the coordinate multiplying it)
+    for p, (i, j) in enumerate(inv.pairs):
+        rows[i].append((1 + n + p, j))
+        if i != j:
+            rows[j].append((1 + n + p, i))
+    ptr = np.cumsum([0] + [len(r) for r in rows]).astype(np.int64)
+    col = np.array([c for r in rows for c, _ in r], dtype=np.int64)
+    qi = np.array([x for r in rows for _, x in r], dtype=np.int64)
+    roll = np.zeros((3, 5))
+    law = 0.0
+    if system.rollers_on:
+        rl = mdl.rollers
+        roll[0] = rl.stiffness
+        roll[1] = rl.damping if mdl.effects.damping else 0.0
+        roll[2] = rl.preload
+        law = 0.0 if rl.law == "linear" else 1.0
+    blocks = inv.membrane
+    width = max([len(b.index) for b in blocks], default=1)
+    idx = np.zeros((len(blocks), width), dtype=np.int64)
+    H = np.zeros((len(blocks), width, width))
+    for b, blk in enumerate(blocks):
+        m = len(blk.index)
+        idx[b, :m], H[b, :m, :m] = blk.index, blk.H
+    flags = np.array([n, f, inv.mass, mdl.g0, 1.0 if system.rollers_on else 0.0, law])
+    return (flags, ptr, col, qi, system.pair_i.astype(np.int64), system.pair_j.astype(np.int64),
+            np.ascontiguousarray(inv.G), np.ascontiguousarray(system.Gtr), system.C.astype(float), roll, idx,
+            np.array([len(b.index) for b in blocks], dtype=np.int64), H, np.array([b.c for b in blocks], float),
+            np.ascontiguousarray(inv.S1), np.ascontiguousarray(inv.K), np.ascontiguousarray(inv.D),
+            inv.dA.astype(np.int64))
+
+
+def channels(drive, system, t) -> np.ndarray:
+    """The exact frame channels (k, 12) at the times t (k,) [s] (increasing from the drive's start time,
+    t[0] where s = s0): load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame_state`, vectorised."""
+    s = el.arc_length(drive, t)
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
+    return frame_channels(el.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
+
+
+def frame_channels(fr, V0, dV0, g0: float) -> np.ndarray:
+    """Channels (k, 12) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,)."""
+    V, dV = V0[:, None], dV0[:, None]
+    a0 = dV * fr.e + V ** 2 * (fr.de + np.cross(fr.W, fr.e))
+    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], V * fr.W, dV * fr.W + V ** 2 * fr.dW, V * fr.e])
+
+
+def _scales(ch: np.ndarray) -> np.ndarray:
+    """Error scale (12,) of each channel: its group's largest norm; ω̇ against |ω̇| + |ω|² (it enters
+    B = skew(ω̇) + skew(ω)²); a group that is zero everywhere is exact (scale 0 accepts 0 error only)."""
+    norm = lambda j: float(np.linalg.norm(ch[:, j:j + 3], axis=1).max())  # noqa: E731
+    groups = [norm(LOAD), norm(OMEGA), norm(DOMEGA) + norm(OMEGA) ** 2, norm(V0)]
+    return np.repeat(groups, 3)
+
+
+@dataclass(frozen=True)
+class Table:
+    """The spline table of the frame channels: nodes (n,) [s], coefficients (4, n - 1, 12), the largest
+    midpoint error relative to the channel scale, the bound it met, and whether it stopped on noise."""
+
+    nodes: np.ndarray
+    coef: np.ndarray
+    error: float
+    bound: float
+    noise: bool
+
+
+def frame_table(system, drive, t, rtol: float) -> Table | None:
+    """The frame channels over [t[0], t[-1]] as a cubic spline whose value at every interval midpoint is
+    within max(INTERP_FRACTION rtol, INTERP_FLOOR) of the channel scale of the exact one (intervals
+    that miss are halved), or within INTERP_NOISE when two halvings in a row no longer halved the error;
+    None when MAX_TABLE_NODES nodes do not reach that (the caller then runs the Python engine)."""
+    bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
+    nodes = np.asarray(t, float)
+    history = []
+    while True:
+        every = np.empty(2 * nodes.size - 1)
+        every[0::2], every[1::2] = nodes, (nodes[1:] + nodes[:-1]) / 2
+        ch = channels(drive, system, every)
+        scale = _scales(ch)
+        spline = CubicSpline(nodes, ch[0::2], axis=0)
+        miss = np.abs(spline(every[1::2]) - ch[1::2]) / np.where(scale > 0, scale, 1.0)
+        worst = miss.max(axis=1)
+        error = float(worst.max())
+        history.append(error)
+        stalled = len(history) >= 3 and history[-1] > 0.5 * history[-3]
+        if error <= bound or (stalled and error <= INTERP_NOISE):
+            return Table(nodes, np.ascontiguousarray(spline.c), error, bound, error > bound)
+        if 2 * nodes.size > MAX_TABLE_NODES or (stalled and error > INTERP_NOISE):
+            return None
+        nodes = np.sort(np.r_[nodes, every[1::2][worst > bound]])
+
+
+def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
+    """:func:`symmech.trolley.elastic.simulate` by Radau on the compiled assembly (prescribed speed; the
+    same state, tolerances, step bound and outputs). ``engine`` / ``engine_reason`` name what ran: the Python
+    engine when the frame cannot be tabulated within its bound (:func:`frame_table`); ``frame_table_nodes``
+    and ``frame_interpolation_error`` (relative to the channel scales) what the table reached."""
+    t = np.asarray(t, dtype=float)
+    table = frame_table(system, drive, t, rtol)
+    if table is None:
+        out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0)
+        out["engine"], out["engine_reason"] = "python", (
+            f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
+            f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+        return out
+    N = system.N
+    line = el.Timeline(system, drive, t)
+    q0 = system.quasi_static(line.state(t[0]))
+    zero = np.zeros(N)
+    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL]
+    step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
+    Y, steps, nfev, status = _solve(pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol, step)
+    if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
+        last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
+        raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: "
+                              f"{'required step size is less than spacing between numbers' if status == ode.STEP_TOO_SMALL else 'no finite state'})")
+    speed = [drive.speed(ti) for ti in t]
+    V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
+    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y)
+    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
+               frame_interpolation_error=table.error)
+    return out
