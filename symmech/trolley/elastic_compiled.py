@@ -25,6 +25,7 @@ cache (see :mod:`symmech.core.ode`).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
@@ -108,15 +109,17 @@ def _a_times(mdl, q, z):
 
 
 @jit
-def _a_cols(mdl, q, Z):
-    """Z A(q)ᵀ (k, N) for Z (k, F): column b gathers Z[:, 1 + b] and the ψ columns of row b."""
+def _a_rows(mdl, q, Z):
+    """A(q) Z (N, k) for Z (F, k): row b gathers Z[1 + b] and the ψ rows of row b."""
     n = int(mdl[0][F_N])
     ptr, col, qi = mdl[1], mdl[2], mdl[3]
-    out = np.empty((Z.shape[0], n))
+    out = np.empty((n, Z.shape[1]))
     for b in range(n):
-        out[:, b] = Z[:, 1 + b]
+        out[b] = Z[1 + b]
         for e in range(ptr[b], ptr[b + 1]):
-            out[:, b] += q[qi[e]] * Z[:, col[e]]
+            x = q[qi[e]]
+            for j in range(Z.shape[1]):
+                out[b, j] += x * Z[col[e], j]
     return out
 
 
@@ -134,33 +137,16 @@ def _rr(mdl, q):
 
 
 @jit
-def _gram_pass(G, x):
-    """X (F, 3, 3) with X_k = Σ_l G_kl x_l."""
-    f = x.size
-    X = np.zeros((f, 3, 3))
-    for k in range(f):
-        for l in range(f):
-            xl = x[l]
-            if xl != 0.0:
-                for i in range(3):
-                    for j in range(3):
-                        X[k, i, j] += G[k, l, i, j] * xl
-    return X
+def _gram_pass(Gx, x):
+    """X (F, 9) with X_k = Σ_l G_kl x_l (row-major 3 x 3), from Gx (F 9, F) the Gram tensor laid out for it."""
+    return (Gx @ x).reshape(x.size, 9)
 
 
 @jit
-def _contract(G, M):
-    """G:M (F, F), (G:M)_kl = Σ_ij G_klij M_ij."""
-    f = G.shape[0]
-    out = np.zeros((f, f))
-    for k in range(f):
-        for l in range(f):
-            acc = 0.0
-            for i in range(3):
-                for j in range(3):
-                    acc += G[k, l, i, j] * M[i, j]
-            out[k, l] = acc
-    return out
+def _contract(G9, M):
+    """G:M (F, F), (G:M)_kl = Σ_ij G_klij M_ij, from G9 (F F, 9)."""
+    f = int(math.sqrt(G9.shape[0]) + 0.5)
+    return (G9 @ M.copy().reshape(9)).reshape(f, f)
 
 
 @jit
@@ -199,30 +185,23 @@ def _membrane(mdl, q, R, Rq, stiffness):
 
 @jit
 def _terms(mdl, ch, q, qd):
-    """(R0 (N,) the residual at q̈ = 0, M (N, N), rr, v, p2 (F,), X (F, 3, 3), B, W) at one state."""
-    flags, G, Gtr, S1, K, D = mdl[0], mdl[6], mdl[7], mdl[14], mdl[15], mdl[16]
+    """(R0 (N,) the residual at q̈ = 0, M (N, N), rr, v, p2 (F,), X (F, 9), B, W, z (F,)) at one state."""
+    flags, Gx, Gtr, S1, K, D = mdl[0], mdl[6], mdl[7], mdl[14], mdl[15], mdl[16]
     rr = _rr(mdl, q)
     v = _times_a(mdl, qd, q)
     p2 = _times_a(mdl, qd, qd)
     p2[:1 + q.size] = 0.0
     B, W = _frame_mats(ch)
-    X = _gram_pass(G, rr)
-    Y = _gram_pass(G, v)
-    load = ch[LOAD:LOAD + 3]
-    z = S1 @ load + Gtr @ p2
-    for k in range(rr.size):
-        acc = 0.0
-        for i in range(3):
-            for j in range(3):
-                acc += B[i, j] * X[k, i, j] + 2.0 * W[i, j] * Y[k, i, j]
-        z[k] += acc
+    X = _gram_pass(Gx, rr)
+    Y = _gram_pass(Gx, v)
+    z = S1 @ ch[LOAD:LOAD + 3].copy() + Gtr @ p2 + X @ B.copy().reshape(9) + 2.0 * (Y @ W.copy().reshape(9))
     R = _a_times(mdl, q, z) + K @ q + D @ qd
     _membrane(mdl, q, R, R.reshape(1, -1), False)
     if flags[F_ROLLERS] != 0.0:
         _, force, _ = _rollers(mdl, q, qd)
-        R[:5] -= mdl[8].T @ force
-    U = _a_cols(mdl, q, Gtr)  # Gtr Aᵀ (F, N)
-    M = _a_cols(mdl, q, U.T.copy())  # A Gtr Aᵀ (symmetric)
+        R[:5] -= force @ mdl[8]
+    AG = _a_rows(mdl, q, Gtr)  # A Gtr (N, F)
+    M = _a_rows(mdl, q, AG.T.copy())  # A Gtr Aᵀ
     return R, M, rr, v, p2, X, B, W, z
 
 
@@ -230,16 +209,11 @@ def _terms(mdl, ch, q, qd):
 def _resultants(mdl, ch, rr, v, acc, X, B, W):
     """Force F and moment M_O (3,) of ∫ (a - g) dm (System.resultants); acc (F,) the coefficients of ü."""
     flags, S1 = mdl[0], mdl[14]
-    load = ch[LOAD:LOAD + 3]
-    first, fv, fa = S1.T @ rr, S1.T @ v, S1.T @ acc
+    load = ch[LOAD:LOAD + 3].copy()
+    first, fv, fa = rr @ S1, v @ S1, acc @ S1
     F = flags[F_MASS] * load + B @ first + 2.0 * W @ fv + fa
     # J(y) = Σ_kl rr_k y_l G_kl = Σ_l y_l X_lᵀ (G_kl = G_lkᵀ)
-    Jr, Jv, Ja = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
-    for l in range(rr.size):
-        Xt = X[l].T
-        Jr += rr[l] * Xt
-        Jv += v[l] * Xt
-        Ja += acc[l] * Xt
+    Jr, Jv, Ja = (rr @ X).reshape(3, 3).T, (v @ X).reshape(3, 3).T, (acc @ X).reshape(3, 3).T
     H = Jr @ B.T + 2.0 * Jv @ W.T + Ja
     moment = np.cross(first, load) - np.array([H[2, 1] - H[1, 2], H[0, 2] - H[2, 0], H[1, 0] - H[0, 1]])
     return F, moment
@@ -284,23 +258,18 @@ def _dissipation(mdl, qd):
 @jit
 def _jacobians(mdl, ch, q, qd):
     """M, ∂R/∂q, ∂R/∂q̇ (N, N) at the state, q̈ from the equations (System.evaluate with ``jacobian``)."""
-    flags, G, Gtr, K, D, C, dA = mdl[0], mdl[6], mdl[7], mdl[15], mdl[16], mdl[8], mdl[17]
+    flags, G9, Gtr, K, D, C, dA = mdl[0], mdl[18], mdl[7], mdl[15], mdl[16], mdl[8], mdl[17]
     n = q.size
     qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
     z = z + Gtr @ _times_a(mdl, qdd, q)  # z at the state's q̈
-    GB, GW = _contract(G, B), _contract(G, W)
-    # T = GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ (F, N): DV, DQ the ψ parts of A at q̇, q̈
-    T = _a_cols(mdl, q, GB)
-    T2 = _a_cols(mdl, qd, 2.0 * GW)
-    T3 = _a_cols(mdl, qdd, Gtr)
-    S = _a_cols(mdl, q, 2.0 * GW)
-    S2 = _a_cols(mdl, qd, 2.0 * Gtr)
-    for b in range(n):  # the identity columns of A are not in DV, DQ
-        T2[:, b] -= 2.0 * GW[:, 1 + b]
-        T3[:, b] -= Gtr[:, 1 + b]
-        S2[:, b] -= 2.0 * Gtr[:, 1 + b]
-    Rq = _a_cols(mdl, q, (T + T2 + T3).T.copy()).T + K
-    Rqd = _a_cols(mdl, q, (S + S2).T.copy()).T + D
+    GW = _contract(G9, W)
+    # Rq = A (GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ), Rqd = A (2 GW Aᵀ + 2 Gtr DVᵀ): DV, DQ the ψ parts of A at q̇, q̈;
+    # by the symmetries (G:B)ᵀ = G:Bᵀ, (G:W)ᵀ = -G:W (W skew), Gtrᵀ = Gtr, each Z Aᵀ is (A Zᵀ)ᵀ
+    psi = lambda x, Zt: _a_rows(mdl, x, Zt) - Zt[1:1 + n]  # noqa: E731  DV(x) Zt
+    T = _a_rows(mdl, q, _contract(G9, B.T.copy())) - 2.0 * psi(qd, GW) + psi(qdd, Gtr)
+    S = -2.0 * _a_rows(mdl, q, GW) + 2.0 * psi(qd, Gtr)
+    Rq = _a_rows(mdl, q, T.T.copy()) + K
+    Rqd = _a_rows(mdl, q, S.T.copy()) + D
     for a in range(n):
         for b in range(n):
             if dA[a, b] >= 0:
@@ -418,10 +387,10 @@ def pack(system) -> tuple:
         idx[b, :m], H[b, :m, :m] = blk.index, blk.H
     flags = np.array([n, f, inv.mass, mdl.g0, 1.0 if system.rollers_on else 0.0, law])
     return (flags, ptr, col, qi, system.pair_i.astype(np.int64), system.pair_j.astype(np.int64),
-            np.ascontiguousarray(inv.G), np.ascontiguousarray(system.Gtr), system.C.astype(float), roll, idx,
+            np.ascontiguousarray(inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f)), np.ascontiguousarray(system.Gtr), system.C.astype(float), roll, idx,
             np.array([len(b.index) for b in blocks], dtype=np.int64), H, np.array([b.c for b in blocks], float),
             np.ascontiguousarray(inv.S1), np.ascontiguousarray(inv.K), np.ascontiguousarray(inv.D),
-            inv.dA.astype(np.int64))
+            inv.dA.astype(np.int64), np.ascontiguousarray(inv.G.reshape(f * f, 9)))
 
 
 def channels(drive, system, t) -> np.ndarray:
