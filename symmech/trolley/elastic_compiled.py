@@ -25,8 +25,14 @@ cache (see :mod:`symmech.core.ode`).
 """
 from __future__ import annotations
 
+import fcntl
 import math
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -339,20 +345,46 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol, max_step):
 
 
 @jit
-def _outputs(mdl, chs, Y):
-    """Per output row i (channels chs (k, 12) of the exact frame, states Y (k, 2 N + 2)): q̈ (k, N), the
-    resultants F, M_O (k, 3) and the coefficient vectors rr, v, ü (k, F) for the energies and probes."""
-    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
+def _rows(mdl, chs, nu, height, Y):
+    """Per output row (channels chs (k, 12) of the exact frame, upward unit vectors nu (k, 3), heights of O
+    (k,) [m], states Y (k, 2 N + 2)): q̈ (k, N), the resultants F, M_O (k, 3), the coefficient vectors of r̃,
+    its rate and acceleration (k, F), and the Jacobi and total energies less the potential Π (k,) [J]
+    (System.jacobi_energy, System.total_energy)."""
+    flags, S1, Gtr = mdl[0], mdl[14], mdl[7]
+    n, f, mass, g0 = int(flags[F_N]), int(flags[F_F]), flags[F_MASS], flags[F_G0]
     k = Y.shape[0]
     qdd_out, F_out, M_out = np.empty((k, n)), np.empty((k, 3)), np.empty((k, 3))
     rr_out, v_out, acc_out = np.empty((k, f)), np.empty((k, f)), np.empty((k, f))
+    h_out, E_out = np.empty(k), np.empty(k)
     for i in range(k):
+        ch = chs[i]
         q, qd = Y[i, :n], Y[i, n:2 * n]
-        qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, chs[i], q, qd)
+        qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
         acc = _times_a(mdl, qdd, q) + p2
-        F_out[i], M_out[i] = _resultants(mdl, chs[i], rr, v, acc, X, B, W)
+        F_out[i], M_out[i] = _resultants(mdl, ch, rr, v, acc, X, B, W)
         qdd_out[i], rr_out[i], v_out[i], acc_out[i] = qdd, rr, v, acc
-    return qdd_out, F_out, M_out, rr_out, v_out, acc_out
+        Jr, Jv = (rr @ X).reshape(3, 3).T, (v @ X).reshape(3, 3).T
+        w, v0 = ch[OMEGA:OMEGA + 3].copy(), ch[V0:V0 + 3].copy()
+        first = rr @ S1
+        t2 = v @ Gtr @ v
+        t0 = 0.5 * (mass * v0 @ v0 + 2.0 * v0 @ np.cross(w, first) + np.sum((W.T @ W) * Jr))
+        h_out[i] = 0.5 * t2 - t0 + g0 * nu[i] @ first
+        twice_t = mass * v0 @ v0 + 2.0 * v0 @ (np.cross(w, first) + v @ S1) + np.sum((W.T @ W) * Jr) + \
+            2.0 * np.sum(W.T * Jv) + t2
+        E_out[i] = 0.5 * twice_t + g0 * (mass * height[i] + nu[i] @ first)
+    return qdd_out, F_out, M_out, rr_out, v_out, acc_out, h_out, E_out
+
+
+def row_terms(system, fr, V0, dV0, Y, height) -> dict:
+    """:func:`symmech.trolley.elastic.row_terms` by :func:`_rows` (the potential Π per row in Python)."""
+    chs = frame_channels(fr, V0, dV0, system.mdl.g0)
+    nu = np.ascontiguousarray(fr.lam[:, :, 1])
+    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
+    res = dict(zip(keys, _rows(pack(system), chs, nu, np.asarray(height, float), np.ascontiguousarray(Y))))
+    pi = np.array([system.potential(q) for q in Y[:, :system.N]])
+    res["h"] += pi
+    res["E"] += pi
+    return res
 
 
 # --------------------------------------------------------------------------- from the Python model
@@ -481,7 +513,96 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
                               f"{'required step size is less than spacing between numbers' if status == ode.STEP_TOO_SMALL else 'no finite state'})")
     speed = [drive.speed(ti) for ti in t]
     V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
-    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y)
+    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out
+
+
+# --------------------------------------------------------------------------- building the cache once
+
+COLD_COMPILE_SECONDS = 120.0  # wall time of the first compile (benchmarks/README.md: measured cold)
+LOCK_NAME = "symmech-elastic-build.lock"  # beside numba's cache files; held by the one process that compiles
+ENTRIES = ("_solve", "_rows")  # the cached entries a run calls
+
+
+def _entry_signatures() -> dict:
+    """The argument types :func:`simulate` and :func:`row_terms` call the entries with (a small model)."""
+    f, n = 3, 1
+    mdl = (np.zeros(6), np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64),
+           np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((9 * f, f)), np.zeros((f, f)), np.zeros((5, 5)),
+           np.zeros((3, 5)), np.zeros((0, 1), np.int64), np.zeros(0, np.int64), np.zeros((0, 1, 1)), np.zeros(0),
+           np.zeros((f, 3)), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n), np.int64), np.zeros((f * f, 9)))
+    tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
+    solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4), 1.0)
+    rows = (mdl, np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
+    return {"_solve": tuple(numba.typeof(a) for a in solve), "_rows": tuple(numba.typeof(a) for a in rows)}
+
+
+def cold() -> bool:
+    """Whether the next run compiles: no machine code for an entry cached for this source yet."""
+    for name in ENTRIES:
+        index = getattr(getattr(globals()[name], "_cache", None), "_cache_file", None)  # numba's cache (private API)
+        if index is not None and not index._load_index():
+            return True
+    return False
+
+
+def cache_dir() -> Path:
+    """Where numba caches the entries (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside this module)."""
+    return Path(_solve._cache._cache_path)  # numba's cache locator (private API, as cold())
+
+
+@contextmanager
+def _build_lock(wait: bool):
+    """The machine-wide build lock (``fcntl.flock``, released by the OS when its holder dies); yields
+    whether this process holds it (always, with ``wait``)."""
+    folder = cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / LOCK_NAME, "a") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            yield False
+            return
+        yield True
+
+
+def warm(wait: bool = True, say=None) -> bool:
+    """Compile the entries into numba's cache unless they are there (one builder per cache, under the build
+    lock; without ``wait`` return False at once when another process holds it); ``say(text)`` tells what
+    it does. Returns whether the cache holds the engine."""
+    with _build_lock(wait) as mine:
+        if not mine:
+            return False
+        if cold():
+            if say:
+                say(f"compiling the elastic engine once, ~{COLD_COMPILE_SECONDS:.0f} s (cache: {cache_dir()})")
+            for name, signature in _entry_signatures().items():
+                globals()[name].compile(signature)
+    return True
+
+
+def warm_in_background() -> bool:
+    """Start a detached ``python -m symmech warm --engine elastic --background`` unless the engine is cached
+    or a builder holds the lock; returns whether one was started."""
+    if not cold():
+        return False
+    with _build_lock(wait=False) as free:
+        if not free:
+            return False
+    subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", "elastic", "--background"],
+                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                     start_new_session=True)
+    return True
+
+
+def wait_warm(timeout: float) -> bool:
+    """Start the builder if none runs and wait up to ``timeout`` [s] for the engine to be cached."""
+    deadline = time.monotonic() + timeout
+    warm_in_background()
+    while cold():
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.5)
+    return True

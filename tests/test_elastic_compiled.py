@@ -1,0 +1,181 @@
+"""The compiled elastic engine (issue 20 item 3) against the Python engine, the reference.
+
+Both engines integrate the same equations by Radau IIA with the same step control (the toolkit's port of
+scipy's) and the same tolerances; they differ in round-off and in the frame along the track, which the
+compiled engine interpolates from a table checked to 1e-3 rtol of each channel's scale. So the reactions
+agree far below the tolerance: bounds of 1e-7 relative to max|P| at rtol 1e-8 (the issue's target), measured
+1e-11…1e-10. The assembly itself (q̈, the resultants, M, ∂R/∂q, ∂R/∂q̇) is compared at random states to
+round-off, and the compiled Jacobian against central differences of the compiled right-hand side.
+"""
+import copy
+import tomllib
+
+import numpy as np
+import pytest
+
+from symmech.core import pipeline, scene
+from symmech.trolley import elastic as el
+from symmech.trolley import elastic_scene
+
+pytestmark = [pytest.mark.compiled_elastic, pytest.mark.xdist_group("test_elastic_compiled")]
+
+RNG = np.random.default_rng(20)
+BUNDLED = tomllib.loads((scene.scenes_folder() / "trolley_elastic_helix.toml").read_text(encoding="utf-8"))
+
+
+def helix(t_end=0.15, steps=50, case=1, **elastic):
+    """The bundled scene, shortened (outputs every 3 ms as bundled), its [elastic] table updated."""
+    doc = copy.deepcopy(BUNDLED)
+    doc["time"] = {"t_end": t_end, "steps": steps}
+    doc["effects"]["local_curvature"] = case == 2
+    for key, value in elastic.items():
+        doc["elastic"][key] = value
+    doc["elastic"]["numerics"] = {**doc["elastic"]["numerics"], "modal_samples": 0}
+    return pipeline.load(doc).setup.elastic
+
+
+def both(setup, rtol):
+    runs = {}
+    for engine in ("compiled", "python"):
+        st = elastic_scene.Setup(**{**setup.__dict__, "engine": engine})
+        runs[engine] = elastic_scene.simulate(st, rtol=rtol)
+    assert runs["compiled"]["engine"] == "compiled" and runs["python"]["engine"] == "python"
+    return runs["compiled"], runs["python"]
+
+
+def relative(a, b):
+    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
+
+
+def agree(c, p, bound):
+    """Every output of the two engines within ``bound`` relative to its largest magnitude."""
+    assert relative(c["P"], p["P"]) < bound
+    for key in ("q", "qd", "qdd", "F", "M", "h", "E", "work", "dissipated", "probe_overload", "probe_elastic"):
+        scale = np.abs(p[key]).max()
+        if scale > 0:
+            assert relative(c[key], p[key]) < 100 * bound, key
+
+
+def test_the_bundled_scene_short_agrees_at_rtol_1e_8():
+    setup = helix()
+    c, p = both(setup, 1e-8)
+    agree(c, p, 1e-7)
+    assert c["frame_interpolation_error"] <= 1e-3 * 1e-8
+    assert abs(c["nfev"] - p["nfev"]) <= 0.05 * p["nfev"]  # the same step control
+
+
+def test_case_2_agrees():
+    c, p = both(helix(case=2), 1e-8)
+    agree(c, p, 1e-7)
+
+
+def test_clamped_pair_with_preload_agrees():
+    rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5, 1e-5, 2e-5, -1e-6, 1e-5]}
+    c, p = both(helix(rollers=rollers), 1e-8)
+    agree(c, p, 1e-7)
+    assert np.abs(c["deflection"]).max() > 1e-5  # beyond some preloads: both branches of the law are used
+
+
+def test_held_membrane_beam_without_damping_agrees():
+    beam = {"root": [0.2, 0.3, -0.5], "axis": [0, 0, 1], "plane": [0, 1, 0], "length": 1.0, "mass_per_length": 3.0,
+            "ei": [50.0, 80.0], "support": "pinned", "axial": "held", "ea": 5e6, "modes": 3}
+    setup = helix(beams=[beam], points=[{"name": "mid", "beam": 0, "xi": 0.5}], effects={"damping": False},
+                  initial={"beams": [{"beam": 0, "plane": 1, "amplitude": 0.02}]})
+    assert setup.system.inv.membrane and not setup.system.inv.D.any()
+    c, p = both(setup, 1e-8)
+    agree(c, p, 1e-7)
+    assert c["dissipated"][-1] == 0.0 and np.abs(c["probe_elastic"]).max() > 1e-3  # it rings, undamped
+
+
+def test_the_checks_hold_on_the_compiled_engine():
+    """The elastic review's checks (energy balance, rollers' small rotation) all pass on a compiled run of the
+    shortened bundled scene, as on the Python one, and the summary names the engine."""
+    from symmech.trolley import elastic_review
+
+    verdicts = {}
+    for engine in ("compiled", "python"):
+        doc = copy.deepcopy(BUNDLED)
+        doc["time"] = {"t_end": 0.15, "steps": 50}
+        doc["elastic"]["numerics"] = {"engine": engine, "modal_samples": 3, "rtol": 1e-8}
+        setup = pipeline.load(doc).setup.elastic
+        result = elastic_scene.run(setup)
+        assert result.summary["elastic"]["engine"] == engine
+        _, checks, _ = elastic_review.review(setup, result)
+        verdicts[engine] = {c.name: c.verdict for c in checks}
+        assert result.summary["elastic"]["energy_residual_relative"] < 10 * 1e-8
+    assert verdicts["compiled"] == verdicts["python"] and "fail" not in verdicts["compiled"].values()
+
+
+def test_the_frame_table_meets_its_bound_between_its_nodes():
+    """At 400 random times the spline is within 4x its bound of the exact channels (the bound is checked at
+    the midpoints only), for case 1 and case 2, and it halves intervals until it meets it."""
+    from symmech.trolley import elastic_compiled as ec
+
+    for case in (1, 2):
+        setup = helix(t_end=1.0, steps=20, case=case)
+        table = ec.frame_table(setup.system, setup.drive, setup.t, 1e-8)
+        assert table.error <= table.bound == 1e-11 and not table.noise and table.nodes.size > 21
+        t = np.sort(RNG.uniform(0.0, 1.0, 400))
+        exact = ec.channels(setup.drive, setup.system, np.r_[0.0, t])[1:]
+        spline = np.empty_like(exact)
+        for i, ti in enumerate(t):
+            ec._channels((table.nodes, table.coef), ti, spline[i])
+        scale = ec._scales(exact)
+        assert (np.abs(spline - exact) / scale).max() <= 4 * table.bound
+
+
+def test_a_speed_with_a_kink_falls_back_to_the_python_engine_and_says_why():
+    """|t - 0.05| has a kink: the spline of ω, v0 misses by O(h) there, halving no longer halves the error
+    at a level above INTERP_NOISE, so the run goes to the Python engine, named in engine_reason."""
+    doc = copy.deepcopy(BUNDLED)
+    doc["motion"]["speed"] = "3 + 20*abs(t - 0.05)"
+    doc["time"] = {"t_end": 0.1, "steps": 20}
+    doc["elastic"]["numerics"] = {"modal_samples": 0}
+    out = elastic_scene.simulate(pipeline.load(doc).setup.elastic, rtol=1e-6)
+    assert out["engine"] == "python" and "tabulated" in out["engine_reason"]
+
+
+def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs():
+    from symmech.trolley import elastic_compiled as ec
+
+    rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
+    beam = {"root": [0.2, 0.3, -0.5], "axis": [0, 0, 1], "plane": [0, 1, 0], "length": 1.0, "mass_per_length": 3.0,
+            "ei": [50.0, 80.0], "support": "pinned", "axial": "held", "ea": 5e6, "modes": 2}
+    setup = helix(case=2, rollers=rollers, beams=[*BUNDLED["elastic"]["beams"], beam])
+    system = setup.system
+    table = ec.frame_table(system, setup.drive, setup.t, 1e-8)
+    args = (ec.pack(system), (table.nodes, table.coef), np.zeros(1))
+    n = 2 * system.N + 2
+    y = np.r_[RNG.normal(size=system.N) * 1e-3, RNG.normal(size=system.N) * 1e-2, 0.0, 0.0]
+    y[:5] = RNG.uniform(-1e-5, 1e-5, 5)  # away from the kinks of the clamped pair (|d| = 2e-5 m)
+    J = np.empty((n, n))
+    ec._jac(0.07, y, args, J)
+    fd = np.empty((n, n))
+    plus, minus = np.empty(n), np.empty(n)
+    for j in range(2 * system.N):
+        h = 1e-7 * max(abs(y[j]), 1e-4)
+        ec._rhs(0.07, y + h * np.eye(n)[j], args, plus)
+        ec._rhs(0.07, y - h * np.eye(n)[j], args, minus)
+        fd[:, j] = (plus - minus) / (2 * h)
+    rows = slice(system.N, 2 * system.N)
+    assert np.abs(J[rows, :2 * system.N] - fd[rows, :2 * system.N]).max() < 1e-6 * np.abs(fd[rows]).max()
+    assert np.array_equal(J[:system.N, system.N:2 * system.N], np.eye(system.N))
+
+
+def test_the_assembly_matches_system_evaluate_at_random_states():
+    """q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
+    from symmech.trolley import elastic_compiled as ec
+
+    rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
+    setup = helix(rollers=rollers)
+    system, mdl = setup.system, ec.pack(setup.system)
+    line = el.Timeline(system, setup.drive, setup.t)
+    for time in (0.0, 0.07):
+        fs = line.state(time)
+        ch = ec.channels(setup.drive, system, np.array([0.0, time]) if time else np.array([0.0]))[-1]
+        q, qd = RNG.normal(size=system.N) * 1e-4, RNG.normal(size=system.N) * 1e-2
+        qdd = system.accelerations(fs, q, qd)
+        _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
+        assert relative(ec._accelerations(mdl, ch, q, qd)[0], qdd) < 1e-12
+        for mine, ref in zip(ec._jacobians(mdl, ch, q, qd), (M, Rq, Rqd)):
+            assert relative(mine, ref) < 1e-12
