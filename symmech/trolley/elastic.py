@@ -481,13 +481,15 @@ class System:
         return np.linalg.solve(self.reaction_system, np.r_[F, moment])
 
     def contact_moment(self, q, forces):
-        """Moment about O of the roller forces at the displaced contact points [N m]."""
+        """Moment about O of the roller forces at the displaced contact points [N m] (..., 3), for
+        coordinates q (..., N) and forces P1…P5 (..., 5)."""
         p = self.contacts
         f = gen.rigid_fields(p[:, 0], p[:, 1], p[:, 2])
-        u = np.einsum("pik,k->pi", f[:, :, :5], q[:5])
+        q = np.asarray(q, float)
+        u = np.einsum("pik,...k->...pi", f[:, :, :5], q[..., :5])
         for col, (i, j) in enumerate(ROTATION_PAIRS):
-            u += (0.5 if i == j else 1.0) * q[i] * q[j] * f[:, :, 5 + col]
-        return np.cross(p + u, forces[:, None] * self.directions).sum(0)
+            u = u + (0.5 if i == j else 1.0) * (q[..., i] * q[..., j])[..., None, None] * f[:, :, 5 + col]
+        return np.cross(p + u, forces[..., :, None] * self.directions).sum(-2)
 
     def jacobi_energy(self, fs: FrameState, q, qd):
         """h = T2 - T0 + Π + V_g [J]: constant when the frame's motion is steady (ω, v0, ν
@@ -794,7 +796,7 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms) -> d
         force, _ = roller_forces(system.mdl.rollers, d, qd[:, :5] @ system.C.T, system.mdl.effects.damping)
         res["P"] = np.column_stack([res["F"][:, 0], force])
         res["deflection"] = d
-        res["M_contacts"] = np.array([system.contact_moment(qi, f) for qi, f in zip(q, force)])
+        res["M_contacts"] = system.contact_moment(q, force)
     else:
         res["P"] = np.linalg.solve(system.reaction_system, np.column_stack([res["F"], res["M"]]).T).T
         res["deflection"], res["M_contacts"] = np.zeros((len(t), 5)), np.zeros((len(t), 3))

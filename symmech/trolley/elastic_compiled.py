@@ -511,8 +511,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
         last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
         raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: "
                               f"{'required step size is less than spacing between numbers' if status == ode.STEP_TOO_SMALL else 'no finite state'})")
-    speed = [drive.speed(ti) for ti in t]
-    V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
     out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
