@@ -4,6 +4,10 @@ Tests marked ``compiled_engine`` (the grain engine) or ``compiled_elastic`` (the
 last and first wait for that engine's build (``wait_warm`` of :mod:`symmech.grain.compiled`,
 :mod:`symmech.trolley.elastic_compiled`), so no test pays numba's compilation on its own; under pytest-xdist
 every worker asks for the build and the build lock lets one process per machine compile.
+
+The elastic trolley's default engine is the compiled one; tests not marked ``compiled_elastic`` run it on
+the Python engine (its reference, which they test; ``engine_reason`` says so), so that no unmarked test
+compiles it in each xdist worker. tests/test_elastic_compiled.py proves the compiled engine against it.
 """
 import importlib
 
@@ -31,6 +35,15 @@ def pytest_collection_modifyitems(session, config, items):
         importlib.import_module(ENGINES[marker]).warm_in_background()
     if needed:
         items[:] = [item for item in items if not _marked(item)] + [item for item in items if _marked(item)]
+
+
+@pytest.fixture(autouse=True)
+def _elastic_reference_engine(request, monkeypatch):
+    if not request.node.get_closest_marker("compiled_elastic"):
+        from symmech.trolley import elastic_scene
+
+        monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("python", "tests: the reference engine "
+                                                                              "(tests/conftest.py)"))
 
 
 @pytest.fixture(autouse=True)

@@ -142,15 +142,16 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
         spline = np.empty_like(exact)
         for i, ti in enumerate(t):
             ec._channels((table.nodes, table.coef), ti, spline[i])
-        assert (np.abs(spline - exact) / ec._scales(exact)).max() <= 4 * table.error
+        # with noise, the exact values at other times carry their own (measured 1.4e-9 on case 2)
+        assert (np.abs(spline - exact) / ec._scales(exact)).max() <= 4 * (ec.INTERP_NOISE if noise else table.error)
 
 
 def test_a_speed_with_a_kink_falls_back_to_the_python_engine_and_says_why():
-    """|t - 0.05| has a kink: the spline of ω, v0 misses by O(h) there, halving no longer halves the error
+    """|t - 0.015| has a kink: the spline of ω, v0 misses by O(h) there, halving no longer halves the error
     at a level above INTERP_NOISE, so the run goes to the Python engine, named in engine_reason."""
     doc = copy.deepcopy(BUNDLED)
-    doc["motion"]["speed"] = "3 + 20*abs(t - 0.05)"
-    doc["time"] = {"t_end": 0.1, "steps": 20}
+    doc["motion"]["speed"] = "3 + 20*abs(t - 0.015)"
+    doc["time"] = {"t_end": 0.03, "steps": 10}
     doc["elastic"]["numerics"] = {"modal_samples": 0}
     out = elastic_scene.simulate(pipeline.load(doc).setup.elastic, rtol=1e-6)
     assert out["engine"] == "python" and "tabulated" in out["engine_reason"]
@@ -174,12 +175,12 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
     fd = np.empty((n, n))
     plus, minus = np.empty(n), np.empty(n)
     for j in range(2 * system.N):
-        h = 1e-7 * max(abs(y[j]), 1e-4)
+        h = 1e-4 * max(abs(y[j]), 1e-4)  # truncation ~h², rounding ~eps/h: 2e-9 of the largest entry here
         ec._rhs(0.07, y + h * np.eye(n)[j], args, plus)
         ec._rhs(0.07, y - h * np.eye(n)[j], args, minus)
         fd[:, j] = (plus - minus) / (2 * h)
     rows = slice(system.N, 2 * system.N)
-    assert np.abs(J[rows, :2 * system.N] - fd[rows, :2 * system.N]).max() < 1e-6 * np.abs(fd[rows]).max()
+    assert np.abs(J[rows, :2 * system.N] - fd[rows, :2 * system.N]).max() < 1e-7 * np.abs(fd[rows]).max()
     assert np.array_equal(J[:system.N, system.N:2 * system.N], np.eye(system.N))
 
 
