@@ -130,7 +130,7 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
     the bound (1e-3 rtol) where the exact frame is smooth; case 2's second differences of Λ* (step 1e-3 m)
     carry ~1e-10 of rounding, which no table resolves: at rtol 1e-8 the table stops on that noise, flagged,
     within INTERP_NOISE, and meets the bound at rtol 1e-6."""
-    from symmech.trolley import elastic_compiled as ec
+    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
 
     for case, rtol, noise in ((1, 1e-8, False), (2, 1e-6, False), (2, 1e-8, True)):
         setup = helix(t_end=1.0, steps=20, case=case)
@@ -141,24 +141,36 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
         exact = ec.channels(setup.drive, setup.system, np.r_[0.0, t])[1:]
         spline = np.empty_like(exact)
         for i, ti in enumerate(t):
-            ec._channels((table.nodes, table.coef), ti, spline[i])
+            ek._channels((table.nodes, table.coef), ti, spline[i])
         # with noise, the exact values at other times carry their own (measured 1.4e-9 on case 2)
-        assert (np.abs(spline - exact) / ec._scales(exact)).max() <= 4 * (ec.INTERP_NOISE if noise else table.error)
+        assert (np.abs(spline - exact) / ec._scales(exact)).max() <= 4 * (1e-9 if noise else table.error)
 
 
-def test_a_speed_with_a_kink_falls_back_to_the_python_engine_and_says_why():
-    """|t - 0.015| has a kink: the spline of ω, v0 misses by O(h) there, halving no longer halves the error
-    at a level above INTERP_NOISE, so the run goes to the Python engine, named in engine_reason."""
+def kinked():
+    """The bundled scene over 0.03 s at a speed 3 + 20 |t - 0.015| m/s: a kink in V0."""
     doc = copy.deepcopy(BUNDLED)
     doc["motion"]["speed"] = "3 + 20*abs(t - 0.015)"
     doc["time"] = {"t_end": 0.03, "steps": 10}
     doc["elastic"]["numerics"] = {"modal_samples": 0}
-    out = elastic_scene.simulate(pipeline.load(doc).setup.elastic, rtol=1e-6)
+    return pipeline.load(doc).setup.elastic
+
+
+def test_a_speed_with_a_kink_is_not_tabulated():
+    """At the kink the spline of ω, v0 misses by O(h): halving no longer gains 16x, above INTERP_NOISE."""
+    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+
+    setup = kinked()
+    assert ec.frame_table(setup.system, setup.drive, setup.t, 1e-6) is None
+
+
+@pytest.mark.slow
+def test_a_speed_with_a_kink_falls_back_to_the_python_engine_and_says_why():
+    out = elastic_scene.simulate(kinked(), rtol=1e-6)
     assert out["engine"] == "python" and "tabulated" in out["engine_reason"]
 
 
 def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs():
-    from symmech.trolley import elastic_compiled as ec
+    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     beam = {"root": [0.2, 0.3, -0.5], "axis": [0, 0, 1], "plane": [0, 1, 0], "length": 1.0, "mass_per_length": 3.0,
@@ -166,18 +178,18 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
     setup = helix(case=2, rollers=rollers, beams=[*BUNDLED["elastic"]["beams"], beam])
     system = setup.system
     table = ec.frame_table(system, setup.drive, setup.t, 1e-8)
-    args = (ec.pack(system), (table.nodes, table.coef), np.zeros(1))
+    args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1))
     n = 2 * system.N + 2
     y = np.r_[RNG.normal(size=system.N) * 1e-3, RNG.normal(size=system.N) * 1e-2, 0.0, 0.0]
     y[:5] = RNG.uniform(-1e-5, 1e-5, 5)  # away from the kinks of the clamped pair (|d| = 2e-5 m)
     J = np.empty((n, n))
-    ec._jac(0.07, y, args, J)
+    ek._jac(0.07, y, args, J)
     fd = np.empty((n, n))
     plus, minus = np.empty(n), np.empty(n)
     for j in range(2 * system.N):
         h = 1e-4 * max(abs(y[j]), 1e-4)  # truncation ~h², rounding ~eps/h: 2e-9 of the largest entry here
-        ec._rhs(0.07, y + h * np.eye(n)[j], args, plus)
-        ec._rhs(0.07, y - h * np.eye(n)[j], args, minus)
+        ek._rhs(0.07, y + h * np.eye(n)[j], args, plus)
+        ek._rhs(0.07, y - h * np.eye(n)[j], args, minus)
         fd[:, j] = (plus - minus) / (2 * h)
     rows = slice(system.N, 2 * system.N)
     assert np.abs(J[rows, :2 * system.N] - fd[rows, :2 * system.N]).max() < 1e-7 * np.abs(fd[rows]).max()
@@ -186,11 +198,11 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
 
 def test_the_assembly_matches_system_evaluate_at_random_states():
     """q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
-    from symmech.trolley import elastic_compiled as ec
+    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     setup = helix(rollers=rollers)
-    system, mdl = setup.system, ec.pack(setup.system)
+    system, mdl = setup.system, ek.pack(setup.system)
     line = el.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
@@ -198,6 +210,6 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
         q, qd = RNG.normal(size=system.N) * 1e-4, RNG.normal(size=system.N) * 1e-2
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
-        assert relative(ec._accelerations(mdl, ch, q, qd)[0], qdd) < 1e-12
-        for mine, ref in zip(ec._jacobians(mdl, ch, q, qd), (M, Rq, Rqd)):
+        assert relative(ek._accelerations(mdl, ch, q, qd)[0], qdd) < 1e-12
+        for mine, ref in zip(ek._jacobians(mdl, ch, q, qd), (M, Rq, Rqd)):
             assert relative(mine, ref) < 1e-12
