@@ -213,3 +213,15 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
         assert relative(ek._accelerations(mdl, ch, q, qd)[0], qdd) < 1e-12
         for mine, ref in zip(ek._jacobians(mdl, ch, q, qd), (M, Rq, Rqd)):
             assert relative(mine, ref) < 1e-12
+
+
+def test_the_estimate_names_the_engine_and_announces_a_first_compile(monkeypatch):
+    from symmech.trolley import elastic_compiled as ec
+
+    sc = pipeline.load(copy.deepcopy(BUNDLED))
+    warm = sc.estimate()
+    assert "elastic model (compiled engine)" in warm.what and "compiling" not in warm.what
+    monkeypatch.setattr(ec, "cold", lambda: True)
+    cold = sc.estimate()
+    assert "compiling the elastic engine once" in cold.what and "symmech warm" in cold.what
+    assert cold.seconds - warm.seconds == pytest.approx(ec.COLD_COMPILE_SECONDS)

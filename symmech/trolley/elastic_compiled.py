@@ -96,8 +96,8 @@ def frame_table(system, drive, t, rtol: float) -> Table | None:
     within max(INTERP_FRACTION rtol, INTERP_FLOOR) of the channel scale of the exact one, halving every
     interval until it is (halved locally, a spline converges slowly: its end conditions reach several
     intervals in); when STALL_ROUNDS rounds of halving no longer reduced the error 4x (noise in the exact
-    values: halving then only interpolates it), the best table so far if its error is at most INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES
-    nodes (the caller then runs the Python engine)."""
+    values: halving then only interpolates it), the best table so far if its error is at most INTERP_NOISE.
+    None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs the Python engine)."""
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
     best, since = None, 0

@@ -245,7 +245,7 @@ def _jacobians(mdl, ch, q, qd):
     qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
     z = z + Gtr @ _times_a(mdl, qdd, q)  # z at the state's q̈
     GW = _contract(G9, W)
-    # Rq = A (GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ), Rqd = A (2 GW Aᵀ + 2 Gtr DVᵀ): DV, DQ the ψ parts of A at q̇, q̈;
+    # Rq = A (GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ), Rqd = A (2 GW Aᵀ + 2 Gtr DVᵀ), DV, DQ the ψ parts of A at q̇, q̈;
     # by the symmetries (G:B)ᵀ = G:Bᵀ, (G:W)ᵀ = -G:W (W skew), Gtrᵀ = Gtr, each Z Aᵀ is (A Zᵀ)ᵀ
     psi = lambda x, Zt: _a_rows(mdl, x, Zt) - Zt[1:1 + n]  # noqa: E731  DV(x) Zt
     T = _a_rows(mdl, q, _contract(G9, B.T.copy())) - 2.0 * psi(qd, GW) + psi(qdd, Gtr)
@@ -384,7 +384,8 @@ def pack(system) -> tuple:
         idx[b, :m], H[b, :m, :m] = blk.index, blk.H
     flags = np.array([n, f, inv.mass, mdl.g0, 1.0 if system.rollers_on else 0.0, law])
     return (flags, ptr, col, qi, system.pair_i.astype(np.int64), system.pair_j.astype(np.int64),
-            np.ascontiguousarray(inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f)), np.ascontiguousarray(system.Gtr), system.C.astype(float), roll, idx,
+            np.ascontiguousarray(inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f)), np.ascontiguousarray(system.Gtr),
+            np.ascontiguousarray(system.C, float), roll, idx,
             np.array([len(b.index) for b in blocks], dtype=np.int64), H, np.array([b.c for b in blocks], float),
             np.ascontiguousarray(inv.S1), np.ascontiguousarray(inv.K), np.ascontiguousarray(inv.D),
             inv.dA.astype(np.int64), np.ascontiguousarray(inv.G.reshape(f * f, 9)))
