@@ -17,7 +17,9 @@ relative to max|P|); a 60 s ride on the same helix with the bundled mast at rtol
 Times are whole ``simulate`` calls (table, integration, outputs), medians of interleaved repeats (every
 variant once per round) with the spread (min-max).
 
-Usage: python benchmarks/bench_trolley_elastic.py [--quick] [--part stiff|engines|cold|all] [--repeats N]
+``cases``: case 2 against case 1 on the compiled engine only (part of ``engines``, alone for a quick look).
+
+Usage: python benchmarks/bench_trolley_elastic.py [--quick] [--part stiff|engines|cases|cold|all] [--repeats N]
 """
 import argparse
 import copy
@@ -121,6 +123,18 @@ def engines(quick: bool, repeats: int):
     ride(quick, repeats)
 
 
+def cases(repeats: int):
+    """Case 2 against case 1 on the compiled engine alone (the bundled scene, rtol 1e-8)."""
+    setups = {case: bundled(case) for case in (1, 2)}
+    run(setups[1], "compiled", 1e-8)
+    times = {case: [] for case in setups}
+    for _ in range(repeats):
+        for case, st in setups.items():
+            times[case].append(run(st, "compiled", 1e-8)[0])
+    print(f"compiled, bundled scene, rtol 1e-8: case 1 {spread(times[1])} s, case 2 {spread(times[2])} s, "
+          f"case 2 / case 1 {np.median(times[2]) / np.median(times[1]):.2f}")
+
+
 def ride(quick: bool, repeats: int):
     """60 s on the helix with the bundled mast at rtol 1e-6, outputs at the bundled 333 Hz (compiled)."""
     t_end = 6.0 if quick else 60.0
@@ -150,7 +164,7 @@ def cold():
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--part", choices=("stiff", "engines", "cold", "all"), default="all")
+    ap.add_argument("--part", choices=("stiff", "engines", "cases", "cold", "all"), default="all")
     ap.add_argument("--repeats", type=int, default=None)
     args = ap.parse_args()
     repeats = args.repeats or (1 if args.quick else 5)
@@ -158,6 +172,8 @@ def main():
         stiff(args.quick, repeats)
     if args.part in ("engines", "all"):
         engines(args.quick, repeats)
+    if args.part == "cases":
+        cases(repeats)
     if args.part in ("cold", "all"):
         cold()
 

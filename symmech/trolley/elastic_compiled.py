@@ -11,7 +11,7 @@ in the kernels), halving every interval until the spline at each interval midpoi
 of the exact value (:data:`INTERP_FRACTION` x rtol of the channel group's scale, at least
 :data:`INTERP_FLOOR`); the reached error is returned and reported. Where the exact values carry rounding
 noise that no refinement removes (case 2's second differences of Λ*: ~1e-9 of the channel scale on the
-bundled helix), the refinement stops once three rounds of halving no longer reduce the error 4x, provided
+bundled helix), the refinement stops once a halving increases the error or two rounds no longer reduce it 4x, provided
 the error is at most :data:`INTERP_NOISE`; otherwise the run falls back to the Python engine and says why
 (:func:`simulate`). The outputs at the grid times use the exact frame.
 """
@@ -40,7 +40,7 @@ INTERP_FLOOR = 1e-13
 # Largest relative error accepted when refinement stops reducing it (noise in the exact frame values).
 INTERP_NOISE = 1e-8
 MAX_TABLE_NODES = 1 << 20
-STALL_ROUNDS = 3
+STALL_ROUNDS = 2
 
 
 def row_terms(system, fr, V0, dV0, Y, height) -> dict:
@@ -56,11 +56,11 @@ def row_terms(system, fr, V0, dV0, Y, height) -> dict:
     return res
 
 
-def channels(drive, system, t) -> np.ndarray:
-    """The exact frame channels (k, 12) at the times t (k,) [s] (increasing from the drive's start time,
-    t[0] where s = s0): load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame_state`, vectorised."""
-    s = el.arc_length(drive, t)
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
+def channels(drive, system, t, at=slice(None)) -> np.ndarray:
+    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
+    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame_state`, vectorised."""
+    s = el.arc_length(drive, t)[at]
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
     return frame_channels(el.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
 
 
@@ -95,28 +95,34 @@ def frame_table(system, drive, t, rtol: float) -> Table | None:
     """The frame channels over [t[0], t[-1]] as a cubic spline whose value at every interval midpoint is
     within max(INTERP_FRACTION rtol, INTERP_FLOOR) of the channel scale of the exact one, halving every
     interval until it is (halved locally, a spline converges slowly: its end conditions reach several
-    intervals in); when STALL_ROUNDS rounds of halving no longer reduced the error 4x (noise in the exact
-    values: halving then only interpolates it), the best table so far if its error is at most INTERP_NOISE.
+    intervals in); when a halving increased the error or STALL_ROUNDS rounds no longer reduced it 4x (noise
+    in the exact values: halving then only interpolates it), the best table so far if its error is at most
+    INTERP_NOISE.
     None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs the Python engine)."""
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
+    ch = channels(drive, system, nodes)  # at the nodes (each round's midpoints become nodes: computed once)
     best, since = None, 0
     while True:
         every = np.empty(2 * nodes.size - 1)
         every[0::2], every[1::2] = nodes, (nodes[1:] + nodes[:-1]) / 2
-        ch = channels(drive, system, every)
-        scale = _scales(ch)
-        spline = CubicSpline(nodes, ch[0::2], axis=0)
-        worst = (np.abs(spline(every[1::2]) - ch[1::2]) / np.where(scale > 0, scale, 1.0)).max(axis=1)
+        mid = channels(drive, system, every, slice(1, None, 2))
+        scale = _scales(np.concatenate([ch, mid]))
+        spline = CubicSpline(nodes, ch, axis=0)
+        worst = (np.abs(spline(every[1::2]) - mid) / np.where(scale > 0, scale, 1.0)).max(axis=1)
         table = Table(nodes, np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
         if table.error <= bound:
             return table
-        # a smooth channel loses 16x per halving; rounds that do not gain 4x meet noise (or a kink)
+        # a smooth channel loses 16x per halving; rounds that do not gain 4x meet noise (or a kink), and a
+        # round that loses is noise outright: halving only interpolates it more closely
+        worse = best is not None and table.error > best.error
         since = 0 if best is None or table.error < 0.25 * best.error else since + 1
         best = table if best is None or table.error < best.error else best
-        if since >= STALL_ROUNDS or 2 * nodes.size > MAX_TABLE_NODES:
+        if worse or since >= STALL_ROUNDS or 2 * nodes.size > MAX_TABLE_NODES:
             return Table(best.nodes, best.coef, best.error, bound, True) if best.error <= INTERP_NOISE else None
-        nodes = every
+        merged = np.empty((every.size, N_CHANNELS))
+        merged[0::2], merged[1::2] = ch, mid
+        nodes, ch = every, merged
 
 
 def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
