@@ -160,7 +160,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
 
 # --------------------------------------------------------------------------- building the cache once
 
-COLD_COMPILE_SECONDS = 120.0  # wall time of the first compile (benchmarks/README.md: measured cold)
+COLD_COMPILE_SECONDS = 90.0  # first compile: 62 s of CPU, 213 s wall at load 10 on 2 cores (benchmarks/README.md)
 LOCK_NAME = "symmech-elastic-build.lock"  # beside numba's cache files; held by the one process that compiles
 ENTRIES = ("_solve", "_rows")  # the cached entries a run calls
 
