@@ -66,6 +66,14 @@ def test_a_short_ride_agrees_at_rtol_1e_8(case):
     assert abs(c["nfev"] - p["nfev"]) <= 0.05 * p["nfev"]  # the same step control
 
 
+def test_rigid_rollers_agree():
+    """Beams only (effects.rollers = false): P from the rigid model's reaction system on both engines."""
+    setup = helix(t_end=0.06, steps=20, effects={"rollers": False})
+    assert not setup.system.rollers_on
+    c, p = both(setup, 1e-8)
+    agree(c, p, 1e-7)
+
+
 @pytest.mark.slow
 def test_the_bundled_scene_agrees_at_rtol_1e_8():
     """The whole bundled scene (3 s, 1000 outputs): P0…P5 within 1e-7 of max|P| (measured 1.7e-12)."""
