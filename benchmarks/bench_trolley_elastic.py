@@ -17,9 +17,9 @@ relative to max|P|); a 60 s ride on the same helix with the bundled mast at rtol
 Times are whole ``simulate`` calls (table, integration, outputs), medians of interleaved repeats (every
 variant once per round) with the spread (min-max).
 
-``cases``: case 2 against case 1 on the compiled engine only (part of ``engines``, alone for a quick look).
+``cases``, ``ride``: case 2 against case 1 on the compiled engine only, the 60 s ride (parts of ``engines``).
 
-Usage: python benchmarks/bench_trolley_elastic.py [--quick] [--part stiff|engines|cases|cold|all] [--repeats N]
+Usage: python benchmarks/bench_trolley_elastic.py [--quick] [--part stiff|engines|cases|ride|cold|all] [--repeats N]
 """
 import argparse
 import copy
@@ -164,7 +164,7 @@ def cold():
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--part", choices=("stiff", "engines", "cases", "cold", "all"), default="all")
+    ap.add_argument("--part", choices=("stiff", "engines", "cases", "ride", "cold", "all"), default="all")
     ap.add_argument("--repeats", type=int, default=None)
     args = ap.parse_args()
     repeats = args.repeats or (1 if args.quick else 5)
@@ -174,6 +174,8 @@ def main():
         engines(args.quick, repeats)
     if args.part == "cases":
         cases(repeats)
+    if args.part == "ride":
+        ride(args.quick, repeats)
     if args.part in ("cold", "all"):
         cold()
 
