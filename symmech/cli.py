@@ -52,13 +52,17 @@ def cmd_warm(ns) -> int:
     import time
 
     from symmech.grain import compiled
+    from symmech.trolley import elastic_compiled
 
-    started = time.perf_counter()
     say = None if ns.quiet or ns.background else (lambda text: print(f"symmech: {text}", file=sys.stderr))
-    if not compiled.warm(wait=not ns.background, say=say):
-        return 0  # --background: another builder holds the lock
-    if not ns.background:
-        print(f"compiled grain engine ready in {time.perf_counter() - started:.1f} s; cache: {compiled.cache_dir()}")
+    engines = {"grain": compiled, "elastic": elastic_compiled}
+    for name in (engines if ns.engine == "all" else [ns.engine]):
+        started = time.perf_counter()
+        if not engines[name].warm(wait=not ns.background, say=say):
+            continue  # --background: another builder holds the lock
+        if not ns.background:
+            print(f"compiled {name} engine ready in {time.perf_counter() - started:.1f} s; cache: "
+                  f"{engines[name].cache_dir()}")
     return 0
 
 
@@ -275,13 +279,16 @@ def build_parser() -> argparse.ArgumentParser:
                          "within this, at 95 %% (default 0.001 m/s)")
     sw.set_defaults(func=cmd_sweep)
 
-    w = sub.add_parser("warm", help="compile the grain engine into numba's cache now (for containers, clusters, "
-                                    "CI); prints where the cache is", description="Compile every compiled kernel a "
-                       "grain run may need into numba's cache, once per cache: NUMBA_CACHE_DIR when set, else "
+    w = sub.add_parser("warm", help="compile the grain and elastic trolley engines into numba's cache now (for "
+                                    "containers, clusters, CI); prints where the cache is", description="Compile "
+                       "every compiled kernel a grain run or an elastic trolley run may need into numba's cache, "
+                       "once per cache: NUMBA_CACHE_DIR when set, else "
                        "__pycache__ beside the installed package (numba's user-wide cache when that is read-only). "
                        "A second `symmech warm` on the same cache waits for the first and then finds it built. "
                        "Exit 0 once the cache holds the engine.")
     w.add_argument("--quiet", action="store_true", help="print only the cache location")
+    w.add_argument("--engine", choices=("all", "grain", "elastic"), default="all",
+                   help="which compiled engine to build (default: all)")
     w.add_argument("--background", action="store_true", help=argparse.SUPPRESS)  # the detached builder of a run
     w.set_defaults(func=cmd_warm)
 

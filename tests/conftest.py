@@ -1,34 +1,55 @@
-"""Session hooks: the compiled grain engine is built once, in the background, while the other tests run.
+"""Session hooks: the compiled engines are built once, in the background, while the other tests run.
 
-Tests marked ``compiled_engine`` run last and first wait for that build
-(:func:`symmech.grain.compiled.wait_warm`), so no test pays numba's compilation on its own; under
-pytest-xdist every worker asks for the build and the build lock lets one process per machine compile.
+Tests marked ``compiled_engine`` (the grain engine) or ``compiled_elastic`` (the elastic trolley engine) run
+last and first wait for that engine's build (``wait_warm`` of :mod:`symmech.grain.compiled`,
+:mod:`symmech.trolley.elastic_compiled`), so no test pays numba's compilation on its own; under pytest-xdist
+every worker asks for the build and the build lock lets one process per machine compile.
+
+The elastic trolley's default engine is the compiled one; tests not marked ``compiled_elastic`` run it on
+the Python engine (its reference, which they test; ``engine_reason`` says so), so that no unmarked test
+compiles it in each xdist worker. tests/test_elastic_compiled.py proves the compiled engine against it.
 """
+import importlib
+
 import pytest
 
-BUILD_TIMEOUT = 1200.0  # s: the cold compile takes ~80 s on an idle 2-core machine, minutes on a busy one
+BUILD_TIMEOUT = 1200.0  # s: a cold compile takes ~1-2 min on an idle 2-core machine, minutes on a busy one
+ENGINES = {"compiled_engine": "symmech.grain.compiled", "compiled_elastic": "symmech.trolley.elastic_compiled"}
 
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "compiled_engine: uses the compiled grain engine; ordered last, waits for "
                                        "the background build started at collection")
+    config.addinivalue_line("markers", "compiled_elastic: uses the compiled elastic trolley engine; ordered last, "
+                                       "waits for the background build started at collection")
+
+
+def _marked(item) -> list:
+    return [marker for marker in ENGINES if item.get_closest_marker(marker)]
 
 
 @pytest.hookimpl(trylast=True)  # after `-m` deselection: no build when no selected test needs it
 def pytest_collection_modifyitems(session, config, items):
-    marked = [item for item in items if item.get_closest_marker("compiled_engine")]
-    if marked:
-        from symmech.grain import compiled
+    needed = {marker for item in items for marker in _marked(item)}
+    for marker in sorted(needed):
+        importlib.import_module(ENGINES[marker]).warm_in_background()
+    if needed:
+        items[:] = [item for item in items if not _marked(item)] + [item for item in items if _marked(item)]
 
-        compiled.warm_in_background()
-        items[:] = [item for item in items if not item.get_closest_marker("compiled_engine")] + marked
+
+@pytest.fixture(autouse=True)
+def _elastic_reference_engine(request, monkeypatch):
+    if not request.node.get_closest_marker("compiled_elastic"):
+        from symmech.trolley import elastic_scene
+
+        monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("python", "tests: the reference engine "
+                                                                              "(tests/conftest.py)"))
 
 
 @pytest.fixture(autouse=True)
 def _compiled_engine_built(request):
-    if request.node.get_closest_marker("compiled_engine"):
-        from symmech.grain import compiled
-
-        if not compiled.wait_warm(BUILD_TIMEOUT):
-            pytest.fail(f"the compiled grain engine was not built within {BUILD_TIMEOUT:g} s (cache: "
-                        f"{compiled.cache_dir()}; `symmech warm` builds it in the foreground)")
+    for marker in _marked(request.node):
+        engine = importlib.import_module(ENGINES[marker])
+        if not engine.wait_warm(BUILD_TIMEOUT):
+            pytest.fail(f"the {ENGINES[marker]} engine was not built within {BUILD_TIMEOUT:g} s (cache: "
+                        f"{engine.cache_dir()}; `symmech warm` builds it in the foreground)")

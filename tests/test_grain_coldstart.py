@@ -54,7 +54,8 @@ def test_auto_on_a_cold_cache_answers_with_the_python_engine_and_starts_one_buil
     assert summary["engine"] == "python" and "background" in summary["engine_reason"]
     assert "Python engine" in summary["estimate"]["what"] and summary["bounces"] >= 3
     (args, kw), = cold_cache  # one builder: detached in its own session, so Ctrl-C of the run does not reach it
-    assert args[1:] == ["-m", "symmech", "warm", "--background"] and kw["start_new_session"] is True
+    assert args[1:] == ["-m", "symmech", "warm", "--engine", "grain", "--background"]
+    assert kw["start_new_session"] is True
 
 
 def test_auto_compiles_first_when_the_python_engine_would_take_longer(tmp_path, cold_cache):
@@ -106,7 +107,7 @@ def test_warm_help_names_the_cache_locations(capsys):
 @pytest.mark.compiled_engine
 def test_warm_on_a_built_cache_prints_its_location_and_compiles_nothing(capsys):
     misses = sum(compiled.run.stats.cache_misses.values())
-    assert main(["warm"]) == 0
+    assert main(["warm", "--engine", "grain"]) == 0
     captured = capsys.readouterr()
     assert f"cache: {compiled.cache_dir()}" in captured.out and "compiling" not in captured.err
     assert sum(compiled.run.stats.cache_misses.values()) == misses and not compiled.cold()
@@ -161,7 +162,7 @@ def test_two_concurrent_first_runs_then_a_third_on_the_compiled_engine_that_agre
     engines = [json.loads((tmp_path / f"run{k}" / "summary.json").read_text())["engine"] for k in (1, 2)]
     assert engines == ["python", "python"]
     started = time.perf_counter()
-    warm = subprocess.run([sys.executable, "-m", "symmech", "warm"], env=_env(cache), capture_output=True,
+    warm = subprocess.run([sys.executable, "-m", "symmech", "warm", "--engine", "grain"], env=_env(cache), capture_output=True,
                           text=True, timeout=1800)  # waits on the lock for the background builder
     assert warm.returncode == 0 and str(cache) in warm.stdout, warm.stderr
     assert "compiling" not in warm.stderr, (warm.stderr, time.perf_counter() - started)  # the builder built it

@@ -1461,7 +1461,7 @@ def warm(wait: bool = True, say=None) -> bool:
 
 
 def warm_in_background() -> bool:
-    """Start a detached builder (``python -m symmech warm --background``, its own session: Ctrl-C or SIGTERM
+    """Start a detached builder (``python -m symmech warm --engine grain --background``, its own session: Ctrl-C or SIGTERM
     of the caller does not reach it) unless the loop is cached or a builder holds the lock; returns at once,
     whether one was started."""
     if not cold():
@@ -1469,7 +1469,7 @@ def warm_in_background() -> bool:
     with _build_lock(wait=False) as free:
         if not free:
             return False
-    subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--background"], stdin=subprocess.DEVNULL,
+    subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", "grain", "--background"], stdin=subprocess.DEVNULL,
                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     return True
 

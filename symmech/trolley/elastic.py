@@ -481,13 +481,15 @@ class System:
         return np.linalg.solve(self.reaction_system, np.r_[F, moment])
 
     def contact_moment(self, q, forces):
-        """Moment about O of the roller forces at the displaced contact points [N m]."""
+        """Moment about O of the roller forces at the displaced contact points [N m] (..., 3), for
+        coordinates q (..., N) and forces P1…P5 (..., 5)."""
         p = self.contacts
         f = gen.rigid_fields(p[:, 0], p[:, 1], p[:, 2])
-        u = np.einsum("pik,k->pi", f[:, :, :5], q[:5])
+        q = np.asarray(q, float)
+        u = np.einsum("pik,...k->...pi", f[:, :, :5], q[..., :5])
         for col, (i, j) in enumerate(ROTATION_PAIRS):
-            u += (0.5 if i == j else 1.0) * q[i] * q[j] * f[:, :, 5 + col]
-        return np.cross(p + u, forces[:, None] * self.directions).sum(0)
+            u = u + (0.5 if i == j else 1.0) * (q[..., i] * q[..., j])[..., None, None] * f[:, :, 5 + col]
+        return np.cross(p + u, forces[..., :, None] * self.directions).sum(-2)
 
     def jacobi_energy(self, fs: FrameState, q, qd):
         """h = T2 - T0 + Π + V_g [J]: constant when the frame's motion is steady (ω, v0, ν
@@ -756,45 +758,63 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     return out
 
 
-def outputs(system: System, drive: Drive, t, s, V0, dV0, Y) -> dict:
-    """Per output time (arrays (n,) of t, s, V0, dV0 and the states Y (n, 2N + 2)): q, q̇, q̈,
-    reactions P (n, 6), resultants F, M (n, 3), roller deflections (n, 5), probe displacements
-    (total and elastic) and overloads (n, n_probes, 3) [m, g], the Jacobi energy h, the total
-    energy E (fixed frame), the dissipated energy and the work of the track forces [J], and the
-    rigid model's reactions and overloads of the centre of mass beside them."""
-    N, inv = system.N, system.inv
-    n = len(t)
-    q, qd, ed, work = Y[:, :N], Y[:, N:2 * N], Y[:, 2 * N], Y[:, 2 * N + 1]
-    fr = frames(drive, s, system.mdl.l)
-    height = drive.track.derivatives(s, 0)[0][:, 1]
-    n_probe = inv.probe_fields.shape[1]
-    res = {k: np.zeros((n,) + shape) for k, shape in (
-        ("qdd", (N,)), ("P", (6,)), ("F", (3,)), ("M", (3,)), ("M_contacts", (3,)), ("deflection", (5,)),
-        ("probe_displacement", (n_probe, 3)), ("probe_elastic", (n_probe, 3)), ("probe_overload", (n_probe, 3)),
-        ("h", ()), ("E", ()))}
-    g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
-    elastic = np.zeros(system.F, bool)
-    elastic[1 + inv.n_roll:1 + N] = True
-    elastic[1 + N:] = [i >= inv.n_roll for i, _ in inv.pairs]
+def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
+    """Per output row (frame fr, speeds V0, dV0, heights of O (n,) [m], states Y (n, 2N + 2)): q̈ (n, N), the
+    resultants F, M (n, 3), the coefficient vectors of r̃, its rate and acceleration (n, F), the Jacobi
+    energy h and the total energy E (n,) [J]. The compiled engine computes the same in numba
+    (:func:`symmech.trolley.elastic_compiled.row_terms`)."""
+    N, n = system.N, len(V0)
+    q, qd = Y[:, :N], Y[:, N:2 * N]
+    res = {k: np.zeros((n,) + shape) for k, shape in (("qdd", (N,)), ("F", (3,)), ("M", (3,)), ("rr", (system.F,)),
+                                                     ("v", (system.F,)), ("acc", (system.F,)), ("h", ()), ("E", ()))}
     for i in range(n):
         fs = frame_state(fr, i, V0[i], dV0[i])
         qdd = system.accelerations(fs, q[i], qd[i])
         res["qdd"][i] = qdd
-        res["P"][i] = system.reactions(fs, q[i], qd[i], qdd)
         res["F"][i], res["M"][i] = system.resultants(fs, q[i], qd[i], qdd)
-        res["M_contacts"][i] = system.contact_moment(q[i], res["P"][i, 1:]) if system.rollers_on else 0.0
-        res["deflection"][i] = system.roller_state(q[i], qd[i])[0]
         rr, A = system.coefficients(q[i])
-        v, acc = qd[i] @ A, qdd @ A + system._p2(qd[i])
-        pos = np.einsum("k,kpi->pi", rr, inv.probe_fields)
-        vel = np.einsum("k,kpi->pi", v, inv.probe_fields)
-        ddu = np.einsum("k,kpi->pi", acc, inv.probe_fields)
-        a = fs.a0 + np.cross(fs.dw, pos) + np.cross(fs.w, np.cross(fs.w, pos)) + 2 * np.cross(fs.w, vel) + ddu
-        res["probe_displacement"][i] = pos - inv.probe_points
-        res["probe_elastic"][i] = np.einsum("k,kpi->pi", np.where(elastic, rr, 0.0), inv.probe_fields)
-        res["probe_overload"][i] = (a + system.mdl.g0 * fs.nu) / g_ref
+        res["rr"][i], res["v"][i], res["acc"][i] = rr, qd[i] @ A, qdd @ A + system._p2(qd[i])
         res["h"][i] = system.jacobi_energy(fs, q[i], qd[i])
         res["E"][i] = system.total_energy(fs, q[i], qd[i], height[i])
+    return res
+
+
+def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms) -> dict:
+    """Per output time (arrays (n,) of t, s, V0, dV0 and the states Y (n, 2N + 2)): q, q̇, q̈,
+    reactions P (n, 6), resultants F, M (n, 3), roller deflections (n, 5), probe displacements
+    (total and elastic) and overloads (n, n_probes, 3) [m, g], the Jacobi energy h, the total
+    energy E (fixed frame), the dissipated energy and the work of the track forces [J], and the
+    rigid model's reactions and overloads of the centre of mass beside them. ``rows`` computes the
+    per-row terms (:func:`row_terms` or the compiled engine's)."""
+    N, inv = system.N, system.inv
+    q, qd, ed, work = Y[:, :N], Y[:, N:2 * N], Y[:, 2 * N], Y[:, 2 * N + 1]
+    fr = frames(drive, s, system.mdl.l)
+    height = drive.track.derivatives(s, 0)[0][:, 1]
+    res = rows(system, fr, V0, dV0, Y, height)
+    if system.rollers_on:
+        d = q[:, :5] @ system.C.T
+        force, _ = roller_forces(system.mdl.rollers, d, qd[:, :5] @ system.C.T, system.mdl.effects.damping)
+        res["P"] = np.column_stack([res["F"][:, 0], force])
+        res["deflection"] = d
+        res["M_contacts"] = system.contact_moment(q, force)
+    else:
+        res["P"] = np.linalg.solve(system.reaction_system, np.column_stack([res["F"], res["M"]]).T).T
+        res["deflection"], res["M_contacts"] = np.zeros((len(t), 5)), np.zeros((len(t), 3))
+    g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
+    elastic = np.zeros(system.F, bool)
+    elastic[1 + inv.n_roll:1 + N] = True
+    elastic[1 + N:] = [i >= inv.n_roll for i, _ in inv.pairs]
+    pos, vel, ddu = (np.einsum("nk,kpi->npi", res[key], inv.probe_fields) for key in ("rr", "v", "acc"))
+    w = V0[:, None] * fr.W
+    dw = dV0[:, None] * fr.W + V0[:, None] ** 2 * fr.dW
+    a0 = dV0[:, None] * fr.e + V0[:, None] ** 2 * (fr.de + np.cross(fr.W, fr.e))
+    a = a0[:, None] + np.cross(dw[:, None], pos) + np.cross(w[:, None], np.cross(w[:, None], pos)) + \
+        2 * np.cross(w[:, None], vel) + ddu
+    res["probe_displacement"] = pos - inv.probe_points
+    res["probe_elastic"] = np.einsum("nk,kpi->npi", np.where(elastic, res["rr"], 0.0), inv.probe_fields)
+    res["probe_overload"] = (a + system.mdl.g0 * fr.lam[:, None, :, 1]) / g_ref
+    for key in ("rr", "v", "acc"):
+        del res[key]
     rigid = model.body_motion(fr, V0, dV0, rigid_body(system.mdl))
     res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, work=work, names=list(inv.names),
                P_rigid=rigid["P"], overload_rigid=rigid["overload"], W=fr.W, dW=fr.dW)

@@ -94,6 +94,13 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
     "points": TableList("report points", item=POINT, max_items=100, default=[]),
     "initial": INITIAL,
     "numerics": Table("integration", {
+        "engine": Choice("`compiled`: the assembly in numba, integrated by the compiled Radau IIA with the analytic "
+                         "Jacobian (symmech.trolley.elastic_compiled; compiled once per installation, ~1 CPU-minute, then "
+                         "loaded from numba's cache; `symmech warm` builds it); the frame along the track is "
+                         "tabulated per run and its interpolation error checked against the exact frame. "
+                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). Traction and a "
+                         "`method` other than Radau run on `python`", choices=("compiled", "python"),
+                         default="compiled"),
         "method": Choice("integrator (implicit ones use the analytic Jacobian)",
                          choices=("Radau", "BDF", "LSODA", "DOP853", "RK45"), default="Radau"),
         "rtol": Float("relative tolerance", unit="1", lo=1e-13, hi=1e-2, default=1e-7),
@@ -120,6 +127,35 @@ class Setup:
     resonance_band: float
     dq0: np.ndarray | None = None  # (N,) coordinates at t = 0 beyond the quasi-static state [m, rad]
     dqd0: np.ndarray | None = None  # (N,) their rates [m/s, rad/s]
+    engine: str = "compiled"  # numerics.engine as given; engine() says what runs
+
+
+def engine(setup: Setup) -> tuple[str, str]:
+    """The engine that integrates the elastic model, "compiled" or "python", and why."""
+    if setup.engine == "python":
+        return "python", 'numerics.engine = "python"'
+    if setup.drive.traction is not None:
+        return "python", "traction (drive.traction) runs on the Python engine only"
+    if setup.method != "Radau":
+        return "python", f"numerics.method = \"{setup.method}\": the compiled engine integrates by Radau"
+    return "compiled", 'numerics.engine = "compiled"'
+
+
+def simulate(setup: Setup, **kw) -> dict:
+    """The elastic model along the setup's grid on the engine of :func:`engine` (keywords: those of
+    :func:`symmech.trolley.elastic.simulate`, ``method`` and ``analytic_jacobian`` only on the Python engine);
+    ``engine`` and ``engine_reason`` in the result name it."""
+    start = {"dq0": setup.dq0, "dqd0": setup.dqd0, "rtol": setup.rtol}
+    name, why = engine(setup)
+    if name == "compiled":
+        from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+
+        out = elastic_compiled.simulate(setup.system, setup.drive, setup.t, **{**start, **kw})
+        out["engine_reason"] = out["engine_reason"] or why
+        return out
+    out = el.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
+    out.update(engine="python", engine_reason=why)
+    return out
 
 
 def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "elastic") -> Setup:
@@ -165,7 +201,7 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
                                             "with beams): the rigid traction run is the trolley's own")
     dq0, dqd0 = _initial(elastic["initial"], system, f"{path}.initial")
     return Setup(system if system.N else None, drive, body, np.asarray(t, float), names, num["method"], num["rtol"],
-                 num["modal_samples"], num["small_rotation"], num["resonance_band"], dq0, dqd0)
+                 num["modal_samples"], num["small_rotation"], num["resonance_band"], dq0, dqd0, num["engine"])
 
 
 def _initial(initial: dict, system: el.System, path: str) -> tuple[np.ndarray, np.ndarray]:
@@ -227,7 +263,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
                       {"elastic_reactions": ResultTable(cols, np.column_stack([t, rigid["P"]]))})
     if ctx is not None:
         ctx.tick("elastic model")
-    r = el.simulate(setup.system, setup.drive, t, setup.method, setup.rtol, dq0=setup.dq0, dqd0=setup.dqd0)
+    r = simulate(setup)
     modes, failed = _modal_analysis(setup, r)
     tables = {"elastic_reactions": _reactions_table(r), "energy": _energy_table(r)}
     if setup.system.rollers_on:
@@ -266,7 +302,12 @@ def _summary(setup: Setup, r, comfort) -> tuple[dict, list]:
         "energy_residual_max_J": float(np.abs(residual).max()),
         "energy_residual_relative": float(np.abs(residual).max() / scale),
         "function_evaluations": int(r["nfev"]),
+        "engine": r["engine"],
+        "engine_reason": r["engine_reason"],
     }
+    if r["engine"] == "compiled":
+        info["frame_table_nodes"] = int(r["frame_table_nodes"])
+        info["frame_interpolation_error"] = float(r["frame_interpolation_error"])
     warnings = []
     if comfort and setup.names:
         info["comfort"] = {}
@@ -511,38 +552,46 @@ def _modes_table(modes: dict, names: list) -> ResultTable:
 
 PRECISION_RTOLS = (1e-4, 1e-6, 1e-8)
 # (name, simulate options, tolerances): explicit DOP853 is bound by the stability of its steps
-# on stiff rollers (the same time at every rtol on the bundled scene), so it is run once.
+# on stiff rollers (the same time at every rtol on the bundled scene), so it is run once; the
+# compiled engine (Radau, analytic J) where the scene can run it.
 PRECISION_METHODS = (("Radau, analytic J", {"method": "Radau"}, PRECISION_RTOLS),
                      ("BDF, analytic J", {"method": "BDF"}, PRECISION_RTOLS),
                      ("Radau, FD J", {"method": "Radau", "analytic_jacobian": False}, PRECISION_RTOLS),
                      ("DOP853", {"method": "DOP853"}, PRECISION_RTOLS[:1]))
+COMPILED_METHOD = "Radau, analytic J, compiled"
 PRECISION_REFERENCE = {"method": "Radau", "rtol": 1e-11, "atol_q": 1e-17}
 
 
 def precision(setup: Setup, ctx) -> Result:
     """Work-precision of the elastic model on the scene's grid: integrators (implicit with the
-    analytic or a differenced Jacobian, explicit) over relative tolerances (absolute: rtol x
-    1e-6 m on the coordinates); error max|P - P_ref| / max|P_ref| of the reactions, the
-    reference by Radau at rtol 1e-11 (steps small enough to resolve every mode)."""
+    analytic or a differenced Jacobian, explicit; the compiled engine's Radau) over relative tolerances
+    (absolute: rtol x 1e-6 m on the coordinates); error max|P - P_ref| / max|P_ref| of the reactions, the
+    reference by the Python engine's Radau at rtol 1e-11 (steps small enough to resolve every mode)."""
     from symmech.core import precision as wp
 
     if setup.system is None:
         raise SymmechError("bench precision of an elastic trolley needs an elastic effect (elastic.effects)")
     ctx.tick("elastic precision: reference")
-    start = {"dq0": setup.dq0, "dqd0": setup.dqd0}
-    ref = el.simulate(setup.system, setup.drive, setup.t, **PRECISION_REFERENCE, **start)["P"]
+    python = Setup(**{**setup.__dict__, "engine": "python"})
+    ref = simulate(python, **PRECISION_REFERENCE)["P"]
     scale = max(np.abs(ref).max(), 1e-300)
+    runs = [(name, python, kw, rtols) for name, kw, rtols in PRECISION_METHODS]
+    compiled = Setup(**{**setup.__dict__, "engine": "compiled", "method": "Radau"})
+    if engine(compiled)[0] == "compiled":
+        from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+
+        elastic_compiled.warm()  # its first compile is not a cost of any row
+        runs.append((COMPILED_METHOD, compiled, {}, PRECISION_RTOLS))
     rows = []
-    for name, kw, rtols in PRECISION_METHODS:
+    for name, st, kw, rtols in runs:
         for rtol in rtols:
             ctx.tick(f"elastic precision: {name}, rtol {rtol:g}")
-            seconds, out = wp.best_time(lambda: el.simulate(setup.system, setup.drive, setup.t, rtol=rtol,
-                                                            atol_q=rtol * 1e-6, **kw, **start), repeats=1,
+            seconds, out = wp.best_time(lambda: simulate(st, rtol=rtol, atol_q=rtol * 1e-6, **kw), repeats=1,
                                         min_seconds=0.0)
             rows.append({"method": name, "knob": "rtol", "value": rtol, "seconds": seconds,
                          "error": float(np.abs(out["P"] - ref).max() / scale)})
-    reference = (f"Radau at rtol {PRECISION_REFERENCE['rtol']:g}, atol {PRECISION_REFERENCE['atol_q']:g} m "
-                 "(coordinates); error max|P - P_ref| / max|P_ref| over the grid")
+    reference = (f"Radau (Python engine) at rtol {PRECISION_REFERENCE['rtol']:g}, atol "
+                 f"{PRECISION_REFERENCE['atol_q']:g} m (coordinates); error max|P - P_ref| / max|P_ref| over the grid")
     return wp.result("trolley", rows, "precision_elastic", "Elastic trolley: work-precision (reactions P0…P5)",
                      reference)
 

@@ -36,6 +36,7 @@ SECONDS_PER_RHS = 2e-4
 # Elastic model per grid step (bundled trolley_elastic_helix on 2 shared cores: ~0.1 s; stiff
 # rollers and undamped beams take more, a rough guide for --max-time only).
 SECONDS_PER_ELASTIC_STEP = 0.1
+SECONDS_PER_ELASTIC_STEP_COMPILED = 2e-3  # bundled scene compiled: ~0.6 s for 1000 steps on a busy machine
 MAX_RHS = 2_000_000  # traction right-hand sides before the integration counts as stalled
 
 
@@ -410,8 +411,16 @@ def estimate(setup: Setup) -> registry.Estimate:
         seconds += SECONDS_PER_RHS * rhs * cases
         what += f", ~{rhs} traction evaluations"
     if setup.elastic is not None and setup.elastic.system is not None:
-        seconds += SECONDS_PER_ELASTIC_STEP * steps
-        what += ", the elastic model"
+        engine, _ = elastic_scene.engine(setup.elastic)
+        what += f", the elastic model ({engine} engine)"
+        seconds += (SECONDS_PER_ELASTIC_STEP_COMPILED if engine == "compiled" else SECONDS_PER_ELASTIC_STEP) * steps
+        if engine == "compiled":
+            from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+
+            if elastic_compiled.cold():
+                seconds += elastic_compiled.COLD_COMPILE_SECONDS
+                what += (f"; compiling the elastic engine once, ~{elastic_compiled.COLD_COMPILE_SECONDS:.0f} s "
+                         f"(numba's cache {elastic_compiled.cache_dir()}; `symmech warm` builds it ahead)")
     return registry.Estimate(seconds, what)
 
 

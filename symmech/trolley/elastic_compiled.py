@@ -1,0 +1,247 @@
+"""The elastic trolley compiled: the assembly of :class:`symmech.trolley.elastic.System` in numba
+(:mod:`symmech.trolley.elastic_kernels`), integrated by the toolkit's Radau IIA with the analytic Jacobian;
+this module drives it (:func:`simulate`, the same contract and outputs as the Python engine's) and builds
+numba's cache once (:func:`warm`).
+
+**The frame along the track.** The right-hand side needs, at any stage time t, the load a0 + g0 ν, ω,
+ω̇ and v0 (body components). They come from Python (``model.moving_frame`` or ``local_curvature_frame``
+of any track, the user's V0(t)) and cannot be called per stage, so :func:`frame_table` tabulates these 12
+channels once per run on a grid of t, vectorised, as a cubic spline (scipy's ``CubicSpline``, evaluated
+in the kernels), halving every interval until the spline at each interval midpoint is within the bound
+of the exact value (:data:`INTERP_FRACTION` x rtol of the channel group's scale, at least
+:data:`INTERP_FLOOR`); the reached error is returned and reported. Where the exact values carry rounding
+noise that no refinement removes (case 2's second differences of Λ*: ~1e-9 of the channel scale on the
+bundled helix), the refinement stops once a halving increases the error or two rounds no longer reduce it 4x, provided
+the error is at most :data:`INTERP_NOISE`; otherwise the run falls back to the Python engine and says why
+(:func:`simulate`). The outputs at the grid times use the exact frame.
+"""
+from __future__ import annotations
+
+import fcntl
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from symmech.core import ode
+from symmech.trolley import elastic as el
+from symmech.trolley import elastic_kernels as ek
+from symmech.trolley.elastic_kernels import DOMEGA, LOAD, N_CHANNELS, OMEGA, V0
+
+# Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
+INTERP_FRACTION = 1e-3
+INTERP_FLOOR = 1e-13
+# Largest relative error accepted when refinement stops reducing it (noise in the exact frame values).
+INTERP_NOISE = 1e-8
+MAX_TABLE_NODES = 1 << 20
+STALL_ROUNDS = 2
+
+
+def row_terms(system, fr, V0, dV0, Y, height) -> dict:
+    """:func:`symmech.trolley.elastic.row_terms` by the kernels' ``_rows`` (the potential Π per row in Python)."""
+    chs = frame_channels(fr, V0, dV0, system.mdl.g0)
+    nu = np.ascontiguousarray(fr.lam[:, :, 1])
+    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
+    terms = ek._rows(ek.pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
+    res = dict(zip(keys, terms))
+    pi = np.array([system.potential(q) for q in Y[:, :system.N]])
+    res["h"] += pi
+    res["E"] += pi
+    return res
+
+
+def channels(drive, system, t, at=slice(None)) -> np.ndarray:
+    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
+    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame_state`, vectorised."""
+    s = el.arc_length(drive, t)[at]
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
+    return frame_channels(el.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
+
+
+def frame_channels(fr, V0, dV0, g0: float) -> np.ndarray:
+    """Channels (k, 12) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,)."""
+    V, dV = V0[:, None], dV0[:, None]
+    a0 = dV * fr.e + V ** 2 * (fr.de + np.cross(fr.W, fr.e))
+    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], V * fr.W, dV * fr.W + V ** 2 * fr.dW, V * fr.e])
+
+
+def _scales(ch: np.ndarray) -> np.ndarray:
+    """Error scale (12,) of each channel: its group's largest norm; ω̇ against |ω̇| + |ω|² (it enters
+    B = skew(ω̇) + skew(ω)²); a group that is zero everywhere is exact (scale 0 accepts 0 error only)."""
+    norm = lambda j: float(np.linalg.norm(ch[:, j:j + 3], axis=1).max())  # noqa: E731
+    groups = [norm(LOAD), norm(OMEGA), norm(DOMEGA) + norm(OMEGA) ** 2, norm(V0)]
+    return np.repeat(groups, 3)
+
+
+@dataclass(frozen=True)
+class Table:
+    """The spline table of the frame channels: nodes (n,) [s], coefficients (4, n - 1, 12), the largest
+    midpoint error relative to the channel scale, the bound it met, and whether it stopped on noise."""
+
+    nodes: np.ndarray
+    coef: np.ndarray
+    error: float
+    bound: float
+    noise: bool
+
+
+def frame_table(system, drive, t, rtol: float) -> Table | None:
+    """The frame channels over [t[0], t[-1]] as a cubic spline whose value at every interval midpoint is
+    within max(INTERP_FRACTION rtol, INTERP_FLOOR) of the channel scale of the exact one, halving every
+    interval until it is (halved locally, a spline converges slowly: its end conditions reach several
+    intervals in); when a halving increased the error or STALL_ROUNDS rounds no longer reduced it 4x (noise
+    in the exact values: halving then only interpolates it), the best table so far if its error is at most
+    INTERP_NOISE.
+    None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs the Python engine)."""
+    bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
+    nodes = np.asarray(t, float)
+    ch = channels(drive, system, nodes)  # at the nodes (each round's midpoints become nodes: computed once)
+    best, since = None, 0
+    while True:
+        every = np.empty(2 * nodes.size - 1)
+        every[0::2], every[1::2] = nodes, (nodes[1:] + nodes[:-1]) / 2
+        mid = channels(drive, system, every, slice(1, None, 2))
+        scale = _scales(np.concatenate([ch, mid]))
+        spline = CubicSpline(nodes, ch, axis=0)
+        worst = (np.abs(spline(every[1::2]) - mid) / np.where(scale > 0, scale, 1.0)).max(axis=1)
+        table = Table(nodes, np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
+        if table.error <= bound:
+            return table
+        # a smooth channel loses 16x per halving; rounds that do not gain 4x meet noise (or a kink), and a
+        # round that loses is noise outright: halving only interpolates it more closely
+        worse = best is not None and table.error > best.error
+        since = 0 if best is None or table.error < 0.25 * best.error else since + 1
+        best = table if best is None or table.error < best.error else best
+        if worse or since >= STALL_ROUNDS or 2 * nodes.size > MAX_TABLE_NODES:
+            return Table(best.nodes, best.coef, best.error, bound, True) if best.error <= INTERP_NOISE else None
+        merged = np.empty((every.size, N_CHANNELS))
+        merged[0::2], merged[1::2] = ch, mid
+        nodes, ch = every, merged
+
+
+def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
+    """:func:`symmech.trolley.elastic.simulate` by Radau on the compiled assembly (prescribed speed; the
+    same state, tolerances, step bound and outputs). ``engine`` / ``engine_reason`` name what ran: the Python
+    engine when the frame cannot be tabulated within its bound (:func:`frame_table`); ``frame_table_nodes``
+    and ``frame_interpolation_error`` (relative to the channel scales) what the table reached."""
+    t = np.asarray(t, dtype=float)
+    table = frame_table(system, drive, t, rtol)
+    if table is None:
+        out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0)
+        out["engine"], out["engine_reason"] = "python", (
+            f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
+            f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+        return out
+    N = system.N
+    line = el.Timeline(system, drive, t)
+    q0 = system.quasi_static(line.state(t[0]))
+    zero = np.zeros(N)
+    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL]
+    step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
+    Y, steps, nfev, status = ek._solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol, step)
+    if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
+        last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
+        why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \
+            "no finite state"
+        raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: {why})")
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
+    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms)
+    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
+               frame_interpolation_error=table.error)
+    return out
+
+
+# --------------------------------------------------------------------------- building the cache once
+
+COLD_COMPILE_SECONDS = 90.0  # first compile: 62 s of CPU, 213 s wall at load 10 on 2 cores (benchmarks/README.md)
+LOCK_NAME = "symmech-elastic-build.lock"  # beside numba's cache files; held by the one process that compiles
+ENTRIES = ("_solve", "_rows")  # the cached entries a run calls
+
+
+def _entry_signatures() -> dict:
+    """The argument types :func:`simulate` and :func:`row_terms` call the entries with (a small model)."""
+    f, n = 3, 1
+    mdl = (np.zeros(6), np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64),
+           np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((9 * f, f)), np.zeros((f, f)), np.zeros((5, 5)),
+           np.zeros((3, 5)), np.zeros((0, 1), np.int64), np.zeros(0, np.int64), np.zeros((0, 1, 1)), np.zeros(0),
+           np.zeros((f, 3)), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n), np.int64), np.zeros((f * f, 9)))
+    tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
+    solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4), 1.0)
+    rows = (mdl, np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
+    return {"_solve": tuple(numba.typeof(a) for a in solve), "_rows": tuple(numba.typeof(a) for a in rows)}
+
+
+def cold() -> bool:
+    """Whether the next run compiles: no machine code for an entry cached for this source yet."""
+    for name in ENTRIES:
+        index = getattr(getattr(getattr(ek, name), "_cache", None), "_cache_file", None)  # numba's cache (private API)
+        if index is not None and not index._load_index():
+            return True
+    return False
+
+
+def cache_dir() -> Path:
+    """Where numba caches the entries (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside this module)."""
+    return Path(ek._solve._cache._cache_path)  # numba's cache locator (private API, as cold())
+
+
+@contextmanager
+def _build_lock(wait: bool):
+    """The machine-wide build lock (``fcntl.flock``, released by the OS when its holder dies); yields
+    whether this process holds it (always, with ``wait``)."""
+    folder = cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / LOCK_NAME, "a") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            yield False
+            return
+        yield True
+
+
+def warm(wait: bool = True, say=None) -> bool:
+    """Compile the entries into numba's cache unless they are there (one builder per cache, under the build
+    lock; without ``wait`` return False at once when another process holds it); ``say(text)`` tells what
+    it does. Returns whether the cache holds the engine."""
+    with _build_lock(wait) as mine:
+        if not mine:
+            return False
+        if cold():
+            if say:
+                say(f"compiling the elastic engine once, ~{COLD_COMPILE_SECONDS:.0f} s (cache: {cache_dir()})")
+            for name, signature in _entry_signatures().items():
+                getattr(ek, name).compile(signature)
+    return True
+
+
+def warm_in_background() -> bool:
+    """Start a detached ``python -m symmech warm --engine elastic --background`` unless the engine is cached
+    or a builder holds the lock; returns whether one was started."""
+    if not cold():
+        return False
+    with _build_lock(wait=False) as free:
+        if not free:
+            return False
+    subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", "elastic", "--background"],
+                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                     start_new_session=True)
+    return True
+
+
+def wait_warm(timeout: float) -> bool:
+    """Start the builder if none runs and wait up to ``timeout`` [s] for the engine to be cached."""
+    deadline = time.monotonic() + timeout
+    warm_in_background()
+    while cold():
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.5)
+    return True

@@ -1,0 +1,391 @@
+"""The elastic trolley's assembly in numba: the right-hand side and Jacobian the toolkit's Radau IIA
+(:mod:`symmech.core.ode`) integrates, the cached whole solve and the per-row output terms; driven by
+:mod:`symmech.trolley.elastic_compiled` (a module of its own: numba's cache is keyed on the file, so the
+driver changes without a recompile).
+
+The physics is that of ``System.evaluate`` / ``resultants`` (the Python engine stays the reference; the
+tests compare the two): per state the coefficient vectors over the fields (rr, and v = q̇ A, the
+ψ part of A held as a sparse list of entries), two passes over the Gram tensor G (X_k = Σ_l G_kl rr_l,
+Y_k = Σ_l G_kl v_l) give the residual R, the resultants F, M_O (track power) and the mass matrix; the
+Jacobian forms G:B and G:W explicitly. The frame enters as 12 channels (load a0 + g0 ν, ω, ω̇, v0) of a
+spline table in t.
+
+The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
+and inlined into the cached entry :func:`_solve`, so a second process loads the whole solve from numba's
+cache (see :mod:`symmech.core.ode`).
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from symmech.core import ode
+
+jit = numba.njit(cache=True, error_model="numpy", nogil=True)
+
+# Frame channels of the table (columns): load a0 + g0 ν [m/s²], ω [rad/s], ω̇ [rad/s²], v0 [m/s].
+LOAD, OMEGA, DOMEGA, V0 = 0, 3, 6, 9
+N_CHANNELS = 12
+# Model flags (the float vector ``flags``): N, F, mass, g0, rollers on, law (0 linear, 1 clamped pair).
+F_N, F_F, F_MASS, F_G0, F_ROLLERS, F_LAW = range(6)
+MAX_STEPS = 50_000_000
+
+
+# --------------------------------------------------------------------------- small pieces
+
+@jit
+def _channels(tab, t, out):
+    """The 12 frame channels at t [s] from the spline table tab = (nodes (n,), coefficients (4, n - 1, 12))."""
+    tk, c = tab
+    i = np.searchsorted(tk, t, side="right") - 1
+    i = min(max(i, 0), tk.size - 2)
+    x = t - tk[i]
+    for j in range(N_CHANNELS):
+        out[j] = ((c[0, i, j] * x + c[1, i, j]) * x + c[2, i, j]) * x + c[3, i, j]
+
+
+@jit
+def _frame_mats(ch):
+    """B = skew(ω̇) + skew(ω)² and W = skew(ω) (3, 3) from the channels ch (12,)."""
+    w, dw = ch[OMEGA:OMEGA + 3], ch[DOMEGA:DOMEGA + 3]
+    W = np.zeros((3, 3))
+    W[0, 1], W[0, 2], W[1, 2] = -w[2], w[1], -w[0]
+    W[1, 0], W[2, 0], W[2, 1] = w[2], -w[1], w[0]
+    B = W @ W
+    B[0, 1] -= dw[2]
+    B[0, 2] += dw[1]
+    B[1, 2] -= dw[0]
+    B[1, 0] += dw[2]
+    B[2, 0] -= dw[1]
+    B[2, 1] += dw[0]
+    return B, W
+
+
+@jit
+def _times_a(mdl, y, x):
+    """y A(x) (F,): the coefficient vector of Σ_b y_b φ̃_b with φ̃_b = φ_b + Σ_c x_c ψ_bc, y and x (N,)."""
+    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
+    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    out = np.zeros(f)
+    for b in range(n):
+        out[1 + b] = y[b]
+        for e in range(ptr[b], ptr[b + 1]):
+            out[col[e]] += y[b] * x[qi[e]]
+    return out
+
+
+@jit
+def _a_times(mdl, q, z):
+    """A(q) z (N,) for z (F,)."""
+    n = int(mdl[0][F_N])
+    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    out = np.empty(n)
+    for b in range(n):
+        acc = z[1 + b]
+        for e in range(ptr[b], ptr[b + 1]):
+            acc += q[qi[e]] * z[col[e]]
+        out[b] = acc
+    return out
+
+
+@jit
+def _a_rows(mdl, q, Z):
+    """A(q) Z (N, k) for Z (F, k): row b gathers Z[1 + b] and the ψ rows of row b."""
+    n = int(mdl[0][F_N])
+    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    out = np.empty((n, Z.shape[1]))
+    for b in range(n):
+        out[b] = Z[1 + b]
+        for e in range(ptr[b], ptr[b + 1]):
+            x = q[qi[e]]
+            for j in range(Z.shape[1]):
+                out[b, j] += x * Z[col[e], j]
+    return out
+
+
+@jit
+def _rr(mdl, q):
+    """Coefficients (F,) of r̃ = r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the fields."""
+    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
+    pi, pj = mdl[4], mdl[5]
+    out = np.zeros(f)
+    out[0] = 1.0
+    out[1:1 + n] = q
+    for p in range(pi.size):
+        out[1 + n + p] = (0.5 if pi[p] == pj[p] else 1.0) * q[pi[p]] * q[pj[p]]
+    return out
+
+
+@jit
+def _gram_pass(Gx, x):
+    """X (F, 9) with X_k = Σ_l G_kl x_l (row-major 3 x 3), from Gx (F 9, F) the Gram tensor laid out for it."""
+    return (Gx @ x).reshape(x.size, 9)
+
+
+@jit
+def _contract(G9, M):
+    """G:M (F, F), (G:M)_kl = Σ_ij G_klij M_ij, from G9 (F F, 9)."""
+    f = int(math.sqrt(G9.shape[0]) + 0.5)
+    return (G9 @ M.copy().reshape(9)).reshape(f, f)
+
+
+@jit
+def _rollers(mdl, q, qd):
+    """Roller deflections d, forces P1…P5 [N] and tangent stiffness dP/dd [N/m] (elastic.roller_forces)."""
+    C, roll, law = mdl[8], mdl[9], mdl[0][F_LAW]
+    d, dd = C @ q[:5], C @ qd[:5]
+    k, c, pre = roll[0], roll[1], roll[2]
+    if law == 0.0:
+        return d, -k * d - c * dd, -k
+    up, down = pre - d, pre + d
+    force = k * (np.maximum(up, 0.0) - np.maximum(down, 0.0)) - c * dd
+    return d, force, -k * (1.0 + (np.sign(up) + np.sign(down)) / 2)
+
+
+@jit
+def _membrane(mdl, q, R, Rq, stiffness):
+    """Adds the held beams' membrane force to R (N,) and, with ``stiffness``, its Hessian to Rq (N, N)."""
+    idx, size, H, cm = mdl[10], mdl[11], mdl[12], mdl[13]
+    for b in range(size.size):
+        m = size[b]
+        x = np.empty(m)
+        for i in range(m):
+            x[i] = q[idx[b, i]]
+        Hb = H[b, :m, :m]
+        hx = Hb @ x
+        quad = x @ hx
+        for i in range(m):
+            R[idx[b, i]] += 4 * cm[b] * quad * hx[i]
+            if stiffness:
+                for j in range(m):
+                    Rq[idx[b, i], idx[b, j]] += 4 * cm[b] * (quad * Hb[i, j] + 2 * hx[i] * hx[j])
+
+
+# --------------------------------------------------------------------------- the state's terms
+
+@jit
+def _terms(mdl, ch, q, qd):
+    """(R0 (N,) the residual at q̈ = 0, M (N, N), rr, v, p2 (F,), X (F, 9), B, W, z (F,)) at one state."""
+    flags, Gx, Gtr, S1, K, D = mdl[0], mdl[6], mdl[7], mdl[14], mdl[15], mdl[16]
+    rr = _rr(mdl, q)
+    v = _times_a(mdl, qd, q)
+    p2 = _times_a(mdl, qd, qd)
+    p2[:1 + q.size] = 0.0
+    B, W = _frame_mats(ch)
+    X = _gram_pass(Gx, rr)
+    Y = _gram_pass(Gx, v)
+    z = S1 @ ch[LOAD:LOAD + 3].copy() + Gtr @ p2 + X @ B.copy().reshape(9) + 2.0 * (Y @ W.copy().reshape(9))
+    R = _a_times(mdl, q, z) + K @ q + D @ qd
+    _membrane(mdl, q, R, R.reshape(1, -1), False)
+    if flags[F_ROLLERS] != 0.0:
+        _, force, _ = _rollers(mdl, q, qd)
+        R[:5] -= force @ mdl[8]
+    AG = _a_rows(mdl, q, Gtr)  # A Gtr (N, F)
+    M = _a_rows(mdl, q, AG.T.copy())  # A Gtr Aᵀ
+    return R, M, rr, v, p2, X, B, W, z
+
+
+@jit
+def _resultants(mdl, ch, rr, v, acc, X, B, W):
+    """Force F and moment M_O (3,) of ∫ (a - g) dm (System.resultants); acc (F,) the coefficients of ü."""
+    flags, S1 = mdl[0], mdl[14]
+    load = ch[LOAD:LOAD + 3].copy()
+    first, fv, fa = rr @ S1, v @ S1, acc @ S1
+    F = flags[F_MASS] * load + B @ first + 2.0 * W @ fv + fa
+    # J(y) = Σ_kl rr_k y_l G_kl = Σ_l y_l X_lᵀ (G_kl = G_lkᵀ)
+    Jr, Jv, Ja = (rr @ X).reshape(3, 3).T, (v @ X).reshape(3, 3).T, (acc @ X).reshape(3, 3).T
+    H = Jr @ B.T + 2.0 * Jv @ W.T + Ja
+    moment = np.cross(first, load) - np.array([H[2, 1] - H[1, 2], H[0, 2] - H[2, 0], H[1, 0] - H[0, 1]])
+    return F, moment
+
+
+@jit
+def _accelerations(mdl, ch, q, qd):
+    """q̈ (N,) and the terms of :func:`_terms` at the state."""
+    R, M, rr, v, p2, X, B, W, z = _terms(mdl, ch, q, qd)
+    qdd = -np.linalg.solve(M, R)
+    return qdd, M, rr, v, p2, X, B, W, z
+
+
+@jit
+def _rhs(t, y, args, out):
+    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model tuple, spline table, calls (1,))."""
+    mdl, tab, calls = args
+    calls[0] += 1.0
+    n = int(mdl[0][F_N])
+    ch = np.empty(N_CHANNELS)
+    _channels(tab, t, ch)
+    q, qd = y[:n], y[n:2 * n]
+    qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
+    acc = _times_a(mdl, qdd, q) + p2
+    F, moment = _resultants(mdl, ch, rr, v, acc, X, B, W)
+    out[:n] = qd
+    out[n:2 * n] = qdd
+    out[2 * n] = _dissipation(mdl, qd)
+    out[2 * n + 1] = F @ ch[V0:V0 + 3] + moment @ ch[OMEGA:OMEGA + 3]
+
+
+@jit
+def _dissipation(mdl, qd):
+    """Power of the damping forces [W] (beam D and roller dampers)."""
+    power = qd @ mdl[16] @ qd
+    if mdl[0][F_ROLLERS] != 0.0:
+        dd = mdl[8] @ qd[:5]
+        power += mdl[9][1] @ (dd * dd)
+    return power
+
+
+@jit
+def _jacobians(mdl, ch, q, qd):
+    """M, ∂R/∂q, ∂R/∂q̇ (N, N) at the state, q̈ from the equations (System.evaluate with ``jacobian``)."""
+    flags, G9, Gtr, K, D, C, dA = mdl[0], mdl[18], mdl[7], mdl[15], mdl[16], mdl[8], mdl[17]
+    n = q.size
+    qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
+    z = z + Gtr @ _times_a(mdl, qdd, q)  # z at the state's q̈
+    GW = _contract(G9, W)
+    # Rq = A (GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ), Rqd = A (2 GW Aᵀ + 2 Gtr DVᵀ), DV, DQ the ψ parts of A at q̇, q̈;
+    # by the symmetries (G:B)ᵀ = G:Bᵀ, (G:W)ᵀ = -G:W (W skew), Gtrᵀ = Gtr, each Z Aᵀ is (A Zᵀ)ᵀ
+    psi = lambda x, Zt: _a_rows(mdl, x, Zt) - Zt[1:1 + n]  # noqa: E731  DV(x) Zt
+    T = _a_rows(mdl, q, _contract(G9, B.T.copy())) - 2.0 * psi(qd, GW) + psi(qdd, Gtr)
+    S = -2.0 * _a_rows(mdl, q, GW) + 2.0 * psi(qd, Gtr)
+    Rq = _a_rows(mdl, q, T.T.copy()) + K
+    Rqd = _a_rows(mdl, q, S.T.copy()) + D
+    for a in range(n):
+        for b in range(n):
+            if dA[a, b] >= 0:
+                Rq[a, b] += z[dA[a, b]]
+    R0 = np.zeros(n)
+    _membrane(mdl, q, R0, Rq, True)
+    if flags[F_ROLLERS] != 0.0:
+        _, _, kt = _rollers(mdl, q, qd)
+        c = mdl[9][1]
+        for i in range(5):
+            for j in range(5):
+                for r in range(5):
+                    Rq[i, j] -= C[r, i] * kt[r] * C[r, j]
+                    Rqd[i, j] += C[r, i] * c[r] * C[r, j]
+    return M, Rq, Rqd
+
+
+@jit
+def _jac(t, y, args, J):
+    """dy'/dy (2 N + 2, 2 N + 2): the rows of q and q̇ (those of E_d and W zero, as the Python engine's)."""
+    mdl, tab, _ = args
+    n = int(mdl[0][F_N])
+    ch = np.empty(N_CHANNELS)
+    _channels(tab, t, ch)
+    M, Rq, Rqd = _jacobians(mdl, ch, y[:n], y[n:2 * n])
+    J[:] = 0.0
+    for i in range(n):
+        J[i, n + i] = 1.0
+    J[n:2 * n, :n] = -np.linalg.solve(M, Rq)
+    J[n:2 * n, n:2 * n] = -np.linalg.solve(M, Rqd)
+
+
+_steps = ode.steppers(_rhs, _jac)
+_radau_start, _radau_step = _steps.radau_start, _steps.radau_step  # globals numba types (not the namespace)
+
+
+@jit
+def _solve(mdl, tab, y0, t_eval, rtol, atol, max_step):
+    """Radau IIA from (t_eval[0], y0) over t_eval (k,), steps at most ``max_step`` [s] (scipy's rule: a longer
+    step is cut and its error history forgotten); returns (Y (k, n) the dense output at t_eval, accepted
+    steps, rhs evaluations, status of :mod:`symmech.core.ode`)."""
+    n, t_end = y0.size, t_eval[-1]
+    Y = np.full((t_eval.size, n), np.nan)
+    calls = np.zeros(1)
+    args = (mdl, tab, calls)
+    t, y, f = t_eval[0], y0.copy(), np.empty(n)
+    _rhs(t, y, args, f)
+    Y[0] = y
+    k = 1
+    J, LUr, LUc = np.empty((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
+    pr, pc = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    Q = np.empty((1, 4 * n))
+    st = _radau_start(t, y, f, t_end, args, rtol, atol, J)
+    for step in range(MAX_STEPS):
+        if not t < t_end:
+            return Y, step, int(calls[0]), ode.SUCCESS
+        if st[ode.R_H] > max_step:
+            st[ode.R_H], st[ode.R_H_OLD], st[ode.R_ERR_OLD] = max_step, -1.0, -1.0
+        t_new, y_new, f_new, ok = _radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
+        if not ok:
+            return Y, step, int(calls[0]), ode.STEP_TOO_SMALL
+        while k < t_eval.size and t_eval[k] <= t_new:
+            Y[k] = ode.radau_dense_at(t_eval[k], t, t_new - t, Q[0])
+            k += 1
+        t, y, f = t_new, y_new, f_new
+    return Y, MAX_STEPS, int(calls[0]), ode.TOO_MANY_STEPS
+
+
+@jit
+def _rows(mdl, chs, nu, height, Y):
+    """Per output row (channels chs (k, 12) of the exact frame, upward unit vectors nu (k, 3), heights of O
+    (k,) [m], states Y (k, 2 N + 2)): q̈ (k, N), the resultants F, M_O (k, 3), the coefficient vectors of r̃,
+    its rate and acceleration (k, F), and the Jacobi and total energies less the potential Π (k,) [J]
+    (System.jacobi_energy, System.total_energy)."""
+    flags, S1, Gtr = mdl[0], mdl[14], mdl[7]
+    n, f, mass, g0 = int(flags[F_N]), int(flags[F_F]), flags[F_MASS], flags[F_G0]
+    k = Y.shape[0]
+    qdd_out, F_out, M_out = np.empty((k, n)), np.empty((k, 3)), np.empty((k, 3))
+    rr_out, v_out, acc_out = np.empty((k, f)), np.empty((k, f)), np.empty((k, f))
+    h_out, E_out = np.empty(k), np.empty(k)
+    for i in range(k):
+        ch = chs[i]
+        q, qd = Y[i, :n], Y[i, n:2 * n]
+        qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
+        acc = _times_a(mdl, qdd, q) + p2
+        F_out[i], M_out[i] = _resultants(mdl, ch, rr, v, acc, X, B, W)
+        qdd_out[i], rr_out[i], v_out[i], acc_out[i] = qdd, rr, v, acc
+        Jr, Jv = (rr @ X).reshape(3, 3).T, (v @ X).reshape(3, 3).T
+        w, v0 = ch[OMEGA:OMEGA + 3].copy(), ch[V0:V0 + 3].copy()
+        first = rr @ S1
+        t2 = v @ Gtr @ v
+        t0 = 0.5 * (mass * v0 @ v0 + 2.0 * v0 @ np.cross(w, first) + np.sum((W.T @ W) * Jr))
+        h_out[i] = 0.5 * t2 - t0 + g0 * nu[i] @ first
+        twice_t = mass * v0 @ v0 + 2.0 * v0 @ (np.cross(w, first) + v @ S1) + np.sum((W.T @ W) * Jr) + \
+            2.0 * np.sum(W.T * Jv) + t2
+        E_out[i] = 0.5 * twice_t + g0 * (mass * height[i] + nu[i] @ first)
+    return qdd_out, F_out, M_out, rr_out, v_out, acc_out, h_out, E_out
+
+
+
+# --------------------------------------------------------------------------- from the Python model
+
+
+def pack(system) -> tuple:
+    """The model tuple the kernels take, from a :class:`symmech.trolley.elastic.System`."""
+    inv, mdl = system.inv, system.mdl
+    n, f = system.N, system.F
+    rows = [[] for _ in range(n)]  # the ψ entries of A: (column, index of the coordinate multiplying it)
+    for p, (i, j) in enumerate(inv.pairs):
+        rows[i].append((1 + n + p, j))
+        if i != j:
+            rows[j].append((1 + n + p, i))
+    ptr = np.cumsum([0] + [len(r) for r in rows]).astype(np.int64)
+    col = np.array([c for r in rows for c, _ in r], dtype=np.int64)
+    qi = np.array([x for r in rows for _, x in r], dtype=np.int64)
+    roll = np.zeros((3, 5))
+    law = 0.0
+    if system.rollers_on:
+        rl = mdl.rollers
+        roll[0] = rl.stiffness
+        roll[1] = rl.damping if mdl.effects.damping else 0.0
+        roll[2] = rl.preload
+        law = 0.0 if rl.law == "linear" else 1.0
+    blocks = inv.membrane
+    width = max([len(b.index) for b in blocks], default=1)
+    idx = np.zeros((len(blocks), width), dtype=np.int64)
+    H = np.zeros((len(blocks), width, width))
+    for b, blk in enumerate(blocks):
+        m = len(blk.index)
+        idx[b, :m], H[b, :m, :m] = blk.index, blk.H
+    flags = np.array([n, f, inv.mass, mdl.g0, 1.0 if system.rollers_on else 0.0, law])
+    return (flags, ptr, col, qi, system.pair_i.astype(np.int64), system.pair_j.astype(np.int64),
+            np.ascontiguousarray(inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f)), np.ascontiguousarray(system.Gtr),
+            np.ascontiguousarray(system.C, float), roll, idx,
+            np.array([len(b.index) for b in blocks], dtype=np.int64), H, np.array([b.c for b in blocks], float),
+            np.ascontiguousarray(inv.S1), np.ascontiguousarray(inv.K), np.ascontiguousarray(inv.D),
+            inv.dA.astype(np.int64), np.ascontiguousarray(inv.G.reshape(f * f, 9)))
