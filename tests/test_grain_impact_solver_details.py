@@ -1,0 +1,281 @@
+"""Impact solvers in detail: the descent's stop rule, start and batch scaling, the golden section's
+printed rules, the scipy baseline's tolerance, Euler-rate warnings and argument checks.
+
+References are independent: the corrected functional summed by hand from H (generated), the
+closed-form sphere impact, brackets that must contain a known minimum.
+"""
+import re
+
+import numpy as np
+import pytest
+
+from symmech.generated import grain_impact as g
+from symmech.grain.body import Ellipsoid, rotation
+from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, euler_rates, solve_descent_batch,
+                                  solve_impact, solve_scipy)
+
+GRAIN = Ellipsoid(2e-3, 1.5e-3, 1e-3, 1e-5)
+BALL = Ellipsoid(1e-3, 1e-3, 1e-3, 2e-5)
+SPHERE_H = np.diag([3.5, 3.5, 1.0])  # a solid sphere's H: 1 + R^2/rho^2 = 7/2 tangentially
+
+
+def corrected_phi(H, m, e, lam, uK0, T, mu):
+    """Sum of squared residuals of (19), H (T_x, T_x tan mu, T_z) - m du_K(mu), over (m |u_K(0)|)^2."""
+    speed = (1 - lam) * np.hypot(uK0[0], uK0[1])
+    du = np.array([speed * np.cos(mu), speed * np.sin(mu), -e * uK0[2]]) - uK0
+    r = H @ np.array([T[0], T[0] * np.tan(mu), T[2]]) - m * du
+    return r @ r / (m * np.linalg.norm(uK0)) ** 2
+
+
+def grain_impact(angles=(0.3, 0.7, 1.1), v=(0.3, 0.1, -0.5), w=(1.0, 2.0, 3.0)):
+    """H and u_K(0) of GRAIN at the given orientation and velocities."""
+    H = g.H(GRAIN.a, GRAIN.b, GRAIN.c, *angles)
+    R = g.contact_offset(GRAIN.a, GRAIN.b, GRAIN.c, *angles)
+    return H, np.asarray(v) + np.cross(w, R)
+
+
+# --------------------------------------------------------------------------- descent
+
+
+def test_descent_options_refuse_each_knob_alone():
+    DescentOptions(max_steps=1, line_iterations=1)  # the smallest admissible counts
+    for bad in ({"max_steps": 0}, {"line_iterations": 0}):
+        with pytest.raises(ValueError, match=r"max_steps and line_iterations must be >= 1"):
+            DescentOptions(**bad)
+    for bad in ({"tol": 0.0}, {"step_max": -1.0}, {"line_tol": 0.0}):
+        with pytest.raises(ValueError, match=r"tol, step_max and line_tol must be > 0"):
+            DescentOptions(**bad)
+
+
+def test_descent_defaults_to_the_printed_method():
+    H, uK0 = grain_impact()
+    default = solve_descent_batch(H[None], GRAIN.mass, 0.5, 0.3, uK0[None])
+    printed = solve_descent_batch(H[None], GRAIN.mass, 0.5, 0.3, uK0[None], "paper")
+    for a, b in zip(default, printed):
+        np.testing.assert_array_equal(a, b)
+    assert default[2][0] == 1 and default[3][0]  # Phi (24) goes negative at once: one step, stopped
+    with pytest.raises(ValueError, match="unknown descent variant 'steepest'"):
+        solve_descent_batch(H[None], GRAIN.mass, 0.5, 0.3, uK0[None], "steepest")
+
+
+def test_descent_starts_on_a_head_on_sphere_impact():
+    """Head-on sphere: the start T = (0, 0, m(1+e)|u_z|/h_zz) solves (19) exactly, so no step is taken."""
+    m, e, uz = BALL.mass, 0.4, -1.5
+    for variant in ("paper", "paper-corrected"):
+        T, mu, steps, stopped = solve_descent_batch(SPHERE_H[None], m, e, 0.3, np.array([[0.0, 0.0, uz]]),
+                                                    variant)
+        assert steps[0] == 0 and stopped[0]
+        np.testing.assert_allclose(T[0], [0.0, 0.0, m * (1 + e) * 1.5], rtol=1e-15, atol=0)
+
+
+def test_corrected_descent_stops_at_the_first_step_below_its_tolerance():
+    """Stop rule Phi <= delta, delta = tol for the squared, dimensionless functional (Phi summed by hand)."""
+    H, uK0 = grain_impact()
+    m, e, lam, tol = GRAIN.mass, 0.5, 0.3, 0.1
+    T, mu, steps, stopped = solve_descent_batch(H[None], m, e, lam, uK0[None], "paper-corrected",
+                                                DescentOptions(tol=tol, line_iterations=20))
+    assert stopped[0] and 1 < steps[0] < 1000
+    assert corrected_phi(H, m, e, lam, uK0, T[0], mu[0]) <= tol
+    before = solve_descent_batch(H[None], m, e, lam, uK0[None], "paper-corrected",
+                                 DescentOptions(tol=tol, max_steps=int(steps[0]) - 1, line_iterations=20))
+    assert not before[3][0] and before[2][0] == steps[0] - 1
+    assert corrected_phi(H, m, e, lam, uK0, before[0][0], before[1][0]) > tol
+
+
+def test_corrected_descent_scales_each_impact_of_a_batch_by_its_own_momentum():
+    """Two impacts 100x apart in speed: the batch gives what each gives alone."""
+    H, uK0 = grain_impact()
+    Hs, us = np.stack([H, H]), np.stack([uK0, 100 * uK0])
+    options = DescentOptions(max_steps=10, line_iterations=30)
+    Tb, mub, stepsb, _ = solve_descent_batch(Hs, GRAIN.mass, 0.5, 0.3, us, "paper-corrected", options)
+    for k in range(2):
+        T, mu, steps, _ = solve_descent_batch(Hs[k:k + 1], GRAIN.mass, 0.5, 0.3, us[k:k + 1],
+                                              "paper-corrected", options)
+        np.testing.assert_allclose(Tb[k], T[0], rtol=1e-12)
+        assert mub[k] == pytest.approx(mu[0], abs=1e-12) and stepsb[k] == steps[0]
+    np.testing.assert_allclose(Tb[1], 100 * Tb[0], rtol=1e-6)  # the law is linear in u_K(0)
+
+
+def test_descent_counts_only_the_steps_of_active_impacts():
+    """A batch of a head-on sphere (solved at the start) and an oblique grain: 0 steps and all of them."""
+    H, uK0 = grain_impact()
+    T, mu, steps, stopped = solve_descent_batch(np.stack([SPHERE_H, H]), GRAIN.mass, 0.4, 0.25,
+                                                np.stack([[0.0, 0.0, -1.5], uK0]), "paper-corrected",
+                                                DescentOptions(max_steps=5, tol=1e-20, line_iterations=30))
+    assert list(steps) == [0, 5] and list(stopped) == [True, False]
+    np.testing.assert_allclose(T[0], [0.0, 0.0, GRAIN.mass * 1.4 * 1.5], rtol=1e-15, atol=0)
+
+
+# --------------------------------------------------------------------------- golden section
+
+
+def test_golden_section_brackets_a_minimum_away_from_zero():
+    """Brackets [2, 3] and [-7, -1]: the initial golden points measure from lo, not from 0."""
+    lo, hi = np.array([2.0, -7.0]), np.array([3.0, -1.0])
+    target = np.array([2.3, -6.5])
+    for iterations in (1, 2, 30):
+        a, b = _golden_section(lambda x: (x - target) ** 2, lo, hi, iterations, 0.0)
+        assert np.all((a <= target) & (target <= b))
+        np.testing.assert_allclose(b - a, (hi - lo) * ((np.sqrt(5) - 1) / 2) ** iterations, rtol=1e-9)
+
+
+def test_golden_section_stops_each_bracket_at_its_own_width():
+    """eps = 1e-4: brackets of width 1 and 1e-3 stop after their own counts, each keeping its minimum."""
+    lo, hi = np.zeros(2), np.array([1.0, 1e-3])
+    target = np.array([0.37, 6e-4])
+    a, b = _golden_section(lambda x: (x - target) ** 2, lo, hi, 100, 1e-4)
+    ratio = (np.sqrt(5) - 1) / 2
+    expected = np.ceil(np.log(1e-4 / (hi - lo)) / np.log(ratio))  # first count with width <= eps
+    np.testing.assert_allclose(b - a, (hi - lo) * ratio ** expected, rtol=1e-9)
+    assert np.all((a <= target) & (target <= b))
+
+
+def test_golden_section_keeps_the_left_bracket_on_ties():
+    """(34): xi(l1) <= xi(l2) keeps [lo, l2]; on a flat function the bracket closes on lo."""
+    a, b = _golden_section(lambda x: np.zeros_like(x), np.array([1.0]), np.array([2.0]), 50, 0.0)
+    assert a[0] == 1.0 and b[0] - 1.0 < 1e-9
+
+
+# --------------------------------------------------------------------------- scipy baseline
+
+
+def test_scipy_baseline_passes_its_tolerance_to_hybr():
+    """A loose xtol stops hybr earlier, with a larger residual, than a tight one."""
+    H, uK0 = grain_impact()
+    loose = solve_scipy(H, GRAIN.mass, 0.5, 0.3, uK0, xtol=1e-2)
+    tight = solve_scipy(H, GRAIN.mass, 0.5, 0.3, uK0, xtol=1e-13)
+    assert loose[2] < tight[2]
+    assert np.linalg.norm(loose[0] - tight[0]) > 1e-9 * np.linalg.norm(tight[0])
+
+
+def test_scipy_baseline_solves_the_sphere_closed_form():
+    v, e, lam = np.array([0.6, -0.8, -1.5]), 0.4, 0.25
+    T, mu, _, ok = solve_scipy(SPHERE_H, BALL.mass, e, lam, v)
+    assert ok
+    np.testing.assert_allclose(T, [-2 / 7 * BALL.mass * lam * 0.6, 2 / 7 * BALL.mass * lam * 0.8,
+                                   BALL.mass * (1 + e) * 1.5], rtol=1e-10)
+    assert mu == pytest.approx(np.arctan2(-0.8, 0.6), abs=1e-10)
+
+
+# --------------------------------------------------------------------------- one impact
+
+
+def test_euler_rate_warnings_name_sin_theta_and_the_amplification():
+    omega = np.array([0.3, -1.2, 4.0])
+    rates, warning = euler_rates(rotation([0.2, 0.9, 0.8]), omega)
+    assert warning is None and rates.shape == (3,)
+    theta = 3e-3
+    rates, warning = euler_rates(rotation([0.2, theta, 0.8]), omega)
+    assert warning == (f"near gimbal lock: sin(theta) = {np.sin(theta):.2e}; Euler rates are amplified by "
+                       f"1/sin(theta) = {1 / np.sin(theta):.3g}, use the angular velocity instead")
+    rates, warning = euler_rates(rotation([0.0, 0.0, 0.8]), omega)
+    assert rates is None
+    assert warning == ("gimbal lock: sin(theta) = 0.00e+00; the Euler rates psi' and phi' are undefined "
+                       "(only psi' + phi' is), the angular velocity is reported instead")
+
+
+def test_solve_impact_refuses_each_argument_alone():
+    v, w, Q = np.array([0.3, 0.1, -0.5]), np.zeros(3), rotation([0.3, 0.7, 1.1])
+    with pytest.raises(ValueError, match=re.escape(
+            "unknown solver 'newton'; choose one of robust, paper, paper-corrected, scipy")):
+        solve_impact(GRAIN, Q, v, w, 0.5, 0.3, solver="newton")
+    for e, lam in ((1.5, 0.3), (-0.1, 0.3), (0.5, 1.2), (0.5, -0.2)):
+        with pytest.raises(ValueError, match=re.escape(f"e = {e} and lambda = {lam} must lie in [0, 1]")):
+            solve_impact(GRAIN, Q, v, w, e, lam)
+
+
+def test_robust_solver_polishes_roots_to_rounding():
+    """The default Newton tolerance (1e-14 rad) leaves the residual of (19) at rounding level."""
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    for _ in range(50):
+        angles = [rng.uniform(-3, 3), np.arccos(rng.uniform(-1, 1)), rng.uniform(-3, 3)]
+        v = np.array([*rng.normal(size=2), -abs(rng.normal()) - 0.1])
+        r = solve_impact(GRAIN, rotation(angles), v, np.zeros(3), 0.5, 0.3)
+        worst = max(worst, r.residual)
+    assert worst < 1e-14
+
+
+def test_solve_impact_admits_the_ends_of_the_ranges():
+    """e = 1 and lambda = 1 are admissible: the sphere's closed form with them."""
+    v = np.array([0.6, -0.8, -1.5])
+    r = solve_impact(BALL, np.eye(3), v, np.zeros(3), 1.0, 1.0)
+    np.testing.assert_allclose(r.T, [-2 / 7 * BALL.mass * 0.6, 2 / 7 * BALL.mass * 0.8, 2 * BALL.mass * 1.5],
+                               rtol=1e-12)
+    assert r.ke_after < r.ke_before  # the slip is lost, the normal speed is kept
+
+
+def test_contact_point_at_rest_along_the_normal_is_refused():
+    """u_Kz(0) = 0 exactly: no impact (the message names the normal velocity and the bound)."""
+    for uz, shown in ((0.0, "0"), (1e-3, "0.001")):
+        with pytest.raises(ImpactError, match=re.escape(
+                f"the contact point is not approaching the plane: u_Kz(0) = {shown} m/s must be < 0")):
+            solve_impact(BALL, np.eye(3), np.array([0.5, 0.2, uz]), np.zeros(3), 0.5, 0.3)
+
+
+def test_scipy_baseline_reports_a_converged_sphere_impact_admissible():
+    v = np.array([0.6, -0.8, -1.5])
+    r = solve_impact(BALL, np.eye(3), v, np.zeros(3), 0.4, 0.25, solver="scipy")
+    assert r.converged and r.admissible and r.warnings == []
+    np.testing.assert_allclose(r.T, [-2 / 7 * BALL.mass * 0.25 * 0.6, 2 / 7 * BALL.mass * 0.25 * 0.8,
+                                     BALL.mass * 1.4 * 1.5], rtol=1e-10)
+
+
+
+def impact_roots_by_scan(H, m, e, lam, uK0, samples=20001):
+    """Roots of det[H d(mu), H e_z, du_K(mu)] = 0 by sign changes on a grid, refined by bisection."""
+    def F(mu):
+        speed = (1 - lam) * np.hypot(uK0[0], uK0[1])
+        du = np.stack([speed * np.cos(mu) - uK0[0], speed * np.sin(mu) - uK0[1],
+                       np.full_like(mu, -(1 + e) * uK0[2])], axis=-1)
+        d = np.stack([np.cos(mu), np.sin(mu), np.zeros_like(mu)], axis=-1)
+        return np.linalg.det(np.stack([d @ H.T, np.broadcast_to(H[:, 2], du.shape), du], axis=-1))
+
+    grid = np.linspace(-np.pi, np.pi, samples)
+    values = F(grid)
+    roots = []
+    for k in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:])):
+        lo, hi = grid[k], grid[k + 1]
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if np.sign(F(np.array([mid]))[0]) == np.sign(F(np.array([lo]))[0]) else (lo, mid)
+        roots.append(0.5 * (lo + hi))
+    return np.array(roots)
+
+
+def test_every_root_and_its_verdict_is_reported():
+    """A needle whose every root gains kinetic energy (one also pulls): the roots, impulses, energy
+    changes and verdicts of the report against a scan of the determinant and hand bookkeeping."""
+    axes = (0.00042210527493724, 0.00014656591496351, 0.00260300938619162)
+    angles = (2.885620771885198, 2.481953019198422, 0.11515564447430515)
+    uK0, e, lam = np.array([1.6508745196647576, -1.443837672820786, -0.6270921245645246]), 0.9165, 0.0104
+    body = Ellipsoid(*axes, 1e-5)
+    H = g.H(*axes, *angles)
+    r = solve_impact(body, rotation(angles), uK0, np.zeros(3), e, lam)
+    scanned = impact_roots_by_scan(H, body.mass, e, lam, uK0)
+    assert len(r.roots) == len(scanned) == 4
+    np.testing.assert_allclose(sorted(root["mu"] for root in r.roots), np.sort(scanned), atol=1e-9)
+    speed = (1 - lam) * np.hypot(*uK0[:2])
+    for root in r.roots:
+        assert set(root) == {"mu", "T", "delta_ke", "creates_energy", "pulling"}
+        mu, T = root["mu"], np.array(root["T"])
+        uK1 = np.array([speed * np.cos(mu), speed * np.sin(mu), -e * uK0[2]])
+        np.testing.assert_allclose(H @ T, body.mass * (uK1 - uK0), rtol=1e-10, atol=1e-12 * body.mass)
+        assert root["delta_ke"] == pytest.approx(0.5 * T @ (uK0 + uK1), rel=1e-9)
+        assert root["creates_energy"] == (root["delta_ke"] > 0) and root["pulling"] == (T[2] < 0)
+    assert [root["creates_energy"] for root in r.roots] == [True] * 4
+    assert [root["pulling"] for root in r.roots].count(True) == 1
+    least = min(r.roots, key=lambda root: (root["pulling"], np.hypot(*root["T"][:2])))
+    assert not r.admissible and r.warnings[0] == (
+        "no admissible root of the printed impact law: the least-impulse root creates kinetic energy "
+        f"(+{least['delta_ke']:.3g} J)")
+
+
+def test_pulling_root_is_reported_with_its_normal_impulse():
+    """A grazing ellipsoid: the least-impulse root pulls it into the plane (T_z < 0), the warning says so."""
+    r = solve_impact(GRAIN, rotation([0.3, 0.7, 1.1]), np.array([0.5, 0.2, -1e-6]), np.zeros(3), 0.5, 0.3)
+    chosen = [root for root in r.roots if np.allclose(root["T"], r.T, rtol=0, atol=0)]
+    assert len(chosen) == 1 and chosen[0]["pulling"] and r.T[2] < 0
+    assert [root["pulling"] for root in r.roots] == [bool(root["T"][2] < 0) for root in r.roots]
+    assert r.warnings[0] == ("no admissible root of the printed impact law: the least-impulse root "
+                             f"pulls the grain into the plane (T_z = {r.T[2]:.3g} N s)")
