@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 
 from symmech.generated import grain_impact as g
+from symmech.generated import grain_impact_printed as printed
 from symmech.grain.body import Ellipsoid, rotation
-from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, euler_rates, solve_descent_batch,
+from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, euler_rates, reduction_tensor,
+                                  solve_descent_batch,
                                   solve_impact, solve_scipy)
 
 GRAIN = Ellipsoid(2e-3, 1.5e-3, 1e-3, 1e-5)
@@ -40,10 +42,10 @@ def grain_impact(angles=(0.3, 0.7, 1.1), v=(0.3, 0.1, -0.5), w=(1.0, 2.0, 3.0)):
 def test_descent_options_refuse_each_knob_alone():
     DescentOptions(max_steps=1, line_iterations=1)  # the smallest admissible counts
     for bad in ({"max_steps": 0}, {"line_iterations": 0}):
-        with pytest.raises(ValueError, match=r"max_steps and line_iterations must be >= 1"):
+        with pytest.raises(ValueError, match=r"^descent max_steps and line_iterations must be >= 1$"):
             DescentOptions(**bad)
-    for bad in ({"tol": 0.0}, {"step_max": -1.0}, {"line_tol": 0.0}):
-        with pytest.raises(ValueError, match=r"tol, step_max and line_tol must be > 0"):
+    for bad in ({"tol": 0.0}, {"step_max": 0.0}, {"line_tol": 0.0}):
+        with pytest.raises(ValueError, match=r"^descent tol, step_max and line_tol must be > 0$"):
             DescentOptions(**bad)
 
 
@@ -56,6 +58,24 @@ def test_descent_defaults_to_the_printed_method():
     assert default[2][0] == 1 and default[3][0]  # Phi (24) goes negative at once: one step, stopped
     with pytest.raises(ValueError, match="unknown descent variant 'steepest'"):
         solve_descent_batch(H[None], GRAIN.mass, 0.5, 0.3, uK0[None], "steepest")
+
+
+def test_printed_descent_stop_rule_is_relative_to_the_momentum():
+    """Phi (24) at the start is 0.67 m|u_K(0)| here: tol = 1 stops before any step, tol = 0.5 after one
+    (Phi then goes negative); the same for a mass 10^8 times larger."""
+    H, uK0 = grain_impact()
+    e, lam = 0.5, 0.3
+    for m in (GRAIN.mass, 1e3):
+        start = (0.0, -m * (1 + e) * uK0[2] / H[2, 2], np.arctan2(uK0[1], uK0[0]))
+        phi0 = printed.functional(*start, H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], m, lam, e, *uK0)
+        assert phi0 / (m * np.linalg.norm(uK0)) == pytest.approx(0.672, abs=1e-3)
+        for tol, steps in ((1.0, 0), (0.5, 1)):
+            out = solve_descent_batch(H[None], m, e, lam, uK0[None], "paper", DescentOptions(tol=tol))
+            assert out[2][0] == steps and out[3][0]
+        # stopped at once, the answer is the documented start
+        T, mu, _, _ = solve_descent_batch(H[None], m, e, lam, uK0[None], "paper", DescentOptions(tol=1.0))
+        np.testing.assert_allclose(T[0], [0.0, 0.0, start[1]], rtol=1e-15, atol=0)
+        assert mu[0] == start[2]
 
 
 def test_descent_starts_on_a_head_on_sphere_impact():
@@ -279,3 +299,25 @@ def test_pulling_root_is_reported_with_its_normal_impulse():
     assert [root["pulling"] for root in r.roots] == [bool(root["T"][2] < 0) for root in r.roots]
     assert r.warnings[0] == ("no admissible root of the printed impact law: the least-impulse root "
                              f"pulls the grain into the plane (T_z = {r.T[2]:.3g} N s)")
+
+
+def test_solve_impact_runs_the_corrected_descent_with_the_options_given():
+    """Three steps of the corrected descent do not solve (19): the result says so, with its residual."""
+    Q, v, w = rotation([0.3, 0.7, 1.1]), np.array([0.3, 0.1, -0.5]), np.array([1.0, 2.0, 3.0])
+    r = solve_impact(GRAIN, Q, v, w, 0.5, 0.3, solver="paper-corrected",
+                     descent=DescentOptions(max_steps=3, line_iterations=20))
+    assert r.solver == "paper-corrected" and r.iterations == 3 and not r.converged and not r.admissible
+    H, uK0 = grain_impact()
+    # T lies on the line of mu (T_y = T_x tan mu), so the residual is the root of the corrected Phi
+    assert r.residual == pytest.approx(np.sqrt(corrected_phi(H, GRAIN.mass, 0.5, 0.3, uK0, r.T, r.mu)), rel=1e-9)
+    assert r.warnings == [f"solver 'paper-corrected' did not solve (19): relative residual {r.residual:.3g}"]
+
+
+def test_reduction_tensor_of_a_sphere_is_seven_halves_tangentially():
+    """A solid sphere: H = 1 + R^2/rho^2 along the plane (rho^2 = 2/5 R^2), 1 along the normal, at any
+    orientation; a batch of orientations gives one H each."""
+    Q = rotation(np.array([[0.3, 0.7, 1.1], [2.0, 0.1, -1.0], [0.0, np.pi / 2, 0.4]]))
+    H = reduction_tensor(BALL, Q)
+    assert H.shape == (3, 3, 3)
+    np.testing.assert_allclose(H, np.broadcast_to(SPHERE_H, (3, 3, 3)), atol=1e-12)
+    np.testing.assert_allclose(reduction_tensor(BALL, Q[1]), SPHERE_H, atol=1e-12)
