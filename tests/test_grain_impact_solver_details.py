@@ -13,8 +13,7 @@ from symmech.generated import grain_impact as g
 from symmech.generated import grain_impact_printed as printed
 from symmech.grain.body import Ellipsoid, rotation
 from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, euler_rates, reduction_tensor,
-                                  solve_descent_batch,
-                                  solve_impact, solve_scipy)
+                                  solve_descent_batch, solve_impact, solve_scipy)
 
 GRAIN = Ellipsoid(2e-3, 1.5e-3, 1e-3, 1e-5)
 BALL = Ellipsoid(1e-3, 1e-3, 1e-3, 2e-5)
