@@ -12,7 +12,8 @@ import pytest
 from symmech.generated import grain_impact as g
 from symmech.generated import grain_impact_printed as printed
 from symmech.grain.body import Ellipsoid, rotation
-from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, euler_rates, reduction_tensor,
+from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, _trig_roots, euler_rates,
+                                  reduction_tensor,
                                   solve_descent_batch, solve_impact, solve_scipy)
 
 GRAIN = Ellipsoid(2e-3, 1.5e-3, 1e-3, 1e-5)
@@ -320,3 +321,35 @@ def test_reduction_tensor_of_a_sphere_is_seven_halves_tangentially():
     assert H.shape == (3, 3, 3)
     np.testing.assert_allclose(H, np.broadcast_to(SPHERE_H, (3, 3, 3)), atol=1e-12)
     np.testing.assert_allclose(reduction_tensor(BALL, Q[1]), SPHERE_H, atol=1e-12)
+
+
+def trig_roots_by_scan(k, samples=2001):
+    """Roots in [-pi, pi) of k0 + k1c cos + k1s sin + k2c cos 2mu + k2s sin 2mu, by brentq on sign changes."""
+    from scipy.optimize import brentq
+
+    def F(mu):
+        return k[0] + k[1] * np.cos(mu) + k[2] * np.sin(mu) + k[3] * np.cos(2 * mu) + k[4] * np.sin(2 * mu)
+
+    grid = np.linspace(-np.pi, np.pi, samples) + 1e-3  # no grid point on mu = pi
+    values = F(grid)
+    roots = [brentq(F, grid[i], grid[i + 1], xtol=1e-15)
+             for i in np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)]
+    return np.sort(np.mod(np.array(roots) + np.pi, 2 * np.pi) - np.pi)
+
+
+def test_companion_eigenvalues_are_the_roots_before_any_polish():
+    """Random trigonometric polynomials (and one with a root at mu = pi, the shift's pole): with no Newton
+    polish the companion matrix's real eigenvalues already give every root; the polish then converges
+    quadratically (a second sweep finds nothing to correct)."""
+    rng = np.random.default_rng(3)
+    k = rng.normal(size=(60, 5))
+    k[0] = [1.0, 1.0, 0.3, 0.0, 0.2]  # F(pi) = k0 - k1c + k2c = 0
+    raw, _ = _trig_roots(k, 1e-14, max_iter=0)
+    polished, sweeps = _trig_roots(k, 1e-14)
+    assert sweeps <= 3
+    for i in range(len(k)):
+        scanned = trig_roots_by_scan(k[i])
+        for roots, tol in ((raw[i], 1e-8), (polished[i], 1e-13)):
+            found = np.sort(roots[~np.isnan(roots)])
+            assert len(found) == len(scanned), i
+            np.testing.assert_allclose(found, scanned, atol=tol)
