@@ -344,12 +344,27 @@ def test_companion_eigenvalues_are_the_roots_before_any_polish():
     rng = np.random.default_rng(3)
     k = rng.normal(size=(60, 5))
     k[0] = [1.0, 1.0, 0.3, 0.0, 0.2]  # F(pi) = k0 - k1c + k2c = 0
-    raw, _ = _trig_roots(k, 1e-14, max_iter=0)
+    raw, none = _trig_roots(k, 1e-14, max_iter=0)
     polished, sweeps = _trig_roots(k, 1e-14)
-    assert sweeps <= 3
+    assert none == 0 and 1 <= sweeps <= 3
     for i in range(len(k)):
         scanned = trig_roots_by_scan(k[i])
         for roots, tol in ((raw[i], 1e-8), (polished[i], 1e-13)):
             found = np.sort(roots[~np.isnan(roots)])
             assert len(found) == len(scanned), i
             np.testing.assert_allclose(found, scanned, atol=tol)
+
+
+def test_newton_polishes_every_row_of_near_double_roots():
+    """cos mu = 1 - x and cos 2mu = 1 - x with x = 1e-10: roots 1.4e-5 and 7e-6 rad from their doubles,
+    against the closed forms 2 asin(sqrt(x/2)) and asin(sqrt(x/2)) (and pi minus it); with F flat there
+    rounding bounds the roots at ~1e-12, which only a polish of every row reaches."""
+    x = 1e-10
+    k = np.array([[-(1 - x), 1.0, 0.0, 0.0, 0.0], [-(1 - x), 0.0, 0.0, 1.0, 0.0]])
+    roots, sweeps = _trig_roots(k, 1e-14)
+    assert 1 <= sweeps <= 3
+    half = np.sqrt((1 + k[0, 0]) / 2)  # (1 - cos)/2 of the stored coefficient, exact in floats
+    np.testing.assert_allclose(np.sort(roots[0][:2]), [-2 * np.arcsin(half), 2 * np.arcsin(half)], atol=1e-15)
+    assert np.isnan(roots[0][2:]).all()
+    near = np.arcsin(half)
+    np.testing.assert_allclose(np.sort(roots[1]), [near - np.pi, -near, near, np.pi - near], atol=5e-12)
