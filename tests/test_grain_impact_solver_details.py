@@ -347,6 +347,7 @@ def test_companion_eigenvalues_are_the_roots_before_any_polish():
     raw, none = _trig_roots(k, 1e-14, max_iter=0)
     polished, sweeps = _trig_roots(k, 1e-14)
     assert none == 0 and 1 <= sweeps <= 3
+    np.testing.assert_array_equal(np.isnan(_trig_roots(1e6 * k, 1e-14)[0]), np.isnan(polished))  # scale-free
     for i in range(len(k)):
         scanned = trig_roots_by_scan(k[i])
         for roots, tol in ((raw[i], 1e-8), (polished[i], 1e-13)):
