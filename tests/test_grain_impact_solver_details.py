@@ -14,7 +14,7 @@ from symmech.generated import grain_impact_printed as printed
 from symmech.grain.body import Ellipsoid, rotation
 from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, _trig_roots, euler_rates,
                                   reduction_tensor,
-                                  solve_descent_batch, solve_impact, solve_scipy)
+                                  solve_descent_batch, solve_impact, solve_robust_batch, solve_scipy)
 
 GRAIN = Ellipsoid(2e-3, 1.5e-3, 1e-3, 1e-5)
 BALL = Ellipsoid(1e-3, 1e-3, 1e-3, 2e-5)
@@ -369,3 +369,36 @@ def test_newton_polishes_every_row_of_near_double_roots():
     assert np.isnan(roots[0][2:]).all()
     near = np.arcsin(half)
     np.testing.assert_allclose(np.sort(roots[1]), [near - np.pi, -near, near, np.pi - near], atol=5e-12)
+
+
+def test_chosen_root_has_the_least_tangential_impulse_of_the_best_class():
+    """300 random impacts: among the roots, by hand, the admissible ones (no energy gained beyond 1e-9 of
+    the kinetic energy, T_z not below -1e-12 |T|) come first, then the energy-creating, then the pulling;
+    within the class the least |T_t| = hypot(T_x, T_y) is chosen."""
+    rng = np.random.default_rng(5)
+    n = 300
+    axes = np.exp(rng.uniform(np.log(1e-4), np.log(3e-3), (n, 3)))
+    angles = np.column_stack([rng.uniform(-np.pi, np.pi, n), np.arccos(rng.uniform(-1, 1, n)),
+                              rng.uniform(-np.pi, np.pi, n)])
+    u = rng.normal(size=(n, 3))
+    u[:, 2] = -np.abs(u[:, 2]) - 1e-3
+    e, lam = rng.uniform(0, 1, n), rng.uniform(0, 1, n)
+    H = g.H(*axes.T, *angles.T)
+    batch = solve_robust_batch(H, 1.0, e, lam, u)
+    classes = set()
+    for i in range(n):
+        ok = ~np.isnan(batch.roots_mu[i])
+        T = batch.roots_T[i][ok]
+        uK1 = np.stack([(1 - lam[i]) * np.hypot(*u[i, :2]) * np.cos(batch.roots_mu[i][ok]),
+                        (1 - lam[i]) * np.hypot(*u[i, :2]) * np.sin(batch.roots_mu[i][ok]),
+                        np.full(ok.sum(), -e[i] * u[i, 2])], axis=1)
+        np.testing.assert_allclose(np.einsum("ij,kj->ki", H[i], T), uK1 - u[i], atol=1e-12)
+        gain = 0.5 * np.sum(T * (u[i] + uK1), axis=1) > 1e-9 * 0.5 * u[i] @ u[i]
+        pull = T[:, 2] < -1e-12 * np.linalg.norm(T, axis=1)
+        rank = np.where(pull, 2, np.where(gain, 1, 0))
+        best = np.flatnonzero(rank == rank.min())
+        expected = T[best[np.argmin(np.hypot(T[best, 0], T[best, 1]))]]
+        np.testing.assert_allclose(batch.T[i], expected, rtol=1e-12, atol=0)
+        assert batch.admissible[i] == (rank.min() == 0)
+        classes.add((rank.min(), len(best) > 1))
+    assert {(0, True), (1, True)} <= classes  # choices within the admissible and within the gaining roots
