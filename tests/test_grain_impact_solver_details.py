@@ -14,7 +14,7 @@ from symmech.generated import grain_impact_printed as printed
 from symmech.grain.body import Ellipsoid, rotation
 from symmech.grain.impact import (DescentOptions, ImpactError, _golden_section, _trig_roots, euler_rates,
                                   reduction_tensor,
-                                  solve_descent_batch, solve_impact, solve_robust_batch, solve_scipy)
+                                  residual_19, solve_descent_batch, solve_impact, solve_robust_batch, solve_scipy)
 
 GRAIN = Ellipsoid(2e-3, 1.5e-3, 1e-3, 1e-5)
 BALL = Ellipsoid(1e-3, 1e-3, 1e-3, 2e-5)
@@ -400,5 +400,36 @@ def test_chosen_root_has_the_least_tangential_impulse_of_the_best_class():
         expected = T[best[np.argmin(np.hypot(T[best, 0], T[best, 1]))]]
         np.testing.assert_allclose(batch.T[i], expected, rtol=1e-12, atol=0)
         assert batch.admissible[i] == (rank.min() == 0)
+        chosen = uK1[np.flatnonzero((T == batch.T[i]).all(axis=1))[0]]
+        np.testing.assert_allclose(batch.uK_after[i], chosen, rtol=1e-12, atol=0)
+        assert batch.residual[i] < 1e-12 and np.isnan(batch.roots_delta_ke[i][~ok]).all()
         classes.add((rank.min(), len(best) > 1))
     assert {(0, True), (1, True)} <= classes  # choices within the admissible and within the gaining roots
+
+
+def test_full_stick_reports_the_impulse_direction():
+    """lambda = 1 (no slip after): mu is immaterial to the law and reported as the direction of T_t,
+    or 0 for a head-on sphere (T_t = 0); the law holds and the residual is at rounding."""
+    H = np.stack([g.H(GRAIN.a, GRAIN.b, GRAIN.c, 0.3, 0.7, 1.1), SPHERE_H])
+    u = np.array([[0.3, 0.1, -0.5], [0.0, 0.0, -1.5]])
+    batch = solve_robust_batch(H, [GRAIN.mass, BALL.mass], 0.5, 1.0, u)
+    T0 = GRAIN.mass * np.linalg.solve(H[0], np.array([0.0, 0.0, -0.5 * -0.5]) - u[0])  # u_K after: (0, 0, -e u_z)
+    np.testing.assert_allclose(batch.T[0], T0, rtol=1e-12)
+    assert batch.mu[0] == pytest.approx(np.arctan2(T0[1], T0[0]), abs=1e-12)
+    np.testing.assert_allclose(batch.T[1], [0.0, 0.0, BALL.mass * 1.5 * 1.5], rtol=1e-15, atol=1e-30)
+    assert batch.mu[1] == 0.0
+    assert (batch.residual < 1e-14).all()
+
+
+def test_residual_of_19_counts_the_normal_error_and_the_line_violation_per_impact():
+    """A sphere's exact impulse, pushed by delta along the normal (row 0) and across the line of mu (row 1,
+    u_K(0) ten times larger): residuals delta / (m |u_K(0)|) each (H_zz = 1; (18) counts |T x d|)."""
+    m, e, lam = BALL.mass, 0.4, 0.25
+    u = np.array([[0.6, -0.8, -1.5], [6.0, -8.0, -15.0]])
+    mu = np.full(2, np.arctan2(-0.8, 0.6))
+    T = np.array([[-2 / 7 * lam * 0.6, 2 / 7 * lam * 0.8, (1 + e) * 1.5]]) * m * np.array([[1.0], [10.0]])
+    delta = np.array([3e-9, 5e-9])
+    T[0, 2] += delta[0]
+    T[1, :2] += delta[1] * np.array([-np.sin(mu[1]), np.cos(mu[1])])
+    np.testing.assert_allclose(residual_19(np.stack([SPHERE_H, SPHERE_H]), m, e, lam, u, T, mu),
+                               delta / (m * np.linalg.norm(u, axis=1)), rtol=1e-6)
