@@ -289,6 +289,11 @@ def test_every_root_and_its_verdict_is_reported():
     assert not r.admissible and r.warnings[0] == (
         "no admissible root of the printed impact law: the least-impulse root creates kinetic energy "
         f"(+{least['delta_ke']:.3g} J)")
+    inertia = rotation(angles) @ np.diag(body.inertia) @ rotation(angles).T
+    ke0 = 0.5 * body.mass * uK0 @ uK0
+    ke1 = 0.5 * body.mass * r.v_c_after @ r.v_c_after + 0.5 * r.omega_after @ inertia @ r.omega_after
+    assert ke1 > 1.02 * ke0
+    assert r.warnings[1:] == [f"the impact creates kinetic energy: {ke0:.6g} J -> {ke1:.6g} J"]
 
 
 def test_pulling_root_is_reported_with_its_normal_impulse():
@@ -433,3 +438,26 @@ def test_residual_of_19_counts_the_normal_error_and_the_line_violation_per_impac
     T[1, :2] += delta[1] * np.array([-np.sin(mu[1]), np.cos(mu[1])])
     np.testing.assert_allclose(residual_19(np.stack([SPHERE_H, SPHERE_H]), m, e, lam, u, T, mu),
                                delta / (m * np.linalg.norm(u, axis=1)), rtol=1e-6)
+
+
+def test_energy_conserving_sphere_impact_is_not_flagged():
+    """e = 1, lambda = 0: the sphere keeps |u_t| and reverses u_n, so its kinetic energy is kept (to
+    rounding): admissible, no warning."""
+    v = np.array([0.6, -0.8, -1.5])
+    r = solve_impact(BALL, np.eye(3), v, np.zeros(3), 1.0, 0.0)
+    assert r.ke_before == pytest.approx(0.5 * BALL.mass * v @ v, rel=1e-15)
+    assert r.ke_after == pytest.approx(r.ke_before, rel=1e-12)
+    assert r.admissible and r.warnings == []
+
+
+def test_grazing_warning_names_both_impulses_past_ten_to_one():
+    """Sphere: |T_t| / T_z = (2/7) lambda V0 / ((1 + e) |u_z|); 10.5 warns (with both impulses), 9.5 does not."""
+    m, e, lam, vt = BALL.mass, 0.5, 0.3, np.array([0.5, 0.2])
+    for ratio in (10.5, 9.5):
+        uz = 2 / 7 * lam * np.hypot(*vt) / ((1 + e) * ratio)
+        r = solve_impact(BALL, np.eye(3), np.array([*vt, -uz]), np.zeros(3), e, lam)
+        Tt, Tz = 2 / 7 * m * lam * np.hypot(*vt), m * (1 + e) * uz
+        assert np.hypot(*r.T[:2]) == pytest.approx(Tt, rel=1e-12) and r.T[2] == pytest.approx(Tz, rel=1e-12)
+        grazing = (f"tangential impulse {Tt:.3g} N s exceeds 10x the normal impulse {Tz:.3g} N s (grazing impact: "
+                   "the printed law demands friction without normal load)")
+        assert r.warnings == ([grazing] if ratio > 10 else [])
