@@ -55,7 +55,7 @@ def cmd_warm(ns) -> int:
     from symmech.trolley import elastic_compiled
 
     say = None if ns.quiet or ns.background else (lambda text: print(f"symmech: {text}", file=sys.stderr))
-    engines = {"grain": compiled, "elastic": elastic_compiled}
+    engines = {"grain": compiled.ENGINE, "elastic": elastic_compiled.ENGINE}
     for name in (engines if ns.engine == "all" else [ns.engine]):
         started = time.perf_counter()
         if not engines[name].warm(wait=not ns.background, say=say):

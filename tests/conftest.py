@@ -1,7 +1,7 @@
 """Session hooks: the compiled engines are built once, in the background, while the other tests run.
 
 Tests marked ``compiled_engine`` (the grain engine) or ``compiled_elastic`` (the elastic trolley engine) run
-last and first wait for that engine's build (``wait_warm`` of :mod:`symmech.grain.compiled`,
+last and first wait for that engine's build (``ENGINE.wait_warm`` of :mod:`symmech.grain.compiled`,
 :mod:`symmech.trolley.elastic_compiled`), so no test pays numba's compilation on its own; under pytest-xdist
 every worker asks for the build and the build lock lets one process per machine compile.
 
@@ -32,7 +32,7 @@ def _marked(item) -> list:
 def pytest_collection_modifyitems(session, config, items):
     needed = {marker for item in items for marker in _marked(item)}
     for marker in sorted(needed):
-        importlib.import_module(ENGINES[marker]).warm_in_background()
+        importlib.import_module(ENGINES[marker]).ENGINE.warm_in_background()
     if needed:
         items[:] = [item for item in items if not _marked(item)] + [item for item in items if _marked(item)]
 
@@ -49,7 +49,7 @@ def _elastic_reference_engine(request, monkeypatch):
 @pytest.fixture(autouse=True)
 def _compiled_engine_built(request):
     for marker in _marked(request.node):
-        engine = importlib.import_module(ENGINES[marker])
+        engine = importlib.import_module(ENGINES[marker]).ENGINE
         if not engine.wait_warm(BUILD_TIMEOUT):
             pytest.fail(f"the {ENGINES[marker]} engine was not built within {BUILD_TIMEOUT:g} s (cache: "
                         f"{engine.cache_dir()}; `symmech warm` builds it in the foreground)")

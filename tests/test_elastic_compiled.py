@@ -229,7 +229,7 @@ def test_the_estimate_names_the_engine_and_announces_a_first_compile(monkeypatch
     sc = pipeline.load(copy.deepcopy(BUNDLED))
     warm = sc.estimate()
     assert "elastic model (compiled engine)" in warm.what and "compiling" not in warm.what
-    monkeypatch.setattr(ec, "cold", lambda: True)
+    monkeypatch.setattr(ec.ENGINE, "cold", lambda: True)
     cold = sc.estimate()
     assert "compiling the elastic engine once" in cold.what and "symmech warm" in cold.what
     assert cold.seconds - warm.seconds == pytest.approx(ec.COLD_COMPILE_SECONDS)

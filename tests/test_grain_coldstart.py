@@ -1,7 +1,7 @@
 """Fast from the first second (issue 19): engine `auto`, the one background build per cache, `symmech warm`,
 and sweeps that compile once per machine.
 
-The fast tests stand in for numba's cache with ``compiled.cold`` and a temporary lock folder; the slow ones
+The fast tests stand in for numba's cache with ``compiled.ENGINE.cold`` and a temporary lock folder; the slow ones
 compile for real into an empty ``NUMBA_CACHE_DIR`` in fresh processes (minutes of CPU each).
 """
 import csv
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import pipeline
+from symmech.core import build, pipeline
 from symmech.grain import compiled, motion_scene, sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,9 +41,9 @@ def cold_cache(tmp_path, monkeypatch):
     """numba's cache reported empty, the build lock in a temporary folder, and no builder process started:
     returns the list of builder command lines that would have been started."""
     started = []
-    monkeypatch.setattr(compiled, "cold", lambda: True)
-    monkeypatch.setattr(compiled, "cache_dir", lambda: tmp_path / "cache")
-    monkeypatch.setattr(compiled.subprocess, "Popen", lambda args, **kw: started.append((args, kw)))
+    monkeypatch.setattr(compiled.ENGINE, "cold", lambda: True)
+    monkeypatch.setattr(compiled.ENGINE, "cache_dir", lambda: tmp_path / "cache")
+    monkeypatch.setattr(build.subprocess, "Popen", lambda args, **kw: started.append((args, kw)))
     return started
 
 
@@ -80,21 +80,21 @@ def test_explicit_engines_are_kept_whatever_the_cache(tmp_path, cold_cache):
 def test_the_build_lock_admits_one_builder_and_dies_with_its_holder(tmp_path, cold_cache):
     """A second builder does not wait (``warm(wait=False)``) and a run starts none while the lock is held; a
     builder killed with SIGKILL leaves the lock free (flock: the OS releases it)."""
-    lock = tmp_path / "cache" / compiled.LOCK_NAME
+    lock = tmp_path / "cache" / compiled.ENGINE.lock_name
     lock.parent.mkdir()
     holder = POPEN([sys.executable, "-c", "import fcntl, sys, time; fh = open(sys.argv[1], 'a'); "
                                "fcntl.flock(fh, fcntl.LOCK_EX); print('held', flush=True); time.sleep(120)",
                                str(lock)], stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout.readline() == "held\n"
-        assert compiled.warm(wait=False) is False
-        assert compiled.warm_in_background() is False and cold_cache == []
+        assert compiled.ENGINE.warm(wait=False) is False
+        assert compiled.ENGINE.warm_in_background() is False and cold_cache == []
     finally:
         holder.send_signal(signal.SIGKILL)
         holder.wait(timeout=30)
-    with compiled._build_lock(wait=False) as mine:
+    with compiled.ENGINE.build_lock(wait=False) as mine:
         assert mine
-    assert compiled.warm_in_background() is True and len(cold_cache) == 1
+    assert compiled.ENGINE.warm_in_background() is True and len(cold_cache) == 1
 
 
 def test_warm_help_names_the_cache_locations(capsys):
@@ -109,8 +109,8 @@ def test_warm_on_a_built_cache_prints_its_location_and_compiles_nothing(capsys):
     misses = sum(compiled.run.stats.cache_misses.values())
     assert main(["warm", "--engine", "grain"]) == 0
     captured = capsys.readouterr()
-    assert f"cache: {compiled.cache_dir()}" in captured.out and "compiling" not in captured.err
-    assert sum(compiled.run.stats.cache_misses.values()) == misses and not compiled.cold()
+    assert f"cache: {compiled.ENGINE.cache_dir()}" in captured.out and "compiling" not in captured.err
+    assert sum(compiled.run.stats.cache_misses.values()) == misses and not compiled.ENGINE.cold()
 
 
 def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path, cold_cache):
@@ -179,7 +179,7 @@ def test_two_concurrent_first_runs_then_a_third_on_the_compiled_engine_that_agre
 SWEEP_ON_FRESH_WORKERS = """
 import json, sys
 import dask.distributed as distributed
-from symmech.core import pipeline
+from symmech.core import build, pipeline
 from symmech.grain import compiled, sweep
 
 raw = {"kind": "grain", "duration": 0.08, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},

@@ -225,10 +225,10 @@ def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     """A run that will compile the engine says so, and its estimate carries the one-off compile time."""
     sc = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "compiled"'})
     compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
-    assert not compiled.cold()  # compiled (or loaded) in this process: cached for this source
-    monkeypatch.setattr(compiled, "cold", lambda: False)
+    assert not compiled.ENGINE.cold()  # compiled (or loaded) in this process: cached for this source
+    monkeypatch.setattr(compiled.ENGINE, "cold", lambda: False)
     warm = motion_scene.estimate(sc)
-    monkeypatch.setattr(compiled, "cold", lambda: True)
+    monkeypatch.setattr(compiled.ENGINE, "cold", lambda: True)
     cold = motion_scene.estimate(sc)
     assert warm.once == 0.0 and "compiling" not in warm.what
     assert cold.once == compiled.COLD_COMPILE_SECONDS == pytest.approx(cold.seconds - warm.seconds, rel=1e-12)

@@ -190,3 +190,21 @@ def test_chart_cells_sit_midway_between_the_swept_values():
     np.testing.assert_allclose(sweep.edges(np.array([1.0, 2.0, 4.0]), False), [0.5, 1.5, 3.0, 5.0], rtol=1e-15)
     np.testing.assert_allclose(sweep.edges(np.array([1.0, 10.0, 100.0]), True), 10 ** np.array([-0.5, 0.5, 1.5, 2.5]),
                                rtol=1e-14)
+
+
+def test_the_compiled_engine_is_built_before_the_first_point_is_timed(monkeypatch):
+    """A sweep on the compiled elastic engine builds it (or loads it) first, so its one-off compile is
+    neither in the first point's time, which the estimate scales to the whole plane, nor paid per worker."""
+    from symmech.trolley import elastic_compiled, elastic_scene
+
+    calls = []
+    monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("compiled", "test"))
+    monkeypatch.setattr(elastic_compiled.ENGINE, "warm", lambda wait=True, say=None: calls.append("warm") or True)
+    monkeypatch.setattr(sweep, "evaluate", lambda data, max_time: calls.append("point") or ("failed", "stub"))
+    raw = swept(TINY, {"field": "motion.constants.a", "values": [3.0, 4.0]})
+    outcomes(raw)
+    assert calls == ["warm", "point", "point"]
+    calls.clear()
+    monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("python", "test"))
+    outcomes(raw)
+    assert calls == ["point", "point"]

@@ -41,20 +41,14 @@ grains on threads (the loop releases the GIL).
 """
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import subprocess
-import sys
-import time
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
-from pathlib import Path
 
 import numba
 import numpy as np
 
-from symmech.core import kernels, ode
+from symmech.core import build, kernels, ode
 from symmech.core.scene import SymmechError
 from symmech.grain import motion, sliding
 
@@ -1405,36 +1399,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     return result
 
 
-def cold() -> bool:
-    """Whether the next run compiles the loop: no machine code for it cached for this source yet."""
-    index = getattr(getattr(run, "_cache", None), "_cache_file", None)  # numba's cache (private API)
-    return index is not None and not index._load_index()
-
-
 # --------------------------------------------------------------------------- building the cache once
-
-LOCK_NAME = "symmech-grain-build.lock"  # beside numba's cache files; held by the one process that compiles
-
-
-def cache_dir() -> Path:
-    """Where numba caches the loop: ``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` beside this module, or
-    numba's user-wide cache folder when the package folder is read-only."""
-    return Path(run._cache._cache_path)  # numba's cache locator (private API, as cold())
-
-
-@contextmanager
-def _build_lock(wait: bool):
-    """The machine-wide build lock (``fcntl.flock``: the OS releases it when its holder dies, so a killed
-    builder never blocks later builds); yields whether this process holds it (always, with ``wait``)."""
-    folder = cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / LOCK_NAME, "a") as fh:
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            yield False
-            return
-        yield True  # closing the file releases the lock
 
 
 def _entry_signature() -> tuple:
@@ -1444,46 +1409,7 @@ def _entry_signature() -> tuple:
     return tuple(numba.typeof(a) for a in args)
 
 
-def warm(wait: bool = True, say=None) -> bool:
-    """Compile the loop (every kernel a run may call) into numba's cache unless it is there; returns whether it
-    is. One builder per cache: under the build lock, a process that waits (``wait``) loads what another built;
-    without ``wait`` it returns at once when another process holds the lock. ``say(text)`` tells what it does.
-    numba writes each cache file whole (a temporary file renamed), so an interrupted build leaves none half
-    written."""
-    with _build_lock(wait) as mine:
-        if not mine:
-            return False
-        if cold():
-            if say:
-                say(f"compiling the grain engine once, ~{COLD_COMPILE_SECONDS:.0f} s (cache: {cache_dir()})")
-            run.compile(_entry_signature())
-    return True
-
-
-def warm_in_background() -> bool:
-    """Start a detached builder (``python -m symmech warm --engine grain --background``, its own session: Ctrl-C or SIGTERM
-    of the caller does not reach it) unless the loop is cached or a builder holds the lock; returns at once,
-    whether one was started."""
-    if not cold():
-        return False
-    with _build_lock(wait=False) as free:
-        if not free:
-            return False
-    subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", "grain", "--background"], stdin=subprocess.DEVNULL,
-                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    return True
-
-
-def wait_warm(timeout: float) -> bool:
-    """Start the builder if none runs (:func:`warm_in_background`) and wait up to ``timeout`` [s] for the loop
-    to be cached; returns whether it is."""
-    deadline = time.monotonic() + timeout
-    warm_in_background()
-    while cold():
-        if time.monotonic() >= deadline:
-            return False
-        time.sleep(0.5)
-    return True
+ENGINE = build.Engine("grain", lambda: {run: _entry_signature()}, COLD_COMPILE_SECONDS)
 
 
 def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float,

@@ -299,7 +299,7 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
     seconds /= COMPILED_SPEEDUP
-    if compiled.cold():
+    if compiled.ENGINE.cold():
         once = compiled.COLD_COMPILE_SECONDS
         return registry.Estimate(seconds + once, f"{what}; compiled engine ({why}); compiling the grain engine "
                                  f"once, ~{once:.0f} s; later runs start in ~1 s", once=once)
@@ -328,7 +328,7 @@ def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
 
     if num.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
-    if not compiled.cold():
+    if not compiled.ENGINE.cold():
         return "compiled", "auto: the compiled engine is built (numba's cache)"
     python = _python_cost(sc, num, sc.duration if duration is None else duration)[0]
     if python > compiled.COLD_COMPILE_SECONDS + python / COMPILED_SPEEDUP:
@@ -355,14 +355,14 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
     if engine == "compiled":
         from symmech.grain import compiled  # imports numba: only when the compiled engine runs
 
-        if compiled.cold():  # compile under the build lock, or load what a concurrent builder made
-            compiled.warm()
+        if compiled.ENGINE.cold():  # compile under the build lock, or load what a concurrent builder made
+            compiled.ENGINE.warm()
         m = compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
     else:
         if num.engine == "auto":
             from symmech.grain import compiled
 
-            compiled.warm_in_background()
+            compiled.ENGINE.warm_in_background()
         m = motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
     m.extra.update(engine=engine, engine_reason=why)
     return m

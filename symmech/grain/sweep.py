@@ -321,7 +321,7 @@ def _warm_worker() -> None:
     """On a dask worker: the compiled engine built once per machine (the others wait on the build lock)."""
     from symmech.grain import compiled
 
-    compiled.warm()
+    compiled.ENGINE.warm()
 
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
@@ -352,7 +352,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
     Grains on the compiled engine find it built: this process builds it first (in the foreground,
     ``say(text)`` tells it), and so does each machine of a ``dask.distributed`` cluster, once per
-    machine (the build lock of :func:`symmech.grain.compiled.warm`).
+    machine (the build lock of :meth:`symmech.core.build.Engine.warm`).
     """
     import dask
 
@@ -360,7 +360,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
     if warm:
         from symmech.grain import compiled
 
-        compiled.warm(say=say)
+        compiled.ENGINE.warm(say=say)
 
     jobs = [(k, i, j, start, min(start + CHUNK, pop["count"])) for k, pop in enumerate(p.populations)
             for i, j in np.ndindex(*p.shape) for start in range(0, pop["count"], CHUNK)]

@@ -17,19 +17,13 @@ the error is at most :data:`INTERP_NOISE`; otherwise the run falls back to the P
 """
 from __future__ import annotations
 
-import fcntl
-import subprocess
-import sys
-import time
-from contextlib import contextmanager
 from dataclasses import dataclass
-from pathlib import Path
 
 import numba
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from symmech.core import ode
+from symmech.core import build, ode
 from symmech.trolley import elastic as el
 from symmech.trolley import elastic_kernels as ek
 from symmech.trolley.elastic_kernels import DOMEGA, LOAD, N_CHANNELS, OMEGA, V0
@@ -161,12 +155,11 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
 # --------------------------------------------------------------------------- building the cache once
 
 COLD_COMPILE_SECONDS = 90.0  # first compile: 62 s of CPU, 213 s wall at load 10 on 2 cores (benchmarks/README.md)
-LOCK_NAME = "symmech-elastic-build.lock"  # beside numba's cache files; held by the one process that compiles
-ENTRIES = ("_solve", "_rows")  # the cached entries a run calls
 
 
 def _entry_signatures() -> dict:
-    """The argument types :func:`simulate` and :func:`row_terms` call the entries with (a small model)."""
+    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with (a
+    small model)."""
     f, n = 3, 1
     mdl = (np.zeros(6), np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64),
            np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((9 * f, f)), np.zeros((f, f)), np.zeros((5, 5)),
@@ -175,73 +168,7 @@ def _entry_signatures() -> dict:
     tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
     solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4), 1.0)
     rows = (mdl, np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
-    return {"_solve": tuple(numba.typeof(a) for a in solve), "_rows": tuple(numba.typeof(a) for a in rows)}
+    return {ek._solve: tuple(numba.typeof(a) for a in solve), ek._rows: tuple(numba.typeof(a) for a in rows)}
 
 
-def cold() -> bool:
-    """Whether the next run compiles: no machine code for an entry cached for this source yet."""
-    for name in ENTRIES:
-        index = getattr(getattr(getattr(ek, name), "_cache", None), "_cache_file", None)  # numba's cache (private API)
-        if index is not None and not index._load_index():
-            return True
-    return False
-
-
-def cache_dir() -> Path:
-    """Where numba caches the entries (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside this module)."""
-    return Path(ek._solve._cache._cache_path)  # numba's cache locator (private API, as cold())
-
-
-@contextmanager
-def _build_lock(wait: bool):
-    """The machine-wide build lock (``fcntl.flock``, released by the OS when its holder dies); yields
-    whether this process holds it (always, with ``wait``)."""
-    folder = cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / LOCK_NAME, "a") as fh:
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            yield False
-            return
-        yield True
-
-
-def warm(wait: bool = True, say=None) -> bool:
-    """Compile the entries into numba's cache unless they are there (one builder per cache, under the build
-    lock; without ``wait`` return False at once when another process holds it); ``say(text)`` tells what
-    it does. Returns whether the cache holds the engine."""
-    with _build_lock(wait) as mine:
-        if not mine:
-            return False
-        if cold():
-            if say:
-                say(f"compiling the elastic engine once, ~{COLD_COMPILE_SECONDS:.0f} s (cache: {cache_dir()})")
-            for name, signature in _entry_signatures().items():
-                getattr(ek, name).compile(signature)
-    return True
-
-
-def warm_in_background() -> bool:
-    """Start a detached ``python -m symmech warm --engine elastic --background`` unless the engine is cached
-    or a builder holds the lock; returns whether one was started."""
-    if not cold():
-        return False
-    with _build_lock(wait=False) as free:
-        if not free:
-            return False
-    subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", "elastic", "--background"],
-                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                     start_new_session=True)
-    return True
-
-
-def wait_warm(timeout: float) -> bool:
-    """Start the builder if none runs and wait up to ``timeout`` [s] for the engine to be cached."""
-    deadline = time.monotonic() + timeout
-    warm_in_background()
-    while cold():
-        if time.monotonic() >= deadline:
-            return False
-        time.sleep(0.5)
-    return True
+ENGINE = build.Engine("elastic", _entry_signatures, COLD_COMPILE_SECONDS)

@@ -417,10 +417,10 @@ def estimate(setup: Setup) -> registry.Estimate:
         if engine == "compiled":
             from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
 
-            if elastic_compiled.cold():
+            if elastic_compiled.ENGINE.cold():
                 seconds += elastic_compiled.COLD_COMPILE_SECONDS
                 what += (f"; compiling the elastic engine once, ~{elastic_compiled.COLD_COMPILE_SECONDS:.0f} s "
-                         f"(numba's cache {elastic_compiled.cache_dir()}; `symmech warm` builds it ahead)")
+                         f"(numba's cache {elastic_compiled.ENGINE.cache_dir()}; `symmech warm` builds it ahead)")
     return registry.Estimate(seconds, what)
 
 

@@ -331,6 +331,9 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     from symmech.core.context import Context
 
     ctx = ctx or Context(quiet=True)
+    warm = _compiled_needed(p)
+    if warm:  # built here first: its one-off compile is no cost of a point, nor of the estimate
+        _warm_worker(ctx.say)
     started = time.perf_counter()
     first = evaluate(p.point(0, 0), ctx.max_time)
     points = int(np.prod(p.shape))
@@ -339,7 +342,24 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
                                                  f"(the first one's) on {processes} worker(s)"), ctx)
     tasks = [dask.delayed(evaluate)(p.point(i, j), ctx.max_time, dask_key_name=f"point-{i}-{j}")
              for i, j in list(np.ndindex(*p.shape))[1:]]
-    return [first] + list(core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx))
+    return [first] + list(core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
+                                             on_workers=_warm_worker if warm else None))
+
+
+def _compiled_needed(p: Plan) -> bool:
+    """Whether the points run the compiled elastic engine (the swept fields choose no engine)."""
+    from symmech.core import pipeline
+    from symmech.trolley import elastic_scene
+
+    setup = pipeline.load(p.point(0, 0)).setup.elastic
+    return setup is not None and setup.system is not None and elastic_scene.engine(setup)[0] == "compiled"
+
+
+def _warm_worker(say=None) -> None:
+    """The compiled elastic engine built once per machine (other processes wait on the build lock)."""
+    from symmech.trolley import elastic_compiled
+
+    elastic_compiled.ENGINE.warm(say=say)
 
 
 # Charts over the plane: (column, title, whether larger is worse)

@@ -1,0 +1,93 @@
+"""Building a compiled engine into numba's cache once per machine.
+
+An engine is a few cached numba entries (``cache=True`` dispatchers) and the argument types a run calls
+them with. :meth:`Engine.warm` compiles them unless numba's cache holds them, under a machine-wide build
+lock (``fcntl.flock`` on a file beside the cache: the OS releases it when its holder dies, so a killed
+builder never blocks later builds); a process that waits for the lock then loads what the holder built.
+numba writes each cache file whole (a temporary file renamed), so an interrupted build leaves none half
+written. :meth:`Engine.warm_in_background` starts a detached builder (``symmech warm --engine NAME
+--background``, its own session: Ctrl-C or SIGTERM of the caller does not reach it).
+"""
+from __future__ import annotations
+
+import fcntl
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Callable
+
+
+class Engine:
+    """The compiled engine ``name`` (``symmech warm --engine NAME``): ``entries()`` maps each cached entry
+    (a numba dispatcher) to the argument types a run calls it with; ``seconds`` [s] is the cold compile a
+    run announces (wall time, idle machine)."""
+
+    def __init__(self, name: str, entries: Callable[[], dict], seconds: float):
+        self.name, self.entries, self.seconds = name, entries, seconds
+        self.lock_name = f"symmech-{name}-build.lock"
+
+    def cold(self) -> bool:
+        """Whether the next run compiles: an entry has no machine code cached for its source yet."""
+        for entry in self.entries():
+            index = getattr(getattr(entry, "_cache", None), "_cache_file", None)  # numba's cache (private API)
+            if index is not None and not index._load_index():
+                return True
+        return False
+
+    def cache_dir(self) -> Path:
+        """Where numba caches the entries: ``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` beside their
+        module, or numba's user-wide cache folder when the package folder is read-only."""
+        return Path(next(iter(self.entries()))._cache._cache_path)  # numba's cache locator (private API)
+
+    @contextmanager
+    def build_lock(self, wait: bool):
+        """The machine-wide build lock; yields whether this process holds it (always, with ``wait``)."""
+        folder = self.cache_dir()
+        folder.mkdir(parents=True, exist_ok=True)
+        with open(folder / self.lock_name, "a") as fh:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                yield False
+                return
+            yield True  # closing the file releases the lock
+
+    def warm(self, wait: bool = True, say=None) -> bool:
+        """Compile the entries into numba's cache unless they are there; returns whether they are. Without
+        ``wait``, return False at once when another process holds the build lock. ``say(text)`` tells what
+        it does."""
+        with self.build_lock(wait) as mine:
+            if not mine:
+                return False
+            if self.cold():
+                if say:
+                    say(f"compiling the {self.name} engine once, ~{self.seconds:.0f} s (cache: {self.cache_dir()})")
+                for entry, signature in self.entries().items():
+                    entry.compile(signature)
+        return True
+
+    def warm_in_background(self) -> bool:
+        """Start a detached builder unless the engine is cached or a builder holds the lock; returns at once,
+        whether one was started."""
+        if not self.cold():
+            return False
+        with self.build_lock(wait=False) as free:
+            if not free:
+                return False
+        subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", self.name, "--background"],
+                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                         start_new_session=True)
+        return True
+
+    def wait_warm(self, timeout: float) -> bool:
+        """Start the builder if none runs and wait up to ``timeout`` [s] for the engine to be cached; returns
+        whether it is."""
+        deadline = time.monotonic() + timeout
+        self.warm_in_background()
+        while self.cold():
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.5)
+        return True
