@@ -194,8 +194,13 @@ def test_interrupted_run_cleans_up_and_keeps_previous_results(tmp_path, capsys, 
     assert run(capsys, scene(tmp_path), "--out", out)[0] == 0
     before = snapshot(out)
     proc, _ = held_run(tmp_path, out, stage)
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
+    try:
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:  # a run that outlived its signal must not outlive the test
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
     assert proc.returncode == 130
     assert one_line(err) == f"symmech: interrupted; {out} keeps its previous content"
     assert snapshot(out) == before and leftovers(out) == []
