@@ -208,3 +208,12 @@ def test_the_compiled_engine_is_built_before_the_first_point_is_timed(monkeypatc
     monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("python", "test"))
     outcomes(raw)
     assert calls == ["point", "point"]
+
+
+def test_the_admissible_border_runs_along_the_cell_edges():
+    """Points admissible left of x = 2 and below y = 1 (a 3 x 2 plane): the border is the edge x = 2.5
+    over the lower row's cell and the edge y = 15 over the two left columns, nothing else."""
+    xe, ye = np.array([0.5, 1.5, 2.5, 3.5]), np.array([5.0, 15.0, 25.0])
+    ok = np.array([[True, False], [True, False], [False, False]])
+    assert sorted(sweep.border(xe, ye, ok)) == sorted([((2.5, 5.0), (2.5, 15.0)), ((0.5, 15.0), (1.5, 15.0)),
+                                                       ((1.5, 15.0), (2.5, 15.0))])

@@ -491,17 +491,25 @@ def _admissible_cells(ax, xs, ok, log) -> None:
         ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
 
 
+def border(xe, ye, ok) -> list:
+    """The cell edges between admissible and other points: segments ((x, y), (x, y)) over the cells with
+    edges xe (nx + 1,), ye (ny + 1,) of the points ok (nx, ny)."""
+    across_x = [((xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[1:] != ok[:-1]))]
+    across_y = [((xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[:, 1:] != ok[:, :-1]))]
+    return across_x + across_y
+
+
 def _plane(fig, ax, x, y, z, ok, title, unit) -> None:
     """Heat map of z (nx, ny) over the cells of x and y (each: values, cell edges) with the border of the
     admissible points ``ok`` drawn around them and the others hatched."""
-    from matplotlib.lines import Line2D
+    from matplotlib.collections import LineCollection
 
     (xs, xe), (ys, ye) = x, y
     mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
-    if ok.any() and not ok.all() and len(xs) > 1 and len(ys) > 1:
-        ax.contour(xs, ys, ok.T.astype(float), levels=[0.5], colors="w", linewidths=2.0)
-        ax.add_line(Line2D([], [], color="w", lw=2.0, label="admissible region border"))
+    if ok.any() and not ok.all():
+        ax.add_collection(LineCollection(border(xe, ye, ok), colors="w", linewidths=2.0,
+                                         label="admissible region border"))
     if not ok.all():
         ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
                   edgecolor="0.3", linewidth=0.0, label="outside the admissible region")
