@@ -173,6 +173,8 @@ def test_command_line_refuses_a_kind_without_sweep_and_a_bad_sweep(tmp_path, cap
 
 
 @pytest.mark.slow
+# the default engine, here and in the worker processes (the fixture's reference engine reaches this one only)
+@pytest.mark.compiled_elastic
 def test_local_cluster_equals_serial_bit_for_bit():
     import dask.distributed as distributed
 
