@@ -66,8 +66,11 @@ SHARDS = {
     "smm_numeric": ("symmech/smm/numeric.py",
                     ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py"],
                     ["*"]),
+    # test_integrity.py runs fresh interpreters, which import the unmutated package; the codegen tests that
+    # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes)
     "integrity": ("symmech/core/integrity.py",
-                  ["tests/test_codegen.py", "tests/test_output_contract.py"], ["*"]),
+                  ["tests/test_codegen.py", "-k", "verify_refuses or used_modules or atomic_write",
+                   "tests/test_integrity_units.py"], ["*"]),
     # defined, not run yet (docs/mutation.md): the rigid trolley's frames and reactions, the output transaction
     "trolley_frames": ("symmech/trolley/model.py", TROLLEY_TESTS,
                        ["*.x_moving_frame__*", "*.x__raw_frame__*", "*ǁFramePlanǁ*", "*.x_plan_frames__*",
