@@ -82,7 +82,11 @@ SHARDS = {
                            "*.x_chord_point__*", "*.x_chord_rotation__*", "*.x_local_curvature_frame__*",
                            "*.x__stencil__*", "*.x__weights__*", "*.x_small_angle_check__*", "*.x__cols__*",
                            "*.x__mv__*"]),
-    "pipeline_output": ("symmech/core/pipeline.py", ["tests/test_outputs.py", "tests/test_api.py"],
+    # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
+    # and a child imports the unmutated package anyway
+    "pipeline_output": ("symmech/core/pipeline.py",
+                        ["tests/test_outputs.py", "tests/test_api.py", "tests/test_pipeline_output.py", "-k",
+                         "not interrupted_run and not racing_runs and not second_run_into_the_same"],
                         ["*.x_check_out__*", "*.x_locked__*", "*.x__acquire__*", "*.x_write__*",
                          "*.x_write_files__*", "*.x__replace_dir__*", "*.x__remove_leftovers__*", "*.x_run_to__*"]),
 }
