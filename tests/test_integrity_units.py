@@ -1,0 +1,145 @@
+"""symmech.core.integrity in-process: the header, the body hash, the per-process cache, the import
+hook's finder and loader, and the atomic write (issue 23 item 1: these kill mutants that the
+fresh-interpreter tests of test_integrity.py cannot see). References are hand-written header lines
+and hashlib, never the module's own functions."""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import sys
+import types
+
+import pytest
+
+from symmech import __version__
+from symmech.core import integrity
+from symmech.core.scene import SymmechError
+
+INPUTS, KEY = "a" * 64, "b" * 64
+BODY = "x = 1\n"
+
+
+def _module_text(body: str = BODY, version: str = __version__) -> str:
+    """A generated module as codegen writes it, the header spelled out by hand."""
+    digest = hashlib.sha256(body.encode("utf-8")).hexdigest()
+    return (f"# symmech {version} generated module; inputs sha256 {INPUTS}\n"
+            f"# source key {KEY}\n# body sha256 {digest}\n{body}")
+
+
+def test_with_header_writes_the_three_header_lines_then_the_body():
+    assert integrity.with_header(BODY, INPUTS, KEY) == _module_text()
+    assert integrity.sha256("é") == hashlib.sha256("é".encode("utf-8")).hexdigest()
+
+
+def test_split_reads_a_header_only_at_the_start_and_only_with_full_hashes():
+    header, body = integrity.split(_module_text("y = 2\n"))
+    assert header == integrity.Header(__version__, INPUTS, KEY, hashlib.sha256(b"y = 2\n").hexdigest())
+    assert body == "y = 2\n"
+    assert header.text() + body == _module_text("y = 2\n")
+    for text in (" " + _module_text(), _module_text().replace(KEY, KEY[:-1], 1), BODY):
+        assert integrity.split(text) == (None, text)
+
+
+@pytest.mark.parametrize("content, why", [
+    (None, "missing"),
+    (b"\xff\xfe not utf-8", "unreadable (UnicodeDecodeError)"),
+    (BODY.encode(), "edited (no symmech header)"),
+    ((_module_text() + "# appended\n").encode(), "edited or truncated (body sha256 differs from its header)"),
+    (_module_text(version="0.0.1").encode(), f"stale (written by symmech 0.0.1, this is {__version__})"),
+    (_module_text().encode(), None),
+])
+def test_problem_names_why_a_module_cannot_be_used(tmp_path, content, why):
+    path = tmp_path / "m.py"
+    if content is not None:
+        path.write_bytes(content)
+    assert integrity.problem(path) == why
+    if why is None:
+        assert integrity.verify_file("m", path) == hashlib.sha256(BODY.encode()).hexdigest()
+    else:
+        with pytest.raises(SymmechError) as exc:
+            integrity.verify_file("m", path)
+        assert str(exc.value) == f"generated module m is {why}: regenerate with `symmech codegen`"
+
+
+def test_a_file_is_hashed_once_until_its_mtime_or_size_changes(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text(_module_text())
+    digest = hashlib.sha256(BODY.encode()).hexdigest()
+    assert integrity.verify_file("m", path) == digest
+    stamp = os.stat(path).st_mtime_ns
+    path.write_text(_module_text().replace("x = 1", "x = 2"))  # same size: an edit the cache hides
+    os.utime(path, ns=(stamp, stamp))
+    assert integrity.verify_file("m", path) == digest
+    os.utime(path, ns=(stamp + 10**9, stamp + 10**9))
+    with pytest.raises(SymmechError, match="m is edited or truncated"):
+        integrity.verify_file("m", path)
+
+
+def test_the_finder_loads_intact_modules_of_the_package_only(tmp_path):
+    (tmp_path / "good.py").write_text(_module_text())
+    (tmp_path / "bad.py").write_text(_module_text() + "x = 3\n")
+    finder = integrity._GeneratedFinder()
+    assert finder.find_spec("json", None) is None
+    assert finder.find_spec("symmech.generated_like.good", [str(tmp_path)]) is None
+    assert finder.find_spec("symmech.generated.absent", [str(tmp_path)]) is None
+    good = finder.find_spec("symmech.generated.good", [str(tmp_path)])
+    assert isinstance(good.loader, integrity._VerifyingLoader)
+    assert (good.loader.name, good.loader.path) == ("symmech.generated.good", str(tmp_path / "good.py"))
+    module = importlib.util.module_from_spec(good)
+    good.loader.exec_module(module)
+    assert module.x == 1
+    bad = finder.find_spec("symmech.generated.bad", [str(tmp_path)])
+    with pytest.raises(SymmechError, match=r"^generated module bad is edited or truncated"):
+        bad.loader.exec_module(importlib.util.module_from_spec(bad))
+
+
+def test_guard_checks_the_index_and_puts_one_finder_first(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys, "meta_path", [f for f in sys.meta_path if not isinstance(f, integrity._GeneratedFinder)])
+    index = tmp_path / "__init__.py"
+    index.write_text(BODY)
+    with pytest.raises(SymmechError, match=r"^generated module __init__ is edited \(no symmech header\)"):
+        integrity.guard(str(index))
+    index.write_text(_module_text())
+    integrity.guard(str(index))
+    integrity.guard(str(index))
+    assert isinstance(sys.meta_path[0], integrity._GeneratedFinder)
+    assert sum(isinstance(f, integrity._GeneratedFinder) for f in sys.meta_path) == 1
+
+
+def test_used_modules_reads_the_recorded_hash_of_package_modules_only(tmp_path, monkeypatch):
+    (tmp_path / "with_header.py").write_text(_module_text("z = 0\n"))
+    (tmp_path / "plain.py").write_text(BODY)
+    for name, file in [("symmech.generated.fake_a", "with_header.py"), ("symmech.generated.fake_b", "plain.py"),
+                       ("symmech.generatedfake_c", "plain.py"), ("fake_d", "plain.py")]:
+        module = types.ModuleType(name)
+        module.__file__ = str(tmp_path / file)
+        monkeypatch.setitem(sys.modules, name, module)
+    monkeypatch.setitem(sys.modules, "symmech.generated.fake_e", types.ModuleType("symmech.generated.fake_e"))
+    used = integrity.used_modules()
+    assert used["fake_a"] == hashlib.sha256(b"z = 0\n").hexdigest()
+    assert used["fake_b"] == "no header"
+    assert not {"fake_e", "generatedfake_c", "fake_d"} & set(used)
+    assert not any(name.startswith("symmech.") or name.startswith(".") for name in used)
+
+
+def test_atomic_write_replaces_the_file_readable_by_all_and_leaves_nothing_else(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text("old")
+    integrity.write_atomic(path, "é\r\nnew\n")
+    assert path.read_bytes() == "é\r\nnew\n".encode("utf-8")
+    assert os.stat(path).st_mode & 0o777 == 0o644
+    assert [p.name for p in tmp_path.iterdir()] == ["m.py"]
+
+
+def test_atomic_write_renames_a_hidden_temporary_file_from_beside_the_target(tmp_path, monkeypatch):
+    path = tmp_path / "m.py"
+    renames = []
+    replace = os.replace
+    monkeypatch.setattr(os, "replace", lambda src, dst: (renames.append((src, dst)), replace(src, dst)))
+    integrity.write_atomic(path, "text")
+    [(src, dst)] = renames
+    src = os.fspath(src)
+    assert (os.path.dirname(src), dst) == (str(tmp_path), path)
+    assert os.path.basename(src).startswith(".m.py.") and src.endswith(".tmp")
+    assert path.read_text() == "text"
