@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 521e5f8eeca8e45a0275455a73dd4746e687a79eaba7cb2019c0e3088246beeb
-# source key b9ac73d9267638dc828c1af759966694e3b00f3e5c149f2a049fb9ca7bb5ab29
-# body sha256 5775910594b16de5a683ddb99e9a3721e5988baf4dcf2833baae0429e1b21927
+# symmech 0.1.0 generated module; inputs sha256 46912bf6cfe93cf91608b59220a9bc3c8e7fa55aba32e492b0c3a24ce3737156
+# source key 300280e7d9616598a3b4ad73c161ab96bc89a089735d0923fe94c7d3f7b1cedd
+# body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -1006,12 +1006,12 @@ def event_values(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, 
     """
     (t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c,), batch = _batch(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c)
     out = numpy.empty(batch + ())
-    x0 = 2*q0
-    x1 = q1**2
-    x2 = q2**2
-    x3 = q0**2 + q3**2
-    x4 = (x1 + x2 + x3)**(-2.0)
-    out[...] = rz - numpy.sqrt(a**2*x4*(2*q1*q3 - q2*x0)**2 + b**2*x4*(q1*x0 + 2*q2*q3)**2 + c**2*x4*(-x1 - x2 + x3)**2)
+    x0 = q1**2
+    x1 = q2**2
+    x2 = 1/(q0**2 + q3**2 + x0 + x1)
+    x3 = 2*x2
+    x4 = q0*x3
+    out[...] = rz - numpy.sqrt(a**2*(2*q1*q3*x2 - q2*x4)**2 + b**2*(q1*x4 + q2*q3*x3)**2 + c**2*(-x0*x3 - x1*x3 + 1)**2)
     return out
 
 

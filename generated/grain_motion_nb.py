@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 69b468d66e8ebcca483e990d361deef29c19a28c0491e2020f0fcb4aaf612d8a
-# source key b9ac73d9267638dc828c1af759966694e3b00f3e5c149f2a049fb9ca7bb5ab29
-# body sha256 e931fb9afba5395969a7876b247ff65287ca9e7477bfbca3d5e2fbb78e154c07
+# symmech 0.1.0 generated module; inputs sha256 9e3bcb0cb843ec98cfcd7cd1aa36ba449fd28fbd5c1ede32c870726c55085ea3
+# source key 300280e7d9616598a3b4ad73c161ab96bc89a089735d0923fe94c7d3f7b1cedd
+# body sha256 7517736981c17ce51a79b2f563ccce0e466f6d9537dba646abf41ffe259f8964
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -1399,12 +1399,12 @@ def rate_jacobian(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY,
 
 @numba.njit(cache=True, error_model="numpy")
 def _event_values_0(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, out, _k):
-    x0 = 2*q0
-    x1 = q1**2
-    x2 = q2**2
-    x3 = q0**2 + q3**2
-    x4 = (x1 + x2 + x3)**(-2)
-    out[_k] = rz - math.sqrt(a**2*x4*(2*q1*q3 - q2*x0)**2 + b**2*x4*(q1*x0 + 2*q2*q3)**2 + c**2*x4*(-x1 - x2 + x3)**2)
+    x0 = q1**2
+    x1 = q2**2
+    x2 = 1/(q0**2 + q3**2 + x0 + x1)
+    x3 = 2*x2
+    x4 = q0*x3
+    out[_k] = rz - math.sqrt(a**2*(2*q1*q3*x2 - q2*x4)**2 + b**2*(q1*x4 + q2*q3*x3)**2 + c**2*(-x0*x3 - x1*x3 + 1)**2)
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -202,9 +202,8 @@ def euler_rates_from_body_rates() -> sp.Matrix:
 def contact_gap() -> sp.Expr:
     """Height of the ellipsoid's lowest point above the plane Z = 0, rz - |D n'| [m] (eq (63)), n' the third
     row of Q(q / |q|): exact also for a quaternion that drifted off unit length in an integration."""
-    norm2 = q0**2 + q1**2 + q2**2 + q3**2
-    n_body = [2 * (q1 * q3 - q0 * q2) / norm2, 2 * (q2 * q3 + q0 * q1) / norm2,
-              (q0**2 - q1**2 - q2**2 + q3**2) / norm2]
+    norm = sp.sqrt(q0**2 + q1**2 + q2**2 + q3**2)
+    n_body = quaternion_matrix().row(2).subs({q: q / norm for q in (q0, q1, q2, q3)}, simultaneous=True)
     return rz - support_distance()[0].subs(dict(zip((n1, n2, n3), n_body)))
 
 
