@@ -60,9 +60,8 @@ def channels(drive, system, t, at=slice(None)) -> np.ndarray:
 
 def frame_channels(fr, V0, dV0, g0: float) -> np.ndarray:
     """Channels (k, 12) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,)."""
-    V, dV = V0[:, None], dV0[:, None]
-    a0 = dV * fr.e + V ** 2 * (fr.de + np.cross(fr.W, fr.e))
-    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], V * fr.W, dV * fr.W + V ** 2 * fr.dW, V * fr.e])
+    v0, a0, w, dw = el.frame_motion(fr, V0, dV0)
+    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], w, dw, v0])
 
 
 def _scales(ch: np.ndarray) -> np.ndarray:

@@ -27,32 +27,32 @@ from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError
 
 AXES = ("x1", "x2", "x3")
-# (pattern of a swept field, its unit, what setting it does); NAME, I and the axis are the field's own
+# (name in messages, pattern of a swept field, its unit, what setting it does); NAME, I and the axis are the
+# field's own
 FIELDS = (
-    (r"motion\.speed_scale", "1", "multiplies the speed expression: V0(t) → value × V0(t)"),
-    (r"motion\.constants\.[A-Za-z_][A-Za-z0-9_]*", "1", "sets the constant NAME of motion.constants (the "
-                                                          "axis's `unit` labels it)"),
-    (r"trolley\.mass", "kg", "sets the body's mass"),
-    (r"elastic\.rollers\.stiffness", "N/m", "sets the stiffness of all five rollers"),
-    (r"elastic\.rollers\.stiffness_scale", "1", "multiplies the five roller stiffnesses"),
-    (r"elastic\.rollers\.damping", "N s/m", "sets the damping of all five rollers"),
-    (r"elastic\.rollers\.damping_scale", "1", "multiplies the five roller dampings"),
-    (r"elastic\.beams\[[0-9]+\]\.ei_scale", "1", "multiplies beam I's bending stiffness in both planes"),
-    (r"elastic\.beams\[[0-9]+\]\.tip_mass", "kg", "sets beam I's tip mass"),
-    (r"elastic\.beams\[[0-9]+\]\.damping_ratio", "1", "sets beam I's damping ratio"),
-    (r"comfort\.x[123]\.(lo|hi)", "g", "sets the lower or upper end of the comfort envelope along that axis"),
+    ("motion.speed_scale", r"motion\.speed_scale", "1", "multiplies the speed expression: V0(t) → value × V0(t)"),
+    ("motion.constants.NAME", r"motion\.constants\.[A-Za-z_][A-Za-z0-9_]*", "1",
+     "sets the constant NAME of motion.constants (the axis's `unit` labels it)"),
+    ("trolley.mass", r"trolley\.mass", "kg", "sets the body's mass"),
+    ("elastic.rollers.stiffness", r"elastic\.rollers\.stiffness", "N/m", "sets the stiffness of all five rollers"),
+    ("elastic.rollers.stiffness_scale", r"elastic\.rollers\.stiffness_scale", "1",
+     "multiplies the five roller stiffnesses"),
+    ("elastic.rollers.damping", r"elastic\.rollers\.damping", "N s/m", "sets the damping of all five rollers"),
+    ("elastic.rollers.damping_scale", r"elastic\.rollers\.damping_scale", "1", "multiplies the five roller dampings"),
+    ("elastic.beams[I].ei_scale", r"elastic\.beams\[[0-9]+\]\.ei_scale", "1",
+     "multiplies beam I's bending stiffness in both planes"),
+    ("elastic.beams[I].tip_mass", r"elastic\.beams\[[0-9]+\]\.tip_mass", "kg", "sets beam I's tip mass"),
+    ("elastic.beams[I].damping_ratio", r"elastic\.beams\[[0-9]+\]\.damping_ratio", "1", "sets beam I's damping ratio"),
+    ("comfort.x1.lo (x1, x2, x3; lo, hi)", r"comfort\.x[123]\.(lo|hi)", "g",
+     "sets the lower or upper end of the comfort envelope along that axis"),
 )
-FIELD_NAMES = ("motion.speed_scale", "motion.constants.NAME", "trolley.mass", "elastic.rollers.stiffness",
-               "elastic.rollers.stiffness_scale", "elastic.rollers.damping", "elastic.rollers.damping_scale",
-               "elastic.beams[I].ei_scale", "elastic.beams[I].tip_mass", "elastic.beams[I].damping_ratio",
-               "comfort.x1.lo (x1, x2, x3; lo, hi)")
 REACTIONS = tuple(f"P{i}" for i in range(6))
 
 
 def _field(path, value):
-    if not isinstance(value, str) or not any(re.fullmatch(p, value) for p, _, _ in FIELDS):
+    if not isinstance(value, str) or not any(re.fullmatch(p, value) for _, p, _, _ in FIELDS):
         raise SceneError(path, f"{s._show(value)} is not a field a trolley sweep can vary; choose one of "
-                               f"{', '.join(FIELD_NAMES)}")
+                               f"{', '.join(name for name, _, _, _ in FIELDS)}")
     return value
 
 
@@ -60,7 +60,7 @@ def unit_of(axis: dict) -> str:
     """The unit of a resolved axis's field (a motion constant's: the axis's ``unit``, default "1")."""
     if axis["field"].startswith("motion.constants."):
         return axis["unit"] or "1"
-    return next(unit for pattern, unit, _ in FIELDS if re.fullmatch(pattern, axis["field"]))
+    return next(unit for _, pattern, unit, _ in FIELDS if re.fullmatch(pattern, axis["field"]))
 
 
 def _check_unit(axis: dict, path: str) -> None:
@@ -348,10 +348,9 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
 
 def _compiled_needed(p: Plan) -> bool:
     """Whether the points run the compiled elastic engine (the swept fields choose no engine)."""
-    from symmech.core import pipeline
     from symmech.trolley import elastic_scene
 
-    setup = pipeline.load(p.point(0, 0)).setup.elastic
+    setup = p.load(0, 0).setup.elastic
     return setup is not None and setup.system is not None and elastic_scene.engine(setup)[0] == "compiled"
 
 
@@ -453,7 +452,7 @@ def _plots(p: Plan, table: Table, ok: np.ndarray, extremes: dict, folder) -> lis
         fig, axes = plotting.figure(width=6.4, height=4.8)
         ax = axes[0, 0]
         if p.y:
-            _plane(fig, ax, (xs, edges(xs, p.x["log"])), (ys, edges(ys, p.y["log"])), z, ok.reshape(p.shape),
+            _plane(fig, ax, edges(xs, p.x["log"]), edges(ys, p.y["log"]), z, ok.reshape(p.shape),
                    title, col.unit)
             ax.plot(xs[worst[0]], ys[worst[1]], "rX", ms=12, mec="k", label="worst")
             ax.plot(xs[best[0]], ys[best[1]], "w*", ms=15, mec="k", label="best")
@@ -499,12 +498,11 @@ def border(xe, ye, ok) -> list:
     return across_x + across_y
 
 
-def _plane(fig, ax, x, y, z, ok, title, unit) -> None:
-    """Heat map of z (nx, ny) over the cells of x and y (each: values, cell edges) with the border of the
+def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
+    """Heat map of z (nx, ny) over the cells with edges xe (nx + 1,) and ye (ny + 1,), with the border of the
     admissible points ``ok`` drawn around them and the others hatched."""
     from matplotlib.collections import LineCollection
 
-    (xs, xe), (ys, ye) = x, y
     mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
     if ok.any() and not ok.all():
