@@ -1,10 +1,11 @@
 """The compiled elastic engine (issue 20 item 3) against the Python engine, the reference.
 
 Both engines integrate the same equations by Radau IIA with the same step control (the toolkit's port of
-scipy's) and the same tolerances; they differ in round-off and in the frame along the track, which the
-compiled engine interpolates from a table checked to 1e-3 rtol of each channel's scale. So the reactions
-agree far below the tolerance: bounds of 1e-7 relative to max|P| at rtol 1e-8 (the issue's target), measured
-1e-11…1e-10. The assembly itself (q̈, the resultants, M, ∂R/∂q, ∂R/∂q̇) is compared at random states to
+scipy's) and the same tolerances, except that the Python engine's steps are bound by the output spacing and
+the compiled engine's are not (its outputs come from the collocation polynomial); the compiled engine
+interpolates the frame along the track from a table checked to 1e-3 rtol of each channel's scale. So the
+reactions agree within the tolerance: bounds of 1e-7 relative to max|P| at rtol 1e-8 (the issue's target),
+measured 7e-9 on the bundled scene (each against Radau at rtol 1e-11: compiled 7.9e-9, Python 1.5e-9). The assembly itself (q̈, the resultants, M, ∂R/∂q, ∂R/∂q̇) is compared at random states to
 round-off, and the compiled Jacobian against central differences of the compiled right-hand side.
 """
 import copy
@@ -50,9 +51,13 @@ def relative(a, b):
 def agree(c, p, bound):
     """P within ``bound`` of max|P|, the other tabulated outputs within 100 ``bound`` of their largest magnitude
     (q̈, not tabulated, follows the undamped roller modes at 500 rad/s: its difference is the integration error
-    times ω²)."""
+    times ω²), the states q, q̇, E_d, W within that plus 10 x their absolute tolerance (1e-12 m, 1e-9 m/s, 1e-9 J,
+    WORK_ATOL: the rates of the stiff start transient are ~1e-5 m/s, the dissipated energy of a short ride
+    ~1e-10 J, so there atol rules, and the engines' steps differ)."""
     assert relative(c["P"], p["P"]) < bound
-    for key in ("q", "qd", "F", "M", "h", "E", "work", "dissipated", "probe_overload", "probe_elastic"):
+    for key, atol in (("q", 1e-12), ("qd", 1e-9), ("dissipated", 1e-9), ("work", el.WORK_ATOL)):
+        assert np.abs(c[key] - p[key]).max() <= 100 * bound * np.abs(p[key]).max() + 10 * atol, key
+    for key in ("F", "M", "h", "E", "probe_overload", "probe_elastic"):
         scale = np.abs(p[key]).max()
         if scale > 0:
             assert relative(c[key], p[key]) < 100 * bound, key
@@ -63,7 +68,7 @@ def test_a_short_ride_agrees_at_rtol_1e_8(case):
     c, p = both(helix(t_end=0.03, steps=10, case=case), 1e-8)
     agree(c, p, 1e-7)
     assert c["frame_interpolation_error"] <= 1e-3 * 1e-8
-    assert abs(c["nfev"] - p["nfev"]) <= 0.05 * p["nfev"]  # the same step control
+    assert c["nfev"] < p["nfev"]  # the steps are not bound by the output spacing (3 ms) as the Python engine's
 
 
 def test_rigid_rollers_agree():
@@ -76,11 +81,13 @@ def test_rigid_rollers_agree():
 
 @pytest.mark.slow
 def test_the_bundled_scene_agrees_at_rtol_1e_8():
-    """The whole bundled scene (3 s, 1000 outputs): P0…P5 within 1e-7 of max|P| (measured 1.7e-12)."""
+    """The whole bundled scene (3 s, 1000 outputs): P0…P5 within 1e-7 of max|P| (measured 7.2e-9), the
+    compiled steps longer than the output spacing (measured 256 steps for 999 intervals)."""
     doc = copy.deepcopy(BUNDLED)
     doc["elastic"]["numerics"] = {"modal_samples": 0}
     c, p = both(pipeline.load(doc).setup.elastic, 1e-8)
     agree(c, p, 1e-7)
+    assert c["steps"] < len(c["t"]) / 2
 
 
 @pytest.mark.slow
@@ -137,13 +144,16 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
     """At 400 random times the spline is within 4x its midpoint error of the exact channels, which is at most
     the bound (1e-3 rtol) where the exact frame is smooth; case 2's second differences of Λ* (step 1e-3 m)
     carry ~1e-10 of rounding, which no table resolves: at rtol 1e-8 the table stops on that noise, flagged,
-    within INTERP_NOISE, and meets the bound at rtol 1e-6."""
+    within INTERP_NOISE, and meets the bound at rtol 1e-6. On 20 outputs the table adds midpoints; on 400
+    at rtol 1e-6 every 2^j-th output time is a node (measured j = 2) and it meets the bound at all of them."""
     from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
 
-    for case, rtol, noise in ((1, 1e-8, False), (2, 1e-6, False), (2, 1e-8, True)):
-        setup = helix(t_end=1.0, steps=20, case=case)
+    for case, rtol, noise, steps in ((1, 1e-8, False, 20), (2, 1e-6, False, 20), (2, 1e-8, True, 20),
+                                     (1, 1e-6, False, 400)):
+        setup = helix(t_end=1.0, steps=steps, case=case)
         table = ec.frame_table(setup.system, setup.drive, setup.t, rtol)
-        assert table.noise == noise and table.bound == 1e-3 * rtol and table.nodes.size > 21
+        assert table.noise == noise and table.bound == 1e-3 * rtol
+        assert table.nodes.size > 21 if steps == 20 else set(table.nodes) < set(setup.t)
         assert table.error <= (ec.INTERP_NOISE if noise else table.bound)
         t = np.sort(RNG.uniform(0.0, 1.0, 400))
         exact = ec.channels(setup.drive, setup.system, np.r_[0.0, t])[1:]

@@ -786,16 +786,17 @@ def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
     return res
 
 
-def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms) -> dict:
+def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, frame=None) -> dict:
     """Per output time (arrays (n,) of t, s, V0, dV0 and the states Y (n, 2N + 2)): q, q̇, q̈,
     reactions P (n, 6), resultants F, M (n, 3), roller deflections (n, 5), probe displacements
     (total and elastic) and overloads (n, n_probes, 3) [m, g], the Jacobi energy h, the total
     energy E (fixed frame), the dissipated energy and the work of the track forces [J], and the
     rigid model's reactions and overloads of the centre of mass beside them. ``rows`` computes the
-    per-row terms (:func:`row_terms` or the compiled engine's)."""
+    per-row terms (:func:`row_terms` or the compiled engine's); ``frame``: the frame at s when the caller has
+    it (:func:`frames`)."""
     N, inv = system.N, system.inv
     q, qd, ed, work = Y[:, :N], Y[:, N:2 * N], Y[:, 2 * N], Y[:, 2 * N + 1]
-    fr = frames(drive, s, system.mdl.l)
+    fr = frames(drive, s, system.mdl.l) if frame is None else frame
     height = drive.track.derivatives(s, 0)[0][:, 1]
     res = rows(system, fr, V0, dV0, Y, height)
     if system.rollers_on:

@@ -74,8 +74,9 @@ def _scales(ch: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Table:
-    """The spline table of the frame channels: nodes (n,) [s], coefficients (4, n - 1, 12), the largest
-    midpoint error relative to the channel scale, the bound it met, and whether it stopped on noise."""
+    """The spline table of the frame channels: nodes (n,) [s], coefficients (4, n - 1, 12), the largest error
+    between its nodes (at the output times it skips or the interval midpoints) relative to the channel scale,
+    the bound it met, and whether it stopped on noise."""
 
     nodes: np.ndarray
     coef: np.ndarray
@@ -84,18 +85,41 @@ class Table:
     noise: bool
 
 
-def frame_table(system, drive, t, rtol: float) -> Table | None:
-    """The frame channels over [t[0], t[-1]] as a cubic spline whose value at every interval midpoint is
-    within max(INTERP_FRACTION rtol, INTERP_FLOOR) of the channel scale of the exact one, halving every
-    interval until it is (halved locally, a spline converges slowly: its end conditions reach several
-    intervals in); when a halving increased the error or STALL_ROUNDS rounds no longer reduced it 4x (noise
-    in the exact values: halving then only interpolates it), the best table so far if its error is at most
-    INTERP_NOISE.
-    None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs the Python engine)."""
+def _subsampled(t, ch: np.ndarray, k: int, bound: float) -> Table:
+    """The spline through every k-th output time t (and the last) and its largest error at the times it skips,
+    from the exact channels ch (len(t), 12) there."""
+    keep = np.zeros(t.size, bool)
+    keep[::k] = keep[-1] = True
+    spline = CubicSpline(t[keep], ch[keep], axis=0)
+    scale = _scales(ch)
+    worst = np.abs(spline(t[~keep]) - ch[~keep]) / np.where(scale > 0, scale, 1.0)
+    return Table(t[keep], np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
+
+
+def frame_table(system, drive, t, rtol: float, ch=None) -> Table | None:
+    """The frame channels over [t[0], t[-1]] as a cubic spline within max(INTERP_FRACTION rtol, INTERP_FLOOR)
+    of the channel scale of the exact values between its nodes. The exact channels at the output times t
+    (``ch`` (len(t), 12), computed when None; the outputs need them anyway) seed it: the spline through
+    every 2^j-th of them that meets the bound at all the times it skips, j as large as it does from j = 1 on,
+    is the table, at no further frame evaluation. Otherwise every interval of t is halved until the spline at each interval
+    midpoint meets the bound (halved locally, a spline converges slowly: its end conditions reach several
+    intervals in); the spline through every second output time counts as the round before. When a halving
+    increased an error already within INTERP_NOISE, or STALL_ROUNDS rounds no longer reduced it 4x (noise in
+    the exact values: halving then only interpolates it), the best table so far if its error is at most
+    INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs the Python
+    engine)."""
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
-    ch = channels(drive, system, nodes)  # at the nodes (each round's midpoints become nodes: computed once)
-    best, since = None, 0
+    ch = channels(drive, system, nodes) if ch is None else ch
+    best, since, k = None, 0, 2
+    while 2 * k <= nodes.size + 1:  # coarser, while the spline through fewer nodes still meets the bound
+        table = _subsampled(nodes, ch, k, bound)
+        if table.error > bound:
+            break
+        best, k = table, 2 * k
+    if best is not None:
+        return best
+    best = table if k == 2 and nodes.size >= 3 else None
     while True:
         every = np.empty(2 * nodes.size - 1)
         every[0::2], every[1::2] = nodes, (nodes[1:] + nodes[:-1]) / 2
@@ -107,8 +131,8 @@ def frame_table(system, drive, t, rtol: float) -> Table | None:
         if table.error <= bound:
             return table
         # a smooth channel loses 16x per halving; rounds that do not gain 4x meet noise (or a kink), and a
-        # round that loses is noise outright: halving only interpolates it more closely
-        worse = best is not None and table.error > best.error
+        # round that loses once the error is down to noise is noise outright: halving only interpolates it
+        worse = best is not None and table.error > best.error and best.error <= INTERP_NOISE
         since = 0 if best is None or table.error < 0.25 * best.error else since + 1
         best = table if best is None or table.error < best.error else best
         if worse or since >= STALL_ROUNDS or 2 * nodes.size > MAX_TABLE_NODES:
@@ -120,11 +144,16 @@ def frame_table(system, drive, t, rtol: float) -> Table | None:
 
 def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
     """:func:`symmech.trolley.elastic.simulate` by Radau on the compiled assembly (prescribed speed; the
-    same state, tolerances, step bound and outputs). ``engine`` / ``engine_reason`` name what ran: the Python
-    engine when the frame cannot be tabulated within its bound (:func:`frame_table`); ``frame_table_nodes``
-    and ``frame_interpolation_error`` (relative to the channel scales) what the table reached."""
+    same state, tolerances and outputs; the steps are not bound by the output spacing: the outputs come from
+    the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
+    ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
+    (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
+    scales) what the table reached."""
     t = np.asarray(t, dtype=float)
-    table = frame_table(system, drive, t, rtol)
+    line = el.Timeline(system, drive, t)
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
+    fr = el.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
+    table = frame_table(system, drive, t, rtol, frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
         out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0)
         out["engine"], out["engine_reason"] = "python", (
@@ -132,20 +161,17 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
             f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
         return out
     N = system.N
-    line = el.Timeline(system, drive, t)
     q0 = system.quasi_static(line.state(t[0]))
     zero = np.zeros(N)
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL]
-    step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
-    Y, steps, nfev, status = ek._solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol, step)
+    Y, steps, nfev, status = ek._solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
     if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
         last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
         why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \
             "no finite state"
         raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: {why})")
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
-    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms)
+    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out
@@ -165,7 +191,7 @@ def _entry_signatures() -> dict:
            np.zeros((3, 5)), np.zeros((0, 1), np.int64), np.zeros(0, np.int64), np.zeros((0, 1, 1)), np.zeros(0),
            np.zeros((f, 3)), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n), np.int64), np.zeros((f * f, 9)))
     tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
-    solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4), 1.0)
+    solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
     rows = (mdl, np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
     return {ek._solve: tuple(numba.typeof(a) for a in solve), ek._rows: tuple(numba.typeof(a) for a in rows)}
 

@@ -289,10 +289,10 @@ _radau_start, _radau_step = _steps.radau_start, _steps.radau_step  # globals num
 
 
 @jit
-def _solve(mdl, tab, y0, t_eval, rtol, atol, max_step):
-    """Radau IIA from (t_eval[0], y0) over t_eval (k,), steps at most ``max_step`` [s] (scipy's rule: a longer
-    step is cut and its error history forgotten); returns (Y (k, n) the dense output at t_eval, accepted
-    steps, rhs evaluations, status of :mod:`symmech.core.ode`)."""
+def _solve(mdl, tab, y0, t_eval, rtol, atol):
+    """Radau IIA from (t_eval[0], y0) over t_eval (k,), steps as long as the error control allows (the outputs
+    come from the collocation polynomial, not from steps to each output time); returns (Y (k, n) the dense
+    output at t_eval, accepted steps, rhs evaluations, status of :mod:`symmech.core.ode`)."""
     n, t_end = y0.size, t_eval[-1]
     Y = np.full((t_eval.size, n), np.nan)
     calls = np.zeros(1)
@@ -308,8 +308,6 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol, max_step):
     for step in range(MAX_STEPS):
         if not t < t_end:
             return Y, step, int(calls[0]), ode.SUCCESS
-        if st[ode.R_H] > max_step:
-            st[ode.R_H], st[ode.R_H_OLD], st[ode.R_ERR_OLD] = max_step, -1.0, -1.0
         t_new, y_new, f_new, ok = _radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             return Y, step, int(calls[0]), ode.STEP_TOO_SMALL
