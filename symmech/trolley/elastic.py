@@ -290,13 +290,13 @@ def roller_forces(rollers: Rollers, d, dd, damping: bool):
     return force, -k * (1.0 + (np.sign(up) + np.sign(down)) / 2)
 
 
-def roller_energy(rollers: Rollers, d) -> float:
-    """Π^P [J] of the roller law at deflections d."""
+def roller_energy(rollers: Rollers, d):
+    """Π^P [J] of the roller law at deflections d (..., 5), shape (...)."""
     k = np.asarray(rollers.stiffness, float)
     if rollers.law == "linear":
-        return float(0.5 * (k * d * d).sum())
+        return 0.5 * (k * d * d).sum(-1)
     pre = np.asarray(rollers.preload, float)
-    return float(0.5 * (k * (np.maximum(pre - d, 0) ** 2 + np.maximum(pre + d, 0) ** 2 - 2 * np.maximum(pre, 0) ** 2)).sum())
+    return 0.5 * (k * (np.maximum(pre - d, 0) ** 2 + np.maximum(pre + d, 0) ** 2 - 2 * np.maximum(pre, 0) ** 2)).sum(-1)
 
 
 # ---------------------------------------------------------------- frame along the track
@@ -510,11 +510,11 @@ class System:
         t0 = 0.5 * (inv.mass * fs.v0 @ fs.v0 + 2 * fs.v0 @ np.cross(fs.w, first) + np.sum((W.T @ W) * J))
         return 0.5 * qd @ M @ qd - t0 + self.potential(q) + self.mdl.g0 * fs.nu @ first
 
-    def potential(self, q) -> float:
-        """Π [J]: beam bending (and membrane) energy and the rollers' potential."""
-        pi = 0.5 * q @ self.inv.K @ q + membrane.energy(self.inv.membrane, q)
+    def potential(self, q):
+        """Π [J]: beam bending (and membrane) energy and the rollers' potential at q (..., N), shape (...)."""
+        pi = 0.5 * np.einsum("...i,ij,...j->...", q, self.inv.K, q) + membrane.energy(self.inv.membrane, q)
         if self.rollers_on:
-            pi += roller_energy(self.mdl.rollers, self.C @ q[:5])
+            pi = pi + roller_energy(self.mdl.rollers, q[..., :5] @ self.C.T)
         return pi
 
     def total_energy(self, fs: FrameState, q, qd, height: float) -> float:

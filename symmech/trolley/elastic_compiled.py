@@ -6,14 +6,19 @@ numba's cache once (:func:`warm`).
 **The frame along the track.** The right-hand side needs, at any stage time t, the load a0 + g0 ν, ω,
 ω̇ and v0 (body components). They come from Python (``model.moving_frame`` or ``local_curvature_frame``
 of any track, the user's V0(t)) and cannot be called per stage, so :func:`frame_table` tabulates these 12
-channels once per run on a grid of t, vectorised, as a cubic spline (scipy's ``CubicSpline``, evaluated
-in the kernels), halving every interval until the spline at each interval midpoint is within the bound
-of the exact value (:data:`INTERP_FRACTION` x rtol of the channel group's scale, at least
-:data:`INTERP_FLOOR`); the reached error is returned and reported. Where the exact values carry rounding
-noise that no refinement removes (case 2's second differences of Λ*: ~1e-9 of the channel scale on the
-bundled helix), the refinement stops once a halving increases the error or two rounds no longer reduce it 4x, provided
-the error is at most :data:`INTERP_NOISE`; otherwise the run falls back to the Python engine and says why
-(:func:`simulate`). The outputs at the grid times use the exact frame.
+channels once per run, vectorised, as a cubic spline in t (scipy's ``CubicSpline``, evaluated in the
+kernels) within a bound of the exact values between its nodes (:data:`INTERP_FRACTION` x rtol of the
+channel group's scale, at least :data:`INTERP_FLOOR`): the exact frame at the output times (the outputs use
+it) seeds it, every 2^j-th of those times its nodes when that meets the bound at the others, else every
+interval halved until the spline at each midpoint does; the reached error is returned and reported. Where
+the exact values carry rounding noise that no refinement removes (case 2's second differences of Λ*: ~1e-9
+of the channel scale on the bundled helix), the refinement stops once a halving increases an error within
+:data:`INTERP_NOISE` or two rounds no longer reduce it 4x, provided the error is at most INTERP_NOISE;
+otherwise the run falls back to the Python engine and says why (:func:`simulate`).
+
+**Steps.** The Python engine bounds its steps by the output spacing; this one does not: the outputs come
+from Radau's collocation polynomial (scipy's dense output), whose error on the bundled scene stays within
+the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
 """
 from __future__ import annotations
 
@@ -44,7 +49,7 @@ def row_terms(system, fr, V0, dV0, Y, height) -> dict:
     keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
     terms = ek._rows(ek.pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
     res = dict(zip(keys, terms))
-    pi = np.array([system.potential(q) for q in Y[:, :system.N]])
+    pi = system.potential(Y[:, :system.N])
     res["h"] += pi
     res["E"] += pi
     return res

@@ -35,12 +35,12 @@ def block(first: int, modes: int, ea: float, length: float) -> Block:
     return Block(np.arange(first, first + 2 * modes), H, ea / (8 * length ** 3))
 
 
-def energy(blocks, q) -> float:
-    """Π_m [J] of all held beams at the coordinates q (N,)."""
+def energy(blocks, q):
+    """Π_m [J] of all held beams at the coordinates q (..., N), shape (...)."""
     out = 0.0
     for b in blocks:
-        x = q[b.index]
-        out += b.c * float(x @ b.H @ x) ** 2
+        x = q[..., b.index]
+        out = out + b.c * np.einsum("...i,ij,...j->...", x, b.H, x) ** 2
     return out
 
 
