@@ -143,7 +143,7 @@ def ride(quick: bool, repeats: int):
     for _ in range(repeats):
         seconds, out = run(st, "compiled", 1e-6)
         times.append(seconds)
-    print(f"{t_end:g} s ride, rtol 1e-6, {len(out['t'])} outputs, compiled: {spread(times)} s, nfev {out['nfev']}, "
+    print(f"{t_end:g} s ride, rtol 1e-6, {len(out['t'])} outputs, compiled: {spread(times)} s, nfev {out['nfev']}, steps {out['steps']}, "
           f"table {out['frame_table_nodes']} nodes (error {out['frame_interpolation_error']:.1e}), "
           f"energy residual {np.abs(elastic_scene.energy_residual(out)).max():.2e} J")
 

@@ -376,17 +376,23 @@ def _stencil(fun, s, h, order: int, span=(-math.inf, math.inf)):
     h = np.minimum(np.broadcast_to(np.asarray(h, dtype=float), s.shape), (hi - lo) / (2 * (n - 1)))
     half = order // 2
     forward, backward = s - half * h < lo, s + half * h > hi
-    layouts = ((~forward & ~backward, np.arange(-half, half + 1)), (forward, np.arange(n)),
-               (backward & ~forward, np.arange(1 - n, 1)))
+    layouts = [(mask, nodes) for mask, nodes in ((~forward & ~backward, np.arange(-half, half + 1)),
+                                                 (forward, np.arange(n)), (backward & ~forward, np.arange(1 - n, 1)))
+               if mask.any()]
     d1 = np.empty(s.shape + (3, 3))
     d2 = np.empty_like(d1)
+    if not layouts:
+        return d1, d2
+    # every node of every layout in one call: fun's cost (a case-2 frame) is mostly per call
+    values = fun(np.concatenate([s[mask] + k * h[mask] for mask, nodes in layouts for k in nodes]))
+    start = 0
     for mask, nodes in layouts:
-        if not mask.any():
-            continue
+        m = np.count_nonzero(mask)
+        at = [values[start + i * m:start + (i + 1) * m] for i in range(len(nodes))]
+        start += m * len(nodes)
         hm = h[mask][..., None, None]
-        values = [fun(s[mask] + k * h[mask]) for k in nodes]
-        d1[mask] = sum(w * v for w, v in zip(_weights(nodes, 1), values)) / hm
-        d2[mask] = sum(w * v for w, v in zip(_weights(nodes, 2), values)) / hm**2
+        d1[mask] = sum(w * v for w, v in zip(_weights(nodes, 1), at)) / hm
+        d2[mask] = sum(w * v for w, v in zip(_weights(nodes, 2), at)) / hm**2
     return d1, d2
 
 
