@@ -5,8 +5,9 @@ scipy's) and the same tolerances, except that the Python engine's steps are boun
 the compiled engine's are not (its outputs come from the collocation polynomial); the compiled engine
 interpolates the frame along the track from a table checked to 1e-3 rtol of each channel's scale. So the
 reactions agree within the tolerance: bounds of 1e-7 relative to max|P| at rtol 1e-8 (the issue's target),
-measured 7e-9 on the bundled scene (each against Radau at rtol 1e-11: compiled 7.9e-9, Python 1.5e-9). The assembly itself (q̈, the resultants, M, ∂R/∂q, ∂R/∂q̇) is compared at random states to
-round-off, and the compiled Jacobian against central differences of the compiled right-hand side.
+measured 7e-9 on the bundled scene (each against Radau at rtol 1e-11: compiled 7.9e-9, Python 1.5e-9). The
+assembly itself (q̈, the resultants, M, ∂R/∂q, ∂R/∂q̇) is compared at random states to round-off, and the
+compiled Jacobian against central differences of the compiled right-hand side.
 """
 import copy
 import tomllib

@@ -106,13 +106,13 @@ def frame_table(system, drive, t, rtol: float, ch=None) -> Table | None:
     of the channel scale of the exact values between its nodes. The exact channels at the output times t
     (``ch`` (len(t), 12), computed when None; the outputs need them anyway) seed it: the spline through
     every 2^j-th of them that meets the bound at all the times it skips, j as large as it does from j = 1 on,
-    is the table, at no further frame evaluation. Otherwise every interval of t is halved until the spline at each interval
-    midpoint meets the bound (halved locally, a spline converges slowly: its end conditions reach several
-    intervals in); the spline through every second output time counts as the round before. When a halving
-    increased an error already within INTERP_NOISE, or STALL_ROUNDS rounds no longer reduced it 4x (noise in
-    the exact values: halving then only interpolates it), the best table so far if its error is at most
-    INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs the Python
-    engine)."""
+    is the table, at no further frame evaluation. Otherwise every interval of t is halved until the spline at
+    each interval midpoint meets the bound (halved locally, a spline converges slowly: its end conditions
+    reach several intervals in); the spline through every second output time counts as the round before.
+    When a halving increased an error already within INTERP_NOISE, or STALL_ROUNDS rounds no longer reduced
+    it 4x (noise in the exact values: halving then only interpolates it), the best table so far if its error
+    is at most INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs
+    the Python engine)."""
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
     ch = channels(drive, system, nodes) if ch is None else ch
