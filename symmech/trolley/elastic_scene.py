@@ -134,8 +134,6 @@ def engine(setup: Setup) -> tuple[str, str]:
     """The engine that integrates the elastic model, "compiled" or "python", and why."""
     if setup.engine == "python":
         return "python", 'numerics.engine = "python"'
-    if setup.drive.traction is not None:
-        return "python", "traction (drive.traction) runs on the Python engine only"
     if setup.method != "Radau":
         return "python", f"numerics.method = \"{setup.method}\": the compiled engine integrates by Radau"
     return "compiled", 'numerics.engine = "compiled"'
