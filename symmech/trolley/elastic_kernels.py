@@ -368,7 +368,7 @@ def traction_force(key, t, v):
     return float(p0(t, v)), float(p0(t, v + h) - p0(t, v - h)) / (2.0 * h)
 
 
-@jit
+@numba.njit(cache=True, error_model="numpy")  # not nogil: the callback holds the GIL
 def _force(key, t, v):
     with numba.objmode(p="float64", dp="float64"):  # a Python call per stage (~2 µs)
         p, dp = traction_force(key, t, v)
