@@ -98,8 +98,8 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
                          "Jacobian (symmech.trolley.elastic_compiled; compiled once per installation, ~1 CPU-minute, then "
                          "loaded from numba's cache; `symmech warm` builds it); the frame along the track is "
                          "tabulated per run and its interpolation error checked against the exact frame. "
-                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). Traction and a "
-                         "`method` other than Radau run on `python`", choices=("compiled", "python"),
+                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). A `method` other "
+                         "than Radau runs on `python`", choices=("compiled", "python"),
                          default="compiled"),
         "method": Choice("integrator (implicit ones use the analytic Jacobian)",
                          choices=("Radau", "BDF", "LSODA", "DOP853", "RK45"), default="Radau"),
