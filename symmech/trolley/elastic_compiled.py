@@ -14,6 +14,10 @@ noise that no refinement removes (case 2's second differences of Λ*: ~1e-9 of t
 bundled helix), the refinement stops once a halving increases the error or two rounds no longer reduce it 4x, provided
 the error is at most :data:`INTERP_NOISE`; otherwise the run falls back to the Python engine and says why
 (:func:`simulate`). The outputs at the grid times use the exact frame.
+
+**Traction.** s is a state, so :func:`simulate_traction` tabulates the frame's geometry in s instead
+(:func:`geometry`, the same checked spline) over the arc lengths the run visits (:func:`reach`), and calls
+the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic_kernels.TRACTIONS`).
 """
 from __future__ import annotations
 

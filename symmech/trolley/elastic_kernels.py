@@ -8,7 +8,8 @@ tests compare the two): per state the coefficient vectors over the fields (rr, a
 ψ part of A held as a sparse list of entries), two passes over the Gram tensor G (X_k = Σ_l G_kl rr_l,
 Y_k = Σ_l G_kl v_l) give the residual R, the resultants F, M_O (track power) and the mass matrix; the
 Jacobian forms G:B and G:W explicitly. The frame enters as 12 channels (load a0 + g0 ν, ω, ω̇, v0) of a
-spline table in t.
+spline table in t; with traction (s, V0 states) as 15 geometry channels of a spline table in s, from which
+the kernels form those 12 at each stage's V0, V̇0 (:func:`_motion`).
 
 The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
 and inlined into the cached entry :func:`_solve`, so a second process loads the whole solve from numba's
