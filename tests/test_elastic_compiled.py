@@ -311,3 +311,15 @@ def test_a_second_of_traction_agrees_with_the_python_engine():
     c, p = both(traction_scene(t_end=1.0, steps=333), 1e-9)
     traction_agree(c, p, 1e-7)
     assert np.ptp(c["V0"]) > 1.0
+
+
+@pytest.mark.slow
+def test_a_traction_run_that_leaves_its_table_falls_back_to_the_python_engine(monkeypatch):
+    """A geometry table over 2 mm about s0 while the trolley runs 0.15 m: the Python engine runs, and says why."""
+    from symmech.trolley import elastic_compiled as ec
+
+    setup = traction_scene(t_end=0.03, steps=10)
+    monkeypatch.setattr(ec, "reach", lambda system, drive, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))
+    out = elastic_scene.simulate(setup, rtol=1e-8)
+    assert out["engine"] == "python" and "left the tabulated s" in out["engine_reason"]
+    assert out["s"][-1] - out["s"][0] > 0.1

@@ -21,6 +21,7 @@ the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic_kernels.TRAC
 """
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numba
@@ -125,10 +126,11 @@ def frame_table(system, drive, t, rtol: float, evaluate=None, scales=_scales) ->
 
 
 def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate` by Radau on the compiled assembly (prescribed speed, or
-    :func:`simulate_traction`; the same state, tolerances, step bound and outputs). ``engine`` / ``engine_reason`` name what ran: the Python
+    """:func:`symmech.trolley.elastic.simulate` by Radau on the compiled assembly (prescribed speed; the
+    same state, tolerances, step bound and outputs). ``engine`` / ``engine_reason`` name what ran: the Python
     engine when the frame cannot be tabulated within its bound (:func:`frame_table`); ``frame_table_nodes``
-    and ``frame_interpolation_error`` (relative to the channel scales) what the table reached."""
+    and ``frame_interpolation_error`` (relative to the channel scales) what the table reached. With
+    ``drive.traction``: :func:`simulate_traction`."""
     t = np.asarray(t, dtype=float)
     if drive.traction is not None:
         return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
@@ -218,6 +220,9 @@ def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dq
     return out
 
 
+_KEYS = itertools.count()
+
+
 def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
     """The compiled traction run on ``table``; None when s leaves it."""
     N = system.N
@@ -227,7 +232,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
                0.0, 0.0, drive.s0, drive.v_initial]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL, 1e-10, 1e-10]
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
-    key = id(drive)
+    key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
     ek.TRACTIONS[key] = drive.traction
     try:
         Y, dV0, steps, nfev, status = ek._solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
