@@ -284,14 +284,17 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
 
 
 def traction_agree(c, p, bound):
-    """P0…P5 within ``bound`` of max|P|, s and V0 within ``bound`` of their largest magnitude, and the energy
-    balance closing on both engines to 1e-8 of the work of the track forces."""
+    """P0…P5 within ``bound`` of max|P|, s and V0 within ``bound`` of their largest magnitude; on both engines
+    the energy balance closing to 1e-8 of the work of the track forces and P0, the x1 resultant of the state,
+    equal to TRACTION at the run's t and V0."""
     assert c["engine"] == "compiled" and p["engine"] == "python"
     assert relative(c["P"], p["P"]) < bound
     for key in ("s", "V0"):
         assert relative(c[key], p[key]) < bound, key
     for run in (c, p):
         assert np.abs(elastic_scene.energy_residual(run)).max() < 1e-8 * np.abs(run["work"]).max()
+        drive = 400 + 300 * np.sin(3 * run["t"]) - 2 * run["V0"] ** 2
+        assert np.abs(run["P"][:, 0] - drive).max() < 1e-9 * np.abs(drive).max()
 
 
 @pytest.mark.parametrize("case", [1, pytest.param(2, marks=pytest.mark.slow)])  # case 2: 20 s on the Python engine
