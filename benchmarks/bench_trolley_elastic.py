@@ -12,6 +12,9 @@ error k e of the reactions.
 compiled and the Python engine, case 1 and case 2 (error of the compiled P0…P5 against the Python engine's,
 relative to max|P|); a 60 s ride on the same helix with the bundled mast at rtol 1e-6 (compiled only).
 
+``traction``: the bundled scene driven by a traction P0 = 400 + 300 sin 3t - 2 V0² N from 5 m/s instead of its
+speed, 0.3 s (100 outputs), case 1, rtol 1e-8, on both engines (the Python engine differences its Jacobian).
+
 ``cold``: the compile of the compiled engine into an empty numba cache (fresh process, NUMBA_CACHE_DIR).
 
 Times are whole ``simulate`` calls (table, integration, outputs), medians of interleaved repeats (every
@@ -19,7 +22,8 @@ variant once per round) with the spread (min-max).
 
 ``cases``, ``ride``: case 2 against case 1 on the compiled engine only, the 60 s ride (parts of ``engines``).
 
-Usage: python benchmarks/bench_trolley_elastic.py [--quick] [--part stiff|engines|cases|ride|cold|all] [--repeats N]
+Usage: python benchmarks/bench_trolley_elastic.py [--quick] [--part stiff|engines|cases|ride|traction|cold|all]
+[--repeats N]
 """
 import argparse
 import copy
@@ -151,6 +155,30 @@ def ride(quick: bool, repeats: int):
           f"energy residual {np.abs(elastic_scene.energy_residual(out)).max():.2e} J")
 
 
+def traction(quick: bool, repeats: int):
+    """Compiled against Python with traction (the bundled scene, 0.3 s, case 1, rtol 1e-8)."""
+    doc = copy.deepcopy(BUNDLED)
+    doc["time"] = {"t_end": 0.06 if quick else 0.3, "steps": 20 if quick else 100}
+    doc["effects"]["traction"] = True
+    doc["motion"] = {"traction": "400 + 300*sin(3*t) - 2*v**2", "initial_speed": 5.0}
+    doc["elastic"]["numerics"] = {"modal_samples": 0}
+    st = pipeline.load(doc).setup.elastic
+    run(st, "compiled", 1e-8)  # loads the cache (or compiles) untimed
+    times, outs = {"compiled": [], "python": []}, {}
+    for _ in range(repeats):
+        for engine in times:
+            seconds, outs[engine] = run(st, engine, 1e-8)
+            times[engine].append(seconds)
+    c, p = outs["compiled"], outs["python"]
+    ratio = np.median(times["python"]) / np.median(times["compiled"])
+    print(f"traction, {doc['time']['t_end']:g} s ({len(c['t'])} outputs), case 1, rtol 1e-8; s: median (min-max) of "
+          f"{repeats} interleaved rounds")
+    print(f"compiled {spread(times['compiled'])} s, python {spread(times['python'])} s, {ratio:.1f}x; "
+          f"|dP|/max|P| {np.abs(c['P'] - p['P']).max() / np.abs(p['P']).max():.2e}, "
+          f"|ds|/max|s| {np.abs(c['s'] - p['s']).max() / np.abs(p['s']).max():.2e}; nfev {c['nfev']}/{p['nfev']}; "
+          f"table {c['frame_table_nodes']} nodes (error {c['frame_interpolation_error']:.1e})")
+
+
 def cold():
     """Wall and CPU time of `symmech warm --engine elastic` into an empty numba cache."""
     with tempfile.TemporaryDirectory() as cache:
@@ -167,7 +195,7 @@ def cold():
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--part", choices=("stiff", "engines", "cases", "ride", "cold", "all"), default="all")
+    ap.add_argument("--part", choices=("stiff", "engines", "cases", "ride", "traction", "cold", "all"), default="all")
     ap.add_argument("--repeats", type=int, default=None)
     args = ap.parse_args()
     repeats = args.repeats or (1 if args.quick else 5)
@@ -179,6 +207,8 @@ def main():
         cases(repeats)
     if args.part == "ride":
         ride(args.quick, repeats)
+    if args.part in ("traction", "all"):
+        traction(args.quick, repeats)
     if args.part in ("cold", "all"):
         cold()
 

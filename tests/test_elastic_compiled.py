@@ -244,3 +244,97 @@ def test_the_estimate_names_the_engine_and_announces_a_first_compile(monkeypatch
     cold = sc.estimate()
     assert "compiling the elastic engine once" in cold.what and "symmech warm" in cold.what
     assert cold.seconds - warm.seconds == pytest.approx(ec.COLD_COMPILE_SECONDS)
+
+
+# ---------------------------------------------------------------- traction (s and V0 are states)
+
+TRACTION = "400 + 300*sin(3*t) - 2*v**2"  # N: a varying drive against a drag quadratic in the speed
+
+
+def traction_scene(t_end=0.06, steps=20, case=1, **elastic):
+    """The bundled scene driven by TRACTION from 5 m/s instead of its speed."""
+    doc = copy.deepcopy(BUNDLED)
+    doc["time"] = {"t_end": t_end, "steps": steps}
+    doc["effects"].update(local_curvature=case == 2, traction=True)
+    doc["motion"] = {"traction": TRACTION, "initial_speed": 5.0}
+    doc["elastic"]["numerics"] = {"modal_samples": 0}
+    doc["elastic"].update(elastic)
+    return pipeline.load(doc).setup.elastic
+
+
+@pytest.mark.parametrize("case", [1, 2])
+def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(case):
+    """All columns (q, q̇, s, V0) of the rows of q̈ and V̇0; s and V0 enter through the geometry table's
+    spline and its derivative, V0 also through P0's drag (-4 V0 N s/m)."""
+    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+
+    setup = traction_scene(case=case)
+    system, drive, N = setup.system, setup.drive, setup.system.N
+    table = ec.frame_table(system, drive, np.linspace(*ec.reach(system, drive, setup.t), 21), 1e-8,
+                           lambda s, at=slice(None): ec.geometry(drive, system, s, at), ec._geometry_scales)
+    ek.TRACTIONS[0] = drive.traction
+    args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1), 0)
+    n = 2 * N + 4
+    y = np.r_[RNG.normal(size=N) * 1e-4, RNG.normal(size=N) * 1e-2, 0.0, 0.0, 0.2, 5.3]
+    J = np.empty((n, n))
+    ek._jac_traction(0.04, y, args, J)
+    fd = np.empty((n, n))
+    plus, minus = np.empty(n), np.empty(n)
+    for j in range(n):
+        h = 1e-4 * max(abs(y[j]), 1e-4)
+        ek._rhs_traction(0.04, y + h * np.eye(n)[j], args, plus)
+        ek._rhs_traction(0.04, y - h * np.eye(n)[j], args, minus)
+        fd[:, j] = (plus - minus) / (2 * h)
+    del ek.TRACTIONS[0]
+    cols = np.r_[0:2 * N, 2 * N + 2, 2 * N + 3]
+    for rows in (slice(N, 2 * N), [2 * N + 3]):
+        assert np.abs(J[rows][:, cols] - fd[rows][:, cols]).max() < 1e-7 * np.abs(fd[rows][:, cols]).max()
+        for col in (2 * N + 2, 2 * N + 3):  # s and V0 one by one: their entries are far smaller than those of q
+            assert np.abs(J[rows, col] - fd[rows, col]).max() < 1e-6 * np.abs(fd[rows, col]).max()
+    assert np.abs(fd[N:2 * N, 2 * N + 2]).max() > 0 and J[2 * N + 2, 2 * N + 3] == 1.0
+
+
+def traction_agree(c, p, bound):
+    """P0…P5 within ``bound`` of max|P|, s and V0 within ``bound`` of their largest magnitude; on both engines
+    the energy balance closing to 1e-8 of the work of the track forces and P0, the x1 resultant of the state,
+    equal to TRACTION at the run's t and V0."""
+    assert c["engine"] == "compiled" and p["engine"] == "python"
+    assert relative(c["P"], p["P"]) < bound
+    for key in ("s", "V0"):
+        assert relative(c[key], p[key]) < bound, key
+    for run in (c, p):
+        assert np.abs(elastic_scene.energy_residual(run)).max() < 1e-8 * np.abs(run["work"]).max()
+        drive = 400 + 300 * np.sin(3 * run["t"]) - 2 * run["V0"] ** 2
+        assert np.abs(run["P"][:, 0] - drive).max() < 1e-9 * np.abs(drive).max()
+
+
+@pytest.mark.parametrize("case", [1, pytest.param(2, marks=pytest.mark.slow)])  # case 2: 20 s on the Python engine
+def test_traction_agrees_with_the_python_engine_at_rtol_1e_9(case):
+    """From 5 m/s on the bundled helix (measured: case 1 over 0.03 s P 2.9e-9, s 2.8e-13, V0 2.7e-11; case 2 over
+    0.06 s P 1.8e-8, s 4.4e-13, V0 1.2e-11); the geometry table within its bound (case 1) or, on case 2's
+    noise, within INTERP_NOISE (measured 2.8e-10)."""
+    from symmech.trolley import elastic_compiled as ec
+
+    c, p = both(traction_scene(t_end=0.03 * case, steps=10 * case, case=case), 1e-9)
+    traction_agree(c, p, 1e-7)
+    assert c["frame_interpolation_error"] <= (1e-3 * 1e-9 if case == 1 else ec.INTERP_NOISE)
+
+
+@pytest.mark.slow
+def test_a_second_of_traction_agrees_with_the_python_engine():
+    """1 s, 333 outputs, case 1 (measured: P 1.3e-8, s 5.8e-14, V0 2.7e-11)."""
+    c, p = both(traction_scene(t_end=1.0, steps=333), 1e-9)
+    traction_agree(c, p, 1e-7)
+    assert np.ptp(c["V0"]) > 1.0
+
+
+@pytest.mark.slow
+def test_a_traction_run_that_leaves_its_table_falls_back_to_the_python_engine(monkeypatch):
+    """A geometry table over 2 mm about s0 while the trolley runs 0.15 m: the Python engine runs, and says why."""
+    from symmech.trolley import elastic_compiled as ec
+
+    setup = traction_scene(t_end=0.03, steps=10)
+    monkeypatch.setattr(ec, "reach", lambda system, drive, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))
+    out = elastic_scene.simulate(setup, rtol=1e-8)
+    assert out["engine"] == "python" and "left the tabulated s" in out["engine_reason"]
+    assert out["s"][-1] - out["s"][0] > 0.1

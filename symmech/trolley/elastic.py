@@ -672,6 +672,15 @@ class Timeline:
         return frame_state(self.cache[float(s)], 0, V0, x[N]), x[:N], x[N]
 
 
+def traction_start(line: Timeline, t0: float) -> np.ndarray:
+    """The quasi-static q (N,) at t0 [s] with traction: under the acceleration of the whole body by P0 along a
+    level x1, at s0 and the initial speed."""
+    system, drive = line.system, line.drive
+    fs, _ = line.traction_states(drive.s0, drive.v_initial)
+    dv = float(drive.traction(t0, drive.v_initial)) / system.inv.mass - system.mdl.g0 * fs.nu[0]
+    return system.quasi_static(frame_state(line.cache[drive.s0], 0, drive.v_initial, dv))
+
+
 def arc_length(drive: Drive, t) -> np.ndarray:
     """s on the grid t (n,): s0 + ∫ V0 dt, 8-point Gauss-Legendre per step [m]."""
     nodes, weights = Timeline.NODES
@@ -710,10 +719,8 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     line = Timeline(system, drive, t)
     traction = drive.traction is not None
     zero = np.zeros(N)
-    if traction:  # quasi-static under the acceleration of the whole body by P0 along a level x1
-        fs, _ = line.traction_states(drive.s0, drive.v_initial)
-        dv = float(drive.traction(t[0], drive.v_initial)) / system.inv.mass - system.mdl.g0 * fs.nu[0]
-        q0 = system.quasi_static(frame_state(line.cache[drive.s0], 0, drive.v_initial, dv))
+    if traction:
+        q0 = traction_start(line, t[0])
     else:
         q0 = system.quasi_static(line.state(t[0]))
 

@@ -19,9 +19,14 @@ otherwise the run falls back to the Python engine and says why (:func:`simulate`
 **Steps.** The Python engine bounds its steps by the output spacing; this one does not: the outputs come
 from Radau's collocation polynomial (scipy's dense output), whose error on the bundled scene stays within
 the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
+
+**Traction.** s is a state, so :func:`simulate_traction` tabulates the frame's geometry in s instead
+(:func:`geometry`, the same checked spline) over the arc lengths the run visits (:func:`reach`), and calls
+the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic_kernels.TRACTIONS`).
 """
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numba
@@ -90,18 +95,18 @@ class Table:
     noise: bool
 
 
-def _subsampled(t, ch: np.ndarray, k: int, bound: float) -> Table:
+def _subsampled(t, ch: np.ndarray, k: int, bound: float, scales) -> Table:
     """The spline through every k-th output time t (and the last) and its largest error at the times it skips,
-    from the exact channels ch (len(t), 12) there."""
+    from the exact channels ch (len(t), c) there."""
     keep = np.zeros(t.size, bool)
     keep[::k] = keep[-1] = True
     spline = CubicSpline(t[keep], ch[keep], axis=0)
-    scale = _scales(ch)
+    scale = scales(ch)
     worst = np.abs(spline(t[~keep]) - ch[~keep]) / np.where(scale > 0, scale, 1.0)
     return Table(t[keep], np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
 
 
-def frame_table(system, drive, t, rtol: float, ch=None) -> Table | None:
+def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_scales) -> Table | None:
     """The frame channels over [t[0], t[-1]] as a cubic spline within max(INTERP_FRACTION rtol, INTERP_FLOOR)
     of the channel scale of the exact values between its nodes. The exact channels at the output times t
     (``ch`` (len(t), 12), computed when None; the outputs need them anyway) seed it: the spline through
@@ -112,13 +117,15 @@ def frame_table(system, drive, t, rtol: float, ch=None) -> Table | None:
     When a halving increased an error already within INTERP_NOISE, or STALL_ROUNDS rounds no longer reduced
     it 4x (noise in the exact values: halving then only interpolates it), the best table so far if its error
     is at most INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs
-    the Python engine)."""
+    the Python engine). ``evaluate(x, at)`` (k, c) and ``scales`` tabulate other channels (:func:`geometry` on
+    s with traction)."""
+    evaluate = evaluate or (lambda x, at=slice(None): channels(drive, system, x, at))
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
-    ch = channels(drive, system, nodes) if ch is None else ch
+    ch = evaluate(nodes) if ch is None else ch
     best, since, k = None, 0, 2
     while 2 * k <= nodes.size + 1:  # coarser, while the spline through fewer nodes still meets the bound
-        table = _subsampled(nodes, ch, k, bound)
+        table = _subsampled(nodes, ch, k, bound, scales)
         if table.error > bound:
             break
         best, k = table, 2 * k
@@ -128,8 +135,8 @@ def frame_table(system, drive, t, rtol: float, ch=None) -> Table | None:
     while True:
         every = np.empty(2 * nodes.size - 1)
         every[0::2], every[1::2] = nodes, (nodes[1:] + nodes[:-1]) / 2
-        mid = channels(drive, system, every, slice(1, None, 2))
-        scale = _scales(np.concatenate([ch, mid]))
+        mid = evaluate(every, slice(1, None, 2))
+        scale = scales(np.concatenate([ch, mid]))
         spline = CubicSpline(nodes, ch, axis=0)
         worst = (np.abs(spline(every[1::2]) - mid) / np.where(scale > 0, scale, 1.0)).max(axis=1)
         table = Table(nodes, np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
@@ -142,7 +149,7 @@ def frame_table(system, drive, t, rtol: float, ch=None) -> Table | None:
         best = table if best is None or table.error < best.error else best
         if worse or since >= STALL_ROUNDS or 2 * nodes.size > MAX_TABLE_NODES:
             return Table(best.nodes, best.coef, best.error, bound, True) if best.error <= INTERP_NOISE else None
-        merged = np.empty((every.size, N_CHANNELS))
+        merged = np.empty((every.size, ch.shape[1]))
         merged[0::2], merged[1::2] = ch, mid
         nodes, ch = every, merged
 
@@ -153,8 +160,10 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
     ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
     (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
-    scales) what the table reached."""
+    scales) what the table reached. With ``drive.traction``: :func:`simulate_traction`."""
     t = np.asarray(t, dtype=float)
+    if drive.traction is not None:
+        return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
     line = el.Timeline(system, drive, t)
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
     fr = el.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
@@ -171,20 +180,119 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL]
     Y, steps, nfev, status = ek._solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
-    if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
-        last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
-        why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \
-            "no finite state"
-        raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: {why})")
+    _check(status, Y, t)
     out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out
 
 
+# --------------------------------------------------------------------------- traction
+
+def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
+    """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
+    :data:`symmech.trolley.elastic_kernels.G_E` …): e, e' + Ω × e, ν, Ω, Ω'."""
+    fr = el.frames(drive, np.asarray(s, float)[at], system.mdl.l)
+    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
+
+
+def _geometry_scales(g: np.ndarray) -> np.ndarray:
+    """Error scale (15,) of each geometry channel: its group's largest norm; e' + Ω × e against it + |Ω|, Ω'
+    against |Ω'| + |Ω|² (the terms they enter a0 and ω̇ beside, per V0²)."""
+    norm = lambda j: float(np.linalg.norm(g[:, j:j + 3], axis=1).max())  # noqa: E731
+    om = norm(ek.G_OM)
+    return np.repeat([norm(ek.G_E), norm(ek.G_K) + om, norm(ek.G_NU), om, norm(ek.G_DOM) + om ** 2], 3)
+
+
+REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
+
+
+def reach(system, drive, t) -> tuple[float, float]:
+    """The arc lengths [m] a traction run visits: those of the rigid body (the whole elastic body's mass,
+    centre and inertia) under the same traction (DOP853 at rtol 1e-6), widened by :data:`REACH_MARGIN` of
+    their span (at least 1 mm) and kept within the frame plan's span."""
+    from scipy.integrate import solve_ivp
+
+    from symmech.trolley import model
+
+    body = el.rigid_body(system.mdl)
+
+    def rates(time, y):
+        fr = el.frames(drive, y[:1], system.mdl.l)
+        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
+        p0 = float(drive.traction(time, y[1]))
+        return [y[1], (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]]
+
+    sol = solve_ivp(rates, (t[0], t[-1]), [drive.s0, drive.v_initial], method="DOP853", t_eval=t, rtol=1e-6)
+    s = sol.y[0] if sol.status == 0 else np.array([drive.s0])
+    pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
+    lo, hi = float(s.min()) - pad, float(s.max()) + pad
+    span = getattr(drive.plan, "span", None)
+    return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
+
+
+def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
+    """:func:`symmech.trolley.elastic.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
+    V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
+    P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
+    Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
+    lo, hi = reach(system, drive, t)
+    table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
+                        lambda s, at=slice(None): geometry(drive, system, s, at), _geometry_scales)
+    if table is not None:
+        out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
+        if out is not None:
+            return out
+    out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0)
+    out["engine"], out["engine_reason"] = "python", (
+        f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
+        f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
+    return out
+
+
+_KEYS = itertools.count()
+
+
+def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
+    """The compiled traction run on ``table``; None when s leaves it."""
+    N = system.N
+    line = el.Timeline(system, drive, t)
+    zero = np.zeros(N)
+    y0 = np.r_[el.traction_start(line, t[0]) + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0,
+               0.0, 0.0, drive.s0, drive.v_initial]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL, 1e-10, 1e-10]
+    step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
+    key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
+    ek.TRACTIONS[key] = drive.traction
+    try:
+        Y, dV0, steps, nfev, status = ek._solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
+                                                         float(rtol), atol, step)
+    finally:
+        del ek.TRACTIONS[key]
+    _check(status, Y, t)
+    s = Y[:, -2]
+    if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
+        return None
+    out = el.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=row_terms)
+    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
+               frame_interpolation_error=table.error)
+    return out
+
+
+def _check(status, Y, t) -> None:
+    """SymmechError when the compiled solve failed or reached no finite state."""
+    if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
+        last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
+        why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \
+            "no finite state"
+        raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: {why})")
+
+
 # --------------------------------------------------------------------------- building the cache once
 
-COLD_COMPILE_SECONDS = 90.0  # first compile: 62 s of CPU, 213 s wall at load 10 on 2 cores (benchmarks/README.md)
+# first compile: 119 s of CPU (62 s before the traction entry), 412 s wall at load 9.5 on 2 cores
+# (benchmarks/README.md)
+COLD_COMPILE_SECONDS = 130.0
 
 
 def _entry_signatures() -> dict:
@@ -198,7 +306,10 @@ def _entry_signatures() -> dict:
     tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
     solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
     rows = (mdl, np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
-    return {ek._solve: tuple(numba.typeof(a) for a in solve), ek._rows: tuple(numba.typeof(a) for a in rows)}
+    traction = (mdl, (np.zeros(2), np.zeros((4, 1, ek.N_GEOMETRY))), 1, np.zeros(6), np.zeros(2), 1e-8,
+                np.zeros(6), 1.0)
+    return {ek._solve: tuple(numba.typeof(a) for a in solve), ek._rows: tuple(numba.typeof(a) for a in rows),
+            ek._solve_traction: tuple(numba.typeof(a) for a in traction)}
 
 
 ENGINE = build.Engine("elastic", _entry_signatures, COLD_COMPILE_SECONDS)

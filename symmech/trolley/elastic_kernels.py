@@ -8,7 +8,8 @@ tests compare the two): per state the coefficient vectors over the fields (rr, a
 ψ part of A held as a sparse list of entries), two passes over the Gram tensor G (X_k = Σ_l G_kl rr_l,
 Y_k = Σ_l G_kl v_l) give the residual R, the resultants F, M_O (track power) and the mass matrix; the
 Jacobian forms G:B and G:W explicitly. The frame enters as 12 channels (load a0 + g0 ν, ω, ω̇, v0) of a
-spline table in t.
+spline table in t; with traction (s, V0 states) as 15 geometry channels of a spline table in s, from which
+the kernels form those 12 at each stage's V0, V̇0 (:func:`_motion`).
 
 The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
 and inlined into the cached entry :func:`_solve`, so a second process loads the whole solve from numba's
@@ -347,6 +348,193 @@ def _rows(mdl, chs, nu, height, Y):
             2.0 * np.sum(W.T * Jv) + t2
         E_out[i] = 0.5 * twice_t + g0 * (mass * height[i] + nu[i] @ first)
     return qdd_out, F_out, M_out, rr_out, v_out, acc_out, h_out, E_out
+
+
+# --------------------------------------------------------------------------- traction (s and V0 are states)
+
+# Geometry channels of the traction table, a spline in the arc length s (columns): e, e' + Ω × e [1/m],
+# ν, Ω [rad/m], Ω' [rad/m²] (model.Frame); the frame's motion at V0, V̇0 follows from them (_motion).
+G_E, G_K, G_NU, G_OM, G_DOM = 0, 3, 6, 9, 12
+N_GEOMETRY = 15
+TRACTIONS: dict = {}  # key -> P0(t, V0) [N] of the runs under way (elastic_compiled.simulate registers them)
+
+
+def traction_force(key, t, v):
+    """P0 [N] and ∂P0/∂V0 [N s/m] of the registered traction ``key`` at t [s], V0 [m/s]: the slope by central
+    differences (the user's expression is Python; step 1e-6 (1 + |V0|): ~1e-10 of its scale)."""
+    p0 = TRACTIONS[key]
+    h = 1e-6 * (1.0 + abs(v))
+    return float(p0(t, v)), float(p0(t, v + h) - p0(t, v - h)) / (2.0 * h)
+
+
+@numba.njit(cache=True, error_model="numpy")  # not nogil: the callback holds the GIL
+def _force(key, t, v):
+    with numba.objmode(p="float64", dp="float64"):  # a Python call per stage (~2 µs)
+        p, dp = traction_force(key, t, v)
+    return p, dp
+
+
+@jit
+def _geometry(tab, s, g, dg):
+    """The 15 geometry channels g and their s-derivatives dg at s [m] from the spline table tab."""
+    sk, c = tab
+    i = np.searchsorted(sk, s, side="right") - 1
+    i = min(max(i, 0), sk.size - 2)
+    x = s - sk[i]
+    for j in range(N_GEOMETRY):
+        g[j] = ((c[0, i, j] * x + c[1, i, j]) * x + c[2, i, j]) * x + c[3, i, j]
+        dg[j] = (3.0 * c[0, i, j] * x + 2.0 * c[1, i, j]) * x + c[2, i, j]
+
+
+@jit
+def _motion(g, V, dV, g0):
+    """The 12 frame channels (load, ω, ω̇, v0) at speed V [m/s] and rate dV [m/s²] from geometry g (15,)."""
+    ch = np.empty(N_CHANNELS)
+    for i in range(3):
+        ch[LOAD + i] = dV * g[G_E + i] + V * V * g[G_K + i] + g0 * g[G_NU + i]
+        ch[OMEGA + i] = V * g[G_OM + i]
+        ch[DOMEGA + i] = dV * g[G_OM + i] + V * V * g[G_DOM + i]
+        ch[V0 + i] = V * g[G_E + i]
+    return ch
+
+
+@jit
+def _traction_terms(mdl, g, q, qd, V, p0):
+    """q̈ (N,), V̇0 and the terms of :func:`_terms` at the frame of that V̇0, from M q̈ + b V̇0 = -R0 and
+    c·q̈ + d V̇0 = P0 - F1 (elastic.Timeline.traction_step; b = ∂R/∂V̇0, c, d those of the x1 resultant F1)."""
+    flags, S1 = mdl[0], mdl[14]
+    n = q.size
+    ch0 = _motion(g, V, 0.0, flags[F_G0])
+    R0, M, rr, v, p2, X, B, W, z = _terms(mdl, ch0, q, qd)
+    dB, _ = _frame_mats(np.concatenate((np.zeros(6), g[G_OM:G_OM + 3], np.zeros(3))))  # ∂B/∂V̇0 = skew(Ω)
+    e = g[G_E:G_E + 3].copy()
+    L = np.empty((n + 1, n + 1))
+    L[:n, :n] = M
+    L[:n, n] = _a_times(mdl, q, S1 @ e + X @ dB.copy().reshape(9))
+    L[n, :n] = _a_rows(mdl, q, S1)[:, 0]
+    L[n, n] = flags[F_MASS] * e[0] + (dB @ (rr @ S1))[0]
+    F0 = _resultants(mdl, ch0, rr, v, p2, X, B, W)[0][0]
+    rhs = np.empty(n + 1)
+    rhs[:n] = -R0
+    rhs[n] = p0 - F0
+    x = np.linalg.solve(L, rhs)
+    return x[:n], x[n], L
+
+
+@jit
+def _rhs_traction(t, y, args, out):
+    """y' of y = [q, q̇, E_d, W, s, V0] (2 N + 4,); args = (model tuple, geometry table, calls (1,), traction key)."""
+    mdl, tab, calls, key = args
+    calls[0] += 1.0
+    n = int(mdl[0][F_N])
+    g, dg = np.empty(N_GEOMETRY), np.empty(N_GEOMETRY)
+    _geometry(tab, y[2 * n + 2], g, dg)
+    q, qd, V = y[:n], y[n:2 * n], y[2 * n + 3]
+    qdd, dV, _ = _traction_terms(mdl, g, q, qd, V, _force(key, t, V)[0])
+    ch = _motion(g, V, dV, mdl[0][F_G0])
+    _, _, rr, v, p2, X, B, W, _ = _terms(mdl, ch, q, qd)
+    F, moment = _resultants(mdl, ch, rr, v, _times_a(mdl, qdd, q) + p2, X, B, W)
+    out[:n] = qd
+    out[n:2 * n] = qdd
+    out[2 * n] = _dissipation(mdl, qd)
+    out[2 * n + 1] = F @ ch[V0:V0 + 3] + moment @ ch[OMEGA:OMEGA + 3]
+    out[2 * n + 2] = V
+    out[2 * n + 3] = dV
+
+
+@jit
+def _frame_rates(g, dg, V, dV, g0, W, theta):
+    """∂(load, B, W)/∂θ at q̈, V̇0 fixed (W = skew(ω) of the state), θ = 0 the arc length s, 1 the speed V0:
+    (3,), (3, 3), (3, 3)."""
+    Om, dOm = g[G_OM:G_OM + 3].copy(), g[G_DOM:G_DOM + 3].copy()
+    if theta == 0:
+        dload = dV * dg[G_E:G_E + 3] + V * V * dg[G_K:G_K + 3] + g0 * dg[G_NU:G_NU + 3]
+        dw, ddw = V * dOm, dV * dOm + V * V * dg[G_DOM:G_DOM + 3]
+    else:
+        dload, dw, ddw = 2.0 * V * g[G_K:G_K + 3], Om, 2.0 * V * dOm
+    dB, dW = _frame_mats(np.concatenate((np.zeros(3), dw, ddw, np.zeros(3))))
+    return dload, dB - dW @ dW + dW @ W + W @ dW, dW  # ∂B = skew(∂ω̇) + ∂(skew(ω)²)
+
+
+@jit
+def _jac_traction(t, y, args, J):
+    """dy'/dy (2 N + 4, 2 N + 4): q̈ and V̇0 are x = L⁻¹ r (:func:`_traction_terms`), so ∂x/∂y = -L⁻¹ ∂G/∂y
+    with G = [R; F1 - P0] at the state's q̈, V̇0 (q, q̇ as :func:`_jacobians`; s, V0 through the frame's
+    channels, ∂/∂s by the spline's derivative); the rows of E_d and W zero, as :func:`_jac`'s."""
+    mdl, tab, _, key = args
+    flags, S1, Gx = mdl[0], mdl[14], mdl[6]
+    n, mass, g0 = int(flags[F_N]), flags[F_MASS], flags[F_G0]
+    g, dg = np.empty(N_GEOMETRY), np.empty(N_GEOMETRY)
+    _geometry(tab, y[2 * n + 2], g, dg)
+    q, qd, V = y[:n], y[n:2 * n], y[2 * n + 3]
+    p0, dp0 = _force(key, t, V)
+    qdd, dV, L = _traction_terms(mdl, g, q, qd, V, p0)
+    ch = _motion(g, V, dV, g0)
+    _, Rq, Rqd = _jacobians(mdl, ch, q, qd)
+    _, _, rr, v, _, X, B, W, _ = _terms(mdl, ch, q, qd)
+    Yv = _gram_pass(Gx, v)
+    AS, first, fv = _a_rows(mdl, q, S1), rr @ S1, v @ S1
+    psi = lambda x: _a_rows(mdl, x, S1) - S1[1:1 + n]  # noqa: E731  DV(x) S1
+    G = np.zeros((n + 1, 2 * n + 2))  # columns q, q̇, s, V0
+    G[:n, :n], G[:n, n:2 * n] = Rq, Rqd
+    G[n, :n] = (AS @ B.T + 2.0 * psi(qd) @ W.T + psi(qdd))[:, 0]
+    G[n, n:2 * n] = (2.0 * AS @ W.T + 2.0 * psi(qd))[:, 0]
+    for theta in range(2):
+        dload, dB, dW = _frame_rates(g, dg, V, dV, g0, W, theta)
+        z = S1 @ dload + X @ dB.copy().reshape(9) + 2.0 * (Yv @ dW.copy().reshape(9))
+        G[:n, 2 * n + theta] = _a_times(mdl, q, z)
+        G[n, 2 * n + theta] = (mass * dload + dB @ first + 2.0 * dW @ fv)[0]
+    G[n, 2 * n + 1] -= dp0
+    dx = -np.linalg.solve(L, G)
+    J[:] = 0.0
+    for i in range(n):
+        J[i, n + i] = 1.0
+    J[2 * n + 2, 2 * n + 3] = 1.0
+    J[n:2 * n, :2 * n], J[2 * n + 3, :2 * n] = dx[:n, :2 * n], dx[n, :2 * n]
+    J[n:2 * n, 2 * n + 2:], J[2 * n + 3, 2 * n + 2:] = dx[:n, 2 * n:], dx[n, 2 * n:]
+
+
+_tsteps = ode.steppers(_rhs_traction, _jac_traction)
+_traction_start, _traction_step = _tsteps.radau_start, _tsteps.radau_step
+
+
+@jit
+def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
+    """:func:`_solve` with traction (y = [q, q̇, E_d, W, s, V0], geometry table in s, traction ``key``); returns
+    also V̇0 (k,) at t_eval [m/s²]."""
+    n, t_end = y0.size, t_eval[-1]
+    Y = np.full((t_eval.size, n), np.nan)
+    calls = np.zeros(1)
+    args = (mdl, tab, calls, key)
+    t, y, f = t_eval[0], y0.copy(), np.empty(n)
+    _rhs_traction(t, y, args, f)
+    Y[0] = y
+    k = 1
+    J, LUr, LUc = np.empty((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
+    pr, pc = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    Q = np.empty((1, 4 * n))
+    st = _traction_start(t, y, f, t_end, args, rtol, atol, J)
+    status, steps = ode.TOO_MANY_STEPS, MAX_STEPS
+    for step in range(MAX_STEPS):
+        if not t < t_end:
+            status, steps = ode.SUCCESS, step
+            break
+        if st[ode.R_H] > max_step:
+            st[ode.R_H], st[ode.R_H_OLD], st[ode.R_ERR_OLD] = max_step, -1.0, -1.0
+        t_new, y_new, f_new, ok = _traction_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
+        if not ok:
+            status, steps = ode.STEP_TOO_SMALL, step
+            break
+        while k < t_eval.size and t_eval[k] <= t_new:
+            Y[k] = ode.radau_dense_at(t_eval[k], t, t_new - t, Q[0])
+            k += 1
+        t, y, f = t_new, y_new, f_new
+    nfev = int(calls[0])
+    dV = np.full(t_eval.size, np.nan)
+    for i in range(k):
+        _rhs_traction(t_eval[i], Y[i], args, f)
+        dV[i] = f[n - 1]
+    return Y, dV, steps, nfev, status
 
 
 

@@ -95,11 +95,11 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
     "initial": INITIAL,
     "numerics": Table("integration", {
         "engine": Choice("`compiled`: the assembly in numba, integrated by the compiled Radau IIA with the analytic "
-                         "Jacobian (symmech.trolley.elastic_compiled; compiled once per installation, ~1 CPU-minute, then "
-                         "loaded from numba's cache; `symmech warm` builds it); the frame along the track is "
+                         "Jacobian (symmech.trolley.elastic_compiled; compiled once per installation, ~2 CPU-minutes, "
+                         "then loaded from numba's cache; `symmech warm` builds it); the frame along the track is "
                          "tabulated per run and its interpolation error checked against the exact frame. "
-                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). Traction and a "
-                         "`method` other than Radau run on `python`", choices=("compiled", "python"),
+                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). A `method` other "
+                         "than Radau runs on `python`", choices=("compiled", "python"),
                          default="compiled"),
         "method": Choice("integrator (implicit ones use the analytic Jacobian)",
                          choices=("Radau", "BDF", "LSODA", "DOP853", "RK45"), default="Radau"),
@@ -134,8 +134,6 @@ def engine(setup: Setup) -> tuple[str, str]:
     """The engine that integrates the elastic model, "compiled" or "python", and why."""
     if setup.engine == "python":
         return "python", 'numerics.engine = "python"'
-    if setup.drive.traction is not None:
-        return "python", "traction (drive.traction) runs on the Python engine only"
     if setup.method != "Radau":
         return "python", f"numerics.method = \"{setup.method}\": the compiled engine integrates by Radau"
     return "compiled", 'numerics.engine = "compiled"'
