@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 be061b8aebda4781b5d2730b0934c1df73ce25cfb551095a3b4a7a478358177b
-# source key 0259e72e54511180fd8869c96025a625c528dbc370bf4adce3518478e1aad251
+# source key 90dd4bdd8d76e628f6c8afc8727b955e60fa5821e797d964b34924372da1ede0
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 34f054890d955cadac06b7450cdb86e2bf21efb23e0969dd65283fbab2d09ef8
-# source key 0259e72e54511180fd8869c96025a625c528dbc370bf4adce3518478e1aad251
+# source key 90dd4bdd8d76e628f6c8afc8727b955e60fa5821e797d964b34924372da1ede0
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 852ddb1909ab30fe9e67663c7d93c25f00fa5a59c876fc4eb3242f795a8beef7
-# source key 08c61feea89c19adf9ad7e0d5bc912d4cee38330100f4385731478cb728ef6d0
+# source key 9db93a76495b55dd4f85d8c36db579496b7b3168d7dca9f8210717bc9cbc6c16
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9e3bcb0cb843ec98cfcd7cd1aa36ba449fd28fbd5c1ede32c870726c55085ea3
-# source key 300280e7d9616598a3b4ad73c161ab96bc89a089735d0923fe94c7d3f7b1cedd
+# source key 4ee7787c3341227954fcd4a7dc373cb36151ce474cf0fce5487298e2c80b91e5
 # body sha256 7517736981c17ce51a79b2f563ccce0e466f6d9537dba646abf41ffe259f8964
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a22309b38bd455261bd0c7e85167e46994fea191434b69e7e4cf1e8df0e61144
-# source key 6fca70262266c3e49ee49fbb90fc9be460fc6c602041bed533fb190cc46406b9
+# source key 310bb228517cd672b7f830c1695dd416d64912f590513de3b12d02e62b2d090d
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 80b2624f70d70075e36559eeb226ec93f6c7e95963eecf2e1d103f0e20301875
-# source key 159a02a6803a7a763010736d408bd7bfd1d43219840e6336d5a88dd0c508278f
+# source key ac89cbf0146d9b5c82f20e3a9f8b42f2ecf3d95a42b26c51e61d26db34233697
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad2960243a79b1fc9e572ff5bd52fcf67abdcef30b031ec4a542ba6530eb8c1b
-# source key 19b6a797f1eab13fe20165743c22d1e35d0312f761e92233b82aa5cad167e289
+# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
 # body sha256 6f95b396ece06dc40ac0b65a2631b5864d2d21cd104805fc81a45a64c4ee5156
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b76b4194778a6c2b3a804a57a42859f2bc6be5de2a0a72ba0138cbfac491f1d4
-# source key 47b18d32d3491a1a171cedc3b32fe64f8f5cb84de5dd95807a96ac968ee7040a
+# source key eb3fcaaa337a945a790b5ddb517594f7e0f4b37d7af0a66c6c20653590a1f1d6
 # body sha256 2974fc570b22e9bbd1f159d4d42e96888601502e1e1aa253438cc5eb2eb841fe
 """Small elastic trolley by Lagrange's equations (test route).
 

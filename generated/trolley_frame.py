@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1c2d2886c81e60ceedb628c02335727c708157ad98c6d9b541ba7379d878ba95
-# source key 05f662e271c5712da60714b7f4c46951fc746bd3eea31fc3b82cc9eb6f65545e
+# source key 1986ffdb002a1f9fdd66982f5f51ecb50304bd4393f7cbba0c96b9f571eb36b5
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

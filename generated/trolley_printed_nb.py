@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 17964483cb2026ee969111d4b561f617879fe6c5c2fa86f8bff4454e3fedf68b
-# source key b44cf82babfa9336ec38c4d932f8944897d6cd19c6ac70495008c3ad288a6616
+# source key cdf79880a5f0f695c761798c0a159943b00c31ab6997732d2235159c3725501e
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

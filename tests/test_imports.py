@@ -87,3 +87,18 @@ def test_a_kind_is_found_without_importing_the_other_papers(tmp_path):
             "print(sorted(p for p in ('symmech.grain', 'symmech.smm', 'symmech.trolley') if p in sys.modules))")
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert proc.stdout.split() == ["['symmech.trolley']"], proc.stderr
+
+
+def test_a_rigid_trolley_run_loads_no_elastic_model(tmp_path):
+    """The elastic model (and its generated module) only for a scene with an ``[elastic]`` table: the run's
+    ``generated_modules``, which the report derives and typesets, are then the rigid trolley's only."""
+    text = (ROOT / "scenes" / "trolley_helix.toml").read_text()
+    text = text.replace("steps = 5000", "steps = 50").replace("paper_tables = true", "paper_tables = false")
+    (tmp_path / "t.toml").write_text(text)
+    code = ("import json, sys; from symmech.cli import main; assert main(['run', 't.toml', '--out', 'o', '--quiet',"
+            " '--no-plots']) == 0; print(json.dumps(sorted(m for m in sys.modules if 'elastic' in m)))")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout.splitlines()[-1]) == ["symmech.trolley.elastic_schema"]
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert sorted(summary["generated_modules"]) == ["trolley_dynamics", "trolley_frame", "trolley_printed"]

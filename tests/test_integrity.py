@@ -110,11 +110,9 @@ def test_edit_after_a_verified_import_is_refused_in_the_same_process(tmp_path):
     assert proc.stdout == REFUSAL.format(name="trolley_printed") + "\n", proc.stderr
 
 
-# A small bundled scene of each kind and a generated module its run imports (the mechanism kind
-# derives its own module from the scene; its run imports the grain modules while the registry
-# looks for the kind).
-RUNS = [("grain_default", "grain_motion"), ("impact_default", "grain_impact"),
-        ("smm_double_pendulum", "grain_impact"), ("trolley_helix", "trolley_frame"),
+# A small bundled scene of each kind and a generated module its run imports (the mechanism kind imports
+# none: below)
+RUNS = [("grain_default", "grain_motion"), ("impact_default", "grain_impact"), ("trolley_helix", "trolley_frame"),
         ("trolley_elastic_helix", "trolley_elastic")]
 
 
@@ -126,6 +124,16 @@ def test_run_on_an_edited_module_is_one_line_exit_2(tmp_path, scene, name):
     assert (proc.returncode, proc.stdout) == (2, ""), proc.stderr
     assert proc.stderr == f"symmech: error: {REFUSAL.format(name=name)}\n"
     assert not (tmp_path / "o").exists()
+
+
+def test_a_mechanism_run_imports_no_generated_module(tmp_path):
+    """The mechanism kind renders its scene's module in the run and imports it from a temporary file: with
+    every module of the generated package edited, its run still succeeds and loads none of them."""
+    args = ["run", str(SCENES / "smm_double_pendulum.toml"), "--out", "o", "--quiet", "--no-plots"]
+    code = (f"from symmech.cli import main\nassert main({args!r}) == 0\n"
+            "print(sorted(m for m in sys.modules if m.startswith('symmech.generated.')))")
+    proc = _python(_edited_copy(tmp_path, *sorted(MODULES)), code, tmp_path)
+    assert (proc.returncode, proc.stdout.splitlines()[-1]) == (0, "[]"), proc.stderr
 
 
 def test_codegen_regenerates_an_edited_module(tmp_path):

@@ -90,8 +90,13 @@ def _scene_modules():
 def _discover(until: str | None = None) -> None:
     """Import scene modules until kind ``until`` is registered (all of them when None): a run
     imports only its own paper's modules, not every kind's dependencies. Modules whose name
-    contains the kind's (``symmech.trolley.scene`` for ``trolley``) are tried first."""
-    for name in sorted(_scene_modules(), key=lambda module: until is None or until not in module):
+    contains the kind's are tried first, and among them ``scene`` or ``<kind>_scene``
+    (``symmech.trolley.scene`` for ``trolley``, before ``symmech.trolley.elastic_scene``)."""
+    def rank(module: str) -> tuple[bool, bool]:
+        last = module.rpartition(".")[2]
+        return until is None or until not in module, last not in ("scene", f"{until}_scene")
+
+    for name in sorted(_scene_modules(), key=rank):
         if until in _KINDS:
             return
         importlib.import_module(name)

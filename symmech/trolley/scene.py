@@ -20,7 +20,7 @@ from symmech.core import schema as sc
 from symmech.core.context import Context
 from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import elastic_review, elastic_scene, model, plots, tables, track as tracks
+from symmech.trolley import elastic_schema, model, plots, tables, track as tracks
 from symmech.trolley import sweep as design_sweep
 
 G_STANDARD = 9.80665
@@ -230,7 +230,7 @@ SCHEMA = sc.Table("a trolley scene", {
     "report": sc.Table("extra outputs", {
         "paper_tables": sc.Bool("list the printed Tables 1, 2 beside both computations (paper example grid)",
                                 default=False)}, default={}),
-    "elastic": elastic_scene.SCHEMA,
+    "elastic": elastic_schema.SCHEMA,
     "sweep": design_sweep.SWEEP,
     "output": sc.plot_output(plots.FIGURES, default=tuple(plots.FIGURES)),
 }, checks=(_cross_checks,))
@@ -260,7 +260,7 @@ class Setup:
     paper_tables: bool
     plan: model.FramePlan = None
     notes: list = None
-    elastic: elastic_scene.Setup | None = None
+    elastic: elastic_scene.Setup | None = None  # noqa: F821 (imported where an [elastic] table is prepared)
     output: dict = None  # the resolved [output] table: plots and formats
 
 
@@ -325,6 +325,8 @@ def prepare(scene: dict) -> Setup:
         if setup.conventions == "paper":
             raise SceneError("elastic", "the elastic model needs conventions = \"physics\"")
         case = 2 if setup.local_curvature else 1
+        from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
+
         setup.elastic = elastic_scene.prepare(scene["elastic"], body, elastic_scene.drive_of(setup, case), setup.t)
     return setup
 
@@ -411,6 +413,8 @@ def estimate(setup: Setup) -> registry.Estimate:
         seconds += SECONDS_PER_RHS * rhs * cases
         what += f", ~{rhs} traction evaluations"
     if setup.elastic is not None and setup.elastic.system is not None:
+        from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
+
         engine, _ = elastic_scene.engine(setup.elastic)
         what += f", the elastic model ({engine} engine)"
         seconds += (SECONDS_PER_ELASTIC_STEP_COMPILED if engine == "compiled" else SECONDS_PER_ELASTIC_STEP) * steps
@@ -603,6 +607,8 @@ def run(setup: Setup, ctx) -> Result:
         result.files["paper_tables.txt"] = _paper_tables_text(summary["paper_tables"])
     elastic = None
     if setup.elastic is not None:
+        from symmech.trolley import elastic_review, elastic_scene  # the elastic model: only when a scene has one
+
         elastic = elastic_scene.run(setup.elastic, ctx, setup.comfort)
         result.tables.update(elastic.tables)
         summary.update(elastic.summary)
@@ -783,6 +789,8 @@ def precision(setup: Setup, ctx) -> Result:
     import dataclasses
 
     if setup.elastic is not None:
+        from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
+
         return elastic_scene.precision(setup.elastic, ctx)
     if not setup.local_curvature or setup.speed is None:
         raise SymmechError("bench precision needs effects.local_curvature = true and a given speed")
