@@ -5,7 +5,7 @@ last and first wait for that engine's build (``ENGINE.wait_warm`` of :mod:`symme
 :mod:`symmech.trolley.elastic_compiled`), so no test pays numba's compilation on its own; under pytest-xdist
 every worker asks for the build and the build lock lets one process per machine compile.
 
-The elastic trolley's default engine is the compiled one; tests not marked ``compiled_elastic`` run it on
+The elastic trolley's default engine (``auto``) is the compiled one once built; tests not marked ``compiled_elastic`` run it on
 the Python engine (its reference, which they test; ``engine_reason`` says so), so that no unmarked test
 compiles it in each xdist worker. tests/test_elastic_compiled.py proves the compiled engine against it.
 """
@@ -42,8 +42,8 @@ def _elastic_reference_engine(request, monkeypatch):
     if not request.node.get_closest_marker("compiled_elastic"):
         from symmech.trolley import elastic_scene
 
-        monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("python", "tests: the reference engine "
-                                                                              "(tests/conftest.py)"))
+        monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("python", "tests: the reference engine "
+                                                                                      "(tests/conftest.py)"))
 
 
 @pytest.fixture(autouse=True)

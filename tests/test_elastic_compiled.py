@@ -236,16 +236,10 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
             assert relative(mine, ref) < 1e-12
 
 
-def test_the_estimate_names_the_engine_and_announces_a_first_compile(monkeypatch):
-    from symmech.trolley import elastic_compiled as ec
-
-    sc = pipeline.load(copy.deepcopy(BUNDLED))
-    warm = sc.estimate()
-    assert "elastic model (compiled engine)" in warm.what and "compiling" not in warm.what
-    monkeypatch.setattr(ec.ENGINE, "cold", lambda: True)
-    cold = sc.estimate()
-    assert "compiling the elastic engine once" in cold.what and "symmech warm" in cold.what
-    assert cold.seconds - warm.seconds == pytest.approx(ec.COLD_COMPILE_SECONDS)
+def test_the_estimate_of_a_built_engine_announces_no_compile():
+    warm = pipeline.load(copy.deepcopy(BUNDLED)).estimate()
+    assert "elastic model (compiled engine; auto: the compiled engine is built" in warm.what
+    assert "compiling" not in warm.what
 
 
 # ---------------------------------------------------------------- traction (s and V0 are states)

@@ -200,14 +200,14 @@ def test_the_compiled_engine_is_built_before_the_first_point_is_timed(monkeypatc
     from symmech.trolley import elastic_compiled, elastic_scene
 
     calls = []
-    monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("compiled", "test"))
+    monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("compiled", "test"))
     monkeypatch.setattr(elastic_compiled.ENGINE, "warm", lambda wait=True, say=None: calls.append("warm") or True)
     monkeypatch.setattr(sweep, "evaluate", lambda data, max_time: calls.append("point") or ("failed", "stub"))
     raw = swept(TINY, {"field": "motion.constants.a", "values": [3.0, 4.0]})
     outcomes(raw)
     assert calls == ["warm", "point", "point"]
     calls.clear()
-    monkeypatch.setattr(elastic_scene, "engine", lambda setup: ("python", "test"))
+    monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("python", "test"))
     outcomes(raw)
     assert calls == ["point", "point"]
 

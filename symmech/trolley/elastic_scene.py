@@ -35,16 +35,34 @@ class Setup:
     resonance_band: float
     dq0: np.ndarray | None = None  # (N,) coordinates at t = 0 beyond the quasi-static state [m, rad]
     dqd0: np.ndarray | None = None  # (N,) their rates [m/s, rad/s]
-    engine: str = "compiled"  # numerics.engine as given; engine() says what runs
+    engine: str = "auto"  # numerics.engine as given; engine() says what runs
 
 
-def engine(setup: Setup) -> tuple[str, str]:
-    """The engine that integrates the elastic model, "compiled" or "python", and why."""
+# Wall time per output step [s] (bundled trolley_elastic_helix on 2 shared cores: Python ~0.1 s, compiled ~0.6 s
+# for 1000 steps; stiff rollers and undamped beams take more): the estimate, and the `auto` engine's choice
+SECONDS_PER_STEP = {"python": 0.1, "compiled": 2e-3}
+
+
+def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
+    """The engine that integrates the elastic model, "compiled" or "python", and why. ``auto`` takes the
+    compiled engine when numba's cache holds it, else whichever answers first over ``runs`` runs of the
+    setup (a sweep's points): the Python engine (:func:`simulate` then has the compiled one built in the
+    background for the next run) or compiling first."""
     if setup.engine == "python":
         return "python", 'numerics.engine = "python"'
     if setup.method != "Radau":
         return "python", f"numerics.method = \"{setup.method}\": the compiled engine integrates by Radau"
-    return "compiled", 'numerics.engine = "compiled"'
+    if setup.engine == "compiled":
+        return "compiled", 'numerics.engine = "compiled"'
+    from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine may run
+
+    if not elastic_compiled.ENGINE.cold():
+        return "compiled", "auto: the compiled engine is built (numba's cache)"
+    python = SECONDS_PER_STEP["python"] * (len(setup.t) - 1) * runs
+    if python > elastic_compiled.COLD_COMPILE_SECONDS:
+        return "compiled", f"auto: the Python engine would take ~{python:.3g} s, longer than compiling first"
+    return "python", ("auto: the compiled engine is not built yet; building it in the background for the next "
+                      "run (`symmech warm --engine elastic` builds it now)")
 
 
 def simulate(setup: Setup, **kw) -> dict:
@@ -56,9 +74,14 @@ def simulate(setup: Setup, **kw) -> dict:
     if name == "compiled":
         from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
 
+        elastic_compiled.ENGINE.warm()  # compile under the build lock, or load what a concurrent builder made
         out = elastic_compiled.simulate(setup.system, setup.drive, setup.t, **{**start, **kw})
         out["engine_reason"] = out["engine_reason"] or why
         return out
+    if setup.engine == "auto" and setup.method == "Radau":
+        from symmech.trolley import elastic_compiled
+
+        elastic_compiled.ENGINE.warm_in_background()
     out = el.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
     out.update(engine="python", engine_reason=why)
     return out

@@ -81,9 +81,11 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
                          "Jacobian (symmech.trolley.elastic_compiled; compiled once per installation, ~2 CPU-minutes, "
                          "then loaded from numba's cache; `symmech warm` builds it); the frame along the track is "
                          "tabulated per run and its interpolation error checked against the exact frame. "
-                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). A `method` other "
-                         "than Radau runs on `python`", choices=("compiled", "python"),
-                         default="compiled"),
+                         "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). `auto`: `compiled` "
+                         "when numba's cache holds it, else `python` while the compiled engine is built in the "
+                         "background for the next run (`compiled` at once when the Python engine's estimate "
+                         "exceeds the compile). A `method` other than Radau runs on `python`",
+                         choices=("auto", "compiled", "python"), default="auto"),
         "method": Choice("integrator (implicit ones use the analytic Jacobian)",
                          choices=("Radau", "BDF", "LSODA", "DOP853", "RK45"), default="Radau"),
         "rtol": Float("relative tolerance", unit="1", lo=1e-13, hi=1e-2, default=1e-7),

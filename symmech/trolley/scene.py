@@ -33,10 +33,6 @@ MAX_LENGTH = 1e7  # m: coordinates and arc lengths
 SECONDS_PER_STEP = 5e-6
 SECONDS_PER_OUTPUT_ROW = 9e-5
 SECONDS_PER_RHS = 2e-4
-# Elastic model per grid step (bundled trolley_elastic_helix on 2 shared cores: ~0.1 s; stiff
-# rollers and undamped beams take more, a rough guide for --max-time only).
-SECONDS_PER_ELASTIC_STEP = 0.1
-SECONDS_PER_ELASTIC_STEP_COMPILED = 2e-3  # bundled scene compiled: ~0.6 s for 1000 steps on a busy machine
 MAX_RHS = 2_000_000  # traction right-hand sides before the integration counts as stalled
 
 
@@ -415,9 +411,9 @@ def estimate(setup: Setup) -> registry.Estimate:
     if setup.elastic is not None and setup.elastic.system is not None:
         from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
 
-        engine, _ = elastic_scene.engine(setup.elastic)
-        what += f", the elastic model ({engine} engine)"
-        seconds += (SECONDS_PER_ELASTIC_STEP_COMPILED if engine == "compiled" else SECONDS_PER_ELASTIC_STEP) * steps
+        engine, why = elastic_scene.engine(setup.elastic)
+        what += f", the elastic model ({engine} engine{'; ' + why if why.startswith('auto') else ''})"
+        seconds += elastic_scene.SECONDS_PER_STEP[engine] * steps
         if engine == "compiled":
             from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
 

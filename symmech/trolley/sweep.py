@@ -347,11 +347,13 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
 
 
 def _compiled_needed(p: Plan) -> bool:
-    """Whether the points run the compiled elastic engine (the swept fields choose no engine)."""
+    """Whether the points run the compiled elastic engine (the swept fields choose no engine; ``auto`` weighs
+    the compile against the Python engine over all points)."""
     from symmech.trolley import elastic_scene
 
     setup = p.load(0, 0).setup.elastic
-    return setup is not None and setup.system is not None and elastic_scene.engine(setup)[0] == "compiled"
+    return (setup is not None and setup.system is not None
+            and elastic_scene.engine(setup, runs=int(np.prod(p.shape)))[0] == "compiled")
 
 
 def _warm_worker(say=None) -> None:
