@@ -267,7 +267,8 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
     setup = traction_scene(case=case)
     system, drive, N = setup.system, setup.drive, setup.system.N
     table = ec.frame_table(system, drive, np.linspace(*ec.reach(system, drive, setup.t), 21), 1e-8,
-                           lambda s, at=slice(None): ec.geometry(drive, system, s, at), ec._geometry_scales)
+                           evaluate=lambda s, at=slice(None): ec.geometry(drive, system, s, at),
+                           scales=ec._geometry_scales)
     ek.TRACTIONS[0] = drive.traction
     args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1), 0)
     n = 2 * N + 4

@@ -238,7 +238,7 @@ def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dq
     Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
     lo, hi = reach(system, drive, t)
     table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
-                        lambda s, at=slice(None): geometry(drive, system, s, at), _geometry_scales)
+                        evaluate=lambda s, at=slice(None): geometry(drive, system, s, at), scales=_geometry_scales)
     if table is not None:
         out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
         if out is not None:
