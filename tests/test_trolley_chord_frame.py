@@ -1,0 +1,219 @@
+"""The case-2 body frame of the rigid trolley (symmech.trolley.model: chord_point, chord_rotation,
+local_curvature_frame, _stencil, _weights) against independent references (issue 23 item 1,
+mutation testing).
+
+On a circular helix (radius R, rise λ per radian, r² = R² + λ², X2 up) the front axle's arc
+length s_A = s + Δ solves 2 R² (1 - cos(Δ/r)) + (λ Δ / r)² = l² (found here by bisection); the body
+frame Λ̄ is the moving frame turned by the smallest rotation taking the tangent t onto the chord
+direction c: written here with the twist frame's x3 = t × up / |t × up|, x2 = x3 × t rolled by θ1(s),
+and its Ω̄, Ω̄' compared with differences of that frame (ω̃ = -Λ̄' Λ̄ᵀ). Difference weights against
+the textbook ones; stencils exact on polynomials of their degree.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from symmech.core.scene import SymmechError
+from symmech.trolley import model
+
+R, RISE = 2.0, 0.5
+ROOT = np.hypot(R, RISE)
+KAPPA, TAU = R / ROOT**2, RISE / ROOT**2
+UP = np.array([0.0, 1.0, 0.0])
+AXLES = 1.3
+
+
+class Helix:
+    """The helix X = (R cos p, R sin p, λ p), p = s / r, its arc-length derivatives written by hand, and
+    an optional roll θ1(s) = a sin(b s)."""
+
+    def __init__(self, roll=(0.0, 0.0)):
+        self.roll = roll
+
+    def derivatives(self, s, order):
+        p = np.asarray(s, float) / ROOT
+        c, n, z = np.cos(p), np.sin(p), np.zeros_like(p)
+        rows = [(R * c, R * n, RISE * p)]
+        for k in range(1, order + 1):  # d^k/ds^k of (R cos p, R sin p): a quarter turn per order
+            rows.append((R * np.cos(p + k * np.pi / 2) / ROOT**k, R * np.sin(p + k * np.pi / 2) / ROOT**k,
+                         z + (RISE / ROOT if k == 1 else 0.0)))
+        return [np.stack(row, axis=-1) for row in rows]
+
+    def twist(self, s):
+        a, b = self.roll
+        s = np.asarray(s, float)
+        return a * np.sin(b * s), a * b * np.cos(b * s), -a * b * b * np.sin(b * s)
+
+
+def _front(s, l=AXLES):
+    def gap(d):
+        return 2 * R**2 * (1 - np.cos(d / ROOT)) + (RISE * d / ROOT) ** 2 - l * l
+    return np.array([x + brentq(gap, 0.5 * l, 2 * l, xtol=1e-15) for x in np.atleast_1d(s)])
+
+
+def _rodrigues(axis, angle):
+    k = axis / np.linalg.norm(axis)
+    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+
+
+def _body_frame(track, s, mode):
+    """Λ̄ (n, 3, 3): the twist or Frenet frame turned by the smallest rotation taking t onto the chord."""
+    out = []
+    for x in np.atleast_1d(s):
+        x0, t, d2 = (v[0] for v in track.derivatives(np.array([x]), 2))
+        if mode == "frenet":
+            x2 = d2 / np.linalg.norm(d2)
+        else:
+            x3 = np.cross(t, UP) / np.linalg.norm(np.cross(t, UP))
+            roll = track.twist(x)[0]
+            x2 = np.cos(roll) * np.cross(x3, t) + np.sin(roll) * x3
+        c = track.derivatives(_front(x), 0)[0][0] - x0
+        c /= np.linalg.norm(c)
+        turn = _rodrigues(np.cross(t, c), np.arccos(t @ c))
+        bar2 = turn @ x2
+        out.append(np.stack([c, bar2, np.cross(c, bar2)]))
+    return np.array(out)
+
+
+def _d1(f, s, h):
+    """f' by 4th-order central differences."""
+    return (f(s - 2 * h) - 8 * f(s - h) + 8 * f(s + h) - f(s + 2 * h)) / (12 * h)
+
+
+def _omega(lam_of, s, h=1e-3):
+    """Ω̄ from ω̃ = -Λ̄' Λ̄ᵀ."""
+    w = -_d1(lam_of, s, h) @ np.swapaxes(lam_of(s), -1, -2)
+    return np.stack([w[..., 2, 1], w[..., 0, 2], w[..., 1, 0]], -1)
+
+
+def test_front_axle_point_is_at_chord_distance_l():
+    s = np.array([0.0, 0.7, 5.0])
+    np.testing.assert_allclose(model.chord_point(Helix(), s, AXLES), _front(s), atol=1e-10)
+    # a front axle as long as the diameter is still reached: half a turn of the circle plus the rise
+    d = model.chord_point(Helix(), s, 2 * R) - s
+    np.testing.assert_allclose(2 * R**2 * (1 - np.cos(d / ROOT)) + (RISE * d / ROOT) ** 2, 4 * R**2, rtol=1e-12)
+
+
+def test_no_front_axle_point_when_the_track_curls_back_within_l():
+    flat = Helix()
+    flat.derivatives = lambda s, order: [  # a level circle of radius R: no chord longer than 2 R
+        np.stack(v, -1) for v in [(R * np.cos(np.asarray(s) / R + k * np.pi / 2) / R**k,
+                                   R * np.sin(np.asarray(s) / R + k * np.pi / 2) / R**k,
+                                   0 * np.asarray(s)) for k in range(order + 1)]]
+    with pytest.raises(SymmechError, match=r"no front-axle point A at chord distance l = 4\.5 m from s = 0\.5 m"):
+        model.chord_point(flat, np.array([0.5]), 4.5)
+
+
+@pytest.mark.parametrize("mode", ["frenet", "twist"])
+def test_chord_rotation_turns_x1_onto_the_chord_by_the_smallest_rotation(mode):
+    track = Helix((0.4, 1.1))
+    s = np.array([0.2, 1.5, 3.0])
+    lstar, chord, base = model.chord_rotation(track, s, AXLES, mode)
+    x0 = track.derivatives(s, 0)[0]
+    np.testing.assert_allclose(chord, track.derivatives(_front(s), 0)[0] - x0, atol=1e-10)
+    np.testing.assert_allclose(np.linalg.norm(chord, axis=-1), AXLES, rtol=1e-10)
+    np.testing.assert_allclose(lstar @ base.lam, _body_frame(track, s, mode), atol=1e-9)
+
+
+@pytest.mark.parametrize("mode, roll", [("frenet", (0.0, 0.0)), ("twist", (0.4, 1.1))])
+def test_local_curvature_frame_matches_differences_of_the_body_frame(mode, roll):
+    track = Helix(roll)
+    s = np.array([0.3, 1.9, 4.0])
+    frame = model.local_curvature_frame(track, s, AXLES, mode)
+    lam = _body_frame(track, s, mode)
+    np.testing.assert_allclose(frame.lam, lam, atol=1e-9)
+    t = track.derivatives(s, 1)[1]
+    np.testing.assert_allclose(frame.e, np.einsum("nij,nj->ni", lam, t), atol=1e-9)
+
+    def e_of(x):
+        return np.einsum("nij,nj->ni", _body_frame(track, x, mode), track.derivatives(x, 1)[1])
+    np.testing.assert_allclose(frame.de, _d1(e_of, s, 1e-3), atol=1e-7)
+    W = _omega(lambda x: _body_frame(track, x, mode), s)
+    np.testing.assert_allclose(frame.W, W, atol=1e-7)
+    dW = _d1(lambda x: _omega(lambda y: _body_frame(track, y, mode), x), s, 1e-2)
+    np.testing.assert_allclose(frame.dW, dW, atol=1e-6)
+    c = track.derivatives(_front(s), 0)[0] - track.derivatives(s, 0)[0]
+    np.testing.assert_allclose(frame.info["psi"], np.arccos((t * c).sum(-1) / AXLES), atol=1e-9)
+    np.testing.assert_allclose(frame.info["chord"], c, atol=1e-10)
+    if mode == "frenet":  # on a helix the chord keeps its place in the Frenet frame: Ω̄ = Λ* [τ, 0, κ]
+        lstar = lam @ np.swapaxes(frame.info["base"].lam, -1, -2)
+        np.testing.assert_allclose(frame.W, lstar @ np.array([TAU, 0.0, KAPPA]), atol=1e-9)
+        np.testing.assert_allclose(frame.dW, 0.0, atol=1e-8)
+        np.testing.assert_allclose(frame.de, 0.0, atol=1e-9)
+
+
+def test_local_curvature_frame_at_the_ends_of_the_span_and_with_given_derivatives():
+    track = Helix((0.4, 1.1))
+    lo, hi = 0.5, 3.0
+    plan = model.FramePlan("twist", np.zeros(0), np.zeros(0), span=(lo, hi))
+    s = np.array([lo, lo + 2e-3, 1.7, hi - 1e-3, hi])
+    frame = model.local_curvature_frame(track, s, AXLES, "twist", fd_order=4, fd_step=1e-2, plan=plan)
+    W = _omega(lambda x: _body_frame(track, x, "twist"), s)
+    dW = _d1(lambda x: _omega(lambda y: _body_frame(track, y, "twist"), x), s, 1e-2)
+    np.testing.assert_allclose(frame.W, W, atol=1e-6)
+    np.testing.assert_allclose(frame.dW, dW, atol=1e-4)
+
+    def lstar(x):
+        x = np.atleast_1d(x)
+        return _body_frame(track, x, "twist") @ np.swapaxes(model.moving_frame(track, x, "twist").lam, -1, -2)
+
+    def derivatives(x, xa):
+        np.testing.assert_allclose(xa, _front(x), atol=1e-10)
+        h = 1e-3
+        d1 = _d1(lstar, x, h)
+        d2 = (-lstar(x - 2 * h) + 16 * lstar(x - h) - 30 * lstar(x) + 16 * lstar(x + h) - lstar(x + 2 * h)) \
+            / (12 * h * h)
+        return d1, d2
+    given = model.local_curvature_frame(track, s, AXLES, "twist", derivatives=derivatives, plan=plan)
+    np.testing.assert_allclose(given.W, W, atol=1e-7)
+    np.testing.assert_allclose(given.dW, dW, atol=1e-6)
+
+
+@pytest.mark.parametrize("nodes, k, weights", [
+    ([-1, 0, 1], 1, [-0.5, 0.0, 0.5]), ([-1, 0, 1], 2, [1.0, -2.0, 1.0]),
+    ([-2, -1, 0, 1, 2], 1, [1 / 12, -2 / 3, 0.0, 2 / 3, -1 / 12]),
+    ([-2, -1, 0, 1, 2], 2, [-1 / 12, 4 / 3, -5 / 2, 4 / 3, -1 / 12]),
+    ([0, 1, 2], 1, [-1.5, 2.0, -0.5]), ([-2, -1, 0], 1, [0.5, -2.0, 1.5]),
+    ([0, 1, 2, 3], 2, [2.0, -5.0, 4.0, -1.0])])
+def test_difference_weights_are_the_textbook_ones(nodes, k, weights):
+    np.testing.assert_allclose(model._weights(nodes, k), weights, atol=1e-12)
+
+
+@pytest.mark.parametrize("order", [2, 4])
+def test_stencil_is_exact_on_polynomials_and_keeps_its_nodes_in_the_span(order):
+    """Entries polynomial of degree ``order``: every stencil (order + 1 central, order + 2 one-sided
+    nodes) differentiates them exactly."""
+    coef = np.arange(1.0, 10.0).reshape(3, 3)
+    seen = []
+
+    def poly(x, k):
+        return [x**order - 0.5 * x + 0.25, order * x**(order - 1) - 0.5, order * (order - 1) * x**(order - 2)][k]
+
+    def fun(x):
+        seen.append(np.array(x))
+        return coef * poly(x, 0)[:, None, None] + np.eye(3) * (x * x)[:, None, None]
+
+    def check(s, d1, d2):
+        np.testing.assert_allclose(d1, coef * poly(s, 1)[:, None, None] + np.eye(3) * (2 * s)[:, None, None],
+                                   rtol=1e-7, atol=1e-7)
+        np.testing.assert_allclose(d2, coef * poly(s, 2)[:, None, None] + 2 * np.eye(3), rtol=1e-4, atol=1e-4)
+
+    lo, hi = -1.0, 2.0
+    s = np.array([lo, -0.99, 0.3, 1.995, hi])
+    check(s, *model._stencil(fun, s, 0.02, order, (lo, hi)))
+    nodes = np.concatenate(seen)
+    assert nodes.min() >= lo and nodes.max() <= hi
+    # a span shorter than the stencil: the step shrinks to (hi - lo) / (2 (order + 1)), nodes stay inside
+    seen.clear()
+    short = np.array([0.0, 0.05, 0.1])
+    check(short, *model._stencil(fun, short, 1.0, order, (0.0, 0.1)))
+    nodes = np.concatenate(seen)
+    assert nodes.min() >= 0.0 and nodes.max() <= 0.1 + 1e-15
+    # no span: central differences with the step given, exact as well
+    seen.clear()
+    check(s, *model._stencil(fun, s, 0.1, order))
+    np.testing.assert_allclose(np.sort(np.unique(np.round(np.stack(seen) - s, 12))),
+                               0.1 * np.arange(-(order // 2), order // 2 + 1), atol=1e-12)
