@@ -217,3 +217,38 @@ def test_stencil_is_exact_on_polynomials_and_keeps_its_nodes_in_the_span(order):
     check(s, *model._stencil(fun, s, 0.1, order))
     np.testing.assert_allclose(np.sort(np.unique(np.round(np.stack(seen) - s, 12))),
                                0.1 * np.arange(-(order // 2), order // 2 + 1), atol=1e-12)
+
+
+def _aircraft(th):
+    """Λ = R1(θ1) R3(θ3) R2(θ2) (yaw θ2 about X2, pitch θ3, roll θ1), passive elementary rotations."""
+    def elementary(axis, angle):
+        out = np.eye(3)
+        i, j = (axis + 1) % 3, (axis + 2) % 3
+        out[i, i], out[i, j], out[j, i], out[j, j] = np.cos(angle), np.sin(angle), -np.sin(angle), np.cos(angle)
+        return out
+    return elementary(0, th[0]) @ elementary(2, th[2]) @ elementary(1, th[1])
+
+
+@pytest.mark.parametrize("chord_dir", [(1.0, 0.12, -0.2), (1.0, 0.15, 0.0)])
+def test_small_angle_check_solves_the_linearised_chord_condition(chord_dir):
+    """(13), (14) written here: Δθ the minimum-norm least-squares solution of Λ̄ ΔR̄ = [l, 0, 0] with
+    Λ̄ = Λ + Σ ∂Λ/∂θi Δθi (∂Λ/∂θi by central differences), the defect max|Λ̄ Λ̄ᵀ - E|; the angles are
+    read back off Λ (θ2 and θ3 away from zero, θ1 = 0.2 rad)."""
+    l = 1.5
+    thetas = [(0.2, 0.5, -0.3), (-0.25, 2.6, 0.4)]
+    lams = np.array([_aircraft(th) for th in thetas])
+    # the chord given in body components (a small turn off x1), passed in fixed components
+    local = np.array(chord_dir) / np.linalg.norm(chord_dir) * l
+    chords = np.array([lam.T @ local for lam in lams])
+    base = model.Frame(lams, *(np.zeros((2, 3)),) * 4)
+    defect, dtheta = model.small_angle_check(base, chords, l)
+    for k, (th, dx) in enumerate(zip(thetas, chords)):
+        h = 1e-6
+        partial = [(_aircraft(np.add(th, h * e)) - _aircraft(np.subtract(th, h * e))) / (2 * h) for e in np.eye(3)]
+        coef = np.stack([p @ dx for p in partial], -1)
+        rhs = np.array([l, 0.0, 0.0]) - _aircraft(th) @ dx
+        ref = np.linalg.lstsq(coef, rhs, rcond=1e-6)[0]  # rank 2: a turn about the chord leaves it
+        np.testing.assert_allclose(dtheta[k], ref, atol=1e-7)
+        bar = _aircraft(th) + sum(p * d for p, d in zip(partial, ref))
+        assert defect[k] == pytest.approx(np.abs(bar @ bar.T - np.eye(3)).max(), abs=1e-7)
+        assert defect[k] > 1e-3  # a turn of ~0.1 rad: the first-order Λ̄ is visibly not orthogonal
