@@ -252,3 +252,17 @@ def test_small_angle_check_solves_the_linearised_chord_condition(chord_dir):
         bar = _aircraft(th) + sum(p * d for p, d in zip(partial, ref))
         assert defect[k] == pytest.approx(np.abs(bar @ bar.T - np.eye(3)).max(), abs=1e-7)
         assert defect[k] > 1e-3  # a turn of ~0.1 rad: the first-order Λ̄ is visibly not orthogonal
+
+
+@pytest.mark.parametrize("up", [1.0, -1.0])
+def test_small_angle_check_at_a_vertical_tangent_with_rounding(up):
+    """x1 vertical: sin θ3 = ±1, which a frame carrying rounding passes by a few ulps (the pitch is then
+    still ±π/2, not NaN)."""
+    lam = np.array([[[0.0, up, 0.0], [-up, 0.0, 0.0], [0.0, 0.0, 1.0]]])
+    chord = lam[0].T @ np.array([1.4, 0.1, -0.05])
+    exact, dtheta = model.small_angle_check(model.Frame(lam, *(np.zeros((1, 3)),) * 4), chord[None], 1.5)
+    rounded, dtheta_rounded = model.small_angle_check(model.Frame(lam * (1 + 4e-16), *(np.zeros((1, 3)),) * 4),
+                                                      chord[None], 1.5)
+    assert np.isfinite(exact).all() and np.isfinite(dtheta).all()
+    np.testing.assert_allclose(rounded, exact, atol=1e-9)
+    np.testing.assert_allclose(dtheta_rounded, dtheta, atol=1e-9)
