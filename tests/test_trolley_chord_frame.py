@@ -59,8 +59,9 @@ def _rodrigues(axis, angle):
     return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
 
 
-def _body_frame(track, s, mode):
-    """Λ̄ (n, 3, 3): the twist or Frenet frame turned by the smallest rotation taking t onto the chord."""
+def _body_frame(track, s, mode, extra_roll=lambda x: 0.0):
+    """Λ̄ (n, 3, 3): the twist or Frenet frame turned by the smallest rotation taking t onto the chord;
+    ``extra_roll(s)`` [rad] added to the twist."""
     out = []
     for x in np.atleast_1d(s):
         x0, t, d2 = (v[0] for v in track.derivatives(np.array([x]), 2))
@@ -68,7 +69,7 @@ def _body_frame(track, s, mode):
             x2 = d2 / np.linalg.norm(d2)
         else:
             x3 = np.cross(t, UP) / np.linalg.norm(np.cross(t, UP))
-            roll = track.twist(x)[0]
+            roll = track.twist(x)[0] + extra_roll(x)
             x2 = np.cos(roll) * np.cross(x3, t) + np.sin(roll) * x3
         c = track.derivatives(_front(x), 0)[0][0] - x0
         c /= np.linalg.norm(c)
@@ -170,6 +171,21 @@ def test_local_curvature_frame_at_the_ends_of_the_span_and_with_given_derivative
     given = model.local_curvature_frame(track, s, AXLES, "twist", derivatives=derivatives, plan=plan)
     np.testing.assert_allclose(given.W, W, atol=1e-7)
     np.testing.assert_allclose(given.dW, dW, atol=1e-6)
+
+
+def test_local_curvature_frame_follows_the_plans_rolls():
+    """A plan that rolls the twist frame by 0.3 rad beyond s = 1 m: the body frame and its rates are
+    those of the twist θ1 + 0.3 there."""
+    track = Helix((0.4, 1.1))
+    plan = model.FramePlan("twist", np.array([1.0]), np.array([0.3]))
+    s = np.array([0.3, 1.9, 4.0])
+    frame = model.local_curvature_frame(track, s, AXLES, "twist", plan=plan)
+
+    def lam_of(x):
+        return _body_frame(track, x, "twist", lambda y: 0.3 * (y > 1.0))
+    np.testing.assert_allclose(frame.lam, lam_of(s), atol=1e-9)
+    np.testing.assert_allclose(frame.W, _omega(lam_of, s), atol=1e-7)
+    np.testing.assert_allclose(frame.dW, _d1(lambda x: _omega(lam_of, x), s, 1e-2), atol=1e-6)
 
 
 @pytest.mark.parametrize("nodes, k, weights", [
