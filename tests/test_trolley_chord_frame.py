@@ -108,6 +108,40 @@ def test_no_front_axle_point_when_the_track_curls_back_within_l():
         model.chord_point(flat, np.array([0.5]), 4.5)
 
 
+class Hook:
+    """A level hook (X2 up): straight along X1 up to s = 0.1 m, a half circle of radius 0.3 m, straight
+    back along -X1 at X3 = 0.6 m; arc-length derivatives written by hand, no twist."""
+
+    D, RADIUS = 0.1, 0.3
+
+    def derivatives(self, s, order):
+        s = np.asarray(s, float)
+        th = np.clip((s - self.D) / self.RADIUS, 0.0, np.pi)
+        on_arc = ((s > self.D) & (s < self.D + np.pi * self.RADIUS))[..., None]
+        back = np.maximum(s - self.D - np.pi * self.RADIUS, 0.0)
+        x = np.stack([np.minimum(s, self.D) + self.RADIUS * np.sin(th) - back, 0 * s,
+                      self.RADIUS * (1 - np.cos(th))], -1)
+        t = np.stack([np.cos(th), 0 * s, np.sin(th)], -1)
+        d2 = np.where(on_arc, np.stack([-np.sin(th), 0 * s, np.cos(th)], -1) / self.RADIUS, 0.0)
+        d3 = np.where(on_arc, np.stack([-np.cos(th), 0 * s, -np.sin(th)], -1) / self.RADIUS**2, 0.0)
+        return [x, t, d2, d3, 0 * x][:order + 1]
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
+def test_chord_pointing_backwards_is_refused_at_the_first_such_arc_length():
+    """From s = 0 the front axle (l = 1 m) is reached on the way back, at X1 = -0.8 m: behind O."""
+    s = np.array([-3.0, 0.0, 0.05])
+    np.testing.assert_allclose(model.chord_point(Hook(), s, 1.0), [-2.0, 0.1 + 0.3 * np.pi + 0.9, 0.1 + 0.3 * np.pi
+                                                                     + 0.85], atol=1e-9)
+    with pytest.raises(SymmechError, match=r"^the chord O -> A points backwards at s = 0 m$"):
+        model.chord_rotation(Hook(), s, 1.0, "twist")
+    lstar, _, _ = model.chord_rotation(Hook(), s[:1], 1.0, "twist")
+    np.testing.assert_allclose(lstar, np.eye(3)[None], atol=1e-12)
+
+
 @pytest.mark.parametrize("mode", ["frenet", "twist"])
 def test_chord_rotation_turns_x1_onto_the_chord_by_the_smallest_rotation(mode):
     track = Helix((0.4, 1.1))
