@@ -90,12 +90,17 @@ def _omega(lam_of, s, h=1e-3):
     return np.stack([w[..., 2, 1], w[..., 0, 2], w[..., 1, 0]], -1)
 
 
-def test_front_axle_point_is_at_chord_distance_l():
+@pytest.mark.parametrize("l", [AXLES, 2 * R])
+def test_front_axle_point_is_the_first_at_chord_distance_l_found_by_newton(l):
+    """The first root, also for l = 2 R (the chord there 79° off the tangent at A, beyond it the helix
+    reaches chord l again after a turn), in a few Newton steps (each evaluates the track once)."""
+    track, calls = Helix(), []
+    exact = track.derivatives
+    track.derivatives = lambda s, order: (calls.append(order), exact(s, order))[1]
     s = np.array([0.0, 0.7, 5.0])
-    np.testing.assert_allclose(model.chord_point(Helix(), s, AXLES), _front(s), atol=1e-10)
-    # a front axle as long as the diameter is still reached: half a turn of the circle plus the rise
-    d = model.chord_point(Helix(), s, 2 * R) - s
-    np.testing.assert_allclose(2 * R**2 * (1 - np.cos(d / ROOT)) + (RISE * d / ROOT) ** 2, 4 * R**2, rtol=1e-12)
+    np.testing.assert_allclose(model.chord_point(track, s, l), _front(s, l), rtol=0, atol=1e-12)
+    assert len(calls) <= 10
+    assert model.chord_point(Helix(), 0.7, l) == pytest.approx(_front(0.7, l)[0], abs=1e-12)  # a scalar s
 
 
 def test_no_front_axle_point_when_the_track_curls_back_within_l():
