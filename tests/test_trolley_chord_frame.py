@@ -104,13 +104,17 @@ def test_front_axle_point_is_the_first_at_chord_distance_l_found_by_newton(l):
 
 
 def test_no_front_axle_point_when_the_track_curls_back_within_l():
-    flat = Helix()
-    flat.derivatives = lambda s, order: [  # a level circle of radius R: no chord longer than 2 R
-        np.stack(v, -1) for v in [(R * np.cos(np.asarray(s) / R + k * np.pi / 2) / R**k,
-                                   R * np.sin(np.asarray(s) / R + k * np.pi / 2) / R**k,
-                                   0 * np.asarray(s)) for k in range(order + 1)]]
+    """A straight run into a level circle of radius R: from s = -3 m the chord 4.5 m reaches the circle,
+    from s = 0.5 m on the circle no point is that far (the diameter is 4 m)."""
+    class Curl(Helix):
+        def derivatives(self, s, order):
+            s = np.asarray(s, float)
+            th = np.maximum(s, 0.0) / R
+            x = np.stack([np.minimum(s, 0.0) + R * np.sin(th), 0 * s, R * (1 - np.cos(th))], -1)
+            return [x, np.stack([np.cos(th), 0 * s, np.sin(th)], -1)][:order + 1]
+    assert model.chord_point(Curl(), np.array([-3.0]), 4.5) > 0.0
     with pytest.raises(SymmechError, match=r"no front-axle point A at chord distance l = 4\.5 m from s = 0\.5 m"):
-        model.chord_point(flat, np.array([0.5]), 4.5)
+        model.chord_point(Curl(), np.array([-3.0, 0.5]), 4.5)
 
 
 class Hook:
