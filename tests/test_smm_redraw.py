@@ -68,6 +68,7 @@ def test_planar_slide_turns_with_its_host(order2):
     np.testing.assert_allclose(vec(m.coordinates[2].axis), [c, s, 0], rtol=0, atol=1e-15)
     np.testing.assert_allclose(vec(m.points["P"].vector), [0.7 * c, 0.7 * s, 0], rtol=0, atol=1e-15)
     assert m.coordinates[0].axis == ("0", "0", "1")
+    assert [b.name for b in m.bodies] == ["m1", "m2"]  # unturned bodies are all kept
 
 
 def _spatial(points, bodies=()):

@@ -1,0 +1,37 @@
+"""The second-order twist of a preloaded torsion spring on compound rotations (forms._twist_hessian)
+against a finite-difference Hessian of n . rotvec(Rx(qa) Rz(qb)) from scipy's Rotation."""
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from symmech.smm import numeric
+
+from smm_helpers import mech
+
+K, M0 = 20.0, 3.0          # [N m/rad], [N m]
+N = np.array([0.0, 0.6, 0.8])
+
+
+def twist(q):
+    R = Rotation.from_rotvec([q[0], 0, 0]) * Rotation.from_rotvec([0, 0, q[1]])
+    return N @ R.as_rotvec()
+
+
+def test_twist_hessian_of_x_then_z_turns():
+    """c = k (dtwist)(dtwist)^T + M0 d2twist (no gravity, no other springs); dtwist = (n.e_x, n.e_z)."""
+    m = mech({
+        "coordinates": [{"name": "a", "type": "angle", "axis": [1, 0, 0]},
+                        {"name": "b", "type": "angle", "axis": [0, 0, 1]}],
+        "points": [{"name": "O", "at": [0, 0, 0]}, {"name": "C", "from": "O", "vector": [0.1, 0.2, -0.5], "turns": ["a", "b"]}],
+        "bodies": [{"name": "B", "mass": 1.0, "inertia": [0.1, 0.2, 0.3], "com": "C", "turns": ["a", "b"]}],
+        "torsion_springs": [{"name": "t", "bodies": ["ground", "B"], "stiffness": K, "preload": M0,
+                             "axis": N.tolist()}]})
+    h = 1e-4
+    H = np.empty((2, 2))
+    for i in range(2):
+        for j in range(2):
+            ei, ej = np.eye(2)[i] * h, np.eye(2)[j] * h
+            H[i, j] = (twist(ei + ej) - twist(ei - ej) - twist(-ei + ej) + twist(-ei - ej)) / (4 * h * h)
+    d = np.array([N[0], N[2]])
+    c = numeric.assemble(m).c.toarray()
+    np.testing.assert_allclose(c, K * np.outer(d, d) + M0 * H, rtol=0, atol=1e-6)
+    assert abs(H[0, 1] + N[1] / 2) < 1e-6  # the compound-rotation term is really there: n . (e_x x e_z) / 2
