@@ -72,17 +72,22 @@ def test_search_with_a_singular_tangent():
     np.testing.assert_allclose(report["q"], [0.0, l - (l0 + mass * g / k)], rtol=0, atol=1e-12)
 
 
+def torsion_pendulum(mass, l, g, k, th0, **preload):
+    """Bob m on a massless rod l drawn at th0 from the downward vertical, torsion spring k to ground."""
+    return mech({"parameters": {"g": param(g, "m/s^2")},
+                 "coordinates": [{"name": "phi", "type": "angle"}],
+                 "points": [{"name": "O", "at": [0, 0]},
+                            {"name": "B", "from": "O", "vector": [l * math.sin(th0), -l * math.cos(th0)], "turns": ["phi"]}],
+                 "bodies": [{"name": "bob", "mass": mass, "com": "B"}],
+                 "torsion_springs": [{"name": "t", "bodies": ["ground", "bob"], "stiffness": k, **preload}],
+                 "gravity": {"g": "g"}})
+
+
 def test_unpreloaded_torsion_spring_keeps_its_free_angle():
     """Pendulum (bob m, rod l) drawn at th0, torsion spring k free in the drawn position:
     m g l sin(th0 + phi) + k phi = 0."""
     mass, l, g, k, th0 = 1.5, 0.8, 9.81, 12.0, 0.6
-    m = mech({"parameters": {"g": param(g, "m/s^2")},
-              "coordinates": [{"name": "phi", "type": "angle"}],
-              "points": [{"name": "O", "at": [0, 0]},
-                         {"name": "B", "from": "O", "vector": [l * math.sin(th0), -l * math.cos(th0)], "turns": ["phi"]}],
-              "bodies": [{"name": "bob", "mass": mass, "com": "B"}],
-              "torsion_springs": [{"name": "t", "bodies": ["ground", "bob"], "stiffness": k}], "gravity": {"g": "g"}})
-    found, report = numeric.solve_equilibrium(m)
+    found, report = numeric.solve_equilibrium(torsion_pendulum(mass, l, g, k, th0))
     phi = scipy.optimize.brentq(lambda p: mass * g * l * math.sin(th0 + p) + k * p, -1.5, 0.0, xtol=1e-15)
     assert report["q"][0] == pytest.approx(phi, abs=1e-9)
     assert float(found.torsion_springs[0].preload) == pytest.approx(k * phi, rel=1e-8)
@@ -96,6 +101,9 @@ def test_equilibrium_preloads_and_zero_stiffness_are_refused_by_name():
     with pytest.raises(SymmechError) as err:
         numeric.solve_equilibrium(hanging(0.0, 0.01, 0.4, 0.05))
     assert str(err.value) == "spring 's': a preloaded spring of zero stiffness has no free length"
+    with pytest.raises(SymmechError) as err:
+        numeric.solve_equilibrium(torsion_pendulum(1.5, 0.8, 9.81, 12.0, 0.6, preload="equilibrium"))
+    assert str(err.value) == "torsion spring 't': equilibrium.solve needs a preload value, not preload = \"equilibrium\""
 
 
 def damped_pair(k=(400.0, 400.0), c=(4.0, 16.0), masses=(1.0, 1.0), coupled=False):
@@ -138,3 +146,17 @@ def test_free_pair_damping_ratio_beside_the_rigid_mode():
     mu = m1 * m2 / (m1 + m2)
     assert md.kinds == ["rigid", "elastic"]
     assert md.zeta[0] is None and md.zeta[1] == pytest.approx(c / (2 * math.sqrt(k * mu)), rel=1e-9)
+
+
+def test_search_tangent_keeps_gravity_the_scene_drops():
+    """A pendulum drawn at th0 whose scene drops gravity from the matrices: its only stiffness is
+    gravity's, and the search still hangs it straight down (phi = -th0)."""
+    th0, l = 0.5, 0.8
+    m = mech({"parameters": {"g": param(9.81, "m/s^2")},
+              "coordinates": [{"name": "phi", "type": "angle"}],
+              "points": [{"name": "O", "at": [0, 0]},
+                         {"name": "B", "from": "O", "vector": [l * math.sin(th0), -l * math.cos(th0)], "turns": ["phi"]}],
+              "bodies": [{"name": "bob", "mass": 1.0, "com": "B"}],
+              "gravity": {"g": "g"}, "effects": {"gravity": False}})
+    _, report = numeric.solve_equilibrium(m)
+    assert report["q"][0] == pytest.approx(-th0, abs=1e-10)
