@@ -160,3 +160,11 @@ def test_search_tangent_keeps_gravity_the_scene_drops():
               "gravity": {"g": "g"}, "effects": {"gravity": False}})
     _, report = numeric.solve_equilibrium(m)
     assert report["q"][0] == pytest.approx(-th0, abs=1e-10)
+
+
+def test_search_out_of_steps_is_refused_with_the_residual():
+    """No Newton step allowed: the refusal names the count and the residual |T0 - m g| = 0.0481 N."""
+    with pytest.raises(SymmechError) as err:
+        numeric.solve_equilibrium(hanging(1.0, 0.01, 0.4, 0.05), max_iter=0)
+    assert str(err.value) == ("equilibrium search did not converge in 0 Newton steps (residual 0.0481); "
+                              "give the equilibrium configuration in the scene")

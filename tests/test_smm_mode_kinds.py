@@ -28,6 +28,7 @@ def test_unstable_mode_below_a_rigid_one():
     lowest) and 0 (the cart's drift, rigid), in this order; no damping ratio for either."""
     M, m, l, g = 3.0, 1.2, 0.7, 9.81
     num = numeric.assemble(inverted_pendulum_on_free_cart(M, m, l, g))
+    assert num.coords == ["x", "p"]
     np.testing.assert_allclose(num.a.toarray(), [[M + m, -m * l], [-m * l, m * l * l]], rtol=1e-15)
     np.testing.assert_allclose(num.c.toarray(), [[0, 0], [0, -m * g * l]], rtol=1e-15)
     md = numeric.modes(num.a.toarray(), num.b.toarray(), num.c.toarray())

@@ -4,6 +4,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from symmech.smm import numeric
+from symmech.smm.model import Effects
 
 from smm_helpers import mech
 
@@ -16,15 +17,22 @@ def twist(q):
     return N @ R.as_rotvec()
 
 
-def test_twist_hessian_of_x_then_z_turns():
-    """c = k (dtwist)(dtwist)^T + M0 d2twist (no gravity, no other springs); dtwist = (n.e_x, n.e_z)."""
-    m = mech({
+def _gimbal():
+    return mech({
         "coordinates": [{"name": "a", "type": "angle", "axis": [1, 0, 0]},
                         {"name": "b", "type": "angle", "axis": [0, 0, 1]}],
-        "points": [{"name": "O", "at": [0, 0, 0]}, {"name": "C", "from": "O", "vector": [0.1, 0.2, -0.5], "turns": ["a", "b"]}],
+        "points": [{"name": "O", "at": [0, 0, 0]}, {"name": "C", "from": "O", "vector": [0.1, 0.2, -0.5], "turns": ["a", "b"]},
+                   {"name": "W", "at": [1.1, 0.2, -0.5]}],
         "bodies": [{"name": "B", "mass": 1.0, "inertia": [0.1, 0.2, 0.3], "com": "C", "turns": ["a", "b"]}],
         "torsion_springs": [{"name": "t", "bodies": ["ground", "B"], "stiffness": K, "preload": M0,
-                             "axis": N.tolist()}]})
+                             "axis": N.tolist()}],
+        "springs": [{"name": "s", "ends": ["C", "W"], "stiffness": 0.0}]})
+
+
+def test_twist_hessian_of_x_then_z_turns():
+    """c = k (dtwist)(dtwist)^T + M0 d2twist (no gravity, a slack spring); dtwist = (n.e_x, n.e_z);
+    without preload effects c = k (dtwist)(dtwist)^T alone."""
+    m = _gimbal()
     h = 1e-4
     H = np.empty((2, 2))
     for i in range(2):
@@ -34,4 +42,16 @@ def test_twist_hessian_of_x_then_z_turns():
     d = np.array([N[0], N[2]])
     c = numeric.assemble(m).c.toarray()
     np.testing.assert_allclose(c, K * np.outer(d, d) + M0 * H, rtol=0, atol=1e-6)
+    assert np.abs(numeric.assemble(m, Effects(preload=False)).c.toarray() - K * np.outer(d, d)).max() < 1e-12
     assert abs(H[0, 1] + N[1] / 2) < 1e-6  # the compound-rotation term is really there: n . (e_x x e_z) / 2
+
+
+def test_spatial_result_carries_coordinates_lengths_and_stiffness_rows():
+    """A (slack) spring C -> W on the gimbal: length |W - C| = 1 m, its L_c row -e . (e_x x C, e_z x C)
+    with e = (W - C)/|W - C| = e_x, then the torsion spring's row (n . e_x, n . e_z)."""
+    num = numeric.assemble(_gimbal())
+    C, e = np.array([0.1, 0.2, -0.5]), np.array([1.0, 0, 0])
+    assert num.coords == ["a", "b"]
+    assert num.lengths == {"s": 1.0}
+    np.testing.assert_allclose(num.L_c.toarray(), [[-e @ np.cross([1, 0, 0], C), -e @ np.cross([0, 0, 1], C)],
+                                                   [N[0], N[2]]], rtol=0, atol=1e-15)
