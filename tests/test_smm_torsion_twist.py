@@ -1,6 +1,7 @@
 """The second-order twist of a preloaded torsion spring on compound rotations (forms._twist_hessian)
 against a finite-difference Hessian of n . rotvec(Rx(qa) Rz(qb)) from scipy's Rotation."""
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from symmech.smm import numeric
@@ -55,3 +56,21 @@ def test_spatial_result_carries_coordinates_lengths_and_stiffness_rows():
     assert num.lengths == {"s": 1.0}
     np.testing.assert_allclose(num.L_c.toarray(), [[-e @ np.cross([1, 0, 0], C), -e @ np.cross([0, 0, 1], C)],
                                                    [N[0], N[2]]], rtol=0, atol=1e-15)
+
+
+def test_spatial_torsion_moment_from_equilibrium():
+    """Bob m at C = (0, 0, -0.5) turned about x then z, gravity along -y, torsion spring about x with
+    preload "equilibrium": eq. (5) gives M0 = -m g 0.5 and the term lists balance (dPi/dq = 0)."""
+    mass, g = 2.0, 9.81
+    m = mech({
+        "parameters": {"g": {"value": g, "unit": "m/s^2"}},
+        "coordinates": [{"name": "a", "type": "angle", "axis": [1, 0, 0]},
+                        {"name": "b", "type": "angle", "axis": [0, 0, 1]}],
+        "points": [{"name": "O", "at": [0, 0, 0]}, {"name": "C", "from": "O", "vector": [0, 0, -0.5], "turns": ["a", "b"]}],
+        "bodies": [{"name": "B", "mass": mass, "inertia": [0.1, 0.2, 0.3], "com": "C", "turns": ["a", "b"]}],
+        "torsion_springs": [{"name": "t", "bodies": ["ground", "B"], "stiffness": K, "preload": "equilibrium",
+                             "axis": [1, 0, 0]}],
+        "gravity": {"g": "g", "direction": [0, -1, 0]}})
+    num = numeric.assemble(m)
+    np.testing.assert_allclose(num.residual, [0.0, 0.0], rtol=0, atol=1e-14)
+    assert numeric.equilibrium_tensions(m)[0] == {"t": pytest.approx(-0.5 * mass * g, rel=1e-14)}
