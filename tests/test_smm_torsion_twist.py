@@ -1,5 +1,7 @@
-"""The second-order twist of a preloaded torsion spring on compound rotations (forms._twist_hessian)
-against a finite-difference Hessian of n . rotvec(Rx(qa) Rz(qb)) from scipy's Rotation."""
+"""Spatial mechanisms, so through the term lists of forms.py: the second-order twist of a preloaded
+torsion spring on compound rotations (forms._twist_hessian) against a finite-difference Hessian of
+n . rotvec(Rx(qa) Rz(qb)) from scipy's Rotation; the result's coordinates, spring lengths and L_c rows
+by hand; a torsion moment from the equilibrium conditions (5)."""
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
