@@ -63,10 +63,16 @@ SHARDS = {
     "coulomb_apply": ("symmech/grain/coulomb_law.py",
                       ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                        "tests/test_coulomb_impact_law.py"], ["*ǁImpactLawǁapply__*"]),
+    # the structural model method: forms.py (spatial term lists, principal axes and torsion springs in
+    # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
     "smm_forms": ("symmech/smm/forms.py",
-                  ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py"], ["*"]),
+                  ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py", "tests/test_smm_spatial_eq.py",
+                   "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py"], ["*"]),
     "smm_numeric": ("symmech/smm/numeric.py",
-                    ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py"],
+                    ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py",
+                     "tests/test_smm_response.py", "tests/test_smm_spatial_eq.py", "tests/test_smm_pivot.py",
+                     "tests/test_smm_equilibrium_search.py", "tests/test_smm_redraw.py", "tests/test_smm_mode_kinds.py",
+                     "tests/test_smm_response_grids.py", "tests/test_smm_torsion_twist.py"],
                     ["*"]),
     # test_integrity.py runs fresh interpreters, which import the unmutated package; the codegen tests that
     # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes)

@@ -384,7 +384,7 @@ def damping_ratios(a, b, c, omega2, kinds) -> list:
 
 
 def free_response(a, b, c, q0, v0, t):
-    """q(t) [n_t x k] of a q'' + b q' + c q = 0 from q(0) = q0, q'(0) = v0 on a uniform grid t."""
+    """q(t) [n_t x k] of a q'' + b q' + c q = 0 from q(t[0]) = q0 [m, rad], q'(t[0]) = v0 on a uniform grid t [s]."""
     n = a.shape[0]
     ainv = np.linalg.inv(a)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-ainv @ c, -ainv @ b]])
