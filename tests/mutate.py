@@ -128,7 +128,7 @@ def run_shard(name: str) -> int:
         if not (folder / link).is_symlink():
             (folder / link).symlink_to(ROOT / link, target_is_directory=True)
     (folder / "pyproject.toml").write_text(shard_pyproject(module, tests), "utf-8")
-    mutmut = [str(Path(sys.executable).parent / "mutmut")]
+    mutmut = [sys.executable, "-m", "mutmut"]  # the one installed for this interpreter, wherever its scripts are
     print(f"== shard {name}: {module} against {' '.join(tests)}", flush=True)
     status = subprocess.call(mutmut + ["run", "--max-children", "1", *patterns], cwd=folder)
     listing = subprocess.run(mutmut + ["results", "--all", "true"], cwd=folder, capture_output=True, text=True).stdout
