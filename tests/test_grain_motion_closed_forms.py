@@ -1,0 +1,249 @@
+"""The Python grain loop (``motion.simulate``) against closed forms of a sphere: the free flight (a parabola and a
+steady spin about a fixed axis), the contact time sqrt(2h/g) of a drop from height h and the bounce times after it,
+restitution along the normal, the sticking impulse of a spinning sphere, the landing, rolling at 5/7 of the
+speed, the work of a vibrating plate through the impulses, the energy budget entry by entry and the summary.
+
+Every expected value is written here from those formulas; none comes from the code under test.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.grain import flight, motion
+from symmech.grain.coulomb_law import ImpactLaw
+
+G = 9.81
+A = 1e-3  # sphere radius [m]
+M = 2e-6  # mass [kg]
+I = 0.4 * M * A**2  # solid sphere [kg m^2]
+H = 0.01  # drop height of the lowest point [m]
+T_C = math.sqrt(2 * H / G)  # first contact of a drop from rest [s]
+EZ = np.array([0.0, 0.0, 1.0])
+
+
+def sphere(law, mu=0.5, amplitude=0.0, freq=20.0, phase=0.0, rotation=True):
+    vib = flight.Vibration(amplitude, 2 * math.pi * freq, phase, (0.0, 0.0, 1.0))
+    return motion.Model((A,) * 3, M, (0.0, 0.0, -G), vib, law, mu, motion.Effects(rotation=rotation))
+
+
+def numerics(**kw):
+    return motion.Numerics(tolerance=1e-11, scan_step=1e-3, sample_interval=1e-3, **kw)
+
+
+def state(z=A + H, v=(0.0, 0.0, 0.0), w=(0.0, 0.0, 0.0), q=(1.0, 0.0, 0.0, 0.0)):
+    return motion.State(0.0, np.array([0.0, 0.0, z]), np.array(v, float), np.array(q, float), np.array(w, float))
+
+
+def frictionless(e):
+    return ImpactLaw("coulomb", e_n=e, e_t=0.0, mu=0.0, check_printed=False)
+
+
+def quaternion_matrix(q):
+    """Body axes as columns in KXYZ of Hamilton quaternions q (..., 4), scalar first."""
+    w, x, y, z = np.moveaxis(np.asarray(q) / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def rodrigues(w, t):
+    """exp(t [w]x) (3, 3): the rotation by |w| t about w."""
+    angle, axis = np.linalg.norm(w) * t, np.asarray(w) / np.linalg.norm(w)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def energy(z, v, w_world):
+    """Absolute energy [J] on a still plate: kinetic plus the potential of gravity (zero at z = 0)."""
+    return 0.5 * M * float(np.dot(v, v)) + 0.5 * I * float(np.dot(w_world, w_world)) + M * G * z
+
+
+def test_free_flight_is_a_parabola_with_a_steady_spin():
+    q0 = np.array([0.9, 0.2, -0.3, 0.25]) / np.linalg.norm([0.9, 0.2, -0.3, 0.25])
+    Q0, w_b = quaternion_matrix(q0), np.array([30.0, -20.0, 50.0])
+    r0, v0 = np.array([0.001, 0.002, A + H]), np.array([0.05, -0.02, 0.1])
+    t_end = 0.02  # the lowest point is still 2 mm up
+    st = motion.State(0.0, r0.copy(), v0.copy(), q0 * 2.0, w_b.copy())  # q is normalised by the loop
+    res = motion.simulate(sphere(frictionless(0.5)), numerics(), st, t_end)
+    rows = res.trajectory
+    t = rows[:, 0]
+    np.testing.assert_allclose(t, np.arange(21) * 1e-3, rtol=0, atol=1e-15)
+    assert np.all(rows[:, 14] == 0)
+    g = np.array([0.0, 0.0, -G])
+    np.testing.assert_allclose(rows[:, 1:4], r0 + np.outer(t, v0) + 0.5 * np.outer(t**2, g), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(rows[:, 4:7], v0 + np.outer(t, g), rtol=0, atol=1e-13)
+    # a sphere spins about a fixed axis at a steady rate: Q(t) = Q0 exp(t [w_b]x), world spin Q0 w_b
+    Qt = np.array([Q0 @ rodrigues(w_b, s) for s in t])
+    np.testing.assert_allclose(quaternion_matrix(rows[:, 7:11]), Qt, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(rows[:, 11:14], np.broadcast_to(Q0 @ w_b, (21, 3)), rtol=0, atol=1e-7)
+    assert res.final.t == t_end
+    np.testing.assert_allclose(res.final.r, rows[-1, 1:4], rtol=0, atol=0)
+    np.testing.assert_allclose(res.final.w, w_b, rtol=0, atol=1e-7)
+    assert res.time_in == {"flight": pytest.approx(t_end, abs=1e-15), "sliding": 0.0}
+    b = res.extra["energy_budget"]
+    start = energy(r0[2], v0, Q0 @ w_b)
+    assert b["start_J"] == pytest.approx(start, rel=1e-13)
+    assert b["end_J"] == pytest.approx(start, rel=1e-10)
+    assert b["input_by_surface_J"] == b["lost_in_impacts_J"] == b["lost_at_landings_J"] == 0.0
+    assert b["lost_in_sliding_J"] == 0.0 and b["relative_residual"] < 1e-10
+    s = res.summary()
+    assert s["duration_s"] == t_end and s["bounces"] == 0
+    np.testing.assert_allclose(s["mean_transport_velocity_m_s"], v0[:2], rtol=1e-12)
+    assert s["time_fraction"] == {"flight": pytest.approx(1.0, rel=1e-14), "sliding": 0.0}
+
+
+def test_rotation_off_flies_without_spin():
+    res = motion.simulate(sphere(frictionless(0.5), rotation=False), numerics(), state(w=(3.0, 4.0, 5.0)), 0.01)
+    assert np.all(res.trajectory[:, 11:14] == 0.0) and np.all(res.final.w == 0.0)
+    assert res.extra["energy_budget"]["start_J"] == pytest.approx(M * G * (A + H), rel=1e-13)
+
+
+def test_dropped_sphere_bounces_at_the_closed_form_times_with_restitution_along_the_normal():
+    """Contact at t_c = sqrt(2h/g), rebound at e g t_c, next contacts t_c (1 + 2e) and t_c (1 + 2e + 2e^2)."""
+    e, v_t, w_b = 0.6, np.array([0.03, 0.01]), np.array([0.0, 0.0, 40.0])
+    t2 = T_C * (1 + 2 * e)
+    t_end = T_C * (1 + 2 * e + e * e)  # between the second and the third contact
+    res = motion.simulate(sphere(frictionless(e)), numerics(), state(v=(*v_t, 0.0), w=w_b), t_end)
+    assert [i["t"] for i in res.impacts] == [pytest.approx(T_C, abs=1e-12), pytest.approx(t2, abs=1e-11)]
+    for k, imp in enumerate(res.impacts):
+        u = G * T_C * e**k  # approach speed of impact k
+        np.testing.assert_allclose(imp["v_before"], [*v_t, -u], rtol=0, atol=1e-10)
+        np.testing.assert_allclose(imp["v_after"], [*v_t, e * u], rtol=0, atol=1e-10)
+        np.testing.assert_allclose(imp["u_after"], [*v_t, e * u], rtol=0, atol=1e-10)
+        np.testing.assert_allclose(imp["impulse"], [0.0, 0.0, M * (1 + e) * u], rtol=1e-9, atol=1e-20)
+        np.testing.assert_allclose([imp["w_before"], imp["w_after"]], [w_b, w_b], rtol=0, atol=1e-9)
+        spin = 0.5 * I * w_b @ w_b
+        assert imp["ke_before"] == pytest.approx(0.5 * M * (v_t @ v_t + u * u) + spin, rel=1e-9)
+        assert imp["ke_after"] == pytest.approx(0.5 * M * (v_t @ v_t + e * e * u * u) + spin, rel=1e-9)
+        assert imp["r"][2] == pytest.approx(A, abs=1e-13) and imp["admissible"] and imp["converged"]
+    impact_rows = res.trajectory[res.trajectory[:, 14] == 1]
+    np.testing.assert_allclose(impact_rows[:, 0], [T_C, T_C, t2, t2], rtol=0, atol=1e-11)
+    np.testing.assert_allclose(impact_rows[:, 6], G * T_C * np.array([-1, e, -e, e * e]), rtol=1e-9)
+    # between the bounces: z = a + e g t_c (t - t_c) - g (t - t_c)^2 / 2
+    between = res.trajectory[(res.trajectory[:, 0] > T_C + 1e-9) & (res.trajectory[:, 0] < t2 - 1e-9)]
+    tau = between[:, 0] - T_C
+    assert len(between) > 50 and np.all(between[:, 14] == 0)
+    np.testing.assert_allclose(between[:, 3], A + e * G * T_C * tau - 0.5 * G * tau**2, rtol=0, atol=1e-12)
+    tau = t_end - t2
+    z_end = A + e * e * G * T_C * tau - 0.5 * G * tau**2
+    assert res.final.r[2] == pytest.approx(z_end, abs=1e-12)
+    lost = 0.5 * M * (G * T_C) ** 2 * (1 - e * e) * (1 + e * e)
+    b = res.extra["energy_budget"]
+    assert b["lost_in_impacts_J"] == pytest.approx(lost, rel=1e-9)
+    assert b["start_J"] == pytest.approx(energy(A + H, [*v_t, 0.0], w_b), rel=1e-13)
+    assert b["end_J"] == pytest.approx(energy(z_end, [*v_t, e * e * G * T_C - G * tau], w_b), rel=1e-10)
+    assert b["input_by_surface_J"] == 0.0 and b["lost_at_landings_J"] == 0.0 and b["relative_residual"] < 1e-9
+    s = res.summary()
+    assert s["bounces"] == 2 and s["energy_dissipated_by_impacts_J"] == pytest.approx(lost, rel=1e-9)
+    assert s["impacts_creating_energy"] == 0 and res.extra["landings"] == 0
+    np.testing.assert_allclose(s["mean_transport_velocity_m_s"], v_t, rtol=1e-12)
+
+
+def test_spinning_turned_sphere_sticks_with_the_closed_form_impulse():
+    """Sphere, K = diag(7/(2m), 7/(2m), 1/m) at R = (0, 0, -a): P_t = -(1 + e_t) 2m/7 u_t, P_n = -(1 + e_n) m u_n;
+    v+ = v + P/m, w+ = w + R x P / I, so u_t+ = -e_t u_t and u_n+ = -e_n u_n."""
+    e_n, e_t = 0.5, 0.3
+    q0 = np.array([0.3, -0.5, 0.7, 0.4]) / np.linalg.norm([0.3, -0.5, 0.7, 0.4])
+    Q0, w_b, v_t = quaternion_matrix(q0), np.array([12.0, -8.0, 6.0]), np.array([0.04, -0.03])
+    law = ImpactLaw("coulomb", e_n=e_n, e_t=e_t, mu=math.inf, check_printed=False)
+    res = motion.simulate(sphere(law), numerics(), state(v=(*v_t, 0.0), w=w_b, q=q0), T_C + 1e-3)
+    imp = res.impacts[0]
+    assert imp["t"] == pytest.approx(T_C, abs=1e-12)
+    R = np.array([0.0, 0.0, -A])
+    w = Q0 @ w_b  # a sphere's spin stays put in flight
+    v = np.array([*v_t, -G * T_C])
+    u = v + np.cross(w, R)
+    P = np.array([*(-(1 + e_t) * 2 * M / 7 * u[:2]), -(1 + e_n) * M * u[2]])
+    v1, w1 = v + P / M, w + np.cross(R, P) / I
+    np.testing.assert_allclose(imp["u_before"], u, rtol=1e-9)
+    np.testing.assert_allclose(imp["impulse"], P, rtol=1e-9)
+    np.testing.assert_allclose(imp["v_after"], v1, rtol=1e-9)
+    np.testing.assert_allclose(imp["w_before"], w_b, rtol=1e-9)
+    Q = Q0 @ rodrigues(w_b, T_C)  # the sphere has turned about its spin axis
+    np.testing.assert_allclose(imp["w_after"], Q.T @ w1, rtol=1e-8)  # body axes
+    np.testing.assert_allclose(imp["u_after"], [*(-e_t * u[:2]), -e_n * u[2]], rtol=1e-9)
+    after = res.trajectory[res.trajectory[:, 14] == 1][1]
+    np.testing.assert_allclose(after[11:14], w1, rtol=1e-9)  # world axes in the trajectory
+    assert imp["ke_after"] == pytest.approx(0.5 * M * v1 @ v1 + 0.5 * I * w1 @ w1, rel=1e-9)
+    assert res.extra["energy_budget"]["lost_in_impacts_J"] == pytest.approx(
+        0.5 * M * v @ v + 0.5 * I * w @ w - imp["ke_after"], rel=1e-9)
+
+
+def test_the_impact_limit_stops_at_the_contact_after_the_last_impact():
+    e = 0.6
+    t3 = T_C * (1 + 2 * e + 2 * e * e)
+    res = motion.simulate(sphere(frictionless(e)), numerics(max_impacts=2), state(), 1.0)
+    assert len(res.impacts) == 2
+    assert res.final.t == pytest.approx(t3, abs=1e-11) and res.time_in["flight"] == pytest.approx(t3, abs=1e-11)
+    assert res.warnings == [f"stopped at t = {res.final.t:.6g} s after numerics.max_impacts = 2 impacts"]
+    assert f"{res.final.t:.6g}" == f"{t3:.6g}"
+
+
+def test_a_plastic_drop_lands_and_rolls_at_five_sevenths():
+    """e = 0: the drop stops at t_c and lands (one landing, no landing loss: the impact left no normal velocity);
+    sliding with mu, the sphere rolls at 5/7 of v0 and sliding loses m v0^2 / 7."""
+    v0, mu = 0.05, 0.4
+    t_roll = 2 * v0 / (7 * mu * G)  # slip stops: v = v0 - mu g t = 5/7 v0
+    t_end = T_C + 2 * t_roll
+    res = motion.simulate(sphere(frictionless(0.0), mu=mu), numerics(), state(v=(v0, 0.0, 0.0)), t_end)
+    assert len(res.impacts) == 1 and res.extra["landings"] == 1
+    assert res.time_in["flight"] == pytest.approx(T_C, abs=1e-12)
+    assert res.time_in["sliding"] == pytest.approx(2 * t_roll, abs=1e-12)
+    np.testing.assert_allclose(res.final.v, [5 / 7 * v0, 0.0, 0.0], rtol=0, atol=1e-9)
+    assert res.final.r[2] == A
+    # distance: v0 t - mu g t^2 / 2 while slipping, then 5/7 v0
+    x = v0 * T_C + v0 * t_roll - 0.5 * mu * G * t_roll**2 + 5 / 7 * v0 * t_roll
+    assert res.final.r[0] == pytest.approx(x, rel=1e-8)
+    np.testing.assert_allclose(res.trajectory[-1, 11:14], [0.0, 5 / 7 * v0 / A, 0.0], rtol=0, atol=1e-6)
+    b = res.extra["energy_budget"]
+    assert b["lost_in_impacts_J"] == pytest.approx(0.5 * M * (G * T_C) ** 2, rel=1e-9)
+    assert b["lost_at_landings_J"] == pytest.approx(0.0, abs=1e-12 * M * v0**2)
+    assert b["lost_in_sliding_J"] == pytest.approx(M * v0**2 / 7, rel=1e-7)
+    assert b["relative_residual"] < 1e-9
+    sliding_rows = res.trajectory[res.trajectory[:, 14] == 2]
+    assert np.all(sliding_rows[:, 3] == A) and np.all(sliding_rows[:, 6] == 0.0)
+    s = res.summary()
+    assert s["time_fraction"]["flight"] == pytest.approx(T_C / t_end, rel=1e-10)
+    assert s["time_fraction"]["sliding"] == pytest.approx(2 * t_roll / t_end, rel=1e-10)
+
+
+@pytest.mark.parametrize("rotation", [True, False])
+def test_released_on_the_plane_moving_down_lands_with_the_plastic_loss(rotation):
+    """On the plane with normal velocity -u and spin about the normal: the landing impulse m u through the centre
+    loses m u^2 / 2 and keeps the spin; it is not counted as a landing of the loop."""
+    u, v_t = 0.02, (0.0, 0.0)
+    w_b = (0.0, 0.0, 30.0) if rotation else (0.0, 0.0, 0.0)
+    res = motion.simulate(sphere(frictionless(0.5), rotation=rotation), numerics(),
+                          state(z=A, v=(*v_t, -u), w=w_b), 0.002)
+    assert res.impacts == [] and res.extra["landings"] == 0
+    b = res.extra["energy_budget"]
+    assert b["lost_at_landings_J"] == pytest.approx(0.5 * M * u * u, rel=1e-12)
+    np.testing.assert_allclose(res.trajectory[0, 4:7], [*v_t, -u], rtol=0, atol=0)
+    assert res.trajectory[0, 14] == 0 and np.all(res.trajectory[1:, 14] == 2)
+    assert np.all(res.trajectory[1:, 6] == 0.0)
+    np.testing.assert_allclose(res.final.w, w_b, rtol=0, atol=1e-9)
+    assert res.time_in == {"flight": 0.0, "sliding": pytest.approx(0.002, abs=1e-15)}
+
+
+def test_work_of_a_vibrating_plate_is_the_sum_of_its_impulses_times_its_velocity():
+    """Plate s = A0 sin(w t + phi) e_z at Gamma = 2 (7 impacts in 6 periods, no landing): input = sum of P_z A0 w cos(w t_i + phi) over the impacts, and
+    the relative normal velocity reverses with e at each."""
+    e, freq, phase = 0.5, 25.0, 0.4
+    om = 2 * math.pi * freq
+    amp = 2.0 * G / om**2
+    model = sphere(frictionless(e), amplitude=amp, freq=freq, phase=phase, rotation=False)
+    num = motion.Numerics(tolerance=1e-11, scan_step=1 / freq / 40, sample_interval=1e-3)
+    res = motion.simulate(model, num, state(z=A + 1e-4), 6 / freq)
+    assert len(res.impacts) == 7 and res.extra["landings"] == 0
+    t = np.array([i["t"] for i in res.impacts])
+    P = np.array([i["impulse"] for i in res.impacts])
+    u0, u1 = np.array([i["u_before"] for i in res.impacts]), np.array([i["u_after"] for i in res.impacts])
+    np.testing.assert_allclose(u1[:, 2], -e * u0[:, 2], rtol=1e-9)
+    np.testing.assert_allclose(P[:, 2], -M * (1 + e) * u0[:, 2], rtol=1e-9)
+    b = res.extra["energy_budget"]
+    assert b["input_by_surface_J"] == pytest.approx(np.sum(P[:, 2] * amp * om * np.cos(om * t + phase)), rel=1e-12)
+    # absolute energy at the start: the plate moves at amp om cos(phase) and sits at amp sin(phase)
+    s0, ds0 = amp * math.sin(phase), amp * om * math.cos(phase)
+    assert b["start_J"] == pytest.approx(0.5 * M * ds0**2 + M * G * (A + 1e-4 + s0), rel=1e-12)
+    assert b["relative_residual"] < 1e-9
