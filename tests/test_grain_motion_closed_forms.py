@@ -247,3 +247,56 @@ def test_work_of_a_vibrating_plate_is_the_sum_of_its_impulses_times_its_velocity
     s0, ds0 = amp * math.sin(phase), amp * om * math.cos(phase)
     assert b["start_J"] == pytest.approx(0.5 * M * ds0**2 + M * G * (A + 1e-4 + s0), rel=1e-12)
     assert b["relative_residual"] < 1e-9
+
+
+def test_tilted_ellipsoid_landing_keeps_the_momentum_about_the_contact_and_drops_the_tilting_spin():
+    """An ellipsoid resting tilted on the plane with normal velocity -u: the plastic impulse P = u / K_nn e_z at
+    the lowest point R (K = 1/m - [R]x I^-1 [R]x, by hand) turns it by I^-1 (R x P); the landing keeps the spin
+    about the normal and drops the tilt, so it loses m u^2 / 2 - I_zz w_z^2 / 2."""
+    axes, m, u = np.array([3e-3, 2e-3, 1e-3]), 4e-6, 0.02
+    q0 = np.array([0.8, 0.3, -0.4, 0.2]) / np.linalg.norm([0.8, 0.3, -0.4, 0.2])
+    Q = quaternion_matrix(q0)
+    n = Q.T @ EZ  # the plane's normal in body axes
+    R = -Q @ (axes**2 * n) / np.linalg.norm(axes * n)  # lowest point, from the centre
+    I_w = Q @ np.diag(m / 5 * (np.sum(axes**2) - axes**2)) @ Q.T
+
+    def skew(x):
+        return np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]])
+
+    K = np.eye(3) / m - skew(R) @ np.linalg.inv(I_w) @ skew(R)
+    P = np.array([0.0, 0.0, u / K[2, 2]])
+    w_z = (np.linalg.inv(I_w) @ np.cross(R, P))[2]
+    assert abs(w_z) > 0.1  # the landing spins it about the normal
+    model = motion.Model(tuple(axes), m, (0.0, 0.0, -G), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
+                         frictionless(0.5), 0.3, motion.Effects())
+    st = motion.State(0.0, np.array([0.0, 0.0, np.linalg.norm(axes * n)]), np.array([0.0, 0.0, -u]), q0,
+                      np.zeros(3))
+    res = motion.simulate(model, numerics(), st, 1e-6)
+    landed = res.trajectory[1]
+    assert landed[0] == 0.0 and landed[14] == 2
+    np.testing.assert_allclose(landed[4:7], 0.0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(landed[11:14], [0.0, 0.0, w_z], rtol=1e-9, atol=1e-12 * abs(w_z))
+    lost = 0.5 * m * u * u - 0.5 * I_w[2, 2] * w_z**2
+    assert res.extra["energy_budget"]["lost_at_landings_J"] == pytest.approx(lost, rel=1e-9)
+
+
+def test_summary_counts_and_rates_of_a_given_motion():
+    """Motion.summary of a hand-made result starting at t = 0.3 s: rates over the duration 0.5 s, the impact
+    counts by verdict (None: not checked), the energy lost in impacts, extra and warnings passed through."""
+    def impact(ke0, ke1, admissible, printed, gain):
+        return {"ke_before": ke0, "ke_after": ke1, "admissible": admissible, "printed_admissible": printed,
+                "printed_creates_energy": gain}
+
+    impacts = [impact(5.0, 2.0, True, False, True), impact(3.0, 4.0, False, None, None),
+               impact(1.0, 0.5, True, True, False), impact(2.0, 1.0, True, False, False)]
+    start = motion.State(0.3, np.array([1.0, 2.0, 0.1]), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3))
+    final = motion.State(0.8, np.array([1.2, 1.9, 0.4]), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3))
+    res = motion.Motion(np.zeros((0, 15)), impacts, {"flight": 0.4, "sliding": 0.1}, ["w1"], start, final,
+                        {"landings": 3})
+    assert res.summary() == {
+        "duration_s": pytest.approx(0.5, abs=1e-15),
+        "mean_transport_velocity_m_s": [pytest.approx(0.4, rel=1e-12), pytest.approx(-0.2, rel=1e-12)],
+        "bounces": 4, "time_fraction": {"flight": pytest.approx(0.8, rel=1e-12), "sliding": pytest.approx(0.2, rel=1e-12)},
+        "energy_dissipated_by_impacts_J": pytest.approx(3.0 - 1.0 + 0.5 + 1.0, rel=1e-15),
+        "impacts_creating_energy": 1, "impacts_where_printed_law_is_inadmissible": 2,
+        "impacts_where_printed_law_creates_energy": 1, "landings": 3, "warnings": ["w1"]}
