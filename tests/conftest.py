@@ -12,7 +12,8 @@ compiles it in each xdist worker. tests/test_elastic_compiled.py proves the comp
 Under mutmut (tests/mutate.py, ``MUTANT_UNDER_TEST`` set) no builder process is started: mutmut reaps every child
 of its main process as one of its workers (a builder's exit stops the run with a KeyError), and a builder would
 compile the unmutated package. A marked test compiles the mutated copy in the foreground (once, in mutmut's main
-process, whose forks inherit it); an unmarked grain scene on ``engine = "auto"`` runs the Python loop there.
+process, whose forks inherit it); an unmarked grain scene on ``engine = "auto"`` runs the Python loop there, even
+once a marked test has built the mutated copy's compiled engine (the motion shard mutates the Python loop).
 """
 import importlib
 import os
@@ -61,8 +62,13 @@ def _under_mutmut() -> bool:
 def _no_builder_under_mutmut(request, monkeypatch):
     if _under_mutmut() and not _marked(request.node):
         from symmech.core import build
+        from symmech.grain import motion_scene
 
         monkeypatch.setattr(build.Engine, "warm_in_background", lambda self: False)
+        choose = motion_scene.choose_engine
+        monkeypatch.setattr(motion_scene, "choose_engine", lambda sc, num=None, duration=None: (
+            ("python", "tests under mutmut (tests/conftest.py)") if (num or sc.numerics).engine == "auto"
+            else choose(sc, num, duration)))
 
 
 @pytest.fixture(autouse=True)
