@@ -300,3 +300,54 @@ def test_summary_counts_and_rates_of_a_given_motion():
         "energy_dissipated_by_impacts_J": pytest.approx(3.0 - 1.0 + 0.5 + 1.0, rel=1e-15),
         "impacts_creating_energy": 1, "impacts_where_printed_law_is_inadmissible": 2,
         "impacts_where_printed_law_creates_energy": 1, "landings": 3, "warnings": ["w1"]}
+
+
+def test_rolling_start_with_spin_about_the_normal_samples_the_closed_form_spin(monkeypatch):
+    """Released on the plane at v0 along x with spin s about the normal: friction spins it up about y at
+    5 mu g t / (2a) until it rolls at 5/7 v0 (t_roll = 2 v0 / (7 mu g)); the spin about the normal stays. The
+    sliding rows sit at the sample times (from 0); progress is reported from inside the phase (at the rolling event)."""
+    v0, mu, s = 0.05, 0.4, 30.0
+    t_roll = 2 * v0 / (7 * mu * G)
+    t_end = 0.0015 + t_roll
+    monkeypatch.setattr(motion, "PROGRESS_INTERVAL", 0.0)
+    seen = []
+    res = motion.simulate(sphere(frictionless(0.0), mu=mu), numerics(), state(z=A, v=(v0, 0.0, 0.0), w=(0, 0, s)),
+                          t_end, on_step=seen.append)
+    rows = res.trajectory[res.trajectory[:, 14] == 2]
+    t = rows[:, 0]
+    np.testing.assert_allclose(t[:-2], np.arange(int(t_end / 1e-3) + 1) * 1e-3, rtol=0, atol=1e-15)
+    assert t[-2] == t[-1] == t_end  # the phase's end and the run's last row
+    w_y = np.minimum(5 * mu * G * t / (2 * A), 5 / 7 * v0 / A)
+    np.testing.assert_allclose(rows[:, 11:14], np.column_stack([0 * t, w_y, s + 0 * t]), rtol=0, atol=1e-6 * s)
+    np.testing.assert_allclose(rows[:, 4], np.maximum(v0 - mu * G * t, 5 / 7 * v0), rtol=0, atol=1e-9)
+    assert any(t_roll - 1e-9 < x < t_roll + 1e-9 for x in seen) and seen[0] == 0.0 and seen[-1] == t_end
+
+
+def test_bounces_shorter_than_the_scan_step_follow_the_geometric_series_until_the_landing():
+    """Drop with e = 0.6: contacts at t_c (1 + 2e (1 - e^k) / (1 - e)), rebounds at e^(k+1) sqrt(2 g h); from the
+    tenth on a flight (2 e^k sqrt(2h/g)) is shorter than the 1 ms scan step. The 21st rebound, 9.7e-6 m/s, is
+    below rest_velocity = 1e-5 m/s: it lands there."""
+    e = 0.6
+    k = np.arange(21)
+    t_k = T_C * (1 + 2 * e * (1 - e**k) / (1 - e))
+    res = motion.simulate(sphere(frictionless(e)), numerics(), state(), t_k[-1] + 0.002)
+    np.testing.assert_allclose([i["t"] for i in res.impacts], t_k, rtol=0, atol=1e-11)
+    np.testing.assert_allclose([i["v_after"][2] for i in res.impacts], e ** (k + 1) * G * T_C, rtol=1e-6)
+    assert res.extra["landings"] == 1 and res.time_in["flight"] == pytest.approx(t_k[-1], abs=1e-11)
+
+
+def test_energy_budget_of_a_vibrating_conveyor_closes_over_flights_impacts_and_sliding_phases():
+    """A point mass thrown off a 30 degree vibrating incline once a period (Gamma_v = 1.3): the surface's work
+    equals the change of energy plus the losses, summed over every phase."""
+    gam, om = math.radians(30), 2 * math.pi * 25
+    amp = 1.3 * G / (om**2 * math.sin(gam))
+    vib = flight.Vibration(amp, om, 0.3, (math.cos(gam), 0.0, math.sin(gam)))
+    g_k = (G * math.sin(math.radians(3)), 0.0, -G * math.cos(math.radians(3)))
+    model = motion.Model((A,) * 3, M, g_k, vib, frictionless(0.0), 0.4, motion.Effects(rotation=False))
+    num = motion.Numerics(tolerance=1e-11, scan_step=1 / 25 / 40, sample_interval=1e-3)
+    res = motion.simulate(model, num, state(z=A), 3 / 25)
+    b = res.extra["energy_budget"]
+    assert res.extra["landings"] >= 2 and b["lost_in_sliding_J"] > 0 and b["input_by_surface_J"] > 0
+    assert b["end_J"] - b["start_J"] == pytest.approx(
+        b["input_by_surface_J"] - b["lost_in_impacts_J"] - b["lost_at_landings_J"] - b["lost_in_sliding_J"],
+        abs=1e-9 * b["input_by_surface_J"])
