@@ -393,3 +393,16 @@ def test_the_impact_laws_warnings_reach_the_run():
                                 f"impact law 'printed' created energy: {ke0:.6g} J -> {ke1:.6g} J"]
     s = res.summary()
     assert s["impacts_creating_energy"] == 1 and s["impacts_where_printed_law_creates_energy"] == 1
+
+
+def test_a_start_given_as_tuples_runs_as_arrays():
+    """The start state may be any sequences (a non-unit quaternion too): released on the plane moving down at u, it
+    lands with the loss m u^2 / 2 and slides from the height a, turning about the normal."""
+    u = 0.02
+    st = motion.State(0.0, (0.0, 0.0, A), (0.0, 0.0, -u), (2.0, 0.0, 0.0, 0.0), (0.0, 0.0, 30.0))
+    res = motion.simulate(sphere(frictionless(0.5)), numerics(), st, 0.002)
+    assert res.extra["energy_budget"]["lost_at_landings_J"] == pytest.approx(0.5 * M * u * u, rel=1e-12)
+    t = res.trajectory[:, 0]
+    assert np.all(res.trajectory[1:, 3] == A)
+    np.testing.assert_allclose(res.trajectory[:, 7:11], np.column_stack([np.cos(15 * t), 0 * t, 0 * t, np.sin(15 * t)]),
+                               rtol=0, atol=1e-9)  # spinning about the normal at 30 rad/s
