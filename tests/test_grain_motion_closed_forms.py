@@ -356,14 +356,17 @@ def test_energy_budget_of_a_vibrating_conveyor_closes_over_flights_impacts_and_s
 
 @pytest.mark.slow  # 160 impacts: 2-8 s
 def test_a_hundred_bounces_within_the_chattering_window_end_in_sliding():
-    """e = 0.95 on a plate of period 1000 s (amplitude 1e-15 m, so the contacts are the still plate's): the n-th
-    contact is at t_c (1 + 2e (1 - e^n) / (1 - e)); the loop lands at the first impact that closes 100 impacts
-    within 1e-4 periods (0.1 s), although the rebounds are still far above rest_velocity."""
+    """e = 0.95 on a plate of amplitude 1e-15 m (so the contacts are the still plate's, at t_c (1 + 2e (1 - e^n) /
+    (1 - e))) whose period puts the window of 1e-4 periods between the spans of the last 99 and 98 gaps closing at
+    impact 159: the loop lands at impact 160, the first that closes 100 impacts within the window, although the
+    rebounds are still far above rest_velocity."""
     e = 0.95
-    model = sphere(frictionless(e), amplitude=1e-15, freq=1e-3, rotation=False)
     t = T_C * (1 + 2 * e * (1 - e ** np.arange(400)) / (1 - e))
-    n = next(k + 1 for k in range(99, 400) if t[k] - t[k - 99] < 0.1)
-    assert e**n * G * T_C > 10 * 1e-5
+    window = t[158] - t[59] - 0.5 * (t[158] - t[157])
+    model = sphere(frictionless(e), amplitude=1e-15, freq=1e-4 / window, rotation=False)
+    assert model.period * 1e-4 == pytest.approx(window, rel=1e-14)
+    n = next(k + 1 for k in range(99, 400) if t[k] - t[k - 99] < window)
+    assert n == 160 and e**n * G * T_C > 10 * 1e-5
     res = motion.simulate(model, numerics(), state(), t[n - 1] + 0.01)
     assert len(res.impacts) == n and res.extra["landings"] == 1
     np.testing.assert_allclose(res.impacts[-1]["t"], t[n - 1], rtol=0, atol=1e-10)
