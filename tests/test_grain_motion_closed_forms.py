@@ -409,3 +409,11 @@ def test_a_start_given_as_tuples_runs_as_arrays():
     assert np.all(res.trajectory[1:, 3] == A)
     np.testing.assert_allclose(res.trajectory[:, 7:11], np.column_stack([np.cos(15 * t), 0 * t, 0 * t, np.sin(15 * t)]),
                                rtol=0, atol=1e-9)  # spinning about the normal at 30 rad/s
+
+
+def test_released_at_rest_under_weak_gravity_slides_from_the_start():
+    """g = 0.5 m/s^2 still pushes the grain onto the plane: it slides from the start (no landing counted)."""
+    model = motion.Model((A,) * 3, M, (0.0, 0.0, -0.5), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
+                         frictionless(0.5), 0.4, motion.Effects())
+    res = motion.simulate(model, numerics(), state(z=A), 0.002)
+    assert res.extra["landings"] == 0 and res.time_in == {"flight": 0.0, "sliding": pytest.approx(0.002, abs=1e-15)}
