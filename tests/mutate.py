@@ -34,7 +34,8 @@ TROLLEY_TESTS = ["tests/test_trolley_physics.py", "tests/test_trolley_paper.py",
                  "tests/test_trolley_table_ends.py"]
 
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
-                      "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py", "-m", "not slow"]
+                      "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
+                      "tests/test_grain_motion_closed_forms.py", "-m", "not slow"]
 
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
