@@ -8,8 +8,15 @@ every worker asks for the build and the build lock lets one process per machine 
 The elastic trolley's default engine (``auto``) is the compiled one once built; tests not marked ``compiled_elastic`` run it on
 the Python engine (its reference, which they test; ``engine_reason`` says so), so that no unmarked test
 compiles it in each xdist worker. tests/test_elastic_compiled.py proves the compiled engine against it.
+
+Under mutmut (tests/mutate.py, ``MUTANT_UNDER_TEST`` set) no builder process is started: mutmut reaps every child
+of its main process as one of its workers (a builder's exit stops the run with a KeyError), and a builder would
+compile the unmutated package. A marked test compiles the mutated copy in the foreground (once, in mutmut's main
+process, whose forks inherit it); an unmarked grain scene on ``engine = "auto"`` runs the Python loop there, even
+once a marked test has built the mutated copy's compiled engine (the motion shard mutates the Python loop).
 """
 import importlib
+import os
 
 import pytest
 
@@ -32,7 +39,8 @@ def _marked(item) -> list:
 def pytest_collection_modifyitems(session, config, items):
     needed = {marker for item in items for marker in _marked(item)}
     for marker in sorted(needed):
-        importlib.import_module(ENGINES[marker]).ENGINE.warm_in_background()
+        if not _under_mutmut():
+            importlib.import_module(ENGINES[marker]).ENGINE.warm_in_background()
     if needed:
         items[:] = [item for item in items if not _marked(item)] + [item for item in items if _marked(item)]
 
@@ -46,10 +54,29 @@ def _elastic_reference_engine(request, monkeypatch):
                                                                                       "(tests/conftest.py)"))
 
 
+def _under_mutmut() -> bool:
+    return "MUTANT_UNDER_TEST" in os.environ
+
+
+@pytest.fixture(autouse=True)
+def _no_builder_under_mutmut(request, monkeypatch):
+    if _under_mutmut() and not _marked(request.node):
+        from symmech.core import build
+        from symmech.grain import motion_scene
+
+        monkeypatch.setattr(build.Engine, "warm_in_background", lambda self: False)
+        choose = motion_scene.choose_engine
+        monkeypatch.setattr(motion_scene, "choose_engine", lambda sc, num=None, duration=None: (
+            ("python", "tests under mutmut (tests/conftest.py)") if (num or sc.numerics).engine == "auto"
+            else choose(sc, num, duration)))
+
+
 @pytest.fixture(autouse=True)
 def _compiled_engine_built(request):
     for marker in _marked(request.node):
         engine = importlib.import_module(ENGINES[marker]).ENGINE
-        if not engine.wait_warm(BUILD_TIMEOUT):
+        if _under_mutmut():
+            engine.warm()
+        elif not engine.wait_warm(BUILD_TIMEOUT):
             pytest.fail(f"the {ENGINES[marker]} engine was not built within {BUILD_TIMEOUT:g} s (cache: "
                         f"{engine.cache_dir()}; `symmech warm` builds it in the foreground)")

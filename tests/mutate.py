@@ -35,6 +35,10 @@ TROLLEY_TESTS = ["tests/test_trolley_physics.py", "tests/test_trolley_paper.py",
 # the reactions' shards, from now on with the tests written against their survivors
 REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py", "tests/test_trolley_chord_frame.py"]
 
+GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
+                      "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
+                      "tests/test_grain_motion_closed_forms.py", "-m", "not slow"]
+
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
@@ -98,6 +102,12 @@ SHARDS = {
     "trolley_paper": ("symmech/trolley/model.py", REACTION_TESTS,
                       ["*.x_paper_case__*", "*.x_paper_lstar__*", "*.x_paper_lstar_derivative__*",
                        "*.x_small_angle_check__*"]),
+    # the grain motion loop (the Python reference engine): the tests that run motion.simulate; scenes on "auto" run
+    # the Python loop there (the mutated copy's numba cache is cold)
+    "motion": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS, ["*"]),
+    # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
+    # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
+    "engine_py": ("symmech/grain/compiled.py", ["tests/test_grain_compiled.py"], ["*"]),
     # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
     # and a child imports the unmutated package anyway
     "pipeline_output": ("symmech/core/pipeline.py",
@@ -128,7 +138,7 @@ def run_shard(name: str) -> int:
         if not (folder / link).is_symlink():
             (folder / link).symlink_to(ROOT / link, target_is_directory=True)
     (folder / "pyproject.toml").write_text(shard_pyproject(module, tests), "utf-8")
-    mutmut = [sys.executable, "-m", "mutmut"]  # the one installed for this interpreter, wherever its scripts are
+    mutmut = [sys.executable, "-m", "mutmut"]  # this interpreter's mutmut (a venv may see a system-wide one)
     print(f"== shard {name}: {module} against {' '.join(tests)}", flush=True)
     status = subprocess.call(mutmut + ["run", "--max-children", "1", *patterns], cwd=folder)
     listing = subprocess.run(mutmut + ["results", "--all", "true"], cwd=folder, capture_output=True, text=True).stdout
