@@ -36,6 +36,7 @@ import os
 import time
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 from timing import interleaved, machine, ratio
 
 from symmech.core import pipeline
@@ -138,7 +139,7 @@ def exudyn_transient(elements: int, steps: int, t) -> np.ndarray:
     """Chordwise tip deflection [m] at t (n,): ANCF Cable2D elements in the plane of rotation, the root
     node at the centre, its slope prescribed (cos Omega t, sin Omega t) (a clamp turning at Omega);
     from the exact cantilever mode at AMPLITUDE turning rigidly at Omega; generalized-alpha, ``steps``
-    (a multiple of len(t) - 1) steps; the tip's position turned into the rotating frame."""
+    steps; the tip's position turned into the rotating frame."""
     import exudyn as exu
     from exudyn.itemInterface import (CoordinateConstraint, MarkerNodeCoordinate, NodePoint2DSlope1,
                                       NodePointGround, ObjectANCFCable2D, SensorNode)
@@ -164,15 +165,15 @@ def exudyn_transient(elements: int, steps: int, t) -> np.ndarray:
     mbs.Assemble()
     settings = exu.SimulationSettings()
     settings.solution.file.write = False
-    settings.solution.sensors.writePeriod = t[-1] / steps
+    settings.solution.sensors.writePeriod = 0.5 * t[-1] / steps
     settings.timeIntegration.numberOfSteps = steps
     settings.timeIntegration.endTime = t[-1]
     settings.timeIntegration.verboseMode = 0
     settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
     mbs.SolveDynamic(settings)
-    data = mbs.GetSensorStoredData(sensor)[::steps // (len(t) - 1)]
-    assert np.allclose(data[:, 0], t, atol=1e-9 * t[-1]), "Exudyn's sensor rows miss the output times"
-    return -np.sin(OMEGA * t) * data[:, 1] + np.cos(OMEGA * t) * data[:, 2]
+    data = mbs.GetSensorStoredData(sensor)  # every step; Exudyn shortens steps where Newton fails
+    x, y = CubicSpline(data[:, 0], data[:, 1:3])(t).T  # 4th order: ~1e-9 of the amplitude at >= 4000 steps
+    return -np.sin(OMEGA * t) * x + np.cos(OMEGA * t) * y
 
 
 def crossing_frequency(t, w) -> float:
