@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cfb45ad98d4eaed7be2339e7aa8ae80bb9ae41374c702fb044287491417a95cc
-# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
+# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4512473cd9d0051fd60f0bc6d25ee22b6adb187869b40c5c127d53d0954e33f4
-# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
+# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
 # body sha256 9c2027bc7d6b7b94a8984d2692010c64848c9845ef7c4b0c7cf0258cfc8dbeaf
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 23b920eadda24d85b78c8a7a6433fb8fdefafc33c54d426f7a868dbe1567edc2
-# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
+# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
 # body sha256 d544c76fe5fce17c7b9fbe3374d8134576b1221631070497eab3066a92eaea51
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 80b2624f70d70075e36559eeb226ec93f6c7e95963eecf2e1d103f0e20301875
-# source key ac89cbf0146d9b5c82f20e3a9f8b42f2ecf3d95a42b26c51e61d26db34233697
+# source key 99b2c852786ad7ec951edd3f2495ae7b2edff14424d0d9ab798bbc6250781feb
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

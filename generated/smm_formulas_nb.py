@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c700c11a79c3d20b3f02e3e1fdb2fb9c52de7f28b4fa3847f7e005ea0435b397
-# source key ac89cbf0146d9b5c82f20e3a9f8b42f2ecf3d95a42b26c51e61d26db34233697
+# source key 99b2c852786ad7ec951edd3f2495ae7b2edff14424d0d9ab798bbc6250781feb
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

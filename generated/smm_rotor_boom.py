@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4e7e7e695a8497f75034ae1bee862f0b7aa4a3f2a7a20c7167bd8a2ded2656b9
-# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
+# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad2960243a79b1fc9e572ff5bd52fcf67abdcef30b031ec4a542ba6530eb8c1b
-# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
+# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
 # body sha256 6f95b396ece06dc40ac0b65a2631b5864d2d21cd104805fc81a45a64c4ee5156
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

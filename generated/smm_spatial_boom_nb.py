@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5a900257343ef64aee5c4c2806327d0a9af011badf5cd46c1fda5a37207d7e55
-# source key 5963e49d4d94278695f19d98570a117f09db3da89603b19b43d68e7f2b4480fc
+# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
 # body sha256 04bf47ab8e9427efc868d6175106ac8ae9d889c2cba8aba24250ac4cc045f3b3
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
