@@ -81,20 +81,19 @@ def _used_modules(summary: dict) -> list[str] | None:
 
 
 def _specs(package: str | None, used: list[str] | None) -> list:
-    """ModuleSpecs of the paper package: those named in ``used`` (derived or printed), else
-    every derived one. Only this package's derivations run, and no more than needed, each once per
-    process and shared with ``codegen`` and ``latex`` (:func:`symmech.core.codegen.derive`)."""
+    """ModuleSpecs of the paper package: those named in ``used`` (derived or printed; only their own
+    derivation modules run, by the generated index), else every derived one. Each derivation runs once per
+    process, shared with ``codegen`` and ``latex`` (:func:`symmech.core.codegen.derive`)."""
     from symmech.core import codegen
+    from symmech.generated import MODULES
 
     if package is None:
         return []
-    specs = []
-    for module in codegen.paper_modules(("derive", "printed") if used else ("derive",)):
-        if module.__name__.startswith(f"symmech.{package}."):
-            specs += [s for s in codegen.derive(module.__name__)[0] if not used or s.name in used]
-            if used and set(used) <= {s.name for s in specs}:
-                break
-    return specs
+    if used:
+        producers = sorted({MODULES[name] for name in used if MODULES.get(name, "").startswith(f"symmech.{package}.")})
+        return [s for module in producers for s in codegen.derive(module)[0] if s.name in used]
+    return [s for module in codegen.paper_modules(("derive",)) if module.__name__.startswith(f"symmech.{package}.")
+            for s in codegen.derive(module.__name__)[0]]
 
 
 def derivations(summary: dict, package: str | None) -> list[Derivation]:
