@@ -60,6 +60,9 @@ def test_a_cold_auto_run_runs_the_python_engine_and_starts_the_builder(cold, mon
     cold.clear()
     elastic_scene.simulate(loaded("python", t_end=0.03, steps=10).setup.elastic)
     assert cold == []  # an explicit engine starts no builder
+    monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("python", "another reason"))
+    elastic_scene.simulate(loaded(t_end=0.03, steps=10).setup.elastic)
+    assert cold == []  # nor does `auto` when the Python engine runs for another reason (tests/conftest.py's)
 
 
 def test_the_estimate_names_the_engine_and_what_a_first_run_costs(cold, monkeypatch):
