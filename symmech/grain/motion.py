@@ -287,7 +287,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
                     warnings.append(f"stopped at t = {st.t:.6g} s after numerics.max_impacts = "
                                     f"{num.max_impacts} impacts")
                     break
-                st, u_n = _bounce(model, num, st, impacts, rec, budget, warnings)
+                st, u_n = _bounce(model, st, impacts, rec, budget, warnings)
             else:
                 u_n = 0.0  # touching without approaching: resting on the plane
             # Resting (no separating velocity the numerics resolve) on a plane that pushes: slide.
@@ -325,7 +325,7 @@ def rocking_warning(count: int) -> str:
             "and it flew on")
 
 
-def _bounce(model: Model, num: Numerics, st: State, impacts: list, rec: _Recorder, budget: _Budget,
+def _bounce(model: Model, st: State, impacts: list, rec: _Recorder, budget: _Budget,
             warnings: list):
     """An impact at ``st``, logged and booked: (state after, normal contact velocity after [m/s]; zero when the
     impacts have become a chattering sequence too dense to follow, which is summed into sliding)."""
