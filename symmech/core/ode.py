@@ -197,11 +197,22 @@ def radau_dense_at(t, t_old, h, Q):
     return y
 
 
-def radau_buffers(n: int) -> tuple:
+@jit
+def radau_buffers(n):
     """Jacobian J (n, n), LU factors and pivots (real LUr, pr; complex LUc, pc) and interpolant Q (1, 4 n) of
     an n-dimensional Radau solve, in the order :func:`make`'s ``radau_step`` takes them."""
     return (np.empty((n, n)), np.empty((n, n)), np.empty(n, dtype=np.int64), np.empty((n, n), dtype=np.complex128),
             np.empty(n, dtype=np.int64), np.empty((1, 4 * n)))
+
+
+@jit
+def radau_dense_until(Y, k, t_eval, t_stop, t_old, h, Q):
+    """Rows Y[k], Y[k + 1], … at the output times t_eval[k…] <= t_stop from the collocation polynomial Q
+    (1, 4 n) of the step (t_old, h); returns the next k."""
+    while k < t_eval.size and t_eval[k] <= t_stop:
+        Y[k] = radau_dense_at(t_eval[k], t_old, h, Q[0])
+        k += 1
+    return k
 
 
 # --------------------------------------------------------------------------- steppers of one rhs
@@ -499,9 +510,7 @@ def _make_solve(rhs, jac, events):
             Y[k] = y
             k += 1
         K = np.empty((DOP_EXTENDED, n))
-        J, LUr, LUc = np.empty((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
-        pr, pc = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
-        Q = np.empty((1, 4 * n))
+        J, LUr, pr, LUc, pc, Q = radau_buffers(n)
         if method == RADAU:
             st = radau_start(t, y, f, t_end, cargs, rtol, atol, J)
             h_abs = 0.0

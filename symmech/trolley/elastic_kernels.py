@@ -302,9 +302,7 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol):
     _rhs(t, y, args, f)
     Y[0] = y
     k = 1
-    J, LUr, LUc = np.empty((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
-    pr, pc = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
-    Q = np.empty((1, 4 * n))
+    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(n)
     st = _radau_start(t, y, f, t_end, args, rtol, atol, J)
     for step in range(MAX_STEPS):
         if not t < t_end:
@@ -312,9 +310,7 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol):
         t_new, y_new, f_new, ok = _radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             return Y, step, int(calls[0]), ode.STEP_TOO_SMALL
-        while k < t_eval.size and t_eval[k] <= t_new:
-            Y[k] = ode.radau_dense_at(t_eval[k], t, t_new - t, Q[0])
-            k += 1
+        k = ode.radau_dense_until(Y, k, t_eval, t_new, t, t_new - t, Q)
         t, y, f = t_new, y_new, f_new
     return Y, MAX_STEPS, int(calls[0]), ode.TOO_MANY_STEPS
 
@@ -510,9 +506,7 @@ def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
     _rhs_traction(t, y, args, f)
     Y[0] = y
     k = 1
-    J, LUr, LUc = np.empty((n, n)), np.empty((n, n)), np.empty((n, n), dtype=np.complex128)
-    pr, pc = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
-    Q = np.empty((1, 4 * n))
+    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(n)
     st = _traction_start(t, y, f, t_end, args, rtol, atol, J)
     status, steps = ode.TOO_MANY_STEPS, MAX_STEPS
     for step in range(MAX_STEPS):
@@ -525,9 +519,7 @@ def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
         if not ok:
             status, steps = ode.STEP_TOO_SMALL, step
             break
-        while k < t_eval.size and t_eval[k] <= t_new:
-            Y[k] = ode.radau_dense_at(t_eval[k], t, t_new - t, Q[0])
-            k += 1
+        k = ode.radau_dense_until(Y, k, t_eval, t_new, t, t_new - t, Q)
         t, y, f = t_new, y_new, f_new
     nfev = int(calls[0])
     dV = np.full(t_eval.size, np.nan)
