@@ -77,7 +77,8 @@ def simulate(setup: Setup, **kw) -> dict:
     if name == "compiled":
         from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
 
-        elastic_compiled.ENGINE.warm()  # compile under the build lock, or load what a concurrent builder made
+        if elastic_compiled.ENGINE.cold():  # compile under the build lock, or load what a concurrent builder made
+            elastic_compiled.ENGINE.warm()
         out = elastic_compiled.simulate(setup.system, setup.drive, setup.t, **{**start, **kw})
         out["engine_reason"] = out["engine_reason"] or why
         return out
