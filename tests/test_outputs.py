@@ -181,8 +181,11 @@ def wait_for(path: Path, proc: subprocess.Popen, seconds=60.0) -> None:
 def held_run(tmp_path: Path, out: Path, stage: str) -> tuple[subprocess.Popen, Path]:
     ready = tmp_path / f"ready-{stage}"
     text = scene(tmp_path, f"held-{stage}", hold=stage, ready=str(ready), release=str(tmp_path / "go"))
+    # SIGINT restored to its default: a shell's background job (`pytest &`) passes it on ignored, and
+    # Python then installs no KeyboardInterrupt handler, so the interrupt under test would never arrive
     proc = subprocess.Popen([*PROBE_CLI, "run", text, "--out", str(out), "--quiet"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     wait_for(ready, proc)
     return proc, ready
 
