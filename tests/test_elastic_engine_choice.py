@@ -52,6 +52,13 @@ def test_auto_on_a_cold_cache_answers_with_the_python_engine_unless_compiling_pa
     assert cold == []  # choosing starts nothing
 
 
+def test_the_cold_reason_says_when_no_builder_will_run(cold, monkeypatch):
+    monkeypatch.setenv("SYMMECH_BACKGROUND_BUILD", "0")  # the real warm_in_background would start none
+    assert choose(loaded().setup.elastic) == ("python", "auto: the compiled engine is not built yet; no background "
+                                              "build (SYMMECH_BACKGROUND_BUILD=0) (`symmech warm --engine elastic` "
+                                              "builds it now)")
+
+
 def test_a_cold_auto_run_runs_the_python_engine_and_starts_the_builder(cold, monkeypatch):
     monkeypatch.setattr(elastic_scene, "engine", choose)
     out = elastic_scene.simulate(loaded(t_end=0.03, steps=10).setup.elastic)

@@ -58,6 +58,17 @@ def test_auto_on_a_cold_cache_answers_with_the_python_engine_and_starts_one_buil
     assert kw["start_new_session"] is True
 
 
+def test_no_builder_with_background_builds_off(tmp_path, cold_cache, monkeypatch):
+    """SYMMECH_BACKGROUND_BUILD=0 (CI jobs, containers): a cold `auto` run answers on the Python engine, starts
+    no builder, and its summary says so."""
+    monkeypatch.setenv("SYMMECH_BACKGROUND_BUILD", "0")
+    out = tmp_path / "out"
+    assert main(["run", str(scene_file(tmp_path, 0.05)), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["engine"] == "python" and "no background build" in summary["engine_reason"]
+    assert cold_cache == []
+
+
 def test_auto_compiles_first_when_the_python_engine_would_take_longer(tmp_path, cold_cache):
     """1000 s of the default scene: ~1e5 impacts, ~1500 s on the Python loop against 80 s of compilation
     plus 1/50 of that: auto waits for the compile, as `compiled` does, and the estimate says so."""

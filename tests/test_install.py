@@ -23,7 +23,9 @@ SCENES = sorted((ROOT / "scenes").glob("*.toml"))
 NOT_SOURCE = shutil.ignore_patterns(".git", "build", "dist", "*.egg-info", "__pycache__", ".*cache",
                                     ".hypothesis", "out", "out-*")
 
-pytestmark = pytest.mark.slow
+# one worker builds the wheel once; its tests share one numba cache, in which the no-C-compiler test builds the
+# grain engine first (so the bundled grain scenes then run compiled) and no run starts a background builder
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_install")]
 
 
 @pytest.fixture(scope="module")
@@ -44,10 +46,37 @@ def installed(tmp_path_factory):
     return venv / "bin", work
 
 
+def run_env(installed, **more) -> dict:
+    """The environment of the installed commands: the module's numba cache, no background builder."""
+    bin_, _ = installed
+    return {**os.environ, "NUMBA_CACHE_DIR": str(bin_.parents[1] / "nb"), "SYMMECH_BACKGROUND_BUILD": "0", **more}
+
+
 def symmech(installed, *args, timeout=900) -> subprocess.CompletedProcess:
     bin_, work = installed
     return subprocess.run([bin_ / "symmech", *map(str, args)], cwd=work, capture_output=True, text=True,
-                          timeout=timeout)
+                          timeout=timeout, env=run_env(installed))
+
+
+def test_main_job_compiles_and_runs_without_a_c_compiler(installed, tmp_path):
+    """Issue 14: a machine without a C compiler runs everything. The README's main job with only the venv's
+    bin on PATH (no cc, gcc or clang reachable, CC pointing nowhere) and an empty numba cache, so the grain
+    engine is compiled here (`symmech warm`; numba emits machine code through LLVM, no C toolchain)."""
+    bin_, work = installed
+    assert not any(shutil.which(cc, path=str(bin_)) for cc in ("cc", "gcc", "clang"))
+    env = run_env(installed, PATH=str(bin_), CC=str(tmp_path / "no-cc"))
+    cache = Path(env["NUMBA_CACHE_DIR"])
+    assert not cache.exists()  # the first test of the module to use it
+    warm = subprocess.run([bin_ / "symmech", "warm", "--engine", "grain"], cwd=work, env=env, capture_output=True,
+                          text=True, timeout=900)
+    assert warm.returncode == 0 and str(cache) in warm.stdout, warm.stderr
+    scene = next((bin_.parent / "lib").glob("python*/site-packages/symmech/scenes/grain_default.toml"))
+    proc = subprocess.run([bin_ / "symmech", "run", scene, "--out", "no_cc", "--quiet"], cwd=work, env=env,
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    summary = assert_valid_output(work / "no_cc")
+    assert summary["kind"] == "grain" and summary["engine"] == "compiled"
+    assert any(cache.rglob("*.nbi"))  # compiled here, cached there
 
 
 def test_the_package_imported_is_the_installed_one(installed):
@@ -92,20 +121,3 @@ def test_every_bundled_scene_runs_from_the_installed_package(installed, scene):
     assert proc.returncode == 0, proc.stderr
     assert assert_valid_output(work / scene.stem)["kind"] == tomllib.loads(scene.read_text())["kind"]
 
-
-def test_main_job_compiles_and_runs_without_a_c_compiler(installed, tmp_path):
-    """Issue 14: a machine without a C compiler runs everything. The README's main job with only the venv's
-    bin on PATH (no cc, gcc or clang reachable, CC pointing nowhere) and an empty numba cache, so the grain
-    engine is compiled here (`symmech warm`; numba emits machine code through LLVM, no C toolchain)."""
-    bin_, work = installed
-    assert not any(shutil.which(cc, path=str(bin_)) for cc in ("cc", "gcc", "clang"))
-    env = {**os.environ, "PATH": str(bin_), "CC": str(tmp_path / "no-cc"), "NUMBA_CACHE_DIR": str(tmp_path / "nb")}
-    warm = subprocess.run([bin_ / "symmech", "warm"], cwd=work, env=env, capture_output=True, text=True, timeout=900)
-    assert warm.returncode == 0 and str(tmp_path / "nb") in warm.stdout, warm.stderr
-    scene = next((bin_.parent / "lib").glob("python*/site-packages/symmech/scenes/grain_default.toml"))
-    proc = subprocess.run([bin_ / "symmech", "run", scene, "--out", "no_cc", "--quiet"], cwd=work, env=env,
-                          capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stderr
-    summary = assert_valid_output(work / "no_cc")
-    assert summary["kind"] == "grain" and summary["engine"] == "compiled"
-    assert any((tmp_path / "nb").rglob("*.nbi"))  # compiled here, cached there

@@ -6,17 +6,28 @@ lock (``fcntl.flock`` on a file beside the cache: the OS releases it when its ho
 builder never blocks later builds); a process that waits for the lock then loads what the holder built.
 numba writes each cache file whole (a temporary file renamed), so an interrupted build leaves none half
 written. :meth:`Engine.warm_in_background` starts a detached builder (``symmech warm --engine NAME
---background``, its own session: Ctrl-C or SIGTERM of the caller does not reach it).
+--background``, its own session: Ctrl-C or SIGTERM of the caller does not reach it), unless
+``SYMMECH_BACKGROUND_BUILD=0`` (CI jobs and containers that warm their cache on purpose, or never want a
+process that outlives the run).
 """
 from __future__ import annotations
 
 import fcntl
+import os
 import subprocess
 import sys
 import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
+
+
+COLD = "auto: the compiled engine is not built yet"  # how every cold-cache reason starts
+
+
+def background_builds() -> bool:
+    """Whether a run may start a detached builder (not with ``SYMMECH_BACKGROUND_BUILD=0``)."""
+    return os.environ.get("SYMMECH_BACKGROUND_BUILD") != "0"
 
 
 class Engine:
@@ -27,6 +38,12 @@ class Engine:
     def __init__(self, name: str, entries: Callable[[], dict], seconds: float):
         self.name, self.entries, self.seconds = name, entries, seconds
         self.lock_name = f"symmech-{name}-build.lock"
+
+    def cold_reason(self) -> str:
+        """Why ``auto`` runs the reference engine on a cold cache (the estimate and summary.json)."""
+        then = ("building it in the background for the next run" if background_builds()
+                else "no background build (SYMMECH_BACKGROUND_BUILD=0)")
+        return f"{COLD}; {then} (`symmech warm --engine {self.name}` builds it now)"
 
     def cold(self) -> bool:
         """Whether the next run compiles: an entry has no machine code cached for its source yet."""
@@ -70,8 +87,9 @@ class Engine:
 
     def warm_in_background(self) -> bool:
         """Start a detached builder unless the engine is cached or a builder holds the lock; returns at once,
-        whether one was started."""
-        if not self.cold():
+        whether one was started. ``SYMMECH_BACKGROUND_BUILD=0`` starts none (the run still answers, on the
+        engine that needs no compile)."""
+        if not background_builds() or not self.cold():
             return False
         with self.build_lock(wait=False) as free:
             if not free:

@@ -334,8 +334,7 @@ def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
     if python > compiled.COLD_COMPILE_SECONDS + python / COMPILED_SPEEDUP:
         return "compiled", (f"auto: the Python engine would take ~{python:.3g} s, longer than compiling "
                             "the compiled engine first")
-    return "python", ("auto: the compiled engine is not built yet; building it in the background for the "
-                      "next run (`symmech warm` builds it now)")
+    return "python", compiled.ENGINE.cold_reason()
 
 
 # --------------------------------------------------------------------------- run

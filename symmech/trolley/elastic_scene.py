@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import kinematics as kin, plotting
+from symmech.core import build, kinematics as kin, plotting
 from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import elastic as el
@@ -43,10 +43,6 @@ class Setup:
 SECONDS_PER_STEP = {"python": 0.1, "compiled": 2e-3}
 
 
-AUTO_COLD = ("auto: the compiled engine is not built yet; building it in the background for the next run "
-             "(`symmech warm --engine elastic` builds it now)")
-
-
 def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
     """The engine that integrates the elastic model, "compiled" or "python", and why. ``auto`` takes the
     compiled engine when numba's cache holds it, else whichever answers first over ``runs`` runs of the
@@ -65,7 +61,7 @@ def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
     python = SECONDS_PER_STEP["python"] * (len(setup.t) - 1) * runs
     if python > elastic_compiled.COLD_COMPILE_SECONDS:
         return "compiled", f"auto: the Python engine would take ~{python:.3g} s, longer than compiling first"
-    return "python", AUTO_COLD
+    return "python", elastic_compiled.ENGINE.cold_reason()
 
 
 def simulate(setup: Setup, **kw) -> dict:
@@ -82,7 +78,7 @@ def simulate(setup: Setup, **kw) -> dict:
         out = elastic_compiled.simulate(setup.system, setup.drive, setup.t, **{**start, **kw})
         out["engine_reason"] = out["engine_reason"] or why
         return out
-    if why == AUTO_COLD:
+    if why.startswith(build.COLD):  # not when the Python engine runs for another reason
         from symmech.trolley import elastic_compiled
 
         elastic_compiled.ENGINE.warm_in_background()
