@@ -24,14 +24,18 @@ QUICK_PRECISION = {"impact_default", "smm_double_pendulum"}
 # run shortened in the default suite (the contract does not depend on the length of the run; the full
 # scene runs in tests/test_trolley_elastic_kind.py and, written out, in the wheel test)
 SHORTENED = {"trolley_elastic_helix": ("steps = 1000 ", "steps = 100 ")}
+# precision studies of elastic scenes on the compiled elastic engine, as a warm install runs them (the slow
+# tier builds it once; on the Python reference engine each study took ~95 s)
+COMPILED_PRECISION = {"trolley_elastic_helix", "trolley_elastic_sweep"}
 
 
-def bundled(having=lambda kind: True, quick=QUICK):
+def bundled(having=lambda kind: True, quick=QUICK, compiled=frozenset()):
     params = []
     for path in sorted(scenes_folder().glob("*.toml")):
         kind = registry.kinds().get(tomllib.loads(path.read_text())["kind"])
         if kind is not None and having(kind):
             marks = () if path.stem in quick else (pytest.mark.slow,)
+            marks += (pytest.mark.compiled_elastic,) if path.stem in compiled else ()
             params.append(pytest.param(path, id=path.stem, marks=marks))
     return params
 
@@ -49,7 +53,8 @@ def test_run_output_contract(scene, tmp_path, capsys):
     assert summary["scene"]["kind"] == tomllib.loads(scene.read_text())["kind"]
 
 
-@pytest.mark.parametrize("scene", bundled(lambda kind: kind.precision is not None, QUICK_PRECISION))
+@pytest.mark.parametrize("scene", bundled(lambda kind: kind.precision is not None, QUICK_PRECISION,
+                                          COMPILED_PRECISION))
 def test_bench_precision_works_on_every_bundled_scene(scene, tmp_path, capsys):
     code = main(["bench", "precision", str(scene), "--out", str(tmp_path / "p"), "--quiet"])
     assert code == 0, capsys.readouterr().err
