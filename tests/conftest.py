@@ -1,9 +1,12 @@
 """Session hooks: the compiled engines are built once, in the background, while the other tests run.
 
-Tests marked ``compiled_engine`` (the grain engine) or ``compiled_elastic`` (the elastic trolley engine) run
-last and first wait for that engine's build (``ENGINE.wait_warm`` of :mod:`symmech.grain.compiled`,
+Tests marked ``compiled_engine`` (the grain engine) or ``compiled_elastic`` (the elastic trolley engine) are
+in the slow tier (each build is 1-2 CPU-minutes, the default suite's budget is 3 minutes); they run last and
+first wait for that engine's build (``ENGINE.wait_warm`` of :mod:`symmech.grain.compiled`,
 :mod:`symmech.trolley.elastic_compiled`), so no test pays numba's compilation on its own; under pytest-xdist
-every worker asks for the build and the build lock lets one process per machine compile.
+every worker asks for the build and the build lock lets one process per machine compile. Runs inside the
+tests start no builder (``SYMMECH_BACKGROUND_BUILD=0``): a grain or elastic scene on ``auto`` with a cold
+cache answers on the Python engine, as a first run does.
 
 The elastic trolley's default engine (``auto``) is the compiled one once built; tests not marked ``compiled_elastic`` run it on
 the Python engine (its reference, which they test; ``engine_reason`` says so), so that no unmarked test
@@ -39,8 +42,11 @@ def _marked(item) -> list:
 def pytest_collection_modifyitems(session, config, items):
     needed = {marker for item in items for marker in _marked(item)}
     for marker in sorted(needed):
-        if not _under_mutmut():
+        if not (_under_mutmut() or config.option.collectonly):
             importlib.import_module(ENGINES[marker]).ENGINE.warm_in_background()
+    # no test run starts a builder of its own (the default tier builds no compiled engine at all); the tests
+    # of the builder itself take this out of their environment
+    os.environ["SYMMECH_BACKGROUND_BUILD"] = "0"
     if needed:
         items[:] = [item for item in items if not _marked(item)] + [item for item in items if _marked(item)]
 

@@ -184,27 +184,27 @@ def test_without_numba_the_numpy_module_stands_in():
 
 @pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:invalid value encountered")  # NaN outside a domain: compared as NaN
-def test_every_compiled_function_matches_numpy():
-    """All functions of all modules, batch, into and scalar, at 64 seeded points in [0.3, 1.7], to RTOL of
-    each function's largest value over the points: a configuration where a whole function nearly vanishes
-    (the held axial field of a beam at its pins, ~1e-3 of its size) is known to absolute accuracy only
-    there, and the two targets' rounding differs (numba forms integer powers by multiplication)."""
+@pytest.mark.parametrize("name", [path.stem.removesuffix("_nb") for path in sorted(GENERATED.glob("*_nb.py"))])
+def test_every_compiled_function_matches_numpy(name):
+    """All functions of every module (one test each, so xdist spreads the compiles), batch, into and scalar,
+    at 64 seeded points in [0.3, 1.7], to RTOL of each function's largest value over the points: a
+    configuration where a whole function nearly vanishes (the held axial field of a beam at its pins, ~1e-3 of
+    its size) is known to absolute accuracy only there, and the two targets' rounding differs (numba forms
+    integer powers by multiplication)."""
     rng = np.random.default_rng(17)
-    for path in sorted(GENERATED.glob("*_nb.py")):
-        name = path.stem.removesuffix("_nb")
-        reference = importlib.import_module(f"symmech.generated.{name}")
-        compiled = kernels.load(name)
-        # rhs(t, y, p), jac and events take vectors: compared in tests/test_dynamics_rhs.py
-        for function in [f for f in reference.__all__ if f not in ("rhs", "jac", "events")]:
-            f = getattr(reference, function)
-            args = rng.uniform(0.3, 1.7, (f.__code__.co_argcount, 64))
-            expected = f(*args)
-            assert_close(getattr(compiled, function)(*args), expected, per_configuration=False)
-            if not len(args):  # a constant (a function of no argument) has no batch axis
-                expected = np.stack([expected] * 2)
-            scalar = getattr(compiled, f"{function}_scalar")(*args[:, 0])
-            assert_close(np.asarray(scalar)[None], expected[:1], per_configuration=False)
-            out = np.full((2,) + expected.shape[1:], 7.0)  # into out[0] only
-            getattr(compiled, f"{function}_into")(*args[:, 1], out)
-            assert_close(out[:1], expected[1:2], per_configuration=False)
-            assert np.all(out[1] == 7.0)
+    reference = importlib.import_module(f"symmech.generated.{name}")
+    compiled = kernels.load(name)
+    # rhs(t, y, p), jac and events take vectors: compared in tests/test_dynamics_rhs.py
+    for function in [f for f in reference.__all__ if f not in ("rhs", "jac", "events")]:
+        f = getattr(reference, function)
+        args = rng.uniform(0.3, 1.7, (f.__code__.co_argcount, 64))
+        expected = f(*args)
+        assert_close(getattr(compiled, function)(*args), expected, per_configuration=False)
+        if not len(args):  # a constant (a function of no argument) has no batch axis
+            expected = np.stack([expected] * 2)
+        scalar = getattr(compiled, f"{function}_scalar")(*args[:, 0])
+        assert_close(np.asarray(scalar)[None], expected[:1], per_configuration=False)
+        out = np.full((2,) + expected.shape[1:], 7.0)  # into out[0] only
+        getattr(compiled, f"{function}_into")(*args[:, 1], out)
+        assert_close(out[:1], expected[1:2], per_configuration=False)
+        assert np.all(out[1] == 7.0)

@@ -26,6 +26,7 @@ def loaded(engine="auto", method="Radau", t_end=3.0, steps=1000):
 def cold(monkeypatch):
     """numba's cache without the compiled engine; the background builders started (none really)."""
     started = []
+    monkeypatch.delenv("SYMMECH_BACKGROUND_BUILD", raising=False)  # tests/conftest.py's
     monkeypatch.setattr(ec.ENGINE, "cold", lambda: True)
     monkeypatch.setattr(ec.ENGINE, "warm_in_background", lambda: started.append("builder") or True)
     monkeypatch.setattr(ec.ENGINE, "warm", lambda wait=True, say=None: pytest.fail("no foreground compile here"))

@@ -19,7 +19,8 @@ from symmech.grain import compiled, contact, flight, motion, motion_scene
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
-pytestmark = pytest.mark.compiled_engine  # ordered last, after the session's background build (conftest.py)
+# slow tier: the engine's build is ~70 s of CPU, more than a third of the default suite's budget (conftest.py)
+pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]
 
 
 def both(model, num, start, t_end):

@@ -6,7 +6,7 @@ import pytest
 from test_grain_hard_cases import CROP, sweep_grain
 from symmech.grain import compiled, flight
 
-pytestmark = pytest.mark.compiled_engine  # ordered last, after the session's background build (conftest.py)
+pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)
 
 
 def test_slip_jacobian_equals_central_differences():

@@ -9,8 +9,6 @@ from symmech.core import pipeline
 from symmech.core.scene import SceneError
 from symmech.grain import sweep
 
-# sweep.compute builds the compiled engine before dispatch: ordered last, after the session's build (conftest.py)
-pytestmark = pytest.mark.compiled_engine
 G = 9.81
 FREQ = 25.0
 W = 2 * math.pi * FREQ
@@ -31,6 +29,8 @@ def conveyor(**extra):
         "impact": {"law": "printed", "e": 0.0, "lambda": 1.0},
         "sliding": {"friction": 100.0},
         "effects": {"rotation": False},
+        # the sweep's logic, not the engine's (tests/test_grain_compiled.py): the Python loop needs no compile
+        "numerics": {"engine": "python"},
     }
     scene.update(extra)
     return scene

@@ -50,6 +50,7 @@ def test_grain_run_with_its_default_plot_loads_matplotlib_but_not_pyplot(tmp_pat
         ["impacts.csv", "path.png", "trajectory.csv"]
 
 
+@pytest.mark.slow
 @pytest.mark.compiled_engine
 def test_compiled_grain_run_loads_no_scipy_integrate_or_optimize(tmp_path):
     """The compiled engine steps with symmech's own DOP853 tableau and root finders: neither the engine's
