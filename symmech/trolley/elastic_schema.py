@@ -83,8 +83,9 @@ SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
                          "tabulated per run and its interpolation error checked against the exact frame. "
                          "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). `auto`: `compiled` "
                          "when numba's cache holds it, else `python` while the compiled engine is built in the "
-                         "background for the next run (`compiled` at once when the Python engine's estimate "
-                         "exceeds the compile). A `method` other than Radau runs on `python`",
+                         "background for the next run (no builder with `SYMMECH_BACKGROUND_BUILD=0`; `compiled` "
+                         "at once when the Python engine's estimate exceeds the compile). A `method` other than "
+                         "Radau runs on `python`",
                          choices=("auto", "compiled", "python"), default="auto"),
         "method": Choice("integrator (implicit ones use the analytic Jacobian)",
                          choices=("Radau", "BDF", "LSODA", "DOP853", "RK45"), default="Radau"),
