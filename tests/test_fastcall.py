@@ -7,6 +7,7 @@ differ in the last bit on other machines, so against it the bound is 1e-15 of th
 measured here). Anything the C side does not take goes to the generated function's path.
 """
 import os
+import pickle
 import subprocess
 import sys
 from types import SimpleNamespace
@@ -71,7 +72,8 @@ def test_c_path_equals_the_kernels_and_the_numpy_module(name):
 
 def test_anything_else_takes_the_generated_path_with_its_results_and_errors():
     """Lists, an int t, a float32, strided or big-endian y, an (n, k) batch and keywords give
-    exactly what the generated function gives; wrong lengths its ValueError; a singular mass matrix the
+    exactly what the generated function gives (the Kernel carries its name and docstring and pickles by
+    name); wrong lengths its ValueError; a singular mass matrix the
     twin's LinAlgError (the cfunc reports it, the general path raises it), and the next call works."""
     twin = kernels.load("grain_motion")
     y, p = next(_states(grain_motion))[1:]
@@ -79,6 +81,7 @@ def test_anything_else_takes_the_generated_path_with_its_results_and_errors():
     for f in (twin.rhs, twin.jac):
         generated = f.__wrapped__
         assert f.__name__ == generated.__name__ and f.__doc__ == generated.__doc__
+        assert pickle.loads(pickle.dumps(f)) is f  # by name, as the function it stands for
         for t, yy, pp in ((0.1, list(y), list(p)), (1, y, p), (0.1, y.astype(np.float32), p),
                           (0.1, np.repeat(y, 2)[::2], p), (0.1, y.astype(">f8"), p)):
             np.testing.assert_array_equal(f(t, yy, pp), generated(t, yy, pp))
