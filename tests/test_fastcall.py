@@ -102,14 +102,19 @@ def test_anything_else_takes_the_generated_path_with_its_results_and_errors():
         assert np.isfinite(getattr(boom, name)(0.0, y, np.ones(13))).all()
 
 
+def _fresh_copy(twin):
+    """The twin's names with the generated rhs and jac, as kernels.load finds them before install."""
+    return SimpleNamespace(**(vars(twin) | {"rhs": twin.rhs.__wrapped__, "jac": twin.jac.__wrapped__}))
+
+
 def test_without_a_compiler_the_numba_path_serves_and_nothing_is_said(tmp_path, monkeypatch, capfd):
     """CC names a missing program and the cache folder is fresh: no extension, no file, no output; the
     twin's rhs binds back to the generated (numba) function and computes."""
     twin = kernels.load("grain_motion")
     monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
     monkeypatch.setattr(fastcall, "cache_dir", lambda dispatcher: tmp_path / "cache")
-    generated = twin.rhs.__wrapped__  # the generated function (stand-in or Kernel: both wrap it)
-    copy = SimpleNamespace(**(vars(twin) | {"rhs": generated}))
+    copy = _fresh_copy(twin)
+    generated = copy.rhs
     fastcall.install(copy)
     y, p = next(_states(grain_motion))[1:]
     np.testing.assert_array_equal(copy.rhs(0.1, y, p), twin.rhs_scalar(0.1, y, p))
@@ -118,10 +123,18 @@ def test_without_a_compiler_the_numba_path_serves_and_nothing_is_said(tmp_path, 
     assert capfd.readouterr() == ("", "")
 
 
-def test_a_second_process_loads_the_built_extension_without_building(tmp_path):
-    """Built once into a fresh folder; another process (CC pointing nowhere: it could not build) loads
-    that file, which keeps its mtime, and leaves no other file."""
-    assert fastcall.extension(tmp_path) is not None
+def test_built_once_then_loaded_by_every_process(tmp_path, monkeypatch):
+    """A fresh folder: the first call builds the extension and binds the C path. Another process (CC
+    pointing nowhere: it could not build) loads that file, which keeps its mtime, and leaves no other file;
+    an install that finds the file gives a C Kernel at once, so a reference taken before the first call
+    is the C path too."""
+    twin = kernels.load("grain_motion")
+    monkeypatch.setattr(fastcall, "cache_dir", lambda dispatcher: tmp_path)
+    y, p = next(_states(grain_motion))[1:]
+    first = _fresh_copy(twin)
+    fastcall.install(first)
+    np.testing.assert_array_equal(first.rhs(0.1, y, p), twin.rhs_scalar(0.1, y, p))
+    assert type(first.rhs).__name__ == "Kernel" and first.rhs.bound
     built = fastcall.artifact(tmp_path)
     stamp, files = built.stat().st_mtime_ns, sorted(tmp_path.iterdir())
     code = (f"from pathlib import Path; from symmech.core import fastcall; "
@@ -130,3 +143,9 @@ def test_a_second_process_loads_the_built_extension_without_building(tmp_path):
                           env=os.environ | {"CC": str(tmp_path / "no-such-cc")})
     assert proc.stdout.strip() == "Kernel", proc.stderr
     assert built.stat().st_mtime_ns == stamp and sorted(tmp_path.iterdir()) == files
+    again = _fresh_copy(twin)
+    fastcall.install(again)
+    early = again.jac
+    assert type(early).__name__ == "Kernel" and not early.bound
+    np.testing.assert_array_equal(early(0.1, y, p), twin.jac_scalar(0.1, y, p))
+    assert early.bound and again.jac is early

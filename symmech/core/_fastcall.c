@@ -1,15 +1,16 @@
 /* A generated rhs(t, y, p) / jac(t, y, p) called from Python at C speed (symmech/core/fastcall.py builds
  * and loads this file).
  *
- * Kernel(address, n, m, ndim, general, owner) is a callable holding a C kernel
+ * Kernel(n, m, ndim, general) is a callable for the lengths n of y and m of p and the rank of its output:
+ * (n,) for rhs (ndim 1), (n, n) for jac (ndim 2). Until bind(address, owner, general) gives it a C kernel
  *     int kernel(double t, const double *y, const double *p, double *out)
- * (0: out written; else the kernel raised, e.g. a singular mass matrix), the lengths n of y and m of p and
- * the rank of its output: (n,) for rhs (ndim 1), (n, n) for jac (ndim 2). A call (vectorcall) with a
- * Python float or int t and float64 C-contiguous 1-d numpy arrays y (n,) and p (m,) allocates the output,
- * runs the kernel and returns the output; anything else (lists, another dtype or length, an (n, k) batch,
- * keywords), or a kernel that fails, goes to ``general``, the module's Python path, which decides (converts,
- * or raises its own error), so the semantics stay those of ``general``. ``owner`` keeps the kernel's
- * machine code alive (numba's cfunc). Instances have a __dict__ for __doc__, __name__, __wrapped__...
+ * (0: out written; else the kernel raised, e.g. a singular mass matrix), every call goes to ``general``.
+ * Once bound, a call (vectorcall) with a Python float or int t and float64 C-contiguous 1-d numpy arrays
+ * y (n,) and p (m,) allocates the output, runs the kernel and returns the output; anything else (lists,
+ * another dtype or length, an (n, k) batch, keywords), or a kernel that fails, goes to ``general``, the
+ * module's Python path, which decides (converts, or raises its own error), so the semantics stay those of
+ * ``general``. ``owner`` keeps the kernel's machine code alive (numba's cfunc). Instances have a __dict__
+ * for __doc__, __name__, __wrapped__...
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -28,7 +29,7 @@ typedef int (*kernel_fn)(double t, const double *y, const double *p, double *out
 typedef struct {
     PyObject_HEAD
     vectorcallfunc vectorcall;
-    kernel_fn kernel;
+    kernel_fn kernel; /* NULL until bind */
     npy_intp n, m;
     int ndim;
     PyObject *general;
@@ -71,7 +72,7 @@ static PyObject *Kernel_vectorcall(PyObject *callable, PyObject *const *args, si
     Kernel *self = (Kernel *)callable;
     double t;
     const double *y, *p;
-    if (PyVectorcall_NARGS(nargsf) == 3 && kwnames == NULL && as_time(args[0], &t) &&
+    if (self->kernel != NULL && PyVectorcall_NARGS(nargsf) == 3 && kwnames == NULL && as_time(args[0], &t) &&
         (y = as_vector(args[1], self->n)) != NULL && (p = as_vector(args[2], self->m)) != NULL) {
         npy_intp shape[2] = {self->n, self->n};
         PyObject *out = PyArray_SimpleNew(self->ndim, shape, NPY_DOUBLE);
@@ -86,31 +87,46 @@ static PyObject *Kernel_vectorcall(PyObject *callable, PyObject *const *args, si
 
 static PyObject *Kernel_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
 {
-    static char *names[] = {"address", "n", "m", "ndim", "general", "owner", NULL};
-    unsigned long long address;
+    static char *names[] = {"n", "m", "ndim", "general", NULL};
     Py_ssize_t n, m;
     int ndim;
-    PyObject *general, *owner;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "KnniOO", names, &address, &n, &m, &ndim, &general, &owner))
+    PyObject *general;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "nniO", names, &n, &m, &ndim, &general))
         return NULL;
-    if (address == 0 || n < 1 || m < 0 || (ndim != 1 && ndim != 2) || !PyCallable_Check(general)) {
-        PyErr_SetString(PyExc_ValueError, "Kernel: address must be non-zero, n >= 1, m >= 0, ndim 1 or 2, "
-                                          "general callable");
+    if (n < 1 || m < 0 || (ndim != 1 && ndim != 2) || !PyCallable_Check(general)) {
+        PyErr_SetString(PyExc_ValueError, "Kernel: n >= 1, m >= 0, ndim 1 or 2, general callable");
         return NULL;
     }
     Kernel *self = (Kernel *)type->tp_alloc(type, 0);
     if (self == NULL)
         return NULL;
     self->vectorcall = Kernel_vectorcall;
-    self->kernel = (kernel_fn)(uintptr_t)address;
     self->n = n;
     self->m = m;
     self->ndim = ndim;
     Py_INCREF(general);
     self->general = general;
-    Py_INCREF(owner);
-    self->owner = owner;
+    Py_INCREF(Py_None);
+    self->owner = Py_None;
     return (PyObject *)self;
+}
+
+static PyObject *Kernel_bind(Kernel *self, PyObject *args)
+{
+    unsigned long long address;
+    PyObject *owner, *general;
+    if (!PyArg_ParseTuple(args, "KOO:bind", &address, &owner, &general))
+        return NULL;
+    if (address == 0 || !PyCallable_Check(general)) {
+        PyErr_SetString(PyExc_ValueError, "bind: address must be non-zero, general callable");
+        return NULL;
+    }
+    Py_INCREF(owner);
+    Py_INCREF(general);
+    Py_SETREF(self->owner, owner);
+    Py_SETREF(self->general, general);
+    self->kernel = (kernel_fn)(uintptr_t)address;
+    Py_RETURN_NONE;
 }
 
 static int Kernel_traverse(Kernel *self, visitproc visit, void *arg)
@@ -148,13 +164,20 @@ static PyMemberDef Kernel_members[] = {
     {NULL},
 };
 
+static PyObject *Kernel_bound(Kernel *self, void *unused)
+{
+    return PyBool_FromLong(self->kernel != NULL);
+}
+
 static PyGetSetDef Kernel_getset[] = {
+    {"bound", (getter)Kernel_bound, NULL, "whether bind gave it a kernel", NULL},
     {"__dict__", PyObject_GenericGetDict, PyObject_GenericSetDict, NULL, NULL},
     {NULL},
 };
 
 static PyMethodDef Kernel_methods[] = {
     {"__reduce__", (PyCFunction)Kernel_reduce, METH_NOARGS, NULL},
+    {"bind", (PyCFunction)Kernel_bind, METH_VARARGS, "bind(address, owner, general): call the C kernel at address"},
     {NULL},
 };
 

@@ -12,9 +12,9 @@ The extension is compiled once with the system C compiler (sysconfig's ``CC``, o
 cache folder of the twin (:func:`symmech.core.build.cache_dir`), named by the hash of the source, the
 Python ABI and numpy's version, under a file lock, through a temporary file renamed into place. It is
 never required: without a compiler, or when the build fails, ``rhs``/``jac`` stay the twin's numba path
-(one debug log record). Nothing is compiled at import: :func:`install` (``kernels.load``) puts a
-stand-in in the twin whose first call loads (or builds) the extension and the cfunc, then rebinds the
-module's name to the C ``Kernel`` (or back to the generated function).
+(one debug log record). Nothing is compiled at import: :func:`install` (``kernels.load``) gives the twin
+a C ``Kernel`` whose first call compiles (or loads from numba's cache) the cfunc, or, while the extension
+is not built, a stand-in whose first call builds it and rebinds the module's name.
 """
 from __future__ import annotations
 
@@ -69,6 +69,13 @@ def _compile(target: Path) -> None:
         Path(tmp).unlink(missing_ok=True)
 
 
+def _load(path: Path) -> ModuleType:
+    spec = importlib.util.spec_from_file_location("_fastcall", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 @functools.cache
 def extension(folder: Path) -> ModuleType | None:
     """The extension module built in ``folder`` (compiled first when missing, once per folder: a process
@@ -79,31 +86,31 @@ def extension(folder: Path) -> ModuleType | None:
             with file_lock(Path(folder) / "symmech-fastcall-build.lock", wait=True):
                 if not path.exists():
                     _compile(path)
-        spec = importlib.util.spec_from_file_location("_fastcall", path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        return module
+        return _load(path)
     except (OSError, subprocess.SubprocessError, ImportError) as exc:
         _log.debug("no C path for generated rhs/jac, the numba path serves them: %s %s", exc,
                    (getattr(exc, "stderr", None) or b"")[-2000:])
         return None
 
 
-def kernel(module: ModuleType, name: str, generated: FunctionType):
-    """The twin ``module``'s ``name`` ("rhs" or "jac") as a C ``Kernel`` whose general path is the twin's
-    ``_<name>_general``, named and documented as ``generated``; None when the extension cannot be built."""
-    ext = extension(cache_dir(getattr(module, f"{name}_into")))
-    if ext is None:
-        return None
-    cfunc = getattr(module, f"{name}_cfunc")()
-    fast = ext.Kernel(cfunc.address, len(module.STATE), len(module.PARAMS), 1 if name == "rhs" else 2,
-                      getattr(module, f"_{name}_general"), cfunc)
+def kernel(ext: ModuleType, module: ModuleType, name: str, generated: FunctionType) -> object:
+    """The twin ``module``'s ``name`` ("rhs" or "jac") as a C ``Kernel`` of the extension ``ext``, named and
+    documented as ``generated`` (the generated function); its first call compiles (or loads from numba's
+    cache) the twin's ``<name>_cfunc`` and binds it, with the twin's ``_<name>_general`` as the general
+    path."""
+    def first_call(*args, **kwargs):
+        cfunc = getattr(module, f"{name}_cfunc")()
+        fast.bind(cfunc.address, cfunc, getattr(module, f"_{name}_general"))
+        return fast(*args, **kwargs)
+
+    fast = ext.Kernel(len(module.STATE), len(module.PARAMS), 1 if name == "rhs" else 2, first_call)
     return functools.update_wrapper(fast, generated)
 
 
 class _FirstCall:
-    """A twin's ``rhs``/``jac`` until its first call, which rebinds the module's name to the C ``Kernel``
-    (or back to the generated function) and calls it; a reference taken before calls what it bound."""
+    """A twin's ``rhs``/``jac`` while the extension is not built: its first call builds it, rebinds the
+    module's name to a C ``Kernel`` (or back to the generated function without a compiler) and calls it; a
+    reference taken before forwards to that, at Python speed."""
 
     def __init__(self, module: ModuleType, name: str):
         self.module, self.name, self.generated, self.bound = module, name, getattr(module, name), None
@@ -111,14 +118,22 @@ class _FirstCall:
 
     def __call__(self, t, y, p):
         if self.bound is None:
-            self.bound = kernel(self.module, self.name, self.generated) or self.generated
+            ext = extension(cache_dir(self.module.rhs_into))
+            self.bound = kernel(ext, self.module, self.name, self.generated) if ext else self.generated
             setattr(self.module, self.name, self.bound)
         return self.bound(t, y, p)
 
 
 def install(module: ModuleType) -> None:
-    """Give the numba twin ``module`` the C path for its ``rhs`` and ``jac`` from their first call (a module
-    without dynamics is left as it is)."""
-    for name in ("rhs", "jac"):
-        if hasattr(module, f"{name}_cfunc") and isinstance(getattr(module, name), FunctionType):  # not yet
-            setattr(module, name, _FirstCall(module, name))
+    """Give the numba twin ``module`` the C path for its ``rhs`` and ``jac`` (a module without dynamics is
+    left as it is): a C ``Kernel`` at once when the extension is built (loading it takes ~1 ms; the cfunc
+    waits for the first call), else a stand-in whose first call builds it. Nothing is compiled here."""
+    names = [name for name in ("rhs", "jac")
+             if hasattr(module, f"{name}_cfunc") and isinstance(getattr(module, name), FunctionType)]
+    if not names:
+        return
+    folder = cache_dir(module.rhs_into)
+    ext = extension(folder) if artifact(folder).exists() else None
+    for name in names:
+        generated = getattr(module, name)
+        setattr(module, name, kernel(ext, module, name, generated) if ext else _FirstCall(module, name))

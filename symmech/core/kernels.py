@@ -5,8 +5,8 @@ when numba imports, else a stand-in with the same names built on the numpy
 module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
 float (scalar quantities) or a float64 array of the element shape (``rhs_scalar``
 and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``); ``f_into(...,
-out)`` writes it into ``out[0]``. The twin's ``rhs``/``jac`` take the C path of
-:mod:`symmech.core.fastcall` from their first call. Runtime
+out)`` writes it into ``out[0]``. The twin's ``rhs``/``jac`` are the C path of
+:mod:`symmech.core.fastcall` (nothing compiled here). Runtime
 code written against ``load`` runs everywhere; only its speed differs. The
 import verifies the module, as every import of ``symmech.generated`` does
 (:mod:`symmech.core.integrity`).
