@@ -70,6 +70,7 @@ def _compile(target: Path) -> None:
 
 
 def _load(path: Path) -> ModuleType:
+    """The extension module in the file ``path`` (ImportError when it does not load)."""
     spec = importlib.util.spec_from_file_location("_fastcall", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
