@@ -6,11 +6,14 @@ Jacobian vs scipy's finite differences.
     pip install symmech[bench]                # adds the optional peer JiTCODE (symbolic -> C, needs a C compiler)
 
 Grain flight (grain_motion, 13 states, 12 parameters), one rhs call at a seeded point, from the same
-sympy derivation (derive_motion.flight_dynamics): JiTCODE's C function, the numba twin (rhs; its kernel
-rhs_scalar; rhs_into called from Python into one reused out, and stepping an explicit Euler loop compiled
-with numba, per step; a jitted no-op taking the same arguments: the price of any call into numba from
-Python), sympy.lambdify(cse=True) and the numpy module's rhs. Ratios: time / JiTCODE's, time / lambdify's.
-Per call, numpy vs numba: smm_spatial_boom (8 states, 21 parameters, a mass matrix) at a seeded point.
+sympy derivation (derive_motion.flight_dynamics): JiTCODE's C function, the twin's rhs as kernels.load
+gives it (the C path of symmech.core.fastcall: rhs_into as a numba cfunc behind a C callable), the
+generated numba rhs it stands for (a numba dispatcher); the kernel rhs_scalar; rhs_into called from Python
+into one reused out, and stepping an explicit Euler loop compiled with numba, per step; a jitted no-op
+taking the same arguments: the price of any call into numba from Python), sympy.lambdify(cse=True) and the
+numpy module's rhs. Ratios: time / JiTCODE's, time / lambdify's.
+Per call, numpy vs the twin (C path and numba path): smm_spatial_boom (8 states, 21 parameters, a mass
+matrix) at a seeded point.
 Integration: the rotor boom's damped free response (Radau, rtol 1e-9) over the bundled scene's 2 s
 (0.5 s with --quick), with the error against the run's matrix-exponential response.
 """
@@ -36,14 +39,18 @@ def per_call(name: str, repeats: int) -> None:
     twin = kernels.load(name)
     rng = np.random.default_rng(1)
     y, p = rng.uniform(0.5, 1.5, len(module.STATE)), rng.uniform(0.5, 1.5, len(module.PARAMS))
-    twin.rhs(0.1, y, p), twin.jac(0.1, y, p)  # compile outside the timing
-    stats = interleaved({"numpy rhs": lambda: module.rhs(0.1, y, p), "numba rhs": lambda: twin.rhs(0.1, y, p),
-                         "numpy jac": lambda: module.jac(0.1, y, p), "numba jac": lambda: twin.jac(0.1, y, p)},
+    twin.rhs(0.1, y, p), twin.jac(0.1, y, p)  # compile outside the timing; binds the C path
+    numba_rhs, numba_jac = twin.rhs.__wrapped__, twin.jac.__wrapped__
+    numba_rhs(0.1, y, p), numba_jac(0.1, y, p)
+    stats = interleaved({"numpy rhs": lambda: module.rhs(0.1, y, p), "C rhs": lambda: twin.rhs(0.1, y, p),
+                         "numba rhs": lambda: numba_rhs(0.1, y, p), "numpy jac": lambda: module.jac(0.1, y, p),
+                         "C jac": lambda: twin.jac(0.1, y, p), "numba jac": lambda: numba_jac(0.1, y, p)},
                         repeats, number=2000)
     for key, s in stats.items():
         print(f"  {name:18s} {key:10s} {s.text('us', 1e6)}")
-    print(f"  {name:18s} numba/numpy rhs {ratio(stats['numpy rhs'], stats['numba rhs'])}, "
-          f"jac {ratio(stats['numpy jac'], stats['numba jac'])}")
+    for path in ("C", "numba"):
+        print(f"  {name:18s} {path}/numpy rhs {ratio(stats['numpy rhs'], stats[f'{path} rhs'])}, "
+              f"jac {ratio(stats['numpy jac'], stats[f'{path} jac'])}")
 
 
 def _jitcode_rhs(dynamics, p):
@@ -95,18 +102,24 @@ def grain_flight(repeats: int) -> None:
     jit = _jitcode_rhs(dynamics, p)
     steps, y_euler, out = 1000, y.copy(), np.empty((1, len(y)))
     _euler(twin.rhs_into, 0.1, y_euler, p, 1e-9, 1), twin.rhs(0.1, y, p), _noop(0.1, y, p)  # compile outside
+    numba_rhs = twin.rhs.__wrapped__  # the generated rhs the C path stands for
+    numba_rhs(0.1, y, p)
+    if type(twin.rhs).__name__ != "Kernel":
+        print("  no C path here (no C compiler?): its row times the numba rhs")
     in_loop = "numba rhs_into, per step of a numba loop"
     contenders = {"JiTCODE f (C)": (lambda: jit(0.1, y)) if jit else None,
+                  "twin rhs, C path (fastcall)": lambda: twin.rhs(0.1, y, p),
                   in_loop: lambda: _euler(twin.rhs_into, 0.1, y_euler, p, 1e-9, steps),
                   "numba rhs_into from Python, out reused": lambda: twin.rhs_into(0.1, y, p, out),
                   "numba: a jitted no-op, same arguments": lambda: _noop(0.1, y, p),
                   "numba rhs_scalar": lambda: twin.rhs_scalar(0.1, y, p),
-                  "numba rhs": lambda: twin.rhs(0.1, y, p),
+                  "numba rhs (the generated function)": lambda: numba_rhs(0.1, y, p),
                   "lambdify(cse=True)": lambda: lam(0.1, *y, *p),
                   "numpy rhs": lambda: module.rhs(0.1, y, p)}
     reference = module.rate(0.1, *y, *p)
     twin.rhs_into(0.1, y, p, out)
-    results = {"numba rhs": twin.rhs(0.1, y, p), "numba rhs_into": out.copy(), "lambdify(cse=True)": lam(0.1, *y, *p),
+    results = {"C path rhs": twin.rhs(0.1, y, p), "numba rhs": numba_rhs(0.1, y, p), "numba rhs_into": out.copy(),
+               "lambdify(cse=True)": lam(0.1, *y, *p),
                "numpy rhs": module.rhs(0.1, y, p)} | ({"JiTCODE f (C)": jit(0.1, y)} if jit else {})
     if jit is None:
         print("  JiTCODE not installed (pip install symmech[bench]): its row is skipped")

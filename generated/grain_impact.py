@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 be061b8aebda4781b5d2730b0934c1df73ce25cfb551095a3b4a7a478358177b
-# source key 90dd4bdd8d76e628f6c8afc8727b955e60fa5821e797d964b34924372da1ede0
+# symmech 0.1.0 generated module; inputs sha256 f4c879bc5431c94558a01a3028112a23a74bf722ae99214a4cb84e692d1509fc
+# source key de650a15a9937dc275e14e52ffc4bfec98ec28e573a8c469ec8b25d1eac65515
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

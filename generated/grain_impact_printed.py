@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ad1e7a04e99e8d02e9149bb85485a3a79a3891e0965e47ab7dba593c9f8a1727
-# source key 9db93a76495b55dd4f85d8c36db579496b7b3168d7dca9f8210717bc9cbc6c16
+# symmech 0.1.0 generated module; inputs sha256 498e046eca310d14e44f494678f4683cc253a90af5afe239b78e358a05b2f716
+# source key 09fcc14bb492d8c39b1028c5375203965e0c96151b8ef7937b2bd1e117e6a8fc
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

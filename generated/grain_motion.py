@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 46912bf6cfe93cf91608b59220a9bc3c8e7fa55aba32e492b0c3a24ce3737156
-# source key 4ee7787c3341227954fcd4a7dc373cb36151ce474cf0fce5487298e2c80b91e5
+# symmech 0.1.0 generated module; inputs sha256 07e4457aa7a8074c60092e110dd4d0de3d62631eff50311da037a1289ad04f28
+# source key 48acbe94696a66a7e85f780f752d6b7837765180cda53bfaeec0b8ed920b2a82
 # body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

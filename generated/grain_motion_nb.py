@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 9e3bcb0cb843ec98cfcd7cd1aa36ba449fd28fbd5c1ede32c870726c55085ea3
-# source key 4ee7787c3341227954fcd4a7dc373cb36151ce474cf0fce5487298e2c80b91e5
-# body sha256 7517736981c17ce51a79b2f563ccce0e466f6d9537dba646abf41ffe259f8964
+# symmech 0.1.0 generated module; inputs sha256 02ee9fdf6ba5bed42585bdcd8e6c12354523b5b4784736fa705a9fa3b875dab1
+# source key 48acbe94696a66a7e85f780f752d6b7837765180cda53bfaeec0b8ed920b2a82
+# body sha256 9c4b29f0ccea7f755c1066d4a7e8d78a9070785fdbe6eaa54b99c27c16c9968c
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -1601,6 +1601,9 @@ def events(t, y, p):
     return out[0]
 
 
+C_SIGNATURE = "int32(float64, CPointer(float64), CPointer(float64), CPointer(float64))"  # of rhs_cfunc, jac_cfunc
+
+
 def _rhs_vectors(t, y, p, out):
     """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
     name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
@@ -1627,10 +1630,31 @@ def rhs(t, y, p):
         return out[0]
     except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
         pass
+    return _rhs_general(t, y, p)
+
+
+def _rhs_general(t, y, p):
+    """``rhs`` for any input: converted, checked, a batch column by column (errors raised here)."""
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
     return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def _rhs_c(t, y, p, out):
+    """``rhs_into`` on C pointers y (n,), p (m,), out (n,) to float64: the body of ``rhs_cfunc``."""
+    try:
+        rhs_into(t, numba.carray(y, 13), numba.carray(p, 15), numba.carray(out, (1, 13)))
+    except Exception:  # (a singular M) the caller takes the general path, which raises it with its message
+        return 1
+    return 0
+
+
+def rhs_cfunc():
+    """``rhs_into`` as a numba ``cfunc`` (compiled, or loaded from numba's cache, at each call: keep it) of C
+    signature ``int (double t, const double *y, const double *p, double *out)`` (y (n,), p (m,), out (n,));
+    returns 0, or 1 when the kernel raised and out is undefined. ``symmech.core.fastcall`` calls it from Python."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_rhs_c)
 
 
 def jac(t, y, p):
@@ -1641,5 +1665,24 @@ def jac(t, y, p):
         return out[0]
     except (TypeError, ValueError):
         pass
+    return _jac_general(t, y, p)
+
+
+def _jac_general(t, y, p):
+    """``jac`` for any input: converted and checked (errors raised here)."""
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)
+
+
+def _jac_c(t, y, p, out):
+    """``jac_into`` on C pointers y (n,), p (m,), out (n, n) to float64: the body of ``jac_cfunc``."""
+    try:
+        jac_into(t, numba.carray(y, 13), numba.carray(p, 15), numba.carray(out, (1, 13, 13)))
+    except Exception:
+        return 1
+    return 0
+
+
+def jac_cfunc():
+    """``jac_into`` as a numba ``cfunc`` of the C signature of ``rhs_cfunc``, out (n, n) row-major."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_jac_c)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ac659f17304a15ed389a951a172c60817f2c88973dc351dcfed15a59d80e4508
-# source key 310bb228517cd672b7f830c1695dd416d64912f590513de3b12d02e62b2d090d
+# symmech 0.1.0 generated module; inputs sha256 4c89b983042d47ad1a4e7cbc4986666cbd700152067fcf35a96bafe03dcd1e3a
+# source key 8284a48e84979d8782a8193556638085eee574751b8ad3369de30d847996a58a
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

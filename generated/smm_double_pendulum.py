@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 cfb45ad98d4eaed7be2339e7aa8ae80bb9ae41374c702fb044287491417a95cc
-# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
+# symmech 0.1.0 generated module; inputs sha256 1097ee70fdf58a6a13c3deddfe6c3e90b8797f301d79e472a857274f66a1f9f9
+# source key eb4e55679061e9944b1d3f639a17712fd561a3ddb1fe37153821b39ec6a524ec
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

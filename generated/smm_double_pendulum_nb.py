@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 4512473cd9d0051fd60f0bc6d25ee22b6adb187869b40c5c127d53d0954e33f4
-# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
-# body sha256 9c2027bc7d6b7b94a8984d2692010c64848c9845ef7c4b0c7cf0258cfc8dbeaf
+# symmech 0.1.0 generated module; inputs sha256 6c71876f392b756f078a31c5ea45ac73b02b64936b349792b8164f4a94096446
+# source key eb4e55679061e9944b1d3f639a17712fd561a3ddb1fe37153821b39ec6a524ec
+# body sha256 ee0b337805a156368d52061587c994bf89595f3d2bc50ca45db8d795edd46b49
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -668,6 +668,9 @@ def jac_scalar(t, y, p):
     return out[0]
 
 
+C_SIGNATURE = "int32(float64, CPointer(float64), CPointer(float64), CPointer(float64))"  # of rhs_cfunc, jac_cfunc
+
+
 def _rhs_vectors(t, y, p, out):
     """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
     name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
@@ -694,10 +697,31 @@ def rhs(t, y, p):
         return out[0]
     except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
         pass
+    return _rhs_general(t, y, p)
+
+
+def _rhs_general(t, y, p):
+    """``rhs`` for any input: converted, checked, a batch column by column (errors raised here)."""
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
     return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def _rhs_c(t, y, p, out):
+    """``rhs_into`` on C pointers y (n,), p (m,), out (n,) to float64: the body of ``rhs_cfunc``."""
+    try:
+        rhs_into(t, numba.carray(y, 4), numba.carray(p, 5), numba.carray(out, (1, 4)))
+    except Exception:  # (a singular M) the caller takes the general path, which raises it with its message
+        return 1
+    return 0
+
+
+def rhs_cfunc():
+    """``rhs_into`` as a numba ``cfunc`` (compiled, or loaded from numba's cache, at each call: keep it) of C
+    signature ``int (double t, const double *y, const double *p, double *out)`` (y (n,), p (m,), out (n,));
+    returns 0, or 1 when the kernel raised and out is undefined. ``symmech.core.fastcall`` calls it from Python."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_rhs_c)
 
 
 def jac(t, y, p):
@@ -708,5 +732,24 @@ def jac(t, y, p):
         return out[0]
     except (TypeError, ValueError):
         pass
+    return _jac_general(t, y, p)
+
+
+def _jac_general(t, y, p):
+    """``jac`` for any input: converted and checked (errors raised here)."""
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)
+
+
+def _jac_c(t, y, p, out):
+    """``jac_into`` on C pointers y (n,), p (m,), out (n, n) to float64: the body of ``jac_cfunc``."""
+    try:
+        jac_into(t, numba.carray(y, 4), numba.carray(p, 5), numba.carray(out, (1, 4, 4)))
+    except Exception:
+        return 1
+    return 0
+
+
+def jac_cfunc():
+    """``jac_into`` as a numba ``cfunc`` of the C signature of ``rhs_cfunc``, out (n, n) row-major."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_jac_c)

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 23b920eadda24d85b78c8a7a6433fb8fdefafc33c54d426f7a868dbe1567edc2
-# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
-# body sha256 d544c76fe5fce17c7b9fbe3374d8134576b1221631070497eab3066a92eaea51
+# symmech 0.1.0 generated module; inputs sha256 6a4b3ed1baceda275a6f2da8ef11e1b94dcf069d5c64d4d37b4ae2beb91d0a97
+# source key eb4e55679061e9944b1d3f639a17712fd561a3ddb1fe37153821b39ec6a524ec
+# body sha256 f51e88dcd17aa736dcd8c31b0c5a6b8a40ad39980583bfc2625aa5b48b4385dd
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -1414,6 +1414,9 @@ def jac_scalar(t, y, p):
     return out[0]
 
 
+C_SIGNATURE = "int32(float64, CPointer(float64), CPointer(float64), CPointer(float64))"  # of rhs_cfunc, jac_cfunc
+
+
 def _rhs_vectors(t, y, p, out):
     """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
     name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
@@ -1440,10 +1443,31 @@ def rhs(t, y, p):
         return out[0]
     except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
         pass
+    return _rhs_general(t, y, p)
+
+
+def _rhs_general(t, y, p):
+    """``rhs`` for any input: converted, checked, a batch column by column (errors raised here)."""
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
     return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def _rhs_c(t, y, p, out):
+    """``rhs_into`` on C pointers y (n,), p (m,), out (n,) to float64: the body of ``rhs_cfunc``."""
+    try:
+        rhs_into(t, numba.carray(y, 10), numba.carray(p, 20), numba.carray(out, (1, 10)))
+    except Exception:  # (a singular M) the caller takes the general path, which raises it with its message
+        return 1
+    return 0
+
+
+def rhs_cfunc():
+    """``rhs_into`` as a numba ``cfunc`` (compiled, or loaded from numba's cache, at each call: keep it) of C
+    signature ``int (double t, const double *y, const double *p, double *out)`` (y (n,), p (m,), out (n,));
+    returns 0, or 1 when the kernel raised and out is undefined. ``symmech.core.fastcall`` calls it from Python."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_rhs_c)
 
 
 def jac(t, y, p):
@@ -1454,5 +1478,24 @@ def jac(t, y, p):
         return out[0]
     except (TypeError, ValueError):
         pass
+    return _jac_general(t, y, p)
+
+
+def _jac_general(t, y, p):
+    """``jac`` for any input: converted and checked (errors raised here)."""
     y, p = _layout(y, p)
     return jac_scalar(float(t), numpy.ascontiguousarray(y), p)
+
+
+def _jac_c(t, y, p, out):
+    """``jac_into`` on C pointers y (n,), p (m,), out (n, n) to float64: the body of ``jac_cfunc``."""
+    try:
+        jac_into(t, numba.carray(y, 10), numba.carray(p, 20), numba.carray(out, (1, 10, 10)))
+    except Exception:
+        return 1
+    return 0
+
+
+def jac_cfunc():
+    """``jac_into`` as a numba ``cfunc`` of the C signature of ``rhs_cfunc``, out (n, n) row-major."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_jac_c)

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 9012c2f32753a297545d081caddb82829f8dde33743d5a89af4195ee1e9ed53d
-# source key aa19457b4bc8798f27a48ce8c6152b928bb60cee22018a3a545ea0f83c4866ce
+# symmech 0.1.0 generated module; inputs sha256 1c367bd21967d0702ae220437dc5f356e39c46afcd2b597ae714a6419f1da00b
+# source key fce23c766b583284e7c1df460d3b509187494fe9176bae1897c2588d2c135f3b
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

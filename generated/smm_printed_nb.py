@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 8d46c824b471e09e7c100fbdf05ab729cff760809ac28466a8af5fcc4ae0e195
-# source key aa19457b4bc8798f27a48ce8c6152b928bb60cee22018a3a545ea0f83c4866ce
+# symmech 0.1.0 generated module; inputs sha256 82ddc6921d8c335b2e2b16f665f2817fae8a364e4ad3457936ee9ba11717482f
+# source key fce23c766b583284e7c1df460d3b509187494fe9176bae1897c2588d2c135f3b
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 7747298412790c6d75713e1fea470f6df7614ea969f60d1865f7ac7ca9bdd63d
-# source key a0d98b917a50751cbcdede93c6de9dae29dcaf531e54097f324d43348a9da5f7
+# symmech 0.1.0 generated module; inputs sha256 fd8c7b7d629f58d28bca21860526d8ac88c5f166a9c5fd81e6a2c9978135e75d
+# source key eb4e55679061e9944b1d3f639a17712fd561a3ddb1fe37153821b39ec6a524ec
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ce21e38b8fcd640bb0249a9ee077dc1b39651edaba47c2d25135bff9cb19636c
-# source key 1986ffdb002a1f9fdd66982f5f51ecb50304bd4393f7cbba0c96b9f571eb36b5
+# symmech 0.1.0 generated module; inputs sha256 f1b46ec3e8316cbe31abd6252b78a64761265c54df71cca4ce2cd79d51942a86
+# source key e0b559515778881561e56ed30ed62fa05f6a0517889d7157650bef5ce056a1e5
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

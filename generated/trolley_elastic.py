@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6ea5309488c4b53f822d3bab1ca9889b0cf81feccd7e9b9ae6b6fea0f28082f3
-# source key eb3fcaaa337a945a790b5ddb517594f7e0f4b37d7af0a66c6c20653590a1f1d6
+# symmech 0.1.0 generated module; inputs sha256 1c3dae8ed9f839aae351b3d3c8c09964ac82b56775483f18c95a992f1169d3e6
+# source key 98565ec0c830e28259a5eccd9feffe8207cc15766b0863946b3b9d91eeb550cb
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c778268079af9b6d010e95a345e0f1efebfb3264acae880a0790200634f9e087
-# source key eb3fcaaa337a945a790b5ddb517594f7e0f4b37d7af0a66c6c20653590a1f1d6
+# symmech 0.1.0 generated module; inputs sha256 5e08e4566f9676cdff1145192feb2fac2b130d18f31b6d04af3d9ce2fe600108
+# source key 98565ec0c830e28259a5eccd9feffe8207cc15766b0863946b3b9d91eeb550cb
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 b76b4194778a6c2b3a804a57a42859f2bc6be5de2a0a72ba0138cbfac491f1d4
-# source key eb3fcaaa337a945a790b5ddb517594f7e0f4b37d7af0a66c6c20653590a1f1d6
-# body sha256 2974fc570b22e9bbd1f159d4d42e96888601502e1e1aa253438cc5eb2eb841fe
+# symmech 0.1.0 generated module; inputs sha256 0e108a875345b936fcfed09b22b094ca487c6c1a1f068fa3d1f313862375cbba
+# source key 98565ec0c830e28259a5eccd9feffe8207cc15766b0863946b3b9d91eeb550cb
+# body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -3254,6 +3254,9 @@ def rhs_scalar(t, y, p):
     return out[0]
 
 
+C_SIGNATURE = "int32(float64, CPointer(float64), CPointer(float64), CPointer(float64))"  # of rhs_cfunc, jac_cfunc
+
+
 def _rhs_vectors(t, y, p, out):
     """First call: ``rhs_into`` compiled (or loaded from the cache) for float64 C vectors only takes this
     name. An explicit signature compiles nothing else, so other arguments raise TypeError at once and
@@ -3272,7 +3275,28 @@ def rhs(t, y, p):
         return out[0]
     except (TypeError, ValueError):  # other types, lengths (or a singular M): the general path decides
         pass
+    return _rhs_general(t, y, p)
+
+
+def _rhs_general(t, y, p):
+    """``rhs`` for any input: converted, checked, a batch column by column (errors raised here)."""
     y, p = _layout(y, p)
     if y.ndim == 1:
         return rhs_scalar(float(t), numpy.ascontiguousarray(y), p)
     return numpy.stack([rhs_scalar(float(t), numpy.ascontiguousarray(column), p) for column in y.T], axis=1)
+
+
+def _rhs_c(t, y, p, out):
+    """``rhs_into`` on C pointers y (n,), p (m,), out (n,) to float64: the body of ``rhs_cfunc``."""
+    try:
+        rhs_into(t, numba.carray(y, 14), numba.carray(p, 42), numba.carray(out, (1, 14)))
+    except Exception:  # (a singular M) the caller takes the general path, which raises it with its message
+        return 1
+    return 0
+
+
+def rhs_cfunc():
+    """``rhs_into`` as a numba ``cfunc`` (compiled, or loaded from numba's cache, at each call: keep it) of C
+    signature ``int (double t, const double *y, const double *p, double *out)`` (y (n,), p (m,), out (n,));
+    returns 0, or 1 when the kernel raised and out is undefined. ``symmech.core.fastcall`` calls it from Python."""
+    return numba.cfunc(C_SIGNATURE, cache=True, error_model="numpy")(_rhs_c)

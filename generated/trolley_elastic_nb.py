@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f1613db6d7a681fbc52ede0df62ac95e69c2044a9fa6463a23287a260ea54752
-# source key eb3fcaaa337a945a790b5ddb517594f7e0f4b37d7af0a66c6c20653590a1f1d6
+# symmech 0.1.0 generated module; inputs sha256 fd37278e2ef5490fbe8fd71b3d911a9e1d8553fc535c732c253af0e9bd275025
+# source key 98565ec0c830e28259a5eccd9feffe8207cc15766b0863946b3b9d91eeb550cb
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0e9999104d9d98db61a63c7043dc5e90093194c207e703947a17839b08c1a1c5
-# source key e448cc93a3829e24a38a3463f164100bd8b4c0ba6ac4ad7b0b25d39540fb96c6
+# symmech 0.1.0 generated module; inputs sha256 817e64db81ca2013b5b123500ecf940b44a91e33db95eb2fa5c6bb5cf508b9d8
+# source key 774cf53f8d3ed6fbe03cba8d93e25808fd65d2a50ac77aef89bb85d4c318c18b
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

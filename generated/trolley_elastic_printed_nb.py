@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ad2d8b22f82c5d3949726461c67cc7565028dfe8bc4645087deed048c76e91d5
-# source key e448cc93a3829e24a38a3463f164100bd8b4c0ba6ac4ad7b0b25d39540fb96c6
+# symmech 0.1.0 generated module; inputs sha256 a14d9b2ca61ae9d73aa9005d08617714cd49f71ee08caa2219f19eb38e4caca1
+# source key 774cf53f8d3ed6fbe03cba8d93e25808fd65d2a50ac77aef89bb85d4c318c18b
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

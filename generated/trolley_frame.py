@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1c2d2886c81e60ceedb628c02335727c708157ad98c6d9b541ba7379d878ba95
-# source key 1986ffdb002a1f9fdd66982f5f51ecb50304bd4393f7cbba0c96b9f571eb36b5
+# symmech 0.1.0 generated module; inputs sha256 d0f26b6c528266d804490da8def842db5fee09c1813362d69b4568e9b4222883
+# source key e0b559515778881561e56ed30ed62fa05f6a0517889d7157650bef5ce056a1e5
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

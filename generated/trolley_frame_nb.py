@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 69511c88946b9984e570c1abe8fc7c0f7981b501a6812645cf71354a4e130bee
-# source key 1986ffdb002a1f9fdd66982f5f51ecb50304bd4393f7cbba0c96b9f571eb36b5
+# symmech 0.1.0 generated module; inputs sha256 0a188cd07f9c3823cb7be08ca772842f923ff9e538e50ab3627312b84f84685c
+# source key e0b559515778881561e56ed30ed62fa05f6a0517889d7157650bef5ce056a1e5
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ca56293ab72003f15075a8044de30e8eec452571377f1e95b85b2a9d8b0e68e2
-# source key cdf79880a5f0f695c761798c0a159943b00c31ab6997732d2235159c3725501e
+# symmech 0.1.0 generated module; inputs sha256 8d79a029caa1edbd1230767573b3ef1f404977b1417ea90599097afa6c3dca9a
+# source key 2454e6a4d7270fe9b28ba2166b0f69b3a4f875f9d111d5b0baa3649b6f5ffbc2
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -30,6 +30,26 @@ def background_builds() -> bool:
     return os.environ.get("SYMMECH_BACKGROUND_BUILD") != "0"
 
 
+def cache_dir(dispatcher) -> Path:
+    """The folder where numba caches the ``cache=True`` dispatcher: ``NUMBA_CACHE_DIR`` when set, else
+    ``__pycache__`` beside its module, or numba's user-wide cache folder when that folder is read-only."""
+    return Path(dispatcher._cache._cache_path)  # numba's cache locator (private API)
+
+
+@contextmanager
+def file_lock(path: Path, wait: bool):
+    """An exclusive ``flock`` on the file ``path`` (created with its folder); yields whether this process
+    holds it (always, with ``wait``)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            yield False
+            return
+        yield True  # closing the file releases the lock
+
+
 class Engine:
     """The compiled engine ``name`` (``symmech warm --engine NAME``): ``entries()`` maps each cached entry
     (a numba dispatcher) to the argument types a run calls it with; ``seconds`` [s] is the cold compile a
@@ -54,22 +74,12 @@ class Engine:
         return False
 
     def cache_dir(self) -> Path:
-        """Where numba caches the entries: ``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` beside their
-        module, or numba's user-wide cache folder when the package folder is read-only."""
-        return Path(next(iter(self.entries()))._cache._cache_path)  # numba's cache locator (private API)
+        """Where numba caches the entries (:func:`cache_dir` of the first)."""
+        return cache_dir(next(iter(self.entries())))
 
-    @contextmanager
     def build_lock(self, wait: bool):
         """The machine-wide build lock; yields whether this process holds it (always, with ``wait``)."""
-        folder = self.cache_dir()
-        folder.mkdir(parents=True, exist_ok=True)
-        with open(folder / self.lock_name, "a") as fh:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                yield False
-                return
-            yield True  # closing the file releases the lock
+        return file_lock(self.cache_dir() / self.lock_name, wait)
 
     def warm(self, wait: bool = True, say=None) -> bool:
         """Compile the entries into numba's cache unless they are there; returns whether they are. Without

@@ -5,7 +5,8 @@ when numba imports, else a stand-in with the same names built on the numpy
 module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
 float (scalar quantities) or a float64 array of the element shape (``rhs_scalar``
 and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``); ``f_into(...,
-out)`` writes it into ``out[0]``. Runtime
+out)`` writes it into ``out[0]``. The twin's ``rhs``/``jac`` are the C path of
+:mod:`symmech.core.fastcall` (nothing compiled here). Runtime
 code written against ``load`` runs everywhere; only its speed differs. The
 import verifies the module, as every import of ``symmech.generated`` does
 (:mod:`symmech.core.integrity`).
@@ -48,7 +49,11 @@ def load(name: str):
     except ImportError:
         pass
     else:
-        return importlib.import_module(f"{PACKAGE}.{name}_nb")
+        from symmech.core import fastcall
+
+        twin = importlib.import_module(f"{PACKAGE}.{name}_nb")
+        fastcall.install(twin)
+        return twin
     reference = importlib.import_module(f"{PACKAGE}.{name}")
     # the layout of a dynamics module's rhs(t, y, p)
     names = {k: getattr(reference, k) for k in ("STATE", "PARAMS") if hasattr(reference, k)}
