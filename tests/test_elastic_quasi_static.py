@@ -1,0 +1,56 @@
+"""The quasi-static state of the elastic trolley (Newton on R(q, 0, 0) = 0) against closed forms.
+
+A pinned beam with held ends, horizontal, one Ritz function per plane, sagging under gravity: bending
+K q, stretching 4 c H² q³ (Π_m = c (H q²)², c = EA/(8 L³)) and the weight f = g ρA L ∫ N dξ balance on the
+real root of K q + 4 c H² q³ + f = 0 (numpy's roots), far from the linear sag -f/K: Newton needs several
+steps. A body whose rollers all have free play carries no load: refused in one sentence."""
+import numpy as np
+import pytest
+
+from symmech.core.scene import SymmechError
+from symmech.generated import trolley_elastic as gen
+from symmech.trolley import elastic as el
+
+pytestmark = pytest.mark.xdist_group("test_elastic_quasi_static")
+
+L, RHO_A, EI, EA, G0 = 2.0, 1.5, 10.0, 1e7, 9.81
+AT_REST = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
+
+
+@pytest.fixture(scope="module")
+def sagging():
+    """The system (beam along x1 bending along x2, up) and the closed-form sag q1 [m] of its first plane."""
+    beam = el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, RHO_A, (EI, EI), "pinned", 1, axial="held", ea=EA)
+    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, G0, None, (beam,), el.Effects(rollers=False))
+    x, w = np.polynomial.legendre.leggauss(30)
+    x, w = (x + 1) / 2, w / 2
+    n, d1, d2 = np.moveaxis(gen.pinned_basis(x)[:, :, 0], 1, 0)
+    k, h, load = EI / L ** 3 * w @ d2 ** 2, w @ d1 ** 2, G0 * RHO_A * L * (w @ n)
+    roots = np.roots([4 * EA / (8 * L ** 3) * h * h, 0.0, k, load])
+    (sag,) = roots[np.abs(roots.imag) < 1e-9].real
+    assert abs(sag) < 0.1 * load / k  # the stretching carries the load, not the bending
+    return el.System(mdl), sag
+
+
+def test_held_beam_sags_to_the_root_of_the_cubic(sagging):
+    system, sag = sagging
+    q = system.quasi_static(AT_REST)
+    assert q == pytest.approx([sag, 0.0], rel=1e-12, abs=1e-15)
+
+
+def test_newton_starts_from_the_given_state_and_counts_its_steps(sagging):
+    system, sag = sagging
+    start = np.array([sag * (1 + 1e-9), 0.0])
+    assert system.quasi_static(AT_REST, start, max_iter=2) == pytest.approx([sag, 0.0], rel=1e-12, abs=1e-15)
+    with pytest.raises(SymmechError, match=r"^no quasi-static state of the elastic model \(Newton did not converge "
+                                           r"in 2 steps; residual [0-9.e+-]+\)$"):
+        system.quasi_static(AT_REST, max_iter=2)
+
+
+def test_free_play_of_every_roller_is_refused():
+    rollers = el.Rollers((1e6,) * 5, (0.0,) * 5, "clamped_pair", (-1e-3,) * 5)
+    system = el.System(el.ElasticModel(100.0, (0.5, 0.3, 0), (10, 20, 15, 0, 0, 0), 2.0, 1.0, G0, rollers))
+    with pytest.raises(SymmechError, match=r"^no quasi-static state of the elastic model: its stiffness is singular "
+                                           r"\(a free play of the rollers, elastic.rollers.preload < 0, carries no "
+                                           r"load\)$"):
+        system.quasi_static(AT_REST)
