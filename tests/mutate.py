@@ -38,7 +38,8 @@ REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py",
 # the elastic trolley's fast covering tests (the Python reference engine: none is marked compiled_elastic), without
 # the five that integrate (10 of the 14 s a survivor costs)
 ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py", "-k",
-                 "not rigid_limit and not jacobi_energy and not reactions_equal and not stiff_rollers and not free_decay"]
+                 "not rigid_limit and not jacobi_energy and not reactions_equal and not stiff_rollers "
+                 "and not free_decay"]
 
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",

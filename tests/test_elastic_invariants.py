@@ -91,7 +91,8 @@ def rod_moments(beam, e):
     tip = r0 + L * e
     m = rho * L + beam.tip_mass
     first = rho * (L * r0 + L ** 2 / 2 * e) + beam.tip_mass * tip
-    second = rho * (L * np.outer(r0, r0) + L ** 2 / 2 * (np.outer(r0, e) + np.outer(e, r0)) + L ** 3 / 3 * np.outer(e, e))
+    second = rho * (L * np.outer(r0, r0) + L ** 2 / 2 * (np.outer(r0, e) + np.outer(e, r0))
+                    + L ** 3 / 3 * np.outer(e, e))
     return m, first, second + beam.tip_mass * np.outer(tip, tip)
 
 

@@ -19,7 +19,8 @@ AT_REST = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.a
 
 @pytest.fixture(scope="module")
 def sagging():
-    """The system (beam along x1 bending along x2, up) and the closed-form sag q1 [m] of its first plane."""
+    """The system (beam along x1 bending along x2, up), the closed-form sag q1 [m] of its first plane, the bending
+    stiffness EI/L³ ∫ N''² dξ [N/m] and the slope integral ∫ N'² dξ [1] of its one function."""
     beam = el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, RHO_A, (EI, EI), "pinned", 1, axial="held", ea=EA)
     mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, G0, None, (beam,), el.Effects(rollers=False))
     x, w = np.polynomial.legendre.leggauss(30)
@@ -29,17 +30,25 @@ def sagging():
     roots = np.roots([4 * EA / (8 * L ** 3) * h * h, 0.0, k, load])
     (sag,) = roots[np.abs(roots.imag) < 1e-9].real
     assert abs(sag) < 0.1 * load / k  # the stretching carries the load, not the bending
-    return el.System(mdl), sag
+    return el.System(mdl), sag, k, h
 
 
 def test_held_beam_sags_to_the_root_of_the_cubic(sagging):
-    system, sag = sagging
+    system, sag, _, _ = sagging
     q = system.quasi_static(AT_REST)
     assert q == pytest.approx([sag, 0.0], rel=1e-12, abs=1e-15)
 
 
+def test_potential_is_bending_plus_stretching(sagging):
+    """Π = ½ k (q1² + q2²) + c (h (q1² + q2²))²: the planes bend apart and stretch the one beam together."""
+    system, _, k, h = sagging
+    q = np.array([0.03, -0.02])
+    square = q @ q
+    assert system.potential(q) == pytest.approx(0.5 * k * square + EA / (8 * L ** 3) * (h * square) ** 2, rel=1e-12)
+
+
 def test_newton_starts_from_the_given_state_and_counts_its_steps(sagging):
-    system, sag = sagging
+    system, sag, _, _ = sagging
     start = np.array([sag * (1 + 1e-9), 0.0])
     assert system.quasi_static(AT_REST, start, max_iter=2) == pytest.approx([sag, 0.0], rel=1e-12, abs=1e-15)
     with pytest.raises(SymmechError, match=r"^no quasi-static state of the elastic model \(Newton did not converge "
