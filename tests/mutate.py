@@ -69,9 +69,11 @@ SHARDS = {
                           "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
                           "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
     "elastic_quasi_static": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*ǁSystemǁquasi_static__*"]),
+    "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+                      ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
+    # reached only through simulate: needs the integrating tests in its selection
     "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
-                         ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*ǁTimelineǁ*",
-                          "*.x_traction_start__*", "*.x_arc_length__*", "*.x__state_at__*"]),
+                         ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # impact.py (1482 mutants) is split: its tests take 6 s, most mutants run all of them
     "impact": ("symmech/grain/impact.py", IMPACT_TESTS,
