@@ -57,3 +57,45 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         assert np.allclose(a0, [[dV, V ** 2 * kappa, 0], [0, 4 * V ** 2 * kappa, 0]], rtol=0, atol=1e-7)
         assert np.allclose(w, [V * darboux, 2 * V * darboux], rtol=0, atol=1e-8)
         assert np.allclose(dw, [dV * darboux, 0 * darboux], rtol=0, atol=1e-7)
+
+
+def test_frame_turning_rate_follows_the_change_of_curvature():
+    """A horizontal ellipse (curvature varying along s): ω̇ = V̇0 W + V0² dW/ds, dW/ds by central differences of
+    ω/V0 along the track (frame_state and the vectorised frame_motion)."""
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": "6*sin(u)", "y": "0", "z": "3*cos(u)",
+                                             "parameter": "u", "u_range": [0.0, 6.0]},
+                      motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
+    drive = elastic_scene.drive_of(prepared(data), 1)
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    time, s, h = 0.5, 2.0, 1e-4
+    V, dV = 4.0, 2.0
+    turn = [el._state_at(system, drive, time, x).w / V for x in (s - h, s, s + h)]
+    dW = (turn[2] - turn[0]) / (2 * h)
+    assert np.abs(dW).max() > 0.01  # the curvature changes here (V0² dW ≈ 0.2 rad/s²)
+    expected = dV * turn[1] + V ** 2 * dW
+    assert np.allclose(el._state_at(system, drive, time, s).dw, expected, rtol=0, atol=1e-6)
+    fr = el.frames(drive, np.array([s]), system.mdl.l)
+    assert np.allclose(el.frame_motion(fr, np.array([V]), np.array([dV]))[3], [expected], rtol=0, atol=1e-6)
+
+
+def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
+    """With local curvature (case 2) the frame is the rigid model's chord frame for the trolley's axle distance,
+    difference order and step; on the ellipse it differs from the tangent frame of case 1."""
+    from symmech.trolley import model
+
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": "6*sin(u)", "y": "0", "z": "3*cos(u)",
+                                             "parameter": "u", "u_range": [0.0, 6.0]},
+                      motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
+    setup = prepared(data)
+    drive = elastic_scene.drive_of(setup, 2)
+    l = 1.5
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), l, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    s = np.array([2.0, 3.5])
+    chord = model.local_curvature_frame(drive.track, s, l, "frenet", setup.fd_order, setup.fd_step, plan=setup.plan)
+    tangent = el.frames(elastic_scene.drive_of(setup, 1), s, l)
+    assert np.abs(chord.W - tangent.W).max() > 1e-3
+    fs = el._state_at(system, drive, 0.5, s[1])  # V0 = 4 m/s
+    for got, ref in ((fs.v0, 4.0 * chord.e[1]), (fs.w, 4.0 * chord.W[1]), (fs.nu, chord.lam[1, :, 1])):
+        assert np.allclose(got, ref, rtol=0, atol=1e-12)
