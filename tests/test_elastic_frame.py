@@ -99,3 +99,19 @@ def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
     fs = el._state_at(system, drive, 0.5, s[1])  # V0 = 4 m/s
     for got, ref in ((fs.v0, 4.0 * chord.e[1]), (fs.w, 4.0 * chord.W[1]), (fs.nu, chord.lam[1, :, 1])):
         assert np.allclose(got, ref, rtol=0, atol=1e-12)
+
+
+def test_frame_keeps_its_plan_through_a_straight_point():
+    """A horizontal sine x3 = sin(x1) is straight at x1 = 0 and π (no Frenet frame): the scene's frame plan turns it
+    into the rotation-minimising frame started from the upward normal, which stays up on a level track, ν = x2, in
+    both cases (Frenet's ν would be ±x3, flipping at the inflection)."""
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": "u", "y": "0", "z": "sin(u)",
+                                             "parameter": "u", "u_range": [0.0, 6.0]},
+                      motion={"speed": "3"}, time={"t_end": 1.0, "steps": 10})
+    setup = prepared(data)
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    for case in (1, 2):
+        drive = elastic_scene.drive_of(setup, case)
+        for s in (1.0, 5.0, 6.5):
+            assert np.allclose(el._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
