@@ -63,3 +63,18 @@ def test_free_play_of_every_roller_is_refused():
                                            r"\(a free play of the rollers, elastic.rollers.preload < 0, carries no "
                                            r"load\)$"):
         system.quasi_static(AT_REST)
+
+
+def test_preloaded_pair_beyond_its_preload_carries_the_weight():
+    """Stiff clamped pairs preloaded by 10 nm, deflected ~0.1 µm: Newton's first step (both rollers pushing, 2k) is
+    half the answer, and the steps must shrink relative to the small q, not to 1 m. The reactions are the
+    statics of three supports (B, C share what the front axle A does not carry)."""
+    k = (2e9, 2e9, 4e9, 3e9, 2e9)
+    rollers = el.Rollers(k, (0.0,) * 5, "clamped_pair", (1e-8,) * 5)
+    system = el.System(el.ElasticModel(100.0, (0.8, 0.5, 0.0), (20.0, 30.0, 25.0, 0, 0, 0), 2.0, 1.0, G0, rollers))
+    q = system.quasi_static(AT_REST)
+    assert np.abs(q).max() < 1e-6
+    total = 100.0 * G0
+    front = total * 0.8 / 2.0
+    P = system.reactions(AT_REST, q, 0 * q, 0 * q)
+    assert np.allclose(P, [0, (total - front) / 2, (total - front) / 2, front, 0, 0], rtol=1e-6, atol=1e-6)
