@@ -35,6 +35,12 @@ TROLLEY_TESTS = ["tests/test_trolley_physics.py", "tests/test_trolley_paper.py",
 # the reactions' shards, from now on with the tests written against their survivors
 REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py", "tests/test_trolley_chord_frame.py"]
 
+# the elastic trolley's fast covering tests (the Python reference engine: none is marked compiled_elastic), without
+# the five that integrate (10 of the 14 s a survivor costs)
+ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py", "-k",
+                 "not rigid_limit and not jacobi_energy and not reactions_equal and not stiff_rollers "
+                 "and not free_decay"]
+
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
                       "tests/test_grain_motion_closed_forms.py", "-m", "not slow"]
@@ -50,6 +56,25 @@ SHARDS = {
                          "tests/test_roller_clamped_pair.py"],
                         ["*.x__beam_damping__*", "*.x_roller_forces__*", "*.x__dissipation__*",
                          "*ǁSystemǁlinear_modes__*"]),
+    # the rest of elastic.py by function, physics first; the fast elastic tests (test_trolley_elastic.py ~11 s)
+    "elastic_invariants": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+                           ["*.x_invariants__*", "*.x__beam_samples__*", "*.x__beam_stiffness__*",
+                            "*.x_beam_basis__*", "*.x_rigid_cloud__*", "*.x__frame_of__*"]),
+    "elastic_system": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+                       ["*ǁSystemǁ__init__*", "*ǁSystemǁevaluate__*", "*ǁSystemǁcoefficients__*", "*ǁSystemǁ_dv__*",
+                        "*ǁSystemǁ_p2__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
+                        "*ǁSystemǁroller_state__*", "*ǁSystemǁ_frame_mats__*"]),
+    "elastic_balances": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+                         ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
+                          "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
+                          "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
+    "elastic_quasi_static": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*ǁSystemǁquasi_static__*"]),
+    "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+                      ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
+    # reached only through simulate: needs the integrating tests in its selection
+    "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+                         ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
+    "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # impact.py (1482 mutants) is split: its tests take 6 s, most mutants run all of them
     "impact": ("symmech/grain/impact.py", IMPACT_TESTS,
                ["*ǁDescentOptionsǁ*", "*.x__golden_section__*", "*.x_solve_descent_batch__*", "*.x_solve_scipy__*",

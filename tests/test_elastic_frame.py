@@ -1,0 +1,117 @@
+"""The frame state of the elastic trolley on a helix against the Frenet-Serret closed forms.
+
+The track r(s) = (a sin(s/c), b s/c, a cos(s/c)), arc length s, c = √(a² + b²), axis up (X2): curvature
+κ = a/c², torsion from B' = -τ N; with the Frenet frame (x1, x2, x3) = (T, N, B) and the speed V0(t), the
+origin moves with v0 = V0 T, a0 = V̇0 T + V0² κ N, the frame turns with ω = V0 (τ T + κ B), ω̇ = V̇0 (τ T + κ B),
+and "up" is ν = (T·X2, N·X2, B·X2)."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symmech.trolley import elastic as el
+from symmech.trolley import elastic_scene
+
+sys.path.insert(0, str(Path(__file__).parent))
+from trolley_util import prepared, setup as scene_dict  # noqa: E402
+
+pytestmark = pytest.mark.xdist_group("test_elastic_frame")
+
+A, B = 7.0, 2.0
+C = float(np.hypot(A, B))
+
+
+def tnb(s):
+    """T, N, B (3, 3) of the helix at s, written out."""
+    u = s / C
+    t = np.array([A * np.cos(u), B, -A * np.sin(u)]) / C
+    n = np.array([-np.sin(u), 0.0, -np.cos(u)])
+    return np.array([t, n, np.cross(t, n)])
+
+
+def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": f"{A}*sin(s/{C!r})", "y": f"{B}*s/{C!r}",
+                                             "z": f"{A}*cos(s/{C!r})"},
+                      motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
+    drive = elastic_scene.drive_of(prepared(data), 1)
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    h = 1e-4
+    for time, s in ((0.5, 1.3), (0.8, 4.0)):
+        V, dV = 3 + 2 * time, 2.0
+        frame = tnb(s)
+        kappa = A / C ** 2
+        tau = -(tnb(s + h)[2] - tnb(s - h)[2]) / (2 * h) @ frame[1]  # B' = -τ N
+        fs = el._state_at(system, drive, time, s)
+        darboux = np.array([tau, 0.0, kappa])
+        assert np.allclose(fs.v0, [V, 0, 0], rtol=0, atol=1e-9)
+        assert np.allclose(fs.a0, [dV, V ** 2 * kappa, 0], rtol=0, atol=1e-7)
+        assert np.allclose(fs.w, V * darboux, rtol=0, atol=1e-8)
+        assert np.allclose(fs.dw, dV * darboux, rtol=0, atol=1e-7)
+        assert np.allclose(fs.nu, frame[:, 1], rtol=0, atol=1e-9)
+        # the vectorised frame_motion gives the same rows
+        fr = el.frames(drive, np.array([s, s]), system.mdl.l)
+        v0, a0, w, dw = el.frame_motion(fr, np.array([V, 2 * V]), np.array([dV, 0.0]))
+        assert np.allclose(v0, [[V, 0, 0], [2 * V, 0, 0]], rtol=0, atol=1e-9)
+        assert np.allclose(a0, [[dV, V ** 2 * kappa, 0], [0, 4 * V ** 2 * kappa, 0]], rtol=0, atol=1e-7)
+        assert np.allclose(w, [V * darboux, 2 * V * darboux], rtol=0, atol=1e-8)
+        assert np.allclose(dw, [dV * darboux, 0 * darboux], rtol=0, atol=1e-7)
+
+
+def test_frame_turning_rate_follows_the_change_of_curvature():
+    """A horizontal ellipse (curvature varying along s): ω̇ = V̇0 W + V0² dW/ds, dW/ds by central differences of
+    ω/V0 along the track (frame_state and the vectorised frame_motion)."""
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": "6*sin(u)", "y": "0", "z": "3*cos(u)",
+                                             "parameter": "u", "u_range": [0.0, 6.0]},
+                      motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
+    drive = elastic_scene.drive_of(prepared(data), 1)
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    time, s, h = 0.5, 2.0, 1e-4
+    V, dV = 4.0, 2.0
+    turn = [el._state_at(system, drive, time, x).w / V for x in (s - h, s, s + h)]
+    dW = (turn[2] - turn[0]) / (2 * h)
+    assert np.abs(dW).max() > 0.01  # the curvature changes here (V0² dW ≈ 0.2 rad/s²)
+    expected = dV * turn[1] + V ** 2 * dW
+    assert np.allclose(el._state_at(system, drive, time, s).dw, expected, rtol=0, atol=1e-6)
+    fr = el.frames(drive, np.array([s]), system.mdl.l)
+    assert np.allclose(el.frame_motion(fr, np.array([V]), np.array([dV]))[3], [expected], rtol=0, atol=1e-6)
+
+
+def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
+    """With local curvature (case 2) the frame is the rigid model's chord frame for the trolley's axle distance,
+    difference order and step; on the ellipse it differs from the tangent frame of case 1."""
+    from symmech.trolley import model
+
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": "6*sin(u)", "y": "0", "z": "3*cos(u)",
+                                             "parameter": "u", "u_range": [0.0, 6.0]},
+                      motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
+    setup = prepared(data)
+    drive = elastic_scene.drive_of(setup, 2)
+    l = 1.5
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), l, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    s = np.array([2.0, 3.5])
+    chord = model.local_curvature_frame(drive.track, s, l, "frenet", setup.fd_order, setup.fd_step, plan=setup.plan)
+    tangent = el.frames(elastic_scene.drive_of(setup, 1), s, l)
+    assert np.abs(chord.W - tangent.W).max() > 1e-3
+    fs = el._state_at(system, drive, 0.5, s[1])  # V0 = 4 m/s
+    for got, ref in ((fs.v0, 4.0 * chord.e[1]), (fs.w, 4.0 * chord.W[1]), (fs.nu, chord.lam[1, :, 1])):
+        assert np.allclose(got, ref, rtol=0, atol=1e-12)
+
+
+def test_frame_keeps_its_plan_through_a_straight_point():
+    """A horizontal sine x3 = sin(x1) is straight at x1 = 0 and π (no Frenet frame): the scene's frame plan turns it
+    into the rotation-minimising frame started from the upward normal, which stays up on a level track, ν = x2, in
+    both cases (Frenet's ν would be ±x3, flipping at the inflection)."""
+    data = scene_dict(frame="frenet", track={"type": "expression", "x": "u", "y": "0", "z": "sin(u)",
+                                             "parameter": "u", "u_range": [0.0, 6.0]},
+                      motion={"speed": "3"}, time={"t_end": 1.0, "steps": 10})
+    setup = prepared(data)
+    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    for case in (1, 2):
+        drive = elastic_scene.drive_of(setup, case)
+        for s in (1.0, 5.0, 6.5):
+            assert np.allclose(el._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
