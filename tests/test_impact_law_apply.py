@@ -66,3 +66,67 @@ def test_sticking_law_on_tilted_ellipsoids_reverses_the_contact_velocity_by_the_
         np.testing.assert_allclose([out["ke_before"][i], out["ke_after"][i]], ke, rtol=1e-12)
     assert out["admissible"].all() and out["converged"].all() and out["warnings"] == []
     assert out["printed_admissible"] == out["printed_creates_energy"] == [None] * len(mass)
+
+
+def test_printed_law_on_tilted_ellipsoids_restitutes_the_contact_velocity_as_printed():
+    """Printed law with rotation: u⁺_n = -e u_n, |u⁺_t| = (1 - λ) |u_t|, and the impulse moves v and ω as a rigid
+    body's; each approaching grain's verdict is logged, the grain leaving gets none and no impulse."""
+    e, lam = 0.5, 0.4
+    axes, mass, Q, v, w = grains(12, 3)
+    out = ImpactLaw("printed", e=e, lam=lam).apply(axes, mass, Q, v, w, True)
+    hit = 0
+    for i in range(len(mass)):
+        R, I_K, K = by_hand(axes[i], mass[i], Q[i])
+        u = v[i] + np.cross(w[i], R)
+        P, u_after = out["impulse"][i], out["u_after"][i]
+        np.testing.assert_allclose(out["v"][i], v[i] + P / mass[i], rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(out["w"][i], w[i] + np.linalg.solve(I_K, np.cross(R, P)), rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(u_after, u + K @ P, rtol=1e-9, atol=1e-12 * np.abs(u).max())
+        if u[2] >= 0:
+            assert not P.any() and out["printed_admissible"][i] is None and out["printed_creates_energy"][i] is None
+            continue
+        hit += 1
+        assert u_after[2] == pytest.approx(-e * u[2], rel=1e-9)
+        assert np.hypot(*u_after[:2]) == pytest.approx((1 - lam) * np.hypot(*u[:2]), rel=1e-9)
+        gains = out["ke_after"][i] > out["ke_before"][i] * (1 + 1e-9)
+        assert out["admissible"][i] == (not gains) and out["printed_creates_energy"][i] == gains
+        assert out["printed_admissible"][i] in (True, False) and out["converged"][i]
+    assert 0 < hit < len(mass)
+
+
+def test_needle_gaining_energy_under_the_printed_law_is_flagged_with_its_energies():
+    """A tumbling needle (5:1:1) under the printed law e = λ = 0.9 gains kinetic energy (the printed law has no
+    admissible root there): both warnings, the energies by hand (½ m v² + ½ ωᵀ I_K ω)."""
+    axes, m = np.array([[5e-3, 1e-3, 1e-3]]), np.array([1e-6])
+    q0 = np.array([-0.529, 0.693, -0.481, 0.091])
+    Q = Rotation.from_quat(np.r_[q0[1:], q0[0]]).as_matrix()[None]
+    v, w = np.array([[0.01, 0.084, -0.3]]), np.array([[43.5, 3.4, -2.4]])
+    out = ImpactLaw("printed", e=0.9, lam=0.9).apply(axes, m, Q, v, w, True)
+    _, I_K, _ = by_hand(axes[0], m[0], Q[0])
+    ke0, ke1 = (0.5 * m[0] * x @ x + 0.5 * y @ I_K @ y for x, y in ((v[0], w[0]), (out["v"][0], out["w"][0])))
+    assert ke1 > 1.04 * ke0
+    assert out["warnings"] == ["printed impact law: no admissible root; the one used creates kinetic energy",
+                               f"impact law 'printed' created energy: {ke0:.6g} J -> {ke1:.6g} J"]
+    assert not out["admissible"][0] and out["printed_admissible"] == [False] and out["printed_creates_energy"] == [True]
+
+
+@pytest.mark.parametrize("rotation", [True, False])
+def test_a_contact_point_sliding_along_the_plane_gets_no_impulse(rotation):
+    """u_n = 0 exactly with a tangential slip: not approaching, so no impulse, even for μ = ∞ (whose sticking
+    impulse would stop the slip)."""
+    axes, mass, Q = np.full((1, 3), 2e-3), np.array([3e-5]), np.eye(3)[None]
+    v, w = np.array([[0.3, -0.1, 0.0]]), np.array([[0.0, 0.0, 20.0]])
+    out = ImpactLaw("coulomb", e_n=0.5, e_t=0.2, check_printed=False).apply(axes, mass, Q, v, w, rotation)
+    assert not out["impulse"].any()
+    np.testing.assert_array_equal(out["v"], v)
+    np.testing.assert_array_equal(out["w"], w if rotation else np.zeros((1, 3)))
+
+
+def test_the_printed_verdict_is_given_only_for_a_rotating_grain():
+    """A point mass (rotation off) gets no printed-law verdict: None, and the Coulomb impulse by the closed form
+    P_n = -(1 + e_n) m u_n, P_t = -(1 + e_t) m u_t (μ = ∞)."""
+    axes, mass, Q = np.full((2, 3), 2e-3), np.array([3e-5, 1e-5]), np.broadcast_to(np.eye(3), (2, 3, 3))
+    v, w = np.array([[0.3, -0.1, -0.5], [0.0, 0.2, -0.1]]), np.array([[40.0, 0.0, 20.0], [0.0, 0.0, 0.0]])
+    out = ImpactLaw("coulomb", e_n=0.5, e_t=0.2, check_printed=True).apply(axes, mass, Q, v, w, False)
+    assert out["printed_admissible"] == out["printed_creates_energy"] == [None, None]
+    np.testing.assert_allclose(out["impulse"], -mass[:, None] * v * [1.2, 1.2, 1.5], rtol=1e-12)
