@@ -70,7 +70,8 @@ def test_sticking_law_on_tilted_ellipsoids_reverses_the_contact_velocity_by_the_
 
 def test_printed_law_on_tilted_ellipsoids_restitutes_the_contact_velocity_as_printed():
     """Printed law with rotation: u⁺_n = -e u_n, |u⁺_t| = (1 - λ) |u_t|, and the impulse moves v and ω as a rigid
-    body's; each approaching grain's verdict is logged, the grain leaving gets none and no impulse."""
+    body's; each approaching grain's verdict is logged, the grain leaving gets none and no impulse; the same
+    without ``check_printed`` (a flag of the Coulomb law)."""
     e, lam = 0.5, 0.4
     axes, mass, Q, v, w = grains(12, 3)
     out = ImpactLaw("printed", e=e, lam=lam).apply(axes, mass, Q, v, w, True)
@@ -92,6 +93,10 @@ def test_printed_law_on_tilted_ellipsoids_restitutes_the_contact_velocity_as_pri
         assert out["admissible"][i] == (not gains) and out["printed_creates_energy"][i] == gains
         assert out["printed_admissible"][i] in (True, False) and out["converged"][i]
     assert 0 < hit < len(mass)
+    # check_printed only adds the printed verdict to the Coulomb law: the printed law itself is solved without it
+    unchecked = ImpactLaw("printed", e=e, lam=lam, check_printed=False).apply(axes, mass, Q, v, w, True)
+    for key in ("impulse", "v", "w", "printed_admissible", "printed_creates_energy", "converged"):
+        np.testing.assert_array_equal(unchecked[key], out[key])
 
 
 def test_needle_gaining_energy_under_the_printed_law_is_flagged_with_its_energies():

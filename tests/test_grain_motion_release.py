@@ -1,0 +1,41 @@
+"""How the Python grain loop starts a grain released on the plane: a grain at rest on a plane that pushes slides from
+the start (no landing, no impact, no flight), whatever its spin about the normal and however the plate vibrates;
+and a contact point approaching slowly, above the round-off of a spinning grain, is an impact."""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.grain import flight, motion
+from symmech.grain.coulomb_law import ImpactLaw
+from test_grain_motion_closed_forms import A, M, numerics, sphere, state
+
+LAW = ImpactLaw("coulomb", e_n=0.5, e_t=0.0, mu=0.0, check_printed=False)
+
+
+def assert_slides_from_the_start(res, t_end):
+    assert res.impacts == [] and res.extra["landings"] == 0
+    assert res.time_in == {"flight": 0.0, "sliding": pytest.approx(t_end, abs=1e-15)}
+    assert res.extra["energy_budget"]["lost_at_landings_J"] == 0.0
+    assert set(res.trajectory[1:, -1]) == {motion.REGIMES.index("sliding")}  # the first row is the start's
+
+
+def test_released_at_rest_spinning_about_the_normal_slides_from_the_start_and_keeps_its_spin():
+    """A sphere at rest on a still plane, spinning at 30 rad/s about the normal: its contact point does not move,
+    so it slides (rests) from the start, in place, its spin about the normal kept."""
+    res = motion.simulate(sphere(LAW), numerics(), state(z=A, w=(0.0, 0.0, 30.0)), 0.002)
+    assert_slides_from_the_start(res, 0.002)
+    np.testing.assert_allclose(res.final.r, [0.0, 0.0, A], atol=1e-15)
+    np.testing.assert_allclose(res.final.v, 0.0, atol=1e-15)
+    np.testing.assert_allclose(flight.rotation_matrix(res.final.q) @ res.final.w, [0.0, 0.0, 30.0], rtol=1e-9)
+
+
+def test_released_at_rest_on_a_vibrating_plate_rides_it_from_the_start():
+    """A sphere at rest on a plate vibrating at Γ = A ω²/g = 0.16 (never lifting it): it rides the plate from the
+    start, at rest relative to it."""
+    model = sphere(LAW, amplitude=1e-4, freq=20.0)
+    assert 1e-4 * (2 * math.pi * 20.0) ** 2 / 9.81 < 0.2
+    res = motion.simulate(model, numerics(), state(z=A), 0.01)
+    assert_slides_from_the_start(res, 0.01)
+    np.testing.assert_allclose(res.final.r, [0.0, 0.0, A], atol=1e-15)
+    np.testing.assert_allclose(res.final.v, 0.0, atol=1e-15)
