@@ -39,3 +39,20 @@ def test_released_at_rest_on_a_vibrating_plate_rides_it_from_the_start():
     assert_slides_from_the_start(res, 0.01)
     np.testing.assert_allclose(res.final.r, [0.0, 0.0, A], atol=1e-15)
     np.testing.assert_allclose(res.final.v, 0.0, atol=1e-15)
+
+
+@pytest.mark.parametrize("spin", [0.0, 30.0])
+def test_a_slow_approach_above_round_off_is_an_impact(spin):
+    """A sphere (spinning about the normal or not) let go 1e-13 m above the plate at 1e-10 m/s downwards under a
+    weak gravity g = 1e-6 m/s²: it arrives at u = sqrt(v0² + 2 g h) = 4.6e-10 m/s, far above the round-off of its
+    contact velocity (1e3 eps (|v| + |ω| a) ~ 1e-14 m/s), so it bounces (u⁺ = -e u) and then lands (below
+    rest_velocity)."""
+    g, h, v0, e = 1e-6, 1e-13, 1e-10, 0.5
+    model = motion.Model((A,) * 3, M, (0.0, 0.0, -g), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)), LAW, 0.5)
+    res = motion.simulate(model, numerics(), state(z=A + h, v=(0.0, 0.0, -v0), w=(0.0, 0.0, spin)), 2e-3)
+    u = math.sqrt(v0**2 + 2 * g * h)
+    assert len(res.impacts) == 1 and res.extra["landings"] == 1
+    imp = res.impacts[0]
+    assert imp["t"] == pytest.approx((u - v0) / g, rel=1e-6)
+    assert imp["u_before"][2] == pytest.approx(-u, rel=1e-6)
+    assert imp["u_after"][2] == pytest.approx(e * u, rel=1e-6)

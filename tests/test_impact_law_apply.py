@@ -135,3 +135,28 @@ def test_the_printed_verdict_is_given_only_for_a_rotating_grain():
     out = ImpactLaw("coulomb", e_n=0.5, e_t=0.2, check_printed=True).apply(axes, mass, Q, v, w, False)
     assert out["printed_admissible"] == out["printed_creates_energy"] == [None, None]
     np.testing.assert_allclose(out["impulse"], -mass[:, None] * v * [1.2, 1.2, 1.5], rtol=1e-12)
+
+
+def test_the_printed_verdict_beside_the_coulomb_law_is_the_printed_laws_with_e_n_and_one_plus_e_t():
+    """With check_printed, the Coulomb law logs the verdict of the printed law with e = e_n, λ = 1 + e_t: the verdict
+    the printed law itself gets (its energy gain checked by hand above), which differs from λ = 2 + e_t or e = λ = 0
+    on these grains. The needle gains energy under e = λ = 0.9, i.e. e_n = 0.9, e_t = -0.1."""
+    e_n, e_t = 0.9, 0.6
+    axes, mass, Q, v, w = grains(40, 3)
+    checked = ImpactLaw("coulomb", e_n=e_n, e_t=e_t, mu=0.3).apply(axes, mass, Q, v, w, True)
+    printed = ImpactLaw("printed", e=e_n, lam=1 + e_t).apply(axes, mass, Q, v, w, True)
+    for i in range(len(mass)):
+        R, I_K, _ = by_hand(axes[i], mass[i], Q[i])
+        if (v[i] + np.cross(w[i], R))[2] < 0:
+            ke = [0.5 * mass[i] * x @ x + 0.5 * y @ I_K @ y
+                  for x, y in ((v[i], w[i]), (printed["v"][i], printed["w"][i]))]
+            assert printed["printed_creates_energy"][i] == (ke[1] > ke[0] * (1 + 1e-9))
+    assert checked["printed_admissible"] == printed["printed_admissible"]
+    assert checked["printed_creates_energy"] == printed["printed_creates_energy"]
+    assert checked["printed_admissible"].count(False) == 2
+    needle = (np.array([[5e-3, 1e-3, 1e-3]]), np.array([1e-6]),
+              Rotation.from_quat([0.693, -0.481, 0.091, -0.529]).as_matrix()[None], np.array([[0.01, 0.084, -0.3]]),
+              np.array([[43.5, 3.4, -2.4]]))
+    out = ImpactLaw("coulomb", e_n=0.9, e_t=-0.1, mu=0.3).apply(*needle, True)
+    assert out["printed_admissible"] == [False] and out["printed_creates_energy"] == [True]
+    assert out["admissible"][0] and out["warnings"] == []  # the Coulomb law itself never gains
