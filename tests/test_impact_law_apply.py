@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from symmech.grain import body
 from symmech.grain.coulomb_law import ImpactLaw
 
 EZ = np.array([0.0, 0.0, 1.0])
@@ -160,3 +161,21 @@ def test_the_printed_verdict_beside_the_coulomb_law_is_the_printed_laws_with_e_n
     out = ImpactLaw("coulomb", e_n=0.9, e_t=-0.1, mu=0.3).apply(*needle, True)
     assert out["printed_admissible"] == [False] and out["printed_creates_energy"] == [True]
     assert out["admissible"][0] and out["warnings"] == []  # the Coulomb law itself never gains
+
+
+def test_grazing_ellipsoid_under_the_printed_law_is_pulled_into_the_plane_and_says_so():
+    """A tilted ellipsoid (2, 1.5, 1 mm) grazing the plane (u_n = -1e-6 m/s, slipping at 0.54 m/s), printed law
+    e = 0.5, λ = 0.3: the only roots pull it into the plane (P_z < 0), no energy gained; the law still holds
+    (u⁺_n = -e u_n, |u⁺_t| = (1 - λ)|u_t|) and it is converged."""
+    axes, mass = np.array([[2e-3, 1.5e-3, 1e-3]]), np.array([1e-5])
+    Q = body.rotation([0.3, 0.7, 1.1])[None]
+    v, w = np.array([[0.5, 0.2, -1e-6]]), np.zeros((1, 3))
+    out = ImpactLaw("printed", e=0.5, lam=0.3).apply(axes, mass, Q, v, w, True)
+    assert out["impulse"][0, 2] < 0
+    assert out["warnings"] == ["printed impact law: no admissible root; the one used pulls the grain into the plane "
+                               "(T_z < 0)"]
+    assert out["printed_admissible"] == [False] and out["printed_creates_energy"] == [False]
+    assert out["admissible"][0] and out["converged"][0]
+    u_after = out["u_after"][0]
+    assert u_after[2] == pytest.approx(0.5e-6, rel=1e-6)
+    assert np.hypot(*u_after[:2]) == pytest.approx(0.7 * np.hypot(0.5, 0.2), rel=1e-9)
