@@ -93,3 +93,19 @@ def test_state_of_a_result_vector_is_made_of_its_views():
     for got, part in ((st.r, y[1:4]), (st.v, y[4:7]), (st.q, y[7:11]), (st.w, y[11:14])):
         assert np.shares_memory(got, y) and np.array_equal(got, part)
     assert math.isclose(st.w[-1], 13 / 4.0)
+
+
+@pytest.mark.parametrize("start, end, work, impacts, landings, sliding, scale", [
+    (0.5, 2.0, 0.25, 0.125, 0.0625, 0.03125, 2.0),   # the end energy is the largest
+    (0.5, -0.25, 1.5, 0.125, 0.0625, 0.03125, 1.5),  # the input
+    (0.5, -0.25, 0.25, 0.5, 0.375, 0.25, 1.125),     # the losses together (each smaller than the start)
+    (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None),            # nothing at all: relative residual 0
+])
+def test_relative_residual_of_the_budget_is_over_its_largest_entry(start, end, work, impacts, landings, sliding, scale):
+    carry = np.zeros(compiled.N_CARRY)
+    carry[[compiled.C_E_START, compiled.C_E_END, compiled.C_WORK]] = start, end, work
+    carry[[compiled.C_IMPACTS, compiled.C_LAND_LOSS, compiled.C_SLIDE_LOSS]] = impacts, landings, sliding
+    report = compiled._Budget(MODEL, carry).report(None, 1e-6)
+    residual = end - start - (work - impacts - landings - sliding)
+    assert report["residual_J"] == residual
+    assert report["relative_residual"] == (abs(residual) / scale if scale else 0.0)
