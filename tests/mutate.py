@@ -37,7 +37,8 @@ REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py",
 
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
-                      "tests/test_grain_motion_closed_forms.py", "-m", "not slow"]
+                      "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
+                      "tests/test_grain_compiled_python_side.py", "-m", "not slow"]
 
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
@@ -66,8 +67,8 @@ SHARDS = {
     # ImpactLaw.apply: 241 mutants, many in log texts; without the grain motion physics tests (100 s a survivor),
     # which reach the law only through whole runs
     "coulomb_apply": ("symmech/grain/coulomb_law.py",
-                      ["tests/test_grain_motion_parts.py", "tests/test_coulomb_impact_law.py"],
-                      ["*ǁImpactLawǁapply__*"]),
+                      ["tests/test_grain_motion_parts.py", "tests/test_coulomb_impact_law.py",
+                       "tests/test_impact_law_apply.py"], ["*ǁImpactLawǁapply__*"]),
     # the structural model method: forms.py (spatial term lists, principal axes and torsion springs in
     # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
     "smm_forms": ("symmech/smm/forms.py",
@@ -113,7 +114,8 @@ SHARDS = {
                      "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
     # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
     # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
-    "engine_py": ("symmech/grain/compiled.py", ["tests/test_grain_compiled.py"],
+    "engine_py": ("symmech/grain/compiled.py", ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
+                                                "tests/test_grain_compiled_start.py"],
                   ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
                    "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x__entry_signature__*"]),
