@@ -114,8 +114,9 @@ SHARDS = {
                      "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
     # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
     # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
-    "engine_py": ("symmech/grain/compiled.py", ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
-                                                "tests/test_grain_compiled_start.py"],
+    "engine_py": ("symmech/grain/compiled.py",
+                  ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
+                   "tests/test_grain_compiled_start.py"],
                   ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
                    "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x__entry_signature__*"]),

@@ -22,7 +22,8 @@ NUM = motion.Numerics(max_impacts=7)
      "printed impact law: no admissible root; the one used creates kinetic energy"),
     (compiled.W_PRINTED_PULLS, 0.0, 0.0,
      "printed impact law: no admissible root; the one used pulls the grain into the plane (T_z < 0)"),
-    (compiled.W_PRINTED_RESIDUAL, 3.456789e-7, 0.0, "printed impact law: no solution of (19) (relative residual 3.46e-07)"),
+    (compiled.W_PRINTED_RESIDUAL, 3.456789e-7, 0.0,
+     "printed impact law: no solution of (19) (relative residual 3.46e-07)"),
     (compiled.W_ENERGY, 1.234567891e-6, 1.3e-6, "impact law 'printed' created energy: 1.23457e-06 J -> 1.3e-06 J"),
 ])
 def test_warning_codes_read_as_the_python_loops_texts(code, a, b, text):
