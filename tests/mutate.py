@@ -43,7 +43,8 @@ ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py
 
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
-                      "tests/test_grain_motion_closed_forms.py", "-m", "not slow"]
+                      "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
+                      "tests/test_grain_compiled_python_side.py", "-m", "not slow"]
 
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
@@ -88,10 +89,11 @@ SHARDS = {
                  "tests/test_coulomb_impact_law.py"],
                 ["*.x_inverse_effective_mass__*", "*.x_coulomb_impulse__*", "*.x_kinetic_energy__*",
                  "*.x_principal_inertia__*"]),
-    # ImpactLaw.apply: 241 mutants, many in log texts; the grain motion tests take 100 s
+    # ImpactLaw.apply: 241 mutants, many in log texts; without the grain motion physics tests (100 s a survivor),
+    # which reach the law only through whole runs
     "coulomb_apply": ("symmech/grain/coulomb_law.py",
-                      ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
-                       "tests/test_coulomb_impact_law.py"], ["*ǁImpactLawǁapply__*"]),
+                      ["tests/test_grain_motion_parts.py", "tests/test_coulomb_impact_law.py",
+                       "tests/test_impact_law_apply.py"], ["*ǁImpactLawǁapply__*"]),
     # the structural model method: forms.py (spatial term lists, principal axes and torsion springs in
     # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
     "smm_forms": ("symmech/smm/forms.py",
@@ -130,9 +132,19 @@ SHARDS = {
     # the grain motion loop (the Python reference engine): the tests that run motion.simulate; scenes on "auto" run
     # the Python loop there (the mutated copy's numba cache is cold)
     "motion": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS, ["*"]),
+    # what the motion shard left without a result (docs/mutation.md)
+    "motion_rest": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                    ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
+                     "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*", "*.x__velocity_noise__*",
+                     "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
     # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
     # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
-    "engine_py": ("symmech/grain/compiled.py", ["tests/test_grain_compiled.py"], ["*"]),
+    "engine_py": ("symmech/grain/compiled.py",
+                  ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
+                   "tests/test_grain_compiled_start.py"],
+                  ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
+                   "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
+                   "*.x__entry_signature__*"]),
     # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
     # and a child imports the unmutated package anyway
     "pipeline_output": ("symmech/core/pipeline.py",

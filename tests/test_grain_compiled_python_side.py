@@ -1,0 +1,112 @@
+"""The Python side of the compiled grain engine (symmech.grain.compiled), without compiling it: the texts of its
+warning and error codes (numbers included, worded as the Python loop words them), the impact log and the energy
+budget built from the compiled loop's raw rows and carry. Expected values are written here by hand."""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.core.scene import SymmechError
+from symmech.grain import compiled, flight, motion
+from symmech.grain.coulomb_law import ImpactLaw
+
+MODEL = motion.Model((1e-3, 1e-3, 1e-3), 2e-6, (0.0, 0.0, -9.81), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
+                     ImpactLaw("printed", e=0.5, lam=0.5), 0.3)
+NUM = motion.Numerics(max_impacts=7)
+
+
+@pytest.mark.parametrize("code, a, b, text", [
+    (compiled.W_MAX_IMPACTS, 0.0123456789, 0.0, "stopped at t = 0.0123457 s after numerics.max_impacts = 7 impacts"),
+    (compiled.W_CHATTER, 0.5, 0.0, "100 impacts within 0.0001 periods: chattering summed into sliding"),
+    (compiled.W_PRINTED_ENERGY, 0.0, 0.0,
+     "printed impact law: no admissible root; the one used creates kinetic energy"),
+    (compiled.W_PRINTED_PULLS, 0.0, 0.0,
+     "printed impact law: no admissible root; the one used pulls the grain into the plane (T_z < 0)"),
+    (compiled.W_PRINTED_RESIDUAL, 3.456789e-7, 0.0,
+     "printed impact law: no solution of (19) (relative residual 3.46e-07)"),
+    (compiled.W_ENERGY, 1.234567891e-6, 1.3e-6, "impact law 'printed' created energy: 1.23457e-06 J -> 1.3e-06 J"),
+])
+def test_warning_codes_read_as_the_python_loops_texts(code, a, b, text):
+    assert compiled._warning(int(code), a, b, MODEL, NUM) == text
+
+
+@pytest.mark.parametrize("status, regime, text", [
+    (compiled.STALLED, 2, "grain: the simulation stopped advancing at t = 0.123456789 s (1000 regime changes without "
+                          "advancing time, sliding regime)"),
+    (compiled.STALLED, 0, "grain: the simulation stopped advancing at t = 0.123456789 s (1000 regime changes without "
+                          "advancing time, flight regime)"),
+    (compiled.SLIDE_STALLED, 2, "sliding stagnates at t = 0.123456789 s: 200 regime changes without advancing time"),
+    (compiled.SLIDE_RHS, 2, "sliding integration stagnates at t = 0.123456789 s (more than 400000 evaluations in one "
+                            "chunk)"),
+    (compiled.SLIDE_FAIL, 2, "sliding integration failed at t = 0.123456789 s: required step size is less than "
+                             "spacing between numbers"),
+    (compiled.ROT_FAIL, 0, "torque-free rotation failed at t = 0.123456789 s: required step size is less than spacing "
+                           "between numbers"),
+])
+def test_failure_codes_raise_the_python_loops_errors(status, regime, text):
+    with pytest.raises(SymmechError) as err:
+        compiled._raise(status, 0.1234567891, regime)
+    assert str(err.value) == text
+
+
+def impact_rows():
+    """Two compiled impact rows: t, r, v before/after, w before/after, impulse, u before/after, ke before/after,
+    then the flags admissible, printed admissible, printed creates energy, converged (-1 not checked, 0 no, 1 yes)."""
+    rows = np.arange(2 * compiled.IMPACT_WIDTH, dtype=float).reshape(2, compiled.IMPACT_WIDTH) / 8.0
+    rows[0, 27:31] = [1.0, -1.0, -1.0, 1.0]
+    rows[1, 27:31] = [0.0, 0.0, 1.0, 0.0]
+    return rows
+
+
+def test_impact_log_from_the_compiled_rows_has_the_python_loops_fields():
+    rows = impact_rows()
+    log = compiled._impact_dicts(rows)
+    assert len(log) == 2
+    for k, entry in enumerate(log):
+        x = list(np.arange(31 * k, 31 * k + 31) / 8.0)
+        assert entry == {"t": x[0], "r": x[1:4], "v_before": x[4:7], "v_after": x[7:10], "w_before": x[10:13],
+                         "w_after": x[13:16], "impulse": x[16:19], "u_before": x[19:22], "u_after": x[22:25],
+                         "ke_before": x[25], "ke_after": x[26],
+                         "admissible": k == 0, "printed_admissible": [None, False][k],
+                         "printed_creates_energy": [None, True][k], "converged": k == 0}
+        assert type(entry["t"]) is float and type(entry["admissible"]) is bool
+    lazy = compiled.LazyMotion(np.zeros((1, 15)), None, {}, [], None, None)
+    lazy._rows = rows
+    assert lazy.impacts == log and lazy.impacts is lazy.impacts  # built once, on first use
+
+
+def test_energy_budget_of_a_finished_run_from_its_carry():
+    """Start 2.0 J, end 1.25 J, work 0.5 J, losses 0.75, 0.25, 0.125 J: residual = end - start - (work - losses)."""
+    carry = np.zeros(compiled.N_CARRY)
+    carry[[compiled.C_E_START, compiled.C_E_END, compiled.C_WORK]] = 2.0, 1.25, 0.5
+    carry[[compiled.C_IMPACTS, compiled.C_LAND_LOSS, compiled.C_SLIDE_LOSS]] = 0.75, 0.25, 0.125
+    report = compiled._Budget(MODEL, carry).report(None, 1e-6)
+    residual = 1.25 - 2.0 - (0.5 - 0.75 - 0.25 - 0.125)
+    assert report == {"start_J": 2.0, "end_J": 1.25, "input_by_surface_J": 0.5, "lost_in_impacts_J": 0.75,
+                      "lost_at_landings_J": 0.25, "lost_in_sliding_J": 0.125, "residual_J": residual,
+                      "relative_residual": abs(residual) / 2.0, "tolerance": 1e-6}
+
+
+def test_state_of_a_result_vector_is_made_of_its_views():
+    y = np.arange(14, dtype=float) / 4.0
+    st = compiled._state(y)
+    assert type(st.t) is float and st.t == 0.0
+    for got, part in ((st.r, y[1:4]), (st.v, y[4:7]), (st.q, y[7:11]), (st.w, y[11:14])):
+        assert np.shares_memory(got, y) and np.array_equal(got, part)
+    assert math.isclose(st.w[-1], 13 / 4.0)
+
+
+@pytest.mark.parametrize("start, end, work, impacts, landings, sliding, scale", [
+    (0.5, 2.0, 0.25, 0.125, 0.0625, 0.03125, 2.0),   # the end energy is the largest
+    (0.5, -0.25, 1.5, 0.125, 0.0625, 0.03125, 1.5),  # the input
+    (0.5, -0.25, 0.25, 0.5, 0.375, 0.25, 1.125),     # the losses together (each smaller than the start)
+    (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None),            # nothing at all: relative residual 0
+])
+def test_relative_residual_of_the_budget_is_over_its_largest_entry(start, end, work, impacts, landings, sliding, scale):
+    carry = np.zeros(compiled.N_CARRY)
+    carry[[compiled.C_E_START, compiled.C_E_END, compiled.C_WORK]] = start, end, work
+    carry[[compiled.C_IMPACTS, compiled.C_LAND_LOSS, compiled.C_SLIDE_LOSS]] = impacts, landings, sliding
+    report = compiled._Budget(MODEL, carry).report(None, 1e-6)
+    residual = end - start - (work - impacts - landings - sliding)
+    assert report["residual_J"] == residual
+    assert report["relative_residual"] == (abs(residual) / scale if scale else 0.0)
