@@ -33,7 +33,8 @@ IMPACT_TESTS = ["tests/test_grain_impact_solver.py", "tests/test_grain_impact_so
 TROLLEY_TESTS = ["tests/test_trolley_physics.py", "tests/test_trolley_paper.py", "tests/test_trolley_continuity.py",
                  "tests/test_trolley_table_ends.py"]
 # the reactions' shards, from now on with the tests written against their survivors
-REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py", "tests/test_trolley_chord_frame.py"]
+REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py", "tests/test_trolley_chord_frame.py",
+                                   "tests/test_trolley_paper_conventions.py"]
 
 SMM_FORMS_TESTS = ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py", "tests/test_smm_spatial_eq.py",
                    "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py"]
