@@ -74,12 +74,13 @@ SHARDS = {
     # the structural model method: forms.py (spatial term lists, principal axes and torsion springs in
     # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
     "smm_forms": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*"]),
-    # smm_forms split by function (its tests take 35 s, a surviving mutant runs all of them); _twist_hessian
-    # ran in the first, unsplit run (docs/mutation.md)
+    # smm_forms split by function (its tests take 35 s, a surviving mutant runs all of them); _twist_hessian's
+    # _1..._24 ran in the first, unsplit run (docs/mutation.md)
     "smm_forms_chain": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
                         ["*.x_turn__*", "*.x_cross__*", "*.x_dot__*", "*.x__vsum__*", "*.x__nonzero__*",
                          "*ǁGeometryǁ*", "*.x_chain_kinematics__*", "*.x_tension_system__*", "*.x__diff__*",
-                         "*.x_torsion_column__*", "*.x_triple_product__*"]),
+                         "*.x_torsion_column__*", "*.x_triple_product__*", "*.x__twist_hessian__mutmut_2[5-9]",
+                         "*.x__twist_hessian__mutmut_[3-5][0-9]"]),
     "smm_forms_assemble": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
                            ["*.x_assemble__mutmut_[1-9]", "*.x_assemble__mutmut_[1-9][0-9]",
                             "*.x_assemble__mutmut_1[0-9][0-9]"]),
