@@ -33,7 +33,11 @@ IMPACT_TESTS = ["tests/test_grain_impact_solver.py", "tests/test_grain_impact_so
 TROLLEY_TESTS = ["tests/test_trolley_physics.py", "tests/test_trolley_paper.py", "tests/test_trolley_continuity.py",
                  "tests/test_trolley_table_ends.py"]
 # the reactions' shards, from now on with the tests written against their survivors
-REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py", "tests/test_trolley_chord_frame.py"]
+REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py", "tests/test_trolley_chord_frame.py",
+                                   "tests/test_trolley_paper_conventions.py"]
+
+SMM_FORMS_TESTS = ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py", "tests/test_smm_spatial_eq.py",
+                   "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py"]
 
 # the elastic trolley's fast covering tests (the Python reference engine: none is marked compiled_elastic), without
 # the five that integrate (10 of the 14 s a survivor costs)
@@ -96,9 +100,18 @@ SHARDS = {
                        "tests/test_impact_law_apply.py"], ["*ǁImpactLawǁapply__*"]),
     # the structural model method: forms.py (spatial term lists, principal axes and torsion springs in
     # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
-    "smm_forms": ("symmech/smm/forms.py",
-                  ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py", "tests/test_smm_spatial_eq.py",
-                   "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py"], ["*"]),
+    "smm_forms": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*"]),
+    # smm_forms split by function (its tests take 35 s, a surviving mutant runs all of them); _twist_hessian's
+    # _1..._24 ran in the first, unsplit run (docs/mutation.md)
+    "smm_forms_chain": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
+                        ["*.x_turn__*", "*.x_cross__*", "*.x_dot__*", "*.x__vsum__*", "*.x__nonzero__*",
+                         "*ǁGeometryǁ*", "*.x_chain_kinematics__*", "*.x_tension_system__*", "*.x__diff__*",
+                         "*.x_torsion_column__*", "*.x_triple_product__*", "*.x__twist_hessian__mutmut_2[5-9]",
+                         "*.x__twist_hessian__mutmut_[3-5][0-9]"]),
+    "smm_forms_assemble": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
+                           ["*.x_assemble__mutmut_[1-9]", "*.x_assemble__mutmut_[1-9][0-9]",
+                            "*.x_assemble__mutmut_1[0-9][0-9]"]),
+    "smm_forms_assemble_b": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*.x_assemble__mutmut_[2-9][0-9][0-9]"]),
     "smm_numeric": ("symmech/smm/numeric.py",
                     ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py",
                      "tests/test_smm_response.py", "tests/test_smm_spatial_eq.py", "tests/test_smm_pivot.py",
@@ -129,6 +142,13 @@ SHARDS = {
     "trolley_paper": ("symmech/trolley/model.py", REACTION_TESTS,
                       ["*.x_paper_case__*", "*.x_paper_lstar__*", "*.x_paper_lstar_derivative__*",
                        "*.x_small_angle_check__*"]),
+    # what the first runs of trolley_chord and trolley_paper left unrun (docs/mutation.md; mutmut ran each
+    # function's mutants in order, so the unrun ones are the last by number)
+    "trolley_chord_rest": ("symmech/trolley/model.py", REACTION_TESTS,
+                           ["*.x_chord_point__mutmut_11[7-9]", "*.x__stencil__*", "*.x__weights__*"]),
+    "trolley_paper_rest": ("symmech/trolley/model.py", REACTION_TESTS,
+                           ["*.x_paper_case__*", "*.x_paper_lstar__*", "*.x_paper_lstar_derivative__*",
+                            "*.x_small_angle_check__mutmut_4[7-9]", "*.x_small_angle_check__mutmut_[5-9][0-9]"]),
     # the grain motion loop (the Python reference engine): the tests that run motion.simulate; scenes on "auto" run
     # the Python loop there (the mutated copy's numba cache is cold)
     "motion": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS, ["*"]),
