@@ -65,12 +65,10 @@ def _under_mutmut() -> bool:
 
 
 @pytest.fixture(autouse=True)
-def _no_builder_under_mutmut(request, monkeypatch):
-    if _under_mutmut() and not _marked(request.node):
-        from symmech.core import build
+def _python_loop_under_mutmut(request, monkeypatch):
+    if _under_mutmut() and not _marked(request.node):  # (no builder starts: SYMMECH_BACKGROUND_BUILD=0)
         from symmech.grain import motion_scene
 
-        monkeypatch.setattr(build.Engine, "warm_in_background", lambda self: False)
         choose = motion_scene.choose_engine
         monkeypatch.setattr(motion_scene, "choose_engine", lambda sc, num=None, duration=None: (
             ("python", "tests under mutmut (tests/conftest.py)") if (num or sc.numerics).engine == "auto"

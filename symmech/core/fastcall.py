@@ -37,6 +37,7 @@ SOURCE = Path(__file__).with_name("_fastcall.c")
 _log = logging.getLogger(__name__)
 
 
+@functools.cache  # per folder: the source is read and hashed once per process
 def artifact(folder: Path) -> Path:
     """The extension's file in ``folder`` for this C source, Python ABI and numpy version."""
     import numpy
