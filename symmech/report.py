@@ -31,7 +31,7 @@ from pathlib import Path
 from symmech import __version__
 from symmech.core import units
 from symmech.core.results import VERDICTS, Check
-from symmech.core.scene import SymmechError
+from symmech.core.scene import SceneError, SymmechError
 
 TEMPLATE = "report.html.j2"
 # Derivations whose sympy text is longer than this are listed, not typeset (H alone
@@ -55,8 +55,8 @@ def _paper_package(kind: str) -> str | None:
     from symmech.core import registry
 
     try:
-        module = registry.kinds()[kind].run.__module__
-    except KeyError:
+        module = registry.get(kind).run.__module__  # imports only the kind's own modules
+    except SceneError:
         return None
     match = re.fullmatch(r"symmech\.(\w+)\..*", module)
     return match.group(1) if match else None

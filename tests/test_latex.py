@@ -3,6 +3,7 @@ import re
 import shutil
 import subprocess
 
+import numpy as np
 import pytest
 import sympy
 
@@ -30,7 +31,7 @@ def balanced(text: str) -> None:
     assert text.count(r"\bigl(") == text.count(r"\bigr)")
 
 
-# The largest expressions take 10-100 s each to lay out: the slow tier prints them.
+# The largest expressions take 1-8 s each to lay out (19 s CPU in all): the slow tier prints them.
 HEAVY = ("trolley_elastic_lagrange.rate", "trolley_elastic_lagrange.lagrange_residual",
          "trolley_elastic_lagrange.rate_mass", "smm_spatial_boom.rate", "smm_spatial_boom.c",
          "smm_spatial_boom.rate_jacobian")
@@ -134,3 +135,19 @@ def test_standalone_tex_compiles(tmp_path, capsys, name, flags):
     pages = int(re.search(r"Output written on .*\((\d+) pages?", run.stdout).group(1))
     assert pages >= (2 if name == "grain_impact.H" else 1)
     assert "Undefined control sequence" not in run.stdout
+
+
+def test_short_is_the_latex_exactly_when_it_fits():
+    """The count that spares printing long subtrees never calls a short expression long (else a line would
+    break where it need not) and never returns a long one."""
+    rng = np.random.default_rng(7)
+    atoms = [*sympy.symbols("x y_1 theta omega_3 xdot xprime q__2"), sympy.Integer(-1), sympy.Rational(1, 2),
+             sympy.Integer(3), sympy.Function("f")(sympy.Symbol("t")), sympy.pi]
+    ops = [sympy.Add, sympy.Mul, lambda a, b: sympy.Pow(a, b), lambda a, b: sympy.sin(a) * b]
+    for _ in range(300):
+        expr = atoms[rng.integers(len(atoms))]
+        for _ in range(rng.integers(1, 6)):
+            expr = ops[rng.integers(len(ops))](expr, atoms[rng.integers(len(atoms))])
+        text = sympy.latex(expr)
+        for width in (len(text) - 1, len(text), 5, 20, 60):
+            assert latex._short(expr, width) == (text if len(text) <= width else None), (expr, width)

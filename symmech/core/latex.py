@@ -9,6 +9,8 @@ so runtime modules import this module lazily.
 """
 from __future__ import annotations
 
+import functools
+import itertools
 import re
 import unicodedata
 
@@ -43,11 +45,31 @@ def equations(nm) -> list[tuple[str, sympy.Expr]]:
     matrix = nm.matrix
     if not nm.shape:
         return [(name_tex(nm.name), matrix[0, 0])]
-    if len(sympy.latex(matrix)) <= MATRIX_WIDTH:
+    if _short(matrix, MATRIX_WIDTH) is not None:
         return [(name_tex(nm.name), matrix)]
     rows, cols = matrix.shape
     return [(entry_tex(nm.name, (i,) if nm.shape == (rows,) else (i, j)), matrix[i, j])
             for i in range(rows) for j in range(cols)]
+
+
+def _short(expr, width: int) -> str | None:
+    """The LaTeX of ``expr`` if it is at most ``width`` characters, else None. A symbol prints as its
+    own LaTeX wherever it stands, any other leaf in at least one character, and every further argument
+    of a node adds at least a separator: a tree longer by that count is long without printing it
+    (printing each subtree at every level of the breaking would be quadratic in the largest matrices)."""
+    entries = expr if isinstance(expr, sympy.MatrixBase) else [expr]
+    least = 0
+    for node in itertools.chain.from_iterable(map(sympy.preorder_traversal, entries)):
+        least += len(node.args) - 1 if node.args else _leaf_length(node)
+        if least > width:
+            return None
+    text = sympy.latex(expr)
+    return text if len(text) <= width else None
+
+
+@functools.lru_cache(maxsize=4096)
+def _leaf_length(leaf) -> int:
+    return len(sympy.latex(leaf)) if leaf.is_Symbol else 1
 
 
 def _wrap(head: str, inner: list[str], tail: str) -> list[str]:
@@ -56,8 +78,9 @@ def _wrap(head: str, inner: list[str], tail: str) -> list[str]:
 
 def chunks(expr) -> list[str]:
     """Pieces of LaTeX for ``expr`` between which a line may break, in reading order."""
-    if isinstance(expr, sympy.MatrixBase) or len(sympy.latex(expr)) <= WIDTH:
-        return [sympy.latex(expr)]
+    text = sympy.latex(expr) if isinstance(expr, sympy.MatrixBase) else _short(expr, WIDTH)
+    if text is not None:
+        return [text]
     if expr.is_Add:
         out = []
         for i, term in enumerate(expr.as_ordered_terms()):
@@ -73,8 +96,8 @@ def chunks(expr) -> list[str]:
 
 def _term_chunks(term) -> list[str]:
     """A product or power with a long sum inside, opened as ``\\bigl( ... \\bigr)``; else one piece."""
-    text = sympy.latex(term)
-    if len(text) <= WIDTH:
+    text = _short(term, WIDTH)
+    if text is not None:
         return [text]
     if term.could_extract_minus_sign():
         inner = _term_chunks(-term)
@@ -82,7 +105,7 @@ def _term_chunks(term) -> list[str]:
     if term.is_Mul:
         numer, denom = sympy.fraction(term)
         factors = sympy.Mul.make_args(numer)
-        long_sums = [f for f in factors if (f.is_Add or f.is_Pow) and len(sympy.latex(f)) > WIDTH]
+        long_sums = [f for f in factors if (f.is_Add or f.is_Pow) and _short(f, WIDTH) is None]
         rest = sympy.Mul(*[f for f in factors if f not in long_sums])
         out = ["" if rest == 1 else sympy.latex(rest) + " "]
         if denom != 1:
@@ -94,7 +117,7 @@ def _term_chunks(term) -> list[str]:
         return [c.strip() for c in out if c.strip()]
     if term.is_Pow and term.base.is_Add:
         return _wrap(r"\bigl(", chunks(term.base), r"\bigr)^{" + sympy.latex(term.exp) + "}")
-    return [text]
+    return [sympy.latex(term)]
 
 
 def lines(pairs: list[tuple[str, object]], width: int = WIDTH) -> list[str]:
