@@ -58,11 +58,13 @@ def cmd_warm(ns) -> int:
     engines = {"grain": compiled.ENGINE, "elastic": elastic_compiled.ENGINE}
     for name in (engines if ns.engine == "all" else [ns.engine]):
         started = time.perf_counter()
-        if not engines[name].warm(wait=not ns.background, say=say):
+        if not engines[name].warm(wait=not ns.background, say=say, ahead=True):
             continue  # --background: another builder holds the lock
         if not ns.background:
+            built = engines[name].ahead_of_time()
+            ahead = f"; built ahead of time: {built.__file__}" if built is not None else ""
             print(f"compiled {name} engine ready in {time.perf_counter() - started:.1f} s; cache: "
-                  f"{engines[name].cache_dir()}")
+                  f"{engines[name].cache_dir()}{ahead}")
     return 0
 
 
@@ -284,6 +286,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "every compiled kernel a grain run or an elastic trolley run may need into numba's cache, "
                        "once per cache: NUMBA_CACHE_DIR when set, else "
                        "__pycache__ beside the installed package (numba's user-wide cache when that is read-only). "
+                       "With a C compiler, the grain engine is also built ahead of time beside the cache, so that "
+                       "later runs load it without numba. "
                        "A second `symmech warm` on the same cache waits for the first and then finds it built. "
                        "Exit 0 once the cache holds the engine.")
     w.add_argument("--quiet", action="store_true", help="print only the cache location")

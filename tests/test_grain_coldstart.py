@@ -21,7 +21,7 @@ import pytest
 
 from symmech.cli import main
 from symmech.core import build, pipeline
-from symmech.grain import compiled, motion_scene, sweep
+from symmech.grain import compiled, compiled_loop, motion_scene, sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "grain_default.toml"
@@ -39,11 +39,12 @@ def scene_file(tmp_path: Path, duration: float, engine: str | None = None) -> Pa
 
 @pytest.fixture
 def cold_cache(tmp_path, monkeypatch):
-    """numba's cache reported empty, the build lock in a temporary folder, and no builder process started:
-    returns the list of builder command lines that would have been started."""
+    """numba's cache reported empty (and no build ahead of time), the build lock in a temporary folder, and no
+    builder process started: returns the list of builder command lines that would have been started."""
     started = []
     monkeypatch.delenv("SYMMECH_BACKGROUND_BUILD", raising=False)  # tests/conftest.py's
     monkeypatch.setattr(compiled.ENGINE, "cold", lambda: True)
+    monkeypatch.setattr(compiled.ENGINE, "ahead_of_time", lambda: None)
     monkeypatch.setattr(compiled.ENGINE, "cache_dir", lambda: tmp_path / "cache")
     monkeypatch.setattr(build.subprocess, "Popen", lambda args, **kw: started.append((args, kw)))
     return started
@@ -120,11 +121,11 @@ def test_warm_help_names_the_cache_locations(capsys):
 @pytest.mark.slow
 @pytest.mark.compiled_engine
 def test_warm_on_a_built_cache_prints_its_location_and_compiles_nothing(capsys):
-    misses = sum(compiled.run.stats.cache_misses.values())
+    misses = sum(compiled_loop.run.stats.cache_misses.values())
     assert main(["warm", "--engine", "grain"]) == 0
     captured = capsys.readouterr()
     assert f"cache: {compiled.ENGINE.cache_dir()}" in captured.out and "compiling" not in captured.err
-    assert sum(compiled.run.stats.cache_misses.values()) == misses and not compiled.ENGINE.cold()
+    assert sum(compiled_loop.run.stats.cache_misses.values()) == misses and not compiled.ENGINE.cold()
 
 
 def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path, cold_cache):
@@ -169,7 +170,7 @@ SWEEP_ON_FRESH_WORKERS = """
 import json, sys
 import dask.distributed as distributed
 from symmech.core import build, pipeline
-from symmech.grain import compiled, sweep
+from symmech.grain import compiled, compiled_loop, sweep
 
 raw = {"kind": "grain", "duration": 0.08, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},
        "vibration": {"amplitude": 1e-3, "frequency": 25.0}, "impact": {"law": "printed", "e": 0.5, "lambda": 1.0},
@@ -180,9 +181,9 @@ with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                               dashboard_address=None) as cluster:
     values = sweep.compute(p, scheduler=cluster.scheduler_address)[0]
     with distributed.Client(cluster.scheduler_address) as client:
-        workers = client.run(lambda: [sum(compiled.run.stats.cache_misses.values()),
-                                      sum(compiled.run.stats.cache_hits.values())])
-print(json.dumps({"client": sum(compiled.run.stats.cache_misses.values()), "workers": list(workers.values()),
+        workers = client.run(lambda: [sum(compiled_loop.run.stats.cache_misses.values()),
+                                      sum(compiled_loop.run.stats.cache_hits.values())])
+print(json.dumps({"client": sum(compiled_loop.run.stats.cache_misses.values()), "workers": list(workers.values()),
                   "finite": bool(all(v[..., :2].size and abs(v[..., :2]).max() < 1 for v in values))}))
 """
 
@@ -206,8 +207,8 @@ def test_first_runs_and_a_sweep_on_fresh_worker_processes_compile_the_engine_onc
     """One cold compile on the machine, whoever asks. Two first runs at once on an empty cache both answer
     (Python engine) and start one builder between them. A sweep on two fresh worker processes, started while
     that builder compiles, waits for it (its client before dispatch) and no worker compiles: no cache miss in
-    the client or either worker. `symmech warm` then finds the cache built, and a third run uses the compiled
-    engine: same impacts, times to 1e-11 s and final position to 1e-7 relative (the documented agreement of
+    the client or either worker. `symmech warm` then finds the cache built and the engine built ahead of time
+    (the builder did both), and a third run uses that build: same impacts, times to 1e-11 s and final position to 1e-7 relative (the documented agreement of
     the two engines, docs/scenes-grain.md)."""
     cache, scene = tmp_path / "cache", scene_file(tmp_path, 0.6)
     cmd = [sys.executable, "-m", "symmech", "run", str(scene), "--quiet", "--no-plots", "--out"]
@@ -228,10 +229,11 @@ def test_first_runs_and_a_sweep_on_fresh_worker_processes_compile_the_engine_onc
     warm = subprocess.run([sys.executable, "-m", "symmech", "warm", "--engine", "grain"], env=_env(cache),
                           capture_output=True, text=True, timeout=1800)
     assert warm.returncode == 0 and str(cache) in warm.stdout, warm.stderr
-    assert "compiling" not in warm.stderr  # the builder built it
+    assert "compiling" not in warm.stderr and "building" not in warm.stderr  # the builder built both
+    assert "built ahead of time: " in warm.stdout
     assert subprocess.run([*cmd, str(tmp_path / "run3")], env=_env(cache), timeout=600).returncode == 0
     third = json.loads((tmp_path / "run3" / "summary.json").read_text())
-    assert third["engine"] == "compiled" and "built" in third["engine_reason"]
+    assert third["engine"] == "compiled" and third["engine_reason"].endswith("built (ahead of time)")
     python, fast = _impact_times(tmp_path / "run1"), _impact_times(tmp_path / "run3")
     assert len(python) == len(fast) > 100 and np.abs(python - fast).max() <= 1e-11
     r_python, r_fast = _final_position(tmp_path / "run1"), _final_position(tmp_path / "run3")

@@ -15,7 +15,7 @@ from grain_sliding_reference import conveyor, on_plane, sphere
 from test_grain_hard_cases import CROP, WEED, sweep_grain
 from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
-from symmech.grain import compiled, contact, flight, motion, motion_scene
+from symmech.grain import compiled, compiled_loop, contact, flight, motion, motion_scene
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
@@ -204,17 +204,17 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
     m = sc.model
     Q0 = flight.rotation_matrix(sc.start.q)
     p = compiled.pack(m, sc.numerics)
-    sp = compiled._slide_params(p, Q0, compiled._offset(p, Q0), m.mu)
-    sp[compiled.S_VSTOP] = 1e-11
+    sp = compiled_loop._slide_params(p, Q0, compiled_loop._offset(p, Q0), m.mu)
+    sp[compiled_loop.S_VSTOP] = 1e-11
     rho = contact.contact_offset(m.axes, Q0)
     k = m.mass / float(Q0[2] @ (m.inertia * Q0[2]))
     B = np.eye(2) + k * np.outer([-rho[1], rho[0]], [-rho[1], rho[0]])  # E + (m / I_zz) rho_perp rho_perp^T
     t = 0.013
     z = np.zeros(13)
     z[7:11] = sc.start.q  # at rest, no spin: c = 0
-    stick, z1 = compiled._settle(t, z, sp, False)
-    s = compiled._geometry(z1, sp)[1]
-    f = np.asarray(m.g_k[:2]) - compiled._slide_surface(sp, t)[1][:2]
+    stick, z1 = compiled_loop._settle(t, z, sp, False)
+    s = compiled_loop._geometry(z1, sp)[1]
+    f = np.asarray(m.g_k[:2]) - compiled_loop._slide_surface(sp, t)[1][:2]
     d = np.linalg.solve(B, f)
     assert not stick and np.linalg.norm(s) == pytest.approx(2e-11, rel=1e-9)
     np.testing.assert_allclose(s / np.linalg.norm(s), d / np.linalg.norm(d), atol=1e-9)
@@ -227,9 +227,9 @@ def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     sc = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "compiled"'})
     compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
     assert not compiled.ENGINE.cold()  # compiled (or loaded) in this process: cached for this source
-    monkeypatch.setattr(compiled.ENGINE, "cold", lambda: False)
+    monkeypatch.setattr(compiled.ENGINE, "needs_compile", lambda: False)
     warm = motion_scene.estimate(sc)
-    monkeypatch.setattr(compiled.ENGINE, "cold", lambda: True)
+    monkeypatch.setattr(compiled.ENGINE, "needs_compile", lambda: True)
     cold = motion_scene.estimate(sc)
     assert warm.once == 0.0 and "compiling" not in warm.what
     assert cold.once == compiled.COLD_COMPILE_SECONDS == pytest.approx(cold.seconds - warm.seconds, rel=1e-12)

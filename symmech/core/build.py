@@ -30,6 +30,11 @@ def background_builds() -> bool:
     return os.environ.get("SYMMECH_BACKGROUND_BUILD") != "0"
 
 
+def ahead_of_time_builds() -> bool:
+    """Whether engines are built and run ahead of time where they can (not with ``SYMMECH_AHEAD_OF_TIME=0``)."""
+    return os.environ.get("SYMMECH_AHEAD_OF_TIME") != "0"
+
+
 def cache_dir(dispatcher) -> Path:
     """The folder where numba caches the ``cache=True`` dispatcher: ``NUMBA_CACHE_DIR`` when set, else
     ``__pycache__`` beside its module, or numba's user-wide cache folder when that folder is read-only."""
@@ -55,9 +60,19 @@ class Engine:
     (a numba dispatcher) to the argument types a run calls it with; ``seconds`` [s] is the cold compile a
     run announces (wall time, idle machine)."""
 
-    def __init__(self, name: str, entries: Callable[[], dict], seconds: float):
+    def __init__(self, name: str, entries: Callable[[], dict], seconds: float, ahead=None):
         self.name, self.entries, self.seconds = name, entries, seconds
+        self.ahead = ahead  # its symmech.core.aot.Build, if it has one
         self.lock_name = f"symmech-{name}-build.lock"
+
+    def ahead_of_time(self):
+        """The engine's ahead-of-time build (:mod:`symmech.core.aot`) when it is current, else None (always
+        with ``SYMMECH_AHEAD_OF_TIME=0``: runs then take numba's cache, and nothing is built); loads no numba."""
+        return self.ahead.load() if self.ahead is not None and ahead_of_time_builds() else None
+
+    def needs_compile(self) -> bool:
+        """Whether running the engine now compiles: no current ahead-of-time build and a cold cache."""
+        return self.ahead_of_time() is None and self.cold()
 
     def cold_reason(self) -> str:
         """Why ``auto`` runs the reference engine on a cold cache (the estimate and summary.json)."""
@@ -81,10 +96,11 @@ class Engine:
         """The machine-wide build lock; yields whether this process holds it (always, with ``wait``)."""
         return file_lock(self.cache_dir() / self.lock_name, wait)
 
-    def warm(self, wait: bool = True, say=None) -> bool:
-        """Compile the entries into numba's cache unless they are there; returns whether they are. Without
-        ``wait``, return False at once when another process holds the build lock. ``say(text)`` tells what
-        it does."""
+    def warm(self, wait: bool = True, say=None, ahead: bool = False) -> bool:
+        """Compile the entries into numba's cache unless they are there, and with ``ahead`` the ahead-of-time
+        build too (``symmech warm`` and the background builder; it reuses numba's compiled functions); returns
+        whether numba's cache holds them. Without ``wait``, return False at once when another process holds
+        the build lock. ``say(text)`` tells what it does."""
         with self.build_lock(wait) as mine:
             if not mine:
                 return False
@@ -93,6 +109,10 @@ class Engine:
                     say(f"compiling the {self.name} engine once, ~{self.seconds:.0f} s (cache: {self.cache_dir()})")
                 for entry, signature in self.entries().items():
                     entry.compile(signature)
+            if ahead and self.ahead is not None and ahead_of_time_builds() and self.ahead.load() is None:
+                if say:
+                    say(f"building the {self.name} engine ahead of time too (runs then load it without numba)")
+                self.ahead.build()
         return True
 
     def warm_in_background(self) -> bool:

@@ -150,16 +150,31 @@ def guard(index_file: str) -> None:
         sys.meta_path.insert(0, _GeneratedFinder())
 
 
+_built_from: dict[str, str] = {}  # name -> body sha256 of the generated modules in a loaded ahead-of-time build
+
+
+def verify_built_from(files) -> None:
+    """Verify the generated modules among ``files`` (those an ahead-of-time build about to run was compiled
+    from, :mod:`symmech.core.aot`) as importing them would, and count them as used (:func:`used_modules`)."""
+    import symmech.generated as package
+
+    folder = Path(package.__file__).parent
+    for path in map(Path, files):
+        if path.parent == folder and path.name != "__init__.py":
+            _built_from[path.stem] = verify_file(path.stem, path)
+
+
 def used_modules() -> dict[str, str]:
-    """{module name: recorded body sha256} of every generated module imported so far."""
-    used = {}
+    """{module name: recorded body sha256} of every generated module imported so far, or compiled into an
+    ahead-of-time build that was loaded."""
+    used = dict(_built_from)
     for name, module in sorted(sys.modules.items()):
         path = getattr(module, "__file__", None)
         if name.startswith(PACKAGE + ".") and path:
             with open(path, encoding="utf-8") as f:
                 header, _ = split("".join(f.readline() for _ in range(HEADER_LINES)))
             used[name.removeprefix(PACKAGE + ".")] = header.body if header else "no header"
-    return used
+    return dict(sorted(used.items()))
 
 
 def write_atomic(path: Path, text: str) -> None:

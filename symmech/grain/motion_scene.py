@@ -296,10 +296,10 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     engine, why = choose_engine(sc)
     if engine == "python":
         return registry.Estimate(seconds, f"{what}; Python engine ({why})")
-    from symmech.grain import compiled  # imports numba: only when the compiled engine runs
+    from symmech.grain import compiled
 
     seconds /= COMPILED_SPEEDUP
-    if compiled.ENGINE.cold():
+    if compiled.ENGINE.needs_compile():
         once = compiled.COLD_COMPILE_SECONDS
         return registry.Estimate(seconds + once, f"{what}; compiled engine ({why}); compiling the grain engine "
                                  f"once, ~{once:.0f} s; later runs start in ~1 s", once=once)
@@ -318,16 +318,18 @@ def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
                   duration: float | None = None) -> tuple[str, str]:
     """The engine that runs accurate mode, "compiled" or "python", and why (for the estimate and summary.json).
 
-    ``auto`` takes the compiled engine when numba's cache holds it. Else it takes whichever the estimate says
+    ``auto`` takes the compiled engine when it is built (ahead of time, or in numba's cache). Else it takes whichever the estimate says
     answers first: the Python loop (seconds on a default scene; :func:`simulate` then has the compiled engine
     built in the background for the next run) or compiling first (~80 s once, then 50x faster)."""
     num = num or sc.numerics
     if num.engine == "python":
         return "python", 'numerics.engine = "python"'
-    from symmech.grain import compiled  # imports numba: only when the compiled engine may run
+    from symmech.grain import compiled  # no numba: the engine's Python side
 
     if num.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
+    if compiled.ENGINE.ahead_of_time() is not None:
+        return "compiled", "auto: the compiled engine is built (ahead of time)"
     if not compiled.ENGINE.cold():
         return "compiled", "auto: the compiled engine is built (numba's cache)"
     python = _python_cost(sc, num, sc.duration if duration is None else duration)[0]
@@ -352,9 +354,9 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
     engine, why = choose_engine(sc, num, t_end)
     if engine == "compiled":
-        from symmech.grain import compiled  # imports numba: only when the compiled engine runs
+        from symmech.grain import compiled
 
-        if compiled.ENGINE.cold():  # compile under the build lock, or load what a concurrent builder made
+        if compiled.ENGINE.needs_compile():  # compile under the build lock, or load what a concurrent builder made
             compiled.ENGINE.warm()
         m = compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
     else:

@@ -1,0 +1,148 @@
+"""Ahead-of-time builds of a compiled engine's entries: an extension module that loads without numba.
+
+A warm run on numba's cache imports numba, sets up its CPU target (its typing and lowering registries, which
+numba builds before loading *any* cached function) and links the cached code: about as long as importing
+numpy, scipy and matplotlib together. An engine also built ahead of time (``numba.pycc`` and the system C
+compiler, by ``symmech warm`` or the background builder right after numba's cache, whose compiled functions it
+reuses) loads as a plain extension module instead.
+
+The build lives in :func:`folder` beside a manifest of the files it was compiled from (their SHA-256: the loop,
+its kernels, the generated modules), the Python ABI and numpy's version. A run uses it only while every recorded
+file still hashes the same, else numba's cache as before: an edited generated module is never run from an old
+build (numba's path then imports it, and the import refuses it), and the generated modules of a current build are
+verified as their import would be and listed among the run's ``generated_modules``. Written whole: the module and the
+manifest each through a temporary file renamed into place, the manifest last, under the engine's build lock.
+Never required: without a C compiler nothing is built and nothing is printed. The built entries hold the GIL
+(pycc's wrappers do not release it), so code that runs an engine on threads calls numba's.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import importlib.machinery
+import importlib.util
+import json
+import os
+import sys
+import tempfile
+import warnings
+from pathlib import Path
+from types import ModuleType
+from typing import Callable
+
+from symmech.core import integrity
+
+SUFFIX = importlib.machinery.EXTENSION_SUFFIXES[0]
+
+
+def folder(anchor: str) -> Path:
+    """Where the build of the engine defined in file ``anchor`` lives: under ``NUMBA_CACHE_DIR`` when set (as
+    numba's cache), else ``__pycache__`` beside ``anchor``, or ``~/.cache/symmech`` when that is read-only."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"]) / "symmech-aot"
+    beside = Path(anchor).parent / "__pycache__"
+    if os.access(beside if beside.exists() else beside.parent, os.W_OK):
+        return beside
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "symmech"
+
+
+def sources(module: ModuleType) -> list[str]:
+    """The files of ``module`` and of every symmech module its globals reach (the functions, constants and
+    generated kernels compiled into a build), sorted."""
+    seen, todo = {}, [module]
+    while todo:
+        m = todo.pop()
+        if m is None or m.__name__ in seen or not m.__name__.startswith("symmech") or not getattr(m, "__file__", None):
+            continue
+        seen[m.__name__] = m.__file__
+        todo += [v if isinstance(v, ModuleType) else sys.modules.get(getattr(v, "__module__", None) or "")
+                 for v in vars(m).values()]
+    return sorted(seen.values())
+
+
+def _digest(path: str) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _platform() -> dict:
+    import numpy
+
+    return {"abi": SUFFIX, "python": sys.version, "numpy": numpy.__version__}
+
+
+class Build:
+    """The ahead-of-time build ``<name>_aot`` of an engine: ``exports()`` maps each exported name to a numba
+    dispatcher and the signature it is compiled for; ``anchor`` is the file of the engine's Python side (its
+    folder, and a source of the build: the loop's constants live there)."""
+
+    def __init__(self, name: str, anchor: str, exports: Callable[[], dict]):
+        self.module_name, self.anchor, self.exports = f"{name}_aot", anchor, exports
+        self._module = None
+
+    def paths(self) -> tuple[Path, Path]:
+        """(extension module, manifest)."""
+        where = folder(self.anchor)
+        return where / f"{self.module_name}{SUFFIX}", where / f"{self.module_name}.json"
+
+    def load(self) -> ModuleType | None:
+        """The built module if it is current (same platform, every recorded file unchanged), else None. Imports
+        no numba; the manifest is checked once per process."""
+        if self._module is None:
+            so, manifest = self.paths()
+            try:
+                record = json.loads(manifest.read_text())
+                current = record["platform"] == _platform() and all(
+                    _digest(f) == h for f, h in record["files"].items())
+            except (OSError, ValueError, KeyError, TypeError):
+                return None
+            if current:
+                integrity.verify_built_from(record["files"])  # refuses an edited or stale module, as an import
+                spec = importlib.util.spec_from_file_location(self.module_name, so)
+                module = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(module)
+                self._module = module
+        return self._module
+
+    def build(self) -> bool:
+        """Compile the exports ahead of time; the caller holds the engine's build lock. Returns whether it
+        built: False without a working C compiler (the runs keep numba's cache)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # numba.pycc is pending deprecation: fine for a cache
+            from numba.pycc import CC
+
+        exports = self.exports()
+        files = sources(sys.modules[next(iter(exports.values()))[0].__module__]) + [self.anchor]
+        record = {"platform": _platform(), "files": {f: _digest(f) for f in sorted(set(files))}}
+        so, manifest = self.paths()
+        so.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=so.parent) as tmp:
+            try:
+                with warnings.catch_warnings(), _quiet():
+                    warnings.simplefilter("ignore")
+                    cc = CC(self.module_name)  # raises without a C compiler
+                    cc.output_dir, cc.verbose = tmp, False
+                    for name, (dispatcher, signature) in exports.items():
+                        cc.export(name, signature)(dispatcher.py_func)
+                    cc.compile()
+            except Exception:  # no C compiler, or a toolchain pycc cannot drive: numba's cache serves
+                return False
+            manifest.unlink(missing_ok=True)
+            os.replace(Path(tmp) / cc.output_file, so)
+            (Path(tmp) / "manifest").write_text(json.dumps(record, indent=1, sort_keys=True))
+            os.replace(Path(tmp) / "manifest", manifest)
+        return True
+
+
+@contextlib.contextmanager
+def _quiet():
+    """The compiler's own output (its command lines, warnings) out of the user's terminal."""
+    saved = [os.dup(1), os.dup(2)]
+    with open(os.devnull, "w") as null:
+        sys.stdout.flush(), sys.stderr.flush()
+        os.dup2(null.fileno(), 1), os.dup2(null.fileno(), 2)
+        try:
+            yield
+        finally:
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)

@@ -1,0 +1,164 @@
+"""The grain engine built ahead of time (symmech.core.aot): used only while current, never required.
+
+The fast tests check the manifest rules without building; the slow ones build the loop with pycc (after numba's
+cache, whose compiled functions the build reuses) and run it against numba's loop and the README's main job."""
+import json
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symmech.core import aot
+from symmech.grain import compiled
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_folder_follows_numba_cache_dir(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert aot.folder(compiled.__file__) == tmp_path / "symmech-aot"
+    monkeypatch.delenv("NUMBA_CACHE_DIR")
+    (tmp_path / "pkg").mkdir()
+    assert aot.folder(str(tmp_path / "pkg" / "m.py")) == tmp_path / "pkg" / "__pycache__"
+
+
+def test_sources_reach_the_loop_its_kernels_and_the_generated_twins():
+    from symmech.grain import compiled_loop
+
+    files = {Path(f).name for f in aot.sources(compiled_loop)}
+    assert {"compiled_loop.py", "ode.py", "sliding.py", "grain_motion_nb.py", "grain_impact_nb.py"} <= files
+    assert all(Path(f).is_file() for f in aot.sources(compiled_loop))
+
+
+@pytest.fixture
+def stale(monkeypatch, tmp_path):
+    """A Build in an empty folder whose manifest the test writes; loading imports nothing of numba."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    source = tmp_path / "loop.py"
+    source.write_text("x = 1\n")
+    build = aot.Build("probe", compiled.__file__, lambda: {})
+    so, manifest = build.paths()
+    so.parent.mkdir(parents=True)
+    so.write_bytes(b"not an extension module")  # loading it would raise: a refusal must not try
+    record = {"platform": aot._platform(), "files": {str(source): aot._digest(str(source))}}
+    return build, manifest, record, source
+
+
+def test_a_build_is_refused_when_a_recorded_file_changed(stale):
+    build, manifest, record, source = stale
+    manifest.write_text(json.dumps(record))
+    with pytest.raises(ImportError):  # current: the (fake) module is loaded
+        build.load()
+    source.write_text("x = 2\n")
+    assert build.load() is None
+
+
+@pytest.mark.parametrize("field, value", [("numpy", "1.0.0"), ("abi", ".cpython-399-x.so"), ("python", "3.0")])
+def test_a_build_is_refused_on_another_platform(stale, field, value):
+    build, manifest, record, _ = stale
+    record["platform"][field] = value
+    manifest.write_text(json.dumps(record))
+    assert build.load() is None
+
+
+@pytest.mark.parametrize("text", ["", "{", '{"files": {}}', '{"platform": 1, "files": []}'])
+def test_a_missing_or_broken_manifest_means_no_build(stale, text):
+    build, manifest, _, _ = stale
+    assert build.load() is None
+    manifest.write_text(text)
+    assert build.load() is None
+
+
+def test_no_build_without_a_c_compiler(monkeypatch, tmp_path, capfd):
+    """pycc fails without a compiler: build() says so and writes nothing; nothing is printed."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    from symmech.grain import compiled_loop
+
+    build = aot.Build("nocc", compiled.__file__, lambda: {"f": (compiled_loop._cross, "f8[::1](f8[::1], f8[::1])")})
+    so, manifest = build.paths()
+    assert build.build() is False
+    assert build.load() is None and not so.exists() and not manifest.exists()
+    assert capfd.readouterr() == ("", "")
+
+
+def test_the_python_side_imports_no_numba():
+    code = ("import sys; from symmech.grain import compiled, motion_scene; "
+            "assert 'numba' not in sys.modules, 'numba imported'; print('ok')")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr
+
+
+# --------------------------------------------------------------------------- real builds (slow)
+
+
+@pytest.fixture(scope="module")
+def built():
+    """The grain engine built ahead of time in the suite's cache (numba's cache first, by the session's builder)."""
+    assert compiled.ENGINE.wait_warm(1200.0)
+    compiled.ENGINE.warm(ahead=True)  # waits for a builder that is at it, else builds
+    module = compiled.ENGINE.ahead_of_time()
+    assert module is not None, "no C compiler? the slow tier needs one"
+    return module
+
+
+def _on_a_thread(*args):
+    box = []
+    worker = threading.Thread(target=lambda: box.append(compiled.simulate(*args)))
+    worker.start()
+    worker.join()
+    return box[0]
+
+
+@pytest.mark.slow
+@pytest.mark.compiled_engine
+@pytest.mark.parametrize("case", ["default scene, 2 s", "crop grain, stiff slip"])
+def test_the_built_loop_equals_numbas(built, case, tmp_path, monkeypatch):
+    """The built loop (main thread) and numba's (a thread) on the default scene (flight, 493 impacts, sliding)
+    and on a slip from rest that turns stiff (Radau): the same impacts and Radau steps, impact times within
+    1e-12 s, final states within 1e-10 relative (one source, two compilations: they differ by round-off at
+    most; the documented engine agreement with the Python loop is 1e-11 s and 1e-7)."""
+    from test_grain_hard_cases import CROP, sweep_grain
+    from test_grain_regimes import default_scene
+
+    monkeypatch.chdir(ROOT)
+    sc, t_end = (default_scene(tmp_path, 2.0), 2.0) if case.startswith("default") else (
+        sweep_grain(CROP, 0.6e-3, 18.0, 0.12), 0.12)
+    assert compiled._entry() is built.run
+    ahead = compiled.simulate(sc.model, sc.numerics, sc.start, t_end)
+    jit = _on_a_thread(sc.model, sc.numerics, sc.start, t_end)
+    assert len(ahead.impacts) == len(jit.impacts) >= (400 if case.startswith("default") else 0)
+    for a, b in zip(ahead.impacts, jit.impacts):
+        assert abs(a["t"] - b["t"]) <= 1e-12
+    for x, y in ((ahead.final.r, jit.final.r), (ahead.final.v, jit.final.v), (ahead.final.q, jit.final.q),
+                 (ahead.final.w, jit.final.w)):
+        np.testing.assert_allclose(x, y, rtol=1e-10, atol=1e-15)
+    assert ahead.extra["implicit_slip_steps"] == jit.extra["implicit_slip_steps"]
+    assert ahead.extra["implicit_slip_steps"] > 0  # both hand stiff slips to Radau
+
+
+@pytest.mark.slow
+@pytest.mark.compiled_engine
+def test_the_main_job_runs_on_the_build_without_numba(built, tmp_path):
+    code = ("import sys; "
+            "from symmech.cli import main; code = main(['run', *sys.argv[1:], '--quiet']); "
+            "print('numba' in sys.modules, code)")
+    done = subprocess.run([sys.executable, "-c", code, str(ROOT / "scenes" / "grain_default.toml"), "--out",
+                           str(tmp_path / "out")], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.splitlines()[-1].split() == ["False", "0"], done.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert "ahead of time" in json.dumps(summary)
+
+
+def test_a_builds_generated_modules_are_verified_and_listed_as_used(monkeypatch):
+    from symmech.core import integrity
+
+    monkeypatch.setattr(integrity, "_built_from", {})
+    twin = Path(integrity.__file__).parents[2] / "generated" / "grain_motion_nb.py"
+    integrity.verify_built_from([str(twin), str(ROOT / "symmech" / "grain" / "sliding.py")])
+    header, _ = integrity.split(twin.read_text(encoding="utf-8"))
+    assert integrity.used_modules()["grain_motion_nb"] == header.body
+    assert integrity._built_from == {"grain_motion_nb": header.body}
