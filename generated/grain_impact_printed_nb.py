@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 263418879c95c30805df7bf816084c70b7c8a7ee241699819b1a742ee4973a9f
-# source key 09fcc14bb492d8c39b1028c5375203965e0c96151b8ef7937b2bd1e117e6a8fc
+# source key 3f22b5c7c0df0878f3f31f86bcff4e6df62606f856c3ae5564502f7b5eeda893
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

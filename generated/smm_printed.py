@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1c367bd21967d0702ae220437dc5f356e39c46afcd2b597ae714a6419f1da00b
-# source key fce23c766b583284e7c1df460d3b509187494fe9176bae1897c2588d2c135f3b
+# source key e4a1a3b232d9cdfe2f1cebe67068ad12be03c5c725f1fa4dbcc296320f575abd
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a14d9b2ca61ae9d73aa9005d08617714cd49f71ee08caa2219f19eb38e4caca1
-# source key 774cf53f8d3ed6fbe03cba8d93e25808fd65d2a50ac77aef89bb85d4c318c18b
+# source key ea033c7abb4d1764a7a89f31e722a8619a7c573eb513c3d0142f47e64e48bd2c
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 
