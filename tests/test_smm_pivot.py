@@ -80,8 +80,8 @@ def test_symbolic_tensions_pivot_numerically():
 
 @pytest.mark.slow
 def test_symbolic_tensions_pivot_numerically_many():
-    errors, bad = _sweep(range(300, 8000))
-    assert len(errors) >= 1650, len(errors)
+    errors, bad = _sweep(range(300, 4200))  # 1109 compared
+    assert len(errors) >= 1050, len(errors)
     assert not bad, bad
 
 
