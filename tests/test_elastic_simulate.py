@@ -14,20 +14,32 @@ import pytest
 from symmech.trolley import elastic as el
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_trolley_elastic import straight  # noqa: E402
+from test_trolley_elastic import circle, straight  # noqa: E402
+from trolley_util import prepared, setup as scene_dict  # noqa: E402
+from symmech.trolley import elastic_scene  # noqa: E402
 
 pytestmark = pytest.mark.xdist_group("test_elastic_simulate")
 
 L, RHO_A, EI, TIP = 1.2, 4.0, (3e3, 5e3), 1.0
 MASS = RHO_A * L / 5 + TIP  # kg, the one mode's
 OMEGA = np.sqrt(4 * np.array(EI) / L ** 3 / MASS)  # rad/s, per plane
+K1, ELL = 4 * EI[0] / L ** 3, RHO_A * L / 3 + TIP  # N/m of plane 1; ℓ = ∫ N1 dm [kg], its load per x1 acceleration
+
+
+TROLLEY_MASS = 80.0
 
 
 def mast(zeta):
     """A cantilever along x2 (plane 1 along x1) on a trolley on rigid rollers, no gravity: N = 2."""
     beam = el.Beam((0.5, 0.3, 0.0), (0, 1, 0), (1, 0, 0), L, RHO_A, EI, "cantilever", 1, TIP, zeta)
-    return el.System(el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 0.0, None,
-                                     (beam,), el.Effects(rollers=False)))
+    return el.System(el.ElasticModel(TROLLEY_MASS, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 0.0,
+                                     None, (beam,), el.Effects(rollers=False)))
+
+
+def ramp_response(a, b, omega, t):
+    """(q, q̇, q̈) of q̈ + ω² q = -ω² (a + b t) from the quasi-static q = -a, q̇ = 0 at t = 0."""
+    return (-(a + b * t) + b * np.sin(omega * t) / omega, -b + b * np.cos(omega * t),
+            -b * omega * np.sin(omega * t))
 
 
 def oscillator(q0, v0, omega, zeta, t):
@@ -65,3 +77,93 @@ def test_a_kicked_mast_on_a_trolley_at_rest_is_two_free_oscillators(method, zeta
         assert r["dissipated"][-1] > 0.1 * energy[0]
     np.testing.assert_allclose(r["work"], 0.0, rtol=0, atol=1e-12)
     np.testing.assert_allclose(r["t"], t, rtol=0, atol=0)
+
+
+def test_a_mast_on_a_trolley_at_a_prescribed_growing_acceleration_follows_the_closed_form():
+    """V0 = 2 + 0.1 t + 5 t² on a straight level track, no gravity: m q̈ + k q = -ℓ (0.1 + 10 t) from the
+    quasi-static state at t = 0 (q = -0.1 ℓ/k, q̇ = 0): q = -(ℓ/k)(0.1 + 10 t) + (10 ℓ/(k ω)) sin ωt; V0, V̇0
+    and s = 2 t + 0.05 t² + 5 t³/3 as prescribed."""
+    data = scene_dict(effects={"gravity": False, "local_curvature": False},
+                      motion={"speed": "2 + 0.1*t + 5*t**2"}, time={"t_end": 0.1, "steps": 4})
+    t = np.linspace(0.0, 0.1, 21)
+    r = el.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t, rtol=1e-10)
+    q, qd, _ = ramp_response(0.1 * ELL / K1, 10 * ELL / K1, OMEGA[0], t)
+    np.testing.assert_allclose(r["q"][:, 0], q, rtol=0, atol=1e-7 * np.abs(q).max())
+    np.testing.assert_allclose(r["qd"][:, 0], qd, rtol=0, atol=3e-7 * np.abs(qd).max())
+    np.testing.assert_allclose(r["q"][:, 1], 0.0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(r["V0"], 2 + 0.1 * t + 5 * t ** 2, rtol=1e-14)
+    np.testing.assert_allclose(r["dV0"], 0.1 + 10 * t, rtol=1e-14)
+    np.testing.assert_allclose(r["s"], 2 * t + 0.05 * t ** 2 + 5 * t ** 3 / 3, rtol=0, atol=1e-14)
+
+
+def test_a_mast_on_a_trolley_pulled_by_a_ramp_of_traction_follows_the_closed_form():
+    """P0 = F0 + F1 t along a straight level track from 2 m/s, no gravity: the trolley and the mast's plane 1
+    (along x1) obey m_tot V̇0 + ℓ q̈ = P0 and m q̈ + k q = -ℓ V̇0, ℓ = ∫ N1 dm = ρA L/3 + M_tip. Eliminating V̇0:
+    m_e q̈ + k q = -ℓ P0/m_tot, m_e = m - ℓ²/m_tot; from the quasi-static start at t = 0 (q̇ = 0, q = -c F0,
+    c = ℓ/(m_tot k)) the ramp gives q = -c (F0 + F1 t) + c F1 sin(Ω t)/Ω, Ω² = k/m_e. Then V̇0 = (P0 - ℓ q̈)/m_tot,
+    V0 and s its integrals (ℓ q̇, ℓ q in closed form). Measured: q 7e-9, q̇ 4e-8, V̇0 3e-10, V0 1e-12, s 2e-13."""
+    F0, F1, v0 = 30.0, 200.0, 2.0  # q ~ 2e-4 m: the shortening terms, ~(q/L)², stay below 1e-7
+    data = scene_dict(effects={"gravity": False, "local_curvature": False, "traction": True},
+                      motion={"traction": f"{F0!r} + {F1!r}*t", "initial_speed": v0}, time={"t_end": 0.1, "steps": 4})
+    drive = elastic_scene.drive_of(prepared(data), 1)
+    t = np.linspace(0.0, 0.1, 21)
+    r = el.simulate(mast(0.0), drive, t, rtol=1e-10)
+    m_tot = TROLLEY_MASS + RHO_A * L + TIP
+    omega = np.sqrt(K1 / (MASS - ELL ** 2 / m_tot))
+    c = ELL / (m_tot * K1)
+    q, qd, qdd = ramp_response(c * F0, c * F1, omega, t)
+    amplitude = c * F1 / omega
+    np.testing.assert_allclose(r["q"][:, 0], q, rtol=0, atol=1e-7 * np.abs(q).max())
+    np.testing.assert_allclose(r["q"][:, 1], 0.0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(r["qd"][:, 0], qd, rtol=0, atol=3e-7 * np.abs(qd).max())
+    assert amplitude > 0.05 * np.abs(q).max()  # the start matters: a wrong start shows in the swing
+    P0 = F0 + F1 * t
+    np.testing.assert_allclose(r["P"][:, 0], P0, rtol=1e-9)
+    np.testing.assert_allclose(r["dV0"], (P0 - ELL * qdd) / m_tot, rtol=1e-8)
+    V0 = v0 + (F0 * t + F1 * t ** 2 / 2 - ELL * qd) / m_tot  # q̇(0) = 0
+    np.testing.assert_allclose(r["V0"], V0, rtol=1e-9)
+    s = v0 * t + (F0 * t ** 2 / 2 + F1 * t ** 3 / 6 - ELL * (q - q[0])) / m_tot
+    np.testing.assert_allclose(r["s"], s, rtol=0, atol=1e-9 * s[-1])
+
+
+@pytest.mark.parametrize("method, handed", [("Radau", True), ("BDF", True), ("LSODA", True), ("DOP853", False)])
+def test_implicit_methods_get_the_derivative_of_the_rates_as_their_jacobian(monkeypatch, method, handed):
+    """The Jacobian simulate hands the solver: d(q, q̇)'/d(q, q̇) of its own right-hand side by central
+    differences (to 1e-6), on a trolley on elastic rollers on a circle (coupled, speed-dependent terms), at
+    the start and a kicked state; none to an explicit method (and none when told not to: scipy differences)."""
+    import scipy.integrate
+
+    handed_over = {}
+    solve_ivp = scipy.integrate.solve_ivp
+
+    def spy(fun, span, y0, **kw):
+        handed_over.update(fun=fun, y0=y0, jac=kw.get("jac"))
+        return solve_ivp(fun, span, y0, **kw)
+
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", spy)
+    beam = el.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1, damping_ratio=0.05)
+    system = el.System(el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (300.0,) * 5), beams=(beam,)))
+    el.simulate(system, circle(15.0, 12.0), np.linspace(0.0, 0.01, 3), method)
+    jac, fun, n = handed_over["jac"], handed_over["fun"], 2 * system.N
+    if not handed:
+        assert jac is None
+        return
+    kick = np.r_[np.linspace(1e-3, -2e-3, n), 0.0, 0.0]
+    for y in (handed_over["y0"], handed_over["y0"] + kick):
+        h = 1e-7 * np.maximum(np.abs(y[:n]), 1e-3)
+        diff = np.column_stack([(fun(0.004, y + np.eye(len(y))[j] * h[j]) - fun(0.004, y - np.eye(len(y))[j] * h[j]))
+                                [:n] / (2 * h[j]) for j in range(n)])
+        analytic = jac(0.004, y)
+        assert analytic.shape == (n + 2, n + 2)
+        np.testing.assert_allclose(analytic[:n, :n], diff, rtol=0, atol=1e-6 * np.abs(diff).max())
+
+
+def test_without_the_analytic_jacobian_scipy_differences(monkeypatch):
+    import scipy.integrate
+
+    seen = []
+    solve_ivp = scipy.integrate.solve_ivp
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", lambda *a, **kw: seen.append(kw.get("jac")) or solve_ivp(*a, **kw))
+    el.simulate(mast(0.0), straight(), np.linspace(0.0, 0.01, 3), analytic_jacobian=False)
+    assert seen == [None]
