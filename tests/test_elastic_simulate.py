@@ -5,12 +5,14 @@ track follow from the start offsets alone.
 The cantilever's one Ritz function is N1 = ξ² (derive_elastic.beam_functions): modal mass m = ρA L/5 + M_tip
 (N1(1) = 1), stiffness k = EI ∫ N1''² dξ / L³ = 4 EI/L³; the stiffness-proportional damping of the plane
 (2ζ/ω1) K gives that one mode the ratio ζ."""
+import dataclasses
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from symmech.core.scene import SymmechError
 from symmech.trolley import elastic as el
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -167,3 +169,36 @@ def test_without_the_analytic_jacobian_scipy_differences(monkeypatch):
     monkeypatch.setattr(scipy.integrate, "solve_ivp", lambda *a, **kw: seen.append(kw.get("jac")) or solve_ivp(*a, **kw))
     el.simulate(mast(0.0), straight(), np.linspace(0.0, 0.01, 3), analytic_jacobian=False)
     assert seen == [None]
+
+
+@pytest.mark.parametrize("method", ["Radau", "DOP853"])
+def test_the_evaluation_counts_are_the_calls_the_solver_made(monkeypatch, method):
+    """nfev and njev (the scene's function_evaluations) count the right-hand side and Jacobian calls."""
+    import scipy.integrate
+
+    calls = {"fun": 0, "jac": 0}
+    solve_ivp = scipy.integrate.solve_ivp
+
+    def counting(name, f):
+        def wrapped(*args):
+            calls[name] += 1
+            return f(*args)
+        return wrapped
+
+    def spy(fun, span, y0, **kw):
+        if kw.get("jac") is not None:
+            kw["jac"] = counting("jac", kw["jac"])
+        return solve_ivp(counting("fun", fun), span, y0, **kw)
+
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", spy)
+    r = el.simulate(mast(0.02), straight(), np.linspace(0.0, 0.02, 5), method, dq0=np.array([1e-4, 0.0]))
+    assert (r["nfev"], r["njev"]) == (calls["fun"], calls["jac"])
+    assert calls["fun"] > 10 and (calls["jac"] > 0) == (method == "Radau")
+
+
+def test_a_failed_integration_names_the_last_time_reached():
+    """A speed that turns NaN after 0.05 s: the solver gives up past the output at 0.04 s, and says so."""
+    drive = straight(2.0)
+    broken = dataclasses.replace(drive, speed=lambda t: (np.where(np.asarray(t) < 0.05, 2.0, np.nan), 0.0 * t))
+    with pytest.raises(SymmechError, match=r"^elastic trolley: integration failed at t = 0\.04 s \(Required step"):
+        el.simulate(mast(0.0), broken, np.linspace(0.0, 0.1, 11))
