@@ -55,7 +55,7 @@ def oscillator(q0, v0, omega, zeta, t):
     return q, qd
 
 
-@pytest.mark.parametrize("method, zeta", [("Radau", 0.03), ("DOP853", 0.0)])
+@pytest.mark.parametrize("method, zeta", [("DOP853", 0.0), ("Radau", 0.03)])
 def test_a_kicked_mast_on_a_trolley_at_rest_is_two_free_oscillators(method, zeta):
     """Plane 1 offset by 0.1 mm (dq0), plane 2 started at 5 mm/s (dqd0), both at once in plane 2 as a check that
     the offsets add: q, q̇ of each plane to 2e-7 of the amplitude (measured 2e-8: the shortening's
@@ -88,7 +88,7 @@ def test_a_mast_on_a_trolley_at_a_prescribed_growing_acceleration_follows_the_cl
     data = scene_dict(effects={"gravity": False, "local_curvature": False},
                       motion={"speed": "2 + 0.1*t + 5*t**2"}, time={"t_end": 0.1, "steps": 4})
     t = np.linspace(0.0, 0.1, 21)
-    r = el.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t, rtol=1e-10)
+    r = el.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t)  # the default tolerances
     q, qd, _ = ramp_response(0.1 * ELL / K1, 10 * ELL / K1, OMEGA[0], t)
     np.testing.assert_allclose(r["q"][:, 0], q, rtol=0, atol=1e-7 * np.abs(q).max())
     np.testing.assert_allclose(r["qd"][:, 0], qd, rtol=0, atol=3e-7 * np.abs(qd).max())
