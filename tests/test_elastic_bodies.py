@@ -10,6 +10,8 @@ from scipy.optimize import brentq
 from symmech.core import kinematics as kin
 from symmech.trolley import elastic as el
 
+pytestmark = pytest.mark.xdist_group("test_elastic_bodies")
+
 TROLLEY = dict(mass=120.0, com=(0.9, 0.4, -0.1), inertia=(12.0, 25.0, 18.0, 1.5, -0.8, 0.6))
 # root [m], axis, plane, length [m], ρA [kg/m], tip mass [kg]: skew axes, so every inertia entry is reached
 RODS = (((0.2, 0.3, 0.1), (0.0, 1.0, 0.2), (1.0, 0.0, 0.0), 1.4, 3.0, 2.5),
@@ -99,7 +101,7 @@ def mode_system():
 
 
 def exact_mode(beam, mode):
-    """(shape at XI scaled to a largest deflection of +1, ω² √ of ρA L⁴/EI as λ²) of the closed form."""
+    """The closed form's shape at XI scaled to a largest deflection of +1 and its λ = βL (ω² = λ⁴ EI/(ρA L⁴))."""
     support, _, rho_a, _, tip = MODE_BEAMS[beam]
     if support == "pinned":
         lam = mode * np.pi
@@ -120,8 +122,9 @@ def system():
                                                     (2, 2, 2, 5e-5)])
 def test_beam_mode_is_the_euler_bernoulli_mode_of_that_beam_and_plane(system, beam, plane, mode, tol):
     """Only the coordinates of that beam's plane are set; their deflection along the beam is the closed-form
-    mode with its largest deflection +1 m (a pinned beam's higher modes up to their sign; to ``tol``, the Ritz error of 8 polynomials), and its Rayleigh
-    quotient on the Ritz K, M is the closed-form ω² = λ⁴ EI/(ρA L⁴) (to 10 tol: the mode's, not another's)."""
+    mode with its largest deflection +1 m (a pinned beam's higher modes up to their sign; to ``tol``, the Ritz
+    error of 8 polynomials), and its Rayleigh quotient on the Ritz K, M is the closed-form ω² = λ⁴ EI/(ρA L⁴)
+    (to 10 tol: the mode's, not another's)."""
     support, length, rho_a, ei, _ = MODE_BEAMS[beam]
     q = el.beam_mode(system, beam, plane, mode)
     names = system.inv.names

@@ -1,6 +1,8 @@
 """`elastic.simulate` against closed forms: a beam of one Ritz function per plane on a trolley at rest is a
 damped oscillator of its own, so its coordinates, rates, energy, dissipated energy and the (zero) work of the
-track follow from the start offsets alone.
+track follow from the start offsets alone; on a trolley at a prescribed ramp of acceleration, or pulled by a
+ramp of traction, it starts quasi-static and swings about the ramp in closed form. Also the Jacobian simulate
+hands implicit solvers (the derivative of its rates), its evaluation counts and its failure message.
 
 The cantilever's one Ritz function is N1 = ξ² (derive_elastic.beam_functions): modal mass m = ρA L/5 + M_tip
 (N1(1) = 1), stiffness k = EI ∫ N1''² dξ / L³ = 4 EI/L³; the stiffness-proportional damping of the plane
@@ -166,7 +168,8 @@ def test_without_the_analytic_jacobian_scipy_differences(monkeypatch):
 
     seen = []
     solve_ivp = scipy.integrate.solve_ivp
-    monkeypatch.setattr(scipy.integrate, "solve_ivp", lambda *a, **kw: seen.append(kw.get("jac")) or solve_ivp(*a, **kw))
+    monkeypatch.setattr(scipy.integrate, "solve_ivp",
+                        lambda *a, **kw: seen.append(kw.get("jac")) or solve_ivp(*a, **kw))
     el.simulate(mast(0.0), straight(), np.linspace(0.0, 0.01, 3), analytic_jacobian=False)
     assert seen == [None]
 
