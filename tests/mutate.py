@@ -80,6 +80,20 @@ SHARDS = {
     "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
+    # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
+    # integrating test that reaches each (the "before" selection, docs/mutation.md) and the closed-form tests
+    # written against their survivors; one shard each (a survivor runs every selected test that covers it)
+    "elastic_rigid_body": ("symmech/trolley/elastic.py",
+                           ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
+                            "reactions_equal or rigid_body"], ["*.x_rigid_body__*"]),
+    "elastic_beam_mode": ("symmech/trolley/elastic.py",
+                          ["tests/test_trolley_elastic_initial.py", "tests/test_elastic_bodies.py", "-k",
+                           "vibrates_at or beam_mode"], ["*.x_beam_mode__*"]),
+    "elastic_simulate": ("symmech/trolley/elastic.py",
+                         ["tests/test_trolley_elastic.py", "tests/test_trolley_elastic_kind.py",
+                          "tests/test_elastic_simulate.py", "-k",
+                          "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
+                         ["*.x_simulate__*"]),
     # impact.py (1482 mutants) is split: its tests take 6 s, most mutants run all of them
     "impact": ("symmech/grain/impact.py", IMPACT_TESTS,
                ["*ǁDescentOptionsǁ*", "*.x__golden_section__*", "*.x_solve_descent_batch__*", "*.x_solve_scipy__*",
