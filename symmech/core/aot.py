@@ -100,6 +100,7 @@ class Build:
                 spec = importlib.util.spec_from_file_location(self.module_name, so)
                 module = importlib.util.module_from_spec(spec)
                 spec.loader.exec_module(module)
+                _scipy_lapack_alone()
                 self._module = module
         return self._module
 
@@ -131,6 +132,26 @@ class Build:
             (Path(tmp) / "manifest").write_text(json.dumps(record, indent=1, sort_keys=True))
             os.replace(Path(tmp) / "manifest", manifest)
         return True
+
+
+def _scipy_lapack_alone() -> None:
+    """numba's runtime inside a build finds BLAS and LAPACK by importing ``scipy.linalg.cython_blas`` and
+    ``cython_lapack`` on first use; that imports the whole ``scipy.linalg`` package (~0.2 s, half of a warm
+    run's imports). Load the two extension modules alone under those names instead (the package, if anyone
+    imports it later, finds them in ``sys.modules``); when scipy keeps them elsewhere, its import does it."""
+    import scipy
+
+    folder = Path(scipy.__file__).parent / "linalg"
+    for name in ("cython_blas", "cython_lapack"):
+        full = f"scipy.linalg.{name}"
+        path = next((folder / (name + suffix) for suffix in importlib.machinery.EXTENSION_SUFFIXES
+                     if (folder / (name + suffix)).is_file()), None)
+        if full in sys.modules or path is None:
+            continue
+        spec = importlib.util.spec_from_file_location(full, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[full] = module
 
 
 @contextlib.contextmanager
