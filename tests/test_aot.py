@@ -39,7 +39,7 @@ def stale(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     source = tmp_path / "loop.py"
     source.write_text("x = 1\n")
-    build = aot.Build("probe", compiled.__file__, lambda: {})
+    build = aot.Build("probe", [compiled.__file__], lambda: {})
     so, manifest = build.paths()
     so.parent.mkdir(parents=True)
     so.write_bytes(b"not an extension module")  # loading it would raise: a refusal must not try
@@ -78,7 +78,8 @@ def test_no_build_without_a_c_compiler(monkeypatch, tmp_path, capfd):
     monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
     from symmech.grain import compiled_loop
 
-    build = aot.Build("nocc", compiled.__file__, lambda: {"f": (compiled_loop._cross, "f8[::1](f8[::1], f8[::1])")})
+    cross = (compiled_loop._cross, "f8[::1](f8[::1], f8[::1])")
+    build = aot.Build("nocc", [compiled.__file__], lambda: {"f": cross})
     so, manifest = build.paths()
     assert build.build() is False
     assert build.load() is None and not so.exists() and not manifest.exists()
@@ -151,7 +152,10 @@ def test_the_main_job_runs_on_the_build_without_numba(built, tmp_path):
     # neither numba nor the scipy.linalg package (the build's BLAS and LAPACK modules are loaded alone)
     assert done.returncode == 0 and done.stdout.splitlines()[-1].split() == ["False", "False", "0"], done.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert "ahead of time" in json.dumps(summary)
+    assert summary["engine_reason"].endswith("built (ahead of time)")
+    assert {"grain_motion_nb", "grain_impact_nb"} <= set(summary["generated_modules"])  # compiled into it
+    files = {Path(f).name for f in json.loads(compiled.ENGINE.ahead.paths()[1].read_text())["files"]}
+    assert {"compiled.py", "compiled_layout.py", "compiled_loop.py", "grain_motion_nb.py"} <= files
 
 
 def test_a_builds_generated_modules_are_verified_and_listed_as_used(monkeypatch):

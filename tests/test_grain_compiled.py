@@ -15,7 +15,7 @@ from grain_sliding_reference import conveyor, on_plane, sphere
 from test_grain_hard_cases import CROP, WEED, sweep_grain
 from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
-from symmech.grain import compiled, compiled_loop, contact, flight, motion, motion_scene
+from symmech.grain import compiled, compiled_layout, compiled_loop, contact, flight, motion, motion_scene
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
@@ -142,20 +142,20 @@ def test_parameter_vector_layout():
     num = motion.Numerics(tolerance=1e-8, scan_step=2e-4, rest_velocity=3e-5, max_impacts=77, sample_interval=5e-3)
     p = compiled.pack(model.active(), num)
     assert model.active() is model and p.shape == (compiled.N_PARAMS,)
-    expected = {compiled.P_AXES: model.axes, compiled.P_MASS: [2.5e-5], compiled.P_INERTIA: model.inertia,
-                compiled.P_G: model.g_k, compiled.P_AMP: [1.1e-3], compiled.P_OMEGA: [2 * math.pi * 23.0],
-                compiled.P_PHASE: [0.7], compiled.P_DIR: vib.direction, compiled.P_LAW: [compiled.LAW_PRINTED],
-                compiled.P_EN: [0.41], compiled.P_ET: [-0.31], compiled.P_MU_IMPACT: [0.52], compiled.P_E: [0.43],
-                compiled.P_LAM: [1.37], compiled.P_CHECK: [1.0], compiled.P_MU: [0.33], compiled.P_ROTATION: [1.0],
-                compiled.P_TOL: [1e-8], compiled.P_SCAN: [2e-4], compiled.P_REST: [3e-5],
-                compiled.P_MAX_IMPACTS: [77.0], compiled.P_SAMPLE: [5e-3], compiled.P_PERIOD: [1 / 23.0]}
+    expected = {compiled_layout.P_AXES: model.axes, compiled_layout.P_MASS: [2.5e-5], compiled_layout.P_INERTIA: model.inertia,
+                compiled_layout.P_G: model.g_k, compiled_layout.P_AMP: [1.1e-3], compiled_layout.P_OMEGA: [2 * math.pi * 23.0],
+                compiled_layout.P_PHASE: [0.7], compiled_layout.P_DIR: vib.direction, compiled_layout.P_LAW: [compiled.LAW_PRINTED],
+                compiled_layout.P_EN: [0.41], compiled_layout.P_ET: [-0.31], compiled_layout.P_MU_IMPACT: [0.52], compiled_layout.P_E: [0.43],
+                compiled_layout.P_LAM: [1.37], compiled_layout.P_CHECK: [1.0], compiled_layout.P_MU: [0.33], compiled_layout.P_ROTATION: [1.0],
+                compiled_layout.P_TOL: [1e-8], compiled_layout.P_SCAN: [2e-4], compiled_layout.P_REST: [3e-5],
+                compiled_layout.P_MAX_IMPACTS: [77.0], compiled_layout.P_SAMPLE: [5e-3], compiled_layout.P_PERIOD: [1 / 23.0]}
     for index, values in expected.items():
         np.testing.assert_allclose(p[index:index + len(values)], values, rtol=1e-15)
     assert sum(len(v) for v in expected.values()) == compiled.N_PARAMS
     off = replace(model, effects=motion.Effects(vibration=False, friction=False, rotation=False))
     p = compiled.pack(off.active(), num)
-    assert p[compiled.P_AMP] == p[compiled.P_MU] == p[compiled.P_ROTATION] == 0.0
-    assert p[compiled.P_OMEGA] == 2 * math.pi * 23.0 and p[compiled.P_MU_IMPACT] == 0.52
+    assert p[compiled_layout.P_AMP] == p[compiled_layout.P_MU] == p[compiled_layout.P_ROTATION] == 0.0
+    assert p[compiled_layout.P_OMEGA] == 2 * math.pi * 23.0 and p[compiled_layout.P_MU_IMPACT] == 0.52
 
 
 def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from symmech.core.scene import SymmechError
-from symmech.grain import compiled, flight, motion
+from symmech.grain import compiled, compiled_layout, flight, motion
 from symmech.grain.coulomb_law import ImpactLaw
 
 MODEL = motion.Model((1e-3, 1e-3, 1e-3), 2e-6, (0.0, 0.0, -9.81), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
@@ -24,7 +24,7 @@ NUM = motion.Numerics(max_impacts=7)
      "printed impact law: no admissible root; the one used pulls the grain into the plane (T_z < 0)"),
     (compiled.W_PRINTED_RESIDUAL, 3.456789e-7, 0.0,
      "printed impact law: no solution of (19) (relative residual 3.46e-07)"),
-    (compiled.W_ENERGY, 1.234567891e-6, 1.3e-6, "impact law 'printed' created energy: 1.23457e-06 J -> 1.3e-06 J"),
+    (compiled_layout.W_ENERGY, 1.234567891e-6, 1.3e-6, "impact law 'printed' created energy: 1.23457e-06 J -> 1.3e-06 J"),
 ])
 def test_warning_codes_read_as_the_python_loops_texts(code, a, b, text):
     assert compiled._warning(int(code), a, b, MODEL, NUM) == text
@@ -40,7 +40,7 @@ def test_warning_codes_read_as_the_python_loops_texts(code, a, b, text):
                             "chunk)"),
     (compiled.SLIDE_FAIL, 2, "sliding integration failed at t = 0.123456789 s: required step size is less than "
                              "spacing between numbers"),
-    (compiled.ROT_FAIL, 0, "torque-free rotation failed at t = 0.123456789 s: required step size is less than spacing "
+    (compiled_layout.ROT_FAIL, 0, "torque-free rotation failed at t = 0.123456789 s: required step size is less than spacing "
                            "between numbers"),
 ])
 def test_failure_codes_raise_the_python_loops_errors(status, regime, text):

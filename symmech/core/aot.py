@@ -72,16 +72,16 @@ def _platform() -> dict:
 
 class Build:
     """The ahead-of-time build ``<name>_aot`` of an engine: ``exports()`` maps each exported name to a numba
-    dispatcher and the signature it is compiled for; ``anchor`` is the file of the engine's Python side (its
-    folder, and a source of the build: the loop's constants live there)."""
+    dispatcher and the signature it is compiled for; ``anchors`` are files of the engine's Python side, sources
+    of the build that :func:`sources` cannot reach (constants imported by name); the first sets the folder."""
 
-    def __init__(self, name: str, anchor: str, exports: Callable[[], dict]):
-        self.module_name, self.anchor, self.exports = f"{name}_aot", anchor, exports
+    def __init__(self, name: str, anchors: list[str], exports: Callable[[], dict]):
+        self.module_name, self.anchors, self.exports = f"{name}_aot", list(anchors), exports
         self._module = None
 
     def paths(self) -> tuple[Path, Path]:
         """(extension module, manifest)."""
-        where = folder(self.anchor)
+        where = folder(self.anchors[0])
         return where / f"{self.module_name}{SUFFIX}", where / f"{self.module_name}.json"
 
     def load(self) -> ModuleType | None:
@@ -112,7 +112,7 @@ class Build:
             from numba.pycc import CC
 
         exports = self.exports()
-        files = sources(sys.modules[next(iter(exports.values()))[0].__module__]) + [self.anchor]
+        files = sources(sys.modules[next(iter(exports.values()))[0].__module__]) + self.anchors
         record = {"platform": _platform(), "files": {f: _digest(f) for f in sorted(set(files))}}
         so, manifest = self.paths()
         so.parent.mkdir(parents=True, exist_ok=True)

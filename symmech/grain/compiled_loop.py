@@ -12,7 +12,7 @@ import numpy as np
 
 from symmech.core import kernels, ode
 from symmech.grain import sliding
-from symmech.grain.compiled import (
+from symmech.grain.compiled_layout import (
     P_MASS, P_INERTIA, P_G, P_AMP, P_OMEGA, P_PHASE, P_DIR, P_LAW, P_EN, P_ET, P_MU_IMPACT, P_E, P_LAM,
     P_CHECK, P_MU, P_ROTATION, P_TOL, P_SCAN, P_REST, P_MAX_IMPACTS, P_SAMPLE, P_PERIOD, LAW_PRINTED, INT,
     FLIGHT, IMPACT, SLIDING, C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING, C_WORK,
