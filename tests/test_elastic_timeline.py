@@ -69,7 +69,10 @@ def traction_drive(drive):
     return dataclasses.replace(drive, speed=None, traction=lambda t, V0: 200.0 + 50.0 * t - 3.0 * V0, v_initial=6.0)
 
 
-def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system):
+@pytest.mark.parametrize("case", [1, 2])
+def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system, case):
+    """Case 2 moves the chord frame of the axle distance l (tests/test_elastic_frame.py)."""
+    drive = dataclasses.replace(drive, local_curvature=case == 2)
     line = el.Timeline(system, traction_drive(drive), GRID)
     assert line.s_nodes is None
     for s, V0 in ((3.0, 6.0), (9.0, 11.0)):
@@ -80,9 +83,9 @@ def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system):
             for key in ("v0", "a0", "w", "dw", "nu"):
                 assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-12, key
         assert np.abs(fs1.a0 - fs0.a0 - fs0.v0 / V0).max() < 1e-12  # ∂a0/∂V̇0 = e, the tangent
-    for s in np.linspace(1.0, 30.0, 100):
+    for s in np.linspace(1.0, 30.0, 100):  # more arc lengths than the cache keeps
         line.traction_states(s, 6.0)
-    assert len(line.cache) <= 65
+        assert len(line.cache) <= 65
 
 
 def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system):
