@@ -159,16 +159,17 @@ def test_outputs_on_elastic_rollers_with_dampers(drive):
     assert not {"rr", "v", "acc"} & set(out)
 
 
-def test_outputs_on_rigid_rollers_without_gravity(drive):
+@pytest.mark.parametrize("g0", [0.0, 0.5])
+def test_outputs_on_rigid_rollers_in_weak_or_no_gravity(drive, g0):
     """Rigid rollers: the six reactions at the contacts carry F and M; no deflections, no contact moment; the
-    overloads in units of the standard gravity when g0 = 0; only the beam's part of the tip is elastic."""
+    overloads in units of g0, or of the standard gravity when g0 = 0; only the beam's part of the tip is elastic."""
     base = model(rollers=False)
-    mdl = el.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, 0.0, None, base.beams, base.effects)
+    mdl = el.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, g0, None, base.beams, base.effects)
     system = el.System(mdl, PROBES)
     body = with_probes(cloud(mdl), False)
     s, V0, dV0, Y = rows_of(system)
     out = el.outputs(system, drive, np.arange(3.0), s, V0, dV0, Y)
-    check_rows(system, body, drive, out, s, V0, dV0, Y, 0.0)
+    check_rows(system, body, drive, out, s, V0, dV0, Y, g0)
     for P, F, M in zip(out["P"], out["F"], out["M"]):
         forces = P[:, None] * DIRECTIONS
         assert np.abs(forces.sum(0) - F).max() < 1e-10 * np.abs(F).max()
