@@ -191,3 +191,18 @@ def test_outputs_use_the_frame_the_caller_gives(drive):
         assert np.array_equal(given[key], own[key]), key
     plain = el.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y)
     assert np.abs(plain["F"] - given["F"]).max() > 1e-4 * np.abs(plain["F"]).max()
+
+
+def test_every_beam_mode_counts_as_elastic_on_a_body_without_second_order_fields(drive):
+    """Rigid rollers and no stiffening: no ψ fields at all, the coordinates are the last fields; the tip's elastic
+    displacement is its whole displacement, Σ N_k(1) q_k b over both planes."""
+    base = model(rollers=False)
+    mdl = el.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, G0, None, base.beams,
+                          el.Effects(rollers=False, stiffening=False, damping=False))
+    system = el.System(mdl, PROBES)
+    assert system.F == 1 + system.N
+    s, V0, dV0, Y = rows_of(system, 2)
+    out = el.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y)
+    tip = np.einsum("ai,na->ni", cloud(mdl)[2][-1], Y[:, :system.N])
+    assert np.abs(out["probe_elastic"][:, 1] - tip).max() < 1e-14
+    assert np.abs(out["probe_displacement"][:, 1] - tip).max() < 1e-14
