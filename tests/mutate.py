@@ -45,6 +45,12 @@ ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py
                  "not rigid_limit and not jacobi_energy and not reactions_equal and not stiff_rollers "
                  "and not free_decay"]
 
+# the elastic trolley's outputs and timeline: the cheapest tests that integrate (5 s, 4 s and 5 s at load 5)
+ELASTIC_OUTPUT_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_the_resultants_at_every_step",
+                        "tests/test_trolley_elastic_kind.py::test_energy_changes_by_the_work_of_the_track_forces[True]"]
+ELASTIC_TIMELINE_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_the_resultants_at_every_step",
+                          "tests/test_trolley_elastic_kind.py::test_traction_on_a_straight_level_track_follows_newton"]
+
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
                       "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
@@ -76,10 +82,10 @@ SHARDS = {
     "elastic_quasi_static": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*ǁSystemǁquasi_static__*"]),
     "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
                       ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
-    # reached only through simulate: needs the integrating tests in its selection
-    "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
+    # integrating tests, a short run on the helix (prescribed speed) and, for the timeline, one with traction
+    "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TIMELINE_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
-    "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, docs/mutation.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
@@ -94,6 +100,7 @@ SHARDS = {
                           "tests/test_elastic_simulate.py", "-k",
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
+    "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # impact.py (1482 mutants) is split: its tests take 6 s, most mutants run all of them
     "impact": ("symmech/grain/impact.py", IMPACT_TESTS,
                ["*ǁDescentOptionsǁ*", "*.x__golden_section__*", "*.x_solve_descent_batch__*", "*.x_solve_scipy__*",

@@ -1,0 +1,128 @@
+"""The elastic trolley's timeline: arc length s(t), the frame state at t, and the traction steps, in closed form.
+
+On the catenary with a twist of tests/test_trolley_elastic_kind.py at the speed V0 = 8 + 3 sin t the arc length is
+s = s0 + 8 t + 3 (1 - cos t); with traction the frame's x1 balance F1 = P0(t, V0) and the equations of motion hold
+together, checked by the explicit point cloud of tests/test_elastic_energies.py (sums over weighted points), and the
+start carries the whole body's acceleration P0/m - g0 dy/ds (the catenary's slope dy/ds = s/√(400 + s²))."""
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symmech.trolley import elastic as el
+from symmech.trolley import elastic_scene
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_elastic_energies import G0, L_AXLE, cloud, model, resultants_of_cloud  # noqa: E402
+from test_elastic_residual import C_ROLL, elastic_forces, virtual_work  # noqa: E402
+from test_trolley_elastic_kind import CATENARY  # noqa: E402
+from trolley_util import prepared  # noqa: E402
+
+pytestmark = pytest.mark.xdist_group("test_elastic_timeline")
+
+S0 = 2.5
+GRID = np.array([0.0, 0.3, 1.0, 2.2, 4.0])
+
+
+def arc(t):
+    return S0 + 8.0 * t + 3.0 * (1.0 - np.cos(t))
+
+
+@pytest.fixture(scope="module")
+def drive():
+    return dataclasses.replace(elastic_scene.drive_of(prepared(CATENARY), 1), s0=S0)
+
+
+@pytest.fixture(scope="module")
+def system():
+    return el.System(model(damping=C_ROLL))
+
+
+def test_arc_length_on_an_uneven_grid_is_the_integral_of_the_speed(drive):
+    assert np.abs(el.arc_length(drive, GRID) - arc(GRID)).max() < 1e-12
+    steady = dataclasses.replace(drive, speed=lambda t: (5.0, 0.0))  # a scalar speed for the whole grid
+    assert np.abs(el.arc_length(steady, GRID) - (S0 + 5.0 * GRID)).max() < 1e-13
+
+
+def test_timeline_arc_length_between_on_and_beyond_the_nodes(drive):
+    line = el.Timeline(None, drive, GRID)
+    for time in (0.0, 0.15, 0.3, 0.65, 1.0, 3.1, 4.0, 5.5):
+        assert line.s(time) == pytest.approx(arc(time), abs=1e-12), time
+
+
+def test_timeline_states_are_the_frames_at_the_arc_length_and_speed(drive, system):
+    line = el.Timeline(system, drive, GRID)
+    fr = el.frames(drive, arc(np.linspace(0.0, 4.0, 200)), L_AXLE)
+    for i, time in enumerate(np.linspace(0.0, 4.0, 200)):  # more times than the cache keeps
+        fs = line.state(time)
+        expected = el.frame_state(fr, i, 8.0 + 3.0 * np.sin(time), 3.0 * np.cos(time))
+        for key in ("v0", "a0", "w", "dw", "nu"):
+            assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-9, (time, key)
+        assert line.state(time) is fs  # an implicit step's stage times are revisited: cached
+        assert len(line.cache) <= 65
+
+
+def traction_drive(drive):
+    """The catenary driven by P0 = 200 + 50 t - 3 V0 [N] from 6 m/s at S0."""
+    return dataclasses.replace(drive, speed=None, traction=lambda t, V0: 200.0 + 50.0 * t - 3.0 * V0, v_initial=6.0)
+
+
+@pytest.mark.parametrize("case", [1, 2])
+def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system, case):
+    """Case 2 moves the chord frame of the axle distance l (tests/test_elastic_frame.py)."""
+    drive = dataclasses.replace(drive, local_curvature=case == 2)
+    line = el.Timeline(system, traction_drive(drive), GRID)
+    assert line.s_nodes is None
+    for s, V0 in ((3.0, 6.0), (9.0, 11.0)):
+        fs0, fs1 = line.traction_states(s, V0)
+        fr = el.frames(drive, s, L_AXLE)
+        for fs, rate in ((fs0, 0.0), (fs1, 1.0)):
+            expected = el.frame_state(fr, 0, V0, rate)
+            for key in ("v0", "a0", "w", "dw", "nu"):
+                assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-12, key
+        assert np.abs(fs1.a0 - fs0.a0 - fs0.v0 / V0).max() < 1e-12  # ∂a0/∂V̇0 = e, the tangent
+    for s in np.linspace(1.0, 30.0, 70 if case == 1 else 0):  # more arc lengths than the cache keeps
+        line.traction_states(s, 6.0)
+        assert len(line.cache) <= 65
+
+
+def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system):
+    """q̈ and V̇0 make the cloud's d'Alembert forces balance the elastic ones, and its x1 resultant the traction."""
+    body = cloud(system.mdl)
+    tdrive = traction_drive(drive)
+    line = el.Timeline(system, tdrive, GRID)
+    rng = np.random.default_rng(5)
+    N = system.N
+    for time, s, V0 in ((0.4, 4.0, 6.5), (1.7, 12.0, 9.0)):
+        q = rng.normal(size=N) * np.r_[np.full(5, 1e-2), np.full(N - 5, 0.1)]
+        qd = rng.normal(size=N)
+        y = np.r_[q, qd, 1.0, 2.0, s, V0]
+        fs, qdd, dv = line.traction_step(time, y)
+        expected = el.frame_state(el.frames(drive, s, L_AXLE), 0, V0, dv)
+        for key in ("v0", "a0", "w", "dw", "nu"):
+            assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-12, key
+        forces = elastic_forces(q, qd)
+        scale = np.abs(virtual_work(body, fs, q, qd, 0 * q)).max() + np.abs(forces).max()
+        assert np.abs(virtual_work(body, fs, q, qd, qdd) + forces).max() < 1e-9 * scale
+        F, _ = resultants_of_cloud(body, fs, q, qd, qdd)
+        assert F[0] == pytest.approx(200.0 + 50.0 * time - 3.0 * V0, abs=1e-9 * np.abs(F).max())
+        assert abs(dv) > 0.1
+
+
+def test_traction_start_carries_the_whole_bodys_acceleration(drive, system):
+    """q at rest relative to the frame at S0, 6 m/s, under V̇0 = P0(t0, 6)/m - g0 dy/ds."""
+    tdrive = traction_drive(drive)
+    line = el.Timeline(system, tdrive, GRID)
+    t0 = 0.8
+    q = el.traction_start(line, t0)
+    mass = system.mdl.mass + system.mdl.beams[0].rho_a * system.mdl.beams[0].length + system.mdl.beams[0].tip_mass
+    dv = (200.0 + 50.0 * t0 - 18.0) / mass - G0 * S0 / np.sqrt(400.0 + S0 ** 2)
+    fs = el.frame_state(el.frames(drive, S0, L_AXLE), 0, 6.0, dv)
+    body = cloud(system.mdl)
+    zero = np.zeros(system.N)
+    forces = elastic_forces(q, zero)
+    scale = np.abs(virtual_work(body, fs, zero, zero, zero)).max()
+    assert np.abs(virtual_work(body, fs, q, zero, zero) + forces).max() < 1e-9 * scale
+    assert np.abs(q).max() > 1e-5
