@@ -114,3 +114,19 @@ def test_unbalanced_load_refused_with_the_residual_and_its_coordinate():
         numeric.equilibrium_tensions(m)
     assert str(err.value) == ("scene field 'springs[1].preload': springs a cannot balance the loads: "
                               f"dPi/dq = {MASS * G:.3g} remains on coordinate 'y'")
+
+
+def test_radial_spring_of_a_long_pendulum_is_indeterminate_despite_round_off():
+    """A spring from the pivot to the bob of a pendulum (l = 10 km, drawn 1.1 rad out) has dl/dphi = 0:
+    its L_c entry is round-off (~1e-12 m, from l sin, l cos), below 1e-10 of the spring's length, so
+    eq. (5) is refused instead of giving the round-off's ~1e17 N."""
+    l, th = 1e4, 1.1
+    m = mech({"parameters": {"g": param(G, "m/s^2")},
+              "coordinates": [{"name": "phi", "type": "angle"}],
+              "points": [{"name": "O", "at": [0, 0]},
+                         {"name": "B", "from": "O", "vector": [l * math.sin(th), -l * math.cos(th)], "turns": ["phi"]}],
+              "bodies": [{"name": "bob", "mass": MASS, "com": "B"}],
+              "springs": [{"name": "s", "ends": ["O", "B"], "stiffness": 5.0, "preload": "equilibrium"}],
+              "gravity": {"g": "g"}})
+    with pytest.raises(SceneError, match=r"springs s: equilibrium \(5\) does not fix their tensions"):
+        numeric.equilibrium_tensions(m)
