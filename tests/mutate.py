@@ -37,13 +37,14 @@ REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py",
                                    "tests/test_trolley_paper_conventions.py"]
 
 SMM_FORMS_TESTS = ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py", "tests/test_smm_spatial_eq.py",
-                   "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py"]
+                   "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py",
+                   "tests/test_smm_torsion_preload_terms.py"]
 
 SMM_NUMERIC_TESTS = ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py",
                      "tests/test_smm_response.py", "tests/test_smm_spatial_eq.py", "tests/test_smm_pivot.py",
                      "tests/test_smm_equilibrium_search.py", "tests/test_smm_redraw.py",
                      "tests/test_smm_mode_kinds.py", "tests/test_smm_response_grids.py",
-                     "tests/test_smm_torsion_twist.py"]
+                     "tests/test_smm_torsion_twist.py", "tests/test_smm_equilibrium_tensions.py"]
 
 # the elastic trolley's fast covering tests (the Python reference engine: none is marked compiled_elastic), without
 # the five that integrate (10 of the 14 s a survivor costs)
