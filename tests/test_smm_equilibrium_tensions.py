@@ -130,3 +130,12 @@ def test_radial_spring_of_a_long_pendulum_is_indeterminate_despite_round_off():
               "gravity": {"g": "g"}})
     with pytest.raises(SceneError, match=r"springs s: equilibrium \(5\) does not fix their tensions"):
         numeric.equilibrium_tensions(m)
+
+
+def test_two_springs_that_cannot_hold_a_spatial_bob_are_named_together():
+    """Two of the three legs of the spatial hang: their pulls span a plane without the weight's line."""
+    m = _spatial_hang()
+    m.springs.pop()
+    with pytest.raises(SceneError, match=r"^scene field 'springs\[0\].preload': springs s0, s1 cannot balance the "
+                                         r"loads: dPi/dq = \S+ remains on coordinate '[xyz]'$"):
+        numeric.equilibrium_tensions(m)
