@@ -1,0 +1,279 @@
+"""The rigid trolley's moving frames (symmech.trolley.model.moving_frame, plan_frames) against closed forms
+(issue 23 item 1, mutation testing of trolley_frames_raw/_plan/_grid).
+
+References written in this file, not read off the code under test:
+* Frenet frame: a curve given by its curvature κ(s) and torsion τ(s), its frame (t, N, B) and position
+  integrated from the Frenet-Serret equations; then Λ = [t; N; B], Ω = [τ, 0, κ], Ω' = [τ', 0, κ'];
+  the clothoid κ = s/A² (τ = 0) in closed form through its inflection at s = 0;
+* twist frame (aircraft angles, y up): x1 = t, x3 = t × ŷ / |t × ŷ|, x2 = x3 × x1, then the roll θ1(s)
+  about x1 (passive: x2 → cos θ1 x2 + sin θ1 x3); its Ω from 4th-order differences of that closed form,
+  Ω̃ = -Λ' Λᵀ, and Ω' from differences of that Ω.
+Tracks answer derivatives(s, order) with exactly order + 1 arrays, as symmech's tracks do.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from symmech.core.scene import SymmechError
+from symmech.trolley import model
+
+H = 1e-3  # difference step [m]: 4th-order error ~ H⁴ |Λ⁽⁵⁾| ≈ 1e-12
+
+
+def _d4(f, s, h=H):
+    """4th-order central difference of f (array-valued) at s."""
+    return (f(s - 2 * h) - 8 * f(s - h) + 8 * f(s + h) - f(s + 2 * h)) / (12 * h)
+
+
+def _vee_rate(lam_of, s):
+    """Ω with Ω̃ = -Λ' Λᵀ (passive frames), Λ' by differences; (n, 3)."""
+    w = -_d4(lam_of, s) @ np.swapaxes(lam_of(s), -1, -2)
+    return np.stack([w[..., 2, 1], w[..., 0, 2], w[..., 1, 0]], axis=-1)
+
+
+class FrenetSerret:
+    """Curve with κ(s) = k0 + k1 sin s, τ(s) = t0 + t1 cos 2s [1/m] from s = 0: (X, t, N, B) integrated by
+    DOP853 (rtol 1e-13); X0'…X0'''' written in the Frenet frame."""
+
+    k0, k1, t0, t1 = 0.5, 0.2, 0.3, 0.1
+
+    def kappa(self, s):
+        return self.k0 + self.k1 * np.sin(s), self.k1 * np.cos(s), -self.k1 * np.sin(s)
+
+    def tau(self, s):
+        return self.t0 + self.t1 * np.cos(2 * s), -2 * self.t1 * np.sin(2 * s)
+
+    def __init__(self, length=8.0):
+        def rhs(s, y):
+            x, t, n, b = y.reshape(4, 3)
+            k, tau = self.kappa(s)[0], self.tau(s)[0]
+            return np.concatenate([t, k * n, -k * t + tau * b, -tau * n])
+
+        start = np.concatenate([np.zeros(3), np.eye(3).ravel()])
+        self.sol = solve_ivp(rhs, (-1.0, length), start, method="DOP853", rtol=1e-13, atol=1e-13, dense_output=True)
+
+    def frame(self, s):
+        y = self.sol.sol(np.asarray(s, float)).T.reshape(-1, 4, 3)
+        return y[:, 0], y[:, 1], y[:, 2], y[:, 3]
+
+    def derivatives(self, s, order):
+        x, t, n, b = self.frame(s)
+        (k, dk, ddk), (tau, dtau) = self.kappa(s), self.tau(s)
+        col = lambda a: np.asarray(a)[:, None]  # noqa: E731
+        rows = [x, t, col(k) * n, col(-k**2) * t + col(dk) * n + col(k * tau) * b,
+                col(-3 * k * dk) * t + col(ddk - k**3 - k * tau**2) * n + col(2 * dk * tau + k * dtau) * b]
+        return rows[:order + 1]
+
+
+def test_frenet_frame_of_a_curve_of_varying_curvature_and_torsion_is_the_integrated_one():
+    curve = FrenetSerret()
+    s = np.linspace(0.0, 7.5, 11)
+    frame = model.moving_frame(curve, s, "frenet")
+    _, t, n, b = curve.frame(s)
+    np.testing.assert_allclose(frame.lam, np.stack([t, n, b], axis=-2), atol=1e-9)
+    (k, dk, _), (tau, dtau) = curve.kappa(s), curve.tau(s)
+    zero = np.zeros_like(s)
+    np.testing.assert_allclose(frame.W, np.stack([tau, zero, k], -1), atol=1e-9)
+    np.testing.assert_allclose(frame.dW, np.stack([dtau, zero, dk], -1), atol=1e-9)
+    np.testing.assert_array_equal(frame.e, np.tile([1.0, 0.0, 0.0], (len(s), 1)))
+    np.testing.assert_array_equal(frame.de, np.zeros((len(s), 3)))
+
+
+class Spline(FrenetSerret):
+    """The same curve with a tangential part in X0'' (and X0''') such as a spline's near-unit speed leaves."""
+
+    def derivatives(self, s, order):
+        rows = super().derivatives(s, order)
+        t = rows[1]
+        return [rows[0], t] + [r + 0.05 * t for r in rows[2:]]
+
+
+def test_frenet_frame_ignores_the_tangential_part_of_the_second_derivative():
+    s = np.linspace(0.5, 6.0, 7)
+    exact = model.moving_frame(FrenetSerret(), s, "frenet")
+    spline = model.moving_frame(Spline(), s, "frenet")
+    np.testing.assert_allclose(spline.lam, exact.lam, atol=1e-12)
+    np.testing.assert_allclose(spline.W[:, 2], exact.W[:, 2], atol=1e-12)  # κ = |X0'' - (X0''·t) t|
+
+
+A = 1.3  # clothoid parameter [m]: κ = s / A²
+
+
+class Clothoid:
+    """Level clothoid (x-z plane, y up): heading φ = s²/(2A²), X0' = (cos φ, 0, sin φ); X0 itself is
+    not needed by the frames and left as the Fresnel integral's first terms would be: zeros."""
+
+    def derivatives(self, s, order):
+        s = np.asarray(s, float)
+        phi, dphi = s**2 / (2 * A**2), s / A**2
+        c, n, z = np.cos(phi), np.sin(phi), np.zeros_like(s)
+        rows = [np.stack([z, z, z], -1), np.stack([c, z, n], -1), np.stack([-n * dphi, z, c * dphi], -1),
+                np.stack([-c * dphi**2 - n / A**2, z, -n * dphi**2 + c / A**2], -1),
+                np.stack([n * dphi**3 - 3 * c * dphi / A**2, z, -c * dphi**3 - 3 * n * dphi / A**2], -1)]
+        return rows[:order + 1]
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
+def test_frenet_frame_is_continued_through_the_clothoid_inflection_by_a_half_turn():
+    """Beyond s = 0 the principal normal reverses; the plan rolls the frame there by 180° so the normal
+    before, n = (sin φ, 0, -cos φ), goes on: Ω3 = -s/A², Ω3' = -1/A² on both sides."""
+    plan = model.plan_frames(Clothoid(), -1.7, 2.31, "frenet", 1e-12)
+    event, = plan.events
+    # check samples 4.01/200 m apart, bisected down to 1e-9 m or until the middle falls where the Frenet frame
+    # is undefined, κ = |s|/A² < 1e-9; the bracket holds the inflection and the event is its middle
+    bracket = 4.01 / 200 / 2 ** event["bisections"]
+    assert bracket <= 1e-9 or abs(event["s"]) < A**2 * 1e-9
+    assert plan.rmf is None and abs(event["s"]) <= bracket / 2 and plan.at == [event["s"]]
+    assert event["kind"] == "inflection (principal normal reverses)"
+    assert abs(event["roll_deg"]) == pytest.approx(180.0, abs=1e-6) and plan.roll[0] == pytest.approx(
+        -np.radians(event["roll_deg"]))
+    s = np.array([-1.7, -0.9, -0.2, 0.3, 1.1, 2.3])
+    frame = model.moving_frame(Clothoid(), s, "frenet", plan)
+    phi = s**2 / (2 * A**2)
+    zero, one = np.zeros_like(s), np.ones_like(s)
+    t = np.stack([np.cos(phi), zero, np.sin(phi)], -1)
+    n = np.stack([np.sin(phi), zero, -np.cos(phi)], -1)
+    np.testing.assert_allclose(frame.lam, np.stack([t, n, np.cross(t, n)], axis=-2), atol=1e-12)
+    np.testing.assert_allclose(frame.W, np.stack([zero, zero, -s / A**2], -1), atol=1e-12)
+    np.testing.assert_allclose(frame.dW, np.stack([zero, zero, -one / A**2], -1), atol=1e-12)
+    assert plan.report() == {"mode": "frenet", "samples_checked": plan.checked, "discontinuities_resolved": 1,
+                             "events": [event]}
+
+
+class ArcThenLine:
+    """Level arc of radius 2 m (heading φ = s/2) up to s = 1 m, straight beyond (y up)."""
+
+    def derivatives(self, s, order):
+        s = np.asarray(s, float)
+        phi, bend, z = 0.5 * np.minimum(s, 1.0), 0.5 * (s < 1.0), np.zeros_like(s)
+        c, n = np.cos(phi), np.sin(phi)
+        rows = [np.stack([z, z, z], -1), np.stack([c, z, n], -1), np.stack([-n * bend, z, c * bend], -1),
+                np.stack([-c * bend**2, z, -n * bend**2], -1), np.stack([n * bend**3, z, -c * bend**3], -1)]
+        return rows[:order + 1]
+
+
+def test_frenet_frame_on_a_straight_line_is_refused_at_the_first_straight_arc_length():
+    with pytest.raises(SymmechError, match=r"curvature is zero at s = 1\.5 m \(straight piece or inflection\)"):
+        model.moving_frame(ArcThenLine(), np.array([0.2, 0.6, 1.5, 2.0]), "frenet")
+
+
+def _twist_reference(t, roll):
+    """Λ (n, 3, 3) of the twist frame from the unit tangent t (n, 3) and the roll θ1 (n,)."""
+    up = np.array([0.0, 1.0, 0.0])
+    x3 = np.cross(t, up)
+    x3 /= np.linalg.norm(x3, axis=-1, keepdims=True)
+    x2 = np.cross(x3, t)
+    c, s = np.cos(roll)[:, None], np.sin(roll)[:, None]
+    return np.stack([t, c * x2 + s * x3, -s * x2 + c * x3], axis=-2)
+
+
+ROLL = (0.4, 1.1)  # θ1 = 0.4 sin(1.1 s) [rad]
+
+
+def _roll(s):
+    a, w = ROLL
+    return a * np.sin(w * s), a * w * np.cos(w * s), -a * w * w * np.sin(w * s)
+
+
+class RisingHelix:
+    """Helix about the vertical y axis, radius 2 m, rise 0.5 m per radian, with the roll θ1(s)."""
+
+    R, RISE = 2.0, 0.5
+    ROOT = np.hypot(R, RISE)
+
+    def unit_tangent(self, s):
+        p = np.asarray(s, float) / self.ROOT
+        return np.stack([-self.R * np.sin(p), self.RISE + 0 * p, self.R * np.cos(p)], -1) / self.ROOT
+
+    def derivatives(self, s, order):
+        p, r = np.asarray(s, float) / self.ROOT, self.ROOT
+        c, n, z = np.cos(p), np.sin(p), np.zeros_like(p)
+        rows = [np.stack([self.R * c, self.RISE * p, self.R * n], -1), self.unit_tangent(s),
+                np.stack([-self.R * c, z, -self.R * n], -1) / r**2, np.stack([self.R * n, z, -self.R * c], -1) / r**3]
+        return rows[:order + 1]
+
+    def twist(self, s):
+        return _roll(np.asarray(s, float))
+
+
+class SlopedLine:
+    """Straight line rising 0.3 m per metre along (1, 0.3, 0.5)/|.|, with the roll θ1(s)."""
+
+    T = np.array([1.0, 0.3, 0.5]) / np.linalg.norm([1.0, 0.3, 0.5])
+
+    def unit_tangent(self, s):
+        return np.broadcast_to(self.T, np.shape(s) + (3,))
+
+    def derivatives(self, s, order):
+        s = np.asarray(s, float)
+        return [s[:, None] * self.T, self.unit_tangent(s)] + [np.zeros((len(s), 3))] * (order - 1)
+
+    def twist(self, s):
+        return _roll(np.asarray(s, float))
+
+
+@pytest.mark.parametrize("track", [RisingHelix(), SlopedLine()], ids=["helix", "line"])
+def test_twist_frame_matches_the_aircraft_angle_frame_and_its_differences(track):
+    s = np.linspace(-1.0, 6.0, 8)
+    frame = model.moving_frame(track, s, "twist")
+
+    def lam_of(x):
+        return _twist_reference(track.unit_tangent(x), _roll(x)[0])
+
+    np.testing.assert_allclose(frame.lam, lam_of(s), atol=1e-12)
+    np.testing.assert_allclose(frame.W, _vee_rate(lam_of, s), atol=1e-9)
+    np.testing.assert_allclose(frame.dW, _d4(lambda x: _vee_rate(lam_of, x), s, 1e-2), atol=1e-7)
+    if isinstance(track, SlopedLine):  # Ω = [θ1', 0, 0] exactly on a straight line
+        _, d1, d2 = _roll(s)
+        np.testing.assert_allclose(frame.W, np.stack([d1, 0 * s, 0 * s], -1), atol=1e-14)
+        np.testing.assert_allclose(frame.dW, np.stack([d2, 0 * s, 0 * s], -1), atol=1e-14)
+    np.testing.assert_array_equal(frame.e, np.tile([1.0, 0.0, 0.0], (len(s), 1)))
+    np.testing.assert_array_equal(frame.de, np.zeros((len(s), 3)))
+
+
+class VerticalLoop:
+    """Loop of radius 8 m in the vertical x-y plane: t = (cos φ, sin φ, 0), φ = s/R, vertical at s = πR/2."""
+
+    R = 8.0
+
+    def derivatives(self, s, order):
+        phi, r = np.asarray(s, float) / self.R, self.R
+        c, n, z = np.cos(phi), np.sin(phi), np.zeros_like(phi)
+        rows = [np.stack([r * n, r - r * c, z], -1), np.stack([c, n, z], -1), np.stack([-n, c, z], -1) / r,
+                np.stack([-c, -n, z], -1) / r**2]
+        return rows[:order + 1]
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
+def test_twist_frame_through_a_vertical_tangent_is_rolled_back_to_stay_upright():
+    """The aircraft angles turn x3 over at the vertical tangent (x3 = sign(cos φ) z); the plan rolls the
+    frame beyond it by 180°, so x3 = z, x2 = (-sin φ, cos φ, 0) all round, Ω = [0, 0, 1/R], Ω' = 0."""
+    loop = VerticalLoop()
+    plan = model.plan_frames(loop, 0.0, 20.0, "twist", 0.0)
+    event, = plan.events
+    assert event["kind"] == "vertical tangent (aircraft angles)" and abs(event["roll_deg"]) == pytest.approx(180.0)
+    assert plan.roll == pytest.approx([-np.radians(event["roll_deg"])])
+    # bisection of a check interval of 0.1 m, stopped next to the vertical tangent (|t_y| > 1 - 1e-9 within
+    # 3.6e-4 m of it): the bracket still holds it and the event is its middle
+    assert 4 <= event["bisections"] <= 10
+    bracket = 0.1 / 2 ** event["bisections"]
+    assert abs(event["s"] - np.pi * loop.R / 2) <= bracket / 2 and plan.at == pytest.approx([event["s"]], abs=0)
+    assert f"within {bracket:.3g} m" in event["action"]
+    s = np.array([1.0, 12.0, 12.8, 19.0])
+    frame = model.moving_frame(loop, s, "twist", plan)
+    phi, z = s / loop.R, np.zeros_like(s)
+    lam = np.stack([np.stack([np.cos(phi), np.sin(phi), z], -1), np.stack([-np.sin(phi), np.cos(phi), z], -1),
+                    np.tile([0.0, 0.0, 1.0], (len(s), 1))], axis=-2)
+    np.testing.assert_allclose(frame.lam, lam, atol=1e-12)
+    np.testing.assert_allclose(frame.W, np.tile([0.0, 0.0, 1 / loop.R], (len(s), 1)), atol=1e-12)
+    np.testing.assert_allclose(frame.dW, np.zeros((len(s), 3)), atol=1e-12)
+    with pytest.raises(SymmechError, match=r"tangent is vertical at s = 12\.5664 m"):
+        model.moving_frame(loop, np.array([1.0, np.pi * loop.R / 2]), "twist")
