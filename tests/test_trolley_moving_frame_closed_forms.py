@@ -277,3 +277,82 @@ def test_twist_frame_through_a_vertical_tangent_is_rolled_back_to_stay_upright()
     np.testing.assert_allclose(frame.dW, np.zeros((len(s), 3)), atol=1e-12)
     with pytest.raises(SymmechError, match=r"tangent is vertical at s = 12\.5664 m"):
         model.moving_frame(loop, np.array([1.0, np.pi * loop.R / 2]), "twist")
+
+
+def test_twist_frame_keeps_upright_through_two_vertical_tangents_by_cumulative_rolls():
+    """Beyond the second vertical tangent (s = 3πR/2) the rolls add up to a whole turn: the raw frame."""
+    loop = VerticalLoop()
+    plan = model.plan_frames(loop, 0.0, 45.0, "twist", 0.0)
+    assert plan.at == pytest.approx([np.pi * loop.R / 2, 3 * np.pi * loop.R / 2], abs=2e-3)
+    assert abs(plan.roll.sum()) == pytest.approx(2 * np.pi) or plan.roll.sum() == pytest.approx(0.0, abs=1e-9)
+    s = np.array([2.0, 12.0, 20.0, 37.0, 38.0, 44.0])
+    frame = model.moving_frame(loop, s, "twist", plan)
+    phi, z = s / loop.R, np.zeros_like(s)
+    np.testing.assert_allclose(frame.lam[:, 1], np.stack([-np.sin(phi), np.cos(phi), z], -1), atol=1e-12)
+    np.testing.assert_allclose(frame.lam[:, 2], np.tile([0.0, 0.0, 1.0], (len(s), 1)), atol=1e-12)
+    np.testing.assert_allclose(frame.W, np.tile([0.0, 0.0, 1 / loop.R], (len(s), 1)), atol=1e-12)
+
+
+class Kink:
+    """Straight level line turning by 30° about y at s = 1 m (no curvature on either side)."""
+
+    TURN = np.radians(30.0)
+
+    def derivatives(self, s, order):
+        s = np.asarray(s, float)
+        a = np.where(s < 1.0, 0.0, self.TURN)
+        z = np.zeros_like(s)
+        t = np.stack([np.cos(a), z, np.sin(a)], -1)
+        return [np.stack([s, z, z], -1), t] + [np.zeros_like(t)] * (order - 1)
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
+def test_a_kink_in_the_track_is_refused_with_its_angle_and_place():
+    with pytest.raises(SymmechError, match=r"tangent jumps by 30 deg near s = (1|0\.99999999\d*) m: the track is not"):
+        model.plan_frames(Kink(), 0.0, 2.0, "twist", 0.0)
+
+
+class HiddenRoll(SlopedLine):
+    """Straight line whose roll θ1 turns by 0.5 rad within a few 1e-4 m around s0 = 1.005 m, between check
+    samples 0.01 m apart: θ1' = c exp(-((s - s0)/w)²), θ1 = c w √π/2 (1 + erf((s - s0)/w))."""
+
+    S0, WIDTH, TOTAL = 1.005, 1e-4, 0.5
+
+    def twist(self, s):
+        from scipy.special import erf
+
+        x = (np.asarray(s, float) - self.S0) / self.WIDTH
+        c = self.TOTAL / (self.WIDTH * np.sqrt(np.pi))
+        bump = c * np.exp(-x * x)
+        return 0.5 * self.TOTAL * (1 + erf(x)), bump, -2 * x / self.WIDTH * bump
+
+
+def test_a_fast_roll_between_check_samples_is_bisected_and_found_continuous():
+    plan = model.plan_frames(HiddenRoll(), 0.0, 2.0, "twist", 0.0)
+    event, = plan.events
+    assert event["kind"] == "fast turn" and "no discontinuity" in event["action"]
+    assert abs(event["s"] - HiddenRoll.S0) < 4 * HiddenRoll.WIDTH and len(plan.at) == 0 and len(plan.roll) == 0
+    s = np.array([0.5, 1.0049, 1.0051, 1.5])
+    np.testing.assert_allclose(model.moving_frame(HiddenRoll(), s, "twist", plan).lam,
+                               _twist_reference(SlopedLine().unit_tangent(s), HiddenRoll().twist(s)[0]), atol=1e-12)
+
+
+class LevelLine(SlopedLine):
+    """The sloped line without roll: the twist frame is the same matrix everywhere (up to rounding)."""
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
+def test_a_straight_sloped_track_has_no_frame_discontinuity():
+    """Ω = 0: neighbouring frames equal to rounding must read as no turn (arccos of their trace read ~1e-8 rad
+    and reported 200 "vertical tangents" with a roll of 0 deg)."""
+    plan = model.plan_frames(LevelLine(), 0.0, 2.0, "twist", 0.0)
+    assert plan.events == [] and len(plan.at) == 0 and plan.checked == 201
+    frame = model.moving_frame(LevelLine(), np.linspace(0.0, 2.0, 5), "twist")
+    turn, predicted = model._turns(frame, np.linspace(0.0, 2.0, 5))
+    assert np.all(turn < 1e-15) and np.all(predicted == 0.0)
