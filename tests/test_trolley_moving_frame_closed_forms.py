@@ -356,3 +356,58 @@ def test_a_straight_sloped_track_has_no_frame_discontinuity():
     frame = model.moving_frame(LevelLine(), np.linspace(0.0, 2.0, 5), "twist")
     turn, predicted = model._turns(frame, np.linspace(0.0, 2.0, 5))
     assert np.all(turn < 1e-15) and np.all(predicted == 0.0)
+
+
+def test_turns_between_neighbouring_frames_and_their_prediction():
+    """On the loop (Ω = [0, 0, 1/R]) neighbours turn by |Δs|/R about x3, also with s running backwards; the
+    prediction |Δs| max(|Ω_k|, |Ω_k+1|) on the Frenet-Serret curve, |Ω| = √(τ² + κ²)."""
+    loop = VerticalLoop()
+    s = np.array([0.0, 0.5, 1.5, 1.7, 0.2, 9.0])
+    turn, predicted = model._turns(model.moving_frame(loop, s, "twist"), s)
+    np.testing.assert_allclose(turn, np.abs(np.diff(s)) / loop.R, rtol=1e-12)
+    np.testing.assert_allclose(predicted, np.abs(np.diff(s)) / loop.R, rtol=1e-12)
+    curve = FrenetSerret()
+    s = np.array([0.3, 1.9, 1.2, 4.0])
+    _, predicted = model._turns(model.moving_frame(curve, s, "frenet"), s)
+    rate = np.hypot(curve.kappa(s)[0], curve.tau(s)[0])
+    np.testing.assert_allclose(predicted, np.abs(np.diff(s)) * np.maximum(rate[1:], rate[:-1]), rtol=1e-9)
+
+
+class LevelCircle:
+    """Level circle of radius 0.02 m (x-z plane, y up): the twist frame turns at 1/R = 50 rad/m."""
+
+    R = 0.02
+
+    def derivatives(self, s, order):
+        phi, r = np.asarray(s, float) / self.R, self.R
+        c, n, z = np.cos(phi), np.sin(phi), np.zeros_like(phi)
+        rows = [r * np.stack([n, z, 1 - c], -1), np.stack([c, z, n], -1), np.stack([-n, z, c], -1) / r,
+                np.stack([-c, z, -n], -1) / r**2]
+        return rows[:order + 1]
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
+def _refined(s, rate):
+    """Each interval of s cut into ceil(Δs max(rate) / 0.2) equal parts (rate: the closed-form |Ω| at s)."""
+    r = rate(s)
+    parts = np.ceil(np.diff(s) * np.maximum(r[1:], r[:-1]) / model.CHECK_TURN).astype(int)
+    return np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(s[:-1], s[1:], parts)] + [s[-1:]])
+
+
+@pytest.mark.parametrize("track, mode, lo, hi, rate", [
+    (LevelCircle(), "twist", 0.0, 2.0, lambda s: np.full_like(s, 50.0)),
+    (Clothoid(), "frenet", 0.1, 30.0, lambda s: s / A**2),
+], ids=["circle", "clothoid"])
+def test_check_grid_refines_until_the_predicted_turn_is_at_most_0_2_rad(track, mode, lo, hi, rate):
+    """One refinement of the 201 even samples suffices (|Ω| is monotone between them)."""
+    grid = model._check_grid(track, lo, hi, mode)
+    expected = _refined(np.linspace(lo, hi, 201), rate)
+    assert len(grid) == len(expected) > 201
+    np.testing.assert_allclose(grid, expected, rtol=1e-13, atol=1e-13)
+    r = rate(grid)
+    assert np.all(np.diff(grid) * np.maximum(r[1:], r[:-1]) <= model.CHECK_TURN * (1 + 1e-9))
+    if mode == "twist":
+        assert len(grid) == 601  # 0.01 m x 50 rad/m = 0.5 rad: every interval in three
