@@ -411,3 +411,50 @@ def test_check_grid_refines_until_the_predicted_turn_is_at_most_0_2_rad(track, m
     assert np.all(np.diff(grid) * np.maximum(r[1:], r[:-1]) <= model.CHECK_TURN * (1 + 1e-9))
     if mode == "twist":
         assert len(grid) == 601  # 0.01 m x 50 rad/m = 0.5 rad: every interval in three
+
+
+class RollingLoop(VerticalLoop):
+    """The loop with a roll at 50 rad/m before s1 (``before``) or beyond it: θ1 = 50 min(s - s1, 0) or
+    50 max(s - s1, 0). Near the vertical tangent (s = 12.566 m) the check samples where the roll runs have
+    |Ω| ≈ 50 rad/m, those where it does not 1/R."""
+
+    def __init__(self, s1, before):
+        self.s1, self.before = s1, before
+
+    def twist(self, s):
+        x = np.asarray(s, float) - self.s1
+        on = (x < 0) if self.before else (x > 0)
+        return 50.0 * np.where(on, x, 0.0), np.where(on, 50.0, 0.0), np.zeros_like(x)
+
+
+@pytest.mark.parametrize("s1, before", [(12.499, True), (12.601, False)], ids=["roll_before", "roll_beyond"])
+def test_a_vertical_tangent_next_to_a_fast_roll_is_still_found(s1, before):
+    """The tangent falls in the check interval [12.5, 12.6] m, whose ends turn at 1/R; its neighbours beyond
+    turn at 50 rad/m: predicting the interval's turn from them (1.5 x 0.05 m x 50 rad/m > π) would take the
+    half turn of the aircraft angles for a fast continuous turn and leave the frame flipped."""
+    plan = model.plan_frames(RollingLoop(s1, before), 12.0, 32.0, "twist", 0.0)
+    jumps = [e for e in plan.events if "roll_deg" in e]
+    assert len(jumps) == 1 and jumps[0]["kind"] == "vertical tangent (aircraft angles)"
+    assert plan.at == pytest.approx([np.pi * VerticalLoop.R / 2], abs=1e-3)
+
+
+class ShiftedClothoid(Clothoid):
+    """Clothoid of parameter 0.1 m with its inflection at s = 1.5 m: κ = 100 (s - 1.5) [1/m]; the Frenet
+    frame is undefined only within 1e-11 m of the inflection, so bisection stops at its resolution."""
+
+    S0, A = 1.5, 0.1
+
+    def derivatives(self, s, order):
+        u = (np.asarray(s, float) - self.S0) * (A / self.A)  # the clothoid above, heading u²/(2A²) = x²/(2·0.1²)
+        return [r * (A / self.A) ** (k - 1) if k > 1 else r for k, r in enumerate(super().derivatives(u, order))]
+
+
+def test_an_inflection_is_bisected_down_to_1e_9_relative():
+    """The bracket ends at most 1e-9 max(1, |s|) = 1.5e-9 m wide, and more than half that."""
+    plan = model.plan_frames(ShiftedClothoid(), 1.0, 2.3, "frenet", 1e-12)
+    event, = plan.events
+    grid = model._check_grid(ShiftedClothoid(), 1.0, 2.3, "frenet")
+    k = np.searchsorted(grid, 1.5) - 1
+    bracket = (grid[k + 1] - grid[k]) / 2 ** event["bisections"]
+    assert 0.75e-9 < bracket <= 1.5e-9 and abs(event["s"] - 1.5) <= bracket / 2
+    assert f"within {bracket:.3g} m" in event["action"] and abs(event["roll_deg"]) == pytest.approx(180.0)
