@@ -294,25 +294,35 @@ def test_twist_frame_keeps_upright_through_two_vertical_tangents_by_cumulative_r
 
 
 class Kink:
-    """Straight level line turning by 30° about y at s = 1 m (no curvature on either side)."""
+    """Straight line along ``before`` turning to ``after`` at s = 1 m (no curvature on either side), rolling
+    at ``roll_rate`` [rad/m] about it."""
 
-    TURN = np.radians(30.0)
+    def __init__(self, before, after, roll_rate):
+        self.before, self.after = (np.asarray(d, float) / np.linalg.norm(d) for d in (before, after))
+        self.roll_rate = roll_rate
 
     def derivatives(self, s, order):
         s = np.asarray(s, float)
-        a = np.where(s < 1.0, 0.0, self.TURN)
-        z = np.zeros_like(s)
-        t = np.stack([np.cos(a), z, np.sin(a)], -1)
-        return [np.stack([s, z, z], -1), t] + [np.zeros_like(t)] * (order - 1)
+        t = np.where((s < 1.0)[:, None], self.before, self.after)
+        return [s[:, None] * t, t] + [np.zeros_like(t)] * (order - 1)
 
     def twist(self, s):
-        z = np.zeros(np.shape(s))
-        return z, z, z
+        s = np.asarray(s, float)
+        return self.roll_rate * s, np.full_like(s, self.roll_rate), np.zeros_like(s)
 
 
-def test_a_kink_in_the_track_is_refused_with_its_angle_and_place():
-    with pytest.raises(SymmechError, match=r"tangent jumps by 30 deg near s = (1|0\.99999999\d*) m: the track is not"):
-        model.plan_frames(Kink(), 0.0, 2.0, "twist", 0.0)
+@pytest.mark.parametrize("after, roll_rate, degrees", [
+    ((np.cos(np.radians(30)), 0.0, np.sin(np.radians(30))), 0.0, "30"),
+    ((np.cos(np.radians(30)), 0.0, np.sin(np.radians(30))), 1.0, "30"),
+    # a cusp: the tangent reverses; with this direction t_a·t_b rounds to -1 - 2e-16
+    ((-1.0, -1.0, -3.0), 0.0, "180"),
+], ids=["kink", "kink_rolling", "cusp"])
+def test_a_kink_in_the_track_is_refused_with_its_angle_and_place(after, roll_rate, degrees):
+    """The frame's turn over the last 1e-9 m, 1.5 x 1e-9 m x 1 rad/m at most, is no kink's 30° or 180°."""
+    before = (1.0, 0.0, 0.0) if degrees == "30" else (1.0, 1.0, 3.0)
+    with pytest.raises(SymmechError, match=rf"tangent jumps by {degrees} deg near s = (1|0\.99999999\d*) m: the "
+                                           "track is not smooth there"):
+        model.plan_frames(Kink(before, after, roll_rate), 0.0, 2.0, "twist", 0.0)
 
 
 class HiddenRoll(SlopedLine):
@@ -333,7 +343,8 @@ class HiddenRoll(SlopedLine):
 def test_a_fast_roll_between_check_samples_is_bisected_and_found_continuous():
     plan = model.plan_frames(HiddenRoll(), 0.0, 2.0, "twist", 0.0)
     event, = plan.events
-    assert event["kind"] == "fast turn" and "no discontinuity" in event["action"]
+    # resolved at the first middle: the check samples are 0.01 m apart
+    assert event["kind"] == "fast turn" and event["action"] == "resolved by refinement to 0.01 m: no discontinuity"
     assert abs(event["s"] - HiddenRoll.S0) < 4 * HiddenRoll.WIDTH and len(plan.at) == 0 and len(plan.roll) == 0
     s = np.array([0.5, 1.0049, 1.0051, 1.5])
     np.testing.assert_allclose(model.moving_frame(HiddenRoll(), s, "twist", plan).lam,
