@@ -266,7 +266,9 @@ def test_twist_frame_through_a_vertical_tangent_is_rolled_back_to_stay_upright()
     assert 4 <= event["bisections"] <= 10
     bracket = 0.1 / 2 ** event["bisections"]
     assert abs(event["s"] - np.pi * loop.R / 2) <= bracket / 2 and plan.at == pytest.approx([event["s"]], abs=0)
-    assert f"within {bracket:.3g} m" in event["action"]
+    roll = event["roll_deg"]
+    assert event["action"] == (f"frame rolls by {roll:.1f} deg within {bracket:.3g} m; the frame beyond is rolled "
+                               f"back by {-roll:.1f} deg to stay continuous")
     s = np.array([1.0, 12.0, 12.8, 19.0])
     frame = model.moving_frame(loop, s, "twist", plan)
     phi, z = s / loop.R, np.zeros_like(s)
