@@ -472,3 +472,28 @@ def test_an_inflection_is_bisected_down_to_1e_9_relative():
     bracket = (grid[k + 1] - grid[k]) / 2 ** event["bisections"]
     assert 0.75e-9 < bracket <= 1.5e-9 and abs(event["s"] - 1.5) <= bracket / 2
     assert f"within {bracket:.3g} m" in event["action"] and abs(event["roll_deg"]) == pytest.approx(180.0)
+
+
+class TightHelix:
+    """Helix of radius 5 cm and rise 2 cm per radian about the horizontal z axis: its Frenet frame turns at
+    √(κ² + τ²) = 1/√(R² + λ²) = 18.57 rad/m; its twist frame faster where the tangent is steep."""
+
+    R, RISE = 0.05, 0.02
+    ROOT = np.hypot(R, RISE)
+
+    def derivatives(self, s, order):
+        p, r = np.asarray(s, float) / self.ROOT, self.ROOT
+        c, n, z = np.cos(p), np.sin(p), np.zeros_like(p)
+        rows = [np.stack([self.R * c, self.R * n, self.RISE * p], -1),
+                np.stack([-self.R * n, self.R * c, self.RISE + z], -1) / r,
+                np.stack([-self.R * c, -self.R * n, z], -1) / r**2, np.stack([self.R * n, -self.R * c, z], -1) / r**3,
+                np.stack([self.R * c, self.R * n, z], -1) / r**4]
+        return rows[:order + 1]
+
+
+def test_a_frenet_plan_checks_the_frenet_frame_on_its_own_grid():
+    """0.015 m x 18.57 rad/m = 0.28 rad: each of the 200 intervals in two, 401 samples, no event."""
+    plan = model.plan_frames(TightHelix(), 0.0, 3.0, "frenet", 1e-6)
+    expected = _refined(np.linspace(0.0, 3.0, 201), lambda s: np.full_like(s, 1 / TightHelix.ROOT))
+    assert plan.checked == len(expected) == 401 and plan.events == [] and plan.rmf is None
+    assert plan.report() == {"mode": "frenet", "samples_checked": 401, "discontinuities_resolved": 0, "events": []}
