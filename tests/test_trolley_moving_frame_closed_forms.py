@@ -142,6 +142,9 @@ def test_frenet_frame_is_continued_through_the_clothoid_inflection_by_a_half_tur
     np.testing.assert_allclose(frame.lam, np.stack([t, n, np.cross(t, n)], axis=-2), atol=1e-12)
     np.testing.assert_allclose(frame.W, np.stack([zero, zero, -s / A**2], -1), atol=1e-12)
     np.testing.assert_allclose(frame.dW, np.stack([zero, zero, -one / A**2], -1), atol=1e-12)
+    np.testing.assert_array_equal(frame.e, np.tile([1.0, 0.0, 0.0], (len(s), 1)))
+    np.testing.assert_array_equal(frame.de, np.zeros((len(s), 3)))
+    assert frame.info == {}
     assert plan.report() == {"mode": "frenet", "samples_checked": plan.checked, "discontinuities_resolved": 1,
                              "events": [event]}
 
