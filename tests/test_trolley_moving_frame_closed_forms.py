@@ -415,19 +415,30 @@ def _refined(s, rate):
     return np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(s[:-1], s[1:], parts)] + [s[-1:]])
 
 
+class UpLoop(VerticalLoop):
+    """The loop started at its vertical tangent: t = (0, 1, 0) exactly at s = 0, where the twist frame's Ω is
+    infinite."""
+
+    def derivatives(self, s, order):
+        return super().derivatives(np.asarray(s, float) + np.pi * self.R / 2, order)
+
+
 @pytest.mark.parametrize("track, mode, lo, hi, rate", [
     (LevelCircle(), "twist", 0.0, 2.0, lambda s: np.full_like(s, 50.0)),
     (Clothoid(), "frenet", 0.1, 30.0, lambda s: s / A**2),
-], ids=["circle", "clothoid"])
+    # samples where the frame is undefined (Ω NaN or infinite) count as not turning: at s = 0 (a sample)
+    (Clothoid(), "frenet", -25.0, 25.0, lambda s: np.abs(s) / A**2),
+    (UpLoop(), "twist", 0.0, 50.0, lambda s: np.where(s == 0, 0.0, 1 / VerticalLoop.R)),
+], ids=["circle", "clothoid", "inflection_sample", "vertical_sample"])
 def test_check_grid_refines_until_the_predicted_turn_is_at_most_0_2_rad(track, mode, lo, hi, rate):
     """One refinement of the 201 even samples suffices (|Ω| is monotone between them)."""
     grid = model._check_grid(track, lo, hi, mode)
     expected = _refined(np.linspace(lo, hi, 201), rate)
-    assert len(grid) == len(expected) > 201
+    assert len(grid) == len(expected)
     np.testing.assert_allclose(grid, expected, rtol=1e-13, atol=1e-13)
     r = rate(grid)
     assert np.all(np.diff(grid) * np.maximum(r[1:], r[:-1]) <= model.CHECK_TURN * (1 + 1e-9))
-    if mode == "twist":
+    if isinstance(track, LevelCircle):
         assert len(grid) == 601  # 0.01 m x 50 rad/m = 0.5 rad: every interval in three
 
 
