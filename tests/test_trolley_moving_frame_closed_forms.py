@@ -34,7 +34,7 @@ def _vee_rate(lam_of, s):
 
 
 class FrenetSerret:
-    """Curve with κ(s) = k0 + k1 sin s, τ(s) = t0 + t1 cos 2s [1/m] from s = 0: (X, t, N, B) integrated by
+    """Curve with κ(s) = k0 + k1 sin s, τ(s) = t0 + t1 cos 2s [1/m] from s = -1 m: (X, t, N, B) integrated by
     DOP853 (rtol 1e-13); X0'…X0'''' written in the Frenet frame."""
 
     k0, k1, t0, t1 = 0.5, 0.2, 0.3, 0.1
