@@ -512,3 +512,16 @@ def test_a_frenet_plan_checks_the_frenet_frame_on_its_own_grid():
     expected = _refined(np.linspace(0.0, 3.0, 201), lambda s: np.full_like(s, 1 / TightHelix.ROOT))
     assert plan.checked == len(expected) == 401 and plan.events == [] and plan.rmf is None
     assert plan.report() == {"mode": "frenet", "samples_checked": 401, "discontinuities_resolved": 0, "events": []}
+
+
+@pytest.mark.parametrize("above", [False, True], ids=["frenet_kept", "rotation_minimising"])
+def test_a_frenet_plan_compares_the_curvature_at_its_check_samples_with_min_curvature(above):
+    """On the curve of speed 1.02 with a tangential part in X0'' (κ = 0.5 + 0.2 sin s, its 201 check samples
+    0.0375 m apart, none refined): a min_curvature 1e-6 above the samples' least κ gives the rotation-minimising
+    frame, started at that sample; 1e-6 below keeps the Frenet frame."""
+    grid = np.linspace(0.0, 7.5, 201)
+    kappa = FrenetSerret().kappa(grid)[0]
+    plan = model.plan_frames(Spline(), 0.0, 7.5, "frenet", kappa.min() + (1e-6 if above else -1e-6))
+    assert (plan.rmf is not None) == above and plan.checked == 201
+    if above:
+        assert plan.events[0]["s"] == grid[np.argmin(kappa)] and plan.events[0]["kind"] == "Frenet frame undefined"
