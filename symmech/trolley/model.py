@@ -221,8 +221,7 @@ def _check_grid(track, lo, hi, mode):
 
 def _turns(frame: Frame, s):
     """Turn angle between neighbouring frames [rad] and the one predicted by |Ω| Δs."""
-    rel = frame.lam[1:] @ np.swapaxes(frame.lam[:-1], -1, -2)
-    turn = np.arccos(np.clip((np.trace(rel, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0))
+    turn = _angle(frame.lam[1:] @ np.swapaxes(frame.lam[:-1], -1, -2))
     rate = np.linalg.norm(frame.W, axis=-1)
     return turn, np.abs(np.diff(s)) * np.maximum(rate[1:], rate[:-1])
 
@@ -260,8 +259,10 @@ def _bisect_jump(track, mode, a, b, frame, k) -> dict:
                       f"{-roll:.1f} deg to stay continuous"}
 
 
-def _angle(rot) -> float:
-    return float(np.arccos(np.clip((np.trace(rot) - 1) / 2, -1.0, 1.0)))
+def _angle(rot):
+    """Rotation angle [rad] of rotation matrices (..., 3, 3) as atan2(sin, cos): arccos of the trace
+    would read a product of equal frames' rounding as a turn of ~1e-8 rad (a jump on a straight track)."""
+    return np.arctan2(np.linalg.norm(kin.vee(rot), axis=-1), (np.trace(rot, axis1=-2, axis2=-1) - 1) / 2)
 
 
 class RotationMinimising:
