@@ -72,10 +72,15 @@ def test_a_missing_or_broken_manifest_means_no_build(stale, text):
     assert build.load() is None
 
 
-def test_no_build_without_a_c_compiler(monkeypatch, tmp_path, capfd):
-    """pycc fails without a compiler: build() says so and writes nothing; nothing is printed."""
+@pytest.mark.parametrize("missing", ["C compiler", "numba.pycc"])
+def test_no_build_without_a_c_compiler_or_pycc(monkeypatch, tmp_path, capfd, missing):
+    """pycc fails without a compiler (or cannot be imported: it needs setuptools on Python >= 3.12): build()
+    says so and writes nothing; nothing is printed."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    if missing == "C compiler":
+        monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    else:
+        monkeypatch.setitem(sys.modules, "numba.pycc", None)  # its import raises ImportError
     from symmech.grain import compiled_loop
 
     cross = (compiled_loop._cross, "f8[::1](f8[::1], f8[::1])")

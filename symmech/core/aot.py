@@ -107,10 +107,6 @@ class Build:
     def build(self) -> bool:
         """Compile the exports ahead of time; the caller holds the engine's build lock. Returns whether it
         built: False without a working C compiler (the runs keep numba's cache)."""
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # numba.pycc is pending deprecation: fine for a cache
-            from numba.pycc import CC
-
         exports = self.exports()
         files = sources(sys.modules[next(iter(exports.values()))[0].__module__]) + self.anchors
         record = {"platform": _platform(), "files": {f: _digest(f) for f in sorted(set(files))}}
@@ -119,13 +115,15 @@ class Build:
         with tempfile.TemporaryDirectory(dir=so.parent) as tmp:
             try:
                 with warnings.catch_warnings(), _quiet():
-                    warnings.simplefilter("ignore")
+                    warnings.simplefilter("ignore")  # numba.pycc is pending deprecation: fine for a cache
+                    from numba.pycc import CC  # needs setuptools (a dependency) on Python >= 3.12
+
                     cc = CC(self.module_name)  # raises without a C compiler
                     cc.output_dir, cc.verbose = tmp, False
                     for name, (dispatcher, signature) in exports.items():
                         cc.export(name, signature)(dispatcher.py_func)
                     cc.compile()
-            except Exception:  # no C compiler, or a toolchain pycc cannot drive: numba's cache serves
+            except Exception:  # no C compiler, no pycc, or a toolchain it cannot drive: numba's cache serves
                 return False
             manifest.unlink(missing_ok=True)
             os.replace(Path(tmp) / cc.output_file, so)
