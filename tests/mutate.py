@@ -50,6 +50,10 @@ GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_moti
                       "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
                       "tests/test_grain_compiled_python_side.py", "-m", "not slow"]
 
+# the compiled engine's tests are in the slow tier (its build), which the default `-m` leaves out
+ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
+                   "tests/test_grain_compiled_start.py", "-m", "compiled_engine or not slow"]
+
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
@@ -157,6 +161,17 @@ SHARDS = {
                     ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
                      "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*", "*.x__velocity_noise__*",
                      "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
+    # what motion_rest left (docs/mutation.md): simulate and impact_record unrun (it ran the cheaper helpers first);
+    # its three untriaged survivors, not named, are in the helpers: motion_helpers reruns them
+    "motion_simulate": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                        ["*.x_simulate__mutmut_[1-9]", "*.x_simulate__mutmut_[1-9][0-9]",
+                         "*.x_simulate__mutmut_1[0-3][0-9]"]),
+    "motion_simulate_b": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                          ["*.x_simulate__mutmut_1[4-9][0-9]", "*.x_simulate__mutmut_2[0-9][0-9]",
+                           "*.x_impact_record__*"]),
+    "motion_helpers": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                       ["*ǁModelǁactive__*", "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*",
+                        "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
     # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
     # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
     "engine_py": ("symmech/grain/compiled.py",
@@ -165,6 +180,10 @@ SHARDS = {
                   ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
                    "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x__entry_signature__*"]),
+    # what engine_py left (docs/mutation.md): simulate from _90, simulate_many, _entry_signature; its ten
+    # untriaged survivors, not named, were the last run (simulate): this shard reruns all of simulate
+    "engine_py_rest": ("symmech/grain/compiled.py", ENGINE_PY_TESTS,
+                       ["*.x_simulate__*", "*.x_simulate_many__*", "*.x__entry_signature__*"]),
     # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
     # and a child imports the unmutated package anyway
     "pipeline_output": ("symmech/core/pipeline.py",
