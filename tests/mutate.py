@@ -197,7 +197,11 @@ SHARDS = {
 def shard_pyproject(module: str, tests: list[str]) -> str:
     """The shard's pyproject.toml text: [tool.mutmut] narrowed to one module, pytest's settings kept."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))
+    # a shard's `-m` goes to every mutant's run too: mutmut passes the selection only to the clean and stats runs,
+    # and the default `-m 'not slow'` would leave a slow-tier test uncollected (exit 5, "no tests")
+    marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
     mutmut = dict(project["tool"]["mutmut"], only_mutate=[module], pytest_add_cli_args_test_selection=tests)
+    mutmut["pytest_add_cli_args"] = mutmut["pytest_add_cli_args"] + marks
     tables = {"tool.mutmut": mutmut, "tool.pytest.ini_options": project["tool"]["pytest"]["ini_options"]}
     # JSON strings, lists, numbers and booleans are valid TOML values
     return "".join(f"[{name}]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in table.items()) + "\n"
