@@ -48,11 +48,13 @@ ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
                       "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
-                      "tests/test_grain_compiled_python_side.py", "-m", "not slow"]
+                      "tests/test_grain_compiled_python_side.py", "tests/test_grain_motion_start_state.py",
+                      "tests/test_grain_motion_stall.py", "-m", "not slow"]
 
 # the compiled engine's tests are in the slow tier (its build), which the default `-m` leaves out
 ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
-                   "tests/test_grain_compiled_start.py", "-m", "compiled_engine or not slow"]
+                   "tests/test_grain_compiled_start.py", "tests/test_grain_compiled_summary.py",
+                   "tests/test_grain_compiled_printed_energy.py", "-m", "compiled_engine or not slow"]
 
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
