@@ -61,7 +61,13 @@ ELASTIC_TIMELINE_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_t
 GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_motion_physics.py",
                       "tests/test_grain_regimes.py", "tests/test_grain_hard_cases.py",
                       "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
-                      "tests/test_grain_compiled_python_side.py", "-m", "not slow"]
+                      "tests/test_grain_compiled_python_side.py", "tests/test_grain_motion_start_state.py",
+                      "tests/test_grain_motion_stall.py", "-m", "not slow"]
+
+# the compiled engine's tests are in the slow tier (its build), which the default `-m` leaves out
+ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
+                   "tests/test_grain_compiled_start.py", "tests/test_grain_compiled_summary.py",
+                   "tests/test_grain_compiled_printed_energy.py", "-m", "compiled_engine or not slow"]
 
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
@@ -196,6 +202,17 @@ SHARDS = {
                     ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
                      "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*", "*.x__velocity_noise__*",
                      "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
+    # what motion_rest left (docs/mutation.md): simulate and impact_record unrun (it ran the cheaper helpers first);
+    # its three untriaged survivors, not named, are in the helpers: motion_helpers reruns them
+    "motion_simulate": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                        ["*.x_simulate__mutmut_[1-9]", "*.x_simulate__mutmut_[1-9][0-9]",
+                         "*.x_simulate__mutmut_1[0-3][0-9]"]),
+    "motion_simulate_b": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                          ["*.x_simulate__mutmut_1[4-9][0-9]", "*.x_simulate__mutmut_2[0-9][0-9]",
+                           "*.x_impact_record__*"]),
+    "motion_helpers": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
+                       ["*ǁModelǁactive__*", "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*",
+                        "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
     # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
     # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
     "engine_py": ("symmech/grain/compiled.py",
@@ -204,6 +221,10 @@ SHARDS = {
                   ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
                    "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x__entry_signature__*"]),
+    # what engine_py left (docs/mutation.md): simulate from _90, simulate_many, _entry_signature; its ten
+    # untriaged survivors, not named, were the last run (simulate): this shard reruns all of simulate
+    "engine_py_rest": ("symmech/grain/compiled.py", ENGINE_PY_TESTS,
+                       ["*.x_simulate__*", "*.x_simulate_many__*", "*.x__entry_signature__*"]),
     # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
     # and a child imports the unmutated package anyway
     "pipeline_output": ("symmech/core/pipeline.py",
@@ -217,7 +238,11 @@ SHARDS = {
 def shard_pyproject(module: str, tests: list[str]) -> str:
     """The shard's pyproject.toml text: [tool.mutmut] narrowed to one module, pytest's settings kept."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))
+    # a shard's `-m` goes to every mutant's run too: mutmut passes the selection only to the clean and stats runs,
+    # and the default `-m 'not slow'` would leave a slow-tier test uncollected (exit 5, "no tests")
+    marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
     mutmut = dict(project["tool"]["mutmut"], only_mutate=[module], pytest_add_cli_args_test_selection=tests)
+    mutmut["pytest_add_cli_args"] = mutmut["pytest_add_cli_args"] + marks
     tables = {"tool.mutmut": mutmut, "tool.pytest.ini_options": project["tool"]["pytest"]["ini_options"]}
     # JSON strings, lists, numbers and booleans are valid TOML values
     return "".join(f"[{name}]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in table.items()) + "\n"
