@@ -314,3 +314,23 @@ def test_paper_mode_landing_drops_spin_and_says_so():
     np.testing.assert_allclose(flight.rotation_matrix(accurate.final.q) @ accurate.final.w, [0, 0, 30.0],
                                atol=1e-9)
     assert "spin_energy_dropped_J" not in accurate.summary()
+
+
+def test_progress_reports_at_most_every_interval_and_always_when_final(monkeypatch):
+    """``motion.Progress``: no report before ``PROGRESS_INTERVAL`` of wall time has passed since the last one
+    (the clock is the test's), one after it, and one whenever ``final`` is set."""
+    clock = [100.0]
+    monkeypatch.setattr(motion.time, "monotonic", lambda: clock[0])
+    seen = []
+    progress = motion.Progress(seen.append)
+    progress(0.1)
+    clock[0] += 0.5 * motion.PROGRESS_INTERVAL
+    progress(0.2)
+    assert seen == []
+    clock[0] += 0.6 * motion.PROGRESS_INTERVAL
+    progress(0.3)
+    progress(0.4)
+    assert seen == [0.3]
+    progress(0.5, final=True)
+    assert seen == [0.3, 0.5]
+    motion.Progress(None)(0.6, final=True)  # no callback: nothing to call
