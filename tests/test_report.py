@@ -218,6 +218,7 @@ def test_report_shows_the_precision_study_beside_the_run(tmp_path):
                       '<td class="num">accurate (exact flight)</td><td class="num">tolerance</td>']
 
 
+@pytest.mark.slow  # a whole precision study of the impact scene (~7 s of CPU)
 def test_report_runs_a_precision_study_when_asked(tmp_path):
     """`symmech report OUT --precision`: the scene's `bench precision` study into OUT/precision, then
     the report with its diagram and one table row per solver setting of the study's CSV."""

@@ -259,6 +259,7 @@ def helix(t_end=10.0):
                                 motion={"speed": "3*t + 7*sin(t/2)"}, time={"t_end": t_end, "steps": 10}))
 
 
+@pytest.mark.slow  # two 10 s rides on stiff rollers on the Python engine (~4.5 s of CPU)
 def test_rigid_limit_on_the_paper_helix():
     """P0…P5 converge to the rigid model's reactions with the error falling like 1/k."""
     t = np.linspace(0.0, 10.0, 21)

@@ -280,6 +280,7 @@ def test_work_precision_of_the_elastic_model():
     assert np.all(table.column("seconds") > 0)
 
 
+@pytest.mark.slow  # the whole bundled ride on the Python engine (~7 s of CPU); its 100-step contract is default
 def test_bundled_scene_runs_with_the_elastic_tables_plots_and_summary(tmp_path):
     """`symmech run scenes/trolley_elastic_helix.toml`: the rigid case tables and the elastic ones
     side by side; the elastic P*_rigid equal the rigid case 1 of the whole body (mast included)."""
