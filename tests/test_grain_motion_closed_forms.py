@@ -374,10 +374,8 @@ def test_a_hundred_bounces_within_the_chattering_window_end_in_sliding():
     assert res.time_in["sliding"] == pytest.approx(0.01, abs=1e-10)
 
 
-def test_the_impact_laws_warnings_reach_the_run():
-    """A needle (5:1:1) hitting the plate tumbling, with the printed law (e = lam = 0.9) that gains 5 % kinetic
-    energy there: the run reports the law's two warnings, the energy by hand from the log (m v^2/2 + sum I_i w_i^2/2,
-    body axes), and counts the impact as creating energy."""
+def needle():
+    """(model, start) of a needle (5:1:1) tumbling onto a still plate under the printed law (e = lam = 0.9)."""
     axes, m = np.array([5e-3, 1e-3, 1e-3]), 1e-6
     q0 = np.array([-0.529, 0.693, -0.481, 0.091]) / np.linalg.norm([-0.529, 0.693, -0.481, 0.091])
     Q = quaternion_matrix(q0)
@@ -386,11 +384,26 @@ def test_the_impact_laws_warnings_reach_the_run():
                          ImpactLaw("printed", e=0.9, lam=0.9), 0.3, motion.Effects())
     st = motion.State(0.0, np.array([0.0, 0.0, np.linalg.norm(axes * n) + 1e-9]), np.array([0.01, 0.084, -0.3]),
                       q0, Q.T @ np.array([43.5, 3.4, -2.4]))
+    return model, st
+
+
+def needle_energies(model, imp) -> tuple[float, float]:
+    """Kinetic energy [J] before and after an impact of the log, by hand: m v^2/2 + sum I_i w_i^2/2 (solid
+    ellipsoid, body axes)."""
+    axes, m = np.array(model.axes), model.mass
+    inertia = m / 5 * (np.sum(axes**2) - axes**2)
+    return tuple(0.5 * m * np.dot(imp[v], imp[v]) + 0.5 * np.dot(inertia, np.square(imp[w]))
+                 for v, w in (("v_before", "w_before"), ("v_after", "w_after")))
+
+
+def test_the_impact_laws_warnings_reach_the_run():
+    """A needle (5:1:1) hitting the plate tumbling, with the printed law (e = lam = 0.9) that gains 5 % kinetic
+    energy there: the run reports the law's two warnings, the energy by hand from the log (m v^2/2 + sum I_i w_i^2/2,
+    body axes), and counts the impact as creating energy."""
+    model, st = needle()
     res = motion.simulate(model, numerics(), st, 1e-5)
     imp = res.impacts[0]
-    inertia = m / 5 * (np.sum(axes**2) - axes**2)
-    ke0, ke1 = (0.5 * m * np.dot(imp[v], imp[v]) + 0.5 * np.dot(inertia, np.square(imp[w]))
-                for v, w in (("v_before", "w_before"), ("v_after", "w_after")))
+    ke0, ke1 = needle_energies(model, imp)
     assert ke1 > 1.04 * ke0 and not imp["admissible"] and imp["printed_creates_energy"] is True
     assert res.warnings[:2] == ["printed impact law: no admissible root; the one used creates kinetic energy",
                                 f"impact law 'printed' created energy: {ke0:.6g} J -> {ke1:.6g} J"]
