@@ -3,6 +3,14 @@
     python tests/mutate.py                 every shard in SHARDS, one after the other
     python tests/mutate.py membrane ...    the named shards (or module paths)
     python tests/mutate.py --list          the shards
+    python tests/mutate.py --screen SHARD [PYTEST ARGS]
+                                           the shard's mutants without a result against a few fast tests
+                                           (default: the shard's), a forked pytest each; kills recorded
+
+A screen runs each mutant in a fork of one process that imported the libraries once, as mutmut does, but
+against the tests named (the new fast ones, say) instead of every covering test: a kill is a kill whichever
+test made it, so it is written into mutmut's cache, and a later `mutmut run` in the shard's folder (no names)
+runs only the survivors, with the shard's whole selection.
 
 mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
 runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
@@ -13,10 +21,16 @@ docs/mutation.md (the test files of the shards not run yet are a first choice, t
 """
 from __future__ import annotations
 
+import contextlib
 import fnmatch
+import importlib
+import io
 import json
+import os
+import signal
 import subprocess
 import sys
+import time
 from collections import Counter
 from pathlib import Path
 
@@ -249,9 +263,9 @@ def shard_pyproject(module: str, tests: list[str]) -> str:
                    for name, table in tables.items())
 
 
-def run_shard(name: str) -> int:
-    """Run one shard in mutants/<name>/; mutmut's exit status."""
-    module, tests, patterns = SHARDS[name]
+def shard_folder(name: str) -> Path:
+    """mutants/<name>/, set up for mutmut: links to the sources and tests, the shard's pyproject.toml."""
+    module, tests, _ = SHARDS[name]
     folder = ROOT / "mutants" / name
     folder.mkdir(parents=True, exist_ok=True)
     settings = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]["mutmut"]
@@ -259,6 +273,13 @@ def run_shard(name: str) -> int:
         if not (folder / link).is_symlink():
             (folder / link).symlink_to(ROOT / link, target_is_directory=True)
     (folder / "pyproject.toml").write_text(shard_pyproject(module, tests), "utf-8")
+    return folder
+
+
+def run_shard(name: str) -> int:
+    """Run one shard in mutants/<name>/; mutmut's exit status."""
+    module, tests, patterns = SHARDS[name]
+    folder = shard_folder(name)
     mutmut = [sys.executable, "-m", "mutmut"]  # this interpreter's mutmut (a venv may see a system-wide one)
     print(f"== shard {name}: {module} against {' '.join(tests)}", flush=True)
     status = subprocess.call(mutmut + ["run", "--max-children", "1", *patterns], cwd=folder)
@@ -274,6 +295,74 @@ def run_shard(name: str) -> int:
     return status
 
 
+# mutmut 3's own first step of `run` (mutmut/__main__.py), so that a screen can start before any mutmut run
+GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant_under_test('mutant_generation')\n"
+            "Path('mutants').mkdir(exist_ok=True)\nm.copy_src_dir(); m.copy_also_copy_files(); m.setup_source_paths()\n"
+            "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
+
+
+def screen(name: str, args: list[str]) -> int:
+    """Run the shard's mutants that have no result against pytest `args`, each in a fork; record the kills."""
+    module, tests, patterns = SHARDS[name]
+    folder = shard_folder(name)
+    meta_path = folder / "mutants" / (module + ".meta")
+    if not meta_path.exists():
+        subprocess.run([sys.executable, "-c", GENERATE], cwd=folder, check=True, stdout=subprocess.DEVNULL)
+    args = args or tests
+    os.chdir(folder / "mutants")
+    sys.path[:0] = [str(folder / "mutants"), str(ROOT / "tests")]
+    import pytest  # noqa: F401 -- imported once, before the forks (the trampolines choose at each call)
+    importlib.import_module(module.removesuffix(".py").replace("/", "."))
+    meta = json.loads(meta_path.read_text("utf-8"))
+    todo = [k for k, v in meta["exit_code_by_key"].items()
+            if v is None and any(fnmatch.fnmatchcase(k, p) for p in patterns)]
+    print(f"== screen {name}: {len(todo)} mutants without a result, against {' '.join(args)}", flush=True)
+    args = [*args, "-x", "-q", "-n", "0", "-p", "no:cacheprovider"]
+    code, first = _screened("", args)  # the unmutated copy must pass, or every kill would be false
+    if code != 0:
+        print(f"== screen {name}: the unmutated code fails ({first or f'exit {code}'})", file=sys.stderr)
+        return 1
+    verdicts = Counter()
+    for key in todo:
+        code, first = _screened(key, args)
+        verdicts["killed" if code in (1, 3) else "survived" if code == 0 else f"exit {code}"] += 1
+        print(f"    {key}: {'killed by ' + first if code in (1, 3) else f'exit {code}'}", flush=True)
+        if code in (1, 3):
+            meta = json.loads(meta_path.read_text("utf-8"))  # mutmut's format: exit codes by mutant
+            meta["exit_code_by_key"][key] = code
+            meta_path.write_text(json.dumps(meta, indent=4), "utf-8")
+    print(f"== screen {name}: " + ", ".join(f"{n} {v}" for v, n in verdicts.most_common()), flush=True)
+    return 0
+
+
+def _screened(key: str, args: list[str], timeout: float = 600) -> tuple[int, str]:
+    """pytest `args` on mutant `key` in a forked child: its exit status (-9 after `timeout` s), the first failure."""
+    import pytest
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read)
+        os.environ["MUTANT_UNDER_TEST"] = key  # mutmut's trampolines read it at every call
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
+            code = pytest.main(args)
+        fails = [line for line in out.getvalue().splitlines() if line.startswith(("FAILED", "ERROR"))]
+        os.write(write, (fails[0][:200] if fails else "").encode())
+        os._exit(int(code))
+    os.close(write)
+    deadline = time.monotonic() + timeout
+    while True:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            break
+        if time.monotonic() > deadline:
+            os.kill(pid, signal.SIGKILL)
+        time.sleep(0.05)
+    with os.fdopen(read, "rb") as pipe:
+        first = pipe.read(400).decode(errors="replace")
+    return os.waitstatus_to_exitcode(status), first
+
+
 def shards_named(arg: str) -> list[str]:
     """The shards an argument names: a shard, or every shard of a module path (itself when neither)."""
     if arg in SHARDS:
@@ -286,6 +375,8 @@ def main(argv: list[str]) -> int:
         for name, (module, tests, patterns) in SHARDS.items():
             print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
         return 0
+    if argv[:1] == ["--screen"] and len(argv) > 1:
+        return screen(argv[1], argv[2:])
     names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
     unknown = [n for n in names if n not in SHARDS]
     if unknown:
