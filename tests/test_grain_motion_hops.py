@@ -1,0 +1,48 @@
+"""The Python grain loop on a plate vibrating along the normal a little above the throw threshold (Gamma = 1.05):
+a point mass slides with the plate, lifts off where the plate accelerates down at g, hops and lands plastically
+(e = 0), once a period. The hop, about 10 ms, is shorter than the 10 ms scan step: the flight after a lift-off has
+to rise above round-off first, then find the landing inside that step. Lift-off time, hop duration and approach
+speed come from the closed-form flight relative to the plate (solved here with scipy's brentq); the time spent
+sliding sums the three sliding phases."""
+import math
+
+import pytest
+from scipy.optimize import brentq
+
+from symmech.grain import motion
+from test_grain_motion_closed_forms import A, G, frictionless, sphere, state
+
+GAMMA, FREQ = 1.05, 20.0  # plate acceleration amplitude / g; frequency [Hz]
+OMEGA = 2 * math.pi * FREQ
+AMP = GAMMA * G / OMEGA**2  # plate z = AMP sin(OMEGA t) [m]
+
+
+def relative_flight(tau: float, phi: float):
+    """Height [m] and velocity [m/s] of a point mass above the plate, tau [s] after leaving it with the plate's
+    velocity at the plate phase phi [rad]: the double integral of g (GAMMA sin(phi + OMEGA s) - 1)."""
+    x = OMEGA * tau
+    height = AMP * (math.sin(phi) * 2 * math.sin(x / 2) ** 2 + math.cos(phi) * (x - math.sin(x))) - G * tau**2 / 2
+    speed = AMP * OMEGA * (math.cos(phi) - math.cos(phi + x)) - G * tau
+    return height, speed
+
+
+def test_hops_shorter_than_the_scan_step_land_at_the_closed_form_times():
+    phi = math.asin(1 / GAMMA)  # normal force g (1 - GAMMA sin(OMEGA t)) reaches zero
+    t_lift = phi / OMEGA
+    hop = brentq(lambda tau: relative_flight(tau, phi)[0], 0.05 / FREQ, 1 / FREQ, xtol=1e-15)
+    approach = relative_flight(hop, phi)[1]
+    assert 9e-3 < hop < 1e-2  # shorter than the scan step below
+    t_end = 0.1  # two periods: lift-offs at t_lift and t_lift + 1/FREQ, both landed before t_end
+    num = motion.Numerics(tolerance=1e-11, scan_step=1e-2, sample_interval=1e-3)
+    res = motion.simulate(sphere(frictionless(0.0), amplitude=AMP, freq=FREQ), num, state(z=A), t_end)
+    landings = [t_lift + hop, t_lift + 1 / FREQ + hop]
+    assert [i["t"] for i in res.impacts] == [pytest.approx(t, abs=1e-10) for t in landings]
+    for imp in res.impacts:
+        assert imp["u_before"][2] == pytest.approx(approach, rel=1e-8)
+        assert imp["v_after"][2] == pytest.approx(0.0, abs=1e-12)
+    assert res.extra["landings"] == 2 and res.extra["rocking_contacts"] == 0
+    # sliding: [0, t_lift], [t_lift + hop, t_lift + 1/FREQ], [t_lift + 1/FREQ + hop, t_end]
+    assert res.time_in["flight"] == pytest.approx(2 * hop, abs=1e-10)
+    assert res.time_in["sliding"] == pytest.approx(t_end - 2 * hop, abs=1e-10)
+    assert res.time_in["flight"] + res.time_in["sliding"] == pytest.approx(t_end, abs=1e-15)
+    assert res.final.t == t_end
