@@ -77,7 +77,9 @@ GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_moti
                       "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_release.py",
                       "tests/test_grain_compiled_python_side.py", "tests/test_grain_motion_start_state.py",
                       "tests/test_grain_motion_stall.py", "tests/test_grain_motion_hops.py",
-                      "tests/test_grain_motion_resting.py", "-m", "not slow"]
+                      "tests/test_grain_motion_resting.py", "tests/test_grain_motion_idle_reset.py",
+                      "tests/test_grain_motion_final_progress.py", "tests/test_grain_motion_rocking_count.py",
+                      "-m", "not slow"]
 
 # the compiled engine's tests are in the slow tier (its build), which the default `-m` leaves out
 ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
