@@ -4,8 +4,9 @@
     python tests/mutate.py membrane ...    the named shards (or module paths)
     python tests/mutate.py --list          the shards
     python tests/mutate.py --screen SHARD [PYTEST ARGS]
-                                           the shard's mutants without a result against a few fast tests
-                                           (default: the shard's), a forked pytest each; kills recorded
+                                           the shard's mutants not killed yet (no result, survived, no test)
+                                           against chosen tests (default: the shard's), a forked pytest
+                                           each; kills recorded
 
 A screen runs each mutant in a fork of one process that imported the libraries once, as mutmut does, but
 against the tests named (the new fast ones, say) instead of every covering test: a kill is a kill whichever
@@ -304,8 +305,12 @@ GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant
             "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
 
 
+# mutmut's exit codes of the mutants a screen runs: no result, survived, no covering test (mutmut/stats.py)
+UNKILLED = (None, 0, 5, 33)
+
+
 def screen(name: str, args: list[str]) -> int:
-    """Run the shard's mutants that have no result against pytest `args`, each in a fork; record the kills."""
+    """Run the shard's mutants not killed yet against pytest `args`, each in a fork; record the kills."""
     module, tests, patterns = SHARDS[name]
     folder = shard_folder(name)
     meta_path = folder / "mutants" / (module + ".meta")
@@ -318,8 +323,8 @@ def screen(name: str, args: list[str]) -> int:
     importlib.import_module(module.removesuffix(".py").replace("/", "."))
     meta = json.loads(meta_path.read_text("utf-8"))
     todo = [k for k, v in meta["exit_code_by_key"].items()
-            if v is None and any(fnmatch.fnmatchcase(k, p) for p in patterns)]
-    print(f"== screen {name}: {len(todo)} mutants without a result, against {' '.join(args)}", flush=True)
+            if v in UNKILLED and any(fnmatch.fnmatchcase(k, p) for p in patterns)]
+    print(f"== screen {name}: {len(todo)} mutants not killed yet, against {' '.join(args)}", flush=True)
     args = [*args, "-x", "-q", "-n", "0", "-p", "no:cacheprovider"]
     code, first = _screened("", args)  # the unmutated copy must pass, or every kill would be false
     if code != 0:
@@ -374,6 +379,9 @@ def shards_named(arg: str) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
+    if argv[:1] in (["-h"], ["--help"]):
+        print(__doc__)
+        return 0
     if argv == ["--list"]:
         for name, (module, tests, patterns) in SHARDS.items():
             print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
