@@ -1,0 +1,55 @@
+"""The compiled engine's ``simulate`` between its loop's batches, without compiling the loop: a stand-in loop
+(``compiled._entry`` replaced) returns chosen times and statuses call by call, as the loop returns a batch of
+``PHASES_PER_CALL`` regime phases; progress is reported with each batch's time and a failure status becomes the
+Python loop's error at the loop's time and regime. Expected values are written here by hand."""
+import numpy as np
+import pytest
+
+from symmech.core.scene import SymmechError
+from symmech.grain import compiled, compiled_layout, flight, motion
+from symmech.grain.coulomb_law import ImpactLaw
+
+MODEL = motion.Model((1e-3, 1e-3, 1e-3), 2e-6, (0.0, 0.0, -9.81), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
+                     ImpactLaw("printed", e=0.5, lam=0.5), 0.3)
+NUM = motion.Numerics()
+START = motion.State(0.25, np.array([0.0, 0.0, 0.01]), np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))
+
+
+def stand_in(monkeypatch, batches):
+    """Replace the loop: its k-th call moves the time to ``batches[k] = (t, status, regime)``; the states it was
+    called with are returned (a list, filled as it runs)."""
+    seen = []
+
+    def run(p, y, t_end, rows, imps, warns, carry, phases):
+        t, status, regime = batches[len(seen)]
+        seen.append(y.copy())
+        y = y.copy()
+        y[0], carry[compiled_layout.C_REGIME] = t, regime
+        return y, rows, imps, warns, status
+
+    monkeypatch.setattr(compiled, "_entry", lambda: run)
+    return seen
+
+
+def test_progress_is_reported_at_each_batch_time_and_once_at_the_end(monkeypatch):
+    monkeypatch.setattr(motion, "PROGRESS_INTERVAL", 0.0)  # every call reports
+    calls = stand_in(monkeypatch, [(0.5, compiled.MORE, 0), (0.75, compiled.MORE, 2), (1.0, compiled.DONE, 0)])
+    times = []
+    result = compiled.simulate(MODEL, NUM, START, 1.0, on_step=times.append)
+    assert times == [0.25, 0.5, 0.75, 1.0]  # before each batch, then the final time
+    assert [y[0] for y in calls] == [0.25, 0.5, 0.75] and result.final.t == 1.0
+
+
+@pytest.mark.parametrize("status, regime, text", [
+    (compiled.STALLED, 2, "grain: the simulation stopped advancing at t = 0.75 s (1000 regime changes without "
+                          "advancing time, sliding regime)"),
+    (compiled.STALLED, 0, "grain: the simulation stopped advancing at t = 0.75 s (1000 regime changes without "
+                          "advancing time, flight regime)"),
+    (compiled.SLIDE_FAIL, 2, "sliding integration failed at t = 0.75 s: required step size is less than spacing "
+                             "between numbers"),
+])
+def test_a_failed_batch_raises_the_python_loops_error_at_its_time_and_regime(monkeypatch, status, regime, text):
+    stand_in(monkeypatch, [(0.5, compiled.MORE, 0), (0.75, status, regime)])
+    with pytest.raises(SymmechError) as err:
+        compiled.simulate(MODEL, NUM, START, 1.0)
+    assert str(err.value) == text
