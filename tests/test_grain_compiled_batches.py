@@ -53,3 +53,21 @@ def test_a_failed_batch_raises_the_python_loops_error_at_its_time_and_regime(mon
     with pytest.raises(SymmechError) as err:
         compiled.simulate(MODEL, NUM, START, 1.0)
     assert str(err.value) == text
+
+
+def test_the_signature_built_ahead_is_the_one_simulate_calls_the_loop_with(monkeypatch):
+    """The engine is compiled (and built ahead of time) for ``_entry_signature``: a run with other argument
+    types would compile again, or find no ahead-of-time export."""
+    import numba
+
+    calls = []
+
+    def run(*args):
+        calls.append(args)
+        y = args[1].copy()
+        y[0] = 1.0
+        return y, args[3], args[4], args[5], compiled.DONE
+
+    monkeypatch.setattr(compiled, "_entry", lambda: run)
+    compiled.simulate(MODEL, NUM, START, 1.0)
+    assert tuple(numba.typeof(a) for a in calls[0]) == compiled._entry_signature()
