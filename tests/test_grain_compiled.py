@@ -13,6 +13,7 @@ import pytest
 
 from grain_sliding_reference import conveyor, on_plane, sphere
 from test_grain_hard_cases import CROP, WEED, sweep_grain
+from test_grain_motion_hops import midway_dip
 from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
 from symmech.grain import compiled, compiled_layout, compiled_loop, contact, flight, motion, motion_scene
@@ -236,3 +237,9 @@ def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     assert "compiling the grain engine once, ~80 s; later runs start in ~1 s" in cold.what
     python = motion_scene.estimate(replace(sc, numerics=replace(sc.numerics, engine="python")))
     assert warm.seconds == pytest.approx(python.seconds / motion_scene.COMPILED_SPEEDUP, rel=1e-12)
+
+
+def test_a_lift_off_whose_dip_lies_midway_between_two_scan_points_is_found():
+    """The compiled scan as the Python one (tests/test_grain_motion_hops.py): a dip below zero between two
+    equal samples is a contact."""
+    midway_dip(compiled.simulate)

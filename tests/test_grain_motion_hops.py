@@ -17,12 +17,12 @@ OMEGA = 2 * math.pi * FREQ
 AMP = GAMMA * G / OMEGA**2  # plate z = AMP sin(OMEGA t) [m]
 
 
-def relative_flight(tau: float, phi: float):
+def relative_flight(tau: float, phi: float, amp: float = AMP):
     """Height [m] and velocity [m/s] of a point mass above the plate, tau [s] after leaving it with the plate's
-    velocity at the plate phase phi [rad]: the double integral of g (GAMMA sin(phi + OMEGA s) - 1)."""
+    velocity at the plate phase phi [rad]: the double integral of g (Gamma sin(phi + OMEGA s) - 1)."""
     x = OMEGA * tau
-    height = AMP * (math.sin(phi) * 2 * math.sin(x / 2) ** 2 + math.cos(phi) * (x - math.sin(x))) - G * tau**2 / 2
-    speed = AMP * OMEGA * (math.cos(phi) - math.cos(phi + x)) - G * tau
+    height = amp * (math.sin(phi) * 2 * math.sin(x / 2) ** 2 + math.cos(phi) * (x - math.sin(x))) - G * tau**2 / 2
+    speed = amp * OMEGA * (math.cos(phi) - math.cos(phi + x)) - G * tau
     return height, speed
 
 
@@ -46,3 +46,22 @@ def test_hops_shorter_than_the_scan_step_land_at_the_closed_form_times():
     assert res.time_in["sliding"] == pytest.approx(t_end - 2 * hop, abs=1e-10)
     assert res.time_in["flight"] + res.time_in["sliding"] == pytest.approx(t_end, abs=1e-15)
     assert res.final.t == t_end
+
+
+def test_a_lift_off_whose_dip_lies_midway_between_two_scan_points_is_found():
+    """At Gamma = 1.001 the normal force g (1 - Gamma sin(OMEGA t)) dips below zero only between 12.14 and 12.86
+    ms, its minimum at T/4 = 12.5 ms, midway between the 1 ms scan points 12 and 13 ms, where it is equal (to the
+    bit: sin(OMEGA t) is symmetric about T/4) and positive. The grain lifts off at asin(1/Gamma)/OMEGA."""
+    midway_dip(motion.simulate)
+
+
+def midway_dip(simulate):
+    """The lift-off of the test above by ``simulate`` (the Python or the compiled loop's)."""
+    gamma = 1.001
+    amp = gamma * G / OMEGA**2
+    phi = math.asin(1 / gamma)
+    hop = brentq(lambda tau: relative_flight(tau, phi, amp)[0], 1e-5, 0.5 / FREQ, xtol=1e-15)
+    num = motion.Numerics(tolerance=1e-11, scan_step=1e-3, sample_interval=1e-3)
+    res = simulate(sphere(frictionless(0.0), amplitude=amp, freq=FREQ), num, state(z=A), 0.02)
+    assert [i["t"] for i in res.impacts] == [pytest.approx(phi / OMEGA + hop, abs=1e-10)]
+    assert res.time_in["flight"] == pytest.approx(hop, abs=1e-10)

@@ -209,6 +209,13 @@ def test_grazing_contact_between_scan_points_is_found():
     assert contact.first_root(lambda t: (np.asarray(t) - 0.5) ** 2 + 1e-8, 0.0, 1.0, 0.2, 1e-12) is None
 
 
+def test_grazing_contact_midway_between_two_equal_scan_values_is_found():
+    """h(t) = (t - 0.375)^2 - 1e-8 scanned at 0.25 from 0: h(0.25) = h(0.5) = 1/64 exactly, neither sample below
+    both neighbours; the dip between them is still found, its first root at 0.375 - 1e-4."""
+    root = contact.first_root(lambda t: (np.asarray(t) - 0.375) ** 2 - 1e-8, 0.0, 1.0, 0.25, 1e-12)
+    assert root == pytest.approx(0.375 - 1e-4, abs=1e-10)
+
+
 @pytest.mark.parametrize("axes", [(4e-3, 4e-3, 0.2e-3), (6e-3, 0.4e-3, 0.4e-3)], ids=["very-flat", "very-long"])
 def test_flat_and_long_grains_run_and_never_create_energy(axes):
     model = grain_model(axes=axes, mass=1e-5)

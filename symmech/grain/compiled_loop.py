@@ -237,7 +237,7 @@ def _first_root(what, t0, t1, step, xtol, ctx, steps, nsteps, p):
                 stop = i
                 break
         for j in range(1, min(stop, n - 1)):
-            if hs[j] < hs[j - 1] and hs[j] < hs[j + 1]:
+            if hs[j] < hs[j - 1] and hs[j] <= hs[j + 1]:  # as contact.first_root: a minimum between equal samples
                 x, fx = _bounded_min(ts[j - 1], ts[j + 1], xtol, (what, ctx, steps, nsteps, p, out))
                 if fx < 0.0 and hs[j - 1] > 0.0:
                     return _brentq(ts[j - 1], x, xtol, (what, ctx, steps, nsteps, p, out)), steps, nsteps

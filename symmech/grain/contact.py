@@ -48,7 +48,8 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
         neg = np.flatnonzero(hs[1:] <= 0.0)
         stop = neg[0] + 1 if neg.size else len(ts)
         inner = np.arange(1, min(stop, len(ts) - 1))
-        for j in inner[(hs[inner] < hs[inner - 1]) & (hs[inner] < hs[inner + 1])]:
+        # a minimum between samples j and j + 1 of equal value (symmetric about their middle) is seen at j
+        for j in inner[(hs[inner] < hs[inner - 1]) & (hs[inner] <= hs[inner + 1])]:
             root = _grazing(h, ts[j - 1], ts[j + 1], xtol)
             if root is not None:
                 return root
