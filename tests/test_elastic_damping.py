@@ -74,7 +74,7 @@ def free_decay(system, q0, t_end, fs=AT_REST):
 
     def rhs(t, y):
         q, qd = y[:n], y[n:2 * n]
-        return np.r_[qd, system.accelerations(fs, q, qd), el._dissipation(system, q, qd)]
+        return np.r_[qd, system.accelerations(fs, q, qd), el._dissipation(system, qd)]
     sol = solve_ivp(rhs, (0.0, t_end), np.r_[q0, np.zeros(n), 0.0], method="DOP853", rtol=1e-11,
                     atol=1e-14 * np.abs(q0).max(), dense_output=True)
     assert sol.status == 0

@@ -690,7 +690,7 @@ def arc_length(drive: Drive, t) -> np.ndarray:
     return drive.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
 
 
-def _dissipation(system: System, q, qd) -> float:
+def _dissipation(system: System, qd) -> float:
     """Power of the damping forces [W] (beam d_ij and roller dampers)."""
     power = qd @ system.inv.D @ qd
     if system.rollers_on and system.mdl.effects.damping:
@@ -732,7 +732,7 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
         else:
             fs = line.state(time)
             qdd, tail = system.accelerations(fs, q, qd), []
-        return np.r_[qd, qdd, _dissipation(system, q, qd), system.track_power(fs, q, qd, qdd), tail]
+        return np.r_[qd, qdd, _dissipation(system, qd), system.track_power(fs, q, qd, qdd), tail]
 
     def jac(time, y):
         fs = line.state(time)
