@@ -133,6 +133,12 @@ SHARDS = {
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
     "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
+    # what the two shards above left without a result (docs/mutation.md), for a screen with their new test files
+    "elastic_outputs_rest": ("symmech/trolley/elastic.py",
+                             ["tests/test_elastic_outputs.py", "tests/test_elastic_timeline.py",
+                              *ELASTIC_OUTPUT_TESTS, ELASTIC_TIMELINE_TESTS[1]],
+                             ["*.x_outputs__mutmut_119", "*.x_outputs__mutmut_1[2-3][0-9]", "*.x_outputs__mutmut_14[0-4]",
+                              "*ǁTimelineǁs__*", "*ǁTimelineǁstate__*", "*ǁTimelineǁ_integral__*"]),
     # impact.py (1482 mutants) is split: its tests take 6 s, most mutants run all of them
     "impact": ("symmech/grain/impact.py", IMPACT_TESTS,
                ["*ǁDescentOptionsǁ*", "*.x__golden_section__*", "*.x_solve_descent_batch__*", "*.x_solve_scipy__*",
