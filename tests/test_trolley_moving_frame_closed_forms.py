@@ -540,3 +540,15 @@ def test_a_frenet_plan_compares_the_curvature_at_its_check_samples_with_min_curv
     assert (plan.rmf is not None) == above and plan.checked == 201
     if above:
         assert plan.events[0]["s"] == grid[np.argmin(kappa)] and plan.events[0]["kind"] == "Frenet frame undefined"
+
+
+def test_a_check_sample_on_the_vertical_tangent_moves_off_it_and_the_tangent_is_found_once():
+    """Over [0, πR] the 201 check samples (Δs = πR/200, one per 0.16 rad at most: no refinement) put the 101st
+    on the vertical tangent at πR/2, where the twist frame is undefined; it moves off by 1 % of the spacing,
+    and the tangent is still the plan's one event, within its bisection bracket."""
+    loop = VerticalLoop()
+    plan = model.plan_frames(loop, 0.0, np.pi * loop.R, "twist", 0.0)
+    assert plan.checked == 201
+    event, = plan.events
+    assert event["kind"] == "vertical tangent (aircraft angles)" and abs(event["roll_deg"]) == pytest.approx(180.0)
+    assert abs(event["s"] - np.pi * loop.R / 2) <= 0.5 * np.pi * loop.R / 200 / 2 ** event["bisections"]
