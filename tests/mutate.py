@@ -206,6 +206,9 @@ SHARDS = {
                            ["*.x_moving_frame__*", "*.x__raw_frame__*", "*.x__first_bad__*"]),
     "trolley_frames_plan": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                             ["*.x_plan_frames__*", "*.x__turns__*", "*.x__bisect_jump__*"]),
+    # plan_frames alone: trolley_frames_plan's unrun mutants are all in it (_bisect_jump and _turns ran in full)
+    "trolley_frames_plan_rest": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
+                                 ["*.x_plan_frames__*"]),
     "trolley_frames_grid": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                             ["*ǁFramePlanǁ*", "*.x__check_grid__*"]),
     # the rigid trolley's reactions (890 mutants, 20-60 s per survivor) split in three
