@@ -332,7 +332,8 @@ def screen(name: str, args: list[str]) -> int:
     meta_path = folder / "mutants" / (module + ".meta")
     if not meta_path.exists():
         subprocess.run([sys.executable, "-c", GENERATE], cwd=folder, check=True, stdout=subprocess.DEVNULL)
-    args = args or tests
+    # the repository's tests as they are now, not mutmut's copy beside the mutants (made when they were generated)
+    args = [str(ROOT / a) if a.startswith("tests/") else a for a in args or tests]
     os.chdir(folder / "mutants")
     sys.path[:0] = [str(folder / "mutants"), str(ROOT / "tests")]
     import pytest  # noqa: F401 -- imported once, before the forks (the trampolines choose at each call)
