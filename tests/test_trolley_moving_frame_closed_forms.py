@@ -542,11 +542,15 @@ def test_a_frenet_plan_compares_the_curvature_at_its_check_samples_with_min_curv
         assert plan.events[0]["s"] == grid[np.argmin(kappa)] and plan.events[0]["kind"] == "Frenet frame undefined"
 
 
-def test_a_check_sample_on_the_vertical_tangent_moves_off_it_and_the_tangent_is_found_once():
+class SmallLoop(VerticalLoop):
+    R = 0.05  # a check spacing of 0.8 mm: a shift of 0.01 m / spacing would be 13 m
+
+
+@pytest.mark.parametrize("loop", [VerticalLoop(), SmallLoop()], ids=["R8", "R0.05"])
+def test_a_check_sample_on_the_vertical_tangent_moves_off_it_and_the_tangent_is_found_once(loop):
     """Over [0, πR] the 201 check samples (Δs = πR/200, one per 0.16 rad at most: no refinement) put the 101st
     on the vertical tangent at πR/2, where the twist frame is undefined; it moves off by 1 % of the spacing,
     and the tangent is still the plan's one event, within its bisection bracket."""
-    loop = VerticalLoop()
     plan = model.plan_frames(loop, 0.0, np.pi * loop.R, "twist", 0.0)
     assert plan.checked == 201
     event, = plan.events
