@@ -352,12 +352,14 @@ def screen(name: str, args: list[str]) -> int:
     verdicts = Counter()
     for key in todo:
         code, first = _screened(key, args, timeout)
-        killed = code in (1, 3) or code < 0  # tests failed, pytest's internal error, a crash or the timeout
+        # tests failed, a collection error (the mutant raised as a test module imported), pytest's internal error,
+        # a crash or the timeout: the unmutated copy passed the same run
+        killed = code in (1, 2, 3) or code < 0
         verdicts["killed" if killed else "survived" if code == 0 else f"exit {code}"] += 1
         print(f"    {key}: {'killed by ' + (first or f'signal {-code}') if killed else f'exit {code}'}", flush=True)
         if killed:
             meta = json.loads(meta_path.read_text("utf-8"))  # mutmut's format: exit codes by mutant
-            meta["exit_code_by_key"][key] = code if code > 0 else 36 if code == -9 else -11  # mutmut's codes
+            meta["exit_code_by_key"][key] = 1 if code == 2 else code if code > 0 else 36 if code == -9 else -11
             meta_path.write_text(json.dumps(meta, indent=4), "utf-8")
     print(f"== screen {name}: " + ", ".join(f"{n} {v}" for v, n in verdicts.most_common()), flush=True)
     return 0
