@@ -424,9 +424,10 @@ class LevelCircle:
 
 
 def _refined(s, rate):
-    """Each interval of s cut into ceil(Δs max(rate) / 0.2) equal parts (rate: the closed-form |Ω| at s)."""
+    """Each interval of s cut into ceil(Δs max(rate) / 0.2) equal parts, at least one (rate: the closed-form |Ω|
+    at s)."""
     r = rate(s)
-    parts = np.ceil(np.diff(s) * np.maximum(r[1:], r[:-1]) / model.CHECK_TURN).astype(int)
+    parts = np.maximum(1, np.ceil(np.diff(s) * np.maximum(r[1:], r[:-1]) / model.CHECK_TURN).astype(int))
     return np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(s[:-1], s[1:], parts)] + [s[-1:]])
 
 
@@ -438,13 +439,31 @@ class UpLoop(VerticalLoop):
         return super().derivatives(np.asarray(s, float) + np.pi * self.R / 2, order)
 
 
+class TightArcThenLine(ArcThenLine):
+    """Level arc of radius 2 cm up to s = 0.5 m (heading φ = 50 s), straight beyond: the arc's intervals are
+    refined, the line's (Ω = 0 in the twist frame) are kept whole."""
+
+    def derivatives(self, s, order):
+        s = np.asarray(s, float)
+        phi, bend, z = 50.0 * np.minimum(s, 0.5), 50.0 * (s < 0.5), np.zeros_like(s)
+        c, n = np.cos(phi), np.sin(phi)
+        rows = [np.stack([z, z, z], -1), np.stack([c, z, n], -1), np.stack([-n * bend, z, c * bend], -1),
+                np.stack([-c * bend**2, z, -n * bend**2], -1), np.stack([n * bend**3, z, -c * bend**3], -1)]
+        return rows[:order + 1]
+
+    def twist(self, s):
+        z = np.zeros(np.shape(s))
+        return z, z, z
+
+
 @pytest.mark.parametrize("track, mode, lo, hi, rate", [
     (LevelCircle(), "twist", 0.0, 2.0, lambda s: np.full_like(s, 50.0)),
+    (TightArcThenLine(), "twist", 0.0, 2.0, lambda s: np.where(s < 0.5, 50.0, 0.0)),
     (Clothoid(), "frenet", 0.1, 30.0, lambda s: s / A**2),
     # samples where the frame is undefined (Ω NaN or infinite) count as not turning: at s = 0 (a sample)
     (Clothoid(), "frenet", -25.0, 25.0, lambda s: np.abs(s) / A**2),
     (UpLoop(), "twist", 0.0, 50.0, lambda s: np.where(s == 0, 0.0, 1 / VerticalLoop.R)),
-], ids=["circle", "clothoid", "inflection_sample", "vertical_sample"])
+], ids=["circle", "arc_then_line", "clothoid", "inflection_sample", "vertical_sample"])
 def test_check_grid_refines_until_the_predicted_turn_is_at_most_0_2_rad(track, mode, lo, hi, rate):
     """One refinement of the 201 even samples suffices (|Ω| is monotone between them)."""
     grid = model._check_grid(track, lo, hi, mode)
