@@ -53,7 +53,8 @@ REACTION_TESTS = TROLLEY_TESTS + ["tests/test_trolley_reactions_closed_form.py",
 
 SMM_FORMS_TESTS = ["tests/test_smm_forms.py", "tests/test_smm_closed_form.py", "tests/test_smm_spatial_eq.py",
                    "tests/test_smm_structural.py", "tests/test_smm_torsion_twist.py",
-                   "tests/test_smm_torsion_preload_terms.py"]
+                   "tests/test_smm_torsion_preload_terms.py", "tests/test_smm_turn_order_hessian.py",
+                   "tests/test_smm_factor_columns.py", "tests/test_smm_ends_meet_in_equilibrium.py"]
 
 SMM_NUMERIC_TESTS = ["tests/test_smm_structural.py", "tests/test_smm_closed_form.py", "tests/test_smm_hard.py",
                      "tests/test_smm_response.py", "tests/test_smm_spatial_eq.py", "tests/test_smm_pivot.py",
