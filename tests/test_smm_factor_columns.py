@@ -63,3 +63,24 @@ def test_link_with_inertia_only_has_no_mass_columns():
     out = matrices(m)
     np.testing.assert_allclose(_f(out["L_a"]), [[1.0]], rtol=0, atol=1e-15)
     np.testing.assert_allclose(_f(out["m_a"]), [[J]], rtol=0, atol=1e-12)
+
+
+def test_torsion_dampers_between_links_and_from_the_ground_factors():
+    """Two links of a planar double pendulum (link1 turned by th1, link2 by th1 and th2): a torsion damper
+    between them sees the relative rotation th2 (axis . (e_b - e_a): th1 cancels), one from the ground to
+    link1 sees th1: L_b = [[0, 1], [1, 0]] (rows th1, th2; columns in the dampers' order), b_d = diag(c1, c2),
+    so b = diag(c2, c1)."""
+    c1, c2 = 2.5, 4.0  # [N m s]
+    m = mech({
+        "coordinates": [{"name": "th1", "type": "angle"}, {"name": "th2", "type": "angle"}],
+        "points": [{"name": "O", "at": [0, 0]},
+                   {"name": "P1", "from": "O", "vector": [L1, 0], "turns": ["th1"]},
+                   {"name": "P2", "from": "P1", "vector": [L2, 0], "turns": ["th1", "th2"]}],
+        "bodies": [{"name": "link1", "mass": M, "inertia": J, "com": "P1", "turns": ["th1"]},
+                   {"name": "link2", "mass": M, "inertia": J, "com": "P2", "turns": ["th1", "th2"]}],
+        "torsion_dampers": [{"name": "relative", "bodies": ["link1", "link2"], "viscosity": c1},
+                            {"name": "absolute", "bodies": ["ground", "link1"], "viscosity": c2}]})
+    out = matrices(m)
+    np.testing.assert_allclose(_f(out["L_b"]), [[0.0, 1.0], [1.0, 0.0]], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(_f(out["b_d"]), np.diag([c1, c2]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(_f(out["b"]), np.diag([c2, c1]), rtol=0, atol=1e-12)
