@@ -16,13 +16,13 @@ START = motion.State(0.25, np.array([0.0, 0.0, 0.01]), np.zeros(3), np.array([1.
 
 
 def stand_in(monkeypatch, batches):
-    """Replace the loop: its k-th call moves the time to ``batches[k] = (t, status, regime)``; the states it was
-    called with are returned (a list, filled as it runs)."""
+    """Replace the loop: its k-th call moves the time to ``batches[k] = (t, status, regime)``; the arguments of
+    each call (its state copied) are returned (a list, filled as it runs)."""
     seen = []
 
     def run(p, y, t_end, rows, imps, warns, carry, phases):
         t, status, regime = batches[len(seen)]
-        seen.append(y.copy())
+        seen.append((p, y.copy(), t_end, rows, imps, warns, carry, phases))
         y = y.copy()
         y[0], carry[compiled_layout.C_REGIME] = t, regime
         return y, rows, imps, warns, status
@@ -37,7 +37,7 @@ def test_progress_is_reported_at_each_batch_time_and_once_at_the_end(monkeypatch
     times = []
     result = compiled.simulate(MODEL, NUM, START, 1.0, on_step=times.append)
     assert times == [0.25, 0.5, 0.75, 1.0]  # before each batch, then the final time
-    assert [y[0] for y in calls] == [0.25, 0.5, 0.75] and result.final.t == 1.0
+    assert [args[1][0] for args in calls] == [0.25, 0.5, 0.75] and result.final.t == 1.0
 
 
 @pytest.mark.parametrize("status, regime, text", [
@@ -60,14 +60,6 @@ def test_the_signature_built_ahead_is_the_one_simulate_calls_the_loop_with(monke
     types would compile again, or find no ahead-of-time export."""
     import numba
 
-    calls = []
-
-    def run(*args):
-        calls.append(args)
-        y = args[1].copy()
-        y[0] = 1.0
-        return y, args[3], args[4], args[5], compiled.DONE
-
-    monkeypatch.setattr(compiled, "_entry", lambda: run)
+    calls = stand_in(monkeypatch, [(1.0, compiled.DONE, 0)])
     compiled.simulate(MODEL, NUM, START, 1.0)
     assert tuple(numba.typeof(a) for a in calls[0]) == compiled._entry_signature()

@@ -152,9 +152,11 @@ def test_frenet_frame_is_continued_through_the_clothoid_inflection_by_a_half_tur
 class ArcThenLine:
     """Level arc of radius 2 m (heading φ = s/2) up to s = 1 m, straight beyond (y up)."""
 
+    BEND, END = 0.5, 1.0  # [1/m], [m]
+
     def derivatives(self, s, order):
         s = np.asarray(s, float)
-        phi, bend, z = 0.5 * np.minimum(s, 1.0), 0.5 * (s < 1.0), np.zeros_like(s)
+        phi, bend, z = self.BEND * np.minimum(s, self.END), self.BEND * (s < self.END), np.zeros_like(s)
         c, n = np.cos(phi), np.sin(phi)
         rows = [np.stack([z, z, z], -1), np.stack([c, z, n], -1), np.stack([-n * bend, z, c * bend], -1),
                 np.stack([-c * bend**2, z, -n * bend**2], -1), np.stack([n * bend**3, z, -c * bend**3], -1)]
@@ -443,13 +445,7 @@ class TightArcThenLine(ArcThenLine):
     """Level arc of radius 2 cm up to s = 0.5 m (heading φ = 50 s), straight beyond: the arc's intervals are
     refined, the line's (Ω = 0 in the twist frame) are kept whole."""
 
-    def derivatives(self, s, order):
-        s = np.asarray(s, float)
-        phi, bend, z = 50.0 * np.minimum(s, 0.5), 50.0 * (s < 0.5), np.zeros_like(s)
-        c, n = np.cos(phi), np.sin(phi)
-        rows = [np.stack([z, z, z], -1), np.stack([c, z, n], -1), np.stack([-n * bend, z, c * bend], -1),
-                np.stack([-c * bend**2, z, -n * bend**2], -1), np.stack([n * bend**3, z, -c * bend**3], -1)]
-        return rows[:order + 1]
+    BEND, END = 50.0, 0.5
 
     def twist(self, s):
         z = np.zeros(np.shape(s))
