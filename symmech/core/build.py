@@ -5,7 +5,10 @@ them with. :meth:`Engine.warm` compiles them unless numba's cache holds them, un
 lock (``fcntl.flock`` on a file beside the cache: the OS releases it when its holder dies, so a killed
 builder never blocks later builds); a process that waits for the lock then loads what the holder built.
 numba writes each cache file whole (a temporary file renamed), so an interrupted build leaves none half
-written. :meth:`Engine.warm_in_background` starts a detached builder (``symmech warm --engine NAME
+written. What a build leaves is recorded (:mod:`symmech.core.artifacts`: each entry's index and data files, the
+sources they were compiled from, the checkout) in ``symmech-<name>-numba.json`` beside them; :meth:`Engine.cold`
+accepts the cache only when that record matches, else warns once naming the refused file and the engine is
+cold (the next build drops the refused files and compiles). :meth:`Engine.warm_in_background` starts a detached builder (``symmech warm --engine NAME
 --background``, its own session: Ctrl-C or SIGTERM of the caller does not reach it), unless
 ``SYMMECH_BACKGROUND_BUILD=0`` (CI jobs and containers that warm their cache on purpose, or never want a
 process that outlives the run).
@@ -13,13 +16,17 @@ process that outlives the run).
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable
+
+from symmech.core import artifacts
 
 
 COLD = "auto: the compiled engine is not built yet"  # how every cold-cache reason starts
@@ -45,8 +52,13 @@ def cache_dir(dispatcher) -> Path:
 def file_lock(path: Path, wait: bool):
     """An exclusive ``flock`` on the file ``path`` (created with its folder); yields whether this process
     holds it (always, with ``wait``)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "a") as fh:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(path, "a")
+    except OSError:  # a read-only cache folder: the lock lives in the user's temporary folder
+        path = Path(tempfile.gettempdir()) / f"{path.name}-{hashlib.sha256(bytes(path)).hexdigest()[:16]}"
+        fh = open(path, "a")
+    with fh:
         try:
             fcntl.flock(fh, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -64,11 +76,19 @@ class Engine:
         self.name, self.entries, self.seconds = name, entries, seconds
         self.ahead = ahead  # its symmech.core.aot.Build, if it has one
         self.lock_name = f"symmech-{name}-build.lock"
+        self._accepted = None  # the (file, mtime) stamps of a record and cache accepted by cold()
+        self._holding = False  # whether this process holds the build lock
 
     def ahead_of_time(self):
         """The engine's ahead-of-time build (:mod:`symmech.core.aot`) when it is current, else None (always
-        with ``SYMMECH_AHEAD_OF_TIME=0``: runs then take numba's cache, and nothing is built); loads no numba."""
-        return self.ahead.load() if self.ahead is not None and ahead_of_time_builds() else None
+        with ``SYMMECH_AHEAD_OF_TIME=0``: runs then take numba's cache, and nothing is built); loads no numba.
+        A build refused as damaged, foreign or stale is rebuilt by a background builder."""
+        if self.ahead is None or not ahead_of_time_builds():
+            return None
+        module = self.ahead.load()
+        if module is None and self.ahead.refused:
+            self.start_builder()
+        return module
 
     def needs_compile(self) -> bool:
         """Whether running the engine now compiles: no current ahead-of-time build and a cold cache."""
@@ -81,12 +101,49 @@ class Engine:
         return f"{COLD}; {then} (`symmech warm --engine {self.name}` builds it now)"
 
     def cold(self) -> bool:
-        """Whether the next run compiles: an entry has no machine code cached for its source yet."""
-        for entry in self.entries():
-            index = getattr(getattr(entry, "_cache", None), "_cache_file", None)  # numba's cache (private API)
-            if index is not None and not index._load_index():
+        """Whether the next run compiles: an entry has no machine code cached for its source yet, or the cache
+        does not match its record (one warning line naming the refused file)."""
+        artifacts.guard_numba_cache()
+        indexes = self.index_files()
+        if not any(index.exists() for index in indexes) or self._builder_at_work():
+            return True
+        stamp = [(os.fspath(p), p.stat().st_mtime_ns) for p in [self.record_file(), *indexes] if p.exists()]
+        if self._accepted != stamp:
+            _, why = artifacts.check(self.record_file(), indexes)
+            if why is not None:
+                artifacts.warn(why, f"numba's cache of the {self.name} engine is not used; it is compiled again")
                 return True
-        return False
+            self._accepted = stamp
+        return any(not entry._cache._cache_file._load_index() for entry in self.entries())  # numba's (private)
+
+    def _builder_at_work(self) -> bool:
+        """Whether another process holds the build lock (its cache files are not all written and recorded)."""
+        if self._holding:
+            return False
+        with self.build_lock(wait=False) as free:
+            return not free
+
+    def index_files(self) -> list[Path]:
+        """numba's index file of each entry (``.nbi``; its data files ``.nbc`` are named in it)."""
+        return [Path(entry._cache._cache_file._index_path) for entry in self.entries()]  # numba's (private API)
+
+    def record_file(self) -> Path:
+        """The record of what the last build left in numba's cache (:mod:`symmech.core.artifacts`)."""
+        return self.cache_dir() / f"symmech-{self.name}-numba.json"
+
+    def _record(self) -> None:
+        """Record the entries' cache files as built now from the entries' sources (a cache folder that cannot
+        be written: one warning, and the next run compiles again)."""
+        built, sources = [], set()
+        for entry in self.entries():
+            cache = entry._cache._cache_file  # numba's (private API)
+            built += [Path(cache._index_path), *(Path(cache._data_path(n)) for n in cache._load_index().values())]
+            sources.update(artifacts.sources(sys.modules[entry.__module__]))
+        try:
+            artifacts.write_record(self.record_file(), built, sorted(sources))
+        except OSError as exc:
+            artifacts.warn(f"{self.record_file()} cannot be written ({exc.strerror or exc})",
+                           "the next run compiles the engine again")
 
     def cache_dir(self) -> Path:
         """Where numba caches the entries (:func:`cache_dir` of the first)."""
@@ -104,22 +161,48 @@ class Engine:
         with self.build_lock(wait) as mine:
             if not mine:
                 return False
-            if self.cold():
-                if say:
-                    say(f"compiling the {self.name} engine once, ~{self.seconds:.0f} s (cache: {self.cache_dir()})")
-                for entry, signature in self.entries().items():
-                    entry.compile(signature)
-            if ahead and self.ahead is not None and ahead_of_time_builds() and self.ahead.load() is None:
-                if say:
-                    say(f"building the {self.name} engine ahead of time too (runs then load it without numba)")
-                self.ahead.build()
+            self._holding = True
+            try:
+                self._build(say, ahead)
+            finally:
+                self._holding = False
         return True
+
+    def _build(self, say, ahead: bool) -> None:
+        """:meth:`warm`'s work under the build lock."""
+        if self.cold():
+            if say:
+                say(f"compiling the {self.name} engine once, ~{self.seconds:.0f} s (cache: {self.cache_dir()})")
+            self._drop_cache()
+            for entry, signature in self.entries().items():
+                entry.compile(signature)
+                if not Path(entry._cache._cache_file._index_path).exists():  # compiled before in this process
+                    entry._cache.save_overload(signature, entry.overloads[tuple(signature)])  # numba's (private)
+            self._record()
+        if ahead and self.ahead is not None and ahead_of_time_builds() and self.ahead.load() is None:
+            if say:
+                say(f"building the {self.name} engine ahead of time too (runs then load it without numba)")
+            self.ahead.build()
+
+    def _drop_cache(self) -> None:
+        """Remove the entries' cache files and their record before a build: numba would load what it finds."""
+        for entry in self.entries():
+            cache = entry._cache._cache_file  # numba's (private API)
+            folder = Path(cache._index_path).parent
+            artifacts.drop([Path(cache._index_path), *folder.glob(cache._data_name_pattern.replace("{number:d}", "*"))])
+        artifacts.drop([self.record_file()])
+        self._accepted = None
 
     def warm_in_background(self) -> bool:
         """Start a detached builder unless the engine is cached or a builder holds the lock; returns at once,
         whether one was started. ``SYMMECH_BACKGROUND_BUILD=0`` starts none (the run still answers, on the
         engine that needs no compile)."""
-        if not background_builds() or not self.cold():
+        return background_builds() and self.cold() and self.start_builder()
+
+    def start_builder(self) -> bool:
+        """Start a detached builder (``symmech warm --engine NAME --background``) unless background builds are
+        off or a builder holds the lock; returns whether one was started."""
+        if not background_builds():
             return False
         with self.build_lock(wait=False) as free:
             if not free:

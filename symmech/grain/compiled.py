@@ -50,7 +50,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from symmech.core import aot, build
+from symmech.core import aot, artifacts, build
 from symmech.core.scene import SymmechError
 from symmech.grain import compiled_layout, motion, sliding
 from symmech.grain.compiled_layout import (
@@ -191,6 +191,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
 def _loop():
     from symmech.grain import compiled_loop  # imports numba
 
+    artifacts.guard_numba_cache()
     return compiled_loop
 
 
