@@ -60,7 +60,7 @@ def test_a_damaged_cache_file_is_one_warning_and_a_recompile(entry, kind, how, c
     module = fresh(folder)
     assert module.cube_plus(2.0) == 9.5 and module.cube_plus.stats.cache_misses  # compiled, not loaded
     err = capsys.readouterr().err
-    assert err.startswith(f"symmech: warning: compiled artifact refused: numba cache file {damaged} is damaged (")
+    assert err.startswith(f"symmech: warning: numba cache file {damaged} is damaged (")
     assert err.endswith("); dropped and recompiled\n") and err.count("\n") == 1
     again = fresh(folder)  # the recompile was cached whole: loaded, no warning
     assert again.cube_plus(2.0) == 9.5 and not again.cube_plus.stats.cache_misses
@@ -123,7 +123,7 @@ def test_a_refused_cache_is_cold_with_one_warning_then_rebuilt(engine, damage, c
         source.write_text(source.read_text() + "\n# edited\n")
     assert eng.cold()
     err = capsys.readouterr().err.splitlines()
-    assert len(err) == 1 and err[0].startswith("symmech: warning: compiled artifact refused: ")
+    assert len(err) == 1 and err[0].startswith("symmech: warning: ") and "cache of the probe engine is not used" in err[0]
     named = {"data truncated": data, "index random bytes": index, "record deleted": index}.get(damage, record)
     assert str(named) in err[0]
     assert eng.warm() and not eng.cold()  # dropped and compiled again, recorded

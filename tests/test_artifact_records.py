@@ -73,7 +73,7 @@ def test_an_unreadable_record_is_refused(built, text):
     so, _, record = built
     record.write_text(text, encoding="latin-1")
     data, why = artifacts.check(record, [so])
-    assert data is None and why.startswith(f"the record {record} is unreadable (")
+    assert data is None and why.startswith(f"{record} is unreadable (")
 
 
 def test_an_unrecorded_file_and_a_missing_one(built, tmp_path):
@@ -81,6 +81,8 @@ def test_an_unrecorded_file_and_a_missing_one(built, tmp_path):
     record.unlink()
     assert artifacts.check(record, [so]) == (None, f"{so} is not recorded (no thing.json)")
     assert artifacts.check(tmp_path / "none.json", [tmp_path / "none.so"]) == (None, "missing")
+    (tmp_path / "file").write_text("")  # a cache folder that cannot exist: nothing built, nothing to refuse
+    assert artifacts.check(tmp_path / "file" / "x.json", [tmp_path / "file" / "x.so"]) == (None, "missing")
 
 
 def test_a_record_that_lists_a_missing_file(built, tmp_path):
@@ -96,8 +98,8 @@ def test_a_record_that_lists_a_missing_file(built, tmp_path):
 def test_a_warning_is_one_line_once_per_process(capsys, monkeypatch):
     monkeypatch.setattr(artifacts, "_warned", set())
     for _ in range(3):
-        artifacts.warn("/x/y.so is damaged", "rebuilt")
-    assert capsys.readouterr().err == "symmech: warning: compiled artifact refused: /x/y.so is damaged; rebuilt\n"
+        artifacts.warn("/x/y.so is damaged; rebuilt")
+    assert capsys.readouterr().err == "symmech: warning: /x/y.so is damaged; rebuilt\n"
 
 
 # --------------------------------------------------------------------------- the ahead-of-time loader
@@ -147,7 +149,7 @@ def test_a_refused_build_is_dropped_after_one_warning(build, damage, capsys):
         so.unlink()
     assert b.load() is None and b.refused
     err = capsys.readouterr().err.splitlines()
-    assert len(err) == 1 and err[0].startswith("symmech: warning: compiled artifact refused: ")
+    assert len(err) == 1 and err[0].startswith("symmech: warning: ") and "; not loaded (numba's cache" in err[0]
     assert (str(so) if damage in ("truncated", "random bytes", "zero bytes", "record of a missing module")
             else str(record)) in err[0]
     assert not so.exists() and not record.exists()  # dropped: the next run neither warns nor loads it

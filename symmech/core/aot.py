@@ -77,7 +77,7 @@ class Build:
                 return None
             if why is not None:
                 self.refused = True
-                artifacts.warn(why, "not loaded; numba's cache serves the engine until it is built again")
+                artifacts.warn(f"{why}; not loaded (numba's cache serves the engine until it is built again)")
                 artifacts.drop([record, so])
                 return None
             integrity.verify_built_from(data["sources"])  # refuses an edited or stale module, as an import
@@ -100,8 +100,8 @@ class Build:
             so.parent.mkdir(parents=True, exist_ok=True)
             workdir = tempfile.TemporaryDirectory(dir=so.parent)
         except OSError as exc:
-            artifacts.warn(f"the folder {so.parent} cannot be written ({exc.strerror or exc})",
-                           "the engine is not built ahead of time (numba's cache serves it)")
+            artifacts.warn(f"{so.parent} cannot be written ({exc.strerror or exc}); the engine is not built ahead "
+                           "of time (numba's cache serves it)")
             return False
         with workdir as tmp:
             try:

@@ -77,11 +77,11 @@ def check(record: Path, built: list[Path]) -> tuple[dict | None, str | None]:
         data = json.loads(record.read_text(encoding="utf-8"))
         files, recorded = {Path(p).name for p in built}, dict(data["built"])
         checkout, built_from = data["checkout"], dict(data["sources"])
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):
         present = [p for p in built if Path(p).exists()]
         return None, f"{present[0]} is not recorded (no {record.name})" if present else "missing"
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
-        return None, f"the record {record} is unreadable ({exc.__class__.__name__})"
+        return None, f"{record} is unreadable ({exc.__class__.__name__})"
     if checkout != CHECKOUT:
         return None, f"{record} was built by another checkout ({checkout})"
     if data.get("platform") != platform():
@@ -105,10 +105,10 @@ def check(record: Path, built: list[Path]) -> tuple[dict | None, str | None]:
     return data, None
 
 
-def warn(why: str, then: str) -> None:
-    """One warning line on stderr (once per process): what was refused and why (``why`` names the file), and
-    what the run does instead."""
-    line = f"symmech: warning: compiled artifact refused: {why}; {then}"
+def warn(message: str) -> None:
+    """One warning line on stderr, once per process: what was refused or could not be written, naming the file,
+    and what the run does instead."""
+    line = f"symmech: warning: {message}"
     if line not in _warned:
         _warned.add(line)
         print(line, file=sys.stderr, flush=True)
@@ -160,7 +160,7 @@ def guard_numba_cache() -> None:
         try:
             save(self, key, data)
         except OSError as exc:
-            warn(f"numba's cache folder {self._cache_path} cannot be written ({exc.strerror or exc})",
+            warn(f"numba's cache folder {self._cache_path} cannot be written ({exc.strerror or exc}); "
                  "compiled in memory for this run")
 
     IndexDataCacheFile._load_index = guarded_load_index
@@ -171,4 +171,4 @@ def guard_numba_cache() -> None:
 
 def _damaged(path: Path, exc: Exception) -> None:
     drop([path])
-    warn(f"numba cache file {path} is damaged ({exc.__class__.__name__})", "dropped and recompiled")
+    warn(f"numba cache file {path} is damaged ({exc.__class__.__name__}); dropped and recompiled")

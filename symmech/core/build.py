@@ -111,7 +111,8 @@ class Engine:
         if self._accepted != stamp:
             _, why = artifacts.check(self.record_file(), indexes)
             if why is not None:
-                artifacts.warn(why, f"numba's cache of the {self.name} engine is not used; it is compiled again")
+                artifacts.warn(f"{why}; numba's cache of the {self.name} engine is not used (the next build "
+                               "compiles it again)")
                 return True
             self._accepted = stamp
         return any(not entry._cache._cache_file._load_index() for entry in self.entries())  # numba's (private)
@@ -142,8 +143,8 @@ class Engine:
         try:
             artifacts.write_record(self.record_file(), built, sorted(sources))
         except OSError as exc:
-            artifacts.warn(f"{self.record_file()} cannot be written ({exc.strerror or exc})",
-                           "the next run compiles the engine again")
+            artifacts.warn(f"{self.record_file()} cannot be written ({exc.strerror or exc}); the next run "
+                           "compiles the engine again")
 
     def cache_dir(self) -> Path:
         """Where numba caches the entries (:func:`cache_dir` of the first)."""

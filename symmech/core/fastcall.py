@@ -92,7 +92,7 @@ def extension(folder: Path) -> ModuleType | None:
         with file_lock(Path(folder) / "symmech-fastcall-build.lock", wait=True):
             _, why = artifacts.check(record, [path])
             if why not in (None, "missing"):
-                artifacts.warn(why, "dropped and built again")
+                artifacts.warn(f"{why}; dropped and built again")
                 artifacts.drop([record, path])
             if why is not None:
                 _compile(path)
