@@ -45,19 +45,24 @@ def platform() -> dict:
     return {"abi": importlib.machinery.EXTENSION_SUFFIXES[0], "python": sys.version, "numpy": numpy.__version__}
 
 
-def sources(module: ModuleType) -> list[str]:
-    """The files of ``module`` and of every symmech module its globals reach (the functions, constants and
-    generated kernels compiled into a build), sorted."""
+def reached(module: ModuleType) -> list[ModuleType]:
+    """``module`` and every symmech module its globals reach (the functions, constants and generated kernels
+    compiled into a build), by name."""
     seen, todo = {}, [module]
     while todo:
         m = todo.pop()
         if m is None or m.__name__ in seen or not getattr(m, "__file__", None) or (
                 m is not module and not m.__name__.startswith("symmech")):
             continue
-        seen[m.__name__] = m.__file__
+        seen[m.__name__] = m
         todo += [v if isinstance(v, ModuleType) else sys.modules.get(getattr(v, "__module__", None) or "")
                  for v in vars(m).values()]
-    return sorted(seen.values())
+    return [seen[name] for name in sorted(seen)]
+
+
+def sources(module: ModuleType) -> list[str]:
+    """The files of :func:`reached` modules, sorted: what a build of ``module``'s functions is made from."""
+    return sorted(m.__file__ for m in reached(module))
 
 
 def write_record(record: Path, built: list[Path], built_from: list[str]) -> None:

@@ -48,6 +48,14 @@ def cache_dir(dispatcher) -> Path:
     return Path(dispatcher._cache._cache_path)  # numba's cache locator (private API)
 
 
+def _mtime(path: Path) -> int | None:
+    """The modification time [ns] of ``path``, None when it is missing."""
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return None
+
+
 @contextmanager
 def file_lock(path: Path, wait: bool):
     """An exclusive ``flock`` on the file ``path`` (created with its folder); yields whether this process
@@ -107,7 +115,7 @@ class Engine:
         indexes = self.index_files()
         if not any(index.exists() for index in indexes) or self._builder_at_work():
             return True
-        stamp = [(os.fspath(p), p.stat().st_mtime_ns) for p in [self.record_file(), *indexes] if p.exists()]
+        stamp = [(os.fspath(p), _mtime(p)) for p in [self.record_file(), *indexes]]
         if self._accepted != stamp:
             _, why = artifacts.check(self.record_file(), indexes)
             if why is not None:
@@ -186,11 +194,14 @@ class Engine:
             self.ahead.build()
 
     def _drop_cache(self) -> None:
-        """Remove the entries' cache files and their record before a build: numba would load what it finds."""
-        for entry in self.entries():
-            cache = entry._cache._cache_file  # numba's (private API)
-            folder = Path(cache._index_path).parent
-            artifacts.drop([Path(cache._index_path), *folder.glob(cache._data_name_pattern.replace("{number:d}", "*"))])
+        """Remove the cache files of every numba function the entries are built from, and their record, before a
+        build: numba would load what it finds, and it checks a cached callee against its own file only."""
+        for module in {m for entry in self.entries() for m in artifacts.reached(sys.modules[entry.__module__])}:
+            for value in vars(module).values():
+                cache = getattr(getattr(value, "_cache", None), "_cache_file", None)  # numba's (private API)
+                if cache is not None:
+                    index = Path(cache._index_path)
+                    artifacts.drop([index, *index.parent.glob(cache._data_name_pattern.replace("{number:d}", "*"))])
         artifacts.drop([self.record_file()])
         self._accepted = None
 
