@@ -87,7 +87,7 @@ def engine(entry, monkeypatch):
     folder, cache = entry
     module = fresh(folder)
     sys.modules["probe_entry"] = module  # an entry's sources are found through its module
-    eng = build.Engine("probe", lambda: {module.cube_plus: (numba.float64,)}, 1.0)
+    eng = build.Engine("probe", "probe_entry", lambda: {module.cube_plus: (numba.float64,)}, 1.0)
     assert eng.warm()
     monkeypatch.setattr(artifacts, "_warned", set())  # the warm's own warning (no record yet) printed
     yield eng, cache
@@ -96,14 +96,14 @@ def engine(entry, monkeypatch):
 
 def test_a_warm_build_records_index_data_and_sources(engine):
     eng, cache = engine
-    data, why = artifacts.check(eng.record_file(), eng.index_files())
+    data, why = artifacts.check(eng.record_file(), [])
     assert why is None and not eng.cold()
     assert {Path(f).suffix for f in data["built"]} == {".nbi", ".nbc"}
     assert [Path(f).name for f in data["sources"]] == ["probe_entry.py"]
 
 
 @pytest.mark.parametrize("damage", ["data truncated", "index random bytes", "record of another checkout",
-                                    "record deleted", "source edited"])
+                                    "source edited"])
 def test_a_refused_cache_is_cold_with_one_warning_then_rebuilt(engine, damage, capsys):
     eng, cache = engine
     capsys.readouterr()
@@ -116,15 +116,41 @@ def test_a_refused_cache_is_cold_with_one_warning_then_rebuilt(engine, damage, c
         _damage(index, "random bytes")
     elif damage == "record of another checkout":
         record.write_text(record.read_text().replace(artifacts.CHECKOUT, "/other/checkout"))
-    elif damage == "record deleted":
-        record.unlink()
     else:
         source = index.parent.parent / "probe_entry.py"
         source.write_text(source.read_text() + "\n# edited\n")
     assert eng.cold()
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("symmech: warning: ") and "cache of the probe engine is not used" in err[0]
-    named = {"data truncated": data, "index random bytes": index, "record deleted": index}.get(damage, record)
-    assert str(named) in err[0]
+    assert str({"data truncated": data, "index random bytes": index}.get(damage, record)) in err[0]
     assert eng.warm() and not eng.cold()  # dropped and compiled again, recorded
-    assert artifacts.check(record, eng.index_files())[1] is None
+    assert artifacts.check(record, [])[1] is None
+
+
+def test_an_unrecorded_cache_is_cold_without_a_warning(engine, capsys):
+    """numba's files without a record (a cache from before records, or the record deleted): nothing is refused
+    at load, the engine is cold and the next build replaces them."""
+    eng, cache = engine
+    capsys.readouterr()
+    eng.record_file().unlink()
+    assert eng.cold() and capsys.readouterr().err == ""
+    assert eng.warm() and not eng.cold()
+
+
+def test_the_record_lives_in_numbas_folder_of_the_entries_module(engine, monkeypatch, tmp_path):
+    eng, cache = engine
+    module = sys.modules["probe_entry"]
+    assert eng.cache_dir() == build.cache_dir(module.cube_plus) == cache and eng.record_file().parent == cache
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "elsewhere"))
+    assert build.cache_dir(fresh(cache.parent).cube_plus) == eng.cache_dir() != cache
+
+
+def test_a_cold_grain_engine_is_told_without_importing_its_loop(tmp_path):
+    """No record in an empty NUMBA_CACHE_DIR: cold, and neither the compiled loop nor its generated twins were
+    imported (summary.json's generated_modules lists what ran: the Python engine's modules only)."""
+    code = ("import sys; from symmech.grain import compiled; print(compiled.ENGINE.cold(), "
+            "'symmech.grain.compiled_loop' in sys.modules, 'symmech.generated.grain_motion_nb' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
+    assert done.returncode == 0 and done.stdout.split() == ["True", "False", "False"], done.stderr

@@ -121,9 +121,11 @@ def build(monkeypatch, tmp_path):
     return b, so, record, source
 
 
-def test_the_folder_is_the_checkouts_own_under_a_shared_cache(build, tmp_path):
+def test_the_folder_is_the_checkouts_own_under_a_shared_cache(build, tmp_path, monkeypatch):
     b, so, _, _ = build
     assert so.parent.parent == tmp_path and so.parent.name.startswith("symmech-aot-")
+    monkeypatch.setattr(artifacts, "CHECKOUT", "/another/clone/symmech")  # a second checkout, same NUMBA_CACHE_DIR
+    assert b.paths()[0].parent.parent == tmp_path and b.paths()[0].parent != so.parent
 
 
 def test_a_current_build_is_loaded(build):

@@ -8,7 +8,8 @@ numba writes each cache file whole (a temporary file renamed), so an interrupted
 written. What a build leaves is recorded (:mod:`symmech.core.artifacts`: each entry's index and data files, the
 sources they were compiled from, the checkout) in ``symmech-<name>-numba.json`` beside them; :meth:`Engine.cold`
 accepts the cache only when that record matches, else warns once naming the refused file and the engine is
-cold (the next build drops the refused files and compiles). :meth:`Engine.warm_in_background` starts a detached builder (``symmech warm --engine NAME
+cold (the next build drops the refused files and compiles); the entries' module is imported only once the
+record matches. :meth:`Engine.warm_in_background` starts a detached builder (``symmech warm --engine NAME
 --background``, its own session: Ctrl-C or SIGTERM of the caller does not reach it), unless
 ``SYMMECH_BACKGROUND_BUILD=0`` (CI jobs and containers that warm their cache on purpose, or never want a
 process that outlives the run).
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import fcntl
 import hashlib
+import importlib.util
 import os
 import subprocess
 import sys
@@ -42,9 +44,21 @@ def ahead_of_time_builds() -> bool:
     return os.environ.get("SYMMECH_AHEAD_OF_TIME") != "0"
 
 
+def numba_folder(source: str) -> Path:
+    """The folder where numba caches the ``cache=True`` functions of the file ``source``: ``NUMBA_CACHE_DIR``
+    when set, else ``__pycache__`` beside it, or numba's user-wide cache folder when that folder is read-only
+    (numba's own choice, private API)."""
+    from numba.core.caching import CodeLibraryCacheImpl
+
+    for locator_class in CodeLibraryCacheImpl._locator_classes:
+        locator = locator_class.from_function(numba_folder, source)  # any function: its line names no folder
+        if locator is not None:
+            return Path(locator.get_cache_path())
+    raise OSError(f"numba has no cache folder for {source}")
+
+
 def cache_dir(dispatcher) -> Path:
-    """The folder where numba caches the ``cache=True`` dispatcher: ``NUMBA_CACHE_DIR`` when set, else
-    ``__pycache__`` beside its module, or numba's user-wide cache folder when that folder is read-only."""
+    """The folder where numba caches the ``cache=True`` dispatcher (:func:`numba_folder` of its file)."""
     return Path(dispatcher._cache._cache_path)  # numba's cache locator (private API)
 
 
@@ -77,14 +91,14 @@ def file_lock(path: Path, wait: bool):
 
 class Engine:
     """The compiled engine ``name`` (``symmech warm --engine NAME``): ``entries()`` maps each cached entry
-    (a numba dispatcher) to the argument types a run calls it with; ``seconds`` [s] is the cold compile a
-    run announces (wall time, idle machine)."""
+    (a numba dispatcher of the module named ``module``) to the argument types a run calls it with;
+    ``seconds`` [s] is the cold compile a run announces (wall time, idle machine)."""
 
-    def __init__(self, name: str, entries: Callable[[], dict], seconds: float, ahead=None):
-        self.name, self.entries, self.seconds = name, entries, seconds
+    def __init__(self, name: str, module: str, entries: Callable[[], dict], seconds: float, ahead=None):
+        self.name, self.module, self.entries, self.seconds = name, module, entries, seconds
         self.ahead = ahead  # its symmech.core.aot.Build, if it has one
         self.lock_name = f"symmech-{name}-build.lock"
-        self._accepted = None  # the (file, mtime) stamps of a record and cache accepted by cold()
+        self._accepted = None  # the modification time [ns] of the record cold() accepted
         self._holding = False  # whether this process holds the build lock
 
     def ahead_of_time(self):
@@ -109,15 +123,18 @@ class Engine:
         return f"{COLD}; {then} (`symmech warm --engine {self.name}` builds it now)"
 
     def cold(self) -> bool:
-        """Whether the next run compiles: an entry has no machine code cached for its source yet, or the cache
-        does not match its record (one warning line naming the refused file)."""
+        """Whether the next run compiles: no current record of the entries' cache files (a record that does not
+        match: one warning line naming the refused file), or an entry has no machine code cached for its
+        source. Imports the entries' module (and so numba and its generated twins) only once the record matches."""
         artifacts.guard_numba_cache()
-        indexes = self.index_files()
-        if not any(index.exists() for index in indexes) or self._builder_at_work():
+        record = self.record_file()
+        if self._builder_at_work():
             return True
-        stamp = [(os.fspath(p), _mtime(p)) for p in [self.record_file(), *indexes]]
+        stamp = _mtime(record)
+        if stamp is None:  # never built and recorded (numba's files, if any, are replaced by the next build)
+            return True
         if self._accepted != stamp:
-            _, why = artifacts.check(self.record_file(), indexes)
+            _, why = artifacts.check(record, [])
             if why is not None:
                 artifacts.warn(f"{why}; numba's cache of the {self.name} engine is not used (the next build "
                                "compiles it again)")
@@ -131,10 +148,6 @@ class Engine:
             return False
         with self.build_lock(wait=False) as free:
             return not free
-
-    def index_files(self) -> list[Path]:
-        """numba's index file of each entry (``.nbi``; its data files ``.nbc`` are named in it)."""
-        return [Path(entry._cache._cache_file._index_path) for entry in self.entries()]  # numba's (private API)
 
     def record_file(self) -> Path:
         """The record of what the last build left in numba's cache (:mod:`symmech.core.artifacts`)."""
@@ -155,8 +168,8 @@ class Engine:
                            "compiles the engine again")
 
     def cache_dir(self) -> Path:
-        """Where numba caches the entries (:func:`cache_dir` of the first)."""
-        return cache_dir(next(iter(self.entries())))
+        """Where numba caches the entries: its cache folder for the file of :attr:`module`."""
+        return numba_folder(importlib.util.find_spec(self.module).origin)
 
     def build_lock(self, wait: bool):
         """The machine-wide build lock; yields whether this process holds it (always, with ``wait``)."""

@@ -212,7 +212,8 @@ def _exports() -> dict:
     return {"run": (run, run.nopython_signatures[0])}
 
 
-ENGINE = build.Engine("grain", lambda: {_loop().run: _entry_signature()}, COLD_COMPILE_SECONDS,
+ENGINE = build.Engine("grain", "symmech.grain.compiled_loop", lambda: {_loop().run: _entry_signature()},
+                      COLD_COMPILE_SECONDS,
                       ahead=aot.Build("grain", [__file__, compiled_layout.__file__], _exports))
 
 
