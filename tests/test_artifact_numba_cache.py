@@ -121,7 +121,8 @@ def test_a_refused_cache_is_cold_with_one_warning_then_rebuilt(engine, damage, c
         source.write_text(source.read_text() + "\n# edited\n")
     assert eng.cold()
     err = capsys.readouterr().err.splitlines()
-    assert len(err) == 1 and err[0].startswith("symmech: warning: ") and "cache of the probe engine is not used" in err[0]
+    assert len(err) == 1 and err[0].startswith("symmech: warning: ")
+    assert "cache of the probe engine is not used" in err[0]
     assert str({"data truncated": data, "index random bytes": index}.get(damage, record)) in err[0]
     assert eng.warm() and not eng.cold()  # dropped and compiled again, recorded
     assert artifacts.check(record, [])[1] is None
