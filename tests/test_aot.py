@@ -122,7 +122,7 @@ def test_the_main_job_runs_on_the_build_without_numba(built, tmp_path):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["engine_reason"].endswith("built (ahead of time)")
     assert {"grain_motion_nb", "grain_impact_nb"} <= set(summary["generated_modules"])  # compiled into it
-    files = {Path(f).name for f in json.loads(compiled.ENGINE.ahead.paths()[1].read_text())["files"]}
+    files = {Path(f).name for f in json.loads(compiled.ENGINE.ahead.paths()[1].read_text())["sources"]}
     assert {"compiled.py", "compiled_layout.py", "compiled_loop.py", "grain_motion_nb.py"} <= files
 
 

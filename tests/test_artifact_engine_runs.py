@@ -95,6 +95,7 @@ def test_a_damaged_numba_cache_answers_on_the_python_engine(cache, tmp_path, dam
     (warning,) = _warnings(done)
     assert str(target) in warning and "cache of the grain engine is not used" in warning
     assert summary["engine"] == "python" and summary["headline"]
+    assert not [m for m in summary["generated_modules"] if m.endswith("_nb")]  # the compiled loop never loaded
 
 
 def test_warm_with_an_unwritable_cache_dir_is_one_warning(tmp_path):
