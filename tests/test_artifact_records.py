@@ -4,6 +4,8 @@ Every refusal names the file; a refused ahead-of-time build is dropped after one
 file that is not an extension module would raise ImportError if it were: the refusal must not try)."""
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -173,3 +175,18 @@ def test_an_unwritable_folder_is_one_warning_and_no_build(monkeypatch, tmp_path,
     assert b.build() is False
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and f"{b.paths()[0].parent} cannot be written" in err[0]
+
+
+def test_a_build_being_replaced_is_left_alone(build, capsys):
+    """A builder holds the lock while it replaces the module and its record: a reader neither judges nor drops
+    the half-replaced pair (here: a module whose record does not match yet), it goes without the build."""
+    from symmech.core.build import file_lock
+
+    b, so, record, _ = build
+    so.write_bytes(b"the new module, record not written yet")
+    with file_lock(b.lock_file(), wait=True):
+        code = ("import sys; from symmech.core import aot; from symmech.grain import compiled; "
+                "b = aot.Build('probe', [compiled.__file__], dict); print(b.load() is None, b.refused)")
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stdout.split() == ["True", "False"] and done.stderr == "", done.stderr
+    assert so.exists() and record.exists()

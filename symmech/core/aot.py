@@ -33,6 +33,7 @@ from types import ModuleType
 from typing import Callable
 
 from symmech.core import artifacts, integrity
+from symmech.core.build import file_lock
 
 SUFFIX = importlib.machinery.EXTENSION_SUFFIXES[0]
 
@@ -68,18 +69,22 @@ class Build:
     def load(self) -> ModuleType | None:
         """The built module if it is current (:func:`symmech.core.artifacts.check`: the module, its sources,
         the checkout and the platform), else None: a build found but refused is dropped after one warning
-        line naming it. Imports no numba; checked once per process."""
+        line naming it; one being replaced (its lock held) is left alone. Imports no numba; checked once per
+        process."""
         if not self._checked:
             self._checked = True
             so, record = self.paths()
-            data, why = artifacts.check(record, [so])
-            if why == "missing":
+            if not (so.exists() or record.exists()):
                 return None
-            if why is not None:
-                self.refused = True
-                artifacts.warn(f"{why}; not loaded (numba's cache serves the engine until it is built again)")
-                artifacts.drop([record, so])
-                return None
+            with file_lock(self.lock_file(), wait=False) as free:
+                if not free:  # a builder is replacing it: numba's cache serves this run
+                    return None
+                data, why = artifacts.check(record, [so])
+                if why is not None:
+                    self.refused = True
+                    artifacts.warn(f"{why}; not loaded (numba's cache serves the engine until it is built again)")
+                    artifacts.drop([record, so])
+                    return None
             integrity.verify_built_from(data["sources"])  # refuses an edited or stale module, as an import
             spec = importlib.util.spec_from_file_location(self.module_name, so)
             module = importlib.util.module_from_spec(spec)
@@ -87,6 +92,10 @@ class Build:
             _scipy_lapack_alone()
             self._module = module
         return self._module
+
+    def lock_file(self) -> Path:
+        """Held while the module and its record are replaced (a reader never judges a half-replaced pair)."""
+        return self.paths()[0].parent / f"{self.module_name}.lock"
 
     def build(self) -> bool:
         """Compile the exports ahead of time; the caller holds the engine's build lock. Returns whether it
@@ -116,9 +125,10 @@ class Build:
                     cc.compile()
             except Exception:  # no C compiler, no pycc, or a toolchain it cannot drive: numba's cache serves
                 return False
-            artifacts.drop([record])
-            os.replace(Path(tmp) / cc.output_file, so)
-            artifacts.write_record(record, [so], files)
+            with file_lock(self.lock_file(), wait=True):
+                artifacts.drop([record])
+                os.replace(Path(tmp) / cc.output_file, so)
+                artifacts.write_record(record, [so], files)
         self._module, self._checked = None, False
         return True
 
