@@ -87,8 +87,15 @@ class Build:
                     return None
             integrity.verify_built_from(data["sources"])  # refuses an edited or stale module, as an import
             spec = importlib.util.spec_from_file_location(self.module_name, so)
-            module = importlib.util.module_from_spec(spec)
-            spec.loader.exec_module(module)
+            try:
+                module = importlib.util.module_from_spec(spec)  # dlopen: an extension is created here
+                spec.loader.exec_module(module)
+            except ImportError as exc:  # intact but unloadable here (a system library changed under it)
+                self.refused = True
+                artifacts.warn(f"{so} cannot be loaded ({' '.join(str(exc).split())}); numba's cache serves the "
+                               "engine until it is built again")
+                artifacts.drop([record, so])
+                return None
             _scipy_lapack_alone()
             self._module = module
         return self._module
