@@ -14,7 +14,8 @@ file when there was one (which is dropped, and rebuilt by the background builder
 never run from an old build (numba's path then imports it, and the import refuses it), nor is another
 checkout's build, and the generated modules of a current build are verified as their import would be and listed
 among the run's ``generated_modules``. Written whole: the module and the record each through a temporary file
-renamed into place, the record last, under the engine's build lock. Never required: without a C compiler
+renamed into place, the record last, under the engine's build lock and a lock of the build's own that a
+reader respects (a pair being replaced is neither loaded nor refused). Never required: without a C compiler
 nothing is built and nothing is printed; an unwritable folder is one warning line. The built entries hold the
 GIL (pycc's wrappers do not release it), so code that runs an engine on threads calls numba's.
 """
