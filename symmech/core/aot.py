@@ -6,14 +6,18 @@ numpy, scipy and matplotlib together. An engine also built ahead of time (``numb
 compiler, by ``symmech warm`` or the background builder right after numba's cache, whose compiled functions it
 reuses) loads as a plain extension module instead.
 
-The build lives in :func:`folder` beside a manifest of the files it was compiled from (their SHA-256: the loop,
-its kernels, the generated modules), the Python ABI and numpy's version. A run uses it only while every recorded
-file still hashes the same, else numba's cache as before: an edited generated module is never run from an old
-build (numba's path then imports it, and the import refuses it), and the generated modules of a current build are
-verified as their import would be and listed among the run's ``generated_modules``. Written whole: the module and the
-manifest each through a temporary file renamed into place, the manifest last, under the engine's build lock.
-Never required: without a C compiler nothing is built and nothing is printed. The built entries hold the GIL
-(pycc's wrappers do not release it), so code that runs an engine on threads calls numba's.
+The build lives in :func:`folder` beside its record (:mod:`symmech.core.artifacts`: the SHA-256 of the built
+module, of every file it was compiled from (the loop, its kernels, the generated modules), the checkout that
+built it, the Python ABI and numpy's version). A run loads it only when all of these match this installation,
+and hashes the module before loading it; else numba's cache serves, after one warning line naming the refused
+file when there was one (which is dropped, and rebuilt by the background builder): an edited generated module is
+never run from an old build (numba's path then imports it, and the import refuses it), nor is another
+checkout's build, and the generated modules of a current build are verified as their import would be and listed
+among the run's ``generated_modules``. Written whole: the module and the record each through a temporary file
+renamed into place, the record last, under the engine's build lock and a lock of the build's own that a
+reader respects (a pair being replaced is neither loaded nor refused). Never required: without a C compiler
+nothing is built and nothing is printed; an unwritable folder is one warning line. The built entries hold the
+GIL (pycc's wrappers do not release it), so code that runs an engine on threads calls numba's.
 """
 from __future__ import annotations
 
@@ -21,7 +25,6 @@ import contextlib
 import hashlib
 import importlib.machinery
 import importlib.util
-import json
 import os
 import sys
 import tempfile
@@ -30,89 +33,94 @@ from pathlib import Path
 from types import ModuleType
 from typing import Callable
 
-from symmech.core import integrity
+from symmech.core import artifacts, integrity
+from symmech.core.build import file_lock
 
 SUFFIX = importlib.machinery.EXTENSION_SUFFIXES[0]
 
 
 def folder(anchor: str) -> Path:
-    """Where the build of the engine defined in file ``anchor`` lives: under ``NUMBA_CACHE_DIR`` when set (as
-    numba's cache), else ``__pycache__`` beside ``anchor``, or ``~/.cache/symmech`` when that is read-only."""
+    """Where the build of the engine defined in file ``anchor`` lives: ``__pycache__`` beside ``anchor``, or,
+    under ``NUMBA_CACHE_DIR`` when set (as numba's cache) or ``~/.cache/symmech`` when ``__pycache__`` is
+    read-only, a folder of this checkout's own (checkouts sharing a cache never load each other's builds)."""
+    own = "symmech-aot-" + hashlib.sha256(artifacts.CHECKOUT.encode()).hexdigest()[:16]
     if os.environ.get("NUMBA_CACHE_DIR"):
-        return Path(os.environ["NUMBA_CACHE_DIR"]) / "symmech-aot"
+        return Path(os.environ["NUMBA_CACHE_DIR"]) / own
     beside = Path(anchor).parent / "__pycache__"
     if os.access(beside if beside.exists() else beside.parent, os.W_OK):
         return beside
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "symmech"
-
-
-def sources(module: ModuleType) -> list[str]:
-    """The files of ``module`` and of every symmech module its globals reach (the functions, constants and
-    generated kernels compiled into a build), sorted."""
-    seen, todo = {}, [module]
-    while todo:
-        m = todo.pop()
-        if m is None or m.__name__ in seen or not m.__name__.startswith("symmech") or not getattr(m, "__file__", None):
-            continue
-        seen[m.__name__] = m.__file__
-        todo += [v if isinstance(v, ModuleType) else sys.modules.get(getattr(v, "__module__", None) or "")
-                 for v in vars(m).values()]
-    return sorted(seen.values())
-
-
-def _digest(path: str) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def _platform() -> dict:
-    import numpy
-
-    return {"abi": SUFFIX, "python": sys.version, "numpy": numpy.__version__}
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "symmech" / own
 
 
 class Build:
     """The ahead-of-time build ``<name>_aot`` of an engine: ``exports()`` maps each exported name to a numba
     dispatcher and the signature it is compiled for; ``anchors`` are files of the engine's Python side, sources
-    of the build that :func:`sources` cannot reach (constants imported by name); the first sets the folder."""
+    of the build that :func:`symmech.core.artifacts.sources` cannot reach (constants imported by name); the
+    first sets the folder. ``refused`` tells whether :meth:`load` refused a build it found (to be rebuilt)."""
 
     def __init__(self, name: str, anchors: list[str], exports: Callable[[], dict]):
         self.module_name, self.anchors, self.exports = f"{name}_aot", list(anchors), exports
-        self._module = None
+        self._module, self._checked, self.refused = None, False, False
 
     def paths(self) -> tuple[Path, Path]:
-        """(extension module, manifest)."""
+        """(extension module, record)."""
         where = folder(self.anchors[0])
         return where / f"{self.module_name}{SUFFIX}", where / f"{self.module_name}.json"
 
     def load(self) -> ModuleType | None:
-        """The built module if it is current (same platform, every recorded file unchanged), else None. Imports
-        no numba; the manifest is checked once per process."""
-        if self._module is None:
-            so, manifest = self.paths()
-            try:
-                record = json.loads(manifest.read_text())
-                current = record["platform"] == _platform() and all(
-                    _digest(f) == h for f, h in record["files"].items())
-            except (OSError, ValueError, KeyError, TypeError):
+        """The built module if it is current (:func:`symmech.core.artifacts.check`: the module, its sources,
+        the checkout and the platform), else None: a build found but refused is dropped after one warning
+        line naming it; one being replaced (its lock held) is left alone. Imports no numba; checked once per
+        process."""
+        if not self._checked:
+            self._checked = True
+            so, record = self.paths()
+            if not (so.exists() or record.exists()):
                 return None
-            if current:
-                integrity.verify_built_from(record["files"])  # refuses an edited or stale module, as an import
-                spec = importlib.util.spec_from_file_location(self.module_name, so)
-                module = importlib.util.module_from_spec(spec)
+            with file_lock(self.lock_file(), wait=False) as free:
+                if not free:  # a builder is replacing it: numba's cache serves this run
+                    return None
+                data, why = artifacts.check(record, [so])
+                if why is not None:
+                    self.refused = True
+                    artifacts.warn(f"{why}; not loaded (numba's cache serves the engine until it is built again)")
+                    artifacts.drop([record, so])
+                    return None
+            integrity.verify_built_from(data["sources"])  # refuses an edited or stale module, as an import
+            spec = importlib.util.spec_from_file_location(self.module_name, so)
+            try:
+                module = importlib.util.module_from_spec(spec)  # dlopen: an extension is created here
                 spec.loader.exec_module(module)
-                _scipy_lapack_alone()
-                self._module = module
+            except ImportError as exc:  # intact but unloadable here (a system library changed under it)
+                self.refused = True
+                artifacts.warn(f"{so} cannot be loaded ({' '.join(str(exc).split())}); numba's cache serves the "
+                               "engine until it is built again")
+                artifacts.drop([record, so])
+                return None
+            _scipy_lapack_alone()
+            self._module = module
         return self._module
+
+    def lock_file(self) -> Path:
+        """Held while the module and its record are replaced (a reader never judges a half-replaced pair)."""
+        return self.paths()[0].parent / f"{self.module_name}.lock"
 
     def build(self) -> bool:
         """Compile the exports ahead of time; the caller holds the engine's build lock. Returns whether it
-        built: False without a working C compiler (the runs keep numba's cache)."""
+        built: False without a working C compiler (the runs keep numba's cache), and False after one warning
+        line when the folder cannot be written."""
+        self.refused = False  # tried: a failed build is not started again by every run
         exports = self.exports()
-        files = sources(sys.modules[next(iter(exports.values()))[0].__module__]) + self.anchors
-        record = {"platform": _platform(), "files": {f: _digest(f) for f in sorted(set(files))}}
-        so, manifest = self.paths()
-        so.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=so.parent) as tmp:
+        files = artifacts.sources(sys.modules[next(iter(exports.values()))[0].__module__]) + self.anchors
+        so, record = self.paths()
+        try:
+            so.parent.mkdir(parents=True, exist_ok=True)
+            workdir = tempfile.TemporaryDirectory(dir=so.parent)
+        except OSError as exc:
+            artifacts.warn(f"{so.parent} cannot be written ({exc.strerror or exc}); the engine is not built ahead "
+                           "of time (numba's cache serves it)")
+            return False
+        with workdir as tmp:
             try:
                 with warnings.catch_warnings(), _quiet():
                     warnings.simplefilter("ignore")  # numba.pycc is pending deprecation: fine for a cache
@@ -125,10 +133,11 @@ class Build:
                     cc.compile()
             except Exception:  # no C compiler, no pycc, or a toolchain it cannot drive: numba's cache serves
                 return False
-            manifest.unlink(missing_ok=True)
-            os.replace(Path(tmp) / cc.output_file, so)
-            (Path(tmp) / "manifest").write_text(json.dumps(record, indent=1, sort_keys=True))
-            os.replace(Path(tmp) / "manifest", manifest)
+            with file_lock(self.lock_file(), wait=True):
+                artifacts.drop([record])
+                os.replace(Path(tmp) / cc.output_file, so)
+                artifacts.write_record(record, [so], files)
+        self._module, self._checked = None, False
         return True
 
 

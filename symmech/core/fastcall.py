@@ -10,9 +10,12 @@ general Python path, so results and errors stay those of the generated ``rhs``/`
 
 The extension is compiled once with the system C compiler (sysconfig's ``CC``, or ``$CC``) into numba's
 cache folder of the twin (:func:`symmech.core.build.cache_dir`), named by the hash of the source, the
-Python ABI and numpy's version, under a file lock, through a temporary file renamed into place. It is
-never required: without a compiler, or when the build fails, ``rhs``/``jac`` stay the twin's numba path
-(one debug log record). Nothing is compiled at import: :func:`install` (``kernels.load``) gives the twin
+Python ABI and numpy's version, under a file lock, through a temporary file renamed into place, and recorded
+beside it (:mod:`symmech.core.artifacts`: its SHA-256, the source's, the checkout, the platform). It is loaded
+only when that record matches (hashed before it is loaded: a truncated extension would be mapped past its end);
+a damaged, foreign or unrecorded file is dropped and rebuilt after one warning line naming it. It is never
+required: without a compiler, or when the build fails, ``rhs``/``jac`` stay the twin's numba path (one debug
+log record). Nothing is compiled at import: :func:`install` (``kernels.load``) gives the twin
 a C ``Kernel`` whose first call compiles (or loads from numba's cache) the cfunc, or, while the extension
 is not built, a stand-in whose first call builds it and rebinds the module's name.
 """
@@ -31,6 +34,7 @@ import tempfile
 from pathlib import Path
 from types import FunctionType, ModuleType
 
+from symmech.core import artifacts
 from symmech.core.build import cache_dir, file_lock
 
 SOURCE = Path(__file__).with_name("_fastcall.c")
@@ -80,14 +84,19 @@ def _load(path: Path) -> ModuleType:
 
 @functools.cache
 def extension(folder: Path) -> ModuleType | None:
-    """The extension module built in ``folder`` (compiled first when missing, once per folder: a process
-    waiting for the lock then loads what the holder built); None when it cannot be built or loaded."""
+    """The extension module built in ``folder`` (compiled first when missing or refused, once per folder: a
+    process waiting for the lock then loads what the holder built); None when it cannot be built or loaded."""
     path = artifact(folder)
+    record = path.with_name(path.name.removesuffix(sysconfig.get_config_var("EXT_SUFFIX")) + ".json")
     try:
-        if not path.exists():
-            with file_lock(Path(folder) / "symmech-fastcall-build.lock", wait=True):
-                if not path.exists():
-                    _compile(path)
+        with file_lock(Path(folder) / "symmech-fastcall-build.lock", wait=True):
+            _, why = artifacts.check(record, [path])
+            if why not in (None, "missing"):
+                artifacts.warn(f"{why}; dropped and built again")
+                artifacts.drop([record, path])
+            if why is not None:
+                _compile(path)
+                artifacts.write_record(record, [path], [str(SOURCE)])
         return _load(path)
     except (OSError, subprocess.SubprocessError, ImportError) as exc:
         _log.debug("no C path for generated rhs/jac, the numba path serves them: %s %s", exc,

@@ -43,14 +43,16 @@ def _into_twin(function):
 @functools.cache
 def load(name: str):
     """The numba module ``<name>_nb``, or the numpy stand-in described above; SymmechError
-    when the module is edited, truncated or stale."""
+    when the module is edited, truncated or stale. numba's cache files of its kernels are loaded under
+    :func:`symmech.core.artifacts.guard_numba_cache`."""
     try:
         import numba  # noqa: F401  (the twin needs it; without it the numpy module stands in)
     except ImportError:
         pass
     else:
-        from symmech.core import fastcall
+        from symmech.core import artifacts, fastcall
 
+        artifacts.guard_numba_cache()  # a damaged cache file of the twin's kernels: recompiled, not an error
         twin = importlib.import_module(f"{PACKAGE}.{name}_nb")
         fastcall.install(twin)
         return twin

@@ -50,7 +50,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from symmech.core import aot, build
+from symmech.core import aot, artifacts, build
 from symmech.core.scene import SymmechError
 from symmech.grain import compiled_layout, motion, sliding
 from symmech.grain.compiled_layout import (
@@ -191,6 +191,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
 def _loop():
     from symmech.grain import compiled_loop  # imports numba
 
+    artifacts.guard_numba_cache()
     return compiled_loop
 
 
@@ -211,7 +212,8 @@ def _exports() -> dict:
     return {"run": (run, run.nopython_signatures[0])}
 
 
-ENGINE = build.Engine("grain", lambda: {_loop().run: _entry_signature()}, COLD_COMPILE_SECONDS,
+ENGINE = build.Engine("grain", "symmech.grain.compiled_loop", lambda: {_loop().run: _entry_signature()},
+                      COLD_COMPILE_SECONDS,
                       ahead=aot.Build("grain", [__file__, compiled_layout.__file__], _exports))
 
 

@@ -312,4 +312,4 @@ def _entry_signatures() -> dict:
             ek._solve_traction: tuple(numba.typeof(a) for a in traction)}
 
 
-ENGINE = build.Engine("elastic", _entry_signatures, COLD_COMPILE_SECONDS)
+ENGINE = build.Engine("elastic", "symmech.trolley.elastic_kernels", _entry_signatures, COLD_COMPILE_SECONDS)
