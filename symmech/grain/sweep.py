@@ -12,7 +12,9 @@ statistic carries its 95 % confidence interval; the points not significantly wor
 best are marked, and the summary sizes the populations for a stated precision.
 
 Every grain is an ordinary grain scene (the base scene with the population's and the
-sweep point's fields changed), validated before any simulation. The plan holds counts,
+sweep point's fields changed). Before any simulation the swept fields and the populations'
+entries are checked to set disjoint entries of the scene, the cost is estimated from counts,
+and the grains are validated at the cost of one point's (:func:`validate`). The plan holds counts,
 not scenes: each task builds its grains from (population, seed, index). The work runs on
 Dask: a local process pool by default, a ``dask.distributed`` scheduler by address
 with ``--scheduler``; results do not depend on where they ran (tested bit for bit).
@@ -195,7 +197,8 @@ def _first(p: Plan, k: int) -> dict:
 
 def plan(raw: dict, resolved: dict) -> Plan:
     """The sweep's plan from the scene's counts (cost independent of the number of grains); grain 0 of
-    each population at the first point is validated, :func:`validate` checks them all."""
+    each population at the first point is validated (:func:`validate` checks the rest); the swept fields and
+    the populations' entries checked to be disjoint (:func:`_check_plan`)."""
     sweep = resolved["sweep"]
     if sweep is None:
         raise SceneError("sweep", "the scene has no [sweep] table (see docs/scenes-grain.md)")
@@ -261,11 +264,18 @@ def load_grain(data: dict, sweep: dict, pop: dict, k: int):
 
 
 def validate(p: Plan) -> None:
-    """Validate every grain scene of the plan, one at a time: a bad grain is named before any simulation."""
+    """The grain scenes checked before any simulation at the cost of one point's grains, not of every point's:
+    every grain of each population at point (0, 0), and its grain 0 at every value of each axis and at the
+    plane's far corner (the swept fields and a population's entries set disjoint entries, :func:`_check_plan`;
+    a grain a check couples both in fails on its own, reported among the failed grains). A bad grain is named
+    by the sweep or population field its value came from."""
+    nx, ny = p.shape
+    points = sorted({(i, 0) for i in range(nx)} | {(0, j) for j in range(ny)} | {(nx - 1, ny - 1)})
     for k, pop in enumerate(p.populations):
-        for i, j in np.ndindex(*p.shape):
-            for data in grains(p, k, i, j):
-                load_grain(data, {"x": p.x, "y": p.y}, pop, k)
+        for data in grains(p, k, 0, 0):
+            load_grain(data, {"x": p.x, "y": p.y}, pop, k)
+        for i, j in points:
+            load_grain(next(grains(p, k, i, j, 0, 1)), {"x": p.x, "y": p.y}, pop, k)
 
 
 def throw_number(resolved: dict) -> float:
@@ -340,7 +350,8 @@ def _warm_worker() -> None:
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
         connect_timeout: float = CONNECT_TIMEOUT, half_width: float | None = None) -> Result:
-    """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write;
+    """``symmech sweep``: validate the scene and its plan, estimate from counts, validate the grains, compute,
+    write;
     ``half_width`` [m/s] the summary's precision target (default 1 mm/s)."""
     from symmech.core import pipeline
     from symmech.core.scene import read_toml
