@@ -212,9 +212,11 @@ def test_a_200_by_200_plane_is_refused_from_counts_within_10_cpu_s_and_200_MB(tm
     scene = _toml(tmp_path, '[sweep.x]\nfield = "motion.speed_scale"\nstart = 0.5\nstop = 1.5\nnum = 200\n'
                             '[sweep.y]\nfield = "elastic.rollers.stiffness"\nstart = 3e6\nstop = 3e7\nnum = 200\n'
                             'log = true\n')
-    code = ("import resource, sys\nfrom symmech import cli\nrc = cli.main(sys.argv[1:])\n"
+    # the peak of this process image: VmHWM (ru_maxrss keeps the peak of the forking pytest worker across exec)
+    code = ("import re, resource, sys\nfrom symmech import cli\nrc = cli.main(sys.argv[1:])\n"
             "use = resource.getrusage(resource.RUSAGE_SELF)\n"
-            "print(use.ru_utime + use.ru_stime, use.ru_maxrss, file=sys.stderr)\nsys.exit(rc)\n")
+            "peak = re.search(r'VmHWM:\\s+(\\d+) kB', open('/proc/self/status').read()).group(1)\n"
+            "print(use.ru_utime + use.ru_stime, peak, file=sys.stderr)\nsys.exit(rc)\n")
     started = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", code, "sweep", str(scene), "--out", str(tmp_path / "o"),
                            "--max-time", "10"], capture_output=True, text=True, timeout=60)
