@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d0f26b6c528266d804490da8def842db5fee09c1813362d69b4568e9b4222883
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# source key 83a847ea18b13a86287fa8d1016db7376cd9684a801c22522cb3ba131bf4e617
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

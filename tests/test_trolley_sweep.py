@@ -202,7 +202,7 @@ def test_the_compiled_engine_is_built_before_the_first_point_is_timed(monkeypatc
     calls = []
     monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("compiled", "test"))
     monkeypatch.setattr(elastic_compiled.ENGINE, "warm", lambda wait=True, say=None: calls.append("warm") or True)
-    monkeypatch.setattr(sweep, "evaluate", lambda data, max_time: calls.append("point") or ("failed", "stub"))
+    monkeypatch.setattr(sweep, "evaluate", lambda p, i, j, until: calls.append("point") or ("failed", "stub"))
     raw = swept(TINY, {"field": "motion.constants.a", "values": [3.0, 4.0]})
     outcomes(raw)
     assert calls == ["warm", "point", "point"]

@@ -6,11 +6,17 @@ A scene kind offers a sweep by registering ``sweep`` with its :class:`~symmech.c
 calls it, so no central list names the kinds that sweep. The work runs on Dask: a local process
 pool by default, serial with ``scheduler="synchronous"``, or a ``dask.distributed`` scheduler
 by address (``--scheduler``); the results do not depend on where they ran.
+
+Before any work a sweep is checked as a whole: its options (:func:`check_options`: ``--out`` as ``symmech run``
+checks it, ``--workers``, the ``--scheduler`` reached), then its axes resolved to the entries of the scene they
+set and checked as a set (:func:`check_disjoint`), then its cost, from counts and at most one timed point
+(:func:`refuse`). The points then run against one deadline (:func:`deadline`, :func:`point_context`).
 """
 from __future__ import annotations
 
 import inspect
 import os
+import time
 
 import numpy as np
 
@@ -20,6 +26,8 @@ from symmech.core.scene import SceneError, SymmechError
 CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (--connect-timeout)
 FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
 MAX_VALUES = 200  # values per axis
+MAX_WORKERS = 256  # local worker processes (--workers)
+LOCAL = (None, "processes", "synchronous", "threads")  # schedulers on this machine; anything else is an address
 
 
 def _values(path, value):
@@ -106,12 +114,65 @@ def put(data: dict, path: str, value, field: str) -> None:
     node[last] = value
 
 
+def dotted(keys: tuple) -> str:
+    """The field name of a key path into a scene, as its errors name it (``elastic.beams[0].ei``)."""
+    out = ""
+    for key in keys:
+        out += f"[{key}]" if isinstance(key, int) else (f".{key}" if out else key)
+    return out
+
+
+def check_disjoint(sets: list[tuple[str, str, list[tuple]]]) -> None:
+    """No scene entry set twice: ``sets`` lists (where: the axis or table that sets, e.g. ``sweep.y.field``; its
+    field as written; the key paths of the scene entries it sets, e.g. ``("elastic", "beams", 0, "ei")``). Two
+    setters clash when a key path of one equals or contains one of the other's, whatever the spelling, alias or
+    scale that reached it; a SceneError naming the later one."""
+    for k, (where, field, keys) in enumerate(sets):
+        for other, other_field, other_keys in sets[:k]:
+            for a in keys:
+                for b in other_keys:
+                    if a[:len(b)] == b or b[:len(a)] == a:
+                        same = "" if field == other_field else f" (as {other_field})"
+                        raise SceneError(where, f"{field} sets {dotted(a)}, which {other}{same} sets already: "
+                                                "each scene entry may be set by one of them only")
+
+
 def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster") -> None:
-    """Refuse a sweep whose estimate (a ``registry.Estimate``) exceeds ``--max-time``; tell it otherwise."""
-    if cost.seconds > ctx.max_time:
-        raise SymmechError(f"estimated sweep time {cost.seconds:.3g} s ({cost.what}) exceeds --max-time "
+    """Refuse a sweep whose estimate (a ``registry.Estimate`` of the work left) and the time already spent
+    exceed ``--max-time``; tell it otherwise."""
+    total = ctx.elapsed() + cost.seconds
+    if total > ctx.max_time:
+        raise SymmechError(f"estimated sweep time {total:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or {advice}")
-    ctx.say(f"estimated sweep time {cost.seconds:.3g} s ({cost.what})")
+    ctx.say(f"estimated sweep time {total:.3g} s ({cost.what})")
+
+
+def deadline(ctx) -> float:
+    """The wall-clock time (``time.time()``, s) at which the sweep of ``ctx`` runs out of ``--max-time``: its
+    tasks, wherever they run, stop there."""
+    return time.time() + ctx.max_time - ctx.elapsed()
+
+
+def point_context(until: float):
+    """A quiet Context for one task of a sweep whose budget ends at ``until`` (:func:`deadline`)."""
+    from symmech.core.context import Context
+
+    return Context(quiet=True, max_time=max(until - time.time(), 0.0))
+
+
+def check_options(out, workers: int | None, scheduler: str | None, connect_timeout: float) -> None:
+    """What a sweep's options can be refused for, before the scene is read: ``out`` as ``symmech run`` checks
+    it, ``workers`` in [1, MAX_WORKERS], a ``scheduler`` address reached within ``connect_timeout`` seconds."""
+    from symmech.core import pipeline
+
+    pipeline.check_out(out)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or not 1 <= workers <= MAX_WORKERS):
+        raise SymmechError(f"--workers {workers} is outside [1, {MAX_WORKERS}]: the number of local worker "
+                           "processes")
+    if scheduler not in LOCAL:
+        with client(scheduler, connect_timeout):
+            pass
 
 
 def workers(count: int | None, scheduler: str | None) -> int:
@@ -132,20 +193,22 @@ def compute(tasks: list, scheduler: str | None = None, processes: int | None = N
 
     ctx = ctx or Context(quiet=True)
     with ctx.progress(len(tasks), "sweep points", unit="task") as bar:
-        if scheduler in (None, "processes", "synchronous", "threads"):
+        if scheduler in LOCAL:
             kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
             with _ticks(bar, {t.key for t in tasks}):
                 (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
-            return values
-        from dask.distributed import as_completed
+        else:
+            from dask.distributed import as_completed
 
-        with client(scheduler, connect_timeout) as c:
-            if on_workers is not None:
-                c.run(on_workers)
-            futures = c.compute(tasks)
-            for _ in as_completed(futures):
-                bar.update(1)
-            return c.gather(futures)
+            with client(scheduler, connect_timeout) as c:
+                if on_workers is not None:
+                    c.run(on_workers)
+                futures = c.compute(tasks)
+                for _ in as_completed(futures):
+                    bar.update(1)
+                values = c.gather(futures)
+    ctx.tick(f"{len(tasks)} sweep tasks")  # tasks past the deadline stopped at once: the sweep is over time
+    return values
 
 
 def _ticks(bar, keys):
@@ -175,11 +238,14 @@ def client(address: str, timeout: float):
 
 def run(source, out, ctx, **options):
     """``symmech sweep``: the sweep its scene kind registered, on the scene ``source`` (a TOML path or a
-    dict as TOML gives it), written into ``out``; a SceneError naming ``kind`` when the kind has none, a
-    SymmechError naming an option (``--half-width``) its sweep does not take."""
-    from symmech.core import registry
+    dict as TOML gives it), written into ``out`` (locked while the sweep runs); a SceneError naming ``kind``
+    when the kind has none, a SymmechError naming an option (``--half-width``) its sweep does not take; the
+    options :func:`check_options` checks, first."""
+    from symmech.core import pipeline, registry
     from symmech.core.scene import read_toml
 
+    check_options(out, options.get("workers"), options.get("scheduler"),
+                  options.get("connect_timeout", CONNECT_TIMEOUT))
     raw = source if isinstance(source, dict) else read_toml(source)
     if not isinstance(raw, dict):
         raise SymmechError("a scene must be a table of fields")
@@ -191,4 +257,5 @@ def run(source, out, ctx, **options):
     for name in options:
         if name not in accepted:
             raise SymmechError(f"--{name.replace('_', '-')} does not apply to a sweep of a {kind.name} scene")
-    return kind.sweep(raw, out, ctx, **options)
+    with pipeline.locked(pipeline.check_out(out)):
+        return kind.sweep(raw, out, ctx, **options)

@@ -12,7 +12,9 @@ statistic carries its 95 % confidence interval; the points not significantly wor
 best are marked, and the summary sizes the populations for a stated precision.
 
 Every grain is an ordinary grain scene (the base scene with the population's and the
-sweep point's fields changed), validated before any simulation. The plan holds counts,
+sweep point's fields changed). Before any simulation the swept fields and the populations'
+entries are checked to set disjoint entries of the scene, the cost is estimated from counts,
+and the grains are validated at the cost of one point's (:func:`validate`). The plan holds counts,
 not scenes: each task builds its grains from (population, seed, index). The work runs on
 Dask: a local process pool by default, a ``dask.distributed`` scheduler by address
 with ``--scheduler``; results do not depend on where they ran (tested bit for bit).
@@ -195,7 +197,8 @@ def _first(p: Plan, k: int) -> dict:
 
 def plan(raw: dict, resolved: dict) -> Plan:
     """The sweep's plan from the scene's counts (cost independent of the number of grains); grain 0 of
-    each population at the first point is validated, :func:`validate` checks them all."""
+    each population at the first point is validated (:func:`validate` checks the rest); the swept fields and
+    the populations' entries checked to be disjoint (:func:`_check_plan`)."""
     sweep = resolved["sweep"]
     if sweep is None:
         raise SceneError("sweep", "the scene has no [sweep] table (see docs/scenes-grain.md)")
@@ -219,13 +222,27 @@ def plan(raw: dict, resolved: dict) -> Plan:
 
 
 def _check_plan(sweep: dict, pops: list) -> None:
-    """No population sets or varies a swept field (the sweep would overwrite it)."""
+    """No scene entry set twice in a population's grains: the swept fields, and then each population's `set`
+    entries (tables resolved to the entries they hold, ``"body" = {density = ...}`` to ``body.density``) and
+    its random orientation, or its `vary` entries (a population varies what it sets, by design)."""
+    axes = [(f"sweep.{a}.field", sweep[a]["field"], [tuple(sweep[a]["field"].split("."))])
+            for a in ("x", "y") if sweep[a] is not None]
     for k, pop in enumerate(pops):
-        for table in ("set", "vary"):
-            for axis in ("x", "y"):
-                if sweep[axis] is not None and sweep[axis]["field"] in pop[table]:
-                    raise SceneError(f"population[{k}].{table}.{sweep[axis]['field']}",
-                                     f"the field is swept by sweep.{axis}, which sets it at every point")
+        where = f"population[{k}]"
+        sets = [(f"{where}.set.{path}", path, _leaves(tuple(path.split(".")), value))
+                for path, value in pop["set"].items()]
+        if pop["random_orientation"]:
+            sets.append((f"{where}.random_orientation", "random_orientation", [("body", "orientation")]))
+        core_sweep.check_disjoint(axes + sets)
+        core_sweep.check_disjoint(axes + [(f"{where}.vary.{path}", path, [tuple(path.split("."))])
+                                          for path in pop["vary"]])
+
+
+def _leaves(keys: tuple, value) -> list[tuple]:
+    """The key paths of the entries ``value`` (a table, or one value) sets at ``keys``."""
+    if isinstance(value, dict) and value:
+        return [leaf for key, v in value.items() for leaf in _leaves(keys + (key,), v)]
+    return [keys]
 
 
 def load_grain(data: dict, sweep: dict, pop: dict, k: int):
@@ -247,11 +264,18 @@ def load_grain(data: dict, sweep: dict, pop: dict, k: int):
 
 
 def validate(p: Plan) -> None:
-    """Validate every grain scene of the plan, one at a time: a bad grain is named before any simulation."""
+    """The grain scenes checked before any simulation at the cost of one point's grains, not of every point's:
+    every grain of each population at point (0, 0), and its grain 0 at every value of each axis and at the
+    plane's far corner (the swept fields and a population's entries set disjoint entries, :func:`_check_plan`;
+    a grain a check couples both in fails on its own, reported among the failed grains). A bad grain is named
+    by the sweep or population field its value came from."""
+    nx, ny = p.shape
+    points = sorted({(i, 0) for i in range(nx)} | {(0, j) for j in range(ny)} | {(nx - 1, ny - 1)})
     for k, pop in enumerate(p.populations):
-        for i, j in np.ndindex(*p.shape):
-            for data in grains(p, k, i, j):
-                load_grain(data, {"x": p.x, "y": p.y}, pop, k)
+        for data in grains(p, k, 0, 0):
+            load_grain(data, {"x": p.x, "y": p.y}, pop, k)
+        for i, j in points:
+            load_grain(next(grains(p, k, i, j, 0, 1)), {"x": p.x, "y": p.y}, pop, k)
 
 
 def throw_number(resolved: dict) -> float:
@@ -261,19 +285,19 @@ def throw_number(resolved: dict) -> float:
     return vib["amplitude"] * (2 * math.pi * vib["frequency"]) ** 2 / g
 
 
-def simulate_point(scenes, first: int = 0) -> tuple[np.ndarray, list, list]:
+def simulate_point(scenes, first: int = 0, until: float = math.inf) -> tuple[np.ndarray, list, list]:
     """Per grain of the iterable ``scenes`` (numbered from ``first``): mean transport velocity (X, Y) [m/s]
     and the fraction of time in flight, shape (n, 3); a grain whose simulation stops with an error (e.g. a
-    stagnation guard) gets a row of NaN and its message in the list of (grain index, message) — it is
-    reported, never averaged in. A grain whose run warned (e.g. a rocking contact the model does not
-    follow) is averaged in and listed as (grain index, warnings)."""
+    stagnation guard, or the sweep's deadline ``until``, a ``time.time()``) gets a row of NaN and its message
+    in the list of (grain index, message) — it is reported, never averaged in. A grain whose run warned (e.g. a
+    rocking contact the model does not follow) is averaged in and listed as (grain index, warnings)."""
     from symmech.core import pipeline
     from symmech.core.scene import SymmechError
 
     out, failed, warned = [], [], []
     for k, data in enumerate(scenes, first):
         try:
-            res = pipeline.load(data).run()
+            res = pipeline.load(data).run(core_sweep.point_context(until))
         except SymmechError as exc:
             out.append((np.nan, np.nan, np.nan))
             failed.append((k, str(exc)))
@@ -285,10 +309,10 @@ def simulate_point(scenes, first: int = 0) -> tuple[np.ndarray, list, list]:
     return np.array(out).reshape(-1, 3), failed, warned
 
 
-def simulate_grains(base: dict, population: dict, fields: dict, start: int, stop: int):
+def simulate_grains(base: dict, population: dict, fields: dict, start: int, stop: int, until: float):
     """A task: grains ``start..stop`` of a population at one sweep point, built here (:func:`point_grains`)
-    and simulated (:func:`simulate_point`)."""
-    return simulate_point(point_grains(base, population, fields, start, stop), start)
+    and simulated (:func:`simulate_point`) until the wall-clock time ``until``."""
+    return simulate_point(point_grains(base, population, fields, start, stop), start, until)
 
 
 def estimate(p: Plan, workers: int):
@@ -326,7 +350,8 @@ def _warm_worker() -> None:
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
         connect_timeout: float = CONNECT_TIMEOUT, half_width: float | None = None) -> Result:
-    """``symmech sweep``: validate the scene and every grain of the sweep, estimate, compute, write;
+    """``symmech sweep``: validate the scene and its plan, estimate from counts, validate the grains, compute,
+    write;
     ``half_width`` [m/s] the summary's precision target (default 1 mm/s)."""
     from symmech.core import pipeline
     from symmech.core.scene import read_toml
@@ -364,7 +389,8 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
     jobs = [(k, i, j, start, min(start + CHUNK, pop["count"])) for k, pop in enumerate(p.populations)
             for i, j in np.ndindex(*p.shape) for start in range(0, pop["count"], CHUNK)]
-    tasks = [dask.delayed(simulate_grains)(p.base, p.populations[k], p.point(i, j), a, b,
+    until = core_sweep.deadline(ctx) if ctx is not None else math.inf
+    tasks = [dask.delayed(simulate_grains)(p.base, p.populations[k], p.point(i, j), a, b, until,
                                            dask_key_name=f"grains-{k}-{i}-{j}-{a}") for k, i, j, a, b in jobs]
     values = core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
                                 on_workers=_warm_worker if warm else None)

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from symmech.core import kinematics as kin
+from symmech.core import context, kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
 from symmech.trolley import membrane, model
@@ -700,10 +700,13 @@ def _dissipation(system: System, qd) -> float:
 
 
 WORK_ATOL = 1e-5  # J, absolute tolerance of the work of the track forces
+# Wall time per output step of this (Python) engine [s] (bundled trolley_elastic_helix on 2 shared cores: ~0.1 s;
+# stiff rollers and undamped beams take more): the estimates of a run, of a sweep, of a fallback to it
+SECONDS_PER_STEP = 0.1
 
 
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
-             atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True) -> dict:
+             atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True, fallback: str = "") -> dict:
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
     (plus the offsets ``dq0``, ``dqd0`` of coordinates and rates, when given).
 
@@ -711,10 +714,17 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     track forces [J]; with ``drive.traction`` also [s, V0]. The prescribed frame follows s(t) of
     :class:`Timeline`. Implicit methods ("Radau", "BDF") use the analytic Jacobian (prescribed
     speed; with traction scipy differences the right-hand side, as without ``analytic_jacobian``).
-    Returns a dict of arrays with a leading axis n (see :func:`outputs`)."""
+    Returns a dict of arrays with a leading axis n (see :func:`outputs`).
+
+    The run's context (:func:`symmech.core.context.active`), when there is one, is ticked at every
+    right-hand side: ``--max-time`` holds here too. ``fallback`` (why this engine runs in place of the compiled
+    one) re-estimates against what is left of it and says so (:meth:`~symmech.core.context.Context.fallback`)."""
     from scipy.integrate import solve_ivp
 
     t = np.asarray(t, dtype=float)
+    ctx = context.active()
+    if ctx is not None and fallback:
+        ctx.fallback(f"elastic model on the Python engine: {fallback}", SECONDS_PER_STEP * (t.size - 1))
     N = system.N
     line = Timeline(system, drive, t)
     traction = drive.traction is not None
@@ -725,6 +735,8 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
         q0 = system.quasi_static(line.state(t[0]))
 
     def rhs(time, y):
+        if ctx is not None:
+            ctx.tick(f"elastic model, Python engine at t = {time:.6g} s")
         q, qd = y[:N], y[N:2 * N]
         if traction:
             fs, qdd, dv = line.traction_step(time, y)

@@ -169,10 +169,10 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     fr = el.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
     table = frame_table(system, drive, t, rtol, frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
-        out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0)
-        out["engine"], out["engine_reason"] = "python", (
-            f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
-            f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+        why = (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
+               f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+        out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+        out["engine"], out["engine_reason"] = "python", why
         return out
     N = system.N
     q0 = system.quasi_static(line.state(t[0]))
@@ -243,10 +243,10 @@ def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dq
         out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
         if out is not None:
             return out
-    out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0)
-    out["engine"], out["engine_reason"] = "python", (
-        f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
-        f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
+    why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
+           f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
+    out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+    out["engine"], out["engine_reason"] = "python", why
     return out
 
 

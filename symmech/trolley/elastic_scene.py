@@ -8,6 +8,7 @@ docs: docs/scenes-trolley-elastic.md.
 """
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,9 +39,9 @@ class Setup:
     engine: str = "auto"  # numerics.engine as given; engine() says what runs
 
 
-# Wall time per output step [s] (bundled trolley_elastic_helix on 2 shared cores: Python ~0.1 s, compiled ~0.6 s
-# for 1000 steps; stiff rollers and undamped beams take more): the estimate, and the `auto` engine's choice
-SECONDS_PER_STEP = {"python": 0.1, "compiled": 2e-3}
+# Wall time per output step [s] (bundled trolley_elastic_helix on 2 shared cores: compiled ~0.6 s for 1000 steps;
+# the Python engine's: el.SECONDS_PER_STEP): the estimate, and the `auto` engine's choice
+SECONDS_PER_STEP = {"python": el.SECONDS_PER_STEP, "compiled": 2e-3}
 
 
 def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
@@ -192,7 +193,8 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
                       {"elastic_reactions": ResultTable(cols, np.column_stack([t, rigid["P"]]))})
     if ctx is not None:
         ctx.tick("elastic model")
-    r = simulate(setup)
+    with ctx.active() if ctx is not None else nullcontext():  # the engines tick it, a fallback re-estimates
+        r = simulate(setup)
     modes, failed = _modal_analysis(setup, r)
     tables = {"elastic_reactions": _reactions_table(r), "energy": _energy_table(r)}
     if setup.system.rollers_on:
@@ -500,25 +502,26 @@ def precision(setup: Setup, ctx) -> Result:
 
     if setup.system is None:
         raise SymmechError("bench precision of an elastic trolley needs an elastic effect (elastic.effects)")
-    ctx.tick("elastic precision: reference")
-    python = Setup(**{**setup.__dict__, "engine": "python"})
-    ref = simulate(python, **PRECISION_REFERENCE)["P"]
-    scale = max(np.abs(ref).max(), 1e-300)
-    runs = [(name, python, kw, rtols) for name, kw, rtols in PRECISION_METHODS]
-    compiled = Setup(**{**setup.__dict__, "engine": "compiled", "method": "Radau"})
-    if engine(compiled)[0] == "compiled":
-        from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+    with ctx.active():  # the Python engine stops at --max-time within a run, not only between runs
+        ctx.tick("elastic precision: reference")
+        python = Setup(**{**setup.__dict__, "engine": "python"})
+        ref = simulate(python, **PRECISION_REFERENCE)["P"]
+        scale = max(np.abs(ref).max(), 1e-300)
+        runs = [(name, python, kw, rtols) for name, kw, rtols in PRECISION_METHODS]
+        compiled = Setup(**{**setup.__dict__, "engine": "compiled", "method": "Radau"})
+        if engine(compiled)[0] == "compiled":
+            from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
 
-        elastic_compiled.ENGINE.warm()  # its first compile is not a cost of any row
-        runs.append((COMPILED_METHOD, compiled, {}, PRECISION_RTOLS))
-    rows = []
-    for name, st, kw, rtols in runs:
-        for rtol in rtols:
-            ctx.tick(f"elastic precision: {name}, rtol {rtol:g}")
-            seconds, out = wp.best_time(lambda: simulate(st, rtol=rtol, atol_q=rtol * 1e-6, **kw), repeats=1,
-                                        min_seconds=0.0)
-            rows.append({"method": name, "knob": "rtol", "value": rtol, "seconds": seconds,
-                         "error": float(np.abs(out["P"] - ref).max() / scale)})
+            elastic_compiled.ENGINE.warm()  # its first compile is not a cost of any row
+            runs.append((COMPILED_METHOD, compiled, {}, PRECISION_RTOLS))
+        rows = []
+        for name, st, kw, rtols in runs:
+            for rtol in rtols:
+                ctx.tick(f"elastic precision: {name}, rtol {rtol:g}")
+                seconds, out = wp.best_time(lambda: simulate(st, rtol=rtol, atol_q=rtol * 1e-6, **kw), repeats=1,
+                                            min_seconds=0.0)
+                rows.append({"method": name, "knob": "rtol", "value": rtol, "seconds": seconds,
+                             "error": float(np.abs(out["P"] - ref).max() / scale)})
     reference = (f"Radau (Python engine) at rtol {PRECISION_REFERENCE['rtol']:g}, atol "
                  f"{PRECISION_REFERENCE['atol_q']:g} m (coordinates); error max|P - P_ref| / max|P_ref| over the grid")
     return wp.result("trolley", rows, "precision_elastic", "Elastic trolley: work-precision (reactions P0…P5)",

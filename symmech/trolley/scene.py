@@ -404,6 +404,7 @@ def estimate(setup: Setup) -> registry.Estimate:
     runs = cases * (2 if setup.paper_tables else 1) * (6 if setup.local_curvature else 1)
     seconds = (SECONDS_PER_STEP * runs + SECONDS_PER_OUTPUT_ROW * cases) * (steps + 1)
     what = f"{steps} steps, {cases} case(s) with outputs"
+    once = 0.0
     if setup.traction is not None:
         rhs = 40 * steps + 2000
         seconds += SECONDS_PER_RHS * rhs * cases
@@ -418,10 +419,11 @@ def estimate(setup: Setup) -> registry.Estimate:
             from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
 
             if elastic_compiled.ENGINE.cold():
-                seconds += elastic_compiled.COLD_COMPILE_SECONDS
+                once = elastic_compiled.COLD_COMPILE_SECONDS
+                seconds += once
                 what += (f"; compiling the elastic engine once, ~{elastic_compiled.COLD_COMPILE_SECONDS:.0f} s "
                          f"(numba's cache {elastic_compiled.ENGINE.cache_dir()}; `symmech warm` builds it ahead)")
-    return registry.Estimate(seconds, what)
+    return registry.Estimate(seconds, what, once)
 
 
 def arc_length(setup: Setup) -> np.ndarray:

@@ -7,8 +7,14 @@ is the scene with those fields set, run through the scene's own path (``pipeline
 whatever engine the trolley kind uses runs the points), and reduced to its design numbers
 (:func:`point_metrics`): peak reactions, their dynamic amplification (elastic / rigid peak of the
 elastic model), the largest roller and body deflections, each report point's comfort margin and
-the closest resonance. Every point scene is validated before any run; a bad swept value is named
-by its axis (``sweep.x``), in one line.
+the closest resonance.
+
+Before any run the plane is checked as a whole, at a cost that does not grow with its points
+(:func:`validate`): the axes resolved to the scene entries they set, disjoint whatever their spelling,
+alias or scale; every value of every axis against its table of the scene; both ends of every comfort
+envelope at every point; the plane's corners as whole scenes. A bad swept value is named by its axis
+(``sweep.x``), in one line. The cost is estimated from counts, then from one timed point
+(:func:`compute`).
 """
 from __future__ import annotations
 
@@ -16,7 +22,7 @@ import copy
 import math
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -100,11 +106,9 @@ def edits(field: str, resolved: dict, value: float, where: str) -> list[tuple[tu
             have = ", ".join(resolved["motion"]["constants"]) or "none"
             raise SceneError(where, f"{field}: the scene's motion.constants has no {name!r} (it has: {have})")
         return [(("motion", "constants", name), value)]
-    if head == "comfort":
+    if head == "comfort":  # one end of the envelope: the plan's base holds the other (:func:`plan`)
         axis, end = rest.split(".")
-        envelope = list(resolved["comfort"][axis])
-        envelope[("lo", "hi").index(end)] = value
-        return [(("comfort", axis), envelope)]
+        return [(("comfort", axis, ("lo", "hi").index(end)), value)]
     if head == "trolley":
         return [(("trolley", "mass"), value)]
     if resolved["elastic"] is None:
@@ -122,14 +126,6 @@ def edits(field: str, resolved: dict, value: float, where: str) -> list[tuple[tu
     if key == "ei_scale":
         return [(("elastic", "beams", int(index), "ei"), [e * value for e in beams[int(index)]["ei"]])]
     return [(("elastic", "beams", int(index), key), value)]
-
-
-def _target(keys: tuple) -> str:
-    """The dotted field name of a keys path, as the scene's errors name it (``elastic.beams[0].ei``)."""
-    out = ""
-    for key in keys:
-        out += f"[{key}]" if isinstance(key, int) else (f".{key}" if out else key)
-    return out
 
 
 def _write(data: dict, keys: tuple, value) -> None:
@@ -170,20 +166,37 @@ class Plan:
                 _write(data, keys, v)
         return data
 
-    def load(self, i: int, j: int):
-        """``pipeline.load`` of point (i, j); its SceneError renamed to the axis whose value it refuses."""
-        from symmech.core import pipeline
+    def load(self, i: int, j: int, whole: bool = True):
+        """``pipeline.load`` of point (i, j) (``whole``; else only the scene's tables the axes set, by their
+        schema); its SceneError renamed to the axis whose value it refuses."""
+        from symmech.core import pipeline, registry
 
+        data = self.point(i, j)
         try:
-            return pipeline.load(self.point(i, j))
+            if whole:
+                return pipeline.load(data)
+            fields = registry.get("trolley").schema.fields
+            for head in {keys[0] for _, axis in self.axes for keys in targets(axis["field"], self.resolved)}:
+                fields[head].resolve(head, True, data[head])
         except SceneError as exc:
             xs, ys = self.values
             for (name, axis), value in zip(self.axes, (xs[i], ys[j])):
-                targets = [_target(keys) for keys, _ in edits(axis["field"], self.resolved, float(value), "")]
-                if any(exc.field == t or exc.field.startswith((f"{t}.", f"{t}[")) for t in targets):
+                names = [core_sweep.dotted(keys) for keys in targets(axis["field"], self.resolved)]
+                if any(_within(exc.field, t) or _within(t, exc.field) for t in names):
                     raise SceneError(f"sweep.{name}", f"{axis['field']} = {value:g}: {exc.field}: "
                                                       f"{str(exc).partition(': ')[2]}") from None
             raise
+
+
+def _within(field: str, entry: str) -> bool:
+    """Whether the dotted ``field`` is the scene entry ``entry`` or lies inside it."""
+    return field == entry or field.startswith((f"{entry}.", f"{entry}["))
+
+
+def targets(field: str, resolved: dict) -> list[tuple]:
+    """The key paths of the scene entries the swept ``field`` sets (its alias, scale or index spelling
+    resolved: ``elastic.beams[00].ei_scale`` sets ``("elastic", "beams", 0, "ei")``)."""
+    return [keys for keys, _ in edits(field, resolved, 1.0, "")]
 
 
 def plan(raw: dict, resolved: dict) -> Plan:
@@ -196,13 +209,49 @@ def plan(raw: dict, resolved: dict) -> Plan:
     p = Plan(sweep["x"], sweep["y"], base, resolved, limits)
     for name, axis in p.axes:
         edits(axis["field"], resolved, float(core_sweep.axis_values(axis)[0]), f"sweep.{name}.field")
+        if axis["field"].startswith("comfort."):  # the swept end's partner, as the scene gives it
+            envelope = axis["field"].split(".")[1]
+            base.setdefault("comfort", {})[envelope] = list(resolved["comfort"][envelope])
+    core_sweep.check_disjoint([(f"sweep.{name}.field", axis["field"], targets(axis["field"], resolved))
+                               for name, axis in p.axes])
     return p
 
 
-def validate(p: Plan) -> None:
-    """Load every point scene (schema, prepare): a bad swept value is named before any run."""
-    for i, j in np.ndindex(*p.shape):
+def validate(p: Plan):
+    """The plane checked before any run, at a cost independent of its number of points: both ends of each
+    comfort envelope at every point (:func:`check_envelopes`), each value of each axis (the other at its first
+    value) against the scene's tables it sets, the corners as whole scenes (schema, prepare). Returns the loaded
+    scene of point (0, 0)."""
+    nx, ny = p.shape
+    check_envelopes(p)
+    for i in range(1, nx):
+        p.load(i, 0, whole=False)
+    for j in range(1, ny):
+        p.load(0, j, whole=False)
+    first = p.load(0, 0)
+    for i, j in {(nx - 1, 0), (0, ny - 1), (nx - 1, ny - 1)} - {(0, 0)}:
         p.load(i, j)
+    return first
+
+
+def check_envelopes(p: Plan) -> None:
+    """lo < hi of every comfort envelope an axis sets one end of, at every point of the plane."""
+    xs, ys = p.values
+    for envelope in AXES:
+        ends = [np.full(p.shape, bound) for bound in p.resolved["comfort"][envelope]]
+        swept = {}
+        for (name, axis), grid in zip(p.axes, np.meshgrid(xs, ys, indexing="ij")):
+            head, _, rest = axis["field"].partition(".")
+            if head == "comfort" and rest.startswith(envelope):
+                end = ("lo", "hi").index(rest.split(".")[1])
+                ends[end], swept[end] = grid, name
+        bad = np.argwhere(~(ends[0] < ends[1]))
+        if swept and bad.size:
+            i, j = bad[0]
+            lo, hi = ends[0][i, j], ends[1][i, j]
+            name = swept.get(0, swept.get(1))
+            raise SceneError(f"sweep.{name}", f"comfort.{envelope} = [{lo:g}, {hi:g}] g at point ({i}, {j}) of the "
+                                              "plane: the envelope [lo, hi] must be increasing (lo < hi)")
 
 
 def comfort_margin(overload: np.ndarray, envelope: dict) -> float:
@@ -284,21 +333,21 @@ def _closest_resonance(modes: Table) -> tuple[list, dict]:
     return out, text
 
 
-def evaluate(data: dict, max_time: float):
-    """A task: the point scene ``data`` run through the scene's own path and reduced to its design numbers
+def evaluate(p: Plan, i: int, j: int, until: float):
+    """A task: point (i, j) of the plan ``p`` built here, run through the scene's own path until the wall-clock
+    time ``until`` (:func:`symmech.core.sweep.deadline`) and reduced to its design numbers
     (:func:`point_metrics`); ("failed", message) when the run stops with a user error. BLAS runs on one
     thread, as on a dask worker: a multi-threaded product rounds differently, and the numbers of a point
     must not depend on where it ran (nor a process pool oversubscribe the cores)."""
     from threadpoolctl import threadpool_limits
 
     from symmech.core import pipeline
-    from symmech.core.context import Context
     from symmech.core.scene import SymmechError
 
     try:
         with threadpool_limits(limits=1):
-            scene = pipeline.load(data)
-            res = scene.run(Context(quiet=True, max_time=max_time))
+            scene = pipeline.load(p.point(i, j))
+            res = scene.run(core_sweep.point_context(until))
     except SymmechError as exc:
         return "failed", str(exc)
     return "ok", *point_metrics(res, scene.setup.comfort), res.warnings
@@ -306,54 +355,80 @@ def evaluate(data: dict, max_time: float):
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
         connect_timeout: float = core_sweep.CONNECT_TIMEOUT) -> Result:
-    """``symmech sweep`` of a trolley scene: validate every point, estimate from the first point's run,
-    compute the rest, write."""
+    """``symmech sweep`` of a trolley scene: validate the plane, estimate from counts and from the first
+    point's run, compute the rest, write."""
     from symmech.core import pipeline
     from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
     scene = pipeline.load(raw)
     p = plan(raw, scene.resolved)
-    validate(p)
-    outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx)
+    first = validate(p)
+    outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx, first)
     res = result(p, outcomes)
     pipeline.write(res, out, scene)
     return res
 
 
+def estimate(first, points: int, processes: int):
+    """The sweep's cost from counts (a ``registry.Estimate``): the kind's estimate of the loaded point scene
+    ``first`` on the engine the sweep runs, its one-off part (a compile) once, the rest ``points`` times,
+    shared by ``processes``."""
+    from symmech.core import registry
+
+    cost = first.kind.estimate(_on_sweep_engine(first.setup, points))
+    seconds = cost.once + (cost.seconds - cost.once) * points / processes
+    return registry.Estimate(seconds, f"from counts: {points} points at ~{cost.seconds - cost.once:.3g} s "
+                                      f"({cost.what}) on {processes} worker(s)", cost.once)
+
+
 def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
-            connect_timeout: float = core_sweep.CONNECT_TIMEOUT, ctx=None) -> list:
-    """The outcome of :func:`evaluate` per point, x-major: point (0, 0) here, timed for the estimate (refused
-    past ``ctx.max_time``), the others on Dask (:func:`symmech.core.sweep.compute`)."""
+            connect_timeout: float = core_sweep.CONNECT_TIMEOUT, ctx=None, first=None) -> list:
+    """The outcome of :func:`evaluate` per point, x-major: refused past ``ctx.max_time`` from counts
+    (:func:`estimate`: nothing built or run yet), then point (0, 0) run here and timed for the estimate of the
+    rest, the others on Dask (:func:`symmech.core.sweep.compute`), all against the deadline of ``ctx``.
+    ``first``: the loaded scene of point (0, 0) (:func:`validate`'s)."""
     import dask
 
     from symmech.core import registry
     from symmech.core.context import Context
 
     ctx = ctx or Context(quiet=True)
-    warm = _compiled_needed(p)
-    if warm:  # built here first: its one-off compile is no cost of a point, nor of the estimate
-        _warm_worker(ctx.say)
-    started = time.perf_counter()
-    first = evaluate(p.point(0, 0), ctx.max_time)
+    first = first or p.load(0, 0)
     points = int(np.prod(p.shape))
-    seconds = (time.perf_counter() - started) * (points - 1) / processes
-    core_sweep.refuse(registry.Estimate(seconds, f"{points} points at {time.perf_counter() - started:.3g} s "
-                                                 f"(the first one's) on {processes} worker(s)"), ctx)
-    tasks = [dask.delayed(evaluate)(p.point(i, j), ctx.max_time, dask_key_name=f"point-{i}-{j}")
+    core_sweep.refuse(estimate(first, points, processes), ctx)
+    warm = _compiled_needed(first, points)
+    if warm:  # built here first (its cost is in the estimate): each point then runs it
+        _warm_worker(ctx.say)
+    until = core_sweep.deadline(ctx)
+    started = time.perf_counter()
+    outcome = evaluate(p, 0, 0, until)
+    took = time.perf_counter() - started
+    core_sweep.refuse(registry.Estimate(took * (points - 1) / processes, f"{points} points at {took:.3g} s "
+                                                                         f"(the first one's) on {processes} "
+                                                                         "worker(s)"), ctx)
+    shared = dask.delayed(p, pure=True)  # one node of the graph: each task builds its own point scene
+    tasks = [dask.delayed(evaluate)(shared, i, j, until, dask_key_name=f"point-{i}-{j}")
              for i, j in list(np.ndindex(*p.shape))[1:]]
-    return [first] + list(core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
-                                             on_workers=_warm_worker if warm else None))
+    return [outcome] + list(core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
+                                               on_workers=_warm_worker if warm else None))
 
 
-def _compiled_needed(p: Plan) -> bool:
-    """Whether the points run the compiled elastic engine (the swept fields choose no engine; ``auto`` weighs
-    the compile against the Python engine over all points)."""
+def _on_sweep_engine(setup, points: int):
+    """The trolley ``setup`` with its elastic model's engine the one the sweep's ``points`` runs choose
+    (``auto`` weighs a compile against the Python engine over all of them)."""
     from symmech.trolley import elastic_scene
 
-    setup = p.load(0, 0).setup.elastic
-    return (setup is not None and setup.system is not None
-            and elastic_scene.engine(setup, runs=int(np.prod(p.shape)))[0] == "compiled")
+    elastic = setup.elastic
+    if elastic is None or elastic.system is None:
+        return setup
+    return replace(setup, elastic=replace(elastic, engine=elastic_scene.engine(elastic, runs=points)[0]))
+
+
+def _compiled_needed(first, points: int) -> bool:
+    """Whether the points run the compiled elastic engine (the swept fields choose no engine)."""
+    elastic = _on_sweep_engine(first.setup, points).elastic
+    return elastic is not None and elastic.system is not None and elastic.engine == "compiled"
 
 
 def _warm_worker(say=None) -> None:
