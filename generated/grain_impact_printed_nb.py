@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 263418879c95c30805df7bf816084c70b7c8a7ee241699819b1a742ee4973a9f
-# source key 3f22b5c7c0df0878f3f31f86bcff4e6df62606f856c3ae5564502f7b5eeda893
+# symmech 0.1.0 generated module; inputs sha256 e6bc79fb5cbec3b209f21f1573686a299a1b7d1c1579af2f199c4bba54119146
+# source key c83e05832b8b32653cd695c8468f132c6dd51acf5f18b66d73e33633d0046825
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 02ee9fdf6ba5bed42585bdcd8e6c12354523b5b4784736fa705a9fa3b875dab1
-# source key 84bb7b8a2ebe3c5a02f958f925599fc696692370e266571746c1a79a1f7a0c95
+# symmech 0.1.0 generated module; inputs sha256 49a8b8a06f10f4a4347ae5fc0303bd320ab32fd6b0cdac408c5808aa8b75dfa4
+# source key a180439f5cd8fdb99772a994d1742c9fc9c78ef28977c9068239e17947bac0c9
 # body sha256 9c4b29f0ccea7f755c1066d4a7e8d78a9070785fdbe6eaa54b99c27c16c9968c
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4c89b983042d47ad1a4e7cbc4986666cbd700152067fcf35a96bafe03dcd1e3a
-# source key c9a2cfac01db74458e2e8cac4982698c902aeb98e1e12c89caf26e270a0ae26e
+# symmech 0.1.0 generated module; inputs sha256 da186415b9ebd2aa1d9a37d430c4f5626dd67b571f3069376eb1ed4deac2b7f9
+# source key 84f2d8c49459982f060fb0c4cd37057dc5a81c1ba7c09a7b92530999232240d1
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 91f652f9e5e2a8667def4bd94cd9440ba6d909879c01d82602c64b3ee78f3655
-# source key c9a2cfac01db74458e2e8cac4982698c902aeb98e1e12c89caf26e270a0ae26e
+# symmech 0.1.0 generated module; inputs sha256 1e78bff939177525602fd5c3c39332e2176d37ba605e4888d528bd35a45645ea
+# source key 84f2d8c49459982f060fb0c4cd37057dc5a81c1ba7c09a7b92530999232240d1
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1097ee70fdf58a6a13c3deddfe6c3e90b8797f301d79e472a857274f66a1f9f9
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# symmech 0.1.0 generated module; inputs sha256 79c4cc88e85d02cdca34917f43b05f4abd68c941c55697c3770904275987efce
+# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6c71876f392b756f078a31c5ea45ac73b02b64936b349792b8164f4a94096446
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# symmech 0.1.0 generated module; inputs sha256 c96a6200f1cd65883aa6be750dc813e9cf42b628c73c3b7b1c59b5182bbb488e
+# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
 # body sha256 ee0b337805a156368d52061587c994bf89595f3d2bc50ca45db8d795edd46b49
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

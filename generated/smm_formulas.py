@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4b6f28bf791f26dc767836d2dee65ff14384b2122df5370da47f19605003942b
-# source key b3d50e16a23a6c9f303f402354351c0271e487b68f443ec9342162162f042b22
+# symmech 0.1.0 generated module; inputs sha256 f6daec3a5d0f920489dcd110f82c6f2cae6919a358f7253ef58541b1686610c6
+# source key 0f51ae2c420e55175d49e943df5cc511d92394bd9067848f59de49210615f183
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 9d24a13b65ec0fd9ba659e1bec9f9f394c283ae206ac59f22ee07d3881f4bcb9
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# symmech 0.1.0 generated module; inputs sha256 d4d676e2526655b941f0290bb52784c6bd5348a0cc2ed895aab3685497d8fbb1
+# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

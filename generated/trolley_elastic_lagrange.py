@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5e08e4566f9676cdff1145192feb2fac2b130d18f31b6d04af3d9ce2fe600108
-# source key 586e85cd22a6ba97e207f4d1ee493c0ee22872a421f6e8fb23478f115da14e13
+# symmech 0.1.0 generated module; inputs sha256 968716567f8f00bad677775c169945a234b67c291585fb661163dc8cefc9df71
+# source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 a14d9b2ca61ae9d73aa9005d08617714cd49f71ee08caa2219f19eb38e4caca1
-# source key ea033c7abb4d1764a7a89f31e722a8619a7c573eb513c3d0142f47e64e48bd2c
+# symmech 0.1.0 generated module; inputs sha256 ac28f93dd38f6f877a1ff4a56a79f51fa47dfc646b52e94390c2402f892f3ce3
+# source key 9db81318600536a6d8664f691d6d00ed6bd6b87ebce22393c6de99e5489a2ca1
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d0f26b6c528266d804490da8def842db5fee09c1813362d69b4568e9b4222883
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
+# source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0a188cd07f9c3823cb7be08ca772842f923ff9e538e50ab3627312b84f84685c
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# symmech 0.1.0 generated module; inputs sha256 135d9324af7b1f990f3f560da52635e6ccf294c1855a6bcf36876de726d0d33c
+# source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 e29fc0d06d4e2903df1a86d59e7ab8299ff080964979a7f6dc942aa20e4e86d0
-# source key 95cde1c35537ffb5db3a6292240ec156f6233dfa8851486509cd8bb067eabd2e
+# symmech 0.1.0 generated module; inputs sha256 02aa698f18b0313e496d4bbeb93ca65a79a62822646b0882ed8dd7017e53e124
+# source key e08b236da1c86af268f8834a6ea23992e2e265ff0e7482785391a2b4dca8979e
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 
