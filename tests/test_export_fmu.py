@@ -28,6 +28,18 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C co
 SCENES = scenes_folder()
 MECHANISMS = sorted(p.stem for p in SCENES.glob("smm_*.toml"))
 TOLERANCE = 1e-7  # of each series' largest magnitude
+# A series below this fraction of the largest coordinate series vanishes in exact arithmetic (a coordinate the
+# start state does not excite, moved only by the round-off of the assembled c, ~1e-17 of the motion): its own
+# magnitude is round-off, so it is compared against the largest series' magnitude.
+VANISHING = 1e-9
+
+
+def deviation(got: np.ndarray, native: np.ndarray) -> float:
+    """Largest deviation of the columns of ``got`` from ``native``, each relative to the native series' largest
+    magnitude (a vanishing series: relative to the largest of all)."""
+    scale = np.abs(native).max(axis=0)
+    scale = np.where(scale < VANISHING * scale.max(), scale.max(), scale)
+    return float(np.max(np.abs(got - native).max(axis=0) / scale))
 
 
 def _scene_with_initial(name: str, tmp_path):
@@ -56,25 +68,23 @@ def rotor_boom():
     return model.load(path), _native(path)
 
 
-def _simulate(fmu, t, names, start_values=None):
-    kwargs = {"solver": "CVode", "relative_tolerance": 1e-10} if "me" in fmu.name else {"relative_tolerance": 1e-10}
+def _simulate(fmu, t, names, start_values=None, rtol=1e-10):
+    kwargs = {"solver": "CVode"} if "_me" in fmu.name else {}
     result = fmpy.simulate_fmu(str(fmu), stop_time=t[-1], output_interval=t[1] - t[0], output=names,
-                               start_values=start_values or {}, **kwargs)
+                               start_values=start_values or {}, relative_tolerance=rtol, **kwargs)
     assert len(result) == len(t)
     np.testing.assert_allclose(result["time"], t, rtol=0, atol=1e-9 * t[-1])
     return np.column_stack([result[n] for n in names])
 
 
-def _check_fmu(path, tmp_path, fmi: int, kind: str) -> float:
-    """Export, validate and simulate; the largest deviation relative to each series' largest magnitude."""
+def _check_fmu(path, tmp_path, fmi: int, kind: str, rtol: float = 1e-10, tolerance: float = TOLERANCE) -> None:
+    """Export, validate and simulate at the importer's relative tolerance ``rtol``; the deviation from the native
+    run within ``tolerance`` of each series' largest magnitude."""
     fmu = tmp_path / f"model_{fmi}_{kind}.fmu"
     assert main(["export", "fmu", str(path), "--out", str(fmu), "--fmi", str(fmi), "--type", kind]) == 0
     assert validate_fmu(str(fmu)) == []
     t, q, names = _native(path)
-    got = _simulate(fmu, t, names)
-    error = float(np.max(np.abs(got - q).max(axis=0) / np.abs(q).max(axis=0)))
-    assert error <= TOLERANCE
-    return error
+    assert deviation(_simulate(fmu, t, names, rtol=rtol), q) <= tolerance
 
 
 def test_rotor_boom_fmu_validates_and_reproduces_the_native_run(tmp_path):
@@ -87,7 +97,7 @@ def test_co_simulation_fmu_steps_with_the_native_accuracy(rotor_boom, tmp_path):
     fmu = build.fmu(exported, tmp_path / "rb_cs.fmu", 2, "cs")
     assert validate_fmu(str(fmu)) == []
     got = _simulate(fmu, t, names)
-    assert np.max(np.abs(got - q).max(axis=0) / np.abs(q).max(axis=0)) <= 1e-9
+    assert deviation(got, q) <= 1e-9
 
 
 @pytest.mark.slow  # every bundled mechanism, FMI 2 and 3, ME and CS (~1 min)
@@ -95,7 +105,12 @@ def test_co_simulation_fmu_steps_with_the_native_accuracy(rotor_boom, tmp_path):
 @pytest.mark.parametrize("kind", ["me", "cs"])
 @pytest.mark.parametrize("name", MECHANISMS)
 def test_every_mechanism_fmu(name, fmi, kind, tmp_path):
-    _check_fmu(_scene_with_initial(name, tmp_path), tmp_path, fmi, kind)
+    """CVode's global error at rtol 1e-10 reaches 1.9e-7 on the excavator and 8.2e-7 on the spatial boom (10 s,
+    2000 output steps), 2e-9 and 1.3e-8 on the others; at rtol 1e-12 it is 4e-9 and 1.5e-8 (it falls with rtol:
+    the FMU's equations are the native ones). Model Exchange is checked at rtol 1e-12 within the 1e-7 target,
+    Co-Simulation (DOP853 inside) at 1e-10 within 1e-9."""
+    rtol, tolerance = (1e-12, TOLERANCE) if kind == "me" else (1e-10, 1e-9)
+    _check_fmu(_scene_with_initial(name, tmp_path), tmp_path, fmi, kind, rtol, tolerance)
 
 
 def test_model_description_names_units_and_causality(tmp_path):
@@ -138,8 +153,7 @@ def test_constant_input_and_a_changed_parameter_against_the_closed_form(rotor_bo
     q0 = np.array([v.start for v in exported.variables if v.name in names])
     expected = q_s + numeric.free_response(a, b, c, q0 - q_s, np.zeros(2), t)
     got = _simulate(fmu, t, names, {"Q_" + names[0]: Q[0], "Q_" + names[1]: Q[1], **changed})
-    error = np.abs(got - expected).max(axis=0) / np.abs(expected).max(axis=0)
-    assert error.max() <= TOLERANCE
+    assert deviation(got, expected) <= TOLERANCE
 
 
 def test_c_example_prints_the_native_table(rotor_boom, tmp_path):
@@ -153,7 +167,7 @@ def test_c_example_prints_the_native_table(rotor_boom, tmp_path):
     assert rows[0] == ["t", *names]
     got = np.array(rows[1:], dtype=float)
     np.testing.assert_allclose(got[:, 0], t, rtol=0, atol=1e-12)
-    assert np.max(np.abs(got[:, 1:] - q).max(axis=0) / np.abs(q).max(axis=0)) <= TOLERANCE
+    assert deviation(got[:, 1:], q) <= TOLERANCE
 
 
 @pytest.mark.parametrize("args, says", [

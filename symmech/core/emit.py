@@ -201,7 +201,8 @@ def _c_context(spec: ModuleSpec, nm: NamedMatrix) -> dict:
     by_layout = spec.dynamics is not None and nm.name in DYNAMICS_FUNCTIONS
     if by_layout:
         dyn = spec.dynamics
-        source = ([("sm_t", dyn.time.name)] if dyn.time else []) + [(f"sm_y[{i}]", a.name) for i, a in enumerate(dyn.state)] \
+        source = ([("sm_t", dyn.time.name)] if dyn.time else []) \
+            + [(f"sm_y[{i}]", a.name) for i, a in enumerate(dyn.state)] \
             + [(f"sm_p[{i}]", a.name) for i, a in enumerate(dyn.params)]
         where = {name: place for place, name in source}
     else:

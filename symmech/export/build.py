@@ -20,7 +20,7 @@ from symmech.export import description, sources
 from symmech.export.model import ExportModel
 
 CFLAGS = ("-std=c99", "-O2", "-fPIC", "-fvisibility=hidden")
-MAKEFILE = """# {identifier}: the example program and the shared library of the exported model (written by symmech export)
+MAKEFILE = """# {identifier}: the example program of the exported model (written by symmech export)
 CC ?= cc
 CFLAGS ?= -std=c99 -O2
 SOURCES = symmech_model.c {identifier}.c

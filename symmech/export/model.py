@@ -126,9 +126,8 @@ def mechanism(setup, native: Table | None) -> ExportModel:
         variables.append(Variable(f"der({names[i]},2)", vr + 2 * n + i, "output", "continuous", f"{c.unit}/s^2",
                                   f"acceleration of {c.name}", derivative_of=vr + n + i))
     for i, c in enumerate(m.coordinates):
-        variables.append(Variable(f"Q_{c.name}" if IDENTIFIER.match(c.name) else _structured(f"Q_{c.name}"),
-                                  vr + 3 * n + i, "input", "continuous", FORCE_UNIT[c.unit],
-                                  f"generalized force on {c.name} (a q'' + b q' + c q = Q)", 0.0))
+        variables.append(Variable(_structured(f"Q_{c.name}"), vr + 3 * n + i, "input", "continuous",
+                                  FORCE_UNIT[c.unit], f"generalized force on {c.name} (a q'' + b q' + c q = Q)", 0.0))
     for k, p in enumerate(m.parameters.values()):
         variables.append(Variable(_structured(p.name), vr + 4 * n + k, "parameter", "tunable", p.unit,
                                   p.meaning or f"parameter {p.name}", float(p.value)))
@@ -141,11 +140,13 @@ def mechanism(setup, native: Table | None) -> ExportModel:
 
 def _nominals(m, q0: list, v0: list) -> tuple[float, float]:
     """Magnitudes of the coordinates and rates of the free motion from (q0, v0): the larger of the start
-    amplitudes, with rates and coordinates related by the highest natural frequency; 1 at rest."""
+    amplitudes, coordinates and rates related by the lowest positive natural frequency (the smaller rate
+    scale, so that an importer's absolute tolerance resolves the slowest mode too); 1 at rest."""
     from symmech.smm import numeric
 
     num = numeric.assemble(m)
     w2 = scipy.linalg.eigvals(num.c.toarray(), num.a.toarray())
-    omega = math.sqrt(max(float(np.max(np.abs(w2[np.isfinite(w2)]), initial=0.0)), 1e-300))
+    positive = np.abs(w2[np.isfinite(w2) & (w2.real > 0)])
+    omega = math.sqrt(float(positive.min())) if positive.size else 1.0
     q = max(max(map(abs, q0)), max(map(abs, v0)) / omega)
     return (q, q * omega) if q > 0 else (1.0, 1.0)
