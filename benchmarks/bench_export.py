@@ -2,7 +2,8 @@
 FMU's DOP853) and the exported C example program, on the bundled mechanism scenes with a free response.
 
 Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv).
-Accuracy: the largest deviation of each coordinate series relative to its largest magnitude.
+Accuracy: `symmech.export.model.deviation`, the largest deviation of each coordinate series relative to its
+largest magnitude.
 
     python benchmarks/bench_export.py [--quick]
 """
@@ -19,6 +20,7 @@ import numpy as np
 from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
 from symmech.export import build, model
+from symmech.export.model import deviation
 from symmech.smm import numeric
 from timing import interleaved, machine
 
@@ -61,8 +63,7 @@ def main() -> None:
                     got = np.column_stack([result[n] for n in names])
                 else:
                     got = result
-                error = np.max(np.abs(got - q).max(axis=0) / np.abs(q).max(axis=0))
-                print(f"  {label:40s} {stats[label].text()}  error {error:.2g}")
+                print(f"  {label:40s} {stats[label].text()}  error {deviation(got, q):.2g}")
 
 
 if __name__ == "__main__":

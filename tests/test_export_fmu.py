@@ -9,7 +9,6 @@ import csv
 import io
 import shutil
 import subprocess
-import tomllib
 
 import numpy as np
 import pytest
@@ -17,8 +16,9 @@ import pytest
 from symmech.cli import main
 from symmech.core import pipeline
 from symmech.core.context import Context
-from symmech.core.scene import scenes_folder
+from symmech.core.scene import read_toml, scenes_folder
 from symmech.export import build, description, model
+from symmech.export.model import deviation
 from symmech.smm import numeric
 
 fmpy = pytest.importorskip("fmpy")
@@ -28,26 +28,12 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C co
 SCENES = scenes_folder()
 MECHANISMS = sorted(p.stem for p in SCENES.glob("smm_*.toml"))
 TOLERANCE = 1e-7  # of each series' largest magnitude
-# A series below this fraction of the largest coordinate series vanishes in exact arithmetic (a coordinate the
-# start state does not excite, moved only by the round-off of the assembled c, ~1e-17 of the motion): its own
-# magnitude is round-off, so it is compared against the largest series' magnitude.
-VANISHING = 1e-9
-
-
-def deviation(got: np.ndarray, native: np.ndarray) -> float:
-    """Largest deviation of the columns of ``got`` from ``native``, each relative to the native series' largest
-    magnitude (a vanishing series: relative to the largest of all)."""
-    scale = np.abs(native).max(axis=0)
-    scale = np.where(scale < VANISHING * scale.max(), scale.max(), scale)
-    return float(np.max(np.abs(got - native).max(axis=0) / scale))
-
-
 def _scene_with_initial(name: str, tmp_path):
     """The bundled scene, with a free response from a small initial deflection when it has none."""
     path = SCENES / f"{name}.toml"
-    text = path.read_text()
-    if "initial" not in tomllib.loads(text):
-        n = len(tomllib.loads(text)["coordinates"])
+    text, data = path.read_text(), read_toml(path)
+    if "initial" not in data:
+        n = len(data["coordinates"])
         text += f"\n[initial]\nq = [{', '.join(['0.001'] * n)}]\nduration = 1.0\nsteps = 500\n"
         path = tmp_path / f"{name}.toml"
         path.write_text(text)
@@ -144,7 +130,7 @@ def test_constant_input_and_a_changed_parameter_against_the_closed_form(rotor_bo
     fmu = build.fmu(exported, tmp_path / "rb_me.fmu", 3, "me")
     Q = np.array([2.0e5, -4.0e4])
     changed = {"c1": 3.0e7}  # the scene has 4e7 N/m
-    data = tomllib.loads((SCENES / "smm_rotor_boom.toml").read_text())
+    data = read_toml(SCENES / "smm_rotor_boom.toml")
     data["parameters"]["c1"]["value"] = changed["c1"]
     m = pipeline.load(data).setup.m
     num = numeric.assemble(m)

@@ -150,3 +150,17 @@ def _nominals(m, q0: list, v0: list) -> tuple[float, float]:
     omega = math.sqrt(float(positive.min())) if positive.size else 1.0
     q = max(max(map(abs, q0)), max(map(abs, v0)) / omega)
     return (q, q * omega) if q > 0 else (1.0, 1.0)
+
+
+# Accuracy of an exported run (tests, benchmarks). A series below this fraction of the largest coordinate series
+# vanishes in exact arithmetic (a coordinate the start state does not excite, moved only by the round-off of the
+# assembled c, ~1e-17 of the motion): its own magnitude is round-off, so it is compared against the largest.
+VANISHING = 1e-9
+
+
+def deviation(got: np.ndarray, native: np.ndarray) -> float:
+    """Largest deviation of the columns of ``got`` from ``native``, each relative to the native series' largest
+    magnitude (a vanishing series: relative to the largest of all)."""
+    scale = np.abs(native).max(axis=0)
+    scale = np.where(scale < VANISHING * scale.max(), scale.max(), scale)
+    return float(np.max(np.abs(got - native).max(axis=0) / scale))
