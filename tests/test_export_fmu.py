@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import pipeline
+from symmech.core import emit, integrity, pipeline
 from symmech.core.context import Context
 from symmech.core.scene import read_toml, scenes_folder
 from symmech.export import build, description, model
@@ -142,8 +142,18 @@ def test_constant_input_and_a_changed_parameter_against_the_closed_form(rotor_bo
     assert deviation(got, expected) <= TOLERANCE
 
 
+def test_exported_c_is_the_checked_generated_module(rotor_boom):
+    """The export renders the scene's module with the codegen emitter: for a bundled scene, the body of the
+    integrity-checked generated/<name>.c."""
+    exported, _ = rotor_boom
+    generated = emit.default_directory() / f"{exported.identifier}.c"
+    assert integrity.split(exported.c_source)[1] == integrity.split(generated.read_text())[1]
+    assert integrity.problem(generated) is None
+
+
 def test_c_example_prints_the_native_table(rotor_boom, tmp_path):
     exported, (t, q, names) = rotor_boom
+    build.c_folder(exported, tmp_path / "rotor_boom_c")  # an earlier export is replaced
     folder = build.c_folder(exported, tmp_path / "rotor_boom_c")
     assert {"Makefile", "model.h", "symmech_model.h", "smm_rotor_boom.c", "example.c"} <= \
         {p.name for p in folder.iterdir()}
@@ -160,14 +170,18 @@ def test_c_example_prints_the_native_table(rotor_boom, tmp_path):
     (["fmu", "trolley_helix.toml", "--out", "x.fmu"], "covers mechanism scenes so far"),
     (["fmu", "mechanism_chain_large.toml", "--out", "x.fmu"], "up to 60 coordinates"),
     (["fmu", "smm_double_pendulum.toml", "--out", "x.zip"], "ends in .fmu"),
+    (["c", "smm_double_pendulum.toml", "--out", "mine"], "a folder of other files"),
 ])
 def test_refusals_are_one_line(args, says, tmp_path, capsys):
     what, scene, *rest = args
     rest[-1] = str(tmp_path / rest[-1])
+    if what == "c":  # a folder of the user's own files is never replaced
+        (tmp_path / "mine").mkdir()
+        (tmp_path / "mine" / "notes.txt").write_text("keep")
     assert main(["export", what, str(SCENES / scene), *rest]) == 2
     err = capsys.readouterr().err
     assert says in err and len(err.strip().splitlines()) == 1
-    assert not list(tmp_path.iterdir())
+    assert sorted(p.name for p in tmp_path.rglob("*")) == (["mine", "notes.txt"] if what == "c" else [])
 
 
 def test_no_compiler_is_one_line(tmp_path, capsys, monkeypatch):

@@ -20,6 +20,7 @@ from symmech.export import description, sources
 from symmech.export.model import ExportModel
 
 CFLAGS = ("-std=c99", "-O2", "-fPIC", "-fvisibility=hidden")
+MARKER = "symmech_model.h"  # a C folder holding it is an earlier export, which `export c` may replace
 MAKEFILE = """# {identifier}: the example program of the exported model (written by symmech export)
 CC ?= cc
 CFLAGS ?= -std=c99 -O2
@@ -102,9 +103,13 @@ def c_folder(model: ExportModel, out: Path) -> Path:
         for name, text in texts.items():
             write_atomic(tmp / name, text)
         compile_c(tmp, ["example.c", "symmech_model.c", f"{model.identifier}.c"], tmp / "example", shared=False)
-        if out.exists():
-            shutil.rmtree(out) if out.is_dir() else out.unlink()
-        os.replace(tmp, out)
+        if out.exists():  # moved aside first: `out` is never missing
+            old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.old-"))
+            os.rename(out, old / "previous")
+            os.rename(tmp, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

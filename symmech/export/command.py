@@ -21,6 +21,9 @@ def export(what: str, scene, out, fmi: int = 3, kind: str = "me") -> Path:
         raise SymmechError(f"--out {out}: an FMU file name ends in .fmu")
     if out.exists() and out.is_dir() != (what == "c"):
         raise SymmechError(f"--out {out}: exists and is {'a folder' if out.is_dir() else 'a file'}")
+    if what == "c" and out.is_dir() and any(out.iterdir()) and not (out / build.MARKER).is_file():
+        raise SymmechError(f"--out {out} is a folder of other files (no {build.MARKER} of an earlier export); "
+                           "choose a new or empty folder")
     build.compiler()  # refuse before any work when there is no C compiler
     exported = model.load(scene)
     return build.fmu(exported, out, fmi, kind) if what == "fmu" else build.c_folder(exported, out)
