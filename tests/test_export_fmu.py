@@ -189,3 +189,24 @@ def test_no_compiler_is_one_line(tmp_path, capsys, monkeypatch):
     assert main(["export", "fmu", str(SCENES / "smm_double_pendulum.toml"), "--out", str(tmp_path / "x.fmu")]) == 2
     err = capsys.readouterr().err
     assert "no C compiler" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow  # FMPy's cmake build of the sources (~20 s)
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="FMPy builds source FMUs with cmake")
+def test_source_fmu_built_by_fmpy_runs(rotor_boom, tmp_path):
+    """The FMU's sources (FMI 3 buildDescription.xml) are complete: FMPy builds this platform's binary from them
+    alone, and that binary reproduces the native run."""
+    import zipfile
+
+    from fmpy.build import build_platform_binary
+
+    exported, (t, q, names) = rotor_boom
+    fmu = build.fmu(exported, tmp_path / "rb_me.fmu", 3, "me")
+    folder = tmp_path / "unzipped"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder, [n for n in z.namelist() if not n.startswith("binaries/")])
+    (tmp_path / "build").mkdir()
+    build_platform_binary(folder, tmp_path / "build")
+    result = fmpy.simulate_fmu(str(folder), solver="CVode", relative_tolerance=1e-10, stop_time=t[-1],
+                               output_interval=t[1] - t[0], output=names)
+    assert deviation(np.column_stack([result[n] for n in names]), q) <= TOLERANCE

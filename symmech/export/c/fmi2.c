@@ -8,7 +8,13 @@
 
 #include "symmech_model.h"
 
+#if defined(_WIN32)
+#define FMI2_EXPORT __declspec(dllexport)
+#elif defined(__GNUC__)
 #define FMI2_EXPORT __attribute__((visibility("default")))
+#else
+#define FMI2_EXPORT
+#endif
 
 typedef void *fmi2Component;
 typedef void *fmi2ComponentEnvironment;
@@ -104,7 +110,8 @@ FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; r
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     Instance *inst = c;
-    return symmech_derivatives(&inst->model) == 0 ? fmi2OK : fail(inst, "singular mass matrix at the start");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular M or non-finite rates at the start");
+    return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c) { (void)c; return fmi2OK; }
@@ -120,7 +127,7 @@ FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c)
 FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
 {
     Instance *inst = c;
-    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix or non-finite rates");
     for (size_t i = 0; i < nvr; i++) {
         if (vr[i] >= N_REAL) return fail(inst, "fmi2GetReal: unknown value reference");
         value[i] = inst->model.r[vr[i]];
@@ -191,7 +198,7 @@ FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[
 {
     Instance *inst = c;
     if (nx != N_X) return fail(inst, "fmi2GetDerivatives: wrong number of states");
-    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix or non-finite rates");
     memcpy(derivatives, inst->model.dx, N_X * sizeof(double));
     return fmi2OK;
 }

@@ -10,7 +10,13 @@
 
 #include "symmech_model.h"
 
+#if defined(_WIN32)
+#define FMI3_EXPORT __declspec(dllexport)
+#elif defined(__GNUC__)
 #define FMI3_EXPORT __attribute__((visibility("default")))
+#else
+#define FMI3_EXPORT
+#endif
 
 typedef void *fmi3Instance;
 typedef void *fmi3InstanceEnvironment;
@@ -135,7 +141,8 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
 FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     Instance *inst = instance;
-    return symmech_derivatives(&inst->model) == 0 ? fmi3OK : fail(inst, "singular mass matrix at the start");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular M or non-finite rates at the start");
+    return fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance instance) { (void)instance; return fmi3OK; }
@@ -154,7 +161,7 @@ FMI3_EXPORT fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueRefe
 {
     Instance *inst = instance;
     if (nValues != nValueReferences) return fail(inst, "fmi3GetFloat64: one value per value reference");
-    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix or non-finite rates");
     for (size_t i = 0; i < nValueReferences; i++) {
         if (valueReferences[i] >= N_REAL) return fail(inst, "fmi3GetFloat64: unknown value reference");
         values[i] = inst->model.r[valueReferences[i]];
@@ -232,7 +239,7 @@ FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, 
 {
     Instance *inst = instance;
     if (nContinuousStates != N_X) return fail(inst, "fmi3GetContinuousStateDerivatives: wrong number of states");
-    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix or non-finite rates");
     memcpy(derivatives, inst->model.dx, N_X * sizeof(double));
     return fmi3OK;
 }
@@ -281,13 +288,15 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     *lastSuccessfulTime = inst->model.r[VR_TIME];
-    return status == 0 ? fmi3OK : fail(inst, "fmi3DoStep: the integration failed (singular M or non-finite state)");
+    if (status != 0) return fail(inst, "fmi3DoStep: the integration failed (singular M or non-finite state)");
+    return fmi3OK;
 }
 
 /* ---- features the model does not have ---- */
 
 #define UNSUPPORTED(name, ...) \
-    FMI3_EXPORT fmi3Status name(fmi3Instance instance, __VA_ARGS__) { return fail(instance, #name " is not supported"); }
+    FMI3_EXPORT fmi3Status name(fmi3Instance instance, __VA_ARGS__) \
+    { return fail(instance, #name " is not supported"); }
 #define UNSUPPORTED_TYPE(T) \
     UNSUPPORTED(fmi3Get##T, const fmi3ValueReference vr[], size_t nvr, fmi3##T values[], size_t nValues) \
     UNSUPPORTED(fmi3Set##T, const fmi3ValueReference vr[], size_t nvr, const fmi3##T values[], size_t nValues)
@@ -342,6 +351,13 @@ UNSUPPORTED(fmi3GetOutputDerivatives, const fmi3ValueReference vr[], size_t nvr,
             fmi3Float64 values[], size_t nValues)
 UNSUPPORTED(fmi3ActivateModelPartition, fmi3ValueReference clockReference, fmi3Float64 activationTime)
 
-FMI3_EXPORT fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) { return fail(instance, "no configuration mode"); }
-FMI3_EXPORT fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) { return fail(instance, "no configuration mode"); }
+FMI3_EXPORT fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
+{
+    return fail(instance, "no configuration mode");
+}
+
+FMI3_EXPORT fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
+{
+    return fail(instance, "no configuration mode");
+}
 FMI3_EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) { (void)instance; return fmi3OK; }

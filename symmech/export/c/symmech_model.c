@@ -58,6 +58,8 @@ int symmech_derivatives(SymmechModel *m)
 {
     if (!m->dirty) return 0;
     if (rates(m, m->r[VR_TIME], m->r + VR_X, m->dx) != 0) return -1;
+    for (int k = 0; k < N_X; k++)
+        if (!isfinite(m->dx[k])) return -1;
     for (int k = 0; k < N_DX; k++) m->r[VR_DX + k] = m->dx[DX_FIRST + k];
     m->dirty = 0;
     return 0;

@@ -19,7 +19,7 @@ typedef struct {
 /* start values of every variable, time 0 */
 void symmech_reset(SymmechModel *m);
 /* dx = y' of M y' = F + inputs at the instance's time, state, inputs and parameters; 0, or -1 where M is
-   singular (non-finite values are left to the caller's checks) */
+   singular or a rate is not finite */
 int symmech_derivatives(SymmechModel *m);
 /* integrate from r[VR_TIME] to t_end with DOP853 (error control rtol, atol per state); 0, or -1 on a
    singular M, a non-finite state or a step size below round-off */
