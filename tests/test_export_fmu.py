@@ -184,6 +184,15 @@ def test_refusals_are_one_line(args, says, tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.rglob("*")) == (["mine", "notes.txt"] if what == "c" else [])
 
 
+def test_a_parameter_named_like_a_c_keyword_is_refused(tmp_path, capsys):
+    text = (SCENES / "smm_double_pendulum.toml").read_text().replace("l1 = {", "long = {").replace('"-l1"', '"-long"')
+    scene = tmp_path / "keyword.toml"
+    scene.write_text(text)
+    assert main(["export", "fmu", str(scene), "--out", str(tmp_path / "x.fmu")]) == 2
+    err = capsys.readouterr().err
+    assert "parameters.long: a reserved word in C" in err and len(err.strip().splitlines()) == 1
+
+
 def test_no_compiler_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("CC", "no-such-compiler")
     assert main(["export", "fmu", str(SCENES / "smm_double_pendulum.toml"), "--out", str(tmp_path / "x.fmu")]) == 2

@@ -105,6 +105,9 @@ def mechanism(setup, native: Table | None) -> ExportModel:
     from symmech.smm.derive import module_spec
 
     m, sc = setup.m, setup.scene
+    reserved = sorted(set(m.parameters) & emit.C99.reserved)
+    if reserved:
+        raise SymmechError(f"parameters.{reserved[0]}: a reserved word in C; rename it to export the scene")
     if sc["equilibrium"]["solve"]:
         m, _ = numeric.solve_equilibrium(m)
     spec = module_spec(m)
