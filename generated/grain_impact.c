@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d4319aba698cc1c9f366d990410449fd69a3cec315074a9e0c84cd7069bbd195
-// source key 9986a6913e874cd254ff7161e7ca2fb5eb5448d47901617b117a691532507958
+// source key 37bd3b49e759f84bd2b5301156649baaca3c23f1abc4463b07ff132485bc1a2e
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 74badcbe93bb7bcbe7c6c70c07e1ac41c8a0005bbfb9c4862dbe829ab6d8453e
-# source key 9986a6913e874cd254ff7161e7ca2fb5eb5448d47901617b117a691532507958
+# source key 37bd3b49e759f84bd2b5301156649baaca3c23f1abc4463b07ff132485bc1a2e
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

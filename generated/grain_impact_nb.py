@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5ed7b2691f70e5550ce28a4ec3c9f459b4abad63561bb72cad6c20197b219b38
-# source key 9986a6913e874cd254ff7161e7ca2fb5eb5448d47901617b117a691532507958
+# source key 37bd3b49e759f84bd2b5301156649baaca3c23f1abc4463b07ff132485bc1a2e
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a2fe40b7dab70c9a9754e2bffff551fc063ed96ff87c58d03183c48eecb4a853
-// source key c83e05832b8b32653cd695c8468f132c6dd51acf5f18b66d73e33633d0046825
+// source key 94464822d635b0cf204dd287f47a4f7c0100b62ae4a90687fc4da01c14f3592d
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

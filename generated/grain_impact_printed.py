@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 85dbb61392d01802001412144c6765584176463d2642026489f5301e8fee4181
-# source key c83e05832b8b32653cd695c8468f132c6dd51acf5f18b66d73e33633d0046825
+# source key 94464822d635b0cf204dd287f47a4f7c0100b62ae4a90687fc4da01c14f3592d
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e6bc79fb5cbec3b209f21f1573686a299a1b7d1c1579af2f199c4bba54119146
-# source key c83e05832b8b32653cd695c8468f132c6dd51acf5f18b66d73e33633d0046825
+# source key 94464822d635b0cf204dd287f47a4f7c0100b62ae4a90687fc4da01c14f3592d
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

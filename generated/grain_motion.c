@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e05d1dffb5cee41955ff7683ff0820620a07f39f92577828c34cc7a364c43df6
-// source key a180439f5cd8fdb99772a994d1742c9fc9c78ef28977c9068239e17947bac0c9
+// source key 307a5bf0fdb8ad48a0df2e408ae643c3739809fb453adcaee8e9c4b6d2756e32
 // body sha256 29d791f375a67a4af761aca35dc842c4ffca9ee751729a8e7fd72291916b04df
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22abb92df2e76ae3686d42b177bb488138324e8851cb9b76255e6b37abeb92f9
-# source key a180439f5cd8fdb99772a994d1742c9fc9c78ef28977c9068239e17947bac0c9
+# source key 307a5bf0fdb8ad48a0df2e408ae643c3739809fb453adcaee8e9c4b6d2756e32
 # body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

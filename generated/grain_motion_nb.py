@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 49a8b8a06f10f4a4347ae5fc0303bd320ab32fd6b0cdac408c5808aa8b75dfa4
-# source key a180439f5cd8fdb99772a994d1742c9fc9c78ef28977c9068239e17947bac0c9
+# source key 307a5bf0fdb8ad48a0df2e408ae643c3739809fb453adcaee8e9c4b6d2756e32
 # body sha256 9c4b29f0ccea7f755c1066d4a7e8d78a9070785fdbe6eaa54b99c27c16c9968c
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 77a754b3f421c4355d266d5de70c63fa4a12e6571e70b9ff06c6ca640609038a
-// source key 84f2d8c49459982f060fb0c4cd37057dc5a81c1ba7c09a7b92530999232240d1
+// source key 3e6ad24a8860df7c82f5189df05e1e04434701b317950d961f27b1022eb0232e
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 da186415b9ebd2aa1d9a37d430c4f5626dd67b571f3069376eb1ed4deac2b7f9
-# source key 84f2d8c49459982f060fb0c4cd37057dc5a81c1ba7c09a7b92530999232240d1
+# source key 3e6ad24a8860df7c82f5189df05e1e04434701b317950d961f27b1022eb0232e
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

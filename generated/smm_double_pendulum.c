@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a394bc2270fdb110090b2f18b8791c2403a820482bc989c878f850c815ed52f4
-// source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+// source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

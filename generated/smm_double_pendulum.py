@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79c4cc88e85d02cdca34917f43b05f4abd68c941c55697c3770904275987efce
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

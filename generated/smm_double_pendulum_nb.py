@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c96a6200f1cd65883aa6be750dc813e9cf42b628c73c3b7b1c59b5182bbb488e
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 ee0b337805a156368d52061587c994bf89595f3d2bc50ca45db8d795edd46b49
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

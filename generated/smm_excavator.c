@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 94fd03cef0cfe01280552830573b46a5db0cbc0601e6fada8d4a9660e5433149
-// source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+// source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

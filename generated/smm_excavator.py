@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 16868e14a5f19aeff2318896dbb9362d1dc26c8fb2dd46417ceb528c221409ff
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b638724fbe78932d9d66a2006a155b8a73abec1048e28c04684ba4f9d86e07af
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 f51e88dcd17aa736dcd8c31b0c5a6b8a40ad39980583bfc2625aa5b48b4385dd
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a46cf6c07c9668c3bfe54866b219dfa9ecadde435db67021acc6f775b18e61cb
-// source key 0f51ae2c420e55175d49e943df5cc511d92394bd9067848f59de49210615f183
+// source key ff3936d625731caac5a0e43ec889380b1ccc8767523c9fcdd8fb62195b12381f
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

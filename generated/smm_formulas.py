@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f6daec3a5d0f920489dcd110f82c6f2cae6919a358f7253ef58541b1686610c6
-# source key 0f51ae2c420e55175d49e943df5cc511d92394bd9067848f59de49210615f183
+# source key ff3936d625731caac5a0e43ec889380b1ccc8767523c9fcdd8fb62195b12381f
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

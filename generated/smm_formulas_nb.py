@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 600b2a7ecaeff01755553c75754d5666514efc158768789bce8261101095334c
-# source key 0f51ae2c420e55175d49e943df5cc511d92394bd9067848f59de49210615f183
+# source key ff3936d625731caac5a0e43ec889380b1ccc8767523c9fcdd8fb62195b12381f
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1d8157b58ce60f9154c356a6974f6f30694048d8cc23894eeb37a21ecb6375b6
-// source key b844f315ed08216df63fea05e57a28eccd0e3716e8b70fee7d318213770c52d5
+// source key 54680911fa659a929ef1dc09ead065181965e4583e12dc1087770950ad7ac6d8
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

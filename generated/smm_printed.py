@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 dbb8e65d918d89e39962ac5ea20dd7f2337606424ff39681449fdcaf5255f5ff
-# source key b844f315ed08216df63fea05e57a28eccd0e3716e8b70fee7d318213770c52d5
+# source key 54680911fa659a929ef1dc09ead065181965e4583e12dc1087770950ad7ac6d8
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bf4e41fac77ef95be9a02c3ce28b20b6f584d0f6aa5d45ed526c93bc85355923
-# source key b844f315ed08216df63fea05e57a28eccd0e3716e8b70fee7d318213770c52d5
+# source key 54680911fa659a929ef1dc09ead065181965e4583e12dc1087770950ad7ac6d8
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

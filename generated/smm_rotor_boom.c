@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7bcd833a0c73cf2bc8d4dd614d08642e475383726d196cd2dffda76728f3f9da
-// source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+// source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d4d676e2526655b941f0290bb52784c6bd5348a0cc2ed895aab3685497d8fbb1
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 196962ab826bdebfcfb43fec482737e7d02fc6ea417f12db38c72e7f6125b392
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 3e58a72ec1d24046edbed972bd984d826383c90d7cd71dd2987ff555c4c3e493
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

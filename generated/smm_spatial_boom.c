@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 520bfb77ca47353b80d067e16bba8f1b15c97459c9edf4f73ef213e7382d8a25
-// source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+// source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

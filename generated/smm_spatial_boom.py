@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 01f75c188fa3ebd1188b16f8223410d647fce03e38a513a61647a71e0da689b3
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b13ee9731019bb3b76ff9ba7fd6e71e326e82c7aedeba78bfd5e2391edfa5eae
-# source key b6e302052c0436b46a270f04345f1d829eba6430cea95b5471fa00b014a7763b
+# source key d085a596fe19214153d3165dad3dbdc9f77a819b448926dcbbf01bca3528627a
 # body sha256 488092b385d22a3423efd4187a4f730778d474a8cd3a463b1bb4429dd479635f
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 846f99db9a3108d4a32b040fd023b8174604ff86a7e677d79cdb2d094bb398a3
-// source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
+// source key 78b6dee3ab9973c0ccfe13d33b549bb183c9f4dce5a5ddb4107c01ffb6f4128f
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

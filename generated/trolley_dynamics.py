@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25bc6225c25b3522e6381c683cfcd4a704c11e90f53cccdb96d6760c36c5f4df
-# source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
+# source key 78b6dee3ab9973c0ccfe13d33b549bb183c9f4dce5a5ddb4107c01ffb6f4128f
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

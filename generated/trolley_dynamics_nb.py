@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 44a0c3f5befb32b02d1cc77a79c3e2ca2678a22111207ec5de5d7fcde990bb10
-# source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
+# source key 78b6dee3ab9973c0ccfe13d33b549bb183c9f4dce5a5ddb4107c01ffb6f4128f
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e607eefeed7745c3a96e3a278687c86a534301812f0ad4f9d0f6edef6206edc5
-// source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
+// source key bb576272dbced537eeeaad7556e0e7bdc9ec38e414cdbd54afafdd505bd5be7e
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

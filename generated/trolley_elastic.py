@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 61a9887016a21ee55e78f40a1415a8b55623387874430d1ce62fbf51b4493055
-# source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
+# source key bb576272dbced537eeeaad7556e0e7bdc9ec38e414cdbd54afafdd505bd5be7e
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 8e1f83659fa64affd6185873d0c21b72d57ae973dcec3840f71cab6bb25ff7ad
-// source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
+// source key bb576272dbced537eeeaad7556e0e7bdc9ec38e414cdbd54afafdd505bd5be7e
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 968716567f8f00bad677775c169945a234b67c291585fb661163dc8cefc9df71
-# source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
+# source key bb576272dbced537eeeaad7556e0e7bdc9ec38e414cdbd54afafdd505bd5be7e
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

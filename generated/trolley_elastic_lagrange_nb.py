@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 68042afcb72ecbcd4848513170552ef4d8496240fb3816e210a1cdd457c75493
-# source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
+# source key bb576272dbced537eeeaad7556e0e7bdc9ec38e414cdbd54afafdd505bd5be7e
 # body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 

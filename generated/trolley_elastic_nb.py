@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9b5e04b945c1aeea4275d98fa45f29f0e0068c1950d8ca4264691b518c336ea2
-# source key dd32d62a36bd71684237ea843be99831218d5436efc3f6f7b5a7c83ee04d52f4
+# source key bb576272dbced537eeeaad7556e0e7bdc9ec38e414cdbd54afafdd505bd5be7e
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e005d693697a1f89d3100f724c7f3ef0c191e6744434d889f0db4824cd9e5eb5
-// source key 9db81318600536a6d8664f691d6d00ed6bd6b87ebce22393c6de99e5489a2ca1
+// source key b62db49cebb769ed398b81e240fe4854a9d81227857928b67f473ea7b3fc24db
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2081dbff72cfec517c6dffd7422847657fea3db78e766309a922a21104bd1f8d
-# source key 9db81318600536a6d8664f691d6d00ed6bd6b87ebce22393c6de99e5489a2ca1
+# source key b62db49cebb769ed398b81e240fe4854a9d81227857928b67f473ea7b3fc24db
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

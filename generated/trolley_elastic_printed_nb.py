@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ac28f93dd38f6f877a1ff4a56a79f51fa47dfc646b52e94390c2402f892f3ce3
-# source key 9db81318600536a6d8664f691d6d00ed6bd6b87ebce22393c6de99e5489a2ca1
+# source key b62db49cebb769ed398b81e240fe4854a9d81227857928b67f473ea7b3fc24db
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

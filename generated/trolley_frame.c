@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e5cf3aeb90e7e8cdd13fde4452396a975700920bfb9f962b6531b6723cdbb518
-// source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
+// source key 78b6dee3ab9973c0ccfe13d33b549bb183c9f4dce5a5ddb4107c01ffb6f4128f
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
-# source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
+# source key 78b6dee3ab9973c0ccfe13d33b549bb183c9f4dce5a5ddb4107c01ffb6f4128f
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 135d9324af7b1f990f3f560da52635e6ccf294c1855a6bcf36876de726d0d33c
-# source key d235905039367d4b083e4a587856a3de9a5feb86d844c60aa7b68741d1c751d3
+# source key 78b6dee3ab9973c0ccfe13d33b549bb183c9f4dce5a5ddb4107c01ffb6f4128f
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 12dfa91129b50189cae8c6b99fda25aee1b2e1921cb59c63f5004c4e0353447f
-// source key e08b236da1c86af268f8834a6ea23992e2e265ff0e7482785391a2b4dca8979e
+// source key b0246db2a0a8d56d8efc6780c627a14c7c1b295260cc309df3027bda294a565c
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3177fc4464bdc9b6eb39fe80f9abd3087f42d96dab4701117ed26773756da428
-# source key e08b236da1c86af268f8834a6ea23992e2e265ff0e7482785391a2b4dca8979e
+# source key b0246db2a0a8d56d8efc6780c627a14c7c1b295260cc309df3027bda294a565c
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 02aa698f18b0313e496d4bbeb93ca65a79a62822646b0882ed8dd7017e53e124
-# source key e08b236da1c86af268f8834a6ea23992e2e265ff0e7482785391a2b4dca8979e
+# source key b0246db2a0a8d56d8efc6780c627a14c7c1b295260cc309df3027bda294a565c
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 
