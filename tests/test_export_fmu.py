@@ -142,6 +142,15 @@ def test_constant_input_and_a_changed_parameter_against_the_closed_form(rotor_bo
     assert deviation(got, expected) <= TOLERANCE
 
 
+def test_export_c_from_the_command_line_to_a_relative_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "c", str(SCENES / "smm_double_pendulum.toml"), "--out", "dp_c"]) == 0
+    assert capsys.readouterr().out == f"wrote {tmp_path / 'dp_c'}\n"
+    printed = subprocess.run([str(tmp_path / "dp_c" / "example")], check=True, capture_output=True, text=True)
+    rows = printed.stdout.split()  # no [initial]: the start state (rest) over 1 s in 100 steps
+    assert rows[0] == "t,phi1,phi2" and len(rows) == 102 and rows[-1] == "1,0,0"
+
+
 def test_exported_c_is_the_checked_generated_module(rotor_boom):
     """The export renders the scene's module with the codegen emitter: for a bundled scene, the body of the
     integrity-checked generated/<name>.c."""

@@ -71,7 +71,7 @@ def fmu(model: ExportModel, out: Path, fmi: int = 3, kind: str = "me") -> Path:
     token = sources.token(model)
     texts = sources.files(model) | {f"fmi{fmi}.c": sources.glue(f"fmi{fmi}.c")}
     xml = (description.fmi3 if fmi == 3 else description.fmi2)(model, token, kind)
-    out = Path(out)
+    out = Path(out).absolute()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         for name, text in texts.items():
@@ -95,7 +95,7 @@ def c_folder(model: ExportModel, out: Path) -> Path:
     compiles; the folder is replaced whole."""
     texts = sources.files(model) | {"example.c": sources.glue("example.c"),
                                     "Makefile": MAKEFILE.format(identifier=model.identifier)}
-    out = Path(out)
+    out = Path(out).absolute()
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}."))
     try:
