@@ -1,11 +1,12 @@
-# symmech 0.1.0 generated module; inputs sha256 b44b84f5d936eef31def0141271f4cc5846b0bbc4e252b2765068a0fff01c827
+# symmech 0.1.0 generated module; inputs sha256 99dacc9d2dcbbae64b4c9baa31b76dd1e1ba8ea9e6e1aeef949eae37f34f3cec
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 b44b84f5d936eef31def0141271f4cc5846b0bbc4e252b2765068a0fff01c827
+# body sha256 99dacc9d2dcbbae64b4c9baa31b76dd1e1ba8ea9e6e1aeef949eae37f34f3cec
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
-``symmech.core.kernels``). Regenerate with ``make codegen``; check with
+``symmech.core.kernels``), ``<name>.c`` its C99 twin (``symmech export``
+reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.
 """
@@ -13,7 +14,7 @@ from symmech.core import integrity as _integrity
 
 _integrity.guard(__file__)
 
-# spec name -> the derivation module that declares it (numpy module and _nb twin)
+# spec name -> the derivation module that declares it (numpy module, _nb and C twins)
 MODULES = {
     'grain_impact': 'symmech.grain.derive',
     'grain_impact_printed': 'symmech.grain.printed',

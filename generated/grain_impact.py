@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 f4c879bc5431c94558a01a3028112a23a74bf722ae99214a4cb84e692d1509fc
-# source key d2a16bf68e5febb311bb14dbe92f75f405861619769188a8091ec88be511d521
+# symmech 0.1.0 generated module; inputs sha256 74badcbe93bb7bcbe7c6c70c07e1ac41c8a0005bbfb9c4862dbe829ab6d8453e
+# source key 8db4cde1b07ff07f99029579a12bc3a6e9c0fb2402b480b4238ef4239bbac0ce
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

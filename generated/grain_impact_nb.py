@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d71ca9f6afdaa144d12944f621b7b1dc3c8a2190fb0bfdc85661dce8e38fa295
-# source key d2a16bf68e5febb311bb14dbe92f75f405861619769188a8091ec88be511d521
+# symmech 0.1.0 generated module; inputs sha256 5ed7b2691f70e5550ce28a4ec3c9f459b4abad63561bb72cad6c20197b219b38
+# source key 8db4cde1b07ff07f99029579a12bc3a6e9c0fb2402b480b4238ef4239bbac0ce
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

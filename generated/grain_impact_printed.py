@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 498e046eca310d14e44f494678f4683cc253a90af5afe239b78e358a05b2f716
-# source key d02226c84933530d752e1a4da1751c04e2292a57eaf6a00edfd09fc98e76359e
+# symmech 0.1.0 generated module; inputs sha256 85dbb61392d01802001412144c6765584176463d2642026489f5301e8fee4181
+# source key bd60ebbf248d9446c460f3d38d01dbc07bc4e33279f95b22da915cc01d73c118
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 263418879c95c30805df7bf816084c70b7c8a7ee241699819b1a742ee4973a9f
-# source key d02226c84933530d752e1a4da1751c04e2292a57eaf6a00edfd09fc98e76359e
+# symmech 0.1.0 generated module; inputs sha256 e6bc79fb5cbec3b209f21f1573686a299a1b7d1c1579af2f199c4bba54119146
+# source key bd60ebbf248d9446c460f3d38d01dbc07bc4e33279f95b22da915cc01d73c118
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

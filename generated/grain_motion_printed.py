@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4c89b983042d47ad1a4e7cbc4986666cbd700152067fcf35a96bafe03dcd1e3a
-# source key c532a6db4e93d5755a39baffffdf7d0c49e1eebf2a0c5e43206bf2cb873f8f24
+# symmech 0.1.0 generated module; inputs sha256 da186415b9ebd2aa1d9a37d430c4f5626dd67b571f3069376eb1ed4deac2b7f9
+# source key 4ea3d4af924b0e3c6fc9e453b4b8bcbc87022e0f26d297b754421f87388bd9fa
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

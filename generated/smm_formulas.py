@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4b6f28bf791f26dc767836d2dee65ff14384b2122df5370da47f19605003942b
-# source key 05ba42c3cea2e2d2f9f341d23ddae17e517f0a7e2edf82b478cc2b20edcd375f
+# symmech 0.1.0 generated module; inputs sha256 f6daec3a5d0f920489dcd110f82c6f2cae6919a358f7253ef58541b1686610c6
+# source key 57f672ad7602ec67772b25c8967fc8e74608532ddf797e2fb996ad315ee8d025
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

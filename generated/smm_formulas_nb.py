@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 df4ef760a153fc2e3a735b15446afe950bedd8c9057a61ccad77bda661bc259f
-# source key 05ba42c3cea2e2d2f9f341d23ddae17e517f0a7e2edf82b478cc2b20edcd375f
+# symmech 0.1.0 generated module; inputs sha256 600b2a7ecaeff01755553c75754d5666514efc158768789bce8261101095334c
+# source key 57f672ad7602ec67772b25c8967fc8e74608532ddf797e2fb996ad315ee8d025
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3f7a4b9d983729c81475f271b5525dc64cbcc3d2b831090860c7f404f002171d
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# symmech 0.1.0 generated module; inputs sha256 196962ab826bdebfcfb43fec482737e7d02fc6ea417f12db38c72e7f6125b392
+# source key 1200266ead322e358444cc7fbd3c0da8f3dab082ae857229dcc86324b17f338b
 # body sha256 3e58a72ec1d24046edbed972bd984d826383c90d7cd71dd2987ff555c4c3e493
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 56d3e2580ce5f0f95b1560a1db2ba92a292d2bde8d86fbd512802eb02ddefee5
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# symmech 0.1.0 generated module; inputs sha256 b13ee9731019bb3b76ff9ba7fd6e71e326e82c7aedeba78bfd5e2391edfa5eae
+# source key 1200266ead322e358444cc7fbd3c0da8f3dab082ae857229dcc86324b17f338b
 # body sha256 488092b385d22a3423efd4187a4f730778d474a8cd3a463b1bb4429dd479635f
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1c3dae8ed9f839aae351b3d3c8c09964ac82b56775483f18c95a992f1169d3e6
-# source key e29cd9e552854b73d07dee78163d188572c8b3b3e8f12f18b96c0abdcc582848
+# symmech 0.1.0 generated module; inputs sha256 61a9887016a21ee55e78f40a1415a8b55623387874430d1ce62fbf51b4493055
+# source key cd885346079fc1cc2c9fa08f3c30eab52721013c15fd4c4ce30a708b266efcb1
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

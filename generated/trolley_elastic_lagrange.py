@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5e08e4566f9676cdff1145192feb2fac2b130d18f31b6d04af3d9ce2fe600108
-# source key e29cd9e552854b73d07dee78163d188572c8b3b3e8f12f18b96c0abdcc582848
+# symmech 0.1.0 generated module; inputs sha256 968716567f8f00bad677775c169945a234b67c291585fb661163dc8cefc9df71
+# source key cd885346079fc1cc2c9fa08f3c30eab52721013c15fd4c4ce30a708b266efcb1
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 fd37278e2ef5490fbe8fd71b3d911a9e1d8553fc535c732c253af0e9bd275025
-# source key e29cd9e552854b73d07dee78163d188572c8b3b3e8f12f18b96c0abdcc582848
+# symmech 0.1.0 generated module; inputs sha256 9b5e04b945c1aeea4275d98fa45f29f0e0068c1950d8ca4264691b518c336ea2
+# source key cd885346079fc1cc2c9fa08f3c30eab52721013c15fd4c4ce30a708b266efcb1
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

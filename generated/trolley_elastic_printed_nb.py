@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 a14d9b2ca61ae9d73aa9005d08617714cd49f71ee08caa2219f19eb38e4caca1
-# source key 2063fdfaabbf0a04f2f82580549a09b8b90933eeb9ae5743768796cdfe41d41f
+# symmech 0.1.0 generated module; inputs sha256 ac28f93dd38f6f877a1ff4a56a79f51fa47dfc646b52e94390c2402f892f3ce3
+# source key 220b6c28f3efe419b11bb393d030ba3b36434d49cd596f7119e84ea624fbb0c3
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d0f26b6c528266d804490da8def842db5fee09c1813362d69b4568e9b4222883
-# source key 83a847ea18b13a86287fa8d1016db7376cd9684a801c22522cb3ba131bf4e617
+# symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
+# source key 4df5d43e47f870395b60bbd5c978016b3516ce7b3aaf5910aa381fec6a9c9cdd
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 8d79a029caa1edbd1230767573b3ef1f404977b1417ea90599097afa6c3dca9a
-# source key 7d432617e5dde2dd59bffb83e47a6d5242d9302161ab26df861bbe82a9875cf1
+# symmech 0.1.0 generated module; inputs sha256 3177fc4464bdc9b6eb39fe80f9abd3087f42d96dab4701117ed26773756da428
+# source key a8defc4ae435849fd728b9546c19d90fdffc024ece64c4ff81ce1a83154c4910
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

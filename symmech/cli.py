@@ -1,4 +1,4 @@
-"""Command-line interface: ``symmech run | sweep | warm | report | codegen | latex | errata | bench``.
+"""Command-line interface: ``symmech run | sweep | warm | report | codegen | latex | errata | bench | export``.
 
 Errors a user can fix (:class:`SymmechError`) print as one line on stderr with
 exit status 2, never a traceback.
@@ -83,6 +83,13 @@ def cmd_bench(ns) -> int:
     _, result = pipeline.run_to(ns.scene, ns.out, _context(ns), study="precision")
     for name in ["summary.json", *[f"{t}.csv" for t in result.tables], *result.files]:
         print(f"wrote {Path(ns.out) / name}")
+    return 0
+
+
+def cmd_export(ns) -> int:
+    from symmech.export.command import export
+
+    print(f"wrote {export(ns.what, ns.scene, ns.out, ns.fmi, ns.type)}")
     return 0
 
 
@@ -330,6 +337,15 @@ def build_parser() -> argparse.ArgumentParser:
     bp.add_argument("--out", default="out-precision", help="output folder")
     _run_options(bp)
     bp.set_defaults(func=cmd_bench)
+
+    x = sub.add_parser("export", help="the scene's model outside Python: an FMU (FMI 2 or 3) or C sources")
+    x.add_argument("what", choices=("fmu", "c"), help="fmu: an FMU file; c: a folder of C sources and an example")
+    x.add_argument("scene", help="scene file (TOML); kind mechanism so far (docs/export.md)")
+    x.add_argument("--out", required=True, help="the .fmu file (fmu) or the folder (c)")
+    x.add_argument("--fmi", type=int, choices=(2, 3), default=3, help="FMI version of the FMU (default 3)")
+    x.add_argument("--type", choices=("me", "cs"), default="me",
+                   help="me: Model Exchange (the importer integrates), cs: Co-Simulation (DOP853 inside)")
+    x.set_defaults(func=cmd_export)
     return p
 
 

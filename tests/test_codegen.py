@@ -40,21 +40,21 @@ def _copy_generated(tmp_path):
 
 @pytest.mark.slow  # renders every module (~40 s); the default tier checks the cache keys (codegen --check)
 def test_generated_folder_is_up_to_date(specs):
-    """Every module of both targets is exactly what its derivation renders (the slow path)."""
+    """Every module of every target is exactly what its derivation renders (the slow path)."""
     index = codegen.Index.read(GENERATED)
     assert sorted(index.modules) == sorted(s.name for s in specs)
     for spec in specs:
         producer = index.modules[spec.name]
         key = codegen.source_key(producer, index.inputs[producer])
         for target in emit.TARGETS:
-            path = GENERATED / f"{spec.name}{target.suffix}.py"
+            path = GENERATED / target.file(spec.name)
             assert path.read_text() == emit.render(spec, target, key), path.name
 
 
 def test_header_names_version_inputs_key_and_body(specs):
     for spec in specs:
         for target in emit.TARGETS:
-            text = (GENERATED / f"{spec.name}{target.suffix}.py").read_text()
+            text = (GENERATED / target.file(spec.name)).read_text()
             header, body = integrity.split(text)
             assert header.version == __version__
             assert header.inputs == emit.inputs_hash(spec, target)
@@ -68,8 +68,8 @@ def test_render_is_byte_identical_under_another_hash_seed(tmp_path):
     env = dict(os.environ, PYTHONHASHSEED="12345")
     subprocess.run([sys.executable, "-m", "symmech", "codegen", "--dir", str(tmp_path)],
                    check=True, env=env, capture_output=True)
-    written = sorted(p.name for p in tmp_path.glob("*.py"))
-    assert written == sorted(p.name for p in GENERATED.glob("*.py"))
+    written = sorted(p.name for tail in ("*.py", "*.c") for p in tmp_path.glob(tail))
+    assert written == sorted(p.name for tail in ("*.py", "*.c") for p in GENERATED.glob(tail))
     for name in written:
         assert (tmp_path / name).read_bytes() == (GENERATED / name).read_bytes(), name
 
@@ -123,7 +123,7 @@ def test_changed_derivation_is_caught_and_unchanged_output_passes(tmp_path, monk
     monkeypatch.setattr(codegen, "derive", derive)
     assert main(["codegen", "--check", "--dir", str(folder)]) == 1
     stale = [line.strip() for line in capsys.readouterr().err.splitlines() if line.startswith("  ")]
-    assert stale == [str(folder / "trolley_frame.py"), str(folder / "trolley_frame_nb.py")]
+    assert stale == [str(folder / name) for name in ("trolley_frame.py", "trolley_frame_nb.py", "trolley_frame.c")]
 
 
 @pytest.mark.parametrize("damage", ["one byte", "truncated", "no header"])

@@ -118,6 +118,16 @@ def test_codegen_in_a_plain_install(installed):
     assert "is an installed package" in proc.stderr and "--dir" in proc.stderr
 
 
+def test_export_from_the_installed_package(installed):
+    """The C glue and the generated C modules are package data: an FMU and a C folder from a plain install."""
+    bin_, work = installed
+    scene = next((bin_.parent / "lib").glob("python*/site-packages/symmech/scenes/smm_rotor_boom.toml"))
+    for what, out in (("fmu", "rotor_boom.fmu"), ("c", "rotor_boom_c")):
+        proc = symmech(installed, "export", what, scene, "--out", out)
+        assert proc.returncode == 0, proc.stderr
+    assert (work / "rotor_boom.fmu").is_file() and (work / "rotor_boom_c" / "example").is_file()
+
+
 @pytest.mark.parametrize("scene", SCENES, ids=[p.stem for p in SCENES])
 def test_every_bundled_scene_runs_from_the_installed_package(installed, scene):
     bin_, work = installed

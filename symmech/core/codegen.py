@@ -1,8 +1,8 @@
 """``symmech codegen``: regenerate ``generated/`` only where its inputs changed.
 
 A *producer* is a module ``symmech.<paper>.derive*`` / ``.printed*`` with
-``module_specs()``; every spec becomes two modules, ``<name>.py`` (numpy, the
-reference) and ``<name>_nb.py`` (numba), see :mod:`symmech.core.emit`.
+``module_specs()``; every spec becomes three files, ``<name>.py`` (numpy, the
+reference), ``<name>_nb.py`` (numba) and ``<name>.c`` (C99), see :mod:`symmech.core.emit`.
 
 Cache: each module's header records the *source key* of its producer, a
 sha256 of the symmech and sympy versions, every template, the source text of
@@ -36,7 +36,7 @@ from symmech.core import integrity
 from symmech.core.scene import scenes_folder
 
 INDEX = "__init__.py"
-SUFFIXES = ("", "_nb")  # emit.TARGETS' suffixes, repeated here so the fast path needs no sympy
+TAILS = (".py", "_nb.py", ".c")  # emit.TARGETS' file names after the spec name, repeated: the fast path needs no sympy
 # The emitter's own files feed every key (not their imports: the error class's module does not shape output).
 EMITTER = ("symmech.core.emit", "symmech.core.integrity", "symmech.core.derivation")
 _PACKAGE_DIR = Path(symmech.__file__).resolve().parent
@@ -45,7 +45,8 @@ _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by h
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
-``symmech.core.kernels``). Regenerate with ``make codegen``; check with
+``symmech.core.kernels``), ``<name>.c`` its C99 twin (``symmech export``
+reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.
 """
@@ -215,7 +216,7 @@ class Index:
     inputs: dict[str, tuple[str, ...]] = field(default_factory=dict)  # producer -> data
 
     def text(self) -> str:
-        lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module and _nb twin)",
+        lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module, _nb and C twins)",
                  "MODULES = {"]
         lines += [f"    {n!r}: {p!r}," for n, p in sorted(self.modules.items())]
         lines += ["}", "# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)",
@@ -243,7 +244,7 @@ class Index:
 # -- plan, check, write -----------------------------------------------------------
 
 def files(name: str) -> list[str]:
-    return [f"{name}{suffix}.py" for suffix in SUFFIXES]
+    return [f"{name}{tail}" for tail in TAILS]
 
 
 def _fresh(directory: Path, index: Index | None, producer: str) -> bool:
@@ -300,7 +301,7 @@ def run(directory: Path, check: bool) -> Report:
                 raise ValueError(f"generated module {spec.name} declared by {new.modules[spec.name]} and {producer}")
             new.modules[spec.name] = producer
             for target in emit.TARGETS:
-                path = directory / f"{spec.name}{target.suffix}.py"
+                path = directory / target.file(spec.name)
                 text = emit.render(spec, target, key)
                 current = path.read_text(encoding="utf-8") if path.is_file() else None
                 if current == text:
@@ -321,7 +322,7 @@ def run(directory: Path, check: bool) -> Report:
             directory.mkdir(parents=True, exist_ok=True)
             integrity.write_atomic(index_path, new.text())
             written.append(str(index_path))
-    for path in sorted(p for p in directory.glob("*.py") if p.name not in expected):
+    for path in sorted(p for tail in (".py", ".c") for p in directory.glob(f"*{tail}") if p.name not in expected):
         stale.append(str(path))
         if not check and integrity.split(path.read_text(encoding="utf-8", errors="replace"))[0] is not None:
             path.unlink()  # a module codegen wrote whose spec is gone

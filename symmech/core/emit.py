@@ -4,9 +4,11 @@
 ``write`` writes it atomically (:mod:`symmech.core.codegen` decides what to
 regenerate). Both targets print the same common-subexpression split
 (:func:`cse_chunks`), which ``symmech latex --cse`` shows too: a target is a
-printer (numpy or math calls), a template, the way a chunk line addresses
+printer (numpy, math or C99 calls), a template, the way a chunk line addresses
 an output element, and whether a dynamics module's rates are printed on floats
-too (the numpy module's one-state path), nothing more.
+too (the numpy module's one-state path), nothing more. The C99 target
+(``<name>.c``) prints the same chunks as C statements into a flat row-major
+``out`` (:func:`_c_context`), for code that leaves Python (``symmech export``).
 
 Determinism: elements are split into chunks in matrix order, each chunk is
 CSE'd with ``order="canonical"`` and a fixed symbol stream, and the header
@@ -26,6 +28,7 @@ from pathlib import Path
 
 import jinja2
 import sympy
+from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
@@ -96,6 +99,19 @@ class _MathPrinter(_ExactDivision, PythonCodePrinter):
         super().__init__({"fully_qualified_modules": True, "strict": True})
 
 
+class _CPrinter(C99CodePrinter):
+    """C99 <math.h> calls on doubles; refuses anything it cannot translate."""
+
+    def __init__(self):
+        super().__init__({"strict": True})
+
+
+# C99 keywords and the names the C template declares: never an argument name
+_C_RESERVED = frozenset("""auto break case char const continue default do double else enum extern float for goto if
+inline int long register restrict return short signed sizeof static struct switch typedef union unsigned void volatile
+while _Bool _Complex _Imaginary out sm_arg sm_t sm_y sm_p sm_i""".split())
+
+
 @dataclass(frozen=True)
 class Target:
     """An emission target: the same CSE'd chunks through another printer and template.
@@ -110,12 +126,21 @@ class Target:
     element: str
     reserved: frozenset[str]  # names the template uses beside the arguments
     float_rates: bool  # a dynamics module's rate functions also on floats with math (rhs/jac at one state)
+    extension: str = ".py"
+    comment: str = "#"  # line comment that starts the integrity header
+
+    def file(self, name: str) -> str:
+        """File name of the module of spec ``name`` in this target."""
+        return f"{name}{self.suffix}{self.extension}"
 
 
 NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...", frozenset({"out", "batch", "math", "numpy"}), True)
 NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "_k",
                frozenset({"out", "_k", "_steps", "_arrays", "_batch", "math", "numba", "numpy"}), False)
-TARGETS = (NUMPY, NUMBA)
+C99 = Target("", "c99.c.j2", _CPrinter, "", _C_RESERVED, False, ".c", "//")
+TARGETS = (NUMPY, NUMBA, C99)
+# functions of a dynamics module that take (t, y, p) in C, the layout of Dynamics.args
+DYNAMICS_FUNCTIONS = ("rate", "rate_jacobian", "rate_mass", "event_values")
 
 
 def _chunk_lines(chunk: Chunk, printer, element: str) -> list[str]:
@@ -166,6 +191,35 @@ def _function_context(nm: NamedMatrix, target: Target) -> dict:
     }
 
 
+def _c_context(spec: ModuleSpec, nm: NamedMatrix) -> dict:
+    """``nm`` as C statements: per chunk the arguments it reads (unpacked from ``sm_arg``, or from ``sm_t``, ``sm_y``,
+    ``sm_p`` for a dynamics function), its CSE temporaries and its nonzero elements at flat row-major offsets."""
+    clash = {a.name for a in nm.args} & C99.reserved
+    if clash:
+        raise ValueError(f"{nm.name}: argument names {sorted(clash)} are reserved in C")
+    printer = _CPrinter()
+    by_layout = spec.dynamics is not None and nm.name in DYNAMICS_FUNCTIONS
+    if by_layout:
+        dyn = spec.dynamics
+        source = ([("sm_t", dyn.time.name)] if dyn.time else []) \
+            + [(f"sm_y[{i}]", a.name) for i, a in enumerate(dyn.state)] \
+            + [(f"sm_p[{i}]", a.name) for i, a in enumerate(dyn.params)]
+        where = {name: place for place, name in source}
+    else:
+        where = {a.name: f"sm_arg[{i}]" for i, a in enumerate(nm.args)}
+    chunks = []
+    for chunk in cse_chunks(nm):
+        used = set().union(*(e.free_symbols for _, e in chunk.replacements),
+                           *(e.free_symbols for _, e in chunk.elements))
+        chunks.append({
+            "unpack": [(a.name, where[a.name]) for a in nm.args if sympy.Symbol(a.name) in used],
+            "temps": [(str(s), printer.doprint(e)) for s, e in chunk.replacements],
+            "elements": [(_flat_index(idx, nm.shape), printer.doprint(e)) for idx, e in chunk.elements if e != 0],
+        })
+    return {"name": nm.name, "meaning": nm.meaning, "unit": nm.unit, "equations": nm.equations, "args": nm.args,
+            "size": math.prod(nm.shape), "shape": nm.shape, "by_layout": by_layout, "chunks": chunks}
+
+
 def _dynamics_context(dyn: Dynamics) -> dict:
     """Layout constants and the call of the rate functions from ``(t, y, p)``."""
     def layout(args):
@@ -195,7 +249,7 @@ def _template_text(name: str) -> str:
 def inputs_hash(spec: ModuleSpec, target: Target = NUMPY) -> str:
     """sha256 of everything the module text is made from."""
     h = hashlib.sha256()
-    for part in (__version__, target.suffix, *map(_template_text, template_names()),
+    for part in (__version__, target.file(""), *map(_template_text, template_names()),
                  spec.name, spec.doc, spec.source):
         h.update(part.encode())
     for f in spec.functions:
@@ -226,20 +280,21 @@ def render(spec: ModuleSpec, target: Target = NUMPY, key: str = NO_KEY) -> str:
         lstrip_blocks=True,
         undefined=jinja2.StrictUndefined,
     )
+    env.filters["c_comment"] = lambda text: str(text).replace("*/", "* /")
     body = env.get_template(target.template).render(
         spec=spec,
-        functions=[_function_context(f, target) for f in spec.functions],
+        functions=[(_c_context(spec, f) if target is C99 else _function_context(f, target)) for f in spec.functions],
         dynamics=_dynamics_context(spec.dynamics) if spec.dynamics else None,
         floats={f.name: _float_context(f) for f in spec.functions
                 if target.float_rates and spec.dynamics and f.name in ("rate", "rate_jacobian", "rate_mass")},
     )
-    return integrity.with_header(body, inputs_hash(spec, target), key)
+    return integrity.with_header(body, inputs_hash(spec, target), key, target.comment)
 
 
 def write(spec: ModuleSpec, directory: Path, target: Target = NUMPY, key: str = NO_KEY) -> Path:
     """Write the module atomically into ``directory`` (created if needed); its path."""
     Path(directory).mkdir(parents=True, exist_ok=True)
-    path = Path(directory) / f"{spec.name}{target.suffix}.py"
+    path = Path(directory) / target.file(spec.name)
     integrity.write_atomic(path, render(spec, target, key))
     return path
 

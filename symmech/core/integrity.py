@@ -6,7 +6,7 @@ Every module ``symmech codegen`` writes starts with :data:`HEADER_LINES` lines::
     # source key K
     # body sha256 B
 
-``B`` is the sha256 of the text after the header, so a hand-edited, truncated
+(``//`` instead of ``#`` in a C file). ``B`` is the sha256 of the text after the header, so a hand-edited, truncated
 or half-written module is detected by reading the file alone; ``VERSION``
 detects a module left from another symmech release; ``I`` (everything the text
 is made from, needs sympy) and ``K`` (the codegen cache key, see
@@ -41,9 +41,9 @@ from symmech.core.scene import SymmechError
 PACKAGE = "symmech.generated"
 HEADER_LINES = 3
 _HEADER = re.compile(
-    r"# symmech (?P<version>\S+) generated module; inputs sha256 (?P<inputs>[0-9a-f]{64})\n"
-    r"# source key (?P<key>[0-9a-f]{64})\n"
-    r"# body sha256 (?P<body>[0-9a-f]{64})\n"
+    r"(?P<comment>#|//) symmech (?P<version>\S+) generated module; inputs sha256 (?P<inputs>[0-9a-f]{64})\n"
+    r"(?P=comment) source key (?P<key>[0-9a-f]{64})\n"
+    r"(?P=comment) body sha256 (?P<body>[0-9a-f]{64})\n"
 )
 
 
@@ -53,20 +53,22 @@ class Header:
     inputs: str
     key: str
     body: str
+    comment: str = "#"  # "//" in a C file
 
     def text(self) -> str:
-        return (f"# symmech {self.version} generated module; inputs sha256 {self.inputs}\n"
-                f"# source key {self.key}\n"
-                f"# body sha256 {self.body}\n")
+        c = self.comment
+        return (f"{c} symmech {self.version} generated module; inputs sha256 {self.inputs}\n"
+                f"{c} source key {self.key}\n"
+                f"{c} body sha256 {self.body}\n")
 
 
 def sha256(text: str) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def with_header(body: str, inputs: str, key: str) -> str:
-    """The full module text: header (recording ``sha256(body)``) then ``body``."""
-    return Header(__version__, inputs, key, sha256(body)).text() + body
+def with_header(body: str, inputs: str, key: str, comment: str = "#") -> str:
+    """The full module text: header (recording ``sha256(body)``, lines starting with ``comment``) then ``body``."""
+    return Header(__version__, inputs, key, sha256(body), comment).text() + body
 
 
 def split(text: str) -> tuple[Header | None, str]:

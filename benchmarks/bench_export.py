@@ -1,0 +1,70 @@
+"""Exported models against the native run: FMU (FMPy, Model Exchange with CVode and Co-Simulation with the
+FMU's DOP853) and the exported C example program, on the bundled mechanism scenes with a free response.
+
+Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv).
+Accuracy: `symmech.export.model.deviation`, the largest deviation of each coordinate series relative to its
+largest magnitude.
+
+    python benchmarks/bench_export.py [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import tempfile
+from pathlib import Path
+
+import fmpy
+import numpy as np
+
+from symmech.core import pipeline
+from symmech.core.scene import scenes_folder
+from symmech.export import build, model
+from symmech.export.model import deviation
+from symmech.smm import numeric
+from timing import interleaved, machine
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="3 rounds instead of 7")
+    repeats = 3 if parser.parse_args().quick else 7
+    print(machine())
+    for name in ("smm_rotor_boom", "smm_spatial_boom"):
+        exported = model.load(scenes_folder() / f"{name}.toml")
+        table = exported.native
+        t, q, names = table.data[:, 0], table.data[:, 1:], [c.name for c in table.columns[1:]]
+        with tempfile.TemporaryDirectory() as tmp:
+            me = build.fmu(exported, Path(tmp) / "me.fmu", 3, "me")
+            cs = build.fmu(exported, Path(tmp) / "cs.fmu", 3, "cs")
+            example = build.c_folder(exported, Path(tmp) / "c") / "example"
+            setup = pipeline.load(scenes_folder() / f"{name}.toml").setup
+            num = numeric.assemble(setup.m)
+            a, b, c = (x.toarray() for x in (num.a, num.b, num.c))
+            ini = setup.scene["initial"]
+            q0, v0 = np.array(ini["q"] or [0.0] * len(names)), np.array(ini["qdot"] or [0.0] * len(names))
+            runs = {
+                "native free_response": lambda: numeric.free_response(a, b, c, q0, v0, t),
+                "FMU ME, FMPy CVode rtol 1e-10": lambda: fmpy.simulate_fmu(
+                    str(me), solver="CVode", relative_tolerance=1e-10, stop_time=t[-1],
+                    output_interval=t[1] - t[0], output=names),
+                "FMU CS, DOP853 rtol 1e-10": lambda: fmpy.simulate_fmu(
+                    str(cs), relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0], output=names),
+                "C example program (DOP853 rtol 1e-12)": lambda: subprocess.run(
+                    [str(example)], check=True, capture_output=True, text=True).stdout,
+            }
+            stats = interleaved(runs, repeats)
+            print(f"\n{name}: {len(names)} coordinates, {t[-1]:g} s in {len(t) - 1} output steps")
+            for label, run in runs.items():
+                result = run()
+                if isinstance(result, str):
+                    got = np.array([row.split(",") for row in result.split()[1:]], dtype=float)[:, 1:]
+                elif result.dtype.names:
+                    got = np.column_stack([result[n] for n in names])
+                else:
+                    got = result
+                print(f"  {label:40s} {stats[label].text()}  error {deviation(got, q):.2g}")
+
+
+if __name__ == "__main__":
+    main()

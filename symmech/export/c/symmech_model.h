@@ -1,0 +1,28 @@
+/* symmech exported model: the state of one instance and the generic numerics around the generated
+   equations (hand-written: no physics here; the physics is the generated C99 module that model.h names).
+
+   Every Float64 variable lives in r[], indexed by its FMI value reference (layout in model.h):
+   r[VR_TIME] time [s], then the N_X continuous states, the derivatives that are not states, the N_U
+   inputs and the N_P parameters. */
+#ifndef SYMMECH_MODEL_H
+#define SYMMECH_MODEL_H
+
+#include "model.h"
+
+typedef struct {
+    double r[N_REAL];
+    double dx[N_X];  /* the state derivatives at r, valid while !dirty */
+    double mass[N_X * N_X];  /* work space: M of M y' = F, overwritten by its LU factors */
+    int dirty;
+} SymmechModel;
+
+/* start values of every variable, time 0 */
+void symmech_reset(SymmechModel *m);
+/* dx = y' of M y' = F + inputs at the instance's time, state, inputs and parameters; 0, or -1 where M is
+   singular or a rate is not finite */
+int symmech_derivatives(SymmechModel *m);
+/* integrate from r[VR_TIME] to t_end with DOP853 (error control rtol, atol per state); 0, or -1 on a
+   singular M, a non-finite state or a step size below round-off */
+int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
+
+#endif

@@ -1,0 +1,29 @@
+"""``symmech export fmu|c``: the runtime of the CLI command (the CLI only parses and prints)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from symmech.core.scene import SymmechError
+from symmech.export import build, model
+
+FMI_VERSIONS = (2, 3)
+TYPES = ("me", "cs")
+
+
+def export(what: str, scene, out, fmi: int = 3, kind: str = "me") -> Path:
+    """Export ``scene`` as an FMU file (``what`` = ``fmu``) or a C folder (``c``) at ``out``; its path."""
+    if fmi not in FMI_VERSIONS:
+        raise SymmechError(f"--fmi {fmi}: expected one of {', '.join(map(str, FMI_VERSIONS))}")
+    if kind not in TYPES:
+        raise SymmechError(f"--type {kind}: expected one of {', '.join(TYPES)}")
+    out = Path(out)
+    if what == "fmu" and out.suffix != ".fmu":
+        raise SymmechError(f"--out {out}: an FMU file name ends in .fmu")
+    if out.exists() and out.is_dir() != (what == "c"):
+        raise SymmechError(f"--out {out}: exists and is {'a folder' if out.is_dir() else 'a file'}")
+    if what == "c" and out.is_dir() and any(out.iterdir()) and not (out / build.MARKER).is_file():
+        raise SymmechError(f"--out {out} is a folder of other files (no {build.MARKER} of an earlier export); "
+                           "choose a new or empty folder")
+    build.compiler()  # refuse before any work when there is no C compiler
+    exported = model.load(scene)
+    return build.fmu(exported, out, fmi, kind) if what == "fmu" else build.c_folder(exported, out)

@@ -1,0 +1,169 @@
+"""What an exported model is made of: a scene's generated C module and its variables.
+
+Variables are Float64 and live in one array indexed by their FMI value reference (the C side's ``r[]``):
+time (0), the continuous states, the state derivatives that are not states themselves, the inputs, the
+parameters. A mechanism (``kind = "mechanism"``, the structural model method) exports its linear equations
+a q'' + b q' + c q = Q: states q and q' (named ``<coordinate>`` and ``der(<coordinate>)``), outputs also
+q'' (``der(<coordinate>,2)``), inputs Q (``Q_<coordinate>``, added to the rows of a q'' in M y' = F), the
+scene's parameters as tunable parameters.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from symmech.core import pipeline
+from symmech.core.context import Context
+from symmech.core.results import Table
+from symmech.core.scene import SymmechError
+
+IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+# generalized force unit by coordinate unit
+FORCE_UNIT = {"m": "N", "rad": "N m"}
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One FMI variable: ``vr`` its value reference, ``derivative_of`` the value reference of the state it is
+    the derivative of (None otherwise); ``start`` None where the model computes it (initial="calculated")."""
+
+    name: str
+    vr: int
+    causality: str  # independent, parameter, input, output
+    variability: str  # continuous, tunable
+    unit: str
+    description: str
+    start: float | None = None
+    derivative_of: int | None = None
+    nominal: float | None = None  # a state's magnitude: importers scale their absolute tolerance by it
+
+    @property
+    def initial(self) -> str | None:
+        if self.causality in ("independent", "input"):
+            return None
+        return "exact" if self.start is not None else "calculated"
+
+
+@dataclass(frozen=True)
+class ExportModel:
+    """A scene ready for C: the generated module ``identifier`` (its C99 text ``c_source``), the variable
+    layout (``n_x`` states, ``n_dx`` derivative outputs that are y'[dx_first:], ``n_u`` inputs added to the
+    rows ``u_row``... of F, ``n_p`` parameters) and the native run's main table (`symmech run`'s, None when
+    the scene has none)."""
+
+    identifier: str
+    description: str
+    c_source: str
+    variables: tuple[Variable, ...]
+    n_x: int
+    n_dx: int
+    dx_first: int
+    n_u: int
+    u_row: int
+    n_p: int
+    native: Table | None
+
+    def layout(self) -> dict[str, int]:
+        """First value reference of each block of ``r[]`` and its size (``N_REAL``)."""
+        vr_x = 1
+        vr_dx = vr_x + self.n_x
+        vr_u = vr_dx + self.n_dx
+        vr_p = vr_u + self.n_u
+        return {"VR_TIME": 0, "VR_X": vr_x, "VR_DX": vr_dx, "VR_U": vr_u, "VR_P": vr_p, "N_REAL": vr_p + self.n_p}
+
+
+def _structured(name: str) -> str:
+    """``name`` as an FMI structured name: an identifier as it is, anything else quoted."""
+    return name if IDENTIFIER.match(name) else "'" + name.replace("\\", "\\\\").replace("'", "\\'") + "'"
+
+
+def load(path) -> ExportModel:
+    """The export model of the scene at ``path`` (validated as `symmech run` does); SymmechError (exit 2) for a
+    kind or size the export does not cover, before any work."""
+    from symmech.smm.scene import SYMBOLIC_LIMIT
+
+    scene = pipeline.load(path)
+    if scene.kind.name != "mechanism":
+        raise SymmechError(f"kind = '{scene.kind.name}': `symmech export` covers mechanism scenes so far "
+                           "(docs/export.md)")
+    if scene.setup.n > SYMBOLIC_LIMIT:
+        raise SymmechError(f"mechanism '{scene.setup.m.name}' has {scene.setup.n} coordinates; `symmech export` "
+                           f"forms its equations symbolically, up to {SYMBOLIC_LIMIT} coordinates")
+    native = scene.kind.run(scene.setup, Context(quiet=True)).tables.get("free_response")
+    return mechanism(scene.setup, native)
+
+
+def mechanism(setup, native: Table | None) -> ExportModel:
+    """The export model of a prepared mechanism scene (``symmech.smm.scene.Setup``) whose native run's main
+    table is ``native``."""
+    from symmech.core import emit
+    from symmech.smm import numeric
+    from symmech.smm.derive import module_spec
+
+    m, sc = setup.m, setup.scene
+    reserved = sorted(set(m.parameters) & emit.C99.reserved)
+    if reserved:
+        raise SymmechError(f"parameters.{reserved[0]}: a reserved word in C; rename it to export the scene")
+    if sc["equilibrium"]["solve"]:
+        m, _ = numeric.solve_equilibrium(m)
+    spec = module_spec(m)
+    n = len(m.coordinates)
+    ini = sc["initial"] or {}
+    q0 = list(ini.get("q") or [0.0] * n)
+    v0 = list(ini.get("qdot") or [0.0] * n)
+    q_nominal, v_nominal = _nominals(m, q0, v0)
+    names = [_structured(c.name) for c in m.coordinates]
+    variables = [Variable("time", 0, "independent", "continuous", "s", "simulation time")]
+    vr = 1
+    for i, c in enumerate(m.coordinates):
+        variables.append(Variable(names[i], vr + i, "output", "continuous", c.unit,
+                                  f"coordinate {c.name} ({c.kind})", q0[i], nominal=q_nominal))
+    for i, c in enumerate(m.coordinates):
+        variables.append(Variable(f"der({names[i]})", vr + n + i, "output", "continuous", f"{c.unit}/s",
+                                  f"rate of {c.name}", v0[i], derivative_of=vr + i, nominal=v_nominal))
+    for i, c in enumerate(m.coordinates):
+        variables.append(Variable(f"der({names[i]},2)", vr + 2 * n + i, "output", "continuous", f"{c.unit}/s^2",
+                                  f"acceleration of {c.name}", derivative_of=vr + n + i))
+    for i, c in enumerate(m.coordinates):
+        variables.append(Variable(_structured(f"Q_{c.name}"), vr + 3 * n + i, "input", "continuous",
+                                  FORCE_UNIT[c.unit], f"generalized force on {c.name} (a q'' + b q' + c q = Q)", 0.0))
+    for k, p in enumerate(m.parameters.values()):
+        variables.append(Variable(_structured(p.name), vr + 4 * n + k, "parameter", "tunable", p.unit,
+                                  p.meaning or f"parameter {p.name}", float(p.value)))
+    clash = {v.name for v in variables if [w.name for w in variables].count(v.name) > 1}
+    if clash:
+        raise SymmechError(f"parameters and coordinates share the names {sorted(clash)}: rename them to export")
+    return ExportModel(spec.name, spec.doc, emit.render(spec, emit.C99), tuple(variables), 2 * n, n, n, n, n,
+                       len(m.parameters), native)
+
+
+def _nominals(m, q0: list, v0: list) -> tuple[float, float]:
+    """Magnitudes of the coordinates and rates of the free motion from (q0, v0): the larger of the start
+    amplitudes, coordinates and rates related by the lowest positive natural frequency (the smaller rate
+    scale, so that an importer's absolute tolerance resolves the slowest mode too); 1 at rest."""
+    from symmech.smm import numeric
+
+    num = numeric.assemble(m)
+    w2 = scipy.linalg.eigvals(num.c.toarray(), num.a.toarray())
+    positive = np.abs(w2[np.isfinite(w2) & (w2.real > 0)])
+    omega = math.sqrt(float(positive.min())) if positive.size else 1.0
+    q = max(max(map(abs, q0)), max(map(abs, v0)) / omega)
+    return (q, q * omega) if q > 0 else (1.0, 1.0)
+
+
+# Accuracy of an exported run (tests, benchmarks). A series below this fraction of the largest coordinate series
+# vanishes in exact arithmetic (a coordinate the start state does not excite, moved only by the round-off of the
+# assembled c, ~1e-17 of the motion): its own magnitude is round-off, so it is compared against the largest.
+VANISHING = 1e-9
+
+
+def deviation(got: np.ndarray, native: np.ndarray) -> float:
+    """Largest deviation of the columns of ``got`` from ``native``, each relative to the native series' largest
+    magnitude (a vanishing series: relative to the largest of all)."""
+    scale = np.abs(native).max(axis=0)
+    scale = np.where(scale < VANISHING * scale.max(), scale.max(), scale)
+    return float(np.max(np.abs(got - native).max(axis=0) / scale))
