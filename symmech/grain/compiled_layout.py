@@ -105,6 +105,7 @@ IMPACT_ROW = Layout("GrainImpact", (
 # Offsets by field name (P_AT.mass == 3): what the loop indexes with.
 P_AT, X_AT, C_AT, S_AT, I_AT = PARAMS.slots, STATE.slots, CARRY.slots, SLIDE.slots, IMPACT_ROW.slots
 N_SLIDE = SLIDE.size
+LAYOUTS = (PARAMS, STATE, CARRY, SLIDE, IMPACT_ROW)  # symmech.core.engines: describe
 LAW_COULOMB, LAW_PRINTED = 0.0, 1.0
 
 # Integer codes are numpy scalars, not Python ints: numba types a Python int constant passed to a jitted

@@ -105,16 +105,16 @@ def _is_sphere(p):
 
 @jit
 def _rhs(t, y, args, out):
-    """Right-hand side of the toolkit's steppers, args = (kind, sp): ``ROT`` torque-free rotation y = (q, w
-    body), sp = inertia; ``SLIP``/``STICK`` sliding, sp the sliding parameters."""
-    kind, sp = args
+    """Right-hand side of the toolkit's steppers, args = (kind, data): ``ROT`` torque-free rotation y = (q, w
+    body), data = the principal inertia (3,); ``SLIP``/``STICK`` sliding, data the sliding parameters (SLIDE)."""
+    kind, data = args
     if kind == ROT:
         qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
-        wd = gm.euler_equations_scalar(sp[0], sp[1], sp[2], y[4], y[5], y[6])
+        wd = gm.euler_equations_scalar(data[0], data[1], data[2], y[4], y[5], y[6])
         out[:4] = qd
         out[4:7] = wd
     else:
-        _slide_rhs(t, y, sp, kind == STICK, out)
+        _slide_rhs(t, y, data, kind == STICK, out)
 
 
 @jit

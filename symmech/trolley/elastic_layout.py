@@ -59,3 +59,4 @@ GEOMETRY = Layout("ElasticGeometry", (
 ))
 F_AT, CH_AT, G_AT = FLAGS.slots, CHANNELS.slots, GEOMETRY.slots
 N_CHANNELS, N_GEOMETRY = CHANNELS.size, GEOMETRY.size
+LAYOUTS = (MODEL, FLAGS, CHANNELS, GEOMETRY)  # symmech.core.engines: describe
