@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f4c879bc5431c94558a01a3028112a23a74bf722ae99214a4cb84e692d1509fc
-# source key 6424b9cd5b47c97a0d4f2c4bf9b5ccb1db12ff3ddf4ab524ede2feaed978dfbb
+# source key 2093be8e1aef666272f046374e25a9135aa79195b6367672ee8d371865fe5203
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

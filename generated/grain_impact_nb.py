@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d71ca9f6afdaa144d12944f621b7b1dc3c8a2190fb0bfdc85661dce8e38fa295
-# source key 6424b9cd5b47c97a0d4f2c4bf9b5ccb1db12ff3ddf4ab524ede2feaed978dfbb
+# source key 2093be8e1aef666272f046374e25a9135aa79195b6367672ee8d371865fe5203
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

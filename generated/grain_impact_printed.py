@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 498e046eca310d14e44f494678f4683cc253a90af5afe239b78e358a05b2f716
-# source key 3f22b5c7c0df0878f3f31f86bcff4e6df62606f856c3ae5564502f7b5eeda893
+# source key 6ea78b2df1924ac3af45b154e41c69688cb290703f4a6021d7a50929ad9a8c82
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 263418879c95c30805df7bf816084c70b7c8a7ee241699819b1a742ee4973a9f
-# source key 3f22b5c7c0df0878f3f31f86bcff4e6df62606f856c3ae5564502f7b5eeda893
+# source key 6ea78b2df1924ac3af45b154e41c69688cb290703f4a6021d7a50929ad9a8c82
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 07e4457aa7a8074c60092e110dd4d0de3d62631eff50311da037a1289ad04f28
-# source key 84bb7b8a2ebe3c5a02f958f925599fc696692370e266571746c1a79a1f7a0c95
+# source key a4f9729285bb1eb4acc3c7c9791c1d6a7d8d33b583afabb46dd5263a89bf018e
 # body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 02ee9fdf6ba5bed42585bdcd8e6c12354523b5b4784736fa705a9fa3b875dab1
-# source key 84bb7b8a2ebe3c5a02f958f925599fc696692370e266571746c1a79a1f7a0c95
+# source key a4f9729285bb1eb4acc3c7c9791c1d6a7d8d33b583afabb46dd5263a89bf018e
 # body sha256 9c4b29f0ccea7f755c1066d4a7e8d78a9070785fdbe6eaa54b99c27c16c9968c
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

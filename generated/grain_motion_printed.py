@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4c89b983042d47ad1a4e7cbc4986666cbd700152067fcf35a96bafe03dcd1e3a
-# source key c9a2cfac01db74458e2e8cac4982698c902aeb98e1e12c89caf26e270a0ae26e
+# source key 51b0a2465edc9c96d4d569d792c6f931ebb218f185176aba54fe7315c25dbe25
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

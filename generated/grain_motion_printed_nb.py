@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 91f652f9e5e2a8667def4bd94cd9440ba6d909879c01d82602c64b3ee78f3655
-# source key c9a2cfac01db74458e2e8cac4982698c902aeb98e1e12c89caf26e270a0ae26e
+# source key 51b0a2465edc9c96d4d569d792c6f931ebb218f185176aba54fe7315c25dbe25
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

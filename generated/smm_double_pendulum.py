@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1097ee70fdf58a6a13c3deddfe6c3e90b8797f301d79e472a857274f66a1f9f9
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

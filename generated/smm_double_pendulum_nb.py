@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6c71876f392b756f078a31c5ea45ac73b02b64936b349792b8164f4a94096446
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 ee0b337805a156368d52061587c994bf89595f3d2bc50ca45db8d795edd46b49
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

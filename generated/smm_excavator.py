@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d92e71f5615999394c89ec27d58b926fb5a5777e95b0af2520b0959ef8fd7ef7
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

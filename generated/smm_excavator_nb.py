@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6a4b3ed1baceda275a6f2da8ef11e1b94dcf069d5c64d4d37b4ae2beb91d0a97
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 f51e88dcd17aa736dcd8c31b0c5a6b8a40ad39980583bfc2625aa5b48b4385dd
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

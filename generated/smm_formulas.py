@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4b6f28bf791f26dc767836d2dee65ff14384b2122df5370da47f19605003942b
-# source key b3d50e16a23a6c9f303f402354351c0271e487b68f443ec9342162162f042b22
+# source key 3c0b2fd90da87b2e7ce56860891dd442bd09de40decde03551c3b896527b4833
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

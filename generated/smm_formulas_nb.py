@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 df4ef760a153fc2e3a735b15446afe950bedd8c9057a61ccad77bda661bc259f
-# source key b3d50e16a23a6c9f303f402354351c0271e487b68f443ec9342162162f042b22
+# source key 3c0b2fd90da87b2e7ce56860891dd442bd09de40decde03551c3b896527b4833
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1c367bd21967d0702ae220437dc5f356e39c46afcd2b597ae714a6419f1da00b
-# source key e4a1a3b232d9cdfe2f1cebe67068ad12be03c5c725f1fa4dbcc296320f575abd
+# source key 6fa65addf86a80389ffa52aa9242cd6ad70d2f5f0f528f7a5b36278143c7ca61
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

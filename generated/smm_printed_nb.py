@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 82ddc6921d8c335b2e2b16f665f2817fae8a364e4ad3457936ee9ba11717482f
-# source key e4a1a3b232d9cdfe2f1cebe67068ad12be03c5c725f1fa4dbcc296320f575abd
+# source key 6fa65addf86a80389ffa52aa9242cd6ad70d2f5f0f528f7a5b36278143c7ca61
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9d24a13b65ec0fd9ba659e1bec9f9f394c283ae206ac59f22ee07d3881f4bcb9
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

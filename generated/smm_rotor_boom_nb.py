@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3f7a4b9d983729c81475f271b5525dc64cbcc3d2b831090860c7f404f002171d
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 3e58a72ec1d24046edbed972bd984d826383c90d7cd71dd2987ff555c4c3e493
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

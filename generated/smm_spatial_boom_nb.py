@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 56d3e2580ce5f0f95b1560a1db2ba92a292d2bde8d86fbd512802eb02ddefee5
-# source key efb87362870f6f028b47ee69e0a2a45c6a7c61bb58c99b66d9a7f108051c3758
+# source key d002f9846cb9edc67ba25c621ee9409cc3feadb6aeaf4c32fa6844b98668ccd9
 # body sha256 488092b385d22a3423efd4187a4f730778d474a8cd3a463b1bb4429dd479635f
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f1b46ec3e8316cbe31abd6252b78a64761265c54df71cca4ce2cd79d51942a86
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# source key 6a9e6e90af7932c8a3abe40320c76f03fc7fc49d1ecbeb3ba505e9d00b849c18
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

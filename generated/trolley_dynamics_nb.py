@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ab5b6314150cae48202490b1a0786bbf529a36e435dd4221ecb20479d00d6b52
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# source key 6a9e6e90af7932c8a3abe40320c76f03fc7fc49d1ecbeb3ba505e9d00b849c18
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1c3dae8ed9f839aae351b3d3c8c09964ac82b56775483f18c95a992f1169d3e6
-# source key 586e85cd22a6ba97e207f4d1ee493c0ee22872a421f6e8fb23478f115da14e13
+# source key 42fb8e9124cd5e380034ee7d3c033cb70005d27c982e73990f9923c98ce62bae
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0e108a875345b936fcfed09b22b094ca487c6c1a1f068fa3d1f313862375cbba
-# source key 586e85cd22a6ba97e207f4d1ee493c0ee22872a421f6e8fb23478f115da14e13
+# source key 42fb8e9124cd5e380034ee7d3c033cb70005d27c982e73990f9923c98ce62bae
 # body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 

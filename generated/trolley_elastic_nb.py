@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fd37278e2ef5490fbe8fd71b3d911a9e1d8553fc535c732c253af0e9bd275025
-# source key 586e85cd22a6ba97e207f4d1ee493c0ee22872a421f6e8fb23478f115da14e13
+# source key 42fb8e9124cd5e380034ee7d3c033cb70005d27c982e73990f9923c98ce62bae
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 817e64db81ca2013b5b123500ecf940b44a91e33db95eb2fa5c6bb5cf508b9d8
-# source key ea033c7abb4d1764a7a89f31e722a8619a7c573eb513c3d0142f47e64e48bd2c
+# source key aeb6424d5782763f674ce2f57bec5a6001dc10c1b254622d84dd0207936e8a8f
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

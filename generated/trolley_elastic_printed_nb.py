@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a14d9b2ca61ae9d73aa9005d08617714cd49f71ee08caa2219f19eb38e4caca1
-# source key ea033c7abb4d1764a7a89f31e722a8619a7c573eb513c3d0142f47e64e48bd2c
+# source key aeb6424d5782763f674ce2f57bec5a6001dc10c1b254622d84dd0207936e8a8f
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

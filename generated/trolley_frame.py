@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d0f26b6c528266d804490da8def842db5fee09c1813362d69b4568e9b4222883
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# source key 6a9e6e90af7932c8a3abe40320c76f03fc7fc49d1ecbeb3ba505e9d00b849c18
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

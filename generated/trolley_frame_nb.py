@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0a188cd07f9c3823cb7be08ca772842f923ff9e538e50ab3627312b84f84685c
-# source key 0b1ff77951d7be148b7d8d3f5a996a7809e7796b531285c3b93a7deb244e2bf7
+# source key 6a9e6e90af7932c8a3abe40320c76f03fc7fc49d1ecbeb3ba505e9d00b849c18
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8d79a029caa1edbd1230767573b3ef1f404977b1417ea90599097afa6c3dca9a
-# source key 95cde1c35537ffb5db3a6292240ec156f6233dfa8851486509cd8bb067eabd2e
+# source key 80be827bd710dfddf7a59d8476f3ebb2e206cc61acb91243e6c93a9e680bb867
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 
