@@ -209,7 +209,7 @@ def _accelerations(mdl, ch, q, qd):
 
 @jit
 def _rhs(t, y, args, out):
-    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model tuple, spline table, calls (1,))."""
+    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model record (elastic_layout.MODEL), spline table, calls (1,))."""
     mdl, tab, calls = args
     calls[0] += 1.0
     n = int(mdl.flags[F_AT.n])
@@ -415,7 +415,7 @@ def _traction_terms(mdl, g, q, qd, V, p0):
 
 @jit
 def _rhs_traction(t, y, args, out):
-    """y' of y = [q, q̇, E_d, W, s, V0] (2 N + 4,); args = (model tuple, geometry table, calls (1,), traction key)."""
+    """y' of y = [q, q̇, E_d, W, s, V0] (2 N + 4,); args = (model record, geometry table, calls (1,), traction key)."""
     mdl, tab, calls, key = args
     calls[0] += 1.0
     n = int(mdl.flags[F_AT.n])
