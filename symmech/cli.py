@@ -52,8 +52,6 @@ def cmd_sweep(ns) -> int:
 def cmd_warm(ns) -> int:
     import time
 
-    from symmech.core import engines
-
     say = None if ns.quiet or ns.background else (lambda text: print(f"symmech: {text}", file=sys.stderr))
     for name, engine in engines.engines().items():
         if ns.engine not in ("all", name):
