@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d4319aba698cc1c9f366d990410449fd69a3cec315074a9e0c84cd7069bbd195
-// source key 8db4cde1b07ff07f99029579a12bc3a6e9c0fb2402b480b4238ef4239bbac0ce
+// source key d9f8b4057db4d6ad8876387acd856560d4a19855026dba0fcd82a245015e7206
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 74badcbe93bb7bcbe7c6c70c07e1ac41c8a0005bbfb9c4862dbe829ab6d8453e
-# source key 8db4cde1b07ff07f99029579a12bc3a6e9c0fb2402b480b4238ef4239bbac0ce
+# source key d9f8b4057db4d6ad8876387acd856560d4a19855026dba0fcd82a245015e7206
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

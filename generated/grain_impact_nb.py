@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5ed7b2691f70e5550ce28a4ec3c9f459b4abad63561bb72cad6c20197b219b38
-# source key 8db4cde1b07ff07f99029579a12bc3a6e9c0fb2402b480b4238ef4239bbac0ce
+# source key d9f8b4057db4d6ad8876387acd856560d4a19855026dba0fcd82a245015e7206
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

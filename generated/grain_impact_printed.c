@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a2fe40b7dab70c9a9754e2bffff551fc063ed96ff87c58d03183c48eecb4a853
-// source key bd60ebbf248d9446c460f3d38d01dbc07bc4e33279f95b22da915cc01d73c118
+// source key a4115810ad420ef46a38d3dcbf839c034e93ce8c60a99371a96c0cd66bdf2338
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

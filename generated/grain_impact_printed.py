@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 85dbb61392d01802001412144c6765584176463d2642026489f5301e8fee4181
-# source key bd60ebbf248d9446c460f3d38d01dbc07bc4e33279f95b22da915cc01d73c118
+# source key a4115810ad420ef46a38d3dcbf839c034e93ce8c60a99371a96c0cd66bdf2338
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

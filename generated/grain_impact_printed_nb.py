@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e6bc79fb5cbec3b209f21f1573686a299a1b7d1c1579af2f199c4bba54119146
-# source key bd60ebbf248d9446c460f3d38d01dbc07bc4e33279f95b22da915cc01d73c118
+# source key a4115810ad420ef46a38d3dcbf839c034e93ce8c60a99371a96c0cd66bdf2338
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 77a754b3f421c4355d266d5de70c63fa4a12e6571e70b9ff06c6ca640609038a
-// source key 4ea3d4af924b0e3c6fc9e453b4b8bcbc87022e0f26d297b754421f87388bd9fa
+// source key ffab85d0d015f4bdb142392ea76548f4d93390f6ce8f69cc2fb99dabf5b5ae70
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1e78bff939177525602fd5c3c39332e2176d37ba605e4888d528bd35a45645ea
-# source key 4ea3d4af924b0e3c6fc9e453b4b8bcbc87022e0f26d297b754421f87388bd9fa
+# source key ffab85d0d015f4bdb142392ea76548f4d93390f6ce8f69cc2fb99dabf5b5ae70
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25bc6225c25b3522e6381c683cfcd4a704c11e90f53cccdb96d6760c36c5f4df
-# source key 4df5d43e47f870395b60bbd5c978016b3516ce7b3aaf5910aa381fec6a9c9cdd
+# source key c64863aef878864508d7b24438b0be96d7854f159da3bd9c6d748df2ec26ed8d
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 44a0c3f5befb32b02d1cc77a79c3e2ca2678a22111207ec5de5d7fcde990bb10
-# source key 4df5d43e47f870395b60bbd5c978016b3516ce7b3aaf5910aa381fec6a9c9cdd
+# source key c64863aef878864508d7b24438b0be96d7854f159da3bd9c6d748df2ec26ed8d
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 8e1f83659fa64affd6185873d0c21b72d57ae973dcec3840f71cab6bb25ff7ad
-// source key cd885346079fc1cc2c9fa08f3c30eab52721013c15fd4c4ce30a708b266efcb1
+// source key 427fb2d7505cda11afb1aa0a62c2859ed3250a4aea0289b07fe44144ab3c86ab
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

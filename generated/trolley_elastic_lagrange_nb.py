@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 68042afcb72ecbcd4848513170552ef4d8496240fb3816e210a1cdd457c75493
-# source key cd885346079fc1cc2c9fa08f3c30eab52721013c15fd4c4ce30a708b266efcb1
+# source key 427fb2d7505cda11afb1aa0a62c2859ed3250a4aea0289b07fe44144ab3c86ab
 # body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
-# source key 4df5d43e47f870395b60bbd5c978016b3516ce7b3aaf5910aa381fec6a9c9cdd
+# source key c64863aef878864508d7b24438b0be96d7854f159da3bd9c6d748df2ec26ed8d
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -17,6 +17,7 @@ import threading
 from pathlib import Path
 
 from symmech import __version__
+from symmech.core import engines
 from symmech.core.context import DEFAULT_MAX_TIME
 from symmech.core.scene import SymmechError
 
@@ -51,20 +52,19 @@ def cmd_sweep(ns) -> int:
 def cmd_warm(ns) -> int:
     import time
 
-    from symmech.grain import compiled
-    from symmech.trolley import elastic_compiled
-
     say = None if ns.quiet or ns.background else (lambda text: print(f"symmech: {text}", file=sys.stderr))
-    engines = {"grain": compiled.ENGINE, "elastic": elastic_compiled.ENGINE}
-    for name in (engines if ns.engine == "all" else [ns.engine]):
+    for name, engine in engines.engines().items():
+        if ns.engine not in ("all", name):
+            continue
         started = time.perf_counter()
-        if not engines[name].warm(wait=not ns.background, say=say, ahead=True):
+        if not engine.warm(wait=not ns.background, say=say, ahead=True):
             continue  # --background: another builder holds the lock
         if not ns.background:
-            built = engines[name].ahead_of_time()
+            builder = engine.builder()
+            built = builder.ahead_of_time()
             ahead = f"; built ahead of time: {built.__file__}" if built is not None else ""
             print(f"compiled {name} engine ready in {time.perf_counter() - started:.1f} s; cache: "
-                  f"{engines[name].cache_dir()}{ahead}")
+                  f"{builder.cache_dir()}{ahead}")
     return 0
 
 
@@ -288,18 +288,19 @@ def build_parser() -> argparse.ArgumentParser:
                          "within this, at 95 %% (default 0.001 m/s)")
     sw.set_defaults(func=cmd_sweep)
 
-    w = sub.add_parser("warm", help="compile the grain and elastic trolley engines into numba's cache now (for "
-                                    "containers, clusters, CI); prints where the cache is", description="Compile "
-                       "every compiled kernel a grain run or an elastic trolley run may need into numba's cache, "
+    w = sub.add_parser("warm", help="compile the compiled engines into numba's cache now (for containers, "
+                                    "clusters, CI); prints where the cache is", description="Compile "
+                       "every compiled kernel a run of the chosen engines may need into numba's cache, "
                        "once per cache: NUMBA_CACHE_DIR when set, else "
                        "__pycache__ beside the installed package (numba's user-wide cache when that is read-only). "
-                       "With a C compiler, the grain engine is also built ahead of time beside the cache, so that "
-                       "later runs load it without numba. "
+                       "With a C compiler, an engine that has an ahead-of-time build (the grain's) is also built "
+                       "beside the cache, so that later runs load it without numba. "
                        "A second `symmech warm` on the same cache waits for the first and then finds it built. "
                        "Exit 0 once the cache holds the engine.")
     w.add_argument("--quiet", action="store_true", help="print only the cache location")
-    w.add_argument("--engine", choices=("all", "grain", "elastic"), default="all",
-                   help="which compiled engine to build (default: all)")
+    w.add_argument("--engine", choices=engines.Choices(), default="all", metavar="NAME",  # no listing at build
+                   help="which compiled engine to build: %(choices)s (default: all; the registered engines, "
+                        "docs/ARCHITECTURE.md)")
     w.add_argument("--background", action="store_true", help=argparse.SUPPRESS)  # the detached builder of a run
     w.set_defaults(func=cmd_warm)
 

@@ -135,28 +135,27 @@ def test_impact_log_built_on_first_use_is_the_same_everywhere(tmp_path):
 
 
 def test_parameter_vector_layout():
-    """pack lists the fields in the order of the P_* indices; Model.active() zeroes what is switched off and is
+    """pack fills every field of the declared layout by name; Model.active() zeroes what is switched off and is
     the model itself when nothing is (pack reads the active model)."""
     vib = flight.Vibration(1.1e-3, 2 * math.pi * 23.0, 0.7, (0.6, 0.0, 0.8))
     law = ImpactLaw("printed", e_n=0.41, e_t=-0.31, mu=0.52, e=0.43, lam=1.37, check_printed=True)
     model = motion.Model((3e-3, 2e-3, 1e-3), 2.5e-5, (0.5, -0.2, -9.7), vib, law, 0.33)
     num = motion.Numerics(tolerance=1e-8, scan_step=2e-4, rest_velocity=3e-5, max_impacts=77, sample_interval=5e-3)
     p = compiled.pack(model.active(), num)
-    assert model.active() is model and p.shape == (compiled.N_PARAMS,)
-    expected = {compiled_layout.P_AXES: model.axes, compiled_layout.P_MASS: [2.5e-5], compiled_layout.P_INERTIA: model.inertia,
-                compiled_layout.P_G: model.g_k, compiled_layout.P_AMP: [1.1e-3], compiled_layout.P_OMEGA: [2 * math.pi * 23.0],
-                compiled_layout.P_PHASE: [0.7], compiled_layout.P_DIR: vib.direction, compiled_layout.P_LAW: [compiled.LAW_PRINTED],
-                compiled_layout.P_EN: [0.41], compiled_layout.P_ET: [-0.31], compiled_layout.P_MU_IMPACT: [0.52], compiled_layout.P_E: [0.43],
-                compiled_layout.P_LAM: [1.37], compiled_layout.P_CHECK: [1.0], compiled_layout.P_MU: [0.33], compiled_layout.P_ROTATION: [1.0],
-                compiled_layout.P_TOL: [1e-8], compiled_layout.P_SCAN: [2e-4], compiled_layout.P_REST: [3e-5],
-                compiled_layout.P_MAX_IMPACTS: [77.0], compiled_layout.P_SAMPLE: [5e-3], compiled_layout.P_PERIOD: [1 / 23.0]}
-    for index, values in expected.items():
-        np.testing.assert_allclose(p[index:index + len(values)], values, rtol=1e-15)
-    assert sum(len(v) for v in expected.values()) == compiled.N_PARAMS
+    assert model.active() is model and p.shape == (31,)
+    expected = {"axes": model.axes, "mass": 2.5e-5, "inertia": model.inertia, "g": model.g_k, "amplitude": 1.1e-3,
+                "omega": 2 * math.pi * 23.0, "phase": 0.7, "direction": vib.direction, "law": compiled.LAW_PRINTED,
+                "e_n": 0.41, "e_t": -0.31, "mu_impact": 0.52, "e": 0.43, "lam": 1.37, "check_printed": 1.0, "mu": 0.33,
+                "rotation": 1.0, "tolerance": 1e-8, "scan_step": 2e-4, "rest_velocity": 3e-5, "max_impacts": 77.0,
+                "sample_interval": 5e-3, "period": 1 / 23.0}
+    got = compiled_layout.PARAMS.unpack(p)
+    assert got.keys() == expected.keys()
+    for name, values in expected.items():
+        np.testing.assert_allclose(got[name], values, rtol=1e-15, err_msg=name)
     off = replace(model, effects=motion.Effects(vibration=False, friction=False, rotation=False))
-    p = compiled.pack(off.active(), num)
-    assert p[compiled_layout.P_AMP] == p[compiled_layout.P_MU] == p[compiled_layout.P_ROTATION] == 0.0
-    assert p[compiled_layout.P_OMEGA] == 2 * math.pi * 23.0 and p[compiled_layout.P_MU_IMPACT] == 0.52
+    got = compiled_layout.PARAMS.unpack(compiled.pack(off.active(), num))
+    assert got["amplitude"] == got["mu"] == got["rotation"] == 0.0
+    assert got["omega"] == 2 * math.pi * 23.0 and got["mu_impact"] == 0.52
 
 
 def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):

@@ -24,7 +24,7 @@ def stand_in(monkeypatch, batches):
         t, status, regime = batches[len(seen)]
         seen.append((p, y.copy(), t_end, rows, imps, warns, carry, phases))
         y = y.copy()
-        y[0], carry[compiled_layout.C_REGIME] = t, regime
+        y[0], carry[compiled_layout.C_AT.regime] = t, regime
         return y, rows, imps, warns, status
 
     monkeypatch.setattr(compiled, "_entry", lambda: run)

@@ -9,6 +9,7 @@ import pytest
 from symmech.core.scene import SymmechError
 from symmech.grain import compiled, compiled_layout, flight, motion
 from symmech.grain.coulomb_law import ImpactLaw
+from symmech.grain.compiled_layout import C_AT
 
 MODEL = motion.Model((1e-3, 1e-3, 1e-3), 2e-6, (0.0, 0.0, -9.81), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
                      ImpactLaw("printed", e=0.5, lam=0.5), 0.3)
@@ -77,9 +78,9 @@ def test_impact_log_from_the_compiled_rows_has_the_python_loops_fields():
 
 def test_energy_budget_of_a_finished_run_from_its_carry():
     """Start 2.0 J, end 1.25 J, work 0.5 J, losses 0.75, 0.25, 0.125 J: residual = end - start - (work - losses)."""
-    carry = np.zeros(compiled.N_CARRY)
-    carry[[compiled.C_E_START, compiled.C_E_END, compiled.C_WORK]] = 2.0, 1.25, 0.5
-    carry[[compiled.C_IMPACTS, compiled.C_LAND_LOSS, compiled.C_SLIDE_LOSS]] = 0.75, 0.25, 0.125
+    carry = compiled.CARRY.zeros()
+    carry[[C_AT.e_start, C_AT.e_end, C_AT.work]] = 2.0, 1.25, 0.5
+    carry[[C_AT.impacts, C_AT.land_loss, C_AT.slide_loss]] = 0.75, 0.25, 0.125
     report = compiled._Budget(MODEL, carry).report(None, 1e-6)
     residual = 1.25 - 2.0 - (0.5 - 0.75 - 0.25 - 0.125)
     assert report == {"start_J": 2.0, "end_J": 1.25, "input_by_surface_J": 0.5, "lost_in_impacts_J": 0.75,
@@ -103,9 +104,9 @@ def test_state_of_a_result_vector_is_made_of_its_views():
     (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None),            # nothing at all: relative residual 0
 ])
 def test_relative_residual_of_the_budget_is_over_its_largest_entry(start, end, work, impacts, landings, sliding, scale):
-    carry = np.zeros(compiled.N_CARRY)
-    carry[[compiled.C_E_START, compiled.C_E_END, compiled.C_WORK]] = start, end, work
-    carry[[compiled.C_IMPACTS, compiled.C_LAND_LOSS, compiled.C_SLIDE_LOSS]] = impacts, landings, sliding
+    carry = compiled.CARRY.zeros()
+    carry[[C_AT.e_start, C_AT.e_end, C_AT.work]] = start, end, work
+    carry[[C_AT.impacts, C_AT.land_loss, C_AT.slide_loss]] = impacts, landings, sliding
     report = compiled._Budget(MODEL, carry).report(None, 1e-6)
     residual = end - start - (work - impacts - landings - sliding)
     assert report["residual_J"] == residual

@@ -165,6 +165,8 @@ def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
     ok = values[0][0, 0, [0, 2], 0]
     assert table.column("mean_vx")[0] == pytest.approx(ok.mean(), rel=1e-15)
     assert res.summary["failed_grains"][0]["grain"] == 1 and res.warnings
+    ds = table.to_xarray()  # over the swept axis, its values the coordinate
+    assert ds.mean_vx.dims == ("x",) and ds.x.values.tolist() == [FREQ] and ds.failed.sel(x=FREQ).item() == 1.0
 
 
 def test_a_grain_that_warns_is_averaged_in_and_listed(monkeypatch):

@@ -79,6 +79,9 @@ def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path):
     assert margin[0] == pytest.approx(limit - n2.max(), rel=1e-12)
     assert list(res.tables["sweep"].column("admissible")) == [0.0, 1.0]
     assert res.summary["worst_point"]["x"] == limit and res.summary["best_point"]["x"] == 6.0
+    ds = res.tables["sweep"].to_xarray()  # over the swept axis, in the order swept
+    assert ds.comfort_margin.dims == ("x",) and ds.x.values.tolist() == [limit, 6.0]
+    assert ds.admissible.sel(x=6.0).item() == 1.0
     # a line over x (no y): one chart per number the rigid model has
     assert sorted(p.name for p in res.plots(tmp_path)) == ["sweep_comfort_margin.png", "sweep_peak_reaction_max.png"]
 

@@ -74,8 +74,9 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
-def _scene_modules():
-    """Names of every ``symmech.<paper>.*scene`` module, in package order, without importing them."""
+def paper_modules(suffix: str):
+    """Names of every ``symmech.<paper>.*<suffix>`` module, in package order, without importing them (scene
+    kinds: ``scene``; compiled engines, :mod:`symmech.core.engines`: ``engine``)."""
     import symmech
 
     for pkg in pkgutil.iter_modules(symmech.__path__):
@@ -83,7 +84,7 @@ def _scene_modules():
             continue
         path = [str(Path(symmech.__path__[0]) / pkg.name)]
         for m in pkgutil.iter_modules(path):
-            if m.name.endswith("scene"):
+            if m.name.endswith(suffix):
                 yield f"symmech.{pkg.name}.{m.name}"
 
 
@@ -96,7 +97,7 @@ def _discover(until: str | None = None) -> None:
         last = module.rpartition(".")[2]
         return until is None or until not in module, last not in ("scene", f"{until}_scene")
 
-    for name in sorted(_scene_modules(), key=rank):
+    for name in sorted(paper_modules("scene"), key=rank):
         if until in _KINDS:
             return
         importlib.import_module(name)

@@ -41,12 +41,17 @@ class Table:
 
     ``text`` optionally holds string columns by name (e.g. a regime or a solver
     status per row), written after the numeric ones.
+
+    ``grid`` declares a long table: {dimension: key column}, outermost first, the rows running over every
+    combination of the key columns' values in row-major order (one row per instant and mode: ``{"t": "t",
+    "mode": "mode_id"}``). Its :meth:`to_xarray` has those dimensions.
     """
 
     columns: tuple[Column, ...]
     data: np.ndarray
     doc: str = ""
     text: dict[str, list[str]] = field(default_factory=dict)
+    grid: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self):
         data = np.asarray(self.data, dtype=float)
@@ -66,9 +71,13 @@ class Table:
     def to_xarray(self, index: bool = True):
         """The table as an ``xarray.Dataset``, one variable per column with ``units`` and
         ``long_name`` attrs. ``index``: the first column is the coordinate (a time series,
-        dimension named after it); otherwise every column is a variable over ``row``."""
+        dimension named after it), or for a long table (``grid``) the grid's dimensions, each with its key
+        column's values as coordinate and the text columns as coordinates over them (``ds.f.sel(mode=1)``);
+        otherwise every column is a variable over ``row``."""
         import xarray as xr
 
+        if index and self.grid:
+            return self._grid_dataset()
         first = self.columns[0].name
         dim = first if index else "row"
         variables = {c.name: (dim, self.data[:, i], {"units": c.unit, "long_name": c.doc or c.name})
@@ -76,6 +85,28 @@ class Table:
         variables.update({name: (dim, np.asarray(values, dtype=str)) for name, values in self.text.items()})
         coords = {first: (first, self.data[:, 0], {"units": self.columns[0].unit,
                                                    "long_name": self.columns[0].doc or first})} if index else {}
+        return xr.Dataset(variables, coords=coords, attrs={"description": self.doc})
+
+    def _grid_dataset(self):
+        """The long table as a Dataset over its grid's dimensions (ValueError when its rows are not the grid)."""
+        import xarray as xr
+
+        def attrs(c: Column) -> dict:
+            return {"units": c.unit, "long_name": c.doc or c.name}
+
+        by_name = {c.name: (i, c) for i, c in enumerate(self.columns)}
+        keys = np.column_stack([self.data[:, by_name[col][0]] for col in self.grid.values()])
+        axes = [k[np.sort(np.unique(k, return_index=True)[1])] for k in keys.T]  # in order of appearance
+        shape = tuple(a.size for a in axes)
+        full = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(axes))
+        if keys.shape != full.shape or not np.array_equal(keys, full):
+            raise ValueError(f"table rows are not the grid {dict(zip(self.grid, shape))} over "
+                             f"{', '.join(self.grid.values())} in row-major order")
+        dims = tuple(self.grid)
+        coords = {dim: (dim, axis, attrs(by_name[col][1])) for (dim, col), axis in zip(self.grid.items(), axes)}
+        coords |= {name: (dims, np.asarray(values, dtype=str).reshape(shape)) for name, values in self.text.items()}
+        variables = {c.name: (dims, self.data[:, i].reshape(shape), attrs(c)) for i, c in enumerate(self.columns)
+                     if c.name not in self.grid.values()}
         return xr.Dataset(variables, coords=coords, attrs={"description": self.doc})
 
 

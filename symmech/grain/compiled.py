@@ -32,8 +32,8 @@ generic integrators and root finders (DOP853, Radau IIA with dense output, Brent
 :mod:`symmech.core.ode`, compiled there for the rotation and sliding right-hand sides (``_rhs``, ``_jac``)
 and the functions of time (``_h``); the loop keeps the physics and the event logic.
 
-Parameters travel in one float64 vector (layout ``P_*`` below), the state as
-(t, r (3), v (3), q (4), w body (3)); results come back as growing arrays
+Parameters travel in one float64 vector (layout :data:`compiled_layout.PARAMS`), the state as
+(t, r (3), v (3), q (4), w body (3)) (``STATE``); results come back as growing arrays
 (trajectory rows, impact rows, warning codes) and are turned into a
 ``motion.Motion`` with the same structure as the Python loop's (its impact log
 built on first use: ``LazyMotion``). The compiled loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
@@ -50,14 +50,13 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from symmech.core import aot, artifacts, build
+from symmech.core import aot, artifacts, build, layout
 from symmech.core.scene import SymmechError
 from symmech.grain import compiled_layout, motion, sliding
 from symmech.grain.compiled_layout import (
-    N_PARAMS, LAW_COULOMB, LAW_PRINTED, INT, C_REGIME, C_LANDINGS, C_T_FLIGHT, C_T_SLIDING, C_WORK, C_IMPACTS,
-    C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN, C_ROCKING, C_IMPLICIT, C_E_START, C_E_END, N_CARRY,
-    DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY,
-    W_PRINTED_PULLS, W_PRINTED_RESIDUAL, IMPACT_WIDTH, PHASES_PER_CALL, COLD_COMPILE_SECONDS, ZENO_IMPACTS,
+    LAYOUTS, PARAMS, STATE, CARRY, IMPACT_ROW, C_AT, X_AT, LAW_COULOMB, LAW_PRINTED, INT, DONE, MORE, STALLED,
+    SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS,
+    W_PRINTED_RESIDUAL, IMPACT_WIDTH, TRAJECTORY_WIDTH, PHASES_PER_CALL, COLD_COMPILE_SECONDS, ZENO_IMPACTS,
     ZENO_INTERVAL, MAX_IDLE_STEPS, MAX_STALLED_EVENTS)
 
 
@@ -65,12 +64,15 @@ from symmech.grain.compiled_layout import (
 
 
 def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
-    """The parameter vector (N_PARAMS,) of an active model and its numerics (layout ``P_*``, in this order)."""
+    """The parameter vector (PARAMS.size,) of an active model and its numerics (layout :data:`PARAMS`)."""
     vib, law = model.vibration, model.law
-    return np.array([*model.axes, model.mass, *model.inertia, *model.g_k, vib.amplitude, vib.omega, vib.phase,
-                     *vib.direction, LAW_PRINTED if law.kind == "printed" else LAW_COULOMB, law.e_n, law.e_t,
-                     law.mu, law.e, law.lam, law.check_printed, model.mu, model.effects.rotation, num.tolerance,
-                     num.scan_step, num.rest_velocity, num.max_impacts, num.sample_interval, model.period], float)
+    return PARAMS.pack(
+        axes=model.axes, mass=model.mass, inertia=model.inertia, g=model.g_k, amplitude=vib.amplitude,
+        omega=vib.omega, phase=vib.phase, direction=vib.direction,
+        law=LAW_PRINTED if law.kind == "printed" else LAW_COULOMB, e_n=law.e_n, e_t=law.e_t, mu_impact=law.mu,
+        e=law.e, lam=law.lam, check_printed=law.check_printed, mu=model.mu, rotation=model.effects.rotation,
+        tolerance=num.tolerance, scan_step=num.scan_step, rest_velocity=num.rest_velocity,
+        max_impacts=num.max_impacts, sample_interval=num.sample_interval, period=model.period)
 
 
 def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:
@@ -88,21 +90,27 @@ def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Num
 
 
 FLAGS = (None, False, True)  # a flag column + 1: not checked, no, yes
+FLAG_FIELDS = ("admissible", "printed_admissible", "printed_creates_energy", "converged")
+# Where each value of an impact row is: a slot for a scalar, a slice for a vector (read from a row as a list).
+IMPACT_VALUES = {f.name: IMPACT_ROW.slice(f.name) if f.shape else IMPACT_ROW.offset(f.name)
+                 for f in IMPACT_ROW.fields if f.name not in FLAG_FIELDS}
 
 
 def _impact_dicts(imps: np.ndarray) -> list:
     """The impact log (the keys of ``motion.impact_record``) from the compiled impact rows (n, IMPACT_WIDTH)."""
-    flags = (imps[:, 27:31] + 1.0).astype(INT).tolist()
-    return [{"t": row[0], "r": row[1:4], "v_before": row[4:7], "v_after": row[7:10], "w_before": row[10:13],
-             "w_after": row[13:16], "impulse": row[16:19], "u_before": row[19:22], "u_after": row[22:25],
-             "ke_before": row[25], "ke_after": row[26], "admissible": FLAGS[admissible],
-             "printed_admissible": FLAGS[printed], "printed_creates_energy": FLAGS[gain], "converged": FLAGS[conv]}
-            for row, (admissible, printed, gain, conv) in zip(imps.tolist(), flags)]
+    flags = (imps[:, [IMPACT_ROW.offset(name) for name in FLAG_FIELDS]] + 1.0).astype(INT).tolist()
+    return [{**{name: row[at] for name, at in IMPACT_VALUES.items()},
+             **{name: FLAGS[code] for name, code in zip(FLAG_FIELDS, codes)}}
+            for row, codes in zip(imps.tolist(), flags)]
+
+
+STATE_VECTORS = tuple(STATE.slice(name) for name in ("r", "v", "q", "w"))  # motion.State's order
 
 
 def _state(y: np.ndarray) -> motion.State:
-    """The state (14,) y as a ``motion.State`` of views of y (y belongs to one result)."""
-    return motion.State(float(y[0]), y[1:4], y[4:7], y[7:11], y[11:14])
+    """The state (STATE.size,) y as a ``motion.State`` of views of y (y belongs to one result); not
+    ``STATE.unpack``, which takes 3 us more of a 0.2 ms run."""
+    return motion.State(float(y[X_AT.t]), *[y[at] for at in STATE_VECTORS])
 
 
 class LazyMotion(motion.Motion):
@@ -125,9 +133,9 @@ class _Budget(motion._Budget):
     (no compiled function of their own to load, no 30 us of numpy kinematics in Python)."""
 
     def __init__(self, model: motion.Model, carry: np.ndarray):
-        self.model, self.start, self.end = model, float(carry[C_E_START]), float(carry[C_E_END])
-        self.work, self.impacts = carry[C_WORK], carry[C_IMPACTS]
-        self.landings, self.sliding = carry[C_LAND_LOSS], carry[C_SLIDE_LOSS]
+        self.model, self.start, self.end = model, float(carry[C_AT.e_start]), float(carry[C_AT.e_end])
+        self.work, self.impacts = carry[C_AT.work], carry[C_AT.impacts]
+        self.landings, self.sliding = carry[C_AT.land_loss], carry[C_AT.slide_loss]
 
     def energy(self, st) -> float:  # report() asks for the end's
         return self.end
@@ -162,26 +170,27 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     p = pack(model, num)
     q = np.asarray(start.q, float)
     w = start.w if model.effects.rotation else (0.0, 0.0, 0.0)
-    y = np.array([start.t, *start.r, *start.v, *(q / np.linalg.norm(q)), *w], float)
-    rows = np.empty((int(max(t_end - start.t, 0.0) / num.sample_interval) + 64, 15))
-    imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), np.zeros(N_CARRY)
+    y = STATE.pack(t=start.t, r=start.r, v=start.v, q=q / np.linalg.norm(q), w=w)
+    rows = np.empty((int(max(t_end - start.t, 0.0) / num.sample_interval) + 64, TRAJECTORY_WIDTH))
+    imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), CARRY.zeros()
     status = MORE
     while status == MORE:
         progress(y[0])
         y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
-        _raise(status, float(y[0]), int(carry[C_REGIME]))
+        _raise(status, float(y[0]), int(carry[C_AT.regime]))
     progress(y[0], final=True)
-    warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_NWARN])]]
-    if carry[C_ROCKING]:
-        warnings.append(motion.rocking_warning(int(carry[C_ROCKING])))
-    extra = {"landings": int(carry[C_LANDINGS]), "rocking_contacts": int(carry[C_ROCKING]),
+    warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_AT.nwarn])]]
+    if carry[C_AT.rocking]:
+        warnings.append(motion.rocking_warning(int(carry[C_AT.rocking])))
+    extra = {"landings": int(carry[C_AT.landings]), "rocking_contacts": int(carry[C_AT.rocking]),
              "energy_budget": _Budget(model, carry).report(None, motion.ENERGY_TOLERANCE),
-             "engine": "compiled", "implicit_slip_steps": int(carry[C_IMPLICIT])}
-    time_in = {"flight": float(carry[C_T_FLIGHT]), "sliding": float(carry[C_T_SLIDING])}
+             "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit])}
+    time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
     final = _state(y)
-    result = LazyMotion(rows[:int(carry[C_ROWS])], None, time_in, list(dict.fromkeys(warnings)), start, final, extra)
-    result._rows = imps[:int(carry[C_NIMP])]
+    result = LazyMotion(rows[:int(carry[C_AT.rows])], None, time_in, list(dict.fromkeys(warnings)), start, final,
+                        extra)
+    result._rows = imps[:int(carry[C_AT.nimp])]
     return result
 
 
@@ -196,12 +205,13 @@ def _loop():
 
 
 def _entry_signature() -> tuple:
-    """The argument types :func:`simulate` calls ``run`` with (arrays as it allocates them)."""
-    import numba
+    """The argument types :func:`simulate` calls ``run`` with: the parameters, the state, t_end, the trajectory,
+    impact and warning rows, the carry and the phases per call (the vectors' types from their layouts)."""
+    from numba import types
 
-    args = (np.zeros(N_PARAMS), np.zeros(14), 1.0, np.empty((64, 15)), np.empty((64, IMPACT_WIDTH)),
-            np.empty((8, 3)), np.zeros(N_CARRY), PHASES_PER_CALL)
-    return tuple(numba.typeof(a) for a in args)
+    rows = types.Array(types.float64, 2, "C")
+    return (PARAMS.numba_type(), STATE.numba_type(), types.float64, rows, rows, rows, CARRY.numba_type(),
+            types.int64)
 
 
 def _exports() -> dict:
@@ -214,7 +224,7 @@ def _exports() -> dict:
 
 ENGINE = build.Engine("grain", "symmech.grain.compiled_loop", lambda: {_loop().run: _entry_signature()},
                       COLD_COMPILE_SECONDS,
-                      ahead=aot.Build("grain", [__file__, compiled_layout.__file__], _exports))
+                      ahead=aot.Build("grain", [__file__, compiled_layout.__file__, layout.__file__], _exports))
 
 
 def _entry():

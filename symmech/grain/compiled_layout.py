@@ -1,36 +1,124 @@
 """The compiled grain engine's vectors and codes, shared by its loop (:mod:`symmech.grain.compiled_loop`)
-and its Python side (:mod:`symmech.grain.compiled`): the parameter vector's layout, the carry vector's, the
-regime, status and warning codes, and the limits both sides apply. No numba here."""
+and its Python side (:mod:`symmech.grain.compiled`): the declared layouts (:mod:`symmech.core.layout`) of
+the parameter vector, the state, the carry vector, the sliding parameters and the impact row; the regime,
+status and warning codes, and the limits both sides apply. No numba here.
+
+The loop reads a slot through a layout's offsets, ``p[P_AT.mass]``: ``P_AT``, ``C_AT``, ``S_AT`` and ``I_AT``
+are named tuples of integers, constants of the compiled code."""
 from __future__ import annotations
 
 import numpy as np
 
+from symmech.core.layout import Field, Layout
 from symmech.grain import motion, sliding
 
-# Parameter vector layout.
-P_AXES, P_MASS, P_INERTIA, P_G = 0, 3, 4, 7  # (3), (1), (3), (3)
-P_AMP, P_OMEGA, P_PHASE, P_DIR = 10, 11, 12, 13  # surface vibration; direction (3)
-P_LAW, P_EN, P_ET, P_MU_IMPACT, P_E, P_LAM, P_CHECK = 16, 17, 18, 19, 20, 21, 22
-P_MU, P_ROTATION, P_TOL, P_SCAN, P_REST, P_MAX_IMPACTS, P_SAMPLE, P_PERIOD = 23, 24, 25, 26, 27, 28, 29, 30
-N_PARAMS = 31
+PARAMS = Layout("GrainParams", (
+    Field("axes", "m", "semi-axes a, b, c of the ellipsoid", (3,)),
+    Field("mass", "kg", "mass"),
+    Field("inertia", "kg m^2", "principal moments of inertia about the body axes", (3,)),
+    Field("g", "m/s^2", "gravity in the surface frame KXYZ", (3,)),
+    Field("amplitude", "m", "surface vibration amplitude"),
+    Field("omega", "rad/s", "surface vibration angular frequency"),
+    Field("phase", "rad", "surface vibration phase at t = 0"),
+    Field("direction", "1", "unit direction of the surface vibration", (3,)),
+    Field("law", "1", "impact law: LAW_COULOMB or LAW_PRINTED"),
+    Field("e_n", "1", "normal restitution of the Coulomb law"),
+    Field("e_t", "1", "tangential restitution of the Coulomb law"),
+    Field("mu_impact", "1", "friction coefficient of the Coulomb law"),
+    Field("e", "1", "restitution of the printed law"),
+    Field("lam", "1", "tangential factor of the printed law"),
+    Field("check_printed", "1", "1: check the printed law's verdict beside the Coulomb law"),
+    Field("mu", "1", "sliding friction coefficient"),
+    Field("rotation", "1", "1: the grain rotates"),
+    Field("tolerance", "1", "relative tolerance of the integrators and root finders"),
+    Field("scan_step", "s", "time step of the contact scan"),
+    Field("rest_velocity", "m/s", "approach speed below which a landing starts sliding"),
+    Field("max_impacts", "", "impacts after which the run stops"),
+    Field("sample_interval", "s", "time between two trajectory rows"),
+    Field("period", "s", "surface vibration period (chatter and chunk lengths)"),
+))
+STATE = Layout("GrainState", (
+    Field("t", "s", "time"),
+    Field("r", "m", "centre position in KXYZ", (3,)),
+    Field("v", "m/s", "centre velocity in KXYZ", (3,)),
+    Field("q", "1", "orientation quaternion (unit)", (4,)),
+    Field("w", "rad/s", "angular velocity in body axes", (3,)),
+))
+# The loop's own state between two calls.
+CARRY = Layout("GrainCarry", (
+    Field("regime", "1", "regime code: FLIGHT, IMPACT or SLIDING"),
+    Field("on_plane", "1", "1: the grain touches the plane at the start of a flight"),
+    Field("landings", "", "landings (impacts ending in sliding)"),
+    Field("idle", "", "regime changes in a row without advancing time"),
+    Field("t_flight", "s", "time in flight"),
+    Field("t_sliding", "s", "time sliding"),
+    Field("work", "J", "work of the surface on the grain"),
+    Field("impacts", "J", "kinetic energy lost in impacts"),
+    Field("land_loss", "J", "kinetic energy lost in landings"),
+    Field("slide_loss", "J", "energy dissipated by sliding friction"),
+    Field("rows", "", "trajectory rows written"),
+    Field("nimp", "", "impact rows written"),
+    Field("nwarn", "", "warning rows written"),
+    Field("rocking", "", "rocking contacts"),
+    Field("implicit", "", "accepted Radau steps of stiff slips"),
+    Field("e_start", "J", "absolute energy at the start"),
+    Field("e_end", "J", "absolute energy at the end"),
+))
+# Parameters of one sliding phase (the sliding right-hand side's), set up at its start.
+SLIDE = Layout("GrainSlide", (
+    Field("g", "m/s^2", "gravity in KXYZ", (3,)),
+    Field("amplitude", "m", "surface vibration amplitude"),
+    Field("omega", "rad/s", "surface vibration angular frequency"),
+    Field("phase", "rad", "surface vibration phase at t = 0"),
+    Field("direction", "1", "unit direction of the surface vibration", (3,)),
+    Field("mu", "1", "sliding friction coefficient"),
+    Field("r0", "m", "contact point from the centre at the start, KXYZ", (3,)),
+    Field("rb", "m", "contact point from the centre, body axes", (3,)),
+    Field("sphere", "1", "1: the grain is a sphere (the contact point is fixed)"),
+    Field("m", "1", "mass-normalised inverse inertia M of the contact, row by row", (9,)),
+    Field("mass", "kg", "mass"),
+    Field("inertia", "kg m^2", "principal moments of inertia", (3,)),
+    Field("ref", "1", "unit slip direction at the start of a slip", (2,)),
+    Field("v_stop", "m/s", "slip speed counted as stopped"),
+    Field("event", "1", "terminal event watched: EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF or EV_FAST"),
+    Field("aniso", "1", "1: the contact is anisotropic (stiff slips possible)"),
+    Field("v_stiff", "m/s", "slip speed below which an anisotropic slip is stiff"),
+))
+# One impact row of the log (the keys of ``motion.impact_record``; flags: -1 not checked, 0 no, 1 yes).
+IMPACT_ROW = Layout("GrainImpact", (
+    Field("t", "s", "time of the impact"),
+    Field("r", "m", "centre position", (3,)),
+    Field("v_before", "m/s", "centre velocity before", (3,)),
+    Field("v_after", "m/s", "centre velocity after", (3,)),
+    Field("w_before", "rad/s", "angular velocity before, body axes", (3,)),
+    Field("w_after", "rad/s", "angular velocity after, body axes", (3,)),
+    Field("impulse", "N s", "impulse on the grain", (3,)),
+    Field("u_before", "m/s", "contact point velocity before", (3,)),
+    Field("u_after", "m/s", "contact point velocity after", (3,)),
+    Field("ke_before", "J", "kinetic energy before"),
+    Field("ke_after", "J", "kinetic energy after"),
+    Field("admissible", "1", "flag: the impulse is admissible"),
+    Field("printed_admissible", "1", "flag: the printed law has an admissible root"),
+    Field("printed_creates_energy", "1", "flag: the printed law creates energy"),
+    Field("converged", "1", "flag: the printed law's solution converged"),
+))
+# Offsets by field name (P_AT.mass == 3): what the loop indexes with.
+P_AT, X_AT, C_AT, S_AT, I_AT = PARAMS.slots, STATE.slots, CARRY.slots, SLIDE.slots, IMPACT_ROW.slots
+N_SLIDE = SLIDE.size
+LAYOUTS = (PARAMS, STATE, CARRY, SLIDE, IMPACT_ROW)  # symmech.core.engines: describe
 LAW_COULOMB, LAW_PRINTED = 0.0, 1.0
 
 # Integer codes are numpy scalars, not Python ints: numba types a Python int constant passed to a jitted
 # function as a literal and compiles that function once more for every such value (83 instead of 61 overloads).
 INT = np.int64
 FLIGHT, IMPACT, SLIDING = INT(0), INT(1), INT(2)  # regime codes, as motion.REGIMES
-# Carry vector: the loop's own state between two calls.
-C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING = 0, 1, 2, 3, 4, 5
-C_WORK, C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN = 6, 7, 8, 9, 10, 11, 12
-# Rocking contacts; accepted Radau steps of stiff slips; absolute energy at the start and at the end.
-C_ROCKING, C_IMPLICIT, C_E_START, C_E_END = 13, 14, 15, 16
-N_CARRY = 17
 # Status of a call.
 DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = (INT(k) for k in range(7))
 # Warning codes (rows: code, value, value).
 W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = (
     INT(k) for k in range(1, 7))
-IMPACT_WIDTH = 31  # t, r, v before/after, w before/after, impulse, u before/after, ke, flags (4)
+IMPACT_WIDTH = IMPACT_ROW.size
+TRAJECTORY_WIDTH = len(motion.TRAJECTORY_COLUMNS)
 
 PHASES_PER_CALL = 2000
 COLD_COMPILE_SECONDS = 80.0  # wall time of the first compile, idle machine: 78 s (benchmarks/bench_grain_compile.py)

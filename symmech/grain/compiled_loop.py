@@ -13,13 +13,9 @@ import numpy as np
 from symmech.core import kernels, ode
 from symmech.grain import sliding
 from symmech.grain.compiled_layout import (
-    P_MASS, P_INERTIA, P_G, P_AMP, P_OMEGA, P_PHASE, P_DIR, P_LAW, P_EN, P_ET, P_MU_IMPACT, P_E, P_LAM,
-    P_CHECK, P_MU, P_ROTATION, P_TOL, P_SCAN, P_REST, P_MAX_IMPACTS, P_SAMPLE, P_PERIOD, LAW_PRINTED, INT,
-    FLIGHT, IMPACT, SLIDING, C_REGIME, C_ON_PLANE, C_LANDINGS, C_IDLE, C_T_FLIGHT, C_T_SLIDING, C_WORK,
-    C_IMPACTS, C_LAND_LOSS, C_SLIDE_LOSS, C_ROWS, C_NIMP, C_NWARN, C_ROCKING, C_IMPLICIT, C_E_START, C_E_END,
-    DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL, W_MAX_IMPACTS, W_CHATTER,
-    W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY, IMPACT_WIDTH, ZENO_IMPACTS,
-    ZENO_INTERVAL, MAX_IDLE_STEPS, MAX_STALLED_EVENTS)
+    P_AT, C_AT, S_AT, I_AT, N_SLIDE, IMPACT_WIDTH, LAW_PRINTED, INT, FLIGHT, IMPACT, SLIDING, DONE, MORE, STALLED,
+    SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS,
+    W_PRINTED_RESIDUAL, W_ENERGY, ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS, MAX_STALLED_EVENTS)
 
 gm = kernels.load("grain_motion")
 gi = kernels.load("grain_impact")
@@ -53,37 +49,38 @@ def _rot(q):
 @jit
 def _offset(p, Q):
     """Contact offset R (3,) [m] of the lowest point, KXYZ (generated ``contact_offset_body``)."""
-    body = gm.contact_offset_body_scalar(p[0], p[1], p[2], Q[2, 0], Q[2, 1], Q[2, 2])
+    body = gm.contact_offset_body_scalar(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2], Q[2, 0], Q[2, 1], Q[2, 2])
     return Q @ body
 
 
 @jit
 def _support(p, Q):
-    return gm.support_distance_scalar(p[0], p[1], p[2], Q[2, 0], Q[2, 1], Q[2, 2])
+    return gm.support_distance_scalar(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2], Q[2, 0], Q[2, 1], Q[2, 2])
 
 
 @jit
 def _surface(p, t):
     """Rows displacement, velocity, acceleration (3, 3) of the surface at t."""
-    return gm.surface_kinematics_scalar(p[P_AMP], p[P_OMEGA], p[P_PHASE], p[P_DIR], p[P_DIR + 1], p[P_DIR + 2], t)
+    d = P_AT.direction
+    return gm.surface_kinematics_scalar(p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase], p[d], p[d + 1], p[d + 2], t)
 
 
 @jit
 def _normal(p, t):
     """Normal force per unit mass n(t) [m/s^2] of a grain on the plane."""
-    return _surface(p, t)[2, 2] - p[P_G + 2]
+    return _surface(p, t)[2, 2] - p[P_AT.g + 2]
 
 
 @jit
 def _world_inv_inertia(p, Q):
-    return Q @ np.diag(1.0 / p[P_INERTIA:P_INERTIA + 3]) @ Q.T
+    return Q @ np.diag(1.0 / p[P_AT.inertia:P_AT.inertia + 3]) @ Q.T
 
 
 @jit
 def _inverse_effective_mass(p, Q, R):
     """K (3, 3) [1/kg], as ``coulomb_law.inverse_effective_mass``; a point mass without rotation."""
-    K = np.eye(3) / p[P_MASS]
-    if p[P_ROTATION] != 0.0:
+    K = np.eye(3) / p[P_AT.mass]
+    if p[P_AT.rotation] != 0.0:
         Rx = np.array([[0.0, -R[2], R[1]], [R[2], 0.0, -R[0]], [-R[1], R[0], 0.0]])
         K = K - Rx @ _world_inv_inertia(p, Q) @ Rx
     return K
@@ -93,13 +90,14 @@ def _inverse_effective_mass(p, Q, R):
 def _kinetic(p, Q, v, w):
     """Kinetic energy [J]; v, w (3,) in KXYZ."""
     wb = Q.T @ w
-    I = p[P_INERTIA:P_INERTIA + 3]
-    return 0.5 * p[P_MASS] * (v @ v) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2)
+    I = p[P_AT.inertia:P_AT.inertia + 3]
+    return 0.5 * p[P_AT.mass] * (v @ v) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2)
 
 
 @jit
 def _is_sphere(p):
-    return max(p[0], p[1], p[2]) == min(p[0], p[1], p[2])
+    a = P_AT.axes
+    return max(p[a], p[a + 1], p[a + 2]) == min(p[a], p[a + 1], p[a + 2])
 
 
 # --------------------------------------------------------------------------- right-hand sides (core.ode steppers)
@@ -107,16 +105,16 @@ def _is_sphere(p):
 
 @jit
 def _rhs(t, y, args, out):
-    """Right-hand side of the toolkit's steppers, args = (kind, sp): ``ROT`` torque-free rotation y = (q, w
-    body), sp = inertia; ``SLIP``/``STICK`` sliding, sp the sliding parameters."""
-    kind, sp = args
+    """Right-hand side of the toolkit's steppers, args = (kind, data): ``ROT`` torque-free rotation y = (q, w
+    body), data = the principal inertia (3,); ``SLIP``/``STICK`` sliding, data the sliding parameters (SLIDE)."""
+    kind, data = args
     if kind == ROT:
         qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
-        wd = gm.euler_equations_scalar(sp[0], sp[1], sp[2], y[4], y[5], y[6])
+        wd = gm.euler_equations_scalar(data[0], data[1], data[2], y[4], y[5], y[6])
         out[:4] = qd
         out[4:7] = wd
     else:
-        _slide_rhs(t, y, sp, kind == STICK, out)
+        _slide_rhs(t, y, data, kind == STICK, out)
 
 
 @jit
@@ -162,12 +160,14 @@ def _orient(t, ctx, tab, ntab):
 def _translate_into(p, ctx, t, out):
     """Centre position and velocity rows out[0] (2, 3) at t of the flight from ctx = (t0, r0, v0, ...)."""
     tau = t - ctx[0]
-    if p[P_AMP] == 0.0:
+    if p[P_AT.amplitude] == 0.0:
         gm.flight_translation_rigid_into(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6],
-                                       p[P_G], p[P_G + 1], p[P_G + 2], 0.0, tau, out)
+                                       p[P_AT.g], p[P_AT.g + 1], p[P_AT.g + 2], 0.0, tau, out)
     else:
-        gm.flight_translation_into(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_G], p[P_G + 1], p[P_G + 2],
-                                 p[P_AMP], p[P_OMEGA], ctx[17], p[P_DIR], p[P_DIR + 1], p[P_DIR + 2], 0.0, tau, out)
+        d = P_AT.direction
+        gm.flight_translation_into(ctx[1], ctx[2], ctx[3], ctx[4], ctx[5], ctx[6], p[P_AT.g], p[P_AT.g + 1],
+                                   p[P_AT.g + 2], p[P_AT.amplitude], p[P_AT.omega], ctx[17], p[d], p[d + 1], p[d + 2],
+                                   0.0, tau, out)
 
 
 @jit
@@ -262,13 +262,13 @@ def _extend(t, t_request, ctx, tab, ntab, p):
     ctx[27] = 1 on failure."""
     if ctx[18] == 0.0:
         return tab, ntab
-    tol = p[P_TOL]
+    tol = p[P_AT.tolerance]
     atol = np.full(7, tol * 1e-3)
     K = np.empty((DOP_EXTENDED, 7))
     inertia = ctx[14:17].copy()
     while ctx[19] < t:
         if ctx[38] == 0.0:  # a new chunk
-            ctx[29] = max(t_request, ctx[19] + p[P_PERIOD])
+            ctx[29] = max(t_request, ctx[19] + p[P_AT.period])
             f = np.empty(7)
             _rhs(ctx[19], ctx[20:27].copy(), (ROT, inertia), f)
             ctx[31:38] = f
@@ -303,9 +303,9 @@ def _flight_ctx(p, y):
     ctx[:14] = y
     ctx[19] = y[0]
     ctx[20:27] = y[7:14]
-    ctx[14:17] = p[P_INERTIA:P_INERTIA + 3]
-    ctx[17] = (p[P_OMEGA] * y[0] + p[P_PHASE]) % (2 * math.pi)
-    rotating = p[P_ROTATION] != 0.0 and (y[11] != 0.0 or y[12] != 0.0 or y[13] != 0.0)
+    ctx[14:17] = p[P_AT.inertia:P_AT.inertia + 3]
+    ctx[17] = (p[P_AT.omega] * y[0] + p[P_AT.phase]) % (2 * math.pi)
+    rotating = p[P_AT.rotation] != 0.0 and (y[11] != 0.0 or y[12] != 0.0 or y[13] != 0.0)
     ctx[18] = 1.0 if rotating else 0.0
     ctx[28] = _support(p, _rot(y[7:11]))
     return ctx
@@ -331,7 +331,7 @@ def _fly(p, y, t_end, on_plane, rows, carry):
     steps = np.empty((64, ROT_WIDTH))
     nsteps = INT(0)
     t_from = y[0]
-    scan, xtol = p[P_SCAN], p[P_TOL] * p[P_SCAN]
+    scan, xtol = p[P_AT.scan_step], p[P_AT.tolerance] * p[P_AT.scan_step]
     if on_plane:
         span = min(scan, t_end - y[0])
         steps, nsteps = _extend(y[0] + span, y[0] + span, ctx, steps, nsteps, p)
@@ -352,10 +352,10 @@ def _fly(p, y, t_end, on_plane, rows, carry):
     steps, nsteps = _extend(t_stop, t_stop, ctx, steps, nsteps, p)
     if ctx[27] != 0.0:
         return y, 3, rows
-    k0 = math.ceil(y[0] / p[P_SAMPLE] - 1e-9)
-    k1 = math.floor(t_stop / p[P_SAMPLE] - 1e-9)
+    k0 = math.ceil(y[0] / p[P_AT.sample_interval] - 1e-9)
+    k1 = math.floor(t_stop / p[P_AT.sample_interval] - 1e-9)
     for kk in range(int(k0), int(k1) + 1):
-        ts = kk * p[P_SAMPLE]
+        ts = kk * p[P_AT.sample_interval]
         if y[0] < ts < t_stop:
             rows = _record(rows, carry, _state_at(ts, ctx, steps, nsteps, p), FLIGHT)
     return _state_at(t_stop, ctx, steps, nsteps, p), 1 if math.isnan(tc) else 0, rows
@@ -367,7 +367,7 @@ def _fly(p, y, t_end, on_plane, rows, carry):
 @jit
 def _record(rows, carry, y, regime):
     """Append the trajectory row of state y (t, r, v, q, w in KXYZ, regime)."""
-    n = int(carry[C_ROWS])
+    n = int(carry[C_AT.rows])
     if n == rows.shape[0]:
         grown = np.empty((2 * n, 15))
         grown[:n] = rows
@@ -375,19 +375,19 @@ def _record(rows, carry, y, regime):
     rows[n, :11] = y[:11]
     rows[n, 11:14] = _rot(y[7:11]) @ y[11:14]
     rows[n, 14] = regime
-    carry[C_ROWS] = n + 1
+    carry[C_AT.rows] = n + 1
     return rows
 
 
 @jit
 def _warn(warns, carry, code, a, b):
-    n = int(carry[C_NWARN])
+    n = int(carry[C_AT.nwarn])
     if n == warns.shape[0]:
         grown = np.empty((2 * n, 3))
         grown[:n] = warns
         warns = grown
     warns[n, 0], warns[n, 1], warns[n, 2] = code, a, b
-    carry[C_NWARN] = n + 1
+    carry[C_AT.nwarn] = n + 1
     return warns
 
 
@@ -531,19 +531,19 @@ def _impact(p, y, warns, carry):
     (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""
     Q = _rot(y[7:11])
     R = _offset(p, Q)
-    m = p[P_MASS]
-    rotating = p[P_ROTATION] != 0.0
+    m = p[P_AT.mass]
+    rotating = p[P_AT.rotation] != 0.0
     v = y[4:7].copy()
     w = Q @ y[11:14] if rotating else np.zeros(3)
     u = v + _cross(w, R)
     K = _inverse_effective_mass(p, Q, R)
-    printed = p[P_LAW] == LAW_PRINTED
+    printed = p[P_AT.law] == LAW_PRINTED
     p_adm = p_gain = -1.0
     converged = 1.0
     P = np.zeros(3)
     if u[2] < 0.0:
-        if rotating and (printed or p[P_CHECK] != 0.0):
-            e, lam = (p[P_E], p[P_LAM]) if printed else (p[P_EN], 1.0 + p[P_ET])
+        if rotating and (printed or p[P_AT.check_printed] != 0.0):
+            e, lam = (p[P_AT.e], p[P_AT.lam]) if printed else (p[P_AT.e_n], 1.0 + p[P_AT.e_t])
             T, residual, adm, gain, pull = _printed(m * K, m, e, lam, u)
             p_adm, p_gain = (1.0 if adm else 0.0), (1.0 if gain else 0.0)
             if printed:
@@ -555,9 +555,9 @@ def _impact(p, y, warns, carry):
                 P = T
         if not (rotating and printed):
             if printed:
-                P = _coulomb_impulse(K, u, p[P_E], p[P_LAM] - 1.0, np.inf)
+                P = _coulomb_impulse(K, u, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf)
             else:
-                P = _coulomb_impulse(K, u, p[P_EN], p[P_ET], p[P_MU_IMPACT])
+                P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
     v_after = v + P / m
     w_after = w + _world_inv_inertia(p, Q) @ _cross(R, P) if rotating else np.zeros(3)
     ke_before, ke_after = _kinetic(p, Q, v, w), _kinetic(p, Q, v_after, w_after)
@@ -568,15 +568,15 @@ def _impact(p, y, warns, carry):
     after[4:7] = v_after
     after[11:14] = Q.T @ w_after
     log = np.empty(IMPACT_WIDTH)
-    log[4:7] = v
-    log[7:10] = v_after
-    log[10:13] = y[11:14]
-    log[13:16] = after[11:14]
-    log[16:19] = P
-    log[19:22] = u
-    log[22:25] = v_after + _cross(w_after, R)
-    log[25], log[26], log[27] = ke_before, ke_after, 1.0 if admissible else 0.0
-    log[28], log[29], log[30] = p_adm, p_gain, converged
+    log[I_AT.v_before:I_AT.v_before + 3] = v
+    log[I_AT.v_after:I_AT.v_after + 3] = v_after
+    log[I_AT.w_before:I_AT.w_before + 3] = y[11:14]
+    log[I_AT.w_after:I_AT.w_after + 3] = after[11:14]
+    log[I_AT.impulse:I_AT.impulse + 3] = P
+    log[I_AT.u_before:I_AT.u_before + 3] = u
+    log[I_AT.u_after:I_AT.u_after + 3] = v_after + _cross(w_after, R)
+    log[I_AT.ke_before], log[I_AT.ke_after], log[I_AT.admissible] = ke_before, ke_after, 1.0 if admissible else 0.0
+    log[I_AT.printed_admissible], log[I_AT.printed_creates_energy], log[I_AT.converged] = p_adm, p_gain, converged
     return after, log, warns
 
 
@@ -584,23 +584,23 @@ def _impact(p, y, warns, carry):
 def _bounce(p, y, rows, imps, warns, carry):
     """An impact at y, logged and booked: (state after, normal contact velocity after, rows, imps, warns)."""
     after, log, warns = _impact(p, y, warns, carry)
-    carry[C_WORK] += log[16:19] @ _surface(p, y[0])[1]
-    carry[C_IMPACTS] += log[25] - log[26]
+    carry[C_AT.work] += log[I_AT.impulse:I_AT.impulse + 3] @ _surface(p, y[0])[1]
+    carry[C_AT.impacts] += log[I_AT.ke_before] - log[I_AT.ke_after]
     rows = _record(rows, carry, y, IMPACT)
     rows = _record(rows, carry, after, IMPACT)
-    n = int(carry[C_NIMP])
+    n = int(carry[C_AT.nimp])
     if n == imps.shape[0]:
         grown = np.empty((2 * n, IMPACT_WIDTH))
         grown[:n] = imps
         imps = grown
-    log[0] = y[0]
-    log[1:4] = y[1:4]
+    log[I_AT.t] = y[0]
+    log[I_AT.r:I_AT.r + 3] = y[1:4]
     imps[n] = log
-    carry[C_NIMP] = n + 1
-    if n + 1 >= ZENO_IMPACTS and imps[n, 0] - imps[n + 1 - ZENO_IMPACTS, 0] < ZENO_INTERVAL * p[P_PERIOD]:
+    carry[C_AT.nimp] = n + 1
+    if n + 1 >= ZENO_IMPACTS and imps[n, I_AT.t] - imps[n + 1 - ZENO_IMPACTS, I_AT.t] < ZENO_INTERVAL * p[P_AT.period]:
         warns = _warn(warns, carry, W_CHATTER, 0.0, 0.0)
         return after, 0.0, rows, imps, warns
-    return after, log[24], rows, imps, warns
+    return after, log[I_AT.u_after + 2], rows, imps, warns
 
 
 # --------------------------------------------------------------------------- contact tests and landing
@@ -619,13 +619,14 @@ def _gap(p, y):
 
 @jit
 def _gap_noise(p, y):
-    return 64 * EPS * (max(p[0], p[1], p[2]) + abs(y[3]) + p[P_AMP])
+    return 64 * EPS * (max(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2]) + abs(y[3]) + p[P_AT.amplitude])
 
 
 @jit
 def _velocity_noise(p, y):
-    scale = (math.sqrt(y[4:7] @ y[4:7]) + math.sqrt(y[11:14] @ y[11:14]) * max(p[0], p[1], p[2])
-             + p[P_AMP] * p[P_OMEGA])
+    a = P_AT.axes
+    scale = (math.sqrt(y[4:7] @ y[4:7]) + math.sqrt(y[11:14] @ y[11:14]) * max(p[a], p[a + 1], p[a + 2])
+             + p[P_AT.amplitude] * p[P_AT.omega])
     return 1e3 * EPS * scale
 
 
@@ -634,9 +635,9 @@ def _energy(p, y):
     """Absolute energy [J]: kinetic in the inertial frame plus the potential of gravity (``motion._Budget``)."""
     s = _surface(p, y[0])
     v = y[4:7] + s[1]
-    I = p[P_INERTIA:P_INERTIA + 3]
+    I = p[P_AT.inertia:P_AT.inertia + 3]
     w = y[11:14]
-    return (p[P_MASS] * (0.5 * (v @ v) - p[P_G:P_G + 3] @ (y[1:4] + s[0]))
+    return (p[P_AT.mass] * (0.5 * (v @ v) - p[P_AT.g:P_AT.g + 3] @ (y[1:4] + s[0]))
             + 0.5 * (I[0] * w[0] ** 2 + I[1] * w[1] ** 2 + I[2] * w[2] ** 2))
 
 
@@ -646,19 +647,19 @@ def _land(p, y, carry):
     Q = _rot(y[7:11])
     R = _offset(p, Q)
     w0 = Q @ y[11:14]
-    rotating = p[P_ROTATION] != 0.0
+    rotating = p[P_AT.rotation] != 0.0
     K = _inverse_effective_mass(p, Q, R)
     P = np.array([0.0, 0.0, -_contact_velocity(p, y) / K[2, 2]])
     v0 = y[4:7].copy()
-    v = v0 + P / p[P_MASS]
+    v = v0 + P / p[P_AT.mass]
     w = w0.copy()
     if rotating:
-        w = w0 + Q @ ((Q.T @ _cross(R, P)) / p[P_INERTIA:P_INERTIA + 3])
+        w = w0 + Q @ ((Q.T @ _cross(R, P)) / p[P_AT.inertia:P_AT.inertia + 3])
         if not _is_sphere(p):
             v[2], w[0], w[1] = 0.0, 0.0, 0.0
     v[2] = 0.0
-    carry[C_WORK] += (p[P_MASS] * (v - v0)) @ _surface(p, y[0])[1]
-    carry[C_LAND_LOSS] += _kinetic(p, Q, v0, w0) - _kinetic(p, Q, v, w)
+    carry[C_AT.work] += (p[P_AT.mass] * (v - v0)) @ _surface(p, y[0])[1]
+    carry[C_AT.land_loss] += _kinetic(p, Q, v0, w0) - _kinetic(p, Q, v, w)
     out = y.copy()
     out[3] = _support(p, Q)
     out[4:7] = v
@@ -672,11 +673,6 @@ NO_EVENT, REGIME, SWITCH = 0, 1, 2  # how a chunk ends: its end time, a regime e
 
 # --------------------------------------------------------------------------- sliding
 
-# Sliding parameters: g (3), vibration A, omega, phase, d (3), mu, R0 (3), R body (3), sphere, M (9), mass,
-# inertia (3), reference slip direction (2), v_stop, event kind, B anisotropic (stiff slip), stiff slip speed.
-S_G, S_AMP, S_OMEGA, S_PHASE, S_DIR, S_MU, S_R0, S_RB, S_SPHERE, S_M = 0, 3, 4, 5, 6, 9, 10, 13, 16, 17
-S_MASS, S_INERTIA, S_REF, S_VSTOP, S_EVENT, S_ANISO, S_STIFF = 26, 27, 30, 32, 33, 34, 35
-N_SLIDE = 36
 # Events: none; the slip stops; the stick ends; an anisotropic slip stops or falls below the stiff slip speed
 # (explicit); the slip speed rises through 2 s_stiff (implicit).
 EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF, EV_FAST = 0.0, 1.0, 2.0, 3.0, 4.0
@@ -684,18 +680,19 @@ EV_NONE, EV_SLIP, EV_STICK, EV_SLIP_STIFF, EV_FAST = 0.0, 1.0, 2.0, 3.0, 4.0
 
 @jit
 def _slide_surface(sp, t):
-    ph = sp[S_OMEGA] * t + sp[S_PHASE]
-    d = sp[S_DIR:S_DIR + 3]
-    return sp[S_AMP] * sp[S_OMEGA] * math.cos(ph) * d, -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(ph) * d
+    ph = sp[S_AT.omega] * t + sp[S_AT.phase]
+    d = sp[S_AT.direction:S_AT.direction + 3]
+    amp, om = sp[S_AT.amplitude], sp[S_AT.omega]
+    return amp * om * math.cos(ph) * d, -amp * om ** 2 * math.sin(ph) * d
 
 
 @jit
 def _offset_now(y, sp):
     """Contact offset R (3 floats) of the sliding grain: fixed for a sphere, turned with q otherwise."""
-    if sp[S_SPHERE] != 0.0:
-        return sp[S_R0], sp[S_R0 + 1], sp[S_R0 + 2]
+    if sp[S_AT.sphere] != 0.0:
+        return sp[S_AT.r0], sp[S_AT.r0 + 1], sp[S_AT.r0 + 2]
     q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
-    v0, v1, v2 = sp[S_RB], sp[S_RB + 1], sp[S_RB + 2]
+    v0, v1, v2 = sp[S_AT.rb], sp[S_AT.rb + 1], sp[S_AT.rb + 2]
     t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
     qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
     return (v0 + (q0 * t0 + u1 * t2 - u2 * t1) / qq, v1 + (q0 * t1 + u2 * t0 - u0 * t2) / qq,
@@ -715,7 +712,7 @@ def _geometry(y, sp):
 
 @jit
 def _mobility(sp):
-    return sp[S_M:S_M + 9].copy().reshape(3, 3)
+    return sp[S_AT.m:S_AT.m + 9].copy().reshape(3, 3)
 
 
 @jit
@@ -728,7 +725,7 @@ def _B(R0, R1, R2, sp):
             acc = 0.0
             for k in range(3):
                 for m in range(3):
-                    acc += Rx[i][k] * sp[S_M + 3 * k + m] * Rx[m][j]
+                    acc += Rx[i][k] * sp[S_AT.m + 3 * k + m] * Rx[m][j]
             B[i, j] = (1.0 if i == j else 0.0) - acc
     return B
 
@@ -745,7 +742,7 @@ def _solve_B(R0, R1, R2, sp, b0, b1):
 def _anisotropic(sp):
     """``sliding._Contact.stiff_slip``: the eigenvalues of the symmetric B at R0 differ by more than 1e-12
     relative (turning about the normal keeps them for the whole phase)."""
-    B = _B(sp[S_R0], sp[S_R0 + 1], sp[S_R0 + 2], sp)
+    B = _B(sp[S_AT.r0], sp[S_AT.r0 + 1], sp[S_AT.r0 + 2], sp)
     gap = math.hypot(B[0, 0] - B[1, 1], 2.0 * B[1, 0])
     return gap > 1e-12 * (0.5 * (B[0, 0] + B[1, 1] + gap))
 
@@ -754,34 +751,34 @@ def _anisotropic(sp):
 def _stick_force(t, y, sp):
     _, acc = _slide_surface(sp, t)
     R, _, c = _geometry(y, sp)
-    p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_G] - acc[0] + c[0], sp[S_G + 1] - acc[1] + c[1])
-    return np.array([-p0, -p1]), acc[2] - sp[S_G + 2]
+    p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_AT.g] - acc[0] + c[0], sp[S_AT.g + 1] - acc[1] + c[1])
+    return np.array([-p0, -p1]), acc[2] - sp[S_AT.g + 2]
 
 
 @jit
 def _slide_rhs(t, y, sp, stick, out):
     """Sliding ODE y = (r (2), v (2), w (3) KXYZ, q (4), W, D) (``sliding._Contact.rhs``), in scalars."""
-    ph = sp[S_OMEGA] * t + sp[S_PHASE]
-    sv = sp[S_AMP] * sp[S_OMEGA] * math.cos(ph)
-    sa = -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(ph)
-    d0, d1, d2 = sp[S_DIR], sp[S_DIR + 1], sp[S_DIR + 2]
+    ph = sp[S_AT.omega] * t + sp[S_AT.phase]
+    sv = sp[S_AT.amplitude] * sp[S_AT.omega] * math.cos(ph)
+    sa = -sp[S_AT.amplitude] * sp[S_AT.omega] ** 2 * math.sin(ph)
+    d0, d1, d2 = sp[S_AT.direction], sp[S_AT.direction + 1], sp[S_AT.direction + 2]
     R0, R1, R2 = _offset_now(y, sp)
     w0, w1, w2 = y[4], y[5], y[6]
     s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
-    n = sa * d2 - sp[S_G + 2]
-    f0, f1 = sp[S_G] - sa * d0, sp[S_G + 1] - sa * d1
+    n = sa * d2 - sp[S_AT.g + 2]
+    f0, f1 = sp[S_AT.g] - sa * d0, sp[S_AT.g + 1] - sa * d1
     if stick:
         p0, p1 = _solve_B(R0, R1, R2, sp, f0 - w2 * w2 * R0, f1 - w2 * w2 * R1)
         phi0, phi1 = -p0, -p1
     else:
         speed = math.hypot(s0, s1)
-        phi0, phi1 = (-sp[S_MU] * n / speed * s0, -sp[S_MU] * n / speed * s1) if speed > 0.0 else (0.0, 0.0)
+        phi0, phi1 = (-sp[S_AT.mu] * n / speed * s0, -sp[S_AT.mu] * n / speed * s1) if speed > 0.0 else (0.0, 0.0)
     tx, ty, tz = R1 * n - R2 * phi1, R2 * phi0 - R0 * n, R0 * phi1 - R1 * phi0
     q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
     out[0], out[1] = y[2], y[3]
     out[2], out[3] = f0 + phi0, f1 + phi1
     for i in range(3):
-        out[4 + i] = sp[S_M + 3 * i] * tx + sp[S_M + 3 * i + 1] * ty + sp[S_M + 3 * i + 2] * tz
+        out[4 + i] = sp[S_AT.m + 3 * i] * tx + sp[S_AT.m + 3 * i + 1] * ty + sp[S_AT.m + 3 * i + 2] * tz
     out[7] = 0.5 * (-w0 * q1 - w1 * q2 - w2 * q3)
     out[8] = 0.5 * (w0 * q0 + w1 * q3 - w2 * q2)
     out[9] = 0.5 * (w1 * q0 + w2 * q1 - w0 * q3)
@@ -795,10 +792,10 @@ def _offset_jac(y, sp):
     """dR/dq (3, 4) of the contact offset of :func:`_offset_now` (zero for a sphere), in scalars:
     R = v + N / |q|^2, N = q0 t + u x t, t = 2 u x v (u the vector part of q, v the body-frame offset)."""
     dR = np.zeros((3, 4))
-    if sp[S_SPHERE] != 0.0:
+    if sp[S_AT.sphere] != 0.0:
         return dR
     q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
-    v0, v1, v2 = sp[S_RB], sp[S_RB + 1], sp[S_RB + 2]
+    v0, v1, v2 = sp[S_AT.rb], sp[S_AT.rb + 1], sp[S_AT.rb + 2]
     qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
     t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
     N = (q0 * t0 + u1 * t2 - u2 * t1, q0 * t1 + u2 * t0 - u0 * t2, q0 * t2 + u0 * t1 - u1 * t0)
@@ -823,15 +820,16 @@ def _slip_jac(t, y, sp, J):
     stiff part is the friction's turning rate mu n / |s| (I - s s^T / |s|^2) through s = v + (w x R)_t, the
     contact offset R turning with q."""
     J[:] = 0.0
-    n = -sp[S_AMP] * sp[S_OMEGA] ** 2 * math.sin(sp[S_OMEGA] * t + sp[S_PHASE]) * sp[S_DIR + 2] - sp[S_G + 2]
-    sv = sp[S_AMP] * sp[S_OMEGA] * math.cos(sp[S_OMEGA] * t + sp[S_PHASE])
+    amp, om, ph = sp[S_AT.amplitude], sp[S_AT.omega], sp[S_AT.phase]
+    n = -amp * om ** 2 * math.sin(om * t + ph) * sp[S_AT.direction + 2] - sp[S_AT.g + 2]
+    sv = amp * om * math.cos(om * t + ph)
     R0, R1, R2 = _offset_now(y, sp)
     w0, w1, w2 = y[4], y[5], y[6]
     s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
     speed = math.hypot(s0, s1)
     k, u0, u1 = 0.0, 0.0, 0.0  # no friction force at zero slip
     if speed > 0.0:
-        k, u0, u1 = -sp[S_MU] * n / speed, s0 / speed, s1 / speed
+        k, u0, u1 = -sp[S_AT.mu] * n / speed, s0 / speed, s1 / speed
     phi0, phi1 = k * s0, k * s1
     ds = np.zeros((2, 13))  # ds/dy at fixed R
     ds[0, 2], ds[0, 5], ds[0, 6] = 1.0, R2, -R1
@@ -846,8 +844,9 @@ def _slip_jac(t, y, sp, J):
                a0 * phi1 + R0 * dp1 - a1 * phi0 - R1 * dp0)
         J[2, j], J[3, j] = dp0, dp1
         for i in range(3):
-            J[4 + i, j] = sp[S_M + 3 * i] * tau[0] + sp[S_M + 3 * i + 1] * tau[1] + sp[S_M + 3 * i + 2] * tau[2]
-        J[11, j] = sv * (sp[S_DIR] * dp0 + sp[S_DIR + 1] * dp1)
+            row = S_AT.m + 3 * i
+            J[4 + i, j] = sp[row] * tau[0] + sp[row + 1] * tau[1] + sp[row + 2] * tau[2]
+        J[11, j] = sv * (sp[S_AT.direction] * dp0 + sp[S_AT.direction + 1] * dp1)
         J[12, j] = -(dp0 * s0 + phi0 * ds0 + dp1 * s1 + phi1 * ds1)
     J[0, 2] = J[1, 3] = 1.0
     q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
@@ -865,24 +864,24 @@ def _slide_kinetic(sp, q, v2, w):
     """Kinetic energy per unit mass [J/kg] of tangential velocity v2 (2,) and spin w (3,) KXYZ."""
     Q = _rot(q)
     wb = Q.T @ w
-    I = sp[S_INERTIA:S_INERTIA + 3]
-    return 0.5 * (v2 @ v2) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2) / sp[S_MASS]
+    I = sp[S_AT.inertia:S_AT.inertia + 3]
+    return 0.5 * (v2 @ v2) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2) / sp[S_AT.mass]
 
 
 @jit
 def _settle(t, y, sp, may_stick):
     """``sliding._settle``: remove a slip within v_stop by a friction impulse; (stick, y)."""
     R, s, _ = _geometry(y, sp)
-    v_stop = sp[S_VSTOP]
-    if sp[S_MU] == 0.0 or math.hypot(s[0], s[1]) > 1.5 * v_stop:
+    v_stop = sp[S_AT.v_stop]
+    if sp[S_AT.mu] == 0.0 or math.hypot(s[0], s[1]) > 1.5 * v_stop:
         return False, y
     phi, n = _stick_force(t, y, sp)
-    stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_MU] * n
+    stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_AT.mu] * n
     target = np.zeros(2)
     if not stick:  # against the stick force: along B^-1 (f + c) (``sliding._Contact.slip_direction``)
         _, acc = _slide_surface(sp, t)
         c = _geometry(y, sp)[2]
-        d0, d1 = _solve_B(R[0], R[1], R[2], sp, sp[S_G] - acc[0] + c[0], sp[S_G + 1] - acc[1] + c[1])
+        d0, d1 = _solve_B(R[0], R[1], R[2], sp, sp[S_AT.g] - acc[0] + c[0], sp[S_AT.g + 1] - acc[1] + c[1])
         target = 2.0 * v_stop * np.array([d0, d1]) / max(math.hypot(d0, d1), 1e-300)
     y = y.copy()
     before = _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
@@ -896,24 +895,24 @@ def _settle(t, y, sp, may_stick):
 @jit
 def _slide_params(p, Q0, R0, mu):
     sp = np.zeros(N_SLIDE)
-    sp[S_G:S_G + 3] = p[P_G:P_G + 3]
-    sp[S_AMP], sp[S_OMEGA], sp[S_PHASE] = p[P_AMP], p[P_OMEGA], p[P_PHASE]
-    sp[S_DIR:S_DIR + 3] = p[P_DIR:P_DIR + 3]
-    sp[S_MU] = mu
-    sp[S_R0:S_R0 + 3] = R0
-    sp[S_RB:S_RB + 3] = Q0.T @ R0
-    sp[S_SPHERE] = 1.0 if _is_sphere(p) else 0.0
+    sp[S_AT.g:S_AT.g + 3] = p[P_AT.g:P_AT.g + 3]
+    sp[S_AT.amplitude], sp[S_AT.omega], sp[S_AT.phase] = p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase]
+    sp[S_AT.direction:S_AT.direction + 3] = p[P_AT.direction:P_AT.direction + 3]
+    sp[S_AT.mu] = mu
+    sp[S_AT.r0:S_AT.r0 + 3] = R0
+    sp[S_AT.rb:S_AT.rb + 3] = Q0.T @ R0
+    sp[S_AT.sphere] = 1.0 if _is_sphere(p) else 0.0
     M = np.zeros((3, 3))
-    if p[P_ROTATION] != 0.0:
+    if p[P_AT.rotation] != 0.0:
         if _is_sphere(p):
-            M = p[P_MASS] / p[P_INERTIA] * np.eye(3)
+            M = p[P_AT.mass] / p[P_AT.inertia] * np.eye(3)
         else:
-            I = p[P_INERTIA:P_INERTIA + 3]
-            M[2, 2] = p[P_MASS] / (I[0] * Q0[2, 0] ** 2 + I[1] * Q0[2, 1] ** 2 + I[2] * Q0[2, 2] ** 2)
-    sp[S_M:S_M + 9] = M.reshape(9)
-    sp[S_MASS] = p[P_MASS]
-    sp[S_INERTIA:S_INERTIA + 3] = p[P_INERTIA:P_INERTIA + 3]
-    sp[S_ANISO] = 1.0 if mu > 0.0 and _anisotropic(sp) else 0.0
+            I = p[P_AT.inertia:P_AT.inertia + 3]
+            M[2, 2] = p[P_AT.mass] / (I[0] * Q0[2, 0] ** 2 + I[1] * Q0[2, 1] ** 2 + I[2] * Q0[2, 2] ** 2)
+    sp[S_AT.m:S_AT.m + 9] = M.reshape(9)
+    sp[S_AT.mass] = p[P_AT.mass]
+    sp[S_AT.inertia:S_AT.inertia + 3] = p[P_AT.inertia:P_AT.inertia + 3]
+    sp[S_AT.aniso] = 1.0 if mu > 0.0 and _anisotropic(sp) else 0.0
     return sp
 
 
@@ -941,27 +940,27 @@ def _event(t, ctx, tab, p):
 def _slip_events(y, sp):
     """(The slip projected on the reference direction minus v_stop, the slip speed)."""
     s = _geometry(y, sp)[1]
-    return s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP], math.hypot(s[0], s[1])
+    return s[0] * sp[S_AT.ref] + s[1] * sp[S_AT.ref + 1] - sp[S_AT.v_stop], math.hypot(s[0], s[1])
 
 
 @jit
 def _event_at(t, y, sp):
-    if sp[S_EVENT] == EV_STICK:
+    if sp[S_AT.event] == EV_STICK:
         phi, n = _stick_force(t, y, sp)
-        return sp[S_MU] * n - math.hypot(phi[0], phi[1])
+        return sp[S_AT.mu] * n - math.hypot(phi[0], phi[1])
     stops, speed = _slip_events(y, sp)
-    if sp[S_EVENT] == EV_SLIP:
+    if sp[S_AT.event] == EV_SLIP:
         return stops
-    if sp[S_EVENT] == EV_FAST:
-        return speed - 2.0 * sp[S_STIFF]
+    if sp[S_AT.event] == EV_FAST:
+        return speed - 2.0 * sp[S_AT.v_stiff]
     # The earlier of the two falling events of an explicit anisotropic slip (slip stops, turns stiff).
-    return min(stops, speed - sp[S_STIFF])
+    return min(stops, speed - sp[S_AT.v_stiff])
 
 
 @jit
 def _locate(event, t, t_new, ctx, tab, p):
     """Time of ``event`` in the step of ctx: Brent on the interpolant to 4 eps (as ``solve_ivp``)."""
-    ctx[16 + S_EVENT] = event
+    ctx[16 + S_AT.event] = event
     return _brentq(t, t_new, 4 * EPS, (EVENT, ctx, tab, INT(0), p, np.empty((1, 2, 3))))
 
 
@@ -981,8 +980,8 @@ def _sample_rows(rows, carry, rec, t_last, ctx, tab):
 def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     """One integration chunk by DOP853 (a fresh ``solve_ivp`` of the Python loop) until t_chunk or the
     terminal event of sp: (t, z, event NO_EVENT / REGIME / SWITCH, rows, status)."""
-    tol = p[P_TOL]
-    g_old = _event_at(t, z, sp) if sp[S_EVENT] != EV_NONE else 0.0
+    tol = p[P_AT.tolerance]
+    g_old = _event_at(t, z, sp) if sp[S_AT.event] != EV_NONE else 0.0
     f = np.empty(13)
     _rhs(t, z, (kind, sp), f)
     h_abs = _first_step(t, z, f, t_chunk, (kind, sp), tol, atol, -DOP_EXPONENT)
@@ -995,8 +994,8 @@ def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
         t_new, z_new, h_abs, ok = _dop_advance(t, z, f, h_abs, t_chunk, (kind, sp), tol, atol, K)
         if not ok:
             return t, z, NO_EVENT, rows, SLIDE_FAIL
-        g_new = _event_at(t_new, z_new, sp) if sp[S_EVENT] != EV_NONE else 0.0
-        fired = sp[S_EVENT] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
+        g_new = _event_at(t_new, z_new, sp) if sp[S_AT.event] != EV_NONE else 0.0
+        fired = sp[S_AT.event] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
         t_last = t_new
         if fired or rec[0] * rec[1] < t_new:
             F[0] = _dop_dense(t, t_new - t, z, z_new, (kind, sp), K).reshape(DOP_POWER * 13)
@@ -1016,7 +1015,7 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     """One chunk of a stiff slip by Radau (a fresh ``solve_ivp(method="Radau")`` of the Python loop) until
     t_chunk or the first terminal event: the slip stops (along sp's reference direction) or its speed rises
     through 2 s_stiff (back to DOP853). Returns (t, z, event, rows, status, accepted steps)."""
-    tol = p[P_TOL]
+    tol = p[P_AT.tolerance]
     f = np.empty(13)
     _rhs(t, z, (SLIP, sp), f)
     J, LUr, LUc = np.empty((13, 13)), np.empty((13, 13)), np.empty((13, 13), dtype=np.complex128)
@@ -1033,7 +1032,7 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
             return t, z, NO_EVENT, rows, SLIDE_FAIL, k
         stops_new, speed_new = _slip_events(z_new, sp)
         _step_ctx(ctx, t, t_new - t, z, 1.0)
-        fast, fast_new = speed - 2.0 * sp[S_STIFF], speed_new - 2.0 * sp[S_STIFF]
+        fast, fast_new = speed - 2.0 * sp[S_AT.v_stiff], speed_new - 2.0 * sp[S_AT.v_stiff]
         t_stops = _locate(EV_SLIP, t, t_new, ctx, Q, p) if stops >= 0.0 and stops_new <= 0.0 else np.inf
         t_fast = _locate(EV_FAST, t, t_new, ctx, Q, p) if fast <= 0.0 and fast_new >= 0.0 else np.inf
         t_last = min(t_stops, t_fast, t_new)
@@ -1049,7 +1048,7 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
 def _slide(p, y, t_end, rows, carry):
     """One sliding phase from state y (``motion._slide`` with ``sliding.slide``): (state, lifted, rows, status)."""
     t0 = y[0]
-    step, tol = p[P_SCAN], p[P_TOL]
+    step, tol = p[P_AT.scan_step], p[P_AT.tolerance]
     dummy = np.empty((1, ROT_WIDTH))
     if _normal(p, t0) > 0:
         t_lift = _first_root(NORMAL, t0, t_end, step, tol * step, np.empty(39), dummy, INT(0), p)[0]
@@ -1057,24 +1056,24 @@ def _slide(p, y, t_end, rows, carry):
         t_lift = t0
     t_stop = t_end if math.isnan(t_lift) else t_lift
     Q0 = _rot(y[7:11])
-    sp = _slide_params(p, Q0, _offset(p, Q0), p[P_MU])
+    sp = _slide_params(p, Q0, _offset(p, Q0), p[P_AT.mu])
     z = np.empty(13)
     z[0:2] = y[1:3]
     z[2:4] = y[4:6]
     z[4:7] = Q0 @ y[11:14]
     z[7:11] = y[7:11]
     z[11] = z[12] = 0.0
-    g = math.sqrt(p[P_G:P_G + 3] @ p[P_G:P_G + 3])
+    g = math.sqrt(p[P_AT.g:P_AT.g + 3] @ p[P_AT.g:P_AT.g + 3])
     v_scale = (g + abs(_normal(p, t0))) * step
-    sp[S_VSTOP] = tol * v_scale
-    sp[S_STIFF] = tol**sliding.SLIP_STIFF_POWER * v_scale
-    a_min = min(p[0], p[1], p[2])
+    sp[S_AT.v_stop] = tol * v_scale
+    sp[S_AT.v_stiff] = tol**sliding.SLIP_STIFF_POWER * v_scale
+    a_min = min(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2])
     atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min, 1 / v_scale,
                                      1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
     stick, z = _settle(t0, z, sp, True)
     t, stalled, status, implicit = t0, 0, DONE, False
     ctx = np.empty(16 + N_SLIDE)
-    rec = np.array([float(math.ceil(t0 / p[P_SAMPLE] - 1e-9)), p[P_SAMPLE], t0, y[3]])
+    rec = np.array([float(math.ceil(t0 / p[P_AT.sample_interval] - 1e-9)), p[P_AT.sample_interval], t0, y[3]])
     while t < t_stop and status == DONE:
         implicit = _implicit(z, sp, stick, 2.0 if implicit else 1.0)
         _choose_event(z, sp, stick)
@@ -1082,7 +1081,7 @@ def _slide(p, y, t_end, rows, carry):
         t_phase, t_chunk = t, min(t_stop, t + 40 * step)
         if implicit:
             t, z, event, rows, status, n = _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec)
-            carry[C_IMPLICIT] += n
+            carry[C_AT.implicit] += n
         else:
             kind = STICK if stick else SLIP
             t, z, event, rows, status = _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec)
@@ -1093,8 +1092,8 @@ def _slide(p, y, t_end, rows, carry):
             implicit = not implicit
         elif event == REGIME:  # the stick force reached the cone (slip starts), or the slip speed v_stop
             stick, z = _settle(t, z, sp, not stick)
-    carry[C_WORK] += p[P_MASS] * z[11]
-    carry[C_SLIDE_LOSS] += p[P_MASS] * z[12]
+    carry[C_AT.work] += p[P_AT.mass] * z[11]
+    carry[C_AT.slide_loss] += p[P_AT.mass] * z[12]
     end = _slide_state(t, z, y[3])
     rows = _record(rows, carry, end, SLIDING)
     return end, (not math.isnan(t_lift)) and t >= t_lift, rows, status
@@ -1103,34 +1102,34 @@ def _slide(p, y, t_end, rows, carry):
 @jit
 def _choose_event(z, sp, stick):
     """The terminal event of the next chunk (``sliding._events``) into sp: kind and reference slip direction."""
-    if sp[S_MU] == 0.0:  # without friction there is no stick or slip regime to change
-        sp[S_EVENT] = EV_NONE
+    if sp[S_AT.mu] == 0.0:  # without friction there is no stick or slip regime to change
+        sp[S_AT.event] = EV_NONE
     elif stick:
-        sp[S_EVENT] = EV_STICK
+        sp[S_AT.event] = EV_STICK
     else:
         s0 = _geometry(z, sp)[1]
         nrm = max(math.hypot(s0[0], s0[1]), 1e-300)
-        sp[S_EVENT] = EV_SLIP_STIFF if sp[S_ANISO] != 0.0 else EV_SLIP
-        sp[S_REF], sp[S_REF + 1] = s0[0] / nrm, s0[1] / nrm
+        sp[S_AT.event] = EV_SLIP_STIFF if sp[S_AT.aniso] != 0.0 else EV_SLIP
+        sp[S_AT.ref], sp[S_AT.ref + 1] = s0[0] / nrm, s0[1] / nrm
 
 
 @jit
 def _implicit(z, sp, stick, band):
     """Whether the next chunk goes implicit (``sliding.slide``): an anisotropic slip below ``band`` s_stiff
     (1; 2 when the last chunk was implicit: the hysteresis band)."""
-    if stick or sp[S_ANISO] == 0.0:
+    if stick or sp[S_AT.aniso] == 0.0:
         return False
     s = _geometry(z, sp)[1]
-    return math.hypot(s[0], s[1]) < band * sp[S_STIFF]
+    return math.hypot(s[0], s[1]) < band * sp[S_AT.v_stiff]
 
 
 @jit
 def _switched(z, sp):
     """At a located ``EV_SLIP_STIFF`` event: the slip speed fell through s_stiff (not the slip stopping)."""
-    if sp[S_EVENT] != EV_SLIP_STIFF:
+    if sp[S_AT.event] != EV_SLIP_STIFF:
         return False
     s = _geometry(z, sp)[1]
-    return math.hypot(s[0], s[1]) - sp[S_STIFF] <= s[0] * sp[S_REF] + s[1] * sp[S_REF + 1] - sp[S_VSTOP]
+    return math.hypot(s[0], s[1]) - sp[S_AT.v_stiff] <= s[0] * sp[S_AT.ref] + s[1] * sp[S_AT.ref + 1] - sp[S_AT.v_stop]
 
 
 @jit
@@ -1151,10 +1150,10 @@ def _slide_state(t, z, height):
 @jit
 def _start(p, y, rows, carry):
     """First row and the release rule of ``motion.simulate``; sets the regime and on_plane in carry."""
-    carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0 if _gap(p, y) <= _gap_noise(p, y) else 0.0
+    carry[C_AT.regime], carry[C_AT.on_plane] = FLIGHT, 1.0 if _gap(p, y) <= _gap_noise(p, y) else 0.0
     rows = _record(rows, carry, y, FLIGHT)
-    if carry[C_ON_PLANE] != 0.0 and _contact_velocity(p, y) <= _velocity_noise(p, y) and _normal(p, y[0]) > 0:
-        carry[C_REGIME], carry[C_ON_PLANE] = SLIDING, 0.0
+    if carry[C_AT.on_plane] != 0.0 and _contact_velocity(p, y) <= _velocity_noise(p, y) and _normal(p, y[0]) > 0:
+        carry[C_AT.regime], carry[C_AT.on_plane] = SLIDING, 0.0
         y = _land(p, y, carry)
     return y, rows
 
@@ -1167,36 +1166,36 @@ def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
         if not y[0] < t_end:
             return y, rows, imps, warns, DONE
         t_before = y[0]
-        if carry[C_REGIME] == FLIGHT:
-            y, fly_status, rows = _fly(p, y, t_end, carry[C_ON_PLANE] != 0.0, rows, carry)
-            carry[C_T_FLIGHT] += y[0] - t_before
+        if carry[C_AT.regime] == FLIGHT:
+            y, fly_status, rows = _fly(p, y, t_end, carry[C_AT.on_plane] != 0.0, rows, carry)
+            carry[C_AT.t_flight] += y[0] - t_before
             if fly_status == 1:
                 return y, rows, imps, warns, DONE
             if fly_status == 3:
                 return y, rows, imps, warns, ROT_FAIL
             u_n = 0.0
             if fly_status == 0 and _contact_velocity(p, y) < -_velocity_noise(p, y):
-                if carry[C_NIMP] >= p[P_MAX_IMPACTS]:
-                    warns = _warn(warns, carry, W_MAX_IMPACTS, y[0], p[P_MAX_IMPACTS])
+                if carry[C_AT.nimp] >= p[P_AT.max_impacts]:
+                    warns = _warn(warns, carry, W_MAX_IMPACTS, y[0], p[P_AT.max_impacts])
                     return y, rows, imps, warns, DONE
                 y, u_n, rows, imps, warns = _bounce(p, y, rows, imps, warns, carry)
-            carry[C_ON_PLANE] = 1.0
-            if u_n <= p[P_REST] and _normal(p, y[0]) > 0:
-                carry[C_REGIME], carry[C_ON_PLANE] = SLIDING, 0.0
-                carry[C_LANDINGS] += 1
+            carry[C_AT.on_plane] = 1.0
+            if u_n <= p[P_AT.rest_velocity] and _normal(p, y[0]) > 0:
+                carry[C_AT.regime], carry[C_AT.on_plane] = SLIDING, 0.0
+                carry[C_AT.landings] += 1
                 y = _land(p, y, carry)
             elif fly_status == 2:  # held on a plane that pulls away: a rocking contact (not modelled)
-                carry[C_ROCKING] += 1
+                carry[C_AT.rocking] += 1
                 y = _land(p, y, carry)
         else:
             y, lifted, rows, status = _slide(p, y, t_end, rows, carry)
-            carry[C_T_SLIDING] += y[0] - t_before
+            carry[C_AT.t_sliding] += y[0] - t_before
             if status != DONE:
                 return y, rows, imps, warns, status
             if lifted:
-                carry[C_REGIME], carry[C_ON_PLANE] = FLIGHT, 1.0
-        carry[C_IDLE] = carry[C_IDLE] + 1 if y[0] == t_before else 0
-        if carry[C_IDLE] > MAX_IDLE_STEPS:
+                carry[C_AT.regime], carry[C_AT.on_plane] = FLIGHT, 1.0
+        carry[C_AT.idle] = carry[C_AT.idle] + 1 if y[0] == t_before else 0
+        if carry[C_AT.idle] > MAX_IDLE_STEPS:
             return y, rows, imps, warns, STALLED
     return y, rows, imps, warns, MORE if y[0] < t_end else DONE
 
@@ -1206,13 +1205,13 @@ def run(p, y, t_end, rows, imps, warns, carry, max_phases):
     """The entry from Python: ``_start`` on a fresh carry (no rows yet), ``run_phases``, and the last row
     once done, in one call, with the energies of the budget at the start and the end (in the carry);
     returns (y, rows, imps, warns, status)."""
-    if carry[C_ROWS] == 0:
-        carry[C_E_START] = _energy(p, y)
+    if carry[C_AT.rows] == 0:
+        carry[C_AT.e_start] = _energy(p, y)
         y, rows = _start(p, y, rows, carry)
     y, rows, imps, warns, status = run_phases(p, y, t_end, rows, imps, warns, carry, max_phases)
     if status == DONE:
-        rows = _record(rows, carry, y, int(carry[C_REGIME]))
-        carry[C_E_END] = _energy(p, y)
+        rows = _record(rows, carry, y, int(carry[C_AT.regime]))
+        carry[C_AT.e_end] = _energy(p, y)
     return y, rows, imps, warns, status
 
 

@@ -296,11 +296,11 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     engine, why = choose_engine(sc)
     if engine == "python":
         return registry.Estimate(seconds, f"{what}; Python engine ({why})")
-    from symmech.grain import compiled
+    from symmech.core import engines
 
     seconds /= COMPILED_SPEEDUP
-    if compiled.ENGINE.needs_compile():
-        once = compiled.COLD_COMPILE_SECONDS
+    once = engines.get("grain").compile_seconds()
+    if once:
         return registry.Estimate(seconds + once, f"{what}; compiled engine ({why}); compiling the grain engine "
                                  f"once, ~{once:.0f} s; later runs start in ~1 s", once=once)
     return registry.Estimate(seconds, f"{what}; compiled engine")

@@ -628,15 +628,17 @@ def result(p: Plan, values: list, failed: list = (), warned: list = (), half_wid
                            "warned_grains": [{"population": n, "point": [i, j], "grain": g, "warnings": m}
                                              for n, i, j, g, m in warned]}
     stats_ = [statistics(v) for v in values]
+    grid = {c.name: c.name for c in cols[:2 if p.y else 1]}  # x-major: to_xarray over the swept axes
     for name, st in zip(p.names, stats_):
         data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS])
-        tables[f"sweep_{name}"] = Table(cols + STAT_COLUMNS, data, f"population {name} over the swept plane")
+        tables[f"sweep_{name}"] = Table(cols + STAT_COLUMNS, data, f"population {name} over the swept plane",
+                                        grid=grid)
     best = similar = None
     if len(values) == 2:
         sep = separation(*values)
         sep_cols = _separation_columns(p.names)
         tables["separation"] = Table(cols + sep_cols, np.column_stack([base] + [sep[c.name].ravel() for c in sep_cols]),
-                                     "separation chart of the two populations")
+                                     "separation chart of the two populations", grid=grid)
         best, similar = best_point(sep)
         at = {c.name: _number(sep[c.name].ravel()[best]) for c in sep_cols}
         summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {

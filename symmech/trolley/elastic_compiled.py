@@ -36,7 +36,7 @@ from scipy.interpolate import CubicSpline
 from symmech.core import build, ode
 from symmech.trolley import elastic as el
 from symmech.trolley import elastic_kernels as ek
-from symmech.trolley.elastic_kernels import DOMEGA, LOAD, N_CHANNELS, OMEGA, V0
+from symmech.trolley.elastic_layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
 INTERP_FRACTION = 1e-3
@@ -78,7 +78,7 @@ def _scales(ch: np.ndarray) -> np.ndarray:
     """Error scale (12,) of each channel: its group's largest norm; ω̇ against |ω̇| + |ω|² (it enters
     B = skew(ω̇) + skew(ω)²); a group that is zero everywhere is exact (scale 0 accepts 0 error only)."""
     norm = lambda j: float(np.linalg.norm(ch[:, j:j + 3], axis=1).max())  # noqa: E731
-    groups = [norm(LOAD), norm(OMEGA), norm(DOMEGA) + norm(OMEGA) ** 2, norm(V0)]
+    groups = [norm(CH_AT.load), norm(CH_AT.omega), norm(CH_AT.domega) + norm(CH_AT.omega) ** 2, norm(CH_AT.v0)]
     return np.repeat(groups, 3)
 
 
@@ -191,7 +191,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
 
 def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
     """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
-    :data:`symmech.trolley.elastic_kernels.G_E` …): e, e' + Ω × e, ν, Ω, Ω'."""
+    :data:`symmech.trolley.elastic_layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
     fr = el.frames(drive, np.asarray(s, float)[at], system.mdl.l)
     return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
 
@@ -200,8 +200,8 @@ def _geometry_scales(g: np.ndarray) -> np.ndarray:
     """Error scale (15,) of each geometry channel: its group's largest norm; e' + Ω × e against it + |Ω|, Ω'
     against |Ω'| + |Ω|² (the terms they enter a0 and ω̇ beside, per V0²)."""
     norm = lambda j: float(np.linalg.norm(g[:, j:j + 3], axis=1).max())  # noqa: E731
-    om = norm(ek.G_OM)
-    return np.repeat([norm(ek.G_E), norm(ek.G_K) + om, norm(ek.G_NU), om, norm(ek.G_DOM) + om ** 2], 3)
+    om = norm(G_AT.om)
+    return np.repeat([norm(G_AT.e), norm(G_AT.k) + om, norm(G_AT.nu), om, norm(G_AT.dom) + om ** 2], 3)
 
 
 REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
@@ -296,20 +296,15 @@ COLD_COMPILE_SECONDS = 130.0
 
 
 def _entry_signatures() -> dict:
-    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with (a
-    small model)."""
-    f, n = 3, 1
-    mdl = (np.zeros(6), np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64),
-           np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((9 * f, f)), np.zeros((f, f)), np.zeros((5, 5)),
-           np.zeros((3, 5)), np.zeros((0, 1), np.int64), np.zeros(0, np.int64), np.zeros((0, 1, 1)), np.zeros(0),
-           np.zeros((f, 3)), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n), np.int64), np.zeros((f * f, 9)))
+    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
+    model record's from its layout (:data:`symmech.trolley.elastic_layout.MODEL`), the rest from small arrays."""
+    mdl = MODEL.numba_type()
     tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
-    solve = (mdl, tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
-    rows = (mdl, np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
-    traction = (mdl, (np.zeros(2), np.zeros((4, 1, ek.N_GEOMETRY))), 1, np.zeros(6), np.zeros(2), 1e-8,
-                np.zeros(6), 1.0)
-    return {ek._solve: tuple(numba.typeof(a) for a in solve), ek._rows: tuple(numba.typeof(a) for a in rows),
-            ek._solve_traction: tuple(numba.typeof(a) for a in traction)}
+    solve = (tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
+    rows = (np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
+    traction = ((np.zeros(2), np.zeros((4, 1, N_GEOMETRY))), 1, np.zeros(6), np.zeros(2), 1e-8, np.zeros(6), 1.0)
+    return {entry: (mdl, *(numba.typeof(a) for a in args))
+            for entry, args in ((ek._solve, solve), (ek._rows, rows), (ek._solve_traction, traction))}
 
 
 ENGINE = build.Engine("elastic", "symmech.trolley.elastic_kernels", _entry_signatures, COLD_COMPILE_SECONDS)

@@ -23,14 +23,10 @@ import numba
 import numpy as np
 
 from symmech.core import ode
+from symmech.trolley.elastic_layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 
-# Frame channels of the table (columns): load a0 + g0 ν [m/s²], ω [rad/s], ω̇ [rad/s²], v0 [m/s].
-LOAD, OMEGA, DOMEGA, V0 = 0, 3, 6, 9
-N_CHANNELS = 12
-# Model flags (the float vector ``flags``): N, F, mass, g0, rollers on, law (0 linear, 1 clamped pair).
-F_N, F_F, F_MASS, F_G0, F_ROLLERS, F_LAW = range(6)
 MAX_STEPS = 50_000_000
 
 
@@ -50,7 +46,7 @@ def _channels(tab, t, out):
 @jit
 def _frame_mats(ch):
     """B = skew(ω̇) + skew(ω)² and W = skew(ω) (3, 3) from the channels ch (12,)."""
-    w, dw = ch[OMEGA:OMEGA + 3], ch[DOMEGA:DOMEGA + 3]
+    w, dw = ch[CH_AT.omega:CH_AT.omega + 3], ch[CH_AT.domega:CH_AT.domega + 3]
     W = np.zeros((3, 3))
     W[0, 1], W[0, 2], W[1, 2] = -w[2], w[1], -w[0]
     W[1, 0], W[2, 0], W[2, 1] = w[2], -w[1], w[0]
@@ -67,8 +63,8 @@ def _frame_mats(ch):
 @jit
 def _times_a(mdl, y, x):
     """y A(x) (F,): the coefficient vector of Σ_b y_b φ̃_b with φ̃_b = φ_b + Σ_c x_c ψ_bc, y and x (N,)."""
-    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
-    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    n, f = int(mdl.flags[F_AT.n]), int(mdl.flags[F_AT.f])
+    ptr, col, qi = mdl.ptr, mdl.col, mdl.qi
     out = np.zeros(f)
     for b in range(n):
         out[1 + b] = y[b]
@@ -80,8 +76,8 @@ def _times_a(mdl, y, x):
 @jit
 def _a_times(mdl, q, z):
     """A(q) z (N,) for z (F,)."""
-    n = int(mdl[0][F_N])
-    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    n = int(mdl.flags[F_AT.n])
+    ptr, col, qi = mdl.ptr, mdl.col, mdl.qi
     out = np.empty(n)
     for b in range(n):
         acc = z[1 + b]
@@ -94,8 +90,8 @@ def _a_times(mdl, q, z):
 @jit
 def _a_rows(mdl, q, Z):
     """A(q) Z (N, k) for Z (F, k): row b gathers Z[1 + b] and the ψ rows of row b."""
-    n = int(mdl[0][F_N])
-    ptr, col, qi = mdl[1], mdl[2], mdl[3]
+    n = int(mdl.flags[F_AT.n])
+    ptr, col, qi = mdl.ptr, mdl.col, mdl.qi
     out = np.empty((n, Z.shape[1]))
     for b in range(n):
         out[b] = Z[1 + b]
@@ -109,8 +105,8 @@ def _a_rows(mdl, q, Z):
 @jit
 def _rr(mdl, q):
     """Coefficients (F,) of r̃ = r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the fields."""
-    n, f = int(mdl[0][F_N]), int(mdl[0][F_F])
-    pi, pj = mdl[4], mdl[5]
+    n, f = int(mdl.flags[F_AT.n]), int(mdl.flags[F_AT.f])
+    pi, pj = mdl.pair_i, mdl.pair_j
     out = np.zeros(f)
     out[0] = 1.0
     out[1:1 + n] = q
@@ -135,7 +131,7 @@ def _contract(G9, M):
 @jit
 def _rollers(mdl, q, qd):
     """Roller deflections d, forces P1…P5 [N] and tangent stiffness dP/dd [N/m] (elastic.roller_forces)."""
-    C, roll, law = mdl[8], mdl[9], mdl[0][F_LAW]
+    C, roll, law = mdl.rollers_map, mdl.roll, mdl.flags[F_AT.law]
     d, dd = C @ q[:5], C @ qd[:5]
     k, c, pre = roll[0], roll[1], roll[2]
     if law == 0.0:
@@ -148,7 +144,7 @@ def _rollers(mdl, q, qd):
 @jit
 def _membrane(mdl, q, R, Rq, stiffness):
     """Adds the held beams' membrane force to R (N,) and, with ``stiffness``, its Hessian to Rq (N, N)."""
-    idx, size, H, cm = mdl[10], mdl[11], mdl[12], mdl[13]
+    idx, size, H, cm = mdl.block_index, mdl.block_size, mdl.block_h, mdl.block_c
     for b in range(size.size):
         m = size[b]
         x = np.empty(m)
@@ -169,7 +165,7 @@ def _membrane(mdl, q, R, Rq, stiffness):
 @jit
 def _terms(mdl, ch, q, qd):
     """(R0 (N,) the residual at q̈ = 0, M (N, N), rr, v, p2 (F,), X (F, 9), B, W, z (F,)) at one state."""
-    flags, Gx, Gtr, S1, K, D = mdl[0], mdl[6], mdl[7], mdl[14], mdl[15], mdl[16]
+    flags, Gx, Gtr, S1, K, D = mdl.flags, mdl.gram_x, mdl.gram_trace, mdl.s1, mdl.stiffness, mdl.damping
     rr = _rr(mdl, q)
     v = _times_a(mdl, qd, q)
     p2 = _times_a(mdl, qd, qd)
@@ -177,12 +173,13 @@ def _terms(mdl, ch, q, qd):
     B, W = _frame_mats(ch)
     X = _gram_pass(Gx, rr)
     Y = _gram_pass(Gx, v)
-    z = S1 @ ch[LOAD:LOAD + 3].copy() + Gtr @ p2 + X @ B.copy().reshape(9) + 2.0 * (Y @ W.copy().reshape(9))
+    load = ch[CH_AT.load:CH_AT.load + 3].copy()
+    z = S1 @ load + Gtr @ p2 + X @ B.copy().reshape(9) + 2.0 * (Y @ W.copy().reshape(9))
     R = _a_times(mdl, q, z) + K @ q + D @ qd
     _membrane(mdl, q, R, R.reshape(1, -1), False)
-    if flags[F_ROLLERS] != 0.0:
+    if flags[F_AT.rollers] != 0.0:
         _, force, _ = _rollers(mdl, q, qd)
-        R[:5] -= force @ mdl[8]
+        R[:5] -= force @ mdl.rollers_map
     AG = _a_rows(mdl, q, Gtr)  # A Gtr (N, F)
     M = _a_rows(mdl, q, AG.T.copy())  # A Gtr Aᵀ
     return R, M, rr, v, p2, X, B, W, z
@@ -191,10 +188,10 @@ def _terms(mdl, ch, q, qd):
 @jit
 def _resultants(mdl, ch, rr, v, acc, X, B, W):
     """Force F and moment M_O (3,) of ∫ (a - g) dm (System.resultants); acc (F,) the coefficients of ü."""
-    flags, S1 = mdl[0], mdl[14]
-    load = ch[LOAD:LOAD + 3].copy()
+    flags, S1 = mdl.flags, mdl.s1
+    load = ch[CH_AT.load:CH_AT.load + 3].copy()
     first, fv, fa = rr @ S1, v @ S1, acc @ S1
-    F = flags[F_MASS] * load + B @ first + 2.0 * W @ fv + fa
+    F = flags[F_AT.mass] * load + B @ first + 2.0 * W @ fv + fa
     # J(y) = Σ_kl rr_k y_l G_kl = Σ_l y_l X_lᵀ (G_kl = G_lkᵀ)
     Jr, Jv, Ja = (rr @ X).reshape(3, 3).T, (v @ X).reshape(3, 3).T, (acc @ X).reshape(3, 3).T
     H = Jr @ B.T + 2.0 * Jv @ W.T + Ja
@@ -212,10 +209,10 @@ def _accelerations(mdl, ch, q, qd):
 
 @jit
 def _rhs(t, y, args, out):
-    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model tuple, spline table, calls (1,))."""
+    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model record (elastic_layout.MODEL), spline table, calls (1,))."""
     mdl, tab, calls = args
     calls[0] += 1.0
-    n = int(mdl[0][F_N])
+    n = int(mdl.flags[F_AT.n])
     ch = np.empty(N_CHANNELS)
     _channels(tab, t, ch)
     q, qd = y[:n], y[n:2 * n]
@@ -225,23 +222,24 @@ def _rhs(t, y, args, out):
     out[:n] = qd
     out[n:2 * n] = qdd
     out[2 * n] = _dissipation(mdl, qd)
-    out[2 * n + 1] = F @ ch[V0:V0 + 3] + moment @ ch[OMEGA:OMEGA + 3]
+    out[2 * n + 1] = F @ ch[CH_AT.v0:CH_AT.v0 + 3] + moment @ ch[CH_AT.omega:CH_AT.omega + 3]
 
 
 @jit
 def _dissipation(mdl, qd):
     """Power of the damping forces [W] (beam D and roller dampers)."""
-    power = qd @ mdl[16] @ qd
-    if mdl[0][F_ROLLERS] != 0.0:
-        dd = mdl[8] @ qd[:5]
-        power += mdl[9][1] @ (dd * dd)
+    power = qd @ mdl.damping @ qd
+    if mdl.flags[F_AT.rollers] != 0.0:
+        dd = mdl.rollers_map @ qd[:5]
+        power += mdl.roll[1] @ (dd * dd)
     return power
 
 
 @jit
 def _jacobians(mdl, ch, q, qd):
     """M, ∂R/∂q, ∂R/∂q̇ (N, N) at the state, q̈ from the equations (System.evaluate with ``jacobian``)."""
-    flags, G9, Gtr, K, D, C, dA = mdl[0], mdl[18], mdl[7], mdl[15], mdl[16], mdl[8], mdl[17]
+    flags, G9, Gtr, K, D = mdl.flags, mdl.gram_9, mdl.gram_trace, mdl.stiffness, mdl.damping
+    C, dA = mdl.rollers_map, mdl.pair_field
     n = q.size
     qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
     z = z + Gtr @ _times_a(mdl, qdd, q)  # z at the state's q̈
@@ -259,9 +257,9 @@ def _jacobians(mdl, ch, q, qd):
                 Rq[a, b] += z[dA[a, b]]
     R0 = np.zeros(n)
     _membrane(mdl, q, R0, Rq, True)
-    if flags[F_ROLLERS] != 0.0:
+    if flags[F_AT.rollers] != 0.0:
         _, _, kt = _rollers(mdl, q, qd)
-        c = mdl[9][1]
+        c = mdl.roll[1]
         for i in range(5):
             for j in range(5):
                 for r in range(5):
@@ -274,7 +272,7 @@ def _jacobians(mdl, ch, q, qd):
 def _jac(t, y, args, J):
     """dy'/dy (2 N + 2, 2 N + 2): the rows of q and q̇ (those of E_d and W zero, as the Python engine's)."""
     mdl, tab, _ = args
-    n = int(mdl[0][F_N])
+    n = int(mdl.flags[F_AT.n])
     ch = np.empty(N_CHANNELS)
     _channels(tab, t, ch)
     M, Rq, Rqd = _jacobians(mdl, ch, y[:n], y[n:2 * n])
@@ -321,8 +319,8 @@ def _rows(mdl, chs, nu, height, Y):
     (k,) [m], states Y (k, 2 N + 2)): q̈ (k, N), the resultants F, M_O (k, 3), the coefficient vectors of r̃,
     its rate and acceleration (k, F), and the Jacobi and total energies less the potential Π (k,) [J]
     (System.jacobi_energy, System.total_energy)."""
-    flags, S1, Gtr = mdl[0], mdl[14], mdl[7]
-    n, f, mass, g0 = int(flags[F_N]), int(flags[F_F]), flags[F_MASS], flags[F_G0]
+    flags, S1, Gtr = mdl.flags, mdl.s1, mdl.gram_trace
+    n, f, mass, g0 = int(flags[F_AT.n]), int(flags[F_AT.f]), flags[F_AT.mass], flags[F_AT.g0]
     k = Y.shape[0]
     qdd_out, F_out, M_out = np.empty((k, n)), np.empty((k, 3)), np.empty((k, 3))
     rr_out, v_out, acc_out = np.empty((k, f)), np.empty((k, f)), np.empty((k, f))
@@ -335,7 +333,7 @@ def _rows(mdl, chs, nu, height, Y):
         F_out[i], M_out[i] = _resultants(mdl, ch, rr, v, acc, X, B, W)
         qdd_out[i], rr_out[i], v_out[i], acc_out[i] = qdd, rr, v, acc
         Jr, Jv = (rr @ X).reshape(3, 3).T, (v @ X).reshape(3, 3).T
-        w, v0 = ch[OMEGA:OMEGA + 3].copy(), ch[V0:V0 + 3].copy()
+        w, v0 = ch[CH_AT.omega:CH_AT.omega + 3].copy(), ch[CH_AT.v0:CH_AT.v0 + 3].copy()
         first = rr @ S1
         t2 = v @ Gtr @ v
         t0 = 0.5 * (mass * v0 @ v0 + 2.0 * v0 @ np.cross(w, first) + np.sum((W.T @ W) * Jr))
@@ -348,10 +346,6 @@ def _rows(mdl, chs, nu, height, Y):
 
 # --------------------------------------------------------------------------- traction (s and V0 are states)
 
-# Geometry channels of the traction table, a spline in the arc length s (columns): e, e' + Ω × e [1/m],
-# ν, Ω [rad/m], Ω' [rad/m²] (model.Frame); the frame's motion at V0, V̇0 follows from them (_motion).
-G_E, G_K, G_NU, G_OM, G_DOM = 0, 3, 6, 9, 12
-N_GEOMETRY = 15
 TRACTIONS: dict = {}  # key -> P0(t, V0) [N] of the runs under way (elastic_compiled.simulate registers them)
 
 
@@ -387,10 +381,10 @@ def _motion(g, V, dV, g0):
     """The 12 frame channels (load, ω, ω̇, v0) at speed V [m/s] and rate dV [m/s²] from geometry g (15,)."""
     ch = np.empty(N_CHANNELS)
     for i in range(3):
-        ch[LOAD + i] = dV * g[G_E + i] + V * V * g[G_K + i] + g0 * g[G_NU + i]
-        ch[OMEGA + i] = V * g[G_OM + i]
-        ch[DOMEGA + i] = dV * g[G_OM + i] + V * V * g[G_DOM + i]
-        ch[V0 + i] = V * g[G_E + i]
+        ch[CH_AT.load + i] = dV * g[G_AT.e + i] + V * V * g[G_AT.k + i] + g0 * g[G_AT.nu + i]
+        ch[CH_AT.omega + i] = V * g[G_AT.om + i]
+        ch[CH_AT.domega + i] = dV * g[G_AT.om + i] + V * V * g[G_AT.dom + i]
+        ch[CH_AT.v0 + i] = V * g[G_AT.e + i]
     return ch
 
 
@@ -398,17 +392,19 @@ def _motion(g, V, dV, g0):
 def _traction_terms(mdl, g, q, qd, V, p0):
     """q̈ (N,), V̇0 and the terms of :func:`_terms` at the frame of that V̇0, from M q̈ + b V̇0 = -R0 and
     c·q̈ + d V̇0 = P0 - F1 (elastic.Timeline.traction_step; b = ∂R/∂V̇0, c, d those of the x1 resultant F1)."""
-    flags, S1 = mdl[0], mdl[14]
+    flags, S1 = mdl.flags, mdl.s1
     n = q.size
-    ch0 = _motion(g, V, 0.0, flags[F_G0])
+    ch0 = _motion(g, V, 0.0, flags[F_AT.g0])
     R0, M, rr, v, p2, X, B, W, z = _terms(mdl, ch0, q, qd)
-    dB, _ = _frame_mats(np.concatenate((np.zeros(6), g[G_OM:G_OM + 3], np.zeros(3))))  # ∂B/∂V̇0 = skew(Ω)
-    e = g[G_E:G_E + 3].copy()
+    dch = np.zeros(N_CHANNELS)  # ∂B/∂V̇0 = skew(Ω): the channels with ω̇ = Ω, nothing else
+    dch[CH_AT.domega:CH_AT.domega + 3] = g[G_AT.om:G_AT.om + 3]
+    dB, _ = _frame_mats(dch)
+    e = g[G_AT.e:G_AT.e + 3].copy()
     L = np.empty((n + 1, n + 1))
     L[:n, :n] = M
     L[:n, n] = _a_times(mdl, q, S1 @ e + X @ dB.copy().reshape(9))
     L[n, :n] = _a_rows(mdl, q, S1)[:, 0]
-    L[n, n] = flags[F_MASS] * e[0] + (dB @ (rr @ S1))[0]
+    L[n, n] = flags[F_AT.mass] * e[0] + (dB @ (rr @ S1))[0]
     F0 = _resultants(mdl, ch0, rr, v, p2, X, B, W)[0][0]
     rhs = np.empty(n + 1)
     rhs[:n] = -R0
@@ -419,21 +415,21 @@ def _traction_terms(mdl, g, q, qd, V, p0):
 
 @jit
 def _rhs_traction(t, y, args, out):
-    """y' of y = [q, q̇, E_d, W, s, V0] (2 N + 4,); args = (model tuple, geometry table, calls (1,), traction key)."""
+    """y' of y = [q, q̇, E_d, W, s, V0] (2 N + 4,); args = (model record, geometry table, calls (1,), traction key)."""
     mdl, tab, calls, key = args
     calls[0] += 1.0
-    n = int(mdl[0][F_N])
+    n = int(mdl.flags[F_AT.n])
     g, dg = np.empty(N_GEOMETRY), np.empty(N_GEOMETRY)
     _geometry(tab, y[2 * n + 2], g, dg)
     q, qd, V = y[:n], y[n:2 * n], y[2 * n + 3]
     qdd, dV, _ = _traction_terms(mdl, g, q, qd, V, _force(key, t, V)[0])
-    ch = _motion(g, V, dV, mdl[0][F_G0])
+    ch = _motion(g, V, dV, mdl.flags[F_AT.g0])
     _, _, rr, v, p2, X, B, W, _ = _terms(mdl, ch, q, qd)
     F, moment = _resultants(mdl, ch, rr, v, _times_a(mdl, qdd, q) + p2, X, B, W)
     out[:n] = qd
     out[n:2 * n] = qdd
     out[2 * n] = _dissipation(mdl, qd)
-    out[2 * n + 1] = F @ ch[V0:V0 + 3] + moment @ ch[OMEGA:OMEGA + 3]
+    out[2 * n + 1] = F @ ch[CH_AT.v0:CH_AT.v0 + 3] + moment @ ch[CH_AT.omega:CH_AT.omega + 3]
     out[2 * n + 2] = V
     out[2 * n + 3] = dV
 
@@ -442,12 +438,12 @@ def _rhs_traction(t, y, args, out):
 def _frame_rates(g, dg, V, dV, g0, W, theta):
     """∂(load, B, W)/∂θ at q̈, V̇0 fixed (W = skew(ω) of the state), θ = 0 the arc length s, 1 the speed V0:
     (3,), (3, 3), (3, 3)."""
-    Om, dOm = g[G_OM:G_OM + 3].copy(), g[G_DOM:G_DOM + 3].copy()
+    Om, dOm = g[G_AT.om:G_AT.om + 3].copy(), g[G_AT.dom:G_AT.dom + 3].copy()
     if theta == 0:
-        dload = dV * dg[G_E:G_E + 3] + V * V * dg[G_K:G_K + 3] + g0 * dg[G_NU:G_NU + 3]
-        dw, ddw = V * dOm, dV * dOm + V * V * dg[G_DOM:G_DOM + 3]
+        dload = dV * dg[G_AT.e:G_AT.e + 3] + V * V * dg[G_AT.k:G_AT.k + 3] + g0 * dg[G_AT.nu:G_AT.nu + 3]
+        dw, ddw = V * dOm, dV * dOm + V * V * dg[G_AT.dom:G_AT.dom + 3]
     else:
-        dload, dw, ddw = 2.0 * V * g[G_K:G_K + 3], Om, 2.0 * V * dOm
+        dload, dw, ddw = 2.0 * V * g[G_AT.k:G_AT.k + 3], Om, 2.0 * V * dOm
     dB, dW = _frame_mats(np.concatenate((np.zeros(3), dw, ddw, np.zeros(3))))
     return dload, dB - dW @ dW + dW @ W + W @ dW, dW  # ∂B = skew(∂ω̇) + ∂(skew(ω)²)
 
@@ -458,8 +454,8 @@ def _jac_traction(t, y, args, J):
     with G = [R; F1 - P0] at the state's q̈, V̇0 (q, q̇ as :func:`_jacobians`; s, V0 through the frame's
     channels, ∂/∂s by the spline's derivative); the rows of E_d and W zero, as :func:`_jac`'s."""
     mdl, tab, _, key = args
-    flags, S1, Gx = mdl[0], mdl[14], mdl[6]
-    n, mass, g0 = int(flags[F_N]), flags[F_MASS], flags[F_G0]
+    flags, S1, Gx = mdl.flags, mdl.s1, mdl.gram_x
+    n, mass, g0 = int(flags[F_AT.n]), flags[F_AT.mass], flags[F_AT.g0]
     g, dg = np.empty(N_GEOMETRY), np.empty(N_GEOMETRY)
     _geometry(tab, y[2 * n + 2], g, dg)
     q, qd, V = y[:n], y[n:2 * n], y[2 * n + 3]
@@ -533,8 +529,9 @@ def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
 # --------------------------------------------------------------------------- from the Python model
 
 
-def pack(system) -> tuple:
-    """The model tuple the kernels take, from a :class:`symmech.trolley.elastic.System`."""
+def pack(system):
+    """The model record the kernels take (:data:`symmech.trolley.elastic_layout.MODEL`), from a
+    :class:`symmech.trolley.elastic.System`."""
     inv, mdl = system.inv, system.mdl
     n, f = system.N, system.F
     rows = [[] for _ in range(n)]  # the ψ entries of A: (column, index of the coordinate multiplying it)
@@ -560,10 +557,9 @@ def pack(system) -> tuple:
     for b, blk in enumerate(blocks):
         m = len(blk.index)
         idx[b, :m], H[b, :m, :m] = blk.index, blk.H
-    flags = np.array([n, f, inv.mass, mdl.g0, 1.0 if system.rollers_on else 0.0, law])
-    return (flags, ptr, col, qi, system.pair_i.astype(np.int64), system.pair_j.astype(np.int64),
-            np.ascontiguousarray(inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f)), np.ascontiguousarray(system.Gtr),
-            np.ascontiguousarray(system.C, float), roll, idx,
-            np.array([len(b.index) for b in blocks], dtype=np.int64), H, np.array([b.c for b in blocks], float),
-            np.ascontiguousarray(inv.S1), np.ascontiguousarray(inv.K), np.ascontiguousarray(inv.D),
-            inv.dA.astype(np.int64), np.ascontiguousarray(inv.G.reshape(f * f, 9)))
+    flags = FLAGS.pack(n=n, f=f, mass=inv.mass, g0=mdl.g0, rollers=1.0 if system.rollers_on else 0.0, law=law)
+    return MODEL.pack(
+        flags=flags, ptr=ptr, col=col, qi=qi, pair_i=system.pair_i, pair_j=system.pair_j,
+        gram_x=inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f), gram_trace=system.Gtr, rollers_map=system.C, roll=roll,
+        block_index=idx, block_size=[len(b.index) for b in blocks], block_h=H, block_c=[b.c for b in blocks],
+        s1=inv.S1, stiffness=inv.K, damping=inv.D, pair_field=inv.dA, gram_9=inv.G.reshape(f * f, 9))

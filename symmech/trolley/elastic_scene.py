@@ -478,7 +478,8 @@ def _modes_table(modes: dict, names: list) -> ResultTable:
            [modes[key].ravel() for key in ("f", "zeta")] + [modes[key].ravel() for key, _, _ in MODE_KEYS] + \
            [modes["shape"][:, :, p, k].ravel() for p in range(len(names)) for k in range(3)] + \
            [rep(modes["forcing"][:, j]) for j in range(len(FORCING))]
-    return ResultTable(cols, np.column_stack(data), text={"component": [x for row in modes["label"] for x in row]})
+    return ResultTable(cols, np.column_stack(data), text={"component": [x for row in modes["label"] for x in row]},
+                       grid={"t": "t", "mode": "mode_id"})
 
 
 PRECISION_RTOLS = (1e-4, 1e-6, 1e-8)

@@ -416,13 +416,14 @@ def estimate(setup: Setup) -> registry.Estimate:
         what += f", the elastic model ({engine} engine{'; ' + why if why.startswith('auto') else ''})"
         seconds += elastic_scene.SECONDS_PER_STEP[engine] * steps
         if engine == "compiled":
-            from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+            from symmech.core import engines
 
-            if elastic_compiled.ENGINE.cold():
-                once = elastic_compiled.COLD_COMPILE_SECONDS
+            elastic = engines.get("elastic")  # its module imports numba: only when the compiled engine runs
+            once = elastic.compile_seconds()
+            if once:
                 seconds += once
-                what += (f"; compiling the elastic engine once, ~{elastic_compiled.COLD_COMPILE_SECONDS:.0f} s "
-                         f"(numba's cache {elastic_compiled.ENGINE.cache_dir()}; `symmech warm` builds it ahead)")
+                what += (f"; compiling the elastic engine once, ~{once:.0f} s "
+                         f"(numba's cache {elastic.builder().cache_dir()}; `symmech warm` builds it ahead)")
     return registry.Estimate(seconds, what, once)
 
 

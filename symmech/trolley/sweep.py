@@ -483,7 +483,8 @@ def result(p: Plan, outcomes: list) -> Result:
     ok = admissible(metric, p.limits)
     table = Table(base_cols + cols + [Column("admissible", "1", "1: comfort margin ≥ 0 and the reactions within "
                                                                  "the stated limits")],
-                  np.column_stack([base, rows, ok.astype(float)]), "design numbers over the swept plane", text)
+                  np.column_stack([base, rows, ok.astype(float)]), "design numbers over the swept plane", text,
+                  grid={c.name: c.name for c in base_cols})
 
     def at(k: int) -> dict:
         point = {"index": [int(v) for v in np.unravel_index(k, p.shape)][:len(p.axes)]}

@@ -1,0 +1,128 @@
+"""Compiled engines register themselves here, as scene kinds do in :mod:`symmech.core.registry`.
+
+An engine is declared by a light module whose name ends in ``engine`` (``symmech/<paper>/*engine.py``; no
+numba, no physics) that calls :func:`register` at import with an :class:`Engine`: its name, one line for
+``--help``, and the module that implements it. ``symmech warm``, its ``--engine`` choices and the run
+estimates read this registry, so adding an engine touches no central list (docs/ARCHITECTURE.md, "Adding
+an engine").
+
+The protocol, every engine alike (the implementation module provides ``ENGINE``, ``simulate`` and
+``LAYOUTS``)::
+
+    engine = engines.get("grain")
+    engine.builder()      # ENGINE, a symmech.core.build.Engine: numba's cache and the ahead-of-time build
+    engine.warm(...)      # build it now, once per machine (symmech warm)
+    engine.load()         # what a run calls: the ahead-of-time build when current, else numba's entries
+    engine.run(...)       # simulate(...): the engine's contract, results as the reference engine's
+    engine.describe()     # its declared layouts (LAYOUTS, symmech.core.layout): names, units, offsets
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+_ENGINES: dict[str, "Engine"] = {}
+_ALL = False  # every engine module imported
+
+
+@dataclass(frozen=True)
+class Engine:
+    """One compiled engine.
+
+    name            ``symmech warm --engine NAME``; the name of its :class:`symmech.core.build.Engine`
+    summary         one line for ``symmech warm --help``
+    implementation  dotted name of the module that provides ``ENGINE`` (a :class:`symmech.core.build.Engine`),
+                    ``simulate(...)`` and ``LAYOUTS`` (its declared layouts, :mod:`symmech.core.layout`)
+    """
+
+    name: str
+    summary: str
+    implementation: str
+
+    def module(self):
+        """The implementation module (imported on first use: it may import numba)."""
+        return importlib.import_module(self.implementation)
+
+    def builder(self):
+        """The engine's :class:`symmech.core.build.Engine`: numba's cache, the build lock, the ahead-of-time build."""
+        return self.module().ENGINE
+
+    def warm(self, wait: bool = True, say=None, ahead: bool = False) -> bool:
+        """:meth:`symmech.core.build.Engine.warm`: build the engine now unless it is built."""
+        return self.builder().warm(wait=wait, say=say, ahead=ahead)
+
+    def load(self):
+        """What a run calls: the ahead-of-time build (a module) when current, else numba's cached entries (a
+        dict of dispatchers to the argument types they are compiled for; they compile on first call)."""
+        builder = self.builder()
+        return builder.ahead_of_time() or builder.entries()
+
+    def run(self, *args, **kwargs):
+        """The engine's ``simulate``."""
+        return self.module().simulate(*args, **kwargs)
+
+    def compile_seconds(self) -> float:
+        """The wall time [s] a run starting now spends compiling first: the cold compile, or 0."""
+        builder = self.builder()
+        return builder.seconds if builder.needs_compile() else 0.0
+
+    def describe(self) -> str:
+        """Its name, summary and declared layouts, one line per field: offset (or array dimensions), name,
+        unit, meaning."""
+        from symmech.core.layout import Layout  # numpy: not at import (the CLI's start)
+
+        lines = [f"{self.name}: {self.summary}"]
+        for layout in self.module().LAYOUTS:
+            lines.append(f"  {layout.name}")
+            for f in layout.fields:
+                where = f"{layout.offset(f.name):>4}" if isinstance(layout, Layout) else \
+                    f"{f.dtype}({', '.join(map(str, f.shape))})"
+                lines.append(f"    {where} {f.name} [{f.unit}] {f.meaning}")
+        return "\n".join(lines)
+
+
+def register(engine: Engine) -> Engine:
+    """Add ``engine`` (called by its declaring module at import time)."""
+    if _ENGINES.get(engine.name, engine) != engine:
+        raise ValueError(f"compiled engine {engine.name!r} registered twice")
+    _ENGINES[engine.name] = engine
+    return engine
+
+
+def _discover(until: str | None = None) -> None:
+    """Import engine modules until engine ``until`` is registered (all of them when None), those whose name
+    contains it first: a grain run imports no other paper's package."""
+    from symmech.core import registry  # the discovery scene kinds use; not at import (the CLI's start)
+
+    for name in sorted(registry.paper_modules("engine"), key=lambda module: until is None or until not in module):
+        if until in _ENGINES:
+            return
+        importlib.import_module(name)
+
+
+def engines() -> dict[str, Engine]:
+    """Every registered engine by name (every ``symmech.<paper>.*engine`` module imported once)."""
+    global _ALL
+    if not _ALL:
+        _discover()
+        _ALL = True
+    return dict(sorted(_ENGINES.items()))
+
+
+def get(name: str) -> Engine:
+    """The engine called ``name`` (KeyError naming the registered ones otherwise)."""
+    _discover(until=name)
+    if name in _ENGINES:
+        return _ENGINES[name]
+    raise KeyError(f"no compiled engine {name!r}; registered: {', '.join(engines())}")
+
+
+class Choices:
+    """The ``--engine`` choices, "all" and every registered name, read when argparse checks a value or prints
+    help (building the parser imports no engine module)."""
+
+    def __contains__(self, name) -> bool:
+        return name == "all" or name in engines()
+
+    def __iter__(self):
+        return iter(("all", *engines()))

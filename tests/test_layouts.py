@@ -1,0 +1,176 @@
+"""Declared layouts (symmech.core.layout) and the engines' vectors declared with them: offsets, pack/unpack
+round trips, the numba types derived from a declaration, and a drift test of the declarations against every
+place that reads them (the compiled loops index through the layouts' offsets, never by hand)."""
+import ast
+import pickle
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+
+from symmech.core.layout import Bundle, Field, Layout
+from symmech.grain import compiled, compiled_layout
+from symmech.trolley import elastic_layout
+
+ROOT = Path(__file__).resolve().parents[1] / "symmech"
+SMALL = Layout("Small", (Field("a", "m", "a scalar"), Field("b", "m/s", "a vector", (3,)),
+                         Field("c", "1", "a matrix", (2, 2))))
+
+
+def test_offsets_slices_and_labels_follow_the_declaration_order():
+    assert SMALL.size == 8 and SMALL.names == ("a", "b", "c") and SMALL.units == ("m", "m/s", "1")
+    assert (SMALL.offset("a"), SMALL.offset("b"), SMALL.offset("c")) == (0, 1, 4)
+    assert SMALL.slice("b") == slice(1, 4) and SMALL.slice("c") == slice(4, 8)
+    assert tuple(SMALL.slots) == (0, 1, 4) and SMALL.slots.c == 4
+    assert SMALL.labels == ("a", "b[0]", "b[1]", "b[2]", "c[0]", "c[1]", "c[2]", "c[3]")
+
+
+def test_pack_then_unpack_gives_back_every_value():
+    c = np.array([[5.0, 6.0], [7.0, 8.0]])
+    vec = SMALL.pack(a=0.5, b=(1.0, 2.0, 3.0), c=c)
+    assert vec.dtype == float and vec.tolist() == [0.5, 1.0, 2.0, 3.0, 5.0, 6.0, 7.0, 8.0]  # c row by row
+    back = SMALL.unpack(vec)
+    assert type(back["a"]) is float and back["a"] == 0.5
+    assert back["b"].tolist() == [1.0, 2.0, 3.0] and np.array_equal(back["c"], c)
+    assert np.shares_memory(back["b"], vec) and np.shares_memory(back["c"], vec)  # views, not copies
+    assert np.array_equal(SMALL.pack(**SMALL.unpack(vec)), vec)
+
+
+@pytest.mark.parametrize("values, error, text", [
+    ({"a": 0.5, "b": (1.0, 2.0)}, TypeError, "'c'"),  # missing
+    ({"a": 0.5, "b": (1.0, 2.0, 3.0), "c": np.zeros((2, 2)), "d": 1.0}, TypeError, "'d'"),  # unknown
+    ({"a": 0.5, "b": (1.0, 2.0), "c": np.zeros((2, 2))}, ValueError, "b has shape (2,), expected (3,)"),
+    ({"a": (0.5, 1.0), "b": (1.0, 2.0, 3.0), "c": np.zeros((2, 2))}, ValueError, "a has shape (2,), expected ()"),
+    ({"a": 0.5, "b": (1.0, 2.0, 3.0), "c": np.zeros(4)}, ValueError, "c has shape (4,), expected (2, 2)"),
+    ({"a": "x", "b": (1.0, 2.0, 3.0), "c": np.zeros((2, 2))}, ValueError, "not a number"),
+])
+def test_pack_refuses_values_that_do_not_fit_and_names_the_field(values, error, text):
+    with pytest.raises(error, match=None) as err:
+        SMALL.pack(**values)
+    assert text in str(err.value)
+
+
+def test_unpack_refuses_a_vector_of_another_length():
+    with pytest.raises(ValueError, match=r"Small.unpack: a vector of shape \(8,\) expected, got \(7,\)"):
+        SMALL.unpack(np.zeros(7))
+
+
+@pytest.mark.parametrize("fields", [
+    (Field("a", "m", ""), Field("a", "m", "")),       # twice
+    (Field("_a", "m", ""),),                          # private
+    (Field("a b", "m", ""),),                         # not an identifier
+    (Field("a", "m", "", (2,), "int64"),),            # a layout holds float64 only
+])
+def test_a_layout_refuses_names_it_could_not_offer_as_attributes(fields):
+    with pytest.raises(ValueError):
+        Layout("Bad", fields)
+
+
+def test_a_layout_vector_is_the_array_type_numba_gives_the_packed_vector():
+    assert SMALL.numba_type() == numba.typeof(SMALL.pack(a=0.0, b=(0, 0, 0), c=np.zeros((2, 2))))
+
+
+def test_a_bundle_packs_a_record_of_its_dtypes_that_numba_types_as_declared_and_pickles():
+    bundle = Bundle("Probe", __name__, (Field("x", "m", "", ("n",)), Field("k", "", "", ("n", 2), "int64")))
+    record = bundle.pack(x=[1, 2], k=[[1, 2], [3, 4]])
+    assert record.x.dtype == np.float64 and record.k.dtype == np.int64 and record.k.flags.c_contiguous
+    assert bundle.numba_type() == numba.typeof(record)
+    assert bundle.unpack(record).keys() == {"x", "k"}
+    with pytest.raises(ValueError, match="k has 1 dimensions, expected 2"):
+        bundle.pack(x=[1.0], k=[1])
+    # numba's cache pickles the record's class by reference: the declaring module binds it under its name
+    model = elastic_layout.MODEL.pack(**{f.name: np.zeros((1,) * len(f.shape), f.dtype)
+                                         for f in elastic_layout.MODEL.fields})
+    assert type(pickle.loads(pickle.dumps(model))) is elastic_layout.ElasticModel
+
+
+def test_the_elastic_model_record_of_a_system_has_the_declared_numba_type():
+    """The signature the elastic engine is compiled for (elastic_compiled._entry_signatures) is the record
+    type derived from MODEL: it must be the type of what pack(system) hands the kernels."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_elastic_compiled import helix
+
+    from symmech.trolley import elastic_compiled, elastic_kernels
+
+    record = elastic_kernels.pack(helix().system)
+    assert numba.typeof(record) == elastic_layout.MODEL.numba_type()
+    for entry, signature in elastic_compiled._entry_signatures().items():
+        assert signature[0] == numba.typeof(record), entry
+    flags = elastic_layout.FLAGS.unpack(record.flags)
+    assert flags["n"] == record.stiffness.shape[0] and flags["f"] == record.gram_trace.shape[0]
+
+
+def test_the_grain_layouts_keep_the_slots_the_engine_was_built_with():
+    """The offsets of the grain's declarations, written down independently (the hand-numbered constants they
+    replaced): a change of order is a change of the engine's interface (ahead-of-time builds, saved rows)."""
+    P, C, S, I = compiled_layout.P_AT, compiled_layout.C_AT, compiled_layout.S_AT, compiled_layout.I_AT
+    sizes = [x.size for x in (compiled_layout.PARAMS, compiled_layout.SLIDE, compiled_layout.CARRY,
+                              compiled_layout.IMPACT_ROW, compiled_layout.STATE)]
+    assert sizes == [31, 36, 17, 31, 14]
+    assert (P.axes, P.mass, P.inertia, P.g, P.amplitude, P.direction, P.law, P.e_n, P.check_printed, P.mu,
+            P.tolerance, P.max_impacts, P.period) == (0, 3, 4, 7, 10, 13, 16, 17, 22, 23, 25, 28, 30)
+    assert (S.g, S.direction, S.mu, S.r0, S.rb, S.sphere, S.m, S.mass, S.inertia, S.ref, S.v_stop, S.event,
+            S.aniso, S.v_stiff) == (0, 6, 9, 10, 13, 16, 17, 26, 27, 30, 32, 33, 34, 35)
+    assert (C.regime, C.work, C.rows, C.nimp, C.nwarn, C.rocking, C.implicit, C.e_start, C.e_end) == \
+        (0, 6, 10, 11, 12, 13, 14, 15, 16)
+    assert (I.t, I.r, I.impulse, I.u_after, I.ke_before, I.admissible, I.converged) == (0, 1, 16, 22, 25, 27, 30)
+
+
+def test_the_grain_state_vector_round_trips_through_the_engines_python_side():
+    y = compiled_layout.STATE.pack(t=0.25, r=(1.0, 2.0, 3.0), v=(4.0, 5.0, 6.0), q=(1.0, 0.0, 0.0, 0.0),
+                                   w=(7.0, 8.0, 9.0))
+    st = compiled._state(y)
+    assert st.t == 0.25 and st.r.tolist() == [1.0, 2.0, 3.0] and st.q.tolist() == [1.0, 0.0, 0.0, 0.0]
+    assert st.w.tolist() == [7.0, 8.0, 9.0] and np.shares_memory(st.v, y)
+
+
+# --------------------------------------------------------------------------- drift
+
+# The vectors each file indexes, and the offsets (named tuples of a layout) each may be indexed with.
+GRAIN_VECTORS = {"p": "P_AT", "sp": "S_AT", "carry": "C_AT", "log": "I_AT"}
+ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT"}
+OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT": compiled_layout.CARRY,
+           "I_AT": compiled_layout.IMPACT_ROW, "X_AT": compiled_layout.STATE, "F_AT": elastic_layout.FLAGS,
+           "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY}
+READERS = {"grain/compiled_loop.py": GRAIN_VECTORS, "grain/compiled.py": GRAIN_VECTORS,
+           "trolley/elastic_kernels.py": ELASTIC_VECTORS, "trolley/elastic_compiled.py": {}}  # (k, 12) tables there
+
+
+def _names(node) -> set:
+    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+
+
+def _by_hand(part, offsets: set) -> bool:
+    """Whether an index expression holds a number but not the vector's offsets (``p[3]``, not ``p[P_AT.g + 2]``,
+    ``p[d + 1]`` after ``d = P_AT.direction``, or a loop's ``ch[j]``)."""
+    return any(isinstance(n, ast.Constant) for n in ast.walk(part)) and not _names(part) & offsets
+
+
+@pytest.mark.parametrize("path", sorted(READERS))
+def test_every_read_of_a_declared_vector_goes_through_its_layout(path):
+    """Every ``X_AT.name`` names a field of X's layout; every ``mdl.name`` a field of the elastic model; and no
+    declared vector (p, sp, carry, the impact row; the elastic flags and channels) is indexed by a bare number:
+    each index is built from the vector's own offsets, so a reordered declaration moves every reader with it."""
+    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
+    vectors = READERS[path]
+    aliases = {t.id for n in ast.walk(tree) if isinstance(n, ast.Assign) and _names(n.value) & OFFSETS.keys()
+               for t in n.targets if isinstance(t, ast.Name)}  # d = P_AT.direction
+    packs = {n for f in ast.walk(tree) if isinstance(f, ast.FunctionDef) and f.name == "pack" for n in ast.walk(f)}
+    seen = 0
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+            if node.value.id in OFFSETS:
+                assert node.attr in OFFSETS[node.value.id].names, f"{path}:{node.lineno} {node.value.id}.{node.attr}"
+                seen += 1
+            if node.value.id == "mdl" and node not in packs:  # pack reads the scene's model, also called mdl
+                assert node.attr in elastic_layout.MODEL.names, f"{path}:{node.lineno} mdl.{node.attr}"
+        if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id in vectors:
+            index = node.slice
+            parts = [index.lower, index.upper] if isinstance(index, ast.Slice) else [index]
+            for part in (p for p in parts if p is not None):
+                assert not _by_hand(part, {vectors[node.value.id]} | aliases), \
+                    f"{path}:{node.lineno} {ast.unparse(node)} indexes a declared vector by hand"
+    assert seen > 0
