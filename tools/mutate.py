@@ -1,39 +1,35 @@
 """Mutation testing by shard: one physics or contract module against the test files that cover it.
 
-    python tests/mutate.py                 every shard in SHARDS, one after the other
-    python tests/mutate.py membrane ...    the named shards (or module paths)
-    python tests/mutate.py --list          the shards
-    python tests/mutate.py --screen SHARD [PYTEST ARGS]
-                                           the shard's mutants not killed yet (no result, survived, no test)
-                                           against chosen tests (default: the shard's), a forked pytest
-                                           each; kills recorded
-
-A screen runs each mutant in a fork of one process that imported the libraries once, as mutmut does, but
-against the tests named (the new fast ones, say) instead of every covering test: a kill is a kill whichever
-test made it, so it is written into mutmut's cache, and a later `mutmut run` in the shard's folder (no names)
-runs only the survivors, with the shard's whole selection.
+    python tools/mutate.py                 every shard in SHARDS through mutmut, one after the other
+    python tools/mutate.py membrane ...    the named shards (or module paths) through mutmut
+    python tools/mutate.py --list          the shards
+    python tools/mutate.py --screen SHARD [--fresh]
+                                           screen the shard's mutants (tools/mutation_screen.py) and write
+                                           their outcomes into mutation/results/<module>.tsv; --fresh makes
+                                           the mutants again from the current tree
+    python tools/mutate.py --table         docs/mutation.md's per-module table from mutation/results/
+    python tools/mutate.py --check [--killed N] [--seed S]
+                                           rerun N killed mutants per record at random (default 30) and every
+                                           proven-equivalent one against the current tree; exit 1 when a
+                                           recorded outcome no longer holds (`make mutate-check`)
 
 mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
 runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
 pyproject.toml made of the repository's [tool.mutmut] and [tool.pytest.ini_options] with the shard's
-module and test files. The cache stays there, so a rerun tests only the mutants whose function
-changed. One worker: the machine is shared. Results and the triage of every survivor:
-docs/mutation.md (the test files of the shards not run yet are a first choice, to be checked).
+module and test files. One worker: the machine is shared. The method: docs/mutation.md; the outcomes:
+mutation/results/.
 """
 from __future__ import annotations
 
-import contextlib
 import fnmatch
-import importlib
-import io
 import json
-import os
-import signal
 import subprocess
 import sys
-import time
 from collections import Counter
 from pathlib import Path
+
+import mutation_record as rec
+import mutation_screen
 
 try:
     import tomllib
@@ -153,6 +149,11 @@ SHARDS = {
                  "tests/test_coulomb_impact_law.py"],
                 ["*.x_inverse_effective_mass__*", "*.x_coulomb_impulse__*", "*.x_kinetic_energy__*",
                  "*.x_principal_inertia__*"]),
+    # the whole module in one record: the fast tests of the law, its printed check and the motion parts that call it
+    "coulomb_law": ("symmech/grain/coulomb_law.py",
+                    ["tests/test_coulomb_impact_law.py", "tests/test_impact_law_apply.py",
+                     "tests/test_printed_law_reversal.py", "tests/test_texts_warnings_and_sparse_rows.py",
+                     "tests/test_grain_motion_parts.py"], ["*"]),
     # ImpactLaw.apply: 241 mutants, many in log texts; without the grain motion physics tests (100 s a survivor),
     # which reach the law only through whole runs
     "coulomb_apply": ("symmech/grain/coulomb_law.py",
@@ -316,89 +317,43 @@ def run_shard(name: str) -> int:
     return status
 
 
-# mutmut 3's own first step of `run` (mutmut/__main__.py), so that a screen can start before any mutmut run
-GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant_under_test('mutant_generation')\n"
-            "Path('mutants').mkdir(exist_ok=True)\nm.copy_src_dir(); m.copy_also_copy_files(); m.setup_source_paths()\n"
-            "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
-
-
-# mutmut's exit codes of the mutants a screen runs: no result, survived, no covering test (mutmut/stats.py)
-UNKILLED = (None, 0, 5, 33)
-
-
-def screen(name: str, args: list[str]) -> int:
-    """Run the shard's mutants not killed yet against pytest `args`, each in a fork; record the kills."""
-    module, tests, patterns = SHARDS[name]
-    folder = shard_folder(name)
-    meta_path = folder / "mutants" / (module + ".meta")
-    if not meta_path.exists():
-        subprocess.run([sys.executable, "-c", GENERATE], cwd=folder, check=True, stdout=subprocess.DEVNULL)
-    # the repository's tests as they are now, not mutmut's copy beside the mutants (made when they were generated)
-    args = [str(ROOT / a) if a.startswith("tests/") else a for a in args or tests]
-    os.chdir(folder / "mutants")
-    sys.path[:0] = [str(folder / "mutants"), str(ROOT / "tests")]
-    import pytest  # noqa: F401 -- imported once, before the forks (the trampolines choose at each call)
-    importlib.import_module(module.removesuffix(".py").replace("/", "."))
-    meta = json.loads(meta_path.read_text("utf-8"))
-    todo = [k for k, v in meta["exit_code_by_key"].items()
-            if v in UNKILLED and any(fnmatch.fnmatchcase(k, p) for p in patterns)]
-    print(f"== screen {name}: {len(todo)} mutants not killed yet, against {' '.join(args)}", flush=True)
-    args = [*args, "-x", "-q", "-n", "0", "-p", "no:cacheprovider"]
-    start = time.monotonic()
-    code, first = _screened("", args)  # the unmutated copy must pass, or every kill would be false
-    timeout = max(60.0, 5 * (time.monotonic() - start))  # a mutant that runs much longer is killed (mutmut too)
-    if code != 0:
-        print(f"== screen {name}: the unmutated code fails ({first or f'exit {code}'})", file=sys.stderr)
-        return 1
-    verdicts = Counter()
-    for key in todo:
-        code, first = _screened(key, args, timeout)
-        # tests failed, a collection error (the mutant raised as a test module imported), pytest's internal error,
-        # a crash or the timeout: the unmutated copy passed the same run
-        killed = code in (1, 2, 3) or code < 0
-        verdicts["killed" if killed else "survived" if code == 0 else f"exit {code}"] += 1
-        print(f"    {key}: {'killed by ' + (first or f'signal {-code}') if killed else f'exit {code}'}", flush=True)
-        if killed:
-            meta = json.loads(meta_path.read_text("utf-8"))  # mutmut's format: exit codes by mutant
-            meta["exit_code_by_key"][key] = 1 if code == 2 else code if code > 0 else 36 if code == -9 else -11
-            meta_path.write_text(json.dumps(meta, indent=4), "utf-8")
-    print(f"== screen {name}: " + ", ".join(f"{n} {v}" for v, n in verdicts.most_common()), flush=True)
-    return 0
-
-
-def _screened(key: str, args: list[str], timeout: float = 600.0) -> tuple[int, str]:
-    """pytest `args` on mutant `key` in a forked child: its exit status (-9 after `timeout` s), the first failure."""
-    import pytest
-    read, write = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(read)
-        os.environ["MUTANT_UNDER_TEST"] = key  # mutmut's trampolines read it at every call
-        out = io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
-            code = pytest.main(args)
-        fails = [line for line in out.getvalue().splitlines() if line.startswith(("FAILED", "ERROR"))]
-        os.write(write, (fails[0][:200] if fails else "").encode())
-        os._exit(int(code))
-    os.close(write)
-    deadline = time.monotonic() + timeout
-    while True:
-        done, status = os.waitpid(pid, os.WNOHANG)
-        if done:
-            break
-        if time.monotonic() > deadline:
-            os.kill(pid, signal.SIGKILL)
-        time.sleep(0.05)
-    with os.fdopen(read, "rb") as pipe:
-        first = pipe.read(400).decode(errors="replace")
-    return os.waitstatus_to_exitcode(status), first
-
-
 def shards_named(arg: str) -> list[str]:
     """The shards an argument names: a shard, or every shard of a module path (itself when neither)."""
     if arg in SHARDS:
         return [arg]
     return [name for name, (module, *_) in SHARDS.items() if module == arg] or [arg]
+
+
+def shard_mutants(name: str) -> list[str]:
+    """The mutmut names of the shard's mutants (its patterns over the module's mutants)."""
+    module, _, patterns = SHARDS[name]
+    names = mutation_screen.mutant_names(ROOT / "mutants" / name, module)
+    return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
+
+
+def screen(name: str, fresh: bool) -> int:
+    """Screen every mutant of one shard into its module's record."""
+    module, tests, _ = SHARDS[name]
+    folder = shard_folder(name)
+    mutation_screen.generate(folder, fresh)
+    return mutation_screen.screen(name, folder, module, tests, shard_mutants(name), fresh=False)
+
+
+def check(killed: int, seed: int) -> int:
+    """Rerun a sample of every record against the current tree (`make mutate-check`), one shard at a time."""
+    status, total = 0, 0
+    for path in sorted(rec.RESULTS.glob("*.tsv")):
+        entries = rec.read(path)
+        chosen = mutation_screen.sample(entries, path.stem, killed, seed)
+        total += len(chosen)
+        for name in sorted({e.shard for e in chosen}):
+            mine = [e for e in chosen if e.shard == name]
+            print(f"== check {path.name}, shard {name}: {len(mine)} recorded outcomes", flush=True)
+            # each shard in a process of its own: a screen imports one mutated copy of the package
+            status |= subprocess.call([sys.executable, __file__, "--recheck", name,
+                                       json.dumps([e.mutant for e in mine])])
+    print(f"== check: {total} recorded outcomes {'hold' if status == 0 else 'do NOT all hold'}")
+    return status
 
 
 def main(argv: list[str]) -> int:
@@ -409,8 +364,19 @@ def main(argv: list[str]) -> int:
         for name, (module, tests, patterns) in SHARDS.items():
             print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
         return 0
-    if argv[:1] == ["--screen"] and len(argv) > 1:
-        return screen(argv[1], argv[2:])
+    if argv == ["--table"]:
+        rec.write_table(sorted({module for module, *_ in SHARDS.values()}))
+        return 0
+    if argv[:1] == ["--check"]:
+        options = dict(zip(argv[1::2], argv[2::2]))
+        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)))
+    if argv[:1] == ["--recheck"] and len(argv) == 3:
+        module, tests, _ = SHARDS[argv[1]]
+        entries = rec.read(rec.record_path(module))
+        chosen = [entries[n] for n in json.loads(argv[2])]
+        return mutation_screen.recheck(argv[1], shard_folder(argv[1]), module, tests, chosen)
+    if argv[:1] == ["--screen"] and len(argv) in (2, 3) and argv[1] in SHARDS:
+        return screen(argv[1], fresh=argv[2:] == ["--fresh"])
     names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
     unknown = [n for n in names if n not in SHARDS]
     if unknown:
