@@ -19,8 +19,9 @@ CASES = {
     "raises_mismatch": ("import pytest\n\ndef test_a():\n    with pytest.raises(ValueError):\n        pass\n",
                         "killed", "test_a"),
     "other_exception": ("def test_a():\n    None + 1\n", "raised", "test_a (TypeError)"),
-    # an assertion after another exception still kills: the screen does not stop at the first failure
-    "raise_then_assert": ("def test_a():\n    {}['k']\n\ndef test_b():\n    assert False\n", "killed", "test_b"),
+    # the screen stops at the first failing test, as -x would
+    "raise_then_assert": ("def test_a():\n    {}['k']\n\ndef test_b():\n    assert False\n", "raised",
+                          "test_a (KeyError)"),
     "fixture": ("import pytest\n\n@pytest.fixture\ndef f():\n    raise OSError\n\ndef test_a(f):\n    pass\n",
                 "error", "test_a (setup: OSError)"),
     "collection": ("import no_such_module_here\n\ndef test_a():\n    pass\n", "collection", None),

@@ -108,7 +108,10 @@ SHARDS = {
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
                           "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
                           "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
-    "elastic_quasi_static": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*ǁSystemǁquasi_static__*"]),
+    # the quasi-static tests first (ELASTIC_TESTS' -k, global, leaves them in)
+    "elastic_quasi_static": ("symmech/trolley/elastic.py",
+                             ["tests/test_elastic_quasi_static.py", "tests/test_texts_warnings_and_sparse_rows.py",
+                              *ELASTIC_TESTS], ["*ǁSystemǁquasi_static__*"]),
     "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
                       ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
@@ -116,7 +119,7 @@ SHARDS = {
     "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TIMELINE_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
-    # integrating test that reaches each (the "before" selection, docs/mutation.md) and the closed-form tests
+    # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
     "elastic_rigid_body": ("symmech/trolley/elastic.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
@@ -130,7 +133,7 @@ SHARDS = {
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
     "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
-    # what the two shards above left without a result (docs/mutation.md), for a screen with their new test files
+    # what the two shards above left without a result (mutation/history.md), for a screen with their new test files
     "elastic_outputs_rest": ("symmech/trolley/elastic.py",
                              ["tests/test_elastic_outputs.py", "tests/test_elastic_timeline.py",
                               *ELASTIC_OUTPUT_TESTS, ELASTIC_TIMELINE_TESTS[1]],
@@ -163,7 +166,7 @@ SHARDS = {
     # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
     "smm_forms": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*"]),
     # smm_forms split by function (its tests take 35 s, a surviving mutant runs all of them); _twist_hessian's
-    # _1..._24 ran in the first, unsplit run (docs/mutation.md)
+    # _1..._24 ran in the first, unsplit run (mutation/history.md)
     "smm_forms_chain": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
                         ["*.x_turn__*", "*.x_cross__*", "*.x_dot__*", "*.x__vsum__*", "*.x__nonzero__*",
                          "*ǁGeometryǁ*", "*.x_chain_kinematics__*", "*.x_tension_system__*", "*.x__diff__*",
@@ -173,7 +176,7 @@ SHARDS = {
                            ["*.x_assemble__mutmut_[1-9]", "*.x_assemble__mutmut_[1-9][0-9]",
                             "*.x_assemble__mutmut_1[0-9][0-9]"]),
     "smm_forms_assemble_b": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*.x_assemble__mutmut_[2-9][0-9][0-9]"]),
-    # what smm_forms_chain and smm_forms_assemble left without a result (docs/mutation.md; mutmut runs a
+    # what smm_forms_chain and smm_forms_assemble left without a result (mutation/history.md; mutmut runs a
     # function's mutants in order of number)
     "smm_forms_chain_rest": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
                              ["*.x_chain_kinematics__mutmut_6[1-9]", "*.x_chain_kinematics__mutmut_[7-9][0-9]",
@@ -195,14 +198,14 @@ SHARDS = {
     # test_integrity.py runs fresh interpreters, which import the unmutated package; the codegen tests that
     # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes)
     "integrity": ("symmech/core/integrity.py",
-                  ["tests/test_codegen.py", "-k", "verify_refuses or used_modules or atomic_write",
-                   "tests/test_integrity_units.py"], ["*"]),
-    # the rigid trolley: trolley_frames run in part (docs/mutation.md)
+                  ["tests/test_integrity_units.py", "tests/test_codegen.py", "-k",
+                   "test_integrity_units or verify_refuses or used_modules or atomic_write"], ["*"]),
+    # the rigid trolley: trolley_frames run in part (mutation/history.md)
     "trolley_frames": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                        ["*.x_moving_frame__*", "*.x__raw_frame__*", "*ǁFramePlanǁ*", "*.x_plan_frames__*",
                         "*.x__check_grid__*", "*.x__turns__*", "*.x__bisect_jump__*", "*.x__angle__*",
                         "*ǁRotationMinimisingǁ*", "*.x__reflect__*", "*.x__first_bad__*"]),
-    # what trolley_frames left unrun or untriaged (docs/mutation.md: all but _angle, _reflect, RotationMinimising),
+    # what trolley_frames left unrun or untriaged (mutation/history.md: all but _angle, _reflect, RotationMinimising),
     # split by function so each shard stays under 30 min, physics first
     "trolley_frames_raw": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                            ["*.x_moving_frame__*", "*.x__raw_frame__*", "*.x__first_bad__*"]),
@@ -223,7 +226,7 @@ SHARDS = {
     "trolley_paper": ("symmech/trolley/model.py", REACTION_TESTS,
                       ["*.x_paper_case__*", "*.x_paper_lstar__*", "*.x_paper_lstar_derivative__*",
                        "*.x_small_angle_check__*"]),
-    # what the first runs of trolley_chord and trolley_paper left unrun (docs/mutation.md; mutmut ran each
+    # what the first runs of trolley_chord and trolley_paper left unrun (mutation/history.md; mutmut ran each
     # function's mutants in order, so the unrun ones are the last by number)
     "trolley_chord_rest": ("symmech/trolley/model.py", REACTION_TESTS,
                            ["*.x_chord_point__mutmut_11[7-9]", "*.x__stencil__*", "*.x__weights__*"]),
@@ -233,12 +236,12 @@ SHARDS = {
     # the grain motion loop (the Python reference engine): the tests that run motion.simulate; scenes on "auto" run
     # the Python loop there (the mutated copy's numba cache is cold)
     "motion": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS, ["*"]),
-    # what the motion shard left without a result (docs/mutation.md)
+    # what the motion shard left without a result (mutation/history.md)
     "motion_rest": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
                     ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
                      "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*", "*.x__velocity_noise__*",
                      "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
-    # what motion_rest left (docs/mutation.md): simulate and impact_record unrun (it ran the cheaper helpers first);
+    # what motion_rest left (mutation/history.md): simulate and impact_record unrun (it ran the cheaper helpers first);
     # its three untriaged survivors, not named, are in the helpers: motion_helpers reruns them
     "motion_simulate": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
                         ["*.x_simulate__mutmut_[1-9]", "*.x_simulate__mutmut_[1-9][0-9]",
@@ -257,7 +260,7 @@ SHARDS = {
                   ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
                    "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x__entry_signature__*"]),
-    # what engine_py left (docs/mutation.md): simulate from _90, simulate_many, _entry_signature; its ten
+    # what engine_py left (mutation/history.md): simulate from _90, simulate_many, _entry_signature; its ten
     # untriaged survivors, not named, were the last run (simulate): this shard reruns all of simulate
     "engine_py_rest": ("symmech/grain/compiled.py", ENGINE_PY_TESTS,
                        ["*.x_simulate__*", "*.x_simulate_many__*", "*.x__entry_signature__*"]),

@@ -14,8 +14,9 @@ change (so that a renumbered mutant is found again), the outcome and the test th
     error       a fixture's setup or teardown failed, no test failed
     no-tests    the selection ran no test
 
-Only "killed" counts as killed. A survivor named in mutation/equivalent.tsv with a written proof (no input the
-code can receive tells it from the original) is counted apart as equivalent.
+"killed" and "raised" are kills (a test failed: pytest's failure, exit 1, not an error), shown apart; nothing
+else is. A survivor named in mutation/equivalent.tsv with a written proof (no input the code can receive tells
+it from the original) is counted apart as equivalent.
 """
 from __future__ import annotations
 
@@ -52,8 +53,15 @@ def change_of(diff: str) -> tuple[str, str]:
     removed = [line[1:].strip() for line in diff.splitlines() if line.startswith("-") and not line.startswith("---")]
     added = [line[1:].strip() for line in diff.splitlines() if line.startswith("+") and not line.startswith("+++")]
     digest = hashlib.sha1("\n".join(["-", *removed, "+", *added]).encode()).hexdigest()[:12]
-    summary = f"{' / '.join(removed)} → {' / '.join(added)}"
-    return digest, summary if len(summary) <= 160 else summary[:157] + "..."
+    old, new = " / ".join(removed), " / ".join(added)
+    same = next((i for i, (a, b) in enumerate(zip(old, new)) if a != b), min(len(old), len(new)))
+    tail = next((i for i, (a, b) in enumerate(zip(old[same:][::-1], new[same:][::-1])) if a != b),
+                min(len(old), len(new)) - same)
+    if len(old) + len(new) > 150:  # the change in brackets, 40 characters of context either side
+        old_part, new_part = old[same:len(old) - tail], new[same:len(new) - tail]
+        before, after = old[:same][-40:], old[len(old) - tail:][:40]
+        return digest, f"…{before}[{old_part} → {new_part}]{after}…"
+    return digest, f"{old} → {new}"
 
 
 def record_path(module: str) -> Path:
@@ -117,25 +125,27 @@ def tally(entries: dict[str, Entry], module: str, proofs: dict[tuple[str, str], 
 def table(modules: list[str]) -> str:
     """The per-module table (markdown) of every committed record, then the modules of `modules` without one."""
     proofs = equivalents()
-    lines = ["| module | mutants | killed (raw) | equivalent, proven | survived | raised | timeout | crash "
-             "| collection, error, no tests | killed of the non-equivalent |",
+    lines = ["| module | mutants screened (made) | killed (raw) | of them by an exception, not an assertion "
+             "| equivalent, proven | survived | timeout | crash | collection, error, no tests "
+             "| killed of the non-equivalent |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     recorded = sorted(RESULTS.glob("*.tsv"))
     for path in recorded:
         module = path.stem
         c = tally(read(path), module, proofs)
-        n = sum(c.values())
+        n, kills = sum(c.values()), c["killed"] + c["raised"]
+        made = next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
         if n == 0:
             continue
         rest = n - c["equivalent"]
-        lines.append(f"| `{module}` | {n} | {c['killed']} ({100 * c['killed'] / n:.1f} %) | {c['equivalent']} "
-                     f"| {c['survived']} | {c['raised']} | {c['timeout']} | {c['crash']} "
+        lines.append(f"| `{module}` | {n} ({made}) | {kills} ({100 * kills / n:.1f} %) | {c['raised']} "
+                     f"| {c['equivalent']} | {c['survived']} | {c['timeout']} | {c['crash']} "
                      f"| {c['collection'] + c['error'] + c['no-tests']} "
-                     f"| {100 * c['killed'] / rest if rest else 100:.1f} % |")
+                     f"| {100 * kills / rest if rest else 100:.1f} % |")
     have = {p.stem for p in recorded}
     missing = sorted({m.removesuffix(".py").replace("/", ".") for m in modules} - have)
-    lines += ["", "Modules with shards and no committed record yet (their numbers in the history below are from "
-                  "the earlier screens, which counted crashes, collection errors and timeouts as kills): "
+    lines += ["", "Modules with shards and no committed record yet (their only numbers are those of the earlier "
+                  "screens in mutation/history.md, which counted crashes, collection errors and timeouts as kills): "
               + (", ".join(f"`{m}`" for m in missing) or "none") + "."]
     return "\n".join(lines)
 

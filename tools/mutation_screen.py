@@ -3,8 +3,8 @@ imported pytest and the mutated module once (mutmut's trampolines choose the mut
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
 The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first test that fails on an assertion; a
-test that fails on another exception does not stop it (a later assertion may still fail).
+the three, at least 60 s. A screen stops a mutant's run at the first failing test, as `-x` would: a test that
+fails on another exception than an assertion is a kill too (pytest's failure, not an error), recorded apart.
 """
 from __future__ import annotations
 
@@ -33,7 +33,8 @@ TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmu
 
 
 class Verdict:
-    """A pytest plugin that notes the first assertion failure (and stops there), other failures and errors."""
+    """A pytest plugin that notes the first failing test, on an assertion or on another exception (and stops
+    there), and fixture and collection errors."""
 
     def __init__(self):
         self.session = None
@@ -55,10 +56,11 @@ class Verdict:
         if report.when != "call":
             self.error = self.error or f"{node.nodeid} ({report.when}: {call.excinfo.typename})"
         elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
-            self.killed = self.killed or node.nodeid
+            self.killed = node.nodeid
             self.session.shouldstop = "a test failed on an assertion"
         else:
-            self.raised = self.raised or f"{node.nodeid} ({call.excinfo.typename})"
+            self.raised = f"{node.nodeid} ({call.excinfo.typename})"
+            self.session.shouldstop = "a test failed on another exception"
 
 
 def freeze_tests(folder: Path) -> Path:
@@ -166,7 +168,9 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     found = changes(folder, module, names)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
-    notes = [n for n in rec.notes_of(path) if not n.startswith(f"shard {shard}:")]
+    made = len(mutant_names(folder, module))
+    notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {shard}:", "made:"))]
+    notes.insert(0, f"made: {made} mutants of {module} by mutmut")
     notes.append(f"shard {shard}: {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, tree {commit}, tests "
                  f"{' '.join(tests)}; unmutated runs {', '.join(f'{t:.1f}' for t in times)} s, limit {limit:.0f} s")
     print(f"== screen {shard}: {len(names)} mutants, unmutated {times} s, limit {limit:.0f} s", flush=True)
@@ -206,7 +210,7 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
             failures += 1
             continue
         outcome, test, _ = run_one(name, args, limit)
-        held = outcome == e.outcome
+        held = outcome == e.outcome or {outcome, e.outcome} == {"killed", "raised"}  # a kill either way
         failures += not held
         print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "
               f"{test} {'ok' if held else 'CHANGED'}", flush=True)
