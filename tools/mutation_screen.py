@@ -148,9 +148,14 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
     args += ["-q", "-n", "0", "-p", "no:cacheprovider"]
     os.chdir(folder / "mutants")
     sys.path[:0] = [str(folder / "mutants"), str(frozen)]
-    import pytest  # noqa: F401 -- imported once, before the forks
+    import pytest
 
     importlib.import_module(module.removesuffix(".py").replace("/", "."))
+    # collect once here, as mutmut's own clean run does: the forks find the test modules and what they import
+    # already loaded (a value a test module computes at import comes from the unmutated code, in mutmut too)
+    os.environ["MUTANT_UNDER_TEST"] = ""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        pytest.main([*args, "--collect-only"])
     times = []
     for _ in range(BASELINE_RUNS):
         outcome, test, seconds = run_one("", args, 3600.0)
