@@ -89,7 +89,8 @@ ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_py
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
     "membrane": ("symmech/trolley/membrane.py",
-                 ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py"], ["*"]),
+                 ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py",
+                  "tests/test_membrane_shared_coordinates.py"], ["*"]),
     # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
     "elastic_damping": ("symmech/trolley/elastic.py",
                         ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",

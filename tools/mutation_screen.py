@@ -145,7 +145,7 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
     generate(folder, fresh)
     frozen = freeze_tests(folder)
     args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
-    args += ["-q", "-n", "0", "-p", "no:cacheprovider"]
+    args += ["-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]  # the plugin reads the exceptions; no tracebacks
     os.chdir(folder / "mutants")
     sys.path[:0] = [str(folder / "mutants"), str(frozen)]
     import pytest
