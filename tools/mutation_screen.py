@@ -3,8 +3,9 @@ imported pytest and the mutated module once (mutmut's trampolines choose the mut
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
 The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first failing test, as `-x` would: a test that
-fails on another exception than an assertion is a kill too (pytest's failure, not an error), recorded apart.
+the three, at least 60 s. A screen stops a mutant's run at the first failing or erroring test, as `-x` would: a
+test that fails on another exception than an assertion is a kill too (pytest's failure, not an error), recorded
+apart; a fixture's error is not.
 """
 from __future__ import annotations
 
@@ -33,8 +34,8 @@ TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmu
 
 
 class Verdict:
-    """A pytest plugin that notes the first failing test, on an assertion or on another exception (and stops
-    there), and fixture and collection errors."""
+    """A pytest plugin that notes the first failing test, on an assertion or on another exception, or the first
+    fixture error (and stops there), and collection errors."""
 
     def __init__(self):
         self.session = None
@@ -55,6 +56,7 @@ class Verdict:
             return
         if report.when != "call":
             self.error = self.error or f"{node.nodeid} ({report.when}: {call.excinfo.typename})"
+            self.session.shouldstop = "a fixture failed"
         elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
             self.killed = node.nodeid
             self.session.shouldstop = "a test failed on an assertion"
