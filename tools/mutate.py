@@ -289,10 +289,10 @@ def shard_pyproject(module: str, tests: list[str]) -> str:
                    for name, table in tables.items())
 
 
-def shard_folder(name: str) -> Path:
-    """mutants/<name>/, set up for mutmut: links to the sources and tests, the shard's pyproject.toml."""
+def shard_folder(name: str, suffix: str = "") -> Path:
+    """mutants/<name><suffix>/, set up for mutmut: links to the sources and tests, the shard's pyproject.toml."""
     module, tests, _ = SHARDS[name]
-    folder = ROOT / "mutants" / name
+    folder = ROOT / "mutants" / (name + suffix)
     folder.mkdir(parents=True, exist_ok=True)
     settings = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]["mutmut"]
     for link in ["tests", *settings["source_paths"], *settings["also_copy"]]:
@@ -378,7 +378,8 @@ def main(argv: list[str]) -> int:
         module, tests, _ = SHARDS[argv[1]]
         entries = rec.read(rec.record_path(module))
         chosen = [entries[n] for n in json.loads(argv[2])]
-        return mutation_screen.recheck(argv[1], shard_folder(argv[1]), module, tests, chosen)
+        # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
+        return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
     if argv[:1] == ["--screen"] and len(argv) in (2, 3) and argv[1] in SHARDS:
         return screen(argv[1], fresh=argv[2:] == ["--fresh"])
     names = [n for a in argv for n in shards_named(a)] or list(SHARDS)

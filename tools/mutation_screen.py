@@ -196,7 +196,7 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
 def sample(entries: dict[str, rec.Entry], module: str, killed: int, seed: int) -> list[rec.Entry]:
     """`killed` killed entries at random (all when fewer) and every survivor with a written proof."""
     proofs = rec.equivalents()
-    kills = sorted(n for n, e in entries.items() if e.outcome == "killed")
+    kills = sorted(n for n, e in entries.items() if e.outcome in ("killed", "raised"))
     chosen = random.Random(seed).sample(kills, min(killed, len(kills)))
     proven = [n for n, e in entries.items() if e.outcome == "survived" and (module, e.hash) in proofs]
     return [entries[n] for n in sorted(chosen + proven)]
