@@ -3,10 +3,11 @@
     python tools/mutate.py                 every shard in SHARDS through mutmut, one after the other
     python tools/mutate.py membrane ...    the named shards (or module paths) through mutmut
     python tools/mutate.py --list          the shards
-    python tools/mutate.py --screen SHARD [--fresh]
+    python tools/mutate.py --screen SHARD [--fresh] [--rest]
                                            screen the shard's mutants (tools/mutation_screen.py) and write
                                            their outcomes into mutation/results/<module>.tsv; --fresh makes
-                                           the mutants again from the current tree
+                                           the mutants again from the current tree, --rest screens only
+                                           those without a recorded kill (after a new test)
     python tools/mutate.py --table         docs/mutation.md's per-module table from mutation/results/
     python tools/mutate.py --check [--killed N] [--seed S]
                                            rerun N killed mutants per record at random (default 30) and every
@@ -157,7 +158,7 @@ SHARDS = {
     "coulomb_law": ("symmech/grain/coulomb_law.py",
                     ["tests/test_coulomb_impact_law.py", "tests/test_impact_law_apply.py",
                      "tests/test_printed_law_reversal.py", "tests/test_texts_warnings_and_sparse_rows.py",
-                     "tests/test_grain_motion_parts.py"], ["*"]),
+                     "tests/test_coulomb_law_precision.py", "tests/test_grain_motion_parts.py"], ["*"]),
     # ImpactLaw.apply: 241 mutants, many in log texts; without the grain motion physics tests (100 s a survivor),
     # which reach the law only through whole runs
     "coulomb_apply": ("symmech/grain/coulomb_law.py",
@@ -335,12 +336,16 @@ def shard_mutants(name: str) -> list[str]:
     return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
 
 
-def screen(name: str, fresh: bool) -> int:
-    """Screen every mutant of one shard into its module's record."""
+def screen(name: str, fresh: bool, rest: bool) -> int:
+    """Screen the mutants of one shard into its module's record: all, or (`rest`) those without a recorded kill."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
-    return mutation_screen.screen(name, folder, module, tests, shard_mutants(name), fresh=False)
+    names = shard_mutants(name)
+    if rest:
+        recorded = rec.read(rec.record_path(module))
+        names = [n for n in names if n not in recorded or recorded[n].outcome not in ("killed", "raised")]
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=rest)
 
 
 def check(killed: int, seed: int) -> int:
@@ -380,8 +385,8 @@ def main(argv: list[str]) -> int:
         chosen = [entries[n] for n in json.loads(argv[2])]
         # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
         return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
-    if argv[:1] == ["--screen"] and len(argv) in (2, 3) and argv[1] in SHARDS:
-        return screen(argv[1], fresh=argv[2:] == ["--fresh"])
+    if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS and set(argv[2:]) <= {"--fresh", "--rest"}:
+        return screen(argv[1], fresh="--fresh" in argv, rest="--rest" in argv)
     names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
     unknown = [n for n in names if n not in SHARDS]
     if unknown:

@@ -167,8 +167,10 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
     return args, max(TIMEOUT_FLOOR, TIMEOUT_FACTOR * max(times)), times
 
 
-def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool) -> int:
-    """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record."""
+def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
+           rest: bool = False) -> int:
+    """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
+    `rest`: they are what an earlier screen of the shard left unkilled (the note says so)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
     entries = rec.read(path)
@@ -176,9 +178,10 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
     made = len(mutant_names(folder, module))
-    notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {shard}:", "made:"))]
+    label = f"{shard} (its unkilled mutants again)" if rest else shard
+    notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {label}:", "made:"))]
     notes.insert(0, f"made: {made} mutants of {module} by mutmut")
-    notes.append(f"shard {shard}: {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, tree {commit}, tests "
+    notes.append(f"shard {label}: {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, tree {commit}, tests "
                  f"{' '.join(tests)}; unmutated runs {', '.join(f'{t:.1f}' for t in times)} s, limit {limit:.0f} s")
     print(f"== screen {shard}: {len(names)} mutants, unmutated {times} s, limit {limit:.0f} s", flush=True)
     for i, name in enumerate(names):
