@@ -7,7 +7,7 @@
                                            screen the shard's mutants (tools/mutation_screen.py) and write
                                            their outcomes into mutation/results/<module>.tsv; --fresh makes
                                            the mutants again from the current tree, --rest screens only
-                                           those without a recorded kill (after a new test)
+                                           those recorded without a kill (after a new test)
     python tools/mutate.py --table         docs/mutation.md's per-module table from mutation/results/
     python tools/mutate.py --check [--killed N] [--seed S]
                                            rerun N killed mutants per record at random (default 30) and every
@@ -200,8 +200,9 @@ SHARDS = {
     # test_integrity.py runs fresh interpreters, which import the unmutated package; the codegen tests that
     # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes)
     "integrity": ("symmech/core/integrity.py",
-                  ["tests/test_integrity_units.py", "tests/test_codegen.py", "-k",
-                   "test_integrity_units or verify_refuses or used_modules or atomic_write"], ["*"]),
+                  ["tests/test_integrity_units.py", "tests/test_codegen.py", "tests/test_aot.py", "-k",
+                   "test_integrity_units or verify_refuses or used_modules or atomic_write or "
+                   "builds_generated_modules_are_verified"], ["*"]),
     # the rigid trolley: trolley_frames run in part (mutation/history.md)
     "trolley_frames": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                        ["*.x_moving_frame__*", "*.x__raw_frame__*", "*ǁFramePlanǁ*", "*.x_plan_frames__*",
@@ -337,14 +338,14 @@ def shard_mutants(name: str) -> list[str]:
 
 
 def screen(name: str, fresh: bool, rest: bool) -> int:
-    """Screen the mutants of one shard into its module's record: all, or (`rest`) those without a recorded kill."""
+    """Screen the mutants of one shard into its module's record: all, or (`rest`) those recorded without a kill."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
     names = shard_mutants(name)
     if rest:
         recorded = rec.read(rec.record_path(module))
-        names = [n for n in names if n not in recorded or recorded[n].outcome not in ("killed", "raised")]
+        names = [n for n in names if n in recorded and recorded[n].outcome not in ("killed", "raised")]
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=rest)
 
 
