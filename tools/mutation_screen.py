@@ -205,8 +205,19 @@ def sample(entries: dict[str, rec.Entry], module: str, killed: int, seed: int) -
     return [entries[n] for n in sorted(chosen + proven)]
 
 
+def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
+    """pytest args that run only the test a recorded kill names (in the frozen copy, with the selection's marks);
+    [] for any other outcome, which needs the whole selection (a survivor survives all of it)."""
+    if entry.outcome not in ("killed", "raised") or not entry.test:
+        return []
+    marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
+    node = entry.test.split(" (")[0]
+    return [str(folder / "frozen" / node), *marks, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
+
+
 def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
-    """Rerun `chosen` on mutants made from the current tree; 1 when an outcome no longer holds or a mutant is gone."""
+    """Rerun `chosen` on mutants made from the current tree, a recorded kill against the test that made it, any
+    other outcome against the whole selection; 1 when an outcome no longer holds or a mutant is gone."""
     args, limit, _ = prepare(folder, module, tests, fresh=True)
     current = mutant_names(folder, module)
     by_hash = {}
@@ -219,7 +230,7 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
             print(f"    {e.mutant} ({e.change}): no longer made from the current tree; rescreen the shard")
             failures += 1
             continue
-        outcome, test, _ = run_one(name, args, limit)
+        outcome, test, _ = run_one(name, deciding(e, folder, tests) or args, limit)
         held = outcome == e.outcome or {outcome, e.outcome} == {"killed", "raised"}  # a kill either way
         failures += not held
         print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "
