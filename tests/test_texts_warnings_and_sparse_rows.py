@@ -57,17 +57,19 @@ def test_coulomb_law_at_its_limits_is_silent_and_exact(mu):
     np.testing.assert_allclose(P, expected, rtol=1e-13, atol=0)
 
 
-def test_rows_more_than_a_second_apart_are_all_kept():
-    """A ball falling from 400 m from t = 3 s to 11 s (no contact), rows every 2 s: the start, 4, 6, 8 and 10 s
-    (the multiples of the interval), the end; positions on the parabola."""
+@pytest.mark.parametrize("interval", [2.0, 0.5])
+def test_rows_more_than_a_second_apart_are_all_kept(interval):
+    """A ball falling from 400 m from t = 3 s to 11 s (no contact), rows every 2 s or 0.5 s: the start, the
+    multiples of the interval between (4, 6, 8, 10 s; 3.5, 4, ..., 10.5 s), the end; positions on the parabola."""
     law = ImpactLaw("coulomb", e_n=0.5, e_t=0.0, mu=0.0, check_printed=False)
     still = flight.Vibration(0.0, 2 * math.pi * 20.0, 0.0, (0.0, 0.0, 1.0))
     model = motion.Model((1e-3,) * 3, 2e-6, (0.0, 0.0, -G), still, law, 0.5, motion.Effects(rotation=True))
-    numerics = motion.Numerics(tolerance=1e-11, scan_step=0.05, sample_interval=2.0)
+    numerics = motion.Numerics(tolerance=1e-11, scan_step=0.05, sample_interval=interval)
     start = motion.State(3.0, np.array([0.0, 0.0, 400.0]), np.array([0.1, 0.0, 0.0]), np.array([1.0, 0, 0, 0]),
                          np.zeros(3))
     rows = motion.simulate(model, numerics, start, 11.0).trajectory
-    t = np.array([3.0, 4.0, 6.0, 8.0, 10.0, 11.0])
+    between = np.arange(math.floor(3.0 / interval) + 1, math.ceil(11.0 / interval)) * interval
+    t = np.concatenate([[3.0], between, [11.0]])
     np.testing.assert_allclose(rows[:, 0], t, rtol=0, atol=1e-12)
     np.testing.assert_allclose(rows[:, 1], 0.1 * (t - 3.0), rtol=0, atol=1e-9)
     np.testing.assert_allclose(rows[:, 3], 400.0 - 0.5 * G * (t - 3.0) ** 2, rtol=0, atol=1e-9)

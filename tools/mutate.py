@@ -239,6 +239,11 @@ SHARDS = {
     # the grain motion loop (the Python reference engine): the tests that run motion.simulate; scenes on "auto" run
     # the Python loop there (the mutated copy's numba cache is cold)
     "motion": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS, ["*"]),
+    # the rocking warning's words and the trajectory's sample times, which the earlier triage called equivalent
+    "motion_texts_and_rows": ("symmech/grain/motion.py",
+                              ["tests/test_texts_warnings_and_sparse_rows.py",
+                               "tests/test_grain_motion_rocking_count.py"],
+                              ["*.x_rocking_warning__*", "*ǁ_Recorderǁtimes__*"]),
     # what the motion shard left without a result (mutation/history.md)
     "motion_rest": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
                     ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
