@@ -104,6 +104,11 @@ def _order(mutant: str) -> tuple[str, int]:
     return function, int(number) if number.isdigit() else 0
 
 
+def shards_of(path: Path) -> set[str]:
+    """The shards whose screens wrote a record's entries."""
+    return {e.shard for e in read(path).values()}
+
+
 def equivalents() -> dict[tuple[str, str], str]:
     """The written proofs: (dotted module, change hash) -> proof."""
     if not EQUIVALENT.exists():
@@ -130,6 +135,7 @@ def table(modules: list[str]) -> str:
              "| killed of the non-equivalent |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     recorded = sorted(RESULTS.glob("*.tsv"))
+    partial = []
     for path in recorded:
         module = path.stem
         c = tally(read(path), module, proofs)
@@ -138,10 +144,14 @@ def table(modules: list[str]) -> str:
         if n == 0:
             continue
         rest = n - c["equivalent"]
+        if made.isdigit() and n < int(made):
+            partial.append(f"`{module}` ({n} of {made}: {', '.join(sorted(shards_of(path)))})")
         lines.append(f"| `{module}` | {n} ({made}) | {kills} ({100 * kills / n:.1f} %) | {c['raised']} "
                      f"| {c['equivalent']} | {c['survived']} | {c['timeout']} | {c['crash']} "
                      f"| {c['collection'] + c['error'] + c['no-tests']} "
                      f"| {100 * kills / rest if rest else 100:.1f} % |")
+    lines += ["", "Records of part of a module (the named shards' functions only): " + (", ".join(partial) or "none")
+              + "."]
     have = {p.stem for p in recorded}
     missing = sorted({m.removesuffix(".py").replace("/", ".") for m in modules} - have)
     lines += ["", "Modules with shards and no committed record yet (their only numbers are those of the earlier "
