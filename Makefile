@@ -1,4 +1,4 @@
-.PHONY: install codegen check test slow bench mutate
+.PHONY: install codegen check test slow bench mutate mutate-check
 PY ?= python
 
 install:
@@ -21,7 +21,12 @@ slow:
 bench:
 	for f in benchmarks/bench_*.py; do $(PY) $$f || exit 1; done
 
-# mutation testing, not in the default suite: every shard of tests/mutate.py one after the other, or
-# MODULE=symmech/trolley/membrane.py (or a shard name) alone; results and triage in docs/mutation.md
+# mutation testing, not in the default suite: every shard of tools/mutate.py one after the other through mutmut,
+# or MODULE=symmech/trolley/membrane.py (or a shard name) alone; the method in docs/mutation.md
 mutate:
-	$(PY) tests/mutate.py $(MODULE)
+	$(PY) tools/mutate.py $(MODULE)
+
+# rerun 30 killed mutants of every committed record (mutation/results/) and every proven-equivalent one against
+# the current tree; fails when a recorded outcome no longer holds
+mutate-check:
+	nice -n 10 $(PY) tools/mutate.py --check

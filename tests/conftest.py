@@ -12,7 +12,7 @@ The elastic trolley's default engine (``auto``) is the compiled one once built; 
 the Python engine (its reference, which they test; ``engine_reason`` says so), so that no unmarked test
 compiles it in each xdist worker. tests/test_elastic_compiled.py proves the compiled engine against it.
 
-Under mutmut (tests/mutate.py, ``MUTANT_UNDER_TEST`` set) no builder process is started: mutmut reaps every child
+Under mutmut (tools/mutate.py, ``MUTANT_UNDER_TEST`` set) no builder process is started: mutmut reaps every child
 of its main process as one of its workers (a builder's exit stops the run with a KeyError), and a builder would
 compile the unmutated package. A marked test compiles the mutated copy in the foreground (once, in mutmut's main
 process, whose forks inherit it); an unmarked grain scene on ``engine = "auto"`` runs the Python loop there, even

@@ -483,7 +483,7 @@ def _printed(H, m, e, lam, u):
     (T (3,), residual of (19), admissible, creates energy, pulls)."""
     k = gi.mu_equation_scalar(H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], lam, e, u[0], u[1], u[2])
     norm_u = math.sqrt(u @ u)
-    stuck = (1.0 - lam) * math.hypot(u[0], u[1]) <= 1e-14 * norm_u
+    stuck = abs(1.0 - lam) * math.hypot(u[0], u[1]) <= 1e-14 * norm_u  # lam > 1 reverses: its size says stuck
     roots = np.full(4, np.nan)
     if stuck:
         roots[0] = 0.0

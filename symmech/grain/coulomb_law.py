@@ -90,7 +90,7 @@ class ImpactLaw:
 
         axes (n, 3) m, mass (n,) kg, Q (n, 3, 3), v (n, 3) m/s, w (n, 3) rad/s in KXYZ.
         A contact point that is not approaching the plane gets no impulse. The printed
-        law is solved exactly (issue 2's robust solver, vectorised). Returns arrays:
+        law is solved exactly (impact.py's robust solver, vectorised). Returns arrays:
         ``v``, ``w`` (n, 3) after, ``impulse`` (n, 3) N s, ``u_before``,
         ``u_after`` (n, 3) contact velocities, ``ke_before``, ``ke_after`` (n,) J,
         ``admissible`` (n,) (no energy created), ``printed_admissible`` (n,) (the printed

@@ -212,7 +212,8 @@ def solve_robust_batch(H, m, e, lam, uK0, tol=1e-14, max_iter=12) -> ImpactBatch
     n = len(uK0)
     m, e, lam = (np.broadcast_to(np.asarray(x, float), (n,)) for x in (m, e, lam))
     k = gen.mu_equation(*_h_args(H), lam, e, uK0[:, 0], uK0[:, 1], uK0[:, 2])
-    speed_after = (1.0 - lam) * np.hypot(uK0[:, 0], uK0[:, 1])
+    # lam > 1 (a tangential reversal) makes the signed speed negative: only its size says stuck
+    speed_after = np.abs(1.0 - lam) * np.hypot(uK0[:, 0], uK0[:, 1])
     stuck = speed_after <= 1e-14 * np.linalg.norm(uK0, axis=1)
     roots, iterations = _trig_roots(k, tol, max_iter)
     # Zero tangential speed after: mu is immaterial, one linear solve gives T.

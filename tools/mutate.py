@@ -1,39 +1,36 @@
 """Mutation testing by shard: one physics or contract module against the test files that cover it.
 
-    python tests/mutate.py                 every shard in SHARDS, one after the other
-    python tests/mutate.py membrane ...    the named shards (or module paths)
-    python tests/mutate.py --list          the shards
-    python tests/mutate.py --screen SHARD [PYTEST ARGS]
-                                           the shard's mutants not killed yet (no result, survived, no test)
-                                           against chosen tests (default: the shard's), a forked pytest
-                                           each; kills recorded
-
-A screen runs each mutant in a fork of one process that imported the libraries once, as mutmut does, but
-against the tests named (the new fast ones, say) instead of every covering test: a kill is a kill whichever
-test made it, so it is written into mutmut's cache, and a later `mutmut run` in the shard's folder (no names)
-runs only the survivors, with the shard's whole selection.
+    python tools/mutate.py                 every shard in SHARDS through mutmut, one after the other
+    python tools/mutate.py membrane ...    the named shards (or module paths) through mutmut
+    python tools/mutate.py --list          the shards
+    python tools/mutate.py --screen SHARD [--fresh] [--rest]
+                                           screen the shard's mutants (tools/mutation_screen.py) and write
+                                           their outcomes into mutation/results/<module>.tsv; --fresh makes
+                                           the mutants again from the current tree, --rest screens only
+                                           those recorded without a kill (after a new test)
+    python tools/mutate.py --table         docs/mutation.md's per-module table from mutation/results/
+    python tools/mutate.py --check [--killed N] [--seed S]
+                                           rerun N killed mutants per record at random (default 30) and every
+                                           proven-equivalent one against the current tree; exit 1 when a
+                                           recorded outcome no longer holds (`make mutate-check`)
 
 mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
 runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
 pyproject.toml made of the repository's [tool.mutmut] and [tool.pytest.ini_options] with the shard's
-module and test files. The cache stays there, so a rerun tests only the mutants whose function
-changed. One worker: the machine is shared. Results and the triage of every survivor:
-docs/mutation.md (the test files of the shards not run yet are a first choice, to be checked).
+module and test files. One worker: the machine is shared. The method: docs/mutation.md; the outcomes:
+mutation/results/.
 """
 from __future__ import annotations
 
-import contextlib
 import fnmatch
-import importlib
-import io
 import json
-import os
-import signal
 import subprocess
 import sys
-import time
 from collections import Counter
 from pathlib import Path
+
+import mutation_record as rec
+import mutation_screen
 
 try:
     import tomllib
@@ -93,7 +90,8 @@ ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_py
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
     "membrane": ("symmech/trolley/membrane.py",
-                 ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py"], ["*"]),
+                 ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py",
+                  "tests/test_membrane_shared_coordinates.py"], ["*"]),
     # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
     "elastic_damping": ("symmech/trolley/elastic.py",
                         ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",
@@ -112,7 +110,10 @@ SHARDS = {
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
                           "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
                           "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
-    "elastic_quasi_static": ("symmech/trolley/elastic.py", ELASTIC_TESTS, ["*ǁSystemǁquasi_static__*"]),
+    # the quasi-static tests first (ELASTIC_TESTS' -k, global, leaves them in)
+    "elastic_quasi_static": ("symmech/trolley/elastic.py",
+                             ["tests/test_elastic_quasi_static.py", "tests/test_texts_warnings_and_sparse_rows.py",
+                              *ELASTIC_TESTS], ["*ǁSystemǁquasi_static__*"]),
     "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
                       ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
@@ -120,7 +121,7 @@ SHARDS = {
     "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TIMELINE_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
-    # integrating test that reaches each (the "before" selection, docs/mutation.md) and the closed-form tests
+    # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
     "elastic_rigid_body": ("symmech/trolley/elastic.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
@@ -134,7 +135,7 @@ SHARDS = {
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
     "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
-    # what the two shards above left without a result (docs/mutation.md), for a screen with their new test files
+    # what the two shards above left without a result (mutation/history.md), for a screen with their new test files
     "elastic_outputs_rest": ("symmech/trolley/elastic.py",
                              ["tests/test_elastic_outputs.py", "tests/test_elastic_timeline.py",
                               *ELASTIC_OUTPUT_TESTS, ELASTIC_TIMELINE_TESTS[1]],
@@ -153,6 +154,11 @@ SHARDS = {
                  "tests/test_coulomb_impact_law.py"],
                 ["*.x_inverse_effective_mass__*", "*.x_coulomb_impulse__*", "*.x_kinetic_energy__*",
                  "*.x_principal_inertia__*"]),
+    # the whole module in one record: the fast tests of the law, its printed check and the motion parts that call it
+    "coulomb_law": ("symmech/grain/coulomb_law.py",
+                    ["tests/test_coulomb_impact_law.py", "tests/test_impact_law_apply.py",
+                     "tests/test_printed_law_reversal.py", "tests/test_texts_warnings_and_sparse_rows.py",
+                     "tests/test_coulomb_law_precision.py", "tests/test_grain_motion_parts.py"], ["*"]),
     # ImpactLaw.apply: 241 mutants, many in log texts; without the grain motion physics tests (100 s a survivor),
     # which reach the law only through whole runs
     "coulomb_apply": ("symmech/grain/coulomb_law.py",
@@ -162,7 +168,7 @@ SHARDS = {
     # test_smm_spatial_eq.py, the planar graph form of structural.py against the term lists), numeric.py (equilibrium, modes, responses, the pivot order of eq. (5))
     "smm_forms": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*"]),
     # smm_forms split by function (its tests take 35 s, a surviving mutant runs all of them); _twist_hessian's
-    # _1..._24 ran in the first, unsplit run (docs/mutation.md)
+    # _1..._24 ran in the first, unsplit run (mutation/history.md)
     "smm_forms_chain": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
                         ["*.x_turn__*", "*.x_cross__*", "*.x_dot__*", "*.x__vsum__*", "*.x__nonzero__*",
                          "*ǁGeometryǁ*", "*.x_chain_kinematics__*", "*.x_tension_system__*", "*.x__diff__*",
@@ -172,7 +178,7 @@ SHARDS = {
                            ["*.x_assemble__mutmut_[1-9]", "*.x_assemble__mutmut_[1-9][0-9]",
                             "*.x_assemble__mutmut_1[0-9][0-9]"]),
     "smm_forms_assemble_b": ("symmech/smm/forms.py", SMM_FORMS_TESTS, ["*.x_assemble__mutmut_[2-9][0-9][0-9]"]),
-    # what smm_forms_chain and smm_forms_assemble left without a result (docs/mutation.md; mutmut runs a
+    # what smm_forms_chain and smm_forms_assemble left without a result (mutation/history.md; mutmut runs a
     # function's mutants in order of number)
     "smm_forms_chain_rest": ("symmech/smm/forms.py", SMM_FORMS_TESTS,
                              ["*.x_chain_kinematics__mutmut_6[1-9]", "*.x_chain_kinematics__mutmut_[7-9][0-9]",
@@ -191,17 +197,18 @@ SHARDS = {
     "smm_numeric_tensions": ("symmech/smm/numeric.py", SMM_NUMERIC_TESTS,
                              ["*.x_equilibrium_tensions__mutmut_1[7-9]", "*.x_equilibrium_tensions__mutmut_[2-9][0-9]",
                               "*.x_equilibrium_tensions__mutmut_1[01][0-9]"]),
+    # test_aot.py's test of verify_built_from finds generated/ beside integrity.py, which the mutated copy has not;
     # test_integrity.py runs fresh interpreters, which import the unmutated package; the codegen tests that
     # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes)
     "integrity": ("symmech/core/integrity.py",
-                  ["tests/test_codegen.py", "-k", "verify_refuses or used_modules or atomic_write",
-                   "tests/test_integrity_units.py"], ["*"]),
-    # the rigid trolley: trolley_frames run in part (docs/mutation.md)
+                  ["tests/test_integrity_units.py", "tests/test_codegen.py", "-k",
+                   "test_integrity_units or verify_refuses or used_modules or atomic_write"], ["*"]),
+    # the rigid trolley: trolley_frames run in part (mutation/history.md)
     "trolley_frames": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                        ["*.x_moving_frame__*", "*.x__raw_frame__*", "*ǁFramePlanǁ*", "*.x_plan_frames__*",
                         "*.x__check_grid__*", "*.x__turns__*", "*.x__bisect_jump__*", "*.x__angle__*",
                         "*ǁRotationMinimisingǁ*", "*.x__reflect__*", "*.x__first_bad__*"]),
-    # what trolley_frames left unrun or untriaged (docs/mutation.md: all but _angle, _reflect, RotationMinimising),
+    # what trolley_frames left unrun or untriaged (mutation/history.md: all but _angle, _reflect, RotationMinimising),
     # split by function so each shard stays under 30 min, physics first
     "trolley_frames_raw": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                            ["*.x_moving_frame__*", "*.x__raw_frame__*", "*.x__first_bad__*"]),
@@ -222,7 +229,7 @@ SHARDS = {
     "trolley_paper": ("symmech/trolley/model.py", REACTION_TESTS,
                       ["*.x_paper_case__*", "*.x_paper_lstar__*", "*.x_paper_lstar_derivative__*",
                        "*.x_small_angle_check__*"]),
-    # what the first runs of trolley_chord and trolley_paper left unrun (docs/mutation.md; mutmut ran each
+    # what the first runs of trolley_chord and trolley_paper left unrun (mutation/history.md; mutmut ran each
     # function's mutants in order, so the unrun ones are the last by number)
     "trolley_chord_rest": ("symmech/trolley/model.py", REACTION_TESTS,
                            ["*.x_chord_point__mutmut_11[7-9]", "*.x__stencil__*", "*.x__weights__*"]),
@@ -232,12 +239,17 @@ SHARDS = {
     # the grain motion loop (the Python reference engine): the tests that run motion.simulate; scenes on "auto" run
     # the Python loop there (the mutated copy's numba cache is cold)
     "motion": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS, ["*"]),
-    # what the motion shard left without a result (docs/mutation.md)
+    # the rocking warning's words and the trajectory's sample times, which the earlier triage called equivalent
+    "motion_texts_and_rows": ("symmech/grain/motion.py",
+                              ["tests/test_texts_warnings_and_sparse_rows.py",
+                               "tests/test_grain_motion_rocking_count.py"],
+                              ["*.x_rocking_warning__*", "*ǁ_Recorderǁtimes__*"]),
+    # what the motion shard left without a result (mutation/history.md)
     "motion_rest": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
                     ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
                      "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*", "*.x__velocity_noise__*",
                      "*ǁProgressǁ*", "*ǁStateǁrow__*", "*.x__unique__*"]),
-    # what motion_rest left (docs/mutation.md): simulate and impact_record unrun (it ran the cheaper helpers first);
+    # what motion_rest left (mutation/history.md): simulate and impact_record unrun (it ran the cheaper helpers first);
     # its three untriaged survivors, not named, are in the helpers: motion_helpers reruns them
     "motion_simulate": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
                         ["*.x_simulate__mutmut_[1-9]", "*.x_simulate__mutmut_[1-9][0-9]",
@@ -256,7 +268,7 @@ SHARDS = {
                   ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
                    "*ǁ_Budgetǁ*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x__entry_signature__*"]),
-    # what engine_py left (docs/mutation.md): simulate from _90, simulate_many, _entry_signature; its ten
+    # what engine_py left (mutation/history.md): simulate from _90, simulate_many, _entry_signature; its ten
     # untriaged survivors, not named, were the last run (simulate): this shard reruns all of simulate
     "engine_py_rest": ("symmech/grain/compiled.py", ENGINE_PY_TESTS,
                        ["*.x_simulate__*", "*.x_simulate_many__*", "*.x__entry_signature__*"]),
@@ -284,10 +296,10 @@ def shard_pyproject(module: str, tests: list[str]) -> str:
                    for name, table in tables.items())
 
 
-def shard_folder(name: str) -> Path:
-    """mutants/<name>/, set up for mutmut: links to the sources and tests, the shard's pyproject.toml."""
+def shard_folder(name: str, suffix: str = "") -> Path:
+    """mutants/<name><suffix>/, set up for mutmut: links to the sources and tests, the shard's pyproject.toml."""
     module, tests, _ = SHARDS[name]
-    folder = ROOT / "mutants" / name
+    folder = ROOT / "mutants" / (name + suffix)
     folder.mkdir(parents=True, exist_ok=True)
     settings = tomllib.loads((ROOT / "pyproject.toml").read_text("utf-8"))["tool"]["mutmut"]
     for link in ["tests", *settings["source_paths"], *settings["also_copy"]]:
@@ -316,89 +328,47 @@ def run_shard(name: str) -> int:
     return status
 
 
-# mutmut 3's own first step of `run` (mutmut/__main__.py), so that a screen can start before any mutmut run
-GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant_under_test('mutant_generation')\n"
-            "Path('mutants').mkdir(exist_ok=True)\nm.copy_src_dir(); m.copy_also_copy_files(); m.setup_source_paths()\n"
-            "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
-
-
-# mutmut's exit codes of the mutants a screen runs: no result, survived, no covering test (mutmut/stats.py)
-UNKILLED = (None, 0, 5, 33)
-
-
-def screen(name: str, args: list[str]) -> int:
-    """Run the shard's mutants not killed yet against pytest `args`, each in a fork; record the kills."""
-    module, tests, patterns = SHARDS[name]
-    folder = shard_folder(name)
-    meta_path = folder / "mutants" / (module + ".meta")
-    if not meta_path.exists():
-        subprocess.run([sys.executable, "-c", GENERATE], cwd=folder, check=True, stdout=subprocess.DEVNULL)
-    # the repository's tests as they are now, not mutmut's copy beside the mutants (made when they were generated)
-    args = [str(ROOT / a) if a.startswith("tests/") else a for a in args or tests]
-    os.chdir(folder / "mutants")
-    sys.path[:0] = [str(folder / "mutants"), str(ROOT / "tests")]
-    import pytest  # noqa: F401 -- imported once, before the forks (the trampolines choose at each call)
-    importlib.import_module(module.removesuffix(".py").replace("/", "."))
-    meta = json.loads(meta_path.read_text("utf-8"))
-    todo = [k for k, v in meta["exit_code_by_key"].items()
-            if v in UNKILLED and any(fnmatch.fnmatchcase(k, p) for p in patterns)]
-    print(f"== screen {name}: {len(todo)} mutants not killed yet, against {' '.join(args)}", flush=True)
-    args = [*args, "-x", "-q", "-n", "0", "-p", "no:cacheprovider"]
-    start = time.monotonic()
-    code, first = _screened("", args)  # the unmutated copy must pass, or every kill would be false
-    timeout = max(60.0, 5 * (time.monotonic() - start))  # a mutant that runs much longer is killed (mutmut too)
-    if code != 0:
-        print(f"== screen {name}: the unmutated code fails ({first or f'exit {code}'})", file=sys.stderr)
-        return 1
-    verdicts = Counter()
-    for key in todo:
-        code, first = _screened(key, args, timeout)
-        # tests failed, a collection error (the mutant raised as a test module imported), pytest's internal error,
-        # a crash or the timeout: the unmutated copy passed the same run
-        killed = code in (1, 2, 3) or code < 0
-        verdicts["killed" if killed else "survived" if code == 0 else f"exit {code}"] += 1
-        print(f"    {key}: {'killed by ' + (first or f'signal {-code}') if killed else f'exit {code}'}", flush=True)
-        if killed:
-            meta = json.loads(meta_path.read_text("utf-8"))  # mutmut's format: exit codes by mutant
-            meta["exit_code_by_key"][key] = 1 if code == 2 else code if code > 0 else 36 if code == -9 else -11
-            meta_path.write_text(json.dumps(meta, indent=4), "utf-8")
-    print(f"== screen {name}: " + ", ".join(f"{n} {v}" for v, n in verdicts.most_common()), flush=True)
-    return 0
-
-
-def _screened(key: str, args: list[str], timeout: float = 600.0) -> tuple[int, str]:
-    """pytest `args` on mutant `key` in a forked child: its exit status (-9 after `timeout` s), the first failure."""
-    import pytest
-    read, write = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(read)
-        os.environ["MUTANT_UNDER_TEST"] = key  # mutmut's trampolines read it at every call
-        out = io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
-            code = pytest.main(args)
-        fails = [line for line in out.getvalue().splitlines() if line.startswith(("FAILED", "ERROR"))]
-        os.write(write, (fails[0][:200] if fails else "").encode())
-        os._exit(int(code))
-    os.close(write)
-    deadline = time.monotonic() + timeout
-    while True:
-        done, status = os.waitpid(pid, os.WNOHANG)
-        if done:
-            break
-        if time.monotonic() > deadline:
-            os.kill(pid, signal.SIGKILL)
-        time.sleep(0.05)
-    with os.fdopen(read, "rb") as pipe:
-        first = pipe.read(400).decode(errors="replace")
-    return os.waitstatus_to_exitcode(status), first
-
-
 def shards_named(arg: str) -> list[str]:
     """The shards an argument names: a shard, or every shard of a module path (itself when neither)."""
     if arg in SHARDS:
         return [arg]
     return [name for name, (module, *_) in SHARDS.items() if module == arg] or [arg]
+
+
+def shard_mutants(name: str) -> list[str]:
+    """The mutmut names of the shard's mutants (its patterns over the module's mutants)."""
+    module, _, patterns = SHARDS[name]
+    names = mutation_screen.mutant_names(ROOT / "mutants" / name, module)
+    return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
+
+
+def screen(name: str, fresh: bool, rest: bool) -> int:
+    """Screen the mutants of one shard into its module's record: all, or (`rest`) those recorded without a kill."""
+    module, tests, _ = SHARDS[name]
+    folder = shard_folder(name)
+    mutation_screen.generate(folder, fresh)
+    names = shard_mutants(name)
+    if rest:
+        recorded = rec.read(rec.record_path(module))
+        names = [n for n in names if n in recorded and recorded[n].outcome not in ("killed", "raised")]
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=rest)
+
+
+def check(killed: int, seed: int) -> int:
+    """Rerun a sample of every record against the current tree (`make mutate-check`), one shard at a time."""
+    status, total = 0, 0
+    for path in sorted(rec.RESULTS.glob("*.tsv")):
+        entries = rec.read(path)
+        chosen = mutation_screen.sample(entries, path.stem, killed, seed)
+        total += len(chosen)
+        for name in sorted({e.shard for e in chosen}):
+            mine = [e for e in chosen if e.shard == name]
+            print(f"== check {path.name}, shard {name}: {len(mine)} recorded outcomes", flush=True)
+            # each shard in a process of its own: a screen imports one mutated copy of the package
+            status |= subprocess.call([sys.executable, __file__, "--recheck", name,
+                                       json.dumps([e.mutant for e in mine])])
+    print(f"== check: {total} recorded outcomes {'hold' if status == 0 else 'do NOT all hold'}")
+    return status
 
 
 def main(argv: list[str]) -> int:
@@ -409,8 +379,20 @@ def main(argv: list[str]) -> int:
         for name, (module, tests, patterns) in SHARDS.items():
             print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
         return 0
-    if argv[:1] == ["--screen"] and len(argv) > 1:
-        return screen(argv[1], argv[2:])
+    if argv == ["--table"]:
+        rec.write_table(sorted({module for module, *_ in SHARDS.values()}))
+        return 0
+    if argv[:1] == ["--check"]:
+        options = dict(zip(argv[1::2], argv[2::2]))
+        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)))
+    if argv[:1] == ["--recheck"] and len(argv) == 3:
+        module, tests, _ = SHARDS[argv[1]]
+        entries = rec.read(rec.record_path(module))
+        chosen = [entries[n] for n in json.loads(argv[2])]
+        # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
+        return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
+    if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS and set(argv[2:]) <= {"--fresh", "--rest"}:
+        return screen(argv[1], fresh="--fresh" in argv, rest="--rest" in argv)
     names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
     unknown = [n for n in names if n not in SHARDS]
     if unknown:

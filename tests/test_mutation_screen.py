@@ -1,0 +1,83 @@
+"""The mutation screen's verdicts (tools/mutation_screen.py) on made-up test files whose outcome is known, and its
+record's change hash and table (tools/mutation_record.py): only an assertion kills; a test that raises something
+else, a fixture error, a collection error, a crash and a timeout each get their own outcome."""
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+import mutation_record as rec  # noqa: E402
+import mutation_screen  # noqa: E402
+
+pytestmark = pytest.mark.xdist_group("test_mutation_screen")
+QUIET = ["-q", "-p", "no:cacheprovider", "-p", "no:xdist", "-p", "no:hypothesispytest"]  # a bare pytest starts faster
+
+CASES = {
+    "assertion": ("def test_a():\n    pass\n\ndef test_b():\n    assert 1 + 1 == 3\n", "killed", "test_b"),
+    "raises_mismatch": ("import pytest\n\ndef test_a():\n    with pytest.raises(ValueError):\n        pass\n",
+                        "killed", "test_a"),
+    "other_exception": ("def test_a():\n    None + 1\n", "raised", "test_a (TypeError)"),
+    # the screen stops at the first failing test, as -x would
+    "raise_then_assert": ("def test_a():\n    {}['k']\n\ndef test_b():\n    assert False\n", "raised",
+                          "test_a (KeyError)"),
+    "fixture": ("import pytest\n\n@pytest.fixture\ndef f():\n    raise OSError\n\ndef test_a(f):\n    pass\n",
+                "error", "test_a (setup: OSError)"),
+    "collection": ("import no_such_module_here\n\ndef test_a():\n    pass\n", "collection", None),
+    "passing": ("def test_a():\n    assert True\n", "survived", ""),
+    "crash": ("import os, signal\n\ndef test_a():\n    os.kill(os.getpid(), signal.SIGKILL)\n", "crash", ""),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_each_outcome_is_told_apart(tmp_path, case):
+    source, outcome, test = CASES[case]
+    path = tmp_path / f"test_{case}.py"
+    path.write_text(source)
+    got, decided, _ = mutation_screen.run_one("", [str(path), *QUIET], 60.0)
+    assert got == outcome
+    if test is not None:
+        assert decided == (f"{path.name}::{test}" if test else "")
+
+
+def test_a_run_past_its_limit_is_a_timeout(tmp_path):
+    path = tmp_path / "test_slow.py"
+    path.write_text("import time\n\ndef test_a():\n    time.sleep(30)\n")
+    outcome, _, seconds = mutation_screen.run_one("", [str(path), *QUIET], 1.0)
+    assert outcome == "timeout" and 1.0 <= seconds < 10.0
+
+
+def test_change_hash_ignores_the_diff_header_and_indentation():
+    diff = textwrap.dedent("""\
+        --- a.py
+        +++ a.py
+        @@ -1,2 +1,2 @@
+         def f(x):
+        -    return x + 1
+        +    return x - 1""")
+    digest, summary = rec.change_of(diff)
+    assert summary == "return x + 1 → return x - 1"
+    assert rec.change_of(diff.replace("a.py", "b.py").replace("    return", "  return"))[0] == digest
+    assert rec.change_of(diff.replace("x - 1", "x * 1"))[0] != digest
+
+
+def test_proven_survivors_count_as_equivalent_and_nothing_else_does():
+    entries = {f"m.x_f__mutmut_{i}": rec.Entry(f"m.x_f__mutmut_{i}", "s", h, o, "", 1.0, "")
+               for i, (h, o) in enumerate([("a", "survived"), ("b", "survived"), ("c", "killed"), ("d", "timeout"),
+                                           ("e", "raised")])}
+    proofs = {("m", "a"): "proof", ("m", "c"): "a proof of a killed mutant is moot", ("other", "b"): "elsewhere"}
+    counts = rec.tally(entries, "m", proofs)
+    assert {k: v for k, v in counts.items() if v} == {"equivalent": 1, "survived": 1, "killed": 1, "timeout": 1,
+                                                       "raised": 1}
+
+
+def test_a_record_survives_a_write_and_read(tmp_path):
+    entries = {"m.x_f__mutmut_10": rec.Entry("m.x_f__mutmut_10", "s", "0123456789ab", "killed", "t.py::test_a", 2.5,
+                                             "a → b"),
+               "m.x_f__mutmut_9": rec.Entry("m.x_f__mutmut_9", "s", "ba9876543210", "survived", "", 3.25, "c → d")}
+    path = tmp_path / "m.tsv"
+    rec.write(path, entries, ["shard s: a note"])
+    assert rec.read(path) == entries
+    assert rec.notes_of(path) == ["shard s: a note"]
+    assert [line.split("\t")[0] for line in path.read_text().splitlines()[2:]] == ["m.x_f__mutmut_9", "m.x_f__mutmut_10"]

@@ -1,0 +1,172 @@
+"""The committed record of mutation screens: one TSV per module in mutation/results/, the equivalence proofs in
+mutation/equivalent.tsv, and the per-module table of docs/mutation.md written from them.
+
+A record line is one mutant: its mutmut name, the shard that screened it, the hash and one-line summary of its
+change (so that a renumbered mutant is found again), the outcome and the test that decided it. Outcomes:
+
+    killed      a test failed on an assertion (AssertionError, or pytest's own failure: `pytest.raises` that
+                did not raise, `pytest.fail`)
+    raised      no assertion failed, but a test failed on another exception the mutated code raised
+    survived    every test passed
+    timeout     stopped after the screen's time limit (a multiple of the unmutated run's slowest of 3)
+    crash       the test process died (a signal) or left no verdict
+    collection  the tests could not be collected (an import of the mutated code failed)
+    error       a fixture's setup or teardown failed, no test failed
+    no-tests    the selection ran no test
+
+"killed" and "raised" are kills (a test failed: pytest's failure, exit 1, not an error), shown apart; nothing
+else is. A survivor named in mutation/equivalent.tsv with a written proof (no input the code can receive tells
+it from the original) is counted apart as equivalent.
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "mutation" / "results"
+EQUIVALENT = ROOT / "mutation" / "equivalent.tsv"
+DOC = ROOT / "docs" / "mutation.md"
+OUTCOMES = ("killed", "raised", "survived", "timeout", "crash", "collection", "error", "no-tests")
+COLUMNS = ("mutant", "shard", "hash", "outcome", "test", "seconds", "change")
+TABLE_START = "<!-- per-module table: written by `python tools/mutate.py --table` from mutation/results/ -->"
+TABLE_END = "<!-- end of the per-module table -->"
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One mutant's screened outcome."""
+
+    mutant: str  # mutmut's name, "<module>.x_<function>__mutmut_<n>" or "<module>.xǁ<Class>ǁ<method>__mutmut_<n>"
+    shard: str
+    hash: str  # of the change (the diff's removed and added lines), 12 hex digits
+    outcome: str
+    test: str  # the test that killed it, or the first that raised or errored; "" otherwise
+    seconds: float  # wall time of its screen
+    change: str  # "old line → new line", stripped, at most 160 characters
+
+
+def change_of(diff: str) -> tuple[str, str]:
+    """(hash, one-line summary) of a mutant's unified diff against its original function."""
+    removed = [line[1:].strip() for line in diff.splitlines() if line.startswith("-") and not line.startswith("---")]
+    added = [line[1:].strip() for line in diff.splitlines() if line.startswith("+") and not line.startswith("+++")]
+    digest = hashlib.sha1("\n".join(["-", *removed, "+", *added]).encode()).hexdigest()[:12]
+    old, new = " / ".join(removed), " / ".join(added)
+    same = next((i for i, (a, b) in enumerate(zip(old, new)) if a != b), min(len(old), len(new)))
+    tail = next((i for i, (a, b) in enumerate(zip(old[same:][::-1], new[same:][::-1])) if a != b),
+                min(len(old), len(new)) - same)
+    if len(old) + len(new) > 150:  # the change in brackets, 40 characters of context either side
+        old_part, new_part = old[same:len(old) - tail], new[same:len(new) - tail]
+        before, after = old[:same][-40:], old[len(old) - tail:][:40]
+        return digest, f"…{before}[{old_part} → {new_part}]{after}…"
+    return digest, f"{old} → {new}"
+
+
+def record_path(module: str) -> Path:
+    """mutation/results/<dotted module>.tsv for a module path such as symmech/grain/coulomb_law.py."""
+    return RESULTS / (module.removesuffix(".py").replace("/", ".") + ".tsv")
+
+
+def read(path: Path) -> dict[str, Entry]:
+    """A record's entries by mutant name (later lines replace earlier ones)."""
+    if not path.exists():
+        return {}
+    with path.open(encoding="utf-8", newline="") as f:
+        rows = csv.DictReader((line for line in f if not line.startswith("#")), delimiter="\t")
+        return {r["mutant"]: Entry(r["mutant"], r["shard"], r["hash"], r["outcome"], r["test"], float(r["seconds"]),
+                                   r["change"]) for r in rows}
+
+
+def write(path: Path, entries: dict[str, Entry], notes: list[str]) -> None:
+    """Write a record atomically, sorted by mutant (function, then number), with `notes` as # lines on top."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tsv.tmp")
+    with tmp.open("w", encoding="utf-8", newline="") as f:
+        f.writelines(f"# {note}\n" for note in notes)
+        out = csv.writer(f, delimiter="\t", lineterminator="\n")
+        out.writerow(COLUMNS)
+        for e in sorted(entries.values(), key=lambda e: _order(e.mutant)):
+            out.writerow([e.mutant, e.shard, e.hash, e.outcome, e.test, f"{e.seconds:.2f}", e.change])
+    tmp.replace(path)
+
+
+def notes_of(path: Path) -> list[str]:
+    """The # lines of a record, without the '# '."""
+    if not path.exists():
+        return []
+    return [line[2:].rstrip("\n") for line in path.read_text("utf-8").splitlines(True) if line.startswith("# ")]
+
+
+def _order(mutant: str) -> tuple[str, int]:
+    function, _, number = mutant.rpartition("__mutmut_")
+    return function, int(number) if number.isdigit() else 0
+
+
+def shards_of(path: Path) -> set[str]:
+    """The shards whose screens wrote a record's entries."""
+    return {e.shard for e in read(path).values()}
+
+
+def equivalents() -> dict[tuple[str, str], str]:
+    """The written proofs: (dotted module, change hash) -> proof."""
+    if not EQUIVALENT.exists():
+        return {}
+    with EQUIVALENT.open(encoding="utf-8", newline="") as f:
+        rows = csv.DictReader((line for line in f if not line.startswith("#")), delimiter="\t")
+        return {(r["module"], r["hash"]): r["proof"] for r in rows}
+
+
+def tally(entries: dict[str, Entry], module: str, proofs: dict[tuple[str, str], str]) -> dict[str, int]:
+    """Counts per outcome, with the proven-equivalent survivors as "equivalent" (not "survived")."""
+    counts = dict.fromkeys((*OUTCOMES, "equivalent"), 0)
+    for e in entries.values():
+        proven = e.outcome == "survived" and (module, e.hash) in proofs
+        counts["equivalent" if proven else e.outcome] += 1
+    return counts
+
+
+def table(modules: list[str]) -> str:
+    """The per-module table (markdown) of every committed record, then the modules of `modules` without one."""
+    proofs = equivalents()
+    lines = ["| module | mutants screened (made) | killed (raw) | of them by an exception, not an assertion "
+             "| equivalent, proven | survived | timeout | crash | collection, error, no tests "
+             "| killed of the non-equivalent |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    recorded = sorted(RESULTS.glob("*.tsv"))
+    partial = []
+    for path in recorded:
+        module = path.stem
+        c = tally(read(path), module, proofs)
+        n, kills = sum(c.values()), c["killed"] + c["raised"]
+        made = next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
+        if n == 0:
+            continue
+        rest = n - c["equivalent"]
+        if made.isdigit() and n < int(made):
+            partial.append(f"`{module}` ({n} of {made}: {', '.join(sorted(shards_of(path)))})")
+        lines.append(f"| `{module}` | {n} ({made}) | {kills} ({100 * kills / n:.1f} %) | {c['raised']} "
+                     f"| {c['equivalent']} | {c['survived']} | {c['timeout']} | {c['crash']} "
+                     f"| {c['collection'] + c['error'] + c['no-tests']} "
+                     f"| {100 * kills / rest if rest else 100:.1f} % |")
+    lines += ["", "Records of part of a module (the named shards' functions only): " + (", ".join(partial) or "none")
+              + "."]
+    have = {p.stem for p in recorded}
+    missing = sorted({m.removesuffix(".py").replace("/", ".") for m in modules} - have)
+    lines += ["", "Modules with shards and no committed record yet (their only numbers are those of the earlier "
+                  "screens in mutation/history.md, which counted crashes, collection errors and timeouts as kills): "
+              + (", ".join(f"`{m}`" for m in missing) or "none") + "."]
+    return "\n".join(lines)
+
+
+def write_table(modules: list[str]) -> None:
+    """Replace the table between the markers of docs/mutation.md."""
+    text = DOC.read_text("utf-8")
+    head, _, rest = text.partition(TABLE_START)
+    _, _, tail = rest.partition(TABLE_END)
+    if not rest:
+        raise SystemExit(f"{DOC}: no line {TABLE_START!r} to write the table after")
+    tmp = DOC.with_suffix(".md.tmp")
+    tmp.write_text(f"{head}{TABLE_START}\n\n{table(modules)}\n\n{TABLE_END}{tail}", "utf-8")
+    tmp.replace(DOC)

@@ -1,0 +1,238 @@
+"""Screens: every mutant of a shard run against a frozen copy of its tests, each in a fork of one process that
+imported pytest and the mutated module once (mutmut's trampolines choose the mutant at each call), with its
+outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
+
+The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
+the three, at least 60 s. A screen stops a mutant's run at the first failing or erroring test, as `-x` would: a
+test that fails on another exception than an assertion is a kill too (pytest's failure, not an error), recorded
+apart; a fixture's error is not.
+"""
+from __future__ import annotations
+
+import contextlib
+import importlib
+import io
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import mutation_record as rec
+
+ROOT = rec.ROOT
+# mutmut 3's own first step of `run` (mutmut/__main__.py): copy the sources and write every mutant beside them
+GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant_under_test('mutant_generation')\n"
+            "Path('mutants').mkdir(exist_ok=True)\nm.copy_src_dir(); m.copy_also_copy_files(); m.setup_source_paths()\n"
+            "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
+BASELINE_RUNS = 3
+TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmutated run times 10, at least 60 s
+
+
+class Verdict:
+    """A pytest plugin that notes the first failing test, on an assertion or on another exception, or the first
+    fixture error (and stops there), and collection errors."""
+
+    def __init__(self):
+        self.session = None
+        self.killed = self.raised = self.error = self.collection = ""
+
+    def pytest_sessionstart(self, session):
+        self.session = session
+
+    def pytest_collectreport(self, report):
+        if report.failed and not self.collection:
+            self.collection = report.nodeid or "(collection)"
+
+    def pytest_exception_interact(self, node, call, report):
+        """Called for every failed phase (and collection error) with the exception: classify it."""
+        import pytest
+
+        if not hasattr(node, "nodeid") or report.when is None:
+            return
+        if report.when != "call":
+            self.error = self.error or f"{node.nodeid} ({report.when}: {call.excinfo.typename})"
+            self.session.shouldstop = "a fixture failed"
+        elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
+            self.killed = node.nodeid
+            self.session.shouldstop = "a test failed on an assertion"
+        else:
+            self.raised = f"{node.nodeid} ({call.excinfo.typename})"
+            self.session.shouldstop = "a test failed on another exception"
+
+
+def freeze_tests(folder: Path) -> Path:
+    """A copy of tests/ made now, in <folder>/frozen/ beside links to the rest of the repository: the tests a
+    screen runs, unchanged by edits to the repository while it runs."""
+    frozen = folder / "frozen"
+    shutil.rmtree(frozen, ignore_errors=True)
+    frozen.mkdir(parents=True)
+    shutil.copytree(ROOT / "tests", frozen / "tests", ignore=shutil.ignore_patterns("__pycache__"))
+    for entry in ROOT.iterdir():
+        if entry.name not in ("tests", ".git", ".venv", "mutants"):
+            (frozen / entry.name).symlink_to(entry, target_is_directory=entry.is_dir())
+    return frozen / "tests"
+
+
+def generate(folder: Path, fresh: bool) -> None:
+    """Write the mutated copy of the shard's module into <folder>/mutants (again from the current tree if fresh)."""
+    if fresh:
+        shutil.rmtree(folder / "mutants", ignore_errors=True)
+    if not (folder / "mutants").exists():
+        subprocess.run([sys.executable, "-c", GENERATE], cwd=folder, check=True, stdout=subprocess.DEVNULL)
+
+
+def changes(folder: Path, module: str, names: list[str]) -> dict[str, tuple[str, str]]:
+    """(hash, summary) of each mutant's change, read from the mutated copy in <folder>."""
+    from mutmut.mutation.diff_apply import get_diff_for_mutant
+
+    with contextlib.chdir(folder):
+        return {name: rec.change_of(get_diff_for_mutant(name, path=module)) for name in names}
+
+
+def mutant_names(folder: Path, module: str) -> list[str]:
+    """Every mutant mutmut wrote for `module` in <folder>."""
+    meta = json.loads((folder / "mutants" / (module + ".meta")).read_text("utf-8"))
+    return list(meta["exit_code_by_key"])
+
+
+def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]:
+    """pytest `args` on mutant `key` ("" for none) in a forked child: (outcome, deciding test, seconds)."""
+    import pytest
+
+    read, write = os.pipe()
+    start = time.monotonic()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read)
+        os.environ["MUTANT_UNDER_TEST"] = key  # mutmut's trampolines read it at every call
+        verdict = Verdict()
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            code = int(pytest.main(args, plugins=[verdict]))
+        found = {"code": code, "killed": verdict.killed, "raised": verdict.raised, "error": verdict.error,
+                 "collection": verdict.collection}
+        os.write(write, json.dumps(found).encode()[:60000])
+        os._exit(0)
+    os.close(write)
+    timed_out = False
+    while not os.waitpid(pid, os.WNOHANG)[0]:
+        if time.monotonic() - start > timeout:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            timed_out = True
+            break
+        time.sleep(0.05)
+    seconds = time.monotonic() - start
+    with os.fdopen(read, "rb") as pipe:
+        payload = pipe.read()
+    if timed_out:
+        return "timeout", "", seconds
+    if not payload:
+        return "crash", "", seconds
+    found = json.loads(payload)
+    for outcome in ("collection", "killed", "raised", "error"):
+        if found[outcome]:
+            return outcome, found[outcome], seconds
+    outcome = {0: "survived", 5: "no-tests"}.get(found["code"], "crash")
+    return outcome, "" if outcome != "crash" else f"pytest exit {found['code']}", seconds
+
+
+def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[list[str], float, list[float]]:
+    """Generate the mutants, freeze the tests, import pytest and the mutated module in this process, and time the
+    unmutated run BASELINE_RUNS times: (pytest args, a mutant's time limit, the baseline times)."""
+    generate(folder, fresh)
+    frozen = freeze_tests(folder)
+    args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
+    args += ["-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]  # the plugin reads the exceptions; no tracebacks
+    os.chdir(folder / "mutants")
+    sys.path[:0] = [str(folder / "mutants"), str(frozen)]
+    import pytest
+
+    importlib.import_module(module.removesuffix(".py").replace("/", "."))
+    # collect once here, as mutmut's own clean run does: the forks find the test modules and what they import
+    # already loaded (a value a test module computes at import comes from the unmutated code, in mutmut too)
+    os.environ["MUTANT_UNDER_TEST"] = ""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        pytest.main([*args, "--collect-only"])
+    times = []
+    for _ in range(BASELINE_RUNS):
+        outcome, test, seconds = run_one("", args, 3600.0)
+        if outcome != "survived":
+            raise SystemExit(f"the unmutated code does not pass its tests ({outcome} {test}): no screen")
+        times.append(seconds)
+    return args, max(TIMEOUT_FLOOR, TIMEOUT_FACTOR * max(times)), times
+
+
+def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
+           rest: bool = False) -> int:
+    """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
+    `rest`: they are what an earlier screen of the shard left unkilled (the note says so)."""
+    args, limit, times = prepare(folder, module, tests, fresh)
+    path = rec.record_path(module)
+    entries = rec.read(path)
+    found = changes(folder, module, names)
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                            text=True).stdout.strip()
+    made = len(mutant_names(folder, module))
+    label = f"{shard} (its unkilled mutants again)" if rest else shard
+    notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {label}:", "made:"))]
+    notes.insert(0, f"made: {made} mutants of {module} by mutmut")
+    notes.append(f"shard {label}: {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, tree {commit}, tests "
+                 f"{' '.join(tests)}; unmutated runs {', '.join(f'{t:.1f}' for t in times)} s, limit {limit:.0f} s")
+    print(f"== screen {shard}: {len(names)} mutants, unmutated {times} s, limit {limit:.0f} s", flush=True)
+    for i, name in enumerate(names):
+        outcome, test, seconds = run_one(name, args, limit)
+        digest, summary = found[name]
+        entries[name] = rec.Entry(name, shard, digest, outcome, test, seconds, summary)
+        print(f"    {name}: {outcome} {test} ({seconds:.1f} s)", flush=True)
+        if i % 10 == 9 or i == len(names) - 1:
+            rec.write(path, entries, notes)
+    counts = rec.tally({n: entries[n] for n in names}, path.stem, rec.equivalents())
+    print(f"== screen {shard}: " + ", ".join(f"{n} {k}" for k, n in counts.items() if n), flush=True)
+    return 0
+
+
+def sample(entries: dict[str, rec.Entry], module: str, killed: int, seed: int) -> list[rec.Entry]:
+    """`killed` killed entries at random (all when fewer) and every survivor with a written proof."""
+    proofs = rec.equivalents()
+    kills = sorted(n for n, e in entries.items() if e.outcome in ("killed", "raised"))
+    chosen = random.Random(seed).sample(kills, min(killed, len(kills)))
+    proven = [n for n, e in entries.items() if e.outcome == "survived" and (module, e.hash) in proofs]
+    return [entries[n] for n in sorted(chosen + proven)]
+
+
+def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
+    """pytest args that run only the test a recorded kill names (in the frozen copy, with the selection's marks);
+    [] for any other outcome, which needs the whole selection (a survivor survives all of it)."""
+    if entry.outcome not in ("killed", "raised") or not entry.test:
+        return []
+    marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
+    node = entry.test.split(" (")[0]
+    return [str(folder / "frozen" / node), *marks, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
+
+
+def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
+    """Rerun `chosen` on mutants made from the current tree, a recorded kill against the test that made it, any
+    other outcome against the whole selection; 1 when an outcome no longer holds or a mutant is gone."""
+    args, limit, _ = prepare(folder, module, tests, fresh=True)
+    current = mutant_names(folder, module)
+    by_hash = {}
+    for name, (digest, _) in changes(folder, module, current).items():
+        by_hash.setdefault((name.rpartition("__mutmut_")[0], digest), name)
+    failures = 0
+    for e in chosen:
+        name = by_hash.get((e.mutant.rpartition("__mutmut_")[0], e.hash))
+        if name is None:
+            print(f"    {e.mutant} ({e.change}): no longer made from the current tree; rescreen the shard")
+            failures += 1
+            continue
+        outcome, test, _ = run_one(name, deciding(e, folder, tests) or args, limit)
+        held = outcome == e.outcome or {outcome, e.outcome} == {"killed", "raised"}  # a kill either way
+        failures += not held
+        print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "
+              f"{test} {'ok' if held else 'CHANGED'}", flush=True)
+    return 1 if failures else 0
