@@ -22,7 +22,7 @@ import numpy as np
 
 from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
-from symmech.export import build, model
+from symmech.export import build, command, model
 from symmech.export.model import deviation
 from symmech.smm import numeric
 from symmech.trolley import elastic_scene
@@ -81,7 +81,7 @@ def elastic(repeats: int) -> None:
     path = scenes_folder() / "trolley_elastic_helix.toml"
     setup = pipeline.load(path).setup.elastic
     names = [f"P{i}" for i in range(6)]
-    exported = model.load(path)
+    exported = command.load(path)
     t = exported.native.data[:, 0]
     reference = elastic_scene.simulate(setup, rtol=1e-10)["P"]
     with tempfile.TemporaryDirectory() as tmp:

@@ -6,7 +6,6 @@ Exchange and the C example program. Slow tier: the bundled elastic scenes whole,
 compiled engine the export reads its frame table from."""
 from __future__ import annotations
 
-import copy
 import csv
 import io
 import shutil
@@ -16,11 +15,12 @@ import tomllib
 import numpy as np
 import pytest
 
+from fuzzscenes import toml_text
 from symmech.cli import main
+from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
 from symmech.export.model import deviation
 from symmech.trolley import elastic_scene
-from symmech.core import pipeline
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy.validation import validate_fmu  # noqa: E402
@@ -38,38 +38,13 @@ def short_helix(tmp_path_factory):
     path and native run, once."""
     tmp_path = tmp_path_factory.mktemp("short_helix")
     doc = tomllib.loads((SCENES / "trolley_elastic_helix.toml").read_text(encoding="utf-8"))
-    doc = copy.deepcopy(doc)
     doc["time"] = {"t_end": 0.15, "steps": 50}
     doc["elastic"]["numerics"]["modal_samples"] = 0
     path = tmp_path / "short_helix.toml"
-    path.write_text(_toml(doc))
+    path.write_text(toml_text(doc))
     with pytest.MonkeyPatch.context() as patch:  # the engine the export's run takes (tests/conftest.py)
         patch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("python", "tests: the reference engine"))
         return path, _native(path)
-
-
-def _toml(doc: dict, prefix: str = "") -> str:
-    """TOML text of the scene dictionary (tables, arrays of tables, numbers, strings, booleans, lists)."""
-    def value(x):
-        if isinstance(x, bool):
-            return "true" if x else "false"
-        if isinstance(x, str):
-            return '"' + x.replace("\\", "\\\\").replace('"', '\\"') + '"'
-        if isinstance(x, list):
-            return "[" + ", ".join(value(v) for v in x) + "]"
-        return repr(x)
-
-    plain = [f"{k} = {value(v)}" for k, v in doc.items()
-             if not isinstance(v, dict) and not (isinstance(v, list) and v and isinstance(v[0], dict))]
-    out = "\n".join(plain) + "\n"
-    for k, v in doc.items():
-        name = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out += f"\n[{name}]\n" + _toml(v, name + ".")
-        elif isinstance(v, list) and v and isinstance(v[0], dict):
-            for entry in v:
-                out += f"\n[[{name}]]\n" + _toml(entry, name + ".")
-    return out
 
 
 def _native(path) -> dict:
@@ -87,8 +62,7 @@ def _simulate(fmu, t, names, rtol=1e-10):
 
 
 def _check_fmu(path, native, tmp_path, fmi: int, kind: str) -> np.ndarray:
-    """Export, validate, simulate; P0…P5 within TOLERANCE of the native run's; the FMU's outputs of
-    ``_OUTPUTS`` returned beside."""
+    """Export, validate, simulate; P0…P5 within TOLERANCE of the native run's; the FMU's OUTPUTS returned."""
     fmu = tmp_path / f"elastic_{fmi}_{kind}.fmu"
     assert main(["export", "fmu", str(path), "--out", str(fmu), "--fmi", str(fmi), "--type", kind]) == 0
     assert validate_fmu(str(fmu)) == []
@@ -124,15 +98,22 @@ def test_elastic_c_example_prints_the_native_reactions(short_helix, tmp_path):
     assert deviation(got[:, 2:], native["P"]) <= TOLERANCE
 
 
-def test_traction_is_refused_in_one_line(tmp_path, capsys):
+TRACTION = [('speed = "3*t + 7*sin(t/2)"', 'traction = "100 - 10*v"\ninitial_speed = 3.0'),
+            ("local_curvature = false", "local_curvature = false\ntraction = true")]
+RIGID_ROLLERS = [("[elastic.rollers]", "[elastic.effects]\nrollers = false\n\n[elastic.rollers]")]
+
+
+@pytest.mark.parametrize("edits, says", [(TRACTION, "prescribed motion.speed"), (RIGID_ROLLERS, "elastic rollers")])
+def test_uncovered_elastic_scenes_are_refused_in_one_line(edits, says, tmp_path, capsys):
     text = (SCENES / "trolley_elastic_helix.toml").read_text(encoding="utf-8")
-    text = text.replace('speed = "3*t + 7*sin(t/2)"', 'traction = "100 - 10*v"\ninitial_speed = 3.0')
-    text = text.replace("local_curvature = false", "local_curvature = false\ntraction = true")
-    scene = tmp_path / "traction.toml"
+    for old, new in edits:
+        assert old in text
+        text = text.replace(old, new)
+    scene = tmp_path / "uncovered.toml"
     scene.write_text(text)
     assert main(["export", "fmu", str(scene), "--out", str(tmp_path / "x.fmu")]) == 2
     err = capsys.readouterr().err
-    assert "prescribed motion.speed" in err and len(err.strip().splitlines()) == 1
+    assert says in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x.fmu").exists()
 
 
@@ -148,3 +129,26 @@ def test_bundled_elastic_scene_fmu(name, fmi, kind, tmp_path):
     assert native["engine"] == "compiled"
     got = _check_fmu(path, native, tmp_path, fmi, kind)
     assert deviation(got, _native_outputs(native)) <= TOLERANCE
+
+
+@pytest.mark.slow  # a second native run of the short ride (the Python engine) and an FMU run
+def test_tuned_roller_stiffness_matches_the_native_run_of_that_scene(short_helix, tmp_path):
+    """The rollers' stiffnesses are tunable parameters: the FMU exported from the bundled values, set to twice
+    them (and started from that scene's quasi-static state), reproduces the native run of the stiffer scene."""
+    path, _ = short_helix
+    stiffer = tmp_path / "stiffer.toml"
+    doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    assert doc["elastic"]["rollers"]["stiffness"] == [1e7] * 5
+    doc["elastic"]["rollers"]["stiffness"] = [2e7] * 5
+    stiffer.write_text(toml_text(doc))
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("python", "tests: the reference engine"))
+        native = _native(stiffer)
+    fmu = tmp_path / "elastic_3_me.fmu"
+    assert main(["export", "fmu", str(path), "--out", str(fmu)]) == 0
+    names = list(pipeline.load(path).setup.elastic.system.inv.names)
+    start = {f"elastic.rollers.stiffness[{r}]": 2e7 for r in range(1, 6)}
+    start.update((name, float(native["q"][0, i])) for i, name in enumerate(names))
+    result = fmpy.simulate_fmu(str(fmu), solver="CVode", relative_tolerance=1e-10, stop_time=native["t"][-1],
+                               output_interval=native["t"][1] - native["t"][0], output=P, start_values=start)
+    assert deviation(np.column_stack([result[n] for n in P]), native["P"]) <= TOLERANCE

@@ -85,15 +85,15 @@ def _structured(name: str) -> str:
 
 
 def load(path) -> ExportModel:
-    """The export model of the scene at ``path`` (validated as `symmech run` does); SymmechError (exit 2) for a
-    kind or size the export does not cover, before any work."""
+    """The export model of the mechanism scene at ``path`` (validated as `symmech run` does): :func:`of_scene`."""
+    return of_scene(pipeline.load(path))
+
+
+def of_scene(scene) -> ExportModel:
+    """The export model of a loaded mechanism scene (``pipeline.load``'s); SymmechError (exit 2) for another
+    kind or a size the export does not cover, before any work."""
     from symmech.smm.scene import SYMBOLIC_LIMIT
 
-    scene = pipeline.load(path)
-    if scene.kind.name == "trolley":
-        from symmech.export import trolley
-
-        return trolley.load(scene)
     if scene.kind.name != "mechanism":
         raise SymmechError(f"kind = '{scene.kind.name}': `symmech export` covers mechanism and elastic trolley "
                            "scenes so far (docs/export.md)")

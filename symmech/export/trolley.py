@@ -6,7 +6,8 @@ as the compiled engine (:mod:`symmech.trolley.elastic_kernels`): states q, q' (`
 prescribed speed as the engine's cubic spline table of the 12 frame channels in t
 (:func:`symmech.trolley.elastic_compiled.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
-``points``). The track and the speed are in the table: the FMU has no parameters and no inputs.
+``points``); parameters: the rollers' stiffnesses and dampings. The track and the speed are in the table:
+they are not parameters, and the FMU has no inputs.
 """
 from __future__ import annotations
 
@@ -77,13 +78,33 @@ def elastic(setup, run: dict) -> ExportModel:
     for i in range(n):
         variables.append(Variable(f"der({names[i]},2)", 1 + 2 * n + i, "output", "continuous", f"{units[i]}/s^2",
                                   f"acceleration of {names[i]}", derivative_of=1 + n + i))
-    for k, c in enumerate(output_columns(setup.names)):
+    columns = output_columns(setup.names)
+    for k, c in enumerate(columns):
         variables.append(Variable(c.name, 1 + 3 * n + k, "output", "continuous", c.unit, c.doc))
+    variables += _parameters(system, 1 + 3 * n + len(columns))
     native = Table((Column("t", "s"), Column("s", "m")) + tuple(Column(f"P{i}", "N") for i in range(6)),
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
     source = data(system, drive, table) + glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
-                       tuple(variables), 2 * n, n, n, 0, 0, 0, native, n_y=len(output_columns(setup.names)))
+                       tuple(variables), 2 * n, n, n, 0, 0, len(PARAMETERS) * 5, native, n_y=len(columns))
+
+
+# The tunable parameters, in the order c/elastic_trolley.c reads p: the rollers' [elastic.rollers] fields
+PARAMETERS = (("stiffness", "N/m", "stiffness"), ("damping", "N s/m", "damping (0 without effects.damping)"))
+
+
+def _parameters(system, vr: int) -> list[Variable]:
+    """The rollers' stiffnesses and dampings from value reference ``vr`` on (``elastic.rollers.stiffness[1]``
+    … as the scene's fields): they enter only the roller forces, so they stay tunable."""
+    from symmech.trolley import elastic_kernels as ek
+
+    roll = ek.pack(system)[9]  # (3, 5): stiffness, damping as the engine applies it, preload
+    out = []
+    for row, (field, unit, what) in enumerate(PARAMETERS):
+        for r in range(5):
+            out.append(Variable(f"elastic.rollers.{field}[{r + 1}]", vr + 5 * row + r, "parameter", "tunable", unit,
+                                f"{what} of the roller of P{r + 1}", float(roll[row, r])))
+    return out
 
 
 def output_columns(points: list[str]) -> tuple[Column, ...]:
@@ -130,7 +151,7 @@ def data(system, drive, table) -> str:
              f"#define EL_PROBES {inv.probe_points.shape[0]}", f"#define EL_G_REF {float(g_ref)!r}",
              _ints("EL_PTR", ptr), _ints("EL_COL", col), _ints("EL_QI", qi), _ints("EL_PAIR_I", pi),
              _ints("EL_PAIR_J", pj), _doubles("EL_GX", gx), _doubles("EL_GTR", gtr), _doubles("EL_C", c),
-             _doubles("EL_ROLLERS", roll), _ints("EL_BLOCK_INDEX", idx), _ints("EL_BLOCK_SIZE", size),
+             _doubles("EL_PRELOAD", roll[2]), _ints("EL_BLOCK_INDEX", idx), _ints("EL_BLOCK_SIZE", size),
              _doubles("EL_BLOCK_H", h), _doubles("EL_BLOCK_C", cm), _doubles("EL_S1", s1), _doubles("EL_K", k),
              _doubles("EL_D", d), _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)),
              _doubles("EL_PROBE_FIELDS", inv.probe_fields), _doubles("EL_PROBE_POINTS", inv.probe_points),

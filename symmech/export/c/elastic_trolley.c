@@ -75,21 +75,22 @@ static void gram_pass(const double *x, double *X)
     }
 }
 
-/* roller deflections d (5) and forces P1..P5 (5) [m, N] */
-static void rollers(const double *q, const double *qd, double *d, double *force)
+/* roller deflections d (5) and forces P1..P5 (5) [m, N]; p = the rollers' stiffnesses (5) [N/m] and
+   dampings (5) [N s/m], the FMU's parameters */
+static void rollers(const double *q, const double *qd, const double *p, double *d, double *force)
 {
     for (int r = 0; r < 5; r++) {
         double dr = 0.0, ddr = 0.0;
         for (int j = 0; j < 5; j++) { dr += EL_C[r * 5 + j] * q[j]; ddr += EL_C[r * 5 + j] * qd[j]; }
-        double k = EL_ROLLERS[r], c = EL_ROLLERS[5 + r], pre = EL_ROLLERS[10 + r];
+        double k = p[r], c = p[5 + r], pre = EL_PRELOAD[r];
         d[r] = dr;
         if (EL_CLAMPED) force[r] = k * (fmax(pre - dr, 0.0) - fmax(pre + dr, 0.0)) - c * ddr;
         else force[r] = -k * dr - c * ddr;
     }
 }
 
-/* R(t, q, q') (EL_N) of M q'' + R = 0 */
-static void residual(double t, const double *q, const double *qd, double *R)
+/* R(t, q, q') (EL_N) of M q'' + R = 0 at the parameters p */
+static void residual(double t, const double *q, const double *qd, const double *p, double *R)
 {
     double ch[EL_CHANNELS + 1], B[9], W[9], rr[EL_F], v[EL_F], p2[EL_F], z[EL_F];
     static double X[9 * EL_F], Y[9 * EL_F];  /* too large for small stacks; one instance at a time */
@@ -127,7 +128,7 @@ static void residual(double t, const double *q, const double *qd, double *R)
     }
     if (EL_ROLLERS_ON) {
         double d[5], force[5];
-        rollers(q, qd, d, force);
+        rollers(q, qd, p, d, force);
         for (int j = 0; j < 5; j++)
             for (int r = 0; r < 5; r++) R[j] -= force[r] * EL_C[r * 5 + j];
     }
@@ -135,9 +136,8 @@ static void residual(double t, const double *q, const double *qd, double *R)
 
 void elastic_trolley_rate(double t, const double *y, const double *p, double *out)
 {
-    (void)p;
     double R[EL_N];
-    residual(t, y, y + EL_N, R);
+    residual(t, y, y + EL_N, p, R);
     for (int a = 0; a < EL_N; a++) { out[a] = y[EL_N + a]; out[EL_N + a] = -R[a]; }
 }
 
@@ -184,7 +184,6 @@ static void probe(const double *c, int k, const double *mask, double *out)
    displacement u (3) [m], elastic deflection e (3) [m] and overload n (3) [g] (elastic.outputs) */
 void elastic_trolley_outputs(double t, const double *y, const double *dy, const double *p, double *out)
 {
-    (void)p;
     const double *q = y, *qd = y + EL_N, *qdd = dy + EL_N;
     double ch[EL_CHANNELS + 1], B[9], W[9], rr[EL_F], v[EL_F], acc[EL_F], p2[EL_F];
     out[0] = channels(t, ch);
@@ -202,7 +201,7 @@ void elastic_trolley_outputs(double t, const double *y, const double *dy, const 
     out[1] = EL_MASS * ch[0] + fa[0];  /* P0 = F1, the resultant along x1 */
     for (int j = 0; j < 3; j++) out[1] += B[j] * first[j] + 2.0 * W[j] * fv[j];
     double d[5], force[5];
-    rollers(q, qd, d, force);
+    rollers(q, qd, p, d, force);
     for (int r = 0; r < 5; r++) { out[2 + r] = force[r]; out[7 + r] = d[r]; }
     for (int k = 0; k < EL_PROBES; k++) {
         double pos[3], vel[3], ddu[3], a[3], wp[3], wwp[3], dwp[3], wv[3];
