@@ -175,7 +175,8 @@ static void probe(const double *c, int k, const double *mask, double *out)
 {
     for (int i = 0; i < 3; i++) {
         double s = 0.0;
-        for (int f = 0; f < EL_F; f++) s += (mask ? mask[f] : 1.0) * c[f] * EL_PROBE_FIELDS[(f * EL_PROBES + k) * 3 + i];
+        for (int f = 0; f < EL_F; f++)
+            s += (mask ? mask[f] : 1.0) * c[f] * EL_PROBE_FIELDS[(f * EL_PROBES + k) * 3 + i];
         out[i] = s;
     }
 }
