@@ -1,9 +1,12 @@
 """Exported models against the native run: FMU (FMPy, Model Exchange with CVode and Co-Simulation with the
-FMU's DOP853) and the exported C example program, on the bundled mechanism scenes with a free response.
+FMU's DOP853) and the exported C example program, on the bundled mechanism scenes with a free response and the
+bundled elastic trolley ride.
 
-Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv).
-Accuracy: `symmech.export.model.deviation`, the largest deviation of each coordinate series relative to its
-largest magnitude.
+Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv); for the
+elastic trolley the compiled engine at the scene's rtol (its reactions P0…P5), and beside it the same engine at
+rtol 1e-10 as a reference closer to the exact solution.
+Accuracy: `symmech.export.model.deviation`, the largest deviation of each series relative to its largest
+magnitude.
 
     python benchmarks/bench_export.py [--quick]
 """
@@ -19,9 +22,10 @@ import numpy as np
 
 from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
-from symmech.export import build, model
+from symmech.export import build, command, model
 from symmech.export.model import deviation
 from symmech.smm import numeric
+from symmech.trolley import elastic_scene
 from timing import interleaved, machine
 
 
@@ -30,6 +34,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="3 rounds instead of 7")
     repeats = 3 if parser.parse_args().quick else 7
     print(machine())
+    elastic(repeats)
     for name in ("smm_rotor_boom", "smm_spatial_boom"):
         exported = model.load(scenes_folder() / f"{name}.toml")
         table = exported.native
@@ -58,12 +63,50 @@ def main() -> None:
             for label, run in runs.items():
                 result = run()
                 if isinstance(result, str):
-                    got = np.array([row.split(",") for row in result.split()[1:]], dtype=float)[:, 1:]
+                    got = _printed(result)[:, 1:]
                 elif result.dtype.names:
                     got = np.column_stack([result[n] for n in names])
                 else:
                     got = result
                 print(f"  {label:40s} {stats[label].text()}  error {deviation(got, q):.2g}")
+
+
+def _printed(text: str) -> np.ndarray:
+    """The rows of the C example program's CSV output."""
+    return np.array([row.split(",") for row in text.split()[1:]], dtype=float)
+
+
+def elastic(repeats: int) -> None:
+    """The bundled elastic helix: FMU ME/CS and the C example program against the compiled engine's run."""
+    path = scenes_folder() / "trolley_elastic_helix.toml"
+    setup = pipeline.load(path).setup.elastic
+    names = [f"P{i}" for i in range(6)]
+    exported = command.load(path)
+    t = exported.native.data[:, 0]
+    reference = elastic_scene.simulate(setup, rtol=1e-10)["P"]
+    with tempfile.TemporaryDirectory() as tmp:
+        me = build.fmu(exported, Path(tmp) / "me.fmu", 3, "me")
+        cs = build.fmu(exported, Path(tmp) / "cs.fmu", 3, "cs")
+        example = build.c_folder(exported, Path(tmp) / "c") / "example"
+        runs = {
+            "native, compiled engine (Radau)": lambda: elastic_scene.simulate(setup)["P"],
+            "FMU ME, FMPy CVode rtol 1e-10": lambda: fmpy.simulate_fmu(
+                str(me), solver="CVode", relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0],
+                output=names),
+            "FMU CS, DOP853 rtol 1e-10": lambda: fmpy.simulate_fmu(
+                str(cs), relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0], output=names),
+            "C example program (DOP853 rtol 1e-12)": lambda: _printed(subprocess.run(
+                [str(example)], check=True, capture_output=True, text=True).stdout)[:, 2:],
+        }
+        stats = interleaved(runs, repeats)
+        native = runs["native, compiled engine (Radau)"]()
+        print(f"\nelastic helix: {t[-1]:g} s in {len(t) - 1} output steps; native vs its rtol 1e-10 run "
+              f"{deviation(native, reference):.2g}")
+        for label, run in runs.items():
+            result = run()
+            got = np.column_stack([result[n] for n in names]) if result.dtype.names else result
+            print(f"  {label:40s} {stats[label].text()}  error {deviation(got, native):.2g} "
+                  f"(vs rtol 1e-10: {deviation(got, reference):.2g})")
 
 
 if __name__ == "__main__":

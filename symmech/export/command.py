@@ -3,8 +3,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from symmech.core import pipeline
 from symmech.core.scene import SymmechError
-from symmech.export import build, model
+from symmech.export import build, model, trolley
+from symmech.export.model import ExportModel
 
 FMI_VERSIONS = (2, 3)
 TYPES = ("me", "cs")
@@ -25,5 +27,12 @@ def export(what: str, scene, out, fmi: int = 3, kind: str = "me") -> Path:
         raise SymmechError(f"--out {out} is a folder of other files (no {build.MARKER} of an earlier export); "
                            "choose a new or empty folder")
     build.compiler()  # refuse before any work when there is no C compiler
-    exported = model.load(scene)
+    exported = load(scene)
     return build.fmu(exported, out, fmi, kind) if what == "fmu" else build.c_folder(exported, out)
+
+
+def load(path) -> ExportModel:
+    """The export model of the scene at ``path``: an elastic trolley (:mod:`symmech.export.trolley`) or a
+    mechanism (:func:`symmech.export.model.of_scene`, which refuses the other kinds in one line)."""
+    scene = pipeline.load(path)
+    return trolley.load(scene) if scene.kind.name == "trolley" else model.of_scene(scene)

@@ -66,14 +66,17 @@ class ExportModel:
     u_row: int
     n_p: int
     native: Table | None
+    n_y: int = 0  # calculated outputs beyond the derivatives (MODEL_OUTPUTS), r[VR_Y:VR_Y + n_y]
 
     def layout(self) -> dict[str, int]:
         """First value reference of each block of ``r[]`` and its size (``N_REAL``)."""
         vr_x = 1
         vr_dx = vr_x + self.n_x
-        vr_u = vr_dx + self.n_dx
+        vr_y = vr_dx + self.n_dx
+        vr_u = vr_y + self.n_y
         vr_p = vr_u + self.n_u
-        return {"VR_TIME": 0, "VR_X": vr_x, "VR_DX": vr_dx, "VR_U": vr_u, "VR_P": vr_p, "N_REAL": vr_p + self.n_p}
+        return {"VR_TIME": 0, "VR_X": vr_x, "VR_DX": vr_dx, "VR_Y": vr_y, "VR_U": vr_u, "VR_P": vr_p,
+                "N_REAL": vr_p + self.n_p}
 
 
 def _structured(name: str) -> str:
@@ -82,14 +85,18 @@ def _structured(name: str) -> str:
 
 
 def load(path) -> ExportModel:
-    """The export model of the scene at ``path`` (validated as `symmech run` does); SymmechError (exit 2) for a
-    kind or size the export does not cover, before any work."""
+    """The export model of the mechanism scene at ``path`` (validated as `symmech run` does): :func:`of_scene`."""
+    return of_scene(pipeline.load(path))
+
+
+def of_scene(scene) -> ExportModel:
+    """The export model of a loaded mechanism scene (``pipeline.load``'s); SymmechError (exit 2) for another
+    kind or a size the export does not cover, before any work."""
     from symmech.smm.scene import SYMBOLIC_LIMIT
 
-    scene = pipeline.load(path)
     if scene.kind.name != "mechanism":
-        raise SymmechError(f"kind = '{scene.kind.name}': `symmech export` covers mechanism scenes so far "
-                           "(docs/export.md)")
+        raise SymmechError(f"kind = '{scene.kind.name}': `symmech export` covers mechanism and elastic trolley "
+                           "scenes so far (docs/export.md)")
     if scene.setup.n > SYMBOLIC_LIMIT:
         raise SymmechError(f"mechanism '{scene.setup.m.name}' has {scene.setup.n} coordinates; `symmech export` "
                            f"forms its equations symbolically, up to {SYMBOLIC_LIMIT} coordinates")

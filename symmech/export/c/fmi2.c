@@ -140,7 +140,7 @@ FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
 {
     Instance *inst = c;
     for (size_t i = 0; i < nvr; i++) {
-        if (vr[i] >= N_REAL || vr[i] == VR_TIME || (vr[i] >= VR_DX && vr[i] < VR_DX + N_DX))
+        if (vr[i] >= N_REAL || vr[i] == VR_TIME || (vr[i] >= VR_DX && vr[i] < VR_U))
             return fail(inst, "fmi2SetReal: not an input, parameter or state");
         inst->model.r[vr[i]] = value[i];
     }

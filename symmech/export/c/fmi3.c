@@ -176,7 +176,7 @@ FMI3_EXPORT fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueRefe
     if (nValues != nValueReferences) return fail(inst, "fmi3SetFloat64: one value per value reference");
     for (size_t i = 0; i < nValueReferences; i++) {
         fmi3ValueReference vr = valueReferences[i];
-        if (vr >= N_REAL || vr == VR_TIME || (vr >= VR_DX && vr < VR_DX + N_DX))
+        if (vr >= N_REAL || vr == VR_TIME || (vr >= VR_DX && vr < VR_U))
             return fail(inst, "fmi3SetFloat64: not an input, parameter or state");
         inst->model.r[vr] = values[i];
     }

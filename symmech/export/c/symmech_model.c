@@ -61,6 +61,9 @@ int symmech_derivatives(SymmechModel *m)
     for (int k = 0; k < N_X; k++)
         if (!isfinite(m->dx[k])) return -1;
     for (int k = 0; k < N_DX; k++) m->r[VR_DX + k] = m->dx[DX_FIRST + k];
+#ifdef MODEL_OUTPUTS
+    MODEL_OUTPUTS(m->r[VR_TIME], m->r + VR_X, m->dx, m->r + VR_P, m->r + VR_Y);
+#endif
     m->dirty = 0;
     return 0;
 }

@@ -2,7 +2,8 @@
    equations (hand-written: no physics here; the physics is the generated C99 module that model.h names).
 
    Every Float64 variable lives in r[], indexed by its FMI value reference (layout in model.h):
-   r[VR_TIME] time [s], then the N_X continuous states, the derivatives that are not states, the N_U
+   r[VR_TIME] time [s], then the N_X continuous states, the derivatives that are not states, the N_Y
+   calculated outputs (MODEL_OUTPUTS, when the model has them), the N_U
    inputs and the N_P parameters. */
 #ifndef SYMMECH_MODEL_H
 #define SYMMECH_MODEL_H
