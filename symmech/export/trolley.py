@@ -98,7 +98,7 @@ def _parameters(system, vr: int) -> list[Variable]:
     … as the scene's fields): they enter only the roller forces, so they stay tunable."""
     from symmech.trolley import elastic_kernels as ek
 
-    roll = ek.pack(system)[9]  # (3, 5): stiffness, damping as the engine applies it, preload
+    roll = ek.pack(system).roll  # (3, 5): stiffness, damping as the engine applies it, preload
     out = []
     for row, (field, unit, what) in enumerate(PARAMETERS):
         for r in range(5):
@@ -130,10 +130,12 @@ def data(system, drive, table) -> str:
     probe fields that ``c/elastic_trolley.c`` reads."""
     from symmech.trolley import elastic as el
     from symmech.trolley import elastic_kernels as ek
+    from symmech.trolley.elastic_layout import F_AT, N_CHANNELS
 
-    (flags, ptr, col, qi, pi, pj, gx, gtr, c, roll, idx, size, h, cm, s1, k, d, _, _) = ek.pack(system)
+    mdl = ek.pack(system)
+    flags, idx, size = mdl.flags, mdl.block_index, mdl.block_size
     inv = system.inv
-    n, f = int(flags[ek.F_N]), int(flags[ek.F_F])
+    n, f = int(flags[F_AT.n]), int(flags[F_AT.f])
     nodes = table.nodes
     s_coef = CubicSpline(nodes, el.arc_length(drive, nodes)).c  # (4, intervals)
     coef = np.concatenate([table.coef, s_coef[:, :, None]], axis=2)  # (4, intervals, 13)
@@ -144,16 +146,17 @@ def data(system, drive, table) -> str:
     width = idx.shape[1]
     lines = ["/* The elastic trolley's data, written by `symmech export` from symmech.trolley.elastic_kernels.pack "
              "and the compiled engine's frame table (do not edit). */",
-             f"#define EL_N {n}", f"#define EL_F {f}", f"#define EL_PAIRS {pi.size}", "#define EL_CHANNELS 12",
-             f"#define EL_NODES {nodes.size}", f"#define EL_MASS {float(flags[ek.F_MASS])!r}",
-             f"#define EL_ROLLERS_ON {int(flags[ek.F_ROLLERS])}", f"#define EL_CLAMPED {int(flags[ek.F_LAW])}",
+             f"#define EL_N {n}", f"#define EL_F {f}", f"#define EL_PAIRS {mdl.pair_i.size}", f"#define EL_CHANNELS {N_CHANNELS}",
+             f"#define EL_NODES {nodes.size}", f"#define EL_MASS {float(flags[F_AT.mass])!r}",
+             f"#define EL_ROLLERS_ON {int(flags[F_AT.rollers])}", f"#define EL_CLAMPED {int(flags[F_AT.law])}",
              f"#define EL_BLOCKS {size.size}", f"#define EL_BLOCK_WIDTH {width}",
              f"#define EL_PROBES {inv.probe_points.shape[0]}", f"#define EL_G_REF {float(g_ref)!r}",
-             _ints("EL_PTR", ptr), _ints("EL_COL", col), _ints("EL_QI", qi), _ints("EL_PAIR_I", pi),
-             _ints("EL_PAIR_J", pj), _doubles("EL_GX", gx), _doubles("EL_GTR", gtr), _doubles("EL_C", c),
-             _doubles("EL_PRELOAD", roll[2]), _ints("EL_BLOCK_INDEX", idx), _ints("EL_BLOCK_SIZE", size),
-             _doubles("EL_BLOCK_H", h), _doubles("EL_BLOCK_C", cm), _doubles("EL_S1", s1), _doubles("EL_K", k),
-             _doubles("EL_D", d), _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)),
+             _ints("EL_PTR", mdl.ptr), _ints("EL_COL", mdl.col), _ints("EL_QI", mdl.qi),
+             _ints("EL_PAIR_I", mdl.pair_i), _ints("EL_PAIR_J", mdl.pair_j), _doubles("EL_GX", mdl.gram_x),
+             _doubles("EL_GTR", mdl.gram_trace), _doubles("EL_C", mdl.rollers_map), _doubles("EL_PRELOAD", mdl.roll[2]),
+             _ints("EL_BLOCK_INDEX", idx), _ints("EL_BLOCK_SIZE", size), _doubles("EL_BLOCK_H", mdl.block_h),
+             _doubles("EL_BLOCK_C", mdl.block_c), _doubles("EL_S1", mdl.s1), _doubles("EL_K", mdl.stiffness),
+             _doubles("EL_D", mdl.damping), _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)),
              _doubles("EL_PROBE_FIELDS", inv.probe_fields), _doubles("EL_PROBE_POINTS", inv.probe_points),
              _doubles("EL_ELASTIC", elastic), ""]
     return "\n".join(lines)
