@@ -1,5 +1,5 @@
 """Grains of the bundled separation sweep that slip while turning: Radau below the stiff slip speed and DOP853
-above it (this code) against Radau for the whole slip and DOP853 throughout (the integrator before issue 13's
+above it (this code) against Radau for the whole slip and DOP853 throughout (the integrator before the stiff-slip
 fix), seconds per grain and the difference of the results.
 
 Grains at sweep point (0.6 mm, 25 Hz) never lift off (normal throw number 0.75) and stick and slip all along;

@@ -1,7 +1,7 @@
 """Sideways-sliding population: CPU time per grain and agreement with an independent event-driven reference.
 
 Point masses on a 3 degree incline vibrating at Gamma_v = 1.3 (lift-off once a period), started on the
-plane with 1-5 cm/s sideways (issue 13). Each grain gets at most ``--cap`` CPU seconds (a run past it
+plane with 1-5 cm/s sideways. Each grain gets at most ``--cap`` CPU seconds (a run past it
 counts as stalled), so the script also measures code that hangs.
 
 Run: python benchmarks/bench_grain_sliding.py [--grains 50] [--duration 0.5] [--cap 30] [--rotation]

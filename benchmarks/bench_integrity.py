@@ -1,4 +1,4 @@
-"""What the import-time integrity check costs (issue 23 item 2).
+"""What the import-time integrity check costs.
 
 Each sample is a fresh interpreter importing a set of generated modules, timed inside
 the process from ``import symmech.generated`` on (numpy and numba imported before); the baseline imports the same

@@ -2,7 +2,7 @@
 
 Part 1, the README's main job (``symmech run scenes/grain_default.toml --out DIR``), each
 contender a fresh interpreter, interleaved over ``--repeats`` (>= 5) rounds: ``python -c pass``
-(interpreter start), ``python -c "import numpy, scipy, matplotlib"`` (the baseline of issue 14:
+(interpreter start), ``python -c "import numpy, scipy, matplotlib"`` (the baseline:
 the main job should take under 4x its time), ``symmech run`` with the scene's default plots (on the
 engine built ahead of time when ``symmech warm`` built it), the same on numba's cache
 (``SYMMECH_AHEAD_OF_TIME=0``) and with ``--no-plots``, the same run through ``main(argv)`` called from Python (without the command

@@ -1,5 +1,5 @@
 """Elastic trolley: what accuracy costs in time (work-precision, stiff rollers), and the compiled engine
-against the Python one (issue 20 item 3).
+against the Python one.
 
 ``stiff`` (default part): a 10 kg trolley on rollers of 1e8 N/m (fastest mode ~5000 rad/s, damped) along
 the paper's helix, t in [0, T]. Methods: Radau and BDF with the analytic Jacobian of the invariants, Radau

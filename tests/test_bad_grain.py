@@ -1,4 +1,4 @@
-"""Bad grain scenes: every one refused before any work, one line naming the field; issue 11's grain defects."""
+"""Bad grain scenes: every one refused before any work, one line naming the field."""
 import json
 import math
 import re
@@ -129,7 +129,7 @@ def test_corpus_is_large_and_named_uniquely():
 def test_messages_give_value_and_range():
     assert "1e-308 kg is outside [1e-12, 1000] kg" in str(assert_rejected(CASES_BY_ID["mass-underflows-1e-308"],
                                                                           "body.mass"))
-    # A NaN mass is a NaN mass (issue 11: it was reported as "unknown parameter 'nan'").
+    # A NaN mass is a NaN mass (it was reported as "unknown parameter 'nan'").
     assert "nan is not finite" in str(assert_rejected(CASES_BY_ID["mass-nan"], "body.mass"))
     assert "|d| = 2 is not a unit vector" in str(assert_rejected(CASES_BY_ID["direction-vector-not-unit"],
                                                                  "vibration.vector"))
@@ -150,7 +150,7 @@ def test_cli_refuses_in_one_line(tmp_path, replacements, words):
 
 
 def test_unit_vector_direction_equals_the_angle_it_names():
-    """direction = "vector" with (cos 30°, 0, sin 30°) is the bundled throw angle of 30°."""
+    """Direction = "vector" with (cos 30°, 0, sin 30°) is the bundled throw angle of 30°."""
     c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
     as_vector = edits(("vibration.direction", "vector"), ("vibration.angle_deg", DELETE), ("vibration.vector", [c, 0, s]))
     a, b = pipeline.load(BASE).setup.model.vibration, pipeline.load(as_vector).setup.model.vibration
@@ -195,7 +195,7 @@ def test_estimate_of_the_default_scene_is_within_a_factor_of_three_of_the_bounce
 
 
 def test_incline_of_minus_37_7_deg_finishes_or_stops_within_the_budget():
-    """Issue 11: a valid scene on an incline of -37.7 deg for 0.25 s crept for an estimated days."""
+    """A valid scene on an incline of -37.7 deg for 0.25 s crept for an estimated days."""
     scene = pipeline.load(edits(("duration", 0.25), ("surface.alpha_deg", -37.7)))
     ctx = Context(quiet=True, max_time=20.0)
     try:
@@ -268,7 +268,7 @@ def test_progress_reports_the_simulated_time(monkeypatch):
 
 
 def test_fastest_admissible_grain_gives_finite_strict_json(tmp_path):
-    """Issue 11: huge velocities gave NaN/Inf and invalid JSON; the largest admissible ones give finite output."""
+    """Huge velocities gave NaN/Inf and invalid JSON; the largest admissible ones give finite output."""
     data = edits(("duration", 0.02), ("initial.velocity", [100.0, -100.0, 100.0]),
                  ("initial.angular_velocity", [1e4, -1e4, 1e4]))
     scene = pipeline.load(data)

@@ -1,4 +1,4 @@
-"""Bad sweep tables and an unreachable scheduler (issue 23 items 4 and 8): every one refused before any
+"""Bad sweep tables and an unreachable scheduler: every one refused before any
 simulation, one line naming the field or the option, exit 2."""
 import socket
 import subprocess

@@ -1,5 +1,5 @@
 """Whatever the scene file or the command line, symmech answers in one line: exit 2 for a
-user error (naming the file, field or option), never a traceback (issue 11: non-UTF-8 or
+user error (naming the file, field or option), never a traceback (non-UTF-8 or
 deeply nested TOML, a folder as the scene, a missing file crashed with a traceback)."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The compiled elastic engine (issue 20 item 3) against the Python engine, the reference.
+"""The compiled elastic engine against the Python engine, the reference.
 
 Both engines integrate the same equations by Radau IIA with the same step control (the toolkit's port of
 scipy's) and the same tolerances, except that the Python engine's steps are bound by the output spacing and
@@ -19,7 +19,7 @@ from symmech.core import pipeline, scene
 from symmech.trolley import elastic as el
 from symmech.trolley import elastic_scene
 
-# slow: the engine compiles ~60 s of CPU, a third of the default tier's budget (issue 19); the default tier
+# slow: the engine compiles ~60 s of CPU, a third of the default tier's budget; the default tier
 # runs the elastic model on the Python engine, this reference
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_elastic, pytest.mark.xdist_group("test_elastic_compiled")]
 
@@ -218,7 +218,7 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
 
 
 def test_the_assembly_matches_system_evaluate_at_random_states():
-    """q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
+    """Q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
     from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}

@@ -1,4 +1,4 @@
-"""The elastic model's ``auto`` engine (issue 19): the compiled engine when numba's cache holds it, else the
+"""The elastic model's ``auto`` engine: the compiled engine when numba's cache holds it, else the
 Python engine (the reference) while the compiled one is built in the background for the next run, and a
 first compile in the foreground only when the Python engine's estimate exceeds it. No numba compile here:
 the cache state is stubbed."""
@@ -24,7 +24,7 @@ def loaded(engine="auto", method="Radau", t_end=3.0, steps=1000):
 
 @pytest.fixture
 def cold(monkeypatch):
-    """numba's cache without the compiled engine; the background builders started (none really)."""
+    """Numba's cache without the compiled engine; the background builders started (none really)."""
     started = []
     monkeypatch.delenv("SYMMECH_BACKGROUND_BUILD", raising=False)  # tests/conftest.py's
     monkeypatch.setattr(ec.ENGINE, "cold", lambda: True)

@@ -1,4 +1,4 @@
-"""Scene fuzzer over every registered kind (issue 11 item 6), driven by the kinds' schemas.
+"""Scene fuzzer over every registered kind, driven by the kinds' schemas.
 
 Every generated scene — valid ones (fields drawn inside their declared ranges,
 durations cut short) and broken ones (wrong types, out-of-range and non-finite

@@ -1,4 +1,4 @@
-"""Fast from the first second (issue 19): engine `auto`, the one background build per cache, `symmech warm`,
+"""Fast from the first second: engine `auto`, the one background build per cache, `symmech warm`,
 and sweeps that compile once per machine.
 
 The fast tests stand in for numba's cache with ``compiled.ENGINE.cold`` and a temporary lock folder; the slow one
@@ -39,7 +39,7 @@ def scene_file(tmp_path: Path, duration: float, engine: str | None = None) -> Pa
 
 @pytest.fixture
 def cold_cache(tmp_path, monkeypatch):
-    """numba's cache reported empty (and no build ahead of time), the build lock in a temporary folder, and no
+    """Numba's cache reported empty (and no build ahead of time), the build lock in a temporary folder, and no
     builder process started: returns the list of builder command lines that would have been started."""
     started = []
     monkeypatch.delenv("SYMMECH_BACKGROUND_BUILD", raising=False)  # tests/conftest.py's

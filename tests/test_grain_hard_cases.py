@@ -1,4 +1,4 @@
-"""Grains of the bundled separation sweep (scenes/grain_separation.toml) that used to fail (issue 13).
+"""Grains of the bundled separation sweep (scenes/grain_separation.toml) that used to fail.
 
 Before: 12 of 54 grains stopped with an error, 9 with "sliding integration stagnates" (an ellipsoid whose contact
 point is off the vertical through its centre, slipping from rest: the friction force turns the slip direction at

@@ -1,4 +1,4 @@
-"""Regime changes of the grain motion (issue 13): impacts need an approaching contact, flight in local
+"""Regime changes of the grain motion: impacts need an approaching contact, flight in local
 time, spin kept through landing and sliding with a closing energy budget, sliding without stalls or drift
 against an independent event-driven integration, progress callbacks.
 

@@ -1,4 +1,4 @@
-"""Populations and sweeps (issue 14 item 3): Dask equals serial bit for bit, the throw number,
+"""Populations and sweeps: Dask equals serial bit for bit, the throw number,
 the lift-off threshold across a swept plane, the separation chart, and validation first."""
 import math
 
@@ -170,7 +170,7 @@ def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
 
 
 def test_a_grain_that_warns_is_averaged_in_and_listed(monkeypatch):
-    """E.g. a rocking contact (issue 13): the grain's result counts, its warnings go to the summary."""
+    """E.g. a rocking contact: the grain's result counts, its warnings go to the summary."""
     real = pipeline.Scene.run
     calls = []
 
@@ -195,14 +195,14 @@ def test_a_grain_that_warns_is_averaged_in_and_listed(monkeypatch):
     assert any("ran with warnings" in w for w in res.warnings)
 
 
-# --- issue 22 items 2-3: a lazy plan, and statistics with confidence intervals -----------------------------
+# --- a lazy plan, and statistics with confidence intervals -----------------------------
 
 def _eager_set(data: dict, path: str, value) -> None:
     sweep._set(data, path, value, "eager plan")
 
 
 def eager_plan(raw):
-    """Reference: the plan as symmech built it before issue 22 (every grain scene of the sweep in memory,
+    """Reference: the plan as symmech built it before the lazy plan (every grain scene of the sweep in memory,
     the grains of a population drawn in turn from one generator); scenes[k][i][j] lists population k's
     grain scenes at point (i, j)."""
     import copy
@@ -285,7 +285,7 @@ print(run.stderr, end="")
 
 def test_a_sweep_of_ten_million_grains_is_refused_from_its_counts_in_seconds(tmp_path):
     """2 populations x 100,000 grains x 50 points: refused by its estimate without a grain scene built
-    (before issue 22 the plan built them all: minutes and gigabytes)."""
+    (before the lazy plan the plan built them all: minutes and gigabytes)."""
     import subprocess
     import sys
 
@@ -384,7 +384,7 @@ def test_grains_needed_for_a_half_width():
 
 @pytest.mark.slow
 def test_the_bundled_separation_sweep_carries_its_intervals(tmp_path):
-    """scenes/grain_separation.toml: 12 x 12 points x 30 grains per population (minutes on 2 cores)."""
+    """Scenes/grain_separation.toml: 12 x 12 points x 30 grains per population (minutes on 2 cores)."""
     import json
 
     from symmech.core.context import Context

@@ -1,4 +1,4 @@
-"""Layers import one way: no cycle among symmech's modules (issue 20 item 1).
+"""Layers import one way: no cycle among symmech's modules.
 
 The graph is read with ``ast`` from every ``symmech/**.py`` file, counting imports anywhere in a file
 (module level and inside functions alike: a lazy import still ties the two layers together).

@@ -1,4 +1,4 @@
-"""Lazy imports: a command loads only what it needs (the fast main job, issue 14 item 6).
+"""Lazy imports: a command loads only what it needs.
 
 Each case runs in a fresh interpreter and reports which heavy packages ended up in
 ``sys.modules``; the expected sets are written out, so a new eager import fails here.

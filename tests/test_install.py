@@ -1,5 +1,5 @@
 """A plain (non-editable) install runs every command from a folder outside the checkout
-(issue 11 item 4: `errata`, `latex smm:...` and `codegen --check` read the repository's
+(`errata`, `latex smm:...` and `codegen --check` read the repository's
 scenes/ through ``Path(__file__).parents`` and failed after ``pip install .``).
 
 Slow: builds a wheel, installs it into a fresh venv (system site-packages give numpy,
@@ -59,7 +59,7 @@ def symmech(installed, *args, timeout=900) -> subprocess.CompletedProcess:
 
 
 def test_main_job_and_a_compile_run_without_a_c_compiler(installed, tmp_path):
-    """Issue 14: a machine without a C compiler runs everything. With only the venv's bin on PATH (no cc, gcc or
+    """A machine without a C compiler runs everything. With only the venv's bin on PATH (no cc, gcc or
     clang reachable, CC pointing nowhere) and an empty numba cache, the README's main job answers at once (its
     first run: the Python engine, no builder in tests), and a compiled kernel of the installed package compiles
     and is cached (numba emits machine code through LLVM, no C toolchain; the grain engine's compile is the same

@@ -1,4 +1,4 @@
-"""Every import of a generated module checks its body hash, by any path (issue 23 item 2).
+"""Every import of a generated module checks its body hash, by any path.
 
 Each case copies ``generated/`` to a temporary folder, appends one harmless line to one
 module, and in a fresh interpreter makes that copy the ``symmech.generated`` package
@@ -137,7 +137,7 @@ def test_a_mechanism_run_imports_no_generated_module(tmp_path):
 
 
 def test_codegen_regenerates_an_edited_module(tmp_path):
-    """codegen reads the files it checks without importing them: it names and rewrites an edited module."""
+    """Codegen reads the files it checks without importing them: it names and rewrites an edited module."""
     folder = _edited_copy(tmp_path, "trolley_printed")
     check, write = ["codegen", "--check", "--dir", str(folder)], ["codegen", "--dir", str(folder)]
     code = f"from symmech.cli import main\nprint(main({check!r}), main({write!r}))"

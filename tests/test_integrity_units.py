@@ -1,5 +1,5 @@
-"""symmech.core.integrity in-process: the header, the body hash, the per-process cache, the import
-hook's finder and loader, and the atomic write (issue 23 item 1: these kill mutants that the
+"""Symmech.core.integrity in-process: the header, the body hash, the per-process cache, the import
+hook's finder and loader, and the atomic write (these kill mutants that the
 fresh-interpreter tests of test_integrity.py cannot see). References are hand-written header lines
 and hashlib, never the module's own functions."""
 from __future__ import annotations

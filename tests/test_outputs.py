@@ -1,4 +1,4 @@
-"""Transactional, self-describing outputs (issue 11 item 2) through the probe kind.
+"""Transactional, self-describing outputs through the probe kind.
 
 Each test names the defect it guards: before, a failed run left the previous
 summary beside new partial files, an interrupted run a truncated CSV, a full disk

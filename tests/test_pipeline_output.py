@@ -1,5 +1,5 @@
 """The output transaction of symmech.core.pipeline in-process: the --out checks, the lock, the
-rename into place and the clean-up of leftovers (issue 23 item 1: these kill mutants that the
+rename into place and the clean-up of leftovers (these kill mutants that the
 child-process tests of test_outputs.py cannot see). Expected messages are written out by hand."""
 from __future__ import annotations
 

@@ -7,7 +7,7 @@ from symmech.cli import main
 from symmech.core import emit
 from symmech.smm.derive import bundled_scenes, module_specs
 
-BASE = """kind = "mechanism"
+BASE = """Kind = "mechanism"
 [parameters]
 m = {value = 1.0, unit = "kg"}
 [[coordinates]]
@@ -201,7 +201,7 @@ def test_parameterless_scene_gets_a_constant_module(tmp_path):
 
 @pytest.mark.slow
 def test_large_chain_scene_runs(tmp_path):
-    """Issue 11: `symmech run scenes/mechanism_chain_large.toml` failed after a minute with
+    """`symmech run scenes/mechanism_chain_large.toml` failed after a minute with
     "precision: unknown field"; it runs (3000 DOF, dense) and its omega^2 match the closed form."""
     import math
 

@@ -119,7 +119,7 @@ def test_large_chain_sparse_assembly():
 
 @pytest.mark.parametrize("K", [1e16, 1e18])
 def test_stiff_loop_spring_keeps_real_modes_elastic(K):
-    """Issue 13: with a loop-closing spring K >= 1e16 the clamped-chain modes (omega^2 = 100, 300)
+    """With a loop-closing spring K >= 1e16 the clamped-chain modes (omega^2 = 100, 300)
     were reported as rigid-body modes (threshold 100 eps max omega^2 >= 222). Rigid modes are now the
     nullity of the Jacobi-scaled stiffness: none here; the spread is reported and warned about."""
     s = run_model(spring_chain([1.0] * 3, [100.0] * 3, end_stiffness=K))

@@ -1,4 +1,4 @@
-"""Issue 13: equilibrium preloads on numeric geometry. The symbolic solve of eq. (5) for the
+"""Equilibrium preloads on numeric geometry. The symbolic solve of eq. (5) for the
 tensions of ``preload = "equilibrium"`` springs divided by a G entry that is zero up to round-off
 (~1e-16) in about one random mechanism in fifty (27 of 1131 below, before): the generated c then
 disagreed with the numeric assembly. The rows are now eliminated in the order of numeric partial

@@ -1,4 +1,4 @@
-"""SMM at scale (issue 14 item 5): the vectorised graph form (11) of symmech.smm.structural equals
+"""SMM at scale: the vectorised graph form (11) of symmech.smm.structural equals
 the term-list assembly of symmech.smm.forms on planar mechanisms (a, b, c, its preload and gravity
 parts, dPi/dq, to 1e-13 of each matrix's scale), and large chains match their closed forms."""
 import math
@@ -16,7 +16,7 @@ from test_smm_pivot import random_scene, tension_error
 
 
 def pendulum(n: int, k: float = 50.0) -> dict:
-    """n links of length l hanging from O, relative angles, bobs m, torsion springs k, gravity."""
+    """N links of length l hanging from O, relative angles, bobs m, torsion springs k, gravity."""
     points = [{"name": "O", "at": [0, 0]}]
     points += [{"name": f"P{i}", "from": "O" if i == 0 else f"P{i - 1}", "vector": [0, "-l"],
                 "turns": [f"q{j}" for j in range(i + 1)]} for i in range(n)]

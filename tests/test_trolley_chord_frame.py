@@ -1,6 +1,5 @@
 """The case-2 body frame of the rigid trolley (symmech.trolley.model: chord_point, chord_rotation,
-local_curvature_frame, _stencil, _weights) against independent references (issue 23 item 1,
-mutation testing).
+local_curvature_frame, _stencil, _weights) against independent references (mutation testing).
 
 On a circular helix (radius R, rise λ per radian, r² = R² + λ², X2 up) the front axle's arc
 length s_A = s + Δ solves 2 R² (1 - cos(Δ/r)) + (λ Δ / r)² = l² (found here by bisection); the body

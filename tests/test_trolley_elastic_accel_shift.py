@@ -1,4 +1,4 @@
-"""Issue 22 item 5: the frequency shift by the deflection under the frame's angular acceleration.
+"""The frequency shift by the deflection under the frame's angular acceleration.
 
 A radial cantilever (the beam of tests/test_trolley_elastic_modal.py: L = 1 m, ρA = 2 kg/m,
 EI = 0.5 / 1 N m² flapwise / in plane) rooted on the rotation axis, the frame at rest and

@@ -1,4 +1,4 @@
-"""Issue 23 item 6: `[elastic.initial]`, the state of the elastic coordinates at t = 0.
+"""`[elastic.initial]`, the state of the elastic coordinates at t = 0.
 
 Free vibrations of a trolley at rest on a straight level track (no gravity, rigid rollers
 unless said): a beam started in one of its own modes vibrates in that mode alone, so the
@@ -149,7 +149,7 @@ def test_initial_state_of_a_rigid_part_is_refused(effects, initial, field):
 def test_cli_refuses_a_bad_initial_state_in_one_line(tmp_path):
     from badinput import cli_rejects
 
-    text = """kind = "trolley"
+    text = """Kind = "trolley"
 [track]
 type = "expression"
 x = "s"

@@ -1,4 +1,4 @@
-"""The elastic trolley as a user capability (issue 10): energy balance with the work of the track
+"""The elastic trolley as a user capability: energy balance with the work of the track
 forces, prescribed traction, the warnings where the model's assumptions fail, the bundled scene."""
 import copy
 import sys

@@ -1,4 +1,4 @@
-"""Issue 22 item 4: the modes of the elastic model say what they are and keep their identity.
+"""The modes of the elastic model say what they are and keep their identity.
 
 A designed crossing: a cantilever rooted at the centre of a level circle (R = 2 m), along x1,
 flapwise (plane 1, along the vertical rotation axis x2) softer than in-plane (plane 2, x3):
@@ -40,7 +40,7 @@ def tracked():
 
 
 def _first_of_plane(modes, plane):
-    """mode_id (0-based) dominated by the first mode of ``plane`` at the first sample."""
+    """Mode_id (0-based) dominated by the first mode of ``plane`` at the first sample."""
     k, = np.flatnonzero((modes["plane"][0] == plane) & (modes["mode_number"][0] == 1))
     return k
 

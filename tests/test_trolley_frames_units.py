@@ -1,5 +1,5 @@
 """The rotation-minimising frame and the turn angle of symmech.trolley.model against closed forms on
-a circular helix (issue 23 item 1, mutation testing). On a helix of radius R and rise λ per radian
+a circular helix (mutation testing). On a helix of radius R and rise λ per radian
 (r² = R² + λ²) the curvature is κ = R / r², the torsion τ = λ / r², and the rotation-minimising
 normal turns against the Frenet normal N at the rate -τ: n = cos ψ N + sin ψ B with ψ' = -τ, so
 Ω = [0, κ sin ψ, κ cos ψ] and Ω' = [0, -κτ cos ψ, κτ sin ψ]."""

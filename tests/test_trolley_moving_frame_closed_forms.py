@@ -1,5 +1,5 @@
 """The rigid trolley's moving frames (symmech.trolley.model.moving_frame, plan_frames) against closed forms
-(issue 23 item 1, mutation testing of trolley_frames_raw/_plan/_grid).
+(mutation testing of trolley_frames_raw/_plan/_grid).
 
 References written in this file, not read off the code under test:
 * Frenet frame: a curve given by its curvature κ(s) and torsion τ(s), its frame (t, N, B) and position

@@ -1,5 +1,5 @@
 """Kinematics and reactions of the rigid trolley's body (symmech.trolley.model.point_coefficients,
-body_motion, the reactions) against independent references (issue 23 item 1, mutation testing).
+body_motion, the reactions) against independent references (mutation testing).
 
 The body frame is written by hand: the Frenet frame of a circular helix (radius R, rise λ per radian,
 r² = R² + λ²: κ = R / r², τ = λ / r²) turned about x3 by φ(s) = φ0 + φ1 s + φ2 s², so the direction
@@ -54,7 +54,7 @@ def _frame(s):
 
 
 def _d(f, t, h, k):
-    """k-th derivative (k = 1, 2) of f at t by 4th-order central differences with step h."""
+    """K-th derivative (k = 1, 2) of f at t by 4th-order central differences with step h."""
     w = {1: (1 / 12, -2 / 3, 0, 2 / 3, -1 / 12), 2: (-1 / 12, 4 / 3, -5 / 2, 4 / 3, -1 / 12)}[k]
     return sum(wj * f(t + j * h) for wj, j in zip(w, range(-2, 3))) / h**k
 

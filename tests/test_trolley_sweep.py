@@ -1,4 +1,4 @@
-"""Vehicle design sweeps (issue 22 item 1): a point's numbers equal those of a direct run of the scene with
+"""Vehicle design sweeps: a point's numbers equal those of a direct run of the scene with
 the same fields set, the comfort margin against hand-built cases, bad [sweep] tables named before any run,
 the command line's outputs, and a LocalCluster equal to the serial run bit for bit (slow tier)."""
 import copy

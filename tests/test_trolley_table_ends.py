@@ -1,4 +1,4 @@
-"""Issue 23 item 3: a motion may use a point-table track from its first point to its last.
+"""A motion may use a point-table track from its first point to its last.
 
 The case 2 differences for Λ*', Λ*'' are one-sided at the ends of the run's arc-length
 range; references are the closed form of a catenary y = a cosh(x / a), by arc length

@@ -1,4 +1,4 @@
-"""A numba twin's ``rhs(t, y, p)`` / ``jac(t, y, p)`` called from Python at C speed (issue 20).
+"""A numba twin's ``rhs(t, y, p)`` / ``jac(t, y, p)`` called from Python at C speed.
 
 A call into any numba dispatcher costs ~1.45x JiTCODE's whole C call (numba types its arguments), so a
 dispatcher cannot return a new array within 2x of it. The C extension ``_fastcall.c`` (beside this file)

@@ -63,7 +63,7 @@ INITIAL = Table("the state at t = 0: offsets added to the quasi-static state the
                        max_items=100, default=[]),
 }, default={})
 
-SCHEMA = Table("elastic model of the trolley (seed 002, issue 10)", {
+SCHEMA = Table("elastic model of the trolley (seed 002)", {
     "effects": Table("which elastic effects to include", {
         "rollers": Bool("elastic rollers (the five roller DOFs)", default=True),
         "body": Bool("elastic beams (else they are rigid masses)", default=True),
