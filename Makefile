@@ -1,4 +1,4 @@
-.PHONY: install codegen check test slow bench mutate mutate-check
+.PHONY: install codegen check lint test slow bench mutate mutate-check mutate-check
 PY ?= python
 
 install:
@@ -9,6 +9,10 @@ codegen:
 
 check:
 	$(PY) -m symmech codegen --check
+
+# ruff, with the rules pinned in pyproject.toml; .ci/run runs it
+lint:
+	$(PY) -m ruff check symmech tests benchmarks tools
 
 test:
 	$(PY) -m pytest

@@ -76,8 +76,8 @@ def composed_expressions(cse):
 
 def hand_numpy(th, dth, ddth, v0, dv0):
     """The same chain written directly with numpy arrays."""
-    (t1, t2, t3), (d1, d2, d3), (dd1, dd2, dd3) = th, dth, ddth
-    s1, s2, s3, c1, c2, c3 = np.sin(t1), np.sin(t2), np.sin(t3), np.cos(t1), np.cos(t2), np.cos(t3)
+    (t1, _, t3), (d1, d2, d3), (dd1, dd2, dd3) = th, dth, ddth
+    s1, s3, c1, c3 = np.sin(t1), np.sin(t3), np.cos(t1), np.cos(t3)
     W = np.stack([d1 + s3 * d2, c1 * c3 * d2 + s1 * d3, -s1 * c3 * d2 + c1 * d3], axis=1)
     dW = np.stack([dd1 + s3 * dd2 + c3 * d3 * d2,
                    c1 * c3 * dd2 + s1 * dd3 - s1 * c3 * d1 * d2 - c1 * s3 * d3 * d2 + c1 * d1 * d3,

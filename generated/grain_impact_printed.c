@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a2fe40b7dab70c9a9754e2bffff551fc063ed96ff87c58d03183c48eecb4a853
-// source key a4115810ad420ef46a38d3dcbf839c034e93ce8c60a99371a96c0cd66bdf2338
+// source key b2c376b18a43731a07ad686f9bbf850e067f45025fe9a7d1a4711ee9bf364825
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1e78bff939177525602fd5c3c39332e2176d37ba605e4888d528bd35a45645ea
-# source key ffab85d0d015f4bdb142392ea76548f4d93390f6ce8f69cc2fb99dabf5b5ae70
+# source key 1cc771151a0f48afc7100ea3c665fe9a8c151d3503e22acdb8fe48caa6594fe2
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

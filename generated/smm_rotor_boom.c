@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7bcd833a0c73cf2bc8d4dd614d08642e475383726d196cd2dffda76728f3f9da
-// source key dfe1b4374f4d21a59f62a138775755854dcb6a5934330b31ac95fea9b5d3cca5
+// source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

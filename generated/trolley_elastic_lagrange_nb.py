@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 68042afcb72ecbcd4848513170552ef4d8496240fb3816e210a1cdd457c75493
-# source key 427fb2d7505cda11afb1aa0a62c2859ed3250a4aea0289b07fe44144ab3c86ab
+# source key 79f5d9c8e5a49ff31fb0b7a9b771deb6f4713528d172e23f0bf95f06fc291d07
 # body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
-# source key c64863aef878864508d7b24438b0be96d7854f159da3bd9c6d748df2ec26ed8d
+# source key 9c68d61d7a106e41a4ee29879ea42b1447716e81c45adfc04ab9edbabe984ecb
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 02aa698f18b0313e496d4bbeb93ca65a79a62822646b0882ed8dd7017e53e124
-# source key bf9cb0c59e767ce9d66453b04f1db3d4969c9defd7d8e8c8ec7420a6144f494f
+# source key 96e36a05de5ffacb6f19fff366ac356beacf459a1d225d85eb1194adf9f01f58
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

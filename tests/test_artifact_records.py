@@ -6,7 +6,6 @@ import json
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -115,7 +114,7 @@ def build(monkeypatch, tmp_path):
     monkeypatch.setattr(artifacts, "_warned", set())
     source = tmp_path / "loop.py"
     source.write_text("x = 1\n")
-    b = aot.Build("probe", [compiled.__file__], lambda: {})
+    b = aot.Build("probe", [compiled.__file__], dict)
     so, record = b.paths()
     so.parent.mkdir(parents=True)
     so.write_bytes(b"not an extension module" * 100)
@@ -164,7 +163,7 @@ def test_a_refused_build_is_dropped_after_one_warning(build, damage, capsys):
 
 def test_no_build_no_warning(monkeypatch, tmp_path, capsys):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    b = aot.Build("probe", [compiled.__file__], lambda: {})
+    b = aot.Build("probe", [compiled.__file__], dict)
     assert b.load() is None and not b.refused and capsys.readouterr().err == ""
 
 

@@ -178,7 +178,7 @@ def kinked():
 
 def test_a_speed_with_a_kink_is_not_tabulated():
     """At the kink the spline of ω, v0 misses by O(h): halving no longer gains 16x, above INTERP_NOISE."""
-    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+    from symmech.trolley import elastic_compiled as ec
 
     setup = kinked()
     assert ec.frame_table(setup.system, setup.drive, setup.t, 1e-6) is None

@@ -19,8 +19,11 @@ G = 9.81
 RADIUS = 1e-3
 
 
+NO_ROTATION = motion.Effects(rotation=False)  # frozen: one instance serves every default
+
+
 def sphere_model(gamma, e, freq=20.0, direction=(0.0, 0.0, 1.0), law=None, mu=0.5, phase=0.0,
-                 effects=motion.Effects(rotation=False), g_k=(0.0, 0.0, -G)):
+                 effects=NO_ROTATION, g_k=(0.0, 0.0, -G)):
     w = 2 * math.pi * freq
     amp = gamma * G / w**2
     law = law or ImpactLaw("coulomb", e_n=e, e_t=0.0, mu=0.0, check_printed=False)

@@ -29,7 +29,7 @@ def _module_text(body: str = BODY, version: str = __version__) -> str:
 
 def test_with_header_writes_the_three_header_lines_then_the_body():
     assert integrity.with_header(BODY, INPUTS, KEY) == _module_text()
-    assert integrity.sha256("é") == hashlib.sha256("é".encode("utf-8")).hexdigest()
+    assert integrity.sha256("é") == hashlib.sha256("é".encode()).hexdigest()
 
 
 def test_split_reads_a_header_only_at_the_start_and_only_with_full_hashes():
@@ -120,14 +120,14 @@ def test_used_modules_reads_the_recorded_hash_of_package_modules_only(tmp_path, 
     assert used["fake_a"] == hashlib.sha256(b"z = 0\n").hexdigest()
     assert used["fake_b"] == "no header"
     assert not {"fake_e", "generatedfake_c", "fake_d"} & set(used)
-    assert not any(name.startswith("symmech.") or name.startswith(".") for name in used)
+    assert not any(name.startswith(("symmech.", ".")) for name in used)
 
 
 def test_atomic_write_replaces_the_file_readable_by_all_and_leaves_nothing_else(tmp_path):
     path = tmp_path / "m.py"
     path.write_text("old")
     integrity.write_atomic(path, "é\r\nnew\n")
-    assert path.read_bytes() == "é\r\nnew\n".encode("utf-8")
+    assert path.read_bytes() == "é\r\nnew\n".encode()
     assert os.stat(path).st_mode & 0o777 == 0o644
     assert [p.name for p in tmp_path.iterdir()] == ["m.py"]
 

@@ -34,7 +34,7 @@ def test_chain_fixed_free(n):
 @pytest.mark.parametrize("n", [2, 5])
 def test_chain_free_free(n):
     k, m = 150.0, 0.7
-    expected = [2 * k / m * (1 - math.cos(j * math.pi / n)) for j in range(0, n)]
+    expected = [2 * k / m * (1 - math.cos(j * math.pi / n)) for j in range(n)]
     w2 = omega2(chain(n, "free-free"))
     assert abs(w2[0]) < 1e-10 * w2[-1]
     np.testing.assert_allclose(w2[1:], expected[1:], rtol=RTOL)

@@ -38,7 +38,7 @@ def test_tables_reproduced_to_printed_digits_except_one(paper_run):
 
 
 def _decimals(row):
-    for table, q, case, t, value, decimals in tables.entries():
+    for _table, q, case, t, _value, decimals in tables.entries():
         if (q, case, t) == (row["quantity"], row["case"], row["t"]):
             return decimals
     raise KeyError(row)
@@ -87,7 +87,6 @@ def test_errata_records_for_the_trolley():
 
 
 def test_exact_lstar_derivative_agrees_with_fine_differences():
-    import copy
 
     from symmech.trolley import model, scene
 

@@ -31,7 +31,7 @@ import tempfile
 import warnings
 from pathlib import Path
 from types import ModuleType
-from typing import Callable
+from collections.abc import Callable
 
 from symmech.core import artifacts, integrity
 from symmech.core.build import file_lock

@@ -226,7 +226,7 @@ class Index:
         return integrity.with_header(body, integrity.sha256(body), "0" * 64)  # no source key: always rebuilt
 
     @classmethod
-    def read(cls, directory: Path) -> "Index | None":
+    def read(cls, directory: Path) -> Index | None:
         """The index in ``directory``, or None when it is missing, edited or unreadable."""
         path = Path(directory) / INDEX
         if integrity.problem(path) is not None:

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 from symmech.core.scene import SymmechError
 
 DEFAULT_MAX_TIME = 3600.0  # s; the CLI's --max-time
-_ACTIVE: ContextVar["Context | None"] = ContextVar("symmech_run_context", default=None)
+_ACTIVE: ContextVar[Context | None] = ContextVar("symmech_run_context", default=None)
 
 
-def active() -> "Context | None":
+def active() -> Context | None:
     """The context of the run in progress on this thread (``with ctx.active():``), or None."""
     return _ACTIVE.get()
 

@@ -54,7 +54,7 @@ class NamedMatrix:
         if len(set(names)) != len(names):
             raise ValueError(f"{self.name}: duplicate argument names in {names}")
         declared = {a.symbol for a in self.args}
-        missing = sorted((s.name for s in self.matrix.free_symbols - declared))
+        missing = sorted(s.name for s in self.matrix.free_symbols - declared)
         if missing:
             raise ValueError(
                 f"{self.name}: free symbols not declared as arguments: {', '.join(missing)}"
@@ -87,7 +87,7 @@ class ModuleSpec:
     doc: str
     source: str
     functions: tuple[NamedMatrix, ...] = field(default_factory=tuple)
-    dynamics: "Dynamics | None" = None  # emitted as rhs(t, y, p), jac(t, y, p), STATE, PARAMS
+    dynamics: Dynamics | None = None  # emitted as rhs(t, y, p), jac(t, y, p), STATE, PARAMS
 
     def __post_init__(self):
         object.__setattr__(self, "functions", tuple(self.functions)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass
 
-_ENGINES: dict[str, "Engine"] = {}
+_ENGINES: dict[str, Engine] = {}
 _ALL = False  # every engine module imported
 
 

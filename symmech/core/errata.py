@@ -9,7 +9,7 @@ is typed in, every difference is computed.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

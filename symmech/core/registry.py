@@ -21,11 +21,12 @@ import importlib
 import pkgutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 from symmech.core.schema import Table
 
-_KINDS: dict[str, "Kind"] = {}
+_KINDS: dict[str, Kind] = {}
 _ALL = False  # every scene module imported
 
 

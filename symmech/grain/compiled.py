@@ -53,7 +53,7 @@ import numpy as np
 from symmech.core import aot, artifacts, build, layout
 from symmech.core.scene import SymmechError
 from symmech.grain import compiled_layout, motion, sliding
-from symmech.grain.compiled_layout import (
+from symmech.grain.compiled_layout import (  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
     LAYOUTS, PARAMS, STATE, CARRY, IMPACT_ROW, C_AT, X_AT, LAW_COULOMB, LAW_PRINTED, INT, DONE, MORE, STALLED,
     SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS,
     W_PRINTED_RESIDUAL, IMPACT_WIDTH, TRAJECTORY_WIDTH, PHASES_PER_CALL, COLD_COMPILE_SECONDS, ZENO_IMPACTS,

@@ -160,7 +160,7 @@ def _trig_roots(k, tol, max_iter=12):
 
     iterations = 0
     active = np.flatnonzero(np.any(real, axis=1))
-    for iterations in range(1, max_iter + 1):
+    for iterations in range(1, max_iter + 1):  # noqa: B007 (the count is returned)
         if active.size == 0:
             break
         r = roots[active]

@@ -84,7 +84,7 @@ class Model:
         inertia.flags.writeable = False  # shared by all its users
         return inertia
 
-    def active(self) -> "Model":
+    def active(self) -> Model:
         """The model the simulation runs: parameters of switched-off effects zeroed (no code runs for them)."""
         if self.effects.vibration and self.effects.friction:
             return self  # nothing to zero (a copy costs as much as the rest of a short compiled run's set-up)

@@ -262,7 +262,7 @@ def interpret(text: str, values: dict, where: str = "<expression>", funcs=None, 
     return ev(_parse(text, where))
 
 
-def numeric(m: Mechanism) -> "NumericArith":
+def numeric(m: Mechanism) -> NumericArith:
     """Float arithmetic over ``m``'s parameter values."""
     return NumericArith(m.values())
 

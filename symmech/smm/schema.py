@@ -75,7 +75,7 @@ def _principal_axes(path, value):
     if not isinstance(value, list) or len(value) != 3:
         raise SceneError(path, f"expected three axes of 3 components, got {value!r}"[:200])
     axes = tuple(_vector(f"{path}[{i}]", v) for i, v in enumerate(value))
-    for i, (v, raw) in enumerate(zip(axes, value)):
+    for i, (_v, raw) in enumerate(zip(axes, value)):
         if len(raw) != 3:
             raise SceneError(f"{path}[{i}]", f"expected 3 components, got {raw!r}"[:200])
     return axes

@@ -206,7 +206,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
     n_roll = len(names)
     K_blocks, held = [], []
     start = 0
-    for index, (pts_b, w_b, beam, xi) in enumerate(parts):
+    for index, (_pts_b, w_b, beam, xi) in enumerate(parts):
         if beam is None or not eff.body:
             start += len(w_b)
             continue
@@ -248,7 +248,7 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
         dA[a, b] = dA[b, a] = 1 + N + idx
     K = np.zeros((N, N))
     D = np.zeros((N, N))
-    for base, kb, zeta in K_blocks:
+    for base, kb, _zeta in K_blocks:
         n = kb.shape[0]
         sl = slice(base, base + n)
         K[sl, sl] = kb

@@ -36,7 +36,7 @@ from scipy.interpolate import CubicSpline
 from symmech.core import build, ode
 from symmech.trolley import elastic as el
 from symmech.trolley import elastic_kernels as ek
-from symmech.trolley.elastic_layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY
+from symmech.trolley.elastic_layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
 INTERP_FRACTION = 1e-3

@@ -19,7 +19,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import elastic as el
 from symmech.trolley.elastic import FORCING
 from symmech.trolley import modal, model
-from symmech.trolley.elastic_schema import MAX_INITIAL_DEFLECTION, SCHEMA
+from symmech.trolley.elastic_schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noqa: F401 (SCHEMA: the kind's table, read here)
 
 
 @dataclass
@@ -326,7 +326,7 @@ def _mode_warnings(modes) -> list:
 def _resonances(setup: Setup, modes) -> list:
     out = []
     f, forcing = modes["f"], modes["forcing"]
-    for j, (name, doc) in enumerate(FORCING):
+    for j, (_name, doc) in enumerate(FORCING):
         fj = forcing[:, j:j + 1]
         near = (fj > 0) & (f > 0) & (np.abs(f - fj) <= setup.resonance_band * fj)
         if near.any():

@@ -49,7 +49,7 @@ def components(system: el.System) -> Components:
         dof[a] = a + 1
         labels[a] = f"roller_{el.ROLLER_NAMES[a]}"
     M0 = system.mass(np.zeros(N))
-    for b, spec in enumerate(system.mdl.beams):
+    for b, _spec in enumerate(system.mdl.beams):
         for p in (1, 2):
             idx = [i for i, name in enumerate(names) if name.startswith(f"beam{b}_p{p}_m")]
             if not idx:

@@ -73,7 +73,7 @@ def _first_bad(s, bad):
     return float(np.asarray(s)[np.argmax(bad)])
 
 
-def moving_frame(track, s, mode: str, plan: "FramePlan | None" = None) -> Frame:
+def moving_frame(track, s, mode: str, plan: FramePlan | None = None) -> Frame:
     """Case 1 frame: x1 along the tangent; ``mode`` "twist" (aircraft angles with the
     track's θ1(s)) or "frenet" (x2 along the principal normal). ``plan`` (from
     :func:`plan_frames`) makes the frame continuous: rolls after the discontinuities it
@@ -136,7 +136,7 @@ class FramePlan:
     mode: str
     at: np.ndarray
     roll: np.ndarray
-    rmf: "RotationMinimising | None" = None
+    rmf: RotationMinimising | None = None
     events: list = field(default_factory=list)
     checked: int = 0
     span: tuple = (-math.inf, math.inf)
