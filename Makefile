@@ -1,4 +1,4 @@
-.PHONY: install codegen check lint test slow bench mutate mutate-check mutate-check
+.PHONY: install codegen check lint test slow bench mutate mutate-check
 PY ?= python
 
 install:
