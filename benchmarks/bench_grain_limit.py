@@ -1,0 +1,309 @@
+"""The grain engine against its limit: spheres through the public API vs a plain-Python exact flight + brentq,
+the layers between a scene and the compiled loop, and a floor measured with the generated kernels alone.
+
+All times are CPU seconds (``time.process_time``: the 2 cores are shared), medians of interleaved repeats
+with min/max; every contender runs once per round. Each sphere's impact times are checked against the
+reference (tolerance 1e-13) beside its time.
+
+- population: N spheres (random start height and speed), each 20 periods, through ``motion_scene.simulate``
+  (the per-grain API), ``compiled.simulate_many`` (2 threads) and the brentq reference: impacts per CPU-second;
+- one sphere, 20 impacts: the same API, ``compiled.simulate``, the compiled loop alone (packed arguments
+  reused: no set-up, no result), the floor and the brentq reference, in ms per run;
+- per-impact breakdown of the floor: root finding (scan + Brent on the exact gap, the generated
+  ``flight_translation_into``) and the impact map (restitution on the relative velocity); bookkeeping is
+  the loop alone minus the floor.
+
+Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+from dataclasses import replace
+
+import numba
+import numpy as np
+
+from timing import Stats, machine, ratio
+
+from bench_grain_motion import exact_flight_brentq, sphere_scene
+
+from symmech.generated import grain_motion_nb as gm_nb
+from symmech.grain import compiled, compiled_loop, motion, motion_scene
+from symmech.grain.compiled_layout import CARRY, IMPACT_WIDTH, PHASES_PER_CALL, STATE, TRAJECTORY_WIDTH
+
+PERIODS = 20.5  # 20 impacts of the period-1 orbit
+XTOL = 1e-12  # brentq's and the floor's time tolerance [s]
+
+
+def cpu_interleaved(contenders: dict, repeats: int, number: int = 1) -> dict[str, Stats]:
+    """As ``timing.interleaved`` in CPU seconds of this process (all threads) per call."""
+    samples = {name: [] for name in contenders}
+    for _ in range(repeats):
+        for name, fn in contenders.items():
+            start = time.process_time()
+            for _ in range(number):
+                fn()
+            samples[name].append((time.process_time() - start) / number)
+    return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
+
+
+# --------------------------------------------------------------------------- the floor: kernels alone
+
+
+@numba.njit(cache=True)
+def _gap(s, t, out):
+    """Gap [m] of the sphere (radius s[15]) at t from the flight state s (16,): the generated exact flight."""
+    gm_nb.flight_translation_into(s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], s[11],
+                                  s[12], s[13], s[14], s[16], t, out)
+    return out[0, 0, 2] - s[15]
+
+
+@numba.njit(cache=True)
+def _brent(s, a, b, fa, fb, xtol, out):
+    """scipy's brentq on the gap in [a, b] with fa * fb < 0: the root [s]."""
+    c, fc, d, e = a, fa, b - a, b - a
+    for _ in range(100):
+        if fb * fc > 0:
+            c, fc, d, e = a, fa, b - a, b - a
+        if abs(fc) < abs(fb):
+            a, b, c, fa, fb, fc = b, c, b, fb, fc, fb
+        tol = 2e-16 * abs(b) + 0.5 * xtol
+        m = 0.5 * (c - b)
+        if abs(m) <= tol or fb == 0.0:
+            return b
+        if abs(e) >= tol and abs(fa) > abs(fb):
+            s1 = fb / fa
+            if a == c:
+                p, q = 2 * m * s1, 1 - s1
+            else:
+                q1, r1 = fa / fc, fb / fc
+                p = s1 * (2 * m * q1 * (q1 - r1) - (b - a) * (r1 - 1))
+                q = (q1 - 1) * (r1 - 1) * (s1 - 1)
+            if p > 0:
+                q = -q
+            p = abs(p)
+            if 2 * p < min(3 * m * q - abs(tol * q), abs(e * q)):
+                e, d = d, p / q
+            else:
+                d, e = m, m
+        else:
+            d, e = m, m
+        a, fa = b, fb
+        b += d if abs(d) > tol else (tol if m > 0 else -tol)
+        fb = _gap(s, b, out)
+    return b
+
+
+@numba.njit(cache=True)
+def _next_impact(s, t_end, step, xtol, out):
+    """The first root of the gap after s[16] (scan at ``step``, Brent), or nan before t_end."""
+    a = s[16]
+    fa = _gap(s, a + 1e-3 * step, out)  # just after the last impact: the grain leaves the plate
+    a += 1e-3 * step
+    while a < t_end:
+        b = min(a + step, t_end)
+        fb = _gap(s, b, out)
+        if fb <= 0.0:
+            return _brent(s, a, b, fa, fb, xtol, out)
+        a, fa = b, fb
+    return math.nan
+
+
+@numba.njit(cache=True)
+def _impact_map(s, t, e, out):
+    """Restitution at t: the flight state s restarts from the contact with -e times the relative velocity."""
+    _gap(s, t, out)
+    for k in range(3):
+        s[k] = out[0, 0, k]
+        s[3 + k] = out[0, 1, k]
+    s[5] = -e * s[5]
+    s[16] = t
+
+
+@numba.njit(cache=True)
+def floor_run(s0, t_end, step, xtol, e, times):
+    """The whole sphere run with the kernels alone: impact times into ``times``; their count."""
+    s = s0.copy()
+    out = np.empty((1, 2, 3))
+    n = 0
+    while n < times.size:
+        t = _next_impact(s, t_end, step, xtol, out)
+        if math.isnan(t):
+            break
+        times[n] = t
+        _impact_map(s, t, e, out)
+        n += 1
+    return n
+
+
+@numba.njit(cache=True)
+def floor_roots(s_at, t_end, step, xtol, times):
+    """Root finding alone: the next impact from each stored post-impact state (rows of s_at)."""
+    out = np.empty((1, 2, 3))
+    for k in range(s_at.shape[0]):
+        times[k] = _next_impact(s_at[k], t_end, step, xtol, out)
+
+
+@numba.njit(cache=True)
+def floor_maps(s_at, times, e):
+    """The impact map alone on stored pre-impact states (rows of s_at) at their impact times."""
+    out = np.empty((1, 2, 3))
+    s = np.empty(s_at.shape[1])
+    for k in range(s_at.shape[0]):
+        s[:] = s_at[k]
+        _impact_map(s, times[k], e, out)
+
+
+def flight_state(model: motion.Model, st: motion.State) -> np.ndarray:
+    """The floor's state (17,): r, v relative, gravity, vibration, radius, t0."""
+    vib = model.vibration
+    return np.array([*st.r, *st.v, *model.g_k, vib.amplitude, vib.omega, vib.phase, *vib.direction,
+                     model.axes[0], st.t])
+
+
+def floor_states(s0, times, e):
+    """The post-impact flight states (n + 1, 17) before each root search of a floor run."""
+    out, s, rows = np.empty((1, 2, 3)), s0.copy(), [s0.copy()]
+    for t in times:
+        _impact_map(s, t, e, out)
+        rows.append(s.copy())
+    return np.array(rows)
+
+
+# --------------------------------------------------------------------------- contenders
+
+
+def sphere_grain(k: int):
+    """Sphere k of the population: the period-1 scene started at a random height (0-0.3 mm) and speed (+-3 %): all stay on bouncing orbits (the reference has no sliding)."""
+    model, st = sphere_scene()
+    rng = np.random.default_rng(k)
+    st = replace(st, r=st.r + np.array([0.0, 0.0, rng.uniform(0, 0.3e-3)]),
+                 v=st.v * rng.uniform(0.97, 1.03))
+    return model, st
+
+
+def scene_of(model, st, num):
+    return motion_scene.GrainScene(model, replace(num, engine="compiled"), st, PERIODS * model.period,
+                                   (0.0, 0.0), {}, {})
+
+
+def loop_alone(model, num, st, t_end):
+    """The compiled loop with its arguments packed once: each call copies the state and carry only."""
+    built = compiled.ENGINE.ahead_of_time()
+    run = built.run if built is not None else compiled_loop.run
+    p = compiled.pack(model.active(), num)
+    y0 = STATE.pack(t=st.t, r=st.r, v=st.v, q=st.q, w=(0.0, 0.0, 0.0))
+    rows = np.empty((int(t_end / num.sample_interval) + 64, TRAJECTORY_WIDTH))
+    imps, warns = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3))
+
+    def call():
+        return run(p, y0.copy(), t_end, rows, imps, warns, CARRY.zeros(), PHASES_PER_CALL)
+    return call
+
+
+def one_sphere(repeats: int):
+    model, st = sphere_scene()
+    T = model.period
+    t_end = PERIODS * T
+    base = motion.Numerics(scan_step=T / 40, sample_interval=T, engine="compiled")
+    ref = np.array([i["t"] for i in motion.simulate(model, replace(base, tolerance=1e-13), st, t_end).impacts])
+    num = replace(base, tolerance=1e-10)
+    sc = scene_of(model, st, num)
+    s0 = flight_state(model, st)
+    times = np.empty(64)
+    loop = loop_alone(model, num, st, t_end)
+    runs = {"public API motion_scene.simulate": lambda: motion_scene.simulate(sc),
+            "compiled.simulate": lambda: compiled.simulate(model, num, st, t_end),
+            "compiled loop alone": loop,
+            "floor: generated kernels + Brent": lambda: floor_run(s0, t_end, T / 40, XTOL, model.law.e_n, times),
+            "plain Python flight + brentq": lambda: exact_flight_brentq(model, st, t_end, XTOL)}
+    n = floor_run(s0, t_end, T / 40, XTOL, model.law.e_n, times)
+    got = {"public API motion_scene.simulate": [i["t"] for i in runs["public API motion_scene.simulate"]().impacts],
+           "compiled.simulate": [i["t"] for i in runs["compiled.simulate"]().impacts],
+           "floor: generated kernels + Brent": times[:n],
+           "plain Python flight + brentq": runs["plain Python flight + brentq"]()}
+    loop()
+    stats = cpu_interleaved(runs, repeats, number=20)
+    print(f"one sphere, {len(ref)} impacts in {PERIODS} periods (CPU ms per run; impact-time error / T):")
+    for label, s in stats.items():
+        g = np.asarray(got.get(label, got["compiled.simulate"]))
+        error = float(np.max(np.abs(g - ref)) / T) if len(g) == len(ref) else math.inf
+        print(f"  {label:<36} {s.text('ms', 1e3)}  error {error:.1e}")
+    brent = stats["plain Python flight + brentq"]
+    for label in ("public API motion_scene.simulate", "compiled.simulate", "compiled loop alone",
+                  "floor: generated kernels + Brent"):
+        print(f"  time / reference's, {label:<34} {stats[label].median / brent.median:6.3f} "
+              f"(reference / this {ratio(brent, stats[label])})")
+    print("  (target: public API <= 0.5 of the reference's time)")
+    return stats, len(ref), s0, times[:n], model
+
+
+def breakdown(stats, impacts, s0, times, model, repeats):
+    """Per impact: the layers between the API and the loop, and the floor's root finding and impact map."""
+    T = model.period
+    pre = floor_states(s0, times, model.law.e_n)  # the flight state before each root search (n + 1, 17)
+    at = np.empty(len(pre))
+    parts = cpu_interleaved({"root finding": lambda: floor_roots(pre, PERIODS * T, T / 40, XTOL, at),
+                             "impact map": lambda: floor_maps(pre[:-1], times, model.law.e_n)}, repeats, number=200)
+    us = 1e6 / impacts
+    api, sim, loop, floor = (stats[k].median * us for k in ("public API motion_scene.simulate",
+                                                            "compiled.simulate", "compiled loop alone",
+                                                            "floor: generated kernels + Brent"))
+    roots, maps = parts["root finding"].median * 1e6 / len(pre), parts["impact map"].median * 1e6 / len(times)
+    print(f"per impact (CPU us, medians; {impacts} impacts a run):")
+    print(f"  public API set-up and results (API - compiled.simulate)  {api - sim:8.2f}")
+    print(f"  compiled.simulate's packing and results (- loop alone)    {sim - loop:8.2f}")
+    print(f"  loop bookkeeping and its flight/contact (loop - floor)    {loop - floor:8.2f}")
+    print(f"  floor: root finding (scan + Brent on the exact gap)       {roots:8.2f}")
+    print(f"  floor: impact map                                         {maps:8.3f}")
+    print(f"  floor, whole run per impact                               {floor:8.2f}")
+    print(f"  -> the API's run per impact is {api / floor:.1f}x the floor's; floor limit "
+          f"{1e6 / floor:,.0f} impacts per CPU-second\n")
+
+
+def population(n: int, repeats: int):
+    grains = [sphere_grain(k) for k in range(n)]
+    T = grains[0][0].period
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    scenes = [scene_of(m, st, num) for m, st in grains]
+    t_end = PERIODS * T
+
+    def api():
+        return sum(len(motion_scene.simulate(sc).impacts) for sc in scenes)
+
+    def many():
+        return sum(len(m.impacts) for m in compiled.simulate_many([m for m, _ in grains], num,
+                                                                 [st for _, st in grains], t_end, workers=2))
+
+    def reference():
+        return sum(len(exact_flight_brentq(m, st, t_end, XTOL)) for m, st in grains)
+
+    runs = {"public API motion_scene.simulate, per grain": api, "compiled.simulate_many, 2 threads": many,
+            "plain Python flight + brentq": reference}
+    counts = {label: run() for label, run in runs.items()}
+    stats = cpu_interleaved(runs, repeats)
+    print(f"population of {n} spheres x {PERIODS} periods (impacts per CPU-second; CPU s per population):")
+    for label, s in stats.items():
+        print(f"  {label:<44} {counts[label] / s.median:>10,.0f} /s  ({counts[label]} impacts; {s.text()})")
+    ref = stats["plain Python flight + brentq"]
+    for label in list(runs)[:2]:
+        print(f"  {label:<44} vs reference: {ratio(ref, stats[label])}")
+    print("  (target: >= 5x the reference, >= 2.5e5 impacts per CPU-second)\n")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="100 spheres instead of 400")
+    p.add_argument("--repeats", type=int, default=5)
+    args = p.parse_args()
+    print(f"machine: {machine()}; numba threads {numba.get_num_threads()}\n")
+    stats, impacts, s0, times, model = one_sphere(args.repeats)
+    breakdown(stats, impacts, s0, times, model, args.repeats)
+    population(100 if args.quick else 400, args.repeats)
+
+
+if __name__ == "__main__":
+    main()
