@@ -167,7 +167,7 @@ def _precision(out: Path, summary: dict) -> dict | None:
         with open(folder / f"{name}.csv", newline="") as fh:
             header, *records = list(csv.reader(fh))
     mine = [_is_chosen(dict(zip(header, cells)), chosen) for cells in records]
-    figures = _diagram(study, name, header, records, mine) if any(mine) else _figures(folder)
+    figures = _diagram(study, name, header, records, mine) if any(mine) else _figures(folder, {})
     return {"folder": str(folder), "reference": study.get("reference", ""), "figures": figures, "header": header,
             "rows": [{"cells": [_cell(c) for c in cells], "chosen": m} for cells, m in zip(records, mine)],
             "own": folder == out}
@@ -185,7 +185,7 @@ def _diagram(study: dict, name: str, header: list[str], records: list[list[str]]
     with tempfile.TemporaryDirectory() as tmp:
         precision.diagram(points, Path(tmp), name, study["tables"][name].get("doc", name), study.get("reference", ""),
                           [p for p, m in zip(points, mine) if m])
-        return _figures(Path(tmp))
+        return _figures(Path(tmp), {})
 
 
 def _cell(text: str) -> str:
@@ -220,14 +220,15 @@ def _is_chosen(row: dict, chosen: dict) -> bool:
     return not ways or any(row.get("method", "").lower().startswith(w) for w in ways)
 
 
-def _figures(out: Path) -> list[tuple[str, str]]:
-    """(title, data URI) of every plot in ``out``: the SVG when there is one, else the PNG."""
+def _figures(out: Path, captions: dict) -> list[tuple[str, str]]:
+    """(caption, data URI) of every plot in ``out``: the SVG when there is one, else the PNG; the caption the run
+    recorded for it (``captions``: {file stem: sentence}), else its file name."""
     figures = []
     for stem in sorted({p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}):
         svg = out / f"{stem}.svg"
         path, mime = (svg, "image/svg+xml") if svg.exists() else (out / f"{stem}.png", "image/png")
         data = base64.b64encode(path.read_bytes()).decode("ascii")
-        figures.append((stem.replace("_", " "), f"data:{mime};base64,{data}"))
+        figures.append((captions.get(stem, stem.replace("_", " ")), f"data:{mime};base64,{data}"))
     return figures
 
 
@@ -312,7 +313,8 @@ def render(out: Path) -> str:
         raw=json.dumps({k: v for k, v in summary.items() if k != "scene"}, indent=2),
         headline=_headline(summary), checks=checks, attention=[c for c in checks if c["verdict"] != "pass"],
         precision=_precision(Path(out), summary), derivations=derived, warnings=summary.get("warnings", []),
-        errata=errata_records(package), figures=_figures(Path(out)), provenance=provenance,
+        errata=errata_records(package), figures=_figures(Path(out), summary.get("captions", {})),
+        provenance=provenance,
         hashes=hashes, hash_source=hash_source)
 
 

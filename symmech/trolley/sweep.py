@@ -507,6 +507,12 @@ def _worst_best(values: np.ndarray, larger_is_worse: bool) -> tuple[int, int]:
     return (hi, lo) if larger_is_worse else (lo, hi)
 
 
+# (pattern of a single run's warning or check, its short label on a chart cell)
+ATTENTION = ((r"sampled at|samples per period", "output sampling"), (r"natural frequenc", "resonance"),
+             (r"energy balance", "energy balance"), (r"small-rotation", "roller rotation"),
+             (r"small-angle", "small-angle range"))
+
+
 def reasons(row: dict, attention: list[str], limits: dict) -> list[tuple[str, str]]:
     """Why a point is not admissible, as (short label for a chart cell, sentence) pairs: its comfort margin below
     0, a reaction beyond its stated limit, a roller reaction changing sign (lift-off), any other warning or
@@ -521,7 +527,7 @@ def reasons(row: dict, attention: list[str], limits: dict) -> list[tuple[str, st
     if lifted:
         out.append(("lift-off", f"roller reaction {', '.join(lifted)} changes sign: the roller would lift off"))
     rest = [a for a in attention if "changes sign" not in a and "comfort envelope" not in a]
-    out += [("check", a) for a in rest]
+    out += [(next((label for pattern, label in ATTENTION if re.search(pattern, a)), "check"), a) for a in rest]
     return out
 
 
@@ -598,10 +604,11 @@ def flat_statement(values: np.ndarray, title: str, unit: str) -> dict | None:
     if spread > FLAT_RTOL * magnitude:
         return None
     mean = float(v.mean())
-    digits = max(1, int(-math.floor(math.log10(FLAT_RTOL))) + 1)
+    shown = f"{mean:.4f}" if unit == "1" else units.format(mean, unit, 5)
+    suffix = "" if unit == "1" else f" {unit}"
     return {"value": mean, "unit": unit, "spread": spread, "tolerance_relative": FLAT_RTOL,
-            "text": f"{title}: {units.format(mean, unit, digits)} everywhere, within the tolerance "
-                    f"(spread {spread:.2g} {unit} ≤ {FLAT_RTOL:g} × {magnitude:.4g} {unit}); not charted"}
+            "text": f"{title}: {shown} everywhere, within the tolerance (its spread over the sweep, "
+                    f"{spread:.2g}{suffix}, is below {FLAT_RTOL:g} of its size); not charted"}
 
 
 def caption(p: Plan, title: str) -> str:
@@ -640,7 +647,7 @@ def decide(p: Plan, table: Table, ok: np.ndarray, why: list) -> dict:
 
     limited = {}
     for k, w in enumerate(why):
-        for label, _ in w:
+        for label in dict.fromkeys(label for label, _ in w):
             limited.setdefault(label, []).append(k)
     return {"objective": objective_text(p), "best": best,
             "admissible": {"count": int(ok.sum()), "of": int(ok.size), "bounds": bounds(ok) if ok.any() else None},
@@ -681,8 +688,6 @@ def answer(p: Plan, table: Table, decision: dict, flat: dict):
                           "every point") for s in flat.values()]
     checks = [Check("points admissible (no warning, no failed check, within the limits)", float(n), "1", "> 0",
                     "pass" if n else "fail")]
-    checks += [Check(f"points limited by {c['reason']} ({_where(p, c['bounds'])})", float(c["points"]), "1",
-                     "0 of the swept points", "warn") for c in decision["limited_by"]]
     warnings = [f"{c['points']} of {total} point(s) limited by {c['reason']} at {_where(p, c['bounds'])}; "
                 f"first: {c['first']}" for c in decision["limited_by"]]
     return headline, checks, warnings

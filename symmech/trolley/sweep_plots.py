@@ -27,10 +27,11 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
             (y_name, y_unit, y_log), = rest
             xe, ye = edges(xs, x_log), edges(ys, y_log)
             _plane(fig, ax, xe, ye, z, ok.reshape(shape), title, unit)
-            _cell_labels(ax, xs, ys, labels, shape)
+            _cell_labels(ax, _centres(xe, x_log), _centres(ye, y_log), labels, shape)
             if best is not None:
                 i, j = np.unravel_index(best, shape)
-                ax.plot(xs[i], ys[j], "*", color="gold", ms=16, mec="k", label="best admissible point")
+                ax.plot(xs[i], ys[j], "*", color="gold", ms=16, mec="k", clip_on=False,
+                        label="best admissible point")
             plotting.set_labels(ax, (x_name, x_unit), (y_name, y_unit))
             ax.set_xlim(xe[0], xe[-1])
             ax.set_ylim(ye[0], ye[-1])
@@ -56,8 +57,14 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
     return written
 
 
+def _centres(e: np.ndarray, log: bool) -> np.ndarray:
+    """The centres (n,) of the cells with edges ``e`` (n + 1,) (geometric on a log axis)."""
+    return np.sqrt(e[:-1] * e[1:]) if log else (e[:-1] + e[1:]) / 2
+
+
 def _cell_labels(ax, xs, ys, labels: list[str], shape) -> None:
-    """What limits each point that is not admissible, written in its cell."""
+    """What limits each point that is not admissible, written at the centre ``xs`` (nx,), ``ys`` (ny,) of its
+    cell (an end cell ends at its point, which would put the text across the frame)."""
     for k, text in enumerate(labels):
         if text:
             i, j = np.unravel_index(k, shape)
