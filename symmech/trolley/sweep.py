@@ -510,7 +510,8 @@ def _worst_best(values: np.ndarray, larger_is_worse: bool) -> tuple[int, int]:
 # (pattern of a single run's warning or check, its short label on a chart cell)
 ATTENTION = ((r"sampled at|samples per period", "output sampling"), (r"natural frequenc", "resonance"),
              (r"energy balance", "energy balance"), (r"small-rotation", "roller rotation"),
-             (r"small-angle", "small-angle range"))
+             (r"small-angle", "small-angle range"), (r"consistent order", "model order"),
+             (r"opposite sign of the rigid", "sign vs rigid"))
 
 
 def reasons(row: dict, attention: list[str], limits: dict) -> list[tuple[str, str]]:
