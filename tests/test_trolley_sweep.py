@@ -12,6 +12,7 @@ from badinput import DELETE, SCENES, bundled, edited
 from outcontract import assert_valid_output
 from symmech import cli
 from symmech.core import pipeline
+from symmech.core import sweep as core_sweep
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import sweep, sweep_plots
 
@@ -196,8 +197,8 @@ def test_local_cluster_equals_serial_bit_for_bit():
 
 
 def test_chart_cells_sit_midway_between_the_swept_values_and_stay_within_the_range():
-    np.testing.assert_allclose(sweep_plots.edges(np.array([1.0, 2.0, 4.0]), False), [1.0, 1.5, 3.0, 4.0], rtol=1e-15)
-    np.testing.assert_allclose(sweep_plots.edges(np.array([1.0, 10.0, 100.0]), True),
+    np.testing.assert_allclose(core_sweep.edges(np.array([1.0, 2.0, 4.0]), False), [1.0, 1.5, 3.0, 4.0], rtol=1e-15)
+    np.testing.assert_allclose(core_sweep.edges(np.array([1.0, 10.0, 100.0]), True),
                                10 ** np.array([0.0, 0.5, 1.5, 2.0]), rtol=1e-14)
 
 

@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 
 from badinput import edited
-from symmech.core import pipeline, plotting
+from symmech.core import pipeline
+from symmech.core import plotting
+from symmech.core import sweep as core_sweep
 from symmech.trolley import sweep
 from test_trolley_sweep import RIGID, TINY, outcomes, swept
 
@@ -67,8 +69,9 @@ def test_the_best_point_is_the_same_on_every_chart(figures):
 
 def test_a_flat_quantity_is_stated_not_colour_mapped():
     """A spread of 2e-4 on 1.0001 (below 1e-3 of it) is stated as one number; a spread of 1 % is charted."""
-    flat = sweep.flat_statement(np.array([1.00005, 1.00025, 1.0001]), "largest dynamic amplification", "1")
+    flat = core_sweep.flat_statement(np.array([1.00005, 1.00025, 1.0001]), "largest dynamic amplification", "1",
+                                     1e-3)
     assert flat["value"] == pytest.approx(1.00013333, rel=1e-8) and flat["spread"] == pytest.approx(2e-4, rel=1e-9)
     assert flat["text"].startswith("largest dynamic amplification: 1.0001 everywhere, within the tolerance")
-    assert sweep.flat_statement(np.array([1.0, 1.01]), "amplification", "1") is None
-    assert sweep.flat_statement(np.array([np.nan, 2.0]), "amplification", "1") is None  # one finite value
+    assert core_sweep.flat_statement(np.array([1.0, 1.01]), "amplification", "1", 1e-3) is None
+    assert core_sweep.flat_statement(np.array([np.nan, 2.0]), "amplification", "1", 1e-3) is None  # one finite

@@ -568,7 +568,7 @@ def result(p: Plan, outcomes: list) -> Result:
             worst, best = _worst_best(metric.column(name), larger)
             extremes[name] = {"worst": at(worst), "best": at(best)}
     flat = {name: statement for name, title, _ in CHARTS if name in names
-            for statement in [flat_statement(metric.column(name), title, unit_of_column(cols, name))] if statement}
+            for statement in [core_sweep.flat_statement(metric.column(name), title, unit_of_column(cols, name), FLAT_RTOL)] if statement}
     decision = decide(p, table, ok, why)
     best = decision["best"]
     failed = [{"index": [int(v) for v in np.unravel_index(k, p.shape)][:len(p.axes)], "error": o[1]}
@@ -593,23 +593,6 @@ def result(p: Plan, outcomes: list) -> Result:
 
 def unit_of_column(cols: list[Column], name: str) -> str:
     return next(c.unit for c in cols if c.name == name)
-
-
-def flat_statement(values: np.ndarray, title: str, unit: str) -> dict | None:
-    """``values`` (n,) stated as one number when their spread is within FLAT_RTOL of their magnitude (a chart of
-    them would colour round-off); None when they vary, or fewer than two are finite."""
-    v = values[np.isfinite(values)]
-    if v.size < 2:
-        return None
-    spread, magnitude = float(v.max() - v.min()), float(np.abs(v).max())
-    if spread > FLAT_RTOL * magnitude:
-        return None
-    mean = float(v.mean())
-    shown = f"{mean:.4f}" if unit == "1" else units.format(mean, unit, 5)
-    suffix = "" if unit == "1" else f" {unit}"
-    return {"value": mean, "unit": unit, "spread": spread, "tolerance_relative": FLAT_RTOL,
-            "text": f"{title}: {shown} everywhere, within the tolerance (its spread over the sweep, "
-                    f"{spread:.2g}{suffix}, is below {FLAT_RTOL:g} of its size); not charted"}
 
 
 def caption(p: Plan, title: str) -> str:

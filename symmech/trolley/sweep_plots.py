@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from symmech.core import plotting
+from symmech.core import sweep as core_sweep
 
 
 def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, charts: list, folder) -> list:
@@ -25,7 +26,7 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
         ax = grid[0, 0]
         if rest:
             (y_name, y_unit, y_log), = rest
-            xe, ye = edges(xs, x_log), edges(ys, y_log)
+            xe, ye = core_sweep.edges(xs, x_log), core_sweep.edges(ys, y_log)
             _plane(fig, ax, xe, ye, z, ok.reshape(shape), title, unit)
             _cell_labels(ax, _centres(xe, x_log), _centres(ye, y_log), labels, shape)
             if best is not None:
@@ -74,7 +75,7 @@ def _cell_labels(ax, xs, ys, labels: list[str], shape) -> None:
 
 def _line_cells(ax, xs, ok, log) -> None:
     """Shade the admissible points' cells along x."""
-    e = edges(xs, log)
+    e = core_sweep.edges(xs, log)
     for n, k in enumerate(np.flatnonzero(ok)):
         ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
     ax.set_xlim(e[0], e[-1])
@@ -93,18 +94,6 @@ def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
     if not ok.all():
         ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
                   edgecolor="0.3", linewidth=0.0, label="not admissible (labelled: why)")
-
-
-def edges(values: np.ndarray, log: bool) -> np.ndarray:
-    """Cell edges (n + 1,) around the swept ``values`` (n,): midway between neighbours (geometrically on a
-    log axis), the end cells ending at the first and last values, so no cell leaves the swept range (one
-    value: ±50 %)."""
-    v = np.log(values) if log else np.asarray(values, float)
-    if len(v) == 1:
-        out = v[0] + np.array([-0.5, 0.5]) * abs(v[0] or 1)
-    else:
-        out = np.concatenate([[v[0]], (v[1:] + v[:-1]) / 2, [v[-1]]])
-    return np.exp(out) if log else out
 
 
 def border(xe, ye, ok) -> list:
