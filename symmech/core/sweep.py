@@ -106,22 +106,22 @@ def edges(values: np.ndarray, log: bool) -> np.ndarray:
     return np.exp(out) if log else out
 
 
-def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float) -> dict | None:
+def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float, atol: float = 0.0) -> dict | None:
     """``values`` (n,) [SI ``unit``] of the quantity ``title`` stated as one number when their spread is within
-    ``rtol`` of their magnitude (a chart of them would colour round-off); None when they vary, or fewer than two
-    are finite."""
+    ``rtol`` of their magnitude plus ``atol`` [``unit``] (a chart of them would colour round-off); None when they
+    vary, or fewer than two are finite."""
     v = values[np.isfinite(values)]
     if v.size < 2:
         return None
     spread, magnitude = float(v.max() - v.min()), float(np.abs(v).max())
-    if spread > rtol * magnitude:
+    if spread > rtol * magnitude + atol:
         return None
     mean = float(v.mean())
     shown = f"{mean:.4f}" if unit == "1" else units.format(mean, unit, 5)
     suffix = "" if unit == "1" else f" {unit}"
     return {"value": mean, "unit": unit, "spread": spread, "tolerance_relative": rtol,
             "text": f"{title}: {shown} everywhere, within the tolerance (its spread over the sweep, "
-                    f"{spread:.2g}{suffix}, is below {rtol:g} of its size); not charted"}
+                    f"{spread:.2g}{suffix}, is below {rtol:g} of its size" + (f" + {atol:g}{suffix}" if atol else "") + "); not charted"}
 
 
 def get(data: dict, path: str):
