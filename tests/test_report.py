@@ -189,7 +189,7 @@ def test_report_reads_the_pipeline_record(tmp_path):
     assert '<td class="verdict">✗ fail</td>' in page
     assert page.index("✗ fail:</strong> a made-up bound") < page.index('<div class="warn">w1</div>') < \
         page.index('<h2 id="checks">')
-    assert "Checks: 1 passed,\n0 warned,\n1 failed." in page
+    assert '<p class="verdict bad">\n✗ 1 check(s) failed (1 passed, 0 warned, 1 failed).' in page
     assert "No plots in this folder." in page
     assert "<code>grain_impact.mu_equation</code>" in page and "grain_motion" not in page
 
