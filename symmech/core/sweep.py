@@ -119,9 +119,10 @@ def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float, atol:
     mean = float(v.mean())
     shown = f"{mean:.4f}" if unit == "1" else units.format(mean, unit, 5)
     suffix = "" if unit == "1" else f" {unit}"
+    absolute = f" + {atol:g}{suffix}" if atol else ""
     return {"value": mean, "unit": unit, "spread": spread, "tolerance_relative": rtol,
             "text": f"{title}: {shown} everywhere, within the tolerance (its spread over the sweep, "
-                    f"{spread:.2g}{suffix}, is below {rtol:g} of its size" + (f" + {atol:g}{suffix}" if atol else "") + "); not charted"}
+                    f"{spread:.2g}{suffix}, is below {rtol:g} of its size{absolute}); not charted"}
 
 
 def get(data: dict, path: str):

@@ -52,8 +52,8 @@ def modes_and_responses(m, md, omega, response, out: Path, output: dict) -> list
             omegas, H = response["frf"]
             # in Hz, as the modes' legend: a peak sits at its mode's frequency
             return _curves(m, omegas / (2 * math.pi), np.maximum(np.abs(H), 1e-300), True,
-                           ("forcing frequency f = ω/2π", "Hz"), ("amplitude |q| under the scene's forcing", "m or rad"),
-                           "frequency response")
+                           ("forcing frequency f = ω/2π", "Hz"),
+                           ("amplitude |q| under the scene's forcing", "m or rad"), "frequency response")
 
     def free():
         if "free" in response:

@@ -568,7 +568,8 @@ def result(p: Plan, outcomes: list) -> Result:
             worst, best = _worst_best(metric.column(name), larger)
             extremes[name] = {"worst": at(worst), "best": at(best)}
     flat = {name: statement for name, title, _ in CHARTS if name in names
-            for statement in [core_sweep.flat_statement(metric.column(name), title, unit_of_column(cols, name), FLAT_RTOL)] if statement}
+            for statement in [core_sweep.flat_statement(metric.column(name), title, unit_of_column(cols, name),
+                                                        FLAT_RTOL)] if statement}
     decision = decide(p, table, ok, why)
     best = decision["best"]
     failed = [{"index": [int(v) for v in np.unravel_index(k, p.shape)][:len(p.axes)], "error": o[1]}
