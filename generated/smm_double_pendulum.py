@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1097ee70fdf58a6a13c3deddfe6c3e90b8797f301d79e472a857274f66a1f9f9
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6c71876f392b756f078a31c5ea45ac73b02b64936b349792b8164f4a94096446
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 ee0b337805a156368d52061587c994bf89595f3d2bc50ca45db8d795edd46b49
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d92e71f5615999394c89ec27d58b926fb5a5777e95b0af2520b0959ef8fd7ef7
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6a4b3ed1baceda275a6f2da8ef11e1b94dcf069d5c64d4d37b4ae2beb91d0a97
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 f51e88dcd17aa736dcd8c31b0c5a6b8a40ad39980583bfc2625aa5b48b4385dd
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

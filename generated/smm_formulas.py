@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4b6f28bf791f26dc767836d2dee65ff14384b2122df5370da47f19605003942b
-# source key 05ba42c3cea2e2d2f9f341d23ddae17e517f0a7e2edf82b478cc2b20edcd375f
+# source key 982720f29628dcf5c0b725a525f76e3e58aeb2ac142cd8195fe4afed268fea29
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

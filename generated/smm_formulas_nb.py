@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 df4ef760a153fc2e3a735b15446afe950bedd8c9057a61ccad77bda661bc259f
-# source key 05ba42c3cea2e2d2f9f341d23ddae17e517f0a7e2edf82b478cc2b20edcd375f
+# source key 982720f29628dcf5c0b725a525f76e3e58aeb2ac142cd8195fe4afed268fea29
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1c367bd21967d0702ae220437dc5f356e39c46afcd2b597ae714a6419f1da00b
-# source key 2c0841ee98235935db16e13e4cb7e1ad6004925b41a8d37e4567635cda50c1cc
+# source key b3981dbc24f3bb55be4a7748014e35a1846e4ed00666df31f551d134b6ceecda
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

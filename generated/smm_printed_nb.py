@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 82ddc6921d8c335b2e2b16f665f2817fae8a364e4ad3457936ee9ba11717482f
-# source key 2c0841ee98235935db16e13e4cb7e1ad6004925b41a8d37e4567635cda50c1cc
+# source key b3981dbc24f3bb55be4a7748014e35a1846e4ed00666df31f551d134b6ceecda
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9d24a13b65ec0fd9ba659e1bec9f9f394c283ae206ac59f22ee07d3881f4bcb9
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3f7a4b9d983729c81475f271b5525dc64cbcc3d2b831090860c7f404f002171d
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 3e58a72ec1d24046edbed972bd984d826383c90d7cd71dd2987ff555c4c3e493
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fd8c7b7d629f58d28bca21860526d8ac88c5f166a9c5fd81e6a2c9978135e75d
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

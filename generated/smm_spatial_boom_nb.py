@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 56d3e2580ce5f0f95b1560a1db2ba92a292d2bde8d86fbd512802eb02ddefee5
-# source key 8de330edee0b222e359656533ab2e66a6fd188a8342240a93ca69748c4857fb6
+# source key 50e87650335a6a261dc523882533f0bed744f410650c959740b89ba671f1c574
 # body sha256 488092b385d22a3423efd4187a4f730778d474a8cd3a463b1bb4429dd479635f
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
