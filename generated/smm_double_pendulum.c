@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a394bc2270fdb110090b2f18b8791c2403a820482bc989c878f850c815ed52f4
-// source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
+// source key bd6dedb34a6925f70674769669cca3424fb01fcc95127f30377fac0263070657
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

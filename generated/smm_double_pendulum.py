@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79c4cc88e85d02cdca34917f43b05f4abd68c941c55697c3770904275987efce
-# source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
+# source key bd6dedb34a6925f70674769669cca3424fb01fcc95127f30377fac0263070657
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 94fd03cef0cfe01280552830573b46a5db0cbc0601e6fada8d4a9660e5433149
-// source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
+// source key bd6dedb34a6925f70674769669cca3424fb01fcc95127f30377fac0263070657
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f6daec3a5d0f920489dcd110f82c6f2cae6919a358f7253ef58541b1686610c6
-# source key 201262045b34c96e0c5aa3dd4ece0f80e2d531b138e12dad5b3bde81c023c4b9
+# source key 6affd4967323280532931a6b95c27dc427364b038d07cfef453c5465962853d4
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

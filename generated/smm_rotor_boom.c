@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7bcd833a0c73cf2bc8d4dd614d08642e475383726d196cd2dffda76728f3f9da
-// source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
+// source key bd6dedb34a6925f70674769669cca3424fb01fcc95127f30377fac0263070657
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d4d676e2526655b941f0290bb52784c6bd5348a0cc2ed895aab3685497d8fbb1
-# source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
+# source key bd6dedb34a6925f70674769669cca3424fb01fcc95127f30377fac0263070657
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

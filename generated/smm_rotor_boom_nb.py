@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 196962ab826bdebfcfb43fec482737e7d02fc6ea417f12db38c72e7f6125b392
-# source key da47e7cdeade533f3c9c6f8ce737ce5b60ed4ab47f4e1011e30f497969749de5
+# source key bd6dedb34a6925f70674769669cca3424fb01fcc95127f30377fac0263070657
 # body sha256 3e58a72ec1d24046edbed972bd984d826383c90d7cd71dd2987ff555c4c3e493
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -46,6 +46,8 @@ def cmd_sweep(ns) -> int:
     for warning in result.warnings:
         print(f"symmech: warning: {warning}", file=sys.stderr)
     print(f"wrote {Path(ns.out) / 'summary.json'}")
+    if not ns.quiet and result.brief():
+        print(result.brief())
     return 0
 
 

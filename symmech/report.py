@@ -40,6 +40,30 @@ MATHML_LIMIT = 2500
 PRECISION_FOLDER = "precision"  # a study beside the run: `symmech bench precision SCENE --out OUT/precision`
 
 
+# Terms a run's answers use, explained once under them
+GLOSSARY = {
+    "case 1": "case 1: the body frame is the moving frame of the track at the reference point O of the trolley",
+    "case 2": "case 2: the body frame turned onto the chord from O to the front axle A (effects.local_curvature)",
+}
+PAPER_BANNER = ("This run uses the paper's conventions (conventions = \"paper\"): they reproduce its printed "
+                "Tables 1 and 2, but two of them are physically inconsistent (an angular velocity per metre used as "
+                "per second; a Λ* that is not a rotation), so its reactions and overloads are not the trolley's: "
+                "at t = 10 s P3 is 571.8 N here against 4263.5 N physically. Run with conventions = \"physics\" "
+                "(the default) for design numbers.")
+
+
+def readable(text: str) -> str:
+    """A sentence with the raw ids of elastic modes made readable (``beam0_plane1_mode1`` → ``beam 0, plane 1,
+    mode 1``)."""
+    return re.sub(r"\bbeam([0-9]+)_plane([0-9]+)_mode([0-9]+)\b", r"beam \1, plane \2, mode \3", text)
+
+
+def glossary(texts: list[str]) -> list[str]:
+    """The explanations of the :data:`GLOSSARY` terms that ``texts`` use."""
+    joined = " ".join(texts)
+    return [meaning for term, meaning in GLOSSARY.items() if re.search(rf"\b{term}\b", joined)]
+
+
 @dataclass(frozen=True)
 class Derivation:
     module: str
@@ -133,8 +157,8 @@ def _headline(summary: dict) -> list[dict]:
     """Rows (name, value in its readable unit, at, meaning) of the summary's headline."""
     rows = []
     for h in summary.get("headline", []):
-        rows.append({"name": h["name"], "value": units.format(h["value"], h["unit"], 4), "at": h["at"],
-                     "meaning": h["meaning"]})
+        rows.append({"name": readable(h["name"]), "value": units.format(h["value"], h["unit"], 4),
+                     "at": readable(h["at"]), "meaning": readable(h["meaning"])})
     return rows
 
 
@@ -145,7 +169,7 @@ def _checks(summary: dict) -> list[dict]:
     for c in summary.get("checks", []):
         value = tuple(c["value"]) if isinstance(c["value"], list) else c["value"]
         check = Check(c["what"], value, c["unit"], c["threshold"], c["verdict"])
-        rows.append({"what": check.what, "measured": check.measured(), "threshold": check.threshold,
+        rows.append({"what": readable(check.what), "measured": check.measured(), "threshold": check.threshold,
                      "verdict": check.verdict, "mark": VERDICTS[check.verdict]})
     return sorted(rows, key=lambda r: order[r["verdict"]])
 
@@ -167,7 +191,7 @@ def _precision(out: Path, summary: dict) -> dict | None:
         with open(folder / f"{name}.csv", newline="") as fh:
             header, *records = list(csv.reader(fh))
     mine = [_is_chosen(dict(zip(header, cells)), chosen) for cells in records]
-    figures = _diagram(study, name, header, records, mine) if any(mine) else _figures(folder)
+    figures = _diagram(study, name, header, records, mine) if any(mine) else _figures(folder, {})
     return {"folder": str(folder), "reference": study.get("reference", ""), "figures": figures, "header": header,
             "rows": [{"cells": [_cell(c) for c in cells], "chosen": m} for cells, m in zip(records, mine)],
             "own": folder == out}
@@ -185,7 +209,7 @@ def _diagram(study: dict, name: str, header: list[str], records: list[list[str]]
     with tempfile.TemporaryDirectory() as tmp:
         precision.diagram(points, Path(tmp), name, study["tables"][name].get("doc", name), study.get("reference", ""),
                           [p for p, m in zip(points, mine) if m])
-        return _figures(Path(tmp))
+        return _figures(Path(tmp), {})
 
 
 def _cell(text: str) -> str:
@@ -220,14 +244,15 @@ def _is_chosen(row: dict, chosen: dict) -> bool:
     return not ways or any(row.get("method", "").lower().startswith(w) for w in ways)
 
 
-def _figures(out: Path) -> list[tuple[str, str]]:
-    """(title, data URI) of every plot in ``out``: the SVG when there is one, else the PNG."""
+def _figures(out: Path, captions: dict) -> list[tuple[str, str]]:
+    """(caption, data URI) of every plot in ``out``: the SVG when there is one, else the PNG; the caption the run
+    recorded for it (``captions``: {file stem: sentence}), else its file name."""
     figures = []
     for stem in sorted({p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}):
         svg = out / f"{stem}.svg"
         path, mime = (svg, "image/svg+xml") if svg.exists() else (out / f"{stem}.png", "image/png")
         data = base64.b64encode(path.read_bytes()).decode("ascii")
-        figures.append((stem.replace("_", " "), f"data:{mime};base64,{data}"))
+        figures.append((captions.get(stem, stem.replace("_", " ")), f"data:{mime};base64,{data}"))
     return figures
 
 
@@ -286,6 +311,14 @@ def run_precision(out: Path, ctx) -> Path:
     return target
 
 
+def _scene_file(summary: dict) -> str:
+    """Where the scene came from: its path, or that it was given as a table (the Python API)."""
+    source = summary.get("scene_file")
+    if source is None:
+        return "not recorded"
+    return "given as a table, not a file (Python API)" if str(source).startswith("<") else str(source)
+
+
 def render(out: Path) -> str:
     """The HTML text of the report on the run in folder ``out``."""
     import jinja2
@@ -295,11 +328,13 @@ def render(out: Path) -> str:
     package = _paper_package(kind)
     derived = derivations(summary, package)
     checks = _checks(summary)
+    headline = _headline(summary)
+    warnings = [readable(w) for w in summary.get("warnings", [])]
     hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}), Path(out))
     provenance = [("symmech version of the run", _text(summary.get("symmech_version", "not recorded"))),
                   ("status", _text(summary.get("status", "not recorded"))),
                   ("wall time [s]", _wall_time(summary)),
-                  ("scene file", _text(summary.get("scene_file", "not recorded"))),
+                  ("scene file", _scene_file(summary)),
                   ("report written by", f"symmech {__version__}, Python {platform.python_version()}"),
                   ("report written at", datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))]
     env = jinja2.Environment(loader=jinja2.FunctionLoader(
@@ -310,9 +345,13 @@ def render(out: Path) -> str:
         title=summary.get("scene", {}).get("title", ""),
         scene=json.dumps(summary["scene"], indent=2) if "scene" in summary else None,
         raw=json.dumps({k: v for k, v in summary.items() if k != "scene"}, indent=2),
-        headline=_headline(summary), checks=checks, attention=[c for c in checks if c["verdict"] != "pass"],
-        precision=_precision(Path(out), summary), derivations=derived, warnings=summary.get("warnings", []),
-        errata=errata_records(package), figures=_figures(Path(out)), provenance=provenance,
+        headline=headline, checks=checks, attention=[c for c in checks if c["verdict"] != "pass"],
+        glossary=glossary([h["name"] for h in headline] + [c["what"] for c in checks]),
+        paper=summary.get("scene", {}).get("conventions") == "paper", paper_banner=PAPER_BANNER,
+        paper_tables=summary.get("paper_tables"),
+        precision=_precision(Path(out), summary), derivations=derived, warnings=warnings,
+        errata=errata_records(package), figures=_figures(Path(out), summary.get("captions", {})),
+        provenance=provenance,
         hashes=hashes, hash_source=hash_source)
 
 

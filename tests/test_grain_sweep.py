@@ -113,8 +113,14 @@ def test_sweep_writes_tables_with_units_heat_maps_and_the_best_point(tmp_path):
     assert list(rows[0])[:3] == ["x [m]", "y [deg]", "gamma [1]"]
     least = min(float(r["overlap [1]"]) for r in rows)
     assert best["overlap"] == pytest.approx(least, abs=0)
-    for name in ("crop_mean_vx", "weed_hop_fraction", "separation_overlap"):
+    for name in ("crop_mean_vx", "weed_hop_fraction"):
         assert (out / f"{name}.png").stat().st_size > 5000
+    # one grain per population, identical velocities: the overlap and Δv_x are the same at every point (to
+    # round-off), so they are stated as numbers, not colour-mapped
+    assert summary["flat"]["separation_overlap"]["value"] == pytest.approx(least, abs=0)
+    assert "everywhere, within the tolerance" in summary["flat"]["separation_overlap"]["text"]
+    assert abs(summary["flat"]["separation_delta_vx"]["value"]) < 1e-15
+    assert not (out / "separation_overlap.png").exists() and not (out / "separation_delta_vx.png").exists()
     # one grain per population: no interval, no spread to size a population from (null, not NaN, in JSON)
     assert best["overlap_interval"] == [None, None] and summary["precision"]["crop"]["grains_needed"] is None
 

@@ -92,13 +92,13 @@ def test_a_colorbar_names_its_quantity_and_unit(tmp_path):
 
 SWEEP_PLOTS = """
 import numpy as np, matplotlib
-from types import SimpleNamespace
-from symmech.grain import sweep
-axis = lambda field, values: {"field": field, "values": values}
-plan = SimpleNamespace(x=axis("vibration.amplitude", [1e-3, 2e-3]), y=axis("vibration.angle_deg", [20.0, 40.0]),
-                       names=["crop"], gamma=np.array([[0.5, 1.0], [1.5, 2.0]]))
+from symmech.grain import sweep_report
+axes = [("vibration amplitude", "m", False), ("vibration angle", "deg", False)]
+values = [np.array([1e-3, 2e-3]), np.array([20.0, 40.0])]
 stats = [{"mean_vx": np.array([[0.1, 0.2], [0.3, 0.4]]), "hop_fraction": np.array([[0.0, 0.5], [1.0, 1.0]])}]
-paths = sweep._plots(plan, stats, {}, None, None, __import__("pathlib").Path(FOLDER))
+charts = sweep_report.charts(["crop"], stats, None)
+paths = sweep_report.plots(axes, values, np.array([[0.5, 1.0], [1.5, 2.0]]), charts, [[]] * 4, None,
+                           __import__("pathlib").Path(FOLDER))
 print(matplotlib.get_backend(), " ".join(sorted(p.name for p in paths)))
 """
 

@@ -12,8 +12,9 @@ from badinput import DELETE, SCENES, bundled, edited
 from outcontract import assert_valid_output
 from symmech import cli
 from symmech.core import pipeline
+from symmech.core import sweep as core_sweep
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import sweep
+from symmech.trolley import sweep, sweep_plots
 
 pytestmark = pytest.mark.xdist_group("test_trolley_sweep")
 
@@ -71,7 +72,8 @@ def test_comfort_margin_of_hand_built_overloads():
 def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path):
     """The rigid helix's largest normal overload n2 is the only one beyond an upper limit set below it, so
     the margin is that limit minus max n2 (a direct run's), and the point is not admissible."""
-    n2 = pipeline.load(RIGID).run().tables["case1_overload"].column("n2")
+    direct = pipeline.load(RIGID).run().tables
+    n2 = direct["case1_overload"].column("n2")
     limit = round(float(n2.max()) - 0.2, 3)
     p, out = outcomes(swept(RIGID, {"field": "comfort.x2.hi", "values": [limit, 6.0]}))
     res = sweep.result(p, out)
@@ -82,8 +84,14 @@ def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path):
     ds = res.tables["sweep"].to_xarray()  # over the swept axis, in the order swept
     assert ds.comfort_margin.dims == ("x",) and ds.x.values.tolist() == [limit, 6.0]
     assert ds.admissible.sel(x=6.0).item() == 1.0
-    # a line over x (no y): one chart per number the rigid model has
-    assert sorted(p.name for p in res.plots(tmp_path)) == ["sweep_comfort_margin.png", "sweep_peak_reaction_max.png"]
+    # a line over x (no y): the comfort margin charted; the comfort limit moves no reaction, so the largest one
+    # is the same at both points: stated as the direct run's number, not charted
+    assert sorted(p.name for p in res.plots(tmp_path)) == ["sweep_comfort_margin.png"]
+    peak = max(np.abs(direct["case1"].column(f"P{i}")).max() for i in range(1, 6))
+    flat = res.summary["flat"]["peak_reaction_max"]
+    assert flat["value"] == pytest.approx(peak, rel=1e-12) and flat["spread"] == 0.0
+    assert "everywhere, within the tolerance" in flat["text"]
+    assert any(h.name == "largest roller reaction |P1…P5|" and h.at == "every point" for h in res.headline)
 
 
 def axis(**fields):
@@ -191,10 +199,10 @@ def test_local_cluster_equals_serial_bit_for_bit():
     assert a.data.shape == (4, 28) and np.array_equal(a.data, b.data) and a.text == b.text
 
 
-def test_chart_cells_sit_midway_between_the_swept_values():
-    np.testing.assert_allclose(sweep.edges(np.array([1.0, 2.0, 4.0]), False), [0.5, 1.5, 3.0, 5.0], rtol=1e-15)
-    np.testing.assert_allclose(sweep.edges(np.array([1.0, 10.0, 100.0]), True), 10 ** np.array([-0.5, 0.5, 1.5, 2.5]),
-                               rtol=1e-14)
+def test_chart_cells_sit_midway_between_the_swept_values_and_stay_within_the_range():
+    np.testing.assert_allclose(core_sweep.edges(np.array([1.0, 2.0, 4.0]), False), [1.0, 1.5, 3.0, 4.0], rtol=1e-15)
+    np.testing.assert_allclose(core_sweep.edges(np.array([1.0, 10.0, 100.0]), True),
+                               10 ** np.array([0.0, 0.5, 1.5, 2.0]), rtol=1e-14)
 
 
 def test_the_compiled_engine_is_built_before_the_first_point_is_timed(monkeypatch):
@@ -220,5 +228,5 @@ def test_the_admissible_border_runs_along_the_cell_edges():
     over the lower row's cell and the edge y = 15 over the two left columns, nothing else."""
     xe, ye = np.array([0.5, 1.5, 2.5, 3.5]), np.array([5.0, 15.0, 25.0])
     ok = np.array([[True, False], [True, False], [False, False]])
-    assert sorted(sweep.border(xe, ye, ok)) == sorted([((2.5, 5.0), (2.5, 15.0)), ((0.5, 15.0), (1.5, 15.0)),
+    assert sorted(sweep_plots.border(xe, ye, ok)) == sorted([((2.5, 5.0), (2.5, 15.0)), ((0.5, 15.0), (1.5, 15.0)),
                                                        ((1.5, 15.0), (2.5, 15.0))])

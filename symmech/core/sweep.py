@@ -21,6 +21,7 @@ import time
 import numpy as np
 
 from symmech.core import schema as s
+from symmech.core import units
 from symmech.core.scene import SceneError, SymmechError
 
 CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (--connect-timeout)
@@ -90,6 +91,37 @@ def axis_values(axis: dict) -> np.ndarray:
         return np.array(axis["values"])
     space = np.geomspace if axis["log"] else np.linspace
     return space(axis["start"], axis["stop"], axis["num"])
+
+
+def edges(values: np.ndarray, log: bool) -> np.ndarray:
+    """Cell edges (n + 1,) around the swept ``values`` (n,): midway between neighbours (geometrically on a
+    log axis), the end cells ending at the first and last values, so no cell leaves the swept range (one
+    value: ±50 %)."""
+    v = np.log(values) if log else np.asarray(values, float)
+    if len(v) == 1:
+        out = v[0] + np.array([-0.5, 0.5]) * abs(v[0] or 1)
+    else:
+        out = np.concatenate([[v[0]], (v[1:] + v[:-1]) / 2, [v[-1]]])
+    return np.exp(out) if log else out
+
+
+def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float, atol: float = 0.0) -> dict | None:
+    """``values`` (n,) [SI ``unit``] of the quantity ``title`` stated as one number when their spread is within
+    ``rtol`` of their magnitude plus ``atol`` [``unit``] (a chart of them would colour round-off); None when they
+    vary, or fewer than two are finite."""
+    v = values[np.isfinite(values)]
+    if v.size < 2:
+        return None
+    spread, magnitude = float(v.max() - v.min()), float(np.abs(v).max())
+    if spread > rtol * magnitude + atol:
+        return None
+    mean = float(v.mean())
+    shown = f"{mean:.4f}" if unit == "1" else units.format(mean, unit, 5)
+    suffix = "" if unit == "1" else f" {unit}"
+    absolute = f" + {atol:g}{suffix}" if atol else ""
+    return {"value": mean, "unit": unit, "spread": spread, "tolerance_relative": rtol,
+            "text": f"{title}: {shown} everywhere, within the tolerance (its spread over the sweep, "
+                    f"{spread:.2g}{suffix}, is below {rtol:g} of its size{absolute}); not charted"}
 
 
 def get(data: dict, path: str):

@@ -28,12 +28,12 @@ from functools import cached_property
 
 import numpy as np
 
-from symmech.core import plotting
 from symmech.core import sweep as core_sweep
 from symmech.core import schema as s
-from symmech.core.results import Column, Result, Table
+from symmech.core.results import Column, Headline, Result, Table
 from symmech.core.scene import SceneError
 from symmech.core.sweep import CONNECT_TIMEOUT, FIELD_PATH, axis_values, get as _get, put as _set
+from symmech.grain import sweep_report
 
 # the fields a sweep may vary, with their units
 SWEPT = {"vibration.amplitude": "m", "vibration.frequency": "Hz", "vibration.angle_deg": "deg",
@@ -66,10 +66,23 @@ def _check_names(pops: list, path: str) -> None:
 
 AXIS = core_sweep.axis_table(s.Choice("the grain-scene field swept (dotted path)", choices=tuple(SWEPT)))
 
+def _check_band(c: dict, path: str) -> None:
+    if None not in (c["hop_fraction_min"], c["hop_fraction_max"]) and c["hop_fraction_min"] > c["hop_fraction_max"]:
+        raise SceneError(f"{path}.hop_fraction_max", f"{c['hop_fraction_max']:g} is below hop_fraction_min "
+                                                     f"{c['hop_fraction_min']:g}: the band must not be empty")
+
+
 SWEEP = s.Table("the swept plane (used by `symmech sweep`; `symmech run` ignores it)", {
     **core_sweep.plane_fields(AXIS),
     "duration": s.Float("simulated time per grain (default: the scene's duration)", unit="s", lo=0.0,
                         lo_open=True, hi=1e4, default=None),
+    "constraints": s.Table("what an eligible operating point keeps (only eligible points can be best)", {
+        "population": s.Str("the population they apply to (default: every population)", default=None),
+        "min_mean_vx": s.Float("least mean transport velocity along X", unit="m/s", lo=-100.0, hi=100.0,
+                               default=None),
+        "hop_fraction_min": s.Float("least fraction of grains hopping", lo=0.0, hi=1.0, default=None),
+        "hop_fraction_max": s.Float("largest fraction of grains hopping", lo=0.0, hi=1.0, default=None),
+    }, default=None, checks=(_check_band,)),
 }, default=None, checks=(core_sweep.check_plane,))
 
 POPULATION = s.Table("a population of grains", {
@@ -155,6 +168,7 @@ class Plan:
     populations: list[dict]  # resolved [[population]] tables
     gamma: np.ndarray  # (nx, ny) throw number at each point
     first: list = dataclass_field(default_factory=list)  # grain 0 of each population at (0, 0), dispatched
+    constraints: dict | None = None  # the resolved [sweep.constraints]
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -210,7 +224,13 @@ def plan(raw: dict, resolved: dict) -> Plan:
     xs = axis_values(sweep["x"])
     ys = axis_values(sweep["y"]) if sweep["y"] else np.array([np.nan])
     _check_plan(sweep, pops)
-    p = Plan(sweep["x"], sweep["y"], [pop["name"] for pop in pops], base, pops, np.empty((len(xs), len(ys))))
+    names = [pop["name"] for pop in pops]
+    constrained = (sweep["constraints"] or {}).get("population")
+    if constrained is not None and constrained not in names:
+        raise SceneError("sweep.constraints.population", f"{constrained!r} is not a population "
+                                                         f"(they are: {', '.join(names)})")
+    p = Plan(sweep["x"], sweep["y"], names, base, pops, np.empty((len(xs), len(ys))),
+             constraints=sweep["constraints"])
     # grain 0 of each population validated (kept for the estimate); Γ from the last one's, as always
     p.first = [_as_dispatched(load_grain(_first(p, k), sweep, pops[k], k)) for k in range(len(pops))]
     resolved = p.first[-1].resolved
@@ -579,11 +599,15 @@ def _separation_columns(names: list[str]) -> list[Column]:
                             f"bootstrap percentile, {RESAMPLES} resamples")]
 
 
-def best_point(sep: dict) -> tuple[int, np.ndarray]:
-    """The best operating point (flat index: the least overlap, ties broken by the larger velocity difference)
-    and the mask (nx, ny) of the points not significantly worse: their overlap interval meets the best's."""
-    best = int(np.lexsort((-np.abs(sep["delta_vx"].ravel()), sep["overlap"].ravel()))[0])
-    return best, sep["overlap_lo"] <= sep["overlap_hi"].ravel()[best]
+def best_point(sep: dict, ok: np.ndarray | None = None) -> tuple[int | None, np.ndarray | None]:
+    """The best eligible operating point (flat index: the least overlap, ties broken by the larger velocity
+    difference; ``ok`` (n,) the eligible points, default all) and the mask (nx, ny) of the eligible points not
+    significantly worse: their overlap interval meets the best's. (None, None) when no point is eligible."""
+    ok = np.ones(sep["overlap"].size, bool) if ok is None else ok
+    best = sweep_report.best(ok, [], [], sep)
+    if best is None:
+        return None, None
+    return best, (sep["overlap_lo"] <= sep["overlap_hi"].ravel()[best]) & ok.reshape(sep["overlap"].shape)
 
 
 def _number(x) -> float | None:
@@ -628,66 +652,53 @@ def result(p: Plan, values: list, failed: list = (), warned: list = (), half_wid
                            "warned_grains": [{"population": n, "point": [i, j], "grain": g, "warnings": m}
                                              for n, i, j, g, m in warned]}
     stats_ = [statistics(v) for v in values]
+    sep = separation(*values) if len(values) == 2 else None
     grid = {c.name: c.name for c in cols[:2 if p.y else 1]}  # x-major: to_xarray over the swept axes
+    why = sweep_report.reasons(p.names, stats_, p.constraints, failed, warned, p.shape)
+    ok = np.array([not w for w in why])
+    verdict = {"verdict": ["eligible" if not w else "; ".join(sentence for _, sentence in w) for w in why]}
+    eligible = Column("eligible", "1", "1: the constraints kept and no grain failed or warned at this point")
     for name, st in zip(p.names, stats_):
-        data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS])
-        tables[f"sweep_{name}"] = Table(cols + STAT_COLUMNS, data, f"population {name} over the swept plane",
-                                        grid=grid)
-    best = similar = None
-    if len(values) == 2:
-        sep = separation(*values)
+        data = np.column_stack([base] + [st[c.name].ravel() for c in STAT_COLUMNS] + [ok.astype(float)])
+        tables[f"sweep_{name}"] = Table(cols + STAT_COLUMNS + [eligible], data, f"population {name} over the swept "
+                                        "plane", verdict, grid=grid)
+    best, similar = (None, None) if sep is None else best_point(sep, ok)
+    if sep is not None:
         sep_cols = _separation_columns(p.names)
         tables["separation"] = Table(cols + sep_cols, np.column_stack([base] + [sep[c.name].ravel() for c in sep_cols]),
                                      "separation chart of the two populations", grid=grid)
-        best, similar = best_point(sep)
+    else:
+        best = sweep_report.best(ok, p.names, stats_, None)
+    if sep is not None and best is not None:
         at = {c.name: _number(sep[c.name].ravel()[best]) for c in sep_cols}
         summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {
             "delta_vx_m_s": at["delta_vx"], "delta_vx_interval_m_s": [at["delta_vx_lo"], at["delta_vx_hi"]],
             "overlap": at["overlap"], "overlap_interval": [at["overlap_lo"], at["overlap_hi"]],
             "level": LEVEL, "points_not_significantly_worse": [list(ij) for ij in zip(*map(np.ndarray.tolist,
                                                                                             np.nonzero(similar)))]}
+    elif best is not None:
+        summary["best_operating_point"] = {c.name: float(base[best, k]) for k, c in enumerate(cols)} | {
+            "mean_vx_m_s": _number(stats_[0]["mean_vx"].ravel()[best]), "level": LEVEL}
     summary["precision"] = _precision(p.names, stats_, values, best, half_width)
     warnings = [f"{len(failed)} grain simulation(s) stopped with an error and are left out of the statistics "
                 f"(summary.json: failed_grains); first: {failed[0][4]}"] if failed else []
     warnings += [f"{len(warned)} grain simulation(s) ran with warnings (summary.json: warned_grains); first: "
                  f"{warned[0][4][0]}"] if warned else []
-    best_ij = None if best is None else divmod(best, p.shape[1])
-    return Result("grain_sweep", summary, tables,
-                  plots=lambda folder: _plots(p, stats_, tables, best_ij, similar, folder), warnings=warnings)
-
-
-def _plots(p: Plan, stats, tables, best, similar, folder) -> list:
-    """Heat maps over the plane (two swept fields): per population the mean X velocity and the hopping
-    fraction, for two the overlap with the best point starred and the points whose overlap interval meets
-    the best's (not significantly worse) hatched."""
-    if not p.y:
-        return []
-    xs, ys = axis_values(p.x), axis_values(p.y)
-    x_label = (p.x["field"], SWEPT[p.x["field"]])
-    y_label = (p.y["field"], SWEPT[p.y["field"]])
-    charts = [(f"{name}_mean_vx", st["mean_vx"], f"{name}: mean transport velocity", "m/s")
-              for name, st in zip(p.names, stats)]
-    charts += [(f"{name}_hop_fraction", st["hop_fraction"], f"{name}: fraction of grains hopping", "1")
-               for name, st in zip(p.names, stats)]
-    if "separation" in tables:
-        sep = tables["separation"]
-        charts.append(("separation_overlap", sep.column("overlap").reshape(len(xs), len(ys)),
-                       "overlap of the X-velocity distributions (1 = inseparable)", "1"))
-    written = []
-    for name, z, title, unit in charts:
-        fig, axes = plotting.figure(width=6.4, height=4.8)
-        ax = axes[0, 0]
-        mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
-        if len(xs) > 1 and len(ys) > 1:
-            lines = ax.contour(xs, ys, p.gamma.T, colors="w", linewidths=0.8)
-            ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
-        if name == "separation_overlap" and best is not None:
-            ax.pcolor(xs, ys, np.ma.masked_where(~similar.T, similar.T), shading="nearest", hatch="///",
-                      facecolor="none", edgecolor="r", linewidth=0.0, label=f"not significantly worse ({LEVEL:.0%})")
-            ax.plot(xs[best[0]], ys[best[1]], "r*", ms=14, label="best operating point")
-            ax.legend(fontsize=8, loc="upper right")
-        plotting.set_labels(ax, x_label, y_label)
-        ax.set_title(title, fontsize=9)
-        written += plotting.save(fig, folder, name)
-    return written
+    axes = [(sweep_report.NAMES[a["field"]], SWEPT[a["field"]], a["log"]) for a in (p.x, p.y) if a]
+    values_ = [v for v in p.values if v is not None]
+    headline, checks, limits, limited_by = sweep_report.answer(axes, values_, why, best, p.names, stats_, sep,
+                                                               summary["precision"], half_width)
+    charts = sweep_report.charts(p.names, stats_, sep)
+    flat = sweep_report.flat(charts)
+    headline += [Headline(f["text"].partition(":")[0], f["value"], f["unit"], f["text"].partition(": ")[2],
+                          "every point") for f in flat.values()]
+    summary |= {"eligible_points": int(ok.sum()), "limited_by": limited_by, "flat": flat,
+                "criterion": "least overlap, ties to the larger |delta_vx|" if sep is not None else "largest mean_vx",
+                "captions": {stem: f"The {title} over {' and '.join(name for name, _, _ in axes)}. The star is the "
+                                   "best eligible operating point; hatched cells are not eligible, labelled with "
+                                   "what limits them; dotted lines are the throw number Γ."
+                             for stem, _, title, _, _ in charts if stem not in flat}}
+    shown = [c for c in charts if c[0] not in flat]
+    return Result("grain_sweep", summary, tables, headline=headline, checks=checks,
+                  plots=lambda folder: sweep_report.plots(axes, values_, p.gamma, shown, why, best, folder),
+                  warnings=warnings + limits)

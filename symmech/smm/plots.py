@@ -50,8 +50,10 @@ def modes_and_responses(m, md, omega, response, out: Path, output: dict) -> list
     def frf():
         if "frf" in response:
             omegas, H = response["frf"]
-            return _curves(m, omegas, np.maximum(np.abs(H), 1e-300), True, ("forcing frequency omega", "rad/s"),
-                           ("amplitude |q|", "m or rad"), "frequency response")
+            # in Hz, as the modes' legend: a peak sits at its mode's frequency
+            return _curves(m, omegas / (2 * math.pi), np.maximum(np.abs(H), 1e-300), True,
+                           ("forcing frequency f = ω/2π", "Hz"),
+                           ("amplitude |q| under the scene's forcing", "m or rad"), "frequency response")
 
     def free():
         if "free" in response:
@@ -96,13 +98,14 @@ def _modes(m, md, omega):
 
 def _curves(m, x, ys, log: bool, xlabel: tuple, ylabel: tuple, title: str):
     """One curve per coordinate (first eight) against x; labels are (quantity, unit) pairs."""
-    fig, axes = plotting.figure(1, 1, width=6.0, height=4.0)
+    fig, axes = plotting.figure(1, 1, width=7.5, height=4.0)
     ax = axes[0, 0]
     for j, name in enumerate(m.coordinate_names[:8]):
         (ax.semilogy if log else ax.plot)(x, ys[:, j], label=name)
     plotting.set_labels(ax, xlabel, ylabel)
     ax.set_title(f"{m.name}: {title}")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)  # beside, not on, the data
+    fig.tight_layout()
     return fig
 
 

@@ -171,6 +171,7 @@ SCHEMA = Table("a mechanism scene (structural model method, seed 003)", {
     "kind": Choice("scene kind", choices=("mechanism",)),
     "name": Str("mechanism name; the generated module is `smm_<name>` (default `mechanism`, for a chain "
                  "`chain_<n>_<ends>_<motion>`)", pattern=r"[A-Za-z0-9_.-]{1,64}", default=None),
+    "title": Str("free text: the report's title", default=""),
     "description": Str("free text", default=""),
     "parameters": Mapping("named parameters: `name = number` or `name = {value, unit, meaning}`; they become "
                           "the arguments (in file order) of the generated functions; not `x<digits>` nor a "

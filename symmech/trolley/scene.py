@@ -176,6 +176,7 @@ def _cross_checks(scene, path):
 # elastic model beside the rigid one.
 SCHEMA = sc.Table("a trolley scene", {
     "kind": sc.Choice("scene kind", choices=("trolley",)),
+    "title": sc.Str("free text: the report's title", default=""),
     "conventions": sc.Choice("`physics`: the consistent model; `paper`: the paper's conventions (Tables 1, 2)",
                              choices=("physics", "paper"), default="physics"),
     "frame": sc.Choice("moving frame: `twist` (aircraft angles with the twist θ1(s)) or `frenet` (x2 = principal "

@@ -26,39 +26,46 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from symmech.core import plotting
+from symmech.core import units
 from symmech.core import schema as s
 from symmech.core import sweep as core_sweep
 from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError
+from symmech.trolley import sweep_plots
 
 AXES = ("x1", "x2", "x3")
-# (name in messages, pattern of a swept field, its unit, what setting it does); NAME, I and the axis are the
-# field's own
+# (name in messages, pattern of a swept field, its unit, what setting it does, its name on a chart); NAME, I and
+# the axis are the field's own
 FIELDS = (
-    ("motion.speed_scale", r"motion\.speed_scale", "1", "multiplies the speed expression: V0(t) → value × V0(t)"),
+    ("motion.speed_scale", r"motion\.speed_scale", "1", "multiplies the speed expression: V0(t) → value × V0(t)",
+     "speed scale"),
     ("motion.constants.NAME", r"motion\.constants\.[A-Za-z_][A-Za-z0-9_]*", "1",
-     "sets the constant NAME of motion.constants (the axis's `unit` labels it)"),
-    ("trolley.mass", r"trolley\.mass", "kg", "sets the body's mass"),
-    ("elastic.rollers.stiffness", r"elastic\.rollers\.stiffness", "N/m", "sets the stiffness of all five rollers"),
+     "sets the constant NAME of motion.constants (the axis's `unit` labels it)", "motion constant"),
+    ("trolley.mass", r"trolley\.mass", "kg", "sets the body's mass", "body mass"),
+    ("elastic.rollers.stiffness", r"elastic\.rollers\.stiffness", "N/m", "sets the stiffness of all five rollers",
+     "roller stiffness"),
     ("elastic.rollers.stiffness_scale", r"elastic\.rollers\.stiffness_scale", "1",
-     "multiplies the five roller stiffnesses"),
-    ("elastic.rollers.damping", r"elastic\.rollers\.damping", "N s/m", "sets the damping of all five rollers"),
-    ("elastic.rollers.damping_scale", r"elastic\.rollers\.damping_scale", "1", "multiplies the five roller dampings"),
+     "multiplies the five roller stiffnesses", "roller stiffness scale"),
+    ("elastic.rollers.damping", r"elastic\.rollers\.damping", "N s/m", "sets the damping of all five rollers",
+     "roller damping"),
+    ("elastic.rollers.damping_scale", r"elastic\.rollers\.damping_scale", "1", "multiplies the five roller dampings",
+     "roller damping scale"),
     ("elastic.beams[I].ei_scale", r"elastic\.beams\[[0-9]+\]\.ei_scale", "1",
-     "multiplies beam I's bending stiffness in both planes"),
-    ("elastic.beams[I].tip_mass", r"elastic\.beams\[[0-9]+\]\.tip_mass", "kg", "sets beam I's tip mass"),
-    ("elastic.beams[I].damping_ratio", r"elastic\.beams\[[0-9]+\]\.damping_ratio", "1", "sets beam I's damping ratio"),
+     "multiplies beam I's bending stiffness in both planes", "beam bending-stiffness scale"),
+    ("elastic.beams[I].tip_mass", r"elastic\.beams\[[0-9]+\]\.tip_mass", "kg", "sets beam I's tip mass",
+     "beam tip mass"),
+    ("elastic.beams[I].damping_ratio", r"elastic\.beams\[[0-9]+\]\.damping_ratio", "1",
+     "sets beam I's damping ratio", "beam damping ratio"),
     ("comfort.x1.lo (x1, x2, x3; lo, hi)", r"comfort\.x[123]\.(lo|hi)", "g",
-     "sets the lower or upper end of the comfort envelope along that axis"),
+     "sets the lower or upper end of the comfort envelope along that axis", "comfort limit"),
 )
 REACTIONS = tuple(f"P{i}" for i in range(6))
 
 
 def _field(path, value):
-    if not isinstance(value, str) or not any(re.fullmatch(p, value) for _, p, _, _ in FIELDS):
+    if not isinstance(value, str) or not any(re.fullmatch(p, value) for _, p, *_ in FIELDS):
         raise SceneError(path, f"{s._show(value)} is not a field a trolley sweep can vary; choose one of "
-                               f"{', '.join(name for name, _, _, _ in FIELDS)}")
+                               f"{', '.join(name for name, *_ in FIELDS)}")
     return value
 
 
@@ -66,7 +73,21 @@ def unit_of(axis: dict) -> str:
     """The unit of a resolved axis's field (a motion constant's: the axis's ``unit``, default "1")."""
     if axis["field"].startswith("motion.constants."):
         return axis["unit"] or "1"
-    return next(unit for _, pattern, unit, _ in FIELDS if re.fullmatch(pattern, axis["field"]))
+    return next(unit for _, pattern, unit, *_ in FIELDS if re.fullmatch(pattern, axis["field"]))
+
+
+def name_of(axis: dict) -> str:
+    """The human name of a resolved axis's field, for charts and answers (``beam 0 tip mass``)."""
+    field = axis["field"]
+    name = next(name for _, pattern, _, _, name in FIELDS if re.fullmatch(pattern, field))
+    if field.startswith("motion.constants."):
+        return f"{name} {field.rpartition('.')[2]}"
+    if field.startswith("elastic.beams["):
+        return name.replace("beam", f"beam {int(re.search(r'[0-9]+', field).group())}", 1)
+    if field.startswith("comfort."):
+        _, envelope, end = field.split(".")
+        return f"{'lower' if end == 'lo' else 'upper'} {name} along {envelope}"
+    return name
 
 
 def _check_unit(axis: dict, path: str) -> None:
@@ -80,6 +101,17 @@ _AXIS = core_sweep.axis_table(
     {"unit": s.Str("unit of a swept motion constant, for the labels and CSV headers", default=None)})
 AXIS = s.Table(_AXIS.doc, _AXIS.fields, checks=_AXIS.checks + (_check_unit,))
 
+# design numbers an objective may name; all but the first two need the [elastic] table
+OBJECTIVES = ("comfort_margin", "peak_reaction_max", "amplification_max", "roller_deflection_max",
+              "body_deflection_max", "resonance_detuning")
+
+
+def _check_objective(sweep: dict, path: str) -> None:
+    quantity = (sweep["objective"] or {}).get("quantity")
+    if quantity == "y" and sweep["y"] is None:
+        raise SceneError(f"{path}.objective.quantity", "y is not swept: give [sweep.y], or objective x")
+
+
 SWEEP = s.Table("the swept plane of a design sweep (used by `symmech sweep`; `symmech run` ignores it)", {
     **core_sweep.plane_fields(AXIS),
     "limits": s.Table("stated limits of the peak reactions (largest magnitudes) of P0…P5; a point beyond "
@@ -87,7 +119,14 @@ SWEEP = s.Table("the swept plane of a design sweep (used by `symmech sweep`; `sy
                                                                              f"{name}", unit="N", lo=0.0,
                                                            lo_open=True, hi=1e12, default=None)
                                              for name in REACTIONS}, default={}),
-}, default=None, checks=(core_sweep.check_plane,))
+    "objective": s.Table("what the best point is best at; only admissible points are eligible (default: the "
+                         "largest comfort margin)", {
+        "quantity": s.Choice("`x` or `y`: the swept value; else a design number of the sweep table",
+                             choices=("x", "y") + OBJECTIVES, default="comfort_margin"),
+        "goal": s.Choice("whether the best point has the largest or the smallest of it", choices=("max", "min"),
+                         default="max"),
+    }, default=None),
+}, default=None, checks=(core_sweep.check_plane, _check_objective))
 
 
 def edits(field: str, resolved: dict, value: float, where: str) -> list[tuple[tuple, object]]:
@@ -144,6 +183,7 @@ class Plan:
     base: dict  # the raw scene without [sweep]
     resolved: dict  # the base scene's resolved fields
     limits: dict  # {"P3": N, ...}: the stated reaction limits
+    objective: tuple[str, str] = ("comfort_margin", "max")  # (x, y or a design number; "max" or "min")
 
     @property
     def values(self) -> tuple[np.ndarray, np.ndarray]:
@@ -206,7 +246,11 @@ def plan(raw: dict, resolved: dict) -> Plan:
         raise SceneError("sweep", "the scene has no [sweep] table (see docs/scenes-trolley.md)")
     base = {k: v for k, v in copy.deepcopy(raw).items() if k != "sweep"}
     limits = {k: v for k, v in sweep["limits"].items() if v is not None}
-    p = Plan(sweep["x"], sweep["y"], base, resolved, limits)
+    objective = sweep["objective"] or {"quantity": "comfort_margin", "goal": "max"}
+    if objective["quantity"] in OBJECTIVES[2:] and resolved["elastic"] is None:
+        raise SceneError("sweep.objective.quantity", f"{objective['quantity']} is a number of the elastic model; "
+                                                     "this scene has no [elastic] table")
+    p = Plan(sweep["x"], sweep["y"], base, resolved, limits, (objective["quantity"], objective["goal"]))
     for name, axis in p.axes:
         edits(axis["field"], resolved, float(core_sweep.axis_values(axis)[0]), f"sweep.{name}.field")
         if axis["field"].startswith("comfort."):  # the swept end's partner, as the scene gives it
@@ -336,7 +380,8 @@ def _closest_resonance(modes: Table) -> tuple[list, dict]:
 def evaluate(p: Plan, i: int, j: int, until: float):
     """A task: point (i, j) of the plan ``p`` built here, run through the scene's own path until the wall-clock
     time ``until`` (:func:`symmech.core.sweep.deadline`) and reduced to its design numbers
-    (:func:`point_metrics`); ("failed", message) when the run stops with a user error. BLAS runs on one
+    (:func:`point_metrics`) and what needs attention (its warnings and the checks that did not pass, as a single run
+    lists them); ("failed", message) when the run stops with a user error. BLAS runs on one
     thread, as on a dask worker: a multi-threaded product rounds differently, and the numbers of a point
     must not depend on where it ran (nor a process pool oversubscribe the cores)."""
     from threadpoolctl import threadpool_limits
@@ -350,7 +395,8 @@ def evaluate(p: Plan, i: int, j: int, until: float):
             res = scene.run(core_sweep.point_context(until))
     except SymmechError as exc:
         return "failed", str(exc)
-    return "ok", *point_metrics(res, scene.setup.comfort), res.warnings
+    attention = res.warnings + [c.text() for c in res.checks if c.verdict != "pass"]
+    return "ok", *point_metrics(res, scene.setup.comfort), attention
 
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
@@ -445,6 +491,9 @@ CHARTS = (("comfort_margin", "least comfort margin", False),
           ("roller_deflection_max", "largest roller deflection", True),
           ("body_deflection_max", "largest body deflection", True),
           ("resonance_detuning", "closest resonance |f / f_forcing - 1|", False))
+# A design number whose spread over the plane is below this fraction of its magnitude is stated, not charted: the
+# peaks are read off the output samples, whose spacing alone moves them by more than that.
+FLAT_RTOL = 1e-3
 
 
 def _number(x) -> float | None:
@@ -458,17 +507,35 @@ def _worst_best(values: np.ndarray, larger_is_worse: bool) -> tuple[int, int]:
     return (hi, lo) if larger_is_worse else (lo, hi)
 
 
-def admissible(table: Table, limits: dict) -> np.ndarray:
-    """Per row: comfort margin ≥ 0 and every stated reaction limit kept (False for a failed point)."""
-    ok = table.column("comfort_margin") >= 0
+# (pattern of a single run's warning or check, its short label on a chart cell)
+ATTENTION = ((r"sampled at|samples per period", "output sampling"), (r"natural frequenc", "resonance"),
+             (r"energy balance", "energy balance"), (r"small-rotation", "roller rotation"),
+             (r"small-angle", "small-angle range"), (r"consistent order", "model order"),
+             (r"opposite sign of the rigid", "sign vs rigid"))
+
+
+def reasons(row: dict, attention: list[str], limits: dict) -> list[tuple[str, str]]:
+    """Why a point is not admissible, as (short label for a chart cell, sentence) pairs: its comfort margin below
+    0, a reaction beyond its stated limit, a roller reaction changing sign (lift-off), any other warning or
+    check that did not pass (``attention``: a single run's). Empty: admissible. ``row``: its design numbers."""
+    out = []
+    if row["comfort_margin"] < 0:
+        out.append(("comfort", f"leaves the comfort envelope by {-row['comfort_margin']:.3g} g"))
     for name, limit in limits.items():
-        ok &= table.column(f"peak_{name}") <= limit
-    return ok
+        if row[f"peak_{name}"] > limit:
+            out.append((f"{name} limit", f"|{name}| reaches {row[f'peak_{name}']:.4g} N > limit {limit:.4g} N"))
+    lifted = sorted(set(re.findall(r"(P[0-9]) changes sign", " ".join(attention))))
+    if lifted:
+        out.append(("lift-off", f"roller reaction {', '.join(lifted)} changes sign: the roller would lift off"))
+    rest = [a for a in attention if "changes sign" not in a and "comfort envelope" not in a]
+    out += [(next((label for pattern, label in ATTENTION if re.search(pattern, a)), "check"), a) for a in rest]
+    return out
 
 
 def result(p: Plan, outcomes: list) -> Result:
-    """Table ``sweep`` (one row per point, x-major), summary (worst and best point, per chart metric too,
-    the admissible points, failed and warned points) and the charts."""
+    """Table ``sweep`` (one row per point, x-major, with its verdict), the decision (:func:`decide`: best
+    admissible point for the objective, the admissible region, what limits the rest) as summary, headline and
+    checks, the charts with the same best point, and the design numbers too flat to chart stated instead."""
     xs, ys = p.values
     X, Y = np.meshgrid(xs, ys, indexing="ij")
     base_cols = [Column(name, unit_of(axis), f"swept field {axis['field']}") for name, axis in p.axes]
@@ -477,12 +544,16 @@ def result(p: Plan, outcomes: list) -> Result:
     if not done:
         raise SceneError("sweep", f"every point failed; first: {outcomes[0][1]}")
     cols, _, text0, _ = done[0][1:]
+    names = [c.name for c in cols]
     rows = np.array([o[2] if o[0] == "ok" else [math.nan] * len(cols) for o in outcomes])
+    why = [[("failed", f"the run stopped: {o[1]}")] if o[0] != "ok" else
+           reasons(dict(zip(names, o[2])), o[4], p.limits) for o in outcomes]
+    ok = np.array([not w for w in why])
     text = {key: [o[3][key] if o[0] == "ok" else "failed" for o in outcomes] for key in text0}
+    text["verdict"] = ["admissible" if not w else "; ".join(sentence for _, sentence in w) for w in why]
     metric = Table(cols, rows)
-    ok = admissible(metric, p.limits)
-    table = Table(base_cols + cols + [Column("admissible", "1", "1: comfort margin ≥ 0 and the reactions within "
-                                                                 "the stated limits")],
+    table = Table(base_cols + cols + [Column("admissible", "1", "1: comfort margin ≥ 0, the reactions within the "
+                                                                 "stated limits, no warning and no check failed")],
                   np.column_stack([base, rows, ok.astype(float)]), "design numbers over the swept plane", text,
                   grid={c.name: c.name for c in base_cols})
 
@@ -492,100 +563,117 @@ def result(p: Plan, outcomes: list) -> Result:
         point |= {c.name: _number(rows[k, n]) for n, c in enumerate(cols)} | {key: text[key][k] for key in text}
         return point | {"admissible": bool(ok[k])}
 
-    names = [c.name for c in cols]
     extremes = {}
     for name, _, larger in CHARTS:
         if name in names:
             worst, best = _worst_best(metric.column(name), larger)
             extremes[name] = {"worst": at(worst), "best": at(best)}
-    failed = [{"index": list(np.unravel_index(k, p.shape))[:len(p.axes)], "error": o[1]}
+    flat = {name: statement for name, title, _ in CHARTS if name in names
+            for statement in [core_sweep.flat_statement(metric.column(name), title, unit_of_column(cols, name),
+                                                        FLAT_RTOL)] if statement}
+    decision = decide(p, table, ok, why)
+    best = decision["best"]
+    failed = [{"index": [int(v) for v in np.unravel_index(k, p.shape)][:len(p.axes)], "error": o[1]}
               for k, o in enumerate(outcomes) if o[0] != "ok"]
-    warned = [{"index": list(np.unravel_index(k, p.shape))[:len(p.axes)], "warnings": len(o[4]), "first": o[4][0]}
-              for k, o in enumerate(outcomes) if o[0] == "ok" and o[4]]
+    warned = [{"index": [int(v) for v in np.unravel_index(k, p.shape)][:len(p.axes)], "warnings": len(o[4]),
+               "first": o[4][0]} for k, o in enumerate(outcomes) if o[0] == "ok" and o[4]]
     summary = {"points": len(outcomes), "swept": [axis["field"] for _, axis in p.axes],
                "units": [unit_of(axis) for _, axis in p.axes], "limits_N": p.limits,
-               "criterion": "comfort_margin: the worst point has the least, the best the largest",
-               "worst_point": extremes["comfort_margin"]["worst"], "best_point": extremes["comfort_margin"]["best"],
-               "extremes": extremes, "admissible_points": int(ok.sum()),
-               "failed_points": [{**f, "index": [int(v) for v in f["index"]]} for f in failed],
-               "warned_points": [{**w, "index": [int(v) for v in w["index"]]} for w in warned]}
-    warnings = [f"{len(failed)} point(s) stopped with an error (summary.json: failed_points); first: "
-                f"{failed[0]['error']}"] if failed else []
-    return Result("trolley_sweep", summary, {"sweep": table}, warnings=warnings,
-                  plots=lambda folder: _plots(p, table, ok, extremes, folder))
+               "criterion": decision["objective"], "decision": {**decision, "best": None if best is None else at(best)},
+               "worst_point": extremes["comfort_margin"]["worst"],
+               "best_point": None if best is None else at(best), "extremes": extremes, "flat": flat,
+               "admissible_points": int(ok.sum()), "failed_points": failed, "warned_points": warned,
+               "captions": {f"sweep_{name}": caption(p, title) for name, title, _ in CHARTS
+                            if name in names and name not in flat}}
+    headline, checks, warnings = answer(p, table, decision, flat)
+    charts = [(name, title, unit_of_column(cols, name)) for name, title, _ in CHARTS if name in names
+              and name not in flat]
+    axes = [(name_of(axis), unit_of(axis), axis["log"]) for _, axis in p.axes]
+    return Result("trolley_sweep", summary, {"sweep": table}, warnings=warnings, headline=headline, checks=checks,
+                  plots=lambda folder: sweep_plots.plots(p.values, axes, table, ok, why, best, charts, folder))
 
 
-def _plots(p: Plan, table: Table, ok: np.ndarray, extremes: dict, folder) -> list:
-    """One chart per design number over the plane (a heat map over x and y, a line over x alone), with the
-    worst (✕) and best (★) points marked and the admissible region outlined."""
-    xs, ys = p.values
-    x_label = (p.x["field"], unit_of(p.x))
-    written = []
-    for name, title, _ in CHARTS:
-        if name not in extremes:
-            continue
-        col = next(c for c in table.columns if c.name == name)
-        z = table.column(name).reshape(p.shape)
-        worst, best = (extremes[name][k]["index"] for k in ("worst", "best"))
-        fig, axes = plotting.figure(width=6.4, height=4.8)
-        ax = axes[0, 0]
-        if p.y:
-            _plane(fig, ax, edges(xs, p.x["log"]), edges(ys, p.y["log"]), z, ok.reshape(p.shape),
-                   title, col.unit)
-            ax.plot(xs[worst[0]], ys[worst[1]], "rX", ms=12, mec="k", label="worst")
-            ax.plot(xs[best[0]], ys[best[1]], "w*", ms=15, mec="k", label="best")
-            plotting.set_labels(ax, x_label, (p.y["field"], unit_of(p.y)))
-        else:
-            ax.plot(xs, z[:, 0], "o-", color="C0")
-            _admissible_cells(ax, xs, ok, p.x["log"])
-            ax.plot(xs[worst[0]], z[worst[0], 0], "rX", ms=12, mec="k", label="worst")
-            ax.plot(xs[best[0]], z[best[0], 0], "*", color="gold", ms=15, mec="k", label="best")
-            plotting.set_labels(ax, x_label, (title, col.unit))
-        for axis, scale in ((p.x, ax.set_xscale), (p.y, ax.set_yscale)):
-            if axis and axis["log"]:
-                scale("log")
-        ax.legend(fontsize=8, loc="best")
-        ax.set_title(title, fontsize=9)
-        written += plotting.save(fig, folder, f"sweep_{name}")
-    return written
+def unit_of_column(cols: list[Column], name: str) -> str:
+    return next(c.unit for c in cols if c.name == name)
 
 
-def edges(values: np.ndarray, log: bool) -> np.ndarray:
-    """Cell edges (n + 1,) around the swept ``values`` (n,): midway between neighbours (geometrically on a
-    log axis), the end cells as wide as their neighbours' halves (one value: ±50 %)."""
-    v = np.log(values) if log else np.asarray(values, float)
-    mid = (v[1:] + v[:-1]) / 2
-    first, last = (v[0] - (mid[0] - v[0]), v[-1] + (v[-1] - mid[-1])) if len(v) > 1 else \
-        (v[0] - 0.5 * abs(v[0] or 1), v[0] + 0.5 * abs(v[0] or 1))
-    out = np.concatenate([[first], mid, [last]])
-    return np.exp(out) if log else out
+def caption(p: Plan, title: str) -> str:
+    """A chart's caption, as a sentence."""
+    over = " and ".join(name_of(axis) for _, axis in p.axes)
+    return (f"The {title} over {over}. The star is the best admissible point for the objective; hatched cells are "
+            "not admissible, labelled with what limits them.")
 
 
-def _admissible_cells(ax, xs, ok, log) -> None:
-    """Shade the admissible points' cells along x."""
-    e = edges(xs, log)
-    for n, k in enumerate(np.flatnonzero(ok)):
-        ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
+def objective_text(p: Plan) -> str:
+    quantity, goal = p.objective
+    what = name_of(p.x if quantity == "x" else p.y) if quantity in ("x", "y") else quantity
+    return f"{'largest' if goal == 'max' else 'smallest'} {what}"
 
 
-def border(xe, ye, ok) -> list:
-    """The cell edges between admissible and other points: segments ((x, y), (x, y)) over the cells with
-    edges xe (nx + 1,), ye (ny + 1,) of the points ok (nx, ny)."""
-    across_x = [((xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[1:] != ok[:-1]))]
-    across_y = [((xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[:, 1:] != ok[:, :-1]))]
-    return across_x + across_y
+def objective_values(p: Plan, table: Table) -> np.ndarray:
+    """The objective per point, signed so that larger is better."""
+    quantity, goal = p.objective
+    if quantity not in [c.name for c in table.columns]:
+        raise SceneError("sweep.objective.quantity", f"{quantity}: this sweep's points have no such design number "
+                                                     f"(they have: {', '.join(n for n, *_ in CHARTS)})")
+    v = table.column(quantity)
+    return v if goal == "max" else -v
 
 
-def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
-    """Heat map of z (nx, ny) over the cells with edges xe (nx + 1,) and ye (ny + 1,), with the border of the
-    admissible points ``ok`` drawn around them and the others hatched."""
-    from matplotlib.collections import LineCollection
+def decide(p: Plan, table: Table, ok: np.ndarray, why: list) -> dict:
+    """The decision: the best admissible point (flat index, or None) for the plan's objective, the admissible
+    region (count and bounds of each swept value), and per reason the points it excludes and where."""
+    score = np.where(ok & np.isfinite(objective_values(p, table)), objective_values(p, table), -np.inf)
+    best = int(np.argmax(score)) if np.isfinite(score).any() else None
+    swept = [c.name for c in table.columns][:len(p.axes)]
 
-    mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
-    fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
-    if ok.any() and not ok.all():
-        ax.add_collection(LineCollection(border(xe, ye, ok), colors="w", linewidths=2.0,
-                                         label="admissible region border"))
-    if not ok.all():
-        ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
-                  edgecolor="0.3", linewidth=0.0, label="outside the admissible region")
+    def bounds(mask) -> dict:
+        return {name: [float(table.column(name)[mask].min()), float(table.column(name)[mask].max())]
+                for name in swept}
+
+    limited = {}
+    for k, w in enumerate(why):
+        for label in dict.fromkeys(label for label, _ in w):
+            limited.setdefault(label, []).append(k)
+    return {"objective": objective_text(p), "best": best,
+            "admissible": {"count": int(ok.sum()), "of": int(ok.size), "bounds": bounds(ok) if ok.any() else None},
+            "limited_by": [{"reason": label, "points": len(ks), "bounds": bounds(np.isin(np.arange(ok.size), ks)),
+                            "first": why[ks[0]][[lbl for lbl, _ in why[ks[0]]].index(label)][1]}
+                           for label, ks in sorted(limited.items(), key=lambda kv: -len(kv[1]))]}
+
+
+def _where(p: Plan, bounds: dict) -> str:
+    parts = []
+    for name, axis in p.axes:
+        lo, hi = bounds[name]
+        unit = unit_of(axis)
+        parts.append(f"{name_of(axis)} {units.format(lo, unit)}" if lo == hi else
+                     f"{name_of(axis)} {units.format(lo, unit)} … {units.format(hi, unit)}")
+    return ", ".join(parts)
+
+
+def answer(p: Plan, table: Table, decision: dict, flat: dict):
+    """(headline, checks, warnings) of a sweep: its decision first, as a single run's answers read."""
+    from symmech.core.results import Check, Headline
+
+    quantity = p.objective[0]
+    headline, best = [], decision["best"]
+    n, total = decision["admissible"]["count"], decision["admissible"]["of"]
+    if best is not None:
+        point = {name: float(table.column(name)[best]) for name, _ in p.axes}
+        where = _where(p, {name: (v, v) for name, v in point.items()})
+        unit = unit_of(p.x if quantity == "x" else p.y) if quantity in ("x", "y") else unit_of_column(table.columns,
+                                                                                                      quantity)
+        headline.append(Headline(f"best point: {decision['objective']}", float(table.column(quantity)[best]), unit,
+                                 f"the {decision['objective']} of the {n} admissible points (no warning, no "
+                                 "failed check, comfort and the stated limits kept); its cell reaches halfway "
+                                 "to the neighbouring values", where))
+    headline.append(Headline("admissible points", float(n), "1", f"of {total}: "
+                             + (_where(p, decision["admissible"]["bounds"]) if n else "none"), ""))
+    headline += [Headline(s["text"].partition(":")[0], s["value"], s["unit"], s["text"].partition(": ")[2],
+                          "every point") for s in flat.values()]
+    checks = [Check("points admissible (no warning, no failed check, within the limits)", float(n), "1", "> 0",
+                    "pass" if n else "fail")]
+    warnings = [f"{c['points']} of {total} point(s) limited by {c['reason']} at {_where(p, c['bounds'])}; "
+                f"first: {c['first']}" for c in decision["limited_by"]]
+    return headline, checks, warnings

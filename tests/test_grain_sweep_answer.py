@@ -1,0 +1,32 @@
+"""A grain sweep's decision on hand-built statistics: the constraints, a failed or warned grain each exclude a
+point with its reason; the best point is the least overlap among the eligible points only."""
+import numpy as np
+
+from symmech.grain import sweep, sweep_report
+
+# a 2 x 2 plane, x-major: points 0 (0, 0), 1 (0, 1), 2 (1, 0), 3 (1, 1)
+CROP = {"mean_vx": np.array([[0.005, 0.03], [0.04, 0.05]]), "hop_fraction": np.array([[0.0, 0.2], [0.95, 0.5]])}
+WEED = {"mean_vx": np.array([[0.0, 0.0], [0.0, 0.0]]), "hop_fraction": np.array([[1.0, 1.0], [1.0, 1.0]])}
+CONSTRAINTS = {"population": "crop", "min_mean_vx": 0.02, "hop_fraction_min": None, "hop_fraction_max": 0.9}
+
+
+def test_constraints_and_warned_grains_exclude_points_with_their_reason():
+    warned = [("weed", 1, 1, 4, ["2 rocking contact(s): ..."])]
+    why = sweep_report.reasons(["crop", "weed"], [CROP, WEED], CONSTRAINTS, [], warned, (2, 2))
+    # point 0: 5 mm/s < 20 mm/s; point 2: hop fraction 0.95 > 0.9; point 3: a warned weed grain; the weed's own
+    # hop fraction of 1 is not constrained (the constraints name the crop)
+    assert [[label for label, _ in w] for w in why] == [["too slow"], [], ["hops"], ["warned grain"]]
+    assert why[0][0][1] == "crop moves at 5 mm/s < 20 mm/s" and why[3][0][1].startswith("weed grain 4: 2 rocking")
+
+
+def test_the_best_point_is_the_least_overlap_among_the_eligible_points():
+    """Overlaps 0.1, 0.4, 0.05, 0.2: the least (point 2) is not eligible, so the best is point 0 (0.1)."""
+    sep = {"overlap": np.array([[0.1, 0.4], [0.05, 0.2]]), "delta_vx": np.zeros((2, 2)),
+           "overlap_lo": np.array([[0.05, 0.3], [0.01, 0.15]]), "overlap_hi": np.array([[0.15, 0.5], [0.1, 0.3]])}
+    ok = np.array([True, True, False, True])
+    best, similar = sweep.best_point(sep, ok)
+    # not significantly worse: an eligible point whose interval's lower end is at most the best's upper end 0.15
+    assert best == 0 and similar.tolist() == [[True, False], [False, True]]
+    assert sweep.best_point(sep, np.zeros(4, bool)) == (None, None)
+    # one population: the fastest eligible transport
+    assert sweep_report.best(np.array([True, True, False, False]), ["crop"], [CROP], None) == 1

@@ -1,0 +1,77 @@
+"""A trolley sweep answers like a designer's tool: a point with a lift-off warning is never admissible and says
+so in its table row and chart cell; the best admissible point for the stated objective is the one starred on
+every chart; a design number too flat to chart is stated as a number."""
+import numpy as np
+import pytest
+
+from badinput import edited
+from symmech.core import pipeline
+from symmech.core import plotting
+from symmech.core import sweep as core_sweep
+from symmech.trolley import sweep
+from test_trolley_sweep import RIGID, TINY, outcomes, swept
+
+pytestmark = pytest.mark.xdist_group("test_trolley_sweep")
+
+# TINY sampled finely enough for its modes and with a comfort envelope no point leaves: only lift-off limits it
+WIDE = edited(TINY, ("time.steps", 40), ("comfort", {"x1": [-40.0, 40.0], "x2": [-40.0, 40.0], "x3": [-40.0, 40.0]}))
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The figures the sweep's charts would save, by file stem."""
+    saved = {}
+    monkeypatch.setattr(plotting, "save", lambda fig, folder, stem: saved.setdefault(stem, fig) and [stem])
+    return saved
+
+
+def test_a_lift_off_point_is_drawn_inadmissible_with_its_reason(figures):
+    """The speed's slope a = 300 m/s² reaches ~36 m/s within 0.12 s: a direct run's roller reaction changes sign
+    (max > 0 > min), so that point is not admissible, whatever its numbers, and its row and cell say lift-off."""
+    direct = pipeline.load(edited(WIDE, ("motion.constants.a", 300.0))).run().tables["elastic_reactions"]
+    assert any(direct.column(f"P{i}").max() > 0 > direct.column(f"P{i}").min() for i in range(1, 6))
+    p, out = outcomes(swept(WIDE, {"field": "motion.constants.a", "values": [3.0, 300.0]}))
+    res = sweep.result(p, out)
+    table = res.tables["sweep"]
+    assert list(table.column("admissible")) == [1.0, 0.0] and table.column("comfort_margin").min() > 0
+    assert table.text["verdict"][0] == "admissible" and "would lift off" in table.text["verdict"][1]
+    assert res.summary["best_point"]["x"] == 3.0
+    assert [c["points"] for c in res.summary["decision"]["limited_by"] if c["reason"] == "lift-off"] == [1]
+    assert any("limited by lift-off" in w for w in res.warnings)
+    res.plots(None)
+    for stem, fig in figures.items():
+        (label,) = [t.get_text() for t in fig.axes[0].texts]
+        assert "lift-off" in label.split(", "), stem
+
+
+def test_the_best_point_is_the_same_on_every_chart(figures):
+    """Objective: the largest speed scale with P3 ≤ 250 N and comfort kept. The best point is the largest x among
+    the rows that keep both (read from the table), and every chart stars it there."""
+    raw = swept(RIGID, {"field": "motion.speed_scale", "values": [0.5, 1.0, 1.5]},
+                {"field": "trolley.mass", "values": [50.0, 100.0]}, limits={"P3": 250.0},
+                objective={"quantity": "x", "goal": "max"})
+    p, out = outcomes(raw)
+    res = sweep.result(p, out)
+    t = res.tables["sweep"]
+    keep = (t.column("comfort_margin") >= 0) & (t.column("peak_P3") <= 250.0)
+    assert 0 < keep.sum() < len(keep)  # the limit bites: the best is not simply the largest x swept
+    k = int(np.flatnonzero(keep)[np.argmax(t.column("x")[keep])])
+    best = (t.column("x")[k], t.column("y")[k])
+    assert (res.summary["best_point"]["x"], res.summary["best_point"]["y"]) == best
+    res.plots(None)
+    assert len(figures) == 2
+    for stem, fig in figures.items():
+        stars = [line for line in fig.axes[0].lines if line.get_label() == "best admissible point"]
+        assert len(stars) == 1 and (stars[0].get_xdata()[0], stars[0].get_ydata()[0]) == best, stem
+        x0, x1 = fig.axes[0].get_xlim()
+        assert (x0, x1) == (0.5, 1.5), stem  # the cells end at the swept range
+
+
+def test_a_flat_quantity_is_stated_not_colour_mapped():
+    """A spread of 2e-4 on 1.0001 (below 1e-3 of it) is stated as one number; a spread of 1 % is charted."""
+    flat = core_sweep.flat_statement(np.array([1.00005, 1.00025, 1.0001]), "largest dynamic amplification", "1",
+                                     1e-3)
+    assert flat["value"] == pytest.approx(1.00013333, rel=1e-8) and flat["spread"] == pytest.approx(2e-4, rel=1e-9)
+    assert flat["text"].startswith("largest dynamic amplification: 1.0001 everywhere, within the tolerance")
+    assert core_sweep.flat_statement(np.array([1.0, 1.01]), "amplification", "1", 1e-3) is None
+    assert core_sweep.flat_statement(np.array([np.nan, 2.0]), "amplification", "1", 1e-3) is None  # one finite
