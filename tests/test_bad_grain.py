@@ -150,7 +150,7 @@ def test_cli_refuses_in_one_line(tmp_path, replacements, words):
 
 
 def test_unit_vector_direction_equals_the_angle_it_names():
-    """Direction = "vector" with (cos 30°, 0, sin 30°) is the bundled throw angle of 30°."""
+    """direction = "vector" with (cos 30°, 0, sin 30°) is the bundled throw angle of 30°."""
     c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
     as_vector = edits(("vibration.direction", "vector"), ("vibration.angle_deg", DELETE), ("vibration.vector", [c, 0, s]))
     a, b = pipeline.load(BASE).setup.model.vibration, pipeline.load(as_vector).setup.model.vibration

@@ -218,7 +218,7 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
 
 
 def test_the_assembly_matches_system_evaluate_at_random_states():
-    """Q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
+    """q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
     from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}

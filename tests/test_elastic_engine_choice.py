@@ -24,7 +24,7 @@ def loaded(engine="auto", method="Radau", t_end=3.0, steps=1000):
 
 @pytest.fixture
 def cold(monkeypatch):
-    """Numba's cache without the compiled engine; the background builders started (none really)."""
+    """numba's cache without the compiled engine; the background builders started (none really)."""
     started = []
     monkeypatch.delenv("SYMMECH_BACKGROUND_BUILD", raising=False)  # tests/conftest.py's
     monkeypatch.setattr(ec.ENGINE, "cold", lambda: True)

@@ -39,7 +39,7 @@ def scene_file(tmp_path: Path, duration: float, engine: str | None = None) -> Pa
 
 @pytest.fixture
 def cold_cache(tmp_path, monkeypatch):
-    """Numba's cache reported empty (and no build ahead of time), the build lock in a temporary folder, and no
+    """numba's cache reported empty (and no build ahead of time), the build lock in a temporary folder, and no
     builder process started: returns the list of builder command lines that would have been started."""
     started = []
     monkeypatch.delenv("SYMMECH_BACKGROUND_BUILD", raising=False)  # tests/conftest.py's

@@ -201,7 +201,7 @@ def test_paper_mode_chattering_ends_in_sliding():
 
 
 def test_grazing_contact_between_scan_points_is_found():
-    """H(t) = (t - 0.5)^2 - 1e-8 dips below zero between scan points 0.4 and 0.6."""
+    """h(t) = (t - 0.5)^2 - 1e-8 dips below zero between scan points 0.4 and 0.6."""
     def h(t):
         return (np.asarray(t) - 0.5) ** 2 - 1e-8
     root = contact.first_root(h, 0.0, 1.0, 0.2, 1e-12)
@@ -210,7 +210,7 @@ def test_grazing_contact_between_scan_points_is_found():
 
 
 def test_grazing_contact_midway_between_two_equal_scan_values_is_found():
-    """H(t) = (t - 0.375)^2 - 1e-8 scanned at 0.25 from 0: h(0.25) = h(0.5) = 1/64 exactly, neither sample below
+    """h(t) = (t - 0.375)^2 - 1e-8 scanned at 0.25 from 0: h(0.25) = h(0.5) = 1/64 exactly, neither sample below
     both neighbours; the dip between them is still found, its first root at 0.375 - 1e-4."""
     root = contact.first_root(lambda t: (np.asarray(t) - 0.375) ** 2 - 1e-8, 0.0, 1.0, 0.25, 1e-12)
     assert root == pytest.approx(0.375 - 1e-4, abs=1e-10)
@@ -284,7 +284,7 @@ def test_constant_euler_rates_of_62_break_angular_momentum_for_an_asymmetric_gra
 
 
 def test_paper_mode_rotates_a_grain_started_at_gimbal_lock():
-    """Theta = 0 (body axis 3 along the normal), where the Euler rates of (62) are singular. Before, paper mode
+    """theta = 0 (body axis 3 along the normal), where the Euler rates of (62) are singular. Before, paper mode
     froze the rotation; now a spin about the normal turns the grain exactly (regular precession, for which (62) is
     exact): Q(t) = Rz(30 t) Q0, and a tumbling start turns by about |w| t without NaN."""
     model = grain_model(axes=(2e-3, 1.5e-3, 1e-3), mass=1e-5)

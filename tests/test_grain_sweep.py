@@ -390,7 +390,7 @@ def test_grains_needed_for_a_half_width():
 
 @pytest.mark.slow
 def test_the_bundled_separation_sweep_carries_its_intervals(tmp_path):
-    """Scenes/grain_separation.toml: 12 x 12 points x 30 grains per population (minutes on 2 cores)."""
+    """scenes/grain_separation.toml: 12 x 12 points x 30 grains per population (minutes on 2 cores)."""
     import json
 
     from symmech.core.context import Context

@@ -137,7 +137,7 @@ def test_a_mechanism_run_imports_no_generated_module(tmp_path):
 
 
 def test_codegen_regenerates_an_edited_module(tmp_path):
-    """Codegen reads the files it checks without importing them: it names and rewrites an edited module."""
+    """codegen reads the files it checks without importing them: it names and rewrites an edited module."""
     folder = _edited_copy(tmp_path, "trolley_printed")
     check, write = ["codegen", "--check", "--dir", str(folder)], ["codegen", "--dir", str(folder)]
     code = f"from symmech.cli import main\nprint(main({check!r}), main({write!r}))"

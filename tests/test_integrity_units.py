@@ -1,4 +1,4 @@
-"""Symmech.core.integrity in-process: the header, the body hash, the per-process cache, the import
+"""symmech.core.integrity in-process: the header, the body hash, the per-process cache, the import
 hook's finder and loader, and the atomic write (these kill mutants that the
 fresh-interpreter tests of test_integrity.py cannot see). References are hand-written header lines
 and hashlib, never the module's own functions."""

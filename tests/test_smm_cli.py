@@ -7,7 +7,7 @@ from symmech.cli import main
 from symmech.core import emit
 from symmech.smm.derive import bundled_scenes, module_specs
 
-BASE = """Kind = "mechanism"
+BASE = """kind = "mechanism"
 [parameters]
 m = {value = 1.0, unit = "kg"}
 [[coordinates]]

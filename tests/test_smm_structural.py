@@ -16,7 +16,7 @@ from test_smm_pivot import random_scene, tension_error
 
 
 def pendulum(n: int, k: float = 50.0) -> dict:
-    """N links of length l hanging from O, relative angles, bobs m, torsion springs k, gravity."""
+    """n links of length l hanging from O, relative angles, bobs m, torsion springs k, gravity."""
     points = [{"name": "O", "at": [0, 0]}]
     points += [{"name": f"P{i}", "from": "O" if i == 0 else f"P{i - 1}", "vector": [0, "-l"],
                 "turns": [f"q{j}" for j in range(i + 1)]} for i in range(n)]

@@ -106,7 +106,7 @@ def test_twist_with_frenet_frame_is_refused():
 
 
 def test_nan_speed_names_the_speed_field_and_time():
-    """Sqrt(5 - t) is complex beyond t = 5 s (before: "the track curls back")."""
+    """sqrt(5 - t) is complex beyond t = 5 s (before: "the track curls back")."""
     with pytest.raises(SceneError) as info:
         prepared(setup(motion={"speed": "sqrt(5 - t)"}, time={"t_end": 10.0, "steps": 100}))
     assert info.value.field == "motion.speed"

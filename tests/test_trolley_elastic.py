@@ -321,7 +321,7 @@ def test_jacobi_energy_on_a_uniform_circle(damped):
 
 
 def test_stiff_rollers_need_no_tiny_steps():
-    """K = 1e8 N/m under a 10 kg body: ω ~ 5000 rad/s, yet the implicit integrator takes few steps."""
+    """k = 1e8 N/m under a 10 kg body: ω ~ 5000 rad/s, yet the implicit integrator takes few steps."""
     mdl = el.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, G0,
                           el.Rollers((1e8,) * 5, (1e3,) * 5))
     system = el.System(mdl)

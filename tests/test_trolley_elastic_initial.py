@@ -149,7 +149,7 @@ def test_initial_state_of_a_rigid_part_is_refused(effects, initial, field):
 def test_cli_refuses_a_bad_initial_state_in_one_line(tmp_path):
     from badinput import cli_rejects
 
-    text = """Kind = "trolley"
+    text = """kind = "trolley"
 [track]
 type = "expression"
 x = "s"

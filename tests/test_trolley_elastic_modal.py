@@ -120,7 +120,7 @@ def test_numerical_failures_of_the_modal_analysis_are_warnings_too(tmp_path, mon
 
 
 def test_roller_frequencies_closed_form_at_q0_and_the_sagged_states_difference():
-    """Docs/trolley-elastic.md: the closed-form roller frequencies (2-DOF bounce/pitch, 3-DOF
+    """docs/trolley-elastic.md: the closed-form roller frequencies (2-DOF bounce/pitch, 3-DOF
     lateral/roll/yaw, -m g0 c2 on roll and pitch) are those of the linearisation at q = 0, with
     gravity too (1e-12); the `modes` table linearises about the sagged quasi-static state, whose
     frequencies differ by first order in the sag: 4.0e-4 at k ~ 1e5 N/m, 10x less at 10x k

@@ -40,7 +40,7 @@ def tracked():
 
 
 def _first_of_plane(modes, plane):
-    """Mode_id (0-based) dominated by the first mode of ``plane`` at the first sample."""
+    """mode_id (0-based) dominated by the first mode of ``plane`` at the first sample."""
     k, = np.flatnonzero((modes["plane"][0] == plane) & (modes["mode_number"][0] == 1))
     return k
 

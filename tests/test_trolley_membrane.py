@@ -134,7 +134,7 @@ def duffing_exact(eps):
 
 @pytest.mark.slow  # a long free vibration per amplitude
 def test_held_pinned_beam_follows_the_duffing_backbone():
-    """W = a(t) sin(πx/L) is exact for held ends (the axial force is uniform): with
+    """w = a(t) sin(πx/L) is exact for held ends (the axial force is uniform): with
     Π = EI π⁴ a²/(4L³) + EA π⁴ a⁴/(32L³) and T = ρAL ȧ²/4, ä + ω0² a (1 + ε (a/â)²) = 0 with
     ε = (â/r)²/4 at the amplitude â; first-order harmonic balance: ω/ω0 = sqrt(1 + (3/16)(â/r)²)."""
     omega_ref = np.pi ** 2 * np.sqrt(E * INERTIA / (RHO * AREA * L ** 4))

@@ -81,7 +81,7 @@ class Helix(Curve):
         return np.stack([t, n, b], -2), omega, np.zeros_like(t)
 
     def dlstar(self, s):
-        """DΛ*/ds = (K Λ* - Λ* K)/r: the figure turns about X3 at 1/r rad/m."""
+        """dΛ*/ds = (K Λ* - Λ* K)/r: the figure turns about X3 at 1/r rad/m."""
         K = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
         lstar = self.lstar(s)
         return (K @ lstar - lstar @ K) / self.root
@@ -125,7 +125,7 @@ HELIX, CIRCLE, CATENARY, LINE = Helix(0.5), Helix(0.0), Catenary(), Line()
 
 @pytest.mark.parametrize("track", [HELIX, CIRCLE], ids=["helix", "circle"])
 def test_paper_lstar_is_the_printed_rodrigues_of_the_unnormalised_axis(track):
-    """S = 0 on the circle is a vertical tangent: the Frenet frame holds there (the twist frame would not)."""
+    """s = 0 on the circle is a vertical tangent: the Frenet frame holds there (the twist frame would not)."""
     s = np.array([0.0, 0.8, 2.5])
     lstar, base = model.paper_lstar(track, s, L, "frenet")
     np.testing.assert_allclose(lstar, track.lstar(s), atol=1e-12)
@@ -138,7 +138,7 @@ def test_paper_lstar_is_the_printed_rodrigues_of_the_unnormalised_axis(track):
 
 
 def test_paper_lstar_derivative_by_central_differences_against_the_turning_helix():
-    """Central2 and central4 with the grid's step (0.05 m; 1 mm for a single point): errors of order h² and
+    """central2 and central4 with the grid's step (0.05 m; 1 mm for a single point): errors of order h² and
     h⁴ against the exact (K Λ* - Λ* K)/r, central2 the test's own difference of the printed Λ*; inside a
     plan's span the frame is evaluated at no arc length outside it."""
     s = np.linspace(0.5, 2.0, 31)

@@ -54,7 +54,7 @@ def _frame(s):
 
 
 def _d(f, t, h, k):
-    """K-th derivative (k = 1, 2) of f at t by 4th-order central differences with step h."""
+    """k-th derivative (k = 1, 2) of f at t by 4th-order central differences with step h."""
     w = {1: (1 / 12, -2 / 3, 0, 2 / 3, -1 / 12), 2: (-1 / 12, 4 / 3, -5 / 2, 4 / 3, -1 / 12)}[k]
     return sum(wj * f(t + j * h) for wj, j in zip(w, range(-2, 3))) / h**k
 
