@@ -51,8 +51,22 @@ def _check_names(fields: tuple, what: str) -> None:
         raise ValueError(f"{what}: field names must be unique public identifiers, got {names}")
 
 
+class _Declared:
+    """What a layout and a bundle share: their ``fields``' names and units, in order."""
+
+    @property
+    def names(self) -> tuple:
+        """The field names, in order."""
+        return tuple(f.name for f in self.fields)
+
+    @property
+    def units(self) -> tuple:
+        """The field units, in order."""
+        return tuple(f.unit for f in self.fields)
+
+
 @dataclass(frozen=True)
-class Layout:
+class Layout(_Declared):
     """A float64 vector of named fields at consecutive offsets, in declaration order.
 
     ``name`` is a Python identifier: the name of the offsets' named tuple (:attr:`slots`) and of a C struct.
@@ -70,16 +84,6 @@ class Layout:
     def _offsets(self) -> dict:
         offsets = np.cumsum([0] + [f.size for f in self.fields]).tolist()
         return dict(zip(self.names, offsets))
-
-    @property
-    def names(self) -> tuple:
-        """The field names, in order."""
-        return tuple(f.name for f in self.fields)
-
-    @property
-    def units(self) -> tuple:
-        """The field units, in order."""
-        return tuple(f.unit for f in self.fields)
 
     @property
     def size(self) -> int:
@@ -167,7 +171,7 @@ class Layout:
 
 
 @dataclass(frozen=True)
-class Bundle:
+class Bundle(_Declared):
     """A tuple of arrays of named fields, in declaration order: a model handed to compiled kernels whole.
 
     ``name`` is the name of its named tuple class, which ``module`` (the declaring module) must bind under
@@ -180,16 +184,6 @@ class Bundle:
 
     def __post_init__(self):
         _check_names(self.fields, self.name)
-
-    @property
-    def names(self) -> tuple:
-        """The field names, in order."""
-        return tuple(f.name for f in self.fields)
-
-    @property
-    def units(self) -> tuple:
-        """The field units, in order."""
-        return tuple(f.unit for f in self.fields)
 
     @cached_property
     def record(self) -> type:
