@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25bc6225c25b3522e6381c683cfcd4a704c11e90f53cccdb96d6760c36c5f4df
-# source key 9c68d61d7a106e41a4ee29879ea42b1447716e81c45adfc04ab9edbabe984ecb
+# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 61a9887016a21ee55e78f40a1415a8b55623387874430d1ce62fbf51b4493055
-# source key 79f5d9c8e5a49ff31fb0b7a9b771deb6f4713528d172e23f0bf95f06fc291d07
+# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

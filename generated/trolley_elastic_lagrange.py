@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 968716567f8f00bad677775c169945a234b67c291585fb661163dc8cefc9df71
-# source key 79f5d9c8e5a49ff31fb0b7a9b771deb6f4713528d172e23f0bf95f06fc291d07
+# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

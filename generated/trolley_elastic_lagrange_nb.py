@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 68042afcb72ecbcd4848513170552ef4d8496240fb3816e210a1cdd457c75493
-# source key 79f5d9c8e5a49ff31fb0b7a9b771deb6f4713528d172e23f0bf95f06fc291d07
+# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
 # body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 

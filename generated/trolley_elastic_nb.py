@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9b5e04b945c1aeea4275d98fa45f29f0e0068c1950d8ca4264691b518c336ea2
-# source key 79f5d9c8e5a49ff31fb0b7a9b771deb6f4713528d172e23f0bf95f06fc291d07
+# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

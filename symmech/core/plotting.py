@@ -53,6 +53,14 @@ def set_labels(ax, x: tuple[str, str], y: tuple[str, str], z: tuple[str, str] | 
         ax.set_zlabel(label(*z))
 
 
+def legend_below(ax, ncol: int = 2) -> None:
+    """The axes' legend under them, outside the data (none when no artist is labelled)."""
+    handles, names = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(handles, names, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=ncol,
+                  frameon=False)
+
+
 def unlabelled(fig) -> list[str]:
     """Descriptions of the visible axes of ``fig`` whose x, y (or z) label lacks a ``[unit]``."""
     def labelled(axes, name):

@@ -174,10 +174,7 @@ def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
         ax.set_xlim(xe[0], xe[-1])
         ax.set_ylim(ye[0], ye[-1])
         ax.set_title(title, fontsize=10)
-        handles, names = ax.get_legend_handles_labels()
-        if handles:  # below the axes, outside the data
-            ax.legend(handles, names, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
-                      frameon=False)
+        plotting.legend_below(ax)
         fig.tight_layout()
         written += plotting.save(fig, folder, stem)
     return written

@@ -49,10 +49,7 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
             if log:
                 scale("log")
         ax.set_title(title, fontsize=10)
-        handles, names = ax.get_legend_handles_labels()
-        if handles:  # below the axes, outside the data
-            ax.legend(handles, names, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3,
-                      frameon=False)
+        plotting.legend_below(ax, ncol=3)
         fig.tight_layout()
         written += plotting.save(fig, folder, f"sweep_{name}")
     return written
