@@ -35,7 +35,8 @@ def test_each_outcome_is_told_apart(tmp_path, case):
     source, outcome, test = CASES[case]
     path = tmp_path / f"test_{case}.py"
     path.write_text(source)
-    got, decided, _ = mutation_screen.run_one("", [str(path), *QUIET], 60.0)
+    # the rootdir pinned: test ids are relative to it, wherever the clone and the temporary folder are
+    got, decided, _ = mutation_screen.run_one("", [str(path), f"--rootdir={tmp_path}", *QUIET], 60.0)
     assert got == outcome
     if test is not None:
         assert decided == (f"{path.name}::{test}" if test else "")
