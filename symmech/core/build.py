@@ -126,7 +126,6 @@ class Engine:
         """Whether the next run compiles: no current record of the entries' cache files (a record that does not
         match: one warning line naming the refused file), or an entry has no machine code cached for its
         source. Imports the entries' module (and so numba and its generated twins) only once the record matches."""
-        artifacts.guard_numba_cache()
         record = self.record_file()
         if self._builder_at_work():
             return True
@@ -140,6 +139,7 @@ class Engine:
                                "compiles it again)")
                 return True
             self._accepted = stamp
+        artifacts.guard_numba_cache()  # before numba reads an index: an unreadable one is a warning, not an error
         return any(not entry._cache._cache_file._load_index() for entry in self.entries())  # numba's (private)
 
     def _builder_at_work(self) -> bool:

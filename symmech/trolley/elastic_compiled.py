@@ -29,13 +29,11 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from symmech.core import build, ode
+from symmech.core import build
 from symmech.trolley import elastic as el
-from symmech.trolley import elastic_kernels as ek
 from symmech.trolley.elastic_layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
@@ -49,6 +47,7 @@ STALL_ROUNDS = 2
 
 def row_terms(system, fr, V0, dV0, Y, height) -> dict:
     """:func:`symmech.trolley.elastic.row_terms` by the kernels' ``_rows`` (the potential Π per row in Python)."""
+    from symmech.trolley import elastic_kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     chs = frame_channels(fr, V0, dV0, system.mdl.g0)
     nu = np.ascontiguousarray(fr.lam[:, :, 1])
     keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
@@ -161,6 +160,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
     (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
     scales) what the table reached. With ``drive.traction``: :func:`simulate_traction`."""
+    from symmech.trolley import elastic_kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     t = np.asarray(t, dtype=float)
     if drive.traction is not None:
         return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
@@ -255,6 +255,7 @@ _KEYS = itertools.count()
 
 def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
     """The compiled traction run on ``table``; None when s leaves it."""
+    from symmech.trolley import elastic_kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     N = system.N
     line = el.Timeline(system, drive, t)
     zero = np.zeros(N)
@@ -281,6 +282,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
 
 def _check(status, Y, t) -> None:
     """SymmechError when the compiled solve failed or reached no finite state."""
+    from symmech.core import ode  # numba: imported by a run, not by choosing the engine or its estimate
     if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
         last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
         why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \
@@ -298,6 +300,9 @@ COLD_COMPILE_SECONDS = 130.0
 def _entry_signatures() -> dict:
     """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
     model record's from its layout (:data:`symmech.trolley.elastic_layout.MODEL`), the rest from small arrays."""
+    # numba: imported by a run, not by choosing the engine or its estimate
+    import numba
+    from symmech.trolley import elastic_kernels as ek
     mdl = MODEL.numba_type()
     tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
     solve = (tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))

@@ -428,20 +428,36 @@ def estimate(first, points: int, processes: int):
                                       f"({cost.what}) on {processes} worker(s)", cost.once)
 
 
+def cheapest(first, points: int, processes: int):
+    """A lower bound of :func:`estimate` (a ``registry.Estimate``): every point on the elastic model's cheapest
+    engine, nothing compiled. It reads no engine's state, so refusing on it loads no numba."""
+    from symmech.core import registry
+    from symmech.trolley import elastic_scene
+
+    setup = first.setup
+    per_point = first.kind.estimate(replace(setup, elastic=None)).seconds
+    if setup.elastic is not None and setup.elastic.system is not None:
+        per_point += min(elastic_scene.SECONDS_PER_STEP.values()) * (len(setup.t) - 1)
+    return registry.Estimate(per_point * points / processes, f"from counts: {points} points at ~{per_point:.3g} s "
+                                                              f"or more each, on the cheapest engine without a "
+                                                              f"compile, on {processes} worker(s)")
+
+
 def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
             connect_timeout: float = core_sweep.CONNECT_TIMEOUT, ctx=None, first=None) -> list:
     """The outcome of :func:`evaluate` per point, x-major: refused past ``ctx.max_time`` from counts
     (:func:`estimate`: nothing built or run yet), then point (0, 0) run here and timed for the estimate of the
     rest, the others on Dask (:func:`symmech.core.sweep.compute`), all against the deadline of ``ctx``.
     ``first``: the loaded scene of point (0, 0) (:func:`validate`'s)."""
-    import dask
-
     from symmech.core import registry
     from symmech.core.context import Context
 
     ctx = ctx or Context(quiet=True)
     first = first or p.load(0, 0)
     points = int(np.prod(p.shape))
+    least = cheapest(first, points, processes)
+    if ctx.elapsed() + least.seconds > ctx.max_time:  # refused before any engine's state is read (numba unloaded)
+        core_sweep.refuse(least, ctx)
     core_sweep.refuse(estimate(first, points, processes), ctx)
     warm = _compiled_needed(first, points)
     if warm:  # built here first (its cost is in the estimate): each point then runs it
@@ -453,6 +469,8 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     core_sweep.refuse(registry.Estimate(took * (points - 1) / processes, f"{points} points at {took:.3g} s "
                                                                          f"(the first one's) on {processes} "
                                                                          "worker(s)"), ctx)
+    import dask  # after the refusals: a refused sweep loads no Dask
+
     shared = dask.delayed(p, pure=True)  # one node of the graph: each task builds its own point scene
     tasks = [dask.delayed(evaluate)(shared, i, j, until, dask_key_name=f"point-{i}-{j}")
              for i, j in list(np.ndindex(*p.shape))[1:]]
