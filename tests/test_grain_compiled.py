@@ -17,6 +17,7 @@ from test_grain_motion_hops import midway_dip
 from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
 from symmech.grain import compiled, compiled_layout, compiled_loop, contact, flight, motion, motion_scene
+from symmech.grain.compiled_layout import S_AT
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
@@ -205,7 +206,7 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
     Q0 = flight.rotation_matrix(sc.start.q)
     p = compiled.pack(m, sc.numerics)
     sp = compiled_loop._slide_params(p, Q0, compiled_loop._offset(p, Q0), m.mu)
-    sp[compiled_loop.S_VSTOP] = 1e-11
+    sp[S_AT.v_stop] = 1e-11
     rho = contact.contact_offset(m.axes, Q0)
     k = m.mass / float(Q0[2] @ (m.inertia * Q0[2]))
     B = np.eye(2) + k * np.outer([-rho[1], rho[0]], [-rho[1], rho[0]])  # E + (m / I_zz) rho_perp rho_perp^T

@@ -5,6 +5,7 @@ import pytest
 
 from test_grain_hard_cases import CROP, sweep_grain
 from symmech.grain import compiled, compiled_loop, flight
+from symmech.grain.compiled_layout import S_AT
 
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)
 
@@ -33,5 +34,5 @@ def test_slip_jacobian_equals_central_differences():
         compiled_loop._slide_rhs(t, zp, sp, False, up)
         compiled_loop._slide_rhs(t, zm, sp, False, down)
         fd[:, j] = (up - down) / (2 * d)
-    assert sp[compiled_loop.S_ANISO] == 1.0 and np.abs(J[2:4, 7:11]).max() > 1.0
+    assert sp[S_AT.aniso] == 1.0 and np.abs(J[2:4, 7:11]).max() > 1.0
     assert np.all(np.abs(J - fd).max(axis=1) <= 1e-7 * np.abs(fd).max(axis=1))
