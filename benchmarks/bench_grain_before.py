@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parents[1]
-SETUP = ("import time, numpy as np; from symmech.core import pipeline; from symmech.grain import compiled; "
+SETUP = ("import time, numpy as np; from symmech.core import pipeline; from symmech.grain.motion_engine import driver as compiled; "
          "sc = pipeline.load('scenes/grain_default.toml').setup; ")
 COLD = SETUP + "compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)"
 WARM = SETUP + ("compiled.simulate(sc.model, sc.numerics, sc.start, 0.01); ts = []\n"

@@ -32,7 +32,7 @@ import numpy as np
 from timing import interleaved, machine, ratio
 
 HERE = Path(__file__).resolve().parents[1]
-CODE = ("from symmech.core import pipeline; from symmech.grain import compiled; "
+CODE = ("from symmech.core import pipeline; from symmech.grain.motion_engine import driver as compiled; "
         "sc = pipeline.load('scenes/grain_default.toml').setup; "
         "compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)")
 # In the fresh process: every compile and LLVM section, as (kind, start?, function, time) in order.

@@ -31,8 +31,9 @@ from timing import Stats, machine, ratio
 from bench_grain_motion import exact_flight_brentq, sphere_scene
 
 from symmech.generated import grain_motion_nb as gm_nb
-from symmech.grain import compiled, compiled_loop, motion, motion_scene
-from symmech.grain.compiled_layout import CARRY, IMPACT_WIDTH, PHASES_PER_CALL, STATE, TRAJECTORY_WIDTH
+from symmech.grain import motion, motion_scene
+from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
+from symmech.grain.motion_engine.layouts import CARRY, IMPACT_WIDTH, PHASES_PER_CALL, STATE, TRAJECTORY_WIDTH
 
 PERIODS = 20.5  # 20 impacts of the period-1 orbit
 XTOL = 1e-12  # brentq's and the floor's time tolerance [s]

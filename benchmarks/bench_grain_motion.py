@@ -26,7 +26,8 @@ from scipy.optimize import brentq
 from symmech.core import pipeline
 from symmech.core.scene import SymmechError
 from symmech.generated import grain_motion as gm
-from symmech.grain import compiled, flight, motion, paper_mode
+from symmech.grain import flight, motion, paper_mode
+from symmech.grain.motion_engine import driver as compiled
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
@@ -193,7 +194,7 @@ def compile_cost(repeats, cold):
     """Fresh processes: import + first call of the compiled loop with the numba cache (and, unless quick,
     one cold run with an empty cache: the one-off compilation after an install)."""
     code = ("import time; t = time.perf_counter(); from symmech.core import pipeline; "
-            "from symmech.grain import compiled; sc = pipeline.load('scenes/grain_default.toml').setup; "
+            "from symmech.grain.motion_engine import driver as compiled; sc = pipeline.load('scenes/grain_default.toml').setup; "
             "compiled.simulate(sc.model, sc.numerics, sc.start, 0.01); print(time.perf_counter() - t)")
 
     def fresh(env=None):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from symmech.core import aot, artifacts
-from symmech.grain import compiled
+from symmech.grain.motion_engine import driver as compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -28,10 +28,10 @@ def test_folder_follows_numba_cache_dir(monkeypatch, tmp_path):
 
 
 def test_sources_reach_the_loop_its_kernels_and_the_generated_twins():
-    from symmech.grain import compiled_loop
+    from symmech.grain.motion_engine import loop as compiled_loop
 
     files = {Path(f).name for f in artifacts.sources(compiled_loop)}
-    assert {"compiled_loop.py", "ode.py", "sliding.py", "grain_motion_nb.py", "grain_impact_nb.py"} <= files
+    assert {"loop.py", "ode.py", "sliding.py", "grain_motion_nb.py", "grain_impact_nb.py"} <= files
     assert all(Path(f).is_file() for f in artifacts.sources(compiled_loop))
 
 
@@ -44,7 +44,7 @@ def test_no_build_without_a_c_compiler_or_pycc(monkeypatch, tmp_path, capfd, mis
         monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
     else:
         monkeypatch.setitem(sys.modules, "numba.pycc", None)  # its import raises ImportError
-    from symmech.grain import compiled_loop
+    from symmech.grain.motion_engine import loop as compiled_loop
 
     cross = (compiled_loop._cross, "f8[::1](f8[::1], f8[::1])")
     build = aot.Build("nocc", [compiled.__file__], lambda: {"f": cross})
@@ -55,7 +55,7 @@ def test_no_build_without_a_c_compiler_or_pycc(monkeypatch, tmp_path, capfd, mis
 
 
 def test_the_python_side_imports_no_numba():
-    code = ("import sys; from symmech.grain import compiled, motion_scene; "
+    code = ("import sys; from symmech.grain import motion_scene; from symmech.grain.motion_engine import driver as compiled; "
             "assert 'numba' not in sys.modules, 'numba imported'; print('ok')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr
@@ -123,7 +123,7 @@ def test_the_main_job_runs_on_the_build_without_numba(built, tmp_path):
     assert summary["engine_reason"].endswith("built (ahead of time)")
     assert {"grain_motion_nb", "grain_impact_nb"} <= set(summary["generated_modules"])  # compiled into it
     files = {Path(f).name for f in json.loads(compiled.ENGINE.ahead.paths()[1].read_text())["sources"]}
-    assert {"compiled.py", "compiled_layout.py", "compiled_loop.py", "grain_motion_nb.py"} <= files
+    assert {"driver.py", "layouts.py", "loop.py", "grain_motion_nb.py"} <= files
 
 
 def test_a_builds_generated_modules_are_verified_and_listed_as_used(monkeypatch):

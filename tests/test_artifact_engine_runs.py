@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from symmech.core import artifacts
-from symmech.grain import compiled
+from symmech.grain.motion_engine import driver as compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "grain_default.toml"
@@ -28,7 +28,7 @@ def cache(tmp_path, monkeypatch):
     ahead-of-time folder)."""
     from numba.core.caching import UserProvidedCacheLocator  # numba's layout under NUMBA_CACHE_DIR
 
-    from symmech.grain import compiled_loop
+    from symmech.grain.motion_engine import loop as compiled_loop
 
     assert compiled.ENGINE.wait_warm(1200.0)
     compiled.ENGINE.warm(ahead=True)
@@ -88,7 +88,7 @@ def test_a_refused_ahead_of_time_build_leaves_numbas_cache(cache, tmp_path, dama
 def test_a_damaged_numba_cache_answers_on_the_python_engine(cache, tmp_path, damage):
     numba_folder, _, _ = cache
     kind = "nbi" if damage.startswith("index") else "1.nbc"
-    (target,) = numba_folder.glob(f"compiled_loop.run-*.py*.{kind}")
+    (target,) = numba_folder.glob(f"loop.run-*.py*.{kind}")
     target.write_bytes(target.read_bytes()[:100] if "truncated" in damage else os.urandom(target.stat().st_size))
     done, summary = _run(tmp_path, SYMMECH_AHEAD_OF_TIME="0")
     assert done.returncode == 0, done.stderr

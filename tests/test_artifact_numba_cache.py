@@ -150,8 +150,8 @@ def test_the_record_lives_in_numbas_folder_of_the_entries_module(engine, monkeyp
 def test_a_cold_grain_engine_is_told_without_importing_its_loop(tmp_path):
     """No record in an empty NUMBA_CACHE_DIR: cold, and neither the compiled loop nor its generated twins were
     imported (summary.json's generated_modules lists what ran: the Python engine's modules only)."""
-    code = ("import sys; from symmech.grain import compiled; print(compiled.ENGINE.cold(), "
-            "'symmech.grain.compiled_loop' in sys.modules, 'symmech.generated.grain_motion_nb' in sys.modules)")
+    code = ("import sys; from symmech.grain.motion_engine import driver as compiled; print(compiled.ENGINE.cold(), "
+            "'symmech.grain.motion_engine.loop' in sys.modules, 'symmech.generated.grain_motion_nb' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                           env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
     assert done.returncode == 0 and done.stdout.split() == ["True", "False", "False"], done.stderr

@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from symmech.core import aot, artifacts
-from symmech.grain import compiled
+from symmech.grain.motion_engine import driver as compiled
 
 
 @pytest.fixture
@@ -187,7 +187,7 @@ def test_a_build_being_replaced_is_left_alone(build, capsys):
     b, so, record, _ = build
     so.write_bytes(b"the new module, record not written yet")
     with file_lock(b.lock_file(), wait=True):
-        code = ("import sys; from symmech.core import aot; from symmech.grain import compiled; "
+        code = ("import sys; from symmech.core import aot; from symmech.grain.motion_engine import driver as compiled; "
                 "b = aot.Build('probe', [compiled.__file__], dict); print(b.load() is None, b.refused)")
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stdout.split() == ["True", "False"] and done.stderr == "", done.stderr

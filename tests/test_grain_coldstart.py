@@ -21,7 +21,8 @@ import pytest
 
 from symmech.cli import main
 from symmech.core import build, pipeline
-from symmech.grain import compiled, compiled_loop, motion_scene, sweep
+from symmech.grain import motion_scene, sweep
+from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "grain_default.toml"
@@ -170,7 +171,8 @@ SWEEP_ON_FRESH_WORKERS = """
 import json, sys
 import dask.distributed as distributed
 from symmech.core import build, pipeline
-from symmech.grain import compiled, compiled_loop, sweep
+from symmech.grain import sweep
+from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 
 raw = {"kind": "grain", "duration": 0.08, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},
        "vibration": {"amplitude": 1e-3, "frequency": 25.0}, "impact": {"law": "printed", "e": 0.5, "lambda": 1.0},

@@ -1,4 +1,4 @@
-"""The compiled accurate-mode grain (symmech.grain.compiled) against the Python loop (the reference) and
+"""The compiled accurate-mode grain (symmech.grain.motion_engine) against the Python loop (the reference) and
 closed forms: same events (impact times, impulses, regime sequence), same final state, same log.
 
 The first run on a machine compiles the loop (about a minute of CPU; cached beside the module after that).
@@ -16,8 +16,9 @@ from test_grain_hard_cases import CROP, WEED, sweep_grain
 from test_grain_motion_hops import midway_dip
 from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
-from symmech.grain import compiled, compiled_layout, compiled_loop, contact, flight, motion, motion_scene
-from symmech.grain.compiled_layout import S_AT
+from symmech.grain import contact, flight, motion, motion_scene
+from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout, loop as compiled_loop
+from symmech.grain.motion_engine.layouts import S_AT
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81

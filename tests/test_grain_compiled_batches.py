@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from symmech.core.scene import SymmechError
-from symmech.grain import compiled, compiled_layout, flight, motion
+from symmech.grain import flight, motion
+from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout
 from symmech.grain.coulomb_law import ImpactLaw
 
 MODEL = motion.Model((1e-3, 1e-3, 1e-3), 2e-6, (0.0, 0.0, -9.81), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),

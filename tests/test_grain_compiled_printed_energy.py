@@ -3,7 +3,7 @@ tumbling onto a still plate under the printed law with e = lam = 0.9, which gain
 both warnings of the law, the second with the energies before and after written by hand from the impact log."""
 import pytest
 
-from symmech.grain import compiled
+from symmech.grain.motion_engine import driver as compiled
 from test_grain_motion_closed_forms import needle, needle_energies, numerics
 
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)

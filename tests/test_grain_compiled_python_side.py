@@ -1,4 +1,4 @@
-"""The Python side of the compiled grain engine (symmech.grain.compiled), without compiling it: the texts of its
+"""The Python side of the compiled grain engine (symmech.grain.motion_engine), without compiling it: the texts of its
 warning and error codes (numbers included, worded as the Python loop words them), the impact log and the energy
 budget built from the compiled loop's raw rows and carry. Expected values are written here by hand."""
 import math
@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from symmech.core.scene import SymmechError
-from symmech.grain import compiled, compiled_layout, flight, motion
+from symmech.grain import flight, motion
+from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout
 from symmech.grain.coulomb_law import ImpactLaw
-from symmech.grain.compiled_layout import C_AT
+from symmech.grain.motion_engine.layouts import C_AT
 
 MODEL = motion.Model((1e-3, 1e-3, 1e-3), 2e-6, (0.0, 0.0, -9.81), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)),
                      ImpactLaw("printed", e=0.5, lam=0.5), 0.3)

@@ -1,4 +1,4 @@
-"""How the compiled grain engine (symmech.grain.compiled) takes its start state: a point mass (rotation off) drops
+"""How the compiled grain engine (symmech.grain.motion_engine) takes its start state: a point mass (rotation off) drops
 without spin whatever spin it was given, and a start quaternion that is not a unit one is normalised; against the
 closed form of the drop (first contact at sqrt(2h/g)) and its energy m g z."""
 import math
@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from symmech.grain import compiled, motion
+from symmech.grain import motion
+from symmech.grain.motion_engine import driver as compiled
 from test_grain_motion_closed_forms import A, G, H, M, T_C, frictionless, numerics, sphere, state
 
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)

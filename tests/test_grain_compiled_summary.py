@@ -7,7 +7,8 @@ import math
 
 import pytest
 
-from symmech.grain import compiled, motion
+from symmech.grain import motion
+from symmech.grain.motion_engine import driver as compiled
 from test_grain_motion_closed_forms import A, G, H, M, T_C, frictionless, numerics, sphere, state
 
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from test_grain_hard_cases import CROP, sweep_grain
-from symmech.grain import compiled, compiled_loop, flight
-from symmech.grain.compiled_layout import S_AT
+from symmech.grain import flight
+from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
+from symmech.grain.motion_engine.layouts import S_AT
 
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)
 

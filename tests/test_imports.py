@@ -56,7 +56,7 @@ def test_compiled_grain_run_loads_no_scipy_integrate_or_optimize(tmp_path):
     """The compiled engine steps with symmech's own DOP853 tableau and root finders: neither the engine's
     import nor a run that stays compiled (0.05 s of the default scene: no stiff slip handed to Radau)
     loads scipy.integrate or scipy.optimize (~0.15 s of imports). numba itself loads scipy.linalg (BLAS)."""
-    code = ("import sys; from symmech.grain import compiled; "
+    code = ("import sys; from symmech.grain.motion_engine import driver as compiled; "
             "print(sorted(m for m in ('scipy.integrate', 'scipy.optimize') if m in sys.modules))")
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert proc.stdout.split() == ["[]"], proc.stderr

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from symmech.core.layout import Bundle, Field, Layout
-from symmech.grain import compiled, compiled_layout
+from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout
 from symmech.trolley import elastic_layout
 
 ROOT = Path(__file__).resolve().parents[1] / "symmech"
@@ -135,7 +135,7 @@ ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT"}
 OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT": compiled_layout.CARRY,
            "I_AT": compiled_layout.IMPACT_ROW, "X_AT": compiled_layout.STATE, "F_AT": elastic_layout.FLAGS,
            "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY}
-READERS = {"grain/compiled_loop.py": GRAIN_VECTORS, "grain/compiled.py": GRAIN_VECTORS,
+READERS = {"grain/motion_engine/loop.py": GRAIN_VECTORS, "grain/motion_engine/driver.py": GRAIN_VECTORS,
            "trolley/elastic_kernels.py": ELASTIC_VECTORS, "trolley/elastic_compiled.py": {}}  # (k, 12) tables there
 
 

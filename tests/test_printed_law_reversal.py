@@ -76,7 +76,7 @@ def test_lambda_and_two_minus_lambda_give_the_same_impulse(lam):
 
 @pytest.mark.slow  # compiles the compiled engine's printed-law solver (~20 s on a cold numba cache)
 def test_the_compiled_engine_solves_a_tangential_reversal_to_rounding_too():
-    from symmech.grain import compiled_loop
+    from symmech.grain.motion_engine import loop as compiled_loop
 
     H, m, u = needles(50, 3)
     e, lam = 0.5, 1.7

@@ -107,7 +107,7 @@ class Numerics:
     ``scan_step`` [s] for root bracketing. Paper mode: step ``dt`` [s], ``nodes`` on the body surface,
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
-    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`), "python" (this loop) or
+    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.motion_engine.driver`), "python" (this loop) or
     "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``)."""
 
     mode: str = "accurate"

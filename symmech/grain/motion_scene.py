@@ -135,7 +135,7 @@ SCHEMA = Fields("a grain scene", {
     "numerics": Fields("numerical choices; T is the vibration period (1 s without vibration)", {
         "mode": Choice("`accurate`: exact flight, root-located events; `paper`: the printed fixed-step scheme",
                        choices=("accurate", "paper"), default="accurate"),
-        "engine": Choice("accurate mode: `compiled`, the event loop in numba (symmech.grain.compiled; the first "
+        "engine": Choice("accurate mode: `compiled`, the event loop in numba (symmech.grain.motion_engine; the first "
                          "run on a machine compiles it, ~80 s, cached for later runs); `python`, the reference loop "
                          "in Python (same events, results to round-off or, in stiff slips, to the tolerance; "
                          "120-290x slower, never compiles); `auto`: `compiled` when it is cached, else `python` "
@@ -324,7 +324,7 @@ def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
     num = num or sc.numerics
     if num.engine == "python":
         return "python", 'numerics.engine = "python"'
-    from symmech.grain import compiled  # no numba: the engine's Python side
+    from symmech.grain.motion_engine import driver as compiled  # no numba: the engine's Python side
 
     if num.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
@@ -354,14 +354,14 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
     engine, why = choose_engine(sc, num, t_end)
     if engine == "compiled":
-        from symmech.grain import compiled
+        from symmech.grain.motion_engine import driver as compiled
 
         if compiled.ENGINE.needs_compile():  # compile under the build lock, or load what a concurrent builder made
             compiled.ENGINE.warm()
         m = compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
     else:
         if num.engine == "auto":
-            from symmech.grain import compiled
+            from symmech.grain.motion_engine import driver as compiled
 
             compiled.ENGINE.warm_in_background()
         m = motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)

@@ -363,7 +363,7 @@ def _compiled_needed(p: Plan) -> bool:
 
 def _warm_worker() -> None:
     """On a dask worker: the compiled engine built once per machine (the others wait on the build lock)."""
-    from symmech.grain import compiled
+    from symmech.grain.motion_engine import driver as compiled
 
     compiled.ENGINE.warm()
 
@@ -403,7 +403,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
     warm = _compiled_needed(p)
     if warm:
-        from symmech.grain import compiled
+        from symmech.grain.motion_engine import driver as compiled
 
         compiled.ENGINE.warm(say=say)
 

@@ -1,6 +1,6 @@
 """The compiled engine's loop in numba: the per-grain event loop of :mod:`symmech.grain.motion`.
 
-The Python side (parameters, results, errors, the entry it calls) is :mod:`symmech.grain.compiled`,
+The Python side (parameters, results, errors, the entry it calls) is :mod:`symmech.grain.motion_engine.driver`,
 which imports no numba: a warm run whose loop was built ahead of time loads that build instead of
 this module. The physics, the event logic and their contract are described there."""
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 
 from symmech.core import kernels, ode
 from symmech.grain import sliding
-from symmech.grain.compiled_layout import (
+from symmech.grain.motion_engine.layouts import (
     P_AT, C_AT, S_AT, I_AT, N_SLIDE, IMPACT_WIDTH, LAW_PRINTED, INT, FLIGHT, IMPACT, SLIDING, DONE, MORE, STALLED,
     SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS,
     W_PRINTED_RESIDUAL, W_ENERGY, ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS, MAX_STALLED_EVENTS)

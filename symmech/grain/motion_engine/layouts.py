@@ -1,5 +1,5 @@
-"""The compiled grain engine's vectors and codes, shared by its loop (:mod:`symmech.grain.compiled_loop`)
-and its Python side (:mod:`symmech.grain.compiled`): the declared layouts (:mod:`symmech.core.layout`) of
+"""The compiled grain engine's vectors and codes, shared by its loop (:mod:`symmech.grain.motion_engine.loop`)
+and its Python side (:mod:`symmech.grain.motion_engine.driver`): the declared layouts (:mod:`symmech.core.layout`) of
 the parameter vector, the state, the carry vector, the sliding parameters and the impact row; the regime,
 status and warning codes, and the limits both sides apply. No numba here.
 

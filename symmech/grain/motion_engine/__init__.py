@@ -1,7 +1,7 @@
 """The grain's compiled engine, registered (:mod:`symmech.core.engines`): the accurate-mode event loop in
-numba (:mod:`symmech.grain.compiled`), built ahead of time where a C compiler is available."""
+numba (:mod:`symmech.grain.motion_engine.driver`), built ahead of time where a C compiler is available."""
 from symmech.core import engines
 
 engines.register(engines.Engine(
     "grain", "the grain's accurate-mode event loop (numba; built ahead of time with a C compiler)",
-    "symmech.grain.compiled"))
+    "symmech.grain.motion_engine.driver"))

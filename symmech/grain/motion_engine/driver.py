@@ -27,12 +27,12 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   system, embedded error estimate, dense output) with the analytic Jacobian of
   the slip, switching as ``sliding.slide`` does; lift-off from the root of n(t).
 
-The loop is :mod:`symmech.grain.compiled_loop`; this module is its Python side and imports no numba. The
+The loop is :mod:`symmech.grain.motion_engine.loop`; this module is its Python side and imports no numba. The
 generic integrators and root finders (DOP853, Radau IIA with dense output, Brent) are those of
 :mod:`symmech.core.ode`, compiled there for the rotation and sliding right-hand sides (``_rhs``, ``_jac``)
 and the functions of time (``_h``); the loop keeps the physics and the event logic.
 
-Parameters travel in one float64 vector (layout :data:`compiled_layout.PARAMS`), the state as
+Parameters travel in one float64 vector (layout :data:`layouts.PARAMS`), the state as
 (t, r (3), v (3), q (4), w body (3)) (``STATE``); results come back as growing arrays
 (trajectory rows, impact rows, warning codes) and are turned into a
 ``motion.Motion`` with the same structure as the Python loop's (its impact log
@@ -52,8 +52,9 @@ import numpy as np
 
 from symmech.core import aot, artifacts, build, layout
 from symmech.core.scene import SymmechError
-from symmech.grain import compiled_layout, motion, sliding
-from symmech.grain.compiled_layout import (  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
+from symmech.grain import motion, sliding
+from symmech.grain.motion_engine import layouts
+from symmech.grain.motion_engine.layouts import (  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
     LAYOUTS, PARAMS, STATE, CARRY, IMPACT_ROW, C_AT, X_AT, LAW_COULOMB, LAW_PRINTED, INT, DONE, MORE, STALLED,
     SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS,
     W_PRINTED_RESIDUAL, IMPACT_WIDTH, TRAJECTORY_WIDTH, PHASES_PER_CALL, COLD_COMPILE_SECONDS, ZENO_IMPACTS,
@@ -198,10 +199,10 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
 
 
 def _loop():
-    from symmech.grain import compiled_loop  # imports numba
+    from symmech.grain.motion_engine import loop  # imports numba
 
     artifacts.guard_numba_cache()
-    return compiled_loop
+    return loop
 
 
 def _entry_signature() -> tuple:
@@ -222,9 +223,9 @@ def _exports() -> dict:
     return {"run": (run, run.nopython_signatures[0])}
 
 
-ENGINE = build.Engine("grain", "symmech.grain.compiled_loop", lambda: {_loop().run: _entry_signature()},
+ENGINE = build.Engine("grain", "symmech.grain.motion_engine.loop", lambda: {_loop().run: _entry_signature()},
                       COLD_COMPILE_SECONDS,
-                      ahead=aot.Build("grain", [__file__, compiled_layout.__file__, layout.__file__], _exports))
+                      ahead=aot.Build("grain", [__file__, layouts.__file__, layout.__file__], _exports))
 
 
 def _entry():
