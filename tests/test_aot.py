@@ -44,9 +44,9 @@ def test_no_build_without_a_c_compiler_or_pycc(monkeypatch, tmp_path, capfd, mis
         monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
     else:
         monkeypatch.setitem(sys.modules, "numba.pycc", None)  # its import raises ImportError
-    from symmech.grain.motion_engine import loop as compiled_loop
+    from symmech.grain.motion_engine import kinematics
 
-    cross = (compiled_loop._cross, "f8[::1](f8[::1], f8[::1])")
+    cross = (kinematics.cross, "f8[::1](f8[::1], f8[::1])")
     build = aot.Build("nocc", [compiled.__file__], lambda: {"f": cross})
     so, manifest = build.paths()
     assert build.build() is False

@@ -17,7 +17,7 @@ from test_grain_motion_hops import midway_dip
 from test_grain_regimes import default_scene
 from symmech.core.scene import SceneError
 from symmech.grain import contact, flight, motion, motion_scene
-from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout, loop as compiled_loop
+from symmech.grain.motion_engine import driver as compiled, kinematics, layouts as compiled_layout, slip
 from symmech.grain.motion_engine.layouts import S_AT
 from symmech.grain.coulomb_law import ImpactLaw
 
@@ -206,7 +206,7 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
     m = sc.model
     Q0 = flight.rotation_matrix(sc.start.q)
     p = compiled.pack(m, sc.numerics)
-    sp = compiled_loop._slide_params(p, Q0, compiled_loop._offset(p, Q0), m.mu)
+    sp = slip.slide_params(p, Q0, kinematics.contact_offset(p, Q0), m.mu)
     sp[S_AT.v_stop] = 1e-11
     rho = contact.contact_offset(m.axes, Q0)
     k = m.mass / float(Q0[2] @ (m.inertia * Q0[2]))
@@ -214,9 +214,9 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
     t = 0.013
     z = np.zeros(13)
     z[7:11] = sc.start.q  # at rest, no spin: c = 0
-    stick, z1 = compiled_loop._settle(t, z, sp, False)
-    s = compiled_loop._geometry(z1, sp)[1]
-    f = np.asarray(m.g_k[:2]) - compiled_loop._slide_surface(sp, t)[1][:2]
+    stick, z1 = slip.settle(t, z, sp, False)
+    s = slip.geometry(z1, sp)[1]
+    f = np.asarray(m.g_k[:2]) - slip.slide_surface(sp, t)[1][:2]
     d = np.linalg.solve(B, f)
     assert not stick and np.linalg.norm(s) == pytest.approx(2e-11, rel=1e-9)
     np.testing.assert_allclose(s / np.linalg.norm(s), d / np.linalg.norm(d), atol=1e-9)

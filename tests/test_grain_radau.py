@@ -5,7 +5,7 @@ import pytest
 
 from test_grain_hard_cases import CROP, sweep_grain
 from symmech.grain import flight
-from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
+from symmech.grain.motion_engine import driver as compiled, kinematics, slip
 from symmech.grain.motion_engine.layouts import S_AT
 
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]  # the engine's build: slow tier (conftest.py)
@@ -20,20 +20,20 @@ def test_slip_jacobian_equals_central_differences():
     sc = sweep_grain(CROP, 0.6e-3, 18.0, 0.12)
     Q0 = flight.rotation_matrix(sc.start.q)
     p = compiled.pack(sc.model, sc.numerics)
-    sp = compiled_loop._slide_params(p, Q0, compiled_loop._offset(p, Q0), sc.model.mu)
+    sp = slip.slide_params(p, Q0, kinematics.contact_offset(p, Q0), sc.model.mu)
     z = np.zeros(13)
     z[2:4], z[4:7], z[7:11] = (0.01, 0.004), (0.0, 0.0, 3.0), sc.start.q
     t = 0.013
     J = np.empty((13, 13))
-    compiled_loop._slip_jac(t, z, sp, J)
+    slip.slip_jac(t, z, sp, J)
     fd, up, down = np.empty((13, 13)), np.empty(13), np.empty(13)
     for j in range(13):
         d = 1e-6 * max(abs(z[j]), 1e-2)
         zp, zm = z.copy(), z.copy()
         zp[j] += d
         zm[j] -= d
-        compiled_loop._slide_rhs(t, zp, sp, False, up)
-        compiled_loop._slide_rhs(t, zm, sp, False, down)
+        slip.slide_rhs(t, zp, sp, False, up)
+        slip.slide_rhs(t, zm, sp, False, down)
         fd[:, j] = (up - down) / (2 * d)
     assert sp[S_AT.aniso] == 1.0 and np.abs(J[2:4, 7:11]).max() > 1.0
     assert np.all(np.abs(J - fd).max(axis=1) <= 1e-7 * np.abs(fd).max(axis=1))

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from symmech.core.layout import Bundle, Field, Layout
+from symmech.grain import motion
 from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout
 from symmech.trolley import elastic_layout
 
@@ -119,6 +120,27 @@ def test_the_grain_layouts_keep_the_slots_the_engine_was_built_with():
     assert (I.t, I.r, I.impulse, I.u_after, I.ke_before, I.admissible, I.converged) == (0, 1, 16, 22, 25, 27, 30)
 
 
+def _fields(layout, names) -> list:
+    return [(f.name, f.shape) for f in layout.fields if f.name in names]
+
+
+def test_the_grain_rows_and_scratch_vectors_mirror_what_they_are_copied_from():
+    """The loop copies a state wholesale into a flight's record (t0 ... w0) and the state's t, r, v, q into a
+    trajectory row; a trajectory row has the columns of the Python loop's trajectory; a sliding step ends with a
+    whole sliding-parameter vector. Sizes written down independently: 39 = 14 + 3 + 1 + 1 + 1 + 7 + 1 + 1 + 1 + 1
+    + 7 + 1, a rotation step 2 + 7 + 7 x 7, a sliding step 2 + 13 + 1 + 36."""
+    L = compiled_layout
+    state = [(f.name, f.shape) for f in L.STATE.fields]
+    assert [(name[:-1], shape) for name, shape in _fields(L.FLIGHT_RECORD, ("t0", "r0", "v0", "q0", "w0"))] == state
+    assert [L.FL_AT.t0, L.FL_AT.w0 + 3] == [0, L.STATE.size]
+    assert _fields(L.TRAJECTORY_ROW, ("t", "r", "v", "q")) == state[:4] and L.T_AT.q == L.X_AT.q
+    assert L.TRAJECTORY_ROW.size == len(motion.TRAJECTORY_COLUMNS) == L.TRAJECTORY_WIDTH == 15
+    assert [L.T_AT.w, L.T_AT.regime] == [motion.TRAJECTORY_COLUMNS.index(c) for c in ("wx", "regime")]
+    assert (L.FLIGHT_RECORD.size, L.ROTATION_STEP.size, L.SLIDE_STEP.size, L.SAMPLER.size) == (39, 58, 52, 4)
+    assert L.SS_AT.sp + L.SLIDE.size == L.SLIDE_STEP.size and L.RS_AT.dense + 49 == L.ROT_WIDTH
+    assert (L.N_FLIGHT, L.N_SLIDE_STEP, L.N_SAMPLER, L.WARNING_WIDTH) == (39, 52, 4, 3)
+
+
 def test_the_grain_state_vector_round_trips_through_the_engines_python_side():
     y = compiled_layout.STATE.pack(t=0.25, r=(1.0, 2.0, 3.0), v=(4.0, 5.0, 6.0), q=(1.0, 0.0, 0.0, 0.0),
                                    w=(7.0, 8.0, 9.0))
@@ -130,12 +152,21 @@ def test_the_grain_state_vector_round_trips_through_the_engines_python_side():
 # --------------------------------------------------------------------------- drift
 
 # The vectors each file indexes, and the offsets (named tuples of a layout) each may be indexed with.
-GRAIN_VECTORS = {"p": "P_AT", "sp": "S_AT", "carry": "C_AT", "log": "I_AT"}
+GRAIN_VECTORS = {"p": "P_AT", "sp": "S_AT", "carry": "C_AT", "log": "I_AT", "imps": "I_AT", "rows": "T_AT",
+                 "warns": "WR_AT", "tab": "RS_AT", "row": "RS_AT", "rec": "SM_AT",
+                 "ctx": ("FL_AT", "SS_AT")}  # ctx: a flight's record, or a sliding step (the root finders take both)
 ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT"}
 OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT": compiled_layout.CARRY,
            "I_AT": compiled_layout.IMPACT_ROW, "X_AT": compiled_layout.STATE, "F_AT": elastic_layout.FLAGS,
-           "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY}
-READERS = {"grain/motion_engine/loop.py": GRAIN_VECTORS, "grain/motion_engine/driver.py": GRAIN_VECTORS,
+           "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY, "T_AT": compiled_layout.TRAJECTORY_ROW,
+           "WR_AT": compiled_layout.WARNING_ROW, "FL_AT": compiled_layout.FLIGHT_RECORD,
+           "RS_AT": compiled_layout.ROTATION_STEP, "SS_AT": compiled_layout.SLIDE_STEP, "SM_AT": compiled_layout.SAMPLER}
+GRAIN_READERS = ("driver", "flight_path", "flight_phase", "impact_law", "kinematics", "landing", "loop", "roots", "rows",
+                 "sliding_phase", "slip")  # the grain engine's modules that read a declared vector
+STATE_READERS = ("flight_phase", "impact_law", "kinematics", "landing", "loop", "sliding_phase")  # y: the state
+READERS = {**{f"grain/motion_engine/{name}.py": GRAIN_VECTORS for name in GRAIN_READERS},
+           **{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, "y": "X_AT", "after": "X_AT", "out": "X_AT"}
+              for name in STATE_READERS},
            "trolley/elastic_kernels.py": ELASTIC_VECTORS, "trolley/elastic_compiled.py": {}}  # (k, 12) tables there
 
 
@@ -168,9 +199,11 @@ def test_every_read_of_a_declared_vector_goes_through_its_layout(path):
             if node.value.id == "mdl" and node not in packs:  # pack reads the scene's model, also called mdl
                 assert node.attr in elastic_layout.MODEL.names, f"{path}:{node.lineno} mdl.{node.attr}"
         if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id in vectors:
-            index = node.slice
-            parts = [index.lower, index.upper] if isinstance(index, ast.Slice) else [index]
+            index = node.slice  # each dimension of a table (rows[n, T_AT.regime]) on its own
+            parts = [b for i in (index.elts if isinstance(index, ast.Tuple) else [index])
+                     for b in ([i.lower, i.upper] if isinstance(i, ast.Slice) else [i])]
             for part in (p for p in parts if p is not None):
-                assert not _by_hand(part, {vectors[node.value.id]} | aliases), \
+                own = vectors[node.value.id]
+                assert not _by_hand(part, ({own} if isinstance(own, str) else set(own)) | aliases), \
                     f"{path}:{node.lineno} {ast.unparse(node)} indexes a declared vector by hand"
     assert seen > 0

@@ -76,11 +76,11 @@ def test_lambda_and_two_minus_lambda_give_the_same_impulse(lam):
 
 @pytest.mark.slow  # compiles the compiled engine's printed-law solver (~20 s on a cold numba cache)
 def test_the_compiled_engine_solves_a_tangential_reversal_to_rounding_too():
-    from symmech.grain.motion_engine import loop as compiled_loop
+    from symmech.grain.motion_engine import impact_law
 
     H, m, u = needles(50, 3)
     e, lam = 0.5, 1.7
-    T = np.array([compiled_loop._printed(H[i], m[i], e, lam, u[i])[0] for i in range(len(m))])
+    T = np.array([impact_law.printed_impulse(H[i], m[i], e, lam, u[i])[0] for i in range(len(m))])
     mu = np.arctan2(T[:, 1], T[:, 0])  # (18) fixes the line of T; (19) then holds for mu or mu + pi
     residual = np.minimum(residual_of_19(H, m, e, lam, u, T, mu), residual_of_19(H, m, e, lam, u, T, mu + np.pi))
     assert np.max(residual) < 1e-12

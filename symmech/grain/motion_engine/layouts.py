@@ -1,14 +1,16 @@
 """The compiled grain engine's vectors and codes, shared by its loop (:mod:`symmech.grain.motion_engine.loop`)
 and its Python side (:mod:`symmech.grain.motion_engine.driver`): the declared layouts (:mod:`symmech.core.layout`) of
-the parameter vector, the state, the carry vector, the sliding parameters and the impact row; the regime,
-status and warning codes, and the limits both sides apply. No numba here.
+the parameter vector, the state, the carry vector, the sliding parameters, the impact, trajectory and warning
+rows, and the loop's scratch vectors (a flight's record and rotation steps, a sliding step, the sampler); the
+regime, status and warning codes, and the limits both sides apply. No numba here.
 
-The loop reads a slot through a layout's offsets, ``p[P_AT.mass]``: ``P_AT``, ``C_AT``, ``S_AT`` and ``I_AT``
+The loop reads a slot through a layout's offsets, ``p[P_AT.mass]``: ``P_AT``, ``C_AT``, ``FL_AT`` and the others
 are named tuples of integers, constants of the compiled code."""
 from __future__ import annotations
 
 import numpy as np
 
+from symmech.core import dop853
 from symmech.core.layout import Field, Layout
 from symmech.grain import motion, sliding
 
@@ -102,10 +104,68 @@ IMPACT_ROW = Layout("GrainImpact", (
     Field("printed_creates_energy", "1", "flag: the printed law creates energy"),
     Field("converged", "1", "flag: the printed law's solution converged"),
 ))
+# One trajectory row (motion.TRAJECTORY_COLUMNS) and one warning row, as the loop returns them.
+TRAJECTORY_ROW = Layout("GrainTrajectoryRow", (
+    Field("t", "s", "time"),
+    Field("r", "m", "centre position in KXYZ", (3,)),
+    Field("v", "m/s", "centre velocity in KXYZ", (3,)),
+    Field("q", "1", "orientation quaternion (unit)", (4,)),
+    Field("w", "rad/s", "angular velocity in KXYZ", (3,)),
+    Field("regime", "1", "regime code: FLIGHT, IMPACT or SLIDING"),
+))
+WARNING_ROW = Layout("GrainWarning", (
+    Field("code", "1", "warning code W_*"),
+    Field("a", "", "first value of the text (a time, a residual, an energy)"),
+    Field("b", "", "second value of the text"),
+))
+# The loop's scratch vectors, inside one call. A flight's record, set up at its start:
+FLIGHT_RECORD = Layout("GrainFlight", (
+    Field("t0", "s", "time at the start of the flight"),
+    Field("r0", "m", "centre position at the start, KXYZ", (3,)),
+    Field("v0", "m/s", "centre velocity at the start, KXYZ", (3,)),
+    Field("q0", "1", "orientation quaternion at the start", (4,)),
+    Field("w0", "rad/s", "angular velocity at the start, body axes", (3,)),
+    Field("inertia", "kg m^2", "principal moments of inertia", (3,)),
+    Field("phase", "rad", "surface vibration phase at t0, modulo 2 pi"),
+    Field("rotating", "1", "1: the rotation is integrated (else the orientation stays q0)"),
+    Field("t_rot", "s", "time the rotation is integrated to"),
+    Field("y_rot", "1, rad/s", "rotation state at t_rot: quaternion (4), angular velocity in body axes (3)", (7,)),
+    Field("failed", "1", "1: the rotation's integration failed"),
+    Field("support", "m", "support height of the lowest point at the start"),
+    Field("chunk_end", "s", "end of the rotation chunk under way"),
+    Field("step", "s", "next step length of the rotation's DOP853"),
+    Field("f", "1/s, rad/s^2", "rotation right-hand side at t_rot", (7,)),
+    Field("in_chunk", "1", "1: a rotation chunk is under way"),
+))
+# One accepted step of a flight's rotation, a row of its step table (the interpolant: core.ode.dop_dense_at).
+ROTATION_STEP = Layout("GrainRotationStep", (
+    Field("t_old", "s", "start of the step"),
+    Field("t_new", "s", "end of the step"),
+    Field("y_old", "1, rad/s", "rotation state at the start of the step", (7,)),
+    Field("dense", "", "the step's dense-output coefficients F (7, 7), row by row", (7 * dop853.INTERPOLATOR_POWER,)),
+))
+# The sliding step whose interpolant the event functions read, with the phase's parameters.
+SLIDE_STEP = Layout("GrainSlideStep", (
+    Field("t_old", "s", "start of the step"),
+    Field("h", "s", "length of the step"),
+    Field("z_old", "", "sliding vector at the start of the step (r (2), v (2), w (3), q (4), W, D)", (13,)),
+    Field("radau", "1", "1: a Radau IIA step (else DOP853)"),
+    Field("sp", "", "the phase's sliding parameters (layout GrainSlide)", (SLIDE.size,)),
+))
+# Where the trajectory rows of a sliding phase stand.
+SAMPLER = Layout("GrainSampler", (
+    Field("next", "", "index k of the next sample time k * interval"),
+    Field("interval", "s", "time between two trajectory rows"),
+    Field("t_start", "s", "start of the sliding phase"),
+    Field("height", "m", "centre height of the sliding grain"),
+))
 # Offsets by field name (P_AT.mass == 3): what the loop indexes with.
 P_AT, X_AT, C_AT, S_AT, I_AT = PARAMS.slots, STATE.slots, CARRY.slots, SLIDE.slots, IMPACT_ROW.slots
-N_SLIDE = SLIDE.size
-LAYOUTS = (PARAMS, STATE, CARRY, SLIDE, IMPACT_ROW)  # symmech.core.engines: describe
+T_AT, WR_AT = TRAJECTORY_ROW.slots, WARNING_ROW.slots
+FL_AT, RS_AT, SS_AT, SM_AT = FLIGHT_RECORD.slots, ROTATION_STEP.slots, SLIDE_STEP.slots, SAMPLER.slots
+N_STATE, N_SLIDE, N_FLIGHT, N_SAMPLER = STATE.size, SLIDE.size, FLIGHT_RECORD.size, SAMPLER.size  # numba: ints
+ROT_WIDTH, N_SLIDE_STEP, WARNING_WIDTH = ROTATION_STEP.size, SLIDE_STEP.size, WARNING_ROW.size
+LAYOUTS = (PARAMS, STATE, CARRY, SLIDE, IMPACT_ROW, TRAJECTORY_ROW, WARNING_ROW)  # symmech.core.engines: describe
 LAW_COULOMB, LAW_PRINTED = 0.0, 1.0
 
 # Integer codes are numpy scalars, not Python ints: numba types a Python int constant passed to a jitted
@@ -118,7 +178,7 @@ DONE, MORE, STALLED, SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, ROT_FAIL = (INT(k) fo
 W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, W_ENERGY = (
     INT(k) for k in range(1, 7))
 IMPACT_WIDTH = IMPACT_ROW.size
-TRAJECTORY_WIDTH = len(motion.TRAJECTORY_COLUMNS)
+TRAJECTORY_WIDTH = TRAJECTORY_ROW.size  # len(motion.TRAJECTORY_COLUMNS): tests/test_layouts.py
 
 PHASES_PER_CALL = 2000
 COLD_COMPILE_SECONDS = 80.0  # wall time of the first compile, idle machine: 78 s (benchmarks/bench_grain_compile.py)

@@ -1,0 +1,207 @@
+"""The scene's impact law at the lowest point, in numba (``ImpactLaw.apply`` for one grain): the
+Chatterjee-Ruina law, and the printed law by its exact reduction (the trigonometric equation of
+``mu_equation``, roots from a 4x4 companion matrix polished by Newton), for the law itself or for its verdict
+in the log (an impact row, layout :data:`layouts.IMPACT_ROW`)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from symmech.core import kernels
+from symmech.core.ode import jit
+from symmech.grain.motion_engine.kinematics import (
+    contact_offset, cross, inverse_effective_mass, kinetic, rotation, world_inv_inertia)
+from symmech.grain.motion_engine.layouts import (
+    I_AT, IMPACT_WIDTH, LAW_PRINTED, P_AT, W_ENERGY, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, X_AT)
+from symmech.grain.motion_engine.rows import warn
+
+gi = kernels.load("grain_impact")
+
+
+@jit
+def _coulomb_impulse(K, u, e_n, e_t, mu):
+    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain)."""
+    P_I = np.zeros(3)
+    P_I[2] = -u[2] / K[2, 2]
+    D = -np.linalg.solve(K, u) - P_I
+    P = (1.0 + e_n) * P_I + (1.0 + e_t) * D
+    d_t = math.hypot(D[0], D[1])
+    p_t = math.hypot(P[0], P[1])
+    outside = p_t / mu > P[2] if mu > 0 else p_t > 0
+    if outside:
+        kappa = (1.0 + e_n) * P_I[2] / (d_t / mu - D[2])
+        return (1.0 + e_n) * P_I + kappa * D
+    return P
+
+
+@jit
+def _trig_roots(k, tol, max_iter):
+    """Real roots (4,) (NaN unused) of k0 + k1c cos + k1s sin + k2c cos2 + k2s sin2 (``_trig_roots`` of
+    :mod:`symmech.grain.impact`)."""
+    k0, k1c, k1s, k2c, k2s = k[0], k[1], k[2], k[3], k[4]
+    best, delta = -1.0, 0.0
+    for i in range(5):
+        s = i * (2 * math.pi / 5)
+        m = s + math.pi
+        val = abs(k0 + k1c * math.cos(m) + k1s * math.sin(m) + k2c * math.cos(2 * m) + k2s * math.sin(2 * m))
+        if val > best:
+            best, delta = val, s
+    c1, s1, c2, s2 = math.cos(delta), math.sin(delta), math.cos(2 * delta), math.sin(2 * delta)
+    a1c, a1s = k1c * c1 + k1s * s1, -k1c * s1 + k1s * c1
+    a2c, a2s = k2c * c2 + k2s * s2, -k2c * s2 + k2s * c2
+    quartic = np.array([k0 - a1c + a2c, 2 * a1s - 4 * a2s, 2 * k0 - 6 * a2c, 2 * a1s + 4 * a2s, k0 + a1c + a2c])
+    roots = np.full(4, np.nan)
+    if abs(quartic[0]) > 0:
+        comp = np.zeros((4, 4), dtype=np.complex128)
+        for j in range(4):
+            comp[0, j] = -quartic[j + 1] / quartic[0]
+        comp[1, 0] = comp[2, 1] = comp[3, 2] = 1.0
+        t = np.linalg.eigvals(comp)
+        for j in range(4):
+            if abs(t[j].imag) <= 1e-6 * (1.0 + abs(t[j].real)):
+                roots[j] = delta + 2 * math.atan(t[j].real)
+    for _ in range(max_iter):
+        big = False
+        for j in range(4):
+            r = roots[j]
+            if math.isnan(r):
+                continue
+            f = k0 + k1c * math.cos(r) + k1s * math.sin(r) + k2c * math.cos(2 * r) + k2s * math.sin(2 * r)
+            d = (-k1c * math.sin(r) + k1s * math.cos(r) - 2 * k2c * math.sin(2 * r) + 2 * k2s * math.cos(2 * r))
+            step = 0.0 if d == 0 else f / d
+            roots[j] = r - min(0.5, max(-0.5, step))
+            big = big or abs(step) > tol
+        if not big:
+            break
+    scale = abs(k0) + abs(k1c) + abs(k1s) + abs(k2c) + abs(k2s)
+    for j in range(4):
+        r = roots[j]
+        f = k0 + k1c * math.cos(r) + k1s * math.sin(r) + k2c * math.cos(2 * r) + k2s * math.sin(2 * r)
+        if abs(f) > 1e-9 * scale:
+            roots[j] = np.nan
+        else:
+            roots[j] = (r + math.pi) % (2 * math.pi) - math.pi
+    roots = np.sort(roots)  # NaN last
+    keep = roots.copy()
+    for j in range(1, 4):
+        if roots[j] - roots[j - 1] < 1e-7:  # a double root: two nearly equal eigenvalues
+            keep[j] = np.nan
+    count = 0
+    for j in range(4):
+        count += 0 if math.isnan(keep[j]) else 1
+    if count > 1:
+        last = keep[count - 1]
+        if abs((last - keep[0] + math.pi) % (2 * math.pi) - math.pi) < 1e-7:
+            keep[count - 1] = np.nan
+    return keep
+
+
+@jit
+def _prescribed(u, e, lam, mu):
+    speed = (1.0 - lam) * math.hypot(u[0], u[1])
+    return np.array([speed * math.cos(mu), speed * math.sin(mu), -e * u[2]])
+
+
+@jit
+def printed_impulse(H, m, e, lam, u):
+    """The printed law solved exactly for one impact (``impact.solve_robust_batch``):
+    (T (3,), residual of (19), admissible, creates energy, pulls)."""
+    k = gi.mu_equation_scalar(H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], lam, e, u[0], u[1], u[2])
+    norm_u = math.sqrt(u @ u)
+    stuck = abs(1.0 - lam) * math.hypot(u[0], u[1]) <= 1e-14 * norm_u  # lam > 1 reverses: its size says stuck
+    roots = np.full(4, np.nan)
+    if stuck:
+        roots[0] = 0.0
+    else:
+        roots = _trig_roots(k, 1e-14, 12)
+    ke_scale = 0.5 * m * (u @ u)
+    Ts = np.zeros((4, 3))
+    score = np.full(4, np.inf)
+    gains = np.zeros(4, dtype=np.bool_)
+    pulls = np.zeros(4, dtype=np.bool_)
+    big = 0.0
+    for j in range(4):
+        mu = 0.0 if math.isnan(roots[j]) else roots[j]
+        du = _prescribed(u, e, lam, mu) - u
+        T = m * np.linalg.solve(H, du)
+        Ts[j] = T
+        gains[j] = 0.5 * (T @ (2 * u + du)) > 1e-9 * ke_scale
+        pulls[j] = T[2] < -1e-12 * math.sqrt(T @ T)
+        if not math.isnan(roots[j]):
+            big = max(big, math.hypot(T[0], T[1]))
+    big = 10.0 * big + 1.0
+    choice, found = 0, False
+    for j in range(4):
+        if not math.isnan(roots[j]):
+            found = True
+            rank = 2.0 if pulls[j] else (1.0 if gains[j] else 0.0)
+            score[j] = rank * big + math.hypot(Ts[j, 0], Ts[j, 1])
+            if score[j] < score[choice]:
+                choice = j
+    T = Ts[choice] if found else np.full(3, np.nan)
+    mu = roots[choice]
+    if stuck:
+        mu = math.atan2(T[1], T[0]) if math.hypot(T[0], T[1]) > 0 else 0.0
+    d0, d1 = math.cos(mu), math.sin(mu)
+    tau = T[0] * d0 + T[1] * d1
+    r = H @ np.array([tau * d0, tau * d1, T[2]]) - m * (_prescribed(u, e, lam, mu) - u)
+    residual = (math.sqrt(r @ r) + abs(T[1] * d0 - T[0] * d1)) / (m * norm_u)
+    bad_gain, bad_pull = gains[choice], pulls[choice]
+    return T, residual, found and not (bad_gain or bad_pull), bad_gain, bad_pull
+
+
+@jit
+def impact(p, y, warns, carry):
+    """The scene's impact law at the lowest point (``ImpactLaw.apply`` for one grain):
+    (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""
+    Q = rotation(y[X_AT.q:X_AT.q + 4])
+    R = contact_offset(p, Q)
+    m = p[P_AT.mass]
+    rotating = p[P_AT.rotation] != 0.0
+    v = y[X_AT.v:X_AT.v + 3].copy()
+    w = Q @ y[X_AT.w:X_AT.w + 3] if rotating else np.zeros(3)
+    u = v + cross(w, R)
+    K = inverse_effective_mass(p, Q, R)
+    printed = p[P_AT.law] == LAW_PRINTED
+    p_adm = p_gain = -1.0
+    converged = 1.0
+    P = np.zeros(3)
+    if u[2] < 0.0:
+        if rotating and (printed or p[P_AT.check_printed] != 0.0):
+            e, lam = (p[P_AT.e], p[P_AT.lam]) if printed else (p[P_AT.e_n], 1.0 + p[P_AT.e_t])
+            T, residual, adm, gain, pull = printed_impulse(m * K, m, e, lam, u)
+            p_adm, p_gain = (1.0 if adm else 0.0), (1.0 if gain else 0.0)
+            if printed:
+                if not adm:
+                    warns = warn(warns, carry, W_PRINTED_ENERGY if gain else W_PRINTED_PULLS, 0.0, 0.0)
+                converged = 1.0 if residual < 1e-8 else 0.0
+                if not residual < 1e-8:
+                    warns = warn(warns, carry, W_PRINTED_RESIDUAL, residual, 0.0)
+                P = T
+        if not (rotating and printed):
+            if printed:
+                P = _coulomb_impulse(K, u, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf)
+            else:
+                P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
+    v_after = v + P / m
+    w_after = w + world_inv_inertia(p, Q) @ cross(R, P) if rotating else np.zeros(3)
+    ke_before, ke_after = kinetic(p, Q, v, w), kinetic(p, Q, v_after, w_after)
+    admissible = ke_after <= ke_before * (1.0 + 1e-9)
+    if not admissible:
+        warns = warn(warns, carry, W_ENERGY, ke_before, ke_after)
+    after = y.copy()
+    after[X_AT.v:X_AT.v + 3] = v_after
+    after[X_AT.w:X_AT.w + 3] = Q.T @ w_after
+    log = np.empty(IMPACT_WIDTH)
+    log[I_AT.v_before:I_AT.v_before + 3] = v
+    log[I_AT.v_after:I_AT.v_after + 3] = v_after
+    log[I_AT.w_before:I_AT.w_before + 3] = y[X_AT.w:X_AT.w + 3]
+    log[I_AT.w_after:I_AT.w_after + 3] = after[X_AT.w:X_AT.w + 3]
+    log[I_AT.impulse:I_AT.impulse + 3] = P
+    log[I_AT.u_before:I_AT.u_before + 3] = u
+    log[I_AT.u_after:I_AT.u_after + 3] = v_after + cross(w_after, R)
+    log[I_AT.ke_before], log[I_AT.ke_after], log[I_AT.admissible] = ke_before, ke_after, 1.0 if admissible else 0.0
+    log[I_AT.printed_admissible], log[I_AT.printed_creates_energy], log[I_AT.converged] = p_adm, p_gain, converged
+    return after, log, warns
+

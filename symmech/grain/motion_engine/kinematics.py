@@ -1,0 +1,123 @@
+"""The rigid grain's kinematics in numba, for every phase of the compiled loop: rotation matrix, lowest point,
+surface motion, effective mass, kinetic and absolute energy, and the contact tests at a state (gap, contact
+velocity and their round-off floors). The physics comes from the generated scalar kernels (``grain_motion_nb``).
+
+``p`` is the parameter vector (layout :data:`layouts.PARAMS`), ``y`` the state (14,) (``STATE``)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from symmech.core import kernels
+from symmech.core.ode import jit
+from symmech.grain.motion_engine.layouts import P_AT, X_AT
+
+gm = kernels.load("grain_motion")
+
+
+EPS = float(np.finfo(float).eps)
+
+
+@jit
+def cross(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+@jit
+def rotation(q):
+    """Q (3, 3) of a quaternion, normalised here (generated ``rotation_matrix``)."""
+    s = math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    return gm.rotation_matrix_scalar(q[0] / s, q[1] / s, q[2] / s, q[3] / s)
+
+
+@jit
+def contact_offset(p, Q):
+    """Contact offset R (3,) [m] of the lowest point, KXYZ (generated ``contact_offset_body``)."""
+    body = gm.contact_offset_body_scalar(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2], Q[2, 0], Q[2, 1], Q[2, 2])
+    return Q @ body
+
+
+@jit
+def support(p, Q):
+    return gm.support_distance_scalar(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2], Q[2, 0], Q[2, 1], Q[2, 2])
+
+
+@jit
+def surface(p, t):
+    """Rows displacement, velocity, acceleration (3, 3) of the surface at t."""
+    d = P_AT.direction
+    return gm.surface_kinematics_scalar(p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase], p[d], p[d + 1], p[d + 2], t)
+
+
+@jit
+def normal_force(p, t):
+    """Normal force per unit mass n(t) [m/s^2] of a grain on the plane."""
+    return surface(p, t)[2, 2] - p[P_AT.g + 2]
+
+
+@jit
+def world_inv_inertia(p, Q):
+    return Q @ np.diag(1.0 / p[P_AT.inertia:P_AT.inertia + 3]) @ Q.T
+
+
+@jit
+def inverse_effective_mass(p, Q, R):
+    """K (3, 3) [1/kg], as ``coulomb_law.inverse_effective_mass``; a point mass without rotation."""
+    K = np.eye(3) / p[P_AT.mass]
+    if p[P_AT.rotation] != 0.0:
+        Rx = np.array([[0.0, -R[2], R[1]], [R[2], 0.0, -R[0]], [-R[1], R[0], 0.0]])
+        K = K - Rx @ world_inv_inertia(p, Q) @ Rx
+    return K
+
+
+@jit
+def kinetic(p, Q, v, w):
+    """Kinetic energy [J]; v, w (3,) in KXYZ."""
+    wb = Q.T @ w
+    I = p[P_AT.inertia:P_AT.inertia + 3]
+    return 0.5 * p[P_AT.mass] * (v @ v) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2)
+
+
+@jit
+def is_sphere(p):
+    a = P_AT.axes
+    return max(p[a], p[a + 1], p[a + 2]) == min(p[a], p[a + 1], p[a + 2])
+
+
+@jit
+def contact_velocity(p, y):
+    Q = rotation(y[X_AT.q:X_AT.q + 4])
+    return y[X_AT.v + 2] + cross(Q @ y[X_AT.w:X_AT.w + 3], contact_offset(p, Q))[2]
+
+
+@jit
+def gap(p, y):
+    return y[X_AT.r + 2] - support(p, rotation(y[X_AT.q:X_AT.q + 4]))
+
+
+@jit
+def gap_noise(p, y):
+    return 64 * EPS * (max(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2]) + abs(y[X_AT.r + 2]) + p[P_AT.amplitude])
+
+
+@jit
+def velocity_noise(p, y):
+    a = P_AT.axes
+    v, w = y[X_AT.v:X_AT.v + 3], y[X_AT.w:X_AT.w + 3]
+    scale = (math.sqrt(v @ v) + math.sqrt(w @ w) * max(p[a], p[a + 1], p[a + 2])
+             + p[P_AT.amplitude] * p[P_AT.omega])
+    return 1e3 * EPS * scale
+
+
+@jit
+def energy(p, y):
+    """Absolute energy [J]: kinetic in the inertial frame plus the potential of gravity (the start and the end of
+    the energy budget, :mod:`symmech.grain.outcome`)."""
+    s = surface(p, y[X_AT.t])
+    v = y[X_AT.v:X_AT.v + 3] + s[1]
+    I = p[P_AT.inertia:P_AT.inertia + 3]
+    w = y[X_AT.w:X_AT.w + 3]
+    return (p[P_AT.mass] * (0.5 * (v @ v) - p[P_AT.g:P_AT.g + 3] @ (y[X_AT.r:X_AT.r + 3] + s[0]))
+            + 0.5 * (I[0] * w[0] ** 2 + I[1] * w[1] ** 2 + I[2] * w[2] ** 2))
+

@@ -1,0 +1,40 @@
+"""The right-hand sides of the compiled loop's integrations and :mod:`symmech.core.ode`'s steppers compiled for
+them (closures: see that module's docstring): the torque-free rotation of a flight (``ROT``) and the sliding
+contact (``SLIP``, ``STICK``), with the slip's Jacobian for Radau IIA."""
+from __future__ import annotations
+
+from symmech.core import ode
+from symmech.core.ode import jit
+from symmech.grain.motion_engine.kinematics import gm
+from symmech.grain.motion_engine.layouts import INT
+from symmech.grain.motion_engine.slip import slide_rhs, slip_jac
+
+ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Prince stepper
+DOP_STAGES, DOP_EXTENDED, DOP_POWER, DOP_EXPONENT = ode.DOP_STAGES, ode.DOP_EXTENDED, ode.DOP_POWER, ode.DOP_EXPONENT
+
+
+@jit
+def rhs(t, y, args, out):
+    """Right-hand side of the toolkit's steppers, args = (kind, data): ``ROT`` torque-free rotation y = (q, w
+    body), data = the principal inertia (3,); ``SLIP``/``STICK`` sliding, data the sliding parameters (SLIDE)."""
+    kind, data = args
+    if kind == ROT:
+        qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
+        wd = gm.euler_equations_scalar(data[0], data[1], data[2], y[4], y[5], y[6])
+        out[:4] = qd
+        out[4:7] = wd
+    else:
+        slide_rhs(t, y, data, kind == STICK, out)
+
+
+@jit
+def jac(t, y, args, J):
+    """Jacobian d rhs / d y (13, 13) into J of the slip (analytic), args = (kind, sp): the only stiff one."""
+    slip_jac(t, y, args[1], J)
+
+
+# The generic DOP853 and Radau IIA code of core.ode, compiled for these right-hand sides.
+_steps = ode.steppers(rhs, jac)
+first_step, dop_advance, dop_dense = _steps.first_step, _steps.dop_advance, _steps.dop_dense
+radau_start, radau_step = _steps.radau_start, _steps.radau_step
+
