@@ -3,7 +3,8 @@ refusal after Newton's default step budget, the rocking warning's words, a quiet
 half-space and frictionless limits, and trajectory rows sampled more than 1 s apart (the schema allows it).
 
 Expected values are written here: the default budget (50 steps) from the signature's documentation, the
-rocking warning as motion.py words it (a literal here: a change of words is a decision), the sphere's closed-form impulse, the parabola of a free fall.
+rocking warning as grain/outcome.py words it for both engines (a literal here: a change of words is a decision),
+the sphere's closed-form impulse, the parabola of a free fall.
 """
 import math
 import warnings
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 from symmech.core.scene import SymmechError
-from symmech.grain import flight, motion
+from symmech.grain import flight, motion, outcome
 from symmech.grain.coulomb_law import ImpactLaw, coulomb_impulse
 from symmech.trolley import elastic as el
 
@@ -36,7 +37,7 @@ def test_newton_refuses_after_fifty_steps_by_default_and_says_so():
 
 
 def test_rocking_warning_reads_as_documented():
-    assert motion.rocking_warning(3) == (
+    assert outcome.rocking_warning(3) == (
         "3 rocking contact(s): a tumbling ellipsoid held on the plane by its spin while the surface accelerates "
         "away; rocking is not modelled, so its tilting spin was dropped (booked as landing loss) and it flew on")
 

@@ -110,8 +110,10 @@ def engines() -> dict[str, Engine]:
 
 
 def get(name: str) -> Engine:
-    """The engine called ``name`` (KeyError naming the registered ones otherwise)."""
-    _discover(until=name)
+    """The engine called ``name`` (KeyError naming the registered ones otherwise); once registered, a dict lookup
+    (the run paths ask for their engine at every run)."""
+    if name not in _ENGINES:
+        _discover(until=name)
     if name in _ENGINES:
         return _ENGINES[name]
     raise KeyError(f"no compiled engine {name!r}; registered: {', '.join(engines())}")

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symmech.core import kinematics as kin
-from symmech.grain import contact
+from symmech.grain import contact, outcome
 from symmech.grain.impact import solve_robust_batch
 
 PRINTED_RESIDUAL = 1e-8  # relative residual of (19) below which the printed law counts as solved
@@ -121,14 +121,11 @@ class ImpactLaw:
                 printed_creates[i] = bool(printed.energy_created[j])
             if self.kind == "printed":
                 for j in np.flatnonzero(~printed.admissible):
-                    reason = ("creates kinetic energy" if printed.energy_created[j]
-                              else "pulls the grain into the plane (T_z < 0)")
-                    warnings.append(f"printed impact law: no admissible root; the one used {reason}")
+                    warnings.append(outcome.printed_inadmissible_warning(bool(printed.energy_created[j])))
             if self.kind == "printed":
                 converged[idx] = printed.residual < PRINTED_RESIDUAL
                 for j in np.flatnonzero(~converged[idx]):
-                    warnings.append(f"printed impact law: no solution of (19) (relative residual "
-                                    f"{printed.residual[j]:.3g})")
+                    warnings.append(outcome.printed_residual_warning(printed.residual[j]))
         if rotation and self.kind == "printed":
             P = np.zeros((n, 3))
             if approaching.any():
@@ -147,8 +144,7 @@ class ImpactLaw:
         ke_after = kinetic_energy(mass, inertia, Q, v_after, w_after)
         admissible = ke_after <= ke_before * (1.0 + 1e-9)
         for i in np.flatnonzero(~admissible):
-            warnings.append(f"impact law '{self.kind}' created energy: "
-                            f"{ke_before[i]:.6g} J -> {ke_after[i]:.6g} J")
+            warnings.append(outcome.energy_created_warning(self.kind, ke_before[i], ke_after[i]))
         return {"v": v_after, "w": w_after, "impulse": P, "u_before": u,
                 "u_after": v_after + np.cross(w_after, R), "ke_before": ke_before, "ke_after": ke_after,
                 "admissible": admissible, "printed_admissible": printed_admissible,

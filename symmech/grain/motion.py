@@ -42,7 +42,7 @@ from functools import cached_property
 import numpy as np
 
 from symmech.core.scene import SymmechError
-from symmech.grain import contact, flight
+from symmech.grain import contact, flight, outcome
 from symmech.grain.coulomb_law import ImpactLaw, inverse_effective_mass, kinetic_energy, principal_inertia
 from symmech.grain.sliding import Body, Sliding, slide
 
@@ -107,7 +107,7 @@ class Numerics:
     ``scan_step`` [s] for root bracketing. Paper mode: step ``dt`` [s], ``nodes`` on the body surface,
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
-    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.motion_engine.driver`), "python" (this loop) or
+    (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.motion_engine`), "python" (this loop) or
     "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``)."""
 
     mode: str = "accurate"
@@ -142,7 +142,8 @@ class State:
 class Motion:
     """Result: ``trajectory`` (n, 15) with :data:`TRAJECTORY_COLUMNS`, ``impacts`` (list of dicts),
     ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the ``start`` state; ``extra`` goes into
-    the summary as it is (accurate mode: ``landings`` and ``energy_budget``, the dict of :meth:`_Budget.report`)."""
+    the summary as it is (accurate mode: ``landings`` and ``energy_budget``, the dict of
+    :meth:`outcome.EnergyBudget.report`)."""
 
     trajectory: np.ndarray
     impacts: list
@@ -220,35 +221,17 @@ class Progress:
             self.on_step(float(t_now))
 
 
-class _Budget:
-    """Energy bookkeeping [J] of one run: absolute energy (kinetic in the inertial frame plus potential of
-    gravity) against the work of the surface and the losses in impacts, landings and sliding."""
+def absolute_energy(model: Model, st: State) -> float:
+    """Absolute energy [J] of the grain at ``st``: kinetic in the inertial frame plus the potential of gravity."""
+    s = model.vibration.kinematics(st.t)
+    v_abs = st.v + s[1]
+    return (model.mass * (0.5 * float(v_abs @ v_abs) - float(np.asarray(model.g_k) @ (st.r + s[0])))
+            + 0.5 * float(st.w @ (model.inertia * st.w)))
 
-    def __init__(self, model: Model, st: State):
-        self.model = model
-        self.start = self.energy(st)
-        self.work = self.impacts = self.landings = self.sliding = 0.0
 
-    def energy(self, st: State) -> float:
-        m, vib = self.model, self.model.vibration
-        s = vib.kinematics(st.t)
-        v_abs = st.v + s[1]
-        return (m.mass * (0.5 * float(v_abs @ v_abs) - float(np.asarray(m.g_k) @ (st.r + s[0])))
-                + 0.5 * float(st.w @ (m.inertia * st.w)))
-
-    def impulse(self, t: float, P) -> None:
-        """Work of the moving surface through an impulse P (3,) [N s] on the grain at time t."""
-        self.work += float(np.asarray(P) @ self.model.vibration.kinematics(t)[1])
-
-    def report(self, st: State, tolerance: float) -> dict:
-        end = self.energy(st)
-        residual = end - self.start - (self.work - self.impacts - self.landings - self.sliding)
-        scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
-        parts = {"start_J": self.start, "end_J": end, "input_by_surface_J": self.work,
-                 "lost_in_impacts_J": self.impacts, "lost_at_landings_J": self.landings,
-                 "lost_in_sliding_J": self.sliding, "residual_J": residual,
-                 "relative_residual": abs(residual) / scale if scale > 0 else 0.0}
-        return {**{k: float(v) for k, v in parts.items()}, "tolerance": tolerance}
+def surface_work(model: Model, t: float, P) -> float:
+    """Work [J] of the moving surface through an impulse P (3,) [N s] on the grain at time t."""
+    return float(np.asarray(P) @ model.vibration.kinematics(t)[1])
 
 
 def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None) -> Motion:
@@ -264,7 +247,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
                  q=np.asarray(start.q, float) / np.linalg.norm(start.q), w=np.array(start.w, float))
     if not model.effects.rotation:
         st.w = np.zeros(3)
-    budget = _Budget(model, st)
+    budget = outcome.EnergyBudget(absolute_energy(model, st))
     on_plane = _gap(model, st) <= _gap_noise(model, st)
     time_in = dict.fromkeys(("flight", "sliding"), 0.0)
     impacts: list = []
@@ -284,8 +267,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
                 break
             if status == "contact" and _contact_velocity(model, st) < -_velocity_noise(model, st):
                 if len(impacts) >= num.max_impacts:
-                    warnings.append(f"stopped at t = {st.t:.6g} s after numerics.max_impacts = "
-                                    f"{num.max_impacts} impacts")
+                    warnings.append(outcome.max_impacts_warning(st.t, num.max_impacts))
                     break
                 st, u_n = _bounce(model, st, impacts, rec, budget, warnings)
             else:
@@ -307,38 +289,30 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
                 regime, on_plane = "flight", True
         idle = idle + 1 if st.t == t_before else 0
         if idle > MAX_IDLE_STEPS:
-            raise SymmechError(f"grain: the simulation stopped advancing at t = {st.t:.9g} s ({MAX_IDLE_STEPS} "
-                               f"regime changes without advancing time, {regime} regime)")
+            raise SymmechError(outcome.stalled_error(st.t, MAX_IDLE_STEPS, regime))
     progress(st.t, final=True)
     rec.add(st, regime)
     if rocking:
-        warnings.append(rocking_warning(rocking))
+        warnings.append(outcome.rocking_warning(rocking))
     extra = {"landings": landings, "rocking_contacts": rocking,
-             "energy_budget": budget.report(st, ENERGY_TOLERANCE)}
-    return Motion(np.array(rec.rows), impacts, time_in, _unique(warnings), start, st, extra)
+             "energy_budget": budget.report(absolute_energy(model, st), ENERGY_TOLERANCE)}
+    return Motion(np.array(rec.rows), impacts, time_in, outcome.distinct(warnings), start, st, extra)
 
 
-def rocking_warning(count: int) -> str:
-    """The warning of ``count`` rocking contacts (both engines word it so)."""
-    return (f"{count} rocking contact(s): a tumbling ellipsoid held on the plane by its spin while the surface "
-            "accelerates away; rocking is not modelled, so its tilting spin was dropped (booked as landing loss) "
-            "and it flew on")
-
-
-def _bounce(model: Model, st: State, impacts: list, rec: _Recorder, budget: _Budget,
+def _bounce(model: Model, st: State, impacts: list, rec: _Recorder, budget: outcome.EnergyBudget,
             warnings: list):
     """An impact at ``st``, logged and booked: (state after, normal contact velocity after [m/s]; zero when the
     impacts have become a chattering sequence too dense to follow, which is summed into sliding)."""
     before = st
     st, out = _impact(model, st, warnings)
-    budget.impulse(st.t, out["impulse"][0])
+    budget.work += surface_work(model, st.t, out["impulse"][0])
     budget.impacts += float(out["ke_before"][0] - out["ke_after"][0])
     rec.add(before, "impact")
     rec.add(st, "impact")
     impacts.append(impact_record(st.t, before, st, out))
     times = [i["t"] for i in impacts[-ZENO_IMPACTS:]]
     if len(times) == ZENO_IMPACTS and times[-1] - times[0] < ZENO_INTERVAL * model.period:
-        warnings.append(f"{ZENO_IMPACTS} impacts within {ZENO_INTERVAL:g} periods: chattering summed into sliding")
+        warnings.append(outcome.chatter_warning(ZENO_IMPACTS, ZENO_INTERVAL))
         return st, 0.0
     return st, float(out["u_after"][0, 2])
 
@@ -375,7 +349,7 @@ def _velocity_noise(model: Model, st: State) -> float:
     return 1e3 * EPS * scale
 
 
-def _land(model: Model, st: State, budget: _Budget) -> State:
+def _land(model: Model, st: State, budget: outcome.EnergyBudget) -> State:
     """Start sliding: a plastic normal impulse at the lowest point stops its normal velocity (angular momentum
     about the contact is kept); a non-spherical grain also gives up the tilting spin the sliding regime does not
     model. Both losses are booked as landing loss; the centre sits at the support height."""
@@ -392,14 +366,15 @@ def _land(model: Model, st: State, budget: _Budget) -> State:
             v[2], w[:2] = 0.0, 0.0
     v[2] = 0.0
     ke = kinetic_energy(model.mass, model.inertia, Q, np.stack([st.v, v]), np.stack([Q @ st.w, w]))
-    budget.impulse(st.t, model.mass * (v - st.v))
+    budget.work += surface_work(model, st.t, model.mass * (v - st.v))
     budget.landings += float(ke[0] - ke[1])
     r = st.r.copy()
     r[2] = float(contact.support_distance(model.axes, Q))
     return State(st.t, r, v, st.q, Q.T @ w)
 
 
-def _slide(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, budget: _Budget, progress):
+def _slide(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, budget: outcome.EnergyBudget,
+           progress):
     """One sliding phase from ``st``: (state at its end, lifted off)."""
     body = Body(model.axes, model.mass, tuple(model.inertia), model.effects.rotation)
     Q = flight.rotation_matrix(st.q)
@@ -463,7 +438,3 @@ def _rise(gap, t0: float, span: float, noise: float):
         if gap(t) > noise:
             return t
     return None
-
-
-def _unique(items: list) -> list:
-    return list(dict.fromkeys(items))

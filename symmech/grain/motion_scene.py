@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import precision as wp
-from symmech.core import registry
+from symmech.core import engines, registry
 from symmech.core.context import Context
 from symmech.core.results import Check, Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
@@ -324,19 +324,18 @@ def choose_engine(sc: GrainScene, num: motion.Numerics | None = None,
     num = num or sc.numerics
     if num.engine == "python":
         return "python", 'numerics.engine = "python"'
-    from symmech.grain.motion_engine import driver as compiled  # no numba: the engine's Python side
-
     if num.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
-    if compiled.ENGINE.ahead_of_time() is not None:
+    compiled = engines.get("grain").builder()  # no numba: the engine's Python side
+    if compiled.ahead_of_time() is not None:
         return "compiled", "auto: the compiled engine is built (ahead of time)"
-    if not compiled.ENGINE.cold():
+    if not compiled.cold():
         return "compiled", "auto: the compiled engine is built (numba's cache)"
     python = _python_cost(sc, num, sc.duration if duration is None else duration)[0]
-    if python > compiled.COLD_COMPILE_SECONDS + python / COMPILED_SPEEDUP:
+    if python > compiled.seconds + python / COMPILED_SPEEDUP:
         return "compiled", (f"auto: the Python engine would take ~{python:.3g} s, longer than compiling "
                             "the compiled engine first")
-    return "python", compiled.ENGINE.cold_reason()
+    return "python", compiled.cold_reason()
 
 
 # --------------------------------------------------------------------------- run
@@ -354,16 +353,13 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
     engine, why = choose_engine(sc, num, t_end)
     if engine == "compiled":
-        from symmech.grain.motion_engine import driver as compiled
-
-        if compiled.ENGINE.needs_compile():  # compile under the build lock, or load what a concurrent builder made
-            compiled.ENGINE.warm()
-        m = compiled.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
+        compiled = engines.get("grain")
+        if compiled.builder().needs_compile():  # compile under the build lock, or load what a concurrent builder made
+            compiled.warm()
+        m = compiled.run(sc.model, num, sc.start, t_end, on_step=on_step)
     else:
         if num.engine == "auto":
-            from symmech.grain.motion_engine import driver as compiled
-
-            compiled.ENGINE.warm_in_background()
+            engines.get("grain").builder().warm_in_background()
         m = motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
     m.extra.update(engine=engine, engine_reason=why)
     return m

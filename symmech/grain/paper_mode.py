@@ -42,7 +42,8 @@ from symmech.grain import contact
 from symmech.grain.body import euler_from_matrix
 from symmech.grain.coulomb_law import principal_inertia
 from symmech.grain.body import rotation as euler_rotation
-from symmech.grain.motion import Model, Motion, Numerics, Progress, State, impact_record, _unique
+from symmech.grain.motion import Model, Motion, Numerics, Progress, State, impact_record
+from symmech.grain.outcome import distinct
 from symmech.grain.flight import quaternion_from_matrix
 from symmech.grain.sliding import slide_step
 
@@ -154,7 +155,7 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
         warnings.append(f"paper mode: {int(np.count_nonzero(spin_dropped))} grain(s) lost spin at landings "
                         f"(up to {spin_dropped.max():.3g} J of kinetic energy): its sliding is a point mass's")
     return r, v, count, {"rows": rec_rows, "impacts": rec_impacts, "time_in": time_in,
-                         "warnings": _unique(warnings), "Q": Q, "w_body": w_body, "spin_dropped": spin_dropped}
+                         "warnings": distinct(warnings), "Q": Q, "w_body": w_body, "spin_dropped": spin_dropped}
 
 
 def _node_support(Q, nodes):

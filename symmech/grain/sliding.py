@@ -50,7 +50,7 @@ import numpy as np
 
 from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
-from symmech.grain import contact, flight
+from symmech.grain import contact, flight, outcome
 from symmech.grain.contact import first_root
 
 MAX_RHS_PER_PHASE = 400_000  # step-count guard: right-hand sides per integration chunk
@@ -175,8 +175,7 @@ class _Contact:
     def rhs(self, t, y, stick: bool):
         self.nfev += 1
         if self.nfev > MAX_RHS_PER_PHASE:
-            raise SymmechError(f"sliding integration stagnates at t = {t:.9g} s "
-                               f"(more than {MAX_RHS_PER_PHASE} evaluations in one chunk)")
+            raise SymmechError(outcome.sliding_evaluations_error(t, MAX_RHS_PER_PHASE))
         vel, acc = self.model.surface(t)
         R, s, c = self.geometry(y)
         n = acc[2] - self.g[2]
@@ -242,11 +241,10 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
         sol = solve_ivp(ode.rhs, (t, min(t_stop, t + chunk)), y, method="Radau" if implicit else "DOP853",
                         rtol=tol, atol=atol, events=events, dense_output=True, args=(stick,))
         if not sol.success:
-            raise SymmechError(f"sliding integration failed at t = {t:.9g} s: {sol.message}")
+            raise SymmechError(outcome.integration_failed_error("sliding integration", t, sol.message))
         stalled = stalled + 1 if sol.t[-1] <= t else 0
         if stalled > MAX_STALLED_EVENTS:
-            raise SymmechError(f"sliding stagnates at t = {t:.9g} s: {MAX_STALLED_EVENTS} regime changes "
-                               "without advancing time")
+            raise SymmechError(outcome.sliding_stalled_error(t, MAX_STALLED_EVENTS))
         pieces.append((t, sol.t[-1], sol.sol))
         t, y = sol.t[-1], sol.y[:, -1].copy()
         if sol.status == 1 and len(sol.t_events) > 1 and sol.t_events[1].size:

@@ -28,6 +28,7 @@ from functools import cached_property
 
 import numpy as np
 
+from symmech.core import engines
 from symmech.core import sweep as core_sweep
 from symmech.core import schema as s
 from symmech.core.results import Column, Headline, Result, Table
@@ -363,9 +364,7 @@ def _compiled_needed(p: Plan) -> bool:
 
 def _warm_worker() -> None:
     """On a dask worker: the compiled engine built once per machine (the others wait on the build lock)."""
-    from symmech.grain.motion_engine import driver as compiled
-
-    compiled.ENGINE.warm()
+    engines.get("grain").warm()
 
 
 def run(source, out, ctx, scheduler: str | None = None, workers: int | None = None,
@@ -403,9 +402,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
     warm = _compiled_needed(p)
     if warm:
-        from symmech.grain.motion_engine import driver as compiled
-
-        compiled.ENGINE.warm(say=say)
+        engines.get("grain").warm(say=say)
 
     jobs = [(k, i, j, start, min(start + CHUNK, pop["count"])) for k, pop in enumerate(p.populations)
             for i, j in np.ndindex(*p.shape) for start in range(0, pop["count"], CHUNK)]

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import build, kinematics as kin, plotting
+from symmech.core import build, engines, kinematics as kin, plotting
 from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import elastic as el
@@ -55,14 +55,13 @@ def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
         return "python", f"numerics.method = \"{setup.method}\": the compiled engine integrates by Radau"
     if setup.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
-    from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine may run
-
-    if not elastic_compiled.ENGINE.cold():
+    compiled = engines.get("elastic").builder()  # imports numba: only when the compiled engine may run
+    if not compiled.cold():
         return "compiled", "auto: the compiled engine is built (numba's cache)"
     python = SECONDS_PER_STEP["python"] * (len(setup.t) - 1) * runs
-    if python > elastic_compiled.COLD_COMPILE_SECONDS:
+    if python > compiled.seconds:
         return "compiled", f"auto: the Python engine would take ~{python:.3g} s, longer than compiling first"
-    return "python", elastic_compiled.ENGINE.cold_reason()
+    return "python", compiled.cold_reason()
 
 
 def simulate(setup: Setup, **kw) -> dict:
@@ -72,17 +71,14 @@ def simulate(setup: Setup, **kw) -> dict:
     start = {"dq0": setup.dq0, "dqd0": setup.dqd0, "rtol": setup.rtol}
     name, why = engine(setup)
     if name == "compiled":
-        from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
-
-        if elastic_compiled.ENGINE.cold():  # compile under the build lock, or load what a concurrent builder made
-            elastic_compiled.ENGINE.warm()
-        out = elastic_compiled.simulate(setup.system, setup.drive, setup.t, **{**start, **kw})
+        compiled = engines.get("elastic")  # imports numba: only when the compiled engine runs
+        if compiled.builder().cold():  # compile under the build lock, or load what a concurrent builder made
+            compiled.builder().warm()
+        out = compiled.run(setup.system, setup.drive, setup.t, **{**start, **kw})
         out["engine_reason"] = out["engine_reason"] or why
         return out
     if why.startswith(build.COLD):  # not when the Python engine runs for another reason
-        from symmech.trolley import elastic_compiled
-
-        elastic_compiled.ENGINE.warm_in_background()
+        engines.get("elastic").builder().warm_in_background()
     out = el.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
     out.update(engine="python", engine_reason=why)
     return out
@@ -511,9 +507,7 @@ def precision(setup: Setup, ctx) -> Result:
         runs = [(name, python, kw, rtols) for name, kw, rtols in PRECISION_METHODS]
         compiled = Setup(**{**setup.__dict__, "engine": "compiled", "method": "Radau"})
         if engine(compiled)[0] == "compiled":
-            from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
-
-            elastic_compiled.ENGINE.warm()  # its first compile is not a cost of any row
+            engines.get("elastic").builder().warm()  # its first compile is not a cost of any row (imports numba)
             runs.append((COMPILED_METHOD, compiled, {}, PRECISION_RTOLS))
         rows = []
         for name, st, kw, rtols in runs:

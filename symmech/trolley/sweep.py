@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from symmech.core import units
+from symmech.core import engines, units
 from symmech.core import schema as s
 from symmech.core import sweep as core_sweep
 from symmech.core.results import Column, Result, Table
@@ -497,9 +497,7 @@ def _compiled_needed(first, points: int) -> bool:
 
 def _warm_worker(say=None) -> None:
     """The compiled elastic engine built once per machine (other processes wait on the build lock)."""
-    from symmech.trolley import elastic_compiled
-
-    elastic_compiled.ENGINE.warm(say=say)
+    engines.get("elastic").builder().warm(say=say)
 
 
 # Charts over the plane: (column, title, whether larger is worse)

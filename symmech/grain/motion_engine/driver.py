@@ -52,13 +52,13 @@ import numpy as np
 
 from symmech.core import aot, artifacts, build, layout
 from symmech.core.scene import SymmechError
-from symmech.grain import motion, sliding
+from symmech.grain import motion, outcome, sliding
 from symmech.grain.motion_engine import layouts
 from symmech.grain.motion_engine.layouts import (  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
     LAYOUTS, PARAMS, STATE, CARRY, IMPACT_ROW, C_AT, X_AT, LAW_COULOMB, LAW_PRINTED, INT, DONE, MORE, STALLED,
     SLIDE_STALLED, SLIDE_RHS, SLIDE_FAIL, W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS,
-    W_PRINTED_RESIDUAL, IMPACT_WIDTH, TRAJECTORY_WIDTH, PHASES_PER_CALL, COLD_COMPILE_SECONDS, ZENO_IMPACTS,
-    ZENO_INTERVAL, MAX_IDLE_STEPS, MAX_STALLED_EVENTS)
+    W_PRINTED_RESIDUAL, IMPACT_WIDTH, TRAJECTORY_WIDTH, WARNING_WIDTH, PHASES_PER_CALL, COLD_COMPILE_SECONDS,
+    ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS, MAX_STALLED_EVENTS)
 
 
 # --------------------------------------------------------------------------- Python side
@@ -77,17 +77,16 @@ def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
 
 
 def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:
-    """The text of a warning code, as the Python loop words it."""
+    """The text of a warning row (code, a, b), as the Python loop words it (:mod:`symmech.grain.outcome`)."""
     if code == W_MAX_IMPACTS:
-        return f"stopped at t = {a:.6g} s after numerics.max_impacts = {num.max_impacts} impacts"
+        return outcome.max_impacts_warning(a, num.max_impacts)
     if code == W_CHATTER:
-        return f"{ZENO_IMPACTS} impacts within {ZENO_INTERVAL:g} periods: chattering summed into sliding"
+        return outcome.chatter_warning(ZENO_IMPACTS, ZENO_INTERVAL)
     if code in (W_PRINTED_ENERGY, W_PRINTED_PULLS):
-        reason = "creates kinetic energy" if code == W_PRINTED_ENERGY else "pulls the grain into the plane (T_z < 0)"
-        return f"printed impact law: no admissible root; the one used {reason}"
+        return outcome.printed_inadmissible_warning(code == W_PRINTED_ENERGY)
     if code == W_PRINTED_RESIDUAL:
-        return f"printed impact law: no solution of (19) (relative residual {a:.3g})"
-    return f"impact law '{model.law.kind}' created energy: {a:.6g} J -> {b:.6g} J"
+        return outcome.printed_residual_warning(a)
+    return outcome.energy_created_warning(model.law.kind, a, b)
 
 
 FLAGS = (None, False, True)  # a flag column + 1: not checked, no, yes
@@ -116,7 +115,12 @@ def _state(y: np.ndarray) -> motion.State:
 
 class LazyMotion(motion.Motion):
     """A ``motion.Motion`` whose impact log is built from the compiled impact rows (n, IMPACT_WIDTH) on first
-    use: a dict per impact costs as much as the compiled loop's work for that impact, and holds the GIL."""
+    use: a dict per impact costs as much as the compiled loop's work for that impact, and holds the GIL. The
+    arguments: the impact rows, then those of ``motion.Motion`` (its impacts None)."""
+
+    def __init__(self, impact_rows: np.ndarray, *args):
+        super().__init__(*args)
+        self._rows = impact_rows
 
     @property
     def impacts(self) -> list:
@@ -129,32 +133,25 @@ class LazyMotion(motion.Motion):
         self._impacts = value
 
 
-class _Budget(motion._Budget):
-    """The Python loop's energy budget from a finished run's carry: its energies come from the compiled entry
-    (no compiled function of their own to load, no 30 us of numpy kinematics in Python)."""
-
-    def __init__(self, model: motion.Model, carry: np.ndarray):
-        self.model, self.start, self.end = model, float(carry[C_AT.e_start]), float(carry[C_AT.e_end])
-        self.work, self.impacts = carry[C_AT.work], carry[C_AT.impacts]
-        self.landings, self.sliding = carry[C_AT.land_loss], carry[C_AT.slide_loss]
-
-    def energy(self, st) -> float:  # report() asks for the end's
-        return self.end
+def _budget(carry: np.ndarray) -> dict:
+    """The energy budget of a finished run from its carry (CARRY.size,): the energies at the start and the end come
+    from the compiled entry (no compiled function of their own to load, no 30 us of numpy kinematics in Python)."""
+    budget = outcome.EnergyBudget(float(carry[C_AT.e_start]), carry[C_AT.work], carry[C_AT.impacts],
+                                  carry[C_AT.land_loss], carry[C_AT.slide_loss])
+    return budget.report(float(carry[C_AT.e_end]), motion.ENERGY_TOLERANCE)
 
 
 def _raise(status: int, t: float, regime: int) -> None:
     """The Python loop's errors for the compiled loop's failure codes."""
     if status == STALLED:
-        raise SymmechError(f"grain: the simulation stopped advancing at t = {t:.9g} s ({MAX_IDLE_STEPS} regime "
-                           f"changes without advancing time, {motion.REGIMES[regime]} regime)")
+        raise SymmechError(outcome.stalled_error(t, MAX_IDLE_STEPS, motion.REGIMES[regime]))
     if status == SLIDE_STALLED:
-        raise SymmechError(f"sliding stagnates at t = {t:.9g} s: {MAX_STALLED_EVENTS} regime changes "
-                           "without advancing time")
+        raise SymmechError(outcome.sliding_stalled_error(t, MAX_STALLED_EVENTS))
     if status == SLIDE_RHS:
-        raise SymmechError(f"sliding integration stagnates at t = {t:.9g} s (more than "
-                           f"{sliding.MAX_RHS_PER_PHASE} evaluations in one chunk)")
+        raise SymmechError(outcome.sliding_evaluations_error(t, sliding.MAX_RHS_PER_PHASE))
     what = "sliding integration" if status == SLIDE_FAIL else "torque-free rotation"
-    raise SymmechError(f"{what} failed at t = {t:.9g} s: required step size is less than spacing between numbers")
+    raise SymmechError(outcome.integration_failed_error(
+        what, t, "required step size is less than spacing between numbers"))
 
 
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
@@ -173,26 +170,24 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     w = start.w if model.effects.rotation else (0.0, 0.0, 0.0)
     y = STATE.pack(t=start.t, r=start.r, v=start.v, q=q / np.linalg.norm(q), w=w)
     rows = np.empty((int(max(t_end - start.t, 0.0) / num.sample_interval) + 64, TRAJECTORY_WIDTH))
-    imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3)), CARRY.zeros()
+    imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, WARNING_WIDTH)), CARRY.zeros()
     status = MORE
     while status == MORE:
-        progress(y[0])
+        progress(y[X_AT.t])
         y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
-        _raise(status, float(y[0]), int(carry[C_AT.regime]))
-    progress(y[0], final=True)
+        _raise(status, float(y[X_AT.t]), int(carry[C_AT.regime]))
+    progress(y[X_AT.t], final=True)
     warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_AT.nwarn])]]
     if carry[C_AT.rocking]:
-        warnings.append(motion.rocking_warning(int(carry[C_AT.rocking])))
+        warnings.append(outcome.rocking_warning(int(carry[C_AT.rocking])))
     extra = {"landings": int(carry[C_AT.landings]), "rocking_contacts": int(carry[C_AT.rocking]),
-             "energy_budget": _Budget(model, carry).report(None, motion.ENERGY_TOLERANCE),
+             "energy_budget": _budget(carry),
              "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit])}
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
     final = _state(y)
-    result = LazyMotion(rows[:int(carry[C_AT.rows])], None, time_in, list(dict.fromkeys(warnings)), start, final,
-                        extra)
-    result._rows = imps[:int(carry[C_AT.nimp])]
-    return result
+    return LazyMotion(imps[:int(carry[C_AT.nimp])], rows[:int(carry[C_AT.rows])], None, time_in,
+                      outcome.distinct(warnings), start, final, extra)
 
 
 # --------------------------------------------------------------------------- building the cache once
