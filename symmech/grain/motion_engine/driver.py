@@ -27,10 +27,11 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   system, embedded error estimate, dense output) with the analytic Jacobian of
   the slip, switching as ``sliding.slide`` does; lift-off from the root of n(t).
 
-The loop is :mod:`symmech.grain.motion_engine.loop`; this module is its Python side and imports no numba. The
-generic integrators and root finders (DOP853, Radau IIA with dense output, Brent) are those of
-:mod:`symmech.core.ode`, compiled there for the rotation and sliding right-hand sides (``_rhs``, ``_jac``)
-and the functions of time (``_h``); the loop keeps the physics and the event logic.
+The loop is :mod:`symmech.grain.motion_engine.loop` and the modules beside it, a phase or a concept each
+(docs/ARCHITECTURE.md); this module is its Python side and imports no numba. The generic integrators and root
+finders (DOP853, Radau IIA with dense output, Brent) are those of :mod:`symmech.core.ode`, compiled for the
+rotation and sliding right-hand sides (:mod:`.steppers`) and the functions of time (:mod:`.roots`); the loop
+keeps the physics and the event logic.
 
 Parameters travel in one float64 vector (layout :data:`layouts.PARAMS`), the state as
 (t, r (3), v (3), q (4), w body (3)) (``STATE``); results come back as growing arrays
