@@ -26,7 +26,45 @@ import math
 
 import numpy as np
 
+from symmech.core.layout import Field, Layout
 from symmech.grain import flight
+
+# The compiled twin's records (float64 vectors), one per flight.
+FLIGHT = Layout("FreeFlight", (
+    Field("t0", "s", "start of the flight"),
+    Field("r0", "m", "centre position relative to the surface at t0, KXYZ", (3,)),
+    Field("v0", "m/s", "centre velocity relative to the surface at t0, KXYZ", (3,)),
+    Field("g", "m/s^2", "gravity in KXYZ", (3,)),
+    Field("amplitude", "m", "surface vibration amplitude"),
+    Field("omega", "rad/s", "surface vibration angular frequency"),
+    Field("phase", "rad", "surface phase at t0, reduced to [0, 2 pi)"),
+    Field("direction", "1", "unit direction of the surface vibration", (3,)),
+    Field("axes", "m", "semi-axes of the ellipsoid", (3,)),
+))
+ROTATION = Layout("FreeRotation", (
+    Field("t0", "s", "start of the rotation"),
+    Field("q0", "1", "attitude quaternion at t0", (4,)),
+    Field("w0", "rad/s", "body angular velocity at t0", (3,)),
+    Field("inertia", "kg m^2", "principal moments", (3,)),
+    Field("fixed_axis", "1", "1: rotation about a fixed axis (sphere, or w0 along a principal axis)"),
+    Field("frame", "1", "body axes a, b, c of the Euler frame (c: the axis the polhode circles)", (3,)),
+    Field("o_first", "1", "1: a is the other extreme axis o, b the middle one; 0: the reverse"),
+    Field("mo", "kg m^2/s", "amplitude of m_o = mo cn(u)"),
+    Field("mmid", "kg m^2/s", "signed amplitude of m_mid = mmid sn(u)"),
+    Field("mc", "kg m^2/s", "signed amplitude of m_c = mc dn(u)"),
+    Field("lam", "1/s", "rate of the elliptic argument u"),
+    Field("k2", "1", "elliptic parameter m = k^2"),
+    Field("K", "1", "complete elliptic integral of the first kind K(k2)"),
+    Field("n", "1", "characteristic of the third-kind integral (<= 0)"),
+    Field("u0", "1", "elliptic argument at t0"),
+    Field("momentum", "kg m^2/s", "|L|"),
+    Field("precession", "rad/s", "C lam = |L| (I_c - I_o) / (I_c I_o)"),
+    Field("pi_complete", "1", "complete third-kind integral Pi(n | k2)"),
+    Field("pi0", "1", "Pi(n; am u0 | k2)"),
+    Field("q_fixed", "1", "quaternion of U, the fixed rotation taking e_z to L", (4,)),
+    Field("q_frame", "1", "quaternion of the permutation Pi, body to Euler frame", (4,)),
+    Field("max_rate", "rad/s", "bound on |w| over the whole motion"),
+))
 
 
 def even_frame(c: int) -> tuple:
@@ -111,6 +149,19 @@ class ExactRotation:
         self.q_frame = self._permutation_quaternion()
         conj = np.array([1.0, -1.0, -1.0, -1.0])
         self.q_fixed = _quaternion_product(_quaternion_product(self.q0, self.q_frame * conj), q_tilt * conj)
+
+    def record(self) -> np.ndarray:
+        """The constants as a :data:`ROTATION` vector (what the compiled twin's ``rotation_setup`` writes)."""
+        values = {"t0": self.t0, "q0": self.q0, "w0": self.w0, "inertia": self.inertia,
+                  "fixed_axis": float(self.fixed_axis), "max_rate": self.max_rate}
+        if self.fixed_axis:
+            rest = {f.name: np.zeros(f.shape) for f in ROTATION.fields if f.name not in values}
+        else:
+            rest = {"frame": self.frame.astype(float), "o_first": float(self.o_first), "q_fixed": self.q_fixed,
+                    "q_frame": self.q_frame, **{name: getattr(self, name) for name in (
+                        "mo", "mmid", "mc", "lam", "k2", "K", "n", "u0", "momentum", "precession",
+                        "pi_complete", "pi0")}}
+        return ROTATION.pack(**values, **rest)
 
     def _argument(self, sn0, cn0) -> float:
         """u0 with sn(u0) = sn0, cn(u0) = cn0: Legendre's F(am) (Carlson's R_F), continued past +-pi/2."""

@@ -1,0 +1,450 @@
+"""The exact free flight in numba: the compiled twin of :mod:`symmech.grain.free_flight` (the reference).
+
+What a compiled event loop calls, per flight (records laid out by ``free_flight.FLIGHT`` and ``ROTATION``,
+float64 vectors the caller owns; ``state`` laid out as the engine's ``STATE``: t, r (3), v (3), q (4), w (3)):
+
+- :func:`flight_setup` ``(state, g, amplitude, omega, phase, direction, axes, inertia, fl, rot)``: the records
+  of the flight that starts at ``state`` (``phase`` the surface phase at t = 0);
+- :func:`flight_state` ``(t, fl, rot, out)``: the state at ``t`` into ``out`` (14,), no integration;
+- :func:`gap` ``(t, fl, rot, buf) -> (h [m], vz [m/s])``: the gap and the relative normal velocity of the
+  centre (``buf``: float64 (1, 2, 3) scratch);
+- :func:`gap_rate_bound` ``(vz, span, fl, rot) -> m/s``: a bound on ``|h'|`` over ``[t, t + span]``;
+- :func:`next_contact` ``(fl, rot, t_from, t_end, step, xtol, buf) -> t`` or nan: the first root of the gap,
+  bracketed at ``step`` and certified between samples by the rate bound, refined by Brent to ``xtol``.
+
+Jacobi's elliptic functions by the descending Landen (AGM) transformation, Carlson's R_F, R_J and R_C by
+duplication: generic numerics, no scipy.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from symmech.generated import grain_motion_nb as gm_nb
+from symmech.grain.free_flight import FLIGHT, ROTATION
+
+jit = numba.njit(cache=True, error_model="numpy", nogil=True)
+F_AT, R_AT = FLIGHT.slots, ROTATION.slots
+EPS = 2.0**-52
+TWO_PI = 2.0 * math.pi
+
+
+# --------------------------------------------------------------------------- special functions
+
+@jit
+def ellipj(u, m):
+    """Jacobi sn, cn, dn and am(u | m) for 0 <= m < 1 (Abramowitz-Stegun 16.4, the AGM as in Cephes)."""
+    if m < 1e-9:
+        t, b = math.sin(u), math.cos(u)
+        ai = 0.25 * m * (u - t * b)
+        return t - ai * b, b + ai * t, 1.0 - 0.5 * m * t * t, u - ai
+    if m >= 0.9999999999:
+        ai = 0.25 * (1.0 - m)
+        b = math.cosh(u)
+        t = math.tanh(u)
+        phi = 1.0 / b
+        twon = b * math.sinh(u)
+        sn = t + ai * (twon - u) / (b * b)
+        ph = 2.0 * math.atan(math.exp(u)) - 0.5 * math.pi + ai * (twon - u) / b
+        ai *= t * phi
+        return sn, phi - ai * (twon - u), phi + ai * (twon + u), ph
+    a = np.empty(16)
+    c = np.empty(16)
+    a[0], b, c[0] = 1.0, math.sqrt(1.0 - m), math.sqrt(m)
+    twon, i = 1.0, 0
+    while abs(c[i] / a[i]) > EPS and i < 15:
+        ai = a[i]
+        i += 1
+        c[i] = 0.5 * (ai - b)
+        t = math.sqrt(ai * b)
+        a[i] = 0.5 * (ai + b)
+        b = t
+        twon *= 2.0
+    phi = twon * a[i] * u
+    b = phi
+    while i > 0:
+        t = c[i] * math.sin(phi) / a[i]
+        b = phi
+        phi = 0.5 * (math.asin(t) + phi)
+        i -= 1
+    cn = math.cos(phi)
+    return math.sin(phi), cn, cn / math.cos(phi - b), phi
+
+
+@jit
+def carlson_rf(x, y, z):
+    """Carlson's R_F(x, y, z), x, y, z >= 0, at most one zero (duplication, Carlson 1995)."""
+    for _ in range(64):
+        lam = math.sqrt(x * y) + math.sqrt(y * z) + math.sqrt(z * x)
+        x, y, z = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam)
+        mean = (x + y + z) / 3.0
+        dx, dy, dz = 1.0 - x / mean, 1.0 - y / mean, 1.0 - z / mean
+        if max(abs(dx), abs(dy), abs(dz)) < 1e-4:
+            e2, e3 = dx * dy - dz * dz, dx * dy * dz
+            return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / math.sqrt(mean)
+    return math.nan
+
+
+@jit
+def carlson_rc(x, y):
+    """Carlson's R_C(x, y), x >= 0, y > 0."""
+    for _ in range(64):
+        lam = 2.0 * math.sqrt(x * y) + y
+        x, y = 0.25 * (x + lam), 0.25 * (y + lam)
+        mean = (x + 2.0 * y) / 3.0
+        s = (y - mean) / mean
+        if abs(s) < 1e-4:
+            return (1.0 + s * s * (0.3 + s * (1.0 / 7.0 + s * (0.375 + s * 9.0 / 22.0)))) / math.sqrt(mean)
+    return math.nan
+
+
+@jit
+def carlson_rj(x, y, z, p):
+    """Carlson's R_J(x, y, z, p), x, y, z >= 0 (at most one zero), p > 0."""
+    total, scale = 0.0, 1.0
+    for _ in range(64):
+        sx, sy, sz = math.sqrt(x), math.sqrt(y), math.sqrt(z)
+        lam = sx * sy + sy * sz + sz * sx
+        alpha = (p * (sx + sy + sz) + sx * sy * sz) ** 2
+        beta = p * (p + lam) ** 2
+        total += scale * carlson_rc(alpha, beta)
+        scale *= 0.25
+        x, y, z, p = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam), 0.25 * (p + lam)
+        mean = 0.2 * (x + y + z + 2.0 * p)
+        dx, dy, dz, dp = (mean - x) / mean, (mean - y) / mean, (mean - z) / mean, (mean - p) / mean
+        if max(abs(dx), abs(dy), abs(dz), abs(dp)) < 1e-4:
+            ea = dx * (dy + dz) + dy * dz
+            eb = dx * dy * dz
+            ec = dp * dp
+            ed = ea - 3.0 * ec
+            ee = eb + 2.0 * dp * (ea - ec)
+            series = (1.0 + ed * (-3.0 / 14.0 + 9.0 / 88.0 * ed - 9.0 / 52.0 * ee)
+                      + eb * (1.0 / 6.0 + dp * (-6.0 / 22.0 + dp * 3.0 / 26.0))
+                      + dp * ea * (1.0 / 3.0 - dp * 3.0 / 22.0) - 1.0 / 3.0 * dp * ec)
+            return 3.0 * total + scale * series / (mean * math.sqrt(mean))
+    return math.nan
+
+
+@jit
+def third_kind(n, phi, m):
+    """Legendre's Pi(n; phi | m), |phi| <= pi/2, n <= 0."""
+    s, c = math.sin(phi), math.cos(phi)
+    delta = 1.0 - m * s * s
+    return s * carlson_rf(c * c, delta, 1.0) + n / 3.0 * s**3 * carlson_rj(c * c, delta, 1.0, 1.0 - n * s * s)
+
+
+# --------------------------------------------------------------------------- quaternions
+
+
+@jit
+def _qmul(p0, p1, p2, p3, q0, q1, q2, q3):
+    return (p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3, p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
+            p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1, p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0)
+
+
+@jit
+def _tilt(ma, mb, mc, M):
+    """Quaternion of Rx(theta) Rz(psi), the z-x-z angles of the momentum (ma, mb, mc) in the Euler frame."""
+    rho = math.hypot(ma, mb)
+    big = math.sqrt((M + abs(mc)) / (2.0 * M))
+    small = rho / (2.0 * M * big)
+    ct2, st2 = (big, small) if mc >= 0.0 else (small, big)
+    half = 0.5 * math.atan2(ma, mb)
+    cp2, sp2 = math.cos(half), math.sin(half)
+    return ct2 * cp2, st2 * cp2, -st2 * sp2, ct2 * sp2
+
+
+@jit
+def _permutation_quaternion(a, b, c):
+    """Quaternion of the even permutation taking body axes (a, b, c) to (x, y, z): identity or +-120 deg."""
+    if c == 2:
+        return 1.0, 0.0, 0.0, 0.0
+    if c == 0:  # (1, 2, 0): x <- body y, y <- body z, z <- body x
+        return 0.5, -0.5, -0.5, -0.5
+    return 0.5, 0.5, 0.5, 0.5
+
+
+# --------------------------------------------------------------------------- the rotation
+
+
+@jit
+def _argument(sn0, cn0, k2, K):
+    """u0 with sn(u0) = sn0, cn(u0) = cn0: F(am | k2), continued past +-pi/2."""
+    am = math.atan2(sn0, cn0)
+    folded = math.copysign(math.pi, am) - am if abs(am) > 0.5 * math.pi else am
+    s, c = math.sin(folded), math.cos(folded)
+    f = s * carlson_rf(c * c, 1.0 - k2 * s * s, 1.0)
+    return math.copysign(2.0 * K, am) - f if abs(am) > 0.5 * math.pi else f
+
+
+@jit
+def _circled_axis(I, m):
+    lo = 0
+    hi = 0
+    for i in range(3):
+        if I[i] < I[lo]:
+            lo = i
+        if I[i] > I[hi]:
+            hi = i
+    if lo == hi:
+        return lo
+    mid = 3 - lo - hi
+    if I[lo] == I[mid]:
+        return hi
+    if I[mid] == I[hi]:
+        return lo
+    excess = 0.0
+    for i in range(3):
+        excess += m[i] * m[i] * (I[i] - I[mid]) / I[i]
+    return hi if excess > 0.0 else lo
+
+
+@jit
+def rotation_setup(inertia, q, w, t0, rot):
+    """Fill ``rot`` (ROTATION) for the free rotation from quaternion ``q`` (4,), body rate ``w`` (3,) at ``t0``."""
+    rot[:] = 0.0
+    norm = math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    rot[R_AT.t0] = t0
+    m = np.empty(3)
+    energy2 = 0.0
+    for i in range(3):
+        rot[R_AT.q0 + i] = q[i] / norm
+        rot[R_AT.w0 + i] = w[i]
+        rot[R_AT.inertia + i] = inertia[i]
+        m[i] = inertia[i] * w[i]
+        energy2 += m[i] * w[i]
+    rot[R_AT.q0 + 3] = q[3] / norm
+    M = math.sqrt(m[0] ** 2 + m[1] ** 2 + m[2] ** 2)
+    i_min = min(inertia[0], inertia[1], inertia[2])
+    rot[R_AT.max_rate] = min(math.sqrt(energy2 / i_min), M / i_min)
+    cross_zero = (w[1] * m[2] == w[2] * m[1]) and (w[2] * m[0] == w[0] * m[2]) and (w[0] * m[1] == w[1] * m[0])
+    if cross_zero or (inertia[0] == inertia[1] and inertia[1] == inertia[2]):
+        rot[R_AT.fixed_axis] = 1.0
+        return
+    c = _circled_axis(inertia, m)
+    a, b = (c + 1) % 3, (c + 2) % 3
+    o_first = abs(inertia[a] - inertia[c]) > abs(inertia[b] - inertia[c]) if inertia[a] != inertia[b] else True
+    o, mid = (a, b) if o_first else (b, a)
+    Io, Imid, Ic = inertia[o], inertia[mid], inertia[c]
+    d_c = 0.0  # 2 E I_c - M^2, summed without cancellation
+    d_o = 0.0  # M^2 - 2 E I_o
+    for i in range(3):
+        if i != c:
+            d_c += m[i] * m[i] * (Ic - inertia[i]) / inertia[i]
+        if i != o:
+            d_o += m[i] * m[i] * (inertia[i] - Io) / inertia[i]
+    lam = math.sqrt((Ic - Imid) * d_o / (Io * Imid * Ic))
+    k2 = min((Imid - Io) * d_c / ((Ic - Imid) * d_o), 1.0 - EPS) if Imid != Io else 0.0
+    sign_c = 1.0 if m[c] >= 0.0 else -1.0
+    parity = 1.0 if o_first else -1.0
+    mo = math.sqrt(Io * d_c / (Ic - Io))
+    mmid = parity * math.copysign(1.0, Ic - Io) * sign_c * math.sqrt(Imid * d_c / (Ic - Imid))
+    K = carlson_rf(0.0, 1.0 - k2, 1.0)
+    n = Ic * (Io - Imid) / (Io * (Ic - Imid))
+    u0 = _argument(m[mid] / mmid if mmid != 0.0 else 0.0, m[o] / mo if mo != 0.0 else 1.0, k2, K)
+    rot[R_AT.frame], rot[R_AT.frame + 1], rot[R_AT.frame + 2] = a, b, c
+    rot[R_AT.o_first] = 1.0 if o_first else 0.0
+    rot[R_AT.mo], rot[R_AT.mmid] = mo, mmid
+    rot[R_AT.mc] = sign_c * math.sqrt(Ic * d_o / (Ic - Io))
+    rot[R_AT.lam], rot[R_AT.k2], rot[R_AT.K], rot[R_AT.n], rot[R_AT.u0] = lam, k2, K, n, u0
+    rot[R_AT.momentum] = M
+    rot[R_AT.precession] = M * (Ic - Io) / (Ic * Io)
+    rot[R_AT.pi_complete] = carlson_rf(0.0, 1.0 - k2, 1.0) + n / 3.0 * carlson_rj(0.0, 1.0 - k2, 1.0, 1.0 - n)
+    ma, mb, mcv, phi0, pi0 = _euler(rot, 0.0)
+    rot[R_AT.pi0] = pi0
+    f0, f1, f2, f3 = _permutation_quaternion(a, b, c)
+    rot[R_AT.q_frame], rot[R_AT.q_frame + 1], rot[R_AT.q_frame + 2], rot[R_AT.q_frame + 3] = f0, f1, f2, f3
+    t0_, t1_, t2_, t3_ = _tilt(ma, mb, mcv, M)
+    p = _qmul(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm, f0, -f1, -f2, -f3)
+    u = _qmul(p[0], p[1], p[2], p[3], t0_, -t1_, -t2_, -t3_)
+    for i in range(4):
+        rot[R_AT.q_fixed + i] = u[i]
+
+
+@jit
+def _euler(rot, tau):
+    """Momentum (ma, mb, mc) in the Euler frame, the angle phi about L and Pi(n; am u) at ``tau = t - t0``."""
+    K = rot[R_AT.K]
+    u = rot[R_AT.u0] + rot[R_AT.lam] * tau
+    j = math.floor((u + K) / (2.0 * K))
+    sn, cn, dn, am = ellipj(u - 2.0 * K * j, rot[R_AT.k2])
+    flip = 1.0 - 2.0 * (j - 2.0 * math.floor(0.5 * j))
+    m_o, m_mid = rot[R_AT.mo] * cn * flip, rot[R_AT.mmid] * sn * flip
+    o_first = rot[R_AT.o_first] == 1.0
+    ma, mb = (m_o, m_mid) if o_first else (m_mid, m_o)
+    c = int(rot[R_AT.frame + 2])
+    o = int(rot[R_AT.frame + (0 if o_first else 1)])
+    M, n = rot[R_AT.momentum], rot[R_AT.n]
+    if n == 0.0:
+        return ma, mb, rot[R_AT.mc] * dn, M * tau / rot[R_AT.inertia + o], 0.0
+    third = 2.0 * j * rot[R_AT.pi_complete] + third_kind(n, am, rot[R_AT.k2])
+    phi = M * tau / rot[R_AT.inertia + c] + rot[R_AT.precession] / rot[R_AT.lam] * (third - rot[R_AT.pi0])
+    return ma, mb, rot[R_AT.mc] * dn, phi, third
+
+
+@jit
+def rotation_at(rot, t, out):
+    """Quaternion and body angular velocity at ``t`` into ``out[0:4]``, ``out[4:7]``."""
+    tau = t - rot[R_AT.t0]
+    q0 = rot[R_AT.q0:R_AT.q0 + 4]
+    if rot[R_AT.fixed_axis] == 1.0:
+        wx, wy, wz = rot[R_AT.w0], rot[R_AT.w0 + 1], rot[R_AT.w0 + 2]
+        rate = math.sqrt(wx * wx + wy * wy + wz * wz)
+        s = math.sin(0.5 * rate * tau) / rate if rate > 0.0 else 0.0
+        q = _qmul(q0[0], q0[1], q0[2], q0[3], math.cos(0.5 * rate * tau), s * wx, s * wy, s * wz)
+        for i in range(3):
+            out[4 + i] = rot[R_AT.w0 + i]
+    else:
+        ma, mb, mc, phi, _ = _euler(rot, tau)
+        u = rot[R_AT.q_fixed:R_AT.q_fixed + 4]
+        p = _qmul(u[0], u[1], u[2], u[3], math.cos(0.5 * phi), 0.0, 0.0, math.sin(0.5 * phi))
+        t0_, t1_, t2_, t3_ = _tilt(ma, mb, mc, rot[R_AT.momentum])
+        p = _qmul(p[0], p[1], p[2], p[3], t0_, t1_, t2_, t3_)
+        f = rot[R_AT.q_frame:R_AT.q_frame + 4]
+        q = _qmul(p[0], p[1], p[2], p[3], f[0], f[1], f[2], f[3])
+        for j, value in enumerate((ma, mb, mc)):
+            body = int(rot[R_AT.frame + j])
+            out[4 + body] = value / rot[R_AT.inertia + body]
+    for i in range(4):
+        out[i] = q[i]
+
+
+# --------------------------------------------------------------------------- the flight and its gap
+
+
+@jit
+def flight_setup(state, g, amplitude, omega, phase, direction, axes, inertia, fl, rot):
+    """Fill ``fl`` (FLIGHT) and ``rot`` (ROTATION) for the flight from ``state`` (t, r, v, q, w; 14,)."""
+    t0 = state[0]
+    fl[F_AT.t0] = t0
+    for i in range(3):
+        fl[F_AT.r0 + i] = state[1 + i]
+        fl[F_AT.v0 + i] = state[4 + i]
+        fl[F_AT.g + i] = g[i]
+        fl[F_AT.direction + i] = direction[i]
+        fl[F_AT.axes + i] = axes[i]
+    fl[F_AT.amplitude], fl[F_AT.omega] = amplitude, omega
+    fl[F_AT.phase] = (omega * t0 + phase) % TWO_PI
+    rotation_setup(inertia, state[7:11], state[11:14], t0, rot)
+
+
+@jit
+def _translate(fl, t, buf):
+    """Relative centre position and velocity at ``t`` into buf[0] (rows)."""
+    f = fl
+    gm_nb.flight_translation_into(f[F_AT.r0], f[F_AT.r0 + 1], f[F_AT.r0 + 2], f[F_AT.v0], f[F_AT.v0 + 1],
+                                  f[F_AT.v0 + 2], f[F_AT.g], f[F_AT.g + 1], f[F_AT.g + 2], f[F_AT.amplitude],
+                                  f[F_AT.omega], f[F_AT.phase], f[F_AT.direction], f[F_AT.direction + 1],
+                                  f[F_AT.direction + 2], 0.0, t - f[F_AT.t0], buf)
+
+
+@jit
+def flight_state(t, fl, rot, out):
+    """The state (t, r, v, q, w) at ``t`` into ``out`` (14,)."""
+    buf = np.empty((1, 2, 3))
+    _translate(fl, t, buf)
+    out[0] = t
+    for i in range(3):
+        out[1 + i] = buf[0, 0, i]
+        out[4 + i] = buf[0, 1, i]
+    rotation_at(rot, t, out[7:14])
+
+
+@jit
+def gap(t, fl, rot, buf):
+    """(h, vz): height [m] of the lowest point above the plane and the centre's relative normal velocity [m/s]."""
+    _translate(fl, t, buf)
+    qw = np.empty(7)
+    rotation_at(rot, t, qw)
+    q0, q1, q2, q3 = qw[0], qw[1], qw[2], qw[3]
+    n0 = 2.0 * (q1 * q3 - q0 * q2)  # body components of e_z: the third row of Q
+    n1 = 2.0 * (q2 * q3 + q0 * q1)
+    n2 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+    a = fl[F_AT.axes:F_AT.axes + 3]
+    support = math.sqrt((a[0] * n0) ** 2 + (a[1] * n1) ** 2 + (a[2] * n2) ** 2)
+    return buf[0, 0, 2] - support, buf[0, 1, 2]
+
+
+@jit
+def gap_rate_bound(vz, span, fl, rot):
+    """Bound [m/s] on |h'| over ``[t, t + span]`` given the centre's relative normal velocity ``vz`` at t."""
+    accel = abs(fl[F_AT.g + 2]) + fl[F_AT.amplitude] * fl[F_AT.omega] ** 2 * abs(fl[F_AT.direction + 2])
+    a_max = max(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
+    return abs(vz) + accel * span + a_max * rot[R_AT.max_rate]
+
+
+@jit
+def _brent(fl, rot, a, b, fa, fb, xtol, buf):
+    """scipy's brentq on the gap in [a, b], fa > 0 >= fb: the root [s]."""
+    c, fc, d, e = a, fa, b - a, b - a
+    for _ in range(100):
+        if fb * fc > 0:
+            c, fc, d, e = a, fa, b - a, b - a
+        if abs(fc) < abs(fb):
+            a, b, c, fa, fb, fc = b, c, b, fb, fc, fb
+        tol = 2e-16 * abs(b) + 0.5 * xtol
+        m = 0.5 * (c - b)
+        if abs(m) <= tol or fb == 0.0:
+            return b
+        if abs(e) >= tol and abs(fa) > abs(fb):
+            s1 = fb / fa
+            if a == c:
+                p, q = 2 * m * s1, 1 - s1
+            else:
+                q1, r1 = fa / fc, fb / fc
+                p = s1 * (2 * m * q1 * (q1 - r1) - (b - a) * (r1 - 1))
+                q = (q1 - 1) * (r1 - 1) * (s1 - 1)
+            if p > 0:
+                q = -q
+            p = abs(p)
+            if 2 * p < min(3 * m * q - abs(tol * q), abs(e * q)):
+                e, d = d, p / q
+            else:
+                d, e = m, m
+        else:
+            d, e = m, m
+        a, fa = b, fb
+        b += d if abs(d) > tol else (tol if m > 0 else -tol)
+        fb = gap(b, fl, rot, buf)[0]
+    return b
+
+
+@jit
+def _certified_root(fl, rot, a, b, ha, hb, bound, xtol, buf):
+    """First sign change of the gap in (a, b) with ha, hb > 0, or nan: a piece is cleared when the cone of
+    slope ``bound`` from both its ends stays above zero (ha + hb > bound (b - a)), else it is halved."""
+    stack = np.empty((128, 4))
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = a, b, ha, hb
+    top = 1
+    while top > 0:
+        top -= 1
+        a, b, ha, hb = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
+        if ha + hb > bound * (b - a) or b - a <= xtol:
+            continue
+        mid = 0.5 * (a + b)
+        hm = gap(mid, fl, rot, buf)[0]
+        if hm <= 0.0:
+            return _brent(fl, rot, a, mid, ha, hm, xtol, buf)
+        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = mid, b, hm, hb  # right, then left on top
+        stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = a, mid, ha, hm
+        top += 2
+    return math.nan
+
+
+@jit
+def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
+    """The first time in (t_from, t_end] where the gap reaches zero (gap(t_from) > 0), or nan."""
+    a = t_from
+    ha, va = gap(a, fl, rot, buf)
+    while a < t_end:
+        b = min(a + step, t_end)
+        hb, vb = gap(b, fl, rot, buf)
+        if hb <= 0.0:
+            return _brent(fl, rot, a, b, ha, hb, xtol, buf)
+        root = _certified_root(fl, rot, a, b, ha, hb, gap_rate_bound(va, b - a, fl, rot), xtol, buf)
+        if not math.isnan(root):
+            return root
+        a, ha, va = b, hb, vb
+    return math.nan
