@@ -4,7 +4,9 @@ Accurate mode: the gap is ``h(t) = z_c(t) - |D Q(t)^T e_z|`` (exact support
 distance of the ellipsoid, generated ``grain_motion.support_distance``); the
 first contact is the first root of ``h`` found by scanning at a step and
 refining with Brent's method to ``xtol`` seconds. A grazing contact (``h`` dips
-below zero between two scan points) is caught by minimising ``h`` around every
+below zero between two scan points) is caught, in the exact flight
+(:func:`first_contact`), by a bound on the gap's rate between two samples; in the
+integrated reference flight (:func:`first_root`), by minimising ``h`` around every
 discrete local minimum of the scan.
 
 Paper mode, eq. (63): the surface of the body is a set of discrete nodes; the
@@ -60,6 +62,36 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
         if ts[-1] >= t1:
             return None
         start = ts[-2]  # overlap so a minimum at the window's edge is seen with both neighbours
+
+
+def first_contact(h, rate_bound, t0: float, t1: float, step: float, xtol: float):
+    """First time in (t0, t1] where the gap ``h`` (float -> float, ``h(t0) > 0``) reaches zero, or None.
+
+    Samples at ``step``; between two positive samples a piece [a, b] is cleared when the cone of slope
+    ``L = rate_bound(a, b - a)`` (a bound on |h'| over [a, b], docs/grain-motion.md) stays above zero,
+    ``h(a) + h(b) > L (b - a)``, else halved, down to ``xtol``: a grazing contact deeper than ``L xtol / 2``
+    is never missed. A sign change is refined by Brent's method to ``xtol`` seconds.
+    """
+    from scipy.optimize import brentq
+
+    a, ha = t0, h(t0)
+    while a < t1:
+        b = min(a + step, t1)
+        hb = h(b)
+        if hb <= 0.0:
+            return brentq(h, a, b, xtol=xtol)
+        pieces, slope = [(a, b, ha, hb)], rate_bound(a, b - a)
+        while pieces:
+            lo, hi, h_lo, h_hi = pieces.pop()
+            if h_lo + h_hi > slope * (hi - lo) or hi - lo <= xtol:
+                continue
+            mid = 0.5 * (lo + hi)
+            h_mid = h(mid)
+            if h_mid <= 0.0:
+                return brentq(h, lo, mid, xtol=xtol)
+            pieces += [(mid, hi, h_mid, h_hi), (lo, mid, h_lo, h_mid)]  # the earlier half first
+        a, ha = b, hb
+    return None
 
 
 def _grazing(h, a: float, b: float, xtol: float):

@@ -2,9 +2,10 @@
 
 One grain alternates between three regimes:
 
-- flight: exact translation in the vibrating frame and torque-free rotation to a
-  tolerance (:mod:`symmech.grain.flight`), until the exact support distance of the
-  ellipsoid reaches the plane (:mod:`symmech.grain.contact`);
+- flight: exact translation in the vibrating frame and exact torque-free rotation
+  (:mod:`symmech.grain.free_flight`; integrated to a tolerance by :mod:`symmech.grain.flight`
+  as the reference), until the exact support distance of the ellipsoid reaches the plane
+  (:mod:`symmech.grain.contact`);
 - impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`),
   only for a contact point approaching the plane faster than round-off;
 - sliding: Coulomb stick/slip and rolling on the plane, spin kept
@@ -42,7 +43,7 @@ from functools import cached_property
 import numpy as np
 
 from symmech.core.scene import SymmechError
-from symmech.grain import contact, flight
+from symmech.grain import contact, flight, free_flight
 from symmech.grain.coulomb_law import ImpactLaw, inverse_effective_mass, kinetic_energy, principal_inertia
 from symmech.grain.sliding import Body, Sliding, slide
 
@@ -108,10 +109,13 @@ class Numerics:
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
     (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`), "python" (this loop) or
-    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``)."""
+    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (this loop):
+    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's rate bound)
+    or "dop853" (the rotation integrated to ``tolerance``: the reference)."""
 
     mode: str = "accurate"
     engine: str = "auto"
+    flight: str = "exact"
     tolerance: float = 1e-9
     scan_step: float = 1e-3
     dt: float = 1e-4
@@ -426,7 +430,13 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
     """
     vib = model.vibration
     rotating = model.effects.rotation and np.any(st.w)
-    rot = flight.RotationFlight(model.inertia, st.q, st.w, st.t, num.tolerance, model.period) if rotating else None
+    exact = num.flight == "exact"
+    if not rotating:
+        rot = None
+    elif exact:
+        rot = free_flight.ExactRotation(model.inertia, st.q, st.w, st.t)
+    else:
+        rot = flight.RotationFlight(model.inertia, st.q, st.w, st.t, num.tolerance, model.period)
 
     def orient(t):
         if rotating:
@@ -439,12 +449,20 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
         h = r[..., 2] - contact.support_distance(model.axes, flight.rotation_matrix(orient(t)[0]))
         return h if np.ndim(t) else float(h)
 
+    def rate_bound(t, span):
+        vz = flight.translate(st.r, st.v, model.g_k, vib, st.t, t)[1][2]
+        return free_flight.gap_rate_bound(vz, span, model.g_k[2], vib, model.axes, rot.max_rate if rotating else 0.0)
+
     t_from = st.t
     if on_plane:
         t_from = _rise(gap, st.t, min(num.scan_step, t_end - st.t), _gap_noise(model, st))
         if t_from is None:
             return st, "resting"
-    tc = contact.first_root(gap, t_from, t_end, num.scan_step, num.tolerance * num.scan_step)
+    xtol = num.tolerance * num.scan_step
+    if exact:
+        tc = contact.first_contact(gap, rate_bound, t_from, t_end, num.scan_step, xtol)
+    else:
+        tc = contact.first_root(gap, t_from, t_end, num.scan_step, xtol)
     t_stop = t_end if tc is None else tc
     ts = rec.times(st.t, t_stop)
     ts = np.append(ts[(ts > st.t) & (ts < t_stop)], t_stop)

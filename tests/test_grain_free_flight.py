@@ -1,0 +1,157 @@
+"""The exact free flight (free_flight, its compiled twin free_flight_nb) against DOP853, closed forms and the
+gap's rate bound; the Python engine's impacts with it against the integrated reference flight."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from symmech.core import pipeline
+from symmech.grain import contact, flight, free_flight, motion
+
+ASYMMETRIC = np.array([1.0, 2.0, 3.0])  # kg m^2
+SHAPES = {  # inertia, body angular velocity [rad/s]
+    "sphere": ([2.0, 2.0, 2.0], [1.0, 0.5, 0.3]),
+    "prolate": ([3.0, 3.0, 1.0], [0.4, -0.5, 1.3]),
+    "oblate": ([1.0, 1.0, 3.0], [1.0, 0.5, 0.3]),
+    "circling largest": ([1.0, 2.0, 3.0], [0.1, 0.5, 1.3]),
+    "circling smallest": ([1.0, 2.0, 3.0], [-1.0, 0.5, -0.3]),
+    "permuted axes": ([3.0, 1.0, 2.0], [1.0, 0.5, 0.3]),
+    "near middle axis": ([1.0, 2.0, 3.0], [0.05, 1.0, 0.05]),
+    "on middle axis": ([1.0, 2.0, 3.0], [0.0, 2.0, 0.0]),
+}
+
+
+def start(seed=3):
+    q = np.random.default_rng(seed).normal(size=4)
+    return q / np.linalg.norm(q)
+
+
+def dop853_deviation(inertia, w0, duration, rtol):
+    """Largest deviation of the exact attitude (matrix entries) and body rate from DOP853's over ``duration``."""
+    q0 = start()
+    exact = free_flight.ExactRotation(inertia, q0, w0, 0.25)
+    ref = flight.RotationFlight(inertia, q0, w0, 0.25, rtol, duration)
+    t = np.linspace(0.25, 0.25 + duration, 41)
+    (qe, we), (qr, wr) = exact.state(t), ref.state(t)
+    return max(np.abs(flight.rotation_matrix(qe) - flight.rotation_matrix(qr)).max(), np.abs(we - wr).max())
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+def test_each_shape_follows_dop853_over_a_period(shape):
+    """Attitude and angular velocity within 1e-12 of DOP853 (rtol 1e-13) over 6 s (>= half a polhode period)."""
+    inertia, w0 = (np.array(x) for x in SHAPES[shape])
+    assert dop853_deviation(inertia, w0, 6.0, 1e-13) < 1e-12
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("w0", [[1.0, 0.5, 0.3], [1e-3, 1.0, 1e-3]], ids=["asymmetric", "near middle axis"])
+def test_over_100_periods_the_gap_to_dop853_is_dop853s_error(w0):
+    """Over 100 polhode periods the deviation from DOP853 shrinks as DOP853's tolerance does (rtol 1e-13 ->
+    scipy's floor 2.2e-14): it is the integrator's global error, not the closed form's."""
+    exact = free_flight.ExactRotation(ASYMMETRIC, start(), np.array(w0), 0.25)
+    duration = 100 * 4 * exact.K / exact.lam
+    coarse = dop853_deviation(ASYMMETRIC, np.array(w0), duration, 1e-13)
+    fine = dop853_deviation(ASYMMETRIC, np.array(w0), duration, 2.3e-14)
+    assert fine < coarse / 2.5 and coarse < 1e-8
+
+
+def test_symmetric_grain_precesses_regularly():
+    """Closed form of the symmetric top: w_perp turns at Omega = (I3 - I1) w3 / I1 in the body, w3 constant,
+    and the symmetry axis precesses about L at |L| / I1 on a cone of constant angle."""
+    inertia, w0 = np.array([1.0, 1.0, 3.0]), np.array([1.0, 0.5, 0.3])
+    rot = free_flight.ExactRotation(inertia, start(), w0, 0.0)
+    t = np.linspace(0.0, 7.0, 29)
+    q, w = rot.state(t)
+    Omega = (inertia[2] - inertia[0]) * w0[2] / inertia[0]
+    turned = (w0[0] + 1j * w0[1]) * np.exp(1j * Omega * t)
+    np.testing.assert_allclose(w[:, 0] + 1j * w[:, 1], turned, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(w[:, 2], w0[2], rtol=0, atol=1e-15)
+    Q = flight.rotation_matrix(q)
+    L = Q[0] @ (inertia * w0)
+    axis = Q[:, :, 2]  # the symmetry axis in space
+    along = axis @ L / np.linalg.norm(L)
+    np.testing.assert_allclose(along, along[0], rtol=0, atol=1e-14)
+    perp = axis - along[:, None] * L / np.linalg.norm(L)
+    angle = np.unwrap(np.arctan2(np.cross(perp[0], perp) @ L / np.linalg.norm(L), perp @ perp[0]))
+    np.testing.assert_allclose(angle, np.linalg.norm(L) / inertia[0] * t, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("w0", [[1.0, 0.5, 0.3], [1e-3, 1.0, 1e-3]], ids=["asymmetric", "near middle axis"])
+def test_energy_and_angular_momentum_exact_to_round_off_over_100_periods(w0):
+    rot = free_flight.ExactRotation(ASYMMETRIC, start(), np.array(w0), 0.0)
+    t = np.linspace(0.0, 100 * 4 * rot.K / rot.lam, 401)
+    q, w = rot.state(t)
+    L = np.einsum("nij,nj->ni", flight.rotation_matrix(q), ASYMMETRIC * w)
+    energy = 0.5 * np.sum(ASYMMETRIC * w * w, axis=-1)
+    assert np.abs(L - L[0]).max() < 5e-15 * np.linalg.norm(L[0])
+    assert np.abs(energy / energy[0] - 1).max() < 5e-15
+
+
+def test_the_rate_bound_holds_on_random_flights():
+    """|h'| (exact: v_z - d|D n|/dt with n' = n x w) never exceeds gap_rate_bound over [t, t + span]; the
+    bound is no wild overestimate either (its worst ratio is above 0.2)."""
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for _ in range(60):
+        axes = rng.uniform(1e-3, 4e-3, 3)
+        inertia = 1e-3 * (np.sum(axes**2) - axes**2) / 5
+        vib = flight.Vibration(rng.uniform(0, 1e-3), rng.uniform(50, 300), rng.uniform(0, 6), tuple(
+            (d := rng.normal(size=3)) / np.linalg.norm(d)))
+        g = rng.normal(size=3) * 5
+        r0, v0, w0 = np.array([0, 0, 5e-3]), rng.normal(size=3) * 0.3, rng.normal(size=3) * 200
+        t0, span = rng.uniform(0, 1), rng.uniform(1e-4, 2e-2)
+        rot = free_flight.ExactRotation(inertia, start(int(rng.integers(1000))), w0, t0)
+        ts = t0 + rng.uniform(0, 3) + np.sort(rng.uniform(0, span, 50))
+        _, v = flight.translate(r0, v0, g, vib, t0, ts)
+        q, w = rot.state(ts)
+        n = flight.rotation_matrix(q)[:, 2, :]
+        d2n = axes**2 * n
+        rate = v[:, 2] - np.sum(d2n * np.cross(n, w), axis=-1) / np.sqrt(np.sum(axes**2 * n * n, axis=-1))
+        _, v_first = flight.translate(r0, v0, g, vib, t0, ts[0])
+        bound = free_flight.gap_rate_bound(v_first[2], ts[-1] - ts[0], g[2], vib, axes, rot.max_rate)
+        assert np.abs(rate).max() <= bound
+        worst = max(worst, np.abs(rate).max() / bound)
+    assert worst > 0.2
+
+
+def grazing_flight(depth):
+    """Ellipsoid (2, 1, 1) mm, long axis horizontal, spinning at 50 rad/s about its horizontal body y axis, no
+    gravity, no vibration, centre held at 2 mm - depth: the long axis reaches below the plane by ``depth`` for a
+    moment. The closed form of the first contact: sin^2(omega t) = (z^2 - c^2) / (a^2 - c^2)."""
+    axes, z0, omega = np.array([2e-3, 1e-3, 1e-3]), 2e-3 - depth, 50.0
+    rot = free_flight.ExactRotation(np.array([1.0, 2.5, 2.5]), np.array([1.0, 0, 0, 0]), np.array([0, omega, 0]), 0.0)
+    vib = flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0))
+
+    def gap(t):
+        return float(z0 - contact.support_distance(axes, flight.rotation_matrix(rot.state(t)[0])))
+
+    exact = np.arcsin(np.sqrt(min(1.0, (z0**2 - axes[1] ** 2) / (axes[0] ** 2 - axes[1] ** 2)))) / omega
+    return gap, lambda t, span: free_flight.gap_rate_bound(0.0, span, 0.0, vib, axes, rot.max_rate), exact
+
+
+def test_a_grazing_contact_the_scan_steps_over_is_found():
+    gap, bound, exact = grazing_flight(depth=1e-7)
+    step = 0.004  # samples at 0, 4, 8 ... ms; the contact lasts ~0.5 ms around pi / 100 s
+    samples = np.array([gap(t) for t in np.arange(0.0, 0.06, step)])
+    assert samples.min() > 0  # a scan for sign changes misses it
+    found = contact.first_contact(gap, bound, 0.0, 0.06, step, 1e-13)
+    assert found == pytest.approx(exact, abs=1e-12)
+    gap_miss, bound_miss, _ = grazing_flight(depth=-1e-7)  # 0.1 um short of touching: no contact
+    assert contact.first_contact(gap_miss, bound_miss, 0.0, 0.06, step, 1e-13) is None
+
+
+def default_scene(tmp_path, duration):
+    text = open("scenes/grain_default.toml").read().replace("duration = 2.0", f"duration = {duration}")
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return pipeline.load(path).setup
+
+
+@pytest.mark.slow
+def test_python_engine_impacts_on_the_default_scene_unchanged_by_the_exact_flight(tmp_path):
+    sc = default_scene(tmp_path, 0.4)
+    runs = {kind: motion.simulate(sc.model, replace(sc.numerics, flight=kind), sc.start, sc.duration)
+            for kind in ("exact", "dop853")}
+    exact, ref = ([i["t"] for i in runs[k].impacts] for k in ("exact", "dop853"))
+    assert len(exact) == len(ref) > 50
+    np.testing.assert_allclose(exact, ref, rtol=0, atol=1e-8 * sc.model.period)
