@@ -110,12 +110,12 @@ class Numerics:
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
     (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`), "python" (this loop) or
     "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (this loop):
-    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's rate bound)
-    or "dop853" (the rotation integrated to ``tolerance``: the reference)."""
+    "dop853" (the rotation integrated to ``tolerance``: the reference, and what the compiled loop does) or
+    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's rate bound)."""
 
     mode: str = "accurate"
     engine: str = "auto"
-    flight: str = "exact"
+    flight: str = "dop853"
     tolerance: float = 1e-9
     scan_step: float = 1e-3
     dt: float = 1e-4
