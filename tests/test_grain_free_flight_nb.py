@@ -67,9 +67,12 @@ def test_flight_state_and_gap_match_the_reference():
             q, w = ref.state(t)
             np.testing.assert_allclose(out[1:7], np.concatenate([r, v]), rtol=1e-14, atol=1e-16)
             np.testing.assert_allclose(out[11:], w, rtol=0, atol=1e-11)
-            h, vz = nb.gap(t, fl, rot, buf)
-            support = contact.support_distance(axes, flight.rotation_matrix(q))
-            assert h == pytest.approx(r[2] - support, abs=1e-17) and vz == v[2]
+            h, rate = nb.gap(t, fl, rot, buf)
+            Q = flight.rotation_matrix(q)
+            assert h == pytest.approx(r[2] - contact.support_distance(axes, Q), abs=1e-17)
+            assert rate == pytest.approx(free_flight.gap_rate(v[2], axes, Q[2], w), rel=1e-11, abs=1e-15)
+        assert nb.gap_curvature_bound(fl, rot) == pytest.approx(
+            free_flight.gap_curvature_bound(g[2], vib, axes, inertia, ref.max_rate), rel=1e-14)
 
 
 def test_next_contact_is_the_reference_first_contact():
@@ -81,15 +84,13 @@ def test_next_contact_is_the_reference_first_contact():
         ref = free_flight.ExactRotation(inertia, state[7:11], state[11:14], state[0])
 
         def gap(t):
-            r, _ = flight.translate(state[1:4], state[4:7], g, vib, state[0], t)
-            return float(r[2] - contact.support_distance(axes, flight.rotation_matrix(ref.state(t)[0])))
-
-        def bound(t, span):
-            vz = flight.translate(state[1:4], state[4:7], g, vib, state[0], t)[1][2]
-            return free_flight.gap_rate_bound(vz, span, g[2], vib, axes, ref.max_rate)
+            (r, v), (q, w) = flight.translate(state[1:4], state[4:7], g, vib, state[0], t), ref.state(t)
+            Q = flight.rotation_matrix(q)
+            return float(r[2] - contact.support_distance(axes, Q)), float(free_flight.gap_rate(v[2], axes, Q[2], w))
 
         t0, step = state[0], 2e-3
-        expected = contact.first_contact(gap, bound, t0, t0 + 1.0, step, 1e-13)
+        curvature = free_flight.gap_curvature_bound(g[2], vib, axes, inertia, ref.max_rate)
+        expected = contact.first_contact(gap, curvature, t0, t0 + 1.0, step, 1e-13)
         got = nb.next_contact(fl, rot, t0, t0 + 1.0, step, 1e-13, buf)
         assert expected is not None and got == pytest.approx(expected, abs=1e-12)
 

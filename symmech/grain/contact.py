@@ -5,7 +5,7 @@ distance of the ellipsoid, generated ``grain_motion.support_distance``); the
 first contact is the first root of ``h`` found by scanning at a step and
 refining with Brent's method to ``xtol`` seconds. A grazing contact (``h`` dips
 below zero between two scan points) is caught, in the exact flight
-(:func:`first_contact`), by a bound on the gap's rate between two samples; in the
+(:func:`first_contact`), by a bound on the gap's curvature between two samples; in the
 integrated reference flight (:func:`first_root`), by minimising ``h`` around every
 discrete local minimum of the scan.
 
@@ -64,34 +64,45 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
         start = ts[-2]  # overlap so a minimum at the window's edge is seen with both neighbours
 
 
-def first_contact(h, rate_bound, t0: float, t1: float, step: float, xtol: float):
-    """First time in (t0, t1] where the gap ``h`` (float -> float, ``h(t0) > 0``) reaches zero, or None.
+def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: float, xtol: float):
+    """First time in (t0, t1] where the gap reaches zero, or None; ``gap_and_rate(t) -> (h, h')`` floats [m, m/s],
+    ``h(t0) > 0``; ``curvature`` [m/s^2] bounds |h''| over the flight.
 
-    Samples at ``step``; between two positive samples a piece [a, b] is cleared when the cone of slope
-    ``L = rate_bound(a, b - a)`` (a bound on |h'| over [a, b], docs/grain-motion.md) stays above zero,
-    ``h(a) + h(b) > L (b - a)``, else halved, down to ``xtol``: a grazing contact deeper than ``L xtol / 2``
-    is never missed. A sign change is refined by Brent's method to ``xtol`` seconds.
+    Samples at ``step``; between two positive samples a piece [a, b] is cleared when one of the parabolas
+    ``h(a) + h'(a) s - curvature s^2 / 2`` (from a) or ``h(b) - h'(b) s - curvature s^2 / 2`` (from b), lower
+    bounds of h over the piece, stays positive on it (concave: checked at its two ends), else halved, down to
+    ``xtol``: a contact deeper than ``curvature xtol^2 / 8`` is never missed (docs/grain-motion.md). A sign
+    change is refined by Brent's method to ``xtol`` seconds.
     """
     from scipy.optimize import brentq
 
-    a, ha = t0, h(t0)
+    def h(t):
+        return gap_and_rate(t)[0]
+
+    a, (ha, da) = t0, gap_and_rate(t0)
     while a < t1:
         b = min(a + step, t1)
-        hb = h(b)
+        hb, db = gap_and_rate(b)
         if hb <= 0.0:
             return brentq(h, a, b, xtol=xtol)
-        pieces, slope = [(a, b, ha, hb)], rate_bound(a, b - a)
+        pieces = [(a, b, ha, da, hb, db)]
         while pieces:
-            lo, hi, h_lo, h_hi = pieces.pop()
-            if h_lo + h_hi > slope * (hi - lo) or hi - lo <= xtol:
+            lo, hi, h_lo, d_lo, h_hi, d_hi = pieces.pop()
+            if hi - lo <= xtol or parabolas_clear(h_lo, d_lo, h_hi, d_hi, hi - lo, curvature):
                 continue
             mid = 0.5 * (lo + hi)
-            h_mid = h(mid)
+            h_mid, d_mid = gap_and_rate(mid)
             if h_mid <= 0.0:
                 return brentq(h, lo, mid, xtol=xtol)
-            pieces += [(mid, hi, h_mid, h_hi), (lo, mid, h_lo, h_mid)]  # the earlier half first
-        a, ha = b, hb
+            pieces += [(mid, hi, h_mid, d_mid, h_hi, d_hi), (lo, mid, h_lo, d_lo, h_mid, d_mid)]  # earlier first
+        a, ha, da = b, hb, db
     return None
+
+
+def parabolas_clear(ha: float, da: float, hb: float, db: float, span: float, curvature: float) -> bool:
+    """True when h > 0 on a piece of length ``span`` [s] is proven by the lower parabola from either end."""
+    drop = 0.5 * curvature * span * span
+    return min(ha, ha + da * span - drop) > 0.0 or min(hb, hb - db * span - drop) > 0.0
 
 
 def _grazing(h, a: float, b: float, xtol: float):

@@ -17,8 +17,9 @@ Energy and angular momentum are constants of the closed form (exact to round-off
 scipy's ``ellipj``, ``ellipk``, ``elliprf``, ``elliprj``; the compiled twin is :mod:`symmech.grain.free_flight_nb`.
 
 The gap of the flight, ``h(t) = z(t) - |D n(t)|`` with ``n = Q^T e_z`` (body axes) and ``D`` the semi-axes,
-is closed form in ``t``; its rate obeys ``|h'| <= |v_z| + a_max |w|max`` (:func:`gap_rate_bound`), which
-:func:`symmech.grain.contact.first_contact` uses so that no grazing contact is missed.
+is closed form in ``t``, and so is its rate (:func:`gap_rate`); its curvature obeys a bound constant over the
+flight (:func:`gap_curvature_bound`), which :func:`symmech.grain.contact.first_contact` uses so that no
+grazing contact is missed.
 """
 from __future__ import annotations
 
@@ -226,9 +227,17 @@ class ExactRotation:
         return q, m / self.inertia
 
 
-def gap_rate_bound(vz, span: float, g_z: float, vibration: flight.Vibration, axes, max_rate: float) -> float:
-    """Bound [m/s] on |h'| over ``[t, t + span]`` from the relative normal velocity ``vz`` [m/s] at t:
-    |z'| <= |vz| + (|g_z| + A omega^2 |d_z|) span, and the support distance moves at most ``a_max |w|max``."""
+def gap_rate(vz, axes, n, w):
+    """The gap's rate h' [m/s] (...,): centre's relative normal velocity ``vz`` (...,) [m/s] less the support
+    distance's rate (D^2 n).(n x w)/|D n|; ``n`` (..., 3) body components of e_z, ``w`` (..., 3) body rate."""
+    d2n = np.square(axes) * n
+    return vz - np.sum(d2n * np.cross(n, w), axis=-1) / np.sqrt(np.sum(d2n * n, axis=-1))
+
+
+def gap_curvature_bound(g_z: float, vibration: flight.Vibration, axes, inertia, max_rate: float) -> float:
+    """Bound [m/s^2] on |h''| over the whole flight (docs/grain-motion.md): |z''| <= |g_z| + A omega^2 |d_z|
+    and |s''| <= (a_max^2 / a_min + a_max (1 + I_max / I_min)) |w|max^2."""
     vib = vibration
-    accel = abs(g_z) + vib.amplitude * vib.omega**2 * abs(vib.direction[2])
-    return abs(vz) + accel * span + max(axes) * max_rate
+    a_max, a_min = max(axes), min(axes)
+    spin = (a_max**2 / a_min + a_max * (1.0 + max(inertia) / min(inertia))) * max_rate**2
+    return abs(g_z) + vib.amplitude * vib.omega**2 * abs(vib.direction[2]) + spin

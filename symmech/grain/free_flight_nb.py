@@ -6,11 +6,12 @@ float64 vectors the caller owns; ``state`` laid out as the engine's ``STATE``: t
 - :func:`flight_setup` ``(state, g, amplitude, omega, phase, direction, axes, inertia, fl, rot)``: the records
   of the flight that starts at ``state`` (``phase`` the surface phase at t = 0);
 - :func:`flight_state` ``(t, fl, rot, out)``: the state at ``t`` into ``out`` (14,), no integration;
-- :func:`gap` ``(t, fl, rot, buf) -> (h [m], vz [m/s])``: the gap and the relative normal velocity of the
-  centre (``buf``: float64 (1, 2, 3) scratch);
-- :func:`gap_rate_bound` ``(vz, span, fl, rot) -> m/s``: a bound on ``|h'|`` over ``[t, t + span]``;
-- :func:`next_contact` ``(fl, rot, t_from, t_end, step, xtol, buf) -> t`` or nan: the first root of the gap,
-  bracketed at ``step`` and certified between samples by the rate bound, refined by Brent to ``xtol``.
+- :func:`gap` ``(t, fl, rot, buf) -> (h [m], h' [m/s])``: the gap and its rate (``buf``: float64 (1, 2, 3)
+  scratch);
+- :func:`gap_curvature_bound` ``(fl, rot) -> m/s^2``: a bound on ``|h''|`` over the whole flight;
+- :func:`next_contact` ``(fl, rot, t_from, t_end, step, xtol, buf) -> t`` or nan: the first root of the gap
+  (``gap(t_from) > 0``), bracketed at ``step`` and certified between samples by the curvature bound, refined
+  by Brent to ``xtol``.
 
 Jacobi's elliptic functions by the descending Landen (AGM) transformation, Carlson's R_F, R_J and R_C by
 duplication: generic numerics, no scipy.
@@ -27,6 +28,7 @@ from symmech.grain.free_flight import FLIGHT, ROTATION
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 F_AT, R_AT = FLIGHT.slots, ROTATION.slots
+FLIGHT_SIZE, ROTATION_SIZE = FLIGHT.size, ROTATION.size  # the records' lengths, constants of compiled callers
 EPS = 2.0**-52
 TWO_PI = 2.0 * math.pi
 
@@ -354,7 +356,7 @@ def flight_state(t, fl, rot, out):
 
 @jit
 def gap(t, fl, rot, buf):
-    """(h, vz): height [m] of the lowest point above the plane and the centre's relative normal velocity [m/s]."""
+    """(h, h'): height [m] of the lowest point above the plane and its rate [m/s]."""
     _translate(fl, t, buf)
     qw = np.empty(7)
     rotation_at(rot, t, qw)
@@ -363,16 +365,23 @@ def gap(t, fl, rot, buf):
     n1 = 2.0 * (q2 * q3 + q0 * q1)
     n2 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
     a = fl[F_AT.axes:F_AT.axes + 3]
-    support = math.sqrt((a[0] * n0) ** 2 + (a[1] * n1) ** 2 + (a[2] * n2) ** 2)
-    return buf[0, 0, 2] - support, buf[0, 1, 2]
+    d0, d1, d2 = a[0] ** 2 * n0, a[1] ** 2 * n1, a[2] ** 2 * n2  # D^2 n
+    support = math.sqrt(d0 * n0 + d1 * n1 + d2 * n2)
+    wx, wy, wz = qw[4], qw[5], qw[6]
+    turn = d0 * (n1 * wz - n2 * wy) + d1 * (n2 * wx - n0 * wz) + d2 * (n0 * wy - n1 * wx)  # (D^2 n).(n x w)
+    return buf[0, 0, 2] - support, buf[0, 1, 2] - turn / support
 
 
 @jit
-def gap_rate_bound(vz, span, fl, rot):
-    """Bound [m/s] on |h'| over ``[t, t + span]`` given the centre's relative normal velocity ``vz`` at t."""
-    accel = abs(fl[F_AT.g + 2]) + fl[F_AT.amplitude] * fl[F_AT.omega] ** 2 * abs(fl[F_AT.direction + 2])
+def gap_curvature_bound(fl, rot):
+    """Bound [m/s^2] on |h''| over the flight: |g_z| + A omega^2 |d_z| + (a_max^2/a_min + a_max (1 + I_max/I_min))
+    |w|max^2 (docs/grain-motion.md)."""
     a_max = max(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
-    return abs(vz) + accel * span + a_max * rot[R_AT.max_rate]
+    a_min = min(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
+    i_max = max(rot[R_AT.inertia], rot[R_AT.inertia + 1], rot[R_AT.inertia + 2])
+    i_min = min(rot[R_AT.inertia], rot[R_AT.inertia + 1], rot[R_AT.inertia + 2])
+    spin = (a_max * a_max / a_min + a_max * (1.0 + i_max / i_min)) * rot[R_AT.max_rate] ** 2
+    return abs(fl[F_AT.g + 2]) + fl[F_AT.amplitude] * fl[F_AT.omega] ** 2 * abs(fl[F_AT.direction + 2]) + spin
 
 
 @jit
@@ -412,39 +421,48 @@ def _brent(fl, rot, a, b, fa, fb, xtol, buf):
 
 
 @jit
-def _certified_root(fl, rot, a, b, ha, hb, bound, xtol, buf):
-    """First sign change of the gap in (a, b) with ha, hb > 0, or nan: a piece is cleared when the cone of
-    slope ``bound`` from both its ends stays above zero (ha + hb > bound (b - a)), else it is halved."""
-    stack = np.empty((128, 4))
-    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = a, b, ha, hb
+def _clear(ha, da, hb, db, span, curvature):
+    """h > 0 on a piece of length ``span`` proven by the lower parabola from either end (contact.parabolas_clear)."""
+    drop = 0.5 * curvature * span * span
+    return min(ha, ha + da * span - drop) > 0.0 or min(hb, hb - db * span - drop) > 0.0
+
+
+@jit
+def _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf):
+    """First sign change of the gap in (a, b) with ha, hb > 0, or nan: a piece not cleared by the parabolas
+    is halved (as contact.first_contact)."""
+    stack = np.empty((128, 6))
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3], stack[0, 4], stack[0, 5] = a, b, ha, da, hb, db
     top = 1
     while top > 0:
         top -= 1
-        a, b, ha, hb = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
-        if ha + hb > bound * (b - a) or b - a <= xtol:
+        a, b, ha, da, hb, db = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4], stack[top, 5]
+        if b - a <= xtol or _clear(ha, da, hb, db, b - a, curvature):
             continue
         mid = 0.5 * (a + b)
-        hm = gap(mid, fl, rot, buf)[0]
+        hm, dm = gap(mid, fl, rot, buf)
         if hm <= 0.0:
             return _brent(fl, rot, a, mid, ha, hm, xtol, buf)
-        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3] = mid, b, hm, hb  # right, then left on top
-        stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2], stack[top + 1, 3] = a, mid, ha, hm
-        top += 2
+        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4], stack[top, 5] = mid, b, hm, dm, hb, db
+        top += 1  # the later half below, the earlier on top
+        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4], stack[top, 5] = a, mid, ha, da, hm, dm
+        top += 1
     return math.nan
 
 
 @jit
 def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
     """The first time in (t_from, t_end] where the gap reaches zero (gap(t_from) > 0), or nan."""
+    curvature = gap_curvature_bound(fl, rot)
     a = t_from
-    ha, va = gap(a, fl, rot, buf)
+    ha, da = gap(a, fl, rot, buf)
     while a < t_end:
         b = min(a + step, t_end)
-        hb, vb = gap(b, fl, rot, buf)
+        hb, db = gap(b, fl, rot, buf)
         if hb <= 0.0:
             return _brent(fl, rot, a, b, ha, hb, xtol, buf)
-        root = _certified_root(fl, rot, a, b, ha, hb, gap_rate_bound(va, b - a, fl, rot), xtol, buf)
+        root = _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf)
         if not math.isnan(root):
             return root
-        a, ha, va = b, hb, vb
+        a, ha, da = b, hb, db
     return math.nan

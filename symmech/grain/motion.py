@@ -449,9 +449,12 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
         h = r[..., 2] - contact.support_distance(model.axes, flight.rotation_matrix(orient(t)[0]))
         return h if np.ndim(t) else float(h)
 
-    def rate_bound(t, span):
-        vz = flight.translate(st.r, st.v, model.g_k, vib, st.t, t)[1][2]
-        return free_flight.gap_rate_bound(vz, span, model.g_k[2], vib, model.axes, rot.max_rate if rotating else 0.0)
+    def gap_and_rate(t):
+        r, v = flight.translate(st.r, st.v, model.g_k, vib, st.t, t)
+        q, w = orient(t)
+        n = flight.rotation_matrix(q)[2]
+        return float(r[2] - contact.support_distance(model.axes, flight.rotation_matrix(q))), float(
+            free_flight.gap_rate(v[2], np.asarray(model.axes), n, w))
 
     t_from = st.t
     if on_plane:
@@ -460,7 +463,9 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
             return st, "resting"
     xtol = num.tolerance * num.scan_step
     if exact:
-        tc = contact.first_contact(gap, rate_bound, t_from, t_end, num.scan_step, xtol)
+        curvature = free_flight.gap_curvature_bound(model.g_k[2], vib, model.axes, model.inertia,
+                                                    rot.max_rate if rotating else 0.0)
+        tc = contact.first_contact(gap_and_rate, curvature, t_from, t_end, num.scan_step, xtol)
     else:
         tc = contact.first_root(gap, t_from, t_end, num.scan_step, xtol)
     t_stop = t_end if tc is None else tc
