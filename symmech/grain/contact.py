@@ -14,6 +14,8 @@ contact test uses the node with the smallest z.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from symmech.generated import grain_motion as gm
@@ -68,11 +70,12 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
     """First time in (t0, t1] where the gap reaches zero, or None; ``gap_and_rate(t) -> (h, h')`` floats [m, m/s],
     ``h(t0) > 0``; ``curvature`` [m/s^2] bounds |h''| over the flight.
 
-    Samples at ``step``; between two positive samples a piece [a, b] is cleared when one of the parabolas
-    ``h(a) + h'(a) s - curvature s^2 / 2`` (from a) or ``h(b) - h'(b) s - curvature s^2 / 2`` (from b), lower
-    bounds of h over the piece, stays positive on it (concave: checked at its two ends), else halved, down to
-    ``xtol``: a contact deeper than ``curvature xtol^2 / 8`` is never missed (docs/grain-motion.md). A sign
-    change is refined by Brent's method to ``xtol`` seconds.
+    From a sample a, the lower parabola ``h(a) + h'(a) s - curvature s^2 / 2`` proves h > 0 up to its first zero
+    (:func:`clear_span`): the next sample is there, or ``step`` on when that is nearer. Between two positive
+    samples a piece is cleared when the lower parabola from either end (from b: ``h(b) - h'(b) s - ...``) stays
+    positive on it (concave: checked at its two ends), else halved, down to ``xtol``: a contact deeper than
+    ``curvature xtol^2 / 8`` is never missed (docs/grain-motion.md). A sign change is refined by Brent's method
+    to ``xtol`` seconds.
     """
     from scipy.optimize import brentq
 
@@ -81,11 +84,12 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
 
     a, (ha, da) = t0, gap_and_rate(t0)
     while a < t1:
-        b = min(a + step, t1)
+        span = clear_span(ha, da, curvature)
+        b = min(a + max(span, step), t1)
         hb, db = gap_and_rate(b)
         if hb <= 0.0:
             return brentq(h, a, b, xtol=xtol)
-        pieces = [(a, b, ha, da, hb, db)]
+        pieces = [(a, b, ha, da, hb, db)] if span < b - a else []
         while pieces:
             lo, hi, h_lo, d_lo, h_hi, d_hi = pieces.pop()
             if hi - lo <= xtol or parabolas_clear(h_lo, d_lo, h_hi, d_hi, hi - lo, curvature):
@@ -97,6 +101,13 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
             pieces += [(mid, hi, h_mid, d_mid, h_hi, d_hi), (lo, mid, h_lo, d_lo, h_mid, d_mid)]  # earlier first
         a, ha, da = b, hb, db
     return None
+
+
+def clear_span(h: float, rate: float, curvature: float) -> float:
+    """Time [s] over which the lower parabola ``h + rate s - curvature s^2 / 2`` (h > 0) stays positive."""
+    if curvature > 0.0:
+        return (rate + math.sqrt(rate * rate + 2.0 * curvature * h)) / curvature
+    return h / -rate if rate < 0.0 else math.inf
 
 
 def parabolas_clear(ha: float, da: float, hb: float, db: float, span: float, curvature: float) -> bool:

@@ -10,8 +10,9 @@ float64 vectors the caller owns; ``state`` laid out as the engine's ``STATE``: t
   scratch);
 - :func:`gap_curvature_bound` ``(fl, rot) -> m/s^2``: a bound on ``|h''|`` over the whole flight;
 - :func:`next_contact` ``(fl, rot, t_from, t_end, step, xtol, buf) -> t`` or nan: the first root of the gap
-  (``gap(t_from) > 0``), bracketed at ``step`` and certified between samples by the curvature bound, refined
-  by Brent to ``xtol``.
+  (``gap(t_from) > 0``): samples as far apart as the lower parabola of the curvature bound proves clear, at
+  most ``step`` apart near the plane, pieces between them certified by the same bound, Brent to ``xtol``
+  (as :func:`symmech.grain.contact.first_contact`).
 
 Jacobi's elliptic functions by the descending Landen (AGM) transformation, Carlson's R_F, R_J and R_C by
 duplication: generic numerics, no scipy.
@@ -287,30 +288,35 @@ def _euler(rot, tau):
 
 
 @jit
-def rotation_at(rot, t, out):
-    """Quaternion and body angular velocity at ``t`` into ``out[0:4]``, ``out[4:7]``."""
+def rotation_tuple(rot, t):
+    """(q0, q1, q2, q3, wx, wy, wz): quaternion and body angular velocity [rad/s] at ``t``, no allocation."""
     tau = t - rot[R_AT.t0]
-    q0 = rot[R_AT.q0:R_AT.q0 + 4]
     if rot[R_AT.fixed_axis] == 1.0:
         wx, wy, wz = rot[R_AT.w0], rot[R_AT.w0 + 1], rot[R_AT.w0 + 2]
         rate = math.sqrt(wx * wx + wy * wy + wz * wz)
         s = math.sin(0.5 * rate * tau) / rate if rate > 0.0 else 0.0
-        q = _qmul(q0[0], q0[1], q0[2], q0[3], math.cos(0.5 * rate * tau), s * wx, s * wy, s * wz)
-        for i in range(3):
-            out[4 + i] = rot[R_AT.w0 + i]
-    else:
-        ma, mb, mc, phi, _ = _euler(rot, tau)
-        u = rot[R_AT.q_fixed:R_AT.q_fixed + 4]
-        p = _qmul(u[0], u[1], u[2], u[3], math.cos(0.5 * phi), 0.0, 0.0, math.sin(0.5 * phi))
-        t0_, t1_, t2_, t3_ = _tilt(ma, mb, mc, rot[R_AT.momentum])
-        p = _qmul(p[0], p[1], p[2], p[3], t0_, t1_, t2_, t3_)
-        f = rot[R_AT.q_frame:R_AT.q_frame + 4]
-        q = _qmul(p[0], p[1], p[2], p[3], f[0], f[1], f[2], f[3])
-        for j, value in enumerate((ma, mb, mc)):
-            body = int(rot[R_AT.frame + j])
-            out[4 + body] = value / rot[R_AT.inertia + body]
-    for i in range(4):
-        out[i] = q[i]
+        q = _qmul(rot[R_AT.q0], rot[R_AT.q0 + 1], rot[R_AT.q0 + 2], rot[R_AT.q0 + 3],
+                  math.cos(0.5 * rate * tau), s * wx, s * wy, s * wz)
+        return q[0], q[1], q[2], q[3], wx, wy, wz
+    ma, mb, mc, phi, _ = _euler(rot, tau)
+    p = _qmul(rot[R_AT.q_fixed], rot[R_AT.q_fixed + 1], rot[R_AT.q_fixed + 2], rot[R_AT.q_fixed + 3],
+              math.cos(0.5 * phi), 0.0, 0.0, math.sin(0.5 * phi))
+    t0_, t1_, t2_, t3_ = _tilt(ma, mb, mc, rot[R_AT.momentum])
+    p = _qmul(p[0], p[1], p[2], p[3], t0_, t1_, t2_, t3_)
+    q = _qmul(p[0], p[1], p[2], p[3], rot[R_AT.q_frame], rot[R_AT.q_frame + 1], rot[R_AT.q_frame + 2],
+              rot[R_AT.q_frame + 3])
+    a, b, c = int(rot[R_AT.frame]), int(rot[R_AT.frame + 1]), int(rot[R_AT.frame + 2])
+    w = [0.0, 0.0, 0.0]
+    w[a], w[b], w[c] = ma / rot[R_AT.inertia + a], mb / rot[R_AT.inertia + b], mc / rot[R_AT.inertia + c]
+    return q[0], q[1], q[2], q[3], w[0], w[1], w[2]
+
+
+@jit
+def rotation_at(rot, t, out):
+    """Quaternion and body angular velocity at ``t`` into ``out[0:4]``, ``out[4:7]``."""
+    values = rotation_tuple(rot, t)
+    for i in range(7):
+        out[i] = values[i]
 
 
 # --------------------------------------------------------------------------- the flight and its gap
@@ -358,16 +364,13 @@ def flight_state(t, fl, rot, out):
 def gap(t, fl, rot, buf):
     """(h, h'): height [m] of the lowest point above the plane and its rate [m/s]."""
     _translate(fl, t, buf)
-    qw = np.empty(7)
-    rotation_at(rot, t, qw)
-    q0, q1, q2, q3 = qw[0], qw[1], qw[2], qw[3]
+    q0, q1, q2, q3, wx, wy, wz = rotation_tuple(rot, t)
     n0 = 2.0 * (q1 * q3 - q0 * q2)  # body components of e_z: the third row of Q
     n1 = 2.0 * (q2 * q3 + q0 * q1)
     n2 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
     a = fl[F_AT.axes:F_AT.axes + 3]
     d0, d1, d2 = a[0] ** 2 * n0, a[1] ** 2 * n1, a[2] ** 2 * n2  # D^2 n
     support = math.sqrt(d0 * n0 + d1 * n1 + d2 * n2)
-    wx, wy, wz = qw[4], qw[5], qw[6]
     turn = d0 * (n1 * wz - n2 * wy) + d1 * (n2 * wx - n0 * wz) + d2 * (n0 * wy - n1 * wx)  # (D^2 n).(n x w)
     return buf[0, 0, 2] - support, buf[0, 1, 2] - turn / support
 
@@ -421,6 +424,14 @@ def _brent(fl, rot, a, b, fa, fb, xtol, buf):
 
 
 @jit
+def clear_span(h, rate, curvature):
+    """Time [s] over which the lower parabola h + rate s - curvature s^2 / 2 (h > 0) stays positive."""
+    if curvature > 0.0:
+        return (rate + math.sqrt(rate * rate + 2.0 * curvature * h)) / curvature
+    return h / -rate if rate < 0.0 else math.inf
+
+
+@jit
 def _clear(ha, da, hb, db, span, curvature):
     """h > 0 on a piece of length ``span`` proven by the lower parabola from either end (contact.parabolas_clear)."""
     drop = 0.5 * curvature * span * span
@@ -428,10 +439,9 @@ def _clear(ha, da, hb, db, span, curvature):
 
 
 @jit
-def _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf):
+def _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack):
     """First sign change of the gap in (a, b) with ha, hb > 0, or nan: a piece not cleared by the parabolas
-    is halved (as contact.first_contact)."""
-    stack = np.empty((128, 6))
+    is halved (as contact.first_contact); ``stack`` (128, 6) scratch."""
     stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3], stack[0, 4], stack[0, 5] = a, b, ha, da, hb, db
     top = 1
     while top > 0:
@@ -454,15 +464,18 @@ def _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf):
 def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
     """The first time in (t_from, t_end] where the gap reaches zero (gap(t_from) > 0), or nan."""
     curvature = gap_curvature_bound(fl, rot)
+    stack = np.empty((128, 6))  # pieces to clear: halving adds one per level, ~log2(step / xtol) < 64 levels
     a = t_from
     ha, da = gap(a, fl, rot, buf)
     while a < t_end:
-        b = min(a + step, t_end)
+        span = clear_span(ha, da, curvature)
+        b = min(a + max(span, step), t_end)
         hb, db = gap(b, fl, rot, buf)
         if hb <= 0.0:
             return _brent(fl, rot, a, b, ha, hb, xtol, buf)
-        root = _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf)
-        if not math.isnan(root):
-            return root
+        if span < b - a:
+            root = _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack)
+            if not math.isnan(root):
+                return root
         a, ha, da = b, hb, db
     return math.nan
