@@ -301,6 +301,10 @@ def exact_flight_floor(repeats: int, floor_us: float | None):
         times = times[:n]
         ref = python_exact_times(model, st, t_end, step, n)
         error = float(np.max(np.abs(times - ref)) / T) if len(ref) == n else math.inf
+        if label == "sphere":  # and against the plain-Python parabola + brentq, independent of the rotation
+            plain = np.array(exact_flight_brentq(model, st, t_end, XTOL))
+            print(f"  sphere vs plain-Python parabola + brentq: impact-time error "
+                  f"{float(np.max(np.abs(times - plain[:n])) / T):.1e} T")
         fls, rots, starts = exact_floor_flights(st0, env, times, e, step)
         at, out = np.empty(len(fls)), np.empty(64)
         stats = cpu_interleaved({
