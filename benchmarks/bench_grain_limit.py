@@ -13,7 +13,7 @@ reference (tolerance 1e-13) beside its time.
   ``flight_translation_into``) and the impact map (restitution on the relative velocity); bookkeeping is
   the loop alone minus the floor;
 - the exact-flight floor (``free_flight_nb``: closed-form translation and rotation, the search certified by
-  the gap's rate bound, Brent) on the same sphere and on a tumbling asymmetric ellipsoid, per impact: root
+  the gap's curvature bound, Brent) on the same sphere and on a tumbling asymmetric ellipsoid, per impact: root
   finding, impact map (state at contact, restitution, the next flight's records), bookkeeping (the rest).
 
 Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only]

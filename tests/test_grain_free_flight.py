@@ -1,5 +1,5 @@
 """The exact free flight (free_flight, its compiled twin free_flight_nb) against DOP853, closed forms and the
-gap's rate bound; the Python engine's impacts with it against the integrated reference flight."""
+gap's rate and curvature bound; the Python engine's impacts with it against the integrated reference flight."""
 from dataclasses import replace
 
 import numpy as np

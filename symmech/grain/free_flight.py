@@ -142,10 +142,8 @@ class ExactRotation:
         self.u0 = self._argument(m[mid] / self.mmid if self.mmid else 0.0, m[o] / self.mo if self.mo else 1.0)
         self.precession = self.momentum * (Ic - Io) / (Ic * Io)  # C lam
         self.pi_complete = float(incomplete_third_kind(self.n, np.pi / 2, self.k2))
-        self.pi0 = 0.0
-        m_frame, phi0 = self._euler(np.zeros(()))
-        self.pi0 = float(phi0) * self.lam / self.precession if self.n != 0.0 else 0.0  # Pi(n; am u0): phi(0) = 0
-        q_tilt = self._tilt(m_frame)
+        self.pi0 = float(self._elliptic(np.asarray(self.u0))[3])  # Pi(n; am u0): phi(0) = 0
+        q_tilt = self._tilt(self._euler(np.zeros(()))[0])
         # U = Q0 Pi^T (Rx Rz)^T (phi = 0 at t0): the fixed rotation taking e_z to L
         self.q_frame = self._permutation_quaternion()
         conj = np.array([1.0, -1.0, -1.0, -1.0])
@@ -174,20 +172,25 @@ class ExactRotation:
         f = s * float(elliprf(c * c, 1.0 - self.k2 * s * s, 1.0))
         return math.copysign(2.0 * self.K, am) - f if abs(am) > math.pi / 2 else f
 
-    def _euler(self, tau):
-        """Momentum in the Euler frame (..., 3) [kg m^2/s] and the angle phi (...,) [rad] at ``tau = t - t0``."""
+    def _elliptic(self, u):
+        """sn, cn, dn of ``u`` (...,) and Pi(n; am u | k2), the argument reduced to |u| <= K first
+        (u = ur + 2 K j: am(u) = am(ur) + j pi, sn and cn change sign with j)."""
         from scipy.special import ellipj
 
-        u = self.u0 + self.lam * tau
-        j = np.floor((u + self.K) / (2.0 * self.K))  # u = ur + 2 K j, |ur| <= K: am(u) = am(ur) + j pi
+        j = np.floor((u + self.K) / (2.0 * self.K))
         sn, cn, dn, am = ellipj(u - 2.0 * self.K * j, self.k2)
         flip = 1.0 - 2.0 * np.mod(j, 2.0)
-        m_o, m_mid, m_c = self.mo * cn * flip, self.mmid * sn * flip, self.mc * dn
+        third = 2.0 * j * self.pi_complete + incomplete_third_kind(self.n, am, self.k2) if self.n else 0.0 * u
+        return sn * flip, cn * flip, dn, third
+
+    def _euler(self, tau):
+        """Momentum in the Euler frame (..., 3) [kg m^2/s] and the angle phi (...,) [rad] at ``tau = t - t0``."""
+        sn, cn, dn, third = self._elliptic(self.u0 + self.lam * tau)
+        m_o, m_mid, m_c = self.mo * cn, self.mmid * sn, self.mc * dn
         m_ab = (m_o, m_mid) if self.o_first else (m_mid, m_o)
-        if self.n == 0.0:
+        if self.n == 0.0:  # symmetric: regular precession about L
             phi = self.momentum * tau / self.inertia[self.frame[0 if self.o_first else 1]]
         else:
-            third = 2.0 * j * self.pi_complete + incomplete_third_kind(self.n, am, self.k2)  # Pi(n; am u)
             phi = self.momentum * tau / self.inertia[self.frame[2]] + self.precession / self.lam * (third - self.pi0)
         return np.stack([*m_ab, m_c], axis=-1), phi
 

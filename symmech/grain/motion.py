@@ -111,7 +111,7 @@ class Numerics:
     (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.compiled`), "python" (this loop) or
     "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (this loop):
     "dop853" (the rotation integrated to ``tolerance``: the reference, and what the compiled loop does) or
-    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's rate bound)."""
+    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's curvature bound)."""
 
     mode: str = "accurate"
     engine: str = "auto"
