@@ -158,6 +158,7 @@ def test_a_grazing_contact_the_scan_steps_over_is_found():
     assert found == pytest.approx(exact, abs=1e-12)
     gap_miss, curvature_miss, _ = grazing_flight(depth=-1e-7)  # 0.1 um short of touching: no contact
     assert contact.first_contact(gap_miss, curvature_miss, 0.0, 0.06, step, 1e-13) is None
+    assert contact.first_contact(gap, curvature, 0.0314, 0.06, step, 1e-13) == 0.0314  # starts inside: now
 
 
 def default_scene(tmp_path, duration):

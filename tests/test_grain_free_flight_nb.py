@@ -109,5 +109,6 @@ def test_next_contact_finds_the_grazing_contact_a_scan_misses():
         if depth > 0:
             exact = math.asin(math.sqrt((z0**2 - axes[1] ** 2) / (axes[0] ** 2 - axes[1] ** 2))) / 50.0
             assert got - 0.1 == pytest.approx(exact, abs=1e-12)
+            assert nb.next_contact(fl, rot, 0.1 + math.pi / 100, 0.16, 0.004, 1e-13, buf) == 0.1 + math.pi / 100
         else:
             assert math.isnan(got)

@@ -67,8 +67,8 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
 
 
 def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: float, xtol: float):
-    """First time in (t0, t1] where the gap reaches zero, or None; ``gap_and_rate(t) -> (h, h')`` floats [m, m/s],
-    ``h(t0) > 0``; ``curvature`` [m/s^2] bounds |h''| over the flight.
+    """First time in (t0, t1] where the gap reaches zero, or None (``t0`` when ``h(t0) <= 0``);
+    ``gap_and_rate(t) -> (h, h')`` floats [m, m/s]; ``curvature`` [m/s^2] bounds |h''| over the flight.
 
     From a sample a, the lower parabola ``h(a) + h'(a) s - curvature s^2 / 2`` proves h > 0 up to its first zero
     (:func:`clear_span`): the next sample is there, or ``step`` on when that is nearer. Between two positive
@@ -83,6 +83,8 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
         return gap_and_rate(t)[0]
 
     a, (ha, da) = t0, gap_and_rate(t0)
+    if ha <= 0.0:
+        return t0  # already touching
     while a < t1:
         span = clear_span(ha, da, curvature)
         b = min(a + max(span, step), t1)

@@ -462,11 +462,14 @@ def _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack):
 
 @jit
 def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
-    """The first time in (t_from, t_end] where the gap reaches zero (gap(t_from) > 0), or nan."""
+    """The first time in (t_from, t_end] where the gap reaches zero, or nan; ``t_from`` itself when the gap is not
+    positive there."""
     curvature = gap_curvature_bound(fl, rot)
     stack = np.empty((128, 6))  # pieces to clear: halving adds one per level, ~log2(step / xtol) < 64 levels
     a = t_from
     ha, da = gap(a, fl, rot, buf)
+    if ha <= 0.0:
+        return a  # already touching: the caller's rise above round-off did not happen
     while a < t_end:
         span = clear_span(ha, da, curvature)
         b = min(a + max(span, step), t_end)
