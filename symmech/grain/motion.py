@@ -2,10 +2,10 @@
 
 One grain alternates between three regimes:
 
-- flight: exact translation in the vibrating frame and exact torque-free rotation
-  (:mod:`symmech.grain.free_flight`; integrated to a tolerance by :mod:`symmech.grain.flight`
-  as the reference), until the exact support distance of the ellipsoid reaches the plane
-  (:mod:`symmech.grain.contact`);
+- flight: exact translation in the vibrating frame and torque-free rotation, integrated to a
+  tolerance (:mod:`symmech.grain.flight`, the default and the reference) or exact
+  (:mod:`symmech.grain.free_flight`, ``Numerics.flight = "exact"``), until the exact support
+  distance of the ellipsoid reaches the plane (:mod:`symmech.grain.contact`);
 - impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`),
   only for a contact point approaching the plane faster than round-off;
 - sliding: Coulomb stick/slip and rolling on the plane, spin kept
@@ -115,7 +115,6 @@ class Numerics:
 
     mode: str = "accurate"
     engine: str = "auto"
-    flight: str = "dop853"
     tolerance: float = 1e-9
     scan_step: float = 1e-3
     dt: float = 1e-4
@@ -124,6 +123,11 @@ class Numerics:
     rest_velocity: float = 1e-5
     max_impacts: int = 100000
     sample_interval: float = 1e-3
+    flight: str = "dop853"
+
+    def __post_init__(self):
+        if self.flight not in ("dop853", "exact"):
+            raise ValueError(f"Numerics.flight must be 'dop853' or 'exact', got {self.flight!r}")
 
 
 @dataclass
@@ -452,9 +456,9 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
     def gap_and_rate(t):
         r, v = flight.translate(st.r, st.v, model.g_k, vib, st.t, t)
         q, w = orient(t)
-        n = flight.rotation_matrix(q)[2]
-        return float(r[2] - contact.support_distance(model.axes, flight.rotation_matrix(q))), float(
-            free_flight.gap_rate(v[2], np.asarray(model.axes), n, w))
+        Q = flight.rotation_matrix(q)
+        return float(r[2] - contact.support_distance(model.axes, Q)), float(
+            free_flight.gap_rate(v[2], np.asarray(model.axes), Q[2], w))
 
     t_from = st.t
     if on_plane:
