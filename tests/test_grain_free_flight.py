@@ -65,6 +65,20 @@ def test_near_the_middle_axis_over_100_periods():
     assert dop853_deviation(ASYMMETRIC, w0, 100 * 4 * exact.K / exact.lam, 1e-13) < 1e-8
 
 
+@pytest.mark.parametrize("w0", [[1.0, 0.5, 0.3], [1e-3, 1.0, 1e-3]], ids=["asymmetric", "near middle axis"])
+def test_restarting_each_period_agrees_with_one_flight_over_100_periods(w0):
+    """The flow property the event loop relies on (each flight restarts from the last state): 100 restarts one
+    polhode period apart end within 1e-12 (attitude matrix, body rate) of one evaluation at 100 periods."""
+    one = free_flight.ExactRotation(ASYMMETRIC, start(), np.array(w0), 0.0)
+    period = 4 * one.K / one.lam
+    q, w = start(), np.array(w0)
+    for k in range(100):
+        q, w = free_flight.ExactRotation(ASYMMETRIC, q, w, k * period).state((k + 1) * period)
+    q_one, w_one = one.state(100 * period)
+    assert np.abs(flight.rotation_matrix(q) - flight.rotation_matrix(q_one)).max() < 1e-12
+    assert np.abs(w - w_one).max() < 1e-12 * np.linalg.norm(w0)
+
+
 def test_symmetric_grain_precesses_regularly():
     """Closed form of the symmetric top: w_perp turns at Omega = (I3 - I1) w3 / I1 in the body, w3 constant,
     and the symmetry axis precesses about L at |L| / I1 on a cone of constant angle."""
