@@ -11,9 +11,12 @@ reference (tolerance 1e-13) beside its time.
   reused: no set-up, no result), the floor and the brentq reference, in ms per run;
 - per-impact breakdown of the floor: root finding (scan + Brent on the exact gap, the generated
   ``flight_translation_into``) and the impact map (restitution on the relative velocity); bookkeeping is
-  the loop alone minus the floor.
+  the loop alone minus the floor;
+- the exact-flight floor (``free_flight_nb``: closed-form translation and rotation, the search certified by
+  the gap's curvature bound, Brent) on the same sphere and on a tumbling asymmetric ellipsoid, per impact: root
+  finding, impact map (state at contact, restitution, the next flight's records), bookkeeping (the rest).
 
-Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5]
+Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only]
 """
 from __future__ import annotations
 
@@ -31,7 +34,8 @@ from timing import Stats, machine, ratio
 from bench_grain_motion import exact_flight_brentq, sphere_scene
 
 from symmech.generated import grain_motion_nb as gm_nb
-from symmech.grain import motion, motion_scene
+from symmech.grain import contact, flight, free_flight, motion, motion_scene
+from symmech.grain import free_flight_nb as ff_nb
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 from symmech.grain.motion_engine.layouts import CARRY, IMPACT_WIDTH, PHASES_PER_CALL, STATE, TRAJECTORY_WIDTH
 
@@ -174,6 +178,155 @@ def floor_states(s0, times, e):
     return np.array(rows)
 
 
+# --------------------------------------------------------------------------- the exact-flight floor
+
+
+@numba.njit(cache=True)
+def exact_map(st, t, e, env, fl, rot):
+    """Impact map of the exact-flight floor: the state at ``t`` into ``st``; the lowest point's normal velocity
+    u = v_z + n.(w x R) (R = -D^2 n / |D n| in body axes) turned into -e u through the centre's alone (spin
+    kept: a timing model, not the scene's law); the next flight's records. ``env``: g (3), A, omega, phase,
+    direction (3), axes (3), inertia (3)."""
+    ff_nb.flight_state(t, fl, rot, st)
+    q0, q1, q2, q3 = st[7], st[8], st[9], st[10]
+    n = (2.0 * (q1 * q3 - q0 * q2), 2.0 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3)
+    d = (env[9] ** 2 * n[0], env[10] ** 2 * n[1], env[11] ** 2 * n[2])
+    s = math.sqrt(d[0] * n[0] + d[1] * n[1] + d[2] * n[2])
+    w = (st[11], st[12], st[13])
+    # n.(w x R) with R = -d / s
+    u = st[6] - (n[0] * (w[1] * d[2] - w[2] * d[1]) + n[1] * (w[2] * d[0] - w[0] * d[2])
+                 + n[2] * (w[0] * d[1] - w[1] * d[0])) / s
+    st[6] -= (1.0 + e) * u
+    ff_nb.flight_setup(st, env[0:3], env[3], env[4], env[5], env[6:9], env[9:12], env[12:15], fl, rot)
+
+
+@numba.njit(cache=True)
+def exact_floor_run(st0, env, t_end, step, xtol, e, times):
+    """The whole run on the exact-flight kernels: impact times into ``times``; their count."""
+    fl, rot = np.empty(ff_nb.FLIGHT_SIZE), np.empty(ff_nb.ROTATION_SIZE)
+    st, buf = st0.copy(), np.empty((1, 2, 3))
+    ff_nb.flight_setup(st, env[0:3], env[3], env[4], env[5], env[6:9], env[9:12], env[12:15], fl, rot)
+    t_from, n = st[0] + 1e-3 * step, 0  # just after the start: the grain leaves the plate
+    while n < times.size and ff_nb.gap(t_from, fl, rot, buf)[0] > 0.0:  # not resting on the plate
+        t = ff_nb.next_contact(fl, rot, t_from, t_end, step, xtol, buf)
+        if math.isnan(t):
+            break
+        times[n] = t
+        n += 1
+        exact_map(st, t, e, env, fl, rot)
+        t_from = t + 1e-3 * step
+    return n
+
+
+@numba.njit(cache=True)
+def exact_floor_roots(fls, rots, t_from, t_end, step, xtol, times):
+    """Root finding alone: the next contact of each stored flight (rows of fls, rots) from t_from."""
+    buf = np.empty((1, 2, 3))
+    for k in range(fls.shape[0]):
+        times[k] = ff_nb.next_contact(fls[k], rots[k], t_from[k], t_end, step, xtol, buf)
+
+
+@numba.njit(cache=True)
+def exact_floor_maps(fls, rots, times, e, env):
+    """The impact map alone on each stored flight at its contact time."""
+    st, fl, rot = np.empty(14), np.empty(ff_nb.FLIGHT_SIZE), np.empty(ff_nb.ROTATION_SIZE)
+    for k in range(times.size):
+        fl[:] = fls[k]
+        rot[:] = rots[k]
+        exact_map(st, times[k], e, env, fl, rot)
+
+
+def exact_floor_flights(st0, env, times, e, step):
+    """The records of every flight of a run (n + 1 rows each) and the start of each search."""
+    fl, rot, st = np.empty(ff_nb.FLIGHT_SIZE), np.empty(ff_nb.ROTATION_SIZE), st0.copy()
+    ff_nb.flight_setup(st, env[0:3], env[3], env[4], env[5], env[6:9], env[9:12], env[12:15], fl, rot)
+    fls, rots, starts = [fl.copy()], [rot.copy()], [st0[0] + 1e-3 * step]
+    for t in times:
+        exact_map(st, t, e, env, fl, rot)
+        fls.append(fl.copy())
+        rots.append(rot.copy())
+        starts.append(t + 1e-3 * step)
+    return np.array(fls), np.array(rots), np.array(starts)
+
+
+def python_exact_times(model, st0, t_end, step, n):
+    """The same run on the scipy reference (free_flight.ExactRotation, contact.first_contact): impact times."""
+    vib, axes, inertia, e = model.vibration, model.axes, model.inertia, model.law.e_n
+    st, times = st0, []
+    while len(times) < n:
+        rot = free_flight.ExactRotation(inertia, st.q, st.w, st.t)
+
+        def gap(t, st=st, rot=rot):
+            (r, v), (q, w) = flight.translate(st.r, st.v, model.g_k, vib, st.t, t), rot.state(t)
+            Q = flight.rotation_matrix(q)
+            return float(r[2] - contact.support_distance(axes, Q)), float(free_flight.gap_rate(v[2], axes, Q[2], w))
+
+        curvature = free_flight.gap_curvature_bound(model.g_k[2], vib, axes, inertia, rot.max_rate)
+        t = contact.first_contact(gap, curvature, st.t + 1e-3 * step, t_end, step, XTOL)
+        if t is None:
+            break
+        times.append(t)
+        r, v = flight.translate(st.r, st.v, model.g_k, vib, st.t, t)
+        q, w = rot.state(t)
+        Q = flight.rotation_matrix(q)
+        u = float(v[2] + np.cross(Q @ w, contact.contact_offset(axes, Q))[2])
+        st = motion.State(t, r, np.array([v[0], v[1], v[2] - (1 + e) * u]), q, w)
+    return np.array(times)
+
+
+def tumbling_ellipsoid():
+    """The sphere scene's plate with an asymmetric ellipsoid (3.5, 1.6, 1.4) mm spinning at (40, 60, 90) rad/s,
+    restitution 0.9 (it keeps bouncing)."""
+    model, st = sphere_scene()
+    axes = (3.5e-3, 1.6e-3, 1.4e-3)
+    model = replace(model, axes=axes, mass=1300 * 4 / 3 * math.pi * math.prod(axes),
+                    law=replace(model.law, e_n=0.9), effects=motion.Effects(rotation=True))
+    return model, replace(st, r=np.array([0.0, 0.0, 4e-3]), w=np.array([40.0, 60.0, 90.0]))
+
+
+def exact_env(model):
+    vib = model.vibration
+    return np.array([*model.g_k, vib.amplitude, vib.omega, vib.phase, *vib.direction, *model.axes, *model.inertia])
+
+
+def exact_flight_floor(repeats: int, floor_us: float | None):
+    """Per impact on the exact-flight kernels: the sphere (against the generated-kernel floor) and a tumbling
+    ellipsoid (impact times checked against the scipy reference)."""
+    print("exact-flight floor (free_flight_nb), per impact (CPU us, medians):")
+    for label, (model, st) in (("sphere", sphere_scene()), ("tumbling ellipsoid", tumbling_ellipsoid())):
+        T, e, env = model.period, model.law.e_n, exact_env(model)
+        t_end, step = PERIODS * T, T / 40
+        st0 = np.array([st.t, *st.r, *st.v, *st.q, *st.w])
+        times = np.empty(64)
+        n = exact_floor_run(st0, env, t_end, step, XTOL, e, times)
+        times = times[:n]
+        ref = python_exact_times(model, st, t_end, step, n)
+        error = float(np.max(np.abs(times - ref)) / T) if len(ref) == n else math.inf
+        if label == "sphere":  # and against the plain-Python parabola + brentq, independent of the rotation
+            plain = np.array(exact_flight_brentq(model, st, t_end, XTOL))
+            print(f"  sphere vs plain-Python parabola + brentq: impact-time error "
+                  f"{float(np.max(np.abs(times - plain[:n])) / T):.1e} T")
+        fls, rots, starts = exact_floor_flights(st0, env, times, e, step)
+        at, out = np.empty(len(fls)), np.empty(64)
+        stats = cpu_interleaved({
+            "whole run": lambda: exact_floor_run(st0, env, t_end, step, XTOL, e, out),
+            "root finding": lambda: exact_floor_roots(fls, rots, starts, t_end, step, XTOL, at),
+            "impact map": lambda: exact_floor_maps(fls, rots, times, e, env)}, repeats, number=200)
+        whole = stats["whole run"].median * 1e6 / n
+        roots = stats["root finding"].median * 1e6 / len(fls)
+        maps = stats["impact map"].median * 1e6 / n
+        print(f"  {label}, {n} impacts in {PERIODS} periods (impact-time error vs the scipy reference {error:.1e} T):")
+        print(f"    root finding (certified scan + Brent on the closed-form gap)  {roots:8.2f}"
+              f"  ({stats['root finding'].text('us', 1e6 / len(fls))})")
+        print(f"    impact map (state at contact, restitution, next records)      {maps:8.2f}")
+        print(f"    bookkeeping (whole run - roots - maps)                        {whole - roots - maps:8.2f}")
+        print(f"    whole run per impact                                          {whole:8.2f}  -> "
+              f"{1e6 / whole:,.0f} impacts per CPU-second")
+        if label == "sphere" and floor_us is not None:
+            print(f"    vs the generated-kernel floor ({floor_us:.2f} us): {floor_us / whole:.2f}x its speed")
+    print()
+
+
 # --------------------------------------------------------------------------- contenders
 
 
@@ -263,6 +416,7 @@ def breakdown(stats, impacts, s0, times, model, repeats):
     print(f"  floor, whole run per impact                               {floor:8.2f}")
     print(f"  -> the API's run per impact is {api / floor:.1f}x the floor's; floor limit "
           f"{1e6 / floor:,.0f} impacts per CPU-second\n")
+    return floor
 
 
 def population(n: int, repeats: int):
@@ -299,10 +453,21 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="100 spheres instead of 400")
     p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--exact-flight-only", action="store_true",
+                   help="only the exact-flight floor (no compiled engine, no population)")
     args = p.parse_args()
     print(f"machine: {machine()}; numba threads {numba.get_num_threads()}\n")
+    if args.exact_flight_only:
+        model, st = sphere_scene()
+        s0, times = flight_state(model, st), np.empty(64)
+        n = floor_run(s0, PERIODS * model.period, model.period / 40, XTOL, model.law.e_n, times)
+        floor = cpu_interleaved({"floor": lambda: floor_run(s0, PERIODS * model.period, model.period / 40, XTOL,
+                                                            model.law.e_n, times)}, args.repeats, number=200)
+        exact_flight_floor(args.repeats, floor["floor"].median * 1e6 / n)
+        return
     stats, impacts, s0, times, model = one_sphere(args.repeats)
-    breakdown(stats, impacts, s0, times, model, args.repeats)
+    floor = breakdown(stats, impacts, s0, times, model, args.repeats)
+    exact_flight_floor(args.repeats, floor)
     population(100 if args.quick else 400, args.repeats)
 
 

@@ -4,13 +4,17 @@ Accurate mode: the gap is ``h(t) = z_c(t) - |D Q(t)^T e_z|`` (exact support
 distance of the ellipsoid, generated ``grain_motion.support_distance``); the
 first contact is the first root of ``h`` found by scanning at a step and
 refining with Brent's method to ``xtol`` seconds. A grazing contact (``h`` dips
-below zero between two scan points) is caught by minimising ``h`` around every
+below zero between two scan points) is caught, in the exact flight
+(:func:`first_contact`), by a bound on the gap's curvature between two samples; in the
+integrated reference flight (:func:`first_root`), by minimising ``h`` around every
 discrete local minimum of the scan.
 
 Paper mode, eq. (63): the surface of the body is a set of discrete nodes; the
 contact test uses the node with the smallest z.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -60,6 +64,58 @@ def first_root(h, t0: float, t1: float, step: float, xtol: float, window: int = 
         if ts[-1] >= t1:
             return None
         start = ts[-2]  # overlap so a minimum at the window's edge is seen with both neighbours
+
+
+def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: float, xtol: float):
+    """First time in (t0, t1] where the gap reaches zero, or None (``t0`` when ``h(t0) <= 0``);
+    ``gap_and_rate(t) -> (h, h')`` floats [m, m/s]; ``curvature`` [m/s^2] bounds |h''| over the flight.
+
+    From a sample a, the lower parabola ``h(a) + h'(a) s - curvature s^2 / 2`` proves h > 0 up to its first zero
+    (:func:`clear_span`): the next sample is there, or ``step`` on when that is nearer. Between two positive
+    samples a piece is cleared when the lower parabola from either end (from b: ``h(b) - h'(b) s - ...``) stays
+    positive on it (concave: checked at its two ends), else halved, down to ``xtol``: a contact deeper than
+    ``curvature xtol^2 / 8`` is never missed (docs/grain-motion.md). A sign change is refined by Brent's method
+    to ``xtol`` seconds.
+    """
+    from scipy.optimize import brentq
+
+    def h(t):
+        return gap_and_rate(t)[0]
+
+    a, (ha, da) = t0, gap_and_rate(t0)
+    if ha <= 0.0:
+        return t0  # already touching
+    while a < t1:
+        span = clear_span(ha, da, curvature)
+        b = min(a + max(span, step), t1)
+        hb, db = gap_and_rate(b)
+        if hb <= 0.0:
+            return brentq(h, a, b, xtol=xtol)
+        pieces = [(a, b, ha, da, hb, db)] if span < b - a else []
+        while pieces:
+            lo, hi, h_lo, d_lo, h_hi, d_hi = pieces.pop()
+            if hi - lo <= xtol or parabolas_clear(h_lo, d_lo, h_hi, d_hi, hi - lo, curvature):
+                continue
+            mid = 0.5 * (lo + hi)
+            h_mid, d_mid = gap_and_rate(mid)
+            if h_mid <= 0.0:
+                return brentq(h, lo, mid, xtol=xtol)
+            pieces += [(mid, hi, h_mid, d_mid, h_hi, d_hi), (lo, mid, h_lo, d_lo, h_mid, d_mid)]  # earlier first
+        a, ha, da = b, hb, db
+    return None
+
+
+def clear_span(h: float, rate: float, curvature: float) -> float:
+    """Time [s] over which the lower parabola ``h + rate s - curvature s^2 / 2`` (h > 0) stays positive."""
+    if curvature > 0.0:
+        return (rate + math.sqrt(rate * rate + 2.0 * curvature * h)) / curvature
+    return h / -rate if rate < 0.0 else math.inf
+
+
+def parabolas_clear(ha: float, da: float, hb: float, db: float, span: float, curvature: float) -> bool:
+    """True when h > 0 on a piece of length ``span`` [s] is proven by the lower parabola from either end."""
+    drop = 0.5 * curvature * span * span
+    return min(ha, ha + da * span - drop) > 0.0 or min(hb, hb - db * span - drop) > 0.0
 
 
 def _grazing(h, a: float, b: float, xtol: float):

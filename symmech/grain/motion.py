@@ -2,9 +2,10 @@
 
 One grain alternates between three regimes:
 
-- flight: exact translation in the vibrating frame and torque-free rotation to a
-  tolerance (:mod:`symmech.grain.flight`), until the exact support distance of the
-  ellipsoid reaches the plane (:mod:`symmech.grain.contact`);
+- flight: exact translation in the vibrating frame and torque-free rotation, integrated to a
+  tolerance (:mod:`symmech.grain.flight`, the default and the reference) or exact
+  (:mod:`symmech.grain.free_flight`, ``Numerics.flight = "exact"``), until the exact support
+  distance of the ellipsoid reaches the plane (:mod:`symmech.grain.contact`);
 - impact: the scene's impact law at the lowest point (:mod:`symmech.grain.coulomb_law`),
   only for a contact point approaching the plane faster than round-off;
 - sliding: Coulomb stick/slip and rolling on the plane, spin kept
@@ -42,7 +43,7 @@ from functools import cached_property
 import numpy as np
 
 from symmech.core.scene import SymmechError
-from symmech.grain import contact, flight, outcome
+from symmech.grain import contact, flight, free_flight, outcome
 from symmech.grain.coulomb_law import ImpactLaw, inverse_effective_mass, kinetic_energy, principal_inertia
 from symmech.grain.sliding import Body, Sliding, slide
 
@@ -108,7 +109,9 @@ class Numerics:
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
     (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.motion_engine`), "python" (this loop) or
-    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``)."""
+    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (this loop):
+    "dop853" (the rotation integrated to ``tolerance``: the reference, and what the compiled loop does) or
+    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's curvature bound)."""
 
     mode: str = "accurate"
     engine: str = "auto"
@@ -120,6 +123,11 @@ class Numerics:
     rest_velocity: float = 1e-5
     max_impacts: int = 100000
     sample_interval: float = 1e-3
+    flight: str = "dop853"
+
+    def __post_init__(self):
+        if self.flight not in ("dop853", "exact"):
+            raise ValueError(f"Numerics.flight must be 'dop853' or 'exact', got {self.flight!r}")
 
 
 @dataclass
@@ -401,7 +409,13 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
     """
     vib = model.vibration
     rotating = model.effects.rotation and np.any(st.w)
-    rot = flight.RotationFlight(model.inertia, st.q, st.w, st.t, num.tolerance, model.period) if rotating else None
+    exact = num.flight == "exact"
+    if not rotating:
+        rot = None
+    elif exact:
+        rot = free_flight.ExactRotation(model.inertia, st.q, st.w, st.t)
+    else:
+        rot = flight.RotationFlight(model.inertia, st.q, st.w, st.t, num.tolerance, model.period)
 
     def orient(t):
         if rotating:
@@ -414,12 +428,25 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
         h = r[..., 2] - contact.support_distance(model.axes, flight.rotation_matrix(orient(t)[0]))
         return h if np.ndim(t) else float(h)
 
+    def gap_and_rate(t):
+        r, v = flight.translate(st.r, st.v, model.g_k, vib, st.t, t)
+        q, w = orient(t)
+        Q = flight.rotation_matrix(q)
+        return float(r[2] - contact.support_distance(model.axes, Q)), float(
+            free_flight.gap_rate(v[2], np.asarray(model.axes), Q[2], w))
+
     t_from = st.t
     if on_plane:
         t_from = _rise(gap, st.t, min(num.scan_step, t_end - st.t), _gap_noise(model, st))
         if t_from is None:
             return st, "resting"
-    tc = contact.first_root(gap, t_from, t_end, num.scan_step, num.tolerance * num.scan_step)
+    xtol = num.tolerance * num.scan_step
+    if exact:
+        curvature = free_flight.gap_curvature_bound(model.g_k[2], vib, model.axes, model.inertia,
+                                                    rot.max_rate if rotating else 0.0)
+        tc = contact.first_contact(gap_and_rate, curvature, t_from, t_end, num.scan_step, xtol)
+    else:
+        tc = contact.first_root(gap, t_from, t_end, num.scan_step, xtol)
     t_stop = t_end if tc is None else tc
     ts = rec.times(st.t, t_stop)
     ts = np.append(ts[(ts > st.t) & (ts < t_stop)], t_stop)
