@@ -71,7 +71,6 @@ def _compare(system, library, states: int = 5) -> None:
         fs = el.FrameState(v0, a0, w, dw, nu)
         load = a0 + system.mdl.g0 * nu
         p = np.r_[rollers, load, w, dw, v0]
-        y = np.r_[q, qd]
         rate, mass = _rates(library, np.r_[q, qd], p)
         R = system.evaluate(fs, q, qd, np.zeros(n))
         terms = np.abs(system.inv.K @ q).max() + np.abs(system.inv.S1).max() * np.abs(load).max()
