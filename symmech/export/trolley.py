@@ -13,6 +13,8 @@ Radau IIA (the roller modes are stiff).
 """
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -93,12 +95,20 @@ def elastic(setup, run: dict) -> ExportModel:
 
 
 def assembly_c(system) -> str:
-    """The C99 module of the model's assembly (rate, rate_mass, outputs), derived from its invariants now."""
-    from symmech.core import emit
-    from symmech.trolley import derive_elastic_assembly  # sympy: only when exporting
-
+    """The C99 module of the model's assembly (rate, rate_mass, outputs), derived from its invariants (once per
+    process and model: an export in each FMI version and type derives it once)."""
     names, units = state_layout(system)
-    return emit.render(derive_elastic_assembly.assembly_spec(assembly_model(system), names, units), emit.C99)
+    model = assembly_model(system)
+    key = hashlib.sha256(repr((model, names, units)).encode()).hexdigest()
+    if key not in _DERIVED:
+        from symmech.core import emit
+        from symmech.trolley import derive_elastic_assembly  # sympy: only when exporting
+
+        _DERIVED[key] = emit.render(derive_elastic_assembly.assembly_spec(model, names, units), emit.C99)
+    return _DERIVED[key]
+
+
+_DERIVED: dict[str, str] = {}  # C text by the digest of the model's invariants
 
 
 # The tunable parameters, in the order c/elastic_trolley.c reads p: the rollers' [elastic.rollers] fields
