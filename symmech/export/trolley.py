@@ -91,7 +91,7 @@ def elastic(setup, run: dict) -> ExportModel:
     source = data(system, drive, table) + glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
                        tuple(variables), 2 * n, n, n, 0, 0, len(PARAMETERS) * 5, native, n_y=len(columns),
-                       stiff=True, modules=(("elastic_assembly", assembly_c(system)),))
+                       stiff=True, modules=(("elastic_assembly", assembly_c(system)),), mass_identity=n)
 
 
 def assembly_c(system) -> str:

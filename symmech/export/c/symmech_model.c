@@ -66,15 +66,19 @@ static int solve_dense(double *a, double *b, int n)
     return 0;
 }
 
-/* y' at (t, y) with the instance's inputs and parameters */
+/* y' at (t, y) with the instance's inputs and parameters; M = diag(I, M22) with an identity block of
+   MASS_IDENTITY rows: only M22 is factored */
 static int rates(SymmechModel *m, double t, const double *y, double *out)
 {
     double *mass = m->mass;
     const double *p = m->r + VR_P;
+    const int k0 = MASS_IDENTITY, n = N_X - MASS_IDENTITY;
     MODEL_RATE(t, y, p, out);
     for (int k = 0; k < N_U; k++) out[U_ROW + k] += m->r[VR_U + k];
     MODEL_RATE_MASS(t, y, p, mass);
-    return solve_dense(mass, out, N_X);
+    for (int i = 0; i < n; i++)  /* M22 packed in place, row by row (never overwriting a row still to read) */
+        for (int j = 0; j < n; j++) mass[i * n + j] = mass[(k0 + i) * N_X + k0 + j];
+    return solve_dense(mass, out + k0, n);
 }
 
 int symmech_derivatives(SymmechModel *m)
