@@ -64,7 +64,9 @@ def _compare(system, library, states: int = 5) -> None:
     """The generated rate, mass and outputs against System.evaluate, mass, reactions and roller_state."""
     rng = np.random.default_rng(32)
     n = system.N
-    rollers = [float(x) for x in system.mdl.rollers.stiffness] + [float(x) for x in system.mdl.rollers.damping]
+    rl = system.mdl.rollers
+    damping = rl.damping if system.mdl.effects.damping else np.zeros(5)
+    rollers = np.r_[rl.stiffness, damping, rl.preload]  # the generated module's first parameters
     for _ in range(states):
         q, qd, qdd = rng.normal(0.0, 1e-3, n), rng.normal(0.0, 1e-2, n), rng.normal(0.0, 1.0, n)
         v0, a0, w, dw, nu = (rng.normal(0.0, 1.0, 3) for _ in range(5))

@@ -90,7 +90,7 @@ def elastic(setup, run: dict) -> ExportModel:
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
     source = data(system, drive, table) + glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
-                       tuple(variables), 2 * n, n, n, 0, 0, len(PARAMETERS) * 5, native, n_y=len(columns),
+                       tuple(variables), 2 * n, n, n, 0, 0, len(parameters(system)) * 5, native, n_y=len(columns),
                        stiff=True, modules=(("elastic_assembly", assembly_c(system)),), mass_identity=n)
 
 
@@ -111,18 +111,26 @@ def assembly_c(system) -> str:
 _DERIVED: dict[str, str] = {}  # C text by the digest of the model's invariants
 
 
-# The tunable parameters, in the order c/elastic_trolley.c reads p: the rollers' [elastic.rollers] fields
-PARAMETERS = (("stiffness", "N/m", "stiffness"), ("damping", "N s/m", "damping (0 without effects.damping)"))
+# The tunable parameters, in the order c/elastic_trolley.c reads p: the rollers' [elastic.rollers] fields (the
+# generated assembly's first parameters); the preloads only under the clamped pair law, the one that reads them
+PARAMETERS = (("stiffness", "N/m", "stiffness"), ("damping", "N s/m", "damping (0 without effects.damping)"),
+              ("preload", "m", "preload (clamped pair law)"))
+
+
+def parameters(system) -> tuple:
+    """The rows of PARAMETERS the model has."""
+    return PARAMETERS if system.mdl.rollers.law == "clamped_pair" else PARAMETERS[:2]
 
 
 def _parameters(system, vr: int) -> list[Variable]:
-    """The rollers' stiffnesses and dampings from value reference ``vr`` on (``elastic.rollers.stiffness[1]``
-    … as the scene's fields): they enter only the roller forces, so they stay tunable."""
+    """The rollers' stiffnesses, dampings and (clamped pair law) preloads from value reference ``vr`` on
+    (``elastic.rollers.stiffness[1]`` … as the scene's fields): they enter only the roller forces, so they
+    stay tunable."""
     from symmech.trolley import elastic_kernels as ek
 
     roll = ek.pack(system).roll  # (3, 5): stiffness, damping as the engine applies it, preload
     out = []
-    for row, (field, unit, what) in enumerate(PARAMETERS):
+    for row, (field, unit, what) in enumerate(parameters(system)):
         for r in range(5):
             out.append(Variable(f"elastic.rollers.{field}[{r + 1}]", vr + 5 * row + r, "parameter", "tunable", unit,
                                 f"{what} of the roller of P{r + 1}", float(roll[row, r])))
@@ -163,7 +171,7 @@ def assembly_model(system) -> dict:
     model = {name: getattr(mdl, name).tolist() for name in (
         "ptr", "col", "qi", "pair_i", "pair_j", "rollers_map", "block_index", "block_size", "block_h", "block_c",
         "s1", "stiffness", "damping", "gram_trace")}
-    model.update(gram_x=mdl.gram_x.reshape(f, 9, f).tolist(), preload=mdl.roll[2].tolist(),
+    model.update(gram_x=mdl.gram_x.reshape(f, 9, f).tolist(),
                  mass=float(mdl.flags[F_AT.mass]), rollers=bool(mdl.flags[F_AT.rollers]),
                  clamped=bool(mdl.flags[F_AT.law]), probe_fields=inv.probe_fields.tolist(),
                  probe_points=inv.probe_points.tolist(), elastic=elastic.tolist(),
@@ -182,6 +190,7 @@ def data(system, drive, table) -> str:
     lines = ["/* The elastic trolley's frame table, written by `symmech export` from the compiled engine's (do not "
              "edit). */",
              f"#define EL_N {system.N}", f"#define EL_CHANNELS {N_CHANNELS}", f"#define EL_NODES {nodes.size}",
+             f"#define EL_ROLLER_PARAMS {5 * len(parameters(system))}",
              _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)), ""]
     return "\n".join(lines)
 

@@ -8,7 +8,7 @@ invariants as numbers: a term whose coefficient is zero is never formed (nine te
 helix), and the emitter's CSE shares the rest. Its text carries the usual hash header.
 
 Functions (C99 via :mod:`symmech.core.emit`): ``rate`` F = (q̇, -R) and ``rate_mass`` M = diag(1, A Gtr Aᵀ) of
-M y' = F over the state y = (q, q̇) with parameters p = (the rollers' stiffnesses and dampings, the 12 frame
+M y' = F over the state y = (q, q̇) with parameters p = (the rollers' stiffnesses, dampings and preloads, the 12 frame
 channels at t: load a0 + g0 ν, ω, ω̇, v0); ``outputs`` (P0…P5, the roller deflections, and per probe its
 displacement, elastic deflection and overload) from (q, q̇, q̈, p).
 """
@@ -30,8 +30,11 @@ CHANNEL_ARGS = args_of(
     + [(CHANNELS[9 + i], f"velocity of the frame's origin along x{i + 1}", "m/s") for i in range(3)])
 STIFFNESS = sp.symbols(f"roller_k1:{ROLLERS + 1}", real=True)
 DAMPING = sp.symbols(f"roller_c1:{ROLLERS + 1}", real=True)
+PRELOAD = sp.symbols(f"roller_pre1:{ROLLERS + 1}", real=True)
 ROLLER_ARGS = args_of([(k, f"stiffness of the roller of P{r + 1}", "N/m") for r, k in enumerate(STIFFNESS)]
-                      + [(c, f"damping of the roller of P{r + 1}", "N s/m") for r, c in enumerate(DAMPING)])
+                      + [(c, f"damping of the roller of P{r + 1}", "N s/m") for r, c in enumerate(DAMPING)]
+                      + [(x, f"preload of the roller of P{r + 1} (clamped pair law)", "m")
+                         for r, x in enumerate(PRELOAD)])
 
 
 def module_specs() -> list:
@@ -42,8 +45,7 @@ def module_specs() -> list:
 def assembly_spec(model: dict, names: list[str], units: list[str]) -> ModuleSpec:
     """The module ``elastic_assembly`` of one elastic model. ``model``: the engine's record
     (``symmech.trolley.elastic_layout.MODEL``) as nested lists by field name (``gram_x`` as (F, 9, F)), with
-    ``preload`` (5,) [N] the
-    rollers' preloads, ``mass`` [kg], ``rollers`` and ``clamped`` (0/1), ``probe_fields`` (F, probes, 3) [m],
+    ``mass`` [kg], ``rollers`` and ``clamped`` (0/1), ``probe_fields`` (F, probes, 3) [m],
     ``probe_points`` (probes, 3) [m], ``elastic`` (F,) 1 on the elastic fields, ``g_ref`` [m/s²]; ``names``,
     ``units`` the N coordinates'."""
     n = len(names)
@@ -124,7 +126,7 @@ class _Terms:
         dd = [_dot(m["rollers_map"][r], qd[:ROLLERS]) for r in range(ROLLERS)]
         force = []
         for r in range(ROLLERS):
-            k, c, pre = STIFFNESS[r], DAMPING[r], _number(m["preload"][r])
+            k, c, pre = STIFFNESS[r], DAMPING[r], PRELOAD[r]
             spring = k * (sp.Max(pre - d[r], 0) - sp.Max(pre + d[r], 0)) if m["clamped"] else -k * d[r]
             force.append(spring - c * dd[r])
         return d, force

@@ -6,7 +6,9 @@
    State y = (q, q'), 2 EL_N; M y' = F with M = diag(1, M(q)), F = (q', -R). */
 #include <string.h>
 
-#define EL_ROLLER_PARAMS 10  /* the FMU's parameters p: the rollers' stiffnesses (5) and dampings (5) */
+/* the generated assembly's first parameters: the rollers' stiffnesses, dampings and preloads (5 each); the
+   FMU's parameters p are the first EL_ROLLER_PARAMS of them, the others 0 (the preloads of the linear law) */
+#define ASSEMBLY_ROLLER_PARAMS 15
 
 void elastic_assembly_rate(double t, const double *y, const double *p, double *out);
 void elastic_assembly_rate_mass(double t, const double *y, const double *p, double *out);
@@ -30,20 +32,21 @@ static void channels(double t, double *ch)
 /* the generated module's parameters: the rollers' (p), then the channels at t, then s */
 static void assembly_params(double t, const double *p, double *out)
 {
+    memset(out, 0, ASSEMBLY_ROLLER_PARAMS * sizeof(double));
     memcpy(out, p, EL_ROLLER_PARAMS * sizeof(double));
-    channels(t, out + EL_ROLLER_PARAMS);
+    channels(t, out + ASSEMBLY_ROLLER_PARAMS);
 }
 
 void elastic_trolley_rate(double t, const double *y, const double *p, double *out)
 {
-    double pa[EL_ROLLER_PARAMS + EL_CHANNELS + 1];
+    double pa[ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS + 1];
     assembly_params(t, p, pa);
     elastic_assembly_rate(t, y, pa, out);
 }
 
 void elastic_trolley_rate_mass(double t, const double *y, const double *p, double *out)
 {
-    double pa[EL_ROLLER_PARAMS + EL_CHANNELS + 1];
+    double pa[ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS + 1];
     assembly_params(t, p, pa);
     elastic_assembly_rate_mass(t, y, pa, out);
 }
@@ -51,10 +54,10 @@ void elastic_trolley_rate_mass(double t, const double *y, const double *p, doubl
 /* s [m], then the generated outputs (P0..P5, d1..d5, per probe u, e, n) at (t, y) with y' = dy */
 void elastic_trolley_outputs(double t, const double *y, const double *dy, const double *p, double *out)
 {
-    double arg[3 * EL_N + EL_ROLLER_PARAMS + EL_CHANNELS + 1];
+    double arg[3 * EL_N + ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS + 1];
     memcpy(arg, y, 2 * EL_N * sizeof(double));
     memcpy(arg + 2 * EL_N, dy + EL_N, EL_N * sizeof(double));
     assembly_params(t, p, arg + 3 * EL_N);
-    out[0] = arg[3 * EL_N + EL_ROLLER_PARAMS + EL_CHANNELS];
+    out[0] = arg[3 * EL_N + ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS];
     elastic_assembly_outputs(arg, out + 1);
 }
