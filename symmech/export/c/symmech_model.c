@@ -18,6 +18,9 @@ void symmech_reset(SymmechModel *m)
     memcpy(m->r, start, sizeof start);
     m->dirty = 1;
     m->horizon = 0.0;
+#ifdef MODEL_STIFF
+    m->radau.h = 0.0;  /* no solve to resume */
+#endif
 }
 
 /* LU factors of a (n x n row-major) with partial pivoting, in place, row swaps into piv; 0, or -1 when
@@ -95,6 +98,7 @@ int symmech_derivatives(SymmechModel *m)
     return 0;
 }
 
+#ifndef MODEL_STIFF
 /* DOP853 from r[VR_TIME] to t_end with Hairer's error control */
 static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
 {
@@ -153,6 +157,7 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
     m->dirty = 1;
     return symmech_derivatives(m);
 }
+#endif
 
 #ifdef MODEL_STIFF
 static const double NOMINAL[N_X] = NOMINALS;
