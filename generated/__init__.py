@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 53d3b8c3086d6e27fe98791140c6e411f7ab36df12c5c289a142f8ddae62cc4d
+# symmech 0.1.0 generated module; inputs sha256 99dacc9d2dcbbae64b4c9baa31b76dd1e1ba8ea9e6e1aeef949eae37f34f3cec
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 53d3b8c3086d6e27fe98791140c6e411f7ab36df12c5c289a142f8ddae62cc4d
+# body sha256 99dacc9d2dcbbae64b4c9baa31b76dd1e1ba8ea9e6e1aeef949eae37f34f3cec
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
@@ -44,7 +44,6 @@ INPUTS = {
     'symmech.smm.printed': (),
     'symmech.trolley.derive': (),
     'symmech.trolley.derive_elastic': (),
-    'symmech.trolley.derive_elastic_assembly': (),
     'symmech.trolley.printed': (),
     'symmech.trolley.printed_elastic': (),
 }

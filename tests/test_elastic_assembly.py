@@ -1,4 +1,4 @@
-"""The elastic trolley's generated assembly (symmech.trolley.derive_elastic_assembly, printed in C99 at export
+"""The elastic trolley's generated assembly (symmech.trolley.symbolic_assembly, printed in C99 at export
 time) against the Python engine's (symmech.trolley.elastic.System: the numpy sums over the same invariants), at
 seeded random states and frame motions: R, M, P0…P5 and the roller deflections to 1e-12 of each quantity's
 scale. Default tier: the bundled helix with one beam mode per plane, no report points and the clamped roller

@@ -1,6 +1,6 @@
 """The elastic trolley as an exported model: the invariants of its assembly, the frame table and the outputs.
 
-The physics is the generated module ``elastic_assembly.c`` (:mod:`symmech.trolley.derive_elastic_assembly`,
+The physics is the generated module ``elastic_assembly.c`` (:mod:`symmech.trolley.symbolic_assembly`,
 derived per model from the invariants of the compiled engine's record, :mod:`symmech.trolley.elastic_kernels`;
 ``c/elastic_trolley.c`` reads the frame table and calls it): states q, q' (``<coordinate>``,
 ``der(<coordinate>)``), M y' = F with M = diag(1, M(q)); the frame's motion along the track at the
@@ -102,9 +102,9 @@ def assembly_c(system) -> str:
     key = hashlib.sha256(repr((model, names, units)).encode()).hexdigest()
     if key not in _DERIVED:
         from symmech.core import emit
-        from symmech.trolley import derive_elastic_assembly  # sympy: only when exporting
+        from symmech.trolley import symbolic_assembly  # sympy: only when exporting
 
-        _DERIVED[key] = emit.render(derive_elastic_assembly.assembly_spec(model, names, units), emit.C99)
+        _DERIVED[key] = emit.render(symbolic_assembly.assembly_spec(model, names, units), emit.C99)
     return _DERIVED[key]
 
 
@@ -156,7 +156,7 @@ def _nominal(series: np.ndarray) -> float:
 
 
 def assembly_model(system) -> dict:
-    """The invariants :func:`symmech.trolley.derive_elastic_assembly.assembly_spec` reads, as nested lists: the
+    """The invariants :func:`symmech.trolley.symbolic_assembly.assembly_spec` reads, as nested lists: the
     engine's record (``elastic_kernels.pack``) and the probes."""
     from symmech.trolley import elastic_kernels as ek
     from symmech.trolley.elastic_layout import F_AT

@@ -1,5 +1,7 @@
 """Layer 1: the elastic trolley's assembled equations for one model, as a module the C target prints.
 
+Not a ``derive*`` producer of `symmech codegen`: nothing here is fixed, every module it makes is a scene's.
+
 The elastic model's equations M(q) q̈ + R(t, q, q̇) = 0 are sums over its invariants (the Gram tensor G, the
 first moments S1, the sparse ψ part of A(q), K, D, the roller map and the held beams' membrane blocks,
 docs/trolley-elastic.md; the compiled engine's ``_terms`` and ``_resultants``). Their sizes and sparsity
@@ -35,11 +37,6 @@ ROLLER_ARGS = args_of([(k, f"stiffness of the roller of P{r + 1}", "N/m") for r,
                       + [(c, f"damping of the roller of P{r + 1}", "N s/m") for r, c in enumerate(DAMPING)]
                       + [(x, f"preload of the roller of P{r + 1} (clamped pair law)", "m")
                          for r, x in enumerate(PRELOAD)])
-
-
-def module_specs() -> list:
-    """None: the assembly depends on the scene (:func:`assembly_spec`, at export time)."""
-    return []
 
 
 def assembly_spec(model: dict, names: list[str], units: list[str]) -> ModuleSpec:
