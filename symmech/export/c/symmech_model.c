@@ -383,7 +383,7 @@ static int radau_start(SymmechModel *m, double t_bound, double rtol, double atol
     s->t = m->r[VR_TIME];
     memcpy(s->y, m->r + VR_X, sizeof s->y);
     s->rtol = rtol;
-    s->atol = atol;
+    s->atol = fmax(atol, RADAU_ATOL_FLOOR);
     s->h_old = s->err_old = -1.0;
     s->h_last = 0.0;
     s->lu_valid = 0;
@@ -408,7 +408,8 @@ static int radau_start(SymmechModel *m, double t_bound, double rtol, double atol
 static int radau(SymmechModel *m, double t_end, double rtol, double atol)
 {
     Radau *s = &m->radau;
-    int resume = s->h > 0.0 && s->rtol == rtol && s->atol == atol && memcmp(s->seen, m->r, sizeof s->seen) == 0;
+    int resume = s->h > 0.0 && s->rtol == rtol && s->atol == fmax(atol, RADAU_ATOL_FLOOR)
+                 && memcmp(s->seen, m->r, sizeof s->seen) == 0;
     double t_bound = fmax(t_end, m->horizon);
     if (!resume && radau_start(m, t_bound, rtol, atol) != 0) return -1;
     while (s->t < t_end)

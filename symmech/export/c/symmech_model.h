@@ -44,8 +44,8 @@ void symmech_reset(SymmechModel *m);
    singular or a rate is not finite */
 int symmech_derivatives(SymmechModel *m);
 /* integrate from r[VR_TIME] to t_end (DOP853, or Radau IIA for a stiff model: MODEL_STIFF), error control
-   rtol and atol (Radau: atol times each state's nominal); 0, or -1 on a singular M, a non-finite state or a
-   step size below round-off */
+   rtol and atol (Radau: atol, at least RADAU_ATOL_FLOOR, times each state's nominal); 0, or -1 on a singular
+   M, a non-finite state or a step size below round-off */
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
 
 #endif
