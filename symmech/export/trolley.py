@@ -7,9 +7,9 @@ derived per model from the invariants of the compiled engine's record, :mod:`sym
 prescribed speed as the engine's cubic spline table of the 12 frame channels in t
 (:func:`symmech.trolley.elastic_compiled.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
-``points``); parameters: the rollers' stiffnesses and dampings. The track and the speed are in the table:
-they are not parameters, and the FMU has no inputs. The C example program and Co-Simulation integrate with
-Radau IIA (the roller modes are stiff).
+``points``); parameters: the rollers' stiffnesses, dampings and (clamped pair law) preloads. The track and
+the speed are in the table: they are not parameters, and the FMU has no inputs. The C example program and
+Co-Simulation integrate with Radau IIA (the roller modes are stiff).
 """
 from __future__ import annotations
 
