@@ -2,8 +2,8 @@
 engine: P0…P5, roller deflections, the report points' overloads).
 
 Default tier: a short ride of the bundled helix (0.15 s, the Python engine as the reference), FMI 3 Model
-Exchange and the C example program. Slow tier: the bundled elastic scenes whole, FMI 2 and 3, ME and CS, on the
-compiled engine the export reads its frame table from."""
+Exchange and Co-Simulation and the C example program. Slow tier: the bundled elastic scenes whole, FMI 2 and 3,
+ME and CS, and the C example program, on the compiled engine the export reads its frame table from."""
 from __future__ import annotations
 
 import csv
@@ -79,16 +79,19 @@ def _native_outputs(native) -> np.ndarray:
     return np.column_stack([native["deflection"], native["probe_elastic"][:, 0], native["probe_overload"][:, 0]])
 
 
-def test_short_elastic_ride_fmu_reproduces_the_native_run(short_helix, tmp_path):
+@pytest.mark.parametrize("kind", ["me", "cs"])  # CS: the FMU's Radau IIA
+def test_short_elastic_ride_fmu_reproduces_the_native_run(short_helix, tmp_path, kind):
     path, native = short_helix
-    got = _check_fmu(path, native, tmp_path, 3, "me")
+    got = _check_fmu(path, native, tmp_path, 3, kind)
     assert deviation(got, _native_outputs(native)) <= TOLERANCE
 
 
-def test_elastic_c_example_prints_the_native_reactions(short_helix, tmp_path):
-    path, native = short_helix
+def _check_c_program(path, native, tmp_path) -> None:
+    """Export the C folder, run its example program (Radau IIA, dense output): t, s and P0…P5 as the native
+    run's."""
     folder = tmp_path / "helix_c"
     assert main(["export", "c", str(path), "--out", str(folder)]) == 0
+    assert "elastic_assembly.c" in (folder / "Makefile").read_text()
     printed = subprocess.run([str(folder / "example")], check=True, capture_output=True, text=True).stdout
     rows = list(csv.reader(io.StringIO(printed)))
     assert rows[0] == ["t", "s", *P]
@@ -96,6 +99,22 @@ def test_elastic_c_example_prints_the_native_reactions(short_helix, tmp_path):
     np.testing.assert_allclose(got[:, 0], native["t"], rtol=0, atol=1e-12)
     assert np.abs(got[:, 1] - native["s"]).max() <= 1e-9 * native["s"].max()  # s(t): a spline in the C
     assert deviation(got[:, 2:], native["P"]) <= TOLERANCE
+
+
+def test_elastic_c_example_prints_the_native_reactions(short_helix, tmp_path):
+    path, native = short_helix
+    _check_c_program(path, native, tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.compiled_elastic
+@pytest.mark.xdist_group("test_elastic_compiled")
+@pytest.mark.parametrize("name", ELASTIC)
+def test_bundled_elastic_c_program_prints_the_native_reactions(name, tmp_path):
+    path = SCENES / f"{name}.toml"
+    native = _native(path)
+    assert native["engine"] == "compiled"
+    _check_c_program(path, native, tmp_path)
 
 
 TRACTION = [('speed = "3*t + 7*sin(t/2)"', 'traction = "100 - 10*v"\ninitial_speed = 3.0'),

@@ -2,7 +2,7 @@
 bounded minimiser, ported to numba, for any right-hand side.
 
 The ports take scipy's steps: the same step-size control, error norms, Newton iteration and interpolants,
-with the tableaux of :mod:`symmech.core.dop853` and the Radau constants below (both bit-equal to scipy's,
+with the tableaux of :mod:`symmech.core.dop853` and :mod:`symmech.core.radau` (both bit-equal to scipy's,
 ``tests/test_ode_toolkit.py``, ``tests/test_dop853.py``), so a compiled solve and ``solve_ivp`` on the same
 right-hand side agree to round-off.
 
@@ -36,6 +36,7 @@ import numpy as np
 
 from symmech.core import dop853 as dop
 from symmech.core import kernels
+from symmech.core import radau as rad
 from symmech.core.scene import SymmechError
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
@@ -50,24 +51,11 @@ DOP_E3, DOP_E5, DOP_D = dop.E3, dop.E5, dop.D
 DOP_STAGES, DOP_EXTENDED, DOP_POWER = INT(dop.N_STAGES), INT(dop.N_STAGES_EXTENDED), INT(dop.INTERPOLATOR_POWER)
 DOP_EXPONENT = -1.0 / 8.0  # error estimator of order 7
 
-# Radau IIA of order 5 (scipy's ``_ivp/radau.py``): nodes, error estimator, the eigen-decomposition of the
-# tableau A = T diag(MU_REAL, MU_COMPLEX, conj) TI, the dense-output matrix (written out: no scipy import).
-S6 = 6.0 ** 0.5
-RADAU_C = np.array([(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0])
-RADAU_E = np.array([[-13.0 - 7.0 * S6, -13.0 + 7.0 * S6, -1.0]]) / 3.0  # (1, 3)
-MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
-MU_COMPLEX = complex(3.0 + 0.5 * (3.0 ** (1.0 / 3.0) - 3.0 ** (2.0 / 3.0)),
-                     -0.5 * (3.0 ** (5.0 / 6.0) + 3.0 ** (7.0 / 6.0)))
-RADAU_T = np.array([[0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
-                    [0.25021312296533332, 0.20412935229379994, -0.38294211275726192], [1.0, 1.0, 0.0]])
-RADAU_TI = np.array([[4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
-                     [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
-                     [0.50287263494578682, -2.57192694985560522, 0.59603920482822492]])
-RADAU_PT = np.array([[13.0 / 3.0 + 7.0 * S6 / 3.0, -23.0 / 3.0 - 22.0 * S6 / 3.0, 10.0 / 3.0 + 5.0 * S6],
-                    [13.0 / 3.0 - 7.0 * S6 / 3.0, -23.0 / 3.0 + 22.0 * S6 / 3.0, 10.0 / 3.0 - 5.0 * S6],
-                    [1.0 / 3.0, -8.0 / 3.0, 10.0 / 3.0]]).T.copy()  # transposed: Q = P^T Z
-NEWTON_MAXITER, RADAU_MIN_FACTOR, RADAU_MAX_FACTOR = 6, 0.2, 10.0
-RADAU_POWER = 1.0 / 4.0  # initial step of the order-3 error estimator
+# Radau IIA of order 5 (scipy's ``_ivp/radau.py``, :mod:`symmech.core.radau`)
+RADAU_C, RADAU_E, RADAU_T, RADAU_TI, RADAU_PT = rad.C, rad.E, rad.T, rad.TI, rad.PT
+MU_REAL, MU_COMPLEX = rad.MU_REAL, rad.MU_COMPLEX
+NEWTON_MAXITER, RADAU_MIN_FACTOR, RADAU_MAX_FACTOR = rad.NEWTON_MAXITER, rad.MIN_FACTOR, rad.MAX_FACTOR
+RADAU_POWER = rad.POWER
 # Solver state between the steps of one solve (``Radau`` attributes): step, previous step and error norm
 # (-1: none), Jacobian current, LU factors valid, start and length of the last step (its interpolant).
 R_H, R_H_OLD, R_ERR_OLD, R_JAC_CURRENT, R_LU_VALID, R_T_OLD, R_H_LAST = 0, 1, 2, 3, 4, 5, 6

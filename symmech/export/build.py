@@ -24,9 +24,9 @@ MARKER = "symmech_model.h"  # a C folder holding it is an earlier export, which 
 MAKEFILE = """# {identifier}: the example program of the exported model (written by symmech export)
 CC ?= cc
 CFLAGS ?= -std=c99 -O2
-SOURCES = symmech_model.c {identifier}.c
+SOURCES = symmech_model.c {sources}
 
-example: example.c $(SOURCES) model.h symmech_model.h dop853_tableau.h
+example: example.c $(SOURCES) model.h symmech_model.h dop853_tableau.h radau_tableau.h
 \t$(CC) $(CFLAGS) -o $@ example.c $(SOURCES) -lm
 
 clean:
@@ -94,7 +94,8 @@ def c_folder(model: ExportModel, out: Path) -> Path:
     """Write the C folder of ``model`` to ``out`` (headers, sources, example.c, Makefile) and check that it
     compiles; the folder is replaced whole."""
     texts = sources.files(model) | {"example.c": sources.glue("example.c"),
-                                    "Makefile": MAKEFILE.format(identifier=model.identifier)}
+                                    "Makefile": MAKEFILE.format(identifier=model.identifier,
+                                                                  sources=" ".join(model.c_files()))}
     out = Path(out).absolute()
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}."))
@@ -102,7 +103,7 @@ def c_folder(model: ExportModel, out: Path) -> Path:
         tmp.chmod(0o755)  # mkdtemp's 0700 would hide the folder from other users
         for name, text in texts.items():
             write_atomic(tmp / name, text)
-        compile_c(tmp, ["example.c", "symmech_model.c", f"{model.identifier}.c"], tmp / "example", shared=False)
+        compile_c(tmp, ["example.c", "symmech_model.c", *model.c_files()], tmp / "example", shared=False)
         if out.exists():  # moved aside first: `out` is never missing
             old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.old-"))
             os.rename(out, old / "previous")

@@ -169,7 +169,7 @@ def build_description(model: ExportModel) -> str:
 
 def source_files(model: ExportModel, fmi: int) -> tuple[str, ...]:
     """The C files an importer compiles, with the FMI glue of version ``fmi``."""
-    return (f"fmi{fmi}.c", "symmech_model.c", f"{model.identifier}.c")
+    return (f"fmi{fmi}.c", "symmech_model.c", *model.c_files())
 
 
 def _text(root: ET.Element) -> str:

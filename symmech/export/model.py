@@ -67,6 +67,13 @@ class ExportModel:
     n_p: int
     native: Table | None
     n_y: int = 0  # calculated outputs beyond the derivatives (MODEL_OUTPUTS), r[VR_Y:VR_Y + n_y]
+    stiff: bool = False  # integrated by Radau IIA in C (Co-Simulation, the example program), else DOP853
+    modules: tuple[tuple[str, str], ...] = ()  # (name, C99 text) of generated modules compiled beside c_source
+    mass_identity: int = 0  # M = diag(I, M22) with this many identity rows (only M22 is factored)
+
+    def c_files(self) -> tuple[str, ...]:
+        """The model's C files (the physics), ``<identifier>.c`` first."""
+        return (f"{self.identifier}.c", *(f"{name}.c" for name, _ in self.modules))
 
     def layout(self) -> dict[str, int]:
         """First value reference of each block of ``r[]`` and its size (``N_REAL``)."""

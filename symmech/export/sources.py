@@ -1,5 +1,5 @@
-"""The C sources of an exported model: the generated physics, ``model.h``, the DOP853 tableau and the
-hand-written glue of ``symmech/export/c`` (FMI 2 and 3, the linear solve, the integrator)."""
+"""The C sources of an exported model: the generated physics, ``model.h``, the DOP853 and Radau IIA tableaux
+and the hand-written glue of ``symmech/export/c`` (FMI 2 and 3, the linear solve, the integrators)."""
 from __future__ import annotations
 
 import hashlib
@@ -7,7 +7,7 @@ import importlib.resources
 
 import jinja2
 
-from symmech.core import dop853
+from symmech.core import dop853, radau
 from symmech.export.model import ExportModel
 
 GLUE = ("symmech_model.h", "symmech_model.c")
@@ -15,7 +15,7 @@ GLUE = ("symmech_model.h", "symmech_model.c")
 
 def token(model: ExportModel) -> str:
     """Instantiation token (FMI 3) and GUID (FMI 2): a digest of the physics and the variables, UUID-shaped."""
-    digest = hashlib.sha256((model.c_source + repr(model.variables)).encode()).hexdigest()
+    digest = hashlib.sha256((model.c_source + repr(model.modules) + repr(model.variables)).encode()).hexdigest()
     return "{" + "-".join((digest[:8], digest[8:12], digest[12:16], digest[16:20], digest[20:32])) + "}"
 
 
@@ -73,9 +73,28 @@ def tableau_header() -> str:
         "#endif", ""])
 
 
+def radau_header() -> str:
+    """``radau_tableau.h``: symmech.core.radau's nodes, error estimator, T, TI, the dense-output matrix and
+    scipy's step-control constants."""
+    def matrix(name, a):
+        rows = ",\n    ".join(", ".join(repr(float(x)) for x in row) for row in a)
+        return f"static const double {name}[{a.size}] = {{\n    {rows}}};"
+
+    return "\n".join([
+        "/* The Radau IIA tableau of order 5 and scipy's step control, written by `symmech export` from "
+        "symmech/core/radau.py. */",
+        "#ifndef RADAU_TABLEAU_H", "#define RADAU_TABLEAU_H", _array("RADAU_C", radau.C), _array("RADAU_E", radau.E[0]),
+        matrix("RADAU_T", radau.T), matrix("RADAU_TI", radau.TI), matrix("RADAU_PT", radau.PT),
+        f"#define RADAU_MU_REAL {radau.MU_REAL!r}", f"#define RADAU_MU_COMPLEX_RE {radau.MU_COMPLEX.real!r}",
+        f"#define RADAU_MU_COMPLEX_IM {radau.MU_COMPLEX.imag!r}", f"#define RADAU_NEWTON_MAXITER {radau.NEWTON_MAXITER}",
+        f"#define RADAU_MIN_FACTOR {radau.MIN_FACTOR!r}", f"#define RADAU_MAX_FACTOR {radau.MAX_FACTOR!r}",
+        f"#define RADAU_POWER {radau.POWER!r}", "#endif", ""])
+
+
 def files(model: ExportModel) -> dict[str, str]:
     """Every C file of the model but the FMI glue: name -> text."""
     out = {f"{model.identifier}.c": model.c_source, "model.h": model_header(model),
-           "dop853_tableau.h": tableau_header()}
+           "dop853_tableau.h": tableau_header(), "radau_tableau.h": radau_header()}
+    out.update((f"{name}.c", text) for name, text in model.modules)
     out.update((name, glue(name)) for name in GLUE)
     return out

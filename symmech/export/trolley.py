@@ -1,15 +1,19 @@
 """The elastic trolley as an exported model: the invariants of its assembly, the frame table and the outputs.
 
-The C side (``c/elastic_trolley.c``, generic sums over the data written here) evaluates the same equations
-as the compiled engine (:mod:`symmech.trolley.elastic_kernels`): states q, q' (``<coordinate>``,
+The physics is the generated module ``elastic_assembly.c`` (:mod:`symmech.trolley.symbolic_assembly`,
+derived per model from the invariants of the compiled engine's record, :mod:`symmech.trolley.elastic_kernels`;
+``c/elastic_trolley.c`` reads the frame table and calls it): states q, q' (``<coordinate>``,
 ``der(<coordinate>)``), M y' = F with M = diag(1, M(q)); the frame's motion along the track at the
 prescribed speed as the engine's cubic spline table of the 12 frame channels in t
 (:func:`symmech.trolley.elastic_compiled.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
-``points``); parameters: the rollers' stiffnesses and dampings. The track and the speed are in the table:
-they are not parameters, and the FMU has no inputs.
+``points``); parameters: the rollers' stiffnesses, dampings and (clamped pair law) preloads. The track and
+the speed are in the table: they are not parameters, and the FMU has no inputs. The C example program and
+Co-Simulation integrate with Radau IIA (the roller modes are stiff).
 """
 from __future__ import annotations
+
+import hashlib
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -86,21 +90,47 @@ def elastic(setup, run: dict) -> ExportModel:
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
     source = data(system, drive, table) + glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
-                       tuple(variables), 2 * n, n, n, 0, 0, len(PARAMETERS) * 5, native, n_y=len(columns))
+                       tuple(variables), 2 * n, n, n, 0, 0, len(parameters(system)) * 5, native, n_y=len(columns),
+                       stiff=True, modules=(("elastic_assembly", assembly_c(system)),), mass_identity=n)
 
 
-# The tunable parameters, in the order c/elastic_trolley.c reads p: the rollers' [elastic.rollers] fields
-PARAMETERS = (("stiffness", "N/m", "stiffness"), ("damping", "N s/m", "damping (0 without effects.damping)"))
+def assembly_c(system) -> str:
+    """The C99 module of the model's assembly (rate, rate_mass, outputs), derived from its invariants (once per
+    process and model: an export in each FMI version and type derives it once)."""
+    names, units = state_layout(system)
+    model = assembly_model(system)
+    key = hashlib.sha256(repr((model, names, units)).encode()).hexdigest()
+    if key not in _DERIVED:
+        from symmech.core import emit
+        from symmech.trolley import symbolic_assembly  # sympy: only when exporting
+
+        _DERIVED[key] = emit.render(symbolic_assembly.assembly_spec(model, names, units), emit.C99)
+    return _DERIVED[key]
+
+
+_DERIVED: dict[str, str] = {}  # C text by the digest of the model's invariants
+
+
+# The tunable parameters, in the order c/elastic_trolley.c reads p: the rollers' [elastic.rollers] fields (the
+# generated assembly's first parameters); the preloads only under the clamped pair law, the one that reads them
+PARAMETERS = (("stiffness", "N/m", "stiffness"), ("damping", "N s/m", "damping (0 without effects.damping)"),
+              ("preload", "m", "preload (clamped pair law)"))
+
+
+def parameters(system) -> tuple:
+    """The rows of PARAMETERS the model has."""
+    return PARAMETERS if system.mdl.rollers.law == "clamped_pair" else PARAMETERS[:2]
 
 
 def _parameters(system, vr: int) -> list[Variable]:
-    """The rollers' stiffnesses and dampings from value reference ``vr`` on (``elastic.rollers.stiffness[1]``
-    … as the scene's fields): they enter only the roller forces, so they stay tunable."""
+    """The rollers' stiffnesses, dampings and (clamped pair law) preloads from value reference ``vr`` on
+    (``elastic.rollers.stiffness[1]`` … as the scene's fields): they enter only the roller forces, so they
+    stay tunable."""
     from symmech.trolley import elastic_kernels as ek
 
     roll = ek.pack(system).roll  # (3, 5): stiffness, damping as the engine applies it, preload
     out = []
-    for row, (field, unit, what) in enumerate(PARAMETERS):
+    for row, (field, unit, what) in enumerate(parameters(system)):
         for r in range(5):
             out.append(Variable(f"elastic.rollers.{field}[{r + 1}]", vr + 5 * row + r, "parameter", "tunable", unit,
                                 f"{what} of the roller of P{r + 1}", float(roll[row, r])))
@@ -125,40 +155,43 @@ def _nominal(series: np.ndarray) -> float:
     return top if top > 0 else 1.0
 
 
-def data(system, drive, table) -> str:
-    """C definitions of the invariants (``elastic_kernels.pack``), the frame table with s(t) beside it and the
-    probe fields that ``c/elastic_trolley.c`` reads."""
-    from symmech.trolley import elastic as el
+def assembly_model(system) -> dict:
+    """The invariants :func:`symmech.trolley.symbolic_assembly.assembly_spec` reads, as nested lists: the
+    engine's record (``elastic_kernels.pack``) and the probes."""
     from symmech.trolley import elastic_kernels as ek
-    from symmech.trolley.elastic_layout import F_AT, N_CHANNELS
+    from symmech.trolley.elastic_layout import F_AT
 
     mdl = ek.pack(system)
-    flags, idx, size = mdl.flags, mdl.block_index, mdl.block_size
     inv = system.inv
-    n, f = int(flags[F_AT.n]), int(flags[F_AT.f])
-    nodes = table.nodes
-    s_coef = CubicSpline(nodes, el.arc_length(drive, nodes)).c  # (4, intervals)
-    coef = np.concatenate([table.coef, s_coef[:, :, None]], axis=2)  # (4, intervals, 13)
+    n = int(mdl.flags[F_AT.n])
+    f = int(mdl.flags[F_AT.f])
     elastic = np.zeros(f)
     elastic[1 + inv.n_roll:1 + n] = 1.0
     elastic[1 + n:] = [1.0 if i >= inv.n_roll else 0.0 for i, _ in inv.pairs]
-    g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
-    width = idx.shape[1]
-    lines = ["/* The elastic trolley's data, written by `symmech export` from symmech.trolley.elastic_kernels.pack "
-             "and the compiled engine's frame table (do not edit). */",
-             f"#define EL_N {n}", f"#define EL_F {f}", f"#define EL_PAIRS {mdl.pair_i.size}", f"#define EL_CHANNELS {N_CHANNELS}",
-             f"#define EL_NODES {nodes.size}", f"#define EL_MASS {float(flags[F_AT.mass])!r}",
-             f"#define EL_ROLLERS_ON {int(flags[F_AT.rollers])}", f"#define EL_CLAMPED {int(flags[F_AT.law])}",
-             f"#define EL_BLOCKS {size.size}", f"#define EL_BLOCK_WIDTH {width}",
-             f"#define EL_PROBES {inv.probe_points.shape[0]}", f"#define EL_G_REF {float(g_ref)!r}",
-             _ints("EL_PTR", mdl.ptr), _ints("EL_COL", mdl.col), _ints("EL_QI", mdl.qi),
-             _ints("EL_PAIR_I", mdl.pair_i), _ints("EL_PAIR_J", mdl.pair_j), _doubles("EL_GX", mdl.gram_x),
-             _doubles("EL_GTR", mdl.gram_trace), _doubles("EL_C", mdl.rollers_map), _doubles("EL_PRELOAD", mdl.roll[2]),
-             _ints("EL_BLOCK_INDEX", idx), _ints("EL_BLOCK_SIZE", size), _doubles("EL_BLOCK_H", mdl.block_h),
-             _doubles("EL_BLOCK_C", mdl.block_c), _doubles("EL_S1", mdl.s1), _doubles("EL_K", mdl.stiffness),
-             _doubles("EL_D", mdl.damping), _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)),
-             _doubles("EL_PROBE_FIELDS", inv.probe_fields), _doubles("EL_PROBE_POINTS", inv.probe_points),
-             _doubles("EL_ELASTIC", elastic), ""]
+    model = {name: getattr(mdl, name).tolist() for name in (
+        "ptr", "col", "qi", "pair_i", "pair_j", "rollers_map", "block_index", "block_size", "block_h", "block_c",
+        "s1", "stiffness", "damping", "gram_trace")}
+    model.update(gram_x=mdl.gram_x.reshape(f, 9, f).tolist(),
+                 mass=float(mdl.flags[F_AT.mass]), rollers=bool(mdl.flags[F_AT.rollers]),
+                 clamped=bool(mdl.flags[F_AT.law]), probe_fields=inv.probe_fields.tolist(),
+                 probe_points=inv.probe_points.tolist(), elastic=elastic.tolist(),
+                 g_ref=float(system.mdl.g0 if system.mdl.g0 > 0 else 9.80665))
+    return model
+
+
+def data(system, drive, table) -> str:
+    """C definitions of the frame table with s(t) beside it, which ``c/elastic_trolley.c`` reads."""
+    from symmech.trolley import elastic as el
+    from symmech.trolley.elastic_layout import N_CHANNELS
+
+    nodes = table.nodes
+    s_coef = CubicSpline(nodes, el.arc_length(drive, nodes)).c  # (4, intervals)
+    coef = np.concatenate([table.coef, s_coef[:, :, None]], axis=2)  # (4, intervals, 13)
+    lines = ["/* The elastic trolley's frame table, written by `symmech export` from the compiled engine's (do not "
+             "edit). */",
+             f"#define EL_N {system.N}", f"#define EL_CHANNELS {N_CHANNELS}", f"#define EL_NODES {nodes.size}",
+             f"#define EL_ROLLER_PARAMS {5 * len(parameters(system))}",
+             _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)), ""]
     return "\n".join(lines)
 
 
@@ -166,9 +199,3 @@ def _doubles(name: str, values) -> str:
     flat = np.asarray(values, float).ravel()
     body = ",".join(repr(float(x)) for x in flat) if flat.size else "0.0"
     return f"static const double {name}[{max(flat.size, 1)}] = {{{body}}};"
-
-
-def _ints(name: str, values) -> str:
-    flat = np.asarray(values).ravel()
-    body = ",".join(str(int(x)) for x in flat) if flat.size else "0"
-    return f"static const int {name}[{max(flat.size, 1)}] = {{{body}}};"

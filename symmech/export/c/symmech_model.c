@@ -1,57 +1,87 @@
 /* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial
-   pivoting) and Dormand and Prince's DOP853 with the error control of Hairer's dop853.f (the tableau in
-   dop853_tableau.h is written from symmech/core/dop853.py). Hand-written; the physics is generated. */
+   pivoting), Dormand and Prince's DOP853 with the error control of Hairer's dop853.f (the tableau in
+   dop853_tableau.h is written from symmech/core/dop853.py) and, for a stiff model (MODEL_STIFF), Radau IIA
+   of order 5 as scipy's and symmech/core/ode.py's (radau_tableau.h written from it) with dense output.
+   Hand-written; the physics is generated. */
 #include <math.h>
 #include <string.h>
 
 #include "symmech_model.h"
 #include "dop853_tableau.h"
+#ifdef MODEL_STIFF
+#include "radau_tableau.h"
+#endif
 
 void symmech_reset(SymmechModel *m)
 {
     static const double start[N_REAL] = START_VALUES;
     memcpy(m->r, start, sizeof start);
     m->dirty = 1;
+    m->horizon = 0.0;
+#ifdef MODEL_STIFF
+    m->radau.h = 0.0;  /* no solve to resume */
+#endif
 }
 
-/* solve a x = b in place (a n x n row-major, overwritten by its LU factors); 0, or -1 when singular */
-static int solve_dense(double *a, double *b, int n)
+/* LU factors of a (n x n row-major) with partial pivoting, in place, row swaps into piv; 0, or -1 when
+   singular */
+static int lu_factor(double *a, int *piv, int n)
 {
     for (int k = 0; k < n; k++) {
         int pivot = k;
         for (int i = k + 1; i < n; i++)
             if (fabs(a[i * n + k]) > fabs(a[pivot * n + k])) pivot = i;
+        piv[k] = pivot;
         if (a[pivot * n + k] == 0.0) return -1;
-        if (pivot != k) {
+        if (pivot != k)
             for (int j = 0; j < n; j++) {
                 double s = a[k * n + j]; a[k * n + j] = a[pivot * n + j]; a[pivot * n + j] = s;
             }
-            double s = b[k]; b[k] = b[pivot]; b[pivot] = s;
-        }
         for (int i = k + 1; i < n; i++) {
-            double f = a[i * n + k] / a[k * n + k];
+            double f = a[i * n + k] /= a[k * n + k];
             if (f == 0.0) continue;
             for (int j = k + 1; j < n; j++) a[i * n + j] -= f * a[k * n + j];
-            b[i] -= f * b[k];
         }
-    }
-    for (int i = n - 1; i >= 0; i--) {
-        double s = b[i];
-        for (int j = i + 1; j < n; j++) s -= a[i * n + j] * b[j];
-        b[i] = s / a[i * n + i];
     }
     return 0;
 }
 
-/* y' at (t, y) with the instance's inputs and parameters */
+/* b = a^-1 b in place from the factors of lu_factor */
+static void lu_solve(const double *a, const int *piv, double *b, int n)
+{
+    for (int k = 0; k < n; k++) {
+        double s = b[k]; b[k] = b[piv[k]]; b[piv[k]] = s;
+    }
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < i; j++) b[i] -= a[i * n + j] * b[j];
+    for (int i = n - 1; i >= 0; i--) {
+        for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];
+        b[i] /= a[i * n + i];
+    }
+}
+
+/* solve a x = b in place (a overwritten by its LU factors); 0, or -1 when singular */
+static int solve_dense(double *a, double *b, int n)
+{
+    int piv[N_X];
+    if (lu_factor(a, piv, n) != 0) return -1;
+    lu_solve(a, piv, b, n);
+    return 0;
+}
+
+/* y' at (t, y) with the instance's inputs and parameters; M = diag(I, M22) with an identity block of
+   MASS_IDENTITY rows: only M22 is factored */
 static int rates(SymmechModel *m, double t, const double *y, double *out)
 {
     double *mass = m->mass;
     const double *p = m->r + VR_P;
+    const int k0 = MASS_IDENTITY, n = N_X - MASS_IDENTITY;
     MODEL_RATE(t, y, p, out);
     for (int k = 0; k < N_U; k++) out[U_ROW + k] += m->r[VR_U + k];
     MODEL_RATE_MASS(t, y, p, mass);
-    return solve_dense(mass, out, N_X);
+    for (int i = 0; i < n; i++)  /* M22 packed in place, row by row (never overwriting a row still to read) */
+        for (int j = 0; j < n; j++) mass[i * n + j] = mass[(k0 + i) * N_X + k0 + j];
+    return solve_dense(mass, out + k0, n);
 }
 
 int symmech_derivatives(SymmechModel *m)
@@ -68,7 +98,9 @@ int symmech_derivatives(SymmechModel *m)
     return 0;
 }
 
-int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol)
+#ifndef MODEL_STIFF
+/* DOP853 from r[VR_TIME] to t_end with Hairer's error control */
+static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
 {
     double k[DOP853_STAGES + 1][N_X], y1[N_X], z[N_X];
     double *y = m->r + VR_X;
@@ -124,4 +156,280 @@ int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol)
     m->r[VR_TIME] = t_end;
     m->dirty = 1;
     return symmech_derivatives(m);
+}
+#endif
+
+#ifdef MODEL_STIFF
+static const double NOMINAL[N_X] = NOMINALS;
+
+/* root mean square of x (n) scaled by atol * NOMINAL + rtol * |y| (scale n of them, repeated) */
+static double scaled_rms(const double *x, int n, const double *scale)
+{
+    double acc = 0.0;
+    for (int i = 0; i < n; i++) acc += (x[i] / scale[i % N_X]) * (x[i] / scale[i % N_X]);
+    return sqrt(acc / n);
+}
+
+static void error_scale(const Radau *s, const double *y, const double *y_new, double *scale)
+{
+    for (int i = 0; i < N_X; i++)
+        scale[i] = s->atol * NOMINAL[i] + s->rtol * fmax(fabs(y[i]), fabs(y_new[i]));
+}
+
+/* out (k x N_X) = a (k x 3) z (3 x N_X) */
+static void mix(const double *a, int k, const double *z, double *out)
+{
+    for (int r = 0; r < k; r++)
+        for (int i = 0; i < N_X; i++)
+            out[r * N_X + i] = a[r * 3] * z[i] + a[r * 3 + 1] * z[N_X + i] + a[r * 3 + 2] * z[2 * N_X + i];
+}
+
+/* dy'/dy by forward differences of the rates (the steps scaled by the states' nominals) */
+static int jacobian(SymmechModel *m, double t, const double *y, const double *f, double *J)
+{
+    double yj[N_X], fj[N_X];
+    memcpy(yj, y, sizeof yj);
+    for (int j = 0; j < N_X; j++) {
+        double step = 1.4901161193847656e-08 * fmax(fabs(y[j]), NOMINAL[j]);
+        yj[j] = y[j] + step;
+        step = yj[j] - y[j];
+        if (rates(m, t, yj, fj) != 0) return -1;
+        for (int i = 0; i < N_X; i++) J[i * N_X + j] = (fj[i] - f[i]) / step;
+        yj[j] = y[j];
+    }
+    return 0;
+}
+
+/* LU factors of MU_REAL/h - J and of MU_COMPLEX/h - J, the latter as the real 2 N_X system
+   [[Re, -Im], [Im, Re]] */
+static int factor(Radau *s, double h)
+{
+    const int n2 = 2 * N_X;
+    double *c = s->lu_complex;
+    memset(c, 0, sizeof s->lu_complex);
+    for (int i = 0; i < N_X; i++) {
+        for (int j = 0; j < N_X; j++) {
+            double a = -s->J[i * N_X + j];
+            s->lu_real[i * N_X + j] = a;
+            c[i * n2 + j] = a;
+            c[(N_X + i) * n2 + N_X + j] = a;
+        }
+        s->lu_real[i * N_X + i] += RADAU_MU_REAL / h;
+        c[i * n2 + i] += RADAU_MU_COMPLEX_RE / h;
+        c[(N_X + i) * n2 + N_X + i] += RADAU_MU_COMPLEX_RE / h;
+        c[i * n2 + N_X + i] = -RADAU_MU_COMPLEX_IM / h;
+        c[(N_X + i) * n2 + i] = RADAU_MU_COMPLEX_IM / h;
+    }
+    if (lu_factor(s->lu_real, s->piv_real, N_X) != 0 || lu_factor(c, s->piv_complex, n2) != 0) return -1;
+    s->lu_valid = 1;
+    return 0;
+}
+
+/* the dense output y (N_X) at t from the last step's interpolant */
+static void dense(const Radau *s, double t, double *y)
+{
+    double x = (t - s->t_old) / s->h_last;
+    for (int i = 0; i < N_X; i++)
+        y[i] = s->Q[3 * N_X + i] + x * (s->Q[i] + x * (s->Q[N_X + i] + x * s->Q[2 * N_X + i]));
+}
+
+/* the collocation system by simplified Newton (scipy's solve_collocation_system): 1 when converged, the
+   stage increments into Z (3 x N_X), the iterations and the convergence rate (-1: none) */
+static int newton(SymmechModel *m, double t, const double *y, double h, double *Z, const double *scale,
+                  double tol, int *iterations, double *rate)
+{
+    Radau *s = &m->radau;
+    double W[3 * N_X], F[3 * N_X], TF[3 * N_X], dW[3 * N_X], z[N_X], wc[2 * N_X];
+    double norm_old = -1.0;
+    int k;
+    mix(RADAU_TI, 3, Z, W);
+    *rate = -1.0;
+    for (k = 0; k < RADAU_NEWTON_MAXITER; k++) {
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < N_X; j++) z[j] = y[j] + Z[i * N_X + j];
+            if (rates(m, t + RADAU_C[i] * h, z, F + i * N_X) != 0) { *iterations = k + 1; return 0; }
+        }
+        mix(RADAU_TI, 3, F, TF);
+        for (int i = 0; i < N_X; i++) {
+            double wr = W[N_X + i], wi = W[2 * N_X + i];
+            dW[i] = TF[i] - RADAU_MU_REAL / h * W[i];
+            wc[i] = TF[N_X + i] - (RADAU_MU_COMPLEX_RE * wr - RADAU_MU_COMPLEX_IM * wi) / h;
+            wc[N_X + i] = TF[2 * N_X + i] - (RADAU_MU_COMPLEX_RE * wi + RADAU_MU_COMPLEX_IM * wr) / h;
+        }
+        lu_solve(s->lu_real, s->piv_real, dW, N_X);
+        lu_solve(s->lu_complex, s->piv_complex, wc, 2 * N_X);
+        memcpy(dW + N_X, wc, sizeof wc);
+        double norm = scaled_rms(dW, 3 * N_X, scale);
+        if (norm_old >= 0.0) *rate = norm / norm_old;
+        if (!isfinite(norm)) break;
+        if (*rate >= 0.0 && (*rate >= 1.0 || pow(*rate, RADAU_NEWTON_MAXITER - k) / (1.0 - *rate) * norm > tol))
+            break;
+        for (int i = 0; i < 3 * N_X; i++) W[i] += dW[i];
+        mix(RADAU_T, 3, W, Z);
+        if (norm == 0.0 || (*rate >= 0.0 && *rate / (1.0 - *rate) * norm < tol)) { *iterations = k + 1; return 1; }
+        norm_old = norm;
+    }
+    *iterations = k < RADAU_NEWTON_MAXITER ? k + 1 : RADAU_NEWTON_MAXITER;
+    return 0;
+}
+
+/* one collocation solve of length h from the integrator's point (scipy's _step_impl): fresh factors and, if
+   Newton fails with an old Jacobian, a fresh one; 1 when converged, -1 on a failed rate or factor */
+static int attempt(SymmechModel *m, double h, double *Z, int *iterations, double *rate)
+{
+    Radau *s = &m->radau;
+    double scale[N_X];
+    if (s->h_last != 0.0) {
+        for (int i = 0; i < 3; i++) {
+            dense(s, s->t + h * RADAU_C[i], Z + i * N_X);
+            for (int j = 0; j < N_X; j++) Z[i * N_X + j] -= s->y[j];
+        }
+    } else {
+        memset(Z, 0, 3 * N_X * sizeof(double));
+    }
+    error_scale(s, s->y, s->y, scale);
+    double tol = fmax(10.0 * 2.220446049250313e-16 / s->rtol, fmin(0.03, sqrt(s->rtol)));
+    double Z0[3 * N_X];
+    memcpy(Z0, Z, sizeof Z0);
+    for (;;) {
+        if (!s->lu_valid && factor(s, h) != 0) return -1;
+        if (newton(m, s->t, s->y, h, Z, scale, tol, iterations, rate)) return 1;
+        if (s->jac_current) return 0;
+        if (jacobian(m, s->t, s->y, s->f, s->J) != 0) return -1;
+        s->jac_current = 1;
+        s->lu_valid = 0;
+        memcpy(Z, Z0, sizeof Z0);
+    }
+}
+
+/* norm of the embedded order-3 error estimate, filtered by (MU_REAL/h - J)^-1 (again through f at the
+   filtered point after a rejection) */
+static double step_error(SymmechModel *m, const double *y_new, double h, const double *Z, int rejected)
+{
+    Radau *s = &m->radau;
+    double ze[N_X], e[N_X], scale[N_X], fe[N_X], ye[N_X];
+    mix(RADAU_E, 1, Z, ze);
+    for (int i = 0; i < N_X; i++) { ze[i] /= h; e[i] = s->f[i] + ze[i]; }
+    lu_solve(s->lu_real, s->piv_real, e, N_X);
+    error_scale(s, s->y, y_new, scale);
+    double err = scaled_rms(e, N_X, scale);
+    if (rejected && err > 1.0) {
+        for (int i = 0; i < N_X; i++) ye[i] = s->y[i] + e[i];
+        if (rates(m, s->t, ye, fe) != 0) return INFINITY;
+        for (int i = 0; i < N_X; i++) fe[i] += ze[i];
+        lu_solve(s->lu_real, s->piv_real, fe, N_X);
+        err = scaled_rms(fe, N_X, scale);
+    }
+    return err;
+}
+
+/* step factor from the error norms (Hairer and Wanner IV.8, scipy's predict_factor) */
+static double predict_factor(double h, double h_old, double err, double err_old)
+{
+    double multiplier = 1.0;
+    if (err_old >= 0.0 && h_old >= 0.0 && err != 0.0) multiplier = h / h_old * pow(err_old / err, 0.25);
+    return err == 0.0 ? INFINITY : fmin(1.0, multiplier) * pow(err, -0.25);
+}
+
+/* one accepted step towards t_bound (scipy's Radau._step_impl); 0, or -1 below round-off or on a failure */
+static int radau_step(SymmechModel *m, double t_bound)
+{
+    Radau *s = &m->radau;
+    double Z[3 * N_X], y_new[N_X], err = 0.0, rate = -1.0, safety = 1.0;
+    double min_step = 10.0 * fabs(nextafter(s->t, INFINITY) - s->t);
+    double h_abs = s->h, h_old = s->h_old, err_old = s->err_old, t_new = s->t;
+    int iterations = 0, rejected = 0;
+    if (h_abs < min_step) { h_abs = min_step; h_old = err_old = -1.0; }
+    for (;;) {
+        if (h_abs < min_step) return -1;
+        t_new = fmin(s->t + h_abs, t_bound);
+        double h = t_new - s->t;
+        h_abs = fabs(h);
+        int ok = attempt(m, h, Z, &iterations, &rate);
+        if (ok < 0) return -1;
+        if (!ok) { h_abs *= 0.5; s->lu_valid = 0; continue; }
+        for (int i = 0; i < N_X; i++) y_new[i] = s->y[i] + Z[2 * N_X + i];
+        err = step_error(m, y_new, h, Z, rejected);
+        safety = 0.9 * (2 * RADAU_NEWTON_MAXITER + 1) / (2 * RADAU_NEWTON_MAXITER + iterations);
+        if (err <= 1.0) break;
+        h_abs *= fmax(RADAU_MIN_FACTOR, safety * predict_factor(h_abs, h_old, err, err_old));
+        s->lu_valid = 0;
+        rejected = 1;
+    }
+    int recompute = iterations > 2 && rate > 1e-3;
+    double grow = fmin(RADAU_MAX_FACTOR, safety * predict_factor(h_abs, h_old, err, err_old));
+    if (!recompute && grow < 1.2) grow = 1.0;
+    else s->lu_valid = 0;
+    s->t_old = s->t;
+    s->h_last = t_new - s->t;
+    mix(RADAU_PT, 3, Z, s->Q);
+    memcpy(s->Q + 3 * N_X, s->y, sizeof s->y);
+    s->t = t_new;
+    memcpy(s->y, y_new, sizeof y_new);
+    if (rates(m, s->t, s->y, s->f) != 0) return -1;
+    if (recompute && jacobian(m, s->t, s->y, s->f, s->J) != 0) return -1;
+    s->jac_current = recompute;
+    s->h_old = s->h;
+    s->err_old = err;
+    s->h = h_abs * grow;
+    return 0;
+}
+
+/* a fresh solve from the instance's time and state (scipy's Radau.__init__): first step, Jacobian */
+static int radau_start(SymmechModel *m, double t_bound, double rtol, double atol)
+{
+    Radau *s = &m->radau;
+    double scale[N_X], y1[N_X], f1[N_X], d[N_X];
+    s->t = m->r[VR_TIME];
+    memcpy(s->y, m->r + VR_X, sizeof s->y);
+    s->rtol = rtol;
+    s->atol = fmax(atol, RADAU_ATOL_FLOOR);
+    s->h_old = s->err_old = -1.0;
+    s->h_last = 0.0;
+    s->lu_valid = 0;
+    if (rates(m, s->t, s->y, s->f) != 0) return -1;
+    double span = t_bound - s->t;  /* scipy's select_initial_step, error estimator of order 3 */
+    error_scale(s, s->y, s->y, scale);
+    double d0 = scaled_rms(s->y, N_X, scale), d1 = scaled_rms(s->f, N_X, scale);
+    double h0 = fmin(d0 < 1e-5 || d1 < 1e-5 ? 1e-6 : 0.01 * d0 / d1, span);
+    for (int i = 0; i < N_X; i++) y1[i] = s->y[i] + h0 * s->f[i];
+    if (rates(m, s->t + h0, y1, f1) != 0) return -1;
+    for (int i = 0; i < N_X; i++) d[i] = f1[i] - s->f[i];
+    double d2 = scaled_rms(d, N_X, scale) / h0;
+    double h1 = d1 <= 1e-15 && d2 <= 1e-15 ? fmax(1e-6, h0 * 1e-3) : pow(0.01 / fmax(d1, d2), RADAU_POWER);
+    s->h = fmin(fmin(100.0 * h0, h1), span);
+    if (jacobian(m, s->t, s->y, s->f, s->J) != 0) return -1;
+    s->jac_current = 1;
+    return 0;
+}
+
+/* Radau IIA from r[VR_TIME] to t_end, stepping up to max(t_end, horizon); resumed from where the last call
+   left it when nothing in r[] has changed since, the state at t_end from the dense output */
+static int radau(SymmechModel *m, double t_end, double rtol, double atol)
+{
+    Radau *s = &m->radau;
+    int resume = s->h > 0.0 && s->rtol == rtol && s->atol == fmax(atol, RADAU_ATOL_FLOOR)
+                 && memcmp(s->seen, m->r, sizeof s->seen) == 0;
+    double t_bound = fmax(t_end, m->horizon);
+    if (!resume && radau_start(m, t_bound, rtol, atol) != 0) return -1;
+    while (s->t < t_end)
+        if (radau_step(m, t_bound) != 0) { s->h = 0.0; return -1; }
+    if (s->t == t_end) memcpy(m->r + VR_X, s->y, sizeof s->y);
+    else dense(s, t_end, m->r + VR_X);
+    m->r[VR_TIME] = t_end;
+    m->dirty = 1;
+    if (symmech_derivatives(m) != 0) { s->h = 0.0; return -1; }
+    memcpy(s->seen, m->r, sizeof s->seen);
+    return 0;
+}
+#endif
+
+int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol)
+{
+    if (t_end <= m->r[VR_TIME]) return 0;
+#ifdef MODEL_STIFF
+    return radau(m, t_end, rtol, atol);
+#else
+    return dop853(m, t_end, rtol, atol);
+#endif
 }

@@ -10,11 +10,32 @@
 
 #include "model.h"
 
+#ifdef MODEL_STIFF
+/* Radau IIA (order 5) between calls of symmech_integrate: where the integrator stands, its step control,
+   Jacobian and factors, and the collocation polynomial of its last step (the dense output) */
+typedef struct {
+    double t, y[N_X], f[N_X];
+    double h, h_old, err_old;  /* next step, the one proposed before it, and its error norm (-1: none) */
+    double t_old, h_last;      /* the last step: start and length (0: none) */
+    double Q[4 * N_X];         /* its interpolant: coefficients of x, x^2, x^3 row by row, then y at t_old */
+    double J[N_X * N_X];       /* dy'/dy */
+    double lu_real[N_X * N_X], lu_complex[4 * N_X * N_X];  /* MU_REAL/h - J; the complex one as 2 N_X real */
+    int piv_real[N_X], piv_complex[2 * N_X];
+    int jac_current, lu_valid;
+    double rtol, atol;
+    double seen[N_REAL];  /* r[] when the last call returned: the integrator resumes only from there */
+} Radau;
+#endif
+
 typedef struct {
     double r[N_REAL];
     double dx[N_X];  /* the state derivatives at r, valid while !dirty */
     double mass[N_X * N_X];  /* work space: M of M y' = F, overwritten by its LU factors */
     int dirty;
+    double horizon;  /* the integrator may step up to this time and interpolate back (0: to each t_end only) */
+#ifdef MODEL_STIFF
+    Radau radau;
+#endif
 } SymmechModel;
 
 /* start values of every variable, time 0 */
@@ -22,8 +43,9 @@ void symmech_reset(SymmechModel *m);
 /* dx = y' of M y' = F + inputs at the instance's time, state, inputs and parameters; 0, or -1 where M is
    singular or a rate is not finite */
 int symmech_derivatives(SymmechModel *m);
-/* integrate from r[VR_TIME] to t_end with DOP853 (error control rtol, atol per state); 0, or -1 on a
-   singular M, a non-finite state or a step size below round-off */
+/* integrate from r[VR_TIME] to t_end (DOP853, or Radau IIA for a stiff model: MODEL_STIFF), error control
+   rtol and atol (Radau: atol, at least RADAU_ATOL_FLOOR, times each state's nominal); 0, or -1 on a singular
+   M, a non-finite state or a step size below round-off */
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
 
 #endif

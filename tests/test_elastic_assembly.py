@@ -1,0 +1,106 @@
+"""The elastic trolley's generated assembly (symmech.trolley.symbolic_assembly, printed in C99 at export
+time) against the Python engine's (symmech.trolley.elastic.System: the numpy sums over the same invariants), at
+seeded random states and frame motions: R, M, P0…P5 and the roller deflections to 1e-12 of each quantity's
+scale. Default tier: the bundled helix with one beam mode per plane, no report points and the clamped roller
+law; slow tier: the bundled helix as it is (its report points' outputs are checked through the exported FMU,
+tests/test_export_trolley.py)."""
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+import tomllib
+
+import numpy as np
+import pytest
+
+from fuzzscenes import toml_text
+from symmech.core import pipeline
+from symmech.core.scene import scenes_folder
+from symmech.export import trolley
+from symmech.trolley import elastic as el
+
+pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+DOUBLES = ctypes.POINTER(ctypes.c_double)
+RTOL = 1e-12
+
+
+def _system(tmp_path, edit) -> el.System:
+    doc = tomllib.loads((scenes_folder() / "trolley_elastic_helix.toml").read_text(encoding="utf-8"))
+    doc["elastic"]["numerics"]["modal_samples"] = 0
+    edit(doc)
+    path = tmp_path / "scene.toml"
+    path.write_text(toml_text(doc))
+    return pipeline.load(path).setup.elastic.system
+
+
+def _library(system, tmp_path):
+    source = tmp_path / "elastic_assembly.c"
+    source.write_text(trolley.assembly_c(system))
+    library = tmp_path / "elastic_assembly.so"
+    subprocess.run(["cc", "-std=c99", "-O1", "-fPIC", "-shared", "-Wall", "-Werror", "-o", str(library),
+                    str(source), "-lm"], check=True)
+    return ctypes.CDLL(str(library))
+
+
+def _pointers(*arrays):
+    return [a.ctypes.data_as(DOUBLES) for a in arrays]
+
+
+def _rates(library, y, p) -> tuple[np.ndarray, np.ndarray]:
+    """F (2 N) and M (2 N, 2 N) of M y' = F from the generated dynamics functions."""
+    n2 = y.size
+    rate, mass = np.full(n2, np.nan), np.full(n2 * n2, np.nan)
+    library.elastic_assembly_rate(ctypes.c_double(0.0), *_pointers(y, p, rate))
+    library.elastic_assembly_rate_mass(ctypes.c_double(0.0), *_pointers(y, p, mass))
+    return rate, mass.reshape(n2, n2)
+
+
+def _close(got, expected, scale) -> None:
+    np.testing.assert_allclose(got, expected, rtol=0, atol=RTOL * scale)
+
+
+def _compare(system, library, states: int = 5) -> None:
+    """The generated rate, mass and outputs against System.evaluate, mass, reactions and roller_state."""
+    rng = np.random.default_rng(32)
+    n = system.N
+    rl = system.mdl.rollers
+    damping = rl.damping if system.mdl.effects.damping else np.zeros(5)
+    rollers = np.r_[rl.stiffness, damping, rl.preload]  # the generated module's first parameters
+    for _ in range(states):
+        q, qd, qdd = rng.normal(0.0, 1e-3, n), rng.normal(0.0, 1e-2, n), rng.normal(0.0, 1.0, n)
+        v0, a0, w, dw, nu = (rng.normal(0.0, 1.0, 3) for _ in range(5))
+        fs = el.FrameState(v0, a0, w, dw, nu)
+        load = a0 + system.mdl.g0 * nu
+        p = np.r_[rollers, load, w, dw, v0]
+        rate, mass = _rates(library, np.r_[q, qd], p)
+        R = system.evaluate(fs, q, qd, np.zeros(n))
+        terms = np.abs(system.inv.K @ q).max() + np.abs(system.inv.S1).max() * np.abs(load).max()
+        np.testing.assert_array_equal(rate[:n], qd)
+        _close(-rate[n:], R, terms)
+        M = system.mass(q)
+        _close(mass[n:, n:], M, np.abs(M).max())
+        np.testing.assert_array_equal(mass[:n], np.eye(2 * n)[:n])
+        outputs = np.full(11 + 9 * len(system.inv.probe_points), np.nan)
+        library.elastic_assembly_outputs(*_pointers(np.r_[q, qd, qdd, p], outputs))
+        P = system.reactions(fs, q, qd, qdd)
+        _close(outputs[:6], P, np.abs(P).max())
+        d = system.roller_state(q, qd)[0]
+        _close(outputs[6:11], d, np.abs(d).max())
+
+
+def test_generated_assembly_equals_the_python_engine(tmp_path):
+    def small(doc):
+        doc["elastic"]["beams"][0]["modes"] = 1
+        del doc["elastic"]["points"]
+        doc["elastic"]["rollers"]["law"] = "clamped_pair"
+        doc["elastic"]["rollers"]["preload"] = [2e-4] * 5
+    system = _system(tmp_path, small)
+    assert system.mdl.rollers.law != "linear"
+    _compare(system, _library(system, tmp_path))
+
+
+@pytest.mark.slow  # the whole helix: ~5 s of sympy
+def test_generated_assembly_of_the_bundled_helix_equals_the_python_engine(tmp_path):
+    system = _system(tmp_path, lambda doc: None)
+    _compare(system, _library(system, tmp_path))
