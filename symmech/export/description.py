@@ -99,13 +99,17 @@ def fmi3(model: ExportModel, token: str, kind: str) -> str:
                 ET.SubElement(structure, "ContinuousStateDerivative", valueReference=str(v.vr))
     for v in _initial_unknowns(model):
         ET.SubElement(structure, "InitialUnknown", valueReference=str(v.vr))
+    if kind == "me":
+        z = model.layout()["VR_Z"]
+        for vr in range(z, z + model.n_z):
+            ET.SubElement(structure, "EventIndicator", valueReference=str(vr))
     return _text(root)
 
 
 def fmi2(model: ExportModel, token: str, kind: str) -> str:
     """FMI 2.0 ``modelDescription.xml`` text; ``kind`` ``me`` or ``cs``. Time is implicit (not a variable)."""
     root = _root(model, "2.0", "guid", token)
-    root.set("numberOfEventIndicators", "0")
+    root.set("numberOfEventIndicators", str(model.n_z if kind == "me" else 0))
     element = "ModelExchange" if kind == "me" else "CoSimulation"
     interface = ET.SubElement(root, element, modelIdentifier=model.identifier)
     if kind == "cs":
