@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
 from symmech.export.model import ExportModel, Variable
 
@@ -53,27 +54,41 @@ def load(scene) -> ExportModel:
     if not effects.rotation:
         raise SymmechError("effects.rotation = false: `symmech export` covers the rotating grain only (the impact "
                            "map is the rotating body's)")
-    landing = first_landing(sc)
+    from symmech.grain import motion_scene
+
+    trajectory = motion_scene.simulate(sc).trajectory
+    landing = first_landing(trajectory)
     if landing is not None:
         raise SymmechError(f"duration = {sc.duration:g}: the grain lands on the surface and slides at t = "
                            f"{landing:.6g} s (the native run), a regime the export does not cover; a duration "
                            f"below {landing:.6g} s exports")
-    return grain(sc)
+    return grain(sc, native_table(trajectory, sc.numerics.sample_interval))
 
 
-def first_landing(sc) -> float | None:
-    """Time [s] where the native run first lands on the surface (the row before its first sliding or sticking
-    row: the last impact, or the start), None when it never does."""
-    from symmech.grain import motion, motion_scene
+def first_landing(trajectory: np.ndarray) -> float | None:
+    """Time [s] where a native run (its trajectory rows) first lands on the surface (the row before its first
+    sliding or sticking row: the last impact, or the start), None when it never does."""
+    from symmech.grain import motion
 
-    trajectory = motion_scene.simulate(sc).trajectory
     (off,) = np.nonzero(trajectory[:, -1] == motion.REGIMES.index("sliding"))
     return float(trajectory[max(off[0] - 1, 0), 0]) if off.size else None
 
 
-def grain(sc) -> ExportModel:
-    """The export model of a prepared grain scene (``symmech.grain.motion_scene.GrainScene``): the generated
-    ``grain_motion`` module's C twin, its layouts read from the numpy module (no sympy)."""
+def native_table(trajectory: np.ndarray, interval: float) -> Table:
+    """The native trajectory's rows on the sample grid (k ``interval`` [s]; the rows at events left out), its
+    columns t, x ... q3 (the exported states of the same names)."""
+    k = np.round(trajectory[:, 0] / interval)
+    on_grid = np.abs(trajectory[:, 0] - k * interval) <= 1e-9 * interval
+    _, first = np.unique(k[on_grid], return_index=True)
+    columns = (Column("t", "s", "time"),) + tuple(Column(name, unit) for name, unit in
+                                                 zip(STATE_NAMES[:10], ("m",) * 3 + ("m/s",) * 3 + ("1",) * 4))
+    return Table(columns, trajectory[on_grid][first][:, :11], doc="trajectory at the sample interval")
+
+
+def grain(sc, native: Table | None) -> ExportModel:
+    """The export model of a prepared grain scene (``symmech.grain.motion_scene.GrainScene``) whose native run's
+    trajectory on the sample grid is ``native``: the generated ``grain_motion`` module's C twin, its layouts
+    read from the numpy module (no sympy)."""
     import importlib.resources
     import inspect
 
@@ -86,10 +101,12 @@ def grain(sc) -> ExportModel:
                           *model.axes)))
     p.update(m=model.mass, e_n=model.law.e_n, e_t=model.law.e_t, mu=model.law.mu)
     y0 = np.concatenate([start.r, start.v, start.q, start.w])
+    nominal = _nominals(sc)
     n = len(gm.STATE)
     variables = [Variable("time", 0, "independent", "continuous", "s", "simulation time")]
     for i, (name, (_, unit, meaning)) in enumerate(zip(STATE_NAMES, gm.STATE)):
-        variables.append(Variable(name, 1 + i, "output", "continuous", unit, meaning, float(y0[i])))
+        variables.append(Variable(name, 1 + i, "output", "continuous", unit, meaning, float(y0[i]),
+                                  nominal=nominal[i]))
     for i, (name, (_, unit, _)) in enumerate(zip(STATE_NAMES, gm.STATE)):
         variables.append(Variable(f"der({name})", 1 + n + i, "output", "continuous",
                                   "1/s" if unit == "1" else f"{unit}/s", f"rate of {name}", derivative_of=1 + i))
@@ -113,4 +130,18 @@ def grain(sc) -> ExportModel:
                    for f, size in ((gm.impact_contact, 12), (gm.coulomb_impulse, 3), (gm.impact_state, n)))
     source = importlib.resources.files("symmech.generated").joinpath(f"{MODULE}.c").read_text(encoding="utf-8")
     return ExportModel(MODULE, gm.__doc__.strip().splitlines()[0], source, tuple(variables), n, n, 0, 0, 0,
-                       len(gm.PARAMS) + len(LAW), None, n_z=1, event_map=stages, has_mass=False)
+                       len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages, has_mass=False)
+
+
+def _nominals(sc) -> list[float]:
+    """Magnitudes of the 13 states (importers scale their absolute tolerances by them): positions the larger of
+    the largest semi-axis, the start height and the amplitude [m]; velocities the larger of the surface's speed
+    amplitude A omega, the speed of a fall from the start height and the start speed [m/s]; the quaternion 1;
+    the rates the start rate, at least 1 rad/s."""
+    model, start = sc.model, sc.start
+    vib = model.vibration
+    length = max(max(model.axes), abs(start.r[2]), vib.amplitude)
+    g = float(np.linalg.norm(model.g_k))
+    speed = max(vib.amplitude * vib.omega, math.sqrt(2 * g * abs(start.r[2])), float(np.linalg.norm(start.v)))
+    rate = max(float(np.linalg.norm(start.w)), 1.0)
+    return [length] * 3 + [speed] * 3 + [1.0] * 4 + [rate] * 3
