@@ -109,6 +109,9 @@ def test_grain_fmu_validates_and_reproduces_the_native_impacts(tmp_path):
         ["m", "m/s", "1", "rad/s", "m", "rad/s", "kg", "1"]
     assert by_name["e_n"].start == "0.4" and by_name["e_n"].causality == "parameter"
     assert _check_impacts(fmu, path, 0.05) == 3
+    # past the first landing (0.0826 s) the grain would slide: the FMU stops with an error, never sinks
+    with pytest.raises(Exception, match="fmi3CompletedIntegratorStep failed"):
+        fmpy.simulate_fmu(str(fmu), solver="CVode", relative_tolerance=1e-10, stop_time=0.1)
 
 
 @pytest.mark.slow  # a compile and a run (~4 s)
@@ -176,3 +179,5 @@ def test_grain_fmu_up_to_the_first_landing(fmi, kind, tmp_path):
             matched += 1
             assert np.abs(np.array([row["x"], row["y"], row["z"]]) - trajectory[same[0], 1:4]).max() <= 1e-9
     assert matched == 83
+    with pytest.raises(Exception, match=f"fmi{fmi}DoStep failed"):  # past the first landing: an error
+        fmpy.simulate_fmu(str(fmu), stop_time=0.1, output_interval=1e-3, relative_tolerance=1e-10)

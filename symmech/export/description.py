@@ -73,7 +73,9 @@ def fmi3(model: ExportModel, token: str, kind: str) -> str:
     """FMI 3.0 ``modelDescription.xml`` text; ``kind`` ``me`` or ``cs``."""
     root = _root(model, "3.0", "instantiationToken", token)
     if kind == "me":
-        ET.SubElement(root, "ModelExchange", modelIdentifier=model.identifier)
+        interface = ET.SubElement(root, "ModelExchange", modelIdentifier=model.identifier)
+        if model.n_z:  # fmi3CompletedIntegratorStep checks that no indicator was crossed without its event
+            interface.set("needsCompletedIntegratorStep", "true")
     else:
         ET.SubElement(root, "CoSimulation", modelIdentifier=model.identifier,
                       canHandleVariableCommunicationStepSize="true")

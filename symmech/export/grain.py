@@ -30,6 +30,9 @@ LAW = (("m", "kg", "grain mass (body.mass, or body.density times the ellipsoid's
        ("e_n", "1", "normal restitution coefficient (impact.e_n)"),
        ("e_t", "1", "tangential restitution coefficient (impact.e_t)"),
        ("mu", "1", "friction coefficient of the impact (impact.mu)"))
+# a gap below -LEFT_FLIGHT x the length scale without an impact: the grain has come to rest on the surface (two
+# crossings within one step of the importer, at the end of a bounce sequence) and would slide
+LEFT_FLIGHT = 1e-6
 # where each dynamics parameter comes from in the scene
 SOURCE = {"gX": "surface.alpha_deg, beta_deg, g", "gY": "surface.alpha_deg, beta_deg, g",
           "gZ": "surface.alpha_deg, beta_deg, g", "A": "vibration.amplitude", "omega": "2 pi vibration.frequency",
@@ -130,7 +133,8 @@ def grain(sc, native: Table | None) -> ExportModel:
                    for f, size in ((gm.impact_contact, 12), (gm.coulomb_impulse, 3), (gm.impact_state, n)))
     source = importlib.resources.files("symmech.generated").joinpath(f"{MODULE}.c").read_text(encoding="utf-8")
     return ExportModel(MODULE, gm.__doc__.strip().splitlines()[0], source, tuple(variables), n, n, 0, 0, 0,
-                       len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages, has_mass=False)
+                       len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages,
+                       event_tolerance=LEFT_FLIGHT * nominal[0], has_mass=False)
 
 
 def _nominals(sc) -> list[float]:

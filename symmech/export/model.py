@@ -73,6 +73,7 @@ class ExportModel:
     # last one's output is the state after
     n_z: int = 0
     event_map: tuple[tuple[str, tuple[str, ...], int], ...] = ()
+    event_tolerance: float = 0.0  # an indicator below -event_tolerance without its event: the model left its regime
     has_mass: bool = True  # M of M y' = F generated as ``rate_mass`` (else the identity)
 
     def layout(self) -> dict[str, int]:

@@ -166,9 +166,13 @@ FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { (void)c; r
 FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
-    (void)c; (void)noSetFMUStatePriorToCurrentPoint;
-    *enterEventMode = *terminateSimulation = 0;
-    return fmi2OK;
+    Instance *inst = c;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    *enterEventMode = 0;
+    *terminateSimulation = symmech_left_model(&inst->model);
+    return *terminateSimulation ? fail(inst, "an event indicator fell below zero without its event: the motion "
+                                             "left what the model covers (a grain at rest on the surface slides)")
+                                : fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
@@ -233,6 +237,9 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     inst->last_time = inst->model.r[VR_TIME];
+    if (status == -2)
+        return fail(inst, "fmi2DoStep: an event indicator fell below zero without its event: the motion left what "
+                          "the model covers (a grain at rest on the surface slides)");
     return status == 0 ? fmi2OK : fail(inst, "fmi2DoStep: the integration failed (singular M or non-finite state)");
 }
 

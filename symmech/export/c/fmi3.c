@@ -204,9 +204,13 @@ FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { (voi
 FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
 {
-    (void)instance; (void)noSetFMUStatePriorToCurrentPoint;
-    *enterEventMode = *terminateSimulation = false;
-    return fmi3OK;
+    Instance *inst = instance;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    *enterEventMode = false;
+    *terminateSimulation = symmech_left_model(&inst->model);
+    return *terminateSimulation ? fail(inst, "an event indicator fell below zero without its event: the motion "
+                                             "left what the model covers (a grain at rest on the surface slides)")
+                                : fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
@@ -293,6 +297,11 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     *lastSuccessfulTime = inst->model.r[VR_TIME];
+    if (status == -2) {
+        *terminateSimulation = true;
+        return fail(inst, "fmi3DoStep: an event indicator fell below zero without its event: the motion left what "
+                          "the model covers (a grain at rest on the surface slides)");
+    }
     if (status != 0) return fail(inst, "fmi3DoStep: the integration failed (singular M or non-finite state)");
     return fmi3OK;
 }

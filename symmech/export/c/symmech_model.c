@@ -162,6 +162,17 @@ int symmech_event_update(SymmechModel *m)
 #endif
 }
 
+int symmech_left_model(SymmechModel *m)
+{
+#if N_Z > 0
+    if (symmech_derivatives(m) != 0) return 0;
+    for (int i = 0; i < N_Z; i++)
+        if (m->r[VR_Z + i] < -EVENT_TOLERANCE) return 1;
+#endif
+    (void)m;
+    return 0;
+}
+
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol)
 {
     double k[DOP853_STAGES + 1][N_X], y1[N_X];
@@ -219,6 +230,8 @@ int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol)
             memcpy(k[0], k[DOP853_STAGES], sizeof k[0]);
 #if N_Z > 0
             MODEL_EVENTS(t, y, m->r + VR_P, z0);
+            for (int i = 0; i < N_Z; i++)
+                if (z0[i] < -EVENT_TOLERANCE) { m->r[VR_TIME] = t; m->dirty = 1; return -2; }
 #endif
             h *= factor;
         } else {
