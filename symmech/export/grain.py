@@ -57,15 +57,27 @@ def load(scene) -> ExportModel:
     if not effects.rotation:
         raise SymmechError("effects.rotation = false: `symmech export` covers the rotating grain only (the impact "
                            "map is the rotating body's)")
-    from symmech.grain import motion_scene
-
-    trajectory = motion_scene.simulate(sc).trajectory
-    landing = first_landing(trajectory)
+    trajectory, landing = native_run(sc)
     if landing is not None:
         raise SymmechError(f"duration = {sc.duration:g}: the grain lands on the surface and slides at t = "
                            f"{landing:.6g} s (the native run), a regime the export does not cover; a duration "
                            f"below {landing:.6g} s exports")
     return grain(sc, native_table(trajectory, sc.numerics.sample_interval))
+
+
+def native_run(sc) -> tuple[np.ndarray, float | None]:
+    """The native run's trajectory rows and its first landing (:func:`first_landing`): over 8 periods of the
+    surface first, then 4 times longer each time until it lands or reaches the scene's duration (a landing,
+    usually within a few periods, costs no run of the whole scene)."""
+    from symmech.grain import motion_scene
+
+    span = min(sc.duration, 8 * sc.model.period)
+    while True:
+        trajectory = motion_scene.simulate(sc, duration=span).trajectory
+        landing = first_landing(trajectory)
+        if landing is not None or span >= sc.duration:
+            return trajectory, landing
+        span = min(sc.duration, 4 * span)
 
 
 def first_landing(trajectory: np.ndarray) -> float | None:
