@@ -170,8 +170,7 @@ FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean 
     (void)noSetFMUStatePriorToCurrentPoint;
     *enterEventMode = 0;
     *terminateSimulation = symmech_left_model(&inst->model);
-    return *terminateSimulation ? fail(inst, "an event indicator fell below zero without its event: the motion "
-                                             "left what the model covers (a grain at rest on the surface slides)")
+    return *terminateSimulation ? fail(inst, LEFT_MODEL_MESSAGE)
                                 : fmi2OK;
 }
 
@@ -238,8 +237,7 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     inst->last_time = inst->model.r[VR_TIME];
     if (status == -2)
-        return fail(inst, "fmi2DoStep: an event indicator fell below zero without its event: the motion left what "
-                          "the model covers (a grain at rest on the surface slides)");
+        return fail(inst, "fmi2DoStep: " LEFT_MODEL_MESSAGE);
     return status == 0 ? fmi2OK : fail(inst, "fmi2DoStep: the integration failed (singular M or non-finite state)");
 }
 

@@ -208,8 +208,7 @@ FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Bo
     (void)noSetFMUStatePriorToCurrentPoint;
     *enterEventMode = false;
     *terminateSimulation = symmech_left_model(&inst->model);
-    return *terminateSimulation ? fail(inst, "an event indicator fell below zero without its event: the motion "
-                                             "left what the model covers (a grain at rest on the surface slides)")
+    return *terminateSimulation ? fail(inst, LEFT_MODEL_MESSAGE)
                                 : fmi3OK;
 }
 
@@ -299,8 +298,7 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
     *lastSuccessfulTime = inst->model.r[VR_TIME];
     if (status == -2) {
         *terminateSimulation = true;
-        return fail(inst, "fmi3DoStep: an event indicator fell below zero without its event: the motion left what "
-                          "the model covers (a grain at rest on the surface slides)");
+        return fail(inst, "fmi3DoStep: " LEFT_MODEL_MESSAGE);
     }
     if (status != 0) return fail(inst, "fmi3DoStep: the integration failed (singular M or non-finite state)");
     return fmi3OK;

@@ -33,5 +33,6 @@ int symmech_event_update(SymmechModel *m);
 /* 1 when an event indicator is below -EVENT_TOLERANCE: crossed without its event, the motion has left what the
    model covers (the grain has come to rest on the surface); 0 otherwise */
 int symmech_left_model(SymmechModel *m);
+#define LEFT_MODEL_MESSAGE "an event indicator fell below zero without its event: the motion left what the model covers"
 
 #endif
