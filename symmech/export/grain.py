@@ -3,8 +3,8 @@
 The flight is the generated dynamics of ``grain_motion`` (13 states: centre position and velocity relative to the
 vibrating surface in KXYZ, orientation quaternion, body-axis angular velocity); the event indicator is its generated
 contact gap (``event_values``, falling through zero at contact) and the map applied at the event its generated
-``impact_state`` (the energy-consistent Coulomb law at the lowest point), as the FMI Reference FMUs' BouncingBall
-applies its restitution at the event. Names: the native trajectory's columns (``x`` ... ``q3``), the body-axis
+``impact_contact`` (K and u of the lowest point), ``coulomb_impulse`` (the energy-consistent Coulomb law) and
+``impact_state`` in turn, as the FMI Reference FMUs' BouncingBall applies its restitution at the event. Names: the native trajectory's columns (``x`` ... ``q3``), the body-axis
 rates as in the impacts table (``w1`` ... ``w3``). Parameters: the scene's fields as the generated equations take
 them (gravity in KXYZ from ``surface``, the vibration, the inertia and mass from ``body``, the impact law).
 
@@ -122,10 +122,11 @@ def grain(sc, native: Table | None) -> ExportModel:
     for i, (name, (_, unit, meaning)) in enumerate(zip(STATE_NAMES, gm.STATE)):
         variables.append(Variable(name, 1 + i, "output", "continuous", unit, meaning, float(y0[i]),
                                   nominal=nominal[i]))
+    rate_unit = {"m": "m/s", "m/s": "m/s^2", "1": "1/s", "rad/s": "rad/s^2"}
     for i, (name, (_, unit, _)) in enumerate(zip(STATE_NAMES, gm.STATE)):
-        variables.append(Variable(f"der({name})", 1 + n + i, "output", "continuous",
-                                  "1/s" if unit == "1" else f"{unit}/s", f"rate of {name}", derivative_of=1 + i))
-    ((event, _, _, unit, meaning),) = gm.EVENTS
+        variables.append(Variable(f"der({name})", 1 + n + i, "output", "continuous", rate_unit[unit],
+                                  f"rate of {name}", derivative_of=1 + i))
+    ((_, _, _, unit, meaning),) = gm.EVENTS
     variables.append(Variable("gap", 1 + 2 * n, "output", "continuous", unit,
                               f"{meaning} (the event indicator: an impact where it falls through zero)"))
     vr = 2 + 2 * n
