@@ -1,6 +1,6 @@
-// symmech 0.1.0 generated module; inputs sha256 f4d7922e9d3ee89117c6bf921be2984d756dd73f4b006c47617c4158427d795a
-// source key 5908438f2a0704fcdc6c7433173dbcd963dcf3261cd88271acfb9dc78f2bafca
-// body sha256 e1c9186d28b1bf79ae7c43220c7d89e6f1f649e2cceceb99d06d9be1528280a7
+// symmech 0.1.0 generated module; inputs sha256 1197f9e6c516ea4aada0ba9c0cc0d41598fd0feabe8976484212a32d9df454ed
+// source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+// body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
    Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -440,9 +440,9 @@ void grain_motion_impact_contact(const double *sm_arg, double *out)
     out[11] = vz + x44*x65 - x55*x63;
 }
 
-/* energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: (3) [N*s].
-   Arguments: k0 [1/kg], k1 [1/kg], k2 [1/kg], k3 [1/kg], k4 [1/kg], k5 [1/kg], k6 [1/kg], k7 [1/kg], k8 [1/kg], u0 [m/s], u1 [m/s], u2 [m/s], e_n [1], e_t [1], mu [1]. */
-void grain_motion_coulomb_impulse(const double *sm_arg, double *out)
+/* plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ: (4) [N*s].
+   Arguments: k0 [1/kg], k1 [1/kg], k2 [1/kg], k3 [1/kg], k4 [1/kg], k5 [1/kg], k6 [1/kg], k7 [1/kg], k8 [1/kg], u0 [m/s], u1 [m/s], u2 [m/s]. */
+void grain_motion_plastic_impulse(const double *sm_arg, double *out)
 {
     (void)sm_arg;
     const double k0 = sm_arg[0];
@@ -457,48 +457,59 @@ void grain_motion_coulomb_impulse(const double *sm_arg, double *out)
     const double u0 = sm_arg[9];
     const double u1 = sm_arg[10];
     const double u2 = sm_arg[11];
-    const double e_n = sm_arg[12];
-    const double e_t = sm_arg[13];
-    const double mu = sm_arg[14];
-    const double x0 = k4*k8;
-    const double x1 = k5*k7;
-    const double x2 = k1*k8;
-    const double x3 = k1*k5;
-    const double x4 = k2*k4;
-    const double x5 = -u0*(x0 - x1) - u1*(k2*k7 - x2) - u2*(x3 - x4);
-    const double x6 = k0*x0 - k0*x1 + k2*k3*k7 - k3*x2 + k6*x3 - k6*x4;
-    const double x7 = 1.0/x6;
-    const double x8 = u2/k8;
-    const double x9 = x7*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3)) + x8;
-    const double x10 = pow(x6, -2);
-    const double x11 = -u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3);
-    const double x12 = -mu*x9 + sqrt(x10*pow(x11, 2) + x10*pow(x5, 2));
-    const double x13 = x8*(e_n + 1);
-    const double x14 = mu*x13;
-    const double x15 = e_t + 1;
-    const double x16 = ((x14 > -x12*x15) ? (
-   -x14/x12
+    const double x0 = u2/k8;
+    const double x1 = k4*k8;
+    const double x2 = k1*k5;
+    const double x3 = k5*k7;
+    const double x4 = k1*k8;
+    const double x5 = k2*k4;
+    const double x6 = 1.0/(k0*x1 - k0*x3 + k2*k3*k7 - k3*x4 + k6*x2 - k6*x5);
+    for (int sm_i = 0; sm_i < 4; sm_i++) out[sm_i] = 0.0;
+    out[0] = -x0;
+    out[1] = x6*(-u0*(x1 - x3) - u1*(k2*k7 - x4) - u2*(x2 - x5));
+    out[2] = x6*(-u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3));
+    out[3] = x0 + x6*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3));
+}
+
+/* energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: (3) [N*s].
+   Arguments: P_I [N*s], D0 [N*s], D1 [N*s], D2 [N*s], u2 [m/s], e_n [1], e_t [1], mu [1]. */
+void grain_motion_coulomb_impulse(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double P_I = sm_arg[0];
+    const double D0 = sm_arg[1];
+    const double D1 = sm_arg[2];
+    const double D2 = sm_arg[3];
+    const double u2 = sm_arg[4];
+    const double e_n = sm_arg[5];
+    const double e_t = sm_arg[6];
+    const double mu = sm_arg[7];
+    const double x0 = -D2*mu + sqrt(pow(D0, 2) + pow(D1, 2));
+    const double x1 = P_I*(e_n + 1);
+    const double x2 = mu*x1;
+    const double x3 = e_t + 1;
+    const double x4 = ((x2 < x0*x3) ? (
+   x2/x0
 )
 : (
-   x15
+   x3
 ));
-    const double x17 = x16*x7;
-    const double x18 = u2 < 0;
+    const double x5 = u2 < 0;
     for (int sm_i = 0; sm_i < 3; sm_i++) out[sm_i] = 0.0;
-    out[0] = ((x18) ? (
-   x17*x5
+    out[0] = ((x5) ? (
+   D0*x4
 )
 : (
    0
 ));
-    out[1] = ((x18) ? (
-   x11*x17
+    out[1] = ((x5) ? (
+   D1*x4
 )
 : (
    0
 ));
-    out[2] = ((x18) ? (
-   -x13 + x16*x9
+    out[2] = ((x5) ? (
+   D2*x4 + x1
 )
 : (
    0

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 305d2d5f04d51210f6e9701e4df09b5882954d604ca08725c66c2dfc582cf2cf
-# source key 5908438f2a0704fcdc6c7433173dbcd963dcf3261cd88271acfb9dc78f2bafca
-# body sha256 c466cb9a4d8d2a46d0f8eb2b299c6d3120570a6f033695b2c0b5cd63c9587c61
+# symmech 0.1.0 generated module; inputs sha256 a09139331ecd0d3cda5180c7d2674d2a1f81127fb4f913fde2cd51bd99250923
+# source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+# body sha256 6eeb434f51b30b333051c7361544cb32139dfb371728cc292be7ebc290d164e0
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -53,7 +53,7 @@ import math
 
 import numpy
 
-__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates", "impact_contact", "coulomb_impulse", "impact_state", "rate", "rate_jacobian", "event_values", "rhs", "jac", "events"]
+__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates", "impact_contact", "plastic_impulse", "coulomb_impulse", "impact_state", "rate", "rate_jacobian", "event_values", "rhs", "jac", "events"]
 
 
 def _batch(*args):
@@ -702,8 +702,8 @@ def impact_contact(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I
     return out
 
 
-def coulomb_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu):
-    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ.
+def plastic_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ.
 
     Parameters
     ----------
@@ -731,6 +731,43 @@ def coulomb_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu
         contact point velocity before the impact, Y [m/s]
     u2 : array_like
         contact point velocity before the impact, Z [m/s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        [N*s]
+    """
+    (k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2,), batch = _batch(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2)
+    out = numpy.empty(batch + (4,))
+    x0 = u2/k8
+    x1 = k4*k8
+    x2 = k1*k5
+    x3 = k5*k7
+    x4 = k1*k8
+    x5 = k2*k4
+    x6 = 1/(k0*x1 - k0*x3 + k2*k3*k7 - k3*x4 + k6*x2 - k6*x5)
+    out[..., 0] = -x0
+    out[..., 1] = x6*(-u0*(x1 - x3) - u1*(k2*k7 - x4) - u2*(x2 - x5))
+    out[..., 2] = x6*(-u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3))
+    out[..., 3] = x0 + x6*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3))
+    return out
+
+
+def coulomb_impulse(P_I, D0, D1, D2, u2, e_n, e_t, mu):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ.
+
+    Parameters
+    ----------
+    P_I : array_like
+        plastic normal impulse [N*s]
+    D0 : array_like
+        plastic sticking impulse beyond it, X [N*s]
+    D1 : array_like
+        plastic sticking impulse beyond it, Y [N*s]
+    D2 : array_like
+        plastic sticking impulse beyond it, Z [N*s]
+    u2 : array_like
+        contact point velocity before the impact, Z [m/s]
     e_n : array_like
         normal restitution coefficient [1]
     e_t : array_like
@@ -743,30 +780,17 @@ def coulomb_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu
     numpy.ndarray, shape (..., 3)
         [N*s]
     """
-    (k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu,), batch = _batch(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu)
+    (P_I, D0, D1, D2, u2, e_n, e_t, mu,), batch = _batch(P_I, D0, D1, D2, u2, e_n, e_t, mu)
     out = numpy.empty(batch + (3,))
-    x0 = k4*k8
-    x1 = k5*k7
-    x2 = k1*k8
-    x3 = k1*k5
-    x4 = k2*k4
-    x5 = -u0*(x0 - x1) - u1*(k2*k7 - x2) - u2*(x3 - x4)
-    x6 = k0*x0 - k0*x1 + k2*k3*k7 - k3*x2 + k6*x3 - k6*x4
-    x7 = 1/x6
-    x8 = u2/k8
-    x9 = x7*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3)) + x8
-    x10 = x6**(-2.0)
-    x11 = -u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3)
-    x12 = -mu*x9 + numpy.sqrt(x10*x11**2 + x10*x5**2)
-    x13 = x8*(e_n + 1)
-    x14 = mu*x13
-    x15 = e_t + 1
-    x16 = numpy.select([numpy.greater(x14, -x12*x15),True], [-x14/x12,x15], default=numpy.nan)
-    x17 = x16*x7
-    x18 = numpy.less(u2, 0)
-    out[..., 0] = numpy.select([x18,True], [x17*x5,0], default=numpy.nan)
-    out[..., 1] = numpy.select([x18,True], [x11*x17,0], default=numpy.nan)
-    out[..., 2] = numpy.select([x18,True], [-x13 + x16*x9,0], default=numpy.nan)
+    x0 = -D2*mu + numpy.sqrt(D0**2 + D1**2)
+    x1 = P_I*(e_n + 1)
+    x2 = mu*x1
+    x3 = e_t + 1
+    x4 = numpy.select([numpy.less(x2, x0*x3),True], [x2/x0,x3], default=numpy.nan)
+    x5 = numpy.less(u2, 0)
+    out[..., 0] = numpy.select([x5,True], [D0*x4,0], default=numpy.nan)
+    out[..., 1] = numpy.select([x5,True], [D1*x4,0], default=numpy.nan)
+    out[..., 2] = numpy.select([x5,True], [D2*x4 + x1,0], default=numpy.nan)
     return out
 
 

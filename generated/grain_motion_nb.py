@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 b05772c6e3565d99c3643d5f7b8f809b59291836addf6d36c72ecb3aa860e412
-# source key 5908438f2a0704fcdc6c7433173dbcd963dcf3261cd88271acfb9dc78f2bafca
-# body sha256 d4e963a63472c28f57293ebc16fb11772e8baa4a180a8d8ca38111c73928c831
+# symmech 0.1.0 generated module; inputs sha256 caed13dfe2aa68adf666eb672f9d549bbc1583c1ab884244c08b63c73b172664
+# source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+# body sha256 889b99534660fddcecf99b0861de91c92edbd96ea2efe691efd8caefde41629f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -76,7 +76,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "impact_contact", "impact_contact_into", "impact_contact_scalar", "coulomb_impulse", "coulomb_impulse_into", "coulomb_impulse_scalar", "impact_state", "impact_state_into", "impact_state_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "event_values", "event_values_into", "event_values_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar", "events", "events_into"]
+__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "impact_contact", "impact_contact_into", "impact_contact_scalar", "plastic_impulse", "plastic_impulse_into", "plastic_impulse_scalar", "coulomb_impulse", "coulomb_impulse_into", "coulomb_impulse_scalar", "impact_state", "impact_state_into", "impact_state_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "event_values", "event_values_into", "event_values_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar", "events", "events_into"]
 
 
 def _flat(*args):
@@ -1132,59 +1132,48 @@ def impact_contact(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _coulomb_impulse_0(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu, out, _k):
-    x0 = k4*k8
-    x1 = k5*k7
-    x2 = k1*k8
-    x3 = k1*k5
-    x4 = k2*k4
-    x5 = -u0*(x0 - x1) - u1*(k2*k7 - x2) - u2*(x3 - x4)
-    x6 = k0*x0 - k0*x1 + k2*k3*k7 - k3*x2 + k6*x3 - k6*x4
-    x7 = 1/x6
-    x8 = u2/k8
-    x9 = x7*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3)) + x8
-    x10 = x6**(-2)
-    x11 = -u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3)
-    x12 = -mu*x9 + math.sqrt(x10*x11**2 + x10*x5**2)
-    x13 = x8*(e_n + 1)
-    x14 = mu*x13
-    x15 = e_t + 1
-    x16 = ((-x14/x12) if (x14 > -x12*x15) else (x15))
-    x17 = x16*x7
-    x18 = (u2 < 0)
-    out[_k, 0] = ((x17*x5) if x18 else (0))
-    out[_k, 1] = ((x11*x17) if x18 else (0))
-    out[_k, 2] = ((-x13 + x16*x9) if x18 else (0))
+def _plastic_impulse_0(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out, _k):
+    x0 = u2/k8
+    x1 = k4*k8
+    x2 = k1*k5
+    x3 = k5*k7
+    x4 = k1*k8
+    x5 = k2*k4
+    x6 = 1/(k0*x1 - k0*x3 + k2*k3*k7 - k3*x4 + k6*x2 - k6*x5)
+    out[_k, 0] = -x0
+    out[_k, 1] = x6*(-u0*(x1 - x3) - u1*(k2*k7 - x4) - u2*(x2 - x5))
+    out[_k, 2] = x6*(-u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3))
+    out[_k, 3] = x0 + x6*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def coulomb_impulse_into(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu, out):
-    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: floats in, written into out[0] (out: float64 (1, 3)) [N*s]."""
-    _coulomb_impulse_0(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu, out, 0)
+def plastic_impulse_into(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ: floats in, written into out[0] (out: float64 (1, 4)) [N*s]."""
+    _plastic_impulse_0(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out, 0)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def coulomb_impulse_scalar(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu):
-    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: floats in, a float64 array (3,) out [N*s]."""
-    out = numpy.empty((1, 3))
-    coulomb_impulse_into(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu, out)
+def plastic_impulse_scalar(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ: floats in, a float64 array (4,) out [N*s]."""
+    out = numpy.empty((1, 4))
+    plastic_impulse_into(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out)
     return out[0]
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _coulomb_impulse_loop(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu, _steps, out):
+def _plastic_impulse_loop(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, _steps, out):
     for _k in range(out.shape[0]):
-        _coulomb_impulse_0(k0[_k * _steps[0]], k1[_k * _steps[1]], k2[_k * _steps[2]], k3[_k * _steps[3]], k4[_k * _steps[4]], k5[_k * _steps[5]], k6[_k * _steps[6]], k7[_k * _steps[7]], k8[_k * _steps[8]], u0[_k * _steps[9]], u1[_k * _steps[10]], u2[_k * _steps[11]], e_n[_k * _steps[12]], e_t[_k * _steps[13]], mu[_k * _steps[14]], out, _k)
+        _plastic_impulse_0(k0[_k * _steps[0]], k1[_k * _steps[1]], k2[_k * _steps[2]], k3[_k * _steps[3]], k4[_k * _steps[4]], k5[_k * _steps[5]], k6[_k * _steps[6]], k7[_k * _steps[7]], k8[_k * _steps[8]], u0[_k * _steps[9]], u1[_k * _steps[10]], u2[_k * _steps[11]], out, _k)
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _coulomb_impulse_ploop(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu, _steps, out):
+def _plastic_impulse_ploop(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, _steps, out):
     for _k in numba.prange(out.shape[0]):
-        _coulomb_impulse_0(k0[_k * _steps[0]], k1[_k * _steps[1]], k2[_k * _steps[2]], k3[_k * _steps[3]], k4[_k * _steps[4]], k5[_k * _steps[5]], k6[_k * _steps[6]], k7[_k * _steps[7]], k8[_k * _steps[8]], u0[_k * _steps[9]], u1[_k * _steps[10]], u2[_k * _steps[11]], e_n[_k * _steps[12]], e_t[_k * _steps[13]], mu[_k * _steps[14]], out, _k)
+        _plastic_impulse_0(k0[_k * _steps[0]], k1[_k * _steps[1]], k2[_k * _steps[2]], k3[_k * _steps[3]], k4[_k * _steps[4]], k5[_k * _steps[5]], k6[_k * _steps[6]], k7[_k * _steps[7]], k8[_k * _steps[8]], u0[_k * _steps[9]], u1[_k * _steps[10]], u2[_k * _steps[11]], out, _k)
 
 
-def coulomb_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu):
-    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ.
+def plastic_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ.
 
     Parameters
     ----------
@@ -1212,6 +1201,72 @@ def coulomb_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu
         contact point velocity before the impact, Y [m/s]
     u2 : array_like
         contact point velocity before the impact, Z [m/s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        [N*s]
+    """
+    _arrays, _steps, _batch = _flat(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_plastic_impulse_ploop if len(out) >= PARALLEL_BATCH else _plastic_impulse_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _coulomb_impulse_0(P_I, D0, D1, D2, u2, e_n, e_t, mu, out, _k):
+    x0 = -D2*mu + math.sqrt(D0**2 + D1**2)
+    x1 = P_I*(e_n + 1)
+    x2 = mu*x1
+    x3 = e_t + 1
+    x4 = ((x2/x0) if (x2 < x0*x3) else (x3))
+    x5 = (u2 < 0)
+    out[_k, 0] = ((D0*x4) if x5 else (0))
+    out[_k, 1] = ((D1*x4) if x5 else (0))
+    out[_k, 2] = ((D2*x4 + x1) if x5 else (0))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def coulomb_impulse_into(P_I, D0, D1, D2, u2, e_n, e_t, mu, out):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: floats in, written into out[0] (out: float64 (1, 3)) [N*s]."""
+    _coulomb_impulse_0(P_I, D0, D1, D2, u2, e_n, e_t, mu, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def coulomb_impulse_scalar(P_I, D0, D1, D2, u2, e_n, e_t, mu):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: floats in, a float64 array (3,) out [N*s]."""
+    out = numpy.empty((1, 3))
+    coulomb_impulse_into(P_I, D0, D1, D2, u2, e_n, e_t, mu, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _coulomb_impulse_loop(P_I, D0, D1, D2, u2, e_n, e_t, mu, _steps, out):
+    for _k in range(out.shape[0]):
+        _coulomb_impulse_0(P_I[_k * _steps[0]], D0[_k * _steps[1]], D1[_k * _steps[2]], D2[_k * _steps[3]], u2[_k * _steps[4]], e_n[_k * _steps[5]], e_t[_k * _steps[6]], mu[_k * _steps[7]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _coulomb_impulse_ploop(P_I, D0, D1, D2, u2, e_n, e_t, mu, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _coulomb_impulse_0(P_I[_k * _steps[0]], D0[_k * _steps[1]], D1[_k * _steps[2]], D2[_k * _steps[3]], u2[_k * _steps[4]], e_n[_k * _steps[5]], e_t[_k * _steps[6]], mu[_k * _steps[7]], out, _k)
+
+
+def coulomb_impulse(P_I, D0, D1, D2, u2, e_n, e_t, mu):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ.
+
+    Parameters
+    ----------
+    P_I : array_like
+        plastic normal impulse [N*s]
+    D0 : array_like
+        plastic sticking impulse beyond it, X [N*s]
+    D1 : array_like
+        plastic sticking impulse beyond it, Y [N*s]
+    D2 : array_like
+        plastic sticking impulse beyond it, Z [N*s]
+    u2 : array_like
+        contact point velocity before the impact, Z [m/s]
     e_n : array_like
         normal restitution coefficient [1]
     e_t : array_like
@@ -1224,7 +1279,7 @@ def coulomb_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu
     numpy.ndarray, shape (..., 3)
         [N*s]
     """
-    _arrays, _steps, _batch = _flat(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, e_n, e_t, mu)
+    _arrays, _steps, _batch = _flat(P_I, D0, D1, D2, u2, e_n, e_t, mu)
     out = numpy.empty((math.prod(_batch),) + (3,))
     (_coulomb_impulse_ploop if len(out) >= PARALLEL_BATCH else _coulomb_impulse_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (3,))

@@ -3,8 +3,8 @@
 The flight is the generated dynamics of ``grain_motion`` (13 states: centre position and velocity relative to the
 vibrating surface in KXYZ, orientation quaternion, body-axis angular velocity); the event indicator is its generated
 contact gap (``event_values``, falling through zero at contact) and the map applied at the event its generated
-``impact_contact`` (K and u of the lowest point), ``coulomb_impulse`` (the energy-consistent Coulomb law) and
-``impact_state`` in turn, as the FMI Reference FMUs' BouncingBall applies its restitution at the event. Names: the native trajectory's columns (``x`` ... ``q3``), the body-axis
+``impact_contact`` (K and u of the lowest point), ``plastic_impulse``, ``coulomb_impulse`` (the energy-consistent
+Coulomb law) and ``impact_state`` in turn, as the FMI Reference FMUs' BouncingBall applies its restitution at the event. Names: the native trajectory's columns (``x`` ... ``q3``), the body-axis
 rates as in the impacts table (``w1`` ... ``w3``). Parameters: the scene's fields as the generated equations take
 them (gravity in KXYZ from ``surface``, the vibration, the inertia and mass from ``body``, the impact law).
 
@@ -136,14 +136,17 @@ def grain(sc, native: Table | None) -> ExportModel:
     vr += len(gm.PARAMS)
     for k, (name, unit, meaning) in enumerate(LAW):
         variables.append(Variable(name, vr + k, "parameter", "tunable", unit, meaning, float(p[name])))
-    # the impact map: K and u of the contact, the law's impulse P, the state after; arguments as C expressions
+    # the impact map: K and u of the contact, the plastic impulses, the law's impulse P, the state after; arguments
+    # as C expressions
     where = {name: f"y[{i}]" for i, (name, _, _) in enumerate(gm.STATE)}
     where.update((name, f"p[{k}]") for k, name in enumerate(params + [x[0] for x in LAW]))
     where.update((f"k{i}", f"s0[{i}]") for i in range(9))
     where.update((f"u{i}", f"s0[{9 + i}]") for i in range(3))
-    where.update((f"P{i}", f"s1[{i}]") for i in range(3))
+    where.update(zip(("P_I", "D0", "D1", "D2"), (f"s1[{i}]" for i in range(4))))
+    where.update((f"P{i}", f"s2[{i}]") for i in range(3))
     stages = tuple((f"{MODULE}_{f.__name__}", tuple(where[a] for a in inspect.signature(f).parameters), size)
-                   for f, size in ((gm.impact_contact, 12), (gm.coulomb_impulse, 3), (gm.impact_state, n)))
+                   for f, size in ((gm.impact_contact, 12), (gm.plastic_impulse, 4), (gm.coulomb_impulse, 3),
+                                   (gm.impact_state, n)))
     source = importlib.resources.files("symmech.generated").joinpath(f"{MODULE}.c").read_text(encoding="utf-8")
     return ExportModel(MODULE, gm.__doc__.strip().splitlines()[0], source, tuple(variables), n, n, 0, 0, 0,
                        len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages,

@@ -215,6 +215,7 @@ e_n, e_t, mu = sp.symbols("e_n e_t mu", real=True)
 K_ENTRIES = sp.symbols("k0:9", real=True)
 u0, u1, u2 = sp.symbols("u0 u1 u2", real=True)
 P0, P1, P2 = sp.symbols("P0 P1 P2", real=True)
+P_I, D0, D1, D2 = sp.symbols("P_I D0 D1 D2", real=True)
 _MASS = [(m, "grain mass", "kg")]
 _LAW = [(e_n, "normal restitution coefficient", "1"), (e_t, "tangential restitution coefficient", "1"),
         (mu, "impact friction coefficient", "1")]
@@ -222,6 +223,8 @@ _K = [(k, f"inverse effective mass at the contact, entry {i // 3 + 1}{i % 3 + 1}
       for i, k in enumerate(K_ENTRIES)]
 _U = [(u, f"contact point velocity before the impact, {x}", "m/s") for u, x in zip((u0, u1, u2), "XYZ")]
 _P = [(P, f"impulse on the grain at the contact, {x}", "N*s") for P, x in zip((P0, P1, P2), "XYZ")]
+_PLASTIC = [(P_I, "plastic normal impulse", "N*s")] + [
+    (d, f"plastic sticking impulse beyond it, {x}", "N*s") for d, x in zip((D0, D1, D2), "XYZ")]
 
 
 def _skew(r: sp.Matrix) -> sp.Matrix:
@@ -245,19 +248,24 @@ def impact_contact() -> sp.Matrix:
     return sp.Matrix([*K, *(sp.Matrix([vx, vy, vz]) + w.cross(R))])
 
 
-def coulomb_impulse() -> sp.Matrix:
-    """Chatterjee and Ruina's impulse P (3,) [N s] at a contact of inverse effective mass K (3, 3) [1/kg] hit at
-    the velocity u (3,) [m/s]: the plastic normal impulse P_I = -u_z / K_zz e_z and the plastic sticking
-    remainder D = -K^-1 u - P_I combined as P = (1 + e_n) P_I + s D, s = 1 + e_t inside the friction cone and,
-    outside it, the s that puts P on the cone |P_t| = mu P_z. No impulse where the point does not approach the
-    plane (u_z >= 0)."""
+def plastic_impulse() -> sp.Matrix:
+    """The impulses (4,) [N s] of a perfectly plastic impact at a contact of inverse effective mass K (3, 3)
+    [1/kg] hit at the velocity u (3,) [m/s]: the normal one P_I = -u_z / K_zz (along e_z) and the sticking
+    remainder D = -K^-1 u - P_I e_z (3) that stops the point."""
     K, u = sp.Matrix(3, 3, K_ENTRIES), sp.Matrix([u0, u1, u2])
-    p_normal = sp.Matrix([0, 0, -u2 / K[2, 2]])
-    D = -(K.adjugate() * u) / K.det() - p_normal
-    normal = (1 + e_n) * p_normal[2]
-    slope = sp.sqrt(D[0] ** 2 + D[1] ** 2) - mu * D[2]
+    normal = -u2 / K[2, 2]
+    return sp.Matrix([normal, *(-(K.adjugate() * u) / K.det() - sp.Matrix([0, 0, normal]))])
+
+
+def coulomb_impulse() -> sp.Matrix:
+    """Chatterjee and Ruina's impulse P (3,) [N s] from the plastic impulses (:func:`plastic_impulse`):
+    P = (1 + e_n) P_I e_z + s D, s = 1 + e_t inside the friction cone and, outside it, the s that puts P on the
+    cone |P_t| = mu P_z. No impulse where the point does not approach the plane (u_z >= 0)."""
+    D = sp.Matrix([D0, D1, D2])
+    normal = (1 + e_n) * P_I
+    slope = sp.sqrt(D0**2 + D1**2) - mu * D2
     s = sp.Piecewise((mu * normal / slope, (1 + e_t) * slope > mu * normal), (1 + e_t, True))
-    return sp.Matrix([sp.Piecewise(((1 + e_n) * p_normal[i] + s * D[i], u2 < 0), (0, True)) for i in range(3)])
+    return (sp.Matrix([0, 0, normal]) + s * D).applyfunc(lambda x: sp.Piecewise((x, u2 < 0), (0, True)))
 
 
 def impact_state() -> sp.Matrix:
@@ -317,7 +325,9 @@ def module_specs() -> list[ModuleSpec]:
                     "Euler-angle rates (psi', theta', phi') from body rates", "rad/s", "62"),
         NamedMatrix("impact_contact", impact_contact(), args_of(_STATE + _INERTIA + _AXES + _MASS),
                     "inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ", "1/kg, m/s"),
-        NamedMatrix("coulomb_impulse", coulomb_impulse(), args_of(_K + _U + _LAW),
+        NamedMatrix("plastic_impulse", plastic_impulse(), args_of(_K + _U),
+                    "plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ", "N*s"),
+        NamedMatrix("coulomb_impulse", coulomb_impulse(), args_of(_PLASTIC + [_U[2]] + _LAW),
                     "energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ", "N*s"),
         NamedMatrix("impact_state", impact_state(), args_of(_STATE + _INERTIA + _AXES + _MASS + _P),
                     "state just after an impulse at the lowest point", "m, m/s, 1, rad/s"),
