@@ -1,13 +1,15 @@
 """Exported models against the native run: FMU (FMPy, Model Exchange with CVode and Co-Simulation with the
-FMU's DOP853, for the elastic trolley its Radau IIA) and the exported C example program, on the bundled mechanism scenes with a free response and the
-bundled elastic trolley ride.
+FMU's DOP853, for the elastic trolley its Radau IIA) and the exported C example program, on the bundled mechanism
+scenes with a free response, the bundled elastic trolley ride, and the default grain scene up to just before its
+first landing (0.082 s: 8 impacts, flight and impacts as state events).
 
 The elastic C example program runs Radau IIA with dense output on the generated assembly; its real-time
 factor is its whole-process wall time over the ride's duration.
 
 Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv); for the
 elastic trolley the compiled engine at the scene's rtol (its reactions P0…P5), and beside it the same engine at
-rtol 1e-10 as a reference closer to the exact solution.
+rtol 1e-10 as a reference closer to the exact solution; for the grain the compiled engine's impacts (times,
+centres) and trajectory rows.
 Accuracy: `symmech.export.model.deviation`, the largest deviation of each series relative to its largest
 magnitude.
 
@@ -37,6 +39,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="3 rounds instead of 7")
     repeats = 3 if parser.parse_args().quick else 7
     print(machine())
+    grain(repeats)
     elastic(repeats)
     for name in ("smm_rotor_boom", "smm_spatial_boom"):
         exported = model.load(scenes_folder() / f"{name}.toml")
@@ -115,6 +118,54 @@ def elastic(repeats: int) -> None:
                   f"(vs rtol 1e-10: {deviation(got, reference):.2g})")
         print(f"  C example program's real-time factor (whole process, wall): "
               f"{stats[EXAMPLE].median / t[-1]:.3g}")
+
+
+def grain(repeats: int) -> None:
+    """The default grain scene over 0.082 s (its first landing is at 0.0826 s): the ME FMU's impact times and
+    centres, the CS FMU's and the C program's trajectory on the sample grid, against the compiled engine."""
+    from symmech.grain import motion_scene
+
+    text = (scenes_folder() / "grain_default.toml").read_text().replace("duration = 2.0 ", "duration = 0.082 ")
+    states = ["x", "y", "z"]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "grain.toml"
+        path.write_text(text)
+        sc = pipeline.load(path).setup
+        exported = command.load(path)
+        t = exported.native.data[:, 0]
+        me = build.fmu(exported, Path(tmp) / "me.fmu", 3, "me")
+        cs = build.fmu(exported, Path(tmp) / "cs.fmu", 3, "cs")
+        example = build.c_folder(exported, Path(tmp) / "c") / "example"
+        runs = {
+            "native, compiled engine": lambda: motion_scene.simulate(sc),
+            "FMU ME, FMPy CVode rtol 1e-10": lambda: fmpy.simulate_fmu(
+                str(me), solver="CVode", relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0],
+                output=states + ["vz"], record_events=True),
+            "FMU CS, DOP853 rtol 1e-10": lambda: fmpy.simulate_fmu(
+                str(cs), relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0], output=states),
+            "C example program (DOP853 rtol 1e-12)": lambda: _printed(subprocess.run(
+                [str(example)], check=True, capture_output=True, text=True).stdout)[:, 1:4],
+        }
+        stats = interleaved(runs, repeats)
+        native = runs["native, compiled engine"]()
+        t_native = np.array([i["t"] for i in native.impacts])
+        r_native = np.array([i["r"] for i in native.impacts])
+        on_grid = exported.native.data[:, 1:4]
+        print(f"\ngrain, default scene over {t[-1]:g} s ({len(t_native)} impacts, "
+              f"{native.extra['engine']} engine)")
+        for label, run in runs.items():
+            result = run()
+            if label.startswith("FMU ME"):
+                at = np.flatnonzero((np.diff(result["time"]) == 0) & (np.diff(result["vz"]) > 0))
+                r = np.column_stack([result[c][at] for c in states])
+                error = (f"{len(at)} impacts; times {np.abs(result['time'][at] - t_native).max():.2g} s, "
+                         f"centres {np.abs(r - r_native).max():.2g} m")
+            elif label.startswith("native"):
+                error = ""
+            else:
+                got = np.column_stack([result[c] for c in states]) if result.dtype.names else result
+                error = f"centres on the sample grid {np.abs(got - on_grid).max():.2g} m"
+            print(f"  {label:40s} {stats[label].text()}  {error}")
 
 
 if __name__ == "__main__":

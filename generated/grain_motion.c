@@ -1,6 +1,6 @@
-// symmech 0.1.0 generated module; inputs sha256 e05d1dffb5cee41955ff7683ff0820620a07f39f92577828c34cc7a364c43df6
-// source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
-// body sha256 29d791f375a67a4af761aca35dc842c4ffca9ee751729a8e7fd72291916b04df
+// symmech 0.1.0 generated module; inputs sha256 1197f9e6c516ea4aada0ba9c0cc0d41598fd0feabe8976484212a32d9df454ed
+// source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+// body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
    Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -335,6 +335,283 @@ void grain_motion_euler_rates(const double *sm_arg, double *out)
     out[0] = x1*(x3 + x5);
     out[1] = w1*x4 - w2*x2;
     out[2] = x1*(w3*x0 - x3*x6 - x5*x6);
+}
+
+/* inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ: (12) [1/kg, m/s].
+   Arguments: rx [m], ry [m], rz [m], vx [m/s], vy [m/s], vz [m/s], q0 [1], q1 [1], q2 [1], q3 [1], w1 [rad/s], w2 [rad/s], w3 [rad/s], I1 [kg*m^2], I2 [kg*m^2], I3 [kg*m^2], a [m], b [m], c [m], m [kg]. */
+void grain_motion_impact_contact(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double vx = sm_arg[3];
+    const double vy = sm_arg[4];
+    const double vz = sm_arg[5];
+    const double q0 = sm_arg[6];
+    const double q1 = sm_arg[7];
+    const double q2 = sm_arg[8];
+    const double q3 = sm_arg[9];
+    const double w1 = sm_arg[10];
+    const double w2 = sm_arg[11];
+    const double w3 = sm_arg[12];
+    const double I1 = sm_arg[13];
+    const double I2 = sm_arg[14];
+    const double I3 = sm_arg[15];
+    const double a = sm_arg[16];
+    const double b = sm_arg[17];
+    const double c = sm_arg[18];
+    const double m = sm_arg[19];
+    const double x0 = -1/m;
+    const double x1 = pow(a, 2);
+    const double x2 = pow(q1, 2);
+    const double x3 = pow(q2, 2);
+    const double x4 = pow(q3, 2);
+    const double x5 = 1.0/(pow(q0, 2) + x2 + x3 + x4);
+    const double x6 = 2*x5;
+    const double x7 = q0*x6;
+    const double x8 = q2*x7;
+    const double x9 = 2*q1*q3*x5 - x8;
+    const double x10 = pow(x9, 2);
+    const double x11 = x1*x10;
+    const double x12 = pow(b, 2);
+    const double x13 = q1*x7;
+    const double x14 = q3*x6;
+    const double x15 = q2*x14 + x13;
+    const double x16 = pow(x15, 2);
+    const double x17 = x12*x16;
+    const double x18 = pow(c, 2);
+    const double x19 = x3*x6;
+    const double x20 = x2*x6 - 1;
+    const double x21 = -x19 - x20;
+    const double x22 = pow(x21, 2);
+    const double x23 = x18*x22;
+    const double x24 = pow(x11 + x17 + x23, -1.0/2.0);
+    const double x25 = x11*x24 + x17*x24 + x23*x24;
+    const double x26 = -x25;
+    const double x27 = 1.0/I1;
+    const double x28 = q3*x7;
+    const double x29 = q1*q2*x6 + x28;
+    const double x30 = 1.0/I3;
+    const double x31 = 2*q2*q3*x5 - x13;
+    const double x32 = 1.0/I2;
+    const double x33 = x4*x6;
+    const double x34 = -x20 - x33;
+    const double x35 = x27*pow(x29, 2) + x30*pow(x31, 2) + x32*pow(x34, 2);
+    const double x36 = x27*x9;
+    const double x37 = x15*x32;
+    const double x38 = x21*x30;
+    const double x39 = x29*x36 + x31*x38 + x34*x37;
+    const double x40 = x1*x24*x9;
+    const double x41 = x12*x15*x24;
+    const double x42 = x18*x21*x24;
+    const double x43 = x29*x40 + x31*x42 + x34*x41;
+    const double x44 = -x43;
+    const double x45 = x25*x35 + x39*x44;
+    const double x46 = x10*x27 + x16*x32 + x22*x30;
+    const double x47 = x25*x39 + x44*x46;
+    const double x48 = q1*x14 + x8;
+    const double x49 = -x19 - x33 + 1;
+    const double x50 = 2*q1*q2*x5 - x28;
+    const double x51 = x27*x29*x49 + x30*x31*x48 + x32*x34*x50;
+    const double x52 = x36*x49 + x37*x50 + x38*x48;
+    const double x53 = x25*x51 + x44*x52;
+    const double x54 = x40*x49 + x41*x50 + x42*x48;
+    const double x55 = -x54;
+    const double x56 = x26*x52 + x46*x54;
+    const double x57 = x26*x51 + x39*x54;
+    const double x58 = x27*pow(x49, 2) + x30*pow(x48, 2) + x32*pow(x50, 2);
+    const double x59 = x26*x58 + x52*x54;
+    const double x60 = x35*x55 + x43*x51;
+    const double x61 = x39*x55 + x43*x52;
+    const double x62 = x43*x58 + x51*x55;
+    const double x63 = w1*x29 + w2*x34 + w3*x31;
+    const double x64 = w1*x9 + w2*x15 + w3*x21;
+    const double x65 = w1*x49 + w2*x50 + w3*x48;
+    for (int sm_i = 0; sm_i < 12; sm_i++) out[sm_i] = 0.0;
+    out[0] = -x0 - x26*x45 - x43*x47;
+    out[1] = -x25*x53 - x47*x55;
+    out[2] = -x44*x53 - x45*x54;
+    out[3] = -x26*x57 - x43*x56;
+    out[4] = -x0 - x25*x59 - x55*x56;
+    out[5] = -x44*x59 - x54*x57;
+    out[6] = -x26*x60 - x43*x61;
+    out[7] = -x25*x62 - x55*x61;
+    out[8] = -x0 - x44*x62 - x54*x60;
+    out[9] = vx + x26*x63 - x44*x64;
+    out[10] = vy - x26*x65 + x55*x64;
+    out[11] = vz + x44*x65 - x55*x63;
+}
+
+/* plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ: (4) [N*s].
+   Arguments: k0 [1/kg], k1 [1/kg], k2 [1/kg], k3 [1/kg], k4 [1/kg], k5 [1/kg], k6 [1/kg], k7 [1/kg], k8 [1/kg], u0 [m/s], u1 [m/s], u2 [m/s]. */
+void grain_motion_plastic_impulse(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double k0 = sm_arg[0];
+    const double k1 = sm_arg[1];
+    const double k2 = sm_arg[2];
+    const double k3 = sm_arg[3];
+    const double k4 = sm_arg[4];
+    const double k5 = sm_arg[5];
+    const double k6 = sm_arg[6];
+    const double k7 = sm_arg[7];
+    const double k8 = sm_arg[8];
+    const double u0 = sm_arg[9];
+    const double u1 = sm_arg[10];
+    const double u2 = sm_arg[11];
+    const double x0 = u2/k8;
+    const double x1 = k4*k8;
+    const double x2 = k1*k5;
+    const double x3 = k5*k7;
+    const double x4 = k1*k8;
+    const double x5 = k2*k4;
+    const double x6 = 1.0/(k0*x1 - k0*x3 + k2*k3*k7 - k3*x4 + k6*x2 - k6*x5);
+    for (int sm_i = 0; sm_i < 4; sm_i++) out[sm_i] = 0.0;
+    out[0] = -x0;
+    out[1] = x6*(-u0*(x1 - x3) - u1*(k2*k7 - x4) - u2*(x2 - x5));
+    out[2] = x6*(-u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3));
+    out[3] = x0 + x6*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3));
+}
+
+/* energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: (3) [N*s].
+   Arguments: P_I [N*s], D0 [N*s], D1 [N*s], D2 [N*s], u2 [m/s], e_n [1], e_t [1], mu [1]. */
+void grain_motion_coulomb_impulse(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double P_I = sm_arg[0];
+    const double D0 = sm_arg[1];
+    const double D1 = sm_arg[2];
+    const double D2 = sm_arg[3];
+    const double u2 = sm_arg[4];
+    const double e_n = sm_arg[5];
+    const double e_t = sm_arg[6];
+    const double mu = sm_arg[7];
+    const double x0 = -D2*mu + sqrt(pow(D0, 2) + pow(D1, 2));
+    const double x1 = P_I*(e_n + 1);
+    const double x2 = mu*x1;
+    const double x3 = e_t + 1;
+    const double x4 = ((x2 < x0*x3) ? (
+   x2/x0
+)
+: (
+   x3
+));
+    const double x5 = u2 < 0;
+    for (int sm_i = 0; sm_i < 3; sm_i++) out[sm_i] = 0.0;
+    out[0] = ((x5) ? (
+   D0*x4
+)
+: (
+   0
+));
+    out[1] = ((x5) ? (
+   D1*x4
+)
+: (
+   0
+));
+    out[2] = ((x5) ? (
+   D2*x4 + x1
+)
+: (
+   0
+));
+}
+
+/* state just after an impulse at the lowest point: (13) [m, m/s, 1, rad/s].
+   Arguments: rx [m], ry [m], rz [m], vx [m/s], vy [m/s], vz [m/s], q0 [1], q1 [1], q2 [1], q3 [1], w1 [rad/s], w2 [rad/s], w3 [rad/s], I1 [kg*m^2], I2 [kg*m^2], I3 [kg*m^2], a [m], b [m], c [m], m [kg], P0 [N*s], P1 [N*s], P2 [N*s]. */
+void grain_motion_impact_state(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double rx = sm_arg[0];
+    const double ry = sm_arg[1];
+    const double rz = sm_arg[2];
+    const double vx = sm_arg[3];
+    const double vy = sm_arg[4];
+    const double vz = sm_arg[5];
+    const double q0 = sm_arg[6];
+    const double q1 = sm_arg[7];
+    const double q2 = sm_arg[8];
+    const double q3 = sm_arg[9];
+    const double w1 = sm_arg[10];
+    const double w2 = sm_arg[11];
+    const double w3 = sm_arg[12];
+    const double I1 = sm_arg[13];
+    const double I2 = sm_arg[14];
+    const double I3 = sm_arg[15];
+    const double a = sm_arg[16];
+    const double b = sm_arg[17];
+    const double c = sm_arg[18];
+    const double m = sm_arg[19];
+    const double P0 = sm_arg[20];
+    const double P1 = sm_arg[21];
+    const double P2 = sm_arg[22];
+    const double x0 = 1.0/m;
+    const double x1 = pow(q1, 2);
+    const double x2 = pow(q2, 2);
+    const double x3 = pow(q3, 2);
+    const double x4 = 1.0/(pow(q0, 2) + x1 + x2 + x3);
+    const double x5 = 2*x4;
+    const double x6 = q0*x5;
+    const double x7 = q2*x6;
+    const double x8 = 2*q1*q3*x4 - x7;
+    const double x9 = q1*x6;
+    const double x10 = q3*x5;
+    const double x11 = q2*x10 + x9;
+    const double x12 = x1*x5;
+    const double x13 = x2*x5 - 1;
+    const double x14 = -x12 - x13;
+    const double x15 = q3*x6;
+    const double x16 = q1*q2*x5 + x15;
+    const double x17 = 1.0/I1;
+    const double x18 = x17*x8;
+    const double x19 = x3*x5;
+    const double x20 = -x12 - x19 + 1;
+    const double x21 = 1.0/I2;
+    const double x22 = x11*x21;
+    const double x23 = 2*q2*q3*x4 - x9;
+    const double x24 = 1.0/I3;
+    const double x25 = x14*x24;
+    const double x26 = x16*x18 + x20*x22 + x23*x25;
+    const double x27 = pow(a, 2);
+    const double x28 = pow(x8, 2);
+    const double x29 = x27*x28;
+    const double x30 = pow(b, 2);
+    const double x31 = pow(x11, 2);
+    const double x32 = x30*x31;
+    const double x33 = pow(c, 2);
+    const double x34 = pow(x14, 2);
+    const double x35 = x33*x34;
+    const double x36 = pow(x29 + x32 + x35, -1.0/2.0);
+    const double x37 = -x29*x36 - x32*x36 - x35*x36;
+    const double x38 = 2*q1*q2*x4 - x15;
+    const double x39 = x11*x30*x36;
+    const double x40 = -x13 - x19;
+    const double x41 = x27*x36*x8;
+    const double x42 = q1*x10 + x7;
+    const double x43 = x14*x33*x36;
+    const double x44 = -x38*x39 - x40*x41 - x42*x43;
+    const double x45 = P0*x37 - P2*x44;
+    const double x46 = -x16*x41 - x20*x39 - x23*x43;
+    const double x47 = -P0*x46 + P1*x44;
+    const double x48 = x18*x40 + x22*x38 + x25*x42;
+    const double x49 = -P1*x37 + P2*x46;
+    const double x50 = w1*x8 + w2*x11 + w3*x14 + x26*x45 + x47*(x17*x28 + x21*x31 + x24*x34) + x48*x49;
+    const double x51 = x16*x17*x40 + x20*x21*x38 + x23*x24*x42;
+    const double x52 = w1*x16 + w2*x20 + w3*x23 + x26*x47 + x45*(pow(x16, 2)*x17 + pow(x20, 2)*x21 + pow(x23, 2)*x24) + x49*x51;
+    const double x53 = w1*x40 + w2*x38 + w3*x42 + x45*x51 + x47*x48 + x49*(x17*pow(x40, 2) + x21*pow(x38, 2) + x24*pow(x42, 2));
+    for (int sm_i = 0; sm_i < 13; sm_i++) out[sm_i] = 0.0;
+    out[0] = rx;
+    out[1] = ry;
+    out[2] = rz;
+    out[3] = P0*x0 + vx;
+    out[4] = P1*x0 + vy;
+    out[5] = P2*x0 + vz;
+    out[6] = q0;
+    out[7] = q1;
+    out[8] = q2;
+    out[9] = q3;
+    out[10] = x16*x52 + x40*x53 + x50*x8;
+    out[11] = x11*x50 + x20*x52 + x38*x53;
+    out[12] = x14*x50 + x23*x52 + x42*x53;
 }
 
 /* F of M y' = F: rates of the grain in flight over the vibrating surface (eqs (61)-(62)): (13) [state unit / s (times M)].

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 22abb92df2e76ae3686d42b177bb488138324e8851cb9b76255e6b37abeb92f9
-# source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
-# body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
+# symmech 0.1.0 generated module; inputs sha256 a09139331ecd0d3cda5180c7d2674d2a1f81127fb4f913fde2cd51bd99250923
+# source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+# body sha256 6eeb434f51b30b333051c7361544cb32139dfb371728cc292be7ebc290d164e0
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -53,7 +53,7 @@ import math
 
 import numpy
 
-__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates", "rate", "rate_jacobian", "event_values", "rhs", "jac", "events"]
+__all__ = ["gravity", "surface_kinematics", "flight_translation", "flight_translation_rigid", "rotation_matrix", "support_distance", "contact_offset_body", "euler_equations", "quaternion_rate", "rotation_invariants", "body_rates", "euler_rates", "impact_contact", "plastic_impulse", "coulomb_impulse", "impact_state", "rate", "rate_jacobian", "event_values", "rhs", "jac", "events"]
 
 
 def _batch(*args):
@@ -565,6 +565,361 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     out[..., 0] = x1*(x3 + x5)
     out[..., 1] = w1*x4 - w2*x2
     out[..., 2] = x1*(w3*x0 - x3*x6 - x5*x6)
+    return out
+
+
+def impact_contact(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m):
+    """inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ.
+
+    Parameters
+    ----------
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+    m : array_like
+        grain mass [kg]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 12)
+        [1/kg, m/s]
+    """
+    (rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m,), batch = _batch(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m)
+    out = numpy.empty(batch + (12,))
+    x0 = -1/m
+    x1 = a**2
+    x2 = q1**2
+    x3 = q2**2
+    x4 = q3**2
+    x5 = 1/(q0**2 + x2 + x3 + x4)
+    x6 = 2*x5
+    x7 = q0*x6
+    x8 = q2*x7
+    x9 = 2*q1*q3*x5 - x8
+    x10 = x9**2
+    x11 = x1*x10
+    x12 = b**2
+    x13 = q1*x7
+    x14 = q3*x6
+    x15 = q2*x14 + x13
+    x16 = x15**2
+    x17 = x12*x16
+    x18 = c**2
+    x19 = x3*x6
+    x20 = x2*x6 - 1
+    x21 = -x19 - x20
+    x22 = x21**2
+    x23 = x18*x22
+    x24 = 1/numpy.sqrt(x11 + x17 + x23)
+    x25 = x11*x24 + x17*x24 + x23*x24
+    x26 = -x25
+    x27 = 1/I1
+    x28 = q3*x7
+    x29 = q1*q2*x6 + x28
+    x30 = 1/I3
+    x31 = 2*q2*q3*x5 - x13
+    x32 = 1/I2
+    x33 = x4*x6
+    x34 = -x20 - x33
+    x35 = x27*x29**2 + x30*x31**2 + x32*x34**2
+    x36 = x27*x9
+    x37 = x15*x32
+    x38 = x21*x30
+    x39 = x29*x36 + x31*x38 + x34*x37
+    x40 = x1*x24*x9
+    x41 = x12*x15*x24
+    x42 = x18*x21*x24
+    x43 = x29*x40 + x31*x42 + x34*x41
+    x44 = -x43
+    x45 = x25*x35 + x39*x44
+    x46 = x10*x27 + x16*x32 + x22*x30
+    x47 = x25*x39 + x44*x46
+    x48 = q1*x14 + x8
+    x49 = -x19 - x33 + 1
+    x50 = 2*q1*q2*x5 - x28
+    x51 = x27*x29*x49 + x30*x31*x48 + x32*x34*x50
+    x52 = x36*x49 + x37*x50 + x38*x48
+    x53 = x25*x51 + x44*x52
+    x54 = x40*x49 + x41*x50 + x42*x48
+    x55 = -x54
+    x56 = x26*x52 + x46*x54
+    x57 = x26*x51 + x39*x54
+    x58 = x27*x49**2 + x30*x48**2 + x32*x50**2
+    x59 = x26*x58 + x52*x54
+    x60 = x35*x55 + x43*x51
+    x61 = x39*x55 + x43*x52
+    x62 = x43*x58 + x51*x55
+    x63 = w1*x29 + w2*x34 + w3*x31
+    x64 = w1*x9 + w2*x15 + w3*x21
+    x65 = w1*x49 + w2*x50 + w3*x48
+    out[..., 0] = -x0 - x26*x45 - x43*x47
+    out[..., 1] = -x25*x53 - x47*x55
+    out[..., 2] = -x44*x53 - x45*x54
+    out[..., 3] = -x26*x57 - x43*x56
+    out[..., 4] = -x0 - x25*x59 - x55*x56
+    out[..., 5] = -x44*x59 - x54*x57
+    out[..., 6] = -x26*x60 - x43*x61
+    out[..., 7] = -x25*x62 - x55*x61
+    out[..., 8] = -x0 - x44*x62 - x54*x60
+    out[..., 9] = vx + x26*x63 - x44*x64
+    out[..., 10] = vy - x26*x65 + x55*x64
+    out[..., 11] = vz + x44*x65 - x55*x63
+    return out
+
+
+def plastic_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ.
+
+    Parameters
+    ----------
+    k0 : array_like
+        inverse effective mass at the contact, entry 11 [1/kg]
+    k1 : array_like
+        inverse effective mass at the contact, entry 12 [1/kg]
+    k2 : array_like
+        inverse effective mass at the contact, entry 13 [1/kg]
+    k3 : array_like
+        inverse effective mass at the contact, entry 21 [1/kg]
+    k4 : array_like
+        inverse effective mass at the contact, entry 22 [1/kg]
+    k5 : array_like
+        inverse effective mass at the contact, entry 23 [1/kg]
+    k6 : array_like
+        inverse effective mass at the contact, entry 31 [1/kg]
+    k7 : array_like
+        inverse effective mass at the contact, entry 32 [1/kg]
+    k8 : array_like
+        inverse effective mass at the contact, entry 33 [1/kg]
+    u0 : array_like
+        contact point velocity before the impact, X [m/s]
+    u1 : array_like
+        contact point velocity before the impact, Y [m/s]
+    u2 : array_like
+        contact point velocity before the impact, Z [m/s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        [N*s]
+    """
+    (k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2,), batch = _batch(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2)
+    out = numpy.empty(batch + (4,))
+    x0 = u2/k8
+    x1 = k4*k8
+    x2 = k1*k5
+    x3 = k5*k7
+    x4 = k1*k8
+    x5 = k2*k4
+    x6 = 1/(k0*x1 - k0*x3 + k2*k3*k7 - k3*x4 + k6*x2 - k6*x5)
+    out[..., 0] = -x0
+    out[..., 1] = x6*(-u0*(x1 - x3) - u1*(k2*k7 - x4) - u2*(x2 - x5))
+    out[..., 2] = x6*(-u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3))
+    out[..., 3] = x0 + x6*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3))
+    return out
+
+
+def coulomb_impulse(P_I, D0, D1, D2, u2, e_n, e_t, mu):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ.
+
+    Parameters
+    ----------
+    P_I : array_like
+        plastic normal impulse [N*s]
+    D0 : array_like
+        plastic sticking impulse beyond it, X [N*s]
+    D1 : array_like
+        plastic sticking impulse beyond it, Y [N*s]
+    D2 : array_like
+        plastic sticking impulse beyond it, Z [N*s]
+    u2 : array_like
+        contact point velocity before the impact, Z [m/s]
+    e_n : array_like
+        normal restitution coefficient [1]
+    e_t : array_like
+        tangential restitution coefficient [1]
+    mu : array_like
+        impact friction coefficient [1]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        [N*s]
+    """
+    (P_I, D0, D1, D2, u2, e_n, e_t, mu,), batch = _batch(P_I, D0, D1, D2, u2, e_n, e_t, mu)
+    out = numpy.empty(batch + (3,))
+    x0 = -D2*mu + numpy.sqrt(D0**2 + D1**2)
+    x1 = P_I*(e_n + 1)
+    x2 = mu*x1
+    x3 = e_t + 1
+    x4 = numpy.select([numpy.less(x2, x0*x3),True], [x2/x0,x3], default=numpy.nan)
+    x5 = numpy.less(u2, 0)
+    out[..., 0] = numpy.select([x5,True], [D0*x4,0], default=numpy.nan)
+    out[..., 1] = numpy.select([x5,True], [D1*x4,0], default=numpy.nan)
+    out[..., 2] = numpy.select([x5,True], [D2*x4 + x1,0], default=numpy.nan)
+    return out
+
+
+def impact_state(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2):
+    """state just after an impulse at the lowest point.
+
+    Parameters
+    ----------
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+    m : array_like
+        grain mass [kg]
+    P0 : array_like
+        impulse on the grain at the contact, X [N*s]
+    P1 : array_like
+        impulse on the grain at the contact, Y [N*s]
+    P2 : array_like
+        impulse on the grain at the contact, Z [N*s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 13)
+        [m, m/s, 1, rad/s]
+    """
+    (rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2,), batch = _batch(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2)
+    out = numpy.empty(batch + (13,))
+    x0 = 1/m
+    x1 = q1**2
+    x2 = q2**2
+    x3 = q3**2
+    x4 = 1/(q0**2 + x1 + x2 + x3)
+    x5 = 2*x4
+    x6 = q0*x5
+    x7 = q2*x6
+    x8 = 2*q1*q3*x4 - x7
+    x9 = q1*x6
+    x10 = q3*x5
+    x11 = q2*x10 + x9
+    x12 = x1*x5
+    x13 = x2*x5 - 1
+    x14 = -x12 - x13
+    x15 = q3*x6
+    x16 = q1*q2*x5 + x15
+    x17 = 1/I1
+    x18 = x17*x8
+    x19 = x3*x5
+    x20 = -x12 - x19 + 1
+    x21 = 1/I2
+    x22 = x11*x21
+    x23 = 2*q2*q3*x4 - x9
+    x24 = 1/I3
+    x25 = x14*x24
+    x26 = x16*x18 + x20*x22 + x23*x25
+    x27 = a**2
+    x28 = x8**2
+    x29 = x27*x28
+    x30 = b**2
+    x31 = x11**2
+    x32 = x30*x31
+    x33 = c**2
+    x34 = x14**2
+    x35 = x33*x34
+    x36 = 1/numpy.sqrt(x29 + x32 + x35)
+    x37 = -x29*x36 - x32*x36 - x35*x36
+    x38 = 2*q1*q2*x4 - x15
+    x39 = x11*x30*x36
+    x40 = -x13 - x19
+    x41 = x27*x36*x8
+    x42 = q1*x10 + x7
+    x43 = x14*x33*x36
+    x44 = -x38*x39 - x40*x41 - x42*x43
+    x45 = P0*x37 - P2*x44
+    x46 = -x16*x41 - x20*x39 - x23*x43
+    x47 = -P0*x46 + P1*x44
+    x48 = x18*x40 + x22*x38 + x25*x42
+    x49 = -P1*x37 + P2*x46
+    x50 = w1*x8 + w2*x11 + w3*x14 + x26*x45 + x47*(x17*x28 + x21*x31 + x24*x34) + x48*x49
+    x51 = x16*x17*x40 + x20*x21*x38 + x23*x24*x42
+    x52 = w1*x16 + w2*x20 + w3*x23 + x26*x47 + x45*(x16**2*x17 + x20**2*x21 + x23**2*x24) + x49*x51
+    x53 = w1*x40 + w2*x38 + w3*x42 + x45*x51 + x47*x48 + x49*(x17*x40**2 + x21*x38**2 + x24*x42**2)
+    out[..., 0] = rx
+    out[..., 1] = ry
+    out[..., 2] = rz
+    out[..., 3] = P0*x0 + vx
+    out[..., 4] = P1*x0 + vy
+    out[..., 5] = P2*x0 + vz
+    out[..., 6] = q0
+    out[..., 7] = q1
+    out[..., 8] = q2
+    out[..., 9] = q3
+    out[..., 10] = x16*x52 + x40*x53 + x50*x8
+    out[..., 11] = x11*x50 + x20*x52 + x38*x53
+    out[..., 12] = x14*x50 + x23*x52 + x42*x53
     return out
 
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 49a8b8a06f10f4a4347ae5fc0303bd320ab32fd6b0cdac408c5808aa8b75dfa4
-# source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
-# body sha256 9c4b29f0ccea7f755c1066d4a7e8d78a9070785fdbe6eaa54b99c27c16c9968c
+# symmech 0.1.0 generated module; inputs sha256 caed13dfe2aa68adf666eb672f9d549bbc1583c1ab884244c08b63c73b172664
+# source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+# body sha256 889b99534660fddcecf99b0861de91c92edbd96ea2efe691efd8caefde41629f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Compiled twin of `symmech.generated.grain_motion` (the numpy module, the
@@ -76,7 +76,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "event_values", "event_values_into", "event_values_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar", "events", "events_into"]
+__all__ = ["gravity", "gravity_into", "gravity_scalar", "surface_kinematics", "surface_kinematics_into", "surface_kinematics_scalar", "flight_translation", "flight_translation_into", "flight_translation_scalar", "flight_translation_rigid", "flight_translation_rigid_into", "flight_translation_rigid_scalar", "rotation_matrix", "rotation_matrix_into", "rotation_matrix_scalar", "support_distance", "support_distance_into", "support_distance_scalar", "contact_offset_body", "contact_offset_body_into", "contact_offset_body_scalar", "euler_equations", "euler_equations_into", "euler_equations_scalar", "quaternion_rate", "quaternion_rate_into", "quaternion_rate_scalar", "rotation_invariants", "rotation_invariants_into", "rotation_invariants_scalar", "body_rates", "body_rates_into", "body_rates_scalar", "euler_rates", "euler_rates_into", "euler_rates_scalar", "impact_contact", "impact_contact_into", "impact_contact_scalar", "plastic_impulse", "plastic_impulse_into", "plastic_impulse_scalar", "coulomb_impulse", "coulomb_impulse_into", "coulomb_impulse_scalar", "impact_state", "impact_state_into", "impact_state_scalar", "rate", "rate_into", "rate_scalar", "rate_jacobian", "rate_jacobian_into", "rate_jacobian_scalar", "event_values", "event_values_into", "event_values_scalar", "rhs", "rhs_into", "rhs_scalar", "jac", "jac_into", "jac_scalar", "events", "events_into"]
 
 
 def _flat(*args):
@@ -964,6 +964,485 @@ def euler_rates(psi, theta, phi, w1, w2, w3):
     out = numpy.empty((math.prod(_batch),) + (3,))
     (_euler_rates_ploop if len(out) >= PARALLEL_BATCH else _euler_rates_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (3,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _impact_contact_0(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, out, _k):
+    x0 = -1/m
+    x1 = a**2
+    x2 = q1**2
+    x3 = q2**2
+    x4 = q3**2
+    x5 = 1/(q0**2 + x2 + x3 + x4)
+    x6 = 2*x5
+    x7 = q0*x6
+    x8 = q2*x7
+    x9 = 2*q1*q3*x5 - x8
+    x10 = x9**2
+    x11 = x1*x10
+    x12 = b**2
+    x13 = q1*x7
+    x14 = q3*x6
+    x15 = q2*x14 + x13
+    x16 = x15**2
+    x17 = x12*x16
+    x18 = c**2
+    x19 = x3*x6
+    x20 = x2*x6 - 1
+    x21 = -x19 - x20
+    x22 = x21**2
+    x23 = x18*x22
+    x24 = 1/math.sqrt(x11 + x17 + x23)
+    x25 = x11*x24 + x17*x24 + x23*x24
+    x26 = -x25
+    x27 = 1/I1
+    x28 = q3*x7
+    x29 = q1*q2*x6 + x28
+    x30 = 1/I3
+    x31 = 2*q2*q3*x5 - x13
+    x32 = 1/I2
+    x33 = x4*x6
+    x34 = -x20 - x33
+    x35 = x27*x29**2 + x30*x31**2 + x32*x34**2
+    x36 = x27*x9
+    x37 = x15*x32
+    x38 = x21*x30
+    x39 = x29*x36 + x31*x38 + x34*x37
+    x40 = x1*x24*x9
+    x41 = x12*x15*x24
+    x42 = x18*x21*x24
+    x43 = x29*x40 + x31*x42 + x34*x41
+    x44 = -x43
+    x45 = x25*x35 + x39*x44
+    x46 = x10*x27 + x16*x32 + x22*x30
+    x47 = x25*x39 + x44*x46
+    x48 = q1*x14 + x8
+    x49 = -x19 - x33 + 1
+    x50 = 2*q1*q2*x5 - x28
+    x51 = x27*x29*x49 + x30*x31*x48 + x32*x34*x50
+    x52 = x36*x49 + x37*x50 + x38*x48
+    x53 = x25*x51 + x44*x52
+    x54 = x40*x49 + x41*x50 + x42*x48
+    x55 = -x54
+    x56 = x26*x52 + x46*x54
+    x57 = x26*x51 + x39*x54
+    x58 = x27*x49**2 + x30*x48**2 + x32*x50**2
+    x59 = x26*x58 + x52*x54
+    x60 = x35*x55 + x43*x51
+    x61 = x39*x55 + x43*x52
+    x62 = x43*x58 + x51*x55
+    x63 = w1*x29 + w2*x34 + w3*x31
+    x64 = w1*x9 + w2*x15 + w3*x21
+    x65 = w1*x49 + w2*x50 + w3*x48
+    out[_k, 0] = -x0 - x26*x45 - x43*x47
+    out[_k, 1] = -x25*x53 - x47*x55
+    out[_k, 2] = -x44*x53 - x45*x54
+    out[_k, 3] = -x26*x57 - x43*x56
+    out[_k, 4] = -x0 - x25*x59 - x55*x56
+    out[_k, 5] = -x44*x59 - x54*x57
+    out[_k, 6] = -x26*x60 - x43*x61
+    out[_k, 7] = -x25*x62 - x55*x61
+    out[_k, 8] = -x0 - x44*x62 - x54*x60
+    out[_k, 9] = vx + x26*x63 - x44*x64
+    out[_k, 10] = vy - x26*x65 + x55*x64
+    out[_k, 11] = vz + x44*x65 - x55*x63
+
+
+@numba.njit(cache=True, error_model="numpy")
+def impact_contact_into(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, out):
+    """inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ: floats in, written into out[0] (out: float64 (1, 12)) [1/kg, m/s]."""
+    _impact_contact_0(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def impact_contact_scalar(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m):
+    """inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ: floats in, a float64 array (12,) out [1/kg, m/s]."""
+    out = numpy.empty((1, 12))
+    impact_contact_into(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _impact_contact_loop(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, _steps, out):
+    for _k in range(out.shape[0]):
+        _impact_contact_0(rx[_k * _steps[0]], ry[_k * _steps[1]], rz[_k * _steps[2]], vx[_k * _steps[3]], vy[_k * _steps[4]], vz[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], w1[_k * _steps[10]], w2[_k * _steps[11]], w3[_k * _steps[12]], I1[_k * _steps[13]], I2[_k * _steps[14]], I3[_k * _steps[15]], a[_k * _steps[16]], b[_k * _steps[17]], c[_k * _steps[18]], m[_k * _steps[19]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _impact_contact_ploop(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _impact_contact_0(rx[_k * _steps[0]], ry[_k * _steps[1]], rz[_k * _steps[2]], vx[_k * _steps[3]], vy[_k * _steps[4]], vz[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], w1[_k * _steps[10]], w2[_k * _steps[11]], w3[_k * _steps[12]], I1[_k * _steps[13]], I2[_k * _steps[14]], I3[_k * _steps[15]], a[_k * _steps[16]], b[_k * _steps[17]], c[_k * _steps[18]], m[_k * _steps[19]], out, _k)
+
+
+def impact_contact(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m):
+    """inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ.
+
+    Parameters
+    ----------
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+    m : array_like
+        grain mass [kg]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 12)
+        [1/kg, m/s]
+    """
+    _arrays, _steps, _batch = _flat(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m)
+    out = numpy.empty((math.prod(_batch),) + (12,))
+    (_impact_contact_ploop if len(out) >= PARALLEL_BATCH else _impact_contact_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (12,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _plastic_impulse_0(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out, _k):
+    x0 = u2/k8
+    x1 = k4*k8
+    x2 = k1*k5
+    x3 = k5*k7
+    x4 = k1*k8
+    x5 = k2*k4
+    x6 = 1/(k0*x1 - k0*x3 + k2*k3*k7 - k3*x4 + k6*x2 - k6*x5)
+    out[_k, 0] = -x0
+    out[_k, 1] = x6*(-u0*(x1 - x3) - u1*(k2*k7 - x4) - u2*(x2 - x5))
+    out[_k, 2] = x6*(-u0*(-k3*k8 + k5*k6) - u1*(k0*k8 - k2*k6) - u2*(-k0*k5 + k2*k3))
+    out[_k, 3] = x0 + x6*(-u0*(k3*k7 - k4*k6) - u1*(-k0*k7 + k1*k6) - u2*(k0*k4 - k1*k3))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def plastic_impulse_into(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ: floats in, written into out[0] (out: float64 (1, 4)) [N*s]."""
+    _plastic_impulse_0(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def plastic_impulse_scalar(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ: floats in, a float64 array (4,) out [N*s]."""
+    out = numpy.empty((1, 4))
+    plastic_impulse_into(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _plastic_impulse_loop(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, _steps, out):
+    for _k in range(out.shape[0]):
+        _plastic_impulse_0(k0[_k * _steps[0]], k1[_k * _steps[1]], k2[_k * _steps[2]], k3[_k * _steps[3]], k4[_k * _steps[4]], k5[_k * _steps[5]], k6[_k * _steps[6]], k7[_k * _steps[7]], k8[_k * _steps[8]], u0[_k * _steps[9]], u1[_k * _steps[10]], u2[_k * _steps[11]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _plastic_impulse_ploop(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _plastic_impulse_0(k0[_k * _steps[0]], k1[_k * _steps[1]], k2[_k * _steps[2]], k3[_k * _steps[3]], k4[_k * _steps[4]], k5[_k * _steps[5]], k6[_k * _steps[6]], k7[_k * _steps[7]], k8[_k * _steps[8]], u0[_k * _steps[9]], u1[_k * _steps[10]], u2[_k * _steps[11]], out, _k)
+
+
+def plastic_impulse(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2):
+    """plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ.
+
+    Parameters
+    ----------
+    k0 : array_like
+        inverse effective mass at the contact, entry 11 [1/kg]
+    k1 : array_like
+        inverse effective mass at the contact, entry 12 [1/kg]
+    k2 : array_like
+        inverse effective mass at the contact, entry 13 [1/kg]
+    k3 : array_like
+        inverse effective mass at the contact, entry 21 [1/kg]
+    k4 : array_like
+        inverse effective mass at the contact, entry 22 [1/kg]
+    k5 : array_like
+        inverse effective mass at the contact, entry 23 [1/kg]
+    k6 : array_like
+        inverse effective mass at the contact, entry 31 [1/kg]
+    k7 : array_like
+        inverse effective mass at the contact, entry 32 [1/kg]
+    k8 : array_like
+        inverse effective mass at the contact, entry 33 [1/kg]
+    u0 : array_like
+        contact point velocity before the impact, X [m/s]
+    u1 : array_like
+        contact point velocity before the impact, Y [m/s]
+    u2 : array_like
+        contact point velocity before the impact, Z [m/s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 4)
+        [N*s]
+    """
+    _arrays, _steps, _batch = _flat(k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2)
+    out = numpy.empty((math.prod(_batch),) + (4,))
+    (_plastic_impulse_ploop if len(out) >= PARALLEL_BATCH else _plastic_impulse_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (4,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _coulomb_impulse_0(P_I, D0, D1, D2, u2, e_n, e_t, mu, out, _k):
+    x0 = -D2*mu + math.sqrt(D0**2 + D1**2)
+    x1 = P_I*(e_n + 1)
+    x2 = mu*x1
+    x3 = e_t + 1
+    x4 = ((x2/x0) if (x2 < x0*x3) else (x3))
+    x5 = (u2 < 0)
+    out[_k, 0] = ((D0*x4) if x5 else (0))
+    out[_k, 1] = ((D1*x4) if x5 else (0))
+    out[_k, 2] = ((D2*x4 + x1) if x5 else (0))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def coulomb_impulse_into(P_I, D0, D1, D2, u2, e_n, e_t, mu, out):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: floats in, written into out[0] (out: float64 (1, 3)) [N*s]."""
+    _coulomb_impulse_0(P_I, D0, D1, D2, u2, e_n, e_t, mu, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def coulomb_impulse_scalar(P_I, D0, D1, D2, u2, e_n, e_t, mu):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ: floats in, a float64 array (3,) out [N*s]."""
+    out = numpy.empty((1, 3))
+    coulomb_impulse_into(P_I, D0, D1, D2, u2, e_n, e_t, mu, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _coulomb_impulse_loop(P_I, D0, D1, D2, u2, e_n, e_t, mu, _steps, out):
+    for _k in range(out.shape[0]):
+        _coulomb_impulse_0(P_I[_k * _steps[0]], D0[_k * _steps[1]], D1[_k * _steps[2]], D2[_k * _steps[3]], u2[_k * _steps[4]], e_n[_k * _steps[5]], e_t[_k * _steps[6]], mu[_k * _steps[7]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _coulomb_impulse_ploop(P_I, D0, D1, D2, u2, e_n, e_t, mu, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _coulomb_impulse_0(P_I[_k * _steps[0]], D0[_k * _steps[1]], D1[_k * _steps[2]], D2[_k * _steps[3]], u2[_k * _steps[4]], e_n[_k * _steps[5]], e_t[_k * _steps[6]], mu[_k * _steps[7]], out, _k)
+
+
+def coulomb_impulse(P_I, D0, D1, D2, u2, e_n, e_t, mu):
+    """energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ.
+
+    Parameters
+    ----------
+    P_I : array_like
+        plastic normal impulse [N*s]
+    D0 : array_like
+        plastic sticking impulse beyond it, X [N*s]
+    D1 : array_like
+        plastic sticking impulse beyond it, Y [N*s]
+    D2 : array_like
+        plastic sticking impulse beyond it, Z [N*s]
+    u2 : array_like
+        contact point velocity before the impact, Z [m/s]
+    e_n : array_like
+        normal restitution coefficient [1]
+    e_t : array_like
+        tangential restitution coefficient [1]
+    mu : array_like
+        impact friction coefficient [1]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        [N*s]
+    """
+    _arrays, _steps, _batch = _flat(P_I, D0, D1, D2, u2, e_n, e_t, mu)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_coulomb_impulse_ploop if len(out) >= PARALLEL_BATCH else _coulomb_impulse_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _impact_state_0(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2, out, _k):
+    x0 = 1/m
+    x1 = q1**2
+    x2 = q2**2
+    x3 = q3**2
+    x4 = 1/(q0**2 + x1 + x2 + x3)
+    x5 = 2*x4
+    x6 = q0*x5
+    x7 = q2*x6
+    x8 = 2*q1*q3*x4 - x7
+    x9 = q1*x6
+    x10 = q3*x5
+    x11 = q2*x10 + x9
+    x12 = x1*x5
+    x13 = x2*x5 - 1
+    x14 = -x12 - x13
+    x15 = q3*x6
+    x16 = q1*q2*x5 + x15
+    x17 = 1/I1
+    x18 = x17*x8
+    x19 = x3*x5
+    x20 = -x12 - x19 + 1
+    x21 = 1/I2
+    x22 = x11*x21
+    x23 = 2*q2*q3*x4 - x9
+    x24 = 1/I3
+    x25 = x14*x24
+    x26 = x16*x18 + x20*x22 + x23*x25
+    x27 = a**2
+    x28 = x8**2
+    x29 = x27*x28
+    x30 = b**2
+    x31 = x11**2
+    x32 = x30*x31
+    x33 = c**2
+    x34 = x14**2
+    x35 = x33*x34
+    x36 = 1/math.sqrt(x29 + x32 + x35)
+    x37 = -x29*x36 - x32*x36 - x35*x36
+    x38 = 2*q1*q2*x4 - x15
+    x39 = x11*x30*x36
+    x40 = -x13 - x19
+    x41 = x27*x36*x8
+    x42 = q1*x10 + x7
+    x43 = x14*x33*x36
+    x44 = -x38*x39 - x40*x41 - x42*x43
+    x45 = P0*x37 - P2*x44
+    x46 = -x16*x41 - x20*x39 - x23*x43
+    x47 = -P0*x46 + P1*x44
+    x48 = x18*x40 + x22*x38 + x25*x42
+    x49 = -P1*x37 + P2*x46
+    x50 = w1*x8 + w2*x11 + w3*x14 + x26*x45 + x47*(x17*x28 + x21*x31 + x24*x34) + x48*x49
+    x51 = x16*x17*x40 + x20*x21*x38 + x23*x24*x42
+    x52 = w1*x16 + w2*x20 + w3*x23 + x26*x47 + x45*(x16**2*x17 + x20**2*x21 + x23**2*x24) + x49*x51
+    x53 = w1*x40 + w2*x38 + w3*x42 + x45*x51 + x47*x48 + x49*(x17*x40**2 + x21*x38**2 + x24*x42**2)
+    out[_k, 0] = rx
+    out[_k, 1] = ry
+    out[_k, 2] = rz
+    out[_k, 3] = P0*x0 + vx
+    out[_k, 4] = P1*x0 + vy
+    out[_k, 5] = P2*x0 + vz
+    out[_k, 6] = q0
+    out[_k, 7] = q1
+    out[_k, 8] = q2
+    out[_k, 9] = q3
+    out[_k, 10] = x16*x52 + x40*x53 + x50*x8
+    out[_k, 11] = x11*x50 + x20*x52 + x38*x53
+    out[_k, 12] = x14*x50 + x23*x52 + x42*x53
+
+
+@numba.njit(cache=True, error_model="numpy")
+def impact_state_into(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2, out):
+    """state just after an impulse at the lowest point: floats in, written into out[0] (out: float64 (1, 13)) [m, m/s, 1, rad/s]."""
+    _impact_state_0(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def impact_state_scalar(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2):
+    """state just after an impulse at the lowest point: floats in, a float64 array (13,) out [m, m/s, 1, rad/s]."""
+    out = numpy.empty((1, 13))
+    impact_state_into(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _impact_state_loop(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2, _steps, out):
+    for _k in range(out.shape[0]):
+        _impact_state_0(rx[_k * _steps[0]], ry[_k * _steps[1]], rz[_k * _steps[2]], vx[_k * _steps[3]], vy[_k * _steps[4]], vz[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], w1[_k * _steps[10]], w2[_k * _steps[11]], w3[_k * _steps[12]], I1[_k * _steps[13]], I2[_k * _steps[14]], I3[_k * _steps[15]], a[_k * _steps[16]], b[_k * _steps[17]], c[_k * _steps[18]], m[_k * _steps[19]], P0[_k * _steps[20]], P1[_k * _steps[21]], P2[_k * _steps[22]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _impact_state_ploop(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _impact_state_0(rx[_k * _steps[0]], ry[_k * _steps[1]], rz[_k * _steps[2]], vx[_k * _steps[3]], vy[_k * _steps[4]], vz[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], w1[_k * _steps[10]], w2[_k * _steps[11]], w3[_k * _steps[12]], I1[_k * _steps[13]], I2[_k * _steps[14]], I3[_k * _steps[15]], a[_k * _steps[16]], b[_k * _steps[17]], c[_k * _steps[18]], m[_k * _steps[19]], P0[_k * _steps[20]], P1[_k * _steps[21]], P2[_k * _steps[22]], out, _k)
+
+
+def impact_state(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2):
+    """state just after an impulse at the lowest point.
+
+    Parameters
+    ----------
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    I1 : array_like
+        principal moment of inertia, body axis 1 [kg*m^2]
+    I2 : array_like
+        principal moment of inertia, body axis 2 [kg*m^2]
+    I3 : array_like
+        principal moment of inertia, body axis 3 [kg*m^2]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+    m : array_like
+        grain mass [kg]
+    P0 : array_like
+        impulse on the grain at the contact, X [N*s]
+    P1 : array_like
+        impulse on the grain at the contact, Y [N*s]
+    P2 : array_like
+        impulse on the grain at the contact, Z [N*s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 13)
+        [m, m/s, 1, rad/s]
+    """
+    _arrays, _steps, _batch = _flat(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, I1, I2, I3, a, b, c, m, P0, P1, P2)
+    out = numpy.empty((math.prod(_batch),) + (13,))
+    (_impact_state_ploop if len(out) >= PARALLEL_BATCH else _impact_state_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (13,))
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -5,7 +5,7 @@ from pathlib import Path
 
 from symmech.core import pipeline
 from symmech.core.scene import SymmechError
-from symmech.export import build, model, trolley
+from symmech.export import build, grain, model, trolley
 from symmech.export.model import ExportModel
 
 FMI_VERSIONS = (2, 3)
@@ -32,7 +32,9 @@ def export(what: str, scene, out, fmi: int = 3, kind: str = "me") -> Path:
 
 
 def load(path) -> ExportModel:
-    """The export model of the scene at ``path``: an elastic trolley (:mod:`symmech.export.trolley`) or a
-    mechanism (:func:`symmech.export.model.of_scene`, which refuses the other kinds in one line)."""
+    """The export model of the scene at ``path``: an elastic trolley (:mod:`symmech.export.trolley`), a grain
+    (:mod:`symmech.export.grain`) or a mechanism (:func:`symmech.export.model.of_scene`, which refuses the other
+    kinds in one line)."""
     scene = pipeline.load(path)
-    return trolley.load(scene) if scene.kind.name == "trolley" else model.of_scene(scene)
+    loaders = {"trolley": trolley.load, "grain": grain.load}
+    return loaders.get(scene.kind.name, model.of_scene)(scene)

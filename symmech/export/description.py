@@ -73,7 +73,9 @@ def fmi3(model: ExportModel, token: str, kind: str) -> str:
     """FMI 3.0 ``modelDescription.xml`` text; ``kind`` ``me`` or ``cs``."""
     root = _root(model, "3.0", "instantiationToken", token)
     if kind == "me":
-        ET.SubElement(root, "ModelExchange", modelIdentifier=model.identifier)
+        interface = ET.SubElement(root, "ModelExchange", modelIdentifier=model.identifier)
+        if model.n_z:  # fmi3CompletedIntegratorStep checks that no indicator was crossed without its event
+            interface.set("needsCompletedIntegratorStep", "true")
     else:
         ET.SubElement(root, "CoSimulation", modelIdentifier=model.identifier,
                       canHandleVariableCommunicationStepSize="true")
@@ -99,13 +101,17 @@ def fmi3(model: ExportModel, token: str, kind: str) -> str:
                 ET.SubElement(structure, "ContinuousStateDerivative", valueReference=str(v.vr))
     for v in _initial_unknowns(model):
         ET.SubElement(structure, "InitialUnknown", valueReference=str(v.vr))
+    if kind == "me":
+        z = model.layout()["VR_Z"]
+        for vr in range(z, z + model.n_z):
+            ET.SubElement(structure, "EventIndicator", valueReference=str(vr))
     return _text(root)
 
 
 def fmi2(model: ExportModel, token: str, kind: str) -> str:
     """FMI 2.0 ``modelDescription.xml`` text; ``kind`` ``me`` or ``cs``. Time is implicit (not a variable)."""
     root = _root(model, "2.0", "guid", token)
-    root.set("numberOfEventIndicators", "0")
+    root.set("numberOfEventIndicators", str(model.n_z if kind == "me" else 0))
     element = "ModelExchange" if kind == "me" else "CoSimulation"
     interface = ET.SubElement(root, element, modelIdentifier=model.identifier)
     if kind == "cs":

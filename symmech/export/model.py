@@ -74,15 +74,24 @@ class ExportModel:
     def c_files(self) -> tuple[str, ...]:
         """The model's C files (the physics), ``<identifier>.c`` first."""
         return (f"{self.identifier}.c", *(f"{name}.c" for name, _ in self.modules))
+    # state events: n_z event indicators r[VR_Z:VR_Z + n_z] (the generated ``event_values``) and the map of the
+    # state applied where one falls to zero: generated functions called in turn, each a stage (C name, its
+    # arguments as C expressions of y, p and the earlier stages' outputs s0[], s1[]..., its output size); the
+    # last one's output is the state after
+    n_z: int = 0
+    event_map: tuple[tuple[str, tuple[str, ...], int], ...] = ()
+    event_tolerance: float = 0.0  # an indicator below -event_tolerance without its event: the model left its regime
+    has_mass: bool = True  # M of M y' = F generated as ``rate_mass`` (else the identity)
 
     def layout(self) -> dict[str, int]:
         """First value reference of each block of ``r[]`` and its size (``N_REAL``)."""
         vr_x = 1
         vr_dx = vr_x + self.n_x
         vr_y = vr_dx + self.n_dx
-        vr_u = vr_y + self.n_y
+        vr_z = vr_y + self.n_y
+        vr_u = vr_z + self.n_z
         vr_p = vr_u + self.n_u
-        return {"VR_TIME": 0, "VR_X": vr_x, "VR_DX": vr_dx, "VR_Y": vr_y, "VR_U": vr_u, "VR_P": vr_p,
+        return {"VR_TIME": 0, "VR_X": vr_x, "VR_DX": vr_dx, "VR_Y": vr_y, "VR_Z": vr_z, "VR_U": vr_u, "VR_P": vr_p,
                 "N_REAL": vr_p + self.n_p}
 
 
@@ -102,8 +111,8 @@ def of_scene(scene) -> ExportModel:
     from symmech.smm.scene import SYMBOLIC_LIMIT
 
     if scene.kind.name != "mechanism":
-        raise SymmechError(f"kind = '{scene.kind.name}': `symmech export` covers mechanism and elastic trolley "
-                           "scenes so far (docs/export.md)")
+        raise SymmechError(f"kind = '{scene.kind.name}': `symmech export` covers mechanism, elastic trolley "
+                           "and grain scenes so far (docs/export.md)")
     if scene.setup.n > SYMBOLIC_LIMIT:
         raise SymmechError(f"mechanism '{scene.setup.m.name}' has {scene.setup.n} coordinates; `symmech export` "
                            f"forms its equations symbolically, up to {SYMBOLIC_LIMIT} coordinates")

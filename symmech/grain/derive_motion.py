@@ -68,6 +68,9 @@ _STATE0 = [(x0, "relative centre position X at t0", "m"), (y0, "relative centre 
 _GK = [(gX, "gravity in KXYZ, X component", "m/s^2"), (gY, "gravity in KXYZ, Y component", "m/s^2"),
        (gZ, "gravity in KXYZ, Z component", "m/s^2")]
 _TIMES = [(t0, "start time of the flight", "s"), (t, "time", "s")]
+_STATE = [(rx, "relative centre position X", "m"), (ry, "relative centre position Y", "m"),
+          (rz, "relative centre position Z", "m"), (vx, "relative centre velocity X", "m/s"),
+          (vy, "relative centre velocity Y", "m/s"), (vz, "relative centre velocity Z", "m/s")] + _QUAT + _RATES
 
 
 def gravity_surface_frame() -> sp.Matrix:
@@ -207,19 +210,83 @@ def contact_gap() -> sp.Expr:
     return rz - support_distance()[0].subs(dict(zip((n1, n2, n3), n_body)))
 
 
+m = sp.Symbol("m", positive=True)
+e_n, e_t, mu = sp.symbols("e_n e_t mu", real=True)
+K_ENTRIES = sp.symbols("k0:9", real=True)
+u0, u1, u2 = sp.symbols("u0 u1 u2", real=True)
+P0, P1, P2 = sp.symbols("P0 P1 P2", real=True)
+P_I, D0, D1, D2 = sp.symbols("P_I D0 D1 D2", real=True)
+_MASS = [(m, "grain mass", "kg")]
+_LAW = [(e_n, "normal restitution coefficient", "1"), (e_t, "tangential restitution coefficient", "1"),
+        (mu, "impact friction coefficient", "1")]
+_K = [(k, f"inverse effective mass at the contact, entry {i // 3 + 1}{i % 3 + 1}", "1/kg")
+      for i, k in enumerate(K_ENTRIES)]
+_U = [(u, f"contact point velocity before the impact, {x}", "m/s") for u, x in zip((u0, u1, u2), "XYZ")]
+_P = [(P, f"impulse on the grain at the contact, {x}", "N*s") for P, x in zip((P0, P1, P2), "XYZ")]
+_PLASTIC = [(P_I, "plastic normal impulse", "N*s")] + [
+    (d, f"plastic sticking impulse beyond it, {x}", "N*s") for d, x in zip((D0, D1, D2), "XYZ")]
+
+
+def _skew(r: sp.Matrix) -> sp.Matrix:
+    return sp.Matrix([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
+
+
+def _contact_frame() -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Matrix]:
+    """At the state (q, w): Q of q / |q| (3, 3), the offset R (3,) [m] of the lowest point from the centre in
+    KXYZ, the inverse inertia in KXYZ (3, 3) [1/(kg m^2)] and w in KXYZ (3,) [rad/s]."""
+    norm = sp.sqrt(q0**2 + q1**2 + q2**2 + q3**2)
+    Q = quaternion_matrix().subs({q: q / norm for q in (q0, q1, q2, q3)}, simultaneous=True)
+    R = Q * contact_offset_body().subs(dict(zip((n1, n2, n3), Q.row(2))))
+    return Q, R, Q * sp.diag(1 / I1, 1 / I2, 1 / I3) * Q.T, Q * sp.Matrix([w1, w2, w3])
+
+
+def impact_contact() -> sp.Matrix:
+    """The lowest point's inverse effective mass K = 1/m - [R]x I_w^-1 [R]x (row by row, 9 entries) [1/kg] and
+    its velocity u = v + w x R (3) [m/s], (12,): what the impact law reads."""
+    _, R, inv_inertia, w = _contact_frame()
+    K = sp.eye(3) / m - _skew(R) * inv_inertia * _skew(R)
+    return sp.Matrix([*K, *(sp.Matrix([vx, vy, vz]) + w.cross(R))])
+
+
+def plastic_impulse() -> sp.Matrix:
+    """The impulses (4,) [N s] of a perfectly plastic impact at a contact of inverse effective mass K (3, 3)
+    [1/kg] hit at the velocity u (3,) [m/s]: the normal one P_I = -u_z / K_zz (along e_z) and the sticking
+    remainder D = -K^-1 u - P_I e_z (3) that stops the point."""
+    K, u = sp.Matrix(3, 3, K_ENTRIES), sp.Matrix([u0, u1, u2])
+    normal = -u2 / K[2, 2]
+    return sp.Matrix([normal, *(-(K.adjugate() * u) / K.det() - sp.Matrix([0, 0, normal]))])
+
+
+def coulomb_impulse() -> sp.Matrix:
+    """Chatterjee and Ruina's impulse P (3,) [N s] from the plastic impulses (:func:`plastic_impulse`):
+    P = (1 + e_n) P_I e_z + s D, s = 1 + e_t inside the friction cone and, outside it, the s that puts P on the
+    cone |P_t| = mu P_z. No impulse where the point does not approach the plane (u_z >= 0)."""
+    D = sp.Matrix([D0, D1, D2])
+    normal = (1 + e_n) * P_I
+    slope = sp.sqrt(D0**2 + D1**2) - mu * D2
+    s = sp.Piecewise((mu * normal / slope, (1 + e_t) * slope > mu * normal), (1 + e_t, True))
+    return (sp.Matrix([0, 0, normal]) + s * D).applyfunc(lambda x: sp.Piecewise((x, u2 < 0), (0, True)))
+
+
+def impact_state() -> sp.Matrix:
+    """The state (13,) just after the impulse P (3,) [N s] at the lowest point: position and orientation kept,
+    v + P / m, w + I^-1 (R x P) in body axes."""
+    Q, R, inv_inertia, w = _contact_frame()
+    P = sp.Matrix([P0, P1, P2])
+    v_after = sp.Matrix([vx, vy, vz]) + P / m
+    return sp.Matrix([rx, ry, rz, *v_after, q0, q1, q2, q3, *(Q.T * (w + inv_inertia * R.cross(P)))])
+
+
 def flight_dynamics() -> Dynamics:
     """Flight of the rigid grain as an ODE in KXYZ: r' = v, v' = g_K - s''(t), q' = q (x) (0, w)/2,
     I w' = -w x I w, ending where the ellipsoid touches the plane (the terminal event ``contact``: the gap
     falls through zero). The run integrates the same equations (translation in closed form). The semi-axes
     enter the event only."""
-    state = [(rx, "relative centre position X", "m"), (ry, "relative centre position Y", "m"),
-             (rz, "relative centre position Z", "m"), (vx, "relative centre velocity X", "m/s"),
-             (vy, "relative centre velocity Y", "m/s"), (vz, "relative centre velocity Z", "m/s")] + _QUAT + _RATES
     acceleration = sp.Matrix([gX, gY, gZ]) - surface_displacement().diff(t, 2)
     rate = sp.Matrix.vstack(sp.Matrix([vx, vy, vz]), acceleration, quaternion_rate(), euler_equations())
     contact = Event("contact", contact_gap(), "gap between the ellipsoid's lowest point and the plane", "m",
                     direction=-1, terminal=True)
-    return Dynamics(args_of(state), args_of(_GK + _VIB + _INERTIA + _AXES), rate, time=Arg(t, "time", "s"),
+    return Dynamics(args_of(_STATE), args_of(_GK + _VIB + _INERTIA + _AXES), rate, time=Arg(t, "time", "s"),
                     meaning="the grain in flight over the vibrating surface (eqs (61)-(62))", events=(contact,))
 
 
@@ -256,6 +323,14 @@ def module_specs() -> list[ModuleSpec]:
                     "body angular velocity (p, q, r) from Euler-angle rates", "rad/s", "43"),
         NamedMatrix("euler_rates", euler_rates_from_body_rates(), args_of(_EULER + _RATES),
                     "Euler-angle rates (psi', theta', phi') from body rates", "rad/s", "62"),
+        NamedMatrix("impact_contact", impact_contact(), args_of(_STATE + _INERTIA + _AXES + _MASS),
+                    "inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ", "1/kg, m/s"),
+        NamedMatrix("plastic_impulse", plastic_impulse(), args_of(_K + _U),
+                    "plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ", "N*s"),
+        NamedMatrix("coulomb_impulse", coulomb_impulse(), args_of(_PLASTIC + [_U[2]] + _LAW),
+                    "energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ", "N*s"),
+        NamedMatrix("impact_state", impact_state(), args_of(_STATE + _INERTIA + _AXES + _MASS + _P),
+                    "state just after an impulse at the lowest point", "m, m/s, 1, rad/s"),
     ]
     return [ModuleSpec("grain_motion", "Grain motion: gravity, surface vibration, exact flight, "
                        "ellipsoid support distance, torque-free rotation.",

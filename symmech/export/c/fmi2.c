@@ -154,9 +154,11 @@ FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi
 
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
 {
-    (void)c;
+    Instance *inst = c;
+    int changed = symmech_event_update(&inst->model);
     memset(info, 0, sizeof *info);
-    return fmi2OK;
+    info->valuesOfContinuousStatesChanged = changed > 0;
+    return changed < 0 ? fail(inst, "fmi2NewDiscreteStates: non-finite state at the event") : fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { (void)c; return fmi2OK; }
@@ -164,9 +166,12 @@ FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { (void)c; r
 FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
-    (void)c; (void)noSetFMUStatePriorToCurrentPoint;
-    *enterEventMode = *terminateSimulation = 0;
-    return fmi2OK;
+    Instance *inst = c;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    *enterEventMode = 0;
+    *terminateSimulation = symmech_left_model(&inst->model);
+    return *terminateSimulation ? fail(inst, LEFT_MODEL_MESSAGE)
+                                : fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
@@ -205,8 +210,11 @@ FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[
 
 FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
 {
-    (void)eventIndicators;
-    return ni == 0 ? fmi2OK : fail(c, "the model has no event indicators");
+    Instance *inst = c;
+    if (ni != N_Z) return fail(inst, "fmi2GetEventIndicators: wrong number of event indicators");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix or non-finite rates");
+    if (N_Z > 0) memcpy(eventIndicators, inst->model.r + VR_Z, N_Z * sizeof(double));
+    return fmi2OK;
 }
 
 FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
@@ -228,6 +236,8 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     inst->last_time = inst->model.r[VR_TIME];
+    if (status == -2)
+        return fail(inst, "fmi2DoStep: " LEFT_MODEL_MESSAGE);
     return status == 0 ? fmi2OK : fail(inst, "fmi2DoStep: the integration failed (singular M or non-finite state)");
 }
 

@@ -190,11 +190,13 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boole
                                                 fmi3Boolean *valuesOfContinuousStatesChanged,
                                                 fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime)
 {
-    (void)instance;
+    Instance *inst = instance;
+    int changed = symmech_event_update(&inst->model);
     *discreteStatesNeedUpdate = *terminateSimulation = *nominalsOfContinuousStatesChanged = false;
-    *valuesOfContinuousStatesChanged = *nextEventTimeDefined = false;
+    *valuesOfContinuousStatesChanged = changed > 0;
+    *nextEventTimeDefined = false;
     *nextEventTime = 0.0;
-    return fmi3OK;
+    return changed < 0 ? fail(inst, "fmi3UpdateDiscreteStates: non-finite state at the event") : fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { (void)instance; return fmi3OK; }
@@ -202,9 +204,12 @@ FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { (voi
 FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
 {
-    (void)instance; (void)noSetFMUStatePriorToCurrentPoint;
-    *enterEventMode = *terminateSimulation = false;
-    return fmi3OK;
+    Instance *inst = instance;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    *enterEventMode = false;
+    *terminateSimulation = symmech_left_model(&inst->model);
+    return *terminateSimulation ? fail(inst, LEFT_MODEL_MESSAGE)
+                                : fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
@@ -247,8 +252,11 @@ FMI3_EXPORT fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, 
 FMI3_EXPORT fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[],
                                               size_t nEventIndicators)
 {
-    (void)eventIndicators;
-    return nEventIndicators == 0 ? fmi3OK : fail(instance, "the model has no event indicators");
+    Instance *inst = instance;
+    if (nEventIndicators != N_Z) return fail(inst, "fmi3GetEventIndicators: wrong number of event indicators");
+    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular mass matrix or non-finite rates");
+    if (N_Z > 0) memcpy(eventIndicators, inst->model.r + VR_Z, N_Z * sizeof(double));
+    return fmi3OK;
 }
 
 FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
@@ -263,7 +271,7 @@ FMI3_EXPORT fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, 
 FMI3_EXPORT fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators)
 {
     (void)instance;
-    *nEventIndicators = 0;
+    *nEventIndicators = N_Z;
     return fmi3OK;
 }
 
@@ -288,6 +296,10 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     *lastSuccessfulTime = inst->model.r[VR_TIME];
+    if (status == -2) {
+        *terminateSimulation = true;
+        return fail(inst, "fmi3DoStep: " LEFT_MODEL_MESSAGE);
+    }
     if (status != 0) return fail(inst, "fmi3DoStep: the integration failed (singular M or non-finite state)");
     return fmi3OK;
 }

@@ -45,7 +45,16 @@ void symmech_reset(SymmechModel *m);
 int symmech_derivatives(SymmechModel *m);
 /* integrate from r[VR_TIME] to t_end (DOP853, or Radau IIA for a stiff model: MODEL_STIFF), error control
    rtol and atol (Radau: atol, at least RADAU_ATOL_FLOOR, times each state's nominal); 0, or -1 on a singular
-   M, a non-finite state or a step size below round-off */
+   M, a non-finite state or a step size below round-off, -2 where the motion left the model
+   (symmech_left_model; r[VR_TIME] is then that time; DOP853 only: a stiff model has no state events) */
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
+/* state events (N_Z > 0): where an indicator r[VR_Z + i] is <= 0, the state becomes the model's event map of
+   it (MODEL_EVENT_MAP); 1 when the state changed, 0 when not, -1 on a non-finite state. symmech_integrate
+   locates the indicators' falls through zero and applies the map there itself (Co-Simulation). */
+int symmech_event_update(SymmechModel *m);
+/* 1 when an event indicator is below -EVENT_TOLERANCE: crossed without its event, the motion has left what the
+   model covers (the grain has come to rest on the surface); 0 otherwise */
+int symmech_left_model(SymmechModel *m);
+#define LEFT_MODEL_MESSAGE "an event indicator fell below zero without its event: the motion left what the model covers"
 
 #endif
