@@ -141,11 +141,11 @@ def sample_note(path: Path) -> str:
 
 def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
     """Clopper-Pearson interval of a proportion k / n (exact binomial, `level` two-sided)."""
-    from scipy.stats import beta
+    from scipy.special import betaincinv  # the beta distribution's quantile, without scipy.stats' import time
 
     alpha = 1.0 - level
-    low = 0.0 if k == 0 else float(beta.ppf(alpha / 2, k, n - k + 1))
-    high = 1.0 if k == n else float(beta.ppf(1 - alpha / 2, k + 1, n - k))
+    low = 0.0 if k == 0 else float(betaincinv(k, n - k + 1, alpha / 2))
+    high = 1.0 if k == n else float(betaincinv(k + 1, n - k, 1 - alpha / 2))
     return low, high
 
 
