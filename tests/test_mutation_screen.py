@@ -25,6 +25,8 @@ CASES = {
                           "test_b"),
     "raise_then_pass": ("def test_a():\n    {}['k']\n\ndef test_b():\n    pass\n", "raised",
                         "test_a (KeyError)"),
+    "fixture_then_assert": ("import pytest\n\n@pytest.fixture\ndef f():\n    raise OSError\n\ndef test_a(f):\n"
+                            "    pass\n\ndef test_b():\n    assert False\n", "killed", "test_b"),
     # it stops at the first assertion, as -x would
     "assert_then_raise": ("def test_a():\n    assert False\n\ndef test_b():\n    {}['k']\n", "killed", "test_a"),
     "fixture": ("import pytest\n\n@pytest.fixture\ndef f():\n    raise OSError\n\ndef test_a(f):\n    pass\n",

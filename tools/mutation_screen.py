@@ -3,9 +3,10 @@ imported pytest and the mutated module once (mutmut's trampolines choose the mut
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
 The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion (a kill) or
-the first fixture error, as `-x` would; past a test that fails on another exception it runs on, so that a mutant
-is recorded "raised" (not a kill: docs/mutation.md) only when no test of the selection fails on an assertion.
+the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion (a kill), as
+`-x` would; past a test that fails on another exception or a fixture error it runs on, so that a mutant is
+recorded "raised" (not a kill: docs/mutation.md) or "error" only when no test of the selection fails on an
+assertion.
 """
 from __future__ import annotations
 
@@ -35,8 +36,8 @@ TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmu
 
 class Verdict:
     """A pytest plugin that notes the first test failing on an assertion (and stops there), else the first failing
-    on another exception (and runs on: a later test may still fail on an assertion), or the first fixture error
-    (and stops there), and collection errors."""
+    on another exception or the first fixture error (and runs on: a later test may still fail on an assertion),
+    and collection errors."""
 
     def __init__(self):
         self.session = None
@@ -55,9 +56,8 @@ class Verdict:
 
         if not hasattr(node, "nodeid") or report.when is None:
             return
-        if report.when != "call":
+        if report.when != "call":  # a fixture: the tests that do not use it may still assert
             self.error = self.error or f"{node.nodeid} ({report.when}: {call.excinfo.typename})"
-            self.session.shouldstop = "a fixture failed"
         elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
             self.killed = node.nodeid
             self.session.shouldstop = "a test failed on an assertion"
