@@ -1,0 +1,35 @@
+"""The mechanism's expressions (smm/model.py): a user's bad expression is one SymmechError line that names where it
+stands, never another exception, and the functions a caller passes are the ones used."""
+import pytest
+
+from symmech.core.scene import SymmechError
+from symmech.smm import model
+
+
+def error_of(call):
+    """The exception `call()` raises, whatever its type: a test of its type is an assertion, not a crash."""
+    with pytest.raises(Exception) as info:
+        call()
+    return info
+
+
+def test_a_division_by_zero_names_the_field():
+    info = error_of(lambda: model.NumericArith({"a": 0.0})("1/a", "bodies[0].mass"))
+    assert info.type is SymmechError
+    assert str(info.value).startswith("bodies[0].mass: expression '1/a' cannot be evaluated")
+
+
+@pytest.mark.parametrize("text", ["foo(1)", "math.sin(1)", "(lambda: 1)()"])
+def test_a_call_of_an_unknown_function_is_an_unsupported_expression(text):
+    info = error_of(lambda: model.interpret(text, {}, "points.A"))
+    assert info.type is SymmechError
+    assert str(info.value) == f"points.A: unsupported expression {text!r}"
+
+
+def test_the_functions_a_caller_passes_are_used():
+    """smm.derive passes sympy's functions: a name only the caller's table holds is found, and it is the caller's."""
+    try:
+        value = model.interpret("triple(2) + sin(0)", {}, funcs={"triple": lambda x: 3 * x, "sin": lambda x: 7.0})
+    except SymmechError as exc:  # the answer to assert on, not an error of the test
+        value = exc
+    assert value == 13.0
