@@ -33,3 +33,16 @@ def test_the_functions_a_caller_passes_are_used():
     except SymmechError as exc:  # the answer to assert on, not an error of the test
         value = exc
     assert value == 13.0
+
+
+def test_the_structural_form_names_the_field_of_a_bad_value():
+    """structural.values and vectors evaluate each text once and name the field in the message; the values are floats
+    in the order of the texts."""
+    from symmech.smm import structural
+
+    ar = model.NumericArith({"a": 2.0, "z": 0.0})
+    assert structural.values(ar, ["a", "3*a", "a"], "masses").tolist() == [2.0, 6.0, 2.0]
+    assert structural.vectors(ar, [["a", "0", "1"], ["1/a", "a", "a**2"]], "com").tolist() == [[2.0, 0.0, 1.0],
+                                                                                               [0.5, 2.0, 4.0]]
+    info = error_of(lambda: structural.values(ar, ["a", "1/z"], "masses"))
+    assert info.type is SymmechError and str(info.value).startswith("masses: expression '1/z' cannot be evaluated")
