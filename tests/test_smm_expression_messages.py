@@ -19,11 +19,19 @@ def test_a_division_by_zero_names_the_field():
     assert str(info.value).startswith("bodies[0].mass: expression '1/a' cannot be evaluated")
 
 
-@pytest.mark.parametrize("text", ["foo(1)", "math.sin(1)", "(lambda: 1)()"])
+@pytest.mark.parametrize("text", ["foo(1)", "math.sin(1)", "(lambda: 1)()", "1 < 2"])
 def test_a_call_of_an_unknown_function_is_an_unsupported_expression(text):
     info = error_of(lambda: model.interpret(text, {}, "points.A"))
     assert info.type is SymmechError
     assert str(info.value) == f"points.A: unsupported expression {text!r}"
+
+
+def test_evaluate_passes_the_field_on_and_says_expression_when_there_is_none():
+    for call, where in [(lambda: model.evaluate("foo(1)", {}, "joints[2].angle"), "joints[2].angle"),
+                        (lambda: model.evaluate("1/0", {}), "<expression>"),
+                        (lambda: model.NumericArith({})("1/0"), "<expression>")]:
+        info = error_of(call)
+        assert info.type is SymmechError and str(info.value).startswith(f"{where}: ")
 
 
 def test_the_functions_a_caller_passes_are_used():
