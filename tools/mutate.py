@@ -8,6 +8,8 @@
                                            their outcomes into mutation/results/<module>.tsv; --fresh makes
                                            the mutants again from the current tree, --rest screens only
                                            those recorded without a kill (after a new test)
+    python tools/mutate.py --screen SHARD ... --survived
+                                           as --rest, only the survivors (a new test written against them)
     python tools/mutate.py --screen SHARD --sample N [--seed S]
                                            screen a seeded random sample of N of the shard's mutants (a record
                                            of its own module: the table gives its rate a binomial interval)
@@ -332,6 +334,8 @@ SHARDS = {
 }
 
 
+OUTCOMES_UNKILLED = tuple(o for o in rec.OUTCOMES if o != "killed")  # what --rest screens again
+
 # every module that computes physics or numerics: "" when it is screened (its record), else why it is not
 COVERAGE = {
     "symmech/grain/body.py": "",
@@ -427,9 +431,9 @@ def shard_mutants(name: str) -> list[str]:
     return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
 
 
-def screen(name: str, fresh: bool, rest: bool, size: int = 0, seed: int = 0) -> int:
+def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0) -> int:
     """Screen the mutants of one shard into its module's record: all, a seeded random sample of `size` (when > 0),
-    or (`rest`) those recorded without a kill."""
+    and of them (`rest`) only those recorded with one of these outcomes."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
@@ -445,8 +449,8 @@ def screen(name: str, fresh: bool, rest: bool, size: int = 0, seed: int = 0) -> 
                  "record's lines are the mutants screened")
     if rest:
         recorded = rec.read(rec.record_path(module))
-        names = [n for n in names if n in recorded and recorded[n].outcome != "killed"]
-    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=rest, drawn=drawn)
+        names = [n for n in names if n in recorded and recorded[n].outcome in rest]
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=bool(rest), drawn=drawn)
 
 
 def check(killed: int, seed: int) -> int:
@@ -487,10 +491,11 @@ def main(argv: list[str]) -> int:
         # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
         return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
     if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS:
-        flags = [a for a in argv[2:] if a in ("--fresh", "--rest")]
+        flags = [a for a in argv[2:] if a in ("--fresh", "--rest", "--survived")]
         options = dict(zip(*[iter(a for a in argv[2:] if a not in flags)] * 2))
         if set(options) <= {"--sample", "--seed"}:
-            return screen(argv[1], "--fresh" in flags, "--rest" in flags, int(options.get("--sample", 0)),
+            rest = ("survived",) if "--survived" in flags else OUTCOMES_UNKILLED if "--rest" in flags else ()
+            return screen(argv[1], "--fresh" in flags, rest, int(options.get("--sample", 0)),
                           int(options.get("--seed", 0)))
     if argv[:1] == ["--rename"] and len(argv) == 3:
         rec.rename(argv[1], argv[2])
