@@ -51,9 +51,9 @@ def point_mass(mu, direction, amplitude=1e-3, omega=50.0):
     return model, body, vib
 
 
-def slide(model, body, v0, t_end):
+def slide(model, body, v0, t_end, sample_times=()):
     return sliding.slide(model, body, 0.0, np.zeros(2), np.asarray(v0, float), np.array([1.0, 0, 0, 0]),
-                         np.zeros(3), t_end, [], t_end / 20, 1e-11)
+                         np.zeros(3), t_end, list(sample_times), t_end / 20, 1e-11)
 
 
 def surface_velocity(vib, t):
@@ -66,8 +66,11 @@ def test_a_grain_held_by_a_sideways_vibrating_plate_takes_the_plates_kinetic_ene
     m (|v_s(t)|^2 - |v_s(0)|^2) / 2 = m (A w)^2 (cos^2 w t - 1) / 2, and nothing is lost."""
     model, body, vib = point_mass(2.0, direction)
     t_end = 0.05
-    res = slide(model, body, (0.0, 0.0), t_end)
+    res = slide(model, body, (0.0, 0.0), t_end, sample_times=[-0.01, 0.0, 0.02, 0.05, 0.07])
     assert not res.lifted and res.t == t_end
+    times, r, v = res.samples[:3]  # only the sample times within the phase [0, t_end), where it stays stuck
+    np.testing.assert_array_equal(times, [0.0, 0.02])
+    np.testing.assert_allclose(np.hstack([r, v]), 0.0, atol=1e-12)
     np.testing.assert_allclose(res.v, [0.0, 0.0], atol=1e-12)
     expected = 0.5 * MASS * (vib.amplitude * vib.omega) ** 2 * (math.cos(vib.omega * t_end) ** 2 - 1.0)
     assert res.work == pytest.approx(expected, rel=1e-9)
