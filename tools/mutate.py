@@ -17,10 +17,11 @@
                                            a module moved (paths such as symmech/core/ode.py): its record,
                                            mutant names and proofs follow it
     python tools/mutate.py --table         docs/mutation.md's per-module table from mutation/results/
-    python tools/mutate.py --check [--killed N] [--seed S]
+    python tools/mutate.py --check [--killed N] [--seed S] [MODULE ...]
                                            rerun N killed mutants per record at random (default 30) and every
-                                           proven-equivalent one against the current tree; exit 1 when a
-                                           recorded outcome no longer holds (`make mutate-check`)
+                                           proven-equivalent one against the current tree (the records of the
+                                           dotted MODULEs only, if named); exit 1 when a recorded outcome no
+                                           longer holds (`make mutate-check`)
 
 mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
 runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
@@ -453,10 +454,13 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=bool(rest), drawn=drawn)
 
 
-def check(killed: int, seed: int) -> int:
-    """Rerun a sample of every record against the current tree (`make mutate-check`), one shard at a time."""
+def check(killed: int, seed: int, only: list[str]) -> int:
+    """Rerun a sample of every record (or of the records of the dotted modules `only`) against the current tree
+    (`make mutate-check`), one shard at a time."""
     status, total = 0, 0
     for path in sorted(rec.RESULTS.glob("*.tsv")):
+        if only and path.stem not in only:
+            continue
         entries = rec.read(path)
         chosen = mutation_screen.sample(entries, path.stem, killed, seed)
         total += len(chosen)
@@ -482,8 +486,10 @@ def main(argv: list[str]) -> int:
         rec.write_table(sorted({module for module, *_ in SHARDS.values()}), COVERAGE)
         return 0
     if argv[:1] == ["--check"]:
-        options = dict(zip(argv[1::2], argv[2::2]))
-        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)))
+        pairs = [a for i, a in enumerate(argv[1:]) if a.startswith("--") or argv[i].startswith("--")]
+        options = dict(zip(pairs[::2], pairs[1::2]))
+        only = [a for a in argv[1:] if a not in pairs]
+        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)), only)
     if argv[:1] == ["--recheck"] and len(argv) == 3:
         module, tests, _ = SHARDS[argv[1]]
         entries = rec.read(rec.record_path(module))
