@@ -98,3 +98,19 @@ def test_paper_slide_step_sticks_on_the_edges_it_documents(g_k, v):
     got = sliding.slide_step(model, 0.0, np.array([v]), 0.01)
     assert step_by_hand(v, g_k[:2], 0.5 * -g_k[2], 0.01) == (0.0, 0.0)
     np.testing.assert_array_equal(got, [[0.0, 0.0]])
+
+
+def test_a_sphere_rolls_down_an_incline_at_five_sevenths_of_the_drive():
+    """A solid sphere (I = 2/5 m r^2) at rest on a still 0.2 rad incline, mu = 1 (the stick force f/3.5 is inside the
+    cone): it rolls without slipping, x = (5/7) g sin(0.2) t^2 / 2, v = (5/7) g sin(0.2) t, spin v / r about Y."""
+    radius, alpha, t_end = 0.01, 0.2, 0.1
+    model = sliding.Sliding((G * math.sin(alpha), 0.0, -G * math.cos(alpha)),
+                            flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)), 1.0)
+    body = sliding.Body((radius,) * 3, MASS, (0.4 * MASS * radius**2,) * 3, True)
+    res = sliding.slide(model, body, 0.0, np.zeros(2), np.zeros(2), np.array([1.0, 0, 0, 0]), np.zeros(3), t_end,
+                        [], t_end / 20, 1e-11)
+    a = 5 / 7 * G * math.sin(alpha)
+    np.testing.assert_allclose(res.r, [a * t_end**2 / 2, 0.0], rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(res.v, [a * t_end, 0.0], rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(res.w, [0.0, a * t_end / radius, 0.0], rtol=1e-9, atol=1e-12)
+    assert abs(res.dissipated) < 1e-12
