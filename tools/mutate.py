@@ -92,7 +92,8 @@ GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_moti
 
 # the grain's parts (geometry, contact, flight, sliding, paper mode): the fast files first, then the parts tests
 # without the four that take seconds each (the screen stops at the first failure)
-GRAIN_PARTS_TESTS = ["tests/test_sliding_step_and_surface_work.py", "tests/test_grain_impact_solver_details.py",
+GRAIN_PARTS_TESTS = ["tests/test_sliding_step_and_surface_work.py", "tests/test_paper_mode_slides.py",
+                     "tests/test_grain_impact_solver_details.py",
                      "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_parts.py", "-k",
                      "not effects_off and not chattering_ends and not flat_and_long and not high_frequency"]
 
