@@ -189,8 +189,9 @@ def table(modules: list[str]) -> str:
                      f"| {rate(c['killed'] + c['raised'], n, sampled)} | {c['equivalent']} | {c['survived']} "
                      f"| {c['timeout']} | {c['crash']} | {c['collection'] + c['error'] + c['no-tests']} "
                      f"| {100 * c['killed'] / rest if rest else 100:.1f} % |")
-    lines += ["", "Samples: the rate of the module's mutants, 95 % Clopper-Pearson interval after it; the record's "
-              "`sample:` note gives the seed and the shard's mutants it was drawn from. Records of part of a module "
+    lines += ["", "Samples: the rate of the mutants the sample was drawn from (the module's, or one shard's: "
+              "the record's `sample:` note gives the seed and the shard), 95 % Clopper-Pearson interval after it. "
+              "Records of part of a module "
               "(the named shards' functions, not a random sample: no interval): " + (", ".join(partial) or "none")
               + "."]
     have = {p.stem for p in recorded}
