@@ -320,7 +320,7 @@ SHARDS = {
                        ["tests/test_smm_expression_messages.py", "tests/test_smm_structural.py"], ["*"]),
     "smm_model": ("symmech/smm/model.py",
                   ["tests/test_smm_expression_messages.py", "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
-                   "closed_form or structural or small_systems"], ["*"]),
+                   "expression_messages or closed_form or structural or small_systems"], ["*"]),
     "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
     "smm_forms_sample": ("symmech/smm/forms.py",
                          ["tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
