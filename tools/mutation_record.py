@@ -15,8 +15,9 @@ change (so that a renumbered mutant is found again), the outcome and the test th
     no-tests    the selection ran no test
 
 Only "killed" is a kill. "raised" (a test failed, pytest's exit 1, but on no assertion) is shown in its own
-column and in the sum "killed + raised" beside the kill rate; nothing else counts. A survivor named in mutation/equivalent.tsv with a written proof (no input the code can receive tells
-it from the original) is counted apart as equivalent.
+column and in the sum "killed + raised" beside the kill rate; nothing else counts. A survivor named in
+mutation/equivalent.tsv with a written proof (no input the code can receive tells it from the original) is
+counted apart as equivalent.
 """
 from __future__ import annotations
 
@@ -134,6 +135,11 @@ def function_of(mutant: str) -> str:
     return mutant.rpartition("__mutmut_")[0].rpartition(".")[2]
 
 
+def made_of(path: Path) -> str:
+    """How many mutants mutmut made of the record's module (its "made:" note; "?" without one)."""
+    return next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
+
+
 def sample_note(path: Path) -> str:
     """The record's "sample:" note ("" for a record of all, or of named shards of, its module's mutants)."""
     return next((note for note in notes_of(path) if note.startswith("sample:")), "")
@@ -177,7 +183,7 @@ def table(modules: list[str]) -> str:
         module = path.stem
         c = tally(read(path), module, proofs)
         n = sum(c.values())
-        made = next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
+        made = made_of(path)
         if n == 0:
             continue
         rest = n - c["equivalent"]
@@ -209,7 +215,7 @@ def coverage_table(coverage: dict[str, str]) -> str:
     for module, why in coverage.items():
         path = record_path(module)
         n = len(read(path))
-        made = next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
+        made = made_of(path)
         found = f"{scope(path, n, made)}: {n} of {made}" if n else "none"
         lines.append(f"| `{module}` | {found} | {why or ('—' if n else 'not screened yet')} |")
     return "\n".join(lines)
