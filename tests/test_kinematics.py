@@ -94,3 +94,15 @@ def test_single_vectors_and_batches_give_the_same_matrices():
     shift = kin.parallel_axis(np.zeros((3, 3)), np.array([1.0, 2.0]), v[0])
     d = v[0]
     assert np.allclose(shift[1], 2 * (d @ d * np.eye(3) - np.outer(d, d)), rtol=1e-15, atol=0)
+
+
+def test_elementary_rotations_are_passive_by_default():
+    """Without `passive`, the matrix of a frame turned by +0.3 rad about each axis (the coordinates of a fixed
+    vector in the turned frame), written out; the active rotation is its transpose."""
+    c, s = np.cos(0.3), np.sin(0.3)
+    written = {0: [[1, 0, 0], [0, c, s], [0, -s, c]], 1: [[c, 0, -s], [0, 1, 0], [s, 0, c]],
+               2: [[c, s, 0], [-s, c, 0], [0, 0, 1]]}
+    for axis, matrix in written.items():
+        np.testing.assert_allclose(kin.elementary(axis, 0.3), matrix, rtol=0, atol=1e-16)
+        np.testing.assert_allclose(kin.elementary(axis, 0.3, passive=False), np.transpose(matrix), rtol=0,
+                                   atol=1e-16)

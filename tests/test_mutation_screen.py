@@ -1,6 +1,7 @@
 """The mutation screen's verdicts (tools/mutation_screen.py) on made-up test files whose outcome is known, and its
-record's change hash and table (tools/mutation_record.py): only an assertion kills; a test that raises something
-else, a fixture error, a collection error, a crash and a timeout each get their own outcome."""
+record's change hash, table, sample intervals and renames (tools/mutation_record.py): only an assertion kills; a
+test that raises something else, a fixture error, a collection error, a crash and a timeout each get their own
+outcome."""
 import sys
 import textwrap
 from pathlib import Path
@@ -19,9 +20,15 @@ CASES = {
     "raises_mismatch": ("import pytest\n\ndef test_a():\n    with pytest.raises(ValueError):\n        pass\n",
                         "killed", "test_a"),
     "other_exception": ("def test_a():\n    None + 1\n", "raised", "test_a (TypeError)"),
-    # the screen stops at the first failing test, as -x would
-    "raise_then_assert": ("def test_a():\n    {}['k']\n\ndef test_b():\n    assert False\n", "raised",
-                          "test_a (KeyError)"),
+    # past a test that raises, the screen runs on: a later assertion kills, as a raise does not
+    "raise_then_assert": ("def test_a():\n    {}['k']\n\ndef test_b():\n    assert False\n", "killed",
+                          "test_b"),
+    "raise_then_pass": ("def test_a():\n    {}['k']\n\ndef test_b():\n    pass\n", "raised",
+                        "test_a (KeyError)"),
+    "fixture_then_assert": ("import pytest\n\n@pytest.fixture\ndef f():\n    raise OSError\n\ndef test_a(f):\n"
+                            "    pass\n\ndef test_b():\n    assert False\n", "killed", "test_b"),
+    # it stops at the first assertion, as -x would
+    "assert_then_raise": ("def test_a():\n    assert False\n\ndef test_b():\n    {}['k']\n", "killed", "test_a"),
     "fixture": ("import pytest\n\n@pytest.fixture\ndef f():\n    raise OSError\n\ndef test_a(f):\n    pass\n",
                 "error", "test_a (setup: OSError)"),
     "collection": ("import no_such_module_here\n\ndef test_a():\n    pass\n", "collection", None),
@@ -82,3 +89,35 @@ def test_a_record_survives_a_write_and_read(tmp_path):
     assert rec.read(path) == entries
     assert rec.notes_of(path) == ["shard s: a note"]
     assert [line.split("\t")[0] for line in path.read_text().splitlines()[2:]] == ["m.x_f__mutmut_9", "m.x_f__mutmut_10"]
+
+
+def test_clopper_pearson_interval_at_its_closed_forms():
+    """k = 0 and k = n have closed forms: the upper end 1 - (alpha/2)^(1/n), the lower end (alpha/2)^(1/n); k = 20 of
+    40 is symmetric about 1/2 (the ends are the 2.5 % and 97.5 % points of Beta(20, 21) and Beta(21, 20))."""
+    assert rec.binomial_interval(0, 40) == (0.0, pytest.approx(1 - 0.025 ** (1 / 40), rel=1e-12))
+    assert rec.binomial_interval(40, 40) == (pytest.approx(0.025 ** (1 / 40), rel=1e-12), 1.0)
+    low, high = rec.binomial_interval(20, 40)
+    assert low + high == pytest.approx(1.0, abs=1e-12) and 0.33 < low < 0.35  # 0.3380, as R's binom.test gives
+
+
+def test_a_renamed_module_keeps_its_record_and_proofs(tmp_path, monkeypatch):
+    """--rename: the record file, its module line, its mutants' names and its proofs' module follow the new path;
+    the outcomes, hashes and the equivalent count stay; mutate-check's key (the function's name) is the same."""
+    monkeypatch.setattr(rec, "RESULTS", tmp_path / "results")
+    monkeypatch.setattr(rec, "EQUIVALENT", tmp_path / "equivalent.tsv")
+    old = "symmech.core.ode.x_f__mutmut_3"
+    entries = {old: rec.Entry(old, "ode", "0123456789ab", "survived", "", 1.0, "a → b"),
+               "symmech.core.ode.xǁCǁm__mutmut_1": rec.Entry("symmech.core.ode.xǁCǁm__mutmut_1", "ode",
+                                                               "ba9876543210", "killed", "t.py::test_a", 1.0, "c → d")}
+    rec.write(rec.record_path("symmech/core/ode.py"), entries, ["made: 9 mutants of symmech/core/ode.py by mutmut"])
+    (tmp_path / "equivalent.tsv").write_text("module\thash\tmutant\tproof\n"
+                                             f"symmech.core.ode\t0123456789ab\t{old}\tthe same\n", "utf-8")
+    rec.rename("symmech/core/ode.py", "symmech/core/numerics/ode.py")
+    path = rec.record_path("symmech/core/numerics/ode.py")
+    assert [p.name for p in (tmp_path / "results").iterdir()] == [path.name]
+    moved = rec.read(path)
+    assert sorted(moved) == ["symmech.core.numerics.ode.x_f__mutmut_3", "symmech.core.numerics.ode.xǁCǁm__mutmut_1"]
+    assert rec.notes_of(path) == ["made: 9 mutants of symmech/core/numerics/ode.py by mutmut",
+                                  "module: symmech/core/numerics/ode.py"]
+    assert rec.tally(moved, "symmech.core.numerics.ode", rec.equivalents())["equivalent"] == 1
+    assert {rec.function_of(n) for n in moved} == {rec.function_of(n) for n in entries} == {"x_f", "xǁCǁm"}

@@ -69,12 +69,17 @@ def elastica(alpha, n=12, gauss=40):
     return np.sort(np.sqrt(lam.real))[:3], float(WX @ np.sin(theta))
 
 
-def model(alpha, modes=6):
+def cantilever(modes=6, length=L, body=True):
+    """The system of the radial cantilever of ``length`` [m] (``body``: the beams' effect on)."""
+    beam = el.Beam((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), length, RHO_A, EI, modes=modes)
+    return el.System(el.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
+                                     el.Effects(rollers=False, body=body)))
+
+
+def model(alpha, modes=6, length=L):
     """The model's first three in-plane frequencies [rad/s], linearised about the quasi-static
-    state under α, their left-out curvature shifts, and the system."""
-    beam = el.Beam((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), L, RHO_A, EI, modes=modes)
-    system = el.System(el.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
-                                       el.Effects(rollers=False)))
+    state under α, their left-out curvature shifts, and the system (a beam of ``length`` [m])."""
+    system = cantilever(modes, length)
     fs = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, alpha, 0.0]), np.array([0.0, 1, 0]))
     q = system.quasi_static(fs)
     omega, _, X = system.linear_modes(fs, q, shapes=True)
@@ -117,19 +122,21 @@ def test_the_model_shift_is_beyond_its_order_and_the_left_out_curvature_accounts
     assert np.abs(half[1] + half[2] - half[0]).max() < np.abs(mine + correction - exact).max() / 8
 
 
-def test_curvature_hessian_is_that_of_its_energy():
+@pytest.mark.parametrize("length", [L, 1.7])
+def test_curvature_hessian_is_that_of_its_energy(length):
     """Both planes bent (seeded q): the Hessian equals central differences of
-    Π_c = ½ ∫ (Σ_p √EI_p w_p' w_p'')² dx evaluated on 4001 points (Simpson), to 1e-5."""
-    system = model(0.0)[2]
+    Π_c = ½ ∫ (Σ_p √EI_p w_p' w_p'')² dx evaluated on 4001 points (Simpson), to 1e-5, on the beam of
+    1 m and on one of 1.7 m (d/dx = d/dξ / L, d²/dx² = d²/dξ² / L², dx = L dξ: at 1 m they cannot be told apart)."""
+    system = cantilever(length=length)
     beam = system.mdl.beams[0]
     xi = np.linspace(0.0, 1.0, 4001)
     basis = el.beam_basis(beam.support, xi)[0][:, :, :beam.modes]
-    d1, d2 = basis[:, 1] / L, basis[:, 2] / L**2
+    d1, d2 = basis[:, 1] / length, basis[:, 2] / length**2
 
     def energy(q):
         w = q.reshape(2, -1)
         g = sum(np.sqrt(ei) * (d1 @ wp) * (d2 @ wp) for ei, wp in zip(beam.ei, w))
-        return 0.5 * L * scipy.integrate.simpson(g**2, x=xi)
+        return 0.5 * length * scipy.integrate.simpson(g**2, x=xi)
 
     q = np.random.default_rng(22).normal(scale=0.05, size=system.N)
     h = 1e-4
@@ -137,6 +144,18 @@ def test_curvature_hessian_is_that_of_its_energy():
                      + energy(q - h * (ea + eb))) / (4 * h * h) for eb in np.eye(system.N)] for ea in np.eye(system.N)])
     H = modal.curvature_hessian(system, q)
     np.testing.assert_allclose(H, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+
+
+def test_beam_slope_is_the_largest_slope_of_both_planes_and_zero_without_beams():
+    """Seeded q on a 1.7 m beam: max over x of |(w_1', w_2')|, w_p' = Σ_k q_pk φ_k'(x/L) / L on 4001 points (the
+    module samples 2001: the same maximum to 1e-6); with the body effect off the model has no beams' slope, 0."""
+    system = cantilever(length=1.7)
+    beam = system.mdl.beams[0]
+    q = np.random.default_rng(7).normal(scale=0.05, size=system.N)
+    d1 = el.beam_basis(beam.support, np.linspace(0.0, 1.0, 4001))[0][:, 1, :beam.modes] / 1.7
+    w = q.reshape(2, -1)
+    assert modal.beam_slope(system, q) == pytest.approx(np.hypot(d1 @ w[0], d1 @ w[1]).max(), rel=1e-6)
+    assert modal.beam_slope(cantilever(length=1.7, body=False), q) == 0.0
 
 
 def _ramp(alpha):

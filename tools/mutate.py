@@ -8,11 +8,20 @@
                                            their outcomes into mutation/results/<module>.tsv; --fresh makes
                                            the mutants again from the current tree, --rest screens only
                                            those recorded without a kill (after a new test)
+    python tools/mutate.py --screen SHARD ... --survived
+                                           as --rest, only the survivors (a new test written against them)
+    python tools/mutate.py --screen SHARD --sample N [--seed S]
+                                           screen a seeded random sample of N of the shard's mutants (a record
+                                           of its own module: the table gives its rate a binomial interval)
+    python tools/mutate.py --rename OLD NEW
+                                           a module moved (paths such as symmech/core/ode.py): its record,
+                                           mutant names and proofs follow it
     python tools/mutate.py --table         docs/mutation.md's per-module table from mutation/results/
-    python tools/mutate.py --check [--killed N] [--seed S]
+    python tools/mutate.py --check [--killed N] [--seed S] [MODULE ...]
                                            rerun N killed mutants per record at random (default 30) and every
-                                           proven-equivalent one against the current tree; exit 1 when a
-                                           recorded outcome no longer holds (`make mutate-check`)
+                                           proven-equivalent one against the current tree (the records of the
+                                           dotted MODULEs only, if named); exit 1 when a recorded outcome no
+                                           longer holds (`make mutate-check`)
 
 mutmut reads its settings from ./pyproject.toml and keeps its cache in ./mutants, so each shard
 runs in its own folder mutants/<shard>/: links to tests/ and to what [tool.mutmut] copies, and a
@@ -24,6 +33,7 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import random
 import subprocess
 import sys
 from collections import Counter
@@ -79,6 +89,13 @@ GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_moti
                       "tests/test_grain_motion_resting.py", "tests/test_grain_motion_idle_reset.py",
                       "tests/test_grain_motion_final_progress.py", "tests/test_grain_motion_rocking_count.py",
                       "-m", "not slow"]
+
+# the grain's parts (geometry, contact, flight, sliding, paper mode): the fast files first, then the parts tests
+# without the four that take seconds each (the screen stops at the first failure)
+GRAIN_PARTS_TESTS = ["tests/test_sliding_step_and_surface_work.py", "tests/test_paper_mode_slides.py",
+                     "tests/test_grain_impact_solver_details.py",
+                     "tests/test_grain_motion_closed_forms.py", "tests/test_grain_motion_parts.py", "-k",
+                     "not effects_off and not chattering_ends and not flat_and_long and not high_frequency"]
 
 # the compiled engine's tests are in the slow tier (its build), which the default `-m` leaves out
 ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
@@ -279,6 +296,84 @@ SHARDS = {
                          "not interrupted_run and not racing_runs and not second_run_into_the_same"],
                         ["*.x_check_out__*", "*.x_locked__*", "*.x__acquire__*", "*.x_write__*",
                          "*.x_write_files__*", "*.x__replace_dir__*", "*.x__remove_leftovers__*", "*.x_run_to__*"]),
+    # every other module that computes physics or numerics, screened by a seeded random sample
+    # (`--screen SHARD --sample N --seed S`): the fast test files that cover it
+    "body": ("symmech/grain/body.py", GRAIN_PARTS_TESTS, ["*"]),
+    "contact": ("symmech/grain/contact.py", GRAIN_PARTS_TESTS, ["*"]),
+    "flight": ("symmech/grain/flight.py", GRAIN_PARTS_TESTS, ["*"]),
+    "sliding": ("symmech/grain/sliding.py", GRAIN_PARTS_TESTS, ["*"]),
+    "paper_mode": ("symmech/grain/paper_mode.py", GRAIN_PARTS_TESTS, ["*"]),
+    "grain_sweep_statistics": ("symmech/grain/sweep.py",
+                               ["tests/test_grain_sweep.py", "-m", "not slow", "-k",
+                                "interval or overlap or separate or half_width or best"],
+                               ["*.x__moments__*", "*.x_mean_interval__*", "*.x_std_interval__*",
+                                "*.x_proportion_interval__*", "*.x_difference_interval__*", "*.x_statistics__*",
+                                "*.x_overlap_normal__*", "*.x_overlap__*", "*.x_overlap_interval__*",
+                                "*.x_grains_needed__*", "*.x_separation__*", "*.x_best_point__*", "*.x__spread__*"]),
+    "track": ("symmech/trolley/track.py",
+              ["tests/test_trolley_physics.py", "tests/test_trolley_frames_units.py",
+               "tests/test_trolley_continuity.py"], ["*"]),
+    "trolley_model": ("symmech/trolley/model.py", REACTION_TESTS + ["tests/test_trolley_frames_units.py"], ["*"]),
+    "modal": ("symmech/trolley/modal.py",
+              ["tests/test_trolley_elastic_modes_tracking.py", "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
+    "smm_structural": ("symmech/smm/structural.py",
+                       ["tests/test_smm_expression_messages.py", "tests/test_smm_structural.py"], ["*"]),
+    "smm_model": ("symmech/smm/model.py",
+                  ["tests/test_smm_expression_messages.py", "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
+                   "expression_messages or closed_form or structural or small_systems"], ["*"]),
+    "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
+    "smm_forms_sample": ("symmech/smm/forms.py",
+                         ["tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
+                          "-k", "not random_spatial and not spatial_boom and not excavator and not many_random"],
+                         ["*"]),
+    "smm_numeric_sample": ("symmech/smm/numeric.py",
+                           ["tests/test_smm_closed_form.py", "tests/test_smm_mode_kinds.py", "tests/test_smm_structural.py",
+                            "tests/test_smm_pivot.py", "-k", "not numerically_many"], ["*"]),
+    "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
+    # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
+    "ode": ("symmech/core/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
+            ["*"]),
+}
+
+
+OUTCOMES_UNKILLED = tuple(o for o in rec.OUTCOMES if o != "killed")  # what --rest screens again
+
+# every module that computes physics or numerics: "" when it is screened (its record), else why it is not
+COVERAGE = {
+    "symmech/grain/body.py": "shard body made, not screened yet: the session's shared cores ran out",
+    "symmech/grain/contact.py": "shard contact made, not screened yet: the session's shared cores ran out",
+    "symmech/grain/flight.py": "shard flight made, not screened yet: the session's shared cores ran out",
+    "symmech/grain/sliding.py": "",
+    "symmech/grain/impact.py": "",
+    "symmech/grain/coulomb_law.py": "",
+    "symmech/grain/paper_mode.py": "",
+    "symmech/grain/motion.py": "two functions only (texts and rows): a sample needs its motion tests, ~100 s a "
+                               "survivor",
+    "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
+                              "and tables",
+    "symmech/grain/compiled.py": "moves to grain/engine/; shards engine_py made, not screened yet (its tests build "
+                                 "the engine, ~80 s)",
+    "symmech/grain/compiled_loop.py": "numba kernels (mutmut does not mutate decorated functions); the engine is "
+                                      "held to the Python reference by the compiled-engine tests",
+    "symmech/trolley/track.py": "",
+    "symmech/trolley/model.py": "10 of the 30 drawn: the sample stopped at the session's end (survivors ~45 s each)",
+    "symmech/trolley/modal.py": "moves to trolley/elastic/: keyed by its current path (--rename)",
+    "symmech/trolley/membrane.py": "moves to trolley/elastic/: keyed by its current path (--rename)",
+    "symmech/trolley/elastic.py": "one function only (quasi_static); moves to trolley/elastic/; a sample needs its "
+                                  "integrating tests, 10-15 s a survivor",
+    "symmech/trolley/elastic_kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
+                                          "elastic.py by tests/test_elastic_compiled.py",
+    "symmech/smm/forms.py": "shard smm_forms_sample made, not screened yet: the session's shared cores ran out",
+    "symmech/smm/numeric.py": "shard smm_numeric_sample made, not screened yet: the session's shared cores ran out",
+    "symmech/smm/structural.py": "",
+    "symmech/smm/model.py": "",
+    "symmech/core/kinematics.py": "",
+    "symmech/core/ode.py": "moves to a numerics package; shard ode made (the toolkit's Python side: its numba "
+                           "kernels are decorated), not screened yet",
+    "symmech/core/dop853.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
+                              "holds it bit-equal to scipy's",
+    "symmech/core/precision.py": "no physics or numerics of its own: wall-clock timing (its numbers are times, which "
+                                 "no test can assert) and the study's rows laid out as a table and a plot",
 }
 
 
@@ -342,22 +437,35 @@ def shard_mutants(name: str) -> list[str]:
     return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
 
 
-def screen(name: str, fresh: bool, rest: bool) -> int:
-    """Screen the mutants of one shard into its module's record: all, or (`rest`) those recorded without a kill."""
+def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0) -> int:
+    """Screen the mutants of one shard into its module's record: all, a seeded random sample of `size` (when > 0),
+    and of them (`rest`) only those recorded with one of these outcomes."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
     names = shard_mutants(name)
+    drawn = ""
+    if size:
+        # from the sorted names (the draw depends on the seed and the set of names only), screened in the order
+        # drawn: a screen stopped early leaves a smaller random sample, not the first functions
+        population = len(names)
+        names = random.Random(seed).sample(sorted(names), min(size, population))
+        drawn = (f"seed {seed}, {len(names)} drawn of the {population} mutants of shard {name} "
+                 f"(random.Random({seed}).sample of their sorted names, screened in the order drawn); this "
+                 "record's lines are the mutants screened")
     if rest:
         recorded = rec.read(rec.record_path(module))
-        names = [n for n in names if n in recorded and recorded[n].outcome not in ("killed", "raised")]
-    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=rest)
+        names = [n for n in names if n in recorded and recorded[n].outcome in rest]
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=bool(rest), drawn=drawn)
 
 
-def check(killed: int, seed: int) -> int:
-    """Rerun a sample of every record against the current tree (`make mutate-check`), one shard at a time."""
+def check(killed: int, seed: int, only: list[str]) -> int:
+    """Rerun a sample of every record (or of the records of the dotted modules `only`) against the current tree
+    (`make mutate-check`), one shard at a time."""
     status, total = 0, 0
     for path in sorted(rec.RESULTS.glob("*.tsv")):
+        if only and path.stem not in only:
+            continue
         entries = rec.read(path)
         chosen = mutation_screen.sample(entries, path.stem, killed, seed)
         total += len(chosen)
@@ -380,19 +488,29 @@ def main(argv: list[str]) -> int:
             print(f"{name:16} {module:28} {' '.join(tests)}  [{' '.join(patterns)}]")
         return 0
     if argv == ["--table"]:
-        rec.write_table(sorted({module for module, *_ in SHARDS.values()}))
+        rec.write_table(sorted({module for module, *_ in SHARDS.values()}), COVERAGE)
         return 0
     if argv[:1] == ["--check"]:
-        options = dict(zip(argv[1::2], argv[2::2]))
-        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)))
+        pairs = [a for i, a in enumerate(argv[1:]) if a.startswith("--") or argv[i].startswith("--")]
+        options = dict(zip(pairs[::2], pairs[1::2]))
+        only = [a for a in argv[1:] if a not in pairs]
+        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)), only)
     if argv[:1] == ["--recheck"] and len(argv) == 3:
         module, tests, _ = SHARDS[argv[1]]
         entries = rec.read(rec.record_path(module))
         chosen = [entries[n] for n in json.loads(argv[2])]
         # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
         return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
-    if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS and set(argv[2:]) <= {"--fresh", "--rest"}:
-        return screen(argv[1], fresh="--fresh" in argv, rest="--rest" in argv)
+    if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS:
+        flags = [a for a in argv[2:] if a in ("--fresh", "--rest", "--survived")]
+        options = dict(zip(*[iter(a for a in argv[2:] if a not in flags)] * 2))
+        if set(options) <= {"--sample", "--seed"}:
+            rest = ("survived",) if "--survived" in flags else OUTCOMES_UNKILLED if "--rest" in flags else ()
+            return screen(argv[1], "--fresh" in flags, rest, int(options.get("--sample", 0)),
+                          int(options.get("--seed", 0)))
+    if argv[:1] == ["--rename"] and len(argv) == 3:
+        rec.rename(argv[1], argv[2])
+        return 0
     names = [n for a in argv for n in shards_named(a)] or list(SHARDS)
     unknown = [n for n in names if n not in SHARDS]
     if unknown:

@@ -14,15 +14,16 @@ change (so that a renumbered mutant is found again), the outcome and the test th
     error       a fixture's setup or teardown failed, no test failed
     no-tests    the selection ran no test
 
-"killed" and "raised" are kills (a test failed: pytest's failure, exit 1, not an error), shown apart; nothing
-else is. A survivor named in mutation/equivalent.tsv with a written proof (no input the code can receive tells
-it from the original) is counted apart as equivalent.
+Only "killed" is a kill. "raised" (a test failed, pytest's exit 1, but on no assertion) is shown in its own
+column and in the sum "killed + raised" beside the kill rate; nothing else counts. A survivor named in
+mutation/equivalent.tsv with a written proof (no input the code can receive tells it from the original) is
+counted apart as equivalent.
 """
 from __future__ import annotations
 
 import csv
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,7 +88,7 @@ def write(path: Path, entries: dict[str, Entry], notes: list[str]) -> None:
         f.writelines(f"# {note}\n" for note in notes)
         out = csv.writer(f, delimiter="\t", lineterminator="\n")
         out.writerow(COLUMNS)
-        for e in sorted(entries.values(), key=lambda e: _order(e.mutant)):
+        for e in sorted(entries.values(), key=lambda e: order(e.mutant)):
             out.writerow([e.mutant, e.shard, e.hash, e.outcome, e.test, f"{e.seconds:.2f}", e.change])
     tmp.replace(path)
 
@@ -99,7 +100,8 @@ def notes_of(path: Path) -> list[str]:
     return [line[2:].rstrip("\n") for line in path.read_text("utf-8").splitlines(True) if line.startswith("# ")]
 
 
-def _order(mutant: str) -> tuple[str, int]:
+def order(mutant: str) -> tuple[str, int]:
+    """Sort key of a mutant name: its function, then its number."""
     function, _, number = mutant.rpartition("__mutmut_")
     return function, int(number) if number.isdigit() else 0
 
@@ -127,30 +129,76 @@ def tally(entries: dict[str, Entry], module: str, proofs: dict[tuple[str, str], 
     return counts
 
 
+def function_of(mutant: str) -> str:
+    """The function part of a mutant's name, without its module ("x_f" or "xǁClassǁmethod"): what stays when
+    the module moves (a record keyed by the old path still finds its mutants in the new one)."""
+    return mutant.rpartition("__mutmut_")[0].rpartition(".")[2]
+
+
+def made_of(path: Path) -> str:
+    """How many mutants mutmut made of the record's module (its "made:" note; "?" without one)."""
+    return next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
+
+
+def sample_note(path: Path) -> str:
+    """The record's "sample:" note ("" for a record of all, or of named shards of, its module's mutants)."""
+    return next((note for note in notes_of(path) if note.startswith("sample:")), "")
+
+
+def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """Clopper-Pearson interval of a proportion k / n (exact binomial, `level` two-sided)."""
+    from scipy.special import betaincinv  # the beta distribution's quantile, without scipy.stats' import time
+
+    alpha = 1.0 - level
+    low = 0.0 if k == 0 else float(betaincinv(k, n - k + 1, alpha / 2))
+    high = 1.0 if k == n else float(betaincinv(k + 1, n - k, 1 - alpha / 2))
+    return low, high
+
+
+def scope(path: Path, n: int, made: str) -> str:
+    """How a record's mutants were chosen: all, a seeded random sample, or the named shards' functions."""
+    if sample_note(path):
+        return "sample"
+    return "full" if not made.isdigit() or n >= int(made) else "part"
+
+
+def rate(k: int, n: int, sampled: bool) -> str:
+    """"k (p %)", with the binomial 95 % interval of the module's rate when the n mutants are a random sample."""
+    if not sampled:
+        return f"{k} ({100 * k / n:.1f} %)"
+    low, high = binomial_interval(k, n)
+    return f"{k} ({100 * k / n:.1f} %, {100 * low:.0f}–{100 * high:.0f} %)"
+
+
 def table(modules: list[str]) -> str:
     """The per-module table (markdown) of every committed record, then the modules of `modules` without one."""
     proofs = equivalents()
-    lines = ["| module | mutants screened (made) | killed (raw) | of them by an exception, not an assertion "
-             "| equivalent, proven | survived | timeout | crash | collection, error, no tests "
-             "| killed of the non-equivalent |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = ["| module | mutants screened (made) | sample or full | killed by an assertion: raw rate | raised "
+             "(another exception) | killed + raised | equivalent, proven | survived | timeout | crash "
+             "| collection, error, no tests | killed by an assertion, of the non-equivalent |",
+             "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     recorded = sorted(RESULTS.glob("*.tsv"))
     partial = []
     for path in recorded:
         module = path.stem
         c = tally(read(path), module, proofs)
-        n, kills = sum(c.values()), c["killed"] + c["raised"]
-        made = next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")
+        n = sum(c.values())
+        made = made_of(path)
         if n == 0:
             continue
         rest = n - c["equivalent"]
-        if made.isdigit() and n < int(made):
+        how = scope(path, n, made)
+        if how == "part":
             partial.append(f"`{module}` ({n} of {made}: {', '.join(sorted(shards_of(path)))})")
-        lines.append(f"| `{module}` | {n} ({made}) | {kills} ({100 * kills / n:.1f} %) | {c['raised']} "
-                     f"| {c['equivalent']} | {c['survived']} | {c['timeout']} | {c['crash']} "
-                     f"| {c['collection'] + c['error'] + c['no-tests']} "
-                     f"| {100 * kills / rest if rest else 100:.1f} % |")
-    lines += ["", "Records of part of a module (the named shards' functions only): " + (", ".join(partial) or "none")
+        sampled = how == "sample"
+        lines.append(f"| `{module}` | {n} ({made}) | {how} | {rate(c['killed'], n, sampled)} | {c['raised']} "
+                     f"| {rate(c['killed'] + c['raised'], n, sampled)} | {c['equivalent']} | {c['survived']} "
+                     f"| {c['timeout']} | {c['crash']} | {c['collection'] + c['error'] + c['no-tests']} "
+                     f"| {100 * c['killed'] / rest if rest else 100:.1f} % |")
+    lines += ["", "Samples: the rate of the mutants the sample was drawn from (the module's, or one shard's: "
+              "the record's `sample:` note gives the seed and the shard), 95 % Clopper-Pearson interval after it. "
+              "Records of part of a module "
+              "(the named shards' functions, not a random sample: no interval): " + (", ".join(partial) or "none")
               + "."]
     have = {p.stem for p in recorded}
     missing = sorted({m.removesuffix(".py").replace("/", ".") for m in modules} - have)
@@ -160,13 +208,52 @@ def table(modules: list[str]) -> str:
     return "\n".join(lines)
 
 
-def write_table(modules: list[str]) -> None:
-    """Replace the table between the markers of docs/mutation.md."""
+def coverage_table(coverage: dict[str, str]) -> str:
+    """Every physics and numerics module (path -> "" when screened, else why not) with its record's scope, or why
+    it has none."""
+    lines = ["| module | record | why not screened, or what is left |", "| --- | --- | --- |"]
+    for module, why in coverage.items():
+        path = record_path(module)
+        n = len(read(path))
+        made = made_of(path)
+        found = f"{scope(path, n, made)}: {n} of {made}" if n else "none"
+        lines.append(f"| `{module}` | {found} | {why or ('—' if n else 'not screened yet')} |")
+    return "\n".join(lines)
+
+
+def write_table(modules: list[str], coverage: dict[str, str]) -> None:
+    """Replace the tables between the markers of docs/mutation.md: per record, then per physics module."""
     text = DOC.read_text("utf-8")
     head, _, rest = text.partition(TABLE_START)
     _, _, tail = rest.partition(TABLE_END)
     if not rest:
         raise SystemExit(f"{DOC}: no line {TABLE_START!r} to write the table after")
     tmp = DOC.with_suffix(".md.tmp")
-    tmp.write_text(f"{head}{TABLE_START}\n\n{table(modules)}\n\n{TABLE_END}{tail}", "utf-8")
+    tables = f"{table(modules)}\n\nEvery module that computes physics or numerics:\n\n{coverage_table(coverage)}"
+    tmp.write_text(f"{head}{TABLE_START}\n\n{tables}\n\n{TABLE_END}{tail}", "utf-8")
     tmp.replace(DOC)
+
+
+def rename(old: str, new: str) -> None:
+    """A module moved from path `old` to `new` (symmech/core/ode.py -> symmech/core/numerics/ode.py): its record
+    file, its notes, its mutants' names and its proofs' module follow it (the change hashes stay: mutate-check
+    finds each mutant again by its function and change)."""
+    dotted = [m.removesuffix(".py").replace("/", ".") for m in (old, new)]
+    source = record_path(old)
+    if not source.exists():
+        raise SystemExit(f"{source}: no record of {old}")
+    entries = {}
+    for e in read(source).values():
+        name = e.mutant.replace(dotted[0] + ".", dotted[1] + ".", 1)
+        entries[name] = replace(e, mutant=name)
+    notes = [note.replace(old, new) for note in notes_of(source) if not note.startswith("module:")]
+    notes.insert(1, f"module: {new}")
+    write(record_path(new), entries, notes)
+    source.unlink()
+    if EQUIVALENT.exists():
+        text = EQUIVALENT.read_text("utf-8")
+        lines = [line.replace(dotted[0], dotted[1]) if line.startswith(dotted[0] + "\t") else line
+                 for line in text.splitlines(True)]
+        tmp = EQUIVALENT.with_suffix(".tsv.tmp")
+        tmp.write_text("".join(lines), "utf-8")
+        tmp.replace(EQUIVALENT)

@@ -3,9 +3,10 @@ imported pytest and the mutated module once (mutmut's trampolines choose the mut
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
 The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first failing or erroring test, as `-x` would: a
-test that fails on another exception than an assertion is a kill too (pytest's failure, not an error), recorded
-apart; a fixture's error is not.
+the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion (a kill), as
+`-x` would; past a test that fails on another exception or a fixture error it runs on, so that a mutant is
+recorded "raised" (not a kill: docs/mutation.md) or "error" only when no test of the selection fails on an
+assertion.
 """
 from __future__ import annotations
 
@@ -34,8 +35,9 @@ TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmu
 
 
 class Verdict:
-    """A pytest plugin that notes the first failing test, on an assertion or on another exception, or the first
-    fixture error (and stops there), and collection errors."""
+    """A pytest plugin that notes the first test failing on an assertion (and stops there), else the first failing
+    on another exception or the first fixture error (and runs on: a later test may still fail on an assertion),
+    and collection errors."""
 
     def __init__(self):
         self.session = None
@@ -54,15 +56,13 @@ class Verdict:
 
         if not hasattr(node, "nodeid") or report.when is None:
             return
-        if report.when != "call":
+        if report.when != "call":  # a fixture: the tests that do not use it may still assert
             self.error = self.error or f"{node.nodeid} ({report.when}: {call.excinfo.typename})"
-            self.session.shouldstop = "a fixture failed"
         elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
             self.killed = node.nodeid
             self.session.shouldstop = "a test failed on an assertion"
         else:
-            self.raised = f"{node.nodeid} ({call.excinfo.typename})"
-            self.session.shouldstop = "a test failed on another exception"
+            self.raised = self.raised or f"{node.nodeid} ({call.excinfo.typename})"
 
 
 def freeze_tests(folder: Path) -> Path:
@@ -168,9 +168,10 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
 
 
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           rest: bool = False) -> int:
+           rest: bool = False, drawn: str = "") -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
-    `rest`: they are what an earlier screen of the shard left unkilled (the note says so)."""
+    `rest`: they are what an earlier screen of the shard left unkilled (the note says so); `drawn`: how a random
+    sample was drawn (the record's "sample:" note)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
     entries = rec.read(path)
@@ -179,8 +180,10 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
                             text=True).stdout.strip()
     made = len(mutant_names(folder, module))
     label = f"{shard} (its unkilled mutants again)" if rest else shard
-    notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {label}:", "made:"))]
-    notes.insert(0, f"made: {made} mutants of {module} by mutmut")
+    notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {label}:", "made:", "module:"))]
+    notes[:0] = [f"made: {made} mutants of {module} by mutmut", f"module: {module}"]
+    if drawn:
+        notes = [n for n in notes if not n.startswith("sample:")] + [f"sample: {drawn}"]
     notes.append(f"shard {label}: {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, tree {commit}, tests "
                  f"{' '.join(tests)}; unmutated runs {', '.join(f'{t:.1f}' for t in times)} s, limit {limit:.0f} s")
     print(f"== screen {shard}: {len(names)} mutants, unmutated {times} s, limit {limit:.0f} s", flush=True)
@@ -222,16 +225,16 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
     current = mutant_names(folder, module)
     by_hash = {}
     for name, (digest, _) in changes(folder, module, current).items():
-        by_hash.setdefault((name.rpartition("__mutmut_")[0], digest), name)
+        by_hash.setdefault((rec.function_of(name), digest), name)
     failures = 0
     for e in chosen:
-        name = by_hash.get((e.mutant.rpartition("__mutmut_")[0], e.hash))
+        name = by_hash.get((rec.function_of(e.mutant), e.hash))  # the module's path may have changed
         if name is None:
             print(f"    {e.mutant} ({e.change}): no longer made from the current tree; rescreen the shard")
             failures += 1
             continue
         outcome, test, _ = run_one(name, deciding(e, folder, tests) or args, limit)
-        held = outcome == e.outcome or {outcome, e.outcome} == {"killed", "raised"}  # a kill either way
+        held = outcome == e.outcome or (e.outcome, outcome) == ("raised", "killed")  # an assertion now: better
         failures += not held
         print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "
               f"{test} {'ok' if held else 'CHANGED'}", flush=True)
