@@ -40,6 +40,7 @@ def entry(tmp_path, monkeypatch):
     """The folder of the module and its cache folder (in-tree: ``NUMBA_CACHE_DIR`` unset), after a first call
     that compiled it into the cache, under the guard."""
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setattr(numba.core.config, "CACHE_DIR", "")  # numba read the variable at its import
     monkeypatch.setattr(artifacts, "_warned", set())
     (tmp_path / "probe_entry.py").write_text(SOURCE)
     artifacts.guard_numba_cache()
