@@ -1,6 +1,6 @@
 """Compiled engines register themselves here, as scene kinds do in :mod:`symmech.core.registry`.
 
-An engine is declared by a light module whose name ends in ``engine`` (``symmech/<paper>/*engine.py``; no
+An engine is declared by a light module marked ``ROLE = "engine"`` (:mod:`symmech.core.discovery`; no
 numba, no physics) that calls :func:`register` at import with an :class:`Engine`: its name, one line for
 ``--help``, and the module that implements it. ``symmech warm``, its ``--engine`` choices and the run
 estimates read this registry, so adding an engine touches no central list (docs/ARCHITECTURE.md, "Adding
@@ -92,16 +92,16 @@ def register(engine: Engine) -> Engine:
 def _discover(until: str | None = None) -> None:
     """Import engine modules until engine ``until`` is registered (all of them when None), those whose name
     contains it first: a grain run imports no other paper's package."""
-    from symmech.core import registry  # the discovery scene kinds use; not at import (the CLI's start)
+    from symmech.core import discovery  # not at import (the CLI's start)
 
-    for name in sorted(registry.paper_modules("engine"), key=lambda module: until is None or until not in module):
+    for name in sorted(discovery.modules("engine"), key=lambda module: until is None or until not in module):
         if until in _ENGINES:
             return
         importlib.import_module(name)
 
 
 def engines() -> dict[str, Engine]:
-    """Every registered engine by name (every ``symmech.<paper>.*engine`` module imported once)."""
+    """Every registered engine by name (every module declaring ``ROLE = "engine"`` imported once)."""
     global _ALL
     if not _ALL:
         _discover()

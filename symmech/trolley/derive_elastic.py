@@ -20,6 +20,8 @@ from symmech.core import kinematics as kin
 from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix, args_of
 from symmech.trolley.derive import SOURCE
 
+ROLE = "derivation"  # found by symmech.core.discovery
+
 u2, u3, q_th1, q_th2, q_th3 = sp.symbols("u2 u3 q_th1 q_th2 q_th3", real=True)
 Q0 = (u2, u3, q_th1, q_th2, q_th3)
 Q0_ARGS = args_of([(u2, "roller DOF: displacement of O along x2", "m"),

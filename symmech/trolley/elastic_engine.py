@@ -2,5 +2,7 @@
 assembly in numba, integrated by Radau IIA (:mod:`symmech.trolley.elastic_compiled`)."""
 from symmech.core import engines
 
+ROLE = "engine"  # found by symmech.core.discovery
+
 engines.register(engines.Engine(
     "elastic", "the elastic trolley's assembly and Radau IIA solve (numba)", "symmech.trolley.elastic_compiled"))

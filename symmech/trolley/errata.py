@@ -11,6 +11,8 @@ from symmech.generated import trolley_frame as frm
 from symmech.generated import trolley_printed as printed
 from symmech.trolley import SEED
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 HELIX = {"R": 7.0, "lam": 5 / (2 * np.pi)}
 
 

@@ -7,6 +7,8 @@ from symmech.generated import trolley_elastic as gen
 from symmech.generated import trolley_elastic_printed as printed
 from symmech.trolley import SEED
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 _NAMES = ("φ0_2", "φ0_3", "φ0_4", "φ0_5", "φ0_6", "ψ0_44", "ψ0_45", "ψ0_46", "ψ0_55", "ψ0_56", "ψ0_66")
 
 

@@ -12,6 +12,8 @@ from symmech.core.derivation import ModuleSpec, NamedMatrix
 from symmech.trolley.derive import SOURCE
 from symmech.trolley.derive_elastic import X, X_ARGS
 
+ROLE = "printed"  # found by symmech.core.discovery
+
 x1, x2, x3 = X
 
 # Columns φ0_2 … φ0_6, then ψ0_44, ψ0_45, ψ0_46, ψ0_55, ψ0_56, ψ0_66 (printed order).

@@ -23,6 +23,8 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import elastic_schema, model, plots, tables, track as tracks
 from symmech.trolley import sweep as design_sweep
 
+ROLE = "kind"  # found by symmech.core.discovery
+
 G_STANDARD = 9.80665
 # Default comfort envelope [g] per body axis (tangential, normal, lateral).
 COMFORT = {"x1": (-2.0, 2.0), "x2": (-1.5, 6.0), "x3": (-2.0, 2.0)}
