@@ -19,7 +19,8 @@ import sympy
 from scipy.integrate import solve_ivp
 
 import symmech
-from symmech.core import emit, kernels
+from symmech.core import emit
+from symmech.numerics import kernels
 from symmech.core.derivation import Arg, Dynamics, ModuleSpec, args_of
 from symmech.core.scene import scenes_folder
 from symmech.generated import grain_motion as gm
@@ -394,7 +395,7 @@ def test_without_numba_kernels_load_gives_the_numpy_rhs_and_layouts():
                     raise ImportError(name)
         sys.meta_path.insert(0, Block())
         import numpy as np
-        from symmech.core import kernels
+        from symmech.numerics import kernels
         from symmech.generated import smm_rotor_boom as rb
         k = kernels.load("smm_rotor_boom")
         assert k.STATE == rb.STATE and k.PARAMS == rb.PARAMS

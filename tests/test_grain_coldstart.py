@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import build, pipeline
+from symmech.core import pipeline
+from symmech.numerics import build
 from symmech.grain import compiled, compiled_loop, motion_scene, sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -169,7 +170,8 @@ def _final_position(out: Path) -> np.ndarray:
 SWEEP_ON_FRESH_WORKERS = """
 import json, sys
 import dask.distributed as distributed
-from symmech.core import build, pipeline
+from symmech.core import pipeline
+from symmech.numerics import build
 from symmech.grain import compiled, compiled_loop, sweep
 
 raw = {"kind": "grain", "duration": 0.08, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},

@@ -1,4 +1,4 @@
-"""The compiled ODE toolkit (symmech.core.ode): scipy's DOP853, Radau IIA and Brent ported to numba, on their
+"""The compiled ODE toolkit (symmech.numerics.ode): scipy's DOP853, Radau IIA and Brent ported to numba, on their
 own: tableaux bit-equal to scipy's, empirical orders of convergence, scipy's step counts on stiff and non-stiff
 problems, and a generated dynamics module integrated end to end (``ode.integrate``) against ``solve_ivp`` and
 the exact free response of the mechanism run.
@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 import symmech
-from symmech.core import ode
+from symmech.numerics import ode
 from symmech.core.scene import SymmechError, scenes_folder
 from symmech.generated import smm_rotor_boom
 
@@ -92,7 +92,7 @@ def fixed_dop853(n, t_end=4.0):
 
 
 def test_radau_tableau_is_scipys_bit_for_bit():
-    """The Radau IIA constants written out in core.ode (no scipy import at run time) are those of scipy's
+    """The Radau IIA constants written out in numerics.ode (no scipy import at run time) are those of scipy's
     ``_ivp/radau.py``, to the last bit."""
     from scipy.integrate._ivp import radau
 
@@ -124,7 +124,7 @@ def test_radau_stiff_prothero_robinson_within_the_tolerance(rtol):
     assert steps < 100
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_radau_takes_scipys_steps():
     """Same algorithm as scipy's Radau with the same (exact) Jacobian: the same number of accepted steps and
     the same largest error to 1e-6 relative (round-off through the step-size control)."""
@@ -252,7 +252,7 @@ def test_integrate_generated_module_equals_solve_ivp_and_the_exact_response(meth
     np.testing.assert_array_less(np.abs(sol.y[:n].T - q_run).max(axis=0), tol * np.abs(q_run).max(axis=0))
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     """The rotor boom with the drive suspension's viscosity mu3 raised 1e4 times: a mode decaying at
     3.6e4 1/s beside the 11 rad/s oscillation (eigenvalues of the generated jac). Radau with the generated jac
@@ -274,7 +274,7 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     assert np.all(np.abs(radau.y - ref.y).max(axis=1) < 1e-6 * scale)
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_integrate_refuses_bad_requests():
     """An unknown method, decreasing times and a step budget too small are errors, not silent results."""
     p, y0, t, _ = _rotor_boom()
@@ -288,7 +288,7 @@ def test_integrate_refuses_bad_requests():
 
 CACHED_CALLER = '''
 import numba, numpy as np
-from symmech.core import ode
+from symmech.numerics import ode
 
 @numba.njit(cache=True)
 def decay(t, y, args, out):
@@ -303,9 +303,9 @@ def caller(y):
 '''
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_a_cached_caller_of_the_toolkit_loads_from_the_cache_in_a_fresh_process(tmp_path):
-    """The design decision of core.ode (its docstring): a cached jitted function calling the toolkit's closures
+    """The design decision of numerics.ode (its docstring): a cached jitted function calling the toolkit's closures
     is compiled once and served from numba's cache in the next process (no miss, one hit), with the same value,
     e^-0.1 to the step's tolerance."""
     (tmp_path / "cached_caller.py").write_text(CACHED_CALLER)
@@ -333,7 +333,7 @@ def spring_events(t, y, args, g):
     g[0], g[1] = y[0], y[1] + args[0] / 2
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 @pytest.mark.parametrize("method", ["DOP853", "Radau"])
 def test_events_of_an_oscillator_at_its_zero_crossings_and_as_solve_ivp_finds_them(method):
     """x = cos(w t): zeros at (j + 1/2) pi / w within 1e-9 s (rtol 1e-10; measured 3e-11, the solve's phase
@@ -363,7 +363,7 @@ def test_events_of_an_oscillator_at_its_zero_crossings_and_as_solve_ivp_finds_th
     assert filled == 1 and not np.isnan(Y[0]).any() and np.isnan(Y[1:]).all()
 
 
-@pytest.mark.slow  # compiles the toolkit for the grain flight (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles the toolkit for the grain flight (not cacheable across processes, numerics/ode.py)
 def test_integrate_ends_a_grain_flight_at_contact():
     """The grain flight module declares its terminal contact event. Spinning about the plane normal over a
     still plane, the gap is rz - c and the contact time is the free-flight closed form

@@ -44,7 +44,7 @@ _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by h
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
-``symmech.core.kernels``), ``<name>.c`` its C99 twin (``symmech export``
+``symmech.numerics.kernels``), ``<name>.c`` its C99 twin (``symmech export``
 reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.

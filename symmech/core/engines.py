@@ -10,7 +10,7 @@ The protocol, every engine alike (the implementation module provides ``ENGINE``,
 ``LAYOUTS``)::
 
     engine = engines.get("grain")
-    engine.builder()      # ENGINE, a symmech.core.build.Engine: numba's cache and the ahead-of-time build
+    engine.builder()      # ENGINE, a symmech.numerics.build.Engine: numba's cache and the ahead-of-time build
     engine.warm(...)      # build it now, once per machine (symmech warm)
     engine.load()         # what a run calls: the ahead-of-time build when current, else numba's entries
     engine.run(...)       # simulate(...): the engine's contract, results as the reference engine's
@@ -29,9 +29,9 @@ _ALL = False  # every engine module imported
 class Engine:
     """One compiled engine.
 
-    name            ``symmech warm --engine NAME``; the name of its :class:`symmech.core.build.Engine`
+    name            ``symmech warm --engine NAME``; the name of its :class:`symmech.numerics.build.Engine`
     summary         one line for ``symmech warm --help``
-    implementation  dotted name of the module that provides ``ENGINE`` (a :class:`symmech.core.build.Engine`),
+    implementation  dotted name of the module that provides ``ENGINE`` (a :class:`symmech.numerics.build.Engine`),
                     ``simulate(...)`` and ``LAYOUTS`` (its declared layouts, :mod:`symmech.core.layout`)
     """
 
@@ -44,11 +44,11 @@ class Engine:
         return importlib.import_module(self.implementation)
 
     def builder(self):
-        """The engine's :class:`symmech.core.build.Engine`: numba's cache, the build lock, the ahead-of-time build."""
+        """The engine's :class:`symmech.numerics.build.Engine`: numba's cache, the build lock, the ahead-of-time build."""
         return self.module().ENGINE
 
     def warm(self, wait: bool = True, say=None, ahead: bool = False) -> bool:
-        """:meth:`symmech.core.build.Engine.warm`: build the engine now unless it is built."""
+        """:meth:`symmech.numerics.build.Engine.warm`: build the engine now unless it is built."""
         return self.builder().warm(wait=wait, say=say, ahead=ahead)
 
     def load(self):

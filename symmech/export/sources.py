@@ -7,7 +7,7 @@ import importlib.resources
 
 import jinja2
 
-from symmech.core import dop853
+from symmech.numerics import dop853
 from symmech.export.model import ExportModel
 
 GLUE = ("symmech_model.h", "symmech_model.c")
@@ -61,12 +61,12 @@ def _array(name: str, values) -> str:
 
 
 def tableau_header() -> str:
-    """``dop853_tableau.h``: symmech.core.dop853's C, A, B, E5, E3 (the 12 stages and the FSAL stage)."""
+    """``dop853_tableau.h``: symmech.numerics.dop853's C, A, B, E5, E3 (the 12 stages and the FSAL stage)."""
     n = dop853.N_STAGES
     rows = ",\n    ".join("{" + ", ".join(repr(float(x)) for x in dop853.A[i, :n]) + "}" for i in range(n))
     return "\n".join([
         "/* The DOP853 tableau (Dormand and Prince 8(5,3), from Hairer's dop853.f), written by `symmech export` "
-        "from symmech/core/dop853.py. */",
+        "from symmech/numerics/dop853.py. */",
         "#ifndef DOP853_TABLEAU_H", "#define DOP853_TABLEAU_H", f"#define DOP853_STAGES {n}",
         _array("DOP853_C", dop853.C[:n]), f"static const double DOP853_A[{n}][{n}] = {{\n    {rows}}};",
         _array("DOP853_B", dop853.B), _array("DOP853_E5", dop853.E5), _array("DOP853_E3", dop853.E3),

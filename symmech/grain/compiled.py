@@ -29,7 +29,7 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
 
 The loop is :mod:`symmech.grain.compiled_loop`; this module is its Python side and imports no numba. The
 generic integrators and root finders (DOP853, Radau IIA with dense output, Brent) are those of
-:mod:`symmech.core.ode`, compiled there for the rotation and sliding right-hand sides (``_rhs``, ``_jac``)
+:mod:`symmech.numerics.ode`, compiled there for the rotation and sliding right-hand sides (``_rhs``, ``_jac``)
 and the functions of time (``_h``); the loop keeps the physics and the event logic.
 
 Parameters travel in one float64 vector (layout :data:`compiled_layout.PARAMS`), the state as
@@ -39,7 +39,7 @@ Parameters travel in one float64 vector (layout :data:`compiled_layout.PARAMS`),
 built on first use: ``LazyMotion``). The compiled loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
 ``on_step`` is called; this does not change the result. ``simulate_many`` runs
 grains on threads (the loop releases the GIL). Once ``symmech warm`` or the background builder has built the
-loop ahead of time (:mod:`symmech.core.aot`), a run on the main thread calls that build: nothing of numba is
+loop ahead of time (:mod:`symmech.numerics.aot`), a run on the main thread calls that build: nothing of numba is
 loaded; threads call numba's, which releases the GIL.
 """
 from __future__ import annotations
@@ -50,7 +50,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from symmech.core import aot, artifacts, build, layout
+from symmech.core import layout
+from symmech.numerics import aot, artifacts, build
 from symmech.core.scene import SymmechError
 from symmech.grain import compiled_layout, motion, sliding
 from symmech.grain.compiled_layout import (  # noqa: F401 (LAYOUTS: the engine protocol reads it here)

@@ -10,7 +10,7 @@ import math
 import numba
 import numpy as np
 
-from symmech.core import kernels, ode
+from symmech.numerics import kernels, ode
 from symmech.grain import sliding
 from symmech.grain.compiled_layout import (
     P_AT, C_AT, S_AT, I_AT, N_SLIDE, IMPACT_WIDTH, LAW_PRINTED, INT, FLIGHT, IMPACT, SLIDING, DONE, MORE, STALLED,

@@ -397,7 +397,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
     Grains on the compiled engine find it built: this process builds it first (in the foreground,
     ``say(text)`` tells it), and so does each machine of a ``dask.distributed`` cluster, once per
-    machine (the build lock of :meth:`symmech.core.build.Engine.warm`).
+    machine (the build lock of :meth:`symmech.numerics.build.Engine.warm`).
     """
     import dask
 

@@ -1,4 +1,4 @@
-/* A generated rhs(t, y, p) / jac(t, y, p) called from Python at C speed (symmech/core/fastcall.py builds
+/* A generated rhs(t, y, p) / jac(t, y, p) called from Python at C speed (symmech/numerics/fastcall.py builds
  * and loads this file).
  *
  * Kernel(n, m, ndim, general) is a callable for the lengths n of y and m of p and the rank of its output:
@@ -183,7 +183,7 @@ static PyMethodDef Kernel_methods[] = {
 
 static PyTypeObject KernelType = {
     PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "symmech.core._fastcall.Kernel",
+    .tp_name = "symmech.numerics._fastcall.Kernel",
     .tp_basicsize = sizeof(Kernel),
     .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
     .tp_new = Kernel_new,
@@ -201,7 +201,7 @@ static PyTypeObject KernelType = {
 static struct PyModuleDef fastcall_module = {
     PyModuleDef_HEAD_INIT,
     .m_name = "_fastcall",
-    .m_doc = "C-speed calls of generated right-hand sides (symmech.core.fastcall).",
+    .m_doc = "C-speed calls of generated right-hand sides (symmech.numerics.fastcall).",
     .m_size = -1,
 };
 

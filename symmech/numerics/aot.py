@@ -6,7 +6,7 @@ numpy, scipy and matplotlib together. An engine also built ahead of time (``numb
 compiler, by ``symmech warm`` or the background builder right after numba's cache, whose compiled functions it
 reuses) loads as a plain extension module instead.
 
-The build lives in :func:`folder` beside its record (:mod:`symmech.core.artifacts`: the SHA-256 of the built
+The build lives in :func:`folder` beside its record (:mod:`symmech.numerics.artifacts`: the SHA-256 of the built
 module, of every file it was compiled from (the loop, its kernels, the generated modules), the checkout that
 built it, the Python ABI and numpy's version). A run loads it only when all of these match this installation,
 and hashes the module before loading it; else numba's cache serves, after one warning line naming the refused
@@ -33,8 +33,9 @@ from pathlib import Path
 from types import ModuleType
 from collections.abc import Callable
 
-from symmech.core import artifacts, integrity
-from symmech.core.build import file_lock
+from symmech.core import integrity
+from symmech.numerics import artifacts
+from symmech.numerics.build import file_lock
 
 SUFFIX = importlib.machinery.EXTENSION_SUFFIXES[0]
 
@@ -55,7 +56,7 @@ def folder(anchor: str) -> Path:
 class Build:
     """The ahead-of-time build ``<name>_aot`` of an engine: ``exports()`` maps each exported name to a numba
     dispatcher and the signature it is compiled for; ``anchors`` are files of the engine's Python side, sources
-    of the build that :func:`symmech.core.artifacts.sources` cannot reach (constants imported by name); the
+    of the build that :func:`symmech.numerics.artifacts.sources` cannot reach (constants imported by name); the
     first sets the folder. ``refused`` tells whether :meth:`load` refused a build it found (to be rebuilt)."""
 
     def __init__(self, name: str, anchors: list[str], exports: Callable[[], dict]):
@@ -68,7 +69,7 @@ class Build:
         return where / f"{self.module_name}{SUFFIX}", where / f"{self.module_name}.json"
 
     def load(self) -> ModuleType | None:
-        """The built module if it is current (:func:`symmech.core.artifacts.check`: the module, its sources,
+        """The built module if it is current (:func:`symmech.numerics.artifacts.check`: the module, its sources,
         the checkout and the platform), else None: a build found but refused is dropped after one warning
         line naming it; one being replaced (its lock held) is left alone. Imports no numba; checked once per
         process."""

@@ -1,8 +1,8 @@
 """Built artifacts, recorded when built and verified before they are loaded.
 
 An artifact is a file built on this machine that a run loads as machine code: numba's cache entries of a
-compiled engine (:mod:`symmech.core.build`), an engine built ahead of time (:mod:`symmech.core.aot`), the
-fast-call extension (:mod:`symmech.core.fastcall`). Its *record* (JSON, written atomically after the files it
+compiled engine (:mod:`symmech.numerics.build`), an engine built ahead of time (:mod:`symmech.numerics.aot`), the
+fast-call extension (:mod:`symmech.numerics.fastcall`). Its *record* (JSON, written atomically after the files it
 records) holds the SHA-256 of every built file, of every source file it was built from, the checkout that
 built it (the folder of the ``symmech`` package) and the platform (Python ABI and version, numpy's version).
 :func:`check` accepts an artifact only when all of these match this installation; a loader then refuses a

@@ -5,7 +5,7 @@ them with. :meth:`Engine.warm` compiles them unless numba's cache holds them, un
 lock (``fcntl.flock`` on a file beside the cache: the OS releases it when its holder dies, so a killed
 builder never blocks later builds); a process that waits for the lock then loads what the holder built.
 numba writes each cache file whole (a temporary file renamed), so an interrupted build leaves none half
-written. What a build leaves is recorded (:mod:`symmech.core.artifacts`: each entry's index and data files, the
+written. What a build leaves is recorded (:mod:`symmech.numerics.artifacts`: each entry's index and data files, the
 sources they were compiled from, the checkout) in ``symmech-<name>-numba.json`` beside them; :meth:`Engine.cold`
 accepts the cache only when that record matches, else warns once naming the refused file and the engine is
 cold (the next build drops the refused files and compiles); the entries' module is imported only once the
@@ -28,7 +28,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from collections.abc import Callable
 
-from symmech.core import artifacts
+from symmech.numerics import artifacts
 
 
 COLD = "auto: the compiled engine is not built yet"  # how every cold-cache reason starts
@@ -96,13 +96,13 @@ class Engine:
 
     def __init__(self, name: str, module: str, entries: Callable[[], dict], seconds: float, ahead=None):
         self.name, self.module, self.entries, self.seconds = name, module, entries, seconds
-        self.ahead = ahead  # its symmech.core.aot.Build, if it has one
+        self.ahead = ahead  # its symmech.numerics.aot.Build, if it has one
         self.lock_name = f"symmech-{name}-build.lock"
         self._accepted = None  # the modification time [ns] of the record cold() accepted
         self._holding = False  # whether this process holds the build lock
 
     def ahead_of_time(self):
-        """The engine's ahead-of-time build (:mod:`symmech.core.aot`) when it is current, else None (always
+        """The engine's ahead-of-time build (:mod:`symmech.numerics.aot`) when it is current, else None (always
         with ``SYMMECH_AHEAD_OF_TIME=0``: runs then take numba's cache, and nothing is built); loads no numba.
         A build refused as damaged, foreign or stale is rebuilt by a background builder."""
         if self.ahead is None or not ahead_of_time_builds():
@@ -150,7 +150,7 @@ class Engine:
             return not free
 
     def record_file(self) -> Path:
-        """The record of what the last build left in numba's cache (:mod:`symmech.core.artifacts`)."""
+        """The record of what the last build left in numba's cache (:mod:`symmech.numerics.artifacts`)."""
         return self.cache_dir() / f"symmech-{self.name}-numba.json"
 
     def _record(self) -> None:

@@ -4,7 +4,7 @@ Transcribed from E. Hairer's published Fortran code ``dop853.f`` (E. Hairer, S. 
 *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993, Section II.10; the pair of
 P. J. Prince and J. R. Dormand, *J. Comput. Appl. Math.* 7 (1981) 67-75), in the layout of scipy's
 ``solve_ivp(method="DOP853")``, whose private ``scipy.integrate._ivp.dop853_coefficients`` transcribes the
-same code: the compiled toolkit (:mod:`symmech.core.ode`, and through it the grain engine) steps exactly as
+same code: the compiled toolkit (:mod:`symmech.numerics.ode`, and through it the grain engine) steps exactly as
 ``solve_ivp`` does, and ``tests/test_dop853.py`` checks every entry against scipy's, bit for bit. Kept here
 so that a run imports neither scipy.integrate nor a private scipy module.
 

@@ -9,9 +9,9 @@ calls the kernel; anything else, and a kernel that raised (a singular mass matri
 general Python path, so results and errors stay those of the generated ``rhs``/``jac``.
 
 The extension is compiled once with the system C compiler (sysconfig's ``CC``, or ``$CC``) into numba's
-cache folder of the twin (:func:`symmech.core.build.cache_dir`), named by the hash of the source, the
+cache folder of the twin (:func:`symmech.numerics.build.cache_dir`), named by the hash of the source, the
 Python ABI and numpy's version, under a file lock, through a temporary file renamed into place, and recorded
-beside it (:mod:`symmech.core.artifacts`: its SHA-256, the source's, the checkout, the platform). It is loaded
+beside it (:mod:`symmech.numerics.artifacts`: its SHA-256, the source's, the checkout, the platform). It is loaded
 only when that record matches (hashed before it is loaded: a truncated extension would be mapped past its end);
 a damaged, foreign or unrecorded file is dropped and rebuilt after one warning line naming it. It is never
 required: without a compiler, or when the build fails, ``rhs``/``jac`` stay the twin's numba path (one debug
@@ -34,8 +34,8 @@ import tempfile
 from pathlib import Path
 from types import FunctionType, ModuleType
 
-from symmech.core import artifacts
-from symmech.core.build import cache_dir, file_lock
+from symmech.numerics import artifacts
+from symmech.numerics.build import cache_dir, file_lock
 
 SOURCE = Path(__file__).with_name("_fastcall.c")
 _log = logging.getLogger(__name__)

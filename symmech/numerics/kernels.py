@@ -6,7 +6,7 @@ module: ``f`` is the numpy function and ``f_scalar`` calls it and returns a
 float (scalar quantities) or a float64 array of the element shape (``rhs_scalar``
 and ``jac_scalar`` of a dynamics module: its ``rhs`` and ``jac``); ``f_into(...,
 out)`` writes it into ``out[0]``. The twin's ``rhs``/``jac`` are the C path of
-:mod:`symmech.core.fastcall` (nothing compiled here). Runtime
+:mod:`symmech.numerics.fastcall` (nothing compiled here). Runtime
 code written against ``load`` runs everywhere; only its speed differs. The
 import verifies the module, as every import of ``symmech.generated`` does
 (:mod:`symmech.core.integrity`).
@@ -44,13 +44,13 @@ def _into_twin(function):
 def load(name: str):
     """The numba module ``<name>_nb``, or the numpy stand-in described above; SymmechError
     when the module is edited, truncated or stale. numba's cache files of its kernels are loaded under
-    :func:`symmech.core.artifacts.guard_numba_cache`."""
+    :func:`symmech.numerics.artifacts.guard_numba_cache`."""
     try:
         import numba  # noqa: F401  (the twin needs it; without it the numpy module stands in)
     except ImportError:
         pass
     else:
-        from symmech.core import artifacts, fastcall
+        from symmech.numerics import artifacts, fastcall
 
         artifacts.guard_numba_cache()  # a damaged cache file of the twin's kernels: recompiled, not an error
         twin = importlib.import_module(f"{PACKAGE}.{name}_nb")

@@ -2,7 +2,7 @@
 bounded minimiser, ported to numba, for any right-hand side.
 
 The ports take scipy's steps: the same step-size control, error norms, Newton iteration and interpolants,
-with the tableaux of :mod:`symmech.core.dop853` and the Radau constants below (both bit-equal to scipy's,
+with the tableaux of :mod:`symmech.numerics.dop853` and the Radau constants below (both bit-equal to scipy's,
 ``tests/test_ode_toolkit.py``, ``tests/test_dop853.py``), so a compiled solve and ``solve_ivp`` on the same
 right-hand side agree to round-off.
 
@@ -34,8 +34,8 @@ from types import SimpleNamespace
 import numba
 import numpy as np
 
-from symmech.core import dop853 as dop
-from symmech.core import kernels
+from symmech.numerics import dop853 as dop
+from symmech.numerics import kernels
 from symmech.core.scene import SymmechError
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
@@ -44,7 +44,7 @@ closure = numba.njit(cache=False, error_model="numpy", nogil=True)  # see the mo
 EPS = float(np.finfo(float).eps)
 INT = np.int64
 
-# DOP853 (core.dop853: the coefficients of scipy's solve_ivp, bit for bit).
+# DOP853 (numerics.dop853: the coefficients of scipy's solve_ivp, bit for bit).
 DOP_A, DOP_B, DOP_C = dop.A, dop.B, dop.C
 DOP_E3, DOP_E5, DOP_D = dop.E3, dop.E5, dop.D
 DOP_STAGES, DOP_EXTENDED, DOP_POWER = INT(dop.N_STAGES), INT(dop.N_STAGES_EXTENDED), INT(dop.INTERPOLATOR_POWER)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from symmech.core import build
+from symmech.numerics import build
 from symmech.trolley import elastic as el
 from symmech.trolley.elastic_layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
@@ -282,7 +282,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
 
 def _check(status, Y, t) -> None:
     """SymmechError when the compiled solve failed or reached no finite state."""
-    from symmech.core import ode  # numba: imported by a run, not by choosing the engine or its estimate
+    from symmech.numerics import ode  # numba: imported by a run, not by choosing the engine or its estimate
     if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
         last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
         why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \

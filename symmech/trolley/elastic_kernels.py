@@ -1,5 +1,5 @@
 """The elastic trolley's assembly in numba: the right-hand side and Jacobian the toolkit's Radau IIA
-(:mod:`symmech.core.ode`) integrates, the cached whole solve and the per-row output terms; driven by
+(:mod:`symmech.numerics.ode`) integrates, the cached whole solve and the per-row output terms; driven by
 :mod:`symmech.trolley.elastic_compiled` (a module of its own: numba's cache is keyed on the file, so the
 driver changes without a recompile).
 
@@ -13,7 +13,7 @@ the kernels form those 12 at each stage's V0, V̇0 (:func:`_motion`).
 
 The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
 and inlined into the cached entry :func:`_solve`, so a second process loads the whole solve from numba's
-cache (see :mod:`symmech.core.ode`).
+cache (see :mod:`symmech.numerics.ode`).
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from symmech.core import ode
+from symmech.numerics import ode
 from symmech.trolley.elastic_layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
@@ -291,7 +291,7 @@ _radau_start, _radau_step = _steps.radau_start, _steps.radau_step  # globals num
 def _solve(mdl, tab, y0, t_eval, rtol, atol):
     """Radau IIA from (t_eval[0], y0) over t_eval (k,), steps as long as the error control allows (the outputs
     come from the collocation polynomial, not from steps to each output time); returns (Y (k, n) the dense
-    output at t_eval, accepted steps, rhs evaluations, status of :mod:`symmech.core.ode`)."""
+    output at t_eval, accepted steps, rhs evaluations, status of :mod:`symmech.numerics.ode`)."""
     n, t_end = y0.size, t_eval[-1]
     Y = np.full((t_eval.size, n), np.nan)
     calls = np.zeros(1)

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import build, kinematics as kin, plotting
+from symmech.core import kinematics as kin, plotting
+from symmech.numerics import build
 from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import elastic as el

@@ -1,6 +1,6 @@
 /* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial
    pivoting) and Dormand and Prince's DOP853 with the error control of Hairer's dop853.f (the tableau in
-   dop853_tableau.h is written from symmech/core/dop853.py). Hand-written; the physics is generated. */
+   dop853_tableau.h is written from symmech/numerics/dop853.py). Hand-written; the physics is generated. */
 #include <math.h>
 #include <string.h>
 
