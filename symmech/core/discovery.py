@@ -25,23 +25,31 @@ NOT_PAPERS = ("core", "export", "generated", "templates", "scenes")  # the packa
 _MARKER = re.compile(r'^ROLE = "(\w+)"', re.MULTILINE)
 
 
+def _walk(folder: Path, prefix: str):
+    """(module name, source file) of every module under ``folder``, subpackages included, nothing imported
+    (``pkgutil.walk_packages`` would import each subpackage, and with it its paper)."""
+    for module in pkgutil.iter_modules([str(folder)]):
+        if module.ispkg:
+            yield prefix + module.name, folder / module.name / "__init__.py"
+            yield from _walk(folder / module.name, f"{prefix}{module.name}.")
+        else:
+            yield prefix + module.name, folder / f"{module.name}.py"
+
+
 @functools.cache
 def declared() -> dict[str, str]:
-    """{module name: role} of every declaring module of the paper packages, in name order; nothing imported
-    but the paper packages' subpackages (walk_packages reads their ``__path__``)."""
+    """{module name: role} of every declaring module of the paper packages, in name order (nothing imported)."""
     found = {}
     root = Path(symmech.__file__).resolve().parent
     for paper in pkgutil.iter_modules([str(root)]):
         if not paper.ispkg or paper.name in NOT_PAPERS:
             continue
-        for module in pkgutil.walk_packages([str(root / paper.name)], f"symmech.{paper.name}."):
-            path = Path(module.module_finder.path) / module.name.rpartition(".")[2]
-            text = (path / "__init__.py" if module.ispkg else path.with_suffix(".py")).read_text(encoding="utf-8")
-            marker = _MARKER.search(text)
+        for name, path in _walk(root / paper.name, f"symmech.{paper.name}."):
+            marker = _MARKER.search(path.read_text(encoding="utf-8"))
             if marker:
                 if marker.group(1) not in ROLES:
-                    raise ValueError(f"{module.name}: ROLE {marker.group(1)!r} is not one of {ROLES}")
-                found[module.name] = marker.group(1)
+                    raise ValueError(f"{name}: ROLE {marker.group(1)!r} is not one of {ROLES}")
+                found[name] = marker.group(1)
     return dict(sorted(found.items()))
 
 
