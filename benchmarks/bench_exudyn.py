@@ -40,8 +40,8 @@ from scipy.interpolate import CubicSpline
 from timing import interleaved, machine, ratio
 
 from symmech.core import pipeline
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene
 
 L, RHO_A, EI, EA = 1.0, 1.0, 1.0, 1e6
 W0 = float(1.8751040687119611 ** 2 * np.sqrt(EI / (RHO_A * L ** 4)))
@@ -127,7 +127,7 @@ def chordwise_grid(system, fs) -> np.ndarray:
 def symmech_transient(system, drive, t, rtol: float, atol_q: float = 1e-12) -> np.ndarray:
     """Chordwise tip deflection [m] at t (n,): the compiled engine from the non-rotating first
     chordwise mode (Ritz, plane 2 = axis x plane: the track's tangent) at AMPLITUDE, relative rates 0."""
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     idx = [system.inv.names.index(f"beam0_p2_m{k + 1}") for k in range(system.mdl.beams[0].modes)]
     out = elastic_compiled.simulate(system, drive, t, rtol, atol_q, dq0=AMPLITUDE * el.beam_mode(system, 0, 2, 1))

@@ -37,8 +37,8 @@ import tomllib
 import numpy as np
 
 from symmech.core import pipeline, scene
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene
 
 SCENE = {"kind": "trolley", "frame": "frenet", "track": {"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)},
          "trolley": {"mass": 10.0, "com": [1.0, 0.5, 0.0], "axle_distance": 2.0, "half_gauge": 1.0},

@@ -350,7 +350,7 @@ def test_elastic_trolley_rhs_equals_the_runtime_model_and_integrates_alike(integ
     1e-12 of the largest (measured 2e-15), and solve_ivp (Radau, rtol 1e-10) on both over 0.05 s to 1e-9
     of the largest coordinate (measured 2e-14)."""
     from symmech.generated import trolley_elastic_lagrange as lag
-    from symmech.trolley import elastic as el
+    from symmech.trolley.elastic import system as el
 
     assert not hasattr(lag, "jac")  # M depends on q: no Jacobian is derived
     rng = np.random.default_rng(11)

@@ -8,7 +8,7 @@ import pytest
 from scipy.optimize import brentq
 
 from symmech.core import kinematics as kin
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 pytestmark = pytest.mark.xdist_group("test_elastic_bodies")
 

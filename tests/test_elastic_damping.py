@@ -13,7 +13,7 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import CANTILEVER_BETA, closed_form_roller_frequencies  # noqa: E402

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 pytestmark = pytest.mark.xdist_group("test_elastic_energies")
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared, setup as scene_dict  # noqa: E402

@@ -11,7 +11,7 @@ import pytest
 
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 pytestmark = pytest.mark.xdist_group("test_elastic_invariants")
 

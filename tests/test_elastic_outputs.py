@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_elastic_energies import (BEAM, G0, HALF_GAUGE, K_ROLL, L_AXLE, bending_energy, cloud,  # noqa: E402

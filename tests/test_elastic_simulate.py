@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from symmech.core.scene import SymmechError
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import circle, straight  # noqa: E402
 from trolley_util import prepared, setup as scene_dict  # noqa: E402
-from symmech.trolley import elastic_scene  # noqa: E402
+from symmech.trolley.elastic import scene as elastic_scene  # noqa: E402
 
 pytestmark = pytest.mark.xdist_group("test_elastic_simulate")
 

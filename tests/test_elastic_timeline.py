@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_elastic_energies import G0, L_AXLE, cloud, model, resultants_of_cloud  # noqa: E402

@@ -11,7 +11,7 @@ import pytest
 
 from symmech.core.layout import Bundle, Field, Layout
 from symmech.grain import compiled, compiled_layout
-from symmech.trolley import elastic_layout
+from symmech.trolley.elastic import layout as elastic_layout
 
 ROOT = Path(__file__).resolve().parents[1] / "symmech"
 SMALL = Layout("Small", (Field("a", "m", "a scalar"), Field("b", "m/s", "a vector", (3,)),
@@ -93,7 +93,7 @@ def test_the_elastic_model_record_of_a_system_has_the_declared_numba_type():
     sys.path.insert(0, str(Path(__file__).parent))
     from test_elastic_compiled import helix
 
-    from symmech.trolley import elastic_compiled, elastic_kernels
+    from symmech.trolley.elastic import compiled as elastic_compiled, kernels as elastic_kernels
 
     record = elastic_kernels.pack(helix().system)
     assert numba.typeof(record) == elastic_layout.MODEL.numba_type()
@@ -136,7 +136,7 @@ OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT"
            "I_AT": compiled_layout.IMPACT_ROW, "X_AT": compiled_layout.STATE, "F_AT": elastic_layout.FLAGS,
            "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY}
 READERS = {"grain/compiled_loop.py": GRAIN_VECTORS, "grain/compiled.py": GRAIN_VECTORS,
-           "trolley/elastic_kernels.py": ELASTIC_VECTORS, "trolley/elastic_compiled.py": {}}  # (k, 12) tables there
+           "trolley/elastic/kernels.py": ELASTIC_VECTORS, "trolley/elastic/compiled.py": {}}  # (k, 12) tables there
 
 
 def _names(node) -> set:

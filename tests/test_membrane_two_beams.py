@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from numpy.polynomial import Legendre
 
-from symmech.trolley import elastic as el
-from symmech.trolley import membrane
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import membrane
 
 RNG = np.random.default_rng(2)
 # steel strips: (length [m], EA [N], modes); different lengths and sections, so no beam mirrors the other

@@ -3,7 +3,7 @@ P = k [(δ - d)₊ - (δ + d)₊] is P = -k d for every d, so it must behave as 
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 K = (1e6, 1e6, 2e6, 1.5e6, 1e6)
 AT_REST = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))

@@ -14,7 +14,7 @@ import pytest
 from symmech.core.scene import SymmechError
 from symmech.grain import flight, motion
 from symmech.grain.coulomb_law import ImpactLaw, coulomb_impulse
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 G = 9.81
 

@@ -10,8 +10,8 @@ from scipy.optimize import brentq
 from symmech.core.errata import evaluate
 from symmech.generated import trolley_elastic as gen
 from symmech.generated import trolley_frame as frm
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene, errata_elastic
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene, errata as errata_elastic
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared, setup as scene_dict  # noqa: E402

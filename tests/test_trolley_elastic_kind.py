@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from symmech.core.schema import validate
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import closed_form_roller_frequencies  # noqa: E402
@@ -75,7 +75,7 @@ def test_energy_changes_by_the_work_of_the_track_forces(damped):
 def test_energy_balance_includes_the_membrane_energy_of_a_held_beam():
     """A pinned beam with held ends (quartic membrane energy) across the trolley, kicked in its
     first mode: the membrane energy swings by ~1 J, the balance still closes to 1e-10 of the work."""
-    from symmech.trolley import membrane
+    from symmech.trolley.elastic import membrane
 
     beam = el.Beam((0.2, 0.3, -0.5), (0, 0, 1), (0, 1, 0), 1.0, 4.0, (3e3, 5e3), "pinned", 2, 0.0, 0.0, "held", 1e7)
     mdl = el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,

@@ -17,7 +17,7 @@ import scipy.linalg
 from symmech.core import pipeline
 from symmech.core.context import Context
 from symmech.core.scene import SymmechError
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 from trolley_util import setup
 
 R, V, L, RHO_A, EI = 2.0, 1.0, 1.0, 2.0, (0.5, 1.0)  # m, m/s, m, kg/m, N m² (flapwise, in-plane)

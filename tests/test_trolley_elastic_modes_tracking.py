@@ -12,7 +12,8 @@ independent Ritz solution of tests/test_trolley_elastic_modal.py).
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el, elastic_scene, modal, plots
+from symmech.trolley import plots
+from symmech.trolley.elastic import system as el, scene as elastic_scene, modal
 from test_trolley_elastic_modal import CIRCLE, EI, L, R, RHO_A, rotating_cantilever
 from trolley_util import prepared, setup
 

@@ -12,8 +12,8 @@ from scipy.special import ellipk
 
 from symmech.core.scene import SceneError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene, membrane
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import scene as elastic_scene, membrane
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared, setup as scene_dict  # noqa: E402

@@ -89,54 +89,54 @@ ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_py
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
-    "membrane": ("symmech/trolley/membrane.py",
+    "membrane": ("symmech/trolley/elastic/membrane.py",
                  ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py",
                   "tests/test_membrane_shared_coordinates.py"], ["*"]),
     # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
-    "elastic_damping": ("symmech/trolley/elastic.py",
+    "elastic_damping": ("symmech/trolley/elastic/system.py",
                         ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",
                          "tests/test_roller_clamped_pair.py"],
                         ["*.x__beam_damping__*", "*.x_roller_forces__*", "*.x__dissipation__*",
                          "*ǁSystemǁlinear_modes__*"]),
     # the rest of elastic.py by function, physics first; the fast elastic tests (test_trolley_elastic.py ~11 s)
-    "elastic_invariants": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_invariants": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                            ["*.x_invariants__*", "*.x__beam_samples__*", "*.x__beam_stiffness__*",
                             "*.x_beam_basis__*", "*.x_rigid_cloud__*", "*.x__frame_of__*"]),
-    "elastic_system": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_system": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                        ["*ǁSystemǁ__init__*", "*ǁSystemǁevaluate__*", "*ǁSystemǁcoefficients__*", "*ǁSystemǁ_dv__*",
                         "*ǁSystemǁ_p2__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
                         "*ǁSystemǁroller_state__*", "*ǁSystemǁ_frame_mats__*"]),
-    "elastic_balances": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_balances": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
                           "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
                           "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
     # the quasi-static tests first (ELASTIC_TESTS' -k, global, leaves them in)
-    "elastic_quasi_static": ("symmech/trolley/elastic.py",
+    "elastic_quasi_static": ("symmech/trolley/elastic/system.py",
                              ["tests/test_elastic_quasi_static.py", "tests/test_texts_warnings_and_sparse_rows.py",
                               *ELASTIC_TESTS], ["*ǁSystemǁquasi_static__*"]),
-    "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_frame": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                       ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
     # integrating tests, a short run on the helix (prescribed speed) and, for the timeline, one with traction
-    "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TIMELINE_TESTS,
+    "elastic_timeline": ("symmech/trolley/elastic/system.py", ELASTIC_TIMELINE_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
-    "elastic_rigid_body": ("symmech/trolley/elastic.py",
+    "elastic_rigid_body": ("symmech/trolley/elastic/system.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
                             "reactions_equal or rigid_body"], ["*.x_rigid_body__*"]),
-    "elastic_beam_mode": ("symmech/trolley/elastic.py",
+    "elastic_beam_mode": ("symmech/trolley/elastic/system.py",
                           ["tests/test_trolley_elastic_initial.py", "tests/test_elastic_bodies.py", "-k",
                            "vibrates_at or beam_mode"], ["*.x_beam_mode__*"]),
-    "elastic_simulate": ("symmech/trolley/elastic.py",
+    "elastic_simulate": ("symmech/trolley/elastic/system.py",
                          ["tests/test_trolley_elastic.py", "tests/test_trolley_elastic_kind.py",
                           "tests/test_elastic_simulate.py", "-k",
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
-    "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
+    "elastic_outputs": ("symmech/trolley/elastic/system.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # what the two shards above left without a result (mutation/history.md), for a screen with their new test files
-    "elastic_outputs_rest": ("symmech/trolley/elastic.py",
+    "elastic_outputs_rest": ("symmech/trolley/elastic/system.py",
                              ["tests/test_elastic_outputs.py", "tests/test_elastic_timeline.py",
                               *ELASTIC_OUTPUT_TESTS, ELASTIC_TIMELINE_TESTS[1]],
                              ["*.x_outputs__mutmut_119", "*.x_outputs__mutmut_1[2-3][0-9]", "*.x_outputs__mutmut_14[0-4]",

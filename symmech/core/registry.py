@@ -77,7 +77,7 @@ def _discover(until: str | None = None) -> None:
     """Import scene modules until kind ``until`` is registered (all of them when None): a run
     imports only its own paper's modules, not every kind's dependencies. Modules whose name
     contains the kind's are tried first, and among them ``scene`` or ``<kind>_scene``
-    (``symmech.trolley.scene`` for ``trolley``, before ``symmech.trolley.elastic_scene``)."""
+    (``symmech.trolley.scene`` for ``trolley``, before ``symmech.trolley.elastic.scene``)."""
     def rank(module: str) -> tuple[bool, bool]:
         last = module.rpartition(".")[2]
         return until is None or until not in module, last not in ("scene", f"{until}_scene")

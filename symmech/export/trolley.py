@@ -1,10 +1,10 @@
 """The elastic trolley as an exported model: the invariants of its assembly, the frame table and the outputs.
 
 The C side (``c/elastic_trolley.c``, generic sums over the data written here) evaluates the same equations
-as the compiled engine (:mod:`symmech.trolley.elastic_kernels`): states q, q' (``<coordinate>``,
+as the compiled engine (:mod:`symmech.trolley.elastic.kernels`): states q, q' (``<coordinate>``,
 ``der(<coordinate>)``), M y' = F with M = diag(1, M(q)); the frame's motion along the track at the
 prescribed speed as the engine's cubic spline table of the 12 frame channels in t
-(:func:`symmech.trolley.elastic_compiled.frame_table`, the same nodes and coefficients) with the arc length
+(:func:`symmech.trolley.elastic.compiled.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
 ``points``); parameters: the rollers' stiffnesses and dampings. The track and the speed are in the table:
 they are not parameters, and the FMU has no inputs.
@@ -26,7 +26,7 @@ ROTATIONS = ("th1", "th2", "th3")  # roller coordinates in rad; the others (u2, 
 def load(scene) -> ExportModel:
     """The export model of a trolley scene with an ``[elastic]`` table (``scene`` a loaded pipeline scene);
     SymmechError for what the export does not cover."""
-    from symmech.trolley import elastic_scene
+    from symmech.trolley.elastic import scene as elastic_scene
 
     setup = scene.setup.elastic
     if setup is None or setup.system is None:
@@ -49,10 +49,10 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 
 
 def elastic(setup, run: dict) -> ExportModel:
-    """The export model of a prepared elastic setup (``symmech.trolley.elastic_scene.Setup``) whose native
+    """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley import elastic as el
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import system as el
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     system, drive, t = setup.system, setup.drive, setup.t
     line = el.Timeline(system, drive, t)
@@ -96,7 +96,7 @@ PARAMETERS = (("stiffness", "N/m", "stiffness"), ("damping", "N s/m", "damping (
 def _parameters(system, vr: int) -> list[Variable]:
     """The rollers' stiffnesses and dampings from value reference ``vr`` on (``elastic.rollers.stiffness[1]``
     … as the scene's fields): they enter only the roller forces, so they stay tunable."""
-    from symmech.trolley import elastic_kernels as ek
+    from symmech.trolley.elastic import kernels as ek
 
     roll = ek.pack(system).roll  # (3, 5): stiffness, damping as the engine applies it, preload
     out = []
@@ -128,9 +128,9 @@ def _nominal(series: np.ndarray) -> float:
 def data(system, drive, table) -> str:
     """C definitions of the invariants (``elastic_kernels.pack``), the frame table with s(t) beside it and the
     probe fields that ``c/elastic_trolley.c`` reads."""
-    from symmech.trolley import elastic as el
-    from symmech.trolley import elastic_kernels as ek
-    from symmech.trolley.elastic_layout import F_AT, N_CHANNELS
+    from symmech.trolley.elastic import system as el
+    from symmech.trolley.elastic import kernels as ek
+    from symmech.trolley.elastic.layout import F_AT, N_CHANNELS
 
     mdl = ek.pack(system)
     flags, idx, size = mdl.flags, mdl.block_index, mdl.block_size
@@ -144,7 +144,7 @@ def data(system, drive, table) -> str:
     elastic[1 + n:] = [1.0 if i >= inv.n_roll else 0.0 for i, _ in inv.pairs]
     g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
     width = idx.shape[1]
-    lines = ["/* The elastic trolley's data, written by `symmech export` from symmech.trolley.elastic_kernels.pack "
+    lines = ["/* The elastic trolley's data, written by `symmech export` from symmech.trolley.elastic.kernels.pack "
              "and the compiled engine's frame table (do not edit). */",
              f"#define EL_N {n}", f"#define EL_F {f}", f"#define EL_PAIRS {mdl.pair_i.size}", f"#define EL_CHANNELS {N_CHANNELS}",
              f"#define EL_NODES {nodes.size}", f"#define EL_MASS {float(flags[F_AT.mass])!r}",

@@ -20,7 +20,8 @@ from symmech.core import schema as sc
 from symmech.core.context import Context
 from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import elastic_schema, model, plots, tables, track as tracks
+from symmech.trolley import model, plots, tables, track as tracks
+from symmech.trolley.elastic import schema as elastic_schema
 from symmech.trolley import sweep as design_sweep
 
 ROLE = "kind"  # found by symmech.core.discovery
@@ -324,7 +325,7 @@ def prepare(scene: dict) -> Setup:
         if setup.conventions == "paper":
             raise SceneError("elastic", "the elastic model needs conventions = \"physics\"")
         case = 2 if setup.local_curvature else 1
-        from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
+        from symmech.trolley.elastic import scene as elastic_scene  # the elastic model: imported only when a scene has one
 
         setup.elastic = elastic_scene.prepare(scene["elastic"], body, elastic_scene.drive_of(setup, case), setup.t)
     return setup
@@ -413,7 +414,7 @@ def estimate(setup: Setup) -> registry.Estimate:
         seconds += SECONDS_PER_RHS * rhs * cases
         what += f", ~{rhs} traction evaluations"
     if setup.elastic is not None and setup.elastic.system is not None:
-        from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
+        from symmech.trolley.elastic import scene as elastic_scene  # the elastic model: imported only when a scene has one
 
         engine, why = elastic_scene.engine(setup.elastic)
         what += f", the elastic model ({engine} engine{'; ' + why if why.startswith('auto') else ''})"
@@ -609,7 +610,7 @@ def run(setup: Setup, ctx) -> Result:
         result.files["paper_tables.txt"] = _paper_tables_text(summary["paper_tables"])
     elastic = None
     if setup.elastic is not None:
-        from symmech.trolley import elastic_review, elastic_scene  # the elastic model: only when a scene has one
+        from symmech.trolley.elastic import review as elastic_review, scene as elastic_scene  # the elastic model: only when a scene has one
 
         elastic = elastic_scene.run(setup.elastic, ctx, setup.comfort)
         result.tables.update(elastic.tables)
@@ -791,7 +792,7 @@ def precision(setup: Setup, ctx) -> Result:
     import dataclasses
 
     if setup.elastic is not None:
-        from symmech.trolley import elastic_scene  # the elastic model: imported only when a scene has one
+        from symmech.trolley.elastic import scene as elastic_scene  # the elastic model: imported only when a scene has one
 
         return elastic_scene.precision(setup.elastic, ctx)
     if not setup.local_curvature or setup.speed is None:

@@ -357,7 +357,7 @@ def point_metrics(res: Result, comfort: dict) -> tuple[list[Column], list[float]
 def _closest_resonance(modes: Table) -> tuple[list, dict]:
     """The (sample, mode, forcing) of the modes table whose natural frequency is nearest, relatively, to a
     positive forcing frequency."""
-    from symmech.trolley.elastic import FORCING
+    from symmech.trolley.elastic.system import FORCING
 
     f = modes.column("f")[:, None]
     forcing = np.column_stack([modes.column(f"forcing_{name}") for name, _ in FORCING])
@@ -432,7 +432,7 @@ def cheapest(first, points: int, processes: int):
     """A lower bound of :func:`estimate` (a ``registry.Estimate``): every point on the elastic model's cheapest
     engine, nothing compiled. It reads no engine's state, so refusing on it loads no numba."""
     from symmech.core import registry
-    from symmech.trolley import elastic_scene
+    from symmech.trolley.elastic import scene as elastic_scene
 
     setup = first.setup
     per_point = first.kind.estimate(replace(setup, elastic=None)).seconds
@@ -481,7 +481,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
 def _on_sweep_engine(setup, points: int):
     """The trolley ``setup`` with its elastic model's engine the one the sweep's ``points`` runs choose
     (``auto`` weighs a compile against the Python engine over all of them)."""
-    from symmech.trolley import elastic_scene
+    from symmech.trolley.elastic import scene as elastic_scene
 
     elastic = setup.elastic
     if elastic is None or elastic.system is None:
@@ -497,7 +497,7 @@ def _compiled_needed(first, points: int) -> bool:
 
 def _warm_worker(say=None) -> None:
     """The compiled elastic engine built once per machine (other processes wait on the build lock)."""
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     elastic_compiled.ENGINE.warm(say=say)
 

@@ -1,6 +1,6 @@
 /* Generic assembly of the elastic trolley's equations from its invariants (hand-written; the invariants, the
    frame table and the output fields are the data written above by `symmech export` from the Python model,
-   symmech.trolley.elastic_kernels.pack). The same sums as the compiled engine's _terms, _resultants and
+   symmech.trolley.elastic.kernels.pack). The same sums as the compiled engine's _terms, _resultants and
    elastic.outputs: M(q) q'' + R(t, q, q') = 0 with the frame's motion from a cubic spline table in t.
    State y = (q, q'), 2 EL_N; M y' = F with M = diag(1, M(q)), F = (q', -R). */
 #include <math.h>

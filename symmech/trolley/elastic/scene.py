@@ -1,7 +1,7 @@
 """The optional ``[elastic]`` table of a trolley scene: ``prepare`` and ``run``.
 
 Not a kind of its own (nothing is registered here): the trolley kind validates its
-``elastic`` field against :data:`~symmech.trolley.elastic_schema.SCHEMA`, calls :func:`prepare` with the resolved
+``elastic`` field against :data:`~symmech.trolley.elastic.schema.SCHEMA`, calls :func:`prepare` with the resolved
 table and the rigid trolley's body and drive, and :func:`run` returns a
 :class:`~symmech.core.results.Result` whose tables sit beside the rigid ones. Field
 docs: docs/scenes-trolley-elastic.md.
@@ -17,10 +17,11 @@ from symmech.core import kinematics as kin, plotting
 from symmech.numerics import build
 from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import elastic as el
-from symmech.trolley.elastic import FORCING
-from symmech.trolley import modal, model
-from symmech.trolley.elastic_schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noqa: F401 (SCHEMA: the kind's table, read here)
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic.system import FORCING
+from symmech.trolley import model
+from symmech.trolley.elastic import modal
+from symmech.trolley.elastic.schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noqa: F401 (SCHEMA: the kind's table, read here)
 
 
 @dataclass
@@ -56,7 +57,7 @@ def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
         return "python", f"numerics.method = \"{setup.method}\": the compiled engine integrates by Radau"
     if setup.engine == "compiled":
         return "compiled", 'numerics.engine = "compiled"'
-    from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine may run
+    from symmech.trolley.elastic import compiled as elastic_compiled  # imports numba: only when the compiled engine may run
 
     if not elastic_compiled.ENGINE.cold():
         return "compiled", "auto: the compiled engine is built (numba's cache)"
@@ -68,12 +69,12 @@ def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
 
 def simulate(setup: Setup, **kw) -> dict:
     """The elastic model along the setup's grid on the engine of :func:`engine` (keywords: those of
-    :func:`symmech.trolley.elastic.simulate`, ``method`` and ``analytic_jacobian`` only on the Python engine);
+    :func:`symmech.trolley.elastic.system.simulate`, ``method`` and ``analytic_jacobian`` only on the Python engine);
     ``engine`` and ``engine_reason`` in the result name it."""
     start = {"dq0": setup.dq0, "dqd0": setup.dqd0, "rtol": setup.rtol}
     name, why = engine(setup)
     if name == "compiled":
-        from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+        from symmech.trolley.elastic import compiled as elastic_compiled  # imports numba: only when the compiled engine runs
 
         if elastic_compiled.ENGINE.cold():  # compile under the build lock, or load what a concurrent builder made
             elastic_compiled.ENGINE.warm()
@@ -81,7 +82,7 @@ def simulate(setup: Setup, **kw) -> dict:
         out["engine_reason"] = out["engine_reason"] or why
         return out
     if why.startswith(build.COLD):  # not when the Python engine runs for another reason
-        from symmech.trolley import elastic_compiled
+        from symmech.trolley.elastic import compiled as elastic_compiled
 
         elastic_compiled.ENGINE.warm_in_background()
     out = el.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
@@ -383,7 +384,7 @@ def _modal_analysis(setup: Setup, r) -> tuple[dict | None, list]:
 
 def _modes(setup: Setup, r) -> dict:
     """The linearisation about the quasi-static state at ``modal_samples`` instants, its modes
-    followed by shape (:mod:`symmech.trolley.modal`): per sample (n,) t, s, V0 and the forcing
+    followed by shape (:mod:`symmech.trolley.elastic.modal`): per sample (n,) t, s, V0 and the forcing
     frequencies (n, 3); per sample and mode_id (n, N) the frequency f [Hz], damping ratio,
     dominant component (beam, plane, mode number, roller DOF, label), its participation and its
     group's, the left-out curvature energy's relative shift; the shapes at the report points
@@ -512,7 +513,7 @@ def precision(setup: Setup, ctx) -> Result:
         runs = [(name, python, kw, rtols) for name, kw, rtols in PRECISION_METHODS]
         compiled = Setup(**{**setup.__dict__, "engine": "compiled", "method": "Radau"})
         if engine(compiled)[0] == "compiled":
-            from symmech.trolley import elastic_compiled  # imports numba: only when the compiled engine runs
+            from symmech.trolley.elastic import compiled as elastic_compiled  # imports numba: only when the compiled engine runs
 
             elastic_compiled.ENGINE.warm()  # its first compile is not a cost of any row
             runs.append((COMPILED_METHOD, compiled, {}, PRECISION_RTOLS))

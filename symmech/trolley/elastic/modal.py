@@ -3,7 +3,7 @@
 A mode's displacement part x (N,) (complex: gyroscopic, circulatory and damping terms) is
 written in *components*: each roller DOF (u2, u3, θ1, θ2, θ3) and each beam's own modes per
 bending plane (the eigenvectors of the beam's Ritz block of M and K on a fixed trolley, as
-:func:`symmech.trolley.elastic.beam_mode`). Its participation in component j is the share
+:func:`symmech.trolley.elastic.system.beam_mode`). Its participation in component j is the share
 |y_j|² M_jj / Σ |y_i|² M_ii of the kinetic norm, y = T⁻¹ x the component coordinates and
 M_jj the mass of component j at the quasi-static state (non-negative, summing to one).
 
@@ -20,7 +20,7 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linear_sum_assignment
 
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el
 
 
 @dataclass(frozen=True)

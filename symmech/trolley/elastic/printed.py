@@ -2,7 +2,7 @@
 
 The plain-text rendering prints φ0_6 with four components ([-x2, x1, 0, 0]ᵀ); the
 fourth is dropped here (a 3-vector field cannot have it). ``symmech errata`` compares
-the rest with :func:`symmech.trolley.derive_elastic.rigid_fields`.
+the rest with :func:`symmech.trolley.elastic.derive.rigid_fields`.
 """
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import sympy as sp
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix
 from symmech.trolley.derive import SOURCE
-from symmech.trolley.derive_elastic import X, X_ARGS
+from symmech.trolley.elastic.derive import X, X_ARGS
 
 ROLE = "printed"  # found by symmech.core.discovery
 

@@ -1,5 +1,5 @@
-"""The elastic trolley compiled: the assembly of :class:`symmech.trolley.elastic.System` in numba
-(:mod:`symmech.trolley.elastic_kernels`), integrated by the toolkit's Radau IIA with the analytic Jacobian;
+"""The elastic trolley compiled: the assembly of :class:`symmech.trolley.elastic.system.System` in numba
+(:mod:`symmech.trolley.elastic.kernels`), integrated by the toolkit's Radau IIA with the analytic Jacobian;
 this module drives it (:func:`simulate`, the same contract and outputs as the Python engine's) and builds
 numba's cache once (:func:`warm`).
 
@@ -22,7 +22,7 @@ the tolerance (benchmarks/README.md), so a fine output grid costs output rows, n
 
 **Traction.** s is a state, so :func:`simulate_traction` tabulates the frame's geometry in s instead
 (:func:`geometry`, the same checked spline) over the arc lengths the run visits (:func:`reach`), and calls
-the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic_kernels.TRACTIONS`).
+the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic.kernels.TRACTIONS`).
 """
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from symmech.numerics import build
-from symmech.trolley import elastic as el
-from symmech.trolley.elastic_layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
+from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
 INTERP_FRACTION = 1e-3
@@ -46,8 +46,8 @@ STALL_ROUNDS = 2
 
 
 def row_terms(system, fr, V0, dV0, Y, height) -> dict:
-    """:func:`symmech.trolley.elastic.row_terms` by the kernels' ``_rows`` (the potential Π per row in Python)."""
-    from symmech.trolley import elastic_kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    """:func:`symmech.trolley.elastic.system.row_terms` by the kernels' ``_rows`` (the potential Π per row in Python)."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     chs = frame_channels(fr, V0, dV0, system.mdl.g0)
     nu = np.ascontiguousarray(fr.lam[:, :, 1])
     keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
@@ -61,7 +61,7 @@ def row_terms(system, fr, V0, dV0, Y, height) -> dict:
 
 def channels(drive, system, t, at=slice(None)) -> np.ndarray:
     """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
-    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame_state`, vectorised."""
+    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.system.frame_state`, vectorised."""
     s = el.arc_length(drive, t)[at]
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
     return frame_channels(el.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
@@ -154,13 +154,13 @@ def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_s
 
 
 def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate` by Radau on the compiled assembly (prescribed speed; the
+    """:func:`symmech.trolley.elastic.system.simulate` by Radau on the compiled assembly (prescribed speed; the
     same state, tolerances and outputs; the steps are not bound by the output spacing: the outputs come from
     the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
     ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
     (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
     scales) what the table reached. With ``drive.traction``: :func:`simulate_traction`."""
-    from symmech.trolley import elastic_kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     t = np.asarray(t, dtype=float)
     if drive.traction is not None:
         return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
@@ -191,7 +191,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
 
 def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
     """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
-    :data:`symmech.trolley.elastic_layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
+    :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
     fr = el.frames(drive, np.asarray(s, float)[at], system.mdl.l)
     return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
 
@@ -232,7 +232,7 @@ def reach(system, drive, t) -> tuple[float, float]:
 
 
 def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
+    """:func:`symmech.trolley.elastic.system.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
     V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
     P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
     Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
@@ -255,7 +255,7 @@ _KEYS = itertools.count()
 
 def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
     """The compiled traction run on ``table``; None when s leaves it."""
-    from symmech.trolley import elastic_kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     N = system.N
     line = el.Timeline(system, drive, t)
     zero = np.zeros(N)
@@ -299,10 +299,10 @@ COLD_COMPILE_SECONDS = 130.0
 
 def _entry_signatures() -> dict:
     """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
-    model record's from its layout (:data:`symmech.trolley.elastic_layout.MODEL`), the rest from small arrays."""
+    model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), the rest from small arrays."""
     # numba: imported by a run, not by choosing the engine or its estimate
     import numba
-    from symmech.trolley import elastic_kernels as ek
+    from symmech.trolley.elastic import kernels as ek
     mdl = MODEL.numba_type()
     tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
     solve = (tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
@@ -312,4 +312,4 @@ def _entry_signatures() -> dict:
             for entry, args in ((ek._solve, solve), (ek._rows, rows), (ek._solve_traction, traction))}
 
 
-ENGINE = build.Engine("elastic", "symmech.trolley.elastic_kernels", _entry_signatures, COLD_COMPILE_SECONDS)
+ENGINE = build.Engine("elastic", "symmech.trolley.elastic.kernels", _entry_signatures, COLD_COMPILE_SECONDS)

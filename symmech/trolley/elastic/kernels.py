@@ -1,6 +1,6 @@
 """The elastic trolley's assembly in numba: the right-hand side and Jacobian the toolkit's Radau IIA
 (:mod:`symmech.numerics.ode`) integrates, the cached whole solve and the per-row output terms; driven by
-:mod:`symmech.trolley.elastic_compiled` (a module of its own: numba's cache is keyed on the file, so the
+:mod:`symmech.trolley.elastic.compiled` (a module of its own: numba's cache is keyed on the file, so the
 driver changes without a recompile).
 
 The physics is that of ``System.evaluate`` / ``resultants`` (the Python engine stays the reference; the
@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from symmech.numerics import ode
-from symmech.trolley.elastic_layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY
+from symmech.trolley.elastic.layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 
@@ -530,8 +530,8 @@ def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
 
 
 def pack(system):
-    """The model record the kernels take (:data:`symmech.trolley.elastic_layout.MODEL`), from a
-    :class:`symmech.trolley.elastic.System`."""
+    """The model record the kernels take (:data:`symmech.trolley.elastic.layout.MODEL`), from a
+    :class:`symmech.trolley.elastic.system.System`."""
     inv, mdl = system.inv, system.mdl
     n, f = system.N, system.F
     rows = [[] for _ in range(n)]  # the ψ entries of A: (column, index of the coordinate multiplying it)

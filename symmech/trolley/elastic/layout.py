@@ -1,5 +1,5 @@
 """The elastic trolley engine's declared layouts (:mod:`symmech.core.layout`), shared by its kernels
-(:mod:`symmech.trolley.elastic_kernels`) and its driver (:mod:`symmech.trolley.elastic_compiled`): the
+(:mod:`symmech.trolley.elastic.kernels`) and its driver (:mod:`symmech.trolley.elastic.compiled`): the
 model record the kernels take whole, its flags vector, the 12 frame channels of the spline table in t and
 the 15 geometry channels of the traction table in s. No numba here.
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from symmech.core import units
 from symmech.core.results import Check, Headline, Result, at_most, within
-from symmech.trolley.elastic_scene import FORCING, Setup
+from symmech.trolley.elastic.scene import FORCING, Setup
 
 ENERGY_TOLERANCE_PER_RTOL = 10.0  # relative energy residual allowed per unit of the integration's rtol
 LIGHT_DAMPING = 0.1  # a mode damped less rings for several periods: the outputs must be able to show it

@@ -4,7 +4,7 @@ A pinned beam whose supports are axially immovable stretches as it bends: the ax
 uniform, N = EA/(2L) ∫ w'² dx (both bending planes), and the strain energy gains
     Π_m = EA/(8L) (∫ w'² dx)² = EA/(8L³) Σ Γ_ijkl q_i q_j q_k q_l,   Γ_ijkl = H_ij H_kl,
 with the mode-slope integrals H_kl = ∫0^1 N_k' N_l' dξ derived in
-:func:`symmech.trolley.derive_elastic.held_membrane` (generated ``pinned_slope_gram``). H is
+:func:`symmech.trolley.elastic.derive.held_membrane` (generated ``pinned_slope_gram``). H is
 block-diagonal over the two planes, so Γ is kept in this product form: per beam the energy,
 force and tangent stiffness are a few products of a (2n, 2n) matrix, evaluated at every step.
 """

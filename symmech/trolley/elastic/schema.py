@@ -78,7 +78,7 @@ SCHEMA = Table("elastic model of the trolley (seed 002)", {
     "initial": INITIAL,
     "numerics": Table("integration", {
         "engine": Choice("`compiled`: the assembly in numba, integrated by the compiled Radau IIA with the analytic "
-                         "Jacobian (symmech.trolley.elastic_compiled; compiled once per installation, ~2 CPU-minutes, "
+                         "Jacobian (symmech.trolley.elastic.compiled; compiled once per installation, ~2 CPU-minutes, "
                          "then loaded from numba's cache; `symmech warm` builds it); the frame along the track is "
                          "tabulated per run and its interpolation error checked against the exact frame. "
                          "`python`: scipy's `solve_ivp` on the numpy assembly (the reference). `auto`: `compiled` "

@@ -29,7 +29,8 @@ import numpy as np
 from symmech.core import context, kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import membrane, model
+from symmech.trolley import model
+from symmech.trolley.elastic import membrane
 
 ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
 # (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
@@ -49,7 +50,7 @@ class Beam:
     [N m²], ``support`` "cantilever" (clamped at the root) or "pinned" (both ends),
     ``modes`` Ritz functions per plane, ``tip_mass`` [kg] at the free end; a pinned beam's
     far end slides along the axis (``axial`` "free", inextensible) or is ``"held"`` (immovable
-    supports: the beam stretches, axial stiffness ``ea`` [N], :mod:`symmech.trolley.membrane`)."""
+    supports: the beam stretches, axial stiffness ``ea`` [N], :mod:`symmech.trolley.elastic.membrane`)."""
 
     root: tuple
     axis: tuple
@@ -140,7 +141,7 @@ class Invariants:
     Field index 0 is r itself, 1…N the φ_a, then the ψ of ``pairs`` (a <= b). ``G`` (F, F, 3, 3)
     = Σ w f_k f_lᵀ [kg m^k], ``S1`` (F, 3) = Σ w f_k; ``dA`` (N, N) maps (a, b) to the field
     index of ψ_ab (or -1); ``K``, ``D`` (N, N) the constant stiffness and damping of the beams;
-    ``membrane`` the :class:`~symmech.trolley.membrane.Block` of each beam with held ends."""
+    ``membrane`` the :class:`~symmech.trolley.elastic.membrane.Block` of each beam with held ends."""
 
     names: list
     pairs: list
@@ -788,7 +789,7 @@ def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
     """Per output row (frame fr, speeds V0, dV0, heights of O (n,) [m], states Y (n, 2N + 2)): q̈ (n, N), the
     resultants F, M (n, 3), the coefficient vectors of r̃, its rate and acceleration (n, F), the Jacobi
     energy h and the total energy E (n,) [J]. The compiled engine computes the same in numba
-    (:func:`symmech.trolley.elastic_compiled.row_terms`)."""
+    (:func:`symmech.trolley.elastic.compiled.row_terms`)."""
     N, n = system.N, len(V0)
     q, qd = Y[:, :N], Y[:, N:2 * N]
     res = {k: np.zeros((n,) + shape) for k, shape in (("qdd", (N,)), ("F", (3,)), ("M", (3,)), ("rr", (system.F,)),
