@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 import symmech
-from symmech.numerics import ode
+from symmech.numerics import ode, radau
 from symmech.core.scene import SymmechError, scenes_folder
 from symmech.generated import smm_rotor_boom
 
@@ -52,7 +52,7 @@ def adaptive(lam, t_end, rtol, atol):
     """Accepted steps and the largest error |y - cos t| at their ends of an adaptive Radau solve."""
     args, y, t, f = np.array([lam]), np.array([1.0]), 0.0, np.empty(1)
     probe(t, y, args, f)
-    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(1)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
     st = PROBE.radau_start(t, y, f, t_end, args, rtol, np.array([atol]), J)
     steps, err = 0, 0.0
     while t < t_end:
@@ -66,10 +66,10 @@ def adaptive(lam, t_end, rtol, atol):
 def fixed_radau(lam, n, t_end=1.0):
     """|y(t_end) - cos t_end| after n equal Radau steps (one collocation solve each, exact Jacobian)."""
     args, y, f, h = np.array([lam]), np.array([1.0]), np.empty(1), t_end / n
-    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(1)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
     J[0, 0] = -lam
-    st = np.zeros(ode.N_RADAU)  # no previous step: the Newton solve starts from zero increments
-    st[ode.R_JAC_CURRENT] = 1.0
+    st = np.zeros(radau.N_RADAU)  # no previous step: the Newton solve starts from zero increments
+    st[radau.R_JAC_CURRENT] = 1.0
     for k in range(n):
         probe(k * h, y, args, f)
         ok, _, _, Z = PROBE.radau_try(k * h, y, f, h, args, 1e-12, np.array([1e-12]), st, J, LUr, pr, LUc, pc, Q)
@@ -92,23 +92,24 @@ def fixed_dop853(n, t_end=4.0):
 
 
 def test_radau_tableau_is_scipys_bit_for_bit():
-    """The Radau IIA constants written out in numerics.ode (no scipy import at run time) are those of scipy's
+    """The Radau IIA constants written out in numerics.radau (no scipy import at run time) are those of scipy's
     ``_ivp/radau.py``, to the last bit."""
-    from scipy.integrate._ivp import radau
+    from scipy.integrate._ivp import radau as scipy_radau
 
-    for ours, theirs in ((ode.RADAU_C, radau.C), (ode.RADAU_E[0], radau.E), (ode.RADAU_T, radau.T),
-                         (ode.RADAU_TI, radau.TI), (ode.RADAU_PT, radau.P.T)):
+    for ours, theirs in ((radau.RADAU_C, scipy_radau.C), (radau.RADAU_E[0], scipy_radau.E),
+                         (radau.RADAU_T, scipy_radau.T),
+                         (radau.RADAU_TI, scipy_radau.TI), (radau.RADAU_PT, scipy_radau.P.T)):
         assert ours.shape == theirs.shape and np.array_equal(ours, theirs)
-    assert ode.MU_REAL == radau.MU_REAL and ode.MU_COMPLEX == radau.MU_COMPLEX
+    assert radau.MU_REAL == scipy_radau.MU_REAL and radau.MU_COMPLEX == scipy_radau.MU_COMPLEX
 
 
 def test_radau_collocation_conditions():
     """The Radau IIA tableau A = T diag(MU_REAL, MU_COMPLEX, conj)^-1 TI (the eigen-decomposition of A^-1)
     satisfies the simplifying conditions C(3): sum_j a_ij c_j^(k-1) = c_i^k / k, k = 1..3, to 1e-14."""
-    lam = np.diag([ode.MU_REAL, ode.MU_COMPLEX.real, ode.MU_COMPLEX.real]).astype(complex)
-    lam[1, 2], lam[2, 1] = -ode.MU_COMPLEX.imag, ode.MU_COMPLEX.imag  # the real form of the complex pair
-    A = np.linalg.inv(ode.RADAU_T @ lam.real @ ode.RADAU_TI)
-    c = ode.RADAU_C
+    lam = np.diag([radau.MU_REAL, radau.MU_COMPLEX.real, radau.MU_COMPLEX.real]).astype(complex)
+    lam[1, 2], lam[2, 1] = -radau.MU_COMPLEX.imag, radau.MU_COMPLEX.imag  # the real form of the complex pair
+    A = np.linalg.inv(radau.RADAU_T @ lam.real @ radau.RADAU_TI)
+    c = radau.RADAU_C
     for k in range(1, 4):
         np.testing.assert_allclose(A @ c ** (k - 1), c ** k / k, rtol=0, atol=1e-14)
 
@@ -264,14 +265,14 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     p[12] *= 1e4
     assert np.linalg.eigvals(smm_rotor_boom.jac(0.0, y0, p)).real.min() < -3e4
     t = np.linspace(0.0, 2.0, 21)
-    radau = ode.integrate("smm_rotor_boom", p, y0, t, method="Radau", rtol=1e-8, atol=1e-14)
+    stiff = ode.integrate("smm_rotor_boom", p, y0, t, method="Radau", rtol=1e-8, atol=1e-14)
     dop = ode.integrate("smm_rotor_boom", p, y0, t, method="DOP853", rtol=1e-8, atol=1e-14)
     ref = solve_ivp(smm_rotor_boom.rhs, (0.0, 2.0), y0, method="Radau", t_eval=t, args=(p,), rtol=1e-8,
                     atol=1e-14, jac=smm_rotor_boom.jac)
-    assert radau.steps < dop.steps / 10
+    assert stiff.steps < dop.steps / 10
     scale = np.abs(dop.y).max(axis=1)
-    assert np.all(np.abs(radau.y - dop.y).max(axis=1) < 1e-6 * scale)
-    assert np.all(np.abs(radau.y - ref.y).max(axis=1) < 1e-6 * scale)
+    assert np.all(np.abs(stiff.y - dop.y).max(axis=1) < 1e-6 * scale)
+    assert np.all(np.abs(stiff.y - ref.y).max(axis=1) < 1e-6 * scale)
 
 
 @pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)

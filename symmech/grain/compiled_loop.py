@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from symmech.numerics import kernels, ode
+from symmech.numerics.jit import inline, jit
 from symmech.grain import sliding
 from symmech.grain.compiled_layout import (
     P_AT, C_AT, S_AT, I_AT, N_SLIDE, IMPACT_WIDTH, LAW_PRINTED, INT, FLIGHT, IMPACT, SLIDING, DONE, MORE, STALLED,
@@ -27,8 +27,6 @@ ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Pri
 
 DOP_STAGES, DOP_EXTENDED, DOP_POWER, DOP_EXPONENT = ode.DOP_STAGES, ode.DOP_EXTENDED, ode.DOP_POWER, ode.DOP_EXPONENT
 ROT_WIDTH = 3 + 7 + 7 * 7  # rotation step table row: t_old, t_new, (unused), y_old (7), F (7 x 7)
-
-jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 
 
 # --------------------------------------------------------------------------- small algebra
@@ -156,7 +154,7 @@ def _orient(t, ctx, tab, ntab):
     return y[:4], y[4:7]
 
 
-@numba.njit(cache=True, error_model="numpy", nogil=True, inline="always")  # inlined: no call in the scan loop
+@inline  # no call in the scan loop
 def _translate_into(p, ctx, t, out):
     """Centre position and velocity rows out[0] (2, 3) at t of the flight from ctx = (t0, r0, v0, ...)."""
     tau = t - ctx[0]

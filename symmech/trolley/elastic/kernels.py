@@ -22,10 +22,9 @@ import math
 import numba
 import numpy as np
 
-from symmech.numerics import ode
+from symmech.numerics import ode, radau
+from symmech.numerics.jit import jit, with_gil
 from symmech.trolley.elastic.layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY
-
-jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 
 MAX_STEPS = 50_000_000
 
@@ -300,7 +299,7 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol):
     _rhs(t, y, args, f)
     Y[0] = y
     k = 1
-    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(n)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(n)
     st = _radau_start(t, y, f, t_end, args, rtol, atol, J)
     for step in range(MAX_STEPS):
         if not t < t_end:
@@ -308,7 +307,7 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol):
         t_new, y_new, f_new, ok = _radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             return Y, step, int(calls[0]), ode.STEP_TOO_SMALL
-        k = ode.radau_dense_until(Y, k, t_eval, t_new, t, t_new - t, Q)
+        k = radau.radau_dense_until(Y, k, t_eval, t_new, t, t_new - t, Q)
         t, y, f = t_new, y_new, f_new
     return Y, MAX_STEPS, int(calls[0]), ode.TOO_MANY_STEPS
 
@@ -357,7 +356,7 @@ def traction_force(key, t, v):
     return float(p0(t, v)), float(p0(t, v + h) - p0(t, v - h)) / (2.0 * h)
 
 
-@numba.njit(cache=True, error_model="numpy")  # not nogil: the callback holds the GIL
+@with_gil  # the callback holds the GIL
 def _force(key, t, v):
     with numba.objmode(p="float64", dp="float64"):  # a Python call per stage (~2 µs)
         p, dp = traction_force(key, t, v)
@@ -502,20 +501,20 @@ def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
     _rhs_traction(t, y, args, f)
     Y[0] = y
     k = 1
-    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(n)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(n)
     st = _traction_start(t, y, f, t_end, args, rtol, atol, J)
     status, steps = ode.TOO_MANY_STEPS, MAX_STEPS
     for step in range(MAX_STEPS):
         if not t < t_end:
             status, steps = ode.SUCCESS, step
             break
-        if st[ode.R_H] > max_step:
-            st[ode.R_H], st[ode.R_H_OLD], st[ode.R_ERR_OLD] = max_step, -1.0, -1.0
+        if st[radau.R_H] > max_step:
+            st[radau.R_H], st[radau.R_H_OLD], st[radau.R_ERR_OLD] = max_step, -1.0, -1.0
         t_new, y_new, f_new, ok = _traction_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             status, steps = ode.STEP_TOO_SMALL, step
             break
-        k = ode.radau_dense_until(Y, k, t_eval, t_new, t, t_new - t, Q)
+        k = radau.radau_dense_until(Y, k, t_eval, t_new, t, t_new - t, Q)
         t, y, f = t_new, y_new, f_new
     nfev = int(calls[0])
     dV = np.full(t_eval.size, np.nan)
