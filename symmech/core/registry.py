@@ -102,7 +102,7 @@ def kinds() -> dict[str, Kind]:
 def get(name) -> Kind:
     """The kind called ``name``; a one-line SceneError naming the field ``kind`` otherwise."""
     from symmech.core.scene import SceneError
-    from symmech.core.schema import _did_you_mean
+    from symmech.core.schema import did_you_mean
 
     if isinstance(name, str):
         _discover(until=name)
@@ -110,6 +110,6 @@ def get(name) -> Kind:
             return _KINDS[name]
     available = kinds()
     if not isinstance(name, str) or name not in available:
-        raise SceneError("kind", f"unknown scene kind {name!r}{_did_you_mean(name, available)}; "
+        raise SceneError("kind", f"unknown scene kind {name!r}{did_you_mean(name, available)}; "
                                  f"choose one of {', '.join(available)}")
     return available[name]

@@ -127,7 +127,7 @@ def _population_base(base: dict, population: dict, field: str) -> tuple[dict, in
     for path in population["vary"]:
         value = _get(data, path)
         if not _is_vector(value):
-            found = "missing" if value is None else s._show(value)
+            found = "missing" if value is None else s.show(value)
             raise SceneError(f"{field}.vary.{path}", f"varies a number or vector of numbers of the scene; "
                                                      f"{path} is {found}")
         draws += len(value) if isinstance(value, list) else 1

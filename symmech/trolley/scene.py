@@ -538,7 +538,7 @@ def paper_table_rows(setup: Setup, paper: dict, physics: dict) -> dict:
         if case not in paper:
             continue
         k = index[time_]
-        pick = lambda r: float(_quantity(r, q)[k])  # noqa: E731
+        pick = lambda r: float(quantity(r, q)[k])  # noqa: E731
         got = pick(paper[case])
         ok = round(got, decimals) == round(value, decimals)
         reproduced += ok
@@ -561,7 +561,8 @@ def _paper_tables_text(tab: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _quantity(res, name):
+def quantity(res, name) -> np.ndarray:
+    """The column of a quantity named like the printed tables (P0…P5, V1…V3, a1…a3) in a case's results."""
     kind, i = name[0], int(name[1:])
     if kind == "P":
         return res["P"][:, i]

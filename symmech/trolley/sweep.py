@@ -64,7 +64,7 @@ REACTIONS = tuple(f"P{i}" for i in range(6))
 
 def _field(path, value):
     if not isinstance(value, str) or not any(re.fullmatch(p, value) for _, p, *_ in FIELDS):
-        raise SceneError(path, f"{s._show(value)} is not a field a trolley sweep can vary; choose one of "
+        raise SceneError(path, f"{s.show(value)} is not a field a trolley sweep can vary; choose one of "
                                f"{', '.join(name for name, *_ in FIELDS)}")
     return value
 

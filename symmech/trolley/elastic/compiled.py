@@ -46,12 +46,12 @@ STALL_ROUNDS = 2
 
 
 def row_terms(system, fr, V0, dV0, Y, height) -> dict:
-    """:func:`symmech.trolley.elastic.system.row_terms` by the kernels' ``_rows`` (the potential Π per row in Python)."""
+    """:func:`symmech.trolley.elastic.system.row_terms` by the kernels' ``rows`` (the potential Π per row in Python)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     chs = frame_channels(fr, V0, dV0, system.mdl.g0)
     nu = np.ascontiguousarray(fr.lam[:, :, 1])
     keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
-    terms = ek._rows(ek.pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
+    terms = ek.rows(ek.pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
     res = dict(zip(keys, terms))
     pi = system.potential(Y[:, :system.N])
     res["h"] += pi
@@ -179,7 +179,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     zero = np.zeros(N)
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL]
-    Y, steps, nfev, status = ek._solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
+    Y, steps, nfev, status = ek.solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
     _check(status, Y, t)
     out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
@@ -266,7 +266,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
     key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
     ek.TRACTIONS[key] = drive.traction
     try:
-        Y, dV0, steps, nfev, status = ek._solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
+        Y, dV0, steps, nfev, status = ek.solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
                                                          float(rtol), atol, step)
     finally:
         del ek.TRACTIONS[key]
@@ -309,7 +309,7 @@ def _entry_signatures() -> dict:
     rows = (np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
     traction = ((np.zeros(2), np.zeros((4, 1, N_GEOMETRY))), 1, np.zeros(6), np.zeros(2), 1e-8, np.zeros(6), 1.0)
     return {entry: (mdl, *(numba.typeof(a) for a in args))
-            for entry, args in ((ek._solve, solve), (ek._rows, rows), (ek._solve_traction, traction))}
+            for entry, args in ((ek.solve, solve), (ek.rows, rows), (ek.solve_traction, traction))}
 
 
 ENGINE = build.Engine("elastic", "symmech.trolley.elastic.kernels", _entry_signatures, COLD_COMPILE_SECONDS)

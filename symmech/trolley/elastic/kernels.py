@@ -12,7 +12,7 @@ spline table in t; with traction (s, V0 states) as 15 geometry channels of a spl
 the kernels form those 12 at each stage's V0, V̇0 (:func:`_motion`).
 
 The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
-and inlined into the cached entry :func:`_solve`, so a second process loads the whole solve from numba's
+and inlined into the cached entry :func:`solve`, so a second process loads the whole solve from numba's
 cache (see :mod:`symmech.numerics.ode`).
 """
 from __future__ import annotations
@@ -287,7 +287,7 @@ _radau_start, _radau_step = _steps.radau_start, _steps.radau_step  # globals num
 
 
 @jit
-def _solve(mdl, tab, y0, t_eval, rtol, atol):
+def solve(mdl, tab, y0, t_eval, rtol, atol):
     """Radau IIA from (t_eval[0], y0) over t_eval (k,), steps as long as the error control allows (the outputs
     come from the collocation polynomial, not from steps to each output time); returns (Y (k, n) the dense
     output at t_eval, accepted steps, rhs evaluations, status of :mod:`symmech.numerics.ode`)."""
@@ -313,7 +313,7 @@ def _solve(mdl, tab, y0, t_eval, rtol, atol):
 
 
 @jit
-def _rows(mdl, chs, nu, height, Y):
+def rows(mdl, chs, nu, height, Y):
     """Per output row (channels chs (k, 12) of the exact frame, upward unit vectors nu (k, 3), heights of O
     (k,) [m], states Y (k, 2 N + 2)): q̈ (k, N), the resultants F, M_O (k, 3), the coefficient vectors of r̃,
     its rate and acceleration (k, F), and the Jacobi and total energies less the potential Π (k,) [J]
@@ -490,8 +490,8 @@ _traction_start, _traction_step = _tsteps.radau_start, _tsteps.radau_step
 
 
 @jit
-def _solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
-    """:func:`_solve` with traction (y = [q, q̇, E_d, W, s, V0], geometry table in s, traction ``key``); returns
+def solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
+    """:func:`solve` with traction (y = [q, q̇, E_d, W, s, V0], geometry table in s, traction ``key``); returns
     also V̇0 (k,) at t_eval [m/s²]."""
     n, t_end = y0.size, t_eval[-1]
     Y = np.full((t_eval.size, n), np.nan)
