@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from symmech.core import pipeline, scene
-from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
 
 # slow: the engine compiles ~60 s of CPU, a third of the default tier's budget; the default tier
@@ -58,7 +58,7 @@ def agree(c, p, bound):
     WORK_ATOL: the rates of the stiff start transient are ~1e-5 m/s, the dissipated energy of a short ride
     ~1e-10 J, so there atol rules, and the engines' steps differ)."""
     assert relative(c["P"], p["P"]) < bound
-    for key, atol in (("q", 1e-12), ("qd", 1e-9), ("dissipated", 1e-9), ("work", el.WORK_ATOL)):
+    for key, atol in (("q", 1e-12), ("qd", 1e-9), ("dissipated", 1e-9), ("work", el_sim.WORK_ATOL)):
         assert np.abs(c[key] - p[key]).max() <= 100 * bound * np.abs(p[key]).max() + 10 * atol, key
     for key in ("F", "M", "h", "E", "probe_overload", "probe_elastic"):
         scale = np.abs(p[key]).max()
@@ -224,7 +224,7 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     setup = helix(rollers=rollers)
     system, mdl = setup.system, ek.pack(setup.system)
-    line = el.Timeline(system, setup.drive, setup.t)
+    line = el_sim.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
         ch = ec.channels(setup.drive, system, np.array([0.0, time]) if time else np.array([0.0]))[-1]

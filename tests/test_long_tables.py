@@ -6,7 +6,7 @@ import pytest
 
 from symmech.core.results import Column, Result, Table
 from symmech.trolley.elastic import scene as elastic_scene
-from symmech.trolley.elastic.system import FORCING
+from symmech.trolley.elastic.body import FORCING
 
 
 def modes(n_s=3, n=2, names=("tip",)):

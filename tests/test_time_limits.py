@@ -13,7 +13,7 @@ from badinput import SCENES, bundled
 from symmech.core import pipeline
 from symmech.core.context import Context
 from symmech.core.scene import SymmechError
-from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import simulate as el_sim
 
 HELIX = bundled("trolley_elastic_helix")  # 3 s on 1000 steps: ~30 s on the Python engine
 
@@ -31,7 +31,7 @@ def test_the_python_engine_stops_at_the_budget():
     setup = elastic_setup()
     ctx = Context(quiet=True, max_time=1.0)
     with ctx.active(), pytest.raises(SymmechError) as info:
-        el.simulate(setup.system, setup.drive, setup.t)
+        el_sim.simulate(setup.system, setup.drive, setup.t)
     # one right-hand side past the budget (milliseconds), far inside the 5 s allowed; the run needs ~30 s
     assert 1.0 < ctx.elapsed() < 2.0, ctx.elapsed()
     assert str(info.value).startswith("run stopped after 1 s: over the time budget --max-time 1 s (elastic model, "

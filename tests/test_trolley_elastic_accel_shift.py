@@ -23,7 +23,7 @@ import scipy.integrate
 
 from symmech.core import pipeline
 from symmech.core.context import Context
-from symmech.trolley.elastic import system as el, modal
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, modal
 from test_trolley_elastic_modal import CIRCLE, EI, L, R, RHO_A
 from trolley_util import setup
 
@@ -72,10 +72,10 @@ def elastica(alpha, n=12, gauss=40):
 def model(alpha, modes=6):
     """The model's first three in-plane frequencies [rad/s], linearised about the quasi-static
     state under α, their left-out curvature shifts, and the system."""
-    beam = el.Beam((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), L, RHO_A, EI, modes=modes)
-    system = el.System(el.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
-                                       el.Effects(rollers=False)))
-    fs = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, alpha, 0.0]), np.array([0.0, 1, 0]))
+    beam = el_body.Beam((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), L, RHO_A, EI, modes=modes)
+    system = el.System(el_body.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
+                                       el_body.Effects(rollers=False)))
+    fs = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, alpha, 0.0]), np.array([0.0, 1, 0]))
     q = system.quasi_static(fs)
     omega, _, X = system.linear_modes(fs, q, shapes=True)
     comp = modal.components(system)
@@ -123,7 +123,7 @@ def test_curvature_hessian_is_that_of_its_energy():
     system = model(0.0)[2]
     beam = system.mdl.beams[0]
     xi = np.linspace(0.0, 1.0, 4001)
-    basis = el.beam_basis(beam.support, xi)[0][:, :, :beam.modes]
+    basis = el_body.beam_basis(beam.support, xi)[0][:, :, :beam.modes]
     d1, d2 = basis[:, 1] / L, basis[:, 2] / L**2
 
     def energy(q):

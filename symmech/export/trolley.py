@@ -51,13 +51,13 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley.elastic import system as el
+    from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
     from symmech.trolley.elastic import compiled as elastic_compiled
 
     system, drive, t = setup.system, setup.drive, setup.t
-    line = el.Timeline(system, drive, t)
+    line = el_sim.Timeline(system, drive, t)
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
-    fr = el.frames(drive, line.s_nodes, system.mdl.l)
+    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)
     table = elastic_compiled.frame_table(system, drive, t, setup.rtol,
                                          elastic_compiled.frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
@@ -128,7 +128,7 @@ def _nominal(series: np.ndarray) -> float:
 def data(system, drive, table) -> str:
     """C definitions of the invariants (``elastic_kernels.pack``), the frame table with s(t) beside it and the
     probe fields that ``c/elastic_trolley.c`` reads."""
-    from symmech.trolley.elastic import system as el
+    from symmech.trolley.elastic import simulate as el_sim
     from symmech.trolley.elastic import kernels as ek
     from symmech.trolley.elastic.layout import F_AT, N_CHANNELS
 
@@ -137,7 +137,7 @@ def data(system, drive, table) -> str:
     inv = system.inv
     n, f = int(flags[F_AT.n]), int(flags[F_AT.f])
     nodes = table.nodes
-    s_coef = CubicSpline(nodes, el.arc_length(drive, nodes)).c  # (4, intervals)
+    s_coef = CubicSpline(nodes, el_sim.arc_length(drive, nodes)).c  # (4, intervals)
     coef = np.concatenate([table.coef, s_coef[:, :, None]], axis=2)  # (4, intervals, 13)
     elastic = np.zeros(f)
     elastic[1 + inv.n_roll:1 + n] = 1.0

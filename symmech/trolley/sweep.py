@@ -357,7 +357,7 @@ def point_metrics(res: Result, comfort: dict) -> tuple[list[Column], list[float]
 def _closest_resonance(modes: Table) -> tuple[list, dict]:
     """The (sample, mode, forcing) of the modes table whose natural frequency is nearest, relatively, to a
     positive forcing frequency."""
-    from symmech.trolley.elastic.system import FORCING
+    from symmech.trolley.elastic.body import FORCING
 
     f = modes.column("f")[:, None]
     forcing = np.column_stack([modes.column(f"forcing_{name}") for name, _ in FORCING])

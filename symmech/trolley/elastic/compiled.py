@@ -33,7 +33,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from symmech.numerics import build
-from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import system as el, frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
@@ -46,7 +46,7 @@ STALL_ROUNDS = 2
 
 
 def row_terms(system, fr, V0, dV0, Y, height) -> dict:
-    """:func:`symmech.trolley.elastic.system.row_terms` by the kernels' ``rows`` (the potential Π per row in Python)."""
+    """:func:`symmech.trolley.elastic.simulate.row_terms` by the kernels' ``rows`` (the potential Π per row in Python)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     chs = frame_channels(fr, V0, dV0, system.mdl.g0)
     nu = np.ascontiguousarray(fr.lam[:, :, 1])
@@ -61,15 +61,15 @@ def row_terms(system, fr, V0, dV0, Y, height) -> dict:
 
 def channels(drive, system, t, at=slice(None)) -> np.ndarray:
     """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
-    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.system.frame_state`, vectorised."""
-    s = el.arc_length(drive, t)[at]
+    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame.frame_state`, vectorised."""
+    s = el_sim.arc_length(drive, t)[at]
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
-    return frame_channels(el.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
+    return frame_channels(el_frame.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
 
 
 def frame_channels(fr, V0, dV0, g0: float) -> np.ndarray:
     """Channels (k, 12) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,)."""
-    v0, a0, w, dw = el.frame_motion(fr, V0, dV0)
+    v0, a0, w, dw = el_frame.frame_motion(fr, V0, dV0)
     return np.column_stack([a0 + g0 * fr.lam[:, :, 1], w, dw, v0])
 
 
@@ -154,7 +154,7 @@ def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_s
 
 
 def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.system.simulate` by Radau on the compiled assembly (prescribed speed; the
+    """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (prescribed speed; the
     same state, tolerances and outputs; the steps are not bound by the output spacing: the outputs come from
     the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
     ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
@@ -164,24 +164,24 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     t = np.asarray(t, dtype=float)
     if drive.traction is not None:
         return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
-    line = el.Timeline(system, drive, t)
+    line = el_sim.Timeline(system, drive, t)
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
-    fr = el.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
+    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
     table = frame_table(system, drive, t, rtol, frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
         why = (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
                f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
-        out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+        out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
         out["engine"], out["engine_reason"] = "python", why
         return out
     N = system.N
     q0 = system.quasi_static(line.state(t[0]))
     zero = np.zeros(N)
     y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL]
     Y, steps, nfev, status = ek.solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
     _check(status, Y, t)
-    out = el.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
+    out = el_sim.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out
@@ -192,7 +192,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
 def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
     """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
     :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
-    fr = el.frames(drive, np.asarray(s, float)[at], system.mdl.l)
+    fr = el_frame.frames(drive, np.asarray(s, float)[at], system.mdl.l)
     return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
 
 
@@ -215,10 +215,10 @@ def reach(system, drive, t) -> tuple[float, float]:
 
     from symmech.trolley import model
 
-    body = el.rigid_body(system.mdl)
+    body = el_sim.rigid_body(system.mdl)
 
     def rates(time, y):
-        fr = el.frames(drive, y[:1], system.mdl.l)
+        fr = el_frame.frames(drive, y[:1], system.mdl.l)
         alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
         p0 = float(drive.traction(time, y[1]))
         return [y[1], (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]]
@@ -232,7 +232,7 @@ def reach(system, drive, t) -> tuple[float, float]:
 
 
 def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.system.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
+    """:func:`symmech.trolley.elastic.simulate.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
     V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
     P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
     Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
@@ -245,7 +245,7 @@ def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dq
             return out
     why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
            f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
-    out = el.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+    out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
     out["engine"], out["engine_reason"] = "python", why
     return out
 
@@ -257,11 +257,11 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
     """The compiled traction run on ``table``; None when s leaves it."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     N = system.N
-    line = el.Timeline(system, drive, t)
+    line = el_sim.Timeline(system, drive, t)
     zero = np.zeros(N)
-    y0 = np.r_[el.traction_start(line, t[0]) + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0,
+    y0 = np.r_[el_sim.traction_start(line, t[0]) + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0,
                0.0, 0.0, drive.s0, drive.v_initial]
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el.WORK_ATOL, 1e-10, 1e-10]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL, 1e-10, 1e-10]
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
     key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
     ek.TRACTIONS[key] = drive.traction
@@ -274,7 +274,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
     s = Y[:, -2]
     if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
         return None
-    out = el.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=row_terms)
+    out = el_sim.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=row_terms)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out

@@ -20,7 +20,7 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linear_sum_assignment
 
-from symmech.trolley.elastic import system as el
+from symmech.trolley.elastic import system as el, body as el_body
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ def components(system: el.System) -> Components:
     labels = [""] * N
     for a in range(system.inv.n_roll):
         dof[a] = a + 1
-        labels[a] = f"roller_{el.ROLLER_NAMES[a]}"
+        labels[a] = f"roller_{el_body.ROLLER_NAMES[a]}"
     M0 = system.mass(np.zeros(N))
     for b, _spec in enumerate(system.mdl.beams):
         for p in (1, 2):
@@ -119,12 +119,12 @@ def curvature_hessian(system: el.System, q: np.ndarray) -> np.ndarray:
     H = np.zeros((system.N, system.N))
     if not system.mdl.effects.body:
         return H
-    xg, wg = np.polynomial.legendre.leggauss(el.BEAM_GAUSS)
+    xg, wg = np.polynomial.legendre.leggauss(el_body.BEAM_GAUSS)
     xi, wg = (xg + 1) / 2, wg / 2
     names = system.inv.names
     for b, beam in enumerate(system.mdl.beams):
         n = beam.modes
-        basis = el.beam_basis(beam.support, xi)[0][:, :, :n]
+        basis = el_body.beam_basis(beam.support, xi)[0][:, :, :n]
         d1, d2 = basis[:, 1] / beam.length, basis[:, 2] / beam.length ** 2  # (P, n) d/dx, d²/dx²
         idx = [[names.index(f"beam{b}_p{p}_m{k + 1}") for k in range(n)] for p in (1, 2)]
         root = np.sqrt(beam.ei)
@@ -158,7 +158,7 @@ def beam_slope(system: el.System, q: np.ndarray) -> float:
     xi = np.linspace(0.0, 1.0, el.MODE_SAMPLES)
     slope = 0.0
     for b, beam in enumerate(system.mdl.beams):
-        d1 = el.beam_basis(beam.support, xi)[0][:, 1, :beam.modes] / beam.length
+        d1 = el_body.beam_basis(beam.support, xi)[0][:, 1, :beam.modes] / beam.length
         w = [d1 @ q[[system.inv.names.index(f"beam{b}_p{p}_m{k + 1}") for k in range(beam.modes)]] for p in (1, 2)]
         slope = max(slope, float(np.hypot(*w).max()))
     return slope

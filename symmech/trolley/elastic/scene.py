@@ -17,8 +17,8 @@ from symmech.core import kinematics as kin, plotting
 from symmech.numerics import build
 from symmech.core.results import Column, Result, Table as ResultTable
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley.elastic import system as el
-from symmech.trolley.elastic.system import FORCING
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic.body import FORCING
 from symmech.trolley import model
 from symmech.trolley.elastic import modal
 from symmech.trolley.elastic.schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noqa: F401 (SCHEMA: the kind's table, read here)
@@ -27,7 +27,7 @@ from symmech.trolley.elastic.schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noq
 @dataclass
 class Setup:
     system: el.System | None
-    drive: el.Drive
+    drive: el_frame.Drive
     body: model.Body
     t: np.ndarray
     names: list
@@ -42,8 +42,8 @@ class Setup:
 
 
 # Wall time per output step [s] (bundled trolley_elastic_helix on 2 shared cores: compiled ~0.6 s for 1000 steps;
-# the Python engine's: el.SECONDS_PER_STEP): the estimate, and the `auto` engine's choice
-SECONDS_PER_STEP = {"python": el.SECONDS_PER_STEP, "compiled": 2e-3}
+# the Python engine's: el_sim.SECONDS_PER_STEP): the estimate, and the `auto` engine's choice
+SECONDS_PER_STEP = {"python": el_sim.SECONDS_PER_STEP, "compiled": 2e-3}
 
 
 def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
@@ -69,7 +69,7 @@ def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
 
 def simulate(setup: Setup, **kw) -> dict:
     """The elastic model along the setup's grid on the engine of :func:`engine` (keywords: those of
-    :func:`symmech.trolley.elastic.system.simulate`, ``method`` and ``analytic_jacobian`` only on the Python engine);
+    :func:`symmech.trolley.elastic.simulate.simulate`, ``method`` and ``analytic_jacobian`` only on the Python engine);
     ``engine`` and ``engine_reason`` in the result name it."""
     start = {"dq0": setup.dq0, "dqd0": setup.dqd0, "rtol": setup.rtol}
     name, why = engine(setup)
@@ -85,15 +85,15 @@ def simulate(setup: Setup, **kw) -> dict:
         from symmech.trolley.elastic import compiled as elastic_compiled
 
         elastic_compiled.ENGINE.warm_in_background()
-    out = el.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
+    out = el_sim.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
     out.update(engine="python", engine_reason=why)
     return out
 
 
-def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "elastic") -> Setup:
+def prepare(elastic: dict, body: model.Body, drive: el_frame.Drive, t, path: str = "elastic") -> Setup:
     """The elastic setup from the resolved ``[elastic]`` table, the rigid trolley's body
     (mass, centre, central inertia, l, ah, g0), its drive and time grid t [s]."""
-    eff = el.Effects(**elastic["effects"])
+    eff = el_body.Effects(**elastic["effects"])
     rollers = elastic["rollers"]
     if eff.rollers and rollers is None:
         raise SceneError(f"{path}.rollers", "missing: elastic rollers (effects.rollers = true) need their stiffness")
@@ -105,7 +105,7 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
         if np.linalg.norm(np.cross(axis, plane)) <= 1e-9 * np.linalg.norm(axis) * np.linalg.norm(plane):
             raise SceneError(f"{path}.beams[{i}].plane", f"{b['plane']} must not be parallel to the axis {b['axis']}")
         _check_axial(b, f"{path}.beams[{i}]")
-        beams.append(el.Beam(tuple(b["root"]), tuple(axis), tuple(plane), b["length"], b["mass_per_length"],
+        beams.append(el_body.Beam(tuple(b["root"]), tuple(axis), tuple(plane), b["length"], b["mass_per_length"],
                              tuple(b["ei"]), b["support"], b["modes"], b["tip_mass"], b["damping_ratio"],
                              b["axial"], b["ea"] or 0.0))
     probes, names = [], []
@@ -119,9 +119,9 @@ def prepare(elastic: dict, body: model.Body, drive: el.Drive, t, path: str = "el
             raise SceneError(f"{where}.name", f"{p['name']!r} names an earlier point too")
         probes.append((None, tuple(p["at"])) if p["at"] is not None else (p["beam"], p["xi"]))
         names.append(p["name"])
-    rl = None if rollers is None else el.Rollers(tuple(rollers["stiffness"]), tuple(rollers["damping"]),
+    rl = None if rollers is None else el_body.Rollers(tuple(rollers["stiffness"]), tuple(rollers["damping"]),
                                                   rollers["law"], tuple(rollers["preload"]))
-    mdl = el.ElasticModel(body.m, tuple(body.r), tuple(body.inertia), body.l, body.ah, body.g0, rl,
+    mdl = el_body.ElasticModel(body.m, tuple(body.r), tuple(body.inertia), body.l, body.ah, body.g0, rl,
                           tuple(beams), eff)
     if eff.rollers and np.linalg.eigvalsh(kin.inertia_matrix(body.inertia))[0] <= 0:
         raise SceneError("trolley.inertia", f"{list(body.inertia)} kg m^2: elastic rollers need a positive "
@@ -187,9 +187,9 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     t = setup.t
     if setup.system is None:
         # no elastic effect: the rigid model itself, on the rigid scene's grid (bit for bit)
-        s = el.arc_length(setup.drive, t)
+        s = el_sim.arc_length(setup.drive, t)
         V0, dV0 = setup.drive.speed(t)
-        rigid = model.body_motion(el.frames(setup.drive, s, setup.body.l), V0, dV0, setup.body)
+        rigid = model.body_motion(el_frame.frames(setup.drive, s, setup.body.l), V0, dV0, setup.body)
         cols = [Column("t", "s")] + [Column(f"P{i}", "N") for i in range(6)]
         return Result("trolley", {"elastic": "no elastic effect selected: rigid model"},
                       {"elastic_reactions": ResultTable(cols, np.column_stack([t, rigid["P"]]))})
@@ -393,11 +393,11 @@ def _modes(setup: Setup, r) -> dict:
     system = setup.system
     idx = np.unique(np.linspace(0, len(r["t"]) - 1, setup.modal_samples).astype(int))
     n = system.N
-    fr = el.frames(setup.drive, r["s"][idx], system.mdl.l)
+    fr = el_frame.frames(setup.drive, r["s"][idx], system.mdl.l)
     comp = modal.components(system)
     states, samples, omegas, zetas = [], [], [], []
     for j, i in enumerate(idx):
-        fs = el.frame_state(fr, j, r["V0"][i], r["dV0"][i])
+        fs = el_frame.frame_state(fr, j, r["V0"][i], r["dV0"][i])
         q = system.quasi_static(fs, r["q"][i])
         # 2n state-space roots: at least n have Im >= 0 (the first n by modulus are kept)
         omega, z, X = system.linear_modes(fs, q, shapes=True)
@@ -415,7 +415,7 @@ def _modes(setup: Setup, r) -> dict:
     out["label"] = [row["label"] for row in rows]
     out["zeta"] = np.array([z[o] for z, o in zip(zetas, order)])
     j, k = np.unravel_index(np.argmax(np.abs(out["curvature_shift"])), out["f"].shape)
-    out["deflection_shift"] = _deflection_shift(system, el.frame_state(fr, j, r["V0"][idx[j]], r["dV0"][idx[j]]),
+    out["deflection_shift"] = _deflection_shift(system, el_frame.frame_state(fr, j, r["V0"][idx[j]], r["dV0"][idx[j]]),
                                                 samples[j][0], shapes[j][:, k], out["f"][j, k])
     W_max = float(np.linalg.norm(r["W"], axis=1).max())
     forcing = forcing_frequencies(system.mdl.l, r["V0"][idx], r["W"][idx], r["dW"][idx], W_max)
@@ -437,7 +437,7 @@ def _identity(system: el.System, comp: modal.Components, q, M, X, omega) -> dict
             "shape": _probe_shapes(system, q, M, X)}
 
 
-def _deflection_shift(system: el.System, fs: el.FrameState, M, x, f: float) -> float:
+def _deflection_shift(system: el.System, fs: el_frame.FrameState, M, x, f: float) -> float:
     """f / f_0 - 1 of the mode x (N,) of frequency f [Hz]: f_0 the frequency of the mode of the
     linearisation about the undeformed state (q = 0, same frame) closest to x by MAC."""
     omega, _, X = system.linear_modes(fs, np.zeros(system.N), shapes=True)
@@ -531,13 +531,13 @@ def precision(setup: Setup, ctx) -> Result:
                      reference)
 
 
-def drive_of(trolley_setup, case: int) -> el.Drive:
+def drive_of(trolley_setup, case: int) -> el_frame.Drive:
     """The drive of a rigid trolley setup (:class:`symmech.trolley.scene.Setup`) for case 1 or 2:
     its speed V0(t), or its traction P0(t, V0) with the initial speed."""
     st = trolley_setup
     if st.traction is not None:
-        return el.Drive(st.track, st.frame, case == 2, None, st.s0, st.fd_order, st.fd_step, st.plan,
+        return el_frame.Drive(st.track, st.frame, case == 2, None, st.s0, st.fd_order, st.fd_step, st.plan,
                         traction=st.traction, v_initial=st.v_initial)
     f, df = st.speed
-    return el.Drive(st.track, st.frame, case == 2, lambda t: (f(t), df(t)), st.s0, st.fd_order, st.fd_step,
+    return el_frame.Drive(st.track, st.frame, case == 2, lambda t: (f(t), df(t)), st.s0, st.fd_order, st.fd_step,
                     st.plan)
