@@ -46,6 +46,7 @@ from symmech.numerics.radau import N_RADAU, radau_buffers, radau_dense_at
 
 DOP853, RADAU = INT(0), INT(1)  # methods of a whole solve
 SUCCESS, STEP_TOO_SMALL, TOO_MANY_STEPS, TERMINATED = INT(0), INT(1), INT(2), INT(3)  # status of a whole solve
+STEP_TOO_SMALL_TEXT = "required step size is less than spacing between numbers"  # scipy's words, every engine's
 
 
 @closure
@@ -275,7 +276,7 @@ def integrate(name: str, p, y0, t_eval, t0: float = 0.0, method: str = "DOP853",
         METHODS[method], float(t0), y0, t_eval, np.ascontiguousarray(p, float), float(rtol), atol, int(max_steps),
         compiled.direction, compiled.terminal)
     if status == STEP_TOO_SMALL:
-        raise SymmechError(f"ode: {method} on {name}: required step size is less than spacing between numbers")
+        raise SymmechError(f"ode: {method} on {name}: {STEP_TOO_SMALL_TEXT}")
     if status == TOO_MANY_STEPS:
         raise SymmechError(f"ode: {method} on {name}: {max_steps} steps did not reach t = {t_eval[-1]:g} s")
     return Solution(t_eval[:filled], Y[:filled].T.copy(), steps, nfev,

@@ -21,7 +21,8 @@ from symmech.core.context import Context
 from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import model, plots, tables, track as tracks
-from symmech.trolley.schema import COMFORT, MAX_LENGTH, MAX_SPEED, SCHEMA
+from symmech.trolley.comfort import COMFORT, comfort_warning
+from symmech.trolley.schema import MAX_LENGTH, MAX_SPEED, SCHEMA
 from symmech.trolley import sweep as design_sweep
 
 ROLE = "kind"  # found by symmech.core.discovery
@@ -466,8 +467,7 @@ def _case_summary(setup, case, r, ctx) -> dict:
         info.update(_small_angle(setup, r, ctx))
     for axis, c in info["comfort"].items():
         if c["samples_outside"]:
-            ctx.warn(f"case {case}: overload along {axis} leaves the comfort envelope "
-                     f"{c['envelope_g']} g from t = {c['first_t_outside']:.4g} s")
+            ctx.warn(comfort_warning(f"case {case}: overload", axis, c["envelope_g"], c["first_t_outside"]))
     return info
 
 

@@ -9,12 +9,11 @@ from symmech.core import expressions
 from symmech.core import schema as sc
 from symmech.core.scene import SceneError
 from symmech.trolley import plots
+from symmech.trolley.comfort import COMFORT
 from symmech.trolley import sweep as design_sweep
 from symmech.trolley.elastic import schema as elastic_schema
 
 G_STANDARD = 9.80665
-# Default comfort envelope [g] per body axis (tangential, normal, lateral).
-COMFORT = {"x1": (-2.0, 2.0), "x2": (-1.5, 6.0), "x3": (-2.0, 2.0)}
 MAX_SPEED = 1e4  # m/s: admissible |V0| (and traction speeds checked up to it)
 MAX_LENGTH = 1e7  # m: coordinates and arc lengths
 

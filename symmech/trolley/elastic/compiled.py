@@ -33,7 +33,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from symmech.numerics import build
-from symmech.trolley.elastic import system as el, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
@@ -285,9 +285,8 @@ def _check(status, Y, t) -> None:
     from symmech.numerics import ode  # numba: imported by a run, not by choosing the engine or its estimate
     if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
         last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
-        why = "required step size is less than spacing between numbers" if status == ode.STEP_TOO_SMALL else \
-            "no finite state"
-        raise el.SymmechError(f"elastic trolley: integration failed after t = {last:.6g} s (compiled Radau: {why})")
+        why = ode.STEP_TOO_SMALL_TEXT if status == ode.STEP_TOO_SMALL else "no finite state"
+        raise el_sim.integration_failed(last, f"compiled Radau: {why}")
 
 
 # --------------------------------------------------------------------------- building the cache once

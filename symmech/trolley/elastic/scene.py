@@ -20,6 +20,7 @@ from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic.body import FORCING
 from symmech.trolley import model
+from symmech.trolley.comfort import comfort_warning
 from symmech.trolley.elastic import modal
 from symmech.trolley.elastic.schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noqa: F401 (SCHEMA: the kind's table, read here)
 
@@ -252,8 +253,8 @@ def _summary(setup: Setup, r, comfort) -> tuple[dict, list]:
                 info["comfort"][name][axis] = {"envelope_g": [lo, hi], "min_g": float(n.min()), "max_g": float(n.max()),
                                                "samples_outside": int(bad.sum())}
                 if bad.any():
-                    warnings.append(f"elastic: overload of point {name} along {axis} leaves the comfort envelope "
-                                    f"[{lo:g}, {hi:g}] g from t = {r['t'][np.argmax(bad)]:.4g} s")
+                    warnings.append(comfort_warning(f"elastic: overload of point {name}", axis, (lo, hi),
+                                                    r["t"][np.argmax(bad)]))
     return {"elastic": info}, warnings
 
 

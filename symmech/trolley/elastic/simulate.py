@@ -121,6 +121,12 @@ WORK_ATOL = 1e-5  # J, absolute tolerance of the work of the track forces
 SECONDS_PER_STEP = 0.1
 
 
+def integration_failed(t_reached: float, why: str) -> SymmechError:
+    """The error of a failed elastic solve, either engine: the last output time reached [s] and the solver's
+    reason."""
+    return SymmechError(f"elastic trolley: integration failed after t = {t_reached:.6g} s ({why})")
+
+
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
              atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True, fallback: str = "") -> dict:
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
@@ -185,7 +191,7 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
     sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, max_step=step, **kw)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
-        raise SymmechError(f"elastic trolley: integration failed at t = {sol.t[-1]:.6g} s ({sol.message})")
+        raise integration_failed(sol.t[-1], sol.message)
     Y = sol.y.T
     if traction:
         s, V0 = Y[:, -2], Y[:, -1]
