@@ -44,3 +44,10 @@ def test_every_role_is_found_in_every_paper():
         papers = {name.split(".")[1] for name in discovery.modules(role)}
         assert papers == {"grain", "smm", "trolley"}, (role, papers)
     assert {name.split(".")[1] for name in discovery.modules("engine")} == {"grain", "trolley"}
+
+
+def test_a_subpackage_is_walked_and_file_names_play_no_part():
+    """The elastic trolley's modules sit in a subpackage under plain names (derive.py, engine.py): found by ROLE."""
+    assert discovery.declared()["symmech.trolley.elastic.derive"] == "derivation"
+    assert discovery.declared()["symmech.trolley.elastic.engine"] == "engine"
+    assert "symmech.trolley.elastic.system" not in discovery.declared()
