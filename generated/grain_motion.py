@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 22abb92df2e76ae3686d42b177bb488138324e8851cb9b76255e6b37abeb92f9
-# source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
-# body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
+# symmech 0.1.0 generated module; inputs sha256 f82c742674b81bcbb4c5129e5dbca4cd07dac2ee561a929aac0b3c2b0327a274
+# source key 25cd26dcff2318a98ebbf70365737036505c206187af07d4b2314de67e0ba53d
+# body sha256 c3c1e46eb98fa7b0e1a7da30b604c3897d68d348fffc1c34ebb34eedaaf99c5b
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -46,7 +46,7 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     p[14] c [m] semi-axis along body axis 3
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
 ``events(t, y, p)`` returns the event functions g (k,) = (1,), in the order of ``EVENTS``
-(``(name, direction, terminal, SI unit, meaning)``; ``symmech.core.ode.integrate`` locates their zeros):
+(``(name, direction, terminal, SI unit, meaning)``; ``symmech.numerics.ode.integrate`` locates their zeros):
     g[0] contact [m] gap between the ellipsoid's lowest point and the plane (direction -1, terminal)
 """
 import math

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key 50e7ff310682008430ab97dcf54d3ae390db4409c3b91bad64f4eaa93fb01c66
+// source key a9a648f56a36d1268bab7a3e8edd11972c57181c3ffeba02d792dd57a028a890
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 
