@@ -66,6 +66,7 @@ ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py
                  "and not free_decay"]
 
 # the elastic trolley's outputs and timeline: the cheapest tests that integrate (5 s, 4 s and 5 s at load 5)
+DAMPING_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py", "tests/test_roller_clamped_pair.py"]
 ELASTIC_OUTPUT_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_the_resultants_at_every_step",
                         "tests/test_trolley_elastic_kind.py::test_energy_changes_by_the_work_of_the_track_forces[True]"]
 ELASTIC_TIMELINE_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_the_resultants_at_every_step",
@@ -92,14 +93,13 @@ SHARDS = {
     "membrane": ("symmech/trolley/elastic/membrane.py",
                  ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py",
                   "tests/test_membrane_shared_coordinates.py"], ["*"]),
-    # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
-    "elastic_damping": ("symmech/trolley/elastic/system.py",
-                        ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",
-                         "tests/test_roller_clamped_pair.py"],
-                        ["*.x__beam_damping__*", "*.x_roller_forces__*", "*.x__dissipation__*",
-                         "*ǁSystemǁlinear_modes__*"]),
+    # the elastic model is split by function: its tests take 45 s, a whole-module shard would take hours
+    "elastic_damping": ("symmech/trolley/elastic/body.py", DAMPING_TESTS,
+                        ["*.x__beam_damping__*", "*.x_roller_forces__*"]),
+    "elastic_damping_modes": ("symmech/trolley/elastic/system.py", DAMPING_TESTS, ["*ǁSystemǁlinear_modes__*"]),
+    "elastic_dissipation": ("symmech/trolley/elastic/simulate.py", DAMPING_TESTS, ["*.x__dissipation__*"]),
     # the rest of elastic.py by function, physics first; the fast elastic tests (test_trolley_elastic.py ~11 s)
-    "elastic_invariants": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
+    "elastic_invariants": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS,
                            ["*.x_invariants__*", "*.x__beam_samples__*", "*.x__beam_stiffness__*",
                             "*.x_beam_basis__*", "*.x_rigid_cloud__*", "*.x__frame_of__*"]),
     "elastic_system": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
@@ -108,35 +108,37 @@ SHARDS = {
                         "*ǁSystemǁroller_state__*", "*ǁSystemǁ_frame_mats__*"]),
     "elastic_balances": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
-                          "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
+                          "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
                           "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
+    "elastic_roller_energy": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*.x_roller_energy__*"]),
     # the quasi-static tests first (ELASTIC_TESTS' -k, global, leaves them in)
     "elastic_quasi_static": ("symmech/trolley/elastic/system.py",
                              ["tests/test_elastic_quasi_static.py", "tests/test_texts_warnings_and_sparse_rows.py",
                               *ELASTIC_TESTS], ["*ǁSystemǁquasi_static__*"]),
-    "elastic_frame": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
-                      ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
+    "elastic_frame": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS,
+                      ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*"]),
+    "elastic_state_at": ("symmech/trolley/elastic/simulate.py", ELASTIC_TESTS, ["*.x__state_at__*"]),
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
     # integrating tests, a short run on the helix (prescribed speed) and, for the timeline, one with traction
-    "elastic_timeline": ("symmech/trolley/elastic/system.py", ELASTIC_TIMELINE_TESTS,
+    "elastic_timeline": ("symmech/trolley/elastic/simulate.py", ELASTIC_TIMELINE_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
-    "elastic_rigid_body": ("symmech/trolley/elastic/system.py",
+    "elastic_rigid_body": ("symmech/trolley/elastic/simulate.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
                             "reactions_equal or rigid_body"], ["*.x_rigid_body__*"]),
     "elastic_beam_mode": ("symmech/trolley/elastic/system.py",
                           ["tests/test_trolley_elastic_initial.py", "tests/test_elastic_bodies.py", "-k",
                            "vibrates_at or beam_mode"], ["*.x_beam_mode__*"]),
-    "elastic_simulate": ("symmech/trolley/elastic/system.py",
+    "elastic_simulate": ("symmech/trolley/elastic/simulate.py",
                          ["tests/test_trolley_elastic.py", "tests/test_trolley_elastic_kind.py",
                           "tests/test_elastic_simulate.py", "-k",
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
-    "elastic_outputs": ("symmech/trolley/elastic/system.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
+    "elastic_outputs": ("symmech/trolley/elastic/simulate.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # what the two shards above left without a result (mutation/history.md), for a screen with their new test files
-    "elastic_outputs_rest": ("symmech/trolley/elastic/system.py",
+    "elastic_outputs_rest": ("symmech/trolley/elastic/simulate.py",
                              ["tests/test_elastic_outputs.py", "tests/test_elastic_timeline.py",
                               *ELASTIC_OUTPUT_TESTS, ELASTIC_TIMELINE_TESTS[1]],
                              ["*.x_outputs__mutmut_119", "*.x_outputs__mutmut_1[2-3][0-9]", "*.x_outputs__mutmut_14[0-4]",
