@@ -30,7 +30,7 @@ from symmech.core.scene import scenes_folder
 from symmech.export import build, command, model
 from symmech.export.model import deviation
 from symmech.smm import numeric
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import scene as elastic_scene
 from timing import interleaved, machine
 
 

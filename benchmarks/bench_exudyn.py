@@ -40,8 +40,8 @@ from scipy.interpolate import CubicSpline
 from timing import interleaved, machine, ratio
 
 from symmech.core import pipeline
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el, body as el_body, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 L, RHO_A, EI, EA = 1.0, 1.0, 1.0, 1e6
 W0 = float(1.8751040687119611 ** 2 * np.sqrt(EI / (RHO_A * L ** 4)))
@@ -50,9 +50,9 @@ OMEGA, RADIUS, SOUTHWELL = 0.5 * W0, 10.0, 1.1933
 
 def symmech_model():
     """The elastic system (the beam on a trolley with rigid rollers), its drive and its frame state on the circle."""
-    beam = el.Beam((0, RADIUS, 0), (0, -1, 0), (0, 0, 1), L, RHO_A, (EI, EI), "cantilever", 8)
-    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
-                          el.Effects(rollers=False, stiffening=True))
+    beam = el_body.Beam((0, RADIUS, 0), (0, -1, 0), (0, 0, 1), L, RHO_A, (EI, EI), "cantilever", 8)
+    mdl = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
+                          el_body.Effects(rollers=False, stiffening=True))
     r = f"{RADIUS!r}"
     scene = {"kind": "trolley", "frame": "frenet",
              "track": {"type": "expression", "x": f"{r}*sin(s/{r})", "y": "0", "z": f"{r}*cos(s/{r})"},
@@ -61,7 +61,7 @@ def symmech_model():
              "effects": {"gravity": True, "local_curvature": False}}
     system = el.System(mdl)
     drive = elastic_scene.drive_of(pipeline.load(scene).setup, 1)
-    return system, drive, el._state_at(system, drive, 0.0, 0.0)
+    return system, drive, el_sim._state_at(system, drive, 0.0, 0.0)
 
 
 def symmech_frequencies(system, fs):
@@ -127,12 +127,12 @@ def chordwise_grid(system, fs) -> np.ndarray:
 def symmech_transient(system, drive, t, rtol: float, atol_q: float = 1e-12) -> np.ndarray:
     """Chordwise tip deflection [m] at t (n,): the compiled engine from the non-rotating first
     chordwise mode (Ritz, plane 2 = axis x plane: the track's tangent) at AMPLITUDE, relative rates 0."""
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     idx = [system.inv.names.index(f"beam0_p2_m{k + 1}") for k in range(system.mdl.beams[0].modes)]
     out = elastic_compiled.simulate(system, drive, t, rtol, atol_q, dq0=AMPLITUDE * el.beam_mode(system, 0, 2, 1))
     assert out["engine"] == "compiled", out["engine_reason"]
-    return out["q"][:, idx] @ el.beam_basis("cantilever", np.ones(1))[0][0, 0, :len(idx)]
+    return out["q"][:, idx] @ el_body.beam_basis("cantilever", np.ones(1))[0][0, 0, :len(idx)]
 
 
 def exudyn_transient(elements: int, steps: int, t) -> np.ndarray:

@@ -17,7 +17,7 @@ and at the end only:
 Error: the largest |y - reference| over the output times, per state relative to that state's largest
 |reference|, the worst state; the reference is ``solve_ivp`` DOP853 at rtol 1e-13 on the numpy module.
 Set-up (not in the timings): numba compiling the toolkit for the module in this process (not cached
-across processes: core/ode.py), JiTCODE's code generation and gcc. Interleaved medians (timing.py).
+across processes: numerics/ode.py), JiTCODE's code generation and gcc. Interleaved medians (timing.py).
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ from scipy.integrate import ode as scipy_ode
 from scipy.integrate import solve_ivp
 from timing import interleaved, machine, ratio
 
-from symmech.core import kernels, ode
+from symmech.numerics import kernels, ode
 from symmech.generated import grain_motion as gm
 
 RTOL, ATOL, SPAN = 1e-10, 1e-12, 2.0

@@ -26,7 +26,7 @@ import sympy
 
 from timing import interleaved, machine, ratio
 
-from symmech.core import kernels
+from symmech.numerics import kernels
 from symmech.generated import grain_impact as g
 from symmech.grain import derive
 from symmech.grain.impact import residual_19, solve_robust_batch, solve_scipy

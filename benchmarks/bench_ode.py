@@ -1,4 +1,4 @@
-"""The compiled ODE toolkit end to end (``symmech.core.ode.integrate``) against ``solve_ivp`` on the numba
+"""The compiled ODE toolkit end to end (``symmech.numerics.ode.integrate``) against ``solve_ivp`` on the numba
 right-hand side of the same generated module (``smm_rotor_boom_nb.rhs``, and its ``jac`` for Radau): the
 rotor boom's damped free response over the bundled scene's 2 s, output every 1 ms (dense output), at the same
 tolerances; the two take the same steps, so the errors against the run's exact matrix exponential are equal
@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from timing import interleaved, machine, ratio
 
 import symmech
-from symmech.core import ode
+from symmech.numerics import ode
 from symmech.core.scene import scenes_folder
 from symmech.generated import smm_rotor_boom_nb as rb
 

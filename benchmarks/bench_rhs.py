@@ -7,7 +7,7 @@ Jacobian vs scipy's finite differences.
 
 Grain flight (grain_motion, 13 states, 12 parameters), one rhs call at a seeded point, from the same
 sympy derivation (derive_motion.flight_dynamics): JiTCODE's C function, the twin's rhs as kernels.load
-gives it (the C path of symmech.core.fastcall: rhs_into as a numba cfunc behind a C callable), the
+gives it (the C path of symmech.numerics.fastcall: rhs_into as a numba cfunc behind a C callable), the
 generated numba rhs it stands for (a numba dispatcher); the kernel rhs_scalar; rhs_into called from Python
 into one reused out, and stepping an explicit Euler loop compiled with numba, per step; a jitted no-op
 taking the same arguments: the price of any call into numba from Python), sympy.lambdify(cse=True) and the
@@ -28,7 +28,7 @@ from scipy.integrate import solve_ivp
 from timing import Stats, interleaved, machine, ratio
 
 import symmech
-from symmech.core import kernels
+from symmech.numerics import kernels
 from symmech.core.scene import scenes_folder
 
 

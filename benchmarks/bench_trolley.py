@@ -22,7 +22,8 @@ import sympy as sp
 
 from timing import interleaved, machine, ratio
 
-from symmech.core import kernels, pipeline
+from symmech.core import pipeline
+from symmech.numerics import kernels
 from symmech.core.context import Context
 from symmech.generated import trolley_dynamics
 from symmech.generated import trolley_frame

@@ -37,8 +37,8 @@ import tomllib
 import numpy as np
 
 from symmech.core import pipeline, scene
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el, body as el_body, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 SCENE = {"kind": "trolley", "frame": "frenet", "track": {"type": "helix", "radius": 7.0, "rise": 5 / (2 * np.pi)},
          "trolley": {"mass": 10.0, "com": [1.0, 0.5, 0.0], "axle_distance": 2.0, "half_gauge": 1.0},
@@ -48,8 +48,8 @@ BUNDLED = tomllib.loads((scene.scenes_folder() / "trolley_elastic_helix.toml").r
 
 def setup():
     drive = elastic_scene.drive_of(pipeline.load(SCENE).setup, 1)
-    mdl = el.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, 9.81,
-                          el.Rollers((1e8,) * 5, (1e3,) * 5))
+    mdl = el_body.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, 9.81,
+                          el_body.Rollers((1e8,) * 5, (1e3,) * 5))
     return el.System(mdl), drive
 
 
@@ -58,7 +58,7 @@ def stiff(quick: bool, repeats: int):
     t = np.linspace(0.0, 1.0 if quick else 2.0, 21)
     # explicit reference: it resolves the start transient of the 5000 rad/s modes, which the
     # L-stable implicit methods may damp faster than the physics once their steps grow
-    ref = el.simulate(system, drive, t, method="DOP853", rtol=1e-10, atol_q=1e-17)["P"]
+    ref = el_sim.simulate(system, drive, t, method="DOP853", rtol=1e-10, atol_q=1e-17)["P"]
     scale = np.abs(ref).max()
     methods = {"Radau, analytic J": dict(method="Radau"), "BDF, analytic J": dict(method="BDF"),
                "Radau, FD J": dict(method="Radau", analytic_jacobian=False), "DOP853": dict(method="DOP853")}
@@ -69,7 +69,7 @@ def stiff(quick: bool, repeats: int):
         for rtol in tols:
             for name, kw in methods.items():
                 start = time.perf_counter()
-                out = el.simulate(system, drive, t, rtol=rtol, atol_q=rtol * 1e-6, **kw)
+                out = el_sim.simulate(system, drive, t, rtol=rtol, atol_q=rtol * 1e-6, **kw)
                 times[(name, rtol)].append(time.perf_counter() - start)
                 errors[(name, rtol)] = np.abs(out["P"] - ref).max() / scale
                 nfev[(name, rtol)] = out["nfev"]

@@ -1,11 +1,11 @@
-# symmech 0.1.0 generated module; inputs sha256 99dacc9d2dcbbae64b4c9baa31b76dd1e1ba8ea9e6e1aeef949eae37f34f3cec
+# symmech 0.1.0 generated module; inputs sha256 c314751b580f1fb3b9c5e6ed3e826bb2662db0711dd2ec6a06e57f14dc626cbf
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 99dacc9d2dcbbae64b4c9baa31b76dd1e1ba8ea9e6e1aeef949eae37f34f3cec
+# body sha256 c314751b580f1fb3b9c5e6ed3e826bb2662db0711dd2ec6a06e57f14dc626cbf
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
-``symmech.core.kernels``), ``<name>.c`` its C99 twin (``symmech export``
+``symmech.numerics.kernels``), ``<name>.c`` its C99 twin (``symmech export``
 reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.
@@ -27,9 +27,9 @@ MODULES = {
     'smm_rotor_boom': 'symmech.smm.derive',
     'smm_spatial_boom': 'symmech.smm.derive',
     'trolley_dynamics': 'symmech.trolley.derive',
-    'trolley_elastic': 'symmech.trolley.derive_elastic',
-    'trolley_elastic_lagrange': 'symmech.trolley.derive_elastic',
-    'trolley_elastic_printed': 'symmech.trolley.printed_elastic',
+    'trolley_elastic': 'symmech.trolley.elastic.derive',
+    'trolley_elastic_lagrange': 'symmech.trolley.elastic.derive',
+    'trolley_elastic_printed': 'symmech.trolley.elastic.printed',
     'trolley_frame': 'symmech.trolley.derive',
     'trolley_printed': 'symmech.trolley.printed',
 }
@@ -43,7 +43,7 @@ INPUTS = {
     'symmech.smm.derive_formulas': (),
     'symmech.smm.printed': (),
     'symmech.trolley.derive': (),
-    'symmech.trolley.derive_elastic': (),
+    'symmech.trolley.elastic.derive': (),
+    'symmech.trolley.elastic.printed': (),
     'symmech.trolley.printed': (),
-    'symmech.trolley.printed_elastic': (),
 }

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 a2fe40b7dab70c9a9754e2bffff551fc063ed96ff87c58d03183c48eecb4a853
-// source key 629fb23eba7adce55e7fc97eb1b96ebc57690957bb40bc51d43ba3fc05cb22d7
+// symmech 0.1.0 generated module; inputs sha256 5cc272abbe3b1bb9886eaa82041009e354f1159e43b11ce56479896e3f99b057
+// source key 1c3d7f9a7b4557893a61b8be4e6b9591352c9fdb3d90fe376a6d2ef59c3fe7e7
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

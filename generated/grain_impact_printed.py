@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 85dbb61392d01802001412144c6765584176463d2642026489f5301e8fee4181
-# source key 629fb23eba7adce55e7fc97eb1b96ebc57690957bb40bc51d43ba3fc05cb22d7
+# symmech 0.1.0 generated module; inputs sha256 a9364d8563e8ead5569690ebf02e7677bcc11a2fca89bd6b2851400651fc06c6
+# source key 1c3d7f9a7b4557893a61b8be4e6b9591352c9fdb3d90fe376a6d2ef59c3fe7e7
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

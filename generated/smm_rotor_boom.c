@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 7bcd833a0c73cf2bc8d4dd614d08642e475383726d196cd2dffda76728f3f9da
-// source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+// symmech 0.1.0 generated module; inputs sha256 abee241ab11ec15eba0dc5eed42c7e702eb720c9ac9a143d733346484671a94a
+// source key 1c2eb613c80dd667679cd152ee5a2f217184d407288cf16cdf2f3476f6ec22e1
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d4d676e2526655b941f0290bb52784c6bd5348a0cc2ed895aab3685497d8fbb1
-# source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+# symmech 0.1.0 generated module; inputs sha256 e8c1583dc46580e9d44cc327256f913b29b7352096ec399218fd44786ef8f3bb
+# source key 1c2eb613c80dd667679cd152ee5a2f217184d407288cf16cdf2f3476f6ec22e1
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 25bc6225c25b3522e6381c683cfcd4a704c11e90f53cccdb96d6760c36c5f4df
-# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+# symmech 0.1.0 generated module; inputs sha256 9c7efe2cdde0bf424688b2d6546444b73221c1bf9f4a2f574a6770deac96ee69
+# source key 0db92db291344e91e73ef842f670d795544f602bdf0cf74bd5f9ff1d27765aab
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 e607eefeed7745c3a96e3a278687c86a534301812f0ad4f9d0f6edef6206edc5
-// source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+// symmech 0.1.0 generated module; inputs sha256 d2cbd59ee0f7f003572d5d6da318dc58c1e39260fba1fe885109d656a96e3c03
+// source key 2b6ea8dc86a3a1377832a4129b1a03e3fc2ec1b70f8949fc07a5726938564cff
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

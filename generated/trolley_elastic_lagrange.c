@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 8e1f83659fa64affd6185873d0c21b72d57ae973dcec3840f71cab6bb25ff7ad
-// source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+// symmech 0.1.0 generated module; inputs sha256 ce4ae4f162b84bff4912daf769c61a20f1c77996cd82593b557461c5e6b10f29
+// source key 2b6ea8dc86a3a1377832a4129b1a03e3fc2ec1b70f8949fc07a5726938564cff
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 968716567f8f00bad677775c169945a234b67c291585fb661163dc8cefc9df71
-# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+# symmech 0.1.0 generated module; inputs sha256 eb77ae40455f94e01ba703fcf22999797c6f1f316c220712dbcdcc0f3c671ceb
+# source key 2b6ea8dc86a3a1377832a4129b1a03e3fc2ec1b70f8949fc07a5726938564cff
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

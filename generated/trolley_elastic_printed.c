@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 e005d693697a1f89d3100f724c7f3ef0c191e6744434d889f0db4824cd9e5eb5
-// source key 18ba12243b54d9ac1c1198fba51f7a9c2d0f1f4790d4975cf83de9198f080313
+// symmech 0.1.0 generated module; inputs sha256 dd8669439fa438950a69dbaa49b30689bd6780cf2ea6a1dd1d3762d2aba4b267
+// source key 38971dbb93cfecff62791881bf089b81855da1c319f48cf4085c1cb80e3c0b78
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

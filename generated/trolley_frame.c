@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 e5cf3aeb90e7e8cdd13fde4452396a975700920bfb9f962b6531b6723cdbb518
-// source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+// symmech 0.1.0 generated module; inputs sha256 80b335d095eb8817e51028633cf7465c867a6da468a79459b105ca7d2ade2b33
+// source key 0db92db291344e91e73ef842f670d795544f602bdf0cf74bd5f9ff1d27765aab
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

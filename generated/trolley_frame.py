@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
-# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+# symmech 0.1.0 generated module; inputs sha256 d08828666e7cbc2d1705fd47e5d5c32483fd51ee8de3df292c403c709e4ebc5d
+# source key 0db92db291344e91e73ef842f670d795544f602bdf0cf74bd5f9ff1d27765aab
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

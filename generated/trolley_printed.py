@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3177fc4464bdc9b6eb39fe80f9abd3087f42d96dab4701117ed26773756da428
-# source key a88ad883ebc61b9c0efe29d68b293333706dc1dfb8f659f0928c44bd7a561139
+# symmech 0.1.0 generated module; inputs sha256 40dfa60b85b3ff9bc4e36f21dd0bd2e07234905e83b9da138f20f8b1ab30ea50
+# source key a9a648f56a36d1268bab7a3e8edd11972c57181c3ffeba02d792dd57a028a890
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -108,7 +108,7 @@ def _specs(package: str | None, used: list[str] | None) -> list:
     """ModuleSpecs of the paper package: those named in ``used`` (derived or printed; only their own
     derivation modules run, by the generated index), else every derived one. Each derivation runs once per
     process, shared with ``codegen`` and ``latex`` (:func:`symmech.core.codegen.derive`)."""
-    from symmech.core import codegen
+    from symmech.core import codegen, discovery
     from symmech.generated import MODULES
 
     if package is None:
@@ -116,8 +116,8 @@ def _specs(package: str | None, used: list[str] | None) -> list:
     if used:
         producers = sorted({MODULES[name] for name in used if MODULES.get(name, "").startswith(f"symmech.{package}.")})
         return [s for module in producers for s in codegen.derive(module)[0] if s.name in used]
-    return [s for module in codegen.paper_modules(("derive",)) if module.__name__.startswith(f"symmech.{package}.")
-            for s in codegen.derive(module.__name__)[0]]
+    return [s for module in discovery.modules("derivation") if module.startswith(f"symmech.{package}.")
+            for s in codegen.derive(module)[0]]
 
 
 def derivations(summary: dict, package: str | None) -> list[Derivation]:
@@ -141,11 +141,11 @@ def derivations(summary: dict, package: str | None) -> list[Derivation]:
 
 def errata_records(package: str | None) -> list[dict]:
     """Evaluated errata checks of the paper package (printed formula vs derivation)."""
-    from symmech.core import codegen, errata
+    from symmech.core import errata
 
     if package is None:
         return []
-    modules = [m for m in codegen.paper_modules(("errata",)) if m.__name__.startswith(f"symmech.{package}.")]
+    modules = [m for m in errata.modules() if m.__name__.startswith(f"symmech.{package}.")]
     return [errata.evaluate(c) for m in modules for c in m.checks()]
 
 

@@ -3,7 +3,7 @@
 Tests marked ``compiled_engine`` (the grain engine) or ``compiled_elastic`` (the elastic trolley engine) are
 in the slow tier (each build is 1-2 CPU-minutes, the default suite's budget is 3 minutes); they run last and
 first wait for that engine's build (``ENGINE.wait_warm`` of :mod:`symmech.grain.motion_engine.driver`,
-:mod:`symmech.trolley.elastic_compiled`), so no test pays numba's compilation on its own; under pytest-xdist
+:mod:`symmech.trolley.elastic.compiled`), so no test pays numba's compilation on its own; under pytest-xdist
 every worker asks for the build and the build lock lets one process per machine compile. Runs inside the
 tests start no builder (``SYMMECH_BACKGROUND_BUILD=0``): a grain or elastic scene on ``auto`` with a cold
 cache answers on the Python engine, as a first run does.
@@ -24,7 +24,7 @@ import os
 import pytest
 
 BUILD_TIMEOUT = 1200.0  # s: a cold compile takes ~1-2 min on an idle 2-core machine, minutes on a busy one
-ENGINES = {"compiled_engine": "symmech.grain.motion_engine.driver", "compiled_elastic": "symmech.trolley.elastic_compiled"}
+ENGINES = {"compiled_engine": "symmech.grain.motion_engine.driver", "compiled_elastic": "symmech.trolley.elastic.compiled"}
 
 
 def pytest_configure(config):
@@ -54,7 +54,7 @@ def pytest_collection_modifyitems(session, config, items):
 @pytest.fixture(autouse=True)
 def _elastic_reference_engine(request, monkeypatch):
     if not request.node.get_closest_marker("compiled_elastic"):
-        from symmech.trolley import elastic_scene
+        from symmech.trolley.elastic import scene as elastic_scene
 
         monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("python", "tests: the reference engine "
                                                                                       "(tests/conftest.py)"))

@@ -1,4 +1,4 @@
-"""The grain engine built ahead of time (symmech.core.aot): used only while current, never required.
+"""The grain engine built ahead of time (symmech.numerics.aot): used only while current, never required.
 
 The fast tests check the build's folder and a failed build without building (the record's rules:
 tests/test_artifact_records.py); the slow ones build the loop with pycc (after numba's
@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symmech.core import aot, artifacts
+from symmech.numerics import aot, artifacts
 from symmech.grain.motion_engine import driver as compiled
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from symmech.core import artifacts
+from symmech.numerics import artifacts
 from symmech.grain.motion_engine import driver as compiled
 
 ROOT = Path(__file__).resolve().parents[1]

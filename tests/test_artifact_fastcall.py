@@ -1,4 +1,4 @@
-"""The fast-call extension (symmech.core.fastcall) on real damaged files: checked against its record before it
+"""The fast-call extension (symmech.numerics.fastcall) on real damaged files: checked against its record before it
 is loaded, refused with one warning naming it, rebuilt, and the numba path when it cannot be.
 
 A truncated extension loaded as it was killed the process with SIGBUS (exit 135): that case runs in a
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from symmech.core import artifacts, fastcall
+from symmech.numerics import artifacts, fastcall
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +48,7 @@ def test_a_truncated_extension_is_rebuilt_not_loaded(folder):
     extension rebuilt (its record current again) and its Kernel type usable."""
     so, record = _paths(folder)
     so.write_bytes(so.read_bytes()[:4000])
-    code = ("import sys; from pathlib import Path; from symmech.core import fastcall; "
+    code = ("import sys; from pathlib import Path; from symmech.numerics import fastcall; "
             "ext = fastcall.extension(Path(sys.argv[1])); print(ext is not None and hasattr(ext, 'Kernel'))")
     done = subprocess.run([sys.executable, "-c", code, str(folder)], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stdout == "True\n", done.stderr

@@ -4,7 +4,7 @@ A tiny ``cache=True`` function in a temporary module stands in for an engine's e
 files, compiled in a fraction of a second; the module executed anew is a new dispatcher that loads them):
 its index (``.nbi``) and data (``.nbc``) files are truncated or overwritten with random bytes; numba alone
 raises on them (UnpicklingError, EOFError: exit 3 of a run), under
-:func:`symmech.core.artifacts.guard_numba_cache` the process warns once naming the file, recompiles and answers.
+:func:`symmech.numerics.artifacts.guard_numba_cache` the process warns once naming the file, recompiles and answers.
 """
 import importlib.util
 import os
@@ -16,7 +16,7 @@ from pathlib import Path
 import numba
 import pytest
 
-from symmech.core import artifacts, build
+from symmech.numerics import artifacts, build
 
 SOURCE = textwrap.dedent("""
     import numba

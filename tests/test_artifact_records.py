@@ -1,4 +1,4 @@
-"""Records of built artifacts (symmech.core.artifacts) and the ahead-of-time loader on real damaged files.
+"""Records of built artifacts (symmech.numerics.artifacts) and the ahead-of-time loader on real damaged files.
 
 Every refusal names the file; a refused ahead-of-time build is dropped after one warning and never loaded (a
 file that is not an extension module would raise ImportError if it were: the refusal must not try)."""
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from symmech.core import aot, artifacts
+from symmech.numerics import aot, artifacts
 from symmech.grain.motion_engine import driver as compiled
 
 
@@ -182,12 +182,12 @@ def test_an_unwritable_folder_is_one_warning_and_no_build(monkeypatch, tmp_path,
 def test_a_build_being_replaced_is_left_alone(build, capsys):
     """A builder holds the lock while it replaces the module and its record: a reader neither judges nor drops
     the half-replaced pair (here: a module whose record does not match yet), it goes without the build."""
-    from symmech.core.build import file_lock
+    from symmech.numerics.build import file_lock
 
     b, so, record, _ = build
     so.write_bytes(b"the new module, record not written yet")
     with file_lock(b.lock_file(), wait=True):
-        code = ("import sys; from symmech.core import aot; from symmech.grain.motion_engine import driver as compiled; "
+        code = ("import sys; from symmech.numerics import aot; from symmech.grain.motion_engine import driver as compiled; "
                 "b = aot.Build('probe', [compiled.__file__], dict); print(b.load() is None, b.refused)")
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stdout.split() == ["True", "False"] and done.stderr == "", done.stderr

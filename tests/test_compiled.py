@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 import sympy
 
-from symmech.core import emit, kernels
+from symmech.core import emit
+from symmech.numerics import kernels
 from symmech.core.derivation import Arg, ModuleSpec, NamedMatrix
 from symmech.generated import grain_impact as gi
 
@@ -157,7 +158,7 @@ NUMBA_BLOCKER = textwrap.dedent("""
 def test_without_numba_the_numpy_module_stands_in():
     code = NUMBA_BLOCKER + textwrap.dedent("""
         import numpy as np
-        from symmech.core import kernels
+        from symmech.numerics import kernels
         from symmech.generated import grain_impact as gi
         k = kernels.load("grain_impact")
         assert k.__name__ == "symmech.generated.grain_impact"

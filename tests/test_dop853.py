@@ -1,4 +1,4 @@
-"""symmech's DOP853 tableau (``core.dop853``) is the one scipy's ``solve_ivp(method="DOP853")`` steps with.
+"""symmech's DOP853 tableau (``numerics.dop853``) is the one scipy's ``solve_ivp(method="DOP853")`` steps with.
 
 The compiled grain engine must take the Python loop's steps exactly, so every coefficient is compared
 with scipy's transcription of Hairer's ``dop853.f`` bit for bit (the runtime never imports that
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate._ivp import dop853_coefficients as scipy_dop
 
-from symmech.core import dop853
+from symmech.numerics import dop853
 
 
 @pytest.mark.parametrize("name", ["A", "B", "C", "E3", "E5", "D"])

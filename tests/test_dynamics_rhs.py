@@ -19,7 +19,8 @@ import sympy
 from scipy.integrate import solve_ivp
 
 import symmech
-from symmech.core import emit, kernels
+from symmech.core import emit
+from symmech.numerics import kernels
 from symmech.core.derivation import Arg, Dynamics, ModuleSpec, args_of
 from symmech.core.scene import scenes_folder
 from symmech.generated import grain_motion as gm
@@ -349,19 +350,19 @@ def test_elastic_trolley_rhs_equals_the_runtime_model_and_integrates_alike(integ
     1e-12 of the largest (measured 2e-15), and solve_ivp (Radau, rtol 1e-10) on both over 0.05 s to 1e-9
     of the largest coordinate (measured 2e-14)."""
     from symmech.generated import trolley_elastic_lagrange as lag
-    from symmech.trolley import elastic as el
+    from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame
 
     assert not hasattr(lag, "jac")  # M depends on q: no Jacobian is derived
     rng = np.random.default_rng(11)
     m0, com, inertia = 90.0, np.array([0.7, 0.4, -0.2]), np.array([12.0, 18.0, 15.0])
     rho_a, length, tip, b1, b3, ei = 3.0, 1.4, 1.5, 0.6, 0.3, (2e3, 5e3)
     k, c, l, ah, g0 = np.array([1e5, 2e5, 1.5e5, 3e5, 2.5e5]), np.array([50.0, 80.0, 60.0, 40.0, 70.0]), 2.0, 0.8, 9.81
-    beam = el.Beam((b1, 0, b3), (0, 1, 0), (1, 0, 0), length, rho_a, ei, "cantilever", 1, tip)
-    system = el.System(el.ElasticModel(m0, tuple(com), (*inertia, 0, 0, 0), l, ah, g0,
-                                       el.Rollers(tuple(k), tuple(c)), (beam,)))
+    beam = el_body.Beam((b1, 0, b3), (0, 1, 0), (1, 0, 0), length, rho_a, ei, "cantilever", 1, tip)
+    system = el.System(el_body.ElasticModel(m0, tuple(com), (*inertia, 0, 0, 0), l, ah, g0,
+                                       el_body.Rollers(tuple(k), tuple(c)), (beam,)))
     flip = np.array([1, 1, 1, 1, 1, 1, -1])  # the runtime's second plane is axis × plane = -x3
     nu = np.array([0.1, 0.2, 0.97])
-    fs = el.FrameState(np.array([8.0, 0.5, 0.0]), np.array([0.3, -1.0, 0.2]), np.array([0.05, 0.1, 0.4]),
+    fs = el_frame.FrameState(np.array([8.0, 0.5, 0.0]), np.array([0.3, -1.0, 0.2]), np.array([0.05, 0.1, 0.4]),
                        np.array([0.01, 0.0, -0.02]), nu / np.linalg.norm(nu))
     p = np.r_[fs.v0, fs.a0 - np.cross(fs.w, fs.v0), fs.w, fs.dw, fs.nu, m0, com, inertia, rho_a, length, tip, b1, b3,
               ei, k, c, g0, l, ah]
@@ -394,7 +395,7 @@ def test_without_numba_kernels_load_gives_the_numpy_rhs_and_layouts():
                     raise ImportError(name)
         sys.meta_path.insert(0, Block())
         import numpy as np
-        from symmech.core import kernels
+        from symmech.numerics import kernels
         from symmech.generated import smm_rotor_boom as rb
         k = kernels.load("smm_rotor_boom")
         assert k.STATE == rb.STATE and k.PARAMS == rb.PARAMS

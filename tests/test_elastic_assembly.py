@@ -1,4 +1,4 @@
-"""The elastic trolley's generated assembly (symmech.trolley.symbolic_assembly, printed in C99 at export
+"""The elastic trolley's generated assembly (symmech.trolley.elastic.symbolic_assembly, printed in C99 at export
 time) against the Python engine's (symmech.trolley.elastic.System: the numpy sums over the same invariants), at
 seeded random states and frame motions: R, M, P0…P5 and the roller deflections to 1e-12 of each quantity's
 scale. Default tier: the bundled helix with one beam mode per plane, no report points and the clamped roller
@@ -18,7 +18,7 @@ from fuzzscenes import toml_text
 from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
 from symmech.export import trolley
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import frame as el_frame, system as el
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
 DOUBLES = ctypes.POINTER(ctypes.c_double)
@@ -70,7 +70,7 @@ def _compare(system, library, states: int = 5) -> None:
     for _ in range(states):
         q, qd, qdd = rng.normal(0.0, 1e-3, n), rng.normal(0.0, 1e-2, n), rng.normal(0.0, 1.0, n)
         v0, a0, w, dw, nu = (rng.normal(0.0, 1.0, 3) for _ in range(5))
-        fs = el.FrameState(v0, a0, w, dw, nu)
+        fs = el_frame.FrameState(v0, a0, w, dw, nu)
         load = a0 + system.mdl.g0 * nu
         p = np.r_[rollers, load, w, dw, v0]
         rate, mass = _rates(library, np.r_[q, qd], p)

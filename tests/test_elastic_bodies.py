@@ -8,7 +8,7 @@ import pytest
 from scipy.optimize import brentq
 
 from symmech.core import kinematics as kin
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, simulate as el_sim
 
 pytestmark = pytest.mark.xdist_group("test_elastic_bodies")
 
@@ -19,10 +19,10 @@ RODS = (((0.2, 0.3, 0.1), (0.0, 1.0, 0.2), (1.0, 0.0, 0.0), 1.4, 3.0, 2.5),
 
 
 def rod_model(rods=RODS, body=True):
-    beams = tuple(el.Beam(root, axis, plane, length, rho_a, (4e3, 6e3), "cantilever", 3, tip)
+    beams = tuple(el_body.Beam(root, axis, plane, length, rho_a, (4e3, 6e3), "cantilever", 3, tip)
                   for root, axis, plane, length, rho_a, tip in rods)
-    return el.ElasticModel(TROLLEY["mass"], TROLLEY["com"], TROLLEY["inertia"], 2.1, 0.7, 9.81, None, beams,
-                           el.Effects(rollers=False, body=body))
+    return el_body.ElasticModel(TROLLEY["mass"], TROLLEY["com"], TROLLEY["inertia"], 2.1, 0.7, 9.81, None, beams,
+                           el_body.Effects(rollers=False, body=body))
 
 
 def point_inertia(m, r):
@@ -52,7 +52,7 @@ def closed_form_body(rods=RODS):
 def test_rigid_body_is_the_trolley_with_its_rods_and_tip_masses(body):
     """Mass, centre and all six central inertia entries (in Body's order I11, I22, I33, I12, I23, I13) to 1e-12,
     and the track data l, a, g0 passed on; the beams count as mass whether elastic or rigid."""
-    got = el.rigid_body(rod_model(body=body))
+    got = el_sim.rigid_body(rod_model(body=body))
     mass, com, inertia = closed_form_body()
     assert got.m == pytest.approx(mass, rel=1e-13)
     np.testing.assert_allclose(got.r, com, rtol=0, atol=1e-13)
@@ -62,7 +62,7 @@ def test_rigid_body_is_the_trolley_with_its_rods_and_tip_masses(body):
 
 
 def test_rigid_body_of_a_bare_trolley_is_the_trolley():
-    got = el.rigid_body(rod_model(rods=()))
+    got = el_sim.rigid_body(rod_model(rods=()))
     assert got.m == TROLLEY["mass"]
     np.testing.assert_allclose(got.r, TROLLEY["com"], rtol=0, atol=1e-15)
     np.testing.assert_allclose(got.inertia, TROLLEY["inertia"], rtol=0, atol=1e-13)
@@ -94,10 +94,10 @@ MODE_BEAMS = (("cantilever", 1.3, 2.0, (300.0, 1200.0), 0.0),
 
 def mode_system():
     """The three beams of MODE_BEAMS, 8 Ritz functions per plane, on a trolley on rigid rollers (no rollers)."""
-    beams = tuple(el.Beam((0.4 * i, 0.1, 0.0), (0, 1, 0), (1, 0, 0), length, rho_a, ei, support, 8, tip)
+    beams = tuple(el_body.Beam((0.4 * i, 0.1, 0.0), (0, 1, 0), (1, 0, 0), length, rho_a, ei, support, 8, tip)
                   for i, (support, length, rho_a, ei, tip) in enumerate(MODE_BEAMS))
-    return el.System(el.ElasticModel(90.0, (0.5, 0.2, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81, None,
-                                      beams, el.Effects(rollers=False)))
+    return el.System(el_body.ElasticModel(90.0, (0.5, 0.2, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81, None,
+                                      beams, el_body.Effects(rollers=False)))
 
 
 def exact_mode(beam, mode):
@@ -132,7 +132,7 @@ def test_beam_mode_is_the_euler_bernoulli_mode_of_that_beam_and_plane(system, be
     others = np.setdiff1d(np.arange(system.N), idx)
     assert np.all(q[others] == 0.0)
     shape, lam = exact_mode(beam, mode)
-    deflection = el.beam_basis(support, XI)[0][:, 0, :] @ q[idx]
+    deflection = el_body.beam_basis(support, XI)[0][:, 0, :] @ q[idx]
     assert deflection.max() == pytest.approx(1.0, abs=tol)
     if support == "pinned" and mode > 1:  # sin(jπξ): peaks of both signs, as large (round-off picks one)
         shape *= np.sign(deflection @ shape)

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from symmech.core import pipeline, scene
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 # slow: the engine compiles ~60 s of CPU, a third of the default tier's budget; the default tier
 # runs the elastic model on the Python engine, this reference
@@ -58,7 +58,7 @@ def agree(c, p, bound):
     WORK_ATOL: the rates of the stiff start transient are ~1e-5 m/s, the dissipated energy of a short ride
     ~1e-10 J, so there atol rules, and the engines' steps differ)."""
     assert relative(c["P"], p["P"]) < bound
-    for key, atol in (("q", 1e-12), ("qd", 1e-9), ("dissipated", 1e-9), ("work", el.WORK_ATOL)):
+    for key, atol in (("q", 1e-12), ("qd", 1e-9), ("dissipated", 1e-9), ("work", el_sim.WORK_ATOL)):
         assert np.abs(c[key] - p[key]).max() <= 100 * bound * np.abs(p[key]).max() + 10 * atol, key
     for key in ("F", "M", "h", "E", "probe_overload", "probe_elastic"):
         scale = np.abs(p[key]).max()
@@ -126,7 +126,7 @@ def test_a_held_membrane_beam_agrees(damping):
 def test_the_checks_hold_on_the_compiled_engine():
     """The elastic review's checks (energy balance, rollers' small rotation) all pass on a compiled run of the
     shortened bundled scene, as on the Python one, and the summary names the engine."""
-    from symmech.trolley import elastic_review
+    from symmech.trolley.elastic import review as elastic_review
 
     verdicts = {}
     for engine in ("compiled", "python"):
@@ -149,7 +149,7 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
     carry ~1e-10 of rounding, which no table resolves: at rtol 1e-8 the table stops on that noise, flagged,
     within INTERP_NOISE, and meets the bound at rtol 1e-6. On 20 outputs the table adds midpoints; on 400
     at rtol 1e-6 every 2^j-th output time is a node (measured j = 2) and it meets the bound at all of them."""
-    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+    from symmech.trolley.elastic import compiled as ec, kernels as ek
 
     for case, rtol, noise, steps in ((1, 1e-8, False, 20), (2, 1e-6, False, 20), (2, 1e-8, True, 20),
                                      (1, 1e-6, False, 400)):
@@ -178,7 +178,7 @@ def kinked():
 
 def test_a_speed_with_a_kink_is_not_tabulated():
     """At the kink the spline of ω, v0 misses by O(h): halving no longer gains 16x, above INTERP_NOISE."""
-    from symmech.trolley import elastic_compiled as ec
+    from symmech.trolley.elastic import compiled as ec
 
     setup = kinked()
     assert ec.frame_table(setup.system, setup.drive, setup.t, 1e-6) is None
@@ -191,7 +191,7 @@ def test_a_speed_with_a_kink_falls_back_to_the_python_engine_and_says_why():
 
 
 def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs():
-    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+    from symmech.trolley.elastic import compiled as ec, kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     beam = {"root": [0.2, 0.3, -0.5], "axis": [0, 0, 1], "plane": [0, 1, 0], "length": 1.0, "mass_per_length": 3.0,
@@ -219,12 +219,12 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
 
 def test_the_assembly_matches_system_evaluate_at_random_states():
     """q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
-    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+    from symmech.trolley.elastic import compiled as ec, kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     setup = helix(rollers=rollers)
     system, mdl = setup.system, ek.pack(setup.system)
-    line = el.Timeline(system, setup.drive, setup.t)
+    line = el_sim.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
         ch = ec.channels(setup.drive, system, np.array([0.0, time]) if time else np.array([0.0]))[-1]
@@ -262,7 +262,7 @@ def traction_scene(t_end=0.06, steps=20, case=1, **elastic):
 def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(case):
     """All columns (q, q̇, s, V0) of the rows of q̈ and V̇0; s and V0 enter through the geometry table's
     spline and its derivative, V0 also through P0's drag (-4 V0 N s/m)."""
-    from symmech.trolley import elastic_compiled as ec, elastic_kernels as ek
+    from symmech.trolley.elastic import compiled as ec, kernels as ek
 
     setup = traction_scene(case=case)
     system, drive, N = setup.system, setup.drive, setup.system.N
@@ -310,7 +310,7 @@ def test_traction_agrees_with_the_python_engine_at_rtol_1e_9(case):
     """From 5 m/s on the bundled helix (measured: case 1 over 0.03 s P 2.9e-9, s 2.8e-13, V0 2.7e-11; case 2 over
     0.06 s P 1.8e-8, s 4.4e-13, V0 1.2e-11); the geometry table within its bound (case 1) or, on case 2's
     noise, within INTERP_NOISE (measured 2.8e-10)."""
-    from symmech.trolley import elastic_compiled as ec
+    from symmech.trolley.elastic import compiled as ec
 
     c, p = both(traction_scene(t_end=0.03 * case, steps=10 * case, case=case), 1e-9)
     traction_agree(c, p, 1e-7)
@@ -328,7 +328,7 @@ def test_a_second_of_traction_agrees_with_the_python_engine():
 @pytest.mark.slow
 def test_a_traction_run_that_leaves_its_table_falls_back_to_the_python_engine(monkeypatch):
     """A geometry table over 2 mm about s0 while the trolley runs 0.15 m: the Python engine runs, and says why."""
-    from symmech.trolley import elastic_compiled as ec
+    from symmech.trolley.elastic import compiled as ec
 
     setup = traction_scene(t_end=0.03, steps=10)
     monkeypatch.setattr(ec, "reach", lambda system, drive, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))

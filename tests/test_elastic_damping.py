@@ -13,12 +13,12 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import CANTILEVER_BETA, closed_form_roller_frequencies  # noqa: E402
 
-AT_REST = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
+AT_REST = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
 # (support, length [m], ρA [kg/m], (EI1, EI2) [N m²], modes, ζ): an undamped beam first (the damping
 # loop skips it and goes on), a soft whip (ω1 < 1 rad/s) and a pinned beam
 BEAMS = (("cantilever", 1.0, 3.0, (5e3, 9e3), 4, 0.0),
@@ -29,10 +29,10 @@ FIRST_ROOT = {"cantilever": CANTILEVER_BETA[0] ** 2, "pinned": np.pi ** 2}  # ω
 
 def beams_on_rigid_rollers(beams):
     """A trolley on rigid rollers carrying ``beams`` (rows of BEAMS), linear (no stiffening), no gravity."""
-    parts = tuple(el.Beam((0.3 * i, 0, 0), (0, 0, 1), (1, 0, 0), length, rho_a, ei, support, modes,
+    parts = tuple(el_body.Beam((0.3 * i, 0, 0), (0, 0, 1), (1, 0, 0), length, rho_a, ei, support, modes,
                           damping_ratio=zeta) for i, (support, length, rho_a, ei, modes, zeta) in enumerate(beams))
-    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, parts,
-                          el.Effects(rollers=False, stiffening=False))
+    mdl = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, parts,
+                          el_body.Effects(rollers=False, stiffening=False))
     return el.System(mdl)
 
 
@@ -74,7 +74,7 @@ def free_decay(system, q0, t_end, fs=AT_REST):
 
     def rhs(t, y):
         q, qd = y[:n], y[n:2 * n]
-        return np.r_[qd, system.accelerations(fs, q, qd), el._dissipation(system, qd)]
+        return np.r_[qd, system.accelerations(fs, q, qd), el_sim._dissipation(system, qd)]
     sol = solve_ivp(rhs, (0.0, t_end), np.r_[q0, np.zeros(n), 0.0], method="DOP853", rtol=1e-11,
                     atol=1e-14 * np.abs(q0).max(), dense_output=True)
     assert sol.status == 0
@@ -120,9 +120,9 @@ BODY = dict(mass=100.0, com=(0.8, 0.5, 0.0), inertia=(20.0, 30.0, 25.0, 0, 0, 0)
 
 
 def roller_system(law="linear", preload=(0.0,) * 5, damping=True):
-    rollers = el.Rollers(K_ROLL, tuple(BETA * k for k in K_ROLL), law, preload)
-    return el.System(el.ElasticModel(BODY["mass"], BODY["com"], BODY["inertia"], 2.0, 1.0, 0.0, rollers,
-                                      effects=el.Effects(damping=damping)))
+    rollers = el_body.Rollers(K_ROLL, tuple(BETA * k for k in K_ROLL), law, preload)
+    return el.System(el_body.ElasticModel(BODY["mass"], BODY["com"], BODY["inertia"], 2.0, 1.0, 0.0, rollers,
+                                      effects=el_body.Effects(damping=damping)))
 
 
 def test_roller_dampers_give_the_modes_their_ratios():
@@ -148,10 +148,10 @@ def test_roller_damping_force():
     c = BETA * np.array(K_ROLL)
     for law, preload, spring in (("linear", (0.0,) * 5, -np.array(K_ROLL) * d),
                                  ("clamped_pair", (1e-3,) * 5, -2 * np.array(K_ROLL) * d)):
-        rollers = el.Rollers(K_ROLL, tuple(c), law, preload)
-        force, kt = el.roller_forces(rollers, d, dd, True)
+        rollers = el_body.Rollers(K_ROLL, tuple(c), law, preload)
+        force, kt = el_body.roller_forces(rollers, d, dd, True)
         assert np.allclose(force, spring - c * dd, rtol=1e-14, atol=0)
-        undamped, kt0 = el.roller_forces(rollers, d, dd, False)
+        undamped, kt0 = el_body.roller_forces(rollers, d, dd, False)
         assert np.allclose(undamped, spring, rtol=1e-14, atol=0)
         assert np.array_equal(kt, kt0)
 
@@ -174,7 +174,7 @@ def test_free_lateral_slide_has_zero_frequencies_and_real_decay_rates():
     a closed form."""
     k, c = (1e6, 1e6, 2e6, 0.0, 0.0), (200.0, 200.0, 400.0, 300.0, 500.0)  # B, C alike: roll apart from bounce
     m, com, inertia, l, a = 100.0, np.array([0.8, 0.0, 0.0]), (20.0, 30.0, 25.0), 2.0, 1.0
-    system = el.System(el.ElasticModel(m, tuple(com), (*inertia, 0, 0, 0), l, a, 0.0, el.Rollers(k, c)))
+    system = el.System(el_body.ElasticModel(m, tuple(com), (*inertia, 0, 0, 0), l, a, 0.0, el_body.Rollers(k, c)))
     omega, zeta = system.linear_modes(AT_REST, np.zeros(5))
     assert len(omega) == 7  # 2 zeros, 2 real decay rates, roll, bounce and pitch
     assert np.array_equal(omega[:2], [0.0, 0.0]) and np.array_equal(zeta[:2], [0.0, 0.0])

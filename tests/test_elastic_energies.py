@@ -10,23 +10,23 @@ import numpy as np
 import pytest
 
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame
 
 pytestmark = pytest.mark.xdist_group("test_elastic_energies")
 
 G0 = 9.81
 L_AXLE, HALF_GAUGE = 2.0, 1.0
 K_ROLL = np.array([1e6, 2e6, 1.5e6, 3e6, 2.5e6])
-BEAM = el.Beam((0.5, 0.3, 0.2), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), 1.3, 4.0, (2e3, 5e3), "cantilever", 3,
+BEAM = el_body.Beam((0.5, 0.3, 0.2), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), 1.3, 4.0, (2e3, 5e3), "cantilever", 3,
                tip_mass=0.4)
 E_AXIS, PLANES = np.array([0.0, 1.0, 0.0]), (np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0]))
 RNG = np.random.default_rng(23)
 
 
 def model(rollers=True, damping=(0.0,) * 5, beams=(BEAM,)):
-    return el.ElasticModel(80.0, (0.4, 0.2, -0.1), (10.0, 20.0, 15.0, 1.0, -2.0, 0.5), L_AXLE, HALF_GAUGE, G0,
-                           el.Rollers(tuple(K_ROLL), damping) if rollers else None, beams,
-                           el.Effects(rollers=rollers, damping=any(damping)))
+    return el_body.ElasticModel(80.0, (0.4, 0.2, -0.1), (10.0, 20.0, 15.0, 1.0, -2.0, 0.5), L_AXLE, HALF_GAUGE, G0,
+                           el_body.Rollers(tuple(K_ROLL), damping) if rollers else None, beams,
+                           el_body.Effects(rollers=rollers, damping=any(damping)))
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +36,7 @@ def system():
 
 def cloud(mdl):
     """Points (P, 3), masses (P,), φ (P, N, 3) and H (P, N, N, 3) of the body (rollers first, then the beam)."""
-    pts, w = el.rigid_cloud(mdl.mass, mdl.com, mdl.inertia)
+    pts, w = el_body.rigid_cloud(mdl.mass, mdl.com, mdl.inertia)
     x, wx = np.polynomial.legendre.leggauss(30)
     xi = np.r_[(x + 1) / 2, 1.0]
     n = BEAM.modes
@@ -48,7 +48,7 @@ def cloud(mdl):
     if nr:
         rigid = np.moveaxis(gen.rigid_fields(*pts.T), -1, 1)  # (P, 11, 3)
         phi[:, :5] = rigid[:, :5]
-        for col, (i, j) in enumerate(el.ROTATION_PAIRS):
+        for col, (i, j) in enumerate(el_body.ROTATION_PAIRS):
             H[:, i, j] = H[:, j, i] = rigid[:, 5 + col]
     on_beam = np.arange(len(pts)) >= 6
     basis = gen.cantilever_basis(xi)[:, :, :n]
@@ -80,7 +80,7 @@ def random_state(N, scale=1.0):
     q = RNG.normal(size=N) * np.r_[1e-2, 1e-2, 0.05, 0.05, 0.05, np.full(N - 5, 0.1)] * scale
     qd, qdd = RNG.normal(size=(2, N))
     nu = RNG.normal(size=3)
-    fs = el.FrameState(RNG.normal(size=3) * 10, RNG.normal(size=3) * 5, RNG.normal(size=3), RNG.normal(size=3),
+    fs = el_frame.FrameState(RNG.normal(size=3) * 10, RNG.normal(size=3) * 5, RNG.normal(size=3), RNG.normal(size=3),
                        nu / np.linalg.norm(nu))
     return fs, q, qd, qdd
 
@@ -107,13 +107,13 @@ def test_clamped_pair_energy_in_closed_form():
     """½ k [(δ - d)₊² + (δ + d)₊² - 2 δ₊²]: inside the preload 2k springs (k d²); beyond it one roller; a gap δ < 0
     stores nothing until it closes."""
     k = 2e6
-    pair = el.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (1e-3, 1e-3, 1e-3, -1e-3, -1e-3))
+    pair = el_body.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (1e-3, 1e-3, 1e-3, -1e-3, -1e-3))
     d = np.array([5e-4, -3e-3, 0.0, 5e-4, 3e-3])
     parts = [k * 5e-4 ** 2, 0.5 * k * ((1e-3 + 3e-3) ** 2 - 2e-6), 0.0, 0.0, 0.5 * k * (3e-3 - 1e-3) ** 2]
-    assert el.roller_energy(pair, d) == pytest.approx(sum(parts), rel=1e-12)
-    assert el.roller_energy(pair, np.zeros((2, 5))) == pytest.approx([0.0, 0.0], abs=1e-18)
-    linear = el.Rollers((k,) * 5, (0.0,) * 5, "linear", (1e-3,) * 5)  # the linear law ignores a preload
-    assert el.roller_energy(linear, d) == pytest.approx(0.5 * k * d @ d, rel=1e-12)
+    assert el_body.roller_energy(pair, d) == pytest.approx(sum(parts), rel=1e-12)
+    assert el_body.roller_energy(pair, np.zeros((2, 5))) == pytest.approx([0.0, 0.0], abs=1e-18)
+    linear = el_body.Rollers((k,) * 5, (0.0,) * 5, "linear", (1e-3,) * 5)  # the linear law ignores a preload
+    assert el_body.roller_energy(linear, d) == pytest.approx(0.5 * k * d @ d, rel=1e-12)
 
 
 def test_energies_are_the_sums_over_the_points(system):
@@ -174,7 +174,7 @@ def test_contact_moment_of_the_roller_forces_at_the_displaced_contacts(system):
     got = system.contact_moment(qs, forces)
     for q, P, m in zip(qs, forces, got):
         u = np.einsum("pai,a->pi", rigid[:, :5], q[:5])
-        for col, (i, j) in enumerate(el.ROTATION_PAIRS):
+        for col, (i, j) in enumerate(el_body.ROTATION_PAIRS):
             u += (0.5 if i == j else 1.0) * q[i] * q[j] * rigid[:, 5 + col]
         expected = np.cross(contacts + u, P[:, None] * dirs).sum(0)
         assert np.abs(m - expected).max() < 1e-12 * np.abs(expected).max()

@@ -8,9 +8,9 @@ import tomllib
 import pytest
 
 from symmech.core import pipeline, scene
-from symmech.trolley import elastic_compiled as ec
-from symmech.trolley import elastic_scene
-from symmech.trolley.elastic_scene import engine as choose  # the real choice (tests/conftest.py patches the module's)
+from symmech.trolley.elastic import compiled as ec
+from symmech.trolley.elastic import scene as elastic_scene
+from symmech.trolley.elastic.scene import engine as choose  # the real choice (tests/conftest.py patches the module's)
 
 BUNDLED = tomllib.loads((scene.scenes_folder() / "trolley_elastic_helix.toml").read_text(encoding="utf-8"))
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared, setup as scene_dict  # noqa: E402
@@ -35,15 +35,15 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
                                              "z": f"{A}*cos(s/{C!r})"},
                       motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
     drive = elastic_scene.drive_of(prepared(data), 1)
-    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
-                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
     h = 1e-4
     for time, s in ((0.5, 1.3), (0.8, 4.0)):
         V, dV = 3 + 2 * time, 2.0
         frame = tnb(s)
         kappa = A / C ** 2
         tau = -(tnb(s + h)[2] - tnb(s - h)[2]) / (2 * h) @ frame[1]  # B' = -τ N
-        fs = el._state_at(system, drive, time, s)
+        fs = el_sim._state_at(system, drive, time, s)
         darboux = np.array([tau, 0.0, kappa])
         assert np.allclose(fs.v0, [V, 0, 0], rtol=0, atol=1e-9)
         assert np.allclose(fs.a0, [dV, V ** 2 * kappa, 0], rtol=0, atol=1e-7)
@@ -51,8 +51,8 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         assert np.allclose(fs.dw, dV * darboux, rtol=0, atol=1e-7)
         assert np.allclose(fs.nu, frame[:, 1], rtol=0, atol=1e-9)
         # the vectorised frame_motion gives the same rows
-        fr = el.frames(drive, np.array([s, s]), system.mdl.l)
-        v0, a0, w, dw = el.frame_motion(fr, np.array([V, 2 * V]), np.array([dV, 0.0]))
+        fr = el_frame.frames(drive, np.array([s, s]), system.mdl.l)
+        v0, a0, w, dw = el_frame.frame_motion(fr, np.array([V, 2 * V]), np.array([dV, 0.0]))
         assert np.allclose(v0, [[V, 0, 0], [2 * V, 0, 0]], rtol=0, atol=1e-9)
         assert np.allclose(a0, [[dV, V ** 2 * kappa, 0], [0, 4 * V ** 2 * kappa, 0]], rtol=0, atol=1e-7)
         assert np.allclose(w, [V * darboux, 2 * V * darboux], rtol=0, atol=1e-8)
@@ -66,17 +66,17 @@ def test_frame_turning_rate_follows_the_change_of_curvature():
                                              "parameter": "u", "u_range": [0.0, 6.0]},
                       motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
     drive = elastic_scene.drive_of(prepared(data), 1)
-    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
-                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
     time, s, h = 0.5, 2.0, 1e-4
     V, dV = 4.0, 2.0
-    turn = [el._state_at(system, drive, time, x).w / V for x in (s - h, s, s + h)]
+    turn = [el_sim._state_at(system, drive, time, x).w / V for x in (s - h, s, s + h)]
     dW = (turn[2] - turn[0]) / (2 * h)
     assert np.abs(dW).max() > 0.01  # the curvature changes here (V0² dW ≈ 0.2 rad/s²)
     expected = dV * turn[1] + V ** 2 * dW
-    assert np.allclose(el._state_at(system, drive, time, s).dw, expected, rtol=0, atol=1e-6)
-    fr = el.frames(drive, np.array([s]), system.mdl.l)
-    assert np.allclose(el.frame_motion(fr, np.array([V]), np.array([dV]))[3], [expected], rtol=0, atol=1e-6)
+    assert np.allclose(el_sim._state_at(system, drive, time, s).dw, expected, rtol=0, atol=1e-6)
+    fr = el_frame.frames(drive, np.array([s]), system.mdl.l)
+    assert np.allclose(el_frame.frame_motion(fr, np.array([V]), np.array([dV]))[3], [expected], rtol=0, atol=1e-6)
 
 
 def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
@@ -90,13 +90,13 @@ def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
     setup = prepared(data)
     drive = elastic_scene.drive_of(setup, 2)
     l = 1.5
-    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), l, 1.0, 9.81,
-                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), l, 1.0, 9.81,
+                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
     s = np.array([2.0, 3.5])
     chord = model.local_curvature_frame(drive.track, s, l, "frenet", setup.fd_order, setup.fd_step, plan=setup.plan)
-    tangent = el.frames(elastic_scene.drive_of(setup, 1), s, l)
+    tangent = el_frame.frames(elastic_scene.drive_of(setup, 1), s, l)
     assert np.abs(chord.W - tangent.W).max() > 1e-3
-    fs = el._state_at(system, drive, 0.5, s[1])  # V0 = 4 m/s
+    fs = el_sim._state_at(system, drive, 0.5, s[1])  # V0 = 4 m/s
     for got, ref in ((fs.v0, 4.0 * chord.e[1]), (fs.w, 4.0 * chord.W[1]), (fs.nu, chord.lam[1, :, 1])):
         assert np.allclose(got, ref, rtol=0, atol=1e-12)
 
@@ -109,9 +109,9 @@ def test_frame_keeps_its_plan_through_a_straight_point():
                                              "parameter": "u", "u_range": [0.0, 6.0]},
                       motion={"speed": "3"}, time={"t_end": 1.0, "steps": 10})
     setup = prepared(data)
-    system = el.System(el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
-                                       el.Rollers((1e6,) * 5, (0.0,) * 5)))
+    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
     for case in (1, 2):
         drive = elastic_scene.drive_of(setup, case)
         for s in (1.0, 5.0, 6.5):
-            assert np.allclose(el._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
+            assert np.allclose(el_sim._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)

@@ -11,15 +11,15 @@ import pytest
 
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body
 
 pytestmark = pytest.mark.xdist_group("test_elastic_invariants")
 
 MASS, COM, INERTIA = 80.0, (0.4, 0.2, -0.1), (10.0, 20.0, 15.0, 1.0, -2.0, 0.5)
 # the cantilever's axis 2 x2 (unnormalised) and its first bending direction leaning along it: b1 = x1
-CANTILEVER = el.Beam((0.5, 0.3, 0.2), (0.0, 2.0, 0.0), (1.0, 0.7, 0.0), 1.3, 4.0, (2e3, 5e3), "cantilever", 3,
+CANTILEVER = el_body.Beam((0.5, 0.3, 0.2), (0.0, 2.0, 0.0), (1.0, 0.7, 0.0), 1.3, 4.0, (2e3, 5e3), "cantilever", 3,
                      tip_mass=0.4)
-PINNED = el.Beam((0.0, 0.1, 0.5), (1.0, 1.0, 0.0), (0.0, 0.0, 3.0), 2.0, 1.5, (4e3, 3e3), "pinned", 2,
+PINNED = el_body.Beam((0.0, 0.1, 0.5), (1.0, 1.0, 0.0), (0.0, 0.0, 3.0), 2.0, 1.5, (4e3, 3e3), "pinned", 2,
                  axial="held", ea=1e6)
 # (beam, ξ) report points and (None, point) on the trolley, mixed
 PROBES = ((0, 1.0), (None, (-0.3, 0.4, 0.1)), (0, 0.35), (1, 0.5), (None, (0.2, -0.1, 0.3)))
@@ -29,8 +29,8 @@ FRAMES = ((np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 
 
 
 def model(**effects):
-    return el.ElasticModel(MASS, COM, INERTIA, 2.0, 1.0, 9.81,
-                           el.Rollers((1e6,) * 5, (0.0,) * 5), (CANTILEVER, PINNED), el.Effects(**effects))
+    return el_body.ElasticModel(MASS, COM, INERTIA, 2.0, 1.0, 9.81,
+                           el_body.Rollers((1e6,) * 5, (0.0,) * 5), (CANTILEVER, PINNED), el_body.Effects(**effects))
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +62,7 @@ def inertia_tensor(points, weights, centre):
 
 
 def test_rigid_cloud_has_the_mass_centre_and_inertia():
-    pts, w = el.rigid_cloud(MASS, COM, INERTIA)
+    pts, w = el_body.rigid_cloud(MASS, COM, INERTIA)
     assert w.sum() == pytest.approx(MASS, rel=1e-15)
     assert np.allclose(w @ pts / MASS, COM, rtol=0, atol=1e-15)
     i11, i22, i33, i12, i23, i13 = INERTIA
@@ -77,10 +77,10 @@ def test_rigid_cloud_refuses_a_body_beyond_the_triangle_inequality_only():
         message = rf"trolley inertia \[{six[0]}, .*\] kg m\^2 violates the triangle inequality \(I11 \+ I22 >= I33 " \
                   r"and permutations\)$"
         with pytest.raises(SymmechError, match=message):
-            el.rigid_cloud(1.0, (0, 0, 0), six)
+            el_body.rigid_cloud(1.0, (0, 0, 0), six)
     # a flat plate (I33 = I11 + I22), also 1.5e-12 kg m² beyond (rounding): all its mass in its plane
     for i33 in (3.0, 3.0 + 3e-12):
-        pts, w = el.rigid_cloud(2.0, (0, 0, 0), (1.0, 2.0, i33, 0, 0, 0))
+        pts, w = el_body.rigid_cloud(2.0, (0, 0, 0), (1.0, 2.0, i33, 0, 0, 0))
         assert np.abs(pts[:, 2]).max() < 1e-5
         assert inertia_tensor(pts, w, np.zeros(3))[2, 2] == pytest.approx(3.0, rel=1e-11)
 
@@ -173,13 +173,13 @@ def expected_probe_fields(system):
             r = np.asarray(where, float)
             rigid = gen.rigid_fields(*r)
             phi[:5] = rigid[:, :5].T
-            psi.update({pair: rigid[:, 5 + col] for col, pair in enumerate(el.ROTATION_PAIRS)})
+            psi.update({pair: rigid[:, 5 + col] for col, pair in enumerate(el_body.ROTATION_PAIRS)})
         else:
             beam, frame = (CANTILEVER, PINNED)[b], FRAMES[b]
             r = np.asarray(beam.root, float) + where * beam.length * frame[0]
             rigid = gen.rigid_fields(*r)
             phi[:5] = rigid[:, :5].T
-            psi.update({pair: rigid[:, 5 + col] for col, pair in enumerate(el.ROTATION_PAIRS)})
+            psi.update({pair: rigid[:, 5 + col] for col, pair in enumerate(el_body.ROTATION_PAIRS)})
             first = names.index(f"beam{b}_p1_m1")
             n = beam.modes
             phi[first:first + 2 * n] = mode_fields(beam, frame, np.array([where]))[:, 0]
@@ -211,7 +211,7 @@ def test_fields_at_the_report_points(system):
     inv = system.inv
     assert len(inv.names) == 15 and inv.n_roll == 5
     beam_pairs = {(2 + a, c) for a in range(3) for c in range(5, 15)}
-    assert set(inv.pairs) == set(el.ROTATION_PAIRS) | beam_pairs | shortening(5)
+    assert set(inv.pairs) == set(el_body.ROTATION_PAIRS) | beam_pairs | shortening(5)
     expected = expected_probe_fields(system)
     assert np.abs(inv.probe_fields - expected).max() < 1e-13
     assert np.allclose(inv.probe_points, expected[0], rtol=0, atol=1e-15)
@@ -221,16 +221,16 @@ def test_fields_at_the_report_points(system):
 
 def test_effects_switch_off_their_coordinates_and_fields():
     def of(**effects):
-        return el.invariants(model(**effects))
+        return el_body.invariants(model(**effects))
 
     full = of()
     no_rollers, rigid_beams, no_stiffening, no_membrane = (of(rollers=False), of(body=False), of(stiffening=False),
                                                           of(membrane=False))
     assert no_rollers.names == full.names[5:] and no_rollers.n_roll == 0
     assert set(no_rollers.pairs) == shortening(0)
-    assert rigid_beams.names == list(el.ROLLER_NAMES) and rigid_beams.pairs == list(el.ROTATION_PAIRS)
+    assert rigid_beams.names == list(el_body.ROLLER_NAMES) and rigid_beams.pairs == list(el_body.ROTATION_PAIRS)
     assert not any(i >= 5 and j >= 5 for i, j in no_stiffening.pairs)
-    assert len(no_stiffening.pairs) == len(el.ROTATION_PAIRS) + 30
+    assert len(no_stiffening.pairs) == len(el_body.ROTATION_PAIRS) + 30
     assert no_membrane.membrane == () and len(full.membrane) == 1
     # the bodies' mass is there whatever the effects
     for inv in (no_rollers, rigid_beams, no_stiffening):
@@ -241,9 +241,9 @@ def test_effects_switch_off_their_coordinates_and_fields():
 @pytest.mark.parametrize("support, axial", [("cantilever", "free"), ("pinned", "free"), ("pinned", "held")])
 def test_axial_field_is_the_shortening_of_the_slopes(support, axial):
     """-L ψ_kl(ξ) = ∫0^ξ N_k' N_l' dξ, less ξ times its value at the far end when the ends are held."""
-    beam = el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), 1.0, 1.0, (1.0, 1.0), support, 8, axial=axial)
+    beam = el_body.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), 1.0, 1.0, (1.0, 1.0), support, 8, axial=axial)
     xi = np.array([0.2, 0.5, 0.9])
-    _, axial_field = el.beam_basis(support, xi, axial)
+    _, axial_field = el_body.beam_basis(support, xi, axial)
     for x, got in zip(xi, axial_field):
         expected = slope_integral(beam, x) - (x * slope_integral(beam, 1.0) if axial == "held" else 0.0)
         assert np.abs(got - expected).max() < 1e-12 * np.abs(expected).max()

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_elastic_energies import (BEAM, G0, HALF_GAUGE, K_ROLL, L_AXLE, bending_energy, cloud,  # noqa: E402
@@ -51,7 +51,7 @@ def with_probes(body, rollers):
     if rollers:
         rigid = np.moveaxis(gen.rigid_fields(*p[:, None]), -1, 1)  # (1, 11, 3)
         phi_p[:, :5] = rigid[:, :5]
-        for col, (i, j) in enumerate(el.ROTATION_PAIRS):
+        for col, (i, j) in enumerate(el_body.ROTATION_PAIRS):
             H_p[:, i, j] = H_p[:, j, i] = rigid[:, 5 + col]
     return (np.vstack([pts, p, pts[-1]]), np.r_[w, 0.0, 0.0], np.concatenate([phi, phi_p, phi[-1:]]),
             np.concatenate([H, H_p, H[-1:]]))
@@ -69,8 +69,8 @@ def rows_of(system, n=3):
 
 
 def frame_states(drive, s, V0, dV0):
-    fr = el.frames(drive, s, L_AXLE)
-    return fr, [el.frame_state(fr, i, V0[i], dV0[i]) for i in range(len(s))]
+    fr = el_frame.frames(drive, s, L_AXLE)
+    return fr, [el_frame.frame_state(fr, i, V0[i], dV0[i]) for i in range(len(s))]
 
 
 def check_rows(system, body, drive, out, s, V0, dV0, Y, g0):
@@ -135,7 +135,7 @@ def test_outputs_on_elastic_rollers_with_dampers(drive):
     body = with_probes(cloud(mdl), True)
     s, V0, dV0, Y = rows_of(system)
     t = np.array([0.1, 0.4, 0.9])
-    out = el.outputs(system, drive, t, s, V0, dV0, Y)
+    out = el_sim.outputs(system, drive, t, s, V0, dV0, Y)
     check_rows(system, body, drive, out, s, V0, dV0, Y, G0)
     N = system.N
     q, qd = Y[:, :N], Y[:, N:2 * N]
@@ -146,14 +146,14 @@ def test_outputs_on_elastic_rollers_with_dampers(drive):
     for i in range(3):
         rigid = np.moveaxis(gen.rigid_fields(*CONTACTS[1:].T), -1, 1)
         u = np.einsum("pai,a->pi", rigid[:, :5], q[i, :5])
-        for col, (a, b) in enumerate(el.ROTATION_PAIRS):
+        for col, (a, b) in enumerate(el_body.ROTATION_PAIRS):
             u += (0.5 if a == b else 1.0) * q[i, a] * q[i, b] * rigid[:, 5 + col]
         moment = np.cross(CONTACTS[1:] + u, forces[i][:, None] * DIRECTIONS[1:]).sum(0)
         assert np.abs(out["M_contacts"][i] - moment).max() < 1e-12 * np.abs(moment).max()
     for key, value in (("t", t), ("s", s), ("V0", V0), ("dV0", dV0), ("q", q), ("qd", qd), ("dissipated", Y[:, -2]),
                        ("work", Y[:, -1])):
         assert np.array_equal(out[key], value), key
-    assert out["names"] == [*el.ROLLER_NAMES] + [f"beam0_p{p}_m{k}" for p in (1, 2) for k in (1, 2, 3)]
+    assert out["names"] == [*el_body.ROLLER_NAMES] + [f"beam0_p{p}_m{k}" for p in (1, 2) for k in (1, 2, 3)]
     fr, _ = frame_states(drive, s, V0, dV0)
     assert np.array_equal(out["W"], fr.W) and np.array_equal(out["dW"], fr.dW)
     assert not {"rr", "v", "acc"} & set(out)
@@ -164,11 +164,11 @@ def test_outputs_on_rigid_rollers_in_weak_or_no_gravity(drive, g0):
     """Rigid rollers: the six reactions at the contacts carry F and M; no deflections, no contact moment; the
     overloads in units of g0, or of the standard gravity when g0 = 0; only the beam's part of the tip is elastic."""
     base = model(rollers=False)
-    mdl = el.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, g0, None, base.beams, base.effects)
+    mdl = el_body.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, g0, None, base.beams, base.effects)
     system = el.System(mdl, PROBES)
     body = with_probes(cloud(mdl), False)
     s, V0, dV0, Y = rows_of(system)
-    out = el.outputs(system, drive, np.arange(3.0), s, V0, dV0, Y)
+    out = el_sim.outputs(system, drive, np.arange(3.0), s, V0, dV0, Y)
     check_rows(system, body, drive, out, s, V0, dV0, Y, g0)
     for P, F, M in zip(out["P"], out["F"], out["M"]):
         forces = P[:, None] * DIRECTIONS
@@ -185,11 +185,11 @@ def test_outputs_use_the_frame_the_caller_gives(drive):
     system = el.System(mdl, PROBES)
     s, V0, dV0, Y = rows_of(system, 2)
     chord = elastic_scene.drive_of(prepared(CATENARY), 2)
-    given = el.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y, frame=el.frames(chord, s, L_AXLE))
-    own = el.outputs(system, chord, np.arange(2.0), s, V0, dV0, Y)
+    given = el_sim.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y, frame=el_frame.frames(chord, s, L_AXLE))
+    own = el_sim.outputs(system, chord, np.arange(2.0), s, V0, dV0, Y)
     for key in ("qdd", "F", "P", "h", "probe_overload", "P_rigid", "W"):
         assert np.array_equal(given[key], own[key]), key
-    plain = el.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y)
+    plain = el_sim.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y)
     assert np.abs(plain["F"] - given["F"]).max() > 1e-4 * np.abs(plain["F"]).max()
 
 
@@ -197,12 +197,12 @@ def test_every_beam_mode_counts_as_elastic_on_a_body_without_second_order_fields
     """Rigid rollers and no stiffening: no ψ fields at all, the coordinates are the last fields; the tip's elastic
     displacement is its whole displacement, Σ N_k(1) q_k b over both planes."""
     base = model(rollers=False)
-    mdl = el.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, G0, None, base.beams,
-                          el.Effects(rollers=False, stiffening=False, damping=False))
+    mdl = el_body.ElasticModel(base.mass, base.com, base.inertia, L_AXLE, HALF_GAUGE, G0, None, base.beams,
+                          el_body.Effects(rollers=False, stiffening=False, damping=False))
     system = el.System(mdl, PROBES)
     assert system.F == 1 + system.N
     s, V0, dV0, Y = rows_of(system, 2)
-    out = el.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y)
+    out = el_sim.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y)
     tip = np.einsum("ai,na->ni", cloud(mdl)[2][-1], Y[:, :system.N])
     assert np.abs(out["probe_elastic"][:, 1] - tip).max() < 1e-14
     assert np.abs(out["probe_displacement"][:, 1] - tip).max() < 1e-14

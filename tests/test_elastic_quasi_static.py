@@ -9,20 +9,20 @@ import pytest
 
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame
 
 pytestmark = pytest.mark.xdist_group("test_elastic_quasi_static")
 
 L, RHO_A, EI, EA, G0 = 2.0, 1.5, 10.0, 1e7, 9.81
-AT_REST = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
+AT_REST = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
 
 
 @pytest.fixture(scope="module")
 def sagging():
     """The system (beam along x1 bending along x2, up), the closed-form sag q1 [m] of its first plane, the bending
     stiffness EI/L³ ∫ N''² dξ [N/m] and the slope integral ∫ N'² dξ [1] of its one function."""
-    beam = el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, RHO_A, (EI, EI), "pinned", 1, axial="held", ea=EA)
-    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, G0, None, (beam,), el.Effects(rollers=False))
+    beam = el_body.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, RHO_A, (EI, EI), "pinned", 1, axial="held", ea=EA)
+    mdl = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, G0, None, (beam,), el_body.Effects(rollers=False))
     x, w = np.polynomial.legendre.leggauss(30)
     x, w = (x + 1) / 2, w / 2
     n, d1, d2 = np.moveaxis(gen.pinned_basis(x)[:, :, 0], 1, 0)
@@ -57,8 +57,8 @@ def test_newton_starts_from_the_given_state_and_counts_its_steps(sagging):
 
 
 def test_free_play_of_every_roller_is_refused():
-    rollers = el.Rollers((1e6,) * 5, (0.0,) * 5, "clamped_pair", (-1e-3,) * 5)
-    system = el.System(el.ElasticModel(100.0, (0.5, 0.3, 0), (10, 20, 15, 0, 0, 0), 2.0, 1.0, G0, rollers))
+    rollers = el_body.Rollers((1e6,) * 5, (0.0,) * 5, "clamped_pair", (-1e-3,) * 5)
+    system = el.System(el_body.ElasticModel(100.0, (0.5, 0.3, 0), (10, 20, 15, 0, 0, 0), 2.0, 1.0, G0, rollers))
     with pytest.raises(SymmechError, match=r"^no quasi-static state of the elastic model: its stiffness is singular "
                                            r"\(a free play of the rollers, elastic.rollers.preload < 0, carries no "
                                            r"load\)$"):
@@ -70,8 +70,8 @@ def test_preloaded_pair_beyond_its_preload_carries_the_weight():
     half the answer, and the steps must shrink relative to the small q, not to 1 m. The reactions are the
     statics of three supports (B, C share what the front axle A does not carry)."""
     k = (2e9, 2e9, 4e9, 3e9, 2e9)
-    rollers = el.Rollers(k, (0.0,) * 5, "clamped_pair", (1e-8,) * 5)
-    system = el.System(el.ElasticModel(100.0, (0.8, 0.5, 0.0), (20.0, 30.0, 25.0, 0, 0, 0), 2.0, 1.0, G0, rollers))
+    rollers = el_body.Rollers(k, (0.0,) * 5, "clamped_pair", (1e-8,) * 5)
+    system = el.System(el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (20.0, 30.0, 25.0, 0, 0, 0), 2.0, 1.0, G0, rollers))
     q = system.quasi_static(AT_REST)
     assert np.abs(q).max() < 1e-6
     total = 100.0 * G0

@@ -12,7 +12,7 @@ import pytest
 
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_elastic_energies import (BEAM, G0, HALF_GAUGE, K_ROLL, L_AXLE, bending_energy, cloud,  # noqa: E402
@@ -60,12 +60,12 @@ def test_residual_is_the_virtual_work_of_the_point_cloud(system):
         assert np.abs(balance).max() < 1e-10 * np.abs(expected).max()
 
 
-HELD = el.Beam((0.0, 0.1, 0.5), (1.0, 1.0, 0.0), (0.0, 0.0, 1.0), 2.0, 1.5, (4e3, 3e3), "pinned", 2,
+HELD = el_body.Beam((0.0, 0.1, 0.5), (1.0, 1.0, 0.0), (0.0, 0.0, 1.0), 2.0, 1.5, (4e3, 3e3), "pinned", 2,
                damping_ratio=0.03, axial="held", ea=1e6)
 
 
 def test_jacobians_are_the_derivatives_of_the_residual():
-    damped = el.Beam(*[getattr(BEAM, f) for f in ("root", "axis", "plane", "length", "rho_a", "ei", "support",
+    damped = el_body.Beam(*[getattr(BEAM, f) for f in ("root", "axis", "plane", "length", "rho_a", "ei", "support",
                                                    "modes", "tip_mass")], damping_ratio=0.02)
     system = el.System(model(damping=C_ROLL, beams=(damped, HELD)))
     assert np.abs(system.inv.D).max() > 0 and system.inv.membrane
@@ -89,9 +89,9 @@ def test_jacobians_are_the_derivatives_of_the_residual():
 
 
 def test_a_body_without_rotary_inertia_is_refused_in_one_sentence():
-    mdl = el.ElasticModel(50.0, (0, 0, 0), (0, 0, 0, 0, 0, 0), 2.0, 1.0, G0, el.Rollers((1e6,) * 5, (0.0,) * 5))
+    mdl = el_body.ElasticModel(50.0, (0, 0, 0), (0, 0, 0, 0, 0, 0), 2.0, 1.0, G0, el_body.Rollers((1e6,) * 5, (0.0,) * 5))
     system = el.System(mdl)
-    fs = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0, 1.0, 0]))
+    fs = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0, 1.0, 0]))
     with pytest.raises(SymmechError, match=r"^the mass matrix of the elastic model is singular: give the trolley a "
                                            r"positive inertia about every axis \(trolley.inertia\)$"):
         system.accelerations(fs, np.zeros(5), np.zeros(5))

@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from symmech.core.scene import SymmechError
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, simulate as el_sim
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import circle, straight  # noqa: E402
 from trolley_util import prepared, setup as scene_dict  # noqa: E402
-from symmech.trolley import elastic_scene  # noqa: E402
+from symmech.trolley.elastic import scene as elastic_scene  # noqa: E402
 
 pytestmark = pytest.mark.xdist_group("test_elastic_simulate")
 
@@ -35,9 +35,9 @@ TROLLEY_MASS = 80.0
 
 def mast(zeta):
     """A cantilever along x2 (plane 1 along x1) on a trolley on rigid rollers, no gravity: N = 2."""
-    beam = el.Beam((0.5, 0.3, 0.0), (0, 1, 0), (1, 0, 0), L, RHO_A, EI, "cantilever", 1, TIP, zeta)
-    return el.System(el.ElasticModel(TROLLEY_MASS, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 0.0,
-                                     None, (beam,), el.Effects(rollers=False)))
+    beam = el_body.Beam((0.5, 0.3, 0.0), (0, 1, 0), (1, 0, 0), L, RHO_A, EI, "cantilever", 1, TIP, zeta)
+    return el.System(el_body.ElasticModel(TROLLEY_MASS, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 0.0,
+                                     None, (beam,), el_body.Effects(rollers=False)))
 
 
 def ramp_response(a, b, omega, t):
@@ -66,7 +66,7 @@ def test_a_kicked_mast_on_a_trolley_at_rest_is_two_free_oscillators(method, zeta
     system = mast(zeta)
     t = np.linspace(0.0, 0.12, 25)  # a period of plane 1 (0.106 s), 0.8 of plane 2
     dq0, dqd0 = np.array([1e-4, -2e-5]), np.array([0.0, 5e-3])
-    r = el.simulate(system, straight(), t, method, rtol=1e-10, dq0=dq0, dqd0=dqd0)
+    r = el_sim.simulate(system, straight(), t, method, rtol=1e-10, dq0=dq0, dqd0=dqd0)
     assert r["names"] == ["beam0_p1_m1", "beam0_p2_m1"]
     energy = 0.0
     for plane in range(2):
@@ -90,7 +90,7 @@ def test_a_mast_on_a_trolley_at_a_prescribed_growing_acceleration_follows_the_cl
     data = scene_dict(effects={"gravity": False, "local_curvature": False},
                       motion={"speed": "2 + 0.1*t + 5*t**2"}, time={"t_end": 0.1, "steps": 4})
     t = np.linspace(0.0, 0.1, 21)
-    r = el.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t)  # the default tolerances
+    r = el_sim.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t)  # the default tolerances
     q, qd, _ = ramp_response(0.1 * ELL / K1, 10 * ELL / K1, OMEGA[0], t)
     np.testing.assert_allclose(r["q"][:, 0], q, rtol=0, atol=1e-7 * np.abs(q).max())
     np.testing.assert_allclose(r["qd"][:, 0], qd, rtol=0, atol=3e-7 * np.abs(qd).max())
@@ -111,7 +111,7 @@ def test_a_mast_on_a_trolley_pulled_by_a_ramp_of_traction_follows_the_closed_for
                       motion={"traction": f"{F0!r} + {F1!r}*t", "initial_speed": v0}, time={"t_end": 0.1, "steps": 4})
     drive = elastic_scene.drive_of(prepared(data), 1)
     t = np.linspace(0.0, 0.1, 21)
-    r = el.simulate(mast(0.0), drive, t, rtol=1e-10)
+    r = el_sim.simulate(mast(0.0), drive, t, rtol=1e-10)
     m_tot = TROLLEY_MASS + RHO_A * L + TIP
     omega = np.sqrt(K1 / (MASS - ELL ** 2 / m_tot))
     c = ELL / (m_tot * K1)
@@ -145,10 +145,10 @@ def test_implicit_methods_get_the_derivative_of_the_rates_as_their_jacobian(monk
         return solve_ivp(fun, span, y0, **kw)
 
     monkeypatch.setattr(scipy.integrate, "solve_ivp", spy)
-    beam = el.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1, damping_ratio=0.05)
-    system = el.System(el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
-                                       el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (300.0,) * 5), beams=(beam,)))
-    el.simulate(system, circle(15.0, 12.0), np.linspace(0.0, 0.01, 3), method)
+    beam = el_body.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1, damping_ratio=0.05)
+    system = el.System(el_body.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
+                                       el_body.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (300.0,) * 5), beams=(beam,)))
+    el_sim.simulate(system, circle(15.0, 12.0), np.linspace(0.0, 0.01, 3), method)
     jac, fun, n = handed_over["jac"], handed_over["fun"], 2 * system.N
     if not handed:
         assert jac is None
@@ -170,7 +170,7 @@ def test_without_the_analytic_jacobian_scipy_differences(monkeypatch):
     solve_ivp = scipy.integrate.solve_ivp
     monkeypatch.setattr(scipy.integrate, "solve_ivp",
                         lambda *a, **kw: seen.append(kw.get("jac")) or solve_ivp(*a, **kw))
-    el.simulate(mast(0.0), straight(), np.linspace(0.0, 0.01, 3), analytic_jacobian=False)
+    el_sim.simulate(mast(0.0), straight(), np.linspace(0.0, 0.01, 3), analytic_jacobian=False)
     assert seen == [None]
 
 
@@ -194,7 +194,7 @@ def test_the_evaluation_counts_are_the_calls_the_solver_made(monkeypatch, method
         return solve_ivp(counting("fun", fun), span, y0, **kw)
 
     monkeypatch.setattr(scipy.integrate, "solve_ivp", spy)
-    r = el.simulate(mast(0.02), straight(), np.linspace(0.0, 0.02, 5), method, dq0=np.array([1e-4, 0.0]))
+    r = el_sim.simulate(mast(0.02), straight(), np.linspace(0.0, 0.02, 5), method, dq0=np.array([1e-4, 0.0]))
     assert (r["nfev"], r["njev"]) == (calls["fun"], calls["jac"])
     assert calls["fun"] > 10 and (calls["jac"] > 0) == (method == "Radau")
 
@@ -203,5 +203,5 @@ def test_a_failed_integration_names_the_last_time_reached():
     """A speed that turns NaN after 0.05 s: the solver gives up past the output at 0.04 s, and says so."""
     drive = straight(2.0)
     broken = dataclasses.replace(drive, speed=lambda t: (np.where(np.asarray(t) < 0.05, 2.0, np.nan), 0.0 * t))
-    with pytest.raises(SymmechError, match=r"^elastic trolley: integration failed at t = 0\.04 s \(Required step"):
-        el.simulate(mast(0.0), broken, np.linspace(0.0, 0.1, 11))
+    with pytest.raises(SymmechError, match=r"^elastic trolley: integration failed after t = 0\.04 s \(Required step"):
+        el_sim.simulate(mast(0.0), broken, np.linspace(0.0, 0.1, 11))

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_elastic_energies import G0, L_AXLE, cloud, model, resultants_of_cloud  # noqa: E402
@@ -41,23 +41,23 @@ def system():
 
 
 def test_arc_length_on_an_uneven_grid_is_the_integral_of_the_speed(drive):
-    assert np.abs(el.arc_length(drive, GRID) - arc(GRID)).max() < 1e-12
+    assert np.abs(el_sim.arc_length(drive, GRID) - arc(GRID)).max() < 1e-12
     steady = dataclasses.replace(drive, speed=lambda t: (5.0, 0.0))  # a scalar speed for the whole grid
-    assert np.abs(el.arc_length(steady, GRID) - (S0 + 5.0 * GRID)).max() < 1e-13
+    assert np.abs(el_sim.arc_length(steady, GRID) - (S0 + 5.0 * GRID)).max() < 1e-13
 
 
 def test_timeline_arc_length_between_on_and_beyond_the_nodes(drive):
-    line = el.Timeline(None, drive, GRID)
+    line = el_sim.Timeline(None, drive, GRID)
     for time in (0.0, 0.15, 0.3, 0.65, 1.0, 3.1, 4.0, 5.5):
         assert line.s(time) == pytest.approx(arc(time), abs=1e-12), time
 
 
 def test_timeline_states_are_the_frames_at_the_arc_length_and_speed(drive, system):
-    line = el.Timeline(system, drive, GRID)
-    fr = el.frames(drive, arc(np.linspace(0.0, 4.0, 200)), L_AXLE)
+    line = el_sim.Timeline(system, drive, GRID)
+    fr = el_frame.frames(drive, arc(np.linspace(0.0, 4.0, 200)), L_AXLE)
     for i, time in enumerate(np.linspace(0.0, 4.0, 200)):  # more times than the cache keeps
         fs = line.state(time)
-        expected = el.frame_state(fr, i, 8.0 + 3.0 * np.sin(time), 3.0 * np.cos(time))
+        expected = el_frame.frame_state(fr, i, 8.0 + 3.0 * np.sin(time), 3.0 * np.cos(time))
         for key in ("v0", "a0", "w", "dw", "nu"):
             assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-9, (time, key)
         assert line.state(time) is fs  # an implicit step's stage times are revisited: cached
@@ -73,13 +73,13 @@ def traction_drive(drive):
 def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system, case):
     """Case 2 moves the chord frame of the axle distance l (tests/test_elastic_frame.py)."""
     drive = dataclasses.replace(drive, local_curvature=case == 2)
-    line = el.Timeline(system, traction_drive(drive), GRID)
+    line = el_sim.Timeline(system, traction_drive(drive), GRID)
     assert line.s_nodes is None
     for s, V0 in ((3.0, 6.0), (9.0, 11.0)):
         fs0, fs1 = line.traction_states(s, V0)
-        fr = el.frames(drive, s, L_AXLE)
+        fr = el_frame.frames(drive, s, L_AXLE)
         for fs, rate in ((fs0, 0.0), (fs1, 1.0)):
-            expected = el.frame_state(fr, 0, V0, rate)
+            expected = el_frame.frame_state(fr, 0, V0, rate)
             for key in ("v0", "a0", "w", "dw", "nu"):
                 assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-12, key
         assert np.abs(fs1.a0 - fs0.a0 - fs0.v0 / V0).max() < 1e-12  # ∂a0/∂V̇0 = e, the tangent
@@ -92,7 +92,7 @@ def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system
     """q̈ and V̇0 make the cloud's d'Alembert forces balance the elastic ones, and its x1 resultant the traction."""
     body = cloud(system.mdl)
     tdrive = traction_drive(drive)
-    line = el.Timeline(system, tdrive, GRID)
+    line = el_sim.Timeline(system, tdrive, GRID)
     rng = np.random.default_rng(5)
     N = system.N
     for time, s, V0 in ((0.4, 4.0, 6.5), (1.7, 12.0, 9.0)):
@@ -100,7 +100,7 @@ def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system
         qd = rng.normal(size=N)
         y = np.r_[q, qd, 1.0, 2.0, s, V0]
         fs, qdd, dv = line.traction_step(time, y)
-        expected = el.frame_state(el.frames(drive, s, L_AXLE), 0, V0, dv)
+        expected = el_frame.frame_state(el_frame.frames(drive, s, L_AXLE), 0, V0, dv)
         for key in ("v0", "a0", "w", "dw", "nu"):
             assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-12, key
         forces = elastic_forces(q, qd)
@@ -114,12 +114,12 @@ def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system
 def test_traction_start_carries_the_whole_bodys_acceleration(drive, system):
     """q at rest relative to the frame at S0, 6 m/s, under V̇0 = P0(t0, 6)/m - g0 dy/ds."""
     tdrive = traction_drive(drive)
-    line = el.Timeline(system, tdrive, GRID)
+    line = el_sim.Timeline(system, tdrive, GRID)
     t0 = 0.8
-    q = el.traction_start(line, t0)
+    q = el_sim.traction_start(line, t0)
     mass = system.mdl.mass + system.mdl.beams[0].rho_a * system.mdl.beams[0].length + system.mdl.beams[0].tip_mass
     dv = (200.0 + 50.0 * t0 - 18.0) / mass - G0 * S0 / np.sqrt(400.0 + S0 ** 2)
-    fs = el.frame_state(el.frames(drive, S0, L_AXLE), 0, 6.0, dv)
+    fs = el_frame.frame_state(el_frame.frames(drive, S0, L_AXLE), 0, 6.0, dv)
     body = cloud(system.mdl)
     zero = np.zeros(system.N)
     forces = elastic_forces(q, zero)
@@ -133,6 +133,6 @@ def test_timeline_integrates_from_the_last_node_only(drive):
     over two (from the node before) only to 3e-9: s(t) = s0 + 8 t + (3/3.5)(1 - cos 3.5 t) to 1e-12."""
     om = 3.5
     fast = dataclasses.replace(drive, speed=lambda t: (8.0 + 3.0 * np.sin(om * t), 3.0 * om * np.cos(om * t)))
-    line = el.Timeline(None, fast, np.arange(5.0))
+    line = el_sim.Timeline(None, fast, np.arange(5.0))
     for time in np.linspace(0.05, 4.5, 37):
         assert line.s(time) == pytest.approx(S0 + 8.0 * time + 3.0 / om * (1.0 - np.cos(om * time)), abs=1e-12)

@@ -5,7 +5,8 @@ import sys
 import pytest
 
 from symmech import cli
-from symmech.core import build, engines
+from symmech.core import engines
+from symmech.numerics import build
 from symmech.core.layout import Bundle, Layout
 
 STANDIN_DECLARATION = '''

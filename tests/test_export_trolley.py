@@ -20,7 +20,7 @@ from symmech.cli import main
 from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
 from symmech.export.model import deviation
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import scene as elastic_scene
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy.validation import validate_fmu  # noqa: E402

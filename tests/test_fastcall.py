@@ -1,4 +1,4 @@
-"""The C path of a numba twin's rhs/jac (symmech.core.fastcall, symmech/core/_fastcall.c).
+"""The C path of a numba twin's rhs/jac (symmech.numerics.fastcall, symmech/numerics/_fastcall.c).
 
 The C Kernel calls the twin's rhs_into/jac_into compiled as a numba cfunc, so its results must be
 bit-equal to the twin's rhs_scalar/jac_scalar (the same generated kernel, the same machine code); the
@@ -15,7 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from symmech.core import fastcall, kernels
+from symmech.numerics import fastcall, kernels
 from symmech.generated import grain_motion, smm_rotor_boom
 
 # grain_motion (no mass matrix) and smm_rotor_boom (M solved in the kernel): the twins the default tier
@@ -137,7 +137,7 @@ def test_built_once_then_loaded_by_every_process(tmp_path, monkeypatch):
     assert type(first.rhs).__name__ == "Kernel" and first.rhs.bound
     built = fastcall.artifact(tmp_path)
     stamp, files = built.stat().st_mtime_ns, sorted(tmp_path.iterdir())
-    code = (f"from pathlib import Path; from symmech.core import fastcall; "
+    code = (f"from pathlib import Path; from symmech.numerics import fastcall; "
             f"print(fastcall.extension(Path({str(tmp_path)!r})).Kernel.__name__)")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                           env=os.environ | {"CC": str(tmp_path / "no-such-cc")})

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import build, pipeline
+from symmech.core import pipeline
+from symmech.numerics import build
 from symmech.grain import motion_scene, sweep
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 
@@ -170,7 +171,8 @@ def _final_position(out: Path) -> np.ndarray:
 SWEEP_ON_FRESH_WORKERS = """
 import json, sys
 import dask.distributed as distributed
-from symmech.core import build, pipeline
+from symmech.core import pipeline
+from symmech.numerics import build
 from symmech.grain import sweep
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 

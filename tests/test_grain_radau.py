@@ -1,4 +1,4 @@
-"""The analytic Jacobian of the slip the compiled grain integrates stiff slips with (by core.ode's Radau IIA,
+"""The analytic Jacobian of the slip the compiled grain integrates stiff slips with (by numerics.ode's Radau IIA,
 tested on its own in test_ode_toolkit.py)."""
 import numpy as np
 import pytest

@@ -76,7 +76,7 @@ def test_main_job_and_a_compile_run_without_a_c_compiler(installed, tmp_path):
     assert proc.returncode == 0, proc.stderr
     summary = assert_valid_output(work / "no_cc")
     assert summary["kind"] == "grain" and summary["engine"] == "python" and summary["bounces"] > 100
-    code = ("from symmech.core import kernels; k = kernels.load('grain_impact'); "
+    code = ("from symmech.numerics import kernels; k = kernels.load('grain_impact'); "
             "print(k.__name__, k.contact_height_scalar(2e-3, 1.5e-3, 1e-3, 0.3, 0.7, 1.1))")
     proc = subprocess.run([bin_ / "python", "-c", code], cwd=work, env=env, capture_output=True, text=True,
                           timeout=900)

@@ -43,7 +43,7 @@ def attempt(style):
 def load():
     if not {name!r}.endswith("_nb"):
         sys.modules["numba"] = None  # kernels.load uses the numpy module only when numba is absent
-    from symmech.core import kernels
+    from symmech.numerics import kernels
     kernels.load({name!r}.removesuffix("_nb"))
 answers = {{
     "import": attempt(lambda: exec("import symmech.generated.{name}")),

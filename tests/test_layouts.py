@@ -12,7 +12,7 @@ import pytest
 from symmech.core.layout import Bundle, Field, Layout
 from symmech.grain import motion
 from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout
-from symmech.trolley import elastic_layout
+from symmech.trolley.elastic import layout as elastic_layout
 
 ROOT = Path(__file__).resolve().parents[1] / "symmech"
 SMALL = Layout("Small", (Field("a", "m", "a scalar"), Field("b", "m/s", "a vector", (3,)),
@@ -94,7 +94,7 @@ def test_the_elastic_model_record_of_a_system_has_the_declared_numba_type():
     sys.path.insert(0, str(Path(__file__).parent))
     from test_elastic_compiled import helix
 
-    from symmech.trolley import elastic_compiled, elastic_kernels
+    from symmech.trolley.elastic import compiled as elastic_compiled, kernels as elastic_kernels
 
     record = elastic_kernels.pack(helix().system)
     assert numba.typeof(record) == elastic_layout.MODEL.numba_type()
@@ -167,7 +167,7 @@ STATE_READERS = ("flight_phase", "impact_law", "kinematics", "landing", "loop", 
 READERS = {**{f"grain/motion_engine/{name}.py": GRAIN_VECTORS for name in GRAIN_READERS},
            **{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, "y": "X_AT", "after": "X_AT", "out": "X_AT"}
               for name in STATE_READERS},
-           "trolley/elastic_kernels.py": ELASTIC_VECTORS, "trolley/elastic_compiled.py": {}}  # (k, 12) tables there
+           "trolley/elastic/kernels.py": ELASTIC_VECTORS, "trolley/elastic/compiled.py": {}}  # (k, 12) tables there
 
 
 def _names(node) -> set:

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from symmech.core.results import Column, Result, Table
-from symmech.trolley import elastic_scene
-from symmech.trolley.elastic import FORCING
+from symmech.trolley.elastic import scene as elastic_scene
+from symmech.trolley.elastic.body import FORCING
 
 
 def modes(n_s=3, n=2, names=("tip",)):

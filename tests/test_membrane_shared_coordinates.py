@@ -4,7 +4,7 @@ the same coordinates (an input `membrane.force` and `stiffness` accept) against 
 import numpy as np
 
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import membrane
+from symmech.trolley.elastic import membrane
 
 
 def test_blocks_on_shared_coordinates_add_their_forces_and_stiffnesses():

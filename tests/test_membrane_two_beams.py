@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from numpy.polynomial import Legendre
 
-from symmech.trolley import elastic as el
-from symmech.trolley import membrane
+from symmech.trolley.elastic import system as el, body as el_body
+from symmech.trolley.elastic import membrane
 
 RNG = np.random.default_rng(2)
 # steel strips: (length [m], EA [N], modes); different lengths and sections, so no beam mirrors the other
@@ -33,10 +33,10 @@ def beam_membrane(q, length, ea, modes):
 
 
 def two_held_beams():
-    beams = tuple(el.Beam((0.1 * i, 0, 0), (0, 0, 1), (1, 0, 0), length, 7800 * ea / 2.1e11, (1e4, 2e4), "pinned",
+    beams = tuple(el_body.Beam((0.1 * i, 0, 0), (0, 0, 1), (1, 0, 0), length, 7800 * ea / 2.1e11, (1e4, 2e4), "pinned",
                           modes, axial="held", ea=ea) for i, (length, ea, modes) in enumerate(BEAMS))
-    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, beams,
-                          el.Effects(rollers=False, stiffening=True, membrane=True))
+    mdl = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, beams,
+                          el_body.Effects(rollers=False, stiffening=True, membrane=True))
     return el.System(mdl)
 
 

@@ -1,4 +1,4 @@
-"""The compiled ODE toolkit (symmech.core.ode): scipy's DOP853, Radau IIA and Brent ported to numba, on their
+"""The compiled ODE toolkit (symmech.numerics.ode): scipy's DOP853, Radau IIA and Brent ported to numba, on their
 own: tableaux bit-equal to scipy's, empirical orders of convergence, scipy's step counts on stiff and non-stiff
 problems, and a generated dynamics module integrated end to end (``ode.integrate``) against ``solve_ivp`` and
 the exact free response of the mechanism run.
@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 import symmech
-from symmech.core import ode
+from symmech.numerics import ode, radau
 from symmech.core.scene import SymmechError, scenes_folder
 from symmech.generated import smm_rotor_boom
 
@@ -52,7 +52,7 @@ def adaptive(lam, t_end, rtol, atol):
     """Accepted steps and the largest error |y - cos t| at their ends of an adaptive Radau solve."""
     args, y, t, f = np.array([lam]), np.array([1.0]), 0.0, np.empty(1)
     probe(t, y, args, f)
-    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(1)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
     st = PROBE.radau_start(t, y, f, t_end, args, rtol, np.array([atol]), J)
     steps, err = 0, 0.0
     while t < t_end:
@@ -66,10 +66,10 @@ def adaptive(lam, t_end, rtol, atol):
 def fixed_radau(lam, n, t_end=1.0):
     """|y(t_end) - cos t_end| after n equal Radau steps (one collocation solve each, exact Jacobian)."""
     args, y, f, h = np.array([lam]), np.array([1.0]), np.empty(1), t_end / n
-    J, LUr, pr, LUc, pc, Q = ode.radau_buffers(1)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
     J[0, 0] = -lam
-    st = np.zeros(ode.N_RADAU)  # no previous step: the Newton solve starts from zero increments
-    st[ode.R_JAC_CURRENT] = 1.0
+    st = np.zeros(radau.N_RADAU)  # no previous step: the Newton solve starts from zero increments
+    st[radau.R_JAC_CURRENT] = 1.0
     for k in range(n):
         probe(k * h, y, args, f)
         ok, _, _, Z = PROBE.radau_try(k * h, y, f, h, args, 1e-12, np.array([1e-12]), st, J, LUr, pr, LUc, pc, Q)
@@ -92,23 +92,24 @@ def fixed_dop853(n, t_end=4.0):
 
 
 def test_radau_tableau_is_scipys_bit_for_bit():
-    """The Radau IIA constants written out in core.ode (no scipy import at run time) are those of scipy's
+    """The Radau IIA constants written out in numerics.radau (no scipy import at run time) are those of scipy's
     ``_ivp/radau.py``, to the last bit."""
-    from scipy.integrate._ivp import radau
+    from scipy.integrate._ivp import radau as scipy_radau
 
-    for ours, theirs in ((ode.RADAU_C, radau.C), (ode.RADAU_E[0], radau.E), (ode.RADAU_T, radau.T),
-                         (ode.RADAU_TI, radau.TI), (ode.RADAU_PT, radau.P.T)):
+    for ours, theirs in ((radau.RADAU_C, scipy_radau.C), (radau.RADAU_E[0], scipy_radau.E),
+                         (radau.RADAU_T, scipy_radau.T),
+                         (radau.RADAU_TI, scipy_radau.TI), (radau.RADAU_PT, scipy_radau.P.T)):
         assert ours.shape == theirs.shape and np.array_equal(ours, theirs)
-    assert ode.MU_REAL == radau.MU_REAL and ode.MU_COMPLEX == radau.MU_COMPLEX
+    assert radau.MU_REAL == scipy_radau.MU_REAL and radau.MU_COMPLEX == scipy_radau.MU_COMPLEX
 
 
 def test_radau_collocation_conditions():
     """The Radau IIA tableau A = T diag(MU_REAL, MU_COMPLEX, conj)^-1 TI (the eigen-decomposition of A^-1)
     satisfies the simplifying conditions C(3): sum_j a_ij c_j^(k-1) = c_i^k / k, k = 1..3, to 1e-14."""
-    lam = np.diag([ode.MU_REAL, ode.MU_COMPLEX.real, ode.MU_COMPLEX.real]).astype(complex)
-    lam[1, 2], lam[2, 1] = -ode.MU_COMPLEX.imag, ode.MU_COMPLEX.imag  # the real form of the complex pair
-    A = np.linalg.inv(ode.RADAU_T @ lam.real @ ode.RADAU_TI)
-    c = ode.RADAU_C
+    lam = np.diag([radau.MU_REAL, radau.MU_COMPLEX.real, radau.MU_COMPLEX.real]).astype(complex)
+    lam[1, 2], lam[2, 1] = -radau.MU_COMPLEX.imag, radau.MU_COMPLEX.imag  # the real form of the complex pair
+    A = np.linalg.inv(radau.RADAU_T @ lam.real @ radau.RADAU_TI)
+    c = radau.RADAU_C
     for k in range(1, 4):
         np.testing.assert_allclose(A @ c ** (k - 1), c ** k / k, rtol=0, atol=1e-14)
 
@@ -124,7 +125,7 @@ def test_radau_stiff_prothero_robinson_within_the_tolerance(rtol):
     assert steps < 100
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_radau_takes_scipys_steps():
     """Same algorithm as scipy's Radau with the same (exact) Jacobian: the same number of accepted steps and
     the same largest error to 1e-6 relative (round-off through the step-size control)."""
@@ -252,7 +253,7 @@ def test_integrate_generated_module_equals_solve_ivp_and_the_exact_response(meth
     np.testing.assert_array_less(np.abs(sol.y[:n].T - q_run).max(axis=0), tol * np.abs(q_run).max(axis=0))
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     """The rotor boom with the drive suspension's viscosity mu3 raised 1e4 times: a mode decaying at
     3.6e4 1/s beside the 11 rad/s oscillation (eigenvalues of the generated jac). Radau with the generated jac
@@ -264,17 +265,17 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     p[12] *= 1e4
     assert np.linalg.eigvals(smm_rotor_boom.jac(0.0, y0, p)).real.min() < -3e4
     t = np.linspace(0.0, 2.0, 21)
-    radau = ode.integrate("smm_rotor_boom", p, y0, t, method="Radau", rtol=1e-8, atol=1e-14)
+    stiff = ode.integrate("smm_rotor_boom", p, y0, t, method="Radau", rtol=1e-8, atol=1e-14)
     dop = ode.integrate("smm_rotor_boom", p, y0, t, method="DOP853", rtol=1e-8, atol=1e-14)
     ref = solve_ivp(smm_rotor_boom.rhs, (0.0, 2.0), y0, method="Radau", t_eval=t, args=(p,), rtol=1e-8,
                     atol=1e-14, jac=smm_rotor_boom.jac)
-    assert radau.steps < dop.steps / 10
+    assert stiff.steps < dop.steps / 10
     scale = np.abs(dop.y).max(axis=1)
-    assert np.all(np.abs(radau.y - dop.y).max(axis=1) < 1e-6 * scale)
-    assert np.all(np.abs(radau.y - ref.y).max(axis=1) < 1e-6 * scale)
+    assert np.all(np.abs(stiff.y - dop.y).max(axis=1) < 1e-6 * scale)
+    assert np.all(np.abs(stiff.y - ref.y).max(axis=1) < 1e-6 * scale)
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_integrate_refuses_bad_requests():
     """An unknown method, decreasing times and a step budget too small are errors, not silent results."""
     p, y0, t, _ = _rotor_boom()
@@ -288,7 +289,7 @@ def test_integrate_refuses_bad_requests():
 
 CACHED_CALLER = '''
 import numba, numpy as np
-from symmech.core import ode
+from symmech.numerics import ode
 
 @numba.njit(cache=True)
 def decay(t, y, args, out):
@@ -303,9 +304,9 @@ def caller(y):
 '''
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_a_cached_caller_of_the_toolkit_loads_from_the_cache_in_a_fresh_process(tmp_path):
-    """The design decision of core.ode (its docstring): a cached jitted function calling the toolkit's closures
+    """The design decision of numerics.ode (its docstring): a cached jitted function calling the toolkit's closures
     is compiled once and served from numba's cache in the next process (no miss, one hit), with the same value,
     e^-0.1 to the step's tolerance."""
     (tmp_path / "cached_caller.py").write_text(CACHED_CALLER)
@@ -333,7 +334,7 @@ def spring_events(t, y, args, g):
     g[0], g[1] = y[0], y[1] + args[0] / 2
 
 
-@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 @pytest.mark.parametrize("method", ["DOP853", "Radau"])
 def test_events_of_an_oscillator_at_its_zero_crossings_and_as_solve_ivp_finds_them(method):
     """x = cos(w t): zeros at (j + 1/2) pi / w within 1e-9 s (rtol 1e-10; measured 3e-11, the solve's phase
@@ -363,7 +364,7 @@ def test_events_of_an_oscillator_at_its_zero_crossings_and_as_solve_ivp_finds_th
     assert filled == 1 and not np.isnan(Y[0]).any() and np.isnan(Y[1:]).all()
 
 
-@pytest.mark.slow  # compiles the toolkit for the grain flight (not cacheable across processes, core/ode.py)
+@pytest.mark.slow  # compiles the toolkit for the grain flight (not cacheable across processes, numerics/ode.py)
 def test_integrate_ends_a_grain_flight_at_contact():
     """The grain flight module declares its terminal contact event. Spinning about the plane normal over a
     still plane, the gap is rz - c and the contact time is the free-flight closed form

@@ -15,7 +15,7 @@ import pytest
 from symmech.core.scene import SymmechError
 from symmech.grain import flight, motion, outcome
 from symmech.grain.coulomb_law import ImpactLaw, coulomb_impulse
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame
 
 G = 9.81
 
@@ -23,11 +23,11 @@ G = 9.81
 def test_newton_refuses_after_fifty_steps_by_default_and_says_so():
     """A held pinned beam sagging under gravity; Newton on K q + 4 c H² q³ + f = 0 from q = 10⁶ m shrinks q by
     about a third a step (the cubic dominates), so it is still far off after 50 steps and converges within 80."""
-    beam = el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), 2.0, 1.5, (10.0, 10.0), "pinned", 1, axial="held", ea=1e7)
-    model = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, G, None, (beam,),
-                            el.Effects(rollers=False))
+    beam = el_body.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), 2.0, 1.5, (10.0, 10.0), "pinned", 1, axial="held", ea=1e7)
+    model = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, G, None, (beam,),
+                            el_body.Effects(rollers=False))
     system = el.System(model)
-    at_rest = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
+    at_rest = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
     far = np.array([1e6, 0.0])
     with pytest.raises(SymmechError, match=r"^no quasi-static state of the elastic model \(Newton did not converge "
                                            r"in 50 steps; residual [0-9.e+-]+\)$"):

@@ -13,7 +13,7 @@ from badinput import SCENES, bundled
 from symmech.core import pipeline
 from symmech.core.context import Context
 from symmech.core.scene import SymmechError
-from symmech.trolley import elastic as el
+from symmech.trolley.elastic import simulate as el_sim
 
 HELIX = bundled("trolley_elastic_helix")  # 3 s on 1000 steps: ~30 s on the Python engine
 
@@ -31,7 +31,7 @@ def test_the_python_engine_stops_at_the_budget():
     setup = elastic_setup()
     ctx = Context(quiet=True, max_time=1.0)
     with ctx.active(), pytest.raises(SymmechError) as info:
-        el.simulate(setup.system, setup.drive, setup.t)
+        el_sim.simulate(setup.system, setup.drive, setup.t)
     # one right-hand side past the budget (milliseconds), far inside the 5 s allowed; the run needs ~30 s
     assert 1.0 < ctx.elapsed() < 2.0, ctx.elapsed()
     assert str(info.value).startswith("run stopped after 1 s: over the time budget --max-time 1 s (elastic model, "
@@ -41,7 +41,7 @@ def test_the_python_engine_stops_at_the_budget():
 def test_a_fallback_past_the_budget_is_refused_before_it_runs():
     """A kink in V0 at t = 1.5 s: the compiled engine cannot tabulate the frame, and the Python engine would
     need ~0.1 s x 1000 steps, over the 20 s budget: refused at once, naming the fallback and both times."""
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     setup = elastic_setup("3 + 20*abs(t - 1.5)", 3.0, 1000)
     ctx = Context(quiet=True, max_time=20.0)
@@ -55,7 +55,7 @@ def test_a_fallback_past_the_budget_is_refused_before_it_runs():
 
 
 def test_a_fallback_within_the_budget_says_so_and_runs(capsys):
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     setup = elastic_setup("3 + 20*abs(t - 0.003)", 0.006, 3)  # the kink mid-way: 3 steps, ~1 s
     ctx = Context(quiet=False, max_time=60.0)

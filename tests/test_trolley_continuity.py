@@ -125,7 +125,7 @@ def test_docs_field_tables_are_generated_from_the_schema():
     from pathlib import Path
 
     from symmech.core.schema import markdown
-    from symmech.trolley.scene import SCHEMA
+    from symmech.trolley.schema import SCHEMA
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "scenes-trolley.md").read_text()
     assert "<!-- schema:begin -->\n" + markdown(SCHEMA) + "\n<!-- schema:end -->" in text

@@ -10,8 +10,8 @@ from scipy.optimize import brentq
 from symmech.core.errata import evaluate
 from symmech.generated import trolley_elastic as gen
 from symmech.generated import trolley_frame as frm
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene, errata_elastic
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene, errata as errata_elastic
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared, setup as scene_dict  # noqa: E402
@@ -40,7 +40,7 @@ def circle(radius, speed):
 
 
 def modes_at(system, drive, q=None):
-    fs = el._state_at(system, drive, 0.0, 0.0)
+    fs = el_sim._state_at(system, drive, 0.0, 0.0)
     return system.linear_modes(fs, np.zeros(system.N) if q is None else q)
 
 
@@ -86,8 +86,8 @@ def test_roller_matrix_maps_coordinates_to_contact_deflections():
 
 def roller_model(g0, k, c=(0.0,) * 5, com=(0.8, 0.5, 0.0), inertia=(20.0, 30.0, 25.0, 0, 0, 0), law="linear",
                  preload=(0.0,) * 5):
-    return el.ElasticModel(100.0, com, inertia, 2.0, 1.0, g0, el.Rollers(k, c, law, preload),
-                           effects=el.Effects(damping=any(c)))
+    return el_body.ElasticModel(100.0, com, inertia, 2.0, 1.0, g0, el_body.Rollers(k, c, law, preload),
+                           effects=el_body.Effects(damping=any(c)))
 
 
 def closed_form_roller_frequencies(m, com, inertia, k, l, a, g0):
@@ -119,7 +119,7 @@ def test_roller_frequencies_on_a_straight_level_track(g0):
 def test_quasi_static_state_carries_the_weight():
     k = (1e10, 1e10, 2e10, 1.5e10, 1e10)  # deflections ~1e-7 m: the load moves by that much
     system = el.System(roller_model(G0, k))
-    fs = el._state_at(system, straight(), 0.0, 0.0)
+    fs = el_sim._state_at(system, straight(), 0.0, 0.0)
     q = system.quasi_static(fs)
     P = system.reactions(fs, q, 0 * q, 0 * q)
     # statics of three supports: B, C share the moment about the front axle
@@ -129,16 +129,16 @@ def test_quasi_static_state_carries_the_weight():
 
 
 def test_clamped_pair_law():
-    rollers = el.Rollers((2e6,) * 5, (0.0,) * 5, "clamped_pair", (1e-4, 1e-4, 1e-4, -1e-4, 1e-4))
+    rollers = el_body.Rollers((2e6,) * 5, (0.0,) * 5, "clamped_pair", (1e-4, 1e-4, 1e-4, -1e-4, 1e-4))
     d = np.array([5e-5, -3e-4, 2e-4, 5e-5, 0.0])
-    force, kt = el.roller_forces(rollers, d, np.zeros(5), False)
+    force, kt = el_body.roller_forces(rollers, d, np.zeros(5), False)
     # inside the preload both rollers push: 2k; beyond it only one: k; inside the gap none
     assert np.allclose(force, [-2e6 * 5e-5 * 2, 2e6 * (4e-4), -2e6 * 3e-4, 0.0, 0.0])
     assert np.allclose(kt, [-4e6, -2e6, -2e6, 0.0, -4e6])
     h = 1e-9
     for i in range(5):
         e = np.eye(5)[i] * h
-        fd = -(el.roller_energy(rollers, d + e) - el.roller_energy(rollers, d - e)) / (2 * h)
+        fd = -(el_body.roller_energy(rollers, d + e) - el_body.roller_energy(rollers, d - e)) / (2 * h)
         assert fd == pytest.approx(force[i], rel=1e-6, abs=1e-6)
 
 
@@ -152,8 +152,8 @@ def test_preloaded_pair_doubles_the_linear_frequencies():
 # ---------------------------------------------------------------- beams
 
 def beam_on_rigid_rollers(beam, g0=0.0, stiffening=True, probes=()):
-    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, g0, None, (beam,),
-                          el.Effects(rollers=False, stiffening=stiffening))
+    mdl = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, g0, None, (beam,),
+                          el_body.Effects(rollers=False, stiffening=stiffening))
     return el.System(mdl, probes)
 
 
@@ -164,7 +164,7 @@ def test_cantilever_frequencies_converge_from_above():
     exact = np.array(CANTILEVER_BETA) ** 2 * unit
     errors = []
     for modes in range(3, 9):
-        beam = el.Beam((0.2, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", modes)
+        beam = el_body.Beam((0.2, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", modes)
         omega = np.sort(modes_at(beam_on_rigid_rollers(beam), straight())[0])
         plane1 = omega[[0, 2, 4]]  # β1², 2β1², β2², 2β2², β3², …
         assert omega[1] == pytest.approx(2 * omega[0], rel=1e-10)
@@ -179,7 +179,7 @@ def test_cantilever_frequencies_converge_from_above():
 
 def test_pinned_beam_frequencies():
     L, rho_a, ei = 2.0, 1.5, (4.0, 4.0)
-    system = beam_on_rigid_rollers(el.Beam((0, 0, 0), (0, 0, 1), (1, 0, 0), L, rho_a, ei, "pinned", 8))
+    system = beam_on_rigid_rollers(el_body.Beam((0, 0, 0), (0, 0, 1), (1, 0, 0), L, rho_a, ei, "pinned", 8))
     omega = np.sort(modes_at(system, straight())[0])
     unit = np.sqrt(ei[0] / (rho_a * L ** 4))
     assert np.allclose(omega[[0, 1]], np.pi ** 2 * unit, rtol=1e-10)
@@ -188,7 +188,7 @@ def test_pinned_beam_frequencies():
 
 def test_cantilever_with_tip_mass():
     L, rho_a, ei, tip = 1.0, 1.0, (1.0, 1.0), 0.7
-    system = beam_on_rigid_rollers(el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", 8, tip))
+    system = beam_on_rigid_rollers(el_body.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", 8, tip))
     omega = np.sort(modes_at(system, straight())[0])[0]
     ratio = tip / (rho_a * L)
     f = lambda b: 1 + np.cos(b) * np.cosh(b) + ratio * b * (np.cos(b) * np.sinh(b) - np.sin(b) * np.cosh(b))  # noqa
@@ -201,9 +201,9 @@ def test_static_sag_under_gravity(modes, err):
     """Horizontal cantilever: tip sag ρAgL⁴/(8EI); Ritz with ξ² alone gives 2/3 of it, the
     quartic deflection is exact from three functions."""
     L, rho_a, ei = 1.5, 3.0, (50.0, 50.0)
-    system = beam_on_rigid_rollers(el.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", modes),
+    system = beam_on_rigid_rollers(el_body.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", modes),
                                    g0=G0, probes=[(0, 1.0)])
-    fs = el._state_at(system, straight(), 0.0, 0.0)
+    fs = el_sim._state_at(system, straight(), 0.0, 0.0)
     q = system.quasi_static(fs)
     rr, _ = system.coefficients(q)
     tip = np.einsum("k,kpi->pi", rr, system.inv.probe_fields)[0] - system.inv.probe_points[0]
@@ -230,7 +230,7 @@ def test_rotating_cantilever_follows_southwell(hub):
     """Beam radial on a horizontal circle, root at distance hub·L from the centre."""
     R, L, rho_a, ei = 10.0, 1.0, 1.0, (1.0, 1.0)
     omega0 = CANTILEVER_BETA[0] ** 2
-    beam = el.Beam((0, R - hub * L, 0), (0, -1, 0), (0, 0, 1), L, rho_a, ei, "cantilever", 8)
+    beam = el_body.Beam((0, R - hub * L, 0), (0, -1, 0), (0, 0, 1), L, rho_a, ei, "cantilever", 8)
     out = {}
     for stiffening in (True, False):
         system = beam_on_rigid_rollers(beam, stiffening=stiffening)
@@ -266,9 +266,9 @@ def test_rigid_limit_on_the_paper_helix():
     late = t >= 5.0  # after the start transient has been damped out
     errors = []
     for k in (1e7, 1e8):
-        mdl = el.ElasticModel(100.0, (1.0, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
-                              el.Rollers((k,) * 5, (2000.0,) * 5))
-        r = el.simulate(el.System(mdl), helix(), t)
+        mdl = el_body.ElasticModel(100.0, (1.0, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                              el_body.Rollers((k,) * 5, (2000.0,) * 5))
+        r = el_sim.simulate(el.System(mdl), helix(), t)
         scale = np.abs(r["P_rigid"][late]).max()
         errors.append(np.abs(r["P"][late] - r["P_rigid"][late]).max() / scale)
     assert errors[1] < 1e-4
@@ -276,10 +276,10 @@ def test_rigid_limit_on_the_paper_helix():
 
 
 def test_reactions_equal_the_resultants_at_every_step():
-    mdl = el.ElasticModel(100.0, (1.0, 0.5, 0.2), (10.0, 20.0, 15.0, 1.0, 0, 0), 2.0, 1.0, G0,
-                          el.Rollers((1e6, 2e6, 1e6, 1e6, 3e6), (500.0,) * 5),
-                          beams=(el.Beam((0.5, 0.3, 0), (0, 1, 0), (1, 0, 0), 1.0, 5.0, (2e3, 4e3), modes=3),))
-    r = el.simulate(el.System(mdl), helix(), np.linspace(0.0, 2.0, 11))
+    mdl = el_body.ElasticModel(100.0, (1.0, 0.5, 0.2), (10.0, 20.0, 15.0, 1.0, 0, 0), 2.0, 1.0, G0,
+                          el_body.Rollers((1e6, 2e6, 1e6, 1e6, 3e6), (500.0,) * 5),
+                          beams=(el_body.Beam((0.5, 0.3, 0), (0, 1, 0), (1, 0, 0), 1.0, 5.0, (2e3, 4e3), modes=3),))
+    r = el_sim.simulate(el.System(mdl), helix(), np.linspace(0.0, 2.0, 11))
     P, F = r["P"], r["F"]
     scale = np.abs(P).max()
     # translations: exact (their fields are constant); x1: P0 is defined by it
@@ -298,17 +298,17 @@ def test_jacobi_energy_on_a_uniform_circle(damped):
     """Steady frame (horizontal circle, constant speed): h = T2 - T0 + Π + V_g is constant
     without damping and falls by exactly the dissipated energy with it."""
     c = (300.0,) * 5 if damped else (0.0,) * 5
-    beam = el.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1,
+    beam = el_body.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1,
                    damping_ratio=0.05 if damped else 0.0)
-    mdl = el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
-                          el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), c), beams=(beam,),
-                          effects=el.Effects(damping=damped))
+    mdl = el_body.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                          el_body.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), c), beams=(beam,),
+                          effects=el_body.Effects(damping=damped))
     system = el.System(mdl)
     drive = circle(15.0, 12.0)
     kick = np.zeros(system.N)
     kick[[0, 2, 4, 5]] = [1e-3, 2e-3, -1e-3, 5e-3]
-    r = el.simulate(system, drive, np.linspace(0.0, 0.2, 21), rtol=1e-9, dq0=kick)
-    fs = el._state_at(system, drive, 0.0, 0.0)
+    r = el_sim.simulate(system, drive, np.linspace(0.0, 0.2, 21), rtol=1e-9, dq0=kick)
+    fs = el_sim._state_at(system, drive, 0.0, 0.0)
     at_rest = system.jacobi_energy(fs, system.quasi_static(fs), np.zeros(system.N))
     excess = r["h"][0] - at_rest  # the energy of the kick
     assert excess > 0.1
@@ -322,10 +322,10 @@ def test_jacobi_energy_on_a_uniform_circle(damped):
 
 def test_stiff_rollers_need_no_tiny_steps():
     """k = 1e8 N/m under a 10 kg body: ω ~ 5000 rad/s, yet the implicit integrator takes few steps."""
-    mdl = el.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, G0,
-                          el.Rollers((1e8,) * 5, (1e3,) * 5))
+    mdl = el_body.ElasticModel(10.0, (1.0, 0.5, 0.0), (1.0, 2.0, 1.5, 0, 0, 0), 2.0, 1.0, G0,
+                          el_body.Rollers((1e8,) * 5, (1e3,) * 5))
     system = el.System(mdl)
-    r = el.simulate(system, helix(), np.linspace(0.0, 5.0, 11))
+    r = el_sim.simulate(system, helix(), np.linspace(0.0, 5.0, 11))
     fastest = modes_at(system, helix())[0].max()
     assert fastest > 4000
     assert r["nfev"] < 2000  # an explicit method would need > fastest * 5 s / 3 ≈ 7000 steps
@@ -339,15 +339,15 @@ def test_fast_assembly_equals_the_symbolic_lagrange_route():
     m0, com, inertia = 90.0, np.array([0.7, 0.4, -0.2]), np.array([12.0, 18.0, 15.0])
     rho_a, L, tip, b1, b3, ei = 3.0, 1.4, 1.5, 0.6, 0.3, (2e3, 5e3)
     k, c, l, ah = np.array([1e5, 2e5, 1.5e5, 3e5, 2.5e5]), np.array([50.0, 80.0, 60.0, 40.0, 70.0]), 2.0, 0.8
-    beam = el.Beam((b1, 0, b3), (0, 1, 0), (1, 0, 0), L, rho_a, ei, "cantilever", 1, tip)
-    system = el.System(el.ElasticModel(m0, tuple(com), (*inertia, 0, 0, 0), l, ah, G0,
-                                       el.Rollers(tuple(k), tuple(c)), (beam,)))
+    beam = el_body.Beam((b1, 0, b3), (0, 1, 0), (1, 0, 0), L, rho_a, ei, "cantilever", 1, tip)
+    system = el.System(el_body.ElasticModel(m0, tuple(com), (*inertia, 0, 0, 0), l, ah, G0,
+                                       el_body.Rollers(tuple(k), tuple(c)), (beam,)))
     flip = np.array([1, 1, 1, 1, 1, 1, -1])  # the runtime's second plane is axis × plane = -x3
     for _ in range(5):
         q = rng.normal(size=7) * np.r_[1e-2, 1e-2, 0.05, 0.05, 0.05, 0.1, 0.1]
         qd, qdd = rng.normal(size=(2, 7))
         nu = rng.normal(size=3)
-        fs = el.FrameState(rng.normal(size=3) * 10, rng.normal(size=3) * 5, rng.normal(size=3), rng.normal(size=3),
+        fs = el_frame.FrameState(rng.normal(size=3) * 10, rng.normal(size=3) * 5, rng.normal(size=3), rng.normal(size=3),
                            nu / np.linalg.norm(nu))
         fast = system.evaluate(fs, flip * q, flip * qd, flip * qdd) * flip
         dv = fs.a0 - np.cross(fs.w, fs.v0)

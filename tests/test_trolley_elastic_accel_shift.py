@@ -14,7 +14,7 @@ section as coordinates (θ = Σ a_k (x/L)^k, exact curvature θ', positions by q
 (cos θ, sin θ)), its static state under the (circulatory) Euler force by Newton and the
 frequencies of its tangent M⁻¹ K_t. It confirms the issue's model shift (-0.22 % for the first
 in-plane mode) and says the consistent one is +0.03 %: the model's shift is beyond its
-consistent order, and the left-out curvature term (:func:`symmech.trolley.modal.curvature_shift`)
+consistent order, and the left-out curvature term (:func:`symmech.trolley.elastic.modal.curvature_shift`)
 accounts for the difference.
 """
 import numpy as np
@@ -23,7 +23,7 @@ import scipy.integrate
 
 from symmech.core import pipeline
 from symmech.core.context import Context
-from symmech.trolley import elastic as el, modal
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, modal
 from test_trolley_elastic_modal import CIRCLE, EI, L, R, RHO_A
 from trolley_util import setup
 
@@ -71,16 +71,16 @@ def elastica(alpha, n=12, gauss=40):
 
 def cantilever(modes=6, length=L, body=True):
     """The system of the radial cantilever of ``length`` [m] (``body``: the beams' effect on)."""
-    beam = el.Beam((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), length, RHO_A, EI, modes=modes)
-    return el.System(el.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
-                                     el.Effects(rollers=False, body=body)))
+    beam = el_body.Beam((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), length, RHO_A, EI, modes=modes)
+    return el.System(el_body.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
+                                          el_body.Effects(rollers=False, body=body)))
 
 
 def model(alpha, modes=6, length=L):
     """The model's first three in-plane frequencies [rad/s], linearised about the quasi-static
     state under α, their left-out curvature shifts, and the system (a beam of ``length`` [m])."""
     system = cantilever(modes, length)
-    fs = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, alpha, 0.0]), np.array([0.0, 1, 0]))
+    fs = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, alpha, 0.0]), np.array([0.0, 1, 0]))
     q = system.quasi_static(fs)
     omega, _, X = system.linear_modes(fs, q, shapes=True)
     comp = modal.components(system)
@@ -130,7 +130,7 @@ def test_curvature_hessian_is_that_of_its_energy(length):
     system = cantilever(length=length)
     beam = system.mdl.beams[0]
     xi = np.linspace(0.0, 1.0, 4001)
-    basis = el.beam_basis(beam.support, xi)[0][:, :, :beam.modes]
+    basis = el_body.beam_basis(beam.support, xi)[0][:, :, :beam.modes]
     d1, d2 = basis[:, 1] / length, basis[:, 2] / length**2
 
     def energy(q):
@@ -152,7 +152,7 @@ def test_beam_slope_is_the_largest_slope_of_both_planes_and_zero_without_beams()
     system = cantilever(length=1.7)
     beam = system.mdl.beams[0]
     q = np.random.default_rng(7).normal(scale=0.05, size=system.N)
-    d1 = el.beam_basis(beam.support, np.linspace(0.0, 1.0, 4001))[0][:, 1, :beam.modes] / 1.7
+    d1 = el_body.beam_basis(beam.support, np.linspace(0.0, 1.0, 4001))[0][:, 1, :beam.modes] / 1.7
     w = q.reshape(2, -1)
     assert modal.beam_slope(system, q) == pytest.approx(np.hypot(d1 @ w[0], d1 @ w[1]).max(), rel=1e-6)
     assert modal.beam_slope(cantilever(length=1.7, body=False), q) == 0.0

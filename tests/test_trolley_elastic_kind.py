@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from symmech.core.schema import validate
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import closed_form_roller_frequencies  # noqa: E402
@@ -49,16 +49,16 @@ def test_energy_changes_by_the_work_of_the_track_forces(damped):
     The work and the dissipation are integrated as states beside the motion; E is evaluated
     from the state alone, so the balance fails for any missing term (e.g. M_O·ω: O(10²) J here)."""
     c = (300.0,) * 5 if damped else (0.0,) * 5
-    beam = el.Beam((0.5, 0.3, 0), (0, 1, 0), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1, tip_mass=1.0,
+    beam = el_body.Beam((0.5, 0.3, 0), (0, 1, 0), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), modes=1, tip_mass=1.0,
                    damping_ratio=0.05 if damped else 0.0)
-    mdl = el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
-                          el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), c), beams=(beam,), effects=el.Effects(damping=damped))
+    mdl = el_body.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                          el_body.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), c), beams=(beam,), effects=el_body.Effects(damping=damped))
     system = el.System(mdl)
     kick = np.zeros(system.N)
     kick[[0, 2, 4, 5]] = [1e-3, 2e-3, -1e-3, 5e-3]
     drive = elastic_scene.drive_of(prepared(CATENARY), 1)
     # explicit: modes of 9-35 Hz, no stiffness to speak of (Radau needs ~10x the evaluations here)
-    r = el.simulate(system, drive, np.linspace(0.0, 0.5, 6), "DOP853", rtol=1e-9, dq0=kick)
+    r = el_sim.simulate(system, drive, np.linspace(0.0, 0.5, 6), "DOP853", rtol=1e-9, dq0=kick)
     residual = np.abs(elastic_scene.energy_residual(r)).max()
     work = np.abs(r["work"]).max()
     assert work > 1e3  # the track does work: the energy is not conserved by itself
@@ -75,17 +75,17 @@ def test_energy_changes_by_the_work_of_the_track_forces(damped):
 def test_energy_balance_includes_the_membrane_energy_of_a_held_beam():
     """A pinned beam with held ends (quartic membrane energy) across the trolley, kicked in its
     first mode: the membrane energy swings by ~1 J, the balance still closes to 1e-10 of the work."""
-    from symmech.trolley import membrane
+    from symmech.trolley.elastic import membrane
 
-    beam = el.Beam((0.2, 0.3, -0.5), (0, 0, 1), (0, 1, 0), 1.0, 4.0, (3e3, 5e3), "pinned", 2, 0.0, 0.0, "held", 1e7)
-    mdl = el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
-                          el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (0.0,) * 5), beams=(beam,),
-                          effects=el.Effects(damping=False))
+    beam = el_body.Beam((0.2, 0.3, -0.5), (0, 0, 1), (0, 1, 0), 1.0, 4.0, (3e3, 5e3), "pinned", 2, 0.0, 0.0, "held", 1e7)
+    mdl = el_body.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                          el_body.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (0.0,) * 5), beams=(beam,),
+                          effects=el_body.Effects(damping=False))
     system = el.System(mdl)
     kick = np.zeros(system.N)
     kick[[0, 2, 5]] = [1e-3, 2e-3, 5e-2]
     drive = elastic_scene.drive_of(prepared(CATENARY), 1)
-    r = el.simulate(system, drive, np.linspace(0.0, 0.5, 6), "DOP853", rtol=1e-9, dq0=kick)
+    r = el_sim.simulate(system, drive, np.linspace(0.0, 0.5, 6), "DOP853", rtol=1e-9, dq0=kick)
     swing = np.ptp([membrane.energy(system.inv.membrane, q) for q in r["q"]])
     assert swing > 0.1
     assert np.abs(elastic_scene.energy_residual(r)).max() < 1e-10 * np.abs(r["work"]).max()
@@ -106,9 +106,9 @@ def test_traction_on_a_straight_level_track_follows_newton():
     s = 5.0 * t + (100 * t ** 2 + 50 * t ** 3 / 3) / 100.0
     errors = []
     for k in (1e7, 1e8):
-        mdl = el.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
-                              el.Rollers((k,) * 5, (2e3,) * 5))
-        r = el.simulate(el.System(mdl), drive, t, rtol=1e-10)
+        mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, G0,
+                              el_body.Rollers((k,) * 5, (2e3,) * 5))
+        r = el_sim.simulate(el.System(mdl), drive, t, rtol=1e-10)
         errors.append(np.abs(r["V0"] - V).max())
         assert np.abs(r["s"] - s).max() < 3 * errors[-1]
         assert np.abs(r["P"][:, 0] - (200 + 100 * t)).max() < 1e-9 * 400  # P0 is the prescribed traction
@@ -177,8 +177,8 @@ def test_comfort_warning_at_a_report_point(x2, warned):
 def test_opposite_sign_warning_logic():
     """The rule itself on made-up histories: a sign differing from the rigid one counts only
     beyond 1e-3 of the largest rigid reaction."""
-    setup = elastic_scene.Setup(el.System(el.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None,
-                                                          effects=el.Effects(rollers=False))),
+    setup = elastic_scene.Setup(el.System(el_body.ElasticModel(1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None,
+                                                          effects=el_body.Effects(rollers=False))),
                                 None, None, None, [], "Radau", 1e-7, 0, 0.05, 0.1)
     t = np.linspace(0.0, 1.0, 5)
     rigid = np.tile([0.0, 100.0, 100.0, 50.0, 10.0, 10.0], (5, 1))
@@ -244,14 +244,14 @@ def test_rigid_limit_with_the_papers_point_mass():
     paper = None
     errors = []
     for k in (1e8, 1e9):
-        mast = el.Beam((1.0, 0.0, 0.0), (0, 1, 0), (1, 0, 0), L, 1e-4, (k * L ** 3 / 3,) * 2, "cantilever", 2, 100.0,
+        mast = el_body.Beam((1.0, 0.0, 0.0), (0, 1, 0), (1, 0, 0), L, 1e-4, (k * L ** 3 / 3,) * 2, "cantilever", 2, 100.0,
                        0.05)
-        mdl = el.ElasticModel(1e-9, (0.0, 0.0, 0.0), (0.0,) * 6, 2.0, 1.0, G0, el.Rollers((k,) * 5, (2000.0,) * 5),
+        mdl = el_body.ElasticModel(1e-9, (0.0, 0.0, 0.0), (0.0,) * 6, 2.0, 1.0, G0, el_body.Rollers((k,) * 5, (2000.0,) * 5),
                               (mast,))
-        r = el.simulate(el.System(mdl), drive, t)
+        r = el_sim.simulate(el.System(mdl), drive, t)
         if paper is None:
             body = model.Body(100.0, (1.0, 0.5, 0.0), (0.0,) * 6, 2.0, 1.0, G0)
-            paper = model.body_motion(el.frames(drive, r["s"], 2.0), r["V0"], r["dV0"], body)["P"]
+            paper = model.body_motion(el_frame.frames(drive, r["s"], 2.0), r["V0"], r["dV0"], body)["P"]
             scale = np.abs(paper[late]).max()
             assert np.abs(r["P_rigid"] - paper).max() < 1e-6 * scale
         errors.append(np.abs(r["P"][late] - r["P_rigid"][late]).max() / scale)

@@ -12,7 +12,8 @@ independent Ritz solution of tests/test_trolley_elastic_modal.py).
 import numpy as np
 import pytest
 
-from symmech.trolley import elastic as el, elastic_scene, modal, plots
+from symmech.trolley import plots
+from symmech.trolley.elastic import system as el, frame as el_frame, simulate as el_sim, scene as elastic_scene, modal
 from test_trolley_elastic_modal import CIRCLE, EI, L, R, RHO_A, rotating_cantilever
 from trolley_util import prepared, setup
 
@@ -34,7 +35,7 @@ def _scene():
 @pytest.fixture(scope="module")
 def tracked():
     st = prepared(_scene()).elastic
-    r = el.simulate(st.system, st.drive, st.t, st.method, 1e-4)  # the modes start Newton from r['q']
+    r = el_sim.simulate(st.system, st.drive, st.t, st.method, 1e-4)  # the modes start Newton from r['q']
     modes = elastic_scene._modes(st, r)
     return st, r, modes, elastic_scene._modes_table(modes, st.names)
 
@@ -99,7 +100,7 @@ def test_rms_shape_of_a_lone_cantilever_mode():
     φ = cosh βx − cos βx − σ (sinh βx − sin βx), βL = 1.8751, has ∫0^L φ² dx = L φ(L)² / 4."""
     st = prepared(_scene()).elastic
     system = st.system
-    fs = el.frame_state(el.frames(st.drive, np.array([0.0]), system.mdl.l), 0, 0.0, 0.0)
+    fs = el_frame.frame_state(el_frame.frames(st.drive, np.array([0.0]), system.mdl.l), 0, 0.0, 0.0)
     q = np.zeros(system.N)
     _, _, X = system.linear_modes(fs, q, shapes=True)
     X = modal.start_phase(system.mass(q), X)  # real shapes: the largest component real
@@ -122,7 +123,7 @@ def test_roller_modes_name_their_dofs_and_shares_of_the_closed_form():
 
     k, com, inertia = (1e6, 1e6, 2e6, 1.5e6, 1e6), (0.8, 0.5, 0.0), (20.0, 30.0, 25.0)
     system = el.System(roller_model(0.0, k, com=com, inertia=inertia + (0, 0, 0)))
-    fs = el._state_at(system, straight(10.0), 0.0, 0.0)
+    fs = el_sim._state_at(system, straight(10.0), 0.0, 0.0)
     q = np.zeros(system.N)
     omega, _, X = system.linear_modes(fs, q, shapes=True)
     comp = modal.components(system)

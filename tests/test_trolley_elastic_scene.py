@@ -8,7 +8,8 @@ import pytest
 
 from symmech.core.scene import SceneError
 from symmech.core.schema import validate
-from symmech.trolley import elastic_scene, scene
+from symmech.trolley import scene
+from symmech.trolley.elastic import scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared as trolley_setup, setup as scene_dict  # noqa: E402

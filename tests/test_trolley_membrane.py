@@ -12,14 +12,14 @@ from scipy.special import ellipk
 
 from symmech.core.scene import SceneError
 from symmech.generated import trolley_elastic as gen
-from symmech.trolley import elastic as el
-from symmech.trolley import elastic_scene, membrane
+from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import scene as elastic_scene, membrane
 
 sys.path.insert(0, str(Path(__file__).parent))
 from trolley_util import prepared, setup as scene_dict  # noqa: E402
 
 RNG = np.random.default_rng(23)
-AT_REST = el.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
+AT_REST = el_frame.FrameState(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.array([0.0, 1.0, 0.0]))
 # steel strip 20 mm x 10 mm, 2 m between immovable pins: r = sqrt(I/A) = h/sqrt(12)
 L, RHO, E, WIDTH, HEIGHT = 2.0, 7800.0, 2.1e11, 0.02, 0.01
 AREA, INERTIA = WIDTH * HEIGHT, WIDTH * HEIGHT ** 3 / 12
@@ -39,9 +39,9 @@ def gauss(a, b, n=24):
 
 
 def held_beam(modes=5, axial="held", stiffening=True, mem=True, ei=(E * INERTIA, E * INERTIA)):
-    beam = el.Beam((0, 0, 0), (0, 0, 1), (1, 0, 0), L, RHO * AREA, ei, "pinned", modes, axial=axial, ea=E * AREA)
-    mdl = el.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
-                          el.Effects(rollers=False, stiffening=stiffening, membrane=mem))
+    beam = el_body.Beam((0, 0, 0), (0, 0, 1), (1, 0, 0), L, RHO * AREA, ei, "pinned", modes, axial=axial, ea=E * AREA)
+    mdl = el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 0.0, None, (beam,),
+                          el_body.Effects(rollers=False, stiffening=stiffening, membrane=mem))
     return el.System(mdl, [(0, 0.5)])
 
 
@@ -165,14 +165,14 @@ def test_membrane_energy_is_conserved_along_the_track():
     data = scene_dict(frame="frenet", track={"type": "expression", "x": "15*sin(s/15)", "y": "0", "z": "15*cos(s/15)"},
                       motion={"speed": "12.0"}, time={"t_end": 1.0, "steps": 10})
     drive = elastic_scene.drive_of(prepared(data), 1)
-    beam = el.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), "pinned", 3, axial="held", ea=2e7)
-    mdl = el.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
-                          el.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (0.0,) * 5), beams=(beam,))
+    beam = el_body.Beam((0.5, 0.3, 0), (0, 0, 1), (1, 0, 0), 1.2, 4.0, (3e3, 5e3), "pinned", 3, axial="held", ea=2e7)
+    mdl = el_body.ElasticModel(80.0, (0.8, 0.4, 0.1), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
+                          el_body.Rollers((2e5, 2e5, 3e5, 2e5, 2e5), (0.0,) * 5), beams=(beam,))
     system = el.System(mdl)
     kick = np.zeros(system.N)
     kick[[0, 2, 5, 8]] = [1e-3, 2e-3, 0.2, -0.1]  # 5 cm at mid-span: Π_m > Π_bending
     # explicit: Radau's Newton iterations cost ~15x more on this strongly nonlinear, non-stiff case
-    r = el.simulate(system, drive, np.linspace(0.0, 0.05, 6), method="DOP853", rtol=1e-10, dq0=kick)
+    r = el_sim.simulate(system, drive, np.linspace(0.0, 0.05, 6), method="DOP853", rtol=1e-10, dq0=kick)
     q = r["q"][0]
     Pi_m = membrane.energy(system.inv.membrane, q)
     assert Pi_m > 2 * 0.5 * q @ system.inv.K @ q
@@ -216,11 +216,11 @@ def test_clamped_pairs_carry_the_weight_and_open_a_gap(mass):
     Pair law: P = -2k d inside the preload δ, P = k (δ - d) once the upper roller lifts off
     (W > 2kδ), leaving a gap -d - δ = W/k - 2δ between it and the rail."""
     k, delta, g0 = 1e6, 1e-3, 9.81
-    mdl = el.ElasticModel(mass, (0.8, 0.0, 0.0), (20.0, 30.0, 25.0, 0, 0, 0), 2.0, 1.0, g0,
-                          el.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (delta,) * 5),
-                          effects=el.Effects(damping=False))
+    mdl = el_body.ElasticModel(mass, (0.8, 0.0, 0.0), (20.0, 30.0, 25.0, 0, 0, 0), 2.0, 1.0, g0,
+                          el_body.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (delta,) * 5),
+                          effects=el_body.Effects(damping=False))
     system = el.System(mdl)
-    fs = el._state_at(system, elastic_scene.drive_of(prepared(scene_dict(motion={"speed": "0.0"})), 1), 0.0, 0.0)
+    fs = el_sim._state_at(system, elastic_scene.drive_of(prepared(scene_dict(motion={"speed": "0.0"})), 1), 0.0, 0.0)
     q = system.quasi_static(fs)
     d = system.roller_state(q, 0 * q)[0]
     loads = mass * g0 * np.array([0.3, 0.3, 0.4])

@@ -208,7 +208,7 @@ def test_chart_cells_sit_midway_between_the_swept_values_and_stay_within_the_ran
 def test_the_compiled_engine_is_built_before_the_first_point_is_timed(monkeypatch):
     """A sweep on the compiled elastic engine builds it (or loads it) first, so its one-off compile is
     neither in the first point's time, which the estimate scales to the whole plane, nor paid per worker."""
-    from symmech.trolley import elastic_compiled, elastic_scene
+    from symmech.trolley.elastic import compiled as elastic_compiled, scene as elastic_scene
 
     calls = []
     monkeypatch.setattr(elastic_scene, "engine", lambda setup, runs=1: ("compiled", "test"))

@@ -76,6 +76,7 @@ ELASTIC_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py
                  "and not free_decay"]
 
 # the elastic trolley's outputs and timeline: the cheapest tests that integrate (5 s, 4 s and 5 s at load 5)
+DAMPING_TESTS = ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py", "tests/test_roller_clamped_pair.py"]
 ELASTIC_OUTPUT_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_the_resultants_at_every_step",
                         "tests/test_trolley_elastic_kind.py::test_energy_changes_by_the_work_of_the_track_forces[True]"]
 ELASTIC_TIMELINE_TESTS = ["tests/test_trolley_elastic.py::test_reactions_equal_the_resultants_at_every_step",
@@ -106,54 +107,55 @@ ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_py
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
-    "membrane": ("symmech/trolley/membrane.py",
+    "membrane": ("symmech/trolley/elastic/membrane.py",
                  ["tests/test_trolley_membrane.py", "tests/test_membrane_two_beams.py",
                   "tests/test_membrane_shared_coordinates.py"], ["*"]),
-    # elastic.py is split by function: its tests take 45 s, a whole-module shard would take hours
-    "elastic_damping": ("symmech/trolley/elastic.py",
-                        ["tests/test_trolley_elastic.py", "tests/test_elastic_damping.py",
-                         "tests/test_roller_clamped_pair.py"],
-                        ["*.x__beam_damping__*", "*.x_roller_forces__*", "*.x__dissipation__*",
-                         "*ǁSystemǁlinear_modes__*"]),
+    # the elastic model is split by function: its tests take 45 s, a whole-module shard would take hours
+    "elastic_damping": ("symmech/trolley/elastic/body.py", DAMPING_TESTS,
+                        ["*.x__beam_damping__*", "*.x_roller_forces__*"]),
+    "elastic_damping_modes": ("symmech/trolley/elastic/system.py", DAMPING_TESTS, ["*ǁSystemǁlinear_modes__*"]),
+    "elastic_dissipation": ("symmech/trolley/elastic/simulate.py", DAMPING_TESTS, ["*.x__dissipation__*"]),
     # the rest of elastic.py by function, physics first; the fast elastic tests (test_trolley_elastic.py ~11 s)
-    "elastic_invariants": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_invariants": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS,
                            ["*.x_invariants__*", "*.x__beam_samples__*", "*.x__beam_stiffness__*",
                             "*.x_beam_basis__*", "*.x_rigid_cloud__*", "*.x__frame_of__*"]),
-    "elastic_system": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_system": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                        ["*ǁSystemǁ__init__*", "*ǁSystemǁevaluate__*", "*ǁSystemǁcoefficients__*", "*ǁSystemǁ_dv__*",
                         "*ǁSystemǁ_p2__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
                         "*ǁSystemǁroller_state__*", "*ǁSystemǁ_frame_mats__*"]),
-    "elastic_balances": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
+    "elastic_balances": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
-                          "*.x_roller_energy__*", "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
+                          "*ǁSystemǁpotential__*", "*ǁSystemǁjacobi_energy__*",
                           "*ǁSystemǁtotal_energy__*", "*ǁSystemǁtrack_power__*"]),
+    "elastic_roller_energy": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*.x_roller_energy__*"]),
     # the quasi-static tests first (ELASTIC_TESTS' -k, global, leaves them in)
-    "elastic_quasi_static": ("symmech/trolley/elastic.py",
+    "elastic_quasi_static": ("symmech/trolley/elastic/system.py",
                              ["tests/test_elastic_quasi_static.py", "tests/test_texts_warnings_and_sparse_rows.py",
                               *ELASTIC_TESTS], ["*ǁSystemǁquasi_static__*"]),
-    "elastic_frame": ("symmech/trolley/elastic.py", ELASTIC_TESTS,
-                      ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*", "*.x__state_at__*"]),
+    "elastic_frame": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS,
+                      ["*.x_frame_state__*", "*.x_frame_motion__*", "*.x_frames__*"]),
+    "elastic_state_at": ("symmech/trolley/elastic/simulate.py", ELASTIC_TESTS, ["*.x__state_at__*"]),
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
     # integrating tests, a short run on the helix (prescribed speed) and, for the timeline, one with traction
-    "elastic_timeline": ("symmech/trolley/elastic.py", ELASTIC_TIMELINE_TESTS,
+    "elastic_timeline": ("symmech/trolley/elastic/simulate.py", ELASTIC_TIMELINE_TESTS,
                          ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
-    "elastic_rigid_body": ("symmech/trolley/elastic.py",
+    "elastic_rigid_body": ("symmech/trolley/elastic/simulate.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
                             "reactions_equal or rigid_body"], ["*.x_rigid_body__*"]),
-    "elastic_beam_mode": ("symmech/trolley/elastic.py",
+    "elastic_beam_mode": ("symmech/trolley/elastic/system.py",
                           ["tests/test_trolley_elastic_initial.py", "tests/test_elastic_bodies.py", "-k",
                            "vibrates_at or beam_mode"], ["*.x_beam_mode__*"]),
-    "elastic_simulate": ("symmech/trolley/elastic.py",
+    "elastic_simulate": ("symmech/trolley/elastic/simulate.py",
                          ["tests/test_trolley_elastic.py", "tests/test_trolley_elastic_kind.py",
                           "tests/test_elastic_simulate.py", "-k",
                           "reactions_equal or energy_changes and True or traction_on or test_elastic_simulate"],
                          ["*.x_simulate__*"]),
-    "elastic_outputs": ("symmech/trolley/elastic.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
+    "elastic_outputs": ("symmech/trolley/elastic/simulate.py", ELASTIC_OUTPUT_TESTS, ["*.x_row_terms__*", "*.x_outputs__*"]),
     # what the two shards above left without a result (mutation/history.md), for a screen with their new test files
-    "elastic_outputs_rest": ("symmech/trolley/elastic.py",
+    "elastic_outputs_rest": ("symmech/trolley/elastic/simulate.py",
                              ["tests/test_elastic_outputs.py", "tests/test_elastic_timeline.py",
                               *ELASTIC_OUTPUT_TESTS, ELASTIC_TIMELINE_TESTS[1]],
                              ["*.x_outputs__mutmut_119", "*.x_outputs__mutmut_1[2-3][0-9]", "*.x_outputs__mutmut_14[0-4]",
@@ -314,7 +316,7 @@ SHARDS = {
               ["tests/test_trolley_physics.py", "tests/test_trolley_frames_units.py",
                "tests/test_trolley_continuity.py"], ["*"]),
     "trolley_model": ("symmech/trolley/model.py", REACTION_TESTS + ["tests/test_trolley_frames_units.py"], ["*"]),
-    "modal": ("symmech/trolley/modal.py",
+    "modal": ("symmech/trolley/elastic/modal.py",
               ["tests/test_trolley_elastic_modes_tracking.py", "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
     "smm_structural": ("symmech/smm/structural.py",
                        ["tests/test_smm_expression_messages.py", "tests/test_smm_structural.py"], ["*"]),
@@ -331,7 +333,7 @@ SHARDS = {
                             "tests/test_smm_pivot.py", "-k", "not numerically_many"], ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
-    "ode": ("symmech/core/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
+    "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
             ["*"]),
 }
 
@@ -351,26 +353,31 @@ COVERAGE = {
                                "survivor",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
-    "symmech/grain/compiled.py": "moves to grain/engine/; shards engine_py made, not screened yet (its tests build "
-                                 "the engine, ~80 s)",
-    "symmech/grain/compiled_loop.py": "numba kernels (mutmut does not mutate decorated functions); the engine is "
-                                      "held to the Python reference by the compiled-engine tests",
+    "symmech/grain/motion_engine/driver.py": "shards engine_py made, not screened yet (its tests build the "
+                                             "engine, ~80 s)",
+    "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
+                                                   "the engine is held to the Python reference by the "
+                                                   "compiled-engine tests",
+    "symmech/grain/free_flight.py": "new this session, not screened yet; held to DOP853 and closed forms by "
+                                    "tests/test_grain_free_flight.py",
     "symmech/trolley/track.py": "",
     "symmech/trolley/model.py": "10 of the 30 drawn: the sample stopped at the session's end (survivors ~45 s each)",
-    "symmech/trolley/modal.py": "moves to trolley/elastic/: keyed by its current path (--rename)",
-    "symmech/trolley/membrane.py": "moves to trolley/elastic/: keyed by its current path (--rename)",
-    "symmech/trolley/elastic.py": "one function only (quasi_static); moves to trolley/elastic/; a sample needs its "
-                                  "integrating tests, 10-15 s a survivor",
-    "symmech/trolley/elastic_kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
-                                          "elastic.py by tests/test_elastic_compiled.py",
+    "symmech/trolley/elastic/modal.py": "",
+    "symmech/trolley/elastic/membrane.py": "",
+    "symmech/trolley/elastic/system.py": "one function only (quasi_static); a sample needs its integrating tests, "
+                                         "10-15 s a survivor",
+    "symmech/trolley/elastic/body.py": "not screened yet (split from the old elastic.py this session)",
+    "symmech/trolley/elastic/simulate.py": "not screened yet (split from the old elastic.py this session)",
+    "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
+                                          "the Python engine by tests/test_elastic_compiled.py",
     "symmech/smm/forms.py": "shard smm_forms_sample made, not screened yet: the session's shared cores ran out",
     "symmech/smm/numeric.py": "shard smm_numeric_sample made, not screened yet: the session's shared cores ran out",
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
-    "symmech/core/ode.py": "moves to a numerics package; shard ode made (the toolkit's Python side: its numba "
-                           "kernels are decorated), not screened yet",
-    "symmech/core/dop853.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
+    "symmech/numerics/ode.py": "shard ode made (the toolkit's Python side: its numba kernels are decorated), "
+                               "not screened yet",
+    "symmech/numerics/dop853_tableau.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
                               "holds it bit-equal to scipy's",
     "symmech/core/precision.py": "no physics or numerics of its own: wall-clock timing (its numbers are times, which "
                                  "no test can assert) and the study's rows laid out as a table and a plot",

@@ -1,7 +1,7 @@
 """``symmech codegen``: regenerate ``generated/`` only where its inputs changed.
 
-A *producer* is a module ``symmech.<paper>.derive*`` / ``.printed*`` with
-``module_specs()``; every spec becomes three files, ``<name>.py`` (numpy, the
+A *producer* is a paper module declaring ``ROLE = "derivation"`` or ``"printed"``
+(:mod:`symmech.core.discovery`) with ``module_specs()``; every spec becomes three files, ``<name>.py`` (numpy, the
 reference), ``<name>_nb.py`` (numba) and ``<name>.c`` (C99), see :mod:`symmech.core.emit`.
 
 Cache: each module's header records the *source key* of its producer, a
@@ -24,7 +24,6 @@ import hashlib
 import importlib
 import importlib.metadata
 import importlib.util
-import pkgutil
 import sys
 import time
 from dataclasses import dataclass, field
@@ -32,7 +31,7 @@ from pathlib import Path
 
 import symmech
 from symmech import __version__
-from symmech.core import integrity
+from symmech.core import discovery, integrity
 from symmech.core.scene import scenes_folder
 
 INDEX = "__init__.py"
@@ -45,7 +44,7 @@ _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by h
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
-``symmech.core.kernels``), ``<name>.c`` its C99 twin (``symmech export``
+``symmech.numerics.kernels``), ``<name>.c`` its C99 twin (``symmech export``
 reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.
@@ -56,25 +55,9 @@ _integrity.guard(__file__)
 '''
 
 
-def paper_module_names(prefixes: tuple[str, ...]) -> list[str]:
-    """Names ``symmech.<paper>.<prefix>*`` of every paper package, in name order; nothing imported."""
-    found = []
-    for pkg in sorted(m.name for m in pkgutil.iter_modules([str(_PACKAGE_DIR)]) if m.ispkg):
-        if pkg in ("core", "generated", "templates"):
-            continue
-        for m in sorted(pkgutil.iter_modules([str(_PACKAGE_DIR / pkg)]), key=lambda m: m.name):
-            if m.name.startswith(prefixes):
-                found.append(f"symmech.{pkg}.{m.name}")
-    return found
-
-
-def paper_modules(prefixes: tuple[str, ...]) -> list:
-    """Modules ``symmech.<paper>.<prefix>*`` of every paper package, imported, in name order."""
-    return [importlib.import_module(name) for name in paper_module_names(prefixes)]
-
-
 def producers() -> list[str]:
-    return paper_module_names(("derive", "printed"))
+    """Names of the producer modules (``ROLE = "derivation"`` or ``"printed"``), in name order; nothing imported."""
+    return discovery.modules("derivation", "printed")
 
 
 # -- source key ---------------------------------------------------------------

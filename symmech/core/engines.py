@@ -1,6 +1,6 @@
 """Compiled engines register themselves here, as scene kinds do in :mod:`symmech.core.registry`.
 
-An engine is declared by a light module whose name ends in ``engine`` (``symmech/<paper>/*engine.py``; no
+An engine is declared by a light module marked ``ROLE = "engine"`` (:mod:`symmech.core.discovery`; no
 numba, no physics) that calls :func:`register` at import with an :class:`Engine`: its name, one line for
 ``--help``, and the module that implements it. ``symmech warm``, its ``--engine`` choices and the run
 estimates read this registry, so adding an engine touches no central list (docs/ARCHITECTURE.md, "Adding
@@ -10,7 +10,7 @@ The protocol, every engine alike (the implementation module provides ``ENGINE``,
 ``LAYOUTS``)::
 
     engine = engines.get("grain")
-    engine.builder()      # ENGINE, a symmech.core.build.Engine: numba's cache and the ahead-of-time build
+    engine.builder()      # ENGINE, a symmech.numerics.build.Engine: numba's cache and the ahead-of-time build
     engine.warm(...)      # build it now, once per machine (symmech warm)
     engine.load()         # what a run calls: the ahead-of-time build when current, else numba's entries
     engine.run(...)       # simulate(...): the engine's contract, results as the reference engine's
@@ -29,9 +29,9 @@ _ALL = False  # every engine module imported
 class Engine:
     """One compiled engine.
 
-    name            ``symmech warm --engine NAME``; the name of its :class:`symmech.core.build.Engine`
+    name            ``symmech warm --engine NAME``; the name of its :class:`symmech.numerics.build.Engine`
     summary         one line for ``symmech warm --help``
-    implementation  dotted name of the module that provides ``ENGINE`` (a :class:`symmech.core.build.Engine`),
+    implementation  dotted name of the module that provides ``ENGINE`` (a :class:`symmech.numerics.build.Engine`),
                     ``simulate(...)`` and ``LAYOUTS`` (its declared layouts, :mod:`symmech.core.layout`)
     """
 
@@ -44,11 +44,11 @@ class Engine:
         return importlib.import_module(self.implementation)
 
     def builder(self):
-        """The engine's :class:`symmech.core.build.Engine`: numba's cache, the build lock, the ahead-of-time build."""
+        """The engine's :class:`symmech.numerics.build.Engine`: numba's cache, the build lock, the ahead-of-time build."""
         return self.module().ENGINE
 
     def warm(self, wait: bool = True, say=None, ahead: bool = False) -> bool:
-        """:meth:`symmech.core.build.Engine.warm`: build the engine now unless it is built."""
+        """:meth:`symmech.numerics.build.Engine.warm`: build the engine now unless it is built."""
         return self.builder().warm(wait=wait, say=say, ahead=ahead)
 
     def load(self):
@@ -92,16 +92,16 @@ def register(engine: Engine) -> Engine:
 def _discover(until: str | None = None) -> None:
     """Import engine modules until engine ``until`` is registered (all of them when None), those whose name
     contains it first: a grain run imports no other paper's package."""
-    from symmech.core import registry  # the discovery scene kinds use; not at import (the CLI's start)
+    from symmech.core import discovery  # not at import (the CLI's start)
 
-    for name in sorted(registry.paper_modules("engine"), key=lambda module: until is None or until not in module):
+    for name in sorted(discovery.modules("engine"), key=lambda module: until is None or until not in module):
         if until in _ENGINES:
             return
         importlib.import_module(name)
 
 
 def engines() -> dict[str, Engine]:
-    """Every registered engine by name (every ``symmech.<paper>.*engine`` module imported once)."""
+    """Every registered engine by name (every module declaring ``ROLE = "engine"`` imported once)."""
     global _ALL
     if not _ALL:
         _discover()

@@ -8,6 +8,7 @@ is typed in, every difference is computed.
 """
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from collections.abc import Callable
 
@@ -73,18 +74,21 @@ class NotCompared:
     reason: str
 
 
-def all_checks() -> list[Check]:
-    """Checks from every paper package's ``errata*`` modules."""
-    from symmech.core.codegen import paper_modules
+def modules() -> list:
+    """The errata modules of every paper package (``ROLE = "errata"``), imported, in name order."""
+    from symmech.core import discovery
 
-    return [c for module in paper_modules(("errata",)) for c in module.checks()]
+    return [importlib.import_module(name) for name in discovery.modules("errata")]
+
+
+def all_checks() -> list[Check]:
+    """Checks from every paper package's errata modules (``ROLE = "errata"``)."""
+    return [c for module in modules() for c in module.checks()]
 
 
 def all_not_compared() -> list[NotCompared]:
-    """The printed items each paper's ``errata*`` modules list as not compared (``not_compared()``)."""
-    from symmech.core.codegen import paper_modules
-
-    return [n for module in paper_modules(("errata",)) if hasattr(module, "not_compared")
+    """The printed items each paper's errata modules list as not compared (``not_compared()``)."""
+    return [n for module in modules() if hasattr(module, "not_compared")
             for n in module.not_compared()]
 
 

@@ -15,7 +15,7 @@ through :func:`write_atomic`, so a reader never sees a partial module.
 
 Every import of a generated module is checked, by any path (``import
 symmech.generated.X``, ``from symmech.generated import X``,
-``importlib.import_module``, :func:`symmech.core.kernels.load`): the package's
+``importlib.import_module``, :func:`symmech.numerics.kernels.load`): the package's
 ``__init__.py`` (written by codegen) calls :func:`guard`, which checks the index
 itself and puts a finder first on ``sys.meta_path`` whose loader hashes each
 ``symmech.generated.*`` module before executing it. A damaged module raises
@@ -157,7 +157,7 @@ _built_from: dict[str, str] = {}  # name -> body sha256 of the generated modules
 
 def verify_built_from(files) -> None:
     """Verify the generated modules among ``files`` (those an ahead-of-time build about to run was compiled
-    from, :mod:`symmech.core.aot`) as importing them would, and count them as used (:func:`used_modules`)."""
+    from, :mod:`symmech.numerics.aot`) as importing them would, and count them as used (:func:`used_modules`)."""
     import symmech.generated as package
 
     folder = Path(package.__file__).parent

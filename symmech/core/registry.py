@@ -1,7 +1,7 @@
 """Scene kinds register themselves here; nothing else lists them.
 
-A paper package declares a kind in a module whose name ends in ``scene``
-(``symmech/<paper>/*scene.py``) by calling :func:`register` at import time. The
+A paper package declares a kind in a module marked ``ROLE = "kind"``
+(:mod:`symmech.core.discovery`) that calls :func:`register` at import time. The
 CLI, the Python API, the docs and the fuzzer find every kind through
 :func:`kinds`, which imports those modules on first use, or :func:`get`, which
 imports them only until the kind asked for is found (a grain run never loads the
@@ -18,9 +18,7 @@ The life of a run (see ``symmech.core.pipeline``)::
 from __future__ import annotations
 
 import importlib
-import pkgutil
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 from collections.abc import Callable
 
@@ -75,30 +73,18 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
-def paper_modules(suffix: str):
-    """Names of every ``symmech.<paper>.*<suffix>`` module, in package order, without importing them (scene
-    kinds: ``scene``; compiled engines, :mod:`symmech.core.engines`: ``engine``)."""
-    import symmech
-
-    for pkg in pkgutil.iter_modules(symmech.__path__):
-        if not pkg.ispkg or pkg.name in ("core", "generated", "templates", "scenes"):
-            continue
-        path = [str(Path(symmech.__path__[0]) / pkg.name)]
-        for m in pkgutil.iter_modules(path):
-            if m.name.endswith(suffix):
-                yield f"symmech.{pkg.name}.{m.name}"
-
-
 def _discover(until: str | None = None) -> None:
     """Import scene modules until kind ``until`` is registered (all of them when None): a run
     imports only its own paper's modules, not every kind's dependencies. Modules whose name
     contains the kind's are tried first, and among them ``scene`` or ``<kind>_scene``
-    (``symmech.trolley.scene`` for ``trolley``, before ``symmech.trolley.elastic_scene``)."""
+    (``symmech.trolley.scene`` for ``trolley``, before ``symmech.trolley.elastic.scene``)."""
     def rank(module: str) -> tuple[bool, bool]:
         last = module.rpartition(".")[2]
         return until is None or until not in module, last not in ("scene", f"{until}_scene")
 
-    for name in sorted(paper_modules("scene"), key=rank):
+    from symmech.core import discovery
+
+    for name in sorted(discovery.modules("kind"), key=rank):
         if until in _KINDS:
             return
         importlib.import_module(name)
@@ -116,7 +102,7 @@ def kinds() -> dict[str, Kind]:
 def get(name) -> Kind:
     """The kind called ``name``; a one-line SceneError naming the field ``kind`` otherwise."""
     from symmech.core.scene import SceneError
-    from symmech.core.schema import _did_you_mean
+    from symmech.core.schema import did_you_mean
 
     if isinstance(name, str):
         _discover(until=name)
@@ -124,6 +110,6 @@ def get(name) -> Kind:
             return _KINDS[name]
     available = kinds()
     if not isinstance(name, str) or name not in available:
-        raise SceneError("kind", f"unknown scene kind {name!r}{_did_you_mean(name, available)}; "
+        raise SceneError("kind", f"unknown scene kind {name!r}{did_you_mean(name, available)}; "
                                  f"choose one of {', '.join(available)}")
     return available[name]

@@ -107,7 +107,7 @@ class Int(Field):
     def check(self, path, value):
         if isinstance(value, bool) or not isinstance(value, int):
             raise SceneError(path, f"expected an integer in {_range_text(self.lo, self.hi, False, False, '')}, "
-                                   f"got {_show(value)}")
+                                   f"got {show(value)}")
         if (self.lo is not None and value < self.lo) or (self.hi is not None and value > self.hi):
             raise SceneError(path, f"{value} is outside {_range_text(self.lo, self.hi, False, False, '')}")
         return value
@@ -120,7 +120,7 @@ class Int(Field):
 class Bool(Field):
     def check(self, path, value):
         if not isinstance(value, bool):
-            raise SceneError(path, f"expected true or false, got {_show(value)}")
+            raise SceneError(path, f"expected true or false, got {show(value)}")
         return value
 
     def type_text(self):
@@ -135,7 +135,7 @@ class Str(Field):
 
     def check(self, path, value):
         if not isinstance(value, str):
-            raise SceneError(path, f"expected a string, got {_show(value)}")
+            raise SceneError(path, f"expected a string, got {show(value)}")
         if len(value) > MAX_STRING:
             raise SceneError(path, f"string of {len(value)} characters; at most {MAX_STRING}")
         if self.pattern and not re.fullmatch(self.pattern, value):
@@ -152,7 +152,7 @@ class Choice(Field):
 
     def check(self, path, value):
         if not isinstance(value, str) or value not in self.choices:
-            raise SceneError(path, f"unknown value {_show(value)}{_did_you_mean(value, self.choices)}; "
+            raise SceneError(path, f"unknown value {show(value)}{did_you_mean(value, self.choices)}; "
                                    f"choose one of {', '.join(self.choices)}")
         return value
 
@@ -170,10 +170,10 @@ class Choices(Field):
     def check(self, path, value):
         if not isinstance(value, (list, tuple)) or len(value) < self.min_items:
             raise SceneError(path, f"expected a list of at least {self.min_items} of {', '.join(self.choices)}, "
-                                   f"got {_show(value)}")
+                                   f"got {show(value)}")
         for i, item in enumerate(value):
             if not isinstance(item, str) or item not in self.choices:
-                raise SceneError(_join(path, i), f"unknown value {_show(item)}{_did_you_mean(item, self.choices)}; "
+                raise SceneError(_join(path, i), f"unknown value {show(item)}{did_you_mean(item, self.choices)}; "
                                                  f"choose from {', '.join(self.choices)}")
             if item in value[:i]:
                 raise SceneError(_join(path, i), f"{item!r} is listed twice")
@@ -191,7 +191,7 @@ class Vector(_Ranged):
 
     def check(self, path, value):
         if not isinstance(value, (list, tuple)) or len(value) != self.n:
-            raise SceneError(path, f"expected a list of {self.n} numbers [{self.unit}], got {_show(value)}")
+            raise SceneError(path, f"expected a list of {self.n} numbers [{self.unit}], got {show(value)}")
         return [check_real(_join(path, i), v, self.unit, self.lo, self.hi, self.lo_open, self.hi_open)
                 for i, v in enumerate(value)]
 
@@ -211,12 +211,12 @@ class Rows(Field):
     def check(self, path, value):
         if not isinstance(value, (list, tuple)) or not self.min_rows <= len(value) <= self.max_rows:
             raise SceneError(path, f"expected {self.min_rows} to {self.max_rows} rows of {self.n} numbers "
-                                   f"[{self.unit}], got {_show(value)}")
+                                   f"[{self.unit}], got {show(value)}")
         rows = []
         for i, row in enumerate(value):
             where = _join(path, i)
             if not isinstance(row, (list, tuple)) or len(row) != self.n:
-                raise SceneError(where, f"expected {self.n} numbers [{self.unit}], got {_show(row)}")
+                raise SceneError(where, f"expected {self.n} numbers [{self.unit}], got {show(row)}")
             rows.append([check_real(_join(where, j), v, self.unit, None, None, False, False)
                          for j, v in enumerate(row)])
         return rows
@@ -268,14 +268,14 @@ class Table(Field):
 
     def check(self, path, value):
         if not isinstance(value, dict):
-            raise SceneError(path or "<scene>", f"expected a table, got {_show(value)}")
+            raise SceneError(path or "<scene>", f"expected a table, got {show(value)}")
         if self.variants:  # the selector first: an unknown variant is reported, not its fields
             key = self.variants[0]
             self.fields[key].resolve(_join(path, key), key in value, value.get(key))
         fields = self.all_fields(value)
         for key in value:
             if key not in fields:
-                raise SceneError(_join(path, key), f"unknown field{_did_you_mean(key, fields)}")
+                raise SceneError(_join(path, key), f"unknown field{did_you_mean(key, fields)}")
         resolved = {}
         for key, f in fields.items():
             resolved[key] = f.resolve(_join(path, key), key in value, value.get(key))
@@ -304,7 +304,7 @@ class TableList(Field):
 
     def check(self, path, value):
         if not isinstance(value, (list, tuple)) or not self.min_items <= len(value) <= self.max_items:
-            raise SceneError(path, f"expected {self.min_items} to {self.max_items} tables, got {_show(value)}")
+            raise SceneError(path, f"expected {self.min_items} to {self.max_items} tables, got {show(value)}")
         resolved = [self.item.check(_join(path, i), v) for i, v in enumerate(value)]
         for check in self.checks:
             check(resolved, path)
@@ -324,7 +324,7 @@ class Mapping(Field):
 
     def check(self, path, value):
         if not isinstance(value, dict) or len(value) > self.max_items:
-            raise SceneError(path, f"expected a table of at most {self.max_items} names, got {_show(value)}")
+            raise SceneError(path, f"expected a table of at most {self.max_items} names, got {show(value)}")
         out = {}
         for key, v in value.items():
             if not re.fullmatch(self.key_pattern, key):
@@ -359,7 +359,7 @@ def check_real(path, value, unit, lo, hi, lo_open, hi_open) -> float:
     """``value`` as a float if it is a finite number in the range, else SceneError."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SceneError(path, f"expected a number in {_range_text(lo, hi, lo_open, hi_open, unit)}, "
-                               f"got {_show(value)}")
+                               f"got {show(value)}")
     try:
         number = float(value)
     except OverflowError:
@@ -374,12 +374,14 @@ def check_real(path, value, unit, lo, hi, lo_open, hi_open) -> float:
     return number
 
 
-def _show(value) -> str:
+def show(value) -> str:
+    """repr of a user's value for a one-line message, cut to 60 characters."""
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _did_you_mean(word, options) -> str:
+def did_you_mean(word, options) -> str:
+    """The message suffix `` (did you mean 'x'?)`` naming the option closest to ``word``, or ""."""
     if not isinstance(word, str):
         return ""
     close = difflib.get_close_matches(word, list(options), n=1)

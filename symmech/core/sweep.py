@@ -142,7 +142,7 @@ def put(data: dict, path: str, value, field: str) -> None:
         node = node.setdefault(key, {})
         if not isinstance(node, dict):
             prefix = ".".join(parents[:depth + 1])
-            raise SceneError(field, f"{prefix} is {s._show(node)} in the scene, not a table: give {prefix} whole")
+            raise SceneError(field, f"{prefix} is {s.show(node)} in the scene, not a table: give {prefix} whole")
     node[last] = value
 
 

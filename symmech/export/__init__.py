@@ -8,7 +8,7 @@
 * :mod:`symmech.export.description` writes ``modelDescription.xml`` (FMI 2.0 and 3.0);
 * :mod:`symmech.export.sources` lays out the C sources: the generated module, ``model.h``, the hand-written
   glue in ``c/`` (FMI 2 and 3, the linear solve and DOP853) and the DOP853 tableau from
-  :mod:`symmech.core.dop853`;
+  :mod:`symmech.numerics.dop853`;
 * :mod:`symmech.export.build` compiles with the system C compiler and packs the FMU or the C folder.
 
 The kinds covered, the variables and what is not done yet: docs/export.md.

@@ -7,7 +7,7 @@ import importlib.resources
 
 import jinja2
 
-from symmech.core import dop853, radau
+from symmech.numerics import dop853_tableau as dop853, radau_tableau as radau
 from symmech.export.model import ExportModel
 
 GLUE = ("symmech_model.h", "symmech_model.c")
@@ -61,12 +61,12 @@ def _array(name: str, values) -> str:
 
 
 def tableau_header() -> str:
-    """``dop853_tableau.h``: symmech.core.dop853's C, A, B, E5, E3 (the 12 stages and the FSAL stage)."""
+    """``dop853_tableau.h``: symmech.numerics.dop853's C, A, B, E5, E3 (the 12 stages and the FSAL stage)."""
     n = dop853.N_STAGES
     rows = ",\n    ".join("{" + ", ".join(repr(float(x)) for x in dop853.A[i, :n]) + "}" for i in range(n))
     return "\n".join([
         "/* The DOP853 tableau (Dormand and Prince 8(5,3), from Hairer's dop853.f), written by `symmech export` "
-        "from symmech/core/dop853.py. */",
+        "from symmech/numerics/dop853.py. */",
         "#ifndef DOP853_TABLEAU_H", "#define DOP853_TABLEAU_H", f"#define DOP853_STAGES {n}",
         _array("DOP853_C", dop853.C[:n]), f"static const double DOP853_A[{n}][{n}] = {{\n    {rows}}};",
         _array("DOP853_B", dop853.B), _array("DOP853_E5", dop853.E5), _array("DOP853_E3", dop853.E3),
@@ -74,15 +74,15 @@ def tableau_header() -> str:
 
 
 def radau_header() -> str:
-    """``radau_tableau.h``: symmech.core.radau's nodes, error estimator, T, TI, the dense-output matrix and
-    scipy's step-control constants."""
+    """``radau_tableau.h``: symmech.numerics.radau_tableau's nodes, error estimator, T, TI, the dense-output
+    matrix and scipy's step-control constants."""
     def matrix(name, a):
         rows = ",\n    ".join(", ".join(repr(float(x)) for x in row) for row in a)
         return f"static const double {name}[{a.size}] = {{\n    {rows}}};"
 
     return "\n".join([
         "/* The Radau IIA tableau of order 5 and scipy's step control, written by `symmech export` from "
-        "symmech/core/radau.py. */",
+        "symmech/numerics/radau_tableau.py. */",
         "#ifndef RADAU_TABLEAU_H", "#define RADAU_TABLEAU_H", _array("RADAU_C", radau.C), _array("RADAU_E", radau.E[0]),
         matrix("RADAU_T", radau.T), matrix("RADAU_TI", radau.TI), matrix("RADAU_PT", radau.PT),
         f"#define RADAU_MU_REAL {radau.MU_REAL!r}", f"#define RADAU_MU_COMPLEX_RE {radau.MU_COMPLEX.real!r}",

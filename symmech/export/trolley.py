@@ -1,11 +1,11 @@
 """The elastic trolley as an exported model: the invariants of its assembly, the frame table and the outputs.
 
-The physics is the generated module ``elastic_assembly.c`` (:mod:`symmech.trolley.symbolic_assembly`,
-derived per model from the invariants of the compiled engine's record, :mod:`symmech.trolley.elastic_kernels`;
+The physics is the generated module ``elastic_assembly.c`` (:mod:`symmech.trolley.elastic.symbolic_assembly`,
+derived per model from the invariants of the compiled engine's record, :mod:`symmech.trolley.elastic.kernels`;
 ``c/elastic_trolley.c`` reads the frame table and calls it): states q, q' (``<coordinate>``,
 ``der(<coordinate>)``), M y' = F with M = diag(1, M(q)); the frame's motion along the track at the
 prescribed speed as the engine's cubic spline table of the 12 frame channels in t
-(:func:`symmech.trolley.elastic_compiled.frame_table`, the same nodes and coefficients) with the arc length
+(:func:`symmech.trolley.elastic.compiled.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
 ``points``); parameters: the rollers' stiffnesses, dampings and (clamped pair law) preloads. The track and
 the speed are in the table: they are not parameters, and the FMU has no inputs. The C example program and
@@ -30,7 +30,7 @@ ROTATIONS = ("th1", "th2", "th3")  # roller coordinates in rad; the others (u2, 
 def load(scene) -> ExportModel:
     """The export model of a trolley scene with an ``[elastic]`` table (``scene`` a loaded pipeline scene);
     SymmechError for what the export does not cover."""
-    from symmech.trolley import elastic_scene
+    from symmech.trolley.elastic import scene as elastic_scene
 
     setup = scene.setup.elastic
     if setup is None or setup.system is None:
@@ -53,15 +53,15 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 
 
 def elastic(setup, run: dict) -> ExportModel:
-    """The export model of a prepared elastic setup (``symmech.trolley.elastic_scene.Setup``) whose native
+    """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley import elastic as el
-    from symmech.trolley import elastic_compiled
+    from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
     system, drive, t = setup.system, setup.drive, setup.t
-    line = el.Timeline(system, drive, t)
+    line = el_sim.Timeline(system, drive, t)
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
-    fr = el.frames(drive, line.s_nodes, system.mdl.l)
+    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)
     table = elastic_compiled.frame_table(system, drive, t, setup.rtol,
                                          elastic_compiled.frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
@@ -102,7 +102,7 @@ def assembly_c(system) -> str:
     key = hashlib.sha256(repr((model, names, units)).encode()).hexdigest()
     if key not in _DERIVED:
         from symmech.core import emit
-        from symmech.trolley import symbolic_assembly  # sympy: only when exporting
+        from symmech.trolley.elastic import symbolic_assembly  # sympy: only when exporting
 
         _DERIVED[key] = emit.render(symbolic_assembly.assembly_spec(model, names, units), emit.C99)
     return _DERIVED[key]
@@ -126,7 +126,7 @@ def _parameters(system, vr: int) -> list[Variable]:
     """The rollers' stiffnesses, dampings and (clamped pair law) preloads from value reference ``vr`` on
     (``elastic.rollers.stiffness[1]`` … as the scene's fields): they enter only the roller forces, so they
     stay tunable."""
-    from symmech.trolley import elastic_kernels as ek
+    from symmech.trolley.elastic import kernels as ek
 
     roll = ek.pack(system).roll  # (3, 5): stiffness, damping as the engine applies it, preload
     out = []
@@ -156,10 +156,10 @@ def _nominal(series: np.ndarray) -> float:
 
 
 def assembly_model(system) -> dict:
-    """The invariants :func:`symmech.trolley.symbolic_assembly.assembly_spec` reads, as nested lists: the
+    """The invariants :func:`symmech.trolley.elastic.symbolic_assembly.assembly_spec` reads, as nested lists: the
     engine's record (``elastic_kernels.pack``) and the probes."""
-    from symmech.trolley import elastic_kernels as ek
-    from symmech.trolley.elastic_layout import F_AT
+    from symmech.trolley.elastic import kernels as ek
+    from symmech.trolley.elastic.layout import F_AT
 
     mdl = ek.pack(system)
     inv = system.inv
@@ -181,11 +181,11 @@ def assembly_model(system) -> dict:
 
 def data(system, drive, table) -> str:
     """C definitions of the frame table with s(t) beside it, which ``c/elastic_trolley.c`` reads."""
-    from symmech.trolley import elastic as el
-    from symmech.trolley.elastic_layout import N_CHANNELS
+    from symmech.trolley.elastic import simulate as el_sim
+    from symmech.trolley.elastic.layout import N_CHANNELS
 
     nodes = table.nodes
-    s_coef = CubicSpline(nodes, el.arc_length(drive, nodes)).c  # (4, intervals)
+    s_coef = CubicSpline(nodes, el_sim.arc_length(drive, nodes)).c  # (4, intervals)
     coef = np.concatenate([table.coef, s_coef[:, :, None]], axis=2)  # (4, intervals, 13)
     lines = ["/* The elastic trolley's frame table, written by `symmech export` from the compiled engine's (do not "
              "edit). */",

@@ -25,6 +25,8 @@ from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 from symmech.grain import SEED
 
+ROLE = "derivation"  # found by symmech.core.discovery
+
 a, b, c = sympy.symbols("a b c", positive=True)
 psi, theta, phi = sympy.symbols("psi theta phi", real=True)
 m = sympy.Symbol("m", positive=True)

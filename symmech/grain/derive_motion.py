@@ -23,6 +23,8 @@ import sympy as sp
 from symmech.core import kinematics as kin
 from symmech.core.derivation import Arg, Dynamics, Event, ModuleSpec, NamedMatrix, args_of
 
+ROLE = "derivation"  # found by symmech.core.discovery
+
 g = sp.Symbol("g", positive=True)
 alpha, beta = sp.symbols("alpha beta", real=True)
 A, phase, t, t0 = sp.symbols("A phase t t0", real=True)

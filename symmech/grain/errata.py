@@ -10,6 +10,8 @@ from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
 from symmech.grain import derive
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 SEED = derive.SEED
 
 

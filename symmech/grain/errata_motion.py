@@ -13,6 +13,8 @@ from symmech.generated import grain_motion as gm
 from symmech.generated import grain_motion_printed as gp
 from symmech.grain import SEED
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 
 
 def _angles(rng, n):

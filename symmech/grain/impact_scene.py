@@ -26,6 +26,8 @@ from symmech.grain.body import Ellipsoid, euler_from_matrix, rotation
 from symmech.grain.impact import (ENERGY_RTOL, RESIDUAL_TOLERANCE, SOLVERS, DescentOptions, euler_rates,
                                   impact_geometry, solve_descent_batch, solve_impact, solve_robust_batch, solve_scipy)
 
+ROLE = "kind"  # found by symmech.core.discovery
+
 # CPU time of the paper's descent per step and per golden-section iteration (measured on the
 # default scene with `paper-corrected`, 200-1000 steps, 60-200 iterations), for the estimate.
 SECONDS_PER_DESCENT_STEP = 3e-3

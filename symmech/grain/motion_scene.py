@@ -27,6 +27,8 @@ from symmech.grain import contact, fields, flight, motion, paper_mode, plots, sw
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
 
+ROLE = "kind"  # found by symmech.core.discovery
+
 MAX_ROWS = 10_000_000  # trajectory rows a run may record
 MAX_SURFACE_ACCELERATION = 1e6  # m/s^2, peak of the vibrating surface
 UNIT_TOLERANCE = 1e-6  # |d| - 1 of a given vibration direction

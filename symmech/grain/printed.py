@@ -14,6 +14,8 @@ from sympy import Matrix, cos, sin, sqrt, tan
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 from symmech.grain import derive as d
 
+ROLE = "printed"  # found by symmech.core.discovery
+
 Rx, Ry, Rz = d.R_surface
 p_xx, p_xy, p_xz, p_yy, p_yz, p_zz = sympy.symbols("P_xx P_xy P_xz P_yy P_yz P_zz", real=True)
 theta0, phi0 = d.theta, d.phi  # the angles at the impact, theta(0) and phi(0) of (44)-(55)

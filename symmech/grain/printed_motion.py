@@ -20,6 +20,8 @@ import sympy as sp
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 
+ROLE = "printed"  # found by symmech.core.discovery
+
 g = sp.Symbol("g", positive=True)
 alpha, beta, delta, dt = sp.symbols("alpha beta delta dt", real=True)
 vx, vy, vz, x, y, z = sp.symbols("vx vy vz x y z", real=True)

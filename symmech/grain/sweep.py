@@ -128,7 +128,7 @@ def _population_base(base: dict, population: dict, field: str) -> tuple[dict, in
     for path in population["vary"]:
         value = _get(data, path)
         if not _is_vector(value):
-            found = "missing" if value is None else s._show(value)
+            found = "missing" if value is None else s.show(value)
             raise SceneError(f"{field}.vary.{path}", f"varies a number or vector of numbers of the scene; "
                                                      f"{path} is {found}")
         draws += len(value) if isinstance(value, list) else 1
@@ -396,7 +396,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
 
     Grains on the compiled engine find it built: this process builds it first (in the foreground,
     ``say(text)`` tells it), and so does each machine of a ``dask.distributed`` cluster, once per
-    machine (the build lock of :meth:`symmech.core.build.Engine.warm`).
+    machine (the build lock of :meth:`symmech.numerics.build.Engine.warm`).
     """
     import dask
 

@@ -23,6 +23,8 @@ from symmech.core.scene import SymmechError, read_toml, scenes_folder
 from symmech.smm import forms
 from symmech.smm.model import Effects, Mechanism, interpret
 
+ROLE = "derivation"  # found by symmech.core.discovery
+
 SCENES = scenes_folder()
 SOURCE = "Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003)"
 

@@ -15,6 +15,8 @@ from symmech.core.kinematics import SYMPY, rodrigues
 from symmech.smm import printed as pr
 from symmech.smm.derive import SOURCE
 
+ROLE = "derivation"  # found by symmech.core.discovery
+
 phi, phi2, s = sympy.symbols("phi phi2 s", real=True)
 
 

@@ -16,6 +16,8 @@ from symmech.core.scene import scenes_folder
 from symmech.smm import SEED
 from symmech.smm.derive import load_mechanism
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 SCENES = scenes_folder()
 
 

@@ -19,6 +19,8 @@ from symmech.generated import smm_formulas as derived
 from symmech.generated import smm_printed as printed
 from symmech.smm import SEED
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 
 def _unit(rng, n, planar=False):
     v = rng.normal(size=(n, 3))

@@ -12,6 +12,8 @@ import sympy
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 from symmech.smm.derive import SOURCE
 
+ROLE = "printed"  # found by symmech.core.discovery
+
 I1, I2, m2, r1, z2, alpha = sympy.symbols("I1 I2 m2 r1 z2 alpha", real=True)
 xM, yM, l4, l5, beta, l3, l6, delta3, delta4 = sympy.symbols("xM yM l4 l5 beta l3 l6 delta3 delta4", real=True)
 L1, delta = sympy.symbols("L1 delta", real=True)

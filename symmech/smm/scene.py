@@ -33,6 +33,8 @@ from symmech.smm.model import Effects, Mechanism
 from symmech.smm.plots import modes_and_responses, precision_plot
 from symmech.smm.schema import SCHEMA
 
+ROLE = "kind"  # found by symmech.core.discovery
+
 # Above this many coordinates the symbolic matrices are not formed (numeric assembly only).
 SYMBOLIC_LIMIT = 60
 # `run` solves dense problems up to this size; above it matrices.json would be huge too.

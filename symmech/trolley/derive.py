@@ -15,6 +15,8 @@ import sympy as sp
 from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 
+ROLE = "derivation"  # found by symmech.core.discovery
+
 SOURCE = "seed 002, Gnezdilov & Russkikh (2016), rigid trolley on a two-rail track"
 
 th1, th2, th3 = sp.symbols("th1 th2 th3", real=True)

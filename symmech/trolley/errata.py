@@ -11,6 +11,8 @@ from symmech.generated import trolley_frame as frm
 from symmech.generated import trolley_printed as printed
 from symmech.trolley import SEED
 
+ROLE = "errata"  # found by symmech.core.discovery
+
 HELIX = {"R": 7.0, "lam": 5 / (2 * np.pi)}
 
 
@@ -102,7 +104,7 @@ def _table_value(conventions: str, rounded: bool):
         for i in x["entry"]:
             _, q, case, time_, _, decimals = tables.entries()[int(i)]
             k = int(round(time_ / (setup.t[1] - setup.t[0])))
-            v = float(scene._quantity(res[case], q)[k])
+            v = float(scene.quantity(res[case], q)[k])
             out.append(round(v, decimals) if rounded else v)
         return np.array(out)
     return value

@@ -103,7 +103,7 @@ def work_precision(rows, path: Path) -> Path:
 
 
 def elastic_figures(setup, r: dict, modes: dict | None, comfort: dict | None) -> dict:
-    """Builders of the elastic model's figures (``r`` from :func:`symmech.trolley.elastic.simulate`),
+    """Builders of the elastic model's figures (``r`` from :func:`symmech.trolley.elastic.simulate.simulate`),
     named as in :data:`FIGURES`; a builder returns None when its figure has nothing to show."""
     return {"elastic_reactions": lambda: _elastic_reactions(r),
             "elastic_deflections": lambda: _deflections(setup, r),
@@ -153,7 +153,7 @@ def campbell(modes: dict):
     per tracked mode (``mode_id``: crossings keep their identity), coloured by the beam plane or
     the rollers dominating it at the first sample, with the forcing frequencies (black, dashed
     and dotted) that a natural frequency should keep away from."""
-    from symmech.trolley.elastic import FORCING
+    from symmech.trolley.elastic.body import FORCING
 
     fig, axes = plotting.figure(1, 2, width=11.0, height=4.5, sharey=True)
     groups = [label.rsplit("_mode", 1)[0] if label.startswith("beam") else "rollers" for label in modes["label"][0]]

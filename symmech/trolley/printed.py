@@ -13,6 +13,8 @@ from symmech.core import kinematics as kin
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
 from symmech.trolley.derive import ANGLE_ARGS, SOURCE, rigid_body_args, th1, th2, th3
 
+ROLE = "printed"  # found by symmech.core.discovery
+
 s1, s2, s3 = sp.sin(th1), sp.sin(th2), sp.sin(th3)
 c1, c2, c3 = sp.cos(th1), sp.cos(th2), sp.cos(th3)
 

@@ -64,7 +64,7 @@ REACTIONS = tuple(f"P{i}" for i in range(6))
 
 def _field(path, value):
     if not isinstance(value, str) or not any(re.fullmatch(p, value) for _, p, *_ in FIELDS):
-        raise SceneError(path, f"{s._show(value)} is not a field a trolley sweep can vary; choose one of "
+        raise SceneError(path, f"{s.show(value)} is not a field a trolley sweep can vary; choose one of "
                                f"{', '.join(name for name, *_ in FIELDS)}")
     return value
 
@@ -357,7 +357,7 @@ def point_metrics(res: Result, comfort: dict) -> tuple[list[Column], list[float]
 def _closest_resonance(modes: Table) -> tuple[list, dict]:
     """The (sample, mode, forcing) of the modes table whose natural frequency is nearest, relatively, to a
     positive forcing frequency."""
-    from symmech.trolley.elastic import FORCING
+    from symmech.trolley.elastic.body import FORCING
 
     f = modes.column("f")[:, None]
     forcing = np.column_stack([modes.column(f"forcing_{name}") for name, _ in FORCING])
@@ -432,7 +432,7 @@ def cheapest(first, points: int, processes: int):
     """A lower bound of :func:`estimate` (a ``registry.Estimate``): every point on the elastic model's cheapest
     engine, nothing compiled. It reads no engine's state, so refusing on it loads no numba."""
     from symmech.core import registry
-    from symmech.trolley import elastic_scene
+    from symmech.trolley.elastic import scene as elastic_scene
 
     setup = first.setup
     per_point = first.kind.estimate(replace(setup, elastic=None)).seconds
@@ -481,7 +481,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
 def _on_sweep_engine(setup, points: int):
     """The trolley ``setup`` with its elastic model's engine the one the sweep's ``points`` runs choose
     (``auto`` weighs a compile against the Python engine over all of them)."""
-    from symmech.trolley import elastic_scene
+    from symmech.trolley.elastic import scene as elastic_scene
 
     elastic = setup.elastic
     if elastic is None or elastic.system is None:

@@ -1,5 +1,5 @@
 /* The elastic trolley's model functions around its generated assembly (elastic_assembly.c, derived from the
-   model's invariants by symmech.trolley.symbolic_assembly at export time): the frame's 12 channels and
+   model's invariants by symmech.trolley.elastic.symbolic_assembly at export time): the frame's 12 channels and
    the arc length s are read at t from their cubic spline table (written above by `symmech export`, the
    compiled engine's nodes and coefficients) and passed to the generated functions after the rollers'
    parameters. Hand-written: a table lookup and argument packing, no physics.

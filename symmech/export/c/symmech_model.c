@@ -1,8 +1,8 @@
 /* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial
    pivoting), Dormand and Prince's DOP853 with the error control of Hairer's dop853.f (the tableau in
-   dop853_tableau.h is written from symmech/core/dop853.py) and, for a stiff model (MODEL_STIFF), Radau IIA
-   of order 5 as scipy's and symmech/core/ode.py's (radau_tableau.h written from it) with dense output.
-   Hand-written; the physics is generated. */
+   dop853_tableau.h is written from symmech/numerics/dop853.py) and, for a stiff model (MODEL_STIFF), Radau IIA
+   of order 5 as scipy's and symmech/numerics/radau.py's (radau_tableau.h written from
+   symmech/numerics/radau_tableau.py) with dense output. Hand-written; the physics is generated. */
 #include <math.h>
 #include <string.h>
 

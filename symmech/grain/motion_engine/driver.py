@@ -29,7 +29,7 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
 
 The loop is :mod:`symmech.grain.motion_engine.loop` and the modules beside it, a phase or a concept each
 (docs/ARCHITECTURE.md); this module is its Python side and imports no numba. The generic integrators and root
-finders (DOP853, Radau IIA with dense output, Brent) are those of :mod:`symmech.core.ode`, compiled for the
+finders (DOP853, Radau IIA with dense output, Brent) are those of :mod:`symmech.numerics.ode`, compiled for the
 rotation and sliding right-hand sides (:mod:`.steppers`) and the functions of time (:mod:`.roots`); the loop
 keeps the physics and the event logic.
 
@@ -40,7 +40,7 @@ Parameters travel in one float64 vector (layout :data:`layouts.PARAMS`), the sta
 built on first use: ``LazyMotion``). The compiled loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
 ``on_step`` is called; this does not change the result. ``simulate_many`` runs
 grains on threads (the loop releases the GIL). Once ``symmech warm`` or the background builder has built the
-loop ahead of time (:mod:`symmech.core.aot`), a run on the main thread calls that build: nothing of numba is
+loop ahead of time (:mod:`symmech.numerics.aot`), a run on the main thread calls that build: nothing of numba is
 loaded; threads call numba's, which releases the GIL.
 """
 from __future__ import annotations
@@ -51,7 +51,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from symmech.core import aot, artifacts, build, layout
+from symmech.core import layout
+from symmech.numerics import aot, artifacts, build
 from symmech.core.scene import SymmechError
 from symmech.grain import motion, outcome, sliding
 from symmech.grain.motion_engine import layouts

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from symmech.core.ode import dop_dense_at, jit
+from symmech.numerics.dop853 import dop_dense_at
+from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.kinematics import gm, rotation, support
 from symmech.grain.motion_engine.layouts import FL_AT, N_FLIGHT, N_STATE, P_AT, ROT_WIDTH, RS_AT, X_AT
 from symmech.grain.motion_engine.steppers import (
@@ -40,7 +40,7 @@ def orient(t, ctx, tab, ntab):
     return y[:4], y[4:7]
 
 
-@numba.njit(cache=True, error_model="numpy", nogil=True, inline="always")  # inlined: no call in the scan loop
+@inline  # no call in the scan loop
 def translate_into(p, ctx, t, out):
     """Centre position and velocity rows out[0] (2, 3) at t of the flight ctx."""
     tau = t - ctx[FL_AT.t0]

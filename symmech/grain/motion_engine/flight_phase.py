@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from symmech.core.ode import jit
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.flight_path import extend_rotation, flight_ctx, state_at
 from symmech.grain.motion_engine.kinematics import gap_noise
 from symmech.grain.motion_engine.layouts import FL_AT, FLIGHT, INT, P_AT, ROT_WIDTH, X_AT

@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from symmech.core import kernels
-from symmech.core.ode import jit
+from symmech.numerics import kernels
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import (
     contact_offset, cross, inverse_effective_mass, kinetic, rotation, world_inv_inertia)
 from symmech.grain.motion_engine.layouts import (

@@ -9,8 +9,8 @@ import math
 
 import numpy as np
 
-from symmech.core import kernels
-from symmech.core.ode import jit
+from symmech.numerics import kernels
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.layouts import P_AT, X_AT
 
 gm = kernels.load("grain_motion")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symmech.core.ode import jit
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.impact_law import impact
 from symmech.grain.motion_engine.kinematics import (
     contact_offset, contact_velocity, cross, inverse_effective_mass, is_sphere, kinetic, rotation, support, surface)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symmech.core import dop853
+from symmech.numerics import dop853_tableau as dop853
 from symmech.core.layout import Field, Layout
 from symmech.grain import motion, sliding
 
@@ -137,7 +137,7 @@ FLIGHT_RECORD = Layout("GrainFlight", (
     Field("f", "1/s, rad/s^2", "rotation right-hand side at t_rot", (7,)),
     Field("in_chunk", "1", "1: a rotation chunk is under way"),
 ))
-# One accepted step of a flight's rotation, a row of its step table (the interpolant: core.ode.dop_dense_at).
+# One accepted step of a flight's rotation, a row of its step table (the interpolant: numerics.dop853.dop_dense_at).
 ROTATION_STEP = Layout("GrainRotationStep", (
     Field("t_old", "s", "start of the step"),
     Field("t_new", "s", "end of the step"),

@@ -6,7 +6,7 @@ which imports no numba: a warm run whose loop was built ahead of time loads that
 this module. The physics, the event logic and their contract are described there."""
 from __future__ import annotations
 
-from symmech.core.ode import jit
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.flight_phase import fly
 from symmech.grain.motion_engine.kinematics import (
     contact_velocity, energy, gap, gap_noise, normal_force, velocity_noise)

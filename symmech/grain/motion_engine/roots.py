@@ -1,12 +1,14 @@
 """The functions of time whose zeros end a phase, and their roots, in numba: the gap of a flight, the normal
 force of a sliding grain, a sliding chunk's terminal event on its step's interpolant; the scan of
-``contact.first_root`` with Brent's root finder and bounded minimiser (:mod:`symmech.core.ode`)."""
+``contact.first_root`` with Brent's root finder and bounded minimiser (:mod:`symmech.numerics.ode`)."""
 from __future__ import annotations
 
 import numpy as np
 
-from symmech.core import ode
-from symmech.core.ode import dop_dense_at, jit, radau_dense_at
+from symmech.numerics import ode
+from symmech.numerics.dop853 import dop_dense_at
+from symmech.numerics.jit import jit
+from symmech.numerics.radau import radau_dense_at
 from symmech.grain.motion_engine.flight_path import extend_rotation, orient, still_gap, translate_into
 from symmech.grain.motion_engine.kinematics import EPS, normal_force, rotation, support
 from symmech.grain.motion_engine.layouts import FL_AT, INT, N_SLIDE, S_AT, SS_AT
@@ -38,7 +40,7 @@ def _h_args(t, args):
     return h_at(what, t, ctx, steps, nsteps, p, out)
 
 
-_roots = ode.roots(_h_args)  # core.ode's Brent root finder and bounded minimiser of h_at
+_roots = ode.roots(_h_args)  # numerics.ode's Brent root finder and bounded minimiser of h_at
 brentq, _bounded_min = _roots.brentq, _roots.bounded_min
 
 

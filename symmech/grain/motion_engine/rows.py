@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symmech.core.ode import jit
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import rotation
 from symmech.grain.motion_engine.layouts import C_AT, T_AT, TRAJECTORY_WIDTH, WARNING_WIDTH, WR_AT, X_AT
 

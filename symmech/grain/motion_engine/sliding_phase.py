@@ -7,7 +7,9 @@ import math
 
 import numpy as np
 
-from symmech.core.ode import dop_dense_at, jit, radau_dense_at
+from symmech.numerics.dop853 import dop_dense_at
+from symmech.numerics.jit import jit
+from symmech.numerics.radau import radau_dense_at
 from symmech.grain import sliding
 from symmech.grain.motion_engine.kinematics import EPS, contact_offset, normal_force, rotation
 from symmech.grain.motion_engine.layouts import (

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from symmech.core.ode import jit
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import cross, is_sphere, rotation
 from symmech.grain.motion_engine.layouts import N_SLIDE, P_AT, S_AT
 

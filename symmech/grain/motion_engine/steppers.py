@@ -1,10 +1,10 @@
-"""The right-hand sides of the compiled loop's integrations and :mod:`symmech.core.ode`'s steppers compiled for
+"""The right-hand sides of the compiled loop's integrations and :mod:`symmech.numerics.ode`'s steppers compiled for
 them (closures: see that module's docstring): the torque-free rotation of a flight (``ROT``) and the sliding
 contact (``SLIP``, ``STICK``), with the slip's Jacobian for Radau IIA."""
 from __future__ import annotations
 
-from symmech.core import ode
-from symmech.core.ode import jit
+from symmech.numerics import ode
+from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import gm
 from symmech.grain.motion_engine.layouts import INT
 from symmech.grain.motion_engine.slip import slide_rhs, slip_jac
@@ -33,7 +33,7 @@ def jac(t, y, args, J):
     slip_jac(t, y, args[1], J)
 
 
-# The generic DOP853 and Radau IIA code of core.ode, compiled for these right-hand sides.
+# The generic DOP853 and Radau IIA code of numerics.ode, compiled for these right-hand sides.
 _steps = ode.steppers(rhs, jac)
 first_step, dop_advance, dop_dense = _steps.first_step, _steps.dop_advance, _steps.dop_dense
 radau_start, radau_step = _steps.radau_start, _steps.radau_step

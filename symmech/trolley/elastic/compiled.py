@@ -1,0 +1,314 @@
+"""The elastic trolley compiled: the assembly of :class:`symmech.trolley.elastic.system.System` in numba
+(:mod:`symmech.trolley.elastic.kernels`), integrated by the toolkit's Radau IIA with the analytic Jacobian;
+this module drives it (:func:`simulate`, the same contract and outputs as the Python engine's) and builds
+numba's cache once (:func:`warm`).
+
+**The frame along the track.** The right-hand side needs, at any stage time t, the load a0 + g0 ν, ω,
+ω̇ and v0 (body components). They come from Python (``model.moving_frame`` or ``local_curvature_frame``
+of any track, the user's V0(t)) and cannot be called per stage, so :func:`frame_table` tabulates these 12
+channels once per run, vectorised, as a cubic spline in t (scipy's ``CubicSpline``, evaluated in the
+kernels) within a bound of the exact values between its nodes (:data:`INTERP_FRACTION` x rtol of the
+channel group's scale, at least :data:`INTERP_FLOOR`): the exact frame at the output times (the outputs use
+it) seeds it, every 2^j-th of those times its nodes when that meets the bound at the others, else every
+interval halved until the spline at each midpoint does; the reached error is returned and reported. Where
+the exact values carry rounding noise that no refinement removes (case 2's second differences of Λ*: ~1e-9
+of the channel scale on the bundled helix), the refinement stops once a halving increases an error within
+:data:`INTERP_NOISE` or two rounds no longer reduce it 4x, provided the error is at most INTERP_NOISE;
+otherwise the run falls back to the Python engine and says why (:func:`simulate`).
+
+**Steps.** The Python engine bounds its steps by the output spacing; this one does not: the outputs come
+from Radau's collocation polynomial (scipy's dense output), whose error on the bundled scene stays within
+the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
+
+**Traction.** s is a state, so :func:`simulate_traction` tabulates the frame's geometry in s instead
+(:func:`geometry`, the same checked spline) over the arc lengths the run visits (:func:`reach`), and calls
+the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic.kernels.TRACTIONS`).
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from symmech.numerics import build
+from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
+
+# Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
+INTERP_FRACTION = 1e-3
+INTERP_FLOOR = 1e-13
+# Largest relative error accepted when refinement stops reducing it (noise in the exact frame values).
+INTERP_NOISE = 1e-8
+MAX_TABLE_NODES = 1 << 20
+STALL_ROUNDS = 2
+
+
+def row_terms(system, fr, V0, dV0, Y, height) -> dict:
+    """:func:`symmech.trolley.elastic.simulate.row_terms` by the kernels' ``rows`` (the potential Π per row in Python)."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    chs = frame_channels(fr, V0, dV0, system.mdl.g0)
+    nu = np.ascontiguousarray(fr.lam[:, :, 1])
+    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
+    terms = ek.rows(ek.pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
+    res = dict(zip(keys, terms))
+    pi = system.potential(Y[:, :system.N])
+    res["h"] += pi
+    res["E"] += pi
+    return res
+
+
+def channels(drive, system, t, at=slice(None)) -> np.ndarray:
+    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
+    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame.frame_state`, vectorised."""
+    s = el_sim.arc_length(drive, t)[at]
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
+    return frame_channels(el_frame.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
+
+
+def frame_channels(fr, V0, dV0, g0: float) -> np.ndarray:
+    """Channels (k, 12) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,)."""
+    v0, a0, w, dw = el_frame.frame_motion(fr, V0, dV0)
+    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], w, dw, v0])
+
+
+def _scales(ch: np.ndarray) -> np.ndarray:
+    """Error scale (12,) of each channel: its group's largest norm; ω̇ against |ω̇| + |ω|² (it enters
+    B = skew(ω̇) + skew(ω)²); a group that is zero everywhere is exact (scale 0 accepts 0 error only)."""
+    norm = lambda j: float(np.linalg.norm(ch[:, j:j + 3], axis=1).max())  # noqa: E731
+    groups = [norm(CH_AT.load), norm(CH_AT.omega), norm(CH_AT.domega) + norm(CH_AT.omega) ** 2, norm(CH_AT.v0)]
+    return np.repeat(groups, 3)
+
+
+@dataclass(frozen=True)
+class Table:
+    """The spline table of the frame channels: nodes (n,) [s], coefficients (4, n - 1, 12), the largest error
+    between its nodes (at the output times it skips or the interval midpoints) relative to the channel scale,
+    the bound it met, and whether it stopped on noise."""
+
+    nodes: np.ndarray
+    coef: np.ndarray
+    error: float
+    bound: float
+    noise: bool
+
+
+def _subsampled(t, ch: np.ndarray, k: int, bound: float, scales) -> Table:
+    """The spline through every k-th output time t (and the last) and its largest error at the times it skips,
+    from the exact channels ch (len(t), c) there."""
+    keep = np.zeros(t.size, bool)
+    keep[::k] = keep[-1] = True
+    spline = CubicSpline(t[keep], ch[keep], axis=0)
+    scale = scales(ch)
+    worst = np.abs(spline(t[~keep]) - ch[~keep]) / np.where(scale > 0, scale, 1.0)
+    return Table(t[keep], np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
+
+
+def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_scales) -> Table | None:
+    """The frame channels over [t[0], t[-1]] as a cubic spline within max(INTERP_FRACTION rtol, INTERP_FLOOR)
+    of the channel scale of the exact values between its nodes. The exact channels at the output times t
+    (``ch`` (len(t), 12), computed when None; the outputs need them anyway) seed it: the spline through
+    every 2^j-th of them that meets the bound at all the times it skips, j as large as it does from j = 1 on,
+    is the table, at no further frame evaluation. Otherwise every interval of t is halved until the spline at
+    each interval midpoint meets the bound (halved locally, a spline converges slowly: its end conditions
+    reach several intervals in); the spline through every second output time counts as the round before.
+    When a halving increased an error already within INTERP_NOISE, or STALL_ROUNDS rounds no longer reduced
+    it 4x (noise in the exact values: halving then only interpolates it), the best table so far if its error
+    is at most INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs
+    the Python engine). ``evaluate(x, at)`` (k, c) and ``scales`` tabulate other channels (:func:`geometry` on
+    s with traction)."""
+    evaluate = evaluate or (lambda x, at=slice(None): channels(drive, system, x, at))
+    bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
+    nodes = np.asarray(t, float)
+    ch = evaluate(nodes) if ch is None else ch
+    best, since, k = None, 0, 2
+    while 2 * k <= nodes.size + 1:  # coarser, while the spline through fewer nodes still meets the bound
+        table = _subsampled(nodes, ch, k, bound, scales)
+        if table.error > bound:
+            break
+        best, k = table, 2 * k
+    if best is not None:
+        return best
+    best = table if k == 2 and nodes.size >= 3 else None
+    while True:
+        every = np.empty(2 * nodes.size - 1)
+        every[0::2], every[1::2] = nodes, (nodes[1:] + nodes[:-1]) / 2
+        mid = evaluate(every, slice(1, None, 2))
+        scale = scales(np.concatenate([ch, mid]))
+        spline = CubicSpline(nodes, ch, axis=0)
+        worst = (np.abs(spline(every[1::2]) - mid) / np.where(scale > 0, scale, 1.0)).max(axis=1)
+        table = Table(nodes, np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
+        if table.error <= bound:
+            return table
+        # a smooth channel loses 16x per halving; rounds that do not gain 4x meet noise (or a kink), and a
+        # round that loses once the error is down to noise is noise outright: halving only interpolates it
+        worse = best is not None and table.error > best.error and best.error <= INTERP_NOISE
+        since = 0 if best is None or table.error < 0.25 * best.error else since + 1
+        best = table if best is None or table.error < best.error else best
+        if worse or since >= STALL_ROUNDS or 2 * nodes.size > MAX_TABLE_NODES:
+            return Table(best.nodes, best.coef, best.error, bound, True) if best.error <= INTERP_NOISE else None
+        merged = np.empty((every.size, ch.shape[1]))
+        merged[0::2], merged[1::2] = ch, mid
+        nodes, ch = every, merged
+
+
+def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
+    """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (prescribed speed; the
+    same state, tolerances and outputs; the steps are not bound by the output spacing: the outputs come from
+    the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
+    ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
+    (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
+    scales) what the table reached. With ``drive.traction``: :func:`simulate_traction`."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    t = np.asarray(t, dtype=float)
+    if drive.traction is not None:
+        return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
+    line = el_sim.Timeline(system, drive, t)
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
+    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
+    table = frame_table(system, drive, t, rtol, frame_channels(fr, V0, dV0, system.mdl.g0))
+    if table is None:
+        why = (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
+               f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+        out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+        out["engine"], out["engine_reason"] = "python", why
+        return out
+    N = system.N
+    q0 = system.quasi_static(line.state(t[0]))
+    zero = np.zeros(N)
+    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL]
+    Y, steps, nfev, status = ek.solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
+    _check(status, Y, t)
+    out = el_sim.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
+    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
+               frame_interpolation_error=table.error)
+    return out
+
+
+# --------------------------------------------------------------------------- traction
+
+def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
+    """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
+    :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
+    fr = el_frame.frames(drive, np.asarray(s, float)[at], system.mdl.l)
+    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
+
+
+def _geometry_scales(g: np.ndarray) -> np.ndarray:
+    """Error scale (15,) of each geometry channel: its group's largest norm; e' + Ω × e against it + |Ω|, Ω'
+    against |Ω'| + |Ω|² (the terms they enter a0 and ω̇ beside, per V0²)."""
+    norm = lambda j: float(np.linalg.norm(g[:, j:j + 3], axis=1).max())  # noqa: E731
+    om = norm(G_AT.om)
+    return np.repeat([norm(G_AT.e), norm(G_AT.k) + om, norm(G_AT.nu), om, norm(G_AT.dom) + om ** 2], 3)
+
+
+REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
+
+
+def reach(system, drive, t) -> tuple[float, float]:
+    """The arc lengths [m] a traction run visits: those of the rigid body (the whole elastic body's mass,
+    centre and inertia) under the same traction (DOP853 at rtol 1e-6), widened by :data:`REACH_MARGIN` of
+    their span (at least 1 mm) and kept within the frame plan's span."""
+    from scipy.integrate import solve_ivp
+
+    from symmech.trolley import model
+
+    body = el_sim.rigid_body(system.mdl)
+
+    def rates(time, y):
+        fr = el_frame.frames(drive, y[:1], system.mdl.l)
+        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
+        p0 = float(drive.traction(time, y[1]))
+        return [y[1], (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]]
+
+    sol = solve_ivp(rates, (t[0], t[-1]), [drive.s0, drive.v_initial], method="DOP853", t_eval=t, rtol=1e-6)
+    s = sol.y[0] if sol.status == 0 else np.array([drive.s0])
+    pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
+    lo, hi = float(s.min()) - pad, float(s.max()) + pad
+    span = getattr(drive.plan, "span", None)
+    return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
+
+
+def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
+    """:func:`symmech.trolley.elastic.simulate.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
+    V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
+    P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
+    Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
+    lo, hi = reach(system, drive, t)
+    table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
+                        evaluate=lambda s, at=slice(None): geometry(drive, system, s, at), scales=_geometry_scales)
+    if table is not None:
+        out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
+        if out is not None:
+            return out
+    why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
+           f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
+    out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+    out["engine"], out["engine_reason"] = "python", why
+    return out
+
+
+_KEYS = itertools.count()
+
+
+def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
+    """The compiled traction run on ``table``; None when s leaves it."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    N = system.N
+    line = el_sim.Timeline(system, drive, t)
+    zero = np.zeros(N)
+    y0 = np.r_[el_sim.traction_start(line, t[0]) + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0,
+               0.0, 0.0, drive.s0, drive.v_initial]
+    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL, 1e-10, 1e-10]
+    step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
+    key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
+    ek.TRACTIONS[key] = drive.traction
+    try:
+        Y, dV0, steps, nfev, status = ek.solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
+                                                         float(rtol), atol, step)
+    finally:
+        del ek.TRACTIONS[key]
+    _check(status, Y, t)
+    s = Y[:, -2]
+    if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
+        return None
+    out = el_sim.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=row_terms)
+    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
+               frame_interpolation_error=table.error)
+    return out
+
+
+def _check(status, Y, t) -> None:
+    """SymmechError when the compiled solve failed or reached no finite state."""
+    from symmech.numerics import ode  # numba: imported by a run, not by choosing the engine or its estimate
+    if status != ode.SUCCESS or not np.all(np.isfinite(Y)):
+        last = t[np.flatnonzero(np.isfinite(Y).all(axis=1))[-1]]
+        why = ode.STEP_TOO_SMALL_TEXT if status == ode.STEP_TOO_SMALL else "no finite state"
+        raise el_sim.integration_failed(last, f"compiled Radau: {why}")
+
+
+# --------------------------------------------------------------------------- building the cache once
+
+# first compile: 119 s of CPU (62 s before the traction entry), 412 s wall at load 9.5 on 2 cores
+# (benchmarks/README.md)
+COLD_COMPILE_SECONDS = 130.0
+
+
+def _entry_signatures() -> dict:
+    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
+    model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), the rest from small arrays."""
+    # numba: imported by a run, not by choosing the engine or its estimate
+    import numba
+    from symmech.trolley.elastic import kernels as ek
+    mdl = MODEL.numba_type()
+    tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
+    solve = (tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
+    rows = (np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
+    traction = ((np.zeros(2), np.zeros((4, 1, N_GEOMETRY))), 1, np.zeros(6), np.zeros(2), 1e-8, np.zeros(6), 1.0)
+    return {entry: (mdl, *(numba.typeof(a) for a in args))
+            for entry, args in ((ek.solve, solve), (ek.rows, rows), (ek.solve_traction, traction))}
+
+
+ENGINE = build.Engine("elastic", "symmech.trolley.elastic.kernels", _entry_signatures, COLD_COMPILE_SECONDS)

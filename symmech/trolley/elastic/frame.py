@@ -1,0 +1,63 @@
+"""The elastic trolley's frame along the track (the rigid model's frames, :mod:`symmech.trolley.model`): the
+prescribed or driven motion along the midline and the frame's a0, ω, ω̇ at a point of it."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from symmech.trolley import model
+
+# ---------------------------------------------------------------- frame along the track
+
+@dataclass(frozen=True)
+class Drive:
+    """The motion of the frame: track, frame mode ("twist", "frenet"), case 2
+    (``local_curvature``) or 1, speed(t) -> (V0 [m/s], dV0 [m/s²]), start s0 [m], the
+    case-2 difference order and step [m], and the rigid setup's frame plan. With
+    ``traction`` (t, V0) -> P0 [N] instead of a speed, s and V0 are coordinates (from
+    ``v_initial`` [m/s]) and the x1 balance of the whole body, F1 = P0, is their equation."""
+
+    track: object
+    frame: str
+    local_curvature: bool
+    speed: object
+    s0: float = 0.0
+    fd_order: int = 4
+    fd_step: float = 1e-3
+    plan: object = None  # model.FramePlan keeping the frame continuous (from the trolley setup)
+    traction: object = None
+    v_initial: float = 0.0
+
+
+@dataclass(frozen=True)
+class FrameState:
+    """Track frame at one instant, body-frame components: velocity v0 [m/s] and acceleration
+    a0 [m/s²] of O, ω [rad/s], ω̇ [rad/s²], upward unit vector ν."""
+
+    v0: np.ndarray
+    a0: np.ndarray
+    w: np.ndarray
+    dw: np.ndarray
+    nu: np.ndarray
+
+
+def frames(drive: Drive, s, l: float) -> model.Frame:
+    s = np.atleast_1d(np.asarray(s, dtype=float))
+    if drive.local_curvature:
+        return model.local_curvature_frame(drive.track, s, l, drive.frame, drive.fd_order, drive.fd_step,
+                                           plan=drive.plan)
+    return model.moving_frame(drive.track, s, drive.frame, drive.plan)
+
+
+def frame_motion(fr: model.Frame, V0, dV0) -> tuple:
+    """v0, a0, ω, ω̇ (k, 3) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,): the
+    vectorised :func:`frame_state` without ν."""
+    V, dV = V0[:, None], dV0[:, None]
+    return V * fr.e, dV * fr.e + V ** 2 * (fr.de + np.cross(fr.W, fr.e)), V * fr.W, dV * fr.W + V ** 2 * fr.dW
+
+
+def frame_state(fr: model.Frame, i: int, V0: float, dV0: float) -> FrameState:
+    e, W = fr.e[i], fr.W[i]
+    return FrameState(V0 * e, dV0 * e + V0 ** 2 * (fr.de[i] + np.cross(W, e)), V0 * W,
+                      dV0 * W + V0 ** 2 * fr.dW[i], fr.lam[i, :, 1])

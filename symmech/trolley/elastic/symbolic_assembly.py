@@ -1,0 +1,177 @@
+"""Layer 1: the elastic trolley's assembled equations for one model, as a module the C target prints.
+
+Not a ``derive*`` producer of `symmech codegen`: nothing here is fixed, every module it makes is a scene's.
+
+The elastic model's equations M(q) q̈ + R(t, q, q̇) = 0 are sums over its invariants (the Gram tensor G, the
+first moments S1, the sparse ψ part of A(q), K, D, the roller map and the held beams' membrane blocks,
+docs/trolley-elastic.md; the compiled engine's ``_terms`` and ``_resultants``). Their sizes and sparsity
+depend on the scene, so the module is derived per model at export time (``symmech export``), with the
+invariants as numbers: a term whose coefficient is zero is never formed (nine tenths of G on the bundled
+helix), and the emitter's CSE shares the rest. Its text carries the usual hash header.
+
+Functions (C99 via :mod:`symmech.core.emit`): ``rate`` F = (q̇, -R) and ``rate_mass`` M = diag(1, A Gtr Aᵀ) of
+M y' = F over the state y = (q, q̇) with parameters p = (the rollers' stiffnesses, dampings and preloads, the 12 frame
+channels at t: load a0 + g0 ν, ω, ω̇, v0); ``outputs`` (P0…P5, the roller deflections, and per probe its
+displacement, elastic deflection and overload) from (q, q̇, q̈, p).
+"""
+from __future__ import annotations
+
+import sympy as sp
+
+from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix, args_of
+from symmech.trolley.derive import SOURCE
+
+NAME = "elastic_assembly"
+ROLLERS = 5
+# the frame channels in the order of symmech.trolley.elastic.layout.CHANNELS
+CHANNELS = tuple(sp.symbols("load1:4 omega1:4 domega1:4 v01:4", real=True))
+CHANNEL_ARGS = args_of(
+    [(CHANNELS[i], f"a0 + g0 ν along x{i + 1}: the frame's acceleration plus gravity", "m/s^2") for i in range(3)]
+    + [(CHANNELS[3 + i], f"angular velocity ω of the frame about x{i + 1}", "rad/s") for i in range(3)]
+    + [(CHANNELS[6 + i], f"angular acceleration ω̇ of the frame about x{i + 1}", "rad/s^2") for i in range(3)]
+    + [(CHANNELS[9 + i], f"velocity of the frame's origin along x{i + 1}", "m/s") for i in range(3)])
+STIFFNESS = sp.symbols(f"roller_k1:{ROLLERS + 1}", real=True)
+DAMPING = sp.symbols(f"roller_c1:{ROLLERS + 1}", real=True)
+PRELOAD = sp.symbols(f"roller_pre1:{ROLLERS + 1}", real=True)
+ROLLER_ARGS = args_of([(k, f"stiffness of the roller of P{r + 1}", "N/m") for r, k in enumerate(STIFFNESS)]
+                      + [(c, f"damping of the roller of P{r + 1}", "N s/m") for r, c in enumerate(DAMPING)]
+                      + [(x, f"preload of the roller of P{r + 1} (clamped pair law)", "m")
+                         for r, x in enumerate(PRELOAD)])
+
+
+def assembly_spec(model: dict, names: list[str], units: list[str]) -> ModuleSpec:
+    """The module ``elastic_assembly`` of one elastic model. ``model``: the engine's record
+    (``symmech.trolley.elastic.layout.MODEL``) as nested lists by field name (``gram_x`` as (F, 9, F)), with
+    ``mass`` [kg], ``rollers`` and ``clamped`` (0/1), ``probe_fields`` (F, probes, 3) [m],
+    ``probe_points`` (probes, 3) [m], ``elastic`` (F,) 1 on the elastic fields, ``g_ref`` [m/s²]; ``names``,
+    ``units`` the N coordinates'."""
+    n = len(names)
+    q = sp.symbols(f"q0:{n}", real=True)
+    qd = sp.symbols(f"qd0:{n}", real=True)
+    qdd = sp.symbols(f"qdd0:{n}", real=True)
+    state = args_of([(q[i], f"coordinate {names[i]}", units[i]) for i in range(n)]
+                    + [(qd[i], f"rate of {names[i]}", f"{units[i]}/s") for i in range(n)])
+    params = ROLLER_ARGS + CHANNEL_ARGS
+    terms = _Terms(model, q, qd)
+    R = terms.residual()
+    M = terms.mass_matrix()
+    mass = sp.diag(sp.eye(n), M)
+    dynamics = Dynamics(state, params, sp.Matrix(list(qd) + [-r for r in R]), mass=mass,
+                        meaning="the elastic trolley in its track frame", jacobian=False)
+    acc_args = args_of([(qdd[i], f"acceleration of {names[i]}", f"{units[i]}/s^2") for i in range(n)])
+    outputs = NamedMatrix("outputs", sp.Matrix(terms.outputs(qdd)), state + acc_args + params,
+                          "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
+    return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 and outputs, assembled from one "
+                      "model's invariants", SOURCE, (outputs,), dynamics)
+
+
+def _number(x) -> sp.Expr:
+    """An invariant's value as an exact binary float (printed with every digit)."""
+    return sp.Float(float(x), 17)
+
+
+def _dot(coefficients, values) -> sp.Expr:
+    """Σ c_i v_i over the nonzero coefficients."""
+    return sp.Add(*[_number(c) * v for c, v in zip(coefficients, values) if c != 0])
+
+
+class _Terms:
+    """The sums of the compiled engine's ``_terms``, ``_rollers``, ``_membrane`` and ``_resultants`` over one
+    model's invariants."""
+
+    def __init__(self, model: dict, q, qd):
+        self.m, self.q, self.qd = model, q, qd
+        self.n, self.f = len(q), len(model["gram_trace"])
+        load, w, dw = CHANNELS[0:3], CHANNELS[3:6], CHANNELS[6:9]
+        W = sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+        dW = sp.Matrix([[0, -dw[2], dw[1]], [dw[2], 0, -dw[0]], [-dw[1], dw[0], 0]])
+        self.load, self.W, self.B = sp.Matrix(load), W, W * W + dW
+        self.rr = self.field_position()
+        self.v = self.times_a(qd, q)
+        self.p2 = [0] * (1 + self.n) + self.times_a(qd, qd)[1 + self.n:]
+
+    def field_position(self) -> list:
+        """Coefficients of r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the fields (F)."""
+        m, q = self.m, self.q
+        pairs = [(sp.Rational(1, 2) if i == j else 1) * q[i] * q[j] for i, j in zip(m["pair_i"], m["pair_j"])]
+        return [sp.Integer(1), *q, *pairs]
+
+    def times_a(self, y, x) -> list:
+        """y A(x) (F): Σ_b y_b (φ_b + Σ_c x_c ψ_bc)."""
+        m = self.m
+        out = [sp.Integer(0)] * self.f
+        for b in range(self.n):
+            out[1 + b] += y[b]
+            for e in range(m["ptr"][b], m["ptr"][b + 1]):
+                out[m["col"][e]] += y[b] * x[m["qi"][e]]
+        return out
+
+    def a_times(self, z) -> list:
+        """A(q) z (N) for z (F)."""
+        m, q = self.m, self.q
+        return [z[1 + b] + sp.Add(*[q[m["qi"][e]] * z[m["col"][e]] for e in range(m["ptr"][b], m["ptr"][b + 1])])
+                for b in range(self.n)]
+
+    def gram_pass(self, x) -> list:
+        """X (F x 9) with X_k = Σ_l G_kl x_l, row-major 3 x 3 blocks."""
+        return [[_dot(self.m["gram_x"][k][j], x) for j in range(9)] for k in range(self.f)]
+
+    def rollers(self, q, qd) -> tuple[list, list]:
+        """Roller deflections d and forces P1…P5 [m, N] (the linear or the clamped-pair law)."""
+        m = self.m
+        d = [_dot(m["rollers_map"][r], q[:ROLLERS]) for r in range(ROLLERS)]
+        dd = [_dot(m["rollers_map"][r], qd[:ROLLERS]) for r in range(ROLLERS)]
+        force = []
+        for r in range(ROLLERS):
+            k, c, pre = STIFFNESS[r], DAMPING[r], PRELOAD[r]
+            spring = k * (sp.Max(pre - d[r], 0) - sp.Max(pre + d[r], 0)) if m["clamped"] else -k * d[r]
+            force.append(spring - c * dd[r])
+        return d, force
+
+    def residual(self) -> list:
+        """R (N) of M q̈ + R = 0 at q̈ = 0."""
+        m, q, qd = self.m, self.q, self.qd
+        X, Y = self.gram_pass(self.rr), self.gram_pass(self.v)
+        B, W = list(self.B), list(self.W)
+        z = [_dot(m["s1"][k], self.load) + _dot(m["gram_trace"][k], self.p2)
+             + sp.Add(*[X[k][j] * B[j] + 2 * Y[k][j] * W[j] for j in range(9)]) for k in range(self.f)]
+        R = [r + _dot(m["stiffness"][b], q) + _dot(m["damping"][b], qd) for b, r in enumerate(self.a_times(z))]
+        for blk, size in enumerate(m["block_size"]):  # held beams' membrane force 4 c (xᵀ H x) H x
+            idx = m["block_index"][blk][:size]
+            H = [row[:size] for row in m["block_h"][blk][:size]]
+            hx = [_dot(H[i], [q[j] for j in idx]) for i in range(size)]
+            quad = sp.Add(*[q[idx[i]] * hx[i] for i in range(size)])
+            for i in range(size):
+                R[idx[i]] += 4 * _number(m["block_c"][blk]) * quad * hx[i]
+        if m["rollers"]:
+            _, force = self.rollers(q, qd)
+            for j in range(ROLLERS):
+                R[j] -= _dot([m["rollers_map"][r][j] for r in range(ROLLERS)], force)
+        return R
+
+    def mass_matrix(self) -> sp.Matrix:
+        """M = A Gtr Aᵀ (N x N)."""
+        gtr = self.m["gram_trace"]
+        AG = [self.a_times([_number(gtr[k][j]) for k in range(self.f)]) for j in range(self.f)]  # (A Gtr)[b, j]
+        columns = [self.a_times([AG[k][j] for k in range(self.f)]) for j in range(self.n)]
+        return sp.Matrix(self.n, self.n, lambda b, j: columns[j][b])
+
+    def outputs(self, qdd) -> list:
+        """P0 (the resultant along x1), P1…P5, d1…d5, then per probe u, e [m] and n [g] at q̈ = qdd."""
+        m, q = self.m, self.q
+        acc = [a + p for a, p in zip(self.times_a(qdd, q), self.p2)]
+        s1 = m["s1"]
+        first, fv, fa = ([_dot([s1[k][j] for k in range(self.f)], x) for j in range(3)] for x in (self.rr, self.v, acc))
+        P0 = _number(m["mass"]) * self.load[0] + fa[0] + sp.Add(
+            *[self.B[0, j] * first[j] + 2 * self.W[0, j] * fv[j] for j in range(3)])
+        d, force = self.rollers(q, self.qd)
+        out = [P0, *force, *d]
+        w, dw = sp.Matrix(CHANNELS[3:6]), sp.Matrix(CHANNELS[6:9])
+        for k, point in enumerate(m["probe_points"]):
+            field = [[m["probe_fields"][f][k][i] for f in range(self.f)] for i in range(3)]
+            pos, vel, ddu = (sp.Matrix([_dot(field[i], x) for i in range(3)]) for x in (self.rr, self.v, acc))
+            elastic = [_dot([c * e for c, e in zip(field[i], m["elastic"])], self.rr) for i in range(3)]
+            a = self.load + dw.cross(pos) + w.cross(w.cross(pos)) + 2 * w.cross(vel) + ddu
+            out += [pos[i] - _number(point[i]) for i in range(3)] + elastic
+            out += [a[i] / _number(m["g_ref"]) for i in range(3)]
+        return out

@@ -1,6 +1,0 @@
-"""The elastic trolley's compiled engine, registered (:mod:`symmech.core.engines`): the elastic body's
-assembly in numba, integrated by Radau IIA (:mod:`symmech.trolley.elastic_compiled`)."""
-from symmech.core import engines
-
-engines.register(engines.Engine(
-    "elastic", "the elastic trolley's assembly and Radau IIA solve (numba)", "symmech.trolley.elastic_compiled"))

@@ -1,0 +1,78 @@
+"""Two habits checked over symmech/ with ast, nothing imported: no module reads another module's private
+``_name``, and no module is longer than 800 lines."""
+import ast
+from pathlib import Path
+
+import symmech
+
+PACKAGE = Path(symmech.__file__).resolve().parent
+MAX_LINES = 800
+PRIVATE_ALLOWED: set[tuple[str, str]] = set()
+LONG_ALLOWED: set[str] = set()
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def cross_module_private_uses(source: str, me: str, package: str) -> set[tuple[str, str]]:
+    """(me, other_module._name) for every private name of another symmech module that the module ``me``
+    (of ``package``, for relative imports) with text ``source`` imports by name or reads as an attribute of an
+    imported module."""
+    tree = ast.parse(source)
+    modules, found = {}, set()  # local name -> symmech module it stands for
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("symmech"):
+                    modules[a.asname or a.name] = a.name
+        elif isinstance(node, ast.ImportFrom):
+            base = ("." * node.level + (node.module or "")) if node.level else node.module or ""
+            if node.level:
+                base = package.rsplit(".", node.level - 1)[0] + ("." + node.module if node.module else "")
+            if not base.startswith("symmech"):
+                continue
+            for a in node.names:
+                if private(a.name) and base != me:
+                    found.add((me, f"{base}.{a.name}"))
+                modules[a.asname or a.name] = f"{base}.{a.name}"
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Attribute) and private(node.attr) and isinstance(node.value, ast.Name)
+                and node.value.id in modules and modules[node.value.id] != me):
+            found.add((me, f"{modules[node.value.id]}.{node.attr}"))
+    return found
+
+
+def test_no_module_uses_another_modules_private_names():
+    found = set()
+    for path in sorted(PACKAGE.rglob("*.py")):
+        me = module_name(path)
+        package = me if path.name == "__init__.py" else me.rpartition(".")[0]
+        found |= cross_module_private_uses(path.read_text(encoding="utf-8"), me, package)
+    assert found - PRIVATE_ALLOWED == set(), "private names used across modules:\n" + "\n".join(
+        f"  {me} reads {name}" for me, name in sorted(found - PRIVATE_ALLOWED))
+    assert PRIVATE_ALLOWED <= found, f"allowed but gone (shrink the list): {sorted(PRIVATE_ALLOWED - found)}"
+
+
+def test_the_checker_sees_a_private_import_and_attribute():
+    """The checker itself: a from-import of ``_x`` and an attribute ``mod._y`` of an imported module count;
+    the module's own private names and another module's dunders do not."""
+    code = ("from symmech.core.schema import _did_you_mean\nfrom symmech.core import scene as s\n"
+            "from . import _sibling\n"
+            "def _own():\n    return s._quantity, s.__name__, _own\n")
+    me = "symmech.grain.probe"
+    assert cross_module_private_uses(code, me, "symmech.grain") == {
+        (me, "symmech.core.schema._did_you_mean"), (me, "symmech.core.scene._quantity"),
+        (me, "symmech.grain._sibling")}
+
+
+def test_no_module_is_longer_than_800_lines():
+    lengths = {str(p.relative_to(PACKAGE)): len(p.read_text(encoding="utf-8").splitlines())
+               for p in PACKAGE.rglob("*.py")}
+    long = {p: n for p, n in lengths.items() if n > MAX_LINES and p not in LONG_ALLOWED}
+    assert long == {}, f"modules over {MAX_LINES} lines: {long}"
