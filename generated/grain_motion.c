@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 1197f9e6c516ea4aada0ba9c0cc0d41598fd0feabe8976484212a32d9df454ed
-// source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
+// symmech 0.1.0 generated module; inputs sha256 f4025b9b8ba171d5319cd071b9dc6d88cfcc62ea7706aae90a97c6b5fa239494
+// source key 1b0f5332c01f85fde41f75442c3c2401f80f84898cf091aac4e0787302c8a9bc
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a09139331ecd0d3cda5180c7d2674d2a1f81127fb4f913fde2cd51bd99250923
-# source key ec2865e0a73902ba746e9282fb71b4c51ab55e36a22338447d5de5652c81a79f
-# body sha256 6eeb434f51b30b333051c7361544cb32139dfb371728cc292be7ebc290d164e0
+# symmech 0.1.0 generated module; inputs sha256 9671e4d6443ed7f5750dda2d7ff50e4f9c07dcbe9c7e85ff4b5cec8416b2016c
+# source key 1b0f5332c01f85fde41f75442c3c2401f80f84898cf091aac4e0787302c8a9bc
+# body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 
 Source: symmech.grain.derive_motion (paper 1, seed 000, eqs (61)-(64)).
@@ -46,7 +46,7 @@ Dynamics of the grain in flight over the vibrating surface (eqs (61)-(62)):
     p[14] c [m] semi-axis along body axis 3
 ``STATE`` and ``PARAMS`` hold ``(name, SI unit, meaning)`` per entry.
 ``events(t, y, p)`` returns the event functions g (k,) = (1,), in the order of ``EVENTS``
-(``(name, direction, terminal, SI unit, meaning)``; ``symmech.core.ode.integrate`` locates their zeros):
+(``(name, direction, terminal, SI unit, meaning)``; ``symmech.numerics.ode.integrate`` locates their zeros):
     g[0] contact [m] gap between the ellipsoid's lowest point and the plane (direction -1, terminal)
 """
 import math
