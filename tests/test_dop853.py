@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate._ivp import dop853_coefficients as scipy_dop
 
-from symmech.numerics import dop853
+from symmech.numerics import dop853_tableau as dop853
 
 
 @pytest.mark.parametrize("name", ["A", "B", "C", "E3", "E5", "D"])

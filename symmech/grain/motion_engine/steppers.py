@@ -3,14 +3,14 @@ them (closures: see that module's docstring): the torque-free rotation of a flig
 contact (``SLIP``, ``STICK``), with the slip's Jacobian for Radau IIA."""
 from __future__ import annotations
 
-from symmech.numerics import ode
+from symmech.numerics import dop853_tableau as tableau, ode
 from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import gm
 from symmech.grain.motion_engine.layouts import INT
 from symmech.grain.motion_engine.slip import slide_rhs, slip_jac
 
 ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Prince stepper
-DOP_STAGES, DOP_EXTENDED, DOP_POWER, DOP_EXPONENT = ode.DOP_STAGES, ode.DOP_EXTENDED, ode.DOP_POWER, ode.DOP_EXPONENT
+DOP_STAGES, DOP_EXTENDED, DOP_POWER, DOP_EXPONENT = tableau.STAGES, tableau.EXTENDED, tableau.POWER, tableau.EXPONENT
 
 
 @jit
