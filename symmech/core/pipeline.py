@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from symmech import __version__
-from symmech.core import integrity, registry
-from symmech.core.context import Context
+from symmech.core import integrity, registry, sample
+from symmech.core.context import DEFAULT_MAX_TIME, Context
 from symmech.core.results import Result
 from symmech.core.scene import SymmechError, check_depth, read_toml
 from symmech.core.schema import validate
@@ -48,7 +48,8 @@ SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
 class Scene:
     """A validated scene: its kind, the resolved fields (defaults filled in) and the setup.
 
-    ``timing`` holds the wall time [s] of each stage done so far (validate, run).
+    ``timing`` holds the wall time [s] of each stage done so far (validate, estimate, run); ``cost`` the
+    estimate the run told (or refused on), once it ran.
     """
 
     kind: registry.Kind
@@ -56,14 +57,22 @@ class Scene:
     setup: Any
     source: str = "<dict>"
     timing: dict = field(default_factory=dict)
+    cost: registry.Estimate | None = None
 
-    def estimate(self) -> registry.Estimate | None:
-        return self.kind.estimate(self.setup) if self.kind.estimate else None
+    def estimate(self, max_time: float = DEFAULT_MAX_TIME, sampled: bool = True) -> registry.Estimate | None:
+        """The run's cost: the kind's count model, scaled by timed samples on this machine when ``sampled``
+        (:func:`symmech.core.sample.timed`, within ``max_time`` [s]), or None for a kind without one."""
+        if self.kind.estimate is None:
+            return None
+        cost = self.kind.estimate(self.setup)
+        return sample.timed(self.kind, self.setup, cost, max_time) if sampled else cost
 
     def run(self, ctx: Context | None = None) -> Result:
         """Compute (no files written); raises SymmechError on a non-finite result."""
         ctx = ctx or Context(quiet=True)
-        cost = self.estimate()
+        start = time.perf_counter()
+        cost = self.cost = self.estimate(ctx.max_time, ctx.sampled)
+        self.timing["estimate"] = time.perf_counter() - start
         if cost is not None and cost.seconds > ctx.max_time:
             raise SymmechError(f"estimated run time {cost.seconds:.3g} s ({cost.what}) exceeds "
                                f"--max-time {ctx.max_time:g} s; raise --max-time to run it")
