@@ -20,18 +20,17 @@ from symmech.core import registry
 from symmech.core.context import Context
 
 SHARE = 0.03  # of the count model's work in the first timed sample; the second takes twice that
-SMALLEST = 0.1  # s; a count estimate below it is told as it is (a sample would cost more than it corrects)
 STEADY = 0.3  # s; samples double until one takes this long (a time slice of a loaded machine is milliseconds)
-FACTOR_BOUNDS = (0.1, 100.0)  # a factor beyond them is the noise of a loaded machine on short samples: clipped
 
 
 def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) -> registry.Estimate:
     """``cost`` (the count estimate of ``setup``) scaled by timed samples of it on this machine, or ``cost``
-    itself when the kind has no sample, the run is short, a compile is still to come or ``cost`` is over
-    ``max_time`` already (refused on counts, with no sample run). The samples run quietly within ``max_time``
-    [s]; they raise only what the run itself would raise."""
+    itself when the kind has no sample, a compile is still to come or ``cost`` is over ``max_time`` already
+    (refused on counts, with no sample run). A short run is sampled too (its count model may be far off, and
+    its samples cost about as little as it does). The samples run quietly within ``max_time`` [s]; they raise
+    only what the run itself would raise."""
     repeated = cost.seconds - cost.once
-    if kind.sample is None or cost.once > 0.0 or repeated < SMALLEST or cost.seconds > max_time:
+    if kind.sample is None or cost.once > 0.0 or repeated <= 0.0 or cost.seconds > max_time:
         return cost
     ctx = Context(quiet=True, max_time=max_time)
     kind.run(kind.sample(setup, 0.0), ctx)  # pays the one-off costs of this process
@@ -40,8 +39,11 @@ def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) 
         share *= 2.0
         samples.append(_timed_sample(kind, setup, share, ctx))
     (m1, t1), (m2, t2) = samples[-2:]
-    factor = (t2 - t1) / (m2 - m1) if m2 > m1 else t2 / m2
-    factor = min(max(factor, FACTOR_BOUNDS[0]), FACTOR_BOUNDS[1])
+    # per count: the slope between the samples; the larger's mean (fixed costs in it) where noise on a loaded
+    # machine makes the slope non-positive or steeper than twice that mean
+    mean = t2 / m2
+    slope = (t2 - t1) / (m2 - m1) if m2 > m1 else mean
+    factor = slope if 0.0 < slope <= 2.0 * mean else mean
     return registry.Estimate(t2 + factor * max(repeated - m2, 0.0),
                              f"{cost.what}; timed samples: {t1:.3g} s and {t2:.3g} s for {m1 / repeated:.0%} and "
                              f"{m2 / repeated:.0%} of it, the rest at {factor:.3g}x the count model")

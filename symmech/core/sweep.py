@@ -203,12 +203,12 @@ def startup_seconds(scheduler: str | None, loaded: float) -> float:
 def chart_seconds(shape: tuple[int, ...]) -> float:
     """Wall time [s] of one heat map of ``shape`` cells with its colour bar, contours, cell labels and legend, drawn and saved as PNG
     here and now (the second of two: the first pays matplotlib's import): a sweep's chart on this machine; a
-    line of ``shape`` (n,) as a plane of one row."""
+    line of ``shape`` (n,) as a plane of two rows."""
     import io
 
     from symmech.core import plotting
 
-    shape = (tuple(shape) + (1,))[:2]
+    shape = tuple(max(n, 2) for n in (tuple(shape) + (1,))[:2])  # contours need two rows
 
     def draw():
         fig, grid = plotting.figure(width=7.5, height=5.2)
