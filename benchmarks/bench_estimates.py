@@ -21,11 +21,13 @@ import tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
-# name: (scene file, the sweep's axes as num points, population counts): small copies of the bundled sweeps
-# (the bundled ones take minutes of CPU on 2 cores) and the whole sweeps of one's own
+# name: (scene file, points per swept axis, grains per population; None: as bundled): small copies of the two
+# large bundled sweeps (minutes of CPU on 2 cores) and the other bundled sweeps whole
 SWEEPS = {
     "grain_separation_3x3x8": ("grain_separation.toml", 3, 8),
     "trolley_elastic_sweep_3x3": ("trolley_elastic_sweep.toml", 3, None),
+    "grain_transport_sweep": ("grain_transport_sweep.toml", None, None),
+    "trolley_speed_sweep": ("trolley_speed_sweep.toml", None, None),
 }
 
 
@@ -47,9 +49,9 @@ def one_sweep(name: str) -> dict:
 
     file, num, count = SWEEPS[name]
     raw = tomllib.loads((SCENES / file).read_text())
-    for axis in ("x", "y"):
+    for axis in ("x", "y") if num else ():
         raw["sweep"][axis]["num"] = num
-    for population in raw.get("population", []):
+    for population in raw.get("population", []) if count else ():
         population["count"] = count
     told = []
 
