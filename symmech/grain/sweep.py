@@ -347,7 +347,6 @@ def estimate(p: Plan, workers: int):
     return registry.Estimate(seconds / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)")
 
 
-
 SAMPLE_GRAINS = 4  # grains of the first population at point (0, 0) timed for the sweep's estimate
 
 
@@ -378,6 +377,7 @@ def timed_estimate(p: Plan, processes: int, scheduler: str | None, drawing: floa
 def chart_count(p: Plan) -> int:
     """The sweep's charts: transport velocity and hop fraction per population, the separation's two."""
     return 2 * len(p.populations) + (2 if len(p.populations) == 2 else 0)
+
 
 def _as_dispatched(scene):
     """A loaded grain scene (pipeline.Scene) as the workers run it: engine `auto` runs compiled, since
