@@ -19,10 +19,10 @@ RIGID = edited(bundled("trolley_helix"), ("time.t_end", 8.0), ("time.steps", 200
 
 
 class Told(Context):
-    """A quiet Context that keeps what it says."""
+    """A Context that keeps what it says (not quiet: a run's estimate is told, so sampled)."""
 
     def __init__(self, **kw):
-        super().__init__(quiet=True, **kw)
+        super().__init__(quiet=False, **kw)
         self.told = []
 
     def say(self, message: str) -> None:
@@ -50,18 +50,20 @@ def test_a_run_estimate_holds_whatever_the_count_model_says(monkeypatch, off):
         monkeypatch.setattr(trolley_scene, name, getattr(trolley_scene, name) * off)
     scene = pipeline.load(RIGID)
     count = scene.kind.estimate(scene.setup).seconds
-    scene.run(Context(quiet=True))
+    scene.run(Told())  # told (not quiet): sampled
     actual = statistics.median([scene.timing["run"], *(run_seconds(scene) for _ in range(2))])
     assert "timed samples" in scene.cost.what
     assert 0.5 <= scene.cost.seconds / actual <= 2.0, (scene.cost, actual)
     assert not 0.5 <= count / actual <= 2.0  # the count model alone would not hold: the test can fail
 
 
-def test_sweep_points_are_not_sampled():
-    """A sweep's points run with the sweep's own estimate: their runs time no samples."""
-    scene = pipeline.load(RIGID)
-    scene.run(core_sweep.point_context(time.time() + 60.0))
-    assert scene.cost == scene.kind.estimate(scene.setup)
+def test_sweep_points_and_quiet_runs_far_from_the_budget_are_not_sampled():
+    """A sweep's points run with the sweep's own estimate, and a quiet run (the API's) whose count estimate is
+    far below --max-time is told to nobody: neither times samples."""
+    for ctx in (core_sweep.point_context(time.time() + 60.0), Context(quiet=True)):
+        scene = pipeline.load(RIGID)
+        scene.run(ctx)
+        assert scene.cost == scene.kind.estimate(scene.setup)
 
 
 def test_a_sweep_estimate_comes_from_its_second_wave():
