@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d4319aba698cc1c9f366d990410449fd69a3cec315074a9e0c84cd7069bbd195
-// source key 7036e2c06235a322bcd980659e3f1ff2968320ad0860c41374e2c231e86bde28
+// source key fb3571620a4af839f75ae5c8c6c0df4ded4237737ec2debe8c498ad2b3dea569
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 74badcbe93bb7bcbe7c6c70c07e1ac41c8a0005bbfb9c4862dbe829ab6d8453e
-# source key 7036e2c06235a322bcd980659e3f1ff2968320ad0860c41374e2c231e86bde28
+# source key fb3571620a4af839f75ae5c8c6c0df4ded4237737ec2debe8c498ad2b3dea569
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5ed7b2691f70e5550ce28a4ec3c9f459b4abad63561bb72cad6c20197b219b38
-# source key 7036e2c06235a322bcd980659e3f1ff2968320ad0860c41374e2c231e86bde28
+# source key fb3571620a4af839f75ae5c8c6c0df4ded4237737ec2debe8c498ad2b3dea569
 # body sha256 f2bc560848509726ad4ea10d6d2cd8387726d5d0138963e1b1153df50a7c26a3
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a2fe40b7dab70c9a9754e2bffff551fc063ed96ff87c58d03183c48eecb4a853
-// source key 629fb23eba7adce55e7fc97eb1b96ebc57690957bb40bc51d43ba3fc05cb22d7
+// source key 4a10aabff20457baa0052f4e61c30159dd4e26a7c24676305e2262ead441d414
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

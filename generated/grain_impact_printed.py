@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 85dbb61392d01802001412144c6765584176463d2642026489f5301e8fee4181
-# source key 629fb23eba7adce55e7fc97eb1b96ebc57690957bb40bc51d43ba3fc05cb22d7
+# source key 4a10aabff20457baa0052f4e61c30159dd4e26a7c24676305e2262ead441d414
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

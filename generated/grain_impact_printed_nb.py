@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e6bc79fb5cbec3b209f21f1573686a299a1b7d1c1579af2f199c4bba54119146
-# source key 629fb23eba7adce55e7fc97eb1b96ebc57690957bb40bc51d43ba3fc05cb22d7
+# source key 4a10aabff20457baa0052f4e61c30159dd4e26a7c24676305e2262ead441d414
 # body sha256 d5c8c8d65c7fb90734ae26bcc8c9e5ebf6f4a1bfd5f6484933dbdb9464358d24
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e05d1dffb5cee41955ff7683ff0820620a07f39f92577828c34cc7a364c43df6
-// source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
+// source key d32d5cfb17cdcc6072bae3812695dada18c3b95209b2a1022cab09f170c5bcc5
 // body sha256 29d791f375a67a4af761aca35dc842c4ffca9ee751729a8e7fd72291916b04df
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

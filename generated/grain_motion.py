@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22abb92df2e76ae3686d42b177bb488138324e8851cb9b76255e6b37abeb92f9
-# source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
+# source key d32d5cfb17cdcc6072bae3812695dada18c3b95209b2a1022cab09f170c5bcc5
 # body sha256 90c427d2b00167fef81498d6ac6aa42ef3c460fd908dd5be87eae97b09b012d5
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

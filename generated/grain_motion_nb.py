@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 49a8b8a06f10f4a4347ae5fc0303bd320ab32fd6b0cdac408c5808aa8b75dfa4
-# source key f87463802522a5dc07c6bd9135a557f4a973cafb0ab757830df526082e2e13f7
+# source key d32d5cfb17cdcc6072bae3812695dada18c3b95209b2a1022cab09f170c5bcc5
 # body sha256 9c4b29f0ccea7f755c1066d4a7e8d78a9070785fdbe6eaa54b99c27c16c9968c
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

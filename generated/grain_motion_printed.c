@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 77a754b3f421c4355d266d5de70c63fa4a12e6571e70b9ff06c6ca640609038a
-// source key 030fce30c10149cec2e76691985c1f253e2749b2f438f284988d44566bfb15ed
+// source key 01ea10690d961f8926dbe0b8fd3c69f3bf4d40c940310cefe785227bd005b29c
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

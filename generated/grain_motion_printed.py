@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 da186415b9ebd2aa1d9a37d430c4f5626dd67b571f3069376eb1ed4deac2b7f9
-# source key 030fce30c10149cec2e76691985c1f253e2749b2f438f284988d44566bfb15ed
+# source key 01ea10690d961f8926dbe0b8fd3c69f3bf4d40c940310cefe785227bd005b29c
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1e78bff939177525602fd5c3c39332e2176d37ba605e4888d528bd35a45645ea
-# source key 030fce30c10149cec2e76691985c1f253e2749b2f438f284988d44566bfb15ed
+# source key 01ea10690d961f8926dbe0b8fd3c69f3bf4d40c940310cefe785227bd005b29c
 # body sha256 4e211226fa0c2371d1d74f53967384746d72dd758d0f039f58a0e0fe3da8242e
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

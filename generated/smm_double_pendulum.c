@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a394bc2270fdb110090b2f18b8791c2403a820482bc989c878f850c815ed52f4
-// source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+// source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c96a6200f1cd65883aa6be750dc813e9cf42b628c73c3b7b1c59b5182bbb488e
-# source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+# source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 # body sha256 ee0b337805a156368d52061587c994bf89595f3d2bc50ca45db8d795edd46b49
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b638724fbe78932d9d66a2006a155b8a73abec1048e28c04684ba4f9d86e07af
-# source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+# source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 # body sha256 f51e88dcd17aa736dcd8c31b0c5a6b8a40ad39980583bfc2625aa5b48b4385dd
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

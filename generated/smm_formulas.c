@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a46cf6c07c9668c3bfe54866b219dfa9ecadde435db67021acc6f775b18e61cb
-// source key 718a40e45d1f015bc53b1ad975871abd146d7eb0d1c3bcbd00730da359731f03
+// source key 7457fd200846c8fe45b748ac1774561854c4181cfb7de8ad10e1e38da4861da5
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f6daec3a5d0f920489dcd110f82c6f2cae6919a358f7253ef58541b1686610c6
-# source key 718a40e45d1f015bc53b1ad975871abd146d7eb0d1c3bcbd00730da359731f03
+# source key 7457fd200846c8fe45b748ac1774561854c4181cfb7de8ad10e1e38da4861da5
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 600b2a7ecaeff01755553c75754d5666514efc158768789bce8261101095334c
-# source key 718a40e45d1f015bc53b1ad975871abd146d7eb0d1c3bcbd00730da359731f03
+# source key 7457fd200846c8fe45b748ac1774561854c4181cfb7de8ad10e1e38da4861da5
 # body sha256 c649c11be7beddb52e65950b3437ac1bb87a4f0cc32c199a7385b767e5e74b71
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

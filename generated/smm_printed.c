@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1d8157b58ce60f9154c356a6974f6f30694048d8cc23894eeb37a21ecb6375b6
-// source key c49ed5275b42308a951ab6c4dda69836eb93b1c9c3a254fd6d5d0d3a84b9ef56
+// source key 889ab28d8285a6cb3cb390995b118926ab2133c451cec22219e155e4f1e16dda
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

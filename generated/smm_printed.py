@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 dbb8e65d918d89e39962ac5ea20dd7f2337606424ff39681449fdcaf5255f5ff
-# source key c49ed5275b42308a951ab6c4dda69836eb93b1c9c3a254fd6d5d0d3a84b9ef56
+# source key 889ab28d8285a6cb3cb390995b118926ab2133c451cec22219e155e4f1e16dda
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

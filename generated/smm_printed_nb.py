@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 bf4e41fac77ef95be9a02c3ce28b20b6f584d0f6aa5d45ed526c93bc85355923
-# source key c49ed5275b42308a951ab6c4dda69836eb93b1c9c3a254fd6d5d0d3a84b9ef56
+# source key 889ab28d8285a6cb3cb390995b118926ab2133c451cec22219e155e4f1e16dda
 # body sha256 30cf89559c7031d87a949021d733ce6734bc18ae1ceabe65d6715518c79b1aa3
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7bcd833a0c73cf2bc8d4dd614d08642e475383726d196cd2dffda76728f3f9da
-// source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+// source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d4d676e2526655b941f0290bb52784c6bd5348a0cc2ed895aab3685497d8fbb1
-# source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+# source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

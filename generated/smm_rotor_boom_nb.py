@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 196962ab826bdebfcfb43fec482737e7d02fc6ea417f12db38c72e7f6125b392
-# source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+# source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 # body sha256 3e58a72ec1d24046edbed972bd984d826383c90d7cd71dd2987ff555c4c3e493
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

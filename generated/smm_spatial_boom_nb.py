@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b13ee9731019bb3b76ff9ba7fd6e71e326e82c7aedeba78bfd5e2391edfa5eae
-# source key cb8e65a78e9a10ef77bccfdeade7542107c7bc0a5112e698cc5977071e1ea560
+# source key 94ecf4d1e0dec8910dd75b66fe7b5103be63799a2b420fb42998f1ab096edf6e
 # body sha256 488092b385d22a3423efd4187a4f730778d474a8cd3a463b1bb4429dd479635f
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

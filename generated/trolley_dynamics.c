@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 846f99db9a3108d4a32b040fd023b8174604ff86a7e677d79cdb2d094bb398a3
-// source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+// source key d7f2cc146f1f712a67b6be934ae295e7fcc2c373325660782f467f20533b5c8f
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 25bc6225c25b3522e6381c683cfcd4a704c11e90f53cccdb96d6760c36c5f4df
-# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+# source key d7f2cc146f1f712a67b6be934ae295e7fcc2c373325660782f467f20533b5c8f
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 44a0c3f5befb32b02d1cc77a79c3e2ca2678a22111207ec5de5d7fcde990bb10
-# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+# source key d7f2cc146f1f712a67b6be934ae295e7fcc2c373325660782f467f20533b5c8f
 # body sha256 24069f88dd2beb24a93ae34e659e628dc6ec36f279dfa3c3216f9cdb5416525f
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

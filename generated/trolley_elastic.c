@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e607eefeed7745c3a96e3a278687c86a534301812f0ad4f9d0f6edef6206edc5
-// source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+// source key d6ad8903c669cc9508d58a7e042833dc9aa7bfab8fdd12d5ebe4b11f7b752c2d
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

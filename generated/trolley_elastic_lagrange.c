@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 8e1f83659fa64affd6185873d0c21b72d57ae973dcec3840f71cab6bb25ff7ad
-// source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+// source key d6ad8903c669cc9508d58a7e042833dc9aa7bfab8fdd12d5ebe4b11f7b752c2d
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 68042afcb72ecbcd4848513170552ef4d8496240fb3816e210a1cdd457c75493
-# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+# source key d6ad8903c669cc9508d58a7e042833dc9aa7bfab8fdd12d5ebe4b11f7b752c2d
 # body sha256 34c98c7a528bc8284441d6840c0ad622744b6a8488e1500fc8ec0350acce005e
 """Small elastic trolley by Lagrange's equations (test route).
 

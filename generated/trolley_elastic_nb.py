@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9b5e04b945c1aeea4275d98fa45f29f0e0068c1950d8ca4264691b518c336ea2
-# source key 4b9201397bb9730bc56a0b0710442b4f2ef376c9eb53ea2f85ca298cbe33c3ba
+# source key d6ad8903c669cc9508d58a7e042833dc9aa7bfab8fdd12d5ebe4b11f7b752c2d
 # body sha256 1d2e6918f12f0a151330ca70cef97e917cf1c6574a1ff5ac4e714e8037dae423
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

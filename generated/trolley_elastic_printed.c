@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e005d693697a1f89d3100f724c7f3ef0c191e6744434d889f0db4824cd9e5eb5
-// source key 18ba12243b54d9ac1c1198fba51f7a9c2d0f1f4790d4975cf83de9198f080313
+// source key 65fc03f9e585881a77e53163ff31845284fa552c58afe00b0abfd707287a4b3f
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

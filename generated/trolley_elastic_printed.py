@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2081dbff72cfec517c6dffd7422847657fea3db78e766309a922a21104bd1f8d
-# source key 18ba12243b54d9ac1c1198fba51f7a9c2d0f1f4790d4975cf83de9198f080313
+# source key 65fc03f9e585881a77e53163ff31845284fa552c58afe00b0abfd707287a4b3f
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ac28f93dd38f6f877a1ff4a56a79f51fa47dfc646b52e94390c2402f892f3ce3
-# source key 18ba12243b54d9ac1c1198fba51f7a9c2d0f1f4790d4975cf83de9198f080313
+# source key 65fc03f9e585881a77e53163ff31845284fa552c58afe00b0abfd707287a4b3f
 # body sha256 08589cc700035da3374923dd0fd6e49860f32f2a24862098cba44c40adc435ad
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e5cf3aeb90e7e8cdd13fde4452396a975700920bfb9f962b6531b6723cdbb518
-// source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+// source key d7f2cc146f1f712a67b6be934ae295e7fcc2c373325660782f467f20533b5c8f
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

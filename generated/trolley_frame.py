@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad93a8d8a7bcf0d90ace9aaff5030d238b7c5e99c05349fbb115f019ee36cc0e
-# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+# source key d7f2cc146f1f712a67b6be934ae295e7fcc2c373325660782f467f20533b5c8f
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 135d9324af7b1f990f3f560da52635e6ccf294c1855a6bcf36876de726d0d33c
-# source key 661874ab27968a8287cca73b789c36eca87f3527cf6b05111732619182637d14
+# source key d7f2cc146f1f712a67b6be934ae295e7fcc2c373325660782f467f20533b5c8f
 # body sha256 336c6b27ae8221d28f52453237d7f1a722a4a71784d67afd8e3d70a94c859934
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 12dfa91129b50189cae8c6b99fda25aee1b2e1921cb59c63f5004c4e0353447f
-// source key a88ad883ebc61b9c0efe29d68b293333706dc1dfb8f659f0928c44bd7a561139
+// source key c1f43356004b4a77deed204c0f34cca2855b687fa3b2e5511a426aa156bdcbb1
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3177fc4464bdc9b6eb39fe80f9abd3087f42d96dab4701117ed26773756da428
-# source key a88ad883ebc61b9c0efe29d68b293333706dc1dfb8f659f0928c44bd7a561139
+# source key c1f43356004b4a77deed204c0f34cca2855b687fa3b2e5511a426aa156bdcbb1
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

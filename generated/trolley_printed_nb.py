@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 02aa698f18b0313e496d4bbeb93ca65a79a62822646b0882ed8dd7017e53e124
-# source key a88ad883ebc61b9c0efe29d68b293333706dc1dfb8f659f0928c44bd7a561139
+# source key c1f43356004b4a77deed204c0f34cca2855b687fa3b2e5511a426aa156bdcbb1
 # body sha256 4cef58fc59cc527c1f33a038f94be35a08792b58a1d0d22e2ebf3166f1eee4a6
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -60,9 +60,10 @@ class Scene:
     timing: dict = field(default_factory=dict)
     cost: registry.Estimate | None = None
 
-    def estimate(self, max_time: float = DEFAULT_MAX_TIME, sampled: bool = True) -> registry.Estimate | None:
-        """The run's cost: the kind's count model, scaled by timed samples on this machine when ``sampled``
-        (:func:`symmech.core.sample.timed`, within ``max_time`` [s]), or None for a kind without one."""
+    def estimate(self, max_time: float = DEFAULT_MAX_TIME, sampled: bool = False) -> registry.Estimate | None:
+        """The run's cost: the kind's count model (instant, nothing run), scaled by timed samples on this machine
+        when ``sampled`` (:func:`symmech.core.sample.timed`, within ``max_time`` [s]; what :meth:`run` tells), or
+        None for a kind without one."""
         if self.kind.estimate is None:
             return None
         cost = self.kind.estimate(self.setup)

@@ -366,7 +366,7 @@ def timed_estimate(p: Plan, processes: int, scheduler: str | None, drawing: floa
     started = time.perf_counter()
     simulate_point(timed)
     per_grain = (time.perf_counter() - started) / len(timed)
-    models = [scene.estimate(sampled=False).seconds for scene in p.first]
+    models = [scene.estimate().seconds for scene in p.first]
     work = per_grain / models[0] * sum(m * q["count"] for m, q in zip(models, p.populations)) * p.gamma.size
     startup = core_sweep.startup_seconds(scheduler, max(first - per_grain, 0.0))
     return registry.Estimate(startup + work / processes + drawing,
