@@ -35,9 +35,13 @@ def one_run(path: str) -> dict:
     from symmech.core import pipeline
     from symmech.core.context import Context
 
+    class Silent(Context):  # not quiet, as `symmech run`: the estimate it tells, timed samples included
+        def say(self, message: str) -> None:
+            pass
+
     with tempfile.TemporaryDirectory() as folder:
         scene = pipeline.load(path)
-        result = scene.run(Context(quiet=True))
+        result = scene.run(Silent(quiet=False))
         pipeline.write(result, Path(folder) / "out", scene, plots=False)
     return {"estimate": scene.cost and scene.cost.seconds, "actual": scene.timing["run"],
             "sampled": scene.timing["estimate"], "what": scene.cost and scene.cost.what}
