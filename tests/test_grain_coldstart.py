@@ -49,6 +49,7 @@ def cold_cache(tmp_path, monkeypatch):
     monkeypatch.setattr(compiled.ENGINE, "ahead_of_time", lambda: None)
     monkeypatch.setattr(compiled.ENGINE, "cache_dir", lambda: tmp_path / "cache")
     monkeypatch.setattr(build.subprocess, "Popen", lambda args, **kw: started.append((args, kw)))
+    monkeypatch.setattr(compiled.ENGINE, "started_builder", False)  # none by this process so far
     return started
 
 

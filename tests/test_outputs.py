@@ -75,8 +75,9 @@ def test_summary_records_version_resolved_scene_module_hashes_and_time(tmp_path,
     assert s["generated_modules"]["smm_double_pendulum"] == hashlib.sha256(body.encode()).hexdigest()
     assert f"# body sha256 {s['generated_modules']['smm_double_pendulum']}\n" in text
     timing = s["timing_s"]
-    assert set(timing) == {"validate", "run", "write", "total"}
-    assert timing["total"] == pytest.approx(timing["validate"] + timing["run"] + timing["write"], rel=1e-12)
+    assert set(timing) == {"validate", "estimate", "run", "write", "total"}
+    assert timing["total"] == pytest.approx(timing["validate"] + timing["estimate"] + timing["run"] + timing["write"],
+                                            rel=1e-12)
     assert s["files"] == ["a.png", "extra.txt", "series.csv"]
     assert s["tables"] == {"series": {"rows": 4, "doc": "", "text_columns": [], "columns": [
         {"name": "t", "unit": "s", "doc": "time"}, {"name": "y", "unit": "m", "doc": "height"}]}}

@@ -34,6 +34,7 @@ class Context:
     max_time: float = DEFAULT_MAX_TIME
     warnings: list[str] = field(default_factory=list)
     started: float = field(default_factory=time.perf_counter)
+    sampled: bool = True  # a run's estimate may time samples (a sweep's points: no, the sweep estimated them)
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.started

@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from symmech import __version__
-from symmech.core import integrity, registry
-from symmech.core.context import Context
+from symmech.core import integrity, registry, sample
+from symmech.core.context import DEFAULT_MAX_TIME, Context
 from symmech.core.results import Result
 from symmech.core.scene import SymmechError, check_depth, read_toml
 from symmech.core.schema import validate
@@ -42,13 +42,15 @@ from symmech.core.schema import validate
 ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "generated_modules",
             "headline", "checks", "warnings", "files", "tables", "scene")
 SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
+COUNT_UNCERTAINTY = 30.0  # a count model's seconds may be this far off on a loaded or another machine
 
 
 @dataclass
 class Scene:
     """A validated scene: its kind, the resolved fields (defaults filled in) and the setup.
 
-    ``timing`` holds the wall time [s] of each stage done so far (validate, run).
+    ``timing`` holds the wall time [s] of each stage done so far (validate, estimate, run); ``cost`` the
+    estimate the run told (or refused on), once it ran.
     """
 
     kind: registry.Kind
@@ -56,20 +58,35 @@ class Scene:
     setup: Any
     source: str = "<dict>"
     timing: dict = field(default_factory=dict)
+    cost: registry.Estimate | None = None
 
-    def estimate(self) -> registry.Estimate | None:
-        return self.kind.estimate(self.setup) if self.kind.estimate else None
+    def estimate(self, max_time: float = DEFAULT_MAX_TIME, sampled: bool = False) -> registry.Estimate | None:
+        """The run's cost: the kind's count model (instant, nothing run), scaled by timed samples on this machine
+        when ``sampled`` (:func:`symmech.core.sample.timed`, within ``max_time`` [s]; what :meth:`run` tells), or
+        None for a kind without one."""
+        if self.kind.estimate is None:
+            return None
+        cost = self.kind.estimate(self.setup)
+        return sample.timed(self.kind, self.setup, cost, max_time) if sampled else cost
 
     def run(self, ctx: Context | None = None) -> Result:
         """Compute (no files written); raises SymmechError on a non-finite result."""
         ctx = ctx or Context(quiet=True)
-        cost = self.estimate()
+        start = time.perf_counter()
+        cost = self.cost = self.estimate(ctx.max_time, ctx.sampled and (not ctx.quiet or self._near_budget(ctx)))
+        self.timing["estimate"] = time.perf_counter() - start
         if cost is not None and cost.seconds > ctx.max_time:
             raise SymmechError(f"estimated run time {cost.seconds:.3g} s ({cost.what}) exceeds "
                                f"--max-time {ctx.max_time:g} s; raise --max-time to run it")
         if cost is not None and cost.seconds >= SHOW_ESTIMATE:
             ctx.say(f"estimated run time {cost.seconds:.3g} s ({cost.what})")
         return self._finish(self.kind.run, ctx, "run")
+
+    def _near_budget(self, ctx: Context) -> bool:
+        """Whether the count estimate, off by up to :data:`COUNT_UNCERTAINTY` either way, may reach ``--max-time``:
+        a quiet run (the API's, a test's) times samples only then, since nobody is told its estimate."""
+        return self.kind.estimate is not None and \
+            self.kind.estimate(self.setup).seconds * COUNT_UNCERTAINTY > ctx.max_time
 
     def precision(self, ctx: Context | None = None) -> Result:
         """The kind's work-precision study (``symmech bench precision``), as a Result."""

@@ -47,7 +47,9 @@ class Kind:
     prepare   resolved scene dict -> setup object; raises SceneError for anything
               physically inadmissible; evaluates expressions over their domain; no I/O
     run       (setup, Context) -> symmech.core.results.Result
-    estimate  setup -> Estimate (optional; runs expected to finish in < 2 s may omit it)
+    estimate  setup -> Estimate (optional; runs expected to finish in < 2 s may omit it): the count model
+    sample    (setup, share) -> setup: the same scene on the same engine over about ``share`` of its work
+              (optional; symmech.core.sample times it to scale ``estimate`` to this machine now)
     precision (setup, Context) -> Result of a work-precision study (optional)
     sweep     (raw scene dict, out folder, Context, **options) -> Result: ``symmech sweep`` over the
               scene's ``[sweep]`` table, written into the folder (optional; symmech.core.sweep)
@@ -63,6 +65,7 @@ class Kind:
     precision: Callable[[Any, Any], Any] | None = None
     docs: str = ""
     sweep: Callable[..., Any] | None = None
+    sample: Callable[[Any, float], Any] | None = None
 
 
 def register(kind: Kind) -> Kind:

@@ -15,8 +15,10 @@ set and checked as a set (:func:`check_disjoint`), then its cost, from counts an
 from __future__ import annotations
 
 import inspect
+from contextlib import contextmanager
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -179,6 +181,52 @@ def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluste
     ctx.say(f"estimated sweep time {total:.3g} s ({cost.what})")
 
 
+
+def process_age() -> float:
+    """Wall time [s] since this process started (Linux: /proc; elsewhere 0): what a new worker process spends
+    importing what this one imported before its estimate."""
+    try:
+        after_name = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
+        started = int(after_name[19]) / os.sysconf("SC_CLK_TCK")  # field 22, starttime, in clock ticks
+        return max(float(Path("/proc/uptime").read_text().split()[0]) - started, 0.0)
+    except (OSError, ValueError, IndexError):
+        return 0.0
+
+
+def startup_seconds(scheduler: str | None, loaded: float) -> float:
+    """What the local worker processes of ``scheduler`` cost before their first task [s], started side by side:
+    each imports what this process imported (:func:`process_age`) and loads the engine (``loaded`` [s], as
+    measured here); none for a serial run or a cluster's running workers."""
+    return process_age() + loaded if scheduler in (None, "processes") else 0.0
+
+
+def chart_seconds(shape: tuple[int, ...]) -> float:
+    """Wall time [s] of one heat map of ``shape`` cells with its colour bar, contours, cell labels and legend, drawn and saved as PNG
+    here and now (the second of two: the first pays matplotlib's import): a sweep's chart on this machine; a
+    line of ``shape`` (n,) as a plane of two rows."""
+    import io
+
+    from symmech.core import plotting
+
+    shape = tuple(max(n, 2) for n in (tuple(shape) + (1,))[:2])  # contours need two rows
+
+    def draw():
+        fig, grid = plotting.figure(width=7.5, height=5.2)
+        z = np.add.outer(np.arange(shape[0]), np.arange(shape[1]) ** 2).astype(float)
+        ax = grid[0, 0]
+        fig.colorbar(ax.pcolormesh(z.T), ax=ax)
+        ax.contour(z.T, colors="k")
+        for i, j in np.ndindex(*shape):  # a sweep chart labels its cells
+            ax.text(i + 0.5, j + 0.5, "lift-off", ha="center", va="center", fontsize=6)
+        ax.plot([0.5], [0.5], "*", label="best admissible point")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.25, 1.0))
+        fig.savefig(io.BytesIO(), format="png", dpi=plotting.DPI)
+
+    draw()
+    start = time.perf_counter()
+    draw()
+    return time.perf_counter() - start
+
 def deadline(ctx) -> float:
     """The wall-clock time (``time.time()``, s) at which the sweep of ``ctx`` runs out of ``--max-time``: its
     tasks, wherever they run, stop there."""
@@ -189,7 +237,7 @@ def point_context(until: float):
     """A quiet Context for one task of a sweep whose budget ends at ``until`` (:func:`deadline`)."""
     from symmech.core.context import Context
 
-    return Context(quiet=True, max_time=max(until - time.time(), 0.0))
+    return Context(quiet=True, max_time=max(until - time.time(), 0.0), sampled=False)
 
 
 def check_options(out, workers: int | None, scheduler: str | None, connect_timeout: float) -> None:
@@ -213,34 +261,69 @@ def workers(count: int | None, scheduler: str | None) -> int:
 
 
 def compute(tasks: list, scheduler: str | None = None, processes: int | None = None,
-            connect_timeout: float = CONNECT_TIMEOUT, ctx=None, on_workers=None) -> list:
+            connect_timeout: float = CONNECT_TIMEOUT, ctx=None, on_workers=None, after: float = 0.0) -> list:
     """The values of the ``dask.delayed`` ``tasks``, in order, with a progress bar on ``ctx`` (a Context).
 
     ``scheduler``: None for a local process pool of ``processes`` workers, "synchronous" for serial,
     "threads", or the address of a ``dask.distributed`` scheduler (a SymmechError when none answers
-    within ``connect_timeout`` seconds); there ``on_workers()`` runs on every worker first."""
-    import dask
+    within ``connect_timeout`` seconds); there ``on_workers()`` runs on every worker first.
 
+    The second wave of tasks, one per worker (the first paid their start and the engine's loading), is the
+    sweep's timed sample on the workers that run it: its wall time per wave left, plus ``after`` [s] (what
+    follows the tasks, e.g. the charts), is the estimate told, and refused past ``--max-time`` (:func:`refuse`).
+    A local pool and a cluster's client are kept from one wave to the next."""
     from symmech.core.context import Context
+    from symmech.core.registry import Estimate
 
     ctx = ctx or Context(quiet=True)
-    with ctx.progress(len(tasks), "sweep points", unit="task") as bar:
-        if scheduler in LOCAL:
-            kwargs = {"num_workers": processes} if processes and scheduler in (None, "processes") else {}
-            with _ticks(bar, {t.key for t in tasks}):
-                (values,) = dask.compute(tasks, scheduler=scheduler or "processes", **kwargs)
-        else:
-            from dask.distributed import as_completed
-
-            with client(scheduler, connect_timeout) as c:
-                if on_workers is not None:
-                    c.run(on_workers)
-                futures = c.compute(tasks)
-                for _ in as_completed(futures):
-                    bar.update(1)
-                values = c.gather(futures)
+    wave = workers(processes, scheduler)
+    with ctx.progress(len(tasks), "sweep points", unit="task") as bar, \
+            _runner(scheduler, processes, connect_timeout, on_workers, bar, {t.key for t in tasks}) as run:
+        values = run(tasks[:wave])  # pays the workers' start and the engine's loading
+        if len(tasks) > 2 * wave:
+            started = time.perf_counter()
+            values += run(tasks[wave:2 * wave])
+            took = time.perf_counter() - started
+            waves = -(-(len(tasks) - 2 * wave) // wave)
+            refuse(Estimate(took * waves + after, f"{len(tasks)} tasks on {wave} worker(s), a wave of {wave} in "
+                                                  f"{took:.3g} s (timed), {waves} more waves, then {after:.3g} s "
+                                                  "for the charts"), ctx)
+        values += run(tasks[len(values):])
     ctx.tick(f"{len(tasks)} sweep tasks")  # tasks past the deadline stopped at once: the sweep is over time
     return values
+
+
+@contextmanager
+def _runner(scheduler: str | None, processes: int | None, connect_timeout: float, on_workers, bar, keys: set):
+    """A function computing a list of tasks on ``scheduler`` (:func:`compute`), its workers kept from one call
+    to the next (a local process pool, or a cluster's client)."""
+    import dask
+
+    if scheduler in (None, "processes"):
+        from concurrent.futures import ProcessPoolExecutor
+
+        from dask.multiprocessing import get_context, initialize_worker_process
+
+        with ProcessPoolExecutor(processes, mp_context=get_context(), initializer=initialize_worker_process) as pool, \
+                _ticks(bar, keys):
+            yield lambda part: list(dask.compute(part, scheduler="processes", pool=pool)[0])
+    elif scheduler in LOCAL:
+        with _ticks(bar, keys):
+            yield lambda part: list(dask.compute(part, scheduler=scheduler)[0])
+    else:
+        from dask.distributed import as_completed
+
+        with client(scheduler, connect_timeout) as c:
+            if on_workers is not None:
+                c.run(on_workers)
+
+            def run(part):
+                futures = c.compute(part)
+                for _ in as_completed(futures):
+                    bar.update(1)
+                return c.gather(futures)
+
+            yield run
 
 
 def _ticks(bar, keys):

@@ -308,6 +308,17 @@ def estimate(sc: GrainScene) -> registry.Estimate:
     return registry.Estimate(seconds, f"{what}; compiled engine")
 
 
+
+SAMPLE_PERIODS = 1.0  # vibration periods a timed sample covers at least
+
+
+def sample(sc: GrainScene, share: float) -> GrainScene:
+    """The scene over ``share`` of its duration (at least :data:`SAMPLE_PERIODS` periods, at most all of it), for
+    :func:`symmech.core.sample.timed`. It runs on the run's engine: ``auto`` takes the compiled engine for both
+    once it is built, and the Python engine for both while it is cold (a compile first is a count estimate's
+    ``once``, never sampled), starting the background build whose load the run shares."""
+    return replace(sc, duration=min(max(share * sc.duration, SAMPLE_PERIODS * sc.model.period), sc.duration))
+
 def _python_cost(sc: GrainScene, num: motion.Numerics, duration: float) -> tuple[float, str]:
     """Accurate mode on the Python loop: expected wall time [s] over ``duration`` [s], and what it counts."""
     impacts = expected_impacts(replace(sc, numerics=num, duration=duration))
@@ -526,4 +537,5 @@ def precision(sc: GrainScene, ctx: Context) -> Result:
 registry.register(registry.Kind(
     name="grain", summary="the whole motion of a grain on an inclined vibrating surface (seed 000, eqs (61)-(64))",
     schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-grain.md",
+    sample=sample,
     sweep=sweep.run))

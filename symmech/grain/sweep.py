@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import copy
 import math
+import time
 from dataclasses import dataclass, field as dataclass_field, replace
 from functools import cached_property
 
@@ -347,6 +348,38 @@ def estimate(p: Plan, workers: int):
     return registry.Estimate(seconds / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)")
 
 
+SAMPLE_GRAINS = 4  # grains of the first population at point (0, 0) timed for the sweep's estimate
+
+
+def timed_estimate(p: Plan, processes: int, scheduler: str | None, drawing: float):
+    """The sweep's cost from timed samples here (a ``registry.Estimate``): grains of the first population at
+    point (0, 0) on the engine the workers run (the first of them alone pays loading it), the count model's
+    ratio between populations, the workers' start (:func:`symmech.core.sweep.startup_seconds`) and the charts,
+    ``drawing`` [s] (:func:`chart_count` times :func:`symmech.core.sweep.chart_seconds`)."""
+    from symmech.core import registry
+
+    pop = p.populations[0]
+    grains = list(point_grains(p.base, pop, p.point(0, 0), 0, min(SAMPLE_GRAINS + 1, pop["count"])))
+    started = time.perf_counter()
+    simulate_point(grains[:1])
+    first = time.perf_counter() - started
+    timed = grains[1:] or grains
+    started = time.perf_counter()
+    simulate_point(timed)
+    per_grain = (time.perf_counter() - started) / len(timed)
+    models = [scene.estimate().seconds for scene in p.first]
+    work = per_grain / models[0] * sum(m * q["count"] for m, q in zip(models, p.populations)) * p.gamma.size
+    startup = core_sweep.startup_seconds(scheduler, max(first - per_grain, 0.0))
+    return registry.Estimate(startup + work / processes + drawing,
+                             f"{p.grain_runs} grain runs at {per_grain:.3g} s (timed here) on {processes} "
+                             f"worker(s), {startup:.3g} s to start them, {drawing:.3g} s for the charts")
+
+
+def chart_count(p: Plan) -> int:
+    """The sweep's charts: transport velocity and hop fraction per population, the separation's two."""
+    return 2 * len(p.populations) + (2 if len(p.populations) == 2 else 0)
+
+
 def _as_dispatched(scene):
     """A loaded grain scene (pipeline.Scene) as the workers run it: engine `auto` runs compiled, since
     :func:`compute` builds the compiled engine before dispatch."""
@@ -403,6 +436,10 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
     warm = _compiled_needed(p)
     if warm:
         engines.get("grain").warm(say=say)
+    drawing = 0.0
+    if ctx is not None:
+        drawing = chart_count(p) * core_sweep.chart_seconds(p.shape)
+        core_sweep.refuse(timed_estimate(p, core_sweep.workers(processes, scheduler), scheduler, drawing), ctx)
 
     jobs = [(k, i, j, start, min(start + CHUNK, pop["count"])) for k, pop in enumerate(p.populations)
             for i, j in np.ndindex(*p.shape) for start in range(0, pop["count"], CHUNK)]
@@ -410,7 +447,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int | None = None,
     tasks = [dask.delayed(simulate_grains)(p.base, p.populations[k], p.point(i, j), a, b, until,
                                            dask_key_name=f"grains-{k}-{i}-{j}-{a}") for k, i, j, a, b in jobs]
     values = core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
-                                on_workers=_warm_worker if warm else None)
+                                on_workers=_warm_worker if warm else None, after=drawing)
     arrays = [np.empty(p.shape + (pop["count"], 3)) for pop in p.populations]
     failed, warned = [], []
     for (k, i, j, a, b), (rows, fail, warn) in zip(jobs, values):

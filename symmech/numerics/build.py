@@ -100,6 +100,7 @@ class Engine:
         self.lock_name = f"symmech-{name}-build.lock"
         self._accepted = None  # the modification time [ns] of the record cold() accepted
         self._holding = False  # whether this process holds the build lock
+        self.started_builder = False  # whether this process started a builder (it may not hold the lock yet)
 
     def ahead_of_time(self):
         """The engine's ahead-of-time build (:mod:`symmech.numerics.aot`) when it is current, else None (always
@@ -226,8 +227,9 @@ class Engine:
 
     def start_builder(self) -> bool:
         """Start a detached builder (``symmech warm --engine NAME --background``) unless background builds are
-        off or a builder holds the lock; returns whether one was started."""
-        if not background_builds():
+        off, a builder holds the lock or this process started one already (a run's timed samples and the run
+        each ask; the builder may not hold the lock yet); returns whether one was started."""
+        if not background_builds() or self.started_builder:
             return False
         with self.build_lock(wait=False) as free:
             if not free:
@@ -235,6 +237,7 @@ class Engine:
         subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", self.name, "--background"],
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                          start_new_session=True)
+        self.started_builder = True
         return True
 
     def wait_warm(self, timeout: float) -> bool:

@@ -16,6 +16,7 @@ import importlib.util
 import io
 import json
 import math
+import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -84,8 +85,27 @@ def estimate(setup: Setup) -> registry.Estimate:
         flops += 60.0 * n**3 + sc["initial"]["steps"] * 8.0 * n**2
     if sc["forcing"]:
         flops += sc["forcing"]["samples"] * 3.0 * n**3
-    seconds = FLOP_SECONDS * flops + (0.05 * n**2 if n <= SYMBOLIC_LIMIT else 0.0)
-    return registry.Estimate(seconds, f"{n} coordinates, dense eigenproblems")
+    seconds = FLOP_SECONDS * flops
+    what = f"{n} coordinates, dense eigenproblems"
+    if n <= SYMBOLIC_LIMIT:
+        seconds += _symbolic_seconds(setup.m)
+        what += ", the symbolic a, b, c"
+    return registry.Estimate(seconds, what)
+
+
+# The symbolic a, b, c (derivation, CSE, printing, import) of the bundled mechanisms on 2 shared cores, within 2x:
+# seconds per point and coordinate, times SPATIAL_FACTOR when an axis leaves z (rotations compose in 3-D), plus
+# sympy's import when this process has not imported it yet.
+SYMBOLIC_SECONDS = 0.025
+SPATIAL_FACTOR = 8.0
+SYMPY_IMPORT_SECONDS = 1.0
+
+
+def _symbolic_seconds(m: Mechanism) -> float:
+    """Expected wall time [s] of the symbolic a, b, c of ``m`` (see :data:`SYMBOLIC_SECONDS`)."""
+    planar = all(tuple(c.axis) == ("0", "0", "1") or c.kind == "slide" for c in m.coordinates)
+    seconds = SYMBOLIC_SECONDS * len(m.points) * len(m.coordinates) * (1.0 if planar else SPATIAL_FACTOR)
+    return seconds + (0.0 if "sympy" in sys.modules else SYMPY_IMPORT_SECONDS)
 
 
 def _module_text(m: Mechanism) -> tuple[str, str]:

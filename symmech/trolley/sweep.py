@@ -466,16 +466,20 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     started = time.perf_counter()
     outcome = evaluate(p, 0, 0, until)
     took = time.perf_counter() - started
-    core_sweep.refuse(registry.Estimate(took * (points - 1) / processes, f"{points} points at {took:.3g} s "
-                                                                         f"(the first one's) on {processes} "
-                                                                         "worker(s)"), ctx)
+    # the first point's time includes loading the engine, as each worker's first point does
+    startup = core_sweep.startup_seconds(scheduler, 0.0)
+    drawing = len(CHARTS) * core_sweep.chart_seconds(p.shape)
+    core_sweep.refuse(registry.Estimate(startup + took * (points - 1) / processes + drawing,
+                                        f"{points} points at {took:.3g} s (the first one's) on {processes} "
+                                        f"worker(s), {startup:.3g} s to start them, up to {len(CHARTS)} charts at "
+                                        f"{drawing / len(CHARTS):.3g} s"), ctx)
     import dask  # after the refusals: a refused sweep loads no Dask
 
     shared = dask.delayed(p, pure=True)  # one node of the graph: each task builds its own point scene
     tasks = [dask.delayed(evaluate)(shared, i, j, until, dask_key_name=f"point-{i}-{j}")
              for i, j in list(np.ndindex(*p.shape))[1:]]
     return [outcome] + list(core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
-                                               on_workers=_warm_worker if warm else None))
+                                               on_workers=_warm_worker if warm else None, after=drawing))
 
 
 def _on_sweep_engine(setup, points: int):

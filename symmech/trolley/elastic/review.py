@@ -50,7 +50,8 @@ def _amplification(reactions) -> list[Headline]:
         peak, rigid = (float(np.abs(reactions.column(f"P{i}{tail}")).max()) for tail in ("", "_rigid"))
         if rigid > 0:
             out.append(Headline(f"dynamic amplification of P{i}", peak / rigid, "1",
-                                f"peak |P{i}| elastic {units.format(peak, 'N')} / rigid {units.format(rigid, 'N')}"))
+                                f"peak |P{i}| elastic {units.format(peak, 'N')} / rigid {units.format(rigid, 'N')}, "
+                                "both carrying the beams and tip masses (the case rows: the rigid trolley alone)"))
     return out
 
 

@@ -1,0 +1,63 @@
+"""Estimates that hold on this machine now: a kind's count model scaled by timed samples of the scene.
+
+A kind's ``estimate`` (its count model) says how a run's cost grows with what it counts (impacts, steps,
+points); its seconds per count were measured once, on one machine at one load, and are off by the load and
+the machine. A kind's ``sample(setup, share)`` gives the same scene on the engine that will run, over about
+``share`` of its work (a shorter duration, fewer steps; share 0: the least it can run). :func:`timed` runs the
+least sample first, which pays what a process pays once (imports, loading a compiled engine from numba's
+cache, starting a background build, whose load then weighs on what follows), then times samples of
+:data:`SHARE`, twice that, and so on until one takes :data:`STEADY` and the last two give a meaningful slope
+(a short or noisy run is sampled nearly whole). The last two samples' difference in time over the count
+model's is this machine's factor now, per count: the estimate is the larger sample's time (its fixed costs
+included) and the rest of the run's counts at that factor (at the larger's mean if no slope held).
+
+A compile still to come (``Estimate.once``) is left as the count model has it: a sample would compile.
+"""
+from __future__ import annotations
+
+import time
+
+from symmech.core import registry
+from symmech.core.context import Context
+
+SHARE = 0.03  # of the count model's work in the first timed sample; the second takes twice that
+STEADY = 0.3  # s; samples double until one takes this long (a time slice of a loaded machine is milliseconds)
+
+
+def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) -> registry.Estimate:
+    """``cost`` (the count estimate of ``setup``) scaled by timed samples of it on this machine, or ``cost``
+    itself when the kind has no sample, a compile is still to come or ``cost`` is over ``max_time`` already
+    (refused on counts, with no sample run). A short run is sampled too (its count model may be far off, and
+    its samples cost about as little as it does). The samples run quietly within ``max_time`` [s]; they raise
+    only what the run itself would raise."""
+    repeated = cost.seconds - cost.once
+    if kind.sample is None or cost.once > 0.0 or repeated <= 0.0 or cost.seconds > max_time:
+        return cost
+    ctx = Context(quiet=True, max_time=max_time)
+    kind.run(kind.sample(setup, 0.0), ctx)  # pays the one-off costs of this process
+    share, samples = SHARE, [_timed_sample(kind, setup, SHARE, ctx)]
+    while len(samples) < 2 or ((samples[-1][1] < STEADY or _slope(*samples[-2:]) is None) and 2.0 * share <= 1.0):
+        share *= 2.0
+        samples.append(_timed_sample(kind, setup, share, ctx))
+    (m1, t1), (m2, t2) = samples[-2:]
+    factor = _slope(*samples[-2:]) or t2 / m2
+    return registry.Estimate(t2 + factor * max(repeated - m2, 0.0),
+                             f"{cost.what}; timed samples: {t1:.3g} s and {t2:.3g} s for {m1 / repeated:.0%} and "
+                             f"{m2 / repeated:.0%} of it, the rest at {factor:.3g}x the count model")
+
+
+def _slope(smaller: tuple[float, float], larger: tuple[float, float]) -> float | None:
+    """Seconds measured per count-model second between two samples ((model, measured) [s] each), or None where
+    the noise of a loaded machine makes it meaningless: not positive, or steeper than twice the larger's mean
+    (fixed costs in it)."""
+    (m1, t1), (m2, t2) = smaller, larger
+    slope = (t2 - t1) / (m2 - m1) if m2 > m1 else 0.0
+    return slope if 0.0 < slope <= 2.0 * t2 / m2 else None
+
+
+def _timed_sample(kind: registry.Kind, setup, share: float, ctx: Context) -> tuple[float, float]:
+    """The count model's seconds and the measured wall time [s] of the sample of ``share`` of ``setup``."""
+    small = kind.sample(setup, share)
+    start = time.perf_counter()
+    kind.run(small, ctx)
+    return kind.estimate(small).seconds, time.perf_counter() - start

@@ -1,0 +1,101 @@
+"""Estimates that hold: a run's estimate comes from timed samples of the scene on this machine, whatever the
+count model's seconds say, and a sweep's from a timed wave of its tasks; each is compared with the time the
+same process then measures (a loaded machine slows both alike)."""
+import statistics
+import time
+
+import dask
+import pytest
+
+from badinput import bundled, edited
+from symmech.core import pipeline
+from symmech.core import sweep as core_sweep
+from symmech.core.context import Context
+from symmech.core.scene import SymmechError
+from symmech.trolley import scene as trolley_scene
+
+# the rigid helix, 8 s on 2000 steps, both cases: ~0.1 s of run on an idle machine
+RIGID = edited(bundled("trolley_helix"), ("time.t_end", 8.0), ("time.steps", 2000), ("report.paper_tables", False))
+
+
+class Told(Context):
+    """A Context that keeps what it says (not quiet: a run's estimate is told, so sampled)."""
+
+    def __init__(self, **kw):
+        super().__init__(quiet=False, **kw)
+        self.told = []
+
+    def say(self, message: str) -> None:
+        self.told.append(message)
+
+
+def run_seconds(scene) -> float:
+    """Wall time [s] of the scene's run stage once more (the median of three is robust to a loaded moment)."""
+    started = time.perf_counter()
+    scene.kind.run(scene.setup, Context(quiet=True))
+    return time.perf_counter() - started
+
+
+def told_seconds(ctx: Told) -> float:
+    """The last sweep estimate ``ctx`` was told, in seconds."""
+    return float([m for m in ctx.told if m.startswith("estimated sweep time")][-1].split()[3])
+
+
+@pytest.mark.parametrize("off", [1.0, 1000.0])
+def test_a_run_estimate_holds_whatever_the_count_model_says(monkeypatch, off):
+    """The count model's seconds per step as they are (tens of times under this scene's time) and 1000x that
+    (a machine far slower than this one): the estimate told is within 2x of the run's own time either way,
+    since samples set the scale; the count estimate alone is more than 2x off either way (the test can fail)."""
+    for name in ("SECONDS_PER_STEP", "SECONDS_PER_OUTPUT_ROW"):
+        monkeypatch.setattr(trolley_scene, name, getattr(trolley_scene, name) * off)
+    scene = pipeline.load(RIGID)
+    count = scene.kind.estimate(scene.setup).seconds
+    scene.run(Told())  # told (not quiet): sampled
+    actual = statistics.median([scene.timing["run"], *(run_seconds(scene) for _ in range(2))])
+    assert "timed samples" in scene.cost.what
+    assert 0.5 <= scene.cost.seconds / actual <= 2.0, (scene.cost, actual)
+    assert not 0.5 <= count / actual <= 2.0  # the count model alone would not hold: the test can fail
+
+
+def test_sweep_points_and_quiet_runs_far_from_the_budget_are_not_sampled():
+    """A sweep's points run with the sweep's own estimate, and a quiet run (the API's) whose count estimate is
+    far below --max-time is told to nobody: neither times samples."""
+    for ctx in (core_sweep.point_context(time.time() + 60.0), Context(quiet=True)):
+        scene = pipeline.load(RIGID)
+        scene.run(ctx)
+        assert scene.cost == scene.kind.estimate(scene.setup)
+
+
+def test_a_sweep_estimate_comes_from_its_second_wave():
+    """Six tasks of 0.05 s, serial: the first pays the workers' start, the second is timed; four waves left.
+    The estimate told (time so far plus four waves) is within 2x of the whole sweep's time."""
+    ctx = Told()
+    tasks = [dask.delayed(time.sleep)(0.05, dask_key_name=f"nap-{k}") for k in range(6)]
+    core_sweep.compute(tasks, "synchronous", ctx=ctx)
+    assert "a wave of 1 in" in ctx.told[-1] and "4 more waves" in ctx.told[-1]
+    assert 0.5 <= told_seconds(ctx) / ctx.elapsed() <= 2.0
+
+
+def test_a_sweep_is_refused_from_its_timed_wave_before_the_rest_runs():
+    """Tasks of 0.1 s under a 0.3 s budget: after two, the estimate (0.2 s + 4 x 0.1 s) is over it, and the
+    sweep stops there in one line, with the remaining four tasks never run."""
+    ran = []
+
+    def nap(k):
+        ran.append(k)
+        time.sleep(0.1)
+
+    tasks = [dask.delayed(nap)(k, dask_key_name=f"nap-{k}") for k in range(6)]
+    with pytest.raises(SymmechError, match=r"estimated sweep time .* exceeds --max-time 0.3 s"):
+        core_sweep.compute(tasks, "synchronous", ctx=Context(quiet=True, max_time=0.3))
+    assert ran == [0, 1]
+
+
+@pytest.mark.slow  # ~4 s: five runs, the answer, six charts
+def test_a_small_trolley_sweep_is_told_an_estimate_that_holds(tmp_path):
+    """Five speeds of a short rigid helix, serial: the last estimate told is within 2x of the sweep's time."""
+    raw = edited(RIGID, ("time.t_end", 1.0), ("time.steps", 50)) | {
+        "sweep": {"x": {"field": "motion.speed_scale", "start": 0.5, "stop": 1.5, "num": 5}}}
+    ctx = Told()
+    core_sweep.run(raw, tmp_path / "out", ctx, scheduler="synchronous")
+    assert 0.5 <= told_seconds(ctx) / ctx.elapsed() <= 2.0, ctx.told
