@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11796ae3b01d56db84ee5a9f36e03fc1d0d6bab0cf7c438627c81c742de6965f
-# source key f7d6d0fdd9a360fbb70e6f1264760a27d49c147e0aa0f30e574eec376aae94d2
+# source key b5258749cb4059f3873bc15d65d660ecb849e67b0035803efb1d0f864ab6b2ac
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cd161cec7e82d55725775f0cbbbeac8c469cfe89ed48ce55e3f88c5972b302ae
-# source key 1c2eb613c80dd667679cd152ee5a2f217184d407288cf16cdf2f3476f6ec22e1
+# source key b5a875d1c15d0659ec581a9a486b197ccfa2bb2a113b53801ed08d735188337f
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

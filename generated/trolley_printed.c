@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key a9a648f56a36d1268bab7a3e8edd11972c57181c3ffeba02d792dd57a028a890
+// source key 59cd5336a9139cdfd95bc1b9a1c3a0af74856ce9c13612f1773ba85f86d13e83
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

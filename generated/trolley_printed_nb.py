@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key a9a648f56a36d1268bab7a3e8edd11972c57181c3ffeba02d792dd57a028a890
+# source key 59cd5336a9139cdfd95bc1b9a1c3a0af74856ce9c13612f1773ba85f86d13e83
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 
