@@ -38,6 +38,7 @@ from symmech.grain import contact, flight, free_flight, motion, motion_scene
 from symmech.grain import free_flight_nb as ff_nb
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 from symmech.grain.motion_engine.layouts import CARRY, IMPACT_WIDTH, PHASES_PER_CALL, STATE, TRAJECTORY_WIDTH
+from symmech.numerics.brent import roots
 
 PERIODS = 20.5  # 20 impacts of the period-1 orbit
 XTOL = 1e-12  # brentq's and the floor's time tolerance [s]
@@ -67,52 +68,24 @@ def _gap(s, t, out):
 
 
 @numba.njit(cache=True)
-def _brent(s, a, b, fa, fb, xtol, out):
-    """scipy's brentq on the gap in [a, b] with fa * fb < 0: the root [s]."""
-    c, fc, d, e = a, fa, b - a, b - a
-    for _ in range(100):
-        if fb * fc > 0:
-            c, fc, d, e = a, fa, b - a, b - a
-        if abs(fc) < abs(fb):
-            a, b, c, fa, fb, fc = b, c, b, fb, fc, fb
-        tol = 2e-16 * abs(b) + 0.5 * xtol
-        m = 0.5 * (c - b)
-        if abs(m) <= tol or fb == 0.0:
-            return b
-        if abs(e) >= tol and abs(fa) > abs(fb):
-            s1 = fb / fa
-            if a == c:
-                p, q = 2 * m * s1, 1 - s1
-            else:
-                q1, r1 = fa / fc, fb / fc
-                p = s1 * (2 * m * q1 * (q1 - r1) - (b - a) * (r1 - 1))
-                q = (q1 - 1) * (r1 - 1) * (s1 - 1)
-            if p > 0:
-                q = -q
-            p = abs(p)
-            if 2 * p < min(3 * m * q - abs(tol * q), abs(e * q)):
-                e, d = d, p / q
-            else:
-                d, e = m, m
-        else:
-            d, e = m, m
-        a, fa = b, fb
-        b += d if abs(d) > tol else (tol if m > 0 else -tol)
-        fb = _gap(s, b, out)
-    return b
+def _gap_of(t, args):
+    """The gap [m] at t as the root finder calls it (``args`` = (s, out))."""
+    return _gap(args[0], t, args[1])
+
+
+_bracketed = roots(_gap_of).bracketed  # the toolkit's brentq, as the engine's
 
 
 @numba.njit(cache=True)
 def _next_impact(s, t_end, step, xtol, out):
     """The first root of the gap after s[16] (scan at ``step``, Brent), or nan before t_end."""
-    a = s[16]
-    fa = _gap(s, a + 1e-3 * step, out)  # just after the last impact: the grain leaves the plate
-    a += 1e-3 * step
+    a = s[16] + 1e-3 * step  # just after the last impact: the grain leaves the plate
+    fa = _gap(s, a, out)
     while a < t_end:
         b = min(a + step, t_end)
         fb = _gap(s, b, out)
         if fb <= 0.0:
-            return _brent(s, a, b, fa, fb, xtol, out)
+            return _bracketed(a, b, fa, fb, xtol, (s, out))
         a, fa = b, fb
     return math.nan
 

@@ -21,16 +21,15 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from symmech.generated import grain_motion_nb as gm_nb
 from symmech.grain.free_flight import FLIGHT, ROTATION
+from symmech.numerics.brent import roots
+from symmech.numerics.jit import EPS, jit
 
-jit = numba.njit(cache=True, error_model="numpy", nogil=True)
 F_AT, R_AT = FLIGHT.slots, ROTATION.slots
 FLIGHT_SIZE, ROTATION_SIZE = FLIGHT.size, ROTATION.size  # the records' lengths, constants of compiled callers
-EPS = 2.0**-52
 TWO_PI = 2.0 * math.pi
 
 
@@ -388,39 +387,12 @@ def gap_curvature_bound(fl, rot):
 
 
 @jit
-def _brent(fl, rot, a, b, fa, fb, xtol, buf):
-    """scipy's brentq on the gap in [a, b], fa > 0 >= fb: the root [s]."""
-    c, fc, d, e = a, fa, b - a, b - a
-    for _ in range(100):
-        if fb * fc > 0:
-            c, fc, d, e = a, fa, b - a, b - a
-        if abs(fc) < abs(fb):
-            a, b, c, fa, fb, fc = b, c, b, fb, fc, fb
-        tol = 2e-16 * abs(b) + 0.5 * xtol
-        m = 0.5 * (c - b)
-        if abs(m) <= tol or fb == 0.0:
-            return b
-        if abs(e) >= tol and abs(fa) > abs(fb):
-            s1 = fb / fa
-            if a == c:
-                p, q = 2 * m * s1, 1 - s1
-            else:
-                q1, r1 = fa / fc, fb / fc
-                p = s1 * (2 * m * q1 * (q1 - r1) - (b - a) * (r1 - 1))
-                q = (q1 - 1) * (r1 - 1) * (s1 - 1)
-            if p > 0:
-                q = -q
-            p = abs(p)
-            if 2 * p < min(3 * m * q - abs(tol * q), abs(e * q)):
-                e, d = d, p / q
-            else:
-                d, e = m, m
-        else:
-            d, e = m, m
-        a, fa = b, fb
-        b += d if abs(d) > tol else (tol if m > 0 else -tol)
-        fb = gap(b, fl, rot, buf)[0]
-    return b
+def _gap_of(t, args):
+    """The gap [m] at t, as the root finder calls it (``args`` = (fl, rot, buf))."""
+    return gap(t, args[0], args[1], args[2])[0]
+
+
+_bracketed = roots(_gap_of).bracketed  # scipy's brentq on the gap (symmech.numerics.brent)
 
 
 @jit
@@ -452,7 +424,7 @@ def _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack):
         mid = 0.5 * (a + b)
         hm, dm = gap(mid, fl, rot, buf)
         if hm <= 0.0:
-            return _brent(fl, rot, a, mid, ha, hm, xtol, buf)
+            return _bracketed(a, mid, ha, hm, xtol, (fl, rot, buf))
         stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4], stack[top, 5] = mid, b, hm, dm, hb, db
         top += 1  # the later half below, the earlier on top
         stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4], stack[top, 5] = a, mid, ha, da, hm, dm
@@ -475,7 +447,7 @@ def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
         b = min(a + max(span, step), t_end)
         hb, db = gap(b, fl, rot, buf)
         if hb <= 0.0:
-            return _brent(fl, rot, a, b, ha, hb, xtol, buf)
+            return _bracketed(a, b, ha, hb, xtol, (fl, rot, buf))
         if span < b - a:
             root = _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack)
             if not math.isnan(root):

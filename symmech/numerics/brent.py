@@ -13,13 +13,14 @@ def roots(f) -> SimpleNamespace:
     """Brent's root finder and bounded minimiser of the jitted ``f(x, args) -> float``, compiled on first call:
 
     - ``brentq(a, b, xtol, args)``: the root in [a, b] (a sign change) to xtol + 4 eps |x| (scipy's ``brentq``);
+    - ``bracketed(a, b, fa, fb, xtol, args)``: the same when the caller holds fa = f(a), fb = f(b) already;
     - ``bounded_min(a, b, xatol, args)``: (x, f(x)) minimising f over [a, b] (scipy's
       ``minimize_scalar(method="bounded")``, at most BOUNDED_MAXFUN evaluations)."""
 
     @closure
-    def brentq(a, b, xtol, args):
+    def bracketed(a, b, fa, fb, xtol, args):
         xpre, xcur = a, b
-        fpre, fcur = f(xpre, args), f(xcur, args)
+        fpre, fcur = fa, fb
         xblk = fblk = spre = scur = 0.0
         if fpre == 0.0:
             return xpre
@@ -53,6 +54,10 @@ def roots(f) -> SimpleNamespace:
             xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
             fcur = f(xcur, args)
         return xcur
+
+    @closure
+    def brentq(a, b, xtol, args):
+        return bracketed(a, b, f(a, args), f(b, args), xtol, args)
 
     @closure
     def bounded_min(a, b, xatol, args):
@@ -119,4 +124,4 @@ def roots(f) -> SimpleNamespace:
                 break
         return xf, fx
 
-    return SimpleNamespace(brentq=brentq, bounded_min=bounded_min)
+    return SimpleNamespace(brentq=brentq, bracketed=bracketed, bounded_min=bounded_min)
