@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 368f83723f8cc778ea00371fa177759ba86bd7e78451a46f24be7af43337ccb0
-# source key 7f603cc34379bd2b86c5c4f1c801ae9c71d9b5f28ded23f92bd927c266724a18
+# source key ee9e603b3b76ade6dcf0052ed3d281a16bd08ceb1b69a7ea0942b116aa646f0c
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

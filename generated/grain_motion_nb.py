@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a5c838daf335039a3cbdfcb78e6923456d0e775fa82ee351c0fa5520dd3790fd
-# source key af5f42d009fce792537048e9f9466c76b17a4a9ad57c2f273deeba1d1bdb8330
+# source key ace2648258c2962909dbcd502d79bc949142ac941c130e62579922fd97f98254
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

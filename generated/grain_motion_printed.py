@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11796ae3b01d56db84ee5a9f36e03fc1d0d6bab0cf7c438627c81c742de6965f
-# source key b5258749cb4059f3873bc15d65d660ecb849e67b0035803efb1d0f864ab6b2ac
+# source key 5a22f2c801e59d3f392287ce7b17aead03198e92be0cc16a7cc94a59880ca87b
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

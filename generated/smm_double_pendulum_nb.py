@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cd161cec7e82d55725775f0cbbbeac8c469cfe89ed48ce55e3f88c5972b302ae
-# source key b5a875d1c15d0659ec581a9a486b197ccfa2bb2a113b53801ed08d735188337f
+# source key 99dcd537f29318c9b7344442df68c4afdc7cd21194f39f91a5491ec560bc9e16
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

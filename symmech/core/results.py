@@ -113,21 +113,33 @@ class Table:
 @dataclass(frozen=True)
 class Headline:
     """One answer of a run, as a person asks for it: name, value in SI ``unit`` ("1" if
-    dimensionless), its one-line meaning and where or when it happens (e.g. "t = 2.8 s")."""
+    dimensionless), its one-line meaning and where or when it happens (e.g. "t = 2.8 s"); an answer
+    with a limit carries its admissible ``envelope`` (lo, hi) in ``unit`` and gets the verdict a
+    :func:`within` check of it would (a value beyond the envelope fails)."""
 
     name: str
     value: float
     unit: str
     meaning: str
     at: str = ""
+    envelope: tuple[float, float] | None = None
+
+    def verdict(self) -> str | None:
+        """"pass" or "fail" against the envelope; None without one."""
+        if self.envelope is None:
+            return None
+        return within(self.name, self.value, self.value, self.envelope, self.unit).verdict
 
     def text(self) -> str:
         """``"name: 0.235 mm (at t = 2.8 s)"`` in the readable unit."""
         return f"{self.name}: {units.format(self.value, self.unit)}" + (f" (at {self.at})" if self.at else "")
 
     def to_json(self) -> dict:
-        return {"name": self.name, "value": float(self.value), "unit": self.unit, "meaning": self.meaning,
-                "at": self.at}
+        out = {"name": self.name, "value": float(self.value), "unit": self.unit, "meaning": self.meaning,
+               "at": self.at}
+        if self.envelope is not None:
+            out |= {"limit": [float(v) for v in self.envelope], "verdict": self.verdict()}
+        return out
 
 
 @dataclass(frozen=True)
