@@ -30,7 +30,7 @@ from pathlib import Path
 
 from symmech import __version__
 from symmech.core import units
-from symmech.core.results import VERDICTS, Check
+from symmech.core.results import VERDICTS, Check, readable
 from symmech.core.scene import SceneError, SymmechError
 
 TEMPLATE = "report.html.j2"
@@ -50,12 +50,6 @@ PAPER_BANNER = ("This run uses the paper's conventions (conventions = \"paper\")
                 "per second; a Λ* that is not a rotation), so its reactions and overloads are not the trolley's: "
                 "at t = 10 s P3 is 571.8 N here against 4263.5 N physically. Run with conventions = \"physics\" "
                 "(the default) for design numbers.")
-
-
-def readable(text: str) -> str:
-    """A sentence with the raw ids of elastic modes made readable (``beam0_plane1_mode1`` → ``beam 0, plane 1,
-    mode 1``)."""
-    return re.sub(r"\bbeam([0-9]+)_plane([0-9]+)_mode([0-9]+)\b", r"beam \1, plane \2, mode \3", text)
 
 
 def glossary(texts: list[str]) -> list[str]:

@@ -268,3 +268,16 @@ def test_every_plot_caption_is_a_sentence(module, table):
     for name, caption in getattr(importlib.import_module(module), table).items():
         assert caption[0].isupper() and caption.endswith(".") and len(caption.split()) >= 6, (name, caption)
         assert not re.search(rf"\b{name}\.(png|svg)\b", caption), (name, caption)
+
+
+def test_campbell_legend_names_beam_planes_in_words():
+    """The mode groups of the Campbell diagram read "beam 0, plane 1", not the raw id ``beam0_plane1``."""
+    from symmech.trolley import plots
+
+    modes = {"label": [["beam0_plane1_mode1", "beam0_plane2_mode1", "roller_1"]], "s": np.array([0.0, 1.0]),
+             "V0": np.array([1.0, 2.0]), "f": np.array([[10.0, 20.0, 30.0], [10.0, 20.0, 30.0]]),
+             "forcing": np.ones((2, 3))}
+    fig = plots.campbell(modes)
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert texts[:3] == ["beam 0, plane 1", "beam 0, plane 2", "rollers"]
+    assert not any("_plane" in t for t in texts)

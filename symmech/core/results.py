@@ -9,6 +9,7 @@ Python API hands the same Result to the user (``Result.tables[name].column(...)`
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Callable
@@ -108,6 +109,13 @@ class Table:
         variables = {c.name: (dims, self.data[:, i].reshape(shape), attrs(c)) for i, c in enumerate(self.columns)
                      if c.name not in self.grid.values()}
         return xr.Dataset(variables, coords=coords, attrs={"description": self.doc})
+
+
+def readable(text: str) -> str:
+    """A sentence with the raw ids of the elastic trolley's modes and mode groups made readable
+    (``beam0_plane1_mode1`` → ``beam 0, plane 1, mode 1``; ``beam0_plane1`` → ``beam 0, plane 1``)."""
+    text = re.sub(r"\bbeam([0-9]+)_plane([0-9]+)_mode([0-9]+)\b", r"beam \1, plane \2, mode \3", text)
+    return re.sub(r"\bbeam([0-9]+)_plane([0-9]+)\b", r"beam \1, plane \2", text)
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import plotting
+from symmech.core.results import readable
 
 
 # plot name -> its caption (a sentence; also the plot's description in the scene's `[output]` docs)
@@ -167,7 +168,7 @@ def campbell(modes: dict):
         order = np.argsort(x)
         for k, group in enumerate(groups):
             ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color=colours[group],
-                    label=group if groups.index(group) == k else None)
+                    label=readable(group) if groups.index(group) == k else None)
         for j, ((_, doc), style) in enumerate(zip(FORCING, ("--", ":", "-."))):
             ax.plot(x[order], modes["forcing"][order, j], ls=style, lw=1, color="k", label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))
