@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9671e4d6443ed7f5750dda2d7ff50e4f9c07dcbe9c7e85ff4b5cec8416b2016c
-# source key af5f42d009fce792537048e9f9466c76b17a4a9ad57c2f273deeba1d1bdb8330
+# source key 54859f3368d069b346aaf9fd9cbc70511445669a64c1697955fc3ba84df06282
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a5c838daf335039a3cbdfcb78e6923456d0e775fa82ee351c0fa5520dd3790fd
-# source key af5f42d009fce792537048e9f9466c76b17a4a9ad57c2f273deeba1d1bdb8330
+# source key 54859f3368d069b346aaf9fd9cbc70511445669a64c1697955fc3ba84df06282
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cd161cec7e82d55725775f0cbbbeac8c469cfe89ed48ce55e3f88c5972b302ae
-# source key b5a875d1c15d0659ec581a9a486b197ccfa2bb2a113b53801ed08d735188337f
+# source key 4c064a94be73cd20e7f56d85ac4d3b79fecf17885946aad3911197706414e614
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

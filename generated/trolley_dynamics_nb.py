@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c00a52375d689bed72d29bf623db6abdeb21489d942808c0a313f25d8caef876
-# source key f5ef7f9f28b74d8ab758bbb35931e11854aa9d4cf066da3ffe20d7db2e93640d
+# source key 0b086faccb10b206575192d9d1be47c170a269ec85a97cd76f5d1cac91161dae
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9acbe3fc564e1eff2c9e42e84208ed558a153412540c0106193402630a2a7ccb
-# source key f5ef7f9f28b74d8ab758bbb35931e11854aa9d4cf066da3ffe20d7db2e93640d
+# source key 0b086faccb10b206575192d9d1be47c170a269ec85a97cd76f5d1cac91161dae
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from symmech import __version__
 from symmech.core import units
-from symmech.core.results import VERDICTS, Check
+from symmech.core.results import VERDICTS, Check, readable
 from symmech.core.scene import SceneError, SymmechError
 
 TEMPLATE = "report.html.j2"
@@ -50,12 +50,6 @@ PAPER_BANNER = ("This run uses the paper's conventions (conventions = \"paper\")
                 "per second; a Λ* that is not a rotation), so its reactions and overloads are not the trolley's: "
                 "at t = 10 s P3 is 571.8 N here against 4263.5 N physically. Run with conventions = \"physics\" "
                 "(the default) for design numbers.")
-
-
-def readable(text: str) -> str:
-    """A sentence with the raw ids of elastic modes made readable (``beam0_plane1_mode1`` → ``beam 0, plane 1,
-    mode 1``)."""
-    return re.sub(r"\bbeam([0-9]+)_plane([0-9]+)_mode([0-9]+)\b", r"beam \1, plane \2, mode \3", text)
 
 
 def glossary(texts: list[str]) -> list[str]:
@@ -140,13 +134,24 @@ def derivations(summary: dict, package: str | None) -> list[Derivation]:
 
 
 def errata_records(package: str | None) -> list[dict]:
-    """Evaluated errata checks of the paper package (printed formula vs derivation)."""
+    """Evaluated errata checks of the paper package (printed formula vs derivation), each with its paper
+    named for reading (``seed 002``) rather than by the seed file's stem."""
     from symmech.core import errata
 
     if package is None:
         return []
     modules = [m for m in errata.modules() if m.__name__.startswith(f"symmech.{package}.")]
-    return [errata.evaluate(c) for m in modules for c in m.checks()]
+    return [{**record, "paper": f"seed {record['seed'].split('_', 1)[0]}"}
+            for record in (errata.evaluate(c) for m in modules for c in m.checks())]
+
+
+def paper_title(package: str | None) -> str:
+    """The paper of a paper package in words, from its docstring ("Paper 2 (seed 002): a two-axle trolley
+    ..."); empty for none."""
+    if package is None:
+        return ""
+    doc = importlib.import_module(f"symmech.{package}").__doc__ or ""
+    return doc.strip().split("\n", 1)[0].rstrip(".")
 
 
 def _text(value) -> str:
@@ -154,11 +159,16 @@ def _text(value) -> str:
 
 
 def _headline(summary: dict) -> list[dict]:
-    """Rows (name, value in its readable unit, at, meaning) of the summary's headline."""
+    """Rows (name, value in its readable unit, at, meaning, limit, verdict, mark) of the summary's headline;
+    an answer with a limit has it as text and is coloured by its verdict as the checks are."""
     rows = []
     for h in summary.get("headline", []):
+        limit, verdict = h.get("limit"), h.get("verdict")
         rows.append({"name": readable(h["name"]), "value": units.format(h["value"], h["unit"], 4),
-                     "at": readable(h["at"]), "meaning": readable(h["meaning"])})
+                     "at": readable(h["at"]), "meaning": readable(h["meaning"]),
+                     "limit": (f"within [{units.format(limit[0], h['unit'])}, {units.format(limit[1], h['unit'])}]"
+                               if limit else ""),
+                     "verdict": verdict or "", "mark": VERDICTS[verdict] if verdict else ""})
     return rows
 
 
@@ -350,7 +360,7 @@ def render(out: Path) -> str:
         paper=summary.get("scene", {}).get("conventions") == "paper", paper_banner=PAPER_BANNER,
         paper_tables=summary.get("paper_tables"),
         precision=_precision(Path(out), summary), derivations=derived, warnings=warnings,
-        errata=errata_records(package), figures=_figures(Path(out), summary.get("captions", {})),
+        errata=errata_records(package), paper_title=paper_title(package), figures=_figures(Path(out), summary.get("captions", {})),
         provenance=provenance,
         hashes=hashes, hash_source=hash_source)
 

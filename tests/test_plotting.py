@@ -230,3 +230,54 @@ def test_plot_axes_in_a_readable_unit(tmp_path):
     assert bottom.get_xlabel() == "time t [s]"
     assert top.yaxis.get_major_formatter()(-1.5e-4, 0) == "-0.15"
     np.testing.assert_array_equal(top.get_lines()[0].get_ydata(), [0.0, -2.0e-4])
+
+
+def test_mixed_coordinates_get_one_panel_per_unit(tmp_path, figures):
+    """The excavator has slides (m) and angles (rad): its free and frequency responses draw each set in its own
+    panel labelled with its own unit, never "m or rad"; every coordinate's curve is in the panel of its type
+    (types as the scene file declares them)."""
+    import tomllib
+
+    text = (SCENES / "smm_excavator.toml").read_text()
+    types = {c["name"]: c["type"] for c in tomllib.loads(text)["coordinates"]}
+    scene = tmp_path / "excavator.toml"
+    scene.write_text(text + '\n[initial]\nq = [0.001, 0.0, 0.0, 0.0, 0.0]\nduration = 0.5\nsteps = 50\n'
+                            '\n[forcing]\nQ = [1.0, 0.0, 0.0, 0.0, 0.0]\nomega = [1.0, 50.0]\nsamples = 20\n'
+                            '\n[output]\nplots = ["free_response", "frequency_response"]\n')
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    unit_of = {"slide": ("m", "mm", "µm"), "angle": ("rad", "mrad")}
+    for stem in ("free_response", "frequency_response"):
+        panels = figures[stem].axes
+        assert len(panels) == 2
+        for ax in panels:
+            names = [line.get_label() for line in ax.get_lines()]
+            kinds = {types[n] for n in names}
+            assert len(kinds) == 1, (stem, names)
+            unit = re.search(r"\[([^\]]+)\]$", ax.get_ylabel()).group(1)
+            assert unit in unit_of[kinds.pop()] and " or " not in ax.get_ylabel()
+        assert sorted(line.get_label() for ax in panels for line in ax.get_lines()) == sorted(types)
+
+
+@pytest.mark.parametrize("module, table", [("symmech.trolley.plots", "FIGURES"), ("symmech.smm.plots", "FIGURES"),
+                                           ("symmech.grain.plots", "MOTION"), ("symmech.grain.plots", "IMPACT")])
+def test_every_plot_caption_is_a_sentence(module, table):
+    """The caption of every plot of every kind (the elastic trolley's too, not run by the report tests) is a
+    sentence, not a file name: it starts with a capital, has several words and ends with a full stop."""
+    import importlib
+
+    for name, caption in getattr(importlib.import_module(module), table).items():
+        assert caption[0].isupper() and caption.endswith(".") and len(caption.split()) >= 6, (name, caption)
+        assert not re.search(rf"\b{name}\.(png|svg)\b", caption), (name, caption)
+
+
+def test_campbell_legend_names_beam_planes_in_words():
+    """The mode groups of the Campbell diagram read "beam 0, plane 1", not the raw id ``beam0_plane1``."""
+    from symmech.trolley import plots
+
+    modes = {"label": [["beam0_plane1_mode1", "beam0_plane2_mode1", "roller_1"]], "s": np.array([0.0, 1.0]),
+             "V0": np.array([1.0, 2.0]), "f": np.array([[10.0, 20.0, 30.0], [10.0, 20.0, 30.0]]),
+             "forcing": np.ones((2, 3))}
+    fig = plots.campbell(modes)
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert texts[:3] == ["beam 0, plane 1", "beam 0, plane 2", "rollers"]
+    assert not any("_plane" in t for t in texts)

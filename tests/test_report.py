@@ -69,8 +69,8 @@ def test_report_is_self_contained(reports, kind):
 def test_errata_of_the_scene_paper_only(reports, kind):
     """The errata are the scene's paper's only: its seed stated once above the table, not on every row."""
     page = html(reports[kind])
-    assert re.findall(r"Every check is of the paper <code>(\d{3})[^<]*</code>", page) == [RUNS[kind][2]]
-    assert not re.findall(r"<tr><td>(\d{3})_[^<]*</td><td>", page)
+    assert re.findall(r"Every check is of paper \d \(seed (\d{3})\): \w[^<]*\.</p>", page) == [RUNS[kind][2]]
+    assert not re.findall(r"\d{3}_[0-9a-f]{16}", page)  # the seed file's stem: a raw id, nowhere on the page
 
 
 def test_impact_report_shows_its_checks_and_derivations(reports):
@@ -84,6 +84,40 @@ def test_impact_report_shows_its_checks_and_derivations(reports):
                      r'<td class="verdict">✓ pass</td>', page)
     assert "<code>grain_impact.H</code>" in page and "symmech latex grain_impact.H --tex H.tex" in page
     assert page.count('<math display="block">') >= 10
+
+
+@pytest.mark.parametrize("kind", RUNS)
+def test_captions_are_sentences_not_file_names(reports, kind):
+    """Every figure of every kind's run has a caption sentence (capital, words, full stop), none a file name."""
+    page = html(reports[kind])
+    captions = re.findall(r"<figcaption>([^<]*)</figcaption>", page)
+    stems = {p.stem for p in reports[kind].glob("*.png")}
+    assert len(captions) == len(stems) >= 1
+    for caption in captions:
+        assert caption[0].isupper() and caption.endswith(".") and len(caption.split()) >= 6, caption
+        assert not re.search(r"\.(png|svg)\b", caption), caption
+        assert caption.rstrip(".").lower() not in {stem.replace("_", " ") for stem in stems} | stems, caption
+
+
+def test_overload_beyond_its_limit_is_coloured_with_the_limit(reports):
+    """The trolley's critical overload n2 (tens of g on the helix) is beyond the default comfort envelope
+    [-1.5, 6] g (docs/scenes-trolley.md): its answer row is coloured as a failed check, with the limit beside it;
+    an overload inside its envelope is coloured as passed. Inside or not is read from the overload CSVs."""
+    import numpy as np
+
+    page = html(reports["trolley"])
+    envelope = {1: (-2.0, 2.0), 2: (-1.5, 6.0), 3: (-2.0, 2.0)}
+    verdicts = []
+    for case in (1, 2):
+        n = np.loadtxt(reports["trolley"] / f"case{case}_overload.csv", delimiter=",", skiprows=1)
+        for k, (lo, hi) in envelope.items():
+            ok = lo <= n[:, k].min() and n[:, k].max() <= hi
+            verdicts.append(ok)
+            row = (rf'<tr class="{"pass" if ok else "fail"}"><td>case {case}: critical overload n{k}</td>'
+                   rf'<td class="value">-?[0-9.]+ g</td><td class="num verdict">{"✓" if ok else "✗"} '
+                   rf'within \[{lo:g} g, {hi:g} g\]</td>')
+            assert re.search(row, page), row
+    assert not all(verdicts)  # the 44 g of the helix is among them
 
 
 def test_provenance_hashes(reports):

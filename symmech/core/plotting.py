@@ -134,6 +134,12 @@ def save(fig, folder: Path, stem: str, formats: tuple[str, ...] = ("png",)) -> l
     return paths
 
 
+def captions(descriptions: dict[str, str], output: dict) -> dict[str, str]:
+    """{plot name: caption sentence} of the plots of a kind (``descriptions``, as its ``[output]`` docs) that the
+    scene's resolved ``[output]`` table asks for; a run records them as ``summary["captions"]`` for the report."""
+    return {name: descriptions[name] for name in output["plots"] if name in descriptions}
+
+
 def draw(figures: dict[str, Callable[[], object]], output: dict, folder: Path) -> list[Path]:
     """Build and save the figures a scene asks for.
 

@@ -9,6 +9,7 @@ Python API hands the same Result to the user (``Result.tables[name].column(...)`
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from collections.abc import Callable
@@ -110,24 +111,43 @@ class Table:
         return xr.Dataset(variables, coords=coords, attrs={"description": self.doc})
 
 
+def readable(text: str) -> str:
+    """A sentence with the raw ids of the elastic trolley's modes and mode groups made readable
+    (``beam0_plane1_mode1`` → ``beam 0, plane 1, mode 1``; ``beam0_plane1`` → ``beam 0, plane 1``)."""
+    text = re.sub(r"\bbeam([0-9]+)_plane([0-9]+)_mode([0-9]+)\b", r"beam \1, plane \2, mode \3", text)
+    return re.sub(r"\bbeam([0-9]+)_plane([0-9]+)\b", r"beam \1, plane \2", text)
+
+
 @dataclass(frozen=True)
 class Headline:
     """One answer of a run, as a person asks for it: name, value in SI ``unit`` ("1" if
-    dimensionless), its one-line meaning and where or when it happens (e.g. "t = 2.8 s")."""
+    dimensionless), its one-line meaning and where or when it happens (e.g. "t = 2.8 s"); an answer
+    with a limit carries its admissible ``envelope`` (lo, hi) in ``unit`` and gets the verdict a
+    :func:`within` check of it would (a value beyond the envelope fails)."""
 
     name: str
     value: float
     unit: str
     meaning: str
     at: str = ""
+    envelope: tuple[float, float] | None = None
+
+    def verdict(self) -> str | None:
+        """"pass" or "fail" against the envelope; None without one."""
+        if self.envelope is None:
+            return None
+        return within(self.name, self.value, self.value, self.envelope, self.unit).verdict
 
     def text(self) -> str:
         """``"name: 0.235 mm (at t = 2.8 s)"`` in the readable unit."""
         return f"{self.name}: {units.format(self.value, self.unit)}" + (f" (at {self.at})" if self.at else "")
 
     def to_json(self) -> dict:
-        return {"name": self.name, "value": float(self.value), "unit": self.unit, "meaning": self.meaning,
-                "at": self.at}
+        out = {"name": self.name, "value": float(self.value), "unit": self.unit, "meaning": self.meaning,
+               "at": self.at}
+        if self.envelope is not None:
+            out |= {"limit": [float(v) for v in self.envelope], "verdict": self.verdict()}
+        return out
 
 
 @dataclass(frozen=True)

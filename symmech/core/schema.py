@@ -337,13 +337,13 @@ class Mapping(Field):
 
 
 def plot_output(plots: dict[str, str], default: tuple[str, ...]) -> Table:
-    """The ``[output]`` table of a kind with plots: which of ``plots`` (name -> what it shows) to
+    """The ``[output]`` table of a kind with plots: which of ``plots`` (name -> its caption) to
     draw, and in which image formats; every kind declares it through here
     (:func:`symmech.core.plotting.draw` reads it)."""
     from symmech.core.plotting import FORMATS
 
     return Table("which plots `symmech run` draws (`--no-plots`: none)", {
-        "plots": Choices("plots to draw, each `<name>.<format>`: " + "; ".join(f"`{k}` {v}" for k, v in plots.items()),
+        "plots": Choices("plots to draw, each `<name>.<format>`: " + " ".join(f"`{k}`: {v}" for k, v in plots.items()),
                          choices=tuple(plots), default=list(default)),
         "formats": Choices("image formats; `symmech report` inlines the SVG when there is one, else the PNG",
                            choices=FORMATS, min_items=1, default=["png"]),

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import precision as wp
-from symmech.core import registry
+from symmech.core import plotting, registry
 from symmech.core.context import Context
 from symmech.core.results import Check, Headline, Result, at_most
 from symmech.core.scene import SceneError
@@ -140,6 +140,7 @@ def run(sc: ImpactScene, ctx: Context) -> Result:
     _, R, H = impact_geometry(sc.body, Q)
     rates, gimbal = _euler_paths(sc, Q, R, result.T, result.omega_after)
     summary = {
+        "captions": plotting.captions(plots.IMPACT, sc.output),
         "solver": {"name": result.solver, "iterations": result.iterations,
                    "residual_19": result.residual, "converged": result.converged},
         "impulse_T": result.T.tolist(),

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import precision as wp
-from symmech.core import engines, registry
+from symmech.core import engines, plotting, registry
 from symmech.core.context import Context
 from symmech.core.results import Check, Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
@@ -406,7 +406,7 @@ def run(sc: GrainScene, ctx: Context) -> Result:
         m = simulate(sc, on_step=_Watch(ctx, bar, sc.numerics.tolerance * sc.numerics.scan_step))
     summary = {"mode": sc.numerics.mode, "impact_law": sc.model.law.kind, "effects": sc.model.effects.__dict__,
                "wall_time_s": time.perf_counter() - started, "estimate": {"seconds": cost.seconds, "what": cost.what},
-               **m.summary()}
+               **m.summary(), "captions": plotting.captions(plots.MOTION, sc.output)}
     warnings = summary.pop("warnings")
     checks = _checks(summary, m.impacts)
     if summary["bounces"]:

@@ -13,10 +13,14 @@ import numpy as np
 from symmech.core import plotting
 from symmech.generated import grain_impact as gen
 
-MOTION = {"path": "(side view and height over time, impacts marked)",
-          "velocity": "(centre velocity, the velocity just after each impact marked)",
-          "phase": "(phase portrait of the normal motion, height against normal velocity)"}
-IMPACT = {"impact": "(the scalar equation F(mu) with its roots, and a top view of slip and impulse)"}
+# plot name -> its caption (a sentence; also the plot's description in the scene's `[output]` docs)
+MOTION = {"path": "The grain's path: side view relative to the surface, and its centre height over time with the "
+                  "impacts marked [m].",
+          "velocity": "Centre velocity of the grain relative to the surface over time, the normal velocity just "
+                      "after each impact marked [m/s].",
+          "phase": "Phase portrait of the normal motion: centre height [m] against normal velocity [m/s]."}
+IMPACT = {"impact": "The impact's scalar equation F(μ) with its roots (o admissible, x not), and a top view of the "
+                    "slip before and after and of the tangential impulse."}
 
 
 def _impact_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -39,9 +39,12 @@ def _draw(ax, m, at, color: str, label: str) -> None:
     ax.plot([], [], "-o", color=color, ms=4, label=label)
 
 
-FIGURES = {"modes": "(the lowest six mode shapes on the geometry)",
-           "frequency_response": "(amplitude per coordinate against forcing frequency, when `[forcing]` asks)",
-           "free_response": "(coordinates against time, when `[initial]` is given)"}
+# plot name -> its caption (a sentence; also the plot's description in the scene's `[output]` docs)
+FIGURES = {"modes": "The lowest six mode shapes drawn on the mechanism's geometry, with their frequencies [Hz].",
+           "frequency_response": "Frequency response under the scene's [forcing]: amplitude of each coordinate "
+                                 "(translations in m, rotations in rad) against the forcing frequency [Hz].",
+           "free_response": "Free response from the scene's [initial] state: each coordinate (translations in m, rotations "
+                            "in rad) against time [s]."}
 
 
 def modes_and_responses(m, md, omega, response, out: Path, output: dict) -> list[str]:
@@ -52,13 +55,13 @@ def modes_and_responses(m, md, omega, response, out: Path, output: dict) -> list
             omegas, H = response["frf"]
             # in Hz, as the modes' legend: a peak sits at its mode's frequency
             return _curves(m, omegas / (2 * math.pi), np.maximum(np.abs(H), 1e-300), True,
-                           ("forcing frequency f = ω/2π", "Hz"),
-                           ("amplitude |q| under the scene's forcing", "m or rad"), "frequency response")
+                           ("forcing frequency f = ω/2π", "Hz"), "amplitude |q| under the scene's forcing",
+                           "frequency response")
 
     def free():
         if "free" in response:
             t, q = response["free"]
-            return _curves(m, t, q, False, ("time t", "s"), ("coordinate q", "m or rad"), "free response")
+            return _curves(m, t, q, False, ("time t", "s"), "coordinate q", "free response")
 
     figures = {"modes": lambda: _modes(m, md, omega), "frequency_response": frf, "free_response": free}
     return [p.name for p in plotting.draw(figures, output, out)]
@@ -96,15 +99,19 @@ def _modes(m, md, omega):
     return fig
 
 
-def _curves(m, x, ys, log: bool, xlabel: tuple, ylabel: tuple, title: str):
-    """One curve per coordinate (first eight) against x; labels are (quantity, unit) pairs."""
-    fig, axes = plotting.figure(1, 1, width=7.5, height=4.0)
-    ax = axes[0, 0]
-    for j, name in enumerate(m.coordinate_names[:8]):
-        (ax.semilogy if log else ax.plot)(x, ys[:, j], label=name)
-    plotting.set_labels(ax, xlabel, ylabel)
-    ax.set_title(f"{m.name}: {title}")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)  # beside, not on, the data
+def _curves(m, x, ys, log: bool, xlabel: tuple, quantity: str, title: str):
+    """One curve per coordinate (first eight) against x (``xlabel``: (quantity, unit)), one panel per coordinate
+    unit (translations in m, rotations in rad), each labelled ``quantity [unit]``; ``ys`` is (len(x), n)."""
+    shown = m.coordinates[:8]
+    panels = {unit: [j for j, co in enumerate(shown) if co.unit == unit] for unit in dict.fromkeys(co.unit
+                                                                                                 for co in shown)}
+    fig, axes = plotting.figure(len(panels), 1, width=7.5, height=4.0 if len(panels) == 1 else 3.0, sharex=True)
+    for ax, (unit, columns) in zip(axes[:, 0], panels.items()):
+        for j in columns:
+            (ax.semilogy if log else ax.plot)(x, ys[:, j], label=shown[j].name)
+        plotting.set_labels(ax, xlabel, (quantity, unit))
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)  # beside the data
+    axes[0, 0].set_title(f"{m.name}: {title}")
     fig.tight_layout()
     return fig
 

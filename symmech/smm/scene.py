@@ -25,13 +25,13 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
-from symmech.core import registry
+from symmech.core import plotting, registry
 from symmech.core.results import Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
 from symmech.smm import build, numeric
 from symmech.smm.chain import chain_spec, exact_omega2
 from symmech.smm.model import Effects, Mechanism
-from symmech.smm.plots import modes_and_responses, precision_plot
+from symmech.smm.plots import FIGURES, modes_and_responses, precision_plot
 from symmech.smm.schema import SCHEMA
 
 ROLE = "kind"  # found by symmech.core.discovery
@@ -197,6 +197,7 @@ def run(setup: Setup, ctx) -> Result:
         "damping_ratios": md.zeta,
         "neglected_effects": eff_report,
         "generated_module": next((k for k in files if k.endswith(".py")), None),
+        "captions": plotting.captions(FIGURES, sc["output"]),
     }
     checks = [equilibrium, at_most("unstable modes (negative omega^2)", cls.count("unstable"), 0),
               at_most("round-off of the lowest omega^2 (stiffness spread x machine epsilon)", md.spread * eps,

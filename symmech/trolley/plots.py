@@ -7,16 +7,21 @@ from pathlib import Path
 import numpy as np
 
 from symmech.core import plotting
+from symmech.core.results import readable
 
 
-FIGURES = {"track": "(3-D midline and centre-of-mass path of every case)",
-           "reactions": "(rail reactions P0...P5 over time, one panel per case)",
-           "overloads": "(overloads in g against the comfort envelope)",
-           "elastic_reactions": "(elastic model: P0...P5 beside the rigid ones)",
-           "elastic_deflections": "(elastic model: roller deflections and elastic deflection of the report points)",
-           "elastic_overloads": "(elastic model: overloads at the report points against the comfort envelope)",
-           "campbell": "(elastic model: natural frequencies against arc length and speed, with the forcing "
-                       "frequencies)"}
+# plot name -> its caption (a sentence; also the plot's description in the scene's `[output]` docs)
+FIGURES = {"track": "The track's midline X0(s) and the centre-of-mass path of every case, in the fixed frame [m].",
+           "reactions": "Rail reactions P0…P5 along the ride, one panel per case [N].",
+           "overloads": "Overloads n1, n2, n3 along the ride against the comfort envelope (green band; red: "
+                        "outside) [g].",
+           "elastic_reactions": "Elastic model: rail reactions P0…P5 along the ride beside the rigid ones [N].",
+           "elastic_deflections": "Elastic model: roller deflections and the elastic deflection of the report points "
+                                  "along the ride [m].",
+           "elastic_overloads": "Elastic model: overloads at the report points along the ride against the comfort "
+                                "envelope [g].",
+           "campbell": "Campbell diagram of the elastic model: natural frequencies against arc length and speed, "
+                       "with the forcing frequencies [Hz]."}
 
 
 def write_all(setup, res: dict, out: Path, output: dict) -> list[Path]:
@@ -163,7 +168,7 @@ def campbell(modes: dict):
         order = np.argsort(x)
         for k, group in enumerate(groups):
             ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color=colours[group],
-                    label=group if groups.index(group) == k else None)
+                    label=readable(group) if groups.index(group) == k else None)
         for j, ((_, doc), style) in enumerate(zip(FORCING, ("--", ":", "-."))):
             ax.plot(x[order], modes["forcing"][order, j], ls=style, lw=1, color="k", label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))

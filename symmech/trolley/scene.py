@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import expressions, registry
+from symmech.core import expressions, plotting, registry
 from symmech.core.context import Context
 from symmech.core.results import Column, Headline, Result, Table, at_most, within
 from symmech.core.scene import SceneError, SymmechError
@@ -398,7 +398,8 @@ def run(setup: Setup, ctx) -> Result:
     summary = {"conventions": setup.conventions, "frame": setup.frame,
                "effects": {"gravity": setup.body.g0 > 0, "local_curvature": setup.local_curvature,
                            "traction": setup.traction is not None},
-               "steps": len(setup.t) - 1, "frame_continuity": setup.plan.report(), "cases": {}}
+               "steps": len(setup.t) - 1, "frame_continuity": setup.plan.report(), "cases": {},
+               "captions": plotting.captions(plots.FIGURES, setup.output)}
     if getattr(setup.track, "noise", None):
         summary["track_noise"] = setup.track.noise
     result = Result("trolley", summary)
@@ -452,7 +453,7 @@ def _case_headline(setup, case, r) -> list[Headline]:
         i = i_max if hi - n[i_max] <= n[i_min] - lo else i_min  # the smaller margin to the envelope
         out.append(Headline(f"case {case}: critical overload n{k + 1}", n[i], "g",
                             f"along {axis}: the extreme nearest to or beyond the comfort envelope [{lo:g}, {hi:g}] g",
-                            at(i)))
+                            at(i), (lo, hi)))
     for j, column in enumerate(CASE_COLUMNS[7:]):
         i = int(np.argmax(np.abs(r["P"][:, j])))
         out.append(Headline(f"case {case}: peak reaction {column.name}", r["P"][i, j], "N", column.doc, at(i)))
