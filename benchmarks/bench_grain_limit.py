@@ -321,7 +321,7 @@ def loop_alone(model, num, st, t_end):
     """The compiled loop with its arguments packed once: each call copies the state and carry only."""
     built = compiled.ENGINE.ahead_of_time()
     run = built.run if built is not None else compiled_loop.run
-    p = compiled.pack(model.active(), num)
+    p = compiled.pack(model, num)
     y0 = STATE.pack(t=st.t, r=st.r, v=st.v, q=st.q, w=(0.0, 0.0, 0.0))
     rows = np.empty((int(t_end / num.sample_interval) + 64, TRAJECTORY_WIDTH))
     imps, warns = np.empty((64, IMPACT_WIDTH)), np.empty((8, 3))

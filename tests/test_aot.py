@@ -96,7 +96,7 @@ def test_the_built_loop_equals_numbas(built, case, tmp_path, monkeypatch):
     monkeypatch.chdir(ROOT)
     sc, t_end = (default_scene(tmp_path, 2.0), 2.0) if case.startswith("default") else (
         sweep_grain(CROP, 0.6e-3, 18.0, 0.12), 0.12)
-    assert compiled._entry() is built.run
+    assert compiled.entry() is built.run
     ahead = compiled.simulate(sc.model, sc.numerics, sc.start, t_end)
     jit = _on_a_thread(sc.model, sc.numerics, sc.start, t_end)
     assert len(ahead.impacts) == len(jit.impacts) >= (400 if case.startswith("default") else 0)

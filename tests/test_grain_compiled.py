@@ -137,14 +137,14 @@ def test_impact_log_built_on_first_use_is_the_same_everywhere(tmp_path):
 
 
 def test_parameter_vector_layout():
-    """pack fills every field of the declared layout by name; Model.active() zeroes what is switched off and is
-    the model itself when nothing is (pack reads the active model)."""
+    """pack fills every field of the declared layout by name; a Model zeroes on construction the parameters of
+    what is switched off (pack reads the model as given)."""
     vib = flight.Vibration(1.1e-3, 2 * math.pi * 23.0, 0.7, (0.6, 0.0, 0.8))
     law = ImpactLaw("printed", e_n=0.41, e_t=-0.31, mu=0.52, e=0.43, lam=1.37, check_printed=True)
     model = motion.Model((3e-3, 2e-3, 1e-3), 2.5e-5, (0.5, -0.2, -9.7), vib, law, 0.33)
     num = motion.Numerics(tolerance=1e-8, scan_step=2e-4, rest_velocity=3e-5, max_impacts=77, sample_interval=5e-3)
-    p = compiled.pack(model.active(), num)
-    assert model.active() is model and p.shape == (31,)
+    p = compiled.pack(model, num)
+    assert p.shape == (31,)
     expected = {"axes": model.axes, "mass": 2.5e-5, "inertia": model.inertia, "g": model.g_k, "amplitude": 1.1e-3,
                 "omega": 2 * math.pi * 23.0, "phase": 0.7, "direction": vib.direction, "law": compiled.LAW_PRINTED,
                 "e_n": 0.41, "e_t": -0.31, "mu_impact": 0.52, "e": 0.43, "lam": 1.37, "check_printed": 1.0, "mu": 0.33,
@@ -155,8 +155,9 @@ def test_parameter_vector_layout():
     for name, values in expected.items():
         np.testing.assert_allclose(got[name], values, rtol=1e-15, err_msg=name)
     off = replace(model, effects=motion.Effects(vibration=False, friction=False, rotation=False))
-    got = compiled_layout.PARAMS.unpack(compiled.pack(off.active(), num))
-    assert got["amplitude"] == got["mu"] == got["rotation"] == 0.0
+    got = compiled_layout.PARAMS.unpack(compiled.pack(off, num))
+    assert got["amplitude"] == got["mu"] == got["rotation"] == 0.0 and got["period"] == 1.0
+    assert off.vibration.amplitude == off.mu == 0.0 and model.vibration.amplitude == 1.1e-3 and model.mu == 0.33
     assert got["omega"] == 2 * math.pi * 23.0 and got["mu_impact"] == 0.52
 
 

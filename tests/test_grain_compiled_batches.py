@@ -1,5 +1,5 @@
 """The compiled engine's ``simulate`` between its loop's batches, without compiling the loop: a stand-in loop
-(``compiled._entry`` replaced) returns chosen times and statuses call by call, as the loop returns a batch of
+(``compiled.entry`` replaced) returns chosen times and statuses call by call, as the loop returns a batch of
 ``PHASES_PER_CALL`` regime phases; progress is reported with each batch's time and a failure status becomes the
 Python loop's error at the loop's time and regime. Expected values are written here by hand."""
 import numpy as np
@@ -28,7 +28,7 @@ def stand_in(monkeypatch, batches):
         y[0], carry[compiled_layout.C_AT.regime] = t, regime
         return y, rows, imps, warns, status
 
-    monkeypatch.setattr(compiled, "_entry", lambda: run)
+    monkeypatch.setattr(compiled, "entry", lambda: run)
     return seen
 
 
@@ -57,10 +57,10 @@ def test_a_failed_batch_raises_the_python_loops_error_at_its_time_and_regime(mon
 
 
 def test_the_signature_built_ahead_is_the_one_simulate_calls_the_loop_with(monkeypatch):
-    """The engine is compiled (and built ahead of time) for ``_entry_signature``: a run with other argument
+    """The engine is compiled (and built ahead of time) for ``entry_signature``: a run with other argument
     types would compile again, or find no ahead-of-time export."""
     import numba
 
     calls = stand_in(monkeypatch, [(1.0, compiled.DONE, 0)])
     compiled.simulate(MODEL, NUM, START, 1.0)
-    assert tuple(numba.typeof(a) for a in calls[0]) == compiled._entry_signature()
+    assert tuple(numba.typeof(a) for a in calls[0]) == compiled.entry_signature()

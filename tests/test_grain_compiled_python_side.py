@@ -29,7 +29,7 @@ NUM = motion.Numerics(max_impacts=7)
     (compiled_layout.W_ENERGY, 1.234567891e-6, 1.3e-6, "impact law 'printed' created energy: 1.23457e-06 J -> 1.3e-06 J"),
 ])
 def test_warning_codes_read_as_the_python_loops_texts(code, a, b, text):
-    assert compiled._warning(int(code), a, b, MODEL, NUM) == text
+    assert compiled.warning_text(int(code), a, b, MODEL, NUM) == text
 
 
 @pytest.mark.parametrize("status, regime, text", [
@@ -47,7 +47,7 @@ def test_warning_codes_read_as_the_python_loops_texts(code, a, b, text):
 ])
 def test_failure_codes_raise_the_python_loops_errors(status, regime, text):
     with pytest.raises(SymmechError) as err:
-        compiled._raise(status, 0.1234567891, regime)
+        compiled.raise_failure(status, 0.1234567891, regime)
     assert str(err.value) == text
 
 
@@ -62,7 +62,7 @@ def impact_rows():
 
 def test_impact_log_from_the_compiled_rows_has_the_python_loops_fields():
     rows = impact_rows()
-    log = compiled._impact_dicts(rows)
+    log = compiled.impact_log(rows)
     assert len(log) == 2
     for k, entry in enumerate(log):
         x = list(np.arange(31 * k, 31 * k + 31) / 8.0)
@@ -81,7 +81,7 @@ def test_energy_budget_of_a_finished_run_from_its_carry():
     carry = compiled.CARRY.zeros()
     carry[[C_AT.e_start, C_AT.e_end, C_AT.work]] = 2.0, 1.25, 0.5
     carry[[C_AT.impacts, C_AT.land_loss, C_AT.slide_loss]] = 0.75, 0.25, 0.125
-    report = compiled._budget(carry)
+    report = compiled.energy_budget(carry)
     residual = 1.25 - 2.0 - (0.5 - 0.75 - 0.25 - 0.125)
     assert report == {"start_J": 2.0, "end_J": 1.25, "input_by_surface_J": 0.5, "lost_in_impacts_J": 0.75,
                       "lost_at_landings_J": 0.25, "lost_in_sliding_J": 0.125, "residual_J": residual,
@@ -90,7 +90,7 @@ def test_energy_budget_of_a_finished_run_from_its_carry():
 
 def test_state_of_a_result_vector_is_made_of_its_views():
     y = np.arange(14, dtype=float) / 4.0
-    st = compiled._state(y)
+    st = compiled.state_view(y)
     assert type(st.t) is float and st.t == 0.0
     for got, part in ((st.r, y[1:4]), (st.v, y[4:7]), (st.q, y[7:11]), (st.w, y[11:14])):
         assert np.shares_memory(got, y) and np.array_equal(got, part)
@@ -107,7 +107,7 @@ def test_relative_residual_of_the_budget_is_over_its_largest_entry(start, end, w
     carry = compiled.CARRY.zeros()
     carry[[C_AT.e_start, C_AT.e_end, C_AT.work]] = start, end, work
     carry[[C_AT.impacts, C_AT.land_loss, C_AT.slide_loss]] = impacts, landings, sliding
-    report = compiled._budget(carry)
+    report = compiled.energy_budget(carry)
     residual = end - start - (work - impacts - landings - sliding)
     assert report["residual_J"] == residual
     assert report["relative_residual"] == (abs(residual) / scale if scale else 0.0)

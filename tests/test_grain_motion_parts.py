@@ -150,7 +150,7 @@ def grain_model(**kw):
 
 def run(model, t_end=0.2, mode="accurate", w=(0.0, 0.0, 0.0), z=3e-3):
     st = motion.State(0.0, np.array([0.0, 0.0, z]), np.zeros(3), np.array([1.0, 0, 0, 0]), np.array(w, float))
-    T = model.period
+    T = 2 * math.pi / model.vibration.omega  # the surface's period even when its vibration is off
     num = motion.Numerics(mode=mode, tolerance=1e-10, scan_step=T / 40, dt=T / 1000, nodes=100,
                           sample_interval=T / 5)
     sim = paper_mode.simulate if mode == "paper" else motion.simulate

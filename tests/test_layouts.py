@@ -144,7 +144,7 @@ def test_the_grain_rows_and_scratch_vectors_mirror_what_they_are_copied_from():
 def test_the_grain_state_vector_round_trips_through_the_engines_python_side():
     y = compiled_layout.STATE.pack(t=0.25, r=(1.0, 2.0, 3.0), v=(4.0, 5.0, 6.0), q=(1.0, 0.0, 0.0, 0.0),
                                    w=(7.0, 8.0, 9.0))
-    st = compiled._state(y)
+    st = compiled.state_view(y)
     assert st.t == 0.25 and st.r.tolist() == [1.0, 2.0, 3.0] and st.q.tolist() == [1.0, 0.0, 0.0, 0.0]
     assert st.w.tolist() == [7.0, 8.0, 9.0] and np.shares_memory(st.v, y)
 

@@ -265,7 +265,7 @@ SHARDS = {
                               ["*.x_rocking_warning__*", "*ǁ_Recorderǁtimes__*"]),
     # what the motion shard left without a result (mutation/history.md)
     "motion_rest": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
-                    ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁactive__*",
+                    ["*.x_simulate__*", "*ǁ_Budgetǁreport__*", "*.x_impact_record__*", "*ǁModelǁ__post_init____*",
                      "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*", "*.x__velocity_noise__*",
                      "*ǁProgressǁ*", "*ǁStateǁrow__*"]),
     # what motion_rest left (mutation/history.md): simulate and impact_record unrun (it ran the cheaper helpers first);
@@ -277,20 +277,20 @@ SHARDS = {
                           ["*.x_simulate__mutmut_1[4-9][0-9]", "*.x_simulate__mutmut_2[0-9][0-9]",
                            "*.x_impact_record__*"]),
     "motion_helpers": ("symmech/grain/motion.py", GRAIN_MOTION_TESTS,
-                       ["*ǁModelǁactive__*", "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*",
+                       ["*ǁModelǁ__post_init____*", "*.x__contact_velocity__*", "*.x__gap__*", "*.x__gap_noise__*",
                         "*ǁProgressǁ*", "*ǁStateǁrow__*"]),
     # the compiled engine's Python side (mutmut leaves decorated functions, the numba kernels, alone); its tests
     # compile the engine once per run in the mutated copy (~80 s, cached in mutants/engine_py/)
     "engine_py": ("symmech/grain/motion_engine/driver.py",
                   ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
                    "tests/test_grain_compiled_start.py"],
-                  ["*.x_pack__*", "*.x__warning__*", "*.x__impact_dicts__*", "*.x__state__*", "*ǁLazyMotionǁ*",
-                   "*.x__budget__*", "*.x__raise__*", "*.x_simulate__*", "*.x_simulate_many__*",
-                   "*.x__entry_signature__*"]),
-    # what engine_py left (mutation/history.md): simulate from _90, simulate_many, _entry_signature; its ten
+                  ["*.x_pack__*", "*.x_warning_text__*", "*.x_impact_log__*", "*.x_state_view__*", "*ǁLazyMotionǁ*",
+                   "*.x_energy_budget__*", "*.x_raise_failure__*", "*.x_simulate__*", "*.x_simulate_many__*",
+                   "*.x_entry_signature__*"]),
+    # what engine_py left (mutation/history.md): simulate from _90, simulate_many, entry_signature; its ten
     # untriaged survivors, not named, were the last run (simulate): this shard reruns all of simulate
     "engine_py_rest": ("symmech/grain/motion_engine/driver.py", ENGINE_PY_TESTS,
-                       ["*.x_simulate__*", "*.x_simulate_many__*", "*.x__entry_signature__*"]),
+                       ["*.x_simulate__*", "*.x_simulate_many__*", "*.x_entry_signature__*"]),
     # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
     # and a child imports the unmutated package anyway
     "pipeline_output": ("symmech/core/pipeline.py",

@@ -69,7 +69,8 @@ class Effects:
 @dataclass(frozen=True)
 class Model:
     """Physics of one scene: grain semi-axes ``axes`` (3,) m and ``mass`` kg, gravity ``g_k`` (3,) m/s^2
-    in KXYZ, surface ``vibration``, impact ``law``, sliding friction coefficient ``mu``, ``effects``."""
+    in KXYZ, surface ``vibration``, impact ``law``, sliding friction coefficient ``mu``, ``effects``; an effect
+    that is off has its parameters zeroed on construction (the vibration's amplitude, ``mu``)."""
 
     axes: tuple
     mass: float
@@ -85,12 +86,13 @@ class Model:
         inertia.flags.writeable = False  # shared by all its users
         return inertia
 
-    def active(self) -> Model:
-        """The model the simulation runs: parameters of switched-off effects zeroed (no code runs for them)."""
-        if self.effects.vibration and self.effects.friction:
-            return self  # nothing to zero (a copy costs as much as the rest of a short compiled run's set-up)
-        vib = self.vibration if self.effects.vibration else replace(self.vibration, amplitude=0.0)
-        return replace(self, vibration=vib, mu=self.mu if self.effects.friction else 0.0)
+    def __post_init__(self):
+        # A model is what runs: the parameters of switched-off effects are zeroed here, once, so that every
+        # engine and the compiled loop's parameter vector read it as given (no code runs for them).
+        if not self.effects.vibration:
+            object.__setattr__(self, "vibration", replace(self.vibration, amplitude=0.0))
+        if not self.effects.friction:
+            object.__setattr__(self, "mu", 0.0)
 
     @property
     def sliding(self) -> Sliding:
@@ -248,7 +250,6 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
     ``on_step(t_now: float) -> None`` (optional) is called with the simulated time [s] at most every
     0.2 s of wall time and once at the end; an exception it raises stops the run and propagates unchanged.
     """
-    model = model.active()
     progress = Progress(on_step)
     rec = _Recorder(num.sample_interval)
     st = replace(start, r=np.array(start.r, float), v=np.array(start.v, float),

@@ -189,9 +189,9 @@ def prepare(r: dict) -> GrainScene:
     alpha, beta = ((math.radians(surface["alpha_deg"]), math.radians(surface["beta_deg"]))
                    if effects.inclination else (0.0, 0.0))
     g_k = tuple(float(x) for x in gm.gravity(surface["g"], alpha, beta))
-    vibration = _vibration(r["vibration"], g_k, effects)
-    mu = r["sliding"]["friction"] if effects.friction else 0.0
-    model = motion.Model(axes, fields.body_mass(r["body"]), g_k, vibration, _law(r["impact"]), mu, effects)
+    vibration = _vibration(r["vibration"], g_k)
+    model = motion.Model(axes, fields.body_mass(r["body"]), g_k, vibration, _law(r["impact"]), r["sliding"]["friction"],
+                         effects)
     numerics = _numerics(r["numerics"], model.period)
     rows = r["duration"] / numerics.sample_interval
     if rows > MAX_ROWS:
@@ -201,7 +201,7 @@ def prepare(r: dict) -> GrainScene:
     return GrainScene(model, numerics, start, r["duration"], (alpha, beta), r["precision"], r["output"])
 
 
-def _vibration(v: dict, g_k: tuple, effects: motion.Effects) -> flight.Vibration:
+def _vibration(v: dict, g_k: tuple) -> flight.Vibration:
     g = float(np.linalg.norm(g_k))
     if v["direction"] == "vertical":
         direction = tuple(-x / g for x in g_k)
@@ -212,8 +212,7 @@ def _vibration(v: dict, g_k: tuple, effects: motion.Effects) -> flight.Vibration
         direction = (math.cos(angle), 0.0, math.sin(angle))
     else:
         direction = tuple(float(x) for x in np.asarray(v["vector"]) / np.linalg.norm(v["vector"]))
-    amplitude = v["amplitude"] if effects.vibration else 0.0
-    return flight.Vibration(amplitude, 2 * math.pi * v["frequency"], math.radians(v["phase_deg"]), direction)
+    return flight.Vibration(v["amplitude"], 2 * math.pi * v["frequency"], math.radians(v["phase_deg"]), direction)
 
 
 def _law(law: dict) -> ImpactLaw:
@@ -256,7 +255,7 @@ def expected_impacts(sc: GrainScene) -> float:
     (normal acceleration amplitude over g_n, Gamma > 1) launches a new sequence every period,
     or every Gamma / pi periods once a throw outlasts a period.
     """
-    model, num = sc.model.active(), sc.numerics
+    model, num = sc.model, sc.numerics
     law = model.law
     e = law.e if law.kind == "printed" else law.e_n
     g_n = abs(model.g_k[2])

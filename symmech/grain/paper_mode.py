@@ -76,7 +76,6 @@ def simulate_batch(model: Model, num: Numerics, axes, mass, r0, v0, angles0, w0,
     nodes = contact.ellipsoid_nodes(np.ones(3), num.nodes)[None] * axes[:, None, :]  # (n, N, 3)
     sliding = np.zeros(n, dtype=bool)
     count = np.zeros(n, dtype=int)
-    model = model.active()
     vib = model.vibration
     slide_model = model.sliding
     warnings: list = []

@@ -67,7 +67,7 @@ from symmech.grain.motion_engine.layouts import (  # noqa: F401 (LAYOUTS: the en
 
 
 def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
-    """The parameter vector (PARAMS.size,) of an active model and its numerics (layout :data:`PARAMS`)."""
+    """The parameter vector (PARAMS.size,) of a model and its numerics (layout :data:`PARAMS`)."""
     vib, law = model.vibration, model.law
     return PARAMS.pack(
         axes=model.axes, mass=model.mass, inertia=model.inertia, g=model.g_k, amplitude=vib.amplitude,
@@ -78,7 +78,7 @@ def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
         max_impacts=num.max_impacts, sample_interval=num.sample_interval, period=model.period)
 
 
-def _warning(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:
+def warning_text(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:
     """The text of a warning row (code, a, b), as the Python loop words it (:mod:`symmech.grain.outcome`)."""
     if code == W_MAX_IMPACTS:
         return outcome.max_impacts_warning(a, num.max_impacts)
@@ -98,7 +98,7 @@ IMPACT_VALUES = {f.name: IMPACT_ROW.slice(f.name) if f.shape else IMPACT_ROW.off
                  for f in IMPACT_ROW.fields if f.name not in FLAG_FIELDS}
 
 
-def _impact_dicts(imps: np.ndarray) -> list:
+def impact_log(imps: np.ndarray) -> list:
     """The impact log (the keys of ``motion.impact_record``) from the compiled impact rows (n, IMPACT_WIDTH)."""
     flags = (imps[:, [IMPACT_ROW.offset(name) for name in FLAG_FIELDS]] + 1.0).astype(INT).tolist()
     return [{**{name: row[at] for name, at in IMPACT_VALUES.items()},
@@ -109,7 +109,7 @@ def _impact_dicts(imps: np.ndarray) -> list:
 STATE_VECTORS = tuple(STATE.slice(name) for name in ("r", "v", "q", "w"))  # motion.State's order
 
 
-def _state(y: np.ndarray) -> motion.State:
+def state_view(y: np.ndarray) -> motion.State:
     """The state (STATE.size,) y as a ``motion.State`` of views of y (y belongs to one result); not
     ``STATE.unpack``, which takes 3 us more of a 0.2 ms run."""
     return motion.State(float(y[X_AT.t]), *[y[at] for at in STATE_VECTORS])
@@ -127,7 +127,7 @@ class LazyMotion(motion.Motion):
     @property
     def impacts(self) -> list:
         if self._impacts is None:
-            self._impacts = _impact_dicts(self._rows)
+            self._impacts = impact_log(self._rows)
         return self._impacts
 
     @impacts.setter
@@ -135,7 +135,7 @@ class LazyMotion(motion.Motion):
         self._impacts = value
 
 
-def _budget(carry: np.ndarray) -> dict:
+def energy_budget(carry: np.ndarray) -> dict:
     """The energy budget of a finished run from its carry (CARRY.size,): the energies at the start and the end come
     from the compiled entry (no compiled function of their own to load, no 30 us of numpy kinematics in Python)."""
     budget = outcome.EnergyBudget(float(carry[C_AT.e_start]), carry[C_AT.work], carry[C_AT.impacts],
@@ -143,7 +143,7 @@ def _budget(carry: np.ndarray) -> dict:
     return budget.report(float(carry[C_AT.e_end]), motion.ENERGY_TOLERANCE)
 
 
-def _raise(status: int, t: float, regime: int) -> None:
+def raise_failure(status: int, t: float, regime: int) -> None:
     """The Python loop's errors for the compiled loop's failure codes."""
     if status == STALLED:
         raise SymmechError(outcome.stalled_error(t, MAX_IDLE_STEPS, motion.REGIMES[regime]))
@@ -164,8 +164,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     of wall time, and once at the end. ``extra["implicit_slip_steps"]`` counts the Radau steps of stiff slips.
     The impact log is built on first use (:class:`LazyMotion`).
     """
-    model = model.active()
-    run = _entry()
+    run = entry()
     progress = motion.Progress(on_step)
     p = pack(model, num)
     q = np.asarray(start.q, float)
@@ -178,16 +177,16 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
         progress(y[X_AT.t])
         y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
-        _raise(status, float(y[X_AT.t]), int(carry[C_AT.regime]))
+        raise_failure(status, float(y[X_AT.t]), int(carry[C_AT.regime]))
     progress(y[X_AT.t], final=True)
-    warnings = [_warning(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_AT.nwarn])]]
+    warnings = [warning_text(int(c), a, b, model, num) for c, a, b in warns[:int(carry[C_AT.nwarn])]]
     if carry[C_AT.rocking]:
         warnings.append(outcome.rocking_warning(int(carry[C_AT.rocking])))
     extra = {"landings": int(carry[C_AT.landings]), "rocking_contacts": int(carry[C_AT.rocking]),
-             "energy_budget": _budget(carry),
+             "energy_budget": energy_budget(carry),
              "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit])}
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
-    final = _state(y)
+    final = state_view(y)
     return LazyMotion(imps[:int(carry[C_AT.nimp])], rows[:int(carry[C_AT.rows])], None, time_in,
                       outcome.distinct(warnings), start, final, extra)
 
@@ -202,7 +201,7 @@ def _loop():
     return loop
 
 
-def _entry_signature() -> tuple:
+def entry_signature() -> tuple:
     """The argument types :func:`simulate` calls ``run`` with: the parameters, the state, t_end, the trajectory,
     impact and warning rows, the carry and the phases per call (the vectors' types from their layouts)."""
     from numba import types
@@ -213,19 +212,19 @@ def _entry_signature() -> tuple:
 
 
 def _exports() -> dict:
-    """What the ahead-of-time build exports: ``run`` for the signature of :func:`_entry_signature`, loaded
+    """What the ahead-of-time build exports: ``run`` for the signature of :func:`entry_signature`, loaded
     from numba's cache first (the build then reuses its compiled functions)."""
     run = _loop().run
-    run.compile(_entry_signature())
+    run.compile(entry_signature())
     return {"run": (run, run.nopython_signatures[0])}
 
 
-ENGINE = build.Engine("grain", "symmech.grain.motion_engine.loop", lambda: {_loop().run: _entry_signature()},
+ENGINE = build.Engine("grain", "symmech.grain.motion_engine.loop", lambda: {_loop().run: entry_signature()},
                       COLD_COMPILE_SECONDS,
                       ahead=aot.Build("grain", [__file__, layouts.__file__, layout.__file__], _exports))
 
 
-def _entry():
+def entry():
     """The loop's entry for this thread: its ahead-of-time build when current and this is the main thread,
     else numba's (which releases the GIL for the grains of :func:`simulate_many`)."""
     built = ENGINE.ahead_of_time() if threading.current_thread() is threading.main_thread() else None
