@@ -300,7 +300,7 @@ SHARDS = {
                          "*.x_write_files__*", "*.x__replace_dir__*", "*.x__remove_leftovers__*", "*.x_run_to__*"]),
     # every other module that computes physics or numerics, screened by a seeded random sample
     # (`--screen SHARD --sample N --seed S`): the fast test files that cover it
-    "body": ("symmech/grain/body.py", GRAIN_PARTS_TESTS, ["*"]),
+    "body": ("symmech/grain/body.py", ["tests/test_grain_body.py", *GRAIN_PARTS_TESTS], ["*"]),
     "contact": ("symmech/grain/contact.py", GRAIN_PARTS_TESTS, ["*"]),
     "flight": ("symmech/grain/flight.py", GRAIN_PARTS_TESTS, ["*"]),
     "sliding": ("symmech/grain/sliding.py", GRAIN_PARTS_TESTS, ["*"]),
