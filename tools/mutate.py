@@ -302,7 +302,7 @@ SHARDS = {
     # (`--screen SHARD --sample N --seed S`): the fast test files that cover it
     "body": ("symmech/grain/body.py", ["tests/test_grain_body.py", *GRAIN_PARTS_TESTS], ["*"]),
     "contact": ("symmech/grain/contact.py", GRAIN_PARTS_TESTS, ["*"]),
-    "flight": ("symmech/grain/flight.py", GRAIN_PARTS_TESTS, ["*"]),
+    "flight": ("symmech/grain/flight.py", ["tests/test_grain_flight_parts.py", *GRAIN_PARTS_TESTS], ["*"]),
     "sliding": ("symmech/grain/sliding.py", GRAIN_PARTS_TESTS, ["*"]),
     "paper_mode": ("symmech/grain/paper_mode.py", GRAIN_PARTS_TESTS, ["*"]),
     "grain_sweep_statistics": ("symmech/grain/sweep.py",
