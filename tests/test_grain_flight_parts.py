@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from symmech.grain.flight import Vibration, quaternion_from_matrix, rotation_matrix, translate
+from symmech.grain.flight import RotationFlight, Vibration, quaternion_from_matrix, rotation_matrix, translate
 
 
 def matrix_of(q):
@@ -52,3 +52,10 @@ def test_translation_relative_to_the_surface_is_gravity_less_the_surface_motion(
     r, v = translate(r0, v0, g, Vibration(A, omega, phase, tuple(d)), t0, t)
     np.testing.assert_allclose(r, r_exact, rtol=0, atol=1e-13)
     np.testing.assert_allclose(v, v_exact, rtol=0, atol=1e-12)
+
+
+def test_a_grain_that_does_not_spin_keeps_its_orientation_and_zero_spin():
+    q0 = np.array([0.8, 0.2, -0.4, 0.3]) / np.linalg.norm([0.8, 0.2, -0.4, 0.3])
+    q, w = RotationFlight([1.0, 2.0, 3.0], q0, np.zeros(3), 0.0, 1e-10, 0.1).state(np.array([0.0, 0.5, 2.0]))
+    np.testing.assert_array_equal(q, np.tile(q0, (3, 1)))
+    np.testing.assert_array_equal(w, np.zeros((3, 3)))
