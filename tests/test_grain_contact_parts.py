@@ -1,0 +1,44 @@
+"""The grain's contact search against closed forms: the lower parabola's clear span, a piece proven by one end
+only, and a gap h(t) = c (t - 1/2)^2 / 2 - delta that dips below zero between two scan samples (its first zero
+1/2 - sqrt(2 delta / c)), found by both searches."""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.grain import contact
+
+C, DELTA = 1.0, 1e-3  # the dip's curvature [m/s^2] and depth [m]
+ROOT = 0.5 - math.sqrt(2 * DELTA / C)
+
+
+def gap_and_rate(t):
+    return 0.5 * C * (t - 0.5) ** 2 - DELTA, C * (t - 0.5)
+
+
+def test_clear_span_is_the_lower_parabolas_first_zero():
+    # h + r s - c s^2 / 2 = 0: 1 - s - s^2 / 2 = 0 at s = sqrt(3) - 1; no curvature: h / -r, or never
+    assert contact.clear_span(1.0, -1.0, 1.0) == pytest.approx(math.sqrt(3) - 1, rel=1e-15)
+    assert contact.clear_span(2.0, -0.5, 0.0) == 4.0
+    assert contact.clear_span(2.0, 0.0, 0.0) == math.inf  # a gap that neither closes nor bends stays open
+    assert contact.clear_span(2.0, 0.5, 0.0) == math.inf
+
+
+def test_a_piece_is_clear_when_either_end_proves_it():
+    # from a: h = 1, level, no curvature: h >= 1 on the piece; from b (rising at b): 1e-6 - 10 < 0 proves nothing
+    assert contact.parabolas_clear(1.0, 0.0, 1e-6, 10.0, 1.0, 0.0)
+    assert contact.parabolas_clear(1e-6, -10.0, 1.0, 0.0, 1.0, 0.0)
+    assert not contact.parabolas_clear(1e-6, -10.0, 1e-6, 10.0, 1.0, 0.0)
+
+
+def test_a_dip_between_two_samples_is_found_by_the_exact_flights_search():
+    # samples at 0 and 0.6 are both above the plane: only halving the piece finds the dip
+    assert gap_and_rate(0.6)[0] > 0
+    assert contact.first_contact(gap_and_rate, C, 0.0, 1.0, 0.6, 1e-12) == pytest.approx(ROOT, abs=1e-11)
+
+
+def test_a_dip_between_two_samples_is_found_by_the_reference_flights_scan():
+    def h(t):
+        return gap_and_rate(np.asarray(t, dtype=float))[0]
+
+    assert contact.first_root(h, 0.0, 1.0, 0.3, 1e-12) == pytest.approx(ROOT, abs=1e-11)

@@ -1,0 +1,61 @@
+"""The grain's flight parts against closed forms written out here: the exact translation relative to a vibrating
+surface, the surface phase, and quaternions of rotation matrices (every branch of Shepperd's method)."""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.grain.flight import RotationFlight, Vibration, quaternion_from_matrix, rotation_matrix, translate
+
+
+def matrix_of(q):
+    """Rotation matrix of the unit quaternion (w, x, y, z) (Hamilton's convention)."""
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+# a generic turn (trace largest), and turns near pi about X, Y and Z (that diagonal entry largest)
+@pytest.mark.parametrize("q", [(0.8, 0.2, -0.4, 0.3), (0.01, 1.0, 0.02, -0.03), (0.02, -0.03, 1.0, 0.05),
+                               (0.03, 0.05, -0.02, 1.0), (-0.6, 0.3, 0.5, -0.2)])
+def test_quaternion_of_a_rotation_matrix_is_the_one_it_was_built_from(q):
+    q = np.array(q) / np.linalg.norm(q)
+    expected = q if q[0] > 0 else -q  # positive scalar part
+    np.testing.assert_allclose(quaternion_from_matrix(matrix_of(q)), expected, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(rotation_matrix(q), matrix_of(q), rtol=0, atol=1e-15)
+
+
+def test_phase_is_reduced_to_zero_to_two_pi():
+    vib = Vibration(1e-3, 2 * math.pi * 10, -0.5, (0.0, 0.0, 1.0))
+    # omega t + phase = 20 pi - 0.5, 1.5 pi - 0.5, -0.5
+    np.testing.assert_allclose(vib.phase_at([1.0, 0.075, 0.0]),
+                               [2 * math.pi - 0.5, 1.5 * math.pi - 0.5, 2 * math.pi - 0.5], rtol=1e-12)
+
+
+@pytest.mark.parametrize("amplitude", [0.0, 1e-3])
+def test_translation_relative_to_the_surface_is_gravity_less_the_surface_motion(amplitude):
+    A, omega, phase, d = amplitude, 2 * math.pi * 50, 0.3, np.array([0.6, 0.0, 0.8])
+    r0, v0, g = np.array([0.1, -0.2, 0.005]), np.array([0.3, 0.1, 1.2]), np.array([0.0, 1.0, -9.81])
+    t0, t = 2.0, np.array([2.0, 2.004, 2.013])
+    tau = (t - t0)[:, None]
+
+    def s(time):
+        return A * d * np.sin(omega * time + phase)
+
+    def s_rate(time):
+        return A * omega * d * np.cos(omega * time + phase)
+
+    # r'' = g - s''(t): r = r0 + v0 tau + g tau^2 / 2 - (s(t) - s(t0) - s'(t0) tau), v its derivative
+    r_exact = r0 + v0 * tau + 0.5 * g * tau**2 - (s(t[:, None]) - s(t0) - s_rate(t0) * tau)
+    v_exact = v0 + g * tau - (s_rate(t[:, None]) - s_rate(t0))
+    r, v = translate(r0, v0, g, Vibration(A, omega, phase, tuple(d)), t0, t)
+    np.testing.assert_allclose(r, r_exact, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(v, v_exact, rtol=0, atol=1e-12)
+
+
+def test_a_grain_that_does_not_spin_keeps_its_orientation_and_zero_spin():
+    q0 = np.array([0.8, 0.2, -0.4, 0.3]) / np.linalg.norm([0.8, 0.2, -0.4, 0.3])
+    q, w = RotationFlight([1.0, 2.0, 3.0], q0, np.zeros(3), 0.0, 1e-10, 0.1).state(np.array([0.0, 0.5, 2.0]))
+    np.testing.assert_array_equal(q, np.tile(q0, (3, 1)))
+    np.testing.assert_array_equal(w, np.zeros((3, 3)))
