@@ -157,7 +157,7 @@ def _nominal(series: np.ndarray) -> float:
 
 def assembly_model(system) -> dict:
     """The invariants :func:`symmech.trolley.elastic.symbolic_assembly.assembly_spec` reads, as nested lists: the
-    engine's record (``elastic_kernels.pack``) and the probes."""
+    engine's record (``elastic.kernels.pack``) and the probes."""
     from symmech.trolley.elastic import kernels as ek
     from symmech.trolley.elastic.layout import F_AT
 

@@ -345,7 +345,7 @@ def rows(mdl, chs, nu, height, Y):
 
 # --------------------------------------------------------------------------- traction (s and V0 are states)
 
-TRACTIONS: dict = {}  # key -> P0(t, V0) [N] of the runs under way (elastic_compiled.simulate registers them)
+TRACTIONS: dict = {}  # key -> P0(t, V0) [N] of the runs under way (compiled.simulate registers them)
 
 
 def traction_force(key, t, v):

@@ -49,7 +49,7 @@ CHANNELS = Layout("ElasticChannels", (
     Field("v0", "m/s", "velocity of the frame's origin", (3,)),
 ))
 # Geometry channels of the traction table in the arc length s (columns; model.Frame); the frame's motion at
-# V0, V̇0 follows from them (elastic_kernels._motion).
+# V0, V̇0 follows from them (kernels._motion).
 GEOMETRY = Layout("ElasticGeometry", (
     Field("e", "1", "unit tangent e", (3,)),
     Field("k", "1/m", "e' + Ω × e", (3,)),
