@@ -72,7 +72,7 @@ def test_impact_log_from_the_compiled_rows_has_the_python_loops_fields():
                          "admissible": k == 0, "printed_admissible": [None, False][k],
                          "printed_creates_energy": [None, True][k], "converged": k == 0}
         assert type(entry["t"]) is float and type(entry["admissible"]) is bool
-    lazy = compiled.LazyMotion(rows, np.zeros((1, 15)), None, {}, [], None, None)
+    lazy = compiled.LazyMotion(np.zeros((1, 15)), None, {}, [], None, None, impact_rows=rows)
     assert lazy.impacts == log and lazy.impacts is lazy.impacts  # built once, on first use
 
 

@@ -135,4 +135,3 @@ def test_every_bundled_scene_runs_from_the_installed_package(installed, scene):
     proc = symmech(installed, "run", installed_scene, "--out", scene.stem, "--quiet", "--max-time", "600")
     assert proc.returncode == 0, proc.stderr
     assert assert_valid_output(work / scene.stem)["kind"] == tomllib.loads(scene.read_text())["kind"]
-

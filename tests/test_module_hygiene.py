@@ -1,6 +1,7 @@
 """Two habits checked over symmech/ with ast, nothing imported: no module reads another module's private
 ``_name``, and no module is longer than 800 lines."""
 import ast
+import tomllib
 from pathlib import Path
 
 import symmech
@@ -76,3 +77,12 @@ def test_no_module_is_longer_than_800_lines():
                for p in PACKAGE.rglob("*.py")}
     long = {p: n for p, n in lengths.items() if n > MAX_LINES and p not in LONG_ALLOWED}
     assert long == {}, f"modules over {MAX_LINES} lines: {long}"
+
+
+def test_every_package_folder_is_declared():
+    """Each folder of symmech/ that is a package (its __init__.py) is among pyproject.toml's packages: a plain
+    install leaves an undeclared one out (the grain's compiled engine once went missing that way)."""
+    root = Path(__file__).resolve().parents[1]
+    declared = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(root).parts) for p in (root / "symmech").rglob("__init__.py")}
+    assert found <= declared, sorted(found - declared)

@@ -3,6 +3,7 @@
 fallback re-estimates against what is left of the budget and says so in one line. The target: an overrun of
 at most 10 % or 5 s."""
 import copy
+import re
 import subprocess
 import sys
 import time
@@ -70,9 +71,9 @@ def test_a_fallback_within_the_budget_says_so_and_runs(capsys):
 @pytest.mark.slow
 @pytest.mark.compiled_elastic  # waits for the session's build of the engine (tests/conftest.py)
 def test_command_line_fallback_holds_max_time(tmp_path):
-    """`symmech run` of the bundled elastic helix with a kink in V0 on the compiled engine, --max-time 30:
-    estimated at 2.1 s on the compiled engine, it falls back and is refused in one line, exit 2, within 30 s
-    (it ran ~33 s, unbounded by --max-time, before the fallback re-estimated)."""
+    """`symmech run` of the bundled elastic helix with a kink in V0 on the compiled engine, --max-time 30: the
+    estimate's timed sample (or the run) falls back to the Python engine, which re-estimates and is refused in
+    one line, exit 2, within 30 s (it ran ~33 s, unbounded by --max-time, before the fallback re-estimated)."""
     text = (SCENES / "trolley_elastic_helix.toml").read_text(encoding="utf-8")
     assert 'speed = "3*t + 7*sin(t/2)"' in text and "[elastic.numerics]\n" in text
     scene = tmp_path / "kink.toml"
@@ -82,8 +83,8 @@ def test_command_line_fallback_holds_max_time(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "symmech", "run", str(scene), "--out", str(tmp_path / "o"),
                            "--max-time", "30"], capture_output=True, text=True, timeout=300)
     seconds = time.perf_counter() - started
-    estimate, error = proc.stderr.splitlines()
-    assert proc.returncode == 2 and estimate.startswith("symmech: estimated run time 2.1 s"), proc.stderr
+    error = proc.stderr.splitlines()[-1]
+    assert proc.returncode == 2 and len(proc.stderr.splitlines()) <= 2, proc.stderr  # an estimate told, at most
     assert error.startswith("symmech: error: elastic model on the Python engine: the frame along the track")
-    assert "re-estimated: ~100 s more" in error and seconds < 30.0
+    assert re.search(r"re-estimated: ~\d+ s more, over the \d+ s left of --max-time 30 s", error) and seconds < 30.0
     assert not (tmp_path / "o").exists()

@@ -118,11 +118,12 @@ def state_view(y: np.ndarray) -> motion.State:
 class LazyMotion(motion.Motion):
     """A ``motion.Motion`` whose impact log is built from the compiled impact rows (n, IMPACT_WIDTH) on first
     use: a dict per impact costs as much as the compiled loop's work for that impact, and holds the GIL. The
-    arguments: the impact rows, then those of ``motion.Motion`` (its impacts None)."""
+    arguments: those of ``motion.Motion`` (its impacts None), and ``impact_rows`` by keyword; the signature stays
+    the dataclass's, so ``dataclasses.replace`` works (it passes the built log as ``impacts``)."""
 
-    def __init__(self, impact_rows: np.ndarray, *args):
-        super().__init__(*args)
+    def __init__(self, *args, impact_rows: np.ndarray | None = None, **kwargs):
         self._rows = impact_rows
+        super().__init__(*args, **kwargs)
 
     @property
     def impacts(self) -> list:
@@ -187,8 +188,8 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
              "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit])}
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
     final = state_view(y)
-    return LazyMotion(imps[:int(carry[C_AT.nimp])], rows[:int(carry[C_AT.rows])], None, time_in,
-                      outcome.distinct(warnings), start, final, extra)
+    return LazyMotion(rows[:int(carry[C_AT.rows])], None, time_in, outcome.distinct(warnings), start, final, extra,
+                      impact_rows=imps[:int(carry[C_AT.nimp])])
 
 
 # --------------------------------------------------------------------------- building the cache once

@@ -16,8 +16,8 @@ BEAM = Table("an Euler–Bernoulli beam fixed to the trolley", {
     "root": Vector("root point (trolley frame)", n=3, unit="m", lo=-1e3, hi=1e3),
     "axis": Vector("direction of the beam axis (normalised)", n=3, unit="1", lo=-1e3, hi=1e3),
     "plane": Vector("first bending direction (its part across the axis is used)", n=3, unit="1", lo=-1e3, hi=1e3),
-    "length": Float("length", unit="m", lo=0.0, lo_open=True, hi=1e3),
-    "mass_per_length": Float("mass per unit length ρA", unit="kg/m", lo=0.0, lo_open=True, hi=1e6),
+    "length": Float("length", unit="m", lo=1e-3, hi=1e3),  # shorter than 1 mm it is no beam (its modes singular)
+    "mass_per_length": Float("mass per unit length ρA", unit="kg/m", lo=1e-3, hi=1e6),  # 1 g/m at least
     "ei": Vector("bending stiffness EI in the first and second plane", n=2, unit="N m^2", lo=0.0, lo_open=True,
                  hi=1e15),
     "support": Choice("`cantilever` (clamped at the root) or `pinned` (pinned at both ends)",
