@@ -150,7 +150,7 @@ def grain(sc, native: Table | None) -> ExportModel:
     source = importlib.resources.files("symmech.generated").joinpath(f"{MODULE}.c").read_text(encoding="utf-8")
     return ExportModel(MODULE, gm.__doc__.strip().splitlines()[0], source, tuple(variables), n, n, 0, 0, 0,
                        len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages,
-                       event_tolerance=LEFT_FLIGHT * nominal[0], has_mass=False)
+                       event_tolerance=LEFT_FLIGHT * nominal[0], mass_identity=n)
 
 
 def _nominals(sc) -> list[float]:

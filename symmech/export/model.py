@@ -69,7 +69,8 @@ class ExportModel:
     n_y: int = 0  # calculated outputs beyond the derivatives (MODEL_OUTPUTS), r[VR_Y:VR_Y + n_y]
     stiff: bool = False  # integrated by Radau IIA in C (Co-Simulation, the example program), else DOP853
     modules: tuple[tuple[str, str], ...] = ()  # (name, C99 text) of generated modules compiled beside c_source
-    mass_identity: int = 0  # M = diag(I, M22) with this many identity rows (only M22 is factored)
+    mass_identity: int = 0  # M = diag(I, M22) with this many identity rows (only M22 is factored; n_x: M = I,
+    # no ``rate_mass`` generated)
 
     def c_files(self) -> tuple[str, ...]:
         """The model's C files (the physics), ``<identifier>.c`` first."""
@@ -81,7 +82,6 @@ class ExportModel:
     n_z: int = 0
     event_map: tuple[tuple[str, tuple[str, ...], int], ...] = ()
     event_tolerance: float = 0.0  # an indicator below -event_tolerance without its event: the model left its regime
-    has_mass: bool = True  # M of M y' = F generated as ``rate_mass`` (else the identity)
 
     def layout(self) -> dict[str, int]:
         """First value reference of each block of ``r[]`` and its size (``N_REAL``)."""
