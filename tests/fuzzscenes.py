@@ -166,7 +166,8 @@ WRONG_TYPES = ["text", True, [], {"a": 1}, [[1, 2], [3]], "1.0"]
 def broken_value(f: s.Field):
     """(value, certainly_wrong): values a user might mistype into the field."""
     numeric = isinstance(f, (s.Float, s.Int))
-    wrong = ["text", {"a": 1}, [1, 2]] + ([] if isinstance(f, s.Bool) else [True])
+    pair = [] if isinstance(f, s.Vector) and f.n == 2 else [[1, 2]]  # a 2-vector takes [1, 2]
+    wrong = ["text", {"a": 1}] + pair + ([] if isinstance(f, s.Bool) else [True])
     if isinstance(f, s.Float):
         wrong += NON_FINITE
     if isinstance(f, s.Int):

@@ -18,8 +18,8 @@ BEAM = Table("an Euler–Bernoulli beam fixed to the trolley", {
     "plane": Vector("first bending direction (its part across the axis is used)", n=3, unit="1", lo=-1e3, hi=1e3),
     "length": Float("length", unit="m", lo=1e-3, hi=1e3),  # shorter than 1 mm it is no beam (its modes singular)
     "mass_per_length": Float("mass per unit length ρA", unit="kg/m", lo=1e-3, hi=1e6),  # 1 g/m at least
-    "ei": Vector("bending stiffness EI in the first and second plane", n=2, unit="N m^2", lo=0.0, lo_open=True,
-                 hi=1e15),
+    "ei": Vector("bending stiffness EI in the first and second plane", n=2, unit="N m^2", lo=1e-6,
+                 hi=1e15),  # softer than a hair its first mode is zero in floating point (its damping undefined)
     "support": Choice("`cantilever` (clamped at the root) or `pinned` (pinned at both ends)",
                       choices=("cantilever", "pinned"), default="cantilever"),
     "modes": Int("Ritz functions per bending plane", lo=1, hi=8, default=4),
