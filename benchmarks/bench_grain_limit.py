@@ -14,9 +14,12 @@ reference (tolerance 1e-13) beside its time.
   the loop alone minus the floor;
 - the exact-flight floor (``free_flight_nb``: closed-form translation and rotation, the search certified by
   the gap's curvature bound, Brent) on the same sphere and on a tumbling asymmetric ellipsoid, per impact: root
-  finding, impact map (state at contact, restitution, the next flight's records), bookkeeping (the rest).
+  finding, impact map (state at contact, restitution, the next flight's records), bookkeeping (the rest);
+- ``--flights``: the compiled loop's exact flight (``Numerics.flight = "exact"``) against its DOP853 flight and
+  the reference, impacts per CPU-second and impact-time errors: one sphere, a tumbling asymmetric ellipsoid, the
+  default scene on one thread, a population of spheres through the public API.
 
-Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only]
+Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only | --flights]
 """
 from __future__ import annotations
 
@@ -34,6 +37,7 @@ from timing import Stats, machine, ratio
 from bench_grain_motion import exact_flight_brentq, sphere_scene
 
 from symmech.generated import grain_motion_nb as gm_nb
+from symmech.core import pipeline
 from symmech.grain import contact, flight, free_flight, motion, motion_scene
 from symmech.grain import free_flight_nb as ff_nb
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
@@ -422,14 +426,102 @@ def population(n: int, repeats: int):
     print("  (target: >= 5x the reference, >= 2.5e5 impacts per CPU-second)\n")
 
 
+# --------------------------------------------------------------------------- the compiled loop's two flights
+
+
+def flight_case(label, runs, impacts, errors, unit="ms", scale=1e3, repeats=5, number=1):
+    """Time the contenders (label -> call) interleaved and print CPU per run, impacts per CPU-second, the error
+    (label -> impact-time error / T) and each one's time over the DOP853 flight's."""
+    stats = cpu_interleaved(runs, repeats, number)
+    dop = stats["compiled, DOP853 flight"]
+    print(f"{label} (CPU {unit} per run; impacts per CPU-second; impact-time error / T):")
+    for name, st in stats.items():
+        print(f"  {name:<34} {st.text(unit, scale)}  {impacts[name] / st.median:>10,.0f} /s  error "
+              f"{errors[name]:.1e}  time / DOP853's {st.median / dop.median:5.2f}")
+    return stats
+
+
+def max_error(times, ref, period):
+    times, ref = np.asarray(times), np.asarray(ref)
+    return float(np.max(np.abs(times - ref)) / period) if len(times) == len(ref) and len(ref) else math.inf
+
+
+def compiled_times(model, num, st, t_end):
+    return [i["t"] for i in compiled.simulate(model, num, st, t_end).impacts]
+
+
+def flights(repeats: int, population_size: int):
+    """The compiled loop's exact flight (closed form, certified contact search) against its DOP853 flight and the
+    reference at equal tolerance: a sphere, a tumbling ellipsoid, the default scene, a population of spheres."""
+    print("compiled loop: exact flight vs DOP853 flight vs the reference\n")
+    model, st = sphere_scene()
+    T = model.period
+    t_end = PERIODS * T
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    ref = compiled_times(model, replace(num, tolerance=1e-13), st, t_end)
+    exact = replace(num, flight="exact")
+    runs = {"compiled, DOP853 flight": lambda: compiled.simulate(model, num, st, t_end),
+            "compiled, exact flight": lambda: compiled.simulate(model, exact, st, t_end),
+            "plain Python flight + brentq": lambda: exact_flight_brentq(model, st, t_end, XTOL)}
+    got = {"compiled, DOP853 flight": compiled_times(model, num, st, t_end),
+           "compiled, exact flight": compiled_times(model, exact, st, t_end),
+           "plain Python flight + brentq": exact_flight_brentq(model, st, t_end, XTOL)}
+    flight_case(f"one sphere, {len(ref)} impacts, tolerance 1e-10", runs, {k: len(v) for k, v in got.items()},
+                {k: max_error(v, ref, T) for k, v in got.items()}, repeats=repeats, number=20)
+
+    model, st = tumbling_ellipsoid()
+    ref = compiled_times(model, replace(num, tolerance=1e-13), st, t_end)
+    python_exact = replace(exact, engine="python")
+    runs = {"compiled, DOP853 flight": lambda: compiled.simulate(model, num, st, t_end),
+            "compiled, exact flight": lambda: compiled.simulate(model, exact, st, t_end),
+            "Python loop, exact flight (scipy)": lambda: motion.simulate(model, python_exact, st, t_end)}
+    got = {"compiled, DOP853 flight": compiled_times(model, num, st, t_end),
+           "compiled, exact flight": compiled_times(model, exact, st, t_end),
+           "Python loop, exact flight (scipy)": [i["t"] for i in runs["Python loop, exact flight (scipy)"]().impacts]}
+    flight_case(f"tumbling asymmetric ellipsoid, {len(ref)} impacts, tolerance 1e-10 (error vs DOP853 at 1e-13)",
+                runs, {k: len(v) for k, v in got.items()}, {k: max_error(v, ref, T) for k, v in got.items()},
+                repeats=repeats, number=5)
+
+    sc = pipeline.load("scenes/grain_default.toml").setup
+    duration, T = 0.5, sc.model.period
+    ref = compiled_times(sc.model, replace(sc.numerics, tolerance=1e-12), sc.start, duration)
+    exact = replace(sc.numerics, flight="exact")
+    runs = {"compiled, DOP853 flight": lambda: compiled.simulate(sc.model, sc.numerics, sc.start, duration),
+            "compiled, exact flight": lambda: compiled.simulate(sc.model, exact, sc.start, duration)}
+    got = {"compiled, DOP853 flight": compiled_times(sc.model, sc.numerics, sc.start, duration),
+           "compiled, exact flight": compiled_times(sc.model, exact, sc.start, duration)}
+    flight_case(f"default scene (ellipsoid, sliding), {duration} s, {len(ref)} impacts, tolerance 1e-9, one thread "
+                "(error vs DOP853 at 1e-12)", runs, {k: len(v) for k, v in got.items()},
+                {k: max_error(v, ref, T) for k, v in got.items()}, repeats=repeats)
+
+    grains = [sphere_grain(k) for k in range(population_size)]
+    T = grains[0][0].period
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    scenes = {"compiled, DOP853 flight": [scene_of(m, s, num) for m, s in grains],
+              "compiled, exact flight": [scene_of(m, s, replace(num, flight="exact")) for m, s in grains]}
+
+    def api(name):
+        return lambda: sum(len(motion_scene.simulate(sc).impacts) for sc in scenes[name])
+    runs = {name: api(name) for name in scenes}
+    runs["plain Python flight + brentq"] = lambda: sum(len(exact_flight_brentq(m, s, t_end, XTOL)) for m, s in grains)
+    impacts = {name: run() for name, run in runs.items()}
+    flight_case(f"population of {population_size} spheres through motion_scene.simulate, {PERIODS} periods", runs,
+                impacts, {name: math.nan for name in runs}, unit="s", scale=1.0, repeats=repeats)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true", help="100 spheres instead of 400")
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--exact-flight-only", action="store_true",
                    help="only the exact-flight floor (no compiled engine, no population)")
+    p.add_argument("--flights", action="store_true",
+                   help="only the compiled loop's exact flight against its DOP853 flight and the reference")
     args = p.parse_args()
     print(f"machine: {machine()}; numba threads {numba.get_num_threads()}\n")
+    if args.flights:
+        flights(args.repeats, 100 if args.quick else 400)
+        return
     if args.exact_flight_only:
         model, st = sphere_scene()
         s0, times = flight_state(model, st), np.empty(64)

@@ -27,11 +27,12 @@ def test_folder_follows_numba_cache_dir(monkeypatch, tmp_path):
     assert aot.folder(str(tmp_path / "pkg" / "m.py")) == tmp_path / "pkg" / "__pycache__"
 
 
-def test_sources_reach_the_loop_its_kernels_and_the_generated_twins():
+def test_sources_reach_the_loop_its_kernels_the_exact_flight_and_the_generated_twins():
     from symmech.grain.motion_engine import loop as compiled_loop
 
     files = {Path(f).name for f in artifacts.sources(compiled_loop)}
-    assert {"loop.py", "ode.py", "sliding.py", "grain_motion_nb.py", "grain_impact_nb.py"} <= files
+    assert {"loop.py", "ode.py", "sliding.py", "grain_motion_nb.py", "grain_impact_nb.py", "free_flight_nb.py",
+            "free_flight.py", "brent.py"} <= files  # the exact flight's kernels and records' layouts
     assert all(Path(f).is_file() for f in artifacts.sources(compiled_loop))
 
 

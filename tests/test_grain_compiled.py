@@ -144,12 +144,12 @@ def test_parameter_vector_layout():
     model = motion.Model((3e-3, 2e-3, 1e-3), 2.5e-5, (0.5, -0.2, -9.7), vib, law, 0.33)
     num = motion.Numerics(tolerance=1e-8, scan_step=2e-4, rest_velocity=3e-5, max_impacts=77, sample_interval=5e-3)
     p = compiled.pack(model, num)
-    assert p.shape == (31,)
+    assert p.shape == (32,)
     expected = {"axes": model.axes, "mass": 2.5e-5, "inertia": model.inertia, "g": model.g_k, "amplitude": 1.1e-3,
                 "omega": 2 * math.pi * 23.0, "phase": 0.7, "direction": vib.direction, "law": compiled.LAW_PRINTED,
                 "e_n": 0.41, "e_t": -0.31, "mu_impact": 0.52, "e": 0.43, "lam": 1.37, "check_printed": 1.0, "mu": 0.33,
                 "rotation": 1.0, "tolerance": 1e-8, "scan_step": 2e-4, "rest_velocity": 3e-5, "max_impacts": 77.0,
-                "sample_interval": 5e-3, "period": 1 / 23.0}
+                "sample_interval": 5e-3, "period": 1 / 23.0, "exact_flight": 0.0}
     got = compiled_layout.PARAMS.unpack(p)
     assert got.keys() == expected.keys()
     for name, values in expected.items():
@@ -159,6 +159,7 @@ def test_parameter_vector_layout():
     assert got["amplitude"] == got["mu"] == got["rotation"] == 0.0 and got["period"] == 1.0
     assert off.vibration.amplitude == off.mu == 0.0 and model.vibration.amplitude == 1.1e-3 and model.mu == 0.33
     assert got["omega"] == 2 * math.pi * 23.0 and got["mu_impact"] == 0.52
+    assert compiled_layout.PARAMS.unpack(compiled.pack(model, replace(num, flight="exact")))["exact_flight"] == 1.0
 
 
 def test_scene_engine_option_selects_the_loop_and_is_validated(tmp_path):

@@ -110,9 +110,9 @@ def test_the_grain_layouts_keep_the_slots_the_engine_was_built_with():
     P, C, S, I = compiled_layout.P_AT, compiled_layout.C_AT, compiled_layout.S_AT, compiled_layout.I_AT
     sizes = [x.size for x in (compiled_layout.PARAMS, compiled_layout.SLIDE, compiled_layout.CARRY,
                               compiled_layout.IMPACT_ROW, compiled_layout.STATE)]
-    assert sizes == [31, 36, 17, 31, 14]
+    assert sizes == [32, 36, 17, 31, 14]
     assert (P.axes, P.mass, P.inertia, P.g, P.amplitude, P.direction, P.law, P.e_n, P.check_printed, P.mu,
-            P.tolerance, P.max_impacts, P.period) == (0, 3, 4, 7, 10, 13, 16, 17, 22, 23, 25, 28, 30)
+            P.tolerance, P.max_impacts, P.period, P.exact_flight) == (0, 3, 4, 7, 10, 13, 16, 17, 22, 23, 25, 28, 30, 31)
     assert (S.g, S.direction, S.mu, S.r0, S.rb, S.sphere, S.m, S.mass, S.inertia, S.ref, S.v_stop, S.event,
             S.aniso, S.v_stiff) == (0, 6, 9, 10, 13, 16, 17, 26, 27, 30, 32, 33, 34, 35)
     assert (C.regime, C.work, C.rows, C.nimp, C.nwarn, C.rocking, C.implicit, C.e_start, C.e_end) == \

@@ -24,12 +24,12 @@ import math
 import numpy as np
 
 from symmech.generated import grain_motion_nb as gm_nb
-from symmech.grain.free_flight import FLIGHT, ROTATION
+from symmech.grain import free_flight  # a module global: the builds of a compiled caller record its layouts' file
 from symmech.numerics.brent import roots
 from symmech.numerics.jit import EPS, jit
 
-F_AT, R_AT = FLIGHT.slots, ROTATION.slots
-FLIGHT_SIZE, ROTATION_SIZE = FLIGHT.size, ROTATION.size  # the records' lengths, constants of compiled callers
+F_AT, R_AT = free_flight.FLIGHT.slots, free_flight.ROTATION.slots
+FLIGHT_SIZE, ROTATION_SIZE = free_flight.FLIGHT.size, free_flight.ROTATION.size  # constants of compiled callers
 TWO_PI = 2.0 * math.pi
 
 

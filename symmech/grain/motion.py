@@ -111,9 +111,10 @@ class Numerics:
     ``as_printed`` (printed (61), (63), (64) verbatim). Both: ``rest_velocity`` [m/s] below which a
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
     (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.motion_engine`), "python" (this loop) or
-    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (this loop):
-    "dop853" (the rotation integrated to ``tolerance``: the reference, and what the compiled loop does) or
-    "exact" (closed-form rotation, :mod:`symmech.grain.free_flight`; contacts certified by the gap's curvature bound)."""
+    "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (both loops):
+    "dop853" (the rotation integrated to ``tolerance``: the reference) or "exact" (closed-form rotation,
+    :mod:`symmech.grain.free_flight` here, its twin ``free_flight_nb`` in the compiled loop; contacts certified by
+    the gap's curvature bound)."""
 
     mode: str = "accurate"
     engine: str = "auto"

@@ -9,7 +9,10 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   (scipy's, ported: the same steps as the Python loop's ``solve_ivp``, error per
   step held to ``tolerance`` relative, ``tolerance * 1e-3`` absolute); the
   orientation inside an accepted step is its 7th-order dense interpolant, smooth
-  in time, so the root finders see a smooth gap;
+  in time, so the root finders see a smooth gap; with ``Numerics.flight = "exact"``
+  the rotation in closed form instead and the contact search of the Python loop's
+  exact flight (:mod:`symmech.grain.free_flight_nb`: samples certified by the gap's
+  curvature bound, Brent), no integration;
 - contact: the gap is scanned at ``scan_step`` in windows of 32 points exactly as
   :func:`symmech.grain.contact.first_root`; a sign change is refined by Brent's
   method (scipy's ``brentq``, ported) to ``tolerance * scan_step`` on the time;
@@ -75,7 +78,8 @@ def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
         law=LAW_PRINTED if law.kind == "printed" else LAW_COULOMB, e_n=law.e_n, e_t=law.e_t, mu_impact=law.mu,
         e=law.e, lam=law.lam, check_printed=law.check_printed, mu=model.mu, rotation=model.effects.rotation,
         tolerance=num.tolerance, scan_step=num.scan_step, rest_velocity=num.rest_velocity,
-        max_impacts=num.max_impacts, sample_interval=num.sample_interval, period=model.period)
+        max_impacts=num.max_impacts, sample_interval=num.sample_interval, period=model.period,
+        exact_flight=num.flight == "exact")
 
 
 def warning_text(code: int, a: float, b: float, model: motion.Model, num: motion.Numerics) -> str:

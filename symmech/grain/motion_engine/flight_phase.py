@@ -1,5 +1,7 @@
 """One flight of the compiled loop, in numba: from a state until the first contact or the end, its
-trajectory rows on the way."""
+trajectory rows on the way. The rotation integrated by DOP853 step by step (:mod:`.flight_path`, the scan of
+:mod:`.roots`), or, when the parameters ask for the exact flight, in closed form (:mod:`symmech.grain.free_flight_nb`:
+the contact certified by the gap's curvature bound, as ``motion._fly`` with ``Numerics.flight = "exact"``)."""
 from __future__ import annotations
 
 import math
@@ -7,16 +9,27 @@ import math
 import numpy as np
 
 from symmech.numerics.jit import jit
+from symmech.grain import free_flight_nb as ff
 from symmech.grain.motion_engine.flight_path import extend_rotation, flight_ctx, state_at
 from symmech.grain.motion_engine.kinematics import gap_noise
-from symmech.grain.motion_engine.layouts import FL_AT, FLIGHT, INT, P_AT, ROT_WIDTH, X_AT
+from symmech.grain.motion_engine.layouts import FL_AT, FLIGHT, INT, N_STATE, P_AT, ROT_WIDTH, X_AT
 from symmech.grain.motion_engine.roots import GAP, first_root, h_at
 from symmech.grain.motion_engine.rows import record
 
 
 @jit
+def _samples(p, t0, t_stop):
+    """The range (k0, k1) of k whose sample times k * sample_interval may lie in (t0, t_stop)."""
+    k0 = math.ceil(t0 / p[P_AT.sample_interval] - 1e-9)
+    return int(k0), int(math.floor(t_stop / p[P_AT.sample_interval] - 1e-9)) + 1
+
+
+@jit
 def fly(p, y, t_end, on_plane, rows, carry):
-    """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, rows)."""
+    """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, 3 the rotation's
+    integration failed, rows)."""
+    if p[P_AT.exact_flight] != 0.0:
+        return _fly_exact(p, y, t_end, on_plane, rows, carry)
     ctx = flight_ctx(p, y)
     steps = np.empty((64, ROT_WIDTH))
     nsteps = INT(0)
@@ -42,11 +55,64 @@ def fly(p, y, t_end, on_plane, rows, carry):
     steps, nsteps = extend_rotation(t_stop, t_stop, ctx, steps, nsteps, p)
     if ctx[FL_AT.failed] != 0.0:
         return y, 3, rows
-    k0 = math.ceil(y[X_AT.t] / p[P_AT.sample_interval] - 1e-9)
-    k1 = math.floor(t_stop / p[P_AT.sample_interval] - 1e-9)
-    for kk in range(int(k0), int(k1) + 1):
+    k0, k1 = _samples(p, y[X_AT.t], t_stop)
+    for kk in range(k0, k1):
         ts = kk * p[P_AT.sample_interval]
         if y[X_AT.t] < ts < t_stop:
             rows = record(rows, carry, state_at(ts, ctx, steps, nsteps, p), FLIGHT)
     return state_at(t_stop, ctx, steps, nsteps, p), 1 if math.isnan(tc) else 0, rows
 
+
+
+@jit
+def _exact_records(p, y):
+    """The exact flight's records (free_flight.FLIGHT, ROTATION) from the state y; a grain that does not rotate
+    keeps its attitude (its rate, kept in y, is not applied)."""
+    fl, rot = np.empty(ff.FLIGHT_SIZE), np.empty(ff.ROTATION_SIZE)
+    start = y.copy()
+    if p[P_AT.rotation] == 0.0:
+        start[X_AT.w:X_AT.w + 3] = 0.0
+    ff.flight_setup(start, p[P_AT.g:P_AT.g + 3], p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase],
+                    p[P_AT.direction:P_AT.direction + 3], p[P_AT.axes:P_AT.axes + 3],
+                    p[P_AT.inertia:P_AT.inertia + 3], fl, rot)
+    return fl, rot
+
+
+@jit
+def _exact_state(t, y, fl, rot, p):
+    """The state (STATE.size,) at t of the exact flight from y."""
+    out = np.empty(N_STATE)
+    ff.flight_state(t, fl, rot, out)
+    if p[P_AT.rotation] == 0.0:
+        out[X_AT.w:X_AT.w + 3] = y[X_AT.w:X_AT.w + 3]
+    return out
+
+
+@jit
+def _fly_exact(p, y, t_end, on_plane, rows, carry):
+    """``fly`` on the closed-form flight: the rise off the plane, ``next_contact`` (no grazing contact missed),
+    the trajectory rows; status 0 contact, 1 end, 2 resting."""
+    fl, rot = _exact_records(p, y)
+    buf = np.empty((1, 2, 3))
+    scan = p[P_AT.scan_step]
+    t_from = y[X_AT.t]
+    if on_plane:  # the rise above round-off of motion._rise
+        span, noise = min(scan, t_end - y[X_AT.t]), gap_noise(p, y)
+        t_from = np.nan
+        for kk in range(64):
+            t = y[X_AT.t] + span / 2.0 ** kk
+            if t <= y[X_AT.t]:
+                break
+            if ff.gap(t, fl, rot, buf)[0] > noise:
+                t_from = t
+                break
+        if math.isnan(t_from):
+            return y, 2, rows
+    tc = ff.next_contact(fl, rot, t_from, t_end, scan, p[P_AT.tolerance] * scan, buf)
+    t_stop = t_end if math.isnan(tc) else tc
+    k0, k1 = _samples(p, y[X_AT.t], t_stop)
+    for kk in range(k0, k1):
+        ts = kk * p[P_AT.sample_interval]
+        if y[X_AT.t] < ts < t_stop:
+            rows = record(rows, carry, _exact_state(ts, y, fl, rot, p), FLIGHT)
+    return _exact_state(t_stop, y, fl, rot, p), 1 if math.isnan(tc) else 0, rows

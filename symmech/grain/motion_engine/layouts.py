@@ -38,6 +38,7 @@ PARAMS = Layout("GrainParams", (
     Field("max_impacts", "", "impacts after which the run stops"),
     Field("sample_interval", "s", "time between two trajectory rows"),
     Field("period", "s", "surface vibration period (chatter and chunk lengths)"),
+    Field("exact_flight", "1", "1: the flight in closed form (free_flight_nb), else the rotation by DOP853"),
 ))
 STATE = Layout("GrainState", (
     Field("t", "s", "time"),
