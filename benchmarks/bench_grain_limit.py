@@ -38,6 +38,7 @@ from bench_grain_motion import exact_flight_brentq, sphere_scene
 
 from symmech.generated import grain_motion_nb as gm_nb
 from symmech.core import pipeline
+from symmech.core.scene import SymmechError
 from symmech.grain import contact, flight, free_flight, motion, motion_scene
 from symmech.grain import free_flight_nb as ff_nb
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
@@ -436,7 +437,7 @@ def flight_case(label, runs, impacts, errors, unit="ms", scale=1e3, repeats=5, n
     dop = stats["compiled, DOP853 flight"]
     print(f"{label} (CPU {unit} per run; impacts per CPU-second; impact-time error / T):")
     for name, st in stats.items():
-        print(f"  {name:<34} {st.text(unit, scale)}  {impacts[name] / st.median:>10,.0f} /s  error "
+        print(f"  {name:<36} {st.text(unit, scale)}  {impacts[name] / st.median:>10,.0f} /s  error "
               f"{errors[name]:.1e}  time / DOP853's {st.median / dop.median:5.2f}")
     return stats
 
@@ -448,6 +449,28 @@ def max_error(times, ref, period):
 
 def compiled_times(model, num, st, t_end):
     return [i["t"] for i in compiled.simulate(model, num, st, t_end).impacts]
+
+
+def default_grain(sc, k: int) -> motion.State:
+    """Grain k of a population around the default scene: start height, velocity and spin drawn with seed k (as
+    ``bench_grain_motion.py``'s population)."""
+    rng = np.random.default_rng(k)
+    return replace(sc.start, r=sc.start.r + np.array([0.0, 0.0, rng.uniform(0, 3e-3)]),
+                   v=rng.normal(scale=0.05, size=3), w=rng.normal(scale=20, size=3))
+
+
+def population_run(model, num, starts, duration):
+    """A call running every start one after another on one thread: its impact count (a grain a guard stops
+    counts none)."""
+    def run():
+        total = 0
+        for st in starts:
+            try:
+                total += len(compiled.simulate(model, num, st, duration).impacts)
+            except SymmechError:
+                pass
+        return total
+    return run
 
 
 def flights(repeats: int, population_size: int):
@@ -471,11 +494,13 @@ def flights(repeats: int, population_size: int):
 
     model, st = tumbling_ellipsoid()
     ref = compiled_times(model, replace(num, tolerance=1e-13), st, t_end)
-    python_exact = replace(exact, engine="python")
+    python_exact, tight = replace(exact, engine="python"), replace(num, tolerance=1e-12)
     runs = {"compiled, DOP853 flight": lambda: compiled.simulate(model, num, st, t_end),
+            "compiled, DOP853 flight, tol 1e-12": lambda: compiled.simulate(model, tight, st, t_end),
             "compiled, exact flight": lambda: compiled.simulate(model, exact, st, t_end),
             "Python loop, exact flight (scipy)": lambda: motion.simulate(model, python_exact, st, t_end)}
     got = {"compiled, DOP853 flight": compiled_times(model, num, st, t_end),
+           "compiled, DOP853 flight, tol 1e-12": compiled_times(model, tight, st, t_end),
            "compiled, exact flight": compiled_times(model, exact, st, t_end),
            "Python loop, exact flight (scipy)": [i["t"] for i in runs["Python loop, exact flight (scipy)"]().impacts]}
     flight_case(f"tumbling asymmetric ellipsoid, {len(ref)} impacts, tolerance 1e-10 (error vs DOP853 at 1e-13)",
@@ -485,14 +510,23 @@ def flights(repeats: int, population_size: int):
     sc = pipeline.load("scenes/grain_default.toml").setup
     duration, T = 0.5, sc.model.period
     ref = compiled_times(sc.model, replace(sc.numerics, tolerance=1e-12), sc.start, duration)
-    exact = replace(sc.numerics, flight="exact")
+    exact, tight = replace(sc.numerics, flight="exact"), replace(sc.numerics, tolerance=1e-11)
     runs = {"compiled, DOP853 flight": lambda: compiled.simulate(sc.model, sc.numerics, sc.start, duration),
+            "compiled, DOP853 flight, tol 1e-11": lambda: compiled.simulate(sc.model, tight, sc.start, duration),
             "compiled, exact flight": lambda: compiled.simulate(sc.model, exact, sc.start, duration)}
     got = {"compiled, DOP853 flight": compiled_times(sc.model, sc.numerics, sc.start, duration),
+           "compiled, DOP853 flight, tol 1e-11": compiled_times(sc.model, tight, sc.start, duration),
            "compiled, exact flight": compiled_times(sc.model, exact, sc.start, duration)}
     flight_case(f"default scene (ellipsoid, sliding), {duration} s, {len(ref)} impacts, tolerance 1e-9, one thread "
                 "(error vs DOP853 at 1e-12)", runs, {k: len(v) for k, v in got.items()},
                 {k: max_error(v, ref, T) for k, v in got.items()}, repeats=repeats)
+
+    starts = [default_grain(sc, k) for k in range(population_size // 10)]
+    runs = {name: population_run(sc.model, num, starts, duration)
+            for name, num in (("compiled, DOP853 flight", sc.numerics), ("compiled, exact flight", exact))}
+    impacts = {name: run() for name, run in runs.items()}
+    flight_case(f"population of {len(starts)} default-scene grains (random height, velocity, spin) x {duration} s, "
+                "one thread", runs, impacts, {name: math.nan for name in runs}, unit="s", scale=1.0, repeats=repeats)
 
     grains = [sphere_grain(k) for k in range(population_size)]
     T = grains[0][0].period
