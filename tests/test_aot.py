@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 import threading
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -85,10 +86,11 @@ def _on_a_thread(*args):
 
 @pytest.mark.slow
 @pytest.mark.compiled_engine
-@pytest.mark.parametrize("case", ["default scene, 2 s", "crop grain, stiff slip"])
+@pytest.mark.parametrize("case", ["default scene, 2 s", "default scene, exact flight, 2 s", "crop grain, stiff slip"])
 def test_the_built_loop_equals_numbas(built, case, tmp_path, monkeypatch):
-    """The built loop (main thread) and numba's (a thread) on the default scene (flight, 493 impacts, sliding)
-    and on a slip from rest that turns stiff (Radau): the same impacts and Radau steps, impact times within
+    """The built loop (main thread) and numba's (a thread) on the default scene (flight, 493 impacts, sliding),
+    with the DOP853 or the exact flight, and on a slip from rest that turns stiff (Radau): the same impacts and
+    Radau steps, impact times within
     1e-12 s, final states within 1e-10 relative (one source, two compilations: they differ by round-off at
     most; the documented engine agreement with the Python loop is 1e-11 s and 1e-7)."""
     from test_grain_hard_cases import CROP, sweep_grain
@@ -97,6 +99,8 @@ def test_the_built_loop_equals_numbas(built, case, tmp_path, monkeypatch):
     monkeypatch.chdir(ROOT)
     sc, t_end = (default_scene(tmp_path, 2.0), 2.0) if case.startswith("default") else (
         sweep_grain(CROP, 0.6e-3, 18.0, 0.12), 0.12)
+    if "exact" in case:
+        sc = replace(sc, numerics=replace(sc.numerics, flight="exact"))
     assert compiled.entry() is built.run
     ahead = compiled.simulate(sc.model, sc.numerics, sc.start, t_end)
     jit = _on_a_thread(sc.model, sc.numerics, sc.start, t_end)
