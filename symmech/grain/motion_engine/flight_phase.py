@@ -1,7 +1,7 @@
 """One flight of the compiled loop, in numba: from a state until the first contact or the end, its
 trajectory rows on the way. The rotation integrated by DOP853 step by step (:mod:`.flight_path`, the scan of
 :mod:`.roots`), or, when the parameters ask for the exact flight, in closed form (:mod:`symmech.grain.free_flight_nb`:
-the contact certified by the gap's curvature bound, as ``motion._fly`` with ``Numerics.flight = "exact"``)."""
+the contact certified by the gap's curvature bound, as the Python loop's flight with ``Numerics.flight = "exact"``)."""
 from __future__ import annotations
 
 import math
@@ -63,7 +63,6 @@ def fly(p, y, t_end, on_plane, rows, carry):
     return state_at(t_stop, ctx, steps, nsteps, p), 1 if math.isnan(tc) else 0, rows
 
 
-
 @jit
 def _exact_records(p, y):
     """The exact flight's records (free_flight.FLIGHT, ROTATION) from the state y; a grain that does not rotate
@@ -96,7 +95,7 @@ def _fly_exact(p, y, t_end, on_plane, rows, carry):
     buf = np.empty((1, 2, 3))
     scan = p[P_AT.scan_step]
     t_from = y[X_AT.t]
-    if on_plane:  # the rise above round-off of motion._rise
+    if on_plane:  # the rise above round-off, as the DOP853 flight's
         span, noise = min(scan, t_end - y[X_AT.t]), gap_noise(p, y)
         t_from = np.nan
         for kk in range(64):
