@@ -19,9 +19,12 @@ def rollers_and_beams(n_beams: int, modes: int = 2) -> el.System:
 def test_components_group_the_roller_dofs_together_and_each_beam_plane_apart():
     """Two beams of two modes on the rollers (5 + 2 x 2 x 2 = 13 components): group 0 for the five roller DOFs,
     2 b + p for the modes of beam b in plane p, integers; components share a group exactly when they share beam
-    and plane (what the scene's group participation sums over)."""
+    and plane (what the scene's group participation sums over); the labels name them in that order."""
     comp = modal.components(rollers_and_beams(2))
-    expected = [0] * 5 + [2 * b + p for b in range(2) for p in (1, 2) for _ in range(2)]
+    beams = [(b, p, k) for b in range(2) for p in (1, 2) for k in (1, 2)]
+    assert comp.labels == ("roller_u2", "roller_u3", "roller_th1", "roller_th2", "roller_th3",
+                           *(f"beam{b}_plane{p}_mode{k}" for b, p, k in beams))
+    expected = [0] * 5 + [2 * b + p for b, p, _ in beams]
     assert comp.group.dtype.kind == "i"
     np.testing.assert_array_equal(comp.group, expected)
     key = list(zip(comp.beam.tolist(), comp.plane.tolist()))
