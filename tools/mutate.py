@@ -494,6 +494,18 @@ def check(killed: int, seed: int, only: list[str]) -> int:
     return status
 
 
+def check_arguments(args: list[str]) -> tuple[int, int, list[str]]:
+    """(killed per record, seed, dotted modules) of `--check`'s arguments `[--killed N] [--seed S] [MODULE ...]`."""
+    options, only = {}, []
+    words = iter(args)
+    for word in words:
+        if word.startswith("--"):
+            options[word] = next(words, "")
+        else:
+            only.append(word)
+    return int(options.get("--killed", 30)), int(options.get("--seed", 0)), only
+
+
 def main(argv: list[str]) -> int:
     if argv[:1] in (["-h"], ["--help"]):
         print(__doc__)
@@ -506,10 +518,7 @@ def main(argv: list[str]) -> int:
         rec.write_table(sorted({module for module, *_ in SHARDS.values()}), COVERAGE)
         return 0
     if argv[:1] == ["--check"]:
-        pairs = [a for i, a in enumerate(argv[1:]) if a.startswith("--") or argv[i].startswith("--")]
-        options = dict(zip(pairs[::2], pairs[1::2]))
-        only = [a for a in argv[1:] if a not in pairs]
-        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)), only)
+        return check(*check_arguments(argv[1:]))
     if argv[:1] == ["--recheck"] and len(argv) == 3:
         module, tests, _ = SHARDS[argv[1]]
         entries = rec.read(rec.record_path(module))
