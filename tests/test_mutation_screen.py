@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+import mutate  # noqa: E402
 import mutation_record as rec  # noqa: E402
 import mutation_screen  # noqa: E402
 
@@ -121,3 +122,10 @@ def test_a_renamed_module_keeps_its_record_and_proofs(tmp_path, monkeypatch):
                                   "module: symmech/core/numerics/ode.py"]
     assert rec.tally(moved, "symmech.core.numerics.ode", rec.equivalents())["equivalent"] == 1
     assert {rec.function_of(n) for n in moved} == {rec.function_of(n) for n in entries} == {"x_f", "xǁCǁm"}
+
+
+def test_check_reads_every_module_named_and_its_options():
+    """`--check MODULE ...` checks the records named (the first one too), all of them when none is named."""
+    assert mutate.check_arguments(["symmech.a", "symmech.b"]) == (30, 0, ["symmech.a", "symmech.b"])
+    assert mutate.check_arguments(["--killed", "5", "symmech.a", "--seed", "3"]) == (5, 3, ["symmech.a"])
+    assert mutate.check_arguments([]) == (30, 0, [])

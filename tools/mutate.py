@@ -317,9 +317,11 @@ SHARDS = {
                "tests/test_trolley_continuity.py"], ["*"]),
     "trolley_model": ("symmech/trolley/model.py", REACTION_TESTS + ["tests/test_trolley_frames_units.py"], ["*"]),
     "modal": ("symmech/trolley/elastic/modal.py",
-              ["tests/test_trolley_elastic_modes_tracking.py", "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
+              ["tests/test_modal_groups_and_phase.py", "tests/test_trolley_elastic_modes_tracking.py",
+               "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
     "smm_structural": ("symmech/smm/structural.py",
-                       ["tests/test_smm_expression_messages.py", "tests/test_smm_structural.py"], ["*"]),
+                       ["tests/test_smm_structural_parts.py", "tests/test_smm_expression_messages.py",
+                        "tests/test_smm_structural.py"], ["*"]),
     "smm_model": ("symmech/smm/model.py",
                   ["tests/test_smm_expression_messages.py", "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
                    "expression_messages or closed_form or structural or small_systems"], ["*"]),
@@ -492,6 +494,18 @@ def check(killed: int, seed: int, only: list[str]) -> int:
     return status
 
 
+def check_arguments(args: list[str]) -> tuple[int, int, list[str]]:
+    """(killed per record, seed, dotted modules) of `--check`'s arguments `[--killed N] [--seed S] [MODULE ...]`."""
+    options, only = {}, []
+    words = iter(args)
+    for word in words:
+        if word.startswith("--"):
+            options[word] = next(words, "")
+        else:
+            only.append(word)
+    return int(options.get("--killed", 30)), int(options.get("--seed", 0)), only
+
+
 def main(argv: list[str]) -> int:
     if argv[:1] in (["-h"], ["--help"]):
         print(__doc__)
@@ -504,10 +518,7 @@ def main(argv: list[str]) -> int:
         rec.write_table(sorted({module for module, *_ in SHARDS.values()}), COVERAGE)
         return 0
     if argv[:1] == ["--check"]:
-        pairs = [a for i, a in enumerate(argv[1:]) if a.startswith("--") or argv[i].startswith("--")]
-        options = dict(zip(pairs[::2], pairs[1::2]))
-        only = [a for a in argv[1:] if a not in pairs]
-        return check(int(options.get("--killed", 30)), int(options.get("--seed", 0)), only)
+        return check(*check_arguments(argv[1:]))
     if argv[:1] == ["--recheck"] and len(argv) == 3:
         module, tests, _ = SHARDS[argv[1]]
         entries = rec.read(rec.record_path(module))

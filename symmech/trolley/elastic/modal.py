@@ -27,8 +27,8 @@ from symmech.trolley.elastic import system as el, body as el_body
 class Components:
     """Component basis T (N, N) (block diagonal: identity on the roller DOFs, each beam plane's
     own modes) and per component its beam (-1: rollers), plane (0: rollers), mode number (0:
-    rollers), roller DOF (1…5 for u2, u3, θ1, θ2, θ3; 0: beams) and its group (the roller DOFs
-    together, or one beam plane)."""
+    rollers), roller DOF (1…5 for u2, u3, θ1, θ2, θ3; 0: beams) and its group (0: the roller DOFs
+    together; 2 b + p: beam b's plane p)."""
 
     T: np.ndarray
     beam: np.ndarray
