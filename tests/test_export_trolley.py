@@ -79,7 +79,8 @@ def _native_outputs(native) -> np.ndarray:
     return np.column_stack([native["deflection"], native["probe_elastic"][:, 0], native["probe_overload"][:, 0]])
 
 
-@pytest.mark.parametrize("kind", ["me", "cs"])  # CS: the FMU's Radau IIA
+# CS (the FMU's Radau IIA) in the slow tier with every bundled elastic scene: the C model code is ME's
+@pytest.mark.parametrize("kind", ["me", pytest.param("cs", marks=pytest.mark.slow)])
 def test_short_elastic_ride_fmu_reproduces_the_native_run(short_helix, tmp_path, kind):
     path, native = short_helix
     got = _check_fmu(path, native, tmp_path, 3, kind)
@@ -101,6 +102,7 @@ def _check_c_program(path, native, tmp_path) -> None:
     assert deviation(got[:, 2:], native["P"]) <= TOLERANCE
 
 
+@pytest.mark.slow  # the default tier builds the same C model code into the ME FMU
 def test_elastic_c_example_prints_the_native_reactions(short_helix, tmp_path):
     path, native = short_helix
     _check_c_program(path, native, tmp_path)
