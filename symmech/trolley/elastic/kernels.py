@@ -508,8 +508,8 @@ def solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
         if not t < t_end:
             status, steps = ode.SUCCESS, step
             break
-        if st[radau.R_H] > max_step:
-            st[radau.R_H], st[radau.R_H_OLD], st[radau.R_ERR_OLD] = max_step, -1.0, -1.0
+        if st[radau.ST_AT.h] > max_step:
+            st[radau.ST_AT.h], st[radau.ST_AT.h_old], st[radau.ST_AT.err_old] = max_step, -1.0, -1.0
         t_new, y_new, f_new, ok = _traction_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             status, steps = ode.STEP_TOO_SMALL, step
