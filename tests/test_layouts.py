@@ -169,13 +169,13 @@ def test_the_grain_state_vector_round_trips_through_the_engines_python_side():
 GRAIN_VECTORS = {"p": "P_AT", "sp": "S_AT", "carry": "C_AT", "log": "I_AT", "imps": "I_AT", "rows": "T_AT",
                  "warns": "WR_AT", "tab": "RS_AT", "row": "RS_AT", "rec": "SM_AT",
                  "ctx": ("FL_AT", "SS_AT")}  # ctx: a flight's record, or a sliding step (the root finders take both)
-ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT"}
+ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT", "roll": "RL_AT"}
 OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT": compiled_layout.CARRY,
            "I_AT": compiled_layout.IMPACT_ROW, "X_AT": compiled_layout.STATE, "F_AT": elastic_layout.FLAGS,
            "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY, "T_AT": compiled_layout.TRAJECTORY_ROW,
            "WR_AT": compiled_layout.WARNING_ROW, "FL_AT": compiled_layout.FLIGHT_RECORD,
            "RS_AT": compiled_layout.ROTATION_STEP, "SS_AT": compiled_layout.SLIDE_STEP, "SM_AT": compiled_layout.SAMPLER,
-           "RO_AT": compiled_layout.ROTATION, "Z_AT": compiled_layout.SLIDE_STATE, "ST_AT": radau.RADAU_STATE}
+           "RO_AT": compiled_layout.ROTATION, "Z_AT": compiled_layout.SLIDE_STATE, "ST_AT": radau.RADAU_STATE, "RL_AT": elastic_layout.ROLLER}
 GRAIN_READERS = ("driver", "flight_path", "flight_phase", "impact_law", "kinematics", "landing", "loop", "roots", "rows",
                  "sliding_phase", "slip", "steppers")  # the grain engine's modules that read a declared vector
 STATE_READERS = ("flight_phase", "impact_law", "kinematics", "landing", "loop", "sliding_phase")  # y: the state
