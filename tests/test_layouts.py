@@ -12,6 +12,7 @@ import pytest
 from symmech.core.layout import Bundle, Field, Layout
 from symmech.grain import motion
 from symmech.grain.motion_engine import driver as compiled, layouts as compiled_layout
+from symmech.numerics import radau
 from symmech.trolley.elastic import layout as elastic_layout
 
 ROOT = Path(__file__).resolve().parents[1] / "symmech"
@@ -118,6 +119,19 @@ def test_the_grain_layouts_keep_the_slots_the_engine_was_built_with():
     assert (C.regime, C.work, C.rows, C.nimp, C.nwarn, C.rocking, C.implicit, C.e_start, C.e_end) == \
         (0, 6, 10, 11, 12, 13, 14, 15, 16)
     assert (I.t, I.r, I.impulse, I.u_after, I.ke_before, I.admissible, I.converged) == (0, 1, 16, 22, 25, 27, 30)
+    Z, RO = compiled_layout.Z_AT, compiled_layout.RO_AT  # the sliding vector and a flight's rotation
+    assert (Z.r, Z.v, Z.w, Z.q, Z.work, Z.loss, compiled_layout.N_SLIDING) == (0, 2, 4, 7, 11, 12, 13)
+    assert (RO.q, RO.w, compiled_layout.N_ROTATION) == (0, 4, 7)
+    assert tuple(radau.ST_AT) == tuple(range(7)) and radau.N_RADAU == 7  # Radau's solver state
+
+
+def test_a_flights_rotation_is_the_states_orientation_and_spin_in_their_order():
+    """The loop copies the state's (q, w) into a flight's rotation state and a flight's record's (q0, w0) out
+    of it whole: the rotation layout must be the state's last two fields, in the same order and shapes."""
+    L = compiled_layout
+    state = [(f.name, f.shape) for f in L.STATE.fields]
+    assert [(f.name, f.shape) for f in L.ROTATION.fields] == state[-2:] == [("q", (4,)), ("w", (3,))]
+    assert L.X_AT.q + L.ROTATION.size == L.STATE.size and L.FL_AT.w0 == L.FL_AT.q0 + L.RO_AT.w
 
 
 def _fields(layout, names) -> list:
@@ -155,18 +169,25 @@ def test_the_grain_state_vector_round_trips_through_the_engines_python_side():
 GRAIN_VECTORS = {"p": "P_AT", "sp": "S_AT", "carry": "C_AT", "log": "I_AT", "imps": "I_AT", "rows": "T_AT",
                  "warns": "WR_AT", "tab": "RS_AT", "row": "RS_AT", "rec": "SM_AT",
                  "ctx": ("FL_AT", "SS_AT")}  # ctx: a flight's record, or a sliding step (the root finders take both)
-ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT"}
+ELASTIC_VECTORS = {"flags": "F_AT", "ch": "CH_AT", "g": "G_AT", "dg": "G_AT", "roll": "RL_AT"}
 OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT": compiled_layout.CARRY,
            "I_AT": compiled_layout.IMPACT_ROW, "X_AT": compiled_layout.STATE, "F_AT": elastic_layout.FLAGS,
            "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY, "T_AT": compiled_layout.TRAJECTORY_ROW,
            "WR_AT": compiled_layout.WARNING_ROW, "FL_AT": compiled_layout.FLIGHT_RECORD,
-           "RS_AT": compiled_layout.ROTATION_STEP, "SS_AT": compiled_layout.SLIDE_STEP, "SM_AT": compiled_layout.SAMPLER}
+           "RS_AT": compiled_layout.ROTATION_STEP, "SS_AT": compiled_layout.SLIDE_STEP, "SM_AT": compiled_layout.SAMPLER,
+           "RO_AT": compiled_layout.ROTATION, "Z_AT": compiled_layout.SLIDE_STATE, "ST_AT": radau.RADAU_STATE, "RL_AT": elastic_layout.ROLLER}
 GRAIN_READERS = ("driver", "flight_path", "flight_phase", "impact_law", "kinematics", "landing", "loop", "roots", "rows",
-                 "sliding_phase", "slip")  # the grain engine's modules that read a declared vector
+                 "sliding_phase", "slip", "steppers")  # the grain engine's modules that read a declared vector
 STATE_READERS = ("flight_phase", "impact_law", "kinematics", "landing", "loop", "sliding_phase")  # y: the state
-READERS = {**{f"grain/motion_engine/{name}.py": GRAIN_VECTORS for name in GRAIN_READERS},
-           **{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, "y": "X_AT", "after": "X_AT", "out": "X_AT"}
-              for name in STATE_READERS},
+# Other vectors by module: z the sliding vector, y a flight's rotation (q, w), st Radau's solver state.
+OWN_VECTORS = {"slip": {"z": "Z_AT", "out": "Z_AT", "J": "Z_AT", "y": "X_AT"}, "sliding_phase": {"z": "Z_AT"},
+               "roots": {"z": "Z_AT"}, "steppers": {"y": ("RO_AT", "Z_AT"), "out": ("RO_AT", "Z_AT")},
+               "flight_path": {"y": ("RO_AT", "X_AT")}}
+READERS = {**{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, **OWN_VECTORS.get(name, {})}
+              for name in GRAIN_READERS},
+           **{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, "y": "X_AT", "after": "X_AT", "out": "X_AT",
+                                                 **OWN_VECTORS.get(name, {})} for name in STATE_READERS},
+           "numerics/radau.py": {"st": "ST_AT"},
            "trolley/elastic/kernels.py": ELASTIC_VECTORS, "trolley/elastic/compiled.py": {}}  # (k, 12) tables there
 
 
@@ -188,7 +209,7 @@ def test_every_read_of_a_declared_vector_goes_through_its_layout(path):
     tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
     vectors = READERS[path]
     aliases = {t.id for n in ast.walk(tree) if isinstance(n, ast.Assign) and _names(n.value) & OFFSETS.keys()
-               for t in n.targets if isinstance(t, ast.Name)}  # d = P_AT.direction
+               for target in n.targets for t in ast.walk(target) if isinstance(t, ast.Name)}  # d = P_AT.direction
     packs = {n for f in ast.walk(tree) if isinstance(f, ast.FunctionDef) and f.name == "pack" for n in ast.walk(f)}
     seen = 0
     for node in ast.walk(tree):

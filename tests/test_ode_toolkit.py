@@ -69,7 +69,7 @@ def fixed_radau(lam, n, t_end=1.0):
     J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
     J[0, 0] = -lam
     st = np.zeros(radau.N_RADAU)  # no previous step: the Newton solve starts from zero increments
-    st[radau.R_JAC_CURRENT] = 1.0
+    st[radau.ST_AT.jac_current] = 1.0
     for k in range(n):
         probe(k * h, y, args, f)
         ok, _, _, Z = PROBE.radau_try(k * h, y, f, h, args, 1e-12, np.array([1e-12]), st, J, LUr, pr, LUc, pc, Q)

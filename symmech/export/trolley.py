@@ -63,7 +63,7 @@ def elastic(setup, run: dict) -> ExportModel:
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
     fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)
     table = elastic_compiled.frame_table(system, drive, t, setup.rtol,
-                                         elastic_compiled.frame_channels(fr, V0, dV0, system.mdl.g0))
+                                         el_frame.frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")
@@ -127,13 +127,14 @@ def _parameters(system, vr: int) -> list[Variable]:
     (``elastic.rollers.stiffness[1]`` … as the scene's fields): they enter only the roller forces, so they
     stay tunable."""
     from symmech.trolley.elastic import kernels as ek
+    from symmech.trolley.elastic.layout import ROLLER
 
-    roll = ek.pack(system).roll  # (3, 5): stiffness, damping as the engine applies it, preload
+    roll = ek.pack(system).roll  # rows of ROLLER: stiffness, damping as the engine applies it, preload
     out = []
     for row, (field, unit, what) in enumerate(parameters(system)):
         for r in range(5):
             out.append(Variable(f"elastic.rollers.{field}[{r + 1}]", vr + 5 * row + r, "parameter", "tunable", unit,
-                                f"{what} of the roller of P{r + 1}", float(roll[row, r])))
+                                f"{what} of the roller of P{r + 1}", float(roll[ROLLER.offset(field), r])))
     return out
 
 

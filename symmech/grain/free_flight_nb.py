@@ -24,11 +24,13 @@ import math
 import numpy as np
 
 from symmech.generated import grain_motion_nb as gm_nb
-from symmech.grain import free_flight  # a module global: the builds of a compiled caller record its layouts' file
+from symmech.grain import free_flight  # module globals: the builds of a compiled caller record their files
+from symmech.grain.motion_engine import layouts
 from symmech.numerics.brent import roots
 from symmech.numerics.jit import EPS, jit
 
 F_AT, R_AT = free_flight.FLIGHT.slots, free_flight.ROTATION.slots
+X_AT = layouts.X_AT
 FLIGHT_SIZE, ROTATION_SIZE = free_flight.FLIGHT.size, free_flight.ROTATION.size  # constants of compiled callers
 TWO_PI = 2.0 * math.pi
 
@@ -323,18 +325,19 @@ def rotation_at(rot, t, out):
 
 @jit
 def flight_setup(state, g, amplitude, omega, phase, direction, axes, inertia, fl, rot):
-    """Fill ``fl`` (FLIGHT) and ``rot`` (ROTATION) for the flight from ``state`` (t, r, v, q, w; 14,)."""
-    t0 = state[0]
+    """Fill ``fl`` (FLIGHT) and ``rot`` (ROTATION) for the flight from ``state`` (layout ``STATE`` of
+    :mod:`symmech.grain.motion_engine.layouts`)."""
+    t0 = state[X_AT.t]
     fl[F_AT.t0] = t0
     for i in range(3):
-        fl[F_AT.r0 + i] = state[1 + i]
-        fl[F_AT.v0 + i] = state[4 + i]
+        fl[F_AT.r0 + i] = state[X_AT.r + i]
+        fl[F_AT.v0 + i] = state[X_AT.v + i]
         fl[F_AT.g + i] = g[i]
         fl[F_AT.direction + i] = direction[i]
         fl[F_AT.axes + i] = axes[i]
     fl[F_AT.amplitude], fl[F_AT.omega] = amplitude, omega
     fl[F_AT.phase] = (omega * t0 + phase) % TWO_PI
-    rotation_setup(inertia, state[7:11], state[11:14], t0, rot)
+    rotation_setup(inertia, state[X_AT.q:X_AT.q + 4], state[X_AT.w:X_AT.w + 3], t0, rot)
 
 
 @jit
@@ -349,14 +352,14 @@ def _translate(fl, t, buf):
 
 @jit
 def flight_state(t, fl, rot, out):
-    """The state (t, r, v, q, w) at ``t`` into ``out`` (14,)."""
+    """The state (layout ``STATE``) at ``t`` into ``out``."""
     buf = np.empty((1, 2, 3))
     _translate(fl, t, buf)
-    out[0] = t
+    out[X_AT.t] = t
     for i in range(3):
-        out[1 + i] = buf[0, 0, i]
-        out[4 + i] = buf[0, 1, i]
-    rotation_at(rot, t, out[7:14])
+        out[X_AT.r + i] = buf[0, 0, i]
+        out[X_AT.v + i] = buf[0, 1, i]
+    rotation_at(rot, t, out[X_AT.q:X_AT.w + 3])  # q, w: adjacent in the state
 
 
 @jit

@@ -1,11 +1,12 @@
 """Radau IIA of order 5 with its dense output (scipy's ``solve_ivp(method="Radau")``), in numba: the constants
 (scipy's ``_ivp/radau.py``, written out: no scipy import), the simplified Newton iteration on the real and
 complex split of the tableau, the step-size control and :func:`steppers` of a right-hand side with its
-Jacobian, the interpolant :func:`radau_dense_at` and the solver state between steps (``R_*`` of ``st``)."""
+Jacobian, the interpolant :func:`radau_dense_at` and the solver state between steps (layout ``RADAU_STATE`` of ``st``)."""
 import math
 
 import numpy as np
 
+from symmech.core.layout import Field, Layout
 from symmech.numerics import first_step as initial
 from symmech.numerics import radau_tableau as tab
 from symmech.numerics.jit import EPS, closure, jit
@@ -16,10 +17,17 @@ RADAU_C, RADAU_E, RADAU_T, RADAU_TI, RADAU_PT = tab.C, tab.E, tab.T, tab.TI, tab
 MU_REAL, MU_COMPLEX = tab.MU_REAL, tab.MU_COMPLEX
 NEWTON_MAXITER, RADAU_MIN_FACTOR, RADAU_MAX_FACTOR = tab.NEWTON_MAXITER, tab.MIN_FACTOR, tab.MAX_FACTOR
 RADAU_POWER = tab.POWER
-# Solver state between the steps of one solve (``Radau`` attributes): step, previous step and error norm
-# (-1: none), Jacobian current, LU factors valid, start and length of the last step (its interpolant).
-R_H, R_H_OLD, R_ERR_OLD, R_JAC_CURRENT, R_LU_VALID, R_T_OLD, R_H_LAST = 0, 1, 2, 3, 4, 5, 6
-N_RADAU = 7
+# Solver state between the steps of one solve (scipy's ``Radau`` attributes), read as ``st[ST_AT.h]``.
+RADAU_STATE = Layout("RadauState", (
+    Field("h", "s", "length of the next step"),
+    Field("h_old", "s", "length of the previous step (-1: none)"),
+    Field("err_old", "1", "error norm of the previous step (-1: none)"),
+    Field("jac_current", "1", "1: the Jacobian is current"),
+    Field("lu_valid", "1", "1: the LU factors are valid"),
+    Field("t_old", "s", "start of the last step (its interpolant)"),
+    Field("h_last", "s", "length of the last step (0: none yet)"),
+))
+ST_AT, N_RADAU = RADAU_STATE.slots, RADAU_STATE.size
 
 
 @jit
@@ -147,23 +155,23 @@ def steppers(rhs, jac) -> tuple:
         """One attempt at a step of length h from (t, y), f = rhs there: the Newton solve from the last step's
         interpolant (zero without one), with fresh factors and, if that fails, a fresh Jacobian (scipy's
         ``_step_impl``). Returns (converged, iterations, rate, Z (3, n))."""
-        if st[R_H_LAST] != 0.0:
+        if st[ST_AT.h_last] != 0.0:
             Z0 = np.empty((3, y.size))
             for i in range(3):
-                Z0[i] = radau_dense_at(t + h * RADAU_C[i], st[R_T_OLD], st[R_H_LAST], Q[0]) - y
+                Z0[i] = radau_dense_at(t + h * RADAU_C[i], st[ST_AT.t_old], st[ST_AT.h_last], Q[0]) - y
         else:
             Z0 = np.zeros((3, y.size))
         scale = atol + np.abs(y) * rtol
         newton_tol = max(10.0 * EPS / rtol, min(0.03, rtol ** 0.5))
         while True:
-            if st[R_LU_VALID] == 0.0:
+            if st[ST_AT.lu_valid] == 0.0:
                 factor(h, J, LUr, pr, LUc, pc)
-                st[R_LU_VALID] = 1.0
+                st[ST_AT.lu_valid] = 1.0
             converged, n_iter, Z, rate = newton(t, y, h, Z0, scale, newton_tol, args, LUr, pr, LUc, pc)
-            if converged or st[R_JAC_CURRENT] != 0.0:
+            if converged or st[ST_AT.jac_current] != 0.0:
                 return converged, n_iter, rate, Z
             jac(t, y, args, J)
-            st[R_JAC_CURRENT], st[R_LU_VALID] = 1.0, 0.0
+            st[ST_AT.jac_current], st[ST_AT.lu_valid] = 1.0, 0.0
 
     @closure
     def radau_error(t, y, y_new, f, h, Z, args, rtol, atol, LUr, pr, rejected):
@@ -183,7 +191,7 @@ def steppers(rhs, jac) -> tuple:
     def radau_step(t, y, f, t_bound, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q):
         """One accepted Radau step (scipy's ``Radau._step_impl``)."""
         min_step = 10 * abs(np.nextafter(t, np.inf) - t)
-        h_abs, h_old, err_old = st[R_H], st[R_H_OLD], st[R_ERR_OLD]
+        h_abs, h_old, err_old = st[ST_AT.h], st[ST_AT.h_old], st[ST_AT.err_old]
         if h_abs < min_step:
             h_abs, h_old, err_old = min_step, -1.0, -1.0
         rejected = False
@@ -196,7 +204,7 @@ def steppers(rhs, jac) -> tuple:
             converged, n_iter, rate, Z = radau_try(t, y, f, h, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
             if not converged:
                 h_abs *= 0.5
-                st[R_LU_VALID] = 0.0
+                st[ST_AT.lu_valid] = 0.0
                 continue
             y_new = y + Z[2]
             err = radau_error(t, y, y_new, f, h, Z, args, rtol, atol, LUr, pr, rejected)
@@ -204,21 +212,21 @@ def steppers(rhs, jac) -> tuple:
             if err <= 1.0:
                 break
             h_abs *= max(RADAU_MIN_FACTOR, safety * predict_factor(h_abs, h_old, err, err_old))
-            st[R_LU_VALID] = 0.0
+            st[ST_AT.lu_valid] = 0.0
             rejected = True
         recompute_jac = n_iter > 2 and rate > 1e-3
         factor_ = min(RADAU_MAX_FACTOR, safety * predict_factor(h_abs, h_old, err, err_old))
         if not recompute_jac and factor_ < 1.2:
             factor_ = 1.0
         else:
-            st[R_LU_VALID] = 0.0
+            st[ST_AT.lu_valid] = 0.0
         f_new = np.empty(y.size)
         rhs(t_new, y_new, args, f_new)
         if recompute_jac:
             jac(t_new, y_new, args, J)
-        st[R_JAC_CURRENT] = 1.0 if recompute_jac else 0.0
-        st[R_H_OLD], st[R_ERR_OLD], st[R_H] = st[R_H], err, h_abs * factor_
-        st[R_T_OLD], st[R_H_LAST] = t, h
+        st[ST_AT.jac_current] = 1.0 if recompute_jac else 0.0
+        st[ST_AT.h_old], st[ST_AT.err_old], st[ST_AT.h] = st[ST_AT.h], err, h_abs * factor_
+        st[ST_AT.t_old], st[ST_AT.h_last] = t, h
         n = y.size
         Q[0, :3 * n] = mix(RADAU_PT, Z).reshape(3 * n)
         Q[0, 3 * n:] = y
@@ -228,10 +236,10 @@ def steppers(rhs, jac) -> tuple:
     def radau_start(t, y, f, t_bound, args, rtol, atol, J):
         """Solver state (N_RADAU,) of a fresh solve (scipy's ``Radau.__init__``): first step, Jacobian at (t, y)."""
         st = np.zeros(N_RADAU)
-        st[R_H] = first_step(t, y, f, t_bound, args, rtol, atol, RADAU_POWER)
-        st[R_H_OLD] = st[R_ERR_OLD] = -1.0
+        st[ST_AT.h] = first_step(t, y, f, t_bound, args, rtol, atol, RADAU_POWER)
+        st[ST_AT.h_old] = st[ST_AT.err_old] = -1.0
         jac(t, y, args, J)
-        st[R_JAC_CURRENT] = 1.0
+        st[ST_AT.jac_current] = 1.0
         return st
 
     return radau_start, radau_step, radau_try, radau_error, newton

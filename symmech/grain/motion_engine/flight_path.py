@@ -14,7 +14,7 @@ import numpy as np
 from symmech.numerics.dop853 import dop_dense_at
 from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.kinematics import gm, rotation, support
-from symmech.grain.motion_engine.layouts import FL_AT, N_FLIGHT, N_STATE, P_AT, ROT_WIDTH, RS_AT, X_AT
+from symmech.grain.motion_engine.layouts import FL_AT, N_FLIGHT, N_ROTATION, N_STATE, P_AT, RO_AT, ROT_WIDTH, RS_AT, X_AT
 from symmech.grain.motion_engine.steppers import (
     DOP_EXPONENT, DOP_EXTENDED, DOP_POWER, DOP_STAGES, ROT, dop_advance, dop_dense, first_step, rhs)
 
@@ -23,7 +23,7 @@ def orient(t, ctx, tab, ntab):
     """(q normalised (4,), w body (3,)) of the flight at t from the rotation step table ``tab`` (rows: layout
     ``ROTATION_STEP``): the interpolant of the first step ending at or after t."""
     if ntab == 0:
-        y = ctx[FL_AT.q0:FL_AT.q0 + 7].copy()  # q0 and w0
+        y = ctx[FL_AT.q0:FL_AT.q0 + N_ROTATION].copy()  # q0 and w0: a rotation state
     else:
         lo, hi = 0, ntab - 1
         while lo < hi:
@@ -33,11 +33,11 @@ def orient(t, ctx, tab, ntab):
             else:
                 lo = mid + 1
         row = tab[lo]
-        y = dop_dense_at(t, row[RS_AT.t_old], row[RS_AT.t_new] - row[RS_AT.t_old], row[RS_AT.y_old:RS_AT.y_old + 7],
+        y = dop_dense_at(t, row[RS_AT.t_old], row[RS_AT.t_new] - row[RS_AT.t_old], row[RS_AT.y_old:RS_AT.y_old + N_ROTATION],
                          tab[lo, RS_AT.dense:])
-    s = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2 + y[3] ** 2)
-    y[:4] /= s
-    return y[:4], y[4:7]
+    q = y[RO_AT.q:RO_AT.q + 4]
+    q /= math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    return q, y[RO_AT.w:RO_AT.w + 3]
 
 
 @inline  # no call in the scan loop
@@ -84,19 +84,19 @@ def extend_rotation(t, t_request, ctx, tab, ntab, p):
     if ctx[FL_AT.rotating] == 0.0:
         return tab, ntab
     tol = p[P_AT.tolerance]
-    atol = np.full(7, tol * 1e-3)
-    K = np.empty((DOP_EXTENDED, 7))
+    atol = np.full(N_ROTATION, tol * 1e-3)
+    K = np.empty((DOP_EXTENDED, N_ROTATION))
     inertia = ctx[FL_AT.inertia:FL_AT.inertia + 3].copy()
     while ctx[FL_AT.t_rot] < t:
         if ctx[FL_AT.in_chunk] == 0.0:  # a new chunk
             ctx[FL_AT.chunk_end] = max(t_request, ctx[FL_AT.t_rot] + p[P_AT.period])
-            f = np.empty(7)
-            rhs(ctx[FL_AT.t_rot], ctx[FL_AT.y_rot:FL_AT.y_rot + 7].copy(), (ROT, inertia), f)
-            ctx[FL_AT.f:FL_AT.f + 7] = f
-            ctx[FL_AT.step] = first_step(ctx[FL_AT.t_rot], ctx[FL_AT.y_rot:FL_AT.y_rot + 7].copy(), f,
+            f = np.empty(N_ROTATION)
+            rhs(ctx[FL_AT.t_rot], ctx[FL_AT.y_rot:FL_AT.y_rot + N_ROTATION].copy(), (ROT, inertia), f)
+            ctx[FL_AT.f:FL_AT.f + N_ROTATION] = f
+            ctx[FL_AT.step] = first_step(ctx[FL_AT.t_rot], ctx[FL_AT.y_rot:FL_AT.y_rot + N_ROTATION].copy(), f,
                                          ctx[FL_AT.chunk_end], (ROT, inertia), tol, atol, -DOP_EXPONENT)
             ctx[FL_AT.in_chunk] = 1.0
-        tt, y, f = ctx[FL_AT.t_rot], ctx[FL_AT.y_rot:FL_AT.y_rot + 7].copy(), ctx[FL_AT.f:FL_AT.f + 7].copy()
+        tt, y, f = ctx[FL_AT.t_rot], ctx[FL_AT.y_rot:FL_AT.y_rot + N_ROTATION].copy(), ctx[FL_AT.f:FL_AT.f + N_ROTATION].copy()
         t_new, y_new, h_abs, ok = dop_advance(tt, y, f, ctx[FL_AT.step], ctx[FL_AT.chunk_end], (ROT, inertia), tol,
                                               atol, K)
         if not ok:
@@ -107,12 +107,12 @@ def extend_rotation(t, t_request, ctx, tab, ntab, p):
             grown[:ntab] = tab
             tab = grown
         tab[ntab, RS_AT.t_old], tab[ntab, RS_AT.t_new] = tt, t_new
-        tab[ntab, RS_AT.y_old:RS_AT.y_old + 7] = y
-        tab[ntab, RS_AT.dense:] = dop_dense(tt, t_new - tt, y, y_new, (ROT, inertia), K).reshape(DOP_POWER * 7)
+        tab[ntab, RS_AT.y_old:RS_AT.y_old + N_ROTATION] = y
+        tab[ntab, RS_AT.dense:] = dop_dense(tt, t_new - tt, y, y_new, (ROT, inertia), K).reshape(DOP_POWER * N_ROTATION)
         ntab += 1
         ctx[FL_AT.t_rot], ctx[FL_AT.step] = t_new, h_abs
-        ctx[FL_AT.y_rot:FL_AT.y_rot + 7] = y_new
-        ctx[FL_AT.f:FL_AT.f + 7] = K[DOP_STAGES]
+        ctx[FL_AT.y_rot:FL_AT.y_rot + N_ROTATION] = y_new
+        ctx[FL_AT.f:FL_AT.f + N_ROTATION] = K[DOP_STAGES]
         if t_new >= ctx[FL_AT.chunk_end]:
             ctx[FL_AT.in_chunk] = 0.0
     return tab, ntab
@@ -124,7 +124,7 @@ def flight_ctx(p, y):
     ctx = np.zeros(N_FLIGHT)
     ctx[FL_AT.t0:FL_AT.w0 + 3] = y
     ctx[FL_AT.t_rot] = y[X_AT.t]
-    ctx[FL_AT.y_rot:FL_AT.y_rot + 7] = y[X_AT.q:X_AT.w + 3]
+    ctx[FL_AT.y_rot:FL_AT.y_rot + N_ROTATION] = y[X_AT.q:X_AT.w + 3]
     ctx[FL_AT.inertia:FL_AT.inertia + 3] = p[P_AT.inertia:P_AT.inertia + 3]
     ctx[FL_AT.phase] = (p[P_AT.omega] * y[X_AT.t] + p[P_AT.phase]) % (2 * math.pi)
     w = X_AT.w

@@ -1,10 +1,11 @@
 """The compiled grain engine's vectors and codes, shared by its loop (:mod:`symmech.grain.motion_engine.loop`)
 and its Python side (:mod:`symmech.grain.motion_engine.driver`): the declared layouts (:mod:`symmech.core.layout`) of
 the parameter vector, the state, the carry vector, the sliding parameters, the impact, trajectory and warning
-rows, and the loop's scratch vectors (a flight's record and rotation steps, a sliding step, the sampler); the
+rows, the vectors its integrators advance (a flight's rotation, a sliding contact's state), and the loop's scratch
+vectors (a flight's record and rotation steps, a sliding step, the sampler); the
 regime, status and warning codes, and the limits both sides apply. No numba here.
 
-The loop reads a slot through a layout's offsets, ``p[P_AT.mass]``: ``P_AT``, ``C_AT``, ``FL_AT`` and the others
+The loop reads a slot through a layout's offsets, ``p[P_AT.mass]``, ``z[Z_AT.work]``: ``P_AT``, ``Z_AT`` and the others
 are named tuples of integers, constants of the compiled code."""
 from __future__ import annotations
 
@@ -87,6 +88,19 @@ SLIDE = Layout("GrainSlide", (
     Field("aniso", "1", "1: the contact is anisotropic (stiff slips possible)"),
     Field("v_stiff", "m/s", "slip speed below which an anisotropic slip is stiff"),
 ))
+# The vectors the loop's integrators advance: a flight's torque-free rotation, and a sliding contact's state.
+ROTATION = Layout("GrainRotation", (
+    Field("q", "1", "orientation quaternion", (4,)),
+    Field("w", "rad/s", "angular velocity in body axes", (3,)),
+))
+SLIDE_STATE = Layout("GrainSlideState", (
+    Field("r", "m", "tangential centre position in KXYZ", (2,)),
+    Field("v", "m/s", "tangential centre velocity in KXYZ", (2,)),
+    Field("w", "rad/s", "angular velocity in KXYZ", (3,)),
+    Field("q", "1", "orientation quaternion", (4,)),
+    Field("work", "J/kg", "work of the surface on the grain since the phase's start, per unit mass"),
+    Field("loss", "J/kg", "energy dissipated by friction since the phase's start, per unit mass"),
+))
 # One impact row of the log (the keys of ``motion.impact_record``; flags: -1 not checked, 0 no, 1 yes).
 IMPACT_ROW = Layout("GrainImpact", (
     Field("t", "s", "time of the impact"),
@@ -130,26 +144,27 @@ FLIGHT_RECORD = Layout("GrainFlight", (
     Field("phase", "rad", "surface vibration phase at t0, modulo 2 pi"),
     Field("rotating", "1", "1: the rotation is integrated (else the orientation stays q0)"),
     Field("t_rot", "s", "time the rotation is integrated to"),
-    Field("y_rot", "1, rad/s", "rotation state at t_rot: quaternion (4), angular velocity in body axes (3)", (7,)),
+    Field("y_rot", "1, rad/s", "rotation state at t_rot (layout GrainRotation)", (ROTATION.size,)),
     Field("failed", "1", "1: the rotation's integration failed"),
     Field("support", "m", "support height of the lowest point at the start"),
     Field("chunk_end", "s", "end of the rotation chunk under way"),
     Field("step", "s", "next step length of the rotation's DOP853"),
-    Field("f", "1/s, rad/s^2", "rotation right-hand side at t_rot", (7,)),
+    Field("f", "1/s, rad/s^2", "rotation right-hand side at t_rot", (ROTATION.size,)),
     Field("in_chunk", "1", "1: a rotation chunk is under way"),
 ))
 # One accepted step of a flight's rotation, a row of its step table (the interpolant: numerics.dop853.dop_dense_at).
 ROTATION_STEP = Layout("GrainRotationStep", (
     Field("t_old", "s", "start of the step"),
     Field("t_new", "s", "end of the step"),
-    Field("y_old", "1, rad/s", "rotation state at the start of the step", (7,)),
-    Field("dense", "", "the step's dense-output coefficients F (7, 7), row by row", (7 * dop853.INTERPOLATOR_POWER,)),
+    Field("y_old", "1, rad/s", "rotation state at the start of the step (layout GrainRotation)", (ROTATION.size,)),
+    Field("dense", "", "the step's dense-output coefficients F (INTERPOLATOR_POWER, ROTATION.size), row by row",
+          (ROTATION.size * dop853.INTERPOLATOR_POWER,)),
 ))
 # The sliding step whose interpolant the event functions read, with the phase's parameters.
 SLIDE_STEP = Layout("GrainSlideStep", (
     Field("t_old", "s", "start of the step"),
     Field("h", "s", "length of the step"),
-    Field("z_old", "", "sliding vector at the start of the step (r (2), v (2), w (3), q (4), W, D)", (13,)),
+    Field("z_old", "", "sliding vector at the start of the step (layout GrainSlideState)", (SLIDE_STATE.size,)),
     Field("radau", "1", "1: a Radau IIA step (else DOP853)"),
     Field("sp", "", "the phase's sliding parameters (layout GrainSlide)", (SLIDE.size,)),
 ))
@@ -164,7 +179,9 @@ SAMPLER = Layout("GrainSampler", (
 P_AT, X_AT, C_AT, S_AT, I_AT = PARAMS.slots, STATE.slots, CARRY.slots, SLIDE.slots, IMPACT_ROW.slots
 T_AT, WR_AT = TRAJECTORY_ROW.slots, WARNING_ROW.slots
 FL_AT, RS_AT, SS_AT, SM_AT = FLIGHT_RECORD.slots, ROTATION_STEP.slots, SLIDE_STEP.slots, SAMPLER.slots
+RO_AT, Z_AT = ROTATION.slots, SLIDE_STATE.slots
 N_STATE, N_SLIDE, N_FLIGHT, N_SAMPLER = STATE.size, SLIDE.size, FLIGHT_RECORD.size, SAMPLER.size  # numba: ints
+N_ROTATION, N_SLIDING = ROTATION.size, SLIDE_STATE.size
 ROT_WIDTH, N_SLIDE_STEP, WARNING_WIDTH = ROTATION_STEP.size, SLIDE_STEP.size, WARNING_ROW.size
 LAYOUTS = (PARAMS, STATE, CARRY, SLIDE, IMPACT_ROW, TRAJECTORY_ROW, WARNING_ROW)  # symmech.core.engines: describe
 LAW_COULOMB, LAW_PRINTED = 0.0, 1.0

@@ -11,7 +11,7 @@ from symmech.numerics.jit import jit
 from symmech.numerics.radau import radau_dense_at
 from symmech.grain.motion_engine.flight_path import extend_rotation, orient, still_gap, translate_into
 from symmech.grain.motion_engine.kinematics import EPS, normal_force, rotation, support
-from symmech.grain.motion_engine.layouts import FL_AT, INT, N_SLIDE, S_AT, SS_AT
+from symmech.grain.motion_engine.layouts import FL_AT, INT, N_SLIDE, N_SLIDING, S_AT, SS_AT
 from symmech.grain.motion_engine.slip import event_at
 
 SCAN_WINDOW = 32
@@ -86,14 +86,14 @@ def interp(t, ctx, coef):
     """The interpolant at t of the sliding step ctx (layout ``SLIDE_STEP``), its coefficients coef[0]."""
     if ctx[SS_AT.radau] != 0.0:
         return radau_dense_at(t, ctx[SS_AT.t_old], ctx[SS_AT.h], coef[0])
-    return dop_dense_at(t, ctx[SS_AT.t_old], ctx[SS_AT.h], ctx[SS_AT.z_old:SS_AT.z_old + 13], coef[0])
+    return dop_dense_at(t, ctx[SS_AT.t_old], ctx[SS_AT.h], ctx[SS_AT.z_old:SS_AT.z_old + N_SLIDING], coef[0])
 
 
 @jit
 def step_ctx(ctx, t, h, z, radau):
     """Set the sliding step ctx (layout ``SLIDE_STEP``) to the step of length h from (t, z)."""
     ctx[SS_AT.t_old], ctx[SS_AT.h], ctx[SS_AT.radau] = t, h, radau
-    ctx[SS_AT.z_old:SS_AT.z_old + 13] = z
+    ctx[SS_AT.z_old:SS_AT.z_old + N_SLIDING] = z
 
 
 @jit

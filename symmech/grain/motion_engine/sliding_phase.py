@@ -9,12 +9,12 @@ import numpy as np
 
 from symmech.numerics.dop853 import dop_dense_at
 from symmech.numerics.jit import jit
-from symmech.numerics.radau import radau_dense_at
+from symmech.numerics.radau import radau_buffers, radau_dense_at
 from symmech.grain import sliding
 from symmech.grain.motion_engine.kinematics import EPS, contact_offset, normal_force, rotation
 from symmech.grain.motion_engine.layouts import (
-    C_AT, DONE, INT, MAX_STALLED_EVENTS, N_FLIGHT, N_SAMPLER, N_SLIDE_STEP, P_AT, ROT_WIDTH, S_AT, SLIDE_FAIL,
-    SLIDE_RHS, SLIDE_STALLED, SLIDING, SM_AT, SS_AT, X_AT)
+    C_AT, DONE, INT, MAX_STALLED_EVENTS, N_FLIGHT, N_SAMPLER, N_SLIDE_STEP, N_SLIDING, P_AT, ROT_WIDTH, S_AT,
+    SLIDE_FAIL, SLIDE_RHS, SLIDE_STALLED, SLIDING, SM_AT, SS_AT, X_AT, Z_AT)
 from symmech.grain.motion_engine.roots import EVENT, NORMAL, brentq, first_root, interp, locate, step_ctx
 from symmech.grain.motion_engine.rows import record
 from symmech.grain.motion_engine.slip import (
@@ -48,11 +48,11 @@ def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     terminal event of sp: (t, z, event NO_EVENT / REGIME / SWITCH, rows, status)."""
     tol = p[P_AT.tolerance]
     g_old = event_at(t, z, sp) if sp[S_AT.event] != EV_NONE else 0.0
-    f = np.empty(13)
+    f = np.empty(N_SLIDING)
     rhs(t, z, (kind, sp), f)
     h_abs = first_step(t, z, f, t_chunk, (kind, sp), tol, atol, -DOP_EXPONENT)
-    K = np.empty((DOP_EXTENDED, 13))
-    F = np.empty((1, DOP_POWER * 13))
+    K = np.empty((DOP_EXTENDED, N_SLIDING))
+    F = np.empty((1, DOP_POWER * N_SLIDING))
     ctx[SS_AT.sp:] = sp
     for _ in range(MAX_STEPS_PER_CHUNK):
         if not t < t_chunk:
@@ -64,7 +64,7 @@ def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
         fired = sp[S_AT.event] != EV_NONE and g_old >= 0.0 and g_new <= 0.0
         t_last = t_new
         if fired or rec[SM_AT.next] * rec[SM_AT.interval] < t_new:
-            F[0] = dop_dense(t, t_new - t, z, z_new, (kind, sp), K).reshape(DOP_POWER * 13)
+            F[0] = dop_dense(t, t_new - t, z, z_new, (kind, sp), K).reshape(DOP_POWER * N_SLIDING)
             step_ctx(ctx, t, t_new - t, z, 0.0)
         if fired:
             t_last = brentq(t, t_new, 4 * EPS, (EVENT, ctx, F, INT(0), p, np.empty((1, 2, 3))))
@@ -82,11 +82,9 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     t_chunk or the first terminal event: the slip stops (along sp's reference direction) or its speed rises
     through 2 s_stiff (back to DOP853). Returns (t, z, event, rows, status, accepted steps)."""
     tol = p[P_AT.tolerance]
-    f = np.empty(13)
+    f = np.empty(N_SLIDING)
     rhs(t, z, (SLIP, sp), f)
-    J, LUr, LUc = np.empty((13, 13)), np.empty((13, 13)), np.empty((13, 13), dtype=np.complex128)
-    pr, pc = np.empty(13, dtype=np.int64), np.empty(13, dtype=np.int64)
-    Q = np.empty((1, 4 * 13))
+    J, LUr, pr, LUc, pc, Q = radau_buffers(N_SLIDING)
     st = radau_start(t, z, f, t_chunk, (SLIP, sp), tol, atol, J)
     ctx[SS_AT.sp:] = sp
     stops, speed = slip_events(z, sp)
@@ -124,19 +122,21 @@ def slide(p, y, t_end, rows, carry):
     t_stop = t_end if math.isnan(t_lift) else t_lift
     Q0 = rotation(y[X_AT.q:X_AT.q + 4])
     sp = slide_params(p, Q0, contact_offset(p, Q0), p[P_AT.mu])
-    z = np.empty(13)
-    z[0:2] = y[X_AT.r:X_AT.r + 2]
-    z[2:4] = y[X_AT.v:X_AT.v + 2]
-    z[4:7] = Q0 @ y[X_AT.w:X_AT.w + 3]
-    z[7:11] = y[X_AT.q:X_AT.q + 4]
-    z[11] = z[12] = 0.0
+    z = np.empty(N_SLIDING)
+    z[Z_AT.r:Z_AT.r + 2] = y[X_AT.r:X_AT.r + 2]
+    z[Z_AT.v:Z_AT.v + 2] = y[X_AT.v:X_AT.v + 2]
+    z[Z_AT.w:Z_AT.w + 3] = Q0 @ y[X_AT.w:X_AT.w + 3]
+    z[Z_AT.q:Z_AT.q + 4] = y[X_AT.q:X_AT.q + 4]
+    z[Z_AT.work] = z[Z_AT.loss] = 0.0
     g = math.sqrt(p[P_AT.g:P_AT.g + 3] @ p[P_AT.g:P_AT.g + 3])
     v_scale = (g + abs(normal_force(p, t0))) * step
     sp[S_AT.v_stop] = tol * v_scale
     sp[S_AT.v_stiff] = tol**sliding.SLIP_STIFF_POWER * v_scale
     a_min = min(p[P_AT.axes], p[P_AT.axes + 1], p[P_AT.axes + 2])
-    atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min, 1 / v_scale,
-                                     1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
+    scale = np.empty(N_SLIDING)  # of each component, times tol v_scale: its absolute tolerance
+    scale[Z_AT.r:Z_AT.r + 2], scale[Z_AT.v:Z_AT.v + 2], scale[Z_AT.w:Z_AT.w + 3] = step, 1.0, 1 / a_min
+    scale[Z_AT.q:Z_AT.q + 4], scale[Z_AT.work], scale[Z_AT.loss] = 1 / v_scale, v_scale, v_scale
+    atol = tol * v_scale * scale
     stick, z = settle(t0, z, sp, True)
     t, stalled, status, implicit = t0, 0, DONE, False
     ctx = np.empty(N_SLIDE_STEP)
@@ -161,8 +161,8 @@ def slide(p, y, t_end, rows, carry):
             implicit = not implicit
         elif event == REGIME:  # the stick force reached the cone (slip starts), or the slip speed v_stop
             stick, z = settle(t, z, sp, not stick)
-    carry[C_AT.work] += p[P_AT.mass] * z[11]
-    carry[C_AT.slide_loss] += p[P_AT.mass] * z[12]
+    carry[C_AT.work] += p[P_AT.mass] * z[Z_AT.work]
+    carry[C_AT.slide_loss] += p[P_AT.mass] * z[Z_AT.loss]
     end = slide_state(t, z, y[X_AT.r + 2])
     rows = record(rows, carry, end, SLIDING)
     return end, (not math.isnan(t_lift)) and t >= t_lift, rows, status

@@ -1,9 +1,9 @@
 """The sliding contact in numba (:mod:`symmech.grain.sliding`): the ODE of a grain on the plane, stick or slip,
 its analytic slip Jacobian, the settling impulse at a regime change and the terminal events of a chunk.
 
-The sliding vector z (13,) is (r (2), v (2), w (3) KXYZ, q (4), W, D): tangential position and velocity, spin,
-orientation, the surface's work and the friction's loss per unit mass; ``sp`` the phase's parameters
-(layout :data:`layouts.SLIDE`)."""
+The sliding vector z (layout :data:`layouts.SLIDE_STATE`) is (r (2), v (2), w (3) KXYZ, q (4), work, loss):
+tangential position and velocity, spin, orientation, the surface's work and the friction's loss per unit mass;
+``sp`` the phase's parameters (layout :data:`layouts.SLIDE`)."""
 from __future__ import annotations
 
 import math
@@ -12,7 +12,7 @@ import numpy as np
 
 from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import cross, is_sphere, rotation
-from symmech.grain.motion_engine.layouts import N_SLIDE, P_AT, S_AT
+from symmech.grain.motion_engine.layouts import N_SLIDE, N_SLIDING, N_STATE, P_AT, S_AT, X_AT, Z_AT
 
 
 # Events: none; the slip stops; the stick ends; an anisotropic slip stops or falls below the stiff slip speed
@@ -29,11 +29,11 @@ def slide_surface(sp, t):
 
 
 @jit
-def _offset_now(y, sp):
+def _offset_now(z, sp):
     """Contact offset R (3 floats) of the sliding grain: fixed for a sphere, turned with q otherwise."""
     if sp[S_AT.sphere] != 0.0:
         return sp[S_AT.r0], sp[S_AT.r0 + 1], sp[S_AT.r0 + 2]
-    q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
+    q0, u0, u1, u2 = z[Z_AT.q], z[Z_AT.q + 1], z[Z_AT.q + 2], z[Z_AT.q + 3]
     v0, v1, v2 = sp[S_AT.rb], sp[S_AT.rb + 1], sp[S_AT.rb + 2]
     t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
     qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
@@ -42,11 +42,11 @@ def _offset_now(y, sp):
 
 
 @jit
-def geometry(y, sp):
+def geometry(z, sp):
     """Contact offset R (3,), slip s (2,), slip acceleration c (2,) of the carried contact point."""
-    R0, R1, R2 = _offset_now(y, sp)
-    w0, w1, w2 = y[4], y[5], y[6]
-    s = np.array([y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2])
+    R0, R1, R2 = _offset_now(z, sp)
+    w0, w1, w2 = z[Z_AT.w], z[Z_AT.w + 1], z[Z_AT.w + 2]
+    s = np.array([z[Z_AT.v] + w1 * R2 - w2 * R1, z[Z_AT.v + 1] + w2 * R0 - w0 * R2])
     # The contact point turns with the spin about the normal: R' = w_z e_z x R; c = (w x R')_t.
     c = np.array([-w2 * (w2 * R0), w2 * (-w2 * R1)])
     return np.array([R0, R1, R2]), s, c
@@ -90,23 +90,23 @@ def _anisotropic(sp):
 
 
 @jit
-def _stick_force(t, y, sp):
+def _stick_force(t, z, sp):
     _, acc = slide_surface(sp, t)
-    R, _, c = geometry(y, sp)
+    R, _, c = geometry(z, sp)
     p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_AT.g] - acc[0] + c[0], sp[S_AT.g + 1] - acc[1] + c[1])
     return np.array([-p0, -p1]), acc[2] - sp[S_AT.g + 2]
 
 
 @jit
-def slide_rhs(t, y, sp, stick, out):
-    """Sliding ODE y = (r (2), v (2), w (3) KXYZ, q (4), W, D) (``_Contact.rhs`` of the Python loop), in scalars."""
+def slide_rhs(t, z, sp, stick, out):
+    """Sliding ODE of z (layout ``SLIDE_STATE``) into out (``_Contact.rhs`` of the Python loop), in scalars."""
     ph = sp[S_AT.omega] * t + sp[S_AT.phase]
     sv = sp[S_AT.amplitude] * sp[S_AT.omega] * math.cos(ph)
     sa = -sp[S_AT.amplitude] * sp[S_AT.omega] ** 2 * math.sin(ph)
     d0, d1, d2 = sp[S_AT.direction], sp[S_AT.direction + 1], sp[S_AT.direction + 2]
-    R0, R1, R2 = _offset_now(y, sp)
-    w0, w1, w2 = y[4], y[5], y[6]
-    s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
+    R0, R1, R2 = _offset_now(z, sp)
+    w0, w1, w2 = z[Z_AT.w], z[Z_AT.w + 1], z[Z_AT.w + 2]
+    s0, s1 = z[Z_AT.v] + w1 * R2 - w2 * R1, z[Z_AT.v + 1] + w2 * R0 - w0 * R2
     n = sa * d2 - sp[S_AT.g + 2]
     f0, f1 = sp[S_AT.g] - sa * d0, sp[S_AT.g + 1] - sa * d1
     if stick:
@@ -116,27 +116,27 @@ def slide_rhs(t, y, sp, stick, out):
         speed = math.hypot(s0, s1)
         phi0, phi1 = (-sp[S_AT.mu] * n / speed * s0, -sp[S_AT.mu] * n / speed * s1) if speed > 0.0 else (0.0, 0.0)
     tx, ty, tz = R1 * n - R2 * phi1, R2 * phi0 - R0 * n, R0 * phi1 - R1 * phi0
-    q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
-    out[0], out[1] = y[2], y[3]
-    out[2], out[3] = f0 + phi0, f1 + phi1
+    q0, q1, q2, q3 = z[Z_AT.q], z[Z_AT.q + 1], z[Z_AT.q + 2], z[Z_AT.q + 3]
+    out[Z_AT.r], out[Z_AT.r + 1] = z[Z_AT.v], z[Z_AT.v + 1]
+    out[Z_AT.v], out[Z_AT.v + 1] = f0 + phi0, f1 + phi1
     for i in range(3):
-        out[4 + i] = sp[S_AT.m + 3 * i] * tx + sp[S_AT.m + 3 * i + 1] * ty + sp[S_AT.m + 3 * i + 2] * tz
-    out[7] = 0.5 * (-w0 * q1 - w1 * q2 - w2 * q3)
-    out[8] = 0.5 * (w0 * q0 + w1 * q3 - w2 * q2)
-    out[9] = 0.5 * (w1 * q0 + w2 * q1 - w0 * q3)
-    out[10] = 0.5 * (w2 * q0 + w0 * q2 - w1 * q1)
-    out[11] = sv * (phi0 * d0 + phi1 * d1 + n * d2)
-    out[12] = -(phi0 * s0 + phi1 * s1)
+        out[Z_AT.w + i] = sp[S_AT.m + 3 * i] * tx + sp[S_AT.m + 3 * i + 1] * ty + sp[S_AT.m + 3 * i + 2] * tz
+    out[Z_AT.q] = 0.5 * (-w0 * q1 - w1 * q2 - w2 * q3)
+    out[Z_AT.q + 1] = 0.5 * (w0 * q0 + w1 * q3 - w2 * q2)
+    out[Z_AT.q + 2] = 0.5 * (w1 * q0 + w2 * q1 - w0 * q3)
+    out[Z_AT.q + 3] = 0.5 * (w2 * q0 + w0 * q2 - w1 * q1)
+    out[Z_AT.work] = sv * (phi0 * d0 + phi1 * d1 + n * d2)
+    out[Z_AT.loss] = -(phi0 * s0 + phi1 * s1)
 
 
 @jit
-def _offset_jac(y, sp):
+def _offset_jac(z, sp):
     """dR/dq (3, 4) of the contact offset of :func:`_offset_now` (zero for a sphere), in scalars:
     R = v + N / |q|^2, N = q0 t + u x t, t = 2 u x v (u the vector part of q, v the body-frame offset)."""
     dR = np.zeros((3, 4))
     if sp[S_AT.sphere] != 0.0:
         return dR
-    q0, u0, u1, u2 = y[7], y[8], y[9], y[10]
+    q0, u0, u1, u2 = z[Z_AT.q], z[Z_AT.q + 1], z[Z_AT.q + 2], z[Z_AT.q + 3]
     v0, v1, v2 = sp[S_AT.rb], sp[S_AT.rb + 1], sp[S_AT.rb + 2]
     qq = q0 * q0 + u0 * u0 + u1 * u1 + u2 * u2
     t0, t1, t2 = 2.0 * (u1 * v2 - u2 * v1), 2.0 * (u2 * v0 - u0 * v2), 2.0 * (u0 * v1 - u1 * v0)
@@ -157,48 +157,48 @@ def _offset_jac(y, sp):
 
 
 @jit
-def slip_jac(t, y, sp, J):
-    """Jacobian d rhs / d y (13, 13) of the slip (``slide_rhs``, not stuck), analytic, column by column: the
+def slip_jac(t, z, sp, J):
+    """Jacobian d rhs / d z (N_SLIDING, N_SLIDING) of the slip (``slide_rhs``, not stuck), analytic, column by column: the
     stiff part is the friction's turning rate mu n / |s| (I - s s^T / |s|^2) through s = v + (w x R)_t, the
     contact offset R turning with q."""
     J[:] = 0.0
     amp, om, ph = sp[S_AT.amplitude], sp[S_AT.omega], sp[S_AT.phase]
     n = -amp * om ** 2 * math.sin(om * t + ph) * sp[S_AT.direction + 2] - sp[S_AT.g + 2]
     sv = amp * om * math.cos(om * t + ph)
-    R0, R1, R2 = _offset_now(y, sp)
-    w0, w1, w2 = y[4], y[5], y[6]
-    s0, s1 = y[2] + w1 * R2 - w2 * R1, y[3] + w2 * R0 - w0 * R2
+    R0, R1, R2 = _offset_now(z, sp)
+    w0, w1, w2 = z[Z_AT.w], z[Z_AT.w + 1], z[Z_AT.w + 2]
+    s0, s1 = z[Z_AT.v] + w1 * R2 - w2 * R1, z[Z_AT.v + 1] + w2 * R0 - w0 * R2
     speed = math.hypot(s0, s1)
     k, u0, u1 = 0.0, 0.0, 0.0  # no friction force at zero slip
     if speed > 0.0:
         k, u0, u1 = -sp[S_AT.mu] * n / speed, s0 / speed, s1 / speed
     phi0, phi1 = k * s0, k * s1
-    ds = np.zeros((2, 13))  # ds/dy at fixed R
-    ds[0, 2], ds[0, 5], ds[0, 6] = 1.0, R2, -R1
-    ds[1, 3], ds[1, 4], ds[1, 6] = 1.0, -R2, R0
-    dR = np.zeros((3, 13))
-    dR[:, 7:11] = _offset_jac(y, sp)
-    for j in range(13):
+    ds = np.zeros((2, N_SLIDING))  # ds/dz at fixed R
+    ds[0, Z_AT.v], ds[0, Z_AT.w + 1], ds[0, Z_AT.w + 2] = 1.0, R2, -R1
+    ds[1, Z_AT.v + 1], ds[1, Z_AT.w], ds[1, Z_AT.w + 2] = 1.0, -R2, R0
+    dR = np.zeros((3, N_SLIDING))
+    dR[:, Z_AT.q:Z_AT.q + 4] = _offset_jac(z, sp)
+    for j in range(N_SLIDING):
         a0, a1, a2 = dR[0, j], dR[1, j], dR[2, j]
         ds0, ds1 = ds[0, j] + w1 * a2 - w2 * a1, ds[1, j] + w2 * a0 - w0 * a2
         dp0, dp1 = k * ((1.0 - u0 * u0) * ds0 - u0 * u1 * ds1), k * ((1.0 - u1 * u1) * ds1 - u0 * u1 * ds0)
         tau = (a1 * n - a2 * phi1 - R2 * dp1, a2 * phi0 + R2 * dp0 - a0 * n,  # d(R x (phi, n))
                a0 * phi1 + R0 * dp1 - a1 * phi0 - R1 * dp0)
-        J[2, j], J[3, j] = dp0, dp1
+        J[Z_AT.v, j], J[Z_AT.v + 1, j] = dp0, dp1
         for i in range(3):
             row = S_AT.m + 3 * i
-            J[4 + i, j] = sp[row] * tau[0] + sp[row + 1] * tau[1] + sp[row + 2] * tau[2]
-        J[11, j] = sv * (sp[S_AT.direction] * dp0 + sp[S_AT.direction + 1] * dp1)
-        J[12, j] = -(dp0 * s0 + phi0 * ds0 + dp1 * s1 + phi1 * ds1)
-    J[0, 2] = J[1, 3] = 1.0
-    q0, q1, q2, q3 = y[7], y[8], y[9], y[10]
+            J[Z_AT.w + i, j] = sp[row] * tau[0] + sp[row + 1] * tau[1] + sp[row + 2] * tau[2]
+        J[Z_AT.work, j] = sv * (sp[S_AT.direction] * dp0 + sp[S_AT.direction + 1] * dp1)
+        J[Z_AT.loss, j] = -(dp0 * s0 + phi0 * ds0 + dp1 * s1 + phi1 * ds1)
+    J[Z_AT.r, Z_AT.v] = J[Z_AT.r + 1, Z_AT.v + 1] = 1.0
+    q0, q1, q2, q3 = z[Z_AT.q], z[Z_AT.q + 1], z[Z_AT.q + 2], z[Z_AT.q + 3]
     dq_dw = ((-q1, -q2, -q3), (q0, q3, -q2), (-q3, q0, q1), (q2, -q1, q0))  # q' = (0, w) (x) q / 2
     dq_dq = ((0.0, -w0, -w1, -w2), (w0, 0.0, -w2, w1), (w1, w2, 0.0, -w0), (w2, -w1, w0, 0.0))
     for i in range(4):
         for j in range(3):
-            J[7 + i, 4 + j] = 0.5 * dq_dw[i][j]
+            J[Z_AT.q + i, Z_AT.w + j] = 0.5 * dq_dw[i][j]
         for j in range(4):
-            J[7 + i, 7 + j] = 0.5 * dq_dq[i][j]
+            J[Z_AT.q + i, Z_AT.q + j] = 0.5 * dq_dq[i][j]
 
 
 @jit
@@ -211,27 +211,28 @@ def _slide_kinetic(sp, q, v2, w):
 
 
 @jit
-def settle(t, y, sp, may_stick):
-    """``_settle`` of :mod:`symmech.grain.sliding`: remove a slip within v_stop by a friction impulse; (stick, y)."""
-    R, s, _ = geometry(y, sp)
+def settle(t, z, sp, may_stick):
+    """``_settle`` of :mod:`symmech.grain.sliding`: remove a slip within v_stop by a friction impulse; (stick, z)."""
+    R, s, _ = geometry(z, sp)
     v_stop = sp[S_AT.v_stop]
     if sp[S_AT.mu] == 0.0 or math.hypot(s[0], s[1]) > 1.5 * v_stop:
-        return False, y
-    phi, n = _stick_force(t, y, sp)
+        return False, z
+    phi, n = _stick_force(t, z, sp)
     stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_AT.mu] * n
     target = np.zeros(2)
     if not stick:  # against the stick force: along B^-1 (f + c) (``_Contact.slip_direction``)
         _, acc = slide_surface(sp, t)
-        c = geometry(y, sp)[2]
+        c = geometry(z, sp)[2]
         d0, d1 = _solve_B(R[0], R[1], R[2], sp, sp[S_AT.g] - acc[0] + c[0], sp[S_AT.g + 1] - acc[1] + c[1])
         target = 2.0 * v_stop * np.array([d0, d1]) / max(math.hypot(d0, d1), 1e-300)
-    y = y.copy()
-    before = _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
+    z = z.copy()
+    q, v, w = Z_AT.q, Z_AT.v, Z_AT.w
+    before = _slide_kinetic(sp, z[q:q + 4], z[v:v + 2], z[w:w + 3])
     dphi = np.array(_solve_B(R[0], R[1], R[2], sp, target[0] - s[0], target[1] - s[1]))
-    y[2:4] += dphi
-    y[4:7] += _mobility(sp) @ cross(R, np.array([dphi[0], dphi[1], 0.0]))
-    y[12] += before - _slide_kinetic(sp, y[7:11], y[2:4], y[4:7])
-    return stick, y
+    z[v:v + 2] += dphi
+    z[w:w + 3] += _mobility(sp) @ cross(R, np.array([dphi[0], dphi[1], 0.0]))
+    z[Z_AT.loss] += before - _slide_kinetic(sp, z[q:q + 4], z[v:v + 2], z[w:w + 3])
+    return stick, z
 
 
 @jit
@@ -259,18 +260,18 @@ def slide_params(p, Q0, R0, mu):
 
 
 @jit
-def slip_events(y, sp):
+def slip_events(z, sp):
     """(The slip projected on the reference direction minus v_stop, the slip speed)."""
-    s = geometry(y, sp)[1]
+    s = geometry(z, sp)[1]
     return s[0] * sp[S_AT.ref] + s[1] * sp[S_AT.ref + 1] - sp[S_AT.v_stop], math.hypot(s[0], s[1])
 
 
 @jit
-def event_at(t, y, sp):
+def event_at(t, z, sp):
     if sp[S_AT.event] == EV_STICK:
-        phi, n = _stick_force(t, y, sp)
+        phi, n = _stick_force(t, z, sp)
         return sp[S_AT.mu] * n - math.hypot(phi[0], phi[1])
-    stops, speed = slip_events(y, sp)
+    stops, speed = slip_events(z, sp)
     if sp[S_AT.event] == EV_SLIP:
         return stops
     if sp[S_AT.event] == EV_FAST:
@@ -315,12 +316,13 @@ def switched(z, sp):
 
 @jit
 def slide_state(t, z, height):
-    """Full state (14,) from the sliding vector z at t (q normalised, w into body axes)."""
-    y = np.empty(14)
-    q = z[7:11] / math.sqrt(z[7:11] @ z[7:11])
-    y[0], y[1], y[2], y[3] = t, z[0], z[1], height
-    y[4], y[5], y[6] = z[2], z[3], 0.0
-    y[7:11] = q
-    y[11:14] = rotation(q).T @ z[4:7]
+    """Full state (layout ``STATE``) from the sliding vector z at t on the plane at centre height ``height`` [m]
+    (q normalised, w into body axes)."""
+    y = np.empty(N_STATE)
+    q = z[Z_AT.q:Z_AT.q + 4] / math.sqrt(z[Z_AT.q:Z_AT.q + 4] @ z[Z_AT.q:Z_AT.q + 4])
+    y[X_AT.t], y[X_AT.r], y[X_AT.r + 1], y[X_AT.r + 2] = t, z[Z_AT.r], z[Z_AT.r + 1], height
+    y[X_AT.v], y[X_AT.v + 1], y[X_AT.v + 2] = z[Z_AT.v], z[Z_AT.v + 1], 0.0
+    y[X_AT.q:X_AT.q + 4] = q
+    y[X_AT.w:X_AT.w + 3] = rotation(q).T @ z[Z_AT.w:Z_AT.w + 3]
     return y
 

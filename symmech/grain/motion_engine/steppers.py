@@ -6,7 +6,7 @@ from __future__ import annotations
 from symmech.numerics import dop853_tableau as tableau, ode
 from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.kinematics import gm
-from symmech.grain.motion_engine.layouts import INT
+from symmech.grain.motion_engine.layouts import INT, RO_AT
 from symmech.grain.motion_engine.slip import slide_rhs, slip_jac
 
 ROT, SLIP, STICK = INT(0), INT(1), INT(2)  # right-hand sides of the Dormand-Prince stepper
@@ -15,21 +15,23 @@ DOP_STAGES, DOP_EXTENDED, DOP_POWER, DOP_EXPONENT = tableau.STAGES, tableau.EXTE
 
 @jit
 def rhs(t, y, args, out):
-    """Right-hand side of the toolkit's steppers, args = (kind, data): ``ROT`` torque-free rotation y = (q, w
-    body), data = the principal inertia (3,); ``SLIP``/``STICK`` sliding, data the sliding parameters (SLIDE)."""
+    """Right-hand side of the toolkit's steppers, args = (kind, data): ``ROT`` torque-free rotation y (layout
+    ``ROTATION``), data = the principal inertia (3,); ``SLIP``/``STICK`` sliding, y the sliding vector (layout
+    ``SLIDE_STATE``), data the sliding parameters (``SLIDE``)."""
     kind, data = args
     if kind == ROT:
-        qd = gm.quaternion_rate_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6])
-        wd = gm.euler_equations_scalar(data[0], data[1], data[2], y[4], y[5], y[6])
-        out[:4] = qd
-        out[4:7] = wd
+        q, w = RO_AT.q, RO_AT.w
+        qd = gm.quaternion_rate_scalar(y[q], y[q + 1], y[q + 2], y[q + 3], y[w], y[w + 1], y[w + 2])
+        wd = gm.euler_equations_scalar(data[0], data[1], data[2], y[w], y[w + 1], y[w + 2])
+        out[q:q + 4] = qd
+        out[w:w + 3] = wd
     else:
         slide_rhs(t, y, data, kind == STICK, out)
 
 
 @jit
 def jac(t, y, args, J):
-    """Jacobian d rhs / d y (13, 13) into J of the slip (analytic), args = (kind, sp): the only stiff one."""
+    """Jacobian d rhs / d y (N_SLIDING, N_SLIDING) into J of the slip (analytic), args = (kind, sp): the only stiff one."""
     slip_jac(t, y, args[1], J)
 
 

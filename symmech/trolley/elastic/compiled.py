@@ -45,32 +45,12 @@ MAX_TABLE_NODES = 1 << 20
 STALL_ROUNDS = 2
 
 
-def row_terms(system, fr, V0, dV0, Y, height) -> dict:
-    """:func:`symmech.trolley.elastic.simulate.row_terms` by the kernels' ``rows`` (the potential Π per row in Python)."""
-    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    chs = frame_channels(fr, V0, dV0, system.mdl.g0)
-    nu = np.ascontiguousarray(fr.lam[:, :, 1])
-    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
-    terms = ek.rows(ek.pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
-    res = dict(zip(keys, terms))
-    pi = system.potential(Y[:, :system.N])
-    res["h"] += pi
-    res["E"] += pi
-    return res
-
-
 def channels(drive, system, t, at=slice(None)) -> np.ndarray:
     """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
     where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame.frame_state`, vectorised."""
     s = el_sim.arc_length(drive, t)[at]
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
-    return frame_channels(el_frame.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
-
-
-def frame_channels(fr, V0, dV0, g0: float) -> np.ndarray:
-    """Channels (k, 12) of the frame fr (k rows) at speeds V0 [m/s] and rates dV0 [m/s²] (k,)."""
-    v0, a0, w, dw = el_frame.frame_motion(fr, V0, dV0)
-    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], w, dw, v0])
+    return el_frame.frame_channels(el_frame.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
 
 
 def _scales(ch: np.ndarray) -> np.ndarray:
@@ -164,10 +144,10 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     t = np.asarray(t, dtype=float)
     if drive.traction is not None:
         return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
-    line = el_sim.Timeline(system, drive, t)
+    line, y0 = el_sim.start(system, drive, t, dq0, dqd0)
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
     fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
-    table = frame_table(system, drive, t, rtol, frame_channels(fr, V0, dV0, system.mdl.g0))
+    table = frame_table(system, drive, t, rtol, el_frame.frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
         why = (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
                f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
@@ -175,13 +155,10 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
         out["engine"], out["engine_reason"] = "python", why
         return out
     N = system.N
-    q0 = system.quasi_static(line.state(t[0]))
-    zero = np.zeros(N)
-    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0]
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL]
     Y, steps, nfev, status = ek.solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
     _check(status, Y, t)
-    out = el_sim.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr)
+    out = el_sim.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=ek.row_terms, frame=fr)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out
@@ -257,10 +234,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
     """The compiled traction run on ``table``; None when s leaves it."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     N = system.N
-    line = el_sim.Timeline(system, drive, t)
-    zero = np.zeros(N)
-    y0 = np.r_[el_sim.traction_start(line, t[0]) + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0,
-               0.0, 0.0, drive.s0, drive.v_initial]
+    _, y0 = el_sim.start(system, drive, t, dq0, dqd0)
     atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL, 1e-10, 1e-10]
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
     key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
@@ -274,7 +248,7 @@ def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | No
     s = Y[:, -2]
     if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
         return None
-    out = el_sim.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=row_terms)
+    out = el_sim.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=ek.row_terms)
     out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
                frame_interpolation_error=table.error)
     return out
@@ -297,7 +271,7 @@ COLD_COMPILE_SECONDS = 130.0
 
 
 def _entry_signatures() -> dict:
-    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
+    """The cached entries and the argument types :func:`simulate` and ``kernels.row_terms`` call them with: the
     model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), the rest from small arrays."""
     # numba: imported by a run, not by choosing the engine or its estimate
     import numba

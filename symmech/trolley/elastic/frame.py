@@ -57,6 +57,13 @@ def frame_motion(fr: model.Frame, V0, dV0) -> tuple:
     return V * fr.e, dV * fr.e + V ** 2 * (fr.de + np.cross(fr.W, fr.e)), V * fr.W, dV * fr.W + V ** 2 * fr.dW
 
 
+def frame_channels(fr: model.Frame, V0, dV0, g0: float) -> np.ndarray:
+    """The frame fr's channels (k, 12) at speeds V0 [m/s] and rates dV0 [m/s²] (k,), in the order of the compiled
+    engine's layout :data:`symmech.trolley.elastic.layout.CHANNELS`: load a0 + g0 ν, ω, ω̇, v0."""
+    v0, a0, w, dw = frame_motion(fr, V0, dV0)
+    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], w, dw, v0])
+
+
 def frame_state(fr: model.Frame, i: int, V0: float, dV0: float) -> FrameState:
     e, W = fr.e[i], fr.W[i]
     return FrameState(V0 * e, dV0 * e + V0 ** 2 * (fr.de[i] + np.cross(W, e)), V0 * W,

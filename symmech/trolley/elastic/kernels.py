@@ -24,7 +24,8 @@ import numpy as np
 
 from symmech.numerics import ode, radau
 from symmech.numerics.jit import jit, with_gil
-from symmech.trolley.elastic.layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY
+from symmech.trolley.elastic.frame import frame_channels
+from symmech.trolley.elastic.layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY, RL_AT, ROLLER
 
 MAX_STEPS = 50_000_000
 
@@ -132,7 +133,7 @@ def _rollers(mdl, q, qd):
     """Roller deflections d, forces P1…P5 [N] and tangent stiffness dP/dd [N/m] (elastic.roller_forces)."""
     C, roll, law = mdl.rollers_map, mdl.roll, mdl.flags[F_AT.law]
     d, dd = C @ q[:5], C @ qd[:5]
-    k, c, pre = roll[0], roll[1], roll[2]
+    k, c, pre = roll[RL_AT.stiffness], roll[RL_AT.damping], roll[RL_AT.preload]
     if law == 0.0:
         return d, -k * d - c * dd, -k
     up, down = pre - d, pre + d
@@ -230,7 +231,7 @@ def _dissipation(mdl, qd):
     power = qd @ mdl.damping @ qd
     if mdl.flags[F_AT.rollers] != 0.0:
         dd = mdl.rollers_map @ qd[:5]
-        power += mdl.roll[1] @ (dd * dd)
+        power += mdl.roll[RL_AT.damping] @ (dd * dd)
     return power
 
 
@@ -258,7 +259,7 @@ def _jacobians(mdl, ch, q, qd):
     _membrane(mdl, q, R0, Rq, True)
     if flags[F_AT.rollers] != 0.0:
         _, _, kt = _rollers(mdl, q, qd)
-        c = mdl.roll[1]
+        c = mdl.roll[RL_AT.damping]
         for i in range(5):
             for j in range(5):
                 for r in range(5):
@@ -508,8 +509,8 @@ def solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
         if not t < t_end:
             status, steps = ode.SUCCESS, step
             break
-        if st[radau.R_H] > max_step:
-            st[radau.R_H], st[radau.R_H_OLD], st[radau.R_ERR_OLD] = max_step, -1.0, -1.0
+        if st[radau.ST_AT.h] > max_step:
+            st[radau.ST_AT.h], st[radau.ST_AT.h_old], st[radau.ST_AT.err_old] = max_step, -1.0, -1.0
         t_new, y_new, f_new, ok = _traction_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
         if not ok:
             status, steps = ode.STEP_TOO_SMALL, step
@@ -528,6 +529,19 @@ def solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
 # --------------------------------------------------------------------------- from the Python model
 
 
+def row_terms(system, fr, V0, dV0, Y, height) -> dict:
+    """:func:`symmech.trolley.elastic.simulate.row_terms` by :func:`rows` (the potential Π per row in Python)."""
+    chs = frame_channels(fr, V0, dV0, system.mdl.g0)
+    nu = np.ascontiguousarray(fr.lam[:, :, 1])
+    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
+    terms = rows(pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
+    res = dict(zip(keys, terms))
+    pi = system.potential(Y[:, :system.N])
+    res["h"] += pi
+    res["E"] += pi
+    return res
+
+
 def pack(system):
     """The model record the kernels take (:data:`symmech.trolley.elastic.layout.MODEL`), from a
     :class:`symmech.trolley.elastic.system.System`."""
@@ -541,13 +555,13 @@ def pack(system):
     ptr = np.cumsum([0] + [len(r) for r in rows]).astype(np.int64)
     col = np.array([c for r in rows for c, _ in r], dtype=np.int64)
     qi = np.array([x for r in rows for _, x in r], dtype=np.int64)
-    roll = np.zeros((3, 5))
+    roll = np.zeros((ROLLER.size, 5))
     law = 0.0
     if system.rollers_on:
         rl = mdl.rollers
-        roll[0] = rl.stiffness
-        roll[1] = rl.damping if mdl.effects.damping else 0.0
-        roll[2] = rl.preload
+        roll[RL_AT.stiffness] = rl.stiffness
+        roll[RL_AT.damping] = rl.damping if mdl.effects.damping else 0.0
+        roll[RL_AT.preload] = rl.preload
         law = 0.0 if rl.law == "linear" else 1.0
     blocks = inv.membrane
     width = max([len(b.index) for b in blocks], default=1)

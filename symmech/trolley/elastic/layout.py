@@ -1,6 +1,6 @@
 """The elastic trolley engine's declared layouts (:mod:`symmech.core.layout`), shared by its kernels
 (:mod:`symmech.trolley.elastic.kernels`) and its driver (:mod:`symmech.trolley.elastic.compiled`): the
-model record the kernels take whole, its flags vector, the 12 frame channels of the spline table in t and
+model record the kernels take whole, its flags vector and roller rows, the 12 frame channels of the spline table in t and
 the 15 geometry channels of the traction table in s. No numba here.
 
 N is the number of generalised coordinates (5 rigid-body coordinates of the trolley on its rollers, then
@@ -18,6 +18,12 @@ FLAGS = Layout("ElasticFlags", (
     Field("rollers", "1", "1: the rollers are elastic"),
     Field("law", "1", "roller law: 0 linear, 1 clamped pair"),
 ))
+# The rows of the model's roller table ``roll`` (ROLLER.size, 5): one column per roller P1…P5.
+ROLLER = Layout("ElasticRoller", (
+    Field("stiffness", "N/m", "roller stiffness"),
+    Field("damping", "N s/m", "roller damping (0 when damping is off)"),
+    Field("preload", "m", "preload deflection of the clamped pair law (negative: a gap)"),
+))
 MODEL = Bundle("ElasticModel", __name__, (
     Field("flags", "", "the flags vector (FLAGS)", (FLAGS.size,)),
     Field("ptr", "", "row pointers of the ψ entries of A, per coordinate", ("N+1",), "int64"),
@@ -29,7 +35,8 @@ MODEL = Bundle("ElasticModel", __name__, (
           ("9F", "F")),
     Field("gram_trace", "kg m^2", "trace of G over its 3 x 3 blocks (Gtr)", ("F", "F")),
     Field("rollers_map", "1", "roller deflections from the 5 rigid-body coordinates", (5, 5)),
-    Field("roll", "", "per roller: stiffness [N/m], damping [N s/m], preload [N]", (3, 5)),
+    Field("roll", "", "per roller (columns): rows of ROLLER, stiffness [N/m], damping [N s/m], preload [m]",
+          (ROLLER.size, 5)),
     Field("block_index", "", "coordinates of each membrane block (padded)", ("B", "W"), "int64"),
     Field("block_size", "", "number of coordinates of each membrane block", ("B",), "int64"),
     Field("block_h", "1", "slope Gram H of each held beam (padded): Π_m = c (qᵀ H q)²", ("B", "W", "W")),
@@ -57,6 +64,6 @@ GEOMETRY = Layout("ElasticGeometry", (
     Field("om", "rad/m", "rotation rate Ω of the frame per arc length", (3,)),
     Field("dom", "rad/m^2", "Ω'", (3,)),
 ))
-F_AT, CH_AT, G_AT = FLAGS.slots, CHANNELS.slots, GEOMETRY.slots
+F_AT, CH_AT, G_AT, RL_AT = FLAGS.slots, CHANNELS.slots, GEOMETRY.slots, ROLLER.slots
 N_CHANNELS, N_GEOMETRY = CHANNELS.size, GEOMETRY.size
-LAYOUTS = (MODEL, FLAGS, CHANNELS, GEOMETRY)  # symmech.core.engines: describe
+LAYOUTS = (MODEL, FLAGS, ROLLER, CHANNELS, GEOMETRY)  # symmech.core.engines: describe

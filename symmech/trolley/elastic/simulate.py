@@ -97,6 +97,20 @@ def traction_start(line: Timeline, t0: float) -> np.ndarray:
     return system.quasi_static(frame_state(line.cache[drive.s0], 0, drive.v_initial, dv))
 
 
+def start(system: System, drive: Drive, t, dq0=None, dqd0=None) -> tuple[Timeline, np.ndarray]:
+    """The run's :class:`Timeline` on the grid t [s] (n,) and its start state y0 (2N + 2,): the quasi-static q at
+    t[0] (:func:`traction_start` with traction) plus the offsets ``dq0``, ``dqd0`` of coordinates and rates,
+    E_d = W = 0 [J]; with ``drive.traction`` also s0 [m] and the initial speed [m/s] (2N + 4,). Both engines
+    start here."""
+    line = Timeline(system, drive, t)
+    traction = drive.traction is not None
+    q0 = traction_start(line, line.t[0]) if traction else system.quasi_static(line.state(line.t[0]))
+    zero = np.zeros(system.N)
+    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0,
+               [drive.s0, drive.v_initial] if traction else []]
+    return line, y0
+
+
 def arc_length(drive: Drive, t) -> np.ndarray:
     """s on the grid t (n,): s0 + ∫ V0 dt, 8-point Gauss-Legendre per step [m]."""
     nodes, weights = Timeline.NODES
@@ -148,13 +162,8 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     if ctx is not None and fallback:
         ctx.fallback(f"elastic model on the Python engine: {fallback}", SECONDS_PER_STEP * (t.size - 1))
     N = system.N
-    line = Timeline(system, drive, t)
+    line, y0 = start(system, drive, t, dq0, dqd0)
     traction = drive.traction is not None
-    zero = np.zeros(N)
-    if traction:
-        q0 = traction_start(line, t[0])
-    else:
-        q0 = system.quasi_static(line.state(t[0]))
 
     def rhs(time, y):
         if ctx is not None:
@@ -179,8 +188,6 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
         out[N:2 * N, N:2 * N] = -np.linalg.solve(M, Rqd)
         return out
 
-    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0,
-               [drive.s0, drive.v_initial] if traction else []]
     # the work of the track forces is under step control too (left out, the stiff start transient
     # goes unresolved and the reactions lose two digits), at 1e-5 J: tighter costs steps on stiff
     # rollers (10 kg on 1e8 N/m: 1761 evaluations at 1e-5 J, 2175 at 1e-9 J) for no gain in P
@@ -210,7 +217,7 @@ def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
     """Per output row (frame fr, speeds V0, dV0, heights of O (n,) [m], states Y (n, 2N + 2)): q̈ (n, N), the
     resultants F, M (n, 3), the coefficient vectors of r̃, its rate and acceleration (n, F), the Jacobi
     energy h and the total energy E (n,) [J]. The compiled engine computes the same in numba
-    (:func:`symmech.trolley.elastic.compiled.row_terms`)."""
+    (:func:`symmech.trolley.elastic.kernels.row_terms`)."""
     N, n = system.N, len(V0)
     q, qd = Y[:, :N], Y[:, N:2 * N]
     res = {k: np.zeros((n,) + shape) for k, shape in (("qdd", (N,)), ("F", (3,)), ("M", (3,)), ("rr", (system.F,)),
