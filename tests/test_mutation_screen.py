@@ -38,7 +38,12 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("case", sorted(CASES))
+# each case is a pytest process (~1 s): the default tier runs one per outcome, the slow tier the orderings too
+ORDERINGS = {"raises_mismatch", "raise_then_assert", "raise_then_pass", "fixture_then_assert", "assert_then_raise"}
+
+
+@pytest.mark.parametrize("case", [c if c not in ORDERINGS else pytest.param(c, marks=pytest.mark.slow)
+                                  for c in sorted(CASES)])
 def test_each_outcome_is_told_apart(tmp_path, case):
     source, outcome, test = CASES[case]
     path = tmp_path / f"test_{case}.py"
