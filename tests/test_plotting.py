@@ -191,16 +191,46 @@ def test_trolley_overloads_in_g_against_the_envelope(tmp_path, figures):
     assert fig.axes[-1].get_xlabel() == "time t [s]"
 
 
-def test_mode_shapes_have_frequency_legends(tmp_path, figures):
+def test_mode_shapes_are_titled_by_their_frequencies(tmp_path, figures):
+    """One panel a mode (the lowest six), in rows of at most three, each titled by the frequency summary.json
+    records and without a legend over the shape."""
     assert main(["run", str(SCENES / "smm_rotor_boom.toml"), "--out", str(tmp_path)]) == 0
     hz = json.loads((tmp_path / "summary.json").read_text())["frequencies_hz"]
     fig = figures["modes"]
-    assert len(fig.axes) == min(len(hz), 6)
-    for i, ax in enumerate(fig.axes):
-        texts = [t.get_text() for t in ax.get_legend().get_texts()]
-        assert texts == ["equilibrium", f"mode {i + 1}: f = {hz[i]:.4g} Hz"]
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(shown) == min(len(hz), 6)
+    assert len({round(ax.get_position().y0, 6) for ax in shown}) == math.ceil(len(shown) / 3)
+    for i, ax in enumerate(shown):
+        assert ax.get_title() == f"mode {i + 1}: f = {hz[i]:.4g} Hz"
+        assert ax.get_legend() is None
         assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")
         assert math.isfinite(hz[i]) and hz[i] > 0
+
+
+def test_save_refuses_a_legend_over_data(tmp_path):
+    """A legend inside the axes hides curves: refused, as an unlabelled axis is; beside or below them it is drawn."""
+    fig, axes = plotting.figure()
+    axes[0, 0].plot([0, 1], [0, 2], label="a curve")
+    plotting.set_labels(axes[0, 0], ("time t", "s"), ("distance", "m"))
+    axes[0, 0].legend(loc="upper left")
+    with pytest.raises(ValueError, match=r"axes 0 .*legend over the data of axes 0"):
+        plotting.save(fig, tmp_path, "bad")
+    assert not list(tmp_path.iterdir())
+    for place in (plotting.legend_beside, plotting.legend_below):
+        place(axes[0, 0])
+        fig.tight_layout()
+        assert plotting.covering_legends(fig) == []
+
+
+def test_a_legend_beside_the_left_panel_is_over_the_right_one(tmp_path):
+    """Beside is not enough when a neighbour's data are there: the legend of the left of two panels is refused."""
+    fig, axes = plotting.figure(1, 2)
+    for ax in axes[0]:
+        ax.plot([0, 1], [0, 2], label="a curve with a long name to reach the next panel")
+        plotting.set_labels(ax, ("time t", "s"), ("distance", "m"))
+    plotting.legend_beside(axes[0, 0])
+    fig.subplots_adjust(wspace=0.3)
+    assert plotting.covering_legends(fig) == ["axes 0 (untitled): legend over the data of axes 1"]
 
 
 @pytest.mark.parametrize("value, unit, text", [
@@ -278,6 +308,6 @@ def test_campbell_legend_names_beam_planes_in_words():
              "V0": np.array([1.0, 2.0]), "f": np.array([[10.0, 20.0, 30.0], [10.0, 20.0, 30.0]]),
              "forcing": np.ones((2, 3))}
     fig = plots.campbell(modes)
-    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    texts = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
     assert texts[:3] == ["beam 0, plane 1", "beam 0, plane 2", "rollers"]
     assert not any("_plane" in t for t in texts)

@@ -373,4 +373,4 @@ def run(source, out, ctx, **options):
         if name not in accepted:
             raise SymmechError(f"--{name.replace('_', '-')} does not apply to a sweep of a {kind.name} scene")
     with pipeline.locked(pipeline.check_out(out)):
-        return kind.sweep(raw, out, ctx, **options)
+        return kind.sweep(source, out, ctx, **options)  # the path, so the summary names the scene file

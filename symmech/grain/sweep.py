@@ -409,7 +409,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
-    scene = pipeline.load(raw)
+    scene = pipeline.load(source)
     p = plan(raw, scene.resolved)
     processes = core_sweep.workers(workers, scheduler)
     core_sweep.refuse(estimate(p, processes), ctx)
