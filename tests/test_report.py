@@ -216,7 +216,7 @@ def test_report_reads_the_pipeline_record(tmp_path):
     (tmp_path / "summary.json").write_text(json.dumps(summary))
     page = report.render(tmp_path)
     assert '&#34;lambda&#34;: 0.25' in page  # the resolved scene, escaped
-    assert "<td>validate 0.01, run 0.5, write 0.25, total 0.76</td>" in page
+    assert "<td>validate 10 ms, run 500 ms, write 250 ms, total 760 ms</td>" in page  # readable units
     assert f'<td>grain_impact</td><td class="num">{digest}</td>' in page
     assert '<td>normal impulse</td><td class="value">4.768 µN s</td>' in page
     # the failed check: first in the table, marked failed, and at the top beside the warning
