@@ -30,3 +30,16 @@ def test_the_best_point_is_the_least_overlap_among_the_eligible_points():
     assert sweep.best_point(sep, np.zeros(4, bool)) == (None, None)
     # one population: the fastest eligible transport
     assert sweep_report.best(np.array([True, True, False, False]), ["crop"], [CROP], None) == 1
+
+
+def test_one_population_needs_grains_for_its_mean_not_for_a_difference():
+    """With one population there is no Δv_x: the grains needed are for its mean X velocity at the best point."""
+    why = [[], [], [("hops", "crop's hop fraction 0.95 outside [0, 0.9]")], []]
+    stats = [{**CROP, "mean_vx_lo": CROP["mean_vx"] - 0.001, "mean_vx_hi": CROP["mean_vx"] + 0.001}]
+    axes = [("vibration amplitude", "m", False), ("vibration frequency", "Hz", False)]
+    values = [np.array([1e-3, 2e-3]), np.array([20.0, 30.0])]
+    precision = {"delta_vx_at_best": {"spread_m_s": 0.01, "grains_needed": 385}}
+    headline, *_ = sweep_report.answer(axes, values, why, 3, ["crop"], stats, None, precision, 1e-3)
+    needed = next(h for h in headline if h.name == "grains per population needed")
+    assert needed.value == 385 and needed.meaning == "for crop's mean X velocity at the best point to ± 1 mm/s (95 %)"
+    assert not any("Δv_x" in h.name or "Δv_x" in h.meaning for h in headline)

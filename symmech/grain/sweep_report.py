@@ -100,8 +100,10 @@ def answer(axes, values, why, k_best, names, stats, sep, precision, half_width) 
                              f"of {ok.size}: " + (describe(axes, values, ok) if ok.any() else "none"), ""))
     needed = (precision.get("delta_vx_at_best") or {}).get("grains_needed")
     if needed is not None:
+        measured = "Δv_x" if sep is not None else f"{names[0]}'s mean X velocity"  # one population: no difference
         headline.append(Headline("grains per population needed", float(needed), "1",
-                                 f"for Δv_x at the best point to ± {units.format(half_width, 'm/s')} (95 %)", ""))
+                                 f"for {measured} at the best point to ± {units.format(half_width, 'm/s')} (95 %)",
+                                 ""))
     limited = {}
     for k, w in enumerate(why):
         for label, sentence in w:
