@@ -126,6 +126,25 @@ def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float, atol:
                     f"{spread:.2g}{suffix}, is below {rtol:g} of its size{absolute}); not charted"}
 
 
+def line(ax, xs: np.ndarray, z: np.ndarray, ok: np.ndarray, labels: list[str], best: int | None, log: bool,
+         title: str, allowed: str = "admissible") -> None:
+    """The chart of a sweep along one axis on ``ax``: ``z`` (n,) over the swept values ``xs`` (n,), the cells of
+    the ``allowed`` points ``ok`` (n,) shaded green, the others labelled with what limits them (``labels``), the
+    ``best`` point (its index, or None) starred; the x range stops at the outer cells' edges."""
+    ax.plot(xs, z, "o-", color="C0", label=title)
+    e = edges(xs, log)
+    for n, k in enumerate(np.flatnonzero(ok)):
+        ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else allowed)
+    for k in np.flatnonzero(~ok):
+        ax.annotate(labels[k], (xs[k], z[k]), textcoords="offset points", xytext=(0, 8), ha="center", fontsize=7,
+                    color="#a00")
+    if best is not None:
+        ax.plot(xs[best], z[best], "*", color="gold", ms=16, mec="k", label=f"best {allowed} point")
+    if log:
+        ax.set_xscale("log")
+    ax.set_xlim(e[0], e[-1])
+
+
 def get(data: dict, path: str):
     """The value at the dotted ``path`` of ``data``; None when it is missing."""
     node = data

@@ -138,12 +138,22 @@ def flat(charts_: list) -> dict:
             if statement}
 
 
+def caption(title: str, axes: list[tuple]) -> str:
+    """A chart's caption, as a sentence (``axes``: (name, unit, log) of the swept fields)."""
+    over = " and ".join(name for name, _, _ in axes)
+    if len(axes) < 2:
+        return (f"The {title} along {over}. The star is the best eligible operating point; the green band holds "
+                "the eligible points, the others are labelled with what limits them.")
+    return (f"The {title} over {over}. The star is the best eligible operating point; hatched cells are not "
+            "eligible, labelled with what limits them; dotted lines are the throw number Γ.")
+
+
 def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
     """Heat maps over the plane (two swept fields; ``axes``: their (name, unit, log)), the same best point
     starred on each, the points that are not eligible hatched and labelled, Γ = A ω²/g (``gamma`` (nx, ny))
     contoured."""
     if len(axes) < 2:
-        return []
+        return _lines(axes[0], values[0], charts_, why, k_best, folder)
     xs, ys = values
     xe, ye = (core_sweep.edges(v, log) for v, (_, _, log) in zip(values, axes))
     shape = (len(xs), len(ys))
@@ -178,5 +188,23 @@ def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
         ax.set_title(title, fontsize=10)
         plotting.legend_below(ax)
         fig.tight_layout()
+        written += plotting.save(fig, folder, stem)
+    return written
+
+
+def _lines(axis: tuple, xs: np.ndarray, charts_: list, why: list, k_best: int | None, folder) -> list:
+    """A sweep along one axis (``axis``: its (name, unit, log); ``xs`` (n,) its values): one line chart per
+    quantity of ``charts_``, the eligible points' cells shaded, the others labelled, the best point starred."""
+    name, x_unit, log = axis
+    ok = np.array([not w for w in why])
+    labels = [", ".join(dict.fromkeys(label for label, _ in w)) for w in why]
+    written = []
+    for stem, z, title, unit, _ in charts_:
+        fig, grid = plotting.figure(width=7.5, height=5.2)
+        ax = grid[0, 0]
+        core_sweep.line(ax, xs, z.ravel(), ok, labels, k_best, log, title, "eligible")
+        plotting.set_labels(ax, (name, x_unit), (title, unit))
+        ax.set_title(title, fontsize=10)
+        plotting.legend_below(ax, ncol=3)
         written += plotting.save(fig, folder, stem)
     return written

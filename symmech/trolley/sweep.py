@@ -620,6 +620,9 @@ def unit_of_column(cols: list[Column], name: str) -> str:
 def caption(p: Plan, title: str) -> str:
     """A chart's caption, as a sentence."""
     over = " and ".join(name_of(axis) for _, axis in p.axes)
+    if p.y is None:
+        return (f"The {title} along {over}. The star is the best admissible point for the objective; the green "
+                "band holds the admissible points, the others are labelled with what limits them.")
     return (f"The {title} over {over}. The star is the best admissible point for the objective; hatched cells are "
             "not admissible, labelled with what limits them.")
 

@@ -36,18 +36,12 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
             plotting.set_labels(ax, (x_name, x_unit), (y_name, y_unit))
             ax.set_xlim(xe[0], xe[-1])
             ax.set_ylim(ye[0], ye[-1])
+            for (_, _, log), scale in zip(axes, (ax.set_xscale, ax.set_yscale)):
+                if log:
+                    scale("log")
         else:
-            ax.plot(xs, z[:, 0], "o-", color="C0", label=title)
-            _line_cells(ax, xs, ok, x_log)
-            for k in np.flatnonzero(~ok):
-                ax.annotate(labels[k], (xs[k], z[k, 0]), textcoords="offset points", xytext=(0, 8), ha="center",
-                            fontsize=7, color="#a00")
-            if best is not None:
-                ax.plot(xs[best], z[best, 0], "*", color="gold", ms=16, mec="k", label="best admissible point")
+            core_sweep.line(ax, xs, z[:, 0], ok, labels, best, x_log, title)
             plotting.set_labels(ax, (x_name, x_unit), (title, unit))
-        for (_, _, log), scale in zip(axes, (ax.set_xscale, ax.set_yscale)):
-            if log:
-                scale("log")
         ax.set_title(title, fontsize=10)
         plotting.legend_below(ax, ncol=3)
         fig.tight_layout()
@@ -68,14 +62,6 @@ def _cell_labels(ax, xs, ys, labels: list[str], shape) -> None:
             i, j = np.unravel_index(k, shape)
             ax.annotate(text.replace(", ", "\n"), (xs[i], ys[j]), ha="center", va="center", fontsize=6,
                         color="k", bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
-
-
-def _line_cells(ax, xs, ok, log) -> None:
-    """Shade the admissible points' cells along x."""
-    e = core_sweep.edges(xs, log)
-    for n, k in enumerate(np.flatnonzero(ok)):
-        ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
-    ax.set_xlim(e[0], e[-1])
 
 
 def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
