@@ -547,7 +547,8 @@ def reasons(row: dict, attention: list[str], limits: dict) -> list[tuple[str, st
     lifted = sorted(set(re.findall(r"(P[0-9]) changes sign", " ".join(attention))))
     if lifted:
         out.append(("lift-off", f"roller reaction {', '.join(lifted)} changes sign: the roller would lift off"))
-    rest = [a for a in attention if "changes sign" not in a and "comfort envelope" not in a]
+    # the lift-off warnings and their check ("... changing sign"), the comfort check: reasons of their own above
+    rest = [a for a in attention if not re.search(r"chang(es|ing) sign|comfort envelope", a)]
     out += [(next((label for pattern, label in ATTENTION if re.search(pattern, a)), "check"), a) for a in rest]
     return out
 
