@@ -262,9 +262,11 @@ def _is_chosen(row: dict, chosen: dict) -> bool:
 
 def _figures(out: Path, captions: dict) -> list[tuple[str, str]]:
     """(caption, data URI) of every plot in ``out``: the SVG when there is one, else the PNG; the caption the run
-    recorded for it (``captions``: {file stem: sentence}), else its file name."""
+    recorded for it (``captions``: {file stem: sentence}, in the order the scene asked for them), else its file
+    name, after the captioned ones."""
+    stems = {p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}
     figures = []
-    for stem in sorted({p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}):
+    for stem in [s for s in captions if s in stems] + sorted(stems - set(captions)):
         svg = out / f"{stem}.svg"
         path, mime = (svg, "image/svg+xml") if svg.exists() else (out / f"{stem}.png", "image/png")
         data = base64.b64encode(path.read_bytes()).decode("ascii")

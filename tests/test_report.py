@@ -319,3 +319,13 @@ def test_a_mechanism_report_is_titled_by_its_description(tmp_path):
 def test_a_run_without_generated_modules_says_so_instead_of_an_empty_table(tmp_path):
     page = _page(tmp_path, generated_modules={})
     assert "<th>sha256</th>" not in page and "The run used no generated module." in page
+
+
+def test_figures_follow_the_order_the_scene_asked_for(tmp_path):
+    """Captions are recorded in the scene's [output] order (modes before free_response): the figures follow it,
+    not the alphabet; a plot without a caption comes last, by its file name."""
+    for stem in ("free_response", "modes", "extra"):
+        (tmp_path / f"{stem}.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    page = _page(tmp_path, captions={"modes": "The mode shapes.", "free_response": "The free response."})
+    assert re.findall(r"<figcaption>([^<]*)</figcaption>", page) == ["The mode shapes.", "The free response.",
+                                                                     "extra"]
