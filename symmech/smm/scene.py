@@ -232,7 +232,7 @@ def _headline(m: Mechanism, omega: list, md, tables: dict) -> list[Headline]:
         co = m.coordinates[j]
         out.append(Headline(f"largest frequency response, {co.name}", amplitude[i, j], co.unit,
                             "amplitude of q for a unit harmonic force (frequency_response.csv)",
-                            f"omega = {h.data[i, 0]:.4g} rad/s ({h.data[i, 0] / (2 * math.pi):.4g} Hz)"))
+                            f"f = {h.data[i, 0] / (2 * math.pi):.4g} Hz (ω = {h.data[i, 0]:.4g} rad/s)"))
     return out
 
 
