@@ -311,3 +311,25 @@ def test_campbell_legend_names_beam_planes_in_words():
     texts = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
     assert texts[:3] == ["beam 0, plane 1", "beam 0, plane 2", "rollers"]
     assert not any("_plane" in t for t in texts)
+
+
+def test_a_large_plane_writes_each_limit_once_a_small_one_in_every_cell():
+    """20 x 20 cells cannot hold 'lift-off' each (the bundled elastic sweep wrote 180 overlapping labels): a plane
+    larger than LABELLED_CELLS per axis names each limit once, on the cell of its points nearest their middle; a
+    3 x 3 plane labels every limited cell."""
+    from symmech.core import sweep as core_sweep
+
+    big = [("lift-off" if i >= 12 else "") for i in range(20) for _ in range(20)]  # x-major: the last 8 columns
+    big[0] = "comfort"
+    fig, axes = plotting.figure()
+    xs, ys = np.arange(20.0), np.arange(20.0)
+    core_sweep.cell_labels(axes[0, 0], xs, ys, big, (20, 20))
+    placed = {t.get_text(): t.xy for t in axes[0, 0].texts}
+    assert placed.keys() == {"lift-off", "comfort"} and placed["comfort"] == (0.0, 0.0)
+    x, y = placed["lift-off"]
+    assert x in (15.0, 16.0) and y in (9.0, 10.0)  # the middle of columns 12-19, rows 0-19
+    fig, axes = plotting.figure()
+    small = ["", "hops", "", "too slow", "", "", "hops", "", "hops, too slow"]
+    core_sweep.cell_labels(axes[0, 0], np.arange(3.0), np.arange(3.0), small, (3, 3))
+    assert [(t.get_text(), t.xy) for t in axes[0, 0].texts] == [
+        ("hops", (0.0, 1.0)), ("too slow", (1.0, 0.0)), ("hops", (2.0, 0.0)), ("hops\ntoo slow", (2.0, 2.0))]

@@ -30,6 +30,7 @@ CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (-
 FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
 MAX_VALUES = 200  # values per axis
 MAX_WORKERS = 256  # local worker processes (--workers)
+LABELLED_CELLS = 10  # a swept plane with at most this many values per axis has every cell's limit written in it
 LOCAL = (None, "processes", "synchronous", "threads")  # schedulers on this machine; anything else is an address
 
 
@@ -124,6 +125,31 @@ def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float, atol:
     return {"value": mean, "unit": unit, "spread": spread, "tolerance_relative": rtol,
             "text": f"{title}: {shown} everywhere, within the tolerance (its spread over the sweep, "
                     f"{spread:.2g}{suffix}, is below {rtol:g} of its size{absolute}); not charted"}
+
+
+def centres(e: np.ndarray, log: bool) -> np.ndarray:
+    """The centres (n,) of the cells with edges ``e`` (n + 1,) (geometric on a log axis)."""
+    return np.sqrt(e[:-1] * e[1:]) if log else (e[:-1] + e[1:]) / 2
+
+
+def cell_labels(ax, xc: np.ndarray, yc: np.ndarray, labels: list[str], shape: tuple[int, int]) -> None:
+    """What limits the points of a plane that are not admissible, written over their cells: ``xc`` (nx,), ``yc``
+    (ny,) the cells' centres (an end cell ends at its point, which would put the text across the frame),
+    ``labels`` (nx ny,) x-major, "" for an admissible point. A plane of at most LABELLED_CELLS values per axis has
+    each cell labelled; on a larger one a label would not fit its cell, so each distinct label is written once,
+    on the cell of its points nearest their middle."""
+    if max(shape) <= LABELLED_CELLS:
+        places, size = [(k, text) for k, text in enumerate(labels) if text], 6
+    else:
+        places, size = [], 8
+        for text in dict.fromkeys(text for text in labels if text):
+            ks = np.flatnonzero([label == text for label in labels])
+            ij = np.column_stack(np.unravel_index(ks, shape))
+            places.append((ks[np.argmin(np.linalg.norm(ij - ij.mean(axis=0), axis=1))], text))
+    for k, text in places:
+        i, j = np.unravel_index(k, shape)
+        ax.annotate(text.replace(", ", "\n"), (xc[i], yc[j]), ha="center", va="center", fontsize=size, color="k",
+                    bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
 
 
 def line(ax, xs: np.ndarray, z: np.ndarray, ok: np.ndarray, labels: list[str], best: int | None, log: bool,

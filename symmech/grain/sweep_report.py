@@ -173,12 +173,8 @@ def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
         if bad.any():
             ax.pcolor(xe, ye, np.ma.masked_where(~bad.T, bad.T), shading="flat", hatch="//", facecolor="none",
                       edgecolor="0.3", linewidth=0.0, label="not eligible (labelled: why)")
-            for k, text in enumerate(labels):
-                if text:
-                    i, j = np.unravel_index(k, shape)
-                    ax.annotate(text.replace(", ", "\n"), ((xe[i] + xe[i + 1]) / 2, (ye[j] + ye[j + 1]) / 2),
-                                ha="center", va="center", fontsize=6,
-                                bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
+            core_sweep.cell_labels(ax, *(core_sweep.centres(e, log) for e, (_, _, log) in zip((xe, ye), axes)),
+                                   labels, shape)
         if k_best is not None:
             i, j = np.unravel_index(k_best, shape)
             ax.plot(xs[i], ys[j], "*", color="gold", ms=16, mec="k", clip_on=False, label="best operating point")

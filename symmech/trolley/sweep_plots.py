@@ -28,7 +28,8 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
             (y_name, y_unit, y_log), = rest
             xe, ye = core_sweep.edges(xs, x_log), core_sweep.edges(ys, y_log)
             _plane(fig, ax, xe, ye, z, ok.reshape(shape), title, unit)
-            _cell_labels(ax, _centres(xe, x_log), _centres(ye, y_log), labels, shape)
+            core_sweep.cell_labels(ax, core_sweep.centres(xe, x_log), core_sweep.centres(ye, y_log), labels,
+                                   shape)
             if best is not None:
                 i, j = np.unravel_index(best, shape)
                 ax.plot(xs[i], ys[j], "*", color="gold", ms=16, mec="k", clip_on=False,
@@ -47,21 +48,6 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
         fig.tight_layout()
         written += plotting.save(fig, folder, f"sweep_{name}")
     return written
-
-
-def _centres(e: np.ndarray, log: bool) -> np.ndarray:
-    """The centres (n,) of the cells with edges ``e`` (n + 1,) (geometric on a log axis)."""
-    return np.sqrt(e[:-1] * e[1:]) if log else (e[:-1] + e[1:]) / 2
-
-
-def _cell_labels(ax, xs, ys, labels: list[str], shape) -> None:
-    """What limits each point that is not admissible, written at the centre ``xs`` (nx,), ``ys`` (ny,) of its
-    cell (an end cell ends at its point, which would put the text across the frame)."""
-    for k, text in enumerate(labels):
-        if text:
-            i, j = np.unravel_index(k, shape)
-            ax.annotate(text.replace(", ", "\n"), (xs[i], ys[j]), ha="center", va="center", fontsize=6,
-                        color="k", bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
 
 
 def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
