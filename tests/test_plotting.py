@@ -333,3 +333,15 @@ def test_a_large_plane_writes_each_limit_once_a_small_one_in_every_cell():
     core_sweep.cell_labels(axes[0, 0], np.arange(3.0), np.arange(3.0), small, (3, 3))
     assert [(t.get_text(), t.xy) for t in axes[0, 0].texts] == [
         ("hops", (0.0, 1.0)), ("too slow", (1.0, 0.0)), ("hops", (2.0, 0.0)), ("hops\ntoo slow", (2.0, 2.0))]
+
+
+def test_a_colour_bar_is_in_a_readable_unit():
+    """Roller deflections of 0.1 to 0.5 mm coloured on a bar read 0.1 ... 0.5 [mm], not 0.0001 ... 0.0005 [m]."""
+    fig, axes = plotting.figure()
+    mesh = axes[0, 0].pcolormesh(np.arange(4.0), np.arange(3.0), np.array([[1e-4, 2e-4, 3e-4], [4e-4, 5e-4, 1e-4]]))
+    fig.colorbar(mesh, ax=axes[0, 0], label=plotting.label("largest roller deflection", "m"))
+    plotting.set_labels(axes[0, 0], ("speed scale", "1"), ("roller stiffness", "N/m"))
+    plotting.readable_units(fig)
+    bar = fig.axes[1]
+    assert bar.get_ylabel() == "largest roller deflection [mm]"
+    assert bar.yaxis.get_major_formatter()(2e-4, 0) == "0.2"

@@ -120,9 +120,7 @@ def readable_units(fig) -> None:
     the label's unit rewritten, e.g. ``"d [m]"`` with ticks 0.0002 -> ``"d [mm]"`` with ticks 0.2."""
     from matplotlib.ticker import FuncFormatter
 
-    for ax in fig.axes:
-        if ax.get_label() == "<colorbar>":
-            continue
+    for ax in fig.axes:  # a colour bar too: its long axis carries its label
         for name in ("x", "y", "z") if hasattr(ax, "get_zlabel") else ("x", "y"):
             if getattr(ax, f"get_{name}scale")() != "linear":
                 continue
