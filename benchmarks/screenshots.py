@@ -3,6 +3,7 @@
     nice -n 10 python benchmarks/screenshots.py --shots /work/shots/s14            # everything
     python benchmarks/screenshots.py --shots DIR trolley_helix grain_separation   # only the names given
     python benchmarks/screenshots.py --shots DIR --reuse                          # photograph existing runs again
+    python benchmarks/screenshots.py --shots DIR --rereport                       # their reports written again first
 
 Each scene of scenes/ runs as a user runs it: a scene with a ``[sweep]`` table by ``symmech sweep`` then
 ``symmech report``, any other by ``symmech run --report``, unchanged (no shortened ``--max-time``), into
@@ -136,6 +137,9 @@ def main(argv: list[str]) -> None:
     parser.add_argument("names", nargs="*", help="scene names (file stems) or own sweeps; default: all")
     parser.add_argument("--shots", type=Path, required=True, help="folder of the screenshots, runs and scenes")
     parser.add_argument("--reuse", action="store_true", help="photograph the reports already in SHOTS/runs")
+    parser.add_argument("--rereport", action="store_true",
+                        help="write the reports of the runs already in SHOTS/runs again (`symmech report`), then "
+                             "photograph them: a report's change seen without running the scenes again")
     ns = parser.parse_args(argv)
     scenes = {p.stem: p for p in sorted(SCENES.glob("*.toml"))}
     names = ns.names or [*scenes, *OWN_SWEEPS]
@@ -146,7 +150,9 @@ def main(argv: list[str]) -> None:
     reports = {}
     for name in names:
         out = ns.shots / "runs" / name
-        if not ns.reuse:
+        if ns.rereport:
+            subprocess.run([sys.executable, "-m", "symmech", "report", str(out)], capture_output=True, check=True)
+        elif not ns.reuse:
             path = scenes[name] if name in scenes else own_scene(name, ns.shots / "scenes")
             started = time.perf_counter()
             failure = run_scene(path, out)
