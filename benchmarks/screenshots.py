@@ -29,11 +29,14 @@ FOLD = {"width": 1280, "height": 900}  # the first screen of a laptop
 # name: (bundled scene, {dotted field: value}) of sweeps beyond the bundled ones, for the report's other answers
 OWN_SWEEPS = {
     # one axis, grain: the transport sweep along amplitude alone (a line chart, not a map)
-    "grain_transport_amplitude": ("grain_transport_sweep.toml", {"sweep.y": None, "sweep.x.num": 7}),
+    "grain_transport_amplitude": ("grain_transport_sweep.toml", {
+        "title": "Crop transport along the vibration amplitude at 25 Hz, at most half the grains hopping",
+        "sweep.y": None, "sweep.x.num": 7}),
     # the elastic sweep over speed and roller damping, 6 x 4: every limit of the ride on one grid
-    "trolley_elastic_damping": ("trolley_elastic_sweep.toml",
-                                {"sweep.x.num": 6, "sweep.y": {"field": "elastic.rollers.damping", "start": 2e3,
-                                                               "stop": 2e4, "num": 4, "log": True}}),
+    "trolley_elastic_damping": ("trolley_elastic_sweep.toml", {
+        "title": "Elastic trolley: the fastest ride onto the helix without lift-off, over the roller damping",
+        "sweep.x.num": 6, "sweep.y": {"field": "elastic.rollers.damping", "start": 2e3, "stop": 2e4, "num": 4,
+                                      "log": True}}),
 }
 
 

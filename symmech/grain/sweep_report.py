@@ -141,11 +141,12 @@ def flat(charts_: list) -> dict:
 def caption(title: str, axes: list[tuple]) -> str:
     """A chart's caption, as a sentence (``axes``: (name, unit, log) of the swept fields)."""
     over = " and ".join(name for name, _, _ in axes)
+    what = title[:1].upper() + title[1:]  # "Crop: mean transport velocity", "Δv_x = crop − weed ..."
     if len(axes) < 2:
-        return (f"The {title} along {over}. The star is the best eligible operating point; the green band holds "
-                "the eligible points, the others are labelled with what limits them.")
-    return (f"The {title} over {over}. The star is the best eligible operating point; hatched cells are not "
-            "eligible, labelled with what limits them; dotted lines are the throw number Γ.")
+        return (f"{what}, along {over}. The star is the best eligible operating point; the green band holds the "
+                "eligible points, the others are labelled with what limits them.")
+    return (f"{what}, over {over}. The star is the best eligible operating point; hatched cells are not eligible, "
+            "labelled with what limits them; dotted lines are the throw number Γ.")
 
 
 def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:

@@ -688,10 +688,15 @@ def answer(p: Plan, table: Table, decision: dict, flat: dict):
         where = _where(p, {name: (v, v) for name, v in point.items()})
         unit = unit_of(p.x if quantity == "x" else p.y) if quantity in ("x", "y") else unit_of_column(table.columns,
                                                                                                       quantity)
-        headline.append(Headline(f"best point: {decision['objective']}", float(table.column(quantity)[best]), unit,
+        value = table.column(quantity)[best]
+        admissible = table.column("admissible") == 1
+        tied = int(np.count_nonzero(admissible & (table.column(quantity) == value)))
+        headline.append(Headline(f"best point: {decision['objective']}", float(value), unit,
                                  f"the {decision['objective']} of the {n} admissible points (no warning, no "
                                  "failed check, comfort and the stated limits kept); its cell reaches halfway "
-                                 "to the neighbouring values", where))
+                                 "to the neighbouring values" + (f"; {tied} admissible points share this value, the "
+                                                                 "first in sweep order is starred" if tied > 1 else ""),
+                                 where))
     headline.append(Headline("admissible points", float(n), "1", f"of {total}: "
                              + (_where(p, decision["admissible"]["bounds"]) if n else "none"), ""))
     headline += [Headline(s["text"].partition(":")[0], s["value"], s["unit"], s["text"].partition(": ")[2],
