@@ -345,3 +345,17 @@ def test_a_colour_bar_is_in_a_readable_unit():
     bar = fig.axes[1]
     assert bar.get_ylabel() == "largest roller deflection [mm]"
     assert bar.yaxis.get_major_formatter()(2e-4, 0) == "0.2"
+
+
+def test_campbell_leaves_out_forcing_far_below_every_mode():
+    """Modes at 10-30 Hz are drawn down to 10/20 = 0.5 Hz: a forcing at 0.1 Hz would be a legend entry with no
+    line in sight, so it is neither drawn nor listed; one at 5 Hz is both."""
+    from symmech.trolley import plots
+    from symmech.trolley.elastic.body import FORCING
+
+    modes = {"label": [["beam0_plane1_mode1", "roller_1"]], "s": np.array([0.0, 1.0]), "V0": np.array([1.0, 2.0]),
+             "f": np.array([[10.0, 30.0], [10.0, 30.0]]), "forcing": np.array([[5.0, 0.1, 0.1], [6.0, 0.1, 0.1]])}
+    fig = plots.campbell(modes)
+    texts = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
+    assert texts == ["beam 0, plane 1", "rollers", FORCING[0][1]]
+    assert all(len(ax.get_lines()) == 3 for ax in fig.axes)

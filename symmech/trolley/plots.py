@@ -163,6 +163,9 @@ def campbell(modes: dict):
     fig, axes = plotting.figure(1, 2, width=11.0, height=4.5, sharey=True)
     groups = [label.rsplit("_mode", 1)[0] if label.startswith("beam") else "rollers" for label in modes["label"][0]]
     colours = {g: f"C{i % 10}" for i, g in enumerate(dict.fromkeys(groups))}
+    natural = modes["f"][modes["f"] > 0]
+    # forcing frequencies far below every mode are of no interest: neither drawn nor in the legend
+    low, high = (natural.min() / 20, natural.max() * 2) if natural.size else (0.0, np.inf)
     for ax, key, quantity in ((axes[0, 0], "s", ("arc length s", "m")), (axes[0, 1], "V0", ("speed V0", "m/s"))):
         x = modes[key]
         order = np.argsort(x)
@@ -170,12 +173,13 @@ def campbell(modes: dict):
             ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color=colours[group],
                     label=readable(group) if groups.index(group) == k else None)
         for j, ((_, doc), style) in enumerate(zip(FORCING, ("--", ":", "-."))):
-            ax.plot(x[order], modes["forcing"][order, j], ls=style, lw=1, color="k", label=doc)
+            forcing = modes["forcing"][order, j]
+            if np.any((forcing >= low) & (forcing <= high)):
+                ax.plot(x[order], forcing, ls=style, lw=1, color="k", label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))
         ax.set_yscale("log")
-        natural = modes["f"][modes["f"] > 0]
-        if natural.size:  # forcing frequencies far below every mode are of no interest
-            ax.set_ylim(natural.min() / 20, natural.max() * 2)
+        if natural.size:
+            ax.set_ylim(low, high)
         ax.grid(alpha=0.3, which="both")
     plotting.legend_beside(axes[0, 1])  # the same lines on both panels: one legend, beside the right one
     axes[0, 0].set_title("Campbell diagram along the track")
