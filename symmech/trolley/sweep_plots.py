@@ -54,12 +54,15 @@ def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
     """Heat map of z (nx, ny) over the cells with edges xe (nx + 1,) and ye (ny + 1,), with the border of the
     admissible points ``ok`` drawn around them and the others hatched."""
     from matplotlib.collections import LineCollection
+    from matplotlib.patheffects import withStroke
 
     mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
     if ok.any() and not ok.all():
-        ax.add_collection(LineCollection(border(xe, ye, ok), colors="w", linewidths=2.0,
-                                         label="admissible region border"))
+        # white outlined in black: seen on every colour of the map, and (its empty twin) in the legend on white
+        outlined = {"color": "w", "linewidth": 2.0, "path_effects": [withStroke(linewidth=3.5, foreground="k")]}
+        ax.add_collection(LineCollection(border(xe, ye, ok), **outlined))
+        ax.plot([], [], **outlined, label="admissible region border")
     if not ok.all():
         ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
                   edgecolor="0.3", linewidth=0.0, label="not admissible (labelled: why)")
