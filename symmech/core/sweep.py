@@ -152,6 +152,26 @@ def cell_labels(ax, xc: np.ndarray, yc: np.ndarray, labels: list[str], shape: tu
                     bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
 
 
+def border(xe: np.ndarray, ye: np.ndarray, ok: np.ndarray) -> list:
+    """The cell edges between admissible and other points: segments ((x, y), (x, y)) over the cells with
+    edges xe (nx + 1,), ye (ny + 1,) of the points ok (nx, ny)."""
+    across_x = [((xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[1:] != ok[:-1]))]
+    across_y = [((xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[:, 1:] != ok[:, :-1]))]
+    return across_x + across_y
+
+
+def region_border(ax, xe: np.ndarray, ye: np.ndarray, ok: np.ndarray, label: str) -> None:
+    """The :func:`border` of the points ``ok`` (nx, ny) on a plane's chart, white outlined in black (seen on every
+    colour of the map) and, by an empty twin, in the legend on the white page; nothing when all or none are ok."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patheffects import withStroke
+
+    if ok.any() and not ok.all():
+        outlined = {"color": "w", "linewidth": 2.0, "path_effects": [withStroke(linewidth=3.5, foreground="k")]}
+        ax.add_collection(LineCollection(border(xe, ye, ok), **outlined))
+        ax.plot([], [], **outlined, label=label)
+
+
 def line(ax, xs: np.ndarray, z: np.ndarray, ok: np.ndarray, labels: list[str], best: int | None, log: bool,
          title: str, allowed: str = "admissible") -> None:
     """The chart of a sweep along one axis on ``ax``: ``z`` (n,) over the swept values ``xs`` (n,), the cells of

@@ -171,6 +171,7 @@ def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
         if len(xs) > 1 and len(ys) > 1:
             lines = ax.contour(xs, ys, gamma.T, colors="0.2", linewidths=0.6, linestyles="dotted")
             ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
+        core_sweep.region_border(ax, xe, ye, ~bad, "eligible region border")
         if bad.any():
             ax.pcolor(xe, ye, np.ma.masked_where(~bad.T, bad.T), shading="flat", hatch="//", facecolor="none",
                       edgecolor="0.3", linewidth=0.0, label="not eligible (labelled: why)")

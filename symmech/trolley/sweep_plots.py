@@ -53,24 +53,9 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
 def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
     """Heat map of z (nx, ny) over the cells with edges xe (nx + 1,) and ye (ny + 1,), with the border of the
     admissible points ``ok`` drawn around them and the others hatched."""
-    from matplotlib.collections import LineCollection
-    from matplotlib.patheffects import withStroke
-
     mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
-    if ok.any() and not ok.all():
-        # white outlined in black: seen on every colour of the map, and (its empty twin) in the legend on white
-        outlined = {"color": "w", "linewidth": 2.0, "path_effects": [withStroke(linewidth=3.5, foreground="k")]}
-        ax.add_collection(LineCollection(border(xe, ye, ok), **outlined))
-        ax.plot([], [], **outlined, label="admissible region border")
+    core_sweep.region_border(ax, xe, ye, ok, "admissible region border")
     if not ok.all():
         ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
                   edgecolor="0.3", linewidth=0.0, label="not admissible (labelled: why)")
-
-
-def border(xe, ye, ok) -> list:
-    """The cell edges between admissible and other points: segments ((x, y), (x, y)) over the cells with
-    edges xe (nx + 1,), ye (ny + 1,) of the points ok (nx, ny)."""
-    across_x = [((xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[1:] != ok[:-1]))]
-    across_y = [((xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[:, 1:] != ok[:, :-1]))]
-    return across_x + across_y
