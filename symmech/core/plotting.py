@@ -154,7 +154,8 @@ def save(fig, folder: Path, stem: str, formats: tuple[str, ...] = ("png",)) -> l
         raise ValueError(f"plot {stem}: a legend hides data (plotting.legend_beside): " + "; ".join(bad))
     paths = [Path(folder) / f"{stem}.{ext}" for ext in formats]
     for path in paths:
-        fig.savefig(path, dpi=DPI, metadata={"Date": None} if path.suffix == ".svg" else None)
+        # the tight box holds what sits outside the axes (legends beside them, labels over an end cell) uncut
+        fig.savefig(path, dpi=DPI, bbox_inches="tight", metadata={"Date": None} if path.suffix == ".svg" else None)
     return paths
 
 

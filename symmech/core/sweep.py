@@ -285,7 +285,7 @@ def chart_seconds(shape: tuple[int, ...]) -> float:
             ax.text(i + 0.5, j + 0.5, "lift-off", ha="center", va="center", fontsize=6)
         ax.plot([0.5], [0.5], "*", label="best admissible point")
         ax.legend(loc="upper left", bbox_to_anchor=(1.25, 1.0))
-        fig.savefig(io.BytesIO(), format="png", dpi=plotting.DPI)
+        fig.savefig(io.BytesIO(), format="png", dpi=plotting.DPI, bbox_inches="tight")  # as plotting.save
 
     draw()
     start = time.perf_counter()
