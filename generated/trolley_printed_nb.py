@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key 4d5a997ecf9f18b4ec0341c4de12640501005fa4d1bccfe61aa643bd1c9c797d
+# source key 29349b1917874f43960fee64f0d28e25005c6c07e6f9ad601ae3e993993ae14a
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -69,11 +69,12 @@ class Derivation:
 
 
 def _paper_package(kind: str) -> str | None:
-    """``grain`` for a kind run by ``symmech.grain.*`` (None for a kind nobody registered)."""
+    """``grain`` for a kind run by ``symmech.grain.*``, and for its sweep (``grain_sweep``); None for a kind
+    nobody registered."""
     from symmech.core import registry
 
     try:
-        module = registry.get(kind).run.__module__  # imports only the kind's own modules
+        module = registry.get(kind.removesuffix("_sweep")).run.__module__  # imports only the kind's own modules
     except SceneError:
         return None
     match = re.fullmatch(r"symmech\.(\w+)\..*", module)
@@ -152,6 +153,11 @@ def paper_title(package: str | None) -> str:
         return ""
     doc = importlib.import_module(f"symmech.{package}").__doc__ or ""
     return doc.strip().split("\n", 1)[0].rstrip(".")
+
+
+def scene_title(scene: dict) -> str:
+    """The report's title: the scene's ``title``, else its ``description`` (mechanisms), else nothing."""
+    return str(scene.get("title") or scene.get("description") or "")
 
 
 def _text(value) -> str:
@@ -256,9 +262,11 @@ def _is_chosen(row: dict, chosen: dict) -> bool:
 
 def _figures(out: Path, captions: dict) -> list[tuple[str, str]]:
     """(caption, data URI) of every plot in ``out``: the SVG when there is one, else the PNG; the caption the run
-    recorded for it (``captions``: {file stem: sentence}), else its file name."""
+    recorded for it (``captions``: {file stem: sentence}, in the order the scene asked for them), else its file
+    name, after the captioned ones."""
+    stems = {p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}
     figures = []
-    for stem in sorted({p.stem for ext in ("png", "svg") for p in out.glob(f"*.{ext}")}):
+    for stem in [s for s in captions if s in stems] + sorted(stems - set(captions)):
         svg = out / f"{stem}.svg"
         path, mime = (svg, "image/svg+xml") if svg.exists() else (out / f"{stem}.png", "image/png")
         data = base64.b64encode(path.read_bytes()).decode("ascii")
@@ -290,8 +298,9 @@ def _wall_time(summary: dict) -> str:
     """The run's wall time: the pipeline's ``timing_s`` phases, else a kind's own figure."""
     timing = summary.get("timing_s")
     if isinstance(timing, dict):
-        return ", ".join(f"{phase} {_text(seconds)}" for phase, seconds in timing.items())
-    return _text(summary.get("wall_time_s", summary.get("elapsed_s", "not recorded")))
+        return ", ".join(f"{phase} {units.format(seconds, 's', 3)}" for phase, seconds in timing.items())
+    seconds = summary.get("wall_time_s", summary.get("elapsed_s"))
+    return units.format(seconds, "s", 3) if isinstance(seconds, (int, float)) else "not recorded"
 
 
 def _read_summary(out: Path) -> dict:
@@ -343,7 +352,7 @@ def render(out: Path) -> str:
     hashes, hash_source = _module_hashes(summary, sorted({d.module for d in derived}), Path(out))
     provenance = [("symmech version of the run", _text(summary.get("symmech_version", "not recorded"))),
                   ("status", _text(summary.get("status", "not recorded"))),
-                  ("wall time [s]", _wall_time(summary)),
+                  ("wall time", _wall_time(summary)),
                   ("scene file", _scene_file(summary)),
                   ("report written by", f"symmech {__version__}, Python {platform.python_version()}"),
                   ("report written at", datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"))]
@@ -352,7 +361,7 @@ def render(out: Path) -> str:
         autoescape=True, trim_blocks=True, lstrip_blocks=True)
     return env.get_template(TEMPLATE).render(
         kind=kind, package=package, out=str(out), summary=summary,
-        title=summary.get("scene", {}).get("title", ""),
+        title=scene_title(summary.get("scene", {})),
         scene=json.dumps(summary["scene"], indent=2) if "scene" in summary else None,
         raw=json.dumps({k: v for k, v in summary.items() if k != "scene"}, indent=2),
         headline=headline, checks=checks, attention=[c for c in checks if c["verdict"] != "pass"],

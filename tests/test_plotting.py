@@ -191,16 +191,46 @@ def test_trolley_overloads_in_g_against_the_envelope(tmp_path, figures):
     assert fig.axes[-1].get_xlabel() == "time t [s]"
 
 
-def test_mode_shapes_have_frequency_legends(tmp_path, figures):
+def test_mode_shapes_are_titled_by_their_frequencies(tmp_path, figures):
+    """One panel a mode (the lowest six), in rows of at most three, each titled by the frequency summary.json
+    records and without a legend over the shape."""
     assert main(["run", str(SCENES / "smm_rotor_boom.toml"), "--out", str(tmp_path)]) == 0
     hz = json.loads((tmp_path / "summary.json").read_text())["frequencies_hz"]
     fig = figures["modes"]
-    assert len(fig.axes) == min(len(hz), 6)
-    for i, ax in enumerate(fig.axes):
-        texts = [t.get_text() for t in ax.get_legend().get_texts()]
-        assert texts == ["equilibrium", f"mode {i + 1}: f = {hz[i]:.4g} Hz"]
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(shown) == min(len(hz), 6)
+    assert len({round(ax.get_position().y0, 6) for ax in shown}) == math.ceil(len(shown) / 3)
+    for i, ax in enumerate(shown):
+        assert ax.get_title() == f"mode {i + 1}: f = {hz[i]:.4g} Hz"
+        assert ax.get_legend() is None
         assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")
         assert math.isfinite(hz[i]) and hz[i] > 0
+
+
+def test_save_refuses_a_legend_over_data(tmp_path):
+    """A legend inside the axes hides curves: refused, as an unlabelled axis is; beside or below them it is drawn."""
+    fig, axes = plotting.figure()
+    axes[0, 0].plot([0, 1], [0, 2], label="a curve")
+    plotting.set_labels(axes[0, 0], ("time t", "s"), ("distance", "m"))
+    axes[0, 0].legend(loc="upper left")
+    with pytest.raises(ValueError, match=r"axes 0 .*legend over the data of axes 0"):
+        plotting.save(fig, tmp_path, "bad")
+    assert not list(tmp_path.iterdir())
+    for place in (plotting.legend_beside, plotting.legend_below):
+        place(axes[0, 0])
+        fig.tight_layout()
+        assert plotting.covering_legends(fig) == []
+
+
+def test_a_legend_beside_the_left_panel_is_over_the_right_one(tmp_path):
+    """Beside is not enough when a neighbour's data are there: the legend of the left of two panels is refused."""
+    fig, axes = plotting.figure(1, 2)
+    for ax in axes[0]:
+        ax.plot([0, 1], [0, 2], label="a curve with a long name to reach the next panel")
+        plotting.set_labels(ax, ("time t", "s"), ("distance", "m"))
+    plotting.legend_beside(axes[0, 0])
+    fig.subplots_adjust(wspace=0.3)
+    assert plotting.covering_legends(fig) == ["axes 0 (untitled): legend over the data of axes 1"]
 
 
 @pytest.mark.parametrize("value, unit, text", [
@@ -278,6 +308,54 @@ def test_campbell_legend_names_beam_planes_in_words():
              "V0": np.array([1.0, 2.0]), "f": np.array([[10.0, 20.0, 30.0], [10.0, 20.0, 30.0]]),
              "forcing": np.ones((2, 3))}
     fig = plots.campbell(modes)
-    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    texts = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
     assert texts[:3] == ["beam 0, plane 1", "beam 0, plane 2", "rollers"]
     assert not any("_plane" in t for t in texts)
+
+
+def test_a_large_plane_writes_each_limit_once_a_small_one_in_every_cell():
+    """20 x 20 cells cannot hold 'lift-off' each (the bundled elastic sweep wrote 180 overlapping labels): a plane
+    larger than LABELLED_CELLS per axis names each limit once, on the cell of its points nearest their middle; a
+    3 x 3 plane labels every limited cell."""
+    from symmech.core import sweep as core_sweep
+
+    big = [("lift-off" if i >= 12 else "") for i in range(20) for _ in range(20)]  # x-major: the last 8 columns
+    big[0] = "comfort"
+    fig, axes = plotting.figure()
+    xs, ys = np.arange(20.0), np.arange(20.0)
+    core_sweep.cell_labels(axes[0, 0], xs, ys, big, (20, 20))
+    placed = {t.get_text(): t.xy for t in axes[0, 0].texts}
+    assert placed.keys() == {"lift-off", "comfort"} and placed["comfort"] == (0.0, 0.0)
+    x, y = placed["lift-off"]
+    assert x in (15.0, 16.0) and y in (9.0, 10.0)  # the middle of columns 12-19, rows 0-19
+    fig, axes = plotting.figure()
+    small = ["", "hops", "", "too slow", "", "", "hops", "", "hops, too slow"]
+    core_sweep.cell_labels(axes[0, 0], np.arange(3.0), np.arange(3.0), small, (3, 3))
+    assert [(t.get_text(), t.xy) for t in axes[0, 0].texts] == [
+        ("hops", (0.0, 1.0)), ("too slow", (1.0, 0.0)), ("hops", (2.0, 0.0)), ("hops\ntoo slow", (2.0, 2.0))]
+
+
+def test_a_colour_bar_is_in_a_readable_unit():
+    """Roller deflections of 0.1 to 0.5 mm coloured on a bar read 0.1 ... 0.5 [mm], not 0.0001 ... 0.0005 [m]."""
+    fig, axes = plotting.figure()
+    mesh = axes[0, 0].pcolormesh(np.arange(4.0), np.arange(3.0), np.array([[1e-4, 2e-4, 3e-4], [4e-4, 5e-4, 1e-4]]))
+    fig.colorbar(mesh, ax=axes[0, 0], label=plotting.label("largest roller deflection", "m"))
+    plotting.set_labels(axes[0, 0], ("speed scale", "1"), ("roller stiffness", "N/m"))
+    plotting.readable_units(fig)
+    bar = fig.axes[1]
+    assert bar.get_ylabel() == "largest roller deflection [mm]"
+    assert bar.yaxis.get_major_formatter()(2e-4, 0) == "0.2"
+
+
+def test_campbell_leaves_out_forcing_far_below_every_mode():
+    """Modes at 10-30 Hz are drawn down to 10/20 = 0.5 Hz: a forcing at 0.1 Hz would be a legend entry with no
+    line in sight, so it is neither drawn nor listed; one at 5 Hz is both."""
+    from symmech.trolley import plots
+    from symmech.trolley.elastic.body import FORCING
+
+    modes = {"label": [["beam0_plane1_mode1", "roller_1"]], "s": np.array([0.0, 1.0]), "V0": np.array([1.0, 2.0]),
+             "f": np.array([[10.0, 30.0], [10.0, 30.0]]), "forcing": np.array([[5.0, 0.1, 0.1], [6.0, 0.1, 0.1]])}
+    fig = plots.campbell(modes)
+    texts = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
+    assert texts == ["beam 0, plane 1", "rollers", FORCING[0][1]]
+    assert all(len(ax.get_lines()) == 3 for ax in fig.axes)

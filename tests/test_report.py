@@ -216,7 +216,7 @@ def test_report_reads_the_pipeline_record(tmp_path):
     (tmp_path / "summary.json").write_text(json.dumps(summary))
     page = report.render(tmp_path)
     assert '&#34;lambda&#34;: 0.25' in page  # the resolved scene, escaped
-    assert "<td>validate 0.01, run 0.5, write 0.25, total 0.76</td>" in page
+    assert "<td>validate 10 ms, run 500 ms, write 250 ms, total 760 ms</td>" in page  # readable units
     assert f'<td>grain_impact</td><td class="num">{digest}</td>' in page
     assert '<td>normal impulse</td><td class="value">4.768 µN s</td>' in page
     # the failed check: first in the table, marked failed, and at the top beside the warning
@@ -267,3 +267,65 @@ def test_report_runs_a_precision_study_when_asked(tmp_path):
     page = html(out)
     section = page[page.index('<h2 id="precision">'):page.index('<h2 id="derivations">')]
     assert section.count("<img ") == 1 and section.count("<tr><td") == len(rows) > 5
+
+
+def _page(tmp_path, **fields) -> str:
+    """The report of a hand-written summary of a kind nobody registered (no derivations, no errata: fast)."""
+    from symmech import report
+
+    (tmp_path / "summary.json").write_text(json.dumps({"kind": "made_up", "status": "ok", **fields}))
+    return report.render(tmp_path)
+
+
+PAPER_ROWS = [{"table": "Table 1", "quantity": "V1", "unit": "m/s", "case": 1, "t": 5.0, "printed": 19.119,
+               "paper_conventions": 19.1188, "default_physics": 17.8361, "reproduced_to_printed_digits": True}]
+PASSED = [{"what": "case 1: overload n1 in the comfort envelope", "value": [0.1, 1.6], "unit": "g",
+           "threshold": "within [-2, 2] g", "verdict": "pass"}]
+
+
+def test_paper_conventions_never_read_as_all_green(tmp_path):
+    """Every check passing in the paper's conventions is no design verdict: the first line says so, the banner
+    counts the reproduced table entries, and the table is open with each quantity's unit."""
+    page = _page(tmp_path, scene={"conventions": "paper"}, checks=PASSED,
+                 paper_tables={"entries": 72, "reproduced": 71, "rows": PAPER_ROWS})
+    verdict = re.search(r'<p class="verdict (\w+)">\s*(.*?)</p>', page, re.S)
+    assert verdict.group(1) == "careful" and "All" not in verdict.group(2) and "✓" not in verdict.group(2)
+    assert "Paper conventions: not the trolley's numbers" in verdict.group(2)
+    banner = re.search(r'<div class="banner">(.*?)</div>', page, re.S).group(1)
+    assert "71 of 72 printed entries reproduced" in banner
+    assert re.search(r'<details open><summary>71 of 72 printed entries', page)
+    assert "<td>V1 [m/s]</td>" in page
+
+
+def test_physics_run_folds_the_paper_tables_and_explains_its_cases_on_top(tmp_path):
+    """In consistent physics the printed tables are an aside (collapsed); what case 1 and 2 are is said before
+    the answers that use them; a headline without places has no empty 'where / when' column."""
+    headline = [{"name": "case 1: peak reaction P1", "value": 990.0, "unit": "N", "meaning": "rear roller B",
+                 "at": ""}]
+    page = _page(tmp_path, scene={"conventions": "physics", "title": "A helix"}, checks=PASSED, headline=headline,
+                 paper_tables={"entries": 72, "reproduced": 71, "rows": PAPER_ROWS})
+    assert "<p><strong>A helix</strong></p>" in page
+    assert '<div class="banner">' not in page and "✓ All 1 checks passed" in page
+    assert re.search(r"<details><summary>71 of 72 printed entries[^<]*\(click to show\)", page)
+    assert page.index("Case 1: the body frame is the moving frame") < page.index('<h2 id="answers">')
+    assert "where / when" not in page
+
+
+def test_a_mechanism_report_is_titled_by_its_description(tmp_path):
+    page = _page(tmp_path, scene={"name": "excavator", "description": "An excavator arm on its hydraulics"})
+    assert "<p><strong>An excavator arm on its hydraulics</strong></p>" in page
+
+
+def test_a_run_without_generated_modules_says_so_instead_of_an_empty_table(tmp_path):
+    page = _page(tmp_path, generated_modules={})
+    assert "<th>sha256</th>" not in page and "The run used no generated module." in page
+
+
+def test_figures_follow_the_order_the_scene_asked_for(tmp_path):
+    """Captions are recorded in the scene's [output] order (modes before free_response): the figures follow it,
+    not the alphabet; a plot without a caption comes last, by its file name."""
+    for stem in ("free_response", "modes", "extra"):
+        (tmp_path / f"{stem}.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    page = _page(tmp_path, captions={"modes": "The mode shapes.", "free_response": "The free response."})
+    assert re.findall(r"<figcaption>([^<]*)</figcaption>", page) == ["The mode shapes.", "The free response.",
+                                                                     "extra"]

@@ -9,7 +9,7 @@ import pytest
 
 from symmech.core.schema import validate
 from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
-from symmech.trolley.elastic import scene as elastic_scene
+from symmech.trolley.elastic import review, scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_trolley_elastic import closed_form_roller_frequencies  # noqa: E402
@@ -154,6 +154,10 @@ def test_sign_change_warning():
     assert np.allclose(P3, 100 * G_SCENE * 0.8 / 2.0, rtol=1e-5)
     assert not [w for w in steady.warnings if "sign" in w]
     assert [w for w in surging.warnings if w.startswith("elastic: P3 changes sign")]
+    # the lift-off is a failed check too, naming the reaction; the steady ride's check passes
+    kept, lifted = (review.contact_check(res.tables["elastic_reactions"]) for res in (steady, surging))
+    assert (kept.verdict, kept.value) == ("pass", 0.0)
+    assert (lifted.verdict, lifted.value) == ("fail", 1.0) and lifted.what.endswith("(lift-off: P3)")
     t = surging.tables["elastic_reactions"].column("t")
     rigid = 100 * (G_SCENE * 0.8 - 20 * np.cos(2 * t) * 0.5) / 2.0
     assert np.abs(surging.tables["elastic_reactions"].column("P3_rigid") - rigid).max() < 1e-9 * 1000

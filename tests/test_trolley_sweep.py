@@ -14,7 +14,7 @@ from symmech import cli
 from symmech.core import pipeline
 from symmech.core import sweep as core_sweep
 from symmech.core.scene import SceneError, SymmechError
-from symmech.trolley import sweep, sweep_plots
+from symmech.trolley import sweep
 
 pytestmark = pytest.mark.xdist_group("test_trolley_sweep")
 
@@ -228,5 +228,5 @@ def test_the_admissible_border_runs_along_the_cell_edges():
     over the lower row's cell and the edge y = 15 over the two left columns, nothing else."""
     xe, ye = np.array([0.5, 1.5, 2.5, 3.5]), np.array([5.0, 15.0, 25.0])
     ok = np.array([[True, False], [True, False], [False, False]])
-    assert sorted(sweep_plots.border(xe, ye, ok)) == sorted([((2.5, 5.0), (2.5, 15.0)), ((0.5, 15.0), (1.5, 15.0)),
-                                                       ((1.5, 15.0), (2.5, 15.0))])
+    assert sorted(core_sweep.border(xe, ye, ok)) == sorted([((2.5, 5.0), (2.5, 15.0)), ((0.5, 15.0), (1.5, 15.0)),
+                                                            ((1.5, 15.0), (2.5, 15.0))])

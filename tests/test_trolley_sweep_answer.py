@@ -58,6 +58,10 @@ def test_the_best_point_is_the_same_on_every_chart(figures):
     k = int(np.flatnonzero(keep)[np.argmax(t.column("x")[keep])])
     best = (t.column("x")[k], t.column("y")[k])
     assert (res.summary["best_point"]["x"], res.summary["best_point"]["y"]) == best
+    # a best value several admissible points reach is said to be shared, by how many
+    tied = int(np.count_nonzero(keep & (t.column("x") == best[0])))
+    meaning = res.headline[0].meaning
+    assert (f"; {tied} admissible points share this value" in meaning) if tied > 1 else "share" not in meaning
     res.plots(None)
     assert len(figures) == 2
     for stem, fig in figures.items():
@@ -75,3 +79,22 @@ def test_a_flat_quantity_is_stated_not_colour_mapped():
     assert flat["text"].startswith("largest dynamic amplification: 1.0001 everywhere, within the tolerance")
     assert core_sweep.flat_statement(np.array([1.0, 1.01]), "amplification", "1", 1e-3) is None
     assert core_sweep.flat_statement(np.array([np.nan, 2.0]), "amplification", "1", 1e-3) is None  # one finite
+
+
+def test_a_best_value_shared_by_several_points_says_so():
+    """Objective: the largest speed scale. Two admissible points (masses 50 and 100 kg) reach the largest, 1.0:
+    the answer says 2 share it and which is starred; a single best point says nothing of sharing."""
+    from symmech.core.results import Column, Table
+
+    raw = swept(RIGID, {"field": "motion.speed_scale", "values": [0.5, 1.0]},
+                {"field": "trolley.mass", "values": [50.0, 100.0]}, objective={"quantity": "x", "goal": "max"})
+    p = sweep.plan(raw, pipeline.load(raw).resolved)
+    for admissible, shared in (([1.0, 1.0, 1.0, 1.0], "; 2 admissible points share this value"), ([1, 1, 1, 0], "")):
+        table = Table([Column("x", "1"), Column("y", "kg"), Column("admissible", "1")],
+                      np.column_stack([[0.5, 0.5, 1.0, 1.0], [50.0, 100.0, 50.0, 100.0], admissible]))
+        ok = table.column("admissible") == 1
+        decision = sweep.decide(p, table, ok, [[] if k else [("lift-off", "...")] for k in ok])
+        best = sweep.answer(p, table, decision, {})[0][0]
+        assert best.value == 1.0 and best.at.startswith("speed scale 1, ")
+        assert best.meaning.endswith("neighbouring values" + (shared and shared + ", the first in sweep order is "
+                                                                           "starred"))

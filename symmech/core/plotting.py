@@ -2,7 +2,7 @@
 
 Every plot of symmech goes through here, so that all of them read alike: each
 axis names a quantity and its unit (``"t [s]"``; :func:`save` refuses a figure
-with an unlabelled axis), shown in a readable scale of it (:func:`readable_units`:
+with an unlabelled axis, or with a legend over data), shown in a readable scale of it (:func:`readable_units`:
 deflections in mm, reactions in kN; the data stay SI), and each figure is written
 in the formats the scene asks for (``[output] formats``: PNG for a quick look, SVG
 for the HTML report).
@@ -53,6 +53,14 @@ def set_labels(ax, x: tuple[str, str], y: tuple[str, str], z: tuple[str, str] | 
         ax.set_zlabel(label(*z))
 
 
+def legend_beside(ax, ncol: int = 1) -> None:
+    """The axes' legend to their right, outside the data (none when no artist is labelled)."""
+    handles, names = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(handles, names, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                  ncol=ncol)
+
+
 def legend_below(ax, ncol: int = 2) -> None:
     """The axes' legend under them, outside the data (none when no artist is labelled)."""
     handles, names = ax.get_legend_handles_labels()
@@ -85,6 +93,21 @@ def unlabelled(fig) -> list[str]:
     return bad
 
 
+def covering_legends(fig) -> list[str]:
+    """Descriptions of the legends of ``fig`` drawn over the data area of a visible axes (its own or a
+    neighbour's): they hide curves; :func:`legend_beside` and :func:`legend_below` put them outside."""
+    areas = [(j, ax.get_window_extent()) for j, ax in enumerate(fig.axes) if ax.get_visible()]
+    bad = []
+    for i, ax in enumerate(fig.axes):
+        legend = ax.get_legend()
+        if legend is None or not ax.get_visible():
+            continue
+        box = legend.get_window_extent()
+        bad += [f"axes {i} ({ax.get_title() or 'untitled'}): legend over the data of axes {j}"
+                for j, area in areas if box.overlaps(area)]
+    return bad
+
+
 def _siblings(ax, name: str) -> list:
     if name == "z":
         return [ax]
@@ -97,9 +120,7 @@ def readable_units(fig) -> None:
     the label's unit rewritten, e.g. ``"d [m]"`` with ticks 0.0002 -> ``"d [mm]"`` with ticks 0.2."""
     from matplotlib.ticker import FuncFormatter
 
-    for ax in fig.axes:
-        if ax.get_label() == "<colorbar>":
-            continue
+    for ax in fig.axes:  # a colour bar too: its long axis carries its label
         for name in ("x", "y", "z") if hasattr(ax, "get_zlabel") else ("x", "y"):
             if getattr(ax, f"get_{name}scale")() != "linear":
                 continue
@@ -120,17 +141,21 @@ def readable_units(fig) -> None:
 def save(fig, folder: Path, stem: str, formats: tuple[str, ...] = ("png",)) -> list[Path]:
     """Write ``stem.<format>`` into ``folder`` for each of ``formats``; returns the paths.
 
-    A figure with an axis that does not name its quantity and unit is a bug: ValueError.
-    Axes in SI units are shown in a readable scale (:func:`readable_units`).
+    A figure with an axis that does not name its quantity and unit, or with a legend over data, is a bug:
+    ValueError. Axes in SI units are shown in a readable scale (:func:`readable_units`).
     """
     bad = unlabelled(fig)
     if bad:
         raise ValueError(f"plot {stem}: every axis needs 'quantity [unit]': " + "; ".join(bad))
     readable_units(fig)
     fig.tight_layout()
+    bad = covering_legends(fig)
+    if bad:
+        raise ValueError(f"plot {stem}: a legend hides data (plotting.legend_beside): " + "; ".join(bad))
     paths = [Path(folder) / f"{stem}.{ext}" for ext in formats]
     for path in paths:
-        fig.savefig(path, dpi=DPI, metadata={"Date": None} if path.suffix == ".svg" else None)
+        # the tight box holds what sits outside the axes (legends beside them, labels over an end cell) uncut
+        fig.savefig(path, dpi=DPI, bbox_inches="tight", metadata={"Date": None} if path.suffix == ".svg" else None)
     return paths
 
 

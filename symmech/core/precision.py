@@ -69,6 +69,6 @@ def diagram(rows: list[dict], folder: Path, name: str, title: str, reference: st
     plotting.set_labels(ax, ("wall time per solve", "s"), ("relative error", "1"))
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    plotting.legend_beside(ax)
     fig.text(0.01, 0.01, f"reference: {reference}", fontsize=7)
     return plotting.save(fig, folder, name)

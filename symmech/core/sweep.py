@@ -30,6 +30,7 @@ CONNECT_TIMEOUT = 5.0  # s: how long --scheduler's address may take to answer (-
 FIELD_PATH = r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*"
 MAX_VALUES = 200  # values per axis
 MAX_WORKERS = 256  # local worker processes (--workers)
+LABELLED_CELLS = 10  # a swept plane with at most this many values per axis has every cell's limit written in it
 LOCAL = (None, "processes", "synchronous", "threads")  # schedulers on this machine; anything else is an address
 
 
@@ -126,6 +127,70 @@ def flat_statement(values: np.ndarray, title: str, unit: str, rtol: float, atol:
                     f"{spread:.2g}{suffix}, is below {rtol:g} of its size{absolute}); not charted"}
 
 
+def centres(e: np.ndarray, log: bool) -> np.ndarray:
+    """The centres (n,) of the cells with edges ``e`` (n + 1,) (geometric on a log axis)."""
+    return np.sqrt(e[:-1] * e[1:]) if log else (e[:-1] + e[1:]) / 2
+
+
+def cell_labels(ax, xc: np.ndarray, yc: np.ndarray, labels: list[str], shape: tuple[int, int]) -> None:
+    """What limits the points of a plane that are not admissible, written over their cells: ``xc`` (nx,), ``yc``
+    (ny,) the cells' centres (an end cell ends at its point, which would put the text across the frame),
+    ``labels`` (nx ny,) x-major, "" for an admissible point. A plane of at most LABELLED_CELLS values per axis has
+    each cell labelled; on a larger one a label would not fit its cell, so each distinct label is written once,
+    on the cell of its points nearest their middle."""
+    if max(shape) <= LABELLED_CELLS:
+        places, size = [(k, text) for k, text in enumerate(labels) if text], 6
+    else:
+        places, size = [], 8
+        for text in dict.fromkeys(text for text in labels if text):
+            ks = np.flatnonzero([label == text for label in labels])
+            ij = np.column_stack(np.unravel_index(ks, shape))
+            places.append((ks[np.argmin(np.linalg.norm(ij - ij.mean(axis=0), axis=1))], text))
+    for k, text in places:
+        i, j = np.unravel_index(k, shape)
+        ax.annotate(text.replace(", ", "\n"), (xc[i], yc[j]), ha="center", va="center", fontsize=size, color="k",
+                    bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
+
+
+def border(xe: np.ndarray, ye: np.ndarray, ok: np.ndarray) -> list:
+    """The cell edges between admissible and other points: segments ((x, y), (x, y)) over the cells with
+    edges xe (nx + 1,), ye (ny + 1,) of the points ok (nx, ny)."""
+    across_x = [((xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[1:] != ok[:-1]))]
+    across_y = [((xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[:, 1:] != ok[:, :-1]))]
+    return across_x + across_y
+
+
+def region_border(ax, xe: np.ndarray, ye: np.ndarray, ok: np.ndarray, label: str) -> None:
+    """The :func:`border` of the points ``ok`` (nx, ny) on a plane's chart, white outlined in black (seen on every
+    colour of the map) and, by an empty twin, in the legend on the white page; nothing when all or none are ok."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patheffects import withStroke
+
+    if ok.any() and not ok.all():
+        outlined = {"color": "w", "linewidth": 2.0, "path_effects": [withStroke(linewidth=3.5, foreground="k")]}
+        ax.add_collection(LineCollection(border(xe, ye, ok), **outlined))
+        ax.plot([], [], **outlined, label=label)
+
+
+def line(ax, xs: np.ndarray, z: np.ndarray, ok: np.ndarray, labels: list[str], best: int | None, log: bool,
+         title: str, allowed: str = "admissible") -> None:
+    """The chart of a sweep along one axis on ``ax``: ``z`` (n,) over the swept values ``xs`` (n,), the cells of
+    the ``allowed`` points ``ok`` (n,) shaded green, the others labelled with what limits them (``labels``), the
+    ``best`` point (its index, or None) starred; the x range stops at the outer cells' edges."""
+    ax.plot(xs, z, "o-", color="C0", label=title)
+    e = edges(xs, log)
+    for n, k in enumerate(np.flatnonzero(ok)):
+        ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else allowed)
+    for k in np.flatnonzero(~ok):
+        ax.annotate(labels[k], (xs[k], z[k]), textcoords="offset points", xytext=(0, 8), ha="center", fontsize=7,
+                    color="#a00")
+    if best is not None:
+        ax.plot(xs[best], z[best], "*", color="gold", ms=16, mec="k", label=f"best {allowed} point")
+    if log:
+        ax.set_xscale("log")
+    ax.set_xlim(e[0], e[-1])
+
+
 def get(data: dict, path: str):
     """The value at the dotted ``path`` of ``data``; None when it is missing."""
     node = data
@@ -220,7 +285,7 @@ def chart_seconds(shape: tuple[int, ...]) -> float:
             ax.text(i + 0.5, j + 0.5, "lift-off", ha="center", va="center", fontsize=6)
         ax.plot([0.5], [0.5], "*", label="best admissible point")
         ax.legend(loc="upper left", bbox_to_anchor=(1.25, 1.0))
-        fig.savefig(io.BytesIO(), format="png", dpi=plotting.DPI)
+        fig.savefig(io.BytesIO(), format="png", dpi=plotting.DPI, bbox_inches="tight")  # as plotting.save
 
     draw()
     start = time.perf_counter()
@@ -373,4 +438,4 @@ def run(source, out, ctx, **options):
         if name not in accepted:
             raise SymmechError(f"--{name.replace('_', '-')} does not apply to a sweep of a {kind.name} scene")
     with pipeline.locked(pipeline.check_out(out)):
-        return kind.sweep(raw, out, ctx, **options)
+        return kind.sweep(source, out, ctx, **options)  # the path, so the summary names the scene file

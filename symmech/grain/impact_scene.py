@@ -172,8 +172,9 @@ def _headline(r) -> list[Headline]:
             Headline("tangential impulse", float(np.hypot(r.T[0], r.T[1])), "N s", "|(T_x, T_y)|, friction"),
             *(Headline(f"centre velocity after, {x}", v, "m/s", "velocity of the centre just after the impact")
               for x, v in zip("xyz", r.v_c_after)),
-            Headline("angular speed after", float(np.linalg.norm(r.omega_after)), "rad/s", "|omega| after the impact"),
-            Headline("rebound velocity of the contact point", r.uK_after[2], "m/s", "u_Kz after the impact"),
+            Headline("angular speed after", float(np.linalg.norm(r.omega_after)), "rad/s", "|ω| after the impact"),
+            Headline("rebound velocity of the contact point", r.uK_after[2], "m/s",
+                     "its velocity along the normal after the impact (> 0: it leaves the plane)"),
             Headline("kinetic energy lost", lost, "J", f"{100 * lost / r.ke_before:.3g} % of the energy before")]
 
 

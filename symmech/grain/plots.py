@@ -47,11 +47,11 @@ def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
         side.plot(tr[:, 1] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
         plotting.set_labels(side, ("X along the surface", "m"), ("Z", "m"))
         side.set_title("Side view (surface frame at its rest position)")
-        side.legend(fontsize=8)
+        plotting.legend_beside(side)
         height.plot(t, tr[:, 3], lw=0.8, label="centre height above the surface")
         height.plot(hits, r_hit[:, 2], **impact_style, label=f"impacts ({hits.size})")
         plotting.set_labels(height, ("time t", "s"), ("relative height z", "m"))
-        height.legend(fontsize=8)
+        plotting.legend_beside(height)
         return fig
 
     def velocity():
@@ -62,7 +62,7 @@ def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
         ax.plot(hits, v_after[:, 2], **impact_style, label=f"v_z just after each impact ({hits.size})")
         plotting.set_labels(ax, ("time t", "s"), ("centre velocity relative to the surface", "m/s"))
         ax.set_title("Centre velocity relative to the surface")
-        ax.legend(fontsize=8)
+        plotting.legend_beside(ax)
         return fig
 
     def phase():
@@ -76,7 +76,7 @@ def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
         plotting.set_labels(ax, ("relative height z", "m"), ("normal velocity v_z", "m/s"))
         ax.set_title("Phase portrait of the normal motion")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        plotting.legend_beside(ax)
         return fig
 
     return plotting.draw({"path": path, "velocity": velocity, "phase": phase}, output, out)
@@ -102,9 +102,9 @@ def _impact_figure(H, sc, result):
         left.plot(np.degrees(root["mu"]), 0, "x" if bad else "o", ms=9, color="tab:red" if bad else "tab:green")
     left.plot(np.degrees(result.mu), 0, "s", mfc="none", ms=14, color="tab:blue", label="chosen root")
     # F = det[H d, H e_z, du_K]: H is dimensionless, du_K a velocity
-    plotting.set_labels(left, ("slip angle mu", "deg"), ("F(mu)", "m/s"))
+    plotting.set_labels(left, ("slip angle μ", "deg"), ("F(μ)", "m/s"))
     left.set_title("exact scalar equation: o admissible, x not")
-    left.legend(loc="best")
+    plotting.legend_beside(left)
     scale = max(np.hypot(*uK0[:2]), 1e-12)
     t_scale = max(np.hypot(*result.T[:2]), 1e-30)
     for vec, label, color in ((uK0[:2] / scale, "slip before", "tab:orange"),
@@ -114,6 +114,6 @@ def _impact_figure(H, sc, result):
         right.plot([], [], color=color, label=label)
     right.set(xlim=(-1.2, 1.2), ylim=(-1.2, 1.2), aspect="equal", title="contact point, top view")
     plotting.set_labels(right, ("X / |V_K(0)|", "1"), ("Y / |V_K(0)|", "1"))
-    right.legend(loc="lower left", fontsize=8)
+    plotting.legend_beside(right)
     right.grid(alpha=0.3)
     return fig

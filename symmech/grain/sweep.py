@@ -409,7 +409,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
-    scene = pipeline.load(raw)
+    scene = pipeline.load(source)
     p = plan(raw, scene.resolved)
     processes = core_sweep.workers(workers, scheduler)
     core_sweep.refuse(estimate(p, processes), ctx)
@@ -728,10 +728,8 @@ def result(p: Plan, values: list, failed: list = (), warned: list = (), half_wid
                           "every point") for f in flat.values()]
     summary |= {"eligible_points": int(ok.sum()), "limited_by": limited_by, "flat": flat,
                 "criterion": "least overlap, ties to the larger |delta_vx|" if sep is not None else "largest mean_vx",
-                "captions": {stem: f"The {title} over {' and '.join(name for name, _, _ in axes)}. The star is the "
-                                   "best eligible operating point; hatched cells are not eligible, labelled with "
-                                   "what limits them; dotted lines are the throw number Γ."
-                             for stem, _, title, _, _ in charts if stem not in flat}}
+                "captions": {stem: sweep_report.caption(title, axes) for stem, _, title, _, _ in charts
+                             if stem not in flat}}
     shown = [c for c in charts if c[0] not in flat]
     return Result("grain_sweep", summary, tables, headline=headline, checks=checks,
                   plots=lambda folder: sweep_report.plots(axes, values_, p.gamma, shown, why, best, folder),

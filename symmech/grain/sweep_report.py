@@ -100,8 +100,10 @@ def answer(axes, values, why, k_best, names, stats, sep, precision, half_width) 
                              f"of {ok.size}: " + (describe(axes, values, ok) if ok.any() else "none"), ""))
     needed = (precision.get("delta_vx_at_best") or {}).get("grains_needed")
     if needed is not None:
+        measured = "Δv_x" if sep is not None else f"{names[0]}'s mean X velocity"  # one population: no difference
         headline.append(Headline("grains per population needed", float(needed), "1",
-                                 f"for Δv_x at the best point to ± {units.format(half_width, 'm/s')} (95 %)", ""))
+                                 f"for {measured} at the best point to ± {units.format(half_width, 'm/s')} (95 %)",
+                                 ""))
     limited = {}
     for k, w in enumerate(why):
         for label, sentence in w:
@@ -136,12 +138,23 @@ def flat(charts_: list) -> dict:
             if statement}
 
 
+def caption(title: str, axes: list[tuple]) -> str:
+    """A chart's caption, as a sentence (``axes``: (name, unit, log) of the swept fields)."""
+    over = " and ".join(name for name, _, _ in axes)
+    what = title[:1].upper() + title[1:]  # "Crop: mean transport velocity", "Δv_x = crop − weed ..."
+    if len(axes) < 2:
+        return (f"{what}, along {over}. The star is the best eligible operating point; the green band holds the "
+                "eligible points, the others are labelled with what limits them.")
+    return (f"{what}, over {over}. The star is the best eligible operating point; hatched cells are not eligible, "
+            "labelled with what limits them; dotted lines are the throw number Γ.")
+
+
 def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
     """Heat maps over the plane (two swept fields; ``axes``: their (name, unit, log)), the same best point
     starred on each, the points that are not eligible hatched and labelled, Γ = A ω²/g (``gamma`` (nx, ny))
     contoured."""
     if len(axes) < 2:
-        return []
+        return _lines(axes[0], values[0], charts_, why, k_best, folder)
     xs, ys = values
     xe, ye = (core_sweep.edges(v, log) for v, (_, _, log) in zip(values, axes))
     shape = (len(xs), len(ys))
@@ -158,15 +171,12 @@ def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
         if len(xs) > 1 and len(ys) > 1:
             lines = ax.contour(xs, ys, gamma.T, colors="0.2", linewidths=0.6, linestyles="dotted")
             ax.clabel(lines, fmt="Γ=%.2g", fontsize=7)
+        core_sweep.region_border(ax, xe, ye, ~bad, "eligible region border")
         if bad.any():
             ax.pcolor(xe, ye, np.ma.masked_where(~bad.T, bad.T), shading="flat", hatch="//", facecolor="none",
                       edgecolor="0.3", linewidth=0.0, label="not eligible (labelled: why)")
-            for k, text in enumerate(labels):
-                if text:
-                    i, j = np.unravel_index(k, shape)
-                    ax.annotate(text.replace(", ", "\n"), ((xe[i] + xe[i + 1]) / 2, (ye[j] + ye[j + 1]) / 2),
-                                ha="center", va="center", fontsize=6,
-                                bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
+            core_sweep.cell_labels(ax, *(core_sweep.centres(e, log) for e, (_, _, log) in zip((xe, ye), axes)),
+                                   labels, shape)
         if k_best is not None:
             i, j = np.unravel_index(k_best, shape)
             ax.plot(xs[i], ys[j], "*", color="gold", ms=16, mec="k", clip_on=False, label="best operating point")
@@ -176,5 +186,23 @@ def plots(axes, values, gamma, charts_, why, k_best, folder) -> list:
         ax.set_title(title, fontsize=10)
         plotting.legend_below(ax)
         fig.tight_layout()
+        written += plotting.save(fig, folder, stem)
+    return written
+
+
+def _lines(axis: tuple, xs: np.ndarray, charts_: list, why: list, k_best: int | None, folder) -> list:
+    """A sweep along one axis (``axis``: its (name, unit, log); ``xs`` (n,) its values): one line chart per
+    quantity of ``charts_``, the eligible points' cells shaded, the others labelled, the best point starred."""
+    name, x_unit, log = axis
+    ok = np.array([not w for w in why])
+    labels = [", ".join(dict.fromkeys(label for label, _ in w)) for w in why]
+    written = []
+    for stem, z, title, unit, _ in charts_:
+        fig, grid = plotting.figure(width=7.5, height=5.2)
+        ax = grid[0, 0]
+        core_sweep.line(ax, xs, z.ravel(), ok, labels, k_best, log, title, "eligible")
+        plotting.set_labels(ax, (name, x_unit), (title, unit))
+        ax.set_title(title, fontsize=10)
+        plotting.legend_below(ax, ncol=3)
         written += plotting.save(fig, folder, stem)
     return written

@@ -2,7 +2,7 @@
 
 ``modes_and_responses`` draws the mode shapes on the mechanism's geometry (links,
 springs and dampers, centres of mass; a spatial mechanism in a top and a side
-projection), with a legend of frequencies, and the frequency and free responses
+projection), each titled by its frequency, and the frequency and free responses
 (:data:`FIGURES`; the scene's ``[output]`` table chooses); ``precision_plot`` draws the
 eigen-solver study.
 """
@@ -16,6 +16,7 @@ import numpy as np
 from symmech.core import plotting
 
 MODES_SHOWN = 6
+MODES_PER_ROW = 3  # panels wide enough to read at a report's width
 # largest drawn displacement as a share of the mechanism's extent
 MODE_SCALE = 0.15
 
@@ -25,7 +26,7 @@ def _frequency_text(i: int, omega) -> str:
     return f"mode {i + 1}: " + ("unstable" if w is None else f"f = {w / (2 * math.pi):.4g} Hz")
 
 
-def _draw(ax, m, at, color: str, label: str) -> None:
+def _draw(ax, m, at, color: str) -> None:
     """The mechanism with point positions ``at(name) -> (2,)``: links solid, springs/dampers dotted."""
     for p in m.points.values():
         if p.parent is not None:
@@ -36,11 +37,11 @@ def _draw(ax, m, at, color: str, label: str) -> None:
         ax.plot(xy[:, 0], xy[:, 1], ":", color=color, lw=1)
     for bd in m.bodies:
         ax.plot(*at(bd.com), "o", color=color, ms=5)
-    ax.plot([], [], "-o", color=color, ms=4, label=label)
 
 
 # plot name -> its caption (a sentence; also the plot's description in the scene's `[output]` docs)
-FIGURES = {"modes": "The lowest six mode shapes drawn on the mechanism's geometry, with their frequencies [Hz].",
+FIGURES = {"modes": "The lowest mode shapes (up to six), each in colour over the mechanism's equilibrium geometry "
+                    "(grey) and titled by its frequency [Hz].",
            "frequency_response": "Frequency response under the scene's [forcing]: amplitude of each coordinate "
                                  "(translations in m, rotations in rad) against the forcing frequency [Hz].",
            "free_response": "Free response from the scene's [initial] state: each coordinate (translations in m, rotations "
@@ -81,20 +82,26 @@ def _modes(m, md, omega):
     # a spatial mechanism is drawn in two projections: top (x-y) and side (x-z)
     views = [(0, 1, "top view"), (0, 2, "side view")] if spatial else [(0, 1, "")]
     span = max(1e-9, float(np.ptp(np.array(list(pos.values())), axis=0).max()))
-    fig, axes = plotting.figure(len(views), shown, width=3.4 * shown, height=3.6)
-    for row, (h, v, view) in enumerate(views):
-        for i, ax in enumerate(axes[row]):
+    # rows of MODES_PER_ROW panels per view; titles name the frequencies, so no legend covers a shape
+    cols = min(shown, MODES_PER_ROW)
+    rows = math.ceil(shown / cols)
+    fig, axes = plotting.figure(len(views) * rows, cols, width=3.6 * cols, height=3.4)
+    for ax in axes.flat:
+        ax.set_visible(False)
+    for first, (h, v, view) in zip(range(0, len(views) * rows, rows), views):
+        for i in range(shown):
+            ax = axes[first + i // cols, i % cols]
+            ax.set_visible(True)
             disp = disps[i]
             amp = max(1e-300, max(np.linalg.norm(d) for d in disp.values()))
             scale = MODE_SCALE * span / amp
-            _draw(ax, m, lambda n: pos[n][[h, v]], "0.7", "equilibrium")
-            _draw(ax, m, lambda n: (pos[n] + scale * disp[n])[[h, v]], f"C{i}", _frequency_text(i, omega))
-            ax.set_title(f"mode {i + 1}" + (f" ({view})" if view else ""), fontsize=9)
+            _draw(ax, m, lambda n: pos[n][[h, v]], "0.7")
+            _draw(ax, m, lambda n: (pos[n] + scale * disp[n])[[h, v]], f"C{i}")
+            ax.set_title(_frequency_text(i, omega) + (f" ({view})" if view else ""), fontsize=9)
             plotting.set_labels(ax, ("x", "m"), ("y" if v == 1 else "z", "m"))
             ax.set_aspect("equal", adjustable="datalim")
             ax.tick_params(labelsize=7)
-            ax.legend(fontsize=7, loc="best")
-    fig.suptitle(f"{m.name}: mode shapes on the geometry (displacement scaled to "
+    fig.suptitle(f"{m.name}: mode shapes in colour over the equilibrium in grey (displacement scaled to "
                  f"{MODE_SCALE:.0%} of the extent)", fontsize=10)
     return fig
 
@@ -110,7 +117,7 @@ def _curves(m, x, ys, log: bool, xlabel: tuple, quantity: str, title: str):
         for j in columns:
             (ax.semilogy if log else ax.plot)(x, ys[:, j], label=shown[j].name)
         plotting.set_labels(ax, xlabel, (quantity, unit))
-        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)  # beside the data
+        plotting.legend_beside(ax)
     axes[0, 0].set_title(f"{m.name}: {title}")
     fig.tight_layout()
     return fig

@@ -142,7 +142,7 @@ def run(setup: Setup, ctx) -> Result:
     numeric.check_mass(m, a)
     # dPi/dq [N or N m] against the stiffness scale times 1 m (or 1 rad)
     res = float(np.abs(num.residual).max())
-    equilibrium = at_most("equilibrium: max |dPi/dq| / stiffness scale (eq. (5))", res / max(np.abs(c).max(), 1.0),
+    equilibrium = at_most("equilibrium: max |∂Π/∂q| / stiffness scale (eq. (5))", res / max(np.abs(c).max(), 1.0),
                           EQUILIBRIUM_TOLERANCE, otherwise="warn")
     if equilibrium.verdict != "pass":
         worst = m.coordinate_names[int(np.argmax(np.abs(num.residual)))]
@@ -199,8 +199,8 @@ def run(setup: Setup, ctx) -> Result:
         "generated_module": next((k for k in files if k.endswith(".py")), None),
         "captions": plotting.captions(FIGURES, sc["output"]),
     }
-    checks = [equilibrium, at_most("unstable modes (negative omega^2)", cls.count("unstable"), 0),
-              at_most("round-off of the lowest omega^2 (stiffness spread x machine epsilon)", md.spread * eps,
+    checks = [equilibrium, at_most("unstable modes (negative ω²)", cls.count("unstable"), 0),
+              at_most("round-off of the lowest ω² (stiffness spread × machine epsilon)", md.spread * eps,
                       CONDITION_WARN, otherwise="warn")]
     return Result("mechanism", summary, tables, files, plots, warnings, headline=_headline(m, omega, md, tables),
                   checks=checks)
@@ -217,7 +217,7 @@ def _headline(m: Mechanism, omega: list, md, tables: dict) -> list[Headline]:
            for i, w in elastic[:HEADLINE_MODES]]
     if md.kinds.count("rigid"):
         out.append(Headline("rigid-body modes", md.kinds.count("rigid"), "1",
-                            "omega = 0: the mechanism can move freely"))
+                            "ω = 0: the mechanism can move freely"))
     if "free_response" in tables:
         q = tables["free_response"]
         values = np.abs(q.data[:, 1:])
@@ -232,7 +232,7 @@ def _headline(m: Mechanism, omega: list, md, tables: dict) -> list[Headline]:
         co = m.coordinates[j]
         out.append(Headline(f"largest frequency response, {co.name}", amplitude[i, j], co.unit,
                             "amplitude of q for a unit harmonic force (frequency_response.csv)",
-                            f"omega = {h.data[i, 0]:.4g} rad/s ({h.data[i, 0] / (2 * math.pi):.4g} Hz)"))
+                            f"f = {h.data[i, 0] / (2 * math.pi):.4g} Hz (ω = {h.data[i, 0]:.4g} rad/s)"))
     return out
 
 

@@ -43,7 +43,7 @@ def _track(setup, res: dict):
         path = setup.track.derivatives(r["s"], 0)[0] + np.einsum("nji,j->ni", r["lam"], np.asarray(setup.body.r))
         ax.plot(path[:, 0], path[:, 2], path[:, 1], lw=1, label=f"centre of mass, case {case}")
     plotting.set_labels(ax, ("X1", "m"), ("X3", "m"), ("X2 (up)", "m"))
-    ax.legend(loc="upper left", fontsize=8)
+    plotting.legend_beside(ax)
     return fig
 
 
@@ -53,7 +53,7 @@ def _reactions(setup, res: dict):
         for i in range(6):
             ax.plot(setup.t, r["P"][:, i], lw=1, label=f"P{i}")
         ax.set_ylabel(plotting.label(f"case {case}: reaction", "N"))
-        ax.legend(ncol=6, fontsize=8)
+        plotting.legend_beside(ax)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
     return fig
@@ -79,7 +79,7 @@ def _envelope_panels(t, curves: dict, comfort: dict, title: str):
                 ax.plot(t[outside], n[outside], ls="none", marker=".", ms=2, alpha=0.5, color="tab:red")
         ax.set_ylabel(plotting.label(f"overload n along {axis}", "g"))
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper right")
+        plotting.legend_beside(ax)
     axes[0, 0].set_title(title)
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
     return fig
@@ -102,7 +102,7 @@ def work_precision(rows, path: Path) -> Path:
     plotting.set_labels(ax, ("time per run", "s"), ("max |P - P_exact|", "N"))
     ax.set_title("case 2 reactions: derivatives of Λ* (labels: steps or fd_step [m])")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    plotting.legend_beside(ax)
     path = Path(path)
     return plotting.save(fig, path.parent, path.stem)
 
@@ -124,7 +124,7 @@ def _elastic_reactions(r: dict):
         ax.plot(t, r["P"][:, i], lw=1, label="elastic")
         ax.set_ylabel(plotting.label(f"P{i}", "N"))
         ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=8, ncol=2)
+    plotting.legend_beside(axes[0, 0])
     axes[-1, 0].set_xlabel(plotting.label("time t", "s"))
     return fig
 
@@ -134,13 +134,13 @@ def _deflections(setup, r):
     if setup.system.rollers_on:
         for i in range(5):
             axes[0, 0].plot(r["t"], r["deflection"][:, i], lw=1, label=f"roller of P{i + 1}")
-        axes[0, 0].legend(fontsize=8, ncol=5)
+        plotting.legend_beside(axes[0, 0])
     axes[0, 0].set_ylabel(plotting.label("roller deflection d", "m"))
     for j, name in enumerate(setup.names):
         for k in range(3):
             axes[1, 0].plot(r["t"], r["probe_elastic"][:, j, k], lw=1, label=f"{name} e{k + 1}")
     if setup.names:
-        axes[1, 0].legend(fontsize=8, ncol=3)
+        plotting.legend_beside(axes[1, 0])
     axes[1, 0].set_ylabel(plotting.label("elastic deflection", "m"))
     axes[1, 0].set_xlabel(plotting.label("time t", "s"))
     for ax in axes[:, 0]:
@@ -163,6 +163,9 @@ def campbell(modes: dict):
     fig, axes = plotting.figure(1, 2, width=11.0, height=4.5, sharey=True)
     groups = [label.rsplit("_mode", 1)[0] if label.startswith("beam") else "rollers" for label in modes["label"][0]]
     colours = {g: f"C{i % 10}" for i, g in enumerate(dict.fromkeys(groups))}
+    natural = modes["f"][modes["f"] > 0]
+    # forcing frequencies far below every mode are of no interest: neither drawn nor in the legend
+    low, high = (natural.min() / 20, natural.max() * 2) if natural.size else (0.0, np.inf)
     for ax, key, quantity in ((axes[0, 0], "s", ("arc length s", "m")), (axes[0, 1], "V0", ("speed V0", "m/s"))):
         x = modes[key]
         order = np.argsort(x)
@@ -170,13 +173,14 @@ def campbell(modes: dict):
             ax.plot(x[order], modes["f"][order, k], marker=".", lw=0.8, color=colours[group],
                     label=readable(group) if groups.index(group) == k else None)
         for j, ((_, doc), style) in enumerate(zip(FORCING, ("--", ":", "-."))):
-            ax.plot(x[order], modes["forcing"][order, j], ls=style, lw=1, color="k", label=doc)
+            forcing = modes["forcing"][order, j]
+            if np.any((forcing >= low) & (forcing <= high)):
+                ax.plot(x[order], forcing, ls=style, lw=1, color="k", label=doc)
         plotting.set_labels(ax, quantity, ("frequency f", "Hz"))
         ax.set_yscale("log")
-        natural = modes["f"][modes["f"] > 0]
-        if natural.size:  # forcing frequencies far below every mode are of no interest
-            ax.set_ylim(natural.min() / 20, natural.max() * 2)
+        if natural.size:
+            ax.set_ylim(low, high)
         ax.grid(alpha=0.3, which="both")
-    axes[0, 0].legend(fontsize=7)
+    plotting.legend_beside(axes[0, 1])  # the same lines on both panels: one legend, beside the right one
     axes[0, 0].set_title("Campbell diagram along the track")
     return fig

@@ -353,7 +353,7 @@ def paper_table_rows(setup: Setup, paper: dict, physics: dict) -> dict:
         got = pick(paper[case])
         ok = round(got, decimals) == round(value, decimals)
         reproduced += ok
-        rows.append({"table": table, "quantity": q, "case": case, "t": time_, "printed": value,
+        rows.append({"table": table, "quantity": q, "unit": UNITS[q], "case": case, "t": time_, "printed": value,
                      "paper_conventions": got, "default_physics": pick(physics[case]),
                      "reproduced_to_printed_digits": bool(ok)})
     return {"entries": len(rows), "reproduced": reproduced, "rows": rows}
@@ -386,6 +386,7 @@ CASE_COLUMNS = (T, *(Column(f"V{i}", "m/s", f"velocity of the centre of mass alo
                 Column("P0", "N", "traction at O along x1"), Column("P1", "N", "rear roller B along x2"),
                 Column("P2", "N", "rear roller C along x2"), Column("P3", "N", "front axle A along x2"),
                 Column("P4", "N", "rear axle O along x3"), Column("P5", "N", "front axle A along x3"))
+UNITS = {c.name: c.unit for c in CASE_COLUMNS}  # the printed tables' quantities in SI
 OVERLOAD_COLUMNS = (T, *(Column(f"n{i}", "g", f"overload (a + g0 ν)/g0 along x{i}") for i in (1, 2, 3)))
 
 

@@ -407,7 +407,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
-    scene = pipeline.load(raw)
+    scene = pipeline.load(source)
     p = plan(raw, scene.resolved)
     first = validate(p)
     outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx, first)
@@ -547,7 +547,8 @@ def reasons(row: dict, attention: list[str], limits: dict) -> list[tuple[str, st
     lifted = sorted(set(re.findall(r"(P[0-9]) changes sign", " ".join(attention))))
     if lifted:
         out.append(("lift-off", f"roller reaction {', '.join(lifted)} changes sign: the roller would lift off"))
-    rest = [a for a in attention if "changes sign" not in a and "comfort envelope" not in a]
+    # the lift-off warnings and their check ("... changing sign"), the comfort check: reasons of their own above
+    rest = [a for a in attention if not re.search(r"chang(es|ing) sign|comfort envelope", a)]
     out += [(next((label for pattern, label in ATTENTION if re.search(pattern, a)), "check"), a) for a in rest]
     return out
 
@@ -620,6 +621,9 @@ def unit_of_column(cols: list[Column], name: str) -> str:
 def caption(p: Plan, title: str) -> str:
     """A chart's caption, as a sentence."""
     over = " and ".join(name_of(axis) for _, axis in p.axes)
+    if p.y is None:
+        return (f"The {title} along {over}. The star is the best admissible point for the objective; the green "
+                "band holds the admissible points, the others are labelled with what limits them.")
     return (f"The {title} over {over}. The star is the best admissible point for the objective; hatched cells are "
             "not admissible, labelled with what limits them.")
 
@@ -684,10 +688,15 @@ def answer(p: Plan, table: Table, decision: dict, flat: dict):
         where = _where(p, {name: (v, v) for name, v in point.items()})
         unit = unit_of(p.x if quantity == "x" else p.y) if quantity in ("x", "y") else unit_of_column(table.columns,
                                                                                                       quantity)
-        headline.append(Headline(f"best point: {decision['objective']}", float(table.column(quantity)[best]), unit,
+        value = table.column(quantity)[best]
+        admissible = table.column("admissible") == 1
+        tied = int(np.count_nonzero(admissible & (table.column(quantity) == value)))
+        headline.append(Headline(f"best point: {decision['objective']}", float(value), unit,
                                  f"the {decision['objective']} of the {n} admissible points (no warning, no "
                                  "failed check, comfort and the stated limits kept); its cell reaches halfway "
-                                 "to the neighbouring values", where))
+                                 "to the neighbouring values" + (f"; {tied} admissible points share this value, the "
+                                                                 "first in sweep order is starred" if tied > 1 else ""),
+                                 where))
     headline.append(Headline("admissible points", float(n), "1", f"of {total}: "
                              + (_where(p, decision["admissible"]["bounds"]) if n else "none"), ""))
     headline += [Headline(s["text"].partition(":")[0], s["value"], s["unit"], s["text"].partition(": ")[2],

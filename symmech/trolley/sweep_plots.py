@@ -28,7 +28,8 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
             (y_name, y_unit, y_log), = rest
             xe, ye = core_sweep.edges(xs, x_log), core_sweep.edges(ys, y_log)
             _plane(fig, ax, xe, ye, z, ok.reshape(shape), title, unit)
-            _cell_labels(ax, _centres(xe, x_log), _centres(ye, y_log), labels, shape)
+            core_sweep.cell_labels(ax, core_sweep.centres(xe, x_log), core_sweep.centres(ye, y_log), labels,
+                                   shape)
             if best is not None:
                 i, j = np.unravel_index(best, shape)
                 ax.plot(xs[i], ys[j], "*", color="gold", ms=16, mec="k", clip_on=False,
@@ -36,18 +37,12 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
             plotting.set_labels(ax, (x_name, x_unit), (y_name, y_unit))
             ax.set_xlim(xe[0], xe[-1])
             ax.set_ylim(ye[0], ye[-1])
+            for (_, _, log), scale in zip(axes, (ax.set_xscale, ax.set_yscale)):
+                if log:
+                    scale("log")
         else:
-            ax.plot(xs, z[:, 0], "o-", color="C0", label=title)
-            _line_cells(ax, xs, ok, x_log)
-            for k in np.flatnonzero(~ok):
-                ax.annotate(labels[k], (xs[k], z[k, 0]), textcoords="offset points", xytext=(0, 8), ha="center",
-                            fontsize=7, color="#a00")
-            if best is not None:
-                ax.plot(xs[best], z[best, 0], "*", color="gold", ms=16, mec="k", label="best admissible point")
+            core_sweep.line(ax, xs, z[:, 0], ok, labels, best, x_log, title)
             plotting.set_labels(ax, (x_name, x_unit), (title, unit))
-        for (_, _, log), scale in zip(axes, (ax.set_xscale, ax.set_yscale)):
-            if log:
-                scale("log")
         ax.set_title(title, fontsize=10)
         plotting.legend_below(ax, ncol=3)
         fig.tight_layout()
@@ -55,47 +50,12 @@ def plots(values, axes, table, ok: np.ndarray, why: list, best: int | None, char
     return written
 
 
-def _centres(e: np.ndarray, log: bool) -> np.ndarray:
-    """The centres (n,) of the cells with edges ``e`` (n + 1,) (geometric on a log axis)."""
-    return np.sqrt(e[:-1] * e[1:]) if log else (e[:-1] + e[1:]) / 2
-
-
-def _cell_labels(ax, xs, ys, labels: list[str], shape) -> None:
-    """What limits each point that is not admissible, written at the centre ``xs`` (nx,), ``ys`` (ny,) of its
-    cell (an end cell ends at its point, which would put the text across the frame)."""
-    for k, text in enumerate(labels):
-        if text:
-            i, j = np.unravel_index(k, shape)
-            ax.annotate(text.replace(", ", "\n"), (xs[i], ys[j]), ha="center", va="center", fontsize=6,
-                        color="k", bbox={"boxstyle": "round,pad=0.15", "fc": "w", "ec": "none", "alpha": 0.75})
-
-
-def _line_cells(ax, xs, ok, log) -> None:
-    """Shade the admissible points' cells along x."""
-    e = core_sweep.edges(xs, log)
-    for n, k in enumerate(np.flatnonzero(ok)):
-        ax.axvspan(e[k], e[k + 1], color="C2", alpha=0.2, lw=0, label=None if n else "admissible")
-    ax.set_xlim(e[0], e[-1])
-
-
 def _plane(fig, ax, xe, ye, z, ok, title, unit) -> None:
     """Heat map of z (nx, ny) over the cells with edges xe (nx + 1,) and ye (ny + 1,), with the border of the
     admissible points ``ok`` drawn around them and the others hatched."""
-    from matplotlib.collections import LineCollection
-
     mesh = ax.pcolormesh(xe, ye, z.T, shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=plotting.label(title, unit))
-    if ok.any() and not ok.all():
-        ax.add_collection(LineCollection(border(xe, ye, ok), colors="w", linewidths=2.0,
-                                         label="admissible region border"))
+    core_sweep.region_border(ax, xe, ye, ok, "admissible region border")
     if not ok.all():
         ax.pcolor(xe, ye, np.ma.masked_where(ok.T, ~ok.T), shading="flat", hatch="//", facecolor="none",
                   edgecolor="0.3", linewidth=0.0, label="not admissible (labelled: why)")
-
-
-def border(xe, ye, ok) -> list:
-    """The cell edges between admissible and other points: segments ((x, y), (x, y)) over the cells with
-    edges xe (nx + 1,), ye (ny + 1,) of the points ok (nx, ny)."""
-    across_x = [((xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[1:] != ok[:-1]))]
-    across_y = [((xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])) for i, j in zip(*np.nonzero(ok[:, 1:] != ok[:, :-1]))]
-    return across_x + across_y

@@ -12,7 +12,7 @@ import numpy as np
 
 from symmech.core import units
 from symmech.core.results import Check, Headline, Result, at_most, within
-from symmech.trolley.elastic.scene import FORCING, Setup
+from symmech.trolley.elastic.scene import FORCING, Setup, sign_changes
 
 ENERGY_TOLERANCE_PER_RTOL = 10.0  # relative energy residual allowed per unit of the integration's rtol
 LIGHT_DAMPING = 0.1  # a mode damped less rings for several periods: the outputs must be able to show it
@@ -35,6 +35,7 @@ def review(setup: Setup, result: Result) -> tuple[list[Headline], list[Check], l
         checks.append(at_most("elastic: roller rotation within the small-rotation range",
                               result.summary["elastic"]["max_roller_rotation_rad"], setup.small_rotation, "rad",
                               otherwise="warn"))
+        checks.append(contact_check(tables["elastic_reactions"]))
     warnings = []
     if "modes" in tables:
         headline += _frequencies(tables["modes"])
@@ -42,6 +43,16 @@ def review(setup: Setup, result: Result) -> tuple[list[Headline], list[Check], l
         checks += [c for c in (_resonance(setup, tables["modes"]), sampling) if c is not None]
         warnings += [warning] if warning else []
     return headline, checks, warnings
+
+
+def contact_check(reactions) -> Check:
+    """The rollers stay pressed: how many of P1…P5 change sign (a roller pressing on one side only would lift
+    off), a failed check beside the warnings that say when."""
+    P, P_rigid = (np.column_stack([reactions.column(f"P{i}{tail}") for i in range(6)]) for tail in ("", "_rigid"))
+    lifted = [i for i, (kind, _) in sign_changes(P, P_rigid).items() if kind == "lift-off"]
+    what = "elastic: rollers pressed, no reaction changing sign" + (
+        f" (lift-off: {', '.join(f'P{i}' for i in lifted)})" if lifted else "")
+    return at_most(what, len(lifted), 0)
 
 
 def _amplification(reactions) -> list[Headline]:

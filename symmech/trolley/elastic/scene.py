@@ -275,6 +275,21 @@ def forcing_frequencies(l: float, V0, W, dW, W_max: float) -> np.ndarray:
     return np.column_stack([speed / l, speed * np.linalg.norm(W, axis=-1) / (2 * np.pi), curvature])
 
 
+def sign_changes(P: np.ndarray, P_rigid: np.ndarray) -> dict[int, tuple[str, int]]:
+    """The roller reactions P1…P5 (columns 1-5 of ``P``, ``P_rigid`` (n, 6) [N], elastic and rigid) whose sign
+    is not kept, beyond a thousandth of the largest rigid reaction: {i: ("flip", first sample) where P_i has the
+    rigid one's opposite sign, else ("lift-off", first sample) where it changes sign (the roller would lift off)}."""
+    threshold = 1e-3 * np.abs(P_rigid).max()
+    out = {}
+    for i in range(1, 6):
+        flips = (np.sign(P[:, i]) != np.sign(P_rigid[:, i])) & (np.abs(P[:, i]) > threshold)
+        if np.any(flips):
+            out[i] = ("flip", int(np.argmax(flips)))
+        elif P[:, i].max() > threshold and P[:, i].min() < -threshold:
+            out[i] = ("lift-off", int(np.argmax(np.sign(P[1:, i]) != np.sign(P[:-1, i]))) + 1)
+    return out
+
+
 def _warnings(setup: Setup, r, modes) -> list:
     out = []
     if setup.system.rollers_on:
@@ -282,17 +297,11 @@ def _warnings(setup: Setup, r, modes) -> list:
         if rot > setup.small_rotation:
             out.append(f"elastic: roller rotation {rot:.3g} rad exceeds {setup.small_rotation:g} rad: the quadratic "
                        "approximation of the rotations is out of its range")
-    threshold = 1e-3 * np.abs(r["P_rigid"]).max()
-    for i in range(1, 6):
-        P = r["P"][:, i]
-        flips = (np.sign(P) != np.sign(r["P_rigid"][:, i])) & (np.abs(P) > threshold)
-        if np.any(flips):
-            out.append(f"elastic: P{i} has the opposite sign of the rigid model's at t = "
-                       f"{r['t'][np.argmax(flips)]:.4g} s")
-        elif P.max() > threshold and P.min() < -threshold:
-            k = int(np.argmax(np.sign(P[1:]) != np.sign(P[:-1]))) + 1
-            out.append(f"elastic: P{i} changes sign at t = {r['t'][k]:.4g} s: a roller pressing on one side "
-                       "only would lift off")
+    for i, (kind, k) in sign_changes(r["P"], r["P_rigid"]).items():
+        out.append(f"elastic: P{i} has the opposite sign of the rigid model's at t = {r['t'][k]:.4g} s"
+                   if kind == "flip" else
+                   f"elastic: P{i} changes sign at t = {r['t'][k]:.4g} s: a roller pressing on one side only "
+                   "would lift off")
     if modes is not None:
         out += _resonances(setup, modes) + _mode_warnings(modes)
     return out
