@@ -26,15 +26,18 @@ STEADY = 0.3  # s; samples double until one takes this long (a time slice of a l
 
 def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) -> registry.Estimate:
     """``cost`` (the count estimate of ``setup``) scaled by timed samples of it on this machine, or ``cost``
-    itself when the kind has no sample, a compile is still to come or ``cost`` is over ``max_time`` already
+    itself when the kind has no sample (of this scene), a compile is still to come or ``cost`` is over ``max_time`` already
     (refused on counts, with no sample run). A short run is sampled too (its count model may be far off, and
     its samples cost about as little as it does). The samples run quietly within ``max_time`` [s]; they raise
     only what the run itself would raise."""
     repeated = cost.seconds - cost.once
     if kind.sample is None or cost.once > 0.0 or repeated <= 0.0 or cost.seconds > max_time:
         return cost
+    least = kind.sample(setup, 0.0)
+    if least is None:  # no run of this scene is smaller than the scene's own
+        return cost
     ctx = Context(quiet=True, max_time=max_time)
-    kind.run(kind.sample(setup, 0.0), ctx)  # pays the one-off costs of this process
+    kind.run(least, ctx)  # pays the one-off costs of this process
     share, samples = SHARE, [_timed_sample(kind, setup, SHARE, ctx)]
     while len(samples) < 2 or ((samples[-1][1] < STEADY or _slope(*samples[-2:]) is None) and 2.0 * share <= 1.0):
         share *= 2.0
