@@ -173,12 +173,13 @@ def check_disjoint(sets: list[tuple[str, str, list[tuple]]]) -> None:
 
 def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster") -> None:
     """Refuse a sweep whose estimate (a ``registry.Estimate`` of the work left) and the time already spent
-    exceed ``--max-time``; tell it otherwise."""
+    exceed ``--max-time``; tell it otherwise, and keep it (from the sweep's start) in ``ctx.estimates``."""
     total = ctx.elapsed() + cost.seconds
     if total > ctx.max_time:
         raise SymmechError(f"estimated sweep time {total:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or {advice}")
     ctx.say(f"estimated sweep time {total:.3g} s ({cost.what})")
+    ctx.estimates.append(type(cost)(total, cost.what))
 
 
 

@@ -416,6 +416,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     validate(p)
     res = result(p, *compute(p, scheduler, processes, connect_timeout, say=ctx.say, ctx=ctx),
                  half_width=1e-3 if half_width is None else half_width)
+    scene.cost = ctx.estimates[-1]  # the summary's estimate: the sweep's last
     pipeline.write(res, out, scene)
     return res
 

@@ -412,6 +412,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     first = validate(p)
     outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx, first)
     res = result(p, outcomes)
+    scene.cost = ctx.estimates[-1]  # the summary's estimate: the sweep's last
     pipeline.write(res, out, scene)
     return res
 
