@@ -10,7 +10,7 @@ import dask
 import pytest
 
 from badinput import bundled, edited
-from symmech.core import pipeline
+from symmech.core import pipeline, sample
 from symmech.core import sweep as core_sweep
 from symmech.core.context import Context
 from symmech.core.scene import SymmechError
@@ -152,3 +152,14 @@ def test_a_chain_estimate_holds_whatever_the_count_model_says(monkeypatch, off):
     assert "timed samples" in scene.cost.what
     assert 0.5 <= scene.cost.seconds / actual <= 2.0, (scene.cost, actual)
     assert not 0.5 <= count / actual <= 2.0
+
+
+def test_the_slowdown_is_the_wall_time_over_the_cpu_time_of_a_probe(monkeypatch):
+    """A process given a third of a core (its CPU clock running at a third of the wall clock's rate) is slowed
+    down 3x; the value is reused for PROBE_KEPT seconds, with no second probe (a clock that raises is not read)."""
+    start = time.perf_counter()
+    monkeypatch.setattr(sample, "_probed", [])
+    monkeypatch.setattr(sample.time, "process_time", lambda: (time.perf_counter() - start) / 3.0)
+    assert sample.slowdown() == pytest.approx(3.0, rel=0.05)
+    monkeypatch.setattr(sample.time, "process_time", lambda: 1 / 0)
+    assert sample.slowdown() == pytest.approx(3.0, rel=0.05)

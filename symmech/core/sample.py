@@ -11,7 +11,8 @@ cache, starting a background build, whose load then weighs on what follows), the
 model's is this machine's factor now, per count: the estimate is the larger sample's time (its fixed costs
 included) and the rest of the run's counts at that factor (at the larger's mean if no slope held).
 
-A compile still to come (``Estimate.once``) is left as the count model has it: a sample would compile.
+A compile still to come (``Estimate.once``) is left as the count model has it: a sample would compile. Its
+seconds (an idle machine's) are scaled by :func:`slowdown`, the share of a core this process gets now.
 """
 from __future__ import annotations
 
@@ -22,6 +23,9 @@ from symmech.core.context import Context
 
 SHARE = 0.03  # of the count model's work in the first timed sample; the second takes twice that
 STEADY = 0.3  # s; samples double until one takes this long (a time slice of a loaded machine is milliseconds)
+PROBE = 0.03  # s of CPU time the slowdown probe spends (tens of time slices)
+PROBE_KEPT = 10.0  # s; a slowdown measured this recently is reused (estimates ask for it again and again)
+_probed: list[tuple[float, float]] = []  # (when [s, perf_counter], slowdown) of the last probe
 
 
 def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) -> registry.Estimate:
@@ -47,6 +51,19 @@ def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) 
     return registry.Estimate(t2 + factor * max(repeated - m2, 0.0),
                              f"{cost.what}; timed samples: {t1:.3g} s and {t2:.3g} s for {m1 / repeated:.0%} and "
                              f"{m2 / repeated:.0%} of it, the rest at {factor:.3g}x the count model")
+
+
+def slowdown() -> float:
+    """How many times longer than on an idle core CPU-bound work in this process takes now [1, at least 1]: the
+    wall time over the CPU time of a pure-Python loop of :data:`PROBE` seconds of CPU (other processes' load, this
+    process's nice value). What a compile (single-threaded, CPU-bound) is scaled by."""
+    now = time.perf_counter()
+    if not _probed or now - _probed[-1][0] > PROBE_KEPT:
+        cpu = time.process_time()
+        while time.process_time() - cpu < PROBE:
+            sum(range(1000))
+        _probed[:] = [(now, max((time.perf_counter() - now) / (time.process_time() - cpu), 1.0))]
+    return _probed[-1][1]
 
 
 def _slope(smaller: tuple[float, float], larger: tuple[float, float]) -> float | None:

@@ -339,13 +339,15 @@ def simulate_grains(base: dict, population: dict, fields: dict, start: int, stop
 
 def estimate(p: Plan, workers: int):
     """Cost of the whole sweep from its counts: the grain kind's estimate of each population's first grain,
-    times the grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
+    times the grains and points, shared by ``workers``, after a compile (done once, here) if the engine is cold (a
+    ``registry.Estimate``)."""
     from symmech.core import registry
 
     first = [scene.estimate() for scene in p.first]
     once = max(e.once for e in first)
-    seconds = once + sum((e.seconds - e.once) * pop["count"] * p.gamma.size for e, pop in zip(first, p.populations))
-    return registry.Estimate(seconds / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)")
+    work = sum((e.seconds - e.once) * pop["count"] * p.gamma.size for e, pop in zip(first, p.populations))
+    return registry.Estimate(once + work / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)"
+                             + (f" after a {once:.3g} s compile" if once else ""), once)
 
 
 SAMPLE_GRAINS = 4  # grains of the first population at point (0, 0) timed for the sweep's estimate
