@@ -171,13 +171,17 @@ def check_disjoint(sets: list[tuple[str, str, list[tuple]]]) -> None:
                                                 "each scene entry may be set by one of them only")
 
 
-def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster") -> None:
+def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster", tell: bool = True) -> None:
     """Refuse a sweep whose estimate (a ``registry.Estimate`` of the work left) and the time already spent
-    exceed ``--max-time``; tell it otherwise, and keep it (from the sweep's start) in ``ctx.estimates``."""
+    exceed ``--max-time``; else, with ``tell``, tell it and keep it (from the sweep's start) in ``ctx.estimates``.
+    An estimate from counts alone, which a timed one follows within seconds, is told only when a compile comes
+    first (the user waits for it): ``tell=cost.once > 0``."""
     total = ctx.elapsed() + cost.seconds
     if total > ctx.max_time:
         raise SymmechError(f"estimated sweep time {total:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or {advice}")
+    if not tell:
+        return
     ctx.say(f"estimated sweep time {total:.3g} s ({cost.what})")
     ctx.estimates.append(type(cost)(total, cost.what))
 

@@ -414,7 +414,8 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     scene = pipeline.load(raw)
     p = plan(raw, scene.resolved)
     processes = core_sweep.workers(workers, scheduler)
-    core_sweep.refuse(estimate(p, processes), ctx)
+    cost = estimate(p, processes)
+    core_sweep.refuse(cost, ctx, tell=cost.once > 0)
     validate(p)
     res = result(p, *compute(p, scheduler, processes, connect_timeout, say=ctx.say, ctx=ctx),
                  half_width=1e-3 if half_width is None else half_width)

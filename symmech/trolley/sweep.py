@@ -459,7 +459,8 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     least = cheapest(first, points, processes)
     if ctx.elapsed() + least.seconds > ctx.max_time:  # refused before any engine's state is read (numba unloaded)
         core_sweep.refuse(least, ctx)
-    core_sweep.refuse(estimate(first, points, processes), ctx)
+    cost = estimate(first, points, processes)
+    core_sweep.refuse(cost, ctx, tell=cost.once > 0)
     warm = _compiled_needed(first, points)
     if warm:  # built here first (its cost is in the estimate): each point then runs it
         _warm_worker(ctx.say)
