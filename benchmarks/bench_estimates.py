@@ -5,8 +5,10 @@
     python benchmarks/bench_estimates.py grain_default   # only the names given
 
 A run's estimate is the one `symmech run` tells (pipeline.Scene.estimate: the count model scaled by a timed
-sample), its actual the run stage's wall time (summary.json's timing_s.run). A sweep's estimate is the last one
-`symmech sweep` tells (the total from its start), its actual the sweep's whole wall time. Ratios est/actual.
+sample; summary.json's `estimate`), its actual the run stage's wall time (summary.json's timing_s.run). A sweep's
+estimate is the last one `symmech sweep` tells (the total from its start; summary.json's `estimate`), its actual
+the sweep's whole wall time; first/act is the first one it tells (on a cold cache, before the compile). Ratios
+est/actual.
 """
 from __future__ import annotations
 
