@@ -163,3 +163,13 @@ def test_the_slowdown_is_the_wall_time_over_the_cpu_time_of_a_probe(monkeypatch)
     assert sample.slowdown() == pytest.approx(3.0, rel=0.05)
     monkeypatch.setattr(sample.time, "process_time", lambda: 1 / 0)
     assert sample.slowdown() == pytest.approx(3.0, rel=0.05)
+
+
+def test_a_scene_with_no_smaller_run_is_estimated_at_the_share_of_a_core_now(monkeypatch):
+    """A chain of 60 masses (its run is mostly its symbolic matrices: no sample) on a third of a core: the count
+    model's idle-core seconds times 3, and the estimate says so."""
+    monkeypatch.setattr(sample, "slowdown", lambda: 3.0)
+    scene = pipeline.load(chain(smm_scene.SYMBOLIC_LIMIT))
+    count = scene.kind.estimate(scene.setup)
+    cost = sample.timed(scene.kind, scene.setup, count, max_time=1e9)
+    assert cost.seconds == pytest.approx(3.0 * count.seconds, rel=1e-12) and "at 3x an idle core's time" in cost.what

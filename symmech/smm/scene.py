@@ -46,7 +46,7 @@ JSON_LIMIT = 200
 # Warn when the eigenvalue spread costs more than this relative accuracy in omega^2.
 CONDITION_WARN = 1e-8
 EQUILIBRIUM_TOLERANCE = 1e-8  # |dPi/dq| relative to the largest stiffness entry (times 1 m or 1 rad)
-FLOP_SECONDS = 1e-10  # rough seconds per dense floating-point operation (LAPACK, 2 cores), for estimates
+FLOP_SECONDS = 1e-10  # rough seconds per dense floating-point operation (LAPACK, one idle core), for estimates
 
 
 @dataclass
@@ -117,12 +117,13 @@ def sample(setup: Setup, share: float) -> Setup | None:
     return prepare(small)
 
 
-# The symbolic a, b, c (derivation, CSE, printing, import) of the bundled mechanisms on 2 shared cores, within 2x:
-# seconds per point and coordinate, times SPATIAL_FACTOR when an axis leaves z (rotations compose in 3-D), plus
-# sympy's import when this process has not imported it yet.
-SYMBOLIC_SECONDS = 0.025
-SPATIAL_FACTOR = 8.0
-SYMPY_IMPORT_SECONDS = 1.0
+# The symbolic a, b, c (derivation, CSE, printing, import) of the bundled mechanisms in CPU seconds (an idle core's
+# wall time; symmech.core.sample scales them by the share of a core now), within 15%: seconds per point and
+# coordinate, times SPATIAL_FACTOR when an axis leaves z (rotations compose in 3-D), plus sympy's import when this
+# process has not imported it yet.
+SYMBOLIC_SECONDS = 0.0025
+SPATIAL_FACTOR = 16.0
+SYMPY_IMPORT_SECONDS = 0.25
 
 
 def _symbolic_seconds(m: Mechanism) -> float:
