@@ -88,8 +88,8 @@ def test_a_sweep_estimate_comes_from_its_second_wave():
 
 
 def test_a_sweep_is_refused_from_its_timed_wave_before_the_rest_runs():
-    """Tasks of 0.1 s under a 0.3 s budget: after two, the estimate (0.2 s + 4 x 0.1 s) is over it, and the
-    sweep stops there in one line, with the remaining four tasks never run."""
+    """Tasks of 0.1 s under a 0.3 s budget: after two (the first two of the spread order), the estimate
+    (0.2 s + 4 x 0.1 s) is over it, and the sweep stops there in one line, with the remaining four never run."""
     ran = []
 
     def nap(k):
@@ -99,7 +99,7 @@ def test_a_sweep_is_refused_from_its_timed_wave_before_the_rest_runs():
     tasks = [dask.delayed(nap)(k, dask_key_name=f"nap-{k}") for k in range(6)]
     with pytest.raises(SymmechError, match=r"estimated sweep time .* exceeds --max-time 0.3 s"):
         core_sweep.compute(tasks, "synchronous", ctx=Context(quiet=True, max_time=0.3))
-    assert ran == [0, 1]
+    assert ran == core_sweep.spread(6)[:2] == [0, 4]
 
 
 @pytest.mark.slow  # ~4 s: five runs, the answer, six charts
@@ -173,3 +173,15 @@ def test_a_scene_with_no_smaller_run_is_estimated_at_the_share_of_a_core_now(mon
     count = scene.kind.estimate(scene.setup)
     cost = sample.timed(scene.kind, scene.setup, count, max_time=1e9)
     assert cost.seconds == pytest.approx(3.0 * count.seconds, rel=1e-12) and "at 3x an idle core's time" in cost.what
+
+
+def test_spread_order_is_a_permutation_whose_first_few_cover_the_range():
+    """Van der Corput order: a permutation of 0 .. n - 1; its first two are the ends' halves, its first four the
+    quarters (for 16: 0, 8, 4, 12), and for any n its first k leave no gap wider than 4 n / k + 1."""
+    assert core_sweep.spread(16)[:4] == [0, 8, 4, 12]
+    for n in (1, 2, 3, 7, 18, 25, 100):
+        order = core_sweep.spread(n)
+        assert sorted(order) == list(range(n))
+        for k in range(2, n + 1):
+            first = sorted(order[:k]) + [n]
+            assert max(b - a for a, b in zip(first, first[1:])) <= 4 * n / k + 1
