@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 84e78c3918f4271739a66e112758145912638c28c83da441d6823378e3c91590
-# source key 978284ae26303412982549fce5d91bffa1191e838dd73b19fec0f3c10fe1ca65
+# source key 26af4810fe6951405bbd49e28b96627655812d185a82cbd9fcf8ba4c018976d9
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

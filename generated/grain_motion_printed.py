@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11796ae3b01d56db84ee5a9f36e03fc1d0d6bab0cf7c438627c81c742de6965f
-# source key 814122a3c66cf2cf32d5de0f9441b531f70f50217084a3cdbd6dd47e9dd16001
+# source key 3940099c59a99c3cb3b434da32853e8520c4bfee62d8aed2db02f72c4e2ead66
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

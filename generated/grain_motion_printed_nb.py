@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cc63e8b1f60da1626a703e7ae0f7d4c139dea9a125fda76a19eddb6818b701a9
-# source key 814122a3c66cf2cf32d5de0f9441b531f70f50217084a3cdbd6dd47e9dd16001
+# source key 3940099c59a99c3cb3b434da32853e8520c4bfee62d8aed2db02f72c4e2ead66
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 660b7c122eec55dc880673516d5d5d36a1b1553f399d59f10b4002541c528be5
-// source key 4c064a94be73cd20e7f56d85ac4d3b79fecf17885946aad3911197706414e614
+// source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d2cbd59ee0f7f003572d5d6da318dc58c1e39260fba1fe885109d656a96e3c03
-// source key 68f3b43714e6895bcefbe77ece4dfc04343194564cb8a3c9ccf401c3827f50a3
+// source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 76bafcc2a41151f638d96d151810982cbb6c2b4c410f635f88d9b254adc0ec3a
-# source key 68f3b43714e6895bcefbe77ece4dfc04343194564cb8a3c9ccf401c3827f50a3
+# source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ce4ae4f162b84bff4912daf769c61a20f1c77996cd82593b557461c5e6b10f29
-// source key 68f3b43714e6895bcefbe77ece4dfc04343194564cb8a3c9ccf401c3827f50a3
+// source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 eb77ae40455f94e01ba703fcf22999797c6f1f316c220712dbcdcc0f3c671ceb
-# source key 68f3b43714e6895bcefbe77ece4dfc04343194564cb8a3c9ccf401c3827f50a3
+# source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

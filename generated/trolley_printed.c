@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key 4d5a997ecf9f18b4ec0341c4de12640501005fa4d1bccfe61aa643bd1c9c797d
+// source key 2d95a7cd9fa41cb877b43500b2d24a66bf26db65a6724d4c64353eba8025d7c0
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

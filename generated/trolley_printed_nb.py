@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key 4d5a997ecf9f18b4ec0341c4de12640501005fa4d1bccfe61aa643bd1c9c797d
+# source key 2d95a7cd9fa41cb877b43500b2d24a66bf26db65a6724d4c64353eba8025d7c0
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 
