@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1545f8e7778ed76d2a2c06db0a28341841d61dc222de54a67a28a238e73ca762
-// source key 143b747f558947345989ae27bef4cf0e72809c6d551fad54b32b795bffd315e2
+// source key 90d1d06def77338ceee7282249b73bd7e834a0e666e588432c45d54d040ca09b
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a559f0254b10a1f096255925cf2498f125b5db7bfbc64427a22037cd9bd4c8e4
-# source key 143b747f558947345989ae27bef4cf0e72809c6d551fad54b32b795bffd315e2
+# source key 90d1d06def77338ceee7282249b73bd7e834a0e666e588432c45d54d040ca09b
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

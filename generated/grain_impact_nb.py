@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 368f83723f8cc778ea00371fa177759ba86bd7e78451a46f24be7af43337ccb0
-# source key 143b747f558947345989ae27bef4cf0e72809c6d551fad54b32b795bffd315e2
+# source key 90d1d06def77338ceee7282249b73bd7e834a0e666e588432c45d54d040ca09b
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

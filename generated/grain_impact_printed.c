@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5cc272abbe3b1bb9886eaa82041009e354f1159e43b11ce56479896e3f99b057
-// source key 26af4810fe6951405bbd49e28b96627655812d185a82cbd9fcf8ba4c018976d9
+// source key a4781399abc9821a247e9d6b1f8c4fb59cc096bfe89cc771febcf761b31b59c8
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a9364d8563e8ead5569690ebf02e7677bcc11a2fca89bd6b2851400651fc06c6
-# source key 26af4810fe6951405bbd49e28b96627655812d185a82cbd9fcf8ba4c018976d9
+# source key a4781399abc9821a247e9d6b1f8c4fb59cc096bfe89cc771febcf761b31b59c8
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

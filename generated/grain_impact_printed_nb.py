@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 84e78c3918f4271739a66e112758145912638c28c83da441d6823378e3c91590
-# source key 26af4810fe6951405bbd49e28b96627655812d185a82cbd9fcf8ba4c018976d9
+# source key a4781399abc9821a247e9d6b1f8c4fb59cc096bfe89cc771febcf761b31b59c8
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 f4025b9b8ba171d5319cd071b9dc6d88cfcc62ea7706aae90a97c6b5fa239494
-// source key d9d28c7c48b2eca990573cebf5ad9b6b77bcc4d631adc993510697fd6f502ac6
+// source key 477ccbd7d7d7e2f153248c06357863eef5ab4e07b2fd9f208aa44c2004cf4038
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

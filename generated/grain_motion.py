@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9671e4d6443ed7f5750dda2d7ff50e4f9c07dcbe9c7e85ff4b5cec8416b2016c
-# source key d9d28c7c48b2eca990573cebf5ad9b6b77bcc4d631adc993510697fd6f502ac6
+# source key 477ccbd7d7d7e2f153248c06357863eef5ab4e07b2fd9f208aa44c2004cf4038
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a5c838daf335039a3cbdfcb78e6923456d0e775fa82ee351c0fa5520dd3790fd
-# source key d9d28c7c48b2eca990573cebf5ad9b6b77bcc4d631adc993510697fd6f502ac6
+# source key 477ccbd7d7d7e2f153248c06357863eef5ab4e07b2fd9f208aa44c2004cf4038
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5b0368138e55d73e6d42268b40a0c2d38f84941b76bf0b8b3bab5e52929187f1
-// source key 3940099c59a99c3cb3b434da32853e8520c4bfee62d8aed2db02f72c4e2ead66
+// source key 4afbf67b3ccee3b29455c9133625df9aaf5aa7913d07308552373041fe1e3245
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11796ae3b01d56db84ee5a9f36e03fc1d0d6bab0cf7c438627c81c742de6965f
-# source key 3940099c59a99c3cb3b434da32853e8520c4bfee62d8aed2db02f72c4e2ead66
+# source key 4afbf67b3ccee3b29455c9133625df9aaf5aa7913d07308552373041fe1e3245
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cc63e8b1f60da1626a703e7ae0f7d4c139dea9a125fda76a19eddb6818b701a9
-# source key 3940099c59a99c3cb3b434da32853e8520c4bfee62d8aed2db02f72c4e2ead66
+# source key 4afbf67b3ccee3b29455c9133625df9aaf5aa7913d07308552373041fe1e3245
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

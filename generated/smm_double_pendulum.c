@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1212902b8f49dacb186d02e40facf3a7530ed6a26633cc2d55fc176e28dcaa00
-// source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+// source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

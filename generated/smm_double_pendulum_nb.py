@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cd161cec7e82d55725775f0cbbbeac8c469cfe89ed48ce55e3f88c5972b302ae
-# source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+# source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 660b7c122eec55dc880673516d5d5d36a1b1553f399d59f10b4002541c528be5
-// source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+// source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

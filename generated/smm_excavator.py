@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 424a8041d7488f7e6133f3d0ae442fe0bd34ab1a807874edb4132eb6c4ab40d9
-# source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+# source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

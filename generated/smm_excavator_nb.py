@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8c0002750c7e268e8218705b50f142bff20b0e9be7abe3d70142dcc1aeda05da
-# source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+# source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 # body sha256 4ba602af3617cd8a0e334d9dafc4fab4e9b308258aab119058d76bfe87195092
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

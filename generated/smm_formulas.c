@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 14ffe531853bf23639f904b513b5d5c241fc02f480a16b184660b2dcc35a48d1
-// source key 659b1c9a466531cedf4d02dca4d03dd05bc88b123ebaa99f8e96e74bd188753b
+// source key c568441adb411c420481bb70813687d66da955011ddb152ca639700b8b39ef67
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 66922e25f03b8129fcab38bac57bd43648d53f240788003bf60392404661f67b
-# source key 659b1c9a466531cedf4d02dca4d03dd05bc88b123ebaa99f8e96e74bd188753b
+# source key c568441adb411c420481bb70813687d66da955011ddb152ca639700b8b39ef67
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

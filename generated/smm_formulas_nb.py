@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9e6d0c40317f2f3a6cb031cfff9e0cf5ef9ea21b07a70714dde52996afb8cbdd
-# source key 659b1c9a466531cedf4d02dca4d03dd05bc88b123ebaa99f8e96e74bd188753b
+# source key c568441adb411c420481bb70813687d66da955011ddb152ca639700b8b39ef67
 # body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7eec63ec461d4fabd2bed956b5efcd383d0541d575fe44ac36617e3e9d02c66b
-// source key 80bd0887347a1aa3820ed1abd198994afd18deb415ab58f1a44e99f7d1ebbfe9
+// source key 6a4938d04e05f5c80ab46034240cbb2be6f51dd43ed811969226d5d8986eb31f
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

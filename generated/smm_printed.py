@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 63edd10bbad299e0733a9b475bab0e913d8631b22bb230c9deb015656215f21e
-# source key 80bd0887347a1aa3820ed1abd198994afd18deb415ab58f1a44e99f7d1ebbfe9
+# source key 6a4938d04e05f5c80ab46034240cbb2be6f51dd43ed811969226d5d8986eb31f
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f80b44e5301db516e45e0cfe467733612417f03d5cfec5ecf3bb26a908655183
-# source key 80bd0887347a1aa3820ed1abd198994afd18deb415ab58f1a44e99f7d1ebbfe9
+# source key 6a4938d04e05f5c80ab46034240cbb2be6f51dd43ed811969226d5d8986eb31f
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 76cd2471c64f52bd5f2e0adbe7efdbc4463aac04c790dff280783db0f111d076
-# source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+# source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 # body sha256 1f9cc5b5973d6d3ebd1cfbb903722f669024bcd2065ef59e90a04af67ea8ad6b
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 b33215e5c384b991fc88a78fc94ad77e944b01352d422d84afe1aadb75d34147
-// source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+// source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

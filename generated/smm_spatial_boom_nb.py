@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3b82938200857d660507e092b3613bb51c041440da710738e74b57970f4c0774
-# source key dc28c6aec9ca4cc7ab7ebb1e718965c3b5d0de8bfad8e51ee3c7ca003cdac947
+# source key 7fb1f83691fc7b3dd54693c668b06ee082d3e840025e94c77cb47486b7d9400c
 # body sha256 ba8d779355ab1ad864f0154f634be1ce0b73f29b15e5eb3092ef4911956b493b
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

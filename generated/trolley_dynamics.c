@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 94c57f1d3ec65b052dfd28d87dad2e083fec2743a3087bbdef964366773366cd
-// source key 1acd12d05ac4a9a28248ba88402b521afc0f53d587bc25ac32d10667eb4e67b6
+// source key 45e93e9367d2b931c179c865d561e24898f657177886410d8786551d1ee817e6
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

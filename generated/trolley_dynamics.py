@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9c7efe2cdde0bf424688b2d6546444b73221c1bf9f4a2f574a6770deac96ee69
-# source key 1acd12d05ac4a9a28248ba88402b521afc0f53d587bc25ac32d10667eb4e67b6
+# source key 45e93e9367d2b931c179c865d561e24898f657177886410d8786551d1ee817e6
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

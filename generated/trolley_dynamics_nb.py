@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c00a52375d689bed72d29bf623db6abdeb21489d942808c0a313f25d8caef876
-# source key 1acd12d05ac4a9a28248ba88402b521afc0f53d587bc25ac32d10667eb4e67b6
+# source key 45e93e9367d2b931c179c865d561e24898f657177886410d8786551d1ee817e6
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

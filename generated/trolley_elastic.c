@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d2cbd59ee0f7f003572d5d6da318dc58c1e39260fba1fe885109d656a96e3c03
-// source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
+// source key bdedb569e920cadc6addb161a40f7107ed019da3800f2e2832b6ccd5399777fa
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

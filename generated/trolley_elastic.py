@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 76bafcc2a41151f638d96d151810982cbb6c2b4c410f635f88d9b254adc0ec3a
-# source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
+# source key bdedb569e920cadc6addb161a40f7107ed019da3800f2e2832b6ccd5399777fa
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ce4ae4f162b84bff4912daf769c61a20f1c77996cd82593b557461c5e6b10f29
-// source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
+// source key bdedb569e920cadc6addb161a40f7107ed019da3800f2e2832b6ccd5399777fa
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 eb77ae40455f94e01ba703fcf22999797c6f1f316c220712dbcdcc0f3c671ceb
-# source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
+# source key bdedb569e920cadc6addb161a40f7107ed019da3800f2e2832b6ccd5399777fa
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

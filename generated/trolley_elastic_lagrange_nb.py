@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4baef280b2e8485ea99e120dc359e9cbb0009aaca10b6ce08064771f71ebac12
-# source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
+# source key bdedb569e920cadc6addb161a40f7107ed019da3800f2e2832b6ccd5399777fa
 # body sha256 6be42a866d00b8aab9c030da582d2aa04ecb6c24b5b3b2ca26f19771150bd196
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fc4666b682c95e25f6daacf8f1d1d88b39ab34860a4994158ef8d6f4a64a39df
-# source key becb2d45eb49b5e0a1c21e8fdf5ad7147e48ed5f035b8bcc5f0685134ec0f502
+# source key bdedb569e920cadc6addb161a40f7107ed019da3800f2e2832b6ccd5399777fa
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

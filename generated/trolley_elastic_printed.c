@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 dd8669439fa438950a69dbaa49b30689bd6780cf2ea6a1dd1d3762d2aba4b267
-// source key b5715d666b08753279313aff54658cfb84ae72317b8166ef07ef4346969885fb
+// source key 6c040a008769341431e9639604714f66dda55f802ac2d8d5b100ada9bb851ea1
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f3a55bbed55b72ad6b8e38b260f0bd81977a506f390df56e02ae9f2d354b314d
-# source key b5715d666b08753279313aff54658cfb84ae72317b8166ef07ef4346969885fb
+# source key 6c040a008769341431e9639604714f66dda55f802ac2d8d5b100ada9bb851ea1
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

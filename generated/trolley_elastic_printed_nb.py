@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae7007bb5a84bbe51589a1875feb0568c91a92d4c93822cca9f43e61d6ef068f
-# source key b5715d666b08753279313aff54658cfb84ae72317b8166ef07ef4346969885fb
+# source key 6c040a008769341431e9639604714f66dda55f802ac2d8d5b100ada9bb851ea1
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

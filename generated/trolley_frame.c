@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 80b335d095eb8817e51028633cf7465c867a6da468a79459b105ca7d2ade2b33
-// source key 1acd12d05ac4a9a28248ba88402b521afc0f53d587bc25ac32d10667eb4e67b6
+// source key 45e93e9367d2b931c179c865d561e24898f657177886410d8786551d1ee817e6
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d08828666e7cbc2d1705fd47e5d5c32483fd51ee8de3df292c403c709e4ebc5d
-# source key 1acd12d05ac4a9a28248ba88402b521afc0f53d587bc25ac32d10667eb4e67b6
+# source key 45e93e9367d2b931c179c865d561e24898f657177886410d8786551d1ee817e6
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

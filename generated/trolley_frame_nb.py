@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9acbe3fc564e1eff2c9e42e84208ed558a153412540c0106193402630a2a7ccb
-# source key 1acd12d05ac4a9a28248ba88402b521afc0f53d587bc25ac32d10667eb4e67b6
+# source key 45e93e9367d2b931c179c865d561e24898f657177886410d8786551d1ee817e6
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key 2d95a7cd9fa41cb877b43500b2d24a66bf26db65a6724d4c64353eba8025d7c0
+// source key 5e3e671110cd49a72ee1d7415d1f4837815acef87be0b67d1b14547d55cb5b8f
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 40dfa60b85b3ff9bc4e36f21dd0bd2e07234905e83b9da138f20f8b1ab30ea50
-# source key 2d95a7cd9fa41cb877b43500b2d24a66bf26db65a6724d4c64353eba8025d7c0
+# source key 5e3e671110cd49a72ee1d7415d1f4837815acef87be0b67d1b14547d55cb5b8f
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

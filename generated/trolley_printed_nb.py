@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key 2d95a7cd9fa41cb877b43500b2d24a66bf26db65a6724d4c64353eba8025d7c0
+# source key 5e3e671110cd49a72ee1d7415d1f4837815acef87be0b67d1b14547d55cb5b8f
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

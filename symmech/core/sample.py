@@ -36,7 +36,8 @@ _probed: list[tuple[float, float]] = []  # (when [s, perf_counter], slowdown) of
 def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) -> registry.Estimate:
     """``cost`` (the count estimate of ``setup``) scaled by timed samples of it on this machine, or ``cost``
     itself when the kind has no sample, a compile is still to come or ``cost`` is over ``max_time`` already
-    (refused on counts, with no sample run). A short run is sampled too (its count model may be far off, and
+    (refused on counts, with no sample run); times :func:`slowdown` when the scene has no smaller run (the kind's
+    sample gives None). A short run is sampled too (its count model may be far off, and
     its samples cost about as little as it does). The samples run quietly within ``max_time`` [s]; they raise
     only what the run itself would raise."""
     repeated = cost.seconds - cost.once
@@ -66,7 +67,8 @@ def timed(kind: registry.Kind, setup, cost: registry.Estimate, max_time: float) 
 def slowdown() -> float:
     """How many times longer than on an idle core CPU-bound work in this process takes now [1, at least 1]: the
     wall time over the CPU time of a pure-Python loop of :data:`PROBE` seconds of CPU (other processes' load, this
-    process's nice value). What a compile (single-threaded, CPU-bound) is scaled by."""
+    process's nice value). What a compile (single-threaded, CPU-bound) and the count model of a scene with no
+    smaller run are scaled by."""
     now = time.perf_counter()
     if not _probed or now - _probed[-1][0] > PROBE_KEPT:
         cpu = time.process_time()
