@@ -205,15 +205,10 @@ def startup_seconds(scheduler: str | None, loaded: float) -> float:
     return process_age() + loaded if scheduler in (None, "processes") else 0.0
 
 
-# A sweep's chart, with its share of the statistics and files around it, per probe chart (measured: a 3 x 3 x 8
-# grain separation sweep took 2.0 s for its answer and 6 charts, 0.34 s a chart, against 0.09 s for the probe).
-CHART_WORK = 3.0
-
-
 def chart_seconds(shape: tuple[int, ...]) -> float:
-    """Wall time [s] of a sweep's chart on this machine now: :data:`CHART_WORK` times one heat map of ``shape``
-    cells with its colour bar, contours, cell labels and legend, drawn and saved as PNG here and now (the second
-    of two: the first pays matplotlib's import); a line of ``shape`` (n,) as a plane of two rows."""
+    """Wall time [s] of one heat map of ``shape`` cells with its colour bar, contours, cell labels and legend, drawn and saved as PNG
+    here and now (the second of two: the first pays matplotlib's import): a sweep's chart on this machine; a
+    line of ``shape`` (n,) as a plane of two rows."""
     import io
 
     from symmech.core import plotting
@@ -235,7 +230,7 @@ def chart_seconds(shape: tuple[int, ...]) -> float:
     draw()
     start = time.perf_counter()
     draw()
-    return CHART_WORK * (time.perf_counter() - start)
+    return time.perf_counter() - start
 
 def deadline(ctx) -> float:
     """The wall-clock time (``time.time()``, s) at which the sweep of ``ctx`` runs out of ``--max-time``: its
