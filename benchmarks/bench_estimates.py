@@ -5,8 +5,10 @@
     python benchmarks/bench_estimates.py grain_default   # only the names given
 
 A run's estimate is the one `symmech run` tells (pipeline.Scene.estimate: the count model scaled by a timed
-sample), its actual the run stage's wall time (summary.json's timing_s.run). A sweep's estimate is the last one
-`symmech sweep` tells (the total from its start), its actual the sweep's whole wall time. Ratios est/actual.
+sample; summary.json's `estimate`), its actual the run stage's wall time (summary.json's timing_s.run). A sweep's
+estimate is the last one `symmech sweep` tells (the total from its start; summary.json's `estimate`), its actual
+the sweep's whole wall time; first/act is the first one it tells (on a cold cache, before the compile). Ratios
+est/actual.
 """
 from __future__ import annotations
 
@@ -67,7 +69,8 @@ def one_sweep(name: str) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         sweep.run(raw, Path(folder) / "out", ctx)
     estimates = [m for m in told if m.startswith("estimated sweep time")]
-    return {"estimate": float(estimates[-1].split()[3]), "actual": ctx.elapsed(), "what": estimates[-1]}
+    return {"estimate": float(estimates[-1].split()[3]), "first": float(estimates[0].split()[3]),
+            "actual": ctx.elapsed(), "what": estimates[-1]}
 
 
 def measure(name: str, cold: bool) -> dict:
@@ -89,12 +92,14 @@ def main(argv: list[str]) -> None:
     cold = "--cold" in argv
     names = [a for a in argv if not a.startswith("--")] or \
         sorted(p.stem for p in SCENES.glob("*.toml") if "sweep" not in p.stem) + list(SWEEPS)
-    print(f"{'name':32s} {'estimate s':>10s} {'actual s':>9s} {'est/act':>8s}  ({'cold' if cold else 'warm'})")
+    print(f"{'name':32s} {'estimate s':>10s} {'actual s':>9s} {'est/act':>8s} {'first/act':>9s}  "
+          f"({'cold' if cold else 'warm'})")
     for name in names:
         m = measure(name, cold)
         est = m["estimate"]
         ratio = f"{est / m['actual']:8.2f}" if est else "       -"
-        print(f"{name:32s} {est or 0:10.3g} {m['actual']:9.3g} {ratio}  {m.get('what') or ''}", flush=True)
+        first = f"{m['first'] / m['actual']:9.2f}" if "first" in m else "        -"
+        print(f"{name:32s} {est or 0:10.3g} {m['actual']:9.3g} {ratio} {first}  {m.get('what') or ''}", flush=True)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 368f83723f8cc778ea00371fa177759ba86bd7e78451a46f24be7af43337ccb0
-# source key 8ae0d25997f6fb2ce69d0b6dfc00aa29374c2a2ce0344055abe22679a2ff0c3f
+# source key 264fec925ac9f218a0ceb68a17e2b481346b525a3caefa7cf5040afbef545b60
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5cc272abbe3b1bb9886eaa82041009e354f1159e43b11ce56479896e3f99b057
-// source key 2e916fa9594a026c2cd8adf08a0f2b1da20cfb921d1fa7483a6dc5b2dad33d9e
+// source key 086f98c99de2c14ae9ff5434c503bc520e4b540a2427055bce07efa2dfefd076
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

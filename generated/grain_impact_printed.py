@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a9364d8563e8ead5569690ebf02e7677bcc11a2fca89bd6b2851400651fc06c6
-# source key 2e916fa9594a026c2cd8adf08a0f2b1da20cfb921d1fa7483a6dc5b2dad33d9e
+# source key 086f98c99de2c14ae9ff5434c503bc520e4b540a2427055bce07efa2dfefd076
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

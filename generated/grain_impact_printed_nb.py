@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 84e78c3918f4271739a66e112758145912638c28c83da441d6823378e3c91590
-# source key 2e916fa9594a026c2cd8adf08a0f2b1da20cfb921d1fa7483a6dc5b2dad33d9e
+# source key 086f98c99de2c14ae9ff5434c503bc520e4b540a2427055bce07efa2dfefd076
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cd161cec7e82d55725775f0cbbbeac8c469cfe89ed48ce55e3f88c5972b302ae
-# source key a0021840dc111a697b6198c823bf3cdf21d3a82ec3e64c177d328d6ae7332dd1
+# source key 161f619f24780deca0fcb5394e999670b6ddb5a2be6162f9b4ad542abfcfa7c3
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

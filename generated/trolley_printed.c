@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key 29349b1917874f43960fee64f0d28e25005c6c07e6f9ad601ae3e993993ae14a
+// source key e0455bd925a29bb52bbbf1ee34fb9e6c51b295095ca1db9229d3de7b0a7b346b
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 40dfa60b85b3ff9bc4e36f21dd0bd2e07234905e83b9da138f20f8b1ab30ea50
-# source key 29349b1917874f43960fee64f0d28e25005c6c07e6f9ad601ae3e993993ae14a
+# source key e0455bd925a29bb52bbbf1ee34fb9e6c51b295095ca1db9229d3de7b0a7b346b
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key 29349b1917874f43960fee64f0d28e25005c6c07e6f9ad601ae3e993993ae14a
+# source key e0455bd925a29bb52bbbf1ee34fb9e6c51b295095ca1db9229d3de7b0a7b346b
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

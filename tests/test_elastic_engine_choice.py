@@ -7,7 +7,7 @@ import tomllib
 
 import pytest
 
-from symmech.core import pipeline, scene
+from symmech.core import pipeline, sample, scene
 from symmech.trolley.elastic import compiled as ec
 from symmech.trolley.elastic import scene as elastic_scene
 from symmech.trolley.elastic.scene import engine as choose  # the real choice (tests/conftest.py patches the module's)
@@ -75,6 +75,7 @@ def test_a_cold_auto_run_runs_the_python_engine_and_starts_the_builder(cold, mon
 
 def test_the_estimate_names_the_engine_and_what_a_first_run_costs(cold, monkeypatch):
     monkeypatch.setattr(elastic_scene, "engine", choose)
+    monkeypatch.setattr(sample, "slowdown", lambda: 1.0)  # the compile as on an idle core
     auto, compiled = loaded().estimate(), loaded("compiled").estimate()
     assert "the elastic model (python engine; auto: the compiled engine is not built yet" in auto.what
     assert "compiling the elastic engine once" in compiled.what and "symmech warm" in compiled.what

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import pipeline
+from symmech.core import pipeline, sample
 from symmech.numerics import build
 from symmech.grain import motion_scene, sweep
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
@@ -75,7 +75,13 @@ def test_no_builder_with_background_builds_off(tmp_path, cold_cache, monkeypatch
     assert cold_cache == []
 
 
-def test_auto_compiles_first_when_the_python_engine_would_take_longer(tmp_path, cold_cache):
+@pytest.fixture
+def idle(monkeypatch):
+    """Compiles estimated as on an idle core (their seconds as declared), whatever the load now."""
+    monkeypatch.setattr(sample, "slowdown", lambda: 1.0)
+
+
+def test_auto_compiles_first_when_the_python_engine_would_take_longer(tmp_path, cold_cache, idle):
     """1000 s of the default scene: ~1e5 impacts, ~1500 s on the Python loop against 80 s of compilation
     plus 1/50 of that: auto waits for the compile, as `compiled` does, and the estimate says so."""
     sc = pipeline.load(scene_file(tmp_path, 1000.0)).setup
@@ -131,7 +137,7 @@ def test_warm_on_a_built_cache_prints_its_location_and_compiles_nothing(capsys):
     assert sum(compiled_loop.run.stats.cache_misses.values()) == misses and not compiled.ENGINE.cold()
 
 
-def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path, cold_cache):
+def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path, cold_cache, idle):
     """The sweep builds the engine before dispatch, so its grains run compiled: the estimate is the compiled
     one, with the compile counted once for all grains."""
     raw = {"kind": "grain", "duration": 0.1, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},
@@ -145,6 +151,8 @@ def test_a_sweep_on_auto_is_estimated_on_the_compiled_engine_built_once(tmp_path
     one = motion_scene.estimate(replace(grain, numerics=replace(grain.numerics, engine="compiled")))
     assert one.once == compiled.COLD_COMPILE_SECONDS
     assert cost.seconds == pytest.approx(one.once + 20 * (one.seconds - one.once), rel=1e-12)
+    shared = sweep.estimate(p, workers=2)  # the grains shared by two workers, the compile done once, here
+    assert shared.seconds == pytest.approx(one.once + 10 * (one.seconds - one.once), rel=1e-12)
     raw["numerics"] = {"engine": "python"}
     assert not sweep._compiled_needed(sweep.plan(raw, pipeline.load(raw).resolved))
 

@@ -15,6 +15,7 @@ from grain_sliding_reference import conveyor, on_plane, sphere
 from test_grain_hard_cases import CROP, WEED, sweep_grain
 from test_grain_motion_hops import midway_dip
 from test_grain_regimes import default_scene
+from symmech.core import sample
 from symmech.core.scene import SceneError
 from symmech.grain import contact, flight, motion, motion_scene
 from symmech.grain.motion_engine import driver as compiled, kinematics, layouts as compiled_layout, slip
@@ -231,6 +232,7 @@ def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     sc = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "compiled"'})
     compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
     assert not compiled.ENGINE.cold()  # compiled (or loaded) in this process: cached for this source
+    monkeypatch.setattr(sample, "slowdown", lambda: 1.0)  # as on an idle core
     monkeypatch.setattr(compiled.ENGINE, "needs_compile", lambda: False)
     warm = motion_scene.estimate(sc)
     monkeypatch.setattr(compiled.ENGINE, "needs_compile", lambda: True)

@@ -239,6 +239,7 @@ def test_estimate_refused_past_max_time_and_shown_when_long(tmp_path, capsys):
                              "raise --max-time to run it")
     code, err = run(capsys, scene(tmp_path, estimate=5.0), "--out", tmp_path / "out")
     assert code == 0 and one_line(err) == "symmech: estimated run time 5 s (probe)"
+    assert assert_valid_output(tmp_path / "out")["estimate"] == {"seconds": 5.0, "what": "probe"}  # as told
     code, err = run(capsys, scene(tmp_path, estimate=5.0), "--out", tmp_path / "out", "--quiet")
     assert code == 0 and err == ""
 
@@ -255,7 +256,7 @@ def test_bench_precision_goes_through_the_registry(tmp_path, capsys):
     code = main(["bench", "precision", scene(tmp_path), "--out", str(tmp_path / "p")])
     assert code == 0
     s = assert_valid_output(tmp_path / "p")
-    assert set(s["timing_s"]) == {"validate", "precision", "write", "total"}
+    assert set(s["timing_s"]) == {"validate", "precision", "write", "total"} and s["estimate"] is None
 
 
 def test_python_api_is_the_same_path(tmp_path):

@@ -35,6 +35,7 @@ class Context:
     warnings: list[str] = field(default_factory=list)
     started: float = field(default_factory=time.perf_counter)
     sampled: bool = True  # a run's estimate may time samples (a sweep's points: no, the sweep estimated them)
+    estimates: list = field(default_factory=list)  # a sweep's estimates told so far, in order (registry.Estimate)
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.started

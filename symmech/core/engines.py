@@ -62,9 +62,12 @@ class Engine:
         return self.module().simulate(*args, **kwargs)
 
     def compile_seconds(self) -> float:
-        """The wall time [s] a run starting now spends compiling first: the cold compile, or 0."""
+        """The wall time [s] a run starting now spends compiling first: the cold compile (an idle machine's
+        seconds times :func:`symmech.core.sample.slowdown` now), or 0."""
+        from symmech.core import sample
+
         builder = self.builder()
-        return builder.seconds if builder.needs_compile() else 0.0
+        return builder.seconds * sample.slowdown() if builder.needs_compile() else 0.0
 
     def describe(self) -> str:
         """Its name, summary and declared layouts, one line per field: offset (or array dimensions), name,

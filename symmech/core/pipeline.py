@@ -39,7 +39,7 @@ from symmech.core.scene import SymmechError, check_depth, read_toml
 from symmech.core.schema import validate
 
 # Keys of every summary.json; a kind's own summary keys sit beside them.
-ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "generated_modules",
+ENVELOPE = ("symmech_version", "kind", "status", "scene_file", "timing_s", "estimate", "generated_modules",
             "headline", "checks", "warnings", "files", "tables", "scene")
 SHOW_ESTIMATE = 2.0  # s; longer runs tell their estimate before starting
 COUNT_UNCERTAINTY = 30.0  # a count model's seconds may be this far off on a loaded or another machine
@@ -50,7 +50,7 @@ class Scene:
     """A validated scene: its kind, the resolved fields (defaults filled in) and the setup.
 
     ``timing`` holds the wall time [s] of each stage done so far (validate, estimate, run); ``cost`` the
-    estimate the run told (or refused on), once it ran.
+    estimate the run told (or refused on), once it ran; a sweep of the scene sets it to the sweep's last.
     """
 
     kind: registry.Kind
@@ -246,6 +246,7 @@ def _summary(result: Result, scene: Scene, files: list[str], timing: dict) -> di
     return {"symmech_version": __version__, "kind": result.kind,
             "status": "warnings" if result.warnings else "ok", "scene_file": scene.source,
             "timing_s": {**timing, "total": sum(timing.values())},
+            "estimate": scene.cost and {"seconds": scene.cost.seconds, "what": scene.cost.what},
             "generated_modules": integrity.used_modules(),
             "headline": [h.to_json() for h in result.headline], "checks": [c.to_json() for c in result.checks],
             **result.summary, "warnings": result.warnings, "files": files, "tables": _describe(result.tables),

@@ -48,8 +48,9 @@ class Kind:
               physically inadmissible; evaluates expressions over their domain; no I/O
     run       (setup, Context) -> symmech.core.results.Result
     estimate  setup -> Estimate (optional; runs expected to finish in < 2 s may omit it): the count model
-    sample    (setup, share) -> setup: the same scene on the same engine over about ``share`` of its work
-              (optional; symmech.core.sample times it to scale ``estimate`` to this machine now)
+    sample    (setup, share) -> setup: the same scene on the same engine over about ``share`` of its work, or None
+              when no smaller run of that scene exists (optional; symmech.core.sample times it to scale
+              ``estimate`` to this machine now)
     precision (setup, Context) -> Result of a work-precision study (optional)
     sweep     (raw scene dict, out folder, Context, **options) -> Result: ``symmech sweep`` over the
               scene's ``[sweep]`` table, written into the folder (optional; symmech.core.sweep)

@@ -236,14 +236,19 @@ def check_disjoint(sets: list[tuple[str, str, list[tuple]]]) -> None:
                                                 "each scene entry may be set by one of them only")
 
 
-def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster") -> None:
+def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluster", tell: bool = True) -> None:
     """Refuse a sweep whose estimate (a ``registry.Estimate`` of the work left) and the time already spent
-    exceed ``--max-time``; tell it otherwise."""
+    exceed ``--max-time``; else, with ``tell``, tell it and keep it (from the sweep's start) in ``ctx.estimates``.
+    An estimate from counts alone, which a timed one follows within seconds, is told only when a compile comes
+    first (the user waits for it): ``tell=cost.once > 0``."""
     total = ctx.elapsed() + cost.seconds
     if total > ctx.max_time:
         raise SymmechError(f"estimated sweep time {total:.3g} s ({cost.what}) exceeds --max-time "
                            f"{ctx.max_time:g} s; raise --max-time, or {advice}")
+    if not tell:
+        return
     ctx.say(f"estimated sweep time {total:.3g} s ({cost.what})")
+    ctx.estimates.append(type(cost)(total, cost.what))
 
 
 
@@ -333,7 +338,9 @@ def compute(tasks: list, scheduler: str | None = None, processes: int | None = N
     "threads", or the address of a ``dask.distributed`` scheduler (a SymmechError when none answers
     within ``connect_timeout`` seconds); there ``on_workers()`` runs on every worker first.
 
-    The second wave of tasks, one per worker (the first paid their start and the engine's loading), is the
+    The tasks run in :func:`spread` order, so that the first waves are spread over the sweep (a grid's corner may
+    cost far more or less than the rest). The second wave of tasks, one per worker (the first paid their start and
+    the engine's loading), is the
     sweep's timed sample on the workers that run it: its wall time per wave left, plus ``after`` [s] (what
     follows the tasks, e.g. the charts), is the estimate told, and refused past ``--max-time`` (:func:`refuse`).
     A local pool and a cluster's client are kept from one wave to the next."""
@@ -342,6 +349,8 @@ def compute(tasks: list, scheduler: str | None = None, processes: int | None = N
 
     ctx = ctx or Context(quiet=True)
     wave = workers(processes, scheduler)
+    order = spread(len(tasks))
+    tasks = [tasks[k] for k in order]
     with ctx.progress(len(tasks), "sweep points", unit="task") as bar, \
             _runner(scheduler, processes, connect_timeout, on_workers, bar, {t.key for t in tasks}) as run:
         values = run(tasks[:wave])  # pays the workers' start and the engine's loading
@@ -355,7 +364,14 @@ def compute(tasks: list, scheduler: str | None = None, processes: int | None = N
                                                   "for the charts"), ctx)
         values += run(tasks[len(values):])
     ctx.tick(f"{len(tasks)} sweep tasks")  # tasks past the deadline stopped at once: the sweep is over time
-    return values
+    return [value for _, value in sorted(zip(order, values), key=lambda pair: pair[0])]
+
+
+def spread(n: int) -> list[int]:
+    """0 .. n - 1 in van der Corput order (by their bits reversed: 0, n/2, n/4, 3n/4, ...): any first few of
+    them are spread over the whole range."""
+    bits = max(n - 1, 1).bit_length()
+    return sorted(range(n), key=lambda k: int(f"{k:0{bits}b}"[::-1], 2))
 
 
 @contextmanager

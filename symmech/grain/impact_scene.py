@@ -113,6 +113,13 @@ def estimate(sc: ImpactScene) -> registry.Estimate:
     return registry.Estimate(ONE_IMPACT_SECONDS, "one impact")
 
 
+def sample(sc: ImpactScene, share: float) -> ImpactScene | None:
+    """For :func:`symmech.core.sample.timed`: the scene itself when its solver is instant (one impact is the least
+    it can run, and milliseconds of a loaded machine's time slices are far from the count model's); None for the
+    paper's descent, which stops where it converges (a shorter descent may cost as much as the whole)."""
+    return None if sc.solver in ("paper", "paper-corrected") else sc
+
+
 def _euler_paths(sc: ImpactScene, Q, R, T, omega_after):
     """Euler rates after the impact three ways: from omega, derived Cramer (43)-(60), printed."""
     psi, theta, phi = euler_from_matrix(Q)
@@ -241,4 +248,5 @@ def precision(sc: ImpactScene, ctx: Context) -> Result:
 
 registry.register(registry.Kind(
     name="impact", summary="one impact of an ellipsoidal grain on a plane (seed 000, eqs (1)-(60))",
-    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-impact.md"))
+    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, sample=sample, precision=precision,
+    docs="docs/scenes-impact.md"))

@@ -400,11 +400,10 @@ class _Watch:
 def run(sc: GrainScene, ctx: Context) -> Result:
     """Simulate the scene: trajectory and impact tables, summary, and the plots."""
     started = time.perf_counter()
-    cost = estimate(sc)  # as told before the run (a background build may finish during it)
     with ctx.progress(sc.duration, "grain", unit="s") as bar, watchdog(ctx, where="grain simulation"):
         m = simulate(sc, on_step=_Watch(ctx, bar, sc.numerics.tolerance * sc.numerics.scan_step))
     summary = {"mode": sc.numerics.mode, "impact_law": sc.model.law.kind, "effects": sc.model.effects.__dict__,
-               "wall_time_s": time.perf_counter() - started, "estimate": {"seconds": cost.seconds, "what": cost.what},
+               "wall_time_s": time.perf_counter() - started,
                **m.summary(), "captions": plotting.captions(plots.MOTION, sc.output)}
     warnings = summary.pop("warnings")
     checks = _checks(summary, m.impacts)

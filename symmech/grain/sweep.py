@@ -339,13 +339,15 @@ def simulate_grains(base: dict, population: dict, fields: dict, start: int, stop
 
 def estimate(p: Plan, workers: int):
     """Cost of the whole sweep from its counts: the grain kind's estimate of each population's first grain,
-    times the grains and points, shared by ``workers`` (a ``registry.Estimate``)."""
+    times the grains and points, shared by ``workers``, after a compile (done once, here) if the engine is cold (a
+    ``registry.Estimate``)."""
     from symmech.core import registry
 
     first = [scene.estimate() for scene in p.first]
     once = max(e.once for e in first)
-    seconds = once + sum((e.seconds - e.once) * pop["count"] * p.gamma.size for e, pop in zip(first, p.populations))
-    return registry.Estimate(seconds / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)")
+    work = sum((e.seconds - e.once) * pop["count"] * p.gamma.size for e, pop in zip(first, p.populations))
+    return registry.Estimate(once + work / max(workers, 1), f"{p.grain_runs} grain runs on {workers} worker(s)"
+                             + (f" after a {once:.3g} s compile" if once else ""), once)
 
 
 SAMPLE_GRAINS = 4  # grains of the first population at point (0, 0) timed for the sweep's estimate
@@ -412,10 +414,12 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     scene = pipeline.load(source)
     p = plan(raw, scene.resolved)
     processes = core_sweep.workers(workers, scheduler)
-    core_sweep.refuse(estimate(p, processes), ctx)
+    cost = estimate(p, processes)
+    core_sweep.refuse(cost, ctx, tell=cost.once > 0)
     validate(p)
     res = result(p, *compute(p, scheduler, processes, connect_timeout, say=ctx.say, ctx=ctx),
                  half_width=1e-3 if half_width is None else half_width)
+    scene.cost = ctx.estimates[-1]  # the summary's estimate: the sweep's last
     pipeline.write(res, out, scene)
     return res
 

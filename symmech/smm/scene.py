@@ -28,6 +28,7 @@ import scipy.linalg
 from symmech.core import plotting, registry
 from symmech.core.results import Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
+from symmech.core.watchdog import watchdog
 from symmech.smm import build, numeric
 from symmech.smm.chain import chain_spec, exact_omega2
 from symmech.smm.model import Effects, Mechanism
@@ -45,7 +46,7 @@ JSON_LIMIT = 200
 # Warn when the eigenvalue spread costs more than this relative accuracy in omega^2.
 CONDITION_WARN = 1e-8
 EQUILIBRIUM_TOLERANCE = 1e-8  # |dPi/dq| relative to the largest stiffness entry (times 1 m or 1 rad)
-FLOP_SECONDS = 1e-10  # rough seconds per dense floating-point operation (LAPACK, 2 cores), for estimates
+FLOP_SECONDS = 1e-10  # rough seconds per dense floating-point operation (LAPACK, one idle core), for estimates
 
 
 @dataclass
@@ -75,12 +76,13 @@ def prepare(resolved: dict) -> Setup:
 
 
 def estimate(setup: Setup) -> registry.Estimate:
-    """Dense eigenproblems, state-space eigenvalues, responses: O(n^3) flops each."""
+    """Dense eigenproblems (the inertia check's and the modes'), state-space eigenvalues, responses: O(n^3)
+    flops each (the count model :func:`symmech.core.sample.timed` scales by :func:`sample`'s timed runs)."""
     n, sc = setup.n, setup.scene
     if n > DENSE_RUN_LIMIT:
         return registry.Estimate(0.0, f"{n} coordinates: refused by `run`")
     damped = bool(setup.m.dampers or setup.m.torsion_dampers) and sc["effects"]["damping"]
-    flops = 12.0 * n**3 + (80.0 * n**3 if damped else 0.0)
+    flops = 16.0 * n**3 + (80.0 * n**3 if damped else 0.0)
     if sc["initial"]:
         flops += 60.0 * n**3 + sc["initial"]["steps"] * 8.0 * n**2
     if sc["forcing"]:
@@ -93,12 +95,35 @@ def estimate(setup: Setup) -> registry.Estimate:
     return registry.Estimate(seconds, what)
 
 
-# The symbolic a, b, c (derivation, CSE, printing, import) of the bundled mechanisms on 2 shared cores, within 2x:
-# seconds per point and coordinate, times SPATIAL_FACTOR when an axis leaves z (rotations compose in 3-D), plus
-# sympy's import when this process has not imported it yet.
-SYMBOLIC_SECONDS = 0.025
-SPATIAL_FACTOR = 8.0
-SYMPY_IMPORT_SECONDS = 1.0
+def sample(setup: Setup, share: float) -> Setup | None:
+    """A ``[chain]`` scene with about ``share`` of its dense work, for :func:`symmech.core.sample.timed`: the same
+    chain of n share^(1/3) masses (the work grows as n^3; enough masses to take the run's path: no symbolic
+    matrices, matrices.csv above :data:`JSON_LIMIT`), its initial state and forcing cut to them. None for a chain of
+    :data:`SYMBOLIC_LIMIT` coordinates or fewer and for an explicit mechanism: their run is mostly the symbolic
+    a, b, c of their own points, which no smaller run repeats (the count model stands)."""
+    sc = setup.scene
+    least = next((limit + 1 for limit in (JSON_LIMIT, SYMBOLIC_LIMIT) if setup.n > limit), None)
+    if sc["chain"] is None or least is None:
+        return None
+    n = min(max(least, round(setup.n * share ** (1.0 / 3.0))), setup.n)
+    small = {**sc, "chain": {**sc["chain"], "n": n}}
+    if sc["initial"]:
+        small["initial"] = {**sc["initial"], **{k: sc["initial"][k] and sc["initial"][k][:n] for k in ("q", "qdot")}}
+    if sc["forcing"]:
+        point = sc["forcing"]["point"]
+        inside = point is None or not point.startswith("P") or int(point[1:]) <= n
+        small["forcing"] = {**sc["forcing"], "Q": sc["forcing"]["Q"] and sc["forcing"]["Q"][:n],
+                            "point": point if inside else f"P{n}"}
+    return prepare(small)
+
+
+# The symbolic a, b, c (derivation, CSE, printing, import) of the bundled mechanisms in CPU seconds (an idle core's
+# wall time; symmech.core.sample scales them by the share of a core now), within 15%: seconds per point and
+# coordinate, times SPATIAL_FACTOR when an axis leaves z (rotations compose in 3-D), plus sympy's import when this
+# process has not imported it yet.
+SYMBOLIC_SECONDS = 0.0025
+SPATIAL_FACTOR = 16.0
+SYMPY_IMPORT_SECONDS = 0.25
 
 
 def _symbolic_seconds(m: Mechanism) -> float:
@@ -128,6 +153,17 @@ def _import_text(name: str, text: str):
 
 
 def run(setup: Setup, ctx) -> Result:
+    """The scene's matrices, modes and responses; stopped past the budget of ``ctx`` between (not within) its
+    dense solves by the watchdog. LAPACK runs on one thread: OpenBLAS's threads wait for each other by spinning,
+    and on a loaded machine a 800 x 800 eigenproblem took 45x longer on two threads than on one (on an idle
+    machine one thread costs at most the second core)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"), watchdog(ctx, where=f"mechanism '{setup.m.name}'"):
+        return _solved(setup, ctx)
+
+
+def _solved(setup: Setup, ctx) -> Result:
     m, sc = setup.m, setup.scene
     if setup.n > DENSE_RUN_LIMIT:
         raise SymmechError(f"mechanism '{m.name}' has {setup.n} coordinates; `symmech run` solves the dense "
@@ -275,8 +311,9 @@ def _matrices_file(m: Mechanism, num) -> dict[str, str]:
     text = io.StringIO()
     w = csv.writer(text)
     w.writerow(["row", "column", "a", "b", "c"])
+    names = m.coordinate_names  # built on each access
     for i, j in sorted(zip(total.row.tolist(), total.col.tolist())):
-        w.writerow([m.coordinate_names[i], m.coordinate_names[j], repr(float(num.a[i, j])),
+        w.writerow([names[i], names[j], repr(float(num.a[i, j])),
                     repr(float(num.b[i, j])), repr(float(num.c[i, j]))])
     return {"matrices.csv": text.getvalue()}
 
@@ -403,5 +440,5 @@ def _eigsh(num, k: int, tol: float, fallback: float) -> np.ndarray:
 
 KIND = registry.register(registry.Kind(
     name="mechanism", summary="linear(ized) lumped-parameter mechanism: SMM matrices, modes, responses (seed 003)",
-    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision,
+    schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, sample=sample, precision=precision,
     docs="docs/scenes-mechanism.md"))

@@ -412,6 +412,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     first = validate(p)
     outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx, first)
     res = result(p, outcomes)
+    scene.cost = ctx.estimates[-1]  # the summary's estimate: the sweep's last
     pipeline.write(res, out, scene)
     return res
 
@@ -458,7 +459,8 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     least = cheapest(first, points, processes)
     if ctx.elapsed() + least.seconds > ctx.max_time:  # refused before any engine's state is read (numba unloaded)
         core_sweep.refuse(least, ctx)
-    core_sweep.refuse(estimate(first, points, processes), ctx)
+    cost = estimate(first, points, processes)
+    core_sweep.refuse(cost, ctx, tell=cost.once > 0)
     warm = _compiled_needed(first, points)
     if warm:  # built here first (its cost is in the estimate): each point then runs it
         _warm_worker(ctx.say)
