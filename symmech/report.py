@@ -156,8 +156,9 @@ def paper_title(package: str | None) -> str:
 
 
 def scene_title(scene: dict) -> str:
-    """The report's title: the scene's ``title``, else its ``description`` (mechanisms), else nothing."""
-    return str(scene.get("title") or scene.get("description") or "")
+    """The report's title: the scene's ``title``, else its ``description`` (mechanisms), else nothing; the
+    backticks of Markdown code dropped (a title is plain text)."""
+    return str(scene.get("title") or scene.get("description") or "").replace("`", "")
 
 
 def _text(value) -> str:

@@ -314,6 +314,8 @@ def test_physics_run_folds_the_paper_tables_and_explains_its_cases_on_top(tmp_pa
 def test_a_mechanism_report_is_titled_by_its_description(tmp_path):
     page = _page(tmp_path, scene={"name": "excavator", "description": "An excavator arm on its hydraulics"})
     assert "<p><strong>An excavator arm on its hydraulics</strong></p>" in page
+    page = _page(tmp_path, scene={"name": "chain", "description": "3,000 masses for `symmech bench precision`"})
+    assert "<p><strong>3,000 masses for symmech bench precision</strong></p>" in page  # Markdown code, no backticks
 
 
 def test_a_run_without_generated_modules_says_so_instead_of_an_empty_table(tmp_path):
