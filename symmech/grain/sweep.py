@@ -350,18 +350,22 @@ def estimate(p: Plan, workers: int):
                              + (f" after a {once:.3g} s compile" if once else ""), once)
 
 
-SAMPLE_GRAINS = 4  # grains of the first population at point (0, 0) timed for the sweep's estimate
+SAMPLE_GRAINS = 4  # grains of the first population, at points spread over the grid, timed for the estimate
 
 
 def timed_estimate(p: Plan, processes: int, scheduler: str | None, drawing: float):
     """The sweep's cost from timed samples here (a ``registry.Estimate``): grains of the first population at
-    point (0, 0) on the engine the workers run (the first of them alone pays loading it), the count model's
+    points spread over the grid (:func:`symmech.core.sweep.spread`), one each, on the engine the workers run (the first of them alone pays loading it), the count model's
     ratio between populations, the workers' start (:func:`symmech.core.sweep.startup_seconds`) and the charts,
     ``drawing`` [s] (:func:`chart_count` times :func:`symmech.core.sweep.chart_seconds`)."""
     from symmech.core import registry
 
-    pop = p.populations[0]
-    grains = list(point_grains(p.base, pop, p.point(0, 0), 0, min(SAMPLE_GRAINS + 1, pop["count"])))
+    pop, ny = p.populations[0], p.shape[1]
+    # one grain per point, the points spread over the grid: a corner's grains may cost far more or less (point
+    # (0, 0) alone overestimated the bundled separation sweep 2.1x)
+    cells = core_sweep.spread(p.gamma.size)[:SAMPLE_GRAINS + 1]
+    grains = [next(point_grains(p.base, pop, p.point(*divmod(c, ny)), k % pop["count"], k % pop["count"] + 1))
+              for k, c in enumerate(cells)]
     started = time.perf_counter()
     simulate_point(grains[:1])
     first = time.perf_counter() - started
