@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a559f0254b10a1f096255925cf2498f125b5db7bfbc64427a22037cd9bd4c8e4
-# source key 264fec925ac9f218a0ceb68a17e2b481346b525a3caefa7cf5040afbef545b60
+# source key e8a4dc5ea35924341b44e24344ef9b271949882eec2358e15211c6b91ead14f8
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

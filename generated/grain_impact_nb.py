@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 368f83723f8cc778ea00371fa177759ba86bd7e78451a46f24be7af43337ccb0
-# source key 264fec925ac9f218a0ceb68a17e2b481346b525a3caefa7cf5040afbef545b60
+# source key e8a4dc5ea35924341b44e24344ef9b271949882eec2358e15211c6b91ead14f8
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5cc272abbe3b1bb9886eaa82041009e354f1159e43b11ce56479896e3f99b057
-// source key 086f98c99de2c14ae9ff5434c503bc520e4b540a2427055bce07efa2dfefd076
+// source key afb53889f6611a0f1bd99c139799823621a21bcf9492b5a60eae9a9f7f0d4f14
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a9364d8563e8ead5569690ebf02e7677bcc11a2fca89bd6b2851400651fc06c6
-# source key 086f98c99de2c14ae9ff5434c503bc520e4b540a2427055bce07efa2dfefd076
+# source key afb53889f6611a0f1bd99c139799823621a21bcf9492b5a60eae9a9f7f0d4f14
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 11796ae3b01d56db84ee5a9f36e03fc1d0d6bab0cf7c438627c81c742de6965f
-# source key e140a1deda37d88550326b94a6bae0c0b88689df30b3cfee6dba8850b4d190bd
+# source key 33973f13c6ef8b144ed6ca45936ed0a503decbccee23c6c5fd3a66f5c1d1b01a
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

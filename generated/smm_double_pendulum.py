@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2146f453aa48fa58fb25bc2138a333afbd122c5fd8d037f995842cafcb7d66a0
-# source key 161f619f24780deca0fcb5394e999670b6ddb5a2be6162f9b4ad542abfcfa7c3
+# source key 2e4283cd86108f8a752a02ceeb9d4728e78fb21d064e03035c577c42716bf8fb
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8c0002750c7e268e8218705b50f142bff20b0e9be7abe3d70142dcc1aeda05da
-# source key 161f619f24780deca0fcb5394e999670b6ddb5a2be6162f9b4ad542abfcfa7c3
+# source key 2e4283cd86108f8a752a02ceeb9d4728e78fb21d064e03035c577c42716bf8fb
 # body sha256 4ba602af3617cd8a0e334d9dafc4fab4e9b308258aab119058d76bfe87195092
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 14ffe531853bf23639f904b513b5d5c241fc02f480a16b184660b2dcc35a48d1
-// source key 323f92383388afc5fb09ebde932e518be78aee0301bae509be9de4d2dcf60bb6
+// source key 5bb46227429712f647b5db6421ba174295ae2b1a7e3e1a4f1b430c3184036ea6
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

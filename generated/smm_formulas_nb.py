@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9e6d0c40317f2f3a6cb031cfff9e0cf5ef9ea21b07a70714dde52996afb8cbdd
-# source key 323f92383388afc5fb09ebde932e518be78aee0301bae509be9de4d2dcf60bb6
+# source key 5bb46227429712f647b5db6421ba174295ae2b1a7e3e1a4f1b430c3184036ea6
 # body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

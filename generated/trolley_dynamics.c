@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 94c57f1d3ec65b052dfd28d87dad2e083fec2743a3087bbdef964366773366cd
-// source key 1597c91ae4f9d628b20d049db27aa3474b91b48afbadb0b52ccdaa5d8a4c8e37
+// source key a7378bdccada3ed8cd491cef8b64810e79721cd800167e1354191c60645f1b7a
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c00a52375d689bed72d29bf623db6abdeb21489d942808c0a313f25d8caef876
-# source key 1597c91ae4f9d628b20d049db27aa3474b91b48afbadb0b52ccdaa5d8a4c8e37
+# source key a7378bdccada3ed8cd491cef8b64810e79721cd800167e1354191c60645f1b7a
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d2cbd59ee0f7f003572d5d6da318dc58c1e39260fba1fe885109d656a96e3c03
-// source key 8bc3e598b8a06a560004a721c8fade47c72e57d40363ed90cb06c018d147fbcc
+// source key 34937845d1842ab94359148c8c9bebedf219c9d304edd3df195248dacb1e147f
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ce4ae4f162b84bff4912daf769c61a20f1c77996cd82593b557461c5e6b10f29
-// source key 8bc3e598b8a06a560004a721c8fade47c72e57d40363ed90cb06c018d147fbcc
+// source key 34937845d1842ab94359148c8c9bebedf219c9d304edd3df195248dacb1e147f
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 eb77ae40455f94e01ba703fcf22999797c6f1f316c220712dbcdcc0f3c671ceb
-# source key 8bc3e598b8a06a560004a721c8fade47c72e57d40363ed90cb06c018d147fbcc
+# source key 34937845d1842ab94359148c8c9bebedf219c9d304edd3df195248dacb1e147f
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

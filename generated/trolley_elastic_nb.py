@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fc4666b682c95e25f6daacf8f1d1d88b39ab34860a4994158ef8d6f4a64a39df
-# source key 8bc3e598b8a06a560004a721c8fade47c72e57d40363ed90cb06c018d147fbcc
+# source key 34937845d1842ab94359148c8c9bebedf219c9d304edd3df195248dacb1e147f
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

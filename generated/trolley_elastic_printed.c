@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 dd8669439fa438950a69dbaa49b30689bd6780cf2ea6a1dd1d3762d2aba4b267
-// source key 07fe451bf49ec0548de2990592a3b1626e4f7f049f5993984b7b40d3926dd514
+// source key 4adb217e8504a56ac33a459b70f584a3aa3bcc5b835c7aae6c00a5648619420b
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

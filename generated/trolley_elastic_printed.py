@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f3a55bbed55b72ad6b8e38b260f0bd81977a506f390df56e02ae9f2d354b314d
-# source key 07fe451bf49ec0548de2990592a3b1626e4f7f049f5993984b7b40d3926dd514
+# source key 4adb217e8504a56ac33a459b70f584a3aa3bcc5b835c7aae6c00a5648619420b
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

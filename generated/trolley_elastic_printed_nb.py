@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae7007bb5a84bbe51589a1875feb0568c91a92d4c93822cca9f43e61d6ef068f
-# source key 07fe451bf49ec0548de2990592a3b1626e4f7f049f5993984b7b40d3926dd514
+# source key 4adb217e8504a56ac33a459b70f584a3aa3bcc5b835c7aae6c00a5648619420b
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

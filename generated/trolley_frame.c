@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 80b335d095eb8817e51028633cf7465c867a6da468a79459b105ca7d2ade2b33
-// source key 1597c91ae4f9d628b20d049db27aa3474b91b48afbadb0b52ccdaa5d8a4c8e37
+// source key a7378bdccada3ed8cd491cef8b64810e79721cd800167e1354191c60645f1b7a
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

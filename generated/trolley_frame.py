@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d08828666e7cbc2d1705fd47e5d5c32483fd51ee8de3df292c403c709e4ebc5d
-# source key 1597c91ae4f9d628b20d049db27aa3474b91b48afbadb0b52ccdaa5d8a4c8e37
+# source key a7378bdccada3ed8cd491cef8b64810e79721cd800167e1354191c60645f1b7a
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key e0455bd925a29bb52bbbf1ee34fb9e6c51b295095ca1db9229d3de7b0a7b346b
+// source key 7935c1b0bd338b1c6a1a328a20db7410030a86248eb6cd4b211ee5d992970498
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 40dfa60b85b3ff9bc4e36f21dd0bd2e07234905e83b9da138f20f8b1ab30ea50
-# source key e0455bd925a29bb52bbbf1ee34fb9e6c51b295095ca1db9229d3de7b0a7b346b
+# source key 7935c1b0bd338b1c6a1a328a20db7410030a86248eb6cd4b211ee5d992970498
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

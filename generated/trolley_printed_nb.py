@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key e0455bd925a29bb52bbbf1ee34fb9e6c51b295095ca1db9229d3de7b0a7b346b
+# source key 7935c1b0bd338b1c6a1a328a20db7410030a86248eb6cd4b211ee5d992970498
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -105,14 +105,15 @@ class Scene:
         return result
 
 
-def load(source) -> Scene:
-    """A validated :class:`Scene` from a TOML path or a dict (as TOML would give)."""
+def load(source, data: dict | None = None) -> Scene:
+    """A validated :class:`Scene` from a TOML path or a dict (as TOML would give); ``data``: the table already read
+    from the path ``source`` (a sweep reads it first), not read again."""
     start = time.perf_counter()
     if isinstance(source, dict):
         data, name = source, "<dict>"
         check_depth(data)
     else:
-        data, name = read_toml(source), str(source)
+        data, name = read_toml(source) if data is None else data, str(source)
     if not isinstance(data, dict):
         raise SymmechError("a scene must be a table of fields")
     kind = registry.get(data.get("kind"))

@@ -2,8 +2,8 @@
 refusal, and the dispatch of the point tasks on Dask with a progress bar.
 
 A scene kind offers a sweep by registering ``sweep`` with its :class:`~symmech.core.registry.Kind`
-(``sweep(raw, out, ctx, **options) -> Result``); :func:`run` reads the scene, finds its kind and
-calls it, so no central list names the kinds that sweep. The work runs on Dask: a local process
+(``sweep(source, out, ctx, **options) -> Result``, ``source`` the scene's path, which its summary names, or its
+table); :func:`run` reads the scene, finds its kind and calls it, so no central list names the kinds that sweep. The work runs on Dask: a local process
 pool by default, serial with ``scheduler="synchronous"``, or a ``dask.distributed`` scheduler
 by address (``--scheduler``); the results do not depend on where they ran.
 
@@ -340,9 +340,8 @@ def compute(tasks: list, scheduler: str | None = None, processes: int | None = N
 
     The tasks run in :func:`spread` order, so that the first waves are spread over the sweep (a grid's corner may
     cost far more or less than the rest). The second wave of tasks, one per worker (the first paid their start and
-    the engine's loading), is the
-    sweep's timed sample on the workers that run it: its wall time per wave left, plus ``after`` [s] (what
-    follows the tasks, e.g. the charts), is the estimate told, and refused past ``--max-time`` (:func:`refuse`).
+    the engine's loading), is the sweep's timed sample on the workers that run it: its wall time per wave left,
+    plus ``after`` [s] (what follows the tasks, e.g. the charts), is the estimate told, and refused past ``--max-time`` (:func:`refuse`).
     A local pool and a cluster's client are kept from one wave to the next."""
     from symmech.core.context import Context
     from symmech.core.registry import Estimate

@@ -355,8 +355,8 @@ SAMPLE_GRAINS = 4  # grains of the first population, at points spread over the g
 
 def timed_estimate(p: Plan, processes: int, scheduler: str | None, drawing: float):
     """The sweep's cost from timed samples here (a ``registry.Estimate``): grains of the first population at
-    points spread over the grid (:func:`symmech.core.sweep.spread`), one each, on the engine the workers run (the first of them alone pays loading it), the count model's
-    ratio between populations, the workers' start (:func:`symmech.core.sweep.startup_seconds`) and the charts,
+    points spread over the grid (:func:`symmech.core.sweep.spread`), one each, on the engine the workers run (the
+    first of them alone pays loading it), the count model's ratio between populations, the workers' start (:func:`symmech.core.sweep.startup_seconds`) and the charts,
     ``drawing`` [s] (:func:`chart_count` times :func:`symmech.core.sweep.chart_seconds`)."""
     from symmech.core import registry
 
@@ -415,7 +415,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
-    scene = pipeline.load(source)
+    scene = pipeline.load(source, raw)
     p = plan(raw, scene.resolved)
     processes = core_sweep.workers(workers, scheduler)
     cost = estimate(p, processes)

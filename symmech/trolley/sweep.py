@@ -407,7 +407,7 @@ def run(source, out, ctx, scheduler: str | None = None, workers: int | None = No
     from symmech.core.scene import read_toml
 
     raw = source if isinstance(source, dict) else read_toml(source)
-    scene = pipeline.load(source)
+    scene = pipeline.load(source, raw)
     p = plan(raw, scene.resolved)
     first = validate(p)
     outcomes = compute(p, scheduler, core_sweep.workers(workers, scheduler), connect_timeout, ctx, first)
