@@ -208,14 +208,21 @@ def reach(system, drive, t) -> tuple[float, float]:
     return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
 
 
+def geometry_table(system, drive, t, rtol: float) -> tuple[Table | None, tuple[float, float]]:
+    """The geometry channels (:func:`geometry`) as a :func:`frame_table` in s over the arc lengths [m] a traction
+    run on the output times t [s] visits (:func:`reach`, returned beside it); None when they cannot be tabulated."""
+    lo, hi = reach(system, drive, t)
+    table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
+                        evaluate=lambda s, at=slice(None): geometry(drive, system, s, at), scales=_geometry_scales)
+    return table, (lo, hi)
+
+
 def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
     """:func:`symmech.trolley.elastic.simulate.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
     V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
     P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
     Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
-    lo, hi = reach(system, drive, t)
-    table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
-                        evaluate=lambda s, at=slice(None): geometry(drive, system, s, at), scales=_geometry_scales)
+    table, (lo, hi) = geometry_table(system, drive, t, rtol)
     if table is not None:
         out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
         if out is not None:
