@@ -10,9 +10,11 @@
                                            those recorded without a kill (after a new test)
     python tools/mutate.py --screen SHARD ... --survived
                                            as --rest, only the survivors (a new test written against them)
-    python tools/mutate.py --screen SHARD --sample N [--seed S]
+    python tools/mutate.py --screen SHARD --sample N [--seed S] [--unrecorded]
                                            screen a seeded random sample of N of the shard's mutants (a record
-                                           of its own module: the table gives its rate a binomial interval)
+                                           of its own module: the table gives its rate a binomial interval);
+                                           --unrecorded: only those drawn that the record does not hold yet (a
+                                           sample stopped early, finished)
     python tools/mutate.py --rename OLD NEW
                                            a module moved (paths such as symmech/core/ode.py): its record,
                                            mutant names and proofs follow it
@@ -452,9 +454,10 @@ def shard_mutants(name: str) -> list[str]:
     return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
 
 
-def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0) -> int:
+def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0, unrecorded: bool = False) -> int:
     """Screen the mutants of one shard into its module's record: all, a seeded random sample of `size` (when > 0),
-    and of them (`rest`) only those recorded with one of these outcomes."""
+    and of them (`rest`) only those recorded with one of these outcomes, or (`unrecorded`) only those the record
+    does not hold."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
@@ -468,10 +471,13 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
         drawn = (f"seed {seed}, {len(names)} drawn of the {population} mutants of shard {name} "
                  f"(random.Random({seed}).sample of their sorted names, screened in the order drawn); this "
                  "record's lines are the mutants screened")
+    recorded = rec.read(rec.record_path(module))
     if rest:
-        recorded = rec.read(rec.record_path(module))
         names = [n for n in names if n in recorded and recorded[n].outcome in rest]
-    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=bool(rest), drawn=drawn)
+    if unrecorded:
+        names = [n for n in names if n not in recorded]
+    which = "its unkilled mutants again" if rest else "the rest of its sample" if unrecorded else ""
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn)
 
 
 def check(killed: int, seed: int, only: list[str]) -> int:
@@ -526,12 +532,12 @@ def main(argv: list[str]) -> int:
         # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
         return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
     if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS:
-        flags = [a for a in argv[2:] if a in ("--fresh", "--rest", "--survived")]
+        flags = [a for a in argv[2:] if a in ("--fresh", "--rest", "--survived", "--unrecorded")]
         options = dict(zip(*[iter(a for a in argv[2:] if a not in flags)] * 2))
         if set(options) <= {"--sample", "--seed"}:
             rest = ("survived",) if "--survived" in flags else OUTCOMES_UNKILLED if "--rest" in flags else ()
             return screen(argv[1], "--fresh" in flags, rest, int(options.get("--sample", 0)),
-                          int(options.get("--seed", 0)))
+                          int(options.get("--seed", 0)), "--unrecorded" in flags)
     if argv[:1] == ["--rename"] and len(argv) == 3:
         rec.rename(argv[1], argv[2])
         return 0

@@ -168,10 +168,10 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
 
 
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           rest: bool = False, drawn: str = "") -> int:
+           which: str = "", drawn: str = "") -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
-    `rest`: they are what an earlier screen of the shard left unkilled (the note says so); `drawn`: how a random
-    sample was drawn (the record's "sample:" note)."""
+    `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
+    so); `drawn`: how a random sample was drawn (the record's "sample:" note)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
     entries = rec.read(path)
@@ -179,7 +179,7 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
     made = len(mutant_names(folder, module))
-    label = f"{shard} (its unkilled mutants again)" if rest else shard
+    label = f"{shard} ({which})" if which else shard
     notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {label}:", "made:", "module:"))]
     notes[:0] = [f"made: {made} mutants of {module} by mutmut", f"module: {module}"]
     if drawn:
