@@ -3,9 +3,9 @@ imported pytest and the mutated module once (mutmut's trampolines choose the mut
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
 The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion (a kill), as
-`-x` would; past a test that fails on another exception or a fixture error it runs on, so that a mutant is
-recorded "raised" (not a kill: docs/mutation.md) or "error" only when no test of the selection fails on an
+the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion, as `-x` would;
+past a test that fails on another exception or a fixture error it runs on, so that a mutant is recorded "raised"
+(killed by a raise: docs/mutation.md) or "error" (not a kill) only when no test of the selection fails on an
 assertion.
 """
 from __future__ import annotations
@@ -202,20 +202,22 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
 def sample(entries: dict[str, rec.Entry], module: str, killed: int, seed: int) -> list[rec.Entry]:
     """`killed` killed entries at random (all when fewer) and every survivor with a written proof."""
     proofs = rec.equivalents()
-    kills = sorted(n for n, e in entries.items() if e.outcome in ("killed", "raised"))
+    kills = sorted(n for n, e in entries.items() if e.outcome in rec.KILLS)
     chosen = random.Random(seed).sample(kills, min(killed, len(kills)))
     proven = [n for n, e in entries.items() if e.outcome == "survived" and (module, e.hash) in proofs]
     return [entries[n] for n in sorted(chosen + proven)]
 
 
 def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
-    """pytest args that run only the test a recorded kill names (in the frozen copy, with the selection's marks);
-    [] for any other outcome, which needs the whole selection (a survivor survives all of it)."""
-    if entry.outcome not in ("killed", "raised") or not entry.test:
+    """pytest args that run only the test a recorded kill names (in the frozen copy, with the selection's marks and
+    its options such as --noconftest); [] for any other outcome, which needs the whole selection (a survivor
+    survives all of it)."""
+    if entry.outcome not in rec.KILLS or not entry.test:
         return []
     marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
+    options = [a for a in tests if a.startswith("--")]
     node = entry.test.split(" (")[0]
-    return [str(folder / "frozen" / node), *marks, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
+    return [str(folder / "frozen" / node), *marks, *options, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
 
 
 def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
