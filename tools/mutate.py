@@ -320,7 +320,10 @@ SHARDS = {
     "track": ("symmech/trolley/track.py",
               ["tests/test_track_tables_and_messages.py", "tests/test_trolley_physics.py", "tests/test_trolley_frames_units.py",
                "tests/test_trolley_continuity.py"], ["*"]),
-    "trolley_model": ("symmech/trolley/model.py", REACTION_TESTS + ["tests/test_trolley_frames_units.py"], ["*"]),
+    # with the moving frame's closed forms (2 s), which hold the jump events' kinds
+    "trolley_model": ("symmech/trolley/model.py",
+                      ["tests/test_trolley_moving_frame_closed_forms.py", *REACTION_TESTS,
+                       "tests/test_trolley_frames_units.py"], ["*"]),
     "modal": ("symmech/trolley/elastic/modal.py",
               ["tests/test_modal_groups_and_phase.py", "tests/test_trolley_elastic_modes_tracking.py",
                "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
@@ -341,6 +344,11 @@ SHARDS = {
     "smm_numeric_sample": ("symmech/smm/numeric.py",
                            ["tests/test_smm_closed_form.py", "tests/test_smm_mode_kinds.py", "tests/test_smm_structural.py",
                             "tests/test_smm_pivot.py", "-k", "not numerically_many"], ["*"]),
+    # the exact free rotation (elliptic functions) and the flight's gap bounds: its own tests, 2.5 s
+    "free_flight": ("symmech/grain/free_flight.py", ["tests/test_grain_free_flight.py"], ["*"]),
+    # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
+    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*"]),
+    "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS, ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
     "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],

@@ -141,9 +141,10 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     return outcome, "" if outcome != "crash" else f"pytest exit {found['code']}", seconds
 
 
-def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[list[str], float, list[float]]:
+def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
+            runs: int = BASELINE_RUNS) -> tuple[list[str], float, list[float]]:
     """Generate the mutants, freeze the tests, import pytest and the mutated module in this process, and time the
-    unmutated run BASELINE_RUNS times: (pytest args, a mutant's time limit, the baseline times)."""
+    unmutated run `runs` times: (pytest args, a mutant's time limit, the baseline times)."""
     generate(folder, fresh)
     frozen = freeze_tests(folder)
     args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
@@ -159,7 +160,7 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         pytest.main([*args, "--collect-only"])
     times = []
-    for _ in range(BASELINE_RUNS):
+    for _ in range(runs):
         outcome, test, seconds = run_one("", args, 3600.0)
         if outcome != "survived":
             raise SystemExit(f"the unmutated code does not pass its tests ({outcome} {test}): no screen")
@@ -223,7 +224,9 @@ def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
 def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
     """Rerun `chosen` on mutants made from the current tree, a recorded kill against the test that made it, any
     other outcome against the whole selection; 1 when an outcome no longer holds or a mutant is gone."""
-    args, limit, _ = prepare(folder, module, tests, fresh=True)
+    # one unmutated run: it must pass, and its time only sets the limit, which can turn a recorded outcome into a
+    # timeout (a failed check), never a failed check into a passed one
+    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1)
     current = mutant_names(folder, module)
     by_hash = {}
     for name, (digest, _) in changes(folder, module, current).items():
