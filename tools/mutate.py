@@ -469,9 +469,10 @@ def shard_mutants(name: str) -> list[str]:
 
 
 def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0, unrecorded: bool = False) -> int:
-    """Screen the mutants of one shard into its module's record: all, a seeded random sample of `size` (when > 0),
-    and of them (`rest`) only those recorded with one of these outcomes, or (`unrecorded`) only those the record
-    does not hold."""
+    """Screen the mutants of one shard into its module's record: all, or a seeded random sample of `size` (when
+    > 0); of those, only the ones the record holds with one of the outcomes `rest`, or (`unrecorded`) only the
+    ones it does not hold. A recorded mutant is found by its function and change, not its number, which moves
+    when the module is edited; its line is replaced under its current name."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
@@ -485,13 +486,22 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
         drawn = (f"seed {seed}, {len(names)} drawn of the {population} mutants of shard {name} "
                  f"(random.Random({seed}).sample of their sorted names, screened in the order drawn); this "
                  "record's lines are the mutants screened")
-    recorded = rec.read(rec.record_path(module))
-    if rest:
-        names = [n for n in names if n in recorded and recorded[n].outcome in rest]
-    if unrecorded:
-        names = [n for n in names if n not in recorded]
+    replaces = {}
+    if rest or unrecorded:
+        recorded = {(rec.function_of(e.mutant), e.hash): e for e in rec.read(rec.record_path(module)).values()}
+        functions = {function for function, _ in recorded}
+        candidates = [n for n in (shard_mutants(name) if rest else names) if rec.function_of(n) in functions]
+        current = {n: (rec.function_of(n), digest)
+                   for n, (digest, _) in mutation_screen.changes(folder, module, candidates).items()}
+        if rest:
+            replaces = {n: recorded[key].mutant for n, key in current.items()
+                        if key in recorded and recorded[key].outcome in rest}
+            names = list(replaces)
+        else:
+            names = [n for n in names if current.get(n) not in recorded]
     which = "its unkilled mutants again" if rest else "the rest of its sample" if unrecorded else ""
-    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn)
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,
+                                  replaces=replaces)
 
 
 def check(killed: int, seed: int, only: list[str]) -> int:

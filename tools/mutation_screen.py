@@ -169,10 +169,11 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
 
 
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           which: str = "", drawn: str = "") -> int:
+           which: str = "", drawn: str = "", replaces: dict[str, str] | None = None) -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
     `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
-    so); `drawn`: how a random sample was drawn (the record's "sample:" note)."""
+    so); `drawn`: how a random sample was drawn (the record's "sample:" note); `replaces`: current name -> the
+    recorded name of the same change, whose line the new one replaces."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
     entries = rec.read(path)
@@ -191,6 +192,9 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     for i, name in enumerate(names):
         outcome, test, seconds = run_one(name, args, limit)
         digest, summary = found[name]
+        old = (replaces or {}).get(name, name)
+        if old not in names[:i]:  # (a line this screen already wrote under that name is another change's)
+            entries.pop(old, None)
         entries[name] = rec.Entry(name, shard, digest, outcome, test, seconds, summary)
         print(f"    {name}: {outcome} {test} ({seconds:.1f} s)", flush=True)
         if i % 10 == 9 or i == len(names) - 1:
