@@ -1,7 +1,7 @@
-"""A sliding phase's contract, by hand: a grain spinning about the normal on a still frictionless plate keeps its
-spin and turns at that rate (its orientation a closed-form quaternion, of unit norm), the phase advances chunk by
-chunk to its end, and a tilted ellipsoid spinning on a rough plate starts to slip at the speed of its contact point,
-|w x R|, with R the ellipsoid's support point written out here.
+"""A sliding phase's contract, by hand: a tilted ellipsoid spinning on a rough plate starts to slip at the speed of
+its contact point, |w x R|, with R the ellipsoid's support point written out here; a grain spinning about the normal
+on a still frictionless plate keeps its spin and turns at that rate (its orientation a closed-form quaternion, of
+unit norm), the phase advancing chunk by chunk to its end.
 
 Expected values are computed here from the geometry: the support point of x^T (Q A^-2 Q^T) x = 1 below the centre is
 R = -E e_z / sqrt(e_z . E e_z), E = Q A^2 Q^T; the friction then pulls the centre against the slip at mu g.
@@ -36,26 +36,6 @@ def turned_about_z(angle, q):
     return np.array([c * w - s * z, c * x - s * y, c * y + s * x, c * z + s * w])
 
 
-def test_a_spin_about_the_normal_on_a_frictionless_plate_turns_the_grain_at_that_rate_chunk_by_chunk():
-    """mu = 0: no torque about the normal, so w = (0, 0, W) stays and q(t) = q_z(W t) q0, |q| = 1 to round-off;
-    progress is told each chunk's end, increasing, within (t0, t_end]."""
-    spin, t_end, step = 40.0, 0.2, 1e-3  # five chunks of 40 steps
-    seen = [0.0]
-
-    def progress(t):
-        assert seen[-1] < t <= t_end, (seen[-1], t)
-        seen.append(t)
-    res = sliding.slide(still_plate(0.0), ellipsoid(), 0.0, np.zeros(2), np.zeros(2), Q0.copy(),
-                        np.array([0.0, 0.0, spin]), t_end, [0.1], step, 1e-10, progress)
-    assert res.t == t_end and not res.lifted
-    assert len(seen) >= 6 and seen[-1] == t_end
-    np.testing.assert_allclose(res.w, [0.0, 0.0, spin], rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(res.q, turned_about_z(spin * t_end, Q0), atol=1e-8)
-    assert abs(float(np.linalg.norm(res.q)) - 1.0) < 4e-16
-    np.testing.assert_allclose(res.samples[3][0], turned_about_z(spin * 0.1, Q0), atol=1e-8)
-    np.testing.assert_allclose(res.v, 0.0, atol=1e-15)
-
-
 def support_point(axes, Q):
     """R (3,) [m] from the centre to the lowest point of the ellipsoid of semi-axes `axes` turned by Q."""
     E = Q @ np.diag(np.square(axes)) @ Q.T
@@ -75,3 +55,23 @@ def test_a_tilted_ellipsoid_spinning_on_a_rough_plate_slips_at_its_contact_point
     expected_v = -mu * G * tau * slip / np.hypot(*slip)
     np.testing.assert_allclose(res.v, expected_v, rtol=2e-3, atol=0.0)
     assert res.dissipated == pytest.approx(MASS * mu * G * np.hypot(*slip) * tau, rel=2e-3)
+
+
+def test_a_spin_about_the_normal_on_a_frictionless_plate_turns_the_grain_at_that_rate_chunk_by_chunk():
+    """mu = 0: no torque about the normal, so w = (0, 0, W) stays and q(t) = q_z(W t) q0, |q| = 1 to round-off;
+    progress is told each chunk's end, increasing, within (t0, t_end]."""
+    spin, t_end, step = 40.0, 0.2, 1e-3  # five chunks of 40 steps
+    seen = [0.0]
+
+    def progress(t):
+        assert seen[-1] < t <= t_end, (seen[-1], t)
+        seen.append(t)
+    res = sliding.slide(still_plate(0.0), ellipsoid(), 0.0, np.zeros(2), np.zeros(2), Q0.copy(),
+                        np.array([0.0, 0.0, spin]), t_end, [0.1], step, 1e-10, progress)
+    assert res.t == t_end and not res.lifted
+    assert len(seen) >= 6 and seen[-1] == t_end
+    np.testing.assert_allclose(res.w, [0.0, 0.0, spin], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.q, turned_about_z(spin * t_end, Q0), atol=1e-8)
+    assert abs(float(np.linalg.norm(res.q)) - 1.0) < 4e-16
+    np.testing.assert_allclose(res.samples[3][0], turned_about_z(spin * 0.1, Q0), atol=1e-8)
+    np.testing.assert_allclose(res.v, 0.0, atol=1e-15)
