@@ -37,10 +37,12 @@ TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmu
 class Verdict:
     """A pytest plugin that notes the first test failing on an assertion (and stops there), else the first failing
     on another exception or the first fixture error (and runs on: a later test may still fail on an assertion),
-    and collection errors."""
+    and collection errors. `told(test)` is called at the first raise: a kill already, whatever a later test does
+    (hang, kill the process)."""
 
-    def __init__(self):
+    def __init__(self, told=None):
         self.session = None
+        self.told = told
         self.killed = self.raised = self.error = self.collection = ""
 
     def pytest_sessionstart(self, session):
@@ -61,8 +63,10 @@ class Verdict:
         elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
             self.killed = node.nodeid
             self.session.shouldstop = "a test failed on an assertion"
-        else:
-            self.raised = self.raised or f"{node.nodeid} ({call.excinfo.typename})"
+        elif not self.raised:
+            self.raised = f"{node.nodeid} ({call.excinfo.typename})"
+            if self.told:
+                self.told(self.raised)
 
 
 def freeze_tests(folder: Path) -> Path:
@@ -110,12 +114,12 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     if pid == 0:
         os.close(read)
         os.environ["MUTANT_UNDER_TEST"] = key  # mutmut's trampolines read it at every call
-        verdict = Verdict()
+        verdict = Verdict(told=lambda test: os.write(write, json.dumps({"raised": test}).encode() + b"\n"))
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             code = int(pytest.main(args, plugins=[verdict]))
         found = {"code": code, "killed": verdict.killed, "raised": verdict.raised, "error": verdict.error,
                  "collection": verdict.collection}
-        os.write(write, json.dumps(found).encode()[:60000])
+        os.write(write, json.dumps(found).encode()[:60000] + b"\n")
         os._exit(0)
     os.close(write)
     timed_out = False
@@ -128,12 +132,11 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
         time.sleep(0.05)
     seconds = time.monotonic() - start
     with os.fdopen(read, "rb") as pipe:
-        payload = pipe.read()
-    if timed_out:
-        return "timeout", "", seconds
-    if not payload:
-        return "crash", "", seconds
-    found = json.loads(payload)
+        told = [json.loads(line) for line in pipe.read().splitlines() if line.endswith(b"}")]
+    found = told[-1] if told and "code" in told[-1] else None
+    if found is None:  # stopped at the limit or died; a test that failed on a raise before that killed it
+        raised = next((t["raised"] for t in told if "raised" in t), "")
+        return ("raised", raised, seconds) if raised else ("timeout" if timed_out else "crash", "", seconds)
     for outcome in ("collection", "killed", "raised", "error"):
         if found[outcome]:
             return outcome, found[outcome], seconds
