@@ -225,8 +225,10 @@ SHARDS = {
     # import hook under test, before each test: a mutant that breaks the hook made every test a fixture error (no
     # verdict); these tests use none of its fixtures and call the hook themselves
     "integrity": ("symmech/core/integrity.py",
-                  ["tests/test_integrity_units.py", "tests/test_codegen.py", "--noconftest", "-k",
-                   "test_integrity_units or verify_refuses or used_modules or atomic_write"], ["*"]),
+                  ["tests/test_integrity_built_from.py", "tests/test_integrity_units.py", "tests/test_codegen.py",
+                   "--noconftest", "-k",
+                   "integrity_built_from or test_integrity_units or verify_refuses or used_modules or atomic_write"],
+                  ["*"]),
     # the rigid trolley: trolley_frames run in part (mutation/history.md)
     "trolley_frames": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                        ["*.x_moving_frame__*", "*.x__raw_frame__*", "*ǁFramePlanǁ*", "*.x_plan_frames__*",
