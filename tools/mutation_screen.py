@@ -172,14 +172,15 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
 
 
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           which: str = "", drawn: str = "", replaces: dict[str, str] | None = None) -> int:
+           which: str = "", drawn: str = "", replaces: dict[str, str] | None = None, stale: tuple = ()) -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
     `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
     so); `drawn`: how a random sample was drawn (the record's "sample:" note); `replaces`: current name -> the
-    recorded name of the same change, whose line the new one replaces."""
+    recorded name of the same change, whose line the new one replaces; `stale`: recorded lines to drop (their
+    change is no longer made)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
-    entries = rec.read(path)
+    entries = {n: e for n, e in rec.read(path).items() if n not in stale}
     found = changes(folder, module, names)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
@@ -202,6 +203,8 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
         print(f"    {name}: {outcome} {test} ({seconds:.1f} s)", flush=True)
         if i % 10 == 9 or i == len(names) - 1:
             rec.write(path, entries, notes)
+    if not names:
+        rec.write(path, entries, notes)
     counts = rec.tally({n: entries[n] for n in names}, path.stem, rec.equivalents())
     print(f"== screen {shard}: " + ", ".join(f"{n} {k}" for k, n in counts.items() if n), flush=True)
     return 0
