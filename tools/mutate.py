@@ -341,7 +341,7 @@ SHARDS = {
     "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
     # with the torsion tests, which cover _twist_hessian (35 s at load 9)
     "smm_forms_sample": ("symmech/smm/forms.py",
-                         ["tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
+                         ["tests/test_smm_forms_geometry.py", "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
                           "tests/test_smm_torsion_twist.py", "-k",
                           "not random_spatial and not spatial_boom and not excavator and not many_random"],
                          ["*"]),
