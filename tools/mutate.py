@@ -341,7 +341,8 @@ SHARDS = {
     "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
     # with the torsion tests, which cover _twist_hessian (35 s at load 9)
     "smm_forms_sample": ("symmech/smm/forms.py",
-                         ["tests/test_smm_forms_geometry.py", "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
+                         ["tests/test_smm_forms_geometry.py", "tests/test_smm_torsion_between_bodies.py",
+                          "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
                           "tests/test_smm_torsion_twist.py", "-k",
                           "not random_spatial and not spatial_boom and not excavator and not many_random"],
                          ["*"]),
@@ -349,7 +350,8 @@ SHARDS = {
                            ["tests/test_smm_closed_form.py", "tests/test_smm_mode_kinds.py", "tests/test_smm_structural.py",
                             "tests/test_smm_pivot.py", "-k", "not numerically_many"], ["*"]),
     # the exact free rotation (elliptic functions) and the flight's gap bounds: its own tests, 2.5 s
-    "free_flight": ("symmech/grain/free_flight.py", ["tests/test_grain_free_flight.py"], ["*"]),
+    "free_flight": ("symmech/grain/free_flight.py",
+                    ["tests/test_grain_free_flight_record.py", "tests/test_grain_free_flight.py"], ["*"]),
     # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
     "elastic_body_sample": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*"]),
     "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS, ["*"]),
@@ -373,7 +375,8 @@ COVERAGE = {
     "symmech/grain/impact.py": "",
     "symmech/grain/coulomb_law.py": "",
     "symmech/grain/paper_mode.py": "",
-    "symmech/grain/motion.py": "two functions only (texts and rows): a sample needs its motion tests, ~100 s a "
+    "symmech/grain/motion.py": "one function only (the trajectory's sample times; the rocking warning moved to "
+                               "grain/outcome.py, unscreened there): a sample needs its motion tests, ~100 s a "
                                "survivor",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
@@ -382,8 +385,7 @@ COVERAGE = {
     "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
                                                    "the engine is held to the Python reference by the "
                                                    "compiled-engine tests",
-    "symmech/grain/free_flight.py": "new this session, not screened yet; held to DOP853 and closed forms by "
-                                    "tests/test_grain_free_flight.py",
+    "symmech/grain/free_flight.py": "",
     "symmech/trolley/track.py": "",
     "symmech/trolley/model.py": "",
     "symmech/trolley/elastic/modal.py": "",
@@ -402,9 +404,7 @@ COVERAGE = {
                                            "(mutation/history.md)",
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
-    "symmech/smm/forms.py": "10 of the 30 drawn (shard smm_forms_sample): stopped at the session's end (up to "
-                            "170 s a mutant at load 9); its selection leaves out tests/test_smm_torsion_twist.py, "
-                            "which covers _twist_hessian, the function of its 3 survivors",
+    "symmech/smm/forms.py": "",
     "symmech/smm/numeric.py": "shard smm_numeric_sample made, not screened: the sessions' CPU went to the modules "
                               "under 90 % and make mutate-check",
     "symmech/smm/structural.py": "",
@@ -512,11 +512,11 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
             names = list(replaces)
         else:
             names = [n for n in names if current.get(n) not in recorded]
-            # lines of the shard's functions whose change is no longer made (the module was edited): mutate-check
-            # could not find them; their functions' current mutants are among those screened now
+            # lines of the shard's mutants whose change is no longer made (the module was edited, or the function
+            # moved out of it): mutate-check could not find them; their functions' current mutants are screened now
             made = set(current.values())
-            mine = {rec.function_of(n) for n in shard_mutants(name)}
-            stale = [e.mutant for key, e in recorded.items() if key[0] in mine and key not in made]
+            stale = [e.mutant for key, e in recorded.items()
+                     if key not in made and any(fnmatch.fnmatchcase(e.mutant, p) for p in SHARDS[name][2])]
     which = ("its unkilled mutants again" if rest else
              "the rest of its sample" if size else "its mutants not recorded" if unrecorded else "")
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,
