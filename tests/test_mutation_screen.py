@@ -1,7 +1,7 @@
 """The mutation screen's verdicts (tools/mutation_screen.py) on made-up test files whose outcome is known, and its
-record's change hash, table, sample intervals and renames (tools/mutation_record.py): only an assertion kills; a
-test that raises something else, a fixture error, a collection error, a crash and a timeout each get their own
-outcome."""
+record's change hash, table, sample intervals and renames (tools/mutation_record.py): a failing test kills, on an
+assertion (`killed`) or on another exception (`raised`), told apart; a fixture error, a collection error, a crash
+and a timeout each get their own outcome, none a kill."""
 import sys
 import textwrap
 from pathlib import Path
@@ -60,6 +60,36 @@ def test_a_run_past_its_limit_is_a_timeout(tmp_path):
     path.write_text("import time\n\ndef test_a():\n    time.sleep(30)\n")
     outcome, _, seconds = mutation_screen.run_one("", [str(path), *QUIET], 1.0)
     assert outcome == "timeout" and 1.0 <= seconds < 10.0
+
+
+@pytest.mark.slow
+def test_a_raise_before_a_test_that_hangs_is_a_kill_by_a_raise(tmp_path):
+    """The screen runs on past a raise (a later test may assert); a later test past the limit leaves the raise."""
+    path = tmp_path / "test_raise_then_hang.py"
+    path.write_text("import time\n\ndef test_a():\n    {}['k']\n\ndef test_b():\n    time.sleep(30)\n")
+    outcome, decided, seconds = mutation_screen.run_one("", [str(path), f"--rootdir={tmp_path}", *QUIET], 3.0)
+    assert (outcome, decided) == ("raised", f"{path.name}::test_a (KeyError)") and seconds < 10.0
+
+
+def test_a_recheck_runs_the_deciding_test_with_the_selections_marks_and_options(tmp_path):
+    kill = rec.Entry("m.x_f__mutmut_1", "s", "0123456789ab", "raised", "tests/test_a.py::test_b (TypeError)", 1.0, "")
+    args = mutation_screen.deciding(kill, tmp_path, ["tests/test_a.py", "--noconftest", "-m", "not slow", "-k", "b"])
+    assert args[:4] == [str(tmp_path / "frozen" / "tests/test_a.py::test_b"), "-m", "not slow", "--noconftest"]
+    assert mutation_screen.deciding(rec.Entry("m.x_f__mutmut_2", "s", "ab", "survived", "", 1.0, ""), tmp_path,
+                                    ["tests/test_a.py"]) == []
+
+
+def test_the_table_counts_both_kinds_of_kill_and_each_non_kill_apart(tmp_path, monkeypatch):
+    """Six mutants of a full record: 2 killed by an assertion, 1 by a raise (3 of 6, 50 %), a survivor, a fixture
+    error and a timeout, each in its column; no proof, so 50 % of the non-equivalent too."""
+    monkeypatch.setattr(rec, "RESULTS", tmp_path)
+    monkeypatch.setattr(rec, "EQUIVALENT", tmp_path / "none.tsv")
+    outcomes = ["killed", "killed", "raised", "survived", "error", "timeout"]
+    entries = {f"m.x_f__mutmut_{i}": rec.Entry(f"m.x_f__mutmut_{i}", "s", f"{i:012x}", o, "", 1.0, "")
+               for i, o in enumerate(outcomes)}
+    rec.write(tmp_path / "m.tsv", entries, ["made: 6 mutants of m.py by mutmut"])
+    row = next(line for line in rec.table(["m.py"]).splitlines() if line.startswith("| `m`"))
+    assert row == "| `m` | 6 (6) | full | 2 | 1 | 3 (50.0 %) | 0 | 1 | 1 | 0 | 0 | 1 | 0 | 50.0 % |"
 
 
 def test_change_hash_ignores_the_diff_header_and_indentation():

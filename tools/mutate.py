@@ -10,9 +10,13 @@
                                            those recorded without a kill (after a new test)
     python tools/mutate.py --screen SHARD ... --survived
                                            as --rest, only the survivors (a new test written against them)
-    python tools/mutate.py --screen SHARD --sample N [--seed S]
+    python tools/mutate.py --screen SHARD --sample N [--seed S] [--unrecorded]
                                            screen a seeded random sample of N of the shard's mutants (a record
-                                           of its own module: the table gives its rate a binomial interval)
+                                           of its own module: the table gives its rate a binomial interval);
+                                           --unrecorded: only those drawn that the record does not hold yet (a
+                                           sample stopped early, finished); without --sample, every mutant the
+                                           record does not hold, and its lines whose change is no longer made
+                                           (the module was edited) are dropped
     python tools/mutate.py --rename OLD NEW
                                            a module moved (paths such as symmech/core/ode.py): its record,
                                            mutant names and proofs follow it
@@ -218,10 +222,15 @@ SHARDS = {
                               "*.x_equilibrium_tensions__mutmut_1[01][0-9]"]),
     # test_aot.py's test of verify_built_from finds generated/ beside integrity.py, which the mutated copy has not;
     # test_integrity.py runs fresh interpreters, which import the unmutated package; the codegen tests that
-    # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes)
+    # compare source keys fail on the mutated copy (its source differs) and derive every module (minutes).
+    # --noconftest: tests/conftest.py's autouse fixtures import the scenes, hence generated modules through the
+    # import hook under test, before each test: a mutant that breaks the hook made every test a fixture error (no
+    # verdict); these tests use none of its fixtures and call the hook themselves
     "integrity": ("symmech/core/integrity.py",
-                  ["tests/test_integrity_units.py", "tests/test_codegen.py", "-k",
-                   "test_integrity_units or verify_refuses or used_modules or atomic_write"], ["*"]),
+                  ["tests/test_integrity_built_from.py", "tests/test_integrity_units.py", "tests/test_codegen.py",
+                   "--noconftest", "-k",
+                   "integrity_built_from or test_integrity_units or verify_refuses or used_modules or atomic_write"],
+                  ["*"]),
     # the rigid trolley: trolley_frames run in part (mutation/history.md)
     "trolley_frames": ("symmech/trolley/model.py", TROLLEY_TESTS + ["tests/test_trolley_frames_units.py"],
                        ["*.x_moving_frame__*", "*.x__raw_frame__*", "*ǁFramePlanǁ*", "*.x_plan_frames__*",
@@ -303,19 +312,22 @@ SHARDS = {
     "body": ("symmech/grain/body.py", ["tests/test_grain_body.py", *GRAIN_PARTS_TESTS], ["*"]),
     "contact": ("symmech/grain/contact.py", ["tests/test_grain_contact_parts.py", *GRAIN_PARTS_TESTS], ["*"]),
     "flight": ("symmech/grain/flight.py", ["tests/test_grain_flight_parts.py", *GRAIN_PARTS_TESTS], ["*"]),
-    "sliding": ("symmech/grain/sliding.py", GRAIN_PARTS_TESTS, ["*"]),
+    "sliding": ("symmech/grain/sliding.py", ["tests/test_sliding_phase_contract.py", *GRAIN_PARTS_TESTS], ["*"]),
     "paper_mode": ("symmech/grain/paper_mode.py", GRAIN_PARTS_TESTS, ["*"]),
     "grain_sweep_statistics": ("symmech/grain/sweep.py",
-                               ["tests/test_grain_sweep.py", "-m", "not slow", "-k",
-                                "interval or overlap or separate or half_width or best"],
+                               ["tests/test_grain_sweep_edges.py", "tests/test_grain_sweep.py", "-m", "not slow", "-k",
+                                "sweep_edges or interval or overlap or separate or half_width or best"],
                                ["*.x__moments__*", "*.x_mean_interval__*", "*.x_std_interval__*",
                                 "*.x_proportion_interval__*", "*.x_difference_interval__*", "*.x_statistics__*",
                                 "*.x_overlap_normal__*", "*.x_overlap__*", "*.x_overlap_interval__*",
                                 "*.x_grains_needed__*", "*.x_separation__*", "*.x_best_point__*", "*.x__spread__*"]),
     "track": ("symmech/trolley/track.py",
-              ["tests/test_trolley_physics.py", "tests/test_trolley_frames_units.py",
+              ["tests/test_track_tables_and_messages.py", "tests/test_trolley_physics.py", "tests/test_trolley_frames_units.py",
                "tests/test_trolley_continuity.py"], ["*"]),
-    "trolley_model": ("symmech/trolley/model.py", REACTION_TESTS + ["tests/test_trolley_frames_units.py"], ["*"]),
+    # with the moving frame's closed forms (2 s), which hold the jump events' kinds
+    "trolley_model": ("symmech/trolley/model.py",
+                      ["tests/test_trolley_moving_frame_closed_forms.py", *REACTION_TESTS,
+                       "tests/test_trolley_frames_units.py"], ["*"]),
     "modal": ("symmech/trolley/elastic/modal.py",
               ["tests/test_modal_groups_and_phase.py", "tests/test_trolley_elastic_modes_tracking.py",
                "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
@@ -323,16 +335,26 @@ SHARDS = {
                        ["tests/test_smm_structural_parts.py", "tests/test_smm_expression_messages.py",
                         "tests/test_smm_structural.py"], ["*"]),
     "smm_model": ("symmech/smm/model.py",
-                  ["tests/test_smm_expression_messages.py", "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
-                   "expression_messages or closed_form or structural or small_systems"], ["*"]),
+                  ["tests/test_smm_mechanism_lookups.py", "tests/test_smm_expression_messages.py",
+                   "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
+                   "mechanism_lookups or expression_messages or closed_form or structural or small_systems"], ["*"]),
     "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
+    # with the torsion tests, which cover _twist_hessian (35 s at load 9)
     "smm_forms_sample": ("symmech/smm/forms.py",
-                         ["tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
-                          "-k", "not random_spatial and not spatial_boom and not excavator and not many_random"],
+                         ["tests/test_smm_forms_geometry.py", "tests/test_smm_torsion_between_bodies.py",
+                          "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py",
+                          "tests/test_smm_torsion_twist.py", "-k",
+                          "not random_spatial and not spatial_boom and not excavator and not many_random"],
                          ["*"]),
     "smm_numeric_sample": ("symmech/smm/numeric.py",
                            ["tests/test_smm_closed_form.py", "tests/test_smm_mode_kinds.py", "tests/test_smm_structural.py",
                             "tests/test_smm_pivot.py", "-k", "not numerically_many"], ["*"]),
+    # the exact free rotation (elliptic functions) and the flight's gap bounds: its own tests, 2.5 s
+    "free_flight": ("symmech/grain/free_flight.py",
+                    ["tests/test_grain_free_flight_record.py", "tests/test_grain_free_flight.py"], ["*"]),
+    # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
+    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*"]),
+    "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS, ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
     "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
@@ -340,7 +362,7 @@ SHARDS = {
 }
 
 
-OUTCOMES_UNKILLED = tuple(o for o in rec.OUTCOMES if o != "killed")  # what --rest screens again
+OUTCOMES_UNKILLED = tuple(o for o in rec.OUTCOMES if o not in rec.KILLS)  # what --rest screens again
 
 # every module that computes physics or numerics: "" when it is screened (its record), else why it is not
 COVERAGE = {
@@ -353,7 +375,8 @@ COVERAGE = {
     "symmech/grain/impact.py": "",
     "symmech/grain/coulomb_law.py": "",
     "symmech/grain/paper_mode.py": "",
-    "symmech/grain/motion.py": "two functions only (texts and rows): a sample needs its motion tests, ~100 s a "
+    "symmech/grain/motion.py": "one function only (the trajectory's sample times; the rocking warning moved to "
+                               "grain/outcome.py, unscreened there): a sample needs its motion tests, ~100 s a "
                                "survivor",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
@@ -362,22 +385,28 @@ COVERAGE = {
     "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
                                                    "the engine is held to the Python reference by the "
                                                    "compiled-engine tests",
-    "symmech/grain/free_flight.py": "new this session, not screened yet; held to DOP853 and closed forms by "
-                                    "tests/test_grain_free_flight.py",
+    "symmech/grain/free_flight.py": "",
     "symmech/trolley/track.py": "",
-    "symmech/trolley/model.py": "10 of the 30 drawn: the sample stopped at the session's end (survivors ~45 s each)",
+    "symmech/trolley/model.py": "",
     "symmech/trolley/elastic/modal.py": "",
     "symmech/trolley/elastic/membrane.py": "",
     "symmech/trolley/elastic/system.py": "one function only (quasi_static); a sample needs its integrating tests, "
                                          "10-15 s a survivor",
-    "symmech/trolley/elastic/body.py": "not screened yet (split from the old elastic.py this session)",
-    "symmech/trolley/elastic/simulate.py": "not screened yet (split from the old elastic.py this session)",
+    "symmech/trolley/elastic/body.py": "shard elastic_body_sample (seeded sample, the fast elastic tests, ~11 s a "
+                                       "survivor) made, not screened: the session's CPU went to the modules under "
+                                       "90 % and make mutate-check; shards of some functions ran by the old rules "
+                                       "(mutation/history.md)",
+    "symmech/trolley/elastic/frame.py": "shard elastic_frame_sample (seeded sample, the fast elastic tests) made, not "
+                                        "screened: the session's CPU went to the modules under 90 % and make "
+                                        "mutate-check; shard elastic_frame ran by the old rules (mutation/history.md)",
+    "symmech/trolley/elastic/simulate.py": "not screened: its functions are reached only through integrating tests "
+                                           "(10-15 s a survivor); shards of some functions ran by the old rules "
+                                           "(mutation/history.md)",
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
-    "symmech/smm/forms.py": "10 of the 30 drawn (shard smm_forms_sample): stopped at the session's end (up to "
-                            "170 s a mutant at load 9); its selection leaves out tests/test_smm_torsion_twist.py, "
-                            "which covers _twist_hessian, the function of its 3 survivors",
-    "symmech/smm/numeric.py": "shard smm_numeric_sample made, not screened yet: the session's end came first",
+    "symmech/smm/forms.py": "",
+    "symmech/smm/numeric.py": "shard smm_numeric_sample made, not screened: the sessions' CPU went to the modules "
+                              "under 90 % and make mutate-check",
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
@@ -452,9 +481,11 @@ def shard_mutants(name: str) -> list[str]:
     return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
 
 
-def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0) -> int:
-    """Screen the mutants of one shard into its module's record: all, a seeded random sample of `size` (when > 0),
-    and of them (`rest`) only those recorded with one of these outcomes."""
+def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0, unrecorded: bool = False) -> int:
+    """Screen the mutants of one shard into its module's record: all, or a seeded random sample of `size` (when
+    > 0); of those, only the ones the record holds with one of the outcomes `rest`, or (`unrecorded`) only the
+    ones it does not hold. A recorded mutant is found by its function and change, not its number, which moves
+    when the module is edited; its line is replaced under its current name."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
@@ -468,10 +499,28 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
         drawn = (f"seed {seed}, {len(names)} drawn of the {population} mutants of shard {name} "
                  f"(random.Random({seed}).sample of their sorted names, screened in the order drawn); this "
                  "record's lines are the mutants screened")
-    if rest:
-        recorded = rec.read(rec.record_path(module))
-        names = [n for n in names if n in recorded and recorded[n].outcome in rest]
-    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, rest=bool(rest), drawn=drawn)
+    replaces, stale = {}, []
+    if rest or unrecorded:
+        recorded = {(rec.function_of(e.mutant), e.hash): e for e in rec.read(rec.record_path(module)).values()}
+        functions = {function for function, _ in recorded}
+        candidates = [n for n in shard_mutants(name) if rec.function_of(n) in functions]
+        current = {n: (rec.function_of(n), digest)
+                   for n, (digest, _) in mutation_screen.changes(folder, module, candidates).items()}
+        if rest:
+            replaces = {n: recorded[key].mutant for n, key in current.items()
+                        if key in recorded and recorded[key].outcome in rest}
+            names = list(replaces)
+        else:
+            names = [n for n in names if current.get(n) not in recorded]
+            # lines of the shard's mutants whose change is no longer made (the module was edited, or the function
+            # moved out of it): mutate-check could not find them; their functions' current mutants are screened now
+            made = set(current.values())
+            stale = [e.mutant for key, e in recorded.items()
+                     if key not in made and any(fnmatch.fnmatchcase(e.mutant, p) for p in SHARDS[name][2])]
+    which = ("its unkilled mutants again" if rest else
+             "the rest of its sample" if size else "its mutants not recorded" if unrecorded else "")
+    return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,
+                                  replaces=replaces, stale=stale)
 
 
 def check(killed: int, seed: int, only: list[str]) -> int:
@@ -526,12 +575,12 @@ def main(argv: list[str]) -> int:
         # a folder of its own: the check makes the mutants afresh, beside a screen that may be running
         return mutation_screen.recheck(argv[1], shard_folder(argv[1], ".check"), module, tests, chosen)
     if argv[:1] == ["--screen"] and len(argv) > 1 and argv[1] in SHARDS:
-        flags = [a for a in argv[2:] if a in ("--fresh", "--rest", "--survived")]
+        flags = [a for a in argv[2:] if a in ("--fresh", "--rest", "--survived", "--unrecorded")]
         options = dict(zip(*[iter(a for a in argv[2:] if a not in flags)] * 2))
         if set(options) <= {"--sample", "--seed"}:
             rest = ("survived",) if "--survived" in flags else OUTCOMES_UNKILLED if "--rest" in flags else ()
             return screen(argv[1], "--fresh" in flags, rest, int(options.get("--sample", 0)),
-                          int(options.get("--seed", 0)))
+                          int(options.get("--seed", 0)), "--unrecorded" in flags)
     if argv[:1] == ["--rename"] and len(argv) == 3:
         rec.rename(argv[1], argv[2])
         return 0

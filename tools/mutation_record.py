@@ -6,7 +6,8 @@ change (so that a renumbered mutant is found again), the outcome and the test th
 
     killed      a test failed on an assertion (AssertionError, or pytest's own failure: `pytest.raises` that
                 did not raise, `pytest.fail`)
-    raised      no assertion failed, but a test failed on another exception the mutated code raised
+    raised      no assertion failed, but a test failed (in its call phase) on another exception the mutated
+                code raised
     survived    every test passed
     timeout     stopped after the screen's time limit (a multiple of the unmutated run's slowest of 3)
     crash       the test process died (a signal) or left no verdict
@@ -14,8 +15,9 @@ change (so that a renumbered mutant is found again), the outcome and the test th
     error       a fixture's setup or teardown failed, no test failed
     no-tests    the selection ran no test
 
-Only "killed" is a kill. "raised" (a test failed, pytest's exit 1, but on no assertion) is shown in its own
-column and in the sum "killed + raised" beside the kill rate; nothing else counts. A survivor named in
+A mutant is killed when a test of its selection fails: "killed" (by an assertion) and "raised" (by a raise) both
+count, each in its own column beside their sum, the kill rate (the convention of PIT and Stryker). Timeouts,
+crashes, collection errors, fixture errors and no tests are not kills, each in its own column. A survivor named in
 mutation/equivalent.tsv with a written proof (no input the code can receive tells it from the original) is
 counted apart as equivalent.
 """
@@ -31,6 +33,7 @@ RESULTS = ROOT / "mutation" / "results"
 EQUIVALENT = ROOT / "mutation" / "equivalent.tsv"
 DOC = ROOT / "docs" / "mutation.md"
 OUTCOMES = ("killed", "raised", "survived", "timeout", "crash", "collection", "error", "no-tests")
+KILLS = ("killed", "raised")  # a test of the selection failed: on an assertion, or on the mutated code's raise
 COLUMNS = ("mutant", "shard", "hash", "outcome", "test", "seconds", "change")
 TABLE_START = "<!-- per-module table: written by `python tools/mutate.py --table` from mutation/results/ -->"
 TABLE_END = "<!-- end of the per-module table -->"
@@ -173,10 +176,10 @@ def rate(k: int, n: int, sampled: bool) -> str:
 def table(modules: list[str]) -> str:
     """The per-module table (markdown) of every committed record, then the modules of `modules` without one."""
     proofs = equivalents()
-    lines = ["| module | mutants screened (made) | sample or full | killed by an assertion: raw rate | raised "
-             "(another exception) | killed + raised | equivalent, proven | survived | timeout | crash "
-             "| collection, error, no tests | killed by an assertion, of the non-equivalent |",
-             "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = ["| module | mutants screened (made) | sample or full | killed by an assertion | killed by a raise "
+             "| killed: kill rate | equivalent, proven | survived | timeout | crash | collection error "
+             "| fixture error | no tests | killed, of the non-equivalent |",
+             "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     recorded = sorted(RESULTS.glob("*.tsv"))
     partial = []
     for path in recorded:
@@ -191,10 +194,11 @@ def table(modules: list[str]) -> str:
         if how == "part":
             partial.append(f"`{module}` ({n} of {made}: {', '.join(sorted(shards_of(path)))})")
         sampled = how == "sample"
-        lines.append(f"| `{module}` | {n} ({made}) | {how} | {rate(c['killed'], n, sampled)} | {c['raised']} "
-                     f"| {rate(c['killed'] + c['raised'], n, sampled)} | {c['equivalent']} | {c['survived']} "
-                     f"| {c['timeout']} | {c['crash']} | {c['collection'] + c['error'] + c['no-tests']} "
-                     f"| {100 * c['killed'] / rest if rest else 100:.1f} % |")
+        kills = sum(c[k] for k in KILLS)
+        lines.append(f"| `{module}` | {n} ({made}) | {how} | {c['killed']} | {c['raised']} "
+                     f"| {rate(kills, n, sampled)} | {c['equivalent']} | {c['survived']} | {c['timeout']} "
+                     f"| {c['crash']} | {c['collection']} | {c['error']} | {c['no-tests']} "
+                     f"| {100 * kills / rest if rest else 100:.1f} % |")
     lines += ["", "Samples: the rate of the mutants the sample was drawn from (the module's, or one shard's: "
               "the record's `sample:` note gives the seed and the shard), 95 % Clopper-Pearson interval after it. "
               "Records of part of a module "

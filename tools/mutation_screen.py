@@ -3,9 +3,9 @@ imported pytest and the mutated module once (mutmut's trampolines choose the mut
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
 The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion (a kill), as
-`-x` would; past a test that fails on another exception or a fixture error it runs on, so that a mutant is
-recorded "raised" (not a kill: docs/mutation.md) or "error" only when no test of the selection fails on an
+the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion, as `-x` would;
+past a test that fails on another exception or a fixture error it runs on, so that a mutant is recorded "raised"
+(killed by a raise: docs/mutation.md) or "error" (not a kill) only when no test of the selection fails on an
 assertion.
 """
 from __future__ import annotations
@@ -37,10 +37,12 @@ TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmu
 class Verdict:
     """A pytest plugin that notes the first test failing on an assertion (and stops there), else the first failing
     on another exception or the first fixture error (and runs on: a later test may still fail on an assertion),
-    and collection errors."""
+    and collection errors. `told(test)` is called at the first raise: a kill already, whatever a later test does
+    (hang, kill the process)."""
 
-    def __init__(self):
+    def __init__(self, told=None):
         self.session = None
+        self.told = told
         self.killed = self.raised = self.error = self.collection = ""
 
     def pytest_sessionstart(self, session):
@@ -61,8 +63,10 @@ class Verdict:
         elif call.excinfo.errisinstance((AssertionError, pytest.fail.Exception)):
             self.killed = node.nodeid
             self.session.shouldstop = "a test failed on an assertion"
-        else:
-            self.raised = self.raised or f"{node.nodeid} ({call.excinfo.typename})"
+        elif not self.raised:
+            self.raised = f"{node.nodeid} ({call.excinfo.typename})"
+            if self.told:
+                self.told(self.raised)
 
 
 def freeze_tests(folder: Path) -> Path:
@@ -110,12 +114,12 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     if pid == 0:
         os.close(read)
         os.environ["MUTANT_UNDER_TEST"] = key  # mutmut's trampolines read it at every call
-        verdict = Verdict()
+        verdict = Verdict(told=lambda test: os.write(write, json.dumps({"raised": test}).encode() + b"\n"))
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             code = int(pytest.main(args, plugins=[verdict]))
         found = {"code": code, "killed": verdict.killed, "raised": verdict.raised, "error": verdict.error,
                  "collection": verdict.collection}
-        os.write(write, json.dumps(found).encode()[:60000])
+        os.write(write, json.dumps(found).encode()[:60000] + b"\n")
         os._exit(0)
     os.close(write)
     timed_out = False
@@ -128,12 +132,11 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
         time.sleep(0.05)
     seconds = time.monotonic() - start
     with os.fdopen(read, "rb") as pipe:
-        payload = pipe.read()
-    if timed_out:
-        return "timeout", "", seconds
-    if not payload:
-        return "crash", "", seconds
-    found = json.loads(payload)
+        told = [json.loads(line) for line in pipe.read().splitlines() if line.endswith(b"}")]
+    found = told[-1] if told and "code" in told[-1] else None
+    if found is None:  # stopped at the limit or died; a test that failed on a raise before that killed it
+        raised = next((t["raised"] for t in told if "raised" in t), "")
+        return ("raised", raised, seconds) if raised else ("timeout" if timed_out else "crash", "", seconds)
     for outcome in ("collection", "killed", "raised", "error"):
         if found[outcome]:
             return outcome, found[outcome], seconds
@@ -141,9 +144,10 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     return outcome, "" if outcome != "crash" else f"pytest exit {found['code']}", seconds
 
 
-def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[list[str], float, list[float]]:
+def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
+            runs: int = BASELINE_RUNS) -> tuple[list[str], float, list[float]]:
     """Generate the mutants, freeze the tests, import pytest and the mutated module in this process, and time the
-    unmutated run BASELINE_RUNS times: (pytest args, a mutant's time limit, the baseline times)."""
+    unmutated run `runs` times: (pytest args, a mutant's time limit, the baseline times)."""
     generate(folder, fresh)
     frozen = freeze_tests(folder)
     args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
@@ -159,7 +163,7 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         pytest.main([*args, "--collect-only"])
     times = []
-    for _ in range(BASELINE_RUNS):
+    for _ in range(runs):
         outcome, test, seconds = run_one("", args, 3600.0)
         if outcome != "survived":
             raise SystemExit(f"the unmutated code does not pass its tests ({outcome} {test}): no screen")
@@ -168,18 +172,20 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[l
 
 
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           rest: bool = False, drawn: str = "") -> int:
+           which: str = "", drawn: str = "", replaces: dict[str, str] | None = None, stale: tuple = ()) -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
-    `rest`: they are what an earlier screen of the shard left unkilled (the note says so); `drawn`: how a random
-    sample was drawn (the record's "sample:" note)."""
+    `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
+    so); `drawn`: how a random sample was drawn (the record's "sample:" note); `replaces`: current name -> the
+    recorded name of the same change, whose line the new one replaces; `stale`: recorded lines to drop (their
+    change is no longer made)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
-    entries = rec.read(path)
+    entries = {n: e for n, e in rec.read(path).items() if n not in stale}
     found = changes(folder, module, names)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
     made = len(mutant_names(folder, module))
-    label = f"{shard} (its unkilled mutants again)" if rest else shard
+    label = f"{shard} ({which})" if which else shard
     notes = [n for n in rec.notes_of(path) if not n.startswith((f"shard {label}:", "made:", "module:"))]
     notes[:0] = [f"made: {made} mutants of {module} by mutmut", f"module: {module}"]
     if drawn:
@@ -190,10 +196,15 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     for i, name in enumerate(names):
         outcome, test, seconds = run_one(name, args, limit)
         digest, summary = found[name]
+        old = (replaces or {}).get(name, name)
+        if old not in names[:i]:  # (a line this screen already wrote under that name is another change's)
+            entries.pop(old, None)
         entries[name] = rec.Entry(name, shard, digest, outcome, test, seconds, summary)
         print(f"    {name}: {outcome} {test} ({seconds:.1f} s)", flush=True)
         if i % 10 == 9 or i == len(names) - 1:
             rec.write(path, entries, notes)
+    if not names:
+        rec.write(path, entries, notes)
     counts = rec.tally({n: entries[n] for n in names}, path.stem, rec.equivalents())
     print(f"== screen {shard}: " + ", ".join(f"{n} {k}" for k, n in counts.items() if n), flush=True)
     return 0
@@ -202,26 +213,30 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
 def sample(entries: dict[str, rec.Entry], module: str, killed: int, seed: int) -> list[rec.Entry]:
     """`killed` killed entries at random (all when fewer) and every survivor with a written proof."""
     proofs = rec.equivalents()
-    kills = sorted(n for n, e in entries.items() if e.outcome in ("killed", "raised"))
+    kills = sorted(n for n, e in entries.items() if e.outcome in rec.KILLS)
     chosen = random.Random(seed).sample(kills, min(killed, len(kills)))
     proven = [n for n, e in entries.items() if e.outcome == "survived" and (module, e.hash) in proofs]
     return [entries[n] for n in sorted(chosen + proven)]
 
 
 def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
-    """pytest args that run only the test a recorded kill names (in the frozen copy, with the selection's marks);
-    [] for any other outcome, which needs the whole selection (a survivor survives all of it)."""
-    if entry.outcome not in ("killed", "raised") or not entry.test:
+    """pytest args that run only the test a recorded kill names (in the frozen copy, with the selection's marks and
+    its options such as --noconftest); [] for any other outcome, which needs the whole selection (a survivor
+    survives all of it)."""
+    if entry.outcome not in rec.KILLS or not entry.test:
         return []
     marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
+    options = [a for a in tests if a.startswith("--")]
     node = entry.test.split(" (")[0]
-    return [str(folder / "frozen" / node), *marks, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
+    return [str(folder / "frozen" / node), *marks, *options, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
 
 
 def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
     """Rerun `chosen` on mutants made from the current tree, a recorded kill against the test that made it, any
     other outcome against the whole selection; 1 when an outcome no longer holds or a mutant is gone."""
-    args, limit, _ = prepare(folder, module, tests, fresh=True)
+    # one unmutated run: it must pass, and its time only sets the limit, which can turn a recorded outcome into a
+    # timeout (a failed check), never a failed check into a passed one
+    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1)
     current = mutant_names(folder, module)
     by_hash = {}
     for name, (digest, _) in changes(folder, module, current).items():

@@ -1,0 +1,67 @@
+"""Track tables and parametrised tracks at their edges, by hand: the turn limit is inclusive (docs/scenes-trolley.md:
+max_turn_deg in (0, 90]), collinear points whose unit directions dot to 1 + 2^-52 are no turn, a kink is named with
+its angle and point, a table without interior samples reports no curvature, and each refusal names its field, the
+value and the rule in one line.
+
+Expected values are written out: the angle between (1, 1, 1) and (0, 0, 2) is acos(1/sqrt 3) = 54.7356 deg, a
+straight table of n unit segments is n m long.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from symmech.core.scene import SceneError
+from symmech.trolley import track
+
+
+def test_a_turn_of_exactly_max_turn_deg_is_allowed():
+    """A right-angle corner (segments along x, then y: cos = 0 exactly, 90.0 deg) under max_turn_deg = 90."""
+    points = [(0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0), (3, 1, 0), (3, 2, 0), (3, 3, 0)]
+    table = track.TableTrack(points, "track.points", 90.0)
+    assert 6.0 * 0.95 < table.length < 6.0 * 1.05  # about the polyline's 6 m
+
+
+def test_a_kink_after_collinear_points_is_refused_with_its_angle_and_point():
+    """Points along (1, 1, 1), whose unit directions dot to 1 + 2^-52 (no turn, not NaN), then a turn to +z at
+    point 3 by acos(1/sqrt 3) = 54.7 deg, above max_turn_deg = 20."""
+    diagonal = np.array([(0, 0, 0), (1, 1, 1), (2, 2, 2)], float)
+    d = np.diff(diagonal, axis=0) / np.linalg.norm(np.diff(diagonal, axis=0), axis=1)[:, None]
+    assert d[0] @ d[1] > 1.0  # the rounding this test is about
+    points = [(0, 0, 0), (1, 1, 1), (2, 2, 2), (3, 3, 3), (3, 3, 5), (3, 3, 7), (3, 3, 9)]
+    angle = math.degrees(math.acos(1 / math.sqrt(3)))
+    assert f"{angle:.1f}" == "54.7"
+    expected = ("scene field 'track.points': track is not smooth: it turns by 54.7 deg at point 3 "
+                "(max_turn_deg = 20); add points or smooth the table")
+    with pytest.raises(SceneError) as refused:
+        track.TableTrack(points, "track.points", 20.0)
+    assert str(refused.value) == expected
+
+
+def test_leaving_a_table_is_refused_with_the_range_and_the_length():
+    """A straight table of five unit segments is 5 m long; s from -1 to 5 m leaves it."""
+    table = track.TableTrack([(k, 0, 0) for k in range(6)], "track.points", 20.0)
+    assert table.length == pytest.approx(5.0, rel=1e-12)
+    with pytest.raises(SceneError) as refused:
+        table.check_domain("track", -1.0, 5.0)
+    assert str(refused.value) == ("scene field 'motion.speed': the motion leaves the track table: s from -1 to 5 m "
+                                  "(with the front axle in case 2), track length 5 m")
+
+
+def test_a_table_without_interior_samples_reports_no_curvature():
+    """Six collinear points with points 2 and 3 1 mm apart: the 120 samples of the fit (4/119 m apart) put none
+    strictly between them, the interior where the curvature is judged, so its error and maximum read 0."""
+    points = [(0, 0, 0), (1, 0, 0), (2, 0, 0), (2.001, 0, 0), (3, 0, 0), (4, 0, 0)]
+    fine = np.linspace(0.0, 4.0, 120)
+    assert not np.any((fine > 2.0) & (fine < 2.001))
+    noise = track.TableTrack(points, "track.points", 20.0).noise
+    assert noise["curvature_error_per_m"] == 0.0 and noise["curvature_max_per_m"] == 0.0
+    assert noise["curvature_overshoot"] == 0.0
+
+
+def test_a_parameter_whose_speed_vanishes_is_refused_where_it_does():
+    """X0(u) = (u^3, 0, 0) on [-1, 1]: |dX0/du| = 3 u^2 is zero at u = 0, a node of the arc length's grid."""
+    with pytest.raises(SceneError) as refused:
+        track.ArcLength(lambda u: 3.0 * np.square(u), -1.0, 1.0, "track.u_range")
+    assert str(refused.value) == ("scene field 'track.u_range': dX0/du vanishes at u = 0: the parametrization is "
+                                  "singular there")
