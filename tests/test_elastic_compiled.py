@@ -199,7 +199,7 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
     setup = helix(case=2, rollers=rollers, beams=[*BUNDLED["elastic"]["beams"], beam])
     system = setup.system
     table = ec.frame_table(system, setup.drive, setup.t, 1e-8)
-    args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1))
+    args = (system.record, (table.nodes, table.coef), np.zeros(1))
     n = 2 * system.N + 2
     y = np.r_[RNG.normal(size=system.N) * 1e-3, RNG.normal(size=system.N) * 1e-2, 0.0, 0.0]
     y[:5] = RNG.uniform(-1e-5, 1e-5, 5)  # away from the kinks of the clamped pair (|d| = 2e-5 m)
@@ -223,7 +223,7 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     setup = helix(rollers=rollers)
-    system, mdl = setup.system, ek.pack(setup.system)
+    system, mdl = setup.system, setup.system.record
     line = el_sim.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
@@ -270,7 +270,7 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
                            evaluate=lambda s, at=slice(None): ec.geometry(drive, system, s, at),
                            scales=ec._geometry_scales)
     ek.TRACTIONS[0] = drive.traction
-    args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1), 0)
+    args = (system.record, (table.nodes, table.coef), np.zeros(1), 0)
     n = 2 * N + 4
     y = np.r_[RNG.normal(size=N) * 1e-4, RNG.normal(size=N) * 1e-2, 0.0, 0.0, 0.2, 5.3]
     J = np.empty((n, n))

@@ -24,7 +24,6 @@ from symmech.export.model import ExportModel, Variable
 from symmech.export.sources import glue
 
 IDENTIFIER = "elastic_trolley"
-ROTATIONS = ("th1", "th2", "th3")  # roller coordinates in rad; the others (u2, u3, beam modes) in m
 
 
 def load(scene) -> ExportModel:
@@ -47,9 +46,13 @@ def load(scene) -> ExportModel:
 
 def state_layout(system) -> tuple[list[str], list[str]]:
     """Names and units of the elastic model's coordinates q (its state is (q, q')): the one place that reads
-    the engine's state order."""
+    the engine's state order; the roller coordinates' units are their declaration's (layout.ROLLER_DOFS), the
+    beams' modal coordinates are in m."""
+    from symmech.trolley.elastic.layout import ROLLER_DOFS
+
     names = list(system.inv.names)
-    return names, ["rad" if n in ROTATIONS else "m" for n in names]
+    units = dict(zip(ROLLER_DOFS.names, ROLLER_DOFS.units))
+    return names, [units.get(n, "m") for n in names]
 
 
 def elastic(setup, run: dict) -> ExportModel:
@@ -126,10 +129,9 @@ def _parameters(system, vr: int) -> list[Variable]:
     """The rollers' stiffnesses, dampings and (clamped pair law) preloads from value reference ``vr`` on
     (``elastic.rollers.stiffness[1]`` … as the scene's fields): they enter only the roller forces, so they
     stay tunable."""
-    from symmech.trolley.elastic import kernels as ek
     from symmech.trolley.elastic.layout import ROLLER
 
-    roll = ek.pack(system).roll  # rows of ROLLER: stiffness, damping as the engine applies it, preload
+    roll = system.record.roll  # rows of ROLLER: stiffness, damping as the engine applies it, preload
     out = []
     for row, (field, unit, what) in enumerate(parameters(system)):
         for r in range(5):
@@ -158,24 +160,19 @@ def _nominal(series: np.ndarray) -> float:
 
 def assembly_model(system) -> dict:
     """The invariants :func:`symmech.trolley.elastic.symbolic_assembly.assembly_spec` reads, as nested lists: the
-    engine's record (``elastic.kernels.pack``) and the probes."""
-    from symmech.trolley.elastic import kernels as ek
+    engine's record (``System.record``) and the probes."""
     from symmech.trolley.elastic.layout import F_AT
 
-    mdl = ek.pack(system)
+    mdl = system.record
     inv = system.inv
-    n = int(mdl.flags[F_AT.n])
     f = int(mdl.flags[F_AT.f])
-    elastic = np.zeros(f)
-    elastic[1 + inv.n_roll:1 + n] = 1.0
-    elastic[1 + n:] = [1.0 if i >= inv.n_roll else 0.0 for i, _ in inv.pairs]
     model = {name: getattr(mdl, name).tolist() for name in (
         "ptr", "col", "qi", "pair_i", "pair_j", "rollers_map", "block_index", "block_size", "block_h", "block_c",
         "s1", "stiffness", "damping", "gram_trace")}
     model.update(gram_x=mdl.gram_x.reshape(f, 9, f).tolist(),
                  mass=float(mdl.flags[F_AT.mass]), rollers=bool(mdl.flags[F_AT.rollers]),
                  clamped=bool(mdl.flags[F_AT.law]), probe_fields=inv.probe_fields.tolist(),
-                 probe_points=inv.probe_points.tolist(), elastic=elastic.tolist(),
+                 probe_points=inv.probe_points.tolist(), elastic=system.beam_fields.astype(float).tolist(),
                  g_ref=float(system.mdl.g0 if system.mdl.g0 > 0 else 9.80665))
     return model
 

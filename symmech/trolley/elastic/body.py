@@ -14,8 +14,9 @@ from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
 from symmech.trolley.elastic import membrane
+from symmech.trolley.elastic.layout import FIELDS, ROLLER_DOFS
 
-ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
+ROLLER_NAMES = ROLLER_DOFS.names  # the roller coordinates, declared with their units
 # (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
 ROTATION_PAIRS = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
 # Gauss points per beam: exact for the products of two shortening fields of degree 2 NMAX + 1.
@@ -228,8 +229,9 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
     G = np.einsum("kpi,p,lpj->klij", F, w, F)
     S1 = np.einsum("kpi,p->ki", F, w)
     dA = -np.ones((N, N), dtype=int)
+    psi_at = FIELDS.sized(N=N, P=len(pairs)).offset("psi")
     for idx, (a, b) in enumerate(pairs):
-        dA[a, b] = dA[b, a] = 1 + N + idx
+        dA[a, b] = dA[b, a] = psi_at + idx
     K = np.zeros((N, N))
     D = np.zeros((N, N))
     for base, kb, _zeta in K_blocks:

@@ -20,7 +20,7 @@ otherwise the run falls back to the Python engine and says why (:func:`simulate`
 from Radau's collocation polynomial (scipy's dense output), whose error on the bundled scene stays within
 the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
 
-**Traction.** s is a state, so :func:`simulate_traction` tabulates the frame's geometry in s instead
+**Traction.** s is a state, so :func:`traction_table` tabulates the frame's geometry in s instead
 (:func:`geometry`, the same checked spline) over the arc lengths the run visits (:func:`reach`), and calls
 the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic.kernels.TRACTIONS`).
 """
@@ -32,9 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from symmech.core.layout import Field, Layout
 from symmech.numerics import build
 from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
-from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
+from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY, state as state_layout  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
 INTERP_FRACTION = 1e-3
@@ -133,35 +134,55 @@ def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_s
         nodes, ch = every, merged
 
 
-def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (prescribed speed; the
-    same state, tolerances and outputs; the steps are not bound by the output spacing: the outputs come from
-    the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
-    ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
-    (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
-    scales) what the table reached. With ``drive.traction``: :func:`simulate_traction`."""
-    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None,
+             reason: str = "") -> dict:
+    """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (the same state,
+    tolerances and outputs; the steps are not bound by the output spacing: the outputs come from the
+    collocation polynomial, within the tolerance of the steps, benchmarks/README.md). The run starts from
+    ``simulate.prepare`` and the model's record (``System.record``), both made once; ``engine`` /
+    ``engine_reason`` name what ran: this engine and ``reason`` (why the caller chose it), or the Python engine
+    and why when the frame cannot be tabulated within its bound (:func:`frame_table`; with traction, or when
+    the run leaves the table: :func:`traction_table`); ``frame_table_nodes`` and ``frame_interpolation_error``
+    (relative to the channel scales) what the table reached."""
     t = np.asarray(t, dtype=float)
-    if drive.traction is not None:
-        return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
-    line, y0 = el_sim.start(system, drive, t, dq0, dqd0)
+    start = el_sim.prepare(system, drive, t, atol_q, dq0, dqd0)
+    run = _traction_run if drive.traction is not None else _prescribed_run
+    out, why = run(system, drive, t, float(rtol), start, reason)
+    if out is None:
+        out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+    return out
+
+
+def _prescribed_run(system, drive, t, rtol: float, start, reason: str) -> tuple[dict | None, str]:
+    """(the outputs of the compiled run at the prescribed speed, "") or (None, why it cannot run)."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    s = start.line.s_nodes
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
-    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
+    fr = el_frame.frames(drive, s, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
     table = frame_table(system, drive, t, rtol, el_frame.frame_channels(fr, V0, dV0, system.mdl.g0))
     if table is None:
-        why = (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
-               f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
-        out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
-        out["engine"], out["engine_reason"] = "python", why
-        return out
-    N = system.N
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL]
-    Y, steps, nfev, status = ek.solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
+        return None, (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
+                      f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+    Y, steps, nfev, status = ek.solve(system.record, (table.nodes, table.coef), start.y0, t, rtol, start.atol)
     _check(status, Y, t)
-    out = el_sim.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=ek.row_terms, frame=fr)
-    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
-               frame_interpolation_error=table.error)
-    return out
+    run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
+           "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
+    return el_sim.outputs(system, drive, t, s, V0, dV0, Y, rows=row_terms, frame=fr, run=run), ""
+
+
+def row_terms(system, fr, V0, dV0, Y, height) -> dict:
+    """:func:`symmech.trolley.elastic.simulate.row_terms` by ``kernels.rows`` on the model's record (the
+    potential Π per row in Python)."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    chs = el_frame.frame_channels(fr, V0, dV0, system.mdl.g0)
+    nu = np.ascontiguousarray(fr.lam[:, :, 1])
+    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
+    terms = ek.rows(system.record, chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
+    res = dict(zip(keys, terms))
+    pi = system.potential(Y[:, state_layout(system.N, False).slice("q")])
+    res["h"] += pi
+    res["E"] += pi
+    return res
 
 
 # --------------------------------------------------------------------------- traction
@@ -182,6 +203,9 @@ def _geometry_scales(g: np.ndarray) -> np.ndarray:
 
 
 REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
+# The state of the rigid body's run that finds the arc lengths a traction run visits (:func:`reach`).
+REACH = Layout("ElasticReach", (Field("s", "m", "arc length of O"), Field("speed", "m/s", "speed V0 of O")))
+RE_AT = REACH.slots
 
 
 def reach(system, drive, t) -> tuple[float, float]:
@@ -195,63 +219,59 @@ def reach(system, drive, t) -> tuple[float, float]:
     body = el_sim.rigid_body(system.mdl)
 
     def rates(time, y):
-        fr = el_frame.frames(drive, y[:1], system.mdl.l)
+        fr = el_frame.frames(drive, y[REACH.slice("s")], system.mdl.l)
         alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
-        p0 = float(drive.traction(time, y[1]))
-        return [y[1], (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]]
+        v = y[RE_AT.speed]
+        p0 = float(drive.traction(time, v))
+        return REACH.pack(s=v, speed=(p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * v ** 2) / alpha[0])
 
-    sol = solve_ivp(rates, (t[0], t[-1]), [drive.s0, drive.v_initial], method="DOP853", t_eval=t, rtol=1e-6)
-    s = sol.y[0] if sol.status == 0 else np.array([drive.s0])
+    sol = solve_ivp(rates, (t[0], t[-1]), REACH.pack(s=drive.s0, speed=drive.v_initial), method="DOP853", t_eval=t,
+                    rtol=1e-6)
+    s = sol.y[RE_AT.s] if sol.status == 0 else np.array([drive.s0])
     pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
     lo, hi = float(s.min()) - pad, float(s.max()) + pad
     span = getattr(drive.plan, "span", None)
     return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
 
 
-def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
-    V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
-    P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
-    Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
+def traction_table(system, drive, t, rtol: float) -> tuple[Table | None, tuple[float, float]]:
+    """The frame's geometry tabulated in s over the arc lengths a traction run visits (:func:`reach`): the table
+    (:func:`frame_table` with :func:`geometry`; None when not within its bound) and that span [m]."""
     lo, hi = reach(system, drive, t)
     table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
                         evaluate=lambda s, at=slice(None): geometry(drive, system, s, at), scales=_geometry_scales)
-    if table is not None:
-        out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
-        if out is not None:
-            return out
-    why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
-           f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
-    out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
-    out["engine"], out["engine_reason"] = "python", why
-    return out
+    return table, (lo, hi)
 
 
 _KEYS = itertools.count()
 
 
-def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
-    """The compiled traction run on ``table``; None when s leaves it."""
+def _traction_run(system, drive, t, rtol: float, start, reason: str) -> tuple[dict | None, str]:
+    """The compiled run with traction: y = [q, q̇, E_d, W, s, V0] (layout.TRACTION_STATE), the frame's geometry
+    tabulated in s (:func:`traction_table`), P0(t, V0) called back in Python per stage; Radau with the analytic
+    Jacobian (``kernels._jac_traction``). (its outputs, "") or (None, why it cannot run: the geometry cannot be
+    tabulated, or the run leaves the table)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    N = system.N
-    _, y0 = el_sim.start(system, drive, t, dq0, dqd0)
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL, 1e-10, 1e-10]
+    table, (lo, hi) = traction_table(system, drive, t, rtol)
+    why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
+           f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
+    if table is None:
+        return None, why
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
     key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
     ek.TRACTIONS[key] = drive.traction
     try:
-        Y, dV0, steps, nfev, status = ek.solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
-                                                         float(rtol), atol, step)
+        Y, dV0, steps, nfev, status = ek.solve_traction(system.record, (table.nodes, table.coef), key, start.y0, t,
+                                                         rtol, start.atol, step)
     finally:
         del ek.TRACTIONS[key]
     _check(status, Y, t)
-    s = Y[:, -2]
+    s = Y[:, start.state.offset("s")]
     if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
-        return None
-    out = el_sim.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=ek.row_terms)
-    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
-               frame_interpolation_error=table.error)
-    return out
+        return None, why
+    run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
+           "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
+    return el_sim.outputs(system, drive, t, s, Y[:, start.state.offset("speed")], dV0, Y, rows=row_terms, run=run), ""
 
 
 def _check(status, Y, t) -> None:
@@ -271,7 +291,7 @@ COLD_COMPILE_SECONDS = 130.0
 
 
 def _entry_signatures() -> dict:
-    """The cached entries and the argument types :func:`simulate` and ``kernels.row_terms`` call them with: the
+    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
     model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), the rest from small arrays."""
     # numba: imported by a run, not by choosing the engine or its estimate
     import numba
