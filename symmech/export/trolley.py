@@ -58,15 +58,11 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
-    from symmech.trolley.elastic import compiled as elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
 
     system, drive, t = setup.system, setup.drive, setup.t
-    line = el_sim.Timeline(system, drive, t)
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
-    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)
-    table = elastic_compiled.frame_table(system, drive, t, setup.rtol,
-                                         el_frame.frame_channels(fr, V0, dV0, system.mdl.g0))
+    inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed)
+    table = elastic_compiled.frame_table(t, setup.rtol, inputs.evaluate, inputs.exact)
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")

@@ -8,11 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from symmech.core import context, kinematics as kin
-from symmech.core.layout import Layout
+from symmech.core.layout import Field, Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
 from symmech.trolley.elastic.body import ElasticModel, invariants, roller_forces
-from symmech.trolley.elastic.frame import Drive, FrameState, frame_motion, frame_state, frames
+from symmech.trolley.elastic.frame import Drive, FrameState, frame_channels, frame_motion, frame_state, frames
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
 from symmech.trolley.elastic.system import System
 
@@ -236,6 +236,91 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
         V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
     return outputs(system, drive, t, s, V0, dV0, Y, run={"nfev": sol.nfev, "njev": sol.njev, "engine": "python",
                                                           "engine_reason": fallback or reason})
+
+
+# --------------------------------------------------------------------------- what the compiled engine reads
+
+def channels(drive, system, t, at=slice(None)) -> np.ndarray:
+    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
+    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame.frame_state`, vectorised."""
+    s = arc_length(drive, t)[at]
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
+    return frame_channels(frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
+
+
+def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
+    """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
+    :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
+    fr = frames(drive, np.asarray(s, float)[at], system.mdl.l)
+    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
+
+
+REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
+# The state of the rigid body's run that finds the arc lengths a traction run visits (:func:`reach`).
+REACH = Layout("ElasticReach", (Field("s", "m", "arc length of O"), Field("speed", "m/s", "speed V0 of O")))
+RE_AT = REACH.slots
+
+
+def reach(system, drive, t) -> tuple[float, float]:
+    """The arc lengths [m] a traction run visits: those of the rigid body (the whole elastic body's mass,
+    centre and inertia) under the same traction (DOP853 at rtol 1e-6), widened by :data:`REACH_MARGIN` of
+    their span (at least 1 mm) and kept within the frame plan's span."""
+    from scipy.integrate import solve_ivp
+
+    body = rigid_body(system.mdl)
+
+    def rates(time, y):
+        fr = frames(drive, y[REACH.slice("s")], system.mdl.l)
+        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
+        v = y[RE_AT.speed]
+        p0 = float(drive.traction(time, v))
+        return REACH.pack(s=v, speed=(p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * v ** 2) / alpha[0])
+
+    sol = solve_ivp(rates, (t[0], t[-1]), REACH.pack(s=drive.s0, speed=drive.v_initial), method="DOP853", t_eval=t,
+                    rtol=1e-6)
+    s = sol.y[RE_AT.s] if sol.status == 0 else np.array([drive.s0])
+    pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
+    lo, hi = float(s.min()) - pad, float(s.max()) + pad
+    span = getattr(drive.plan, "span", None)
+    return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
+
+
+def exact_frame(system: System, drive: Drive, t) -> tuple:
+    """The exact frame at the output times t [s] (k,) at the prescribed speed: the frame at their arc lengths
+    (:func:`arc_length`), V0 [m/s] and dV0 [m/s²] (k,), and its channels (k, 12) (:func:`frame_channels`)."""
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
+    fr = frames(drive, arc_length(drive, t), system.mdl.l)
+    return fr, V0, dV0, frame_channels(fr, V0, dV0, system.mdl.g0)
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What a compiled run reads, made in one pass (:func:`compiled_inputs`): its :class:`Start`, the model
+    record (``System.record``), the nodes that seed its frame table (the output times t [s]; with traction arc
+    lengths over :func:`reach` [m]), the exact channels there when known (else None), ``evaluate(x, at)`` the
+    exact channels at x[at] (:func:`channels`, with traction :func:`geometry`) and, at the prescribed speed, the
+    exact frame at the outputs with V0, dV0 (:func:`exact_frame`; with traction None) and the span of s that
+    traction tabulates (with traction)."""
+
+    start: Start
+    record: object
+    seed: np.ndarray
+    exact: np.ndarray | None
+    evaluate: object
+    frame: tuple | None = None
+    span: tuple = ()
+
+
+def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
+    """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
+    start = prepare(system, drive, t, atol_q, dq0, dqd0)
+    if drive.traction is None:
+        frame = exact_frame(system, drive, t)
+        return Inputs(start, system.record, t, frame[-1], lambda x, at=slice(None): channels(drive, system, x, at),
+                      frame)
+    lo, hi = reach(system, drive, t)
+    return Inputs(start, system.record, np.linspace(lo, hi, max(t.size, 16)), None,
+                  lambda x, at=slice(None): geometry(drive, system, x, at), span=(lo, hi))
 
 
 def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
