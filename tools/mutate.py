@@ -121,7 +121,7 @@ SHARDS = {
                             "*.x_beam_basis__*", "*.x_rigid_cloud__*", "*.x__frame_of__*"]),
     "elastic_system": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                        ["*ǁSystemǁ__init__*", "*ǁSystemǁevaluate__*", "*ǁSystemǁcoefficients__*", "*ǁSystemǁ_dv__*",
-                        "*ǁSystemǁ_p2__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
+                        "*ǁSystemǁquadratic_rates__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
                         "*ǁSystemǁroller_state__*", "*ǁSystemǁ_frame_mats__*"]),
     "elastic_balances": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",

@@ -339,7 +339,7 @@ def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
         res["qdd"][i] = qdd
         res["F"][i], res["M"][i] = system.resultants(fs, q[i], qd[i], qdd)
         rr, A = system.coefficients(q[i])
-        res["rr"][i], res["v"][i], res["acc"][i] = rr, qd[i] @ A, qdd @ A + system._p2(qd[i])
+        res["rr"][i], res["v"][i], res["acc"][i] = rr, qd[i] @ A, qdd @ A + system.quadratic_rates(qd[i])
         res["h"][i] = system.jacobi_energy(fs, q[i], qd[i])
         res["E"][i] = system.total_energy(fs, q[i], qd[i], height[i])
     return res

@@ -130,7 +130,9 @@ class System:
         np.add.at(out, (self.pair_j[off], cols[off]), rate[self.pair_i[off]])
         return out
 
-    def _p2(self, qd):
+    def quadratic_rates(self, qd):
+        """(F,) the coefficients over the fields of the acceleration's terms quadratic in the rates q̇ (N,):
+        Σ_ab q̇_a q̇_b ψ_ab, on the ψ fields only."""
         out = np.zeros(self.F)
         out[self.fields.slice("psi")] = np.where(self.diag, 1.0, 2.0) * qd[self.pair_i] * qd[self.pair_j]
         return out
@@ -155,7 +157,7 @@ class System:
         inv, g0 = self.inv, self.mdl.g0
         rr, A = self.coefficients(q)
         v = qd @ A
-        acc = qdd @ A + self._p2(qd)
+        acc = qdd @ A + self.quadratic_rates(qd)
         B, W, GB, GW = self._frame_mats(fs)
         load = fs.a0 + g0 * fs.nu
         z = inv.S1 @ load + GB @ rr + 2 * GW @ v + self.Gtr @ acc
@@ -195,7 +197,7 @@ class System:
         inv = self.inv
         rr, A = self.coefficients(q)
         v = qd @ A
-        acc = qdd @ A + self._p2(qd)
+        acc = qdd @ A + self.quadratic_rates(qd)
         B, W, _, _ = self._frame_mats(fs)
         load = fs.a0 + self.mdl.g0 * fs.nu
         first = inv.S1.T
