@@ -327,7 +327,7 @@ def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
     """Per output row (frame fr, speeds V0, dV0, heights of O (n,) [m], states Y (n, layout.state)): q̈ (n, N), the
     resultants F, M (n, 3), the coefficient vectors of r̃, its rate and acceleration (n, F), the Jacobi
     energy h and the total energy E (n,) [J]. The compiled engine computes the same in numba
-    (:func:`symmech.trolley.elastic.kernels.row_terms`)."""
+    (:func:`symmech.trolley.elastic.compiled.row_terms`)."""
     N, n = system.N, len(V0)
     st = state_layout(N, False)  # the first fields of either state
     q, qd = Y[:, st.slice("q")], Y[:, st.slice("qd")]
