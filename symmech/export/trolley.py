@@ -20,7 +20,7 @@ from scipy.interpolate import CubicSpline
 
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
-from symmech.export.model import ExportModel, Variable
+from symmech.export.model import REALS, ExportModel, Variable
 from symmech.export.sources import glue
 
 IDENTIFIER = "elastic_trolley"
@@ -59,6 +59,7 @@ def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
     from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
+    from symmech.trolley.elastic.layout import STATE
 
     system, drive, t = setup.system, setup.drive, setup.t
     inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed)
@@ -67,24 +68,28 @@ def elastic(setup, run: dict) -> ExportModel:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")
     names, units = state_layout(system)
-    n = len(names)
+    n, columns = len(names), output_columns(setup.names)
     q0 = np.asarray(run["q"][0])
     qd0 = np.asarray(run["qd"][0])
-    variables = [Variable("time", 0, "independent", "continuous", "s", "simulation time")]
+    # the exported states are the engine's q, q' (the first fields of its state), the derivatives q''
+    reals = REALS.sized(X=2 * n, DX=n, Y=len(columns), Z=0, U=0, P=len(parameters(system)) * 5)
+    engine = STATE.sized(N=n)
+    q, qd, qdd = (reals.offset("x") + engine.offset("q"), reals.offset("x") + engine.offset("qd"),
+                  reals.offset("dx"))
+    variables = [Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")]
     for i in range(n):
-        variables.append(Variable(names[i], 1 + i, "output", "continuous", units[i], f"coordinate {names[i]}",
+        variables.append(Variable(names[i], q + i, "output", "continuous", units[i], f"coordinate {names[i]}",
                                   float(q0[i]), nominal=_nominal(run["q"][:, i])))
     for i in range(n):
-        variables.append(Variable(f"der({names[i]})", 1 + n + i, "output", "continuous", f"{units[i]}/s",
-                                  f"rate of {names[i]}", float(qd0[i]), derivative_of=1 + i,
+        variables.append(Variable(f"der({names[i]})", qd + i, "output", "continuous", f"{units[i]}/s",
+                                  f"rate of {names[i]}", float(qd0[i]), derivative_of=q + i,
                                   nominal=_nominal(run["qd"][:, i])))
     for i in range(n):
-        variables.append(Variable(f"der({names[i]},2)", 1 + 2 * n + i, "output", "continuous", f"{units[i]}/s^2",
-                                  f"acceleration of {names[i]}", derivative_of=1 + n + i))
-    columns = output_columns(setup.names)
+        variables.append(Variable(f"der({names[i]},2)", qdd + i, "output", "continuous", f"{units[i]}/s^2",
+                                  f"acceleration of {names[i]}", derivative_of=qd + i))
     for k, c in enumerate(columns):
-        variables.append(Variable(c.name, 1 + 3 * n + k, "output", "continuous", c.unit, c.doc))
-    variables += _parameters(system, 1 + 3 * n + len(columns))
+        variables.append(Variable(c.name, reals.offset("y") + k, "output", "continuous", c.unit, c.doc))
+    variables += _parameters(system, reals.offset("p"))
     native = Table((Column("t", "s"), Column("s", "m")) + tuple(Column(f"P{i}", "N") for i in range(6)),
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
     source = data(system, drive, table) + glue("elastic_trolley.c")
