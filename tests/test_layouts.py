@@ -342,3 +342,12 @@ def test_an_exported_models_value_references_follow_the_declared_reals():
     model = ExportModel("m", "", "", (), 4, 2, 2, 2, 0, 5, None, n_y=3, n_z=1)
     assert model.layout() == {"VR_TIME": 0, "VR_X": 1, "VR_DX": 5, "VR_Y": 7, "VR_Z": 10, "VR_U": 11, "VR_P": 13,
                               "N_REAL": 18}
+
+
+def test_the_elastic_builds_record_covers_its_declared_layouts():
+    """The kernels freeze the layouts' offsets into numba's cache: the build's record must list the declaring file,
+    so that a changed declaration counts the cache as stale (numba keys its cache on the kernels' file alone)."""
+    from symmech.numerics import artifacts
+    from symmech.trolley.elastic import kernels
+
+    assert elastic_layout.__file__ in artifacts.sources(kernels)

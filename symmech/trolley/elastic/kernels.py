@@ -27,6 +27,7 @@ import numpy as np
 
 from symmech.numerics import ode, radau
 from symmech.numerics.jit import jit, with_gil
+from symmech.trolley.elastic import layout  # noqa: F401 (a module global: numerics.artifacts then records its file as a source of this build, so a changed declaration rebuilds)
 from symmech.trolley.elastic.layout import (CH_AT, CO_AT, F_AT, FC_AT, G_AT, N_CHANNELS, N_GEOMETRY, N_ROLLER_DOFS,
                                             RL_AT, U_AT, Y_AT)
 
