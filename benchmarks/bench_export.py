@@ -1,19 +1,21 @@
 """Exported models against the native run: FMU (FMPy, Model Exchange with CVode and Co-Simulation with the
 FMU's DOP853, for the elastic trolley its Radau IIA) and the exported C example program, on the bundled mechanism
-scenes with a free response, the bundled elastic trolley ride, and the default grain scene up to just before its
-first landing (0.082 s: 8 impacts, flight and impacts as state events).
+scenes with a free response, the bundled elastic trolley ride, the same ride under traction (P0 = 100 - 10 V0 N
+from 3 m/s: no bundled scene has traction), and the default grain scene up to just before its first landing
+(0.082 s: 8 impacts, flight and impacts as state events).
 
 The elastic C example program runs Radau IIA with dense output on the generated assembly; its real-time
 factor is its whole-process wall time over the ride's duration.
 
 Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv); for the
-elastic trolley the compiled engine at the scene's rtol (its reactions P0…P5), and beside it the same engine at
-rtol 1e-10 as a reference closer to the exact solution; for the grain the compiled engine's impacts (times,
+elastic trolley the compiled engine at the scene's rtol (its reactions P0…P5; under traction also s, V0), and
+beside it the same engine at rtol 1e-10 (under traction also the coordinates' atol 1e-14 m) as a reference closer
+to the exact solution; for the grain the compiled engine's impacts (times,
 centres) and trajectory rows.
 Accuracy: `symmech.export.model.deviation`, the largest deviation of each series relative to its largest
 magnitude.
 
-    python benchmarks/bench_export.py [--quick]
+    python benchmarks/bench_export.py [--quick] [--only grain|elastic|traction|mechanism]
 """
 from __future__ import annotations
 
@@ -37,10 +39,17 @@ from timing import interleaved, machine
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="3 rounds instead of 7")
-    repeats = 3 if parser.parse_args().quick else 7
+    parser.add_argument("--only", choices=("grain", "elastic", "traction", "mechanism"), help="one model only")
+    args = parser.parse_args()
+    repeats = 3 if args.quick else 7
     print(machine())
-    grain(repeats)
-    elastic(repeats)
+    for name, bench in (("grain", grain), ("elastic", elastic), ("traction", traction), ("mechanism", mechanisms)):
+        if args.only in (None, name):
+            bench(repeats)
+
+
+def mechanisms(repeats: int) -> None:
+    """The rotor boom and the spatial boom: FMU ME/CS and the C example program against the exact free response."""
     for name in ("smm_rotor_boom", "smm_spatial_boom"):
         exported = model.load(scenes_folder() / f"{name}.toml")
         table = exported.native
@@ -87,35 +96,62 @@ EXAMPLE = "C example program (Radau IIA rtol 1e-8)"
 
 def elastic(repeats: int) -> None:
     """The bundled elastic helix: FMU ME/CS and the C example program against the compiled engine's run."""
-    path = scenes_folder() / "trolley_elastic_helix.toml"
+    _ride("elastic helix", scenes_folder() / "trolley_elastic_helix.toml", [f"P{i}" for i in range(6)],
+          lambda run: run["P"], {"rtol": 1e-10}, slice(2, None), repeats)
+
+
+# the bundled helix under traction: P0 = 100 - 10 V0 N from 3 m/s
+TRACTION = (('speed = "3*t + 7*sin(t/2)"', 'traction = "100 - 10*v"\ninitial_speed = 3.0'),
+            ("local_curvature = false", "local_curvature = false\ntraction = true"),
+            ("modal_samples = 10", "modal_samples = 0"))
+
+
+def traction(repeats: int) -> None:
+    """The bundled elastic helix under traction: FMU ME/CS and the C example program against the compiled engine's
+    traction run (P0…P5, s, V0)."""
+    text = (scenes_folder() / "trolley_elastic_helix.toml").read_text()
+    for old, new in TRACTION:
+        text = text.replace(old, new)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "traction_helix.toml"
+        path.write_text(text)
+        _ride("elastic helix under traction", path, [f"P{i}" for i in range(6)] + ["s", "V0"],
+              lambda run: np.column_stack([run["P"], run["s"], run["V0"]]), {"rtol": 1e-10, "atol_q": 1e-14},
+              [3, 4, 5, 6, 7, 8, 1, 2], repeats)
+
+
+def _ride(title: str, path: Path, names: list[str], series, reference: dict, columns, repeats: int) -> None:
+    """FMU ME/CS and the C example program of the elastic scene at ``path`` against the compiled engine's run:
+    ``series(run)`` the compared columns ``names`` of a native run, ``reference`` the keywords of a tighter native
+    run beside it, ``columns`` those of the example program's table."""
     setup = pipeline.load(path).setup.elastic
-    names = [f"P{i}" for i in range(6)]
     exported = command.load(path)
     t = exported.native.data[:, 0]
-    reference = elastic_scene.simulate(setup, rtol=1e-10)["P"]
+    tight = series(elastic_scene.simulate(setup, **reference))
     with tempfile.TemporaryDirectory() as tmp:
         me = build.fmu(exported, Path(tmp) / "me.fmu", 3, "me")
         cs = build.fmu(exported, Path(tmp) / "cs.fmu", 3, "cs")
         example = build.c_folder(exported, Path(tmp) / "c") / "example"
         runs = {
-            "native, compiled engine (Radau)": lambda: elastic_scene.simulate(setup)["P"],
+            "native, compiled engine (Radau)": lambda: series(elastic_scene.simulate(setup)),
             "FMU ME, FMPy CVode rtol 1e-10": lambda: fmpy.simulate_fmu(
                 str(me), solver="CVode", relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0],
                 output=names),
             "FMU CS, Radau IIA rtol 1e-10": lambda: fmpy.simulate_fmu(
                 str(cs), relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0], output=names),
             EXAMPLE: lambda: _printed(subprocess.run(
-                [str(example)], check=True, capture_output=True, text=True).stdout)[:, 2:],
+                [str(example)], check=True, capture_output=True, text=True).stdout)[:, columns],
         }
         stats = interleaved(runs, repeats)
         native = runs["native, compiled engine (Radau)"]()
-        print(f"\nelastic helix: {t[-1]:g} s in {len(t) - 1} output steps; native vs its rtol 1e-10 run "
-              f"{deviation(native, reference):.2g}")
+        tolerances = ", ".join(f"{k} {v:g}" for k, v in reference.items())
+        print(f"\n{title}: {t[-1]:g} s in {len(t) - 1} output steps; native vs its run at {tolerances} "
+              f"{deviation(native, tight):.2g}")
         for label, run in runs.items():
             result = run()
             got = np.column_stack([result[n] for n in names]) if result.dtype.names else result
             print(f"  {label:40s} {stats[label].text()}  error {deviation(got, native):.2g} "
-                  f"(vs rtol 1e-10: {deviation(got, reference):.2g})")
+                  f"(vs {tolerances}: {deviation(got, tight):.2g})")
         print(f"  C example program's real-time factor (whole process, wall): "
               f"{stats[EXAMPLE].median / t[-1]:.3g}")
 

@@ -343,7 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     x = sub.add_parser("export", help="the scene's model outside Python: an FMU (FMI 2 or 3) or C sources")
     x.add_argument("what", choices=("fmu", "c"), help="fmu: an FMU file; c: a folder of C sources and an example")
-    x.add_argument("scene", help="scene file (TOML); kind mechanism so far (docs/export.md)")
+    x.add_argument("scene", help="scene file (TOML): a mechanism, an elastic trolley or a grain (docs/export.md)")
     x.add_argument("--out", required=True, help="the .fmu file (fmu) or the folder (c)")
     x.add_argument("--fmi", type=int, choices=(2, 3), default=3, help="FMI version of the FMU (default 3)")
     x.add_argument("--type", choices=("me", "cs"), default="me",

@@ -3,7 +3,7 @@ time) against the Python engine's (symmech.trolley.elastic.System: the numpy sum
 seeded random states and frame motions: R, M, P0…P5 and the roller deflections to 1e-12 of each quantity's
 scale. Default tier: the bundled helix with one beam mode per plane, no report points and the clamped roller
 law; slow tier: the bundled helix as it is (its report points' outputs are checked through the exported FMU,
-tests/test_export_trolley.py)."""
+tests/test_export_trolley.py), and the assembly under traction against the Python engine's traction step."""
 from __future__ import annotations
 
 import ctypes
@@ -11,32 +11,39 @@ import shutil
 import subprocess
 import tomllib
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from fuzzscenes import toml_text
-from symmech.core import pipeline
+from symmech.core import expressions, pipeline
 from symmech.core.scene import scenes_folder
 from symmech.export import trolley
-from symmech.trolley.elastic import frame as el_frame, system as el
+from symmech.trolley.elastic import frame as el_frame, simulate as el_sim, system as el
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
 DOUBLES = ctypes.POINTER(ctypes.c_double)
 RTOL = 1e-12
 
 
-def _system(tmp_path, edit) -> el.System:
+def _scene(tmp_path, edit):
+    """The bundled helix without its modal study, edited by ``edit``: the loaded scene."""
     doc = tomllib.loads((scenes_folder() / "trolley_elastic_helix.toml").read_text(encoding="utf-8"))
     doc["elastic"]["numerics"]["modal_samples"] = 0
     edit(doc)
     path = tmp_path / "scene.toml"
     path.write_text(toml_text(doc))
-    return pipeline.load(path).setup.elastic.system
+    return pipeline.load(path)
 
 
-def _library(system, tmp_path):
+def _system(tmp_path, edit) -> el.System:
+    return _scene(tmp_path, edit).setup.elastic.system
+
+
+def _library(system, tmp_path, law=None):
     source = tmp_path / "elastic_assembly.c"
-    source.write_text(trolley.assembly_c(system))
+    source.write_text(trolley.assembly_c(system, law))
     library = tmp_path / "elastic_assembly.so"
     subprocess.run(["cc", "-std=c99", "-O1", "-fPIC", "-shared", "-Wall", "-Werror", "-o", str(library),
                     str(source), "-lm"], check=True)
@@ -47,12 +54,12 @@ def _pointers(*arrays):
     return [a.ctypes.data_as(DOUBLES) for a in arrays]
 
 
-def _rates(library, y, p) -> tuple[np.ndarray, np.ndarray]:
-    """F (2 N) and M (2 N, 2 N) of M y' = F from the generated dynamics functions."""
+def _rates(library, y, p, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """F (n) and M (n, n) of M y' = F from the generated dynamics functions at time t [s], state y (n,)."""
     n2 = y.size
     rate, mass = np.full(n2, np.nan), np.full(n2 * n2, np.nan)
-    library.elastic_assembly_rate(ctypes.c_double(0.0), *_pointers(y, p, rate))
-    library.elastic_assembly_rate_mass(ctypes.c_double(0.0), *_pointers(y, p, mass))
+    library.elastic_assembly_rate(ctypes.c_double(t), *_pointers(y, p, rate))
+    library.elastic_assembly_rate_mass(ctypes.c_double(t), *_pointers(y, p, mass))
     return rate, mass.reshape(n2, n2)
 
 
@@ -104,3 +111,43 @@ def test_generated_assembly_equals_the_python_engine(tmp_path):
 def test_generated_assembly_of_the_bundled_helix_equals_the_python_engine(tmp_path):
     system = _system(tmp_path, lambda doc: None)
     _compare(system, _library(system, tmp_path))
+
+
+@pytest.mark.slow  # sympy derives the traction assembly (~3 s)
+def test_generated_traction_assembly_equals_the_python_engine(tmp_path):
+    """Under traction (y = (q, s, q', V0)): q'' and V0' solved from the generated rate and mass, and the outputs
+    P0…P5, against the Python engine's Timeline.traction_step and reactions at seeded random states along the
+    track and times (law P0 = 100 - 10 v + 5 t N); with 50 N added to F's last row (the FMU's input), against
+    the engine with the law + 50 N."""
+    def traction(doc):
+        doc["elastic"]["beams"][0]["modes"] = 1
+        del doc["elastic"]["points"]
+        doc["motion"] = {"traction": "100 - 10*v + 5*t", "initial_speed": 3.0}
+        doc["effects"]["traction"] = True
+    scene = _scene(tmp_path, traction)
+    system, drive = scene.setup.elastic.system, scene.setup.elastic.drive
+    law = expressions.parse("motion.traction", "100 - 10*v + 5*t", ("t", "v"))
+    library = _library(system, tmp_path, law)
+    rng = np.random.default_rng(32)
+    n = system.N
+    rollers = np.r_[system.mdl.rollers.stiffness, system.mdl.rollers.damping, np.zeros(5)]
+    for extra in (0.0, 50.0):
+        stronger = dataclasses.replace(drive, traction=lambda t, v: drive.traction(t, v) + extra)
+        line = el_sim.Timeline(system, stronger, [0.0, 3.0])
+        for _ in range(4):
+            q, qd = rng.normal(0.0, 1e-4, n), rng.normal(0.0, 1e-3, n)
+            s, V, t = rng.uniform(0.0, 10.0), rng.uniform(1.0, 8.0), rng.uniform(0.0, 3.0)
+            p = np.r_[rollers, el_sim.geometry(drive, system, np.array([s]))[0]]
+            rate, mass = _rates(library, np.r_[q, s, qd, V], p, t)
+            np.testing.assert_array_equal(rate[:n + 1], np.r_[qd, V])
+            np.testing.assert_array_equal(mass[:n + 1], np.eye(2 * n + 2)[:n + 1])
+            rate[-1] += extra
+            x = np.linalg.solve(mass[n + 1:, n + 1:], rate[n + 1:])
+            fs, qdd, dV = line.traction_step(t, np.r_[q, qd, 0.0, 0.0, s, V])
+            _close(x[:n], qdd, np.abs(qdd).max())
+            _close(x[n], dV, abs(dV))
+            outputs = np.full(11, np.nan)
+            library.elastic_assembly_outputs(*_pointers(np.r_[q, s, qd, V, x, p], outputs))
+            P = system.reactions(fs, q, qd, qdd)
+            _close(outputs[:6], P, np.abs(P).max())
+            assert outputs[0] == pytest.approx(100 - 10 * V + 5 * t + extra, rel=1e-12)

@@ -1,5 +1,6 @@
-"""Two habits checked over symmech/ with ast, nothing imported: no module reads another module's private
-``_name``, and no module is longer than 800 lines."""
+"""Habits checked over the sources, nothing imported: no module reads another module's private ``_name`` (ast),
+no module is longer than 800 lines, every package folder is declared, and no text file keeps a merge's
+conflict markers."""
 import ast
 import tomllib
 from pathlib import Path
@@ -86,3 +87,29 @@ def test_every_package_folder_is_declared():
     declared = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
     found = {".".join(p.parent.relative_to(root).parts) for p in (root / "symmech").rglob("__init__.py")}
     assert found <= declared, sorted(found - declared)
+
+
+CONFLICT_MARKERS = ("<<<<<<< ", "=======", ">>>>>>> ")
+TEXT_FOLDERS = ("symmech", "tests", "docs", "templates", "scenes", "benchmarks", "tools", "mutation", "generated")
+
+
+def conflict_lines(text: str) -> list[int]:
+    """1-based numbers of the lines that open, split or close a merge conflict (git's markers at a line's start)."""
+    return [i for i, line in enumerate(text.splitlines(), 1)
+            if line.startswith(CONFLICT_MARKERS[::2]) or line == CONFLICT_MARKERS[1]]
+
+
+def test_no_file_keeps_a_merge_conflict():
+    """A conflict resolved in haste once left git's markers in docs/export.md for a session."""
+    root = Path(__file__).resolve().parents[1]
+    files = [root / n for n in ("README.md", "CHANGELOG.md", "pyproject.toml", "Makefile")]
+    files += [p for d in TEXT_FOLDERS for p in (root / d).rglob("*")
+              if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".pyc", ".so", ".png")]
+    found = {str(p.relative_to(root)): conflict_lines(p.read_text(encoding="utf-8", errors="replace"))
+             for p in files if p.exists()}
+    assert {p: n for p, n in found.items() if n} == {}
+
+
+def test_the_checker_sees_each_conflict_marker():
+    text = "a\n<<<<<<< HEAD\nb\n=======\nc\n>>>>>>> branch\n=======x\n"
+    assert conflict_lines(text) == [2, 4, 6]

@@ -8,8 +8,14 @@ prescribed speed as the engine's cubic spline table of the 12 frame channels in 
 (:func:`symmech.trolley.elastic.compiled.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
 ``points``); parameters: the rollers' stiffnesses, dampings and (clamped pair law) preloads. The track and
-the speed are in the table: they are not parameters, and the FMU has no inputs. The C example program and
-Co-Simulation integrate with Radau IIA (the roller modes are stiff).
+the speed are in the table: they are not parameters, and the FMU has no inputs.
+
+Under traction (``effects.traction = true``, :func:`traction`) the arc length s and the speed V0 are states
+too (``s``, ``V0`` = der(s), ``der(V0)``), the frame's geometry is the compiled engine's spline table in s
+(:func:`symmech.trolley.elastic.compiled.tabulate`, over the arc lengths the scene's run visits), the
+scene's law P0(t, V0) is printed into the generated assembly, and one input ``traction_force`` [N] adds to it
+(a controller drives the trolley; 0 reproduces the scene). The C example program and Co-Simulation integrate
+with Radau IIA (the roller modes are stiff).
 """
 from __future__ import annotations
 
@@ -18,6 +24,7 @@ import hashlib
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from symmech.core import expressions
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
 from symmech.export.model import REALS, ExportModel, Variable
@@ -35,13 +42,15 @@ def load(scene) -> ExportModel:
     if setup is None or setup.system is None:
         raise SymmechError("kind = 'trolley': `symmech export` covers the elastic trolley (an [elastic] table "
                            "with an elastic effect) and mechanism scenes (docs/export.md)")
-    if setup.drive.traction is not None:
-        raise SymmechError("effects.traction = true: `symmech export` covers the elastic trolley at a "
-                           "prescribed motion.speed so far (docs/export.md)")
     if not setup.system.rollers_on:
         raise SymmechError("elastic.effects.rollers = false: `symmech export` covers the elastic trolley on "
                            "elastic rollers so far (docs/export.md)")
-    return elastic(setup, elastic_scene.simulate(setup))
+    run = elastic_scene.simulate(setup)
+    if setup.drive.traction is None:
+        return elastic(setup, run)
+    motion = scene.resolved["motion"]
+    return traction(setup, run, expressions.parse("motion.traction", motion["traction"], ("t", "v"),
+                                                  motion["constants"]))
 
 
 def state_layout(system) -> tuple[list[str], list[str]]:
@@ -59,56 +68,111 @@ def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
     from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
-    from symmech.trolley.elastic.layout import STATE
 
     system, drive, t = setup.system, setup.drive, setup.t
     inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed)
-    table = elastic_compiled.frame_table(t, setup.rtol, inputs.evaluate, inputs.exact)
+    table = elastic_compiled.tabulate(inputs, setup.rtol)
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")
     names, units = state_layout(system)
     n, columns = len(names), output_columns(setup.names)
-    q0 = np.asarray(run["q"][0])
-    qd0 = np.asarray(run["qd"][0])
-    # the exported states are the engine's q, q' (the first fields of its state), the derivatives q''
     reals = REALS.sized(X=2 * n, DX=n, Y=len(columns), Z=0, U=0, P=len(parameters(system)) * 5)
-    engine = STATE.sized(N=n)
-    q, qd, qdd = (reals.offset("x") + engine.offset("q"), reals.offset("x") + engine.offset("qd"),
-                  reals.offset("dx"))
-    variables = [Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")]
-    for i in range(n):
-        variables.append(Variable(names[i], q + i, "output", "continuous", units[i], f"coordinate {names[i]}",
-                                  float(q0[i]), nominal=_nominal(run["q"][:, i])))
-    for i in range(n):
-        variables.append(Variable(f"der({names[i]})", qd + i, "output", "continuous", f"{units[i]}/s",
-                                  f"rate of {names[i]}", float(qd0[i]), derivative_of=q + i,
-                                  nominal=_nominal(run["qd"][:, i])))
-    for i in range(n):
-        variables.append(Variable(f"der({names[i]},2)", qdd + i, "output", "continuous", f"{units[i]}/s^2",
-                                  f"acceleration of {names[i]}", derivative_of=qd + i))
+    variables = [time_variable(reals), *_motion_variables(reals, [
+        (names[i], units[i], f"coordinate {names[i]}", f"der({names[i]})", run["q"][:, i], run["qd"][:, i])
+        for i in range(n)])]
     for k, c in enumerate(columns):
         variables.append(Variable(c.name, reals.offset("y") + k, "output", "continuous", c.unit, c.doc))
     variables += _parameters(system, reals.offset("p"))
     native = Table((Column("t", "s"), Column("s", "m")) + tuple(Column(f"P{i}", "N") for i in range(6)),
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
-    source = data(system, drive, table) + glue("elastic_trolley.c")
+    s_coef = CubicSpline(table.nodes, el_sim.arc_length(drive, table.nodes)).c  # (4, intervals)
+    source = data(system, table.nodes, np.concatenate([table.coef, s_coef[:, :, None]], axis=2), False)
+    source += glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
                        tuple(variables), 2 * n, n, n, 0, 0, len(parameters(system)) * 5, native, n_y=len(columns),
                        stiff=True, modules=(("elastic_assembly", assembly_c(system)),), mass_identity=n)
 
 
-def assembly_c(system) -> str:
+def traction(setup, run: dict, law) -> ExportModel:
+    """The export model of a prepared elastic setup under traction whose native run is ``run``; ``law`` the
+    scene's P0(t, v) [N] as a sympy expression (:func:`symmech.core.expressions.parse`)."""
+    from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
+
+    system, drive, t = setup.system, setup.drive, setup.t
+    inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed, span)
+    table, (lo, hi) = elastic_compiled.tabulate(inputs, setup.rtol), inputs.span
+    if table is None:
+        raise SymmechError("the frame along the track cannot be tabulated in s within its bound (a non-smooth "
+                           "track): `symmech export` needs the compiled engine's table")
+    names, units = state_layout(system)
+    n = len(names)
+    coordinates = [(names[i], units[i], f"coordinate {names[i]}", f"der({names[i]})", run["q"][:, i],
+                    run["qd"][:, i]) for i in range(n)]
+    coordinates.append(("s", "m", f"arc length of O along the track (tabulated over [{lo:.6g}, {hi:.6g}] m)", "V0",
+                        run["s"], run["V0"]))
+    columns = output_columns(setup.names)[1:]  # s is a state
+    m = len(coordinates)
+    reals = REALS.sized(X=2 * m, DX=m, Y=len(columns), Z=0, U=1, P=len(parameters(system)) * 5)
+    variables = [time_variable(reals), *_motion_variables(reals, coordinates)]
+    variables += [Variable(c.name, reals.offset("y") + k, "output", "continuous", c.unit, c.doc)
+                  for k, c in enumerate(columns)]
+    variables += [Variable("traction_force", reals.offset("u"), "input", "continuous", "N", "force along the track "
+                           "(x1 at O) added to the scene's traction P0(t, V0): 0 runs the scene as it is", 0.0)]
+    variables += _parameters(system, reals.offset("p"))
+    native = Table((Column("t", "s"), Column("s", "m"), Column("V0", "m/s")) + tuple(Column(f"P{i}", "N")
+                                                                                     for i in range(6)),
+                   np.column_stack([t, run["s"], run["V0"], run["P"]]), doc="elastic reactions")
+    source = "#define EL_TRACTION 1\n" + data(system, table.nodes, table.coef, True) + glue("elastic_trolley.c")
+    return ExportModel(IDENTIFIER, "Elastic trolley along its track under traction (symmech)", source,
+                       tuple(variables), 2 * n + 2, n + 1, n + 1, 1, 2 * n + 1, len(parameters(system)) * 5, native,
+                       n_y=len(columns), stiff=True, modules=(("elastic_assembly", assembly_c(system, law)),),
+                       mass_identity=n + 1)
+
+
+def time_variable(reals) -> Variable:
+    """The independent variable at its place in ``reals`` (:data:`symmech.export.model.REALS` sized)."""
+    return Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")
+
+
+def _motion_variables(reals, coordinates) -> list[Variable]:
+    """The states x = (values, rates) and the accelerations dx at their places in ``reals`` (REALS sized with
+    X = 2 m, DX = m): ``coordinates`` (m of them: name, unit, description, name of its rate, values (k,), rates
+    (k,) over the native run) give their values, then their rates, then the accelerations
+    (``der(<coordinate>,2)``, or ``der(<rate>)`` when the rate has a name of its own); starts and nominals from
+    the native run."""
+    m = len(coordinates)
+    value, rate_at, acceleration_at = reals.offset("x"), reals.offset("x") + m, reals.offset("dx")
+    out = []
+    for i, (name, unit, what, _, x, _) in enumerate(coordinates):
+        out.append(Variable(name, value + i, "output", "continuous", unit, what, float(x[0]), nominal=_nominal(x)))
+    for i, (name, unit, _, rate, _, v) in enumerate(coordinates):
+        out.append(Variable(rate, rate_at + i, "output", "continuous", f"{unit}/s", f"rate of {name}", float(v[0]),
+                            derivative_of=value + i, nominal=_nominal(v)))
+    for i, (name, unit, _, rate, _, _) in enumerate(coordinates):
+        acceleration = f"der({name},2)" if rate == f"der({name})" else f"der({rate})"
+        out.append(Variable(acceleration, acceleration_at + i, "output", "continuous", f"{unit}/s^2",
+                            f"acceleration of {name}", derivative_of=rate_at + i))
+    return out
+
+
+def assembly_c(system, law=None) -> str:
     """The C99 module of the model's assembly (rate, rate_mass, outputs), derived from its invariants (once per
-    process and model: an export in each FMI version and type derives it once)."""
+    process, model and traction ``law``, None at a prescribed speed: an export in each FMI version and type
+    derives it once)."""
     names, units = state_layout(system)
     model = assembly_model(system)
-    key = hashlib.sha256(repr((model, names, units)).encode()).hexdigest()
+    key = hashlib.sha256(repr((model, names, units, law)).encode()).hexdigest()
     if key not in _DERIVED:
         from symmech.core import emit
-        from symmech.trolley.elastic import symbolic_assembly  # sympy: only when exporting
+        from symmech.trolley.elastic import symbolic_assembly as sa  # sympy: only when exporting
 
-        _DERIVED[key] = emit.render(symbolic_assembly.assembly_spec(model, names, units), emit.C99)
+        if law is None:
+            spec = sa.assembly_spec(model, names, units)
+        else:
+            t, v = expressions.symbol("t"), expressions.symbol("v")
+            spec = sa.traction_spec(model, names, units, law.xreplace({t: sa.TIME, v: sa.SPEED}))
+        _DERIVED[key] = emit.render(spec, emit.C99)
     return _DERIVED[key]
 
 
@@ -174,23 +238,19 @@ def assembly_model(system) -> dict:
                  mass=float(mdl.flags[F_AT.mass]), rollers=bool(mdl.flags[F_AT.rollers]),
                  clamped=bool(mdl.flags[F_AT.law]), probe_fields=inv.probe_fields.tolist(),
                  probe_points=inv.probe_points.tolist(), elastic=system.beam_fields.astype(float).tolist(),
+                 g0=float(mdl.flags[F_AT.g0]),
                  g_ref=float(system.mdl.g0 if system.mdl.g0 > 0 else 9.80665))
     return model
 
 
-def data(system, drive, table) -> str:
-    """C definitions of the frame table with s(t) beside it, which ``c/elastic_trolley.c`` reads."""
-    from symmech.trolley.elastic import simulate as el_sim
-    from symmech.trolley.elastic.layout import N_CHANNELS
-
-    nodes = table.nodes
-    s_coef = CubicSpline(nodes, el_sim.arc_length(drive, nodes)).c  # (4, intervals)
-    coef = np.concatenate([table.coef, s_coef[:, :, None]], axis=2)  # (4, intervals, 13)
+def data(system, nodes, coef, traction: bool) -> str:
+    """C definitions of the frame table ``c/elastic_trolley.c`` reads: nodes (k,) [s, or m under traction] and
+    cubic coefficients (4, k - 1, columns): the 12 frame channels and s in t, or the 15 geometry channels in s."""
     lines = ["/* The elastic trolley's frame table, written by `symmech export` from the compiled engine's (do not "
              "edit). */",
-             f"#define EL_N {system.N}", f"#define EL_CHANNELS {N_CHANNELS}", f"#define EL_NODES {nodes.size}",
+             f"#define EL_N {system.N}", f"#define EL_COLUMNS {coef.shape[2]}", f"#define EL_NODES {nodes.size}",
              f"#define EL_ROLLER_PARAMS {5 * len(parameters(system))}",
-             _doubles("EL_TIMES", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)), ""]
+             _doubles("EL_NODES_AT", nodes), _doubles("EL_TABLE", coef.transpose(1, 2, 0)), ""]
     return "\n".join(lines)
 
 

@@ -1,63 +1,85 @@
 /* The elastic trolley's model functions around its generated assembly (elastic_assembly.c, derived from the
-   model's invariants by symmech.trolley.elastic.symbolic_assembly at export time): the frame's 12 channels and
-   the arc length s are read at t from their cubic spline table (written above by `symmech export`, the
-   compiled engine's nodes and coefficients) and passed to the generated functions after the rollers'
-   parameters. Hand-written: a table lookup and argument packing, no physics.
-   State y = (q, q'), 2 EL_N; M y' = F with M = diag(1, M(q)), F = (q', -R). */
+   model's invariants by symmech.trolley.elastic.symbolic_assembly at export time): the frame's table (written
+   above by `symmech export`, the compiled engine's nodes and cubic coefficients) is read and passed to the
+   generated functions after the rollers' parameters. Hand-written: a table lookup and argument packing, no
+   physics.
+   At a prescribed speed the table is in t: the 12 frame channels and the arc length s (EL_COLUMNS = 13), and
+   y = (q, q'), M y' = F with M = diag(1, M(q)). Under traction (EL_TRACTION) it is in s = y[EL_N]: the 15
+   geometry channels, and y = (q, s, q', V0), M = diag(1, L); outside the table's arc lengths the channels are
+   NaN, so the rates are not finite and the FMU reports an error instead of extrapolating the track. */
+#include <math.h>
 #include <string.h>
+
+#include "model.h"
 
 /* the generated assembly's first parameters: the rollers' stiffnesses, dampings and preloads (5 each); the
    FMU's parameters p are the first EL_ROLLER_PARAMS of them, the others 0 (the preloads of the linear law) */
 #define ASSEMBLY_ROLLER_PARAMS 15
+#define ASSEMBLY_PARAMS (ASSEMBLY_ROLLER_PARAMS + EL_COLUMNS)
 
 void elastic_assembly_rate(double t, const double *y, const double *p, double *out);
 void elastic_assembly_rate_mass(double t, const double *y, const double *p, double *out);
 void elastic_assembly_outputs(const double *arg, double *out);
 
-/* the 12 frame channels and s at t (EL_CHANNELS + 1), clamped to the table */
-static void channels(double t, double *ch)
+/* the EL_COLUMNS table columns at x (t, or s under traction): clamped to the table in t, NaN outside it in s */
+static void columns(double x, double *ch)
 {
-    int lo = 0, hi = EL_NODES - 2;
-    while (lo < hi) {  /* the last node <= t */
-        int mid = (lo + hi + 1) / 2;
-        if (EL_TIMES[mid] <= t) lo = mid; else hi = mid - 1;
+#ifdef EL_TRACTION
+    if (!(x >= EL_NODES_AT[0] && x <= EL_NODES_AT[EL_NODES - 1])) {
+        for (int j = 0; j < EL_COLUMNS; j++) ch[j] = NAN;
+        return;
     }
-    double x = t - EL_TIMES[lo];
-    for (int j = 0; j <= EL_CHANNELS; j++) {
-        const double *c = EL_TABLE + (size_t)(lo * (EL_CHANNELS + 1) + j) * 4;
-        ch[j] = ((c[0] * x + c[1]) * x + c[2]) * x + c[3];
+#endif
+    int lo = 0, hi = EL_NODES - 2;
+    while (lo < hi) {  /* the last node <= x */
+        int mid = (lo + hi + 1) / 2;
+        if (EL_NODES_AT[mid] <= x) lo = mid; else hi = mid - 1;
+    }
+    double h = x - EL_NODES_AT[lo];
+    for (int j = 0; j < EL_COLUMNS; j++) {
+        const double *c = EL_TABLE + (size_t)(lo * EL_COLUMNS + j) * 4;
+        ch[j] = ((c[0] * h + c[1]) * h + c[2]) * h + c[3];
     }
 }
 
-/* the generated module's parameters: the rollers' (p), then the channels at t, then s */
-static void assembly_params(double t, const double *p, double *out)
+/* the generated module's parameters: the rollers' (p), then the table's columns at t or s */
+static void assembly_params(double t, const double *y, const double *p, double *out)
 {
     memset(out, 0, ASSEMBLY_ROLLER_PARAMS * sizeof(double));
     memcpy(out, p, EL_ROLLER_PARAMS * sizeof(double));
-    channels(t, out + ASSEMBLY_ROLLER_PARAMS);
+#ifdef EL_TRACTION
+    (void)t;
+    columns(y[EL_N], out + ASSEMBLY_ROLLER_PARAMS);
+#else
+    (void)y;
+    columns(t, out + ASSEMBLY_ROLLER_PARAMS);
+#endif
 }
 
 void elastic_trolley_rate(double t, const double *y, const double *p, double *out)
 {
-    double pa[ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS + 1];
-    assembly_params(t, p, pa);
+    double pa[ASSEMBLY_PARAMS];
+    assembly_params(t, y, p, pa);
     elastic_assembly_rate(t, y, pa, out);
 }
 
 void elastic_trolley_rate_mass(double t, const double *y, const double *p, double *out)
 {
-    double pa[ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS + 1];
-    assembly_params(t, p, pa);
+    double pa[ASSEMBLY_PARAMS];
+    assembly_params(t, y, p, pa);
     elastic_assembly_rate_mass(t, y, pa, out);
 }
 
-/* s [m], then the generated outputs (P0..P5, d1..d5, per probe u, e, n) at (t, y) with y' = dy */
+/* at a prescribed speed s [m] first; then the generated outputs (P0..P5, d1..d5, per probe u, e, n) at (t, y)
+   with y' = dy: they read y, the accelerations y'[DX_FIRST:] and the parameters */
 void elastic_trolley_outputs(double t, const double *y, const double *dy, const double *p, double *out)
 {
-    double arg[3 * EL_N + ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS + 1];
-    memcpy(arg, y, 2 * EL_N * sizeof(double));
-    memcpy(arg + 2 * EL_N, dy + EL_N, EL_N * sizeof(double));
-    assembly_params(t, p, arg + 3 * EL_N);
-    out[0] = arg[3 * EL_N + ASSEMBLY_ROLLER_PARAMS + EL_CHANNELS];
-    elastic_assembly_outputs(arg, out + 1);
+    double arg[N_X + N_DX + ASSEMBLY_PARAMS];
+    memcpy(arg, y, N_X * sizeof(double));
+    memcpy(arg + N_X, dy + DX_FIRST, N_DX * sizeof(double));
+    assembly_params(t, y, p, arg + N_X + N_DX);
+#ifndef EL_TRACTION
+    *out++ = arg[N_X + N_DX + ASSEMBLY_PARAMS - 1];
+#endif
+    elastic_assembly_outputs(arg, out);
 }

@@ -149,7 +149,7 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
 def _prescribed_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[dict | None, str]:
     """(the outputs of the compiled run at the prescribed speed, "") or (None, why it cannot run)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    table = frame_table(t, rtol, inputs.evaluate, inputs.exact)
+    table = tabulate(inputs, rtol)
     if table is None:
         return None, (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
                       f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
@@ -186,6 +186,16 @@ def geometry_scales(g: np.ndarray) -> np.ndarray:
     return np.repeat([norm(G_AT.e), norm(G_AT.k) + om, norm(G_AT.nu), om, norm(G_AT.dom) + om ** 2], 3)
 
 
+def tabulate(inputs, rtol: float) -> Table | None:
+    """The frame table a compiled run on ``inputs`` (``simulate.compiled_inputs``) reads, and its export: the frame
+    channels in t (:func:`frame_table` seeded by the exact channels at the outputs) or, with traction, the
+    geometry channels in s over ``inputs.span`` (scaled by :func:`geometry_scales`); None when it cannot be
+    tabulated within its bound."""
+    if inputs.span:
+        return frame_table(inputs.seed, rtol, inputs.evaluate, scales=geometry_scales)
+    return frame_table(inputs.seed, rtol, inputs.evaluate, inputs.exact)
+
+
 _KEYS = itertools.count()
 
 
@@ -195,7 +205,7 @@ def _traction_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[d
     the analytic Jacobian (``kernels._jac_traction``). (its outputs, "") or (None, why it cannot run: the
     geometry cannot be tabulated, or the run leaves the table)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    table = frame_table(inputs.seed, rtol, inputs.evaluate, scales=geometry_scales)
+    table = tabulate(inputs, rtol)
     why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
            f"run left the tabulated s in [{inputs.span[0]:.6g}, {inputs.span[1]:.6g}] m: the Python engine "
            "evaluates it exactly")

@@ -13,6 +13,12 @@ Functions (C99 via :mod:`symmech.core.emit`): ``rate`` F = (q̇, -R) and ``rate_
 M y' = F over the state y = (q, q̇) with parameters p = (the rollers' stiffnesses, dampings and preloads, the 12 frame
 channels at t: load a0 + g0 ν, ω, ω̇, v0); ``outputs`` (P0…P5, the roller deflections, and per probe its
 displacement, elastic deflection and overload) from (q, q̇, q̈, p).
+
+With traction (:func:`traction_spec`) s and V0 are states, y = (q, s, q̇, V0): the 12 channels follow from the
+15 geometry channels at s (parameters) and V0, V̇0 (the compiled engine's ``_motion``), and q̈, V̇0 solve
+M q̈ + R = 0 together with F1 = P0(t, V0) (the x1 resultant against the traction law, the engine's
+``_traction_terms``), both affine in (q̈, V̇0): M = diag(1, L) with L their coefficients, F = (q̇, V0, -R, P0 - F1)
+at q̈ = V̇0 = 0. ``outputs`` then read (y, q̈, V̇0, p).
 """
 from __future__ import annotations
 
@@ -30,6 +36,14 @@ CHANNEL_ARGS = args_of(
     + [(CHANNELS[3 + i], f"angular velocity ω of the frame about x{i + 1}", "rad/s") for i in range(3)]
     + [(CHANNELS[6 + i], f"angular acceleration ω̇ of the frame about x{i + 1}", "rad/s^2") for i in range(3)]
     + [(CHANNELS[9 + i], f"velocity of the frame's origin along x{i + 1}", "m/s") for i in range(3)])
+# the traction table's geometry channels in the order of symmech.trolley.elastic.layout.GEOMETRY
+GEOMETRY = tuple(sp.symbols("e1:4 k1:4 nu1:4 Om1:4 dOm1:4", real=True))
+GEOMETRY_ARGS = args_of(
+    [(GEOMETRY[i], f"unit tangent e along x{i + 1}", "1") for i in range(3)]
+    + [(GEOMETRY[3 + i], f"e' + Ω × e along x{i + 1} (per arc length)", "1/m") for i in range(3)]
+    + [(GEOMETRY[6 + i], f"unit vertical ν along x{i + 1}", "1") for i in range(3)]
+    + [(GEOMETRY[9 + i], f"rotation rate Ω of the frame per arc length about x{i + 1}", "rad/m") for i in range(3)]
+    + [(GEOMETRY[12 + i], f"Ω' about x{i + 1}", "rad/m^2") for i in range(3)])
 STIFFNESS = sp.symbols(f"roller_k1:{ROLLERS + 1}", real=True)
 DAMPING = sp.symbols(f"roller_c1:{ROLLERS + 1}", real=True)
 PRELOAD = sp.symbols(f"roller_pre1:{ROLLERS + 1}", real=True)
@@ -46,23 +60,81 @@ def assembly_spec(model: dict, names: list[str], units: list[str]) -> ModuleSpec
     ``probe_points`` (probes, 3) [m], ``elastic`` (F,) 1 on the elastic fields, ``g_ref`` [m/s²]; ``names``,
     ``units`` the N coordinates'."""
     n = len(names)
-    q = sp.symbols(f"q0:{n}", real=True)
-    qd = sp.symbols(f"qd0:{n}", real=True)
-    qdd = sp.symbols(f"qdd0:{n}", real=True)
-    state = args_of([(q[i], f"coordinate {names[i]}", units[i]) for i in range(n)]
-                    + [(qd[i], f"rate of {names[i]}", f"{units[i]}/s") for i in range(n)])
+    q, qd, qdd = _coordinates(n)
+    state = _state_args(q, qd, names, units)
     params = ROLLER_ARGS + CHANNEL_ARGS
-    terms = _Terms(model, q, qd)
+    terms = _Terms(model, q, qd, CHANNELS)
     R = terms.residual()
     M = terms.mass_matrix()
     mass = sp.diag(sp.eye(n), M)
     dynamics = Dynamics(state, params, sp.Matrix(list(qd) + [-r for r in R]), mass=mass,
                         meaning="the elastic trolley in its track frame", jacobian=False)
-    acc_args = args_of([(qdd[i], f"acceleration of {names[i]}", f"{units[i]}/s^2") for i in range(n)])
-    outputs = NamedMatrix("outputs", sp.Matrix(terms.outputs(qdd)), state + acc_args + params,
-                          "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
+    outputs = NamedMatrix("outputs", sp.Matrix(terms.outputs(qdd)), state + _acceleration_args(qdd, names, units)
+                          + params, "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
     return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 and outputs, assembled from one "
                       "model's invariants", SOURCE, (outputs,), dynamics)
+
+
+# the traction law's variables: time and the speed of O along the track
+TIME = sp.Symbol("t", real=True)
+SPEED = sp.Symbol("V0", real=True)
+ARC_LENGTH = sp.Symbol("s", real=True)
+SPEED_RATE = sp.Symbol("dV0", real=True)
+
+
+def traction_spec(model: dict, names: list[str], units: list[str], law: sp.Expr) -> ModuleSpec:
+    """The module ``elastic_assembly`` of one elastic model under traction: state y = (q, s, q̇, V0), parameters
+    the rollers' and the 15 geometry channels at s (GEOMETRY); ``law`` P0 [N] in TIME [s] and SPEED [m/s];
+    ``model`` as :func:`assembly_spec` reads it, with ``g0`` [m/s²] (0 without gravity). F's last row is
+    P0 - F1: an input force added there adds to the law."""
+    n = len(names)
+    q, qd, qdd = _coordinates(n)
+    V, dV = SPEED, SPEED_RATE
+    state = args_of([(q[i], f"coordinate {names[i]}", units[i]) for i in range(n)]
+                    + [(ARC_LENGTH, "arc length of O along the track", "m")]
+                    + [(qd[i], f"rate of {names[i]}", f"{units[i]}/s") for i in range(n)]
+                    + [(V, "speed of O along the track", "m/s")])
+    params = ROLLER_ARGS + GEOMETRY_ARGS
+    terms = _Terms(model, q, qd, motion(V, dV, _number(model["g0"])))
+    R = terms.residual()  # at q̈ = 0, affine in V̇0
+    F1 = terms.resultant_x1(qdd)  # affine in q̈ and V̇0
+    at_rest = {dV: 0, **{x: 0 for x in qdd}}
+    L = sp.zeros(n + 1, n + 1)
+    L[:n, :n] = terms.mass_matrix()
+    L[:n, n] = sp.Matrix([sp.diff(r, dV) for r in R])
+    L[n, :n] = sp.Matrix([[sp.diff(F1, x) for x in qdd]])
+    L[n, n] = sp.diff(F1, dV)
+    rate = [*qd, V, *[-r.xreplace(at_rest) for r in R], law - F1.xreplace(at_rest)]
+    dynamics = Dynamics(state, params, sp.Matrix(rate), mass=sp.diag(sp.eye(n + 1), L),
+                        time=args_of([(TIME, "time", "s")])[0], jacobian=False,
+                        meaning="the elastic trolley in its track frame under traction")
+    accelerations = _acceleration_args(qdd, names, units) + args_of([(dV, "rate of V0", "m/s^2")])
+    outputs = NamedMatrix("outputs", sp.Matrix(terms.outputs(qdd)), state + accelerations + params,
+                          "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
+    return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 with F1 = P0(t, V0) and outputs, "
+                      "assembled from one model's invariants", SOURCE, (outputs,), dynamics)
+
+
+def motion(V, dV, g0) -> tuple:
+    """The 12 frame channels (load, ω, ω̇, v0) at speed V [m/s] and its rate dV [m/s²] from the GEOMETRY channels
+    (the compiled engine's ``_motion``)."""
+    e, k, nu, om, dom = (GEOMETRY[3 * i:3 * i + 3] for i in range(5))
+    return (tuple(dV * e[i] + V ** 2 * k[i] + g0 * nu[i] for i in range(3)) + tuple(V * om[i] for i in range(3))
+            + tuple(dV * om[i] + V ** 2 * dom[i] for i in range(3)) + tuple(V * e[i] for i in range(3)))
+
+
+def _coordinates(n: int) -> tuple:
+    """Symbols of q, q̇, q̈ (n each)."""
+    return (sp.symbols(f"q0:{n}", real=True), sp.symbols(f"qd0:{n}", real=True), sp.symbols(f"qdd0:{n}", real=True))
+
+
+def _state_args(q, qd, names, units) -> tuple:
+    return args_of([(q[i], f"coordinate {names[i]}", units[i]) for i in range(len(q))]
+                   + [(qd[i], f"rate of {names[i]}", f"{units[i]}/s") for i in range(len(q))])
+
+
+def _acceleration_args(qdd, names, units) -> tuple:
+    return args_of([(qdd[i], f"acceleration of {names[i]}", f"{units[i]}/s^2") for i in range(len(qdd))])
 
 
 def _number(x) -> sp.Expr:
@@ -79,10 +151,11 @@ class _Terms:
     """The sums of the compiled engine's ``_terms``, ``_rollers``, ``_membrane`` and ``_resultants`` over one
     model's invariants."""
 
-    def __init__(self, model: dict, q, qd):
-        self.m, self.q, self.qd = model, q, qd
+    def __init__(self, model: dict, q, qd, channels):
+        """``channels``: the 12 frame channels (symbols or expressions) in the order of CHANNELS."""
+        self.m, self.q, self.qd, self.channels = model, q, qd, channels
         self.n, self.f = len(q), len(model["gram_trace"])
-        load, w, dw = CHANNELS[0:3], CHANNELS[3:6], CHANNELS[6:9]
+        load, w, dw = channels[0:3], channels[3:6], channels[6:9]
         W = sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
         dW = sp.Matrix([[0, -dw[2], dw[1]], [dw[2], 0, -dw[0]], [-dw[1], dw[0], 0]])
         self.load, self.W, self.B = sp.Matrix(load), W, W * W + dW
@@ -156,17 +229,25 @@ class _Terms:
         columns = [self.a_times([AG[k][j] for k in range(self.f)]) for j in range(self.n)]
         return sp.Matrix(self.n, self.n, lambda b, j: columns[j][b])
 
+    def resultant_x1(self, qdd) -> sp.Expr:
+        """F1: the x1 resultant of the forces on the body (P0) at q̈ = qdd."""
+        m, s1 = self.m, self.m["s1"]
+        acc = self.acceleration(qdd)
+        first, fv, fa = ([_dot([s1[k][j] for k in range(self.f)], x) for j in range(3)] for x in (self.rr, self.v, acc))
+        return _number(m["mass"]) * self.load[0] + fa[0] + sp.Add(
+            *[self.B[0, j] * first[j] + 2 * self.W[0, j] * fv[j] for j in range(3)])
+
+    def acceleration(self, qdd) -> list:
+        """Coefficients (F) of the field acceleration at q̈ = qdd."""
+        return [a + p for a, p in zip(self.times_a(qdd, self.q), self.p2)]
+
     def outputs(self, qdd) -> list:
         """P0 (the resultant along x1), P1…P5, d1…d5, then per probe u, e [m] and n [g] at q̈ = qdd."""
-        m, q = self.m, self.q
-        acc = [a + p for a, p in zip(self.times_a(qdd, q), self.p2)]
-        s1 = m["s1"]
-        first, fv, fa = ([_dot([s1[k][j] for k in range(self.f)], x) for j in range(3)] for x in (self.rr, self.v, acc))
-        P0 = _number(m["mass"]) * self.load[0] + fa[0] + sp.Add(
-            *[self.B[0, j] * first[j] + 2 * self.W[0, j] * fv[j] for j in range(3)])
-        d, force = self.rollers(q, self.qd)
-        out = [P0, *force, *d]
-        w, dw = sp.Matrix(CHANNELS[3:6]), sp.Matrix(CHANNELS[6:9])
+        m = self.m
+        acc = self.acceleration(qdd)
+        d, force = self.rollers(self.q, self.qd)
+        out = [self.resultant_x1(qdd), *force, *d]
+        w, dw = sp.Matrix(self.channels[3:6]), sp.Matrix(self.channels[6:9])
         for k, point in enumerate(m["probe_points"]):
             field = [[m["probe_fields"][f][k][i] for f in range(self.f)] for i in range(3)]
             pos, vel, ddu = (sp.Matrix([_dot(field[i], x) for i in range(3)]) for x in (self.rr, self.v, acc))
