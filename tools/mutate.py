@@ -138,7 +138,8 @@ SHARDS = {
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
     # integrating tests, a short run on the helix (prescribed speed) and, for the timeline, one with traction
     "elastic_timeline": ("symmech/trolley/elastic/simulate.py", ELASTIC_TIMELINE_TESTS,
-                         ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
+                         ["*ǁTimelineǁ*", "*.x_traction_start__*"]),
+    "elastic_arc_length": ("symmech/trolley/elastic/frame.py", ELASTIC_TIMELINE_TESTS, ["*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)

@@ -67,7 +67,7 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
+    from symmech.trolley.elastic import compiled as elastic_compiled, frame as el_frame, simulate as el_sim
 
     system, drive, t = setup.system, setup.drive, setup.t
     inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed)
@@ -86,7 +86,7 @@ def elastic(setup, run: dict) -> ExportModel:
     variables += _parameters(system, reals.offset("p"))
     native = Table((Column("t", "s"), Column("s", "m")) + tuple(Column(f"P{i}", "N") for i in range(6)),
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
-    s_coef = CubicSpline(table.nodes, el_sim.arc_length(drive, table.nodes)).c  # (4, intervals)
+    s_coef = CubicSpline(table.nodes, el_frame.arc_length(drive, table.nodes)).c  # (4, intervals)
     source = data(system, table.nodes, np.concatenate([table.coef, s_coef[:, :, None]], axis=2), False)
     source += glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
@@ -101,7 +101,7 @@ def traction(setup, run: dict, law) -> ExportModel:
 
     system, drive, t = setup.system, setup.drive, setup.t
     inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed, span)
-    table, (lo, hi) = elastic_compiled.tabulate(inputs, setup.rtol), inputs.span
+    table, (lo, hi) = elastic_compiled.tabulate(inputs, setup.rtol), inputs.frame.span
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated in s within its bound (a non-smooth "
                            "track): `symmech export` needs the compiled engine's table")

@@ -21,7 +21,7 @@ from Radau's collocation polynomial (scipy's dense output), whose error on the b
 the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
 
 **Traction.** s is a state, so the run tabulates the frame's geometry in s instead
-(``simulate.geometry``, the same checked spline) over the arc lengths the run visits (``simulate.reach``), and calls
+(``frame.geometry``, the same checked spline) over the arc lengths the run visits (``simulate.reach``), and calls
 the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic.kernels.TRACTIONS`).
 """
 from __future__ import annotations
@@ -89,7 +89,7 @@ def frame_table(t, rtol: float, evaluate, ch=None, scales=_scales) -> Table | No
     it 4x (noise in the exact values: halving then only interpolates it), the best table so far if its error
     is at most INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs
     the Python engine). ``evaluate(x, at)`` (k, c) gives the exact channels at x[at]
-    (``simulate.channels``; ``simulate.geometry`` on s with traction, then with :func:`geometry_scales` as
+    (``frame.channels``; ``frame.geometry`` on s with traction, then with :func:`geometry_scales` as
     ``scales``)."""
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
@@ -153,7 +153,7 @@ def _prescribed_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple
     if table is None:
         return None, (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
                       f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
-    start, (fr, V0, dV0, _) = inputs.start, inputs.frame
+    start, (fr, V0, dV0, _) = inputs.start, inputs.frame.at_outputs
     Y, steps, nfev, status = ek.solve(inputs.record, (table.nodes, table.coef), start.y0, t, rtol, start.atol)
     _check(status, Y, t)
     run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
@@ -189,11 +189,12 @@ def geometry_scales(g: np.ndarray) -> np.ndarray:
 def tabulate(inputs, rtol: float) -> Table | None:
     """The frame table a compiled run on ``inputs`` (``simulate.compiled_inputs``) reads, and its export: the frame
     channels in t (:func:`frame_table` seeded by the exact channels at the outputs) or, with traction, the
-    geometry channels in s over ``inputs.span`` (scaled by :func:`geometry_scales`); None when it cannot be
+    geometry channels in s over ``inputs.frame.span`` (scaled by :func:`geometry_scales`); None when it cannot be
     tabulated within its bound."""
-    if inputs.span:
-        return frame_table(inputs.seed, rtol, inputs.evaluate, scales=geometry_scales)
-    return frame_table(inputs.seed, rtol, inputs.evaluate, inputs.exact)
+    frame = inputs.frame
+    if frame.span:
+        return frame_table(frame.seed, rtol, frame.evaluate, scales=geometry_scales)
+    return frame_table(frame.seed, rtol, frame.evaluate, frame.exact)
 
 
 _KEYS = itertools.count()
@@ -207,7 +208,7 @@ def _traction_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[d
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     table = tabulate(inputs, rtol)
     why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
-           f"run left the tabulated s in [{inputs.span[0]:.6g}, {inputs.span[1]:.6g}] m: the Python engine "
+           f"run left the tabulated s in [{inputs.frame.span[0]:.6g}, {inputs.frame.span[1]:.6g}] m: the Python engine "
            "evaluates it exactly")
     if table is None:
         return None, why

@@ -1,5 +1,6 @@
 """The elastic trolley's frame along the track (the rigid model's frames, :mod:`symmech.trolley.model`): the
-prescribed or driven motion along the midline and the frame's a0, ω, ω̇ at a point of it."""
+prescribed or driven motion along the midline, the frame's a0, ω, ω̇ at a point of it, and what a compiled run
+tabulates of it (:func:`tabulation`: the exact channels in t, or the geometry in s with traction)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -68,3 +69,59 @@ def frame_state(fr: model.Frame, i: int, V0: float, dV0: float) -> FrameState:
     e, W = fr.e[i], fr.W[i]
     return FrameState(V0 * e, dV0 * e + V0 ** 2 * (fr.de[i] + np.cross(W, e)), V0 * W,
                       dV0 * W + V0 ** 2 * fr.dW[i], fr.lam[i, :, 1])
+
+
+# ---------------------------------------------------------------- what the compiled engine tabulates
+
+GAUSS_LEGENDRE = np.polynomial.legendre.leggauss(8)  # nodes and weights of the arc length per interval
+
+
+def arc_length(drive: Drive, t) -> np.ndarray:
+    """s on the grid t (n,): s0 + ∫ V0 dt, 8-point Gauss-Legendre per step [m]."""
+    nodes, weights = GAUSS_LEGENDRE
+    mid, half = (t[1:] + t[:-1]) / 2, (t[1:] - t[:-1]) / 2
+    x = mid[:, None] + half[:, None] * nodes
+    v = np.broadcast_to(np.asarray(drive.speed(x)[0], dtype=float), x.shape)
+    return drive.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
+
+
+def channels(drive: Drive, mdl, t, at=slice(None)) -> np.ndarray:
+    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
+    where s = s0) [s] of the model ``mdl`` (its l [m] and g0 [m/s²]): :func:`frame_channels`, vectorised."""
+    s = arc_length(drive, t)[at]
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
+    return frame_channels(frames(drive, s, mdl.l), V0, dV0, mdl.g0)
+
+
+def geometry(drive: Drive, mdl, s, at=slice(None)) -> np.ndarray:
+    """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
+    :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
+    fr = frames(drive, np.asarray(s, float)[at], mdl.l)
+    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
+
+
+@dataclass(frozen=True)
+class Tabulation:
+    """What a compiled run tabulates of the frame (:func:`tabulation`): the nodes that seed its table (the output
+    times t [s]; with traction arc lengths over ``span`` [m]), ``evaluate(x, at)`` the exact channels at x[at]
+    (:func:`channels`, with traction :func:`geometry`), and at the prescribed speed the exact channels at the
+    seed (k, 12) and the exact frame at the outputs with V0 [m/s], dV0 [m/s²] (k,) and those channels."""
+
+    seed: np.ndarray
+    evaluate: object
+    exact: np.ndarray | None = None
+    at_outputs: tuple | None = None
+    span: tuple = ()
+
+
+def tabulation(drive: Drive, mdl, t, s, span: tuple = ()) -> Tabulation:
+    """The :class:`Tabulation` of a run of the model ``mdl`` (its l [m], g0 [m/s²]) on the output times t [s]
+    (k,) at the arc lengths s [m] (k,) (:func:`arc_length`) or, with traction (``span`` the arc lengths [m] the
+    run visits), of its geometry on max(k, 16) arc lengths over the span."""
+    if span:
+        return Tabulation(np.linspace(*span, max(t.size, 16)), lambda x, at=slice(None): geometry(drive, mdl, x, at),
+                          span=span)
+    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
+    fr = frames(drive, s, mdl.l)
+    ch = frame_channels(fr, V0, dV0, mdl.g0)
+    return Tabulation(t, lambda x, at=slice(None): channels(drive, mdl, x, at), ch, (fr, V0, dV0, ch))

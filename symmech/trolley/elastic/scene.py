@@ -183,7 +183,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     t = setup.t
     if setup.system is None:
         # no elastic effect: the rigid model itself, on the rigid scene's grid (bit for bit)
-        s = el_sim.arc_length(setup.drive, t)
+        s = el_frame.arc_length(setup.drive, t)
         V0, dV0 = setup.drive.speed(t)
         rigid = model.body_motion(el_frame.frames(setup.drive, s, setup.body.l), V0, dV0, setup.body)
         cols = [Column("t", "s")] + [Column(f"P{i}", "N") for i in range(6)]

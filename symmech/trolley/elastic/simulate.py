@@ -12,7 +12,8 @@ from symmech.core.layout import Field, Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
 from symmech.trolley.elastic.body import ElasticModel, invariants, roller_forces
-from symmech.trolley.elastic.frame import Drive, FrameState, frame_channels, frame_motion, frame_state, frames
+from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
+                                           frame_state, frames, tabulation)
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
 from symmech.trolley.elastic.system import System
 
@@ -39,15 +40,13 @@ class Timeline:
     rigid scene computes it, and from the last node) and the frame state at t, cached:
     implicit steps revisit their stage times."""
 
-    NODES = np.polynomial.legendre.leggauss(8)
-
     def __init__(self, system: System, drive: Drive, t):
         self.system, self.drive, self.t = system, drive, np.asarray(t, dtype=float)
         self.s_nodes = arc_length(drive, self.t) if drive.traction is None else None
         self.cache: dict = {}
 
     def _integral(self, a, b):
-        x, w = self.NODES
+        x, w = GAUSS_LEGENDRE
         mid, half = (a + b) / 2, (b - a) / 2
         return float(sum(wi * float(self.drive.speed(mid + half * xi)[0]) for xi, wi in zip(x, w)) * half)
 
@@ -132,15 +131,6 @@ def prepare(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None)
         y0.update(s=drive.s0, speed=drive.v_initial)
         atol.update(s=1e-10, speed=1e-10)
     return Start(line, state, state.pack(**y0), state.pack(**atol))
-
-
-def arc_length(drive: Drive, t) -> np.ndarray:
-    """s on the grid t (n,): s0 + ∫ V0 dt, 8-point Gauss-Legendre per step [m]."""
-    nodes, weights = Timeline.NODES
-    mid, half = (t[1:] + t[:-1]) / 2, (t[1:] - t[:-1]) / 2
-    x = mid[:, None] + half[:, None] * nodes
-    v = np.broadcast_to(np.asarray(drive.speed(x)[0], dtype=float), x.shape)
-    return drive.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
 
 
 def _dissipation(system: System, qd) -> float:
@@ -240,21 +230,6 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
 
 # --------------------------------------------------------------------------- what the compiled engine reads
 
-def channels(drive, system, t, at=slice(None)) -> np.ndarray:
-    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
-    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame.frame_state`, vectorised."""
-    s = arc_length(drive, t)[at]
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
-    return frame_channels(frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
-
-
-def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
-    """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
-    :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
-    fr = frames(drive, np.asarray(s, float)[at], system.mdl.l)
-    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
-
-
 REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
 # The state of the rigid body's run that finds the arc lengths a traction run visits (:func:`reach`).
 REACH = Layout("ElasticReach", (Field("s", "m", "arc length of O"), Field("speed", "m/s", "speed V0 of O")))
@@ -285,42 +260,22 @@ def reach(system, drive, t) -> tuple[float, float]:
     return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
 
 
-def exact_frame(system: System, drive: Drive, t) -> tuple:
-    """The exact frame at the output times t [s] (k,) at the prescribed speed: the frame at their arc lengths
-    (:func:`arc_length`), V0 [m/s] and dV0 [m/s²] (k,), and its channels (k, 12) (:func:`frame_channels`)."""
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
-    fr = frames(drive, arc_length(drive, t), system.mdl.l)
-    return fr, V0, dV0, frame_channels(fr, V0, dV0, system.mdl.g0)
-
-
 @dataclass(frozen=True)
 class Inputs:
     """What a compiled run reads, made in one pass (:func:`compiled_inputs`): its :class:`Start`, the model
-    record (``System.record``), the nodes that seed its frame table (the output times t [s]; with traction arc
-    lengths over :func:`reach` [m]), the exact channels there when known (else None), ``evaluate(x, at)`` the
-    exact channels at x[at] (:func:`channels`, with traction :func:`geometry`) and, at the prescribed speed, the
-    exact frame at the outputs with V0, dV0 (:func:`exact_frame`; with traction None) and the span of s that
-    traction tabulates (with traction)."""
+    record (``System.record``) and what it tabulates of the frame
+    (:class:`symmech.trolley.elastic.frame.Tabulation`; with traction over the span :func:`reach` finds)."""
 
     start: Start
     record: object
-    seed: np.ndarray
-    exact: np.ndarray | None
-    evaluate: object
-    frame: tuple | None = None
-    span: tuple = ()
+    frame: Tabulation
 
 
 def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
     """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
     start = prepare(system, drive, t, atol_q, dq0, dqd0)
-    if drive.traction is None:
-        frame = exact_frame(system, drive, t)
-        return Inputs(start, system.record, t, frame[-1], lambda x, at=slice(None): channels(drive, system, x, at),
-                      frame)
-    lo, hi = reach(system, drive, t)
-    return Inputs(start, system.record, np.linspace(lo, hi, max(t.size, 16)), None,
-                  lambda x, at=slice(None): geometry(drive, system, x, at), span=(lo, hi))
+    span = reach(system, drive, t) if drive.traction is not None else ()
+    return Inputs(start, system.record, tabulation(drive, system.mdl, t, start.line.s_nodes, span))
 
 
 def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
@@ -358,6 +313,7 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
     q, qd = Y[:, st.slice("q")], Y[:, st.slice("qd")]
     ed, work = Y[:, st.offset("dissipated")], Y[:, st.offset("work")]
     fr = frames(drive, s, system.mdl.l) if frame is None else frame
+    _, a0, w, dw = frame_motion(fr, V0, dV0)
     height = drive.track.derivatives(s, 0)[0][:, 1]
     res = rows(system, fr, V0, dV0, Y, height)
     if system.rollers_on:
@@ -371,7 +327,6 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
         res["deflection"], res["M_contacts"] = np.zeros((len(t), 5)), np.zeros((len(t), 3))
     g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
     pos, vel, ddu = (np.einsum("nk,kpi->npi", res[key], inv.probe_fields) for key in ("rr", "v", "acc"))
-    _, a0, w, dw = frame_motion(fr, V0, dV0)
     a = a0[:, None] + np.cross(dw[:, None], pos) + np.cross(w[:, None], np.cross(w[:, None], pos)) + \
         2 * np.cross(w[:, None], vel) + ddu
     res["probe_displacement"] = pos - inv.probe_points
