@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from symmech.core import pipeline, scene
-from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import body as el_body, frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
 
 # slow: the engine compiles ~60 s of CPU, a third of the default tier's budget; the default tier
@@ -271,7 +271,7 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
 
     setup = traction_scene(case=case)
     system, drive, N = setup.system, setup.drive, setup.system.N
-    table = ec.frame_table(np.linspace(*el_sim.reach(system, drive, setup.t), 21), 1e-8,
+    table = ec.frame_table(np.linspace(*el_frame.reach(drive, el_body.rigid_body(system.mdl), setup.t), 21), 1e-8,
                            lambda s, at=slice(None): el_frame.geometry(drive, system.mdl, s, at), scales=ec.geometry_scales)
     ek.TRACTIONS[0] = drive.traction
     args = (system.record, (table.nodes, table.coef), np.zeros(1), 0)
@@ -333,7 +333,7 @@ def test_a_second_of_traction_agrees_with_the_python_engine():
 def test_a_traction_run_that_leaves_its_table_falls_back_to_the_python_engine(monkeypatch):
     """A geometry table over 2 mm about s0 while the trolley runs 0.15 m: the Python engine runs, and says why."""
     setup = traction_scene(t_end=0.03, steps=10)
-    monkeypatch.setattr(el_sim, "reach", lambda system, drive, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))
+    monkeypatch.setattr(el_frame, "reach", lambda drive, body, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))
     out = elastic_scene.simulate(setup, rtol=1e-8)
     assert out["engine"] == "python" and "left the tabulated s" in out["engine_reason"]
     assert out["s"][-1] - out["s"][0] > 0.1

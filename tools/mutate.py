@@ -143,7 +143,7 @@ SHARDS = {
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
-    "elastic_rigid_body": ("symmech/trolley/elastic/simulate.py",
+    "elastic_rigid_body": ("symmech/trolley/elastic/body.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
                             "reactions_equal or rigid_body"], ["*.x_rigid_body__*"]),
     "elastic_beam_mode": ("symmech/trolley/elastic/system.py",

@@ -13,6 +13,7 @@ import numpy as np
 from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
+from symmech.trolley import model
 from symmech.trolley.elastic import membrane
 from symmech.trolley.elastic.layout import FIELDS, ROLLER_DOFS
 
@@ -283,3 +284,14 @@ def roller_energy(rollers: Rollers, d):
         return 0.5 * (k * d * d).sum(-1)
     pre = np.asarray(rollers.preload, float)
     return 0.5 * (k * (np.maximum(pre - d, 0) ** 2 + np.maximum(pre + d, 0) ** 2 - 2 * np.maximum(pre, 0) ** 2)).sum(-1)
+
+
+def rigid_body(mdl: ElasticModel) -> model.Body:
+    """The rigid model's body with the total mass, centre of mass and central inertia of
+    trolley, beams and tip masses (undeformed)."""
+    inv = invariants(mdl)
+    m = inv.mass
+    com = inv.S1[0] / m
+    J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
+    I = kin.inertia_from_second_moment(J)
+    return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)

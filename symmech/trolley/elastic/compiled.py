@@ -21,7 +21,7 @@ from Radau's collocation polynomial (scipy's dense output), whose error on the b
 the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
 
 **Traction.** s is a state, so the run tabulates the frame's geometry in s instead
-(``frame.geometry``, the same checked spline) over the arc lengths the run visits (``simulate.reach``), and calls
+(``frame.geometry``, the same checked spline) over the arc lengths the run visits (``frame.reach``), and calls
 the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic.kernels.TRACTIONS`).
 """
 from __future__ import annotations
@@ -202,7 +202,7 @@ _KEYS = itertools.count()
 
 def _traction_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[dict | None, str]:
     """The compiled run with traction: y = [q, q̇, E_d, W, s, V0] (layout.TRACTION_STATE), the frame's geometry
-    tabulated in s over the span ``simulate.reach`` found, P0(t, V0) called back in Python per stage; Radau with
+    tabulated in s over the span ``frame.reach`` found, P0(t, V0) called back in Python per stage; Radau with
     the analytic Jacobian (``kernels._jac_traction``). (its outputs, "") or (None, why it cannot run: the
     geometry cannot be tabulated, or the run leaves the table)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symmech.core.layout import Field, Layout
 from symmech.trolley import model
 
 # ---------------------------------------------------------------- frame along the track
@@ -114,14 +115,43 @@ class Tabulation:
     span: tuple = ()
 
 
-def tabulation(drive: Drive, mdl, t, s, span: tuple = ()) -> Tabulation:
+def tabulation(drive: Drive, mdl, t, s, rigid: model.Body | None = None) -> Tabulation:
     """The :class:`Tabulation` of a run of the model ``mdl`` (its l [m], g0 [m/s²]) on the output times t [s]
-    (k,) at the arc lengths s [m] (k,) (:func:`arc_length`) or, with traction (``span`` the arc lengths [m] the
-    run visits), of its geometry on max(k, 16) arc lengths over the span."""
-    if span:
+    (k,) at the arc lengths s [m] (k,) (:func:`arc_length`) or, with traction (``rigid`` the rigid body of the
+    same mass), of its geometry on max(k, 16) arc lengths over the span :func:`reach` finds."""
+    if rigid is not None:
+        span = reach(drive, rigid, t)
         return Tabulation(np.linspace(*span, max(t.size, 16)), lambda x, at=slice(None): geometry(drive, mdl, x, at),
                           span=span)
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
     fr = frames(drive, s, mdl.l)
     ch = frame_channels(fr, V0, dV0, mdl.g0)
     return Tabulation(t, lambda x, at=slice(None): channels(drive, mdl, x, at), ch, (fr, V0, dV0, ch))
+
+
+REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
+# The state of the rigid body's run that finds the arc lengths a traction run visits (:func:`reach`).
+REACH = Layout("ElasticReach", (Field("s", "m", "arc length of O"), Field("speed", "m/s", "speed V0 of O")))
+RE_AT = REACH.slots
+
+
+def reach(drive: Drive, body: model.Body, t) -> tuple[float, float]:
+    """The arc lengths [m] a traction run on the output times t [s] visits: those of the rigid ``body`` (the
+    whole elastic body's mass, centre and inertia, ``body.rigid_body``) under the same traction (DOP853 at rtol
+    1e-6), widened by :data:`REACH_MARGIN` of their span (at least 1 mm) and kept within the frame plan's span."""
+    from scipy.integrate import solve_ivp
+
+    def rates(time, y):
+        fr = frames(drive, y[REACH.slice("s")], body.l)
+        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
+        v = y[RE_AT.speed]
+        p0 = float(drive.traction(time, v))
+        return REACH.pack(s=v, speed=(p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * v ** 2) / alpha[0])
+
+    sol = solve_ivp(rates, (t[0], t[-1]), REACH.pack(s=drive.s0, speed=drive.v_initial), method="DOP853", t_eval=t,
+                    rtol=1e-6)
+    s = sol.y[RE_AT.s] if sol.status == 0 else np.array([drive.s0])
+    pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
+    lo, hi = float(s.min()) - pad, float(s.max()) + pad
+    span = getattr(drive.plan, "span", None)
+    return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)

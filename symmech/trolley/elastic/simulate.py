@@ -7,28 +7,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import context, kinematics as kin
-from symmech.core.layout import Field, Layout
+from symmech.core import context
+from symmech.core.layout import Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
-from symmech.trolley.elastic.body import ElasticModel, invariants, roller_forces
+from symmech.trolley.elastic.body import rigid_body, roller_forces
 from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
                                            frame_state, frames, tabulation)
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
 from symmech.trolley.elastic.system import System
 
 # ---------------------------------------------------------------- integration along the track
-
-def rigid_body(mdl: ElasticModel) -> model.Body:
-    """The rigid model's body with the total mass, centre of mass and central inertia of
-    trolley, beams and tip masses (undeformed)."""
-    inv = invariants(mdl)
-    m = inv.mass
-    com = inv.S1[0] / m
-    J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
-    I = kin.inertia_from_second_moment(J)
-    return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)
-
 
 def _state_at(system: System, drive: Drive, t: float, s: float) -> FrameState:
     V0, dV0 = drive.speed(t)
@@ -230,41 +219,11 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
 
 # --------------------------------------------------------------------------- what the compiled engine reads
 
-REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
-# The state of the rigid body's run that finds the arc lengths a traction run visits (:func:`reach`).
-REACH = Layout("ElasticReach", (Field("s", "m", "arc length of O"), Field("speed", "m/s", "speed V0 of O")))
-RE_AT = REACH.slots
-
-
-def reach(system, drive, t) -> tuple[float, float]:
-    """The arc lengths [m] a traction run visits: those of the rigid body (the whole elastic body's mass,
-    centre and inertia) under the same traction (DOP853 at rtol 1e-6), widened by :data:`REACH_MARGIN` of
-    their span (at least 1 mm) and kept within the frame plan's span."""
-    from scipy.integrate import solve_ivp
-
-    body = rigid_body(system.mdl)
-
-    def rates(time, y):
-        fr = frames(drive, y[REACH.slice("s")], system.mdl.l)
-        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
-        v = y[RE_AT.speed]
-        p0 = float(drive.traction(time, v))
-        return REACH.pack(s=v, speed=(p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * v ** 2) / alpha[0])
-
-    sol = solve_ivp(rates, (t[0], t[-1]), REACH.pack(s=drive.s0, speed=drive.v_initial), method="DOP853", t_eval=t,
-                    rtol=1e-6)
-    s = sol.y[RE_AT.s] if sol.status == 0 else np.array([drive.s0])
-    pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
-    lo, hi = float(s.min()) - pad, float(s.max()) + pad
-    span = getattr(drive.plan, "span", None)
-    return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
-
-
 @dataclass(frozen=True)
 class Inputs:
     """What a compiled run reads, made in one pass (:func:`compiled_inputs`): its :class:`Start`, the model
     record (``System.record``) and what it tabulates of the frame
-    (:class:`symmech.trolley.elastic.frame.Tabulation`; with traction over the span :func:`reach` finds)."""
+    (:class:`symmech.trolley.elastic.frame.Tabulation`; with traction over the span ``frame.reach`` finds)."""
 
     start: Start
     record: object
@@ -274,8 +233,8 @@ class Inputs:
 def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
     """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
     start = prepare(system, drive, t, atol_q, dq0, dqd0)
-    span = reach(system, drive, t) if drive.traction is not None else ()
-    return Inputs(start, system.record, tabulation(drive, system.mdl, t, start.line.s_nodes, span))
+    rigid = rigid_body(system.mdl) if drive.traction is not None else None
+    return Inputs(start, system.record, tabulation(drive, system.mdl, t, start.line.s_nodes, rigid))
 
 
 def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
