@@ -1,6 +1,7 @@
 """The elastic trolley's body (seed 002, eqs. (9) and the roller section): the model's data (beams, rollers,
 effects), the body sampled by weighted points, the fields φ, ψ over the samples and their Gram tensors (the
-inertia invariants), the beams' stiffness and damping, the rollers' forces and energy.
+inertia invariants), the rigid body of the same mass, the beams' stiffness and damping, the rollers' forces
+and energy.
 
 The coordinates and fields are those of :mod:`symmech.trolley.elastic.system`."""
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """The elastic trolley's frame along the track (the rigid model's frames, :mod:`symmech.trolley.model`): the
 prescribed or driven motion along the midline, the frame's a0, ω, ω̇ at a point of it, and what a compiled run
-tabulates of it (:func:`tabulation`: the exact channels in t, or the geometry in s with traction)."""
+tabulates of it (:func:`tabulation`: the exact channels in t, or the geometry in s over the arc lengths a
+traction run visits, :func:`reach`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,6 +1,6 @@
-"""The elastic trolley integrated along the track: the rigid body of the same mass, the timeline of a run
-with traction, the solve (scipy's ``solve_ivp`` on :class:`symmech.trolley.elastic.system.System`) and the
-outputs per row (reactions, energies, deflections)."""
+"""The elastic trolley integrated along the track: the timeline of a run (with traction too), the start
+both engines share, what a compiled run reads (:func:`compiled_inputs`), the solve (scipy's ``solve_ivp`` on
+:class:`symmech.trolley.elastic.system.System`) and the outputs per row (reactions, energies, deflections)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
