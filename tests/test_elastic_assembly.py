@@ -20,7 +20,7 @@ from fuzzscenes import toml_text
 from symmech.core import expressions, pipeline
 from symmech.core.scene import scenes_folder
 from symmech.export import trolley
-from symmech.trolley.elastic import compiled, frame as el_frame, simulate as el_sim, system as el
+from symmech.trolley.elastic import frame as el_frame, simulate as el_sim, system as el
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
 DOUBLES = ctypes.POINTER(ctypes.c_double)
@@ -137,7 +137,7 @@ def test_generated_traction_assembly_equals_the_python_engine(tmp_path):
         for _ in range(4):
             q, qd = rng.normal(0.0, 1e-4, n), rng.normal(0.0, 1e-3, n)
             s, V, t = rng.uniform(0.0, 10.0), rng.uniform(1.0, 8.0), rng.uniform(0.0, 3.0)
-            p = np.r_[rollers, compiled.geometry(drive, system, np.array([s]))[0]]
+            p = np.r_[rollers, el_frame.geometry(drive, system.mdl, np.array([s]))[0]]
             rate, mass = _rates(library, np.r_[q, s, qd, V], p, t)
             np.testing.assert_array_equal(rate[:n + 1], np.r_[qd, V])
             np.testing.assert_array_equal(mass[:n + 1], np.eye(2 * n + 2)[:n + 1])

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from symmech.core import pipeline, scene
-from symmech.trolley.elastic import simulate as el_sim
+from symmech.trolley.elastic import body as el_body, frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
 
 # slow: the engine compiles ~60 s of CPU, a third of the default tier's budget; the default tier
@@ -36,6 +36,11 @@ def helix(t_end=0.15, steps=50, case=1, **elastic):
         doc["elastic"][key] = value
     doc["elastic"]["numerics"] = {**doc["elastic"]["numerics"], "modal_samples": 0}
     return pipeline.load(doc).setup.elastic
+
+
+def exact_channels(setup):
+    """The exact frame channels of the setup's drive at times x[at], as a compiled run evaluates them."""
+    return lambda x, at=slice(None): el_frame.channels(setup.drive, setup.system.mdl, x, at)
 
 
 def both(setup, rtol):
@@ -154,12 +159,12 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
     for case, rtol, noise, steps in ((1, 1e-8, False, 20), (2, 1e-6, False, 20), (2, 1e-8, True, 20),
                                      (1, 1e-6, False, 400)):
         setup = helix(t_end=1.0, steps=steps, case=case)
-        table = ec.frame_table(setup.system, setup.drive, setup.t, rtol)
+        table = ec.frame_table(setup.t, rtol, exact_channels(setup))
         assert table.noise == noise and table.bound == 1e-3 * rtol
         assert table.nodes.size > 21 if steps == 20 else set(table.nodes) < set(setup.t)
         assert table.error <= (ec.INTERP_NOISE if noise else table.bound)
         t = np.sort(RNG.uniform(0.0, 1.0, 400))
-        exact = ec.channels(setup.drive, setup.system, np.r_[0.0, t])[1:]
+        exact = el_frame.channels(setup.drive, setup.system.mdl, np.r_[0.0, t])[1:]
         spline = np.empty_like(exact)
         for i, ti in enumerate(t):
             ek._channels((table.nodes, table.coef), ti, spline[i])
@@ -181,7 +186,7 @@ def test_a_speed_with_a_kink_is_not_tabulated():
     from symmech.trolley.elastic import compiled as ec
 
     setup = kinked()
-    assert ec.frame_table(setup.system, setup.drive, setup.t, 1e-6) is None
+    assert ec.frame_table(setup.t, 1e-6, exact_channels(setup)) is None
 
 
 @pytest.mark.slow
@@ -198,8 +203,8 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
             "ei": [50.0, 80.0], "support": "pinned", "axial": "held", "ea": 5e6, "modes": 2}
     setup = helix(case=2, rollers=rollers, beams=[*BUNDLED["elastic"]["beams"], beam])
     system = setup.system
-    table = ec.frame_table(system, setup.drive, setup.t, 1e-8)
-    args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1))
+    table = ec.frame_table(setup.t, 1e-8, exact_channels(setup))
+    args = (system.record, (table.nodes, table.coef), np.zeros(1))
     n = 2 * system.N + 2
     y = np.r_[RNG.normal(size=system.N) * 1e-3, RNG.normal(size=system.N) * 1e-2, 0.0, 0.0]
     y[:5] = RNG.uniform(-1e-5, 1e-5, 5)  # away from the kinks of the clamped pair (|d| = 2e-5 m)
@@ -219,15 +224,15 @@ def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs()
 
 def test_the_assembly_matches_system_evaluate_at_random_states():
     """q̈, M, ∂R/∂q, ∂R/∂q̇ and the resultants of the kernels against System.evaluate / resultants (numpy)."""
-    from symmech.trolley.elastic import compiled as ec, kernels as ek
+    from symmech.trolley.elastic import kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     setup = helix(rollers=rollers)
-    system, mdl = setup.system, ek.pack(setup.system)
+    system, mdl = setup.system, setup.system.record
     line = el_sim.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
-        ch = ec.channels(setup.drive, system, np.array([0.0, time]) if time else np.array([0.0]))[-1]
+        ch = el_frame.channels(setup.drive, system.mdl, np.array([0.0, time]) if time else np.array([0.0]))[-1]
         q, qd = RNG.normal(size=system.N) * 1e-4, RNG.normal(size=system.N) * 1e-2
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
@@ -266,11 +271,10 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
 
     setup = traction_scene(case=case)
     system, drive, N = setup.system, setup.drive, setup.system.N
-    table = ec.frame_table(system, drive, np.linspace(*ec.reach(system, drive, setup.t), 21), 1e-8,
-                           evaluate=lambda s, at=slice(None): ec.geometry(drive, system, s, at),
-                           scales=ec._geometry_scales)
+    table = ec.frame_table(np.linspace(*el_frame.reach(drive, el_body.rigid_body(system.mdl), setup.t), 21), 1e-8,
+                           lambda s, at=slice(None): el_frame.geometry(drive, system.mdl, s, at), scales=ec.geometry_scales)
     ek.TRACTIONS[0] = drive.traction
-    args = (ek.pack(system), (table.nodes, table.coef), np.zeros(1), 0)
+    args = (system.record, (table.nodes, table.coef), np.zeros(1), 0)
     n = 2 * N + 4
     y = np.r_[RNG.normal(size=N) * 1e-4, RNG.normal(size=N) * 1e-2, 0.0, 0.0, 0.2, 5.3]
     J = np.empty((n, n))
@@ -328,10 +332,8 @@ def test_a_second_of_traction_agrees_with_the_python_engine():
 @pytest.mark.slow
 def test_a_traction_run_that_leaves_its_table_falls_back_to_the_python_engine(monkeypatch):
     """A geometry table over 2 mm about s0 while the trolley runs 0.15 m: the Python engine runs, and says why."""
-    from symmech.trolley.elastic import compiled as ec
-
     setup = traction_scene(t_end=0.03, steps=10)
-    monkeypatch.setattr(ec, "reach", lambda system, drive, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))
+    monkeypatch.setattr(el_frame, "reach", lambda drive, body, t: (drive.s0 - 1e-3, drive.s0 + 1e-3))
     out = elastic_scene.simulate(setup, rtol=1e-8)
     assert out["engine"] == "python" and "left the tabulated s" in out["engine_reason"]
     assert out["s"][-1] - out["s"][0] > 0.1

@@ -41,9 +41,9 @@ def system():
 
 
 def test_arc_length_on_an_uneven_grid_is_the_integral_of_the_speed(drive):
-    assert np.abs(el_sim.arc_length(drive, GRID) - arc(GRID)).max() < 1e-12
+    assert np.abs(el_frame.arc_length(drive, GRID) - arc(GRID)).max() < 1e-12
     steady = dataclasses.replace(drive, speed=lambda t: (5.0, 0.0))  # a scalar speed for the whole grid
-    assert np.abs(el_sim.arc_length(steady, GRID) - (S0 + 5.0 * GRID)).max() < 1e-13
+    assert np.abs(el_frame.arc_length(steady, GRID) - (S0 + 5.0 * GRID)).max() < 1e-13
 
 
 def test_timeline_arc_length_between_on_and_beyond_the_nodes(drive):

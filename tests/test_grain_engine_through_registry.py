@@ -43,9 +43,9 @@ class StandIn:
         self.builder_.calls.append("warm")
         return True
 
-    def run(self, model, num, start, t_end, on_step=None):
+    def run(self, model, num, start, t_end, on_step=None, reason=""):
         self.runs.append((model, num.engine, t_end))
-        return motion.Motion(None, [], {}, [], start, start, {})
+        return motion.Motion(None, [], {}, [], start, start, {"engine": "compiled", "engine_reason": reason})
 
 
 def test_a_compiled_run_takes_the_registered_engine(monkeypatch):

@@ -73,6 +73,44 @@ def test_a_layout_vector_is_the_array_type_numba_gives_the_packed_vector():
     assert SMALL.numba_type() == numba.typeof(SMALL.pack(a=0.0, b=(0, 0, 0), c=np.zeros((2, 2))))
 
 
+FAMILY = Layout("Family", (Field("q", "m", "coordinates", ("N",)), Field("e", "J", "an energy"),
+                           Field("psi", "1", "pairs", ("P",))))
+
+
+def test_a_layout_family_sized_for_a_model_has_the_offsets_of_its_sizes():
+    member = FAMILY.sized(N=3, P=2)
+    assert FAMILY.dims == ("N", "P") and member.dims == () and member.size == 6
+    assert (member.offset("e"), member.slice("psi")) == (3, slice(4, 6))
+    assert member.edges().tolist() == [0, 3, 4, 6] and member.edges().dtype == np.int64
+    assert FAMILY.positions == member.positions and tuple(FAMILY.positions) == (0, 1, 2)
+    assert FAMILY.sized(N=3, P=2) is member  # one member per sizes
+    assert member.pack(q=[1.0, 2.0, 3.0], e=4.0, psi=[5.0, 6.0]).tolist() == [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+
+
+@pytest.mark.parametrize("sizes", [{"N": 3}, {"N": 3, "P": 2, "M": 1}, {"N": -1, "P": 2}, {"N": 1.5, "P": 2}])
+def test_a_layout_family_refuses_sizes_that_do_not_fit_its_dimensions(sizes):
+    with pytest.raises(ValueError, match=r"Family.sized: sizes of \('N', 'P'\)"):
+        FAMILY.sized(**sizes)
+
+
+def test_a_layout_family_has_no_offsets_until_its_sizes_are_given():
+    with pytest.raises(ValueError, match="sizes of .* are open"):
+        FAMILY.offset("e")
+
+
+def test_the_elastic_states_keep_the_order_both_engines_were_built_with():
+    """The state [q, q̇, E_d, W(, s, V0)] of a model of 4 coordinates, offsets written down independently; the
+    state without traction is the traction state's first fields (the output rows read either through it)."""
+    plain, traction = elastic_layout.state(4, False), elastic_layout.state(4, True)
+    assert plain.edges().tolist() == [0, 4, 8, 9, 10]
+    assert traction.edges().tolist() == [0, 4, 8, 9, 10, 11, 12]
+    assert traction.fields[:len(plain.fields)] == plain.fields
+    assert elastic_layout.FIELDS.sized(N=4, P=3).edges().tolist() == [0, 1, 5, 8]
+    assert elastic_layout.TRACTION_UNKNOWNS.sized(N=4).edges().tolist() == [0, 4, 5]
+    assert elastic_layout.TRACTION_COLUMNS.sized(N=4).edges().tolist() == [0, 4, 8, 9, 10]
+    assert elastic_layout.ROLLER_DOFS.names == ("u2", "u3", "th1", "th2", "th3")
+
+
 def test_a_bundle_packs_a_record_of_its_dtypes_that_numba_types_as_declared_and_pickles():
     bundle = Bundle("Probe", __name__, (Field("x", "m", "", ("n",)), Field("k", "", "", ("n", 2), "int64")))
     record = bundle.pack(x=[1, 2], k=[[1, 2], [3, 4]])
@@ -89,20 +127,25 @@ def test_a_bundle_packs_a_record_of_its_dtypes_that_numba_types_as_declared_and_
 
 def test_the_elastic_model_record_of_a_system_has_the_declared_numba_type():
     """The signature the elastic engine is compiled for (elastic_compiled._entry_signatures) is the record
-    type derived from MODEL: it must be the type of what pack(system) hands the kernels."""
+    type derived from MODEL: it must be the type of the record System.record hands the kernels."""
     import sys
 
     sys.path.insert(0, str(Path(__file__).parent))
     from test_elastic_compiled import helix
 
-    from symmech.trolley.elastic import compiled as elastic_compiled, kernels as elastic_kernels
+    from symmech.trolley.elastic import compiled as elastic_compiled
 
-    record = elastic_kernels.pack(helix().system)
+    record = helix().system.record
     assert numba.typeof(record) == elastic_layout.MODEL.numba_type()
     for entry, signature in elastic_compiled._entry_signatures().items():
         assert signature[0] == numba.typeof(record), entry
     flags = elastic_layout.FLAGS.unpack(record.flags)
     assert flags["n"] == record.stiffness.shape[0] and flags["f"] == record.gram_trace.shape[0]
+    n, pairs = int(flags["n"]), record.pair_i.size  # the edges the kernels read: those of the sized layouts
+    assert record.state_at.tolist() == [0, n, 2 * n, 2 * n + 1, 2 * n + 2, 2 * n + 3, 2 * n + 4]
+    assert record.fields_at.tolist() == [0, 1, 1 + n, 1 + n + pairs] and 1 + n + pairs == flags["f"]
+    assert record.unknowns_at.tolist() == [0, n, n + 1]
+    assert record.columns_at.tolist() == [0, n, 2 * n, 2 * n + 1, 2 * n + 2]
 
 
 def test_the_grain_layouts_keep_the_slots_the_engine_was_built_with():
@@ -175,7 +218,9 @@ OFFSETS = {"P_AT": compiled_layout.PARAMS, "S_AT": compiled_layout.SLIDE, "C_AT"
            "CH_AT": elastic_layout.CHANNELS, "G_AT": elastic_layout.GEOMETRY, "T_AT": compiled_layout.TRAJECTORY_ROW,
            "WR_AT": compiled_layout.WARNING_ROW, "FL_AT": compiled_layout.FLIGHT_RECORD,
            "RS_AT": compiled_layout.ROTATION_STEP, "SS_AT": compiled_layout.SLIDE_STEP, "SM_AT": compiled_layout.SAMPLER,
-           "RO_AT": compiled_layout.ROTATION, "Z_AT": compiled_layout.SLIDE_STATE, "ST_AT": radau.RADAU_STATE, "RL_AT": elastic_layout.ROLLER}
+           "RO_AT": compiled_layout.ROTATION, "Z_AT": compiled_layout.SLIDE_STATE, "ST_AT": radau.RADAU_STATE, "RL_AT": elastic_layout.ROLLER,
+           "Y_AT": elastic_layout.TRACTION_STATE, "FC_AT": elastic_layout.FIELDS, "U_AT": elastic_layout.TRACTION_UNKNOWNS,
+           "CO_AT": elastic_layout.TRACTION_COLUMNS}
 GRAIN_READERS = ("driver", "flight_path", "flight_phase", "impact_law", "kinematics", "landing", "loop", "roots", "rows",
                  "sliding_phase", "slip", "steppers")  # the grain engine's modules that read a declared vector
 STATE_READERS = ("flight_phase", "impact_law", "kinematics", "landing", "loop", "sliding_phase")  # y: the state
@@ -228,3 +273,81 @@ def test_every_read_of_a_declared_vector_goes_through_its_layout(path):
                 assert not _by_hand(part, ({own} if isinstance(own, str) else set(own)) | aliases), \
                     f"{path}:{node.lineno} {ast.unparse(node)} indexes a declared vector by hand"
     assert seen > 0
+
+
+# The vectors whose length follows the model (the elastic state, field coefficients, traction unknowns and
+# columns): each file's names for them. Every index into them is built from the sized layouts (offsets bound from
+# Y_AT, FC_AT, U_AT, CO_AT positions, or a sized layout's offset/slice), never from a number or the size n alone.
+# The axes of each that are sized (None: all of them; a table's rows are not).
+SIZED = {"trolley/elastic/kernels.py": {**dict.fromkeys(("y", "out", "f", "J", "L", "rhs", "x", "G", "dx", "z", "Z",
+                                                         "Zt", "S1", "p2", "q", "qd", "R")), "Y": (1,)},
+         "trolley/elastic/compiled.py": {"y": None, "Y": (1,)},
+         "trolley/elastic/simulate.py": {**dict.fromkeys(("y", "out", "mask")), "Y": (1,), "q": (1,), "qd": (1,)},
+         "trolley/elastic/system.py": dict.fromkeys(("rr", "out", "q", "qd", "R", "Rq", "Rqd", "mask")),
+         "trolley/elastic/scene.py": {"target": None, "q": (1,)}, "trolley/elastic/body.py": {"dA": None}}
+SIZE_NAMES = {"n", "N"}
+LAYOUT_CALLS = {"offset", "slice"}  # a sized layout's offsets, from Python
+
+
+def _layout_names(tree) -> set:
+    """Names bound to what reads a sized layout: ``iq = at[Y_AT.q]``, ``iq, iqd = st.slice("q"), ...`` (element by
+    element where both sides are tuples), ``ROTATIONS = slice(ROLLER_DOFS.offset(...), ...)``."""
+    def reads(value) -> bool:
+        return bool(_names(value) & OFFSETS.keys()) or any(
+            isinstance(c, ast.Call) and isinstance(c.func, ast.Attribute) and c.func.attr in LAYOUT_CALLS
+            for c in ast.walk(value))
+
+    out = set()
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Assign):
+            continue
+        for target in node.targets:
+            pairs = zip(target.elts, node.value.elts) if isinstance(target, ast.Tuple) and \
+                isinstance(node.value, ast.Tuple) and len(target.elts) == len(node.value.elts) else [(target, node.value)]
+            out |= {t.id for tg, value in pairs if reads(value) for t in ast.walk(tg) if isinstance(t, ast.Name)}
+    return out
+
+
+def _sized_by_hand(part, allowed: set) -> bool:
+    """Whether an index into a sized vector holds a number or the size alone (``y[n:2 * n]``, ``rr[0]``, ``q[:5]``)
+    and nothing that reads its layout."""
+    numbers = any(isinstance(n, ast.Constant) and type(n.value) in (int, float) for n in ast.walk(part))
+    calls = any(isinstance(c, ast.Call) and isinstance(c.func, ast.Attribute) and c.func.attr in LAYOUT_CALLS
+                for c in ast.walk(part))
+    return (numbers or bool(_names(part) & SIZE_NAMES)) and not (calls or _names(part) & allowed)
+
+
+@pytest.mark.parametrize("path", sorted(SIZED))
+def test_every_index_into_a_vector_sized_by_the_model_reads_its_layout(path):
+    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
+    allowed = _layout_names(tree) | OFFSETS.keys() | {"N_ROLLER_DOFS"}
+    seen = 0
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id in SIZED[path]:
+            index, axes = node.slice, SIZED[path][node.value.id]
+            dims = index.elts if isinstance(index, ast.Tuple) else [index]
+            parts = [b for axis, i in enumerate(dims) if axes is None or axis in axes
+                     for b in ([i.lower, i.upper, i.step] if isinstance(i, ast.Slice) else [i])]
+            for part in (p for p in parts if p is not None):
+                assert not _sized_by_hand(part, allowed), f"{path}:{node.lineno} {ast.unparse(node)} numbers a slot by hand"
+                seen += 1
+    assert seen > 0
+
+
+def test_an_exported_models_value_references_follow_the_declared_reals():
+    """r[] of an export: time, 4 states, 2 derivatives, 3 outputs, 1 event indicator, 2 inputs, 5 parameters;
+    the first value reference of each block written down independently."""
+    from symmech.export.model import ExportModel
+
+    model = ExportModel("m", "", "", (), 4, 2, 2, 2, 0, 5, None, n_y=3, n_z=1)
+    assert model.layout() == {"VR_TIME": 0, "VR_X": 1, "VR_DX": 5, "VR_Y": 7, "VR_Z": 10, "VR_U": 11, "VR_P": 13,
+                              "N_REAL": 18}
+
+
+def test_the_elastic_builds_record_covers_its_declared_layouts():
+    """The kernels freeze the layouts' offsets into numba's cache: the build's record must list the declaring file,
+    so that a changed declaration counts the cache as stale (numba keys its cache on the kernels' file alone)."""
+    from symmech.numerics import artifacts
+    from symmech.trolley.elastic import kernels
+
+    assert elastic_layout.__file__ in artifacts.sources(kernels)

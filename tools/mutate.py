@@ -125,7 +125,7 @@ SHARDS = {
                             "*.x_beam_basis__*", "*.x_rigid_cloud__*", "*.x__frame_of__*"]),
     "elastic_system": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                        ["*ǁSystemǁ__init__*", "*ǁSystemǁevaluate__*", "*ǁSystemǁcoefficients__*", "*ǁSystemǁ_dv__*",
-                        "*ǁSystemǁ_p2__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
+                        "*ǁSystemǁquadratic_rates__*", "*ǁSystemǁmass__*", "*ǁSystemǁaccelerations__*",
                         "*ǁSystemǁroller_state__*", "*ǁSystemǁ_frame_mats__*"]),
     "elastic_balances": ("symmech/trolley/elastic/system.py", ELASTIC_TESTS,
                          ["*ǁSystemǁresultants__*", "*ǁSystemǁreactions__*", "*ǁSystemǁcontact_moment__*",
@@ -142,11 +142,12 @@ SHARDS = {
     # reached only through simulate (ELASTIC_TESTS leave out every test that integrates): the cheapest
     # integrating tests, a short run on the helix (prescribed speed) and, for the timeline, one with traction
     "elastic_timeline": ("symmech/trolley/elastic/simulate.py", ELASTIC_TIMELINE_TESTS,
-                         ["*ǁTimelineǁ*", "*.x_traction_start__*", "*.x_arc_length__*"]),
+                         ["*ǁTimelineǁ*", "*.x_traction_start__*"]),
+    "elastic_arc_length": ("symmech/trolley/elastic/frame.py", ELASTIC_TIMELINE_TESTS, ["*.x_arc_length__*"]),
     # reached only through simulate (rigid_body by outputs, beam_mode by a scene's initial mode): the cheapest
     # integrating test that reaches each (the "before" selection, mutation/history.md) and the closed-form tests
     # written against their survivors; one shard each (a survivor runs every selected test that covers it)
-    "elastic_rigid_body": ("symmech/trolley/elastic/simulate.py",
+    "elastic_rigid_body": ("symmech/trolley/elastic/body.py",
                            ["tests/test_trolley_elastic.py", "tests/test_elastic_bodies.py", "-k",
                             "reactions_equal or rigid_body"], ["*.x_rigid_body__*"]),
     "elastic_beam_mode": ("symmech/trolley/elastic/system.py",

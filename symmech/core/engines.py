@@ -70,15 +70,15 @@ class Engine:
         return builder.seconds * sample.slowdown() if builder.needs_compile() else 0.0
 
     def describe(self) -> str:
-        """Its name, summary and declared layouts, one line per field: offset (or array dimensions), name,
-        unit, meaning."""
+        """Its name, summary and declared layouts, one line per field: offset (or, for an array or a layout
+        sized by the model, dimensions), name, unit, meaning."""
         from symmech.core.layout import Layout  # numpy: not at import (the CLI's start)
 
         lines = [f"{self.name}: {self.summary}"]
         for layout in self.module().LAYOUTS:
             lines.append(f"  {layout.name}")
             for f in layout.fields:
-                where = f"{layout.offset(f.name):>4}" if isinstance(layout, Layout) else \
+                where = f"{layout.offset(f.name):>4}" if isinstance(layout, Layout) and not layout.dims else \
                     f"{f.dtype}({', '.join(map(str, f.shape))})"
                 lines.append(f"    {where} {f.name} [{f.unit}] {f.meaning}")
         return "\n".join(lines)

@@ -12,6 +12,8 @@ and shapes. Nothing here imports numba at import time (the grain engine's Python
 """
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from collections import namedtuple
 from dataclasses import dataclass
@@ -27,8 +29,8 @@ class Field:
     name     a Python identifier, unique in its layout
     unit     SI unit ("1" for a pure number or a code, "" for an index or a count)
     meaning  one line
-    shape    () for a scalar; ints for a slot vector (:class:`Layout`), dimension names or ints for an
-             array of a :class:`Bundle`
+    shape    () for a scalar; ints or dimension names for a slot vector (:class:`Layout`: a name is a size
+             given when the model is built, :meth:`Layout.sized`) or an array of a :class:`Bundle`
     dtype    numpy dtype name of the values (a :class:`Layout` holds float64 only)
     """
 
@@ -42,6 +44,11 @@ class Field:
     def size(self) -> int:
         """Number of slots the field takes in a :class:`Layout` (1 for a scalar)."""
         return math.prod(self.shape)
+
+    @property
+    def open(self) -> tuple:
+        """The dimension names of its shape, in order (() for a fixed shape)."""
+        return tuple(d for d in self.shape if isinstance(d, str))
 
 
 def _check_names(fields: tuple, what: str) -> None:
@@ -70,6 +77,9 @@ class Layout(_Declared):
     """A float64 vector of named fields at consecutive offsets, in declaration order.
 
     ``name`` is a Python identifier: the name of the offsets' named tuple (:attr:`slots`) and of a C struct.
+    A field's shape may name a dimension (``("N",)``: a model's N coordinates): such a layout is a family, and
+    :meth:`sized` gives the member of a model; its compiled readers take that member's :meth:`edges` at run time
+    and index them with the constant :attr:`positions`.
     """
 
     name: str
@@ -77,18 +87,47 @@ class Layout(_Declared):
 
     def __post_init__(self):
         _check_names(self.fields, self.name)
-        if any(f.dtype != "float64" or not all(isinstance(d, int) for d in f.shape) for f in self.fields):
-            raise ValueError(f"{self.name}: a layout holds float64 fields of fixed integer shapes")
+        if any(f.dtype != "float64" or not all(isinstance(d, (int, str)) for d in f.shape) for f in self.fields):
+            raise ValueError(f"{self.name}: a layout holds float64 fields of integer or named shapes")
+
+    @property
+    def dims(self) -> tuple:
+        """The dimension names its fields leave open, in order of first use (() for a fixed size)."""
+        return tuple(dict.fromkeys(d for f in self.fields for d in f.open))
+
+    def sized(self, **dims: int) -> Layout:
+        """This layout with every open dimension given (``STATE.sized(N=7)``): a layout of fixed size, the same
+        name and fields (cached per sizes); ValueError for a missing, unknown or negative size."""
+        if set(dims) != set(self.dims) or any(not isinstance(v, int) or v < 0 for v in dims.values()):
+            raise ValueError(f"{self.name}.sized: sizes of {self.dims} expected (ints >= 0), got {dims}")
+        return _sized(self, tuple(sorted(dims.items())))
+
+    @cached_property
+    def _edges(self) -> list:
+        if self.dims:
+            raise ValueError(f"{self.name}: the sizes of {self.dims} are open; {self.name}.sized(...) gives them")
+        return np.cumsum([0] + [f.size for f in self.fields]).tolist()
 
     @cached_property
     def _offsets(self) -> dict:
-        offsets = np.cumsum([0] + [f.size for f in self.fields]).tolist()
-        return dict(zip(self.names, offsets))
+        return dict(zip(self.names, self._edges))
 
     @property
     def size(self) -> int:
         """Length of the vector."""
-        return sum(f.size for f in self.fields)
+        return self._edges[-1]
+
+    @cached_property
+    def positions(self) -> tuple:
+        """The fields' positions in declaration order as a named tuple (``positions.q``): constants a compiled
+        loop indexes :meth:`edges` with (``at[Q.qd]`` is where the field qd starts, ``at[Q.qd + 1]`` where it
+        ends), the same for every member of a family of layouts."""
+        return namedtuple(f"{self.name}Fields", self.names)(*range(len(self.fields)))
+
+    def edges(self) -> np.ndarray:
+        """Where each field starts, then the vector's length (len(fields) + 1,) int64: the offsets a compiled
+        loop reads at run time when they depend on the model's sizes (a record's array)."""
+        return np.array(self._edges, dtype=np.int64)
 
     def field(self, name: str) -> Field:
         """The field called ``name`` (KeyError naming the layout otherwise)."""
@@ -168,6 +207,14 @@ class Layout(_Declared):
         from numba import types
 
         return types.Array(types.float64, 1, "C")
+
+
+@functools.lru_cache(maxsize=64)
+def _sized(layout: Layout, dims: tuple) -> Layout:
+    """The member of a family of layouts at the sizes ``dims`` ((name, size) pairs)."""
+    given = dict(dims)
+    return Layout(layout.name, tuple(dataclasses.replace(f, shape=tuple(given.get(d, d) for d in f.shape))
+                                     for f in layout.fields))
 
 
 @dataclass(frozen=True)

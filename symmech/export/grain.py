@@ -21,7 +21,7 @@ import numpy as np
 
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
-from symmech.export.model import ExportModel, Variable
+from symmech.export.model import REALS, ExportModel, Variable
 
 MODULE = "grain_motion"
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz", "q0", "q1", "q2", "q3", "w1", "w2", "w3")
@@ -118,18 +118,20 @@ def grain(sc, native: Table | None) -> ExportModel:
     y0 = np.concatenate([start.r, start.v, start.q, start.w])
     nominal = _nominals(sc)
     n = len(gm.STATE)
-    variables = [Variable("time", 0, "independent", "continuous", "s", "simulation time")]
+    reals = REALS.sized(X=n, DX=n, Y=0, Z=len(gm.EVENTS), U=0, P=len(gm.PARAMS) + len(LAW))
+    x, dx = reals.offset("x"), reals.offset("dx")
+    variables = [Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")]
     for i, (name, (_, unit, meaning)) in enumerate(zip(STATE_NAMES, gm.STATE)):
-        variables.append(Variable(name, 1 + i, "output", "continuous", unit, meaning, float(y0[i]),
+        variables.append(Variable(name, x + i, "output", "continuous", unit, meaning, float(y0[i]),
                                   nominal=nominal[i]))
     rate_unit = {"m": "m/s", "m/s": "m/s^2", "1": "1/s", "rad/s": "rad/s^2"}
     for i, (name, (_, unit, _)) in enumerate(zip(STATE_NAMES, gm.STATE)):
-        variables.append(Variable(f"der({name})", 1 + n + i, "output", "continuous", rate_unit[unit],
-                                  f"rate of {name}", derivative_of=1 + i))
+        variables.append(Variable(f"der({name})", dx + i, "output", "continuous", rate_unit[unit],
+                                  f"rate of {name}", derivative_of=x + i))
     ((_, _, _, unit, meaning),) = gm.EVENTS
-    variables.append(Variable("gap", 1 + 2 * n, "output", "continuous", unit,
+    variables.append(Variable("gap", reals.offset("z"), "output", "continuous", unit,
                               f"{meaning} (the event indicator: an impact where it falls through zero)"))
-    vr = 2 + 2 * n
+    vr = reals.offset("p")
     for k, (name, unit, meaning) in enumerate(gm.PARAMS):
         variables.append(Variable(name, vr + k, "parameter", "tunable", unit, f"{meaning} (from {SOURCE[name]})",
                                   float(p[name])))

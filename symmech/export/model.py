@@ -18,10 +18,22 @@ import scipy.linalg
 
 from symmech.core import pipeline
 from symmech.core.context import Context
+from symmech.core.layout import Field, Layout
 from symmech.core.results import Table
 from symmech.core.scene import SymmechError
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+# The real variables of an exported model in the order of their value references (the C side's r[]), sized per
+# model (:meth:`ExportModel.reals`); each variable carries its own unit.
+REALS = Layout("ExportReals", (
+    Field("time", "s", "simulation time"),
+    Field("x", "", "the continuous states", ("X",)),
+    Field("dx", "", "the state derivatives that are not states (y'[dx_first:])", ("DX",)),
+    Field("y", "", "the calculated outputs", ("Y",)),
+    Field("z", "", "the event indicators", ("Z",)),
+    Field("u", "", "the inputs", ("U",)),
+    Field("p", "", "the parameters", ("P",)),
+))
 # generalized force unit by coordinate unit
 FORCE_UNIT = {"m": "N", "rad": "N m"}
 
@@ -84,15 +96,9 @@ class ExportModel:
     event_tolerance: float = 0.0  # an indicator below -event_tolerance without its event: the model left its regime
 
     def layout(self) -> dict[str, int]:
-        """First value reference of each block of ``r[]`` and its size (``N_REAL``)."""
-        vr_x = 1
-        vr_dx = vr_x + self.n_x
-        vr_y = vr_dx + self.n_dx
-        vr_z = vr_y + self.n_y
-        vr_u = vr_z + self.n_z
-        vr_p = vr_u + self.n_u
-        return {"VR_TIME": 0, "VR_X": vr_x, "VR_DX": vr_dx, "VR_Y": vr_y, "VR_Z": vr_z, "VR_U": vr_u, "VR_P": vr_p,
-                "N_REAL": vr_p + self.n_p}
+        """First value reference of each block of ``r[]`` (:data:`REALS`) and its size (``N_REAL``)."""
+        reals = REALS.sized(X=self.n_x, DX=self.n_dx, Y=self.n_y, Z=self.n_z, U=self.n_u, P=self.n_p)
+        return {**{f"VR_{name.upper()}": reals.offset(name) for name in reals.names}, "N_REAL": reals.size}
 
 
 def _structured(name: str) -> str:
@@ -140,22 +146,23 @@ def mechanism(setup, native: Table | None) -> ExportModel:
     v0 = list(ini.get("qdot") or [0.0] * n)
     q_nominal, v_nominal = _nominals(m, q0, v0)
     names = [_structured(c.name) for c in m.coordinates]
-    variables = [Variable("time", 0, "independent", "continuous", "s", "simulation time")]
-    vr = 1
+    reals = REALS.sized(X=2 * n, DX=n, Y=0, Z=0, U=n, P=len(m.parameters))  # x = (q, q'), dx = q'', u = Q
+    q, qd, qdd = reals.offset("x"), reals.offset("x") + n, reals.offset("dx")
+    variables = [Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")]
     for i, c in enumerate(m.coordinates):
-        variables.append(Variable(names[i], vr + i, "output", "continuous", c.unit,
+        variables.append(Variable(names[i], q + i, "output", "continuous", c.unit,
                                   f"coordinate {c.name} ({c.kind})", q0[i], nominal=q_nominal))
     for i, c in enumerate(m.coordinates):
-        variables.append(Variable(f"der({names[i]})", vr + n + i, "output", "continuous", f"{c.unit}/s",
-                                  f"rate of {c.name}", v0[i], derivative_of=vr + i, nominal=v_nominal))
+        variables.append(Variable(f"der({names[i]})", qd + i, "output", "continuous", f"{c.unit}/s",
+                                  f"rate of {c.name}", v0[i], derivative_of=q + i, nominal=v_nominal))
     for i, c in enumerate(m.coordinates):
-        variables.append(Variable(f"der({names[i]},2)", vr + 2 * n + i, "output", "continuous", f"{c.unit}/s^2",
-                                  f"acceleration of {c.name}", derivative_of=vr + n + i))
+        variables.append(Variable(f"der({names[i]},2)", qdd + i, "output", "continuous", f"{c.unit}/s^2",
+                                  f"acceleration of {c.name}", derivative_of=qd + i))
     for i, c in enumerate(m.coordinates):
-        variables.append(Variable(_structured(f"Q_{c.name}"), vr + 3 * n + i, "input", "continuous",
+        variables.append(Variable(_structured(f"Q_{c.name}"), reals.offset("u") + i, "input", "continuous",
                                   FORCE_UNIT[c.unit], f"generalized force on {c.name} (a q'' + b q' + c q = Q)", 0.0))
     for k, p in enumerate(m.parameters.values()):
-        variables.append(Variable(_structured(p.name), vr + 4 * n + k, "parameter", "tunable", p.unit,
+        variables.append(Variable(_structured(p.name), reals.offset("p") + k, "parameter", "tunable", p.unit,
                                   p.meaning or f"parameter {p.name}", float(p.value)))
     clash = {v.name for v in variables if [w.name for w in variables].count(v.name) > 1}
     if clash:

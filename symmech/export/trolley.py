@@ -12,7 +12,7 @@ the speed are in the table: they are not parameters, and the FMU has no inputs.
 
 Under traction (``effects.traction = true``, :func:`traction`) the arc length s and the speed V0 are states
 too (``s``, ``V0`` = der(s), ``der(V0)``), the frame's geometry is the compiled engine's spline table in s
-(:func:`symmech.trolley.elastic.compiled.geometry_table`, over the arc lengths the scene's run visits), the
+(:func:`symmech.trolley.elastic.compiled.tabulate`, over the arc lengths the scene's run visits), the
 scene's law P0(t, V0) is printed into the generated assembly, and one input ``traction_force`` [N] adds to it
 (a controller drives the trolley; 0 reproduces the scene). The C example program and Co-Simulation integrate
 with Radau IIA (the roller modes are stiff).
@@ -27,11 +27,10 @@ from scipy.interpolate import CubicSpline
 from symmech.core import expressions
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
-from symmech.export.model import ExportModel, Variable
+from symmech.export.model import REALS, ExportModel, Variable
 from symmech.export.sources import glue
 
 IDENTIFIER = "elastic_trolley"
-ROTATIONS = ("th1", "th2", "th3")  # roller coordinates in rad; the others (u2, u3, beam modes) in m
 
 
 def load(scene) -> ExportModel:
@@ -56,37 +55,38 @@ def load(scene) -> ExportModel:
 
 def state_layout(system) -> tuple[list[str], list[str]]:
     """Names and units of the elastic model's coordinates q (its state is (q, q')): the one place that reads
-    the engine's state order."""
+    the engine's state order; the roller coordinates' units are their declaration's (layout.ROLLER_DOFS), the
+    beams' modal coordinates are in m."""
+    from symmech.trolley.elastic.layout import ROLLER_DOFS
+
     names = list(system.inv.names)
-    return names, ["rad" if n in ROTATIONS else "m" for n in names]
+    units = dict(zip(ROLLER_DOFS.names, ROLLER_DOFS.units))
+    return names, [units.get(n, "m") for n in names]
 
 
 def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
-    from symmech.trolley.elastic import compiled as elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled, frame as el_frame, simulate as el_sim
 
     system, drive, t = setup.system, setup.drive, setup.t
-    line = el_sim.Timeline(system, drive, t)
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape) for x in drive.speed(t))
-    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)
-    table = elastic_compiled.frame_table(system, drive, t, setup.rtol,
-                                         el_frame.frame_channels(fr, V0, dV0, system.mdl.g0))
+    inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed)
+    table = elastic_compiled.tabulate(inputs, setup.rtol)
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")
     names, units = state_layout(system)
-    n = len(names)
-    variables = [TIME, *_motion_variables([(names[i], units[i], f"coordinate {names[i]}", f"der({names[i]})",
-                                            run["q"][:, i], run["qd"][:, i]) for i in range(n)])]
-    columns = output_columns(setup.names)
+    n, columns = len(names), output_columns(setup.names)
+    reals = REALS.sized(X=2 * n, DX=n, Y=len(columns), Z=0, U=0, P=len(parameters(system)) * 5)
+    variables = [time_variable(reals), *_motion_variables(reals, [
+        (names[i], units[i], f"coordinate {names[i]}", f"der({names[i]})", run["q"][:, i], run["qd"][:, i])
+        for i in range(n)])]
     for k, c in enumerate(columns):
-        variables.append(Variable(c.name, 1 + 3 * n + k, "output", "continuous", c.unit, c.doc))
-    variables += _parameters(system, 1 + 3 * n + len(columns))
+        variables.append(Variable(c.name, reals.offset("y") + k, "output", "continuous", c.unit, c.doc))
+    variables += _parameters(system, reals.offset("p"))
     native = Table((Column("t", "s"), Column("s", "m")) + tuple(Column(f"P{i}", "N") for i in range(6)),
                    np.column_stack([t, run["s"], run["P"]]), doc="elastic reactions")
-    s_coef = CubicSpline(table.nodes, el_sim.arc_length(drive, table.nodes)).c  # (4, intervals)
+    s_coef = CubicSpline(table.nodes, el_frame.arc_length(drive, table.nodes)).c  # (4, intervals)
     source = data(system, table.nodes, np.concatenate([table.coef, s_coef[:, :, None]], axis=2), False)
     source += glue("elastic_trolley.c")
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
@@ -97,10 +97,11 @@ def elastic(setup, run: dict) -> ExportModel:
 def traction(setup, run: dict, law) -> ExportModel:
     """The export model of a prepared elastic setup under traction whose native run is ``run``; ``law`` the
     scene's P0(t, v) [N] as a sympy expression (:func:`symmech.core.expressions.parse`)."""
-    from symmech.trolley.elastic import compiled as elastic_compiled
+    from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
 
     system, drive, t = setup.system, setup.drive, setup.t
-    table, (lo, hi) = elastic_compiled.geometry_table(system, drive, t, setup.rtol)
+    inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed, span)
+    table, (lo, hi) = elastic_compiled.tabulate(inputs, setup.rtol), inputs.frame.span
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated in s within its bound (a non-smooth "
                            "track): `symmech export` needs the compiled engine's table")
@@ -110,14 +111,15 @@ def traction(setup, run: dict, law) -> ExportModel:
                     run["qd"][:, i]) for i in range(n)]
     coordinates.append(("s", "m", f"arc length of O along the track (tabulated over [{lo:.6g}, {hi:.6g}] m)", "V0",
                         run["s"], run["V0"]))
-    variables = [TIME, *_motion_variables(coordinates)]
     columns = output_columns(setup.names)[1:]  # s is a state
-    vr_y = len(variables)  # value references are the positions
-    variables += [Variable(c.name, vr_y + k, "output", "continuous", c.unit, c.doc) for k, c in enumerate(columns)]
-    vr_u = vr_y + len(columns)
-    variables += [Variable("traction_force", vr_u, "input", "continuous", "N", "force along the track (x1 at O) "
-                           "added to the scene's traction P0(t, V0): 0 runs the scene as it is", 0.0)]
-    variables += _parameters(system, vr_u + 1)
+    m = len(coordinates)
+    reals = REALS.sized(X=2 * m, DX=m, Y=len(columns), Z=0, U=1, P=len(parameters(system)) * 5)
+    variables = [time_variable(reals), *_motion_variables(reals, coordinates)]
+    variables += [Variable(c.name, reals.offset("y") + k, "output", "continuous", c.unit, c.doc)
+                  for k, c in enumerate(columns)]
+    variables += [Variable("traction_force", reals.offset("u"), "input", "continuous", "N", "force along the track "
+                           "(x1 at O) added to the scene's traction P0(t, V0): 0 runs the scene as it is", 0.0)]
+    variables += _parameters(system, reals.offset("p"))
     native = Table((Column("t", "s"), Column("s", "m"), Column("V0", "m/s")) + tuple(Column(f"P{i}", "N")
                                                                                      for i in range(6)),
                    np.column_stack([t, run["s"], run["V0"], run["P"]]), doc="elastic reactions")
@@ -128,25 +130,29 @@ def traction(setup, run: dict, law) -> ExportModel:
                        mass_identity=n + 1)
 
 
-TIME = Variable("time", 0, "independent", "continuous", "s", "simulation time")
+def time_variable(reals) -> Variable:
+    """The independent variable at its place in ``reals`` (:data:`symmech.export.model.REALS` sized)."""
+    return Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")
 
 
-def _motion_variables(coordinates) -> list[Variable]:
-    """The states and accelerations from value reference 1 on: ``coordinates`` (name, unit, description, name of
-    its rate, values (k,), rates (k,) over the native run) give their values, then their rates, then the
-    accelerations (``der(<coordinate>,2)``, or ``der(<rate>)`` when the rate has a name of its own); starts and
-    nominals from the native run."""
-    n = len(coordinates)
+def _motion_variables(reals, coordinates) -> list[Variable]:
+    """The states x = (values, rates) and the accelerations dx at their places in ``reals`` (REALS sized with
+    X = 2 m, DX = m): ``coordinates`` (m of them: name, unit, description, name of its rate, values (k,), rates
+    (k,) over the native run) give their values, then their rates, then the accelerations
+    (``der(<coordinate>,2)``, or ``der(<rate>)`` when the rate has a name of its own); starts and nominals from
+    the native run."""
+    m = len(coordinates)
+    value, rate_at, acceleration_at = reals.offset("x"), reals.offset("x") + m, reals.offset("dx")
     out = []
     for i, (name, unit, what, _, x, _) in enumerate(coordinates):
-        out.append(Variable(name, 1 + i, "output", "continuous", unit, what, float(x[0]), nominal=_nominal(x)))
+        out.append(Variable(name, value + i, "output", "continuous", unit, what, float(x[0]), nominal=_nominal(x)))
     for i, (name, unit, _, rate, _, v) in enumerate(coordinates):
-        out.append(Variable(rate, 1 + n + i, "output", "continuous", f"{unit}/s", f"rate of {name}", float(v[0]),
-                            derivative_of=1 + i, nominal=_nominal(v)))
+        out.append(Variable(rate, rate_at + i, "output", "continuous", f"{unit}/s", f"rate of {name}", float(v[0]),
+                            derivative_of=value + i, nominal=_nominal(v)))
     for i, (name, unit, _, rate, _, _) in enumerate(coordinates):
         acceleration = f"der({name},2)" if rate == f"der({name})" else f"der({rate})"
-        out.append(Variable(acceleration, 1 + 2 * n + i, "output", "continuous", f"{unit}/s^2",
-                            f"acceleration of {name}", derivative_of=1 + n + i))
+        out.append(Variable(acceleration, acceleration_at + i, "output", "continuous", f"{unit}/s^2",
+                            f"acceleration of {name}", derivative_of=rate_at + i))
     return out
 
 
@@ -188,10 +194,9 @@ def _parameters(system, vr: int) -> list[Variable]:
     """The rollers' stiffnesses, dampings and (clamped pair law) preloads from value reference ``vr`` on
     (``elastic.rollers.stiffness[1]`` … as the scene's fields): they enter only the roller forces, so they
     stay tunable."""
-    from symmech.trolley.elastic import kernels as ek
     from symmech.trolley.elastic.layout import ROLLER
 
-    roll = ek.pack(system).roll  # rows of ROLLER: stiffness, damping as the engine applies it, preload
+    roll = system.record.roll  # rows of ROLLER: stiffness, damping as the engine applies it, preload
     out = []
     for row, (field, unit, what) in enumerate(parameters(system)):
         for r in range(5):
@@ -220,24 +225,20 @@ def _nominal(series: np.ndarray) -> float:
 
 def assembly_model(system) -> dict:
     """The invariants :func:`symmech.trolley.elastic.symbolic_assembly.assembly_spec` reads, as nested lists: the
-    engine's record (``elastic.kernels.pack``) and the probes."""
-    from symmech.trolley.elastic import kernels as ek
+    engine's record (``System.record``) and the probes."""
     from symmech.trolley.elastic.layout import F_AT
 
-    mdl = ek.pack(system)
+    mdl = system.record
     inv = system.inv
-    n = int(mdl.flags[F_AT.n])
     f = int(mdl.flags[F_AT.f])
-    elastic = np.zeros(f)
-    elastic[1 + inv.n_roll:1 + n] = 1.0
-    elastic[1 + n:] = [1.0 if i >= inv.n_roll else 0.0 for i, _ in inv.pairs]
     model = {name: getattr(mdl, name).tolist() for name in (
         "ptr", "col", "qi", "pair_i", "pair_j", "rollers_map", "block_index", "block_size", "block_h", "block_c",
         "s1", "stiffness", "damping", "gram_trace")}
     model.update(gram_x=mdl.gram_x.reshape(f, 9, f).tolist(),
                  mass=float(mdl.flags[F_AT.mass]), rollers=bool(mdl.flags[F_AT.rollers]),
                  clamped=bool(mdl.flags[F_AT.law]), probe_fields=inv.probe_fields.tolist(),
-                 probe_points=inv.probe_points.tolist(), elastic=elastic.tolist(), g0=float(mdl.flags[F_AT.g0]),
+                 probe_points=inv.probe_points.tolist(), elastic=system.beam_fields.astype(float).tolist(),
+                 g0=float(mdl.flags[F_AT.g0]),
                  g_ref=float(system.mdl.g0 if system.mdl.g0 > 0 else 9.80665))
     return model
 

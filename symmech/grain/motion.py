@@ -245,8 +245,9 @@ def surface_work(model: Model, t: float, P) -> float:
     return float(np.asarray(P) @ model.vibration.kinematics(t)[1])
 
 
-def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None) -> Motion:
+def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=None, reason: str = "") -> Motion:
     """Accurate mode from ``start`` to ``t_end`` [s]; the grain starts in flight (or on the plane at rest).
+    ``extra`` names this engine ("python") and ``reason``, why the caller chose it.
 
     ``on_step(t_now: float) -> None`` (optional) is called with the simulated time [s] at most every
     0.2 s of wall time and once at the end; an exception it raises stops the run and propagates unchanged.
@@ -305,7 +306,8 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
     if rocking:
         warnings.append(outcome.rocking_warning(rocking))
     extra = {"landings": landings, "rocking_contacts": rocking,
-             "energy_budget": budget.report(absolute_energy(model, st), ENERGY_TOLERANCE)}
+             "energy_budget": budget.report(absolute_energy(model, st), ENERGY_TOLERANCE), "engine": "python",
+             "engine_reason": reason}
     return Motion(np.array(rec.rows), impacts, time_in, outcome.distinct(warnings), start, st, extra)
 
 

@@ -368,13 +368,10 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
         compiled = engines.get("grain")
         if compiled.builder().needs_compile():  # compile under the build lock, or load what a concurrent builder made
             compiled.warm()
-        m = compiled.run(sc.model, num, sc.start, t_end, on_step=on_step)
-    else:
-        if num.engine == "auto":
-            engines.get("grain").builder().warm_in_background()
-        m = motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step)
-    m.extra.update(engine=engine, engine_reason=why)
-    return m
+        return compiled.run(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
+    if num.engine == "auto":
+        engines.get("grain").builder().warm_in_background()
+    return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
 
 
 class _Watch:

@@ -162,8 +162,9 @@ def raise_failure(status: int, t: float, regime: int) -> None:
 
 
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
-             on_step=None) -> motion.Motion:
-    """Accurate mode compiled: the contract and the result structure of :func:`symmech.grain.motion.simulate`.
+             on_step=None, reason: str = "") -> motion.Motion:
+    """Accurate mode compiled: the contract and the result structure of :func:`symmech.grain.motion.simulate`
+    (``extra`` names this engine, "compiled", and ``reason``, why the caller chose it).
 
     ``on_step(t_now)`` is called between batches of ``PHASES_PER_CALL`` regime phases, at most every 0.2 s
     of wall time, and once at the end. ``extra["implicit_slip_steps"]`` counts the Radau steps of stiff slips.
@@ -189,7 +190,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
         warnings.append(outcome.rocking_warning(int(carry[C_AT.rocking])))
     extra = {"landings": int(carry[C_AT.landings]), "rocking_contacts": int(carry[C_AT.rocking]),
              "energy_budget": energy_budget(carry),
-             "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit])}
+             "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit]), "engine_reason": reason}
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
     final = state_view(y)
     return LazyMotion(rows[:int(carry[C_AT.rows])], None, time_in, outcome.distinct(warnings), start, final, extra,

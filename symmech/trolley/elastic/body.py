@@ -1,6 +1,7 @@
 """The elastic trolley's body (seed 002, eqs. (9) and the roller section): the model's data (beams, rollers,
 effects), the body sampled by weighted points, the fields φ, ψ over the samples and their Gram tensors (the
-inertia invariants), the beams' stiffness and damping, the rollers' forces and energy.
+inertia invariants), the rigid body of the same mass, the beams' stiffness and damping, the rollers' forces
+and energy.
 
 The coordinates and fields are those of :mod:`symmech.trolley.elastic.system`."""
 from __future__ import annotations
@@ -13,9 +14,11 @@ import numpy as np
 from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
+from symmech.trolley import model
 from symmech.trolley.elastic import membrane
+from symmech.trolley.elastic.layout import FIELDS, ROLLER_DOFS
 
-ROLLER_NAMES = ("u2", "u3", "th1", "th2", "th3")
+ROLLER_NAMES = ROLLER_DOFS.names  # the roller coordinates, declared with their units
 # (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
 ROTATION_PAIRS = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
 # Gauss points per beam: exact for the products of two shortening fields of degree 2 NMAX + 1.
@@ -228,8 +231,9 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
     G = np.einsum("kpi,p,lpj->klij", F, w, F)
     S1 = np.einsum("kpi,p->ki", F, w)
     dA = -np.ones((N, N), dtype=int)
+    psi_at = FIELDS.sized(N=N, P=len(pairs)).offset("psi")
     for idx, (a, b) in enumerate(pairs):
-        dA[a, b] = dA[b, a] = 1 + N + idx
+        dA[a, b] = dA[b, a] = psi_at + idx
     K = np.zeros((N, N))
     D = np.zeros((N, N))
     for base, kb, _zeta in K_blocks:
@@ -281,3 +285,14 @@ def roller_energy(rollers: Rollers, d):
         return 0.5 * (k * d * d).sum(-1)
     pre = np.asarray(rollers.preload, float)
     return 0.5 * (k * (np.maximum(pre - d, 0) ** 2 + np.maximum(pre + d, 0) ** 2 - 2 * np.maximum(pre, 0) ** 2)).sum(-1)
+
+
+def rigid_body(mdl: ElasticModel) -> model.Body:
+    """The rigid model's body with the total mass, centre of mass and central inertia of
+    trolley, beams and tip masses (undeformed)."""
+    inv = invariants(mdl)
+    m = inv.mass
+    com = inv.S1[0] / m
+    J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
+    I = kin.inertia_from_second_moment(J)
+    return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)

@@ -20,8 +20,8 @@ otherwise the run falls back to the Python engine and says why (:func:`simulate`
 from Radau's collocation polynomial (scipy's dense output), whose error on the bundled scene stays within
 the tolerance (benchmarks/README.md), so a fine output grid costs output rows, not steps.
 
-**Traction.** s is a state, so :func:`simulate_traction` tabulates the frame's geometry in s instead
-(:func:`geometry`, the same checked spline) over the arc lengths the run visits (:func:`reach`), and calls
+**Traction.** s is a state, so the run tabulates the frame's geometry in s instead
+(``frame.geometry``, the same checked spline) over the arc lengths the run visits (``frame.reach``), and calls
 the user's P0(t, V0) back per stage (:data:`symmech.trolley.elastic.kernels.TRACTIONS`).
 """
 from __future__ import annotations
@@ -34,7 +34,7 @@ from scipy.interpolate import CubicSpline
 
 from symmech.numerics import build
 from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
-from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
+from symmech.trolley.elastic.layout import CH_AT, G_AT, LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY, state as state_layout  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 # Interpolation error bound: a fraction of rtol of each channel group's scale, never below rounding.
 INTERP_FRACTION = 1e-3
@@ -43,14 +43,6 @@ INTERP_FLOOR = 1e-13
 INTERP_NOISE = 1e-8
 MAX_TABLE_NODES = 1 << 20
 STALL_ROUNDS = 2
-
-
-def channels(drive, system, t, at=slice(None)) -> np.ndarray:
-    """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
-    where s = s0) [s]: load, ω, ω̇, v0 of :func:`symmech.trolley.elastic.frame.frame_state`, vectorised."""
-    s = el_sim.arc_length(drive, t)[at]
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
-    return el_frame.frame_channels(el_frame.frames(drive, s, system.mdl.l), V0, dV0, system.mdl.g0)
 
 
 def _scales(ch: np.ndarray) -> np.ndarray:
@@ -85,7 +77,7 @@ def _subsampled(t, ch: np.ndarray, k: int, bound: float, scales) -> Table:
     return Table(t[keep], np.ascontiguousarray(spline.c), float(worst.max()), bound, False)
 
 
-def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_scales) -> Table | None:
+def frame_table(t, rtol: float, evaluate, ch=None, scales=_scales) -> Table | None:
     """The frame channels over [t[0], t[-1]] as a cubic spline within max(INTERP_FRACTION rtol, INTERP_FLOOR)
     of the channel scale of the exact values between its nodes. The exact channels at the output times t
     (``ch`` (len(t), 12), computed when None; the outputs need them anyway) seed it: the spline through
@@ -96,9 +88,9 @@ def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_s
     When a halving increased an error already within INTERP_NOISE, or STALL_ROUNDS rounds no longer reduced
     it 4x (noise in the exact values: halving then only interpolates it), the best table so far if its error
     is at most INTERP_NOISE. None when neither is reached within MAX_TABLE_NODES nodes (the caller then runs
-    the Python engine). ``evaluate(x, at)`` (k, c) and ``scales`` tabulate other channels (:func:`geometry` on
-    s with traction)."""
-    evaluate = evaluate or (lambda x, at=slice(None): channels(drive, system, x, at))
+    the Python engine). ``evaluate(x, at)`` (k, c) gives the exact channels at x[at]
+    (``frame.channels``; ``frame.geometry`` on s with traction, then with :func:`geometry_scales` as
+    ``scales``)."""
     bound = max(INTERP_FRACTION * rtol, INTERP_FLOOR)
     nodes = np.asarray(t, float)
     ch = evaluate(nodes) if ch is None else ch
@@ -133,47 +125,60 @@ def frame_table(system, drive, t, rtol: float, ch=None, evaluate=None, scales=_s
         nodes, ch = every, merged
 
 
-def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (prescribed speed; the
-    same state, tolerances and outputs; the steps are not bound by the output spacing: the outputs come from
-    the collocation polynomial, within the tolerance of the steps, benchmarks/README.md). ``engine`` /
-    ``engine_reason`` name what ran: the Python engine when the frame cannot be tabulated within its bound
-    (:func:`frame_table`); ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
-    scales) what the table reached. With ``drive.traction``: :func:`simulate_traction`."""
-    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None,
+             reason: str = "") -> dict:
+    """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (the same state,
+    tolerances and outputs; the steps are not bound by the output spacing: the outputs come from the
+    collocation polynomial, within the tolerance of the steps, benchmarks/README.md). What the run reads is
+    made in one pass (``simulate.compiled_inputs``: the start, the model's record, the exact frame); ``engine``
+    / ``engine_reason`` name what ran: this engine and ``reason`` (why the caller chose it), or the Python engine
+    and why when the frame cannot be tabulated within its bound (:func:`frame_table`) or, with traction, the
+    run leaves the table; ``frame_table_nodes`` and ``frame_interpolation_error`` (relative to the channel
+    scales) what the table reached."""
     t = np.asarray(t, dtype=float)
+    inputs = el_sim.compiled_inputs(system, drive, t, atol_q, dq0, dqd0)
     if drive.traction is not None:
-        return simulate_traction(system, drive, t, rtol, atol_q, dq0, dqd0)
-    line, y0 = el_sim.start(system, drive, t, dq0, dqd0)
-    V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
-    fr = el_frame.frames(drive, line.s_nodes, system.mdl.l)  # exact, at the outputs: theirs and the table's seed
-    table = frame_table(system, drive, t, rtol, el_frame.frame_channels(fr, V0, dV0, system.mdl.g0))
-    if table is None:
-        why = (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
-               f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+        out, why = _traction_run(system, drive, t, float(rtol), inputs, reason)
+    else:
+        out, why = _prescribed_run(system, drive, t, float(rtol), inputs, reason)
+    if out is None:
         out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
-        out["engine"], out["engine_reason"] = "python", why
-        return out
-    N = system.N
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL]
-    Y, steps, nfev, status = ek.solve(ek.pack(system), (table.nodes, table.coef), y0, t, float(rtol), atol)
-    _check(status, Y, t)
-    out = el_sim.outputs(system, drive, t, line.s_nodes, V0, dV0, Y, rows=ek.row_terms, frame=fr)
-    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
-               frame_interpolation_error=table.error)
     return out
+
+
+def _prescribed_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[dict | None, str]:
+    """(the outputs of the compiled run at the prescribed speed, "") or (None, why it cannot run)."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    table = tabulate(inputs, rtol)
+    if table is None:
+        return None, (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
+                      f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+    start, (fr, V0, dV0, _) = inputs.start, inputs.frame.at_outputs
+    Y, steps, nfev, status = ek.solve(inputs.record, (table.nodes, table.coef), start.y0, t, rtol, start.atol)
+    _check(status, Y, t)
+    run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
+           "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
+    return el_sim.outputs(system, drive, t, start.line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr, run=run), ""
+
+
+def row_terms(system, fr, V0, dV0, Y, height) -> dict:
+    """:func:`symmech.trolley.elastic.simulate.row_terms` by ``kernels.rows`` on the model's record (the
+    potential Π per row in Python)."""
+    from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
+    chs = el_frame.frame_channels(fr, V0, dV0, system.mdl.g0)
+    nu = np.ascontiguousarray(fr.lam[:, :, 1])
+    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
+    terms = ek.rows(system.record, chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
+    res = dict(zip(keys, terms))
+    pi = system.potential(Y[:, state_layout(system.N, False).slice("q")])
+    res["h"] += pi
+    res["E"] += pi
+    return res
 
 
 # --------------------------------------------------------------------------- traction
 
-def geometry(drive, system, s, at=slice(None)) -> np.ndarray:
-    """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
-    :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
-    fr = el_frame.frames(drive, np.asarray(s, float)[at], system.mdl.l)
-    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
-
-
-def _geometry_scales(g: np.ndarray) -> np.ndarray:
+def geometry_scales(g: np.ndarray) -> np.ndarray:
     """Error scale (15,) of each geometry channel: its group's largest norm; e' + Ω × e against it + |Ω|, Ω'
     against |Ω'| + |Ω|² (the terms they enter a0 and ω̇ beside, per V0²)."""
     norm = lambda j: float(np.linalg.norm(g[:, j:j + 3], axis=1).max())  # noqa: E731
@@ -181,84 +186,48 @@ def _geometry_scales(g: np.ndarray) -> np.ndarray:
     return np.repeat([norm(G_AT.e), norm(G_AT.k) + om, norm(G_AT.nu), om, norm(G_AT.dom) + om ** 2], 3)
 
 
-REACH_MARGIN = 0.1  # of the rigid run's span of s, on each side of it: the elastic speed differs by ~1e-7
-
-
-def reach(system, drive, t) -> tuple[float, float]:
-    """The arc lengths [m] a traction run visits: those of the rigid body (the whole elastic body's mass,
-    centre and inertia) under the same traction (DOP853 at rtol 1e-6), widened by :data:`REACH_MARGIN` of
-    their span (at least 1 mm) and kept within the frame plan's span."""
-    from scipy.integrate import solve_ivp
-
-    from symmech.trolley import model
-
-    body = el_sim.rigid_body(system.mdl)
-
-    def rates(time, y):
-        fr = el_frame.frames(drive, y[:1], system.mdl.l)
-        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
-        p0 = float(drive.traction(time, y[1]))
-        return [y[1], (p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * y[1] ** 2) / alpha[0]]
-
-    sol = solve_ivp(rates, (t[0], t[-1]), [drive.s0, drive.v_initial], method="DOP853", t_eval=t, rtol=1e-6)
-    s = sol.y[0] if sol.status == 0 else np.array([drive.s0])
-    pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
-    lo, hi = float(s.min()) - pad, float(s.max()) + pad
-    span = getattr(drive.plan, "span", None)
-    return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)
-
-
-def geometry_table(system, drive, t, rtol: float) -> tuple[Table | None, tuple[float, float]]:
-    """The geometry channels (:func:`geometry`) as a :func:`frame_table` in s over the arc lengths [m] a traction
-    run on the output times t [s] visits (:func:`reach`, returned beside it); None when they cannot be tabulated."""
-    lo, hi = reach(system, drive, t)
-    table = frame_table(system, drive, np.linspace(lo, hi, max(t.size, 16)), rtol,
-                        evaluate=lambda s, at=slice(None): geometry(drive, system, s, at), scales=_geometry_scales)
-    return table, (lo, hi)
-
-
-def simulate_traction(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> dict:
-    """:func:`symmech.trolley.elastic.simulate.simulate` with traction on the compiled assembly: y = [q, q̇, E_d, W, s,
-    V0], the frame's geometry tabulated in s over :func:`reach` (:func:`frame_table` with :func:`geometry`),
-    P0(t, V0) called back in Python per stage; Radau with the analytic Jacobian (``_jac_traction``). The
-    Python engine runs when the geometry cannot be tabulated or the run leaves the table."""
-    table, (lo, hi) = geometry_table(system, drive, t, rtol)
-    if table is not None:
-        out = _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table)
-        if out is not None:
-            return out
-    why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
-           f"run left the tabulated s in [{lo:.6g}, {hi:.6g}] m: the Python engine evaluates it exactly")
-    out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
-    out["engine"], out["engine_reason"] = "python", why
-    return out
+def tabulate(inputs, rtol: float) -> Table | None:
+    """The frame table a compiled run on ``inputs`` (``simulate.compiled_inputs``) reads, and its export: the frame
+    channels in t (:func:`frame_table` seeded by the exact channels at the outputs) or, with traction, the
+    geometry channels in s over ``inputs.frame.span`` (scaled by :func:`geometry_scales`); None when it cannot be
+    tabulated within its bound."""
+    frame = inputs.frame
+    if frame.span:
+        return frame_table(frame.seed, rtol, frame.evaluate, scales=geometry_scales)
+    return frame_table(frame.seed, rtol, frame.evaluate, frame.exact)
 
 
 _KEYS = itertools.count()
 
 
-def _traction_run(system, drive, t, rtol, atol_q, dq0, dqd0, table) -> dict | None:
-    """The compiled traction run on ``table``; None when s leaves it."""
+def _traction_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[dict | None, str]:
+    """The compiled run with traction: y = [q, q̇, E_d, W, s, V0] (layout.TRACTION_STATE), the frame's geometry
+    tabulated in s over the span ``frame.reach`` found, P0(t, V0) called back in Python per stage; Radau with
+    the analytic Jacobian (``kernels._jac_traction``). (its outputs, "") or (None, why it cannot run: the
+    geometry cannot be tabulated, or the run leaves the table)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    N = system.N
-    _, y0 = el_sim.start(system, drive, t, dq0, dqd0)
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, el_sim.WORK_ATOL, 1e-10, 1e-10]
+    table = tabulate(inputs, rtol)
+    why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
+           f"run left the tabulated s in [{inputs.frame.span[0]:.6g}, {inputs.frame.span[1]:.6g}] m: the Python engine "
+           "evaluates it exactly")
+    if table is None:
+        return None, why
+    start = inputs.start
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
     key = next(_KEYS)  # one per run: concurrent runs (threads) each find their own P0
     ek.TRACTIONS[key] = drive.traction
     try:
-        Y, dV0, steps, nfev, status = ek.solve_traction(ek.pack(system), (table.nodes, table.coef), key, y0, t,
-                                                         float(rtol), atol, step)
+        Y, dV0, steps, nfev, status = ek.solve_traction(inputs.record, (table.nodes, table.coef), key, start.y0, t,
+                                                         rtol, start.atol, step)
     finally:
         del ek.TRACTIONS[key]
     _check(status, Y, t)
-    s = Y[:, -2]
+    s = Y[:, start.state.offset("s")]
     if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
-        return None
-    out = el_sim.outputs(system, drive, t, s, Y[:, -1], dV0, Y[:, :-2], rows=ek.row_terms)
-    out.update(nfev=nfev, njev=-1, steps=steps, engine="compiled", engine_reason="", frame_table_nodes=table.nodes.size,
-               frame_interpolation_error=table.error)
-    return out
+        return None, why
+    run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
+           "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
+    return el_sim.outputs(system, drive, t, s, Y[:, start.state.offset("speed")], dV0, Y, rows=row_terms, run=run), ""
 
 
 def _check(status, Y, t) -> None:
@@ -278,7 +247,7 @@ COLD_COMPILE_SECONDS = 130.0
 
 
 def _entry_signatures() -> dict:
-    """The cached entries and the argument types :func:`simulate` and ``kernels.row_terms`` call them with: the
+    """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
     model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), the rest from small arrays."""
     # numba: imported by a run, not by choosing the engine or its estimate
     import numba

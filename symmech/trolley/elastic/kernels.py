@@ -1,5 +1,5 @@
 """The elastic trolley's assembly in numba: the right-hand side and Jacobian the toolkit's Radau IIA
-(:mod:`symmech.numerics.ode`) integrates, the cached whole solve and the per-row output terms; driven by
+(:mod:`symmech.numerics.ode`) integrates, the cached whole solve and the per-row output terms (:func:`rows`); driven by
 :mod:`symmech.trolley.elastic.compiled` (a module of its own: numba's cache is keyed on the file, so the
 driver changes without a recompile).
 
@@ -9,7 +9,10 @@ tests compare the two): per state the coefficient vectors over the fields (rr, a
 Y_k = Σ_l G_kl v_l) give the residual R, the resultants F, M_O (track power) and the mass matrix; the
 Jacobian forms G:B and G:W explicitly. The frame enters as 12 channels (load a0 + g0 ν, ω, ω̇, v0) of a
 spline table in t; with traction (s, V0 states) as 15 geometry channels of a spline table in s, from which
-the kernels form those 12 at each stage's V0, V̇0 (:func:`_motion`).
+the kernels form those 12 at each stage's V0, V̇0 (:func:`_motion`). The model comes as one record
+(:data:`symmech.trolley.elastic.layout.MODEL`, packed once per model by ``System.record``); the vectors whose
+length follows the model's size (the state, the field coefficients, the traction unknowns) are indexed
+through the edges it carries (``mdl.state_at[Y_AT.qd]``: where q̇ starts).
 
 The generic steppers are compiled per right-hand side as closures (:func:`ode.steppers` at module level)
 and inlined into the cached entry :func:`solve`, so a second process loads the whole solve from numba's
@@ -24,8 +27,9 @@ import numpy as np
 
 from symmech.numerics import ode, radau
 from symmech.numerics.jit import jit, with_gil
-from symmech.trolley.elastic.frame import frame_channels
-from symmech.trolley.elastic.layout import CH_AT, F_AT, FLAGS, G_AT, MODEL, N_CHANNELS, N_GEOMETRY, RL_AT, ROLLER
+from symmech.trolley.elastic import layout  # noqa: F401 (a module global: numerics.artifacts then records its file as a source of this build, so a changed declaration rebuilds)
+from symmech.trolley.elastic.layout import (CH_AT, CO_AT, F_AT, FC_AT, G_AT, N_CHANNELS, N_GEOMETRY, N_ROLLER_DOFS,
+                                            RL_AT, U_AT, Y_AT)
 
 MAX_STEPS = 50_000_000
 
@@ -64,10 +68,10 @@ def _frame_mats(ch):
 def _times_a(mdl, y, x):
     """y A(x) (F,): the coefficient vector of Σ_b y_b φ̃_b with φ̃_b = φ_b + Σ_c x_c ψ_bc, y and x (N,)."""
     n, f = int(mdl.flags[F_AT.n]), int(mdl.flags[F_AT.f])
-    ptr, col, qi = mdl.ptr, mdl.col, mdl.qi
+    ptr, col, qi, phi = mdl.ptr, mdl.col, mdl.qi, mdl.fields_at[FC_AT.phi]
     out = np.zeros(f)
     for b in range(n):
-        out[1 + b] = y[b]
+        out[phi + b] = y[b]
         for e in range(ptr[b], ptr[b + 1]):
             out[col[e]] += y[b] * x[qi[e]]
     return out
@@ -77,10 +81,10 @@ def _times_a(mdl, y, x):
 def _a_times(mdl, q, z):
     """A(q) z (N,) for z (F,)."""
     n = int(mdl.flags[F_AT.n])
-    ptr, col, qi = mdl.ptr, mdl.col, mdl.qi
+    ptr, col, qi, phi = mdl.ptr, mdl.col, mdl.qi, mdl.fields_at[FC_AT.phi]
     out = np.empty(n)
     for b in range(n):
-        acc = z[1 + b]
+        acc = z[phi + b]
         for e in range(ptr[b], ptr[b + 1]):
             acc += q[qi[e]] * z[col[e]]
         out[b] = acc
@@ -89,12 +93,12 @@ def _a_times(mdl, q, z):
 
 @jit
 def _a_rows(mdl, q, Z):
-    """A(q) Z (N, k) for Z (F, k): row b gathers Z[1 + b] and the ψ rows of row b."""
+    """A(q) Z (N, k) for Z (F, k): row b gathers Z's row of φ_b and the ψ rows of row b."""
     n = int(mdl.flags[F_AT.n])
-    ptr, col, qi = mdl.ptr, mdl.col, mdl.qi
+    ptr, col, qi, phi = mdl.ptr, mdl.col, mdl.qi, mdl.fields_at[FC_AT.phi]
     out = np.empty((n, Z.shape[1]))
     for b in range(n):
-        out[b] = Z[1 + b]
+        out[b] = Z[phi + b]
         for e in range(ptr[b], ptr[b + 1]):
             x = q[qi[e]]
             for j in range(Z.shape[1]):
@@ -106,12 +110,13 @@ def _a_rows(mdl, q, Z):
 def _rr(mdl, q):
     """Coefficients (F,) of r̃ = r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the fields."""
     n, f = int(mdl.flags[F_AT.n]), int(mdl.flags[F_AT.f])
-    pi, pj = mdl.pair_i, mdl.pair_j
+    pi, pj, at = mdl.pair_i, mdl.pair_j, mdl.fields_at
+    phi, psi = at[FC_AT.phi], at[FC_AT.psi]
     out = np.zeros(f)
-    out[0] = 1.0
-    out[1:1 + n] = q
+    out[at[FC_AT.r]] = 1.0
+    out[phi:phi + n] = q
     for p in range(pi.size):
-        out[1 + n + p] = (0.5 if pi[p] == pj[p] else 1.0) * q[pi[p]] * q[pj[p]]
+        out[psi + p] = (0.5 if pi[p] == pj[p] else 1.0) * q[pi[p]] * q[pj[p]]
     return out
 
 
@@ -132,7 +137,7 @@ def _contract(G9, M):
 def _rollers(mdl, q, qd):
     """Roller deflections d, forces P1…P5 [N] and tangent stiffness dP/dd [N/m] (elastic.roller_forces)."""
     C, roll, law = mdl.rollers_map, mdl.roll, mdl.flags[F_AT.law]
-    d, dd = C @ q[:5], C @ qd[:5]
+    d, dd = C @ q[:N_ROLLER_DOFS], C @ qd[:N_ROLLER_DOFS]
     k, c, pre = roll[RL_AT.stiffness], roll[RL_AT.damping], roll[RL_AT.preload]
     if law == 0.0:
         return d, -k * d - c * dd, -k
@@ -169,7 +174,7 @@ def _terms(mdl, ch, q, qd):
     rr = _rr(mdl, q)
     v = _times_a(mdl, qd, q)
     p2 = _times_a(mdl, qd, qd)
-    p2[:1 + q.size] = 0.0
+    p2[:mdl.fields_at[FC_AT.psi]] = 0.0  # its r and φ parts
     B, W = _frame_mats(ch)
     X = _gram_pass(Gx, rr)
     Y = _gram_pass(Gx, v)
@@ -179,7 +184,7 @@ def _terms(mdl, ch, q, qd):
     _membrane(mdl, q, R, R.reshape(1, -1), False)
     if flags[F_AT.rollers] != 0.0:
         _, force, _ = _rollers(mdl, q, qd)
-        R[:5] -= force @ mdl.rollers_map
+        R[:N_ROLLER_DOFS] -= force @ mdl.rollers_map
     AG = _a_rows(mdl, q, Gtr)  # A Gtr (N, F)
     M = _a_rows(mdl, q, AG.T.copy())  # A Gtr Aᵀ
     return R, M, rr, v, p2, X, B, W, z
@@ -209,20 +214,21 @@ def _accelerations(mdl, ch, q, qd):
 
 @jit
 def _rhs(t, y, args, out):
-    """y' of y = [q, q̇, E_d, W] (2 N + 2,); args = (model record (elastic_layout.MODEL), spline table, calls (1,))."""
+    """y' of the state y (layout.STATE); args = (model record (layout.MODEL), spline table, calls (1,))."""
     mdl, tab, calls = args
     calls[0] += 1.0
-    n = int(mdl.flags[F_AT.n])
+    at = mdl.state_at
+    iq, iqd, n = at[Y_AT.q], at[Y_AT.qd], int(mdl.flags[F_AT.n])
     ch = np.empty(N_CHANNELS)
     _channels(tab, t, ch)
-    q, qd = y[:n], y[n:2 * n]
+    q, qd = y[iq:iq + n], y[iqd:iqd + n]
     qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
     acc = _times_a(mdl, qdd, q) + p2
     F, moment = _resultants(mdl, ch, rr, v, acc, X, B, W)
-    out[:n] = qd
-    out[n:2 * n] = qdd
-    out[2 * n] = _dissipation(mdl, qd)
-    out[2 * n + 1] = F @ ch[CH_AT.v0:CH_AT.v0 + 3] + moment @ ch[CH_AT.omega:CH_AT.omega + 3]
+    out[iq:iq + n] = qd
+    out[iqd:iqd + n] = qdd
+    out[at[Y_AT.dissipated]] = _dissipation(mdl, qd)
+    out[at[Y_AT.work]] = F @ ch[CH_AT.v0:CH_AT.v0 + 3] + moment @ ch[CH_AT.omega:CH_AT.omega + 3]
 
 
 @jit
@@ -230,7 +236,7 @@ def _dissipation(mdl, qd):
     """Power of the damping forces [W] (beam D and roller dampers)."""
     power = qd @ mdl.damping @ qd
     if mdl.flags[F_AT.rollers] != 0.0:
-        dd = mdl.rollers_map @ qd[:5]
+        dd = mdl.rollers_map @ qd[:N_ROLLER_DOFS]
         power += mdl.roll[RL_AT.damping] @ (dd * dd)
     return power
 
@@ -246,7 +252,8 @@ def _jacobians(mdl, ch, q, qd):
     GW = _contract(G9, W)
     # Rq = A (GB Aᵀ + 2 GW DVᵀ + Gtr DQᵀ), Rqd = A (2 GW Aᵀ + 2 Gtr DVᵀ), DV, DQ the ψ parts of A at q̇, q̈;
     # by the symmetries (G:B)ᵀ = G:Bᵀ, (G:W)ᵀ = -G:W (W skew), Gtrᵀ = Gtr, each Z Aᵀ is (A Zᵀ)ᵀ
-    psi = lambda x, Zt: _a_rows(mdl, x, Zt) - Zt[1:1 + n]  # noqa: E731  DV(x) Zt
+    phi = mdl.fields_at[FC_AT.phi]
+    psi = lambda x, Zt: _a_rows(mdl, x, Zt) - Zt[phi:phi + n]  # noqa: E731  DV(x) Zt
     T = _a_rows(mdl, q, _contract(G9, B.T.copy())) - 2.0 * psi(qd, GW) + psi(qdd, Gtr)
     S = -2.0 * _a_rows(mdl, q, GW) + 2.0 * psi(qd, Gtr)
     Rq = _a_rows(mdl, q, T.T.copy()) + K
@@ -260,9 +267,9 @@ def _jacobians(mdl, ch, q, qd):
     if flags[F_AT.rollers] != 0.0:
         _, _, kt = _rollers(mdl, q, qd)
         c = mdl.roll[RL_AT.damping]
-        for i in range(5):
-            for j in range(5):
-                for r in range(5):
+        for i in range(N_ROLLER_DOFS):
+            for j in range(N_ROLLER_DOFS):
+                for r in range(c.size):
                     Rq[i, j] -= C[r, i] * kt[r] * C[r, j]
                     Rqd[i, j] += C[r, i] * c[r] * C[r, j]
     return M, Rq, Rqd
@@ -270,17 +277,19 @@ def _jacobians(mdl, ch, q, qd):
 
 @jit
 def _jac(t, y, args, J):
-    """dy'/dy (2 N + 2, 2 N + 2): the rows of q and q̇ (those of E_d and W zero, as the Python engine's)."""
+    """dy'/dy of the state (layout.STATE) by the state: the rows of q and q̇ (those of E_d and W zero, as the
+    Python engine's)."""
     mdl, tab, _ = args
-    n = int(mdl.flags[F_AT.n])
+    at = mdl.state_at
+    iq, iqd, n = at[Y_AT.q], at[Y_AT.qd], int(mdl.flags[F_AT.n])
     ch = np.empty(N_CHANNELS)
     _channels(tab, t, ch)
-    M, Rq, Rqd = _jacobians(mdl, ch, y[:n], y[n:2 * n])
+    M, Rq, Rqd = _jacobians(mdl, ch, y[iq:iq + n], y[iqd:iqd + n])
     J[:] = 0.0
     for i in range(n):
-        J[i, n + i] = 1.0
-    J[n:2 * n, :n] = -np.linalg.solve(M, Rq)
-    J[n:2 * n, n:2 * n] = -np.linalg.solve(M, Rqd)
+        J[iq + i, iqd + i] = 1.0
+    J[iqd:iqd + n, iq:iq + n] = -np.linalg.solve(M, Rq)
+    J[iqd:iqd + n, iqd:iqd + n] = -np.linalg.solve(M, Rqd)
 
 
 _steps = ode.steppers(_rhs, _jac)
@@ -316,18 +325,19 @@ def solve(mdl, tab, y0, t_eval, rtol, atol):
 @jit
 def rows(mdl, chs, nu, height, Y):
     """Per output row (channels chs (k, 12) of the exact frame, upward unit vectors nu (k, 3), heights of O
-    (k,) [m], states Y (k, 2 N + 2)): q̈ (k, N), the resultants F, M_O (k, 3), the coefficient vectors of r̃,
+    (k,) [m], states Y (k, layout.STATE)): q̈ (k, N), the resultants F, M_O (k, 3), the coefficient vectors of r̃,
     its rate and acceleration (k, F), and the Jacobi and total energies less the potential Π (k,) [J]
     (System.jacobi_energy, System.total_energy)."""
     flags, S1, Gtr = mdl.flags, mdl.s1, mdl.gram_trace
     n, f, mass, g0 = int(flags[F_AT.n]), int(flags[F_AT.f]), flags[F_AT.mass], flags[F_AT.g0]
+    iq, iqd = mdl.state_at[Y_AT.q], mdl.state_at[Y_AT.qd]
     k = Y.shape[0]
     qdd_out, F_out, M_out = np.empty((k, n)), np.empty((k, 3)), np.empty((k, 3))
     rr_out, v_out, acc_out = np.empty((k, f)), np.empty((k, f)), np.empty((k, f))
     h_out, E_out = np.empty(k), np.empty(k)
     for i in range(k):
         ch = chs[i]
-        q, qd = Y[i, :n], Y[i, n:2 * n]
+        q, qd = Y[i, iq:iq + n], Y[i, iqd:iqd + n]
         qdd, M, rr, v, p2, X, B, W, z = _accelerations(mdl, ch, q, qd)
         acc = _times_a(mdl, qdd, q) + p2
         F_out[i], M_out[i] = _resultants(mdl, ch, rr, v, acc, X, B, W)
@@ -392,46 +402,47 @@ def _motion(g, V, dV, g0):
 def _traction_terms(mdl, g, q, qd, V, p0):
     """q̈ (N,), V̇0 and the terms of :func:`_terms` at the frame of that V̇0, from M q̈ + b V̇0 = -R0 and
     c·q̈ + d V̇0 = P0 - F1 (elastic.Timeline.traction_step; b = ∂R/∂V̇0, c, d those of the x1 resultant F1)."""
-    flags, S1 = mdl.flags, mdl.s1
-    n = q.size
+    flags, S1, at = mdl.flags, mdl.s1, mdl.unknowns_at
+    n, iqdd, idv = q.size, at[U_AT.qdd], at[U_AT.dspeed]  # L's rows and columns: the unknowns q̈, V̇0
     ch0 = _motion(g, V, 0.0, flags[F_AT.g0])
     R0, M, rr, v, p2, X, B, W, z = _terms(mdl, ch0, q, qd)
     dch = np.zeros(N_CHANNELS)  # ∂B/∂V̇0 = skew(Ω): the channels with ω̇ = Ω, nothing else
     dch[CH_AT.domega:CH_AT.domega + 3] = g[G_AT.om:G_AT.om + 3]
     dB, _ = _frame_mats(dch)
     e = g[G_AT.e:G_AT.e + 3].copy()
-    L = np.empty((n + 1, n + 1))
-    L[:n, :n] = M
-    L[:n, n] = _a_times(mdl, q, S1 @ e + X @ dB.copy().reshape(9))
-    L[n, :n] = _a_rows(mdl, q, S1)[:, 0]
-    L[n, n] = flags[F_AT.mass] * e[0] + (dB @ (rr @ S1))[0]
+    L = np.empty((at[U_AT.dspeed + 1], at[U_AT.dspeed + 1]))
+    L[iqdd:iqdd + n, iqdd:iqdd + n] = M
+    L[iqdd:iqdd + n, idv] = _a_times(mdl, q, S1 @ e + X @ dB.copy().reshape(9))
+    L[idv, iqdd:iqdd + n] = _a_rows(mdl, q, S1)[:, 0]
+    L[idv, idv] = flags[F_AT.mass] * e[0] + (dB @ (rr @ S1))[0]
     F0 = _resultants(mdl, ch0, rr, v, p2, X, B, W)[0][0]
-    rhs = np.empty(n + 1)
-    rhs[:n] = -R0
-    rhs[n] = p0 - F0
+    rhs = np.empty(at[U_AT.dspeed + 1])
+    rhs[iqdd:iqdd + n] = -R0
+    rhs[idv] = p0 - F0
     x = np.linalg.solve(L, rhs)
-    return x[:n], x[n], L
+    return x[iqdd:iqdd + n], x[idv], L
 
 
 @jit
 def _rhs_traction(t, y, args, out):
-    """y' of y = [q, q̇, E_d, W, s, V0] (2 N + 4,); args = (model record, geometry table, calls (1,), traction key)."""
+    """y' of the state y (layout.TRACTION_STATE); args = (model record, geometry table, calls (1,), traction key)."""
     mdl, tab, calls, key = args
     calls[0] += 1.0
-    n = int(mdl.flags[F_AT.n])
+    at = mdl.state_at
+    iq, iqd, n = at[Y_AT.q], at[Y_AT.qd], int(mdl.flags[F_AT.n])
     g, dg = np.empty(N_GEOMETRY), np.empty(N_GEOMETRY)
-    _geometry(tab, y[2 * n + 2], g, dg)
-    q, qd, V = y[:n], y[n:2 * n], y[2 * n + 3]
+    _geometry(tab, y[at[Y_AT.s]], g, dg)
+    q, qd, V = y[iq:iq + n], y[iqd:iqd + n], y[at[Y_AT.speed]]
     qdd, dV, _ = _traction_terms(mdl, g, q, qd, V, _force(key, t, V)[0])
     ch = _motion(g, V, dV, mdl.flags[F_AT.g0])
     _, _, rr, v, p2, X, B, W, _ = _terms(mdl, ch, q, qd)
     F, moment = _resultants(mdl, ch, rr, v, _times_a(mdl, qdd, q) + p2, X, B, W)
-    out[:n] = qd
-    out[n:2 * n] = qdd
-    out[2 * n] = _dissipation(mdl, qd)
-    out[2 * n + 1] = F @ ch[CH_AT.v0:CH_AT.v0 + 3] + moment @ ch[CH_AT.omega:CH_AT.omega + 3]
-    out[2 * n + 2] = V
-    out[2 * n + 3] = dV
+    out[iq:iq + n] = qd
+    out[iqd:iqd + n] = qdd
+    out[at[Y_AT.dissipated]] = _dissipation(mdl, qd)
+    out[at[Y_AT.work]] = F @ ch[CH_AT.v0:CH_AT.v0 + 3] + moment @ ch[CH_AT.omega:CH_AT.omega + 3]
+    out[at[Y_AT.s]] = V
+    out[at[Y_AT.speed]] = dV
 
 
 @jit
@@ -444,21 +455,27 @@ def _frame_rates(g, dg, V, dV, g0, W, theta):
         dw, ddw = V * dOm, dV * dOm + V * V * dg[G_AT.dom:G_AT.dom + 3]
     else:
         dload, dw, ddw = 2.0 * V * g[G_AT.k:G_AT.k + 3], Om, 2.0 * V * dOm
-    dB, dW = _frame_mats(np.concatenate((np.zeros(3), dw, ddw, np.zeros(3))))
+    rates = np.zeros(N_CHANNELS)
+    rates[CH_AT.omega:CH_AT.omega + 3], rates[CH_AT.domega:CH_AT.domega + 3] = dw, ddw
+    dB, dW = _frame_mats(rates)
     return dload, dB - dW @ dW + dW @ W + W @ dW, dW  # ∂B = skew(∂ω̇) + ∂(skew(ω)²)
 
 
 @jit
 def _jac_traction(t, y, args, J):
-    """dy'/dy (2 N + 4, 2 N + 4): q̈ and V̇0 are x = L⁻¹ r (:func:`_traction_terms`), so ∂x/∂y = -L⁻¹ ∂G/∂y
-    with G = [R; F1 - P0] at the state's q̈, V̇0 (q, q̇ as :func:`_jacobians`; s, V0 through the frame's
-    channels, ∂/∂s by the spline's derivative); the rows of E_d and W zero, as :func:`_jac`'s."""
+    """dy'/dy of the state (layout.TRACTION_STATE) by the state: q̈ and V̇0 are x = L⁻¹ r
+    (:func:`_traction_terms`; rows of layout.TRACTION_UNKNOWNS), so ∂x/∂y = -L⁻¹ ∂G/∂y with G = [R; F1 - P0] at
+    the state's q̈, V̇0 (columns of layout.TRACTION_COLUMNS: q, q̇ as :func:`_jacobians`; s, V0 through the
+    frame's channels, ∂/∂s by the spline's derivative); the rows of E_d and W zero, as :func:`_jac`'s."""
     mdl, tab, _, key = args
-    flags, S1, Gx = mdl.flags, mdl.s1, mdl.gram_x
+    flags, S1, Gx, at, un, co = mdl.flags, mdl.s1, mdl.gram_x, mdl.state_at, mdl.unknowns_at, mdl.columns_at
     n, mass, g0 = int(flags[F_AT.n]), flags[F_AT.mass], flags[F_AT.g0]
+    iq, iqd, i_s, iv = at[Y_AT.q], at[Y_AT.qd], at[Y_AT.s], at[Y_AT.speed]
+    uqdd, udv = un[U_AT.qdd], un[U_AT.dspeed]
+    cq, cqd, cs, cv = co[CO_AT.q], co[CO_AT.qd], co[CO_AT.s], co[CO_AT.speed]
     g, dg = np.empty(N_GEOMETRY), np.empty(N_GEOMETRY)
-    _geometry(tab, y[2 * n + 2], g, dg)
-    q, qd, V = y[:n], y[n:2 * n], y[2 * n + 3]
+    _geometry(tab, y[i_s], g, dg)
+    q, qd, V = y[iq:iq + n], y[iqd:iqd + n], y[iv]
     p0, dp0 = _force(key, t, V)
     qdd, dV, L = _traction_terms(mdl, g, q, qd, V, p0)
     ch = _motion(g, V, dV, g0)
@@ -466,24 +483,29 @@ def _jac_traction(t, y, args, J):
     _, _, rr, v, _, X, B, W, _ = _terms(mdl, ch, q, qd)
     Yv = _gram_pass(Gx, v)
     AS, first, fv = _a_rows(mdl, q, S1), rr @ S1, v @ S1
-    psi = lambda x: _a_rows(mdl, x, S1) - S1[1:1 + n]  # noqa: E731  DV(x) S1
-    G = np.zeros((n + 1, 2 * n + 2))  # columns q, q̇, s, V0
-    G[:n, :n], G[:n, n:2 * n] = Rq, Rqd
-    G[n, :n] = (AS @ B.T + 2.0 * psi(qd) @ W.T + psi(qdd))[:, 0]
-    G[n, n:2 * n] = (2.0 * AS @ W.T + 2.0 * psi(qd))[:, 0]
-    for theta in range(2):
+    phi = mdl.fields_at[FC_AT.phi]
+    psi = lambda x: _a_rows(mdl, x, S1) - S1[phi:phi + n]  # noqa: E731  DV(x) S1
+    G = np.zeros((un[U_AT.dspeed + 1], co[CO_AT.speed + 1]))
+    G[uqdd:uqdd + n, cq:cq + n], G[uqdd:uqdd + n, cqd:cqd + n] = Rq, Rqd
+    G[udv, cq:cq + n] = (AS @ B.T + 2.0 * psi(qd) @ W.T + psi(qdd))[:, 0]
+    G[udv, cqd:cqd + n] = (2.0 * AS @ W.T + 2.0 * psi(qd))[:, 0]
+    for theta, column in ((0, cs), (1, cv)):
         dload, dB, dW = _frame_rates(g, dg, V, dV, g0, W, theta)
         z = S1 @ dload + X @ dB.copy().reshape(9) + 2.0 * (Yv @ dW.copy().reshape(9))
-        G[:n, 2 * n + theta] = _a_times(mdl, q, z)
-        G[n, 2 * n + theta] = (mass * dload + dB @ first + 2.0 * dW @ fv)[0]
-    G[n, 2 * n + 1] -= dp0
+        G[uqdd:uqdd + n, column] = _a_times(mdl, q, z)
+        G[udv, column] = (mass * dload + dB @ first + 2.0 * dW @ fv)[0]
+    G[udv, cv] -= dp0
     dx = -np.linalg.solve(L, G)
     J[:] = 0.0
     for i in range(n):
-        J[i, n + i] = 1.0
-    J[2 * n + 2, 2 * n + 3] = 1.0
-    J[n:2 * n, :2 * n], J[2 * n + 3, :2 * n] = dx[:n, :2 * n], dx[n, :2 * n]
-    J[n:2 * n, 2 * n + 2:], J[2 * n + 3, 2 * n + 2:] = dx[:n, 2 * n:], dx[n, 2 * n:]
+        J[iq + i, iqd + i] = 1.0
+    J[i_s, iv] = 1.0
+    # the rows of q̇ and V0 are those of q̈ and V̇0 in dx
+    J[iqd:iqd + n, iq:iq + n] = dx[uqdd:uqdd + n, cq:cq + n]
+    J[iqd:iqd + n, iqd:iqd + n] = dx[uqdd:uqdd + n, cqd:cqd + n]
+    J[iv, iq:iq + n], J[iv, iqd:iqd + n] = dx[udv, cq:cq + n], dx[udv, cqd:cqd + n]
+    J[iqd:iqd + n, i_s], J[iqd:iqd + n, iv] = dx[uqdd:uqdd + n, cs], dx[uqdd:uqdd + n, cv]
+    J[iv, i_s], J[iv, iv] = dx[udv, cs], dx[udv, cv]
 
 
 _tsteps = ode.steppers(_rhs_traction, _jac_traction)
@@ -521,58 +543,5 @@ def solve_traction(mdl, tab, key, y0, t_eval, rtol, atol, max_step):
     dV = np.full(t_eval.size, np.nan)
     for i in range(k):
         _rhs_traction(t_eval[i], Y[i], args, f)
-        dV[i] = f[n - 1]
+        dV[i] = f[mdl.state_at[Y_AT.speed]]
     return Y, dV, steps, nfev, status
-
-
-
-# --------------------------------------------------------------------------- from the Python model
-
-
-def row_terms(system, fr, V0, dV0, Y, height) -> dict:
-    """:func:`symmech.trolley.elastic.simulate.row_terms` by :func:`rows` (the potential Π per row in Python)."""
-    chs = frame_channels(fr, V0, dV0, system.mdl.g0)
-    nu = np.ascontiguousarray(fr.lam[:, :, 1])
-    keys = ("qdd", "F", "M", "rr", "v", "acc", "h", "E")
-    terms = rows(pack(system), chs, nu, np.ascontiguousarray(height, float), np.ascontiguousarray(Y))
-    res = dict(zip(keys, terms))
-    pi = system.potential(Y[:, :system.N])
-    res["h"] += pi
-    res["E"] += pi
-    return res
-
-
-def pack(system):
-    """The model record the kernels take (:data:`symmech.trolley.elastic.layout.MODEL`), from a
-    :class:`symmech.trolley.elastic.system.System`."""
-    inv, mdl = system.inv, system.mdl
-    n, f = system.N, system.F
-    rows = [[] for _ in range(n)]  # the ψ entries of A: (column, index of the coordinate multiplying it)
-    for p, (i, j) in enumerate(inv.pairs):
-        rows[i].append((1 + n + p, j))
-        if i != j:
-            rows[j].append((1 + n + p, i))
-    ptr = np.cumsum([0] + [len(r) for r in rows]).astype(np.int64)
-    col = np.array([c for r in rows for c, _ in r], dtype=np.int64)
-    qi = np.array([x for r in rows for _, x in r], dtype=np.int64)
-    roll = np.zeros((ROLLER.size, 5))
-    law = 0.0
-    if system.rollers_on:
-        rl = mdl.rollers
-        roll[RL_AT.stiffness] = rl.stiffness
-        roll[RL_AT.damping] = rl.damping if mdl.effects.damping else 0.0
-        roll[RL_AT.preload] = rl.preload
-        law = 0.0 if rl.law == "linear" else 1.0
-    blocks = inv.membrane
-    width = max([len(b.index) for b in blocks], default=1)
-    idx = np.zeros((len(blocks), width), dtype=np.int64)
-    H = np.zeros((len(blocks), width, width))
-    for b, blk in enumerate(blocks):
-        m = len(blk.index)
-        idx[b, :m], H[b, :m, :m] = blk.index, blk.H
-    flags = FLAGS.pack(n=n, f=f, mass=inv.mass, g0=mdl.g0, rollers=1.0 if system.rollers_on else 0.0, law=law)
-    return MODEL.pack(
-        flags=flags, ptr=ptr, col=col, qi=qi, pair_i=system.pair_i, pair_j=system.pair_j,
-        gram_x=inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f), gram_trace=system.Gtr, rollers_map=system.C, roll=roll,
-        block_index=idx, block_size=[len(b.index) for b in blocks], block_h=H, block_c=[b.c for b in blocks],
-        s1=inv.S1, stiffness=inv.K, damping=inv.D, pair_field=inv.dA, gram_9=inv.G.reshape(f * f, 9))

@@ -24,6 +24,38 @@ ROLLER = Layout("ElasticRoller", (
     Field("damping", "N s/m", "roller damping (0 when damping is off)"),
     Field("preload", "m", "preload deflection of the clamped pair law (negative: a gap)"),
 ))
+# The vectors whose length follows the model's N coordinates and P pairs (families, core.layout.Layout.sized): the
+# compiled loops read their edges from the model record (``mdl.state_at``...) indexed by the constant positions
+# (Y_AT, FC_AT...), the Python side slices a member sized for the model.
+# The state both engines integrate; a run with traction adds s and V0 (TRACTION_STATE: STATE's fields first).
+STATE = Layout("ElasticState", (
+    Field("q", "m or rad", "generalised coordinates: the five roller DOFs (elastic rollers), then the beams'", ("N",)),
+    Field("qd", "m/s or rad/s", "their rates", ("N",)),
+    Field("dissipated", "J", "energy E_d dissipated by the roller and beam dampers"),
+    Field("work", "J", "work W of the forces of the track"),
+))
+TRACTION_STATE = Layout("ElasticTractionState", STATE.fields + (
+    Field("s", "m", "arc length of O along the track"),
+    Field("speed", "m/s", "speed V0 of O along the track"),
+))
+# The coefficients of a body point's position r̃ = r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the F = 1 + N + P fields.
+FIELDS = Layout("ElasticFields", (
+    Field("r", "1", "the undeformed position r"),
+    Field("phi", "m or rad", "the coordinates' fields φ_a", ("N",)),
+    Field("psi", "m^2, m rad or rad^2", "the pairs' fields ψ_ab, a <= b (pair_i, pair_j)", ("P",)),
+))
+# The roller coordinates, the first of q when the rollers are elastic (body.ROLLER_NAMES).
+ROLLER_DOFS = Layout("ElasticRollerDofs", (
+    Field("u2", "m", "translation of the trolley along x2"), Field("u3", "m", "translation along x3"),
+    Field("th1", "rad", "small rotation about x1"), Field("th2", "rad", "about x2"), Field("th3", "rad", "about x3"),
+))
+# With traction, q̈ and V̇0 solve one linear system together: its unknowns, and the columns of its derivative
+# by the state (the state without E_d and W, which the equations do not read).
+TRACTION_UNKNOWNS = Layout("ElasticTractionUnknowns", (
+    Field("qdd", "m/s^2 or rad/s^2", "accelerations of the coordinates", ("N",)),
+    Field("dspeed", "m/s^2", "rate V̇0 of the speed"),
+))
+TRACTION_COLUMNS = Layout("ElasticTractionColumns", tuple(TRACTION_STATE.field(n) for n in ("q", "qd", "s", "speed")))
 MODEL = Bundle("ElasticModel", __name__, (
     Field("flags", "", "the flags vector (FLAGS)", (FLAGS.size,)),
     Field("ptr", "", "row pointers of the ψ entries of A, per coordinate", ("N+1",), "int64"),
@@ -46,6 +78,11 @@ MODEL = Bundle("ElasticModel", __name__, (
     Field("damping", "N s/m", "constant damping D of the beams", ("N", "N")),
     Field("pair_field", "", "field index of ψ_ab for coordinates (a, b), -1 for none (dA)", ("N", "N"), "int64"),
     Field("gram_9", "kg m^2", "Gram tensor G as G_kl at row F k + l, flattened 3 x 3 block", ("F*F", 9)),
+    Field("state_at", "", "edges of the state (TRACTION_STATE sized for the model; STATE its first fields)", (7,),
+          "int64"),
+    Field("fields_at", "", "edges of the field coefficients (FIELDS sized for the model)", (4,), "int64"),
+    Field("unknowns_at", "", "edges of the traction unknowns (TRACTION_UNKNOWNS sized)", (3,), "int64"),
+    Field("columns_at", "", "edges of the traction Jacobian's columns (TRACTION_COLUMNS sized)", (5,), "int64"),
 ))
 ElasticModel = MODEL.record  # bound here under its own name: numba's cache pickles the class by reference
 # Frame channels of the table in t (columns).
@@ -65,5 +102,19 @@ GEOMETRY = Layout("ElasticGeometry", (
     Field("dom", "rad/m^2", "Ω'", (3,)),
 ))
 F_AT, CH_AT, G_AT, RL_AT = FLAGS.slots, CHANNELS.slots, GEOMETRY.slots, ROLLER.slots
-N_CHANNELS, N_GEOMETRY = CHANNELS.size, GEOMETRY.size
-LAYOUTS = (MODEL, FLAGS, ROLLER, CHANNELS, GEOMETRY)  # symmech.core.engines: describe
+Y_AT, FC_AT = TRACTION_STATE.positions, FIELDS.positions
+U_AT, CO_AT = TRACTION_UNKNOWNS.positions, TRACTION_COLUMNS.positions
+N_CHANNELS, N_GEOMETRY, N_ROLLER_DOFS = CHANNELS.size, GEOMETRY.size, ROLLER_DOFS.size
+LAYOUTS = (MODEL, FLAGS, ROLLER, CHANNELS, GEOMETRY, ROLLER_DOFS, STATE, TRACTION_STATE, FIELDS, TRACTION_UNKNOWNS,
+           TRACTION_COLUMNS)  # symmech.core.engines: describe
+
+
+def state(n: int, traction: bool) -> Layout:
+    """The state of a run of a model of n coordinates: STATE, or TRACTION_STATE with traction."""
+    return (TRACTION_STATE if traction else STATE).sized(N=n)
+
+
+def edges(n: int, pairs: int) -> dict:
+    """The record's edges of the sized vectors (MODEL's ``*_at`` fields) of a model of n coordinates and pairs."""
+    return {"state_at": TRACTION_STATE.sized(N=n).edges(), "fields_at": FIELDS.sized(N=n, P=pairs).edges(),
+            "unknowns_at": TRACTION_UNKNOWNS.sized(N=n).edges(), "columns_at": TRACTION_COLUMNS.sized(N=n).edges()}

@@ -22,7 +22,10 @@ from symmech.trolley.elastic.body import FORCING
 from symmech.trolley import model
 from symmech.trolley.comfort import comfort_warning
 from symmech.trolley.elastic import modal
+from symmech.trolley.elastic.layout import N_ROLLER_DOFS, ROLLER_DOFS
 from symmech.trolley.elastic.schema import MAX_INITIAL_DEFLECTION, SCHEMA  # noqa: F401 (SCHEMA: the kind's table, read here)
+
+ROTATIONS = slice(ROLLER_DOFS.offset("th1"), ROLLER_DOFS.offset("th3") + 1)  # θ1…θ3 among q's roller coordinates
 
 
 @dataclass
@@ -77,14 +80,10 @@ def simulate(setup: Setup, **kw) -> dict:
         compiled = engines.get("elastic")  # imports numba: only when the compiled engine runs
         if compiled.builder().cold():  # compile under the build lock, or load what a concurrent builder made
             compiled.builder().warm()
-        out = compiled.run(setup.system, setup.drive, setup.t, **{**start, **kw})
-        out["engine_reason"] = out["engine_reason"] or why
-        return out
+        return compiled.run(setup.system, setup.drive, setup.t, **{**start, **kw}, reason=why)
     if why.startswith(build.COLD):  # not when the Python engine runs for another reason
         engines.get("elastic").builder().warm_in_background()
-    out = el_sim.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw})
-    out.update(engine="python", engine_reason=why)
-    return out
+    return el_sim.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw}, reason=why)
 
 
 def prepare(elastic: dict, body: model.Body, drive: el_frame.Drive, t, path: str = "elastic") -> Setup:
@@ -141,7 +140,7 @@ def _initial(initial: dict, system: el.System, path: str) -> tuple[np.ndarray, n
         if any(initial[key]):
             if not system.rollers_on:
                 raise SceneError(f"{path}.{key}", f"{initial[key]}: the rollers are rigid (effects.rollers = false)")
-            target[:5] = initial[key]
+            target[:N_ROLLER_DOFS] = initial[key]
     seen = set()
     for i, entry in enumerate(initial["beams"]):
         where = f"{path}.beams[{i}]"
@@ -184,7 +183,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     t = setup.t
     if setup.system is None:
         # no elastic effect: the rigid model itself, on the rigid scene's grid (bit for bit)
-        s = el_sim.arc_length(setup.drive, t)
+        s = el_frame.arc_length(setup.drive, t)
         V0, dV0 = setup.drive.speed(t)
         rigid = model.body_motion(el_frame.frames(setup.drive, s, setup.body.l), V0, dV0, setup.body)
         cols = [Column("t", "s")] + [Column(f"P{i}", "N") for i in range(6)]
@@ -226,7 +225,7 @@ def _summary(setup: Setup, r, comfort) -> tuple[dict, list]:
         "dynamic_amplification": {f"P{i}": float(peak[i] / peak_rigid[i]) if peak_rigid[i] > 0 else None
                                   for i in range(6)},
         "max_roller_deflection_m": float(np.abs(r["deflection"]).max()),
-        "max_roller_rotation_rad": float(np.abs(r["q"][:, 2:5]).max()) if setup.system.rollers_on else 0.0,
+        "max_roller_rotation_rad": float(np.abs(r["q"][:, ROTATIONS]).max()) if setup.system.rollers_on else 0.0,
         "dissipated_J": float(r["dissipated"][-1]),
         "track_work_J": float(r["work"][-1]),
         "energy_residual_max_J": float(np.abs(residual).max()),
@@ -293,7 +292,7 @@ def sign_changes(P: np.ndarray, P_rigid: np.ndarray) -> dict[int, tuple[str, int
 def _warnings(setup: Setup, r, modes) -> list:
     out = []
     if setup.system.rollers_on:
-        rot = np.abs(r["q"][:, 2:5]).max()
+        rot = np.abs(r["q"][:, ROTATIONS]).max()
         if rot > setup.small_rotation:
             out.append(f"elastic: roller rotation {rot:.3g} rad exceeds {setup.small_rotation:g} rad: the quadratic "
                        "approximation of the rotations is out of its range")

@@ -1,30 +1,23 @@
-"""The elastic trolley integrated along the track: the rigid body of the same mass, the timeline of a run
-with traction, the solve (scipy's ``solve_ivp`` on :class:`symmech.trolley.elastic.system.System`) and the
-outputs per row (reactions, energies, deflections)."""
+"""The elastic trolley integrated along the track: the timeline of a run (with traction too), the start
+both engines share, what a compiled run reads (:func:`compiled_inputs`), the solve (scipy's ``solve_ivp`` on
+:class:`symmech.trolley.elastic.system.System`) and the outputs per row (reactions, energies, deflections)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
 
 import numpy as np
 
-from symmech.core import context, kinematics as kin
+from symmech.core import context
+from symmech.core.layout import Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
-from symmech.trolley.elastic.body import ElasticModel, invariants, roller_forces
-from symmech.trolley.elastic.frame import Drive, FrameState, frame_motion, frame_state, frames
+from symmech.trolley.elastic.body import rigid_body, roller_forces
+from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
+                                           frame_state, frames, tabulation)
+from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
 from symmech.trolley.elastic.system import System
 
 # ---------------------------------------------------------------- integration along the track
-
-def rigid_body(mdl: ElasticModel) -> model.Body:
-    """The rigid model's body with the total mass, centre of mass and central inertia of
-    trolley, beams and tip masses (undeformed)."""
-    inv = invariants(mdl)
-    m = inv.mass
-    com = inv.S1[0] / m
-    J = inv.G[0, 0] - m * np.outer(com, com)  # central second moment
-    I = kin.inertia_from_second_moment(J)
-    return model.Body(m, tuple(com), (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[1, 2], I[0, 2]), mdl.l, mdl.ah, mdl.g0)
-
 
 def _state_at(system: System, drive: Drive, t: float, s: float) -> FrameState:
     V0, dV0 = drive.speed(t)
@@ -36,15 +29,13 @@ class Timeline:
     rigid scene computes it, and from the last node) and the frame state at t, cached:
     implicit steps revisit their stage times."""
 
-    NODES = np.polynomial.legendre.leggauss(8)
-
     def __init__(self, system: System, drive: Drive, t):
         self.system, self.drive, self.t = system, drive, np.asarray(t, dtype=float)
         self.s_nodes = arc_length(drive, self.t) if drive.traction is None else None
         self.cache: dict = {}
 
     def _integral(self, a, b):
-        x, w = self.NODES
+        x, w = GAUSS_LEGENDRE
         mid, half = (a + b) / 2, (b - a) / 2
         return float(sum(wi * float(self.drive.speed(mid + half * xi)[0]) for xi, wi in zip(x, w)) * half)
 
@@ -73,7 +64,8 @@ class Timeline:
         """(frame state, q̈, V̇0) with traction: M q̈ + b V̇0 = -R0 and F1 = P0(t, V0) solved together
         (b = ∂R/∂V̇0, F1 the x1 resultant of (8), affine in q̈ and V̇0)."""
         system, N = self.system, self.system.N
-        q, qd, s, V0 = y[:N], y[N:2 * N], y[-2], y[-1]
+        y = state_layout(N, True).unpack(y)
+        q, qd, s, V0 = y["q"], y["qd"], y["s"], y["speed"]
         fs0, fs1 = self.traction_states(float(s), float(V0))
         zero = np.zeros(N)
         R0 = system.evaluate(fs0, q, qd, zero)
@@ -97,34 +89,44 @@ def traction_start(line: Timeline, t0: float) -> np.ndarray:
     return system.quasi_static(frame_state(line.cache[drive.s0], 0, drive.v_initial, dv))
 
 
-def start(system: System, drive: Drive, t, dq0=None, dqd0=None) -> tuple[Timeline, np.ndarray]:
-    """The run's :class:`Timeline` on the grid t [s] (n,) and its start state y0 (2N + 2,): the quasi-static q at
-    t[0] (:func:`traction_start` with traction) plus the offsets ``dq0``, ``dqd0`` of coordinates and rates,
-    E_d = W = 0 [J]; with ``drive.traction`` also s0 [m] and the initial speed [m/s] (2N + 4,). Both engines
+@dataclass(frozen=True)
+class Start:
+    """What a run of either engine starts from: its :class:`Timeline`, the layout of its state
+    (layout.STATE, with traction layout.TRACTION_STATE, sized for the model), the start state y0 and the absolute
+    tolerances atol of the state's slots (both of that layout)."""
+
+    line: Timeline
+    state: Layout
+    y0: np.ndarray
+    atol: np.ndarray
+
+
+def prepare(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Start:
+    """The :class:`Start` of a run on the grid t [s] (n,): y0 is the quasi-static q at t[0]
+    (:func:`traction_start` with traction) plus the offsets ``dq0``, ``dqd0`` of coordinates and rates,
+    E_d = W = 0 [J]; with ``drive.traction`` also s0 [m] and the initial speed [m/s]. atol: ``atol_q`` on q
+    [m, rad], 1e3 atol_q on q̇, 1e-9 J on E_d, :data:`WORK_ATOL` on W, 1e-10 on s [m] and V0 [m/s]. Both engines
     start here."""
     line = Timeline(system, drive, t)
     traction = drive.traction is not None
+    state = state_layout(system.N, traction)
     q0 = traction_start(line, line.t[0]) if traction else system.quasi_static(line.state(line.t[0]))
     zero = np.zeros(system.N)
-    y0 = np.r_[q0 + (zero if dq0 is None else dq0), zero if dqd0 is None else dqd0, 0.0, 0.0,
-               [drive.s0, drive.v_initial] if traction else []]
-    return line, y0
-
-
-def arc_length(drive: Drive, t) -> np.ndarray:
-    """s on the grid t (n,): s0 + ∫ V0 dt, 8-point Gauss-Legendre per step [m]."""
-    nodes, weights = Timeline.NODES
-    mid, half = (t[1:] + t[:-1]) / 2, (t[1:] - t[:-1]) / 2
-    x = mid[:, None] + half[:, None] * nodes
-    v = np.broadcast_to(np.asarray(drive.speed(x)[0], dtype=float), x.shape)
-    return drive.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
+    y0 = {"q": q0 + (zero if dq0 is None else dq0), "qd": zero if dqd0 is None else dqd0, "dissipated": 0.0,
+          "work": 0.0}
+    atol = {"q": np.full(system.N, atol_q), "qd": np.full(system.N, atol_q * 1e3), "dissipated": 1e-9,
+            "work": WORK_ATOL}
+    if traction:
+        y0.update(s=drive.s0, speed=drive.v_initial)
+        atol.update(s=1e-10, speed=1e-10)
+    return Start(line, state, state.pack(**y0), state.pack(**atol))
 
 
 def _dissipation(system: System, qd) -> float:
     """Power of the damping forces [W] (beam d_ij and roller dampers)."""
     power = qd @ system.inv.D @ qd
     if system.rollers_on and system.mdl.effects.damping:
-        dd = system.C @ qd[:5]
+        dd = system.C @ qd[:N_ROLLER_DOFS]
         power += float(np.asarray(system.mdl.rollers.damping) @ (dd * dd))
     return float(power)
 
@@ -142,15 +144,17 @@ def integration_failed(t_reached: float, why: str) -> SymmechError:
 
 
 def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float = 1e-8,
-             atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True, fallback: str = "") -> dict:
+             atol_q: float = 1e-12, dq0=None, dqd0=None, analytic_jacobian: bool = True, fallback: str = "",
+             reason: str = "") -> dict:
     """Integrate the relative motion on the grid t [s] (n,) from the quasi-static state at t[0]
     (plus the offsets ``dq0``, ``dqd0`` of coordinates and rates, when given).
 
-    y = [q, q̇, E_d, W]: the coordinates, their rates, the dissipated energy and the work of the
-    track forces [J]; with ``drive.traction`` also [s, V0]. The prescribed frame follows s(t) of
+    y = [q, q̇, E_d, W] (layout.STATE): the coordinates, their rates, the dissipated energy and the work of
+    the track forces [J]; with ``drive.traction`` also [s, V0] (layout.TRACTION_STATE). The prescribed frame follows s(t) of
     :class:`Timeline`. Implicit methods ("Radau", "BDF") use the analytic Jacobian (prescribed
     speed; with traction scipy differences the right-hand side, as without ``analytic_jacobian``).
-    Returns a dict of arrays with a leading axis n (see :func:`outputs`).
+    Returns a dict of arrays with a leading axis n (see :func:`outputs`), ``engine`` "python" and
+    ``engine_reason`` why it ran: ``fallback`` or ``reason`` (the caller's choice of it).
 
     The run's context (:func:`symmech.core.context.active`), when there is one, is ticked at every
     right-hand side: ``--max-time`` holds here too. ``fallback`` (why this engine runs in place of the compiled
@@ -161,65 +165,86 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     ctx = context.active()
     if ctx is not None and fallback:
         ctx.fallback(f"elastic model on the Python engine: {fallback}", SECONDS_PER_STEP * (t.size - 1))
-    N = system.N
-    line, y0 = start(system, drive, t, dq0, dqd0)
-    traction = drive.traction is not None
+    start = prepare(system, drive, t, atol_q, dq0, dqd0)
+    line, st, traction = start.line, start.state, drive.traction is not None
+    iq, iqd = st.slice("q"), st.slice("qd")
 
     def rhs(time, y):
         if ctx is not None:
             ctx.tick(f"elastic model, Python engine at t = {time:.6g} s")
-        q, qd = y[:N], y[N:2 * N]
+        q, qd = y[iq], y[iqd]
+        rates = {}
         if traction:
             fs, qdd, dv = line.traction_step(time, y)
-            tail = [y[-1], dv]
+            rates.update(s=y[st.offset("speed")], speed=dv)
         else:
             fs = line.state(time)
-            qdd, tail = system.accelerations(fs, q, qd), []
-        return np.r_[qd, qdd, _dissipation(system, qd), system.track_power(fs, q, qd, qdd), tail]
+            qdd = system.accelerations(fs, q, qd)
+        return st.pack(q=qd, qd=qdd, dissipated=_dissipation(system, qd),
+                       work=system.track_power(fs, q, qd, qdd), **rates)
 
     def jac(time, y):
         fs = line.state(time)
-        q, qd = y[:N], y[N:2 * N]
+        q, qd = y[iq], y[iqd]
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
-        out = np.zeros((2 * N + 2, 2 * N + 2))
-        out[:N, N:2 * N] = np.eye(N)
-        out[N:2 * N, :N] = -np.linalg.solve(M, Rq)
-        out[N:2 * N, N:2 * N] = -np.linalg.solve(M, Rqd)
+        out = np.zeros((st.size, st.size))
+        out[iq, iqd] = np.eye(system.N)
+        out[iqd, iq] = -np.linalg.solve(M, Rq)
+        out[iqd, iqd] = -np.linalg.solve(M, Rqd)
         return out
 
     # the work of the track forces is under step control too (left out, the stiff start transient
     # goes unresolved and the reactions lose two digits), at 1e-5 J: tighter costs steps on stiff
     # rollers (10 kg on 1e8 N/m: 1761 evaluations at 1e-5 J, 2175 at 1e-9 J) for no gain in P
-    atol = np.r_[np.full(N, atol_q), np.full(N, atol_q * 1e3), 1e-9, WORK_ATOL, [1e-10, 1e-10] if traction else []]
     kw = {"jac": jac} if analytic_jacobian and not traction and method in ("Radau", "BDF", "LSODA") else {}
     # Steps no longer than the output spacing: the outputs come from the dense output, whose
     # interpolation error the step control does not see (Radau's steps grow to ~0.3 s here).
     step = float(np.min(np.diff(t))) if len(t) > 1 else np.inf
-    sol = solve_ivp(rhs, (t[0], t[-1]), y0, method=method, t_eval=t, rtol=rtol, atol=atol, max_step=step, **kw)
+    sol = solve_ivp(rhs, (t[0], t[-1]), start.y0, method=method, t_eval=t, rtol=rtol, atol=start.atol, max_step=step,
+                    **kw)
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         raise integration_failed(sol.t[-1], sol.message)
     Y = sol.y.T
     if traction:
-        s, V0 = Y[:, -2], Y[:, -1]
+        s, V0 = Y[:, st.offset("s")], Y[:, st.offset("speed")]
         dV0 = np.array([line.traction_step(ti, yi)[2] for ti, yi in zip(t, Y)])
-        Y = Y[:, :-2]
     else:
         s = line.s_nodes
         speed = [drive.speed(ti) for ti in t]
         V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
-    out = outputs(system, drive, t, s, V0, dV0, Y)
-    out["nfev"], out["njev"] = sol.nfev, sol.njev
-    return out
+    return outputs(system, drive, t, s, V0, dV0, Y, run={"nfev": sol.nfev, "njev": sol.njev, "engine": "python",
+                                                          "engine_reason": fallback or reason})
+
+
+# --------------------------------------------------------------------------- what the compiled engine reads
+
+@dataclass(frozen=True)
+class Inputs:
+    """What a compiled run reads, made in one pass (:func:`compiled_inputs`): its :class:`Start`, the model
+    record (``System.record``) and what it tabulates of the frame
+    (:class:`symmech.trolley.elastic.frame.Tabulation`; with traction over the span ``frame.reach`` finds)."""
+
+    start: Start
+    record: object
+    frame: Tabulation
+
+
+def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
+    """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
+    start = prepare(system, drive, t, atol_q, dq0, dqd0)
+    rigid = rigid_body(system.mdl) if drive.traction is not None else None
+    return Inputs(start, system.record, tabulation(drive, system.mdl, t, start.line.s_nodes, rigid))
 
 
 def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
-    """Per output row (frame fr, speeds V0, dV0, heights of O (n,) [m], states Y (n, 2N + 2)): q̈ (n, N), the
+    """Per output row (frame fr, speeds V0, dV0, heights of O (n,) [m], states Y (n, layout.state)): q̈ (n, N), the
     resultants F, M (n, 3), the coefficient vectors of r̃, its rate and acceleration (n, F), the Jacobi
     energy h and the total energy E (n,) [J]. The compiled engine computes the same in numba
-    (:func:`symmech.trolley.elastic.kernels.row_terms`)."""
+    (:func:`symmech.trolley.elastic.compiled.row_terms`)."""
     N, n = system.N, len(V0)
-    q, qd = Y[:, :N], Y[:, N:2 * N]
+    st = state_layout(N, False)  # the first fields of either state
+    q, qd = Y[:, st.slice("q")], Y[:, st.slice("qd")]
     res = {k: np.zeros((n,) + shape) for k, shape in (("qdd", (N,)), ("F", (3,)), ("M", (3,)), ("rr", (system.F,)),
                                                      ("v", (system.F,)), ("acc", (system.F,)), ("h", ()), ("E", ()))}
     for i in range(n):
@@ -228,28 +253,31 @@ def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
         res["qdd"][i] = qdd
         res["F"][i], res["M"][i] = system.resultants(fs, q[i], qd[i], qdd)
         rr, A = system.coefficients(q[i])
-        res["rr"][i], res["v"][i], res["acc"][i] = rr, qd[i] @ A, qdd @ A + system._p2(qd[i])
+        res["rr"][i], res["v"][i], res["acc"][i] = rr, qd[i] @ A, qdd @ A + system.quadratic_rates(qd[i])
         res["h"][i] = system.jacobi_energy(fs, q[i], qd[i])
         res["E"][i] = system.total_energy(fs, q[i], qd[i], height[i])
     return res
 
 
-def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, frame=None) -> dict:
-    """Per output time (arrays (n,) of t, s, V0, dV0 and the states Y (n, 2N + 2)): q, q̇, q̈,
+def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, frame=None, run=None) -> dict:
+    """Per output time (arrays (n,) of t, s, V0, dV0 and the states Y (n, layout.state)): q, q̇, q̈,
     reactions P (n, 6), resultants F, M (n, 3), roller deflections (n, 5), probe displacements
     (total and elastic) and overloads (n, n_probes, 3) [m, g], the Jacobi energy h, the total
     energy E (fixed frame), the dissipated energy and the work of the track forces [J], and the
     rigid model's reactions and overloads of the centre of mass beside them. ``rows`` computes the
     per-row terms (:func:`row_terms` or the compiled engine's); ``frame``: the frame at s when the caller has
-    it (:func:`frames`)."""
+    it (:func:`frames`); ``run``: what the engine reports of its run (evaluations, steps, its name), as it is."""
     N, inv = system.N, system.inv
-    q, qd, ed, work = Y[:, :N], Y[:, N:2 * N], Y[:, 2 * N], Y[:, 2 * N + 1]
+    st = state_layout(N, False)  # the first fields of either state
+    q, qd = Y[:, st.slice("q")], Y[:, st.slice("qd")]
+    ed, work = Y[:, st.offset("dissipated")], Y[:, st.offset("work")]
     fr = frames(drive, s, system.mdl.l) if frame is None else frame
+    _, a0, w, dw = frame_motion(fr, V0, dV0)
     height = drive.track.derivatives(s, 0)[0][:, 1]
     res = rows(system, fr, V0, dV0, Y, height)
     if system.rollers_on:
-        d = q[:, :5] @ system.C.T
-        force, _ = roller_forces(system.mdl.rollers, d, qd[:, :5] @ system.C.T, system.mdl.effects.damping)
+        d = q[:, :N_ROLLER_DOFS] @ system.C.T
+        force, _ = roller_forces(system.mdl.rollers, d, qd[:, :N_ROLLER_DOFS] @ system.C.T, system.mdl.effects.damping)
         res["P"] = np.column_stack([res["F"][:, 0], force])
         res["deflection"] = d
         res["M_contacts"] = system.contact_moment(q, force)
@@ -257,19 +285,15 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
         res["P"] = np.linalg.solve(system.reaction_system, np.column_stack([res["F"], res["M"]]).T).T
         res["deflection"], res["M_contacts"] = np.zeros((len(t), 5)), np.zeros((len(t), 3))
     g_ref = system.mdl.g0 if system.mdl.g0 > 0 else 9.80665
-    elastic = np.zeros(system.F, bool)
-    elastic[1 + inv.n_roll:1 + N] = True
-    elastic[1 + N:] = [i >= inv.n_roll for i, _ in inv.pairs]
     pos, vel, ddu = (np.einsum("nk,kpi->npi", res[key], inv.probe_fields) for key in ("rr", "v", "acc"))
-    _, a0, w, dw = frame_motion(fr, V0, dV0)
     a = a0[:, None] + np.cross(dw[:, None], pos) + np.cross(w[:, None], np.cross(w[:, None], pos)) + \
         2 * np.cross(w[:, None], vel) + ddu
     res["probe_displacement"] = pos - inv.probe_points
-    res["probe_elastic"] = np.einsum("nk,kpi->npi", np.where(elastic, res["rr"], 0.0), inv.probe_fields)
+    res["probe_elastic"] = np.einsum("nk,kpi->npi", np.where(system.beam_fields, res["rr"], 0.0), inv.probe_fields)
     res["probe_overload"] = (a + system.mdl.g0 * fr.lam[:, None, :, 1]) / g_ref
     for key in ("rr", "v", "acc"):
         del res[key]
     rigid = model.body_motion(fr, V0, dV0, rigid_body(system.mdl))
     res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, work=work, names=list(inv.names),
-               P_rigid=rigid["P"], overload_rigid=rigid["overload"], W=fr.W, dW=fr.dW)
+               P_rigid=rigid["P"], overload_rigid=rigid["overload"], W=fr.W, dW=fr.dW, **(run or {}))
     return res

@@ -21,6 +21,7 @@ along x1 (first of (8)).
 """
 from __future__ import annotations
 
+from functools import cached_property
 
 import numpy as np
 
@@ -31,6 +32,7 @@ from symmech.trolley.elastic import membrane
 from symmech.trolley.elastic.body import (ROTATION_PAIRS, ElasticModel, beam_basis, invariants, roller_energy,
                                           roller_forces)
 from symmech.trolley.elastic.frame import FrameState
+from symmech.trolley.elastic.layout import FIELDS, FLAGS, MODEL, N_ROLLER_DOFS, RL_AT, ROLLER, edges
 
 # ---------------------------------------------------------------- equations of motion
 
@@ -48,6 +50,7 @@ class System:
         inv = self.inv
         self.N = len(inv.names)
         self.F = inv.G.shape[0]
+        self.fields = FIELDS.sized(N=self.N, P=len(inv.pairs))  # the coefficient vectors over the F fields
         self.Gtr = np.einsum("klii->kl", inv.G)
         self.C = gen.roller_matrix(mdl.l, mdl.ah)
         self.pair_i = np.array([p[0] for p in inv.pairs], dtype=int)
@@ -61,30 +64,77 @@ class System:
         self.reaction_system = np.array(cols).T
         self.rollers_on = inv.n_roll == 5
 
+    @cached_property
+    def beam_fields(self) -> np.ndarray:
+        """(F,) bool: the fields of the beams' deflection, their φ and ψ (not the roller coordinates')."""
+        fields, n_roll = self.fields, self.inv.n_roll
+        mask = np.zeros(fields.size, bool)
+        mask[fields.slice("phi")] = np.arange(self.N) >= n_roll
+        mask[fields.slice("psi")] = [i >= n_roll for i, _ in self.inv.pairs]
+        return mask
+
+    @cached_property
+    def record(self):
+        """The model as the compiled kernels take it (:data:`symmech.trolley.elastic.layout.MODEL`), packed once:
+        the compiled run, its output rows and the export read this one record."""
+        inv, mdl = self.inv, self.mdl
+        n, f = self.N, self.F
+        rows = [[] for _ in range(n)]  # the ψ entries of A: (column, index of the coordinate multiplying it)
+        for p, (i, j) in enumerate(inv.pairs):
+            rows[i].append((self.fields.offset("psi") + p, j))
+            if i != j:
+                rows[j].append((self.fields.offset("psi") + p, i))
+        ptr = np.cumsum([0] + [len(r) for r in rows]).astype(np.int64)
+        col = np.array([c for r in rows for c, _ in r], dtype=np.int64)
+        qi = np.array([x for r in rows for _, x in r], dtype=np.int64)
+        roll = np.zeros((ROLLER.size, 5))
+        law = 0.0
+        if self.rollers_on:
+            rl = mdl.rollers
+            roll[RL_AT.stiffness] = rl.stiffness
+            roll[RL_AT.damping] = rl.damping if mdl.effects.damping else 0.0
+            roll[RL_AT.preload] = rl.preload
+            law = 0.0 if rl.law == "linear" else 1.0
+        blocks = inv.membrane
+        width = max([len(b.index) for b in blocks], default=1)
+        idx = np.zeros((len(blocks), width), dtype=np.int64)
+        H = np.zeros((len(blocks), width, width))
+        for b, blk in enumerate(blocks):
+            m = len(blk.index)
+            idx[b, :m], H[b, :m, :m] = blk.index, blk.H
+        flags = FLAGS.pack(n=n, f=f, mass=inv.mass, g0=mdl.g0, rollers=1.0 if self.rollers_on else 0.0, law=law)
+        return MODEL.pack(
+            **edges(n, len(inv.pairs)), flags=flags, ptr=ptr, col=col, qi=qi, pair_i=self.pair_i, pair_j=self.pair_j,
+            gram_x=inv.G.transpose(0, 2, 3, 1).reshape(9 * f, f), gram_trace=self.Gtr, rollers_map=self.C, roll=roll,
+            block_index=idx, block_size=[len(b.index) for b in blocks], block_h=H, block_c=[b.c for b in blocks],
+            s1=inv.S1, stiffness=inv.K, damping=inv.D, pair_field=inv.dA, gram_9=inv.G.reshape(f * f, 9))
+
     # coefficient vectors over the fields
     def coefficients(self, q):
-        N, F = self.N, self.F
-        rr = np.zeros(F)
-        rr[0] = 1.0
-        rr[1:1 + N] = q
+        N, fields = self.N, self.fields
+        rr = np.zeros(fields.size)
+        rr[fields.offset("r")] = 1.0
+        rr[fields.slice("phi")] = q
         qi, qj = q[self.pair_i], q[self.pair_j]
-        rr[1 + N:] = np.where(self.diag, 0.5, 1.0) * qi * qj
+        rr[fields.slice("psi")] = np.where(self.diag, 0.5, 1.0) * qi * qj
         A = self._dv(q)
-        A[np.arange(N), 1 + np.arange(N)] = 1.0
+        A[np.arange(N), fields.offset("phi") + np.arange(N)] = 1.0
         return rr, A
 
     def _dv(self, rate):
         """(N, F): ∂(Σ_c rate_c φ̃_c)/∂q_b = Σ_c rate_c ψ_cb (with rate = q: the ψ part of φ̃_b)."""
         out = np.zeros((self.N, self.F))
-        cols = 1 + self.N + np.arange(len(self.pair_i))
+        cols = self.fields.offset("psi") + np.arange(len(self.pair_i))
         np.add.at(out, (self.pair_i, cols), rate[self.pair_j])
         off = ~self.diag
         np.add.at(out, (self.pair_j[off], cols[off]), rate[self.pair_i[off]])
         return out
 
-    def _p2(self, qd):
+    def quadratic_rates(self, qd):
+        """(F,) the coefficients over the fields of the acceleration's terms quadratic in the rates q̇ (N,):
+        Σ_ab q̇_a q̇_b ψ_ab, on the ψ fields only."""
         out = np.zeros(self.F)
-        out[1 + self.N:] = np.where(self.diag, 1.0, 2.0) * qd[self.pair_i] * qd[self.pair_j]
+        out[self.fields.slice("psi")] = np.where(self.diag, 1.0, 2.0) * qd[self.pair_i] * qd[self.pair_j]
         return out
 
     def roller_state(self, q, qd):
@@ -92,7 +142,7 @@ class System:
         if not self.rollers_on:
             z = np.zeros(5)
             return z, z, z, z
-        d, dd = self.C @ q[:5], self.C @ qd[:5]
+        d, dd = self.C @ q[:N_ROLLER_DOFS], self.C @ qd[:N_ROLLER_DOFS]
         force, kt = roller_forces(self.mdl.rollers, d, dd, self.mdl.effects.damping)
         return d, dd, force, kt
 
@@ -107,14 +157,14 @@ class System:
         inv, g0 = self.inv, self.mdl.g0
         rr, A = self.coefficients(q)
         v = qd @ A
-        acc = qdd @ A + self._p2(qd)
+        acc = qdd @ A + self.quadratic_rates(qd)
         B, W, GB, GW = self._frame_mats(fs)
         load = fs.a0 + g0 * fs.nu
         z = inv.S1 @ load + GB @ rr + 2 * GW @ v + self.Gtr @ acc
         R = A @ z + inv.K @ q + inv.D @ qd + membrane.force(inv.membrane, q)
         d, dd, force, kt = self.roller_state(q, qd)
         if self.rollers_on:
-            R[:5] -= self.C.T @ force
+            R[:N_ROLLER_DOFS] -= self.C.T @ force
         if not jacobian:
             return R
         M = A @ self.Gtr @ A.T
@@ -124,9 +174,10 @@ class System:
             membrane.stiffness(inv.membrane, q)
         Rqd = A @ (2 * GW @ A.T + 2 * self.Gtr @ DV.T) + inv.D
         if self.rollers_on:
-            Rq[:5, :5] -= self.C.T @ (kt[:, None] * self.C)
+            rollers = slice(N_ROLLER_DOFS)
+            Rq[rollers, rollers] -= self.C.T @ (kt[:, None] * self.C)
             if self.mdl.effects.damping:
-                Rqd[:5, :5] += self.C.T @ (np.asarray(self.mdl.rollers.damping)[:, None] * self.C)
+                Rqd[rollers, rollers] += self.C.T @ (np.asarray(self.mdl.rollers.damping)[:, None] * self.C)
         return R, M, Rq, Rqd
 
     def mass(self, q):
@@ -146,7 +197,7 @@ class System:
         inv = self.inv
         rr, A = self.coefficients(q)
         v = qd @ A
-        acc = qdd @ A + self._p2(qd)
+        acc = qdd @ A + self.quadratic_rates(qd)
         B, W, _, _ = self._frame_mats(fs)
         load = fs.a0 + self.mdl.g0 * fs.nu
         first = inv.S1.T
@@ -171,9 +222,9 @@ class System:
         p = self.contacts
         f = gen.rigid_fields(p[:, 0], p[:, 1], p[:, 2])
         q = np.asarray(q, float)
-        u = np.einsum("pik,...k->...pi", f[:, :, :5], q[..., :5])
+        u = np.einsum("pik,...k->...pi", f[:, :, :N_ROLLER_DOFS], q[..., :N_ROLLER_DOFS])
         for col, (i, j) in enumerate(ROTATION_PAIRS):
-            u = u + (0.5 if i == j else 1.0) * (q[..., i] * q[..., j])[..., None, None] * f[:, :, 5 + col]
+            u = u + (0.5 if i == j else 1.0) * (q[..., i] * q[..., j])[..., None, None] * f[:, :, N_ROLLER_DOFS + col]
         return np.cross(p + u, forces[..., :, None] * self.directions).sum(-2)
 
     def jacobi_energy(self, fs: FrameState, q, qd):
@@ -192,7 +243,7 @@ class System:
         """Π [J]: beam bending (and membrane) energy and the rollers' potential at q (..., N), shape (...)."""
         pi = 0.5 * np.einsum("...i,ij,...j->...", q, self.inv.K, q) + membrane.energy(self.inv.membrane, q)
         if self.rollers_on:
-            pi = pi + roller_energy(self.mdl.rollers, q[..., :5] @ self.C.T)
+            pi = pi + roller_energy(self.mdl.rollers, q[..., :N_ROLLER_DOFS] @ self.C.T)
         return pi
 
     def total_energy(self, fs: FrameState, q, qd, height: float) -> float:
