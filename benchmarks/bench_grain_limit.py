@@ -6,7 +6,8 @@ with min/max; every contender runs once per round. Each sphere's impact times ar
 reference (tolerance 1e-13) beside its time.
 
 - population: N spheres (random start height and speed), each 20 periods, through ``motion_scene.simulate``
-  (the per-grain API), ``compiled.simulate_many`` (2 threads) and the brentq reference: impacts per CPU-second;
+  (the per-grain API), ``motion_scene.simulate_many`` (the population API, one thread), ``compiled.simulate_many``
+  (2 threads) and the brentq reference: impacts per CPU-second;
 - one sphere, 20 impacts: the same API, ``compiled.simulate``, the compiled loop alone (packed arguments
   reused: no set-up, no result), the floor and the brentq reference, in ms per run;
 - per-impact breakdown of the floor: root finding (scan + Brent on the exact gap, the generated
@@ -407,6 +408,9 @@ def population(n: int, repeats: int):
     def api():
         return sum(len(motion_scene.simulate(sc).impacts) for sc in scenes)
 
+    def api_many():
+        return sum(len(m.impacts) for m in motion_scene.simulate_many(scenes, workers=1))
+
     def many():
         return sum(len(m.impacts) for m in compiled.simulate_many([m for m, _ in grains], num,
                                                                  [st for _, st in grains], t_end, workers=2))
@@ -414,15 +418,16 @@ def population(n: int, repeats: int):
     def reference():
         return sum(len(exact_flight_brentq(m, st, t_end, XTOL)) for m, st in grains)
 
-    runs = {"public API motion_scene.simulate, per grain": api, "compiled.simulate_many, 2 threads": many,
-            "plain Python flight + brentq": reference}
+    runs = {"public API motion_scene.simulate, per grain": api,
+            "public API motion_scene.simulate_many, 1 thread": api_many,
+            "compiled.simulate_many, 2 threads": many, "plain Python flight + brentq": reference}
     counts = {label: run() for label, run in runs.items()}
     stats = cpu_interleaved(runs, repeats)
     print(f"population of {n} spheres x {PERIODS} periods (impacts per CPU-second; CPU s per population):")
     for label, s in stats.items():
         print(f"  {label:<44} {counts[label] / s.median:>10,.0f} /s  ({counts[label]} impacts; {s.text()})")
     ref = stats["plain Python flight + brentq"]
-    for label in list(runs)[:2]:
+    for label in list(runs)[:3]:
         print(f"  {label:<44} vs reference: {ratio(ref, stats[label])}")
     print("  (target: >= 5x the reference, >= 2.5e5 impacts per CPU-second)\n")
 

@@ -366,6 +366,8 @@ def flight_state(t, fl, rot, out):
 def gap(t, fl, rot, buf):
     """(h, h'): height [m] of the lowest point above the plane and its rate [m/s]."""
     _translate(fl, t, buf)
+    if fl[F_AT.axes] == fl[F_AT.axes + 1] and fl[F_AT.axes + 1] == fl[F_AT.axes + 2]:
+        return buf[0, 0, 2] - fl[F_AT.axes], buf[0, 1, 2]  # a sphere: no attitude in its gap
     q0, q1, q2, q3, wx, wy, wz = rotation_tuple(rot, t)
     n0 = 2.0 * (q1 * q3 - q0 * q2)  # body components of e_z: the third row of Q
     n1 = 2.0 * (q2 * q3 + q0 * q1)
@@ -380,12 +382,12 @@ def gap(t, fl, rot, buf):
 @jit
 def gap_curvature_bound(fl, rot):
     """Bound [m/s^2] on |h''| over the flight: |g_z| + A omega^2 |d_z| + (a_max^2/a_min + a_max (1 + I_max/I_min))
-    |w|max^2 (docs/grain-motion.md)."""
+    |w|max^2, the last term 0 for a sphere (docs/grain-motion.md)."""
     a_max = max(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
     a_min = min(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
     i_max = max(rot[R_AT.inertia], rot[R_AT.inertia + 1], rot[R_AT.inertia + 2])
     i_min = min(rot[R_AT.inertia], rot[R_AT.inertia + 1], rot[R_AT.inertia + 2])
-    spin = (a_max * a_max / a_min + a_max * (1.0 + i_max / i_min)) * rot[R_AT.max_rate] ** 2
+    spin = (a_max * a_max / a_min + a_max * (1.0 + i_max / i_min)) * rot[R_AT.max_rate] ** 2 if a_max > a_min else 0.0
     return abs(fl[F_AT.g + 2]) + fl[F_AT.amplitude] * fl[F_AT.omega] ** 2 * abs(fl[F_AT.direction + 2]) + spin
 
 
