@@ -344,18 +344,21 @@ def one_sphere(repeats: int):
     base = motion.Numerics(scan_step=T / 40, sample_interval=T, engine="compiled")
     ref = np.array([i["t"] for i in motion.simulate(model, replace(base, tolerance=1e-13), st, t_end).impacts])
     num = replace(base, tolerance=1e-10)
+    dop853 = replace(num, flight="dop853")  # the path before the closed form became the default for spheres
     sc = scene_of(model, st, num)
     s0 = flight_state(model, st)
     times = np.empty(64)
     loop = loop_alone(model, num, st, t_end)
     runs = {"public API motion_scene.simulate": lambda: motion_scene.simulate(sc),
             "compiled.simulate": lambda: compiled.simulate(model, num, st, t_end),
+            "compiled.simulate, DOP853 flight": lambda: compiled.simulate(model, dop853, st, t_end),
             "compiled loop alone": loop,
             "floor: generated kernels + Brent": lambda: floor_run(s0, t_end, T / 40, XTOL, model.law.e_n, times),
             "plain Python flight + brentq": lambda: exact_flight_brentq(model, st, t_end, XTOL)}
     n = floor_run(s0, t_end, T / 40, XTOL, model.law.e_n, times)
     got = {"public API motion_scene.simulate": [i["t"] for i in runs["public API motion_scene.simulate"]().impacts],
            "compiled.simulate": [i["t"] for i in runs["compiled.simulate"]().impacts],
+           "compiled.simulate, DOP853 flight": [i["t"] for i in runs["compiled.simulate, DOP853 flight"]().impacts],
            "floor: generated kernels + Brent": times[:n],
            "plain Python flight + brentq": runs["plain Python flight + brentq"]()}
     loop()
@@ -366,8 +369,8 @@ def one_sphere(repeats: int):
         error = float(np.max(np.abs(g - ref)) / T) if len(g) == len(ref) else math.inf
         print(f"  {label:<36} {s.text('ms', 1e3)}  error {error:.1e}")
     brent = stats["plain Python flight + brentq"]
-    for label in ("public API motion_scene.simulate", "compiled.simulate", "compiled loop alone",
-                  "floor: generated kernels + Brent"):
+    for label in ("public API motion_scene.simulate", "compiled.simulate", "compiled.simulate, DOP853 flight",
+                  "compiled loop alone", "floor: generated kernels + Brent"):
         print(f"  time / reference's, {label:<34} {stats[label].median / brent.median:6.3f} "
               f"(reference / this {ratio(brent, stats[label])})")
     print("  (target: public API <= 0.5 of the reference's time)")
@@ -485,7 +488,8 @@ def flights(repeats: int, population_size: int):
     model, st = sphere_scene()
     T = model.period
     t_end = PERIODS * T
-    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled",
+                          flight="dop853")
     ref = compiled_times(model, replace(num, tolerance=1e-13), st, t_end)
     exact = replace(num, flight="exact")
     runs = {"compiled, DOP853 flight": lambda: compiled.simulate(model, num, st, t_end),
@@ -513,6 +517,7 @@ def flights(repeats: int, population_size: int):
                 repeats=repeats, number=5)
 
     sc = pipeline.load("scenes/grain_default.toml").setup
+    sc = replace(sc, numerics=replace(sc.numerics, flight="dop853"))
     duration, T = 0.5, sc.model.period
     ref = compiled_times(sc.model, replace(sc.numerics, tolerance=1e-12), sc.start, duration)
     exact, tight = replace(sc.numerics, flight="exact"), replace(sc.numerics, tolerance=1e-11)
@@ -535,7 +540,8 @@ def flights(repeats: int, population_size: int):
 
     grains = [sphere_grain(k) for k in range(population_size)]
     T = grains[0][0].period
-    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled",
+                          flight="dop853")
     scenes = {"compiled, DOP853 flight": [scene_of(m, s, num) for m, s in grains],
               "compiled, exact flight": [scene_of(m, s, replace(num, flight="exact")) for m, s in grains]}
 

@@ -442,7 +442,7 @@ def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
     """The first time in (t_from, t_end] where the gap reaches zero, or nan; ``t_from`` itself when the gap is not
     positive there."""
     curvature = gap_curvature_bound(fl, rot)
-    stack = np.empty((128, 6))  # pieces to clear: halving adds one per level, ~log2(step / xtol) < 64 levels
+    stack = np.empty((0, 6))  # pieces to clear, allocated on first need (128 rows: one per halving, < 64 levels)
     a = t_from
     ha, da = gap(a, fl, rot, buf)
     if ha <= 0.0:
@@ -454,6 +454,8 @@ def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
         if hb <= 0.0:
             return _bracketed(a, b, ha, hb, xtol, (fl, rot, buf))
         if span < b - a:
+            if stack.shape[0] == 0:
+                stack = np.empty((128, 6))
             root = _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack)
             if not math.isnan(root):
                 return root
