@@ -20,7 +20,7 @@ reference (tolerance 1e-13) beside its time.
   the reference, impacts per CPU-second and impact-time errors: one sphere, a tumbling asymmetric ellipsoid, the
   default scene on one thread, a population of spheres through the public API.
 
-Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only | --flights]
+Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only | --flights | --population]
 """
 from __future__ import annotations
 
@@ -562,8 +562,14 @@ def main():
                    help="only the exact-flight floor (no compiled engine, no population)")
     p.add_argument("--flights", action="store_true",
                    help="only the compiled loop's exact flight against its DOP853 flight and the reference")
+    p.add_argument("--population", action="store_true",
+                   help="only the population (in a fresh process: the sections before it leave garbage and "
+                        "threads that load the threaded contenders)")
     args = p.parse_args()
     print(f"machine: {machine()}; numba threads {numba.get_num_threads()}\n")
+    if args.population:
+        population(100 if args.quick else 400, args.repeats)
+        return
     if args.flights:
         flights(args.repeats, 100 if args.quick else 400)
         return
