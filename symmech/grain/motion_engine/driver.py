@@ -254,23 +254,20 @@ def many_signature() -> tuple:
     return (table, table, types.Array(types.float64, 1, "C"), types.int64, table, types.Array(types.int64, 1, "C"))
 
 
-def _entries() -> dict:
-    """The compiled entries and their signatures: ``run`` and ``run_many``."""
-    loop = _loop()
-    return {loop.run: entry_signature(), loop.run_many: many_signature()}
-
-
 def _exports() -> dict:
-    """What the ahead-of-time build exports: the entries for their signatures, loaded from numba's cache first (the
-    build then reuses its compiled functions)."""
+    """What the ahead-of-time build exports: ``run`` for the signature of :func:`entry_signature`, loaded from
+    numba's cache first (the build then reuses its compiled functions), and ``run_many`` for
+    :func:`many_signature`, compiled here: ~8 s of CPU that a scene's first run, which needs ``run`` only
+    (the engine's entry), does not wait for; without the build a population compiles it on first use."""
+    loop = _loop()
     exports = {}
-    for dispatcher, signature in _entries().items():
+    for dispatcher, signature in ((loop.run, entry_signature()), (loop.run_many, many_signature())):
         dispatcher.compile(signature)
         exports[dispatcher.__name__] = (dispatcher, dispatcher.nopython_signatures[0])
     return exports
 
 
-ENGINE = build.Engine("grain", "symmech.grain.motion_engine.loop", _entries,
+ENGINE = build.Engine("grain", "symmech.grain.motion_engine.loop", lambda: {_loop().run: entry_signature()},
                       COLD_COMPILE_SECONDS,
                       ahead=aot.Build("grain", [__file__, layouts.__file__, layout.__file__], _exports))
 
