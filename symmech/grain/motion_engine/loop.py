@@ -90,7 +90,6 @@ def run(p, y, t_end, rows, imps, warns, carry, max_phases):
     return y, rows, imps, warns, status
 
 
-
 @jit
 def _append(into, n, rows, count):
     """rows[:count] appended to into[:n] (doubled when full); returns (into, n + count)."""
