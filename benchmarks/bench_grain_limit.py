@@ -6,7 +6,8 @@ with min/max; every contender runs once per round. Each sphere's impact times ar
 reference (tolerance 1e-13) beside its time.
 
 - population: N spheres (random start height and speed), each 20 periods, through ``motion_scene.simulate``
-  (the per-grain API), ``compiled.simulate_many`` (2 threads) and the brentq reference: impacts per CPU-second;
+  (the per-grain API), ``motion_scene.simulate_many`` (the population API, one thread), ``compiled.simulate_many``
+  (2 threads) and the brentq reference: impacts per CPU-second;
 - one sphere, 20 impacts: the same API, ``compiled.simulate``, the compiled loop alone (packed arguments
   reused: no set-up, no result), the floor and the brentq reference, in ms per run;
 - per-impact breakdown of the floor: root finding (scan + Brent on the exact gap, the generated
@@ -19,7 +20,7 @@ reference (tolerance 1e-13) beside its time.
   the reference, impacts per CPU-second and impact-time errors: one sphere, a tumbling asymmetric ellipsoid, the
   default scene on one thread, a population of spheres through the public API.
 
-Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only | --flights]
+Run: python benchmarks/bench_grain_limit.py [--quick] [--repeats 5] [--exact-flight-only | --flights | --population]
 """
 from __future__ import annotations
 
@@ -343,18 +344,21 @@ def one_sphere(repeats: int):
     base = motion.Numerics(scan_step=T / 40, sample_interval=T, engine="compiled")
     ref = np.array([i["t"] for i in motion.simulate(model, replace(base, tolerance=1e-13), st, t_end).impacts])
     num = replace(base, tolerance=1e-10)
+    dop853 = replace(num, flight="dop853")  # the path before the closed form became the default for spheres
     sc = scene_of(model, st, num)
     s0 = flight_state(model, st)
     times = np.empty(64)
     loop = loop_alone(model, num, st, t_end)
     runs = {"public API motion_scene.simulate": lambda: motion_scene.simulate(sc),
             "compiled.simulate": lambda: compiled.simulate(model, num, st, t_end),
+            "compiled.simulate, DOP853 flight": lambda: compiled.simulate(model, dop853, st, t_end),
             "compiled loop alone": loop,
             "floor: generated kernels + Brent": lambda: floor_run(s0, t_end, T / 40, XTOL, model.law.e_n, times),
             "plain Python flight + brentq": lambda: exact_flight_brentq(model, st, t_end, XTOL)}
     n = floor_run(s0, t_end, T / 40, XTOL, model.law.e_n, times)
     got = {"public API motion_scene.simulate": [i["t"] for i in runs["public API motion_scene.simulate"]().impacts],
            "compiled.simulate": [i["t"] for i in runs["compiled.simulate"]().impacts],
+           "compiled.simulate, DOP853 flight": [i["t"] for i in runs["compiled.simulate, DOP853 flight"]().impacts],
            "floor: generated kernels + Brent": times[:n],
            "plain Python flight + brentq": runs["plain Python flight + brentq"]()}
     loop()
@@ -365,8 +369,8 @@ def one_sphere(repeats: int):
         error = float(np.max(np.abs(g - ref)) / T) if len(g) == len(ref) else math.inf
         print(f"  {label:<36} {s.text('ms', 1e3)}  error {error:.1e}")
     brent = stats["plain Python flight + brentq"]
-    for label in ("public API motion_scene.simulate", "compiled.simulate", "compiled loop alone",
-                  "floor: generated kernels + Brent"):
+    for label in ("public API motion_scene.simulate", "compiled.simulate", "compiled.simulate, DOP853 flight",
+                  "compiled loop alone", "floor: generated kernels + Brent"):
         print(f"  time / reference's, {label:<34} {stats[label].median / brent.median:6.3f} "
               f"(reference / this {ratio(brent, stats[label])})")
     print("  (target: public API <= 0.5 of the reference's time)")
@@ -407,6 +411,9 @@ def population(n: int, repeats: int):
     def api():
         return sum(len(motion_scene.simulate(sc).impacts) for sc in scenes)
 
+    def api_many():
+        return sum(len(m.impacts) for m in motion_scene.simulate_many(scenes, workers=1))
+
     def many():
         return sum(len(m.impacts) for m in compiled.simulate_many([m for m, _ in grains], num,
                                                                  [st for _, st in grains], t_end, workers=2))
@@ -414,15 +421,16 @@ def population(n: int, repeats: int):
     def reference():
         return sum(len(exact_flight_brentq(m, st, t_end, XTOL)) for m, st in grains)
 
-    runs = {"public API motion_scene.simulate, per grain": api, "compiled.simulate_many, 2 threads": many,
-            "plain Python flight + brentq": reference}
+    runs = {"public API motion_scene.simulate, per grain": api,
+            "public API motion_scene.simulate_many, 1 thread": api_many,
+            "compiled.simulate_many, 2 threads": many, "plain Python flight + brentq": reference}
     counts = {label: run() for label, run in runs.items()}
     stats = cpu_interleaved(runs, repeats)
     print(f"population of {n} spheres x {PERIODS} periods (impacts per CPU-second; CPU s per population):")
     for label, s in stats.items():
         print(f"  {label:<44} {counts[label] / s.median:>10,.0f} /s  ({counts[label]} impacts; {s.text()})")
     ref = stats["plain Python flight + brentq"]
-    for label in list(runs)[:2]:
+    for label in list(runs)[:3]:
         print(f"  {label:<44} vs reference: {ratio(ref, stats[label])}")
     print("  (target: >= 5x the reference, >= 2.5e5 impacts per CPU-second)\n")
 
@@ -480,7 +488,8 @@ def flights(repeats: int, population_size: int):
     model, st = sphere_scene()
     T = model.period
     t_end = PERIODS * T
-    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled",
+                          flight="dop853")
     ref = compiled_times(model, replace(num, tolerance=1e-13), st, t_end)
     exact = replace(num, flight="exact")
     runs = {"compiled, DOP853 flight": lambda: compiled.simulate(model, num, st, t_end),
@@ -508,6 +517,7 @@ def flights(repeats: int, population_size: int):
                 repeats=repeats, number=5)
 
     sc = pipeline.load("scenes/grain_default.toml").setup
+    sc = replace(sc, numerics=replace(sc.numerics, flight="dop853"))
     duration, T = 0.5, sc.model.period
     ref = compiled_times(sc.model, replace(sc.numerics, tolerance=1e-12), sc.start, duration)
     exact, tight = replace(sc.numerics, flight="exact"), replace(sc.numerics, tolerance=1e-11)
@@ -530,7 +540,8 @@ def flights(repeats: int, population_size: int):
 
     grains = [sphere_grain(k) for k in range(population_size)]
     T = grains[0][0].period
-    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled")
+    num = motion.Numerics(scan_step=T / 40, sample_interval=T, tolerance=1e-10, engine="compiled",
+                          flight="dop853")
     scenes = {"compiled, DOP853 flight": [scene_of(m, s, num) for m, s in grains],
               "compiled, exact flight": [scene_of(m, s, replace(num, flight="exact")) for m, s in grains]}
 
@@ -551,8 +562,14 @@ def main():
                    help="only the exact-flight floor (no compiled engine, no population)")
     p.add_argument("--flights", action="store_true",
                    help="only the compiled loop's exact flight against its DOP853 flight and the reference")
+    p.add_argument("--population", action="store_true",
+                   help="only the population (in a fresh process: the sections before it leave garbage and "
+                        "threads that load the threaded contenders)")
     args = p.parse_args()
     print(f"machine: {machine()}; numba threads {numba.get_num_threads()}\n")
+    if args.population:
+        population(100 if args.quick else 400, args.repeats)
+        return
     if args.flights:
         flights(args.repeats, 100 if args.quick else 400)
         return

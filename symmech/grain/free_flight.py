@@ -239,8 +239,8 @@ def gap_rate(vz, axes, n, w):
 
 def gap_curvature_bound(g_z: float, vibration: flight.Vibration, axes, inertia, max_rate: float) -> float:
     """Bound [m/s^2] on |h''| over the whole flight (docs/grain-motion.md): |z''| <= |g_z| + A omega^2 |d_z|
-    and |s''| <= (a_max^2 / a_min + a_max (1 + I_max / I_min)) |w|max^2."""
+    and |s''| <= (a_max^2 / a_min + a_max (1 + I_max / I_min)) |w|max^2 (0 for a sphere: s = a)."""
     vib = vibration
     a_max, a_min = max(axes), min(axes)
-    spin = (a_max**2 / a_min + a_max * (1.0 + max(inertia) / min(inertia))) * max_rate**2
+    spin = (a_max**2 / a_min + a_max * (1.0 + max(inertia) / min(inertia))) * max_rate**2 if a_max > a_min else 0.0
     return abs(g_z) + vib.amplitude * vib.omega**2 * abs(vib.direction[2]) + spin

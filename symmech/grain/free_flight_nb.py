@@ -366,6 +366,8 @@ def flight_state(t, fl, rot, out):
 def gap(t, fl, rot, buf):
     """(h, h'): height [m] of the lowest point above the plane and its rate [m/s]."""
     _translate(fl, t, buf)
+    if fl[F_AT.axes] == fl[F_AT.axes + 1] and fl[F_AT.axes + 1] == fl[F_AT.axes + 2]:
+        return buf[0, 0, 2] - fl[F_AT.axes], buf[0, 1, 2]  # a sphere: no attitude in its gap
     q0, q1, q2, q3, wx, wy, wz = rotation_tuple(rot, t)
     n0 = 2.0 * (q1 * q3 - q0 * q2)  # body components of e_z: the third row of Q
     n1 = 2.0 * (q2 * q3 + q0 * q1)
@@ -380,12 +382,12 @@ def gap(t, fl, rot, buf):
 @jit
 def gap_curvature_bound(fl, rot):
     """Bound [m/s^2] on |h''| over the flight: |g_z| + A omega^2 |d_z| + (a_max^2/a_min + a_max (1 + I_max/I_min))
-    |w|max^2 (docs/grain-motion.md)."""
+    |w|max^2, the last term 0 for a sphere (docs/grain-motion.md)."""
     a_max = max(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
     a_min = min(fl[F_AT.axes], fl[F_AT.axes + 1], fl[F_AT.axes + 2])
     i_max = max(rot[R_AT.inertia], rot[R_AT.inertia + 1], rot[R_AT.inertia + 2])
     i_min = min(rot[R_AT.inertia], rot[R_AT.inertia + 1], rot[R_AT.inertia + 2])
-    spin = (a_max * a_max / a_min + a_max * (1.0 + i_max / i_min)) * rot[R_AT.max_rate] ** 2
+    spin = (a_max * a_max / a_min + a_max * (1.0 + i_max / i_min)) * rot[R_AT.max_rate] ** 2 if a_max > a_min else 0.0
     return abs(fl[F_AT.g + 2]) + fl[F_AT.amplitude] * fl[F_AT.omega] ** 2 * abs(fl[F_AT.direction + 2]) + spin
 
 
@@ -440,7 +442,7 @@ def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
     """The first time in (t_from, t_end] where the gap reaches zero, or nan; ``t_from`` itself when the gap is not
     positive there."""
     curvature = gap_curvature_bound(fl, rot)
-    stack = np.empty((128, 6))  # pieces to clear: halving adds one per level, ~log2(step / xtol) < 64 levels
+    stack = np.empty((0, 6))  # pieces to clear, allocated on first need (128 rows: one per halving, < 64 levels)
     a = t_from
     ha, da = gap(a, fl, rot, buf)
     if ha <= 0.0:
@@ -452,6 +454,8 @@ def next_contact(fl, rot, t_from, t_end, step, xtol, buf):
         if hb <= 0.0:
             return _bracketed(a, b, ha, hb, xtol, (fl, rot, buf))
         if span < b - a:
+            if stack.shape[0] == 0:
+                stack = np.empty((128, 6))
             root = _certified_root(fl, rot, a, b, ha, da, hb, db, curvature, xtol, buf, stack)
             if not math.isnan(root):
                 return root

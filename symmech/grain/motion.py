@@ -48,6 +48,7 @@ from symmech.grain.coulomb_law import ImpactLaw, inverse_effective_mass, kinetic
 from symmech.grain.sliding import Body, Sliding, slide
 
 REGIMES = ("flight", "impact", "sliding")
+FLIGHTS = ("auto", "dop853", "exact")  # Numerics.flight
 EPS = float(np.finfo(float).eps)
 PROGRESS_INTERVAL = 0.2  # s of wall time between two calls of on_step
 ENERGY_TOLERANCE = 1e-6  # stated bound on the relative residual of the energy budget
@@ -112,9 +113,10 @@ class Numerics:
     bounce ends in sliding, ``max_impacts``, ``sample_interval`` [s] of the trajectory file. ``engine``
     (accurate mode, read by the scene kind): "compiled" (:mod:`symmech.grain.motion_engine`), "python" (this loop) or
     "auto" (compiled when numba's cache holds it; ``motion_scene.choose_engine``). ``flight`` (both loops):
-    "dop853" (the rotation integrated to ``tolerance``: the reference) or "exact" (closed-form rotation,
+    "dop853" (the rotation integrated to ``tolerance``: the reference), "exact" (closed-form rotation,
     :mod:`symmech.grain.free_flight` here, its twin ``free_flight_nb`` in the compiled loop; contacts certified by
-    the gap's curvature bound)."""
+    the gap's curvature bound) or "auto" (the default: "exact" in the compiled loop where the gap does not depend
+    on the attitude, a sphere or a grain with rotation off, else "dop853"; this loop, the reference, integrates)."""
 
     mode: str = "accurate"
     engine: str = "auto"
@@ -126,11 +128,11 @@ class Numerics:
     rest_velocity: float = 1e-5
     max_impacts: int = 100000
     sample_interval: float = 1e-3
-    flight: str = "dop853"
+    flight: str = "auto"
 
     def __post_init__(self):
-        if self.flight not in ("dop853", "exact"):
-            raise ValueError(f"Numerics.flight must be 'dop853' or 'exact', got {self.flight!r}")
+        if self.flight not in FLIGHTS:
+            raise ValueError(f"Numerics.flight must be one of {', '.join(map(repr, FLIGHTS))}, got {self.flight!r}")
 
 
 @dataclass

@@ -374,6 +374,30 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
     return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
 
 
+def simulate_many(scenes: list, workers: int | None = None) -> list:
+    """The grains of ``scenes`` (a list of :class:`GrainScene`), each as :func:`simulate` runs it without ``on_step``;
+    on the compiled engine, the scenes that share numerics and duration run as one population (packed once, the
+    loop over grains compiled: the engine's ``simulate_many``, ``workers`` threads), the others one by one."""
+    out = [None] * len(scenes)
+    groups = {}
+    for k, sc in enumerate(scenes):
+        groups.setdefault((sc.numerics, sc.duration), []).append(k)
+    for (num, duration), members in groups.items():
+        engine, why = choose_engine(scenes[members[0]]) if num.mode == "accurate" else ("paper", "")
+        if engine != "compiled":
+            for k in members:
+                out[k] = simulate(scenes[k])
+            continue
+        compiled = engines.get("grain")
+        if compiled.builder().needs_compile():
+            compiled.warm()
+        runs = compiled.module().simulate_many([scenes[k].model for k in members], num,
+                                               [scenes[k].start for k in members], duration, workers, why)
+        for k, m in zip(members, runs):
+            out[k] = m
+    return out
+
+
 class _Watch:
     """``on_step`` of a run: progress bar, time budget, and the stagnation guard of the phase loop."""
 

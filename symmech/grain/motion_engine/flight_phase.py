@@ -68,8 +68,9 @@ def _exact_records(p, y):
     """The exact flight's records (free_flight.FLIGHT, ROTATION) from the state y; a grain that does not rotate
     keeps its attitude (its rate, kept in y, is not applied)."""
     fl, rot = np.empty(ff.FLIGHT_SIZE), np.empty(ff.ROTATION_SIZE)
-    start = y.copy()
+    start = y
     if p[P_AT.rotation] == 0.0:
+        start = y.copy()
         start[X_AT.w:X_AT.w + 3] = 0.0
     ff.flight_setup(start, p[P_AT.g:P_AT.g + 3], p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase],
                     p[P_AT.direction:P_AT.direction + 3], p[P_AT.axes:P_AT.axes + 3],

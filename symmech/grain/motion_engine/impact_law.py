@@ -20,11 +20,12 @@ gi = kernels.load("grain_impact")
 
 
 @jit
-def _coulomb_impulse(K, u, e_n, e_t, mu):
-    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain)."""
+def _coulomb_impulse(K, u, e_n, e_t, mu, point_mass):
+    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain); ``point_mass``: K is
+    1/m times the identity (no rotation), solved by a division instead of LAPACK."""
     P_I = np.zeros(3)
     P_I[2] = -u[2] / K[2, 2]
-    D = -np.linalg.solve(K, u) - P_I
+    D = (-u / K[2, 2] if point_mass else -np.linalg.solve(K, u)) - P_I
     P = (1.0 + e_n) * P_I + (1.0 + e_t) * D
     d_t = math.hypot(D[0], D[1])
     p_t = math.hypot(P[0], P[1])
@@ -156,9 +157,9 @@ def impact(p, y, warns, carry):
     """The scene's impact law at the lowest point (``ImpactLaw.apply`` for one grain):
     (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""
     Q = rotation(y[X_AT.q:X_AT.q + 4])
-    R = contact_offset(p, Q)
     m = p[P_AT.mass]
     rotating = p[P_AT.rotation] != 0.0
+    R = contact_offset(p, Q) if rotating else np.zeros(3)  # without spin, u = v whatever R is
     v = y[X_AT.v:X_AT.v + 3].copy()
     w = Q @ y[X_AT.w:X_AT.w + 3] if rotating else np.zeros(3)
     u = v + cross(w, R)
@@ -181,9 +182,9 @@ def impact(p, y, warns, carry):
                 P = T
         if not (rotating and printed):
             if printed:
-                P = _coulomb_impulse(K, u, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf)
+                P = _coulomb_impulse(K, u, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf, not rotating)
             else:
-                P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
+                P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact], not rotating)
     v_after = v + P / m
     w_after = w + world_inv_inertia(p, Q) @ cross(R, P) if rotating else np.zeros(3)
     ke_before, ke_after = kinetic(p, Q, v, w), kinetic(p, Q, v_after, w_after)
@@ -192,7 +193,7 @@ def impact(p, y, warns, carry):
         warns = warn(warns, carry, W_ENERGY, ke_before, ke_after)
     after = y.copy()
     after[X_AT.v:X_AT.v + 3] = v_after
-    after[X_AT.w:X_AT.w + 3] = Q.T @ w_after
+    after[X_AT.w:X_AT.w + 3] = Q.T @ w_after if rotating else w_after
     log = np.empty(IMPACT_WIDTH)
     log[I_AT.v_before:I_AT.v_before + 3] = v
     log[I_AT.v_after:I_AT.v_after + 3] = v_after

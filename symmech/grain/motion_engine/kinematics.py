@@ -74,6 +74,8 @@ def inverse_effective_mass(p, Q, R):
 @jit
 def kinetic(p, Q, v, w):
     """Kinetic energy [J]; v, w (3,) in KXYZ."""
+    if w[0] == 0.0 and w[1] == 0.0 and w[2] == 0.0:  # no spin: the same sum without the product Q^T w
+        return 0.5 * p[P_AT.mass] * (v @ v)
     wb = Q.T @ w
     I = p[P_AT.inertia:P_AT.inertia + 3]
     return 0.5 * p[P_AT.mass] * (v @ v) + 0.5 * (I[0] * wb[0] ** 2 + I[1] * wb[1] ** 2 + I[2] * wb[2] ** 2)
@@ -87,6 +89,9 @@ def is_sphere(p):
 
 @jit
 def contact_velocity(p, y):
+    w = y[X_AT.w:X_AT.w + 3]
+    if w[0] == 0.0 and w[1] == 0.0 and w[2] == 0.0:  # no spin: the centre's, no rotation matrix to build
+        return y[X_AT.v + 2]
     Q = rotation(y[X_AT.q:X_AT.q + 4])
     return y[X_AT.v + 2] + cross(Q @ y[X_AT.w:X_AT.w + 3], contact_offset(p, Q))[2]
 

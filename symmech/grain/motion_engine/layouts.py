@@ -198,7 +198,7 @@ W_MAX_IMPACTS, W_CHATTER, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL,
 IMPACT_WIDTH = IMPACT_ROW.size
 TRAJECTORY_WIDTH = TRAJECTORY_ROW.size  # len(motion.TRAJECTORY_COLUMNS): tests/test_layouts.py
 
-PHASES_PER_CALL = 2000
+PHASES_PER_CALL = INT(2000)  # a numpy int: passed inside the loop (run_many), no literal overload of run
 COLD_COMPILE_SECONDS = 80.0  # wall time of the first compile, idle machine: 78 s (benchmarks/bench_grain_compile.py)
 ZENO_IMPACTS, ZENO_INTERVAL, MAX_IDLE_STEPS = motion.ZENO_IMPACTS, motion.ZENO_INTERVAL, motion.MAX_IDLE_STEPS
 MAX_STALLED_EVENTS = sliding.MAX_STALLED_EVENTS

@@ -3,8 +3,11 @@
 
 The Python side (parameters, results, errors, the entry it calls) is :mod:`symmech.grain.motion_engine.driver`,
 which imports no numba: a warm run whose loop was built ahead of time loads that build instead of
-this module. The physics, the event logic and their contract are described there."""
+this module. The physics, the event logic and their contract are described there. ``run_many`` runs a population
+in one call (the driver's ``simulate_many``): each grain exactly as ``run``, the results one grain after another."""
 from __future__ import annotations
+
+import numpy as np
 
 from symmech.numerics.jit import jit
 from symmech.grain.motion_engine.flight_phase import fly
@@ -12,7 +15,8 @@ from symmech.grain.motion_engine.kinematics import (
     contact_velocity, energy, gap, gap_noise, normal_force, velocity_noise)
 from symmech.grain.motion_engine.landing import bounce, land
 from symmech.grain.motion_engine.layouts import (
-    C_AT, DONE, FLIGHT, MAX_IDLE_STEPS, MORE, P_AT, ROT_FAIL, SLIDING, STALLED, W_MAX_IMPACTS, X_AT)
+    C_AT, DONE, FLIGHT, IMPACT_WIDTH, MAX_IDLE_STEPS, MORE, P_AT, PHASES_PER_CALL, ROT_FAIL, SLIDING, STALLED,
+    TRAJECTORY_WIDTH, W_MAX_IMPACTS, WARNING_WIDTH, X_AT)
 from symmech.grain.motion_engine.rows import record, warn
 from symmech.grain.motion_engine.sliding_phase import slide
 
@@ -85,3 +89,36 @@ def run(p, y, t_end, rows, imps, warns, carry, max_phases):
         carry[C_AT.e_end] = energy(p, y)
     return y, rows, imps, warns, status
 
+
+@jit
+def _append(into, n, rows, count):
+    """rows[:count] appended to into[:n] (doubled when full); returns (into, n + count)."""
+    if n + count > into.shape[0]:
+        grown = np.empty((max(2 * into.shape[0], n + count), into.shape[1]))
+        grown[:n] = into[:n]
+        into = grown
+    into[n:n + count] = rows[:count]
+    return into, n + count
+
+
+@jit
+def run_many(ps, ys, t_ends, row_hint, carries, statuses):
+    """A population, grain k = 0..n-1 after grain, each as ``run`` called until it is done or fails (no return to
+    Python between its phases): parameters ps (n, PARAMS.size), start states ys (n, STATE.size) replaced by the
+    final ones, ends t_ends (n,) [s], ``row_hint`` trajectory rows a grain's buffer starts with, carries
+    (n, CARRY.size) zeros filled as ``run``'s, statuses (n,) filled. Returns the trajectory, impact and warning rows
+    of every grain one after another (a grain's counts: its carry's rows, nimp, nwarn)."""
+    n = ys.shape[0]
+    rows, imps, warns = np.empty((row_hint, TRAJECTORY_WIDTH)), np.empty((64, IMPACT_WIDTH)), np.empty((8, WARNING_WIDTH))
+    all_rows, all_imps, all_warns = np.empty((n * row_hint, TRAJECTORY_WIDTH)), np.empty((64, IMPACT_WIDTH)), np.empty(
+        (8, WARNING_WIDTH))
+    nr, ni, nw = 0, 0, 0
+    for k in range(n):
+        y, status, carry = ys[k].copy(), MORE, carries[k]
+        while status == MORE:
+            y, rows, imps, warns, status = run(ps[k], y, t_ends[k], rows, imps, warns, carry, PHASES_PER_CALL)
+        ys[k], statuses[k] = y, status
+        all_rows, nr = _append(all_rows, nr, rows, int(carry[C_AT.rows]))
+        all_imps, ni = _append(all_imps, ni, imps, int(carry[C_AT.nimp]))
+        all_warns, nw = _append(all_warns, nw, warns, int(carry[C_AT.nwarn]))
+    return all_rows[:nr], all_imps[:ni], all_warns[:nw]

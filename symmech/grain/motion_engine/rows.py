@@ -18,7 +18,11 @@ def record(rows, carry, y, regime):
         grown[:n] = rows
         rows = grown
     rows[n, T_AT.t:T_AT.q + 4] = y[X_AT.t:X_AT.q + 4]  # t, r, v, q: both in the state's order
-    rows[n, T_AT.w:T_AT.w + 3] = rotation(y[X_AT.q:X_AT.q + 4]) @ y[X_AT.w:X_AT.w + 3]
+    w = y[X_AT.w:X_AT.w + 3]
+    if w[0] == 0.0 and w[1] == 0.0 and w[2] == 0.0:  # no spin (rotation off): no rotation matrix to build
+        rows[n, T_AT.w:T_AT.w + 3] = 0.0
+    else:
+        rows[n, T_AT.w:T_AT.w + 3] = rotation(y[X_AT.q:X_AT.q + 4]) @ w
     rows[n, T_AT.regime] = regime
     carry[C_AT.rows] = n + 1
     return rows
