@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 c314751b580f1fb3b9c5e6ed3e826bb2662db0711dd2ec6a06e57f14dc626cbf
+# symmech 0.1.0 generated module; inputs sha256 b2ce09f583e9496c98f0c6b5058d1f9abe39dffb09dae96482b6ea217c03a38d
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 c314751b580f1fb3b9c5e6ed3e826bb2662db0711dd2ec6a06e57f14dc626cbf
+# body sha256 b2ce09f583e9496c98f0c6b5058d1f9abe39dffb09dae96482b6ea217c03a38d
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
@@ -20,6 +20,7 @@ MODULES = {
     'grain_impact_printed': 'symmech.grain.printed',
     'grain_motion': 'symmech.grain.derive_motion',
     'grain_motion_printed': 'symmech.grain.printed_motion',
+    'grain_sliding': 'symmech.grain.derive_sliding',
     'smm_double_pendulum': 'symmech.smm.derive',
     'smm_excavator': 'symmech.smm.derive',
     'smm_formulas': 'symmech.smm.derive_formulas',
@@ -37,6 +38,7 @@ MODULES = {
 INPUTS = {
     'symmech.grain.derive': (),
     'symmech.grain.derive_motion': (),
+    'symmech.grain.derive_sliding': (),
     'symmech.grain.printed': (),
     'symmech.grain.printed_motion': (),
     'symmech.smm.derive': ('scenes', 'scenes/smm_double_pendulum.toml', 'scenes/smm_excavator.toml', 'scenes/smm_rotor_boom.toml', 'scenes/smm_spatial_boom.toml'),

@@ -31,10 +31,12 @@ def balanced(text: str) -> None:
     assert text.count(r"\bigl(") == text.count(r"\bigr)")
 
 
-# The largest expressions take 1-8 s each to lay out (19 s CPU in all): the slow tier prints them.
+# The largest expressions take 1-15 s each to lay out (~80 s CPU in all): the slow tier prints them.
 HEAVY = ("trolley_elastic_lagrange.rate", "trolley_elastic_lagrange.lagrange_residual",
          "trolley_elastic_lagrange.rate_mass", "smm_spatial_boom.rate", "smm_spatial_boom.c",
-         "smm_spatial_boom.rate_jacobian")
+         "smm_spatial_boom.rate_jacobian", "grain_sliding.stick_force", "grain_sliding.slip_direction",
+         "grain_sliding.slip_rate", "grain_sliding.stick_rate", "grain_sliding.stick_events",
+         "grain_sliding.friction_impulse")
 
 
 def _prints_in_short_balanced_lines(name, nm):

@@ -107,11 +107,16 @@ def _term_chunks(term) -> list[str]:
         factors = sympy.Mul.make_args(numer)
         long_sums = [f for f in factors if (f.is_Add or f.is_Pow) and _short(f, WIDTH) is None]
         rest = sympy.Mul(*[f for f in factors if f not in long_sums])
+        # a long factor of the denominator is opened as (...)^{-1}: a fraction cannot break across lines
+        denoms = sympy.Mul.make_args(denom)
+        long_denoms = [f for f in denoms if _short(f, WIDTH) is None]
+        short_denom = sympy.Mul(*[f for f in denoms if f not in long_denoms])
         out = ["" if rest == 1 else sympy.latex(rest) + " "]
-        if denom != 1:
-            out[0] += r"\frac{1}{" + sympy.latex(denom) + "} "
-        for f in long_sums:
-            inner = _term_chunks(f) if f.is_Pow else _wrap(r"\bigl(", chunks(f), r"\bigr)")
+        if short_denom != 1:
+            out[0] += r"\frac{1}{" + sympy.latex(short_denom) + "} "
+        pieces = [_term_chunks(f) if f.is_Pow else _wrap(r"\bigl(", chunks(f), r"\bigr)") for f in long_sums]
+        pieces += [_wrap(r"\bigl(", chunks(f), r"\bigr)^{-1}") for f in long_denoms]
+        for inner in pieces:
             out[-1] += inner[0]
             out += inner[1:]
         return [c.strip() for c in out if c.strip()]

@@ -44,12 +44,12 @@ n1, n2, n3 = sp.symbols("n1 n2 n3", real=True)
 _G = [(g, "gravitational acceleration", "m/s^2")]
 _INCL = [(alpha, "rise of the surface X axis above the horizontal", "rad"),
          (beta, "rise of the surface Y axis above the horizontal", "rad")]
-_VIB = [(A, "vibration amplitude", "m"), (omega, "vibration angular frequency", "rad/s"),
+VIBRATION_ARGS = [(A, "vibration amplitude", "m"), (omega, "vibration angular frequency", "rad/s"),
         (phase, "vibration phase at t = 0", "rad"),
         (dX, "vibration direction, X component (unit vector)", "1"),
         (dY, "vibration direction, Y component (unit vector)", "1"),
         (dZ, "vibration direction, Z component (unit vector)", "1")]
-_AXES = [(a, "semi-axis along body axis 1", "m"), (b, "semi-axis along body axis 2", "m"),
+AXES_ARGS = [(a, "semi-axis along body axis 1", "m"), (b, "semi-axis along body axis 2", "m"),
          (c, "semi-axis along body axis 3", "m")]
 _QUAT = [(q0, "orientation quaternion, scalar part", "1"),
          (q1, "orientation quaternion, x part", "1"),
@@ -58,7 +58,7 @@ _QUAT = [(q0, "orientation quaternion, scalar part", "1"),
 _NORMAL = [(n1, "plane normal in body axes, component 1 (third row of Q)", "1"),
            (n2, "plane normal in body axes, component 2", "1"),
            (n3, "plane normal in body axes, component 3", "1")]
-_INERTIA = [(I1, "principal moment of inertia, body axis 1", "kg*m^2"),
+INERTIA_ARGS = [(I1, "principal moment of inertia, body axis 1", "kg*m^2"),
             (I2, "principal moment of inertia, body axis 2", "kg*m^2"),
             (I3, "principal moment of inertia, body axis 3", "kg*m^2")]
 _RATES = [(w1, "angular velocity, body axis 1", "rad/s"), (w2, "angular velocity, body axis 2", "rad/s"),
@@ -67,10 +67,10 @@ _EULER = [(psi, "precession angle", "rad"), (theta, "nutation angle", "rad"), (p
 _STATE0 = [(x0, "relative centre position X at t0", "m"), (y0, "relative centre position Y at t0", "m"),
            (z0, "relative centre position Z at t0", "m"), (vx0, "relative centre velocity X at t0", "m/s"),
            (vy0, "relative centre velocity Y at t0", "m/s"), (vz0, "relative centre velocity Z at t0", "m/s")]
-_GK = [(gX, "gravity in KXYZ, X component", "m/s^2"), (gY, "gravity in KXYZ, Y component", "m/s^2"),
+GRAVITY_ARGS = [(gX, "gravity in KXYZ, X component", "m/s^2"), (gY, "gravity in KXYZ, Y component", "m/s^2"),
        (gZ, "gravity in KXYZ, Z component", "m/s^2")]
 _TIMES = [(t0, "start time of the flight", "s"), (t, "time", "s")]
-_STATE = [(rx, "relative centre position X", "m"), (ry, "relative centre position Y", "m"),
+STATE_ARGS = [(rx, "relative centre position X", "m"), (ry, "relative centre position Y", "m"),
           (rz, "relative centre position Z", "m"), (vx, "relative centre velocity X", "m/s"),
           (vy, "relative centre velocity Y", "m/s"), (vz, "relative centre velocity Z", "m/s")] + _QUAT + _RATES
 
@@ -288,14 +288,14 @@ def flight_dynamics() -> Dynamics:
     rate = sp.Matrix.vstack(sp.Matrix([vx, vy, vz]), acceleration, quaternion_rate(), euler_equations())
     contact = Event("contact", contact_gap(), "gap between the ellipsoid's lowest point and the plane", "m",
                     direction=-1, terminal=True)
-    return Dynamics(args_of(_STATE), args_of(_GK + _VIB + _INERTIA + _AXES), rate, time=Arg(t, "time", "s"),
+    return Dynamics(args_of(STATE_ARGS), args_of(GRAVITY_ARGS + VIBRATION_ARGS + INERTIA_ARGS + AXES_ARGS), rate, time=Arg(t, "time", "s"),
                     meaning="the grain in flight over the vibrating surface (eqs (61)-(62))", events=(contact,))
 
 
 def module_specs() -> list[ModuleSpec]:
-    t_args = args_of(_VIB + [(t, "time", "s")])
-    flight_args = args_of(_STATE0 + _GK + _VIB + _TIMES)
-    rigid_args = args_of(_STATE0 + _GK + _TIMES)
+    t_args = args_of(VIBRATION_ARGS + [(t, "time", "s")])
+    flight_args = args_of(_STATE0 + GRAVITY_ARGS + VIBRATION_ARGS + _TIMES)
+    rigid_args = args_of(_STATE0 + GRAVITY_ARGS + _TIMES)
     functions = [
         NamedMatrix("gravity", gravity_surface_frame(), args_of(_G + _INCL),
                     "gravity components in the surface frame KXYZ", "m/s^2", "61"),
@@ -309,15 +309,15 @@ def module_specs() -> list[ModuleSpec]:
                     "m, m/s", "61"),
         NamedMatrix("rotation_matrix", quaternion_matrix(), args_of(_QUAT),
                     "rotation matrix of a unit quaternion, body axes as columns in KXYZ", "1"),
-        NamedMatrix("support_distance", support_distance(), args_of(_AXES + _NORMAL),
+        NamedMatrix("support_distance", support_distance(), args_of(AXES_ARGS + _NORMAL),
                     "centre height above the plane when the ellipsoid touches it", "m", "63"),
-        NamedMatrix("contact_offset_body", contact_offset_body(), args_of(_AXES + _NORMAL),
+        NamedMatrix("contact_offset_body", contact_offset_body(), args_of(AXES_ARGS + _NORMAL),
                     "offset of the lowest point of the ellipsoid from its centre, in body axes", "m", "63"),
-        NamedMatrix("euler_equations", euler_equations(), args_of(_INERTIA + _RATES),
+        NamedMatrix("euler_equations", euler_equations(), args_of(INERTIA_ARGS + _RATES),
                     "torque-free Euler equations: body angular acceleration", "rad/s^2", "62"),
         NamedMatrix("quaternion_rate", quaternion_rate(), args_of(_QUAT + _RATES),
                     "quaternion rate for body-frame angular velocity", "1/s", "62"),
-        NamedMatrix("rotation_invariants", invariants(), args_of(_INERTIA + _RATES + _QUAT),
+        NamedMatrix("rotation_invariants", invariants(), args_of(INERTIA_ARGS + _RATES + _QUAT),
                     "rotational kinetic energy and angular momentum in KXYZ", "J, kg*m^2/s"),
         NamedMatrix("body_rates", body_rates_from_euler_rates() * sp.Matrix([psi_d, theta_d, phi_d]),
                     args_of(_EULER + [(psi_d, "precession rate", "rad/s"), (theta_d, "nutation rate", "rad/s"),
@@ -325,13 +325,13 @@ def module_specs() -> list[ModuleSpec]:
                     "body angular velocity (p, q, r) from Euler-angle rates", "rad/s", "43"),
         NamedMatrix("euler_rates", euler_rates_from_body_rates(), args_of(_EULER + _RATES),
                     "Euler-angle rates (psi', theta', phi') from body rates", "rad/s", "62"),
-        NamedMatrix("impact_contact", impact_contact(), args_of(_STATE + _INERTIA + _AXES + _MASS),
+        NamedMatrix("impact_contact", impact_contact(), args_of(STATE_ARGS + INERTIA_ARGS + AXES_ARGS + _MASS),
                     "inverse effective mass K (row by row) and velocity u of the lowest point, KXYZ", "1/kg, m/s"),
         NamedMatrix("plastic_impulse", plastic_impulse(), args_of(_K + _U),
                     "plastic normal impulse and the sticking impulse beyond it at the contact, KXYZ", "N*s"),
         NamedMatrix("coulomb_impulse", coulomb_impulse(), args_of(_PLASTIC + [_U[2]] + _LAW),
                     "energy-consistent Coulomb impulse (Chatterjee-Ruina) at the contact, KXYZ", "N*s"),
-        NamedMatrix("impact_state", impact_state(), args_of(_STATE + _INERTIA + _AXES + _MASS + _P),
+        NamedMatrix("impact_state", impact_state(), args_of(STATE_ARGS + INERTIA_ARGS + AXES_ARGS + _MASS + _P),
                     "state just after an impulse at the lowest point", "m, m/s, 1, rad/s"),
     ]
     return [ModuleSpec("grain_motion", "Grain motion: gravity, surface vibration, exact flight, "
