@@ -353,8 +353,11 @@ SHARDS = {
     "free_flight": ("symmech/grain/free_flight.py",
                     ["tests/test_grain_free_flight_record.py", "tests/test_grain_free_flight.py"], ["*"]),
     # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
-    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*"]),
-    "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS, ["*"]),
+    # with the rigid cloud's and the frame's own tests (1 s and 2 s)
+    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ["tests/test_elastic_invariants.py", *ELASTIC_TESTS],
+                            ["*"]),
+    "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ["tests/test_elastic_frame.py", *ELASTIC_TESTS],
+                             ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
     "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
