@@ -395,13 +395,8 @@ COVERAGE = {
     "symmech/trolley/elastic/membrane.py": "",
     "symmech/trolley/elastic/system.py": "one function only (quasi_static); a sample needs its integrating tests, "
                                          "10-15 s a survivor",
-    "symmech/trolley/elastic/body.py": "shard elastic_body_sample (seeded sample, the fast elastic tests, ~11 s a "
-                                       "survivor) made, not screened: the session's CPU went to the modules under "
-                                       "90 % and make mutate-check; shards of some functions ran by the old rules "
-                                       "(mutation/history.md)",
-    "symmech/trolley/elastic/frame.py": "shard elastic_frame_sample (seeded sample, the fast elastic tests) made, not "
-                                        "screened: the session's CPU went to the modules under 90 % and make "
-                                        "mutate-check; shard elastic_frame ran by the old rules (mutation/history.md)",
+    "symmech/trolley/elastic/body.py": "",
+    "symmech/trolley/elastic/frame.py": "",
     "symmech/trolley/elastic/simulate.py": "not screened: its functions are reached only through integrating tests "
                                            "(10-15 s a survivor); shards of some functions ran by the old rules "
                                            "(mutation/history.md)",
