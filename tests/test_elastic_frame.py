@@ -57,6 +57,13 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         assert np.allclose(a0, [[dV, V ** 2 * kappa, 0], [0, 4 * V ** 2 * kappa, 0]], rtol=0, atol=1e-7)
         assert np.allclose(w, [V * darboux, 2 * V * darboux], rtol=0, atol=1e-8)
         assert np.allclose(dw, [dV * darboux, 0 * darboux], rtol=0, atol=1e-7)
+        # the compiled engine's channels: load a0 + g0 ν, ω, ω̇, v0, row by row
+        channels = el_frame.frame_channels(fr, np.array([V, 2 * V]), np.array([dV, 0.0]), 9.81)
+        expected = [[dV, V ** 2 * kappa, 0, *V * darboux, *dV * darboux, V, 0, 0],
+                    [0, 4 * V ** 2 * kappa, 0, *2 * V * darboux, 0, 0, 0, 2 * V, 0, 0]]
+        expected = np.array(expected) + np.r_[9.81 * frame[:, 1], np.zeros(9)]
+        assert channels.shape == (2, 12)
+        assert np.allclose(channels, expected, rtol=0, atol=1e-7)
 
 
 def test_frame_turning_rate_follows_the_change_of_curvature():

@@ -75,3 +75,90 @@ def test_a_spin_about_the_normal_on_a_frictionless_plate_turns_the_grain_at_that
     assert abs(float(np.linalg.norm(res.q)) - 1.0) < 4e-16
     np.testing.assert_allclose(res.samples[3][0], turned_about_z(spin * 0.1, Q0), atol=1e-8)
     np.testing.assert_allclose(res.v, 0.0, atol=1e-15)
+
+
+@pytest.fixture
+def integrations(monkeypatch):
+    """Every solve_ivp call of the phase: (method, (t0, t1), y0, stick, status, [event sizes], y at its end)."""
+    import scipy.integrate
+
+    calls, solve_ivp = [], scipy.integrate.solve_ivp
+
+    def recorded(fun, span, y0, method, args, **options):
+        sol = solve_ivp(fun, span, y0, method=method, args=args, **options)
+        calls.append((method, span, np.array(y0), args[0], sol.status, [e.size for e in sol.t_events or []],
+                      sol.y[:, -1].copy()))
+        return sol
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", recorded)
+    return calls
+
+
+def slip_speed(y):
+    """|v + (w x R)_t| [m/s] of the ellipsoid of AXES in state y = (r, v, w, q, W, D)."""
+    R = support_point(AXES, flight.rotation_matrix(y[7:11]))
+    return float(np.hypot(*(y[2:4] + np.cross(y[4:7], R)[:2])))
+
+
+def s_stiff(tol, step, n0):
+    """The documented switch speed tol^(1/2) v_scale, v_scale = (|g| + |n(t0)|) step [m/s]."""
+    return math.sqrt(tol) * (G + abs(n0)) * step
+
+
+def test_a_sphere_sliding_to_rolling_reaches_five_sevenths_of_its_speed_by_dop853_alone(integrations):
+    """A sphere launched without spin slips until v = 5/7 v0 at t = 2 v0 / (7 mu g), then rolls (w_y = v / a);
+    the friction loss is m v0^2 / 7. Its B is isotropic (the identity times 7/2), so no slip is stiff: every chunk,
+    the slip's last ~s_stiff included, runs with DOP853."""
+    a, mu, v0 = 2e-3, 0.3, 0.1
+    sphere = sliding.Body((a, a, a), MASS, (0.4 * MASS * a * a,) * 3, True)
+    res = sliding.slide(still_plate(mu), sphere, 0.0, np.zeros(2), np.array([v0, 0.0]), np.array([1.0, 0, 0, 0]),
+                        np.zeros(3), 0.02, [], 1e-3, 1e-9)
+    assert 2 * v0 / (7 * mu * G) < 0.02
+    np.testing.assert_allclose(res.v, [5 / 7 * v0, 0.0], rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(res.w, [0.0, 5 / 7 * v0 / a, 0.0], rtol=1e-7, atol=1e-9)
+    assert res.dissipated == pytest.approx(MASS * v0 * v0 / 7, rel=1e-7)
+    assert {c[0] for c in integrations} == {"DOP853"}
+    assert [c[3] for c in integrations][:2] == [False, True]  # the slip, then the rolling (a stick)
+
+
+def test_a_tilted_ellipsoids_slip_coming_to_rest_goes_implicit_at_s_stiff(integrations):
+    """Anisotropic B: a slip from 0.02 m/s decelerates with DOP853 until its speed falls through s_stiff (an
+    event), the rest of the slip runs with Radau down to v_stop, and the stick that follows with DOP853."""
+    tol, step = 1e-9, 1e-3
+    sliding.slide(still_plate(0.3), ellipsoid(), 0.0, np.zeros(2), np.array([0.02, 0.0]), Q0.copy(), np.zeros(3),
+                  0.02, [], step, tol)
+    switch = s_stiff(tol, step, G)
+    assert [(c[0], c[3]) for c in integrations] == [("DOP853", False), ("Radau", False), ("DOP853", True)]
+    explicit, implicit, _ = integrations
+    assert explicit[5] == [0, 1]  # ended on the switch event
+    assert slip_speed(explicit[6]) == pytest.approx(switch, rel=1e-6)
+    assert slip_speed(implicit[2]) == pytest.approx(switch, rel=1e-6)
+    assert implicit[5] == [1, 0]  # ended on the slip's stop
+
+
+def test_a_slip_in_the_hysteresis_band_stays_implicit_across_a_chunk_and_leaves_it_at_twice_s_stiff(integrations):
+    """On a 0.3 rad incline (mu below the stick limit of the tilted ellipsoid's B) the stick ends near 0.0166 s
+    and a slip starts at 2 v_stop with Radau; a chunk (40 steps) ends while its speed is inside the band
+    [s_stiff, 2 s_stiff): the next chunk stays implicit, and the switch to DOP853 comes at 2 s_stiff."""
+    tol, step, incline = 1e-4, 1e-5, 0.3
+    plate = sliding.Sliding((G * math.sin(incline), 0.0, -G * math.cos(incline)),
+                            flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)), 0.2784)
+    sliding.slide(plate, ellipsoid(), 0.0, np.zeros(2), np.zeros(2), Q0.copy(), np.zeros(3), 0.0175, [], step, tol)
+    switch = s_stiff(tol, step, G * math.cos(incline))
+    slips = [c for c in integrations if not c[3]]
+    assert [c[0] for c in slips] == ["Radau", "Radau", "DOP853", "DOP853"]
+    first, second, third = slips[:3]
+    assert first[4] == 0 and first[1][1] == pytest.approx(first[1][0] + 40 * step, rel=1e-12)  # a chunk's end
+    assert switch < slip_speed(first[6]) < 2 * switch
+    assert second[5] == [0, 1] and slip_speed(second[6]) == pytest.approx(2 * switch, rel=1e-6)
+    assert slip_speed(third[2]) == pytest.approx(2 * switch, rel=1e-6)
+
+
+def test_a_start_at_zero_normal_force_is_a_lift_off_at_once():
+    """The surface accelerates down at exactly g at t0 (A omega^2 = g, phase pi/2): n(t0) = 0, so the phase ends
+    at t0, lifted, though n = g (1 - cos t) rises after it."""
+    plate = sliding.Sliding((0.0, 0.0, -G), flight.Vibration(G, 1.0, math.pi / 2, (0.0, 0.0, 1.0)), 0.3)
+    assert plate.normal(0.0) == 0.0 and plate.normal(0.05) > 0.0
+    res = sliding.slide(plate, ellipsoid(), 0.0, np.zeros(2), np.array([0.01, 0.0]), Q0.copy(), np.zeros(3), 0.1,
+                        [], 1e-3, 1e-9)
+    assert res.lifted and res.t == 0.0
+    np.testing.assert_array_equal(res.v, [0.01, 0.0])

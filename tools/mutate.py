@@ -354,8 +354,11 @@ SHARDS = {
     "free_flight": ("symmech/grain/free_flight.py",
                     ["tests/test_grain_free_flight_record.py", "tests/test_grain_free_flight.py"], ["*"]),
     # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
-    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ELASTIC_TESTS, ["*"]),
-    "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ELASTIC_TESTS, ["*"]),
+    # with the rigid cloud's and the frame's own tests (1 s and 2 s)
+    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ["tests/test_elastic_invariants.py", *ELASTIC_TESTS],
+                            ["*"]),
+    "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ["tests/test_elastic_frame.py", *ELASTIC_TESTS],
+                             ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
     "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
@@ -393,13 +396,8 @@ COVERAGE = {
     "symmech/trolley/elastic/membrane.py": "",
     "symmech/trolley/elastic/system.py": "one function only (quasi_static); a sample needs its integrating tests, "
                                          "10-15 s a survivor",
-    "symmech/trolley/elastic/body.py": "shard elastic_body_sample (seeded sample, the fast elastic tests, ~11 s a "
-                                       "survivor) made, not screened: the session's CPU went to the modules under "
-                                       "90 % and make mutate-check; shards of some functions ran by the old rules "
-                                       "(mutation/history.md)",
-    "symmech/trolley/elastic/frame.py": "shard elastic_frame_sample (seeded sample, the fast elastic tests) made, not "
-                                        "screened: the session's CPU went to the modules under 90 % and make "
-                                        "mutate-check; shard elastic_frame ran by the old rules (mutation/history.md)",
+    "symmech/trolley/elastic/body.py": "",
+    "symmech/trolley/elastic/frame.py": "",
     "symmech/trolley/elastic/simulate.py": "not screened: its functions are reached only through integrating tests "
                                            "(10-15 s a survivor); shards of some functions ran by the old rules "
                                            "(mutation/history.md)",
