@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 368f83723f8cc778ea00371fa177759ba86bd7e78451a46f24be7af43337ccb0
-# source key e8a4dc5ea35924341b44e24344ef9b271949882eec2358e15211c6b91ead14f8
+# symmech 0.1.0 generated module; inputs sha256 0bffdb2f30f6ed8312086f15100ff2ad5961492947b959c28a6e0f841df9663b
+# source key 2cffa2ebcb54b1ee81f31f5a993735e843d33d34d94ce206e809a8d23dd4877e
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 a9364d8563e8ead5569690ebf02e7677bcc11a2fca89bd6b2851400651fc06c6
-# source key afb53889f6611a0f1bd99c139799823621a21bcf9492b5a60eae9a9f7f0d4f14
+# symmech 0.1.0 generated module; inputs sha256 aae22db447cd785582d72f24f4b326598c48e8ee60ddf175644491e89c723617
+# source key 519222b3b19376baae6b1a422594e2cc4977448fef0aad85725e7bd59b1bf4e8
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 f4025b9b8ba171d5319cd071b9dc6d88cfcc62ea7706aae90a97c6b5fa239494
-// source key f613ef94ab3e6e9a4d4aae98cab3863e295cbc68adb0c4ee8145ea08ee59ec20
+// symmech 0.1.0 generated module; inputs sha256 1cf4249e083cb922fda962bef1522dd77d742bfa6282554081861a4ab64b2386
+// source key 9666d794d99e8ac73a45d0fc17ae0052f688f15207082450b4fa3cb5675d79f6
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

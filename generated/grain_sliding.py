@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d3f67282b0d6e0c980849a45386082b26aecaa3a513abb3c30cae1a389101347
-# source key b2e047009fb74a5609b7c7287266b9a470f0842eeb3f5cb533ceeab5383bc89a
+# symmech 0.1.0 generated module; inputs sha256 c3255e68b1a781010864c3da580cae15ccbb52ef27fc3bc0f5e13a9581ad132c
+# source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
 # body sha256 0c050407f0d09bbbd0057513e68f6bf534449991768f704903fa069467f2ad6c
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

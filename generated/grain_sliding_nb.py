@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2d55634409d2ff9619e4f82bd9ea3e37570a90c9a7170ee90a4c25501886b234
-# source key b2e047009fb74a5609b7c7287266b9a470f0842eeb3f5cb533ceeab5383bc89a
+# symmech 0.1.0 generated module; inputs sha256 4c83a48123e1c63961beda484c3f649f7083d83abf82574098d61a1b5c44c2c0
+# source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
 # body sha256 e8b5fbcc2a6b42dff8d1aa69d64e21c6c8f4f0177007152e65d99e310e2611a9
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2146f453aa48fa58fb25bc2138a333afbd122c5fd8d037f995842cafcb7d66a0
-# source key 2e4283cd86108f8a752a02ceeb9d4728e78fb21d064e03035c577c42716bf8fb
+# symmech 0.1.0 generated module; inputs sha256 16b611ab0a4deab7ed9c4600824529c8c73fae25d90275cf6a35bcfa508829b3
+# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 cd161cec7e82d55725775f0cbbbeac8c469cfe89ed48ce55e3f88c5972b302ae
-# source key 2e4283cd86108f8a752a02ceeb9d4728e78fb21d064e03035c577c42716bf8fb
+# symmech 0.1.0 generated module; inputs sha256 7b60983b7685d65b7c7dbbb3fc943fe406069fbb357e34a05a6f7417fca4e2e6
+# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 660b7c122eec55dc880673516d5d5d36a1b1553f399d59f10b4002541c528be5
-// source key 2e4283cd86108f8a752a02ceeb9d4728e78fb21d064e03035c577c42716bf8fb
+// symmech 0.1.0 generated module; inputs sha256 0a8afa197b15c932a60e24a227463d5552ee48df73002f07f0b007b8e44b68bb
+// source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 7eec63ec461d4fabd2bed956b5efcd383d0541d575fe44ac36617e3e9d02c66b
-// source key a42bfdccd2bfde0936b2b7c2d022417e90f5ddc3fee3ef8e33325491996a4be1
+// symmech 0.1.0 generated module; inputs sha256 399a3323d5d67c7c9a7afc01f4477cff78d7be870a4873594440a4c6db006602
+// source key 8b357e8adb397a290b2ceb744587b86b4b2afb55eee88a9ccb9c3dbb734eb6b5
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 63edd10bbad299e0733a9b475bab0e913d8631b22bb230c9deb015656215f21e
-# source key a42bfdccd2bfde0936b2b7c2d022417e90f5ddc3fee3ef8e33325491996a4be1
+# symmech 0.1.0 generated module; inputs sha256 2e4ce565af0a4356e9cbedeb754e33e986bd8dd7727aa5c3b72fe3482432c370
+# source key 8b357e8adb397a290b2ceb744587b86b4b2afb55eee88a9ccb9c3dbb734eb6b5
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

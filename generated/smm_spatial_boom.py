@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c3293d8e8159b540dae7294c60a196883cb989fcac11bd5b005be6468d45fbc9
-# source key 2e4283cd86108f8a752a02ceeb9d4728e78fb21d064e03035c577c42716bf8fb
+# symmech 0.1.0 generated module; inputs sha256 04596443a6ace72f5dd7c3b16b545c9e11e73c6dcf171fe4e2729e79915584e6
+# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

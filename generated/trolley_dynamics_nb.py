@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c00a52375d689bed72d29bf623db6abdeb21489d942808c0a313f25d8caef876
-# source key a7378bdccada3ed8cd491cef8b64810e79721cd800167e1354191c60645f1b7a
+# symmech 0.1.0 generated module; inputs sha256 abc15c5327f86d35439d8e6a1f20ee996410cef058ae731061909c14a428306d
+# source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

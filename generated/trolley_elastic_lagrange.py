@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 eb77ae40455f94e01ba703fcf22999797c6f1f316c220712dbcdcc0f3c671ceb
-# source key 34937845d1842ab94359148c8c9bebedf219c9d304edd3df195248dacb1e147f
+# symmech 0.1.0 generated module; inputs sha256 2b35c1daeb0caf07539e72552324aee49cfc70a7d26ebedf786d30be6ab3fcf9
+# source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 dd8669439fa438950a69dbaa49b30689bd6780cf2ea6a1dd1d3762d2aba4b267
-// source key 4adb217e8504a56ac33a459b70f584a3aa3bcc5b835c7aae6c00a5648619420b
+// symmech 0.1.0 generated module; inputs sha256 e1bea6ff0154cc32bcf4fb0979834e1b0de2d2ad5ce5a1fbab9f9eb6031df6f2
+// source key 69ccd57d8df7370a231481d9d830cad2b36cda42862fb4b387a0105880a43e55
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ae7007bb5a84bbe51589a1875feb0568c91a92d4c93822cca9f43e61d6ef068f
-# source key 4adb217e8504a56ac33a459b70f584a3aa3bcc5b835c7aae6c00a5648619420b
+# symmech 0.1.0 generated module; inputs sha256 f70820e6bf3ca783923dc847b50afc7a7ce6440f1535642537c6d33109d641ed
+# source key 69ccd57d8df7370a231481d9d830cad2b36cda42862fb4b387a0105880a43e55
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

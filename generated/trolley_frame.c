@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 80b335d095eb8817e51028633cf7465c867a6da468a79459b105ca7d2ade2b33
-// source key a7378bdccada3ed8cd491cef8b64810e79721cd800167e1354191c60645f1b7a
+// symmech 0.1.0 generated module; inputs sha256 fdb91e4a9a28d87b65e10a1278255eab2765ee4e67f63de3d590dc9e11304595
+// source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

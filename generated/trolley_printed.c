@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 6b703e8ee3dc7452575427fb5f30a1b407489e6f54964fe996e4745e04fa8fc0
-// source key 7935c1b0bd338b1c6a1a328a20db7410030a86248eb6cd4b211ee5d992970498
+// symmech 0.1.0 generated module; inputs sha256 7ce51eff7cd47013c2c515c298237f51ecee8035808ffdc2199cb9e860fe2b46
+// source key 8f52dbbce80fb2dd744c2281f5bf52dea12e1b735ff70be50c710f39bab7833f
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 40dfa60b85b3ff9bc4e36f21dd0bd2e07234905e83b9da138f20f8b1ab30ea50
-# source key 7935c1b0bd338b1c6a1a328a20db7410030a86248eb6cd4b211ee5d992970498
+# symmech 0.1.0 generated module; inputs sha256 810e0bc07c27ac2066a8cb7a895f49c964fd181c6d21d5872d7c3a80c7f3dc03
+# source key 8f52dbbce80fb2dd744c2281f5bf52dea12e1b735ff70be50c710f39bab7833f
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

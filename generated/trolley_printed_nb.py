@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b41d7654c2832797ff880192e0d0d23807d94919b5ad774cdefb94bee8339025
-# source key 7935c1b0bd338b1c6a1a328a20db7410030a86248eb6cd4b211ee5d992970498
+# symmech 0.1.0 generated module; inputs sha256 7fff7247b270cce851284ab66d2af539cf536c45e57bd54c73b4cae026c5bc74
+# source key 8f52dbbce80fb2dd744c2281f5bf52dea12e1b735ff70be50c710f39bab7833f
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -256,15 +256,31 @@ def inputs_hash(spec: ModuleSpec, target: Target = NUMPY) -> str:
         h.update(f"{f.name}|{f.meaning}|{f.unit}|{f.equations}".encode())
         for a in f.args:
             h.update(f"{a.name}|{a.meaning}|{a.unit}".encode())
-        h.update(_srepr_digest(sympy.ImmutableMatrix(f.matrix)))
+        h.update(_matrix_digest(sympy.ImmutableMatrix(f.matrix)))
     if spec.dynamics:  # the split of the arguments into t, y and p
         h.update(repr(_dynamics_context(spec.dynamics)).encode())
     return h.hexdigest()
 
 
-@functools.lru_cache(maxsize=256)  # srepr is the slow part and is the same for every target
-def _srepr_digest(matrix: sympy.ImmutableMatrix) -> bytes:
-    return hashlib.sha256(sympy.srepr(sympy.Matrix(matrix)).encode()).digest()
+@functools.lru_cache(maxsize=256)  # the same for every target
+def _matrix_digest(matrix: sympy.ImmutableMatrix) -> bytes:
+    """sha256 over the expression tree, each shared subexpression digested once: ``srepr`` of the whole matrix
+    writes a shared subtree out at every use (5 s for the grain's stick force alone)."""
+    memo: dict = {}
+    return b"".join(_tree_digest(e, memo) for e in (sympy.Integer(matrix.rows), sympy.Integer(matrix.cols), *matrix))
+
+
+def _tree_digest(expr: sympy.Basic, memo: dict) -> bytes:
+    """An atom by its ``srepr`` (name, assumptions, value), a node by its class and its arguments' digests in
+    sympy's canonical order (sorted on construction, independent of the hash seed)."""
+    key = (type(expr), expr)  # 2 and 2.0 are equal in sympy, and hash alike
+    digest = memo.get(key)
+    if digest is None:
+        h = hashlib.sha256(type(expr).__name__.encode() if expr.args else sympy.srepr(expr).encode())
+        for arg in expr.args:
+            h.update(_tree_digest(arg, memo))
+        digest = memo[key] = h.digest()
+    return digest
 
 
 # Source key of modules written outside `symmech codegen` (no cache entry).
