@@ -108,3 +108,13 @@ def spring_chain(masses, stiffnesses, end_stiffness=None, tension=0.0):
 
 def sorted_sqrt(w2):
     return np.sqrt(np.sort(np.asarray(w2)))
+
+
+def fd_hessian(f, n: int, h: float = 1e-4) -> np.ndarray:
+    """(n, n) Hessian of the scalar ``f`` at 0 by central differences of step ``h`` (error O(h^2))."""
+    H = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            ei, ej = np.eye(n)[i] * h, np.eye(n)[j] * h
+            H[i, j] = (f(ei + ej) - f(ei - ej) - f(-ei + ej) + f(-ei - ej)) / (4 * h * h)
+    return H

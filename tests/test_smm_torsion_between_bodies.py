@@ -6,7 +6,7 @@ from scipy.spatial.transform import Rotation
 
 from symmech.smm import numeric
 
-from smm_helpers import mech
+from smm_helpers import fd_hessian, mech
 
 K, M0 = 20.0, 3.0  # [N m/rad], [N m]
 N = np.array([0.0, 0.6, 0.8])
@@ -28,12 +28,7 @@ def test_the_twist_between_two_turning_bodies_has_their_cross_term():
                    {"name": "B", "mass": 2.0, "inertia": [0.2, 0.1, 0.3], "com": "CB", "turns": ["b"]}],
         "torsion_springs": [{"name": "t", "bodies": ["A", "B"], "stiffness": K, "preload": M0, "axis": N.tolist()}],
         "springs": [{"name": "s", "ends": ["CA", "W"], "stiffness": 0.0}]})
-    h = 1e-4
-    H = np.empty((2, 2))
-    for i in range(2):
-        for j in range(2):
-            ei, ej = np.eye(2)[i] * h, np.eye(2)[j] * h
-            H[i, j] = (twist(ei + ej) - twist(ei - ej) - twist(-ei + ej) + twist(-ei - ej)) / (4 * h * h)
+    H = fd_hessian(twist, 2)
     assert abs(H[0, 1] - N[1] / 2) < 1e-6  # -n . (e_x x e_z) / 2 = n_y / 2: the pair of a turn of each body
     d = np.array([-N[0], N[2]])
     np.testing.assert_allclose(numeric.assemble(m).c.toarray(), K * np.outer(d, d) + M0 * H, rtol=0, atol=1e-6)

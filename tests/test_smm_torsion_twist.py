@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 from symmech.smm import numeric
 from symmech.smm.model import Effects
 
-from smm_helpers import mech
+from smm_helpers import fd_hessian, mech
 
 K, M0 = 20.0, 3.0          # [N m/rad], [N m]
 N = np.array([0.0, 0.6, 0.8])
@@ -36,12 +36,7 @@ def test_twist_hessian_of_x_then_z_turns():
     """c = k (dtwist)(dtwist)^T + M0 d2twist (no gravity, a slack spring); dtwist = (n.e_x, n.e_z);
     without preload effects c = k (dtwist)(dtwist)^T alone."""
     m = _gimbal()
-    h = 1e-4
-    H = np.empty((2, 2))
-    for i in range(2):
-        for j in range(2):
-            ei, ej = np.eye(2)[i] * h, np.eye(2)[j] * h
-            H[i, j] = (twist(ei + ej) - twist(ei - ej) - twist(-ei + ej) + twist(-ei - ej)) / (4 * h * h)
+    H = fd_hessian(twist, 2)
     d = np.array([N[0], N[2]])
     c = numeric.assemble(m).c.toarray()
     np.testing.assert_allclose(c, K * np.outer(d, d) + M0 * H, rtol=0, atol=1e-6)
