@@ -36,5 +36,6 @@ def test_summary_of_two_bounces_is_the_closed_form_drops(monkeypatch):
         "energy_dissipated_by_impacts_J": pytest.approx(lost, rel=1e-9), "impacts_creating_energy": 0,
         "impacts_where_printed_law_is_inadmissible": 0, "impacts_where_printed_law_creates_energy": 0,
         "landings": 0, "rocking_contacts": 0, "energy_budget": budget, "engine": "compiled",
+        "engine_reason": "",
         "implicit_slip_steps": 0, "warnings": []}
     assert res.start is start and math.isclose(res.final.t, t0 + duration)
