@@ -365,10 +365,7 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
         return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
     engine, why = choose_engine(sc, num, t_end)
     if engine == "compiled":
-        compiled = engines.get("grain")
-        if compiled.builder().needs_compile():  # compile under the build lock, or load what a concurrent builder made
-            compiled.warm()
-        return compiled.run(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
+        return _compiled().run(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
     if num.engine == "auto":
         engines.get("grain").builder().warm_in_background()
     return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
@@ -388,14 +385,19 @@ def simulate_many(scenes: list, workers: int | None = None) -> list:
             for k in members:
                 out[k] = simulate(scenes[k])
             continue
-        compiled = engines.get("grain")
-        if compiled.builder().needs_compile():
-            compiled.warm()
-        runs = compiled.module().simulate_many([scenes[k].model for k in members], num,
-                                               [scenes[k].start for k in members], duration, workers, why)
+        runs = _compiled().module().simulate_many([scenes[k].model for k in members], num,
+                                                  [scenes[k].start for k in members], duration, workers, why)
         for k, m in zip(members, runs):
             out[k] = m
     return out
+
+
+def _compiled():
+    """The grain's compiled engine, ready: compiled under the build lock, or loaded as a concurrent builder made it."""
+    compiled = engines.get("grain")
+    if compiled.builder().needs_compile():
+        compiled.warm()
+    return compiled
 
 
 class _Watch:
