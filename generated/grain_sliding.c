@@ -1,6 +1,6 @@
-// symmech 0.1.0 generated module; inputs sha256 b3ee5cc0bfb601ae0eef29635c29b027ba8b37877ebfa2edbbbd1b032c41a161
-// source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
-// body sha256 5aa8a7bd2f2c7987eb7b23b7f424303a78e3c7a78d61e2708609f8edff38f926
+// symmech 0.1.0 generated module; inputs sha256 84f4334bccb41e9fe919456183c9f699a77ad7dd1ec8f3d3778b949f2e7113f5
+// source key a0e17d6d04e86e8194bd906f7227c477c187e3eb9adf2e3d18cc16d975bb1863
+// body sha256 366b188556699fb09d6eb00c07fa06e0af99a2dd605d3b1658259bf41001d72a
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 
    Source: symmech.grain.derive_sliding (the sliding model of symmech.grain.sliding).
@@ -711,5 +711,65 @@ void grain_sliding_friction_impulse(const double *sm_arg, double *out)
     out[10] = w1 + x14*x58 - x28*x56 + x38*x57;
     out[11] = w2 + x11*x58 + x39*x57 - x56*x7;
     out[12] = w3 + x22*x58 - x30*x56 + x40*x57;
+}
+
+/* state of the grain put on the plane (a landing after its plastic normal impulse): centre at the support height, v_z zero, the tilting spin dropped unless it rolls: (13) [m, m/s, 1, rad/s].
+   Arguments: rx [m], ry [m], rz [m], vx [m/s], vy [m/s], vz [m/s], q0 [1], q1 [1], q2 [1], q3 [1], w1 [rad/s], w2 [rad/s], w3 [rad/s], a [m], b [m], c [m], roll [1]. */
+void grain_sliding_rest_on_plane(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double rx = sm_arg[0];
+    const double ry = sm_arg[1];
+    const double vx = sm_arg[3];
+    const double vy = sm_arg[4];
+    const double q0 = sm_arg[6];
+    const double q1 = sm_arg[7];
+    const double q2 = sm_arg[8];
+    const double q3 = sm_arg[9];
+    const double w1 = sm_arg[10];
+    const double w2 = sm_arg[11];
+    const double w3 = sm_arg[12];
+    const double a = sm_arg[13];
+    const double b = sm_arg[14];
+    const double c = sm_arg[15];
+    const double roll = sm_arg[16];
+    const double x0 = pow(q1, 2);
+    const double x1 = pow(q2, 2);
+    const double x2 = pow(q3, 2);
+    const double x3 = 1.0/(pow(q0, 2) + x0 + x1 + x2);
+    const double x4 = 2*x3;
+    const double x5 = q0*x4;
+    const double x6 = q2*x5;
+    const double x7 = 2*q1*q3*x3 - x6;
+    const double x8 = q1*x5;
+    const double x9 = q3*x4;
+    const double x10 = q2*x9 + x8;
+    const double x11 = x1*x4;
+    const double x12 = x0*x4 - 1;
+    const double x13 = -x11 - x12;
+    const double x14 = w1*x7 + w2*x10 + w3*x13;
+    const double x15 = q3*x5;
+    const double x16 = q1*q2*x4 + x15;
+    const double x17 = 2*q2*q3*x3 - x8;
+    const double x18 = x2*x4;
+    const double x19 = -x12 - x18;
+    const double x20 = roll*(w1*x16 + w2*x19 + w3*x17);
+    const double x21 = -x11 - x18 + 1;
+    const double x22 = 2*q1*q2*x3 - x15;
+    const double x23 = q1*x9 + x6;
+    const double x24 = roll*(w1*x21 + w2*x22 + w3*x23);
+    for (int sm_i = 0; sm_i < 13; sm_i++) out[sm_i] = 0.0;
+    out[0] = rx;
+    out[1] = ry;
+    out[2] = sqrt(pow(a, 2)*pow(x7, 2) + pow(b, 2)*pow(x10, 2) + pow(c, 2)*pow(x13, 2));
+    out[3] = vx;
+    out[4] = vy;
+    out[6] = q0;
+    out[7] = q1;
+    out[8] = q2;
+    out[9] = q3;
+    out[10] = x14*x7 + x16*x20 + x21*x24;
+    out[11] = x10*x14 + x19*x20 + x22*x24;
+    out[12] = x13*x14 + x17*x20 + x23*x24;
 }
 

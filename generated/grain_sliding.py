@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 c3255e68b1a781010864c3da580cae15ccbb52ef27fc3bc0f5e13a9581ad132c
-# source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
-# body sha256 0c050407f0d09bbbd0057513e68f6bf534449991768f704903fa069467f2ad6c
+# symmech 0.1.0 generated module; inputs sha256 1061f0b179455402f97cef737f69c7f1e88881336606d0ab708cba11bf9fdfc0
+# source key a0e17d6d04e86e8194bd906f7227c477c187e3eb9adf2e3d18cc16d975bb1863
+# body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 
 Source: symmech.grain.derive_sliding (the sliding model of symmech.grain.sliding).
@@ -11,7 +11,7 @@ Needs numpy only.
 """
 import numpy
 
-__all__ = ["normal_force", "slip", "stick_force", "slip_direction", "slip_rate", "stick_rate", "slip_events", "stick_events", "friction_impulse"]
+__all__ = ["normal_force", "slip", "stick_force", "slip_direction", "slip_rate", "stick_rate", "slip_events", "stick_events", "friction_impulse", "rest_on_plane"]
 
 
 def _batch(*args):
@@ -1136,4 +1136,92 @@ def friction_impulse(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
     out[..., 10] = w1 + x14*x58 - x28*x56 + x38*x57
     out[..., 11] = w2 + x11*x58 + x39*x57 - x56*x7
     out[..., 12] = w3 + x22*x58 - x30*x56 + x40*x57
+    return out
+
+
+def rest_on_plane(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll):
+    """state of the grain put on the plane (a landing after its plastic normal impulse): centre at the support height, v_z zero, the tilting spin dropped unless it rolls.
+
+    Parameters
+    ----------
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+    roll : array_like
+        1: a sphere, rolling about any axis; 0: turning about the normal only [1]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 13)
+        [m, m/s, 1, rad/s]
+    """
+    (rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll,), batch = _batch(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll)
+    out = numpy.empty(batch + (13,))
+    x0 = q1**2
+    x1 = q2**2
+    x2 = q3**2
+    x3 = 1/(q0**2 + x0 + x1 + x2)
+    x4 = 2*x3
+    x5 = q0*x4
+    x6 = q2*x5
+    x7 = 2*q1*q3*x3 - x6
+    x8 = q1*x5
+    x9 = q3*x4
+    x10 = q2*x9 + x8
+    x11 = x1*x4
+    x12 = x0*x4 - 1
+    x13 = -x11 - x12
+    x14 = w1*x7 + w2*x10 + w3*x13
+    x15 = q3*x5
+    x16 = q1*q2*x4 + x15
+    x17 = 2*q2*q3*x3 - x8
+    x18 = x2*x4
+    x19 = -x12 - x18
+    x20 = roll*(w1*x16 + w2*x19 + w3*x17)
+    x21 = -x11 - x18 + 1
+    x22 = 2*q1*q2*x3 - x15
+    x23 = q1*x9 + x6
+    x24 = roll*(w1*x21 + w2*x22 + w3*x23)
+    out[..., 0] = rx
+    out[..., 1] = ry
+    out[..., 2] = numpy.sqrt(a**2*x7**2 + b**2*x10**2 + c**2*x13**2)
+    out[..., 3] = vx
+    out[..., 4] = vy
+    out[..., 5] = 0
+    out[..., 6] = q0
+    out[..., 7] = q1
+    out[..., 8] = q2
+    out[..., 9] = q3
+    out[..., 10] = x14*x7 + x16*x20 + x21*x24
+    out[..., 11] = x10*x14 + x19*x20 + x22*x24
+    out[..., 12] = x13*x14 + x17*x20 + x23*x24
     return out

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 4c83a48123e1c63961beda484c3f649f7083d83abf82574098d61a1b5c44c2c0
-# source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
-# body sha256 e8b5fbcc2a6b42dff8d1aa69d64e21c6c8f4f0177007152e65d99e310e2611a9
+# symmech 0.1.0 generated module; inputs sha256 c6c2017768f0ec645f1850bd754905f8cfb523386ce833e0973608819c62e201
+# source key a0e17d6d04e86e8194bd906f7227c477c187e3eb9adf2e3d18cc16d975bb1863
+# body sha256 1bab40246e5e6e63f22a9fd8f2a71da862a581c12ea356e37c1e078c16685d09
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 
 Compiled twin of `symmech.generated.grain_sliding` (the numpy module, the
@@ -33,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["normal_force", "normal_force_into", "normal_force_scalar", "slip", "slip_into", "slip_scalar", "stick_force", "stick_force_into", "stick_force_scalar", "slip_direction", "slip_direction_into", "slip_direction_scalar", "slip_rate", "slip_rate_into", "slip_rate_scalar", "stick_rate", "stick_rate_into", "stick_rate_scalar", "slip_events", "slip_events_into", "slip_events_scalar", "stick_events", "stick_events_into", "stick_events_scalar", "friction_impulse", "friction_impulse_into", "friction_impulse_scalar"]
+__all__ = ["normal_force", "normal_force_into", "normal_force_scalar", "slip", "slip_into", "slip_scalar", "stick_force", "stick_force_into", "stick_force_scalar", "slip_direction", "slip_direction_into", "slip_direction_scalar", "slip_rate", "slip_rate_into", "slip_rate_scalar", "stick_rate", "stick_rate_into", "stick_rate_scalar", "slip_events", "slip_events_into", "slip_events_scalar", "stick_events", "stick_events_into", "stick_events_scalar", "friction_impulse", "friction_impulse_into", "friction_impulse_scalar", "rest_on_plane", "rest_on_plane_into", "rest_on_plane_scalar"]
 
 
 def _flat(*args):
@@ -1440,4 +1440,123 @@ def friction_impulse(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, 
     _arrays, _steps, _batch = _flat(t, rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, gX, gY, gZ, A, omega, phase, dX, dY, dZ, I1, I2, I3, a, b, c, m, roll, target0, target1)
     out = numpy.empty((math.prod(_batch),) + (13,))
     (_friction_impulse_ploop if len(out) >= PARALLEL_BATCH else _friction_impulse_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (13,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rest_on_plane_0(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll, out, _k):
+    x0 = q1**2
+    x1 = q2**2
+    x2 = q3**2
+    x3 = 1/(q0**2 + x0 + x1 + x2)
+    x4 = 2*x3
+    x5 = q0*x4
+    x6 = q2*x5
+    x7 = 2*q1*q3*x3 - x6
+    x8 = q1*x5
+    x9 = q3*x4
+    x10 = q2*x9 + x8
+    x11 = x1*x4
+    x12 = x0*x4 - 1
+    x13 = -x11 - x12
+    x14 = w1*x7 + w2*x10 + w3*x13
+    x15 = q3*x5
+    x16 = q1*q2*x4 + x15
+    x17 = 2*q2*q3*x3 - x8
+    x18 = x2*x4
+    x19 = -x12 - x18
+    x20 = roll*(w1*x16 + w2*x19 + w3*x17)
+    x21 = -x11 - x18 + 1
+    x22 = 2*q1*q2*x3 - x15
+    x23 = q1*x9 + x6
+    x24 = roll*(w1*x21 + w2*x22 + w3*x23)
+    out[_k, 0] = rx
+    out[_k, 1] = ry
+    out[_k, 2] = math.sqrt(a**2*x7**2 + b**2*x10**2 + c**2*x13**2)
+    out[_k, 3] = vx
+    out[_k, 4] = vy
+    out[_k, 5] = 0
+    out[_k, 6] = q0
+    out[_k, 7] = q1
+    out[_k, 8] = q2
+    out[_k, 9] = q3
+    out[_k, 10] = x14*x7 + x16*x20 + x21*x24
+    out[_k, 11] = x10*x14 + x19*x20 + x22*x24
+    out[_k, 12] = x13*x14 + x17*x20 + x23*x24
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rest_on_plane_into(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll, out):
+    """state of the grain put on the plane (a landing after its plastic normal impulse): centre at the support height, v_z zero, the tilting spin dropped unless it rolls: floats in, written into out[0] (out: float64 (1, 13)) [m, m/s, 1, rad/s]."""
+    _rest_on_plane_0(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def rest_on_plane_scalar(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll):
+    """state of the grain put on the plane (a landing after its plastic normal impulse): centre at the support height, v_z zero, the tilting spin dropped unless it rolls: floats in, a float64 array (13,) out [m, m/s, 1, rad/s]."""
+    out = numpy.empty((1, 13))
+    rest_on_plane_into(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rest_on_plane_loop(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll, _steps, out):
+    for _k in range(out.shape[0]):
+        _rest_on_plane_0(rx[_k * _steps[0]], ry[_k * _steps[1]], rz[_k * _steps[2]], vx[_k * _steps[3]], vy[_k * _steps[4]], vz[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], w1[_k * _steps[10]], w2[_k * _steps[11]], w3[_k * _steps[12]], a[_k * _steps[13]], b[_k * _steps[14]], c[_k * _steps[15]], roll[_k * _steps[16]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _rest_on_plane_ploop(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _rest_on_plane_0(rx[_k * _steps[0]], ry[_k * _steps[1]], rz[_k * _steps[2]], vx[_k * _steps[3]], vy[_k * _steps[4]], vz[_k * _steps[5]], q0[_k * _steps[6]], q1[_k * _steps[7]], q2[_k * _steps[8]], q3[_k * _steps[9]], w1[_k * _steps[10]], w2[_k * _steps[11]], w3[_k * _steps[12]], a[_k * _steps[13]], b[_k * _steps[14]], c[_k * _steps[15]], roll[_k * _steps[16]], out, _k)
+
+
+def rest_on_plane(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll):
+    """state of the grain put on the plane (a landing after its plastic normal impulse): centre at the support height, v_z zero, the tilting spin dropped unless it rolls.
+
+    Parameters
+    ----------
+    rx : array_like
+        relative centre position X [m]
+    ry : array_like
+        relative centre position Y [m]
+    rz : array_like
+        relative centre position Z [m]
+    vx : array_like
+        relative centre velocity X [m/s]
+    vy : array_like
+        relative centre velocity Y [m/s]
+    vz : array_like
+        relative centre velocity Z [m/s]
+    q0 : array_like
+        orientation quaternion, scalar part [1]
+    q1 : array_like
+        orientation quaternion, x part [1]
+    q2 : array_like
+        orientation quaternion, y part [1]
+    q3 : array_like
+        orientation quaternion, z part [1]
+    w1 : array_like
+        angular velocity, body axis 1 [rad/s]
+    w2 : array_like
+        angular velocity, body axis 2 [rad/s]
+    w3 : array_like
+        angular velocity, body axis 3 [rad/s]
+    a : array_like
+        semi-axis along body axis 1 [m]
+    b : array_like
+        semi-axis along body axis 2 [m]
+    c : array_like
+        semi-axis along body axis 3 [m]
+    roll : array_like
+        1: a sphere, rolling about any axis; 0: turning about the normal only [1]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 13)
+        [m, m/s, 1, rad/s]
+    """
+    _arrays, _steps, _batch = _flat(rx, ry, rz, vx, vy, vz, q0, q1, q2, q3, w1, w2, w3, a, b, c, roll)
+    out = numpy.empty((math.prod(_batch),) + (13,))
+    (_rest_on_plane_ploop if len(out) >= PARALLEL_BATCH else _rest_on_plane_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (13,))

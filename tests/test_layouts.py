@@ -335,13 +335,13 @@ def test_every_index_into_a_vector_sized_by_the_model_reads_its_layout(path):
 
 
 def test_an_exported_models_value_references_follow_the_declared_reals():
-    """r[] of an export: time, 4 states, 2 derivatives, 3 outputs, 1 event indicator, 2 inputs, 5 parameters;
-    the first value reference of each block written down independently."""
+    """r[] of an export: time, 4 states, 2 derivatives, 3 outputs, 1 event indicator, 2 inputs, 5 parameters,
+    3 discrete states; the first value reference of each block written down independently."""
     from symmech.export.model import ExportModel
 
-    model = ExportModel("m", "", "", (), 4, 2, 2, 2, 0, 5, None, n_y=3, n_z=1)
+    model = ExportModel("m", "", "", (), 4, 2, 2, 2, 0, 5, None, n_y=3, n_z=1, n_d=3)
     assert model.layout() == {"VR_TIME": 0, "VR_X": 1, "VR_DX": 5, "VR_Y": 7, "VR_Z": 10, "VR_U": 11, "VR_P": 13,
-                              "N_REAL": 18}
+                              "VR_D": 18, "N_REAL": 21}
 
 
 def test_the_elastic_builds_record_covers_its_declared_layouts():

@@ -1,20 +1,28 @@
-"""The grain (kind ``grain``) as an exported model: flight and impacts as state events.
+"""The grain (kind ``grain``) as an exported model: flight, slip and stick as its regimes, impacts, landings,
+stops and lift-offs as state events.
 
-The flight is the generated dynamics of ``grain_motion`` (13 states: centre position and velocity relative to the
-vibrating surface in KXYZ, orientation quaternion, body-axis angular velocity); the event indicator is its generated
-contact gap (``event_values``, falling through zero at contact) and the map applied at the event its generated
-``impact_contact`` (K and u of the lowest point), ``plastic_impulse``, ``coulomb_impulse`` (the energy-consistent
-Coulomb law) and ``impact_state`` in turn, as the FMI Reference FMUs' BouncingBall applies its restitution at the event. Names: the native trajectory's columns (``x`` ... ``q3``), the body-axis
-rates as in the impacts table (``w1`` ... ``w3``). Parameters: the scene's fields as the generated equations take
-them (gravity in KXYZ from ``surface``, the vibration, the inertia and mass from ``body``, the impact law).
+The states are the flight's 13 of the generated ``grain_motion`` (centre position and velocity relative to the
+vibrating surface in KXYZ, orientation quaternion, body-axis angular velocity), kept through every regime; the
+regime (flight, slip, stick) is a discrete state. In flight the rates are ``grain_motion``'s and the event
+indicator its contact gap; on the plane the rates and the two indicators are the generated ``grain_sliding``'s
+(slip: the slip along its reference direction minus v_stop, and the normal force; stick: the friction cone's
+margin and the normal force). At the events the hand-written ``c/grain.c`` takes the native engine's decisions
+with its thresholds and calls the generated maps: the impact (``impact_contact``, ``plastic_impulse``,
+``coulomb_impulse``, ``impact_state``), the landing (the plastic normal impulse, ``rest_on_plane``), the friction
+impulse of a stop or a cone exit (``friction_impulse``), the lift-off. Names: the native trajectory's columns
+(``x`` ... ``q3``), the body-axis rates as in the impacts table (``w1`` ... ``w3``). Parameters: the scene's fields
+as the generated equations take them (gravity in KXYZ from ``surface``, the vibration, the inertia and mass from
+``body``, the impact law, the sliding friction) and the native engine's numerics that decide its transitions.
 
-Covered: accurate mode, the Coulomb law with a friction limit, rotation on, flight and impacts until the native
-run's first landing (a bounce sequence that ends below ``numerics.rest_velocity``, then sliding): a scene whose
-duration reaches it is refused in one line naming the duration and the landing time, as is anything else not
-covered (docs/export.md).
+Covered: accurate mode, the Coulomb law with a friction limit, rotation on. Model Exchange follows every regime (the
+importer's solver meets the stiff slip); Co-Simulation and the C program integrate with the FMU's own DOP853, which
+has no stiff slip: they cover flight and impacts until the native run's first landing, and a scene whose duration
+reaches it is refused in one line naming the duration and the landing time, as is anything else not covered
+(docs/export.md).
 """
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
@@ -22,16 +30,33 @@ import numpy as np
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
 from symmech.export.model import REALS, ExportModel, Variable
+from symmech.export.sources import glue
 
-MODULE = "grain_motion"
+IDENTIFIER = "grain"
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz", "q0", "q1", "q2", "q3", "w1", "w2", "w3")
-# parameters of the impact map beyond the dynamics' (after them in r[]): name, unit, description
+# parameters beyond the flight dynamics' (after them in r[]): name, unit, description
 LAW = (("m", "kg", "grain mass (body.mass, or body.density times the ellipsoid's volume)"),
        ("e_n", "1", "normal restitution coefficient (impact.e_n)"),
        ("e_t", "1", "tangential restitution coefficient (impact.e_t)"),
        ("mu", "1", "friction coefficient of the impact (impact.mu)"))
-# a gap below -LEFT_FLIGHT x the length scale without an impact: the grain has come to rest on the surface (two
-# crossings within one step of the importer, at the end of a bounce sequence) and would slide
+SLIDING = (("mu_s", "1", "sliding friction coefficient (sliding.friction)"),
+           ("roll", "1", "1: a sphere, rolling about any axis on the plane; 0: an ellipsoid, turning about the "
+                         "normal only (from body.semi_axes)"),
+           ("tolerance", "1", "the native engine's tolerance (numerics.tolerance): v_stop = tolerance (|g| + |n|) "
+                              "scan_step at a landing"),
+           ("scan_step", "s", "the native engine's scan step (numerics.scan_step): v_stop's time scale"),
+           ("rest_velocity", "m/s", "a bounce whose contact point leaves slower than this lands "
+                                    "(numerics.rest_velocity)"),
+           ("period", "s", "vibration period (1 s without vibration): the chatter guard's time scale"))
+# the discrete states (r[VR_D...]): name, unit, description, exported as an output; the chatter guard's ring of
+# the last ZENO_IMPACTS impact times follows them
+DISCRETE = (("regime", "1", "regime: 0 flight, 1 slip, 2 stick", True),
+            ("v_stop", "m/s", "slip speed at which a slip stops (set at each landing)", True),
+            ("ref0", "1", "the slip's reference direction, X component", False),
+            ("ref1", "1", "the slip's reference direction, Y component", False),
+            ("impacts", "1", "number of impacts so far", True))
+# a gap below -LEFT_FLIGHT x the length scale without an impact: the grain has sunk into the surface (two
+# crossings within one step of the importer)
 LEFT_FLIGHT = 1e-6
 # where each dynamics parameter comes from in the scene
 SOURCE = {"gX": "surface.alpha_deg, beta_deg, g", "gY": "surface.alpha_deg, beta_deg, g",
@@ -39,11 +64,18 @@ SOURCE = {"gX": "surface.alpha_deg, beta_deg, g", "gY": "surface.alpha_deg, beta
           "phase": "vibration.phase_deg", "dX": "vibration.direction", "dY": "vibration.direction",
           "dZ": "vibration.direction", "I1": "body", "I2": "body", "I3": "body", "a": "body.semi_axes",
           "b": "body.semi_axes", "c": "body.semi_axes"}
+INDICATORS = (("indicator1", "1", "event indicator 1: in flight the gap [m] (an impact or a landing where it falls "
+                                  "through zero), in a slip the slip along its reference direction minus v_stop "
+                                  "[m/s] (the slip stops), in a stick the friction cone's margin mu n - |phi| "
+                                  "[m/s^2] (a slip starts)"),
+              ("indicator2", "1", "event indicator 2: in flight 1, on the plane the normal force per unit mass "
+                                  "[m/s^2] (lift-off where it falls through zero)"))
 
 
-def load(scene) -> ExportModel:
-    """The export model of a loaded grain scene (``pipeline.load``'s); SymmechError (exit 2), naming the field
-    and its value, for a scene whose regimes the export does not cover."""
+def load(scene, sliding: bool = True) -> ExportModel:
+    """The export model of a loaded grain scene (``pipeline.load``'s); ``sliding`` False for an export whose own
+    integrator runs it (Co-Simulation, the C folder), which follows flight and impacts only. SymmechError (exit 2),
+    naming the field and its value, for a scene whose regimes the export does not cover."""
     sc = scene.setup
     law, effects = sc.model.law, sc.model.effects
     if sc.numerics.mode != "accurate":
@@ -57,11 +89,16 @@ def load(scene) -> ExportModel:
     if not effects.rotation:
         raise SymmechError("effects.rotation = false: `symmech export` covers the rotating grain only (the impact "
                            "map is the rotating body's)")
+    if sliding:
+        from symmech.grain import motion_scene
+
+        return grain(sc, native_table(motion_scene.simulate(sc).trajectory, sc.numerics.sample_interval))
     trajectory, landing = native_run(sc)
     if landing is not None:
         raise SymmechError(f"duration = {sc.duration:g}: the grain lands on the surface and slides at t = "
-                           f"{landing:.6g} s (the native run), a regime the export does not cover; a duration "
-                           f"below {landing:.6g} s exports")
+                           f"{landing:.6g} s (the native run); Co-Simulation and the C folder integrate with their "
+                           "own DOP853, which follows flight and impacts only: export it for Model Exchange "
+                           f"(--type me), or a duration below {landing:.6g} s")
     return grain(sc, native_table(trajectory, sc.numerics.sample_interval))
 
 
@@ -102,23 +139,25 @@ def native_table(trajectory: np.ndarray, interval: float) -> Table:
 
 def grain(sc, native: Table | None) -> ExportModel:
     """The export model of a prepared grain scene (``symmech.grain.motion_scene.GrainScene``) whose native run's
-    trajectory on the sample grid is ``native``: the generated ``grain_motion`` module's C twin, its layouts
-    read from the numpy module (no sympy)."""
+    trajectory on the sample grid is ``native``: the hand-written regimes of ``c/grain.c`` over the C twins of the
+    generated ``grain_motion`` and ``grain_sliding``, their layouts read from the numpy modules (no sympy)."""
     import importlib.resources
-    import inspect
 
     from symmech.generated import grain_motion as gm
+    from symmech.grain import motion
 
     model, start = sc.model, sc.start
     vib = model.vibration
-    params = [name for name, _, _ in gm.PARAMS]
-    p = dict(zip(params, (*model.g_k, vib.amplitude, vib.omega, vib.phase, *vib.direction, *model.inertia,
-                          *model.axes)))
-    p.update(m=model.mass, e_n=model.law.e_n, e_t=model.law.e_t, mu=model.law.mu)
+    params = [name for name, _, _ in gm.PARAMS] + [name for name, _, _ in LAW + SLIDING]
+    values = dict(zip(params, (*model.g_k, vib.amplitude, vib.omega, vib.phase, *vib.direction, *model.inertia,
+                               *model.axes, model.mass, model.law.e_n, model.law.e_t, model.law.mu, model.mu,
+                               1.0 if max(model.axes) == min(model.axes) else 0.0, sc.numerics.tolerance,
+                               sc.numerics.scan_step, sc.numerics.rest_velocity, model.period)))
     y0 = np.concatenate([start.r, start.v, start.q, start.w])
     nominal = _nominals(sc)
     n = len(gm.STATE)
-    reals = REALS.sized(X=n, DX=n, Y=0, Z=len(gm.EVENTS), U=0, P=len(gm.PARAMS) + len(LAW))
+    n_d = len(DISCRETE) + motion.ZENO_IMPACTS
+    reals = REALS.sized(X=n, DX=n, Y=0, Z=len(INDICATORS), U=0, P=len(params), D=n_d)
     x, dx = reals.offset("x"), reals.offset("dx")
     variables = [Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")]
     for i, (name, (_, unit, meaning)) in enumerate(zip(STATE_NAMES, gm.STATE)):
@@ -128,31 +167,67 @@ def grain(sc, native: Table | None) -> ExportModel:
     for i, (name, (_, unit, _)) in enumerate(zip(STATE_NAMES, gm.STATE)):
         variables.append(Variable(f"der({name})", dx + i, "output", "continuous", rate_unit[unit],
                                   f"rate of {name}", derivative_of=x + i))
-    ((_, _, _, unit, meaning),) = gm.EVENTS
-    variables.append(Variable("gap", reals.offset("z"), "output", "continuous", unit,
-                              f"{meaning} (the event indicator: an impact where it falls through zero)"))
-    vr = reals.offset("p")
-    for k, (name, unit, meaning) in enumerate(gm.PARAMS):
-        variables.append(Variable(name, vr + k, "parameter", "tunable", unit, f"{meaning} (from {SOURCE[name]})",
-                                  float(p[name])))
-    vr += len(gm.PARAMS)
-    for k, (name, unit, meaning) in enumerate(LAW):
-        variables.append(Variable(name, vr + k, "parameter", "tunable", unit, meaning, float(p[name])))
-    # the impact map: K and u of the contact, the plastic impulses, the law's impulse P, the state after; arguments
-    # as C expressions
-    where = {name: f"y[{i}]" for i, (name, _, _) in enumerate(gm.STATE)}
-    where.update((name, f"p[{k}]") for k, name in enumerate(params + [x[0] for x in LAW]))
-    where.update((f"k{i}", f"s0[{i}]") for i in range(9))
-    where.update((f"u{i}", f"s0[{9 + i}]") for i in range(3))
-    where.update(zip(("P_I", "D0", "D1", "D2"), (f"s1[{i}]" for i in range(4))))
-    where.update((f"P{i}", f"s2[{i}]") for i in range(3))
-    stages = tuple((f"{MODULE}_{f.__name__}", tuple(where[a] for a in inspect.signature(f).parameters), size)
-                   for f, size in ((gm.impact_contact, 12), (gm.plastic_impulse, 4), (gm.coulomb_impulse, 3),
-                                   (gm.impact_state, n)))
-    source = importlib.resources.files("symmech.generated").joinpath(f"{MODULE}.c").read_text(encoding="utf-8")
-    return ExportModel(MODULE, gm.__doc__.strip().splitlines()[0], source, tuple(variables), n, n, 0, 0, 0,
-                       len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages,
-                       event_tolerance=LEFT_FLIGHT * nominal[0], mass_identity=n)
+    variables += [Variable(name, reals.offset("z") + k, "output", "continuous", unit, meaning)
+                  for k, (name, unit, meaning) in enumerate(INDICATORS)]
+    units = {name: unit for name, unit, _ in gm.PARAMS}
+    meanings = {name: f"{meaning} (from {SOURCE[name]})" for name, _, meaning in gm.PARAMS}
+    units.update((name, unit) for name, unit, _ in LAW + SLIDING)
+    meanings.update((name, meaning) for name, _, meaning in LAW + SLIDING)
+    variables += [Variable(name, reals.offset("p") + k, "parameter", "tunable", units[name], meanings[name],
+                           float(values[name])) for k, name in enumerate(params)]
+    variables += [Variable(name, reals.offset("d") + k, "output", "discrete", unit, meaning, 0.0)
+                  for k, (name, unit, meaning, shown) in enumerate(DISCRETE) if shown]
+    source = "\n".join(_prelude(params)) + "\n" + glue("grain.c")
+    modules = tuple((name, importlib.resources.files("symmech.generated").joinpath(f"{name}.c").read_text(
+        encoding="utf-8")) for name in ("grain_motion", "grain_sliding"))
+    return ExportModel(IDENTIFIER, "Grain on a vibrating plane: flight, impacts, slip and stick (symmech)", source,
+                       tuple(variables), n, n, 0, 0, 0, len(params), native, n_z=len(INDICATORS), n_d=n_d,
+                       modules=modules, event_tolerance=LEFT_FLIGHT * nominal[0], mass_identity=n)
+
+
+# the generated functions c/grain.c calls (module, function), each through a gatherer call_<function>(t, y, p, a,
+# out) of its arguments: the time, the state y, the parameters and discrete states p, the rest in order from a
+CALLED = (("grain_sliding", ("normal_force", "slip", "stick_force", "slip_direction", "slip_rate", "stick_rate",
+                             "slip_events", "stick_events", "friction_impulse", "rest_on_plane")),
+          ("grain_motion", ("impact_contact", "plastic_impulse", "coulomb_impulse", "impact_state")))
+# the parameters and discrete states c/grain.c reads by name: its macro, the first name
+READ = (("P_G", "gX"), ("P_AMPLITUDE", "A"), ("P_OMEGA", "omega"), ("P_AXES", "a"), ("P_MU_S", "mu_s"),
+        ("P_TOLERANCE", "tolerance"), ("P_SCAN_STEP", "scan_step"), ("P_REST_VELOCITY", "rest_velocity"),
+        ("P_PERIOD", "period"))
+
+
+def _prelude(params: list[str]) -> list[str]:
+    """The C lines before ``c/grain.c``: the offsets it reads, the chatter guard's constants and the gatherers
+    of the generated functions' arguments (read from the numpy modules' signatures)."""
+    import importlib
+
+    from symmech.generated import grain_motion as gm
+    from symmech.grain import motion
+
+    discrete = [name for name, _, _, _ in DISCRETE]
+    lines = [f"/* {IDENTIFIER}: the regimes of c/grain.c over the generated grain_motion and grain_sliding (written "
+             "by `symmech export`) */", '#include "model.h"']
+    lines += [f"#define {macro} {params.index(name)}" for macro, name in READ]
+    lines += [f"#define D_{name.upper()} {k}" for k, name in enumerate(discrete[:2])]
+    lines += ["#define D_REF 2", f"#define D_IMPACTS {discrete.index('impacts')}", f"#define D_TIMES {len(discrete)}",
+              f"#define ZENO_IMPACTS {motion.ZENO_IMPACTS}", f"#define ZENO_INTERVAL {motion.ZENO_INTERVAL!r}"]
+    lines += [f"void grain_motion_{f}(double t, const double *y, const double *p, double *out);"
+              for f in ("rate", "event_values")]
+    where = {"t": "t"}
+    where.update((name, f"y[{i}]") for i, (name, _, _) in enumerate(gm.STATE))
+    where.update((name, f"p[{k}]") for k, name in enumerate(params))
+    where.update((name, f"p[N_P + {discrete.index(name)}]") for name in ("v_stop", "ref0", "ref1"))
+    for module, functions in CALLED:
+        generated = importlib.import_module(f"symmech.generated.{module}")
+        for f in functions:
+            names = list(inspect.signature(getattr(generated, f)).parameters)
+            rest = [a for a in names if a not in where]
+            args = ", ".join(where.get(a) or f"a[{rest.index(a)}]" for a in names)
+            lines += [f"void {module}_{f}(const double *arg, double *out);",
+                      f"static void call_{f}(double t, const double *y, const double *p, const double *a, double *out)",
+                      "{", "    (void)t; (void)y; (void)p; (void)a;", f"    const double arg[] = {{{args}}};",
+                      f"    {module}_{f}(arg, out);", "}"]
+    return lines
 
 
 def _nominals(sc) -> list[float]:

@@ -33,6 +33,8 @@ REALS = Layout("ExportReals", (
     Field("z", "", "the event indicators", ("Z",)),
     Field("u", "", "the inputs", ("U",)),
     Field("p", "", "the parameters", ("P",)),
+    Field("d", "", "the discrete states (a model with regimes), read by its functions of (t, y, p) at p[N_P + i]",
+          ("D",)),
 ))
 # generalized force unit by coordinate unit
 FORCE_UNIT = {"m": "N", "rad": "N m"}
@@ -87,17 +89,15 @@ class ExportModel:
     def c_files(self) -> tuple[str, ...]:
         """The model's C files (the physics), ``<identifier>.c`` first."""
         return (f"{self.identifier}.c", *(f"{name}.c" for name, _ in self.modules))
-    # state events: n_z event indicators r[VR_Z:VR_Z + n_z] (the generated ``event_values``) and the map of the
-    # state applied where one falls to zero: generated functions called in turn, each a stage (C name, its
-    # arguments as C expressions of y, p and the earlier stages' outputs s0[], s1[]..., its output size); the
-    # last one's output is the state after
+    # state events: n_z event indicators r[VR_Z:VR_Z + n_z] (``<identifier>_event_values``) and, where one falls
+    # through zero, ``<identifier>_event_update`` of the state and the n_d discrete states r[VR_D:VR_D + n_d]
     n_z: int = 0
-    event_map: tuple[tuple[str, tuple[str, ...], int], ...] = ()
+    n_d: int = 0
     event_tolerance: float = 0.0  # an indicator below -event_tolerance without its event: the model left its regime
 
     def layout(self) -> dict[str, int]:
         """First value reference of each block of ``r[]`` (:data:`REALS`) and its size (``N_REAL``)."""
-        reals = REALS.sized(X=self.n_x, DX=self.n_dx, Y=self.n_y, Z=self.n_z, U=self.n_u, P=self.n_p)
+        reals = REALS.sized(X=self.n_x, DX=self.n_dx, Y=self.n_y, Z=self.n_z, U=self.n_u, P=self.n_p, D=self.n_d)
         return {**{f"VR_{name.upper()}": reals.offset(name) for name in reals.names}, "N_REAL": reals.size}
 
 
@@ -146,7 +146,7 @@ def mechanism(setup, native: Table | None) -> ExportModel:
     v0 = list(ini.get("qdot") or [0.0] * n)
     q_nominal, v_nominal = _nominals(m, q0, v0)
     names = [_structured(c.name) for c in m.coordinates]
-    reals = REALS.sized(X=2 * n, DX=n, Y=0, Z=0, U=n, P=len(m.parameters))  # x = (q, q'), dx = q'', u = Q
+    reals = REALS.sized(X=2 * n, DX=n, Y=0, Z=0, U=n, P=len(m.parameters), D=0)  # x = (q, q'), dx = q'', u = Q
     q, qd, qdd = reals.offset("x"), reals.offset("x") + n, reals.offset("dx")
     variables = [Variable("time", reals.offset("time"), "independent", "continuous", "s", "simulation time")]
     for i, c in enumerate(m.coordinates):

@@ -77,7 +77,7 @@ def elastic(setup, run: dict) -> ExportModel:
                            "or speed): `symmech export` needs the compiled engine's table")
     names, units = state_layout(system)
     n, columns = len(names), output_columns(setup.names)
-    reals = REALS.sized(X=2 * n, DX=n, Y=len(columns), Z=0, U=0, P=len(parameters(system)) * 5)
+    reals = REALS.sized(X=2 * n, DX=n, Y=len(columns), Z=0, U=0, P=len(parameters(system)) * 5, D=0)
     variables = [time_variable(reals), *_motion_variables(reals, [
         (names[i], units[i], f"coordinate {names[i]}", f"der({names[i]})", run["q"][:, i], run["qd"][:, i])
         for i in range(n)])]
@@ -113,7 +113,7 @@ def traction(setup, run: dict, law) -> ExportModel:
                         run["s"], run["V0"]))
     columns = output_columns(setup.names)[1:]  # s is a state
     m = len(coordinates)
-    reals = REALS.sized(X=2 * m, DX=m, Y=len(columns), Z=0, U=1, P=len(parameters(system)) * 5)
+    reals = REALS.sized(X=2 * m, DX=m, Y=len(columns), Z=0, U=1, P=len(parameters(system)) * 5, D=0)
     variables = [time_variable(reals), *_motion_variables(reals, coordinates)]
     variables += [Variable(c.name, reals.offset("y") + k, "output", "continuous", c.unit, c.doc)
                   for k, c in enumerate(columns)]

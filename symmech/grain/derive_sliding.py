@@ -8,7 +8,9 @@ z and v_z hold still (z' = v_z' = 0), v_t' = f + phi, q' = q (x) (0, w)/2 and th
 (phi, n)) (the time derivative of Q^T w_K is Q^T w_K': the spin keeps its own axis). The regime's events are
 functions here too: the slip speed along a reference direction falling to v_stop, the stick force reaching the
 friction cone, the normal force reaching zero (lift-off); and the friction impulse that sets the slip to a
-target (zero: the contact sticks; 2 v_stop along the slip direction: it slips on).
+target (zero: the contact sticks; 2 v_stop along the slip direction: it slips on); and the landing's last step, the
+state put to rest on the plane after its plastic normal impulse (the centre at the support height, v_z zero and,
+turning about the normal only, the tilting spin dropped).
 
 The mobility M blends the two bodies of the Python model by the parameter ``roll`` (1: a sphere, M = m I1^-1 E,
 rolling about any axis; 0: any other ellipsoid, M = m e_z e_z^T / I_zz, turning about the normal only); the
@@ -90,6 +92,14 @@ class Contact:
         return sp.Matrix([*state[:3], state[3] + dphi[0], state[4] + dphi[1], *state[5:10],
                           *(sp.Matrix(state[10:]) + dw)])
 
+    def rest_on_plane(self) -> sp.Matrix:
+        """The state (13,) of the grain put on the plane: the centre at the support height |D n'| (the gap
+        zero), v_z = 0 and the spin in KXYZ kept about the normal only (roll = 0) or whole (roll = 1)."""
+        state = [a for a, _, _ in dm.STATE_ARGS]
+        height = dm.support_distance()[0].subs(dict(zip((dm.n1, dm.n2, dm.n3), self.Q.row(2))))
+        spin = self.Q.T * sp.diag(roll, roll, 1) * self.w
+        return sp.Matrix([*state[:2], height, *state[3:5], 0, *state[6:10], *spin])
+
 
 def module_specs() -> list[ModuleSpec]:
     k = Contact()
@@ -116,6 +126,9 @@ def module_specs() -> list[ModuleSpec]:
                     "|phi| (a slip starts where it falls through zero), the normal force (lift-off)", "m/s^2"),
         NamedMatrix("friction_impulse", k.impulse(), args_of(_ARGS + _TARGET),
                     "state after the friction impulse that sets the slip to the target", "m, m/s, 1, rad/s"),
+        NamedMatrix("rest_on_plane", k.rest_on_plane(), args_of(dm.STATE_ARGS + dm.AXES_ARGS + [_BODY[1]]),
+                    "state of the grain put on the plane (a landing after its plastic normal impulse): centre at "
+                    "the support height, v_z zero, the tilting spin dropped unless it rolls", "m, m/s, 1, rad/s"),
     ]
     return [ModuleSpec("grain_sliding", "Grain sliding: slip and stick on the vibrating plane, their events and "
                        "the friction impulse, over the flight's state.",

@@ -140,7 +140,7 @@ FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
 {
     Instance *inst = c;
     for (size_t i = 0; i < nvr; i++) {
-        if (vr[i] >= N_REAL || vr[i] == VR_TIME || (vr[i] >= VR_DX && vr[i] < VR_U))
+        if (vr[i] >= N_REAL || vr[i] == VR_TIME || (vr[i] >= VR_DX && vr[i] < VR_U) || vr[i] >= VR_D)
             return fail(inst, "fmi2SetReal: not an input, parameter or state");
         inst->model.r[vr[i]] = value[i];
     }
@@ -155,7 +155,7 @@ FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
 {
     Instance *inst = c;
-    int changed = symmech_event_update(&inst->model);
+    int changed = symmech_event_update(&inst->model, 0);
     memset(info, 0, sizeof *info);
     info->valuesOfContinuousStatesChanged = changed > 0;
     return changed < 0 ? fail(inst, "fmi2NewDiscreteStates: non-finite state at the event") : fmi2OK;

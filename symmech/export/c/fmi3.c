@@ -176,7 +176,7 @@ FMI3_EXPORT fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueRefe
     if (nValues != nValueReferences) return fail(inst, "fmi3SetFloat64: one value per value reference");
     for (size_t i = 0; i < nValueReferences; i++) {
         fmi3ValueReference vr = valueReferences[i];
-        if (vr >= N_REAL || vr == VR_TIME || (vr >= VR_DX && vr < VR_U))
+        if (vr >= N_REAL || vr == VR_TIME || (vr >= VR_DX && vr < VR_U) || vr >= VR_D)
             return fail(inst, "fmi3SetFloat64: not an input, parameter or state");
         inst->model.r[vr] = values[i];
     }
@@ -191,7 +191,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boole
                                                 fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime)
 {
     Instance *inst = instance;
-    int changed = symmech_event_update(&inst->model);
+    int changed = symmech_event_update(&inst->model, 0);
     *discreteStatesNeedUpdate = *terminateSimulation = *nominalsOfContinuousStatesChanged = false;
     *valuesOfContinuousStatesChanged = changed > 0;
     *nextEventTimeDefined = false;

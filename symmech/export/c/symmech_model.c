@@ -110,26 +110,18 @@ int symmech_derivatives(SymmechModel *m)
 #error "state events are located by DOP853 only: a stiff model has none"
 #endif
 
-int symmech_event_update(SymmechModel *m)
+int symmech_event_update(SymmechModel *m, int own_integrator)
 {
 #if N_Z > 0
-    double after[N_X];
-    int changed = 0;
     if (symmech_derivatives(m) != 0) return -1;
-    for (int i = 0; i < N_Z; i++) {
-        if (m->r[VR_Z + i] > 0.0) continue;
-        MODEL_EVENT_MAP(m->r + VR_X, m->r + VR_P, after);
-        for (int j = 0; j < N_X; j++) {
-            if (!isfinite(after[j])) return -1;
-            changed |= after[j] != m->r[VR_X + j];
-        }
-        memcpy(m->r + VR_X, after, sizeof after);
-        m->dirty = 1;
-        if (symmech_derivatives(m) != 0) return -1;
-    }
-    return changed;
+    int changed = MODEL_EVENT_UPDATE(m->r[VR_TIME], m->r + VR_X, m->r + VR_P, own_integrator);
+    if (changed <= 0) return changed;
+    for (int j = 0; j < N_X; j++)
+        if (!isfinite(m->r[VR_X + j])) return -1;
+    m->dirty = 1;
+    return symmech_derivatives(m) != 0 ? -1 : 1;
 #else
-    (void)m;
+    (void)m; (void)own_integrator;
     return 0;
 #endif
 }
@@ -255,7 +247,9 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
                 memcpy(y, y1, sizeof y1);
                 m->r[VR_TIME] = t;
                 m->dirty = 1;
-                if (symmech_event_update(m) < 0 || rates(m, t, y, k[0]) != 0) return -1;
+                int update = symmech_event_update(m, 1);
+                if (update < 0) return update == -2 ? -2 : -1;
+                if (rates(m, t, y, k[0]) != 0) return -1;
                 MODEL_EVENTS(t, y, m->r + VR_P, z0);
                 h *= factor;
                 continue;

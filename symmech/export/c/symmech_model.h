@@ -4,7 +4,7 @@
    Every Float64 variable lives in r[], indexed by its FMI value reference (layout in model.h):
    r[VR_TIME] time [s], then the N_X continuous states, the derivatives that are not states, the N_Y
    calculated outputs (MODEL_OUTPUTS, when the model has them), the N_U
-   inputs and the N_P parameters. */
+   inputs, the N_P parameters and the N_D discrete states of a model with regimes. */
 #ifndef SYMMECH_MODEL_H
 #define SYMMECH_MODEL_H
 
@@ -48,13 +48,16 @@ int symmech_derivatives(SymmechModel *m);
    M, a non-finite state or a step size below round-off, -2 where the motion left the model
    (symmech_left_model; r[VR_TIME] is then that time; DOP853 only: a stiff model has no state events) */
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
-/* state events (N_Z > 0): where an indicator r[VR_Z + i] is <= 0, the state becomes the model's event map of
-   it (MODEL_EVENT_MAP); 1 when the state changed, 0 when not, -1 on a non-finite state. symmech_integrate
-   locates the indicators' falls through zero and applies the map there itself (Co-Simulation). */
-int symmech_event_update(SymmechModel *m);
+/* state events (N_Z > 0): at an indicator's fall through zero, the model's update of the state and its
+   discrete states (MODEL_EVENT_UPDATE; own_integrator: called from symmech_integrate); 1 when something changed,
+   0 when not, -1 on a non-finite state, -2 where the model's own integrator does not cover what follows (the
+   grain lands). symmech_integrate locates the indicators' falls through zero and calls it there itself
+   (Co-Simulation). */
+int symmech_event_update(SymmechModel *m, int own_integrator);
 /* 1 when an event indicator is below -EVENT_TOLERANCE: crossed without its event, the motion has left what the
    model covers (the grain has come to rest on the surface); 0 otherwise */
 int symmech_left_model(SymmechModel *m);
-#define LEFT_MODEL_MESSAGE "an event indicator fell below zero without its event: the motion left what the model covers"
+#define LEFT_MODEL_MESSAGE "the motion left what the model covers: an event indicator fell below zero without its " \
+    "event, or it enters a regime the model's own integrator (Co-Simulation) does not follow"
 
 #endif

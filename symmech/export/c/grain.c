@@ -1,0 +1,164 @@
+/* The grain's regimes as the discrete state of an exported model: flight, slip or stick decides which generated
+   rates and event indicators hold, and at the events the native engine's transitions
+   (symmech/grain/motion_engine: loop.py, landing.py, sliding_phase.py, slip.py) with its thresholds. Hand-written
+   glue: every quantity of physics comes from the generated grain_motion and grain_sliding modules through the
+   call_* gatherers written above this file by `symmech export` (with the offsets P_* of the parameters in p and
+   D_* of the discrete states in d = p + N_P, r[VR_D...]). */
+#include <math.h>
+#include <stddef.h>
+
+#include "symmech_model.h"
+
+enum { FLIGHT, SLIP, STICK };
+
+static double *discrete(double *p) { return p + N_P; }
+
+static int regime_of(const double *p) { return (int)p[N_P + D_REGIME]; }
+
+void grain_rate(double t, const double *y, const double *p, double *out)
+{
+    switch (regime_of(p)) {
+    case SLIP: call_slip_rate(t, y, p, NULL, out); break;
+    case STICK: call_stick_rate(t, y, p, NULL, out); break;
+    default: grain_motion_rate(t, y, p, out);
+    }
+}
+
+/* flight: the gap and a constant 1; slip: s . ref - v_stop and n; stick: mu n - |phi| and n */
+void grain_event_values(double t, const double *y, const double *p, double *out)
+{
+    switch (regime_of(p)) {
+    case SLIP: call_slip_events(t, y, p, NULL, out); break;
+    case STICK: call_stick_events(t, y, p, NULL, out); break;
+    default: grain_motion_event_values(t, y, p, out); out[1] = 1.0;
+    }
+}
+
+static double normal_force(double t, const double *p)
+{
+    double n;
+    call_normal_force(t, NULL, p, NULL, &n);
+    return n;
+}
+
+static double largest_axis(const double *p) { return fmax(p[P_AXES], fmax(p[P_AXES + 1], p[P_AXES + 2])); }
+
+/* the native engine's round-off floors of the gap [m] and of the contact velocity [m/s] (kinematics.py) */
+static double gap_noise(const double *y, const double *p)
+{
+    return 64 * 2.220446049250313e-16 * (largest_axis(p) + fabs(y[2]) + p[P_AMPLITUDE]);
+}
+
+static double velocity_noise(const double *y, const double *p)
+{
+    double v = sqrt(y[3] * y[3] + y[4] * y[4] + y[5] * y[5]), w = sqrt(y[10] * y[10] + y[11] * y[11] + y[12] * y[12]);
+    return 1e3 * 2.220446049250313e-16 * (v + w * largest_axis(p) + p[P_AMPLITUDE] * p[P_OMEGA]);
+}
+
+/* the slip's reference direction (its event reads the slip along it): the slip's own direction now */
+static void set_reference(double t, const double *y, double *p)
+{
+    double s[2];
+    call_slip(t, y, p, NULL, s);
+    double size = fmax(hypot(s[0], s[1]), 1e-300);
+    discrete(p)[D_REF] = s[0] / size;
+    discrete(p)[D_REF + 1] = s[1] / size;
+}
+
+/* slip.py's settle: a slip within 1.5 v_stop is removed by a friction impulse, into a stick when may_stick and
+   the stick force is inside the cone, else into a slip of 2 v_stop along the slip direction */
+static void settle(double t, double *y, double *p, int may_stick)
+{
+    double *d = discrete(p), s[2], phi[2], target[2] = {0.0, 0.0}, after[N_X];
+    call_slip(t, y, p, NULL, s);
+    d[D_REGIME] = SLIP;
+    if (p[P_MU_S] > 0.0 && hypot(s[0], s[1]) <= 1.5 * d[D_V_STOP]) {
+        call_stick_force(t, y, p, NULL, phi);
+        int stick = may_stick && hypot(phi[0], phi[1]) <= p[P_MU_S] * normal_force(t, p);
+        if (!stick) {
+            double direction[2];
+            call_slip_direction(t, y, p, NULL, direction);
+            target[0] = 2.0 * d[D_V_STOP] * direction[0];
+            target[1] = 2.0 * d[D_V_STOP] * direction[1];
+        }
+        call_friction_impulse(t, y, p, target, after);
+        for (int i = 0; i < N_X; i++) y[i] = after[i];
+        if (stick) {
+            d[D_REGIME] = STICK;
+            return;
+        }
+    }
+    set_reference(t, y, p);
+}
+
+/* landing.py's land: the plastic normal impulse at the lowest point, the grain put on the plane, then the
+   sliding phase's start (sliding_phase.py: v_stop = tolerance (|g| + |n|) scan_step, settled) */
+static void land(double t, double *y, double *p)
+{
+    double contact[12], plastic[4], impulse[3] = {0.0, 0.0, 0.0}, after[N_X];
+    call_impact_contact(t, y, p, NULL, contact);
+    call_plastic_impulse(t, y, p, contact, plastic);
+    impulse[2] = plastic[0];
+    call_impact_state(t, y, p, impulse, after);
+    call_rest_on_plane(t, after, p, NULL, y);
+    double g = sqrt(p[P_G] * p[P_G] + p[P_G + 1] * p[P_G + 1] + p[P_G + 2] * p[P_G + 2]);
+    discrete(p)[D_V_STOP] = p[P_TOLERANCE] * (g + fabs(normal_force(t, p))) * p[P_SCAN_STEP];
+    settle(t, y, p, 1);
+}
+
+/* landing.py's bounce: the impact map, the impact counted; the contact point's normal velocity after it, or 0
+   where ZENO_IMPACTS impacts fell within ZENO_INTERVAL periods (chattering: it lands) */
+static double bounce(double t, double *y, double *p, const double *contact)
+{
+    double *d = discrete(p), plastic[4], coulomb[5], impulse[3], after[N_X], contact_after[12];
+    call_plastic_impulse(t, y, p, contact, plastic);
+    for (int i = 0; i < 4; i++) coulomb[i] = plastic[i];
+    coulomb[4] = contact[11];
+    call_coulomb_impulse(t, y, p, coulomb, impulse);
+    call_impact_state(t, y, p, impulse, after);
+    for (int i = 0; i < N_X; i++) y[i] = after[i];
+    long n = (long)d[D_IMPACTS];
+    d[D_TIMES + n % ZENO_IMPACTS] = t;
+    d[D_IMPACTS] = (double)(n + 1);
+    if (n + 1 >= ZENO_IMPACTS && t - d[D_TIMES + (n + 1) % ZENO_IMPACTS] < ZENO_INTERVAL * p[P_PERIOD]) return 0.0;
+    call_impact_contact(t, y, p, NULL, contact_after);
+    return contact_after[11];
+}
+
+/* loop.py's flight branch at a contact (the gap at most its round-off, the point not leaving: the native engine
+   locates the gap's falls only): a bounce where the point approaches, then a landing where it leaves slower than
+   rest_velocity (or touches without approaching) on a plane that pushes */
+static int flight_event(double t, double *y, double *p, int own_integrator)
+{
+    double gap[2], contact[12], u_n = 0.0;
+    int changed = 0;
+    grain_motion_event_values(t, y, p, gap);
+    if (gap[0] > gap_noise(y, p)) return 0;
+    call_impact_contact(t, y, p, NULL, contact);
+    if (contact[11] > velocity_noise(y, p)) return 0;  /* the gap rising through zero after a bounce or a lift-off */
+    if (contact[11] < -velocity_noise(y, p)) {
+        u_n = bounce(t, y, p, contact);
+        changed = 1;
+    }
+    if (u_n <= p[P_REST_VELOCITY] && normal_force(t, p) > 0.0) {
+        if (own_integrator) return -2;  /* its DOP853 has no stiff slip: the model's own integrator flies only */
+        land(t, y, p);
+        changed = 1;
+    }
+    return changed;
+}
+
+int grain_event_update(double t, double *y, double *p, int own_integrator)
+{
+    double z[2];
+    int regime = regime_of(p);
+    if (regime == FLIGHT) return flight_event(t, y, p, own_integrator);
+    grain_event_values(t, y, p, z);
+    if (z[1] <= 0.0) {  /* the normal force reached zero: lift-off */
+        discrete(p)[D_REGIME] = FLIGHT;
+        return 1;
+    }
+    if (z[0] > 0.0) return 0;
+    settle(t, y, p, regime == SLIP);  /* the slip stopped, or the stick force reached the cone */
+    return 1;
+}
