@@ -65,8 +65,18 @@ static void set_reference(double t, const double *y, double *p)
     discrete(p)[D_REF + 1] = s[1] / size;
 }
 
+/* The speed a slip starts at where a stick ends: the native engine's 2 v_stop, here at least 2 sqrt(eps) times the
+   velocities' nominal. An importer's difference-quotient Jacobian perturbs a velocity by sqrt(eps) times its
+   magnitude; a slip below that turns its direction (at mu n |B| / |s|) faster than that Jacobian sees, and CVode
+   creeps (about 1e5 steps over the first 2 ms at rtol 1e-12, against 500 from 2e-9 m/s). */
+static double slip_on_speed(const double *p)
+{
+    static const double nominal[N_X] = NOMINALS;
+    return 2.0 * fmax(p[N_P + D_V_STOP], 1.4901161193847656e-08 * nominal[3]);
+}
+
 /* slip.py's settle: a slip within 1.5 v_stop is removed by a friction impulse, into a stick when may_stick and
-   the stick force is inside the cone, else into a slip of 2 v_stop along the slip direction */
+   the stick force is inside the cone, else into a slip along the slip direction (slip_on_speed) */
 static void settle(double t, double *y, double *p, int may_stick)
 {
     double *d = discrete(p), s[2], phi[2], target[2] = {0.0, 0.0}, after[N_X];
@@ -78,8 +88,8 @@ static void settle(double t, double *y, double *p, int may_stick)
         if (!stick) {
             double direction[2];
             call_slip_direction(t, y, p, NULL, direction);
-            target[0] = 2.0 * d[D_V_STOP] * direction[0];
-            target[1] = 2.0 * d[D_V_STOP] * direction[1];
+            target[0] = slip_on_speed(p) * direction[0];
+            target[1] = slip_on_speed(p) * direction[1];
         }
         call_friction_impulse(t, y, p, target, after);
         for (int i = 0; i < N_X; i++) y[i] = after[i];
