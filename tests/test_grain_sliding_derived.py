@@ -1,8 +1,8 @@
 """The derived sliding regime (``generated/grain_sliding``, layer 1 ``symmech.grain.derive_sliding``) against the
 Python sliding model (``symmech.grain.sliding``, written by hand in KXYZ with the spin in the surface frame) at
 random states of an ellipsoid (turning about the normal) and a sphere (rolling): normal force, slip, stick force,
-slip direction, the slip's and the stick's rates, the event indicators and the friction impulse, each to 1e-12 of
-its magnitude."""
+slip direction, the slip's and the stick's rates, the event indicators, the friction impulse and the landing (its
+last step ``rest_on_plane``), each to 1e-12 of its magnitude."""
 from __future__ import annotations
 
 import math
@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from symmech.generated import grain_sliding as gs
-from symmech.grain import flight, sliding
-from symmech.grain.coulomb_law import principal_inertia
+from symmech.generated import grain_motion as gm, grain_sliding as gs
+from symmech.grain import contact, flight, sliding
+from symmech.grain.coulomb_law import inverse_effective_mass, principal_inertia
 
 TOLERANCE = 1e-12
 ELLIPSOID = (3.5e-3, 1.6e-3, 1.4e-3)  # m, the default scene's grain
@@ -74,14 +74,36 @@ def test_derived_sliding_is_the_python_sliding_model(axes):
         _close(gs.slip_events(*args, v_stop, *ref)[1], model.normal(t))
 
 
+def _landed(args, Q):
+    """The Python loop's landing (``motion._land``) written out from the Python contact and impact modules: the
+    plastic normal impulse -u_z / K_zz at the lowest point, the tilting spin of a non-sphere dropped, v_z = 0, the
+    centre at the support height; the 13 flight states."""
+    axes, mass, inertia = np.array(args[26:29]), args[29], np.array(args[23:26])
+    R = contact.contact_offset(axes, Q)
+    v, w = np.array(args[4:7]), Q @ np.array(args[11:14])
+    K = inverse_effective_mass(mass, inertia, Q, R)
+    P = np.array([0.0, 0.0, -(v + np.cross(w, R))[2] / K[2, 2]])
+    v, w = v + P / mass, w + Q @ ((Q.T @ np.cross(R, P)) / inertia)
+    if max(axes) != min(axes):
+        w[:2] = 0.0
+    v[2] = 0.0
+    return np.concatenate([args[1:3], [contact.support_distance(axes, Q)], v, args[7:11], Q.T @ w])
+
+
 @pytest.mark.parametrize("axes", [ELLIPSOID, SPHERE], ids=["ellipsoid", "sphere"])
 def test_friction_impulse_is_the_settling_of_the_python_model(axes):
     """Near v_stop the Python model removes the slip by an impulse and sticks, or restarts it at 2 v_stop along
-    the slip direction: the derived impulse to the same target gives the same velocity and spin."""
+    the slip direction: the derived impulse to the same target gives the same velocity and spin. The landing
+    before a sliding phase (the exported grain's: impact_contact, plastic_impulse, impact_state at the plastic
+    normal impulse, rest_on_plane) is the Python loop's."""
     rng = np.random.default_rng(33)
     outcomes = set()
     for _ in range(20):
         model, ode, args, y, Q = _case(rng, axes)
+        state, inertia, mass = args[1:14], args[23:26], args[29]
+        contact_k_u = gm.impact_contact(*state, *inertia, *args[26:29], mass)
+        pushed = gm.impact_state(*state, *inertia, *args[26:29], mass, 0.0, 0.0, gm.plastic_impulse(*contact_k_u)[0])
+        _close(gs.rest_on_plane(*pushed, *args[26:29], args[30]), _landed(args, Q))
         t, v_stop = args[0], 1e-6
         y[2:4] -= ode.geometry(y)[1] - rng.normal(0.0, 0.3 * v_stop, 2)  # a slip within v_stop
         args = (*args[:4], *y[2:4], *args[6:])
