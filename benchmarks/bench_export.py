@@ -1,8 +1,9 @@
 """Exported models against the native run: FMU (FMPy, Model Exchange with CVode and Co-Simulation with the
 FMU's DOP853, for the elastic trolley its Radau IIA) and the exported C example program, on the bundled mechanism
 scenes with a free response, the bundled elastic trolley ride, the same ride under traction (P0 = 100 - 10 V0 N
-from 3 m/s: no bundled scene has traction), and the default grain scene up to just before its first landing
-(0.082 s: 8 impacts, flight and impacts as state events).
+from 3 m/s: no bundled scene has traction), the default grain scene up to just before its first landing
+(0.082 s: 8 impacts, flight and impacts as state events), and the default grain scene through its sliding regimes
+(``sliding``: its first 50 impacts, over 0.23 s, and the whole 2 s; Model Exchange only).
 
 The elastic C example program runs Radau IIA with dense output on the generated assembly; its real-time
 factor is its whole-process wall time over the ride's duration.
@@ -15,7 +16,7 @@ centres) and trajectory rows.
 Accuracy: `symmech.export.model.deviation`, the largest deviation of each series relative to its largest
 magnitude.
 
-    python benchmarks/bench_export.py [--quick] [--only grain|elastic|traction|mechanism]
+    python benchmarks/bench_export.py [--quick] [--only grain|sliding|elastic|traction|mechanism]
 """
 from __future__ import annotations
 
@@ -39,11 +40,13 @@ from timing import interleaved, machine
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="3 rounds instead of 7")
-    parser.add_argument("--only", choices=("grain", "elastic", "traction", "mechanism"), help="one model only")
+    parser.add_argument("--only", choices=("grain", "sliding", "elastic", "traction", "mechanism"),
+                        help="one model only")
     args = parser.parse_args()
     repeats = 3 if args.quick else 7
     print(machine())
-    for name, bench in (("grain", grain), ("elastic", elastic), ("traction", traction), ("mechanism", mechanisms)):
+    for name, bench in (("grain", grain), ("sliding", grain_sliding), ("elastic", elastic), ("traction", traction),
+                        ("mechanism", mechanisms)):
         if args.only in (None, name):
             bench(repeats)
 
@@ -202,6 +205,58 @@ def grain(repeats: int) -> None:
                 got = np.column_stack([result[c] for c in states]) if result.dtype.names else result
                 error = f"centres on the sample grid {np.abs(got - on_grid).max():.2g} m"
             print(f"  {label:40s} {stats[label].text()}  {error}")
+
+
+def grain_sliding(repeats: int) -> None:
+    """The default grain scene through its landings, slips, sticks and lift-offs, over 0.23 s (its first 50
+    impacts) and 2 s: the ME FMU's impact times and centres under FMPy's CVode at rtol 1e-10 and 1e-12 against the
+    compiled engine at the scene's tolerance 1e-9 and at 1e-12."""
+    from symmech.grain import motion_scene
+
+    def impacts(run) -> tuple[np.ndarray, np.ndarray]:
+        return np.array([i["t"] for i in run.impacts]), np.array([i["r"] for i in run.impacts])
+
+    for duration in (0.23, 2.0):
+        text = (scenes_folder() / "grain_default.toml").read_text().replace("duration = 2.0 ",
+                                                                          f"duration = {duration!r} ")
+        with tempfile.TemporaryDirectory() as tmp:
+            path, tight_path = Path(tmp) / "grain.toml", Path(tmp) / "grain_tight.toml"
+            path.write_text(text)
+            tight_path.write_text(text.replace("tolerance = 1e-9", "tolerance = 1e-12"))
+            sc = pipeline.load(path).setup
+            tight = impacts(motion_scene.simulate(pipeline.load(tight_path).setup))
+            fmu = build.fmu(command.load(path), Path(tmp) / "me.fmu", 3, "me")
+            runs = {"native, compiled engine (tol 1e-9)": lambda: motion_scene.simulate(sc)}
+            for rtol in (1e-10, 1e-12):
+                runs[f"FMU ME, FMPy CVode rtol {rtol:g}"] = lambda rtol=rtol: fmpy.simulate_fmu(
+                    str(fmu), solver="CVode", relative_tolerance=rtol, stop_time=duration,
+                    output_interval=duration / 50, output=["x", "y", "z", "impacts"], record_events=True)
+            stats = interleaved(runs, repeats)
+            native = impacts(runs["native, compiled engine (tol 1e-9)"]())
+            print(f"\ngrain through its sliding regimes, default scene over {duration:g} s ({len(native[0])} impacts); "
+                  f"native at tol 1e-9 vs 1e-12: {_impact_errors(native, tight)}")
+            for label, run in runs.items():
+                result = run()
+                if label.startswith("native"):
+                    print(f"  {label:40s} {stats[label].text()}")
+                    continue
+                at = np.flatnonzero((np.diff(result["time"]) == 0) & (np.diff(result["impacts"]) > 0))
+                got = result["time"][at], np.column_stack([result[c][at] for c in "xyz"])
+                print(f"  {label:40s} {stats[label].text()}  {len(at)} impacts; vs native "
+                      f"{_impact_errors(got, native)}; vs native at 1e-12 {_impact_errors(got, tight)}")
+
+
+def _impact_errors(got: tuple[np.ndarray, np.ndarray], reference: tuple[np.ndarray, np.ndarray]) -> str:
+    """The largest time [s] and centre [m] errors of the first 50 impacts of ``got`` (times, centres) against
+    ``reference``, and of all of them when there are more."""
+    if len(got[0]) != len(reference[0]):
+        return f"{len(got[0])} impacts against {len(reference[0])}"
+    text = []
+    for n in sorted({min(50, len(got[0])), len(got[0])}):
+        dt = np.abs(got[0][:n] - reference[0][:n]).max()
+        dr = np.abs(got[1][:n] - reference[1][:n]).max()
+        text.append(f"first {n}: times {dt:.2g} s, centres {dr:.2g} m")
+    return "; ".join(text)
 
 
 if __name__ == "__main__":
