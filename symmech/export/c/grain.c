@@ -4,6 +4,7 @@
    glue: every quantity of physics comes from the generated grain_motion and grain_sliding modules through the
    call_* gatherers written above this file by `symmech export` (with the offsets P_* of the parameters in p and
    D_* of the discrete states in d = p + N_P, r[VR_D...]). */
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -46,13 +47,13 @@ static double largest_axis(const double *p) { return fmax(p[P_AXES], fmax(p[P_AX
 /* the native engine's round-off floors of the gap [m] and of the contact velocity [m/s] (kinematics.py) */
 static double gap_noise(const double *y, const double *p)
 {
-    return 64 * 2.220446049250313e-16 * (largest_axis(p) + fabs(y[2]) + p[P_AMPLITUDE]);
+    return 64 * DBL_EPSILON * (largest_axis(p) + fabs(y[2]) + p[P_AMPLITUDE]);
 }
 
 static double velocity_noise(const double *y, const double *p)
 {
     double v = sqrt(y[3] * y[3] + y[4] * y[4] + y[5] * y[5]), w = sqrt(y[10] * y[10] + y[11] * y[11] + y[12] * y[12]);
-    return 1e3 * 2.220446049250313e-16 * (v + w * largest_axis(p) + p[P_AMPLITUDE] * p[P_OMEGA]);
+    return 1e3 * DBL_EPSILON * (v + w * largest_axis(p) + p[P_AMPLITUDE] * p[P_OMEGA]);
 }
 
 /* the slip's reference direction (its event reads the slip along it): the slip's own direction now */
@@ -65,38 +66,51 @@ static void set_reference(double t, const double *y, double *p)
     discrete(p)[D_REF + 1] = s[1] / size;
 }
 
-/* The speed a slip starts at where a stick ends: the native engine's 2 v_stop, here at least 2 sqrt(eps) times the
-   velocities' nominal. An importer's difference-quotient Jacobian perturbs a velocity by sqrt(eps) times its
-   magnitude; a slip below that turns its direction (at mu n |B| / |s|) faster than that Jacobian sees, and CVode
-   creeps (about 1e5 steps over the first 2 ms at rtol 1e-12, against 500 from 2e-9 m/s). */
+/* The slowest slip the FMU lets start: 2 sqrt(eps) times the velocities' nominal, or the native engine's 2 v_stop
+   if faster. An importer's difference-quotient Jacobian perturbs a velocity by sqrt(eps) times its magnitude; a
+   slip below that turns its direction (at mu n |B| / |s|) faster than that Jacobian sees, and CVode creeps (about
+   1e5 steps over the first 2 ms at rtol 1e-12, against 500 from 1e-9 m/s). */
 static double slip_on_speed(const double *p)
 {
     static const double nominal[N_X] = NOMINALS;
-    return 2.0 * fmax(p[N_P + D_V_STOP], 1.4901161193847656e-08 * nominal[3]);
+    return 2.0 * fmax(p[N_P + D_V_STOP], sqrt(DBL_EPSILON) * nominal[3]);
+}
+
+static void friction_impulse(double t, double *y, const double *p, const double *target)
+{
+    double after[N_X];
+    call_friction_impulse(t, y, p, target, after);
+    for (int i = 0; i < N_X; i++) y[i] = after[i];
 }
 
 /* slip.py's settle: a slip within 1.5 v_stop is removed by a friction impulse, into a stick when may_stick and
-   the stick force is inside the cone, else into a slip along the slip direction (slip_on_speed) */
+   the stick force is inside the cone, else into a slip along the slip direction at slip_on_speed; a faster slip
+   goes on along its own direction, brought up to slip_on_speed by a friction impulse where slower (the FMU's
+   difference: the native engine goes on at any speed) */
 static void settle(double t, double *y, double *p, int may_stick)
 {
-    double *d = discrete(p), s[2], phi[2], target[2] = {0.0, 0.0}, after[N_X];
+    double *d = discrete(p), s[2], direction[2], target[2];
     call_slip(t, y, p, NULL, s);
+    double speed = hypot(s[0], s[1]);
     d[D_REGIME] = SLIP;
-    if (p[P_MU_S] > 0.0 && hypot(s[0], s[1]) <= 1.5 * d[D_V_STOP]) {
+    if (p[P_MU_S] > 0.0 && speed <= 1.5 * d[D_V_STOP]) {
+        double phi[2];
         call_stick_force(t, y, p, NULL, phi);
-        int stick = may_stick && hypot(phi[0], phi[1]) <= p[P_MU_S] * normal_force(t, p);
-        if (!stick) {
-            double direction[2];
-            call_slip_direction(t, y, p, NULL, direction);
-            target[0] = slip_on_speed(p) * direction[0];
-            target[1] = slip_on_speed(p) * direction[1];
-        }
-        call_friction_impulse(t, y, p, target, after);
-        for (int i = 0; i < N_X; i++) y[i] = after[i];
-        if (stick) {
+        if (may_stick && hypot(phi[0], phi[1]) <= p[P_MU_S] * normal_force(t, p)) {
+            target[0] = target[1] = 0.0;
+            friction_impulse(t, y, p, target);
             d[D_REGIME] = STICK;
             return;
         }
+        call_slip_direction(t, y, p, NULL, direction);
+    } else {
+        direction[0] = s[0] / fmax(speed, 1e-300);
+        direction[1] = s[1] / fmax(speed, 1e-300);
+    }
+    if (p[P_MU_S] > 0.0 && (speed <= 1.5 * d[D_V_STOP] || speed < slip_on_speed(p))) {
+        target[0] = slip_on_speed(p) * direction[0];
+        target[1] = slip_on_speed(p) * direction[1];
+        friction_impulse(t, y, p, target);
     }
     set_reference(t, y, p);
 }
