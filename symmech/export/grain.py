@@ -55,9 +55,9 @@ DISCRETE = (("regime", "1", "regime: 0 flight, 1 slip, 2 stick", True),
             ("ref0", "1", "the slip's reference direction, X component", False),
             ("ref1", "1", "the slip's reference direction, Y component", False),
             ("impacts", "1", "number of impacts so far", True))
-# a gap below -LEFT_FLIGHT x the length scale without an impact: the grain has sunk into the surface (two
-# crossings within one step of the importer)
-LEFT_FLIGHT = 1e-6
+# an indicator below -MISSED_EVENT x the length scale without its event: the importer stepped over two of its
+# crossings (in flight: the grain has sunk into the surface)
+MISSED_EVENT = 1e-6
 # where each dynamics parameter comes from in the scene
 SOURCE = {"gX": "surface.alpha_deg, beta_deg, g", "gY": "surface.alpha_deg, beta_deg, g",
           "gZ": "surface.alpha_deg, beta_deg, g", "A": "vibration.amplitude", "omega": "2 pi vibration.frequency",
@@ -182,7 +182,7 @@ def grain(sc, native: Table | None) -> ExportModel:
         encoding="utf-8")) for name in ("grain_motion", "grain_sliding"))
     return ExportModel(IDENTIFIER, "Grain on a vibrating plane: flight, impacts, slip and stick (symmech)", source,
                        tuple(variables), n, n, 0, 0, 0, len(params), native, n_z=len(INDICATORS), n_d=n_d,
-                       modules=modules, event_tolerance=LEFT_FLIGHT * nominal[0], mass_identity=n)
+                       modules=modules, event_tolerance=MISSED_EVENT * nominal[0], mass_identity=n)
 
 
 # the generated functions c/grain.c calls (module, function), each through a gatherer call_<function>(t, y, p, a,
