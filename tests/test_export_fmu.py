@@ -212,6 +212,8 @@ def test_c_example_prints_the_native_table(rotor_boom, tmp_path):
 @pytest.mark.parametrize("args, says", [
     (["fmu", "trolley_helix.toml", "--out", "x.fmu"], "covers the elastic trolley"),
     (["fmu", "mechanism_chain_large.toml", "--out", "x.fmu"], "up to 60 coordinates"),
+    pytest.param(["c", "impact_default.toml", "--out", "x_c"], "covers mechanism, elastic trolley and grain",
+                 marks=pytest.mark.slow),  # the default tier's budget: one kind's refusal there is enough
     (["fmu", "smm_double_pendulum.toml", "--out", "x.zip"], "ends in .fmu"),
     (["c", "smm_double_pendulum.toml", "--out", "mine"], "a folder of other files"),
 ])
@@ -238,9 +240,11 @@ def test_a_parameter_named_like_a_c_keyword_is_refused(tmp_path, capsys):
 
 def test_no_compiler_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("CC", "no-such-compiler")
-    assert main(["export", "fmu", str(SCENES / "smm_double_pendulum.toml"), "--out", str(tmp_path / "x.fmu")]) == 2
-    err = capsys.readouterr().err
-    assert "no C compiler" in err and len(err.strip().splitlines()) == 1
+    for what, out in (("fmu", "x.fmu"), ("c", "x_c")):
+        assert main(["export", what, str(SCENES / "smm_double_pendulum.toml"), "--out", str(tmp_path / out)]) == 2
+        err = capsys.readouterr().err
+        assert "no C compiler" in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.slow  # FMPy's cmake build of the sources (~20 s)
