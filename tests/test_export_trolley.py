@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import io
+import resource
 import shutil
 import subprocess
 import tomllib
@@ -87,9 +88,9 @@ def test_short_elastic_ride_fmu_reproduces_the_native_run(short_helix, tmp_path,
     assert deviation(got, _native_outputs(native)) <= TOLERANCE
 
 
-def _check_c_program(path, native, tmp_path) -> None:
+def _check_c_program(path, native, tmp_path):
     """Export the C folder, run its example program (Radau IIA, dense output): t, s and P0…P5 as the native
-    run's."""
+    run's; the program's path."""
     folder = tmp_path / "helix_c"
     assert main(["export", "c", str(path), "--out", str(folder)]) == 0
     assert "elastic_assembly.c" in (folder / "Makefile").read_text()
@@ -100,6 +101,18 @@ def _check_c_program(path, native, tmp_path) -> None:
     np.testing.assert_allclose(got[:, 0], native["t"], rtol=0, atol=1e-12)
     assert np.abs(got[:, 1] - native["s"]).max() <= 1e-9 * native["s"].max()  # s(t): a spline in the C
     assert deviation(got[:, 2:], native["P"]) <= TOLERANCE
+    return folder / "example"
+
+
+def _cpu_seconds(program) -> float:
+    """The least CPU time [s] (user + system) of five runs of ``program``, a whole process each."""
+    best = np.inf
+    for _ in range(5):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        subprocess.run([str(program)], check=True, capture_output=True)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        best = min(best, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    return best
 
 
 @pytest.mark.slow  # the default tier builds the same C model code into the ME FMU
@@ -116,7 +129,9 @@ def test_bundled_elastic_c_program_prints_the_native_reactions(name, tmp_path):
     path = SCENES / f"{name}.toml"
     native = _native(path)
     assert native["engine"] == "compiled"
-    _check_c_program(path, native, tmp_path)
+    program = _check_c_program(path, native, tmp_path)
+    if name == "trolley_elastic_helix":  # the bundled ride's real-time factor on one core: <= 0.01 (0.0077 measured)
+        assert _cpu_seconds(program) <= 0.01 * native["t"][-1]
 
 
 TRACTION = [('speed = "3*t + 7*sin(t/2)"', 'traction = "100 - 10*v"\ninitial_speed = 3.0'),
