@@ -19,17 +19,35 @@ import math
 
 import numpy as np
 
+from symmech.core.layout import Field, Layout
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
 from symmech.export.model import REALS, ExportModel, Variable
+from symmech.grain.vectors import T_AT, TRAJECTORY_ROW
 
 MODULE = "grain_motion"
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz", "q0", "q1", "q2", "q3", "w1", "w2", "w3")
+# the native run's trajectory columns the exported run is compared with: time, then the states x ... q3
+NATIVE_FIELDS = ("t", "r", "v", "q")
 # parameters of the impact map beyond the dynamics' (after them in r[]): name, unit, description
 LAW = (("m", "kg", "grain mass (body.mass, or body.density times the ellipsoid's volume)"),
        ("e_n", "1", "normal restitution coefficient (impact.e_n)"),
        ("e_t", "1", "tangential restitution coefficient (impact.e_t)"),
        ("mu", "1", "friction coefficient of the impact (impact.mu)"))
+# The impact map: the generated functions applied in turn at an impact and their outputs (the last, the state
+# after the impact, is the dynamics' STATE), each slot named as the later stages' arguments (the derivation's
+# symbols: symmech.grain.derive_motion).
+CONTACT = Layout("ImpactContact", (
+    Field("k", "1/kg", "inverse effective mass K of the lowest point, row by row", (9,)),
+    Field("u", "m/s", "velocity of the lowest point before the impact", (3,)),
+))
+PLASTIC = Layout("PlasticImpulse", (
+    Field("P_I", "N s", "plastic normal impulse"),
+    Field("D", "N s", "plastic sticking impulse beyond it", (3,)),
+))
+COULOMB = Layout("CoulombImpulse", (Field("P", "N s", "the energy-consistent Coulomb impulse", (3,)),))
+IMPACT_MAP = (("impact_contact", CONTACT), ("plastic_impulse", PLASTIC), ("coulomb_impulse", COULOMB),
+              ("impact_state", None))
 # a gap below -LEFT_FLIGHT x the length scale without an impact: the grain has come to rest on the surface (two
 # crossings within one step of the importer, at the end of a bounce sequence) and would slide
 LEFT_FLIGHT = 1e-6
@@ -85,19 +103,22 @@ def first_landing(trajectory: np.ndarray) -> float | None:
     sliding or sticking row: the last impact, or the start), None when it never does."""
     from symmech.grain import motion
 
-    (off,) = np.nonzero(trajectory[:, -1] == motion.REGIMES.index("sliding"))
-    return float(trajectory[max(off[0] - 1, 0), 0]) if off.size else None
+    (off,) = np.nonzero(trajectory[:, T_AT.regime] == motion.REGIMES.index("sliding"))
+    return float(trajectory[max(off[0] - 1, 0), T_AT.t]) if off.size else None
 
 
 def native_table(trajectory: np.ndarray, interval: float) -> Table:
     """The native trajectory's rows on the sample grid (k ``interval`` [s]; the rows at events left out), its
     columns t, x ... q3 (the exported states of the same names)."""
-    k = np.round(trajectory[:, 0] / interval)
-    on_grid = np.abs(trajectory[:, 0] - k * interval) <= 1e-9 * interval
+    t = trajectory[:, T_AT.t]
+    k = np.round(t / interval)
+    on_grid = np.abs(t - k * interval) <= 1e-9 * interval
     _, first = np.unique(k[on_grid], return_index=True)
-    columns = (Column("t", "s", "time"),) + tuple(Column(name, unit) for name, unit in
-                                                 zip(STATE_NAMES[:10], ("m",) * 3 + ("m/s",) * 3 + ("1",) * 4))
-    return Table(columns, trajectory[on_grid][first][:, :11], doc="trajectory at the sample interval")
+    exported = [TRAJECTORY_ROW.field(name) for name in NATIVE_FIELDS]
+    units = [f.unit for f in exported[1:] for _ in range(f.size)]
+    columns = (Column("t", "s", "time"),) + tuple(Column(name, unit) for name, unit in zip(STATE_NAMES, units))
+    rows = TRAJECTORY_ROW.split(trajectory[on_grid][first])
+    return Table(columns, np.column_stack([rows[name] for name in NATIVE_FIELDS]), doc="trajectory at the sample interval")
 
 
 def grain(sc, native: Table | None) -> ExportModel:
@@ -138,21 +159,23 @@ def grain(sc, native: Table | None) -> ExportModel:
     vr += len(gm.PARAMS)
     for k, (name, unit, meaning) in enumerate(LAW):
         variables.append(Variable(name, vr + k, "parameter", "tunable", unit, meaning, float(p[name])))
-    # the impact map: K and u of the contact, the plastic impulses, the law's impulse P, the state after; arguments
-    # as C expressions
+    # the impact map's stages, each output slot named as the later stages' arguments; arguments as C expressions
     where = {name: f"y[{i}]" for i, (name, _, _) in enumerate(gm.STATE)}
     where.update((name, f"p[{k}]") for k, name in enumerate(params + [x[0] for x in LAW]))
-    where.update((f"k{i}", f"s0[{i}]") for i in range(9))
-    where.update((f"u{i}", f"s0[{9 + i}]") for i in range(3))
-    where.update(zip(("P_I", "D0", "D1", "D2"), (f"s1[{i}]" for i in range(4))))
-    where.update((f"P{i}", f"s2[{i}]") for i in range(3))
-    stages = tuple((f"{MODULE}_{f.__name__}", tuple(where[a] for a in inspect.signature(f).parameters), size)
-                   for f, size in ((gm.impact_contact, 12), (gm.plastic_impulse, 4), (gm.coulomb_impulse, 3),
-                                   (gm.impact_state, n)))
+    for stage, (_, outputs) in enumerate(IMPACT_MAP[:-1]):
+        where.update((name, f"s{stage}[{i}]") for i, name in enumerate(slot_names(outputs)))
+    stages = tuple((f"{MODULE}_{name}", tuple(where[a] for a in inspect.signature(getattr(gm, name)).parameters),
+                    n if outputs is None else outputs.size) for name, outputs in IMPACT_MAP)
     source = importlib.resources.files("symmech.generated").joinpath(f"{MODULE}.c").read_text(encoding="utf-8")
     return ExportModel(MODULE, gm.__doc__.strip().splitlines()[0], source, tuple(variables), n, n, 0, 0, 0,
                        len(gm.PARAMS) + len(LAW), native, n_z=1, event_map=stages,
                        event_tolerance=LEFT_FLIGHT * nominal[0], mass_identity=n)
+
+
+def slot_names(layout: Layout) -> list[str]:
+    """The name of each slot of ``layout`` as a generated function's argument: the field's name for a scalar, its
+    name and the index for a vector (``k0`` ... ``k8``)."""
+    return [f.name if f.shape == () else f"{f.name}{i}" for f in layout.fields for i in range(f.size)]
 
 
 def _nominals(sc) -> list[float]:
