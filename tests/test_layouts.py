@@ -411,9 +411,6 @@ def test_the_generated_rigid_fields_have_the_declared_columns():
     assert np.allclose(parts["psi"][0, :, 0], [0.0, -0.25, 1.0], rtol=0, atol=1e-15)
     with pytest.raises(ValueError, match="ElasticRigidFields.split: a last axis of 11 expected"):
         elastic_layout.RIGID_FIELDS.split(out[..., :10])
-    assert np.array_equal(elastic_layout.RIGID_FIELDS.stack(**parts), out)  # stack: split's inverse
-    with pytest.raises(ValueError, match="ElasticRigidFields.stack"):
-        elastic_layout.RIGID_FIELDS.stack(phi=parts["phi"], psi=parts["phi"])
 
 
 def test_an_exported_models_value_references_follow_the_declared_reals():

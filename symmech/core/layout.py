@@ -205,15 +205,6 @@ class Layout(_Declared):
             raise ValueError(f"{self.name}.split: a last axis of {self.size} expected, got shape {np.shape(array)}")
         return {f.name: array[..., self.slice(f.name)] for f in self.fields}
 
-    def stack(self, **parts) -> np.ndarray:
-        """The array (..., size) whose last axis holds each field's slots, from ``parts`` by name, each (..., field
-        size) (a scalar field (..., 1)): :meth:`split`'s inverse, for columns built in the declared order."""
-        if set(parts) != set(self.names) or any(np.shape(parts[f.name])[-1:] != (f.size,) for f in self.fields):
-            raise ValueError(f"{self.name}.stack: the fields {self.names} of last axes "
-                             f"{[f.size for f in self.fields]} expected, got shapes "
-                             f"{ {name: np.shape(v) for name, v in parts.items()} }")
-        return np.concatenate([np.asarray(parts[f.name], float) for f in self.fields], axis=-1)
-
     def zeros(self) -> np.ndarray:
         """A vector of zeros (size,)."""
         return np.zeros(self.size)

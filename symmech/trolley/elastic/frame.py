@@ -10,7 +10,6 @@ import numpy as np
 
 from symmech.core.layout import Field, Layout
 from symmech.trolley import model
-from symmech.trolley.elastic.layout import CHANNELS, GEOMETRY
 
 # ---------------------------------------------------------------- frame along the track
 
@@ -65,7 +64,7 @@ def frame_channels(fr: model.Frame, V0, dV0, g0: float) -> np.ndarray:
     """The frame fr's channels (k, 12) at speeds V0 [m/s] and rates dV0 [m/s²] (k,), in the order of the compiled
     engine's layout :data:`symmech.trolley.elastic.layout.CHANNELS`: load a0 + g0 ν, ω, ω̇, v0."""
     v0, a0, w, dw = frame_motion(fr, V0, dV0)
-    return CHANNELS.stack(load=a0 + g0 * fr.lam[:, :, 1], omega=w, domega=dw, v0=v0)
+    return np.column_stack([a0 + g0 * fr.lam[:, :, 1], w, dw, v0])
 
 
 def frame_state(fr: model.Frame, i: int, V0: float, dV0: float) -> FrameState:
@@ -100,7 +99,7 @@ def geometry(drive: Drive, mdl, s, at=slice(None)) -> np.ndarray:
     """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
     :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
     fr = frames(drive, np.asarray(s, float)[at], mdl.l)
-    return GEOMETRY.stack(e=fr.e, k=fr.de + np.cross(fr.W, fr.e), nu=fr.lam[:, :, 1], om=fr.W, dom=fr.dW)
+    return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
 
 
 @dataclass(frozen=True)
