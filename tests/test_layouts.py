@@ -285,6 +285,16 @@ SIZED = {"trolley/elastic/kernels.py": {**dict.fromkeys(("y", "out", "f", "J", "
          "trolley/elastic/simulate.py": {**dict.fromkeys(("y", "out", "mask")), "Y": (1,), "q": (1,), "qd": (1,)},
          "trolley/elastic/system.py": dict.fromkeys(("rr", "out", "q", "qd", "R", "Rq", "Rqd", "mask")),
          "trolley/elastic/scene.py": {"target": None, "q": (1,)}, "trolley/elastic/body.py": {"dA": None}}
+# The vectors and generated outputs outside the engines that a declared layout numbers (read through its offsets,
+# slices or split), by file: a Python reference's states (the sliding contact's, a flight's rotation), the
+# trajectory rows, the generated rigid fields' columns, the assembly's frame and geometry channels and fields.
+SIZED.update({
+    "grain/sliding.py": {"y": None}, "grain/flight.py": {"y": None}, "grain/plots.py": {"tr": None},
+    "grain/motion_scene.py": {"tr": None}, "export/grain.py": {"trajectory": None, "rows": None},
+    "trolley/elastic/body.py": {"dA": None, "rigid": None}, "trolley/elastic/system.py": {
+        **SIZED["trolley/elastic/system.py"], "f": None},
+    "trolley/elastic/symbolic_assembly.py": dict.fromkeys(("channels", "values", "out", "z", "CHANNELS", "GEOMETRY")),
+})
 SIZE_NAMES = {"n", "N"}
 LAYOUT_CALLS = {"offset", "slice"}  # a sized layout's offsets, from Python
 
@@ -332,6 +342,75 @@ def test_every_index_into_a_vector_sized_by_the_model_reads_its_layout(path):
                 assert not _sized_by_hand(part, allowed), f"{path}:{node.lineno} {ast.unparse(node)} numbers a slot by hand"
                 seen += 1
     assert seen > 0
+
+
+def _c_indices_by_hand(tree) -> list[str]:
+    """The C expressions written with a number in their index (``f"s0[{9 + i}]"``): an f-string whose text before a
+    value ends in ``[`` and whose value is a number or arithmetic with one, but for a 1-based label (``[{r + 1}]``)."""
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.JoinedStr):
+            continue
+        for before, value in zip(node.values, node.values[1:]):
+            if not (isinstance(before, ast.Constant) and str(before.value).endswith("[")
+                    and isinstance(value, ast.FormattedValue)):
+                continue
+            expr = value.value
+            label = isinstance(expr, ast.BinOp) and isinstance(expr.op, ast.Add) and \
+                isinstance(expr.right, ast.Constant) and expr.right.value == 1
+            offset = isinstance(expr, ast.Constant) or isinstance(expr, ast.BinOp) and any(
+                isinstance(n, ast.Constant) and type(n.value) is int for n in ast.walk(expr))
+            if offset and not label:  # a number, or an offset added to an index (a size, max(n, 1), passes)
+                found.append(ast.unparse(node))
+    return found
+
+
+@pytest.mark.parametrize("path", ["export/grain.py", "export/trolley.py", "export/model.py"])
+def test_the_exports_c_expressions_index_through_declared_layouts(path):
+    """The export writes C expressions of its buffers (``s0[i]``: a generated stage's outputs) from the stages'
+    declared layouts, never an offset by hand."""
+    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
+    assert _c_indices_by_hand(tree) == []
+    assert _c_indices_by_hand(ast.parse('x = f"s0[{9 + i}]"; y = f"P{i}[{r + 1}]"')) == ["f's0[{9 + i}]'"]
+
+
+def test_the_exported_impact_maps_stages_name_their_outputs_as_the_next_stages_arguments():
+    """Each stage's declared outputs are its generated function's output size and the names of the derivation's
+    arguments the later stages read (symmech.grain.derive_motion: K row by row and u, P_I and D, P)."""
+    import inspect
+
+    from symmech.export import grain as export_grain
+    from symmech.generated import grain_motion as gm
+
+    args = {name: list(inspect.signature(getattr(gm, name)).parameters) for name, _ in export_grain.IMPACT_MAP}
+    y = [0.0] * 13
+    outputs = {"impact_contact": gm.impact_contact(*y, 1.0, 2.0, 3.0, 0.3, 0.2, 0.1, 1.0),
+               "plastic_impulse": gm.plastic_impulse(2, 0, 0, 0, 2, 0, 0, 0, 2, 0.1, 0.2, -1.0),
+               "coulomb_impulse": gm.coulomb_impulse(0.5, 0.1, 0.2, 0.0, -1.0, 0.5, 0.0, 0.3)}
+    for name, layout in export_grain.IMPACT_MAP[:-1]:
+        names = export_grain.slot_names(layout)
+        assert outputs[name].shape == (layout.size,), name
+        assert set(names) <= {a for stage, _ in export_grain.IMPACT_MAP for a in args[stage]}, name
+    assert export_grain.slot_names(export_grain.CONTACT) == args["plastic_impulse"]  # k0 ... k8, u0, u1, u2
+    assert export_grain.slot_names(export_grain.PLASTIC) == args["coulomb_impulse"][:4]  # P_I, D0, D1, D2
+    assert export_grain.slot_names(export_grain.COULOMB) == args["impact_state"][-3:]  # P0, P1, P2
+
+
+def test_the_generated_rigid_fields_have_the_declared_columns():
+    """trolley_elastic.rigid_fields returns φ0 of the five roller coordinates then ψ0 of the rotation pairs
+    (the derivation's order, symmech.trolley.elastic.derive): the layout that splits them must agree."""
+    from symmech.generated import trolley_elastic as gen
+
+    out = gen.rigid_fields(np.array([0.5]), np.array([0.25]), np.array([-1.0]))
+    parts = elastic_layout.RIGID_FIELDS.split(out)
+    assert out.shape == (1, 3, elastic_layout.RIGID_FIELDS.size) == (1, 3, 11)
+    assert parts["phi"].shape[-1] == elastic_layout.ROLLER_DOFS.size == 5
+    assert parts["psi"].shape[-1] == len(elastic_layout.ROTATION_PAIRS) == 6
+    # φ0 of u2 is the unit vector x2 (a translation), ψ0_44 of a point r = (x1, x2, x3) is -(0, x2, x3) (th1 twice)
+    assert parts["phi"][0, :, 0].tolist() == [0.0, 1.0, 0.0]
+    assert np.allclose(parts["psi"][0, :, 0], [0.0, -0.25, 1.0], rtol=0, atol=1e-15)
+    with pytest.raises(ValueError, match="ElasticRigidFields.split: a last axis of 11 expected"):
+        elastic_layout.RIGID_FIELDS.split(out[..., :10])
 
 
 def test_an_exported_models_value_references_follow_the_declared_reals():

@@ -2,6 +2,7 @@
 no module is longer than 800 lines, every package folder is declared, and no text file keeps a merge's
 conflict markers."""
 import ast
+import re
 import tomllib
 from pathlib import Path
 
@@ -87,6 +88,30 @@ def test_every_package_folder_is_declared():
     declared = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
     found = {".".join(p.parent.relative_to(root).parts) for p in (root / "symmech").rglob("__init__.py")}
     assert found <= declared, sorted(found - declared)
+
+
+def test_the_architecture_names_every_module():
+    """docs/ARCHITECTURE.md has a place for every module of symmech/ (its tree or its module groups' rows): a new
+    module goes in with its line there."""
+    root = Path(__file__).resolve().parents[1]
+    doc = (root / "docs" / "ARCHITECTURE.md").read_text(encoding="utf-8")
+    unnamed = [str(p.relative_to(PACKAGE)) for p in PACKAGE.rglob("*.py")
+               if p.name != "__init__.py" and p.name not in doc]
+    assert unnamed == []
+
+
+ISSUE_REFERENCE = re.compile(r"\bissues?\s*#?\d+", re.IGNORECASE)
+
+
+def test_no_code_or_doc_names_an_issue_by_number():
+    """Code and docs say why in their own words; only CHANGELOG.md groups its lines by issue."""
+    root = Path(__file__).resolve().parents[1]
+    files = [root / "README.md"] + [p for d in ("symmech", "docs", "templates", "tools", "benchmarks")
+                                    for p in (root / d).rglob("*") if p.suffix in (".py", ".md", ".j2", ".c", ".h")]
+    texts = {str(p.relative_to(root)): p.read_text(encoding="utf-8") for p in files}
+    found = {p: ISSUE_REFERENCE.findall(text) for p, text in texts.items() if "issue" in text.lower()}
+    assert {p: hits for p, hits in found.items() if hits} == {}
+    assert ISSUE_REFERENCE.findall("see Issue #31, issues 4 and issue 7") == ["Issue #31", "issues 4", "issue 7"]
 
 
 CONFLICT_MARKERS = ("<<<<<<< ", "=======", ">>>>>>> ")

@@ -198,6 +198,13 @@ class Layout(_Declared):
         return {name: float(vec[at]) if shape == () else vec[at] if len(shape) == 1 else vec[at].reshape(shape)
                 for name, at, shape in self._where}
 
+    def split(self, array) -> dict:
+        """{name: view} of ``array`` (..., size) along its last axis: each field's slots (..., field size), for
+        arrays whose last axis this layout declares (a generated function's output columns, a table's rows)."""
+        if np.shape(array)[-1:] != (self.size,):
+            raise ValueError(f"{self.name}.split: a last axis of {self.size} expected, got shape {np.shape(array)}")
+        return {f.name: array[..., self.slice(f.name)] for f in self.fields}
+
     def zeros(self) -> np.ndarray:
         """A vector of zeros (size,)."""
         return np.zeros(self.size)

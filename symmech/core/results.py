@@ -69,6 +69,10 @@ class Table:
                 return self.data[:, i]
         raise KeyError(name)
 
+    def select(self, names) -> np.ndarray:
+        """The columns ``names`` side by side (rows, len(names)); KeyError for an unknown name."""
+        return np.column_stack([self.column(name) for name in names])
+
     def to_xarray(self, index: bool = True):
         """The table as an ``xarray.Dataset``, one variable per column with ``units`` and
         ``long_name`` attrs. ``index``: the first column is the coordinate (a time series,

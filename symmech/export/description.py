@@ -158,7 +158,7 @@ def _initial_unknowns(model: ExportModel) -> list[Variable]:
 
 def _experiment(root: ET.Element, model: ExportModel) -> None:
     if model.native is not None:
-        t = model.native.data[:, 0]
+        t = model.native.column("t")
         ET.SubElement(root, "DefaultExperiment", startTime=_number(t[0]), stopTime=_number(t[-1]),
                       stepSize=_number(t[1] - t[0]))
 

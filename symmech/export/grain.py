@@ -27,12 +27,16 @@ import math
 
 import numpy as np
 
+from symmech.core.layout import Field, Layout
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
 from symmech.export.model import REALS, ExportModel, Variable
 from symmech.export.sources import glue
+from symmech.grain.vectors import T_AT, TRAJECTORY_ROW
 
 IDENTIFIER = "grain"
+# the native run's trajectory columns the exported run is compared with: time, then the states x ... q3
+NATIVE_FIELDS = ("t", "r", "v", "q")
 STATE_NAMES = ("x", "y", "z", "vx", "vy", "vz", "q0", "q1", "q2", "q3", "w1", "w2", "w3")
 # parameters beyond the flight dynamics' (after them in r[]): name, unit, description
 LAW = (("m", "kg", "grain mass (body.mass, or body.density times the ellipsoid's volume)"),
@@ -58,6 +62,20 @@ DISCRETE = (("regime", "1", "regime: 0 flight, 1 slip, 2 stick", True),
 # an indicator below -MISSED_EVENT x the length scale without its event: the importer stepped over two of its
 # crossings (in flight: the grain has sunk into the surface)
 MISSED_EVENT = 1e-6
+# The impact map: the generated functions c/grain.c applies in turn at an impact and their outputs (the last, the
+# state after the impact, is the dynamics' STATE), each slot named as the later stages' arguments (the derivation's
+# symbols: symmech.grain.derive_motion).
+CONTACT = Layout("ImpactContact", (
+    Field("k", "1/kg", "inverse effective mass K of the lowest point, row by row", (9,)),
+    Field("u", "m/s", "velocity of the lowest point before the impact", (3,)),
+))
+PLASTIC = Layout("PlasticImpulse", (
+    Field("P_I", "N s", "plastic normal impulse"),
+    Field("D", "N s", "plastic sticking impulse beyond it", (3,)),
+))
+COULOMB = Layout("CoulombImpulse", (Field("P", "N s", "the energy-consistent Coulomb impulse", (3,)),))
+IMPACT_MAP = (("impact_contact", CONTACT), ("plastic_impulse", PLASTIC), ("coulomb_impulse", COULOMB),
+              ("impact_state", None))
 # where each dynamics parameter comes from in the scene
 SOURCE = {"gX": "surface.alpha_deg, beta_deg, g", "gY": "surface.alpha_deg, beta_deg, g",
           "gZ": "surface.alpha_deg, beta_deg, g", "A": "vibration.amplitude", "omega": "2 pi vibration.frequency",
@@ -122,19 +140,22 @@ def first_landing(trajectory: np.ndarray) -> float | None:
     sliding or sticking row: the last impact, or the start), None when it never does."""
     from symmech.grain import motion
 
-    (off,) = np.nonzero(trajectory[:, -1] == motion.REGIMES.index("sliding"))
-    return float(trajectory[max(off[0] - 1, 0), 0]) if off.size else None
+    (off,) = np.nonzero(trajectory[:, T_AT.regime] == motion.REGIMES.index("sliding"))
+    return float(trajectory[max(off[0] - 1, 0), T_AT.t]) if off.size else None
 
 
 def native_table(trajectory: np.ndarray, interval: float) -> Table:
     """The native trajectory's rows on the sample grid (k ``interval`` [s]; the rows at events left out), its
     columns t, x ... q3 (the exported states of the same names)."""
-    k = np.round(trajectory[:, 0] / interval)
-    on_grid = np.abs(trajectory[:, 0] - k * interval) <= 1e-9 * interval
+    t = trajectory[:, T_AT.t]
+    k = np.round(t / interval)
+    on_grid = np.abs(t - k * interval) <= 1e-9 * interval
     _, first = np.unique(k[on_grid], return_index=True)
-    columns = (Column("t", "s", "time"),) + tuple(Column(name, unit) for name, unit in
-                                                 zip(STATE_NAMES[:10], ("m",) * 3 + ("m/s",) * 3 + ("1",) * 4))
-    return Table(columns, trajectory[on_grid][first][:, :11], doc="trajectory at the sample interval")
+    exported = [TRAJECTORY_ROW.field(name) for name in NATIVE_FIELDS]
+    units = [f.unit for f in exported[1:] for _ in range(f.size)]
+    columns = (Column("t", "s", "time"),) + tuple(Column(name, unit) for name, unit in zip(STATE_NAMES, units))
+    rows = TRAJECTORY_ROW.split(trajectory[on_grid][first])
+    return Table(columns, np.column_stack([rows[name] for name in NATIVE_FIELDS]), doc="trajectory at the sample interval")
 
 
 def grain(sc, native: Table | None) -> ExportModel:
@@ -228,6 +249,12 @@ def _prelude(params: list[str]) -> list[str]:
                       "{", "    (void)t; (void)y; (void)p; (void)a;", f"    const double arg[] = {{{args}}};",
                       f"    {module}_{f}(arg, out);", "}"]
     return lines
+
+
+def slot_names(layout: Layout) -> list[str]:
+    """The name of each slot of ``layout`` as a generated function's argument: the field's name for a scalar, its
+    name and the index for a vector (``k0`` ... ``k8``)."""
+    return [f.name if f.shape == () else f"{f.name}{i}" for f in layout.fields for i in range(f.size)]
 
 
 def _nominals(sc) -> list[float]:

@@ -51,7 +51,7 @@ def _table(model: ExportModel) -> dict:
         return {"header": ",".join(["t"] + [v.name for v in states]), "vrs": [v.vr for v in states],
                 "stop": 1.0, "steps": 100}
     names = [c.name for c in model.native.columns]
-    t = model.native.data[:, 0]
+    t = model.native.column("t")
     return {"header": ",".join(names), "vrs": [by_name[n] for n in names[1:]], "stop": repr(float(t[-1])),
             "steps": len(t) - 1}
 

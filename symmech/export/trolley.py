@@ -111,7 +111,7 @@ def traction(setup, run: dict, law) -> ExportModel:
                     run["qd"][:, i]) for i in range(n)]
     coordinates.append(("s", "m", f"arc length of O along the track (tabulated over [{lo:.6g}, {hi:.6g}] m)", "V0",
                         run["s"], run["V0"]))
-    columns = output_columns(setup.names)[1:]  # s is a state
+    columns = [c for c in output_columns(setup.names) if c.name != "s"]  # s is a state
     m = len(coordinates)
     reals = REALS.sized(X=2 * m, DX=m, Y=len(columns), Z=0, U=1, P=len(parameters(system)) * 5, D=0)
     variables = [time_variable(reals), *_motion_variables(reals, coordinates)]

@@ -18,6 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from symmech.generated import grain_motion as gm
+from symmech.grain.vectors import ROTATION
+
+# a flight's rotation state is ROTATION (the compiled engine's too): the slots of q and w
+RO_Q, RO_W = ROTATION.slice("q"), ROTATION.slice("w")
 
 
 @dataclass(frozen=True)
@@ -95,11 +99,11 @@ class RotationFlight:
         self.t0 = t0
         self._pieces: list = []  # (t_start, t_end, dense)
         self._end = t0
-        self._y_end = np.concatenate([q0, w0]).astype(float)
+        self._y_end = ROTATION.pack(q=q0, w=w0)
         self.static = not np.any(w0)
 
     def _rhs(self, _t, y):
-        q, w = y[:4], y[4:]
+        q, w = y[RO_Q], y[RO_W]
         return np.concatenate([gm.quaternion_rate(*q, *w), gm.euler_equations(*self.inertia, *w)])
 
     def _extend(self, t: float) -> None:
@@ -118,14 +122,14 @@ class RotationFlight:
         """(q (..., 4), w (..., 3)) at times ``t >= t0`` (scalar or array); q renormalised."""
         t = np.asarray(t, dtype=float)
         if self.static:
-            return (np.broadcast_to(self._y_end[:4], t.shape + (4,)).copy(),
-                    np.broadcast_to(self._y_end[4:], t.shape + (3,)).copy())
+            q, w = self._y_end[RO_Q], self._y_end[RO_W]
+            return np.broadcast_to(q, t.shape + q.shape).copy(), np.broadcast_to(w, t.shape + w.shape).copy()
         self._extend(float(t.max()))
-        y = np.empty((7,) + t.shape)
+        y = np.empty((ROTATION.size,) + t.shape)
         for start, end, dense in self._pieces:
             inside = (t >= start) & (t <= end)
             if inside.any():
                 y[:, inside] = dense(t[inside])
         y = np.moveaxis(y, 0, -1)
-        q = y[..., :4] / np.linalg.norm(y[..., :4], axis=-1, keepdims=True)
-        return q, y[..., 4:]
+        q = y[..., RO_Q] / np.linalg.norm(y[..., RO_Q], axis=-1, keepdims=True)
+        return q, y[..., RO_W]

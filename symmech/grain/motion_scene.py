@@ -26,6 +26,7 @@ from symmech.generated import grain_motion as gm
 from symmech.grain import contact, fields, flight, motion, paper_mode, plots, sweep
 from symmech.grain.body import rotation
 from symmech.grain.coulomb_law import ImpactLaw
+from symmech.grain.vectors import T_AT
 
 ROLE = "kind"  # found by symmech.core.discovery
 
@@ -498,8 +499,9 @@ TRAJECTORY = (Column("t", "s", "time"), *(Column(x, "m", f"centre {x}, KXYZ, rel
 
 def _trajectory(m: motion.Motion) -> Table:
     tr = m.trajectory
-    return Table(TRAJECTORY, tr[:, :-1], "rows at the sample interval and at every event; regime: flight, "
-                 "impact (pre and post rows) or sliding", {"regime": [motion.REGIMES[int(c)] for c in tr[:, -1]]})
+    return Table(TRAJECTORY, np.delete(tr, T_AT.regime, axis=1), "rows at the sample interval and at every event; "
+                 "regime: flight, impact (pre and post rows) or sliding",
+                 {"regime": [motion.REGIMES[int(c)] for c in tr[:, T_AT.regime]]})
 
 
 IMPACTS = (Column("t", "s", "impact time"), *(Column(x, "m", f"centre {x}") for x in "xyz"),

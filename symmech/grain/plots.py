@@ -12,6 +12,7 @@ import numpy as np
 
 from symmech.core import plotting
 from symmech.generated import grain_impact as gen
+from symmech.grain.vectors import TRAJECTORY_ROW
 
 # plot name -> its caption (a sentence; also the plot's description in the scene's `[output]` docs)
 MOTION = {"path": "The grain's path: side view relative to the surface, and its centre height over time with the "
@@ -34,8 +35,8 @@ def _impact_states(result) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
 def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
     """The figures of :data:`MOTION` that ``output`` (the scene's ``[output]`` table) asks for,
     of a grain run, relative to the surface frame."""
-    tr = result.trajectory
-    t = tr[:, 0]
+    tr = TRAJECTORY_ROW.split(result.trajectory)  # t (n, 1), r, v (n, 3) relative to the surface
+    t, r, v = tr["t"][:, 0], tr["r"], tr["v"]
     hits, r_hit, v_before, v_after = _impact_states(result)
     impact_style = {"ls": "none", "marker": "o", "ms": 3, "mfc": "none", "color": "tab:red"}
 
@@ -43,12 +44,12 @@ def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
         s = sc.model.vibration.kinematics(t)[..., 0, :]  # surface displacement (n, 3) [m]
         fig, axes = plotting.figure(2, 1, height=3.0)
         side, height = axes[:, 0]
-        side.plot(tr[:, 1] + s[:, 0], tr[:, 3] + s[:, 2], lw=0.8, label="centre of mass")
-        side.plot(tr[:, 1] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
+        side.plot(r[:, 0] + s[:, 0], r[:, 2] + s[:, 2], lw=0.8, label="centre of mass")
+        side.plot(r[:, 0] + s[:, 0], s[:, 2], lw=0.8, color="k", label="surface under the grain")
         plotting.set_labels(side, ("X along the surface", "m"), ("Z", "m"))
         side.set_title("Side view (surface frame at its rest position)")
         plotting.legend_beside(side)
-        height.plot(t, tr[:, 3], lw=0.8, label="centre height above the surface")
+        height.plot(t, r[:, 2], lw=0.8, label="centre height above the surface")
         height.plot(hits, r_hit[:, 2], **impact_style, label=f"impacts ({hits.size})")
         plotting.set_labels(height, ("time t", "s"), ("relative height z", "m"))
         plotting.legend_beside(height)
@@ -57,8 +58,8 @@ def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
     def velocity():
         fig, axes = plotting.figure(1, 1, height=4.0)
         ax = axes[0, 0]
-        for k, name in ((4, "v_x"), (5, "v_y"), (6, "v_z")):
-            ax.plot(t, tr[:, k], lw=0.8, label=f"{name} (relative)")
+        for k, name in enumerate(("v_x", "v_y", "v_z")):
+            ax.plot(t, v[:, k], lw=0.8, label=f"{name} (relative)")
         ax.plot(hits, v_after[:, 2], **impact_style, label=f"v_z just after each impact ({hits.size})")
         plotting.set_labels(ax, ("time t", "s"), ("centre velocity relative to the surface", "m/s"))
         ax.set_title("Centre velocity relative to the surface")
@@ -68,7 +69,7 @@ def motion_plots(sc, result, out: Path, output: dict) -> list[Path]:
     def phase():
         fig, axes = plotting.figure(1, 1, width=6.0, height=5.0)
         ax = axes[0, 0]
-        ax.plot(tr[:, 3], tr[:, 6], lw=0.6, color="tab:blue", label="flight and sliding")
+        ax.plot(r[:, 2], v[:, 2], lw=0.6, color="tab:blue", label="flight and sliding")
         ax.plot(r_hit[:, 2], v_before[:, 2], ls="none", marker="v", ms=4, color="tab:red",
                 label="just before impact")
         ax.plot(r_hit[:, 2], v_after[:, 2], ls="none", marker="^", ms=4, color="tab:green",

@@ -52,6 +52,11 @@ from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.grain import contact, flight, outcome
 from symmech.grain.contact import first_root
+from symmech.grain.vectors import SLIDE_STATE
+
+# the state of a sliding phase is SLIDE_STATE (the compiled engine's too): its fields' slots
+Z_R, Z_V, Z_W, Z_Q = (SLIDE_STATE.slice(name) for name in ("r", "v", "w", "q"))
+Z_WORK, Z_LOSS = SLIDE_STATE.offset("work"), SLIDE_STATE.offset("loss")
 
 MAX_RHS_PER_PHASE = 400_000  # step-count guard: right-hand sides per integration chunk
 MAX_STALLED_EVENTS = 200  # stagnation guard: consecutive events that do not advance time
@@ -146,10 +151,10 @@ class _Contact:
 
     def geometry(self, y):
         """Contact offset R (3,), slip s (2,), slip acceleration of the carried contact point c (2,)."""
-        w = y[4:7]
-        R = self.R0 if self.R_body is None else _rotate(y[7:11], self.R_body)
+        w = y[Z_W]
+        R = self.R0 if self.R_body is None else _rotate(y[Z_Q], self.R_body)
         wR = _cross(w, R)
-        s = y[2:4] + wR[:2]
+        s = y[Z_V] + wR[:2]
         # The contact point turns with the spin about the normal: R' = w_z e_z x R.
         c = _cross(w, (-w[2] * R[1], w[2] * R[0], 0.0))[:2]
         return R, s, c
@@ -186,11 +191,11 @@ class _Contact:
             speed = math.hypot(s[0], s[1])
             phi = -self.model.mu * n / speed * s if speed > 0.0 else np.zeros(2)
         force = (phi[0], phi[1], n)
-        w0, w1, w2 = y[4:7]
-        q0, q1, q2, q3 = y[7:11]
+        w0, w1, w2 = y[Z_W]
+        q0, q1, q2, q3 = y[Z_Q]
         dq = 0.5 * np.array([-w0 * q1 - w1 * q2 - w2 * q3, w0 * q0 + w1 * q3 - w2 * q2,
                              w1 * q0 + w2 * q1 - w0 * q3, w2 * q0 + w0 * q2 - w1 * q1])  # (0, w) (x) q
-        return np.concatenate([y[2:4], f + phi, self.M @ _cross(R, force), dq,
+        return np.concatenate([y[Z_V], f + phi, self.M @ _cross(R, force), dq,
                                [force[0] * vel[0] + force[1] * vel[1] + n * vel[2], -(phi[0] * s[0] + phi[1] * s[1])]])
 
 
@@ -216,14 +221,14 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
     t_lift = first_root(model.normal, t0, t_end, step, tol * step) if model.normal(t0) > 0 else t0
     t_stop = t_end if t_lift is None else t_lift
     ode = _Contact(model, body, q0)
-    y = np.concatenate([r0, v0, w0, q0, [0.0, 0.0]]).astype(float)
+    y = SLIDE_STATE.pack(r=r0, v=v0, w=w0, q=q0, work=0.0, loss=0.0)
     sample_times = np.asarray(sample_times, dtype=float)
     # Velocity gained over one scan step: the scale of the slip-speed resolution and of atol.
     v_scale = (float(np.linalg.norm(model.g_k)) + float(np.abs(model.normal(t0)))) * step
     v_stop = tol * v_scale
     a_min = min(body.axes)
-    atol = tol * v_scale * np.array([step, step, 1, 1, 1 / a_min, 1 / a_min, 1 / a_min,
-                                     1 / v_scale, 1 / v_scale, 1 / v_scale, 1 / v_scale, v_scale, v_scale])
+    atol = tol * v_scale * SLIDE_STATE.pack(r=(step, step), v=(1, 1), w=(1 / a_min,) * 3, q=(1 / v_scale,) * 4,
+                                            work=v_scale, loss=v_scale)
     chunk = 40 * step
     # Slip speed below which an anisotropic slip goes implicit: the friction's turning rate ~ mu n / |s| makes
     # DOP853 stability-bound there (measured: 1.2e-6 m/s at tol 1e-9 costs DOP853's time within ~30 % where
@@ -254,8 +259,8 @@ def slide(model: Sliding, body: Body, t0: float, r0, v0, q0, w0, t_end: float, s
         if progress is not None:
             progress(t)
     samples = _samples(pieces, sample_times[(sample_times >= t0) & (sample_times < t)])
-    return SlideResult(t, y[:2], y[2:4], y[4:7], y[7:11] / np.linalg.norm(y[7:11]), t_lift is not None and
-                       t >= t_lift, body.mass * y[11], body.mass * y[12], samples)
+    return SlideResult(t, y[Z_R], y[Z_V], y[Z_W], y[Z_Q] / np.linalg.norm(y[Z_Q]), t_lift is not None and
+                       t >= t_lift, body.mass * y[Z_WORK], body.mass * y[Z_LOSS], samples)
 
 
 def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
@@ -270,12 +275,12 @@ def _settle(ode: _Contact, t, y, v_stop, may_stick: bool = True):
     stick = may_stick and math.hypot(*phi) <= ode.model.mu * n
     target = np.zeros(2) if stick else 2.0 * v_stop * ode.slip_direction(t, y)
     y = y.copy()
-    Q = flight.rotation_matrix(y[7:11])
-    before = ode.body.kinetic(Q, np.append(y[2:4], 0.0), y[4:7])
+    Q = flight.rotation_matrix(y[Z_Q])
+    before = ode.body.kinetic(Q, np.append(y[Z_V], 0.0), y[Z_W])
     dphi = np.linalg.solve(ode.B(R), target - s)
-    y[2:4] += dphi
-    y[4:7] += ode.M @ np.cross(R, np.append(dphi, 0.0))
-    y[12] += before - ode.body.kinetic(Q, np.append(y[2:4], 0.0), y[4:7])
+    y[Z_V] += dphi
+    y[Z_W] += ode.M @ np.cross(R, np.append(dphi, 0.0))
+    y[Z_LOSS] += before - ode.body.kinetic(Q, np.append(y[Z_V], 0.0), y[Z_W])
     return stick, y
 
 
@@ -319,13 +324,13 @@ def _stick_ends(ode: _Contact, mu):
 
 def _samples(pieces, times):
     """(t (n,), r (n, 2), v (n, 2), q (n, 4), w (n, 3)) from the dense outputs at sorted ``times``."""
-    y = np.empty((len(times), 13))
+    y = np.empty((len(times), SLIDE_STATE.size))
     for a, b, dense in pieces:
         inside = (times >= a) & (times <= b)
         if inside.any():
             y[inside] = dense(times[inside]).T
-    q = y[:, 7:11] / np.linalg.norm(y[:, 7:11], axis=1, keepdims=True) if len(times) else y[:, 7:11]
-    return times, y[:, :2], y[:, 2:4], q, y[:, 4:7]
+    q = y[:, Z_Q] / np.linalg.norm(y[:, Z_Q], axis=1, keepdims=True) if len(times) else y[:, Z_Q]
+    return times, y[:, Z_R], y[:, Z_V], q, y[:, Z_W]
 
 
 def slide_step(model: Sliding, t, v, dt: float):

@@ -256,19 +256,19 @@ def _headline(m: Mechanism, omega: list, md, tables: dict) -> list[Headline]:
                             "ω = 0: the mechanism can move freely"))
     if "free_response" in tables:
         q = tables["free_response"]
-        values = np.abs(q.data[:, 1:])
-        i, j = np.unravel_index(np.argmax(values), values.shape)
+        coordinates = q.select([co.name for co in m.coordinates])
+        i, j = np.unravel_index(np.argmax(np.abs(coordinates)), coordinates.shape)
         co = m.coordinates[j]
-        out.append(Headline(f"largest free response, {co.name}", q.data[i, j + 1], co.unit,
-                            "largest |q| of free_response.csv", f"t = {q.data[i, 0]:.4g} s"))
+        out.append(Headline(f"largest free response, {co.name}", coordinates[i, j], co.unit,
+                            "largest |q| of free_response.csv", f"t = {q.column('t')[i]:.4g} s"))
     if "frequency_response" in tables:
         h = tables["frequency_response"]
-        amplitude = h.data[:, 1:1 + len(m.coordinates)]
+        amplitude = h.select([f"abs_{co.name}" for co in m.coordinates])
         i, j = np.unravel_index(np.argmax(amplitude), amplitude.shape)
-        co = m.coordinates[j]
+        co, omega = m.coordinates[j], h.column("omega")[i]
         out.append(Headline(f"largest frequency response, {co.name}", amplitude[i, j], co.unit,
                             "amplitude of q for a unit harmonic force (frequency_response.csv)",
-                            f"f = {h.data[i, 0] / (2 * math.pi):.4g} Hz (ω = {h.data[i, 0]:.4g} rad/s)"))
+                            f"f = {omega / (2 * math.pi):.4g} Hz (ω = {omega:.4g} rad/s)"))
     return out
 
 

@@ -387,11 +387,12 @@ def quantity(res, name) -> np.ndarray:
 
 
 T = Column("t", "s", "time")
+REACTION_COLUMNS = (Column("P0", "N", "traction at O along x1"), Column("P1", "N", "rear roller B along x2"),
+                    Column("P2", "N", "rear roller C along x2"), Column("P3", "N", "front axle A along x2"),
+                    Column("P4", "N", "rear axle O along x3"), Column("P5", "N", "front axle A along x3"))
 CASE_COLUMNS = (T, *(Column(f"V{i}", "m/s", f"velocity of the centre of mass along x{i}") for i in (1, 2, 3)),
                 *(Column(f"a{i}", "m/s^2", f"acceleration of the centre of mass along x{i}") for i in (1, 2, 3)),
-                Column("P0", "N", "traction at O along x1"), Column("P1", "N", "rear roller B along x2"),
-                Column("P2", "N", "rear roller C along x2"), Column("P3", "N", "front axle A along x2"),
-                Column("P4", "N", "rear axle O along x3"), Column("P5", "N", "front axle A along x3"))
+                *REACTION_COLUMNS)
 UNITS = {c.name: c.unit for c in CASE_COLUMNS}  # the printed tables' quantities in SI
 OVERLOAD_COLUMNS = (T, *(Column(f"n{i}", "g", f"overload (a + g0 ν)/g0 along x{i}") for i in (1, 2, 3)))
 
@@ -461,7 +462,7 @@ def _case_headline(setup, case, r) -> list[Headline]:
         out.append(Headline(f"case {case}: critical overload n{k + 1}", n[i], "g",
                             f"along {axis}: the extreme nearest to or beyond the comfort envelope [{lo:g}, {hi:g}] g",
                             at(i), (lo, hi)))
-    for j, column in enumerate(CASE_COLUMNS[7:]):
+    for j, column in enumerate(REACTION_COLUMNS):
         i = int(np.argmax(np.abs(r["P"][:, j])))
         out.append(Headline(f"case {case}: peak reaction {column.name}", r["P"][i, j], "N", column.doc, at(i)))
     return out

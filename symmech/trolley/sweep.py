@@ -331,7 +331,9 @@ def point_metrics(res: Result, comfort: dict) -> tuple[list[Column], list[float]
                 for n, a in zip(REACTIONS, amp)]
         out.append((Column("amplification_max", "1", "largest dynamic amplification of P0…P5"), np.nanmax(amp)))
     if "roller_deflections" in t:
-        d = t["roller_deflections"].data[:, 1:]
+        from symmech.trolley.elastic.scene import DEFLECTIONS
+
+        d = t["roller_deflections"].select([c.name for c in DEFLECTIONS])
         out.append((Column("roller_deflection_max", "m", "largest roller deflection |d1…d5|"), np.abs(d).max()))
     names = [c.name[:-3] for c in t["points"].columns if c.name.endswith("_n1")] if "points" in t else []
     if names:
@@ -341,7 +343,7 @@ def point_metrics(res: Result, comfort: dict) -> tuple[list[Column], list[float]
         out.append((Column("body_deflection_max", "m", "largest elastic deflection of a report point"), e.max()))
         series = {n: np.column_stack([pts.column(f"{n}_n{k}") for k in (1, 2, 3)]) for n in names}
     else:
-        series = {"com": t[f"{case}_overload"].data[:, 1:4]}
+        series = {"com": t[f"{case}_overload"].select(("n1", "n2", "n3"))}
     margins = {n: comfort_margin(v, comfort) for n, v in series.items()}
     where = "report point" if names else "centre of mass (rigid model)"
     out += [(Column(f"comfort_margin_{n}", "g", f"least distance of the {where} {n}'s overload to the comfort "

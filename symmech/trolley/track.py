@@ -105,7 +105,7 @@ class ExpressionTrack(Track):
         for name, e in zip("xyz", self.exprs):
             _check_with_derivatives(f"{field}.{name}", e, "s", lo, hi, MAX_ORDER, "m")
         s = np.linspace(lo, hi, 2001)
-        t = np.stack(self._f(s)[3:6], axis=-1)
+        t = self.derivatives(s, 1)[1]  # dX0/ds
         dev = np.abs(np.linalg.norm(t, axis=-1) - 1.0)
         if dev.max() > 1e-6:
             raise SceneError(f"{field}.x", f"|dX0/ds| deviates from 1 by {dev.max():.3g} at s = "

@@ -14,6 +14,7 @@ import numpy as np
 from symmech.numerics import dop853_tableau as dop853
 from symmech.core.layout import Field, Layout
 from symmech.grain import motion, sliding
+from symmech.grain.vectors import ROTATION, SLIDE_STATE, TRAJECTORY_ROW  # shared with the Python reference
 
 PARAMS = Layout("GrainParams", (
     Field("axes", "m", "semi-axes a, b, c of the ellipsoid", (3,)),
@@ -88,19 +89,6 @@ SLIDE = Layout("GrainSlide", (
     Field("aniso", "1", "1: the contact is anisotropic (stiff slips possible)"),
     Field("v_stiff", "m/s", "slip speed below which an anisotropic slip is stiff"),
 ))
-# The vectors the loop's integrators advance: a flight's torque-free rotation, and a sliding contact's state.
-ROTATION = Layout("GrainRotation", (
-    Field("q", "1", "orientation quaternion", (4,)),
-    Field("w", "rad/s", "angular velocity in body axes", (3,)),
-))
-SLIDE_STATE = Layout("GrainSlideState", (
-    Field("r", "m", "tangential centre position in KXYZ", (2,)),
-    Field("v", "m/s", "tangential centre velocity in KXYZ", (2,)),
-    Field("w", "rad/s", "angular velocity in KXYZ", (3,)),
-    Field("q", "1", "orientation quaternion", (4,)),
-    Field("work", "J/kg", "work of the surface on the grain since the phase's start, per unit mass"),
-    Field("loss", "J/kg", "energy dissipated by friction since the phase's start, per unit mass"),
-))
 # One impact row of the log (the keys of ``motion.impact_record``; flags: -1 not checked, 0 no, 1 yes).
 IMPACT_ROW = Layout("GrainImpact", (
     Field("t", "s", "time of the impact"),
@@ -119,15 +107,7 @@ IMPACT_ROW = Layout("GrainImpact", (
     Field("printed_creates_energy", "1", "flag: the printed law creates energy"),
     Field("converged", "1", "flag: the printed law's solution converged"),
 ))
-# One trajectory row (motion.TRAJECTORY_COLUMNS) and one warning row, as the loop returns them.
-TRAJECTORY_ROW = Layout("GrainTrajectoryRow", (
-    Field("t", "s", "time"),
-    Field("r", "m", "centre position in KXYZ", (3,)),
-    Field("v", "m/s", "centre velocity in KXYZ", (3,)),
-    Field("q", "1", "orientation quaternion (unit)", (4,)),
-    Field("w", "rad/s", "angular velocity in KXYZ", (3,)),
-    Field("regime", "1", "regime code: FLIGHT, IMPACT or SLIDING"),
-))
+# One warning row, as the loop returns them.
 WARNING_ROW = Layout("GrainWarning", (
     Field("code", "1", "warning code W_*"),
     Field("a", "", "first value of the text (a time, a residual, an energy)"),

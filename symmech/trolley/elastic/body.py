@@ -16,11 +16,9 @@ from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
 from symmech.trolley import model
 from symmech.trolley.elastic import membrane
-from symmech.trolley.elastic.layout import FIELDS, ROLLER_DOFS
+from symmech.trolley.elastic.layout import FIELDS, RIGID_FIELDS, ROLLER_DOFS, ROTATION_PAIRS
 
 ROLLER_NAMES = ROLLER_DOFS.names  # the roller coordinates, declared with their units
-# (i, j) of the ψ0 columns of the generated rigid_fields: 44, 45, 46, 55, 56, 66
-ROTATION_PAIRS = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
 # Gauss points per beam: exact for the products of two shortening fields of degree 2 NMAX + 1.
 BEAM_GAUSS = 2 * 8 + 4
 # Frequencies that load the body periodically (name, meaning), in the columns of the scene's forcing_frequencies.
@@ -184,12 +182,11 @@ def invariants(mdl: ElasticModel, probes=()) -> Invariants:
     names: list[str] = []
     psi: dict[tuple, np.ndarray] = {}
     eff = mdl.effects
-    rigid = gen.rigid_fields(pts[:, 0], pts[:, 1], pts[:, 2])  # (P, 3, 11)
+    rigid = RIGID_FIELDS.split(gen.rigid_fields(pts[:, 0], pts[:, 1], pts[:, 2]))  # phi, psi: (P, 3, 5), (P, 3, 6)
     if eff.rollers and mdl.rollers is not None:
         names += list(ROLLER_NAMES)
-        fields += [rigid[:, :, i] for i in range(5)]
-        for col, pair in enumerate(ROTATION_PAIRS):
-            psi[pair] = rigid[:, :, 5 + col]
+        fields += list(np.moveaxis(rigid["phi"], -1, 0))
+        psi.update(zip(ROTATION_PAIRS, np.moveaxis(rigid["psi"], -1, 0)))
     n_roll = len(names)
     K_blocks, held = [], []
     start = 0

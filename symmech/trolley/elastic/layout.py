@@ -49,6 +49,14 @@ ROLLER_DOFS = Layout("ElasticRollerDofs", (
     Field("u2", "m", "translation of the trolley along x2"), Field("u3", "m", "translation along x3"),
     Field("th1", "rad", "small rotation about x1"), Field("th2", "rad", "about x2"), Field("th3", "rad", "about x3"),
 ))
+# (i, j) of the rotation pairs of ψ0 (0-based in q0 = (u2, u3, th1, th2, th3)): 44, 45, 46, 55, 56, 66
+ROTATION_PAIRS = ((2, 2), (2, 3), (2, 4), (3, 3), (3, 4), (4, 4))
+# The columns of the generated ``trolley_elastic.rigid_fields`` (P, 3, columns): the rigid displacement's first and
+# second derivatives at q0 = 0 (symmech.trolley.elastic.derive.rigid_fields).
+RIGID_FIELDS = Layout("ElasticRigidFields", (
+    Field("phi", "1 or m", "φ0: derivative by each roller coordinate (ROLLER_DOFS)", (ROLLER_DOFS.size,)),
+    Field("psi", "m", "ψ0: second derivative by each rotation pair (ROTATION_PAIRS)", (len(ROTATION_PAIRS),)),
+))
 # With traction, q̈ and V̇0 solve one linear system together: its unknowns, and the columns of its derivative
 # by the state (the state without E_d and W, which the equations do not read).
 TRACTION_UNKNOWNS = Layout("ElasticTractionUnknowns", (
@@ -106,7 +114,7 @@ Y_AT, FC_AT = TRACTION_STATE.positions, FIELDS.positions
 U_AT, CO_AT = TRACTION_UNKNOWNS.positions, TRACTION_COLUMNS.positions
 N_CHANNELS, N_GEOMETRY, N_ROLLER_DOFS = CHANNELS.size, GEOMETRY.size, ROLLER_DOFS.size
 LAYOUTS = (MODEL, FLAGS, ROLLER, CHANNELS, GEOMETRY, ROLLER_DOFS, STATE, TRACTION_STATE, FIELDS, TRACTION_UNKNOWNS,
-           TRACTION_COLUMNS)  # symmech.core.engines: describe
+           TRACTION_COLUMNS, RIGID_FIELDS)  # symmech.core.engines: describe
 
 
 def state(n: int, traction: bool) -> Layout:

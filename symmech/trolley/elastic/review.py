@@ -12,7 +12,7 @@ import numpy as np
 
 from symmech.core import units
 from symmech.core.results import Check, Headline, Result, at_most, within
-from symmech.trolley.elastic.scene import FORCING, Setup, sign_changes
+from symmech.trolley.elastic.scene import DEFLECTIONS, FORCING, Setup, sign_changes
 
 ENERGY_TOLERANCE_PER_RTOL = 10.0  # relative energy residual allowed per unit of the integration's rtol
 LIGHT_DAMPING = 0.1  # a mode damped less rings for several periods: the outputs must be able to show it
@@ -70,7 +70,7 @@ def _deflections(setup: Setup, tables) -> list[Headline]:
     t = setup.t
     out = []
     if "roller_deflections" in tables:
-        d = np.abs(tables["roller_deflections"].data[:, 1:])
+        d = np.abs(tables["roller_deflections"].select([c.name for c in DEFLECTIONS]))
         i, j = np.unravel_index(np.argmax(d), d.shape)
         out.append(Headline("largest roller deflection", d[i, j], "m", f"roller of P{j + 1}", f"t = {t[i]:.4g} s"))
     for name in setup.names:

@@ -49,6 +49,9 @@ class Setup:
 # the Python engine's: el_sim.SECONDS_PER_STEP): the estimate, and the `auto` engine's choice
 SECONDS_PER_STEP = {"python": el_sim.SECONDS_PER_STEP, "compiled": 2e-3}
 
+# the columns of the roller_deflections table beside t
+DEFLECTIONS = tuple(Column(f"d{i + 1}", "m", f"deflection of the roller of P{i + 1}") for i in range(5))
+
 
 def engine(setup: Setup, runs: int = 1) -> tuple[str, str]:
     """The engine that integrates the elastic model, "compiled" or "python", and why. ``auto`` takes the
@@ -196,9 +199,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
     modes, failed = _modal_analysis(setup, r)
     tables = {"elastic_reactions": _reactions_table(r), "energy": _energy_table(r)}
     if setup.system.rollers_on:
-        tables["roller_deflections"] = ResultTable(
-            [Column("t", "s")] + [Column(f"d{i + 1}", "m", f"deflection of the roller of P{i + 1}") for i in range(5)],
-            np.column_stack([t, r["deflection"]]))
+        tables["roller_deflections"] = ResultTable((Column("t", "s"), *DEFLECTIONS), np.column_stack([t, r["deflection"]]))
     if setup.names:
         tables["points"] = _points_table(setup.names, r)
     if modes is not None:

@@ -26,24 +26,29 @@ import sympy as sp
 
 from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix, args_of
 from symmech.trolley.derive import SOURCE
+from symmech.trolley.elastic.layout import CHANNELS as CHANNEL_LAYOUT, FIELDS, GEOMETRY as GEOMETRY_LAYOUT, N_ROLLER_DOFS
 
 NAME = "elastic_assembly"
 ROLLERS = 5
-# the frame channels in the order of symmech.trolley.elastic.layout.CHANNELS
-CHANNELS = tuple(sp.symbols("load1:4 omega1:4 domega1:4 v01:4", real=True))
-CHANNEL_ARGS = args_of(
-    [(CHANNELS[i], f"a0 + g0 ν along x{i + 1}: the frame's acceleration plus gravity", "m/s^2") for i in range(3)]
-    + [(CHANNELS[3 + i], f"angular velocity ω of the frame about x{i + 1}", "rad/s") for i in range(3)]
-    + [(CHANNELS[6 + i], f"angular acceleration ω̇ of the frame about x{i + 1}", "rad/s^2") for i in range(3)]
-    + [(CHANNELS[9 + i], f"velocity of the frame's origin along x{i + 1}", "m/s") for i in range(3)])
-# the traction table's geometry channels in the order of symmech.trolley.elastic.layout.GEOMETRY
-GEOMETRY = tuple(sp.symbols("e1:4 k1:4 nu1:4 Om1:4 dOm1:4", real=True))
-GEOMETRY_ARGS = args_of(
-    [(GEOMETRY[i], f"unit tangent e along x{i + 1}", "1") for i in range(3)]
-    + [(GEOMETRY[3 + i], f"e' + Ω × e along x{i + 1} (per arc length)", "1/m") for i in range(3)]
-    + [(GEOMETRY[6 + i], f"unit vertical ν along x{i + 1}", "1") for i in range(3)]
-    + [(GEOMETRY[9 + i], f"rotation rate Ω of the frame per arc length about x{i + 1}", "rad/m") for i in range(3)]
-    + [(GEOMETRY[12 + i], f"Ω' about x{i + 1}", "rad/m^2") for i in range(3)])
+
+
+def _symbols(layout) -> tuple:
+    """One real symbol per slot of ``layout``, in its order (``load1``, ``load2``, ... for a field ``load`` of
+    3), and their arguments (symbol, meaning with the component, unit)."""
+    symbols = tuple(sp.Symbol(f"{f.name}{i + 1}", real=True) for f in layout.fields for i in range(f.size))
+    rows = [(f.meaning, f.unit, i) for f in layout.fields for i in range(f.size)]
+    return symbols, args_of([(x, f"{meaning}, x{i + 1} component", unit)
+                             for x, (meaning, unit, i) in zip(symbols, rows)])
+
+
+def _by_field(layout, values) -> dict:
+    """{field name: its slots of ``values``} of a sequence in the order of ``layout``."""
+    return {f.name: tuple(values[layout.slice(f.name)]) for f in layout.fields}
+
+
+# the frame channels of the table in t and the geometry channels of the traction table in s, as declared
+CHANNELS, CHANNEL_ARGS = _symbols(CHANNEL_LAYOUT)
+GEOMETRY, GEOMETRY_ARGS = _symbols(GEOMETRY_LAYOUT)
 STIFFNESS = sp.symbols(f"roller_k1:{ROLLERS + 1}", real=True)
 DAMPING = sp.symbols(f"roller_c1:{ROLLERS + 1}", real=True)
 PRELOAD = sp.symbols(f"roller_pre1:{ROLLERS + 1}", real=True)
@@ -118,9 +123,12 @@ def traction_spec(model: dict, names: list[str], units: list[str], law: sp.Expr)
 def motion(V, dV, g0) -> tuple:
     """The 12 frame channels (load, ω, ω̇, v0) at speed V [m/s] and its rate dV [m/s²] from the GEOMETRY channels
     (the compiled engine's ``_motion``)."""
-    e, k, nu, om, dom = (GEOMETRY[3 * i:3 * i + 3] for i in range(5))
-    return (tuple(dV * e[i] + V ** 2 * k[i] + g0 * nu[i] for i in range(3)) + tuple(V * om[i] for i in range(3))
-            + tuple(dV * om[i] + V ** 2 * dom[i] for i in range(3)) + tuple(V * e[i] for i in range(3)))
+    geo = _by_field(GEOMETRY_LAYOUT, GEOMETRY)
+    e, k, nu, om, dom = (geo[name] for name in ("e", "k", "nu", "om", "dom"))
+    frame = {"load": tuple(dV * e[i] + V ** 2 * k[i] + g0 * nu[i] for i in range(3)),
+             "omega": tuple(V * om[i] for i in range(3)),
+             "domega": tuple(dV * om[i] + V ** 2 * dom[i] for i in range(3)), "v0": tuple(V * e[i] for i in range(3))}
+    return tuple(x for name in CHANNEL_LAYOUT.names for x in frame[name])
 
 
 def _coordinates(n: int) -> tuple:
@@ -155,13 +163,16 @@ class _Terms:
         """``channels``: the 12 frame channels (symbols or expressions) in the order of CHANNELS."""
         self.m, self.q, self.qd, self.channels = model, q, qd, channels
         self.n, self.f = len(q), len(model["gram_trace"])
-        load, w, dw = channels[0:3], channels[3:6], channels[6:9]
+        self.at = FIELDS.sized(N=self.n, P=self.f - 1 - self.n)  # the fields: r, the φ_a, the ψ_ab
+        frame = _by_field(CHANNEL_LAYOUT, channels)
+        load, w, dw = frame["load"], frame["omega"], frame["domega"]
         W = sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
         dW = sp.Matrix([[0, -dw[2], dw[1]], [dw[2], 0, -dw[0]], [-dw[1], dw[0], 0]])
         self.load, self.W, self.B = sp.Matrix(load), W, W * W + dW
         self.rr = self.field_position()
         self.v = self.times_a(qd, q)
-        self.p2 = [0] * (1 + self.n) + self.times_a(qd, qd)[1 + self.n:]
+        psi = self.at.offset("psi")
+        self.p2 = [0] * psi + self.times_a(qd, qd)[psi:]
 
     def field_position(self) -> list:
         """Coefficients of r + Σ q_a φ_a + ½ Σ q_a q_b ψ_ab over the fields (F)."""
@@ -173,16 +184,17 @@ class _Terms:
         """y A(x) (F): Σ_b y_b (φ_b + Σ_c x_c ψ_bc)."""
         m = self.m
         out = [sp.Integer(0)] * self.f
+        phi = self.at.offset("phi")
         for b in range(self.n):
-            out[1 + b] += y[b]
+            out[phi + b] += y[b]
             for e in range(m["ptr"][b], m["ptr"][b + 1]):
                 out[m["col"][e]] += y[b] * x[m["qi"][e]]
         return out
 
     def a_times(self, z) -> list:
         """A(q) z (N) for z (F)."""
-        m, q = self.m, self.q
-        return [z[1 + b] + sp.Add(*[q[m["qi"][e]] * z[m["col"][e]] for e in range(m["ptr"][b], m["ptr"][b + 1])])
+        m, q, phi = self.m, self.q, self.at.offset("phi")
+        return [z[phi + b] + sp.Add(*[q[m["qi"][e]] * z[m["col"][e]] for e in range(m["ptr"][b], m["ptr"][b + 1])])
                 for b in range(self.n)]
 
     def gram_pass(self, x) -> list:
@@ -192,8 +204,8 @@ class _Terms:
     def rollers(self, q, qd) -> tuple[list, list]:
         """Roller deflections d and forces P1…P5 [m, N] (the linear or the clamped-pair law)."""
         m = self.m
-        d = [_dot(m["rollers_map"][r], q[:ROLLERS]) for r in range(ROLLERS)]
-        dd = [_dot(m["rollers_map"][r], qd[:ROLLERS]) for r in range(ROLLERS)]
+        d = [_dot(m["rollers_map"][r], q[:N_ROLLER_DOFS]) for r in range(ROLLERS)]
+        dd = [_dot(m["rollers_map"][r], qd[:N_ROLLER_DOFS]) for r in range(ROLLERS)]
         force = []
         for r in range(ROLLERS):
             k, c, pre = STIFFNESS[r], DAMPING[r], PRELOAD[r]
@@ -218,7 +230,7 @@ class _Terms:
                 R[idx[i]] += 4 * _number(m["block_c"][blk]) * quad * hx[i]
         if m["rollers"]:
             _, force = self.rollers(q, qd)
-            for j in range(ROLLERS):
+            for j in range(N_ROLLER_DOFS):
                 R[j] -= _dot([m["rollers_map"][r][j] for r in range(ROLLERS)], force)
         return R
 
@@ -247,7 +259,8 @@ class _Terms:
         acc = self.acceleration(qdd)
         d, force = self.rollers(self.q, self.qd)
         out = [self.resultant_x1(qdd), *force, *d]
-        w, dw = sp.Matrix(self.channels[3:6]), sp.Matrix(self.channels[6:9])
+        frame = _by_field(CHANNEL_LAYOUT, self.channels)
+        w, dw = sp.Matrix(frame["omega"]), sp.Matrix(frame["domega"])
         for k, point in enumerate(m["probe_points"]):
             field = [[m["probe_fields"][f][k][i] for f in range(self.f)] for i in range(3)]
             pos, vel, ddu = (sp.Matrix([_dot(field[i], x) for i in range(3)]) for x in (self.rr, self.v, acc))

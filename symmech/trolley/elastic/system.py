@@ -29,10 +29,11 @@ from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
 from symmech.trolley.elastic import membrane
-from symmech.trolley.elastic.body import (ROTATION_PAIRS, ElasticModel, beam_basis, invariants, roller_energy,
+from symmech.trolley.elastic.body import (ElasticModel, beam_basis, invariants, roller_energy,
                                           roller_forces)
 from symmech.trolley.elastic.frame import FrameState
-from symmech.trolley.elastic.layout import FIELDS, FLAGS, MODEL, N_ROLLER_DOFS, RL_AT, ROLLER, edges
+from symmech.trolley.elastic.layout import (FIELDS, FLAGS, MODEL, N_ROLLER_DOFS, RIGID_FIELDS, RL_AT, ROLLER,
+                                           ROTATION_PAIRS, edges)
 
 # ---------------------------------------------------------------- equations of motion
 
@@ -220,11 +221,11 @@ class System:
         """Moment about O of the roller forces at the displaced contact points [N m] (..., 3), for
         coordinates q (..., N) and forces P1…P5 (..., 5)."""
         p = self.contacts
-        f = gen.rigid_fields(p[:, 0], p[:, 1], p[:, 2])
+        f = RIGID_FIELDS.split(gen.rigid_fields(p[:, 0], p[:, 1], p[:, 2]))
         q = np.asarray(q, float)
-        u = np.einsum("pik,...k->...pi", f[:, :, :N_ROLLER_DOFS], q[..., :N_ROLLER_DOFS])
-        for col, (i, j) in enumerate(ROTATION_PAIRS):
-            u = u + (0.5 if i == j else 1.0) * (q[..., i] * q[..., j])[..., None, None] * f[:, :, N_ROLLER_DOFS + col]
+        u = np.einsum("pik,...k->...pi", f["phi"], q[..., :N_ROLLER_DOFS])
+        for (i, j), psi in zip(ROTATION_PAIRS, np.moveaxis(f["psi"], -1, 0)):
+            u = u + (0.5 if i == j else 1.0) * (q[..., i] * q[..., j])[..., None, None] * psi
         return np.cross(p + u, forces[..., :, None] * self.directions).sum(-2)
 
     def jacobi_energy(self, fs: FrameState, q, qd):
