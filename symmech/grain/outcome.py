@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 
 @dataclass
 class EnergyBudget:
@@ -20,13 +22,24 @@ class EnergyBudget:
     def report(self, end: float, tolerance: float) -> dict:
         """The summary's ``energy_budget`` for the absolute energy ``end`` [J] at the end: the parts, the residual
         of the balance and its size relative to the largest part, beside the stated ``tolerance``."""
-        residual = end - self.start - (self.work - self.impacts - self.landings - self.sliding)
-        scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
-        parts = {"start_J": self.start, "end_J": end, "input_by_surface_J": self.work,
-                 "lost_in_impacts_J": self.impacts, "lost_at_landings_J": self.landings,
-                 "lost_in_sliding_J": self.sliding, "residual_J": residual,
-                 "relative_residual": abs(residual) / scale if scale > 0 else 0.0}
-        return {**{k: float(v) for k, v in parts.items()}, "tolerance": tolerance}
+        return budget_reports([self.start], [end], [self.work], [self.impacts], [self.landings], [self.sliding],
+                              tolerance)[0]
+
+
+BUDGET_KEYS = ("start_J", "end_J", "input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J",
+               "lost_in_sliding_J", "residual_J", "relative_residual")
+
+
+def budget_reports(start, end, work, impacts, landings, sliding, tolerance: float) -> list:
+    """:meth:`EnergyBudget.report` of n runs at once, from their parts (each a sequence (n,) [J]): one dict each,
+    built in bulk (a population's results; the numbers are those of each run alone, element by element)."""
+    start, end, work, impacts, landings, sliding = (np.asarray(x, float) for x in (start, end, work, impacts,
+                                                                                   landings, sliding))
+    residual = end - start - (work - impacts - landings - sliding)
+    scale = np.fmax(np.fmax(np.abs(start), np.abs(end)), np.fmax(np.abs(work), impacts + landings + sliding))
+    relative = np.divide(np.abs(residual), scale, out=np.zeros_like(scale), where=scale > 0)
+    columns = (start, end, work, impacts, landings, sliding, residual, relative)
+    return [{**dict(zip(BUDGET_KEYS, row)), "tolerance": tolerance} for row in zip(*(c.tolist() for c in columns))]
 
 
 def distinct(warnings: list) -> list:
