@@ -212,22 +212,25 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
     budgets = energy_budgets(carries)
     counts = carries[:, [C_AT.landings, C_AT.rocking, C_AT.implicit]].astype(INT).tolist()
     times = carries[:, [C_AT.t_flight, C_AT.t_sliding]].tolist()
+    done = (statuses == DONE).tolist()
     rows, imps, warns = tables
     out, begin = [], [0, 0, 0]
     for k, (model, start, end, budget, (landings, rocking, implicit), (flight, slide)) in enumerate(
             zip(models, starts, ends, budgets, counts, times)):
-        warned = warns[begin[2]:end[2]]
-        if statuses[k] != DONE:
+        if not done[k]:
             out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
-        else:
-            texts = [warning_text(int(c), a, b, model, num) for c, a, b in warned] if len(warned) else []
-            if rocking:
-                texts.append(outcome.rocking_warning(rocking))
-            extra = {"landings": landings, "rocking_contacts": rocking, "energy_budget": budget, "engine": "compiled",
-                     "implicit_slip_steps": implicit, "engine_reason": reason}
-            out.append(LazyMotion(rows[begin[0]:end[0]], None, {"flight": flight, "sliding": slide},
-                                  outcome.distinct(texts) if texts else texts, start, state_view(ys[k]), extra,
-                                  impact_rows=imps[begin[1]:end[1]]))
+            begin = end
+            continue
+        texts = []
+        if end[2] > begin[2]:
+            texts = [warning_text(int(c), a, b, model, num) for c, a, b in warns[begin[2]:end[2]].tolist()]
+        if rocking:
+            texts.append(outcome.rocking_warning(rocking))
+        extra = {"landings": landings, "rocking_contacts": rocking, "energy_budget": budget, "engine": "compiled",
+                 "implicit_slip_steps": implicit, "engine_reason": reason}
+        out.append(LazyMotion(rows[begin[0]:end[0]], None, {"flight": flight, "sliding": slide},
+                              outcome.distinct(texts) if texts else texts, start, state_view(ys[k]), extra,
+                              impact_rows=imps[begin[1]:end[1]]))
         begin = end
     return out
 
