@@ -22,8 +22,11 @@ class EnergyBudget:
     def report(self, end: float, tolerance: float) -> dict:
         """The summary's ``energy_budget`` for the absolute energy ``end`` [J] at the end: the parts, the residual
         of the balance and its size relative to the largest part, beside the stated ``tolerance``."""
-        return budget_reports([self.start], [end], [self.work], [self.impacts], [self.landings], [self.sliding],
-                              tolerance)[0]
+        residual = end - self.start - (self.work - self.impacts - self.landings - self.sliding)
+        scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
+        parts = (self.start, end, self.work, self.impacts, self.landings, self.sliding, residual,
+                 abs(residual) / scale if scale > 0 else 0.0)
+        return {**{k: float(v) for k, v in zip(BUDGET_KEYS, parts)}, "tolerance": tolerance}
 
 
 BUDGET_KEYS = ("start_J", "end_J", "input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J",
@@ -31,12 +34,13 @@ BUDGET_KEYS = ("start_J", "end_J", "input_by_surface_J", "lost_in_impacts_J", "l
 
 
 def budget_reports(start, end, work, impacts, landings, sliding, tolerance: float) -> list:
-    """:meth:`EnergyBudget.report` of n runs at once, from their parts (each a sequence (n,) [J]): one dict each,
-    built in bulk (a population's results; the numbers are those of each run alone, element by element)."""
-    start, end, work, impacts, landings, sliding = (np.asarray(x, float) for x in (start, end, work, impacts,
-                                                                                   landings, sliding))
+    """:meth:`EnergyBudget.report` of n runs at once (a population's results, built in bulk), from their parts (each
+    an array (n,) [J]): the same operations element by element, the largest part chosen as Python's ``max`` does
+    (a NaN first stays), so each dict equals the report of that run alone."""
     residual = end - start - (work - impacts - landings - sliding)
-    scale = np.fmax(np.fmax(np.abs(start), np.abs(end)), np.fmax(np.abs(work), impacts + landings + sliding))
+    scale = np.abs(start)
+    for part in (np.abs(end), np.abs(work), impacts + landings + sliding):
+        scale = np.where(part > scale, part, scale)
     relative = np.divide(np.abs(residual), scale, out=np.zeros_like(scale), where=scale > 0)
     columns = (start, end, work, impacts, landings, sliding, residual, relative)
     return [{**dict(zip(BUDGET_KEYS, row)), "tolerance": tolerance} for row in zip(*(c.tolist() for c in columns))]

@@ -163,11 +163,14 @@ class LazyMotion(motion.Motion):
 def energy_budget(carry: np.ndarray) -> dict:
     """The energy budget of a finished run from its carry (CARRY.size,): the energies at the start and the end come
     from the compiled entry (no compiled function of their own to load, no 30 us of numpy kinematics in Python)."""
-    return energy_budgets(carry[None, :])[0]
+    budget = outcome.EnergyBudget(float(carry[C_AT.e_start]), carry[C_AT.work], carry[C_AT.impacts],
+                                  carry[C_AT.land_loss], carry[C_AT.slide_loss])
+    return budget.report(float(carry[C_AT.e_end]), motion.ENERGY_TOLERANCE)
 
 
 def energy_budgets(carries: np.ndarray) -> list:
-    """:func:`energy_budget` of each of the finished runs' carries (n, CARRY.size), built in bulk."""
+    """:func:`energy_budget` of each of the finished runs' carries (n, CARRY.size), built in bulk (equal, bit for
+    bit, to each run's own)."""
     c = carries.T
     return outcome.budget_reports(c[C_AT.e_start], c[C_AT.e_end], c[C_AT.work], c[C_AT.impacts], c[C_AT.land_loss],
                                   c[C_AT.slide_loss], motion.ENERGY_TOLERANCE)
@@ -186,8 +189,15 @@ def failure(status: int, t: float, regime: int) -> SymmechError:
         what, t, "required step size is less than spacing between numbers"))
 
 
+def start_vector(model: motion.Model, start: motion.State) -> np.ndarray:
+    """The loop's start state (STATE.size,): q normalised, no spin when the model does not rotate."""
+    q = np.asarray(start.q, float)
+    w = start.w if model.effects.rotation else (0.0, 0.0, 0.0)
+    return STATE.pack(t=start.t, r=start.r, v=start.v, q=q / np.linalg.norm(q), w=w)
+
+
 def start_vectors(models: list, starts: list) -> np.ndarray:
-    """The loop's start states (grains, STATE.size) in bulk: q normalised, no spin where the model does not rotate."""
+    """:func:`start_vector` of each grain (grains, STATE.size), built in bulk (equal to each, bit for bit)."""
     ys = np.empty((len(starts), STATE.size))
     ys[:, X_AT.t] = [st.t for st in starts]
     for at, name in zip(STATE_VECTORS, ("r", "v", "q", "w")):
@@ -221,18 +231,37 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
             out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
             begin = end
             continue
-        texts = []
-        if end[2] > begin[2]:
-            texts = [warning_text(int(c), a, b, model, num) for c, a, b in warns[begin[2]:end[2]].tolist()]
-        if rocking:
-            texts.append(outcome.rocking_warning(rocking))
-        extra = {"landings": landings, "rocking_contacts": rocking, "energy_budget": budget, "engine": "compiled",
-                 "implicit_slip_steps": implicit, "engine_reason": reason}
-        out.append(LazyMotion(rows[begin[0]:end[0]], None, {"flight": flight, "sliding": slide},
-                              outcome.distinct(texts) if texts else texts, start, state_view(ys[k]), extra,
+        texts = run_warnings(warns[begin[2]:end[2]] if end[2] > begin[2] else (), rocking, model, num)
+        out.append(LazyMotion(rows[begin[0]:end[0]], None, {"flight": flight, "sliding": slide}, texts, start,
+                              state_view(ys[k]), run_extra(landings, rocking, budget, implicit, reason),
                               impact_rows=imps[begin[1]:end[1]]))
         begin = end
     return out
+
+
+def run_warnings(warns, rocking: int, model: motion.Model, num: motion.Numerics) -> list:
+    """The warnings of a run: its warning rows (n, WARNING_WIDTH) worded, then its ``rocking`` contacts, each once."""
+    texts = [warning_text(int(c), a, b, model, num) for c, a, b in (warns.tolist() if len(warns) else ())]
+    if rocking:
+        texts.append(outcome.rocking_warning(rocking))
+    return outcome.distinct(texts) if texts else texts
+
+
+def run_extra(landings: int, rocking: int, budget: dict, implicit: int, reason: str) -> dict:
+    """A compiled run's ``extra``: its counts, energy budget, this engine and why the caller chose it."""
+    return {"landings": landings, "rocking_contacts": rocking, "energy_budget": budget, "engine": "compiled",
+            "implicit_slip_steps": implicit, "engine_reason": reason}
+
+
+def motion_of(model: motion.Model, num: motion.Numerics, start: motion.State, y: np.ndarray, carry: np.ndarray,
+              rows: np.ndarray, imps: np.ndarray, warns: np.ndarray, reason: str = "") -> motion.Motion:
+    """:func:`motions` of one finished run (no bulk arrays: a single grain's results in a few us): its final state y
+    (STATE.size,), carry (CARRY.size,), trajectory, impact and warning rows (its counts)."""
+    rocking = int(carry[C_AT.rocking])
+    extra = run_extra(int(carry[C_AT.landings]), rocking, energy_budget(carry), int(carry[C_AT.implicit]), reason)
+    time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
+    return LazyMotion(rows, None, time_in, run_warnings(warns, rocking, model, num), start, state_view(y), extra,
+                      impact_rows=imps)
 
 
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
@@ -247,18 +276,18 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
     run = entry()
     progress = motion.Progress(on_step)
     p = pack(model, num)
-    ys = start_vectors([model], [start])
-    y = ys[0]
+    y = start_vector(model, start)
     rows = np.empty((row_hint(t_end - start.t, num), TRAJECTORY_WIDTH))
     imps, warns, carry = np.empty((64, IMPACT_WIDTH)), np.empty((8, WARNING_WIDTH)), CARRY.zeros()
     status = MORE
     while status == MORE:
         progress(y[X_AT.t])
         y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
-    if status == DONE:
-        progress(y[X_AT.t], final=True)
-    ys[0] = y
-    return motions([model], num, [start], ys, carry[None, :], (rows, imps, warns), np.array([status]), reason)[0]
+    if status != DONE:
+        raise failure(status, float(y[X_AT.t]), int(carry[C_AT.regime]))
+    progress(y[X_AT.t], final=True)
+    return motion_of(model, num, start, y, carry, rows[:int(carry[C_AT.rows])], imps[:int(carry[C_AT.nimp])],
+                     warns[:int(carry[C_AT.nwarn])], reason)
 
 
 def row_hint(duration: float, num: motion.Numerics) -> int:
