@@ -407,3 +407,23 @@ def test_the_bundled_separation_sweep_carries_its_intervals(tmp_path):
     for name in ("crop", "weed"):
         assert summary["precision"][name]["grains_needed"] >= 2
     assert (tmp_path / "out" / "separation_overlap.png").stat().st_size > 5000
+
+
+@pytest.mark.slow
+def test_a_slice_the_budget_cannot_hold_runs_grain_by_grain_to_the_same_answers():
+    """Near the deadline (less time left than BUDGET_MARGIN times a slice's count estimate) the grains run one by one,
+    each watched by the deadline, and give what the population gives; past it, each is refused by the deadline."""
+    import time
+
+    raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
+                   sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
+    p = build(raw)
+    grains = list(sweep.grains(p, 0, 0, 0))
+    estimate = pipeline.load(grains[0]).estimate().seconds
+    together = sweep.simulate_point(grains)
+    near = sweep.simulate_point(grains, until=time.time() + 0.5 * sweep.BUDGET_MARGIN * len(grains) * estimate)
+    assert estimate * len(grains) * sweep.BUDGET_MARGIN > 0.5 * sweep.BUDGET_MARGIN * len(grains) * estimate > estimate
+    assert np.array_equal(together[0], near[0]) and together[1:] == near[1:] == ([], [])
+    past = sweep.simulate_point(grains, until=time.time() - 1.0)
+    assert np.isnan(past[0]).all() and [k for k, _ in past[1]] == [0, 1, 2]
+    assert all("max-time" in message for _, message in past[1])

@@ -470,6 +470,20 @@ def transport(sc: GrainScene, m: motion.Motion) -> tuple[tuple, list[str]]:
     return (vx, vy, flight_share), warnings
 
 
+def sweep_answers(scenes: list) -> list:
+    """Per grain scene of ``scenes`` (GrainScenes), run together as one population (:func:`simulate_many`), what a
+    sweep reads of it (:func:`transport`) or its SymmechError (the kind's ``population``)."""
+    answers = []
+    for sc, m in zip(scenes, simulate_many(scenes, workers=1, strict=False)):
+        try:
+            if isinstance(m, SymmechError):
+                raise m
+            answers.append(transport(sc, m))
+        except SymmechError as exc:
+            answers.append(exc)
+    return answers
+
+
 MIN_SAMPLES_PER_IMPACT = 2  # trajectory rows per mean interval between impacts, to draw the bounces
 
 
@@ -588,4 +602,4 @@ registry.register(registry.Kind(
     name="grain", summary="the whole motion of a grain on an inclined vibrating surface (seed 000, eqs (61)-(64))",
     schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-grain.md",
     sample=sample,
-    sweep=sweep.run))
+    sweep=sweep.run, population=sweep_answers))
