@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 10ec9291b0b3ff2fae98899f2762f6beeac75ba2915f5dd66790b2cc0cf2c407
-// source key 2cffa2ebcb54b1ee81f31f5a993735e843d33d34d94ce206e809a8d23dd4877e
+// source key 2d04e904ef4642a6822ffc38d503c532a3e4a5fd80ed7a0b2eab7c99dfa60649
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

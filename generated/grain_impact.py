@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b76760b8c364d70e67e783d7fca55abaec98f100800b4072f7d3e45bf41db69e
-# source key 2cffa2ebcb54b1ee81f31f5a993735e843d33d34d94ce206e809a8d23dd4877e
+# source key 2d04e904ef4642a6822ffc38d503c532a3e4a5fd80ed7a0b2eab7c99dfa60649
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bffdb2f30f6ed8312086f15100ff2ad5961492947b959c28a6e0f841df9663b
-# source key 2cffa2ebcb54b1ee81f31f5a993735e843d33d34d94ce206e809a8d23dd4877e
+# source key 2d04e904ef4642a6822ffc38d503c532a3e4a5fd80ed7a0b2eab7c99dfa60649
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

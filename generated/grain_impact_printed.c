@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 d55f22534b3cd6ef287667053ba27b899c6a0454eaa5ebb324e568a3583bc47d
-// source key 519222b3b19376baae6b1a422594e2cc4977448fef0aad85725e7bd59b1bf4e8
+// source key 47c4d60eb2281a078388781ddb725f4cd8bc4263ae0b07938ca3fe32562266c3
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 aae22db447cd785582d72f24f4b326598c48e8ee60ddf175644491e89c723617
-# source key 519222b3b19376baae6b1a422594e2cc4977448fef0aad85725e7bd59b1bf4e8
+# source key 47c4d60eb2281a078388781ddb725f4cd8bc4263ae0b07938ca3fe32562266c3
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3b198be5e7e0dc5f865f40fc79bedc9bcae8b89a6f866daeff37d0670eb738c4
-# source key 519222b3b19376baae6b1a422594e2cc4977448fef0aad85725e7bd59b1bf4e8
+# source key 47c4d60eb2281a078388781ddb725f4cd8bc4263ae0b07938ca3fe32562266c3
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

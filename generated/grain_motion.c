@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1cf4249e083cb922fda962bef1522dd77d742bfa6282554081861a4ab64b2386
-// source key 9666d794d99e8ac73a45d0fc17ae0052f688f15207082450b4fa3cb5675d79f6
+// source key db87baaff31d8bb848325841b0a095aa75f0a975e1981fe5c910cac88f6f0f61
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

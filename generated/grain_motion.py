@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0b7c53c3b3cc49b0dd4269c01369314ca37f2bd96337b7f8721e52d3df0afb92
-# source key 9666d794d99e8ac73a45d0fc17ae0052f688f15207082450b4fa3cb5675d79f6
+# source key db87baaff31d8bb848325841b0a095aa75f0a975e1981fe5c910cac88f6f0f61
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1b2e5c0f1a2fd91c703faeeb7ce6997ac20db98cd24429414ec3f61663affa36
-# source key 9666d794d99e8ac73a45d0fc17ae0052f688f15207082450b4fa3cb5675d79f6
+# source key db87baaff31d8bb848325841b0a095aa75f0a975e1981fe5c910cac88f6f0f61
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

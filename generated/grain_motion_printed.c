@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 3d9382c1eb1f7c339e5d6b3c3336a0acd2e1389d366224d902c6c1816d38bc77
-// source key d5a6a6cd1d02eed06868e21eeee655f2776b84e154b0cd93582ee489a98fb28a
+// source key 22d0165c07881142417dd5c93e12bc6aaf957314a8bbc14863d5bfe64158c3ed
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

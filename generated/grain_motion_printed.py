@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d7f75372611de9d8bbfc48302d08026c4cb0d8ced531bd0c4c058b2de72850b3
-# source key d5a6a6cd1d02eed06868e21eeee655f2776b84e154b0cd93582ee489a98fb28a
+# source key 22d0165c07881142417dd5c93e12bc6aaf957314a8bbc14863d5bfe64158c3ed
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 80f875b003ccef9f8caed0a7df29b27f60ec70b68b95e9764e5e34e3a9294d6c
-# source key d5a6a6cd1d02eed06868e21eeee655f2776b84e154b0cd93582ee489a98fb28a
+# source key 22d0165c07881142417dd5c93e12bc6aaf957314a8bbc14863d5bfe64158c3ed
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 b3ee5cc0bfb601ae0eef29635c29b027ba8b37877ebfa2edbbbd1b032c41a161
-// source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
+// source key 9983bc466a08a507fc525bf0dad0c83f4125dec4d4465fc59a2f78adb7996635
 // body sha256 5aa8a7bd2f2c7987eb7b23b7f424303a78e3c7a78d61e2708609f8edff38f926
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

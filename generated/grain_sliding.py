@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c3255e68b1a781010864c3da580cae15ccbb52ef27fc3bc0f5e13a9581ad132c
-# source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
+# source key 9983bc466a08a507fc525bf0dad0c83f4125dec4d4465fc59a2f78adb7996635
 # body sha256 0c050407f0d09bbbd0057513e68f6bf534449991768f704903fa069467f2ad6c
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4c83a48123e1c63961beda484c3f649f7083d83abf82574098d61a1b5c44c2c0
-# source key 6e097dae5077ea6111cd87a7eb0c379d277d5a39b033795e321efd45f0ac2616
+# source key 9983bc466a08a507fc525bf0dad0c83f4125dec4d4465fc59a2f78adb7996635
 # body sha256 e8b5fbcc2a6b42dff8d1aa69d64e21c6c8f4f0177007152e65d99e310e2611a9
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e36e7e11e3ba2ba4563ce9892357de085f65e2aa56cc907f4ab8d09c73ddcf93
-// source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+// source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 16b611ab0a4deab7ed9c4600824529c8c73fae25d90275cf6a35bcfa508829b3
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

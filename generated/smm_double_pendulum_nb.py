@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7b60983b7685d65b7c7dbbb3fc943fe406069fbb357e34a05a6f7417fca4e2e6
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

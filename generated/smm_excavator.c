@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 0a8afa197b15c932a60e24a227463d5552ee48df73002f07f0b007b8e44b68bb
-// source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+// source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7585d1a5d888b129d22aa40035725a0c8cdff21d3da5da6660e2780f7ba05ec0
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a6a94365ab241749dc9394602d00a970ff253ff034b4cce152d6bc38277c6671
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 4ba602af3617cd8a0e334d9dafc4fab4e9b308258aab119058d76bfe87195092
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

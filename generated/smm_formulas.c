@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2d4aebcc7a8c03e53a8933d491f6bd1bb652421c77fa7fa88f7023394f507ff5
-// source key 724db4cc63be67e20d477e7b0961fba3ae18df68ee622c6656fe57ea16bd4d2e
+// source key 47f6a89bf2e20b6b7135943cdde983c56e7c773fa6209ad2ab0d48032c382fd6
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

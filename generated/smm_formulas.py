@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0f9b4f87e32083ed8b1ea0d3a749712c560d1c5136bc67ed979cd8c2b47abd75
-# source key 724db4cc63be67e20d477e7b0961fba3ae18df68ee622c6656fe57ea16bd4d2e
+# source key 47f6a89bf2e20b6b7135943cdde983c56e7c773fa6209ad2ab0d48032c382fd6
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 db1e9c66edfffeedcaa54617a6dea3ea6cfe05f4725501b51e7257dee5fe5246
-# source key 724db4cc63be67e20d477e7b0961fba3ae18df68ee622c6656fe57ea16bd4d2e
+# source key 47f6a89bf2e20b6b7135943cdde983c56e7c773fa6209ad2ab0d48032c382fd6
 # body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

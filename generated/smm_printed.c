@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 399a3323d5d67c7c9a7afc01f4477cff78d7be870a4873594440a4c6db006602
-// source key 8b357e8adb397a290b2ceb744587b86b4b2afb55eee88a9ccb9c3dbb734eb6b5
+// source key 7bb78fe2ee1571574b3090acb8fbdc919257b9933e937d6a36d5e8ca1d6bb590
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

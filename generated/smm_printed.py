@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2e4ce565af0a4356e9cbedeb754e33e986bd8dd7727aa5c3b72fe3482432c370
-# source key 8b357e8adb397a290b2ceb744587b86b4b2afb55eee88a9ccb9c3dbb734eb6b5
+# source key 7bb78fe2ee1571574b3090acb8fbdc919257b9933e937d6a36d5e8ca1d6bb590
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

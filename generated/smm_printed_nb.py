@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6592a78c962befaece6895e4e3215c179b1e462e95213d361c80f911f859d1b8
-# source key 8b357e8adb397a290b2ceb744587b86b4b2afb55eee88a9ccb9c3dbb734eb6b5
+# source key 7bb78fe2ee1571574b3090acb8fbdc919257b9933e937d6a36d5e8ca1d6bb590
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5fc532a5bacd6187b72aab1dffd79fb4d241f2fc584c0d4e01cba50f9c72be4a
-// source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+// source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

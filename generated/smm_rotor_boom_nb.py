@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b427863f2560aea4dad0bd51b7bf253d6f701741ce94d1a204ad591223192be6
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 1f9cc5b5973d6d3ebd1cfbb903722f669024bcd2065ef59e90a04af67ea8ad6b
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2953164934d5d1d14fe72086073ab0c40176a2dc376a62c665590e77b1baf841
-// source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+// source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 04596443a6ace72f5dd7c3b16b545c9e11e73c6dcf171fe4e2729e79915584e6
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

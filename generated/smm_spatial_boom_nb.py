@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e4699c0fec81e11108f39db63d29819598eff6bb9df9d1ec3b12ec1f5a63be9d
-# source key 27cae297fa9996be9c29e6230212b07fad6351454f974fb41c5197060a1251ec
+# source key c30d4788425a79c336b63011ab6b42c1b8d527b8388d4c83121591fdc27d6594
 # body sha256 ba8d779355ab1ad864f0154f634be1ce0b73f29b15e5eb3092ef4911956b493b
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

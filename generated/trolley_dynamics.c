@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 87787f1c7d8403b644b7d1368ebeb4658eaea20fc5413d1d78143814cfb68ac8
-// source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
+// source key b3023c699a847076b4d5edadac0d879f7a3f8c8638f6c660bdfab74de13c1a34
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 92a6f016985eaf1b2bb62e6f5ec6e1bd056ea8b72c97d16a8c23897b52948d95
-# source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
+# source key b3023c699a847076b4d5edadac0d879f7a3f8c8638f6c660bdfab74de13c1a34
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 abc15c5327f86d35439d8e6a1f20ee996410cef058ae731061909c14a428306d
-# source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
+# source key b3023c699a847076b4d5edadac0d879f7a3f8c8638f6c660bdfab74de13c1a34
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ab32475cbb80b45d0171d830b0428099c347a9163dcb879daafaa114db9ada52
-// source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
+// source key 31408db36c304328e3ef685767cf7ecb0e4561d25ad77db5b7f2b54345878c02
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

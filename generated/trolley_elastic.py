@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 777db75a5467337f063026484ec193ca6b56919316bb7d7b37e24f94ef9fcda6
-# source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
+# source key 31408db36c304328e3ef685767cf7ecb0e4561d25ad77db5b7f2b54345878c02
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

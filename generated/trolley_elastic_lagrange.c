@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a62778de16bd949750e9c6241d773dc0073f48d014d9693f00efa85e88bcef15
-// source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
+// source key 31408db36c304328e3ef685767cf7ecb0e4561d25ad77db5b7f2b54345878c02
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2b35c1daeb0caf07539e72552324aee49cfc70a7d26ebedf786d30be6ab3fcf9
-# source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
+# source key 31408db36c304328e3ef685767cf7ecb0e4561d25ad77db5b7f2b54345878c02
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 be2668cd527d1f238bcb5f3cac2cfa30d4c713c2df9f4a37cac21da57e1caba7
-# source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
+# source key 31408db36c304328e3ef685767cf7ecb0e4561d25ad77db5b7f2b54345878c02
 # body sha256 6be42a866d00b8aab9c030da582d2aa04ecb6c24b5b3b2ca26f19771150bd196
 """Small elastic trolley by Lagrange's equations (test route).
 

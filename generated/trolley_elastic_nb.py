@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22a47187587591bb1fad9b3fbd7f4a1f0d3c39f4d10b6766039f5d36b0ed5584
-# source key 609c0d767f263df56edd515016a27a91a90c35acb37fbefbe995f0434ef7e36d
+# source key 31408db36c304328e3ef685767cf7ecb0e4561d25ad77db5b7f2b54345878c02
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e1bea6ff0154cc32bcf4fb0979834e1b0de2d2ad5ce5a1fbab9f9eb6031df6f2
-// source key 69ccd57d8df7370a231481d9d830cad2b36cda42862fb4b387a0105880a43e55
+// source key d9a2fb0441af202735e15bad7b980dc6a39723de559ee247c6a2172b9eafb993
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

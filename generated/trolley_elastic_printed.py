@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fdb50a0adb1d77561fe3e09bd1053cbb17a92d87d5b905e166b27c07d5df304a
-# source key 69ccd57d8df7370a231481d9d830cad2b36cda42862fb4b387a0105880a43e55
+# source key d9a2fb0441af202735e15bad7b980dc6a39723de559ee247c6a2172b9eafb993
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f70820e6bf3ca783923dc847b50afc7a7ce6440f1535642537c6d33109d641ed
-# source key 69ccd57d8df7370a231481d9d830cad2b36cda42862fb4b387a0105880a43e55
+# source key d9a2fb0441af202735e15bad7b980dc6a39723de559ee247c6a2172b9eafb993
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

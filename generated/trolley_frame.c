@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 fdb91e4a9a28d87b65e10a1278255eab2765ee4e67f63de3d590dc9e11304595
-// source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
+// source key b3023c699a847076b4d5edadac0d879f7a3f8c8638f6c660bdfab74de13c1a34
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

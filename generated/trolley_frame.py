@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad5b35542fb315346b6bf8b03ec8c349febb9533bcc51e45a88998328b672fb5
-# source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
+# source key b3023c699a847076b4d5edadac0d879f7a3f8c8638f6c660bdfab74de13c1a34
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

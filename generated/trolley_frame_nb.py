@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8da110da6110fe13e0816c1857d38d73239488198c54277a584c9552ba1d098d
-# source key 6d899f05fbc839a1b6d46734e31d1712922cd98742d31749916a954640c8c8a2
+# source key b3023c699a847076b4d5edadac0d879f7a3f8c8638f6c660bdfab74de13c1a34
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7ce51eff7cd47013c2c515c298237f51ecee8035808ffdc2199cb9e860fe2b46
-// source key 8f52dbbce80fb2dd744c2281f5bf52dea12e1b735ff70be50c710f39bab7833f
+// source key 4c862ce986070a23aed29d8e8166d3f20d0a58c1a67638ac74486868f381c1cc
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 810e0bc07c27ac2066a8cb7a895f49c964fd181c6d21d5872d7c3a80c7f3dc03
-# source key 8f52dbbce80fb2dd744c2281f5bf52dea12e1b735ff70be50c710f39bab7833f
+# source key 4c862ce986070a23aed29d8e8166d3f20d0a58c1a67638ac74486868f381c1cc
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7fff7247b270cce851284ab66d2af539cf536c45e57bd54c73b4cae026c5bc74
-# source key 8f52dbbce80fb2dd744c2281f5bf52dea12e1b735ff70be50c710f39bab7833f
+# source key 4c862ce986070a23aed29d8e8166d3f20d0a58c1a67638ac74486868f381c1cc
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

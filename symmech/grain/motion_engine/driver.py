@@ -224,18 +224,17 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
     times = carries[:, [C_AT.t_flight, C_AT.t_sliding]].tolist()
     done = (statuses == DONE).tolist()
     rows, imps, warns = tables
-    out, begin = [], [0, 0, 0]
-    for k, (model, start, end, budget, (landings, rocking, implicit), (flight, slide)) in enumerate(
+    out, row0, imp0, warn0 = [], 0, 0, 0  # where grain k's rows begin in each table
+    for k, (model, start, (row1, imp1, warn1), budget, (landings, rocking, implicit), (flight, slide)) in enumerate(
             zip(models, starts, ends, budgets, counts, times)):
         if not done[k]:
             out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
-            begin = end
-            continue
-        texts = run_warnings(warns[begin[2]:end[2]] if end[2] > begin[2] else (), rocking, model, num)
-        out.append(LazyMotion(rows[begin[0]:end[0]], None, {"flight": flight, "sliding": slide}, texts, start,
-                              state_view(ys[k]), run_extra(landings, rocking, budget, implicit, reason),
-                              impact_rows=imps[begin[1]:end[1]]))
-        begin = end
+        else:
+            texts = run_warnings(warns[warn0:warn1] if warn1 > warn0 else (), rocking, model, num)
+            out.append(LazyMotion(rows[row0:row1], None, {"flight": flight, "sliding": slide}, texts, start,
+                                  state_view(ys[k]), run_extra(landings, rocking, budget, implicit, reason),
+                                  impact_rows=imps[imp0:imp1]))
+        row0, imp0, warn0 = row1, imp1, warn1
     return out
 
 
