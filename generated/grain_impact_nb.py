@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bffdb2f30f6ed8312086f15100ff2ad5961492947b959c28a6e0f841df9663b
-# source key e7366adb489c3c23982680705a064368b6ead554f8f1cca31f02f78fe1f805ab
+# source key 59a6f3022b589584db192aa71552c5967432a0a5a573cfb609bf8aba332a1710
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

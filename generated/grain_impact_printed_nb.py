@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3b198be5e7e0dc5f865f40fc79bedc9bcae8b89a6f866daeff37d0670eb738c4
-# source key cbcf6ceaa544e1a3315ce9091c34cfffed17564649cb0734348a1c47abf9ed34
+# source key 1f97c9eab4c95e2cf0eac02ac1e0804bb249f6f9e2249bb818342e60ecc90374
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

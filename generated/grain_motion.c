@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1cf4249e083cb922fda962bef1522dd77d742bfa6282554081861a4ab64b2386
-// source key e08b1b7a8fa97c4e4bfc4074ecc2ace4bd59ac5b9b92ec5b1e3d377427ea905f
+// source key b74f15fa8bdc742933bd21d1b914c42896a836a75ddbb317973a2c5f7fad59c7
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

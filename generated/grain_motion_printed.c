@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 3d9382c1eb1f7c339e5d6b3c3336a0acd2e1389d366224d902c6c1816d38bc77
-// source key 4c4664c65bc09451ad0a31aca5ddeff8c3dc0db8124e2475a2d119713f2eff5e
+// source key b95143e93ba172fce1d880ea75367804340a1bad6052b6d53e4695eef35769b4
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

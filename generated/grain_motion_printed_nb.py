@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 80f875b003ccef9f8caed0a7df29b27f60ec70b68b95e9764e5e34e3a9294d6c
-# source key 4c4664c65bc09451ad0a31aca5ddeff8c3dc0db8124e2475a2d119713f2eff5e
+# source key b95143e93ba172fce1d880ea75367804340a1bad6052b6d53e4695eef35769b4
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1061f0b179455402f97cef737f69c7f1e88881336606d0ab708cba11bf9fdfc0
-# source key 5147a07c45fcbbd2091cb3651b7b3fd5976dd5c284b680a111c66effcf53e5f6
+# source key 0f0b0368e560a6d07f1575764fd97f9a6ebeeb2078ebe824e2f4d137f2bde29d
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

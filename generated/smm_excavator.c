@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 0a8afa197b15c932a60e24a227463d5552ee48df73002f07f0b007b8e44b68bb
-// source key 1ebb655670fca503e0867b1ff6f794dff6e51b48d50610b99f7a573f8b692fa3
+// source key 31e5ad01ea3f358bbacf97c81d0e3337d8995db583a38d611ddea111402983bb
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

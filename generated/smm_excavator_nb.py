@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a6a94365ab241749dc9394602d00a970ff253ff034b4cce152d6bc38277c6671
-# source key 1ebb655670fca503e0867b1ff6f794dff6e51b48d50610b99f7a573f8b692fa3
+# source key 31e5ad01ea3f358bbacf97c81d0e3337d8995db583a38d611ddea111402983bb
 # body sha256 4ba602af3617cd8a0e334d9dafc4fab4e9b308258aab119058d76bfe87195092
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 399a3323d5d67c7c9a7afc01f4477cff78d7be870a4873594440a4c6db006602
-// source key 36f7dd369379658be99043e0dd86d85fedb9e4c44653d567252e1960e691f734
+// source key a7e145b44f1820d50b0e22dc47a216d564ad96b234ba7085d351b6fbdba53fc5
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

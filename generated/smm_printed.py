@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2e4ce565af0a4356e9cbedeb754e33e986bd8dd7727aa5c3b72fe3482432c370
-# source key 36f7dd369379658be99043e0dd86d85fedb9e4c44653d567252e1960e691f734
+# source key a7e145b44f1820d50b0e22dc47a216d564ad96b234ba7085d351b6fbdba53fc5
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

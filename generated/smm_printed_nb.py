@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6592a78c962befaece6895e4e3215c179b1e462e95213d361c80f911f859d1b8
-# source key 36f7dd369379658be99043e0dd86d85fedb9e4c44653d567252e1960e691f734
+# source key a7e145b44f1820d50b0e22dc47a216d564ad96b234ba7085d351b6fbdba53fc5
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 abc15c5327f86d35439d8e6a1f20ee996410cef058ae731061909c14a428306d
-# source key 1a68c2d5b8aec852c51505014ab1725f8306c8b499219940016254b62d9a214b
+# source key ab6247132c61ea03d34c4fde04bb549310e3a4d16556bb4b63fe647130a40164
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a62778de16bd949750e9c6241d773dc0073f48d014d9693f00efa85e88bcef15
-// source key c9054cb43fa22d9d08edd5df2928e8d7b4200e351a6d5adb2c09f327aa52259a
+// source key 9bcbf9227beabf29691a3b39c6bb53f93cbd94135fb8ffa01affba80df07468d
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

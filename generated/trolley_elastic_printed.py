@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fdb50a0adb1d77561fe3e09bd1053cbb17a92d87d5b905e166b27c07d5df304a
-# source key 2f35c2d1232e59241a29f39a02d3d5d18bca3fbd0817c4865935ca770a08f43d
+# source key 3e85b4707fd1e9dec05abcbe847d70afb6038dddd7a2005af0f9b7d18181ab2e
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 fdb91e4a9a28d87b65e10a1278255eab2765ee4e67f63de3d590dc9e11304595
-// source key 1a68c2d5b8aec852c51505014ab1725f8306c8b499219940016254b62d9a214b
+// source key ab6247132c61ea03d34c4fde04bb549310e3a4d16556bb4b63fe647130a40164
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7ce51eff7cd47013c2c515c298237f51ecee8035808ffdc2199cb9e860fe2b46
-// source key 26ed23bb578464fa4f2c2a052fe8af879743f183c8d4b97ba4d2e6856e31c064
+// source key f77dbb27182cff15cbdf240b73e9ac258ece701b4ed1f08f75fd54e6a498ba83
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

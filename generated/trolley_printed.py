@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 810e0bc07c27ac2066a8cb7a895f49c964fd181c6d21d5872d7c3a80c7f3dc03
-# source key 26ed23bb578464fa4f2c2a052fe8af879743f183c8d4b97ba4d2e6856e31c064
+# source key f77dbb27182cff15cbdf240b73e9ac258ece701b4ed1f08f75fd54e6a498ba83
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7fff7247b270cce851284ab66d2af539cf536c45e57bd54c73b4cae026c5bc74
-# source key 26ed23bb578464fa4f2c2a052fe8af879743f183c8d4b97ba4d2e6856e31c064
+# source key f77dbb27182cff15cbdf240b73e9ac258ece701b4ed1f08f75fd54e6a498ba83
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

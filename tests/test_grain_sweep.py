@@ -7,7 +7,7 @@ import pytest
 
 from symmech.core import pipeline
 from symmech.core.scene import SceneError
-from symmech.grain import sweep
+from symmech.grain import motion_scene, sweep
 
 G = 9.81
 FREQ = 25.0
@@ -150,16 +150,14 @@ def test_sweep_refuses_past_the_time_budget(tmp_path):
 def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
     from symmech.core.scene import SymmechError
 
-    real = pipeline.Scene.run
-    calls = []
+    real = motion_scene.simulate_many
 
-    def flaky(self, ctx=None):
-        calls.append(1)
-        if len(calls) == 2:
-            raise SymmechError("sliding integration stagnates at t = 0.01 s")
-        return real(self, ctx)
+    def flaky(scenes, workers=None, strict=True):  # the second grain's run fails
+        runs = real(scenes, workers, strict)
+        runs[1] = SymmechError("sliding integration stagnates at t = 0.01 s")
+        return runs
 
-    monkeypatch.setattr(pipeline.Scene, "run", flaky)
+    monkeypatch.setattr(motion_scene, "simulate_many", flaky)
     raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
                    sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
     p = build(raw)
@@ -177,17 +175,14 @@ def test_a_grain_that_stops_with_an_error_is_reported_not_averaged(monkeypatch):
 
 def test_a_grain_that_warns_is_averaged_in_and_listed(monkeypatch):
     """E.g. a rocking contact: the grain's result counts, its warnings go to the summary."""
-    real = pipeline.Scene.run
-    calls = []
+    real = motion_scene.simulate_many
 
-    def warning(self, ctx=None):
-        calls.append(1)
-        res = real(self, ctx)
-        if len(calls) == 3:
-            res.warnings.append("1 rocking contact(s): ...")
-        return res
+    def warning(scenes, workers=None, strict=True):  # the third grain's run warns
+        runs = real(scenes, workers, strict)
+        runs[2].warnings.append("1 rocking contact(s): ...")
+        return runs
 
-    monkeypatch.setattr(pipeline.Scene, "run", warning)
+    monkeypatch.setattr(motion_scene, "simulate_many", warning)
     raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
                    sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
     p = build(raw)
@@ -412,3 +407,23 @@ def test_the_bundled_separation_sweep_carries_its_intervals(tmp_path):
     for name in ("crop", "weed"):
         assert summary["precision"][name]["grains_needed"] >= 2
     assert (tmp_path / "out" / "separation_overlap.png").stat().st_size > 5000
+
+
+@pytest.mark.slow
+def test_a_slice_the_budget_cannot_hold_runs_grain_by_grain_to_the_same_answers():
+    """Near the deadline (less time left than BUDGET_MARGIN times a slice's count estimate) the grains run one by one,
+    each watched by the deadline, and give what the population gives; past it, each is refused by the deadline."""
+    import time
+
+    raw = conveyor(duration=1 / FREQ, population=[{"name": "a", "count": 3, "vary": {"body.density": 0.1}}],
+                   sweep={"x": {"field": "vibration.frequency", "values": [FREQ]}})
+    p = build(raw)
+    grains = list(sweep.grains(p, 0, 0, 0))
+    estimate = pipeline.load(grains[0]).estimate().seconds
+    together = sweep.simulate_point(grains)
+    near = sweep.simulate_point(grains, until=time.time() + 0.5 * sweep.BUDGET_MARGIN * len(grains) * estimate)
+    assert estimate * len(grains) * sweep.BUDGET_MARGIN > 0.5 * sweep.BUDGET_MARGIN * len(grains) * estimate > estimate
+    assert np.array_equal(together[0], near[0]) and together[1:] == near[1:] == ([], [])
+    past = sweep.simulate_point(grains, until=time.time() - 1.0)
+    assert np.isnan(past[0]).all() and [k for k, _ in past[1]] == [0, 1, 2]
+    assert all("max-time" in message for _, message in past[1])

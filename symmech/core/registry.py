@@ -54,6 +54,9 @@ class Kind:
     precision (setup, Context) -> Result of a work-precision study (optional)
     sweep     (raw scene dict, out folder, Context, **options) -> Result: ``symmech sweep`` over the
               scene's ``[sweep]`` table, written into the folder (optional; symmech.core.sweep)
+    population list of setups -> per setup, what the kind's sweep reads of its run, or its SymmechError: the runs
+              together, each as ``run`` would run it (optional; the kind's sweep calls it through here, since the
+              kind's module imports its sweep)
     docs      path of the kind's docs page in the repository (for messages)
     """
 
@@ -67,6 +70,7 @@ class Kind:
     docs: str = ""
     sweep: Callable[..., Any] | None = None
     sample: Callable[[Any, float], Any] | None = None
+    population: Callable[[list], list] | None = None
 
 
 def register(kind: Kind) -> Kind:

@@ -166,6 +166,10 @@ class Motion:
     final: State
     extra: dict = field(default_factory=dict)
 
+    def impact_times(self) -> np.ndarray:
+        """The impact times (n,) [s] in order (the compiled engine reads them from its rows, no log built)."""
+        return np.array([i["t"] for i in self.impacts], dtype=float)
+
     def summary(self) -> dict:
         duration = self.final.t - self.start.t
         dissipated = sum(i["ke_before"] - i["ke_after"] for i in self.impacts)

@@ -372,25 +372,36 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
     return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
 
 
-def simulate_many(scenes: list, workers: int | None = None) -> list:
+def simulate_many(scenes: list, workers: int | None = None, strict: bool = True) -> list:
     """The grains of ``scenes`` (a list of :class:`GrainScene`), each as :func:`simulate` runs it without ``on_step``;
     on the compiled engine, the scenes that share numerics and duration run as one population (packed once, the
-    loop over grains compiled: the engine's ``simulate_many``, ``workers`` threads), the others one by one."""
+    loop over grains compiled, the results built in bulk: the engine's ``simulate_many``, ``workers`` threads), the
+    others one by one. A grain whose run fails raises its SymmechError (``strict``) or stands in the list as it."""
     out = [None] * len(scenes)
     groups = {}
     for k, sc in enumerate(scenes):
         groups.setdefault((sc.numerics, sc.duration), []).append(k)
     for (num, duration), members in groups.items():
         engine, why = choose_engine(scenes[members[0]]) if num.mode == "accurate" else ("paper", "")
-        if engine != "compiled":
-            for k in members:
-                out[k] = simulate(scenes[k])
-            continue
-        runs = _compiled().module().simulate_many([scenes[k].model for k in members], num,
-                                                  [scenes[k].start for k in members], duration, workers, why)
+        if engine == "compiled":
+            runs = _compiled().module().simulate_many([scenes[k].model for k in members], num,
+                                                      [scenes[k].start for k in members], duration, workers, why,
+                                                      strict)
+        else:
+            runs = [_one(scenes[k], strict) for k in members]
         for k, m in zip(members, runs):
             out[k] = m
     return out
+
+
+def _one(sc: GrainScene, strict: bool):
+    """:func:`simulate` of one scene; its SymmechError raised (``strict``) or returned."""
+    try:
+        return simulate(sc)
+    except SymmechError as exc:
+        if strict:
+            raise
+        return exc
 
 
 def _compiled():
@@ -432,7 +443,7 @@ def run(sc: GrainScene, ctx: Context) -> Result:
     warnings = summary.pop("warnings")
     checks = _checks(summary, m.impacts)
     if summary["bounces"]:
-        sampling, advice = _sampling(sc, summary)
+        sampling, advice = _sampling(sc, summary["duration_s"], summary["bounces"])
         checks.append(sampling)
         warnings += advice
 
@@ -441,6 +452,37 @@ def run(sc: GrainScene, ctx: Context) -> Result:
 
     return Result("grain", summary, {"trajectory": _trajectory(m), "impacts": _impacts(m)},
                   plots=draw, warnings=warnings, events="impacts", headline=_headline(summary), checks=checks)
+
+
+def transport(sc: GrainScene, m: motion.Motion) -> tuple[tuple, list[str]]:
+    """What a sweep reads of a grain's run, as :func:`run` reports it but without its tables: (mean transport
+    velocity along X and Y [m/s], fraction of the time in flight) and the run's warnings (the motion's, then the
+    sampling advice). SymmechError for a non-finite result, as the run's."""
+    duration = m.final.t - m.start.t
+    (vx, vy), flight_share = ((m.final.r[:2] - m.start.r[:2]) / duration).tolist(), m.time_in.get("flight", 0.0) / duration
+    bad = ~np.isfinite(m.trajectory)
+    if bad.any() or not all(map(math.isfinite, (vx, vy, flight_share))):
+        row = int(np.argwhere(bad)[0, 0]) if bad.any() else -1
+        raise SymmechError(f"non-finite result: the grain's trajectory or transport (row {row})")
+    warnings = list(m.warnings)
+    bounces = len(m.impact_times())
+    if bounces:
+        warnings += _sampling(sc, duration, bounces)[1]
+    return (vx, vy, flight_share), warnings
+
+
+def sweep_answers(scenes: list) -> list:
+    """Per grain scene of ``scenes`` (GrainScenes), run together as one population (:func:`simulate_many`), what a
+    sweep reads of it (:func:`transport`) or its SymmechError (the kind's ``population``)."""
+    answers = []
+    for sc, m in zip(scenes, simulate_many(scenes, workers=1, strict=False)):
+        try:
+            if isinstance(m, SymmechError):
+                raise m
+            answers.append(transport(sc, m))
+        except SymmechError as exc:
+            answers.append(exc)
+    return answers
 
 
 MIN_SAMPLES_PER_IMPACT = 2  # trajectory rows per mean interval between impacts, to draw the bounces
@@ -478,15 +520,16 @@ def _checks(s: dict, impacts: list) -> list[Check]:
     return out
 
 
-def _sampling(sc: GrainScene, s: dict) -> tuple[Check, list[str]]:
-    """Can the trajectory show the bounces? Its rows per mean interval between impacts, and advice if not."""
-    gap = s["duration_s"] / s["bounces"]
+def _sampling(sc: GrainScene, duration: float, bounces: int) -> tuple[Check, list[str]]:
+    """Can the trajectory show the bounces (``bounces`` > 0 over ``duration`` [s])? Its rows per mean interval
+    between impacts, and advice if not."""
+    gap = duration / bounces
     per_impact = gap / sc.numerics.sample_interval
     check = Check("trajectory rows per mean interval between impacts", per_impact, "1",
                   f">= {MIN_SAMPLES_PER_IMPACT}", "pass" if per_impact >= MIN_SAMPLES_PER_IMPACT else "warn")
     if check.verdict == "pass":
         return check, []
-    return check, [f"grain: {s['bounces']} impacts in {s['duration_s']:.4g} s, one every {gap:.3g} s on average, "
+    return check, [f"grain: {bounces} impacts in {duration:.4g} s, one every {gap:.3g} s on average, "
                    f"but trajectory rows every {sc.numerics.sample_interval:.3g} s: set numerics.sample_interval "
                    f"<= {gap / MIN_SAMPLES_PER_IMPACT:.3g} s to see the bounces"]
 
@@ -561,4 +604,4 @@ registry.register(registry.Kind(
     name="grain", summary="the whole motion of a grain on an inclined vibrating surface (seed 000, eqs (61)-(64))",
     schema=SCHEMA, prepare=prepare, run=run, estimate=estimate, precision=precision, docs="docs/scenes-grain.md",
     sample=sample,
-    sweep=sweep.run))
+    sweep=sweep.run, population=sweep_answers))

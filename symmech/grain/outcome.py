@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 
 @dataclass
 class EnergyBudget:
@@ -22,11 +24,26 @@ class EnergyBudget:
         of the balance and its size relative to the largest part, beside the stated ``tolerance``."""
         residual = end - self.start - (self.work - self.impacts - self.landings - self.sliding)
         scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
-        parts = {"start_J": self.start, "end_J": end, "input_by_surface_J": self.work,
-                 "lost_in_impacts_J": self.impacts, "lost_at_landings_J": self.landings,
-                 "lost_in_sliding_J": self.sliding, "residual_J": residual,
-                 "relative_residual": abs(residual) / scale if scale > 0 else 0.0}
-        return {**{k: float(v) for k, v in parts.items()}, "tolerance": tolerance}
+        parts = (self.start, end, self.work, self.impacts, self.landings, self.sliding, residual,
+                 abs(residual) / scale if scale > 0 else 0.0)
+        return {**{k: float(v) for k, v in zip(BUDGET_KEYS, parts)}, "tolerance": tolerance}
+
+
+BUDGET_KEYS = ("start_J", "end_J", "input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J",
+               "lost_in_sliding_J", "residual_J", "relative_residual")
+
+
+def budget_reports(start, end, work, impacts, landings, sliding, tolerance: float) -> list:
+    """:meth:`EnergyBudget.report` of n runs at once (a population's results, built in bulk), from their parts (each
+    an array (n,) [J]): the same operations element by element, the largest part chosen as Python's ``max`` does
+    (a NaN first stays), so each dict equals the report of that run alone."""
+    residual = end - start - (work - impacts - landings - sliding)
+    scale = np.abs(start)
+    for part in (np.abs(end), np.abs(work), impacts + landings + sliding):
+        scale = np.where(part > scale, part, scale)
+    relative = np.divide(np.abs(residual), scale, out=np.zeros_like(scale), where=scale > 0)
+    columns = (start, end, work, impacts, landings, sliding, residual, relative)
+    return [{**dict(zip(BUDGET_KEYS, row)), "tolerance": tolerance} for row in zip(*(c.tolist() for c in columns))]
 
 
 def distinct(warnings: list) -> list:

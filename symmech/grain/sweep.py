@@ -307,28 +307,62 @@ def throw_number(resolved: dict) -> float:
     return vib["amplitude"] * (2 * math.pi * vib["frequency"]) ** 2 / g
 
 
+POPULATION_SLICE = 16  # grains per compiled population call
+BUDGET_MARGIN = 10.0  # a slice runs as one population (no clock inside it) only while the time left holds this many
+# times its count estimate (at most 0.7 of the actual, motion_scene's fit); else its grains run one by one, watched
+
+
 def simulate_point(scenes, first: int = 0, until: float = math.inf) -> tuple[np.ndarray, list, list]:
-    """Per grain of the iterable ``scenes`` (numbered from ``first``): mean transport velocity (X, Y) [m/s]
-    and the fraction of time in flight, shape (n, 3); a grain whose simulation stops with an error (e.g. a
-    stagnation guard, or the sweep's deadline ``until``, a ``time.time()``) gets a row of NaN and its message
-    in the list of (grain index, message) — it is reported, never averaged in. A grain whose run warned (e.g. a
-    rocking contact the model does not follow) is averaged in and listed as (grain index, warnings)."""
+    """Per grain of the iterable ``scenes`` (raw grain scenes, numbered from ``first``): mean transport velocity
+    (X, Y) [m/s] and the fraction of time in flight, shape (n, 3); a grain whose scene or simulation stops with an
+    error (e.g. a stagnation guard, or the sweep's deadline ``until``, a ``time.time()``) gets a row of NaN and its
+    message in the list of (grain index, message) — it is reported, never averaged in. A grain whose run warned
+    (e.g. a rocking contact the model does not follow) is averaged in and listed as (grain index, warnings).
+    The grains run in slices of :data:`POPULATION_SLICE` (:func:`_slice`), each as ``symmech run`` would run it."""
     from symmech.core import pipeline
     from symmech.core.scene import SymmechError
 
-    out, failed, warned = [], [], []
+    out, failed, warned, loaded = [], [], [], []
     for k, data in enumerate(scenes, first):
         try:
-            res = pipeline.load(data).run(core_sweep.point_context(until))
+            loaded.append((k, pipeline.load(data)))
         except SymmechError as exc:
-            out.append((np.nan, np.nan, np.nan))
             failed.append((k, str(exc)))
-            continue
-        vx, vy = res.summary["mean_transport_velocity_m_s"]
-        out.append((vx, vy, res.summary["time_fraction"].get("flight", 0.0)))
-        if res.warnings:
-            warned.append((k, list(res.warnings)))
-    return np.array(out).reshape(-1, 3), failed, warned
+        out.append((np.nan, np.nan, np.nan))
+    for at in range(0, len(loaded), POPULATION_SLICE):
+        for k, answer in _slice(loaded[at:at + POPULATION_SLICE], until):
+            if isinstance(answer, SymmechError):
+                failed.append((k, str(answer)))
+                continue
+            out[k - first], warnings = answer
+            if warnings:
+                warned.append((k, warnings))
+    return np.array(out).reshape(-1, 3), sorted(failed), sorted(warned)
+
+
+def _slice(part: list, until: float) -> list:
+    """(grain index, ((vx, vy, flight fraction), warnings) or the grain's SymmechError) of each loaded grain scene
+    of ``part`` (a list of (index, pipeline.Scene)): as one population (the kind's ``population``:
+    ``motion_scene.sweep_answers``, the results built in bulk) while the time to ``until`` holds
+    :data:`BUDGET_MARGIN` times the slice's count estimate, else one by one, each run watched by the deadline as
+    ``symmech run`` watches it."""
+    scenes = [scene for _, scene in part]
+    if scenes[0].estimate().seconds * len(part) * BUDGET_MARGIN < until - time.time():
+        return list(zip([k for k, _ in part], scenes[0].kind.population([scene.setup for scene in scenes])))
+    return [(k, _alone(scene, until)) for k, scene in part]
+
+
+def _alone(scene, until: float):
+    """One grain's ((vx, vy, flight fraction), warnings) from its whole run (a ``pipeline.Scene`` under the
+    deadline ``until``), or its SymmechError."""
+    from symmech.core.scene import SymmechError
+
+    try:
+        res = scene.run(core_sweep.point_context(until))
+    except SymmechError as exc:
+        return exc
+    vx, vy = res.summary["mean_transport_velocity_m_s"]
+    return (vx, vy, res.summary["time_fraction"].get("flight", 0.0)), list(res.warnings)
 
 
 def simulate_grains(base: dict, population: dict, fields: dict, start: int, stop: int, until: float):

@@ -48,6 +48,7 @@ loaded; threads call numba's, which releases the GIL.
 """
 from __future__ import annotations
 
+import math
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -152,6 +153,12 @@ class LazyMotion(motion.Motion):
     def impacts(self, value) -> None:  # the dataclass __init__ (None from simulate) and assignments
         self._impacts = value
 
+    def impact_times(self) -> np.ndarray:
+        """The impact times (n,) [s], read from the impact rows while the log is not built (no dict per impact)."""
+        if self._impacts is None:
+            return self._rows[:, IMPACT_ROW.offset("t")].copy()
+        return super().impact_times()
+
 
 def energy_budget(carry: np.ndarray) -> dict:
     """The energy budget of a finished run from its carry (CARRY.size,): the energies at the start and the end come
@@ -161,16 +168,24 @@ def energy_budget(carry: np.ndarray) -> dict:
     return budget.report(float(carry[C_AT.e_end]), motion.ENERGY_TOLERANCE)
 
 
-def raise_failure(status: int, t: float, regime: int) -> None:
-    """The Python loop's errors for the compiled loop's failure codes."""
+def energy_budgets(carries: np.ndarray) -> list:
+    """:func:`energy_budget` of each of the finished runs' carries (n, CARRY.size), built in bulk (equal, bit for
+    bit, to each run's own)."""
+    c = carries.T
+    return outcome.budget_reports(c[C_AT.e_start], c[C_AT.e_end], c[C_AT.work], c[C_AT.impacts], c[C_AT.land_loss],
+                                  c[C_AT.slide_loss], motion.ENERGY_TOLERANCE)
+
+
+def failure(status: int, t: float, regime: int) -> SymmechError:
+    """The Python loop's error for a compiled loop's failure code."""
     if status == STALLED:
-        raise SymmechError(outcome.stalled_error(t, MAX_IDLE_STEPS, motion.REGIMES[regime]))
+        return SymmechError(outcome.stalled_error(t, MAX_IDLE_STEPS, motion.REGIMES[regime]))
     if status == SLIDE_STALLED:
-        raise SymmechError(outcome.sliding_stalled_error(t, MAX_STALLED_EVENTS))
+        return SymmechError(outcome.sliding_stalled_error(t, MAX_STALLED_EVENTS))
     if status == SLIDE_RHS:
-        raise SymmechError(outcome.sliding_evaluations_error(t, sliding.MAX_RHS_PER_PHASE))
+        return SymmechError(outcome.sliding_evaluations_error(t, sliding.MAX_RHS_PER_PHASE))
     what = "sliding integration" if status == SLIDE_FAIL else "torque-free rotation"
-    raise SymmechError(outcome.integration_failed_error(
+    return SymmechError(outcome.integration_failed_error(
         what, t, "required step size is less than spacing between numbers"))
 
 
@@ -181,19 +196,71 @@ def start_vector(model: motion.Model, start: motion.State) -> np.ndarray:
     return STATE.pack(t=start.t, r=start.r, v=start.v, q=q / np.linalg.norm(q), w=w)
 
 
+def start_vectors(models: list, starts: list) -> np.ndarray:
+    """:func:`start_vector` of each grain (grains, STATE.size), built in bulk (equal to each, bit for bit)."""
+    ys = np.empty((len(starts), STATE.size))
+    ys[:, X_AT.t] = [st.t for st in starts]
+    for at, name in zip(STATE_VECTORS, ("r", "v", "q", "w")):
+        ys[:, at] = [getattr(st, name) for st in starts]
+    q = ys[:, X_AT.q:X_AT.q + 4]
+    q /= np.array([math.sqrt(row.dot(row)) for row in q])[:, None]  # each as np.linalg.norm (dot, sqrt)
+    ys[[not model.effects.rotation for model in models], X_AT.w:X_AT.w + 3] = 0.0
+    return ys
+
+
+def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, carries: np.ndarray, tables: tuple,
+            statuses: np.ndarray, reason: str = "", strict: bool = True) -> list:
+    """The ``motion.Motion`` of each finished run, built in bulk: final states ys (grains, STATE.size), carries
+    (grains, CARRY.size), the trajectory, impact and warning rows of all grains one after another (``tables``;
+    a grain's counts in its carry), the statuses (grains,); ``extra`` names this engine, "compiled", and
+    ``reason``, why the caller chose it. A failed grain raises its error (``strict``) or is its SymmechError."""
+    failed = np.flatnonzero(statuses != DONE)
+    if strict and len(failed):
+        k = failed[0]
+        raise failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime]))
+    ends = np.cumsum(carries[:, ROW_COUNTS].astype(INT), axis=0).tolist()  # (grains, 3): rows, impacts, warnings
+    budgets = energy_budgets(carries)
+    counts = carries[:, [C_AT.landings, C_AT.rocking, C_AT.implicit]].astype(INT).tolist()
+    times = carries[:, [C_AT.t_flight, C_AT.t_sliding]].tolist()
+    done = (statuses == DONE).tolist()
+    rows, imps, warns = tables
+    out, row0, imp0, warn0 = [], 0, 0, 0  # where grain k's rows begin in each table
+    for k, (model, start, (row1, imp1, warn1), budget, (landings, rocking, implicit), (flight, slide)) in enumerate(
+            zip(models, starts, ends, budgets, counts, times)):
+        if not done[k]:
+            out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
+        else:
+            texts = run_warnings(warns[warn0:warn1] if warn1 > warn0 else (), rocking, model, num)
+            out.append(LazyMotion(rows[row0:row1], None, {"flight": flight, "sliding": slide}, texts, start,
+                                  state_view(ys[k]), run_extra(landings, rocking, budget, implicit, reason),
+                                  impact_rows=imps[imp0:imp1]))
+        row0, imp0, warn0 = row1, imp1, warn1
+    return out
+
+
+def run_warnings(warns, rocking: int, model: motion.Model, num: motion.Numerics) -> list:
+    """The warnings of a run: its warning rows (n, WARNING_WIDTH) worded, then its ``rocking`` contacts, each once."""
+    texts = [warning_text(int(c), a, b, model, num) for c, a, b in (warns.tolist() if len(warns) else ())]
+    if rocking:
+        texts.append(outcome.rocking_warning(rocking))
+    return outcome.distinct(texts) if texts else texts
+
+
+def run_extra(landings: int, rocking: int, budget: dict, implicit: int, reason: str) -> dict:
+    """A compiled run's ``extra``: its counts, energy budget, this engine and why the caller chose it."""
+    return {"landings": landings, "rocking_contacts": rocking, "energy_budget": budget, "engine": "compiled",
+            "implicit_slip_steps": implicit, "engine_reason": reason}
+
+
 def motion_of(model: motion.Model, num: motion.Numerics, start: motion.State, y: np.ndarray, carry: np.ndarray,
               rows: np.ndarray, imps: np.ndarray, warns: np.ndarray, reason: str = "") -> motion.Motion:
-    """The ``motion.Motion`` of a finished run: its final state y (STATE.size,), carry (CARRY.size,), its trajectory
-    (carry rows, TRAJECTORY_WIDTH), impact (carry nimp, IMPACT_WIDTH) and warning rows (carry nwarn, WARNING_WIDTH);
-    ``extra`` names this engine, "compiled", and ``reason``, why the caller chose it."""
-    warnings = [warning_text(int(c), a, b, model, num) for c, a, b in warns]
-    if carry[C_AT.rocking]:
-        warnings.append(outcome.rocking_warning(int(carry[C_AT.rocking])))
-    extra = {"landings": int(carry[C_AT.landings]), "rocking_contacts": int(carry[C_AT.rocking]),
-             "energy_budget": energy_budget(carry),
-             "engine": "compiled", "implicit_slip_steps": int(carry[C_AT.implicit]), "engine_reason": reason}
+    """:func:`motions` of one finished run (no bulk arrays: a single grain's results in a few us): its final state y
+    (STATE.size,), carry (CARRY.size,), trajectory, impact and warning rows (its counts)."""
+    rocking = int(carry[C_AT.rocking])
+    extra = run_extra(int(carry[C_AT.landings]), rocking, energy_budget(carry), int(carry[C_AT.implicit]), reason)
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
-    return LazyMotion(rows, None, time_in, outcome.distinct(warnings), start, state_view(y), extra, impact_rows=imps)
+    return LazyMotion(rows, None, time_in, run_warnings(warns, rocking, model, num), start, state_view(y), extra,
+                      impact_rows=imps)
 
 
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,
@@ -216,7 +283,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
         progress(y[X_AT.t])
         y, rows, imps, warns, status = run(p, y, t_end, rows, imps, warns, carry, PHASES_PER_CALL)
     if status != DONE:
-        raise_failure(status, float(y[X_AT.t]), int(carry[C_AT.regime]))
+        raise failure(status, float(y[X_AT.t]), int(carry[C_AT.regime]))
     progress(y[X_AT.t], final=True)
     return motion_of(model, num, start, y, carry, rows[:int(carry[C_AT.rows])], imps[:int(carry[C_AT.nimp])],
                      warns[:int(carry[C_AT.nwarn])], reason)
@@ -292,19 +359,21 @@ ROW_COUNTS = [C_AT.rows, C_AT.nimp, C_AT.nwarn]  # the counts of the tables loop
 
 
 def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float,
-                  workers: int | None = None, reason: str = "") -> list:
+                  workers: int | None = None, reason: str = "", strict: bool = True) -> list:
     """Grains with their own models and start states, each as :func:`simulate` (bit for bit; no ``on_step``): a
     population packed once (one parameter vector per distinct model), its grains run one after another inside one
     compiled call (``loop.run_many``) per thread, ``workers`` threads (default: one per core, at most one per
-    ``GRAINS_PER_THREAD`` grains; the compiled loop releases the GIL); the results split per grain in Python
-    without a loop over impacts (``reason`` as :func:`simulate`'s). The first grain that failed raises its error."""
+    ``GRAINS_PER_THREAD`` grains; the compiled loop releases the GIL); the results built in bulk (:func:`motions`:
+    no loop over impacts; ``reason`` as :func:`simulate`'s). A failed grain raises its error (the first, ``strict``)
+    or stands in the list as its SymmechError."""
     n = len(models)
     packed = {}
-    ps, ys = np.empty((n, PARAMS.size)), np.empty((n, STATE.size))
-    for k, (model, start) in enumerate(zip(models, starts)):
+    ps = np.empty((n, PARAMS.size))
+    for k, model in enumerate(models):
         if model not in packed:
             packed[model] = pack(model, num)
-        ps[k], ys[k] = packed[model], start_vector(model, start)
+        ps[k] = packed[model]
+    ys = start_vectors(models, starts)
     t_ends = np.full(n, float(t_end))
     carries, statuses = np.zeros((n, CARRY.size)), np.empty(n, INT)
     hint = row_hint(t_end - float(np.min(ys[:, X_AT.t], initial=t_end)), num)
@@ -320,13 +389,5 @@ def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float
         # the impact law's 3 x 3 solves call OpenBLAS: its own threads spin beside ours, 5x the CPU (measured)
         with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(threads) as pool:
             parts = list(pool.map(part, cuts[:-1], cuts[1:]))
-    for k in np.flatnonzero(statuses != DONE)[:1]:
-        raise_failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime]))
-    out = []
-    for a, b, tables in zip(cuts[:-1], cuts[1:], parts):
-        counts = carries[a:b][:, ROW_COUNTS].astype(INT)  # (grains, 3): trajectory, impact, warning rows
-        ends = np.cumsum(counts, axis=0)
-        for k in range(b - a):
-            pieces = [table[end - count:end] for table, end, count in zip(tables, ends[k], counts[k])]
-            out.append(motion_of(models[a + k], num, starts[a + k], ys[a + k], carries[a + k], *pieces, reason))
-    return out
+    tables = parts[0] if threads == 1 else tuple(np.concatenate(column) for column in zip(*parts))
+    return motions(models, num, starts, ys, carries, tables, statuses, reason, strict)

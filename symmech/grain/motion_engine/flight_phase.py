@@ -25,11 +25,18 @@ def _samples(p, t0, t_stop):
 
 
 @jit
-def fly(p, y, t_end, on_plane, rows, carry):
+def scratch():
+    """The closed-form flight's work arrays, made once per call of the loop and reused by every flight: its records
+    (free_flight.FLIGHT, ROTATION), the translation's buffer (1, 2, 3) and a state (STATE.size,)."""
+    return np.empty(ff.FLIGHT_SIZE), np.empty(ff.ROTATION_SIZE), np.empty((1, 2, 3)), np.empty(N_STATE)
+
+
+@jit
+def fly(p, y, t_end, on_plane, rows, carry, work):
     """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, 3 the rotation's
-    integration failed, rows)."""
+    integration failed, rows); ``work``: :func:`scratch`."""
     if p[P_AT.exact_flight] != 0.0:
-        return _fly_exact(p, y, t_end, on_plane, rows, carry)
+        return _fly_exact(p, y, t_end, on_plane, rows, carry, work)
     ctx = flight_ctx(p, y)
     steps = np.empty((64, ROT_WIDTH))
     nsteps = INT(0)
@@ -64,24 +71,22 @@ def fly(p, y, t_end, on_plane, rows, carry):
 
 
 @jit
-def _exact_records(p, y):
-    """The exact flight's records (free_flight.FLIGHT, ROTATION) from the state y; a grain that does not rotate
-    keeps its attitude (its rate, kept in y, is not applied)."""
-    fl, rot = np.empty(ff.FLIGHT_SIZE), np.empty(ff.ROTATION_SIZE)
-    start = y
+def _exact_records(p, y, fl, rot, start):
+    """Fill the exact flight's records ``fl``, ``rot`` (free_flight.FLIGHT, ROTATION) from the state y; a grain that
+    does not rotate keeps its attitude (its rate, kept in y, is not applied: ``start``, a state, holds y without it)."""
+    source = y
     if p[P_AT.rotation] == 0.0:
-        start = y.copy()
+        start[:] = y
         start[X_AT.w:X_AT.w + 3] = 0.0
-    ff.flight_setup(start, p[P_AT.g:P_AT.g + 3], p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase],
+        source = start
+    ff.flight_setup(source, p[P_AT.g:P_AT.g + 3], p[P_AT.amplitude], p[P_AT.omega], p[P_AT.phase],
                     p[P_AT.direction:P_AT.direction + 3], p[P_AT.axes:P_AT.axes + 3],
                     p[P_AT.inertia:P_AT.inertia + 3], fl, rot)
-    return fl, rot
 
 
 @jit
-def _exact_state(t, y, fl, rot, p):
-    """The state (STATE.size,) at t of the exact flight from y."""
-    out = np.empty(N_STATE)
+def _exact_state(t, y, fl, rot, p, out):
+    """The state (STATE.size,) at t of the exact flight from y, into ``out`` (returned)."""
     ff.flight_state(t, fl, rot, out)
     if p[P_AT.rotation] == 0.0:
         out[X_AT.w:X_AT.w + 3] = y[X_AT.w:X_AT.w + 3]
@@ -89,11 +94,11 @@ def _exact_state(t, y, fl, rot, p):
 
 
 @jit
-def _fly_exact(p, y, t_end, on_plane, rows, carry):
+def _fly_exact(p, y, t_end, on_plane, rows, carry, work):
     """``fly`` on the closed-form flight: the rise off the plane, ``next_contact`` (no grazing contact missed),
-    the trajectory rows; status 0 contact, 1 end, 2 resting."""
-    fl, rot = _exact_records(p, y)
-    buf = np.empty((1, 2, 3))
+    the trajectory rows; status 0 contact, 1 end, 2 resting. ``work``: :func:`scratch` (the returned state is new)."""
+    fl, rot, buf, state = work
+    _exact_records(p, y, fl, rot, state)
     scan = p[P_AT.scan_step]
     t_from = y[X_AT.t]
     if on_plane:  # the rise above round-off, as the DOP853 flight's
@@ -114,5 +119,5 @@ def _fly_exact(p, y, t_end, on_plane, rows, carry):
     for kk in range(k0, k1):
         ts = kk * p[P_AT.sample_interval]
         if y[X_AT.t] < ts < t_stop:
-            rows = record(rows, carry, _exact_state(ts, y, fl, rot, p), FLIGHT)
-    return _exact_state(t_stop, y, fl, rot, p), 1 if math.isnan(tc) else 0, rows
+            rows = record(rows, carry, _exact_state(ts, y, fl, rot, p, state), FLIGHT)
+    return _exact_state(t_stop, y, fl, rot, p, np.empty(N_STATE)), 1 if math.isnan(tc) else 0, rows

@@ -20,12 +20,11 @@ gi = kernels.load("grain_impact")
 
 
 @jit
-def _coulomb_impulse(K, u, e_n, e_t, mu, point_mass):
-    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain); ``point_mass``: K is
-    1/m times the identity (no rotation), solved by a division instead of LAPACK."""
+def _coulomb_impulse(K, u, e_n, e_t, mu):
+    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain)."""
     P_I = np.zeros(3)
     P_I[2] = -u[2] / K[2, 2]
-    D = (-u / K[2, 2] if point_mass else -np.linalg.solve(K, u)) - P_I
+    D = -np.linalg.solve(K, u) - P_I
     P = (1.0 + e_n) * P_I + (1.0 + e_t) * D
     d_t = math.hypot(D[0], D[1])
     p_t = math.hypot(P[0], P[1])
@@ -34,6 +33,22 @@ def _coulomb_impulse(K, u, e_n, e_t, mu, point_mass):
         kappa = (1.0 + e_n) * P_I[2] / (d_t / mu - D[2])
         return (1.0 + e_n) * P_I + kappa * D
     return P
+
+
+@jit
+def _point_impulse(u, k, e_n, e_t, mu):
+    """``_coulomb_impulse`` of a point mass (K = k times the identity, k = 1/m [1/kg]) in scalars, the same
+    operations element by element (no arrays, no LAPACK): (P_x, P_y, P_z) [N s]."""
+    pi_z = -u[2] / k
+    d_x, d_y, d_z = -u[0] / k - 0.0, -u[1] / k - 0.0, -u[2] / k - pi_z
+    p_x, p_y = (1.0 + e_n) * 0.0 + (1.0 + e_t) * d_x, (1.0 + e_n) * 0.0 + (1.0 + e_t) * d_y
+    p_z = (1.0 + e_n) * pi_z + (1.0 + e_t) * d_z
+    p_t = math.hypot(p_x, p_y)
+    outside = p_t / mu > p_z if mu > 0 else p_t > 0
+    if outside:
+        kappa = (1.0 + e_n) * pi_z / (math.hypot(d_x, d_y) / mu - d_z)
+        return (1.0 + e_n) * 0.0 + kappa * d_x, (1.0 + e_n) * 0.0 + kappa * d_y, (1.0 + e_n) * pi_z + kappa * d_z
+    return p_x, p_y, p_z
 
 
 @jit
@@ -156,12 +171,13 @@ def printed_impulse(H, m, e, lam, u):
 def impact(p, y, warns, carry):
     """The scene's impact law at the lowest point (``ImpactLaw.apply`` for one grain):
     (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""
+    if p[P_AT.rotation] == 0.0:
+        return _point_mass_impact(p, y, warns, carry)
     Q = rotation(y[X_AT.q:X_AT.q + 4])
     m = p[P_AT.mass]
-    rotating = p[P_AT.rotation] != 0.0
-    R = contact_offset(p, Q) if rotating else np.zeros(3)  # without spin, u = v whatever R is
+    R = contact_offset(p, Q)
     v = y[X_AT.v:X_AT.v + 3].copy()
-    w = Q @ y[X_AT.w:X_AT.w + 3] if rotating else np.zeros(3)
+    w = Q @ y[X_AT.w:X_AT.w + 3]
     u = v + cross(w, R)
     K = inverse_effective_mass(p, Q, R)
     printed = p[P_AT.law] == LAW_PRINTED
@@ -169,7 +185,7 @@ def impact(p, y, warns, carry):
     converged = 1.0
     P = np.zeros(3)
     if u[2] < 0.0:
-        if rotating and (printed or p[P_AT.check_printed] != 0.0):
+        if printed or p[P_AT.check_printed] != 0.0:
             e, lam = (p[P_AT.e], p[P_AT.lam]) if printed else (p[P_AT.e_n], 1.0 + p[P_AT.e_t])
             T, residual, adm, gain, pull = printed_impulse(m * K, m, e, lam, u)
             p_adm, p_gain = (1.0 if adm else 0.0), (1.0 if gain else 0.0)
@@ -180,29 +196,71 @@ def impact(p, y, warns, carry):
                 if not residual < 1e-8:
                     warns = warn(warns, carry, W_PRINTED_RESIDUAL, residual, 0.0)
                 P = T
-        if not (rotating and printed):
-            if printed:
-                P = _coulomb_impulse(K, u, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf, not rotating)
-            else:
-                P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact], not rotating)
+        if not printed:
+            P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
     v_after = v + P / m
-    w_after = w + world_inv_inertia(p, Q) @ cross(R, P) if rotating else np.zeros(3)
+    w_after = w + world_inv_inertia(p, Q) @ cross(R, P)
     ke_before, ke_after = kinetic(p, Q, v, w), kinetic(p, Q, v_after, w_after)
-    admissible = ke_after <= ke_before * (1.0 + 1e-9)
-    if not admissible:
-        warns = warn(warns, carry, W_ENERGY, ke_before, ke_after)
+    admissible, warns = _booked(ke_before, ke_after, warns, carry)
     after = y.copy()
     after[X_AT.v:X_AT.v + 3] = v_after
-    after[X_AT.w:X_AT.w + 3] = Q.T @ w_after if rotating else w_after
+    after[X_AT.w:X_AT.w + 3] = Q.T @ w_after
     log = np.empty(IMPACT_WIDTH)
-    log[I_AT.v_before:I_AT.v_before + 3] = v
-    log[I_AT.v_after:I_AT.v_after + 3] = v_after
-    log[I_AT.w_before:I_AT.w_before + 3] = y[X_AT.w:X_AT.w + 3]
     log[I_AT.w_after:I_AT.w_after + 3] = after[X_AT.w:X_AT.w + 3]
     log[I_AT.impulse:I_AT.impulse + 3] = P
     log[I_AT.u_before:I_AT.u_before + 3] = u
     log[I_AT.u_after:I_AT.u_after + 3] = v_after + cross(w_after, R)
-    log[I_AT.ke_before], log[I_AT.ke_after], log[I_AT.admissible] = ke_before, ke_after, 1.0 if admissible else 0.0
-    log[I_AT.printed_admissible], log[I_AT.printed_creates_energy], log[I_AT.converged] = p_adm, p_gain, converged
+    _log_common(log, y, v, v_after, ke_before, ke_after, admissible, p_adm, p_gain, converged)
     return after, log, warns
 
+
+@jit
+def _point_mass_impact(p, y, warns, carry):
+    """``impact`` of a grain that does not rotate (a point mass: no spin, u = v, K = 1/m), its Coulomb impulse in
+    scalars (:func:`_point_impulse`); the printed law of such a grain is its Coulomb reduction (e, lam - 1, no
+    bound), as ``ImpactLaw.apply``. No rotation matrix, no LAPACK, four arrays instead of ~25."""
+    m = p[P_AT.mass]
+    v = y[X_AT.v:X_AT.v + 3].copy()
+    u = (v[0] + 0.0, v[1] + 0.0, v[2] + 0.0)  # v + w x R with w = 0, as the rotating grain's
+    P = (0.0, 0.0, 0.0)
+    if u[2] < 0.0:
+        k = 1.0 / m
+        if p[P_AT.law] == LAW_PRINTED:
+            P = _point_impulse(u, k, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf)
+        else:
+            P = _point_impulse(u, k, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
+    v_after = np.empty(3)
+    for i in range(3):
+        v_after[i] = v[i] + P[i] / m
+    ke_before, ke_after = 0.5 * m * (v @ v), 0.5 * m * (v_after @ v_after)  # kinetic() without spin
+    admissible, warns = _booked(ke_before, ke_after, warns, carry)
+    after = y.copy()
+    after[X_AT.v:X_AT.v + 3] = v_after
+    after[X_AT.w:X_AT.w + 3] = 0.0
+    log = np.empty(IMPACT_WIDTH)
+    for i in range(3):
+        log[I_AT.w_after + i] = 0.0
+        log[I_AT.impulse + i] = P[i]
+        log[I_AT.u_before + i] = u[i]
+        log[I_AT.u_after + i] = v_after[i] + 0.0
+    _log_common(log, y, v, v_after, ke_before, ke_after, admissible, -1.0, -1.0, 1.0)
+    return after, log, warns
+
+
+@jit
+def _booked(ke_before, ke_after, warns, carry):
+    """Whether an impact created no energy (to 1e-9 relative), and the warning row if it did: (admissible, warns)."""
+    admissible = ke_after <= ke_before * (1.0 + 1e-9)
+    if not admissible:
+        warns = warn(warns, carry, W_ENERGY, ke_before, ke_after)
+    return admissible, warns
+
+
+@jit
+def _log_common(log, y, v, v_after, ke_before, ke_after, admissible, p_adm, p_gain, converged):
+    """The parts of an impact row that both grains fill alike: velocities, spin before, energies and flags."""
+    log[I_AT.v_before:I_AT.v_before + 3] = v
+    log[I_AT.v_after:I_AT.v_after + 3] = v_after
+    log[I_AT.w_before:I_AT.w_before + 3] = y[X_AT.w:X_AT.w + 3]
+    log[I_AT.ke_before], log[I_AT.ke_after], log[I_AT.admissible] = ke_before, ke_after, 1.0 if admissible else 0.0
+    log[I_AT.printed_admissible], log[I_AT.printed_creates_energy], log[I_AT.converged] = p_adm, p_gain, converged

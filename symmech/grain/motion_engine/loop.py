@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from symmech.numerics.jit import jit
-from symmech.grain.motion_engine.flight_phase import fly
+from symmech.grain.motion_engine.flight_phase import fly, scratch
 from symmech.grain.motion_engine.kinematics import (
     contact_velocity, energy, gap, gap_noise, normal_force, velocity_noise)
 from symmech.grain.motion_engine.landing import bounce, land
@@ -37,12 +37,13 @@ def _start(p, y, rows, carry):
 def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
     """At most ``max_phases`` regime phases of the loop of ``motion.simulate`` from state y (14,);
     returns (y, rows, imps, warns, status)."""
+    work = scratch()
     for _ in range(max_phases):
         if not y[X_AT.t] < t_end:
             return y, rows, imps, warns, DONE
         t_before = y[X_AT.t]
         if carry[C_AT.regime] == FLIGHT:
-            y, fly_status, rows = fly(p, y, t_end, carry[C_AT.on_plane] != 0.0, rows, carry)
+            y, fly_status, rows = fly(p, y, t_end, carry[C_AT.on_plane] != 0.0, rows, carry, work)
             carry[C_AT.t_flight] += y[X_AT.t] - t_before
             if fly_status == 1:
                 return y, rows, imps, warns, DONE
