@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.grain import free_flight_nb as ff
 from symmech.grain.motion_engine.flight_path import extend_rotation, flight_ctx, state_at
 from symmech.grain.motion_engine.kinematics import gap_noise
@@ -24,7 +24,7 @@ def _samples(p, t0, t_stop):
     return int(k0), int(math.floor(t_stop / p[P_AT.sample_interval] - 1e-9)) + 1
 
 
-@jit
+@inline
 def fly(p, y, t_end, on_plane, rows, carry):
     """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, 3 the rotation's
     integration failed, rows)."""
@@ -88,7 +88,7 @@ def _exact_state(t, y, fl, rot, p):
     return out
 
 
-@jit
+@inline
 def _fly_exact(p, y, t_end, on_plane, rows, carry):
     """``fly`` on the closed-form flight: the rise off the plane, ``next_contact`` (no grazing contact missed),
     the trajectory rows; status 0 contact, 1 end, 2 resting."""

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from symmech.numerics.dop853 import dop_dense_at
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.numerics.radau import radau_buffers, radau_dense_at
 from symmech.grain import sliding
 from symmech.grain.motion_engine.kinematics import EPS, contact_offset, normal_force, rotation
@@ -42,7 +42,7 @@ def _sample_rows(rows, carry, rec, t_last, ctx, coef):
     return rows
 
 
-@jit
+@inline
 def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     """One integration chunk by DOP853 (a fresh ``solve_ivp`` of the Python loop) until t_chunk or the
     terminal event of sp: (t, z, event NO_EVENT / REGIME / SWITCH, rows, status)."""
@@ -76,7 +76,7 @@ def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     return t, z, NO_EVENT, rows, DONE if t >= t_chunk else SLIDE_RHS
 
 
-@jit
+@inline
 def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     """One chunk of a stiff slip by Radau (a fresh ``solve_ivp(method="Radau")`` of the Python loop) until
     t_chunk or the first terminal event: the slip stops (along sp's reference direction) or its speed rises
@@ -108,7 +108,7 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     return t, z, NO_EVENT, rows, DONE if t >= t_chunk else SLIDE_RHS, MAX_RADAU_STEPS
 
 
-@jit
+@inline
 def slide(p, y, t_end, rows, carry):
     """One sliding phase from state y (the Python loop's ``_slide`` with ``sliding.slide``): (state, lifted, rows,
     status)."""
