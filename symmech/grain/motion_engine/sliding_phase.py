@@ -27,6 +27,8 @@ from symmech.grain.motion_engine.steppers import (
 
 MAX_STEPS_PER_CHUNK = sliding.MAX_RHS_PER_PHASE // 12  # DOP853 steps (12 evaluations) per sliding chunk
 MAX_RADAU_STEPS = sliding.MAX_RHS_PER_PHASE // 4  # Radau steps (at least 4 evaluations) per sliding chunk
+# A landing may stick: a numpy bool, typed as bool and not as the literal True, which would compile settle twice.
+MAY_STICK = np.bool_(True)
 NO_EVENT, REGIME, SWITCH = 0, 1, 2  # how a chunk ends: its end time, a regime event, the integrator switch
 
 
@@ -137,7 +139,7 @@ def slide(p, y, t_end, rows, carry):
     scale[Z_AT.r:Z_AT.r + 2], scale[Z_AT.v:Z_AT.v + 2], scale[Z_AT.w:Z_AT.w + 3] = step, 1.0, 1 / a_min
     scale[Z_AT.q:Z_AT.q + 4], scale[Z_AT.work], scale[Z_AT.loss] = 1 / v_scale, v_scale, v_scale
     atol = tol * v_scale * scale
-    stick, z = settle(t0, z, sp, True)
+    stick, z = settle(t0, z, sp, MAY_STICK)
     t, stalled, status, implicit = t0, 0, DONE, False
     ctx = np.empty(N_SLIDE_STEP)
     rec = np.empty(N_SAMPLER)
