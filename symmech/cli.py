@@ -51,10 +51,15 @@ def cmd_sweep(ns) -> int:
     return 0
 
 
+BUILDER_NICENESS = 19  # the lowest priority
+
+
 def cmd_warm(ns) -> int:
     import time
 
     say = None if ns.quiet or ns.background else (lambda text: print(f"symmech: {text}", file=sys.stderr))
+    if ns.background:  # the run that started this builder, and any started meanwhile, come first on the cores
+        os.nice(BUILDER_NICENESS)
     for name, engine in engines.engines().items():
         if ns.engine not in ("all", name):
             continue

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import pipeline, sample
+from symmech.core import engines, pipeline, sample
 from symmech.numerics import build
 from symmech.grain import motion_scene, sweep
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
@@ -118,6 +118,14 @@ def test_the_build_lock_admits_one_builder_and_dies_with_its_holder(tmp_path, co
     with compiled.ENGINE.build_lock(wait=False) as mine:
         assert mine
     assert compiled.ENGINE.warm_in_background() is True and len(cold_cache) == 1
+
+
+def test_the_background_builder_runs_at_the_lowest_priority(monkeypatch):
+    niceness = []
+    monkeypatch.setattr(os, "nice", niceness.append)
+    monkeypatch.setattr(engines, "engines", dict)  # no engine: nothing compiles
+    assert main(["warm", "--background"]) == 0 and niceness == [19]
+    assert main(["warm", "--quiet"]) == 0 and niceness == [19]  # a warm the user asked for keeps its priority
 
 
 def test_warm_help_names_the_cache_locations(capsys):

@@ -9,7 +9,7 @@ import numpy as np
 from symmech.core.layout import Field, Layout
 from symmech.numerics import first_step as initial
 from symmech.numerics import radau_tableau as tab
-from symmech.numerics.jit import EPS, closure, jit
+from symmech.numerics.jit import EPS, closure, inline_closure, jit
 from symmech.numerics.linalg import lu, lu_solve
 
 # Radau IIA of order 5 (scipy's ``_ivp/radau.py``, :mod:`symmech.numerics.radau_tableau`, which the C export reads too)
@@ -115,7 +115,7 @@ def steppers(rhs, jac) -> tuple:
     rtol is a float, atol an array (n,) [units of y]."""
     first_step = initial.make(rhs)
 
-    @closure
+    @inline_closure
     def newton(t, y, h, Z0, scale, tol, args, LUr, pr, LUc, pc):
         """The collocation system by simplified Newton on the real / complex split (scipy's
         ``solve_collocation_system``): (converged, iterations, Z (3, n) the stage increments, rate; -1: none)."""
@@ -150,7 +150,7 @@ def steppers(rhs, jac) -> tuple:
             norm_old = dW_norm
         return converged, k + 1, Z, rate
 
-    @closure
+    @inline_closure
     def radau_try(t, y, f, h, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q):
         """One attempt at a step of length h from (t, y), f = rhs there: the Newton solve from the last step's
         interpolant (zero without one), with fresh factors and, if that fails, a fresh Jacobian (scipy's
@@ -173,7 +173,7 @@ def steppers(rhs, jac) -> tuple:
             jac(t, y, args, J)
             st[ST_AT.jac_current], st[ST_AT.lu_valid] = 1.0, 0.0
 
-    @closure
+    @inline_closure
     def radau_error(t, y, y_new, f, h, Z, args, rtol, atol, LUr, pr, rejected):
         """Norm of the embedded order-3 error estimate, filtered by (MU_REAL / h - J)^-1 (again through f at
         the filtered point after a rejection, as scipy)."""

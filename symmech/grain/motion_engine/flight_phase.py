@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.grain import free_flight_nb as ff
 from symmech.grain.motion_engine.flight_path import extend_rotation, flight_ctx, state_at
 from symmech.grain.motion_engine.kinematics import gap_noise
@@ -31,7 +31,7 @@ def scratch():
     return np.empty(ff.FLIGHT_SIZE), np.empty(ff.ROTATION_SIZE), np.empty((1, 2, 3)), np.empty(N_STATE)
 
 
-@jit
+@inline
 def fly(p, y, t_end, on_plane, rows, carry, work):
     """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, 3 the rotation's
     integration failed, rows); ``work``: :func:`scratch`."""
@@ -93,7 +93,7 @@ def _exact_state(t, y, fl, rot, p, out):
     return out
 
 
-@jit
+@inline
 def _fly_exact(p, y, t_end, on_plane, rows, carry, work):
     """``fly`` on the closed-form flight: the rise off the plane, ``next_contact`` (no grazing contact missed),
     the trajectory rows; status 0 contact, 1 end, 2 resting. ``work``: :func:`scratch` (the returned state is new)."""

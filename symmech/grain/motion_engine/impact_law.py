@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from symmech.numerics import kernels
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.kinematics import (
     contact_offset, cross, inverse_effective_mass, kinetic, rotation, world_inv_inertia)
 from symmech.grain.motion_engine.layouts import (
@@ -119,7 +119,7 @@ def _prescribed(u, e, lam, mu):
     return np.array([speed * math.cos(mu), speed * math.sin(mu), -e * u[2]])
 
 
-@jit
+@inline
 def printed_impulse(H, m, e, lam, u):
     """The printed law solved exactly for one impact (``impact.solve_robust_batch``):
     (T (3,), residual of (19), admissible, creates energy, pulls)."""
@@ -167,7 +167,7 @@ def printed_impulse(H, m, e, lam, u):
     return T, residual, found and not (bad_gain or bad_pull), bad_gain, bad_pull
 
 
-@jit
+@inline
 def impact(p, y, warns, carry):
     """The scene's impact law at the lowest point (``ImpactLaw.apply`` for one grain):
     (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""

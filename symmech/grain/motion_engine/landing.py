@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.impact_law import impact
 from symmech.grain.motion_engine.kinematics import (
     contact_offset, contact_velocity, cross, inverse_effective_mass, is_sphere, kinetic, rotation, support, surface)
@@ -13,7 +13,7 @@ from symmech.grain.motion_engine.layouts import (
 from symmech.grain.motion_engine.rows import record, warn
 
 
-@jit
+@inline
 def bounce(p, y, rows, imps, warns, carry):
     """An impact at y, logged and booked: (state after, normal contact velocity after, rows, imps, warns)."""
     after, log, warns = impact(p, y, warns, carry)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.flight_phase import fly, scratch
 from symmech.grain.motion_engine.kinematics import (
     contact_velocity, energy, gap, gap_noise, normal_force, velocity_noise)
@@ -21,7 +21,7 @@ from symmech.grain.motion_engine.rows import record, warn
 from symmech.grain.motion_engine.sliding_phase import slide
 
 
-@jit
+@inline
 def _start(p, y, rows, carry):
     """First row and the release rule of ``motion.simulate``; sets the regime and on_plane in carry."""
     carry[C_AT.regime], carry[C_AT.on_plane] = FLIGHT, 1.0 if gap(p, y) <= gap_noise(p, y) else 0.0
@@ -33,7 +33,7 @@ def _start(p, y, rows, carry):
     return y, rows
 
 
-@jit
+@inline
 def run_phases(p, y, t_end, rows, imps, warns, carry, max_phases):
     """At most ``max_phases`` regime phases of the loop of ``motion.simulate`` from state y (14,);
     returns (y, rows, imps, warns, status)."""

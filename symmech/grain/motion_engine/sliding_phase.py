@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from symmech.numerics.dop853 import dop_dense_at
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.numerics.radau import radau_buffers, radau_dense_at
 from symmech.grain import sliding
 from symmech.grain.motion_engine.kinematics import EPS, contact_offset, normal_force, rotation
@@ -27,6 +27,8 @@ from symmech.grain.motion_engine.steppers import (
 
 MAX_STEPS_PER_CHUNK = sliding.MAX_RHS_PER_PHASE // 12  # DOP853 steps (12 evaluations) per sliding chunk
 MAX_RADAU_STEPS = sliding.MAX_RHS_PER_PHASE // 4  # Radau steps (at least 4 evaluations) per sliding chunk
+# A landing may stick: a numpy bool, typed as bool and not as the literal True, which would compile settle twice.
+MAY_STICK = np.bool_(True)
 NO_EVENT, REGIME, SWITCH = 0, 1, 2  # how a chunk ends: its end time, a regime event, the integrator switch
 
 
@@ -42,7 +44,7 @@ def _sample_rows(rows, carry, rec, t_last, ctx, coef):
     return rows
 
 
-@jit
+@inline
 def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     """One integration chunk by DOP853 (a fresh ``solve_ivp`` of the Python loop) until t_chunk or the
     terminal event of sp: (t, z, event NO_EVENT / REGIME / SWITCH, rows, status)."""
@@ -76,7 +78,7 @@ def _dop_chunk(p, kind, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     return t, z, NO_EVENT, rows, DONE if t >= t_chunk else SLIDE_RHS
 
 
-@jit
+@inline
 def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     """One chunk of a stiff slip by Radau (a fresh ``solve_ivp(method="Radau")`` of the Python loop) until
     t_chunk or the first terminal event: the slip stops (along sp's reference direction) or its speed rises
@@ -108,7 +110,7 @@ def _radau_chunk(p, t, z, t_chunk, sp, atol, ctx, rows, carry, rec):
     return t, z, NO_EVENT, rows, DONE if t >= t_chunk else SLIDE_RHS, MAX_RADAU_STEPS
 
 
-@jit
+@inline
 def slide(p, y, t_end, rows, carry):
     """One sliding phase from state y (the Python loop's ``_slide`` with ``sliding.slide``): (state, lifted, rows,
     status)."""
@@ -137,7 +139,7 @@ def slide(p, y, t_end, rows, carry):
     scale[Z_AT.r:Z_AT.r + 2], scale[Z_AT.v:Z_AT.v + 2], scale[Z_AT.w:Z_AT.w + 3] = step, 1.0, 1 / a_min
     scale[Z_AT.q:Z_AT.q + 4], scale[Z_AT.work], scale[Z_AT.loss] = 1 / v_scale, v_scale, v_scale
     atol = tol * v_scale * scale
-    stick, z = settle(t0, z, sp, True)
+    stick, z = settle(t0, z, sp, MAY_STICK)
     t, stalled, status, implicit = t0, 0, DONE, False
     ctx = np.empty(N_SLIDE_STEP)
     rec = np.empty(N_SAMPLER)
