@@ -360,8 +360,12 @@ SHARDS = {
                     ["tests/test_grain_free_flight_record.py", "tests/test_grain_free_flight.py"], ["*"]),
     # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
     # with the rigid cloud's and the frame's own tests (1 s and 2 s)
-    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ["tests/test_elastic_invariants.py", *ELASTIC_TESTS],
-                            ["*"]),
+    # with the rigid body of the same mass (moved into body.py: reached before only through integrating tests)
+    "elastic_body_sample": ("symmech/trolley/elastic/body.py",
+                            ["tests/test_elastic_invariants.py",
+                             "tests/test_elastic_bodies.py::test_rigid_body_is_the_trolley_with_its_rods_and_tip_masses",
+                             "tests/test_elastic_bodies.py::test_rigid_body_of_a_bare_trolley_is_the_trolley",
+                             *ELASTIC_TESTS], ["*"]),
     "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ["tests/test_elastic_frame.py", *ELASTIC_TESTS],
                              ["*"]),
     # the motion loop by a seeded sample: GRAIN_MOTION_TESTS without the nine that take 4-22 s each (their 150 s
@@ -535,11 +539,15 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
             replaces = {found[e.mutant]: e.mutant for e in entries if e.mutant in found and e.outcome in rest}
             names = list(replaces)
         else:
+            drawn_names = set(names)
             names = [n for n in names if n not in found.values()]
             # lines of the shard's mutants whose change is no longer made (the module was edited, or the function
             # moved out of it): mutate-check could not find them; their functions' current mutants are screened now
             stale = [e.mutant for e in entries
                      if e.mutant not in found and any(fnmatch.fnmatchcase(e.mutant, p) for p in SHARDS[name][2])]
+            # a sample's lines are the mutants drawn: when an edit changed the population, the draw did too
+            stale += [e.mutant for e in entries
+                      if size and e.shard == name and e.mutant in found and found[e.mutant] not in drawn_names]
     which = ("its unkilled mutants again" if rest else
              "the rest of its sample" if size else "its mutants not recorded" if unrecorded else "")
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,
