@@ -375,6 +375,13 @@ SHARDS = {
                        "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
                        "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
                        "and not flat_and_long and not steep_downhill"], ["*"]),
+    # the chattering window's closed form and the Python loop's exact flight (slow tier, 1-8 s): the motion_sample's
+    # survivors again
+    "motion_chatter": ("symmech/grain/motion.py",
+                       ["tests/test_grain_motion_closed_forms.py::"
+                        "test_exact_flight_of_a_tumbling_needle_meets_the_plate_where_dop853_does",
+                        "tests/test_grain_motion_closed_forms.py::"
+                        "test_a_hundred_bounces_within_the_chattering_window_end_in_sliding", "-m", "slow"], ["*"]),
     # the elastic Python engine's run: its own files, then the fast elastic tests with the cheapest that integrate
     "elastic_simulate_sample": ("symmech/trolley/elastic/simulate.py",
                                 ["tests/test_elastic_simulate.py", "tests/test_elastic_timeline.py",
@@ -409,9 +416,9 @@ COVERAGE = {
     "symmech/grain/impact.py": "",
     "symmech/grain/coulomb_law.py": "",
     "symmech/grain/paper_mode.py": "",
-    "symmech/grain/motion.py": "one function only (the trajectory's sample times; the rocking warning moved to "
-                               "grain/outcome.py, unscreened there): a sample needs its motion tests, ~100 s a "
-                               "survivor",
+    "symmech/grain/motion.py": "a seeded sample of 40 (shard motion_sample) beside the 16 mutants of the trajectory's "
+                               "sample times screened before as a part and outside the draw (5 of them survive): "
+                               "the interval treats all 56 as drawn",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
     "symmech/grain/motion_engine/driver.py": "shards engine_py made, not screened yet (its tests build the "
