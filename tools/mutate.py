@@ -435,9 +435,7 @@ COVERAGE = {
                                          "10-15 s a survivor",
     "symmech/trolley/elastic/body.py": "",
     "symmech/trolley/elastic/frame.py": "",
-    "symmech/trolley/elastic/simulate.py": "not screened: its functions are reached only through integrating tests "
-                                           "(10-15 s a survivor); shards of some functions ran by the old rules "
-                                           "(mutation/history.md)",
+    "symmech/trolley/elastic/simulate.py": "",
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
     "symmech/smm/forms.py": "",
