@@ -408,8 +408,7 @@ OUTCOMES_UNKILLED = tuple(o for o in rec.OUTCOMES if o not in rec.KILLS)  # what
 # every module that computes physics or numerics: "" when it is screened (its record), else why it is not
 COVERAGE = {
     "symmech/grain/body.py": "",
-    "symmech/grain/contact.py": "10 of the 30 drawn: the sample stopped at the session's end (~20 s a mutant at "
-                                "load 9)",
+    "symmech/grain/contact.py": "",
     "symmech/grain/flight.py": "10 of the 30 drawn: the sample stopped at the session's end (up to 70 s a mutant "
                                "at load 9)",
     "symmech/grain/sliding.py": "",
@@ -421,8 +420,10 @@ COVERAGE = {
                                "the interval treats all 56 as drawn",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
-    "symmech/grain/motion_engine/driver.py": "shards engine_py made, not screened yet (its tests build the "
-                                             "engine, ~80 s)",
+    "symmech/grain/motion_engine/driver.py": "shard engine_py_sample made, not screened: its tests build and run "
+                                             "the compiled engine (the slow tier's compiled_engine tests: ~80 s of "
+                                             "numba compilation, then minutes a mutant on the shared cores); the "
+                                             "sessions' CPU went to the modules with none of their tests' cost",
     "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
                                                    "the engine is held to the Python reference by the "
                                                    "compiled-engine tests",
