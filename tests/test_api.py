@@ -111,3 +111,32 @@ def test_discovery_finds_every_kind_after_one_registered_itself():
             "print(sorted(registry.kinds()))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "['grain', 'impact', 'mechanism', 'trolley']"
+
+
+def test_a_scene_given_as_a_dict_is_held_to_the_nesting_bound_of_a_file():
+    """A dict scene nested 40 arrays deep (a file's bound is 32) is refused in one line naming the first field past
+    the bound, as a TOML file would be, before its schema reads it."""
+    from symmech.core import pipeline
+
+    deep = 0
+    for _ in range(40):
+        deep = [deep]
+    with pytest.raises(SceneError) as err:
+        pipeline.load({"kind": "grain", "grain": deep})
+    assert str(err.value) == "scene field 'grain" + "[0]" * 32 + "': nested deeper than 32 tables or arrays"
+
+
+def test_an_estimate_is_timed_on_this_machine_only_when_asked(oscillator, monkeypatch):
+    """The count model ω·duration/100 s as it is, and timed by the kind's samples within max_time when sampled."""
+    import dataclasses
+
+    from symmech.core import sample
+
+    counted = dataclasses.replace(oscillator, estimate=lambda setup: registry.Estimate(
+        setup["omega"] * setup["duration"] / 100, "steps"))
+    monkeypatch.setitem(registry._KINDS, counted.name, counted)
+    monkeypatch.setattr(sample, "timed", lambda kind, setup, cost, max_time: registry.Estimate(
+        2 * cost.seconds, f"{cost.what}, timed within {max_time:g} s"))
+    scene = symmech.load({"kind": "test_oscillator", "omega": 4.0, "duration": 5.0})
+    assert scene.estimate() == registry.Estimate(0.2, "steps")
+    assert scene.estimate(7.0, sampled=True) == registry.Estimate(0.4, "steps, timed within 7 s")

@@ -64,6 +64,27 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         expected = np.array(expected) + np.r_[9.81 * frame[:, 1], np.zeros(9)]
         assert channels.shape == (2, 12)
         assert np.allclose(channels, expected, rtol=0, atol=1e-7)
+    # over a run: the arc length s0 + 3 t + t² (Gauss-Legendre is exact on a polynomial), the channels at t[at],
+    # the geometry per arc length (e = T, e' + Ω × e = κ N, ν, Ω = (τ, 0, κ), Ω' = 0 on a helix) and the table of a
+    # run at a prescribed speed (its output times, the channels there, V0 and dV0)
+    t = np.array([0.0, 0.25, 0.6, 1.0])
+    s = drive.s0 + 3 * t + t ** 2
+    taus = [-(tnb(x + h)[2] - tnb(x - h)[2]) / (2 * h) @ tnb(x)[1] for x in s]
+    V, dV = 3 + 2 * t, np.full(t.size, 2.0)
+    rows = np.array([[d, v * v * kappa, 0, v * tau, 0, v * kappa, d * tau, 0, d * kappa, v, 0, 0]
+                     for v, d, tau in zip(V, dV, taus)])
+    rows[:, :3] += 9.81 * np.array([tnb(x)[:, 1] for x in s])
+    assert np.abs(el_frame.arc_length(drive, t) - s).max() < 1e-12
+    assert np.allclose(el_frame.channels(drive, system.mdl, t, slice(1, 3)), rows[1:3], rtol=0, atol=1e-7)
+    geometry = el_frame.geometry(drive, system.mdl, s, slice(2, None))
+    assert geometry.shape == (2, 15)
+    assert np.allclose(geometry, [[1, 0, 0, 0, kappa, 0, *tnb(x)[:, 1], tau, 0, kappa, 0, 0, 0]
+                                  for x, tau in zip(s[2:], taus[2:])], rtol=0, atol=1e-7)
+    table = el_frame.tabulation(drive, system.mdl, t, s)
+    assert table.seed is t and table.span == ()
+    assert np.allclose(table.exact, rows, rtol=0, atol=1e-7)
+    assert np.array_equal(table.at_outputs[1], V) and np.array_equal(table.at_outputs[2], dV)
+    assert np.allclose(table.evaluate(t, slice(0, 2)), rows[:2], rtol=0, atol=1e-7)
 
 
 def test_frame_turning_rate_follows_the_change_of_curvature():
@@ -122,3 +143,23 @@ def test_frame_keeps_its_plan_through_a_straight_point():
         drive = elastic_scene.drive_of(setup, case)
         for s in (1.0, 5.0, 6.5):
             assert np.allclose(el_sim._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
+
+
+def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
+    """P0 = 200 + 100 t N on 100 kg from 5 m/s on a straight level track: s = 5 t + (100 t² + 50 t³/3)/100 (Newton),
+    0 to 15.333 m over 2 s; a traction run's table spans that, widened by a tenth of it on each side (within the
+    frame plan's span), with 16 arc lengths, where e = (1, 0, 0), no curvature, ν = (0, 1, 0), no turning."""
+    data = scene_dict(trolley={"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
+                      effects={"gravity": True, "local_curvature": False, "traction": True},
+                      motion={"traction": "200 + 100*t", "initial_speed": 5.0}, time={"t_end": 2.0, "steps": 10})
+    st = prepared(data)
+    drive = elastic_scene.drive_of(st, 1)
+    mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
+                               el_body.Rollers((1e8,) * 5, (2e3,) * 5))
+    end = 5.0 * 2.0 + (100 * 4.0 + 50 * 8.0 / 3) / 100.0
+    plan = drive.plan.span  # +-20 km: it leaves the span alone
+    table = el_frame.tabulation(drive, mdl, st.t, None, el_body.rigid_body(mdl))
+    assert table.span == pytest.approx((max(-0.1 * end, plan[0]), min(1.1 * end, plan[1])), rel=1e-6, abs=1e-9)
+    assert np.array_equal(table.seed, np.linspace(*table.span, 16)) and table.exact is None
+    assert np.allclose(table.evaluate(table.seed, slice(3, 5)), [[1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]] * 2,
+                       rtol=0, atol=1e-12)

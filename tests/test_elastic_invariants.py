@@ -247,3 +247,28 @@ def test_axial_field_is_the_shortening_of_the_slopes(support, axial):
     for x, got in zip(xi, axial_field):
         expected = slope_integral(beam, x) - (x * slope_integral(beam, 1.0) if axial == "held" else 0.0)
         assert np.abs(got - expected).max() < 1e-12 * np.abs(expected).max()
+
+
+def test_clamped_pair_energy_is_zero_at_rest_and_grows_as_its_closed_form():
+    """Two rollers clamping the rail, each preloaded by δ: Π = ½ k [(δ - d)₊² + (δ + d)₊² - 2 δ₊²] is k d² while both
+    touch (|d| <= δ), ½ k [(|d| + δ)² - 2 δ²] after one lifts, and 0 undeflected; with a gap (δ < 0) ½ k (|d| + δ)²
+    once the rail reaches a roller."""
+    k, delta = 2e6, 1e-3
+    rollers = el_body.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (delta, delta, delta, delta, -delta))
+    d = np.array([0.0, 0.5e-3, -2e-3, 0.3e-3, 3e-3])
+    expected = [0.0, k * 0.25e-6, 0.5 * k * (9e-6 - 2e-6), k * 0.09e-6, 0.5 * k * 4e-6]
+    got = [el_body.roller_energy(rollers, np.where(np.arange(5) == i, d, 0.0)) for i in range(5)]
+    assert np.allclose(got, expected, rtol=1e-12, atol=0)
+
+
+def test_roller_laws_take_any_real_numbers_as_floats():
+    """Stiffness and preload as Python integers past int64 (an object array unless converted): the forces,
+    stiffness and energy are float arrays, equal to those of the same numbers given as floats."""
+    big, d = 2 ** 70, np.array([1e-3, -2e-3, 0.0, 5e-4, 3e-3])
+    exact = el_body.Rollers((big,) * 5, (0,) * 5, "clamped_pair", (2 ** 64, 0, 0, 0, 0))
+    floats = el_body.Rollers((float(big),) * 5, (0.0,) * 5, "clamped_pair", (2.0 ** 64, 0.0, 0.0, 0.0, 0.0))
+    for got, ref in ((el_body.roller_forces(exact, d, d, True), el_body.roller_forces(floats, d, d, True)),
+                     ((el_body.roller_energy(exact, d),), (el_body.roller_energy(floats, d),))):
+        for a, b in zip(got, ref):
+            assert np.asarray(a).dtype == np.float64
+            np.testing.assert_array_equal(a, b)

@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from symmech.core.context import Context
+from symmech.core.scene import SymmechError
 from symmech.trolley.elastic import system as el, frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
 
@@ -136,3 +138,29 @@ def test_timeline_integrates_from_the_last_node_only(drive):
     line = el_sim.Timeline(None, fast, np.arange(5.0))
     for time in np.linspace(0.05, 4.5, 37):
         assert line.s(time) == pytest.approx(S0 + 8.0 * time + 3.0 / om * (1.0 - np.cos(om * time)), abs=1e-12)
+
+
+def test_a_compiled_run_reads_the_start_record_and_table_of_the_run(drive, system):
+    """The inputs of a compiled run at atol_q = 1e-7: the start's tolerances as documented (1e-7 on q, 1e-4 on q̇,
+    1e-9 J on E_d), its q the quasi-static q at t[0] plus the given offsets, the model's record, and at the prescribed
+    speed a table seeded at the output times whose channels are those at the arc length s0 + 8 t + 3 (1 - cos t)."""
+    dq0 = np.linspace(1e-4, 2e-4, system.N)
+    inputs = el_sim.compiled_inputs(system, drive, GRID, 1e-7, dq0=dq0)
+    state = inputs.start.state
+    np.testing.assert_array_equal(inputs.start.atol[state.slice("q")], 1e-7)
+    np.testing.assert_allclose(inputs.start.atol[state.slice("qd")], 1e-4, rtol=1e-15)
+    assert inputs.start.atol[state.slots.dissipated] == 1e-9
+    quasi = system.quasi_static(inputs.start.line.state(GRID[0]))
+    np.testing.assert_allclose(inputs.start.y0[state.slice("q")], quasi + dq0, rtol=0, atol=1e-15)
+    assert inputs.record is system.record and inputs.frame.seed is GRID
+    np.testing.assert_allclose(inputs.frame.at_outputs[0].lam, el_frame.frames(drive, arc(GRID), system.mdl.l).lam,
+                               rtol=0, atol=1e-12)
+
+
+def test_the_python_engine_stops_at_the_runs_time_budget(drive, system):
+    """A run whose budget is spent (--max-time 0 s) stops at its first right-hand side, in one line that says where."""
+    with Context(quiet=True, max_time=0.0).active():
+        with pytest.raises(SymmechError) as err:
+            el_sim.simulate(system, drive, GRID)
+    assert str(err.value).endswith("over the time budget --max-time 0 s (elastic model, Python engine at t = 0 s); "
+                                   "raise --max-time to go on")

@@ -31,10 +31,16 @@ def test_a_piece_is_clear_when_either_end_proves_it():
     assert not contact.parabolas_clear(1e-6, -10.0, 1e-6, 10.0, 1.0, 0.0)
 
 
-def test_a_dip_between_two_samples_is_found_by_the_exact_flights_search():
-    # samples at 0 and 0.6 are both above the plane: only halving the piece finds the dip
+@pytest.mark.parametrize("t0", [0.0, -10.0])
+def test_a_dip_between_two_samples_is_found_by_the_exact_flights_search(t0):
+    """Samples at t0 and t0 + 0.6 are both above the plane: only halving the piece finds the dip, whatever the clock
+    reads at the start (a flight from t0 = -10 s, the same gap shifted)."""
     assert gap_and_rate(0.6)[0] > 0
-    assert contact.first_contact(gap_and_rate, C, 0.0, 1.0, 0.6, 1e-12) == pytest.approx(ROOT, abs=1e-11)
+
+    def shifted(t):
+        return gap_and_rate(t - t0)
+
+    assert contact.first_contact(shifted, C, t0, t0 + 1.0, 0.6, 1e-12) == pytest.approx(t0 + ROOT, abs=1e-11)
 
 
 def test_a_dip_between_two_samples_is_found_by_the_reference_flights_scan():
@@ -42,3 +48,12 @@ def test_a_dip_between_two_samples_is_found_by_the_reference_flights_scan():
         return gap_and_rate(np.asarray(t, dtype=float))[0]
 
     assert contact.first_root(h, 0.0, 1.0, 0.3, 1e-12) == pytest.approx(ROOT, abs=1e-11)
+
+
+def test_a_gap_that_touches_the_plane_at_a_sample_is_a_contact_there():
+    """h = (t - 1/2)², sampled at 0 and 1/2 (step 1/2, the parabola from 0 clears only 0.207 s): h reaches zero
+    exactly at the sample t = 1/2 and rises after; the first contact is that sample."""
+    def touching(t):
+        return (t - 0.5) ** 2, 2.0 * (t - 0.5)
+
+    assert contact.first_contact(touching, 2.0, 0.0, 1.0, 0.5, 1e-12) == 0.5

@@ -430,3 +430,20 @@ def test_released_at_rest_under_weak_gravity_slides_from_the_start():
                          frictionless(0.5), 0.4, motion.Effects())
     res = motion.simulate(model, numerics(), state(z=A), 0.002)
     assert res.extra["landings"] == 0 and res.time_in == {"flight": 0.0, "sliding": pytest.approx(0.002, abs=1e-15)}
+
+
+
+@pytest.mark.slow  # two tumbling flights in Python: 0.8 s
+def test_exact_flight_of_a_tumbling_needle_meets_the_plate_where_dop853_does():
+    """The needle tumbling 5 mm above a still plate, flown in closed form (free_flight's Jacobi functions, contacts
+    certified by the gap's curvature bound) and by DOP853 to 1e-11: the same first contact to 1e-9 s, and the same
+    state there (the centre, whose height is the support distance of the attitude, to 1e-10 m; the spin to 1e-6
+    rad/s)."""
+    model, st = needle()
+    st = motion.State(0.0, st.r + np.array([0.0, 0.0, 5e-3]), st.v, st.q, st.w)
+    exact, ref = (motion.simulate(model, numerics(flight=how, max_impacts=1), st, 0.1).impacts[0]
+                  for how in ("exact", "dop853"))
+    assert exact["t"] == pytest.approx(ref["t"], abs=1e-9) and 1e-3 < ref["t"] < 3e-2
+    np.testing.assert_allclose(exact["r"], ref["r"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(exact["w_before"], ref["w_before"], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(exact["v_before"], ref["v_before"], rtol=0, atol=1e-9)

@@ -127,6 +127,20 @@ def test_a_record_survives_a_write_and_read(tmp_path):
     assert [line.split("\t")[0] for line in path.read_text().splitlines()[2:]] == ["m.x_f__mutmut_9", "m.x_f__mutmut_10"]
 
 
+def test_a_change_made_at_several_places_finds_each_recorded_mutant_its_own():
+    """`continue` → `break` at three places of f (one hash): the recorded _62 is found as _62 while f still makes
+    that change there, as the place nearest its number (_63) after an edit moved it, and never as _37 or _49; a
+    change no longer made finds nothing."""
+    def entry(name, digest):
+        return rec.Entry(name, "s", digest, "survived", "", 1.0, "continue → break")
+
+    old = [entry("old.path.x_f__mutmut_62", "aaaaaaaaaaaa"), entry("old.path.x_f__mutmut_7", "bbbbbbbbbbbb")]
+    places = {f"m.x_f__mutmut_{n}": ("x_f", "aaaaaaaaaaaa") for n in (37, 49, 62)}
+    assert rec.match(old, places) == {"old.path.x_f__mutmut_62": "m.x_f__mutmut_62"}
+    moved = {f"m.x_f__mutmut_{n}": ("x_f", "aaaaaaaaaaaa") for n in (38, 50, 63)}
+    assert rec.match(old, moved) == {"old.path.x_f__mutmut_62": "m.x_f__mutmut_63"}
+
+
 def test_clopper_pearson_interval_at_its_closed_forms():
     """k = 0 and k = n have closed forms: the upper end 1 - (alpha/2)^(1/n), the lower end (alpha/2)^(1/n); k = 20 of
     40 is symmetric about 1/2 (the ends are the 2.5 % and 97.5 % points of Beta(20, 21) and Beta(21, 20))."""

@@ -150,16 +150,21 @@ def test_free_pair_damping_ratio_beside_the_rigid_mode():
 
 def test_search_tangent_keeps_gravity_the_scene_drops():
     """A pendulum drawn at th0 whose scene drops gravity from the matrices: its only stiffness is
-    gravity's, and the search still hangs it straight down (phi = -th0)."""
+    gravity's, and the search still hangs it straight down (phi = -th0), step for step as the same
+    pendulum whose scene keeps gravity (the first tangent too)."""
     th0, l = 0.5, 0.8
-    m = mech({"parameters": {"g": param(9.81, "m/s^2")},
-              "coordinates": [{"name": "phi", "type": "angle"}],
-              "points": [{"name": "O", "at": [0, 0]},
-                         {"name": "B", "from": "O", "vector": [l * math.sin(th0), -l * math.cos(th0)], "turns": ["phi"]}],
-              "bodies": [{"name": "bob", "mass": 1.0, "com": "B"}],
-              "gravity": {"g": "g"}, "effects": {"gravity": False}})
-    _, report = numeric.solve_equilibrium(m)
+
+    def pendulum(gravity):
+        return mech({"parameters": {"g": param(9.81, "m/s^2")},
+                     "coordinates": [{"name": "phi", "type": "angle"}],
+                     "points": [{"name": "O", "at": [0, 0]},
+                                {"name": "B", "from": "O", "vector": [l * math.sin(th0), -l * math.cos(th0)],
+                                 "turns": ["phi"]}],
+                     "bodies": [{"name": "bob", "mass": 1.0, "com": "B"}],
+                     "gravity": {"g": "g"}, "effects": {"gravity": gravity}})
+    _, report = numeric.solve_equilibrium(pendulum(False))
     assert report["q"][0] == pytest.approx(-th0, abs=1e-10)
+    assert report == numeric.solve_equilibrium(pendulum(True))[1]
 
 
 def test_search_out_of_steps_is_refused_with_the_residual():

@@ -79,6 +79,20 @@ def test_condition_of_the_jacobi_scaled_stiffness():
     assert md.kinds == ["elastic", "elastic"]
 
 
+@pytest.mark.parametrize("gap_in_eps, kinds", [(38, ["rigid", "elastic"]), (42, ["elastic", "elastic"])])
+def test_null_eigenvalue_threshold_is_ten_n_eps_of_the_largest(gap_in_eps, kinds):
+    """c = [[1, 1 - d], [1 - d, 1]] (D = I): eigenvalues d and 2 - d; a null one is within 10 n eps (2 - d) =
+    40 eps of the largest, so d = 38 eps is a rigid mode and d = 42 eps an elastic one (2 eps either side of the
+    threshold, the 2 x 2 eigenvalue's round-off about one eps)."""
+    eps = np.finfo(float).eps
+    d = gap_in_eps * eps
+    c = np.array([[1.0, 1.0 - d], [1.0 - d, 1.0]])
+    found, condition = numeric.classify(c, np.array([d, 2.0 - d]))
+    assert found == kinds
+    if kinds[0] == "elastic":
+        assert condition == pytest.approx((2.0 - d) / d, rel=0.1)
+
+
 def test_light_mechanism_is_not_refused_and_the_refusal_names_the_field():
     """The singular-mass test is relative: 1e-9 kg beside 1e-13 kg m^2 is a regular (small) mass
     matrix; an eigenvalue at 1e-12 of the largest is refused, naming the coordinate's field and

@@ -17,14 +17,15 @@ def vec(text):
     return np.array([float(x) for x in text])
 
 
-def gimbal(axis_b=(0, 0, 1)):
+def gimbal(axis_b=(0, 0, 1), **more):
     """Two angles, a about x then b about ``axis_b`` (spatial); a body with distinct principal
-    moments and no principal axes given, at the end of V0."""
+    moments and no principal axes given, at the end of V0; ``more`` scene tables beside them."""
     return mech({
         "coordinates": [{"name": "a", "type": "angle", "axis": [1, 0, 0]},
                         {"name": "b", "type": "angle", "axis": list(axis_b)}],
         "points": [{"name": "O", "at": [0, 0, 0]}, {"name": "C", "from": "O", "vector": V0.tolist(), "turns": ["a", "b"]}],
         "bodies": [{"name": "B", "mass": 2.0, "inertia": [0.1, 0.2, 0.3], "com": "C", "turns": ["a", "b"]}],
+        **more,
     })
 
 
@@ -38,6 +39,17 @@ def test_two_angle_gimbal_redrawn_exactly():
     np.testing.assert_allclose(vec(m.coordinates[1].axis), Rotation.from_rotvec([QA, 0, 0]).apply([0, 0, 1]),
                                rtol=0, atol=1e-15)
     np.testing.assert_allclose([vec(p) for p in m.bodies[0].axes], R.T, rtol=0, atol=1e-15)
+
+
+def test_torsion_spring_turned_off_its_axis_is_refused_in_one_line():
+    """A torsion spring about x on the gimbal's body, which b also turns about z: its twist is no sum of
+    angles, and the redraw says so, naming the spring and its axis."""
+    m = gimbal(torsion_springs=[{"name": "t", "bodies": ["ground", "B"], "stiffness": 2.0, "axis": [1, 0, 0]}])
+    with pytest.raises(SymmechError) as err:
+        numeric.moved(m, np.array([QA, QB]))
+    assert str(err.value) == ("equilibrium.solve: torsion spring 't' turns about axes other than its own axis "
+                              "[1.0, 0.0, 0.0]; the equilibrium search handles torsion springs whose bodies turn "
+                              "about the spring axis only")
 
 
 def test_redrawn_axis_is_a_unit_vector():

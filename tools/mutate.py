@@ -108,6 +108,11 @@ ENGINE_PY_TESTS = ["tests/test_grain_compiled.py", "tests/test_grain_compiled_py
                    "tests/test_grain_compiled_printed_energy.py", "tests/test_grain_compiled_batches.py", "-m",
                    "compiled_engine or not slow"]
 
+# the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
+# and a child imports the unmutated package anyway
+PIPELINE_TESTS = ["tests/test_outputs.py", "tests/test_api.py", "tests/test_pipeline_output.py", "-k",
+                         "not interrupted_run and not racing_runs and not second_run_into_the_same"]
+
 # shard name -> (module to mutate, test files that cover it, the mutants it runs: glob patterns over
 # mutmut's names, "<module>.x_<function>__mutmut_<n>" and "<module>.xǁ<Class>ǁ<method>__mutmut_<n>")
 SHARDS = {
@@ -301,11 +306,7 @@ SHARDS = {
     # untriaged survivors, not named, were the last run (simulate): this shard reruns all of simulate
     "engine_py_rest": ("symmech/grain/motion_engine/driver.py", ENGINE_PY_TESTS,
                        ["*.x_simulate__*", "*.x_simulate_many__*", "*.x_entry_signature__*"]),
-    # the tests that hold --out from a child process (tests/probe_kind.py) time out in the mutated copy,
-    # and a child imports the unmutated package anyway
-    "pipeline_output": ("symmech/core/pipeline.py",
-                        ["tests/test_outputs.py", "tests/test_api.py", "tests/test_pipeline_output.py", "-k",
-                         "not interrupted_run and not racing_runs and not second_run_into_the_same"],
+    "pipeline_output": ("symmech/core/pipeline.py", PIPELINE_TESTS,
                         ["*.x_check_out__*", "*.x_locked__*", "*.x__acquire__*", "*.x_write__*",
                          "*.x_write_files__*", "*.x__replace_dir__*", "*.x__remove_leftovers__*", "*.x_run_to__*"]),
     # every other module that computes physics or numerics, screened by a seeded random sample
@@ -347,22 +348,58 @@ SHARDS = {
                           "tests/test_smm_torsion_twist.py", "-k",
                           "not random_spatial and not spatial_boom and not excavator and not many_random"],
                          ["*"]),
+    # the responses', searches' and tensions' own tests first (5 s together)
     "smm_numeric_sample": ("symmech/smm/numeric.py",
-                           ["tests/test_smm_closed_form.py", "tests/test_smm_mode_kinds.py", "tests/test_smm_structural.py",
+                           ["tests/test_smm_response.py", "tests/test_smm_response_grids.py",
+                            "tests/test_smm_equilibrium_tensions.py", "tests/test_smm_equilibrium_search.py",
+                            "tests/test_smm_redraw.py", "tests/test_smm_torsion_twist.py",
+                            "tests/test_smm_closed_form.py", "tests/test_smm_mode_kinds.py", "tests/test_smm_structural.py",
                             "tests/test_smm_pivot.py", "-k", "not numerically_many"], ["*"]),
     # the exact free rotation (elliptic functions) and the flight's gap bounds: its own tests, 2.5 s
     "free_flight": ("symmech/grain/free_flight.py",
                     ["tests/test_grain_free_flight_record.py", "tests/test_grain_free_flight.py"], ["*"]),
     # the elastic trolley's modules split from elastic.py, each by a seeded sample against the fast elastic tests
     # with the rigid cloud's and the frame's own tests (1 s and 2 s)
-    "elastic_body_sample": ("symmech/trolley/elastic/body.py", ["tests/test_elastic_invariants.py", *ELASTIC_TESTS],
-                            ["*"]),
+    # with the rigid body of the same mass (moved into body.py: reached before only through integrating tests)
+    "elastic_body_sample": ("symmech/trolley/elastic/body.py",
+                            ["tests/test_elastic_invariants.py",
+                             "tests/test_elastic_bodies.py::test_rigid_body_is_the_trolley_with_its_rods_and_tip_masses",
+                             "tests/test_elastic_bodies.py::test_rigid_body_of_a_bare_trolley_is_the_trolley",
+                             *ELASTIC_TESTS], ["*"]),
     "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ["tests/test_elastic_frame.py", *ELASTIC_TESTS],
                              ["*"]),
+    # the motion loop by a seeded sample: GRAIN_MOTION_TESTS without the nine that take 4-22 s each (their 150 s
+    # would be every survivor's cost) and with the texts' and rows' tests
+    "motion_sample": ("symmech/grain/motion.py",
+                      ["tests/test_texts_warnings_and_sparse_rows.py", *GRAIN_MOTION_TESTS[:-2], "-m", "not slow", "-k",
+                       "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
+                       "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
+                       "and not flat_and_long and not steep_downhill"], ["*"]),
+    # the chattering window's closed form and the Python loop's exact flight (slow tier, 1-8 s): the motion_sample's
+    # survivors again
+    "motion_chatter": ("symmech/grain/motion.py",
+                       ["tests/test_grain_motion_closed_forms.py::"
+                        "test_exact_flight_of_a_tumbling_needle_meets_the_plate_where_dop853_does",
+                        "tests/test_grain_motion_closed_forms.py::"
+                        "test_a_hundred_bounces_within_the_chattering_window_end_in_sliding", "-m", "slow"], ["*"]),
+    # the elastic Python engine's run: its own files, then the fast elastic tests with the cheapest that integrate
+    "elastic_simulate_sample": ("symmech/trolley/elastic/simulate.py",
+                                ["tests/test_elastic_simulate.py", "tests/test_elastic_timeline.py",
+                                 "tests/test_elastic_outputs.py", "tests/test_trolley_elastic.py",
+                                 "tests/test_elastic_damping.py", "-m", "not slow", "-k",
+                                 "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
+                                ["*"]),
+    "engine_py_sample": ("symmech/grain/motion_engine/driver.py", ENGINE_PY_TESTS, ["*"]),
+    "pipeline_sample": ("symmech/core/pipeline.py", PIPELINE_TESTS, ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
     "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
             ["*"]),
+    # integrate, _adapter, make and steppers are reached only where a test builds a generated module's solver in the
+    # mutant's process (its closures are compiled anew in each process: tens of seconds a mutant)
+    "ode_integrate": ("symmech/numerics/ode.py",
+                      ["tests/test_ode_toolkit.py", "-m", "slow", "-k",
+                       "integrate_refuses or integrate_generated_module or integrate_radau_with"], ["*"]),
 }
 
 
@@ -371,21 +408,22 @@ OUTCOMES_UNKILLED = tuple(o for o in rec.OUTCOMES if o not in rec.KILLS)  # what
 # every module that computes physics or numerics: "" when it is screened (its record), else why it is not
 COVERAGE = {
     "symmech/grain/body.py": "",
-    "symmech/grain/contact.py": "10 of the 30 drawn: the sample stopped at the session's end (~20 s a mutant at "
-                                "load 9)",
+    "symmech/grain/contact.py": "",
     "symmech/grain/flight.py": "10 of the 30 drawn: the sample stopped at the session's end (up to 70 s a mutant "
                                "at load 9)",
     "symmech/grain/sliding.py": "",
     "symmech/grain/impact.py": "",
     "symmech/grain/coulomb_law.py": "",
     "symmech/grain/paper_mode.py": "",
-    "symmech/grain/motion.py": "one function only (the trajectory's sample times; the rocking warning moved to "
-                               "grain/outcome.py, unscreened there): a sample needs its motion tests, ~100 s a "
-                               "survivor",
+    "symmech/grain/motion.py": "a seeded sample of 40 (shard motion_sample) beside the 16 mutants of the trajectory's "
+                               "sample times screened before as a part and outside the draw (5 of them survive): "
+                               "the interval treats all 56 as drawn",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
-    "symmech/grain/motion_engine/driver.py": "shards engine_py made, not screened yet (its tests build the "
-                                             "engine, ~80 s)",
+    "symmech/grain/motion_engine/driver.py": "shard engine_py_sample made, not screened: its tests build and run "
+                                             "the compiled engine (the slow tier's compiled_engine tests: ~80 s of "
+                                             "numba compilation, then minutes a mutant on the shared cores); the "
+                                             "sessions' CPU went to the modules with none of their tests' cost",
     "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
                                                    "the engine is held to the Python reference by the "
                                                    "compiled-engine tests",
@@ -398,21 +436,17 @@ COVERAGE = {
                                          "10-15 s a survivor",
     "symmech/trolley/elastic/body.py": "",
     "symmech/trolley/elastic/frame.py": "",
-    "symmech/trolley/elastic/simulate.py": "not screened: its functions are reached only through integrating tests "
-                                           "(10-15 s a survivor); shards of some functions ran by the old rules "
-                                           "(mutation/history.md)",
+    "symmech/trolley/elastic/simulate.py": "",
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
     "symmech/smm/forms.py": "",
-    "symmech/smm/numeric.py": "shard smm_numeric_sample made, not screened: the sessions' CPU went to the modules "
-                              "under 90 % and make mutate-check",
+    "symmech/smm/numeric.py": "",
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
-    "symmech/numerics/ode.py": "not screened: shard ode's fast tests do not reach it (steppers runs at the test "
-                               "module's import, before a mutant is chosen; integrate, _make_solve and _adapter only "
-                               "in slow tests, 10-23 s of numba compilation each); a first try left 10 of 10 "
-                               "survivors, not recorded",
+    "symmech/numerics/ode.py": "10 of the 30 drawn (shard ode_integrate: the slow tests that build a generated "
+                               "module's solver, its closures compiled anew in each mutant's process, 1-4 min a "
+                               "mutant at load 7): the screen stopped at the session's end",
     "symmech/numerics/dop853_tableau.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
                               "holds it bit-equal to scipy's",
     "symmech/core/precision.py": "no physics or numerics of its own: wall-clock timing (its numbers are times, which "
@@ -500,22 +534,25 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
                  "record's lines are the mutants screened")
     replaces, stale = {}, []
     if rest or unrecorded:
-        recorded = {(rec.function_of(e.mutant), e.hash): e for e in rec.read(rec.record_path(module)).values()}
-        functions = {function for function, _ in recorded}
+        entries = list(rec.read(rec.record_path(module)).values())
+        functions = {rec.function_of(e.mutant) for e in entries}
         candidates = [n for n in shard_mutants(name) if rec.function_of(n) in functions]
         current = {n: (rec.function_of(n), digest)
                    for n, (digest, _) in mutation_screen.changes(folder, module, candidates).items()}
+        found = rec.match(entries, current)
         if rest:
-            replaces = {n: recorded[key].mutant for n, key in current.items()
-                        if key in recorded and recorded[key].outcome in rest}
+            replaces = {found[e.mutant]: e.mutant for e in entries if e.mutant in found and e.outcome in rest}
             names = list(replaces)
         else:
-            names = [n for n in names if current.get(n) not in recorded]
+            drawn_names = set(names)
+            names = [n for n in names if n not in found.values()]
             # lines of the shard's mutants whose change is no longer made (the module was edited, or the function
             # moved out of it): mutate-check could not find them; their functions' current mutants are screened now
-            made = set(current.values())
-            stale = [e.mutant for key, e in recorded.items()
-                     if key not in made and any(fnmatch.fnmatchcase(e.mutant, p) for p in SHARDS[name][2])]
+            stale = [e.mutant for e in entries
+                     if e.mutant not in found and any(fnmatch.fnmatchcase(e.mutant, p) for p in SHARDS[name][2])]
+            # a sample's lines are the mutants drawn: when an edit changed the population, the draw did too
+            stale += [e.mutant for e in entries
+                      if size and e.shard == name and e.mutant in found and found[e.mutant] not in drawn_names]
     which = ("its unkilled mutants again" if rest else
              "the rest of its sample" if size else "its mutants not recorded" if unrecorded else "")
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,

@@ -138,6 +138,34 @@ def function_of(mutant: str) -> str:
     return mutant.rpartition("__mutmut_")[0].rpartition(".")[2]
 
 
+def match(entries: list[Entry], current: dict[str, tuple[str, str]]) -> dict[str, str]:
+    """Recorded mutant name -> the current mutant making the same change (`current`: name -> (function, change
+    hash)); the numbers move when the module is edited, the module's path when it moves. A change a function makes
+    at several places (`continue` → `break`) has one current mutant per place: each recorded mutant keeps its own
+    function and number when they still make the change, else takes the unclaimed one nearest its number."""
+    places: dict[tuple[str, str], list[str]] = {}
+    for name, key in current.items():
+        places.setdefault(key, []).append(name)
+    found: dict[str, str] = {}
+    claimed: set[str] = set()
+
+    def number(name: str) -> int:
+        return order(name)[1]
+
+    def same_place(e: Entry) -> str | None:
+        return next((n for n in places.get((function_of(e.mutant), e.hash), [])
+                     if number(n) == number(e.mutant)), None)
+
+    for e in sorted(entries, key=lambda e: same_place(e) is None):
+        left = [n for n in places.get((function_of(e.mutant), e.hash), []) if n not in claimed]
+        name = same_place(e) if same_place(e) in left else min(left, key=lambda n: abs(number(n) - number(e.mutant)),
+                                                                default=None)
+        if name is not None:
+            found[e.mutant] = name
+            claimed.add(name)
+    return found
+
+
 def made_of(path: Path) -> str:
     """How many mutants mutmut made of the record's module (its "made:" note; "?" without one)."""
     return next((note.split()[1] for note in notes_of(path) if note.startswith("made:")), "?")

@@ -237,13 +237,12 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
     # one unmutated run: it must pass, and its time only sets the limit, which can turn a recorded outcome into a
     # timeout (a failed check), never a failed check into a passed one
     args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1)
-    current = mutant_names(folder, module)
-    by_hash = {}
-    for name, (digest, _) in changes(folder, module, current).items():
-        by_hash.setdefault((rec.function_of(name), digest), name)
+    current = {name: (rec.function_of(name), digest)
+               for name, (digest, _) in changes(folder, module, mutant_names(folder, module)).items()}
+    found = rec.match(chosen, current)
     failures = 0
     for e in chosen:
-        name = by_hash.get((rec.function_of(e.mutant), e.hash))  # the module's path may have changed
+        name = found.get(e.mutant)
         if name is None:
             print(f"    {e.mutant} ({e.change}): no longer made from the current tree; rescreen the shard")
             failures += 1
