@@ -11,7 +11,7 @@ from symmech.core import context
 from symmech.core.layout import Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
-from symmech.trolley.elastic.body import rigid_body, roller_forces
+from symmech.trolley.elastic.body import roller_forces
 from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
                                            frame_state, frames, tabulation)
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
@@ -233,7 +233,7 @@ class Inputs:
 def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
     """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
     start = prepare(system, drive, t, atol_q, dq0, dqd0)
-    rigid = rigid_body(system.mdl) if drive.traction is not None else None
+    rigid = system.rigid if drive.traction is not None else None
     return Inputs(start, system.record, tabulation(drive, system.mdl, t, start.line.s_nodes, rigid))
 
 
@@ -293,7 +293,7 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
     res["probe_overload"] = (a + system.mdl.g0 * fr.lam[:, None, :, 1]) / g_ref
     for key in ("rr", "v", "acc"):
         del res[key]
-    rigid = model.body_motion(fr, V0, dV0, rigid_body(system.mdl))
+    rigid = model.body_motion(fr, V0, dV0, system.rigid)
     res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, work=work, names=list(inv.names),
                P_rigid=rigid["P"], overload_rigid=rigid["overload"], W=fr.W, dW=fr.dW, **(run or {}))
     return res
