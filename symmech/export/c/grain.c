@@ -91,7 +91,7 @@ static void friction_impulse(double t, double *y, const double *p, const double 
    difference: the native engine goes on at any speed) */
 static void settle(double t, double *y, double *p, int may_stick)
 {
-    double *d = discrete(p), s[2], direction[2], target[2];
+    double *d = discrete(p), s[2], direction[2], target[FRICTION_IMPULSE_ARGS];
     call_slip(t, y, p, NULL, s);
     double speed = hypot(s[0], s[1]);
     d[D_REGIME] = SLIP;
@@ -157,7 +157,7 @@ static double bounce(double t, double *y, double *p, const double *contact)
    rest_velocity (or touches without approaching) on a plane that pushes */
 static int flight_event(double t, double *y, double *p, int own_integrator)
 {
-    double gap[2], contact[CONTACT_SIZE], u_n = 0.0;
+    double gap[N_Z], contact[CONTACT_SIZE], u_n = 0.0;
     int changed = 0;
     grain_motion_event_values(t, y, p, gap);
     if (gap[0] > gap_noise(y, p)) return 0;
@@ -177,7 +177,7 @@ static int flight_event(double t, double *y, double *p, int own_integrator)
 
 int grain_event_update(double t, double *y, double *p, int own_integrator)
 {
-    double z[2];
+    double z[N_Z];
     int regime = regime_of(p);
     if (regime == FLIGHT) return flight_event(t, y, p, own_integrator);
     grain_event_values(t, y, p, z);
