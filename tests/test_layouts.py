@@ -3,6 +3,7 @@ round trips, the numba types derived from a declaration, and a drift test of the
 place that reads them (the compiled loops index through the layouts' offsets, never by hand)."""
 import ast
 import pickle
+import re
 from pathlib import Path
 
 import numba
@@ -372,6 +373,29 @@ def test_the_exports_c_expressions_index_through_declared_layouts(path):
     tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
     assert _c_indices_by_hand(tree) == []
     assert _c_indices_by_hand(ast.parse('x = f"s0[{9 + i}]"; y = f"P{i}[{r + 1}]"')) == ["f's0[{9 + i}]'"]
+
+
+# The vectors the export's hand-written C glue indexes whose slots a declaration numbers (the state, the
+# parameters and discrete states, the impact map's stages and their arguments, the nominals): its names for them.
+C_VECTORS = ("y", "p", "d", "after", "nominal", "contact", "contact_after", "plastic", "coulomb", "impulse")
+C_SUBSCRIPT = re.compile(r"\b(" + "|".join(C_VECTORS) + r")\[([^\]]*)\]")
+
+
+def _c_slots_by_hand(text: str) -> list[str]:
+    """The subscripts of those vectors, declarations' sizes included, that hold a number but no macro (``y[2]``,
+    ``contact[12]``; not ``contact[CONTACT_U + 2]``, ``y[i]``): the macros are the offsets and sizes the export
+    writes before the glue from the layouts."""
+    return [m.group(0) for m in C_SUBSCRIPT.finditer(text)
+            if re.search(r"\b\d", m.group(2)) and not re.search(r"\b[A-Z][A-Z0-9_]*\b", m.group(2))]
+
+
+def test_the_exports_c_glue_indexes_through_declared_offsets():
+    """No literal slot or size of a declared vector in symmech/export/c/*.c (the macros are checked by the
+    compiles of tests/test_export_grain.py)."""
+    assert _c_slots_by_hand("double contact[12]; x = y[2] + p[N_P + 1] + y[i] + contact[CONTACT_U + 2];") == \
+        ["contact[12]", "y[2]"]
+    for path in sorted((ROOT / "export" / "c").glob("*.c")):
+        assert _c_slots_by_hand(path.read_text(encoding="utf-8")) == [], path.name
 
 
 def test_the_exported_impact_maps_stages_name_their_outputs_as_the_next_stages_arguments():

@@ -76,6 +76,8 @@ PLASTIC = Layout("PlasticImpulse", (
 COULOMB = Layout("CoulombImpulse", (Field("P", "N s", "the energy-consistent Coulomb impulse", (3,)),))
 IMPACT_MAP = (("impact_contact", CONTACT), ("plastic_impulse", PLASTIC), ("coulomb_impulse", COULOMB),
               ("impact_state", None))
+# the impact map's outputs as c/grain.c names their offsets and sizes (CONTACT_U, CONTACT_SIZE, ...)
+C_LAYOUTS = (("CONTACT", CONTACT), ("PLASTIC", PLASTIC), ("COULOMB", COULOMB))
 # where each dynamics parameter comes from in the scene
 SOURCE = {"gX": "surface.alpha_deg, beta_deg, g", "gY": "surface.alpha_deg, beta_deg, g",
           "gZ": "surface.alpha_deg, beta_deg, g", "A": "vibration.amplitude", "omega": "2 pi vibration.frequency",
@@ -218,8 +220,10 @@ READ = (("P_G", "gX"), ("P_AMPLITUDE", "A"), ("P_OMEGA", "omega"), ("P_AXES", "a
 
 
 def _prelude(params: list[str]) -> list[str]:
-    """The C lines before ``c/grain.c``: the offsets it reads, the chatter guard's constants and the gatherers
-    of the generated functions' arguments (read from the numpy modules' signatures)."""
+    """The C lines before ``c/grain.c``: the offsets it reads (parameters, discrete states, the state's Y_<name>,
+    the impact map's outputs <LAYOUT>_<field> and <LAYOUT>_SIZE, each gatherer's arguments from a:
+    <FUNCTION>_ARG_<name> and <FUNCTION>_ARGS), the chatter guard's constants and the gatherers of the generated
+    functions' arguments (read from the numpy modules' signatures)."""
     import importlib
 
     from symmech.generated import grain_motion as gm
@@ -232,6 +236,10 @@ def _prelude(params: list[str]) -> list[str]:
     lines += [f"#define D_{name.upper()} {k}" for k, name in enumerate(discrete[:2])]
     lines += ["#define D_REF 2", f"#define D_IMPACTS {discrete.index('impacts')}", f"#define D_TIMES {len(discrete)}",
               f"#define ZENO_IMPACTS {motion.ZENO_IMPACTS}", f"#define ZENO_INTERVAL {motion.ZENO_INTERVAL!r}"]
+    lines += [f"#define Y_{name.upper()} {i}" for i, (name, _, _) in enumerate(gm.STATE)]
+    for prefix, layout in C_LAYOUTS:
+        lines += [f"#define {prefix}_{name.upper()} {offset}" for name, offset in zip(layout.names, layout.slots)]
+        lines.append(f"#define {prefix}_SIZE {layout.size}")
     lines += [f"void grain_motion_{f}(double t, const double *y, const double *p, double *out);"
               for f in ("rate", "event_values")]
     where = {"t": "t"}
@@ -244,6 +252,9 @@ def _prelude(params: list[str]) -> list[str]:
             names = list(inspect.signature(getattr(generated, f)).parameters)
             rest = [a for a in names if a not in where]
             args = ", ".join(where.get(a) or f"a[{rest.index(a)}]" for a in names)
+            if rest:
+                lines += [f"#define {f.upper()}_ARG_{a.upper()} {k}" for k, a in enumerate(rest)]
+                lines.append(f"#define {f.upper()}_ARGS {len(rest)}")
             lines += [f"void {module}_{f}(const double *arg, double *out);",
                       f"static void call_{f}(double t, const double *y, const double *p, const double *a, double *out)",
                       "{", "    (void)t; (void)y; (void)p; (void)a;", f"    const double arg[] = {{{args}}};",

@@ -421,6 +421,16 @@ def local_curvature_frame(track, s, l: float, mode: str, fd_order: int = 4, fd_s
     return Frame(lstar @ base.lam, lstar[..., :, 0], d1[..., :, 0], W, dW, info)
 
 
+def track_frame(track, s, l: float, mode: str, local_curvature: bool, fd_order: int = 4, fd_step: float = 1e-3,
+                plan=None) -> Frame:
+    """The frame at the arc lengths s (k,) [m]: case 2 (:func:`local_curvature_frame`, the chord of length l [m],
+    its differences of order ``fd_order`` with step ``fd_step`` [m]) when ``local_curvature``, else case 1
+    (:func:`moving_frame`)."""
+    if not local_curvature:
+        return moving_frame(track, s, mode, plan)
+    return local_curvature_frame(track, s, l, mode, fd_order, fd_step, plan=plan)
+
+
 def small_angle_check(base: Frame, chord: np.ndarray, l: float) -> np.ndarray:
     """Orthogonality defect max|Λ̄ Λ̄ᵀ - E| of the first-order Λ̄ (13) with Δθ from (14), shape (n,).
 

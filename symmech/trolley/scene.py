@@ -258,10 +258,8 @@ def arc_length(setup: Setup) -> np.ndarray:
 
 
 def frame_at(setup: Setup, case: int, s) -> model.Frame:
-    if case == 1:
-        return model.moving_frame(setup.track, s, setup.frame, setup.plan)
-    return model.local_curvature_frame(setup.track, s, setup.body.l, setup.frame, setup.fd_order, setup.fd_step,
-                                       plan=setup.plan)
+    return model.track_frame(setup.track, s, setup.body.l, setup.frame, case != 1, setup.fd_order, setup.fd_step,
+                             setup.plan)
 
 
 def integrate_traction(setup: Setup, case: int, ctx=None):

@@ -42,17 +42,19 @@ static double normal_force(double t, const double *p)
     return n;
 }
 
+static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
 static double largest_axis(const double *p) { return fmax(p[P_AXES], fmax(p[P_AXES + 1], p[P_AXES + 2])); }
 
 /* the native engine's round-off floors of the gap [m] and of the contact velocity [m/s] (kinematics.py) */
 static double gap_noise(const double *y, const double *p)
 {
-    return 64 * DBL_EPSILON * (largest_axis(p) + fabs(y[2]) + p[P_AMPLITUDE]);
+    return 64 * DBL_EPSILON * (largest_axis(p) + fabs(y[Y_RZ]) + p[P_AMPLITUDE]);
 }
 
 static double velocity_noise(const double *y, const double *p)
 {
-    double v = sqrt(y[3] * y[3] + y[4] * y[4] + y[5] * y[5]), w = sqrt(y[10] * y[10] + y[11] * y[11] + y[12] * y[12]);
+    double v = norm3(y + Y_VX), w = norm3(y + Y_W1);
     return 1e3 * DBL_EPSILON * (v + w * largest_axis(p) + p[P_AMPLITUDE] * p[P_OMEGA]);
 }
 
@@ -73,7 +75,7 @@ static void set_reference(double t, const double *y, double *p)
 static double slip_on_speed(const double *p)
 {
     static const double nominal[N_X] = NOMINALS;
-    return 2.0 * fmax(p[N_P + D_V_STOP], sqrt(DBL_EPSILON) * nominal[3]);
+    return 2.0 * fmax(p[N_P + D_V_STOP], sqrt(DBL_EPSILON) * nominal[Y_VX]);
 }
 
 static void friction_impulse(double t, double *y, const double *p, const double *target)
@@ -89,7 +91,7 @@ static void friction_impulse(double t, double *y, const double *p, const double 
    difference: the native engine goes on at any speed) */
 static void settle(double t, double *y, double *p, int may_stick)
 {
-    double *d = discrete(p), s[2], direction[2], target[2];
+    double *d = discrete(p), s[2], direction[2], target[FRICTION_IMPULSE_ARGS];
     call_slip(t, y, p, NULL, s);
     double speed = hypot(s[0], s[1]);
     d[D_REGIME] = SLIP;
@@ -119,10 +121,10 @@ static void settle(double t, double *y, double *p, int may_stick)
    sliding phase's start (sliding_phase.py: v_stop = tolerance (|g| + |n|) scan_step, settled) */
 static void land(double t, double *y, double *p)
 {
-    double contact[12], plastic[4], impulse[3] = {0.0, 0.0, 0.0}, after[N_X];
+    double contact[CONTACT_SIZE], plastic[PLASTIC_SIZE], impulse[COULOMB_SIZE] = {0.0}, after[N_X];
     call_impact_contact(t, y, p, NULL, contact);
     call_plastic_impulse(t, y, p, contact, plastic);
-    impulse[2] = plastic[0];
+    impulse[COULOMB_P + 2] = plastic[PLASTIC_P_I];
     call_impact_state(t, y, p, impulse, after);
     call_rest_on_plane(t, after, p, NULL, y);
     double g = sqrt(p[P_G] * p[P_G] + p[P_G + 1] * p[P_G + 1] + p[P_G + 2] * p[P_G + 2]);
@@ -134,10 +136,11 @@ static void land(double t, double *y, double *p)
    where ZENO_IMPACTS impacts fell within ZENO_INTERVAL periods (chattering: it lands) */
 static double bounce(double t, double *y, double *p, const double *contact)
 {
-    double *d = discrete(p), plastic[4], coulomb[5], impulse[3], after[N_X], contact_after[12];
+    double *d = discrete(p), plastic[PLASTIC_SIZE], coulomb[COULOMB_IMPULSE_ARGS], impulse[COULOMB_SIZE], after[N_X],
+           contact_after[CONTACT_SIZE];
     call_plastic_impulse(t, y, p, contact, plastic);
-    for (int i = 0; i < 4; i++) coulomb[i] = plastic[i];
-    coulomb[4] = contact[11];
+    for (int i = 0; i < PLASTIC_SIZE; i++) coulomb[COULOMB_IMPULSE_ARG_P_I + i] = plastic[PLASTIC_P_I + i];
+    coulomb[COULOMB_IMPULSE_ARG_U2] = contact[CONTACT_U + 2];
     call_coulomb_impulse(t, y, p, coulomb, impulse);
     call_impact_state(t, y, p, impulse, after);
     for (int i = 0; i < N_X; i++) y[i] = after[i];
@@ -146,7 +149,7 @@ static double bounce(double t, double *y, double *p, const double *contact)
     d[D_IMPACTS] = (double)(n + 1);
     if (n + 1 >= ZENO_IMPACTS && t - d[D_TIMES + (n + 1) % ZENO_IMPACTS] < ZENO_INTERVAL * p[P_PERIOD]) return 0.0;
     call_impact_contact(t, y, p, NULL, contact_after);
-    return contact_after[11];
+    return contact_after[CONTACT_U + 2];
 }
 
 /* loop.py's flight branch at a contact (the gap at most its round-off, the point not leaving: the native engine
@@ -154,13 +157,13 @@ static double bounce(double t, double *y, double *p, const double *contact)
    rest_velocity (or touches without approaching) on a plane that pushes */
 static int flight_event(double t, double *y, double *p, int own_integrator)
 {
-    double gap[2], contact[12], u_n = 0.0;
+    double gap[N_Z], contact[CONTACT_SIZE], u_n = 0.0;
     int changed = 0;
     grain_motion_event_values(t, y, p, gap);
     if (gap[0] > gap_noise(y, p)) return 0;
     call_impact_contact(t, y, p, NULL, contact);
-    if (contact[11] > velocity_noise(y, p)) return 0;  /* the gap rising through zero after a bounce or a lift-off */
-    if (contact[11] < -velocity_noise(y, p)) {
+    if (contact[CONTACT_U + 2] > velocity_noise(y, p)) return 0;  /* the gap rising through zero after a bounce or a lift-off */
+    if (contact[CONTACT_U + 2] < -velocity_noise(y, p)) {
         u_n = bounce(t, y, p, contact);
         changed = 1;
     }
@@ -174,7 +177,7 @@ static int flight_event(double t, double *y, double *p, int own_integrator)
 
 int grain_event_update(double t, double *y, double *p, int own_integrator)
 {
-    double z[2];
+    double z[N_Z];
     int regime = regime_of(p);
     if (regime == FLIGHT) return flight_event(t, y, p, own_integrator);
     grain_event_values(t, y, p, z);

@@ -137,28 +137,30 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     scales) what the table reached."""
     t = np.asarray(t, dtype=float)
     inputs = el_sim.compiled_inputs(system, drive, t, atol_q, dq0, dqd0)
+    table = tabulate(inputs, float(rtol))
     if drive.traction is not None:
-        out, why = _traction_run(system, drive, t, float(rtol), inputs, reason)
+        solved, why = _traction_run(drive, t, float(rtol), inputs, table)
     else:
-        out, why = _prescribed_run(system, drive, t, float(rtol), inputs, reason)
-    if out is None:
-        out = el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
-    return out
+        solved, why = _prescribed_run(drive, t, float(rtol), inputs, table)
+    if solved is None:
+        return el_sim.simulate(system, drive, t, "Radau", rtol, atol_q, dq0, dqd0, fallback=why)
+    (s, V0, dV0, Y, fr, steps, nfev) = solved
+    report = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
+              "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
+    return el_sim.outputs(system, drive, t, s, V0, dV0, Y, rows=row_terms, frame=fr, run=report)
 
 
-def _prescribed_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[dict | None, str]:
-    """(the outputs of the compiled run at the prescribed speed, "") or (None, why it cannot run)."""
+def _prescribed_run(drive, t, rtol: float, inputs, table) -> tuple[tuple | None, str]:
+    """The compiled run at the prescribed speed on the frame ``table`` (:func:`tabulate`): ((s, V0, dV0 (n,), the
+    states Y (n, layout.state), the frame at the outputs, steps, evaluations), "") or (None, why it cannot run)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    table = tabulate(inputs, rtol)
     if table is None:
         return None, (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
                       f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
     start, (fr, V0, dV0, _) = inputs.start, inputs.frame.at_outputs
     Y, steps, nfev, status = ek.solve(inputs.record, (table.nodes, table.coef), start.y0, t, rtol, start.atol)
     _check(status, Y, t)
-    run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
-           "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
-    return el_sim.outputs(system, drive, t, start.line.s_nodes, V0, dV0, Y, rows=row_terms, frame=fr, run=run), ""
+    return (start.line.s_nodes, V0, dV0, Y, fr, steps, nfev), ""
 
 
 def row_terms(system, fr, V0, dV0, Y, height) -> dict:
@@ -200,13 +202,13 @@ def tabulate(inputs, rtol: float) -> Table | None:
 _KEYS = itertools.count()
 
 
-def _traction_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[dict | None, str]:
+def _traction_run(drive, t, rtol: float, inputs, table) -> tuple[tuple | None, str]:
     """The compiled run with traction: y = [q, q̇, E_d, W, s, V0] (layout.TRACTION_STATE), the frame's geometry
-    tabulated in s over the span ``frame.reach`` found, P0(t, V0) called back in Python per stage; Radau with
-    the analytic Jacobian (``kernels._jac_traction``). (its outputs, "") or (None, why it cannot run: the
-    geometry cannot be tabulated, or the run leaves the table)."""
+    ``table`` tabulated in s over the span ``frame.reach`` found, P0(t, V0) called back in Python per stage; Radau
+    with the analytic Jacobian (``kernels._jac_traction``). ((s, V0, dV0, Y as :func:`_prescribed_run`'s, no frame,
+    steps, evaluations), "") or (None, why it cannot run: the geometry cannot be tabulated, or the run leaves the
+    table)."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
-    table = tabulate(inputs, rtol)
     why = (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
            f"run left the tabulated s in [{inputs.frame.span[0]:.6g}, {inputs.frame.span[1]:.6g}] m: the Python engine "
            "evaluates it exactly")
@@ -225,9 +227,7 @@ def _traction_run(system, drive, t, rtol: float, inputs, reason: str) -> tuple[d
     s = Y[:, start.state.offset("s")]
     if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
         return None, why
-    run = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
-           "frame_table_nodes": table.nodes.size, "frame_interpolation_error": table.error}
-    return el_sim.outputs(system, drive, t, s, Y[:, start.state.offset("speed")], dV0, Y, rows=row_terms, run=run), ""
+    return (s, Y[:, start.state.offset("speed")], dV0, Y, None, steps, nfev), ""
 
 
 def _check(status, Y, t) -> None:

@@ -47,10 +47,8 @@ class FrameState:
 
 def frames(drive: Drive, s, l: float) -> model.Frame:
     s = np.atleast_1d(np.asarray(s, dtype=float))
-    if drive.local_curvature:
-        return model.local_curvature_frame(drive.track, s, l, drive.frame, drive.fd_order, drive.fd_step,
-                                           plan=drive.plan)
-    return model.moving_frame(drive.track, s, drive.frame, drive.plan)
+    return model.track_frame(drive.track, s, l, drive.frame, drive.local_curvature, drive.fd_order, drive.fd_step,
+                             drive.plan)
 
 
 def frame_motion(fr: model.Frame, V0, dV0) -> tuple:

@@ -11,7 +11,7 @@ from symmech.core import context
 from symmech.core.layout import Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
-from symmech.trolley.elastic.body import rigid_body, roller_forces
+from symmech.trolley.elastic.body import roller_forces
 from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
                                            frame_state, frames, tabulation)
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
@@ -101,13 +101,13 @@ class Start:
     atol: np.ndarray
 
 
-def prepare(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Start:
-    """The :class:`Start` of a run on the grid t [s] (n,): y0 is the quasi-static q at t[0]
+def prepare(line: Timeline, atol_q: float, dq0=None, dqd0=None) -> Start:
+    """The :class:`Start` of a run on the grid ``line.t`` [s] (n,): y0 is the quasi-static q at t[0]
     (:func:`traction_start` with traction) plus the offsets ``dq0``, ``dqd0`` of coordinates and rates,
     E_d = W = 0 [J]; with ``drive.traction`` also s0 [m] and the initial speed [m/s]. atol: ``atol_q`` on q
     [m, rad], 1e3 atol_q on q̇, 1e-9 J on E_d, :data:`WORK_ATOL` on W, 1e-10 on s [m] and V0 [m/s]. Both engines
     start here."""
-    line = Timeline(system, drive, t)
+    system, drive = line.system, line.drive
     traction = drive.traction is not None
     state = state_layout(system.N, traction)
     q0 = traction_start(line, line.t[0]) if traction else system.quasi_static(line.state(line.t[0]))
@@ -165,7 +165,7 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     ctx = context.active()
     if ctx is not None and fallback:
         ctx.fallback(f"elastic model on the Python engine: {fallback}", SECONDS_PER_STEP * (t.size - 1))
-    start = prepare(system, drive, t, atol_q, dq0, dqd0)
+    start = prepare(Timeline(system, drive, t), atol_q, dq0, dqd0)
     line, st, traction = start.line, start.state, drive.traction is not None
     iq, iqd = st.slice("q"), st.slice("qd")
 
@@ -232,9 +232,10 @@ class Inputs:
 
 def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
     """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
-    start = prepare(system, drive, t, atol_q, dq0, dqd0)
-    rigid = rigid_body(system.mdl) if drive.traction is not None else None
-    return Inputs(start, system.record, tabulation(drive, system.mdl, t, start.line.s_nodes, rigid))
+    line = Timeline(system, drive, t)
+    rigid = system.rigid if drive.traction is not None else None
+    frame = tabulation(drive, system.mdl, t, line.s_nodes, rigid)
+    return Inputs(prepare(line, atol_q, dq0, dqd0), system.record, frame)
 
 
 def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
@@ -293,7 +294,7 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
     res["probe_overload"] = (a + system.mdl.g0 * fr.lam[:, None, :, 1]) / g_ref
     for key in ("rr", "v", "acc"):
         del res[key]
-    rigid = model.body_motion(fr, V0, dV0, rigid_body(system.mdl))
+    rigid = model.body_motion(fr, V0, dV0, system.rigid)
     res.update(t=t, s=s, V0=V0, dV0=dV0, q=q, qd=qd, dissipated=ed, work=work, names=list(inv.names),
                P_rigid=rigid["P"], overload_rigid=rigid["overload"], W=fr.W, dW=fr.dW, **(run or {}))
     return res

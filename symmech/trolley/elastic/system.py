@@ -29,7 +29,7 @@ from symmech.core import kinematics as kin
 from symmech.core.scene import SymmechError
 from symmech.generated import trolley_elastic as gen
 from symmech.trolley.elastic import membrane
-from symmech.trolley.elastic.body import (ElasticModel, beam_basis, invariants, roller_energy,
+from symmech.trolley.elastic.body import (ElasticModel, beam_basis, invariants, rigid_body, roller_energy,
                                           roller_forces)
 from symmech.trolley.elastic.frame import FrameState
 from symmech.trolley.elastic.layout import (FIELDS, FLAGS, MODEL, N_ROLLER_DOFS, RIGID_FIELDS, RL_AT, ROLLER,
@@ -73,6 +73,13 @@ class System:
         mask[fields.slice("phi")] = np.arange(self.N) >= n_roll
         mask[fields.slice("psi")] = [i >= n_roll for i, _ in self.inv.pairs]
         return mask
+
+    @cached_property
+    def rigid(self):
+        """The rigid model's body (``symmech.trolley.model.Body``) of the same total mass, centre of mass and
+        central inertia (:func:`~symmech.trolley.elastic.body.rigid_body`), made once: a traction run finds its
+        span with it, and every run's outputs set the rigid reactions beside the elastic ones."""
+        return rigid_body(self.mdl)
 
     @cached_property
     def record(self):
