@@ -163,3 +163,25 @@ def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
     assert np.array_equal(table.seed, np.linspace(*table.span, 16)) and table.exact is None
     assert np.allclose(table.evaluate(table.seed, slice(3, 5)), [[1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]] * 2,
                        rtol=0, atol=1e-12)
+
+
+def test_traction_reach_sees_a_turn_between_two_outputs():
+    """P0 = -100 N on 100 kg from 5 m/s on a straight level track: s = 5 t - t²/2 (Newton) turns back at t = 5 s,
+    s = 12.5 m, between the outputs at 10/3 and 20/3 s (s = 100/9 m at both); the table spans 0 to 12.5 m widened by
+    a tenth on each side, not the outputs' 0 to 100/9 m. The compiled run's own check puts the turn at the same arc
+    length from the outputs' s and speed (constant deceleration: exact)."""
+    from symmech.trolley.elastic import compiled as el_compiled
+
+    data = scene_dict(trolley={"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
+                      effects={"gravity": True, "local_curvature": False, "traction": True},
+                      motion={"traction": "-100", "initial_speed": 5.0}, time={"t_end": 10.0, "steps": 3})
+    st = prepared(data)
+    drive = elastic_scene.drive_of(st, 1)
+    mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
+                               el_body.Rollers((1e8,) * 5, (2e3,) * 5))
+    assert np.allclose(st.t, [0, 10 / 3, 20 / 3, 10], rtol=0, atol=1e-12)
+    lo, hi = el_frame.reach(drive, el_body.rigid_body(mdl), st.t)
+    assert (lo, hi) == pytest.approx((-1.25, 13.75), rel=0, abs=1e-6)
+    v = 5.0 - st.t
+    assert el_compiled.turning_points(st.t, 5 * st.t - st.t ** 2 / 2, v) == pytest.approx([12.5], rel=1e-12)
+    assert el_compiled.turning_points(st.t, st.t, np.ones(4)).size == 0

@@ -224,10 +224,20 @@ def _traction_run(drive, t, rtol: float, inputs, table) -> tuple[tuple | None, s
     finally:
         del ek.TRACTIONS[key]
     _check(status, Y, t)
-    s = Y[:, start.state.offset("s")]
-    if s.min() < table.nodes[0] or s.max() > table.nodes[-1]:
+    s, speed = Y[:, start.state.offset("s")], Y[:, start.state.offset("speed")]
+    visited = np.concatenate([s, turning_points(t, s, speed)])
+    if visited.min() < table.nodes[0] or visited.max() > table.nodes[-1]:
         return None, why
-    return (s, Y[:, start.state.offset("speed")], dV0, Y, None, steps, nfev), ""
+    return (s, speed, dV0, Y, None, steps, nfev), ""
+
+
+def turning_points(t, s, v):
+    """Where the run turns back between two outputs (its speed v [m/s] changes sign from t_k to t_k+1 [s]), the
+    arc length [m] at the turn as the speed's linear interpolation puts it (exact under a constant acceleration):
+    s_k + v_k tau / 2 with tau = h v_k / (v_k - v_k+1). Shape (number of turns,)."""
+    k = np.flatnonzero(v[:-1] * v[1:] < 0)
+    tau = np.diff(t)[k] * v[k] / (v[k] - v[k + 1])
+    return s[k] + v[k] * tau / 2
 
 
 def _check(status, Y, t) -> None:

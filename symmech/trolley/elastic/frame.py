@@ -137,7 +137,7 @@ RE_AT = REACH.slots
 def reach(drive: Drive, body: model.Body, t) -> tuple[float, float]:
     """The arc lengths [m] a traction run on the output times t [s] visits: those of the rigid ``body`` (the
     whole elastic body's mass, centre and inertia, ``body.rigid_body``) under the same traction (DOP853 at rtol
-    1e-6), widened by :data:`REACH_MARGIN` of their span (at least 1 mm) and kept within the frame plan's span."""
+    1e-6) at the output times and where it turns back between them (its speed through zero), widened by :data:`REACH_MARGIN` of their span (at least 1 mm) and kept within the frame plan's span."""
     from scipy.integrate import solve_ivp
 
     def rates(time, y):
@@ -147,9 +147,12 @@ def reach(drive: Drive, body: model.Body, t) -> tuple[float, float]:
         p0 = float(drive.traction(time, v))
         return REACH.pack(s=v, speed=(p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * v ** 2) / alpha[0])
 
+    def turn(time, y):  # s is extreme between the outputs where the speed passes through zero
+        return y[RE_AT.speed]
+
     sol = solve_ivp(rates, (t[0], t[-1]), REACH.pack(s=drive.s0, speed=drive.v_initial), method="DOP853", t_eval=t,
-                    rtol=1e-6)
-    s = sol.y[RE_AT.s] if sol.status == 0 else np.array([drive.s0])
+                    rtol=1e-6, events=turn)
+    s = np.concatenate([sol.y[RE_AT.s], sol.y_events[0].reshape(-1, REACH.size)[:, RE_AT.s]]) if sol.status == 0 else np.array([drive.s0])
     pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
     lo, hi = float(s.min()) - pad, float(s.max()) + pad
     span = getattr(drive.plan, "span", None)
