@@ -193,6 +193,11 @@ from symmech.numerics import build
 from symmech.grain import sweep
 from symmech.grain.motion_engine import driver as compiled, loop as compiled_loop
 
+
+def stats(which):  # cache misses or hits of the engine's entries: a grain (run), a population (run_many: the sweep's)
+    return sum(sum(getattr(d.stats, which).values()) for d in (compiled_loop.run, compiled_loop.run_many))
+
+
 raw = {"kind": "grain", "duration": 0.08, "body": {"semi_axes": [1e-3, 1e-3, 1e-3], "density": 1200.0},
        "vibration": {"amplitude": 1e-3, "frequency": 25.0}, "impact": {"law": "printed", "e": 0.5, "lambda": 1.0},
        "population": [{"name": "a", "count": 2, "vary": {"body.density": 0.1}}],
@@ -202,9 +207,8 @@ with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                               dashboard_address=None) as cluster:
     values = sweep.compute(p, scheduler=cluster.scheduler_address)[0]
     with distributed.Client(cluster.scheduler_address) as client:
-        workers = client.run(lambda: [sum(compiled_loop.run.stats.cache_misses.values()),
-                                      sum(compiled_loop.run.stats.cache_hits.values())])
-print(json.dumps({"client": sum(compiled_loop.run.stats.cache_misses.values()), "workers": list(workers.values()),
+        workers = client.run(lambda: [stats("cache_misses"), stats("cache_hits")])
+print(json.dumps({"client": stats("cache_misses"), "workers": list(workers.values()),
                   "finite": bool(all(v[..., :2].size and abs(v[..., :2]).max() < 1 for v in values))}))
 """
 
