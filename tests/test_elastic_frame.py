@@ -145,17 +145,22 @@ def test_frame_keeps_its_plan_through_a_straight_point():
             assert np.allclose(el_sim._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
 
 
+def _level_traction(traction: str, t_end: float, steps: int):
+    """A 100 kg trolley on a straight level track under the traction P0(t) [N] from 5 m/s: the prepared scene,
+    its drive and the elastic model (its rigid body: 100 kg)."""
+    data = scene_dict(trolley={"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
+                      effects={"gravity": True, "local_curvature": False, "traction": True},
+                      motion={"traction": traction, "initial_speed": 5.0}, time={"t_end": t_end, "steps": steps})
+    st = prepared(data)
+    mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
+                               el_body.Rollers((1e8,) * 5, (2e3,) * 5))
+    return st, elastic_scene.drive_of(st, 1), mdl
+
 def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
     """P0 = 200 + 100 t N on 100 kg from 5 m/s on a straight level track: s = 5 t + (100 t² + 50 t³/3)/100 (Newton),
     0 to 15.333 m over 2 s; a traction run's table spans that, widened by a tenth of it on each side (within the
     frame plan's span), with 16 arc lengths, where e = (1, 0, 0), no curvature, ν = (0, 1, 0), no turning."""
-    data = scene_dict(trolley={"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
-                      effects={"gravity": True, "local_curvature": False, "traction": True},
-                      motion={"traction": "200 + 100*t", "initial_speed": 5.0}, time={"t_end": 2.0, "steps": 10})
-    st = prepared(data)
-    drive = elastic_scene.drive_of(st, 1)
-    mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
-                               el_body.Rollers((1e8,) * 5, (2e3,) * 5))
+    st, drive, mdl = _level_traction("200 + 100*t", t_end=2.0, steps=10)
     end = 5.0 * 2.0 + (100 * 4.0 + 50 * 8.0 / 3) / 100.0
     plan = drive.plan.span  # +-20 km: it leaves the span alone
     table = el_frame.tabulation(drive, mdl, st.t, None, el_body.rigid_body(mdl))
@@ -172,13 +177,7 @@ def test_traction_reach_sees_a_turn_between_two_outputs():
     length from the outputs' s and speed (constant deceleration: exact)."""
     from symmech.trolley.elastic import compiled as el_compiled
 
-    data = scene_dict(trolley={"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
-                      effects={"gravity": True, "local_curvature": False, "traction": True},
-                      motion={"traction": "-100", "initial_speed": 5.0}, time={"t_end": 10.0, "steps": 3})
-    st = prepared(data)
-    drive = elastic_scene.drive_of(st, 1)
-    mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
-                               el_body.Rollers((1e8,) * 5, (2e3,) * 5))
+    st, drive, mdl = _level_traction("-100", t_end=10.0, steps=3)
     assert np.allclose(st.t, [0, 10 / 3, 20 / 3, 10], rtol=0, atol=1e-12)
     lo, hi = el_frame.reach(drive, el_body.rigid_body(mdl), st.t)
     assert (lo, hi) == pytest.approx((-1.25, 13.75), rel=0, abs=1e-6)
