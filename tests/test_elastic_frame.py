@@ -145,12 +145,12 @@ def test_frame_keeps_its_plan_through_a_straight_point():
             assert np.allclose(el_sim._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
 
 
-def _level_traction(traction: str, t_end: float, steps: int):
-    """A 100 kg trolley on a straight level track under the traction P0(t) [N] from 5 m/s: the prepared scene,
+def _level_traction(traction: str, t_end: float, steps: int, initial_speed: float = 5.0):
+    """A 100 kg trolley on a straight level track under the traction P0(t, v) [N] from initial_speed [m/s]: the prepared scene,
     its drive and the elastic model (its rigid body: 100 kg)."""
     data = scene_dict(trolley={"mass": 100.0, "com": [0.8, 0.5, 0.0], "inertia": [10.0, 20.0, 15.0, 0, 0, 0]},
                       effects={"gravity": True, "local_curvature": False, "traction": True},
-                      motion={"traction": traction, "initial_speed": 5.0}, time={"t_end": t_end, "steps": steps})
+                      motion={"traction": traction, "initial_speed": initial_speed}, time={"t_end": t_end, "steps": steps})
     st = prepared(data)
     mdl = el_body.ElasticModel(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0, 0, 0, 0), 2.0, 1.0, 9.81,
                                el_body.Rollers((1e8,) * 5, (2e3,) * 5))
@@ -171,16 +171,18 @@ def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
 
 
 def test_traction_reach_sees_a_turn_between_two_outputs():
-    """P0 = -100 N on 100 kg from 5 m/s on a straight level track: s = 5 t - t²/2 (Newton) turns back at t = 5 s,
-    s = 12.5 m, between the outputs at 10/3 and 20/3 s (s = 100/9 m at both); the table spans 0 to 12.5 m widened by
-    a tenth on each side, not the outputs' 0 to 100/9 m. The compiled run's own check puts the turn at the same arc
-    length from the outputs' s and speed (constant deceleration: exact)."""
+    """P0 = -50 - 50 v N on 100 kg from 1 m/s on a straight level track: v = -1 + 2 exp(-t/2), s = -t + 4 (1 -
+    exp(-t/2)) (Newton) turns back at t = 2 ln 2 s, s = 2 - 2 ln 2 m, between the outputs at 1 and 2 s; the table
+    spans 0 to that widened by a tenth of it on each side (0.1 of 0.61 m: more than the 1 mm floor), not the
+    outputs' 0 to s(1) = 0.574 m. The compiled run's own check puts a turn where the speed's linear interpolation
+    does: exact under a constant deceleration (s = 5 t - t²/2 turns at 12.5 m between 10/3 and 20/3 s)."""
     from symmech.trolley.elastic import compiled as el_compiled
 
-    st, drive, mdl = _level_traction("-100", t_end=10.0, steps=3)
-    assert np.allclose(st.t, [0, 10 / 3, 20 / 3, 10], rtol=0, atol=1e-12)
+    st, drive, mdl = _level_traction("-50 - 50*v", t_end=3.0, steps=3, initial_speed=1.0)
+    assert np.allclose(st.t, [0, 1, 2, 3], rtol=0, atol=1e-12)
+    top = 2 - 2 * np.log(2)
     lo, hi = el_frame.reach(drive, el_body.rigid_body(mdl), st.t)
-    assert (lo, hi) == pytest.approx((-1.25, 13.75), rel=0, abs=1e-6)
-    v = 5.0 - st.t
-    assert el_compiled.turning_points(st.t, 5 * st.t - st.t ** 2 / 2, v) == pytest.approx([12.5], rel=1e-12)
-    assert el_compiled.turning_points(st.t, st.t, np.ones(4)).size == 0
+    assert (lo, hi) == pytest.approx((-0.1 * top, 1.1 * top), rel=0, abs=1e-5)
+    t = np.array([0, 10 / 3, 20 / 3, 10])
+    assert el_compiled.turning_points(t, 5 * t - t ** 2 / 2, 5.0 - t) == pytest.approx([12.5], rel=1e-12)
+    assert el_compiled.turning_points(t, t, np.ones(4)).size == 0
