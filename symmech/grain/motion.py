@@ -170,6 +170,10 @@ class Motion:
         """The impact times (n,) [s] in order (the compiled engine reads them from its rows, no log built)."""
         return np.array([i["t"] for i in self.impacts], dtype=float)
 
+    def transport_velocity(self) -> list:
+        """Mean transport velocity along X and Y [m/s]: the net displacement over the duration."""
+        return ((self.final.r[:2] - self.start.r[:2]) / (self.final.t - self.start.t)).tolist()
+
     def summary(self) -> dict:
         duration = self.final.t - self.start.t
         dissipated = sum(i["ke_before"] - i["ke_after"] for i in self.impacts)
@@ -178,7 +182,7 @@ class Motion:
         printed_energy = sum(1 for i in self.impacts if i["printed_creates_energy"] is True)
         return {
             "duration_s": duration,
-            "mean_transport_velocity_m_s": ((self.final.r[:2] - self.start.r[:2]) / duration).tolist(),
+            "mean_transport_velocity_m_s": self.transport_velocity(),
             "bounces": len(self.impacts),
             "time_fraction": {k: v / duration for k, v in self.time_in.items()},
             "energy_dissipated_by_impacts_J": dissipated,

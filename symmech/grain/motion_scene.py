@@ -459,7 +459,7 @@ def transport(sc: GrainScene, m: motion.Motion) -> tuple[tuple, list[str]]:
     velocity along X and Y [m/s], fraction of the time in flight) and the run's warnings (the motion's, then the
     sampling advice). SymmechError for a non-finite result, as the run's."""
     duration = m.final.t - m.start.t
-    (vx, vy), flight_share = ((m.final.r[:2] - m.start.r[:2]) / duration).tolist(), m.time_in.get("flight", 0.0) / duration
+    (vx, vy), flight_share = m.transport_velocity(), m.time_in.get("flight", 0.0) / duration
     bad = ~np.isfinite(m.trajectory)
     if bad.any() or not all(map(math.isfinite, (vx, vy, flight_share))):
         row = int(np.argwhere(bad)[0, 0]) if bad.any() else -1
