@@ -27,15 +27,14 @@ def export(what: str, scene, out, fmi: int = 3, kind: str = "me") -> Path:
         raise SymmechError(f"--out {out} is a folder of other files (no {build.MARKER} of an earlier export); "
                            "choose a new or empty folder")
     build.compiler()  # refuse before any work when there is no C compiler
-    exported = load(scene, sliding=what == "fmu" and kind == "me")
+    exported = load(scene)
     return build.fmu(exported, out, fmi, kind) if what == "fmu" else build.c_folder(exported, out)
 
 
-def load(path, sliding: bool = True) -> ExportModel:
+def load(path) -> ExportModel:
     """The export model of the scene at ``path``: an elastic trolley (:mod:`symmech.export.trolley`), a grain
-    (:mod:`symmech.export.grain`; ``sliding`` False where the export's own integrator runs it: flight and impacts
-    only) or a mechanism (:func:`symmech.export.model.of_scene`, which refuses the other kinds in one line)."""
+    (:mod:`symmech.export.grain`) or a mechanism (:func:`symmech.export.model.of_scene`, which refuses the other kinds in one line)."""
     scene = pipeline.load(path)
     if scene.kind.name == "grain":
-        return grain.load(scene, sliding)
+        return grain.load(scene)
     return (trolley.load if scene.kind.name == "trolley" else model.of_scene)(scene)

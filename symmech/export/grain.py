@@ -14,10 +14,9 @@ impulse of a stop or a cone exit (``friction_impulse``), the lift-off. Names: th
 as the generated equations take them (gravity in KXYZ from ``surface``, the vibration, the inertia and mass from
 ``body``, the impact law, the sliding friction) and the native engine's numerics that decide its transitions.
 
-Covered: accurate mode, the Coulomb law with a friction limit, rotation on. Model Exchange follows every regime (the
-importer's solver meets the stiff slip); Co-Simulation and the C program integrate with the FMU's own DOP853, which
-has no stiff slip: they cover flight and impacts until the native run's first landing, and a scene whose duration
-reaches it is refused in one line naming the duration and the landing time, as is anything else not covered
+Covered: accurate mode, the Coulomb law with a friction limit, rotation on, every regime: under Model Exchange the
+importer's solver integrates and locates the events, under Co-Simulation and in the C program the FMU's own DOP853
+(its events located on its dense output, c/symmech_model.c); anything else is refused in one line
 (docs/export.md).
 """
 from __future__ import annotations
@@ -58,7 +57,8 @@ DISCRETE = (("regime", "1", "regime: 0 flight, 1 slip, 2 stick", True),
             ("v_stop", "m/s", "slip speed at which a slip stops (set at each landing)", True),
             ("ref0", "1", "the slip's reference direction, X component", False),
             ("ref1", "1", "the slip's reference direction, Y component", False),
-            ("impacts", "1", "number of impacts so far", True))
+            ("impacts", "1", "number of impacts so far", True),
+            ("last_impact", "s", "time of the latest impact (0 before the first)", True))
 # an indicator below -MISSED_EVENT x the length scale without its event: the importer stepped over two of its
 # crossings (in flight: the grain has sunk into the surface)
 MISSED_EVENT = 1e-6
@@ -92,10 +92,12 @@ INDICATORS = (("indicator1", "1", "event indicator 1: in flight the gap [m] (an 
                                   "[m/s^2] (lift-off where it falls through zero)"))
 
 
-def load(scene, sliding: bool = True) -> ExportModel:
-    """The export model of a loaded grain scene (``pipeline.load``'s); ``sliding`` False for an export whose own
-    integrator runs it (Co-Simulation, the C folder), which follows flight and impacts only. SymmechError (exit 2),
-    naming the field and its value, for a scene whose regimes the export does not cover."""
+def load(scene) -> ExportModel:
+    """The export model of a loaded grain scene (``pipeline.load``'s), its native run's trajectory the example
+    program's table and the FMU's default experiment. SymmechError (exit 2), naming the field and its value, for a
+    scene whose regimes the export does not cover."""
+    from symmech.grain import motion_scene
+
     sc = scene.setup
     law, effects = sc.model.law, sc.model.effects
     if sc.numerics.mode != "accurate":
@@ -109,41 +111,7 @@ def load(scene, sliding: bool = True) -> ExportModel:
     if not effects.rotation:
         raise SymmechError("effects.rotation = false: `symmech export` covers the rotating grain only (the impact "
                            "map is the rotating body's)")
-    if sliding:
-        from symmech.grain import motion_scene
-
-        return grain(sc, native_table(motion_scene.simulate(sc).trajectory, sc.numerics.sample_interval))
-    trajectory, landing = native_run(sc)
-    if landing is not None:
-        raise SymmechError(f"duration = {sc.duration:g}: the grain lands on the surface and slides at t = "
-                           f"{landing:.6g} s (the native run); Co-Simulation and the C folder integrate with their "
-                           "own DOP853, which follows flight and impacts only: export it for Model Exchange "
-                           f"(--type me), or a duration below {landing:.6g} s")
-    return grain(sc, native_table(trajectory, sc.numerics.sample_interval))
-
-
-def native_run(sc) -> tuple[np.ndarray, float | None]:
-    """The native run's trajectory rows and its first landing (:func:`first_landing`): over 8 periods of the
-    surface first, then 4 times longer each time until it lands or reaches the scene's duration (a landing,
-    usually within a few periods, costs no run of the whole scene)."""
-    from symmech.grain import motion_scene
-
-    span = min(sc.duration, 8 * sc.model.period)
-    while True:
-        trajectory = motion_scene.simulate(sc, duration=span).trajectory
-        landing = first_landing(trajectory)
-        if landing is not None or span >= sc.duration:
-            return trajectory, landing
-        span = min(sc.duration, 4 * span)
-
-
-def first_landing(trajectory: np.ndarray) -> float | None:
-    """Time [s] where a native run (its trajectory rows) first lands on the surface (the row before its first
-    sliding or sticking row: the last impact, or the start), None when it never does."""
-    from symmech.grain import motion
-
-    (off,) = np.nonzero(trajectory[:, T_AT.regime] == motion.REGIMES.index("sliding"))
-    return float(trajectory[max(off[0] - 1, 0), T_AT.t]) if off.size else None
+    return grain(sc, native_table(motion_scene.simulate(sc).trajectory, sc.numerics.sample_interval))
 
 
 def native_table(trajectory: np.ndarray, interval: float) -> Table:
@@ -234,7 +202,8 @@ def _prelude(params: list[str]) -> list[str]:
              "by `symmech export`) */", '#include "model.h"']
     lines += [f"#define {macro} {params.index(name)}" for macro, name in READ]
     lines += [f"#define D_{name.upper()} {k}" for k, name in enumerate(discrete[:2])]
-    lines += ["#define D_REF 2", f"#define D_IMPACTS {discrete.index('impacts')}", f"#define D_TIMES {len(discrete)}",
+    lines += ["#define D_REF 2", f"#define D_IMPACTS {discrete.index('impacts')}",
+              f"#define D_LAST_IMPACT {discrete.index('last_impact')}", f"#define D_TIMES {len(discrete)}",
               f"#define ZENO_IMPACTS {motion.ZENO_IMPACTS}", f"#define ZENO_INTERVAL {motion.ZENO_INTERVAL!r}"]
     lines += [f"#define Y_{name.upper()} {i}" for i, (name, _, _) in enumerate(gm.STATE)]
     for prefix, layout in C_LAYOUTS:

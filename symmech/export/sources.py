@@ -61,16 +61,22 @@ def _array(name: str, values) -> str:
 
 
 def tableau_header() -> str:
-    """``dop853_tableau.h``: symmech.numerics.dop853's C, A, B, E5, E3 (the 12 stages and the FSAL stage)."""
-    n = dop853.N_STAGES
-    rows = ",\n    ".join("{" + ", ".join(repr(float(x)) for x in dop853.A[i, :n]) + "}" for i in range(n))
+    """``dop853_tableau.h``: symmech.numerics.dop853's C, A (the 12 stages, the FSAL stage and the 3 stages of the
+    dense output), B, E5, E3 and D (the interpolant's last 4 coefficient rows)."""
+    n, extended = dop853.N_STAGES, dop853.N_STAGES_EXTENDED
+
+    def matrix(name, a):
+        rows = ",\n    ".join("{" + ", ".join(repr(float(x)) for x in row) + "}" for row in a)
+        return f"static const double {name}[{a.shape[0]}][{a.shape[1]}] = {{\n    {rows}}};"
+
     return "\n".join([
-        "/* The DOP853 tableau (Dormand and Prince 8(5,3), from Hairer's dop853.f), written by `symmech export` "
-        "from symmech/numerics/dop853.py. */",
+        "/* The DOP853 tableau (Dormand and Prince 8(5,3), from Hairer's dop853.f) and its dense output of order 7, "
+        "written by `symmech export` from symmech/numerics/dop853.py. */",
         "#ifndef DOP853_TABLEAU_H", "#define DOP853_TABLEAU_H", f"#define DOP853_STAGES {n}",
-        _array("DOP853_C", dop853.C[:n]), f"static const double DOP853_A[{n}][{n}] = {{\n    {rows}}};",
+        f"#define DOP853_EXTENDED {extended}", f"#define DOP853_POWER {dop853.INTERPOLATOR_POWER}",
+        _array("DOP853_C", dop853.C[:extended]), matrix("DOP853_A", dop853.A[:extended, :extended]),
         _array("DOP853_B", dop853.B), _array("DOP853_E5", dop853.E5), _array("DOP853_E3", dop853.E3),
-        "#endif", ""])
+        matrix("DOP853_D", dop853.D), "#endif", ""])
 
 
 def radau_header() -> str:

@@ -155,7 +155,7 @@ FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
 {
     Instance *inst = c;
-    int changed = symmech_event_update(&inst->model, 0);
+    int changed = symmech_event_update(&inst->model);
     memset(info, 0, sizeof *info);
     info->valuesOfContinuousStatesChanged = changed > 0;
     return changed < 0 ? fail(inst, "fmi2NewDiscreteStates: non-finite state at the event") : fmi2OK;

@@ -191,7 +191,7 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boole
                                                 fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime)
 {
     Instance *inst = instance;
-    int changed = symmech_event_update(&inst->model, 0);
+    int changed = symmech_event_update(&inst->model);
     *discreteStatesNeedUpdate = *terminateSimulation = *nominalsOfContinuousStatesChanged = false;
     *valuesOfContinuousStatesChanged = changed > 0;
     *nextEventTimeDefined = false;

@@ -147,6 +147,7 @@ static double bounce(double t, double *y, double *p, const double *contact)
     long n = (long)d[D_IMPACTS];
     d[D_TIMES + n % ZENO_IMPACTS] = t;
     d[D_IMPACTS] = (double)(n + 1);
+    d[D_LAST_IMPACT] = t;
     if (n + 1 >= ZENO_IMPACTS && t - d[D_TIMES + (n + 1) % ZENO_IMPACTS] < ZENO_INTERVAL * p[P_PERIOD]) return 0.0;
     call_impact_contact(t, y, p, NULL, contact_after);
     return contact_after[CONTACT_U + 2];
@@ -155,7 +156,7 @@ static double bounce(double t, double *y, double *p, const double *contact)
 /* loop.py's flight branch at a contact (the gap at most its round-off, the point not leaving: the native engine
    locates the gap's falls only): a bounce where the point approaches, then a landing where it leaves slower than
    rest_velocity (or touches without approaching) on a plane that pushes */
-static int flight_event(double t, double *y, double *p, int own_integrator)
+static int flight_event(double t, double *y, double *p)
 {
     double gap[N_Z], contact[CONTACT_SIZE], u_n = 0.0;
     int changed = 0;
@@ -168,18 +169,17 @@ static int flight_event(double t, double *y, double *p, int own_integrator)
         changed = 1;
     }
     if (u_n <= p[P_REST_VELOCITY] && normal_force(t, p) > 0.0) {
-        if (own_integrator) return -2;  /* its DOP853 has no stiff slip: the model's own integrator flies only */
         land(t, y, p);
         changed = 1;
     }
     return changed;
 }
 
-int grain_event_update(double t, double *y, double *p, int own_integrator)
+int grain_event_update(double t, double *y, double *p)
 {
     double z[N_Z];
     int regime = regime_of(p);
-    if (regime == FLIGHT) return flight_event(t, y, p, own_integrator);
+    if (regime == FLIGHT) return flight_event(t, y, p);
     grain_event_values(t, y, p, z);
     if (z[1] <= 0.0) {  /* the normal force reached zero: lift-off */
         discrete(p)[D_REGIME] = FLIGHT;

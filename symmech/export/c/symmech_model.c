@@ -1,6 +1,7 @@
 /* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial
-   pivoting), Dormand and Prince's DOP853 with the error control of Hairer's dop853.f (the tableau in
-   dop853_tableau.h is written from symmech/numerics/dop853.py) and, for a stiff model (MODEL_STIFF), Radau IIA
+   pivoting), Dormand and Prince's DOP853 with the error control of Hairer's dop853.f and its dense output of
+   order 7 (the tableau in dop853_tableau.h is written from symmech/numerics/dop853.py), state events located on
+   that dense output by the Illinois method and, for a stiff model (MODEL_STIFF), Radau IIA
    of order 5 as scipy's and symmech/numerics/radau.py's (radau_tableau.h written from
    symmech/numerics/radau_tableau.py) with dense output. Hand-written; the physics is generated. */
 #include <math.h>
@@ -110,18 +111,18 @@ int symmech_derivatives(SymmechModel *m)
 #error "state events are located by DOP853 only: a stiff model has none"
 #endif
 
-int symmech_event_update(SymmechModel *m, int own_integrator)
+int symmech_event_update(SymmechModel *m)
 {
 #if N_Z > 0
     if (symmech_derivatives(m) != 0) return -1;
-    int changed = MODEL_EVENT_UPDATE(m->r[VR_TIME], m->r + VR_X, m->r + VR_P, own_integrator);
+    int changed = MODEL_EVENT_UPDATE(m->r[VR_TIME], m->r + VR_X, m->r + VR_P);
     if (changed <= 0) return changed;
     for (int j = 0; j < N_X; j++)
         if (!isfinite(m->r[VR_X + j])) return -1;
     m->dirty = 1;
     return symmech_derivatives(m) != 0 ? -1 : 1;
 #else
-    (void)m; (void)own_integrator;
+    (void)m;
     return 0;
 #endif
 }
@@ -159,57 +160,153 @@ static int dop853_step(SymmechModel *m, double t, const double *y, double h, dou
 }
 
 #if N_Z > 0
-/* the lowest indicator among those positive in z0 at (t, y): their falls through zero */
-static double falling(SymmechModel *m, double t, const double *y, const double *z0)
+/* The accepted step h from (t, y) to y1 (stages k[0..DOP853_STAGES], the last f at y1) as its interpolant of
+   order 7 (scipy's DOP853._dense_output_impl): the 3 extra stages into k, the coefficients F row by row */
+static int dop853_dense(SymmechModel *m, double t, const double *y, const double *y1, double h, double k[][N_X],
+                        double F[][N_X])
 {
-    double z[N_Z], lowest = INFINITY;
-    MODEL_EVENTS(t, y, m->r + VR_P, z);
-    for (int i = 0; i < N_Z; i++)
-        if (z0[i] > 0.0 && z[i] < lowest) lowest = z[i];
-    return lowest;
+    double z[N_X];
+    for (int s = DOP853_STAGES + 1; s < DOP853_EXTENDED; s++) {
+        for (int i = 0; i < N_X; i++) {
+            double sum = 0.0;
+            for (int j = 0; j < s; j++) sum += DOP853_A[s][j] * k[j][i];
+            z[i] = y[i] + h * sum;
+        }
+        if (rates(m, t + DOP853_C[s] * h, z, k[s]) != 0) return -1;
+    }
+    for (int i = 0; i < N_X; i++) {
+        double dy = y1[i] - y[i];
+        F[0][i] = dy;
+        F[1][i] = h * k[0][i] - dy;
+        F[2][i] = 2.0 * dy - h * (k[DOP853_STAGES][i] + k[0][i]);
+        for (int r = 0; r < DOP853_POWER - 3; r++) {
+            double sum = 0.0;
+            for (int j = 0; j < DOP853_EXTENDED; j++) sum += DOP853_D[r][j] * k[j][i];
+            F[3 + r][i] = h * sum;
+        }
+    }
+    return 0;
 }
 
-/* The accepted step h from (t, y) (first stage k[0]) to y1 crossed an indicator that was positive in z0: the
-   first time of the fall, located by the Illinois method on the step's own length (a step of DOP853 from
-   (t, y) to each trial time, shorter than one it accepted). Leaves the state just past it (indicator <= 0) in
-   y1 and returns its length (-1 on a failed rate). */
-static double locate(SymmechModel *m, double t, const double *y, double h, double k[][N_X], const double *z0,
-                     double *y1)
+/* the interpolant at the fraction x of the step: y at its start plus the nested form in x and 1 - x */
+static void dense_at(const double F[][N_X], const double *y, double x, double *out)
 {
-    double lo = 0.0, hi = h, f_lo = INFINITY, f_hi = falling(m, t + h, y1, z0), trial[N_X];
-    for (int i = 0; i < N_Z; i++)
-        if (z0[i] > 0.0 && z0[i] < f_lo) f_lo = z0[i];
+    for (int i = 0; i < N_X; i++) {
+        double acc = 0.0;
+        for (int r = 0; r < DOP853_POWER; r++) {
+            acc += F[DOP853_POWER - 1 - r][i];
+            acc *= r % 2 == 0 ? x : 1.0 - x;
+        }
+        out[i] = y[i] + acc;
+    }
+}
+
+/* indicator i at the fraction x of the step from (t, y) of length h, the interpolated state into yx */
+static double indicator_at(SymmechModel *m, double t, const double *y, double h, const double F[][N_X], double x,
+                           int i, double *yx)
+{
+    double z[N_Z];
+    dense_at(F, y, x, yx);
+    MODEL_EVENTS(t + x * h, yx, m->r + VR_P, z);
+    return z[i];
+}
+
+/* Indicator i's fall through zero between the fractions lo (where it is f_lo > 0) and hi (f_hi <= 0) of the step,
+   by the Illinois method on the interpolant, to 4 ulp of t: the fraction on the side where it is <= 0 */
+static double fall_of(SymmechModel *m, double t, const double *y, double h, const double F[][N_X], int i, double lo,
+                      double f_lo, double hi, double f_hi)
+{
+    double yx[N_X];
     int side = 0;
-    for (int it = 0; it < 200 && hi - lo > 4 * 2.2e-16 * fmax(fabs(t), fabs(h)); it++) {
-        double s = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-        if (!(s > lo && s < hi)) s = 0.5 * (lo + hi);
-        if (dop853_step(m, t, y, s, k, trial) != 0) return -1.0;
-        double f = falling(m, t + s, trial, z0);
+    for (int it = 0; it < 200 && (hi - lo) * h > 4 * 2.2e-16 * fmax(fabs(t), h); it++) {
+        double x = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+        if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+        double f = indicator_at(m, t, y, h, F, x, i, yx);
         if (f > 0.0) {
-            lo = s; f_lo = f;
+            lo = x; f_lo = f;
             if (side == -1) f_hi *= 0.5;
             side = -1;
         } else {
-            hi = s; f_hi = f;
-            memcpy(y1, trial, sizeof trial);
+            hi = x; f_hi = f;
             if (side == 1) f_lo *= 0.5;
             side = 1;
         }
     }
     return hi;
 }
+
+/* Indicator i non-positive at the fractions lo and hi of the step but lower at hi: it may have risen above zero
+   and fallen back between them (a short flight after a bounce). Its maximum there by golden section on the
+   interpolant, stopped at the first positive value: that fraction and the value into *f, or -1 when it stays
+   non-positive (to 4 ulp of t) */
+static double positive_between(SymmechModel *m, double t, const double *y, double h, const double F[][N_X], int i,
+                               double lo, double hi, double *f)
+{
+    const double golden = 0.6180339887498949;
+    double yx[N_X], a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
+    double fa = indicator_at(m, t, y, h, F, a, i, yx), fb = indicator_at(m, t, y, h, F, b, i, yx);
+    while (fa <= 0.0 && fb <= 0.0 && (hi - lo) * h > 4 * 2.2e-16 * fmax(fabs(t), h)) {
+        if (fa >= fb) {
+            hi = b; b = a; fb = fa;
+            a = hi - golden * (hi - lo);
+            fa = indicator_at(m, t, y, h, F, a, i, yx);
+        } else {
+            lo = a; a = b; fa = fb;
+            b = lo + golden * (hi - lo);
+            fb = indicator_at(m, t, y, h, F, b, i, yx);
+        }
+    }
+    if (fa > 0.0) { *f = fa; return a; }
+    if (fb > 0.0) { *f = fb; return b; }
+    return -1.0;
+}
+
+/* The first fall of an indicator through zero within the accepted step from (t, y) of length h (z0: the
+   indicators at its start, the interpolant F, y1 its end): the interpolant sampled at SCAN_POINTS fractions of the
+   step; a fall bracketed between two samples (positive, then non-positive; or non-positive at both and lower at
+   the second, with a positive value between them: positive_between) located by fall_of, the earliest of the
+   indicators falling there. Its fraction of the step (in (0, 1]) and the state there into y_event; 0 when none
+   falls */
+#define SCAN_POINTS 8
+static double first_fall(SymmechModel *m, double t, const double *y, double h, const double F[][N_X],
+                         const double *z0, const double *y1, double *y_event)
+{
+    double before[N_Z], z[N_Z], yx[N_X];
+    memcpy(before, z0, sizeof before);
+    for (int j = 1; j <= SCAN_POINTS; j++) {
+        double x = (double)j / SCAN_POINTS, lo = (double)(j - 1) / SCAN_POINTS, first = 2.0;
+        if (j < SCAN_POINTS) dense_at(F, y, x, yx);
+        else memcpy(yx, y1, sizeof yx);
+        MODEL_EVENTS(t + x * h, yx, m->r + VR_P, z);
+        for (int i = 0; i < N_Z; i++) {
+            if (z[i] > 0.0) continue;
+            double x_up = lo, f_up = before[i];
+            if (before[i] <= 0.0) x_up = z[i] < before[i] ? positive_between(m, t, y, h, F, i, lo, x, &f_up) : -1.0;
+            if (x_up >= 0.0) first = fmin(first, fall_of(m, t, y, h, F, i, x_up, f_up, x, z[i]));
+        }
+        if (first <= 1.0) {
+            if (first < 1.0) dense_at(F, y, first, y_event);
+            else memcpy(y_event, y1, sizeof yx);
+            return first;
+        }
+        memcpy(before, z, sizeof before);
+    }
+    return 0.0;
+}
 #endif
 
-/* DOP853 from r[VR_TIME] to t_end with Hairer's error control, state events located and mapped */
+/* DOP853 from r[VR_TIME] to t_end with Hairer's error control; with state events, each accepted step's
+   interpolant searched for an indicator's fall (first_fall), the model's update applied there
+   (symmech_event_update) and the integration resumed from it */
 static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
 {
-    double k[DOP853_STAGES + 1][N_X], y1[N_X];
+    double k[DOP853_EXTENDED][N_X], y1[N_X];
     double *y = m->r + VR_X;
     double t = m->r[VR_TIME];
     if (t_end <= t) return 0;
     if (rates(m, t, y, k[0]) != 0) return -1;
 #if N_Z > 0
-    double z0[N_Z];
+    double z0[N_Z], F[DOP853_POWER][N_X], y_event[N_X];
     MODEL_EVENTS(t, y, m->r + VR_P, z0);
 #endif
     double h = t_end - t, norm_y = 0.0, norm_f = 0.0;
@@ -223,6 +320,7 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
     while (t < t_end) {
         int last = t + h >= t_end;
         if (last) h = t_end - t;
+        if (last && h <= 16 * 2.2e-16 * fabs(t)) break;  /* an event within round-off of t_end */
         if (h < 16 * 2.2e-16 * fabs(t) || h <= 0.0) return -1;
         if (dop853_step(m, t, y, h, k, y1) != 0) return -1;
         if (rates(m, t + h, y1, k[DOP853_STAGES]) != 0) return -1;
@@ -237,36 +335,34 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
         double denom = err5 + 0.01 * err3;
         double err = denom > 0.0 ? fabs(h) * err5 / sqrt(denom * N_X) : 0.0;
         if (!isfinite(err)) return -1;
-        if (err <= 1.0) {
-            double factor = err == 0.0 ? 10.0 : fmin(10.0, 0.9 * pow(err, -1.0 / 8.0));
-#if N_Z > 0
-            if (falling(m, t + h, y1, z0) <= 0.0) {  /* an event in the step: stop there, map the state */
-                double s = locate(m, t, y, h, k, z0, y1);
-                if (s < 0.0) return -1;
-                t += s;
-                memcpy(y, y1, sizeof y1);
-                m->r[VR_TIME] = t;
-                m->dirty = 1;
-                int update = symmech_event_update(m, 1);
-                if (update < 0) return update == -2 ? -2 : -1;
-                if (rates(m, t, y, k[0]) != 0) return -1;
-                MODEL_EVENTS(t, y, m->r + VR_P, z0);
-                h *= factor;
-                continue;
-            }
-#endif
-            t = last ? t_end : t + h;
-            memcpy(y, y1, sizeof y1);
-            memcpy(k[0], k[DOP853_STAGES], sizeof k[0]);
-#if N_Z > 0
-            MODEL_EVENTS(t, y, m->r + VR_P, z0);
-            for (int i = 0; i < N_Z; i++)
-                if (z0[i] < -EVENT_TOLERANCE) { m->r[VR_TIME] = t; m->dirty = 1; return -2; }
-#endif
-            h *= factor;
-        } else {
+        if (err > 1.0) {
             h *= fmax(0.2, 0.9 * pow(err, -1.0 / 8.0));
+            continue;
         }
+        double factor = err == 0.0 ? 10.0 : fmin(10.0, 0.9 * pow(err, -1.0 / 8.0));
+#if N_Z > 0
+        if (dop853_dense(m, t, y, y1, h, k, F) != 0) return -1;
+        double x = first_fall(m, t, y, h, F, z0, y1, y_event);
+        if (x > 0.0) {  /* an event in the step: stop there, update the state, go on from it */
+            t = x == 1.0 && last ? t_end : t + x * h;
+            memcpy(y, y_event, sizeof y_event);
+            m->r[VR_TIME] = t;
+            m->dirty = 1;
+            if (symmech_event_update(m) < 0) return -1;
+            if (rates(m, t, y, k[0]) != 0) return -1;
+            MODEL_EVENTS(t, y, m->r + VR_P, z0);
+            continue;
+        }
+#endif
+        t = last ? t_end : t + h;
+        memcpy(y, y1, sizeof y1);
+        memcpy(k[0], k[DOP853_STAGES], sizeof k[0]);
+#if N_Z > 0
+        MODEL_EVENTS(t, y, m->r + VR_P, z0);
+        for (int i = 0; i < N_Z; i++)
+            if (z0[i] < -EVENT_TOLERANCE) { m->r[VR_TIME] = t; m->dirty = 1; return -2; }
+#endif
+        h *= factor;
     }
     m->r[VR_TIME] = t_end;
     m->dirty = 1;

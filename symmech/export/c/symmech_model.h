@@ -44,20 +44,20 @@ void symmech_reset(SymmechModel *m);
    singular or a rate is not finite */
 int symmech_derivatives(SymmechModel *m);
 /* integrate from r[VR_TIME] to t_end (DOP853, or Radau IIA for a stiff model: MODEL_STIFF), error control
-   rtol and atol (Radau: atol, at least RADAU_ATOL_FLOOR, times each state's nominal); 0, or -1 on a singular
-   M, a non-finite state or a step size below round-off, -2 where the motion left the model
-   (symmech_left_model; r[VR_TIME] is then that time; DOP853 only: a stiff model has no state events) */
+   rtol and atol (Radau: atol, at least RADAU_ATOL_FLOOR, times each state's nominal); with state events (DOP853
+   only: a stiff model has none) each fall of an indicator through zero located on the step's dense output and
+   the model's update applied there (symmech_event_update); 0, or -1 on a singular M, a non-finite state or a step
+   size below round-off, -2 where the motion left the model (symmech_left_model; r[VR_TIME] is then that time) */
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
 /* state events (N_Z > 0): at an indicator's fall through zero, the model's update of the state and its
-   discrete states (MODEL_EVENT_UPDATE; own_integrator: called from symmech_integrate); 1 when something changed,
-   0 when not, -1 on a non-finite state, -2 where the model's own integrator does not cover what follows (the
-   grain lands). symmech_integrate locates the indicators' falls through zero and calls it there itself
-   (Co-Simulation). */
-int symmech_event_update(SymmechModel *m, int own_integrator);
-/* 1 when an event indicator is below -EVENT_TOLERANCE: crossed without its event, the motion has left what the
-   model covers (the grain has come to rest on the surface); 0 otherwise */
+   discrete states (MODEL_EVENT_UPDATE); 1 when something changed, 0 when not, -1 on a non-finite state. The
+   importer calls it at the events it locates (Model Exchange), symmech_integrate at those it locates itself
+   (Co-Simulation, the example program). */
+int symmech_event_update(SymmechModel *m);
+/* 1 when an event indicator is below -EVENT_TOLERANCE: crossed without its event (an importer stepped over two
+   of its zeros), the motion has left what the model covers; 0 otherwise */
 int symmech_left_model(SymmechModel *m);
 #define LEFT_MODEL_MESSAGE "the motion left what the model covers: an event indicator fell below zero without its " \
-    "event, or it enters a regime the model's own integrator (Co-Simulation) does not follow"
+    "event"
 
 #endif
