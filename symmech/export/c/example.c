@@ -12,8 +12,8 @@ int main(void)
     SymmechModel model;
     symmech_reset(&model);
     model.horizon = TABLE_STOP;  /* no inputs change on the way: steps need not stop at the printed times */
-    if (symmech_derivatives(&model) != 0) {
-        fprintf(stderr, "%s: singular mass matrix at the start\n", MODEL_IDENTIFIER);
+    if (symmech_start(&model) != 0) {
+        fprintf(stderr, "%s: singular mass matrix or non-finite rates at the start\n", MODEL_IDENTIFIER);
         return 1;
     }
     printf("%s\n", TABLE_HEADER);

@@ -110,7 +110,7 @@ FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; r
 FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     Instance *inst = c;
-    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular M or non-finite rates at the start");
+    if (symmech_start(&inst->model) != 0) return fail(inst, "singular M or non-finite rates at the start");
     return fmi2OK;
 }
 

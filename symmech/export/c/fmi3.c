@@ -141,7 +141,7 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
 FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     Instance *inst = instance;
-    if (symmech_derivatives(&inst->model) != 0) return fail(inst, "singular M or non-finite rates at the start");
+    if (symmech_start(&inst->model) != 0) return fail(inst, "singular M or non-finite rates at the start");
     return fmi3OK;
 }
 

@@ -127,6 +127,12 @@ int symmech_event_update(SymmechModel *m)
 #endif
 }
 
+int symmech_start(SymmechModel *m)
+{
+    if (symmech_derivatives(m) != 0) return -1;
+    return symmech_event_update(m) < 0 ? -1 : 0;
+}
+
 int symmech_left_model(SymmechModel *m)
 {
 #if N_Z > 0

@@ -54,6 +54,10 @@ int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
    importer calls it at the events it locates (Model Exchange), symmech_integrate at those it locates itself
    (Co-Simulation, the example program). */
 int symmech_event_update(SymmechModel *m);
+/* the start: the derivatives, and the model's update where an event holds at the start values (a grain that
+   starts on the surface lands: the update a Model Exchange importer asks for after the initialization, made for
+   Co-Simulation and the example program too); 0, or -1 on a singular M or a non-finite state */
+int symmech_start(SymmechModel *m);
 /* 1 when an event indicator is below -EVENT_TOLERANCE: crossed without its event (an importer stepped over two
    of its zeros), the motion has left what the model covers; 0 otherwise */
 int symmech_left_model(SymmechModel *m);
