@@ -196,8 +196,9 @@ def test_grain_fmu_through_its_sliding_regimes(fmi, tmp_path):
     assert _check_impacts(fmu, path, 0.23, rtol=1e-12, first=50) == 53
 
 
-def _slave(fmu, fmi: int, rtol: float, stop: float):
-    """FMPy's Co-Simulation instance of ``fmu``, initialised at rtol, and the value references by name."""
+def _cs_rows(fmu, fmi: int, points: np.ndarray) -> dict:
+    """FMPy's Co-Simulation instance of ``fmu`` at rtol 1e-10 stepped to each of ``points`` [s] in turn: at each,
+    x, y, z, impacts, last_impact and regime."""
     from fmpy.fmi2 import FMU2Slave
     from fmpy.fmi3 import FMU3Slave
 
@@ -206,12 +207,21 @@ def _slave(fmu, fmi: int, rtol: float, stop: float):
                                                    modelIdentifier=md.coSimulation.modelIdentifier)
     slave.instantiate()
     if fmi == 3:
-        slave.enterInitializationMode(tolerance=rtol, startTime=0.0, stopTime=stop)
+        slave.enterInitializationMode(tolerance=1e-10, startTime=0.0, stopTime=points[-1])
     else:
-        slave.setupExperiment(tolerance=rtol, startTime=0.0, stopTime=stop)
+        slave.setupExperiment(tolerance=1e-10, startTime=0.0, stopTime=points[-1])
         slave.enterInitializationMode()
     slave.exitInitializationMode()
-    return slave, {v.name: v.valueReference for v in md.modelVariables}
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    get = slave.getFloat64 if fmi == 3 else slave.getReal
+    t, rows = 0.0, {}
+    for point in points:
+        slave.doStep(t, point - t)
+        t = point
+        rows[point] = np.array(get([vr[n] for n in ("x", "y", "z", "impacts", "last_impact", "regime")]))
+    slave.terminate()
+    slave.freeInstance()
+    return rows
 
 
 @pytest.mark.slow  # FMI 2 and 3, the native run and 0.23 s in ~400 communication steps (~10 s)
@@ -230,14 +240,7 @@ def test_grain_cs_fmu_through_its_sliding_regimes(fmi, tmp_path):
     t_native, r_native, trajectory = _native(path)
     grid = np.round(np.arange(1, 231) * 1e-3, 12)
     points = np.unique(np.concatenate([grid, t_native - TIME_TOLERANCE, t_native, t_native + TIME_TOLERANCE]))
-    slave, vr = _slave(fmu, fmi, 1e-10, 0.23)
-    names = ["x", "y", "z", "impacts", "last_impact", "regime"]
-    get = slave.getFloat64 if fmi == 3 else slave.getReal
-    t, rows = 0.0, {}
-    for point in points:
-        slave.doStep(t, point - t)
-        t = point
-        rows[point] = np.array(get([vr[n] for n in names]))
+    rows = _cs_rows(fmu, fmi, points)
     assert len(t_native) == 53 and rows[points[-1]][3] == 53
     for k, t_k in enumerate(t_native):
         before, at, after = rows[t_k - TIME_TOLERANCE], rows[t_k], rows[t_k + TIME_TOLERANCE]
@@ -249,3 +252,30 @@ def test_grain_cs_fmu_through_its_sliding_regimes(fmi, tmp_path):
     on_plane = trajectory[native_rows, T_AT.regime] == motion.REGIMES.index("sliding")
     assert np.array_equal(np.array([rows[g][5] > 0 for g in grid]), on_plane) and on_plane.sum() > 10
     assert max(np.abs(rows[g][:3] - trajectory[i, 1:4]).max() for g, i in zip(grid, native_rows)) <= 2e-9
+
+
+@pytest.mark.slow  # 3 scenes, FMI 2 and 3, ME and CS, each with its native run (~1 min)
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("kind", ["me", "cs"])
+@pytest.mark.parametrize("name", sorted(p.stem for p in scenes_folder().glob("grain_*.toml")))
+def test_every_bundled_grain_scene(name, kind, fmi, tmp_path):
+    """Every bundled grain scene (the default one over 2 s, 493 impacts; the sweeps' grain, which starts on the
+    surface, over 0.4 s) exports as an FMU that FMPy validates and that has every impact of the native run:
+    Model Exchange under CVode at rtol 1e-12, the first 50 impact times within 1e-8 s and centres within 1e-7 m;
+    Co-Simulation (rtol 1e-10), each native impact k between the FMU's count k - 1 at 1e-8 s before it and k after,
+    every impact's `last_impact` within 1e-8 s."""
+    path = scenes_folder() / f"{name}.toml"
+    fmu = tmp_path / f"{name}_{kind}_{fmi}.fmu"
+    assert main(["export", "fmu", str(path), "--out", str(fmu), "--fmi", str(fmi), "--type", kind]) == 0
+    assert validate_fmu(str(fmu)) == []
+    duration = pipeline.load(path).setup.duration
+    if kind == "me":
+        assert _check_impacts(fmu, path, duration, rtol=1e-12, first=50) >= 100
+        return
+    t_native, _, _ = _native(path)
+    rows = _cs_rows(fmu, fmi, np.unique(np.concatenate([t_native - TIME_TOLERANCE, t_native + TIME_TOLERANCE,
+                                                       [duration]])))
+    assert len(t_native) >= 100 and rows[duration][3] == len(t_native)
+    for k, t_k in enumerate(t_native):
+        before, after = rows[t_k - TIME_TOLERANCE], rows[t_k + TIME_TOLERANCE]
+        assert before[3] == k and after[3] == k + 1 and abs(after[4] - t_k) <= TIME_TOLERANCE
