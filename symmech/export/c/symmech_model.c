@@ -145,18 +145,23 @@ int symmech_left_model(SymmechModel *m)
 }
 
 #ifndef MODEL_STIFF
+/* stage s of a DOP853 step of size h from (t, y), the stages before it in k: k[s] */
+static int stage(SymmechModel *m, double t, const double *y, double h, double k[][N_X], int s)
+{
+    double z[N_X];
+    for (int i = 0; i < N_X; i++) {
+        double sum = 0.0;
+        for (int j = 0; j < s; j++) sum += DOP853_A[s][j] * k[j][i];
+        z[i] = y[i] + h * sum;
+    }
+    return rates(m, t + DOP853_C[s] * h, z, k[s]);
+}
+
 /* one DOP853 step of size h from (t, y) whose first stage k[0] is set: the stages k[1..], y1 = y(t + h) */
 static int dop853_step(SymmechModel *m, double t, const double *y, double h, double k[][N_X], double *y1)
 {
-    double z[N_X];
-    for (int s = 1; s < DOP853_STAGES; s++) {
-        for (int i = 0; i < N_X; i++) {
-            double sum = 0.0;
-            for (int j = 0; j < s; j++) sum += DOP853_A[s][j] * k[j][i];
-            z[i] = y[i] + h * sum;
-        }
-        if (rates(m, t + DOP853_C[s] * h, z, k[s]) != 0) return -1;
-    }
+    for (int s = 1; s < DOP853_STAGES; s++)
+        if (stage(m, t, y, h, k, s) != 0) return -1;
     for (int i = 0; i < N_X; i++) {
         double sum = 0.0;
         for (int j = 0; j < DOP853_STAGES; j++) sum += DOP853_B[j] * k[j][i];
@@ -171,15 +176,8 @@ static int dop853_step(SymmechModel *m, double t, const double *y, double h, dou
 static int dop853_dense(SymmechModel *m, double t, const double *y, const double *y1, double h, double k[][N_X],
                         double F[][N_X])
 {
-    double z[N_X];
-    for (int s = DOP853_STAGES + 1; s < DOP853_EXTENDED; s++) {
-        for (int i = 0; i < N_X; i++) {
-            double sum = 0.0;
-            for (int j = 0; j < s; j++) sum += DOP853_A[s][j] * k[j][i];
-            z[i] = y[i] + h * sum;
-        }
-        if (rates(m, t + DOP853_C[s] * h, z, k[s]) != 0) return -1;
-    }
+    for (int s = DOP853_STAGES + 1; s < DOP853_EXTENDED; s++)
+        if (stage(m, t, y, h, k, s) != 0) return -1;
     for (int i = 0; i < N_X; i++) {
         double dy = y1[i] - y[i];
         F[0][i] = dy;
