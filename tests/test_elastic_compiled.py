@@ -40,7 +40,7 @@ def helix(t_end=0.15, steps=50, case=1, **elastic):
 
 def exact_channels(setup):
     """The exact frame channels of the setup's drive at times x[at], as a compiled run evaluates them."""
-    return lambda x, at=slice(None): el_frame.channels(setup.drive, setup.system.mdl, x, at)
+    return lambda x, at=slice(None): el_frame.channels(setup.drive, setup.system.mdl.g0, x, at)
 
 
 def both(setup, rtol):
@@ -164,7 +164,7 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
         assert table.nodes.size > 21 if steps == 20 else set(table.nodes) < set(setup.t)
         assert table.error <= (el_frame.INTERP_NOISE if noise else table.bound)
         t = np.sort(RNG.uniform(0.0, 1.0, 400))
-        exact = el_frame.channels(setup.drive, setup.system.mdl, np.r_[0.0, t])[1:]
+        exact = el_frame.channels(setup.drive, setup.system.mdl.g0, np.r_[0.0, t])[1:]
         spline = np.empty_like(exact)
         for i, ti in enumerate(t):
             ek._channels((table.nodes, table.coef), ti, spline[i])
@@ -231,7 +231,7 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
     line = el_sim.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
-        ch = el_frame.channels(setup.drive, system.mdl, np.array([0.0, time]) if time else np.array([0.0]))[-1]
+        ch = el_frame.channels(setup.drive, system.mdl.g0, np.array([0.0, time]) if time else np.array([0.0]))[-1]
         q, qd = RNG.normal(size=system.N) * 1e-4, RNG.normal(size=system.N) * 1e-2
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)

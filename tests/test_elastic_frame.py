@@ -76,12 +76,12 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
                      for v, d, tau in zip(V, dV, taus)])
     rows[:, :3] += 9.81 * np.array([tnb(x)[:, 1] for x in s])
     assert np.abs(el_frame.arc_length(drive, t) - s).max() < 1e-12
-    assert np.allclose(el_frame.channels(drive, system.mdl, t, slice(1, 3)), rows[1:3], rtol=0, atol=1e-7)
+    assert np.allclose(el_frame.channels(drive, system.mdl.g0, t, slice(1, 3)), rows[1:3], rtol=0, atol=1e-7)
     geometry = el_frame.geometry(drive, s, slice(2, None))
     assert geometry.shape == (2, 15)
     assert np.allclose(geometry, [[1, 0, 0, 0, kappa, 0, *tnb(x)[:, 1], tau, 0, kappa, 0, 0, 0]
                                   for x, tau in zip(s[2:], taus[2:])], rtol=0, atol=1e-7)
-    table = el_frame.tabulation(drive, system.mdl, t, 1e-6)
+    table = el_frame.tabulation(drive, system.mdl.g0, t, 1e-6)
     assert table.seed is t and table.span == ()
     assert np.allclose(table.exact, rows, rtol=0, atol=1e-7)
     assert np.array_equal(table.at_outputs[1], V) and np.array_equal(table.at_outputs[2], dV)
@@ -158,7 +158,7 @@ def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
     st, drive, mdl = _level_traction("200 + 100*t", t_end=2.0, steps=10)
     end = 5.0 * 2.0 + (100 * 4.0 + 50 * 8.0 / 3) / 100.0
     plan = drive.plan.span  # +-20 km: it leaves the span alone
-    table = el_frame.tabulation(drive, mdl, st.t, 1e-6, el_body.rigid_body(mdl))
+    table = el_frame.tabulation(drive, mdl.g0, st.t, 1e-6, el_body.rigid_body(mdl))
     assert table.span == pytest.approx((max(-0.1 * end, plan[0]), min(1.1 * end, plan[1])), rel=1e-6, abs=1e-9)
     assert np.array_equal(table.seed, np.linspace(*table.span, 16)) and table.exact is None
     assert np.allclose(table.evaluate(table.seed, slice(3, 5)), [[1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]] * 2,

@@ -1,7 +1,7 @@
 """The elastic trolley compiled: the assembly of :class:`symmech.trolley.elastic.system.System` in numba
 (:mod:`symmech.trolley.elastic.kernels`), integrated by the toolkit's Radau IIA with the analytic Jacobian;
 this module drives it (:func:`simulate`, the same contract and outputs as the Python engine's; :class:`Run`, its
-inputs by name for the engine protocol) and builds numba's cache once (``ENGINE``).
+inputs by name, and ``RUNNER`` for the engine protocol) and builds numba's cache once (``ENGINE``).
 
 **The way in.** A run reads what ``simulate.compiled_inputs`` makes in one pass: the start both engines share, the
 model's record (``System.record``, packed once per system) and the frame along the track tabulated as a spline
@@ -32,8 +32,8 @@ from symmech.trolley.elastic.layout import LAYOUTS, MODEL, N_CHANNELS, N_GEOMETR
 
 @dataclass(frozen=True)
 class Run:
-    """A run of this engine, its inputs by name (the engine protocol's run, :class:`symmech.core.engines.Run`):
-    those of :func:`simulate`."""
+    """A run of this engine, its inputs by name (the engine protocol's run, ``engines.Engine.run``): those of
+    :func:`simulate`."""
 
     system: object  # symmech.trolley.elastic.system.System
     drive: object  # symmech.trolley.elastic.frame.Drive
@@ -44,9 +44,17 @@ class Run:
     dqd0: object = None
     reason: str = ""
 
-    def simulate(self) -> dict:
-        """:func:`simulate` of these inputs."""
-        return simulate(self.system, self.drive, self.t, self.rtol, self.atol_q, self.dq0, self.dqd0, self.reason)
+
+class Runner:
+    """This engine's side of the protocol's run (:class:`symmech.core.engines.Runner`)."""
+
+    def simulate(self, inputs: Run) -> dict:
+        """:func:`simulate` of the inputs."""
+        return simulate(inputs.system, inputs.drive, inputs.t, inputs.rtol, inputs.atol_q, inputs.dq0, inputs.dqd0,
+                        inputs.reason)
+
+
+RUNNER = Runner()
 
 
 def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=None, dqd0=None,

@@ -104,12 +104,12 @@ def arc_length(drive: Drive, t) -> np.ndarray:
     return drive.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
 
 
-def channels(drive: Drive, mdl, t, at=slice(None)) -> np.ndarray:
+def channels(drive: Drive, g0: float, t, at=slice(None)) -> np.ndarray:
     """The exact frame channels (k, 12) at the times t[at] (t increasing from the drive's start time, t[0]
-    where s = s0) [s] of the model ``mdl`` (its g0 [m/s²]): :func:`frame_channels`, vectorised."""
+    where s = s0) [s] under the gravity g0 [m/s²]: :func:`frame_channels`, vectorised."""
     s = arc_length(drive, t)[at]
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
-    return frame_channels(frames(drive, s), V0, dV0, mdl.g0)
+    return frame_channels(frames(drive, s), V0, dV0, g0)
 
 
 def geometry(drive: Drive, s, at=slice(None)) -> np.ndarray:
@@ -233,16 +233,16 @@ class Tabulation:
     span: tuple = ()
 
 
-def tabulation(drive: Drive, mdl, t, rtol: float, rigid: model.Body | None = None) -> Tabulation:
-    """The :class:`Tabulation` of a run of the model ``mdl`` (its g0 [m/s²]) at relative tolerance rtol on the
-    output times t [s] (k,): its channels in t at the arc lengths :func:`arc_length` gives, the table seeded by the
+def tabulation(drive: Drive, g0: float, t, rtol: float, rigid: model.Body | None = None) -> Tabulation:
+    """The :class:`Tabulation` of a run under the gravity g0 [m/s²] at relative tolerance rtol on the output
+    times t [s] (k,): its channels in t at the arc lengths :func:`arc_length` gives, the table seeded by the
     exact channels at the outputs; or, with traction (``rigid`` the rigid body of the same mass), its geometry on
     max(k, 16) arc lengths over the span :func:`reach` finds, scaled by :func:`geometry_scales`."""
     if rigid is None:
         V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
         fr = frames(drive, arc_length(drive, t))
-        ch = frame_channels(fr, V0, dV0, mdl.g0)
-        evaluate = lambda x, at=slice(None): channels(drive, mdl, x, at)  # noqa: E731
+        ch = frame_channels(fr, V0, dV0, g0)
+        evaluate = lambda x, at=slice(None): channels(drive, g0, x, at)  # noqa: E731
         return Tabulation(t, evaluate, frame_table(t, rtol, evaluate, ch), ch, (fr, V0, dV0, ch))
     span = reach(drive, rigid, t)
     seed = np.linspace(*span, max(t.size, 16))

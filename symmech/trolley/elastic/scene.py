@@ -80,10 +80,12 @@ def simulate(setup: Setup, **kw) -> dict:
     start = {"dq0": setup.dq0, "dqd0": setup.dqd0, "rtol": setup.rtol}
     name, why = engine(setup)
     if name == "compiled":
-        compiled = engines.get("elastic")  # imports numba: only when the compiled engine runs
+        compiled: engines.Engine = engines.get("elastic")
         if compiled.builder().cold():  # compile under the build lock, or load what a concurrent builder made
             compiled.builder().warm()
-        return compiled.run(setup.system, setup.drive, setup.t, **{**start, **kw}, reason=why)
+        from symmech.trolley.elastic.compiled import Run  # its Python side: numba is imported by the run
+
+        return compiled.run(Run(setup.system, setup.drive, setup.t, **{**start, **kw}, reason=why))
     if why.startswith(build.COLD):  # not when the Python engine runs for another reason
         engines.get("elastic").builder().warm_in_background()
     return el_sim.simulate(setup.system, setup.drive, setup.t, **{"method": setup.method, **start, **kw}, reason=why)

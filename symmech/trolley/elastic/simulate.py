@@ -235,7 +235,7 @@ def compiled_inputs(system: System, drive: Drive, t, rtol: float, atol_q: float,
     table's bound) and the keywords of :func:`prepare`."""
     line = Timeline(system, drive, t)
     rigid = system.rigid if drive.traction is not None else None
-    frame = tabulation(drive, system.mdl, t, rtol, rigid)
+    frame = tabulation(drive, system.mdl.g0, t, rtol, rigid)
     return Inputs(prepare(line, atol_q, dq0, dqd0), system.record, frame)
 
 
