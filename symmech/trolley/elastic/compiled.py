@@ -26,7 +26,6 @@ import numpy as np
 
 from symmech.numerics import build
 from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
-from symmech.trolley.elastic.frame import INTERP_NOISE, MAX_TABLE_NODES
 from symmech.trolley.elastic.layout import LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY, state as state_layout  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 
@@ -108,9 +107,9 @@ def _driven(start, frame, t, Y, dV0) -> tuple | None:
 def _why_not(drive, frame) -> str:
     """Why a run falls back to the Python engine: the frame cannot be tabulated, or a traction run left its table."""
     if drive.traction is None:
-        return (f"the frame along the track could not be tabulated within {INTERP_NOISE:g} of its scale on "
-                f"{MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
-    return (f"the frame along the track could not be tabulated in s within {INTERP_NOISE:g} of its scale, or the "
+        return (f"the frame along the track could not be tabulated within {el_frame.INTERP_NOISE:g} of its scale on "
+                f"{el_frame.MAX_TABLE_NODES} nodes (a non-smooth track or speed): the Python engine evaluates it exactly")
+    return (f"the frame along the track could not be tabulated in s within {el_frame.INTERP_NOISE:g} of its scale, or the "
             f"run left the tabulated s in [{frame.span[0]:.6g}, {frame.span[1]:.6g}] m: the Python engine "
             "evaluates it exactly")
 
