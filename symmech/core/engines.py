@@ -78,8 +78,9 @@ class Engine:
     def run(self, inputs):
         """The run of ``inputs``, a ``Run`` of this engine's implementation module (TypeError for another's: the
         inputs name their engine), by its :class:`Runner`."""
-        if type(inputs) is not self.module().Run:
-            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, not {type(inputs).__qualname__}")
+        kind = type(inputs)
+        if (kind.__module__, kind.__qualname__) != (self.implementation, "Run"):
+            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, not {kind.__qualname__}")
         runner = self.runner()
         return runner.simulate(inputs)
 
