@@ -118,7 +118,7 @@ def test_a_registered_stand_in_engine_appears_in_symmech_warm_without_editing_th
 def test_the_protocol_of_a_stand_in_engine(standin, monkeypatch):
     engine = engines.get("standin")
     assert engine.run(standin.Run(21)) == 42
-    with pytest.raises(TypeError, match="engine 'standin' runs standin_implementation.Run, not int"):
+    with pytest.raises(TypeError, match="engine 'standin' runs standin_implementation.Run, not builtins.int"):
         engine.run(21)  # the inputs name their engine
     assert engine.load() == {"entry": ()}  # no ahead-of-time build: numba's entries
     monkeypatch.setattr(sample, "slowdown", lambda: 3.0)  # a third of a core now: the 12 s compile takes 36 s
