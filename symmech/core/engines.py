@@ -80,7 +80,8 @@ class Engine:
         inputs name their engine), by its :class:`Runner`."""
         kind = type(inputs)
         if (kind.__module__, kind.__qualname__) != (self.implementation, "Run"):
-            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, not {kind.__module__}.{kind.__qualname__}")
+            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, "
+                            f"not {kind.__module__}.{kind.__qualname__}")
         runner = self.runner()
         return runner.simulate(inputs)
 
