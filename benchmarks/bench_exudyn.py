@@ -61,7 +61,7 @@ def symmech_model():
              "effects": {"gravity": True, "local_curvature": False}}
     system = el.System(mdl)
     drive = elastic_scene.drive_of(pipeline.load(scene).setup, 1)
-    return system, drive, el_sim._state_at(system, drive, 0.0, 0.0)
+    return system, drive, el_sim._state_at(drive, 0.0, 0.0)
 
 
 def symmech_frequencies(system, fs):

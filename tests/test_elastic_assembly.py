@@ -137,7 +137,7 @@ def test_generated_traction_assembly_equals_the_python_engine(tmp_path):
         for _ in range(4):
             q, qd = rng.normal(0.0, 1e-4, n), rng.normal(0.0, 1e-3, n)
             s, V, t = rng.uniform(0.0, 10.0), rng.uniform(1.0, 8.0), rng.uniform(0.0, 3.0)
-            p = np.r_[rollers, el_frame.geometry(drive, system.mdl, np.array([s]))[0]]
+            p = np.r_[rollers, el_frame.geometry(drive, np.array([s]))[0]]
             rate, mass = _rates(library, np.r_[q, s, qd, V], p, t)
             np.testing.assert_array_equal(rate[:n + 1], np.r_[qd, V])
             np.testing.assert_array_equal(mass[:n + 1], np.eye(2 * n + 2)[:n + 1])

@@ -40,7 +40,7 @@ def helix(t_end=0.15, steps=50, case=1, **elastic):
 
 def exact_channels(setup):
     """The exact frame channels of the setup's drive at times x[at], as a compiled run evaluates them."""
-    return lambda x, at=slice(None): el_frame.channels(setup.drive, setup.system.mdl, x, at)
+    return lambda x, at=slice(None): el_frame.channels(setup.drive, setup.system.mdl.g0, x, at)
 
 
 def both(setup, rtol):
@@ -154,22 +154,22 @@ def test_the_frame_table_meets_its_bound_between_its_nodes():
     carry ~1e-10 of rounding, which no table resolves: at rtol 1e-8 the table stops on that noise, flagged,
     within INTERP_NOISE, and meets the bound at rtol 1e-6. On 20 outputs the table adds midpoints; on 400
     at rtol 1e-6 every 2^j-th output time is a node (measured j = 2) and it meets the bound at all of them."""
-    from symmech.trolley.elastic import compiled as ec, kernels as ek
+    from symmech.trolley.elastic import kernels as ek
 
     for case, rtol, noise, steps in ((1, 1e-8, False, 20), (2, 1e-6, False, 20), (2, 1e-8, True, 20),
                                      (1, 1e-6, False, 400)):
         setup = helix(t_end=1.0, steps=steps, case=case)
-        table = ec.frame_table(setup.t, rtol, exact_channels(setup))
+        table = el_frame.frame_table(setup.t, rtol, exact_channels(setup))
         assert table.noise == noise and table.bound == 1e-3 * rtol
         assert table.nodes.size > 21 if steps == 20 else set(table.nodes) < set(setup.t)
-        assert table.error <= (ec.INTERP_NOISE if noise else table.bound)
+        assert table.error <= (el_frame.INTERP_NOISE if noise else table.bound)
         t = np.sort(RNG.uniform(0.0, 1.0, 400))
-        exact = el_frame.channels(setup.drive, setup.system.mdl, np.r_[0.0, t])[1:]
+        exact = el_frame.channels(setup.drive, setup.system.mdl.g0, np.r_[0.0, t])[1:]
         spline = np.empty_like(exact)
         for i, ti in enumerate(t):
             ek._channels((table.nodes, table.coef), ti, spline[i])
         # with noise, the exact values at other times carry their own (measured 1.4e-9 on case 2)
-        assert (np.abs(spline - exact) / ec._scales(exact)).max() <= 4 * (1e-9 if noise else table.error)
+        assert (np.abs(spline - exact) / el_frame._scales(exact)).max() <= 4 * (1e-9 if noise else table.error)
 
 
 def kinked():
@@ -183,10 +183,9 @@ def kinked():
 
 def test_a_speed_with_a_kink_is_not_tabulated():
     """At the kink the spline of ω, v0 misses by O(h): halving no longer gains 16x, above INTERP_NOISE."""
-    from symmech.trolley.elastic import compiled as ec
 
     setup = kinked()
-    assert ec.frame_table(setup.t, 1e-6, exact_channels(setup)) is None
+    assert el_frame.frame_table(setup.t, 1e-6, exact_channels(setup)) is None
 
 
 @pytest.mark.slow
@@ -196,14 +195,14 @@ def test_a_speed_with_a_kink_falls_back_to_the_python_engine_and_says_why():
 
 
 def test_the_compiled_jacobian_matches_central_differences_of_the_compiled_rhs():
-    from symmech.trolley.elastic import compiled as ec, kernels as ek
+    from symmech.trolley.elastic import kernels as ek
 
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     beam = {"root": [0.2, 0.3, -0.5], "axis": [0, 0, 1], "plane": [0, 1, 0], "length": 1.0, "mass_per_length": 3.0,
             "ei": [50.0, 80.0], "support": "pinned", "axial": "held", "ea": 5e6, "modes": 2}
     setup = helix(case=2, rollers=rollers, beams=[*BUNDLED["elastic"]["beams"], beam])
     system = setup.system
-    table = ec.frame_table(setup.t, 1e-8, exact_channels(setup))
+    table = el_frame.frame_table(setup.t, 1e-8, exact_channels(setup))
     args = (system.record, (table.nodes, table.coef), np.zeros(1))
     n = 2 * system.N + 2
     y = np.r_[RNG.normal(size=system.N) * 1e-3, RNG.normal(size=system.N) * 1e-2, 0.0, 0.0]
@@ -232,7 +231,7 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
     line = el_sim.Timeline(system, setup.drive, setup.t)
     for time in (0.0, 0.07):
         fs = line.state(time)
-        ch = el_frame.channels(setup.drive, system.mdl, np.array([0.0, time]) if time else np.array([0.0]))[-1]
+        ch = el_frame.channels(setup.drive, system.mdl.g0, np.array([0.0, time]) if time else np.array([0.0]))[-1]
         q, qd = RNG.normal(size=system.N) * 1e-4, RNG.normal(size=system.N) * 1e-2
         qdd = system.accelerations(fs, q, qd)
         _, M, Rq, Rqd = system.evaluate(fs, q, qd, qdd, jacobian=True)
@@ -267,12 +266,12 @@ def traction_scene(t_end=0.06, steps=20, case=1, **elastic):
 def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(case):
     """All columns (q, q̇, s, V0) of the rows of q̈ and V̇0; s and V0 enter through the geometry table's
     spline and its derivative, V0 also through P0's drag (-4 V0 N s/m)."""
-    from symmech.trolley.elastic import compiled as ec, kernels as ek
+    from symmech.trolley.elastic import kernels as ek
 
     setup = traction_scene(case=case)
     system, drive, N = setup.system, setup.drive, setup.system.N
-    table = ec.frame_table(np.linspace(*el_frame.reach(drive, el_body.rigid_body(system.mdl), setup.t), 21), 1e-8,
-                           lambda s, at=slice(None): el_frame.geometry(drive, system.mdl, s, at), scales=ec.geometry_scales)
+    table = el_frame.frame_table(np.linspace(*el_frame.reach(drive, el_body.rigid_body(system.mdl), setup.t), 21), 1e-8,
+                           lambda s, at=slice(None): el_frame.geometry(drive, s, at), scales=el_frame.geometry_scales)
     ek.TRACTIONS[0] = drive.traction
     args = (system.record, (table.nodes, table.coef), np.zeros(1), 0)
     n = 2 * N + 4
@@ -314,11 +313,9 @@ def test_traction_agrees_with_the_python_engine_at_rtol_1e_9(case):
     """From 5 m/s on the bundled helix (measured: case 1 over 0.03 s P 2.9e-9, s 2.8e-13, V0 2.7e-11; case 2 over
     0.06 s P 1.8e-8, s 4.4e-13, V0 1.2e-11); the geometry table within its bound (case 1) or, on case 2's
     noise, within INTERP_NOISE (measured 2.8e-10)."""
-    from symmech.trolley.elastic import compiled as ec
-
     c, p = both(traction_scene(t_end=0.03 * case, steps=10 * case, case=case), 1e-9)
     traction_agree(c, p, 1e-7)
-    assert c["frame_interpolation_error"] <= (1e-3 * 1e-9 if case == 1 else ec.INTERP_NOISE)
+    assert c["frame_interpolation_error"] <= (1e-3 * 1e-9 if case == 1 else el_frame.INTERP_NOISE)
 
 
 @pytest.mark.slow

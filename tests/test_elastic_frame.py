@@ -4,6 +4,7 @@ The track r(s) = (a sin(s/c), b s/c, a cos(s/c)), arc length s, c = √(a² + b�
 κ = a/c², torsion from B' = -τ N; with the Frenet frame (x1, x2, x3) = (T, N, B) and the speed V0(t), the
 origin moves with v0 = V0 T, a0 = V̇0 T + V0² κ N, the frame turns with ω = V0 (τ T + κ B), ω̇ = V̇0 (τ T + κ B),
 and "up" is ν = (T·X2, N·X2, B·X2)."""
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -43,7 +44,7 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         frame = tnb(s)
         kappa = A / C ** 2
         tau = -(tnb(s + h)[2] - tnb(s - h)[2]) / (2 * h) @ frame[1]  # B' = -τ N
-        fs = el_sim._state_at(system, drive, time, s)
+        fs = el_sim._state_at(drive, time, s)
         darboux = np.array([tau, 0.0, kappa])
         assert np.allclose(fs.v0, [V, 0, 0], rtol=0, atol=1e-9)
         assert np.allclose(fs.a0, [dV, V ** 2 * kappa, 0], rtol=0, atol=1e-7)
@@ -51,7 +52,7 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         assert np.allclose(fs.dw, dV * darboux, rtol=0, atol=1e-7)
         assert np.allclose(fs.nu, frame[:, 1], rtol=0, atol=1e-9)
         # the vectorised frame_motion gives the same rows
-        fr = el_frame.frames(drive, np.array([s, s]), system.mdl.l)
+        fr = el_frame.frames(drive, np.array([s, s]))
         v0, a0, w, dw = el_frame.frame_motion(fr, np.array([V, 2 * V]), np.array([dV, 0.0]))
         assert np.allclose(v0, [[V, 0, 0], [2 * V, 0, 0]], rtol=0, atol=1e-9)
         assert np.allclose(a0, [[dV, V ** 2 * kappa, 0], [0, 4 * V ** 2 * kappa, 0]], rtol=0, atol=1e-7)
@@ -75,12 +76,12 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
                      for v, d, tau in zip(V, dV, taus)])
     rows[:, :3] += 9.81 * np.array([tnb(x)[:, 1] for x in s])
     assert np.abs(el_frame.arc_length(drive, t) - s).max() < 1e-12
-    assert np.allclose(el_frame.channels(drive, system.mdl, t, slice(1, 3)), rows[1:3], rtol=0, atol=1e-7)
-    geometry = el_frame.geometry(drive, system.mdl, s, slice(2, None))
+    assert np.allclose(el_frame.channels(drive, system.mdl.g0, t, slice(1, 3)), rows[1:3], rtol=0, atol=1e-7)
+    geometry = el_frame.geometry(drive, s, slice(2, None))
     assert geometry.shape == (2, 15)
     assert np.allclose(geometry, [[1, 0, 0, 0, kappa, 0, *tnb(x)[:, 1], tau, 0, kappa, 0, 0, 0]
                                   for x, tau in zip(s[2:], taus[2:])], rtol=0, atol=1e-7)
-    table = el_frame.tabulation(drive, system.mdl, t, s)
+    table = el_frame.tabulation(drive, system.mdl.g0, t, 1e-6)
     assert table.seed is t and table.span == ()
     assert np.allclose(table.exact, rows, rtol=0, atol=1e-7)
     assert np.array_equal(table.at_outputs[1], V) and np.array_equal(table.at_outputs[2], dV)
@@ -94,16 +95,14 @@ def test_frame_turning_rate_follows_the_change_of_curvature():
                                              "parameter": "u", "u_range": [0.0, 6.0]},
                       motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
     drive = elastic_scene.drive_of(prepared(data), 1)
-    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
-                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
     time, s, h = 0.5, 2.0, 1e-4
     V, dV = 4.0, 2.0
-    turn = [el_sim._state_at(system, drive, time, x).w / V for x in (s - h, s, s + h)]
+    turn = [el_sim._state_at(drive, time, x).w / V for x in (s - h, s, s + h)]
     dW = (turn[2] - turn[0]) / (2 * h)
     assert np.abs(dW).max() > 0.01  # the curvature changes here (V0² dW ≈ 0.2 rad/s²)
     expected = dV * turn[1] + V ** 2 * dW
-    assert np.allclose(el_sim._state_at(system, drive, time, s).dw, expected, rtol=0, atol=1e-6)
-    fr = el_frame.frames(drive, np.array([s]), system.mdl.l)
+    assert np.allclose(el_sim._state_at(drive, time, s).dw, expected, rtol=0, atol=1e-6)
+    fr = el_frame.frames(drive, np.array([s]))
     assert np.allclose(el_frame.frame_motion(fr, np.array([V]), np.array([dV]))[3], [expected], rtol=0, atol=1e-6)
 
 
@@ -116,15 +115,13 @@ def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
                                              "parameter": "u", "u_range": [0.0, 6.0]},
                       motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
     setup = prepared(data)
-    drive = elastic_scene.drive_of(setup, 2)
     l = 1.5
-    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), l, 1.0, 9.81,
-                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
+    drive = dataclasses.replace(elastic_scene.drive_of(setup, 2), l=l)
     s = np.array([2.0, 3.5])
     chord = model.local_curvature_frame(drive.track, s, l, "frenet", setup.fd_order, setup.fd_step, plan=setup.plan)
-    tangent = el_frame.frames(elastic_scene.drive_of(setup, 1), s, l)
+    tangent = el_frame.frames(dataclasses.replace(elastic_scene.drive_of(setup, 1), l=l), s)
     assert np.abs(chord.W - tangent.W).max() > 1e-3
-    fs = el_sim._state_at(system, drive, 0.5, s[1])  # V0 = 4 m/s
+    fs = el_sim._state_at(drive, 0.5, s[1])  # V0 = 4 m/s
     for got, ref in ((fs.v0, 4.0 * chord.e[1]), (fs.w, 4.0 * chord.W[1]), (fs.nu, chord.lam[1, :, 1])):
         assert np.allclose(got, ref, rtol=0, atol=1e-12)
 
@@ -137,12 +134,10 @@ def test_frame_keeps_its_plan_through_a_straight_point():
                                              "parameter": "u", "u_range": [0.0, 6.0]},
                       motion={"speed": "3"}, time={"t_end": 1.0, "steps": 10})
     setup = prepared(data)
-    system = el.System(el_body.ElasticModel(100.0, (0, 0, 0), (1, 1, 1, 0, 0, 0), 2.0, 1.0, 9.81,
-                                       el_body.Rollers((1e6,) * 5, (0.0,) * 5)))
     for case in (1, 2):
         drive = elastic_scene.drive_of(setup, case)
         for s in (1.0, 5.0, 6.5):
-            assert np.allclose(el_sim._state_at(system, drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
+            assert np.allclose(el_sim._state_at(drive, 0.0, s).nu, [0.0, 1.0, 0.0], rtol=0, atol=1e-9)
 
 
 def _level_traction(traction: str, t_end: float, steps: int, initial_speed: float = 5.0):
@@ -163,7 +158,7 @@ def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
     st, drive, mdl = _level_traction("200 + 100*t", t_end=2.0, steps=10)
     end = 5.0 * 2.0 + (100 * 4.0 + 50 * 8.0 / 3) / 100.0
     plan = drive.plan.span  # +-20 km: it leaves the span alone
-    table = el_frame.tabulation(drive, mdl, st.t, None, el_body.rigid_body(mdl))
+    table = el_frame.tabulation(drive, mdl.g0, st.t, 1e-6, el_body.rigid_body(mdl))
     assert table.span == pytest.approx((max(-0.1 * end, plan[0]), min(1.1 * end, plan[1])), rel=1e-6, abs=1e-9)
     assert np.array_equal(table.seed, np.linspace(*table.span, 16)) and table.exact is None
     assert np.allclose(table.evaluate(table.seed, slice(3, 5)), [[1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]] * 2,

@@ -1,5 +1,6 @@
 """Compiled engines register themselves (symmech.core.engines): discovery, the protocol every engine
 provides, and a stand-in engine that appears in ``symmech warm`` without any edit of the CLI."""
+import dataclasses
 import sys
 
 import pytest
@@ -15,6 +16,8 @@ from symmech.core import engines
 engines.register(engines.Engine("standin", "a stand-in engine of the tests", "standin_implementation"))
 '''
 STANDIN_IMPLEMENTATION = '''
+from dataclasses import dataclass
+
 from symmech.core.layout import Field, Layout
 
 CALLS = []
@@ -44,8 +47,17 @@ class Builder:
 ENGINE = Builder()
 
 
-def simulate(x):
-    return 2 * x
+@dataclass(frozen=True)
+class Run:
+    x: float
+
+
+class Runner:
+    def simulate(self, inputs):
+        return 2 * inputs.x
+
+
+RUNNER = Runner()
 '''
 
 
@@ -68,7 +80,8 @@ def test_the_engines_of_the_papers_are_discovered_and_provide_the_protocol():
     for name, engine in found.items():
         module = engine.module()
         assert isinstance(module.ENGINE, build.Engine) and module.ENGINE.name == name
-        assert engine.builder() is module.ENGINE and callable(module.simulate)
+        assert engine.builder() is module.ENGINE and engine.runner() is module.RUNNER
+        assert dataclasses.is_dataclass(module.Run) and module.Run.__dataclass_params__.frozen
         assert module.LAYOUTS and all(isinstance(x, (Layout, Bundle)) for x in module.LAYOUTS)
 
 
@@ -104,7 +117,9 @@ def test_a_registered_stand_in_engine_appears_in_symmech_warm_without_editing_th
 
 def test_the_protocol_of_a_stand_in_engine(standin, monkeypatch):
     engine = engines.get("standin")
-    assert engine.run(21) == 42
+    assert engine.run(standin.Run(21)) == 42
+    with pytest.raises(TypeError, match="engine 'standin' runs standin_implementation.Run, not builtins.int"):
+        engine.run(21)  # the inputs name their engine
     assert engine.load() == {"entry": ()}  # no ahead-of-time build: numba's entries
     monkeypatch.setattr(sample, "slowdown", lambda: 3.0)  # a third of a core now: the 12 s compile takes 36 s
     assert engine.compile_seconds() == 36.0

@@ -43,9 +43,10 @@ class StandIn:
         self.builder_.calls.append("warm")
         return True
 
-    def run(self, model, num, start, t_end, on_step=None, reason=""):
-        self.runs.append((model, num.engine, t_end))
-        return motion.Motion(None, [], {}, [], start, start, {"engine": "compiled", "engine_reason": reason})
+    def run(self, inputs):
+        self.runs.append((inputs.model, inputs.numerics.engine, inputs.t_end))
+        return motion.Motion(None, [], {}, [], inputs.start, inputs.start,
+                             {"engine": "compiled", "engine_reason": inputs.reason})
 
 
 def test_a_compiled_run_takes_the_registered_engine(monkeypatch):

@@ -234,7 +234,7 @@ READERS = {**{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, **OWN_VECTORS.
            **{f"grain/motion_engine/{name}.py": {**GRAIN_VECTORS, "y": "X_AT", "after": "X_AT", "out": "X_AT",
                                                  **OWN_VECTORS.get(name, {})} for name in STATE_READERS},
            "numerics/radau.py": {"st": "ST_AT"},
-           "trolley/elastic/kernels.py": ELASTIC_VECTORS, "trolley/elastic/compiled.py": {}}  # (k, 12) tables there
+           "trolley/elastic/kernels.py": ELASTIC_VECTORS, "trolley/elastic/frame.py": {}}  # (k, 12) tables there
 
 
 def _names(node) -> set:

@@ -40,7 +40,7 @@ def circle(radius, speed):
 
 
 def modes_at(system, drive, q=None):
-    fs = el_sim._state_at(system, drive, 0.0, 0.0)
+    fs = el_sim._state_at(drive, 0.0, 0.0)
     return system.linear_modes(fs, np.zeros(system.N) if q is None else q)
 
 
@@ -119,7 +119,7 @@ def test_roller_frequencies_on_a_straight_level_track(g0):
 def test_quasi_static_state_carries_the_weight():
     k = (1e10, 1e10, 2e10, 1.5e10, 1e10)  # deflections ~1e-7 m: the load moves by that much
     system = el.System(roller_model(G0, k))
-    fs = el_sim._state_at(system, straight(), 0.0, 0.0)
+    fs = el_sim._state_at(straight(), 0.0, 0.0)
     q = system.quasi_static(fs)
     P = system.reactions(fs, q, 0 * q, 0 * q)
     # statics of three supports: B, C share the moment about the front axle
@@ -203,7 +203,7 @@ def test_static_sag_under_gravity(modes, err):
     L, rho_a, ei = 1.5, 3.0, (50.0, 50.0)
     system = beam_on_rigid_rollers(el_body.Beam((0, 0, 0), (1, 0, 0), (0, 1, 0), L, rho_a, ei, "cantilever", modes),
                                    g0=G0, probes=[(0, 1.0)])
-    fs = el_sim._state_at(system, straight(), 0.0, 0.0)
+    fs = el_sim._state_at(straight(), 0.0, 0.0)
     q = system.quasi_static(fs)
     rr, _ = system.coefficients(q)
     tip = np.einsum("k,kpi->pi", rr, system.inv.probe_fields)[0] - system.inv.probe_points[0]
@@ -308,7 +308,7 @@ def test_jacobi_energy_on_a_uniform_circle(damped):
     kick = np.zeros(system.N)
     kick[[0, 2, 4, 5]] = [1e-3, 2e-3, -1e-3, 5e-3]
     r = el_sim.simulate(system, drive, np.linspace(0.0, 0.2, 21), rtol=1e-9, dq0=kick)
-    fs = el_sim._state_at(system, drive, 0.0, 0.0)
+    fs = el_sim._state_at(drive, 0.0, 0.0)
     at_rest = system.jacobi_energy(fs, system.quasi_static(fs), np.zeros(system.N))
     excess = r["h"][0] - at_rest  # the energy of the kick
     assert excess > 0.1

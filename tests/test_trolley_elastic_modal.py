@@ -79,12 +79,12 @@ def test_quasi_static_state_zero_converges_from_rounding_noise():
 
     st = prepared(_scene())
     system = st.elastic.system
-    fs = el_frame.frame_state(el_frame.frames(st.elastic.drive, np.array([0.5]), system.mdl.l), 0, V, 0.0)
+    fs = el_frame.frame_state(el_frame.frames(st.elastic.drive, np.array([0.5])), 0, V, 0.0)
     q = system.quasi_static(fs, np.full(system.N, 1e-20))
     assert np.abs(q).max() <= el.Q_FLOOR
     # a loaded state still converges to its own (relative) tolerance: gravity bends the soft beam
     loaded = prepared({**_scene(), "effects": {"gravity": True, "local_curvature": False}})
-    fs = el_frame.frame_state(el_frame.frames(loaded.elastic.drive, np.array([0.5]), system.mdl.l), 0, V, 0.0)
+    fs = el_frame.frame_state(el_frame.frames(loaded.elastic.drive, np.array([0.5])), 0, V, 0.0)
     q = loaded.elastic.system.quasi_static(fs)
     R_ = loaded.elastic.system.evaluate(fs, q, np.zeros_like(q), np.zeros_like(q))
     assert np.abs(q).max() > 1e-3 and np.abs(R_).max() < 1e-9
@@ -132,7 +132,7 @@ def test_roller_frequencies_closed_form_at_q0_and_the_sagged_states_difference()
     for scale in (1e5, 1e6):
         k = tuple(scale * np.array([1.0, 1.0, 2.0, 1.5, 1.0]))
         system = el.System(roller_model(g0, k, com=com, inertia=inertia + (0, 0, 0)))
-        fs = el_sim._state_at(system, straight(), 0.0, 0.0)
+        fs = el_sim._state_at(straight(), 0.0, 0.0)
         vertical, lateral = closed_form_roller_frequencies(100.0, com, inertia, k, 2.0, 1.0, g0)
         closed = np.sort(np.r_[vertical, lateral])
         np.testing.assert_allclose(system.linear_modes(fs, np.zeros(system.N))[0], closed, rtol=1e-12)

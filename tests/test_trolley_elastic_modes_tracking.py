@@ -100,7 +100,7 @@ def test_rms_shape_of_a_lone_cantilever_mode():
     φ = cosh βx − cos βx − σ (sinh βx − sin βx), βL = 1.8751, has ∫0^L φ² dx = L φ(L)² / 4."""
     st = prepared(_scene()).elastic
     system = st.system
-    fs = el_frame.frame_state(el_frame.frames(st.drive, np.array([0.0]), system.mdl.l), 0, 0.0, 0.0)
+    fs = el_frame.frame_state(el_frame.frames(st.drive, np.array([0.0])), 0, 0.0, 0.0)
     q = np.zeros(system.N)
     _, _, X = system.linear_modes(fs, q, shapes=True)
     X = modal.start_phase(system.mass(q), X)  # real shapes: the largest component real
@@ -123,7 +123,7 @@ def test_roller_modes_name_their_dofs_and_shares_of_the_closed_form():
 
     k, com, inertia = (1e6, 1e6, 2e6, 1.5e6, 1e6), (0.8, 0.5, 0.0), (20.0, 30.0, 25.0)
     system = el.System(roller_model(0.0, k, com=com, inertia=inertia + (0, 0, 0)))
-    fs = el_sim._state_at(system, straight(10.0), 0.0, 0.0)
+    fs = el_sim._state_at(straight(10.0), 0.0, 0.0)
     q = np.zeros(system.N)
     omega, _, X = system.linear_modes(fs, q, shapes=True)
     comp = modal.components(system)

@@ -220,7 +220,7 @@ def test_clamped_pairs_carry_the_weight_and_open_a_gap(mass):
                           el_body.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (delta,) * 5),
                           effects=el_body.Effects(damping=False))
     system = el.System(mdl)
-    fs = el_sim._state_at(system, elastic_scene.drive_of(prepared(scene_dict(motion={"speed": "0.0"})), 1), 0.0, 0.0)
+    fs = el_sim._state_at(elastic_scene.drive_of(prepared(scene_dict(motion={"speed": "0.0"})), 1), 0.0, 0.0)
     q = system.quasi_static(fs)
     d = system.roller_state(q, 0 * q)[0]
     loads = mass * g0 * np.array([0.3, 0.3, 0.4])

@@ -6,23 +6,36 @@ numba, no physics) that calls :func:`register` at import with an :class:`Engine`
 estimates read this registry, so adding an engine touches no central list (docs/ARCHITECTURE.md, "Adding
 an engine").
 
-The protocol, every engine alike (the implementation module provides ``ENGINE``, ``simulate`` and
-``LAYOUTS``)::
+The protocol, every engine alike (the implementation module provides ``ENGINE``, ``LAYOUTS``, ``Run``, the
+frozen dataclass of a run's inputs by name, and ``RUNNER``, a :class:`Runner`)::
 
     engine = engines.get("grain")
     engine.builder()      # ENGINE, a symmech.numerics.build.Engine: numba's cache and the ahead-of-time build
     engine.warm(...)      # build it now, once per machine (symmech warm)
     engine.load()         # what a run calls: the ahead-of-time build when current, else numba's entries
-    engine.run(...)       # simulate(...): the engine's contract, results as the reference engine's
+    engine.run(inputs)    # RUNNER.simulate(inputs): a Run of this engine, results as the reference engine's
     engine.describe()     # its declared layouts (LAYOUTS, symmech.core.layout): names, units, offsets
 """
 from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
+from typing import Protocol
 
 _ENGINES: dict[str, Engine] = {}
 _ALL = False  # every engine module imported
+
+
+class Runner(Protocol):
+    """What runs an engine's inputs: ``RUNNER`` in its implementation module, an object of a class of its own whose
+    ``simulate(inputs)`` takes that module's ``Run``, the frozen dataclass of a run's inputs by name (the grain's
+    ``driver.Run``: model, numerics, start, t_end, on_step, reason; the elastic trolley's ``compiled.Run``: system,
+    drive, t, rtol, atol_q, dq0, dqd0, reason), and returns what the reference engine returns. Named inputs and a
+    method of a named class, not ``simulate(*args)`` behind the registry: a reader follows a run from the scene
+    through :meth:`Engine.run` to the engine's loop."""
+
+    def simulate(self, inputs):
+        """The run of ``inputs`` (the implementation module's ``Run``) on this engine."""
 
 
 @dataclass(frozen=True)
@@ -32,7 +45,8 @@ class Engine:
     name            ``symmech warm --engine NAME``; the name of its :class:`symmech.numerics.build.Engine`
     summary         one line for ``symmech warm --help``
     implementation  dotted name of the module that provides ``ENGINE`` (a :class:`symmech.numerics.build.Engine`),
-                    ``simulate(...)`` and ``LAYOUTS`` (its declared layouts, :mod:`symmech.core.layout`)
+                    ``Run`` (the frozen dataclass of a run's inputs), ``RUNNER`` (a :class:`Runner` of them) and
+                    ``LAYOUTS`` (its declared layouts, :mod:`symmech.core.layout`)
     """
 
     name: str
@@ -57,9 +71,19 @@ class Engine:
         builder = self.builder()
         return builder.ahead_of_time() or builder.entries()
 
-    def run(self, *args, **kwargs):
-        """The engine's ``simulate``."""
-        return self.module().simulate(*args, **kwargs)
+    def runner(self) -> Runner:
+        """The engine's :class:`Runner` (``RUNNER``)."""
+        return self.module().RUNNER
+
+    def run(self, inputs):
+        """The run of ``inputs``, a ``Run`` of this engine's implementation module (TypeError for another's: the
+        inputs name their engine), by its :class:`Runner`."""
+        kind = type(inputs)
+        if (kind.__module__, kind.__qualname__) != (self.implementation, "Run"):
+            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, "
+                            f"not {kind.__module__}.{kind.__qualname__}")
+        runner = self.runner()
+        return runner.simulate(inputs)
 
     def compile_seconds(self) -> float:
         """The wall time [s] a run starting now spends compiling first: the cold compile (an idle machine's

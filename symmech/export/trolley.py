@@ -5,14 +5,14 @@ derived per model from the invariants of the compiled engine's record, :mod:`sym
 ``c/elastic_trolley.c`` reads the frame table and calls it): states q, q' (``<coordinate>``,
 ``der(<coordinate>)``), M y' = F with M = diag(1, M(q)); the frame's motion along the track at the
 prescribed speed as the engine's cubic spline table of the 12 frame channels in t
-(:func:`symmech.trolley.elastic.compiled.frame_table`, the same nodes and coefficients) with the arc length
+(:func:`symmech.trolley.elastic.frame.frame_table`, the same nodes and coefficients) with the arc length
 s beside them. Outputs: the native run's columns (``elastic_reactions``, ``roller_deflections``,
 ``points``); parameters: the rollers' stiffnesses, dampings and (clamped pair law) preloads. The track and
 the speed are in the table: they are not parameters, and the FMU has no inputs.
 
 Under traction (``effects.traction = true``, :func:`traction`) the arc length s and the speed V0 are states
 too (``s``, ``V0`` = der(s), ``der(V0)``), the frame's geometry is the compiled engine's spline table in s
-(:func:`symmech.trolley.elastic.compiled.tabulate`, over the arc lengths the scene's run visits), the
+(:func:`symmech.trolley.elastic.frame.tabulation`, over the arc lengths the scene's run visits), the
 scene's law P0(t, V0) is printed into the generated assembly, and one input ``traction_force`` [N] adds to it
 (a controller drives the trolley; 0 reproduces the scene). The C example program and Co-Simulation integrate
 with Radau IIA (the roller modes are stiff).
@@ -67,11 +67,10 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley.elastic import compiled as elastic_compiled, frame as el_frame, simulate as el_sim
+    from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
 
     system, drive, t = setup.system, setup.drive, setup.t
-    inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed)
-    table = elastic_compiled.tabulate(inputs, setup.rtol)
+    table = el_sim.compiled_inputs(system, drive, t, setup.rtol, 1e-12).frame.table  # a compiled run's
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")
@@ -97,11 +96,11 @@ def elastic(setup, run: dict) -> ExportModel:
 def traction(setup, run: dict, law) -> ExportModel:
     """The export model of a prepared elastic setup under traction whose native run is ``run``; ``law`` the
     scene's P0(t, v) [N] as a sympy expression (:func:`symmech.core.expressions.parse`)."""
-    from symmech.trolley.elastic import compiled as elastic_compiled, simulate as el_sim
+    from symmech.trolley.elastic import simulate as el_sim
 
     system, drive, t = setup.system, setup.drive, setup.t
-    inputs = el_sim.compiled_inputs(system, drive, t, atol_q=1e-12)  # a compiled run's (its table's seed, span)
-    table, (lo, hi) = elastic_compiled.tabulate(inputs, setup.rtol), inputs.frame.span
+    frame = el_sim.compiled_inputs(system, drive, t, setup.rtol, 1e-12).frame  # a compiled run's (its table, span)
+    table, (lo, hi) = frame.table, frame.span
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated in s within its bound (a non-smooth "
                            "track): `symmech export` needs the compiled engine's table")

@@ -13,6 +13,7 @@ conserved by the exact motion; the tests measure the drift.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,6 +41,11 @@ class Vibration:
     @property
     def off(self) -> bool:
         return self.amplitude == 0.0
+
+    @property
+    def period(self) -> float:
+        """Vibration period [s], or 1 s when the surface does not vibrate (a time scale only)."""
+        return 2 * np.pi / self.omega if not self.off else 1.0
 
     def phase_at(self, t):
         """Surface phase ``omega t + phase`` reduced to [0, 2 pi) [rad]."""
@@ -133,3 +139,17 @@ class RotationFlight:
         y = np.moveaxis(y, 0, -1)
         q = y[..., RO_Q] / np.linalg.norm(y[..., RO_Q], axis=-1, keepdims=True)
         return q, y[..., RO_W]
+
+
+def bounces(v0: float, e: float, g: float, v_rest: float, span: float) -> float:
+    """Bounces of a sequence launched at ``v0`` [m/s] off a still surface with restitution ``e`` under the normal
+    gravity ``g`` [m/s^2], until the contact leaves slower than ``v_rest`` [m/s] or ``span`` [s] ends (the estimate
+    of a run's impacts)."""
+    if v0 <= v_rest or e == 0.0:
+        return 1.0
+    count = math.log(v_rest / v0) / math.log(e) if e < 1.0 else math.inf
+    # k bounces last 2 v0 (1 - e^k) / (g (1 - e)); a sequence longer than span is cut there.
+    fits = 1.0 - span * g * (1.0 - e) / (2.0 * v0)
+    if fits > 0.0:
+        count = min(count, math.log(fits) / math.log(e) if e < 1.0 else span * g / (2.0 * v0))
+    return 1.0 + count

@@ -102,7 +102,7 @@ class Model:
     @property
     def period(self) -> float:
         """Vibration period [s], or 1 s when the surface does not vibrate (a time scale only)."""
-        return 2 * np.pi / self.vibration.omega if not self.vibration.off else 1.0
+        return self.vibration.period
 
 
 @dataclass(frozen=True)

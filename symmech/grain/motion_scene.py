@@ -191,14 +191,14 @@ def prepare(r: dict) -> GrainScene:
                    if effects.inclination else (0.0, 0.0))
     g_k = tuple(float(x) for x in gm.gravity(surface["g"], alpha, beta))
     vibration = _vibration(r["vibration"], g_k)
-    model = motion.Model(axes, fields.body_mass(r["body"]), g_k, vibration, _law(r["impact"]), r["sliding"]["friction"],
-                         effects)
-    numerics = _numerics(r["numerics"], model.period)
+    law = _law(r["impact"])
+    numerics = _numerics(r["numerics"], vibration.period)
     rows = r["duration"] / numerics.sample_interval
     if rows > MAX_ROWS:
         raise SceneError("numerics.sample_interval", f"{numerics.sample_interval:.3g} s gives {rows:.3g} trajectory "
                                                      f"rows over {r['duration']:g} s; at most {MAX_ROWS:g}")
     start = _start(r["initial"], axes, r["body"]["orientation"], effects)
+    model = motion.Model(axes, fields.body_mass(r["body"]), g_k, vibration, law, r["sliding"]["friction"], effects)
     return GrainScene(model, numerics, start, r["duration"], (alpha, beta), r["precision"], r["output"])
 
 
@@ -264,25 +264,13 @@ def expected_impacts(sc: GrainScene) -> float:
     a_n = vib.amplitude * vib.omega**2 * abs(vib.direction[2])
     drop = max(float(sc.start.r[2] - contact.support_distance(model.axes, flight.rotation_matrix(sc.start.q))), 0.0)
     v_drop = math.hypot(sc.start.v[2], math.sqrt(2 * g_n * drop)) + vib.amplitude * vib.omega * abs(vib.direction[2])
-    impacts = _sequence(v_drop, e, g_n, num.rest_velocity, sc.duration)
+    impacts = flight.bounces(v_drop, e, g_n, num.rest_velocity, sc.duration)
     if a_n > g_n:
         period = sc.model.period
         v_throw = vib.amplitude * vib.omega * abs(vib.direction[2])
         launches = sc.duration / period * min(1.0, math.pi * g_n / a_n)
-        impacts += launches * _sequence(v_throw, e, g_n, num.rest_velocity, period)
+        impacts += launches * flight.bounces(v_throw, e, g_n, num.rest_velocity, period)
     return min(impacts, float(num.max_impacts))
-
-
-def _sequence(v0: float, e: float, g: float, v_rest: float, span: float) -> float:
-    """Bounces of a sequence launched at ``v0`` [m/s] with restitution ``e`` within ``span`` [s]."""
-    if v0 <= v_rest or e == 0.0:
-        return 1.0
-    bounces = math.log(v_rest / v0) / math.log(e) if e < 1.0 else math.inf
-    # k bounces last 2 v0 (1 - e^k) / (g (1 - e)); a sequence longer than span is cut there.
-    fits = 1.0 - span * g * (1.0 - e) / (2.0 * v0)
-    if fits > 0.0:
-        bounces = min(bounces, math.log(fits) / math.log(e) if e < 1.0 else span * g / (2.0 * v0))
-    return 1.0 + bounces
 
 
 def estimate(sc: GrainScene) -> registry.Estimate:
@@ -362,11 +350,14 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
     ``on_step(t)`` [s] is called at most every ``motion.PROGRESS_INTERVAL`` of wall time, in both modes."""
     num = numerics or sc.numerics
     t_end = sc.duration if duration is None else duration
-    if num.mode == "paper":
-        return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
-    engine, why = choose_engine(sc, num, t_end)
+    engine, why = ("paper", "") if num.mode == "paper" else choose_engine(sc, num, t_end)
     if engine == "compiled":
-        return _compiled().run(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
+        from symmech.grain.motion_engine.driver import Run  # the engine's Python side: no numba
+
+        compiled: engines.Engine = _compiled()
+        return compiled.run(Run(sc.model, num, sc.start, t_end, on_step, why))
+    if engine == "paper":
+        return paper_mode.simulate(sc.model, num, sc.start, t_end, sc.alpha_beta, on_step=on_step)
     if num.engine == "auto":
         engines.get("grain").builder().warm_in_background()
     return motion.simulate(sc.model, num, sc.start, t_end, on_step=on_step, reason=why)
@@ -404,7 +395,7 @@ def _one(sc: GrainScene, strict: bool):
         return exc
 
 
-def _compiled():
+def _compiled() -> engines.Engine:
     """The grain's compiled engine, ready: compiled under the build lock, or loaded as a concurrent builder made it."""
     compiled = engines.get("grain")
     if compiled.builder().needs_compile():

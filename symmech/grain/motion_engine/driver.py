@@ -51,7 +51,9 @@ from __future__ import annotations
 import math
 import os
 import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -261,6 +263,30 @@ def motion_of(model: motion.Model, num: motion.Numerics, start: motion.State, y:
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
     return LazyMotion(rows, None, time_in, run_warnings(warns, rocking, model, num), start, state_view(y), extra,
                       impact_rows=imps)
+
+
+@dataclass(frozen=True)
+class Run:
+    """One grain's run on this engine, its inputs by name (the engine protocol's run, ``engines.Engine.run``): those
+    of :func:`simulate`."""
+
+    model: motion.Model
+    numerics: motion.Numerics
+    start: motion.State
+    t_end: float  # [s]
+    on_step: Callable[[float], None] | None = None
+    reason: str = ""
+
+
+class Runner:
+    """This engine's side of the protocol's run (:class:`symmech.core.engines.Runner`)."""
+
+    def simulate(self, inputs: Run) -> motion.Motion:
+        """:func:`simulate` of the inputs."""
+        return simulate(inputs.model, inputs.numerics, inputs.start, inputs.t_end, inputs.on_step, inputs.reason)
+
+
+RUNNER = Runner()
 
 
 def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_end: float,

@@ -19,9 +19,9 @@ from symmech.trolley.elastic.system import System
 
 # ---------------------------------------------------------------- integration along the track
 
-def _state_at(system: System, drive: Drive, t: float, s: float) -> FrameState:
+def _state_at(drive: Drive, t: float, s: float) -> FrameState:
     V0, dV0 = drive.speed(t)
-    return frame_state(frames(drive, s, system.mdl.l), 0, float(V0), float(dV0))
+    return frame_state(frames(drive, s), 0, float(V0), float(dV0))
 
 
 class Timeline:
@@ -47,7 +47,7 @@ class Timeline:
         if time not in self.cache:
             if len(self.cache) > 64:
                 self.cache.clear()
-            self.cache[time] = _state_at(self.system, self.drive, time, self.s(time))
+            self.cache[time] = _state_at(self.drive, time, self.s(time))
         return self.cache[time]
 
     def traction_states(self, s: float, V0: float) -> tuple[FrameState, FrameState]:
@@ -56,7 +56,7 @@ class Timeline:
         if s not in self.cache:
             if len(self.cache) > 64:
                 self.cache.clear()
-            self.cache[s] = frames(self.drive, s, self.system.mdl.l)
+            self.cache[s] = frames(self.drive, s)
         fr = self.cache[s]
         return frame_state(fr, 0, V0, 0.0), frame_state(fr, 0, V0, 1.0)
 
@@ -222,7 +222,7 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
 @dataclass(frozen=True)
 class Inputs:
     """What a compiled run reads, made in one pass (:func:`compiled_inputs`): its :class:`Start`, the model
-    record (``System.record``) and what it tabulates of the frame
+    record (``System.record``) and what it tabulates of the frame with its spline table
     (:class:`symmech.trolley.elastic.frame.Tabulation`; with traction over the span ``frame.reach`` finds)."""
 
     start: Start
@@ -230,11 +230,12 @@ class Inputs:
     frame: Tabulation
 
 
-def compiled_inputs(system: System, drive: Drive, t, atol_q: float, dq0=None, dqd0=None) -> Inputs:
-    """The :class:`Inputs` of a compiled run on the grid t [s] (n,) (the keywords those of :func:`prepare`)."""
+def compiled_inputs(system: System, drive: Drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> Inputs:
+    """The :class:`Inputs` of a compiled run on the grid t [s] (n,) at relative tolerance ``rtol`` (the frame
+    table's bound) and the keywords of :func:`prepare`."""
     line = Timeline(system, drive, t)
     rigid = system.rigid if drive.traction is not None else None
-    frame = tabulation(drive, system.mdl, t, line.s_nodes, rigid)
+    frame = tabulation(drive, system.mdl.g0, t, rtol, rigid)
     return Inputs(prepare(line, atol_q, dq0, dqd0), system.record, frame)
 
 
@@ -272,7 +273,7 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
     st = state_layout(N, False)  # the first fields of either state
     q, qd = Y[:, st.slice("q")], Y[:, st.slice("qd")]
     ed, work = Y[:, st.offset("dissipated")], Y[:, st.offset("work")]
-    fr = frames(drive, s, system.mdl.l) if frame is None else frame
+    fr = frames(drive, s) if frame is None else frame
     _, a0, w, dw = frame_motion(fr, V0, dV0)
     height = drive.track.derivatives(s, 0)[0][:, 1]
     res = rows(system, fr, V0, dV0, Y, height)
