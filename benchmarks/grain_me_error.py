@@ -2,7 +2,7 @@
 
 FMPy's own CVode driver (tests/fmpy_cvode.py: BDF, atol = rtol x nominal, max step a fiftieth of 0.23 s, reset at
 each event) runs the grain's flight on the generated numpy module ``grain_motion`` (rates, the gap as the event
-indicator, the impact map at each zero), no FMU, over the default scene's first three bounce sequences (impacts
+indicator, the impact map at each zero: tests/grain_cvode.py), no FMU, over the default scene's first three bounce sequences (impacts
 1-13 from the start, 14-23 and 24-33 from the native state at the first flight row after the first and second
 sliding phase), in three formulations of the centre's motion:
 
@@ -28,20 +28,21 @@ import numpy as np
 
 from symmech.core import pipeline
 from symmech.core.scene import scenes_folder
-from symmech.export.grain import nominals
 from symmech.generated import grain_motion as gm
 from symmech.grain import motion, motion_scene
 from symmech.grain.vectors import TRAJECTORY_ROW
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from fmpy_cvode import Driven  # noqa: E402  (FMPy's CVode driver, shared with the tests)
+from grain_cvode import Flight, bounces  # noqa: E402  (the grain's flight under it, shared with the tests)
 
 SPAN = 0.23  # s: the default scene's first 53 impacts, as bench_export.py --only sliding
 SEQUENCES = 3
 
 
-class Grain:
-    """The default scene's parameters, the native run at tol 1e-12 and the starts of its bounce sequences."""
+class Grain(Flight):
+    """The default scene's flight, the native run at tol 1e-12 and the starts (t [s], relative state) of its bounce
+    sequences."""
 
     def __init__(self, folder: Path):
         text = (scenes_folder() / "grain_default.toml").read_text()
@@ -49,15 +50,10 @@ class Grain:
         path.write_text(text.replace("duration = 2.0 ", f"duration = {SPAN!r} ")
                         .replace("tolerance = 1e-9", "tolerance = 1e-12"))
         sc = pipeline.load(path).setup
-        vib, model = sc.model.vibration, sc.model
-        self.p = np.array([*model.g_k, vib.amplitude, vib.omega, vib.phase, *vib.direction, *model.inertia,
-                           *model.axes])
-        self.law = (model.mass, model.law.e_n, model.law.e_t, model.law.mu)
-        self.nominals = np.array(nominals(sc))
+        super().__init__(sc)
         native = motion_scene.simulate(sc)
-        self.impacts = np.array([i["t"] for i in native.impacts])
-        rows = TRAJECTORY_ROW.split(native.trajectory)
-        regime = np.ravel(rows["regime"])
+        self.native_impacts = np.array([i["t"] for i in native.impacts])
+        regime = np.ravel(TRAJECTORY_ROW.split(native.trajectory)["regime"])
         flying = regime == motion.REGIMES.index("flight")
         lifts = np.flatnonzero(flying[1:] & (regime[:-1] == motion.REGIMES.index("sliding"))) + 1
         self.starts = [(0.0, np.concatenate([sc.start.r, sc.start.v, sc.start.q, sc.start.w]))]
@@ -70,14 +66,6 @@ class Grain:
         """The surface's displacement [m] and velocity [m/s] at ``t``."""
         kin = gm.surface_kinematics(*self.p[3:9], t)
         return kin[0], kin[1]
-
-    def bounce(self, y: np.ndarray) -> np.ndarray:
-        """The relative state after the impact map at the relative state ``y``."""
-        args = (*y, *self.p[9:], self.law[0])
-        contact = gm.impact_contact(*args)
-        plastic = gm.plastic_impulse(*contact[:12])
-        impulse = gm.coulomb_impulse(plastic[0], *plastic[1:4], contact[11], *self.law[1:])
-        return np.asarray(gm.impact_state(*args, *impulse), float)
 
 
 class Formulation:
@@ -105,7 +93,7 @@ class Formulation:
         return np.concatenate([translation, x])
 
     def rate(self, t: float, x: np.ndarray) -> np.ndarray:
-        f = gm.rhs(t, self.relative(t, x), self.grain.p)
+        f = self.grain.rate(t, self.relative(t, x))
         if self.name == "relative":
             return f
         if self.name == "inertial":
@@ -120,21 +108,15 @@ def sequence(form: Formulation, t0: float, y0: np.ndarray, count: int, rtol: flo
              jacobian: bool) -> np.ndarray:
     """The times [s] of the first ``count`` impacts after ``t0`` of CVode's run from the relative state ``y0``."""
     grain = form.grain
-    x = form.start(t0, y0)
-    jac = (lambda t, y: gm.jac(t, y, grain.p)) if jacobian else None
-    run = Driven(form.rate, x, form.nominals(scale), t0, rtol, SPAN / 50, nz=1, jacobian=jac, max_steps=100_000,
-                 events=lambda t, y: np.ravel(gm.event_values(t, *form.relative(t, y), *grain.p)))
-    times, t = [], t0
-    while len(times) < count:
-        event, t = run.step(t, t0 + SPAN)
-        if not event:
-            raise RuntimeError(f"{form.name}: no impact by {t:g} s")
-        y = form.relative(t, run.state["y"])
-        if gm.impact_contact(*y, *grain.p[9:], grain.law[0])[11] < 0:  # approaching: a bounce
-            times.append(t)
-            run.state["y"] = form.start(t, grain.bounce(y))
-        run.reset(t)
-    return np.array(times)
+
+    def bounce(t, x):
+        after = grain.bounce(form.relative(t, x))
+        return None if after is None else form.start(t, after)
+
+    run = Driven(form.rate, form.start(t0, y0), form.nominals(scale), t0, rtol, SPAN / 50, nz=1, max_steps=100_000,
+                 events=lambda t, y: grain.gap(t, form.relative(t, y)),
+                 jacobian=(lambda t, y: gm.jac(t, y, grain.p)) if jacobian else None)
+    return bounces(run, count, SPAN / 50, bounce)
 
 
 def main() -> None:
@@ -152,7 +134,7 @@ def main() -> None:
             errors = []
             for (t0, y0), first, last in zip(grain.starts, bounds, bounds[1:]):
                 times = sequence(form, t0, y0, last - first, rtol, scale, jacobian)
-                errors.append(np.abs(times - grain.impacts[first:last]).max())
+                errors.append(np.abs(times - grain.native_impacts[first:last]).max())
             label = f"{name}, nominals x {scale:g}{', exact Jacobian' if jacobian else ''}"
             print(f"  rtol {rtol:g}  {label:42s} " + "  ".join(f"{e:.2g}" for e in errors))
 
