@@ -4,16 +4,19 @@ FMPy's own CVode driver (tests/fmpy_cvode.py: BDF, atol = rtol x nominal, max st
 each event) runs the grain's flight on the generated numpy module ``grain_motion`` (rates, the gap as the event
 indicator, the impact map at each zero: tests/grain_cvode.py), no FMU, over the default scene's first three bounce sequences (impacts
 1-13 from the start, 14-23 and 24-33 from the native state at the first flight row after the first and second
-sliding phase), in three formulations of the centre's motion:
+sliding phase), in four formulations of the centre's motion:
 
 - relative: the FMU's states (the centre relative to the vibrating surface: its flight carries sin and cos);
 - inertial: the centre in the inertial frame (a parabola in flight: BDF of order >= 2 is exact on it), the gap and
   the impact map on the relative state (the surface's closed form subtracted);
-- exact: the translation in closed form (``flight_translation``), CVode integrating the rotation only (quaternion
-  and torque-free Euler equations): the best any choice of translation states could do;
+- ballistic: the inertial centre's deviation from its straight line at the flight's start (g (t - t0)^2 / 2: a
+  parabola from zero at each flight's start) and its rate;
+- exact: the translation in closed form (``flight_translation``), CVode integrating the rotation only;
 
-each with the FMU's nominals and with every nominal times 1e-6 (atol -> 0: CVode's pure relative control), the
-relative one also with the exact Jacobian (``grain_motion.jac``: FMPy differences the rates). Printed: the largest
+the rotation as the FMU's quaternion and body rates (torque-free Euler equations), or (``+momentum``) the quaternion
+and the angular momentum in KXYZ (constant in flight); with the FMU's nominals or every nominal times 1e-3 or 1e-6
+(atol -> 0: CVode's pure relative control), the relative one also with the exact Jacobian (``grain_motion.jac``:
+FMPy differences the rates). Printed: the largest
 impact time error of each sequence [s] against the native compiled engine at tol 1e-12 (the target: 1e-8 s).
 
 With ``--fmu``: the exported FMU itself (FMI 3 ME, the default scene over 0.23 s at its tolerance 1e-9) under
@@ -47,6 +50,11 @@ from grain_cvode import Flight, bounces  # noqa: E402  (the grain's flight under
 
 SPAN = 0.23  # s: the default scene's first 53 impacts, as bench_export.py --only sliding
 SEQUENCES = 3
+# (formulation, nominals' scale, CVode handed the exact Jacobian)
+VARIANTS = (("relative", 1.0, False), ("relative", 1.0, True), ("relative", 1e-6, False), ("inertial", 1.0, False),
+            ("inertial", 1e-6, False), ("ballistic", 1.0, False), ("ballistic", 1e-3, False),
+            ("ballistic", 1e-6, False), ("ballistic+momentum", 1e-6, False), ("exact", 1.0, False),
+            ("exact", 1e-6, False), ("exact+momentum", 1e-6, False))
 
 
 class Grain(Flight):
@@ -78,39 +86,59 @@ class Grain(Flight):
 
 
 class Formulation:
-    """The states CVode integrates (``x``) against the relative state (``relative``) in one flight from t0."""
+    """The states CVode integrates (``x``) against the relative state (``relative``) in one flight from t0: the
+    translation (``relative``, ``inertial``, ``ballistic``: the inertial centre's deviation from its line at the
+    flight's start, R0 + V0 (t - t0), and its rate, or ``exact``: none) and the rotation (``body``: quaternion and body
+    rates; ``momentum``: quaternion and the angular momentum in KXYZ, constant in flight)."""
 
     def __init__(self, name: str, grain: Grain):
-        self.name, self.grain = name, grain
+        self.grain = grain
+        self.translation, _, rotation = name.partition("+")
+        self.rotation = rotation or "body"
+        self.inertia = grain.p[9:12]
 
     def start(self, t0: float, y: np.ndarray) -> np.ndarray:
+        """x at the flight's start ``t0`` [s] from the relative state ``y`` (13,)."""
         self.t0, self.y0 = t0, y.copy()
-        if self.name == "relative":
-            return y.copy()
-        if self.name == "inertial":
-            s, ds = self.grain.surface(t0)
-            return np.concatenate([y[:3] + s, y[3:6] + ds, y[6:]])
-        return y[6:].copy()
+        s, ds = self.grain.surface(t0)
+        self.line = (y[:3] + s, y[3:6] + ds)
+        translation = {"relative": y[:6], "inertial": np.r_[self.line[0], self.line[1]], "ballistic": np.zeros(6),
+                       "exact": np.zeros(0)}[self.translation]
+        q, w = y[6:10], y[10:13]
+        rotation = y[6:] if self.rotation == "body" else np.r_[q, np.asarray(gm.rotation_matrix(*q)) @ (self.inertia * w)]
+        return np.r_[translation, rotation]
 
     def relative(self, t: float, x: np.ndarray) -> np.ndarray:
-        if self.name == "relative":
-            return x
-        if self.name == "inertial":
-            s, ds = self.grain.surface(t)
-            return np.concatenate([x[:3] - s, x[3:6] - ds, x[6:]])
-        translation = np.ravel(gm.flight_translation(*self.y0[:6], *self.grain.p[:9], self.t0, t))
-        return np.concatenate([translation, x])
+        """The relative state (13,) at ``t`` [s] from x."""
+        s, ds = self.grain.surface(t)
+        if self.translation == "relative":
+            translation = x[:6]
+        elif self.translation == "inertial":
+            translation = np.r_[x[:3] - s, x[3:6] - ds]
+        elif self.translation == "ballistic":
+            r0, v0 = self.line
+            translation = np.r_[r0 + v0 * (t - self.t0) + x[:3] - s, v0 + x[3:6] - ds]
+        else:
+            translation = np.ravel(gm.flight_translation(*self.y0[:6], *self.grain.p[:9], self.t0, t))
+        rotation = x[len(x) - 7:]
+        if self.rotation == "momentum":
+            q = rotation[:4]
+            rotation = np.r_[q, np.asarray(gm.rotation_matrix(*q)).T @ rotation[4:] / self.inertia]
+        return np.r_[translation, rotation]
 
     def rate(self, t: float, x: np.ndarray) -> np.ndarray:
         f = self.grain.rate(t, self.relative(t, x))
-        if self.name == "relative":
-            return f
-        if self.name == "inertial":
-            return np.concatenate([x[3:6], self.grain.p[:3], f[6:]])
-        return f[6:]
+        free_fall = np.r_[x[3:6], self.grain.p[:3]]
+        translation = {"relative": f[:6], "inertial": free_fall, "ballistic": free_fall,
+                       "exact": np.zeros(0)}[self.translation]
+        return np.r_[translation, f[6:] if self.rotation == "body" else np.r_[f[6:10], np.zeros(3)]]
 
     def nominals(self, scale: float) -> np.ndarray:
-        return self.grain.nominals[6:] * scale if self.name == "exact" else self.grain.nominals * scale
+        """The FMU's nominals of x's states (a momentum's: the rates' times the largest inertia) times ``scale``."""
+        n = self.grain.nominals
+        translation = n[:0] if self.translation == "exact" else n[:6]
+        rotation = n[6:] if self.rotation == "body" else np.r_[n[6:10], n[10:13] * self.inertia.max()]
+        return np.r_[translation, rotation] * scale
 
 
 def sequence(form: Formulation, t0: float, y0: np.ndarray, count: int, rtol: float, scale: float,
@@ -167,9 +195,7 @@ def main() -> None:
     print(f"largest impact time error of bounce sequences 1-{SEQUENCES} (impacts 1-13, 14-23, 24-33) against the "
           "native engine at tol 1e-12 [s]")
     for rtol in rtols:
-        for name, scale, jacobian in (("relative", 1.0, False), ("relative", 1.0, True), ("relative", 1e-6, False),
-                                      ("inertial", 1.0, False), ("inertial", 1e-6, False), ("exact", 1.0, False),
-                                      ("exact", 1e-6, False)):
+        for name, scale, jacobian in VARIANTS:
             form = Formulation(name, grain)
             errors = []
             for (t0, y0), first, last in zip(grain.starts, bounds, bounds[1:]):
