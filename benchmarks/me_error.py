@@ -7,7 +7,8 @@ largest magnitude (:func:`symmech.export.model.deviation`):
 - the FMU (FMI 3 ME) under ``fmpy.simulate_fmu`` (CVode) at rtol 1e-10, its error at a quarter, half and the whole
   run (growth), and at rtol 1e-8…1e-12 (the slope of log error over log rtol);
 - the same CVode (FMPy's driver, tests/fmpy_cvode.py) on the native equations y' = A y, no FMU: as simulate_fmu
-  drives it, with no max step, with a max step of the run / 2000, with the exact Jacobian A, every 10th output;
+  drives it, with no max step, with a max step of the run / 2000, with the exact Jacobian A, with the nominals
+  times 1e-3 and 1e-6 (atol -> 0: CVode's relative control alone), every 10th output;
 - independent integrators on y' = A y: scipy's BDF (NDF, orders 1–5), LSODA (ODEPACK, Adams/BDF), Radau IIA and
   DOP853, all at rtol 1e-10, atol 1e-10 x each state's nominal (what FMPy hands CVode);
 - the FMU's rates against A y at 200 random states (relative to the largest rate).
@@ -78,9 +79,11 @@ def study(path: Path, folder: Path) -> None:
     print(f"  FMU against CVode on A y (the same driver, no FMU): {deviation(got, reference[:, :n]):.2g}; "
           f"the FMU's rates against A y: {rate_deviation(fmu, mech.A, mech.nominals):.2g}")
     variants = {"as simulate_fmu (max step run/50)": {}, "no max step": {"max_step": np.inf},
-                "max step run/2000": {"max_step": t[-1] / 2000}, "exact Jacobian": {"jacobian": True}}
+                "max step run/2000": {"max_step": t[-1] / 2000}, "exact Jacobian": {"jacobian": True},
+                "nominals x 1e-3": {"scale": 1e-3}, "nominals x 1e-6 (atol -> 0)": {"scale": 1e-6}}
     for label, options in variants.items():
-        y, steps = cvode(mech.A, mech.y0, mech.nominals, t, RTOL, **options)
+        scale = options.pop("scale", 1.0)
+        y, steps = cvode(mech.A, mech.y0, mech.nominals * scale, t, RTOL, **options)
         print(f"  CVode on A y, {label:34s} {deviation(y[:, :n], exact):.3g} ({steps} steps)")
     y, steps = cvode(mech.A, mech.y0, mech.nominals, t[::10], RTOL)
     print(f"  CVode on A y, {'every 10th output time':34s} {deviation(y[:, :n], exact[::10]):.3g} ({steps} steps)")

@@ -145,7 +145,7 @@ def grain(sc, native: Table | None) -> ExportModel:
                                1.0 if max(model.axes) == min(model.axes) else 0.0, sc.numerics.tolerance,
                                sc.numerics.scan_step, sc.numerics.rest_velocity, model.period)))
     y0 = np.concatenate([start.r, start.v, start.q, start.w])
-    nominal = _nominals(sc)
+    nominal = nominals(sc)
     n = len(gm.STATE)
     n_d = len(DISCRETE) + motion.ZENO_IMPACTS
     reals = REALS.sized(X=n, DX=n, Y=0, Z=len(INDICATORS), U=0, P=len(params), D=n_d)
@@ -237,7 +237,7 @@ def slot_names(layout: Layout) -> list[str]:
     return [f.name if f.shape == () else f"{f.name}{i}" for f in layout.fields for i in range(f.size)]
 
 
-def _nominals(sc) -> list[float]:
+def nominals(sc) -> list[float]:
     """Magnitudes of the 13 states (importers scale their absolute tolerances by them): positions the larger of
     the largest semi-axis, the start height and the amplitude [m]; velocities the larger of the surface's speed
     amplitude A omega, the speed of a fall from the start height and the start speed [m/s]; the quaternion 1;
