@@ -518,7 +518,7 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
     """Screen the mutants of one shard into its module's record: all, or a seeded random sample of `size` (when
     > 0); of those, only the ones the record holds with one of the outcomes `rest`, or (`unrecorded`) only the
     ones it does not hold. A recorded mutant is found by its function and change, not its number, which moves
-    when the module is edited; its line is replaced under its current name."""
+    when the module is edited; every line the record keeps is written under its mutant's current name."""
     module, tests, _ = SHARDS[name]
     folder = shard_folder(name)
     mutation_screen.generate(folder, fresh)
@@ -532,7 +532,7 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
         drawn = (f"seed {seed}, {len(names)} drawn of the {population} mutants of shard {name} "
                  f"(random.Random({seed}).sample of their sorted names, screened in the order drawn); this "
                  "record's lines are the mutants screened")
-    replaces, stale = {}, []
+    found, stale = {}, []
     if rest or unrecorded:
         entries = list(rec.read(rec.record_path(module)).values())
         functions = {rec.function_of(e.mutant) for e in entries}
@@ -541,8 +541,7 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
                    for n, (digest, _) in mutation_screen.changes(folder, module, candidates).items()}
         found = rec.match(entries, current)
         if rest:
-            replaces = {found[e.mutant]: e.mutant for e in entries if e.mutant in found and e.outcome in rest}
-            names = list(replaces)
+            names = [found[e.mutant] for e in entries if e.mutant in found and e.outcome in rest]
         else:
             drawn_names = set(names)
             names = [n for n in names if n not in found.values()]
@@ -556,7 +555,7 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
     which = ("its unkilled mutants again" if rest else
              "the rest of its sample" if size else "its mutants not recorded" if unrecorded else "")
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,
-                                  replaces=replaces, stale=stale)
+                                  renames=found, stale=stale)
 
 
 def check(killed: int, seed: int, only: list[str]) -> int:

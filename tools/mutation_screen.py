@@ -21,6 +21,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import mutation_record as rec
@@ -171,16 +172,22 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
     return args, max(TIMEOUT_FLOOR, TIMEOUT_FACTOR * max(times)), times
 
 
+def kept(entries: dict[str, rec.Entry], renames: dict[str, str], stale: tuple) -> dict[str, rec.Entry]:
+    """The record's lines a screen keeps (all but `stale`), each under its mutant's current name (`renames`:
+    recorded -> current): after an edit renumbered a function's mutants, a mutant screened now may carry the name a
+    kept line had, and writing it under that name would overwrite the kept line."""
+    return {renames.get(n, n): replace(e, mutant=renames.get(n, n)) for n, e in entries.items() if n not in stale}
+
+
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           which: str = "", drawn: str = "", replaces: dict[str, str] | None = None, stale: tuple = ()) -> int:
+           which: str = "", drawn: str = "", renames: dict[str, str] | None = None, stale: tuple = ()) -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
     `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
-    so); `drawn`: how a random sample was drawn (the record's "sample:" note); `replaces`: current name -> the
-    recorded name of the same change, whose line the new one replaces; `stale`: recorded lines to drop (their
-    change is no longer made)."""
+    so); `drawn`: how a random sample was drawn (the record's "sample:" note); `renames`: recorded name -> the
+    current name of the same change; `stale`: recorded lines to drop (their change is no longer made)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
-    entries = {n: e for n, e in rec.read(path).items() if n not in stale}
+    entries = kept(rec.read(path), renames or {}, stale)
     found = changes(folder, module, names)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
@@ -196,9 +203,6 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     for i, name in enumerate(names):
         outcome, test, seconds = run_one(name, args, limit)
         digest, summary = found[name]
-        old = (replaces or {}).get(name, name)
-        if old not in names[:i]:  # (a line this screen already wrote under that name is another change's)
-            entries.pop(old, None)
         entries[name] = rec.Entry(name, shard, digest, outcome, test, seconds, summary)
         print(f"    {name}: {outcome} {test} ({seconds:.1f} s)", flush=True)
         if i % 10 == 9 or i == len(names) - 1:
