@@ -389,6 +389,17 @@ SHARDS = {
                                  "tests/test_elastic_damping.py", "-m", "not slow", "-k",
                                  "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
                                 ["*"]),
+    # the elastic equations of motion by a seeded sample: the quasi-static and energy tests first (fast, exact), then
+    # the fast elastic files and the cheapest that integrate (test_dynamics_rhs.py, 40 s of other kinds, left out)
+    "elastic_system_sample": ("symmech/trolley/elastic/system.py",
+                              ["tests/test_elastic_quasi_static.py", "tests/test_texts_warnings_and_sparse_rows.py",
+                               "tests/test_elastic_energies.py", "tests/test_elastic_residual.py",
+                               "tests/test_elastic_bodies.py", "tests/test_elastic_damping.py",
+                               "tests/test_trolley_elastic.py", "tests/test_elastic_assembly.py",
+                               "tests/test_elastic_simulate.py", "tests/test_elastic_timeline.py",
+                               "tests/test_elastic_outputs.py", "-m", "not slow", "-k",
+                               "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
+                              ["*"]),
     "engine_py_sample": ("symmech/grain/motion_engine/driver.py", ENGINE_PY_TESTS, ["*"]),
     "pipeline_sample": ("symmech/core/pipeline.py", PIPELINE_TESTS, ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
