@@ -40,6 +40,7 @@ import json
 import random
 import subprocess
 import sys
+import time
 from collections import Counter
 from pathlib import Path
 
@@ -572,7 +573,7 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
 def check(killed: int, seed: int, only: list[str]) -> int:
     """Rerun a sample of every record (or of the records of the dotted modules `only`) against the current tree
     (`make mutate-check`), one shard at a time."""
-    status, total = 0, 0
+    status, total, start = 0, 0, time.monotonic()
     for path in sorted(rec.RESULTS.glob("*.tsv")):
         if only and path.stem not in only:
             continue
@@ -585,7 +586,8 @@ def check(killed: int, seed: int, only: list[str]) -> int:
             # each shard in a process of its own: a screen imports one mutated copy of the package
             status |= subprocess.call([sys.executable, __file__, "--recheck", name,
                                        json.dumps([e.mutant for e in mine])])
-    print(f"== check: {total} recorded outcomes {'hold' if status == 0 else 'do NOT all hold'}")
+    print(f"== check: {total} recorded outcomes {'hold' if status == 0 else 'do NOT all hold'} "
+          f"({time.monotonic() - start:.0f} s)")
     return status
 
 
