@@ -195,3 +195,22 @@ def test_a_gentle_drive_starts_a_rolling_spheres_slip_along_a_unit_direction():
     np.testing.assert_allclose(contact.slip_direction(0.0, y), [0.6, -0.8], rtol=0, atol=1e-15)
     assert math.isclose(ball.kinetic(np.eye(3), np.array([0.3, 0.0, 0.4]), np.array([0.0, 0.0, 10.0])),
                         0.125 + 20 * a * a, rel_tol=1e-14)
+
+
+def test_a_phase_whose_events_do_not_advance_time_stops_at_the_guards_count(monkeypatch):
+    """Every chunk ends on an event where it started: the phase stops at the chunk after the 200th in a row
+    (MAX_STALLED_EVENTS), with one line naming the time and the count, not one chunk later or never."""
+    starts = []
+
+    def stalled(fun, span, y0, **kwargs):
+        starts.append(span[0])
+        if len(starts) > sliding.MAX_STALLED_EVENTS + 1:
+            pytest.fail("the stall guard let a stalled phase run on")
+        return SimpleNamespace(success=True, status=1, t=np.array([span[0]]), y=np.asarray(y0)[:, None], sol=None,
+                               t_events=[np.array([span[0]])])
+
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", stalled)
+    with pytest.raises(SymmechError, match=r"^sliding stagnates at t = 0.25 s: 200 regime changes without advancing"):
+        sliding.slide(still_plate(0.3), ellipsoid(), 0.25, np.zeros(2), np.array([0.01, 0.0]), Q0.copy(),
+                      np.zeros(3), 0.5, [], 1e-3, 1e-9)
+    assert starts == [0.25] * (sliding.MAX_STALLED_EVENTS + 1)
