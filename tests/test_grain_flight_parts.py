@@ -64,9 +64,13 @@ def test_a_grain_that_does_not_spin_keeps_its_orientation_and_zero_spin():
 def test_a_spin_about_a_principal_axis_turns_at_its_rate_across_chunks():
     """w = (0, 0, 10) rad/s about the body's z axis, a principal axis (I w' = -w x I w = 0): w stays, and from
     q0 = 1 the orientation is q(t) = (cos 5t, 0, 0, sin 5t), asked at times that each extend the rotation by a
-    chunk of 0.02 s (some steps each), the next chunk starting where the last ended."""
-    flight = RotationFlight([1.0, 2.0, 3.0], np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0]), 0.0, 1e-10,
-                            0.02)
+    chunk of 0.02 s (some steps each), the next chunk starting where the last ended. Asked at t0 first, before any
+    chunk, it is the start state as given (it was memory left unwritten)."""
+    q0, w0 = np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0])
+    flight = RotationFlight([1.0, 2.0, 3.0], q0, w0, 0.0, 1e-10, 0.02)
+    q, w = flight.state(np.array([0.0, 0.0]))
+    np.testing.assert_array_equal(q, [q0, q0])
+    np.testing.assert_array_equal(w, [w0, w0])
     for t in (0.01, 0.03, 0.05):
         q, w = flight.state(t)
         np.testing.assert_allclose(q, [np.cos(5 * t), 0.0, 0.0, np.sin(5 * t)], rtol=0, atol=1e-8)
