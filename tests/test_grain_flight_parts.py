@@ -75,3 +75,14 @@ def test_a_spin_about_a_principal_axis_turns_at_its_rate_across_chunks():
         q, w = flight.state(t)
         np.testing.assert_allclose(q, [np.cos(5 * t), 0.0, 0.0, np.sin(5 * t)], rtol=0, atol=1e-8)
         np.testing.assert_allclose(w, [0.0, 0.0, 10.0], rtol=0, atol=1e-12)
+
+
+def test_a_single_precision_rotation_matrix_gives_the_quaternion_of_its_entries():
+    """A turn of 0.3 rad about z stored in float32 (an input the API takes) is read in double precision: from its
+    stored entries c = Q[0, 0], s = Q[1, 0], q = (w, 0, 0, s / (2 w)) with w = sqrt(2 + 2c) / 2 (trace 1 + 2c, the
+    largest of Shepperd's four), to round-off, not to float32's 1e-8."""
+    c, s = math.cos(0.3), math.sin(0.3)
+    Q = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], dtype=np.float32)
+    c, s = float(Q[0, 0]), float(Q[1, 0])
+    w = math.sqrt(2 + 2 * c) / 2
+    np.testing.assert_allclose(quaternion_from_matrix(Q), [w, 0.0, 0.0, s / (2 * w)], rtol=0, atol=1e-15)
