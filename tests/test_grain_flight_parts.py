@@ -1,9 +1,11 @@
 """The grain's flight parts against closed forms written out here: the exact translation relative to a vibrating
 surface, the surface phase, and quaternions of rotation matrices (every branch of Shepperd's method)."""
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import scipy.integrate
 
 from symmech.grain.flight import RotationFlight, Vibration, quaternion_from_matrix, rotation_matrix, translate
 
@@ -86,3 +88,12 @@ def test_a_single_precision_rotation_matrix_gives_the_quaternion_of_its_entries(
     c, s = float(Q[0, 0]), float(Q[1, 0])
     w = math.sqrt(2 + 2 * c) / 2
     np.testing.assert_allclose(quaternion_from_matrix(Q), [w, 0.0, 0.0, s / (2 * w)], rtol=0, atol=1e-15)
+
+
+def test_a_failed_rotation_integration_says_why(monkeypatch):
+    failed = SimpleNamespace(success=False, message="Required step size is less than spacing between numbers.")
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", lambda *args, **kwargs: failed)
+    rotation = RotationFlight([1.0, 2.0, 3.0], np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0]), 0.0, 1e-10,
+                              0.02)
+    with pytest.raises(RuntimeError, match=r"^torque-free rotation did not integrate: Required step size is less"):
+        rotation.state(0.01)
