@@ -77,6 +77,10 @@ def test_a_recheck_runs_the_deciding_test_with_the_selections_marks_and_options(
     assert args[:4] == [str(tmp_path / "frozen" / "tests/test_a.py::test_b"), "-m", "not slow", "--noconftest"]
     assert mutation_screen.deciding(rec.Entry("m.x_f__mutmut_2", "s", "ab", "survived", "", 1.0, ""), tmp_path,
                                     ["tests/test_a.py"]) == []
+    both = mutation_screen.node_args(["tests/test_a.py::test_b", "tests/test_c.py::test_d[1]"], tmp_path,
+                                     ["tests/test_a.py", "-m", "slow"])
+    assert both[:4] == [str(tmp_path / "frozen" / "tests/test_a.py::test_b"),
+                        str(tmp_path / "frozen" / "tests/test_c.py::test_d[1]"), "-m", "slow"]
 
 
 def test_the_table_counts_both_kinds_of_kill_and_each_non_kill_apart(tmp_path, monkeypatch):

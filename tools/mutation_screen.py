@@ -145,10 +145,11 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     return outcome, "" if outcome != "crash" else f"pytest exit {found['code']}", seconds
 
 
-def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
-            runs: int = BASELINE_RUNS) -> tuple[list[str], float, list[float]]:
+def prepare(folder: Path, module: str, tests: list[str], fresh: bool, runs: int = BASELINE_RUNS,
+            timed: list[str] | None = None) -> tuple[list[str], float, list[float]]:
     """Generate the mutants, freeze the tests, import pytest and the mutated module in this process, and time the
-    unmutated run `runs` times: (pytest args, a mutant's time limit, the baseline times)."""
+    unmutated run `runs` times (of the pytest args `timed`, when only those tests will run; else of the whole
+    selection): (the selection's pytest args, a mutant's time limit, the baseline times)."""
     generate(folder, fresh)
     frozen = freeze_tests(folder)
     args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
@@ -165,7 +166,7 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
         pytest.main([*args, "--collect-only"])
     times = []
     for _ in range(runs):
-        outcome, test, seconds = run_one("", args, 3600.0)
+        outcome, test, seconds = run_one("", timed or args, 3600.0)
         if outcome != "survived":
             raise SystemExit(f"the unmutated code does not pass its tests ({outcome} {test}): no screen")
         times.append(seconds)
@@ -229,19 +230,28 @@ def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
     survives all of it)."""
     if entry.outcome not in rec.KILLS or not entry.test:
         return []
+    return node_args([entry.test.split(" (")[0]], folder, tests)
+
+
+def node_args(nodes: list[str], folder: Path, tests: list[str]) -> list[str]:
+    """pytest args that run only the tests `nodes` (pytest node ids under tests/) in the frozen copy, with the
+    selection's marks and options."""
     marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
     options = [a for a in tests if a.startswith("--")]
-    node = entry.test.split(" (")[0]
-    return [str(folder / "frozen" / node), *marks, *options, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
+    return [*(str(folder / "frozen" / node) for node in nodes), *marks, *options, "-q", "-n", "0", "-p",
+            "no:cacheprovider", "--tb=no"]
 
 
 def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
     """Rerun `chosen` on mutants made from the current tree, a recorded kill against the test that made it, any
     other outcome against the whole selection; 1 when an outcome no longer holds or a mutant is gone."""
-    # one unmutated run: it must pass, and its time only sets the limit, which can turn a recorded outcome into a
-    # timeout (a failed check), never a failed check into a passed one
+    # one unmutated run of the tests the check will run (only the deciding tests when every chosen outcome is a
+    # kill, else the whole selection): it must pass, and its time only sets the limit, which can turn a recorded
+    # outcome into a timeout (a failed check), never a failed check into a passed one
     start = time.monotonic()
-    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1)
+    kills_only = all(deciding(e, folder, tests) for e in chosen)
+    timed = node_args(sorted({e.test.split(" (")[0] for e in chosen}), folder, tests) if kills_only else None
+    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1, timed=timed)
     # only the chosen mutants' functions: a mutant is found again in its own function (mutation_record.match), and a
     # diff costs a parse of the module (a minute for the 2000 mutants of a large module)
     functions = {rec.function_of(e.mutant) for e in chosen}
@@ -262,5 +272,6 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
         print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "
               f"{test} {'ok' if held else 'CHANGED'}", flush=True)
     print(f"== recheck {shard}: {len(chosen) - failures} of {len(chosen)} hold; {ready - start:.0f} s to make the "
-          f"mutants and run the unmutated selection, {time.monotonic() - ready:.0f} s to rerun", flush=True)
+          f"mutants and run the unmutated {'deciding tests' if kills_only else 'selection'}, "
+          f"{time.monotonic() - ready:.0f} s to rerun", flush=True)
     return 1 if failures else 0
