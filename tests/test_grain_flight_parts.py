@@ -67,12 +67,15 @@ def test_a_spin_about_a_principal_axis_turns_at_its_rate_across_chunks():
     """w = (0, 0, 10) rad/s about the body's z axis, a principal axis (I w' = -w x I w = 0): w stays, and from
     q0 = 1 the orientation is q(t) = (cos 5t, 0, 0, sin 5t), asked at times that each extend the rotation by a
     chunk of 0.02 s (some steps each), the next chunk starting where the last ended. Asked at t0 first, before any
-    chunk, it is the start state as given (it was memory left unwritten)."""
-    q0, w0 = np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0])
-    flight = RotationFlight([1.0, 2.0, 3.0], q0, w0, 0.0, 1e-10, 0.02)
-    q, w = flight.state(np.array([0.0, 0.0]))
-    np.testing.assert_array_equal(q, [q0, q0])
-    np.testing.assert_array_equal(w, [w0, w0])
+    chunk, a rotation is its start state as given, bit for bit (no step taken, nothing renormalised; it was memory
+    left unwritten)."""
+    q_any = np.array([0.8, 0.2, -0.4, 0.3]) / np.linalg.norm([0.8, 0.2, -0.4, 0.3])
+    q, w = RotationFlight([1.0, 2.0, 3.0], q_any, np.array([0.3, -2.0, 10.0]), 0.0, 1e-10, 0.02).state(
+        np.array([0.0, 0.0]))
+    np.testing.assert_array_equal(q, [q_any, q_any])
+    np.testing.assert_array_equal(w, [[0.3, -2.0, 10.0]] * 2)
+    flight = RotationFlight([1.0, 2.0, 3.0], np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0]), 0.0, 1e-10,
+                            0.02)
     for t in (0.01, 0.03, 0.05):
         q, w = flight.state(t)
         np.testing.assert_allclose(q, [np.cos(5 * t), 0.0, 0.0, np.sin(5 * t)], rtol=0, atol=1e-8)
