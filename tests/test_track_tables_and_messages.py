@@ -7,6 +7,7 @@ Expected values are written out: the angle between (1, 1, 1) and (0, 0, 2) is ac
 straight table of n unit segments is n m long.
 """
 import math
+import re
 
 import numpy as np
 import pytest
@@ -74,3 +75,14 @@ def test_arc_length_inverse_of_a_track_whose_speed_grows():
     s = np.array([0.0, 0.1234, 1.5, 2.9, 3.0])
     assert arc.length == pytest.approx(3.0, rel=1e-14)
     np.testing.assert_allclose(arc.parameter(s), np.sqrt(s + 1), rtol=0, atol=1e-13)
+
+
+def test_a_table_that_loops_back_onto_itself_is_refused_where_it_does():
+    """30 samples of a vertical circle of radius 1 m over 2 pi + 0.6 rad: the track passes its start again one turn,
+    2 pi m of arc, later (far more than 4 of its 300 dense samples' spacing, far less than 4 / spacing), and the
+    refusal names the two arc lengths where it does."""
+    points = [(math.cos(a), 0.0, math.sin(a)) for a in np.linspace(0.0, 2 * math.pi + 0.6, 30)]
+    with pytest.raises(SceneError, match=r"^scene field 'track.points': track intersects itself near s = ") as err:
+        track.TableTrack(points, "track.points", 30.0)
+    first, second = (float(x) for x in re.findall(r"s = ([0-9.e+-]+) m", str(err.value)))
+    assert abs(second - first - 2 * math.pi) < 0.05
