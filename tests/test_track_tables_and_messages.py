@@ -12,6 +12,7 @@ import re
 import numpy as np
 import pytest
 
+from symmech.core import expressions
 from symmech.core.scene import SceneError
 from symmech.trolley import track
 
@@ -86,3 +87,13 @@ def test_a_table_that_loops_back_onto_itself_is_refused_where_it_does():
         track.TableTrack(points, "track.points", 30.0)
     first, second = (float(x) for x in re.findall(r"s = ([0-9.e+-]+) m", str(err.value)))
     assert abs(second - first - 2 * math.pi) < 0.05
+
+
+def test_a_twist_singular_on_the_ride_is_refused_in_its_own_field_and_metres():
+    """θ1(s) = 1 / (s - 2) on a ride over [0, 5] m is infinite at s = 2 m: the refusal names the twist's field and the
+    arc length in metres."""
+    line = track.Track()  # the base's twist check, without a midline's own
+    line.twist_expr = expressions.parse("track.twist", "1/(s - 2)", ("s",), {})
+    with pytest.raises(SceneError, match=r"^scene field 'track.twist': '1/\(s - 2\)' is infinite or overflows at "
+                                         r"s = 2 m \(domain \[0, 5\]\)$"):
+        line.check_domain("track", 0.0, 5.0)
