@@ -41,9 +41,11 @@ def test_a_kink_after_collinear_points_is_refused_with_its_angle_and_point():
 
 
 def test_leaving_a_table_is_refused_with_the_range_and_the_length():
-    """A straight table of five unit segments is 5 m long; s from -1 to 5 m leaves it."""
+    """A straight table of five unit segments is 5 m long; s from -1 to 5 m leaves it, s from 0 to its very end
+    (its length) does not."""
     table = track.TableTrack([(k, 0, 0) for k in range(6)], "track.points", 20.0)
     assert table.length == pytest.approx(5.0, rel=1e-12)
+    table.check_domain("track", 0.0, table.length)
     with pytest.raises(SceneError) as refused:
         table.check_domain("track", -1.0, 5.0)
     assert str(refused.value) == ("scene field 'motion.speed': the motion leaves the track table: s from -1 to 5 m "
@@ -97,3 +99,9 @@ def test_a_twist_singular_on_the_ride_is_refused_in_its_own_field_and_metres():
     with pytest.raises(SceneError, match=r"^scene field 'track.twist': '1/\(s - 2\)' is infinite or overflows at "
                                          r"s = 2 m \(domain \[0, 5\]\)$"):
         line.check_domain("track", 0.0, 5.0)
+
+
+def test_coinciding_points_are_refused_by_their_numbers():
+    points = [(0, 0, 0), (1, 0, 0), (2, 0, 0), (2, 0, 0), (3, 0, 0)]
+    with pytest.raises(SceneError, match=r"^scene field 'track.points': points 2 and 3 coincide; a track table needs"):
+        track.TableTrack(points, "track.points", 20.0)
