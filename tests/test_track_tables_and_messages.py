@@ -105,3 +105,13 @@ def test_coinciding_points_are_refused_by_their_numbers():
     points = [(0, 0, 0), (1, 0, 0), (2, 0, 0), (2, 0, 0), (3, 0, 0)]
     with pytest.raises(SceneError, match=r"^scene field 'track.points': points 2 and 3 coincide; a track table needs"):
         track.TableTrack(points, "track.points", 20.0)
+
+
+def test_a_twist_reads_the_scenes_constants():
+    """[track] twist = "c*s" with constants c = 0.25 rad/m on a straight table: θ1 = c s, θ1' = c, θ1'' = 0."""
+    line = track.build({"type": "table", "points": [(k, 0, 0) for k in range(6)], "max_turn_deg": 20.0,
+                        "smoothing": 0.0, "twist": "c*s", "constants": {"c": 0.25}})
+    theta, rate, curl = line.twist(np.array([2.0, 4.0]))
+    np.testing.assert_allclose(theta, [0.5, 1.0], rtol=1e-15)
+    np.testing.assert_allclose(rate, [0.25, 0.25], rtol=1e-15)
+    np.testing.assert_array_equal(curl, [0.0, 0.0])
