@@ -115,3 +115,14 @@ def test_a_twist_reads_the_scenes_constants():
     np.testing.assert_allclose(theta, [0.5, 1.0], rtol=1e-15)
     np.testing.assert_allclose(rate, [0.25, 0.25], rtol=1e-15)
     np.testing.assert_array_equal(curl, [0.0, 0.0])
+
+
+def test_a_smoothed_table_stays_within_its_smoothing_of_its_points():
+    """Twelve points 1 m apart along x, zigzagging by ±2 cm, smoothed to 1 cm: the fit is the smoothest within an RMS
+    distance of 1 cm of them (splprep's sum of squares n σ²), so the RMS of the points' distances to the track is
+    1 cm, to 10 % (its dense samples 3 mm apart); the zigzag itself is 2 cm off the straight line."""
+    points = np.array([(float(k), 0.02 * (-1) ** k, 0.0) for k in range(12)])
+    table = track.TableTrack(points, "track.points", 20.0, 0.01)
+    midline = table.derivatives(np.linspace(0.0, table.length, 4001), 0)[0]
+    distance = np.linalg.norm(midline[None, :, :] - points[:, None, :], axis=-1).min(axis=1)
+    assert 0.009 < math.sqrt(np.mean(distance ** 2)) < 0.011
