@@ -126,3 +126,11 @@ def test_a_smoothed_table_stays_within_its_smoothing_of_its_points():
     midline = table.derivatives(np.linspace(0.0, table.length, 4001), 0)[0]
     distance = np.linalg.norm(midline[None, :, :] - points[:, None, :], axis=-1).min(axis=1)
     assert 0.009 < math.sqrt(np.mean(distance ** 2)) < 0.011
+
+
+def test_a_midline_undefined_on_the_ride_is_refused_in_its_coordinates_field():
+    """y(s) = sqrt(5 - s) on a ride over [0, 6] m is undefined past s = 5 m: the refusal names track.y (x and z are
+    defined there) in metres."""
+    line = track.build({"type": "expression", "x": "s", "y": "sqrt(5 - s)", "z": "0", "parameter": "s", "twist": "0"})
+    with pytest.raises(SceneError, match=r"^scene field 'track.y': 'sqrt\(5 - s\)' is undefined or complex at s = 5 m"):
+        line.check_domain("track", 0.0, 6.0)
