@@ -252,13 +252,17 @@ def test_axial_field_is_the_shortening_of_the_slopes(support, axial):
 def test_clamped_pair_energy_is_zero_at_rest_and_grows_as_its_closed_form():
     """Two rollers clamping the rail, each preloaded by δ: Π = ½ k [(δ - d)₊² + (δ + d)₊² - 2 δ₊²] is k d² while both
     touch (|d| <= δ), ½ k [(|d| + δ)² - 2 δ²] after one lifts, and 0 undeflected; with a gap (δ < 0) ½ k (|d| + δ)²
-    once the rail reaches a roller."""
+    once the rail reaches a roller; a batch of deflections (rows) gets one energy a row. The linear law is ½ k d²."""
     k, delta = 2e6, 1e-3
     rollers = el_body.Rollers((k,) * 5, (0.0,) * 5, "clamped_pair", (delta, delta, delta, delta, -delta))
     d = np.array([0.0, 0.5e-3, -2e-3, 0.3e-3, 3e-3])
     expected = [0.0, k * 0.25e-6, 0.5 * k * (9e-6 - 2e-6), k * 0.09e-6, 0.5 * k * 4e-6]
     got = [el_body.roller_energy(rollers, np.where(np.arange(5) == i, d, 0.0)) for i in range(5)]
     assert np.allclose(got, expected, rtol=1e-12, atol=0)
+    rows = np.array([np.where(np.arange(5) == i, d, 0.0) for i in (1, 2)])
+    assert np.allclose(el_body.roller_energy(rollers, rows), expected[1:3], rtol=1e-12, atol=0)
+    linear = el_body.Rollers((k,) * 5, (0.0,) * 5)
+    assert np.isclose(el_body.roller_energy(linear, d), 0.5 * k * float(d @ d), rtol=1e-12, atol=0)
 
 
 def test_roller_laws_take_any_real_numbers_as_floats():

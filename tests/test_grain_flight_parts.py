@@ -1,9 +1,11 @@
 """The grain's flight parts against closed forms written out here: the exact translation relative to a vibrating
 surface, the surface phase, and quaternions of rotation matrices (every branch of Shepperd's method)."""
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import scipy.integrate
 
 from symmech.grain.flight import RotationFlight, Vibration, quaternion_from_matrix, rotation_matrix, translate
 
@@ -59,3 +61,42 @@ def test_a_grain_that_does_not_spin_keeps_its_orientation_and_zero_spin():
     q, w = RotationFlight([1.0, 2.0, 3.0], q0, np.zeros(3), 0.0, 1e-10, 0.1).state(np.array([0.0, 0.5, 2.0]))
     np.testing.assert_array_equal(q, np.tile(q0, (3, 1)))
     np.testing.assert_array_equal(w, np.zeros((3, 3)))
+
+
+def test_a_spin_about_a_principal_axis_turns_at_its_rate_across_chunks():
+    """w = (0, 0, 10) rad/s about the body's z axis, a principal axis (I w' = -w x I w = 0): w stays, and from
+    q0 = 1 the orientation is q(t) = (cos 5t, 0, 0, sin 5t), asked at times that each extend the rotation by a
+    chunk of 0.02 s (some steps each), the next chunk starting where the last ended. Asked at t0 first, before any
+    chunk, a rotation is its start state as given, bit for bit (no step taken, nothing renormalised; it was memory
+    left unwritten)."""
+    q_any = np.array([0.8, 0.2, -0.4, 0.3]) / np.linalg.norm([0.8, 0.2, -0.4, 0.3])
+    q, w = RotationFlight([1.0, 2.0, 3.0], q_any, np.array([0.3, -2.0, 10.0]), 0.0, 1e-10, 0.02).state(
+        np.array([0.0, 0.0]))
+    np.testing.assert_array_equal(q, [q_any, q_any])
+    np.testing.assert_array_equal(w, [[0.3, -2.0, 10.0]] * 2)
+    flight = RotationFlight([1.0, 2.0, 3.0], np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0]), 0.0, 1e-10,
+                            0.02)
+    for t in (0.01, 0.03, 0.05):
+        q, w = flight.state(t)
+        np.testing.assert_allclose(q, [np.cos(5 * t), 0.0, 0.0, np.sin(5 * t)], rtol=0, atol=1e-8)
+        np.testing.assert_allclose(w, [0.0, 0.0, 10.0], rtol=0, atol=1e-12)
+
+
+def test_a_single_precision_rotation_matrix_gives_the_quaternion_of_its_entries():
+    """A turn of 0.3 rad about z stored in float32 (an input the API takes) is read in double precision: from its
+    stored entries c = Q[0, 0], s = Q[1, 0], q = (w, 0, 0, s / (2 w)) with w = sqrt(2 + 2c) / 2 (trace 1 + 2c, the
+    largest of Shepperd's four), to round-off, not to float32's 1e-8."""
+    c, s = math.cos(0.3), math.sin(0.3)
+    Q = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], dtype=np.float32)
+    c, s = float(Q[0, 0]), float(Q[1, 0])
+    w = math.sqrt(2 + 2 * c) / 2
+    np.testing.assert_allclose(quaternion_from_matrix(Q), [w, 0.0, 0.0, s / (2 * w)], rtol=0, atol=1e-15)
+
+
+def test_a_failed_rotation_integration_says_why(monkeypatch):
+    failed = SimpleNamespace(success=False, message="Required step size is less than spacing between numbers.")
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", lambda *args, **kwargs: failed)
+    rotation = RotationFlight([1.0, 2.0, 3.0], np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 10.0]), 0.0, 1e-10,
+                              0.02)
+    with pytest.raises(RuntimeError, match=r"^torque-free rotation did not integrate: Required step size is less"):
+        rotation.state(0.01)

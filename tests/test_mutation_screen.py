@@ -77,6 +77,10 @@ def test_a_recheck_runs_the_deciding_test_with_the_selections_marks_and_options(
     assert args[:4] == [str(tmp_path / "frozen" / "tests/test_a.py::test_b"), "-m", "not slow", "--noconftest"]
     assert mutation_screen.deciding(rec.Entry("m.x_f__mutmut_2", "s", "ab", "survived", "", 1.0, ""), tmp_path,
                                     ["tests/test_a.py"]) == []
+    both = mutation_screen.node_args(["tests/test_a.py::test_b", "tests/test_c.py::test_d[1]"], tmp_path,
+                                     ["tests/test_a.py", "-m", "slow"])
+    assert both[:4] == [str(tmp_path / "frozen" / "tests/test_a.py::test_b"),
+                        str(tmp_path / "frozen" / "tests/test_c.py::test_d[1]"), "-m", "slow"]
 
 
 def test_the_table_counts_both_kinds_of_kill_and_each_non_kill_apart(tmp_path, monkeypatch):
@@ -139,6 +143,24 @@ def test_a_change_made_at_several_places_finds_each_recorded_mutant_its_own():
     assert rec.match(old, places) == {"old.path.x_f__mutmut_62": "m.x_f__mutmut_62"}
     moved = {f"m.x_f__mutmut_{n}": ("x_f", "aaaaaaaaaaaa") for n in (38, 50, 63)}
     assert rec.match(old, moved) == {"old.path.x_f__mutmut_62": "m.x_f__mutmut_63"}
+
+
+def test_a_screen_after_an_edit_keeps_every_recorded_line_under_its_current_name():
+    """An edit inserted a mutant at _1 of f: the recorded _1 and _2 are now _2 and _3, and the new _1 is screened.
+    Every kept line moves to its current name first, so the new _1 overwrites none of them; a stale line goes."""
+    def entry(name, digest, outcome):
+        return rec.Entry(name, "s", digest, outcome, "", 1.0, "a → b")
+
+    recorded = {"m.x_f__mutmut_1": entry("m.x_f__mutmut_1", "aaaaaaaaaaaa", "killed"),
+                "m.x_f__mutmut_2": entry("m.x_f__mutmut_2", "bbbbbbbbbbbb", "survived"),
+                "m.x_f__mutmut_9": entry("m.x_f__mutmut_9", "cccccccccccc", "raised")}
+    current = {"m.x_f__mutmut_1": ("x_f", "dddddddddddd"), "m.x_f__mutmut_2": ("x_f", "aaaaaaaaaaaa"),
+               "m.x_f__mutmut_3": ("x_f", "bbbbbbbbbbbb")}
+    found = rec.match(list(recorded.values()), current)
+    kept = mutation_screen.kept(recorded, found, ("m.x_f__mutmut_9",))
+    assert {n: (e.mutant, e.hash, e.outcome) for n, e in kept.items()} == {
+        "m.x_f__mutmut_2": ("m.x_f__mutmut_2", "aaaaaaaaaaaa", "killed"),
+        "m.x_f__mutmut_3": ("m.x_f__mutmut_3", "bbbbbbbbbbbb", "survived")}
 
 
 def test_clopper_pearson_interval_at_its_closed_forms():

@@ -39,3 +39,18 @@ def test_a_grain_leaves_a_plate_that_falls_faster_than_gravity():
     assert math.pi / 6 < omega * first < 5 * math.pi / 6
     assert len(res.impacts) >= 2
     assert res.time_in["flight"] > 0.5 * 2 * math.pi / omega
+
+
+def test_as_printed_a_plastic_landing_lifts_nothing_off():
+    """As printed, (64) lifts a grain off only when z'_c > 0 after the impact. A point mass 0.1 mm above a still
+    plate, e_n = 0: the printed contact test first fires at step k = 45 (the explicit fall h - g dt^2 k(k+1)/2 is
+    first below 0 there), the impact leaves z'_c = 0 exactly, and the grain slides from that step on, losing mu g dt
+    of its 0.5 m/s each of the 56 steps to t = 0.01 s: one impact, no second."""
+    mu, v0, dt = 0.3, 0.5, 1e-4
+    num = motion.Numerics(mode="paper", dt=dt, nodes=20, sample_interval=0.01, as_printed=True)
+    res = paper_mode.simulate(sphere(mu=mu, rotation=False), num, on_plane(v=(v0, 0.0, 0.0), z=1.1e-3), 0.01)
+    assert len(res.impacts) == 1
+    landing = res.impacts[0]
+    assert math.isclose(landing["t"], 45 * dt, rel_tol=1e-12) and landing["v_after"][2] == 0.0
+    assert math.isclose(res.final.v[0], v0 - 56 * mu * G * dt, rel_tol=1e-12)
+    assert res.final.v[2] == 0.0

@@ -7,11 +7,15 @@ Expected values are computed here from the geometry: the support point of x^T (Q
 R = -E e_z / sqrt(e_z . E e_z), E = Q A^2 Q^T; the friction then pulls the centre against the slip at mu g.
 """
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import scipy.integrate
 
+from symmech.core.scene import SymmechError
 from symmech.grain import flight, sliding
+from symmech.grain.vectors import SLIDE_STATE
 
 G = 9.81
 MASS = 2e-3  # kg
@@ -162,3 +166,51 @@ def test_a_start_at_zero_normal_force_is_a_lift_off_at_once():
                         [], 1e-3, 1e-9)
     assert res.lifted and res.t == 0.0
     np.testing.assert_array_equal(res.v, [0.01, 0.0])
+
+
+def test_a_failed_sliding_integration_says_when_and_why(monkeypatch):
+    """The solver's failure reaches the user as one line: what failed, at which time, the solver's own reason."""
+    failed = SimpleNamespace(success=False, message="Required step size is less than spacing between numbers.")
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", lambda *args, **kwargs: failed)
+    with pytest.raises(SymmechError, match=r"^sliding integration failed at t = 0.25 s: Required step size is less"):
+        sliding.slide(still_plate(0.3), ellipsoid(), 0.25, np.zeros(2), np.array([0.01, 0.0]), Q0.copy(),
+                      np.zeros(3), 0.5, [], 1e-3, 1e-9)
+
+
+def test_a_gentle_drive_starts_a_rolling_spheres_slip_along_a_unit_direction():
+    """A sphere (radius a, I = 2/5 m a^2) at rest on a still plate tilted so that g_t = (0.3, -0.4) m/s^2: the
+    contact's B = 1 + m a^2 / I = 7/2 on the tangent plane: the stick force holding it is -B^-1 g_t = (-0.6, 0.8)/7
+    with n = g, B^-1 g_t has length 1/7 m/s^2 (below 1, where a direction left unnormalised shows) and the slip
+    starts along (0.6, -0.8). Its kinetic energy per unit mass at
+    v = (0.3, 0, 0.4) m/s, w = (0, 0, 10) rad/s is |v|^2/2 + (I/m) |w|^2/2 = 0.125 + 20 a^2 J/kg."""
+    a, mass = 1e-3, 2.0
+    ball = sliding.Body((a,) * 3, mass, (0.4 * mass * a * a,) * 3, True)
+    plate = sliding.Sliding((0.3, -0.4, -G), flight.Vibration(0.0, 1.0, 0.0, (0.0, 0.0, 1.0)), 0.1)
+    q = np.array([1.0, 0.0, 0.0, 0.0])
+    contact = sliding._Contact(plate, ball, q)
+    y = SLIDE_STATE.pack(r=(0.0, 0.0), v=(0.0, 0.0), w=(0.0, 0.0, 0.0), q=q, work=0.0, loss=0.0)
+    phi, n = contact.stick_force(0.0, y)
+    np.testing.assert_allclose(phi, [-0.6 / 7, 0.8 / 7], rtol=0, atol=1e-16)
+    assert n == G
+    np.testing.assert_allclose(contact.slip_direction(0.0, y), [0.6, -0.8], rtol=0, atol=1e-15)
+    assert math.isclose(ball.kinetic(np.eye(3), np.array([0.3, 0.0, 0.4]), np.array([0.0, 0.0, 10.0])),
+                        0.125 + 20 * a * a, rel_tol=1e-14)
+
+
+def test_a_phase_whose_events_do_not_advance_time_stops_at_the_guards_count(monkeypatch):
+    """Every chunk ends on an event where it started: the phase stops at the chunk after the 200th in a row
+    (MAX_STALLED_EVENTS), with one line naming the time and the count, not one chunk later or never."""
+    starts = []
+
+    def stalled(fun, span, y0, **kwargs):
+        starts.append(span[0])
+        if len(starts) > sliding.MAX_STALLED_EVENTS + 1:
+            pytest.fail("the stall guard let a stalled phase run on")
+        return SimpleNamespace(success=True, status=1, t=np.array([span[0]]), y=np.asarray(y0)[:, None], sol=None,
+                               t_events=[np.array([span[0]])])
+
+    monkeypatch.setattr(scipy.integrate, "solve_ivp", stalled)
+    with pytest.raises(SymmechError, match=r"^sliding stagnates at t = 0.25 s: 200 regime changes without advancing"):
+        sliding.slide(still_plate(0.3), ellipsoid(), 0.25, np.zeros(2), np.array([0.01, 0.0]), Q0.copy(),
+                      np.zeros(3), 0.5, [], 1e-3, 1e-9)
+    assert starts == [0.25] * (sliding.MAX_STALLED_EVENTS + 1)

@@ -7,10 +7,12 @@ Expected values are written out: the angle between (1, 1, 1) and (0, 0, 2) is ac
 straight table of n unit segments is n m long.
 """
 import math
+import re
 
 import numpy as np
 import pytest
 
+from symmech.core import expressions
 from symmech.core.scene import SceneError
 from symmech.trolley import track
 
@@ -39,9 +41,11 @@ def test_a_kink_after_collinear_points_is_refused_with_its_angle_and_point():
 
 
 def test_leaving_a_table_is_refused_with_the_range_and_the_length():
-    """A straight table of five unit segments is 5 m long; s from -1 to 5 m leaves it."""
+    """A straight table of five unit segments is 5 m long; s from -1 to 5 m leaves it, s from 0 to its very end
+    (its length) does not."""
     table = track.TableTrack([(k, 0, 0) for k in range(6)], "track.points", 20.0)
     assert table.length == pytest.approx(5.0, rel=1e-12)
+    table.check_domain("track", 0.0, table.length)
     with pytest.raises(SceneError) as refused:
         table.check_domain("track", -1.0, 5.0)
     assert str(refused.value) == ("scene field 'motion.speed': the motion leaves the track table: s from -1 to 5 m "
@@ -74,3 +78,59 @@ def test_arc_length_inverse_of_a_track_whose_speed_grows():
     s = np.array([0.0, 0.1234, 1.5, 2.9, 3.0])
     assert arc.length == pytest.approx(3.0, rel=1e-14)
     np.testing.assert_allclose(arc.parameter(s), np.sqrt(s + 1), rtol=0, atol=1e-13)
+
+
+def test_a_table_that_loops_back_onto_itself_is_refused_where_it_does():
+    """30 samples of a vertical circle of radius 1 m over 2 pi + 0.6 rad: the track passes its start again one turn,
+    2 pi m of arc, later (far more than 4 of its 300 dense samples' spacing, far less than 4 / spacing), and the
+    refusal names the two arc lengths where it does."""
+    points = [(math.cos(a), 0.0, math.sin(a)) for a in np.linspace(0.0, 2 * math.pi + 0.6, 30)]
+    with pytest.raises(SceneError, match=r"^scene field 'track.points': track intersects itself near s = ") as err:
+        track.TableTrack(points, "track.points", 30.0)
+    first, second = (float(x) for x in re.findall(r"s = ([0-9.e+-]+) m", str(err.value)))
+    assert abs(second - first - 2 * math.pi) < 0.05
+
+
+def test_a_twist_singular_on_the_ride_is_refused_in_its_own_field_and_metres():
+    """θ1(s) = 1 / (s - 2) on a ride over [0, 5] m is infinite at s = 2 m: the refusal names the twist's field and the
+    arc length in metres."""
+    line = track.Track()  # the base's twist check, without a midline's own
+    line.twist_expr = expressions.parse("track.twist", "1/(s - 2)", ("s",), {})
+    with pytest.raises(SceneError, match=r"^scene field 'track.twist': '1/\(s - 2\)' is infinite or overflows at "
+                                         r"s = 2 m \(domain \[0, 5\]\)$"):
+        line.check_domain("track", 0.0, 5.0)
+
+
+def test_coinciding_points_are_refused_by_their_numbers():
+    points = [(0, 0, 0), (1, 0, 0), (2, 0, 0), (2, 0, 0), (3, 0, 0)]
+    with pytest.raises(SceneError, match=r"^scene field 'track.points': points 2 and 3 coincide; a track table needs"):
+        track.TableTrack(points, "track.points", 20.0)
+
+
+def test_a_twist_reads_the_scenes_constants():
+    """[track] twist = "c*s" with constants c = 0.25 rad/m on a straight table: θ1 = c s, θ1' = c, θ1'' = 0."""
+    line = track.build({"type": "table", "points": [(k, 0, 0) for k in range(6)], "max_turn_deg": 20.0,
+                        "smoothing": 0.0, "twist": "c*s", "constants": {"c": 0.25}})
+    theta, rate, curl = line.twist(np.array([2.0, 4.0]))
+    np.testing.assert_allclose(theta, [0.5, 1.0], rtol=1e-15)
+    np.testing.assert_allclose(rate, [0.25, 0.25], rtol=1e-15)
+    np.testing.assert_array_equal(curl, [0.0, 0.0])
+
+
+def test_a_smoothed_table_stays_within_its_smoothing_of_its_points():
+    """Twelve points 1 m apart along x, zigzagging by ±2 cm, smoothed to 1 cm: the fit is the smoothest within an RMS
+    distance of 1 cm of them (splprep's sum of squares n σ²), so the RMS of the points' distances to the track is
+    1 cm, to 10 % (its dense samples 3 mm apart); the zigzag itself is 2 cm off the straight line."""
+    points = np.array([(float(k), 0.02 * (-1) ** k, 0.0) for k in range(12)])
+    table = track.TableTrack(points, "track.points", 20.0, 0.01)
+    midline = table.derivatives(np.linspace(0.0, table.length, 4001), 0)[0]
+    distance = np.linalg.norm(midline[None, :, :] - points[:, None, :], axis=-1).min(axis=1)
+    assert 0.009 < math.sqrt(np.mean(distance ** 2)) < 0.011
+
+
+def test_a_midline_undefined_on_the_ride_is_refused_in_its_coordinates_field():
+    """y(s) = sqrt(5 - s) on a ride over [0, 6] m is undefined past s = 5 m: the refusal names track.y (x and z are
+    defined there) in metres."""
+    line = track.build({"type": "expression", "x": "s", "y": "sqrt(5 - s)", "z": "0", "parameter": "s", "twist": "0"})
+    with pytest.raises(SceneError, match=r"^scene field 'track.y': 'sqrt\(5 - s\)' is undefined or complex at s = 5 m"):
+        line.check_domain("track", 0.0, 6.0)

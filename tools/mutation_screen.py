@@ -21,6 +21,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import mutation_record as rec
@@ -144,10 +145,11 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     return outcome, "" if outcome != "crash" else f"pytest exit {found['code']}", seconds
 
 
-def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
-            runs: int = BASELINE_RUNS) -> tuple[list[str], float, list[float]]:
+def prepare(folder: Path, module: str, tests: list[str], fresh: bool, runs: int = BASELINE_RUNS,
+            timed: list[str] | None = None) -> tuple[list[str], float, list[float]]:
     """Generate the mutants, freeze the tests, import pytest and the mutated module in this process, and time the
-    unmutated run `runs` times: (pytest args, a mutant's time limit, the baseline times)."""
+    unmutated run `runs` times (of the pytest args `timed`, when only those tests will run; else of the whole
+    selection): (the selection's pytest args, a mutant's time limit, the baseline times)."""
     generate(folder, fresh)
     frozen = freeze_tests(folder)
     args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
@@ -164,23 +166,29 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool,
         pytest.main([*args, "--collect-only"])
     times = []
     for _ in range(runs):
-        outcome, test, seconds = run_one("", args, 3600.0)
+        outcome, test, seconds = run_one("", timed or args, 3600.0)
         if outcome != "survived":
             raise SystemExit(f"the unmutated code does not pass its tests ({outcome} {test}): no screen")
         times.append(seconds)
     return args, max(TIMEOUT_FLOOR, TIMEOUT_FACTOR * max(times)), times
 
 
+def kept(entries: dict[str, rec.Entry], renames: dict[str, str], stale: tuple) -> dict[str, rec.Entry]:
+    """The record's lines a screen keeps (all but `stale`), each under its mutant's current name (`renames`:
+    recorded -> current): after an edit renumbered a function's mutants, a mutant screened now may carry the name a
+    kept line had, and writing it under that name would overwrite the kept line."""
+    return {renames.get(n, n): replace(e, mutant=renames.get(n, n)) for n, e in entries.items() if n not in stale}
+
+
 def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[str], fresh: bool,
-           which: str = "", drawn: str = "", replaces: dict[str, str] | None = None, stale: tuple = ()) -> int:
+           which: str = "", drawn: str = "", renames: dict[str, str] | None = None, stale: tuple = ()) -> int:
     """Screen `names` (mutmut names, of the shard's patterns) and write their outcomes into the module's record;
     `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
-    so); `drawn`: how a random sample was drawn (the record's "sample:" note); `replaces`: current name -> the
-    recorded name of the same change, whose line the new one replaces; `stale`: recorded lines to drop (their
-    change is no longer made)."""
+    so); `drawn`: how a random sample was drawn (the record's "sample:" note); `renames`: recorded name -> the
+    current name of the same change; `stale`: recorded lines to drop (their change is no longer made)."""
     args, limit, times = prepare(folder, module, tests, fresh)
     path = rec.record_path(module)
-    entries = {n: e for n, e in rec.read(path).items() if n not in stale}
+    entries = kept(rec.read(path), renames or {}, stale)
     found = changes(folder, module, names)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
@@ -196,9 +204,6 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     for i, name in enumerate(names):
         outcome, test, seconds = run_one(name, args, limit)
         digest, summary = found[name]
-        old = (replaces or {}).get(name, name)
-        if old not in names[:i]:  # (a line this screen already wrote under that name is another change's)
-            entries.pop(old, None)
         entries[name] = rec.Entry(name, shard, digest, outcome, test, seconds, summary)
         print(f"    {name}: {outcome} {test} ({seconds:.1f} s)", flush=True)
         if i % 10 == 9 or i == len(names) - 1:
@@ -225,22 +230,36 @@ def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
     survives all of it)."""
     if entry.outcome not in rec.KILLS or not entry.test:
         return []
+    return node_args([entry.test.split(" (")[0]], folder, tests)
+
+
+def node_args(nodes: list[str], folder: Path, tests: list[str]) -> list[str]:
+    """pytest args that run only the tests `nodes` (pytest node ids under tests/) in the frozen copy, with the
+    selection's marks and options."""
     marks = tests[tests.index("-m"):tests.index("-m") + 2] if "-m" in tests else []
     options = [a for a in tests if a.startswith("--")]
-    node = entry.test.split(" (")[0]
-    return [str(folder / "frozen" / node), *marks, *options, "-q", "-n", "0", "-p", "no:cacheprovider", "--tb=no"]
+    return [*(str(folder / "frozen" / node) for node in nodes), *marks, *options, "-q", "-n", "0", "-p",
+            "no:cacheprovider", "--tb=no"]
 
 
 def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: list[rec.Entry]) -> int:
     """Rerun `chosen` on mutants made from the current tree, a recorded kill against the test that made it, any
     other outcome against the whole selection; 1 when an outcome no longer holds or a mutant is gone."""
-    # one unmutated run: it must pass, and its time only sets the limit, which can turn a recorded outcome into a
-    # timeout (a failed check), never a failed check into a passed one
-    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1)
+    # one unmutated run of the tests the check will run (only the deciding tests when every chosen outcome is a
+    # kill, else the whole selection): it must pass, and its time only sets the limit, which can turn a recorded
+    # outcome into a timeout (a failed check), never a failed check into a passed one
+    start = time.monotonic()
+    kills_only = all(deciding(e, folder, tests) for e in chosen)
+    timed = node_args(sorted({e.test.split(" (")[0] for e in chosen}), folder, tests) if kills_only else None
+    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1, timed=timed)
+    # only the chosen mutants' functions: a mutant is found again in its own function (mutation_record.match), and a
+    # diff costs a parse of the module (a minute for the 2000 mutants of a large module)
+    functions = {rec.function_of(e.mutant) for e in chosen}
+    candidates = [n for n in mutant_names(folder, module) if rec.function_of(n) in functions]
     current = {name: (rec.function_of(name), digest)
-               for name, (digest, _) in changes(folder, module, mutant_names(folder, module)).items()}
+               for name, (digest, _) in changes(folder, module, candidates).items()}
     found = rec.match(chosen, current)
-    failures = 0
+    failures, ready = 0, time.monotonic()
     for e in chosen:
         name = found.get(e.mutant)
         if name is None:
@@ -252,4 +271,7 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
         failures += not held
         print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "
               f"{test} {'ok' if held else 'CHANGED'}", flush=True)
+    print(f"== recheck {shard}: {len(chosen) - failures} of {len(chosen)} hold; {ready - start:.0f} s to make the "
+          f"mutants and run the unmutated {'deciding tests' if kills_only else 'selection'}, "
+          f"{time.monotonic() - ready:.0f} s to rerun", flush=True)
     return 1 if failures else 0

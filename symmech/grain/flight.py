@@ -131,6 +131,9 @@ class RotationFlight:
             q, w = self._y_end[RO_Q], self._y_end[RO_W]
             return np.broadcast_to(q, t.shape + q.shape).copy(), np.broadcast_to(w, t.shape + w.shape).copy()
         self._extend(float(t.max()))
+        if not self._pieces:  # asked at t0 only, before the first chunk (no piece would fill y): the start state
+            return (np.broadcast_to(self._y_end[RO_Q], t.shape + (4,)).copy(),
+                    np.broadcast_to(self._y_end[RO_W], t.shape + (3,)).copy())
         y = np.empty((ROTATION.size,) + t.shape)
         for start, end, dense in self._pieces:
             inside = (t >= start) & (t <= end)
