@@ -1,6 +1,7 @@
 """Derivations, impact laws, effects switches, hard cases and scene errors of the grain motion."""
 import math
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -56,6 +57,17 @@ def test_support_distance_is_the_lowest_point(axes):
     np.testing.assert_allclose(R[:, 2], -h, rtol=1e-12)
     body = np.einsum("nji,nj->ni", Q, R) / np.asarray(axes)
     np.testing.assert_allclose(np.sum(body**2, axis=1), 1.0, rtol=1e-12)
+    # a quarter of a 3-4-5 turn about x, exact in rationals: the plane's normal in body axes is n = (0, 4/5, 3/5),
+    # the lowest point -D^2 n / |D n| with D = diag(a, b, c), at depth |D n|; a float offset from an exact rotation
+    a, b, c = axes
+    exact = [[1, 0, 0], [0, Fraction(3, 5), Fraction(-4, 5)], [0, Fraction(4, 5), Fraction(3, 5)]]
+    depth = math.hypot(4 * b, 3 * c) / 5
+    lowest = np.array([0.0, -4 / 5 * b * b, -3 / 5 * c * c]) / depth
+    R = contact.contact_offset(axes, exact)
+    assert R.dtype == np.float64
+    np.testing.assert_allclose(R, np.array(exact, dtype=float) @ lowest, rtol=1e-14, atol=1e-14 * max(axes))
+    assert R[2] == pytest.approx(-depth, rel=1e-14)
+    assert contact.support_distance(axes, exact) == pytest.approx(depth, rel=1e-14)
 
 
 def test_euler_rates_invert_body_rates_and_match_the_planned_convention():

@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import tomllib
+from fractions import Fraction
 
 import numba
 import numpy as np
@@ -278,15 +279,18 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
 @pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_integrate_refuses_bad_requests():
     """An unknown method, decreasing times and a step budget too small are errors, not silent results; the last
-    names the end it did not reach."""
+    names the end it did not reach, whether the parameters and atol are floats or exact rationals (Fractions, an
+    object array to numpy: read as the floats they equal, not handed to the compiled solver as objects)."""
     p, y0, t, _ = _rotor_boom()
     with pytest.raises(SymmechError, match="method 'RK45'"):
         ode.integrate("smm_rotor_boom", p, y0, t, method="RK45")
     with pytest.raises(SymmechError, match="increasing"):
         ode.integrate("smm_rotor_boom", p, y0, t[::-1])
-    with pytest.raises(SymmechError) as err:
-        ode.integrate("smm_rotor_boom", p, y0, t, max_steps=3)
-    assert str(err.value) == f"ode: DOP853 on smm_rotor_boom: 3 steps did not reach t = {t[-1]:g} s"
+    end = f"ode: DOP853 on smm_rotor_boom: 3 steps did not reach t = {t[-1]:g} s"
+    for params, atol in [(p, 1e-10), ([Fraction(x) for x in p], 1e-10), (p, Fraction(1, 10**10))]:
+        with pytest.raises(SymmechError) as err:
+            ode.integrate("smm_rotor_boom", params, y0, t, atol=atol, max_steps=3)
+        assert str(err.value) == end
 
 
 CACHED_CALLER = '''
