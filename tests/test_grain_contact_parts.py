@@ -24,11 +24,21 @@ def test_clear_span_is_the_lower_parabolas_first_zero():
     assert contact.clear_span(2.0, 0.5, 0.0) == math.inf
 
 
-def test_a_piece_is_clear_when_either_end_proves_it():
+def test_a_piece_is_clear_when_either_end_proves_it_else_halved_down_to_xtol():
     # from a: h = 1, level, no curvature: h >= 1 on the piece; from b (rising at b): 1e-6 - 10 < 0 proves nothing
     assert contact.parabolas_clear(1.0, 0.0, 1e-6, 10.0, 1.0, 0.0)
     assert contact.parabolas_clear(1e-6, -10.0, 1.0, 0.0, 1.0, 0.0)
     assert not contact.parabolas_clear(1e-6, -10.0, 1e-6, 10.0, 1.0, 0.0)
+    # a level gap of 1 mm under a curvature bound of 1e6 m/s^2 is never cleared: over a step of 1 s at xtol = 1/4 s
+    # it is sampled at 0, 1, then halved to pieces of 1/4 s (exact in binary) and no further: 1/2, 1/4, 3/4
+    times = []
+
+    def level(t):
+        times.append(t)
+        return 1e-3, 0.0
+
+    assert contact.first_contact(level, 1e6, 0.0, 1.0, 1.0, 0.25) is None
+    assert times == [0.0, 1.0, 0.5, 0.25, 0.75]
 
 
 @pytest.mark.parametrize("t0", [0.0, -10.0])

@@ -5,6 +5,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from symmech.cli import main
@@ -46,7 +47,13 @@ def test_flight_translation_solves_the_relative_equation():
 @pytest.mark.parametrize("axes", [(3e-3, 1e-3, 0.8e-3), (5e-3, 5e-3, 0.05e-3), (1e-2, 0.2e-3, 0.2e-3)],
                          ids=["seed", "very-flat", "very-long"])
 def test_support_distance_is_the_lowest_point(axes):
-    """Closed form against brute force over a fine surface mesh; R lies on the ellipsoid."""
+    """Closed form against brute force over a fine surface mesh; R lies on the ellipsoid. The mesh is the golden
+    (Fibonacci) lattice: scaled back to the unit sphere, 1000 nodes are spread evenly, each node's nearest one at
+    least 3 / sqrt(1000) away (the lattice's packing distance 3.09 / sqrt(N)), their second moment I / 3."""
+    unit = contact.ellipsoid_nodes(axes, 1000) / np.asarray(axes)
+    np.testing.assert_allclose(np.linalg.norm(unit, axis=1), 1.0, rtol=1e-14)
+    assert cKDTree(unit).query(unit, k=2)[0][:, 1].min() > 3 / math.sqrt(1000)
+    np.testing.assert_allclose(unit.T @ unit / 1000, np.eye(3) / 3, atol=1e-4)
     Q = Rotation.random(20, random_state=3).as_matrix()
     nodes = contact.ellipsoid_nodes(axes, 200000)
     brute = -np.min(np.einsum("nij,kj->nki", Q, nodes)[..., 2], axis=1)
