@@ -444,9 +444,7 @@ COVERAGE = {
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
-    "symmech/numerics/ode.py": "10 of the 30 drawn (shard ode_integrate: the slow tests that build a generated "
-                               "module's solver, its closures compiled anew in each mutant's process, 1-4 min a "
-                               "mutant at load 7): the screen stopped at the session's end",
+    "symmech/numerics/ode.py": "",
     "symmech/numerics/dop853_tableau.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
                               "holds it bit-equal to scipy's",
     "symmech/core/precision.py": "no physics or numerics of its own: wall-clock timing (its numbers are times, which "
