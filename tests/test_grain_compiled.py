@@ -122,6 +122,7 @@ def test_batch_on_threads_equals_one_by_one(tmp_path):
         one = compiled.simulate(model, sc.numerics, start, 0.08)
         assert np.array_equal(res.trajectory, one.trajectory)
         assert [i["t"] for i in res.impacts] == [i["t"] for i in one.impacts]
+        assert res.extra == one.extra and res.warnings == one.warnings  # the energy budget and counts too
     # what the ahead-of-time build exports: the loop's two entries, each for the argument types its caller passes
     exports = compiled.ENGINE.ahead.exports()
     assert sorted(exports) == ["run", "run_many"]
