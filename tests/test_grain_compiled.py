@@ -111,7 +111,8 @@ def test_rolling_sphere_conveyor_matches_the_python_loop():
 
 
 def test_batch_on_threads_equals_one_by_one(tmp_path):
-    """simulate_many (threads; the loop releases the GIL) gives each grain bit for bit its serial result."""
+    """simulate_many (threads; the loop releases the GIL) gives each grain bit for bit its serial result; the
+    ahead-of-time build exports ``run`` and ``run_many`` for the signatures simulate and simulate_many call."""
     sc = default_scene(tmp_path, 0.08)
     starts = [replace(sc.start, v=np.array([0.01 * k, 0.0, 0.0])) for k in range(4)]
     models = [replace(sc.model, mu=0.3 + 0.1 * k) for k in range(4)]
@@ -121,6 +122,13 @@ def test_batch_on_threads_equals_one_by_one(tmp_path):
         one = compiled.simulate(model, sc.numerics, start, 0.08)
         assert np.array_equal(res.trajectory, one.trajectory)
         assert [i["t"] for i in res.impacts] == [i["t"] for i in one.impacts]
+        assert res.extra == one.extra and res.warnings == one.warnings  # the energy budget and counts too
+    # what the ahead-of-time build exports: the loop's two entries, each for the argument types its caller passes
+    exports = compiled.ENGINE.ahead.exports()
+    assert sorted(exports) == ["run", "run_many"]
+    assert [exports[name][0].__name__ for name in ("run", "run_many")] == ["run", "run_many"]
+    assert exports["run"][1].args == compiled.entry_signature()
+    assert exports["run_many"][1].args == compiled.many_signature()
 
 
 def test_impact_log_built_on_first_use_is_the_same_everywhere(tmp_path):

@@ -64,3 +64,34 @@ def test_the_signature_built_ahead_is_the_one_simulate_calls_the_loop_with(monke
     calls = stand_in(monkeypatch, [(1.0, compiled.DONE, 0)])
     compiled.simulate(MODEL, NUM, START, 1.0)
     assert tuple(numba.typeof(a) for a in calls[0]) == compiled.entry_signature()
+
+
+def test_a_population_takes_a_thread_per_16_grains_and_raises_its_first_failure(monkeypatch):
+    """48 grains: three threads of 16 when three workers are asked, two (one a core, two cores) by default; with the
+    grains starting at t = k / 100 s, grains 20 and 30 stalled at t + 1/2 (a stand-in ``run_many``), the run
+    raises grain 20's error, the first in the population's order. BLAS runs one thread inside each."""
+    from threadpoolctl import threadpool_info
+
+    parts, blas_threads = [], []
+    np.linalg.solve(np.eye(2), np.ones(2))  # numpy's BLAS loaded (the impact law's 3 x 3 solves load it)
+
+    def run_many(ps, ys, t_ends, hint, carries, statuses):
+        parts.append(len(ps))
+        blas_threads.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+        statuses[:] = compiled.DONE
+        for k in np.flatnonzero(np.isin(np.round(ys[:, 0] * 100), (20, 30))):
+            statuses[k], ys[k, 0], carries[k, compiled_layout.C_AT.regime] = compiled.STALLED, ys[k, 0] + 0.5, 2
+        empty = np.empty((0, 1))
+        return empty, empty, empty
+
+    monkeypatch.setattr(compiled, "entry_many", lambda: run_many)
+    monkeypatch.setattr(compiled.os, "cpu_count", lambda: 2)
+    starts = [motion.State(k / 100, START.r, START.v, START.q, START.w) for k in range(48)]
+    for workers, cut in [(3, [16, 16, 16]), (None, [24, 24])]:
+        parts.clear()
+        with pytest.raises(SymmechError) as err:
+            compiled.simulate_many([MODEL] * 48, NUM, starts, 1.0, workers=workers)
+        assert sorted(parts) == cut
+        assert blas_threads and set(blas_threads) == {1}  # BLAS's own threads would spin beside the grains'
+        blas_threads.clear()
+        assert str(err.value).startswith("grain: the simulation stopped advancing at t = 0.7 s ")

@@ -1,9 +1,11 @@
 """Derivations, impact laws, effects switches, hard cases and scene errors of the grain motion."""
 import math
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from symmech.cli import main
@@ -45,7 +47,13 @@ def test_flight_translation_solves_the_relative_equation():
 @pytest.mark.parametrize("axes", [(3e-3, 1e-3, 0.8e-3), (5e-3, 5e-3, 0.05e-3), (1e-2, 0.2e-3, 0.2e-3)],
                          ids=["seed", "very-flat", "very-long"])
 def test_support_distance_is_the_lowest_point(axes):
-    """Closed form against brute force over a fine surface mesh; R lies on the ellipsoid."""
+    """Closed form against brute force over a fine surface mesh; R lies on the ellipsoid. The mesh is the golden
+    (Fibonacci) lattice: scaled back to the unit sphere, 1000 nodes are spread evenly, each node's nearest one at
+    least 3 / sqrt(1000) away (the lattice's packing distance 3.09 / sqrt(N)), their second moment I / 3."""
+    unit = contact.ellipsoid_nodes(axes, 1000) / np.asarray(axes)
+    np.testing.assert_allclose(np.linalg.norm(unit, axis=1), 1.0, rtol=1e-14)
+    assert cKDTree(unit).query(unit, k=2)[0][:, 1].min() > 3 / math.sqrt(1000)
+    np.testing.assert_allclose(unit.T @ unit / 1000, np.eye(3) / 3, atol=1e-4)
     Q = Rotation.random(20, random_state=3).as_matrix()
     nodes = contact.ellipsoid_nodes(axes, 200000)
     brute = -np.min(np.einsum("nij,kj->nki", Q, nodes)[..., 2], axis=1)
@@ -56,6 +64,17 @@ def test_support_distance_is_the_lowest_point(axes):
     np.testing.assert_allclose(R[:, 2], -h, rtol=1e-12)
     body = np.einsum("nji,nj->ni", Q, R) / np.asarray(axes)
     np.testing.assert_allclose(np.sum(body**2, axis=1), 1.0, rtol=1e-12)
+    # a quarter of a 3-4-5 turn about x, exact in rationals: the plane's normal in body axes is n = (0, 4/5, 3/5),
+    # the lowest point -D^2 n / |D n| with D = diag(a, b, c), at depth |D n|; a float offset from an exact rotation
+    a, b, c = axes
+    exact = [[1, 0, 0], [0, Fraction(3, 5), Fraction(-4, 5)], [0, Fraction(4, 5), Fraction(3, 5)]]
+    depth = math.hypot(4 * b, 3 * c) / 5
+    lowest = np.array([0.0, -4 / 5 * b * b, -3 / 5 * c * c]) / depth
+    R = contact.contact_offset(axes, exact)
+    assert R.dtype == np.float64
+    np.testing.assert_allclose(R, np.array(exact, dtype=float) @ lowest, rtol=1e-14, atol=1e-14 * max(axes))
+    assert R[2] == pytest.approx(-depth, rel=1e-14)
+    assert contact.support_distance(axes, exact) == pytest.approx(depth, rel=1e-14)
 
 
 def test_euler_rates_invert_body_rates_and_match_the_planned_convention():

@@ -47,7 +47,8 @@ def test_start_phase_turns_the_largest_kinetic_component_real_and_positive():
 def test_curvature_shift_is_rayleighs_quotient_and_zero_without_a_frequency():
     """One beam (no rollers) bent at q: for the unit shapes x = e_j the first-order shift is H_jj / (2 ω² M_jj)
     (the Rayleigh quotient of the docstring, H the curvature Hessian, M the mass at q), in floats; a mode of
-    ω = 0 (a rigid motion) has no frequency to shift: 0."""
+    ω = 0 (a rigid motion) has no frequency to shift: 0. Two beams on the rollers: H block-diagonal, a block a
+    beam."""
     system = rollers_and_beams(1, modes=3)
     system = el.System(dataclasses.replace(system.mdl, rollers=None, effects=el_body.Effects(rollers=False)))
     q = np.array([0.02, -0.01, 0.005, 0.03, 0.01, -0.02])
@@ -62,3 +63,12 @@ def test_curvature_shift_is_rayleighs_quotient_and_zero_without_a_frequency():
     omega[1] = 0.0
     shift = modal.curvature_shift(system, q, omega, X)
     assert shift[1] == 0.0 and shift.dtype == np.float64
+    # two such beams on the rollers (5 + 2 x 6 components): each beam's block is its own at its q, in its own rows
+    # and columns, and the rollers' rows and columns are zero (the energy is the beams' bending alone)
+    q_rollers = np.array([0.01, -0.02, 0.03, 0.04, -0.05])
+    both = modal.curvature_hessian(rollers_and_beams(2, modes=3), np.concatenate([q_rollers, q, q[::-1]]))
+    np.testing.assert_array_equal(both[:5], 0.0)
+    np.testing.assert_array_equal(both[:, :5], 0.0)
+    np.testing.assert_allclose(both[5:11, 5:11], H, rtol=1e-14)
+    np.testing.assert_allclose(both[11:, 11:], modal.curvature_hessian(system, q[::-1]), rtol=1e-14)
+    np.testing.assert_array_equal(both[5:11, 11:], 0.0)

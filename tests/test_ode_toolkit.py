@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import tomllib
+from fractions import Fraction
 
 import numba
 import numpy as np
@@ -260,7 +261,7 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     needs under a tenth of DOP853's steps (measured 921 against 11399, as scipy's) and agrees with DOP853 at
     21 requested times to 1e-6 of each state's largest value (both at rtol 1e-8; measured 6e-10 in the
     coordinates, 3.5e-7 in the rate of the stiff one), and with scipy's Radau on the numpy rhs and jac to
-    1e-6."""
+    1e-6. DOP853 over 400 s is refused at the default step budget (a million steps, ~16 s)."""
     p, y0, _, _ = _rotor_boom()
     p[12] *= 1e4
     assert np.linalg.eigvals(smm_rotor_boom.jac(0.0, y0, p)).real.min() < -3e4
@@ -273,20 +274,32 @@ def test_integrate_radau_with_the_generated_jac_on_a_stiff_boom():
     scale = np.abs(dop.y).max(axis=1)
     assert np.all(np.abs(stiff.y - dop.y).max(axis=1) < 1e-6 * scale)
     assert np.all(np.abs(stiff.y - ref.y).max(axis=1) < 1e-6 * scale)
+    # DOP853's step is held at its stability limit (11399 steps for 2 s): 400 s would take over two million, past
+    # the default budget of a million steps, which the refusal names
+    with pytest.raises(SymmechError, match="^ode: DOP853 on smm_rotor_boom: 1000000 steps did not reach t = 400 s$"):
+        ode.integrate("smm_rotor_boom", p, y0, [400.0], method="DOP853", rtol=1e-8, atol=1e-14)
 
 
 @pytest.mark.slow  # compiles its own solver closures (not cacheable across processes, numerics/ode.py)
 def test_integrate_refuses_bad_requests():
-    """An unknown method, decreasing times and a step budget too small are errors, not silent results; the last
-    names the end it did not reach."""
+    """An unknown method, no times or decreasing ones and a step budget too small are errors, not silent results;
+    the last names the end it did not reach, for all the times or the last alone, whether the parameters and atol
+    are floats or exact rationals (Fractions, an object array to numpy: read as the floats they equal, not handed
+    to the compiled solver as objects)."""
     p, y0, t, _ = _rotor_boom()
     with pytest.raises(SymmechError, match="method 'RK45'"):
         ode.integrate("smm_rotor_boom", p, y0, t, method="RK45")
     with pytest.raises(SymmechError, match="increasing"):
         ode.integrate("smm_rotor_boom", p, y0, t[::-1])
-    with pytest.raises(SymmechError) as err:
-        ode.integrate("smm_rotor_boom", p, y0, t, max_steps=3)
-    assert str(err.value) == f"ode: DOP853 on smm_rotor_boom: 3 steps did not reach t = {t[-1]:g} s"
+    with pytest.raises(SymmechError, match="non-empty"):
+        ode.integrate("smm_rotor_boom", p, y0, t[:0])
+    end = f"ode: DOP853 on smm_rotor_boom: 3 steps did not reach t = {t[-1]:g} s"
+    # a single output time is a request like any other (it reaches the step budget)
+    for times, params, atol in [(t, p, 1e-10), (t[-1:], p, 1e-10), (t, [Fraction(x) for x in p], 1e-10),
+                                (t, p, Fraction(1, 10**10))]:
+        with pytest.raises(SymmechError) as err:
+            ode.integrate("smm_rotor_boom", params, y0, times, atol=atol, max_steps=3)
+        assert str(err.value) == end
 
 
 CACHED_CALLER = '''

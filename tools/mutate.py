@@ -401,6 +401,9 @@ SHARDS = {
                                "tests/test_elastic_outputs.py", "-m", "not slow", "-k",
                                "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
                               ["*"]),
+    # the compiled_engine tests build the mutated copy's engine in the first unmutated run (minutes) into numba's
+    # cache, and every later fork loads it from there (15-20 s a run at load 9): run with NUMBA_CACHE_DIR set to a
+    # folder that outlives the screen (the mutated copy's files keep their paths and times, so the cache stays valid)
     "engine_py_sample": ("symmech/grain/motion_engine/driver.py", ENGINE_PY_TESTS, ["*"]),
     "pipeline_sample": ("symmech/core/pipeline.py", PIPELINE_TESTS, ["*"]),
     "kinematics": ("symmech/core/kinematics.py", ["tests/test_kinematics.py", "tests/test_trolley_physics.py"], ["*"]),
@@ -431,10 +434,7 @@ COVERAGE = {
                                "the interval treats all 56 as drawn",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
-    "symmech/grain/motion_engine/driver.py": "shard engine_py_sample made, not screened: its tests build and run "
-                                             "the compiled engine (the slow tier's compiled_engine tests: ~80 s of "
-                                             "numba compilation, then minutes a mutant on the shared cores); the "
-                                             "sessions' CPU went to the modules with none of their tests' cost",
+    "symmech/grain/motion_engine/driver.py": "",
     "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
                                                    "the engine is held to the Python reference by the "
                                                    "compiled-engine tests",
@@ -456,9 +456,7 @@ COVERAGE = {
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
-    "symmech/numerics/ode.py": "10 of the 30 drawn (shard ode_integrate: the slow tests that build a generated "
-                               "module's solver, its closures compiled anew in each mutant's process, 1-4 min a "
-                               "mutant at load 7): the screen stopped at the session's end",
+    "symmech/numerics/ode.py": "",
     "symmech/numerics/dop853_tableau.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
                               "holds it bit-equal to scipy's",
     "symmech/core/precision.py": "no physics or numerics of its own: wall-clock timing (its numbers are times, which "
