@@ -362,7 +362,7 @@ def flight_state(t, fl, rot, out):
     rotation_at(rot, t, out[X_AT.q:X_AT.w + 3])  # q, w: adjacent in the state
 
 
-@jit
+@inline
 def gap(t, fl, rot, buf):
     """(h, h'): height [m] of the lowest point above the plane and its rate [m/s]."""
     _translate(fl, t, buf)

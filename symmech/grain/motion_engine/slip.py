@@ -92,12 +92,17 @@ def _anisotropic(sp):
     return gap > 1e-12 * (0.5 * (B00 + B11 + gap))
 
 
-@jit
+@inline
 def _stick_force(t, z, sp):
-    _, acc = slide_surface(sp, t)
-    R, _, c = geometry(z, sp)
-    p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_AT.g] - acc[0] + c[0], sp[S_AT.g + 1] - acc[1] + c[1])
-    return np.array([-p0, -p1]), acc[2] - sp[S_AT.g + 2]
+    """(phi0, phi1, n): the friction force per unit mass holding the slip at zero and the normal force, in scalars
+    (``slide_surface`` and ``geometry`` written out: no arrays in a stick phase's event, evaluated every step)."""
+    d0, d1, d2 = sp[S_AT.direction], sp[S_AT.direction + 1], sp[S_AT.direction + 2]
+    a = -sp[S_AT.amplitude] * sp[S_AT.omega] ** 2 * math.sin(sp[S_AT.omega] * t + sp[S_AT.phase])
+    R0, R1, R2 = _offset_now(z, sp)
+    w2 = z[Z_AT.w + 2]
+    c0, c1 = -w2 * (w2 * R0), w2 * (-w2 * R1)
+    p0, p1 = _solve_B(R0, R1, R2, sp, sp[S_AT.g] - a * d0 + c0, sp[S_AT.g + 1] - a * d1 + c1)
+    return -p0, -p1, a * d2 - sp[S_AT.g + 2]
 
 
 @inline
@@ -220,8 +225,8 @@ def settle(t, z, sp, may_stick):
     v_stop = sp[S_AT.v_stop]
     if sp[S_AT.mu] == 0.0 or math.hypot(s[0], s[1]) > 1.5 * v_stop:
         return False, z
-    phi, n = _stick_force(t, z, sp)
-    stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_AT.mu] * n
+    phi0, phi1, n = _stick_force(t, z, sp)
+    stick = may_stick and math.hypot(phi0, phi1) <= sp[S_AT.mu] * n
     target = np.zeros(2)
     if not stick:  # against the stick force: along B^-1 (f + c) (``_Contact.slip_direction``)
         _, acc = slide_surface(sp, t)
@@ -272,8 +277,8 @@ def slip_events(z, sp):
 @jit
 def event_at(t, z, sp):
     if sp[S_AT.event] == EV_STICK:
-        phi, n = _stick_force(t, z, sp)
-        return sp[S_AT.mu] * n - math.hypot(phi[0], phi[1])
+        phi0, phi1, n = _stick_force(t, z, sp)
+        return sp[S_AT.mu] * n - math.hypot(phi0, phi1)
     stops, speed = slip_events(z, sp)
     if sp[S_AT.event] == EV_SLIP:
         return stops
