@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 import symmech
-from symmech.numerics import ode, radau
+from symmech.numerics import linalg, ode, radau
 from symmech.core.scene import SymmechError, scenes_folder
 from symmech.generated import smm_rotor_boom
 
@@ -135,6 +135,44 @@ def test_radau_takes_scipys_steps():
                     rtol=1e-6, atol=1e-9, jac=lambda t, y: np.array([[-1e6]]))
     assert steps == len(ref.t) - 1
     assert err == pytest.approx(np.max(np.abs(ref.y[0] - np.cos(ref.t))), rel=1e-6)
+
+
+def textbook_lu(A):
+    """Doolittle elimination with partial pivoting in numpy, every row updated (the zero multipliers too)."""
+    A = A.copy()
+    piv = np.empty(len(A), dtype=np.int64)
+    for k in range(len(A)):
+        m = k + int(np.argmax(np.abs(A[k:, k])))  # the first largest
+        piv[k] = m
+        A[[k, m]] = A[[m, k]]
+        for i in range(k + 1, len(A)):
+            A[i, k] /= A[k, k]
+            A[i, k + 1:] -= A[i, k] * A[k, k + 1:]
+    return A, piv
+
+
+@pytest.mark.slow  # compiles the LU and its solve for real and complex matrices (~3 s of CPU)
+def test_lu_of_the_slip_iteration_matrix_skips_zero_rows_bit_for_bit():
+    """The Radau iteration matrix mu/h - J of a stiff slip (the grain's 13 sliding states: r, v, w, q, work, loss;
+    J zero in the columns of r, work, loss and in the rows of w_x, w_y) factored by ``linalg.lu``,
+    which leaves a row alone when its multiplier is zero, equals the textbook elimination that updates every row,
+    entry by entry (real: the same operations on every row it changes), and its solve A x = b equals numpy's to 1e-13 (real and complex)."""
+    rng = np.random.default_rng(3)
+    pattern = np.zeros((13, 13), dtype=bool)
+    pattern[0, 2] = pattern[1, 3] = True  # r' = v
+    pattern[np.ix_([2, 3, 6, 11, 12], range(2, 11))] = True  # v, w_z, work, loss: of v, w, q
+    pattern[np.ix_(range(7, 11), range(4, 11))] = True  # q' of w, q
+    J = np.where(pattern, rng.normal(size=(13, 13)) * 1e4, 0.0)
+    for A in (3e4 * np.eye(13) - J, (2e4 + 1e4j) * np.eye(13) - J):
+        LU, piv = A.copy(), np.empty(13, dtype=np.int64)
+        linalg.lu(LU, piv)
+        b = rng.normal(size=13).astype(A.dtype)
+        x = b.copy()
+        linalg.solve_in_place(LU, piv, x)
+        np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-13, atol=1e-13 * np.abs(x).max())
+        if A.dtype == float:
+            ref, ref_piv = textbook_lu(A)
+            assert np.array_equal(piv, ref_piv) and np.array_equal(LU, ref)
 
 
 @pytest.mark.parametrize("lam, order", [(1.0, 5.0), (1e6, 3.0)])

@@ -27,7 +27,7 @@ from symmech.generated import grain_motion_nb as gm_nb
 from symmech.grain import free_flight  # module globals: the builds of a compiled caller record their files
 from symmech.grain.motion_engine import layouts
 from symmech.numerics.brent import roots
-from symmech.numerics.jit import EPS, jit
+from symmech.numerics.jit import EPS, inline, jit
 
 F_AT, R_AT = free_flight.FLIGHT.slots, free_flight.ROTATION.slots
 X_AT = layouts.X_AT
@@ -340,7 +340,7 @@ def flight_setup(state, g, amplitude, omega, phase, direction, axes, inertia, fl
     rotation_setup(inertia, state[X_AT.q:X_AT.q + 4], state[X_AT.w:X_AT.w + 3], t0, rot)
 
 
-@jit
+@inline
 def _translate(fl, t, buf):
     """Relative centre position and velocity at ``t`` into buf[0] (rows)."""
     f = fl
@@ -350,7 +350,7 @@ def _translate(fl, t, buf):
                                   f[F_AT.direction + 2], 0.0, t - f[F_AT.t0], buf)
 
 
-@jit
+@inline
 def flight_state(t, fl, rot, out):
     """The state (layout ``STATE``) at ``t`` into ``out``."""
     buf = np.empty((1, 2, 3))
@@ -362,7 +362,7 @@ def flight_state(t, fl, rot, out):
     rotation_at(rot, t, out[X_AT.q:X_AT.w + 3])  # q, w: adjacent in the state
 
 
-@jit
+@inline
 def gap(t, fl, rot, buf):
     """(h, h'): height [m] of the lowest point above the plane and its rate [m/s]."""
     _translate(fl, t, buf)
@@ -391,7 +391,7 @@ def gap_curvature_bound(fl, rot):
     return abs(fl[F_AT.g + 2]) + fl[F_AT.amplitude] * fl[F_AT.omega] ** 2 * abs(fl[F_AT.direction + 2]) + spin
 
 
-@jit
+@inline
 def _gap_of(t, args):
     """The gap [m] at t, as the root finder calls it (``args`` = (fl, rot, buf))."""
     return gap(t, args[0], args[1], args[2])[0]

@@ -8,10 +8,10 @@ import math
 import numpy as np
 
 from symmech.numerics.dop853_tableau import A, B, C, D, E3, E5, EXPONENT, EXTENDED, POWER, STAGES
-from symmech.numerics.jit import closure, jit
+from symmech.numerics.jit import closure, inline, jit
 
 
-@jit
+@inline
 def combine(out, y, K, a, s, h):
     """out = y + h sum_j<s a_j K_j, element by element (no temporaries: this is the hot loop)."""
     for i in range(K.shape[1]):

@@ -9,8 +9,8 @@ import numpy as np
 from symmech.core.layout import Field, Layout
 from symmech.numerics import first_step as initial
 from symmech.numerics import radau_tableau as tab
-from symmech.numerics.jit import EPS, closure, inline_closure, jit
-from symmech.numerics.linalg import lu, lu_solve
+from symmech.numerics.jit import EPS, closure, inline, inline_closure, jit
+from symmech.numerics.linalg import lu, lu_solve, solve_in_place
 
 # Radau IIA of order 5 (scipy's ``_ivp/radau.py``, :mod:`symmech.numerics.radau_tableau`, which the C export reads too)
 RADAU_C, RADAU_E, RADAU_T, RADAU_TI, RADAU_PT = tab.C, tab.E, tab.T, tab.TI, tab.PT
@@ -30,7 +30,7 @@ RADAU_STATE = Layout("RadauState", (
 ST_AT, N_RADAU = RADAU_STATE.slots, RADAU_STATE.size
 
 
-@jit
+@inline
 def rms(x, scale):
     """scipy's ``norm(x / scale)``: root mean square of x (..., n) scaled by scale (n,)."""
     acc = 0.0
@@ -44,12 +44,19 @@ def rms(x, scale):
 @jit
 def mix(A, Z):
     """A @ Z for a small A (k, 3) and Z (3, n), by loops (no BLAS call for 3 x 13)."""
-    out = np.zeros((A.shape[0], Z.shape[1]))
+    out = np.empty((A.shape[0], Z.shape[1]))
+    mix_into(A, Z, out)
+    return out
+
+
+@inline
+def mix_into(A, Z, out):
+    """:func:`mix` into out (k, n): the Newton iteration's products without an array made per iteration."""
+    out[:] = 0.0
     for r in range(A.shape[0]):
         for j in range(3):
             for i in range(Z.shape[1]):
                 out[r, i] += A[r, j] * Z[j, i]
-    return out
 
 
 @jit
@@ -62,6 +69,16 @@ def factor(h, J, LUr, pr, LUc, pc):
             LUc[i, j] = (MU_COMPLEX / h if i == j else 0.0) - J[i, j]
     lu(LUr, pr)
     lu(LUc, pc)
+
+
+@inline
+def _finite(F):
+    """Whether every entry of F (3, n) is finite (np.all(np.isfinite(F)) without its array)."""
+    for i in range(F.shape[0]):
+        for j in range(F.shape[1]):
+            if not math.isfinite(F[i, j]):
+                return False
+    return True
 
 
 @jit
@@ -122,28 +139,32 @@ def steppers(rhs, jac) -> tuple:
         n = y.size
         W = mix(RADAU_TI, Z0)
         Z = Z0.copy()
-        F = np.empty((3, n))
-        dW = np.empty((3, n))
+        F, TF, dW = np.empty((3, n)), np.empty((3, n)), np.empty((3, n))  # work arrays, reused by every iteration
+        stage = np.empty(n)
         Wc = np.empty(n, dtype=np.complex128)
         norm_old, rate, converged, k = -1.0, -1.0, False, 0
         for k in range(NEWTON_MAXITER):
             for i in range(3):
-                rhs(t + RADAU_C[i] * h, y + Z[i], args, F[i])
-            if not np.all(np.isfinite(F)):
+                for j in range(n):
+                    stage[j] = y[j] + Z[i, j]
+                rhs(t + RADAU_C[i] * h, stage, args, F[i])
+            if not _finite(F):
                 break
-            TF = mix(RADAU_TI, F)  # rows: the real and the complex part's real and imaginary projections
+            mix_into(RADAU_TI, F, TF)  # rows: the real and the complex part's real and imaginary projections
             for i in range(n):
                 Wc[i] = complex(TF[1, i], TF[2, i]) - MU_COMPLEX / h * complex(W[1, i], W[2, i])
-            dW[0] = lu_solve(LUr, pr, TF[0] - MU_REAL / h * W[0])
-            dWc = lu_solve(LUc, pc, Wc)
-            dW[1], dW[2] = dWc.real, dWc.imag
+                dW[0, i] = TF[0, i] - MU_REAL / h * W[0, i]
+            solve_in_place(LUr, pr, dW[0])
+            solve_in_place(LUc, pc, Wc)
+            for i in range(n):
+                dW[1, i], dW[2, i] = Wc[i].real, Wc[i].imag
             dW_norm = rms(dW, scale)
             if norm_old >= 0.0:
                 rate = dW_norm / norm_old
             if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate) * dW_norm > tol):
                 break
             W += dW
-            Z = mix(RADAU_T, W)
+            mix_into(RADAU_T, W, Z)
             if dW_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dW_norm < tol):
                 converged = True
                 break

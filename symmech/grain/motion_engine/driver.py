@@ -226,15 +226,16 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
     times = carries[:, [C_AT.t_flight, C_AT.t_sliding]].tolist()
     done = (statuses == DONE).tolist()
     rows, imps, warns = tables
+    finals = zip(ys[:, X_AT.t].tolist(), *(ys[:, at] for at in STATE_VECTORS))  # t, r, v, q, w: views of ys's rows
     out, row0, imp0, warn0 = [], 0, 0, 0  # where grain k's rows begin in each table
-    for k, (model, start, (row1, imp1, warn1), budget, (landings, rocking, implicit), (flight, slide)) in enumerate(
-            zip(models, starts, ends, budgets, counts, times)):
+    for k, (model, start, (row1, imp1, warn1), budget, (landings, rocking, implicit), (flight, slide), final) in (
+            enumerate(zip(models, starts, ends, budgets, counts, times, finals))):
         if not done[k]:
             out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
         else:
-            texts = run_warnings(warns[warn0:warn1] if warn1 > warn0 else (), rocking, model, num)
+            texts = run_warnings(warns[warn0:warn1], rocking, model, num) if warn1 > warn0 or rocking else []
             out.append(LazyMotion(rows[row0:row1], None, {"flight": flight, "sliding": slide}, texts, start,
-                                  state_view(ys[k]), run_extra(landings, rocking, budget, implicit, reason),
+                                  motion.State(*final), run_extra(landings, rocking, budget, implicit, reason),
                                   impact_rows=imps[imp0:imp1]))
         row0, imp0, warn0 = row1, imp1, warn1
     return out

@@ -70,7 +70,7 @@ def fly(p, y, t_end, on_plane, rows, carry, work):
     return state_at(t_stop, ctx, steps, nsteps, p), 1 if math.isnan(tc) else 0, rows
 
 
-@jit
+@inline
 def _exact_records(p, y, fl, rot, start):
     """Fill the exact flight's records ``fl``, ``rot`` (free_flight.FLIGHT, ROTATION) from the state y; a grain that
     does not rotate keeps its attitude (its rate, kept in y, is not applied: ``start``, a state, holds y without it)."""
@@ -84,7 +84,7 @@ def _exact_records(p, y, fl, rot, start):
                     p[P_AT.inertia:P_AT.inertia + 3], fl, rot)
 
 
-@jit
+@inline
 def _exact_state(t, y, fl, rot, p, out):
     """The state (STATE.size,) at t of the exact flight from y, into ``out`` (returned)."""
     ff.flight_state(t, fl, rot, out)

@@ -214,7 +214,7 @@ def impact(p, y, warns, carry):
     return after, log, warns
 
 
-@jit
+@inline
 def _point_mass_impact(p, y, warns, carry):
     """``impact`` of a grain that does not rotate (a point mass: no spin, u = v, K = 1/m), its Coulomb impulse in
     scalars (:func:`_point_impulse`); the printed law of such a grain is its Coulomb reduction (e, lam - 1, no

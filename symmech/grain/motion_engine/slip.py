@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from symmech.numerics.jit import jit
+from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.kinematics import cross, is_sphere, rotation
 from symmech.grain.motion_engine.layouts import N_SLIDE, N_SLIDING, N_STATE, P_AT, S_AT, X_AT, Z_AT
 
@@ -28,7 +28,7 @@ def slide_surface(sp, t):
     return amp * om * math.cos(ph) * d, -amp * om ** 2 * math.sin(ph) * d
 
 
-@jit
+@inline
 def _offset_now(z, sp):
     """Contact offset R (3 floats) of the sliding grain: fixed for a sphere, turned with q otherwise."""
     if sp[S_AT.sphere] != 0.0:
@@ -57,47 +57,55 @@ def _mobility(sp):
     return sp[S_AT.m:S_AT.m + 9].copy().reshape(3, 3)
 
 
-@jit
-def _B(R0, R1, R2, sp):
-    """B = (E - [R]x M [R]x)_tt (2, 2): the tangential slip response to a tangential impulse per unit mass."""
+@inline
+def _b_entry(i, j, R0, R1, R2, sp):
+    """Entry (i, j) of B = (E - [R]x M [R]x)_tt: the tangential slip response to a tangential impulse per unit mass."""
     Rx = ((0.0, -R2, R1), (R2, 0.0, -R0), (-R1, R0, 0.0))
-    B = np.zeros((2, 2))
-    for i in range(2):
-        for j in range(2):
-            acc = 0.0
-            for k in range(3):
-                for m in range(3):
-                    acc += Rx[i][k] * sp[S_AT.m + 3 * k + m] * Rx[m][j]
-            B[i, j] = (1.0 if i == j else 0.0) - acc
-    return B
+    acc = 0.0
+    for k in range(3):
+        for m in range(3):
+            acc += Rx[i][k] * sp[S_AT.m + 3 * k + m] * Rx[m][j]
+    return (1.0 if i == j else 0.0) - acc
 
 
-@jit
+@inline
+def _B(R0, R1, R2, sp):
+    """B (2, 2) as its entries (B00, B01, B10, B11), in scalars: the stick force's solve makes no array per call."""
+    return (_b_entry(0, 0, R0, R1, R2, sp), _b_entry(0, 1, R0, R1, R2, sp), _b_entry(1, 0, R0, R1, R2, sp),
+            _b_entry(1, 1, R0, R1, R2, sp))
+
+
+@inline
 def _solve_B(R0, R1, R2, sp, b0, b1):
     """B^-1 b (Cramer's rule)."""
-    B = _B(R0, R1, R2, sp)
-    det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
-    return (B[1, 1] * b0 - B[0, 1] * b1) / det, (B[0, 0] * b1 - B[1, 0] * b0) / det
+    B00, B01, B10, B11 = _B(R0, R1, R2, sp)
+    det = B00 * B11 - B01 * B10
+    return (B11 * b0 - B01 * b1) / det, (B00 * b1 - B10 * b0) / det
 
 
 @jit
 def _anisotropic(sp):
     """``_Contact.stiff_slip`` of :mod:`symmech.grain.sliding`: the eigenvalues of the symmetric B at R0 differ by
     more than 1e-12 relative (turning about the normal keeps them for the whole phase)."""
-    B = _B(sp[S_AT.r0], sp[S_AT.r0 + 1], sp[S_AT.r0 + 2], sp)
-    gap = math.hypot(B[0, 0] - B[1, 1], 2.0 * B[1, 0])
-    return gap > 1e-12 * (0.5 * (B[0, 0] + B[1, 1] + gap))
+    B00, _, B10, B11 = _B(sp[S_AT.r0], sp[S_AT.r0 + 1], sp[S_AT.r0 + 2], sp)
+    gap = math.hypot(B00 - B11, 2.0 * B10)
+    return gap > 1e-12 * (0.5 * (B00 + B11 + gap))
 
 
-@jit
+@inline
 def _stick_force(t, z, sp):
-    _, acc = slide_surface(sp, t)
-    R, _, c = geometry(z, sp)
-    p0, p1 = _solve_B(R[0], R[1], R[2], sp, sp[S_AT.g] - acc[0] + c[0], sp[S_AT.g + 1] - acc[1] + c[1])
-    return np.array([-p0, -p1]), acc[2] - sp[S_AT.g + 2]
+    """(phi0, phi1, n): the friction force per unit mass holding the slip at zero and the normal force, in scalars
+    (``slide_surface`` and ``geometry`` written out: no arrays in a stick phase's event, evaluated every step)."""
+    d0, d1, d2 = sp[S_AT.direction], sp[S_AT.direction + 1], sp[S_AT.direction + 2]
+    a = -sp[S_AT.amplitude] * sp[S_AT.omega] ** 2 * math.sin(sp[S_AT.omega] * t + sp[S_AT.phase])
+    R0, R1, R2 = _offset_now(z, sp)
+    w2 = z[Z_AT.w + 2]
+    c0, c1 = -w2 * (w2 * R0), w2 * (-w2 * R1)
+    p0, p1 = _solve_B(R0, R1, R2, sp, sp[S_AT.g] - a * d0 + c0, sp[S_AT.g + 1] - a * d1 + c1)
+    return -p0, -p1, a * d2 - sp[S_AT.g + 2]
 
 
-@jit
+@inline
 def slide_rhs(t, z, sp, stick, out):
     """Sliding ODE of z (layout ``SLIDE_STATE``) into out (``_Contact.rhs`` of the Python loop), in scalars."""
     ph = sp[S_AT.omega] * t + sp[S_AT.phase]
@@ -156,7 +164,7 @@ def _offset_jac(z, sp):
     return dR
 
 
-@jit
+@inline
 def slip_jac(t, z, sp, J):
     """Jacobian d rhs / d z (N_SLIDING, N_SLIDING) of the slip (``slide_rhs``, not stuck), analytic, column by column: the
     stiff part is the friction's turning rate mu n / |s| (I - s s^T / |s|^2) through s = v + (w x R)_t, the
@@ -217,8 +225,8 @@ def settle(t, z, sp, may_stick):
     v_stop = sp[S_AT.v_stop]
     if sp[S_AT.mu] == 0.0 or math.hypot(s[0], s[1]) > 1.5 * v_stop:
         return False, z
-    phi, n = _stick_force(t, z, sp)
-    stick = may_stick and math.hypot(phi[0], phi[1]) <= sp[S_AT.mu] * n
+    phi0, phi1, n = _stick_force(t, z, sp)
+    stick = may_stick and math.hypot(phi0, phi1) <= sp[S_AT.mu] * n
     target = np.zeros(2)
     if not stick:  # against the stick force: along B^-1 (f + c) (``_Contact.slip_direction``)
         _, acc = slide_surface(sp, t)
@@ -269,8 +277,8 @@ def slip_events(z, sp):
 @jit
 def event_at(t, z, sp):
     if sp[S_AT.event] == EV_STICK:
-        phi, n = _stick_force(t, z, sp)
-        return sp[S_AT.mu] * n - math.hypot(phi[0], phi[1])
+        phi0, phi1, n = _stick_force(t, z, sp)
+        return sp[S_AT.mu] * n - math.hypot(phi0, phi1)
     stops, speed = slip_events(z, sp)
     if sp[S_AT.event] == EV_SLIP:
         return stops
