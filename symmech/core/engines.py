@@ -14,6 +14,7 @@ frozen dataclass of a run's inputs by name, and ``RUNNER``, a :class:`Runner`)::
     engine.warm(...)      # build it now, once per machine (symmech warm)
     engine.load()         # what a run calls: the ahead-of-time build when current, else numba's entries
     engine.run(inputs)    # RUNNER.simulate(inputs): a Run of this engine, results as the reference engine's
+    engine.run_many(pop)  # RUNNER.simulate_many(pop): a Population of this engine (one that runs populations)
     engine.describe()     # its declared layouts (LAYOUTS, symmech.core.layout): names, units, offsets
 """
 from __future__ import annotations
@@ -32,7 +33,9 @@ class Runner(Protocol):
     ``driver.Run``: model, numerics, start, t_end, on_step, reason; the elastic trolley's ``compiled.Run``: system,
     drive, t, rtol, atol_q, dq0, dqd0, reason), and returns what the reference engine returns. Named inputs and a
     method of a named class, not ``simulate(*args)`` behind the registry: a reader follows a run from the scene
-    through :meth:`Engine.run` to the engine's loop."""
+    through :meth:`Engine.run` to the engine's loop. An engine that runs populations adds ``simulate_many(inputs)``
+    of its module's frozen ``Population`` (the grain's ``driver.Population``: models, numerics, starts, t_end,
+    workers, reason, strict), read through :meth:`Engine.run_many`."""
 
     def simulate(self, inputs):
         """The run of ``inputs`` (the implementation module's ``Run``) on this engine."""
@@ -78,12 +81,23 @@ class Engine:
     def run(self, inputs):
         """The run of ``inputs``, a ``Run`` of this engine's implementation module (TypeError for another's: the
         inputs name their engine), by its :class:`Runner`."""
-        kind = type(inputs)
-        if (kind.__module__, kind.__qualname__) != (self.implementation, "Run"):
-            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, "
-                            f"not {kind.__module__}.{kind.__qualname__}")
+        self.check(inputs, "Run")
         runner = self.runner()
         return runner.simulate(inputs)
+
+    def run_many(self, inputs) -> list:
+        """The runs of a population, ``inputs`` a ``Population`` of this engine's implementation module (an engine
+        that runs populations: its :class:`Runner` has ``simulate_many``), one result per member, in order."""
+        self.check(inputs, "Population")
+        runner = self.runner()
+        return runner.simulate_many(inputs)
+
+    def check(self, inputs, kind_name: str) -> None:
+        """TypeError unless ``inputs`` are of the class ``kind_name`` of this engine's implementation module."""
+        kind = type(inputs)
+        if (kind.__module__, kind.__qualname__) != (self.implementation, kind_name):
+            raise TypeError(f"engine {self.name!r} runs {self.implementation}.{kind_name}, "
+                            f"not {kind.__module__}.{kind.__qualname__}")
 
     def compile_seconds(self) -> float:
         """The wall time [s] a run starting now spends compiling first: the cold compile (an idle machine's
