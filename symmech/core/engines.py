@@ -33,12 +33,20 @@ class Runner(Protocol):
     ``driver.Run``: model, numerics, start, t_end, on_step, reason; the elastic trolley's ``compiled.Run``: system,
     drive, t, rtol, atol_q, dq0, dqd0, reason), and returns what the reference engine returns. Named inputs and a
     method of a named class, not ``simulate(*args)`` behind the registry: a reader follows a run from the scene
-    through :meth:`Engine.run` to the engine's loop. An engine that runs populations adds ``simulate_many(inputs)``
-    of its module's frozen ``Population`` (the grain's ``driver.Population``: models, numerics, starts, t_end,
-    workers, reason, strict), read through :meth:`Engine.run_many`."""
+    through :meth:`Engine.run` to the engine's loop."""
 
     def simulate(self, inputs):
         """The run of ``inputs`` (the implementation module's ``Run``) on this engine."""
+
+
+class PopulationRunner(Runner, Protocol):
+    """A :class:`Runner` of an engine that runs populations: ``simulate_many(inputs)`` takes its module's
+    ``Population``, the frozen dataclass of a population's inputs by name (the grain's ``driver.Population``:
+    models, numerics, starts, t_end, workers, reason, strict), and returns one result per member, in order, each
+    as ``simulate`` returns it (:meth:`Engine.run_many`)."""
+
+    def simulate_many(self, inputs) -> list:
+        """The runs of ``inputs`` (the implementation module's ``Population``) on this engine."""
 
 
 @dataclass(frozen=True)
@@ -87,9 +95,9 @@ class Engine:
 
     def run_many(self, inputs) -> list:
         """The runs of a population, ``inputs`` a ``Population`` of this engine's implementation module (an engine
-        that runs populations: its :class:`Runner` has ``simulate_many``), one result per member, in order."""
+        that runs populations: its ``RUNNER`` is a :class:`PopulationRunner`), one result per member, in order."""
         self.check(inputs, "Population")
-        runner = self.runner()
+        runner: PopulationRunner = self.module().RUNNER
         return runner.simulate_many(inputs)
 
     def check(self, inputs, kind_name: str) -> None:

@@ -273,7 +273,7 @@ class Population:
 
 
 class Runner:
-    """This engine's side of the protocol's run and population (:class:`symmech.core.engines.Runner`)."""
+    """This engine's side of the protocol's run and population (:class:`symmech.core.engines.PopulationRunner`)."""
 
     def simulate(self, inputs: Run) -> motion.Motion:
         """:func:`simulate` of the inputs."""
