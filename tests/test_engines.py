@@ -52,9 +52,17 @@ class Run:
     x: float
 
 
+@dataclass(frozen=True)
+class Population:
+    xs: list
+
+
 class Runner:
     def simulate(self, inputs):
         return 2 * inputs.x
+
+    def simulate_many(self, inputs):
+        return [3 * x for x in inputs.xs]
 
 
 RUNNER = Runner()
@@ -120,6 +128,9 @@ def test_the_protocol_of_a_stand_in_engine(standin, monkeypatch):
     assert engine.run(standin.Run(21)) == 42
     with pytest.raises(TypeError, match="engine 'standin' runs standin_implementation.Run, not builtins.int"):
         engine.run(21)  # the inputs name their engine
+    assert engine.run_many(standin.Population([1, 2])) == [3, 6]
+    with pytest.raises(TypeError, match="runs standin_implementation.Population, not standin_implementation.Run"):
+        engine.run_many(standin.Run(21))  # a population's inputs are its own type
     assert engine.load() == {"entry": ()}  # no ahead-of-time build: numba's entries
     monkeypatch.setattr(sample, "slowdown", lambda: 3.0)  # a third of a core now: the 12 s compile takes 36 s
     assert engine.compile_seconds() == 36.0

@@ -132,16 +132,17 @@ def test_batch_on_threads_equals_one_by_one(tmp_path):
 
 
 def test_impact_log_built_on_first_use_is_the_same_everywhere(tmp_path):
-    """The lazy impact log: a list of dicts with the Python loop's keys and value types, the same after pickling
-    (before and after first use), through dataclasses.replace and asdict."""
+    """The deferred impact log: the public motion.Motion, its log a list of dicts with the Python loop's keys and
+    value types, the same after pickling (before and after first use), through dataclasses.replace and asdict."""
     sc = default_scene(tmp_path, 0.05)
     c, p = both(sc.model, sc.numerics, sc.start, 0.05)
     before = pickle.loads(pickle.dumps(c))
     log = c.impacts
+    assert type(c) is type(p) is motion.Motion
     assert type(log) is list and len(log) == len(p.impacts) >= 3 and c.impacts is log
     for a, b in zip(log, p.impacts):
         assert list(a) == list(b) and [type(v) for v in a.values()] == [type(v) for v in b.values()]
-    assert before.impacts == pickle.loads(pickle.dumps(c)).impacts == dataclasses.asdict(c)["impacts"] == log
+    assert before.impacts == pickle.loads(pickle.dumps(c)).impacts == dataclasses.asdict(c)["impact_log"].entries() == log
     assert dataclasses.replace(c, warnings=[]).impacts == log
 
 

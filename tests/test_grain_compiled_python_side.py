@@ -71,8 +71,10 @@ def test_impact_log_from_the_compiled_rows_has_the_python_loops_fields():
                          "admissible": k == 0, "printed_admissible": [None, False][k],
                          "printed_creates_energy": [None, True][k], "converged": k == 0}
         assert type(entry["t"]) is float and type(entry["admissible"]) is bool
-    lazy = compiled.LazyMotion(np.zeros((1, 15)), None, {}, [], None, None, impact_rows=rows)
-    assert lazy.impacts == log and lazy.impacts is lazy.impacts  # built once, on first use
+    lazy = motion.Motion(np.zeros((1, 15)), compiled.deferred_log(rows), {}, [], None, None)
+    assert type(lazy) is motion.Motion and "impacts" not in vars(lazy)  # the public type, no log built yet
+    assert lazy.impact_times().tolist() == [0.0, 31 / 8.0] and "impacts" not in vars(lazy)  # read from the rows
+    assert lazy.impacts == log and lazy.impacts is lazy.impacts  # built once, on first read
 
 
 def test_energy_budget_of_a_finished_run_from_its_carry():

@@ -30,11 +30,11 @@ class Builder:
 
 
 class StandIn:
-    """What motion_scene may use of a registered engine: builder(), warm() and run()."""
+    """What motion_scene may use of a registered engine: builder(), warm(), run() and run_many()."""
 
     def __init__(self, built: bool):
         self.builder_ = Builder(built)
-        self.runs = []
+        self.runs, self.populations = [], []
 
     def builder(self):
         return self.builder_
@@ -43,9 +43,15 @@ class StandIn:
         self.builder_.calls.append("warm")
         return True
 
+    def run_many(self, inputs):
+        self.populations.append((type(inputs).__name__, inputs.models, inputs.starts, inputs.t_end, inputs.workers,
+                                 inputs.strict))
+        return [motion.Motion(None, motion.ImpactLog([]), {}, [], start, start, {"engine_reason": inputs.reason})
+                for start in inputs.starts]
+
     def run(self, inputs):
         self.runs.append((inputs.model, inputs.numerics.engine, inputs.t_end))
-        return motion.Motion(None, [], {}, [], inputs.start, inputs.start,
+        return motion.Motion(None, motion.ImpactLog([]), {}, [], inputs.start, inputs.start,
                              {"engine": "compiled", "engine_reason": inputs.reason})
 
 
@@ -58,6 +64,11 @@ def test_a_compiled_run_takes_the_registered_engine(monkeypatch):
     m = motion_scene.simulate(sc, num, duration=0.01)
     assert stand_in.runs == [(sc.model, "compiled", 0.01)] and stand_in.builder_.calls == ["warm"]
     assert m.extra == {"engine": "compiled", "engine_reason": 'numerics.engine = "compiled"'}
+    # a population too: one Population of the members by name, through the registry's run_many
+    other = replace(sc, numerics=num, duration=0.02, start=replace(sc.start, t=0.005))
+    ms = motion_scene.simulate_many([other, other], workers=1, strict=False)
+    assert stand_in.populations == [("Population", [sc.model] * 2, [other.start] * 2, 0.02, 1, False)]
+    assert [x.start for x in ms] == [other.start] * 2 and ms[0].extra["engine_reason"] == 'numerics.engine = "compiled"'
 
 
 def test_auto_reads_the_registered_engines_build(monkeypatch):

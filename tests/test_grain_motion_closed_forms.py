@@ -292,7 +292,7 @@ def test_summary_counts_and_rates_of_a_given_motion():
                impact(1.5, 1.0, True, False, False)]
     start = motion.State(0.3, np.array([1.0, 2.0, 0.1]), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3))
     final = motion.State(0.8, np.array([1.2, 1.9, 0.4]), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3))
-    res = motion.Motion(np.zeros((0, 15)), impacts, {"flight": 0.4, "sliding": 0.1}, ["w1"], start, final,
+    res = motion.Motion(np.zeros((0, 15)), motion.ImpactLog(impacts), {"flight": 0.4, "sliding": 0.1}, ["w1"], start, final,
                         {"landings": 3})
     assert res.summary() == {
         "duration_s": pytest.approx(0.5, abs=1e-15),

@@ -300,7 +300,7 @@ SHARDS = {
     "engine_py": ("symmech/grain/motion_engine/driver.py",
                   ["tests/test_grain_compiled.py", "tests/test_grain_compiled_python_side.py",
                    "tests/test_grain_compiled_start.py"],
-                  ["*.x_pack__*", "*.x_warning_text__*", "*.x_impact_log__*", "*.x_state_view__*", "*ǁLazyMotionǁ*",
+                  ["*.x_pack__*", "*.x_warning_text__*", "*.x_impact_log__*", "*.x_state_view__*", "*.x_deferred_log__*",
                    "*.x_energy_budget__*", "*.x_raise_failure__*", "*.x_simulate__*", "*.x_simulate_many__*",
                    "*.x_entry_signature__*"]),
     # what engine_py left (mutation/history.md): simulate from _90, simulate_many, entry_signature; its ten

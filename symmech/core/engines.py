@@ -14,6 +14,7 @@ frozen dataclass of a run's inputs by name, and ``RUNNER``, a :class:`Runner`)::
     engine.warm(...)      # build it now, once per machine (symmech warm)
     engine.load()         # what a run calls: the ahead-of-time build when current, else numba's entries
     engine.run(inputs)    # RUNNER.simulate(inputs): a Run of this engine, results as the reference engine's
+    engine.run_many(pop)  # RUNNER.simulate_many(pop): a Population of this engine (one that runs populations)
     engine.describe()     # its declared layouts (LAYOUTS, symmech.core.layout): names, units, offsets
 """
 from __future__ import annotations
@@ -36,6 +37,16 @@ class Runner(Protocol):
 
     def simulate(self, inputs):
         """The run of ``inputs`` (the implementation module's ``Run``) on this engine."""
+
+
+class PopulationRunner(Runner, Protocol):
+    """A :class:`Runner` of an engine that runs populations: ``simulate_many(inputs)`` takes its module's
+    ``Population``, the frozen dataclass of a population's inputs by name (the grain's ``driver.Population``:
+    models, numerics, starts, t_end, workers, reason, strict), and returns one result per member, in order, each
+    as ``simulate`` returns it (:meth:`Engine.run_many`)."""
+
+    def simulate_many(self, inputs) -> list:
+        """The runs of ``inputs`` (the implementation module's ``Population``) on this engine."""
 
 
 @dataclass(frozen=True)
@@ -78,12 +89,23 @@ class Engine:
     def run(self, inputs):
         """The run of ``inputs``, a ``Run`` of this engine's implementation module (TypeError for another's: the
         inputs name their engine), by its :class:`Runner`."""
-        kind = type(inputs)
-        if (kind.__module__, kind.__qualname__) != (self.implementation, "Run"):
-            raise TypeError(f"engine {self.name!r} runs {self.implementation}.Run, "
-                            f"not {kind.__module__}.{kind.__qualname__}")
+        self.check(inputs, "Run")
         runner = self.runner()
         return runner.simulate(inputs)
+
+    def run_many(self, inputs) -> list:
+        """The runs of a population, ``inputs`` a ``Population`` of this engine's implementation module (an engine
+        that runs populations: its ``RUNNER`` is a :class:`PopulationRunner`), one result per member, in order."""
+        self.check(inputs, "Population")
+        runner: PopulationRunner = self.module().RUNNER
+        return runner.simulate_many(inputs)
+
+    def check(self, inputs, kind_name: str) -> None:
+        """TypeError unless ``inputs`` are of the class ``kind_name`` of this engine's implementation module."""
+        kind = type(inputs)
+        if (kind.__module__, kind.__qualname__) != (self.implementation, kind_name):
+            raise TypeError(f"engine {self.name!r} runs {self.implementation}.{kind_name}, "
+                            f"not {kind.__module__}.{kind.__qualname__}")
 
     def compile_seconds(self) -> float:
         """The wall time [s] a run starting now spends compiling first: the cold compile (an idle machine's

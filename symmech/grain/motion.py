@@ -151,24 +151,51 @@ class State:
         return [self.t, *self.r, *self.v, *self.q, *(Q @ self.w), REGIMES.index(regime)]
 
 
+class ImpactLog:
+    """A run's impact log, read as :attr:`Motion.impacts`: the entries themselves (a list of dicts with the keys of
+    :func:`impact_record`), or an engine's impact rows (n, width) with ``build``, the function that makes the entries
+    of them, and ``t_column``, the column of the impact times [s]: built on first read (a dict per impact costs as
+    much as the compiled loop's work for that impact, and holds the GIL)."""
+
+    __slots__ = ("rows", "build", "t_column")
+
+    def __init__(self, rows, build=None, t_column: int = 0):
+        self.rows, self.build, self.t_column = rows, build, t_column
+
+    def entries(self) -> list:
+        """The entries (a list of dicts), built from the rows by ``build`` when there is one."""
+        return self.rows if self.build is None else self.build(self.rows)
+
+    def times(self) -> np.ndarray:
+        """The impact times (n,) [s] in order; from the rows' column, no entry built."""
+        if self.build is None:
+            return np.array([i["t"] for i in self.rows], dtype=float)
+        return self.rows[:, self.t_column].copy()
+
+
 @dataclass
 class Motion:
-    """Result: ``trajectory`` (n, 15) with :data:`TRAJECTORY_COLUMNS`, ``impacts`` (list of dicts),
-    ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the ``start`` state; ``extra`` goes into
-    the summary as it is (accurate mode: ``landings`` and ``energy_budget``, the dict of
-    :meth:`outcome.EnergyBudget.report`)."""
+    """Result: ``trajectory`` (n, 15) with :data:`TRAJECTORY_COLUMNS`, ``impact_log`` (:class:`ImpactLog`, read
+    as ``impacts``, a list of dicts), ``time_in`` seconds per regime, ``warnings``, the ``final`` state and the
+    ``start`` state; ``extra`` goes into the summary as it is (accurate mode: ``landings`` and ``energy_budget``,
+    the dict of :meth:`outcome.EnergyBudget.report`)."""
 
     trajectory: np.ndarray
-    impacts: list
+    impact_log: ImpactLog
     time_in: dict
     warnings: list
     start: State
     final: State
     extra: dict = field(default_factory=dict)
 
+    @cached_property
+    def impacts(self) -> list:
+        """The impact log, a dict per impact (the keys of :func:`impact_record`), built once on first read."""
+        return self.impact_log.entries()
+
     def impact_times(self) -> np.ndarray:
-        """The impact times (n,) [s] in order (the compiled engine reads them from its rows, no log built)."""
-        return np.array([i["t"] for i in self.impacts], dtype=float)
+        """The impact times (n,) [s] in order (from the compiled engine's rows: no log built)."""
+        return self.impact_log.times()
 
     def transport_velocity(self) -> list:
         """Mean transport velocity along X and Y [m/s]: the net displacement over the duration."""
@@ -318,7 +345,7 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, on_step=No
     extra = {"landings": landings, "rocking_contacts": rocking,
              "energy_budget": budget.report(absolute_energy(model, st), ENERGY_TOLERANCE), "engine": "python",
              "engine_reason": reason}
-    return Motion(np.array(rec.rows), impacts, time_in, outcome.distinct(warnings), start, st, extra)
+    return Motion(np.array(rec.rows), ImpactLog(impacts), time_in, outcome.distinct(warnings), start, st, extra)
 
 
 def _bounce(model: Model, st: State, impacts: list, rec: _Recorder, budget: outcome.EnergyBudget,

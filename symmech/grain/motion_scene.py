@@ -366,7 +366,7 @@ def simulate(sc: GrainScene, numerics: motion.Numerics | None = None, duration: 
 def simulate_many(scenes: list, workers: int | None = None, strict: bool = True) -> list:
     """The grains of ``scenes`` (a list of :class:`GrainScene`), each as :func:`simulate` runs it without ``on_step``;
     on the compiled engine, the scenes that share numerics and duration run as one population (packed once, the
-    loop over grains compiled, the results built in bulk: the engine's ``simulate_many``, ``workers`` threads), the
+    loop over grains compiled, the results built in bulk: the engine's ``run_many``, ``workers`` threads), the
     others one by one. A grain whose run fails raises its SymmechError (``strict``) or stands in the list as it."""
     out = [None] * len(scenes)
     groups = {}
@@ -375,9 +375,10 @@ def simulate_many(scenes: list, workers: int | None = None, strict: bool = True)
     for (num, duration), members in groups.items():
         engine, why = choose_engine(scenes[members[0]]) if num.mode == "accurate" else ("paper", "")
         if engine == "compiled":
-            runs = _compiled().module().simulate_many([scenes[k].model for k in members], num,
-                                                      [scenes[k].start for k in members], duration, workers, why,
-                                                      strict)
+            from symmech.grain.motion_engine.driver import Population  # the engine's Python side: no numba
+
+            runs = _compiled().run_many(Population([scenes[k].model for k in members], num,
+                                                   [scenes[k].start for k in members], duration, workers, why, strict))
         else:
             runs = [_one(scenes[k], strict) for k in members]
         for k, m in zip(members, runs):

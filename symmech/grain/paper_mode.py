@@ -42,7 +42,7 @@ from symmech.grain import contact
 from symmech.grain.body import euler_from_matrix
 from symmech.grain.coulomb_law import principal_inertia
 from symmech.grain.body import rotation as euler_rotation
-from symmech.grain.motion import Model, Motion, Numerics, Progress, State, impact_record
+from symmech.grain.motion import ImpactLog, Model, Motion, Numerics, Progress, State, impact_record
 from symmech.grain.outcome import distinct
 from symmech.grain.flight import quaternion_from_matrix
 from symmech.grain.sliding import slide_step
@@ -197,5 +197,5 @@ def simulate(model: Model, num: Numerics, start: State, t_end: float, alpha_beta
                                   t_end, record=True, alpha_beta=alpha_beta, on_step=on_step)
     rows = [start.row("flight")] + rec["rows"]
     final = State(t_end, r[0], v[0], quaternion_from_matrix(rec["Q"][0]), rec["w_body"][0])
-    return Motion(np.array(rows), rec["impacts"], rec["time_in"], rec["warnings"], start, final,
+    return Motion(np.array(rows), ImpactLog(rec["impacts"]), rec["time_in"], rec["warnings"], start, final,
                   {"spin_energy_dropped_J": float(rec["spin_dropped"][0])})

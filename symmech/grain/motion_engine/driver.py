@@ -40,7 +40,7 @@ Parameters travel in one float64 vector (layout :data:`layouts.PARAMS`), the sta
 (t, r (3), v (3), q (4), w body (3)) (``STATE``); results come back as growing arrays
 (trajectory rows, impact rows, warning codes) and are turned into a
 ``motion.Motion`` with the same structure as the Python loop's (its impact log
-built on first use: ``LazyMotion``). The compiled loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
+built on first read: ``motion.ImpactLog``). The compiled loop returns to Python every ``PHASES_PER_CALL`` regime phases so that
 ``on_step`` is called; this does not change the result. ``simulate_many`` runs
 grains on threads (the loop releases the GIL). Once ``symmech warm`` or the background builder has built the
 loop ahead of time (:mod:`symmech.numerics.aot`), a run on the main thread calls that build: nothing of numba is
@@ -115,6 +115,7 @@ IMPACT_VALUES = {f.name: IMPACT_ROW.slice(f.name) if f.shape else IMPACT_ROW.off
 
 
 IMPACT_KEYS = (*IMPACT_VALUES, *FLAG_FIELDS)
+T_COLUMN = IMPACT_ROW.offset("t")
 
 
 def impact_log(imps: np.ndarray) -> list:
@@ -135,31 +136,9 @@ def state_view(y: np.ndarray) -> motion.State:
     return motion.State(float(y[X_AT.t]), *[y[at] for at in STATE_VECTORS])
 
 
-class LazyMotion(motion.Motion):
-    """A ``motion.Motion`` whose impact log is built from the compiled impact rows (n, IMPACT_WIDTH) on first
-    use: a dict per impact costs as much as the compiled loop's work for that impact, and holds the GIL. The
-    arguments: those of ``motion.Motion`` (its impacts None), and ``impact_rows`` by keyword; the signature stays
-    the dataclass's, so ``dataclasses.replace`` works (it passes the built log as ``impacts``)."""
-
-    def __init__(self, *args, impact_rows: np.ndarray | None = None, **kwargs):
-        self._rows = impact_rows
-        super().__init__(*args, **kwargs)
-
-    @property
-    def impacts(self) -> list:
-        if self._impacts is None:
-            self._impacts = impact_log(self._rows)
-        return self._impacts
-
-    @impacts.setter
-    def impacts(self, value) -> None:  # the dataclass __init__ (None from simulate) and assignments
-        self._impacts = value
-
-    def impact_times(self) -> np.ndarray:
-        """The impact times (n,) [s], read from the impact rows while the log is not built (no dict per impact)."""
-        if self._impacts is None:
-            return self._rows[:, IMPACT_ROW.offset("t")].copy()
-        return super().impact_times()
+def deferred_log(imps: np.ndarray) -> motion.ImpactLog:
+    """The impact log of the compiled impact rows (n, IMPACT_WIDTH), built by :func:`impact_log` on first read."""
+    return motion.ImpactLog(imps, impact_log, T_COLUMN)
 
 
 def energy_budget(carry: np.ndarray) -> dict:
@@ -234,9 +213,9 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
             out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
         else:
             texts = run_warnings(warns[warn0:warn1], rocking, model, num) if warn1 > warn0 or rocking else []
-            out.append(LazyMotion(rows[row0:row1], None, {"flight": flight, "sliding": slide}, texts, start,
-                                  motion.State(*final), run_extra(landings, rocking, budget, implicit, reason),
-                                  impact_rows=imps[imp0:imp1]))
+            out.append(motion.Motion(rows[row0:row1], deferred_log(imps[imp0:imp1]),
+                                     {"flight": flight, "sliding": slide}, texts, start, motion.State(*final),
+                                     run_extra(landings, rocking, budget, implicit, reason)))
         row0, imp0, warn0 = row1, imp1, warn1
     return out
 
@@ -262,8 +241,8 @@ def motion_of(model: motion.Model, num: motion.Numerics, start: motion.State, y:
     rocking = int(carry[C_AT.rocking])
     extra = run_extra(int(carry[C_AT.landings]), rocking, energy_budget(carry), int(carry[C_AT.implicit]), reason)
     time_in = {"flight": float(carry[C_AT.t_flight]), "sliding": float(carry[C_AT.t_sliding])}
-    return LazyMotion(rows, None, time_in, run_warnings(warns, rocking, model, num), start, state_view(y), extra,
-                      impact_rows=imps)
+    return motion.Motion(rows, deferred_log(imps), time_in, run_warnings(warns, rocking, model, num), start,
+                         state_view(y), extra)
 
 
 @dataclass(frozen=True)
@@ -279,12 +258,32 @@ class Run:
     reason: str = ""
 
 
+@dataclass(frozen=True)
+class Population:
+    """Grains run together on this engine, their inputs by name (the engine protocol's population,
+    ``engines.Engine.run_many``): those of :func:`simulate_many` (``models`` and ``starts`` a list each, one per
+    grain)."""
+
+    models: list
+    numerics: motion.Numerics
+    starts: list
+    t_end: float  # [s]
+    workers: int | None = None
+    reason: str = ""
+    strict: bool = True
+
+
 class Runner:
-    """This engine's side of the protocol's run (:class:`symmech.core.engines.Runner`)."""
+    """This engine's side of the protocol's run and population (:class:`symmech.core.engines.PopulationRunner`)."""
 
     def simulate(self, inputs: Run) -> motion.Motion:
         """:func:`simulate` of the inputs."""
         return simulate(inputs.model, inputs.numerics, inputs.start, inputs.t_end, inputs.on_step, inputs.reason)
+
+    def simulate_many(self, inputs: Population) -> list:
+        """:func:`simulate_many` of the inputs."""
+        return simulate_many(inputs.models, inputs.numerics, inputs.starts, inputs.t_end, inputs.workers,
+                             inputs.reason, inputs.strict)
 
 
 RUNNER = Runner()
@@ -297,7 +296,7 @@ def simulate(model: motion.Model, num: motion.Numerics, start: motion.State, t_e
 
     ``on_step(t_now)`` is called between batches of ``PHASES_PER_CALL`` regime phases, at most every 0.2 s
     of wall time, and once at the end. ``extra["implicit_slip_steps"]`` counts the Radau steps of stiff slips.
-    The impact log is built on first use (:class:`LazyMotion`).
+    The impact log is built on first read (:func:`deferred_log`).
     """
     run = entry()
     progress = motion.Progress(on_step)
