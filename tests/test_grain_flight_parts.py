@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 
-from symmech.grain.flight import RotationFlight, Vibration, quaternion_from_matrix, rotation_matrix, translate
+from symmech.grain.flight import RotationFlight, Vibration, bounces, quaternion_from_matrix, rotation_matrix, translate
 
 
 def matrix_of(q):
@@ -18,9 +18,11 @@ def matrix_of(q):
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-# a generic turn (trace largest), and turns near pi about X, Y and Z (that diagonal entry largest)
+# a generic turn (trace largest), turns near pi about X, Y and Z (that diagonal entry largest), and two turns with
+# no Y part whose Q[2, 1] or Q[1, 2] (0.72) exceeds every diagonal entry: the Y branch would divide by s = 0
 @pytest.mark.parametrize("q", [(0.8, 0.2, -0.4, 0.3), (0.01, 1.0, 0.02, -0.03), (0.02, -0.03, 1.0, 0.05),
-                               (0.03, 0.05, -0.02, 1.0), (-0.6, 0.3, 0.5, -0.2)])
+                               (0.03, 0.05, -0.02, 1.0), (-0.6, 0.3, 0.5, -0.2), (0.6, 0.6, 0.0, math.sqrt(0.28)),
+                               (0.6, -0.6, 0.0, math.sqrt(0.28))])
 def test_quaternion_of_a_rotation_matrix_is_the_one_it_was_built_from(q):
     q = np.array(q) / np.linalg.norm(q)
     expected = q if q[0] > 0 else -q  # positive scalar part
@@ -100,3 +102,14 @@ def test_a_failed_rotation_integration_says_why(monkeypatch):
                               0.02)
     with pytest.raises(RuntimeError, match=r"^torque-free rotation did not integrate: Required step size is less"):
         rotation.state(0.01)
+
+
+def test_bounces_of_a_sequence_off_a_still_surface():
+    """Rebound speeds v0 e^k and flights 2 v0 e^k / g: with v0 = 2 m/s, e = 1/2, g = 10 m/s^2 the flights last 0.4,
+    0.2, 0.1 s, so 0.6 s holds 2 of them (+ the last impact); a rest speed of v0 / 8 ends it after 3 rebounds; an
+    elastic bounce lasts 0.4 s; a launch at or below the rest speed, or a plastic one, is one impact."""
+    assert bounces(2.0, 0.5, 10.0, 1e-3, 0.6) == pytest.approx(3.0, rel=1e-12)
+    assert bounces(2.0, 0.5, 10.0, 0.25, 10.0) == pytest.approx(4.0, rel=1e-12)
+    assert bounces(2.0, 1.0, 10.0, 0.25, 1.0) == pytest.approx(3.5, rel=1e-12)
+    assert bounces(0.2, 0.5, 10.0, 0.25, 1.0) == 1.0
+    assert bounces(2.0, 0.0, 10.0, 0.25, 1.0) == 1.0

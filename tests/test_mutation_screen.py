@@ -114,10 +114,13 @@ def test_proven_survivors_count_as_equivalent_and_nothing_else_does():
     entries = {f"m.x_f__mutmut_{i}": rec.Entry(f"m.x_f__mutmut_{i}", "s", h, o, "", 1.0, "")
                for i, (h, o) in enumerate([("a", "survived"), ("b", "survived"), ("c", "killed"), ("d", "timeout"),
                                            ("e", "raised")])}
-    proofs = {("m", "a"): "proof", ("m", "c"): "a proof of a killed mutant is moot", ("other", "b"): "elsewhere"}
+    proofs = {("m", "x_f", "a"): "proof", ("m", "x_f", "c"): "a proof of a killed mutant is moot",
+              ("other", "x_f", "b"): "elsewhere"}
     counts = rec.tally(entries, "m", proofs)
     assert {k: v for k, v in counts.items() if v} == {"equivalent": 1, "survived": 1, "killed": 1, "timeout": 1,
                                                        "raised": 1}
+    # the same change in another function of the module is another mutant: the proof of x_f's does not cover it
+    assert rec.tally(entries, "m", {("m", "x_g", "a"): "a proof of x_g's change"})["equivalent"] == 0
 
 
 def test_a_record_survives_a_write_and_read(tmp_path):

@@ -114,21 +114,27 @@ def shards_of(path: Path) -> set[str]:
     return {e.shard for e in read(path).values()}
 
 
-def equivalents() -> dict[tuple[str, str], str]:
-    """The written proofs: (dotted module, change hash) -> proof."""
+def equivalents() -> dict[tuple[str, str, str], str]:
+    """The written proofs: (dotted module, function, change hash) -> proof. The function is part of the key: the
+    same line changed the same way in another function (`np.asarray(q, dtype=float)` in two functions) is another
+    mutant, which a proof of the first does not cover."""
     if not EQUIVALENT.exists():
         return {}
     with EQUIVALENT.open(encoding="utf-8", newline="") as f:
         rows = csv.DictReader((line for line in f if not line.startswith("#")), delimiter="\t")
-        return {(r["module"], r["hash"]): r["proof"] for r in rows}
+        return {(r["module"], function_of(r["mutant"]), r["hash"]): r["proof"] for r in rows}
 
 
-def tally(entries: dict[str, Entry], module: str, proofs: dict[tuple[str, str], str]) -> dict[str, int]:
+def is_proven(entry: Entry, module: str, proofs: dict[tuple[str, str, str], str]) -> bool:
+    """Whether a recorded survivor of `module` has a written proof of its own function's change."""
+    return entry.outcome == "survived" and (module, function_of(entry.mutant), entry.hash) in proofs
+
+
+def tally(entries: dict[str, Entry], module: str, proofs: dict[tuple[str, str, str], str]) -> dict[str, int]:
     """Counts per outcome, with the proven-equivalent survivors as "equivalent" (not "survived")."""
     counts = dict.fromkeys((*OUTCOMES, "equivalent"), 0)
     for e in entries.values():
-        proven = e.outcome == "survived" and (module, e.hash) in proofs
-        counts["equivalent" if proven else e.outcome] += 1
+        counts["equivalent" if is_proven(e, module, proofs) else e.outcome] += 1
     return counts
 
 

@@ -220,7 +220,7 @@ def sample(entries: dict[str, rec.Entry], module: str, killed: int, seed: int) -
     proofs = rec.equivalents()
     kills = sorted(n for n, e in entries.items() if e.outcome in rec.KILLS)
     chosen = random.Random(seed).sample(kills, min(killed, len(kills)))
-    proven = [n for n, e in entries.items() if e.outcome == "survived" and (module, e.hash) in proofs]
+    proven = [n for n, e in entries.items() if rec.is_proven(e, module, proofs)]
     return [entries[n] for n in sorted(chosen + proven)]
 
 
