@@ -450,7 +450,10 @@ COVERAGE = {
                                          "module, its fast tests and the cheapest that integrate, 15-30 s a "
                                          "survivor) is ready, not screened",
     "symmech/trolley/elastic/body.py": "",
-    "symmech/trolley/elastic/frame.py": "",
+    "symmech/trolley/elastic/frame.py": ("drawn again after the frame's spline table moved in from the compiled "
+                                         "engine (638 mutants, from 349): 57 of the 60 drawn screened now, 3 kept; 17 survivors, 16 of them in frame_table, "
+                                         "_subsampled and geometry_scales, whose tests (test_elastic_compiled.py) "
+                                         "are in the slow tier, outside the shard; not yet killed"),
     "symmech/trolley/elastic/simulate.py": "",
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
