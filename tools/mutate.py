@@ -369,6 +369,11 @@ SHARDS = {
                              *ELASTIC_TESTS], ["*"]),
     "elastic_frame_sample": ("symmech/trolley/elastic/frame.py", ["tests/test_elastic_frame.py", *ELASTIC_TESTS],
                              ["*"]),
+    # the frame's spline table (moved in from the compiled engine): its tests are slow-tier ones that build no kernel
+    "elastic_frame_table": ("symmech/trolley/elastic/frame.py",
+                            ["tests/test_elastic_compiled.py", "tests/test_elastic_frame.py", "-m", "slow or not slow",
+                             "-k", "frame_table or kink_is_not or not compiled"],
+                            ["*frame_table*", "*_subsampled*", "*geometry_scales*", "*_scales*", "*arc_length*"]),
     # the motion loop by a seeded sample: GRAIN_MOTION_TESTS without the nine that take 4-22 s each (their 150 s
     # would be every survivor's cost) and with the texts' and rows' tests
     "motion_sample": ("symmech/grain/motion.py",
@@ -451,9 +456,8 @@ COVERAGE = {
                                          "survivor) is ready, not screened",
     "symmech/trolley/elastic/body.py": "",
     "symmech/trolley/elastic/frame.py": ("drawn again after the frame's spline table moved in from the compiled "
-                                         "engine (638 mutants, from 349): 57 of the 60 drawn screened now, 3 kept; 17 survivors, 16 of them in frame_table, "
-                                         "_subsampled and geometry_scales, whose tests (test_elastic_compiled.py) "
-                                         "are in the slow tier, outside the shard; not yet killed"),
+                                         "engine (638 mutants, from 349); its survivors screened again by shard "
+                                         "elastic_frame_table, with the table's slow-tier tests that build no kernel"),
     "symmech/trolley/elastic/simulate.py": "",
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
