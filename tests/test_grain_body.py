@@ -44,6 +44,13 @@ def test_euler_angles_of_generic_rotations_are_the_angles_they_were_built_from()
     # batch shapes (..., 3, 3) -> (..., 3), and rotation() is the inverse map
     np.testing.assert_allclose(euler_from_matrix(Q.reshape(4, 5, 3, 3)), angles.reshape(4, 5, 3), atol=1e-12)
     np.testing.assert_allclose(rotation(angles.reshape(4, 5, 3)), Q.reshape(4, 5, 3, 3), rtol=0, atol=1e-15)
+    with pytest.raises(TypeError, match="not 'complex'"):  # a complex angle is refused, not cut to its real part
+        rotation([0.3 + 0.1j, 0.7, 1.1])
+    # a single-precision matrix (an input the API takes) is read in double: the angle of its stored values, to
+    # round-off, not to float32's 1e-8
+    turn = rx(0.3).astype(np.float32)  # about x: psi = phi = 0, theta the angle of the stored cosine and sine
+    theta = math.atan2(float(turn[2, 1]), float(turn[1, 1]))
+    np.testing.assert_allclose(euler_from_matrix(turn), [0.0, theta, 0.0], rtol=0, atol=1e-16)
 
 
 @pytest.mark.parametrize("psi, phi", [(0.3, 0.5), (-2.0, 1.2), (2.5, 2.0)])

@@ -5,6 +5,7 @@ References are independent: the corrected functional summed by hand from H (gene
 closed-form sphere impact, brackets that must contain a known minimum.
 """
 import re
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -379,7 +380,8 @@ def test_newton_polishes_every_row_of_near_double_roots():
 def test_chosen_root_has_the_least_tangential_impulse_of_the_best_class():
     """300 random impacts: among the roots, by hand, the admissible ones (no energy gained beyond 1e-9 of
     the kinetic energy, T_z not below -1e-12 |T|) come first, then the energy-creating, then the pulling;
-    within the class the least |T_t| = hypot(T_x, T_y) is chosen."""
+    within the class the least |T_t| = hypot(T_x, T_y) is chosen. The mass, 10³ kg, makes impulses of order
+    10³ N s: the classes must come first whatever the impulses' unit."""
     rng = np.random.default_rng(5)
     n = 300
     axes = np.exp(rng.uniform(np.log(1e-4), np.log(3e-3), (n, 3)))
@@ -389,7 +391,8 @@ def test_chosen_root_has_the_least_tangential_impulse_of_the_best_class():
     u[:, 2] = -np.abs(u[:, 2]) - 1e-3
     e, lam = rng.uniform(0, 1, n), rng.uniform(0, 1, n)
     H = g.H(*axes.T, *angles.T)
-    batch = solve_robust_batch(H, 1.0, e, lam, u)
+    m = 1e3
+    batch = solve_robust_batch(H, m, e, lam, u)
     classes = set()
     for i in range(n):
         ok = ~np.isnan(batch.roots_mu[i])
@@ -397,8 +400,8 @@ def test_chosen_root_has_the_least_tangential_impulse_of_the_best_class():
         uK1 = np.stack([(1 - lam[i]) * np.hypot(*u[i, :2]) * np.cos(batch.roots_mu[i][ok]),
                         (1 - lam[i]) * np.hypot(*u[i, :2]) * np.sin(batch.roots_mu[i][ok]),
                         np.full(ok.sum(), -e[i] * u[i, 2])], axis=1)
-        np.testing.assert_allclose(np.einsum("ij,kj->ki", H[i], T), uK1 - u[i], atol=1e-12)
-        gain = 0.5 * np.sum(T * (u[i] + uK1), axis=1) > 1e-9 * 0.5 * u[i] @ u[i]
+        np.testing.assert_allclose(np.einsum("ij,kj->ki", H[i], T) / m, uK1 - u[i], atol=1e-12)
+        gain = 0.5 * np.sum(T * (u[i] + uK1), axis=1) > 1e-9 * 0.5 * m * u[i] @ u[i]
         pull = T[:, 2] < -1e-12 * np.linalg.norm(T, axis=1)
         rank = np.where(pull, 2, np.where(gain, 1, 0))
         best = np.flatnonzero(rank == rank.min())
@@ -414,10 +417,11 @@ def test_chosen_root_has_the_least_tangential_impulse_of_the_best_class():
 
 def test_full_stick_reports_the_impulse_direction():
     """lambda = 1 (no slip after): mu is immaterial to the law and reported as the direction of T_t,
-    or 0 for a head-on sphere (T_t = 0); the law holds and the residual is at rounding."""
+    or 0 for a head-on sphere (T_t = 0); the law holds and the residual is at rounding. e and lambda come as
+    exact rationals (as a scene's sympy constants may): read as the floats they equal."""
     H = np.stack([g.H(GRAIN.a, GRAIN.b, GRAIN.c, 0.3, 0.7, 1.1), SPHERE_H])
     u = np.array([[0.3, 0.1, -0.5], [0.0, 0.0, -1.5]])
-    batch = solve_robust_batch(H, [GRAIN.mass, BALL.mass], 0.5, 1.0, u)
+    batch = solve_robust_batch(H, [GRAIN.mass, BALL.mass], Fraction(1, 2), Fraction(1), u)
     T0 = GRAIN.mass * np.linalg.solve(H[0], np.array([0.0, 0.0, -0.5 * -0.5]) - u[0])  # u_K after: (0, 0, -e u_z)
     np.testing.assert_allclose(batch.T[0], T0, rtol=1e-12)
     assert batch.mu[0] == pytest.approx(np.arctan2(T0[1], T0[0]), abs=1e-12)
