@@ -18,13 +18,19 @@ def assert_slides_from_the_start(res, t_end, v_release=0.0):
     assert res.time_in == {"flight": 0.0, "sliding": pytest.approx(t_end, abs=1e-15)}
     assert res.extra["energy_budget"]["lost_at_landings_J"] == pytest.approx(0.5 * M * v_release**2, rel=1e-12, abs=0)
     assert set(res.trajectory[1:, -1]) == {motion.REGIMES.index("sliding")}  # the first row is the start's
+    # then a sliding row at every sample time (1 ms apart) from t = 0 on, so the file says it slides at t = 0, up to
+    # the end; a sample time within round-off (1e-9 of the interval) before the end is the end's rows, not one more
+    samples = np.arange(round(t_end / 1e-3)) * 1e-3
+    np.testing.assert_array_equal(res.trajectory[1:len(samples) + 1, 0], samples)
+    assert (res.trajectory[len(samples) + 1:, 0] == t_end).all()
 
 
 def test_released_at_rest_spinning_about_the_normal_slides_from_the_start_and_keeps_its_spin():
     """A sphere at rest on a still plane, spinning at 30 rad/s about the normal: its contact point does not move,
-    so it slides (rests) from the start, in place, its spin about the normal kept."""
-    res = motion.simulate(sphere(LAW), numerics(), state(z=A, w=(0.0, 0.0, 30.0)), 0.002)
-    assert_slides_from_the_start(res, 0.002)
+    so it slides (rests) from the start, in place, its spin about the normal kept. The run ends 0.1 ns past its
+    sample time 2 ms."""
+    res = motion.simulate(sphere(LAW), numerics(), state(z=A, w=(0.0, 0.0, 30.0)), 0.002 + 1e-13)
+    assert_slides_from_the_start(res, 0.002 + 1e-13)
     np.testing.assert_allclose(res.final.r, [0.0, 0.0, A], atol=1e-15)
     np.testing.assert_allclose(res.final.v, 0.0, atol=1e-15)
     np.testing.assert_allclose(flight.rotation_matrix(res.final.q) @ res.final.w, [0.0, 0.0, 30.0], rtol=1e-9)
