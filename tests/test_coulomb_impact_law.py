@@ -6,6 +6,8 @@ K = diag(7/(2m), 7/(2m), 1/m) (I = 2/5 m r²). With the contact velocity u (u_z 
     sliding:                    P_n the same,            P_t = -μ P_n u_t/|u_t|
 and v+ = v + P/m, ω+ = ω + I⁻¹ (R × P). A point mass (rotation off) is the same with K_t = 1/m.
 A contact point that is not approaching the plane gets no impulse."""
+from fractions import Fraction
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -99,6 +101,20 @@ def test_kinetic_energy_and_principal_inertia_of_an_ellipsoid():
     wb = Q.T @ w
     expected = 0.5 * m * (v @ v) + 0.5 * (inertia * wb) @ wb
     assert kinetic_energy(m, inertia, Q, v, w) == pytest.approx(expected, rel=1e-14)
+    # single-precision axes and mass (inputs the API takes) are read in double: the closed form of the stored
+    # values to round-off, not to float32's 1e-8
+    a, b, c, m = (float(np.float32(x)) for x in (a, b, c, m))
+    np.testing.assert_allclose(principal_inertia(np.float32([a, b, c]), np.float32(m)),
+                               [m * (b * b + c * c) / 5, m * (a * a + c * c) / 5, m * (a * a + b * b) / 5], rtol=1e-15)
+
+
+def test_inverse_effective_mass_of_a_sphere_given_in_exact_rationals():
+    """A solid sphere touching at R = (0, 0, -r): K = diag(1/m + r²/I, 1/m + r²/I, 1/m) with I = 2/5 m r², so
+    K_tt = 7 / (2 m); mass and inertia as exact rationals (a scene's sympy constants) give a float array."""
+    m, r = Fraction(3, 100000), Fraction(1, 500)
+    K = inverse_effective_mass(m, [Fraction(2, 5) * m * r * r] * 3, np.eye(3), [0.0, 0.0, -float(r)])
+    assert K.dtype == np.float64
+    np.testing.assert_allclose(K, np.diag([7 / (2 * 3e-5), 7 / (2 * 3e-5), 1 / 3e-5]), rtol=1e-15, atol=1e-10)
 
 
 def test_sliding_impulse_of_tilted_ellipsoids_lies_on_the_friction_cone():
