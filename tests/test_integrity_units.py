@@ -4,8 +4,10 @@ fresh-interpreter tests of test_integrity.py cannot see). References are hand-wr
 and hashlib, never the module's own functions."""
 from __future__ import annotations
 
+import codecs
 import hashlib
 import importlib.util
+import locale
 import os
 import sys
 import types
@@ -143,3 +145,78 @@ def test_atomic_write_renames_a_hidden_temporary_file_from_beside_the_target(tmp
     assert (os.path.dirname(src), dst) == (str(tmp_path), path)
     assert os.path.basename(src).startswith(".m.py.") and src.endswith(".tmp")
     assert path.read_text() == "text"
+
+
+def test_files_are_read_and_written_as_utf8_whatever_the_locale(tmp_path, monkeypatch):
+    """Under a C locale (ASCII: LANG=C, say, in a program that has not switched to UTF-8) a module whose body holds
+    non-ASCII text is written byte for byte as UTF-8, found intact, and its recorded hash is read."""
+    body = "s = 'μ — é'\n"
+    text = _module_text(body)
+    path = tmp_path / "m.py"
+    module = types.ModuleType("symmech.generated.fake_utf8")
+    module.__file__ = str(path)
+    monkeypatch.setitem(sys.modules, "symmech.generated.fake_utf8", module)
+    before = locale.setlocale(locale.LC_CTYPE)
+    locale.setlocale(locale.LC_CTYPE, "C")
+    try:
+        assert codecs.lookup(locale.getencoding()).name == "ascii"
+        integrity.write_atomic(path, text)
+        assert integrity.problem(path) is None
+        assert integrity.used_modules()["fake_utf8"] == hashlib.sha256(body.encode("utf-8")).hexdigest()
+    finally:
+        locale.setlocale(locale.LC_CTYPE, before)
+    assert path.read_bytes() == text.encode("utf-8")
+
+
+def test_an_interrupt_after_the_rename_surfaces_as_itself(tmp_path, monkeypatch):
+    """The temporary file is already renamed when the interrupt comes: its clean-up finds nothing to remove and
+    the caller sees the interrupt, not a FileNotFoundError; the file holds the new text."""
+    replace = os.replace
+
+    def replace_then_interrupt(src, dst):
+        replace(src, dst)
+        raise RuntimeError("interrupted after the rename")
+
+    monkeypatch.setattr(os, "replace", replace_then_interrupt)
+    path = tmp_path / "m.py"
+    with pytest.raises(RuntimeError, match="^interrupted after the rename$"):
+        integrity.write_atomic(path, "new")
+    assert [p.name for p in tmp_path.iterdir()] == ["m.py"] and path.read_text() == "new"
+
+
+def test_a_file_whose_stat_fails_is_checked_every_time(tmp_path, monkeypatch):
+    """Without a (path, mtime, size) stamp nothing is cached: a damaged module checked after an intact one, both
+    unstat-able, is still refused."""
+    good, bad = tmp_path / "good.py", tmp_path / "bad.py"
+    good.write_text(_module_text())
+    bad.write_text(BODY)
+
+    def unavailable(path, *args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(os, "stat", unavailable)
+    assert integrity.verify_file("good", good) == hashlib.sha256(BODY.encode()).hexdigest()
+    with pytest.raises(SymmechError, match=r"^generated module bad is edited \(no symmech header\)"):
+        integrity.verify_file("bad", bad)
+
+
+def test_a_damaged_module_of_a_build_is_named_in_the_refusal(tmp_path, monkeypatch):
+    """An ahead-of-time build's source in the package's folder (here a stand-in folder) that is not intact is
+    refused by its module name, as its import would be."""
+    import symmech.generated
+
+    monkeypatch.setattr(symmech.generated, "__file__", str(tmp_path / "__init__.py"))
+    (tmp_path / "twin_nb.py").write_text(BODY)
+    with pytest.raises(SymmechError, match=r"^generated module twin_nb is edited \(no symmech header\): regenerate"):
+        integrity.verify_built_from([str(tmp_path / "twin_nb.py")])
+
+
+def test_the_finder_leaves_every_other_module_to_the_usual_loaders():
+    """With the finder installed (by the package's import), a module outside the package imported afresh (colorsys
+    of the standard library, no symmech header) loads as usual. No fixture: none may import anything first."""
+    import symmech.generated  # noqa: F401
+
+    assert any(isinstance(finder, integrity._GeneratedFinder) for finder in sys.meta_path)
+    sys.modules.pop("colorsys", None)
+    colorsys = importlib.import_module("colorsys")
+    assert colorsys.rgb_to_hsv(0.0, 0.0, 1.0) == (2 / 3, 1.0, 1.0)
