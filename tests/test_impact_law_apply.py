@@ -119,13 +119,16 @@ def test_needle_gaining_energy_under_the_printed_law_is_flagged_with_its_energie
 @pytest.mark.parametrize("rotation", [True, False])
 def test_a_contact_point_sliding_along_the_plane_gets_no_impulse(rotation):
     """u_n = 0 exactly with a tangential slip: not approaching, so no impulse, even for μ = ∞ (whose sticking
-    impulse would stop the slip)."""
-    axes, mass, Q = np.full((1, 3), 2e-3), np.array([3e-5]), np.eye(3)[None]
-    v, w = np.array([[0.3, -0.1, 0.0]]), np.array([[0.0, 0.0, 20.0]])
+    impulse would stop the slip). Nor does a grain at rest on the plane (the second): 0 J before and after, which
+    creates no energy."""
+    axes, mass, Q = np.full((2, 3), 2e-3), np.array([3e-5, 3e-5]), np.broadcast_to(np.eye(3), (2, 3, 3))
+    v, w = np.array([[0.3, -0.1, 0.0], [0.0, 0.0, 0.0]]), np.array([[0.0, 0.0, 20.0], [0.0, 0.0, 0.0]])
     out = ImpactLaw("coulomb", e_n=0.5, e_t=0.2, check_printed=False).apply(axes, mass, Q, v, w, rotation)
     assert not out["impulse"].any()
     np.testing.assert_array_equal(out["v"], v)
-    np.testing.assert_array_equal(out["w"], w if rotation else np.zeros((1, 3)))
+    np.testing.assert_array_equal(out["w"], w if rotation else np.zeros((2, 3)))
+    assert out["ke_before"][1] == out["ke_after"][1] == 0.0
+    assert out["admissible"].tolist() == [True, True] and out["warnings"] == []
 
 
 def test_the_printed_verdict_is_given_only_for_a_rotating_grain():
