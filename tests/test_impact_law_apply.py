@@ -9,11 +9,13 @@ velocity is u = v + ω × R. With K = E/m - [R]x I_K⁻¹ [R]x, u⁺ = u + K P.
 - The printed law (e, λ): u⁺_n = -e u_n and |u⁺_t| = (1 - λ) |u_t| (turned by the law's angle).
 Every expected value is written here from those formulas; none comes from the code under test.
 """
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from symmech.grain import body
+from symmech.grain import body, coulomb_law
 from symmech.grain.coulomb_law import ImpactLaw
 
 EZ = np.array([0.0, 0.0, 1.0])
@@ -182,3 +184,22 @@ def test_grazing_ellipsoid_under_the_printed_law_is_pulled_into_the_plane_and_sa
     u_after = out["u_after"][0]
     assert u_after[2] == pytest.approx(0.5e-6, rel=1e-6)
     assert np.hypot(*u_after[:2]) == pytest.approx(0.7 * np.hypot(0.5, 0.2), rel=1e-9)
+
+
+def test_a_printed_solve_left_with_a_residual_is_not_converged_and_says_so(monkeypatch):
+    """The printed law's solver returns the relative residual of (19) it reached; at or above 1e-8 the impact is
+    not converged and a warning gives the residual. The solver leaves none on a sphere, so its residuals are set
+    here: 1e-8 exactly, 3e-8 and 0 for three spheres hitting the plane (which the printed law never makes gain
+    energy: no other warning)."""
+    real = coulomb_law.solve_robust_batch
+
+    def left_with_residuals(*args, **kwargs):
+        return dataclasses.replace(real(*args, **kwargs), residual=np.array([1e-8, 3e-8, 0.0]))
+
+    monkeypatch.setattr(coulomb_law, "solve_robust_batch", left_with_residuals)
+    axes, mass, Q = np.full((3, 3), 2e-3), np.full(3, 3e-5), np.broadcast_to(np.eye(3), (3, 3, 3))
+    v, w = np.array([[0.3, -0.1, -0.5], [0.0, 0.2, -0.1], [0.0, 0.0, -1.0]]), np.full((3, 3), 10.0)
+    out = ImpactLaw("printed", e=0.5, lam=0.3).apply(axes, mass, Q, v, w, True)
+    assert out["converged"].tolist() == [False, False, True]
+    assert out["warnings"] == ["printed impact law: no solution of (19) (relative residual 1e-08)",
+                               "printed impact law: no solution of (19) (relative residual 3e-08)"]
