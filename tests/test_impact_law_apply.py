@@ -10,6 +10,7 @@ velocity is u = v + ω × R. With K = E/m - [R]x I_K⁻¹ [R]x, u⁺ = u + K P.
 Every expected value is written here from those formulas; none comes from the code under test.
 """
 import dataclasses
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -122,10 +123,11 @@ def test_needle_gaining_energy_under_the_printed_law_is_flagged_with_its_energie
 def test_a_contact_point_sliding_along_the_plane_gets_no_impulse(rotation):
     """u_n = 0 exactly with a tangential slip: not approaching, so no impulse, even for μ = ∞ (whose sticking
     impulse would stop the slip). Nor does a grain at rest on the plane (the second): 0 J before and after, which
-    creates no energy."""
+    creates no energy. The spins come as exact rationals (a scene's sympy constants): read as the floats they equal."""
     axes, mass, Q = np.full((2, 3), 2e-3), np.array([3e-5, 3e-5]), np.broadcast_to(np.eye(3), (2, 3, 3))
     v, w = np.array([[0.3, -0.1, 0.0], [0.0, 0.0, 0.0]]), np.array([[0.0, 0.0, 20.0], [0.0, 0.0, 0.0]])
-    out = ImpactLaw("coulomb", e_n=0.5, e_t=0.2, check_printed=False).apply(axes, mass, Q, v, w, rotation)
+    spins = [[Fraction(x) for x in row] for row in w.tolist()]
+    out = ImpactLaw("coulomb", e_n=0.5, e_t=0.2, check_printed=False).apply(axes, mass, Q, v, spins, rotation)
     assert not out["impulse"].any()
     np.testing.assert_array_equal(out["v"], v)
     np.testing.assert_array_equal(out["w"], w if rotation else np.zeros((2, 3)))
