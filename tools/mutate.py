@@ -435,7 +435,7 @@ COVERAGE = {
     "symmech/grain/coulomb_law.py": "",
     "symmech/grain/paper_mode.py": "",
     "symmech/grain/motion.py": "a seeded sample of 40 (shard motion_sample) beside the 16 mutants of the trajectory's "
-                               "sample times screened before as a part and outside the draw (5 of them survive): "
+                               "sample times screened before as a part and outside the draw (2 of them survive): "
                                "the interval treats all 56 as drawn",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
