@@ -91,21 +91,6 @@ def test_a_tables_noise_estimates_do_not_depend_on_the_direction_it_is_listed_in
     assert back["overshoot_near_m"] == pytest.approx(10.0 - ahead["overshoot_near_m"], abs=1e-9)
 
 
-def test_single_precision_stations_are_read_as_doubles():
-    """The paper's helix (R = 2 m, λ = 0.5 m) at stations given in float32: X0 and its derivatives are those of the
-    stations' exact values, R cos φ, R sin φ, λ φ with φ = s / √(R² + λ²), to round-off (a float32 evaluation
-    would be off by ~1e-7)."""
-    helix = track.build({"type": "helix", "radius": 2.0, "rise": 0.5, "twist": "0"})
-    s = np.array([0.1, 1.3, 7.7], np.float32)
-    root = math.sqrt(2.0**2 + 0.5**2)
-    phi = s.astype(float) / root
-    rise = (0.5 * phi, np.full(3, 0.5 / root), np.zeros(3))  # λ φ and its derivatives in s
-    for k, value in enumerate(helix.derivatives(s, 2)):
-        turn = phi + k * np.pi / 2  # d/ds of cos φ and sin φ: a quarter turn and a factor 1 / √(R² + λ²)
-        exact = np.stack([2.0 * np.cos(turn) / root**k, 2.0 * np.sin(turn) / root**k, rise[k]], axis=-1)
-        np.testing.assert_allclose(value, exact, rtol=0, atol=1e-14)
-
-
 def test_a_parameter_whose_speed_vanishes_is_refused_where_it_does():
     """X0(u) = (u^3, 0, 0) on [-1, 1]: |dX0/du| = 3 u^2 is zero at u = 0, a node of the arc length's grid."""
     with pytest.raises(SceneError) as refused:
@@ -177,3 +162,18 @@ def test_a_midline_undefined_on_the_ride_is_refused_in_its_coordinates_field():
     line = track.build({"type": "expression", "x": "s", "y": "sqrt(5 - s)", "z": "0", "parameter": "s", "twist": "0"})
     with pytest.raises(SceneError, match=r"^scene field 'track.y': 'sqrt\(5 - s\)' is undefined or complex at s = 5 m"):
         line.check_domain("track", 0.0, 6.0)
+
+
+def test_single_precision_stations_are_read_as_doubles():
+    """The paper's helix (R = 2 m, λ = 0.5 m) at stations given in float32: X0 and its derivatives are those of the
+    stations' exact values, R cos φ, R sin φ, λ φ with φ = s / √(R² + λ²), to round-off (a float32 evaluation
+    would be off by ~1e-7)."""
+    helix = track.build({"type": "helix", "radius": 2.0, "rise": 0.5, "twist": "0"})
+    s = np.array([0.1, 1.3, 7.7], np.float32)
+    root = math.sqrt(2.0**2 + 0.5**2)
+    phi = s.astype(float) / root
+    rise = (0.5 * phi, np.full(3, 0.5 / root), np.zeros(3))  # λ φ and its derivatives in s
+    for k, value in enumerate(helix.derivatives(s, 2)):
+        turn = phi + k * np.pi / 2  # d/ds of cos φ and sin φ: a quarter turn and a factor 1 / √(R² + λ²)
+        exact = np.stack([2.0 * np.cos(turn) / root**k, 2.0 * np.sin(turn) / root**k, rise[k]], axis=-1)
+        np.testing.assert_allclose(value, exact, rtol=0, atol=1e-14)
