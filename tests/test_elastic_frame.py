@@ -181,3 +181,39 @@ def test_traction_reach_sees_a_turn_between_two_outputs():
     t = np.array([0, 10 / 3, 20 / 3, 10])
     assert el_compiled.turning_points(t, 5 * t - t ** 2 / 2, 5.0 - t) == pytest.approx([12.5], rel=1e-12)
     assert el_compiled.turning_points(t, t, np.ones(4)).size == 0
+
+
+def test_geometry_error_scales_add_the_turning_rate_where_it_enters_beside():
+    """Two rows of geometry channels written out: |e| = 1, |e' + Ω × e| = 0.5 (then 0.3), |ν| = 1, |Ω| = 2 (then
+    1), |Ω'| = 1 (then 3) 1/m²: the scales are each group's largest norm, e' + Ω × e against 0.5 + 2 = 2.5 (it enters
+    a0 beside Ω, per V0²) and Ω' against 3 + 2² = 7 (it enters ω̇ beside Ω²), three columns a group."""
+    g = np.zeros((2, 15))
+    g[:, 0:3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]          # e
+    g[:, 3:6] = [[0.3, 0.4, 0.0], [0.0, 0.0, 0.3]]          # e' + Ω × e
+    g[:, 6:9] = [[0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]         # ν
+    g[:, 9:12] = [[0.0, 0.0, 2.0], [1.0, 0.0, 0.0]]         # Ω
+    g[:, 12:15] = [[0.6, 0.8, 0.0], [0.0, -3.0, 0.0]]       # Ω'
+    np.testing.assert_array_equal(el_frame.geometry_scales(g), np.repeat([1.0, 2.5, 1.0, 2.0, 7.0], 3))
+
+
+def test_a_frame_table_whose_error_equals_its_bound_meets_it():
+    """Channels zero at nine output times but one, d, at the second: the spline through every 2nd or 4th of them
+    is zero, so its error at the times it skips is d / scale (scale 1); with d exactly the bound max(1e-3 rtol,
+    1e-13) the bound is met (≤, as between the halving rounds' nodes), and the coarsest such spline, through t[::4],
+    is the table, with no further evaluation of the frame."""
+    t = np.linspace(0.0, 1.0, 9)
+    rtol = 1e-3
+    bound = max(el_frame.INTERP_FRACTION * rtol, el_frame.INTERP_FLOOR)
+    ch = np.zeros((9, 2))
+    ch[1, 0] = bound
+
+    calls = []
+
+    def evaluate(x, at=slice(None)):  # the frame between the outputs: zero there
+        calls.append(x)
+        return np.zeros((np.asarray(x)[at].size, 2))
+
+    table = el_frame.frame_table(t, rtol, evaluate, ch, scales=lambda c: np.ones(c.shape[1]))
+    assert not calls
+    np.testing.assert_array_equal(table.nodes, t[::4])
+    assert table.error == table.bound == bound and not table.noise

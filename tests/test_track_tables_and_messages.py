@@ -54,13 +54,41 @@ def test_leaving_a_table_is_refused_with_the_range_and_the_length():
 
 def test_a_table_without_interior_samples_reports_no_curvature():
     """Six collinear points with points 2 and 3 1 mm apart: the 120 samples of the fit (4/119 m apart) put none
-    strictly between them, the interior where the curvature is judged, so its error and maximum read 0."""
+    strictly between them, the interior where the curvature is judged, so its error and maximum read 0.
+
+    Then a bent table whose sample 80 lies exactly on point 2: chords 5, 5 (along (3, 4) and (4, 3)), 1/8, 3/4
+    and 4 m, exact in binary, 119/8 m in all, so its 120 samples are 1/8 m apart, sample 80 is at u = 10 m = point
+    2 and sample 81 at point 3. The interior's edge is not inside it: the bent fit's curvature at point 2 (not 0)
+    is not judged, and the table still reports no curvature."""
     points = [(0, 0, 0), (1, 0, 0), (2, 0, 0), (2.001, 0, 0), (3, 0, 0), (4, 0, 0)]
     fine = np.linspace(0.0, 4.0, 120)
     assert not np.any((fine > 2.0) & (fine < 2.001))
     noise = track.TableTrack(points, "track.points", 20.0).noise
     assert noise["curvature_error_per_m"] == 0.0 and noise["curvature_max_per_m"] == 0.0
     assert noise["curvature_overshoot"] == 0.0
+    bent = [(0, 0, 0), (3, 4, 0), (7, 7, 0), (7.125, 7, 0), (7.875, 7, 0), (11.875, 7, 0)]
+    fine = np.linspace(0.0, 14.875, 120)
+    assert fine[80] == 10.0 and fine[81] == 10.125
+    noise = track.TableTrack(bent, "track.points", 90.0).noise
+    assert noise["curvature_error_per_m"] == 0.0 and noise["curvature_max_per_m"] == 0.0
+    assert noise["curvature_overshoot"] == 0.0
+
+
+def test_a_tables_noise_estimates_do_not_depend_on_the_direction_it_is_listed_in():
+    """Ten unit chords turning by -5 deg after the first and by -5 deg twice at the end, listed forwards and
+    backwards: the same curve, so the same curvature overshoot, at the same place (chord length u from one end,
+    10 m - u from the other), to round-off.
+    The overshoot is judged against the three-point curvature of the two points either side of each sample, a
+    neighbourhood symmetric under the reversal."""
+    heading = np.radians(np.cumsum([0, -5, 0, 0, 0, 0, 0, 0, -5, -5]))
+    chords = np.stack([np.cos(heading), np.sin(heading), np.zeros(10)], axis=-1)
+    points = np.concatenate([np.zeros((1, 3)), np.cumsum(chords, axis=0)])
+    ahead = track.TableTrack(points, "track.points", 20.0).noise
+    back = track.TableTrack(points[::-1], "track.points", 20.0).noise
+    assert ahead["curvature_overshoot"] > 0.05
+    assert back["curvature_overshoot"] == pytest.approx(ahead["curvature_overshoot"], rel=1e-9)
+    assert back["curvature_max_per_m"] == pytest.approx(ahead["curvature_max_per_m"], rel=1e-9)
+    assert back["overshoot_near_m"] == pytest.approx(10.0 - ahead["overshoot_near_m"], abs=1e-9)
 
 
 def test_a_parameter_whose_speed_vanishes_is_refused_where_it_does():
@@ -134,3 +162,18 @@ def test_a_midline_undefined_on_the_ride_is_refused_in_its_coordinates_field():
     line = track.build({"type": "expression", "x": "s", "y": "sqrt(5 - s)", "z": "0", "parameter": "s", "twist": "0"})
     with pytest.raises(SceneError, match=r"^scene field 'track.y': 'sqrt\(5 - s\)' is undefined or complex at s = 5 m"):
         line.check_domain("track", 0.0, 6.0)
+
+
+def test_single_precision_stations_are_read_as_doubles():
+    """The paper's helix (R = 2 m, λ = 0.5 m) at stations given in float32: X0 and its derivatives are those of the
+    stations' exact values, R cos φ, R sin φ, λ φ with φ = s / √(R² + λ²), to round-off (a float32 evaluation
+    would be off by ~1e-7)."""
+    helix = track.build({"type": "helix", "radius": 2.0, "rise": 0.5, "twist": "0"})
+    s = np.array([0.1, 1.3, 7.7], np.float32)
+    root = math.sqrt(2.0**2 + 0.5**2)
+    phi = s.astype(float) / root
+    rise = (0.5 * phi, np.full(3, 0.5 / root), np.zeros(3))  # λ φ and its derivatives in s
+    for k, value in enumerate(helix.derivatives(s, 2)):
+        turn = phi + k * np.pi / 2  # d/ds of cos φ and sin φ: a quarter turn and a factor 1 / √(R² + λ²)
+        exact = np.stack([2.0 * np.cos(turn) / root**k, 2.0 * np.sin(turn) / root**k, rise[k]], axis=-1)
+        np.testing.assert_allclose(value, exact, rtol=0, atol=1e-14)

@@ -102,6 +102,25 @@ def test_front_axle_point_is_the_first_at_chord_distance_l_found_by_newton(l):
     assert model.chord_point(Helix(), 0.7, l) == pytest.approx(_front(0.7, l)[0], abs=1e-12)  # a scalar s
 
 
+def test_front_axle_newton_stops_once_the_chord_is_within_its_tolerance():
+    """The iteration stops at the first |f| = | |X0(s_A) - X0(s)|² - l² | ≤ 1e-12 l², the bound included: on the
+    straight track X0 = (s, s / 10⁶, 0) with l = 10⁶ m, the first guess s_A = l misses l² by exactly 1 m² =
+    1e-12 l² (10¹² + 1 and 1e-12 · 10⁶ · 10⁶ = 1 are exact in binary), so one Newton step is taken and no more;
+    it lands on the root l / √(1 + 10⁻¹²) to round-off."""
+    class Slope:
+        def derivatives(self, s, order):
+            s = np.asarray(s, float)
+            return [np.stack([s, s / 1e6, 0 * s], -1), np.stack([1 + 0 * s, 1e-6 + 0 * s, 0 * s], -1)][:order + 1]
+
+    track, steps = Slope(), []
+    exact = track.derivatives
+    track.derivatives = lambda s, order: (steps.append(order), exact(s, order))[1]
+    l = 1e6
+    assert 1e-12 * l * l == 1.0 and (l * l + 1.0) - l * l == 1.0
+    assert model.chord_point(track, np.array([0.0]), l)[0] == pytest.approx(l / np.sqrt(1 + 1e-12), rel=1e-15)
+    assert steps.count(1) == 1
+
+
 def test_no_front_axle_point_when_the_track_curls_back_within_l():
     """A straight run into a level circle of radius R: from s = -3 m the chord 4.5 m reaches the circle,
     from s = 0.5 m on the circle no point is that far (the diameter is 4 m)."""
