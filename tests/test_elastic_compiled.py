@@ -11,12 +11,14 @@ compiled Jacobian against central differences of the compiled right-hand side.
 """
 import copy
 import tomllib
+from functools import partial
 
 import numpy as np
 import pytest
 
 from symmech.core import pipeline, scene
-from symmech.trolley.elastic import body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley import model
+from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
 
 # slow: the engine compiles ~60 s of CPU, a third of the default tier's budget; the default tier
@@ -270,8 +272,9 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
 
     setup = traction_scene(case=case)
     system, drive, N = setup.system, setup.drive, setup.system.N
-    table = el_frame.frame_table(np.linspace(*el_frame.reach(drive, el_body.rigid_body(system.mdl), setup.t), 21), 1e-8,
-                           lambda s, at=slice(None): el_frame.geometry(drive, s, at), scales=el_frame.geometry_scales)
+    span = el_frame.reach(drive, partial(model.traction_acceleration, system.rigid), setup.t)
+    table = el_frame.frame_table(np.linspace(*span, 21), 1e-8, lambda s, at=slice(None): el_frame.geometry(drive, s, at),
+                                 scales=el_frame.geometry_scales)
     ek.TRACTIONS[0] = drive.traction
     args = (system.record, (table.nodes, table.coef), np.zeros(1), 0)
     n = 2 * N + 4

@@ -6,11 +6,13 @@ origin moves with v0 = V0 T, a0 = V̇0 T + V0² κ N, the frame turns with ω = 
 and "up" is ν = (T·X2, N·X2, B·X2)."""
 import dataclasses
 import sys
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from symmech.trolley import model
 from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
 
@@ -52,7 +54,7 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
         assert np.allclose(fs.dw, dV * darboux, rtol=0, atol=1e-7)
         assert np.allclose(fs.nu, frame[:, 1], rtol=0, atol=1e-9)
         # the vectorised frame_motion gives the same rows
-        fr = el_frame.frames(drive, np.array([s, s]))
+        fr = drive.frames(np.array([s, s]))
         v0, a0, w, dw = el_frame.frame_motion(fr, np.array([V, 2 * V]), np.array([dV, 0.0]))
         assert np.allclose(v0, [[V, 0, 0], [2 * V, 0, 0]], rtol=0, atol=1e-9)
         assert np.allclose(a0, [[dV, V ** 2 * kappa, 0], [0, 4 * V ** 2 * kappa, 0]], rtol=0, atol=1e-7)
@@ -102,24 +104,23 @@ def test_frame_turning_rate_follows_the_change_of_curvature():
     assert np.abs(dW).max() > 0.01  # the curvature changes here (V0² dW ≈ 0.2 rad/s²)
     expected = dV * turn[1] + V ** 2 * dW
     assert np.allclose(el_sim._state_at(drive, time, s).dw, expected, rtol=0, atol=1e-6)
-    fr = el_frame.frames(drive, np.array([s]))
+    fr = drive.frames(np.array([s]))
     assert np.allclose(el_frame.frame_motion(fr, np.array([V]), np.array([dV]))[3], [expected], rtol=0, atol=1e-6)
 
 
 def test_case_two_moves_the_frame_of_the_chord_between_the_axles():
     """With local curvature (case 2) the frame is the rigid model's chord frame for the trolley's axle distance,
     difference order and step; on the ellipse it differs from the tangent frame of case 1."""
-    from symmech.trolley import model
-
     data = scene_dict(frame="frenet", track={"type": "expression", "x": "6*sin(u)", "y": "0", "z": "3*cos(u)",
                                              "parameter": "u", "u_range": [0.0, 6.0]},
                       motion={"speed": "3 + 2*t"}, time={"t_end": 1.0, "steps": 10})
     setup = prepared(data)
     l = 1.5
-    drive = dataclasses.replace(elastic_scene.drive_of(setup, 2), l=l)
+    setup.body = dataclasses.replace(setup.body, l=l)
+    drive = elastic_scene.drive_of(setup, 2)
     s = np.array([2.0, 3.5])
-    chord = model.local_curvature_frame(drive.track, s, l, "frenet", setup.fd_order, setup.fd_step, plan=setup.plan)
-    tangent = el_frame.frames(dataclasses.replace(elastic_scene.drive_of(setup, 1), l=l), s)
+    chord = model.local_curvature_frame(setup.track, s, l, "frenet", setup.fd_order, setup.fd_step, plan=setup.plan)
+    tangent = elastic_scene.drive_of(setup, 1).frames(s)
     assert np.abs(chord.W - tangent.W).max() > 1e-3
     fs = el_sim._state_at(drive, 0.5, s[1])  # V0 = 4 m/s
     for got, ref in ((fs.v0, 4.0 * chord.e[1]), (fs.w, 4.0 * chord.W[1]), (fs.nu, chord.lam[1, :, 1])):
@@ -157,8 +158,8 @@ def test_traction_reach_is_the_rigid_run_widened_by_a_tenth_of_its_span():
     frame plan's span), with 16 arc lengths, where e = (1, 0, 0), no curvature, ν = (0, 1, 0), no turning."""
     st, drive, mdl = _level_traction("200 + 100*t", t_end=2.0, steps=10)
     end = 5.0 * 2.0 + (100 * 4.0 + 50 * 8.0 / 3) / 100.0
-    plan = drive.plan.span  # +-20 km: it leaves the span alone
-    table = el_frame.tabulation(drive, mdl.g0, st.t, 1e-6, el_body.rigid_body(mdl))
+    plan = drive.frames.plan.span  # +-20 km: it leaves the span alone
+    table = el_frame.tabulation(drive, mdl.g0, st.t, 1e-6, partial(model.traction_acceleration, el_body.rigid_body(mdl)))
     assert table.span == pytest.approx((max(-0.1 * end, plan[0]), min(1.1 * end, plan[1])), rel=1e-6, abs=1e-9)
     assert np.array_equal(table.seed, np.linspace(*table.span, 16)) and table.exact is None
     assert np.allclose(table.evaluate(table.seed, slice(3, 5)), [[1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]] * 2,
@@ -176,7 +177,7 @@ def test_traction_reach_sees_a_turn_between_two_outputs():
     st, drive, mdl = _level_traction("-50 - 50*v", t_end=3.0, steps=3, initial_speed=1.0)
     assert np.allclose(st.t, [0, 1, 2, 3], rtol=0, atol=1e-12)
     top = 2 - 2 * np.log(2)
-    lo, hi = el_frame.reach(drive, el_body.rigid_body(mdl), st.t)
+    lo, hi = el_frame.reach(drive, partial(model.traction_acceleration, el_body.rigid_body(mdl)), st.t)
     assert (lo, hi) == pytest.approx((-0.1 * top, 1.1 * top), rel=0, abs=1e-5)
     t = np.array([0, 10 / 3, 20 / 3, 10])
     assert el_compiled.turning_points(t, 5 * t - t ** 2 / 2, 5.0 - t) == pytest.approx([12.5], rel=1e-12)

@@ -69,7 +69,7 @@ def rows_of(system, n=3):
 
 
 def frame_states(drive, s, V0, dV0):
-    fr = el_frame.frames(drive, s)
+    fr = drive.frames(s)
     return fr, [el_frame.frame_state(fr, i, V0[i], dV0[i]) for i in range(len(s))]
 
 
@@ -185,7 +185,7 @@ def test_outputs_use_the_frame_the_caller_gives(drive):
     system = el.System(mdl, PROBES)
     s, V0, dV0, Y = rows_of(system, 2)
     chord = elastic_scene.drive_of(prepared(CATENARY), 2)
-    given = el_sim.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y, frame=el_frame.frames(chord, s))
+    given = el_sim.outputs(system, drive, np.arange(2.0), s, V0, dV0, Y, frame=chord.frames(s))
     own = el_sim.outputs(system, chord, np.arange(2.0), s, V0, dV0, Y)
     for key in ("qdd", "F", "P", "h", "probe_overload", "P_rigid", "W"):
         assert np.array_equal(given[key], own[key]), key

@@ -56,7 +56,7 @@ def test_timeline_arc_length_between_on_and_beyond_the_nodes(drive):
 
 def test_timeline_states_are_the_frames_at_the_arc_length_and_speed(drive, system):
     line = el_sim.Timeline(system, drive, GRID)
-    fr = el_frame.frames(drive, arc(np.linspace(0.0, 4.0, 200)))
+    fr = drive.frames(arc(np.linspace(0.0, 4.0, 200)))
     for i, time in enumerate(np.linspace(0.0, 4.0, 200)):  # more times than the cache keeps
         fs = line.state(time)
         expected = el_frame.frame_state(fr, i, 8.0 + 3.0 * np.sin(time), 3.0 * np.cos(time))
@@ -74,12 +74,12 @@ def traction_drive(drive):
 @pytest.mark.parametrize("case", [1, 2])
 def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system, case):
     """Case 2 moves the chord frame of the axle distance l (tests/test_elastic_frame.py)."""
-    drive = dataclasses.replace(drive, local_curvature=case == 2)
+    drive = dataclasses.replace(drive, frames=dataclasses.replace(drive.frames, local_curvature=case == 2))
     line = el_sim.Timeline(system, traction_drive(drive), GRID)
     assert line.s_nodes is None
     for s, V0 in ((3.0, 6.0), (9.0, 11.0)):
         fs0, fs1 = line.traction_states(s, V0)
-        fr = el_frame.frames(drive, s)
+        fr = drive.frames(s)
         for fs, rate in ((fs0, 0.0), (fs1, 1.0)):
             expected = el_frame.frame_state(fr, 0, V0, rate)
             for key in ("v0", "a0", "w", "dw", "nu"):
@@ -102,7 +102,7 @@ def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system
         qd = rng.normal(size=N)
         y = np.r_[q, qd, 1.0, 2.0, s, V0]
         fs, qdd, dv = line.traction_step(time, y)
-        expected = el_frame.frame_state(el_frame.frames(drive, s), 0, V0, dv)
+        expected = el_frame.frame_state(drive.frames(s), 0, V0, dv)
         for key in ("v0", "a0", "w", "dw", "nu"):
             assert np.abs(getattr(fs, key) - getattr(expected, key)).max() < 1e-12, key
         forces = elastic_forces(q, qd)
@@ -121,7 +121,7 @@ def test_traction_start_carries_the_whole_bodys_acceleration(drive, system):
     q = el_sim.traction_start(line, t0)
     mass = system.mdl.mass + system.mdl.beams[0].rho_a * system.mdl.beams[0].length + system.mdl.beams[0].tip_mass
     dv = (200.0 + 50.0 * t0 - 18.0) / mass - G0 * S0 / np.sqrt(400.0 + S0 ** 2)
-    fs = el_frame.frame_state(el_frame.frames(drive, S0), 0, 6.0, dv)
+    fs = el_frame.frame_state(drive.frames(S0), 0, 6.0, dv)
     body = cloud(system.mdl)
     zero = np.zeros(system.N)
     forces = elastic_forces(q, zero)
@@ -153,7 +153,7 @@ def test_a_compiled_run_reads_the_start_record_and_table_of_the_run(drive, syste
     quasi = system.quasi_static(inputs.start.line.state(GRID[0]))
     np.testing.assert_allclose(inputs.start.y0[state.slice("q")], quasi + dq0, rtol=0, atol=1e-15)
     assert inputs.record is system.record and inputs.frame.seed is GRID
-    np.testing.assert_allclose(inputs.frame.at_outputs[0].lam, el_frame.frames(drive, arc(GRID)).lam,
+    np.testing.assert_allclose(inputs.frame.at_outputs[0].lam, drive.frames(arc(GRID)).lam,
                                rtol=0, atol=1e-12)
 
 

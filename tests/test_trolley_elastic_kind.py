@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from symmech.core.schema import validate
-from symmech.trolley.elastic import system as el, body as el_body, frame as el_frame, simulate as el_sim
+from symmech.trolley.elastic import system as el, body as el_body, simulate as el_sim
 from symmech.trolley.elastic import review, scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -255,7 +255,7 @@ def test_rigid_limit_with_the_papers_point_mass():
         r = el_sim.simulate(el.System(mdl), drive, t)
         if paper is None:
             body = model.Body(100.0, (1.0, 0.5, 0.0), (0.0,) * 6, 2.0, 1.0, G0)
-            paper = model.body_motion(el_frame.frames(drive, r["s"]), r["V0"], r["dV0"], body)["P"]
+            paper = model.body_motion(drive.frames(r["s"]), r["V0"], r["dV0"], body)["P"]
             scale = np.abs(paper[late]).max()
             assert np.abs(r["P_rigid"] - paper).max() < 1e-6 * scale
         errors.append(np.abs(r["P"][late] - r["P_rigid"][late]).max() / scale)

@@ -79,12 +79,12 @@ def test_quasi_static_state_zero_converges_from_rounding_noise():
 
     st = prepared(_scene())
     system = st.elastic.system
-    fs = el_frame.frame_state(el_frame.frames(st.elastic.drive, np.array([0.5])), 0, V, 0.0)
+    fs = el_frame.frame_state(st.elastic.drive.frames(np.array([0.5])), 0, V, 0.0)
     q = system.quasi_static(fs, np.full(system.N, 1e-20))
     assert np.abs(q).max() <= el.Q_FLOOR
     # a loaded state still converges to its own (relative) tolerance: gravity bends the soft beam
     loaded = prepared({**_scene(), "effects": {"gravity": True, "local_curvature": False}})
-    fs = el_frame.frame_state(el_frame.frames(loaded.elastic.drive, np.array([0.5])), 0, V, 0.0)
+    fs = el_frame.frame_state(loaded.elastic.drive.frames(np.array([0.5])), 0, V, 0.0)
     q = loaded.elastic.system.quasi_static(fs)
     R_ = loaded.elastic.system.evaluate(fs, q, np.zeros_like(q), np.zeros_like(q))
     assert np.abs(q).max() > 1e-3 and np.abs(R_).max() < 1e-9

@@ -100,7 +100,7 @@ def test_rms_shape_of_a_lone_cantilever_mode():
     φ = cosh βx − cos βx − σ (sinh βx − sin βx), βL = 1.8751, has ∫0^L φ² dx = L φ(L)² / 4."""
     st = prepared(_scene()).elastic
     system = st.system
-    fs = el_frame.frame_state(el_frame.frames(st.drive, np.array([0.0])), 0, 0.0, 0.0)
+    fs = el_frame.frame_state(st.drive.frames(np.array([0.0])), 0, 0.0, 0.0)
     q = np.zeros(system.N)
     _, _, X = system.linear_modes(fs, q, shapes=True)
     X = modal.start_phase(system.mass(q), X)  # real shapes: the largest component real

@@ -431,6 +431,27 @@ def track_frame(track, s, l: float, mode: str, local_curvature: bool, fd_order: 
     return local_curvature_frame(track, s, l, mode, fd_order, fd_step, plan=plan)
 
 
+@dataclass(frozen=True)
+class TrackFrames:
+    """The frame along a track as a function of the arc length, with a run's settings fixed: called with s (k,)
+    [m] it is :func:`track_frame` there (case 2 when ``local_curvature``: the chord of length l [m], differences
+    of order ``fd_order`` with step ``fd_step`` [m]; ``plan`` the :class:`FramePlan` keeping it continuous). A
+    scene builds it once; whatever evaluates the frame along the way (a rigid run, the elastic model's frame
+    table) is handed it."""
+
+    track: object
+    l: float
+    mode: str
+    local_curvature: bool
+    fd_order: int = 4
+    fd_step: float = 1e-3
+    plan: FramePlan | None = None
+
+    def __call__(self, s) -> Frame:
+        return track_frame(self.track, np.atleast_1d(np.asarray(s, dtype=float)), self.l, self.mode,
+                           self.local_curvature, self.fd_order, self.fd_step, self.plan)
+
+
 def small_angle_check(base: Frame, chord: np.ndarray, l: float) -> np.ndarray:
     """Orthogonality defect max|Λ̄ Λ̄ᵀ - E| of the first-order Λ̄ (13) with Δθ from (14), shape (n,).
 
@@ -453,6 +474,14 @@ def point_coefficients(frame: Frame, body: Body):
     """α, β (n, 3) of the centre of mass: V = V0 α, a = V̇0 α + V0² β [1, 1/m]."""
     coef = dyn.point_coefficients(*_cols(frame.e), *_cols(frame.de), *_cols(frame.W), *_cols(frame.dW), *body.r)
     return coef[..., :3], coef[..., 3:]
+
+
+def traction_acceleration(body: Body, frame: Frame, P0, V0):
+    """V̇0 (k,) [m/s²] of the rigid ``body`` driven along the track by the traction P0 [N] at the speed V0 [m/s]
+    on the frame at k arc lengths: the x1 balance m a1 = P0 - m g0 ν1 with a1 = α1 V̇0 + β1 V0²
+    (:func:`point_coefficients`)."""
+    alpha, beta = point_coefficients(frame, body)
+    return (P0 / body.m - body.g0 * frame.lam[:, 0, 1] - beta[:, 0] * V0 ** 2) / alpha[:, 0]
 
 
 def body_motion(frame: Frame, V0, dV0, body: Body) -> dict:

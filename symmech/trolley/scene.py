@@ -60,6 +60,10 @@ class Setup:
     elastic: elastic_scene.Setup | None = None  # noqa: F821 (imported where an [elastic] table is prepared)
     output: dict = None  # the resolved [output] table: plots and formats
 
+    def frames(self, case: int) -> model.TrackFrames:
+        """The frame along the track of case 1 or 2 (the chord between the axles), as a function of s."""
+        return model.TrackFrames(self.track, self.body.l, self.frame, case != 1, self.fd_order, self.fd_step, self.plan)
+
 
 def _time_functions(field: str, text: str, variables: tuple[str, ...], t_end: float, constants: dict):
     """Numeric f and df/dt of an expression field in ``variables`` (t first) and ``constants`` (name:
@@ -257,16 +261,11 @@ def arc_length(setup: Setup) -> np.ndarray:
     return setup.s0 + np.concatenate([[0.0], np.cumsum((v * weights).sum(axis=1) * half)])
 
 
-def frame_at(setup: Setup, case: int, s) -> model.Frame:
-    return model.track_frame(setup.track, s, setup.body.l, setup.frame, case != 1, setup.fd_order, setup.fd_step,
-                             setup.plan)
-
-
 def integrate_traction(setup: Setup, case: int, ctx=None):
     """s, V0, dV0 on the grid from m a1 = P0 - m g0 ν1 along x1 (a1 = α1 V̇0 + β1 V0²)."""
     from scipy.integrate import solve_ivp
 
-    body = setup.body
+    body, frames = setup.body, setup.frames(case)
     calls, reached = [0], [setup.t[0]]
     ctx = ctx or Context(quiet=True)
 
@@ -282,7 +281,7 @@ def integrate_traction(setup: Setup, case: int, ctx=None):
         if not abs(y[1]) <= MAX_SPEED:
             raise SymmechError(f"traction: the speed reaches {y[1]:.6g} m/s at t = {t:.6g} s, beyond "
                                f"{MAX_SPEED:g} m/s (motion.traction)")
-        fr = frame_at(setup, case, np.array([y[0]]))
+        fr = frames(np.array([y[0]]))
         alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
         if alpha[0] <= 1e-6:
             raise SymmechError(f"traction: the centre of mass cannot be driven along the track at s = {y[0]:.6g} m "
@@ -318,7 +317,7 @@ def compute(setup: Setup, conventions: str | None = None, ctx=None) -> dict:
             out = model.paper_case(setup.track, s, v0, dv0, setup.body, setup.frame, case == 2,
                                    setup.lstar_derivative, plan=setup.plan)
         else:
-            fr = frame_at(setup, case, s)
+            fr = setup.frames(case)(s)
             out = model.body_motion(fr, v0, dv0, setup.body)
             out["frame"] = fr
         out.update(s=s, V0=v0, dV0=dv0)

@@ -1,4 +1,5 @@
-"""The elastic trolley's frame along the track (the rigid model's frames, :mod:`symmech.trolley.model`): the
+"""The elastic trolley's frame along the track (the rigid model's frames, :class:`symmech.trolley.model.TrackFrames`,
+built by the scene and held by the :class:`Drive`; this module evaluates them, it does not make them): the
 prescribed or driven motion along the midline, the frame's a0, ω, ω̇ at a point of it, and what a compiled run
 tabulates of it (:func:`tabulation`: the exact channels in t, or the geometry in s over the arc lengths a
 traction run visits, :func:`reach`, and their spline table, :func:`frame_table`).
@@ -31,22 +32,15 @@ from symmech.trolley.elastic.layout import CH_AT, G_AT
 
 @dataclass(frozen=True)
 class Drive:
-    """The motion of the frame: track, frame mode ("twist", "frenet"), case 2
-    (``local_curvature``) or 1, speed(t) -> (V0 [m/s], dV0 [m/s²]), the body's length l [m] (case 2's chord
-    between the axles), start s0 [m], the case-2 difference order and step [m], and the rigid setup's frame
-    plan: all that defines the frame at an arc length (:func:`frames`). With
-    ``traction`` (t, V0) -> P0 [N] instead of a speed, s and V0 are coordinates (from
-    ``v_initial`` [m/s]) and the x1 balance of the whole body, F1 = P0, is their equation."""
+    """The motion of the frame: the frame along the track, ``frames(s)`` -> ``model.Frame`` at the arc lengths s
+    (k,) [m] (the rigid model's :class:`symmech.trolley.model.TrackFrames`, built by the scene: its track, frame
+    mode, case, difference settings and frame plan), speed(t) -> (V0 [m/s], dV0 [m/s²]) and the start s0 [m].
+    With ``traction`` (t, V0) -> P0 [N] instead of a speed, s and V0 are coordinates (from ``v_initial``
+    [m/s]) and the x1 balance of the whole body, F1 = P0, is their equation."""
 
-    track: object
-    frame: str
-    local_curvature: bool
+    frames: model.TrackFrames
     speed: object
-    l: float
     s0: float = 0.0
-    fd_order: int = 4
-    fd_step: float = 1e-3
-    plan: object = None  # model.FramePlan keeping the frame continuous (from the trolley setup)
     traction: object = None
     v_initial: float = 0.0
 
@@ -61,13 +55,6 @@ class FrameState:
     w: np.ndarray
     dw: np.ndarray
     nu: np.ndarray
-
-
-def frames(drive: Drive, s) -> model.Frame:
-    """The frame of the drive at the arc lengths s (k,) [m] (``model.track_frame``)."""
-    s = np.atleast_1d(np.asarray(s, dtype=float))
-    return model.track_frame(drive.track, s, drive.l, drive.frame, drive.local_curvature, drive.fd_order, drive.fd_step,
-                             drive.plan)
 
 
 def frame_motion(fr: model.Frame, V0, dV0) -> tuple:
@@ -109,13 +96,13 @@ def channels(drive: Drive, g0: float, t, at=slice(None)) -> np.ndarray:
     where s = s0) [s] under the gravity g0 [m/s²]: :func:`frame_channels`, vectorised."""
     s = arc_length(drive, t)[at]
     V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape)[at] for x in drive.speed(t))
-    return frame_channels(frames(drive, s), V0, dV0, g0)
+    return frame_channels(drive.frames(s), V0, dV0, g0)
 
 
 def geometry(drive: Drive, s, at=slice(None)) -> np.ndarray:
     """The geometry channels (k, 15) of the frame at the arc lengths s[at] [m] (columns of
     :data:`symmech.trolley.elastic.layout.GEOMETRY`): e, e' + Ω × e, ν, Ω, Ω'."""
-    fr = frames(drive, np.asarray(s, float)[at])
+    fr = drive.frames(np.asarray(s, float)[at])
     return np.column_stack([fr.e, fr.de + np.cross(fr.W, fr.e), fr.lam[:, :, 1], fr.W, fr.dW])
 
 
@@ -233,18 +220,19 @@ class Tabulation:
     span: tuple = ()
 
 
-def tabulation(drive: Drive, g0: float, t, rtol: float, rigid: model.Body | None = None) -> Tabulation:
+def tabulation(drive: Drive, g0: float, t, rtol: float, accelerate=None) -> Tabulation:
     """The :class:`Tabulation` of a run under the gravity g0 [m/s²] at relative tolerance rtol on the output
     times t [s] (k,): its channels in t at the arc lengths :func:`arc_length` gives, the table seeded by the
-    exact channels at the outputs; or, with traction (``rigid`` the rigid body of the same mass), its geometry on
-    max(k, 16) arc lengths over the span :func:`reach` finds, scaled by :func:`geometry_scales`."""
-    if rigid is None:
+    exact channels at the outputs; or, with traction (``accelerate`` the rigid body's of the same mass, as
+    :func:`reach` takes it), its geometry on max(k, 16) arc lengths over the span :func:`reach` finds, scaled by
+    :func:`geometry_scales`."""
+    if accelerate is None:
         V0, dV0 = (np.broadcast_to(np.asarray(x, float), t.shape).copy() for x in drive.speed(t))
-        fr = frames(drive, arc_length(drive, t))
+        fr = drive.frames(arc_length(drive, t))
         ch = frame_channels(fr, V0, dV0, g0)
         evaluate = lambda x, at=slice(None): channels(drive, g0, x, at)  # noqa: E731
         return Tabulation(t, evaluate, frame_table(t, rtol, evaluate, ch), ch, (fr, V0, dV0, ch))
-    span = reach(drive, rigid, t)
+    span = reach(drive, accelerate, t)
     seed = np.linspace(*span, max(t.size, 16))
     evaluate = lambda x, at=slice(None): geometry(drive, x, at)  # noqa: E731
     return Tabulation(seed, evaluate, frame_table(seed, rtol, evaluate, scales=geometry_scales), span=span)
@@ -256,18 +244,17 @@ REACH = Layout("ElasticReach", (Field("s", "m", "arc length of O"), Field("speed
 RE_AT = REACH.slots
 
 
-def reach(drive: Drive, body: model.Body, t) -> tuple[float, float]:
-    """The arc lengths [m] a traction run on the output times t [s] visits: those of the rigid ``body`` (the
-    whole elastic body's mass, centre and inertia, ``body.rigid_body``) under the same traction (DOP853 at rtol
-    1e-6) at the output times and where it turns back between them (its speed through zero), widened by :data:`REACH_MARGIN` of their span (at least 1 mm) and kept within the frame plan's span."""
+def reach(drive: Drive, accelerate, t) -> tuple[float, float]:
+    """The arc lengths [m] a traction run on the output times t [s] visits: those of the rigid body (the whole
+    elastic body's mass, centre and inertia, ``body.rigid_body``) under the same traction, whose V̇0 [m/s²] at a
+    frame, P0 [N] and V0 [m/s] is ``accelerate(frame, P0, V0)`` (``model.traction_acceleration`` of that body),
+    (DOP853 at rtol 1e-6) at the output times and where it turns back between them (its speed through zero),
+    widened by :data:`REACH_MARGIN` of their span (at least 1 mm) and kept within the frame plan's span."""
     from scipy.integrate import solve_ivp
 
     def rates(time, y):
-        fr = frames(drive, y[REACH.slice("s")])
-        alpha, beta = (c[0] for c in model.point_coefficients(fr, body))
         v = y[RE_AT.speed]
-        p0 = float(drive.traction(time, v))
-        return REACH.pack(s=v, speed=(p0 / body.m - body.g0 * fr.lam[0, 0, 1] - beta[0] * v ** 2) / alpha[0])
+        return REACH.pack(s=v, speed=accelerate(drive.frames(y[REACH.slice("s")]), float(drive.traction(time, v)), v)[0])
 
     def turn(time, y):  # s is extreme between the outputs where the speed passes through zero
         return y[RE_AT.speed]
@@ -277,5 +264,5 @@ def reach(drive: Drive, body: model.Body, t) -> tuple[float, float]:
     s = np.concatenate([sol.y[RE_AT.s], sol.y_events[0].reshape(-1, REACH.size)[:, RE_AT.s]]) if sol.status == 0 else np.array([drive.s0])
     pad = max(REACH_MARGIN * np.ptp(s), 1e-3)
     lo, hi = float(s.min()) - pad, float(s.max()) + pad
-    span = getattr(drive.plan, "span", None)
+    span = getattr(drive.frames.plan, "span", None)
     return (max(lo, span[0]), min(hi, span[1])) if span else (lo, hi)

@@ -190,7 +190,7 @@ def run(setup: Setup, ctx=None, comfort: dict | None = None) -> Result:
         # no elastic effect: the rigid model itself, on the rigid scene's grid (bit for bit)
         s = el_frame.arc_length(setup.drive, t)
         V0, dV0 = setup.drive.speed(t)
-        rigid = model.body_motion(el_frame.frames(setup.drive, s), V0, dV0, setup.body)
+        rigid = model.body_motion(setup.drive.frames(s), V0, dV0, setup.body)
         cols = [Column("t", "s")] + [Column(f"P{i}", "N") for i in range(6)]
         return Result("trolley", {"elastic": "no elastic effect selected: rigid model"},
                       {"elastic_reactions": ResultTable(cols, np.column_stack([t, rigid["P"]]))})
@@ -401,7 +401,7 @@ def _modes(setup: Setup, r) -> dict:
     system = setup.system
     idx = np.unique(np.linspace(0, len(r["t"]) - 1, setup.modal_samples).astype(int))
     n = system.N
-    fr = el_frame.frames(setup.drive, r["s"][idx])
+    fr = setup.drive.frames(r["s"][idx])
     comp = modal.components(system)
     states, samples, omegas, zetas = [], [], [], []
     for j, i in enumerate(idx):
@@ -541,9 +541,7 @@ def drive_of(trolley_setup, case: int) -> el_frame.Drive:
     """The drive of a rigid trolley setup (:class:`symmech.trolley.scene.Setup`) for case 1 or 2:
     its speed V0(t), or its traction P0(t, V0) with the initial speed."""
     st = trolley_setup
-    frame = {"track": st.track, "frame": st.frame, "local_curvature": case == 2, "l": st.body.l, "s0": st.s0,
-             "fd_order": st.fd_order, "fd_step": st.fd_step, "plan": st.plan}
     if st.traction is not None:
-        return el_frame.Drive(**frame, speed=None, traction=st.traction, v_initial=st.v_initial)
+        return el_frame.Drive(st.frames(case), speed=None, s0=st.s0, traction=st.traction, v_initial=st.v_initial)
     f, df = st.speed
-    return el_frame.Drive(**frame, speed=lambda t: (f(t), df(t)))
+    return el_frame.Drive(st.frames(case), speed=lambda t: (f(t), df(t)), s0=st.s0)

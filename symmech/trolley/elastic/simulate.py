@@ -4,6 +4,7 @@ both engines share, what a compiled run reads (:func:`compiled_inputs`), the sol
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from symmech.core.scene import SymmechError
 from symmech.trolley import model
 from symmech.trolley.elastic.body import roller_forces
 from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
-                                           frame_state, frames, tabulation)
+                                           frame_state, tabulation)
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
 from symmech.trolley.elastic.system import System
 
@@ -21,7 +22,7 @@ from symmech.trolley.elastic.system import System
 
 def _state_at(drive: Drive, t: float, s: float) -> FrameState:
     V0, dV0 = drive.speed(t)
-    return frame_state(frames(drive, s), 0, float(V0), float(dV0))
+    return frame_state(drive.frames(s), 0, float(V0), float(dV0))
 
 
 class Timeline:
@@ -56,7 +57,7 @@ class Timeline:
         if s not in self.cache:
             if len(self.cache) > 64:
                 self.cache.clear()
-            self.cache[s] = frames(self.drive, s)
+            self.cache[s] = self.drive.frames(s)
         fr = self.cache[s]
         return frame_state(fr, 0, V0, 0.0), frame_state(fr, 0, V0, 1.0)
 
@@ -234,8 +235,8 @@ def compiled_inputs(system: System, drive: Drive, t, rtol: float, atol_q: float,
     """The :class:`Inputs` of a compiled run on the grid t [s] (n,) at relative tolerance ``rtol`` (the frame
     table's bound) and the keywords of :func:`prepare`."""
     line = Timeline(system, drive, t)
-    rigid = system.rigid if drive.traction is not None else None
-    frame = tabulation(drive, system.mdl.g0, t, rtol, rigid)
+    accelerate = partial(model.traction_acceleration, system.rigid) if drive.traction is not None else None
+    frame = tabulation(drive, system.mdl.g0, t, rtol, accelerate)
     return Inputs(prepare(line, atol_q, dq0, dqd0), system.record, frame)
 
 
@@ -268,14 +269,14 @@ def outputs(system: System, drive: Drive, t, s, V0, dV0, Y, rows=row_terms, fram
     energy E (fixed frame), the dissipated energy and the work of the track forces [J], and the
     rigid model's reactions and overloads of the centre of mass beside them. ``rows`` computes the
     per-row terms (:func:`row_terms` or the compiled engine's); ``frame``: the frame at s when the caller has
-    it (:func:`frames`); ``run``: what the engine reports of its run (evaluations, steps, its name), as it is."""
+    it (``drive.frames``); ``run``: what the engine reports of its run (evaluations, steps, its name), as it is."""
     N, inv = system.N, system.inv
     st = state_layout(N, False)  # the first fields of either state
     q, qd = Y[:, st.slice("q")], Y[:, st.slice("qd")]
     ed, work = Y[:, st.offset("dissipated")], Y[:, st.offset("work")]
-    fr = frames(drive, s) if frame is None else frame
+    fr = drive.frames(s) if frame is None else frame
     _, a0, w, dw = frame_motion(fr, V0, dV0)
-    height = drive.track.derivatives(s, 0)[0][:, 1]
+    height = drive.frames.track.derivatives(s, 0)[0][:, 1]
     res = rows(system, fr, V0, dV0, Y, height)
     if system.rollers_on:
         d = q[:, :N_ROLLER_DOFS] @ system.C.T
