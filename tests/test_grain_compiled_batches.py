@@ -36,12 +36,17 @@ def stand_in(monkeypatch, batches):
 
 
 def test_progress_is_reported_at_each_batch_time_and_once_at_the_end(monkeypatch):
+    """A run through the registry's ``run`` (the engine's ``Runner``): progress at each batch's time, the reason
+    given in its ``extra``."""
+    from symmech.core import engines
+
     monkeypatch.setattr(motion, "PROGRESS_INTERVAL", 0.0)  # every call reports
     calls = stand_in(monkeypatch, [(0.5, compiled.MORE, 0), (0.75, compiled.MORE, 2), (1.0, compiled.DONE, 0)])
     times = []
-    result = compiled.simulate(MODEL, NUM, START, 1.0, on_step=times.append)
+    result = engines.get("grain").run(compiled.Run(MODEL, NUM, START, 1.0, times.append, "chosen here"))
     assert times == [0.25, 0.5, 0.75, 1.0]  # before each batch, then the final time
     assert [args[1][0] for args in calls] == [0.25, 0.5, 0.75] and result.final.t == 1.0
+    assert result.extra["engine_reason"] == "chosen here"
 
 
 @pytest.mark.parametrize("status, regime, text", [
@@ -123,7 +128,10 @@ def test_a_population_through_the_registry_is_each_grains_own_rows_times_and_cou
     for k, run in enumerate(runs):
         assert run.trajectory.shape == (k + 1, compiled.TRAJECTORY_WIDTH) and set(run.trajectory.ravel()) == {k}
         assert run.time_in == {"flight": k / 10, "sliding": k / 100} and run.start is starts[k]
-        assert run.extra["landings"] == k and run.extra["engine_reason"] == "chosen here" and run.warnings == []
+        assert {key: value for key, value in run.extra.items() if key != "energy_budget"} == {
+            "landings": k, "rocking_contacts": 0, "engine": "compiled", "implicit_slip_steps": 0,
+            "engine_reason": "chosen here"}
+        assert run.extra["energy_budget"]["end_J"] == 0.0 and run.warnings == []
         assert run.final.t == 1.0 and run.impacts == []
     with pytest.raises(ValueError, match=r"^simulate_many: 3 models but 2 start states; one of each per grain$"):
         compiled.simulate_many([MODEL] * 3, NUM, starts[:2], 1.0)
