@@ -221,3 +221,10 @@ def test_a_kill_whose_deciding_test_was_renamed_is_rerun_against_the_whole_selec
                    "m.x_f__mutmut_2": [], "m.x_f__mutmut_3": []}
     assert capsys.readouterr().out == ("    m.x_f__mutmut_2: its deciding test tests/test_a.py::test_old is not in the "
                                        "selection any more (renamed or removed): rerun against the whole selection\n")
+
+
+def test_a_mutants_limit_is_ten_times_the_median_unmutated_run_at_least_a_minute():
+    """The driver's first unmutated run built numba's cache (705 s, then 18 and 30 s): the limit is 10 x 30 s, not
+    10 x 705 s; short runs get the 60 s floor."""
+    assert mutation_screen.time_limit([705.3, 18.5, 30.3]) == pytest.approx(303.0, rel=1e-12)
+    assert mutation_screen.time_limit([1.0, 2.0, 3.0]) == 60.0
