@@ -84,7 +84,7 @@ def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
         tolerance=num.tolerance, scan_step=num.scan_step, rest_velocity=num.rest_velocity,
         max_impacts=num.max_impacts, sample_interval=num.sample_interval, period=model.period,
         exact_flight=closed_form_flight(model, num))
-    if np.isnan(p).any():  # the loop's event search would run on without end: refused here, by name
+    if np.isnan(p).any():  # a NaN (a NaN e_t, say) sends the compiled loop on without end: refused here, by name
         nan = [name for name, value in PARAMS.unpack(p).items() if np.isnan(value).any()]
         raise ValueError(f"grain engine: parameter {', '.join(nan)} is NaN")
     return p
