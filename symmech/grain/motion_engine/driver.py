@@ -398,7 +398,7 @@ def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float
     no loop over impacts; ``reason`` as :func:`simulate`'s). A failed grain raises its error (the first, ``strict``)
     or stands in the list as its SymmechError. ``models`` and ``starts`` of different lengths are a ValueError."""
     n = len(models)
-    if len(starts) != n:  # the loop reads grain k's state beside its parameters: a shorter list would be overrun
+    if len(starts) != n:  # the loop runs a grain per start: extra starts would be dropped, missing ones never run
         raise ValueError(f"simulate_many: {n} models but {len(starts)} start states; one of each per grain")
     packed = {}
     ps = np.empty((n, PARAMS.size))
