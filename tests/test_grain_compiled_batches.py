@@ -1,7 +1,9 @@
 """The compiled engine's ``simulate`` between its loop's batches, without compiling the loop: a stand-in loop
 (``compiled.entry`` replaced) returns chosen times and statuses call by call, as the loop returns a batch of
 ``PHASES_PER_CALL`` regime phases; progress is reported with each batch's time and a failure status becomes the
-Python loop's error at the loop's time and regime. Expected values are written here by hand."""
+Python loop's error at the loop's time and regime. A population (a stand-in ``run_many``) through the registry
+gets each grain's own results, the main thread calls the ahead-of-time build, and ``pack`` and ``simulate_many``
+refuse what the loop cannot run. Expected values are written here by hand."""
 import math
 from dataclasses import replace
 
