@@ -56,6 +56,12 @@ def test_translation_relative_to_the_surface_is_gravity_less_the_surface_motion(
     r, v = translate(r0, v0, g, Vibration(A, omega, phase, tuple(d)), t0, t)
     np.testing.assert_allclose(r, r_exact, rtol=0, atol=1e-13)
     np.testing.assert_allclose(v, v_exact, rtol=0, atol=1e-12)
+    # positions, velocities and gravity are real: a complex one is refused, not flown with its real part kept
+    for k in range(3):
+        vectors = [r0.tolist(), v0.tolist(), g.tolist()]
+        vectors[k] = [1j, 0.0, 0.0]
+        with pytest.raises(TypeError):
+            translate(*vectors, Vibration(A, omega, phase, tuple(d)), t0, t)
 
 
 def test_a_grain_that_does_not_spin_keeps_its_orientation_and_zero_spin():
@@ -63,6 +69,8 @@ def test_a_grain_that_does_not_spin_keeps_its_orientation_and_zero_spin():
     q, w = RotationFlight([1.0, 2.0, 3.0], q0, np.zeros(3), 0.0, 1e-10, 0.1).state(np.array([0.0, 0.5, 2.0]))
     np.testing.assert_array_equal(q, np.tile(q0, (3, 1)))
     np.testing.assert_array_equal(w, np.zeros((3, 3)))
+    with pytest.raises(TypeError):  # times are real: a complex one is refused, as by a spinning grain's rotation
+        RotationFlight([1.0, 2.0, 3.0], q0, np.zeros(3), 0.0, 1e-10, 0.1).state([0.5 + 0.5j])
 
 
 def test_a_spin_about_a_principal_axis_turns_at_its_rate_across_chunks():
@@ -93,6 +101,9 @@ def test_a_single_precision_rotation_matrix_gives_the_quaternion_of_its_entries(
     c, s = float(Q[0, 0]), float(Q[1, 0])
     w = math.sqrt(2 + 2 * c) / 2
     np.testing.assert_allclose(quaternion_from_matrix(Q), [w, 0.0, 0.0, s / (2 * w)], rtol=0, atol=1e-15)
+    # a quaternion is real: one given as complex numbers is refused, not turned into a matrix of its real parts
+    with pytest.raises(TypeError):
+        rotation_matrix([w + 0.1j, 0.0, 0.0, s / (2 * w)])
 
 
 def test_a_failed_rotation_integration_says_why(monkeypatch):

@@ -203,3 +203,28 @@ def test_check_reads_every_module_named_and_its_options():
     assert mutate.check_arguments(["symmech.a", "symmech.b"]) == (30, 0, ["symmech.a", "symmech.b"])
     assert mutate.check_arguments(["--killed", "5", "symmech.a", "--seed", "3"]) == (5, 3, ["symmech.a"])
     assert mutate.check_arguments([]) == (30, 0, [])
+
+
+def test_a_kill_whose_deciding_test_was_renamed_is_rerun_against_the_whole_selection(tmp_path, capsys):
+    """mutate-check reruns a recorded kill against the test that made it; when the selection no longer holds that
+    test (renamed here), pytest would refuse its node id (exit 4, once read as a crash): the kill is rerun against
+    the whole selection ([]), and the check says so. A kill whose test is there keeps it; a survivor takes all."""
+    def entry(n, outcome, test):
+        return rec.Entry(f"m.x_f__mutmut_{n}", "s", f"{n:012x}", outcome, test, 1.0, "")
+
+    chosen = [entry(1, "killed", "tests/test_a.py::test_b[1]"), entry(2, "raised", "tests/test_a.py::test_old (KeyError)"),
+              entry(3, "survived", "")]
+    got = mutation_screen.reruns(chosen, {"tests/test_a.py::test_b[1]", "tests/test_a.py::test_new"}, tmp_path,
+                                 ["tests/test_a.py", "-m", "not slow"])
+    assert got == {"m.x_f__mutmut_1": [str(tmp_path / "frozen" / "tests/test_a.py::test_b[1]"), "-m", "not slow", "-q",
+                                       "-n", "0", "-p", "no:cacheprovider", "--tb=no"],
+                   "m.x_f__mutmut_2": [], "m.x_f__mutmut_3": []}
+    assert capsys.readouterr().out == ("    m.x_f__mutmut_2: its deciding test tests/test_a.py::test_old is not in the "
+                                       "selection any more (renamed or removed): rerun against the whole selection\n")
+
+
+def test_a_mutants_limit_is_ten_times_the_median_unmutated_run_at_least_a_minute():
+    """The driver's first unmutated run built numba's cache (705 s, then 18 and 30 s): the limit is 10 x 30 s, not
+    10 x 705 s; short runs get the 60 s floor."""
+    assert mutation_screen.time_limit([705.3, 18.5, 30.3]) == pytest.approx(303.0, rel=1e-12)
+    assert mutation_screen.time_limit([1.0, 2.0, 3.0]) == 60.0

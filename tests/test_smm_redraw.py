@@ -25,7 +25,7 @@ def gimbal(axis_b=(0, 0, 1), **more):
                         {"name": "b", "type": "angle", "axis": list(axis_b)}],
         "points": [{"name": "O", "at": [0, 0, 0]}, {"name": "C", "from": "O", "vector": V0.tolist(), "turns": ["a", "b"]}],
         "bodies": [{"name": "B", "mass": 2.0, "inertia": [0.1, 0.2, 0.3], "com": "C", "turns": ["a", "b"]}],
-        **more,
+        **more,  # a table of the same name replaces the gimbal's
     })
 
 
@@ -39,6 +39,12 @@ def test_two_angle_gimbal_redrawn_exactly():
     np.testing.assert_allclose(vec(m.coordinates[1].axis), Rotation.from_rotvec([QA, 0, 0]).apply([0, 0, 1]),
                                rtol=0, atol=1e-15)
     np.testing.assert_allclose([vec(p) for p in m.bodies[0].axes], R.T, rtol=0, atol=1e-15)
+    # principal axes given (the drawn frame's axes in turn: y, z, x): each is turned by R
+    given = [[0, 1, 0], [0, 0, 1], [1, 0, 0]]
+    body = {"name": "B", "mass": 2.0, "inertia": [0.1, 0.2, 0.3], "com": "C", "turns": ["a", "b"],
+            "principal_axes": given}
+    m = numeric.moved(gimbal(bodies=[body]), np.array([QA, QB]))
+    np.testing.assert_allclose([vec(p) for p in m.bodies[0].axes], (R @ np.array(given).T).T, rtol=0, atol=1e-15)
 
 
 def test_torsion_spring_turned_off_its_axis_is_refused_in_one_line():

@@ -9,7 +9,7 @@ change (so that a renumbered mutant is found again), the outcome and the test th
     raised      no assertion failed, but a test failed (in its call phase) on another exception the mutated
                 code raised
     survived    every test passed
-    timeout     stopped after the screen's time limit (a multiple of the unmutated run's slowest of 3)
+    timeout     stopped after the screen's time limit (a multiple of the unmutated runs' median of 3)
     crash       the test process died (a signal) or left no verdict
     collection  the tests could not be collected (an import of the mutated code failed)
     error       a fixture's setup or teardown failed, no test failed

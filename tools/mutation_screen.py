@@ -2,8 +2,8 @@
 imported pytest and the mutated module once (mutmut's trampolines choose the mutant at each call), with its
 outcome judged from the tests' own reports (mutation_record.py lists the outcomes).
 
-The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the slowest of
-the three, at least 60 s. A screen stops a mutant's run at the first test failing on an assertion, as `-x` would;
+The unmutated copy runs 3 times first and must pass each time; a mutant's limit is 10 times the median of
+the three (the first may build numba's cache), at least 60 s. A screen stops a mutant's run at the first test failing on an assertion, as `-x` would;
 past a test that fails on another exception or a fixture error it runs on, so that a mutant is recorded "raised"
 (killed by a raise: docs/mutation.md) or "error" (not a kill) only when no test of the selection fails on an
 assertion.
@@ -18,6 +18,7 @@ import os
 import random
 import shutil
 import signal
+import statistics
 import subprocess
 import sys
 import time
@@ -32,7 +33,7 @@ GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant
             "Path('mutants').mkdir(exist_ok=True)\nm.copy_src_dir(); m.copy_also_copy_files(); m.setup_source_paths()\n"
             "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
 BASELINE_RUNS = 3
-TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the slowest unmutated run times 10, at least 60 s
+TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the median unmutated run times 10, at least 60 s
 
 
 class Verdict:
@@ -68,6 +69,16 @@ class Verdict:
             self.raised = f"{node.nodeid} ({call.excinfo.typename})"
             if self.told:
                 self.told(self.raised)
+
+
+class Collected:
+    """A pytest plugin that keeps the node ids of the tests a collection selected (after `-m` and `-k`)."""
+
+    def __init__(self):
+        self.nodes: set[str] = set()
+
+    def pytest_collection_finish(self, session):
+        self.nodes = {item.nodeid for item in session.items}
 
 
 def freeze_tests(folder: Path) -> Path:
@@ -145,11 +156,9 @@ def run_one(key: str, args: list[str], timeout: float) -> tuple[str, str, float]
     return outcome, "" if outcome != "crash" else f"pytest exit {found['code']}", seconds
 
 
-def prepare(folder: Path, module: str, tests: list[str], fresh: bool, runs: int = BASELINE_RUNS,
-            timed: list[str] | None = None) -> tuple[list[str], float, list[float]]:
-    """Generate the mutants, freeze the tests, import pytest and the mutated module in this process, and time the
-    unmutated run `runs` times (of the pytest args `timed`, when only those tests will run; else of the whole
-    selection): (the selection's pytest args, a mutant's time limit, the baseline times)."""
+def load(folder: Path, module: str, tests: list[str], fresh: bool) -> tuple[list[str], set[str]]:
+    """Generate the mutants, freeze the tests, import pytest and the mutated module in this process and collect the
+    tests once: (the selection's pytest args, the node ids of the tests it selects)."""
     generate(folder, fresh)
     frozen = freeze_tests(folder)
     args = [str(frozen / a.removeprefix("tests/")) if a.startswith("tests/") else a for a in tests]
@@ -162,15 +171,29 @@ def prepare(folder: Path, module: str, tests: list[str], fresh: bool, runs: int 
     # collect once here, as mutmut's own clean run does: the forks find the test modules and what they import
     # already loaded (a value a test module computes at import comes from the unmutated code, in mutmut too)
     os.environ["MUTANT_UNDER_TEST"] = ""
+    collected = Collected()
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        pytest.main([*args, "--collect-only"])
+        pytest.main([*args, "--collect-only"], plugins=[collected])
+    return args, collected.nodes
+
+
+def baseline(args: list[str], runs: int = BASELINE_RUNS) -> tuple[float, list[float]]:
+    """Time the unmutated run of the pytest `args` `runs` times, each of which must pass: (a mutant's time limit,
+    the times)."""
     times = []
     for _ in range(runs):
-        outcome, test, seconds = run_one("", timed or args, 3600.0)
+        outcome, test, seconds = run_one("", args, 3600.0)
         if outcome != "survived":
             raise SystemExit(f"the unmutated code does not pass its tests ({outcome} {test}): no screen")
         times.append(seconds)
-    return args, max(TIMEOUT_FLOOR, TIMEOUT_FACTOR * max(times)), times
+    return time_limit(times), times
+
+
+def time_limit(times: list[float]) -> float:
+    """A mutant's time limit [s] from the unmutated runs' times [s]: 10 times their median, at least 60 s. Not the
+    slowest: the first run may build numba's cache of the mutated copy (705 s against 18 and 30 s after it), and a
+    limit of 7000 s would let a mutant that runs on without end hold the screen for two hours."""
+    return max(TIMEOUT_FLOOR, TIMEOUT_FACTOR * statistics.median(times))
 
 
 def kept(entries: dict[str, rec.Entry], renames: dict[str, str], stale: tuple) -> dict[str, rec.Entry]:
@@ -186,7 +209,8 @@ def screen(shard: str, folder: Path, module: str, tests: list[str], names: list[
     `which`: what they are, when not all of the shard's (say "its unkilled mutants again": the shard's note says
     so); `drawn`: how a random sample was drawn (the record's "sample:" note); `renames`: recorded name -> the
     current name of the same change; `stale`: recorded lines to drop (their change is no longer made)."""
-    args, limit, times = prepare(folder, module, tests, fresh)
+    args, _ = load(folder, module, tests, fresh)
+    limit, times = baseline(args)
     path = rec.record_path(module)
     entries = kept(rec.read(path), renames or {}, stale)
     found = changes(folder, module, names)
@@ -230,7 +254,26 @@ def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
     survives all of it)."""
     if entry.outcome not in rec.KILLS or not entry.test:
         return []
-    return node_args([entry.test.split(" (")[0]], folder, tests)
+    return node_args([deciding_test(entry)], folder, tests)
+
+
+def deciding_test(entry: rec.Entry) -> str:
+    """The node id of the test a recorded kill names ("" for none)."""
+    return entry.test.split(" (")[0]
+
+
+def reruns(chosen: list[rec.Entry], collected: set[str], folder: Path, tests: list[str]) -> dict[str, list[str]]:
+    """The pytest args each chosen mutant is rerun with: its deciding test's (:func:`deciding`), or [] (the whole
+    selection) for a survivor and for a kill whose deciding test the selection no longer holds (renamed, removed,
+    or deselected), which the check says: pytest would refuse the node id (exit 4) or run nothing."""
+    out = {}
+    for e in chosen:
+        out[e.mutant] = deciding(e, folder, tests)
+        if out[e.mutant] and deciding_test(e) not in collected:
+            print(f"    {e.mutant}: its deciding test {deciding_test(e)} is not in the selection any more (renamed "
+                  "or removed): rerun against the whole selection", flush=True)
+            out[e.mutant] = []
+    return out
 
 
 def node_args(nodes: list[str], folder: Path, tests: list[str]) -> list[str]:
@@ -249,9 +292,11 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
     # kill, else the whole selection): it must pass, and its time only sets the limit, which can turn a recorded
     # outcome into a timeout (a failed check), never a failed check into a passed one
     start = time.monotonic()
-    kills_only = all(deciding(e, folder, tests) for e in chosen)
-    timed = node_args(sorted({e.test.split(" (")[0] for e in chosen}), folder, tests) if kills_only else None
-    args, limit, _ = prepare(folder, module, tests, fresh=True, runs=1, timed=timed)
+    args, collected = load(folder, module, tests, fresh=True)
+    rerun = reruns(chosen, collected, folder, tests)
+    kills_only = all(rerun.values())
+    limit, _ = baseline(node_args(sorted({deciding_test(e) for e in chosen}), folder, tests) if kills_only else args,
+                        runs=1)
     # only the chosen mutants' functions: a mutant is found again in its own function (mutation_record.match), and a
     # diff costs a parse of the module (a minute for the 2000 mutants of a large module)
     functions = {rec.function_of(e.mutant) for e in chosen}
@@ -266,7 +311,7 @@ def recheck(shard: str, folder: Path, module: str, tests: list[str], chosen: lis
             print(f"    {e.mutant} ({e.change}): no longer made from the current tree; rescreen the shard")
             failures += 1
             continue
-        outcome, test, _ = run_one(name, deciding(e, folder, tests) or args, limit)
+        outcome, test, _ = run_one(name, rerun[e.mutant] or args, limit)
         held = outcome == e.outcome or (e.outcome, outcome) == ("raised", "killed")  # an assertion now: better
         failures += not held
         print(f"    {e.mutant}{'' if name == e.mutant else f' (now {name})'}: recorded {e.outcome}, now {outcome} "

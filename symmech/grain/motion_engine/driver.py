@@ -73,9 +73,10 @@ from symmech.grain.motion_engine.layouts import (  # noqa: F401 (LAYOUTS: the en
 
 
 def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
-    """The parameter vector (PARAMS.size,) of a model and its numerics (layout :data:`PARAMS`)."""
+    """The parameter vector (PARAMS.size,) of a model and its numerics (layout :data:`PARAMS`); a ValueError naming
+    the parameters that are NaN."""
     vib, law = model.vibration, model.law
-    return PARAMS.pack(
+    p = PARAMS.pack(
         axes=model.axes, mass=model.mass, inertia=model.inertia, g=model.g_k, amplitude=vib.amplitude,
         omega=vib.omega, phase=vib.phase, direction=vib.direction,
         law=LAW_PRINTED if law.kind == "printed" else LAW_COULOMB, e_n=law.e_n, e_t=law.e_t, mu_impact=law.mu,
@@ -83,6 +84,10 @@ def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
         tolerance=num.tolerance, scan_step=num.scan_step, rest_velocity=num.rest_velocity,
         max_impacts=num.max_impacts, sample_interval=num.sample_interval, period=model.period,
         exact_flight=closed_form_flight(model, num))
+    if np.isnan(p).any():  # a NaN (a NaN e_t, say) sends the compiled loop on without end: refused here, by name
+        nan = [name for name, value in PARAMS.unpack(p).items() if np.isnan(value).any()]
+        raise ValueError(f"grain engine: parameter {', '.join(nan)} is NaN")
+    return p
 
 
 def closed_form_flight(model: motion.Model, num: motion.Numerics) -> bool:
@@ -391,8 +396,10 @@ def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float
     compiled call (``loop.run_many``) per thread, ``workers`` threads (default: one per core, at most one per
     ``GRAINS_PER_THREAD`` grains; the compiled loop releases the GIL); the results built in bulk (:func:`motions`:
     no loop over impacts; ``reason`` as :func:`simulate`'s). A failed grain raises its error (the first, ``strict``)
-    or stands in the list as its SymmechError."""
+    or stands in the list as its SymmechError. ``models`` and ``starts`` of different lengths are a ValueError."""
     n = len(models)
+    if len(starts) != n:  # the loop runs a grain per start: extra starts would be dropped, missing ones never run
+        raise ValueError(f"simulate_many: {n} models but {len(starts)} start states; one of each per grain")
     packed = {}
     ps = np.empty((n, PARAMS.size))
     for k, model in enumerate(models):
