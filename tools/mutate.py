@@ -534,6 +534,15 @@ def shard_mutants(name: str) -> list[str]:
     return [k for k in names if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
 
 
+def rescreen_shards(path: Path) -> set[str]:
+    """The shards of a record whose every screen was of its unkilled mutants again (`--rest`, `--survived`): they
+    added no mutant of their own, so their lines are mutants another shard drew."""
+    screens = [n.removeprefix("shard ").split(":")[0] for n in rec.notes_of(path) if n.startswith("shard ")]
+    shards = {label.split(" (")[0] for label in screens}
+    again = f" ({mutation_screen.AGAIN})"
+    return {s for s in shards if all(label == s + again for label in screens if label.split(" (")[0] == s)}
+
+
 def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 0, unrecorded: bool = False) -> int:
     """Screen the mutants of one shard into its module's record: all, or a seeded random sample of `size` (when
     > 0); of those, only the ones the record holds with one of the outcomes `rest`, or (`unrecorded`) only the
@@ -569,10 +578,12 @@ def screen(name: str, fresh: bool, rest: tuple = (), size: int = 0, seed: int = 
             # moved out of it): mutate-check could not find them; their functions' current mutants are screened now
             stale = [e.mutant for e in entries
                      if e.mutant not in found and any(fnmatch.fnmatchcase(e.mutant, p) for p in SHARDS[name][2])]
-            # a sample's lines are the mutants drawn: when an edit changed the population, the draw did too
+            # a sample's lines are the mutants drawn: when an edit changed the population, the draw did too; so are
+            # the lines of shards that only screened the record's own mutants again (another shard's --survived)
+            drawers = {name} | rescreen_shards(rec.record_path(module))
             stale += [e.mutant for e in entries
-                      if size and e.shard == name and e.mutant in found and found[e.mutant] not in drawn_names]
-    which = ("its unkilled mutants again" if rest else
+                      if size and e.shard in drawers and e.mutant in found and found[e.mutant] not in drawn_names]
+    which = (mutation_screen.AGAIN if rest else
              "the rest of its sample" if size else "its mutants not recorded" if unrecorded else "")
     return mutation_screen.screen(name, folder, module, tests, names, fresh=False, which=which, drawn=drawn,
                                   renames=found, stale=stale)
