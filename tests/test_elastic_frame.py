@@ -83,7 +83,10 @@ def test_frame_state_on_a_helix_is_the_frenet_serret_motion():
     assert geometry.shape == (2, 15)
     assert np.allclose(geometry, [[1, 0, 0, 0, kappa, 0, *tnb(x)[:, 1], tau, 0, kappa, 0, 0, 0]
                                   for x, tau in zip(s[2:], taus[2:])], rtol=0, atol=1e-7)
-    table = el_frame.tabulation(drive, system.mdl.g0, t, 1e-6)
+    handed = []  # the arc lengths the frame is evaluated at: the outputs' once, as the table's seed too
+    counted = dataclasses.replace(drive, frames=lambda x: handed.append(np.array(x)) or drive.frames(x))
+    table = el_frame.tabulation(counted, system.mdl.g0, t, 1e-6)
+    assert sum(np.array_equal(x, el_frame.arc_length(drive, t)) for x in handed) == 1
     assert table.seed is t and table.span == ()
     assert np.allclose(table.exact, rows, rtol=0, atol=1e-7)
     assert np.array_equal(table.at_outputs[1], V) and np.array_equal(table.at_outputs[2], dV)
@@ -218,3 +221,38 @@ def test_a_frame_table_whose_error_equals_its_bound_meets_it():
     assert not calls
     np.testing.assert_array_equal(table.nodes, t[::4])
     assert table.error == table.bound == bound and not table.noise
+    # seven zero channels at the integer times 0..6: every 4th of them (and the last) meets any bound, 2 k = 8 = 7 + 1
+    # nodes being enough for k = 4; the nodes are float times, as the kernels read them
+    coarse = el_frame.frame_table(np.arange(7), rtol, evaluate, np.zeros((7, 2)), scales=lambda c: np.ones(c.shape[1]))
+    assert coarse.nodes.dtype == np.float64 and np.array_equal(coarse.nodes, [0.0, 4.0, 6.0]) and not calls
+
+
+def test_a_frame_table_halved_once_to_its_bound_meets_it():
+    """Two outputs with zero channels (no coarser spline to try): the straight spline between them is zero, and the
+    exact channels at the midpoint are the bound itself, which meets it: the two outputs are the table."""
+    rtol = 1e-3
+    bound = max(el_frame.INTERP_FRACTION * rtol, el_frame.INTERP_FLOOR)
+
+    def evaluate(x, at=slice(None)):
+        return np.full((np.asarray(x)[at].size, 2), bound)
+
+    table = el_frame.frame_table(np.array([0.0, 1.0]), rtol, evaluate, np.zeros((2, 2)),
+                                 scales=lambda c: np.ones(c.shape[1]))
+    np.testing.assert_array_equal(table.nodes, [0.0, 1.0])
+    assert table.error == table.bound == bound and not table.noise
+
+
+def test_a_frame_table_of_noise_gives_up_after_its_stall_rounds():
+    """Channels of noise of unit amplitude (unit scale) between two outputs: no halving gains 4x, so after the first
+    round (the best so far) the table gives up once STALL_ROUNDS more rounds did not; noise far above INTERP_NOISE
+    makes no table (None)."""
+    rng = np.random.default_rng(3)
+    rounds = []
+
+    def evaluate(x, at=slice(None)):
+        rounds.append(np.asarray(x)[at].size)
+        return rng.uniform(-1.0, 1.0, (np.asarray(x)[at].size, 2))
+
+    table = el_frame.frame_table(np.array([0.0, 1.0]), 1e-3, evaluate, rng.uniform(-1.0, 1.0, (2, 2)),
+                                 scales=lambda c: np.ones(c.shape[1]))
+    assert table is None and rounds == [1, 2, 4][:1 + el_frame.STALL_ROUNDS]

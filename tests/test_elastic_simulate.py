@@ -90,7 +90,8 @@ def test_a_mast_on_a_trolley_at_a_prescribed_growing_acceleration_follows_the_cl
     data = scene_dict(effects={"gravity": False, "local_curvature": False},
                       motion={"speed": "2 + 0.1*t + 5*t**2"}, time={"t_end": 0.1, "steps": 4})
     t = np.linspace(0.0, 0.1, 21)
-    r = el_sim.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t)  # the default tolerances
+    r = el_sim.simulate(mast(0.0), elastic_scene.drive_of(prepared(data), 1), t, reason="asked")  # default tolerances
+    assert (r["engine"], r["engine_reason"]) == ("python", "asked")
     q, qd, _ = ramp_response(0.1 * ELL / K1, 10 * ELL / K1, OMEGA[0], t)
     np.testing.assert_allclose(r["q"][:, 0], q, rtol=0, atol=1e-7 * np.abs(q).max())
     np.testing.assert_allclose(r["qd"][:, 0], qd, rtol=0, atol=3e-7 * np.abs(qd).max())

@@ -132,6 +132,12 @@ def test_a_record_survives_a_write_and_read(tmp_path):
     assert rec.read(path) == entries
     assert rec.notes_of(path) == ["shard s: a note"]
     assert [line.split("\t")[0] for line in path.read_text().splitlines()[2:]] == ["m.x_f__mutmut_9", "m.x_f__mutmut_10"]
+    # a shard that only screened the record's mutants again (its lines are another shard's draw) is told from one
+    # that screened mutants of its own, later again too
+    again = f"({mutation_screen.AGAIN}): a note"
+    rec.write(path, entries, ["shard s (the rest of its sample): a note", f"shard table {again}", "shard part: a note",
+                              f"shard part {again}", f"shard table {again}"])
+    assert mutate.rescreen_shards(path) == {"table"}
 
 
 def test_a_change_made_at_several_places_finds_each_recorded_mutant_its_own():

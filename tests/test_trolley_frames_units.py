@@ -26,6 +26,14 @@ class Helix:
         return [np.stack(row, axis=-1) for row in rows[:order + 1]]
 
 
+class FastHelix(Helix):
+    """The helix with X0' 1.001 times its unit tangent: a table track's X0' is unit only to its fit error."""
+
+    def derivatives(self, s, order):
+        rows = super().derivatives(s, order)
+        return [rows[0], 1.001 * rows[1], *rows[2:]]
+
+
 def _frenet(s):
     p = s / ROOT
     t = np.stack([-R * np.sin(p), R * np.cos(p), np.full_like(p, RISE)], -1) / ROOT
@@ -58,6 +66,8 @@ def test_rotation_minimising_frame_on_a_helix_matches_the_closed_form(min_curvat
     np.testing.assert_allclose(frame.dW, np.stack([zero, -KAPPA * TAU * np.cos(psi), KAPPA * TAU * np.sin(psi)], -1),
                                atol=1e-9)
     np.testing.assert_array_equal(frame.e, np.tile([1.0, 0.0, 0.0], (9, 1)))
+    # x1 is the unit tangent whatever the track's speed: the same frame on a track whose X0' is not of unit length
+    np.testing.assert_allclose(rmf.frame(FastHelix(), s).lam, frame.lam, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(frame.de, np.zeros((9, 3)))
 
 

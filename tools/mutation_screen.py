@@ -33,6 +33,7 @@ GENERATE = ("from pathlib import Path\nimport mutmut.__main__ as m\nm.set_mutant
             "Path('mutants').mkdir(exist_ok=True)\nm.copy_src_dir(); m.copy_also_copy_files(); m.setup_source_paths()\n"
             "m.store_lines_covered_by_tests(); m.create_mutants(1)\n")
 BASELINE_RUNS = 3
+AGAIN = "its unkilled mutants again"  # a screen's note for --rest and --survived
 TIMEOUT_FACTOR, TIMEOUT_FLOOR = 10.0, 60.0  # a mutant's limit: the median unmutated run times 10, at least 60 s
 
 
