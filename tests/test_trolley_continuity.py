@@ -92,6 +92,10 @@ def test_noisy_table_is_smoothed_or_warned(smoothing, max_error, warned):
     err = abs(np.abs(res[1]["a"][:, 2]).max() / (v**2 / radius) - 1)
     assert st.track.noise["point_noise_m"] == pytest.approx(0.01, rel=0.3)
     assert any("dominated by noise" in n for n in st.notes) == warned
+    if warned:  # the curvature error as a percentage of the largest curvature
+        noise = st.track.noise
+        percent = 100 * noise["curvature_error_per_m"] / noise["curvature_max_per_m"]
+        assert f"({percent:.0f} %)" in next(n for n in st.notes if "dominated by noise" in n)
     if max_error is None:
         assert err > 1.0
     else:

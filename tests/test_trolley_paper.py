@@ -71,6 +71,9 @@ def test_default_physics_scene_lists_both_conventions(tmp_path):
     dv0 = 3 + 3.5 * np.cos(5.0)
     expected = kappa * v0**2 + kappa * dv0 * 1.0 - 0.5 * (kappa**2 + tau**2) * v0**2
     assert row["default_physics"] == pytest.approx(expected, rel=1e-9)
+    # the case's acceleration extremes hold that value of a2 at t = 10 s, in m/s²
+    a2 = summary["cases"]["case1"]["acceleration"]["a2"]
+    assert a2["min"] <= expected <= a2["max"] and a2["unit"] == "m/s^2"
     assert row["printed"] == 3.274
     assert row["paper_conventions"] == pytest.approx(3.274, abs=5e-4)
 
