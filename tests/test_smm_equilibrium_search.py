@@ -177,7 +177,7 @@ def test_search_out_of_steps_is_refused_with_the_residual():
 
 def test_line_search_refuses_a_step_that_only_matches_the_residual():
     """Rod l = 1 m drawn horizontal, m g l = pi/2 N m, torsion spring k = 1 N m/rad free hanging down
-    (preload k pi/2): the only equilibrium is phi = -pi/2 (k phi + m g l sin(pi/2 + phi) = 0). The first
+    (preload k pi/2): with th = pi/2 + phi, k th + m g l sin(th) = 0 has the one root th = 0, phi = -pi/2. The first
     Newton step -(k pi/2 + m g l)/k = -pi lands on the mirror image, whose residual -pi equals the start's
     bit for bit (cos(pi) = -1 exactly): a step that does not lower the residual is halved, and the half step
     lands on the equilibrium (torsion moment 0, lever arm cos(pi/2) ~ 6e-17 m) in one iteration."""
