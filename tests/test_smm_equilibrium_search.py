@@ -173,3 +173,20 @@ def test_search_out_of_steps_is_refused_with_the_residual():
         numeric.solve_equilibrium(hanging(1.0, 0.01, 0.4, 0.05), max_iter=0)
     assert str(err.value) == ("equilibrium search did not converge in 0 Newton steps (residual 0.0481); "
                               "give the equilibrium configuration in the scene")
+
+
+def test_line_search_refuses_a_step_that_only_matches_the_residual():
+    """Rod l = 1 m drawn horizontal, m g l = pi/2 N m, torsion spring k = 1 N m/rad free hanging down
+    (preload k pi/2): with th = pi/2 + phi, k th + m g l sin(th) = 0 has the one root th = 0, phi = -pi/2. The first
+    Newton step -(k pi/2 + m g l)/k = -pi lands on the mirror image, whose residual -pi equals the start's
+    bit for bit (cos(pi) = -1 exactly): a step that does not lower the residual is halved, and the half step
+    lands on the equilibrium (torsion moment 0, lever arm cos(pi/2) ~ 6e-17 m) in one iteration."""
+    m = mech({"parameters": {"g": param(math.pi / 2, "m/s^2")},
+              "coordinates": [{"name": "phi", "type": "angle"}],
+              "points": [{"name": "O", "at": [0, 0]}, {"name": "B", "from": "O", "vector": [1, 0], "turns": ["phi"]}],
+              "bodies": [{"name": "bob", "mass": 1.0, "com": "B"}],
+              "torsion_springs": [{"name": "t", "bodies": ["ground", "bob"], "stiffness": 1.0, "preload": math.pi / 2}],
+              "gravity": {"g": "g"}})
+    _, report = numeric.solve_equilibrium(m)
+    assert report["iterations"] == 1 and report["residual"] <= 1e-15
+    assert report["q"][0] == pytest.approx(-math.pi / 2, abs=1e-15)

@@ -1,6 +1,7 @@
 """Mode kinds, damping ratios without damping, the conditioning numbers and the singular-mass
 refusal, against matrices and eigenvalues written by hand."""
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -77,6 +78,15 @@ def test_condition_of_the_jacobi_scaled_stiffness():
     lo, hi = (p - math.sqrt(p * p - 4 * q)) / 2, (p + math.sqrt(p * p - 4 * q)) / 2
     assert md.spread == pytest.approx(hi / lo, rel=1e-12)
     assert md.kinds == ["elastic", "elastic"]
+    # Two unit-diagonal pairs coupled by b and e up to 7e76 (D = I): eigenvalues 1 -+ b, 1 -+ e, condition
+    # (b + 1)/(e - 1), which must come out correctly rounded: LAPACK's dsyevr rescales a matrix whose largest
+    # entry passes ~8.2e76 (by a factor that is not a power of two, costing the last bit), so the scaling must
+    # not carry these across
+    for b, e in [(4e76, 3e75), (7e76, 3e75), (6e76, 7e75)]:
+        c = np.array([[1, b, 0, 0], [b, 1, 0, 0], [0, 0, 1, e], [0, 0, e, 1]])
+        md = numeric.modes(np.eye(4), np.zeros((4, 4)), c)
+        assert md.condition == float((Fraction(b) + 1) / (Fraction(e) - 1))
+        assert md.kinds == ["unstable", "unstable", "elastic", "elastic"]
 
 
 @pytest.mark.parametrize("gap_in_eps, kinds", [(38, ["rigid", "elastic"]), (42, ["elastic", "elastic"])])

@@ -470,10 +470,9 @@ COVERAGE = {
     "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
                                           "the Python engine by tests/test_elastic_compiled.py",
     "symmech/smm/forms.py": "",
-    "symmech/smm/numeric.py": ("sample drawn on from 30 to 40 (prefix-stable); left: classify's scale 1 -> 2 "
-                               "(a power of two: exact except where LAPACK rescales, couplings ~1e76), lstsq "
-                               "without rcond=None (numpy >= 2's default; differs on numpy 1.26, which pyproject "
-                               "admits), the line search's < -> <= (a trial residual equal to the last, bit for bit)"),
+    "symmech/smm/numeric.py": ("sample drawn on from 30 to 40 (prefix-stable); left: lstsq without rcond=None "
+                               "(numpy >= 2's default, the same call on the numpy installed; differs on numpy "
+                               "1.26, which pyproject admits)"),
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
