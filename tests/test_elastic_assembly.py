@@ -133,7 +133,7 @@ def test_generated_traction_assembly_equals_the_python_engine(tmp_path):
     rollers = np.r_[system.mdl.rollers.stiffness, system.mdl.rollers.damping, np.zeros(5)]
     for extra in (0.0, 50.0):
         stronger = dataclasses.replace(drive, traction=lambda t, v: drive.traction(t, v) + extra)
-        line = el_sim.Timeline(system, stronger, [0.0, 3.0])
+        line = el_sim.Timeline(system, stronger, [0.0, 3.0], None)
         for _ in range(4):
             q, qd = rng.normal(0.0, 1e-4, n), rng.normal(0.0, 1e-3, n)
             s, V, t = rng.uniform(0.0, 10.0), rng.uniform(1.0, 8.0), rng.uniform(0.0, 3.0)

@@ -230,7 +230,7 @@ def test_the_assembly_matches_system_evaluate_at_random_states():
     rollers = {**BUNDLED["elastic"]["rollers"], "law": "clamped_pair", "preload": [2e-5] * 5}
     setup = helix(rollers=rollers)
     system, mdl = setup.system, setup.system.record
-    line = el_sim.Timeline(system, setup.drive, setup.t)
+    line = el_sim.Timeline(system, setup.drive, setup.t, el_frame.arc_length(setup.drive, setup.t))
     for time in (0.0, 0.07):
         fs = line.state(time)
         ch = el_frame.channels(setup.drive, system.mdl.g0, np.array([0.0, time]) if time else np.array([0.0]))[-1]

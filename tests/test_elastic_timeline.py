@@ -16,7 +16,7 @@ from symmech.core.context import Context
 from symmech.core.scene import SymmechError
 from symmech.trolley import model as trolley_model
 from symmech.trolley.elastic import body as el_body, system as el, frame as el_frame, simulate as el_sim
-from symmech.trolley.elastic import scene as elastic_scene
+from symmech.trolley.elastic import compiled as el_compiled, scene as elastic_scene
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_elastic_energies import G0, cloud, model, resultants_of_cloud  # noqa: E402
@@ -51,13 +51,13 @@ def test_arc_length_on_an_uneven_grid_is_the_integral_of_the_speed(drive):
 
 
 def test_timeline_arc_length_between_on_and_beyond_the_nodes(drive):
-    line = el_sim.Timeline(None, drive, GRID)
+    line = el_sim.Timeline(None, drive, GRID, el_frame.arc_length(drive, GRID))
     for time in (0.0, 0.15, 0.3, 0.65, 1.0, 3.1, 4.0, 5.5):
         assert line.s(time) == pytest.approx(arc(time), abs=1e-12), time
 
 
 def test_timeline_states_are_the_frames_at_the_arc_length_and_speed(drive, system):
-    line = el_sim.Timeline(system, drive, GRID)
+    line = el_sim.Timeline(system, drive, GRID, el_frame.arc_length(drive, GRID))
     fr = drive.frames(arc(np.linspace(0.0, 4.0, 200)))
     kept = 0
     for i, time in enumerate(np.linspace(0.0, 4.0, 200)):  # more times than the cache keeps
@@ -79,7 +79,7 @@ def traction_drive(drive):
 def test_traction_states_differ_by_a_unit_rate_along_the_tangent(drive, system, case):
     """Case 2 moves the chord frame of the axle distance l (tests/test_elastic_frame.py)."""
     drive = dataclasses.replace(drive, frames=dataclasses.replace(drive.frames, local_curvature=case == 2))
-    line = el_sim.Timeline(system, traction_drive(drive), GRID)
+    line = el_sim.Timeline(system, traction_drive(drive), GRID, None)
     assert line.s_nodes is None
     for s, V0 in ((3.0, 6.0), (9.0, 11.0)):
         fs0, fs1 = line.traction_states(s, V0)
@@ -98,7 +98,7 @@ def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system
     """q̈ and V̇0 make the cloud's d'Alembert forces balance the elastic ones, and its x1 resultant the traction."""
     body = cloud(system.mdl)
     tdrive = traction_drive(drive)
-    line = el_sim.Timeline(system, tdrive, GRID)
+    line = el_sim.Timeline(system, tdrive, GRID, None)
     rng = np.random.default_rng(5)
     N = system.N
     for time, s, V0 in ((0.4, 4.0, 6.5), (1.7, 12.0, 9.0)):
@@ -120,7 +120,7 @@ def test_traction_step_solves_the_motion_with_the_traction_balance(drive, system
 def test_traction_start_carries_the_whole_bodys_acceleration(drive, system):
     """q at rest relative to the frame at S0, 6 m/s, under V̇0 = P0(t0, 6)/m - g0 dy/ds."""
     tdrive = traction_drive(drive)
-    line = el_sim.Timeline(system, tdrive, GRID)
+    line = el_sim.Timeline(system, tdrive, GRID, None)
     t0 = 0.8
     q = el_sim.traction_start(line, t0)
     mass = system.mdl.mass + system.mdl.beams[0].rho_a * system.mdl.beams[0].length + system.mdl.beams[0].tip_mass
@@ -139,7 +139,7 @@ def test_timeline_integrates_from_the_last_node_only(drive):
     over two (from the node before) only to 3e-9: s(t) = s0 + 8 t + (3/3.5)(1 - cos 3.5 t) to 1e-12."""
     om = 3.5
     fast = dataclasses.replace(drive, speed=lambda t: (8.0 + 3.0 * np.sin(om * t), 3.0 * om * np.cos(om * t)))
-    line = el_sim.Timeline(None, fast, np.arange(5.0))
+    line = el_sim.Timeline(None, fast, np.arange(5.0), el_frame.arc_length(fast, np.arange(5.0)))
     for time in np.linspace(0.05, 4.5, 37):
         assert line.s(time) == pytest.approx(S0 + 8.0 * time + 3.0 / om * (1.0 - np.cos(om * time)), abs=1e-12)
 
@@ -149,7 +149,7 @@ def test_a_compiled_run_reads_the_start_record_and_table_of_the_run(drive, syste
     1e-9 J on E_d), its q the quasi-static q at t[0] plus the given offsets, the model's record, and at the prescribed
     speed a table seeded at the output times whose channels are those at the arc length s0 + 8 t + 3 (1 - cos t)."""
     dq0 = np.linspace(1e-4, 2e-4, system.N)
-    inputs = el_sim.compiled_inputs(system, drive, GRID, 1e-2, 1e-7, dq0=dq0)  # a coarse table: not its test
+    inputs = el_compiled.compiled_inputs(system, drive, GRID, 1e-2, 1e-7, dq0=dq0)  # a coarse table: not its test
     state = inputs.start.state
     np.testing.assert_array_equal(inputs.start.atol[state.slice("q")], 1e-7)
     np.testing.assert_allclose(inputs.start.atol[state.slice("qd")], 1e-4, rtol=1e-15)
@@ -162,7 +162,7 @@ def test_a_compiled_run_reads_the_start_record_and_table_of_the_run(drive, syste
     # with traction the table is in s over the span frame.reach gives the whole body's rigid body (mass, centre and
     # inertia of trolley, beam and tip: tests/test_elastic_frame.py holds reach to Newton), cut at the track's end
     tdrive = traction_drive(drive)
-    traction = el_sim.compiled_inputs(system, tdrive, GRID, 1e-2, 1e-7)
+    traction = el_compiled.compiled_inputs(system, tdrive, GRID, 1e-2, 1e-7)
     start, span = traction.start, traction.frame.span
     assert start.atol[start.state.offset("s")] == start.atol[start.state.offset("speed")] == 1e-10  # as documented
     whole = partial(trolley_model.traction_acceleration, el_body.rigid_body(system.mdl))

@@ -67,10 +67,11 @@ def state_layout(system) -> tuple[list[str], list[str]]:
 def elastic(setup, run: dict) -> ExportModel:
     """The export model of a prepared elastic setup (``symmech.trolley.elastic.scene.Setup``) whose native
     run (``elastic_scene.simulate``) is ``run``."""
-    from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
+    from symmech.trolley.elastic import frame as el_frame
+    from symmech.trolley.elastic.compiled import compiled_inputs
 
     system, drive, t = setup.system, setup.drive, setup.t
-    table = el_sim.compiled_inputs(system, drive, t, setup.rtol, 1e-12).frame.table  # a compiled run's
+    table = compiled_inputs(system, drive, t, setup.rtol, 1e-12).frame.table  # a compiled run's
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated within its bound (a non-smooth track "
                            "or speed): `symmech export` needs the compiled engine's table")
@@ -96,10 +97,10 @@ def elastic(setup, run: dict) -> ExportModel:
 def traction(setup, run: dict, law) -> ExportModel:
     """The export model of a prepared elastic setup under traction whose native run is ``run``; ``law`` the
     scene's P0(t, v) [N] as a sympy expression (:func:`symmech.core.expressions.parse`)."""
-    from symmech.trolley.elastic import simulate as el_sim
+    from symmech.trolley.elastic.compiled import compiled_inputs
 
     system, drive, t = setup.system, setup.drive, setup.t
-    frame = el_sim.compiled_inputs(system, drive, t, setup.rtol, 1e-12).frame  # a compiled run's (its table, span)
+    frame = compiled_inputs(system, drive, t, setup.rtol, 1e-12).frame  # a compiled run's (its table, span)
     table, (lo, hi) = frame.table, frame.span
     if table is None:
         raise SymmechError("the frame along the track cannot be tabulated in s within its bound (a non-smooth "

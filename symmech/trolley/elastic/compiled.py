@@ -3,11 +3,12 @@
 this module drives it (:func:`simulate`, the same contract and outputs as the Python engine's; :class:`Run`, its
 inputs by name, and ``RUNNER`` for the engine protocol) and builds numba's cache once (``ENGINE``).
 
-**The way in.** A run reads what ``simulate.compiled_inputs`` makes in one pass: the start both engines share, the
-model's record (``System.record``, packed once per system) and the frame along the track tabulated as a spline
-(``frame.tabulation``: in t at a prescribed speed, in s over the span a traction run visits; the table's bound and
-its refinement in :mod:`symmech.trolley.elastic.frame`); :func:`simulate` hands them to the kernels' solve and
-makes the outputs once, on the way out.
+**The way in.** A run reads what :func:`compiled_inputs` makes in one pass: the frame along the track first (its
+arc lengths at the outputs, ``frame.arc_length``, and its spline table, ``frame.tabulation``: in t at a prescribed
+speed, in s over the span a traction run visits; the table's bound and its refinement in
+:mod:`symmech.trolley.elastic.frame`), then the start both engines share (``simulate.prepare``, on the timeline of
+those arc lengths) and the model's record (``System.record``, packed once per system); :func:`simulate` hands them
+to the kernels' solve and makes the outputs once, on the way out.
 
 **Steps.** The Python engine bounds its steps by the output spacing; this one does not: the outputs come
 from Radau's collocation polynomial (scipy's dense output), whose error on the bundled scene stays within
@@ -21,10 +22,12 @@ from __future__ import annotations
 import itertools
 from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from symmech.numerics import build
+from symmech.trolley import model
 from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic.layout import LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY, state as state_layout  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
@@ -61,14 +64,14 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     """:func:`symmech.trolley.elastic.simulate.simulate` by Radau on the compiled assembly (the same state,
     tolerances and outputs; the steps are not bound by the output spacing: the outputs come from the
     collocation polynomial, within the tolerance of the steps, benchmarks/README.md). What the run reads is
-    made in one pass (``simulate.compiled_inputs``: the start, the model's record, the frame's table) and handed
+    made in one pass (:func:`compiled_inputs`: the frame's table, the start, the model's record) and handed
     to the kernels' solve; ``engine`` / ``engine_reason`` name what ran: this engine and ``reason`` (why the caller
     chose it), or the Python engine and why when the frame cannot be tabulated within its bound
     (``frame.frame_table``) or, with traction, the run leaves the table; ``frame_table_nodes`` and
     ``frame_interpolation_error`` (relative to the channel scales) what the table reached."""
     from symmech.trolley.elastic import kernels as ek  # numba: imported by a run, not by choosing the engine or its estimate
     t, rtol = np.asarray(t, dtype=float), float(rtol)
-    inputs = el_sim.compiled_inputs(system, drive, t, rtol, atol_q, dq0, dqd0)
+    inputs = compiled_inputs(system, drive, t, rtol, atol_q, dq0, dqd0)
     start, frame, solved = inputs.start, inputs.frame, None
     if frame.table is not None:
         spline = (frame.table.nodes, frame.table.coef)
@@ -86,6 +89,29 @@ def simulate(system, drive, t, rtol: float = 1e-8, atol_q: float = 1e-12, dq0=No
     report = {"nfev": nfev, "njev": -1, "steps": steps, "engine": "compiled", "engine_reason": reason,
               "frame_table_nodes": frame.table.nodes.size, "frame_interpolation_error": frame.table.error}
     return el_sim.outputs(system, drive, t, s, V0, dV0, Y, rows=row_terms, frame=fr, run=report)
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What a run reads, made in one pass (:func:`compiled_inputs`): its start (``simulate.Start``), the model
+    record (``System.record``) and what it tabulates of the frame with its spline table (``frame.Tabulation``;
+    with traction over the span ``frame.reach`` finds)."""
+
+    start: el_sim.Start
+    record: object
+    frame: el_frame.Tabulation
+
+
+def compiled_inputs(system, drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> Inputs:
+    """The :class:`Inputs` of a run on the grid t [s] (n,) at relative tolerance ``rtol`` (the frame table's bound)
+    and the keywords of ``simulate.prepare``: the frame first (its arc lengths at t and its table), then the start
+    on the timeline of those arc lengths."""
+    prescribed = drive.traction is None  # with traction s is a state: no arc lengths on the grid
+    accelerate = None if prescribed else partial(model.traction_acceleration, system.rigid)
+    s_nodes = el_frame.arc_length(drive, t) if prescribed else None
+    frame = el_frame.tabulation(drive, system.mdl.g0, t, rtol, accelerate)
+    line = el_sim.Timeline(system, drive, t, s_nodes)
+    return Inputs(el_sim.prepare(line, atol_q, dq0, dqd0), system.record, frame)
 
 
 def _prescribed(start, frame) -> tuple:

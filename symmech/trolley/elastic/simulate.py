@@ -1,10 +1,9 @@
 """The elastic trolley integrated along the track: the timeline of a run (with traction too), the start
-both engines share, what a compiled run reads (:func:`compiled_inputs`), the solve (scipy's ``solve_ivp`` on
+both engines share (:func:`prepare`), the solve (scipy's ``solve_ivp`` on
 :class:`symmech.trolley.elastic.system.System`) and the outputs per row (reactions, energies, deflections)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
@@ -13,8 +12,7 @@ from symmech.core.layout import Layout
 from symmech.core.scene import SymmechError
 from symmech.trolley import model
 from symmech.trolley.elastic.body import roller_forces
-from symmech.trolley.elastic.frame import (GAUSS_LEGENDRE, Drive, FrameState, Tabulation, arc_length, frame_motion,
-                                           frame_state, tabulation)
+from symmech.trolley.elastic.frame import GAUSS_LEGENDRE, Drive, FrameState, arc_length, frame_motion, frame_state
 from symmech.trolley.elastic.layout import N_ROLLER_DOFS, state as state_layout
 from symmech.trolley.elastic.system import System
 
@@ -26,13 +24,12 @@ def _state_at(drive: Drive, t: float, s: float) -> FrameState:
 
 
 class Timeline:
-    """Arc length s(t) = s0 + ∫ V0 dt (8-point Gauss-Legendre per interval of the grid t, as the
-    rigid scene computes it, and from the last node) and the frame state at t, cached:
-    implicit steps revisit their stage times."""
+    """Arc length s(t) = s0 + ∫ V0 dt (from the arc lengths ``s_nodes`` (n,) [m] on the grid t [s] (n,),
+    :func:`symmech.trolley.elastic.frame.arc_length`, None with traction; 8-point Gauss-Legendre from the last node)
+    and the frame state at t, cached: implicit steps revisit their stage times."""
 
-    def __init__(self, system: System, drive: Drive, t):
-        self.system, self.drive, self.t = system, drive, np.asarray(t, dtype=float)
-        self.s_nodes = arc_length(drive, self.t) if drive.traction is None else None
+    def __init__(self, system: System, drive: Drive, t, s_nodes):
+        self.system, self.drive, self.t, self.s_nodes = system, drive, np.asarray(t, dtype=float), s_nodes
         self.cache: dict = {}
 
     def _integral(self, a, b):
@@ -166,7 +163,8 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
     ctx = context.active()
     if ctx is not None and fallback:
         ctx.fallback(f"elastic model on the Python engine: {fallback}", SECONDS_PER_STEP * (t.size - 1))
-    start = prepare(Timeline(system, drive, t), atol_q, dq0, dqd0)
+    s_nodes = arc_length(drive, t) if drive.traction is None else None
+    start = prepare(Timeline(system, drive, t, s_nodes), atol_q, dq0, dqd0)
     line, st, traction = start.line, start.state, drive.traction is not None
     iq, iqd = st.slice("q"), st.slice("qd")
 
@@ -216,28 +214,6 @@ def simulate(system: System, drive: Drive, t, method: str = "Radau", rtol: float
         V0, dV0 = (np.array([float(v[k]) for v in speed]) for k in (0, 1))
     return outputs(system, drive, t, s, V0, dV0, Y, run={"nfev": sol.nfev, "njev": sol.njev, "engine": "python",
                                                           "engine_reason": fallback or reason})
-
-
-# --------------------------------------------------------------------------- what the compiled engine reads
-
-@dataclass(frozen=True)
-class Inputs:
-    """What a compiled run reads, made in one pass (:func:`compiled_inputs`): its :class:`Start`, the model
-    record (``System.record``) and what it tabulates of the frame with its spline table
-    (:class:`symmech.trolley.elastic.frame.Tabulation`; with traction over the span ``frame.reach`` finds)."""
-
-    start: Start
-    record: object
-    frame: Tabulation
-
-
-def compiled_inputs(system: System, drive: Drive, t, rtol: float, atol_q: float, dq0=None, dqd0=None) -> Inputs:
-    """The :class:`Inputs` of a compiled run on the grid t [s] (n,) at relative tolerance ``rtol`` (the frame
-    table's bound) and the keywords of :func:`prepare`."""
-    line = Timeline(system, drive, t)
-    accelerate = partial(model.traction_acceleration, system.rigid) if drive.traction is not None else None
-    frame = tabulation(drive, system.mdl.g0, t, rtol, accelerate)
-    return Inputs(prepare(line, atol_q, dq0, dqd0), system.record, frame)
 
 
 def row_terms(system: System, fr: model.Frame, V0, dV0, Y, height) -> dict:
