@@ -332,8 +332,13 @@ SHARDS = {
                       ["tests/test_trolley_moving_frame_closed_forms.py", *REACTION_TESTS,
                        "tests/test_trolley_frames_units.py"], ["*"]),
     # the rigid trolley's run (its traction integration, arc length and visited span): the rigid trolley's tests and
-    # its refusals
-    "trolley_scene_sample": ("symmech/trolley/scene.py", [*TROLLEY_TESTS, "tests/test_bad_trolley.py"], ["*"]),
+    # its refusals, the bundled elastic scene's run (6 s) and the physics helix's precision study (slow tier, 21 s),
+    # without the paper's precision study (slow tier, paper conventions only)
+    "trolley_scene_sample": ("symmech/trolley/scene.py",
+                             [*TROLLEY_TESTS, "tests/test_bad_trolley.py",
+                              "tests/test_output_contract.py::test_run_output_contract[trolley_elastic_helix]",
+                              "tests/test_output_contract.py::test_bench_precision_works_on_every_bundled_scene"
+                              "[trolley_helix]", "-m", "slow or not slow", "-k", "not orders_one_two_four"], ["*"]),
     "modal": ("symmech/trolley/elastic/modal.py",
               ["tests/test_modal_groups_and_phase.py", "tests/test_trolley_elastic_modes_tracking.py",
                "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
