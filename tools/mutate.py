@@ -456,11 +456,8 @@ COVERAGE = {
     "symmech/grain/free_flight.py": "",
     "symmech/trolley/track.py": "",
     "symmech/trolley/model.py": "",
-    "symmech/trolley/scene.py": ("a seeded sample of 30 (shard trolley_scene_sample), screened once: 7 survivors "
-                                 "not yet killed (the overload check's unit text, the headline's minimum, an elastic "
-                                 "scene's case without local curvature, the precision study's symbolic reference, the "
-                                 "visited span's width on an endless track, a speed's second derivative made for its "
-                                 "first, the elastic run called without its context)"),
+    "symmech/trolley/scene.py": ("a seeded sample of 30 (shard trolley_scene_sample: the rigid trolley's tests, the bundled "
+                                 "elastic scene's run and the physics helix's precision study)"),
     "symmech/trolley/elastic/modal.py": "",
     "symmech/trolley/elastic/membrane.py": "",
     "symmech/trolley/elastic/system.py": ("a seeded sample of the whole module (shard elastic_system_sample); it "
