@@ -171,6 +171,22 @@ def test_a_number_is_a_constant_expression():
     assert st.speed[0](np.array([1.0]))[0] == 10.0 and st.track.twist(np.array([3.0]))[0][0] == 0.25
 
 
+@pytest.mark.slow
+def test_a_speed_law_is_differentiated_once():
+    """A run needs V0 and its rate only: 36 nested sines, whose first derivative has ~700 nodes and whose second
+    would exceed the 20000 a derivative may have, are accepted; the rate is the chain rule's product of cosines."""
+    depth = 36
+    st = prepared(setup(motion={"speed": "10 + " + "sin(" * depth + "t" + ")" * depth},
+                        time={"t_end": 2.0, "steps": 4}))
+    inner, rate = st.t.copy(), np.ones_like(st.t)
+    for _ in range(depth):
+        rate *= np.cos(inner)
+        inner = np.sin(inner)
+    np.testing.assert_allclose(st.speed[0](st.t), 10.0 + inner, rtol=1e-14)
+    np.testing.assert_allclose(st.speed[1](st.t), rate, rtol=1e-12, atol=1e-15)
+    assert rate[1] > 0.1  # the rate at t = 0.5 s is not negligible (the test can fail)
+
+
 def test_rotation_minimising_frame_has_no_roll_and_its_stated_angular_velocity():
     """Forced on the helix (min_curvature above κ): x1 = t, Ω1 = 0, and Ω, Ω' agree with
     differences of the frame itself (-Λ' Λᵀ = Ω̌ for a passive Λ); |a| of O stays κ v²."""

@@ -76,6 +76,20 @@ def test_default_physics_scene_lists_both_conventions(tmp_path):
     assert a2["min"] <= expected <= a2["max"] and a2["unit"] == "m/s^2"
     assert row["printed"] == 3.274
     assert row["paper_conventions"] == pytest.approx(3.274, abs=5e-4)
+    # the comfort checks state each case's overload range (its extremes) in g against the envelope
+    extremes = summary["cases"]["case1"]["overload"]
+    checks = {c["what"]: c for c in summary["checks"]}
+    for k, (lo, hi) in enumerate(((-2, 2), (-1.5, 6), (-2, 2)), start=1):
+        check = checks[f"case 1: overload n{k} in the comfort envelope"]
+        assert check["value"] == [extremes[f"n{k}"]["min"], extremes[f"n{k}"]["max"]]
+        assert (check["unit"], check["threshold"]) == ("g", f"within [{lo:g} g, {hi:g} g]")
+    # the headline's critical n1 is the extreme with the smaller margin to [-2, 2] g: the minimum (-7.6 g
+    # near the end of the ride, where the centre of mass ahead of O feels -κ² x1 V0²), not the +1.6 g at t = 0
+    n1 = extremes["n1"]
+    assert n1["min"] < -7 and 0 < 2 - n1["max"] < 0.5 and n1["t_min"] > 17
+    head = next(h for h in summary["headline"] if h["name"] == "case 1: critical overload n1")
+    assert (head["value"], head["unit"], head["verdict"]) == (n1["min"], "g", "fail")
+    assert head["at"].startswith(f"t = {n1['t_min']:.4g} s")
 
 
 def test_errata_records_for_the_trolley():

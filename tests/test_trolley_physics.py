@@ -146,12 +146,18 @@ def test_gravity_free_variant_matches_full_model_with_zero_gravity():
 
 def test_local_curvature_off_gives_only_case1_equal_to_full_model_case1():
     helix = {"type": "helix", "radius": 7.0, "rise": 0.8}
-    on = setup(frame="frenet", track=helix, effects={"local_curvature": True})
-    off = setup(frame="frenet", track=helix, effects={"local_curvature": False})
+    inertia = {"inertia": [10.0, 20.0, 15.0, 0, 0, 0]}
+    on = setup(frame="frenet", track=helix, trolley=inertia, effects={"local_curvature": True})
+    # with an [elastic] table too: its drive follows case 1's frame
+    off = setup(frame="frenet", track=helix, trolley=inertia, effects={"local_curvature": False},
+                elastic={"rollers": {"stiffness": [1e7] * 5, "damping": [3e3] * 5}})
     _, r_on = compute(on)
-    _, r_off = compute(off)
+    st, r_off = compute(off)
     assert set(r_off) == {1}
     np.testing.assert_array_equal(r_off[1]["P"], r_on[1]["P"])
+    drive = st.elastic.drive.frames(r_off[1]["s"]).lam
+    np.testing.assert_array_equal(drive, r_off[1]["frame"].lam)
+    assert np.abs(drive - r_on[2]["frame"].lam).max() > 0.1  # the chord turns case 2's frame by ~κ l / 2
 
 
 def test_rigid_body_inertia_adds_gyroscopic_moment():

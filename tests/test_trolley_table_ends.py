@@ -38,6 +38,10 @@ def test_issue_scene_runs_from_the_first_point_of_the_table():
         assert st.plan.span == (0.0, pytest.approx(8.0, rel=1e-12))
         for case in (1, 2):
             assert np.all(np.isfinite(res[case]["P"]))
+    # at rest on the first point the span widens to two stencils on the table, not half of them before it
+    st = prepared(setup(track={"type": "table", "points": pts}, motion={"speed": "0"},
+                        time={"t_end": 1.0, "steps": 2}, effects={"local_curvature": True}))
+    assert st.plan.span == (0.0, pytest.approx(2 * (st.fd_order + 1) * 0.02, rel=1e-12))
 
 
 def test_one_sided_stencils_at_the_ends_match_the_exact_derivatives(monkeypatch):

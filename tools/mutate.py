@@ -332,8 +332,13 @@ SHARDS = {
                       ["tests/test_trolley_moving_frame_closed_forms.py", *REACTION_TESTS,
                        "tests/test_trolley_frames_units.py"], ["*"]),
     # the rigid trolley's run (its traction integration, arc length and visited span): the rigid trolley's tests and
-    # its refusals
-    "trolley_scene_sample": ("symmech/trolley/scene.py", [*TROLLEY_TESTS, "tests/test_bad_trolley.py"], ["*"]),
+    # its refusals, the bundled elastic scene's run (6 s) and the physics helix's precision study (slow tier, 21 s),
+    # without the paper's precision study (slow tier, paper conventions only)
+    "trolley_scene_sample": ("symmech/trolley/scene.py",
+                             [*TROLLEY_TESTS, "tests/test_bad_trolley.py",
+                              "tests/test_output_contract.py::test_run_output_contract[trolley_elastic_helix]",
+                              "tests/test_output_contract.py::test_bench_precision_works_on_every_bundled_scene"
+                              "[trolley_helix]", "-m", "slow or not slow", "-k", "not orders_one_two_four"], ["*"]),
     "modal": ("symmech/trolley/elastic/modal.py",
               ["tests/test_modal_groups_and_phase.py", "tests/test_trolley_elastic_modes_tracking.py",
                "tests/test_trolley_elastic_accel_shift.py"], ["*"]),
@@ -451,11 +456,8 @@ COVERAGE = {
     "symmech/grain/free_flight.py": "",
     "symmech/trolley/track.py": "",
     "symmech/trolley/model.py": "",
-    "symmech/trolley/scene.py": ("a seeded sample of 30 (shard trolley_scene_sample), screened once: 7 survivors "
-                                 "not yet killed (the overload check's unit text, the headline's minimum, an elastic "
-                                 "scene's case without local curvature, the precision study's symbolic reference, the "
-                                 "visited span's width on an endless track, a speed's second derivative made for its "
-                                 "first, the elastic run called without its context)"),
+    "symmech/trolley/scene.py": ("a seeded sample of 30 (shard trolley_scene_sample: the rigid trolley's tests, the bundled "
+                                 "elastic scene's run and the physics helix's precision study)"),
     "symmech/trolley/elastic/modal.py": "",
     "symmech/trolley/elastic/membrane.py": "",
     "symmech/trolley/elastic/system.py": ("a seeded sample of the whole module (shard elastic_system_sample); it "
