@@ -259,8 +259,9 @@ def deciding(entry: rec.Entry, folder: Path, tests: list[str]) -> list[str]:
 
 
 def deciding_test(entry: rec.Entry) -> str:
-    """The node id of the test a recorded kill names ("" for none)."""
-    return entry.test.split(" (")[0]
+    """The node id of the test a recorded kill names ("" for none): the text before its exception's " (Name)", which
+    is last; a parametrised id may hold " (" itself."""
+    return entry.test.rsplit(" (", 1)[0] if entry.test.endswith(")") else entry.test
 
 
 def reruns(chosen: list[rec.Entry], collected: set[str], folder: Path, tests: list[str]) -> dict[str, list[str]]:
