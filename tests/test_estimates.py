@@ -56,14 +56,20 @@ def told_seconds(ctx: Told) -> float:
 def test_a_run_estimate_holds_whatever_the_count_model_says(monkeypatch, off):
     """The count model's seconds per step as they are (tens of times under this scene's time) and 1000x that
     (a machine far slower than this one): the estimate told is within 2x of the run's own time either way,
-    since samples set the scale; the count estimate alone is more than 2x off either way (the test can fail)."""
+    since samples set the scale; the count estimate alone is more than 2x off either way (the test can fail).
+    A wall-time estimate against wall time: when the machine's load changes between the samples and the runs
+    (other jobs on 2 cores), the pair is taken once more, sampled anew; the count model, tens of times off, fails
+    both."""
     for name in ("SECONDS_PER_STEP", "SECONDS_PER_OUTPUT_ROW"):
         monkeypatch.setattr(trolley_scene, name, getattr(trolley_scene, name) * off)
     scene = pipeline.load(RIGID)
     count = scene.kind.estimate(scene.setup).seconds
-    scene.run(Told())  # told (not quiet): sampled
-    actual = statistics.median([scene.timing["run"], *(run_seconds(scene) for _ in range(2))])
-    assert "timed samples" in scene.cost.what
+    for _ in range(2):
+        scene.run(Told())  # told (not quiet): sampled
+        actual = statistics.median([scene.timing["run"], *(run_seconds(scene) for _ in range(2))])
+        assert "timed samples" in scene.cost.what
+        if 0.5 <= scene.cost.seconds / actual <= 2.0:
+            break
     assert 0.5 <= scene.cost.seconds / actual <= 2.0, (scene.cost, actual)
     assert not 0.5 <= count / actual <= 2.0  # the count model alone would not hold: the test can fail
 
