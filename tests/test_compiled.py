@@ -170,6 +170,8 @@ def test_without_numba_the_numpy_module_stands_in():
         out = np.zeros((1, 3, 3))
         k.H_into(2e-3, 1.5e-3, 1e-3, 0.3, 0.7, 1.1, out)
         assert np.array_equal(out[0], H)
+        assert k.H_scalar.__doc__ == "H on floats (numpy fallback: numba is not installed)."  # help() reads them
+        assert k.H_into.__doc__ == "H on floats into out[0] (numpy fallback: numba is not installed)."
         assert np.array_equal(k.H(2e-3, 1e-3, 1e-3, np.zeros(4), 0.5, 0.5), gi.H(2e-3, 1e-3, 1e-3, np.zeros(4), 0.5, 0.5))
         try:
             import symmech.generated.grain_impact_nb

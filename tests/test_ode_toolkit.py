@@ -5,6 +5,7 @@ the exact free response of the mechanism run.
 
 The stiff test problem is Prothero-Robinson: y' = -lam (y - cos t) - sin t, y(0) = 1, solution cos t for
 every lam."""
+import functools
 import math
 import os
 import subprocess
@@ -45,8 +46,10 @@ def no_jac(t, y, args, J):
     J[:] = 0.0
 
 
-PROBE = ode.steppers(probe, probe_jac)
-OSC = ode.steppers(oscillator, no_jac)
+@functools.cache  # made on first use, not at import: a mutation screen's child process (forked after the
+def stepper_set(rhs, jac):  # import) then builds them from the mutated factories
+    """``ode.steppers(rhs, jac)``, once per process."""
+    return ode.steppers(rhs, jac)
 
 
 def adaptive(lam, t_end, rtol, atol):
@@ -54,10 +57,10 @@ def adaptive(lam, t_end, rtol, atol):
     args, y, t, f = np.array([lam]), np.array([1.0]), 0.0, np.empty(1)
     probe(t, y, args, f)
     J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
-    st = PROBE.radau_start(t, y, f, t_end, args, rtol, np.array([atol]), J)
+    st = stepper_set(probe, probe_jac).radau_start(t, y, f, t_end, args, rtol, np.array([atol]), J)
     steps, err = 0, 0.0
     while t < t_end:
-        t, y, f, ok = PROBE.radau_step(t, y, f, t_end, args, rtol, np.array([atol]), st, J, LUr, pr, LUc, pc, Q)
+        t, y, f, ok = stepper_set(probe, probe_jac).radau_step(t, y, f, t_end, args, rtol, np.array([atol]), st, J, LUr, pr, LUc, pc, Q)
         assert ok
         steps += 1
         err = max(err, abs(y[0] - math.cos(t)))
@@ -73,7 +76,7 @@ def fixed_radau(lam, n, t_end=1.0):
     st[radau.ST_AT.jac_current] = 1.0
     for k in range(n):
         probe(k * h, y, args, f)
-        ok, _, _, Z = PROBE.radau_try(k * h, y, f, h, args, 1e-12, np.array([1e-12]), st, J, LUr, pr, LUc, pc, Q)
+        ok, _, _, Z = stepper_set(probe, probe_jac).radau_try(k * h, y, f, h, args, 1e-12, np.array([1e-12]), st, J, LUr, pr, LUc, pc, Q)
         assert ok
         y = y + Z[2]
     return abs(y[0] - math.cos(t_end))
@@ -86,7 +89,7 @@ def fixed_dop853(n, t_end=4.0):
     K, atol = np.empty((ode.DOP_EXTENDED, 2)), np.full(2, 1e30)
     oscillator(t, y, None, f)
     for _ in range(n):
-        t_new, y, _, ok = OSC.dop_advance(t, y, f, h, t_end, None, 1e-3, atol, K)
+        t_new, y, _, ok = stepper_set(oscillator, no_jac).dop_advance(t, y, f, h, t_end, None, 1e-3, atol, K)
         assert ok and t_new == pytest.approx(t + h, rel=1e-14)
         t, f = t_new, K[ode.DOP_STAGES].copy()
     return np.abs(y - (math.cos(t_end), -math.sin(t_end))).max()
@@ -233,19 +236,19 @@ def bowl(x, args):
     return (x - args[0]) ** 2 + math.cos(3.0 * x) * 0.01
 
 
-KEPLER, BOWL = ode.roots(kepler), ode.roots(bowl)
-
-
 def test_brentq_and_bounded_min_equal_scipys():
     """Kepler's equation E - e sin E = M (e 0.3, M 1.2) and a bumpy bowl on [0, 5]: the root equals scipy's
-    brentq (same xtol, rtol 4 eps) to 1e-15 and has residual below 1e-14; the minimiser returns scipy's
-    bounded-Brent minimum to 1e-12 (xatol 1e-12)."""
+    brentq (same xtol, rtol 4 eps) to 1e-15 and has residual below 1e-14, and so does ``bracketed`` given the ends'
+    values; the minimiser returns scipy's bounded-Brent minimum to 1e-12 (xatol 1e-12)."""
     args = np.array([0.3, 1.2])
-    root = KEPLER.brentq(0.0, math.pi, 1e-15, args)
+    kepler_roots = ode.roots(kepler)  # in the test: a screen's child builds it from the mutated factory
+    root = kepler_roots.brentq(0.0, math.pi, 1e-15, args)
     assert root == pytest.approx(brentq(lambda x: x - 0.3 * math.sin(x) - 1.2, 0.0, math.pi, xtol=1e-15),
                                  abs=1e-15)
     assert abs(kepler(root, args)) < 1e-14
-    x, fx = BOWL.bounded_min(0.0, 5.0, 1e-12, np.array([2.0]))
+    ends = kepler(0.0, args), kepler(math.pi, args)
+    assert kepler_roots.bracketed(0.0, math.pi, *ends, 1e-15, args) == root
+    x, fx = ode.roots(bowl).bounded_min(0.0, 5.0, 1e-12, np.array([2.0]))
     ref = minimize_scalar(lambda x: (x - 2.0) ** 2 + math.cos(3.0 * x) * 0.01, bounds=(0.0, 5.0),
                           method="bounded", options={"xatol": 1e-12})
     assert x == pytest.approx(ref.x, abs=1e-12) and fx == pytest.approx(ref.fun, abs=1e-14)

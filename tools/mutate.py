@@ -423,6 +423,16 @@ SHARDS = {
     # the toolkit's Python side (mutmut leaves the numba kernels, decorated, alone) without the order studies
     "ode": ("symmech/numerics/ode.py", ["tests/test_ode_toolkit.py", "-k", "not empirical_order and not fresh_process"],
             ["*"]),
+    # what mutmut mutates in the numba modules: the undecorated Python around the kernels (the closures' bodies
+    # and the decorated functions are left alone)
+    "brent_closures": ("symmech/numerics/brent.py",
+                       ["tests/test_ode_toolkit.py", "-k", "brentq_and_bounded or grain_flight_at_contact"], ["*"]),
+    "radau_closures": ("symmech/numerics/radau.py",
+                       ["tests/test_ode_toolkit.py", "-m", "slow or not slow", "-k", "radau_stiff_prothero"], ["*"]),
+    "kernel_twins": ("symmech/numerics/kernels.py", ["tests/test_compiled.py"], ["*"]),
+    "elastic_traction_callback": ("symmech/trolley/elastic/kernels.py",
+                                  ["tests/test_elastic_compiled.py", "-m", "slow or not slow", "-k", "traction"],
+                                  ["*"]),
     # integrate, _adapter, make and steppers are reached only where a test builds a generated module's solver in the
     # mutant's process (its closures are compiled anew in each process: tens of seconds a mutant)
     "ode_integrate": ("symmech/numerics/ode.py",
@@ -483,6 +493,42 @@ COVERAGE = {
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
     "symmech/numerics/ode.py": "",
+    "symmech/numerics/brent.py": ("whole (shard brent_closures): its 6 mutants, the namespace roots returns; the root "
+                                  "finder and the minimiser are numba closures, which mutmut does not mutate, held "
+                                  "to scipy's brentq and bounded minimiser by tests/test_ode_toolkit.py"),
+    "symmech/numerics/radau.py": ("whole (shard radau_closures): its 2 mutants, the first step's factory in "
+                                  "steppers; the rest is numba kernels and closures (not mutated), held to scipy's "
+                                  "Radau steps and collocation conditions by tests/test_ode_toolkit.py"),
+    "symmech/numerics/kernels.py": "",
+    "symmech/numerics/dop853.py, first_step.py, linalg.py": (
+        "numba kernels and closures only: mutmut makes no mutant of them; tests/test_ode_toolkit.py holds them to "
+        "scipy's DOP853 steps, its select_initial_step and to LU solves bit for bit"),
+    "symmech/grain/free_flight_nb.py": ("numba kernels only (no mutant made); held to the screened Python free flight "
+                                        "(free_flight.py) by tests/test_grain_free_flight_nb.py"),
+    "symmech/*/derive*.py (the derivations)": (
+        "sympy: what they compute is generated/, and a mutant either renders a different byte, which "
+        "tests/test_codegen.py::test_generated_folder_is_up_to_date (slow tier) finds against the committed "
+        "modules, or renders the same modules (no output differs); the generated modules' numbers are held to "
+        "closed forms and the papers by their tests"),
+    "symmech/trolley/elastic/symbolic_assembly.py": (
+        "sympy: the elastic equations a scene's C module prints; tests/test_elastic_assembly.py holds the generated "
+        "assembly equal to the Python engine's (the screened system.py)"),
+    "symmech/*/printed*.py, errata*.py": (
+        "the papers' printed formulas transcribed, and their comparison with the derivations: no computation of "
+        "their own; tests/test_errata_coverage.py and each paper's errata tests name every disagreement"),
+    "symmech/trolley/tables.py, comfort.py": "the paper's tables and the comfort envelope transcribed: data",
+    "symmech/core/layout.py, grain/vectors.py, grain/motion_engine/layouts.py, trolley/elastic/layout.py": (
+        "declared layouts (offsets, pack and unpack of float64 vectors): no physics or numerics; "
+        "tests/test_layouts.py holds the offsets, the pack-unpack round trip and the slots both engines were built "
+        "with"),
+    "symmech/core/sample.py": ("cost estimates scaled by timed samples: times, which no test can assert beyond "
+                               "tests/test_estimates.py's factor-of-2 bounds"),
+    "symmech/export/*.py": (
+        "the C and FMU emission: the physics in an exported model is the generated C of the derivations; the "
+        "exported models are held to the native runs by FMPy in tests/test_export_*.py"),
+    "symmech/numerics/aot.py, artifacts.py, build.py, fastcall.py, jit.py": (
+        "building, recording and loading compiled artifacts: no arithmetic on physical quantities; "
+        "tests/test_artifact_*.py, test_aot.py and test_fastcall.py hold what is loaded and refused"),
     "symmech/numerics/dop853_tableau.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
                               "holds it bit-equal to scipy's",
     "symmech/core/precision.py": "no physics or numerics of its own: wall-clock timing (its numbers are times, which "
