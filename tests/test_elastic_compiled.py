@@ -10,6 +10,7 @@ assembly itself (q̈, the resultants, M, ∂R/∂q, ∂R/∂q̇) is compared at 
 compiled Jacobian against central differences of the compiled right-hand side.
 """
 import copy
+import math
 import tomllib
 from functools import partial
 
@@ -295,6 +296,24 @@ def test_the_traction_jacobian_matches_central_differences_of_the_compiled_rhs(c
         for col in (2 * N + 2, 2 * N + 3):  # s and V0 one by one: their entries are far smaller than those of q
             assert np.abs(J[rows, col] - fd[rows, col]).max() < 1e-6 * np.abs(fd[rows, col]).max()
     assert np.abs(fd[N:2 * N, 2 * N + 2]).max() > 0 and J[2 * N + 2, 2 * N + 3] == 1.0
+
+
+def test_the_traction_slope_is_the_central_difference_of_the_documented_step():
+    """P0 = sin(k V0), k = 1000 s/m: traction_force's ∂P0/∂V0 is the central difference of step
+    h = 1e-6 (1 + |V0|) m/s, whose closed form is k cos(k V0) sin(k h)/(k h): at V0 = 99 m/s (h = 1e-4, 0.17 %
+    under the derivative) and -0.5 m/s (h = 1.5e-6), within 1e-8 of it (the phases' rounding: ~1e-10)."""
+    from symmech.trolley.elastic import kernels as ek
+
+    k = 1000.0
+    ek.TRACTIONS["probe"] = lambda t, v: math.sin(k * v)
+    try:
+        for v in (99.0, -0.5):
+            h = 1e-6 * (1.0 + abs(v))
+            p0, slope = ek.traction_force("probe", 0.3, v)
+            assert p0 == math.sin(k * v)
+            assert slope == pytest.approx(k * math.cos(k * v) * math.sin(k * h) / (k * h), rel=1e-8)
+    finally:
+        del ek.TRACTIONS["probe"]
 
 
 def traction_agree(c, p, bound):
