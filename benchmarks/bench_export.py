@@ -72,6 +72,8 @@ def mechanisms(repeats: int) -> None:
                 "FMU ME, FMPy CVode rtol 1e-10": lambda: fmpy.simulate_fmu(
                     str(me), solver="CVode", relative_tolerance=1e-10, stop_time=t[-1],
                     output_interval=t[1] - t[0], output=names),
+                "FMU ME, CVode at its default (1e-12)": lambda: fmpy.simulate_fmu(  # the DefaultExperiment's
+                    str(me), solver="CVode", stop_time=t[-1], output_interval=t[1] - t[0], output=names),
                 "FMU CS, DOP853 rtol 1e-10": lambda: fmpy.simulate_fmu(
                     str(cs), relative_tolerance=1e-10, stop_time=t[-1], output_interval=t[1] - t[0], output=names),
                 "C example program (DOP853 rtol 1e-12)": lambda: subprocess.run(
@@ -237,8 +239,9 @@ def _cs_impacts(fmu: Path, t_native: np.ndarray, r_native: np.ndarray, delta: fl
 
 def grain_sliding(repeats: int) -> None:
     """The default grain scene through its landings, slips, sticks and lift-offs, over 0.23 s (its first 50
-    impacts) and 2 s: the ME FMU's impact times and centres under FMPy's CVode at rtol 1e-10 and 1e-12 against the
-    compiled engine at the scene's tolerance 1e-9 and at 1e-12."""
+    impacts) and 2 s: the ME FMU's impact times and centres under FMPy's CVode at rtol 1e-10 and at the FMU's
+    DefaultExperiment tolerance (1e-12: simulate_fmu without relative_tolerance) against the compiled engine at the
+    scene's tolerance 1e-9 and at 1e-12."""
     from symmech.grain import motion_scene
 
     def impacts(run) -> tuple[np.ndarray, np.ndarray]:
@@ -255,8 +258,9 @@ def grain_sliding(repeats: int) -> None:
             tight = impacts(motion_scene.simulate(pipeline.load(tight_path).setup))
             fmu = build.fmu(command.load(path), Path(tmp) / "me.fmu", 3, "me")
             runs = {"native, compiled engine (tol 1e-9)": lambda: motion_scene.simulate(sc)}
-            for rtol in (1e-10, 1e-12):
-                runs[f"FMU ME, FMPy CVode rtol {rtol:g}"] = lambda rtol=rtol: fmpy.simulate_fmu(
+            for rtol in (1e-10, None):
+                label = f"rtol {rtol:g}" if rtol else "at its default (1e-12)"
+                runs[f"FMU ME, FMPy CVode {label}"] = lambda rtol=rtol: fmpy.simulate_fmu(
                     str(fmu), solver="CVode", relative_tolerance=rtol, stop_time=duration,
                     output_interval=duration / 50, output=["x", "y", "z", "impacts"], record_events=True)
             stats = interleaved(runs, repeats)

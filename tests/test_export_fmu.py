@@ -59,7 +59,8 @@ def rotor_boom():
     return model.load(path), _native(path)
 
 
-def _simulate(fmu, t, names, start_values=None, rtol=1e-10):
+def _simulate(fmu, t, names, start_values=None, rtol: float | None = 1e-10):
+    """FMPy's run of ``fmu`` at the native times ``t`` [s] (rtol None: the FMU's DefaultExperiment tolerance)."""
     kwargs = {"solver": "CVode"} if "_me" in fmu.name else {}
     result = fmpy.simulate_fmu(str(fmu), stop_time=t[-1], output_interval=t[1] - t[0], output=names,
                                start_values=start_values or {}, relative_tolerance=rtol, **kwargs)
@@ -68,7 +69,8 @@ def _simulate(fmu, t, names, start_values=None, rtol=1e-10):
     return np.column_stack([result[n] for n in names])
 
 
-def _check_fmu(path, tmp_path, fmi: int, kind: str, rtol: float = 1e-10, tolerance: float = TOLERANCE) -> None:
+def _check_fmu(path, tmp_path, fmi: int, kind: str, rtol: float | None = 1e-10,
+               tolerance: float = TOLERANCE) -> None:
     """Export, validate and simulate at the importer's relative tolerance ``rtol``; the deviation from the native
     run within ``tolerance`` of each series' largest magnitude."""
     fmu = tmp_path / f"model_{fmi}_{kind}.fmu"
@@ -87,6 +89,7 @@ def test_co_simulation_fmu_steps_with_the_native_accuracy(rotor_boom, tmp_path):
     exported, (t, q, names) = rotor_boom
     fmu = build.fmu(exported, tmp_path / "rb_cs.fmu", 2, "cs")
     assert validate_fmu(str(fmu)) == []
+    assert fmpy.read_model_description(str(fmu)).defaultExperiment.tolerance is None  # its DOP853's default
     got = _simulate(fmu, t, names)
     assert deviation(got, q) <= 1e-9
 
@@ -98,9 +101,10 @@ def test_co_simulation_fmu_steps_with_the_native_accuracy(rotor_boom, tmp_path):
 def test_every_mechanism_fmu(name, fmi, kind, tmp_path):
     """CVode's global error at rtol 1e-10 reaches 1.9e-7 on the excavator and 8.2e-7 on the spatial boom (10 s,
     2000 output steps), 2e-9 and 1.3e-8 on the others; at rtol 1e-12 it is 4e-9 and 1.5e-8 (it falls with rtol:
-    the FMU's equations are the native ones). Model Exchange is checked at rtol 1e-12 within the 1e-7 target,
-    Co-Simulation (DOP853 inside) at 1e-10 within 1e-9."""
-    rtol, tolerance = (1e-12, TOLERANCE) if kind == "me" else (1e-10, 1e-9)
+    the FMU's equations are the native ones). Model Exchange is checked at the FMU's DefaultExperiment tolerance
+    (rtol 1e-12, which FMPy takes when not given one) within the 1e-7 target, Co-Simulation (DOP853 inside) at
+    1e-10 within 1e-9."""
+    rtol, tolerance = (None, TOLERANCE) if kind == "me" else (1e-10, 1e-9)
     _check_fmu(_scene_with_initial(name, tmp_path), tmp_path, fmi, kind, rtol, tolerance)
 
 
@@ -145,6 +149,7 @@ def test_model_description_names_units_and_causality(tmp_path):
         ("input", "N m", 0.0)
     assert (by_name["l1"].causality, by_name["l1"].variability, float(by_name["l1"].start)) == \
         ("parameter", "tunable", 1.0)
+    assert float(md.defaultExperiment.tolerance) == 1e-12  # CVode's rtol that meets the 1e-7 target (slow tests)
     units = {u.name: u.baseUnit for u in md.unitDefinitions}
     assert (units["N m"].kg, units["N m"].m, units["N m"].s) == (1, 2, -2)
     assert (units["rad/s^2"].rad, units["rad/s^2"].s) == (1, -2)

@@ -80,7 +80,7 @@ def fmi3(model: ExportModel, token: str, kind: str) -> str:
         ET.SubElement(root, "CoSimulation", modelIdentifier=model.identifier,
                       canHandleVariableCommunicationStepSize="true")
     _units(root, model.variables)
-    _experiment(root, model)
+    _experiment(root, model, kind)
     variables = ET.SubElement(root, "ModelVariables")
     for v in model.variables:
         attributes = _attributes(v) | {"unit": v.unit}
@@ -121,7 +121,7 @@ def fmi2(model: ExportModel, token: str, kind: str) -> str:
         ET.SubElement(files, "File", name=name)
     variables = [v for v in model.variables if v.causality != "independent"]
     _units(root, tuple(variables))
-    _experiment(root, model)
+    _experiment(root, model, kind)
     index = {v.vr: i + 1 for i, v in enumerate(variables)}  # FMI 2 refers to variables by 1-based position
     listing = ET.SubElement(root, "ModelVariables")
     for v in variables:
@@ -156,11 +156,18 @@ def _initial_unknowns(model: ExportModel) -> list[Variable]:
     return [v for v in model.variables if v.causality == "output" and v.initial == "calculated"]
 
 
-def _experiment(root: ET.Element, model: ExportModel) -> None:
+def _experiment(root: ET.Element, model: ExportModel, kind: str) -> None:
+    """The native run's span and output step (where the scene has a run); under Model Exchange the tolerance at
+    which the importer's integrator reproduces the native run (Co-Simulation's own integrator has its default,
+    DEFAULT_TOLERANCE in C)."""
+    experiment = {}
     if model.native is not None:
         t = model.native.column("t")
-        ET.SubElement(root, "DefaultExperiment", startTime=_number(t[0]), stopTime=_number(t[-1]),
-                      stepSize=_number(t[1] - t[0]))
+        experiment = {"startTime": _number(t[0]), "stopTime": _number(t[-1]), "stepSize": _number(t[1] - t[0])}
+    if kind == "me":
+        experiment["tolerance"] = _number(model.me_tolerance)
+    if experiment:
+        ET.SubElement(root, "DefaultExperiment", experiment)
 
 
 def build_description(model: ExportModel) -> str:
