@@ -483,8 +483,10 @@ COVERAGE = {
                                             "(compiled_inputs, moved in from simulate.py: the frame's arc lengths "
                                             "and table, then the start) is held by tests/test_elastic_timeline.py "
                                             "and tests/test_elastic_compiled.py"),
-    "symmech/trolley/elastic/kernels.py": "numba kernels (mutmut does not mutate decorated functions); held to "
-                                          "the Python engine by tests/test_elastic_compiled.py",
+    "symmech/trolley/elastic/kernels.py": ("whole (shard elastic_traction_callback): its 27 mutants, all of the one "
+                                           "undecorated function (traction_force, the traction's Python callback); "
+                                           "the numba kernels (not mutated) are held to the Python engine by "
+                                           "tests/test_elastic_compiled.py"),
     "symmech/smm/forms.py": "",
     "symmech/smm/numeric.py": ("sample drawn on from 30 to 40 (prefix-stable); left: lstsq without rcond=None "
                                "(numpy >= 2's default, the same call on the numpy installed; differs on numpy "
