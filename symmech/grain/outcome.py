@@ -26,17 +26,11 @@ class EnergyBudget:
         scale = max(abs(self.start), abs(end), abs(self.work), self.impacts + self.landings + self.sliding)
         parts = (self.start, end, self.work, self.impacts, self.landings, self.sliding, residual,
                  abs(residual) / scale if scale > 0 else 0.0)
-        return budget_report(*map(float, parts), tolerance)
+        return {**{k: float(v) for k, v in zip(BUDGET_KEYS, parts)}, "tolerance": tolerance}
 
 
-def budget_report(start: float, end: float, work: float, impacts: float, landings: float, sliding: float,
-                  residual: float, relative: float, tolerance: float) -> dict:
-    """The ``energy_budget`` dict of its parts [J], the residual [J], the relative residual and the tolerance: the one
-    place its keys are named (a dict display: half the time of ``dict(zip(keys, values))``, a population builds one
-    per grain)."""
-    return {"start_J": start, "end_J": end, "input_by_surface_J": work, "lost_in_impacts_J": impacts,
-            "lost_at_landings_J": landings, "lost_in_sliding_J": sliding, "residual_J": residual,
-            "relative_residual": relative, "tolerance": tolerance}
+BUDGET_KEYS = ("start_J", "end_J", "input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J",
+               "lost_in_sliding_J", "residual_J", "relative_residual")
 
 
 def budget_reports(start, end, work, impacts, landings, sliding, tolerance: float) -> list:
@@ -48,8 +42,8 @@ def budget_reports(start, end, work, impacts, landings, sliding, tolerance: floa
     for part in (np.abs(end), np.abs(work), impacts + landings + sliding):
         scale = np.where(part > scale, part, scale)
     relative = np.divide(np.abs(residual), scale, out=np.zeros_like(scale), where=scale > 0)
-    table = np.column_stack((start, end, work, impacts, landings, sliding, residual, relative)).tolist()
-    return [budget_report(*row, tolerance) for row in table]
+    columns = (start, end, work, impacts, landings, sliding, residual, relative)
+    return [{**dict(zip(BUDGET_KEYS, row)), "tolerance": tolerance} for row in zip(*(c.tolist() for c in columns))]
 
 
 def distinct(warnings: list) -> list:
