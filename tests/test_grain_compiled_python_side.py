@@ -167,13 +167,36 @@ def test_equal_models_are_packed_once_and_each_grain_gets_its_models_row(monkeyp
     assert np.array_equal(ps, np.repeat(ps[:, :1], compiled.PARAMS.size, axis=1)) and ps.flags.c_contiguous
 
 
+class Counted:
+    """A stand-in model that counts its hashes and comparisons (equal to any other of its kind)."""
+
+    calls = []
+
+    def __hash__(self):
+        Counted.calls.append("hash")
+        return 0
+
+    def __eq__(self, other):
+        Counted.calls.append("eq")
+        return isinstance(other, Counted)
+
+
+def test_a_model_equal_to_the_one_before_is_compared_not_hashed(monkeypatch):
+    """Five equal models, each its own object, as a scene's grains bring them: the first compared with none before
+    it and hashed into the dict of distinct models, then one comparison a grain with the one before; one packing."""
+    monkeypatch.setattr(compiled, "pack", lambda model, num: np.zeros(compiled.PARAMS.size))
+    Counted.calls.clear()
+    ps = compiled.packs([Counted() for _ in range(5)], NUM)
+    assert Counted.calls == ["eq", "hash", "eq", "eq", "eq", "eq"] and ps.shape == (5, compiled.PARAMS.size)
+
+
 def population_run():
     """Three finished grains as the compiled population loop leaves them: carries with their counts (2, 0, 3
-    trajectory rows; 1, 0, 2 impacts; grain 2 one warning and 4 rocking contacts), the tables of all grains one after
-    another, the final states; grain 1 failed (stalled)."""
+    trajectory rows; 1, 0, 2 impacts; grain 0 one warning, grain 2 4 rocking contacts), the tables of all grains one
+    after another, the final states; grain 1 failed (stalled)."""
     carries = np.zeros((3, compiled.CARRY.size))
     carries[:, [C_AT.rows, C_AT.nimp, C_AT.nwarn, C_AT.rocking, C_AT.landings, C_AT.implicit]] = [
-        [2, 1, 0, 0, 1, 5], [0, 0, 0, 0, 0, 0], [3, 2, 1, 4, 0, 0]]
+        [2, 1, 1, 0, 1, 5], [0, 0, 0, 0, 0, 0], [3, 2, 0, 4, 0, 0]]
     carries[:, [C_AT.t_flight, C_AT.t_sliding, C_AT.e_start, C_AT.e_end]] = np.arange(12.0).reshape(3, 4) / 8
     carries[:, C_AT.regime] = 2
     rows = np.arange(5 * compiled.TRAJECTORY_WIDTH, dtype=float).reshape(5, -1)
@@ -196,10 +219,10 @@ def test_population_results_are_each_grains_own_motion():
         "sliding regime)")  # ys[1, 0] = 14 / 16
     with pytest.raises(SymmechError, match=r"^grain: the simulation stopped advancing at t = 0.875 s "):
         compiled.motions([MODEL] * 3, NUM, starts, ys, carries, (rows, imps, warns), statuses, "why")
-    own = {0: compiled.motion_of(MODEL, NUM, starts[0], ys[0], carries[0], rows[:2], imps[:1], warns[:0], "why"),
-           2: compiled.motion_of(MODEL, NUM, starts[2], ys[2], carries[2], rows[2:], imps[1:], warns, "why")}
-    assert own[2].warnings == ["stopped at t = 0.25 s after numerics.max_impacts = 7 impacts",
-                               compiled.outcome.rocking_warning(4)] and own[0].extra["implicit_slip_steps"] == 5
+    own = {0: compiled.motion_of(MODEL, NUM, starts[0], ys[0], carries[0], rows[:2], imps[:1], warns, "why"),
+           2: compiled.motion_of(MODEL, NUM, starts[2], ys[2], carries[2], rows[2:], imps[1:], warns[:0], "why")}
+    assert own[0].warnings == ["stopped at t = 0.25 s after numerics.max_impacts = 7 impacts"]
+    assert own[2].warnings == [compiled.outcome.rocking_warning(4)] and own[0].extra["implicit_slip_steps"] == 5
     assert own[0].impact_times().tolist() == [31 / 8] and own[2].impact_times().tolist() == [0.0, 31 / 8]
     for k, one in own.items():
         m = got[k]
@@ -208,6 +231,7 @@ def test_population_results_are_each_grains_own_motion():
         assert (m.time_in, m.warnings, m.extra) == (one.time_in, one.warnings, one.extra)
         assert m.time_in == {"flight": carries[k, C_AT.t_flight], "sliding": carries[k, C_AT.t_sliding]}
         assert [type(v) for v in m.extra.values()] == [type(v) for v in one.extra.values()]
+        assert [type(v) for v in m.time_in.values()] == [float, float] and type(m.final.t) is float
         assert m.start is starts[k] and m.final.t == ys[k, 0] == k * 14 / 16
         assert np.array_equal(np.concatenate(dataclasses.astuple(m.final)[1:]), ys[k, 1:])
         assert np.shares_memory(m.final.r, ys) and np.shares_memory(m.trajectory, rows)
