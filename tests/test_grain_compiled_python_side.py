@@ -235,3 +235,10 @@ def test_population_results_are_each_grains_own_motion():
         assert m.start is starts[k] and m.final.t == ys[k, 0] == k * 14 / 16
         assert np.array_equal(np.concatenate(dataclasses.astuple(m.final)[1:]), ys[k, 1:])
         assert np.shares_memory(m.final.r, ys) and np.shares_memory(m.trajectory, rows)
+
+
+@pytest.mark.parametrize("duration, interval, rows", [(0.5, 1e-3, 564), (2.0, 0.25, 72), (-1.0, 0.25, 64)])
+def test_a_runs_trajectory_buffer_starts_with_its_samples_and_64_rows_more(duration, interval, rows):
+    """The rows a run's trajectory buffer starts with: one per sample interval of its duration (none for a
+    duration below zero) and 64 for events; the loop grows it past that."""
+    assert compiled.row_hint(duration, motion.Numerics(sample_interval=interval)) == rows
