@@ -1,6 +1,7 @@
 """The Python side of the compiled grain engine (symmech.grain.motion_engine), without compiling it: the texts of its
 warning and error codes (numbers included, worded as the Python loop words them), the impact log and the energy
 budget built from the compiled loop's raw rows and carry. Expected values are written here by hand."""
+import dataclasses
 import math
 
 import numpy as np
@@ -87,6 +88,11 @@ def test_energy_budget_of_a_finished_run_from_its_carry():
     assert report == {"start_J": 2.0, "end_J": 1.25, "input_by_surface_J": 0.5, "lost_in_impacts_J": 0.75,
                       "lost_at_landings_J": 0.25, "lost_in_sliding_J": 0.125, "residual_J": residual,
                       "relative_residual": abs(residual) / 2.0, "tolerance": 1e-6}
+    assert list(report) == ["start_J", "end_J", "input_by_surface_J", "lost_in_impacts_J", "lost_at_landings_J",
+                            "lost_in_sliding_J", "residual_J", "relative_residual", "tolerance"]  # the summary's order
+    assert {type(v) for v in report.values()} == {float}
+    bulk = compiled.energy_budgets(np.array([carry]))[0]
+    assert list(bulk.items()) == list(report.items()) and {type(v) for v in bulk.values()} == {float}
 
 
 def test_state_of_a_result_vector_is_made_of_its_views():
@@ -140,3 +146,99 @@ def test_start_states_in_bulk_equal_each_grains_own():
     for y, model in zip(ys, models):
         assert y.tobytes() == compiled.start_vector(model, start).tobytes()
     assert ys[1, 11:].tolist() == [0.0, 0.0, 0.0] and ys[0, 11:].tolist() == [3.0, -4.0, 5.0]
+    # the norms of many quaternions at once (one matmul) are each one's np.linalg.norm, bit for bit
+    qs = np.random.default_rng(7).normal(size=(300, 4)) * np.logspace(-3, 3, 300)[:, None]
+    starts = [dataclasses.replace(start, q=q) for q in qs]
+    bulk = compiled.start_vectors([models[0]] * len(starts), starts)
+    assert bulk.tobytes() == np.array([compiled.start_vector(models[0], st) for st in starts]).tobytes()
+
+
+def test_equal_models_are_packed_once_and_each_grain_gets_its_models_row(monkeypatch):
+    """Grains of friction 0.3, 0.3 (an equal copy), 0.7, 0.3, 0.7 (a copy): two packings, and each grain's row holds
+    its own friction coefficient."""
+    packed = []
+    monkeypatch.setattr(compiled, "pack", lambda model, num: packed.append(model) or np.full(compiled.PARAMS.size,
+                                                                                             model.mu))
+    other = dataclasses.replace(MODEL, mu=0.7)
+    models = [MODEL, dataclasses.replace(MODEL), other, MODEL, dataclasses.replace(other)]
+    ps = compiled.packs(models, NUM)
+    assert packed == [MODEL, other] and packed[1] is other
+    assert ps.shape == (5, compiled.PARAMS.size) and ps[:, 0].tolist() == [0.3, 0.3, 0.7, 0.3, 0.7]
+    assert np.array_equal(ps, np.repeat(ps[:, :1], compiled.PARAMS.size, axis=1)) and ps.flags.c_contiguous
+
+
+class Counted:
+    """A stand-in model that counts its hashes and comparisons (equal to any other of its kind)."""
+
+    calls = []
+
+    def __hash__(self):
+        Counted.calls.append("hash")
+        return 0
+
+    def __eq__(self, other):
+        Counted.calls.append("eq")
+        return isinstance(other, Counted)
+
+
+def test_a_model_equal_to_the_one_before_is_compared_not_hashed(monkeypatch):
+    """Five equal models, each its own object, as a scene's grains bring them: the first compared with none before
+    it and hashed into the dict of distinct models, then one comparison a grain with the one before; one packing."""
+    monkeypatch.setattr(compiled, "pack", lambda model, num: np.zeros(compiled.PARAMS.size))
+    Counted.calls.clear()
+    ps = compiled.packs([Counted() for _ in range(5)], NUM)
+    assert Counted.calls == ["eq", "hash", "eq", "eq", "eq", "eq"] and ps.shape == (5, compiled.PARAMS.size)
+
+
+def population_run():
+    """Three finished grains as the compiled population loop leaves them: carries with their counts (2, 0, 3
+    trajectory rows; 1, 0, 2 impacts; grain 0 one warning, grain 2 4 rocking contacts), the tables of all grains one
+    after another, the final states; grain 1 failed (stalled)."""
+    carries = np.zeros((3, compiled.CARRY.size))
+    carries[:, [C_AT.rows, C_AT.nimp, C_AT.nwarn, C_AT.rocking, C_AT.landings, C_AT.implicit]] = [
+        [2, 1, 1, 0, 1, 5], [0, 0, 0, 0, 0, 0], [3, 2, 0, 4, 0, 0]]
+    carries[:, [C_AT.t_flight, C_AT.t_sliding, C_AT.e_start, C_AT.e_end]] = np.arange(12.0).reshape(3, 4) / 8
+    carries[:, C_AT.regime] = 2
+    rows = np.arange(5 * compiled.TRAJECTORY_WIDTH, dtype=float).reshape(5, -1)
+    imps = np.vstack((impact_rows()[1:], impact_rows()))
+    warns = np.array([[compiled.W_MAX_IMPACTS, 0.25, 0.0]])
+    ys = np.arange(3 * compiled.STATE.size, dtype=float).reshape(3, -1) / 16
+    statuses = np.array([compiled.DONE, compiled.STALLED, compiled.DONE])
+    return carries, (rows, imps, warns), ys, statuses
+
+
+def test_population_results_are_each_grains_own_motion():
+    """Each grain's result of a population, built in bulk, is the motion.Motion that motion_of builds of that grain's
+    own rows: every field set, equal value for value and type for type; the failed grain stands as its error, or is
+    raised (strict)."""
+    carries, (rows, imps, warns), ys, statuses = population_run()
+    starts = [motion.State(k, np.zeros(3), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3)) for k in range(3)]
+    got = compiled.motions([MODEL] * 3, NUM, starts, ys, carries, (rows, imps, warns), statuses, "why", strict=False)
+    assert isinstance(got[1], SymmechError) and str(got[1]) == (
+        "grain: the simulation stopped advancing at t = 0.875 s (1000 regime changes without advancing time, "
+        "sliding regime)")  # ys[1, 0] = 14 / 16
+    with pytest.raises(SymmechError, match=r"^grain: the simulation stopped advancing at t = 0.875 s "):
+        compiled.motions([MODEL] * 3, NUM, starts, ys, carries, (rows, imps, warns), statuses, "why")
+    own = {0: compiled.motion_of(MODEL, NUM, starts[0], ys[0], carries[0], rows[:2], imps[:1], warns, "why"),
+           2: compiled.motion_of(MODEL, NUM, starts[2], ys[2], carries[2], rows[2:], imps[1:], warns[:0], "why")}
+    assert own[0].warnings == ["stopped at t = 0.25 s after numerics.max_impacts = 7 impacts"]
+    assert own[2].warnings == [compiled.outcome.rocking_warning(4)] and own[0].extra["implicit_slip_steps"] == 5
+    assert own[0].impact_times().tolist() == [31 / 8] and own[2].impact_times().tolist() == [0.0, 31 / 8]
+    for k, one in own.items():
+        m = got[k]
+        assert type(m) is motion.Motion and set(vars(m)) == {f.name for f in dataclasses.fields(m)}  # all built
+        assert m.trajectory.tobytes() == one.trajectory.tobytes() and m.impacts == one.impacts
+        assert (m.time_in, m.warnings, m.extra) == (one.time_in, one.warnings, one.extra)
+        assert m.time_in == {"flight": carries[k, C_AT.t_flight], "sliding": carries[k, C_AT.t_sliding]}
+        assert [type(v) for v in m.extra.values()] == [type(v) for v in one.extra.values()]
+        assert [type(v) for v in m.time_in.values()] == [float, float] and type(m.final.t) is float
+        assert m.start is starts[k] and m.final.t == ys[k, 0] == k * 14 / 16
+        assert np.array_equal(np.concatenate(dataclasses.astuple(m.final)[1:]), ys[k, 1:])
+        assert np.shares_memory(m.final.r, ys) and np.shares_memory(m.trajectory, rows)
+
+
+@pytest.mark.parametrize("duration, interval, rows", [(0.5, 1e-3, 564), (2.0, 0.25, 72), (-1.0, 0.25, 64)])
+def test_a_runs_trajectory_buffer_starts_with_its_samples_and_64_rows_more(duration, interval, rows):
+    """The rows a run's trajectory buffer starts with: one per sample interval of its duration (none for a
+    duration below zero) and 64 for events; the loop grows it past that."""
+    assert compiled.row_hint(duration, motion.Numerics(sample_interval=interval)) == rows

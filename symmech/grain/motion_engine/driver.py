@@ -48,7 +48,6 @@ loaded; threads call numba's, which releases the GIL.
 """
 from __future__ import annotations
 
-import math
 import os
 import threading
 from collections.abc import Callable
@@ -88,6 +87,18 @@ def pack(model: motion.Model, num: motion.Numerics) -> np.ndarray:
         nan = [name for name, value in PARAMS.unpack(p).items() if np.isnan(value).any()]
         raise ValueError(f"grain engine: parameter {', '.join(nan)} is NaN")
     return p
+
+
+def packs(models: list, num: motion.Numerics) -> np.ndarray:
+    """:func:`pack` of each grain's model (grains, PARAMS.size), equal models packed once: a model equal to the one
+    before it (the usual population: one model) is found by one comparison, others through a dict (a hash and a
+    comparison: twice the time of the comparison, on a frozen dataclass ~1.5 us)."""
+    distinct, which, last, row = {}, [], None, -1  # model -> its row; each grain's row
+    for model in models:
+        if model is not last and model != last:
+            last, row = model, distinct.setdefault(model, len(distinct))
+        which.append(row)
+    return np.array([pack(model, num) for model in distinct]).reshape(len(distinct), PARAMS.size)[which]
 
 
 def closed_form_flight(model: motion.Model, num: motion.Numerics) -> bool:
@@ -187,9 +198,10 @@ def start_vectors(models: list, starts: list) -> np.ndarray:
     ys = np.empty((len(starts), STATE.size))
     ys[:, X_AT.t] = [st.t for st in starts]
     for at, name in zip(STATE_VECTORS, ("r", "v", "q", "w")):
-        ys[:, at] = [getattr(st, name) for st in starts]
+        ys[:, at] = np.array([getattr(st, name) for st in starts], float)  # one conversion, not one per row
     q = ys[:, X_AT.q:X_AT.q + 4]
-    q /= np.array([math.sqrt(row.dot(row)) for row in q])[:, None]  # each as np.linalg.norm (dot, sqrt)
+    # row @ column is numpy's 1-D dot (BLAS ddot), as np.linalg.norm's: the same bits, one call for all rows
+    q /= np.sqrt(q[:, None, :] @ q[:, :, None])[:, 0]
     ys[[not model.effects.rotation for model in models], X_AT.w:X_AT.w + 3] = 0.0
     return ys
 
@@ -199,30 +211,33 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
     """The ``motion.Motion`` of each finished run, built in bulk: final states ys (grains, STATE.size), carries
     (grains, CARRY.size), the trajectory, impact and warning rows of all grains one after another (``tables``;
     a grain's counts in its carry), the statuses (grains,); ``extra`` names this engine, "compiled", and
-    ``reason``, why the caller chose it. A failed grain raises its error (``strict``) or is its SymmechError."""
-    failed = np.flatnonzero(statuses != DONE)
-    if strict and len(failed):
-        k = failed[0]
-        raise failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime]))
-    ends = np.cumsum(carries[:, ROW_COUNTS].astype(INT), axis=0).tolist()  # (grains, 3): rows, impacts, warnings
-    budgets = energy_budgets(carries)
-    counts = carries[:, [C_AT.landings, C_AT.rocking, C_AT.implicit]].astype(INT).tolist()
+    ``reason``, why the caller chose it. A failed grain raises its error (``strict``) or is its SymmechError.
+    Every number a grain's result needs is read out of the arrays in one ``tolist`` per kind: in the loop over
+    grains only the views of its rows and the result's objects are made."""
+    failed = np.flatnonzero(statuses != DONE).tolist()
+    if strict and failed:
+        raise grain_failure(failed[0], ys, carries, statuses)
+    counts = carries[:, GRAIN_COUNTS].astype(INT)  # (grains, 6): rows, impacts, warnings, landings, rocking, implicit
+    ends = counts[:, :3].cumsum(axis=0)
+    # per grain: where its rows begin and end in each table (rows, impacts, warnings), then its other counts
+    table = np.hstack((ends - counts[:, :3], ends, counts[:, 3:])).tolist()
     times = carries[:, [C_AT.t_flight, C_AT.t_sliding]].tolist()
-    done = (statuses == DONE).tolist()
     rows, imps, warns = tables
     finals = zip(ys[:, X_AT.t].tolist(), *(ys[:, at] for at in STATE_VECTORS))  # t, r, v, q, w: views of ys's rows
-    out, row0, imp0, warn0 = [], 0, 0, 0  # where grain k's rows begin in each table
-    for k, (model, start, (row1, imp1, warn1), budget, (landings, rocking, implicit), (flight, slide), final) in (
-            enumerate(zip(models, starts, ends, budgets, counts, times, finals))):
-        if not done[k]:
-            out.append(failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime])))
-        else:
-            texts = run_warnings(warns[warn0:warn1], rocking, model, num) if warn1 > warn0 or rocking else []
-            out.append(motion.Motion(rows[row0:row1], deferred_log(imps[imp0:imp1]),
-                                     {"flight": flight, "sliding": slide}, texts, start, motion.State(*final),
-                                     run_extra(landings, rocking, budget, implicit, reason)))
-        row0, imp0, warn0 = row1, imp1, warn1
+    out = [motion.Motion(rows[row0:row1], deferred_log(imps[imp0:imp1]), {"flight": flight, "sliding": slide},
+                         run_warnings(warns[warn0:warn1], rocking, model, num) if warn1 > warn0 or rocking else [],
+                         start, motion.State(*final), run_extra(landings, rocking, budget, implicit, reason))
+           for model, start, (row0, imp0, warn0, row1, imp1, warn1, landings, rocking, implicit), (flight, slide),
+           budget, final in zip(models, starts, table, times, energy_budgets(carries), finals)]
+    for k in failed:
+        out[k] = grain_failure(k, ys, carries, statuses)
     return out
+
+
+def grain_failure(k: int, ys: np.ndarray, carries: np.ndarray, statuses: np.ndarray) -> SymmechError:
+    """:func:`failure` of grain k of a population: its status, the time of its state in ys, the regime in its
+    carry."""
+    return failure(int(statuses[k]), float(ys[k, X_AT.t]), int(carries[k, C_AT.regime]))
 
 
 def run_warnings(warns, rocking: int, model: motion.Model, num: motion.Numerics) -> list:
@@ -386,7 +401,9 @@ def entry():
 
 
 GRAINS_PER_THREAD = 16  # a thread's start costs about a sphere's run
-ROW_COUNTS = [C_AT.rows, C_AT.nimp, C_AT.nwarn]  # the counts of the tables loop.run_many returns
+# a grain's counts in its carry: its rows in the tables loop.run_many returns (trajectory, impacts, warnings), then
+# those its result reports
+GRAIN_COUNTS = [C_AT.rows, C_AT.nimp, C_AT.nwarn, C_AT.landings, C_AT.rocking, C_AT.implicit]
 
 
 def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float,
@@ -400,18 +417,12 @@ def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float
     n = len(models)
     if len(starts) != n:  # the loop runs a grain per start: extra starts would be dropped, missing ones never run
         raise ValueError(f"simulate_many: {n} models but {len(starts)} start states; one of each per grain")
-    packed = {}
-    ps = np.empty((n, PARAMS.size))
-    for k, model in enumerate(models):
-        if model not in packed:
-            packed[model] = pack(model, num)
-        ps[k] = packed[model]
+    ps = packs(models, num)
     ys = start_vectors(models, starts)
     t_ends = np.full(n, float(t_end))
     carries, statuses = np.zeros((n, CARRY.size)), np.empty(n, INT)
     hint = row_hint(t_end - float(np.min(ys[:, X_AT.t], initial=t_end)), num)
     threads = max(1, min(workers or os.cpu_count() or 1, n // GRAINS_PER_THREAD))
-    cuts = np.linspace(0, n, threads + 1).astype(int)
 
     def part(a, b):
         return entry_many()(ps[a:b], ys[a:b], t_ends[a:b], hint, carries[a:b], statuses[a:b])
@@ -419,6 +430,7 @@ def simulate_many(models: list, num: motion.Numerics, starts: list, t_end: float
         parts = [part(0, n)]
     else:
         from threadpoolctl import threadpool_limits
+        cuts = np.linspace(0, n, threads + 1).astype(int)
         # the impact law's 3 x 3 solves call OpenBLAS: its own threads spin beside ours, 5x the CPU (measured)
         with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(threads) as pool:
             parts = list(pool.map(part, cuts[:-1], cuts[1:]))
