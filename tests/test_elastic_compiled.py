@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from symmech.core import pipeline, scene
+from symmech.core.scene import SymmechError
 from symmech.trolley import model
 from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
 from symmech.trolley.elastic import scene as elastic_scene
@@ -80,6 +81,40 @@ def test_a_short_ride_agrees_at_rtol_1e_8(case):
     agree(c, p, 1e-7)
     assert c["frame_interpolation_error"] <= 1e-3 * 1e-8
     assert c["nfev"] < p["nfev"]  # the steps are not bound by the output spacing (3 ms) as the Python engine's
+
+
+def test_a_short_ride_by_default_is_the_run_at_atol_1e_12_and_gives_qdd():
+    """compiled.simulate's default absolute tolerance on q is 1e-12 m, the Python engine's: the run without it
+    equals the run given it, bit for bit (an atol of 1 m moves P by 2e-7); its q̈ is the Python engine's within
+    1e-2 of the largest (measured 1.1e-3: the integration error times the roller modes' ω², see agree)."""
+    from symmech.trolley.elastic import compiled as el_compiled
+
+    setup = helix(t_end=0.03, steps=10)
+    default = el_compiled.simulate(setup.system, setup.drive, setup.t)
+    given = el_compiled.simulate(setup.system, setup.drive, setup.t, atol_q=1e-12)
+    for key in ("P", "q", "qd", "qdd"):
+        assert np.array_equal(default[key], given[key]), key
+    python = el_sim.simulate(setup.system, setup.drive, setup.t, "Radau", 1e-8)
+    assert relative(default["qdd"], python["qdd"]) < 1e-2
+
+
+@pytest.mark.parametrize("status, finite, why, reached", [(1, 4, "required step size is less than spacing", 0.3),
+                                                           (0, 2, "no finite state", 0.1)])
+def test_a_failed_compiled_solve_names_the_last_finite_time(status, finite, why, reached):
+    """A solve that stopped on too small a step, or whose states turned non-finite after the 2nd output: the
+    error names the engine, the reason and the last output time whose state is finite; a finite successful
+    solve passes."""
+    from symmech.numerics import ode
+    from symmech.trolley.elastic import compiled as el_compiled
+
+    t, Y = np.array([0.0, 0.1, 0.2, 0.3]), np.ones((4, 3))
+    Y[finite:] = np.nan
+    with pytest.raises(SymmechError) as error:
+        el_compiled._check(status, Y, t)
+    assert str(error.value) == f"elastic trolley: integration failed after t = {reached:g} s (compiled Radau: " + (
+        ode.STEP_TOO_SMALL_TEXT if status else why) + ")"
+    assert why in str(error.value)
+    el_compiled._check(ode.SUCCESS, np.ones((4, 3)), t)
 
 
 def test_rigid_rollers_agree():

@@ -403,6 +403,14 @@ SHARDS = {
                                  "tests/test_elastic_damping.py", "-m", "not slow", "-k",
                                  "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
                                 ["*"]),
+    # the compiled elastic engine's driver by a seeded sample: the runs against the Python engine that take seconds,
+    # the fallbacks, the inputs' record and the Jacobians (the engine's cache kept warm: NUMBA_CACHE_DIR)
+    "elastic_compiled_sample": ("symmech/trolley/elastic/compiled.py",
+                                ["tests/test_elastic_timeline.py", "tests/test_elastic_compiled.py",
+                                 "tests/test_elastic_frame.py", "-m", "slow or not slow", "-k",
+                                 "short_ride or rigid_rollers or kink or estimate_of_a_built or leaves_its_table "
+                                 "or compiled_run_reads or jacobian or traction_agrees or assembly_matches "
+                                 "or failed_compiled_solve or turn_between"], ["*"]),
     # the elastic equations of motion by a seeded sample: the quasi-static and energy tests first (fast, exact), then
     # the fast elastic files and the cheapest that integrate (test_dynamics_rhs.py, 40 s of other kinds, left out)
     "elastic_system_sample": ("symmech/trolley/elastic/system.py",
