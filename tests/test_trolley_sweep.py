@@ -145,6 +145,8 @@ CASES = [
     ("comfort-limits-cross", swept(TINY, {"field": "comfort.x2.lo", "values": [0.0, 7.0]}), "sweep.x"),
     ("speed-too-fast", swept(TINY, {"field": "motion.speed_scale", "values": [1.0, 1e5]}), "sweep.x"),
     ("tip-mass-negative", swept(TINY, {"field": "elastic.beams[0].tip_mass", "values": [-2.0]}), "sweep.x"),
+    ("objective-y-not-swept", swept(RIGID, {"field": "motion.speed_scale", "values": [1.0]}, objective={"quantity": "y"}),
+     "sweep.objective.quantity"),
 ]
 
 
