@@ -117,6 +117,9 @@ def test_messages_say_what_to_do():
     element = assert_sweep_rejected(edits(("population[0].set", {"body.semi_axes.x": 1e-3})),
                                     "population[0].set.body.semi_axes.x")
     assert "body.semi_axes is [0.0035, 0.0016, 0.0014] in the scene, not a table" in str(element)
+    assert str(assert_sweep_rejected(CASES[5][1], "sweep.x.stop")).endswith(": start and stop are required with num")
+    assert str(assert_sweep_rejected(CASES[7][1], "sweep.x.stop")).endswith(": equals start (0.001): the 4 values "
+                                                                            "would repeat")
     swept = assert_sweep_rejected(edits(("sweep.x.values", [-1e-3, 1e-3])), "sweep.x")
     assert "vibration.amplitude: -0.001 m is outside [0, 1] m" in str(swept)
 

@@ -3,7 +3,10 @@ count model's seconds say, and a sweep's from a timed wave of its tasks; each is
 same process then measures (a loaded machine slows both alike)."""
 import dataclasses
 import json
+import os
 import statistics
+import subprocess
+import sys
 import time
 
 import dask
@@ -85,12 +88,44 @@ def test_sweep_points_and_quiet_runs_far_from_the_budget_are_not_sampled():
 
 def test_a_sweep_estimate_comes_from_its_second_wave():
     """Six tasks of 0.05 s, serial: the first pays the workers' start, the second is timed; four waves left.
-    The estimate told (time so far plus four waves) is within 2x of the whole sweep's time."""
+    The estimate told (time so far plus four waves) is within 2x of the whole sweep's time; the progress bar of
+    six tasks advances by one per task."""
     ctx = Told()
+    bars = []
+    ctx.progress = lambda total, desc, unit: bars.append((total, [])) or Bar(bars[-1][1])
     tasks = [dask.delayed(time.sleep)(0.05, dask_key_name=f"nap-{k}") for k in range(6)]
     core_sweep.compute(tasks, "synchronous", ctx=ctx)
     assert "a wave of 1 in" in ctx.told[-1] and "4 more waves" in ctx.told[-1]
     assert 0.5 <= told_seconds(ctx) / ctx.elapsed() <= 2.0
+    assert bars == [(6, [1] * 6)]
+
+
+class Bar:
+    """A progress bar that keeps its steps in ``steps``."""
+
+    def __init__(self, steps: list):
+        self.update = steps.append
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_local_workers_start_at_this_process_s_age_plus_the_engine_s_loading():
+    """A local pool's workers import what this process imported: its age, as `ps` counts it (whole seconds),
+    plus the engine's loading (0 off Linux, where /proc is missing); a serial run, threads or a cluster's running
+    workers start nothing."""
+    age = 0.0
+    if sys.platform == "linux":
+        ps = subprocess.run(["ps", "-o", "etimes=", "-p", str(os.getpid())], capture_output=True, text=True, check=True)
+        age = float(ps.stdout)
+    assert core_sweep.process_age() == pytest.approx(age, abs=1.5)
+    for scheduler in (None, "processes"):
+        assert core_sweep.startup_seconds(scheduler, 100.0) == pytest.approx(100.0 + age, abs=1.5)
+    for scheduler in ("synchronous", "threads", "tcp://10.0.0.1:8786"):
+        assert core_sweep.startup_seconds(scheduler, 100.0) == 0.0
 
 
 def test_a_sweep_is_refused_from_its_timed_wave_before_the_rest_runs():

@@ -160,7 +160,8 @@ def test_tasks_past_the_deadline_stop_the_sweep():
     tasks = [dask.delayed(time.sleep)(0.2, dask_key_name=f"nap-{k}") for k in range(2)]  # two: no estimate
     with pytest.raises(SymmechError, match=r"over the time budget --max-time 0.3 s \(2 sweep tasks\)"):
         core_sweep.compute(tasks, "synchronous", ctx=ctx)
-    assert core_sweep.point_context(time.time() - 1.0).max_time == 0.0
+    point = core_sweep.point_context(time.time() - 1.0)
+    assert (point.max_time, point.quiet, point.sampled) == (0.0, True, False)  # the sweep estimated its points
 
 
 @pytest.mark.parametrize("workers", [-1, 0, 257])

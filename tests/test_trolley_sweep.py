@@ -13,6 +13,8 @@ from outcontract import assert_valid_output
 from symmech import cli
 from symmech.core import pipeline
 from symmech.core import sweep as core_sweep
+from symmech.core.context import Context
+from symmech.core.results import Column, Result, Table
 from symmech.core.scene import SceneError, SymmechError
 from symmech.trolley import sweep
 
@@ -67,9 +69,26 @@ def test_comfort_margin_of_hand_built_overloads():
     # beyond two faces at a corner: minus the Euclidean distance, a 3-4-5 triangle
     corner = np.vstack([inside, [2.3, 6.4, 0.0]])
     assert sweep.comfort_margin(corner, envelope) == pytest.approx(-0.5, abs=1e-15)
+    # a rigid run of two samples with those overloads and a modes table: natural frequencies 10 Hz (at t = 0.5 s)
+    # and 30 Hz (t = 1 s) against the forcings 12 and 40 Hz, then 25 Hz; the closest, |10 / 12 - 1| = 1/6
+    reactions = Table([Column(f"P{i}", "N") for i in range(6)], np.array([[1.0, -2.0, 3.0, -4.0, 5.0, -6.0],
+                                                                         [0.5, 7.0, -1.0, 2.0, -9.0, 3.0]]))
+    overload = Table([Column(n, "g") for n in ("n1", "n2", "n3")], inside)
+    modes = Table([Column(n, "1") for n in ("f", "forcing_axle", "forcing_rotation", "forcing_curvature", "mode_id",
+                                              "t", "s")],
+                  np.array([[10.0, 12.0, 0.0, 40.0, 3.0, 0.5, 2.0], [30.0, 0.0, 25.0, 0.0, 4.0, 1.0, 4.0]]),
+                  text={"component": ["beam 0 y", "beam 1 z"]})
+    run = Result("trolley", {}, {"case1": reactions, "case1_overload": overload, "modes": modes})
+    cols, values, text = sweep.point_metrics(run, envelope)
+    got = dict(zip([c.name for c in cols], values))
+    assert [got[f"peak_P{i}"] for i in range(6)] == [1.0, 7.0, 3.0, 4.0, 9.0, 6.0] and got["peak_reaction_max"] == 9.0
+    assert got["comfort_margin"] == got["comfort_margin_com"] == 1.0
+    assert [got[f"resonance_{k}"] for k in ("f", "forcing_f", "mode", "t", "s")] == [10.0, 12.0, 3.0, 0.5, 2.0]
+    assert got["resonance_detuning"] == pytest.approx(1 / 6, rel=1e-15)
+    assert text == {"resonance_forcing": "axle", "resonance_component": "beam 0 y"}
 
 
-def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path):
+def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path, monkeypatch):
     """The rigid helix's largest normal overload n2 is the only one beyond an upper limit set below it, so
     the margin is that limit minus max n2 (a direct run's), and the point is not admissible."""
     direct = pipeline.load(RIGID).run().tables
@@ -92,6 +111,10 @@ def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path):
     assert flat["value"] == pytest.approx(peak, rel=1e-12) and flat["spread"] == 0.0
     assert "everywhere, within the tolerance" in flat["text"]
     assert any(h.name == "largest roller reaction |P1…P5|" and h.at == "every point" for h in res.headline)
+    # the charts are in the estimate: at 100 s a chart, the sweep of two points is refused under 150 s
+    monkeypatch.setattr(core_sweep, "chart_seconds", lambda shape: 100.0)
+    with pytest.raises(SymmechError, match=r"estimated sweep time 6\d\d s .* up to 6 charts at 100 s"):
+        sweep.compute(p, "synchronous", ctx=Context(quiet=True, max_time=150.0))
 
 
 def axis(**fields):
@@ -122,6 +145,8 @@ CASES = [
     ("comfort-limits-cross", swept(TINY, {"field": "comfort.x2.lo", "values": [0.0, 7.0]}), "sweep.x"),
     ("speed-too-fast", swept(TINY, {"field": "motion.speed_scale", "values": [1.0, 1e5]}), "sweep.x"),
     ("tip-mass-negative", swept(TINY, {"field": "elastic.beams[0].tip_mass", "values": [-2.0]}), "sweep.x"),
+    ("objective-y-not-swept", swept(RIGID, {"field": "motion.speed_scale", "values": [1.0]}, objective={"quantity": "y"}),
+     "sweep.objective.quantity"),
 ]
 
 
@@ -172,7 +197,7 @@ def test_command_line_refuses_a_kind_without_sweep_and_a_bad_sweep(tmp_path, cap
     scene.write_text('kind = "impact"\n')
     assert cli.main(["sweep", str(scene), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("symmech: error: scene field 'kind': scene kind 'impact' has no sweep (kinds with one: ")
+    assert err == "symmech: error: scene field 'kind': scene kind 'impact' has no sweep (kinds with one: grain, trolley)\n"
     bad = tmp_path / "bad.toml"
     bad.write_text(RIGID_TOML + '[sweep.x]\nfield = "motion.speed_scale"\nvalues = [1.0, 1e5]\n')
     assert cli.main(["sweep", str(bad), "--out", str(tmp_path / "o")]) == 2

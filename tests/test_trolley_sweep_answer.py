@@ -1,6 +1,9 @@
 """A trolley sweep answers like a designer's tool: a point with a lift-off warning is never admissible and says
 so in its table row and chart cell; the best admissible point for the stated objective is the one starred on
 every chart; a design number too flat to chart is stated as a number."""
+import dataclasses
+import time
+
 import numpy as np
 import pytest
 
@@ -69,6 +72,17 @@ def test_the_best_point_is_the_same_on_every_chart(figures):
         assert len(stars) == 1 and (stars[0].get_xdata()[0], stars[0].get_ydata()[0]) == best, stem
         x0, x1 = fig.axes[0].get_xlim()
         assert (x0, x1) == (0.5, 1.5), stem  # the cells end at the swept range
+    # the chart the estimate times is one of these charts' size (stopped at its figure: only its size is read)
+    sizes = {tuple(fig.get_size_inches()) for fig in figures.values()}
+
+    def measured(**size):
+        raise LookupError(size)
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(plotting, "figure", measured)
+        with pytest.raises(LookupError) as drawn:
+            core_sweep.chart_seconds((3, 2))
+    assert sizes == {(drawn.value.args[0]["width"], drawn.value.args[0]["height"])}
 
 
 def test_a_flat_quantity_is_stated_not_colour_mapped():
@@ -76,7 +90,8 @@ def test_a_flat_quantity_is_stated_not_colour_mapped():
     flat = core_sweep.flat_statement(np.array([1.00005, 1.00025, 1.0001]), "largest dynamic amplification", "1",
                                      1e-3)
     assert flat["value"] == pytest.approx(1.00013333, rel=1e-8) and flat["spread"] == pytest.approx(2e-4, rel=1e-9)
-    assert flat["text"].startswith("largest dynamic amplification: 1.0001 everywhere, within the tolerance")
+    assert flat["text"] == ("largest dynamic amplification: 1.0001 everywhere, within the tolerance (its spread over "
+                            "the sweep, 0.0002, is below 0.001 of its size); not charted")
     assert core_sweep.flat_statement(np.array([1.0, 1.01]), "amplification", "1", 1e-3) is None
     assert core_sweep.flat_statement(np.array([np.nan, 2.0]), "amplification", "1", 1e-3) is None  # one finite
 
@@ -98,3 +113,25 @@ def test_a_best_value_shared_by_several_points_says_so():
         assert best.value == 1.0 and best.at.startswith("speed scale 1, ")
         assert best.meaning.endswith("neighbouring values" + (shared and shared + ", the first in sweep order is "
                                                                            "starred"))
+    # the smallest speed scale, over four hand-made points (x-major): (0.5, 50 kg) leaves the comfort envelope by
+    # 0.25 g, (1, 100 kg) failed, the other two admissible; the largest roller reaction is 1 kN at every point
+    cols = [Column(f"peak_P{i}", "N") for i in range(6)] + [Column("peak_reaction_max", "N"),
+                                                          Column("comfort_margin", "g")]
+    points = [("ok", cols, [1.0, 2.0, 3.0, 4.0, 5.0, 1e3, 1e3, margin], {}, []) for margin in (-0.25, 0.5, 0.75)]
+    res = sweep.result(dataclasses.replace(p, objective=("x", "min")), points + [("failed", "stopped here")])
+    best = res.summary["best_point"]
+    assert (best["index"], best["x"], best["y"]) == ([0, 1], 0.5, 100.0) and res.summary["decision"]["best"] == best
+    assert [(h.name, h.value, h.meaning, h.at) for h in res.headline] == [
+        ("best point: smallest speed scale", 0.5, "the smallest speed scale of the 2 admissible points (no warning, no "
+         "failed check, comfort and the stated limits kept); its cell reaches halfway to the neighbouring values",
+         "speed scale 0.5, body mass 100 kg"),
+        ("admissible points", 2.0, "of 4: speed scale 0.5 … 1, body mass 50 kg … 100 kg", ""),
+        ("largest roller reaction |P1…P5|", 1e3, "1 kN everywhere, within the tolerance (its spread over the sweep, "
+                                                 "0 N, is below 0.001 of its size); not charted", "every point")]
+    assert res.warnings == [
+        "1 of 4 point(s) limited by comfort at speed scale 0.5, body mass 50 kg; first: leaves the comfort envelope "
+        "by 0.25 g",
+        "1 of 4 point(s) limited by failed at speed scale 1, body mass 100 kg; first: the run stopped: stopped here"]
+    # a point the scene refuses is a failed task, with the scene's message
+    refused = sweep.evaluate(dataclasses.replace(p, y={**p.y, "values": [50.0, -1.0]}), 0, 1, time.time() + 60.0)
+    assert refused == ("failed", "scene field 'trolley.mass': -1 kg is outside [0.001, 1e+07] kg")

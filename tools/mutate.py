@@ -324,6 +324,26 @@ SHARDS = {
                                 "*.x_proportion_interval__*", "*.x_difference_interval__*", "*.x_statistics__*",
                                 "*.x_overlap_normal__*", "*.x_overlap__*", "*.x_overlap_interval__*",
                                 "*.x_grains_needed__*", "*.x_separation__*", "*.x_best_point__*", "*.x__spread__*"]),
+    # what every sweep shares (axes, paths, cells, cost refusal, dispatch): the sweeps' validation, estimates and
+    # refusals without the ones that build a plane of 40000 points, start a scheduler or run a sweep of seconds;
+    # the refusal of a kind without a sweep
+    "core_sweep_sample": ("symmech/core/sweep.py",
+                          ["tests/test_sweep_validation.py", "tests/test_estimates.py", "tests/test_bad_sweep.py",
+                           "tests/test_trolley_sweep_answer.py",
+                           "tests/test_plotting.py::test_a_large_plane_writes_each_limit_once_a_small_one_in_every_cell",
+                           "tests/test_trolley_sweep.py::test_command_line_refuses_a_kind_without_sweep_and_a_bad_sweep",
+                           "-k", "not 200_by_200 and not alias_in_one_line and not unreachable and not lift_off and not "
+                           "chain and not slowdown and not no_smaller_run and not run_estimate_holds"], ["*"]),
+    # the trolley's design sweep (plan, point metrics, decision, answer): its tests without the command-line runs
+    # and the lift-off sweep (5-14 s each), with the plane checks of test_sweep_validation.py
+    "trolley_sweep_sample": ("symmech/trolley/sweep.py",
+                             ["tests/test_trolley_sweep.py", "tests/test_trolley_sweep_answer.py",
+                              "tests/test_sweep_validation.py", "-k",
+                              "not lift_off and not command_line and not 200_by_200 and not unreachable"], ["*"]),
+    # the scene files' expression language: its own tests without the fuzzing (10 s), and the mechanism's messages
+    "expressions_sample": ("symmech/core/expressions.py",
+                           ["tests/test_expressions.py", "tests/test_smm_expression_messages.py", "-k", "not fuzzed"],
+                           ["*"]),
     "track": ("symmech/trolley/track.py",
               ["tests/test_track_tables_and_messages.py", "tests/test_trolley_physics.py", "tests/test_trolley_frames_units.py",
                "tests/test_trolley_continuity.py"], ["*"]),
@@ -476,6 +496,8 @@ COVERAGE = {
     "symmech/trolley/model.py": "",
     "symmech/trolley/scene.py": ("a seeded sample of 30 (shard trolley_scene_sample: the rigid trolley's tests, the bundled "
                                  "elastic scene's run and the physics helix's precision study)"),
+    "symmech/trolley/sweep.py": ("a seeded sample of 30 (shard trolley_sweep_sample): a design sweep's point metrics "
+                                 "(peaks, amplification, comfort margin, closest resonance), decision and answer"),
     "symmech/trolley/elastic/modal.py": "",
     "symmech/trolley/elastic/membrane.py": "",
     "symmech/trolley/elastic/system.py": ("a seeded sample of the whole module (shard elastic_system_sample); it "
@@ -502,6 +524,11 @@ COVERAGE = {
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
     "symmech/core/kinematics.py": "",
+    "symmech/core/sweep.py": ("a seeded sample of 30 (shard core_sweep_sample): what every sweep shares (axes, cell "
+                              "edges, flat statements, the cost estimate and refusal, the dispatch)"),
+    "symmech/core/expressions.py": ("a seeded sample drawn on from 30 to 67 (prefix-stable), so that its 2 proofs are "
+                                    "at most 3 %; left: 3 survivors of the domain check's minimum search (`|` for `&` "
+                                    "picking minima, no xatol, `<` for `<=` at the threshold)"),
     "symmech/numerics/ode.py": "",
     "symmech/numerics/brent.py": ("whole (shard brent_closures): its 6 mutants, the namespace roots returns; the root "
                                   "finder and the minimiser are numba closures, which mutmut does not mutate, held "
