@@ -349,6 +349,18 @@ SHARDS = {
                   ["tests/test_smm_mechanism_lookups.py", "tests/test_smm_expression_messages.py",
                    "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
                    "mechanism_lookups or expression_messages or closed_form or structural or small_systems"], ["*"]),
+    # the mechanism's chains and build (admissibility refusals first: they assert the field and the words), then the
+    # structural and closed-form files; the CLI's refusals run a child process, which imports the unmutated package
+    "smm_chain_sample": ("symmech/smm/chain.py",
+                         ["tests/test_bad_mechanism.py", "tests/test_smm_structural.py", "tests/test_smm_hard.py",
+                          "-k", "not cli"], ["*"]),
+    "smm_build_sample": ("symmech/smm/build.py",
+                         ["tests/test_bad_mechanism.py", "tests/test_smm_mechanism_lookups.py",
+                          "tests/test_smm_expression_messages.py", "tests/test_smm_closed_form.py",
+                          "tests/test_smm_structural.py", "-k", "not cli"], ["*"]),
+    # the independent Lagrange check: the tests that compare it with the chain and graph forms (8 s)
+    "smm_lagrange_sample": ("symmech/smm/lagrange.py",
+                            ["tests/test_smm_forms.py", "tests/test_smm_spatial_eq.py", "-k", "lagrange"], ["*"]),
     "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
     # with the torsion tests, which cover _twist_hessian (35 s at load 9)
     "smm_forms_sample": ("symmech/smm/forms.py",
@@ -403,6 +415,12 @@ SHARDS = {
                                  "tests/test_elastic_damping.py", "-m", "not slow", "-k",
                                  "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
                                 ["*"]),
+    # the elastic scene (setup, run, outputs): its refusals and the engine's choice first, then its runs (6 s, 5 s);
+    # the initial state's 14-20 s decay studies and the CLI's child processes left out
+    "elastic_scene_sample": ("symmech/trolley/elastic/scene.py",
+                             ["tests/test_bad_trolley.py", "tests/test_elastic_engine_choice.py",
+                              "tests/test_trolley_elastic_scene.py", "tests/test_trolley_elastic_initial.py", "-k",
+                              "not cli and not vibrates_at and not decays_at"], ["*"]),
     # the elastic equations of motion by a seeded sample: the quasi-static and energy tests first (fast, exact), then
     # the fast elastic files and the cheapest that integrate (test_dynamics_rhs.py, 40 s of other kinds, left out)
     "elastic_system_sample": ("symmech/trolley/elastic/system.py",
