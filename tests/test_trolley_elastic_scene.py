@@ -39,6 +39,7 @@ def test_no_elastic_effect_gives_the_rigid_results_bit_for_bit():
     rigid = scene.compute(st)[2]["P"]
     got = elastic_scene.run(es).tables["elastic_reactions"]
     assert np.array_equal(got.data[:, 1:], rigid)
+    assert [c.header for c in got.columns] == ["t [s]"] + [f"P{i} [N]" for i in range(6)]
 
 
 def test_full_run_tables_and_summary():
@@ -62,6 +63,15 @@ def test_full_run_tables_and_summary():
     late = P.column("t") > 1.5
     assert np.abs(P.data[late, 2:8] - rigid[late]).max() < 0.05 * np.abs(rigid).max()
     assert set(res.tables) == {"elastic_reactions", "energy", "roller_deflections", "points", "modes"}
+    # the energy balance's columns as the outputs' metadata gives them, the residual written out
+    E = res.tables["energy"]
+    assert [(c.name, c.unit, c.doc) for c in E.columns] == [
+        ("t", "s", ""), ("h", "J", "T2 - T0 + Π + V_g (constant on a steady frame without damping)"),
+        ("E", "J", "total energy T + Π + V_g in the fixed frame"), ("work", "J", "work of the track forces on the body"),
+        ("dissipated", "J", "energy dissipated by the dampers"),
+        ("residual", "J", "E - E(0) - work + dissipated (zero up to the integration error)")]
+    assert np.array_equal(E.column("residual"),
+                          E.column("E") - E.column("E")[0] - E.column("work") + E.column("dissipated"))
     pts = res.tables["points"]
     assert pts.column("seat_e1").max() == 0.0  # the trolley itself does not deform
     assert np.abs(pts.column("tip_e1")).max() > 1e-6
