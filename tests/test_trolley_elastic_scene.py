@@ -72,6 +72,10 @@ def test_full_run_tables_and_summary():
         ("residual", "J", "E - E(0) - work + dissipated (zero up to the integration error)")]
     assert np.array_equal(E.column("residual"),
                           E.column("E") - E.column("E")[0] - E.column("work") + E.column("dissipated"))
+    # the summary's energy figures are the table's last work and dissipation, and its largest residual
+    info = res.summary["elastic"]
+    assert (info["track_work_J"], info["dissipated_J"]) == (E.column("work")[-1], E.column("dissipated")[-1])
+    assert info["energy_residual_max_J"] == np.abs(E.column("residual")).max()
     pts = res.tables["points"]
     assert pts.column("seat_e1").max() == 0.0  # the trolley itself does not deform
     assert np.abs(pts.column("tip_e1")).max() > 1e-6
