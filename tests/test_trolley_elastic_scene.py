@@ -87,6 +87,11 @@ def test_full_run_tables_and_summary():
     assert np.all(modes.column("f") > 0)
 
 
+# the held ends' refusals as a user reads them
+HELD_WORDS = {"elastic.beams[0].axial": "`held` needs support = `pinned` (a cantilever has a free end)",
+              "elastic.beams[0].ea": "missing: held ends (axial = `held`) need the axial stiffness EA in (0, 1e+15] N"}
+
+
 @pytest.mark.parametrize("elastic, field", [
     ({"rollers": {"stiffness": [1e7] * 4}}, "elastic.rollers.stiffness"),
     ({"effects": {"rollers": True}}, "elastic.rollers"),
@@ -97,6 +102,10 @@ def test_full_run_tables_and_summary():
     ({"rollers": {"stiffness": [1e7] * 5}, "points": [{"name": "p"}]}, "elastic.points[0]"),
     ({"rollers": {"stiffness": [1e7] * 5}, "beams": [{**ELASTIC["beams"][0], "modes": 9}]},
      "elastic.beams[0].modes"),
+    ({"rollers": {"stiffness": [1e7] * 5}, "beams": [{**ELASTIC["beams"][0], "axial": "held", "ea": 1e7}]},
+     "elastic.beams[0].axial"),
+    ({"rollers": {"stiffness": [1e7] * 5}, "beams": [{**ELASTIC["beams"][0], "axial": "held", "support": "pinned"}]},
+     "elastic.beams[0].ea"),
 ])
 def test_bad_fields_name_themselves(elastic, field):
     with pytest.raises(SceneError) as err:
@@ -104,6 +113,8 @@ def test_bad_fields_name_themselves(elastic, field):
         resolved = elastic_scene.SCHEMA.check("elastic", copy.deepcopy(elastic))
         elastic_scene.prepare(resolved, st.body, elastic_scene.drive_of(st, 2), st.t)
     assert str(err.value).startswith(f"scene field '{field}'")
+    if field in HELD_WORDS:
+        assert str(err.value) == f"scene field '{field}': {HELD_WORDS[field]}"
 
 
 def test_point_mass_trolley_on_elastic_rollers_is_refused():
