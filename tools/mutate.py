@@ -418,16 +418,18 @@ SHARDS = {
                                  "not rigid_limit and not jacobi_energy and not stiff_rollers and not free_decay"],
                                 ["*"]),
     # the elastic scene (setup, run, outputs): its refusals and the engine's choice first, then its runs and warnings
-    # (25 s) and the curvature-shift warning's (2 s); the initial state's 14-20 s decay studies, two integrations of the Python engine's own (9 s each) and
-    # the CLI's child processes (they import the unmutated package) left out
+    # (25 s), the curvature-shift warning's (2 s) and the work-precision study's (slow tier, 15 s); the initial state's
+    # 14-20 s decay studies, the other slow tests, two integrations of the Python engine's own (9 s each) and the CLI's
+    # child processes (they import the unmutated package) left out
     "elastic_scene_sample": ("symmech/trolley/elastic/scene.py",
                              ["tests/test_bad_trolley.py", "tests/test_elastic_engine_choice.py",
                               "tests/test_trolley_elastic_scene.py", "tests/test_trolley_elastic_initial.py",
                               "tests/test_trolley_elastic_kind.py", "tests/test_trolley_elastic_modes_tracking.py",
                               "tests/test_trolley_elastic_accel_shift.py::"
-                              "test_the_shift_beyond_the_consistent_order_is_flagged", "-k",
+                              "test_the_shift_beyond_the_consistent_order_is_flagged", "-m", "slow or not slow", "-k",
                               "not cli and not vibrates_at and not decays_at and not long_run and not explode "
-                              "and not traction_on_a_straight and not energy_changes"], ["*"]),
+                              "and not traction_on_a_straight and not energy_changes and not duffing_backbone "
+                              "and not membrane_energy and not rigid_limit_with and not bundled_scene_runs"], ["*"]),
     # the elastic equations of motion by a seeded sample: the quasi-static and energy tests first (fast, exact), then
     # the fast elastic files and the cheapest that integrate (test_dynamics_rhs.py, 40 s of other kinds, left out)
     "elastic_system_sample": ("symmech/trolley/elastic/system.py",
