@@ -496,7 +496,8 @@ COVERAGE = {
                                          "by shard elastic_frame_table, with the table's slow-tier tests that build "
                                          "no kernel"),
     "symmech/trolley/elastic/simulate.py": "",
-    "symmech/trolley/elastic/scene.py": "",
+    "symmech/trolley/elastic/scene.py": ("a seeded sample of 30 (shard elastic_scene_sample: the scene's refusals, "
+                                         "runs, warnings and modes, with the work-precision study of the slow tier)"),
     "symmech/trolley/elastic/compiled.py": ("not screened: the compiled engine's driver; what a run reads "
                                             "(compiled_inputs, moved in from simulate.py: the frame's arc lengths "
                                             "and table, then the start) is held by tests/test_elastic_timeline.py "
@@ -511,7 +512,9 @@ COVERAGE = {
     "symmech/smm/model.py": "",
     "symmech/smm/chain.py": "",
     "symmech/smm/build.py": "",
-    "symmech/smm/lagrange.py": "",
+    "symmech/smm/lagrange.py": ("sample drawn on from 30 to 34 (prefix-stable) for its proof (sympy.zeros(n) is "
+                                "square); left: the rates' symbols declared non-real (b holds no rate: believed "
+                                "equivalent, not claimed, a second proof at 34 would exceed the 3 % cap)"),
     "symmech/core/kinematics.py": "",
     "symmech/numerics/ode.py": "",
     "symmech/numerics/dop853_tableau.py": "a table of constants (Hairer's tableau), no code to mutate; tests/test_ode_toolkit.py "
