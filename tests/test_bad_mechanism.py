@@ -66,6 +66,7 @@ CASES = [
     ("damper_named_like_a_spring", RB, "dampers[0].name", "rope", "dampers[0].name"),
     ("body_named_ground", DP, "bodies[0].name", "ground", "bodies[0].name"),
     ("body_com_undefined", DP, "bodies[0].com", "Z", "bodies[0].com"),
+    ("body_com_misspelt", DP, "bodies[0].com", "AB", "bodies[0].com"),
     ("point_parent_undefined", DP, "points[1].from", "Q", "points[1].from"),
     ("point_loop", DP, "points[1].from", "B", "points[1].from"),
     ("point_root_and_chain", DP, "points[1].at", [0, 1], "points[1].at"),
@@ -77,6 +78,7 @@ CASES = [
     ("torsion_spring_body_to_itself", SB, "torsion_springs[0].bodies", ["boom", "boom"], "torsion_springs[0].bodies"),
     ("torsion_spring_unknown_body", SB, "torsion_springs[0].bodies", ["ground", "bom"], "torsion_springs[0].bodies"),
     ("coordinate_repeated_in_point_chain", DP, "points[2].turns", ["phi1", "phi1"], "points[2].turns"),
+    ("coordinate_repeated_after_the_first", DP, "points[2].turns", ["phi1", "phi2", "phi2"], "points[2].turns"),
     ("coordinate_repeated_in_body", DP, "bodies[1].turns", ["phi1", "phi2", "phi2"], "bodies[1].turns"),
     # directions
     ("gravity_direction_not_unit", DP, "gravity.direction", [0, -2], "gravity.direction"),
@@ -91,6 +93,7 @@ CASES = [
     ("inertia_triangle_inequality", SB, "bodies[0].inertia", [1e6, 1.0, 1.0], "bodies[0].inertia[0]"),
     ("viscosity_negative", RB, "dampers[0].viscosity", -1.0, "dampers[0].viscosity"),
     ("stiffness_negative", RB, "springs[0].stiffness", -5.0, "springs[0].stiffness"),
+    ("torsion_stiffness_negative", SB, "torsion_springs[0].stiffness", -1.0, "torsion_springs[0].stiffness"),
     ("equilibrium_preload_with_search", SB, "equilibrium", {"solve": True}, "springs[0].preload"),
     # responses
     ("duration_huge", RB, "initial.duration", 1e308, "initial.duration"),
@@ -110,10 +113,18 @@ CASES = [
 ]
 
 
+# the words a user reads, for the cases that name a coordinate, offer a name or give a unit
+WORDS = {"coordinate_repeated_after_the_first": "coordinate 'phi2' is listed twice",
+         "body_com_misspelt": "point 'AB' is not defined (did you mean 'B'?)",
+         "torsion_stiffness_negative": "-1 = -1 N m/rad is outside [0, 1e+30] N m/rad"}
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
 def test_bad_mechanism_refused(case):
-    _, base, path, value, field = case
-    assert_rejected(changed(bundled(base), path, value), field)
+    name, base, path, value, field = case
+    err = assert_rejected(changed(bundled(base), path, value), field)
+    if name in WORDS:
+        assert str(err) == f"scene field '{field}': {WORDS[name]}"
 
 
 def test_corpus_size():
@@ -124,6 +135,12 @@ def test_nan_mass_is_named_as_such():
     """Before: "unknown parameter 'nan'"."""
     err = assert_rejected(changed(bundled(DP), "bodies[0].mass", NAN), "bodies[0].mass")
     assert "not finite" in str(err) and "unknown parameter" not in str(err)
+
+
+def test_principal_axes_off_by_exactly_the_tolerance_are_admitted():
+    """axis 1 . axis 2 = 1e-9 exactly in binary (axis 2 = (1e-9, 1, 0) has the norm 1.0 in double): the
+    orthonormality tolerance, 1e-9, is met, not exceeded."""
+    pipeline.load(changed(bundled(SB), "bodies[0].principal_axes", [[1, 0, 0], [1e-9, 1, 0], [0, 0, 1]]))
 
 
 def test_free_free_chain_of_one_mass():

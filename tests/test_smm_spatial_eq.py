@@ -135,16 +135,16 @@ def test_principal_axes_must_be_orthonormal():
 
 # ---------------------------------------------------------------- torsion-spring preload
 
-def _pendulum(preload, effects=None, solve=False):
+def _pendulum(preload, effects=None, solve=False, bodies=("ground", "bob")):
     """Bob m on a massless rod l drawn at th0 from the downward vertical; torsion spring k
-    (ground -> bob) with moment M0 in the drawn configuration."""
+    (``bodies``: ground -> bob) with moment M0 in the drawn configuration."""
     d = {"parameters": {"m": param(1.5, "kg"), "l": param(0.8, "m"), "g": param(9.81, "m/s^2"),
                         "k": param(12.0, "N m/rad"), "th0": param(0.6, "rad")},
          "coordinates": [{"name": "phi", "type": "angle"}],
          "points": [{"name": "O", "at": [0, 0]},
                     {"name": "B", "from": "O", "vector": ["l*sin(th0)", "-l*cos(th0)"], "turns": ["phi"]}],
          "bodies": [{"name": "bob", "mass": "m", "com": "B"}],
-         "torsion_springs": [{"name": "t", "bodies": ["ground", "bob"], "stiffness": "k", "preload": preload}],
+         "torsion_springs": [{"name": "t", "bodies": list(bodies), "stiffness": "k", "preload": preload}],
          "gravity": {"g": "g"}}
     if effects:
         d["effects"] = effects
@@ -282,6 +282,11 @@ def test_torsion_preload_from_equilibrium_conditions():
     ch, lg = matrices(m), lagrange.matrices(m)
     for key in ("c", "residual"):
         assert all(sympy.simplify(x - z) == 0 for x, z in zip(ch[key], lg[key]))
+    # drawn from the bob to the ground: the twist and M0 change sign, Lagrange's c and equilibrium do not
+    lg = lagrange.matrices(_pendulum("equilibrium", bodies=("bob", "ground")))
+    s = {n: sympy.Symbol(n, real=True) for n in ("m", "l", "g", "k", "th0")}
+    assert sympy.simplify(lg["residual"][0]) == 0
+    assert sympy.simplify(lg["c"][0, 0] - s["k"] - s["m"] * s["g"] * s["l"] * sympy.cos(s["th0"])) == 0
     with pytest.raises(SymmechError, match="torsion spring 't': equilibrium.solve needs a preload value"):
         numeric.solve_equilibrium(m)
 

@@ -8,7 +8,7 @@ import pytest
 import scipy.sparse.linalg
 
 from symmech.smm import numeric, structural
-from symmech.smm.derive import bundled_scenes, load_mechanism
+from symmech.smm.derive import bundled_scenes, load_mechanism, parameter_args
 from symmech.smm.model import Effects, NumericArith
 
 from smm_helpers import bar_on_springs, chain, hanging_mass, mech, spring_chain
@@ -89,3 +89,11 @@ def test_long_chain_lowest_modes_closed_form(ends):
     exact = np.array(exact_omega2({**spec, "motion": "axial", "tension": 0.0})[:10])
     # kappa ~ (n/pi)^2 ~ 3e6: about 1e-8 of the spectrum's top in absolute terms
     np.testing.assert_allclose(w, exact, rtol=0, atol=1e-8 * 4 * 1e4 / 0.1 + 1e-7 * exact.max())
+    # what a user reads: the default name, the springs by name (k0 to the fixed start, kn to the fixed end) at zero
+    # tension, the parameters' units and meanings (the generated module's PARAMS)
+    assert m.name == f"chain_5000_{ends}_axial"
+    first, last = (1 if ends == "free-free" else 0), (5000 if ends == "fixed-fixed" else 4999)
+    assert num.tensions == {f"k{i}": 0.0 for i in range(first, last + 1)}
+    assert [(a.name, a.unit, a.meaning) for a in parameter_args(m)] == [
+        ("m", "kg", "mass of each particle"), ("k", "N/m", "stiffness of each spring"),
+        ("L", "m", "spring length in equilibrium"), ("T", "N", "spring tension in equilibrium")]

@@ -193,12 +193,13 @@ def test_opposite_sign_warning_logic():
         assert bool([w for w in got if w.startswith("elastic: P4 has the opposite sign")]) == warned
 
 
-@pytest.mark.parametrize("ratio, warned", [(1.0, True), (0.5, False)])
-def test_resonance_warning_at_the_axle_passing_frequency(ratio, warned):
+@pytest.mark.parametrize("ratio, warned, softness", [(1.0, True, 1e-3), (0.5, False, 1.0)])
+def test_resonance_warning_at_the_axle_passing_frequency(ratio, warned, softness):
     """Straight level track at constant V0: the only forcing is the axle passing V0/l (no
     rotation, no curvature). V0 = ratio · l · f_bounce with f_bounce the lowest closed-form
-    roller frequency: within 10 % at ratio 1, nowhere near any mode at 0.5."""
-    k = (1e5, 1e5, 2e5, 1.5e5, 1e5)
+    roller frequency: within 10 % at ratio 1 (rollers 1000 times softer: a forcing below 1 Hz counts),
+    nowhere near any mode at 0.5."""
+    k = tuple(softness * x for x in (1e5, 1e5, 2e5, 1.5e5, 1e5))
     vertical, lateral = closed_form_roller_frequencies(100.0, (0.8, 0.5, 0.0), (10.0, 20.0, 15.0), k, 2.0, 1.0, 0.0)
     f = np.sort(np.r_[vertical, lateral]) / (2 * np.pi)
     speed = float(ratio * 2.0 * f[0])

@@ -39,6 +39,7 @@ def test_no_elastic_effect_gives_the_rigid_results_bit_for_bit():
     rigid = scene.compute(st)[2]["P"]
     got = elastic_scene.run(es).tables["elastic_reactions"]
     assert np.array_equal(got.data[:, 1:], rigid)
+    assert [c.header for c in got.columns] == ["t [s]"] + [f"P{i} [N]" for i in range(6)]
 
 
 def test_full_run_tables_and_summary():
@@ -62,6 +63,19 @@ def test_full_run_tables_and_summary():
     late = P.column("t") > 1.5
     assert np.abs(P.data[late, 2:8] - rigid[late]).max() < 0.05 * np.abs(rigid).max()
     assert set(res.tables) == {"elastic_reactions", "energy", "roller_deflections", "points", "modes"}
+    # the energy balance's columns as the outputs' metadata gives them, the residual written out
+    E = res.tables["energy"]
+    assert [(c.name, c.unit, c.doc) for c in E.columns] == [
+        ("t", "s", ""), ("h", "J", "T2 - T0 + Π + V_g (constant on a steady frame without damping)"),
+        ("E", "J", "total energy T + Π + V_g in the fixed frame"), ("work", "J", "work of the track forces on the body"),
+        ("dissipated", "J", "energy dissipated by the dampers"),
+        ("residual", "J", "E - E(0) - work + dissipated (zero up to the integration error)")]
+    assert np.array_equal(E.column("residual"),
+                          E.column("E") - E.column("E")[0] - E.column("work") + E.column("dissipated"))
+    # the summary's energy figures are the table's last work and dissipation, and its largest residual
+    info = res.summary["elastic"]
+    assert (info["track_work_J"], info["dissipated_J"]) == (E.column("work")[-1], E.column("dissipated")[-1])
+    assert info["energy_residual_max_J"] == np.abs(E.column("residual")).max()
     pts = res.tables["points"]
     assert pts.column("seat_e1").max() == 0.0  # the trolley itself does not deform
     assert np.abs(pts.column("tip_e1")).max() > 1e-6
@@ -71,6 +85,11 @@ def test_full_run_tables_and_summary():
     # 3 samples x 9 modes; t, s, V0, mode_id, f, zeta, 7 identity columns, 3 x 2 report points, 3 forcing
     assert modes.data.shape == (3 * 9, 6 + 7 + 6 + 3) and len(modes.text["component"]) == 3 * 9
     assert np.all(modes.column("f") > 0)
+
+
+# the held ends' refusals as a user reads them
+HELD_WORDS = {"elastic.beams[0].axial": "`held` needs support = `pinned` (a cantilever has a free end)",
+              "elastic.beams[0].ea": "missing: held ends (axial = `held`) need the axial stiffness EA in (0, 1e+15] N"}
 
 
 @pytest.mark.parametrize("elastic, field", [
@@ -83,6 +102,10 @@ def test_full_run_tables_and_summary():
     ({"rollers": {"stiffness": [1e7] * 5}, "points": [{"name": "p"}]}, "elastic.points[0]"),
     ({"rollers": {"stiffness": [1e7] * 5}, "beams": [{**ELASTIC["beams"][0], "modes": 9}]},
      "elastic.beams[0].modes"),
+    ({"rollers": {"stiffness": [1e7] * 5}, "beams": [{**ELASTIC["beams"][0], "axial": "held", "ea": 1e7}]},
+     "elastic.beams[0].axial"),
+    ({"rollers": {"stiffness": [1e7] * 5}, "beams": [{**ELASTIC["beams"][0], "axial": "held", "support": "pinned"}]},
+     "elastic.beams[0].ea"),
 ])
 def test_bad_fields_name_themselves(elastic, field):
     with pytest.raises(SceneError) as err:
@@ -90,6 +113,8 @@ def test_bad_fields_name_themselves(elastic, field):
         resolved = elastic_scene.SCHEMA.check("elastic", copy.deepcopy(elastic))
         elastic_scene.prepare(resolved, st.body, elastic_scene.drive_of(st, 2), st.t)
     assert str(err.value).startswith(f"scene field '{field}'")
+    if field in HELD_WORDS:
+        assert str(err.value) == f"scene field '{field}': {HELD_WORDS[field]}"
 
 
 def test_point_mass_trolley_on_elastic_rollers_is_refused():

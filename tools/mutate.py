@@ -369,6 +369,20 @@ SHARDS = {
                   ["tests/test_smm_mechanism_lookups.py", "tests/test_smm_expression_messages.py",
                    "tests/test_smm_closed_form.py", "tests/test_smm_structural.py", "tests/test_smm_forms.py", "-k",
                    "mechanism_lookups or expression_messages or closed_form or structural or small_systems"], ["*"]),
+    # the mechanism's chains and build (admissibility refusals first: they assert the field and the words), then the
+    # structural and closed-form files; the CLI's refusals run a child process, which imports the unmutated package
+    "smm_chain_sample": ("symmech/smm/chain.py",
+                         ["tests/test_bad_mechanism.py", "tests/test_smm_structural.py", "tests/test_smm_hard.py",
+                          "-k", "not cli"], ["*"]),
+    "smm_build_sample": ("symmech/smm/build.py",
+                         ["tests/test_bad_mechanism.py", "tests/test_smm_mechanism_lookups.py",
+                          "tests/test_smm_expression_messages.py", "tests/test_smm_closed_form.py",
+                          "tests/test_smm_structural.py", "-k", "not cli"], ["*"]),
+    # the independent Lagrange check: the tests that compare it with the chain and graph forms (10 s), without the
+    # random planar chains (6 s: derivations of their own)
+    "smm_lagrange_sample": ("symmech/smm/lagrange.py",
+                            ["tests/test_smm_forms.py", "tests/test_smm_spatial_eq.py", "-k",
+                             "lagrange or small_systems or torsion_preload_from_equilibrium"], ["*"]),
     "impact_all": ("symmech/grain/impact.py", IMPACT_TESTS, ["*"]),
     # with the torsion tests, which cover _twist_hessian (35 s at load 9)
     "smm_forms_sample": ("symmech/smm/forms.py",
@@ -431,6 +445,19 @@ SHARDS = {
                                  "short_ride or rigid_rollers or kink or estimate_of_a_built or leaves_its_table "
                                  "or compiled_run_reads or jacobian or traction_agrees or assembly_matches "
                                  "or failed_compiled_solve or turn_between"], ["*"]),
+    # the elastic scene (setup, run, outputs): its refusals and the engine's choice first, then its runs and warnings
+    # (25 s), the curvature-shift warning's (2 s) and the work-precision study's (slow tier, 15 s); the initial state's
+    # 14-20 s decay studies, the other slow tests, two integrations of the Python engine's own (9 s each) and the CLI's
+    # child processes (they import the unmutated package) left out
+    "elastic_scene_sample": ("symmech/trolley/elastic/scene.py",
+                             ["tests/test_bad_trolley.py", "tests/test_elastic_engine_choice.py",
+                              "tests/test_trolley_elastic_scene.py", "tests/test_trolley_elastic_initial.py",
+                              "tests/test_trolley_elastic_kind.py", "tests/test_trolley_elastic_modes_tracking.py",
+                              "tests/test_trolley_elastic_accel_shift.py::"
+                              "test_the_shift_beyond_the_consistent_order_is_flagged", "-m", "slow or not slow", "-k",
+                              "not cli and not vibrates_at and not decays_at and not long_run and not explode "
+                              "and not traction_on_a_straight and not energy_changes and not duffing_backbone "
+                              "and not membrane_energy and not rigid_limit_with and not bundled_scene_runs"], ["*"]),
     # the elastic equations of motion by a seeded sample: the quasi-static and energy tests first (fast, exact), then
     # the fast elastic files and the cheapest that integrate (test_dynamics_rhs.py, 40 s of other kinds, left out)
     "elastic_system_sample": ("symmech/trolley/elastic/system.py",
@@ -509,6 +536,8 @@ COVERAGE = {
                                          "by shard elastic_frame_table, with the table's slow-tier tests that build "
                                          "no kernel"),
     "symmech/trolley/elastic/simulate.py": "",
+    "symmech/trolley/elastic/scene.py": ("a seeded sample of 30 (shard elastic_scene_sample: the scene's refusals, "
+                                         "runs, warnings and modes, with the work-precision study of the slow tier)"),
     "symmech/trolley/elastic/compiled.py": ("not screened: the compiled engine's driver; what a run reads "
                                             "(compiled_inputs, moved in from simulate.py: the frame's arc lengths "
                                             "and table, then the start) is held by tests/test_elastic_timeline.py "
@@ -523,6 +552,11 @@ COVERAGE = {
                                "1.26, which pyproject admits)"),
     "symmech/smm/structural.py": "",
     "symmech/smm/model.py": "",
+    "symmech/smm/chain.py": "",
+    "symmech/smm/build.py": "",
+    "symmech/smm/lagrange.py": ("sample drawn on from 30 to 34 (prefix-stable) for its proof (sympy.zeros(n) is "
+                                "square); left: the rates' symbols declared non-real (b holds no rate: believed "
+                                "equivalent, not claimed, a second proof at 34 would exceed the 3 % cap)"),
     "symmech/core/kinematics.py": "",
     "symmech/core/sweep.py": ("a seeded sample of 30 (shard core_sweep_sample): what every sweep shares (axes, cell "
                               "edges, flat statements, the cost estimate and refusal, the dispatch)"),
