@@ -423,6 +423,14 @@ SHARDS = {
                        "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
                        "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
                        "and not flat_and_long and not steep_downhill"], ["*"]),
+    # the energy budget and the warnings' and errors' texts both accurate-mode engines report: the motion_sample's
+    # selection (the texts' and rows' tests, the motion loop's fast ones)
+    "grain_outcome_sample": ("symmech/grain/outcome.py",
+                             ["tests/test_texts_warnings_and_sparse_rows.py", *GRAIN_MOTION_TESTS[:-2], "-m",
+                              "not slow", "-k",
+                              "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
+                              "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
+                              "and not flat_and_long and not steep_downhill"], ["*"]),
     # the chattering window's closed form and the Python loop's exact flight (slow tier, 1-8 s): the motion_sample's
     # survivors again
     "motion_chatter": ("symmech/grain/motion.py",
