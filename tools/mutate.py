@@ -329,15 +329,14 @@ SHARDS = {
     # engine's stand-in test fails under mutmut (tests/conftest.py forces the Python loop for auto); the grain's
     # slow tier for its printed-law checks and precision study (1-2 s), not its compiled run or bundled sweeps
     "grain_scene_sample": ("symmech/grain/motion_scene.py",
-                           ["tests/test_bad_grain.py", "tests/test_grain_engine_through_registry.py",
-                            "tests/test_grain_motion_scene.py",
-                            "tests/test_headline.py::test_grain_headline_from_the_tables",
+                           ["tests/test_bad_grain.py", "tests/test_headline.py::test_grain_headline_from_the_tables",
                             "tests/test_headline.py::test_grain_sampled_too_coarsely_for_its_impacts_warns",
+                            "tests/test_grain_motion_scene.py", "tests/test_grain_engine_through_registry.py",
                             "tests/test_grain_sweep.py", "-m", "slow or not slow", "-k",
                             "not auto_reads_the_registered and not dask_cluster and not default_scene_and_precision "
                             "and not bundled_separation_sweep and not slice_the_budget"], ["*"]),
     "impact_scene_sample": ("symmech/grain/impact_scene.py",
-                            ["tests/test_bad_impact.py", "tests/test_cli_impact.py",
+                            ["tests/test_cli_impact.py", "tests/test_bad_impact.py",
                              "tests/test_headline.py::test_impact_headline_from_momentum_and_the_law", "-k",
                              "not latex_list and not errata_json"], ["*"]),
     "track": ("symmech/trolley/track.py",
