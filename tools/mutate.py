@@ -462,6 +462,10 @@ COVERAGE = {
                                "the interval treats all 56 as drawn",
     "symmech/grain/sweep.py": "the statistics only (shard grain_sweep_statistics); the rest is the plan, dispatch "
                               "and tables",
+    "symmech/grain/motion_scene.py": ("a seeded sample of 30 (shard grain_scene_sample: the grain kind's refusals, "
+                                      "estimates, runs, headline, sweeps, printed-law checks and precision study)"),
+    "symmech/grain/impact_scene.py": ("a seeded sample of 30 (shard impact_scene_sample: the impact kind's refusals, "
+                                      "runs through the CLI and API, headline and precision study)"),
     "symmech/grain/motion_engine/driver.py": ("drawn again (744 mutants) after simulate_many's length check and "
                                               "pack's NaN refusal; 1 proven equivalent (motions' `or True`: an "
                                               "empty slice's warnings are an empty list)"),
