@@ -160,6 +160,28 @@ def test_unit_vector_direction_equals_the_angle_it_names():
 # --------------------------------------------------------------------------- no hang, estimate, progress
 
 
+def test_a_surface_at_exactly_one_g_throws_nothing():
+    """Normal vibration whose peak acceleration A (2 pi f)^2 equals g exactly (Gamma = 1): the surface never
+    throws the grain, so the estimate is the one bounce sequence of a grain resting on it, launched at the
+    surface's peak speed A 2 pi f: 1 + ln(v_rest / v0) / ln(e) bounces (the sequence ends long before 2 s)."""
+    amplitude, frequency, e = 1e-3, 25.0, 0.4
+    g = amplitude * (2 * math.pi * frequency) ** 2
+    scene = pipeline.load(edits(("surface.g", g), ("surface.alpha_deg", 0.0), ("vibration.direction", "normal"),
+                                ("vibration.angle_deg", DELETE), ("initial.position", DELETE)))
+    v0 = amplitude * 2 * math.pi * frequency
+    assert motion_scene.expected_impacts(scene.setup) == pytest.approx(1 + math.log(1e-5 / v0) / math.log(e),
+                                                                         rel=1e-12)
+
+
+def test_a_timed_sample_is_a_share_of_the_run_and_at_least_one_period():
+    """The 2 s default scene (25 Hz: T = 0.04 s): a tenth is 0.2 s, a thousandth is raised to one period, and a
+    share above one is the whole run; nothing else changes."""
+    sc = pipeline.load(BASE).setup
+    assert [motion_scene.sample(sc, share).duration for share in (0.1, 1e-3, 2.0)] == pytest.approx([0.2, 0.04, 2.0],
+                                                                                                   rel=1e-15)
+    assert motion_scene.sample(sc, 0.1).model is sc.model and motion_scene.sample(sc, 0.1).start is sc.start
+
+
 def test_1000_s_scene_is_refused_at_once_past_max_time(tmp_path):
     scene = tmp_path / "long.toml"
     scene.write_text(re.sub(r"(?m)^duration = .*$", "duration = 1000.0", BASE_TEXT))

@@ -2,12 +2,14 @@
 import json
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from symmech.cli import main
+from symmech.core import pipeline
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = (ROOT / "scenes" / "impact_default.toml").read_text()
@@ -35,9 +37,28 @@ def test_default_scene_summary(tmp_path, capsys):
     # The printed (51)/(55) change the spin rate only.
     np.testing.assert_allclose(rates["cramer_printed"][:2], rates["from_angular_velocity"][:2], rtol=1e-10)
     assert abs(rates["cramer_printed"][2] - rates["from_angular_velocity"][2]) > 1.0
-    for key in ("impulse_T", "mu", "centre_velocity_after", "angular_velocity_after", "warnings", "roots"):
+    for key in ("impulse_T", "mu", "centre_velocity_after", "angular_velocity_after", "roots"):
         assert key in s
+    assert s["warnings"] == []  # far from gimbal lock (theta = 0.7), an admissible root
     assert (tmp_path / "out" / "impact.png").stat().st_size > 10000
+
+
+def test_a_pulling_root_fails_its_check_and_gimbal_lock_is_warned():
+    """The grazing impact of tests/test_grain_impact_solver_details.py (u = (0.5, 0.2, -1e-6) m/s, no spin): its
+    least-impulse root pulls the grain into the plane, and the admissibility check fails (value 0). At theta = 0
+    the Euler rates are undefined: the run warns and reports no rates."""
+    grazing = tomllib.loads(DEFAULT)
+    grazing["state"] = {"velocity": [0.5, 0.2, -1e-6], "angular_velocity": [0.0, 0.0, 0.0]}
+    check = pipeline.load(grazing).run().checks[2]
+    assert (check.what, check.value, check.threshold, check.verdict) == (
+        "an admissible root: no energy created, no pull into the plane", 0.0, "= 1 (admissible)", "fail")
+    locked = tomllib.loads(DEFAULT)
+    locked["body"]["orientation"] = [0.3, 0.0, 1.1]
+    result = pipeline.load(locked).run()
+    assert result.warnings == ["gimbal lock: sin(theta) = 0.00e+00; the Euler rates psi' and phi' are undefined "
+                               "(only psi' + phi' is), the angular velocity is reported instead"]
+    assert result.summary["euler_rates_after"] == dict.fromkeys(("from_angular_velocity", "cramer_derived",
+                                                                 "cramer_printed"))
 
 
 @pytest.mark.parametrize("solver", ["paper", "paper-corrected", "scipy"])
@@ -123,4 +144,10 @@ def test_bench_precision_writes_csv_and_png(tmp_path, capsys):
     assert json.loads((tmp_path / "summary.json").read_text())["reference"].startswith("mpmath")
     robust = [r.split(",") for r in rows[1:] if r.split(",")[3].startswith("robust")]
     assert len(robust) == 4 and max(float(r[1]) for r in robust) < 1e-14
+    knobs = [("robust (exact reduction)", "newton_iterations", n) for n in (0, 1, 2, 3)]
+    knobs += [("scipy.optimize.root", "xtol", x) for x in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12)]
+    knobs += [(f"descent ({v})", "max_steps", n) for v in ("paper", "paper-corrected") for n in (1, 10, 100, 1000)]
+    assert [(r.split(",")[3], r.split(",")[4], float(r.split(",")[0])) for r in rows[1:]] == knobs
+    tables = json.loads((tmp_path / "summary.json").read_text())["tables"]
+    assert tables["precision_impact"]["doc"] == "Impact solvers: work-precision"
     assert (tmp_path / "precision_impact.png").stat().st_size > 10000

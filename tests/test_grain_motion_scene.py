@@ -88,3 +88,58 @@ def test_api_run_has_the_impacts_as_event_log():
     assert log.sizes["row"] >= 3
     assert (log["t"].attrs["units"], log["Tz"].attrs["units"], log["vz_before"].attrs["units"]) == ("s", "N s", "m/s")
     assert set(log["admissible"].values) <= {"True", "False"}
+
+
+@pytest.mark.slow
+def test_a_printed_law_creating_energy_fails_one_check_and_warns_in_the_other():
+    """The needle (5:1:1) of tests/test_grain_motion_closed_forms.py tumbling onto a still plate under the printed
+    law (e = lambda = 0.9), as a grain scene: its one impact gains kinetic energy, so "impacts creating energy"
+    fails, while the printed law's own verdict is advice (warn); both law warnings reach the run."""
+    import numpy as np
+
+    from symmech.core import pipeline
+    from symmech.grain import body, contact, flight
+
+    axes, q0 = [5e-3, 1e-3, 1e-3], np.array([-0.529, 0.693, -0.481, 0.091])
+    Q = flight.rotation_matrix(q0 / np.linalg.norm(q0))
+    z = float(contact.support_distance(tuple(axes), Q)) + 1e-9
+    data = {"kind": "grain", "duration": 1e-5,
+            "body": {"semi_axes": axes, "mass": 1e-6, "orientation": body.euler_from_matrix(Q).tolist()},
+            "impact": {"law": "printed", "e": 0.9, "lambda": 0.9}, "sliding": {"friction": 0.3},
+            "initial": {"position": [0.0, 0.0, z], "velocity": [0.01, 0.084, -0.3],
+                        "angular_velocity": [43.5, 3.4, -2.4]},
+            "numerics": {"engine": "python", "scan_step": 1e-5, "sample_interval": 1e-5}}
+    result = pipeline.load(data).run()
+    checks = {c.what: (c.value, c.threshold, c.verdict) for c in result.checks}
+    assert checks["impacts creating energy"] == (1.0, "<= 0", "fail")
+    assert checks["impacts where the printed law would create energy"] == (1.0, "<= 0", "warn")
+    assert result.warnings[0] == "printed impact law: no admissible root; the one used creates kinetic energy"
+    assert result.warnings[1].startswith("impact law 'printed' created energy: ")
+
+
+@pytest.mark.slow
+def test_precision_study_rows_and_the_first_order_of_paper_mode():
+    """The default grain over 4 ms (T/10, before its first contact at ~27 ms): accurate mode's exact flight meets
+    the reference at every tolerance; paper mode's error falls as its step (first order: error / dt within 10 %
+    over dt = T/100 ... T/3000); the node count, which only the contact test reads, changes nothing."""
+    import tomllib
+
+    from symmech.core import pipeline
+
+    data = tomllib.loads(SCENE.read_text())
+    data["numerics"]["engine"] = "python"
+    data["precision"]["duration"] = 0.004
+    result = pipeline.load(data).precision()
+    table = result.tables["precision_grain"]
+    period = 1 / 25
+    rows = [("accurate (exact flight, root-located contact)", "tolerance", tol) for tol in (1e-3, 1e-5, 1e-7, 1e-9)]
+    rows += [("paper mode, 400 nodes", "dt", period / steps) for steps in (100, 300, 1000, 3000)]
+    rows += [("paper mode, dt = T/1000, nodes", "nodes", nodes) for nodes in (50, 200, 800)]
+    assert list(zip(table.text["method"], table.text["knob"])) == [row[:2] for row in rows]
+    assert list(table.column("value")) == pytest.approx([row[2] for row in rows], rel=1e-15)
+    error = table.column("error")
+    assert max(error[:4]) < 1e-12
+    per_dt = error[4:8] / table.column("value")[4:8]
+    assert max(per_dt) < 1.1 * min(per_dt) and min(error[4:8]) > 1e-5
+    assert list(error[8:]) == [error[6]] * 3
+    assert result.summary["reference"] == "accurate mode at tolerance 1e-12, scan step 0.00025 s, duration 0.004 s"

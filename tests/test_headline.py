@@ -106,6 +106,27 @@ def test_grain_headline_from_the_tables(runs, summaries):
     assert sampling["value"] == pytest.approx(span / len(im["t"]) / (1 / 25 / 40), rel=1e-12)
     assert sampling["verdict"] == ("pass" if sampling["value"] >= 2 else "warn")
     assert all(c["verdict"] == "pass" for c in summaries["grain"]["checks"])
+    # the texts a reader sees: names, units, meanings, the span averaged over, the checks' names and thresholds
+    s, over = summaries["grain"], "mean over 0.5 s"  # the fixture's duration
+    assert list(s["time_fraction"]) == ["flight", "sliding"]
+    assert [(x["name"], x["unit"], x["meaning"], x["at"]) for x in s["headline"]] == [
+        ("transport velocity along the slope", "m/s", "net displacement along X / duration", over),
+        ("transport velocity across the slope", "m/s", "net displacement along Y / duration", over),
+        ("time in flight", "%", "share of the run spent in flight", ""),
+        ("time sliding", "%", "share of the run spent sliding", ""),
+        ("impacts", "1", "rows of impacts.csv", ""),
+        ("energy dissipated by impacts", "J", "sum of ke_before - ke_after over impacts.csv", ""),
+        ("energy dissipated in all", "J", "impacts, landings and sliding friction", "")]
+    budget = s["energy_budget"]
+    assert h["energy dissipated in all"]["value"] == pytest.approx(
+        budget["lost_in_impacts_J"] + budget["lost_at_landings_J"] + budget["lost_in_sliding_J"], rel=1e-12)
+    assert [(x["what"], x["threshold"]) for x in s["checks"]] == [
+        ("energy balance closes (relative residual)", "<= 1e-06"), ("impacts creating energy", "<= 0"),
+        ("impacts whose solver did not converge", "<= 0"), ("impacts where the printed law would create energy", "<= 0"),
+        ("trajectory rows per mean interval between impacts", ">= 2")]
+    assert s["tables"]["impacts"]["doc"] == ("one row per impact; admissible: no energy created by this law; "
+                                             "printed_law_*: the printed law's verdict at this impact (empty when "
+                                             "not evaluated)")
 
 
 def test_impact_headline_from_momentum_and_the_law(summaries):
@@ -122,7 +143,21 @@ def test_impact_headline_from_momentum_and_the_law(summaries):
         -0.5 * s["contact_velocity_before"][2], rel=1e-9)
     assert h["kinetic energy lost"]["value"] == pytest.approx(s["kinetic_energy_before"] - s["kinetic_energy_after"],
                                                               rel=1e-12)
-    assert [c["verdict"] for c in s["checks"]] == ["pass"] * 3
+    assert h["angular speed after"]["value"] == pytest.approx(np.linalg.norm(s["angular_velocity_after"]), rel=1e-15)
+    lost = 100 * (1 - s["kinetic_energy_after"] / s["kinetic_energy_before"])
+    centre = [(f"centre velocity after, {x}", "m/s", "velocity of the centre just after the impact") for x in "xyz"]
+    assert [(x["name"], x["unit"], x["meaning"]) for x in s["headline"]] == [
+        ("normal impulse", "N s", "T_z, along the plane's normal"),
+        ("tangential impulse", "N s", "|(T_x, T_y)|, friction"), *centre,
+        ("angular speed after", "rad/s", "|ω| after the impact"),
+        ("rebound velocity of the contact point", "m/s",
+         "its velocity along the normal after the impact (> 0: it leaves the plane)"),
+        ("kinetic energy lost", "J", f"{lost:.3g} % of the energy before")]
+    assert [(c["what"], c["unit"], c["threshold"], c["verdict"]) for c in s["checks"]] == [
+        ("impact equations (19) solved (relative residual)", "1", "<= 1e-08", "pass"),
+        ("kinetic energy after / before (no energy created)", "1", "<= 1", "pass"),
+        ("an admissible root: no energy created, no pull into the plane", "1", "= 1 (admissible)", "pass")]
+    assert s["checks"][1]["value"] == pytest.approx(s["kinetic_energy_after"] / s["kinetic_energy_before"], rel=1e-15)
 
 
 def _peak(values: np.ndarray) -> tuple[float, int]:
