@@ -95,6 +95,12 @@ GRAIN_MOTION_TESTS = ["tests/test_grain_motion_parts.py", "tests/test_grain_moti
                       "tests/test_grain_motion_resting.py", "tests/test_grain_motion_idle_reset.py",
                       "tests/test_grain_motion_final_progress.py", "tests/test_grain_motion_rocking_count.py",
                       "-m", "not slow"]
+# the motion loop's sample and the outcome's: GRAIN_MOTION_TESTS without the nine that take 4-22 s each (their 150 s
+# would be every survivor's cost) and with the texts' and rows' tests
+MOTION_SAMPLE_TESTS = ["tests/test_texts_warnings_and_sparse_rows.py", *GRAIN_MOTION_TESTS[:-2], "-m", "not slow", "-k",
+                       "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
+                       "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
+                       "and not flat_and_long and not steep_downhill"]
 
 # the grain's parts (geometry, contact, flight, sliding, paper mode): the fast files first, then the parts tests
 # without the four that take seconds each (the screen stops at the first failure)
@@ -431,21 +437,10 @@ SHARDS = {
                             ["tests/test_elastic_compiled.py", "tests/test_elastic_frame.py", "-m", "slow or not slow",
                              "-k", "frame_table or kink_is_not or not compiled"],
                             ["*frame_table*", "*_subsampled*", "*geometry_scales*", "*_scales*", "*arc_length*"]),
-    # the motion loop by a seeded sample: GRAIN_MOTION_TESTS without the nine that take 4-22 s each (their 150 s
-    # would be every survivor's cost) and with the texts' and rows' tests
-    "motion_sample": ("symmech/grain/motion.py",
-                      ["tests/test_texts_warnings_and_sparse_rows.py", *GRAIN_MOTION_TESTS[:-2], "-m", "not slow", "-k",
-                       "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
-                       "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
-                       "and not flat_and_long and not steep_downhill"], ["*"]),
-    # the energy budget and the warnings' and errors' texts both accurate-mode engines report: the motion_sample's
-    # selection (the texts' and rows' tests, the motion loop's fast ones)
-    "grain_outcome_sample": ("symmech/grain/outcome.py",
-                             ["tests/test_texts_warnings_and_sparse_rows.py", *GRAIN_MOTION_TESTS[:-2], "-m",
-                              "not slow", "-k",
-                              "not moreau_reference and not default_scene_impacts and not sideways_sliding_population "
-                              "and not effects_off and not period_doubling and not no_period1 and not chattering_ends "
-                              "and not flat_and_long and not steep_downhill"], ["*"]),
+    # the motion loop by a seeded sample
+    "motion_sample": ("symmech/grain/motion.py", MOTION_SAMPLE_TESTS, ["*"]),
+    # the energy budget and the warnings' and errors' texts both accurate-mode engines report
+    "grain_outcome_sample": ("symmech/grain/outcome.py", MOTION_SAMPLE_TESTS, ["*"]),
     # the chattering window's closed form and the Python loop's exact flight (slow tier, 1-8 s): the motion_sample's
     # survivors again
     "motion_chatter": ("symmech/grain/motion.py",
@@ -539,6 +534,7 @@ COVERAGE = {
                                       "estimates, runs, headline, sweeps, printed-law checks and precision study)"),
     "symmech/grain/impact_scene.py": ("a seeded sample of 30 (shard impact_scene_sample: the impact kind's refusals, "
                                       "runs through the CLI and API, headline and precision study)"),
+    "symmech/grain/outcome.py": "",
     "symmech/grain/motion_engine/driver.py": ("drawn again (744 mutants) after simulate_many's length check and "
                                               "pack's NaN refusal; 1 proven equivalent (motions' `or True`: an "
                                               "empty slice's warnings are an empty list)"),
