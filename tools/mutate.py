@@ -535,9 +535,9 @@ COVERAGE = {
     "symmech/grain/impact_scene.py": ("a seeded sample of 30 (shard impact_scene_sample: the impact kind's refusals, "
                                       "runs through the CLI and API, headline and precision study)"),
     "symmech/grain/outcome.py": "",
-    "symmech/grain/motion_engine/driver.py": ("drawn again (744 mutants) after simulate_many's length check and "
-                                              "pack's NaN refusal; 1 proven equivalent (motions' `or True`: an "
-                                              "empty slice's warnings are an empty list)"),
+    "symmech/grain/motion_engine/driver.py": ("drawn again (757 mutants) after the population's results were built in "
+                                              "bulk (packs, start vectors, counts in one tolist); its old proof "
+                                              "went with the rewritten line"),
     "symmech/grain/motion_engine/*.py (the loop)": "numba kernels (mutmut does not mutate decorated functions); "
                                                    "the engine is held to the Python reference by the "
                                                    "compiled-engine tests",
