@@ -98,6 +98,24 @@ def test_a_short_ride_by_default_is_the_run_at_atol_1e_12_and_gives_qdd():
     assert relative(default["qdd"], python["qdd"]) < 1e-2
 
 
+def test_a_short_ride_s_rows_of_integer_heights_use_the_cached_entry(monkeypatch):
+    """row_terms takes the heights [m] as float64 whatever their dtype: integer heights run the cached entry of the
+    rows kernel (no new specialisation compiled) and give the terms of the same heights as floats, bit for bit."""
+    from symmech.trolley.elastic import compiled as el_compiled, kernels as ek
+
+    calls, row_terms = [], el_compiled.row_terms
+    monkeypatch.setattr(el_compiled, "row_terms", lambda *args: calls.append(args) or row_terms(*args))
+    setup = helix(t_end=0.03, steps=10)
+    el_compiled.simulate(setup.system, setup.drive, setup.t)
+    *args, height = calls[0]
+    entries = len(ek.rows.signatures)
+    whole = row_terms(*args, np.rint(1e3 * height).astype(np.int64))
+    assert len(ek.rows.signatures) == entries
+    as_floats = row_terms(*args, np.rint(1e3 * height))
+    for key, value in as_floats.items():
+        assert np.array_equal(whole[key], value), key
+
+
 @pytest.mark.parametrize("status, finite, why, reached", [(1, 4, "required step size is less than spacing", 0.3),
                                                            (0, 2, "no finite state", 0.1)])
 def test_a_failed_compiled_solve_names_the_last_finite_time(status, finite, why, reached):

@@ -144,6 +144,23 @@ def test_timeline_integrates_from_the_last_node_only(drive):
         assert line.s(time) == pytest.approx(S0 + 8.0 * time + 3.0 / om * (1.0 - np.cos(om * time)), abs=1e-12)
 
 
+@pytest.mark.slow  # imports numba and the elastic kernels (nothing compiles)
+def test_a_compiled_run_reads_entries_typed_as_its_calls():
+    """The entries the elastic engine compiles and caches, written out as numba types: the model record, then
+    C-contiguous float64 arrays (1-D vectors, 2-D rows and channels, the 3-D spline coefficients), the tolerance and
+    the traction's time step as float64 and its key as int64, in the order solve, rows and solve_traction take them."""
+    import numba
+
+    from symmech.trolley.elastic import kernels as ek
+    from symmech.trolley.elastic.layout import MODEL
+
+    f8, vec, mat, cube = numba.float64, numba.float64[::1], numba.float64[:, ::1], numba.float64[:, :, ::1]
+    table, record = numba.types.Tuple((vec, cube)), MODEL.numba_type()
+    assert el_compiled.ENGINE.entries() == {ek.solve: (record, table, vec, vec, f8, vec),
+                                           ek.rows: (record, mat, mat, vec, mat),
+                                           ek.solve_traction: (record, table, numba.int64, vec, vec, f8, vec, f8)}
+
+
 def test_a_compiled_run_reads_the_start_record_and_table_of_the_run(drive, system):
     """The inputs of a compiled run at atol_q = 1e-7: the start's tolerances as documented (1e-7 on q, 1e-4 on q̇,
     1e-9 J on E_d), its q the quasi-static q at t[0] plus the given offsets, the model's record, and at the prescribed

@@ -462,7 +462,7 @@ SHARDS = {
                                  "tests/test_elastic_frame.py", "-m", "slow or not slow", "-k",
                                  "short_ride or rigid_rollers or kink or estimate_of_a_built or leaves_its_table "
                                  "or compiled_run_reads or jacobian or traction_agrees or assembly_matches "
-                                 "or failed_compiled_solve or turn_between"], ["*"]),
+                                 "or failed_compiled_solve or turn_between or entries_typed"], ["*"]),
     # the elastic scene (setup, run, outputs): its refusals and the engine's choice first, then its runs and warnings
     # (25 s), the curvature-shift warning's (2 s) and the work-precision study's (slow tier, 15 s); the initial state's
     # 14-20 s decay studies, the other slow tests, two integrations of the Python engine's own (9 s each) and the CLI's

@@ -29,7 +29,7 @@ import numpy as np
 from symmech.numerics import build
 from symmech.trolley import model
 from symmech.trolley.elastic import frame as el_frame, simulate as el_sim
-from symmech.trolley.elastic.layout import LAYOUTS, MODEL, N_CHANNELS, N_GEOMETRY, state as state_layout  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
+from symmech.trolley.elastic.layout import LAYOUTS, MODEL, state as state_layout  # noqa: F401 (LAYOUTS: the engine protocol reads it here)
 
 
 @dataclass(frozen=True)
@@ -203,17 +203,16 @@ COLD_COMPILE_SECONDS = 130.0
 
 def _entry_signatures() -> dict:
     """The cached entries and the argument types :func:`simulate` and :func:`row_terms` call them with: the
-    model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), the rest from small arrays."""
+    model record's from its layout (:data:`symmech.trolley.elastic.layout.MODEL`), then C-contiguous float64
+    arrays (vectors, rows, a spline table's knots and coefficients), float64 scalars and the traction's int64 key."""
     # numba: imported by a run, not by choosing the engine or its estimate
     import numba
     from symmech.trolley.elastic import kernels as ek
-    mdl = MODEL.numba_type()
-    tab = (np.zeros(2), np.zeros((4, 1, N_CHANNELS)))
-    solve = (tab, np.zeros(4), np.zeros(2), 1e-8, np.zeros(4))
-    rows = (np.zeros((2, N_CHANNELS)), np.zeros((2, 3)), np.zeros(2), np.zeros((2, 4)))
-    traction = ((np.zeros(2), np.zeros((4, 1, N_GEOMETRY))), 1, np.zeros(6), np.zeros(2), 1e-8, np.zeros(6), 1.0)
-    return {entry: (mdl, *(numba.typeof(a) for a in args))
-            for entry, args in ((ek.solve, solve), (ek.rows, rows), (ek.solve_traction, traction))}
+    f8, vec, mat, cube = numba.float64, numba.float64[::1], numba.float64[:, ::1], numba.float64[:, :, ::1]
+    mdl, table = MODEL.numba_type(), numba.types.Tuple((vec, cube))
+    return {ek.solve: (mdl, table, vec, vec, f8, vec),  # spline, y0, t, rtol, atol
+            ek.rows: (mdl, mat, mat, vec, mat),  # channels, nu, height, Y
+            ek.solve_traction: (mdl, table, numba.int64, vec, vec, f8, vec, f8)}  # spline, key, y0, t, rtol, atol, max step
 
 
 ENGINE = build.Engine("elastic", "symmech.trolley.elastic.kernels", _entry_signatures, COLD_COMPILE_SECONDS)
