@@ -53,6 +53,7 @@ def both(setup, rtol):
         st = elastic_scene.Setup(**{**setup.__dict__, "engine": engine})
         runs[engine] = elastic_scene.simulate(st, rtol=rtol)
     assert runs["compiled"]["engine"] == "compiled" and runs["python"]["engine"] == "python"
+    assert runs["compiled"]["engine_reason"] == 'numerics.engine = "compiled"'  # why the scene chose it, as it said
     return runs["compiled"], runs["python"]
 
 
@@ -114,6 +115,24 @@ def test_a_short_ride_s_rows_of_integer_heights_use_the_cached_entry(monkeypatch
     as_floats = row_terms(*args, np.rint(1e3 * height))
     for key, value in as_floats.items():
         assert np.array_equal(whole[key], value), key
+
+
+def test_a_short_ride_at_integer_output_times_runs_the_cached_entries():
+    """Output times given as integers [s] (0 and 1 s) are read as float64: the run calls the cached entries (numba
+    may compile nothing more) and equals the run at the same times as floats, bit for bit."""
+    from symmech.trolley.elastic import compiled as el_compiled, kernels as ek
+
+    setup = helix()
+    as_floats = el_compiled.simulate(setup.system, setup.drive, [0.0, 1.0])
+    for entry in (ek.solve, ek.rows):
+        entry.disable_compile()
+    try:
+        whole = el_compiled.simulate(setup.system, setup.drive, [0, 1])
+    finally:
+        for entry in (ek.solve, ek.rows):
+            entry.disable_compile(False)
+    for key in ("P", "q", "qd", "t"):
+        assert np.array_equal(whole[key], as_floats[key]), key
 
 
 @pytest.mark.parametrize("status, finite, why, reached", [(1, 4, "required step size is less than spacing", 0.3),
