@@ -50,7 +50,9 @@ SLIDING = (("mu_s", "1", "sliding friction coefficient (sliding.friction)"),
            ("scan_step", "s", "the native engine's scan step (numerics.scan_step): v_stop's time scale"),
            ("rest_velocity", "m/s", "a bounce whose contact point leaves slower than this lands "
                                     "(numerics.rest_velocity)"),
-           ("period", "s", "vibration period (1 s without vibration): the chatter guard's time scale"))
+           ("period", "s", "vibration period (1 s without vibration): the chatter guard's time scale"),
+           ("max_impacts", "1", "the simulation ends at the contact after this many impacts, as the native engine "
+                                "stops (numerics.max_impacts)"))
 # the discrete states (r[VR_D...]): name, unit, description, exported as an output; the chatter guard's ring of
 # the last ZENO_IMPACTS impact times follows them
 DISCRETE = (("regime", "1", "regime: 0 flight, 1 slip, 2 stick", True),
@@ -58,7 +60,11 @@ DISCRETE = (("regime", "1", "regime: 0 flight, 1 slip, 2 stick", True),
             ("ref0", "1", "the slip's reference direction, X component", False),
             ("ref1", "1", "the slip's reference direction, Y component", False),
             ("impacts", "1", "number of impacts so far", True),
-            ("last_impact", "s", "time of the latest impact (0 before the first)", True))
+            ("last_impact", "s", "time of the latest impact (0 before the first)", True),
+            ("rocking", "1", "number of rocking contacts (held on a plane that pulls away: put on the plane, the "
+                             "tilting spin dropped, flying on)", True),
+            ("stopped", "1", "1 once the simulation ended at numerics.max_impacts impacts", True),
+            ("notice", "1", "what the last event update tells the importer (c/grain.c's grain_notice)", False))
 # an indicator below -MISSED_EVENT x the length scale without its event: the importer stepped over two of its
 # crossings (in flight: the grain has sunk into the surface)
 MISSED_EVENT = 1e-6
@@ -146,7 +152,8 @@ def grain(sc, native: Table | None) -> ExportModel:
     values = dict(zip(params, (*model.g_k, vib.amplitude, vib.omega, vib.phase, *vib.direction, *model.inertia,
                                *model.axes, model.mass, model.law.e_n, model.law.e_t, model.law.mu, model.mu,
                                1.0 if max(model.axes) == min(model.axes) else 0.0, sc.numerics.tolerance,
-                               sc.numerics.scan_step, sc.numerics.rest_velocity, model.period)))
+                               sc.numerics.scan_step, sc.numerics.rest_velocity, model.period,
+                               sc.numerics.max_impacts)))
     y0 = np.concatenate([start.r, start.v, start.q, start.w])
     nominal = nominals(sc)
     n = len(gm.STATE)
@@ -188,7 +195,7 @@ CALLED = (("grain_sliding", ("normal_force", "slip", "stick_force", "slip_direct
 # the parameters and discrete states c/grain.c reads by name: its macro, the first name
 READ = (("P_G", "gX"), ("P_AMPLITUDE", "A"), ("P_OMEGA", "omega"), ("P_AXES", "a"), ("P_MU_S", "mu_s"),
         ("P_TOLERANCE", "tolerance"), ("P_SCAN_STEP", "scan_step"), ("P_REST_VELOCITY", "rest_velocity"),
-        ("P_PERIOD", "period"))
+        ("P_PERIOD", "period"), ("P_MAX_IMPACTS", "max_impacts"))
 
 
 def _prelude(params: list[str]) -> list[str]:
@@ -205,9 +212,8 @@ def _prelude(params: list[str]) -> list[str]:
     lines = [f"/* {IDENTIFIER}: the regimes of c/grain.c over the generated grain_motion and grain_sliding (written "
              "by `symmech export`) */", '#include "model.h"']
     lines += [f"#define {macro} {params.index(name)}" for macro, name in READ]
-    lines += [f"#define D_{name.upper()} {k}" for k, name in enumerate(discrete[:2])]
-    lines += ["#define D_REF 2", f"#define D_IMPACTS {discrete.index('impacts')}",
-              f"#define D_LAST_IMPACT {discrete.index('last_impact')}", f"#define D_TIMES {len(discrete)}",
+    lines += [f"#define D_{name.upper()} {k}" for k, name in enumerate(discrete) if name not in ("ref0", "ref1")]
+    lines += [f"#define D_REF {discrete.index('ref0')}", f"#define D_TIMES {len(discrete)}",
               f"#define ZENO_IMPACTS {motion.ZENO_IMPACTS}", f"#define ZENO_INTERVAL {motion.ZENO_INTERVAL!r}"]
     lines += [f"#define Y_{name.upper()} {i}" for i, (name, _, _) in enumerate(gm.STATE)]
     for prefix, layout in C_LAYOUTS:

@@ -3,6 +3,7 @@
    of what the standard defines. Functions of features the model does not have (integer, boolean and string
    variables, FMU states, directional derivatives, input derivatives, asynchronous steps) return fmi2Error. */
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -51,6 +52,7 @@ typedef struct {
     const fmi2CallbackFunctions *callbacks;
     double tolerance;  /* Co-Simulation: relative tolerance of DOP853 */
     double last_time;  /* end of the last successful step */
+    int terminated;    /* Co-Simulation: the model ended the simulation (fmi2Terminated) */
 } Instance;
 
 static fmi2Status fail(Instance *inst, const char *message)
@@ -59,6 +61,15 @@ static fmi2Status fail(Instance *inst, const char *message)
         inst->callbacks->logger(inst->callbacks->componentEnvironment, MODEL_IDENTIFIER, fmi2Error,
                                 "logStatusError", "%s", message);
     return fmi2Error;
+}
+
+/* the model's notices (a rocking contact, the stop at max_impacts) as warnings with their time */
+static void notice(void *env, double t, const char *message)
+{
+    Instance *inst = env;
+    if (inst->callbacks && inst->callbacks->logger)
+        inst->callbacks->logger(inst->callbacks->componentEnvironment, MODEL_IDENTIFIER, fmi2Warning,
+                                "logStatusWarning", "t = %.17g s: %s", t, message);
 }
 
 FMI2_EXPORT const char *fmi2GetTypesPlatform(void) { return "default"; }
@@ -88,6 +99,8 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     inst->callbacks = functions;
     inst->tolerance = DEFAULT_TOLERANCE;
     symmech_reset(&inst->model);
+    inst->model.notice = notice;
+    inst->model.notice_env = inst;
     return inst;
 }
 
@@ -121,6 +134,7 @@ FMI2_EXPORT fmi2Status fmi2Reset(fmi2Component c)
     Instance *inst = c;
     symmech_reset(&inst->model);
     inst->tolerance = DEFAULT_TOLERANCE;
+    inst->terminated = 0;
     return fmi2OK;
 }
 
@@ -157,7 +171,8 @@ FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *inf
     Instance *inst = c;
     int changed = symmech_event_update(&inst->model);
     memset(info, 0, sizeof *info);
-    info->valuesOfContinuousStatesChanged = changed > 0;
+    info->valuesOfContinuousStatesChanged = changed == 1;
+    info->terminateSimulation = changed == SYMMECH_STOP;
     return changed < 0 ? fail(inst, "fmi2NewDiscreteStates: non-finite state at the event") : fmi2OK;
 }
 
@@ -236,6 +251,10 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     inst->last_time = inst->model.r[VR_TIME];
+    if (status == 1) {  /* the model ended the simulation at last_time (its notice logged) */
+        inst->terminated = 1;
+        return fmi2Discard;
+    }
     if (status == -2)
         return fail(inst, "fmi2DoStep: " LEFT_MODEL_MESSAGE);
     return status == 0 ? fmi2OK : fail(inst, "fmi2DoStep: the integration failed (singular M or non-finite state)");
@@ -248,6 +267,14 @@ FMI2_EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s
     Instance *inst = c;
     if (s != fmi2LastSuccessfulTime) return fail(inst, "fmi2GetRealStatus: only fmi2LastSuccessfulTime");
     *value = inst->last_time;
+    return fmi2OK;
+}
+
+FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
+{
+    Instance *inst = c;
+    if (s != fmi2Terminated) return fail(inst, "fmi2GetBooleanStatus: only fmi2Terminated");
+    *value = inst->terminated;
     return fmi2OK;
 }
 
@@ -276,5 +303,4 @@ UNSUPPORTED(fmi2GetRealOutputDerivatives, const fmi2ValueReference vr[], size_t 
             fmi2Real value[])
 UNSUPPORTED(fmi2GetStatus, const fmi2StatusKind s, fmi2Status *value)
 UNSUPPORTED(fmi2GetIntegerStatus, const fmi2StatusKind s, fmi2Integer *value)
-UNSUPPORTED(fmi2GetBooleanStatus, const fmi2StatusKind s, fmi2Boolean *value)
 UNSUPPORTED(fmi2GetStringStatus, const fmi2StatusKind s, fmi2String *value)

@@ -5,6 +5,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -53,12 +54,22 @@ typedef struct {
     fmi3InstanceEnvironment environment;
     fmi3LogMessageCallback log;
     double tolerance;  /* Co-Simulation: relative tolerance of DOP853 */
+    bool early_return_allowed;  /* Co-Simulation: fmi3DoStep may return before the step's end */
 } Instance;
 
 static fmi3Status fail(Instance *inst, const char *message)
 {
     if (inst && inst->log) inst->log(inst->environment, fmi3Error, "logStatusError", message);
     return fmi3Error;
+}
+
+/* the model's notices (a rocking contact, the stop at max_impacts) as warnings with their time */
+static void notice(void *env, double t, const char *message)
+{
+    Instance *inst = env;
+    char line[512];
+    snprintf(line, sizeof line, "t = %.17g s: %s", t, message);
+    if (inst->log) inst->log(inst->environment, fmi3Warning, "logStatusWarning", line);
 }
 
 static Instance *instantiate(fmi3String token, fmi3InstanceEnvironment environment, fmi3LogMessageCallback log)
@@ -73,6 +84,8 @@ static Instance *instantiate(fmi3String token, fmi3InstanceEnvironment environme
     inst->log = log;
     inst->tolerance = DEFAULT_TOLERANCE;
     symmech_reset(&inst->model);
+    inst->model.notice = notice;
+    inst->model.notice_env = inst;
     return inst;
 }
 
@@ -105,9 +118,10 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fm
                                                      fmi3IntermediateUpdateCallback intermediateUpdate)
 {
     (void)instanceName; (void)resourcePath; (void)visible; (void)loggingOn; (void)eventModeUsed;
-    (void)earlyReturnAllowed; (void)requiredIntermediateVariables; (void)nRequiredIntermediateVariables;
-    (void)intermediateUpdate;
-    return instantiate(instantiationToken, environment, logMessage);
+    (void)requiredIntermediateVariables; (void)nRequiredIntermediateVariables; (void)intermediateUpdate;
+    Instance *inst = instantiate(instantiationToken, environment, logMessage);
+    if (inst != NULL) inst->early_return_allowed = earlyReturnAllowed;
+    return inst;
 }
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
@@ -192,8 +206,9 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boole
 {
     Instance *inst = instance;
     int changed = symmech_event_update(&inst->model);
-    *discreteStatesNeedUpdate = *terminateSimulation = *nominalsOfContinuousStatesChanged = false;
-    *valuesOfContinuousStatesChanged = changed > 0;
+    *discreteStatesNeedUpdate = *nominalsOfContinuousStatesChanged = false;
+    *terminateSimulation = changed == SYMMECH_STOP;
+    *valuesOfContinuousStatesChanged = changed == 1;
     *nextEventTimeDefined = false;
     *nextEventTime = 0.0;
     return changed < 0 ? fail(inst, "fmi3UpdateDiscreteStates: non-finite state at the event") : fmi3OK;
@@ -296,6 +311,11 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
     int status = symmech_integrate(&inst->model, currentCommunicationPoint + communicationStepSize,
                                    inst->tolerance, ABSOLUTE_TOLERANCE * inst->tolerance);
     *lastSuccessfulTime = inst->model.r[VR_TIME];
+    if (status == 1) {  /* the model ended the simulation at lastSuccessfulTime (its notice logged) */
+        *terminateSimulation = true;
+        *earlyReturn = inst->early_return_allowed;
+        return fmi3OK;
+    }
     if (status == -2) {
         *terminateSimulation = true;
         return fail(inst, "fmi3DoStep: " LEFT_MODEL_MESSAGE);

@@ -11,6 +11,7 @@
 #include "symmech_model.h"
 
 enum { FLIGHT, SLIP, STICK };
+enum { NO_NOTICE, MAX_IMPACTS_NOTICE, ROCKING_NOTICE };  /* d[D_NOTICE]: what the last update tells */
 
 static double *discrete(double *p) { return p + N_P; }
 
@@ -117,9 +118,9 @@ static void settle(double t, double *y, double *p, int may_stick)
     set_reference(t, y, p);
 }
 
-/* landing.py's land: the plastic normal impulse at the lowest point, the grain put on the plane, then the
-   sliding phase's start (sliding_phase.py: v_stop = tolerance (|g| + |n|) scan_step, settled) */
-static void land(double t, double *y, double *p)
+/* landing.py's land: the plastic normal impulse at the lowest point, the grain put on the plane (the centre at
+   the support height, v_z = 0, an ellipsoid's tilting spin dropped) */
+static void put_on_plane(double t, double *y, const double *p)
 {
     double contact[CONTACT_SIZE], plastic[PLASTIC_SIZE], impulse[COULOMB_SIZE] = {0.0}, after[N_X];
     call_impact_contact(t, y, p, NULL, contact);
@@ -127,6 +128,13 @@ static void land(double t, double *y, double *p)
     impulse[COULOMB_P + 2] = plastic[PLASTIC_P_I];
     call_impact_state(t, y, p, impulse, after);
     call_rest_on_plane(t, after, p, NULL, y);
+}
+
+/* a landing: put_on_plane, then the sliding phase's start (sliding_phase.py: v_stop = tolerance (|g| + |n|)
+   scan_step, settled) */
+static void land(double t, double *y, double *p)
+{
+    put_on_plane(t, y, p);
     double g = sqrt(p[P_G] * p[P_G] + p[P_G + 1] * p[P_G + 1] + p[P_G + 2] * p[P_G + 2]);
     discrete(p)[D_V_STOP] = p[P_TOLERANCE] * (g + fabs(normal_force(t, p))) * p[P_SCAN_STEP];
     settle(t, y, p, 1);
@@ -153,18 +161,41 @@ static double bounce(double t, double *y, double *p, const double *contact)
     return contact_after[CONTACT_U + 2];
 }
 
+/* A contact the native engine never reaches (flight_phase.py's fly, status "resting"): after the last bounce the
+   next flight stays within the gap's round-off, the plane pulling away (n <= 0: no landing). Here the gap fell
+   back through zero, the point approaching at u < 0 [m/s], after a hop since the last impact whose height
+   |u| (t - t_last) / 4 (a parabola's) stayed within the gap's round-off. */
+static int held_on_plane(double t, const double *y, const double *p, double u)
+{
+    const double *d = discrete(p);
+    return normal_force(t, p) <= 0.0 && d[D_IMPACTS] > 0.0 && -u * (t - d[D_LAST_IMPACT]) / 4.0 <= gap_noise(y, p);
+}
+
 /* loop.py's flight branch at a contact (the gap at most its round-off, the point not leaving: the native engine
-   locates the gap's falls only): a bounce where the point approaches, then a landing where it leaves slower than
-   rest_velocity (or touches without approaching) on a plane that pushes */
+   locates the gap's falls only): a rocking contact where the grain is held on a plane that pulls away (loop.py:
+   put on the plane, its tilting spin dropped, flying on; counted and told), the stop at numerics.max_impacts
+   before a bounce, a bounce where the point approaches, then a landing where it leaves slower than rest_velocity
+   (or touches without approaching) on a plane that pushes */
 static int flight_event(double t, double *y, double *p)
 {
-    double gap[N_Z], contact[CONTACT_SIZE], u_n = 0.0;
+    double *d = discrete(p), gap[N_Z], contact[CONTACT_SIZE], u_n = 0.0;
     int changed = 0;
     grain_motion_event_values(t, y, p, gap);
     if (gap[0] > gap_noise(y, p)) return 0;
     call_impact_contact(t, y, p, NULL, contact);
     if (contact[CONTACT_U + 2] > velocity_noise(y, p)) return 0;  /* the gap rising through zero after a bounce or a lift-off */
+    if (contact[CONTACT_U + 2] < -velocity_noise(y, p) && held_on_plane(t, y, p, contact[CONTACT_U + 2])) {
+        put_on_plane(t, y, p);
+        d[D_ROCKING] += 1.0;
+        d[D_NOTICE] = ROCKING_NOTICE;
+        return 1;
+    }
     if (contact[CONTACT_U + 2] < -velocity_noise(y, p)) {
+        if (d[D_IMPACTS] >= p[P_MAX_IMPACTS]) {
+            d[D_STOPPED] = 1.0;
+            d[D_NOTICE] = MAX_IMPACTS_NOTICE;
+            return SYMMECH_STOP;
+        }
         u_n = bounce(t, y, p, contact);
         changed = 1;
     }
@@ -175,10 +206,26 @@ static int flight_event(double t, double *y, double *p)
     return changed;
 }
 
+/* outcome.py's warnings, as the FMU takes them */
+const char *grain_notice(const double *p)
+{
+    switch ((int)p[N_P + D_NOTICE]) {
+    case MAX_IMPACTS_NOTICE:
+        return "the simulation ends at the contact after numerics.max_impacts impacts (parameter max_impacts), "
+               "as the native engine stops";
+    case ROCKING_NOTICE:
+        return "a rocking contact: a tumbling ellipsoid held on the plane by its spin while the surface accelerates "
+               "away; rocking is not modelled, so its tilting spin was dropped and it flies on (output rocking)";
+    default: return NULL;
+    }
+}
+
 int grain_event_update(double t, double *y, double *p)
 {
     double z[N_Z];
     int regime = regime_of(p);
+    discrete(p)[D_NOTICE] = NO_NOTICE;
+    if (discrete(p)[D_STOPPED] != 0.0) return SYMMECH_STOP;
     if (regime == FLIGHT) return flight_event(t, y, p);
     grain_event_values(t, y, p, z);
     if (z[1] <= 0.0) {  /* the normal force reached zero: lift-off */

@@ -116,7 +116,9 @@ int symmech_event_update(SymmechModel *m)
 #if N_Z > 0
     if (symmech_derivatives(m) != 0) return -1;
     int changed = MODEL_EVENT_UPDATE(m->r[VR_TIME], m->r + VR_X, m->r + VR_P);
-    if (changed <= 0) return changed;
+    const char *notice = MODEL_NOTICE(m->r + VR_P);
+    if (notice != NULL && m->notice != NULL) m->notice(m->notice_env, m->r[VR_TIME], notice);
+    if (changed <= 0 || changed == SYMMECH_STOP) return changed;
     for (int j = 0; j < N_X; j++)
         if (!isfinite(m->r[VR_X + j])) return -1;
     m->dirty = 1;
@@ -352,7 +354,9 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
             memcpy(y, y_event, sizeof y_event);
             m->r[VR_TIME] = t;
             m->dirty = 1;
-            if (symmech_event_update(m) < 0) return -1;
+            int update = symmech_event_update(m);
+            if (update < 0) return -1;
+            if (update == SYMMECH_STOP) return 1;
             if (rates(m, t, y, k[0]) != 0) return -1;
             MODEL_EVENTS(t, y, m->r + VR_P, z0);
             continue;

@@ -33,6 +33,10 @@ typedef struct {
     double mass[N_X * N_X];  /* work space: M of M y' = F, overwritten by its LU factors */
     int dirty;
     double horizon;  /* the integrator may step up to this time and interpolate back (0: to each t_end only) */
+    /* told of each notice of the model's event updates (MODEL_NOTICE: a rocking contact, the stop), with its
+       time; NULL: not told */
+    void (*notice)(void *env, double t, const char *message);
+    void *notice_env;
 #ifdef MODEL_STIFF
     Radau radau;
 #endif
@@ -46,14 +50,17 @@ int symmech_derivatives(SymmechModel *m);
 /* integrate from r[VR_TIME] to t_end (DOP853, or Radau IIA for a stiff model: MODEL_STIFF), error control
    rtol and atol (Radau: atol, at least RADAU_ATOL_FLOOR, times each state's nominal); with state events (DOP853
    only: a stiff model has none) each fall of an indicator through zero located on the step's dense output and
-   the model's update applied there (symmech_event_update); 0, or -1 on a singular M, a non-finite state or a step
-   size below round-off, -2 where the motion left the model (symmech_left_model; r[VR_TIME] is then that time) */
+   the model's update applied there (symmech_event_update); 0, 1 where the model ended the simulation at an event
+   (SYMMECH_STOP: r[VR_TIME] is then its time), or -1 on a singular M, a non-finite state or a step size below
+   round-off, -2 where the motion left the model (symmech_left_model; r[VR_TIME] is then that time) */
 int symmech_integrate(SymmechModel *m, double t_end, double rtol, double atol);
 /* state events (N_Z > 0): at an indicator's fall through zero, the model's update of the state and its
-   discrete states (MODEL_EVENT_UPDATE); 1 when something changed, 0 when not, -1 on a non-finite state. The
+   discrete states (MODEL_EVENT_UPDATE), its notice passed to m->notice; 1 when something changed, 0 when not,
+   SYMMECH_STOP when the model ends the simulation there (and at every update after), -1 on a non-finite state. The
    importer calls it at the events it locates (Model Exchange), symmech_integrate at those it locates itself
    (Co-Simulation, the example program). */
 int symmech_event_update(SymmechModel *m);
+#define SYMMECH_STOP 2
 /* the start: the derivatives, and the model's update where an event holds at the start values (a grain that
    starts on the surface lands: the update a Model Exchange importer asks for after the initialization, made for
    Co-Simulation and the example program too); 0, or -1 on a singular M or a non-finite state */
