@@ -167,7 +167,7 @@ static double bounce(double t, double *y, double *p, const double *contact)
    |u| (t - t_last) / 4 (a parabola's) stayed within the gap's round-off. */
 static int held_on_plane(double t, const double *y, const double *p, double u)
 {
-    const double *d = discrete(p);
+    const double *d = p + N_P;
     return normal_force(t, p) <= 0.0 && d[D_IMPACTS] > 0.0 && -u * (t - d[D_LAST_IMPACT]) / 4.0 <= gap_noise(y, p);
 }
 

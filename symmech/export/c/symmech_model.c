@@ -173,61 +173,73 @@ static int dop853_step(SymmechModel *m, double t, const double *y, double h, dou
 }
 
 #if N_Z > 0
-/* The accepted step h from (t, y) to y1 (stages k[0..DOP853_STAGES], the last f at y1) as its interpolant of
-   order 7 (scipy's DOP853._dense_output_impl): the 3 extra stages into k, the coefficients F row by row */
+/* one accepted DOP853 step as its interpolant of order 7: from (t, y) of length h, the coefficients F row by row */
+typedef struct {
+    double t, h, y[N_X];
+    double F[DOP853_POWER][N_X];
+} Dense;
+
+/* The accepted step h from (t, y) to y1 (stages k[0..DOP853_STAGES], the last f at y1) as its interpolant
+   (scipy's DOP853._dense_output_impl): the 3 extra stages into k, the step into s */
 static int dop853_dense(SymmechModel *m, double t, const double *y, const double *y1, double h, double k[][N_X],
-                        double F[][N_X])
+                        Dense *s)
 {
-    for (int s = DOP853_STAGES + 1; s < DOP853_EXTENDED; s++)
-        if (stage(m, t, y, h, k, s) != 0) return -1;
+    for (int st = DOP853_STAGES + 1; st < DOP853_EXTENDED; st++)
+        if (stage(m, t, y, h, k, st) != 0) return -1;
+    s->t = t;
+    s->h = h;
+    memcpy(s->y, y, sizeof s->y);
     for (int i = 0; i < N_X; i++) {
         double dy = y1[i] - y[i];
-        F[0][i] = dy;
-        F[1][i] = h * k[0][i] - dy;
-        F[2][i] = 2.0 * dy - h * (k[DOP853_STAGES][i] + k[0][i]);
+        s->F[0][i] = dy;
+        s->F[1][i] = h * k[0][i] - dy;
+        s->F[2][i] = 2.0 * dy - h * (k[DOP853_STAGES][i] + k[0][i]);
         for (int r = 0; r < DOP853_POWER - 3; r++) {
             double sum = 0.0;
             for (int j = 0; j < DOP853_EXTENDED; j++) sum += DOP853_D[r][j] * k[j][i];
-            F[3 + r][i] = h * sum;
+            s->F[3 + r][i] = h * sum;
         }
     }
     return 0;
 }
 
 /* the interpolant at the fraction x of the step: y at its start plus the nested form in x and 1 - x */
-static void dense_at(const double F[][N_X], const double *y, double x, double *out)
+static void dense_at(const Dense *s, double x, double *out)
 {
     for (int i = 0; i < N_X; i++) {
         double acc = 0.0;
         for (int r = 0; r < DOP853_POWER; r++) {
-            acc += F[DOP853_POWER - 1 - r][i];
+            acc += s->F[DOP853_POWER - 1 - r][i];
             acc *= r % 2 == 0 ? x : 1.0 - x;
         }
-        out[i] = y[i] + acc;
+        out[i] = s->y[i] + acc;
     }
 }
 
-/* indicator i at the fraction x of the step from (t, y) of length h, the interpolated state into yx */
-static double indicator_at(SymmechModel *m, double t, const double *y, double h, const double F[][N_X], double x,
-                           int i, double *yx)
+/* indicator i at the fraction x of the step s */
+static double indicator_at(SymmechModel *m, const Dense *s, double x, int i)
 {
-    double z[N_Z];
-    dense_at(F, y, x, yx);
-    MODEL_EVENTS(t + x * h, yx, m->r + VR_P, z);
+    double z[N_Z], yx[N_X];
+    dense_at(s, x, yx);
+    MODEL_EVENTS(s->t + x * s->h, yx, m->r + VR_P, z);
     return z[i];
+}
+
+/* a bracket [lo, hi] of fractions of the step s still wider than 4 ulp of t */
+static int wide(const Dense *s, double lo, double hi)
+{
+    return (hi - lo) * s->h > 4 * 2.2e-16 * fmax(fabs(s->t), s->h);
 }
 
 /* Indicator i's fall through zero between the fractions lo (where it is f_lo > 0) and hi (f_hi <= 0) of the step,
    by the Illinois method on the interpolant, to 4 ulp of t: the fraction on the side where it is <= 0 */
-static double fall_of(SymmechModel *m, double t, const double *y, double h, const double F[][N_X], int i, double lo,
-                      double f_lo, double hi, double f_hi)
+static double fall_of(SymmechModel *m, const Dense *s, int i, double lo, double f_lo, double hi, double f_hi)
 {
-    double yx[N_X];
     int side = 0;
-    for (int it = 0; it < 200 && (hi - lo) * h > 4 * 2.2e-16 * fmax(fabs(t), h); it++) {
+    for (int it = 0; it < 200 && wide(s, lo, hi); it++) {
         double x = hi - f_hi * (hi - lo) / (f_hi - f_lo);
         if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
-        double f = indicator_at(m, t, y, h, F, x, i, yx);
+        double f = indicator_at(m, s, x, i);
         if (f > 0.0) {
             lo = x; f_lo = f;
             if (side == -1) f_hi *= 0.5;
@@ -241,63 +253,151 @@ static double fall_of(SymmechModel *m, double t, const double *y, double h, cons
     return hi;
 }
 
-/* Indicator i non-positive at the fractions lo and hi of the step but lower at hi: it may have risen above zero
-   and fallen back between them (a short flight after a bounce). Its maximum there by golden section on the
-   interpolant, stopped at the first positive value: that fraction and the value into *f, or -1 when it stays
-   non-positive (to 4 ulp of t) */
-static double positive_between(SymmechModel *m, double t, const double *y, double h, const double F[][N_X], int i,
-                               double lo, double hi, double *f)
+/* Golden section on the interpolant for the extremum of indicator i between the fractions lo and hi of the step,
+   its maximum (sign 1: stopped at the first positive value) or its minimum (sign -1: stopped at the first value
+   <= 0). That fraction and the value into *f, or -1 when none is found (to 4 ulp of t). */
+static double golden(SymmechModel *m, const Dense *s, int i, double lo, double hi, int sign, double *f)
 {
     const double golden = 0.6180339887498949;
-    double yx[N_X], a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
-    double fa = indicator_at(m, t, y, h, F, a, i, yx), fb = indicator_at(m, t, y, h, F, b, i, yx);
-    while (fa <= 0.0 && fb <= 0.0 && (hi - lo) * h > 4 * 2.2e-16 * fmax(fabs(t), h)) {
-        if (fa >= fb) {
+    double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo);
+    double fa = indicator_at(m, s, a, i), fb = indicator_at(m, s, b, i);
+    while ((sign > 0 ? fa <= 0.0 && fb <= 0.0 : fa > 0.0 && fb > 0.0) && wide(s, lo, hi)) {
+        if (sign * fa >= sign * fb) {
             hi = b; b = a; fb = fa;
             a = hi - golden * (hi - lo);
-            fa = indicator_at(m, t, y, h, F, a, i, yx);
+            fa = indicator_at(m, s, a, i);
         } else {
             lo = a; a = b; fa = fb;
             b = lo + golden * (hi - lo);
-            fb = indicator_at(m, t, y, h, F, b, i, yx);
+            fb = indicator_at(m, s, b, i);
         }
     }
-    if (fa > 0.0) { *f = fa; return a; }
-    if (fb > 0.0) { *f = fb; return b; }
+    if (sign > 0 ? fa > 0.0 : fa <= 0.0) { *f = fa; return a; }
+    if (sign > 0 ? fb > 0.0 : fb <= 0.0) { *f = fb; return b; }
     return -1.0;
 }
 
-/* The first fall of an indicator through zero within the accepted step from (t, y) of length h (z0: the
-   indicators at its start, the interpolant F, y1 its end): the interpolant sampled at SCAN_POINTS fractions of the
-   step; a fall bracketed between two samples (positive, then non-positive; or non-positive at both and lower at
-   the second, with a positive value between them: positive_between) located by fall_of, the earliest of the
-   indicators falling there. Its fraction of the step (in (0, 1]) and the state there into y_event; 0 when none
-   falls */
-#define SCAN_POINTS 8
-static double first_fall(SymmechModel *m, double t, const double *y, double h, const double F[][N_X],
-                         const double *z0, const double *y1, double *y_event)
+/* A grazing fall of indicator i, positive at the fraction lo (f_lo): where it dips to <= 0 between lo and hi and
+   rises back (the native engine's scan: a local minimum among its samples, minimised there), the fall located
+   before the dip's bottom; 2 when it stays positive */
+static double dip_of(SymmechModel *m, const Dense *s, int i, double lo, double f_lo, double hi)
 {
-    double before[N_Z], z[N_Z], yx[N_X];
-    memcpy(before, z0, sizeof before);
+    double f;
+    double x = golden(m, s, i, lo, hi, -1, &f);
+    return x < 0.0 ? 2.0 : fall_of(m, s, i, lo, f_lo, x, f);
+}
+
+/* samples of the scan per step; the fraction of the previous step's last sample but one */
+#define SCAN_POINTS 8
+#define BEFORE_LAST ((double)(SCAN_POINTS - 1) / SCAN_POINTS)
+/* where an indicator's slope at a step's start or end is read, as a fraction of the step (one eighth of a
+   sample's spacing) */
+#define PROBE (1.0 / (8 * SCAN_POINTS))
+
+/* The first event of indicator i in the samples z[0..j] (z[j][i] the newest at the fraction x) of the step s,
+   found when z[j] is sampled: a fall bracketed between z[j - 1] and z[j] (positive, then non-positive; or both
+   non-positive and lower at z[j], with a positive value between them: a short flight after a bounce), or a
+   grazing dip around z[j - 1] where it is a positive local minimum (z[-1] = z_before, the previous step's sample at
+   BEFORE_LAST, NAN without one); 2 when none */
+static double event_of(SymmechModel *m, const Dense *s, int i, const double z[][N_Z], int j, double z_before)
+{
+    double lo = (double)(j - 1) / SCAN_POINTS, x = (double)j / SCAN_POINTS, f_lo = z[j - 1][i], f_up;
+    if (z[j][i] <= 0.0) {
+        if (f_lo > 0.0) return fall_of(m, s, i, lo, f_lo, x, z[j][i]);
+        double up = z[j][i] < f_lo ? golden(m, s, i, lo, x, 1, &f_up) : -1.0;
+        return up < 0.0 ? 2.0 : fall_of(m, s, i, up, f_up, x, z[j][i]);
+    }
+    double left = j >= 2 ? z[j - 2][i] : z_before;
+    if (!(f_lo > 0.0 && f_lo <= z[j][i])) return 2.0;
+    if (j >= 2) return f_lo < left ? dip_of(m, s, i, (double)(j - 2) / SCAN_POINTS, left, x) : 2.0;
+    /* at the step's start: falling into it from the previous step, or (no previous sample) falling at its start */
+    if (isnan(left) ? indicator_at(m, s, PROBE, i) < f_lo : f_lo < left)
+        return dip_of(m, s, i, 0.0, f_lo, x);
+    return 2.0;
+}
+
+/* The first event within the accepted step s (z0: the indicators at its start, y1 its end): the interpolant
+   sampled at SCAN_POINTS fractions, each indicator's first event (event_of), the earliest of them; where the
+   step is the integration's last (end_of_run), a grazing dip after its last sample but one where the indicator
+   falls into the end. A grazing dip that straddles the start of s and lies in the previous step (prev, its
+   sample z_before at BEFORE_LAST; NULL, none) is located there: *where is then prev. The fraction of the step
+   (in (0, 1]) and the state there into y_event; 0 when nothing falls; z_last: the sample at BEFORE_LAST. */
+static double first_fall(SymmechModel *m, const Dense *s, const Dense *prev, const double *z_before,
+                         const double *z0, const double *y1, int end_of_run, double *y_event, const Dense **where,
+                         double *z_last)
+{
+    double z[SCAN_POINTS + 1][N_Z], yx[N_X];
+    memcpy(z[0], z0, sizeof z[0]);
+    *where = s;
     for (int j = 1; j <= SCAN_POINTS; j++) {
-        double x = (double)j / SCAN_POINTS, lo = (double)(j - 1) / SCAN_POINTS, first = 2.0;
-        if (j < SCAN_POINTS) dense_at(F, y, x, yx);
+        double x = (double)j / SCAN_POINTS, first = 2.0;
+        if (j < SCAN_POINTS) dense_at(s, x, yx);
         else memcpy(yx, y1, sizeof yx);
-        MODEL_EVENTS(t + x * h, yx, m->r + VR_P, z);
+        MODEL_EVENTS(s->t + x * s->h, yx, m->r + VR_P, z[j]);
+        for (int i = 0; j == 1 && prev != NULL && i < N_Z; i++) {  /* a minimum at the start of s: its earlier side */
+            if (!(z0[i] > 0.0 && z0[i] < z_before[i] && z0[i] <= z[1][i])) continue;
+            double x_prev = dip_of(m, prev, i, BEFORE_LAST, z_before[i], 1.0);
+            if (x_prev <= 1.0) {
+                dense_at(prev, x_prev, y_event);
+                *where = prev;
+                return x_prev;
+            }
+        }
         for (int i = 0; i < N_Z; i++) {
-            if (z[i] > 0.0) continue;
-            double x_up = lo, f_up = before[i];
-            if (before[i] <= 0.0) x_up = z[i] < before[i] ? positive_between(m, t, y, h, F, i, lo, x, &f_up) : -1.0;
-            if (x_up >= 0.0) first = fmin(first, fall_of(m, t, y, h, F, i, x_up, f_up, x, z[i]));
+            first = fmin(first, event_of(m, s, i, (const double (*)[N_Z])z, j, prev ? z_before[i] : NAN));
+            if (end_of_run && j == SCAN_POINTS && z[j][i] > 0.0 && z[j][i] < z[j - 1][i]
+                && indicator_at(m, s, 1.0 - PROBE, i) <= z[j][i])  /* a minimum before the end, none after it */
+                first = fmin(first, dip_of(m, s, i, BEFORE_LAST, z[j - 1][i], 1.0));
         }
         if (first <= 1.0) {
-            if (first < 1.0) dense_at(F, y, first, y_event);
+            if (first < 1.0) dense_at(s, first, y_event);
             else memcpy(y_event, y1, sizeof yx);
             return first;
         }
-        memcpy(before, z, sizeof before);
     }
+    memcpy(z_last, z[SCAN_POINTS - 1], sizeof z[0]);
     return 0.0;
+}
+
+/* The event search of one dop853 call: the last two accepted steps without an event between them (a dip at their
+   boundary is searched on both), the indicators at the current step's start and at the previous step's sample
+   BEFORE_LAST */
+typedef struct {
+    Dense steps[2];
+    int current;   /* steps[current]: the step searched next */
+    int has_prev;  /* steps[1 - current] precedes it */
+    double z0[N_Z], z_before[N_Z];
+} Scan;
+
+static void scan_start(SymmechModel *m, Scan *scan)
+{
+    scan->has_prev = 0;
+    MODEL_EVENTS(m->r[VR_TIME], m->r + VR_X, m->r + VR_P, scan->z0);
+}
+
+/* The accepted step h from (r[VR_TIME], r[VR_X]) to y1 (stages k, the last f at y1; end_of_run: the call's last)
+   searched for an event (first_fall): where one falls, the time and the state set to it and the model's update
+   applied, 1 (or SYMMECH_STOP, the model's); 0 when none (the step becomes the previous one); -1 on a failure */
+static int step_events(SymmechModel *m, Scan *scan, const double *y1, double h, double k[][N_X], int end_of_run,
+                       double t_end)
+{
+    Dense *s = &scan->steps[scan->current];
+    const Dense *prev = scan->has_prev ? &scan->steps[1 - scan->current] : NULL, *where;
+    double y_event[N_X], z_last[N_Z] = {0.0};
+    if (dop853_dense(m, m->r[VR_TIME], m->r + VR_X, y1, h, k, s) != 0) return -1;
+    double x = first_fall(m, s, prev, scan->z_before, scan->z0, y1, end_of_run, y_event, &where, z_last);
+    if (x <= 0.0) {
+        memcpy(scan->z_before, z_last, sizeof z_last);
+        scan->current = 1 - scan->current;
+        scan->has_prev = 1;
+        return 0;
+    }
+    m->r[VR_TIME] = x == 1.0 && where == s && end_of_run ? t_end : where->t + x * where->h;
+    memcpy(m->r + VR_X, y_event, sizeof y_event);
+    m->dirty = 1;
+    int update = symmech_event_update(m);
+    if (update >= 0) scan_start(m, scan);
+    return update == SYMMECH_STOP ? update : update < 0 ? -1 : 1;
 }
 #endif
 
@@ -312,8 +412,8 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
     if (t_end <= t) return 0;
     if (rates(m, t, y, k[0]) != 0) return -1;
 #if N_Z > 0
-    double z0[N_Z], F[DOP853_POWER][N_X], y_event[N_X];
-    MODEL_EVENTS(t, y, m->r + VR_P, z0);
+    Scan scan = {.current = 0};
+    scan_start(m, &scan);
 #endif
     double h = t_end - t, norm_y = 0.0, norm_f = 0.0;
     for (int i = 0; i < N_X; i++) {  /* Hairer's first guess: |y| / |f| scaled, at most the interval */
@@ -347,18 +447,13 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
         }
         double factor = err == 0.0 ? 10.0 : fmin(10.0, 0.9 * pow(err, -1.0 / 8.0));
 #if N_Z > 0
-        if (dop853_dense(m, t, y, y1, h, k, F) != 0) return -1;
-        double x = first_fall(m, t, y, h, F, z0, y1, y_event);
-        if (x > 0.0) {  /* an event in the step: stop there, update the state, go on from it */
-            t = x == 1.0 && last ? t_end : t + x * h;
-            memcpy(y, y_event, sizeof y_event);
-            m->r[VR_TIME] = t;
-            m->dirty = 1;
-            int update = symmech_event_update(m);
-            if (update < 0) return -1;
-            if (update == SYMMECH_STOP) return 1;
+        m->r[VR_TIME] = t;
+        int event = step_events(m, &scan, y1, h, k, last, t_end);
+        if (event != 0) {  /* an event in the step: the update applied there, go on from it */
+            if (event < 0) return -1;
+            if (event == SYMMECH_STOP) return 1;
+            t = m->r[VR_TIME];
             if (rates(m, t, y, k[0]) != 0) return -1;
-            MODEL_EVENTS(t, y, m->r + VR_P, z0);
             continue;
         }
 #endif
@@ -366,9 +461,9 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
         memcpy(y, y1, sizeof y1);
         memcpy(k[0], k[DOP853_STAGES], sizeof k[0]);
 #if N_Z > 0
-        MODEL_EVENTS(t, y, m->r + VR_P, z0);
+        MODEL_EVENTS(t, y, m->r + VR_P, scan.z0);
         for (int i = 0; i < N_Z; i++)
-            if (z0[i] < -EVENT_TOLERANCE) { m->r[VR_TIME] = t; m->dirty = 1; return -2; }
+            if (scan.z0[i] < -EVENT_TOLERANCE) { m->r[VR_TIME] = t; m->dirty = 1; return -2; }
 #endif
         h *= factor;
     }
