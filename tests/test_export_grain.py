@@ -304,3 +304,192 @@ def test_every_bundled_grain_scene(name, kind, fmi, tmp_path):
     for k, t_k in enumerate(t_native):
         before, after = rows[t_k - TIME_TOLERANCE], rows[t_k + TIME_TOLERANCE]
         assert before[3] == k and after[3] == k + 1 and abs(after[4] - t_k) <= TIME_TOLERANCE
+
+
+# A model of one state s' = 1 whose event indicator dips to -DIP_DEPTH at s = DIP_PERIOD (k + 1/2) and rises back
+# within 7.2e-7 s: its C source (the event update prints each event's time), written for the test
+DIP_PERIOD, DIP_DEPTH = 0.0113, 1e-8
+DIP_SOURCE = f"""#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+void dip_rate(double t, const double *y, const double *p, double *out) {{ (void)t; (void)y; (void)p; out[0] = 1.0; }}
+void dip_event_values(double t, const double *y, const double *p, double *out)
+{{
+    (void)t; (void)p;
+    out[0] = 0.5 * (1.0 + cos(2.0 * 3.141592653589793 * y[0] / {DIP_PERIOD!r})) - {DIP_DEPTH!r};
+}}
+int dip_event_update(double t, double *y, double *p) {{ (void)y; (void)p; fprintf(stderr, "%.17g\\n", t); return 0; }}
+const char *dip_notice(const double *p) {{ (void)p; return NULL; }}
+"""
+
+
+def test_event_search_finds_dips_between_its_samples(tmp_path):
+    """The event search of c/symmech_model.c (the example program's calls of symmech_integrate, 0.01 s each, DOP853
+    at rtol 1e-12) on an indicator with 88 dips below zero in 1 s, each 7.2e-7 s wide (a grazing contact), far
+    narrower than a sample spacing (1/8 of a step of ~1e-3 s): the samples around each are positive, so only the
+    search for a local minimum among the samples finds them (the search before it found 1 of the 88). Every dip's fall is found,
+    once, within 1e-12 s of its closed form t = (P / 2 pi) (pi - acos(1 - 2 depth)) + k P: those inside a step,
+    those straddling two steps and those in the last step of a call."""
+    from symmech.export import build
+    from symmech.export.model import ExportModel, Variable
+
+    variables = (Variable("time", 0, "independent", "continuous", "s", "time"),
+                 Variable("s", 1, "output", "continuous", "1", "the state", 0.0),
+                 Variable("der(s)", 2, "output", "continuous", "1/s", "its rate", derivative_of=1),
+                 Variable("z", 3, "output", "continuous", "1", "the indicator"))
+    dip = ExportModel("dip", "dips between samples", DIP_SOURCE, variables, 1, 1, 0, 0, 0, 0, None, n_z=1,
+                      mass_identity=1, event_tolerance=1.0)
+    folder = build.c_folder(dip, tmp_path / "dip")
+    run = subprocess.run([str(folder / "example")], check=True, capture_output=True, text=True)
+    start, *found = np.array(run.stderr.split(), dtype=float)  # the start's update (symmech_start), then the events
+    k = np.arange(int(1.0 / DIP_PERIOD - 0.5) + 1)
+    want = DIP_PERIOD / (2 * np.pi) * (np.pi - np.arccos(1 - 2 * DIP_DEPTH)) + k * DIP_PERIOD
+    assert len(want) == 88 and want[0] > 0.005
+    assert start == 0.0 and len(found) == len(want) and np.abs(np.array(found) - want).max() <= 1e-12
+
+
+def _simulate(fmu, stop: float, output: list[str], capsys) -> tuple[dict, str]:
+    """FMPy's run of ``fmu`` to ``stop`` [s] (Model Exchange: CVode at the FMU's default tolerance; Co-Simulation:
+    early return allowed, so that a run the FMU ends stops at its time), its ``output`` and its logged messages
+    (FMPy's own logger prints them: a logger of the test's would stay registered in FMPy's FMI 2 proxy after the
+    run and be called, freed, by later instances)."""
+    capsys.readouterr()
+    res = fmpy.simulate_fmu(str(fmu), stop_time=stop, output_interval=stop / 100, output=output,
+                            early_return_allowed=True)
+    return res, capsys.readouterr().out
+
+
+@pytest.mark.slow  # a native run, 4 exports and FMPy runs (~10 s)
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("kind", ["me", "cs"])
+def test_max_impacts_ends_the_simulation_at_the_native_stop(kind, fmi, tmp_path, capsys):
+    """numerics.max_impacts = 2 on the default drop (3 contacts in 0.05 s): the native engine stops at its third
+    contact (t = 0.04376 s) without applying it, with a warning; the FMU ends the simulation there the FMI way
+    (Model Exchange: terminateSimulation from the event update; Co-Simulation: fmi2Discard with fmi2Terminated,
+    fmi3DoStep's terminateSimulation), within 1e-8 s of the native stop, after exactly 2 impacts, and logs why."""
+    path = _scene(tmp_path, 0.05, ("tolerance = 1e-9", "tolerance = 1e-9\nmax_impacts = 2"))
+    run = motion_scene.simulate(pipeline.load(path).setup)
+    assert len(run.impacts) == 2 and any("max_impacts = 2" in w for w in run.warnings)
+    fmu = tmp_path / f"grain_{kind}_{fmi}.fmu"
+    assert main(["export", "fmu", str(path), "--out", str(fmu), "--fmi", str(fmi), "--type", kind]) == 0
+    assert validate_fmu(str(fmu)) == []
+    res, messages = _simulate(fmu, 0.05, ["impacts", "z"], capsys)
+    assert res["impacts"][-1] == 2 and abs(res["time"][-1] - run.final.t) <= TIME_TOLERANCE
+    assert run.final.t < 0.045 and messages.count("numerics.max_impacts") == 1
+
+
+def _grazing_scene(tmp_path, depth: float = 1e-9):
+    """A sphere (radius 1.5 mm) 0.1 mm above a surface vibrating along its normal (1 mm, 50 Hz, from its top: the
+    surface accelerating down at A w^2 = 99 m/s^2 > g), falling towards it at the speed v0 whose relative path
+    z(t) = z0 + v0 t - g t^2 / 2 - A (cos w t - 1) reaches at most ``depth`` [m] below the surface (a closed form
+    minimised by scipy): the grain grazes the surface for 2 sqrt(2 depth / (A w^2 - g)) = 9.5e-6 s at 1.5 ms."""
+    from scipy.optimize import brentq, minimize_scalar
+
+    amplitude, omega, g, radius, gap0 = 1e-3, 2 * np.pi * 50.0, 9.81, 1.5e-3, 1e-4
+
+    def lowest(v0):
+        path = minimize_scalar(lambda t: gap0 + v0 * t - g * t * t / 2 - amplitude * (np.cos(omega * t) - 1),
+                               bounds=(0.0, 4e-3), method="bounded", options={"xatol": 1e-14})
+        return path.fun
+
+    v0 = brentq(lambda v: lowest(v) + depth, -0.2, -0.1, xtol=1e-16)
+    path = tmp_path / "graze.toml"
+    path.write_text(f"""kind = "grain"
+duration = 0.01
+[body]
+semi_axes = [{radius}, {radius}, {radius}]
+density = 1300.0
+[surface]
+alpha_deg = 0.0
+[vibration]
+amplitude = {amplitude}
+frequency = 50.0
+phase_deg = 90.0
+direction = "normal"
+[impact]
+law = "coulomb"
+e_n = 0.4
+e_t = -0.3
+mu = 0.5
+[sliding]
+friction = 0.5
+[initial]
+position = [0.0, 0.0, {radius + gap0!r}]
+velocity = [0.0, 0.0, {v0!r}]
+[numerics]
+mode = "accurate"
+tolerance = 1e-9
+""")
+    return path
+
+
+@pytest.mark.slow  # a native run, 3 exports, FMPy (~8 s)
+def test_grazing_contact_is_found_by_co_simulation_and_the_c_program(tmp_path):
+    """A grazing contact 1e-9 m deep and 9.5e-6 s long inside one DOP853 step (the search before this one missed
+    it: no impact, the grain flying on through the surface's round-off): the native engine bounces there
+    (t = 1.5463 ms, at 3.9e-4 m/s); the Co-Simulation FMU (FMI 2 and 3, one communication step over the 10 ms)
+    has that one impact within 1e-8 s, and the C program's trajectory on the sample grid is the native one within
+    1e-9 m (missing the bounce moves the centre by ~4e-6 m by the end)."""
+    path = _grazing_scene(tmp_path)
+    t_native, _, trajectory = _native(path)
+    assert len(t_native) == 1
+    for fmi in (2, 3):
+        fmu = tmp_path / f"graze_{fmi}.fmu"
+        assert main(["export", "fmu", str(path), "--out", str(fmu), "--fmi", str(fmi), "--type", "cs"]) == 0
+        assert validate_fmu(str(fmu)) == []
+        end = _cs_rows(fmu, fmi, np.array([0.01]))[0.01]
+        assert end[3] == 1 and abs(end[4] - t_native[0]) <= TIME_TOLERANCE
+    folder = tmp_path / "graze_c"
+    assert main(["export", "c", str(path), "--out", str(folder)]) == 0
+    printed = subprocess.run([str(folder / "example")], check=True, capture_output=True, text=True).stdout
+    got = np.array(list(csv.reader(io.StringIO(printed)))[1:], dtype=float)
+    matched, error = _on_grid(got[:, 0], got[:, 1:4], trajectory)
+    assert matched == len(got) == 21 and error <= 1e-9
+
+
+def _rocking_scene(tmp_path):
+    """The separation sweep's crop grain of tests/test_grain_hard_cases.py at 1 mm, 32 Hz over 0.04 s: its bounces
+    accumulate at 0.03561 s while the surface accelerates away (a rocking contact of the native engine)."""
+    text = (scenes_folder() / "grain_separation.toml").read_text().split("[sweep.x]")[0]
+    for old, new in (("semi_axes = [3.5e-3, 1.6e-3, 1.4e-3]", "semi_axes = [0.0035082751372901796, "
+                      "0.0017441483828242994, 0.0013003646915614976]\norientation = [5.960540267916768, "
+                      "1.9566358746946042, 2.659838524324996]\n#"),
+                     ("frequency = 25.0", "frequency = 32.0\n#"), ("duration = 0.4", "duration = 0.04\n#")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "rocking.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.slow  # a native run, 3 exports, FMPy (~8 s)
+def test_rocking_contact_as_the_native_engine(tmp_path, capsys):
+    """The native engine's rocking contact (17 impacts, the last at 0.035611228 s after which the next hop would
+    stay within the gap's round-off on a plane that pulls away: the grain put on the plane, its tilting spin
+    dropped, flying on, one rocking contact warned): the Co-Simulation FMU (FMI 2 and 3) and the C program do the
+    same at the contact that ends that hop (4e-9 s later), count it (output `rocking`) and log it; the FMU's 17
+    impact times (its `last_impact` halfway to the next native impact) are within 1e-8 s of the native ones, and
+    the C program's trajectory on the sample grid after it
+    within 1e-9 m of the native one (2.0e-10 m measured)."""
+    path = _rocking_scene(tmp_path)
+    run = motion_scene.simulate(pipeline.load(path).setup)
+    t_native = np.array([i["t"] for i in run.impacts])
+    assert run.extra["rocking_contacts"] == 1 and len(t_native) == 17
+    for fmi in (2, 3):
+        fmu = tmp_path / f"rocking_{fmi}.fmu"
+        assert main(["export", "fmu", str(path), "--out", str(fmu), "--fmi", str(fmi), "--type", "cs"]) == 0
+        assert validate_fmu(str(fmu)) == []
+        after = np.append((t_native[:-1] + t_native[1:]) / 2, 0.04)  # the last impacts are 1e-8 s apart
+        rows = _cs_rows(fmu, fmi, after)
+        for k, t_k in enumerate(t_native):
+            assert rows[after[k]][3] == k + 1 and abs(rows[after[k]][4] - t_k) <= TIME_TOLERANCE
+        res, messages = _simulate(fmu, 0.04, ["impacts", "rocking"], capsys)
+        assert res["impacts"][-1] == 17 and res["rocking"][-1] == 1 and res["time"][-1] == pytest.approx(0.04)
+        assert messages.count("rocking contact") == 1
+    folder = tmp_path / "rocking_c"
+    assert main(["export", "c", str(path), "--out", str(folder)]) == 0
+    ran = subprocess.run([str(folder / "example")], check=True, capture_output=True, text=True)
+    assert ran.stderr.count("rocking contact") == 1
+    got = np.array(list(csv.reader(io.StringIO(ran.stdout)))[1:], dtype=float)
+    matched, error = _on_grid(got[:, 0], got[:, 1:4], run.trajectory)
+    assert matched == len(got) == 52 and error <= 1e-9

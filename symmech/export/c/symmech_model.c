@@ -290,9 +290,8 @@ static double dip_of(SymmechModel *m, const Dense *s, int i, double lo, double f
 /* samples of the scan per step; the fraction of the previous step's last sample but one */
 #define SCAN_POINTS 8
 #define BEFORE_LAST ((double)(SCAN_POINTS - 1) / SCAN_POINTS)
-/* where an indicator's slope at a step's start or end is read, as a fraction of the step (one eighth of a
-   sample's spacing) */
-#define PROBE (1.0 / (8 * SCAN_POINTS))
+/* where an indicator's slope at a step's start or end is read, as a fraction of the step */
+#define PROBE 1e-6
 
 /* The first event of indicator i in the samples z[0..j] (z[j][i] the newest at the fraction x) of the step s,
    found when z[j] is sampled: a fall bracketed between z[j - 1] and z[j] (positive, then non-positive; or both
