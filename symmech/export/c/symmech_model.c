@@ -297,7 +297,8 @@ static double dip_of(SymmechModel *m, const Dense *s, int i, double lo, double f
    found when z[j] is sampled: a fall bracketed between z[j - 1] and z[j] (positive, then non-positive; or both
    non-positive and lower at z[j], with a positive value between them: a short flight after a bounce), or a
    grazing dip around z[j - 1] where it is a positive local minimum (z[-1] = z_before, the previous step's sample at
-   BEFORE_LAST, NAN without one); 2 when none */
+   BEFORE_LAST; without one NAN, the indicator's slope at the start deciding, or -INFINITY, none searched); 2 when
+   none */
 static double event_of(SymmechModel *m, const Dense *s, int i, const double z[][N_Z], int j, double z_before)
 {
     double lo = (double)(j - 1) / SCAN_POINTS, x = (double)j / SCAN_POINTS, f_lo = z[j - 1][i], f_up;
@@ -320,10 +321,11 @@ static double event_of(SymmechModel *m, const Dense *s, int i, const double z[][
    step is the integration's last (end_of_run), a grazing dip after its last sample but one where the indicator
    falls into the end. A grazing dip that straddles the start of s and lies in the previous step (prev, its
    sample z_before at BEFORE_LAST; NULL, none) is located there: *where is then prev. The fraction of the step
-   (in (0, 1]) and the state there into y_event; 0 when nothing falls; z_last: the sample at BEFORE_LAST. */
+   (in (0, 1]) and the state there into y_event; 0 when nothing falls; z_last: the sample at BEFORE_LAST; no_prev:
+   event_of's z_before without a previous step. */
 static double first_fall(SymmechModel *m, const Dense *s, const Dense *prev, const double *z_before,
-                         const double *z0, const double *y1, int end_of_run, double *y_event, const Dense **where,
-                         double *z_last)
+                         double no_prev, const double *z0, const double *y1, int end_of_run, double *y_event,
+                         const Dense **where, double *z_last)
 {
     double z[SCAN_POINTS + 1][N_Z], yx[N_X];
     memcpy(z[0], z0, sizeof z[0]);
@@ -343,7 +345,7 @@ static double first_fall(SymmechModel *m, const Dense *s, const Dense *prev, con
             }
         }
         for (int i = 0; i < N_Z; i++) {
-            first = fmin(first, event_of(m, s, i, (const double (*)[N_Z])z, j, prev ? z_before[i] : NAN));
+            first = fmin(first, event_of(m, s, i, (const double (*)[N_Z])z, j, prev ? z_before[i] : no_prev));
             if (end_of_run && j == SCAN_POINTS && z[j][i] > 0.0 && z[j][i] < z[j - 1][i]
                 && indicator_at(m, s, 1.0 - PROBE, i) <= z[j][i])  /* a minimum before the end, none after it */
                 first = fmin(first, dip_of(m, s, i, BEFORE_LAST, z[j - 1][i], 1.0));
@@ -365,12 +367,15 @@ typedef struct {
     Dense steps[2];
     int current;   /* steps[current]: the step searched next */
     int has_prev;  /* steps[1 - current] precedes it */
+    double no_prev;  /* else at a call's start NAN, after an event -INFINITY (its update settled the start: an
+                        indicator there at its round-off is no dip) */
     double z0[N_Z], z_before[N_Z];
 } Scan;
 
-static void scan_start(SymmechModel *m, Scan *scan)
+static void scan_start(SymmechModel *m, Scan *scan, double no_prev)
 {
     scan->has_prev = 0;
+    scan->no_prev = no_prev;
     MODEL_EVENTS(m->r[VR_TIME], m->r + VR_X, m->r + VR_P, scan->z0);
 }
 
@@ -384,7 +389,8 @@ static int step_events(SymmechModel *m, Scan *scan, const double *y1, double h, 
     const Dense *prev = scan->has_prev ? &scan->steps[1 - scan->current] : NULL, *where;
     double y_event[N_X], z_last[N_Z] = {0.0};
     if (dop853_dense(m, m->r[VR_TIME], m->r + VR_X, y1, h, k, s) != 0) return -1;
-    double x = first_fall(m, s, prev, scan->z_before, scan->z0, y1, end_of_run, y_event, &where, z_last);
+    double x = first_fall(m, s, prev, scan->z_before, scan->no_prev, scan->z0, y1, end_of_run, y_event, &where,
+                          z_last);
     if (x <= 0.0) {
         memcpy(scan->z_before, z_last, sizeof z_last);
         scan->current = 1 - scan->current;
@@ -395,7 +401,7 @@ static int step_events(SymmechModel *m, Scan *scan, const double *y1, double h, 
     memcpy(m->r + VR_X, y_event, sizeof y_event);
     m->dirty = 1;
     int update = symmech_event_update(m);
-    if (update >= 0) scan_start(m, scan);
+    if (update >= 0) scan_start(m, scan, -INFINITY);
     return update == SYMMECH_STOP ? update : update < 0 ? -1 : 1;
 }
 #endif
@@ -412,7 +418,7 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
     if (rates(m, t, y, k[0]) != 0) return -1;
 #if N_Z > 0
     Scan scan = {.current = 0};
-    scan_start(m, &scan);
+    scan_start(m, &scan, NAN);
 #endif
     double h = t_end - t, norm_y = 0.0, norm_f = 0.0;
     for (int i = 0; i < N_X; i++) {  /* Hairer's first guess: |y| / |f| scaled, at most the interval */
