@@ -1,7 +1,8 @@
 /* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial
    pivoting), Dormand and Prince's DOP853 with the error control of Hairer's dop853.f and its dense output of
    order 7 (the tableau in dop853_tableau.h is written from symmech/numerics/dop853.py), state events located on
-   that dense output by the Illinois method and, for a stiff model (MODEL_STIFF), Radau IIA
+   that dense output by the Illinois method (golden section finding the grazing dips between its samples) and,
+   for a stiff model (MODEL_STIFF), Radau IIA
    of order 5 as scipy's and symmech/numerics/radau.py's (radau_tableau.h written from
    symmech/numerics/radau_tableau.py) with dense output. Hand-written; the physics is generated. */
 #include <math.h>
