@@ -161,7 +161,7 @@ static double bounce(double t, double *y, double *p, const double *contact)
     return contact_after[CONTACT_U + 2];
 }
 
-/* A contact the native engine never reaches (flight_phase.py's fly, status "resting"): after the last bounce the
+/* A contact the native engine does not reach (flight_phase.py's fly, status "resting"): after the last bounce the
    next flight stays within the gap's round-off, the plane pulling away (n <= 0: no landing). Here the gap fell
    back through zero, the point approaching at u < 0 [m/s], after a hop since the last impact whose height
    |u| (t - t_last) / 4 (a parabola's) stayed within the gap's round-off. */
@@ -184,13 +184,13 @@ static int flight_event(double t, double *y, double *p)
     if (gap[0] > gap_noise(y, p)) return 0;
     call_impact_contact(t, y, p, NULL, contact);
     if (contact[CONTACT_U + 2] > velocity_noise(y, p)) return 0;  /* the gap rising through zero after a bounce or a lift-off */
-    if (contact[CONTACT_U + 2] < -velocity_noise(y, p) && held_on_plane(t, y, p, contact[CONTACT_U + 2])) {
-        put_on_plane(t, y, p);
-        d[D_ROCKING] += 1.0;
-        d[D_NOTICE] = ROCKING_NOTICE;
-        return 1;
-    }
     if (contact[CONTACT_U + 2] < -velocity_noise(y, p)) {
+        if (held_on_plane(t, y, p, contact[CONTACT_U + 2])) {
+            put_on_plane(t, y, p);
+            d[D_ROCKING] += 1.0;
+            d[D_NOTICE] = ROCKING_NOTICE;
+            return 1;
+        }
         if (d[D_IMPACTS] >= p[P_MAX_IMPACTS]) {
             d[D_STOPPED] = 1.0;
             d[D_NOTICE] = MAX_IMPACTS_NOTICE;
