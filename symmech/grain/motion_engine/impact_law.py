@@ -1,7 +1,7 @@
 """The scene's impact law at the lowest point, in numba (``ImpactLaw.apply`` for one grain): the
 Chatterjee-Ruina law, and the printed law by its exact reduction (the trigonometric equation of
-``mu_equation``, roots from a 4x4 companion matrix polished by Newton), for the law itself or for its verdict
-in the log (an impact row, layout :data:`layouts.IMPACT_ROW`)."""
+``mu_equation``, the roots of its quartic, the companion matrix's eigenvalues, by Durand-Kerner, polished by
+Newton), for the law itself or for its verdict in the log (an impact row, layout :data:`layouts.IMPACT_ROW`)."""
 from __future__ import annotations
 
 import math
