@@ -6,11 +6,14 @@ results (trajectory and impact rows) are equal bit for bit. ``--sweep N``: N int
 bundled separation sweep's grains instead (:data:`SWEEP_POINTS` x 2 populations x 8 grains through
 ``motion_scene.simulate_many``, as the sweep runs them), CPU per grain, each tree on its own warm cache (``symmech
 warm`` it first: ``NUMBA_CACHE_DIR`` of this process, ``--before-cache`` of the other), their trajectory and impact
-rows compared bit for bit.
+rows compared bit for bit. With ``--before-cache`` and no ``--sweep`` the warm runs use the two warm caches (this
+tree's ``NUMBA_CACHE_DIR``, ``--before-cache``; ``symmech warm`` each first) instead of fresh ones, and ``--cold 0``
+skips the cold compiles: the warm comparison alone, impacts per CPU-second beside each time.
 
     git archive HEAD~3 | tar -x -C /tmp/before
     python benchmarks/bench_grain_before.py --before /tmp/before --cold 3 --warm 5
     python benchmarks/bench_grain_before.py --before /tmp/before --before-cache /tmp/cache --sweep 5
+    python benchmarks/bench_grain_before.py --before /tmp/before --before-cache /tmp/cache --cold 0 --warm 7
 """
 from __future__ import annotations
 
@@ -33,7 +36,7 @@ WARM = SETUP + ("compiled.simulate(sc.model, sc.numerics, sc.start, 0.01); ts = 
                 "for _ in range(3):\n"
                 "    c = time.process_time(); r = compiled.simulate(sc.model, sc.numerics, sc.start, "
                 "sc.start.t + sc.duration); ts.append(time.process_time() - c)\n"
-                "print(min(ts)); np.save(OUT + '_rows.npy', r.trajectory); np.save(OUT + '_imps.npy', r._rows)")
+                "print(min(ts)); np.save(OUT + '_rows.npy', r.trajectory); np.save(OUT + '_imps.npy', r.impact_log.rows)")
 
 
 # Low-throw corner (stiff slips), mid-plane, high-throw corner of the 12 x 12 plane: (amplitude, frequency) indices.
@@ -47,7 +50,7 @@ SWEEP = ("import time, tomllib, numpy as np; from symmech.core import pipeline; 
          "    motion_scene.simulate_many(scenes, workers=1)\n"
          "print((time.process_time() - c) / 2 / len(scenes)); assert ms[0].extra['engine'] == 'compiled'\n"
          "np.save(OUT + '_rows.npy', np.concatenate([m.trajectory for m in ms])); "
-         "np.save(OUT + '_imps.npy', np.concatenate([m._rows for m in ms]))")
+         "np.save(OUT + '_imps.npy', np.concatenate([m.impact_log.rows for m in ms]))")
 
 
 def child(tree: Path, code: str, cache: str) -> tuple[float, str]:
@@ -101,15 +104,20 @@ def main() -> None:
             with tempfile.TemporaryDirectory() as cache:
                 cold[name].append(child(tree, COLD, cache)[0])
     with tempfile.TemporaryDirectory() as work:
+        caches = {name: str(Path(work) / f"cache_{name}") for name in trees}
+        if ns.before_cache:
+            caches = {"this": os.environ["NUMBA_CACHE_DIR"], "before": ns.before_cache}
         warm = {k: [] for k in trees}
         for _ in range(ns.warm):
             for name, tree in trees.items():
                 code = f"OUT = {str(Path(work) / name)!r}\n" + WARM
-                warm[name].append(float(child(tree, code, str(Path(work) / f"cache_{name}"))[1]))
+                warm[name].append(float(child(tree, code, caches[name])[1]))
         equal = all(np.array_equal(np.load(Path(work) / f"this_{k}.npy").view(np.int64),
                                    np.load(Path(work) / f"before_{k}.npy").view(np.int64)) for k in ("rows", "imps"))
+        impacts = {name: len(np.load(Path(work) / f"{name}_imps.npy")) for name in trees}
     for name in trees:
-        print(f"{name:<7} cold compile {summary(cold[name])} CPU; warm default scene {summary(warm[name])} CPU")
+        print(f"{name:<7} cold compile {summary(cold[name])} CPU; warm default scene {summary(warm[name])} CPU, "
+              f"{impacts[name]} impacts: {impacts[name] / statistics.median(warm[name]):,.0f} per CPU-second")
     if ns.cold:
         print(f"this / before cold: {statistics.median(cold['this']) / statistics.median(cold['before']):.3f}")
     print(f"this / before warm: {statistics.median(warm['this']) / statistics.median(warm['before']):.3f}; "
