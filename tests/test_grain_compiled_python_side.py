@@ -237,6 +237,26 @@ def test_population_results_are_each_grains_own_motion():
         assert np.shares_memory(m.final.r, ys) and np.shares_memory(m.trajectory, rows)
 
 
+def test_a_failed_grain_stands_as_its_own_error_and_no_result_is_built_for_it(monkeypatch):
+    """Grains 0 and 1 of three failed (a slip that stalled at t = 0 s, the torque-free rotation at 0.875 s), grain 2
+    finished: each failure stands at its own place as its own error, and only grain 2's extra and warnings are
+    built (grain 0's warning row and rocking contacts are not worded)."""
+    carries, (rows, imps, warns), ys, statuses = population_run()
+    statuses = np.array([compiled.SLIDE_STALLED, compiled_layout.ROT_FAIL, compiled.DONE])
+    built, worded = [], []
+    monkeypatch.setattr(compiled, "run_extra", lambda *args: built.append(args) or {})
+    monkeypatch.setattr(compiled, "run_warnings", lambda *args: worded.append(args) or [])
+    starts = [motion.State(k, np.zeros(3), np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(3)) for k in range(3)]
+    got = compiled.motions([MODEL] * 3, NUM, starts, ys, carries, (rows, imps, warns), statuses, "why", strict=False)
+    assert [type(m) for m in got] == [SymmechError, SymmechError, motion.Motion]
+    assert str(got[0]) == "sliding stagnates at t = 0 s: 200 regime changes without advancing time"
+    assert str(got[1]) == ("torque-free rotation failed at t = 0.875 s: required step size is less than spacing "
+                           "between numbers")
+    assert len(built) == 1 and built[0][:2] == (0, 4)
+    assert len(worded) == 1 and worded[0][0].shape == (0, compiled.WARNING_WIDTH) and worded[0][1] == 4
+    assert got[2].trajectory.tobytes() == rows[2:].tobytes() and got[2].impact_times().tolist() == [0.0, 31 / 8]
+
+
 @pytest.mark.parametrize("duration, interval, rows", [(0.5, 1e-3, 564), (2.0, 0.25, 72), (-1.0, 0.25, 64)])
 def test_a_runs_trajectory_buffer_starts_with_its_samples_and_64_rows_more(duration, interval, rows):
     """The rows a run's trajectory buffer starts with: one per sample interval of its duration (none for a

@@ -20,8 +20,9 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   for a grazing contact; the scan evaluates the gap only up to the first point
   at or below zero, which is all the Python scan uses of its window;
 - impact: the Chatterjee-Ruina law, and the printed law by the exact reduction
-  (the trigonometric equation of ``mu_equation``, roots from a 4x4 companion
-  matrix polished by Newton) for the law itself or for its verdict in the log;
+  (the trigonometric equation of ``mu_equation``, its quartic's roots by the
+  Durand-Kerner iteration, polished by Newton) for the law itself or for its
+  verdict in the log;
 - sliding: the ODE of :mod:`symmech.grain.sliding` (stick, slip, spin about the
   normal, work and loss as quadratures) by the same DOP853 with
   terminal events located by Brent on the step; stiff slips (anisotropic, below
@@ -211,27 +212,31 @@ def motions(models: list, num: motion.Numerics, starts: list, ys: np.ndarray, ca
     """The ``motion.Motion`` of each finished run, built in bulk: final states ys (grains, STATE.size), carries
     (grains, CARRY.size), the trajectory, impact and warning rows of all grains one after another (``tables``;
     a grain's counts in its carry), the statuses (grains,); ``extra`` names this engine, "compiled", and
-    ``reason``, why the caller chose it. A failed grain raises its error (``strict``) or is its SymmechError.
-    Every number a grain's result needs is read out of the arrays in one ``tolist`` per kind: in the loop over
-    grains only the views of its rows and the result's objects are made."""
+    ``reason``, why the caller chose it. A failed grain raises its error (``strict``) or is its SymmechError (no
+    result built for it). Every number a grain's result needs is read out of the arrays by one ``tolist`` per
+    kind, as columns zipped (no list per grain); in the loop over grains only the views of its rows and the
+    result's objects are made."""
     failed = np.flatnonzero(statuses != DONE).tolist()
     if strict and failed:
         raise grain_failure(failed[0], ys, carries, statuses)
+    errors = iter([grain_failure(k, ys, carries, statuses) for k in failed])  # taken in grain order below
     counts = carries[:, GRAIN_COUNTS].astype(INT)  # (grains, 6): rows, impacts, warnings, landings, rocking, implicit
-    ends = counts[:, :3].cumsum(axis=0)
-    # per grain: where its rows begin and end in each table (rows, impacts, warnings), then its other counts
-    table = np.hstack((ends - counts[:, :3], ends, counts[:, 3:])).tolist()
-    times = carries[:, [C_AT.t_flight, C_AT.t_sliding]].tolist()
+    bounds = np.zeros((len(counts) + 1, 3), INT)  # where each grain's rows begin in each table, then the end
+    np.cumsum(counts[:, :3], axis=0, out=bounds[1:])
+    bounds, columns = bounds.tolist(), counts[:, 3:].T.tolist()
+    times = carries[:, C_AT.t_flight].tolist(), carries[:, C_AT.t_sliding].tolist()
     rows, imps, warns = tables
-    finals = zip(ys[:, X_AT.t].tolist(), *(ys[:, at] for at in STATE_VECTORS))  # t, r, v, q, w: views of ys's rows
-    out = [motion.Motion(rows[row0:row1], deferred_log(imps[imp0:imp1]), {"flight": flight, "sliding": slide},
-                         run_warnings(warns[warn0:warn1], rocking, model, num) if warn1 > warn0 or rocking else [],
-                         start, motion.State(*final), run_extra(landings, rocking, budget, implicit, reason))
-           for model, start, (row0, imp0, warn0, row1, imp1, warn1, landings, rocking, implicit), (flight, slide),
-           budget, final in zip(models, starts, table, times, energy_budgets(carries), finals)]
-    for k in failed:
-        out[k] = grain_failure(k, ys, carries, statuses)
-    return out
+    finals = (ys[:, X_AT.t].tolist(), *(ys[:, at] for at in STATE_VECTORS))  # t; r, v, q, w: views of ys's rows
+    Motion, State, ImpactLog = motion.Motion, motion.State, motion.ImpactLog  # looked up once, not per grain
+    done = int(DONE)  # a Python int: a numpy scalar's comparison costs ~0.1 us a grain
+    return [Motion(rows[row0:row1], ImpactLog(imps[imp0:imp1], impact_log, T_COLUMN),
+                   {"flight": flight, "sliding": slide},
+                   run_warnings(warns[warn0:warn1], rocking, model, num) if warn1 > warn0 or rocking else [],
+                   start, State(t, r, v, q, w), run_extra(landings, rocking, budget, implicit, reason))
+            if status == done else next(errors)
+            for status, model, start, (row0, imp0, warn0), (row1, imp1, warn1), landings, rocking, implicit, flight,
+            slide, budget, t, r, v, q, w in zip(statuses.tolist(), models, starts, bounds, bounds[1:], *columns,
+                                                *times, energy_budgets(carries), *finals)]
 
 
 def grain_failure(k: int, ys: np.ndarray, carries: np.ndarray, statuses: np.ndarray) -> SymmechError:
