@@ -33,7 +33,7 @@ WARM = SETUP + ("compiled.simulate(sc.model, sc.numerics, sc.start, 0.01); ts = 
                 "for _ in range(3):\n"
                 "    c = time.process_time(); r = compiled.simulate(sc.model, sc.numerics, sc.start, "
                 "sc.start.t + sc.duration); ts.append(time.process_time() - c)\n"
-                "print(min(ts)); np.save(OUT + '_rows.npy', r.trajectory); np.save(OUT + '_imps.npy', r._rows)")
+                "print(min(ts)); np.save(OUT + '_rows.npy', r.trajectory); np.save(OUT + '_imps.npy', r.impact_log.rows)")
 
 
 # Low-throw corner (stiff slips), mid-plane, high-throw corner of the 12 x 12 plane: (amplitude, frequency) indices.
@@ -47,7 +47,7 @@ SWEEP = ("import time, tomllib, numpy as np; from symmech.core import pipeline; 
          "    motion_scene.simulate_many(scenes, workers=1)\n"
          "print((time.process_time() - c) / 2 / len(scenes)); assert ms[0].extra['engine'] == 'compiled'\n"
          "np.save(OUT + '_rows.npy', np.concatenate([m.trajectory for m in ms])); "
-         "np.save(OUT + '_imps.npy', np.concatenate([m._rows for m in ms]))")
+         "np.save(OUT + '_imps.npy', np.concatenate([m.impact_log.rows for m in ms]))")
 
 
 def child(tree: Path, code: str, cache: str) -> tuple[float, str]:
