@@ -5,7 +5,11 @@ kernels and the loop), this tree and optionally another source tree (``--before 
 of an earlier commit), interleaved; then the cached start (cache beside the module, warmed first).
 ``--functions`` instead compiles once, cold, and prints where the time goes per compiled function (numba's
 ``numba:compile`` and ``numba:llvm_lock`` events: a function's own time excludes the callees it compiled).
-``--first-run`` times the README's main job (``symmech run scenes/grain_default.toml``, default engine
+``--cpu TREE...`` measures the CPU of one cold compile per tree and round (the variants of a compile-time study:
+each a source tree), interleaved: an empty ``NUMBA_CACHE_DIR``, a fresh process at ``nice -n 10``, CPU by
+``getrusage`` around the first call, the compile events counted; then a second process on the same cache (it must
+compile nothing) and the whole default scene, whose impact rows, trajectory and final state are compared bit for
+bit with the first tree's. ``--first-run`` times the README's main job (``symmech run scenes/grain_default.toml``, default engine
 ``auto``) in a fresh process on an empty cache beside the baseline ``python -c "import numpy, scipy,
 matplotlib"``, interleaved; each round's background builder is then killed (SIGKILL, by its process id: the
 lock must not outlive it). Then one build (``symmech warm``) and a run on the built engine, whose impacts
@@ -14,6 +18,7 @@ and final position are compared with the first run's.
     python benchmarks/bench_grain_compile.py --before /tmp/before --repeats 5
     python benchmarks/bench_grain_compile.py --functions
     python benchmarks/bench_grain_compile.py --first-run --repeats 5
+    python benchmarks/bench_grain_compile.py --cpu /tmp/before . --repeats 1
 """
 from __future__ import annotations
 
@@ -57,6 +62,75 @@ def fresh(tree: Path, cold: bool, record: bool = False) -> str:
             env["NUMBA_CACHE_DIR"] = cache
         args = [sys.executable, "-c", RECORD, CODE] if record else [sys.executable, "-c", CODE]
         return subprocess.run(args, cwd=tree, env=env, check=True, capture_output=True, text=True).stdout
+
+
+# In the fresh process: CPU seconds of the first call, its compile events; then the whole scene's results saved.
+MEASURED = """
+import json, resource, sys
+import numpy as np
+from numba.core import event
+
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+from symmech.core import pipeline
+from symmech.grain.motion_engine import driver as compiled
+sc = pipeline.load('scenes/grain_default.toml').setup
+with event.install_recorder("numba:compile") as compiles, event.install_recorder("numba:llvm_lock") as llvm:
+    c0 = cpu()
+    compiled.simulate(sc.model, sc.numerics, sc.start, 0.01)
+    c1 = cpu()
+rows = [(ts, ev.kind, ev.is_start, ev.data["dispatcher"].py_func.__qualname__ if ev.kind == "numba:compile" else "",
+         ev.data["dispatcher"].py_func.__module__ if ev.kind == "numba:compile" else "")
+        for ts, ev in compiles.buffer + llvm.buffer]
+r = compiled.simulate(sc.model, sc.numerics, sc.start, sc.start.t + sc.duration)
+f = r.final
+np.savez(sys.argv[1], trajectory=r.trajectory, impacts=np.asarray(r.impact_log.rows),
+         final=np.array([f.t, *f.r, *f.v, *f.q, *f.w]))
+print(json.dumps({"cpu": c1 - c0, "events": sorted(rows, key=lambda r: r[0])}))
+"""
+
+
+def cold_cpu(tree: Path, out: str) -> dict:
+    """One cold compile on ``tree`` (empty cache, fresh process, nice 10): CPU [s], overloads, compile-event and
+    LLVM seconds, the load before it; then the second process's compiles on that cache (0 when the cache works)."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    with tempfile.TemporaryDirectory() as cache:
+        env["NUMBA_CACHE_DIR"] = cache
+        load = os.getloadavg()[0]
+        runs = [json.loads(subprocess.run(["nice", "-n", "10", sys.executable, "-c", MEASURED, f"{out}{k}.npz"],
+                                          cwd=tree, env=env, check=True, capture_output=True, text=True).stdout)
+                for k in range(2)]
+    table = own_times(runs[0]["events"])
+    return {"cpu": runs[0]["cpu"], "overloads": sum(r[0] for r in table.values()), "load": load,
+            "events": sum(r[1] for r in table.values()), "llvm": sum(r[2] for r in table.values()),
+            "second": sum(1 for e in runs[1]["events"] if e[1] == "numba:compile" and e[2])}
+
+
+def same_results(a: str, b: str) -> bool:
+    """Whether two runs' trajectory, impact rows and final state are equal bit for bit (as int64)."""
+    x, y = np.load(a), np.load(b)
+    return all(x[k].shape == y[k].shape and np.array_equal(x[k].view(np.int64), y[k].view(np.int64))
+               for k in ("trajectory", "impacts", "final"))
+
+
+def cpu_study(trees: list[Path], repeats: int) -> None:
+    """Interleaved cold compiles of each tree (see the module docstring), CPU medians and results compared."""
+    print(f"machine: {machine()}; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")
+    rows = {str(t): [] for t in trees}
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(repeats):
+            for i, tree in enumerate(trees):
+                row = cold_cpu(tree.resolve(), f"{tmp}/{i}_{k}_")
+                row["equal"] = same_results(f"{tmp}/0_{k}_0.npz", f"{tmp}/{i}_{k}_0.npz")
+                rows[str(tree)].append(row)
+                print(f"  round {k}: {tree}: {json.dumps(row)}", flush=True)
+    for tree, rs in rows.items():
+        cpu = sorted(r["cpu"] for r in rs)
+        print(f"  {tree}: cold compile {cpu[len(cpu) // 2]:.1f} s CPU (min {cpu[0]:.1f}, max {cpu[-1]:.1f}, n={len(cpu)}), "
+              f"{rs[0]['overloads']} overloads, second process compiled {max(r['second'] for r in rs)}, "
+              f"results bit for bit as the first tree's: {all(r['equal'] for r in rs)}")
 
 
 def own_times(events: list) -> dict:
@@ -161,7 +235,10 @@ def main():
     p.add_argument("--functions", action="store_true", help="print the compile time per function instead")
     p.add_argument("--top", type=int, default=25, help="with --functions: rows printed")
     p.add_argument("--first-run", action="store_true", help="time the README main job on an empty cache instead")
+    p.add_argument("--cpu", type=Path, nargs="+", help="source trees: the CPU of a cold compile of each instead")
     a = p.parse_args()
+    if a.cpu:
+        return cpu_study(a.cpu, a.repeats)
     if a.functions:
         return functions(a.top)
     if a.first_run:
