@@ -1,4 +1,4 @@
-"""Where the default grain scene's CPU goes, per phase of the compiled loop (issue #35).
+"""Where the default grain scene's CPU goes, per phase of the compiled loop.
 
 The scene (``scenes/grain_default.toml``, 2 s) is run once phase by phase (``loop.run`` with one phase per call),
 which records each phase's start (state and carry). Each phase is then replayed from its start, alone, in CPU
