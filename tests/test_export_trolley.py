@@ -8,10 +8,8 @@ from __future__ import annotations
 
 import csv
 import io
-import resource
 import shutil
 import subprocess
-import sys
 import tomllib
 
 import numpy as np
@@ -91,7 +89,7 @@ def test_short_elastic_ride_fmu_reproduces_the_native_run(short_helix, tmp_path,
 
 def _check_c_program(path, native, tmp_path):
     """Export the C folder, run its example program (Radau IIA, dense output): t, s and P0…P5 as the native
-    run's; the program's path."""
+    run's."""
     folder = tmp_path / "helix_c"
     assert main(["export", "c", str(path), "--out", str(folder)]) == 0
     assert "elastic_assembly.c" in (folder / "Makefile").read_text()
@@ -102,18 +100,6 @@ def _check_c_program(path, native, tmp_path):
     np.testing.assert_allclose(got[:, 0], native["t"], rtol=0, atol=1e-12)
     assert np.abs(got[:, 1] - native["s"]).max() <= 1e-9 * native["s"].max()  # s(t): a spline in the C
     assert deviation(got[:, 2:], native["P"]) <= TOLERANCE
-    return folder / "example"
-
-
-def _cpu_seconds(command: list, runs: int = 5) -> float:
-    """The least CPU time [s] (user + system, its child processes included) of ``runs`` runs of ``command``."""
-    best = np.inf
-    for _ in range(runs):
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([str(word) for word in command], check=True, capture_output=True)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        best = min(best, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
-    return best
 
 
 @pytest.mark.slow  # the default tier builds the same C model code into the ME FMU
@@ -126,18 +112,15 @@ def test_elastic_c_example_prints_the_native_reactions(short_helix, tmp_path):
 @pytest.mark.compiled_elastic
 @pytest.mark.xdist_group("test_elastic_compiled")
 @pytest.mark.parametrize("name", ELASTIC)
-def test_bundled_elastic_c_program_and_export_meet_the_targets(name, tmp_path):
-    """The C program prints the native run's reactions (within 1e-7), the helix's at a real-time factor of at
-    most 0.01 by CPU; the export takes at most 30 s of CPU with the native run, the derivation and the compile."""
+def test_bundled_elastic_c_programs_print_the_native_reactions(name, tmp_path):
+    """Every bundled elastic ride's C program prints the native run's reactions (within 1e-7). Its real-time
+    factor (target <= 0.01 for the helix) and the export's time (target <= 30 s with the compile) are measured in
+    benchmarks/bench_export.py, not asserted here: a CPU bound in a test fails on a slower machine, not on a
+    slower program."""
     path = SCENES / f"{name}.toml"
     native = _native(path)
     assert native["engine"] == "compiled"
-    program = _check_c_program(path, native, tmp_path)
-    if name == "trolley_elastic_helix":  # the bundled ride's real-time factor on one core: <= 0.01 (0.0077 measured)
-        assert _cpu_seconds([program]) <= 0.01 * native["t"][-1]
-    # an export within 30 s including the compile: its CPU time in a process of its own (5 s measured)
-    export = [sys.executable, "-m", "symmech", "export", "fmu", path, "--out", tmp_path / "timed.fmu"]
-    assert _cpu_seconds(export, runs=1) <= 30.0
+    _check_c_program(path, native, tmp_path)
 
 
 TRACTION = [('speed = "3*t + 7*sin(t/2)"', 'traction = "100 - 10*v"\ninitial_speed = 3.0'),

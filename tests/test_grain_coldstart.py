@@ -120,6 +120,36 @@ def test_the_build_lock_admits_one_builder_and_dies_with_its_holder(tmp_path, co
     assert compiled.ENGINE.warm_in_background() is True and len(cold_cache) == 1
 
 
+def test_waiting_for_a_cold_engine_builds_it_here_once_no_builder_works_on_it(tmp_path, cold_cache, monkeypatch):
+    """``wait_warm`` polls while another process holds the build lock; once none does and the engine is still
+    cold (no builder may start: tests/conftest.py's ``SYMMECH_BACKGROUND_BUILD=0``; the other build ended with
+    its record refused), it builds in this process instead of waiting out its 1200 s."""
+    monkeypatch.setenv("SYMMECH_BACKGROUND_BUILD", "0")
+    built, polls = [], []
+    monkeypatch.setattr(compiled.ENGINE, "cold", lambda: not built)
+    monkeypatch.setattr(compiled.ENGINE, "warm", lambda: built.append("here"))
+    lock = tmp_path / "cache" / compiled.ENGINE.lock_name
+    lock.parent.mkdir()
+    holder = POPEN([sys.executable, "-c", "import fcntl, sys, time; fh = open(sys.argv[1], 'a'); "
+                               "fcntl.flock(fh, fcntl.LOCK_EX); print('held', flush=True); time.sleep(120)",
+                               str(lock)], stdout=subprocess.PIPE, text=True)
+
+    def poll(seconds):  # the other builder ends while this one waits, the cache still cold
+        polls.append(seconds)
+        assert len(polls) == 1, "waits on with no builder at work"
+        holder.send_signal(signal.SIGKILL)
+        holder.wait(timeout=30)
+
+    monkeypatch.setattr(build.time, "sleep", poll)
+    try:
+        assert holder.stdout.readline() == "held\n"
+        assert compiled.ENGINE.wait_warm(1200.0) is True
+    finally:
+        holder.kill()
+        holder.wait(timeout=30)
+    assert polls == [0.5] and built == ["here"] and cold_cache == []
+
+
 def test_the_background_builder_runs_at_the_lowest_priority(monkeypatch):
     niceness = []
     monkeypatch.setattr(os, "nice", niceness.append)

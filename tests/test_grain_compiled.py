@@ -23,6 +23,7 @@ from symmech.grain.motion_engine.layouts import S_AT
 from symmech.grain.coulomb_law import ImpactLaw
 
 G = 9.81
+EPS = float(np.finfo(float).eps)
 # slow tier: the engine's build is ~70 s of CPU, more than a third of the default suite's budget (conftest.py)
 pytestmark = [pytest.mark.slow, pytest.mark.compiled_engine]
 
@@ -31,19 +32,36 @@ def both(model, num, start, t_end):
     return compiled.simulate(model, num, start, t_end), motion.simulate(model, num, start, t_end)
 
 
-def assert_same(c, p, t_tol, state_rtol):
-    """Same event log and regimes; impact times to t_tol [s]; impulses, velocities and final state to state_rtol."""
+def impact_time_tolerances(p, t_tol, gap_length):
+    """Per impact of ``p``: t_tol [s] (the root finder's share) plus the gap's round-off over the contact's
+    approach speed. The gap is computed from positions of size ``gap_length`` [m] to a few eps * gap_length, and
+    a root moves by that error over |g'| = |u_n| (the contact point's normal velocity before the impact): in a
+    chattering tail |u_n| falls to 1e-7 m/s and the two loops' impact times part by 1e-11 s (the tumbling crop
+    grain: |dt| * |u_n| <= 3 eps * gap_length in its tail, 47 eps * gap_length where xtol dominates). 16 eps
+    * gap_length is the bound; ``gap_length = 0`` leaves t_tol alone."""
+    return np.array([t_tol + 16 * EPS * gap_length / max(abs(i["u_before"][2]), 1e-300) if gap_length else t_tol
+                     for i in p.impacts])
+
+
+def assert_same(c, p, t_tol, state_rtol, gap_length=0.0):
+    """Same event log and regimes; event times to t_tol [s] (impact times to ``impact_time_tolerances``);
+    impulses, velocities and final state to state_rtol."""
     assert len(c.impacts) == len(p.impacts)
     assert c.extra["landings"] == p.extra["landings"]
     assert c.warnings == p.warnings
     assert c.trajectory.shape == p.trajectory.shape
     assert np.array_equal(c.trajectory[:, -1], p.trajectory[:, -1])  # the regime of every row
-    assert np.max(np.abs(c.trajectory[:, 0] - p.trajectory[:, 0]), initial=0.0) <= t_tol
+    at_impact = impact_time_tolerances(p, t_tol, gap_length)
+    rows = p.trajectory[:, 0]
+    row_tol = np.full(rows.shape, t_tol)
+    for i, tol in zip(p.impacts, at_impact):  # an impact's rows (before and after) carry its time
+        row_tol[rows == i["t"]] = tol
+    assert np.all(np.abs(c.trajectory[:, 0] - rows) <= row_tol)
     # Impulses and velocities to state_rtol of their largest value in the run (a bounce at the end of a
     # chattering sequence is 1e-6 of the first; its relative error is that much larger).
     scales = {k: max((np.abs(i[k]).max() for i in p.impacts), default=1.0) for k in ("impulse", "v_after", "w_after")}
-    for a, b in zip(c.impacts, p.impacts):
-        assert abs(a["t"] - b["t"]) <= t_tol
+    for a, b, tol in zip(c.impacts, p.impacts, at_impact):
+        assert abs(a["t"] - b["t"]) <= tol
         for key, scale in scales.items():
             assert np.abs(np.subtract(a[key], b[key])).max() <= state_rtol * scale
         for key in ("admissible", "printed_admissible", "printed_creates_energy", "converged"):
@@ -52,8 +70,8 @@ def assert_same(c, p, t_tol, state_rtol):
         x, y = getattr(c.final, key), getattr(p.final, key)
         assert np.linalg.norm(x - y) <= state_rtol * max(np.linalg.norm(y), 1e-3)
     assert c.final.t == pytest.approx(p.final.t, abs=t_tol)
-    for k in p.time_in:
-        assert c.time_in[k] == pytest.approx(p.time_in[k], abs=t_tol)
+    for k in p.time_in:  # durations: back-to-back phases telescope to their last event's time
+        assert c.time_in[k] == pytest.approx(p.time_in[k], abs=max(at_impact, default=t_tol))
 
 
 def test_ellipsoid_default_scene_matches_the_python_loop(tmp_path):

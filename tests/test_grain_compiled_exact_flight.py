@@ -106,14 +106,16 @@ def rocking_crop(tmp_path):
 def test_the_compiled_exact_flight_runs_every_regime_as_the_python_one(tmp_path, case, state_rtol):
     """Through landings, slides, lift-offs and a rocking contact (the tumbling crop grain at 32 Hz), with the
     printed law's verdicts: the compiled and the Python loop on the exact flight log the same events, rows and
-    regimes, impact times within 1e-11 s (measured 5.1e-12), states within ``state_rtol`` (the tests of the
+    regimes, event times within 1e-11 s, and an impact's within the gap's round-off over its approach speed
+    (``impact_time_tolerances``: the crop grain's chattering tail, 17 impacts down to |u_n| = 6.7e-8 m/s, parts
+    the two loops by 2.7e-11 s on one machine, 5.1e-12 on another), states within ``state_rtol`` (the tests of the
     DOP853 flight's; the spinning sphere's stick-slip phases amplify round-off: 1.6e-7 measured, 3e-8 between the
     two loops' DOP853 flights)."""
     model, num, start, t_end = case(tmp_path)
     c, p = both(model, replace(num, flight="exact"), start, t_end)
     assert len(p.impacts) + p.extra["landings"] + p.extra["rocking_contacts"] >= 4
     assert c.extra["rocking_contacts"] == p.extra["rocking_contacts"]
-    assert_same(c, p, 1e-11, state_rtol)
+    assert_same(c, p, 1e-11, state_rtol, gap_length=max(model.axes))
 
 
 def test_sphere_on_a_vibrating_plate_bounces_as_with_dop853():

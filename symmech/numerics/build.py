@@ -101,6 +101,7 @@ class Engine:
         self._accepted = None  # the modification time [ns] of the record cold() accepted
         self._holding = False  # whether this process holds the build lock
         self.started_builder = False  # whether this process started a builder (it may not hold the lock yet)
+        self._builder_process = None  # that builder's process
 
     def ahead_of_time(self):
         """The engine's ahead-of-time build (:mod:`symmech.numerics.aot`) when it is current, else None (always
@@ -234,19 +235,28 @@ class Engine:
         with self.build_lock(wait=False) as free:
             if not free:
                 return False
-        subprocess.Popen([sys.executable, "-m", "symmech", "warm", "--engine", self.name, "--background"],
-                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                         start_new_session=True)
+        self._builder_process = subprocess.Popen(
+            [sys.executable, "-m", "symmech", "warm", "--engine", self.name, "--background"],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         self.started_builder = True
         return True
 
     def wait_warm(self, timeout: float) -> bool:
         """Start the builder if none runs and wait up to ``timeout`` [s] for the engine to be cached; returns
-        whether it is."""
+        whether it is. Cold with no builder at work (background builds off, or a build ended with the cache
+        cold: another process compiled into it meanwhile, and its record refuses it), it builds here instead of
+        waiting for nothing."""
         deadline = time.monotonic() + timeout
         self.warm_in_background()
         while self.cold():
+            if not (self._builder_at_work() or self._builder_starting()):
+                self.warm()
+                return not self.cold()
             if time.monotonic() >= deadline:
                 return False
             time.sleep(0.5)
         return True
+
+    def _builder_starting(self) -> bool:
+        """Whether the builder this process started still runs (before it takes the lock, or after)."""
+        return self._builder_process is not None and self._builder_process.poll() is None
