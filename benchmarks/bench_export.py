@@ -7,7 +7,8 @@ dense output), and through its sliding regimes under Model Exchange (``sliding``
 and the whole 2 s).
 
 The elastic C example program runs Radau IIA with dense output on the generated assembly; its real-time
-factor is its whole-process wall time over the ride's duration.
+factor is its CPU time (user + system, the median of >= 5 interleaved rounds of 20 runs) over the ride's duration,
+beside a baseline build of the program (``--baseline DIR/example``, e.g. one exported from main) when given.
 
 Native: `numeric.free_response` (the exact modal solution `symmech run` writes as free_response.csv); for the
 elastic trolley the compiled engine at the scene's rtol (its reactions P0…P5; under traction also s, V0), and
@@ -17,12 +18,14 @@ centres) and trajectory rows.
 Accuracy: `symmech.export.model.deviation`, the largest deviation of each series relative to its largest
 magnitude.
 
-    python benchmarks/bench_export.py [--quick] [--only grain|sliding|elastic|traction|mechanism]
+    python benchmarks/bench_export.py [--quick] [--only grain|sliding|elastic|traction|mechanism|exports]
+        [--baseline PATH]
 """
 from __future__ import annotations
 
 import argparse
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -35,21 +38,37 @@ from symmech.export import build, command, model
 from symmech.export.model import deviation
 from symmech.smm import numeric
 from symmech.trolley.elastic import scene as elastic_scene
-from timing import interleaved, machine
+from timing import interleaved, interleaved_cpu, machine
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="3 rounds instead of 7")
-    parser.add_argument("--only", choices=("grain", "sliding", "elastic", "traction", "mechanism"),
+    parser.add_argument("--only", choices=("grain", "sliding", "elastic", "traction", "mechanism", "exports"),
                         help="one model only")
+    parser.add_argument("--baseline", help="an elastic helix example program to time beside this tree's")
     args = parser.parse_args()
     repeats = 3 if args.quick else 7
     print(machine())
-    for name, bench in (("grain", grain), ("sliding", grain_sliding), ("elastic", elastic), ("traction", traction),
-                        ("mechanism", mechanisms)):
+    for name, bench in (("grain", grain), ("sliding", grain_sliding),
+                        ("elastic", lambda repeats: elastic(repeats, args.baseline)), ("traction", traction),
+                        ("mechanism", mechanisms), ("exports", exports)):
         if args.only in (None, name):
             bench(repeats)
+
+
+def exports(repeats: int) -> None:
+    """CPU time of `symmech export fmu` (FMI 3 ME) for every bundled scene it accepts, each in a process of its own
+    (the native run, the derivation and the compile included), rounds interleaved; target <= 30 s each."""
+    with tempfile.TemporaryDirectory() as tmp:
+        commands = {}
+        for path in sorted(scenes_folder().glob("*.toml")):
+            command = [sys.executable, "-m", "symmech", "export", "fmu", str(path), "--out", f"{tmp}/{path.stem}.fmu"]
+            if subprocess.run(command, capture_output=True).returncode == 0:  # refused scenes (exit 2) left out
+                commands[path.stem] = command
+        print("\nsymmech export fmu of each bundled scene it accepts, CPU per export (target <= 30 s):")
+        for name, cpu in interleaved_cpu(commands, max(repeats, 5), number=1).items():
+            print(f"  {name:28s} {cpu.text()}")
 
 
 def mechanisms(repeats: int) -> None:
@@ -100,10 +119,11 @@ def _printed(text: str) -> np.ndarray:
 EXAMPLE = "C example program (Radau IIA rtol 1e-8)"
 
 
-def elastic(repeats: int) -> None:
-    """The bundled elastic helix: FMU ME/CS and the C example program against the compiled engine's run."""
+def elastic(repeats: int, baseline: str | None = None) -> None:
+    """The bundled elastic helix: FMU ME/CS and the C example program against the compiled engine's run;
+    ``baseline`` another build of its example program, timed beside this one's."""
     _ride("elastic helix", scenes_folder() / "trolley_elastic_helix.toml", [f"P{i}" for i in range(6)],
-          lambda run: run["P"], {"rtol": 1e-10}, slice(2, None), repeats)
+          lambda run: run["P"], {"rtol": 1e-10}, slice(2, None), repeats, baseline)
 
 
 # the bundled helix under traction: P0 = 100 - 10 V0 N from 3 m/s
@@ -126,10 +146,12 @@ def traction(repeats: int) -> None:
               [3, 4, 5, 6, 7, 8, 1, 2], repeats)
 
 
-def _ride(title: str, path: Path, names: list[str], series, reference: dict, columns, repeats: int) -> None:
+def _ride(title: str, path: Path, names: list[str], series, reference: dict, columns, repeats: int,
+          baseline: str | None = None) -> None:
     """FMU ME/CS and the C example program of the elastic scene at ``path`` against the compiled engine's run:
     ``series(run)`` the compared columns ``names`` of a native run, ``reference`` the keywords of a tighter native
-    run beside it, ``columns`` those of the example program's table."""
+    run beside it, ``columns`` those of the example program's table; ``baseline`` another build of the example
+    program, its CPU time measured beside this one's."""
     setup = pipeline.load(path).setup.elastic
     exported = command.load(path)
     t = exported.native.data[:, 0]
@@ -158,8 +180,9 @@ def _ride(title: str, path: Path, names: list[str], series, reference: dict, col
             got = np.column_stack([result[n] for n in names]) if result.dtype.names else result
             print(f"  {label:40s} {stats[label].text()}  error {deviation(got, native):.2g} "
                   f"(vs {tolerances}: {deviation(got, tight):.2g})")
-        print(f"  C example program's real-time factor (whole process, wall): "
-              f"{stats[EXAMPLE].median / t[-1]:.3g}")
+        programs = {"this tree": [str(example)], **({"baseline": [baseline]} if baseline else {})}
+        for label, cpu in interleaved_cpu(programs, max(repeats, 5)).items():
+            print(f"  C example program, {label}: CPU {cpu.text()}, real-time factor {cpu.median / t[-1]:.3g}")
 
 
 def grain(repeats: int) -> None:

@@ -36,6 +36,24 @@ def interleaved(contenders: dict[str, Callable[[], object]], repeats: int = 5,
     return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
 
 
+def interleaved_cpu(commands: dict[str, list[str]], repeats: int = 5, number: int = 20) -> dict[str, Stats]:
+    """CPU seconds (user + system) per run of each command (a process, its output discarded): ``number`` runs per
+    round, rounds interleaved over ``repeats``; the CPU time is the children's by getrusage, so it excludes
+    whatever else the machine runs."""
+    import resource
+    import subprocess
+
+    samples = {name: [] for name in commands}
+    for _ in range(repeats):
+        for name, command in commands.items():
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            for _ in range(number):
+                subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            samples[name].append((after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime) / number)
+    return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
+
+
 def ratio(slow: Stats, fast: Stats) -> str:
     """slow/fast at the medians, with the range from the extremes."""
     return (f"{slow.median / fast.median:6.2f}x (range {slow.low / fast.high:.2f}-"

@@ -54,13 +54,17 @@ def _pointers(*arrays):
     return [a.ctypes.data_as(DOUBLES) for a in arrays]
 
 
-def _rates(library, y, p, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """F (n) and M (n, n) of M y' = F from the generated dynamics functions at time t [s], state y (n,)."""
+def _rates(library, y, p, t: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """F (n) and M (n, n) of M y' = F from the generated dynamics functions at time t [s], state y (n,), and M's
+    block below its identity rows (n/2, n/2) from ``mass_block``."""
     n2 = y.size
     rate, mass = np.full(n2, np.nan), np.full(n2 * n2, np.nan)
     library.elastic_assembly_rate(ctypes.c_double(t), *_pointers(y, p, rate))
     library.elastic_assembly_rate_mass(ctypes.c_double(t), *_pointers(y, p, mass))
-    return rate, mass.reshape(n2, n2)
+    k = n2 // 2
+    block = np.full(k * k, np.nan)
+    library.elastic_assembly_mass_block(*_pointers(np.r_[y, p], block))
+    return rate, mass.reshape(n2, n2), block.reshape(k, k)
 
 
 def _close(got, expected, scale) -> None:
@@ -80,13 +84,14 @@ def _compare(system, library, states: int = 5) -> None:
         fs = el_frame.FrameState(v0, a0, w, dw, nu)
         load = a0 + system.mdl.g0 * nu
         p = np.r_[rollers, load, w, dw, v0]
-        rate, mass = _rates(library, np.r_[q, qd], p)
+        rate, mass, block = _rates(library, np.r_[q, qd], p)
         R = system.evaluate(fs, q, qd, np.zeros(n))
         terms = np.abs(system.inv.K @ q).max() + np.abs(system.inv.S1).max() * np.abs(load).max()
         np.testing.assert_array_equal(rate[:n], qd)
         _close(-rate[n:], R, terms)
         M = system.mass(q)
         _close(mass[n:, n:], M, np.abs(M).max())
+        _close(block, np.tril(M), np.abs(M).max())  # M is symmetric: the Cholesky solve reads its lower triangle
         np.testing.assert_array_equal(mass[:n], np.eye(2 * n)[:n])
         outputs = np.full(11 + 9 * len(system.inv.probe_points), np.nan)
         library.elastic_assembly_outputs(*_pointers(np.r_[q, qd, qdd, p], outputs))
@@ -138,11 +143,12 @@ def test_generated_traction_assembly_equals_the_python_engine(tmp_path):
             q, qd = rng.normal(0.0, 1e-4, n), rng.normal(0.0, 1e-3, n)
             s, V, t = rng.uniform(0.0, 10.0), rng.uniform(1.0, 8.0), rng.uniform(0.0, 3.0)
             p = np.r_[rollers, el_frame.geometry(drive, np.array([s]))[0]]
-            rate, mass = _rates(library, np.r_[q, s, qd, V], p, t)
+            rate, mass, block = _rates(library, np.r_[q, s, qd, V], p, t)
             np.testing.assert_array_equal(rate[:n + 1], np.r_[qd, V])
             np.testing.assert_array_equal(mass[:n + 1], np.eye(2 * n + 2)[:n + 1])
+            _close(block, mass[n + 1:, n + 1:], np.abs(block).max())
             rate[-1] += extra
-            x = np.linalg.solve(mass[n + 1:, n + 1:], rate[n + 1:])
+            x = np.linalg.solve(block, rate[n + 1:])  # the exported model solves with the block
             fs, qdd, dV = line.traction_step(t, np.r_[q, qd, 0.0, 0.0, s, V])
             _close(x[:n], qdd, np.abs(qdd).max())
             _close(x[n], dV, abs(dV))

@@ -1,9 +1,9 @@
-/* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial
-   pivoting), Dormand and Prince's DOP853 with the error control of Hairer's dop853.f and its dense output of
-   order 7 (the tableau in dop853_tableau.h is written from symmech/numerics/dop853.py), state events located on
-   that dense output by the Illinois method (golden section finding the grazing dips between its samples) and,
-   for a stiff model (MODEL_STIFF), Radau IIA
-   of order 5 as scipy's and symmech/numerics/radau.py's (radau_tableau.h written from
+/* Generic numerics of an exported symmech model: the linear solve of M y' = F (LU with partial pivoting, or
+   Cholesky where the model declares its block of M symmetric positive definite: MASS_SPD), Dormand and Prince's
+   DOP853 with the error control of Hairer's dop853.f and its dense output of order 7 (the tableau in
+   dop853_tableau.h is written from symmech/numerics/dop853.py), state events located on that dense output by the
+   Illinois method (golden section finding the grazing dips between its samples) and, for a stiff model
+   (MODEL_STIFF), Radau IIA of order 5 as scipy's and symmech/numerics/radau.py's (radau_tableau.h written from
    symmech/numerics/radau_tableau.py) with dense output. Hand-written; the physics is generated. */
 #include <math.h>
 #include <string.h>
@@ -25,6 +25,7 @@ void symmech_reset(SymmechModel *m)
 #endif
 }
 
+#if defined(MODEL_STIFF) || ((defined(MODEL_RATE_MASS) || defined(MODEL_MASS_BLOCK)) && !defined(MASS_SPD))
 /* LU factors of a (n x n row-major) with partial pivoting, in place, row swaps into piv; 0, or -1 when
    singular */
 static int lu_factor(double *a, int *piv, int n)
@@ -61,32 +62,78 @@ static void lu_solve(const double *a, const int *piv, double *b, int n)
         b[i] /= a[i * n + i];
     }
 }
+#endif
 
-/* solve a x = b in place (a overwritten by its LU factors); 0, or -1 when singular */
-static int solve_dense(double *a, double *b, int n)
+#if defined(MODEL_RATE_MASS) || defined(MODEL_MASS_BLOCK)
+#define N_M (N_X - MASS_IDENTITY)
+#ifdef MODEL_MASS_BLOCK  /* the model writes M22 alone, row by row */
+#define MASS_STRIDE N_M
+#define MASS_AT 0
+#else  /* the model writes M whole: M22 from row and column MASS_IDENTITY */
+#define MASS_STRIDE N_X
+#define MASS_AT (MASS_IDENTITY * N_X + MASS_IDENTITY)
+#endif
+
+#ifdef MASS_SPD
+/* b = M22^-1 b (N_M) by Cholesky, M22 the symmetric positive definite block of M (at mass + MASS_AT, row stride
+   MASS_STRIDE; its lower triangle read and overwritten by the factor); 0, or -1 when it is not positive
+   definite. Half the work of LU and no pivot search; the sizes are compile-time constants. */
+static int solve_mass(double *mass, double *b)
 {
-    int piv[N_X];
-    if (lu_factor(a, piv, n) != 0) return -1;
-    lu_solve(a, piv, b, n);
+    double *a = mass + MASS_AT, inv[N_M];
+    for (int j = 0; j < N_M; j++) {
+        double d = a[j * MASS_STRIDE + j];
+        for (int k = 0; k < j; k++) d -= a[j * MASS_STRIDE + k] * a[j * MASS_STRIDE + k];
+        if (!(d > 0.0)) return -1;
+        inv[j] = 1.0 / sqrt(d);
+        for (int i = j + 1; i < N_M; i++) {
+            double s = a[i * MASS_STRIDE + j];
+            for (int k = 0; k < j; k++) s -= a[i * MASS_STRIDE + k] * a[j * MASS_STRIDE + k];
+            a[i * MASS_STRIDE + j] = s * inv[j];
+        }
+    }
+    for (int i = 0; i < N_M; i++) {  /* L z = b, then L^T x = z */
+        double s = b[i];
+        for (int k = 0; k < i; k++) s -= a[i * MASS_STRIDE + k] * b[k];
+        b[i] = s * inv[i];
+    }
+    for (int i = N_M - 1; i >= 0; i--) {
+        double s = b[i];
+        for (int k = i + 1; k < N_M; k++) s -= a[k * MASS_STRIDE + i] * b[k];
+        b[i] = s * inv[i];
+    }
     return 0;
 }
+#else
+/* b = M22^-1 b (N_M) by LU with partial pivoting, M22 packed row by row at the start of mass (never overwriting
+   a row still to read) and overwritten by its factors; 0, or -1 when singular */
+static int solve_mass(double *mass, double *b)
+{
+    int piv[N_M];
+    for (int i = 0; MASS_STRIDE != N_M && i < N_M; i++)
+        for (int j = 0; j < N_M; j++) mass[i * N_M + j] = mass[MASS_AT + i * MASS_STRIDE + j];
+    if (lu_factor(mass, piv, N_M) != 0) return -1;
+    lu_solve(mass, piv, b, N_M);
+    return 0;
+}
+#endif
+#endif
 
 /* y' at (t, y) with the instance's inputs and parameters; M = diag(I, M22) with an identity block of
    MASS_IDENTITY rows: only M22 is factored */
 static int rates(SymmechModel *m, double t, const double *y, double *out)
 {
-    double *mass = m->mass;
     const double *p = m->r + VR_P;
-    const int k0 = MASS_IDENTITY, n = N_X - MASS_IDENTITY;
     MODEL_RATE(t, y, p, out);
     for (int k = 0; k < N_U; k++) out[U_ROW + k] += m->r[VR_U + k];
-#ifdef MODEL_RATE_MASS
-    MODEL_RATE_MASS(t, y, p, mass);
-    for (int i = 0; i < n; i++)  /* M22 packed in place, row by row (never overwriting a row still to read) */
-        for (int j = 0; j < n; j++) mass[i * n + j] = mass[(k0 + i) * N_X + k0 + j];
-    return solve_dense(mass, out + k0, n);
+#if defined(MODEL_MASS_BLOCK)
+    MODEL_MASS_BLOCK(t, y, p, m->mass);
+    return solve_mass(m->mass, out + MASS_IDENTITY);
+#elif defined(MODEL_RATE_MASS)
+    MODEL_RATE_MASS(t, y, p, m->mass);
+    return solve_mass(m->mass, out + MASS_IDENTITY);
 #else
-    (void)mass; (void)k0; (void)n;  /* M is the identity */
+    (void)m;  /* M is the identity */
     return 0;
 #endif
 }
@@ -520,27 +567,83 @@ static int jacobian(SymmechModel *m, double t, const double *y, const double *f,
     return 0;
 }
 
-/* LU factors of MU_REAL/h - J and of MU_COMPLEX/h - J, the latter as the real 2 N_X system
-   [[Re, -Im], [Im, Re]] */
+/* LU factors with partial pivoting (by |re| + |im|, as LAPACK's zgetrf) of the complex N_X x N_X matrix
+   (re, im row-major) in place, row swaps into piv; 0, or -1 when singular. A quarter of the real 2 N_X
+   system's work to factor. */
+static int lu_factor_complex(double *re, double *im, int *piv)
+{
+    for (int k = 0; k < N_X; k++) {
+        int pivot = k;
+        for (int i = k + 1; i < N_X; i++)
+            if (fabs(re[i * N_X + k]) + fabs(im[i * N_X + k])
+                > fabs(re[pivot * N_X + k]) + fabs(im[pivot * N_X + k])) pivot = i;
+        piv[k] = pivot;
+        if (re[pivot * N_X + k] == 0.0 && im[pivot * N_X + k] == 0.0) return -1;
+        if (pivot != k)
+            for (int j = 0; j < N_X; j++) {
+                double s = re[k * N_X + j]; re[k * N_X + j] = re[pivot * N_X + j]; re[pivot * N_X + j] = s;
+                s = im[k * N_X + j]; im[k * N_X + j] = im[pivot * N_X + j]; im[pivot * N_X + j] = s;
+            }
+        double pr = re[k * N_X + k], pi = im[k * N_X + k], p2 = pr * pr + pi * pi;
+        double ir = pr / p2, ii = -pi / p2;  /* 1 / pivot */
+        for (int i = k + 1; i < N_X; i++) {
+            double ar = re[i * N_X + k], ai = im[i * N_X + k];
+            double fr = ar * ir - ai * ii, fi = ar * ii + ai * ir;
+            re[i * N_X + k] = fr;
+            im[i * N_X + k] = fi;
+            if (fr == 0.0 && fi == 0.0) continue;
+            for (int j = k + 1; j < N_X; j++) {
+                double br = re[k * N_X + j], bi = im[k * N_X + j];
+                re[i * N_X + j] -= fr * br - fi * bi;
+                im[i * N_X + j] -= fr * bi + fi * br;
+            }
+        }
+    }
+    return 0;
+}
+
+/* (br, bi) = a^-1 (br, bi) in place from the factors of lu_factor_complex */
+static void lu_solve_complex(const double *re, const double *im, const int *piv, double *br, double *bi)
+{
+    for (int k = 0; k < N_X; k++) {
+        double s = br[k]; br[k] = br[piv[k]]; br[piv[k]] = s;
+        s = bi[k]; bi[k] = bi[piv[k]]; bi[piv[k]] = s;
+    }
+    for (int i = 0; i < N_X; i++) {
+        double sr = br[i], si = bi[i];
+        for (int j = 0; j < i; j++) {
+            sr -= re[i * N_X + j] * br[j] - im[i * N_X + j] * bi[j];
+            si -= re[i * N_X + j] * bi[j] + im[i * N_X + j] * br[j];
+        }
+        br[i] = sr; bi[i] = si;
+    }
+    for (int i = N_X - 1; i >= 0; i--) {
+        double sr = br[i], si = bi[i];
+        for (int j = i + 1; j < N_X; j++) {
+            sr -= re[i * N_X + j] * br[j] - im[i * N_X + j] * bi[j];
+            si -= re[i * N_X + j] * bi[j] + im[i * N_X + j] * br[j];
+        }
+        double dr = re[i * N_X + i], di = im[i * N_X + i], d2 = dr * dr + di * di;
+        br[i] = (sr * dr + si * di) / d2;
+        bi[i] = (si * dr - sr * di) / d2;
+    }
+}
+
+/* LU factors of MU_REAL/h - J and of the complex MU_COMPLEX/h - J */
 static int factor(Radau *s, double h)
 {
-    const int n2 = 2 * N_X;
-    double *c = s->lu_complex;
-    memset(c, 0, sizeof s->lu_complex);
-    for (int i = 0; i < N_X; i++) {
-        for (int j = 0; j < N_X; j++) {
-            double a = -s->J[i * N_X + j];
-            s->lu_real[i * N_X + j] = a;
-            c[i * n2 + j] = a;
-            c[(N_X + i) * n2 + N_X + j] = a;
-        }
-        s->lu_real[i * N_X + i] += RADAU_MU_REAL / h;
-        c[i * n2 + i] += RADAU_MU_COMPLEX_RE / h;
-        c[(N_X + i) * n2 + N_X + i] += RADAU_MU_COMPLEX_RE / h;
-        c[i * n2 + N_X + i] = -RADAU_MU_COMPLEX_IM / h;
-        c[(N_X + i) * n2 + i] = RADAU_MU_COMPLEX_IM / h;
+    for (int i = 0; i < N_X * N_X; i++) {
+        s->lu_real[i] = -s->J[i];
+        s->lu_complex_re[i] = -s->J[i];
+        s->lu_complex_im[i] = 0.0;
     }
-    if (lu_factor(s->lu_real, s->piv_real, N_X) != 0 || lu_factor(c, s->piv_complex, n2) != 0) return -1;
+    for (int i = 0; i < N_X; i++) {
+        s->lu_real[i * N_X + i] += RADAU_MU_REAL / h;
+        s->lu_complex_re[i * N_X + i] += RADAU_MU_COMPLEX_RE / h;
+        s->lu_complex_im[i * N_X + i] = RADAU_MU_COMPLEX_IM / h;
+    }
+    if (lu_factor(s->lu_real, s->piv_real, N_X) != 0
+        || lu_factor_complex(s->lu_complex_re, s->lu_complex_im, s->piv_complex) != 0) return -1;
     s->lu_valid = 1;
     return 0;
 }
@@ -577,7 +680,7 @@ static int newton(SymmechModel *m, double t, const double *y, double h, double *
             wc[N_X + i] = TF[2 * N_X + i] - (RADAU_MU_COMPLEX_RE * wi + RADAU_MU_COMPLEX_IM * wr) / h;
         }
         lu_solve(s->lu_real, s->piv_real, dW, N_X);
-        lu_solve(s->lu_complex, s->piv_complex, wc, 2 * N_X);
+        lu_solve_complex(s->lu_complex_re, s->lu_complex_im, s->piv_complex, wc, wc + N_X);
         memcpy(dW + N_X, wc, sizeof wc);
         double norm = scaled_rms(dW, 3 * N_X, scale);
         if (norm_old >= 0.0) *rate = norm / norm_old;

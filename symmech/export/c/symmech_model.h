@@ -19,8 +19,9 @@ typedef struct {
     double t_old, h_last;      /* the last step: start and length (0: none) */
     double Q[4 * N_X];         /* its interpolant: coefficients of x, x^2, x^3 row by row, then y at t_old */
     double J[N_X * N_X];       /* dy'/dy */
-    double lu_real[N_X * N_X], lu_complex[4 * N_X * N_X];  /* MU_REAL/h - J; the complex one as 2 N_X real */
-    int piv_real[N_X], piv_complex[2 * N_X];
+    double lu_real[N_X * N_X];  /* MU_REAL/h - J */
+    double lu_complex_re[N_X * N_X], lu_complex_im[N_X * N_X];  /* MU_COMPLEX/h - J: real and imaginary parts */
+    int piv_real[N_X], piv_complex[N_X];
     int jac_current, lu_valid;
     double rtol, atol;
     double seen[N_REAL];  /* r[] when the last call returned: the integrator resumes only from there */
