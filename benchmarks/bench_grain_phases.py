@@ -14,7 +14,11 @@ The difference of two variants is that part's cost. A call from Python costs a f
 whole run (argument unboxing, cold caches), measured alone (a call doing nothing) and subtracted; the sum is therefore
 compared with the whole run timed in one call (``loop.run`` for all phases), reported beside it.
 
-Run: python benchmarks/bench_grain_phases.py [--repeats 7] (numba's cache built: ``symmech warm --engine grain``)
+``--impact-alone``: instead, the impact law alone (``impact_law.impact``) on the run's pre-impact states (the first
+of each pair of IMPACT trajectory rows), in one compiled loop, CPU per impact with and without the printed law's check.
+
+Run: python benchmarks/bench_grain_phases.py [--repeats 7] [--impact-alone] (numba's cache built: ``symmech warm
+--engine grain``)
 """
 from __future__ import annotations
 
@@ -22,14 +26,16 @@ import argparse
 import os
 import time
 
+import numba
 import numpy as np
 
 from timing import machine
 
 from symmech.core import pipeline
 from symmech.grain.motion_engine import driver, loop
+from symmech.grain.motion_engine.impact_law import impact
 from symmech.grain.motion_engine.layouts import (
-    C_AT, CARRY, FLIGHT, IMPACT_WIDTH, INT, MORE, P_AT, TRAJECTORY_WIDTH, WARNING_WIDTH)
+    C_AT, CARRY, FLIGHT, IMPACT, IMPACT_WIDTH, INT, MORE, P_AT, STATE, T_AT, TRAJECTORY_WIDTH, WARNING_WIDTH)
 
 
 def buffers():
@@ -86,6 +92,36 @@ def whole_run(p, y0, t_end, repeats):
     return float(np.median(times)) / 1e6, min(times) / 1e6
 
 
+@numba.njit(cache=True, error_model="numpy")
+def _impacts(p, states, carry, rounds):
+    """impact_law.impact on every state (n, STATE.size), ``rounds`` times; the warning count reset each call."""
+    warns = np.empty((64, WARNING_WIDTH))
+    after = states.copy()
+    for _ in range(rounds):
+        for i in range(states.shape[0]):
+            carry[C_AT.nwarn] = 0.0
+            after[i], _, warns = impact(p, states[i], warns, carry)
+    return after
+
+
+def impact_alone(p, y0, t_end, repeats, rounds=100):
+    """CPU us per impact of the impact law alone on the run's pre-impact states: (median, min) of ``repeats``, and
+    the number of impacts."""
+    rows, imps, warns = buffers()
+    carry = CARRY.zeros()
+    _, rows, _, _, _ = loop.run(p, y0.copy(), t_end, rows, imps, warns, carry, INT(1 << 30))
+    rows = rows[:int(carry[C_AT.rows])]
+    at_impact = rows[rows[:, T_AT.regime] == IMPACT]  # pairs (before, after); a row starts with the state
+    states = np.ascontiguousarray(at_impact[0::2, :STATE.size])
+    _impacts(p, states, CARRY.zeros(), 1)
+    times = []
+    for _ in range(repeats):
+        start = time.process_time_ns()
+        _impacts(p, states, CARRY.zeros(), rounds)
+        times.append((time.process_time_ns() - start) / 1e3 / rounds / len(states))
+    return float(np.median(times)), min(times), len(states)
+
+
 def variant(p, **fields):
     q = p.copy()
     for name, value in fields.items():
@@ -96,11 +132,17 @@ def variant(p, **fields):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--impact-alone", action="store_true", help="the impact law alone on the run's impact states")
     ns = ap.parse_args()
     print(f"machine: {machine()}; load average {os.getloadavg()[0]:.1f}")
     sc = pipeline.load("scenes/grain_default.toml").setup
     p, y0 = driver.pack(sc.model, sc.numerics), driver.start_vector(sc.model, sc.start)
     t_end = sc.start.t + sc.duration
+    if ns.impact_alone:
+        for label, q in (("with the printed law's check", p), ("Coulomb law alone", variant(p, check_printed=0.0))):
+            median, least, n = impact_alone(q, y0, t_end, ns.repeats)
+            print(f"impact law alone, {label:<28} {median:6.3f} us per impact (min {least:.3f}; {n} impacts)")
+        return
     phases, carry = record_phases(p, y0, t_end)
     flights = [ph for ph in phases if ph[0] == FLIGHT]
     slides = [ph for ph in phases if ph[0] != FLIGHT]

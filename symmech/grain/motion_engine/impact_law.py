@@ -11,7 +11,8 @@ import numpy as np
 from symmech.numerics import kernels
 from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.kinematics import (
-    EPS, contact_offset, cross, inverse_effective_mass, kinetic, rotation, world_inv_inertia)
+    EPS, contact_offset_xyz, cross_xyz, dot3, inertia_solve, inverse_effective_mass, kinetic, rotation, turn,
+    turn_back)
 from symmech.grain.motion_engine.layouts import (
     I_AT, IMPACT_WIDTH, LAW_PRINTED, P_AT, W_ENERGY, W_PRINTED_ENERGY, W_PRINTED_PULLS, W_PRINTED_RESIDUAL, X_AT)
 from symmech.grain.motion_engine.rows import warn
@@ -21,26 +22,34 @@ gi = kernels.load("grain_impact")
 
 @jit
 def _coulomb_impulse(K, u, e_n, e_t, mu):
-    """Chatterjee-Ruina impulse P (3,) [N s] (``coulomb_law.coulomb_impulse`` for one grain)."""
-    P_I = np.zeros(3)
-    P_I[2] = -u[2] / K[2, 2]
-    D = -np.linalg.solve(K, u) - P_I
-    P = (1.0 + e_n) * P_I + (1.0 + e_t) * D
-    d_t = math.hypot(D[0], D[1])
-    p_t = math.hypot(P[0], P[1])
-    outside = p_t / mu > P[2] if mu > 0 else p_t > 0
-    if outside:
-        kappa = (1.0 + e_n) * P_I[2] / (d_t / mu - D[2])
-        return (1.0 + e_n) * P_I + kappa * D
-    return P
+    """Chatterjee-Ruina impulse (P_x, P_y, P_z) [N s] (``coulomb_law.coulomb_impulse`` for one grain) of the
+    symmetric K's 6 entries (:func:`kinematics.inverse_effective_mass`) [1/kg] and u (3 floats) [m/s]: K u' = u by
+    the generated Cramer formulas, no LAPACK."""
+    pi_z = -u[2] / K[5]
+    s = _solve_symmetric(K, u)
+    return _bounded_impulse(pi_z, -s[0] - 0.0, -s[1] - 0.0, -s[2] - pi_z, e_n, e_t, mu)
+
+
+@jit
+def _solve_symmetric(K, b):
+    """x of K x = b, K symmetric given by (K_xx, K_xy, K_xz, K_yy, K_yz, K_zz): the generated Cramer formulas
+    (``cramer_solution``, written for the Euler rates, a general 3 x 3 system)."""
+    x = gi.cramer_solution_scalar(K[0], K[1], K[2], K[1], K[3], K[4], K[2], K[4], K[5], b[0], b[1], b[2])
+    return x[0], x[1], x[2]
 
 
 @jit
 def _point_impulse(u, k, e_n, e_t, mu):
     """``_coulomb_impulse`` of a point mass (K = k times the identity, k = 1/m [1/kg]) in scalars, the same
-    operations element by element (no arrays, no LAPACK): (P_x, P_y, P_z) [N s]."""
+    operations element by element: (P_x, P_y, P_z) [N s]."""
     pi_z = -u[2] / k
-    d_x, d_y, d_z = -u[0] / k - 0.0, -u[1] / k - 0.0, -u[2] / k - pi_z
+    return _bounded_impulse(pi_z, -u[0] / k - 0.0, -u[1] / k - 0.0, -u[2] / k - pi_z, e_n, e_t, mu)
+
+
+@jit
+def _bounded_impulse(pi_z, d_x, d_y, d_z, e_n, e_t, mu):
+    """The law from the frictionless plastic normal impulse pi_z and D = sticking plastic minus it [N s]:
+    (1 + e_n) P_I + (1 + e_t) D, pulled back onto the friction cone (mu) if outside; 3 floats [N s]."""
     p_x, p_y = (1.0 + e_n) * 0.0 + (1.0 + e_t) * d_x, (1.0 + e_n) * 0.0 + (1.0 + e_t) * d_y
     p_z = (1.0 + e_n) * pi_z + (1.0 + e_t) * d_z
     p_t = math.hypot(p_x, p_y)
@@ -141,23 +150,25 @@ def _trig_roots(k, tol, max_iter):
 
 @jit
 def _prescribed(u, e, lam, mu):
+    """The printed law's contact velocity after [m/s] at slip angle mu [rad], 3 floats."""
     speed = (1.0 - lam) * math.hypot(u[0], u[1])
-    return np.array([speed * math.cos(mu), speed * math.sin(mu), -e * u[2]])
+    return speed * math.cos(mu), speed * math.sin(mu), -e * u[2]
 
 
 @inline
 def printed_impulse(H, m, e, lam, u):
-    """The printed law solved exactly for one impact (``impact.solve_robust_batch``):
-    (T (3,), residual of (19), admissible, creates energy, pulls)."""
-    k = gi.mu_equation_scalar(H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2], lam, e, u[0], u[1], u[2])
-    norm_u = math.sqrt(u @ u)
+    """The printed law solved exactly for one impact (``impact.solve_robust_batch``) of H = m K [1] by its upper
+    triangle (H_xx, H_xy, H_xz, H_yy, H_yz, H_zz), mass m [kg], u (3 floats or (3,)) [m/s]:
+    (T (3 floats) [N s], residual of (19), admissible, creates energy, pulls)."""
+    k = gi.mu_equation_scalar(H[0], H[1], H[2], H[3], H[4], H[5], lam, e, u[0], u[1], u[2])
+    norm_u = math.sqrt(dot3(u, u))
     stuck = abs(1.0 - lam) * math.hypot(u[0], u[1]) <= 1e-14 * norm_u  # lam > 1 reverses: its size says stuck
     roots = np.full(4, np.nan)
     if stuck:
         roots[0] = 0.0
     else:
         roots = _trig_roots(k, 1e-14, 12)
-    ke_scale = 0.5 * m * (u @ u)
+    ke_scale = 0.5 * m * dot3(u, u)
     Ts = np.zeros((4, 3))
     score = np.full(4, np.inf)
     gains = np.zeros(4, dtype=np.bool_)
@@ -167,11 +178,13 @@ def printed_impulse(H, m, e, lam, u):
         if j > 0 and math.isnan(roots[j]):
             continue  # an unused slot: never chosen (slot 0's T, at mu = 0, stands when no root is found)
         mu = 0.0 if math.isnan(roots[j]) else roots[j]
-        du = _prescribed(u, e, lam, mu) - u
-        T = m * np.linalg.solve(H, du)
-        Ts[j] = T
-        gains[j] = 0.5 * (T @ (2 * u + du)) > 1e-9 * ke_scale
-        pulls[j] = T[2] < -1e-12 * math.sqrt(T @ T)
+        u_next = _prescribed(u, e, lam, mu)
+        du = (u_next[0] - u[0], u_next[1] - u[1], u_next[2] - u[2])
+        x = _solve_symmetric(H, du)
+        T = (m * x[0], m * x[1], m * x[2])
+        Ts[j, 0], Ts[j, 1], Ts[j, 2] = T
+        gains[j] = 0.5 * dot3(T, (2 * u[0] + du[0], 2 * u[1] + du[1], 2 * u[2] + du[2])) > 1e-9 * ke_scale
+        pulls[j] = T[2] < -1e-12 * math.sqrt(dot3(T, T))
         if not math.isnan(roots[j]):
             big = max(big, math.hypot(T[0], T[1]))
     big = 10.0 * big + 1.0
@@ -183,39 +196,48 @@ def printed_impulse(H, m, e, lam, u):
             score[j] = rank * big + math.hypot(Ts[j, 0], Ts[j, 1])
             if score[j] < score[choice]:
                 choice = j
-    T = Ts[choice] if found else np.full(3, np.nan)
+    T = (Ts[choice, 0], Ts[choice, 1], Ts[choice, 2]) if found else (np.nan, np.nan, np.nan)
     mu = roots[choice]
     if stuck:
         mu = math.atan2(T[1], T[0]) if math.hypot(T[0], T[1]) > 0 else 0.0
     d0, d1 = math.cos(mu), math.sin(mu)
     tau = T[0] * d0 + T[1] * d1
-    r = H @ np.array([tau * d0, tau * d1, T[2]]) - m * (_prescribed(u, e, lam, mu) - u)
-    residual = (math.sqrt(r @ r) + abs(T[1] * d0 - T[0] * d1)) / (m * norm_u)
+    r = _residual_19(H, (tau * d0, tau * d1, T[2]), m, u, _prescribed(u, e, lam, mu))
+    residual = (math.sqrt(dot3(r, r)) + abs(T[1] * d0 - T[0] * d1)) / (m * norm_u)
     bad_gain, bad_pull = gains[choice], pulls[choice]
     return T, residual, found and not (bad_gain or bad_pull), bad_gain, bad_pull
+
+
+@jit
+def _residual_19(H, T, m, u, u_next):
+    """H T - m (u_next - u) [N s], 3 floats: H by its 6 entries, symmetric; u_next the printed law's velocity after."""
+    return (H[0] * T[0] + H[1] * T[1] + H[2] * T[2] - m * (u_next[0] - u[0]),
+            H[1] * T[0] + H[3] * T[1] + H[4] * T[2] - m * (u_next[1] - u[1]),
+            H[2] * T[0] + H[4] * T[1] + H[5] * T[2] - m * (u_next[2] - u[2]))
 
 
 @inline
 def impact(p, y, warns, carry):
     """The scene's impact law at the lowest point (``ImpactLaw.apply`` for one grain):
-    (state after, log row (IMPACT_WIDTH,) without t and r, warns)."""
+    (state after, log row (IMPACT_WIDTH,) without t and r, warns). Vectors as 3 floats, K as its 6 entries: no
+    BLAS or LAPACK call; the arrays are Q, the state after and the log (and the printed law's few)."""
     if p[P_AT.rotation] == 0.0:
         return _point_mass_impact(p, y, warns, carry)
     Q = rotation(y[X_AT.q:X_AT.q + 4])
     m = p[P_AT.mass]
-    R = contact_offset(p, Q)
-    v = y[X_AT.v:X_AT.v + 3].copy()
-    w = Q @ y[X_AT.w:X_AT.w + 3]
-    u = v + cross(w, R)
+    R = contact_offset_xyz(p, Q)
+    v = (y[X_AT.v], y[X_AT.v + 1], y[X_AT.v + 2])
+    w = turn(Q, y[X_AT.w:X_AT.w + 3])
+    u = _plus(v, cross_xyz(w, R))
     K = inverse_effective_mass(p, Q, R)
     printed = p[P_AT.law] == LAW_PRINTED
     p_adm = p_gain = -1.0
     converged = 1.0
-    P = np.zeros(3)
+    P = (0.0, 0.0, 0.0)
     if u[2] < 0.0:
         if printed or p[P_AT.check_printed] != 0.0:
             e, lam = (p[P_AT.e], p[P_AT.lam]) if printed else (p[P_AT.e_n], 1.0 + p[P_AT.e_t])
-            T, residual, adm, gain, pull = printed_impulse(m * K, m, e, lam, u)
+            T, residual, adm, gain, pull = printed_impulse((m * K[0], m * K[1], m * K[2], m * K[3], m * K[4], m * K[5]), m, e, lam, u)
             p_adm, p_gain = (1.0 if adm else 0.0), (1.0 if gain else 0.0)
             if printed:
                 if not adm:
@@ -226,29 +248,42 @@ def impact(p, y, warns, carry):
                 P = T
         if not printed:
             P = _coulomb_impulse(K, u, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
-    v_after = v + P / m
-    w_after = w + world_inv_inertia(p, Q) @ cross(R, P)
+    v_after = (v[0] + P[0] / m, v[1] + P[1] / m, v[2] + P[2] / m)
+    w_after = _plus(w, inertia_solve(p, Q, cross_xyz(R, P)))
     ke_before, ke_after = kinetic(p, Q, v, w), kinetic(p, Q, v_after, w_after)
     admissible, warns = _booked(ke_before, ke_after, warns, carry)
     after = y.copy()
-    after[X_AT.v:X_AT.v + 3] = v_after
-    after[X_AT.w:X_AT.w + 3] = Q.T @ w_after
+    _put(after, X_AT.v, v_after)
+    w_body = turn_back(Q, w_after)
+    _put(after, X_AT.w, w_body)
     log = np.empty(IMPACT_WIDTH)
-    log[I_AT.w_after:I_AT.w_after + 3] = after[X_AT.w:X_AT.w + 3]
-    log[I_AT.impulse:I_AT.impulse + 3] = P
-    log[I_AT.u_before:I_AT.u_before + 3] = u
-    log[I_AT.u_after:I_AT.u_after + 3] = v_after + cross(w_after, R)
+    _put(log, I_AT.w_after, w_body)
+    _put(log, I_AT.impulse, P)
+    _put(log, I_AT.u_before, u)
+    _put(log, I_AT.u_after, _plus(v_after, cross_xyz(w_after, R)))
     _log_common(log, y, v, v_after, ke_before, ke_after, admissible, p_adm, p_gain, converged)
     return after, log, warns
+
+
+@jit
+def _plus(a, b):
+    """a + b of two 3-vectors (floats or (3,)), 3 floats."""
+    return a[0] + b[0], a[1] + b[1], a[2] + b[2]
+
+
+@jit
+def _put(vec, at, a):
+    """vec[at:at + 3] = a (3 floats or (3,)); at: a layout's offset, from the caller."""
+    vec[at], vec[at + 1], vec[at + 2] = a[0], a[1], a[2]
 
 
 @inline
 def _point_mass_impact(p, y, warns, carry):
     """``impact`` of a grain that does not rotate (a point mass: no spin, u = v, K = 1/m), its Coulomb impulse in
     scalars (:func:`_point_impulse`); the printed law of such a grain is its Coulomb reduction (e, lam - 1, no
-    bound), as ``ImpactLaw.apply``. No rotation matrix, no LAPACK, four arrays instead of ~25."""
+    bound), as ``ImpactLaw.apply``. No rotation matrix, no LAPACK; the arrays are the state after and the log."""
     m = p[P_AT.mass]
-    v = y[X_AT.v:X_AT.v + 3].copy()
+    v = (y[X_AT.v], y[X_AT.v + 1], y[X_AT.v + 2])
     u = (v[0] + 0.0, v[1] + 0.0, v[2] + 0.0)  # v + w x R with w = 0, as the rotating grain's
     P = (0.0, 0.0, 0.0)
     if u[2] < 0.0:
@@ -257,20 +292,17 @@ def _point_mass_impact(p, y, warns, carry):
             P = _point_impulse(u, k, p[P_AT.e], p[P_AT.lam] - 1.0, np.inf)
         else:
             P = _point_impulse(u, k, p[P_AT.e_n], p[P_AT.e_t], p[P_AT.mu_impact])
-    v_after = np.empty(3)
-    for i in range(3):
-        v_after[i] = v[i] + P[i] / m
-    ke_before, ke_after = 0.5 * m * (v @ v), 0.5 * m * (v_after @ v_after)  # kinetic() without spin
+    v_after = (v[0] + P[0] / m, v[1] + P[1] / m, v[2] + P[2] / m)
+    ke_before, ke_after = 0.5 * m * dot3(v, v), 0.5 * m * dot3(v_after, v_after)  # kinetic() without spin
     admissible, warns = _booked(ke_before, ke_after, warns, carry)
     after = y.copy()
-    after[X_AT.v:X_AT.v + 3] = v_after
-    after[X_AT.w:X_AT.w + 3] = 0.0
+    _put(after, X_AT.v, v_after)
+    _put(after, X_AT.w, (0.0, 0.0, 0.0))
     log = np.empty(IMPACT_WIDTH)
-    for i in range(3):
-        log[I_AT.w_after + i] = 0.0
-        log[I_AT.impulse + i] = P[i]
-        log[I_AT.u_before + i] = u[i]
-        log[I_AT.u_after + i] = v_after[i] + 0.0
+    _put(log, I_AT.w_after, (0.0, 0.0, 0.0))
+    _put(log, I_AT.impulse, P)
+    _put(log, I_AT.u_before, u)
+    _put(log, I_AT.u_after, (v_after[0] + 0.0, v_after[1] + 0.0, v_after[2] + 0.0))
     _log_common(log, y, v, v_after, ke_before, ke_after, admissible, -1.0, -1.0, 1.0)
     return after, log, warns
 
@@ -287,8 +319,8 @@ def _booked(ke_before, ke_after, warns, carry):
 @jit
 def _log_common(log, y, v, v_after, ke_before, ke_after, admissible, p_adm, p_gain, converged):
     """The parts of an impact row that both grains fill alike: velocities, spin before, energies and flags."""
-    log[I_AT.v_before:I_AT.v_before + 3] = v
-    log[I_AT.v_after:I_AT.v_after + 3] = v_after
-    log[I_AT.w_before:I_AT.w_before + 3] = y[X_AT.w:X_AT.w + 3]
+    _put(log, I_AT.v_before, v)
+    _put(log, I_AT.v_after, v_after)
+    _put(log, I_AT.w_before, y[X_AT.w:X_AT.w + 3])
     log[I_AT.ke_before], log[I_AT.ke_after], log[I_AT.admissible] = ke_before, ke_after, 1.0 if admissible else 0.0
     log[I_AT.printed_admissible], log[I_AT.printed_creates_energy], log[I_AT.converged] = p_adm, p_gain, converged

@@ -7,7 +7,7 @@ import numpy as np
 from symmech.numerics.jit import inline, jit
 from symmech.grain.motion_engine.impact_law import impact
 from symmech.grain.motion_engine.kinematics import (
-    contact_offset, contact_velocity, cross, inverse_effective_mass, is_sphere, kinetic, rotation, support, surface)
+    contact_offset, contact_velocity, cross, dot3, inverse_effective_mass, is_sphere, kinetic, rotation, support, surface)
 from symmech.grain.motion_engine.layouts import (
     C_AT, I_AT, IMPACT, IMPACT_WIDTH, P_AT, W_CHATTER, X_AT, ZENO_IMPACTS, ZENO_INTERVAL)
 from symmech.grain.motion_engine.rows import record, warn
@@ -17,7 +17,7 @@ from symmech.grain.motion_engine.rows import record, warn
 def bounce(p, y, rows, imps, warns, carry):
     """An impact at y, logged and booked: (state after, normal contact velocity after, rows, imps, warns)."""
     after, log, warns = impact(p, y, warns, carry)
-    carry[C_AT.work] += log[I_AT.impulse:I_AT.impulse + 3] @ surface(p, y[X_AT.t])[1]
+    carry[C_AT.work] += dot3(log[I_AT.impulse:I_AT.impulse + 3], surface(p, y[X_AT.t])[1])
     carry[C_AT.impacts] += log[I_AT.ke_before] - log[I_AT.ke_after]
     rows = record(rows, carry, y, IMPACT)
     rows = record(rows, carry, after, IMPACT)
@@ -44,7 +44,7 @@ def land(p, y, carry):
     w0 = Q @ y[X_AT.w:X_AT.w + 3]
     rotating = p[P_AT.rotation] != 0.0
     K = inverse_effective_mass(p, Q, R)
-    P = np.array([0.0, 0.0, -contact_velocity(p, y) / K[2, 2]])
+    P = np.array([0.0, 0.0, -contact_velocity(p, y) / K[5]])  # K_zz
     v0 = y[X_AT.v:X_AT.v + 3].copy()
     v = v0 + P / p[P_AT.mass]
     w = w0.copy()
