@@ -6,7 +6,9 @@ its index (``.nbi``) and data (``.nbc``) files are truncated or overwritten with
 raises on them (UnpicklingError, EOFError: exit 3 of a run), under
 :func:`symmech.numerics.artifacts.guard_numba_cache` the process warns once naming the file, recompiles and answers.
 """
+import hashlib
 import importlib.util
+import json
 import os
 import subprocess
 import sys
@@ -127,6 +129,30 @@ def test_a_refused_cache_is_cold_with_one_warning_then_rebuilt(engine, damage, c
     assert str({"data truncated": data, "index random bytes": index}.get(damage, record)) in err[0]
     assert eng.warm() and not eng.cold()  # dropped and compiled again, recorded
     assert artifacts.check(record, [])[1] is None
+
+
+def test_a_source_edited_while_the_build_compiles_leaves_a_stale_record(entry, monkeypatch, capsys):
+    """The record holds the sources as they were when the build began (its process had imported them): an edit
+    during the compile makes the cache stale at the next check (one warning naming the record), not current."""
+    folder, cache = entry
+    module = fresh(folder)
+    monkeypatch.setitem(sys.modules, "probe_entry", module)  # an entry's sources are found through its module
+    source = folder / "probe_entry.py"
+    compile_as_imported = module.cube_plus.compile
+
+    def compile_while_edited(signature):
+        source.write_text(source.read_text().replace("1.5", "2.5"))
+        return compile_as_imported(signature)
+
+    monkeypatch.setattr(module.cube_plus, "compile", compile_while_edited)
+    eng = build.Engine("probe", "probe_entry", lambda: {module.cube_plus: (numba.float64,)}, 1.0)
+    assert eng.warm() and module.cube_plus(2.0) == 9.5  # the code compiled is the one imported
+    data = json.loads(eng.record_file().read_text())
+    assert data["sources"] == {str(source): hashlib.sha256(SOURCE.encode()).hexdigest()}
+    capsys.readouterr()
+    assert eng.cold()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{eng.record_file()} is stale (built from another version of {source})" in err
 
 
 def test_an_unrecorded_cache_is_cold_without_a_warning(engine, capsys):

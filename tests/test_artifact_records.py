@@ -19,7 +19,7 @@ def built(tmp_path):
     so, source, record = tmp_path / "thing.so", tmp_path / "thing.c", tmp_path / "thing.json"
     so.write_bytes(os.urandom(4096))
     source.write_text("int x;\n")
-    artifacts.write_record(record, [so], [str(source)])
+    artifacts.write_record(record, [so], artifacts.digests([str(source)]))
     return so, source, record
 
 
@@ -91,7 +91,7 @@ def test_a_record_that_lists_a_missing_file(built, tmp_path):
     so, source, record = built
     other = tmp_path / "other.nbc"
     other.write_bytes(b"data")
-    artifacts.write_record(record, [so, other], [str(source)])
+    artifacts.write_record(record, [so, other], artifacts.digests([str(source)]))
     other.unlink()
     assert artifacts.check(record, [so]) == (None, f"{other} is missing or unreadable")
 
@@ -118,7 +118,7 @@ def build(monkeypatch, tmp_path):
     so, record = b.paths()
     so.parent.mkdir(parents=True)
     so.write_bytes(b"not an extension module" * 100)
-    artifacts.write_record(record, [so], [str(source)])
+    artifacts.write_record(record, [so], artifacts.digests([str(source)]))
     return b, so, record, source
 
 
@@ -174,7 +174,7 @@ def test_an_unwritable_folder_is_one_warning_and_no_build(monkeypatch, tmp_path,
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "file" / "cache"))
     monkeypatch.setattr(artifacts, "_warned", set())
     b = aot.Build("probe", [compiled.__file__], lambda: {"f": (compiled.pack, None)})
-    assert b.build() is False
+    assert b.build(artifacts.digests(b.sources())) is False
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and f"{b.paths()[0].parent} cannot be written" in err[0]
 

@@ -13,7 +13,7 @@ import pytest
 
 from grain_sliding_reference import conveyor, on_plane, sphere
 from test_grain_hard_cases import CROP, WEED, sweep_grain
-from test_grain_motion_hops import midway_dip
+from test_grain_motion_hops import lift_off_at_the_end, midway_dip
 from test_grain_regimes import default_scene
 from symmech.core import sample
 from symmech.core.scene import SceneError
@@ -275,3 +275,9 @@ def test_a_lift_off_whose_dip_lies_midway_between_two_scan_points_is_found():
     """The compiled scan as the Python one (tests/test_grain_motion_hops.py): a dip below zero between two
     equal samples is a contact."""
     midway_dip(compiled.simulate)
+
+
+def test_a_run_that_ends_just_after_a_lift_off_ends_in_flight():
+    """The compiled loop as the Python one (tests/test_grain_motion_hops.py): no landing at the end of a run that
+    ends less than a scan step after a lift-off."""
+    lift_off_at_the_end(compiled.simulate)

@@ -4,6 +4,7 @@ a point mass slides with the plate, lifts off where the plate accelerates down a
 to rise above round-off first, then find the landing inside that step. Lift-off time, hop duration and approach
 speed come from the closed-form flight relative to the plate (solved here with scipy's brentq); the time spent
 sliding sums the three sliding phases."""
+import itertools
 import math
 
 import pytest
@@ -53,6 +54,30 @@ def test_a_lift_off_whose_dip_lies_midway_between_two_scan_points_is_found():
     ms, its minimum at T/4 = 12.5 ms, midway between the 1 ms scan points 12 and 13 ms, where it is equal (to the
     bit: sin(OMEGA t) is symmetric about T/4) and positive. The grain lifts off at asin(1/Gamma)/OMEGA."""
     midway_dip(motion.simulate)
+
+
+def test_a_run_that_ends_just_after_a_lift_off_ends_in_flight():
+    """Lifting off less than a scan step before the end, the flight cannot rise above round-off before t_end: the
+    run ends in flight at t_end (it used to take that for a resting grain, land it and lift it off again, 1000 times,
+    and stop with an error)."""
+    lift_off_at_the_end(motion.simulate)
+
+
+def lift_off_at_the_end(simulate):
+    """The run above by ``simulate`` (the Python or the compiled loop's), each way of flying: a point mass on a plate
+    at Gamma = 2 lifts off at asin(1/Gamma)/OMEGA, d before t_end."""
+    gamma = 2.0
+    t_lift = math.asin(1 / gamma) / OMEGA
+    for flight, d in itertools.product(motion.FLIGHTS, (1e-9, 1e-7, 3e-7, 2e-3)):
+        num = motion.Numerics(tolerance=1e-11, scan_step=1e-2, sample_interval=1e-3, flight=flight)
+        res = simulate(sphere(frictionless(0.0), amplitude=gamma * G / OMEGA**2, freq=FREQ), num, state(z=A),
+                       t_lift + d)
+        assert res.final.t == t_lift + d and not res.impacts and res.extra["landings"] == 0
+        assert res.time_in["sliding"] == pytest.approx(t_lift, abs=1e-13)
+        assert res.time_in["flight"] == pytest.approx(d, abs=1e-13)
+        height, speed = relative_flight(d, math.pi / 6, gamma * G / OMEGA**2)  # pi/6: the lift-off's phase
+        assert res.final.r[2] - A == pytest.approx(height, abs=1e-14)
+        assert res.final.v[2] == pytest.approx(speed, abs=1e-12)
 
 
 def midway_dip(simulate):

@@ -446,7 +446,7 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
     """Fly from ``st`` until the first contact or ``t_end``: (state, "contact" | "end" | "resting").
 
     A flight that starts on the plane (after an impact or lift-off) first has to rise above round-off;
-    "resting" says it does not within one scan step.
+    "resting" says it does not within one scan step. A run that ends within that step ends in flight.
     """
     vib = model.vibration
     rotating = model.effects.rotation and np.any(st.w)
@@ -479,8 +479,10 @@ def _fly(model: Model, num: Numerics, st: State, t_end: float, rec: _Recorder, o
     t_from = st.t
     if on_plane:
         t_from = _rise(gap, st.t, min(num.scan_step, t_end - st.t), _gap_noise(model, st))
-        if t_from is None:
+        if t_from is None and t_end - st.t >= num.scan_step:
             return st, "resting"
+        if t_from is None:  # the run ends before the rise is over: in flight, not resting (no landing at t_end)
+            t_from = t_end
     xtol = num.tolerance * num.scan_step
     if exact:
         curvature = free_flight.gap_curvature_bound(model.g_k[2], vib, model.axes, model.inertia,

@@ -65,12 +65,18 @@ def sources(module: ModuleType) -> list[str]:
     return sorted(m.__file__ for m in reached(module))
 
 
-def write_record(record: Path, built: list[Path], built_from: list[str]) -> None:
-    """Record the files ``built`` (all in the folder of ``record``) as built by this checkout from the files
-    ``built_from``; OSError when the folder cannot be written."""
+def digests(files) -> dict[str, str]:
+    """The SHA-256 of each of ``files`` by path: what a build is made from, taken before it compiles."""
+    return {f: digest(f) for f in sorted(set(files))}
+
+
+def write_record(record: Path, built: list[Path], built_from: dict[str, str]) -> None:
+    """Record the files ``built`` (all in the folder of ``record``) as built by this checkout from the sources
+    whose :func:`digests` ``built_from`` were taken before the build began (a source edited while it compiled is
+    then stale at the next check, not recorded as built); OSError when the folder cannot be written."""
     text = json.dumps({"checkout": CHECKOUT, "platform": platform(),
                        "built": {Path(p).name: digest(p) for p in built},
-                       "sources": {f: digest(f) for f in sorted(set(built_from))}}, indent=1, sort_keys=True)
+                       "sources": dict(sorted(built_from.items()))}, indent=1, sort_keys=True)
     write_atomic(record, text + "\n")
 
 

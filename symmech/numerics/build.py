@@ -155,16 +155,20 @@ class Engine:
         """The record of what the last build left in numba's cache (:mod:`symmech.numerics.artifacts`)."""
         return self.cache_dir() / f"symmech-{self.name}-numba.json"
 
-    def _record(self) -> None:
-        """Record the entries' cache files as built now from the entries' sources (a cache folder that cannot
-        be written: one warning, and the next run compiles again)."""
-        built, sources = [], set()
+    def sources(self) -> list[str]:
+        """The files the entries are compiled from (and the ahead-of-time build's, when there is one)."""
+        files = {f for entry in self.entries() for f in artifacts.sources(sys.modules[entry.__module__])}
+        return sorted(files | set(self.ahead.sources() if self.ahead is not None else ()))
+
+    def _record(self, before: dict[str, str]) -> None:
+        """Record the entries' cache files as built from the sources whose digests ``before`` the build took
+        (a cache folder that cannot be written: one warning, and the next run compiles again)."""
+        built = []
         for entry in self.entries():
             cache = entry._cache._cache_file  # numba's (private API)
             built += [Path(cache._index_path), *(Path(cache._data_path(n)) for n in cache._load_index().values())]
-            sources.update(artifacts.sources(sys.modules[entry.__module__]))
         try:
-            artifacts.write_record(self.record_file(), built, sorted(sources))
+            artifacts.write_record(self.record_file(), built, before)
         except OSError as exc:
             artifacts.warn(f"{self.record_file()} cannot be written ({exc.strerror or exc}); the next run "
                            "compiles the engine again")
@@ -181,19 +185,21 @@ class Engine:
         """Compile the entries into numba's cache unless they are there, and with ``ahead`` the ahead-of-time
         build too (``symmech warm`` and the background builder; it reuses numba's compiled functions); returns
         whether numba's cache holds them. Without ``wait``, return False at once when another process holds
-        the build lock. ``say(text)`` tells what it does."""
+        the build lock. ``say(text)`` tells what it does. The sources' digests are taken first, before the wait
+        for the lock and the compile: a source edited meanwhile leaves a stale record, never a false one."""
+        before = artifacts.digests(self.sources())
         with self.build_lock(wait) as mine:
             if not mine:
                 return False
             self._holding = True
             try:
-                self._build(say, ahead)
+                self._build(say, ahead, before)
             finally:
                 self._holding = False
         return True
 
-    def _build(self, say, ahead: bool) -> None:
-        """:meth:`warm`'s work under the build lock."""
+    def _build(self, say, ahead: bool, before: dict[str, str]) -> None:
+        """:meth:`warm`'s work under the build lock, from the sources whose digests are ``before``."""
         if self.cold():
             if say:
                 say(f"compiling the {self.name} engine once, ~{self.seconds:.0f} s (cache: {self.cache_dir()})")
@@ -202,11 +208,11 @@ class Engine:
                 entry.compile(signature)
                 if not Path(entry._cache._cache_file._index_path).exists():  # compiled before in this process
                     entry._cache.save_overload(signature, entry.overloads[tuple(signature)])  # numba's (private)
-            self._record()
+            self._record(before)
         if ahead and self.ahead is not None and ahead_of_time_builds() and self.ahead.load() is None:
             if say:
                 say(f"building the {self.name} engine ahead of time too (runs then load it without numba)")
-            self.ahead.build()
+            self.ahead.build(before)
 
     def _drop_cache(self) -> None:
         """Remove the cache files of every numba function the entries are built from, and their record, before a

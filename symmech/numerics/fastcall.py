@@ -95,8 +95,9 @@ def extension(folder: Path) -> ModuleType | None:
                 artifacts.warn(f"{why}; dropped and built again")
                 artifacts.drop([record, path])
             if why is not None:
+                source = artifacts.digests([str(SOURCE)])
                 _compile(path)
-                artifacts.write_record(record, [path], [str(SOURCE)])
+                artifacts.write_record(record, [path], source)
         return _load(path)
     except (OSError, subprocess.SubprocessError, ImportError) as exc:
         _log.debug("no C path for generated rhs/jac, the numba path serves them: %s %s", exc,

@@ -55,8 +55,10 @@ def fly(p, y, t_end, on_plane, rows, carry, work):
             if h_at(GAP, t, ctx, steps, nsteps, p, out) > noise:
                 t_from = t
                 break
-        if math.isnan(t_from):
+        if math.isnan(t_from) and span >= scan:
             return y, 2, rows
+        if math.isnan(t_from):  # the run ends before the rise is over: in flight, not resting
+            t_from = t_end
     tc, steps, nsteps = first_root(GAP, t_from, t_end, scan, xtol, ctx, steps, nsteps, p)
     t_stop = t_end if math.isnan(tc) else tc
     steps, nsteps = extend_rotation(t_stop, t_stop, ctx, steps, nsteps, p)
@@ -111,8 +113,10 @@ def _fly_exact(p, y, t_end, on_plane, rows, carry, work):
             if ff.gap(t, fl, rot, buf)[0] > noise:
                 t_from = t
                 break
-        if math.isnan(t_from):
+        if math.isnan(t_from) and span >= scan:
             return y, 2, rows
+        if math.isnan(t_from):  # the run ends before the rise is over: in flight, not resting
+            t_from = t_end
     tc = ff.next_contact(fl, rot, t_from, t_end, scan, p[P_AT.tolerance] * scan, buf)
     t_stop = t_end if math.isnan(tc) else tc
     k0, k1 = _samples(p, y[X_AT.t], t_stop)
