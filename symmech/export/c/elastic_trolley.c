@@ -19,6 +19,7 @@
 
 void elastic_assembly_rate(double t, const double *y, const double *p, double *out);
 void elastic_assembly_mass_block(const double *arg, double *out);
+void elastic_assembly_rate_and_mass_block(double t, const double *y, const double *p, double *out);
 void elastic_assembly_outputs(const double *arg, double *out);
 
 /* the EL_COLUMNS table columns at x (t, or s under traction): clamped to the table in t, NaN outside it in s */
@@ -70,6 +71,17 @@ void elastic_trolley_mass_block(double t, const double *y, const double *p, doub
     memcpy(arg, y, N_X * sizeof(double));
     assembly_params(t, y, p, arg + N_X);
     elastic_assembly_mass_block(arg, out);
+}
+
+/* F and M22 from one table lookup and one generated function (their common subexpressions formed once) */
+void elastic_trolley_rate_and_mass_block(double t, const double *y, const double *p, double *f, double *mass)
+{
+    enum { N_M = N_X - MASS_IDENTITY };
+    double pa[ASSEMBLY_PARAMS], out[N_X + N_M * N_M];
+    assembly_params(t, y, p, pa);
+    elastic_assembly_rate_and_mass_block(t, y, pa, out);
+    memcpy(f, out, N_X * sizeof(double));
+    memcpy(mass, out + N_X, N_M * N_M * sizeof(double));
 }
 
 /* at a prescribed speed s [m] first; then the generated outputs (P0..P5, d1..d5, per probe u, e, n) at (t, y)
