@@ -18,7 +18,6 @@
 #define ASSEMBLY_PARAMS (ASSEMBLY_ROLLER_PARAMS + EL_COLUMNS)
 
 void elastic_assembly_rate(double t, const double *y, const double *p, double *out);
-void elastic_assembly_mass_block(const double *arg, double *out);
 void elastic_assembly_rate_and_mass_block(double t, const double *y, const double *p, double *out);
 void elastic_assembly_outputs(const double *arg, double *out);
 
@@ -62,15 +61,6 @@ void elastic_trolley_rate(double t, const double *y, const double *p, double *ou
     double pa[ASSEMBLY_PARAMS];
     assembly_params(t, y, p, pa);
     elastic_assembly_rate(t, y, pa, out);
-}
-
-/* M22 of M y' = F alone (the generated mass_block, from y then the generated module's parameters) */
-void elastic_trolley_mass_block(double t, const double *y, const double *p, double *out)
-{
-    double arg[N_X + ASSEMBLY_PARAMS];
-    memcpy(arg, y, N_X * sizeof(double));
-    assembly_params(t, y, p, arg + N_X);
-    elastic_assembly_mass_block(arg, out);
 }
 
 /* F and M22 from one table lookup and one generated function (their common subexpressions formed once) */

@@ -25,7 +25,7 @@ void symmech_reset(SymmechModel *m)
 #endif
 }
 
-#if defined(MODEL_STIFF) || ((defined(MODEL_RATE_MASS) || defined(MODEL_MASS_BLOCK)) && !defined(MASS_SPD))
+#if defined(MODEL_STIFF) || ((defined(MODEL_RATE_MASS) || defined(MODEL_RATE_AND_MASS_BLOCK)) && !defined(MASS_SPD))
 /* LU factors of a (n x n row-major) with partial pivoting, in place, row swaps into piv; 0, or -1 when
    singular */
 static int lu_factor(double *a, int *piv, int n)
@@ -64,9 +64,9 @@ static void lu_solve(const double *a, const int *piv, double *b, int n)
 }
 #endif
 
-#if defined(MODEL_RATE_MASS) || defined(MODEL_MASS_BLOCK)
+#if defined(MODEL_RATE_MASS) || defined(MODEL_RATE_AND_MASS_BLOCK)
 #define N_M (N_X - MASS_IDENTITY)
-#ifdef MODEL_MASS_BLOCK  /* the model writes M22 alone, row by row */
+#ifdef MODEL_RATE_AND_MASS_BLOCK  /* the model writes M22 alone, row by row */
 #define MASS_STRIDE N_M
 #define MASS_AT 0
 #else  /* the model writes M whole: M22 from row and column MASS_IDENTITY */
@@ -131,9 +131,6 @@ static int rates(SymmechModel *m, double t, const double *y, double *out)
 #endif
     for (int k = 0; k < N_U; k++) out[U_ROW + k] += m->r[VR_U + k];
 #if defined(MODEL_RATE_AND_MASS_BLOCK)
-    return solve_mass(m->mass, out + MASS_IDENTITY);
-#elif defined(MODEL_MASS_BLOCK)
-    MODEL_MASS_BLOCK(t, y, p, m->mass);
     return solve_mass(m->mass, out + MASS_IDENTITY);
 #elif defined(MODEL_RATE_MASS)
     MODEL_RATE_MASS(t, y, p, m->mass);

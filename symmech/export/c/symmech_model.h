@@ -8,9 +8,8 @@
 
    What model.h names (the generated physics, M y' = F): MODEL_RATE(t, y, p, F) always; M the identity, or
    M = diag(I, M22) with MASS_IDENTITY identity rows and either MODEL_RATE_MASS(t, y, p, M) (M whole, row by row)
-   or MODEL_MASS_BLOCK(t, y, p, M22) (M22 alone, row by row); with MODEL_MASS_BLOCK the model may also define
-   MODEL_RATE_AND_MASS_BLOCK(t, y, p, F, M22), both in one call (their common subexpressions formed once), which
-   the solve then calls instead of the two; MASS_SPD where M22 is symmetric positive definite (Cholesky, its lower
+   or MODEL_RATE_AND_MASS_BLOCK(t, y, p, F, M22) (F and M22 alone, row by row, in one call: their common
+   subexpressions formed once; the solve then calls it instead of MODEL_RATE); MASS_SPD where M22 is symmetric positive definite (Cholesky, its lower
    triangle read); MODEL_SECOND_ORDER where y = (x, x') with F's first N_X/2 rows x' (Radau then solves its
    Newton systems by the halves' Schur complement). */
 #ifndef SYMMECH_MODEL_H
