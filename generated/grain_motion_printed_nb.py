@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 80f875b003ccef9f8caed0a7df29b27f60ec70b68b95e9764e5e34e3a9294d6c
-# source key b95143e93ba172fce1d880ea75367804340a1bad6052b6d53e4695eef35769b4
+# source key 45d6da67ce53c1d11019cee21001febd9d734b817796e8b1fb1dac3100540c93
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

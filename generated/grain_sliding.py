@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1061f0b179455402f97cef737f69c7f1e88881336606d0ab708cba11bf9fdfc0
-# source key 0f0b0368e560a6d07f1575764fd97f9a6ebeeb2078ebe824e2f4d137f2bde29d
+# source key 526f533d9cd0e257969aebd3350c66616023d887f78ca5c92ab72939ad624bdb
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 0a8afa197b15c932a60e24a227463d5552ee48df73002f07f0b007b8e44b68bb
-// source key 31e5ad01ea3f358bbacf97c81d0e3337d8995db583a38d611ddea111402983bb
+// source key fd1d150037be2eeeff7da541d8d7bcf3aa50cf3e5761a68196153257f5a7ea8b
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

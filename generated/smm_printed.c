@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 399a3323d5d67c7c9a7afc01f4477cff78d7be870a4873594440a4c6db006602
-// source key a7e145b44f1820d50b0e22dc47a216d564ad96b234ba7085d351b6fbdba53fc5
+// source key 1d2b2d0048fdb5d62c5d19cc6799bce50da266892e6441ec8b12ae8175b9d07a
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 87787f1c7d8403b644b7d1368ebeb4658eaea20fc5413d1d78143814cfb68ac8
-// source key ab6247132c61ea03d34c4fde04bb549310e3a4d16556bb4b63fe647130a40164
+// source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

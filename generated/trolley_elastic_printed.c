@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e1bea6ff0154cc32bcf4fb0979834e1b0de2d2ad5ce5a1fbab9f9eb6031df6f2
-// source key 3e85b4707fd1e9dec05abcbe847d70afb6038dddd7a2005af0f9b7d18181ab2e
+// source key b2bea7ee4fb96a6f6d4da1c450b618147792c773c6b093f4dc57e4a0b2bf7aa2
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 fdb91e4a9a28d87b65e10a1278255eab2765ee4e67f63de3d590dc9e11304595
-// source key ab6247132c61ea03d34c4fde04bb549310e3a4d16556bb4b63fe647130a40164
+// source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

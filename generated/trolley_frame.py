@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad5b35542fb315346b6bf8b03ec8c349febb9533bcc51e45a88998328b672fb5
-# source key ab6247132c61ea03d34c4fde04bb549310e3a4d16556bb4b63fe647130a40164
+# source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8da110da6110fe13e0816c1857d38d73239488198c54277a584c9552ba1d098d
-# source key ab6247132c61ea03d34c4fde04bb549310e3a4d16556bb4b63fe647130a40164
+# source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7ce51eff7cd47013c2c515c298237f51ecee8035808ffdc2199cb9e860fe2b46
-// source key f77dbb27182cff15cbdf240b73e9ac258ece701b4ed1f08f75fd54e6a498ba83
+// source key 4edd13ccc887a733af6f0d119334b0ce847c41644d72ae963706aae64f4968bd
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

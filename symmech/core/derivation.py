@@ -34,7 +34,9 @@ class NamedMatrix:
 
     ``args`` fixes the argument order of the generated function; every free
     symbol of ``matrix`` must be one of them (checked by :meth:`check`).
-    ``equations`` names the paper's equations the matrix stands for.
+    ``equations`` names the paper's equations the matrix stands for. ``whole``:
+    one CSE over all its elements instead of chunks (a function whose parts share
+    much, e.g. a rate with its mass matrix; slower to derive when large).
     """
 
     name: str
@@ -43,6 +45,7 @@ class NamedMatrix:
     meaning: str
     unit: str
     equations: str = ""
+    whole: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "matrix", sympy.Matrix(self.matrix))

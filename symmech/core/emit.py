@@ -50,11 +50,13 @@ class Chunk:
 
 
 def cse_chunks(nm: NamedMatrix) -> list[Chunk]:
-    """Split ``nm`` (arguments under their code names) into chunks of CHUNK_ELEMENTS and CSE each chunk."""
+    """Split ``nm`` (arguments under their code names) into chunks of CHUNK_ELEMENTS (one chunk when ``nm.whole``)
+    and CSE each chunk."""
     clash = {a.name for a in nm.args if re.fullmatch(r"x\d+", a.name)}
     if clash:
         raise ValueError(f"{nm.name}: argument names {sorted(clash)} clash with CSE names x0, x1, ...")
-    return list(_cse_chunks(sympy.ImmutableMatrix(nm.code_matrix()), nm.shape, CHUNK_ELEMENTS))
+    matrix = sympy.ImmutableMatrix(nm.code_matrix())
+    return list(_cse_chunks(matrix, nm.shape, len(matrix) if nm.whole else CHUNK_ELEMENTS))
 
 
 @functools.lru_cache(maxsize=64)  # every target prints the same chunks: CSE once per matrix
@@ -140,7 +142,7 @@ NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "_k",
 C99 = Target("", "c99.c.j2", _CPrinter, "", _C_RESERVED, False, ".c", "//")
 TARGETS = (NUMPY, NUMBA, C99)
 # functions of a dynamics module that take (t, y, p) in C, the layout of Dynamics.args
-DYNAMICS_FUNCTIONS = ("rate", "rate_jacobian", "rate_mass", "event_values")
+DYNAMICS_FUNCTIONS = ("rate", "rate_jacobian", "rate_mass", "event_values", "rate_and_mass_block")
 
 
 def _chunk_lines(chunk: Chunk, printer, element: str) -> list[str]:
@@ -253,7 +255,7 @@ def inputs_hash(spec: ModuleSpec, target: Target = NUMPY) -> str:
                  spec.name, spec.doc, spec.source):
         h.update(part.encode())
     for f in spec.functions:
-        h.update(f"{f.name}|{f.meaning}|{f.unit}|{f.equations}".encode())
+        h.update(f"{f.name}|{f.meaning}|{f.unit}|{f.equations}{'|whole' if f.whole else ''}".encode())
         for a in f.args:
             h.update(f"{a.name}|{a.meaning}|{a.unit}".encode())
         h.update(_matrix_digest(sympy.ImmutableMatrix(f.matrix)))

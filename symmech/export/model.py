@@ -85,8 +85,10 @@ class ExportModel:
     modules: tuple[tuple[str, str], ...] = ()  # (name, C99 text) of generated modules compiled beside c_source
     mass_identity: int = 0  # M = diag(I, M22) with this many identity rows (only M22 is factored; n_x: M = I,
     # no ``rate_mass`` generated)
-    mass_block: bool = False  # the model writes M22 alone (``<identifier>_mass_block``) instead of M whole
+    # the model writes F and M22 alone in one function (``<identifier>_rate_and_mass_block``) instead of M whole
+    mass_block: bool = False
     mass_spd: bool = False  # M22 is symmetric positive definite by construction (Cholesky: its lower triangle read)
+    second_order: bool = False  # y = (x, x') with F's first n_x/2 rows x' (a stiff model's Radau uses it)
     # the Model Exchange FMU's DefaultExperiment tolerance: the relative tolerance at which FMPy's CVode (BDF,
     # atol = rtol x nominal) reproduces the native run within the export's targets (docs/export.md)
     me_tolerance: float = 1e-10

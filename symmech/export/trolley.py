@@ -92,7 +92,7 @@ def elastic(setup, run: dict) -> ExportModel:
     return ExportModel(IDENTIFIER, "Elastic trolley along its track at the prescribed speed (symmech)", source,
                        tuple(variables), 2 * n, n, n, 0, 0, len(parameters(system)) * 5, native, n_y=len(columns),
                        stiff=True, modules=(("elastic_assembly", assembly_c(system)),), mass_identity=n,
-                       mass_block=True, mass_spd=True)  # M(q) = A Gtr A^T: the kinetic energy's Gram
+                       mass_block=True, second_order=True, mass_spd=True)  # M(q) = A Gtr A^T: the kinetic energy's Gram
 
 
 def traction(setup, run: dict, law) -> ExportModel:
@@ -128,7 +128,7 @@ def traction(setup, run: dict, law) -> ExportModel:
     return ExportModel(IDENTIFIER, "Elastic trolley along its track under traction (symmech)", source,
                        tuple(variables), 2 * n + 2, n + 1, n + 1, 1, 2 * n + 1, len(parameters(system)) * 5, native,
                        n_y=len(columns), stiff=True, modules=(("elastic_assembly", assembly_c(system, law)),),
-                       mass_identity=n + 1, mass_block=True)  # L: M(q) bordered by the traction law's row
+                       mass_identity=n + 1, mass_block=True, second_order=True)  # L: M(q) bordered by the traction law's row
 
 
 def time_variable(reals) -> Variable:
@@ -158,7 +158,7 @@ def _motion_variables(reals, coordinates) -> list[Variable]:
 
 
 def assembly_c(system, law=None) -> str:
-    """The C99 module of the model's assembly (rate, rate_mass, outputs, mass_block), derived from its invariants
+    """The C99 module of the model's assembly (rate, rate_mass, outputs, rate_and_mass_block), derived from its invariants
     (once per process, model and traction ``law``, None at a prescribed speed: an export in each FMI version and
     type derives it once)."""
     names, units = state_layout(system)

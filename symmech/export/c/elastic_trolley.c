@@ -18,7 +18,7 @@
 #define ASSEMBLY_PARAMS (ASSEMBLY_ROLLER_PARAMS + EL_COLUMNS)
 
 void elastic_assembly_rate(double t, const double *y, const double *p, double *out);
-void elastic_assembly_mass_block(const double *arg, double *out);
+void elastic_assembly_rate_and_mass_block(double t, const double *y, const double *p, double *out);
 void elastic_assembly_outputs(const double *arg, double *out);
 
 /* the EL_COLUMNS table columns at x (t, or s under traction): clamped to the table in t, NaN outside it in s */
@@ -63,13 +63,15 @@ void elastic_trolley_rate(double t, const double *y, const double *p, double *ou
     elastic_assembly_rate(t, y, pa, out);
 }
 
-/* M22 of M y' = F alone (the generated mass_block, from y then the generated module's parameters) */
-void elastic_trolley_mass_block(double t, const double *y, const double *p, double *out)
+/* F and M22 from one table lookup and one generated function (their common subexpressions formed once) */
+void elastic_trolley_rate_and_mass_block(double t, const double *y, const double *p, double *f, double *mass)
 {
-    double arg[N_X + ASSEMBLY_PARAMS];
-    memcpy(arg, y, N_X * sizeof(double));
-    assembly_params(t, y, p, arg + N_X);
-    elastic_assembly_mass_block(arg, out);
+    enum { N_M = N_X - MASS_IDENTITY };
+    double pa[ASSEMBLY_PARAMS], out[N_X + N_M * N_M];
+    assembly_params(t, y, p, pa);
+    elastic_assembly_rate_and_mass_block(t, y, pa, out);
+    memcpy(f, out, N_X * sizeof(double));
+    memcpy(mass, out + N_X, N_M * N_M * sizeof(double));
 }
 
 /* at a prescribed speed s [m] first; then the generated outputs (P0..P5, d1..d5, per probe u, e, n) at (t, y)

@@ -25,7 +25,7 @@ void symmech_reset(SymmechModel *m)
 #endif
 }
 
-#if defined(MODEL_STIFF) || ((defined(MODEL_RATE_MASS) || defined(MODEL_MASS_BLOCK)) && !defined(MASS_SPD))
+#if defined(MODEL_STIFF) || ((defined(MODEL_RATE_MASS) || defined(MODEL_RATE_AND_MASS_BLOCK)) && !defined(MASS_SPD))
 /* LU factors of a (n x n row-major) with partial pivoting, in place, row swaps into piv; 0, or -1 when
    singular */
 static int lu_factor(double *a, int *piv, int n)
@@ -64,9 +64,9 @@ static void lu_solve(const double *a, const int *piv, double *b, int n)
 }
 #endif
 
-#if defined(MODEL_RATE_MASS) || defined(MODEL_MASS_BLOCK)
+#if defined(MODEL_RATE_MASS) || defined(MODEL_RATE_AND_MASS_BLOCK)
 #define N_M (N_X - MASS_IDENTITY)
-#ifdef MODEL_MASS_BLOCK  /* the model writes M22 alone, row by row */
+#ifdef MODEL_RATE_AND_MASS_BLOCK  /* the model writes M22 alone, row by row */
 #define MASS_STRIDE N_M
 #define MASS_AT 0
 #else  /* the model writes M whole: M22 from row and column MASS_IDENTITY */
@@ -124,10 +124,13 @@ static int solve_mass(double *mass, double *b)
 static int rates(SymmechModel *m, double t, const double *y, double *out)
 {
     const double *p = m->r + VR_P;
+#ifdef MODEL_RATE_AND_MASS_BLOCK
+    MODEL_RATE_AND_MASS_BLOCK(t, y, p, out, m->mass);
+#else
     MODEL_RATE(t, y, p, out);
+#endif
     for (int k = 0; k < N_U; k++) out[U_ROW + k] += m->r[VR_U + k];
-#if defined(MODEL_MASS_BLOCK)
-    MODEL_MASS_BLOCK(t, y, p, m->mass);
+#if defined(MODEL_RATE_AND_MASS_BLOCK)
     return solve_mass(m->mass, out + MASS_IDENTITY);
 #elif defined(MODEL_RATE_MASS)
     MODEL_RATE_MASS(t, y, p, m->mass);
@@ -528,6 +531,12 @@ static int dop853(SymmechModel *m, double t_end, double rtol, double atol)
 
 #ifdef MODEL_STIFF
 static const double NOMINAL[N_X] = NOMINALS;
+#ifdef MODEL_SECOND_ORDER
+#define N_H (N_X / 2)
+#define N_LU N_H  /* the size of the factored systems */
+#else
+#define N_LU N_X
+#endif
 
 /* root mean square of x (n) scaled by atol * NOMINAL + rtol * |y| (scale n of them, repeated) */
 static double scaled_rms(const double *x, int n, const double *scale)
@@ -567,35 +576,35 @@ static int jacobian(SymmechModel *m, double t, const double *y, const double *f,
     return 0;
 }
 
-/* LU factors with partial pivoting (by |re| + |im|, as LAPACK's zgetrf) of the complex N_X x N_X matrix
-   (re, im row-major) in place, row swaps into piv; 0, or -1 when singular. A quarter of the real 2 N_X
+/* LU factors with partial pivoting (by |re| + |im|, as LAPACK's zgetrf) of the complex N_LU x N_LU matrix
+   (re, im row-major) in place, row swaps into piv; 0, or -1 when singular. A quarter of the real 2 N_LU
    system's work to factor. */
 static int lu_factor_complex(double *re, double *im, int *piv)
 {
-    for (int k = 0; k < N_X; k++) {
+    for (int k = 0; k < N_LU; k++) {
         int pivot = k;
-        for (int i = k + 1; i < N_X; i++)
-            if (fabs(re[i * N_X + k]) + fabs(im[i * N_X + k])
-                > fabs(re[pivot * N_X + k]) + fabs(im[pivot * N_X + k])) pivot = i;
+        for (int i = k + 1; i < N_LU; i++)
+            if (fabs(re[i * N_LU + k]) + fabs(im[i * N_LU + k])
+                > fabs(re[pivot * N_LU + k]) + fabs(im[pivot * N_LU + k])) pivot = i;
         piv[k] = pivot;
-        if (re[pivot * N_X + k] == 0.0 && im[pivot * N_X + k] == 0.0) return -1;
+        if (re[pivot * N_LU + k] == 0.0 && im[pivot * N_LU + k] == 0.0) return -1;
         if (pivot != k)
-            for (int j = 0; j < N_X; j++) {
-                double s = re[k * N_X + j]; re[k * N_X + j] = re[pivot * N_X + j]; re[pivot * N_X + j] = s;
-                s = im[k * N_X + j]; im[k * N_X + j] = im[pivot * N_X + j]; im[pivot * N_X + j] = s;
+            for (int j = 0; j < N_LU; j++) {
+                double s = re[k * N_LU + j]; re[k * N_LU + j] = re[pivot * N_LU + j]; re[pivot * N_LU + j] = s;
+                s = im[k * N_LU + j]; im[k * N_LU + j] = im[pivot * N_LU + j]; im[pivot * N_LU + j] = s;
             }
-        double pr = re[k * N_X + k], pi = im[k * N_X + k], p2 = pr * pr + pi * pi;
+        double pr = re[k * N_LU + k], pi = im[k * N_LU + k], p2 = pr * pr + pi * pi;
         double ir = pr / p2, ii = -pi / p2;  /* 1 / pivot */
-        for (int i = k + 1; i < N_X; i++) {
-            double ar = re[i * N_X + k], ai = im[i * N_X + k];
+        for (int i = k + 1; i < N_LU; i++) {
+            double ar = re[i * N_LU + k], ai = im[i * N_LU + k];
             double fr = ar * ir - ai * ii, fi = ar * ii + ai * ir;
-            re[i * N_X + k] = fr;
-            im[i * N_X + k] = fi;
+            re[i * N_LU + k] = fr;
+            im[i * N_LU + k] = fi;
             if (fr == 0.0 && fi == 0.0) continue;
-            for (int j = k + 1; j < N_X; j++) {
-                double br = re[k * N_X + j], bi = im[k * N_X + j];
-                re[i * N_X + j] -= fr * br - fi * bi;
-                im[i * N_X + j] -= fr * bi + fi * br;
+            for (int j = k + 1; j < N_LU; j++) {
+                double br = re[k * N_LU + j], bi = im[k * N_LU + j];
+                re[i * N_LU + j] -= fr * br - fi * bi;
+                im[i * N_LU + j] -= fr * bi + fi * br;
             }
         }
     }
@@ -605,32 +614,60 @@ static int lu_factor_complex(double *re, double *im, int *piv)
 /* (br, bi) = a^-1 (br, bi) in place from the factors of lu_factor_complex */
 static void lu_solve_complex(const double *re, const double *im, const int *piv, double *br, double *bi)
 {
-    for (int k = 0; k < N_X; k++) {
+    for (int k = 0; k < N_LU; k++) {
         double s = br[k]; br[k] = br[piv[k]]; br[piv[k]] = s;
         s = bi[k]; bi[k] = bi[piv[k]]; bi[piv[k]] = s;
     }
-    for (int i = 0; i < N_X; i++) {
+    for (int i = 0; i < N_LU; i++) {
         double sr = br[i], si = bi[i];
         for (int j = 0; j < i; j++) {
-            sr -= re[i * N_X + j] * br[j] - im[i * N_X + j] * bi[j];
-            si -= re[i * N_X + j] * bi[j] + im[i * N_X + j] * br[j];
+            sr -= re[i * N_LU + j] * br[j] - im[i * N_LU + j] * bi[j];
+            si -= re[i * N_LU + j] * bi[j] + im[i * N_LU + j] * br[j];
         }
         br[i] = sr; bi[i] = si;
     }
-    for (int i = N_X - 1; i >= 0; i--) {
+    for (int i = N_LU - 1; i >= 0; i--) {
         double sr = br[i], si = bi[i];
-        for (int j = i + 1; j < N_X; j++) {
-            sr -= re[i * N_X + j] * br[j] - im[i * N_X + j] * bi[j];
-            si -= re[i * N_X + j] * bi[j] + im[i * N_X + j] * br[j];
+        for (int j = i + 1; j < N_LU; j++) {
+            sr -= re[i * N_LU + j] * br[j] - im[i * N_LU + j] * bi[j];
+            si -= re[i * N_LU + j] * bi[j] + im[i * N_LU + j] * br[j];
         }
-        double dr = re[i * N_X + i], di = im[i * N_X + i], d2 = dr * dr + di * di;
+        double dr = re[i * N_LU + i], di = im[i * N_LU + i], d2 = dr * dr + di * di;
         br[i] = (sr * dr + si * di) / d2;
         bi[i] = (si * dr - sr * di) / d2;
     }
 }
 
-/* LU factors of MU_REAL/h - J and of the complex MU_COMPLEX/h - J */
-static int factor(Radau *s, double h)
+#ifdef MODEL_SECOND_ORDER
+/* the Radau matrices a I - J of J = [[0, I], [J21, J22]] (the first N_H rates are y[N_H:], their rows of J
+   exactly [0, I]), reduced to the N_H x N_H systems S(a) = a I - J22 - J21 / a of the second half (Hairer and
+   Wanner's RADAU5 for second-order systems): an eighth of the factoring and half of each solve. The first half
+   follows as x1 = (b1 + x2) / a: no cancellation at small steps (large a), where x2 = a x1 - b1 would have it. */
+static void radau_matrices(Radau *s, double h)
+{
+    double ar = RADAU_MU_COMPLEX_RE / h, ai = RADAU_MU_COMPLEX_IM / h, a = RADAU_MU_REAL / h;
+    double a2 = ar * ar + ai * ai, ir = ar / a2, ii = -ai / a2;  /* 1 / (ar + i ai) */
+    for (int i = 0; i < N_H; i++)
+        for (int j = 0; j < N_H; j++) {
+            double j21 = s->J[(N_H + i) * N_X + j], j22 = s->J[(N_H + i) * N_X + N_H + j];
+            s->lu_real[i * N_H + j] = (i == j ? a : 0.0) - j22 - j21 / a;
+            s->lu_complex_re[i * N_H + j] = (i == j ? ar : 0.0) - j22 - j21 * ir;
+            s->lu_complex_im[i * N_H + j] = (i == j ? ai : 0.0) - j21 * ii;
+        }
+}
+
+/* b2 + J21 c into r (N_H): S(a) x2 = r solves (a I - J) x = (b1, b2) for x2 with c = b1 / a */
+static void reduced(const Radau *s, const double *b, const double *c, double *r)
+{
+    for (int i = 0; i < N_H; i++) {
+        double acc = b[N_H + i];
+        for (int j = 0; j < N_H; j++) acc += s->J[(N_H + i) * N_X + j] * c[j];
+        r[i] = acc;
+    }
+}
+#else
+/* the Radau matrices MU_REAL/h - J and MU_COMPLEX/h - J */
+static void radau_matrices(Radau *s, double h)
 {
     for (int i = 0; i < N_X * N_X; i++) {
         s->lu_real[i] = -s->J[i];
@@ -642,10 +679,55 @@ static int factor(Radau *s, double h)
         s->lu_complex_re[i * N_X + i] += RADAU_MU_COMPLEX_RE / h;
         s->lu_complex_im[i * N_X + i] = RADAU_MU_COMPLEX_IM / h;
     }
-    if (lu_factor(s->lu_real, s->piv_real, N_X) != 0
+}
+#endif
+
+/* LU factors of the Radau matrices at step h (kept with them: their solves read it) */
+static int factor(Radau *s, double h)
+{
+    radau_matrices(s, h);
+    s->h_lu = h;
+    if (lu_factor(s->lu_real, s->piv_real, N_LU) != 0
         || lu_factor_complex(s->lu_complex_re, s->lu_complex_im, s->piv_complex) != 0) return -1;
     s->lu_valid = 1;
     return 0;
+}
+
+/* b (N_X) = (MU_REAL/h - J)^-1 b, h that of the factors */
+static void solve_real(const Radau *s, double *b)
+{
+#ifdef MODEL_SECOND_ORDER
+    double a = RADAU_MU_REAL / s->h_lu, c[N_H];
+    for (int i = 0; i < N_H; i++) c[i] = b[i] / a;
+    reduced(s, b, c, b + N_H);
+    lu_solve(s->lu_real, s->piv_real, b + N_H, N_H);
+    for (int i = 0; i < N_H; i++) b[i] = (b[i] + b[N_H + i]) / a;
+#else
+    lu_solve(s->lu_real, s->piv_real, b, N_X);
+#endif
+}
+
+/* (br, bi) (N_X each) = (MU_COMPLEX/h - J)^-1 (br, bi), h that of the factors */
+static void solve_complex(const Radau *s, double *br, double *bi)
+{
+#ifdef MODEL_SECOND_ORDER
+    double ar = RADAU_MU_COMPLEX_RE / s->h_lu, ai = RADAU_MU_COMPLEX_IM / s->h_lu, a2 = ar * ar + ai * ai;
+    double cr[N_H], ci[N_H];
+    for (int i = 0; i < N_H; i++) {  /* c = b1 / a */
+        cr[i] = (br[i] * ar + bi[i] * ai) / a2;
+        ci[i] = (bi[i] * ar - br[i] * ai) / a2;
+    }
+    reduced(s, br, cr, br + N_H);
+    reduced(s, bi, ci, bi + N_H);
+    lu_solve_complex(s->lu_complex_re, s->lu_complex_im, s->piv_complex, br + N_H, bi + N_H);
+    for (int i = 0; i < N_H; i++) {  /* x1 = (b1 + x2) / a */
+        double xr = br[i] + br[N_H + i], xi = bi[i] + bi[N_H + i];
+        br[i] = (xr * ar + xi * ai) / a2;
+        bi[i] = (xi * ar - xr * ai) / a2;
+    }
+#else
+    lu_solve_complex(s->lu_complex_re, s->lu_complex_im, s->piv_complex, br, bi);
+#endif
 }
 
 /* the dense output y (N_X) at t from the last step's interpolant */
@@ -679,8 +761,8 @@ static int newton(SymmechModel *m, double t, const double *y, double h, double *
             wc[i] = TF[N_X + i] - (RADAU_MU_COMPLEX_RE * wr - RADAU_MU_COMPLEX_IM * wi) / h;
             wc[N_X + i] = TF[2 * N_X + i] - (RADAU_MU_COMPLEX_RE * wi + RADAU_MU_COMPLEX_IM * wr) / h;
         }
-        lu_solve(s->lu_real, s->piv_real, dW, N_X);
-        lu_solve_complex(s->lu_complex_re, s->lu_complex_im, s->piv_complex, wc, wc + N_X);
+        solve_real(s, dW);
+        solve_complex(s, wc, wc + N_X);
         memcpy(dW + N_X, wc, sizeof wc);
         double norm = scaled_rms(dW, 3 * N_X, scale);
         if (norm_old >= 0.0) *rate = norm / norm_old;
@@ -733,14 +815,14 @@ static double step_error(SymmechModel *m, const double *y_new, double h, const d
     double ze[N_X], e[N_X], scale[N_X], fe[N_X], ye[N_X];
     mix(RADAU_E, 1, Z, ze);
     for (int i = 0; i < N_X; i++) { ze[i] /= h; e[i] = s->f[i] + ze[i]; }
-    lu_solve(s->lu_real, s->piv_real, e, N_X);
+    solve_real(s, e);
     error_scale(s, s->y, y_new, scale);
     double err = scaled_rms(e, N_X, scale);
     if (rejected && err > 1.0) {
         for (int i = 0; i < N_X; i++) ye[i] = s->y[i] + e[i];
         if (rates(m, s->t, ye, fe) != 0) return INFINITY;
         for (int i = 0; i < N_X; i++) fe[i] += ze[i];
-        lu_solve(s->lu_real, s->piv_real, fe, N_X);
+        solve_real(s, fe);
         err = scaled_rms(fe, N_X, scale);
     }
     return err;

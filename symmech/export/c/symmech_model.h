@@ -4,7 +4,14 @@
    Every Float64 variable lives in r[], indexed by its FMI value reference (layout in model.h):
    r[VR_TIME] time [s], then the N_X continuous states, the derivatives that are not states, the N_Y
    calculated outputs (MODEL_OUTPUTS, when the model has them), the N_U
-   inputs, the N_P parameters and the N_D discrete states of a model with regimes. */
+   inputs, the N_P parameters and the N_D discrete states of a model with regimes.
+
+   What model.h names (the generated physics, M y' = F): MODEL_RATE(t, y, p, F) always; M the identity, or
+   M = diag(I, M22) with MASS_IDENTITY identity rows and either MODEL_RATE_MASS(t, y, p, M) (M whole, row by row)
+   or MODEL_RATE_AND_MASS_BLOCK(t, y, p, F, M22) (F and M22 alone, row by row, in one call: their common
+   subexpressions formed once; the solve then calls it instead of MODEL_RATE); MASS_SPD where M22 is symmetric positive definite (Cholesky, its lower
+   triangle read); MODEL_SECOND_ORDER where y = (x, x') with F's first N_X/2 rows x' (Radau then solves its
+   Newton systems by the halves' Schur complement). */
 #ifndef SYMMECH_MODEL_H
 #define SYMMECH_MODEL_H
 
@@ -19,9 +26,10 @@ typedef struct {
     double t_old, h_last;      /* the last step: start and length (0: none) */
     double Q[4 * N_X];         /* its interpolant: coefficients of x, x^2, x^3 row by row, then y at t_old */
     double J[N_X * N_X];       /* dy'/dy */
-    double lu_real[N_X * N_X];  /* MU_REAL/h - J */
+    double lu_real[N_X * N_X];  /* MU_REAL/h - J (MODEL_SECOND_ORDER: its N_X/2 x N_X/2 Schur complement) */
     double lu_complex_re[N_X * N_X], lu_complex_im[N_X * N_X];  /* MU_COMPLEX/h - J: real and imaginary parts */
     int piv_real[N_X], piv_complex[N_X];
+    double h_lu;  /* the step of the factors */
     int jac_current, lu_valid;
     double rtol, atol;
     double seen[N_REAL];  /* r[] when the last call returned: the integrator resumes only from there */

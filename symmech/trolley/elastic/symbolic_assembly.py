@@ -12,9 +12,9 @@ helix), and the emitter's CSE shares the rest. Its text carries the usual hash h
 Functions (C99 via :mod:`symmech.core.emit`): ``rate`` F = (q̇, -R) and ``rate_mass`` M = diag(1, A Gtr Aᵀ) of
 M y' = F over the state y = (q, q̇) with parameters p = (the rollers' stiffnesses, dampings and preloads, the 12 frame
 channels at t: load a0 + g0 ν, ω, ω̇, v0); ``outputs`` (P0…P5, the roller deflections, and per probe its
-displacement, elastic deflection and overload) from (q, q̇, q̈, p); ``mass_block`` the block of M below its
-identity rows alone from (y, p), the one the exported model's solve reads (at a prescribed speed its lower
-triangle: M(q) is symmetric).
+displacement, elastic deflection and overload) from (q, q̇, q̈, p); ``rate_and_mass_block`` F, then the block
+of M below its identity rows alone (at a prescribed speed its lower triangle: M(q) is symmetric), from (t, y, p)
+with one CSE over both: what the exported model's solve reads at each rate evaluation.
 
 With traction (:func:`traction_spec`) s and V0 are states, y = (q, s, q̇, V0): the 12 channels follow from the
 15 geometry channels at s (parameters) and V0, V̇0 (the compiled engine's ``_motion``), and q̈, V̇0 solve
@@ -78,16 +78,19 @@ def assembly_spec(model: dict, names: list[str], units: list[str]) -> ModuleSpec
                         meaning="the elastic trolley in its track frame", jacobian=False)
     outputs = NamedMatrix("outputs", sp.Matrix(terms.outputs(qdd)), state + _acceleration_args(qdd, names, units)
                           + params, "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
+    block = M.lower_triangular()
     return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 and outputs, assembled from one "
-                      "model's invariants", SOURCE, (outputs, mass_block(M.lower_triangular(), state + params)),
+                      "model's invariants", SOURCE, (outputs, rate_and_mass_block(dynamics, block)),
                       dynamics)
 
 
-def mass_block(block: sp.Matrix, args) -> NamedMatrix:
-    """The block of M below its identity rows alone (``mass_block``, from y then p): the exported model's solve
-    reads only it, and its CSE spans fewer chunks than the whole ``rate_mass``. At a prescribed speed the block
-    M(q) = A Gtr Aᵀ is symmetric: its lower triangle (the upper zero), all that the Cholesky solve reads."""
-    return NamedMatrix("mass_block", block, args, "the block of M below its identity rows", "kg, kg m, kg m^2")
+def rate_and_mass_block(dynamics: Dynamics, block: sp.Matrix) -> NamedMatrix:
+    """F (y's size), then the block of M below its identity rows row by row, from
+    (t, y, p) as ``rate``: the exported model's solve needs both at each rate evaluation, and one CSE over both
+    forms their common subexpressions (the frame's channels combined with q) once."""
+    args = ((dynamics.time,) if dynamics.time else ()) + dynamics.state + dynamics.params
+    return NamedMatrix("rate_and_mass_block", sp.Matrix([*dynamics.rate, *block]), args,
+                       "F, then the block of M below its identity rows", "F's, then kg, kg m, kg m^2", whole=True)
 
 
 # the traction law's variables: time and the speed of O along the track
@@ -127,7 +130,7 @@ def traction_spec(model: dict, names: list[str], units: list[str], law: sp.Expr)
     outputs = NamedMatrix("outputs", sp.Matrix(terms.outputs(qdd)), state + accelerations + params,
                           "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
     return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 with F1 = P0(t, V0) and outputs, "
-                      "assembled from one model's invariants", SOURCE, (outputs, mass_block(L, state + params)),
+                      "assembled from one model's invariants", SOURCE, (outputs, rate_and_mass_block(dynamics, L)),
                       dynamics)
 
 
