@@ -49,6 +49,22 @@ def pytest_collection_modifyitems(session, config, items):
     os.environ["SYMMECH_BACKGROUND_BUILD"] = "0"
     if needed:
         items[:] = [item for item in items if not _marked(item)] + [item for item in items if _marked(item)]
+    if getattr(config.option, "loadgroup", False):
+        _keep_xdist_groups(items)
+
+
+def _keep_xdist_groups(items) -> None:
+    """Give each ``xdist_group`` test the ``@group`` suffix ``--dist loadgroup`` schedules by, where xdist left none.
+
+    pytest 9.2 holds a node's id in ``_id``; pytest-xdist 3.8 still writes the suffix into ``_nodeid``, which
+    nothing reads any more, so every group was spread over the workers and each worker derived, compiled and
+    ran the groups' module fixtures again (an open xdist bug: loadgroup with pytest's structured node ids).
+    The suffix is xdist's own: the group names, sorted, joined by ``_``."""
+    for item in items:
+        names = sorted({str(mark.args[0] if mark.args else mark.kwargs.get("name", "default"))
+                        for mark in item.iter_markers("xdist_group")})
+        if names and "@" not in item.nodeid.rpartition("]")[2] and hasattr(item, "_id"):
+            item._id = type(item._id).parse(f"{item.nodeid}@{'_'.join(names)}")
 
 
 @pytest.fixture(autouse=True)

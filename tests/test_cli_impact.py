@@ -121,6 +121,7 @@ def test_latex_list_plain_and_cse(capsys):
     assert main(["latex", "no.such"]) == 2
 
 
+@pytest.mark.xdist_group("errata")  # the errata checks' sympy work, cached: once, with tests/test_errata_coverage.py
 def test_errata_json_records(capsys):
     assert main(["errata", "--json"]) == 0
     records = json.loads(capsys.readouterr().out)["records"]

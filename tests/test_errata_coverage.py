@@ -11,8 +11,9 @@ from symmech.smm import errata_general
 STEMS = {"000_b52a2f612feb4113", "002_7fa2a0a5477072ec", "003_6166172b9b245651"}
 
 
-# its module fixture is built once per xdist worker: one worker runs the module
-pytestmark = pytest.mark.xdist_group("test_errata_coverage")
+# its module fixture is built once per xdist worker: one worker runs the module, and `errata --json`
+# (tests/test_cli_impact.py) in the same worker shares the checks' cached sympy work
+pytestmark = pytest.mark.xdist_group("errata")
 
 
 @pytest.fixture(scope="module")

@@ -4,6 +4,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 import yaml
 
 from symmech.cli import main
@@ -46,3 +47,12 @@ def test_changelog_covers_every_resolved_issue():
     text = (ROOT / "CHANGELOG.md").read_text()
     for issue in (2, 3, 4, 5, 12):
         assert f"### Issue {issue} " in text
+
+
+@pytest.mark.xdist_group("project_files")
+def test_a_grouped_test_carries_its_group_to_the_scheduler(request):
+    """Under ``--dist loadgroup`` (pyproject's addopts) a test's id ends in ``@group``: the scheduler keeps a group
+    in one worker by that suffix alone (tests/conftest.py writes it where pytest-xdist could not)."""
+    if not getattr(request.config.option, "loadgroup", False):
+        pytest.skip("not an xdist worker under --dist loadgroup")
+    assert request.node.nodeid.endswith("::test_a_grouped_test_carries_its_group_to_the_scheduler@project_files")

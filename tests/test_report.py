@@ -232,12 +232,14 @@ def test_report_reads_the_pipeline_record(tmp_path):
 
 def test_report_shows_the_precision_study_beside_the_run(tmp_path):
     """A `symmech bench precision` study in OUT/precision: its rows in the report, the row at the run's
-    own setting (mode accurate, tolerance 1e-9) highlighted, not the paper-mode row of equal value."""
+    own setting (mode accurate, tolerance 1e-9) highlighted, not the paper-mode row of equal value. The section
+    reads the scene's settings, not its kind: a kind nobody registered spares the grain paper's derivations and
+    their MathML (~50 s of CPU in a worker without them)."""
     from symmech import report
 
     (tmp_path / "precision").mkdir()
     (tmp_path / "summary.json").write_text(json.dumps({
-        "kind": "grain", "headline": [], "checks": [],
+        "kind": "made_up", "headline": [], "checks": [],
         "scene": {"kind": "grain", "numerics": {"mode": "accurate", "tolerance": 1e-9}}}))
     (tmp_path / "precision" / "summary.json").write_text(json.dumps({
         "kind": "grain", "study": "precision", "reference": "accurate at 1e-12", "tables": {"precision_grain": {}}}))
