@@ -51,7 +51,7 @@ def test_no_build_without_a_c_compiler_or_pycc(monkeypatch, tmp_path, capfd, mis
     cross = (kinematics.cross, "f8[::1](f8[::1], f8[::1])")
     build = aot.Build("nocc", [compiled.__file__], lambda: {"f": cross})
     so, manifest = build.paths()
-    assert build.build(artifacts.digests(build.sources())) is False
+    assert build.build({}) is False  # no digest is read before the compile
     assert build.load() is None and not so.exists() and not manifest.exists()
     assert capfd.readouterr() == ("", "")
 

@@ -174,7 +174,7 @@ def test_an_unwritable_folder_is_one_warning_and_no_build(monkeypatch, tmp_path,
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "file" / "cache"))
     monkeypatch.setattr(artifacts, "_warned", set())
     b = aot.Build("probe", [compiled.__file__], lambda: {"f": (compiled.pack, None)})
-    assert b.build(artifacts.digests(b.sources())) is False
+    assert b.build({}) is False  # no digest is read before the folder is written
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and f"{b.paths()[0].parent} cannot be written" in err[0]
 

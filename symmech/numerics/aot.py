@@ -106,18 +106,14 @@ class Build:
         """Held while the module and its record are replaced (a reader never judges a half-replaced pair)."""
         return self.paths()[0].parent / f"{self.module_name}.lock"
 
-    def sources(self) -> list[str]:
-        """The files the build is made from: those its exports reach, and the anchors."""
-        return artifacts.sources(sys.modules[next(iter(self.exports().values()))[0].__module__]) + self.anchors
-
     def build(self, before: dict[str, str]) -> bool:
         """Compile the exports ahead of time; the caller holds the engine's build lock and took the
-        :func:`symmech.numerics.artifacts.digests` ``before`` of at least :meth:`sources` before its process
-        compiled anything. Returns whether it built: False without a working C compiler (the runs keep numba's
-        cache), and False after one warning line when the folder cannot be written."""
+        :func:`symmech.numerics.artifacts.digests` ``before`` of the files the exports reach and the anchors
+        before its process compiled anything. Returns whether it built: False without a working C compiler (the
+        runs keep numba's cache), and False after one warning line when the folder cannot be written."""
         self.refused = False  # tried: a failed build is not started again by every run
         exports = self.exports()
-        built_from = {f: before[f] for f in self.sources()}
+        files = artifacts.sources(sys.modules[next(iter(exports.values()))[0].__module__]) + self.anchors
         so, record = self.paths()
         try:
             so.parent.mkdir(parents=True, exist_ok=True)
@@ -142,7 +138,7 @@ class Build:
             with file_lock(self.lock_file(), wait=True):
                 artifacts.drop([record])
                 os.replace(Path(tmp) / cc.output_file, so)
-                artifacts.write_record(record, [so], built_from)
+                artifacts.write_record(record, [so], {f: before[f] for f in files})
         self._module, self._checked = None, False
         return True
 

@@ -156,9 +156,10 @@ class Engine:
         return self.cache_dir() / f"symmech-{self.name}-numba.json"
 
     def sources(self) -> list[str]:
-        """The files the entries are compiled from (and the ahead-of-time build's, when there is one)."""
+        """The files the entries are compiled from, and the ahead-of-time build's anchors when it has one (its
+        exports are the entries' module's); imports that module, compiles nothing."""
         files = {f for entry in self.entries() for f in artifacts.sources(sys.modules[entry.__module__])}
-        return sorted(files | set(self.ahead.sources() if self.ahead is not None else ()))
+        return sorted(files | set(self.ahead.anchors if self.ahead is not None else ()))
 
     def _record(self, before: dict[str, str]) -> None:
         """Record the entries' cache files as built from the sources whose digests ``before`` the build took
