@@ -17,7 +17,6 @@
 #define ASSEMBLY_ROLLER_PARAMS 15
 #define ASSEMBLY_PARAMS (ASSEMBLY_ROLLER_PARAMS + EL_COLUMNS)
 
-void elastic_assembly_rate(double t, const double *y, const double *p, double *out);
 void elastic_assembly_rate_and_mass_block(double t, const double *y, const double *p, double *out);
 void elastic_assembly_outputs(const double *arg, double *out);
 
@@ -54,13 +53,6 @@ static void assembly_params(double t, const double *y, const double *p, double *
     (void)y;
     columns(t, out + ASSEMBLY_ROLLER_PARAMS);
 #endif
-}
-
-void elastic_trolley_rate(double t, const double *y, const double *p, double *out)
-{
-    double pa[ASSEMBLY_PARAMS];
-    assembly_params(t, y, p, pa);
-    elastic_assembly_rate(t, y, pa, out);
 }
 
 /* F and M22 from one table lookup and one generated function (their common subexpressions formed once) */

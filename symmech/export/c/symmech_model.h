@@ -6,10 +6,10 @@
    calculated outputs (MODEL_OUTPUTS, when the model has them), the N_U
    inputs, the N_P parameters and the N_D discrete states of a model with regimes.
 
-   What model.h names (the generated physics, M y' = F): MODEL_RATE(t, y, p, F) always; M the identity, or
-   M = diag(I, M22) with MASS_IDENTITY identity rows and either MODEL_RATE_MASS(t, y, p, M) (M whole, row by row)
-   or MODEL_RATE_AND_MASS_BLOCK(t, y, p, F, M22) (F and M22 alone, row by row, in one call: their common
-   subexpressions formed once; the solve then calls it instead of MODEL_RATE); MASS_SPD where M22 is symmetric positive definite (Cholesky, its lower
+   What model.h names (the generated physics, M y' = F): MODEL_RATE(t, y, p, F) with M the identity, or with
+   M = diag(I, M22), MASS_IDENTITY identity rows, and MODEL_RATE_MASS(t, y, p, M) (M whole, row by row); or, instead
+   of both, MODEL_RATE_AND_MASS_BLOCK(t, y, p, F, M22) (F and M22 alone, row by row, in one call: their common
+   subexpressions formed once); MASS_SPD where M22 is symmetric positive definite (Cholesky, its lower
    triangle read); MODEL_SECOND_ORDER where y = (x, x') with F's first N_X/2 rows x' (Radau then solves its
    Newton systems by the halves' Schur complement). */
 #ifndef SYMMECH_MODEL_H
