@@ -10,6 +10,7 @@ import pytest
 from probe_kind import install
 
 from symmech.cli import main
+from symmech.core import scene
 from symmech.core.scene import MAX_DEPTH, MAX_SCENE_BYTES
 
 
@@ -39,19 +40,38 @@ def write(tmp_path, content: bytes):
     (b"a = " + b"{b = " * 3000 + b"1" + b"}" * 3000, "is nested too deeply"),
     (b"a = " + b"[" * (MAX_DEPTH + 2) + b"]" * (MAX_DEPTH + 2),
      "scene field 'a" + "[0]" * MAX_DEPTH + "': nested deeper than"),
-    # 3000 levels, past the recursion limit as the deep table's: tomllib's time grows as the key's length squared
-    (b"a" + b".a" * 3000 + b" = 1", "scene field 'a" + ".a" * MAX_DEPTH + "': nested deeper than"),
+    # refused before parsing: tomllib's time grows as the key's parts squared (6.5 s of CPU for these 20,000)
+    (b"a" + b".a" * 20_000 + b" = 1", "scene field 'a" + ".a" * MAX_DEPTH + "': nested deeper than"),
+    (b"[t]\n" + b"\"q\" . " * 20_000 + b"k = 1", "scene field 'q" + ".q" * MAX_DEPTH + "': nested deeper than"),
+    (b"[" + b"a." * 20_000 + b"a]", "scene field 'a" + ".a" * MAX_DEPTH + "': nested deeper than"),
+    (b"x = {" + b"a." * 20_000 + b"a = 1}", "scene field 'a" + ".a" * MAX_DEPTH + "': nested deeper than"),
+    # the same chain in a value or a comment is the parser's to read: no false refusal
+    (b'title = "' + b"a." * 40 + b'" # ' + b"b." * 40 + b"\n", "scene field 'kind': unknown scene kind None"),
     (b"n = " + b"9" * 5000, "holds an unreadable value: Exceeds the limit (4300 digits)"),
     (b"kind = [grain", "is not valid TOML: "),
     (b"", "scene field 'kind': unknown scene kind None; choose one of "),
     (b'kind = "prbe"', "unknown scene kind 'prbe' (did you mean 'probe'?); choose one of "),
-], ids=["latin1", "utf16", "deep-array", "deep-table", "array-past-limit", "long-dotted-key", "long-integer",
+], ids=["latin1", "utf16", "deep-array", "deep-table", "array-past-limit", "long-dotted-key", "long-quoted-key",
+        "long-table-header", "long-inline-key", "dotted-value-and-comment", "long-integer",
         "bad-toml", "empty", "misspelt-kind"])
 def test_unreadable_scene_files(tmp_path, capsys, content, words):
     path = write(tmp_path, content)
     code, line = answer(capsys, ["run", str(path), "--out", str(tmp_path / "out")])
     assert code == 2 and line.startswith("symmech: error: ") and words in line
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("parts, parsed", [(MAX_DEPTH, True), (MAX_DEPTH + 1, False), (50_000, False)])
+def test_a_long_dotted_key_is_refused_before_parsing(tmp_path, monkeypatch, parts, parsed):
+    calls = []
+    monkeypatch.setattr(scene.tomllib, "loads", lambda text: calls.append(text) or {})
+    path = write(tmp_path, b"[t]\n x" + b" . x" * (parts - 1) + b" = 1\n")
+    if parsed:
+        assert scene.read_toml(path) == {} and len(calls) == 1
+    else:
+        with pytest.raises(scene.SceneError, match="^scene field 'x" + r"\.x" * MAX_DEPTH + "': nested deeper"):
+            scene.read_toml(path)
+        assert calls == []
 
 
 def test_huge_scene_file_is_not_read(tmp_path, capsys):

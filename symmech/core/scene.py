@@ -7,6 +7,7 @@ line naming the file) and defines :class:`SymmechError` / :class:`SceneError`.
 from __future__ import annotations
 
 import importlib.resources
+import re
 import sys
 from pathlib import Path
 
@@ -33,6 +34,14 @@ class SceneError(SymmechError):
 MAX_SCENE_BYTES = 16 * 2**20
 MAX_DEPTH = 32
 
+# tomllib's time grows as the square of a dotted key's parts (a 20,000-part key: 6.5 s, the file bound allows
+# millions). A key of more than MAX_DEPTH parts is too deep whatever its table, so it is refused before parsing.
+# The chain must start a line, a table header or an inline table's entry, so a value or comment holding one is
+# left to the parser; only a multi-line string whose line starts with 33 dotted words would be refused unread.
+_KEY_PART = r"""(?:[A-Za-z0-9_-]+|"(?:[^"\\\n]|\\.)*"|'[^'\n]*')"""
+_LONG_DOTTED_KEY = re.compile(
+    rf"(?:^|[{{,\[])[ \t]*((?:{_KEY_PART}[ \t]*\.[ \t]*){{{MAX_DEPTH}}}{_KEY_PART})", re.MULTILINE)
+
 
 def read_toml(path) -> dict:
     """The TOML document at ``path``; every problem is one SymmechError naming the file."""
@@ -54,6 +63,7 @@ def read_toml(path) -> dict:
         line = raw[:exc.start].count(b"\n") + 1
         raise SymmechError(f"scene file {path} is not UTF-8 text (byte 0x{raw[exc.start]:02x} "
                            f"on line {line})") from None
+    refuse_long_dotted_key(text)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -64,6 +74,15 @@ def read_toml(path) -> dict:
         raise SymmechError(f"scene file {path} holds an unreadable value: {exc}") from None
     check_depth(data)
     return data
+
+
+def refuse_long_dotted_key(text: str) -> None:
+    """SceneError naming the first dotted key of more than MAX_DEPTH parts, found without parsing ``text``."""
+    found = _LONG_DOTTED_KEY.search(text)
+    if found:
+        parts = re.findall(_KEY_PART, found.group(1))
+        field = ".".join(part.strip("\"'") for part in parts)
+        raise SceneError(field, f"nested deeper than {MAX_DEPTH} tables or arrays")
 
 
 def check_depth(data) -> None:
