@@ -32,6 +32,37 @@ def scratch():
 
 
 @inline
+def _rise(p, y, t_end, gap, args):
+    """Where a grain on the plane starts its flight: the first ``t = t0 + span / 2**k`` (k = 0 … 63, span the scan
+    step or less at the run's end) where ``gap(t, args)`` [m] exceeds the gap's round-off; t_end if the run ends
+    before the rise is over (in flight, not resting); NaN if it stays within round-off for a whole scan step
+    (resting)."""
+    span, noise = min(p[P_AT.scan_step], t_end - y[X_AT.t]), gap_noise(p, y)
+    for kk in range(64):
+        t = y[X_AT.t] + span / 2.0 ** kk
+        if t <= y[X_AT.t]:
+            break
+        if gap(t, args) > noise:
+            return t
+    return np.nan if span >= p[P_AT.scan_step] else t_end
+
+
+# The gaps take their arguments as one tuple: numba inlines no call with *args.
+@inline
+def _path_gap(t, args):
+    """The gap [m] at t of the DOP853 flight; args (ctx, steps, nsteps, p, out): its rotation's steps so far."""
+    ctx, steps, nsteps, p, out = args
+    return h_at(GAP, t, ctx, steps, nsteps, p, out)
+
+
+@inline
+def _exact_gap(t, args):
+    """The gap [m] at t of the closed-form flight; args (fl, rot, buf): its records and buffer."""
+    fl, rot, buf = args
+    return ff.gap(t, fl, rot, buf)[0]
+
+
+@inline
 def fly(p, y, t_end, on_plane, rows, carry, work):
     """Fly from y until the first contact or t_end: (state, status 0 contact, 1 end, 2 resting, 3 the rotation's
     integration failed, rows); ``work``: :func:`scratch`."""
@@ -45,20 +76,9 @@ def fly(p, y, t_end, on_plane, rows, carry, work):
     if on_plane:
         span = min(scan, t_end - y[X_AT.t])
         steps, nsteps = extend_rotation(y[X_AT.t] + span, y[X_AT.t] + span, ctx, steps, nsteps, p)
-        noise = gap_noise(p, y)
-        out = np.empty((1, 2, 3))
-        t_from = np.nan
-        for kk in range(64):
-            t = y[X_AT.t] + span / 2.0 ** kk
-            if t <= y[X_AT.t]:
-                break
-            if h_at(GAP, t, ctx, steps, nsteps, p, out) > noise:
-                t_from = t
-                break
-        if math.isnan(t_from) and span >= scan:
+        t_from = _rise(p, y, t_end, _path_gap, (ctx, steps, nsteps, p, np.empty((1, 2, 3))))
+        if math.isnan(t_from):
             return y, 2, rows
-        if math.isnan(t_from):  # the run ends before the rise is over: in flight, not resting
-            t_from = t_end
     tc, steps, nsteps = first_root(GAP, t_from, t_end, scan, xtol, ctx, steps, nsteps, p)
     t_stop = t_end if math.isnan(tc) else tc
     steps, nsteps = extend_rotation(t_stop, t_stop, ctx, steps, nsteps, p)
@@ -103,20 +123,10 @@ def _fly_exact(p, y, t_end, on_plane, rows, carry, work):
     _exact_records(p, y, fl, rot, state)
     scan = p[P_AT.scan_step]
     t_from = y[X_AT.t]
-    if on_plane:  # the rise above round-off, as the DOP853 flight's
-        span, noise = min(scan, t_end - y[X_AT.t]), gap_noise(p, y)
-        t_from = np.nan
-        for kk in range(64):
-            t = y[X_AT.t] + span / 2.0 ** kk
-            if t <= y[X_AT.t]:
-                break
-            if ff.gap(t, fl, rot, buf)[0] > noise:
-                t_from = t
-                break
-        if math.isnan(t_from) and span >= scan:
+    if on_plane:
+        t_from = _rise(p, y, t_end, _exact_gap, (fl, rot, buf))
+        if math.isnan(t_from):
             return y, 2, rows
-        if math.isnan(t_from):  # the run ends before the rise is over: in flight, not resting
-            t_from = t_end
     tc = ff.next_contact(fl, rot, t_from, t_end, scan, p[P_AT.tolerance] * scan, buf)
     t_stop = t_end if math.isnan(tc) else tc
     k0, k1 = _samples(p, y[X_AT.t], t_stop)
