@@ -214,6 +214,50 @@ def test_c_example_prints_the_native_table(rotor_boom, tmp_path):
     assert deviation(got[:, 1:], q) <= TOLERANCE
 
 
+# the example program's own "%.17g" (exact integer digits for |x| in [1e-6, 1e16), printf elsewhere), run on each
+# double of stdin (16 hex digits of its bits) instead of the model
+HARNESS = r"""
+#include <stdio.h>
+#include <string.h>
+#define main example_main
+#include "example.c"
+#undef main
+int main(void)
+{
+    unsigned long long bits;
+    while (scanf("%llx", &bits) == 1) {
+        double x;
+        char text[32];
+        memcpy(&x, &bits, sizeof x);
+        format_g17(x, text);
+        puts(text);
+    }
+    return 0;
+}
+"""
+
+
+def test_c_example_prints_each_double_as_python_formats_it(rotor_boom, tmp_path):
+    """The example program's table numbers against Python's own correctly rounded "%.17g" (its dtoa, ties to
+    even): random magnitudes over the exact digits' range and beyond, random bit patterns, exact ties in the 17th
+    digit, the neighbours of powers of ten and of the range's ends; each read back is the same double."""
+    exported, _ = rotor_boom
+    folder = build.c_folder(exported, tmp_path / "rotor_boom_c")
+    (folder / "harness.c").write_text(HARNESS)
+    build.compile_c(folder, ["harness.c", "symmech_model.c", *exported.c_files()], folder / "harness", shared=False)
+    rng = np.random.default_rng(7)
+    magnitudes = 10.0 ** rng.uniform(-8, 17, 40000) * rng.choice([-1.0, 1.0], 40000)
+    patterns = rng.integers(0, 2**63, 20000, dtype=np.uint64).view(np.float64)
+    ties = np.ldexp(rng.integers(2**52, 2**53, 20000) | 1, -rng.integers(1, 9, 20000))  # x.5, .25, ... at 1e14-1e15
+    powers = 10.0 ** np.arange(-8, 18)
+    edges = np.concatenate([np.nextafter(powers, 0), powers, np.nextafter(powers, np.inf), [0.0, -0.0, 1.0]])
+    x = np.concatenate([magnitudes, patterns[np.isfinite(patterns)], ties, edges, -edges])
+    printed = subprocess.run([str(folder / "harness")], input="\n".join(f"{b:016x}" for b in x.view(np.uint64)),
+                             check=True, capture_output=True, text=True).stdout.split()
+    assert printed == [f"{v:.17g}" for v in x.tolist()]
+    assert np.array_equal(np.array(printed, dtype=float), x)
+
+
 @pytest.mark.parametrize("args, says", [
     (["fmu", "trolley_helix.toml", "--out", "x.fmu"], "covers the elastic trolley"),
     (["fmu", "mechanism_chain_large.toml", "--out", "x.fmu"], "up to 60 coordinates"),

@@ -14,6 +14,17 @@
 #include "radau_tableau.h"
 #endif
 
+/* before the short loops of the linear solves, whose sizes are compile-time constants: unrolled (whole up to 16
+   trips; GCC keeps them rolled at -O2, where the counting and branching cost as much as the arithmetic), the same
+   operations in the same order, so the same results */
+#if defined(__clang__)
+#define UNROLLED _Pragma("unroll 16")
+#elif defined(__GNUC__)
+#define UNROLLED _Pragma("GCC unroll 16")
+#else
+#define UNROLLED
+#endif
+
 void symmech_reset(SymmechModel *m)
 {
     static const double start[N_REAL] = START_VALUES;
@@ -55,9 +66,13 @@ static void lu_solve(const double *a, const int *piv, double *b, int n)
     for (int k = 0; k < n; k++) {
         double s = b[k]; b[k] = b[piv[k]]; b[piv[k]] = s;
     }
+    UNROLLED
     for (int i = 0; i < n; i++)
+        UNROLLED
         for (int j = 0; j < i; j++) b[i] -= a[i * n + j] * b[j];
+    UNROLLED
     for (int i = n - 1; i >= 0; i--) {
+        UNROLLED
         for (int j = i + 1; j < n; j++) b[i] -= a[i * n + j] * b[j];
         b[i] /= a[i * n + i];
     }
@@ -81,24 +96,32 @@ static void lu_solve(const double *a, const int *piv, double *b, int n)
 static int solve_mass(double *mass, double *b)
 {
     double *a = mass + MASS_AT, inv[N_M];
+    UNROLLED
     for (int j = 0; j < N_M; j++) {
         double d = a[j * MASS_STRIDE + j];
+        UNROLLED
         for (int k = 0; k < j; k++) d -= a[j * MASS_STRIDE + k] * a[j * MASS_STRIDE + k];
         if (!(d > 0.0)) return -1;
         inv[j] = 1.0 / sqrt(d);
+        UNROLLED
         for (int i = j + 1; i < N_M; i++) {
             double s = a[i * MASS_STRIDE + j];
+            UNROLLED
             for (int k = 0; k < j; k++) s -= a[i * MASS_STRIDE + k] * a[j * MASS_STRIDE + k];
             a[i * MASS_STRIDE + j] = s * inv[j];
         }
     }
+    UNROLLED
     for (int i = 0; i < N_M; i++) {  /* L z = b, then L^T x = z */
         double s = b[i];
+        UNROLLED
         for (int k = 0; k < i; k++) s -= a[i * MASS_STRIDE + k] * b[k];
         b[i] = s * inv[i];
     }
+    UNROLLED
     for (int i = N_M - 1; i >= 0; i--) {
         double s = b[i];
+        UNROLLED
         for (int k = i + 1; k < N_M; k++) s -= a[k * MASS_STRIDE + i] * b[k];
         b[i] = s * inv[i];
     }
@@ -556,6 +579,7 @@ static void error_scale(const Radau *s, const double *y, const double *y_new, do
 static void mix(const double *a, int k, const double *z, double *out)
 {
     for (int r = 0; r < k; r++)
+        UNROLLED
         for (int i = 0; i < N_X; i++)
             out[r * N_X + i] = a[r * 3] * z[i] + a[r * 3 + 1] * z[N_X + i] + a[r * 3 + 2] * z[2 * N_X + i];
 }
@@ -618,16 +642,20 @@ static void lu_solve_complex(const double *re, const double *im, const int *piv,
         double s = br[k]; br[k] = br[piv[k]]; br[piv[k]] = s;
         s = bi[k]; bi[k] = bi[piv[k]]; bi[piv[k]] = s;
     }
+    UNROLLED
     for (int i = 0; i < N_LU; i++) {
         double sr = br[i], si = bi[i];
+        UNROLLED
         for (int j = 0; j < i; j++) {
             sr -= re[i * N_LU + j] * br[j] - im[i * N_LU + j] * bi[j];
             si -= re[i * N_LU + j] * bi[j] + im[i * N_LU + j] * br[j];
         }
         br[i] = sr; bi[i] = si;
     }
+    UNROLLED
     for (int i = N_LU - 1; i >= 0; i--) {
         double sr = br[i], si = bi[i];
+        UNROLLED
         for (int j = i + 1; j < N_LU; j++) {
             sr -= re[i * N_LU + j] * br[j] - im[i * N_LU + j] * bi[j];
             si -= re[i * N_LU + j] * bi[j] + im[i * N_LU + j] * br[j];
@@ -661,6 +689,7 @@ static void reduced(const Radau *s, const double *b, const double *c, double *r)
 {
     for (int i = 0; i < N_H; i++) {
         double acc = b[N_H + i];
+        UNROLLED
         for (int j = 0; j < N_H; j++) acc += s->J[(N_H + i) * N_X + j] * c[j];
         r[i] = acc;
     }
