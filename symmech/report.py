@@ -115,6 +115,21 @@ def _specs(package: str | None, used: list[str] | None) -> list:
             for s in codegen.derive(module)[0]]
 
 
+def _longer_than(expr, limit: int) -> bool:
+    """Whether ``expr`` (a sympy expression or matrix) prints in more than ``limit`` characters. Each atom prints
+    in at least one, so past ``limit`` atoms the answer is known without printing: a matrix of ~10^5 characters
+    costs sympy seconds to print only to be measured."""
+    from sympy import MatrixBase, preorder_traversal
+
+    atoms = 0
+    for element in (expr if isinstance(expr, MatrixBase) else [expr]):
+        for node in preorder_traversal(element):
+            atoms += not node.args
+            if atoms > limit:
+                return True
+    return len(str(expr)) > limit
+
+
 def derivations(summary: dict, package: str | None) -> list[Derivation]:
     """The derived matrices behind the run: the modules it names, else its paper's derived modules
     (for a mechanism, whose modules are per scene, only the one the run used)."""
@@ -127,7 +142,7 @@ def derivations(summary: dict, package: str | None) -> list[Derivation]:
         for f in spec.functions:
             expr = f.matrix if f.shape else f.matrix[0, 0]
             typeset = None
-            if len(str(expr)) <= MATHML_LIMIT:
+            if not _longer_than(expr, MATHML_LIMIT):
                 rhs = mathml(expr, printer="presentation")
                 typeset = (f'<math display="block"><mrow>{_name_mathml(f.name)}<mo>=</mo>{rhs}</mrow></math>')
             out.append(Derivation(spec.name, f.name, f.meaning, f.unit, f.equations, typeset))
