@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 10ec9291b0b3ff2fae98899f2762f6beeac75ba2915f5dd66790b2cc0cf2c407
-// source key d0667f11d966c8fd6a82ea2144c75f927ff8c0edf0a9a17c13185ce0f676d26e
+// source key d39f44ff1d607fecbfb3d3e6bc47f4d06af4fad2e7df09b4d5e89cfb3e9c989e
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

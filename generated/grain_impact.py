@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b76760b8c364d70e67e783d7fca55abaec98f100800b4072f7d3e45bf41db69e
-# source key d0667f11d966c8fd6a82ea2144c75f927ff8c0edf0a9a17c13185ce0f676d26e
+# source key d39f44ff1d607fecbfb3d3e6bc47f4d06af4fad2e7df09b4d5e89cfb3e9c989e
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

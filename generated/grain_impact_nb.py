@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bffdb2f30f6ed8312086f15100ff2ad5961492947b959c28a6e0f841df9663b
-# source key d0667f11d966c8fd6a82ea2144c75f927ff8c0edf0a9a17c13185ce0f676d26e
+# source key d39f44ff1d607fecbfb3d3e6bc47f4d06af4fad2e7df09b4d5e89cfb3e9c989e
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1cf4249e083cb922fda962bef1522dd77d742bfa6282554081861a4ab64b2386
-// source key 1c61c6704365d6b18334ccc67a29954be36fdfca687c0587243f4f98c6c6f531
+// source key 71ceb43405faf8255e3f501f942fdc10da63fea4b01ea09315f40d08ead19598
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0b7c53c3b3cc49b0dd4269c01369314ca37f2bd96337b7f8721e52d3df0afb92
-# source key 1c61c6704365d6b18334ccc67a29954be36fdfca687c0587243f4f98c6c6f531
+# source key 71ceb43405faf8255e3f501f942fdc10da63fea4b01ea09315f40d08ead19598
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1b2e5c0f1a2fd91c703faeeb7ce6997ac20db98cd24429414ec3f61663affa36
-# source key 1c61c6704365d6b18334ccc67a29954be36fdfca687c0587243f4f98c6c6f531
+# source key 71ceb43405faf8255e3f501f942fdc10da63fea4b01ea09315f40d08ead19598
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

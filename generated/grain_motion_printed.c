@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 3d9382c1eb1f7c339e5d6b3c3336a0acd2e1389d366224d902c6c1816d38bc77
-// source key 45d6da67ce53c1d11019cee21001febd9d734b817796e8b1fb1dac3100540c93
+// source key 7463d48a671fa348fcf07c2bc72742a94fc97d7045128f0cfaf828069969d7a9
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

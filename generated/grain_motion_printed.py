@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d7f75372611de9d8bbfc48302d08026c4cb0d8ced531bd0c4c058b2de72850b3
-# source key 45d6da67ce53c1d11019cee21001febd9d734b817796e8b1fb1dac3100540c93
+# source key 7463d48a671fa348fcf07c2bc72742a94fc97d7045128f0cfaf828069969d7a9
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

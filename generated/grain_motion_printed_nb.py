@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 80f875b003ccef9f8caed0a7df29b27f60ec70b68b95e9764e5e34e3a9294d6c
-# source key 45d6da67ce53c1d11019cee21001febd9d734b817796e8b1fb1dac3100540c93
+# source key 7463d48a671fa348fcf07c2bc72742a94fc97d7045128f0cfaf828069969d7a9
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1061f0b179455402f97cef737f69c7f1e88881336606d0ab708cba11bf9fdfc0
-# source key 526f533d9cd0e257969aebd3350c66616023d887f78ca5c92ab72939ad624bdb
+# source key 153cd238b90d12d159b8d193d402034d55e1d4ef77ba63a0ad767bf865f3cdc7
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

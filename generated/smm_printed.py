@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2e4ce565af0a4356e9cbedeb754e33e986bd8dd7727aa5c3b72fe3482432c370
-# source key 1d2b2d0048fdb5d62c5d19cc6799bce50da266892e6441ec8b12ae8175b9d07a
+# source key 18c294680f1c19372832b20acf1927678a3c2e054548f67f561dc50cad1f93d4
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

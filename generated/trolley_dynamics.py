@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 92a6f016985eaf1b2bb62e6f5ec6e1bd056ea8b72c97d16a8c23897b52948d95
-# source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
+# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

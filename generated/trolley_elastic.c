@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ab32475cbb80b45d0171d830b0428099c347a9163dcb879daafaa114db9ada52
-// source key 9810ee176fd24b1dd6a89d8c841162af332bfd2c6d8a183cc01ba1ed44bc1a50
+// source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

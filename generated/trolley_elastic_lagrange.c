@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a62778de16bd949750e9c6241d773dc0073f48d014d9693f00efa85e88bcef15
-// source key 9810ee176fd24b1dd6a89d8c841162af332bfd2c6d8a183cc01ba1ed44bc1a50
+// source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

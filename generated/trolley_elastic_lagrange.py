@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2b35c1daeb0caf07539e72552324aee49cfc70a7d26ebedf786d30be6ab3fcf9
-# source key 9810ee176fd24b1dd6a89d8c841162af332bfd2c6d8a183cc01ba1ed44bc1a50
+# source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

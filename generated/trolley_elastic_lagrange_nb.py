@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 be2668cd527d1f238bcb5f3cac2cfa30d4c713c2df9f4a37cac21da57e1caba7
-# source key 9810ee176fd24b1dd6a89d8c841162af332bfd2c6d8a183cc01ba1ed44bc1a50
+# source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
 # body sha256 6be42a866d00b8aab9c030da582d2aa04ecb6c24b5b3b2ca26f19771150bd196
 """Small elastic trolley by Lagrange's equations (test route).
 

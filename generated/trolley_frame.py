@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ad5b35542fb315346b6bf8b03ec8c349febb9533bcc51e45a88998328b672fb5
-# source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
+# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

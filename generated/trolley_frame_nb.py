@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8da110da6110fe13e0816c1857d38d73239488198c54277a584c9552ba1d098d
-# source key c9702043fd616d5d3b27f6a9fab29de297c0ac8ed4e6b410fb93463c77fa338e
+# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

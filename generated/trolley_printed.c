@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 7ce51eff7cd47013c2c515c298237f51ecee8035808ffdc2199cb9e860fe2b46
-// source key 4edd13ccc887a733af6f0d119334b0ce847c41644d72ae963706aae64f4968bd
+// source key 462f1efa45a9d93f8d765bd0deeba81f1361f97cb8e1b65f532c00ed9cfa868f
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 810e0bc07c27ac2066a8cb7a895f49c964fd181c6d21d5872d7c3a80c7f3dc03
-# source key 4edd13ccc887a733af6f0d119334b0ce847c41644d72ae963706aae64f4968bd
+# source key 462f1efa45a9d93f8d765bd0deeba81f1361f97cb8e1b65f532c00ed9cfa868f
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 
