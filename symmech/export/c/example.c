@@ -31,17 +31,17 @@ static long long scaled(double x, int k, int *range)
     return base + (lo > n + 0.5 || (lo == n + 0.5 && base % 2 != 0));
 }
 
-/* the 17 digits d of a number's magnitude and its exponent e in [-6, 16] into s as %g writes them: trailing zeros
+/* the 17 digits of a number's magnitude and its exponent e in [-6, 16] into s as %g writes them: trailing zeros
    dropped, fixed notation from e = -4, d.ddde-0X below */
-static void write_g(char *s, const char *d, int e, int negative)
+static void write_g(char *s, const char *digits, int e, int negative)
 {
     int last = 16;  /* the last digit kept */
-    while (last > 0 && d[last] == '0') last--;
+    while (last > 0 && digits[last] == '0') last--;
     if (negative) *s++ = '-';
     if (e < -4) {
-        *s++ = d[0];
+        *s++ = digits[0];
         if (last > 0) *s++ = '.';
-        for (int i = 1; i <= last; i++) *s++ = d[i];
+        for (int i = 1; i <= last; i++) *s++ = digits[i];
         *s++ = 'e';
         *s++ = '-';
         *s++ = '0';
@@ -56,7 +56,7 @@ static void write_g(char *s, const char *d, int e, int negative)
     }
     for (int i = 0; i <= (last > e ? last : e); i++) {
         if (i == e + 1 && e >= 0) *s++ = '.';
-        *s++ = d[i];
+        *s++ = digits[i];
     }
     *s = '\0';
 }
@@ -86,9 +86,9 @@ static void format_g17(double x, char *s)
         n /= 10;
         e++;
     }
-    char d[17];
-    for (int i = 16; i >= 0; i--, n /= 10) d[i] = (char)('0' + n % 10);
-    write_g(s, d, e, x < 0);
+    char digits[17];
+    for (int i = 16; i >= 0; i--, n /= 10) digits[i] = (char)('0' + n % 10);
+    write_g(s, digits, e, x < 0);
 }
 
 int main(void)
