@@ -119,15 +119,9 @@ def _longer_than(expr, limit: int) -> bool:
     """Whether ``expr`` (a sympy expression or matrix) prints in more than ``limit`` characters. Each atom prints
     in at least one, so past ``limit`` atoms the answer is known without printing: a matrix of ~10^5 characters
     costs sympy seconds to print only to be measured."""
-    from sympy import MatrixBase, preorder_traversal
+    from symmech.core.latex import longer_than
 
-    atoms = 0
-    for element in (expr if isinstance(expr, MatrixBase) else [expr]):
-        for node in preorder_traversal(element):
-            atoms += not node.args
-            if atoms > limit:
-                return True
-    return len(str(expr)) > limit
+    return longer_than(expr, limit, lambda node: not node.args) or len(str(expr)) > limit
 
 
 def derivations(summary: dict, package: str | None) -> list[Derivation]:

@@ -57,14 +57,28 @@ def _short(expr, width: int) -> str | None:
     own LaTeX wherever it stands, any other leaf in at least one character, and every further argument
     of a node adds at least a separator: a tree longer by that count is long without printing it
     (printing each subtree at every level of the breaking would be quadratic in the largest matrices)."""
-    entries = expr if isinstance(expr, sympy.MatrixBase) else [expr]
-    least = 0
-    for node in itertools.chain.from_iterable(map(sympy.preorder_traversal, entries)):
-        least += len(node.args) - 1 if node.args else _leaf_length(node)
-        if least > width:
-            return None
+    if longer_than(expr, width, _least_latex):
+        return None
     text = sympy.latex(expr)
     return text if len(text) <= width else None
+
+
+def longer_than(expr, width: int, least) -> bool:
+    """Whether ``expr`` (an expression or a matrix, every entry) prints in more than ``width`` characters by a
+    lower bound alone: the sum of ``least(node)`` over its tree, each node's fewest characters in the printer's
+    form. Stops as soon as the sum passes ``width``, so a huge tree costs no more than ``width`` nodes."""
+    entries = expr if isinstance(expr, sympy.MatrixBase) else [expr]
+    total = 0
+    for node in itertools.chain.from_iterable(map(sympy.preorder_traversal, entries)):
+        total += least(node)
+        if total > width:
+            return True
+    return False
+
+
+def _least_latex(node) -> int:
+    """A node's fewest characters in LaTeX: a separator per further argument, a leaf its own length."""
+    return len(node.args) - 1 if node.args else _leaf_length(node)
 
 
 @functools.lru_cache(maxsize=4096)
