@@ -226,26 +226,21 @@ def cmd_errata(ns) -> int:
     return 0
 
 
-def _seconds(text: str) -> float:
-    """--max-time, --connect-timeout: a positive finite number of seconds (argparse reports the error)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text} is outside (0, inf) s")
-    return value
+def _positive(quantity: str, unit: str):
+    """An argparse type: a positive finite number of ``unit`` (argparse reports the error, naming ``quantity``)."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {quantity}, got {text!r}") from None
+        if not 0 < value < float("inf"):
+            raise argparse.ArgumentTypeError(f"{text} is outside (0, inf) {unit}")
+        return value
+    return parse
 
 
-def _speed(text: str) -> float:
-    """--half-width: a positive finite speed in m/s (argparse reports the error)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a speed in m/s, got {text!r}") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text} is outside (0, inf) m/s")
-    return value
+_seconds = _positive("a number of seconds", "s")  # --max-time, --connect-timeout
+_speed = _positive("a speed in m/s", "m/s")  # --half-width
 
 
 def _run_options(p: argparse.ArgumentParser) -> None:
