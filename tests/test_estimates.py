@@ -197,13 +197,21 @@ def test_a_chain_estimate_holds_whatever_the_count_model_says(monkeypatch, off):
 
 def test_the_slowdown_is_the_wall_time_over_the_cpu_time_of_a_probe(monkeypatch):
     """A process given a third of a core (its CPU clock running at a third of the wall clock's rate) is slowed
-    down 3x; the value is reused for PROBE_KEPT seconds, with no second probe (a clock that raises is not read)."""
-    start = time.perf_counter()
+    down 3x; the value is reused for PROBE_KEPT seconds, with no second probe (a clock that raises is not read).
+    Both clocks are fakes driven by the probe's own reads (1 ms of CPU per read), so that the machine's load, which
+    stretches the real wall clock between two reads, cannot move the answer."""
+    wall = [100.0]
+
+    def cpu_read() -> float:
+        wall[0] += 3e-3
+        return wall[0] / 3.0
+
     monkeypatch.setattr(sample, "_probed", [])
-    monkeypatch.setattr(sample.time, "process_time", lambda: (time.perf_counter() - start) / 3.0)
-    assert sample.slowdown() == pytest.approx(3.0, rel=0.05)
+    monkeypatch.setattr(sample.time, "perf_counter", lambda: wall[0])
+    monkeypatch.setattr(sample.time, "process_time", cpu_read)
+    assert sample.slowdown() == pytest.approx(3.0, rel=1e-9)
     monkeypatch.setattr(sample.time, "process_time", lambda: 1 / 0)
-    assert sample.slowdown() == pytest.approx(3.0, rel=0.05)
+    assert sample.slowdown() == pytest.approx(3.0, rel=1e-9)
 
 
 def test_a_scene_with_no_smaller_run_is_estimated_at_the_share_of_a_core_now(monkeypatch):
