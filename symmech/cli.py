@@ -146,12 +146,6 @@ def cmd_codegen(ns) -> int:
     return 0
 
 
-def _named_matrices() -> dict:
-    from symmech.core import codegen
-
-    return {f"{s.name}.{f.name}": f for s in codegen.module_specs() for f in s.functions}
-
-
 def _named_matrix(name: str):
     """The derived matrix ``module.function``; only the producer the generated index names for
     ``module`` is derived (one paper's derivation, not all of them)."""
@@ -186,9 +180,11 @@ def cmd_latex(ns) -> int:
     from symmech.core import emit, latex
 
     if ns.list or not ns.name:
-        for key, nm in _named_matrices().items():
-            eq = f"  eqs. {nm.equations}" if nm.equations else ""
-            print(f"{key:<40} {nm.meaning}{eq}")
+        from symmech.generated import MATRICES  # the listing codegen wrote: no derivation
+
+        for key, (meaning, equations) in MATRICES.items():
+            eq = f"  eqs. {equations}" if equations else ""
+            print(f"{key:<40} {meaning}{eq}")
         return 0
     nm = _scene_matrix(ns.name) if ":" in ns.name else _named_matrix(ns.name)
     if ns.cse:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from symmech.cli import main
-from symmech.core import pipeline
+from symmech.core import codegen, pipeline
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = (ROOT / "scenes" / "impact_default.toml").read_text()
@@ -106,9 +106,16 @@ def test_cli_process_prints_no_traceback(tmp_path):
 
 
 @pytest.mark.xdist_group("derive")  # derives every module: in the worker that already has them
-def test_latex_list_plain_and_cse(capsys):
-    assert main(["latex", "--list"]) == 0
+def test_latex_list_plain_and_cse(capsys, monkeypatch):
+    """The listing is the index's (no derivation runs for it), line for line what the derivations declare: every
+    generated function by module, in its declared order, with its meaning and equations."""
+    with monkeypatch.context() as patch:
+        patch.setattr(codegen, "derive", lambda producer: pytest.fail(f"--list derived {producer}"))
+        assert main(["latex", "--list"]) == 0
     listing = capsys.readouterr().out
+    declared = [f"{key:<40} {f.meaning}" + (f"  eqs. {f.equations}" if f.equations else "")
+                for key, f in codegen.named_matrices().items()]
+    assert listing.splitlines() == declared and len(declared) > 150
     assert "grain_impact.H " in listing and "grain_impact_printed.functional" in listing
     assert main(["latex", "grain_impact.euler_rate_matrix"]) == 0
     comment, body = capsys.readouterr().out.split("\n", 1)

@@ -174,6 +174,19 @@ def test_deleted_index_rebuilds_everything(tmp_path, capsys):
     assert (folder / "__init__.py").read_bytes() == (GENERATED / "__init__.py").read_bytes()
 
 
+@pytest.mark.slow  # derives every module again
+def test_an_index_without_the_listing_is_rebuilt_with_it(tmp_path, capsys):
+    """An index written before ``latex --list``'s listing (signed, its modules current) derives every producer once
+    and is written with the listing, byte for byte the committed one."""
+    folder = _copy_generated(tmp_path)
+    index = codegen.Index.read(folder)
+    index.matrices.clear()
+    (folder / "__init__.py").write_text(index.text(), encoding="utf-8")
+    report = codegen.run(folder, check=False)
+    assert sorted(report.derived) == sorted(codegen.producers()) and report.written == [str(folder / "__init__.py")]
+    assert (folder / "__init__.py").read_bytes() == (GENERATED / "__init__.py").read_bytes()
+
+
 def test_installed_package_refuses_codegen_without_dir(monkeypatch, capsys):
     """Not a checkout (as after `pip install .`): one line, exit 2, nothing written."""
     monkeypatch.setattr(codegen, "ROOT", Path("/nonexistent/site-packages"))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import sympy
 
-from symmech.cli import _named_matrices, main
+from symmech.cli import main
 from symmech.core import codegen, latex
 
 MAX_LINE = 2000
@@ -60,7 +60,7 @@ def test_every_derived_matrix_prints_in_short_balanced_lines(producer):
 
 @pytest.mark.slow
 def test_the_largest_derived_matrices_print_in_short_balanced_lines():
-    matrices = _named_matrices()
+    matrices = codegen.named_matrices()
     for name in HEAVY:
         _prints_in_short_balanced_lines(name, matrices[name])
 

@@ -167,6 +167,11 @@ def module_specs() -> list:
     return sorted(specs, key=lambda s: s.name)
 
 
+def named_matrices() -> dict:
+    """Every derived function (a FunctionSpec) by its name ``module.function``; derives every producer."""
+    return {f"{s.name}.{f.name}": f for s in module_specs() for f in s.functions}
+
+
 def _data_name(path: Path) -> str | None:
     """Name of a data file or folder a derivation read; None when it is not the package's own data.
 
@@ -193,10 +198,13 @@ def _data_path(name: str) -> Path:
 
 @dataclass
 class Index:
-    """``generated/__init__.py``: which producer declares each module, and the data each producer reads."""
+    """``generated/__init__.py``: which producer declares each module, the data each producer reads, and each
+    generated function's meaning and equations (``symmech latex --list`` reads them without deriving)."""
 
     modules: dict[str, str] = field(default_factory=dict)  # spec name -> producer
     inputs: dict[str, tuple[str, ...]] = field(default_factory=dict)  # producer -> data
+    # "module.function" -> (meaning, equations), each module's functions in their declared order
+    matrices: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     def text(self) -> str:
         lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module, _nb and C twins)",
@@ -205,6 +213,8 @@ class Index:
         lines += ["}", "# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)",
                   "INPUTS = {"]
         lines += [f"    {p!r}: {tuple(d)!r}," for p, d in sorted(self.inputs.items())]
+        lines += ["}", "# module.function -> (meaning, the paper's equations) of every generated function", "MATRICES = {"]
+        lines += [f"    {k!r}: {tuple(v)!r}," for n in sorted(self.modules) for k, v in self.listing(n).items()]
         body = "\n".join(lines + ["}", ""])
         return integrity.with_header(body, integrity.sha256(body), "0" * 64)  # no source key: always rebuilt
 
@@ -218,10 +228,21 @@ class Index:
         for node in ast.parse(path.read_text(encoding="utf-8")).body:
             if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name):
                 values[node.targets[0].id] = ast.literal_eval(node.value)
-        return cls(values.get("MODULES", {}), values.get("INPUTS", {}))
+        return cls(values.get("MODULES", {}), values.get("INPUTS", {}), values.get("MATRICES", {}))
 
     def names(self, producer: str) -> list[str]:
         return sorted(n for n, p in self.modules.items() if p == producer)
+
+    def listing(self, name: str) -> dict[str, tuple[str, str]]:
+        """The entries of :attr:`matrices` of module ``name``."""
+        return {k: v for k, v in self.matrices.items() if k.partition(".")[0] == name}
+
+    def declare(self, producer: str, spec) -> None:
+        """Record ``spec`` (a ModuleSpec) as declared by ``producer``, with its functions' listing."""
+        if spec.name in self.modules:
+            raise ValueError(f"generated module {spec.name} declared by {self.modules[spec.name]} and {producer}")
+        self.modules[spec.name] = producer
+        self.matrices.update((f"{spec.name}.{f.name}", (f.meaning, f.equations)) for f in spec.functions)
 
 
 # -- plan, check, write -----------------------------------------------------------
@@ -236,6 +257,8 @@ def _fresh(directory: Path, index: Index | None, producer: str) -> bool:
         return False
     key = source_key(producer, index.inputs[producer])
     for name in index.names(producer):
+        if not index.listing(name):  # an index written before the listing: derive once to fill it
+            return False
         for file in files(name):
             path = directory / file
             if integrity.problem(path) is not None:
@@ -271,7 +294,9 @@ def run(directory: Path, check: bool) -> Report:
     for producer in producers():
         if _fresh(directory, old, producer):
             new.inputs[producer] = old.inputs[producer]
-            new.modules.update((n, producer) for n in old.names(producer))
+            for n in old.names(producer):
+                new.modules[n] = producer
+                new.matrices.update(old.listing(n))
             continue
         from symmech.core import emit  # imports sympy: only when something must be derived
 
@@ -280,9 +305,7 @@ def run(directory: Path, check: bool) -> Report:
         new.inputs[producer] = data
         key = source_key(producer, data)
         for spec in specs:
-            if spec.name in new.modules:
-                raise ValueError(f"generated module {spec.name} declared by {new.modules[spec.name]} and {producer}")
-            new.modules[spec.name] = producer
+            new.declare(producer, spec)
             for target in emit.TARGETS:
                 path = directory / target.file(spec.name)
                 text = emit.render(spec, target, key)
