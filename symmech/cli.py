@@ -147,16 +147,17 @@ def cmd_codegen(ns) -> int:
 
 
 def _named_matrix(name: str):
-    """The derived matrix ``module.function``; only the producer the generated index names for
-    ``module`` is derived (one paper's derivation, not all of them)."""
+    """The derived matrix ``module.function``; a name the generated index does not list is refused before any
+    derivation, and only the producer the index names for ``module`` is derived (one paper's, not all)."""
     from symmech.core import codegen
-    from symmech.generated import MODULES
+    from symmech.core.schema import did_you_mean
+    from symmech.generated import MATRICES, MODULES
 
-    producer = MODULES.get(name.partition(".")[0])
-    specs = codegen.derive(producer)[0] if producer else ()
-    for f in (f for s in specs for f in s.functions if f"{s.name}.{f.name}" == name):
-        return f
-    raise SymmechError(f"no derived matrix named '{name}' (see `symmech latex --list`)")
+    if name not in MATRICES:
+        raise SymmechError(f"no derived matrix named '{name}'{did_you_mean(name, MATRICES)} "
+                           "(see `symmech latex --list`)")
+    specs = codegen.derive(MODULES[name.partition(".")[0]])[0]
+    return next(f for s in specs for f in s.functions if f"{s.name}.{f.name}" == name)
 
 
 def _scene_matrix(name: str):

@@ -107,12 +107,15 @@ def test_cli_process_prints_no_traceback(tmp_path):
 
 @pytest.mark.xdist_group("derive")  # derives every module: in the worker that already has them
 def test_latex_list_plain_and_cse(capsys, monkeypatch):
-    """The listing is the index's (no derivation runs for it), line for line what the derivations declare: every
+    """The listing is the index's (no derivation runs for it, nor for refusing a name it lacks), line for line what the derivations declare: every
     generated function by module, in its declared order, with its meaning and equations."""
     with monkeypatch.context() as patch:
         patch.setattr(codegen, "derive", lambda producer: pytest.fail(f"--list derived {producer}"))
         assert main(["latex", "--list"]) == 0
-    listing = capsys.readouterr().out
+        listing = capsys.readouterr().out
+        assert main(["latex", "grain_impact.HH"]) == 2  # refused from the index, before any derivation
+        assert capsys.readouterr().err == ("symmech: error: no derived matrix named 'grain_impact.HH' (did you mean "
+                                           "'grain_impact.H'?) (see `symmech latex --list`)\n")
     declared = [f"{key:<40} {f.meaning}" + (f"  eqs. {f.equations}" if f.equations else "")
                 for key, f in codegen.named_matrices().items()]
     assert listing.splitlines() == declared and len(declared) > 150
