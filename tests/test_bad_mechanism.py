@@ -160,9 +160,9 @@ def test_unknown_field_refused_before_any_work():
     the dense eigenproblem."""
     import time
 
-    start = time.perf_counter()
+    start = time.process_time()  # CPU: the machine's load does not stretch it
     assert_rejected(changed(bundled(CH), "precision.dense_limt", 10), "precision.dense_limt")
-    assert time.perf_counter() - start < 1.0
+    assert time.process_time() - start < 1.0
 
 
 @pytest.mark.parametrize("mass, words", [

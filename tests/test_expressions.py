@@ -36,9 +36,9 @@ def refused(text, words, variables=("t",), constants=None):
     ("t" * 2001, "characters"), ("E**t + f(t)", "only the functions"),
 ])
 def test_refused_without_evaluation(text, words):
-    start = time.perf_counter()
+    start = time.process_time()  # CPU: the machine's load does not stretch it
     refused(text, words)
-    assert time.perf_counter() - start < 1.0
+    assert time.process_time() - start < 1.0
 
 
 def test_accepted_expressions_are_the_sympy_expressions():
@@ -128,28 +128,28 @@ def _random_expressions():
 
 def test_fuzzed_expressions_parse_or_fail_with_a_field_error():
     """Random expressions: a sympy expression that passes the domain check on [0, 5], or a
-    SceneError naming the field — never another exception, never more than 2 s."""
+    SceneError naming the field — never another exception, never more than 2 s of CPU."""
     from hypothesis import given, settings
 
     @settings(max_examples=150, deadline=None, derandomize=True)
     @given(_random_expressions())
     def check(text):
-        start = time.perf_counter()
+        start = time.process_time()
         try:
             expr = ex.parse("f", text, ("t",))
             ex.check_domain("f", expr, "t", 0.0, 5.0, samples=201)
         except SceneError as err:
             assert err.field == "f" and "\n" not in str(err)
-        assert time.perf_counter() - start < 2.0, text
+        assert time.process_time() - start < 2.0, text
 
     check()
 
 
 def test_derivatives_are_bounded_in_size():
     tower = ex.parse("f", "**".join(["t"] * 12), ("t",))
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(SceneError, match=r"derivative 3 of 't\*\*\(t\*\*\(.* has 37461 terms \(at most 20000\)"):
         ex.derivatives("f", tower, "t", 4)
-    assert time.perf_counter() - start < 10.0
+    assert time.process_time() - start < 10.0
     d = ex.derivatives("f", ex.parse("f", "sin(2*t)", ("t",)), "t", 2)
     assert d == [sp.sin(2 * T), 2 * sp.cos(2 * T), -4 * sp.sin(2 * T)]

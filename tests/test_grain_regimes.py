@@ -150,7 +150,7 @@ def test_sideways_sliding_population_of_fifty():
     assert worst < 1e-7
 
 
-def test_steep_downhill_scene_of_issue_11_finishes(tmp_path):
+def test_steep_downhill_scene_finishes(tmp_path):
     sc = default_scene(tmp_path, 0.25, **{"alpha_deg = 3.0": "alpha_deg = -37.7",
                                           "velocity = [0.0, 0.0, 0.0]": "velocity = [0.0, 0.03, 0.0]"})
     start = time.process_time()
