@@ -174,16 +174,17 @@ def test_deleted_index_rebuilds_everything(tmp_path, capsys):
     assert (folder / "__init__.py").read_bytes() == (GENERATED / "__init__.py").read_bytes()
 
 
-@pytest.mark.slow  # derives every module again
-def test_an_index_without_the_listing_is_rebuilt_with_it(tmp_path, capsys):
-    """An index written before ``latex --list``'s listing (signed, its modules current) derives every producer once
-    and is written with the listing, byte for byte the committed one."""
+def test_an_index_without_a_modules_listing_rebuilds_it(tmp_path):
+    """An index that lacks a module's listing (as one written before ``latex --list`` read it; signed, the module
+    current) derives that module's producer once and is written with the listing, byte for byte the committed
+    one. One small module, one cheap derivation."""
     folder = _copy_generated(tmp_path)
     index = codegen.Index.read(folder)
-    index.matrices.clear()
+    for key in index.listing("grain_impact_printed"):
+        del index.matrices[key]
     (folder / "__init__.py").write_text(index.text(), encoding="utf-8")
     report = codegen.run(folder, check=False)
-    assert sorted(report.derived) == sorted(codegen.producers()) and report.written == [str(folder / "__init__.py")]
+    assert report.derived == ["symmech.grain.printed"] and report.written == [str(folder / "__init__.py")]
     assert (folder / "__init__.py").read_bytes() == (GENERATED / "__init__.py").read_bytes()
 
 
