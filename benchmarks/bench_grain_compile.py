@@ -13,11 +13,14 @@ bit with the first tree's. ``--first-run`` times the README's main job (``symmec
 ``auto``) in a fresh process on an empty cache beside the baseline ``python -c "import numpy, scipy,
 matplotlib"``, interleaved; each round's background builder is then killed (SIGKILL, by its process id: the
 lock must not outlive it). Then one build (``symmech warm``) and a run on the built engine, whose impacts
-and final position are compared with the first run's.
+and final position are compared with the first run's. ``--during-build`` times, in interleaved rounds, the
+first run on an empty cache against a second run started right after a first one while that run's builder
+compiles (the builder killed after each), and prints each run's engine.
 
     python benchmarks/bench_grain_compile.py --before /tmp/before --repeats 5
     python benchmarks/bench_grain_compile.py --functions
     python benchmarks/bench_grain_compile.py --first-run --repeats 5
+    python benchmarks/bench_grain_compile.py --during-build --repeats 5
     python benchmarks/bench_grain_compile.py --cpu /tmp/before . --repeats 1
 """
 from __future__ import annotations
@@ -26,6 +29,7 @@ import argparse
 import json
 import os
 import signal
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -228,6 +232,30 @@ def first_runs(repeats: int) -> None:
               f"{np.linalg.norm(r1 - r2):.2g} m")
 
 
+def during_build(repeats: int) -> None:
+    """The first run on an empty cache against a second run during the first run's background build."""
+    print(f"machine: {machine()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        caches = iter(range(10**6))
+        first, second, engines = [], [], set()
+        for _ in range(repeats):
+            for times, before in ((first, False), (second, True)):
+                cache, out = f"{tmp}/cache{next(caches)}", Path(tmp) / "out"
+                if before:
+                    first_run(cache, Path(tmp) / "before", kill=False)
+                    assert _builders(cache), "the first run started no builder"
+                start = time.perf_counter()
+                first_run(cache, out, kill=False)
+                times.append(time.perf_counter() - start)
+                engines.add((before, _result(out)[0], bool(_builders(cache))))
+                for pid in _builders(cache):
+                    os.kill(pid, signal.SIGKILL)
+        for label, t in (("first run", first), ("second run during the build", second)):
+            print(f"  {label:<28} {statistics.median(t):.2f} s (min {min(t):.2f}, max {max(t):.2f}; n = {len(t)})")
+        print(f"  second / first (medians): {statistics.median(second) / statistics.median(first):.3f}")
+        print(f"  (during build, engine, a builder still at work after the run): {sorted(engines)}")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--before", type=Path, help="another source tree to compare (cold)")
@@ -236,7 +264,11 @@ def main():
     p.add_argument("--top", type=int, default=25, help="with --functions: rows printed")
     p.add_argument("--first-run", action="store_true", help="time the README main job on an empty cache instead")
     p.add_argument("--cpu", type=Path, nargs="+", help="source trees: the CPU of a cold compile of each instead")
+    p.add_argument("--during-build", action="store_true",
+                   help="time a second run during the first run's background build against the first run")
     a = p.parse_args()
+    if a.during_build:
+        return during_build(a.repeats)
     if a.cpu:
         return cpu_study(a.cpu, a.repeats)
     if a.functions:
