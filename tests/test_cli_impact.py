@@ -107,8 +107,9 @@ def test_cli_process_prints_no_traceback(tmp_path):
 
 @pytest.mark.xdist_group("derive")  # derives every module: in the worker that already has them
 def test_latex_list_plain_and_cse(capsys, monkeypatch):
-    """The listing is the index's (no derivation runs for it, nor for refusing a name it lacks), line for line what the derivations declare: every
-    generated function by module, in its declared order, with its meaning and equations."""
+    """The listing is the index's (no derivation runs for it, nor for refusing a name it lacks), line for line
+    what the derivations declare: every generated function by module, in its declared order, with its meaning
+    and equations."""
     with monkeypatch.context() as patch:
         patch.setattr(codegen, "derive", lambda producer: pytest.fail(f"--list derived {producer}"))
         assert main(["latex", "--list"]) == 0

@@ -213,7 +213,8 @@ class Index:
         lines += ["}", "# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)",
                   "INPUTS = {"]
         lines += [f"    {p!r}: {tuple(d)!r}," for p, d in sorted(self.inputs.items())]
-        lines += ["}", "# module.function -> (meaning, the paper's equations) of every generated function", "MATRICES = {"]
+        lines += ["}", "# module.function -> (meaning, the paper's equations) of every generated function",
+                  "MATRICES = {"]
         lines += [f"    {k!r}: {tuple(v)!r}," for n in sorted(self.modules) for k, v in self.listing(n).items()]
         body = "\n".join(lines + ["}", ""])
         return integrity.with_header(body, integrity.sha256(body), "0" * 64)  # no source key: always rebuilt
