@@ -60,14 +60,14 @@ def kind_of(name: str) -> registry.Kind:
     return registry.kinds()[name]
 
 
-def outcome(text: str) -> tuple[int, str, float, Path]:
-    """(exit status, stderr, wall time [s], output folder) of ``symmech run`` on ``text``.
+def outcome(text: str, folder: Path) -> tuple[int, str, float, Path]:
+    """(exit status, stderr, wall time [s], output folder) of ``symmech run`` on ``text``, written with its
+    output into ``folder``.
 
     A case still running after HANG seconds dumps every thread's stack and ends the
     test process (faulthandler's watchdog thread: it does not touch SIGALRM, which
     the kinds' own time-budget watchdog uses).
     """
-    folder = Path(tempfile.mkdtemp(prefix="symmech-fuzz-"))
     (folder / "scene.toml").write_text(text)
     err = io.StringIO()
     faulthandler.dump_traceback_later(HANG, exit=True, file=sys.__stderr__)
@@ -82,8 +82,8 @@ def outcome(text: str) -> tuple[int, str, float, Path]:
 
 
 def check(text: str, expected: str | None) -> None:
-    code, err, seconds, out = outcome(text)
-    try:
+    with tempfile.TemporaryDirectory(prefix="symmech-fuzz-") as folder:
+        code, err, seconds, out = outcome(text, Path(folder))
         assert seconds < MAX_TIME + SLACK, f"{seconds:.1f} s past the budget:\n{text[:2000]}"
         assert code in (0, 2), f"exit {code}: {err}\n{text[:2000]}"
         if code == 0:
@@ -97,10 +97,6 @@ def check(text: str, expected: str | None) -> None:
                 f"expected field {expected!r}: {lines[0]}"
         else:
             assert named or any(words in lines[0] for words in NO_FIELD_OK), lines[0]
-    finally:
-        import shutil
-
-        shutil.rmtree(out.parent, ignore_errors=True)
 
 
 def _leaf_sites(kind, data):
@@ -189,11 +185,16 @@ def test_through_the_real_command(tmp_path, name):
         assert len(proc.stderr.splitlines()) == 1 and words in proc.stderr, proc.stderr
 
 
+def exit_status(text: str) -> int:
+    with tempfile.TemporaryDirectory(prefix="symmech-fuzz-") as folder:
+        return outcome(text, Path(folder))[0]
+
+
 def test_the_fuzzer_finds_a_planted_bug(monkeypatch):
     """The generators reach a kind's internal error (the probe's ``fail = "bug"``) and
     ``check`` reports it: the fuzzer can fail."""
     install(monkeypatch)
-    case = find(valid_cases(PROBE), lambda case: outcome(case[0])[0] == 3,
+    case = find(valid_cases(PROBE), lambda case: exit_status(case[0]) == 3,
                 settings=settings(max_examples=500, deadline=None, database=None, derandomize=True))
     assert 'fail = "bug"' in case[0]
     with pytest.raises(AssertionError, match="exit 3: symmech: internal error: ZeroDivisionError"):
