@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 10ec9291b0b3ff2fae98899f2762f6beeac75ba2915f5dd66790b2cc0cf2c407
-// source key d39f44ff1d607fecbfb3d3e6bc47f4d06af4fad2e7df09b4d5e89cfb3e9c989e
+// symmech 0.1.0 generated module; inputs sha256 321b1680fd3eb019a8989d7a57f45e742e67c495811b50b0402190b22604f99b
+// source key c0ab39b64caeda37418818bd60592d7e7c3f84d6a181ae8cdc0237623e54ec74
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b76760b8c364d70e67e783d7fca55abaec98f100800b4072f7d3e45bf41db69e
-# source key d39f44ff1d607fecbfb3d3e6bc47f4d06af4fad2e7df09b4d5e89cfb3e9c989e
+# symmech 0.1.0 generated module; inputs sha256 c4faeca037192f2e22f79861ed571fd2f53995e93e8c15ccc2531c855d8a97b8
+# source key c0ab39b64caeda37418818bd60592d7e7c3f84d6a181ae8cdc0237623e54ec74
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0bffdb2f30f6ed8312086f15100ff2ad5961492947b959c28a6e0f841df9663b
-# source key d39f44ff1d607fecbfb3d3e6bc47f4d06af4fad2e7df09b4d5e89cfb3e9c989e
+# symmech 0.1.0 generated module; inputs sha256 b9ff479c2f82811051eb64dcc6001954e8c54de01c156a0807e58212d5abd4e3
+# source key c0ab39b64caeda37418818bd60592d7e7c3f84d6a181ae8cdc0237623e54ec74
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

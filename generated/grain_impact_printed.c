@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 d55f22534b3cd6ef287667053ba27b899c6a0454eaa5ebb324e568a3583bc47d
-// source key 8b08aa0a761af5aaf0edbcd865a5ceef2db77455a6937418664a96d51ec9eef1
+// symmech 0.1.0 generated module; inputs sha256 7d2873f131834bee587d81c813fc1e1686c043de68deec5f535e165950270aba
+// source key c95d106f9c7684eb2244744a9e36e761b4e92b0f43354313dd79d7d88f298582
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 aae22db447cd785582d72f24f4b326598c48e8ee60ddf175644491e89c723617
-# source key 8b08aa0a761af5aaf0edbcd865a5ceef2db77455a6937418664a96d51ec9eef1
+# symmech 0.1.0 generated module; inputs sha256 508807cd948a4c243b29eb99088ad5daad2b54446e6df9a231c447d91dd364c1
+# source key c95d106f9c7684eb2244744a9e36e761b4e92b0f43354313dd79d7d88f298582
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 3b198be5e7e0dc5f865f40fc79bedc9bcae8b89a6f866daeff37d0670eb738c4
-# source key 8b08aa0a761af5aaf0edbcd865a5ceef2db77455a6937418664a96d51ec9eef1
+# symmech 0.1.0 generated module; inputs sha256 50735581d54ed5eef14b19cdcbf5265a35d95c33de518d7d64e38684bd615f5d
+# source key c95d106f9c7684eb2244744a9e36e761b4e92b0f43354313dd79d7d88f298582
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

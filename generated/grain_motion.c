@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 1cf4249e083cb922fda962bef1522dd77d742bfa6282554081861a4ab64b2386
-// source key 71ceb43405faf8255e3f501f942fdc10da63fea4b01ea09315f40d08ead19598
+// symmech 0.1.0 generated module; inputs sha256 86704e49f0b45cc166ff2330c8c8e83c9c1b390b951a9d1497752f156b69862f
+// source key 9d48c94c06399f75aa0889e8b1a934bcb7b06b8b5bdbfdd12c649e4892f2a30e
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

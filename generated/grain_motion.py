@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 0b7c53c3b3cc49b0dd4269c01369314ca37f2bd96337b7f8721e52d3df0afb92
-# source key 71ceb43405faf8255e3f501f942fdc10da63fea4b01ea09315f40d08ead19598
+# symmech 0.1.0 generated module; inputs sha256 2eab4125db7701096ea39b99b6799a66639e7f1a344547ac36f7c6e188b0dd09
+# source key 9d48c94c06399f75aa0889e8b1a934bcb7b06b8b5bdbfdd12c649e4892f2a30e
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1b2e5c0f1a2fd91c703faeeb7ce6997ac20db98cd24429414ec3f61663affa36
-# source key 71ceb43405faf8255e3f501f942fdc10da63fea4b01ea09315f40d08ead19598
+# symmech 0.1.0 generated module; inputs sha256 605c0276573ad9d5528c7d2bc5649a9e1335461e03f954257ea2a6acba0d705b
+# source key 9d48c94c06399f75aa0889e8b1a934bcb7b06b8b5bdbfdd12c649e4892f2a30e
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 3d9382c1eb1f7c339e5d6b3c3336a0acd2e1389d366224d902c6c1816d38bc77
-// source key 7463d48a671fa348fcf07c2bc72742a94fc97d7045128f0cfaf828069969d7a9
+// symmech 0.1.0 generated module; inputs sha256 9e7e00964efbfe73fd40a1e902a96f653524d4de89db815db1490b63c1fb52a4
+// source key 06d9377ac0f4cec63c6dde194f06ab797517101a72210bd532bed637aea341dc
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d7f75372611de9d8bbfc48302d08026c4cb0d8ced531bd0c4c058b2de72850b3
-# source key 7463d48a671fa348fcf07c2bc72742a94fc97d7045128f0cfaf828069969d7a9
+# symmech 0.1.0 generated module; inputs sha256 c569f3be831589edbf61f976a71d1fecedbc95d7aa1c6bdd86b71c53fe99defd
+# source key 06d9377ac0f4cec63c6dde194f06ab797517101a72210bd532bed637aea341dc
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 80f875b003ccef9f8caed0a7df29b27f60ec70b68b95e9764e5e34e3a9294d6c
-# source key 7463d48a671fa348fcf07c2bc72742a94fc97d7045128f0cfaf828069969d7a9
+# symmech 0.1.0 generated module; inputs sha256 a7f958aa3fa265167a524c2f3921e7df16bfaaf7e1f214815fc7542fadd44f97
+# source key 06d9377ac0f4cec63c6dde194f06ab797517101a72210bd532bed637aea341dc
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

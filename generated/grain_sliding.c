@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 84f4334bccb41e9fe919456183c9f699a77ad7dd1ec8f3d3778b949f2e7113f5
-// source key 153cd238b90d12d159b8d193d402034d55e1d4ef77ba63a0ad767bf865f3cdc7
+// symmech 0.1.0 generated module; inputs sha256 343f1c1e0ca9763cda5bd2ff52577beadbaaa0628091db031feadc930875bff6
+// source key ccdab4635cb7a2f1c67d26f810e6811deb5aa260da7a65b3ff6f5f8933aa4784
 // body sha256 366b188556699fb09d6eb00c07fa06e0af99a2dd605d3b1658259bf41001d72a
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 1061f0b179455402f97cef737f69c7f1e88881336606d0ab708cba11bf9fdfc0
-# source key 153cd238b90d12d159b8d193d402034d55e1d4ef77ba63a0ad767bf865f3cdc7
+# symmech 0.1.0 generated module; inputs sha256 66e7cd18f12e108af22891681636ef0ce560cd71a0ee0432957ecee319509aa6
+# source key ccdab4635cb7a2f1c67d26f810e6811deb5aa260da7a65b3ff6f5f8933aa4784
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

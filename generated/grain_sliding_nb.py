@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c6c2017768f0ec645f1850bd754905f8cfb523386ce833e0973608819c62e201
-# source key 153cd238b90d12d159b8d193d402034d55e1d4ef77ba63a0ad767bf865f3cdc7
+# symmech 0.1.0 generated module; inputs sha256 2fdabd92e82970fbf91c24354f5db45c5a661f8221bcc065b3835741c60a0aa8
+# source key ccdab4635cb7a2f1c67d26f810e6811deb5aa260da7a65b3ff6f5f8933aa4784
 # body sha256 1bab40246e5e6e63f22a9fd8f2a71da862a581c12ea356e37c1e078c16685d09
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 e36e7e11e3ba2ba4563ce9892357de085f65e2aa56cc907f4ab8d09c73ddcf93
-// source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+// symmech 0.1.0 generated module; inputs sha256 8d407d5706202680777e7e1a420872256ba5d24776a78e41bc02e83be2067c92
+// source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

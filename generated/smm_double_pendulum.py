@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 16b611ab0a4deab7ed9c4600824529c8c73fae25d90275cf6a35bcfa508829b3
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# symmech 0.1.0 generated module; inputs sha256 b6ce661d0f5a26d31817dbeecbc3fbf473016bf0896542bc23be416b54a1c641
+# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 7b60983b7685d65b7c7dbbb3fc943fe406069fbb357e34a05a6f7417fca4e2e6
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
-# body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
+# symmech 0.1.0 generated module; inputs sha256 c048d1f686e3854fe3f058e4312f5171a30ac0e6f4ed7d822397b945f6c0003c
+# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# body sha256 dc40022d9a1ca361dcdc141f2806f7d27cf3e1f8e23655ee2f4fc6c18bd59e23
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 
 Compiled twin of `symmech.generated.smm_double_pendulum` (the numpy module, the
@@ -634,13 +634,44 @@ def _layout(y, p):
     return y, p
 
 
+# numba's numpy.linalg.solve costs ~8 s of compilation per argument layout; this elimination, a fraction of that
+@numba.njit(cache=True, error_model="numpy")
+def _solve_into(M, b):
+    """b (n, k) overwritten by M^-1 b, M (n, n) by its LU factors (Gaussian elimination, partial pivoting);
+    numpy.linalg.LinAlgError on an exactly zero pivot, as LAPACK's gesv reports a singular M."""
+    n = M.shape[0]
+    for k in range(n):
+        pivot = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[pivot, k]):
+                pivot = i
+        if M[pivot, k] == 0.0:
+            raise numpy.linalg.LinAlgError("Matrix is singular to machine precision.")
+        for j in range(n):
+            M[k, j], M[pivot, j] = M[pivot, j], M[k, j]
+        for j in range(b.shape[1]):
+            b[k, j], b[pivot, j] = b[pivot, j], b[k, j]
+        for i in range(k + 1, n):
+            factor = M[i, k] / M[k, k]
+            for j in range(k + 1, n):
+                M[i, j] -= factor * M[k, j]
+            for j in range(b.shape[1]):
+                b[i, j] -= factor * b[k, j]
+    for i in range(n - 1, -1, -1):
+        for j in range(b.shape[1]):
+            total = b[i, j]
+            for c in range(i + 1, n):
+                total -= M[i, c] * b[c, j]
+            b[i, j] = total / M[i, i]
+
+
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
     """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
     if y.shape[0] != 4 or p.shape[0] != 5 or out.shape[1] != 4:
         raise ValueError("rhs_into: y must hold 4 floats, p 5, out (1, 4)")
     rate_into(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), out.T)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -657,7 +688,7 @@ def jac_into(t, y, p, out):
     if y.shape[0] != 4 or p.shape[0] != 5 or out.shape[1] != 4 or out.shape[2] != 4:
         raise ValueError("jac_into: y must hold 4 floats, p 5, out (1, 4, 4)")
     rate_jacobian_into(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], p[0], p[1], p[2], p[3], p[4]), out[0])
 
 
 @numba.njit(cache=True, error_model="numpy")

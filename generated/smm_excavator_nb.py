@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 a6a94365ab241749dc9394602d00a970ff253ff034b4cce152d6bc38277c6671
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
-# body sha256 4ba602af3617cd8a0e334d9dafc4fab4e9b308258aab119058d76bfe87195092
+# symmech 0.1.0 generated module; inputs sha256 c7530c695892542685ea9c9fd6a66ae9a4ab4b7571c72dbcd1fa61e5afa8ccbb
+# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# body sha256 cd85e3f7a47678bf2e63121f111536af09407b57d11dde17c41315bf194fa672
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 
 Compiled twin of `symmech.generated.smm_excavator` (the numpy module, the
@@ -1380,13 +1380,44 @@ def _layout(y, p):
     return y, p
 
 
+# numba's numpy.linalg.solve costs ~8 s of compilation per argument layout; this elimination, a fraction of that
+@numba.njit(cache=True, error_model="numpy")
+def _solve_into(M, b):
+    """b (n, k) overwritten by M^-1 b, M (n, n) by its LU factors (Gaussian elimination, partial pivoting);
+    numpy.linalg.LinAlgError on an exactly zero pivot, as LAPACK's gesv reports a singular M."""
+    n = M.shape[0]
+    for k in range(n):
+        pivot = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[pivot, k]):
+                pivot = i
+        if M[pivot, k] == 0.0:
+            raise numpy.linalg.LinAlgError("Matrix is singular to machine precision.")
+        for j in range(n):
+            M[k, j], M[pivot, j] = M[pivot, j], M[k, j]
+        for j in range(b.shape[1]):
+            b[k, j], b[pivot, j] = b[pivot, j], b[k, j]
+        for i in range(k + 1, n):
+            factor = M[i, k] / M[k, k]
+            for j in range(k + 1, n):
+                M[i, j] -= factor * M[k, j]
+            for j in range(b.shape[1]):
+                b[i, j] -= factor * b[k, j]
+    for i in range(n - 1, -1, -1):
+        for j in range(b.shape[1]):
+            total = b[i, j]
+            for c in range(i + 1, n):
+                total -= M[i, c] * b[c, j]
+            b[i, j] = total / M[i, i]
+
+
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
     """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
     if y.shape[0] != 10 or p.shape[0] != 20 or out.shape[1] != 10:
         raise ValueError("rhs_into: y must hold 10 floats, p 20, out (1, 10)")
     rate_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]), out.T)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1403,7 +1434,7 @@ def jac_into(t, y, p, out):
     if y.shape[0] != 10 or p.shape[0] != 20 or out.shape[1] != 10 or out.shape[2] != 10:
         raise ValueError("jac_into: y must hold 10 floats, p 20, out (1, 10, 10)")
     rate_jacobian_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19]), out[0])
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 db1e9c66edfffeedcaa54617a6dea3ea6cfe05f4725501b51e7257dee5fe5246
-# source key ea220c98bb5d2f6dc4de0061753968b840f6bd64d0dd2ad5a4ff39e615d90497
+# symmech 0.1.0 generated module; inputs sha256 5806931f309dfb75fe377153f7ef6fdc4c11894b7035824b4b29d5fad19af4de
+# source key 19b8c5869e0cebdad812fbbe1d30916e1b6fa3547afbc7e018d44af2c3402fcc
 # body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 399a3323d5d67c7c9a7afc01f4477cff78d7be870a4873594440a4c6db006602
-// source key 18c294680f1c19372832b20acf1927678a3c2e054548f67f561dc50cad1f93d4
+// symmech 0.1.0 generated module; inputs sha256 8df246f6876ca8e1aedee6160fd189613308a2ad9fe969cc6f0654535bfcfb76
+// source key edc292ff9f8911efae7174bd2b84c169d01e96d42c4f6b94e969bebd9adcb583
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

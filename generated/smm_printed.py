@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2e4ce565af0a4356e9cbedeb754e33e986bd8dd7727aa5c3b72fe3482432c370
-# source key 18c294680f1c19372832b20acf1927678a3c2e054548f67f561dc50cad1f93d4
+# symmech 0.1.0 generated module; inputs sha256 41f180347c6e079069b1d190fda51397dfd254c3265c3d635e163c31171826c9
+# source key edc292ff9f8911efae7174bd2b84c169d01e96d42c4f6b94e969bebd9adcb583
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 5fc532a5bacd6187b72aab1dffd79fb4d241f2fc584c0d4e01cba50f9c72be4a
-// source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+// symmech 0.1.0 generated module; inputs sha256 23541b88acad7b02a27cf9be704c62e4b2aea3e8b176f6a8791a30e8ad7bc27a
+// source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 d1dc018e93cc205b520a71de147b181785d3b2de315725e18c2f7de3c06c007d
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# symmech 0.1.0 generated module; inputs sha256 6e94ae06b48559234d8a7fedc8ef5195e1f9a183b94e7d9908c71d330122167b
+# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 e4699c0fec81e11108f39db63d29819598eff6bb9df9d1ec3b12ec1f5a63be9d
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
-# body sha256 ba8d779355ab1ad864f0154f634be1ce0b73f29b15e5eb3092ef4911956b493b
+# symmech 0.1.0 generated module; inputs sha256 1f17f661f53b388a4870cc1682acf387e387b3cd6c4fd78a4dfc312a90df3bd6
+# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# body sha256 f69f23c8fe61a74f11b2b74bf668b7221688290fd53b2d59efa10eda3fbf2bc6
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
 Compiled twin of `symmech.generated.smm_spatial_boom` (the numpy module, the
@@ -1369,13 +1369,44 @@ def _layout(y, p):
     return y, p
 
 
+# numba's numpy.linalg.solve costs ~8 s of compilation per argument layout; this elimination, a fraction of that
+@numba.njit(cache=True, error_model="numpy")
+def _solve_into(M, b):
+    """b (n, k) overwritten by M^-1 b, M (n, n) by its LU factors (Gaussian elimination, partial pivoting);
+    numpy.linalg.LinAlgError on an exactly zero pivot, as LAPACK's gesv reports a singular M."""
+    n = M.shape[0]
+    for k in range(n):
+        pivot = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[pivot, k]):
+                pivot = i
+        if M[pivot, k] == 0.0:
+            raise numpy.linalg.LinAlgError("Matrix is singular to machine precision.")
+        for j in range(n):
+            M[k, j], M[pivot, j] = M[pivot, j], M[k, j]
+        for j in range(b.shape[1]):
+            b[k, j], b[pivot, j] = b[pivot, j], b[k, j]
+        for i in range(k + 1, n):
+            factor = M[i, k] / M[k, k]
+            for j in range(k + 1, n):
+                M[i, j] -= factor * M[k, j]
+            for j in range(b.shape[1]):
+                b[i, j] -= factor * b[k, j]
+    for i in range(n - 1, -1, -1):
+        for j in range(b.shape[1]):
+            total = b[i, j]
+            for c in range(i + 1, n):
+                total -= M[i, c] * b[c, j]
+            b[i, j] = total / M[i, i]
+
+
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
     """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
     if y.shape[0] != 8 or p.shape[0] != 21 or out.shape[1] != 8:
         raise ValueError("rhs_into: y must hold 8 floats, p 21, out (1, 8)")
     rate_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), out.T)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -1392,7 +1423,7 @@ def jac_into(t, y, p, out):
     if y.shape[0] != 8 or p.shape[0] != 21 or out.shape[1] != 8 or out.shape[2] != 8:
         raise ValueError("jac_into: y must hold 8 floats, p 21, out (1, 8, 8)")
     rate_jacobian_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20]), out[0])
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 87787f1c7d8403b644b7d1368ebeb4658eaea20fc5413d1d78143814cfb68ac8
-// source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
+// symmech 0.1.0 generated module; inputs sha256 7b68c6e21ab36514e5e0db2a707bda2b23b733ee32e204c50768e6686ac4012e
+// source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 92a6f016985eaf1b2bb62e6f5ec6e1bd056ea8b72c97d16a8c23897b52948d95
-# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
+# symmech 0.1.0 generated module; inputs sha256 8693eb233d91b1e891741ffd7ac3bfa72dfbf745b59eddbf7b07ba297fce15f1
+# source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

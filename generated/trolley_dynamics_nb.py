@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 abc15c5327f86d35439d8e6a1f20ee996410cef058ae731061909c14a428306d
-# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
+# symmech 0.1.0 generated module; inputs sha256 572bea8d179659cb87dbdeb0e098e0389b05123287736ec0594c1a0fb4758596
+# source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 a62778de16bd949750e9c6241d773dc0073f48d014d9693f00efa85e88bcef15
-// source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
+// symmech 0.1.0 generated module; inputs sha256 ff1701f54f24d795f2ea89b160293c5ec26a9872dfc9c3b76e24b344b9940404
+// source key 08073b0c992ce5e65af7d73b7598567b3b24e15b40341ac6a56102d9f52a666e
 // body sha256 310cab78095440daad6005d2ccaa205d8ea2903517883b3de526dda65954bdf8
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 2b35c1daeb0caf07539e72552324aee49cfc70a7d26ebedf786d30be6ab3fcf9
-# source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
+# symmech 0.1.0 generated module; inputs sha256 149ae48a1e39acdb2b40f952ed5944b24fc1c47dc2406568d67eeebf3315cad2
+# source key 08073b0c992ce5e65af7d73b7598567b3b24e15b40341ac6a56102d9f52a666e
 # body sha256 427c03901516adf6936b7f3c54609bea645602640b4587b2598f4d722c158ac2
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 be2668cd527d1f238bcb5f3cac2cfa30d4c713c2df9f4a37cac21da57e1caba7
-# source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
-# body sha256 6be42a866d00b8aab9c030da582d2aa04ecb6c24b5b3b2ca26f19771150bd196
+# symmech 0.1.0 generated module; inputs sha256 0b5d17dbe52ac59d7c8f55b28c18d5a305166bcab21166b0bdd836d20a5c1c87
+# source key 08073b0c992ce5e65af7d73b7598567b3b24e15b40341ac6a56102d9f52a666e
+# body sha256 997d4620efe1932b71d5b8134bb82b8a18d29155712786c9eb2fc1d017cca544
 """Small elastic trolley by Lagrange's equations (test route).
 
 Compiled twin of `symmech.generated.trolley_elastic_lagrange` (the numpy module, the
@@ -3237,13 +3237,44 @@ def _layout(y, p):
     return y, p
 
 
+# numba's numpy.linalg.solve costs ~8 s of compilation per argument layout; this elimination, a fraction of that
+@numba.njit(cache=True, error_model="numpy")
+def _solve_into(M, b):
+    """b (n, k) overwritten by M^-1 b, M (n, n) by its LU factors (Gaussian elimination, partial pivoting);
+    numpy.linalg.LinAlgError on an exactly zero pivot, as LAPACK's gesv reports a singular M."""
+    n = M.shape[0]
+    for k in range(n):
+        pivot = k
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > abs(M[pivot, k]):
+                pivot = i
+        if M[pivot, k] == 0.0:
+            raise numpy.linalg.LinAlgError("Matrix is singular to machine precision.")
+        for j in range(n):
+            M[k, j], M[pivot, j] = M[pivot, j], M[k, j]
+        for j in range(b.shape[1]):
+            b[k, j], b[pivot, j] = b[pivot, j], b[k, j]
+        for i in range(k + 1, n):
+            factor = M[i, k] / M[k, k]
+            for j in range(k + 1, n):
+                M[i, j] -= factor * M[k, j]
+            for j in range(b.shape[1]):
+                b[i, j] -= factor * b[k, j]
+    for i in range(n - 1, -1, -1):
+        for j in range(b.shape[1]):
+            total = b[i, j]
+            for c in range(i + 1, n):
+                total -= M[i, c] * b[c, j]
+            b[i, j] = total / M[i, i]
+
+
 @numba.njit(cache=True, error_model="numpy")
 def rhs_into(t, y, p, out):
     """y' at time ``t`` [s] from float64 arrays ``y`` (n,), ``p`` (m,), written into out[0] (out: float64 (1, n)); allocates M to solve with it."""
     if y.shape[0] != 14 or p.shape[0] != 42 or out.shape[1] != 14:
         raise ValueError("rhs_into: y must hold 14 floats, p 42, out (1, 14)")
     rate_into(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41], out)
-    out[0] = numpy.linalg.solve(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41]), out[0])
+    _solve_into(rate_mass_scalar(y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13], p[14], p[15], p[16], p[17], p[18], p[19], p[20], p[21], p[22], p[23], p[24], p[25], p[26], p[27], p[28], p[29], p[30], p[31], p[32], p[33], p[34], p[35], p[36], p[37], p[38], p[39], p[40], p[41]), out.T)
 
 
 @numba.njit(cache=True, error_model="numpy")

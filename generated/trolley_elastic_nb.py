@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 22a47187587591bb1fad9b3fbd7f4a1f0d3c39f4d10b6766039f5d36b0ed5584
-# source key 7800049f19adbf48f324498e18aefe02afa59deade7eba220a3e9800580381d2
+# symmech 0.1.0 generated module; inputs sha256 b295695f7333e866520d1f2a912d88fab179d5667c8e73a2d552c0298ec6578d
+# source key 08073b0c992ce5e65af7d73b7598567b3b24e15b40341ac6a56102d9f52a666e
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 e1bea6ff0154cc32bcf4fb0979834e1b0de2d2ad5ce5a1fbab9f9eb6031df6f2
-// source key d7b8e4e7c76c80862d82e58d5e194644d699056d670a85fb1a15fd2b66fa2589
+// symmech 0.1.0 generated module; inputs sha256 18153168417f3f1244a4198101988b7832ab1f184f28d051217de413c71473af
+// source key 77722dfc9e36b0652cab245208a77fa578dc688b4a1a7d386231a04b54fd07b5
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

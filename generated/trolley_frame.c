@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 fdb91e4a9a28d87b65e10a1278255eab2765ee4e67f63de3d590dc9e11304595
-// source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
+// symmech 0.1.0 generated module; inputs sha256 de8012708c00917a287e7caf4dd1d969285b1d14edf32215f253bdd7c5ccdc06
+// source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

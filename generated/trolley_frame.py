@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ad5b35542fb315346b6bf8b03ec8c349febb9533bcc51e45a88998328b672fb5
-# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
+# symmech 0.1.0 generated module; inputs sha256 eba7952b9877ca8db10173ef4c3ba2de4872ea65ae60dceca736dbeac6377545
+# source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

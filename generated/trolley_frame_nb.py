@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 8da110da6110fe13e0816c1857d38d73239488198c54277a584c9552ba1d098d
-# source key caedb13e8053ac36b04514c83150bd0077ca4c9249bf6e17f21672774f0e498d
+# symmech 0.1.0 generated module; inputs sha256 4cc8617557536019dc8149e89937e8394c4d63396ccd53ce3000a6f8c8d43c44
+# source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 7ce51eff7cd47013c2c515c298237f51ecee8035808ffdc2199cb9e860fe2b46
-// source key 462f1efa45a9d93f8d765bd0deeba81f1361f97cb8e1b65f532c00ed9cfa868f
+// symmech 0.1.0 generated module; inputs sha256 c11ccaf5e9f031d5b6db7ea520d8f0e9cf5abca59e90571ea9a76d9264f10098
+// source key 4a0ac9a317ec397846054e4a20cf596b61940f5ffafc6e12fe3b6a948b8f26b0
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

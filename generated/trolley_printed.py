@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 810e0bc07c27ac2066a8cb7a895f49c964fd181c6d21d5872d7c3a80c7f3dc03
-# source key 462f1efa45a9d93f8d765bd0deeba81f1361f97cb8e1b65f532c00ed9cfa868f
+# symmech 0.1.0 generated module; inputs sha256 5319068dcb468410e4cd159a349e2bfeb432ba8d99fd31c7615cc42dc733733f
+# source key 4a0ac9a317ec397846054e4a20cf596b61940f5ffafc6e12fe3b6a948b8f26b0
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 7fff7247b270cce851284ab66d2af539cf536c45e57bd54c73b4cae026c5bc74
-# source key 462f1efa45a9d93f8d765bd0deeba81f1361f97cb8e1b65f532c00ed9cfa868f
+# symmech 0.1.0 generated module; inputs sha256 90e6d883136c45ab3f5a428120c2e97e82fe955c473a849d16432e14a743af05
+# source key 4a0ac9a317ec397846054e4a20cf596b61940f5ffafc6e12fe3b6a948b8f26b0
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 
