@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e36e7e11e3ba2ba4563ce9892357de085f65e2aa56cc907f4ab8d09c73ddcf93
-// source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+// source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7b60983b7685d65b7c7dbbb3fc943fe406069fbb357e34a05a6f7417fca4e2e6
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 68a6c3e60b6117c7228abff3d0c49d8625a322521e68027ceb3244b3d0097b37
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 0a8afa197b15c932a60e24a227463d5552ee48df73002f07f0b007b8e44b68bb
-// source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+// source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

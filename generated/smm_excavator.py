@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7585d1a5d888b129d22aa40035725a0c8cdff21d3da5da6660e2780f7ba05ec0
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

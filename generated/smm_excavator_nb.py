@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a6a94365ab241749dc9394602d00a970ff253ff034b4cce152d6bc38277c6671
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 4ba602af3617cd8a0e334d9dafc4fab4e9b308258aab119058d76bfe87195092
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2d4aebcc7a8c03e53a8933d491f6bd1bb652421c77fa7fa88f7023394f507ff5
-// source key ea220c98bb5d2f6dc4de0061753968b840f6bd64d0dd2ad5a4ff39e615d90497
+// source key 4bfa8221961858ee93cf0532b86017a7c339c593aaa29cdb9c288eddf5ec5daf
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

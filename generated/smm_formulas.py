@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0f9b4f87e32083ed8b1ea0d3a749712c560d1c5136bc67ed979cd8c2b47abd75
-# source key ea220c98bb5d2f6dc4de0061753968b840f6bd64d0dd2ad5a4ff39e615d90497
+# source key 4bfa8221961858ee93cf0532b86017a7c339c593aaa29cdb9c288eddf5ec5daf
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

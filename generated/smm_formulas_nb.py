@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 db1e9c66edfffeedcaa54617a6dea3ea6cfe05f4725501b51e7257dee5fe5246
-# source key ea220c98bb5d2f6dc4de0061753968b840f6bd64d0dd2ad5a4ff39e615d90497
+# source key 4bfa8221961858ee93cf0532b86017a7c339c593aaa29cdb9c288eddf5ec5daf
 # body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 399a3323d5d67c7c9a7afc01f4477cff78d7be870a4873594440a4c6db006602
-// source key 18c294680f1c19372832b20acf1927678a3c2e054548f67f561dc50cad1f93d4
+// source key 582e2fbc36a11344af98fa7d6293cf65514ba0a09a0721728540dbe7c8f58c44
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 2e4ce565af0a4356e9cbedeb754e33e986bd8dd7727aa5c3b72fe3482432c370
-# source key 18c294680f1c19372832b20acf1927678a3c2e054548f67f561dc50cad1f93d4
+# source key 582e2fbc36a11344af98fa7d6293cf65514ba0a09a0721728540dbe7c8f58c44
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6592a78c962befaece6895e4e3215c179b1e462e95213d361c80f911f859d1b8
-# source key 18c294680f1c19372832b20acf1927678a3c2e054548f67f561dc50cad1f93d4
+# source key 582e2fbc36a11344af98fa7d6293cf65514ba0a09a0721728540dbe7c8f58c44
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5fc532a5bacd6187b72aab1dffd79fb4d241f2fc584c0d4e01cba50f9c72be4a
-// source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+// source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

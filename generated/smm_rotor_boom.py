@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 d1dc018e93cc205b520a71de147b181785d3b2de315725e18c2f7de3c06c007d
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

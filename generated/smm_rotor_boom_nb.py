@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b427863f2560aea4dad0bd51b7bf253d6f701741ce94d1a204ad591223192be6
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 1f9cc5b5973d6d3ebd1cfbb903722f669024bcd2065ef59e90a04af67ea8ad6b
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

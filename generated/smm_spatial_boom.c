@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2953164934d5d1d14fe72086073ab0c40176a2dc376a62c665590e77b1baf841
-// source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+// source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 04596443a6ace72f5dd7c3b16b545c9e11e73c6dcf171fe4e2729e79915584e6
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

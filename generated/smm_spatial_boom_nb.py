@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 e4699c0fec81e11108f39db63d29819598eff6bb9df9d1ec3b12ec1f5a63be9d
-# source key fe7914b77417cb58225dc01c3baac06840b302f9bba1f712f43c391970e63157
+# source key 5c3d984aad97ebdcc297438e6989c82f1643caa265675521be5e6e96b63fe591
 # body sha256 ba8d779355ab1ad864f0154f634be1ce0b73f29b15e5eb3092ef4911956b493b
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 
