@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 0943146e4c3b6b1065464f199727a7f759b7bd391148c5f7e193e8b45b7cefbc
+# symmech 0.1.0 generated module; inputs sha256 f4bf9eb71bf389e57981c22047167abccd0fc5f56551bc8076302f543059c158
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 0943146e4c3b6b1065464f199727a7f759b7bd391148c5f7e193e8b45b7cefbc
+# body sha256 f4bf9eb71bf389e57981c22047167abccd0fc5f56551bc8076302f543059c158
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
@@ -22,6 +22,7 @@ MODULES = {
     'grain_motion_printed': 'symmech.grain.printed_motion',
     'grain_sliding': 'symmech.grain.derive_sliding',
     'smm_double_pendulum': 'symmech.smm.derive',
+    'smm_errata': 'symmech.smm.derive_errata',
     'smm_excavator': 'symmech.smm.derive',
     'smm_formulas': 'symmech.smm.derive_formulas',
     'smm_printed': 'symmech.smm.printed',
@@ -42,6 +43,7 @@ INPUTS = {
     'symmech.grain.printed': (),
     'symmech.grain.printed_motion': (),
     'symmech.smm.derive': ('scenes', 'scenes/smm_double_pendulum.toml', 'scenes/smm_excavator.toml', 'scenes/smm_rotor_boom.toml', 'scenes/smm_spatial_boom.toml'),
+    'symmech.smm.derive_errata': ('scenes/smm_excavator.toml', 'scenes/smm_rotor_boom.toml', 'scenes/smm_spatial_boom.toml'),
     'symmech.smm.derive_formulas': (),
     'symmech.smm.printed': (),
     'symmech.trolley.derive': (),
@@ -117,6 +119,20 @@ MATRICES = {
     'smm_double_pendulum.rate': ("F of M y' = F: rates of the free motion of 'double_pendulum' about its configuration", ''),
     'smm_double_pendulum.rate_jacobian': ('dF/dy, rows F, columns y', ''),
     'smm_double_pendulum.rate_mass': ("M of M y' = F", ''),
+    'smm_errata.excavator_m_a': ('excavator: diagonal of (m): the mass or moment of inertia of each column of (L_a)', '(3)'),
+    'smm_errata.excavator_graph_a': ('excavator: inertia matrix (a) by the graph form: (L_a) from structural matrices', '(11), (3)'),
+    'smm_errata.excavator_lagrange_a': ("excavator: inertia matrix d2T/dq'dq' by Lagrange's route (positions by rotation matrices)", '(1), (3)'),
+    'smm_errata.rotor_boom_m_a': ('rotor_boom: diagonal of (m): the mass or moment of inertia of each column of (L_a)', '(3)'),
+    'smm_errata.rotor_boom_c_d': ('rotor_boom: diagonal of (c) of the springs: the stiffness of each column of (L_c)', '(9)'),
+    'smm_errata.rotor_boom_L_b': ('rotor_boom: damping transformation matrix (L_b): rows coordinates, columns dampers', '(10)'),
+    'smm_errata.rotor_boom_b_d': ('rotor_boom: viscosity of each column of (L_b)', '(10)'),
+    'smm_errata.rotor_boom_lagrange_a': ("rotor_boom: inertia matrix d2T/dq'dq' by Lagrange's route (positions by rotation matrices)", '(1), (3)'),
+    'smm_errata.rotor_boom_lagrange_b': ("rotor_boom: damping matrix d2Phi/dq'dq' of Rayleigh's function", '(10)'),
+    'smm_errata.rotor_boom_lagrange_c': ("rotor_boom: stiffness matrix d2Pi/dq dq at equilibrium by Lagrange's route", '(7), (9)'),
+    'smm_errata.spatial_boom_m_a': ('spatial_boom: diagonal of (m): the mass or moment of inertia of each column of (L_a)', '(3)'),
+    'smm_errata.spatial_boom_c_d': ('spatial_boom: diagonal of (c) of the springs: the stiffness of each column of (L_c)', '(9)'),
+    'smm_errata.spatial_boom_lagrange_a': ("spatial_boom: inertia matrix d2T/dq'dq' by Lagrange's route (positions by rotation matrices)", '(1), (3)'),
+    'smm_errata.spatial_boom_lagrange_c': ("spatial_boom: stiffness matrix d2Pi/dq dq at equilibrium by Lagrange's route", '(7), (9)'),
     'smm_excavator.a': ("excavator: inertia matrix (a), a q'' + b q' + c q = Q", '(1), (3)'),
     'smm_excavator.b': ('excavator: damping matrix (b)', '(10)'),
     'smm_excavator.c': ('excavator: stiffness matrix (c) with the effects the scene asks for', '(7), (9)'),

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 8d407d5706202680777e7e1a420872256ba5d24776a78e41bc02e83be2067c92
-// source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+// source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

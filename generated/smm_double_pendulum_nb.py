@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c048d1f686e3854fe3f058e4312f5171a30ac0e6f4ed7d822397b945f6c0003c
-# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 # body sha256 dc40022d9a1ca361dcdc141f2806f7d27cf3e1f8e23655ee2f4fc6c18bd59e23
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c7530c695892542685ea9c9fd6a66ae9a4ab4b7571c72dbcd1fa61e5afa8ccbb
-# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 # body sha256 cd85e3f7a47678bf2e63121f111536af09407b57d11dde17c41315bf194fa672
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 0c6e3eb3c59c8dab1dc0ddc64685541108d7a726e886e4d6b84330077efca801
-// source key 19b8c5869e0cebdad812fbbe1d30916e1b6fa3547afbc7e018d44af2c3402fcc
+// source key c3045f0b11bed659493201600d9ecbb0353833b0ebc90b9dcc849e0bad2e2a32
 // body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 21ed0383430199225e6217e8635095333bc89717e206d8fe6c7dcbd3f71d2f13
-# source key 19b8c5869e0cebdad812fbbe1d30916e1b6fa3547afbc7e018d44af2c3402fcc
+# source key c3045f0b11bed659493201600d9ecbb0353833b0ebc90b9dcc849e0bad2e2a32
 # body sha256 50034924a4c318bc1f4f99e5338443fbc3a1182d89702df524fd7fe4e0315665
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5806931f309dfb75fe377153f7ef6fdc4c11894b7035824b4b29d5fad19af4de
-# source key 19b8c5869e0cebdad812fbbe1d30916e1b6fa3547afbc7e018d44af2c3402fcc
+# source key c3045f0b11bed659493201600d9ecbb0353833b0ebc90b9dcc849e0bad2e2a32
 # body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 41f180347c6e079069b1d190fda51397dfd254c3265c3d635e163c31171826c9
-# source key edc292ff9f8911efae7174bd2b84c169d01e96d42c4f6b94e969bebd9adcb583
+# source key 4d474a6cb79305785d0d6ed7796252ccee6cadc9f540f99c6a3240a243930226
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

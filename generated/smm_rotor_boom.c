@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 23541b88acad7b02a27cf9be704c62e4b2aea3e8b176f6a8791a30e8ad7bc27a
-// source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+// source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6e94ae06b48559234d8a7fedc8ef5195e1f9a183b94e7d9908c71d330122167b
-# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 78f6deb374fff798993acb031bcb30be6bb5c931ac3fca93b982bd1c1de21894
-# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 # body sha256 317c122de6069bc20574ea6526d823a7f4596c3beacd6ee1cc7cacdedd9db823
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

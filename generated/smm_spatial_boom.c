@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 bf3178658ca7867b4d6546520ce9022c28eddda74f3ce69f500a9fe29c696aa3
-// source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+// source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

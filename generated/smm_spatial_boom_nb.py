@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1f17f661f53b388a4870cc1682acf387e387b3cd6c4fd78a4dfc312a90df3bd6
-# source key 2f5df5826f481566ae6bad126ffd70d2825bad56ce1787fd67170306a99b2a4a
+# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
 # body sha256 f69f23c8fe61a74f11b2b74bf668b7221688290fd53b2d59efa10eda3fbf2bc6
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -150,9 +150,8 @@ def errata_records(package: str | None) -> list[dict]:
 
     if package is None:
         return []
-    modules = [m for m in errata.modules() if m.__name__.startswith(f"symmech.{package}.")]
     return [{**record, "paper": f"seed {record['seed'].split('_', 1)[0]}"}
-            for record in (errata.evaluate(c) for m in modules for c in m.checks())]
+            for record in (errata.evaluate(c) for m in errata.modules(package) for c in m.checks())]
 
 
 def paper_title(package: str | None) -> str:

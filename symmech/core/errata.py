@@ -74,11 +74,13 @@ class NotCompared:
     reason: str
 
 
-def modules() -> list:
-    """The errata modules of every paper package (``ROLE = "errata"``), imported, in name order."""
+def modules(package: str | None = None) -> list:
+    """The errata modules (``ROLE = "errata"``) of every paper package, or of ``package`` only (``"smm"``: the
+    others' derivations are not imported), imported, in name order."""
     from symmech.core import discovery
 
-    return [importlib.import_module(name) for name in discovery.modules("errata")]
+    return [importlib.import_module(name) for name in discovery.modules("errata")
+            if package is None or name.startswith(f"symmech.{package}.")]
 
 
 def all_checks() -> list[Check]:

@@ -3,6 +3,25 @@ from pathlib import Path
 
 SEED = "003_6166172b9b245651"  # the seed file's stem: how every record names this paper
 
+# legible entries of the printed 5.2 (L_c): (row, column) with rows s1 s2 phi3 phi4 phi5, columns c1..c4; here
+# (no sympy) for both the printed twin (symmech.smm.printed) and the errata that compare it
+EX52_LC_ENTRIES = ((0, 0), (0, 1), (0, 2), (0, 3), (1, 0), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3),
+                   (3, 0), (3, 1), (3, 2), (3, 3), (4, 0), (4, 1), (4, 2), (4, 3))
+
+
+def load_mechanism(path: Path):
+    """The :class:`~symmech.smm.model.Mechanism` of a scene file (explicit vector model or a generated
+    ``[chain]``), its parameters evaluated in floats; no sympy (the errata sample around its values)."""
+    from symmech.core.scene import SymmechError, read_toml
+    from symmech.core.schema import validate
+    from symmech.smm.build import model
+    from symmech.smm.schema import SCHEMA
+
+    data = read_toml(path)
+    if data.get("kind") != "mechanism":
+        raise SymmechError(f"{path}: not a mechanism scene")
+    return model(validate(SCHEMA, data))
+
 
 def latex_matrices(rest: str) -> dict:
     """Matrices for ``symmech latex smm:<scene>.<name>``.
@@ -12,7 +31,7 @@ def latex_matrices(rest: str) -> dict:
     form of :func:`symmech.smm.derive.readable` (parameters with positive values taken as positive).
     """
     from symmech.core.scene import SymmechError
-    from symmech.smm.derive import SCENES, load_mechanism, named_matrices, readable
+    from symmech.smm.derive import SCENES, named_matrices, readable
 
     scene, _, key = rest.rpartition(".")
     if not scene:

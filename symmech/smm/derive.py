@@ -19,8 +19,8 @@ import sympy
 
 from symmech.core import expressions
 from symmech.core.derivation import Arg, Dynamics, ModuleSpec, NamedMatrix
-from symmech.core.scene import SymmechError, read_toml, scenes_folder
-from symmech.smm import forms
+from symmech.core.scene import scenes_folder
+from symmech.smm import forms, load_mechanism
 from symmech.smm.model import Effects, Mechanism, interpret
 
 ROLE = "derivation"  # found by symmech.core.discovery
@@ -279,18 +279,6 @@ def module_spec(m: Mechanism) -> ModuleSpec:
 def bundled_scenes() -> list[Path]:
     """The bundled mechanism scenes whose modules live in generated/."""
     return sorted(SCENES.glob("smm_*.toml"))
-
-
-def load_mechanism(path: Path) -> Mechanism:
-    """The mechanism of a scene file (explicit vector model or a generated ``[chain]``)."""
-    from symmech.core.schema import validate
-    from symmech.smm.build import model
-    from symmech.smm.schema import SCHEMA
-
-    data = read_toml(path)
-    if data.get("kind") != "mechanism":
-        raise SymmechError(f"{path}: not a mechanism scene")
-    return model(validate(SCHEMA, data))
 
 
 def module_specs() -> list[ModuleSpec]:

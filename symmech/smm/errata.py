@@ -13,8 +13,7 @@ import numpy as np
 
 from symmech.core.errata import Check, NotCompared
 from symmech.core.scene import scenes_folder
-from symmech.smm import SEED
-from symmech.smm.derive import load_mechanism
+from symmech.smm import EX52_LC_ENTRIES, SEED, load_mechanism
 
 ROLE = "errata"  # found by symmech.core.discovery
 
@@ -40,8 +39,6 @@ def _call(module: str, name: str, x: dict, pick=None):
 
 
 def checks() -> list[Check]:
-    from symmech.smm.printed import EX52_LC_ENTRIES
-
     rows, cols = zip(*EX52_LC_ENTRIES)
     note = "geometry reconstructed from the text and the printed matrices (docs/smm.md)"
     return [

@@ -5,21 +5,28 @@ Vector formulas: printed twins in ``smm_printed`` vs the definitions differentia
 ``smm_formulas`` at seeded random unit axes and vectors. Equations (1)-(11): the printed
 matrix formula evaluated with the SMM's factors (L_a, m, L_c, c, L_b, mu) vs Lagrange's
 equations linearised at equilibrium (:mod:`symmech.smm.lagrange`, no conjugate vectors),
-with every parameter drawn in [0.5, 1.5] times its scene value.
+with every parameter drawn in [0.5, 1.5] times its scene value. Both sides are generated
+(the mechanism's ``smm_<name>`` and ``smm_errata`` of :mod:`symmech.smm.derive_errata`):
+no sympy runs here, and the 200 samples are one batch call per quantity.
 """
 from __future__ import annotations
 
 import functools
+import importlib
 import inspect
 
 import numpy as np
 
 from symmech.core.errata import Check, NotCompared
+from symmech.core.scene import scenes_folder
+from symmech.generated import smm_errata
 from symmech.generated import smm_formulas as derived
 from symmech.generated import smm_printed as printed
-from symmech.smm import SEED
+from symmech.smm import SEED, load_mechanism
 
 ROLE = "errata"  # found by symmech.core.discovery
+
+SCENES = scenes_folder()
 
 
 def _unit(rng, n, planar=False):
@@ -82,47 +89,32 @@ def _vector_checks() -> list[Check]:
     return [Check(SEED, eq, text, sample, *_pair(name, dname), note) for eq, text, sample, name, dname, note in rows]
 
 
-@functools.cache
-def _mechanism(scene: str):
-    """Lambdified SMM factors and Lagrange matrices of a bundled mechanism, and its nominal parameters."""
-    import sympy
-
-    from symmech.smm import lagrange
-    from symmech.smm.derive import SCENES, load_mechanism, matrices, parameter_args
-
-    m = load_mechanism(SCENES / f"smm_{scene}.toml")
-    smm, lag = matrices(m), lagrange.matrices(m)
-    graph = matrices(m, form="graph")
-    args = [a.symbol for a in parameter_args(m)]
-    parts = {k: smm[k] for k in ("L_a", "m_a", "L_c", "c_d", "L_b", "b_d", "c")}
-    parts.update({f"lagrange_{k}": lag[k] for k in ("a", "b", "c")}, graph_a=graph["a"])
-    funcs = {k: sympy.lambdify(args, v, "numpy", cse=True) for k, v in parts.items()}
-    return funcs, [a.name for a in parameter_args(m)], m.values()
+def _function(scene: str, key: str):
+    """The generated function of quantity ``key`` of a bundled mechanism: its own module's (a, c, L_a,
+    L_c) or, for what only the errata need, ``smm_errata``'s ``<scene>_<key>``."""
+    own = importlib.import_module(f"symmech.generated.smm_{scene}")
+    return getattr(own, key, None) or getattr(smm_errata, f"{scene}_{key}")
 
 
 def _sampler(scene):
     def sample(rng, n):
-        _, names, nominal = _mechanism(scene)
-        return {k: nominal[k] * rng.uniform(0.5, 1.5, n) for k in names}
+        nominal = load_mechanism(SCENES / f"smm_{scene}.toml").values()
+        return {k: v * rng.uniform(0.5, 1.5, n) for k, v in nominal.items()}
     return sample
 
 
 def _evaluate(scene, key, x):
-    funcs, names, _ = _mechanism(scene)
-    n = len(next(iter(x.values())))
-    return np.array([np.asarray(funcs[key](*(x[k][i] for k in names)), dtype=float) for i in range(n)])
+    """``key`` at the n sampled parameter sets ``x``: shape (n,) + the quantity's shape."""
+    return np.asarray(_call(_function(scene, key), x), dtype=float)
 
 
 def _triple(L, d, literal_diagonal=False):
-    """L diag(d) L^T; with ``literal_diagonal`` the printed index pair (kappa, kappa) of (1), (10):
-    entry (kappa, lambda) = sum_j d_j L_kappa,j^2 for every lambda."""
-    if L.shape[-1] == 0:
-        return np.zeros(L.shape[:-1] + (L.shape[-2],))
-    dd = np.diagonal(d, axis1=-2, axis2=-1)
+    """L diag(d) L^T for L (n, k, j) and the diagonals d (n, j); with ``literal_diagonal`` the printed index
+    pair (kappa, kappa) of (1), (10): entry (kappa, lambda) = sum_j d_j L_kappa,j^2 for every lambda."""
     if literal_diagonal:
-        row = np.einsum("nkj,nj,nkj->nk", L, dd, L)
+        row = np.einsum("nkj,nj,nkj->nk", L, d, L)
         return np.repeat(row[:, :, None], L.shape[1], axis=2)
-    return np.einsum("nkj,nj,nlj->nkl", L, dd, L)
+    return np.einsum("nkj,nj,nlj->nkl", L, d, L)
 
 
 def _formula(scene, what):

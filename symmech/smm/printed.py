@@ -10,6 +10,7 @@ from __future__ import annotations
 import sympy
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix, args_of
+from symmech.smm import EX52_LC_ENTRIES
 from symmech.smm.derive import SOURCE
 
 ROLE = "printed"  # found by symmech.core.discovery
@@ -72,11 +73,6 @@ def ex52_La() -> NamedMatrix:
     ])
     return NamedMatrix("ex52_La", L, _args(xM, yM, l4, alpha, l5, beta),
                        "example 5.2: (L_a) as printed (conjugate vectors written out)", "m or 1", "5.2 (L_a)")
-
-
-# legible entries of the printed 5.2 (L_c): (row, column) with rows s1 s2 phi3 phi4 phi5, columns c1..c4
-EX52_LC_ENTRIES = ((0, 0), (0, 1), (0, 2), (0, 3), (1, 0), (1, 1), (1, 2), (1, 3), (2, 2), (2, 3),
-                   (3, 0), (3, 1), (3, 2), (3, 3), (4, 0), (4, 1), (4, 2), (4, 3))
 
 
 def ex52_Lc() -> NamedMatrix:
