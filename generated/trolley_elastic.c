@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ab32475cbb80b45d0171d830b0428099c347a9163dcb879daafaa114db9ada52
-// source key 0a7d791b95cc50661ebcd9c811bff2bf12e53e749250ce7176b40c07c044b74e
+// source key 5ca5036580e2ef86bfef4ccb90304fb77d7262059987bd2cdddaf7de6b8970f4
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 777db75a5467337f063026484ec193ca6b56919316bb7d7b37e24f94ef9fcda6
-# source key 0a7d791b95cc50661ebcd9c811bff2bf12e53e749250ce7176b40c07c044b74e
+# source key 5ca5036580e2ef86bfef4ccb90304fb77d7262059987bd2cdddaf7de6b8970f4
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5316bb40abed04eb65e4f66b48db8b998e9cb64e35c0423a1b566f7a1caae4b5
-// source key 0a7d791b95cc50661ebcd9c811bff2bf12e53e749250ce7176b40c07c044b74e
+// source key 5ca5036580e2ef86bfef4ccb90304fb77d7262059987bd2cdddaf7de6b8970f4
 // body sha256 6d51d4292543679442ae34d3d8f0b5892d984ada68bfb30bb007ba943025b161
 /* Small elastic trolley by Lagrange's equations (test route).
 

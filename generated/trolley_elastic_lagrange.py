@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 99ae122726a64f1e173ff2cd229d3626e9d64d33788b124b1f5d8f0911062d1c
-# source key 0a7d791b95cc50661ebcd9c811bff2bf12e53e749250ce7176b40c07c044b74e
+# source key 5ca5036580e2ef86bfef4ccb90304fb77d7262059987bd2cdddaf7de6b8970f4
 # body sha256 f8f7f1ad15caf6efe47b62c57d3b15e7063c31b04ceaa9199aa2fe2e80cb6877
 """Small elastic trolley by Lagrange's equations (test route).
 

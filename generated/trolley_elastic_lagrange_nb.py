@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0346736c7386590b58dacc4514a38dd5a7de0b2c15abec864bf2429a34472a4e
-# source key 0a7d791b95cc50661ebcd9c811bff2bf12e53e749250ce7176b40c07c044b74e
+# source key 5ca5036580e2ef86bfef4ccb90304fb77d7262059987bd2cdddaf7de6b8970f4
 # body sha256 d4b7985c0a13424aebf6dc793bb704c5f1d697cc92472568ffd05d94590f09a5
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22a47187587591bb1fad9b3fbd7f4a1f0d3c39f4d10b6766039f5d36b0ed5584
-# source key 0a7d791b95cc50661ebcd9c811bff2bf12e53e749250ce7176b40c07c044b74e
+# source key 5ca5036580e2ef86bfef4ccb90304fb77d7262059987bd2cdddaf7de6b8970f4
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 e1bea6ff0154cc32bcf4fb0979834e1b0de2d2ad5ce5a1fbab9f9eb6031df6f2
-// source key c0c28dc64086986da113f125ff40772d8b7fdd75d871b1ebb9ea96c9f84ed518
+// source key eb930f5a0102c3ae4b1408cf07ab876af80c61baa7fb62ba8e17d045623d9d72
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fdb50a0adb1d77561fe3e09bd1053cbb17a92d87d5b905e166b27c07d5df304a
-# source key c0c28dc64086986da113f125ff40772d8b7fdd75d871b1ebb9ea96c9f84ed518
+# source key eb930f5a0102c3ae4b1408cf07ab876af80c61baa7fb62ba8e17d045623d9d72
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

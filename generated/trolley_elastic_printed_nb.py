@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f70820e6bf3ca783923dc847b50afc7a7ce6440f1535642537c6d33109d641ed
-# source key c0c28dc64086986da113f125ff40772d8b7fdd75d871b1ebb9ea96c9f84ed518
+# source key eb930f5a0102c3ae4b1408cf07ab876af80c61baa7fb62ba8e17d045623d9d72
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -53,6 +53,7 @@ def rigid_displacement(point=X) -> sp.Matrix:
 
 @functools.cache
 def _fields_at_x() -> tuple[sp.Matrix, sp.Matrix]:
+    """φ0 (3 x 5) and ψ0 (3 x 6) at the symbolic point X [m], once per process."""
     u = rigid_displacement()
     zero = {q: 0 for q in Q0}
     phi = sp.Matrix.hstack(*[u.diff(q).subs(zero) for q in Q0])
