@@ -1,6 +1,6 @@
-// symmech 0.1.0 generated module; inputs sha256 0c6e3eb3c59c8dab1dc0ddc64685541108d7a726e886e4d6b84330077efca801
-// source key c3045f0b11bed659493201600d9ecbb0353833b0ebc90b9dcc849e0bad2e2a32
-// body sha256 5aa521884798328759edab2b775bab711a4883b1ee30f927c079ce32360df0e9
+// symmech 0.1.0 generated module; inputs sha256 71f2281a9327bef69bc2d2ef9717311013c2d3824d556de3a565b0259e65ae17
+// source key faa9a718c7f7df2b71c645de793aa6b3f955341c4cacfa7fe7860ff72b93b6b6
+// body sha256 1e7ef2233d7ee5664488564dcfa2c034ac5c88873792a114ffe0e0f52c86b00e
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
    Source: Pominov, Structural models in the dynamics of mining machines, DYNAMACH'89 (seed 003).
@@ -60,22 +60,19 @@ void smm_formulas_length_d2_turn(const double *sm_arg, double *out)
     const double u_y = sm_arg[7];
     const double u_z = sm_arg[8];
     const double ell = sm_arg[9];
-    const double x0 = pow(ell, 2);
-    const double x1 = pow(u_x, 2)*x0 + pow(u_y, 2)*x0 + pow(u_z, 2)*x0;
-    const double x2 = e_x*p_y;
-    const double x3 = e_y*p_x;
+    const double x0 = pow(u_x, 2) + pow(u_y, 2) + pow(u_z, 2);
+    const double x1 = fabs(ell);
+    const double x2 = e_y*p_z;
+    const double x3 = e_z*p_y;
     const double x4 = x2 - x3;
-    const double x5 = e_x*p_z;
-    const double x6 = e_z*p_x - x5;
-    const double x7 = e_y*p_z;
-    const double x8 = e_z*p_y;
-    const double x9 = x7 - x8;
-    const double x10 = ell*u_x;
-    const double x11 = ell*u_y;
-    const double x12 = ell*u_z;
-    const double x13 = x10*x9 + x11*x6 + x12*x4;
+    const double x5 = e_x*p_y;
+    const double x6 = e_y*p_x;
+    const double x7 = x5 - x6;
+    const double x8 = e_x*p_z;
+    const double x9 = e_z*p_x;
+    const double x10 = x8 - x9;
     for (int sm_i = 0; sm_i < 1; sm_i++) out[sm_i] = 0.0;
-    out[0] = (x10*(e_y*x2 + e_z*x5 + p_x*(pow(e_x, 2) - 1)) + x11*(e_x*x3 + e_z*x7 + p_y*(pow(e_y, 2) - 1)) + x12*(e_x*e_z*p_x + e_y*x8 + p_z*(pow(e_z, 2) - 1)) + pow(x4, 2) + pow(x6, 2) + pow(x9, 2) - pow(x13, 2)/x1)/sqrt(x1);
+    out[0] = ((ell*u_x*(e_y*x5 + e_z*x8 + p_x*(pow(e_x, 2) - 1)) + ell*u_y*(e_x*x6 + e_z*x2 + p_y*(pow(e_y, 2) - 1)) + ell*u_z*(e_x*x9 + e_y*x3 + p_z*(pow(e_z, 2) - 1)) + pow(x10, 2) + pow(x4, 2) + pow(x7, 2))/x1 - x1*pow(u_x*x4 - u_y*x10 + u_z*x7, 2)/(pow(ell, 2)*x0))/sqrt(x0);
 }
 
 /* d2|anchor - R(e, q1) R(f, q2) p|/dq1 dq2 at 0, eqs. sec. 3: () [m].
@@ -96,26 +93,25 @@ void smm_formulas_length_d2_two_turns(const double *sm_arg, double *out)
     const double u_y = sm_arg[10];
     const double u_z = sm_arg[11];
     const double ell = sm_arg[12];
-    const double x0 = pow(ell, 2);
-    const double x1 = pow(u_x, 2)*x0 + pow(u_y, 2)*x0 + pow(u_z, 2)*x0;
-    const double x2 = -e_x*p_y + e_y*p_x;
-    const double x3 = f_x*p_y;
-    const double x4 = -f_y*p_x + x3;
-    const double x5 = e_x*p_z - e_z*p_x;
-    const double x6 = f_x*p_z;
-    const double x7 = f_z*p_x;
-    const double x8 = x6 - x7;
-    const double x9 = -e_y*p_z + e_z*p_y;
-    const double x10 = f_y*p_z;
-    const double x11 = -f_z*p_y + x10;
-    const double x12 = e_y*f_y;
-    const double x13 = e_z*f_z;
-    const double x14 = ell*u_x;
-    const double x15 = e_x*f_x;
-    const double x16 = ell*u_y;
-    const double x17 = ell*u_z;
+    const double x0 = pow(u_x, 2) + pow(u_y, 2) + pow(u_z, 2);
+    const double x1 = fabs(ell);
+    const double x2 = e_y*p_z - e_z*p_y;
+    const double x3 = e_x*p_y - e_y*p_x;
+    const double x4 = e_x*p_z - e_z*p_x;
+    const double x5 = f_y*p_z;
+    const double x6 = f_z*p_y;
+    const double x7 = x5 - x6;
+    const double x8 = f_x*p_y;
+    const double x9 = f_y*p_x;
+    const double x10 = x8 - x9;
+    const double x11 = f_x*p_z;
+    const double x12 = f_z*p_x;
+    const double x13 = x11 - x12;
+    const double x14 = e_y*f_y;
+    const double x15 = e_z*f_z;
+    const double x16 = e_x*f_x;
     for (int sm_i = 0; sm_i < 1; sm_i++) out[sm_i] = 0.0;
-    out[0] = (-x11*x9 + x14*(e_y*x3 + e_z*x6 + p_x*(-x12 - x13)) + x16*(e_x*f_y*p_x + e_z*x10 + p_y*(-x13 - x15)) + x17*(e_x*x7 + e_y*f_z*p_y + p_z*(-x12 - x15)) - x2*x4 + x5*x8 + (x11*x14 - x16*x8 + x17*x4)*(x14*x9 + x16*x5 + x17*x2)/x1)/sqrt(x1);
+    out[0] = ((ell*u_x*(e_y*x8 + e_z*x11 - p_x*(x14 + x15)) + ell*u_y*(e_x*x9 + e_z*x5 - p_y*(x15 + x16)) + ell*u_z*(e_x*x12 + e_y*x6 - p_z*(x14 + x16)) + x10*x3 + x13*x4 + x2*x7)/x1 - x1*(u_x*x2 - u_y*x4 + u_z*x3)*(u_x*x7 - u_y*x13 + u_z*x10)/(pow(ell, 2)*x0))/sqrt(x0);
 }
 
 /* d2|anchor - (p + s s)|/ds2 at 0, eqs. sec. 3: () [1/m].
@@ -130,10 +126,10 @@ void smm_formulas_length_d2_slide(const double *sm_arg, double *out)
     const double u_y = sm_arg[4];
     const double u_z = sm_arg[5];
     const double ell = sm_arg[6];
-    const double x0 = pow(ell, 2);
-    const double x1 = pow(u_x, 2)*x0 + pow(u_y, 2)*x0 + pow(u_z, 2)*x0;
+    const double x0 = pow(u_x, 2) + pow(u_y, 2) + pow(u_z, 2);
+    const double x1 = fabs(ell);
     for (int sm_i = 0; sm_i < 1; sm_i++) out[sm_i] = 0.0;
-    out[0] = (pow(s_x, 2) + pow(s_y, 2) + pow(s_z, 2) - pow(ell*s_x*u_x + ell*s_y*u_y + ell*s_z*u_z, 2)/x1)/sqrt(x1);
+    out[0] = ((pow(s_x, 2) + pow(s_y, 2) + pow(s_z, 2))/x1 - x1*pow(s_x*u_x + s_y*u_y + s_z*u_z, 2)/(pow(ell, 2)*x0))/sqrt(x0);
 }
 
 /* derivatives of R_k(phi)(p + s s) at 0, eqs. Table 1: (8) [m^2, m or 1].
@@ -167,19 +163,24 @@ void smm_formulas_table1_length(const double *sm_arg, double *out)
     const double u_x = sm_arg[4];
     const double u_y = sm_arg[5];
     const double ell = sm_arg[6];
-    const double x0 = ell*u_y;
-    const double x1 = ell*u_x;
-    const double x2 = p_x*x0 - p_y*x1;
-    const double x3 = pow(ell, 2);
-    const double x4 = pow(u_x, 2)*x3 + pow(u_y, 2)*x3;
-    const double x5 = pow(x4, -1.0/2.0);
-    const double x6 = s_x*x1 + s_y*x0;
-    const double x7 = 1.0/x4;
+    const double x0 = p_x*u_y;
+    const double x1 = p_y*u_x;
+    const double x2 = pow(ell, 2);
+    const double x3 = pow(u_x, 2);
+    const double x4 = pow(u_y, 2);
+    const double x5 = pow(x2*x3 + x2*x4, -1.0/2.0);
+    const double x6 = s_x*u_x;
+    const double x7 = s_y*u_y;
+    const double x8 = x3 + x4;
+    const double x9 = pow(x8, -1.0/2.0);
+    const double x10 = fabs(ell);
+    const double x11 = 1.0/x10;
+    const double x12 = x10/(x2*x8);
     for (int sm_i = 0; sm_i < 4; sm_i++) out[sm_i] = 0.0;
-    out[0] = x2*x5;
-    out[1] = x5*x6;
-    out[2] = x5*(pow(p_x, 2) - p_x*x1 + pow(p_y, 2) - p_y*x0 - pow(x2, 2)*x7);
-    out[3] = x5*(pow(s_x, 2) + pow(s_y, 2) - pow(x6, 2)*x7);
+    out[0] = x5*(ell*x0 - ell*x1);
+    out[1] = x5*(ell*x6 + ell*x7);
+    out[2] = -x9*(x11*(ell*p_x*u_x + ell*p_y*u_y - pow(p_x, 2) - pow(p_y, 2)) + x12*pow(x0 - x1, 2));
+    out[3] = x9*(x11*(pow(s_x, 2) + pow(s_y, 2)) - x12*pow(x6 + x7, 2));
 }
 
 /* d2 Pi/dphi2 of the pendulum on a spring preloaded to equilibrium, eqs. Fig. 8: () [N m].
@@ -198,16 +199,19 @@ void smm_formulas_fig8_c(const double *sm_arg, double *out)
     const double x1 = g*m;
     const double x2 = pow(ell, 2);
     const double x3 = sin(beta);
-    const double x4 = cos(beta);
-    const double x5 = 1.0/(x2*pow(x3, 2) + x2*pow(x4, 2));
-    const double x6 = ell*x4;
-    const double x7 = x0*x6;
-    const double x8 = cos(alpha);
-    const double x9 = ell*x3;
-    const double x10 = x8*x9;
-    const double x11 = -L*x10 - L*x7;
+    const double x4 = pow(x3, 2);
+    const double x5 = cos(beta);
+    const double x6 = pow(x5, 2);
+    const double x7 = x2*x4 + x2*x6;
+    const double x8 = x0*x5;
+    const double x9 = L*ell;
+    const double x10 = cos(alpha);
+    const double x11 = x10*x3;
+    const double x12 = -x11*x9 - x8*x9;
+    const double x13 = x4 + x6;
+    const double x14 = fabs(ell);
     for (int sm_i = 0; sm_i < 1; sm_i++) out[sm_i] = 0.0;
-    out[0] = -pow(L, 2)*x1*x8*(L*pow(x0, 2) - L*x5*pow(x10 + x7, 2) + L*pow(x8, 2) + x0*x9 - x6*x8)/x11 - L*x0*x1 + c1*pow(x11, 2)*x5;
+    out[0] = -pow(L, 2)*x1*x10*sqrt(x7)*(-L*x14*pow(x11 + x8, 2)/(x13*x2) + (L*pow(x0, 2) + L*pow(x10, 2) + ell*x0*x3 - ell*x10*x5)/x14)/(x12*sqrt(x13)) - L*x0*x1 + c1*pow(x12, 2)/x7;
 }
 
 /* d2 Pi/ds2 across a spring of tension c1 Delta, eqs. Fig. 9: () [N/m].

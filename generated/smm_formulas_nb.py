@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 5806931f309dfb75fe377153f7ef6fdc4c11894b7035824b4b29d5fad19af4de
-# source key c3045f0b11bed659493201600d9ecbb0353833b0ebc90b9dcc849e0bad2e2a32
-# body sha256 06de5c46ececaa49152c5c1a6fb2c5ada359fb435b60c57400ed1c324f7e1669
+# symmech 0.1.0 generated module; inputs sha256 9d1e726bcb8941842572ce7d6467ff1e321041a7c26e4d0260c5ee201a2661d4
+# source key faa9a718c7f7df2b71c645de793aa6b3f955341c4cacfa7fe7860ff72b93b6b6
+# body sha256 9d4b295720c395e7398d72de8d41d2c6aafc27aa5937fc54822ed9c1e5dc9b2a
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 
 Compiled twin of `symmech.generated.smm_formulas` (the numpy module, the
@@ -171,21 +171,18 @@ def spatial_conjugate(e_x, e_y, e_z, p_x, p_y, p_z):
 
 @numba.njit(cache=True, error_model="numpy")
 def _length_d2_turn_0(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
-    x0 = ell**2
-    x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
-    x2 = e_x*p_y
-    x3 = e_y*p_x
+    x0 = u_x**2 + u_y**2 + u_z**2
+    x1 = abs(ell)
+    x2 = e_y*p_z
+    x3 = e_z*p_y
     x4 = x2 - x3
-    x5 = e_x*p_z
-    x6 = e_z*p_x - x5
-    x7 = e_y*p_z
-    x8 = e_z*p_y
-    x9 = x7 - x8
-    x10 = ell*u_x
-    x11 = ell*u_y
-    x12 = ell*u_z
-    x13 = x10*x9 + x11*x6 + x12*x4
-    out[_k] = (x10*(e_y*x2 + e_z*x5 + p_x*(e_x**2 - 1)) + x11*(e_x*x3 + e_z*x7 + p_y*(e_y**2 - 1)) + x12*(e_x*e_z*p_x + e_y*x8 + p_z*(e_z**2 - 1)) + x4**2 + x6**2 + x9**2 - x13**2/x1)/math.sqrt(x1)
+    x5 = e_x*p_y
+    x6 = e_y*p_x
+    x7 = x5 - x6
+    x8 = e_x*p_z
+    x9 = e_z*p_x
+    x10 = x8 - x9
+    out[_k] = ((ell*u_x*(e_y*x5 + e_z*x8 + p_x*(e_x**2 - 1)) + ell*u_y*(e_x*x6 + e_z*x2 + p_y*(e_y**2 - 1)) + ell*u_z*(e_x*x9 + e_y*x3 + p_z*(e_z**2 - 1)) + x10**2 + x4**2 + x7**2)/x1 - x1*(u_x*x4 - u_y*x10 + u_z*x7)**2/(ell**2*x0))/math.sqrt(x0)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -253,25 +250,24 @@ def length_d2_turn(e_x, e_y, e_z, p_x, p_y, p_z, u_x, u_y, u_z, ell):
 
 @numba.njit(cache=True, error_model="numpy")
 def _length_d2_two_turns_0(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u_z, ell, out, _k):
-    x0 = ell**2
-    x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
-    x2 = -e_x*p_y + e_y*p_x
-    x3 = f_x*p_y
-    x4 = -f_y*p_x + x3
-    x5 = e_x*p_z - e_z*p_x
-    x6 = f_x*p_z
-    x7 = f_z*p_x
-    x8 = x6 - x7
-    x9 = -e_y*p_z + e_z*p_y
-    x10 = f_y*p_z
-    x11 = -f_z*p_y + x10
-    x12 = e_y*f_y
-    x13 = e_z*f_z
-    x14 = ell*u_x
-    x15 = e_x*f_x
-    x16 = ell*u_y
-    x17 = ell*u_z
-    out[_k] = (-x11*x9 + x14*(e_y*x3 + e_z*x6 + p_x*(-x12 - x13)) + x16*(e_x*f_y*p_x + e_z*x10 + p_y*(-x13 - x15)) + x17*(e_x*x7 + e_y*f_z*p_y + p_z*(-x12 - x15)) - x2*x4 + x5*x8 + (x11*x14 - x16*x8 + x17*x4)*(x14*x9 + x16*x5 + x17*x2)/x1)/math.sqrt(x1)
+    x0 = u_x**2 + u_y**2 + u_z**2
+    x1 = abs(ell)
+    x2 = e_y*p_z - e_z*p_y
+    x3 = e_x*p_y - e_y*p_x
+    x4 = e_x*p_z - e_z*p_x
+    x5 = f_y*p_z
+    x6 = f_z*p_y
+    x7 = x5 - x6
+    x8 = f_x*p_y
+    x9 = f_y*p_x
+    x10 = x8 - x9
+    x11 = f_x*p_z
+    x12 = f_z*p_x
+    x13 = x11 - x12
+    x14 = e_y*f_y
+    x15 = e_z*f_z
+    x16 = e_x*f_x
+    out[_k] = ((ell*u_x*(e_y*x8 + e_z*x11 - p_x*(x14 + x15)) + ell*u_y*(e_x*x9 + e_z*x5 - p_y*(x15 + x16)) + ell*u_z*(e_x*x12 + e_y*x6 - p_z*(x14 + x16)) + x10*x3 + x13*x4 + x2*x7)/x1 - x1*(u_x*x2 - u_y*x4 + u_z*x3)*(u_x*x7 - u_y*x13 + u_z*x10)/(ell**2*x0))/math.sqrt(x0)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -345,9 +341,9 @@ def length_d2_two_turns(e_x, e_y, e_z, f_x, f_y, f_z, p_x, p_y, p_z, u_x, u_y, u
 
 @numba.njit(cache=True, error_model="numpy")
 def _length_d2_slide_0(s_x, s_y, s_z, u_x, u_y, u_z, ell, out, _k):
-    x0 = ell**2
-    x1 = u_x**2*x0 + u_y**2*x0 + u_z**2*x0
-    out[_k] = (s_x**2 + s_y**2 + s_z**2 - (ell*s_x*u_x + ell*s_y*u_y + ell*s_z*u_z)**2/x1)/math.sqrt(x1)
+    x0 = u_x**2 + u_y**2 + u_z**2
+    x1 = abs(ell)
+    out[_k] = ((s_x**2 + s_y**2 + s_z**2)/x1 - x1*(s_x*u_x + s_y*u_y + s_z*u_z)**2/(ell**2*x0))/math.sqrt(x0)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -472,18 +468,23 @@ def table1_planar(p_x, p_y, s_x, s_y):
 
 @numba.njit(cache=True, error_model="numpy")
 def _table1_length_0(p_x, p_y, s_x, s_y, u_x, u_y, ell, out, _k):
-    x0 = ell*u_y
-    x1 = ell*u_x
-    x2 = p_x*x0 - p_y*x1
-    x3 = ell**2
-    x4 = u_x**2*x3 + u_y**2*x3
-    x5 = 1/math.sqrt(x4)
-    x6 = s_x*x1 + s_y*x0
-    x7 = 1/x4
-    out[_k, 0] = x2*x5
-    out[_k, 1] = x5*x6
-    out[_k, 2] = x5*(p_x**2 - p_x*x1 + p_y**2 - p_y*x0 - x2**2*x7)
-    out[_k, 3] = x5*(s_x**2 + s_y**2 - x6**2*x7)
+    x0 = p_x*u_y
+    x1 = p_y*u_x
+    x2 = ell**2
+    x3 = u_x**2
+    x4 = u_y**2
+    x5 = 1/math.sqrt(x2*x3 + x2*x4)
+    x6 = s_x*u_x
+    x7 = s_y*u_y
+    x8 = x3 + x4
+    x9 = 1/math.sqrt(x8)
+    x10 = abs(ell)
+    x11 = 1/x10
+    x12 = x10/(x2*x8)
+    out[_k, 0] = x5*(ell*x0 - ell*x1)
+    out[_k, 1] = x5*(ell*x6 + ell*x7)
+    out[_k, 2] = -x9*(x11*(ell*p_x*u_x + ell*p_y*u_y - p_x**2 - p_y**2) + x12*(x0 - x1)**2)
+    out[_k, 3] = x9*(x11*(s_x**2 + s_y**2) - x12*(x6 + x7)**2)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -549,15 +550,18 @@ def _fig8_c_0(c1, L, alpha, beta, ell, m, g, out, _k):
     x1 = g*m
     x2 = ell**2
     x3 = math.sin(beta)
-    x4 = math.cos(beta)
-    x5 = 1/(x2*x3**2 + x2*x4**2)
-    x6 = ell*x4
-    x7 = x0*x6
-    x8 = math.cos(alpha)
-    x9 = ell*x3
-    x10 = x8*x9
-    x11 = -L*x10 - L*x7
-    out[_k] = -L**2*x1*x8*(L*x0**2 - L*x5*(x10 + x7)**2 + L*x8**2 + x0*x9 - x6*x8)/x11 - L*x0*x1 + c1*x11**2*x5
+    x4 = x3**2
+    x5 = math.cos(beta)
+    x6 = x5**2
+    x7 = x2*x4 + x2*x6
+    x8 = x0*x5
+    x9 = L*ell
+    x10 = math.cos(alpha)
+    x11 = x10*x3
+    x12 = -x11*x9 - x8*x9
+    x13 = x4 + x6
+    x14 = abs(ell)
+    out[_k] = -L**2*x1*x10*math.sqrt(x7)*(-L*x14*(x11 + x8)**2/(x13*x2) + (L*x0**2 + L*x10**2 + ell*x0*x3 - ell*x10*x5)/x14)/(x12*math.sqrt(x13)) - L*x0*x1 + c1*x12**2/x7
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1b84cae2aeea7793bbb6d3ed96bfbe93b9a1ba3bc3ae4eff85da6e3ec8ec536a
-// source key 08073b0c992ce5e65af7d73b7598567b3b24e15b40341ac6a56102d9f52a666e
+// source key f878d5047317e3fe8d4502671dde9a49de54e4e18c8c7a975c6022060aa77c83
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7955c86747f70cfc7645cff4d89379de684e5837ace0befe18b1e26474b7c8b7
-# source key 08073b0c992ce5e65af7d73b7598567b3b24e15b40341ac6a56102d9f52a666e
+# source key f878d5047317e3fe8d4502671dde9a49de54e4e18c8c7a975c6022060aa77c83
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

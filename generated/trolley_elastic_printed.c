@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 18153168417f3f1244a4198101988b7832ab1f184f28d051217de413c71473af
-// source key 77722dfc9e36b0652cab245208a77fa578dc688b4a1a7d386231a04b54fd07b5
+// source key 5aa2036af3998129611b09de02f5c132f21cdadc0137b4c50910ed1a1d4d9861
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

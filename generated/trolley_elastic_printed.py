@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c75798e1c8c1acf99cb8cad8e7c1a6308191c451aedb6cf82cadeba7661145db
-# source key 77722dfc9e36b0652cab245208a77fa578dc688b4a1a7d386231a04b54fd07b5
+# source key 5aa2036af3998129611b09de02f5c132f21cdadc0137b4c50910ed1a1d4d9861
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

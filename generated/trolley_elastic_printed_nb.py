@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae80778943dfa07bcbf09b21096074b85577a3a8443b4bc7c72449de09126310
-# source key 77722dfc9e36b0652cab245208a77fa578dc688b4a1a7d386231a04b54fd07b5
+# source key 5aa2036af3998129611b09de02f5c132f21cdadc0137b4c50910ed1a1d4d9861
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -9,6 +9,8 @@ compare the two numerically. Nothing here uses the SMM's own conjugate-vector ru
 from __future__ import annotations
 
 import sympy
+from sympy.core.exprtools import factor_terms
+from sympy.simplify.simplify import signsimp
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix
 from symmech.core.kinematics import SYMPY, rodrigues
@@ -27,6 +29,12 @@ def _turn(axis, angle) -> sympy.Matrix:
 
 def _at_zero(expr, *symbols):
     return expr.subs({x: 0 for x in symbols})
+
+
+def _second_at_zero(expr, x, y, *symbols) -> sympy.Expr:
+    """∂²expr/∂x∂y at ``symbols`` = 0, one variable at a time, tidied by factor_terms(signsimp()) at zero:
+    sympy's diff(expr, x, y) tidies the whole expression before differentiating, most of the cost."""
+    return factor_terms(signsimp(_at_zero(expr.diff(x).diff(y), *symbols)))
 
 
 def _like(printed: NamedMatrix, matrix, meaning: str) -> NamedMatrix:
@@ -54,18 +62,18 @@ def _length(moving: sympy.Matrix) -> sympy.Expr:
 
 def length_d2_turn() -> NamedMatrix:
     l_ = _length(_turn(pr.E, phi) * pr.P)
-    return _like(pr.length_d2_turn(), [_at_zero(sympy.diff(l_, phi, 2), phi)], "d2|anchor - R(e, q) p|/dq2 at 0")
+    return _like(pr.length_d2_turn(), [_second_at_zero(l_, phi, phi, phi)], "d2|anchor - R(e, q) p|/dq2 at 0")
 
 
 def length_d2_two_turns() -> NamedMatrix:
     l_ = _length(_turn(pr.E, phi) * _turn(pr.F, phi2) * pr.P)
-    return _like(pr.length_d2_two_turns(), [_at_zero(sympy.diff(l_, phi, phi2), phi, phi2)],
+    return _like(pr.length_d2_two_turns(), [_second_at_zero(l_, phi, phi2, phi, phi2)],
                  "d2|anchor - R(e, q1) R(f, q2) p|/dq1 dq2 at 0")
 
 
 def length_d2_slide() -> NamedMatrix:
     l_ = _length(pr.P + s * pr.S)
-    return _like(pr.length_d2_slide(), [_at_zero(sympy.diff(l_, s, 2), s)], "d2|anchor - (p + s s)|/ds2 at 0")
+    return _like(pr.length_d2_slide(), [_second_at_zero(l_, s, s, s)], "d2|anchor - (p + s s)|/ds2 at 0")
 
 
 def _planar_point():
@@ -90,8 +98,9 @@ def table1_length() -> NamedMatrix:
     anchor = sympy.Matrix([pr.px, pr.py, 0]) - pr.ell * u
     d = r - anchor
     l_ = sympy.sqrt(d.dot(d))
-    row = [l_.diff(phi), l_.diff(s), l_.diff(phi, 2), l_.diff(s, 2)]
-    return _like(pr.table1_length(), [_at_zero(x, phi, s) for x in row], "derivatives of |R_k(phi)(p + s s) - anchor|")
+    row = [_at_zero(l_.diff(phi), phi, s), _at_zero(l_.diff(s), phi, s), _second_at_zero(l_, phi, phi, phi, s),
+           _second_at_zero(l_, s, s, phi, s)]
+    return _like(pr.table1_length(), row, "derivatives of |R_k(phi)(p + s s) - anchor|")
 
 
 def fig8_c() -> NamedMatrix:
@@ -105,7 +114,7 @@ def fig8_c() -> NamedMatrix:
     weight = pr.mass * pr.g
     dl = _at_zero(length.diff(phi), phi)
     tension = -weight * pr.L * sympy.cos(pr.alpha) / dl  # dPi/dphi = T dl/dphi + m g dy/dphi = 0
-    C = pr.c1 * dl**2 + tension * _at_zero(length.diff(phi, 2), phi) + weight * _at_zero(A[1].diff(phi, 2), phi)
+    C = pr.c1 * dl**2 + tension * _second_at_zero(length, phi, phi, phi) + weight * _at_zero(A[1].diff(phi, 2), phi)
     return _like(pr.fig8_c(), [C], "d2 Pi/dphi2 of the pendulum on a spring preloaded to equilibrium")
 
 
@@ -113,7 +122,7 @@ def fig9_c() -> NamedMatrix:
     printed = pr.fig9_c()
     delta = printed.args[1].symbol
     potential = pr.c1 * (sympy.sqrt(pr.ell**2 + s**2) - (pr.ell - delta)) ** 2 / 2
-    return _like(printed, [_at_zero(potential.diff(s, 2), s)], "d2 Pi/ds2 across a spring of tension c1 Delta")
+    return _like(printed, [_second_at_zero(potential, s, s, s)], "d2 Pi/ds2 across a spring of tension c1 Delta")
 
 
 def omega_c_rates() -> NamedMatrix:

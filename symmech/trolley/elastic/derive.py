@@ -14,6 +14,8 @@ mid-plane strain, :func:`held_membrane`: the quartic membrane energy).
 """
 from __future__ import annotations
 
+import functools
+
 import sympy as sp
 
 from symmech.core import kinematics as kin
@@ -49,14 +51,22 @@ def rigid_displacement(point=X) -> sp.Matrix:
     return (rot - sp.eye(3)) * r + sp.Matrix([0, u2, u3])
 
 
-def rigid_fields(point=X) -> tuple[sp.Matrix, sp.Matrix]:
-    """φ0 (3 x 5) and ψ0 (3 x 6, columns ROTATION_PAIRS): first and second derivatives
-    of the exact rigid displacement at q0 = 0."""
-    u = rigid_displacement(point)
+@functools.cache
+def _fields_at_x() -> tuple[sp.Matrix, sp.Matrix]:
+    """φ0 (3 x 5) and ψ0 (3 x 6) at the symbolic point X [m], once per process."""
+    u = rigid_displacement()
     zero = {q: 0 for q in Q0}
     phi = sp.Matrix.hstack(*[u.diff(q).subs(zero) for q in Q0])
     psi = sp.Matrix.hstack(*[u.diff(Q0[i], Q0[j]).subs(zero) for i, j in ROTATION_PAIRS])
     return phi, psi
+
+
+def rigid_fields(point=X) -> tuple[sp.Matrix, sp.Matrix]:
+    """φ0 (3 x 5) and ψ0 (3 x 6, columns ROTATION_PAIRS): first and second derivatives
+    of the exact rigid displacement at q0 = 0. Both are linear in r: derived once at r = X
+    and evaluated at ``point`` (the rotation sequence is the costly part)."""
+    at = dict(zip(X, point))
+    return tuple(m.xreplace(at) for m in _fields_at_x())
 
 
 def quadratic_displacement(point=X) -> sp.Matrix:
@@ -136,6 +146,13 @@ def beam_basis(support: str) -> list[NamedMatrix]:
                         "ψ_ij (quadratic strain ε11 = u1' + ½ w'²)")]
 
 
+def _poly_hessian(expr: sp.Expr, q) -> sp.Matrix:
+    """sympy.hessian of an expression polynomial in q, differentiated as a Poly in q (sympy's diff walks the
+    expanded sum once per entry)."""
+    poly = sp.Poly(expr, *q)
+    return sp.Matrix(len(q), len(q), lambda k, l: poly.diff(q[k]).diff(q[l]).as_expr())
+
+
 def held_membrane(support: str = "pinned") -> list[NamedMatrix]:
     """Mid-plane stretching of a beam whose ends are held (immovable axial supports at ξ = 0, 1).
 
@@ -153,8 +170,8 @@ def held_membrane(support: str = "pinned") -> list[NamedMatrix]:
     u1 = length * _integral_from_0(sp.expand(eps - slope ** 2 / (2 * length ** 2)))
     eps_held = sp.solve(u1.subs(U, 1), eps)[0]
     u1 = sp.expand(u1.subs(eps, eps_held))
-    gram = (sp.hessian(eps_held, q) * length ** 2).applyfunc(sp.simplify)
-    held = (sp.hessian(u1, q) * length).applyfunc(sp.expand)
+    gram = (_poly_hessian(eps_held, q) * length ** 2).applyfunc(sp.simplify)
+    held = (_poly_hessian(u1, q) * length).applyfunc(sp.expand)
     if gram.free_symbols or held.free_symbols - {U}:
         raise ValueError("the held-end membrane fields depend on more than ξ")
     return [NamedMatrix(f"{support}_slope_gram", gram, (),
@@ -174,13 +191,40 @@ def module_specs() -> list[ModuleSpec]:
                        SOURCE, [residual := lagrange_model()], lagrange_dynamics(residual))]
 
 
+def directional(expr: sp.Expr, seeds: dict, memo: dict | None = None) -> sp.Expr:
+    """Σ_a ∂expr/∂a · seeds[a] (e.g. d/dt by the chain rule with seeds {q: q̇, q̇: q̈}) by the sum, product and
+    integer power rules on expr's tree, each distinct subtree once; ``memo`` ({subtree: its derivative}) carries
+    that over calls with the same seeds. sympy's diff walks the whole tree once per variable instead."""
+    memo = {} if memo is None else memo
+    if expr in memo:
+        return memo[expr]
+    if expr in seeds:
+        out = sp.sympify(seeds[expr])
+    elif not expr.args:
+        out = sp.S.Zero
+    elif expr.is_Add:
+        out = sp.Add(*[directional(a, seeds, memo) for a in expr.args])
+    elif expr.is_Mul:
+        parts = [(k, directional(a, seeds, memo)) for k, a in enumerate(expr.args)]
+        out = sp.Add(*[sp.Mul(*expr.args[:k], d, *expr.args[k + 1:]) for k, d in parts if d != 0])
+    elif expr.is_Pow and expr.exp.is_Integer:
+        d = directional(expr.base, seeds, memo)
+        out = expr.exp * expr.base ** (expr.exp - 1) * d if d != 0 else sp.S.Zero
+    else:
+        raise ValueError(f"no chain rule for {type(expr).__name__}")
+    memo[expr] = out
+    return out
+
+
 def lagrange_dynamics(residual: NamedMatrix) -> Dynamics:
     """The small model's motion for solve_ivp: y = (q, q̇), M(q) = diag(E, ∂R/∂q̈), F = (q̇, -R at q̈ = 0),
     R the residual (linear in q̈), with the frame's motion (V, ω, their rates, ν) held at the values
     of p. M depends on q: rhs only, no Jacobian."""
     q, qd, qdd, rest = (residual.args[i:j] for i, j in ((0, 7), (7, 14), (14, 21), (21, None)))
     accelerations = sp.Matrix([a.symbol for a in qdd])
-    mass = residual.matrix.jacobian(accelerations)
+    memos = [{} for _ in accelerations]  # one per column: the rows share subtrees
+    mass = sp.Matrix(len(residual.matrix), len(accelerations),
+                     lambda i, j: directional(residual.matrix[i], {accelerations[j]: 1}, memos[j]))
     if mass.free_symbols & set(accelerations):
         raise ValueError("the Lagrange residual is not linear in the accelerations")
     rate = sp.Matrix.vstack(sp.Matrix([a.symbol for a in qd]), -residual.matrix.xreplace({s: 0 for s in accelerations}))
@@ -251,11 +295,11 @@ def lagrange_model() -> NamedMatrix:
     V += (ei[0] * q[5] ** 2 + ei[1] * q[6] ** 2) * 4 / (2 * length ** 3)  # ∫ (N'')² dξ = 4
     dd = d.jacobian(qv) * qdv
     rayleigh = sum(ci * x ** 2 for ci, x in zip(c, dd)) / 2
-    rows = []
+    rates = dict(zip(q + qd + tuple(v) + tuple(w), qd + qdd + dv + dw))  # the total time derivative
+    rows, memo = [], {}  # memo: subtrees shared by the rows are differentiated once
     for i in range(7):
-        p_i = T.diff(qd[i])
-        total = sum(p_i.diff(a) * b for a, b in zip(q + qd + tuple(v) + tuple(w), qd + qdd + dv + dw))
-        rows.append(total - T.diff(q[i]) + V.diff(q[i]) + rayleigh.diff(qd[i]))
+        total = directional(directional(T, {qd[i]: 1}), rates, memo)
+        rows.append(total - directional(T, {q[i]: 1}) + V.diff(q[i]) + rayleigh.diff(qd[i]))
     args = args_of([(s, f"coordinate {n}", "m or rad") for s, n in zip(q, names)]
                    + [(s, f"rate of {n}", "m/s or rad/s") for s, n in zip(qd, names)]
                    + [(s, f"acceleration of {n}", "m/s^2 or rad/s^2") for s, n in zip(qdd, names)]
