@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 8d407d5706202680777e7e1a420872256ba5d24776a78e41bc02e83be2067c92
-// source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
+// source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 4057c1dbf951c7e74613551a26f77fc09647658733d7942d4735194d84e1e7d3
-# source key f18dd64c33f004314d91a09b84d7ce3e6d7a9cefd623b652e4a7a6f278b926ce
+# source key 3fcaffccc7a65522bb65b4f95a98cfb13c216fe00ad0e675bce839a867e20774
 # body sha256 6a59ab6d11a24e69f903dc46c98452f3a2b72b10a9d2032f391112f99d8de8f6
 """The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

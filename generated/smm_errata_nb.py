@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f6341769115d9761032c8a0777c814fc691028a0c250021f7d9548ced9b7cb37
-# source key f18dd64c33f004314d91a09b84d7ce3e6d7a9cefd623b652e4a7a6f278b926ce
+# source key 3fcaffccc7a65522bb65b4f95a98cfb13c216fe00ad0e675bce839a867e20774
 # body sha256 9740583351de0ab389ffe27936fe3a35852316b92c67e34fbe3e0b1997d83ffd
 """The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

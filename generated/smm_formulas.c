@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 71f2281a9327bef69bc2d2ef9717311013c2d3824d556de3a565b0259e65ae17
-// source key faa9a718c7f7df2b71c645de793aa6b3f955341c4cacfa7fe7860ff72b93b6b6
+// source key dd44b5a385e202d679a308d908b81e84e943413352fab1883f788fc40b7fc9bd
 // body sha256 1e7ef2233d7ee5664488564dcfa2c034ac5c88873792a114ffe0e0f52c86b00e
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

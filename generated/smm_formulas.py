@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7672cb5a5a6c23bd37374e271d44aaf77ce419e2f372a8043140a89e74ef14bb
-# source key faa9a718c7f7df2b71c645de793aa6b3f955341c4cacfa7fe7860ff72b93b6b6
+# source key dd44b5a385e202d679a308d908b81e84e943413352fab1883f788fc40b7fc9bd
 # body sha256 2d2d9f5708fb64021e1c0c77db318a31e37a73055c64403b39e1eabf98eeee19
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

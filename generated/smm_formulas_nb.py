@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9d1e726bcb8941842572ce7d6467ff1e321041a7c26e4d0260c5ee201a2661d4
-# source key faa9a718c7f7df2b71c645de793aa6b3f955341c4cacfa7fe7860ff72b93b6b6
+# source key dd44b5a385e202d679a308d908b81e84e943413352fab1883f788fc40b7fc9bd
 # body sha256 9d4b295720c395e7398d72de8d41d2c6aafc27aa5937fc54822ed9c1e5dc9b2a
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

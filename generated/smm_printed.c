@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 8df246f6876ca8e1aedee6160fd189613308a2ad9fe969cc6f0654535bfcfb76
-// source key 4d474a6cb79305785d0d6ed7796252ccee6cadc9f540f99c6a3240a243930226
+// source key 451643b9d315e29ecaeb9e4c1ab6e90b30ce4acaa10ce616044c459e207dc3b0
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 41f180347c6e079069b1d190fda51397dfd254c3265c3d635e163c31171826c9
-# source key 4d474a6cb79305785d0d6ed7796252ccee6cadc9f540f99c6a3240a243930226
+# source key 451643b9d315e29ecaeb9e4c1ab6e90b30ce4acaa10ce616044c459e207dc3b0
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

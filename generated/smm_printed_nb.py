@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 ae6dbcfb8f9602e3b9a469b34b7a7f396b699f668253951bea54074d8c2ba63a
-# source key 4d474a6cb79305785d0d6ed7796252ccee6cadc9f540f99c6a3240a243930226
+# source key 451643b9d315e29ecaeb9e4c1ab6e90b30ce4acaa10ce616044c459e207dc3b0
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

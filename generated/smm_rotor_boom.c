@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 23541b88acad7b02a27cf9be704c62e4b2aea3e8b176f6a8791a30e8ad7bc27a
-// source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
+// source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

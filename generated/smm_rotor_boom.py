@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 6e94ae06b48559234d8a7fedc8ef5195e1f9a183b94e7d9908c71d330122167b
-# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
+# source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 78f6deb374fff798993acb031bcb30be6bb5c931ac3fca93b982bd1c1de21894
-# source key 51e3ea18eedd08e1b01f243c7daac4040571fa36767229609750d7ac88d07a3e
+# source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
 # body sha256 317c122de6069bc20574ea6526d823a7f4596c3beacd6ee1cc7cacdedd9db823
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

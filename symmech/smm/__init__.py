@@ -9,20 +9,6 @@ EX52_LC_ENTRIES = ((0, 0), (0, 1), (0, 2), (0, 3), (1, 0), (1, 1), (1, 2), (1, 3
                    (3, 0), (3, 1), (3, 2), (3, 3), (4, 0), (4, 1), (4, 2), (4, 3))
 
 
-def load_mechanism(path: Path):
-    """The :class:`~symmech.smm.model.Mechanism` of a scene file (explicit vector model or a generated
-    ``[chain]``), its parameters evaluated in floats; no sympy (the errata sample around its values)."""
-    from symmech.core.scene import SymmechError, read_toml
-    from symmech.core.schema import validate
-    from symmech.smm.build import model
-    from symmech.smm.schema import SCHEMA
-
-    data = read_toml(path)
-    if data.get("kind") != "mechanism":
-        raise SymmechError(f"{path}: not a mechanism scene")
-    return model(validate(SCHEMA, data))
-
-
 def latex_matrices(rest: str) -> dict:
     """Matrices for ``symmech latex smm:<scene>.<name>``.
 
@@ -31,6 +17,7 @@ def latex_matrices(rest: str) -> dict:
     form of :func:`symmech.smm.derive.readable` (parameters with positive values taken as positive).
     """
     from symmech.core.scene import SymmechError
+    from symmech.smm.build import load_mechanism
     from symmech.smm.derive import SCENES, named_matrices, readable
 
     scene, _, key = rest.rpartition(".")

@@ -12,10 +12,12 @@ dotted scene field.
 from __future__ import annotations
 
 import difflib
+from pathlib import Path
 
 import numpy as np
 
-from symmech.core.scene import SceneError, SymmechError
+from symmech.core.scene import SceneError, SymmechError, read_toml
+from symmech.core.schema import validate
 from symmech.smm import schema as S
 from symmech.smm.chain import build_chain, chain_spec
 from symmech.smm.model import (EQUILIBRIUM, GROUND, Body, Coordinate, Effects, Link, Mechanism, Parameter, Point,
@@ -251,3 +253,11 @@ def coordinate_count(resolved: dict) -> int:
     """Number of generalized coordinates of the scene (without building the model)."""
     return resolved["chain"]["n"] if resolved["chain"] is not None else len(resolved["coordinates"])
 
+
+def load_mechanism(path: Path) -> Mechanism:
+    """The :class:`~symmech.smm.model.Mechanism` of a scene file (explicit vector model or a generated
+    ``[chain]``), its parameters evaluated in floats; no sympy (the errata sample around its values)."""
+    data = read_toml(path)
+    if data.get("kind") != "mechanism":
+        raise SymmechError(f"{path}: not a mechanism scene")
+    return model(validate(S.SCHEMA, data))

@@ -20,7 +20,8 @@ import sympy
 from symmech.core import expressions
 from symmech.core.derivation import Arg, Dynamics, ModuleSpec, NamedMatrix
 from symmech.core.scene import scenes_folder
-from symmech.smm import forms, load_mechanism
+from symmech.smm import forms
+from symmech.smm.build import load_mechanism
 from symmech.smm.model import Effects, Mechanism, interpret
 
 ROLE = "derivation"  # found by symmech.core.discovery

@@ -12,7 +12,8 @@ from __future__ import annotations
 import sympy
 
 from symmech.core.derivation import ModuleSpec, NamedMatrix
-from symmech.smm import lagrange, load_mechanism
+from symmech.smm import lagrange
+from symmech.smm.build import load_mechanism
 from symmech.smm.derive import SCENES, SOURCE, matrices, parameter_args
 
 ROLE = "derivation"  # found by symmech.core.discovery

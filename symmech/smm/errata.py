@@ -13,7 +13,8 @@ import numpy as np
 
 from symmech.core.errata import Check, NotCompared
 from symmech.core.scene import scenes_folder
-from symmech.smm import EX52_LC_ENTRIES, SEED, load_mechanism
+from symmech.smm import EX52_LC_ENTRIES, SEED
+from symmech.smm.build import load_mechanism
 
 ROLE = "errata"  # found by symmech.core.discovery
 

@@ -22,7 +22,8 @@ from symmech.core.scene import scenes_folder
 from symmech.generated import smm_errata
 from symmech.generated import smm_formulas as derived
 from symmech.generated import smm_printed as printed
-from symmech.smm import SEED, load_mechanism
+from symmech.smm import SEED
+from symmech.smm.build import load_mechanism
 
 ROLE = "errata"  # found by symmech.core.discovery
 
