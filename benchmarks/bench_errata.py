@@ -3,7 +3,7 @@
 Per round and per checkout (``--tree``, interleaved): the CPU seconds of ``report.errata_records(PAPER)``
 inside a fresh interpreter (imports included, numpy imported before) and whether sympy was imported by it;
 and the CPU (children's getrusage) and wall seconds of ``symmech run SCENE --report --quiet`` and of the same
-run without ``--report``. Each checkout runs with its folder first on PYTHONPATH.
+run without ``--report``. Each checkout runs on its own generated code (``timing.tree_env``).
 
 Run: python benchmarks/bench_errata.py --tree OLD --tree NEW [--paper smm] [--scene scenes/smm_rotor_boom.toml]
      [--repeats 5]
@@ -11,7 +11,6 @@ Run: python benchmarks/bench_errata.py --tree OLD --tree NEW [--paper smm] [--sc
 from __future__ import annotations
 
 import argparse
-import os
 import resource
 import statistics
 import subprocess
@@ -19,7 +18,7 @@ import sys
 import tempfile
 import time
 
-from timing import machine
+from timing import Stats, machine, tree_env
 
 PROBE = """\
 import sys, time
@@ -31,14 +30,8 @@ print(time.process_time() - start, len(records), "sympy" in sys.modules)
 """
 
 
-def _env(tree: str) -> dict:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (tree, env.get("PYTHONPATH")) if p)
-    return env
-
-
 def _records(tree: str, paper: str) -> tuple[float, int, bool]:
-    out = subprocess.run([sys.executable, "-c", PROBE.format(paper=paper)], env=_env(tree), cwd=tree,
+    out = subprocess.run([sys.executable, "-c", PROBE.format(paper=paper)], env=tree_env(tree), cwd=tree,
                          capture_output=True, text=True, check=True).stdout.split()
     return float(out[0]), int(out[1]), out[2] == "True"
 
@@ -48,13 +41,13 @@ def _run(tree: str, scene: str, report: bool) -> tuple[float, float]:
     with tempfile.TemporaryDirectory() as out:
         command = [sys.executable, "-m", "symmech", "run", scene, "--out", out, "--quiet"] + ["--report"] * report
         before, start = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-        subprocess.run(command, env=_env(tree), cwd=tree, check=True, stdout=subprocess.DEVNULL)
+        subprocess.run(command, env=tree_env(tree), cwd=tree, check=True, stdout=subprocess.DEVNULL)
         wall, after = time.perf_counter() - start, resource.getrusage(resource.RUSAGE_CHILDREN)
     return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime, wall
 
 
 def _line(label: str, values: list[float]) -> str:
-    return f"{label:<34} {statistics.median(values):7.3f} s (min {min(values):.3f}, max {max(values):.3f}, n={len(values)})"
+    return f"{label:<34} {Stats(statistics.median(values), min(values), max(values), len(values)).text()}"
 
 
 def main() -> None:

@@ -27,6 +27,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from timing import tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 SETUP = ("import time, numpy as np; from symmech.core import pipeline; from symmech.grain.motion_engine import driver as compiled; "
@@ -55,7 +56,7 @@ SWEEP = ("import time, tomllib, numpy as np; from symmech.core import pipeline; 
 
 def child(tree: Path, code: str, cache: str) -> tuple[float, str]:
     """(CPU seconds, stdout) of ``code`` in a fresh process on ``tree`` with numba's cache in ``cache``."""
-    env = {**os.environ, "PYTHONPATH": str(tree), "NUMBA_CACHE_DIR": cache}
+    env = {**tree_env(tree), "NUMBA_CACHE_DIR": cache}
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run([sys.executable, "-c", code], cwd=tree, env=env, check=True, capture_output=True,
                          text=True).stdout

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from timing import interleaved, machine, ratio
+from timing import interleaved, machine, ratio, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 CODE = ("from symmech.core import pipeline; from symmech.grain.motion_engine import driver as compiled; "
@@ -60,7 +60,7 @@ print(json.dumps(sorted(rows, key=lambda r: r[0])))
 def fresh(tree: Path, cold: bool, record: bool = False) -> str:
     """One fresh process on ``tree``; with ``cold`` an empty numba cache; returns its stdout (with ``record``
     the compile events)."""
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = tree_env(tree)
     with tempfile.TemporaryDirectory() as cache:
         if cold:
             env["NUMBA_CACHE_DIR"] = cache
@@ -99,7 +99,7 @@ print(json.dumps({"cpu": c1 - c0, "events": sorted(rows, key=lambda r: r[0])}))
 def cold_cpu(tree: Path, out: str) -> dict:
     """One cold compile on ``tree`` (empty cache, fresh process, nice 10): CPU [s], overloads, compile-event and
     LLVM seconds, the load before it; then the second process's compiles on that cache (0 when the cache works)."""
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = tree_env(tree)
     with tempfile.TemporaryDirectory() as cache:
         env["NUMBA_CACHE_DIR"] = cache
         load = os.getloadavg()[0]

@@ -19,7 +19,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from timing import interleaved_cpu, machine, ratio
+from timing import interleaved_cpu, machine, ratio, tree_env
 
 NAMES = ["smm_rotor_boom", "smm_spatial_boom"]
 
@@ -39,7 +39,7 @@ def child(name: str) -> None:
 
 
 def command(tree: Path, name: str) -> list[str]:
-    return ["env", f"PYTHONPATH={tree}", sys.executable, __file__, "--child", name]
+    return ["env", f"PYTHONPATH={tree_env(tree)['PYTHONPATH']}", sys.executable, __file__, "--child", name]
 
 
 def values(tree: Path, name: str) -> dict:

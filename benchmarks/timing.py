@@ -54,6 +54,17 @@ def interleaved_cpu(commands: dict[str, list[str]], repeats: int = 5, number: in
     return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
 
 
+def tree_env(tree) -> dict:
+    """The environment of a child process that runs the source tree ``tree``: its folder first on PYTHONPATH, then
+    tree_site/ (whose sitecustomize.py serves the tree's own generated/, templates/ and scenes/, which an editable
+    install would map to its own checkout)."""
+    import os
+    from pathlib import Path
+
+    site = Path(__file__).resolve().parent / "tree_site"
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(tree), str(site)])}
+
+
 def ratio(slow: Stats, fast: Stats) -> str:
     """slow/fast at the medians, with the range from the extremes."""
     return (f"{slow.median / fast.median:6.2f}x (range {slow.low / fast.high:.2f}-"

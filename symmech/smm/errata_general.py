@@ -97,10 +97,15 @@ def _function(scene: str, key: str):
     return getattr(own, key, None) or getattr(smm_errata, f"{scene}_{key}")
 
 
+@functools.cache
+def _nominal(scene: str) -> dict:
+    """The bundled mechanism's parameter values by name, read once (several checks sample around them)."""
+    return load_mechanism(SCENES / f"smm_{scene}.toml").values()
+
+
 def _sampler(scene):
     def sample(rng, n):
-        nominal = load_mechanism(SCENES / f"smm_{scene}.toml").values()
-        return {k: v * rng.uniform(0.5, 1.5, n) for k, v in nominal.items()}
+        return {k: v * rng.uniform(0.5, 1.5, n) for k, v in _nominal(scene).items()}
     return sample
 
 
