@@ -256,6 +256,19 @@ def test_source_key_follows_imports_and_data(tmp_path):
         codegen.source_key("symmech.smm.derive", inputs["symmech.smm.derive"][:-1])
 
 
+def test_a_scenes_folder_is_keyed_by_its_scenes_not_its_bytecode(tmp_path, monkeypatch):
+    """Importing the scenes package writes scenes/__pycache__ where Python writes bytecode: the mechanisms' key
+    stays (their modules were reported outdated after any run), while a scene added or removed changes it."""
+    (tmp_path / "a.toml").write_text("kind = 'mechanism'\n")
+    monkeypatch.setattr(codegen, "scenes_folder", lambda: tmp_path)
+    before = codegen.source_key("symmech.smm.derive", ("scenes",))
+    (tmp_path / "__pycache__").mkdir()
+    (tmp_path / "__pycache__" / "__init__.cpython-311.pyc").write_bytes(b"bytecode")
+    assert codegen.source_key("symmech.smm.derive", ("scenes",)) == before
+    (tmp_path / "b.toml").write_text("kind = 'mechanism'\n")
+    assert codegen.source_key("symmech.smm.derive", ("scenes",)) != before
+
+
 def test_a_derivation_records_the_package_data_only(tmp_path, monkeypatch):
     """What a derivation opens in a virtual environment inside the checkout (a wheel's direct_url.json, read
     through importlib.metadata) is not an input: only bundled scenes and files of the symmech package are."""

@@ -117,7 +117,9 @@ def source_key(producer: str, data: tuple[str, ...]) -> str:
         h.update(f"module {name}\n".encode() + _source_file(name).read_bytes())
     for rel in data:
         path = _data_path(rel)
-        content = ("\n".join(sorted(p.name for p in path.iterdir())).encode() if path.is_dir()
+        # a folder is keyed by its entries, not by the bytecode Python writes when it imports the scenes package
+        content = ("\n".join(sorted(p.name for p in path.iterdir() if p.name != "__pycache__")).encode()
+                   if path.is_dir()
                    else path.read_bytes() if path.is_file() else b"<missing>")
         h.update(f"data {rel}\n".encode() + content)
     return h.hexdigest()
