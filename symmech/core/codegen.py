@@ -74,8 +74,14 @@ def _source_file(module: str) -> Path | None:
 def _imported(module: str, path: Path) -> set[str]:
     """symmech modules (and their parent packages) that ``path`` imports anywhere in its text."""
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    return {n for n in _symmech_names(package, path.read_text(encoding="utf-8")) if _source_file(n) is not None}
+
+
+@functools.cache  # by the text itself: every producer's closure parses the shared core modules again otherwise
+def _symmech_names(package: str, text: str) -> frozenset[str]:
+    """The symmech names (and their parents) that ``text``, a module of ``package``, imports anywhere."""
     names = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(ast.parse(text)):
         if isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -87,7 +93,7 @@ def _imported(module: str, path: Path) -> set[str]:
         parts = name.split(".")
         if parts[0] == "symmech":
             found.update(".".join(parts[:i]) for i in range(1, len(parts) + 1))
-    return {n for n in found if _source_file(n) is not None}
+    return frozenset(found)
 
 
 def closure(module: str) -> list[str]:
