@@ -1,12 +1,13 @@
-# symmech 0.1.0 generated module; inputs sha256 f4bf9eb71bf389e57981c22047167abccd0fc5f56551bc8076302f543059c158
+# symmech 0.1.0 generated module; inputs sha256 c70b5343b7edc5417341bf92cc110bceebec2a95503cf85d68649ca0b0727971
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 f4bf9eb71bf389e57981c22047167abccd0fc5f56551bc8076302f543059c158
+# body sha256 c70b5343b7edc5417341bf92cc110bceebec2a95503cf85d68649ca0b0727971
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
 ``symmech.numerics.kernels``), ``<name>.c`` its C99 twin (``symmech export``
-reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
+reads it through ``integrity.verify_file``), ``<name>_mathml.py`` what
+``symmech report`` typesets of it (no sympy at report time). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.
 """
@@ -14,25 +15,26 @@ from symmech.core import integrity as _integrity
 
 _integrity.guard(__file__)
 
-# spec name -> the derivation module that declares it (numpy module, _nb and C twins)
+# spec name -> the derivation module that declares it (numpy module, _nb, C and MathML twins);
+# derivation modules by name, each one's modules in the order it declares them (the report's)
 MODULES = {
     'grain_impact': 'symmech.grain.derive',
-    'grain_impact_printed': 'symmech.grain.printed',
     'grain_motion': 'symmech.grain.derive_motion',
-    'grain_motion_printed': 'symmech.grain.printed_motion',
     'grain_sliding': 'symmech.grain.derive_sliding',
+    'grain_impact_printed': 'symmech.grain.printed',
+    'grain_motion_printed': 'symmech.grain.printed_motion',
     'smm_double_pendulum': 'symmech.smm.derive',
-    'smm_errata': 'symmech.smm.derive_errata',
     'smm_excavator': 'symmech.smm.derive',
-    'smm_formulas': 'symmech.smm.derive_formulas',
-    'smm_printed': 'symmech.smm.printed',
     'smm_rotor_boom': 'symmech.smm.derive',
     'smm_spatial_boom': 'symmech.smm.derive',
+    'smm_errata': 'symmech.smm.derive_errata',
+    'smm_formulas': 'symmech.smm.derive_formulas',
+    'smm_printed': 'symmech.smm.printed',
+    'trolley_frame': 'symmech.trolley.derive',
     'trolley_dynamics': 'symmech.trolley.derive',
     'trolley_elastic': 'symmech.trolley.elastic.derive',
     'trolley_elastic_lagrange': 'symmech.trolley.elastic.derive',
     'trolley_elastic_printed': 'symmech.trolley.elastic.printed',
-    'trolley_frame': 'symmech.trolley.derive',
     'trolley_printed': 'symmech.trolley.printed',
 }
 # derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)

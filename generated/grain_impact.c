@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 321b1680fd3eb019a8989d7a57f45e742e67c495811b50b0402190b22604f99b
-// source key c0ab39b64caeda37418818bd60592d7e7c3f84d6a181ae8cdc0237623e54ec74
+// symmech 0.1.0 generated module; inputs sha256 f504df368415c8b9584181c98594fb76f1d34e12537368a25bc1626b49a61b61
+// source key e578e4640c5603cf8a5c7ef709f623fff4cf688f04dc28653f88fc873226f24a
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

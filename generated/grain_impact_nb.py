@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 b9ff479c2f82811051eb64dcc6001954e8c54de01c156a0807e58212d5abd4e3
-# source key c0ab39b64caeda37418818bd60592d7e7c3f84d6a181ae8cdc0237623e54ec74
+# symmech 0.1.0 generated module; inputs sha256 454117a88683e6b48a2fbf61eb954bd9ce8354666c964ff1db62375e56efe36d
+# source key e578e4640c5603cf8a5c7ef709f623fff4cf688f04dc28653f88fc873226f24a
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 7d2873f131834bee587d81c813fc1e1686c043de68deec5f535e165950270aba
-// source key c95d106f9c7684eb2244744a9e36e761b4e92b0f43354313dd79d7d88f298582
+// symmech 0.1.0 generated module; inputs sha256 80860e4f52f0f559b1a40ee168e236b177ee992a0f26fdc841e73cb1f8feb964
+// source key 2adf97c1cd34774c9063aa9496c6aa544b7f0c20104d21949a2082d950697dc1
 // body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

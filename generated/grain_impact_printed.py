@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 508807cd948a4c243b29eb99088ad5daad2b54446e6df9a231c447d91dd364c1
-# source key c95d106f9c7684eb2244744a9e36e761b4e92b0f43354313dd79d7d88f298582
+# symmech 0.1.0 generated module; inputs sha256 4feb30eab165a9ec372bd716499c7591536d67f4a8341acc6a1b49b1f29a1d75
+# source key 2adf97c1cd34774c9063aa9496c6aa544b7f0c20104d21949a2082d950697dc1
 # body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

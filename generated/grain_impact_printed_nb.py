@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 50735581d54ed5eef14b19cdcbf5265a35d95c33de518d7d64e38684bd615f5d
-# source key c95d106f9c7684eb2244744a9e36e761b4e92b0f43354313dd79d7d88f298582
+# symmech 0.1.0 generated module; inputs sha256 2ce7206d717d8118d1ba88fbece7e7ccc37333bea77e4638cfe60d7d16ee6572
+# source key 2adf97c1cd34774c9063aa9496c6aa544b7f0c20104d21949a2082d950697dc1
 # body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 9e7e00964efbfe73fd40a1e902a96f653524d4de89db815db1490b63c1fb52a4
-// source key 06d9377ac0f4cec63c6dde194f06ab797517101a72210bd532bed637aea341dc
+// symmech 0.1.0 generated module; inputs sha256 2c7c89432e8309f7ed550e8a1453228d7282a0c80862062f37c1db9b2ec13282
+// source key 9dc067bffc4c6eec2ded89b3aa9e7bd80ff7b12041e70059e0cac4257a9e3de9
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c569f3be831589edbf61f976a71d1fecedbc95d7aa1c6bdd86b71c53fe99defd
-# source key 06d9377ac0f4cec63c6dde194f06ab797517101a72210bd532bed637aea341dc
+# symmech 0.1.0 generated module; inputs sha256 79d68995e2124b0765ebc2ccac2f8312ed97e03fe3ca6f1ee1763f284d2a5c33
+# source key 9dc067bffc4c6eec2ded89b3aa9e7bd80ff7b12041e70059e0cac4257a9e3de9
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 66e7cd18f12e108af22891681636ef0ce560cd71a0ee0432957ecee319509aa6
-# source key ccdab4635cb7a2f1c67d26f810e6811deb5aa260da7a65b3ff6f5f8933aa4784
+# symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
+# source key 08ddee0244aa56f52240efd0163f6a84545f8c80701ea2f66e7486c02985ee11
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 8d407d5706202680777e7e1a420872256ba5d24776a78e41bc02e83be2067c92
-// source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+// symmech 0.1.0 generated module; inputs sha256 ec7ebd79270eaec2199c40f7f5ca6b20ec7afaee11fc55b996f28525450f234e
+// source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 c048d1f686e3854fe3f058e4312f5171a30ac0e6f4ed7d822397b945f6c0003c
-# source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+# symmech 0.1.0 generated module; inputs sha256 0f3eb9609a62684b43124b5428f951e10701dcb33f337a67052bf25d279e8e47
+# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 # body sha256 dc40022d9a1ca361dcdc141f2806f7d27cf3e1f8e23655ee2f4fc6c18bd59e23
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

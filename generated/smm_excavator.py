@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4ec55aa58a89c11f347e08d42db4b4c76ee69766b49b1a7d661c9a4d4206ba9a
-# source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+# symmech 0.1.0 generated module; inputs sha256 5389ca09e7839e558a5f7d4114f7be003b6d31f0363d20088e9e1f6c076cd6a9
+# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 8df246f6876ca8e1aedee6160fd189613308a2ad9fe969cc6f0654535bfcfb76
-// source key 451643b9d315e29ecaeb9e4c1ab6e90b30ce4acaa10ce616044c459e207dc3b0
+// symmech 0.1.0 generated module; inputs sha256 74e081f9bdf2d991ec28fc5646c53c09e1b6d2f4af6a6cb40a7a2336b94fa9f0
+// source key 0abe7d4370272dfd48f81377e078ab406f8e626da04713bba5bf47102d2b2684
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

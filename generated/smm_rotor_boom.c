@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 23541b88acad7b02a27cf9be704c62e4b2aea3e8b176f6a8791a30e8ad7bc27a
-// source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+// symmech 0.1.0 generated module; inputs sha256 836403c7330e41578b5f4ea29b865bb316cabb683e79b98b573400c80cb4dd19
+// source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 6e94ae06b48559234d8a7fedc8ef5195e1f9a183b94e7d9908c71d330122167b
-# source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+# symmech 0.1.0 generated module; inputs sha256 029aa6ae1984b4b624b7b513fc01aec605e6f837213a1ddc156ef8fc6b3a2e84
+# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 78f6deb374fff798993acb031bcb30be6bb5c931ac3fca93b982bd1c1de21894
-# source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+# symmech 0.1.0 generated module; inputs sha256 06d0fd6d105f28ed6c8877197c74c3e1e6b51346c339d50d86a1ebd78fc2dc7a
+# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 # body sha256 317c122de6069bc20574ea6526d823a7f4596c3beacd6ee1cc7cacdedd9db823
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 bf3178658ca7867b4d6546520ce9022c28eddda74f3ce69f500a9fe29c696aa3
-// source key c33f6a139fd3bc97cfd7c995b59f39ed7f3499d530b1238fe94b24d9a6b0b7ca
+// symmech 0.1.0 generated module; inputs sha256 56f52369c0883c8c648d20d159d68510b8354fe1e4836123b6a334bad7cd6366
+// source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

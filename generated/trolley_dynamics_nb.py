@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 572bea8d179659cb87dbdeb0e098e0389b05123287736ec0594c1a0fb4758596
-# source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
+# symmech 0.1.0 generated module; inputs sha256 525c82f0cc2904fc0b55a3fb754ff7efe495e47b4b5790781b5c5d70a095dfcd
+# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 e45b9d2a641199bb38c448f67efd2c25b62080a703ffeb17a697ff721e4a0f4b
-# source key f878d5047317e3fe8d4502671dde9a49de54e4e18c8c7a975c6022060aa77c83
+# symmech 0.1.0 generated module; inputs sha256 865f1e83a767760a6932af376e6dd65fbe10b08769e32fca0f70a17b969884d5
+# source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
 # body sha256 8f465e3eb75b98da15882d9600c88a5011e851fef26b1138023d0d9b96c480b8
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 18153168417f3f1244a4198101988b7832ab1f184f28d051217de413c71473af
-// source key 5aa2036af3998129611b09de02f5c132f21cdadc0137b4c50910ed1a1d4d9861
+// symmech 0.1.0 generated module; inputs sha256 5faf39078489b7463c1c4c29b6d57bb802540c7ca712180852430b630d37f68b
+// source key 713fc867c1b55e801d5a5cb8ae4bfbe03da1074fa2a707604c1e280f97a2028f
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 ae80778943dfa07bcbf09b21096074b85577a3a8443b4bc7c72449de09126310
-# source key 5aa2036af3998129611b09de02f5c132f21cdadc0137b4c50910ed1a1d4d9861
+# symmech 0.1.0 generated module; inputs sha256 44ec528fe2bb7ffdb2f99c0bab75257ced43567288fba5d219b628492e15e7d4
+# source key 713fc867c1b55e801d5a5cb8ae4bfbe03da1074fa2a707604c1e280f97a2028f
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 4cc8617557536019dc8149e89937e8394c4d63396ccd53ce3000a6f8c8d43c44
-# source key 4bf1b5543db88e3b3e0b453774d514cb4b93a37eee3759b0740cd09b7772e073
+# symmech 0.1.0 generated module; inputs sha256 5d1c836ee9142d326f385c6eb402b6d31b1d0e4005b3a216c611722b8bd1337f
+# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
-// symmech 0.1.0 generated module; inputs sha256 c11ccaf5e9f031d5b6db7ea520d8f0e9cf5abca59e90571ea9a76d9264f10098
-// source key 4a0ac9a317ec397846054e4a20cf596b61940f5ffafc6e12fe3b6a948b8f26b0
+// symmech 0.1.0 generated module; inputs sha256 1f74efd61bec2a23607289fa6a128197a228785e803e102fb3c021f6fb488c9a
+// source key c870549370df568037f3052d38a1a2c7a715623acf3e340dc8f66f0856b6c87d
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
-# symmech 0.1.0 generated module; inputs sha256 5319068dcb468410e4cd159a349e2bfeb432ba8d99fd31c7615cc42dc733733f
-# source key 4a0ac9a317ec397846054e4a20cf596b61940f5ffafc6e12fe3b6a948b8f26b0
+# symmech 0.1.0 generated module; inputs sha256 36bc87d62b0fedb420c80484a7146b115cdedce87604a4ccd51e1499eb74baf2
+# source key c870549370df568037f3052d38a1a2c7a715623acf3e340dc8f66f0856b6c87d
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -34,9 +34,6 @@ from symmech.core.results import VERDICTS, Check, readable
 from symmech.core.scene import SceneError, SymmechError
 
 TEMPLATE = "report.html.j2"
-# Derivations whose sympy text is longer than this are listed, not typeset (H alone
-# is 19,000 characters: MathML of it would be megabytes nobody reads).
-MATHML_LIMIT = 2500
 PRECISION_FOLDER = "precision"  # a study beside the run: `symmech bench precision SCENE --out OUT/precision`
 
 
@@ -65,7 +62,7 @@ class Derivation:
     meaning: str
     unit: str
     equations: str
-    mathml: str | None  # None when too long to typeset
+    mathml: str | None  # None when too long to typeset (symmech.core.typeset.MATHML_LIMIT)
 
 
 def _paper_package(kind: str) -> str | None:
@@ -81,16 +78,6 @@ def _paper_package(kind: str) -> str | None:
     return match.group(1) if match else None
 
 
-def _name_mathml(name: str) -> str:
-    import sympy
-    from sympy.printing.mathml import mathml
-
-    head = name.split("_", 1)[0]
-    if len(head) == 1 or head.lower() in ("lambda", "omega", "theta", "phi", "psi"):
-        return mathml(sympy.Symbol(name), printer="presentation")
-    return f"<mtext>{name}</mtext>"
-
-
 def _used_modules(summary: dict) -> list[str] | None:
     """The generated modules the run imported, and the one it wrote for its scene (mechanisms)."""
     used = list(summary["generated_modules"]) if isinstance(summary.get("generated_modules"), dict) else []
@@ -99,47 +86,42 @@ def _used_modules(summary: dict) -> list[str] | None:
     return used or None
 
 
-def _specs(package: str | None, used: list[str] | None) -> list:
-    """ModuleSpecs of the paper package: those named in ``used`` (derived or printed; only their own
-    derivation modules run, by the generated index), else every derived one. Each derivation runs once per
-    process, shared with ``codegen`` and ``latex`` (:func:`symmech.core.codegen.derive`)."""
-    from symmech.core import codegen, discovery
+def _generated(package: str, used: list[str] | None) -> list[str]:
+    """Generated modules of the paper package: those named in ``used`` (derived or printed), else every derived one;
+    each derivation module's (by name) in the order it declares them (the generated index's order)."""
+    from symmech.core import discovery
     from symmech.generated import MODULES
 
-    if package is None:
-        return []
     if used:
-        producers = sorted({MODULES[name] for name in used if MODULES.get(name, "").startswith(f"symmech.{package}.")})
-        return [s for module in producers for s in codegen.derive(module)[0] if s.name in used]
-    return [s for module in discovery.modules("derivation") if module.startswith(f"symmech.{package}.")
-            for s in codegen.derive(module)[0]]
+        return [name for name, producer in MODULES.items() if name in used and producer.startswith(f"symmech.{package}.")]
+    derived = {m for m in discovery.modules("derivation") if m.startswith(f"symmech.{package}.")}
+    return [name for name, producer in MODULES.items() if producer in derived]
 
 
-def _longer_than(expr, limit: int) -> bool:
-    """Whether ``expr`` (a sympy expression or matrix) prints in more than ``limit`` characters. Each atom prints
-    in at least one, so past ``limit`` atoms the answer is known without printing: a matrix of ~10^5 characters
-    costs sympy seconds to print only to be measured."""
-    from symmech.core.latex import longer_than
+def _own_mechanism(summary: dict) -> list[Derivation]:
+    """The matrices of a mechanism scene of the user's own, whose module the run rendered (not in generated/):
+    derived again from the resolved scene the run recorded (sympy, seconds)."""
+    from symmech.core import typeset
+    from symmech.smm import build, derive
 
-    return longer_than(expr, limit, lambda node: not node.args) or len(str(expr)) > limit
+    spec = derive.module_spec(build.model(summary["scene"]))
+    return [Derivation(spec.name, f.name, f.meaning, f.unit, f.equations, typeset.block(f)) for f in spec.functions]
 
 
 def derivations(summary: dict, package: str | None) -> list[Derivation]:
     """The derived matrices behind the run: the modules it names, else its paper's derived modules
-    (for a mechanism, whose modules are per scene, only the one the run used)."""
-    from sympy.printing.mathml import mathml
+    (for a mechanism, whose modules are per scene, only the one the run used). A module of ``symmech.generated``
+    is read from its MathML twin (``<name>_mathml.py``, typeset by codegen: no sympy)."""
+    from symmech.generated import MODULES
 
     used = _used_modules(summary)
-    specs = [] if package == "smm" and not used else _specs(package, used)
-    out = []
-    for spec in specs:
-        for f in spec.functions:
-            expr = f.matrix if f.shape else f.matrix[0, 0]
-            typeset = None
-            if not _longer_than(expr, MATHML_LIMIT):
-                rhs = mathml(expr, printer="presentation")
-                typeset = (f'<math display="block"><mrow>{_name_mathml(f.name)}<mo>=</mo>{rhs}</mrow></math>')
-            out.append(Derivation(spec.name, f.name, f.meaning, f.unit, f.equations, typeset))
+    if package is None or (package == "smm" and not used):
+        return []
+    out = [Derivation(name, function, *shown) for name in _generated(package, used)
+           for function, shown in importlib.import_module(f"symmech.generated.{name}_mathml").FUNCTIONS.items()]
+    own = summary.get("generated_module")
+    if package == "smm" and own and Path(own).stem not in MODULES:
+        out += _own_mechanism(summary)
     return out
 
 

@@ -123,7 +123,8 @@ def test_changed_derivation_is_caught_and_unchanged_output_passes(tmp_path, monk
     monkeypatch.setattr(codegen, "derive", derive)
     assert main(["codegen", "--check", "--dir", str(folder)]) == 1
     stale = [line.strip() for line in capsys.readouterr().err.splitlines() if line.startswith("  ")]
-    assert stale == [str(folder / name) for name in ("trolley_frame.py", "trolley_frame_nb.py", "trolley_frame.c")]
+    assert stale == [str(folder / name) for name in ("trolley_frame.py", "trolley_frame_nb.py", "trolley_frame.c",
+                                                        "trolley_frame_mathml.py")]
 
 
 @pytest.mark.parametrize("damage", ["one byte", "truncated", "no header"])

@@ -145,3 +145,12 @@ def test_codegen_regenerates_an_edited_module(tmp_path):
     assert proc.stdout.splitlines()[-1] == "1 0", proc.stderr
     assert f"  {folder / 'trolley_printed.py'}" in proc.stderr.splitlines()
     assert (folder / "trolley_printed.py").read_bytes() == (GENERATED / "trolley_printed.py").read_bytes()
+
+
+def test_the_report_refuses_an_edited_mathml_twin(tmp_path):
+    """What the report typesets is a generated module like the others: an edited one is refused, not shown."""
+    code = ("from symmech.core.scene import SymmechError\nfrom symmech import report\n"
+            "try:\n    report.derivations({'generated_modules': {'trolley_frame': ''}}, 'trolley')\n"
+            "except SymmechError as exc:\n    print(exc)\n")
+    proc = _python(_edited_copy(tmp_path, "trolley_frame_mathml"), code, tmp_path)
+    assert proc.stdout == REFUSAL.format(name="trolley_frame_mathml") + "\n", proc.stderr

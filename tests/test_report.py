@@ -140,6 +140,72 @@ def test_mechanism_report_typesets_the_scene_matrices(reports):
     assert f"<td>smm_rotor_boom</td><td class=\"num\">{header.rsplit(' ', 1)[1]}</td>" in page
 
 
+PACKAGES = {"impact": "grain", "grain": "grain", "trolley": "trolley", "mechanism": "smm"}
+
+
+@pytest.mark.parametrize("kind", RUNS)
+def test_the_derivations_of_a_bundled_scene_import_no_sympy(reports, kind, tmp_path):
+    """They are read from the MathML codegen typeset into generated/, not derived again; the whole report of a
+    mechanism imports no sympy either (the grain's and the trolley's errata still derive their printed formulas)."""
+    code = ("import json, sys; from pathlib import Path; from symmech import report; "
+            f"summary = json.loads(Path({str(reports[kind] / 'summary.json')!r}).read_text()); "
+            f"shown = report.derivations(summary, {PACKAGES[kind]!r}); "
+            f"page = {kind == 'mechanism'} and report.render(Path({str(reports[kind])!r})); "
+            "print(len(shown), sum(d.mathml is not None for d in shown), 'sympy' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    shown, typeset, sympy_imported = proc.stdout.split()
+    assert int(shown) >= int(typeset) >= 5 and sympy_imported == "False", proc.stderr
+
+
+# (derivation module, generated module, function): a few of each paper, typeset by codegen
+TYPESET = [("symmech.grain.derive", "grain_impact", "rotation"), ("symmech.grain.derive", "grain_impact", "contact_height"),
+           ("symmech.trolley.derive", "trolley_frame", "Lambda"), ("symmech.trolley.derive", "trolley_frame", "A"),
+           ("symmech.smm.derive", "smm_rotor_boom", "a"), ("symmech.smm.derive", "smm_rotor_boom", "L_c")]
+
+
+@pytest.mark.parametrize(("producer", "module", "function"), TYPESET)
+def test_the_generated_mathml_is_sympys_of_the_derivation(producer, module, function):
+    """The MathML twin holds sympy's presentation MathML of the derived matrix, derived here again, with the
+    function's meaning, unit and equations."""
+    import importlib
+
+    from sympy.printing.mathml import mathml
+
+    from symmech.core import codegen
+
+    spec = next(s for s in codegen.derive(producer)[0] if s.name == module)
+    f = next(f for f in spec.functions if f.name == function)
+    meaning, unit, equations, typeset = importlib.import_module(f"symmech.generated.{module}_mathml").FUNCTIONS[function]
+    assert (meaning, unit, equations) == (f.meaning, f.unit, f.equations)
+    rhs = mathml(f.matrix if f.shape else f.matrix[0, 0], printer="presentation")
+    assert typeset.startswith('<math display="block"><mrow>') and typeset.endswith(f"<mo>=</mo>{rhs}</mrow></math>")
+
+
+def test_a_matrix_over_the_limit_is_listed_not_typeset():
+    """H of the grain (19,000 characters of sympy text) is named with its meaning, without MathML."""
+    from symmech.core import codegen, typeset
+    from symmech.generated import grain_impact_mathml
+
+    spec = next(s for s in codegen.derive("symmech.grain.derive")[0] if s.name == "grain_impact")
+    h = next(f for f in spec.functions if f.name == "H")
+    assert len(str(h.matrix)) > typeset.MATHML_LIMIT
+    assert grain_impact_mathml.FUNCTIONS["H"] == (h.meaning, h.unit, h.equations, None)
+
+
+def test_a_mechanism_of_the_users_own_is_derived_at_report_time(tmp_path):
+    """A mechanism not in generated/ (its module rendered by the run) is typeset from its scene at report time: the
+    rotor boom renamed shows its own module's functions, typeset as codegen typeset the bundled one's."""
+    from symmech.generated import smm_rotor_boom_mathml
+
+    scene = tmp_path / "my_boom.toml"
+    scene.write_text((SCENES / "smm_rotor_boom.toml").read_text().replace('name = "rotor_boom"', 'name = "my_boom"', 1))
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--report", "--quiet"]) == 0
+    page = html(tmp_path / "out")
+    for function, (_, _, _, typeset) in smm_rotor_boom_mathml.FUNCTIONS.items():
+        assert f"<code>smm_my_boom.{function}</code>" in page
+        assert typeset is None or typeset in page
+
+
 def test_missing_summary_is_a_one_line_error(tmp_path, capsys):
     assert main(["report", str(tmp_path)]) == 2
     err = capsys.readouterr().err

@@ -1,8 +1,9 @@
 """``symmech codegen``: regenerate ``generated/`` only where its inputs changed.
 
 A *producer* is a paper module declaring ``ROLE = "derivation"`` or ``"printed"``
-(:mod:`symmech.core.discovery`) with ``module_specs()``; every spec becomes three files, ``<name>.py`` (numpy, the
-reference), ``<name>_nb.py`` (numba) and ``<name>.c`` (C99), see :mod:`symmech.core.emit`.
+(:mod:`symmech.core.discovery`) with ``module_specs()``; every spec becomes four files, ``<name>.py`` (numpy, the
+reference), ``<name>_nb.py`` (numba), ``<name>.c`` (C99) and ``<name>_mathml.py`` (what ``symmech report`` typesets),
+see :mod:`symmech.core.emit`.
 
 Cache: each module's header records the *source key* of its producer, a
 sha256 of the symmech and sympy versions, every template, the source text of
@@ -35,9 +36,10 @@ from symmech.core import discovery, integrity
 from symmech.core.scene import scenes_folder
 
 INDEX = "__init__.py"
-TAILS = (".py", "_nb.py", ".c")  # emit.TARGETS' file names after the spec name, repeated: the fast path needs no sympy
+# emit.TARGETS' file names after the spec name, repeated: the fast path needs no sympy
+TAILS = (".py", "_nb.py", ".c", "_mathml.py")
 # The emitter's own files feed every key (not their imports: the error class's module does not shape output).
-EMITTER = ("symmech.core.emit", "symmech.core.integrity", "symmech.core.derivation")
+EMITTER = ("symmech.core.emit", "symmech.core.integrity", "symmech.core.derivation", "symmech.core.typeset")
 _PACKAGE_DIR = Path(symmech.__file__).resolve().parent
 ROOT = _PACKAGE_DIR.parent  # the repository in a checkout (where `symmech codegen` writes by default)
 _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by hand).
@@ -45,7 +47,8 @@ _INDEX_DOC = '''"""Numeric modules emitted by `symmech codegen` (never edit by h
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
 reference), ``<name>_nb.py`` is its numba twin (load it through
 ``symmech.numerics.kernels``), ``<name>.c`` its C99 twin (``symmech export``
-reads it through ``integrity.verify_file``). Regenerate with ``make codegen``; check with
+reads it through ``integrity.verify_file``), ``<name>_mathml.py`` what
+``symmech report`` typesets of it (no sympy at report time). Regenerate with ``make codegen``; check with
 ``symmech codegen --check``. This index is written by codegen too; importing
 it checks the body hash of every module of the package as it is imported.
 """
@@ -209,15 +212,17 @@ class Index:
     """``generated/__init__.py``: which producer declares each module, the data each producer reads, and each
     generated function's meaning and equations (``symmech latex --list`` reads them without deriving)."""
 
-    modules: dict[str, str] = field(default_factory=dict)  # spec name -> producer
+    # spec name -> producer, producers in name order, each one's modules in the order it declares them (the report's)
+    modules: dict[str, str] = field(default_factory=dict)
     inputs: dict[str, tuple[str, ...]] = field(default_factory=dict)  # producer -> data
     # "module.function" -> (meaning, equations), each module's functions in their declared order
     matrices: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     def text(self) -> str:
-        lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module, _nb and C twins)",
+        lines = [_INDEX_DOC, "# spec name -> the derivation module that declares it (numpy module, _nb, C and MathML twins);",
+                 "# derivation modules by name, each one's modules in the order it declares them (the report's)",
                  "MODULES = {"]
-        lines += [f"    {n!r}: {p!r}," for n, p in sorted(self.modules.items())]
+        lines += [f"    {n!r}: {p!r}," for n, p in self.modules.items()]
         lines += ["}", "# derivation module -> data files and folders its derivation reads (scenes/..., symmech/...)",
                   "INPUTS = {"]
         lines += [f"    {p!r}: {tuple(d)!r}," for p, d in sorted(self.inputs.items())]
@@ -240,7 +245,8 @@ class Index:
         return cls(values.get("MODULES", {}), values.get("INPUTS", {}), values.get("MATRICES", {}))
 
     def names(self, producer: str) -> list[str]:
-        return sorted(n for n, p in self.modules.items() if p == producer)
+        """The modules of ``producer`` in the order it declares them."""
+        return [n for n, p in self.modules.items() if p == producer]
 
     def listing(self, name: str) -> dict[str, tuple[str, str]]:
         """The entries of :attr:`matrices` of module ``name``."""

@@ -9,6 +9,8 @@ an output element, and whether a dynamics module's rates are printed on floats
 too (the numpy module's one-state path), nothing more. The C99 target
 (``<name>.c``) prints the same chunks as C statements into a flat row-major
 ``out`` (:func:`_c_context`), for code that leaves Python (``symmech export``).
+The MathML target (``<name>_mathml.py``) holds what ``symmech report`` shows of
+each function, its whole matrix typeset by :mod:`symmech.core.typeset`.
 
 Determinism: elements are split into chunks in matrix order, each chunk is
 CSE'd with ``order="canonical"`` and a fixed symbol stream, and the header
@@ -29,11 +31,12 @@ from pathlib import Path
 import jinja2
 import sympy
 from sympy.printing.c import C99CodePrinter
+from sympy.printing.mathml import MathMLPresentationPrinter
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
 from symmech import __version__
-from symmech.core import integrity
+from symmech.core import integrity, typeset
 from symmech.core.derivation import Dynamics, ModuleSpec, NamedMatrix
 
 # Elements per chunk: each chunk is CSE'd on its own and, when a function has
@@ -140,7 +143,9 @@ NUMPY = Target("", "module.py.j2", _NumPyPrinter, "...", frozenset({"out", "batc
 NUMBA = Target("_nb", "numba.py.j2", _MathPrinter, "_k",
                frozenset({"out", "_k", "_steps", "_arrays", "_batch", "math", "numba", "numpy"}), False)
 C99 = Target("", "c99.c.j2", _CPrinter, "", _C_RESERVED, False, ".c", "//")
-TARGETS = (NUMPY, NUMBA, C99)
+# what `symmech report` shows of each function, typeset at codegen so that a report needs no sympy
+MATHML = Target("_mathml", "mathml.py.j2", MathMLPresentationPrinter, "", frozenset(), False)
+TARGETS = (NUMPY, NUMBA, C99, MATHML)
 # functions of a dynamics module that take (t, y, p) in C, the layout of Dynamics.args
 DYNAMICS_FUNCTIONS = ("rate", "rate_jacobian", "rate_mass", "event_values", "rate_and_mass_block")
 
@@ -222,6 +227,18 @@ def _c_context(spec: ModuleSpec, nm: NamedMatrix) -> dict:
             "size": math.prod(nm.shape), "shape": nm.shape, "by_layout": by_layout, "chunks": chunks}
 
 
+def _mathml_context(nm: NamedMatrix) -> dict:
+    """What the report shows of ``nm``: name, meaning, unit, equations, and its MathML (None when too long)."""
+    return {"name": nm.name, "meaning": nm.meaning, "unit": nm.unit, "equations": nm.equations,
+            "mathml": typeset.block(nm)}
+
+
+def _context(spec: ModuleSpec, nm: NamedMatrix, target: Target) -> dict:
+    if target is C99:
+        return _c_context(spec, nm)
+    return _mathml_context(nm) if target is MATHML else _function_context(nm, target)
+
+
 def _dynamics_context(dyn: Dynamics) -> dict:
     """Layout constants and the call of the rate functions from ``(t, y, p)``."""
     def layout(args):
@@ -299,9 +316,10 @@ def render(spec: ModuleSpec, target: Target = NUMPY, key: str = NO_KEY) -> str:
         undefined=jinja2.StrictUndefined,
     )
     env.filters["c_comment"] = lambda text: str(text).replace("*/", "* /")
+    env.filters["pyrepr"] = repr
     body = env.get_template(target.template).render(
-        spec=spec,
-        functions=[(_c_context(spec, f) if target is C99 else _function_context(f, target)) for f in spec.functions],
+        spec=spec, limit=typeset.MATHML_LIMIT,
+        functions=[_context(spec, f, target) for f in spec.functions],
         dynamics=_dynamics_context(spec.dynamics) if spec.dynamics else None,
         floats={f.name: _float_context(f) for f in spec.functions
                 if target.float_rates and spec.dynamics and f.name in ("rate", "rate_jacobian", "rate_mass")},

@@ -10,11 +10,12 @@ so runtime modules import this module lazily.
 from __future__ import annotations
 
 import functools
-import itertools
 import re
 import unicodedata
 
 import sympy
+
+from symmech.core.typeset import longer_than
 
 WIDTH = 110  # characters of LaTeX source per line: about one printed line
 MATRIX_WIDTH = 400  # a whole matrix up to this length is printed as one matrix
@@ -61,19 +62,6 @@ def _short(expr, width: int) -> str | None:
         return None
     text = sympy.latex(expr)
     return text if len(text) <= width else None
-
-
-def longer_than(expr, width: int, least) -> bool:
-    """Whether ``expr`` (an expression or a matrix, every entry) prints in more than ``width`` characters by a
-    lower bound alone: the sum of ``least(node)`` over its tree, each node's fewest characters in the printer's
-    form. Stops as soon as the sum passes ``width``, so a huge tree costs no more than ``width`` nodes."""
-    entries = expr if isinstance(expr, sympy.MatrixBase) else [expr]
-    total = 0
-    for node in itertools.chain.from_iterable(map(sympy.preorder_traversal, entries)):
-        total += least(node)
-        if total > width:
-            return True
-    return False
 
 
 def _least_latex(node) -> int:
