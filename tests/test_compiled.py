@@ -132,17 +132,29 @@ def test_chunked_function_compiles_and_matches(tmp_path, monkeypatch):
     assert np.isinf(numba_module.big_scalar(0.5, 1.0)[0, 1])  # error_model="numpy": no ZeroDivisionError
 
 
+def _imports(path) -> set[str]:
+    imported = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            imported.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            imported.add(node.module)
+    return imported
+
+
 def test_compiled_modules_import_numpy_numba_math_only():
+    """Every numpy module has its numba twin, which imports math, numba and numpy only; the report's MathML
+    twins import nothing."""
     files = sorted(GENERATED.glob("*_nb.py"))
-    assert len(files) == len(list(GENERATED.glob("*.py"))) // 2
+    numpy_modules = [p for p in GENERATED.glob("*.py")
+                     if p.name != "__init__.py" and not p.stem.endswith(("_nb", "_mathml"))]
+    assert sorted(p.stem for p in files) == sorted(f"{p.stem}_nb" for p in numpy_modules) and len(files) > 15
     for path in files:
-        imported = set()
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                imported.update(a.name for a in node.names)
-            elif isinstance(node, ast.ImportFrom):
-                imported.add(node.module)
-        assert imported == {"math", "numba", "numpy"}, path.name
+        assert _imports(path) == {"math", "numba", "numpy"}, path.name
+    mathml = sorted(GENERATED.glob("*_mathml.py"))
+    assert sorted(p.stem for p in mathml) == sorted(f"{p.stem}_mathml" for p in numpy_modules)
+    for path in mathml:
+        assert _imports(path) == set(), path.name
 
 
 NUMBA_BLOCKER = textwrap.dedent("""
