@@ -11,14 +11,12 @@ Run: python benchmarks/bench_errata.py --tree OLD --tree NEW [--paper smm] [--sc
 from __future__ import annotations
 
 import argparse
-import resource
-import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
-from timing import Stats, machine, tree_env
+from timing import Stats, child_cpu, machine, tree_env
 
 PROBE = """\
 import sys, time
@@ -40,14 +38,13 @@ def _run(tree: str, scene: str, report: bool) -> tuple[float, float]:
     """(CPU, wall) seconds of one ``symmech run`` of ``scene`` in ``tree``."""
     with tempfile.TemporaryDirectory() as out:
         command = [sys.executable, "-m", "symmech", "run", scene, "--out", out, "--quiet"] + ["--report"] * report
-        before, start = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-        subprocess.run(command, env=tree_env(tree), cwd=tree, check=True, stdout=subprocess.DEVNULL)
-        wall, after = time.perf_counter() - start, resource.getrusage(resource.RUSAGE_CHILDREN)
-    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime, wall
+        start = time.perf_counter()
+        cpu, _ = child_cpu(command, env=tree_env(tree), cwd=tree, stdout=subprocess.DEVNULL)
+    return cpu, time.perf_counter() - start
 
 
 def _line(label: str, values: list[float]) -> str:
-    return f"{label:<34} {Stats(statistics.median(values), min(values), max(values), len(values)).text()}"
+    return f"{label:<34} {Stats.of(values).text()}"
 
 
 def main() -> None:

@@ -19,15 +19,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
-from timing import tree_env
+from timing import child_cpu, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 SETUP = ("import time, numpy as np; from symmech.core import pipeline; from symmech.grain.motion_engine import driver as compiled; "
@@ -57,11 +55,8 @@ SWEEP = ("import time, tomllib, numpy as np; from symmech.core import pipeline; 
 def child(tree: Path, code: str, cache: str) -> tuple[float, str]:
     """(CPU seconds, stdout) of ``code`` in a fresh process on ``tree`` with numba's cache in ``cache``."""
     env = {**tree_env(tree), "NUMBA_CACHE_DIR": cache}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run([sys.executable, "-c", code], cwd=tree, env=env, check=True, capture_output=True,
-                         text=True).stdout
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime, out
+    cpu, done = child_cpu([sys.executable, "-c", code], cwd=tree, env=env, capture_output=True, text=True)
+    return cpu, done.stdout
 
 
 def summary(xs: list) -> str:

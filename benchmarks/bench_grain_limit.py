@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
 import time
 from dataclasses import replace
 
@@ -59,7 +58,7 @@ def cpu_interleaved(contenders: dict, repeats: int, number: int = 1) -> dict[str
             for _ in range(number):
                 fn()
             samples[name].append((time.process_time() - start) / number)
-    return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
+    return {name: Stats.of(s) for name, s in samples.items()}
 
 
 # --------------------------------------------------------------------------- the floor: kernels alone

@@ -14,14 +14,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
-import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from timing import Stats, machine, ratio, tree_env
+from timing import Stats, child_cpu, machine, ratio, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 RUNS = ("grain_default", "trolley_helix")
@@ -37,12 +35,9 @@ print(time.process_time() - start)
 
 def _run_seconds(tree: Path, scene: str, out: Path) -> float:
     """CPU seconds of ``symmech run SCENE --report`` with ``tree``."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([sys.executable, "-m", "symmech", "run", str(tree / "scenes" / f"{scene}.toml"), "--out",
-                    str(out), "--report", "--quiet"], check=True, cwd=tree, env=tree_env(tree),
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    command = [sys.executable, "-m", "symmech", "run", str(tree / "scenes" / f"{scene}.toml"), "--out", str(out),
+               "--report", "--quiet"]
+    return child_cpu(command, cwd=tree, env=tree_env(tree), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)[0]
 
 
 def _derive_seconds(tree: Path, summary: dict, package: str) -> float:
@@ -85,7 +80,7 @@ def main() -> None:
                     samples.setdefault((f"report.derivations {case}", name), []).append(
                         _derive_seconds(tree, summary, package))
     print(f"# {machine()}; CPU seconds, median (min, max) of {args.repeats} interleaved rounds")
-    stats = {key: Stats(statistics.median(s), min(s), max(s), len(s)) for key, s in samples.items()}
+    stats = {key: Stats.of(s) for key, s in samples.items()}
     for what in dict.fromkeys(what for what, _ in stats):
         base, this = stats[(what, "base")], stats[(what, "this")]
         print(f"{what}\n  base {base.text()}\n  this {this.text()}\n  base/this {ratio(base, this)}")

@@ -5,7 +5,9 @@ machine that slows down for a while slows every contender alike.
 """
 from __future__ import annotations
 
+import resource
 import statistics
+import subprocess
 import time
 from dataclasses import dataclass
 from collections.abc import Callable
@@ -17,6 +19,11 @@ class Stats:
     low: float
     high: float
     n: int
+
+    @classmethod
+    def of(cls, samples) -> Stats:
+        """Median, min, max and count of ``samples``."""
+        return cls(statistics.median(samples), min(samples), max(samples), len(samples))
 
     def text(self, unit: str = "s", scale: float = 1.0) -> str:
         return (f"{self.median * scale:9.4g} {unit} (min {self.low * scale:.4g}, max {self.high * scale:.4g}, "
@@ -33,25 +40,28 @@ def interleaved(contenders: dict[str, Callable[[], object]], repeats: int = 5,
             for _ in range(number):
                 fn()
             samples[name].append((time.perf_counter() - start) / number)
-    return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
+    return {name: Stats.of(s) for name, s in samples.items()}
+
+
+def child_cpu(command: list[str], **run) -> tuple[float, subprocess.CompletedProcess]:
+    """CPU seconds (user + system) of one child process running ``command`` (``subprocess.run`` with ``check=True``
+    and the keywords ``run``), by getrusage of the children, so whatever else the machine runs does not count; and
+    the finished process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    done = subprocess.run(command, check=True, **run)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime, done
 
 
 def interleaved_cpu(commands: dict[str, list[str]], repeats: int = 5, number: int = 20) -> dict[str, Stats]:
     """CPU seconds (user + system) per run of each command (a process, its output discarded): ``number`` runs per
-    round, rounds interleaved over ``repeats``; the CPU time is the children's by getrusage, so it excludes
-    whatever else the machine runs."""
-    import resource
-    import subprocess
-
+    round, rounds interleaved over ``repeats``; the CPU time is the children's (:func:`child_cpu`)."""
     samples = {name: [] for name in commands}
     for _ in range(repeats):
         for name, command in commands.items():
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            for _ in range(number):
-                subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            samples[name].append((after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime) / number)
-    return {name: Stats(statistics.median(s), min(s), max(s), len(s)) for name, s in samples.items()}
+            runs = [child_cpu(command, stdout=subprocess.DEVNULL)[0] for _ in range(number)]
+            samples[name].append(sum(runs) / number)
+    return {name: Stats.of(s) for name, s in samples.items()}
 
 
 def tree_env(tree) -> dict:
