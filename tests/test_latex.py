@@ -31,7 +31,8 @@ def balanced(text: str) -> None:
     assert text.count(r"\bigl(") == text.count(r"\bigr)")
 
 
-# The largest expressions take 1-15 s each to lay out (~80 s CPU in all): the slow tier prints them.
+# The largest expressions take seconds each to lay out (~35 s of CPU in all with their `--cse` forms, 160 s
+# before symmech.core.latex printed each subexpression once): the slow tier prints them.
 HEAVY = ("trolley_elastic_lagrange.rate", "trolley_elastic_lagrange.lagrange_residual",
          "trolley_elastic_lagrange.rate_mass", "smm_spatial_boom.rate", "smm_spatial_boom.c",
          "smm_spatial_boom.rate_jacobian", "grain_sliding.stick_force", "grain_sliding.slip_direction",
