@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 c70b5343b7edc5417341bf92cc110bceebec2a95503cf85d68649ca0b0727971
+# symmech 0.1.0 generated module; inputs sha256 00f8015020c041f1c74af8807bf39c8424e877edd955d5a1f2818966d12591de
 # source key 0000000000000000000000000000000000000000000000000000000000000000
-# body sha256 c70b5343b7edc5417341bf92cc110bceebec2a95503cf85d68649ca0b0727971
+# body sha256 00f8015020c041f1c74af8807bf39c8424e877edd955d5a1f2818966d12591de
 """Numeric modules emitted by `symmech codegen` (never edit by hand).
 
 Installed as ``symmech.generated``: ``<name>.py`` needs numpy only (the
@@ -75,6 +75,7 @@ MATRICES = {
     'grain_impact_printed.system_19_residual': ('residuals of (19) as printed', '(19)'),
     'grain_impact_printed.functional': ('Phi as printed (sum of residuals)', '(24)'),
     'grain_impact_printed.gradient': ('grad Phi as printed', '(25)-(27)'),
+    'grain_impact_printed.functional_gradient': ('grad Phi derived from the printed (24)', '(24)'),
     'grain_impact_printed.euler_rate_system': ('matrix a as printed', '(44)-(52)'),
     'grain_impact_printed.euler_rate_rhs': ('right-hand side b as printed', '(53)-(55)'),
     'grain_impact_printed.cramer_solution': ("Euler rates by Cramer's rule as printed", '(58)-(60)'),

@@ -1,6 +1,6 @@
-// symmech 0.1.0 generated module; inputs sha256 80860e4f52f0f559b1a40ee168e236b177ee992a0f26fdc841e73cb1f8feb964
-// source key 2adf97c1cd34774c9063aa9496c6aa544b7f0c20104d21949a2082d950697dc1
-// body sha256 bdd3772db487410e52c8b5a19b94ecbc734bbe29bf3a7433a9bce9913ecc720d
+// symmech 0.1.0 generated module; inputs sha256 aa8237665202607be5395bef1ce27e23289f36574abfaddca58d05443bacead0
+// source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+// body sha256 f19ced16afd015af0ba45f11f58625238318692cba1e0e56509e18457b145075
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
    Source: seed 000_b52a2f612feb4113, eqs (3)-(60), transcribed in symmech.grain.printed.
@@ -191,6 +191,33 @@ void grain_impact_printed_gradient(const double *sm_arg, double *out)
     out[0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0;
     out[1] = -h_xz - h_yz - h_zz;
     out[2] = -T_x*(h_yy + h_yz)/pow(x1, 2) + m*x1*x2*x3 - m*x2*x3*sin(mu);
+}
+
+/* grad Phi derived from the printed (24), eqs. (24): (3) [1, 1, N*s/rad].
+   Arguments: T_x [N*s], T_z [N*s], mu [rad], h_xx [1], h_xy [1], h_xz [1], h_yy [1], h_yz [1], h_zz [1], m [kg], lambda_ [1], e [1], u_x0 [m/s], u_y0 [m/s], u_z0 [m/s]. */
+void grain_impact_printed_functional_gradient(const double *sm_arg, double *out)
+{
+    (void)sm_arg;
+    const double T_x = sm_arg[0];
+    const double mu = sm_arg[2];
+    const double h_xx = sm_arg[3];
+    const double h_xy = sm_arg[4];
+    const double h_xz = sm_arg[5];
+    const double h_yy = sm_arg[6];
+    const double h_yz = sm_arg[7];
+    const double h_zz = sm_arg[8];
+    const double m = sm_arg[9];
+    const double lambda_ = sm_arg[10];
+    const double u_x0 = sm_arg[12];
+    const double u_y0 = sm_arg[13];
+    const double x0 = tan(mu);
+    const double x1 = T_x*(pow(x0, 2) + 1);
+    const double x2 = sqrt(pow(u_x0, 2) + pow(u_y0, 2));
+    const double x3 = 1 - lambda_;
+    for (int sm_i = 0; sm_i < 3; sm_i++) out[sm_i] = 0.0;
+    out[0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0;
+    out[1] = -h_xz - h_yz - h_zz;
+    out[2] = -h_xy*x1 - h_yy*x1 - h_yz*x1 - m*x2*x3*sin(mu) + m*x2*x3*cos(mu);
 }
 
 /* matrix a as printed, eqs. (44)-(52): (3, 3) [kg*m^2].

@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 4feb30eab165a9ec372bd716499c7591536d67f4a8341acc6a1b49b1f29a1d75
-# source key 2adf97c1cd34774c9063aa9496c6aa544b7f0c20104d21949a2082d950697dc1
-# body sha256 eb24ac30fbf4310004a8ec426f35dba5e1c4a2d2c2a2ddecb64617e1b24d051b
+# symmech 0.1.0 generated module; inputs sha256 095e8e0c52e8add83490d6d8c4aabc35370abcea71c3d698004d315d37871c1c
+# source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+# body sha256 f41147c8a23a603be9f5217d9974fcc4edb0467ad4db6750a461ed52b2080d3f
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Source: seed 000_b52a2f612feb4113, eqs (3)-(60), transcribed in symmech.grain.printed.
@@ -11,7 +11,7 @@ Needs numpy only.
 """
 import numpy
 
-__all__ = ["inertia_ratio", "H", "system_19_residual", "functional", "gradient", "euler_rate_system", "euler_rate_rhs", "cramer_solution", "body_components", "centre_velocity_after"]
+__all__ = ["inertia_ratio", "H", "system_19_residual", "functional", "gradient", "functional_gradient", "euler_rate_system", "euler_rate_rhs", "cramer_solution", "body_components", "centre_velocity_after"]
 
 
 def _batch(*args):
@@ -302,6 +302,59 @@ def gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_
     out[..., 0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0
     out[..., 1] = -h_xz - h_yz - h_zz
     out[..., 2] = -T_x*(h_yy + h_yz)/x1**2 + m*x1*x2*x3 - m*x2*x3*numpy.sin(mu)
+    return out
+
+
+def functional_gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
+    """grad Phi derived from the printed (24) — eqs. (24).
+
+    Parameters
+    ----------
+    T_x : array_like
+        impulse, X [N*s]
+    T_z : array_like
+        impulse, Z [N*s]
+    mu : array_like
+        angle of the tangential impulse and velocity from X [rad]
+    h_xx : array_like
+        reduction tensor entry xx [1]
+    h_xy : array_like
+        reduction tensor entry xy [1]
+    h_xz : array_like
+        reduction tensor entry xz [1]
+    h_yy : array_like
+        reduction tensor entry yy [1]
+    h_yz : array_like
+        reduction tensor entry yz [1]
+    h_zz : array_like
+        reduction tensor entry zz [1]
+    m : array_like
+        mass [kg]
+    lambda_ : array_like
+        tangential reduction factor lambda [1]
+    e : array_like
+        normal restitution coefficient [1]
+    u_x0 : array_like
+        pre-impact contact-point velocity, X [m/s]
+    u_y0 : array_like
+        pre-impact contact-point velocity, Y [m/s]
+    u_z0 : array_like
+        pre-impact contact-point velocity, Z [m/s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        [1, 1, N*s/rad]
+    """
+    (T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0,), batch = _batch(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty(batch + (3,))
+    x0 = numpy.tan(mu)
+    x1 = T_x*(x0**2 + 1)
+    x2 = numpy.sqrt(u_x0**2 + u_y0**2)
+    x3 = 1 - lambda_
+    out[..., 0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0
+    out[..., 1] = -h_xz - h_yz - h_zz
+    out[..., 2] = -h_xy*x1 - h_yy*x1 - h_yz*x1 - m*x2*x3*numpy.sin(mu) + m*x2*x3*numpy.cos(mu)
     return out
 
 

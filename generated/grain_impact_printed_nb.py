@@ -1,6 +1,6 @@
-# symmech 0.1.0 generated module; inputs sha256 2ce7206d717d8118d1ba88fbece7e7ccc37333bea77e4638cfe60d7d16ee6572
-# source key 2adf97c1cd34774c9063aa9496c6aa544b7f0c20104d21949a2082d950697dc1
-# body sha256 092df220c043d5420090bfb955882ab3c2505a970682677a3d2183d86d853a10
+# symmech 0.1.0 generated module; inputs sha256 9ac8da813c32473e514b7a11375003f200f2310be67175cdeb722cca52389f0b
+# source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+# body sha256 17686d5ecd709fc01ce8406726493ed87f2bfef80365f2679427f555582ab306
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 
 Compiled twin of `symmech.generated.grain_impact_printed` (the numpy module, the
@@ -33,7 +33,7 @@ import numpy
 
 PARALLEL_BATCH = 20000
 
-__all__ = ["inertia_ratio", "inertia_ratio_into", "inertia_ratio_scalar", "H", "H_into", "H_scalar", "system_19_residual", "system_19_residual_into", "system_19_residual_scalar", "functional", "functional_into", "functional_scalar", "gradient", "gradient_into", "gradient_scalar", "euler_rate_system", "euler_rate_system_into", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_into", "euler_rate_rhs_scalar", "cramer_solution", "cramer_solution_into", "cramer_solution_scalar", "body_components", "body_components_into", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_into", "centre_velocity_after_scalar"]
+__all__ = ["inertia_ratio", "inertia_ratio_into", "inertia_ratio_scalar", "H", "H_into", "H_scalar", "system_19_residual", "system_19_residual_into", "system_19_residual_scalar", "functional", "functional_into", "functional_scalar", "gradient", "gradient_into", "gradient_scalar", "functional_gradient", "functional_gradient_into", "functional_gradient_scalar", "euler_rate_system", "euler_rate_system_into", "euler_rate_system_scalar", "euler_rate_rhs", "euler_rate_rhs_into", "euler_rate_rhs_scalar", "cramer_solution", "cramer_solution_into", "cramer_solution_scalar", "body_components", "body_components_into", "body_components_scalar", "centre_velocity_after", "centre_velocity_after_into", "centre_velocity_after_scalar"]
 
 
 def _flat(*args):
@@ -482,6 +482,90 @@ def gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_
     _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
     out = numpy.empty((math.prod(_batch),) + (3,))
     (_gradient_ploop if len(out) >= PARALLEL_BATCH else _gradient_loop)(*_arrays, _steps, out)
+    return out.reshape(_batch + (3,))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _functional_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, _k):
+    x0 = math.tan(mu)
+    x1 = T_x*(x0**2 + 1)
+    x2 = math.sqrt(u_x0**2 + u_y0**2)
+    x3 = 1 - lambda_
+    out[_k, 0] = -h_xx - h_xy*x0 - h_xy - h_xz - h_yy*x0 - h_yz*x0
+    out[_k, 1] = -h_xz - h_yz - h_zz
+    out[_k, 2] = -h_xy*x1 - h_yy*x1 - h_yz*x1 - m*x2*x3*math.sin(mu) + m*x2*x3*math.cos(mu)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def functional_gradient_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out):
+    """grad Phi derived from the printed (24): floats in, written into out[0] (out: float64 (1, 3)) [1, 1, N*s/rad]."""
+    _functional_gradient_0(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out, 0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def functional_gradient_scalar(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
+    """grad Phi derived from the printed (24): floats in, a float64 array (3,) out [1, 1, N*s/rad]."""
+    out = numpy.empty((1, 3))
+    functional_gradient_into(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, out)
+    return out[0]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _functional_gradient_loop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in range(out.shape[0]):
+        _functional_gradient_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
+
+
+@numba.njit(cache=True, error_model="numpy", parallel=True)
+def _functional_gradient_ploop(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0, _steps, out):
+    for _k in numba.prange(out.shape[0]):
+        _functional_gradient_0(T_x[_k * _steps[0]], T_z[_k * _steps[1]], mu[_k * _steps[2]], h_xx[_k * _steps[3]], h_xy[_k * _steps[4]], h_xz[_k * _steps[5]], h_yy[_k * _steps[6]], h_yz[_k * _steps[7]], h_zz[_k * _steps[8]], m[_k * _steps[9]], lambda_[_k * _steps[10]], e[_k * _steps[11]], u_x0[_k * _steps[12]], u_y0[_k * _steps[13]], u_z0[_k * _steps[14]], out, _k)
+
+
+def functional_gradient(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0):
+    """grad Phi derived from the printed (24) — eqs. (24).
+
+    Parameters
+    ----------
+    T_x : array_like
+        impulse, X [N*s]
+    T_z : array_like
+        impulse, Z [N*s]
+    mu : array_like
+        angle of the tangential impulse and velocity from X [rad]
+    h_xx : array_like
+        reduction tensor entry xx [1]
+    h_xy : array_like
+        reduction tensor entry xy [1]
+    h_xz : array_like
+        reduction tensor entry xz [1]
+    h_yy : array_like
+        reduction tensor entry yy [1]
+    h_yz : array_like
+        reduction tensor entry yz [1]
+    h_zz : array_like
+        reduction tensor entry zz [1]
+    m : array_like
+        mass [kg]
+    lambda_ : array_like
+        tangential reduction factor lambda [1]
+    e : array_like
+        normal restitution coefficient [1]
+    u_x0 : array_like
+        pre-impact contact-point velocity, X [m/s]
+    u_y0 : array_like
+        pre-impact contact-point velocity, Y [m/s]
+    u_z0 : array_like
+        pre-impact contact-point velocity, Z [m/s]
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        [1, 1, N*s/rad]
+    """
+    _arrays, _steps, _batch = _flat(T_x, T_z, mu, h_xx, h_xy, h_xz, h_yy, h_yz, h_zz, m, lambda_, e, u_x0, u_y0, u_z0)
+    out = numpy.empty((math.prod(_batch),) + (3,))
+    (_functional_gradient_ploop if len(out) >= PARALLEL_BATCH else _functional_gradient_loop)(*_arrays, _steps, out)
     return out.reshape(_batch + (3,))
 
 

@@ -98,20 +98,26 @@ def _generated(package: str, used: list[str] | None) -> list[str]:
     return [name for name, producer in MODULES.items() if producer in derived]
 
 
-def _own_mechanism(summary: dict) -> list[Derivation]:
-    """The matrices of a mechanism scene of the user's own, whose module the run rendered (not in generated/):
-    derived again from the resolved scene the run recorded (sympy, seconds)."""
+def _own_mechanism(summary: dict, folder: Path | None) -> list[Derivation]:
+    """The matrices of a mechanism scene of the user's own, whose module the run rendered (not in generated/): the
+    run's own spec when this process rendered the module in ``folder`` (``run --report``), else derived again from the
+    resolved scene the run recorded (sympy, seconds)."""
     from symmech.core import typeset
-    from symmech.smm import build, derive
+    from symmech.smm import scene
 
-    spec = derive.module_spec(build.model(summary["scene"]))
+    path = folder / summary["generated_module"] if folder else None
+    spec = scene.rendered_spec(path.read_text()) if path and path.is_file() else None
+    if spec is None:
+        from symmech.smm import build, derive
+
+        spec = derive.module_spec(build.model(summary["scene"]))
     return [Derivation(spec.name, f.name, f.meaning, f.unit, f.equations, typeset.block(f)) for f in spec.functions]
 
 
-def derivations(summary: dict, package: str | None) -> list[Derivation]:
-    """The derived matrices behind the run: the modules it names, else its paper's derived modules
-    (for a mechanism, whose modules are per scene, only the one the run used). A module of ``symmech.generated``
-    is read from its MathML twin (``<name>_mathml.py``, typeset by codegen: no sympy)."""
+def derivations(summary: dict, package: str | None, folder: Path | None = None) -> list[Derivation]:
+    """The derived matrices behind the run (its output folder ``folder``): the modules it names, else its paper's
+    derived modules (for a mechanism, whose modules are per scene, only the one the run used). A module of
+    ``symmech.generated`` is read from its MathML twin (``<name>_mathml.py``, typeset by codegen: no sympy)."""
     from symmech.generated import MODULES
 
     used = _used_modules(summary)
@@ -121,7 +127,7 @@ def derivations(summary: dict, package: str | None) -> list[Derivation]:
            for function, shown in importlib.import_module(f"symmech.generated.{name}_mathml").FUNCTIONS.items()]
     own = summary.get("generated_module")
     if package == "smm" and own and Path(own).stem not in MODULES:
-        out += _own_mechanism(summary)
+        out += _own_mechanism(summary, folder)
     return out
 
 
@@ -336,7 +342,7 @@ def render(out: Path) -> str:
     summary = _read_summary(Path(out))
     kind = str(summary.get("kind", "unknown"))
     package = _paper_package(kind)
-    derived = derivations(summary, package)
+    derived = derivations(summary, package, Path(out))
     checks = _checks(summary)
     headline = _headline(summary)
     warnings = [readable(w) for w in summary.get("warnings", [])]

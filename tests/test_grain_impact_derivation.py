@@ -139,6 +139,24 @@ def test_euler_rate_matrix_matches_finite_differences():
         np.testing.assert_allclose(W @ rates, omega_body, rtol=1e-7, atol=1e-8)
 
 
+def test_gradient_of_the_printed_functional_matches_finite_differences():
+    """functional_gradient, the errata's reference for (25)-(27), is the gradient of the printed (24) in
+    (T_x, T_z, mu): central differences of printed.functional, step 1e-6 of each variable's scale."""
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(3, 3))
+    H = np.eye(3) + A @ A.T
+    h = (H[0, 0], H[0, 1], H[0, 2], H[1, 1], H[1, 2], H[2, 2])
+    m, lam, e, u = 1e-5, 0.3, 0.6, (0.4, -0.2, -0.7)
+    for x in rng.normal(size=(10, 3)) * np.array([m, m, 0.5]):
+        grad = printed.functional_gradient(*x, *h, m, lam, e, *u)
+        for k, step in enumerate((1e-6 * m, 1e-6 * m, 1e-6)):
+            up, down = x.copy(), x.copy()
+            up[k] += step
+            down[k] -= step
+            difference = (printed.functional(*up, *h, m, lam, e, *u) - printed.functional(*down, *h, m, lam, e, *u))
+            assert grad[k] == pytest.approx(difference.item() / (2 * step), rel=1e-7, abs=1e-9 * m)
+
+
 def test_mu_equation_is_the_determinant_condition():
     """F(mu) from the generated coefficients equals det[H d, H e_z, du(mu)] evaluated directly."""
     rng = np.random.default_rng(11)

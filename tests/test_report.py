@@ -146,7 +146,7 @@ PACKAGES = {"impact": "grain", "grain": "grain", "trolley": "trolley", "mechanis
 @pytest.mark.parametrize("kind", RUNS)
 def test_the_derivations_of_a_bundled_scene_import_no_sympy(reports, kind, tmp_path):
     """They are read from the MathML codegen typeset into generated/, not derived again; the whole report of a
-    mechanism imports no sympy either (the grain's and the trolley's errata still derive their printed formulas)."""
+    mechanism imports no sympy either (the trolley's errata build a helix track from its expressions in sympy)."""
     code = ("import json, sys; from pathlib import Path; from symmech import report; "
             f"summary = json.loads(Path({str(reports[kind] / 'summary.json')!r}).read_text()); "
             f"shown = report.derivations(summary, {PACKAGES[kind]!r}); "
@@ -155,6 +155,15 @@ def test_the_derivations_of_a_bundled_scene_import_no_sympy(reports, kind, tmp_p
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     shown, typeset, sympy_imported = proc.stdout.split()
     assert int(shown) >= int(typeset) >= 5 and sympy_imported == "False", proc.stderr
+
+
+def test_the_grains_errata_import_no_sympy(tmp_path):
+    """The gradient of the printed (24) that (25)-(27) are checked against is generated at codegen."""
+    code = ("import sys; from symmech import report; "
+            "print(len(report.errata_records('grain')), 'sympy' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    records, sympy_imported = proc.stdout.split()
+    assert int(records) >= 27 and sympy_imported == "False", proc.stderr
 
 
 # (derivation module, generated module, function): a few of each paper, typeset by codegen
@@ -204,6 +213,26 @@ def test_a_mechanism_of_the_users_own_is_derived_at_report_time(tmp_path):
     for function, (_, _, _, typeset) in smm_rotor_boom_mathml.FUNCTIONS.items():
         assert f"<code>smm_my_boom.{function}</code>" in page
         assert typeset is None or typeset in page
+
+
+def test_run_report_of_a_mechanism_of_the_users_own_derives_it_once(tmp_path, monkeypatch):
+    """`run --report` typesets the spec the run rendered its module from, not a second derivation; its page shows
+    what a report without the run's folder derives again from the recorded scene."""
+    from symmech import report
+    from symmech.smm import derive
+
+    scene = tmp_path / "my_boom.toml"
+    scene.write_text((SCENES / "smm_rotor_boom.toml").read_text().replace('name = "rotor_boom"', 'name = "my_boom"', 1))
+    derived = []
+    monkeypatch.setattr(derive, "module_spec", lambda m, spec=derive.module_spec: derived.append(m.name) or spec(m))
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--report", "--quiet"]) == 0
+    assert derived == ["my_boom"]
+    again = report.derivations(json.loads((tmp_path / "out" / "summary.json").read_text()), "smm")
+    assert derived == ["my_boom", "my_boom"] and sum(d.module == "smm_my_boom" for d in again) >= 5
+    page = html(tmp_path / "out")
+    for d in again:
+        assert f"<code>{d.module}.{d.name}</code>" in page
+        assert d.mathml is None or d.mathml in page
 
 
 def test_missing_summary_is_a_one_line_error(tmp_path, capsys):

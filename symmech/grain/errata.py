@@ -1,18 +1,14 @@
 """Seed 000, eqs (3)-(60): printed formulas against the derivation, at seeded random points."""
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from symmech.core.errata import Check, NotCompared
 from symmech.generated import grain_impact as gen
 from symmech.generated import grain_impact_printed as printed
-from symmech.grain import derive
+from symmech.grain import SEED
 
 ROLE = "errata"  # found by symmech.core.discovery
-
-SEED = derive.SEED
 
 
 def _geometry(rng, n):
@@ -42,28 +38,6 @@ def _descent_args(x):
     H = gen.H(*_geo(x))
     h = (H[:, 0, 0], H[:, 0, 1], H[:, 0, 2], H[:, 1, 1], H[:, 1, 2], H[:, 2, 2])
     return (x["Tx"], x["Tz"], x["mu"], *h, x["m"], x["lam"], x["e"], x["ux0"], x["uy0"], x["uz0"])
-
-
-@functools.cache
-def _printed_phi_gradient():
-    """Symbolic gradient of the printed (24) itself, lambdified: what (25)-(27) should be."""
-    import sympy
-
-    from symmech.grain import printed as printed_src
-
-    phi = printed_src.functional()[0]
-    args = [s for s in (derive.Tx, derive.Tz, derive.mu, derive.hxx, derive.hxy, derive.hxz, derive.hyy,
-                        derive.hyz, derive.hzz, derive.m, derive.lam, derive.e, derive.ux0, derive.uy0,
-                        derive.uz0)]
-    grad = [sympy.diff(phi, v) for v in (derive.Tx, derive.Tz, derive.mu)]
-    return sympy.lambdify(args, grad, "numpy")
-
-
-def _gradient_component(k):
-    def derived(x):
-        g = _printed_phi_gradient()(*_descent_args(x))[k]
-        return np.broadcast_to(g, x["m"].shape)
-    return derived
 
 
 def _euler_system_point(rng, n):
@@ -148,7 +122,8 @@ def checks() -> list[Check]:
     ]
     for k, eq, name in ((0, "(25)", "T_x"), (1, "(26)", "T_z"), (2, "(27)", "mu")):
         out.append(Check(SEED, eq, f"dPhi/d{name} of the printed (24)", _impact_point,
-                         lambda x, k=k: printed.gradient(*_descent_args(x))[:, k], _gradient_component(k),
+                         lambda x, k=k: printed.gradient(*_descent_args(x))[:, k],
+                         lambda x, k=k: printed.functional_gradient(*_descent_args(x))[:, k],
                          note="(27) drops h_xy from the tan(mu) term" if k == 2 else ""))
     out.append(Check(SEED, "(41)", "centre-of-mass velocity after the impact", _velocity_point,
                      _velocity(printed), _velocity(gen)))

@@ -76,6 +76,12 @@ def functional():
     return Matrix([-sum(system_19_residual())])
 
 
+def functional_gradient():
+    """The gradient of the printed (24) itself in (T_x, T_z, mu): what (25)-(27) should print."""
+    phi = functional()[0]
+    return Matrix([sympy.diff(phi, v) for v in (d.Tx, d.Tz, d.mu)])
+
+
 def gradient():
     """(25)-(27) as printed; (27) omits h_xy from the tan(mu) term."""
     V0 = sqrt(d.ux0**2 + d.uy0**2)
@@ -145,6 +151,8 @@ def module_specs() -> list[ModuleSpec]:
                     "Phi as printed (sum of residuals)", "N*s", "(24)"),
         NamedMatrix("gradient", gradient(), descent_args,
                     "grad Phi as printed", "1, 1, N*s/rad", "(25)-(27)"),
+        NamedMatrix("functional_gradient", functional_gradient(), descent_args,
+                    "grad Phi derived from the printed (24)", "1, 1, N*s/rad", "(24)"),
         NamedMatrix("euler_rate_system", euler_rate_system(), args_of(d.EULER_SYSTEM_ARGS),
                     "matrix a as printed", "kg*m^2", "(44)-(52)"),
         NamedMatrix("euler_rate_rhs", euler_rate_rhs(), args_of(d.EULER_RHS_ARGS),

@@ -21,11 +21,12 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
 
-from symmech.core import plotting, registry
+from symmech.core import integrity, plotting, registry
 from symmech.core.results import Column, Headline, Result, Table, at_most
 from symmech.core.scene import SceneError, SymmechError
 from symmech.core.watchdog import watchdog
@@ -34,6 +35,9 @@ from symmech.smm.chain import chain_spec, exact_omega2
 from symmech.smm.model import Effects, Mechanism
 from symmech.smm.plots import FIGURES, modes_and_responses, precision_plot
 from symmech.smm.schema import SCHEMA
+
+if TYPE_CHECKING:  # sympy's: imported when a run derives
+    from symmech.core.derivation import ModuleSpec
 
 ROLE = "kind"  # found by symmech.core.discovery
 
@@ -133,13 +137,27 @@ def _symbolic_seconds(m: Mechanism) -> float:
     return seconds + (0.0 if "sympy" in sys.modules else SYMPY_IMPORT_SECONDS)
 
 
+# The spec behind the module text this process rendered last, by the text's sha256: the report written right after
+# the run in the same process (`run --report`) typesets it instead of deriving the scene again (only the last one
+# is kept: a sweep renders one per point).
+_rendered: dict[str, ModuleSpec] = {}
+
+
+def rendered_spec(text: str) -> ModuleSpec | None:
+    """The spec this process rendered last as module ``text``, else None."""
+    return _rendered.get(integrity.sha256(text))
+
+
 def _module_text(m: Mechanism) -> tuple[str, str]:
     """File name and text of the scene's symbolic matrices rendered with the project emitter."""
     from symmech.core import emit
     from symmech.smm.derive import module_spec
 
     spec = module_spec(m)
-    return f"{spec.name}.py", emit.render(spec)
+    text = emit.render(spec)
+    _rendered.clear()
+    _rendered[integrity.sha256(text)] = spec
+    return f"{spec.name}.py", text
 
 
 def _import_text(name: str, text: str):
