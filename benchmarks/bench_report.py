@@ -19,7 +19,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from timing import Stats, child_cpu, machine, ratio, tree_env
+from timing import child_cpu, print_base_this, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 RUNS = ("grain_default", "trolley_helix")
@@ -79,11 +79,7 @@ def main() -> None:
                 for case, (summary, package) in cases.items():
                     samples.setdefault((f"report.derivations {case}", name), []).append(
                         _derive_seconds(tree, summary, package))
-    print(f"# {machine()}; CPU seconds, median (min, max) of {args.repeats} interleaved rounds")
-    stats = {key: Stats.of(s) for key, s in samples.items()}
-    for what in dict.fromkeys(what for what, _ in stats):
-        base, this = stats[(what, "base")], stats[(what, "this")]
-        print(f"{what}\n  base {base.text()}\n  this {this.text()}\n  base/this {ratio(base, this)}")
+    print_base_this(samples, args.repeats)
 
 
 if __name__ == "__main__":

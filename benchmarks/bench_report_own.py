@@ -18,7 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from timing import Stats, child_cpu, machine, ratio, tree_env
+from timing import child_cpu, print_base_this, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 WRITE = """\
@@ -74,11 +74,7 @@ def main() -> None:
                         _run_report(tree, scene, out / name / scene.stem))
                     samples.setdefault((f"report.write after the run, {scene.stem}", name), []).append(
                         _write_seconds(tree, scene, out / name / f"{scene.stem}_write"))
-    print(f"# {machine()}; CPU seconds, median (min, max) of {args.repeats} interleaved rounds")
-    stats = {key: Stats.of(s) for key, s in samples.items()}
-    for what in dict.fromkeys(what for what, _ in stats):
-        base, this = stats[(what, "base")], stats[(what, "this")]
-        print(f"{what}\n  base {base.text()}\n  this {this.text()}\n  base/this {ratio(base, this)}")
+    print_base_this(samples, args.repeats)
 
 
 if __name__ == "__main__":

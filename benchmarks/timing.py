@@ -86,3 +86,13 @@ def machine() -> str:
     import platform
 
     return f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def print_base_this(samples: dict[tuple[str, str], list[float]], repeats: int) -> None:
+    """Each measure of ``samples`` ((measure, "base" or "this") -> CPU seconds per round) as the two trees' stats
+    and their ratio, in the order measured."""
+    print(f"# {machine()}; CPU seconds, median (min, max) of {repeats} interleaved rounds")
+    stats = {key: Stats.of(s) for key, s in samples.items()}
+    for what in dict.fromkeys(what for what, _ in stats):
+        base, this = stats[(what, "base")], stats[(what, "this")]
+        print(f"{what}\n  base {base.text()}\n  this {this.text()}\n  base/this {ratio(base, this)}")
