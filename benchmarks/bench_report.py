@@ -33,10 +33,9 @@ print(time.process_time() - start)
 """
 
 
-def _run_seconds(tree: Path, scene: str, out: Path) -> float:
-    """CPU seconds of ``symmech run SCENE --report`` with ``tree``."""
-    command = [sys.executable, "-m", "symmech", "run", str(tree / "scenes" / f"{scene}.toml"), "--out", str(out),
-               "--report", "--quiet"]
+def run_report_seconds(tree: Path, scene: Path, out: Path) -> float:
+    """CPU seconds of ``symmech run SCENE --report`` with ``tree`` (a fresh process, the children's getrusage)."""
+    command = [sys.executable, "-m", "symmech", "run", str(scene), "--out", str(out), "--report", "--quiet"]
     return child_cpu(command, cwd=tree, env=tree_env(tree), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)[0]
 
 
@@ -68,14 +67,14 @@ def main() -> None:
         out = Path(tmp)
         for name, tree in trees.items():  # warms the numba cache; the summaries for report.derivations
             for scene in RUNS:
-                _run_seconds(tree, scene, out / name / scene)
+                run_report_seconds(tree, tree / "scenes" / f"{scene}.toml", out / name / scene)
         cases = _summaries(HERE, out / "this")
         samples: dict[tuple[str, str], list[float]] = {}
         for _ in range(args.repeats):
             for name, tree in trees.items():
                 for scene in RUNS:
                     samples.setdefault((f"run {scene} --report", name), []).append(
-                        _run_seconds(tree, scene, out / name / scene))
+                        run_report_seconds(tree, tree / "scenes" / f"{scene}.toml", out / name / scene))
                 for case, (summary, package) in cases.items():
                     samples.setdefault((f"report.derivations {case}", name), []).append(
                         _derive_seconds(tree, summary, package))

@@ -18,7 +18,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from timing import child_cpu, print_base_this, tree_env
+from bench_report import run_report_seconds
+from timing import print_base_this, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 WRITE = """\
@@ -41,12 +42,6 @@ def _own_copy(name: str, folder: Path) -> Path:
     return path
 
 
-def _run_report(tree: Path, scene: Path, out: Path) -> float:
-    """CPU seconds of ``symmech run SCENE --report`` with ``tree``."""
-    command = [sys.executable, "-m", "symmech", "run", str(scene), "--out", str(out), "--report", "--quiet"]
-    return child_cpu(command, cwd=tree, env=tree_env(tree), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)[0]
-
-
 def _write_seconds(tree: Path, scene: Path, out: Path) -> float:
     """CPU seconds of ``report.write`` after the run of ``scene`` in the same process, with ``tree``."""
     code = WRITE.format(scene=str(scene), out=str(out))
@@ -66,12 +61,12 @@ def main() -> None:
         out = Path(tmp)
         scenes = [_own_copy(name, out) for name in args.scenes]
         for name, tree in trees.items():  # warms the numba cache
-            _run_report(tree, scenes[0], out / name)
+            run_report_seconds(tree, scenes[0], out / name)
         for _ in range(args.repeats):
             for name, tree in trees.items():
                 for scene in scenes:
                     samples.setdefault((f"run {scene.name} --report", name), []).append(
-                        _run_report(tree, scene, out / name / scene.stem))
+                        run_report_seconds(tree, scene, out / name / scene.stem))
                     samples.setdefault((f"report.write after the run, {scene.stem}", name), []).append(
                         _write_seconds(tree, scene, out / name / f"{scene.stem}_write"))
     print_base_this(samples, args.repeats)
