@@ -7,6 +7,7 @@ key), or None when either outcome is admissible (exit 0, or exit 2 naming some f
 from __future__ import annotations
 
 import copy
+import functools
 import json
 import math
 import re
@@ -26,13 +27,15 @@ UNKNOWN_KEY = "zz_not_a_field"
 
 # ---- the base scene of a kind ---------------------------------------------------------
 
+@functools.cache  # every case draws its base scene: parsing every bundled file each time was seconds per suite
+def _bundled() -> tuple[dict, ...]:
+    """Every bundled scene (as TOML data), in file-name order, parsed once per process."""
+    return tuple(tomllib.loads(path.read_text()) for path in sorted(scenes_folder().glob("*.toml")))
+
+
 def base_scenes(kind) -> list[dict]:
-    """Every bundled scene of ``kind`` (as TOML data), or one built from its defaults."""
-    found = []
-    for path in sorted(scenes_folder().glob("*.toml")):
-        data = tomllib.loads(path.read_text())
-        if data.get("kind") == kind.name:
-            found.append(data)
+    """Every bundled scene of ``kind`` (as TOML data, a fresh copy), or one built from its defaults."""
+    found = [copy.deepcopy(data) for data in _bundled() if data.get("kind") == kind.name]
     return found or [{"kind": kind.name}]
 
 
