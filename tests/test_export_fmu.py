@@ -259,7 +259,7 @@ def test_c_example_prints_each_double_as_python_formats_it(rotor_boom, tmp_path)
 
 
 @pytest.mark.parametrize("args, says", [
-    (["fmu", "trolley_helix.toml", "--out", "x.fmu"], "covers the elastic trolley"),
+    (["fmu", "trolley_helix.toml", "--out", "x.fmu"], "an elastic effect), mechanism and grain scenes"),
     (["fmu", "mechanism_chain_large.toml", "--out", "x.fmu"], "up to 60 coordinates"),
     pytest.param(["c", "impact_default.toml", "--out", "x_c"], "covers mechanism, elastic trolley and grain",
                  marks=pytest.mark.slow),  # the default tier's budget: one kind's refusal there is enough

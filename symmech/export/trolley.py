@@ -41,7 +41,7 @@ def load(scene) -> ExportModel:
     setup = scene.setup.elastic
     if setup is None or setup.system is None:
         raise SymmechError("kind = 'trolley': `symmech export` covers the elastic trolley (an [elastic] table "
-                           "with an elastic effect) and mechanism scenes (docs/export.md)")
+                           "with an elastic effect), mechanism and grain scenes (docs/export.md)")
     if not setup.system.rollers_on:
         raise SymmechError("elastic.effects.rollers = false: `symmech export` covers the elastic trolley on "
                            "elastic rollers so far (docs/export.md)")
