@@ -96,7 +96,7 @@ def cmd_bench(ns) -> int:
 def cmd_export(ns) -> int:
     from symmech.export.command import export
 
-    print(f"wrote {export(ns.what, ns.scene, ns.out, ns.fmi, ns.type)}")
+    print(f"wrote {export(ns.what, ns.scene, ns.out, ns.fmi, ns.type, _context(ns))}")
     return 0
 
 
@@ -345,6 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--fmi", type=int, choices=(2, 3), default=3, help="FMI version of the FMU (default 3)")
     x.add_argument("--type", choices=("me", "cs"), default="me",
                    help="me: Model Exchange (the importer integrates), cs: Co-Simulation (DOP853 inside)")
+    _run_options(x)  # the export runs the scene natively (its main table): estimated and bounded as `run` is
     x.set_defaults(func=cmd_export)
     return p
 

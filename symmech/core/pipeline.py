@@ -72,6 +72,13 @@ class Scene:
     def run(self, ctx: Context | None = None) -> Result:
         """Compute (no files written); raises SymmechError on a non-finite result."""
         ctx = ctx or Context(quiet=True)
+        self.budget(ctx)
+        return self._finish(self.kind.run, ctx, "run")
+
+    def budget(self, ctx: Context) -> registry.Estimate | None:
+        """The run's estimate (:meth:`estimate`, sampled unless ``ctx`` is quiet and far from its budget) held to
+        ``ctx.max_time`` before any work: a SymmechError when it exceeds it, told in one line when it is long. What
+        :meth:`run` and `symmech export` (which runs the scene natively) do first."""
         start = time.perf_counter()
         cost = self.cost = self.estimate(ctx.max_time, ctx.sampled and (not ctx.quiet or self._near_budget(ctx)))
         self.timing["estimate"] = time.perf_counter() - start
@@ -80,7 +87,7 @@ class Scene:
                                f"--max-time {ctx.max_time:g} s; raise --max-time to run it")
         if cost is not None and cost.seconds >= SHOW_ESTIMATE:
             ctx.say(f"estimated run time {cost.seconds:.3g} s ({cost.what})")
-        return self._finish(self.kind.run, ctx, "run")
+        return cost
 
     def _near_budget(self, ctx: Context) -> bool:
         """Whether the count estimate, off by up to :data:`COUNT_UNCERTAINTY` either way, may reach ``--max-time``:

@@ -26,6 +26,7 @@ import math
 
 import numpy as np
 
+from symmech.core.context import Context
 from symmech.core.layout import Field, Layout
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
@@ -101,10 +102,10 @@ INDICATORS = (("indicator1", "1", "event indicator 1: in flight the gap [m] (an 
                                   "[m/s^2] (lift-off where it falls through zero)"))
 
 
-def load(scene) -> ExportModel:
-    """The export model of a loaded grain scene (``pipeline.load``'s), its native run's trajectory the example
-    program's table and the FMU's default experiment. SymmechError (exit 2), naming the field and its value, for a
-    scene whose regimes the export does not cover."""
+def load(scene, ctx: Context | None = None) -> ExportModel:
+    """The export model of a loaded grain scene (``pipeline.load``'s), its native run's trajectory (run under ``ctx``'s
+    time budget) the example program's table and the FMU's default experiment. SymmechError (exit 2), naming the field
+    and its value, for a scene whose regimes the export does not cover."""
     from symmech.grain import motion_scene
 
     sc = scene.setup
@@ -120,7 +121,10 @@ def load(scene) -> ExportModel:
     if not effects.rotation:
         raise SymmechError("effects.rotation = false: `symmech export` covers the rotating grain only (the impact "
                            "map is the rotating body's)")
-    return grain(sc, native_table(motion_scene.simulate(sc).trajectory, sc.numerics.sample_interval))
+    ctx = ctx or Context(quiet=True)
+    scene.budget(ctx)
+    native = motion_scene.simulate_watched(sc, ctx)
+    return grain(sc, native_table(native.trajectory, sc.numerics.sample_interval))
 
 
 def native_table(trajectory: np.ndarray, interval: float) -> Table:

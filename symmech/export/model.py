@@ -118,9 +118,9 @@ def load(path) -> ExportModel:
     return of_scene(pipeline.load(path))
 
 
-def of_scene(scene) -> ExportModel:
-    """The export model of a loaded mechanism scene (``pipeline.load``'s); SymmechError (exit 2) for another
-    kind or a size the export does not cover, before any work."""
+def of_scene(scene, ctx: Context | None = None) -> ExportModel:
+    """The export model of a loaded mechanism scene (``pipeline.load``'s), its native run under ``ctx``'s time budget;
+    SymmechError (exit 2) for another kind or a size the export does not cover, before any work."""
     from symmech.smm.scene import SYMBOLIC_LIMIT
 
     if scene.kind.name != "mechanism":
@@ -129,7 +129,9 @@ def of_scene(scene) -> ExportModel:
     if scene.setup.n > SYMBOLIC_LIMIT:
         raise SymmechError(f"mechanism '{scene.setup.m.name}' has {scene.setup.n} coordinates; `symmech export` "
                            f"forms its equations symbolically, up to {SYMBOLIC_LIMIT} coordinates")
-    native = scene.kind.run(scene.setup, Context(quiet=True)).tables.get("free_response")
+    ctx = ctx or Context(quiet=True)
+    scene.budget(ctx)
+    native = scene.kind.run(scene.setup, ctx).tables.get("free_response")
     return mechanism(scene.setup, native)
 
 

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from symmech.core import expressions
+from symmech.core.context import Context
 from symmech.core.results import Column, Table
 from symmech.core.scene import SymmechError
 from symmech.export.model import REALS, ExportModel, Variable
@@ -33,9 +34,9 @@ from symmech.export.sources import glue
 IDENTIFIER = "elastic_trolley"
 
 
-def load(scene) -> ExportModel:
-    """The export model of a trolley scene with an ``[elastic]`` table (``scene`` a loaded pipeline scene);
-    SymmechError for what the export does not cover."""
+def load(scene, ctx: Context | None = None) -> ExportModel:
+    """The export model of a trolley scene with an ``[elastic]`` table (``scene`` a loaded pipeline scene), its native
+    run under ``ctx``'s time budget; SymmechError for what the export does not cover."""
     from symmech.trolley.elastic import scene as elastic_scene
 
     setup = scene.setup.elastic
@@ -45,7 +46,10 @@ def load(scene) -> ExportModel:
     if not setup.system.rollers_on:
         raise SymmechError("elastic.effects.rollers = false: `symmech export` covers the elastic trolley on "
                            "elastic rollers so far (docs/export.md)")
-    run = elastic_scene.simulate(setup)
+    ctx = ctx or Context(quiet=True)
+    scene.budget(ctx)
+    with ctx.active():  # the engines tick it, a fallback re-estimates against what is left
+        run = elastic_scene.simulate(setup)
     if setup.drive.traction is None:
         return elastic(setup, run)
     motion = scene.resolved["motion"]

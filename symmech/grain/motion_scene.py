@@ -424,11 +424,17 @@ class _Watch:
         self.t, self.stalled = t, 0
 
 
+def simulate_watched(sc: GrainScene, ctx: Context) -> motion.Motion:
+    """:func:`simulate` under ``ctx``: its progress bar, its time budget (ticked at each step and by the watchdog)
+    and the guard against a loop that stops advancing; what `symmech run` and `symmech export` run."""
+    with ctx.progress(sc.duration, "grain", unit="s") as bar, watchdog(ctx, where="grain simulation"):
+        return simulate(sc, on_step=_Watch(ctx, bar, sc.numerics.tolerance * sc.numerics.scan_step))
+
+
 def run(sc: GrainScene, ctx: Context) -> Result:
     """Simulate the scene: trajectory and impact tables, summary, and the plots."""
     started = time.perf_counter()
-    with ctx.progress(sc.duration, "grain", unit="s") as bar, watchdog(ctx, where="grain simulation"):
-        m = simulate(sc, on_step=_Watch(ctx, bar, sc.numerics.tolerance * sc.numerics.scan_step))
+    m = simulate_watched(sc, ctx)
     summary = {"mode": sc.numerics.mode, "impact_law": sc.model.law.kind, "effects": sc.model.effects.__dict__,
                "wall_time_s": time.perf_counter() - started,
                **m.summary(), "captions": plotting.captions(plots.MOTION, sc.output)}
