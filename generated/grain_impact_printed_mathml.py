@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3f6f9212a5402cb00fb6e94f5ead239ccadbbf57d3a336f2d8c2fa1703054aa8
-# source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+# source key fbea52a0a2806fd6bda400c7a8bd85f5e98f034bb92417cef46e6efbe22336b0
 # body sha256 294c89c01eac0fe0eb73c8e4648aa29275d182972c1574babe896c0df7fc47eb
 """Typeset MathML of the functions of `grain_impact_printed`, read by `symmech report`.
 

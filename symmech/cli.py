@@ -18,12 +18,10 @@ from pathlib import Path
 
 from symmech import __version__
 from symmech.core import engines
-from symmech.core.context import DEFAULT_MAX_TIME
+from symmech.core.context import DEFAULT_MAX_TIME, Context
 from symmech.core.scene import SymmechError
 
 def _context(ns):
-    from symmech.core.context import Context
-
     return Context(quiet=ns.quiet, max_time=ns.max_time)
 
 
@@ -125,7 +123,8 @@ def cmd_codegen(ns) -> int:
     if directory.exists() and not directory.is_dir():
         raise SymmechError(f"codegen --dir: {directory} is not a folder")
     try:
-        report = codegen.run(directory, check=ns.check)
+        with Context().progress(len(codegen.producers()), "codegen", unit="module") as bar:  # shown past 2 s
+            report = codegen.run(directory, check=ns.check, progress=bar)
     except OSError as exc:
         raise SymmechError(f"codegen --dir: cannot use {exc.filename or directory}: {exc.strerror}") from None
     ran = f"{len(report.derived)} derivation modules run" if report.derived else "nothing derived (cache)"
@@ -156,7 +155,9 @@ def _named_matrix(name: str):
     if name not in MATRICES:
         raise SymmechError(f"no derived matrix named '{name}'{did_you_mean(name, MATRICES)} "
                            "(see `symmech latex --list`)")
-    specs = codegen.derive(MODULES[name.partition(".")[0]])[0]
+    producer = MODULES[name.partition(".")[0]]
+    print(f"symmech: deriving {producer} (seconds to a minute)", file=sys.stderr)  # the matrix is shown as derived
+    specs = codegen.derive(producer)[0]
     return next(f for s in specs for f in s.functions if f"{s.name}.{f.name}" == name)
 
 

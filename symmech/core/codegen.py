@@ -299,14 +299,18 @@ def _without_key(text: str) -> str:
     return body if header is None else f"{header.inputs}\n{header.body}\n{body}"
 
 
-def run(directory: Path, check: bool) -> Report:
-    """Compare ``directory`` with the derivations; unless ``check``, write what differs."""
+def run(directory: Path, check: bool, progress=None) -> Report:
+    """Compare ``directory`` with the derivations; unless ``check``, write what differs. ``progress`` (a tqdm bar, or
+    None) is advanced by one per producer module, fresh or derived (a full derivation takes minutes)."""
     start = time.perf_counter()
     directory = Path(directory)
     old = Index.read(directory)
     new = Index()
     stale, written, derived, outdated = [], [], [], []
     for producer in producers():
+        if progress is not None:
+            progress.set_postfix_str(producer.rpartition(".")[2], refresh=False)
+            progress.update(1)
         if _fresh(directory, old, producer):
             new.inputs[producer] = old.inputs[producer]
             for n in old.names(producer):
