@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 f504df368415c8b9584181c98594fb76f1d34e12537368a25bc1626b49a61b61
-// source key e578e4640c5603cf8a5c7ef709f623fff4cf688f04dc28653f88fc873226f24a
+// source key ecb760c29b548968fab97bb828158bb60b36f6e0b67b36ffc22cd8614ae7ff47
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

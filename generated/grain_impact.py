@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cac8d123c502d9de0fb43ec86a8e2ca1a2fe496fa78865c5d990d0039755679d
-# source key e578e4640c5603cf8a5c7ef709f623fff4cf688f04dc28653f88fc873226f24a
+# source key ecb760c29b548968fab97bb828158bb60b36f6e0b67b36ffc22cd8614ae7ff47
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31de10fa330792b2450c7476a571f8bf73a2450f8002913ed96d3547bad82c11
-# source key e578e4640c5603cf8a5c7ef709f623fff4cf688f04dc28653f88fc873226f24a
+# source key ecb760c29b548968fab97bb828158bb60b36f6e0b67b36ffc22cd8614ae7ff47
 # body sha256 9594b976c63432e21bbeb89c4a97890d9dad291cea15e2d86d9968e337185976
 """Typeset MathML of the functions of `grain_impact`, read by `symmech report`.
 

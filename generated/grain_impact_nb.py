@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 454117a88683e6b48a2fbf61eb954bd9ce8354666c964ff1db62375e56efe36d
-# source key e578e4640c5603cf8a5c7ef709f623fff4cf688f04dc28653f88fc873226f24a
+# source key ecb760c29b548968fab97bb828158bb60b36f6e0b67b36ffc22cd8614ae7ff47
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 aa8237665202607be5395bef1ce27e23289f36574abfaddca58d05443bacead0
-// source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+// source key a89a3306b219de9c7edf021cfcfa7dd2035eb83bb9201056032573b4d83c116e
 // body sha256 f19ced16afd015af0ba45f11f58625238318692cba1e0e56509e18457b145075
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 095e8e0c52e8add83490d6d8c4aabc35370abcea71c3d698004d315d37871c1c
-# source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+# source key a89a3306b219de9c7edf021cfcfa7dd2035eb83bb9201056032573b4d83c116e
 # body sha256 f41147c8a23a603be9f5217d9974fcc4edb0467ad4db6750a461ed52b2080d3f
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3f6f9212a5402cb00fb6e94f5ead239ccadbbf57d3a336f2d8c2fa1703054aa8
-# source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+# source key a89a3306b219de9c7edf021cfcfa7dd2035eb83bb9201056032573b4d83c116e
 # body sha256 294c89c01eac0fe0eb73c8e4648aa29275d182972c1574babe896c0df7fc47eb
 """Typeset MathML of the functions of `grain_impact_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9ac8da813c32473e514b7a11375003f200f2310be67175cdeb722cca52389f0b
-# source key 4e213518e88d6ae1ccbbba1542dd558db084eb2a5fd9b6b816d71ae2bfbfa1c5
+# source key a89a3306b219de9c7edf021cfcfa7dd2035eb83bb9201056032573b4d83c116e
 # body sha256 17686d5ecd709fc01ce8406726493ed87f2bfef80365f2679427f555582ab306
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

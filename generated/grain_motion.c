@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 feabbac407e6ccc3993d79bc8f6a498874d4854fa2d92e4c971cdb7c4d9df915
-// source key d1dddf63c181f34d73e16ba38db410ba32d4b7c1a860a002d59b1e16d39747a8
+// source key eb8fee76c51bee606f794cdf9a78b6efa50b401779dff558a12cd9beeb5f06e3
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1fe5379d72002a24f3d2a3462b2626c71f6917cc98bbc7e61c8997e021aa4efe
-# source key d1dddf63c181f34d73e16ba38db410ba32d4b7c1a860a002d59b1e16d39747a8
+# source key eb8fee76c51bee606f794cdf9a78b6efa50b401779dff558a12cd9beeb5f06e3
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

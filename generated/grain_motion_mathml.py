@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9b30041e2fd9009cfee00ba11cec5fe4a336e8cc20c17cf7717f881960b562ac
-# source key d1dddf63c181f34d73e16ba38db410ba32d4b7c1a860a002d59b1e16d39747a8
+# source key eb8fee76c51bee606f794cdf9a78b6efa50b401779dff558a12cd9beeb5f06e3
 # body sha256 cbb0afbf86db27c0be3baf1a804ff9d0050b7de4266931394e3cc89f096d1f30
 """Typeset MathML of the functions of `grain_motion`, read by `symmech report`.
 

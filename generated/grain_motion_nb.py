@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5fbbee432ea0e1e754e2e674dc30bc485ad2efab9bb32657fdd34c7f94147084
-# source key d1dddf63c181f34d73e16ba38db410ba32d4b7c1a860a002d59b1e16d39747a8
+# source key eb8fee76c51bee606f794cdf9a78b6efa50b401779dff558a12cd9beeb5f06e3
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

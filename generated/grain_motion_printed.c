@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c7c89432e8309f7ed550e8a1453228d7282a0c80862062f37c1db9b2ec13282
-// source key 9dc067bffc4c6eec2ded89b3aa9e7bd80ff7b12041e70059e0cac4257a9e3de9
+// source key 0c72c3fb48a817dfab087313210111fd6bc93bb857c2fc1332d16bea2750bfae
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79d68995e2124b0765ebc2ccac2f8312ed97e03fe3ca6f1ee1763f284d2a5c33
-# source key 9dc067bffc4c6eec2ded89b3aa9e7bd80ff7b12041e70059e0cac4257a9e3de9
+# source key 0c72c3fb48a817dfab087313210111fd6bc93bb857c2fc1332d16bea2750bfae
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

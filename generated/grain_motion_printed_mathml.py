@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 151b68d166914ba60769ff842d16ebfe24c387748eab0a79923b21e4c2b22d05
-# source key 9dc067bffc4c6eec2ded89b3aa9e7bd80ff7b12041e70059e0cac4257a9e3de9
+# source key 0c72c3fb48a817dfab087313210111fd6bc93bb857c2fc1332d16bea2750bfae
 # body sha256 3b8d3e50c551294d418e57a80f99ad59ecf51f050d177d6899428166a383c477
 """Typeset MathML of the functions of `grain_motion_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b4242ef4cf53bf9380cab25d8e34d0f1152458a3c29fe877b2e9e8ec606b561c
-# source key 9dc067bffc4c6eec2ded89b3aa9e7bd80ff7b12041e70059e0cac4257a9e3de9
+# source key 0c72c3fb48a817dfab087313210111fd6bc93bb857c2fc1332d16bea2750bfae
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c84b317a58b640b878d412fc96ddd4fd93caf060f48a43d01c4f24cfb0e85d2
-// source key 08ddee0244aa56f52240efd0163f6a84545f8c80701ea2f66e7486c02985ee11
+// source key 5c66d5e5a196a46726713263c4ff563b0ee43b360e39d17baebee0dda6491f97
 // body sha256 366b188556699fb09d6eb00c07fa06e0af99a2dd605d3b1658259bf41001d72a
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
-# source key 08ddee0244aa56f52240efd0163f6a84545f8c80701ea2f66e7486c02985ee11
+# source key 5c66d5e5a196a46726713263c4ff563b0ee43b360e39d17baebee0dda6491f97
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22cfba090c66a0209884c82322504defa89eba60fff0e2fb307230876c5fcc02
-# source key 08ddee0244aa56f52240efd0163f6a84545f8c80701ea2f66e7486c02985ee11
+# source key 5c66d5e5a196a46726713263c4ff563b0ee43b360e39d17baebee0dda6491f97
 # body sha256 ce26e98c44d021455381fbc9d083f6e89222ff22dba3e490debcdc54ce00ff0c
 """Typeset MathML of the functions of `grain_sliding`, read by `symmech report`.
 

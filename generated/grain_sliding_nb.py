@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 99200fbfb29c7ad99e09a4cac7ee7c5fe255b0b8d9a0ea9b042e89bc417bad7a
-# source key 08ddee0244aa56f52240efd0163f6a84545f8c80701ea2f66e7486c02985ee11
+# source key 5c66d5e5a196a46726713263c4ff563b0ee43b360e39d17baebee0dda6491f97
 # body sha256 1bab40246e5e6e63f22a9fd8f2a71da862a581c12ea356e37c1e078c16685d09
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ec7ebd79270eaec2199c40f7f5ca6b20ec7afaee11fc55b996f28525450f234e
-// source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+// source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

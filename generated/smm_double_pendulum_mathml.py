@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 733321625ccaeafa5e76b660801bbdaf9137399b6dd38a49a234d0f5e71d1d1c
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 f755ae7a635c88e9a76acf6601b4613ce6c2481e9a79a9964991ced2a4e0eef6
 """Typeset MathML of the functions of `smm_double_pendulum`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0f3eb9609a62684b43124b5428f951e10701dcb33f337a67052bf25d279e8e47
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 dc40022d9a1ca361dcdc141f2806f7d27cf3e1f8e23655ee2f4fc6c18bd59e23
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

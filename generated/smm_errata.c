@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 69d01375538ee05763ff6a872b31748f01034cf40f7ad431ca61f1478e339b06
-// source key 3cc1a718db8fd27986da8ebd304673fe9a8b4fd3b6f12655f3ed17edcc9e99ba
+// source key 1763f59dc4b3dd295c2431aaa381b3dbb768cdbac18a2eb47e58d04ed03d03fd
 // body sha256 c120813920f7d204241a2a875c7e311c679f658730fef504e8c58634d5d943a9
 /* The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cbc4d809c6176b6209d4a21c9e7ce0c5d7790a32331be993cf05391f21caa1b1
-# source key 3cc1a718db8fd27986da8ebd304673fe9a8b4fd3b6f12655f3ed17edcc9e99ba
+# source key 1763f59dc4b3dd295c2431aaa381b3dbb768cdbac18a2eb47e58d04ed03d03fd
 # body sha256 6a59ab6d11a24e69f903dc46c98452f3a2b72b10a9d2032f391112f99d8de8f6
 """The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 32047742ceffa84adee7c6df35d301194fb7a7596bf715c022bdfa9cbfa57315
-# source key 3cc1a718db8fd27986da8ebd304673fe9a8b4fd3b6f12655f3ed17edcc9e99ba
+# source key 1763f59dc4b3dd295c2431aaa381b3dbb768cdbac18a2eb47e58d04ed03d03fd
 # body sha256 88274ea598ac4b8680a7c9f909669075054db51475a7d7d6078672e3bc98235c
 """Typeset MathML of the functions of `smm_errata`, read by `symmech report`.
 

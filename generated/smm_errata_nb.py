@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0e6e60cdedaebf3431b4391d5c28b0a8e3a14a115a4a34f002811e4718185c75
-# source key 3cc1a718db8fd27986da8ebd304673fe9a8b4fd3b6f12655f3ed17edcc9e99ba
+# source key 1763f59dc4b3dd295c2431aaa381b3dbb768cdbac18a2eb47e58d04ed03d03fd
 # body sha256 9740583351de0ab389ffe27936fe3a35852316b92c67e34fbe3e0b1997d83ffd
 """The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 caf956d6f72b9b86a23bb93c88cfa672fc00e5f87a9b7a455a1a8e2eb7890ea4
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 666baab2b769e706ce555af5534bc12d569eea8686851af223bdff510aa493a0
 """Typeset MathML of the functions of `smm_excavator`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 07c1b753daa30709958a25ccaf8d2495c0d03f23290f588ddb900bf8fdf7ec73
-// source key de557a229a4d0776be5e6dbe107ef54308a1c0710b4be343f1dadbc4fbed3399
+// source key c846ff5006d80b742d17a57febd764d192c308d6bee1e37f62acf0d32d5b7007
 // body sha256 1e7ef2233d7ee5664488564dcfa2c034ac5c88873792a114ffe0e0f52c86b00e
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8eb659fc5758d86ac45d2f5e3a0bd13ad30026da73e5be70bff4d37f622f751d
-# source key de557a229a4d0776be5e6dbe107ef54308a1c0710b4be343f1dadbc4fbed3399
+# source key c846ff5006d80b742d17a57febd764d192c308d6bee1e37f62acf0d32d5b7007
 # body sha256 2d2d9f5708fb64021e1c0c77db318a31e37a73055c64403b39e1eabf98eeee19
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

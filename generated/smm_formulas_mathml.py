@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e7a7cd025d520897f05994d7987c6e67456a859455acb5a6ccf520c22d1bfef
-# source key de557a229a4d0776be5e6dbe107ef54308a1c0710b4be343f1dadbc4fbed3399
+# source key c846ff5006d80b742d17a57febd764d192c308d6bee1e37f62acf0d32d5b7007
 # body sha256 de25249eb6fd285ec6985289923852af0e7ea7082917eda44a1f24cb6f4541ed
 """Typeset MathML of the functions of `smm_formulas`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a2d43f48a4f64df3957bfc09f0d470279833f565e619335820a62540b74c75fe
-# source key de557a229a4d0776be5e6dbe107ef54308a1c0710b4be343f1dadbc4fbed3399
+# source key c846ff5006d80b742d17a57febd764d192c308d6bee1e37f62acf0d32d5b7007
 # body sha256 9d4b295720c395e7398d72de8d41d2c6aafc27aa5937fc54822ed9c1e5dc9b2a
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 74e081f9bdf2d991ec28fc5646c53c09e1b6d2f4af6a6cb40a7a2336b94fa9f0
-// source key 0abe7d4370272dfd48f81377e078ab406f8e626da04713bba5bf47102d2b2684
+// source key 55c11e91db4eea5def604edc24f660d8f73575dd39fb40e4732383362332b6e3
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 179e5ea550e2b599880c023437d2d082a29204baded70f8311e7b015d8baa3c1
-# source key 0abe7d4370272dfd48f81377e078ab406f8e626da04713bba5bf47102d2b2684
+# source key 55c11e91db4eea5def604edc24f660d8f73575dd39fb40e4732383362332b6e3
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f153c377311a031a04cc4f2a0f11639ec2794512c1922684e2d7c0f05d83ae4d
-# source key 0abe7d4370272dfd48f81377e078ab406f8e626da04713bba5bf47102d2b2684
+# source key 55c11e91db4eea5def604edc24f660d8f73575dd39fb40e4732383362332b6e3
 # body sha256 93139c4cf9a02d0ec276b142af5fca64a217568d8a8f507db801909239400590
 """Typeset MathML of the functions of `smm_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 50d6825a9714d999fa96a1f8f1f2e29b2854e2b1dc494ca4c53365f4e55c6aa6
-# source key 0abe7d4370272dfd48f81377e078ab406f8e626da04713bba5bf47102d2b2684
+# source key 55c11e91db4eea5def604edc24f660d8f73575dd39fb40e4732383362332b6e3
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 029aa6ae1984b4b624b7b513fc01aec605e6f837213a1ddc156ef8fc6b3a2e84
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

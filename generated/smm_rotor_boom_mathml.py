@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 51f706aca1c2d17b56eba03d72a6f1216053b6f2ee4e4aa4eac65ee2cce58cbb
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 e608b677dc4fb26ad6a09fd6cefb35f3a420bf51577f5096c38f5e40f43633f8
 """Typeset MathML of the functions of `smm_rotor_boom`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 06d0fd6d105f28ed6c8877197c74c3e1e6b51346c339d50d86a1ebd78fc2dc7a
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 317c122de6069bc20574ea6526d823a7f4596c3beacd6ee1cc7cacdedd9db823
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

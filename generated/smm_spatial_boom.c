@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 56f52369c0883c8c648d20d159d68510b8354fe1e4836123b6a334bad7cd6366
-// source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+// source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b4cec3f7f051aa35b33b4eea33ab350d4d71935a543d8e4cba673e407d0a382d
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 955d6e4136ab2ecea45738b48b7c97e9195a5d019d8c2114580d6294a36fdb04
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

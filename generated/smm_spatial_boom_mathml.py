@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3b7bd788de08757393bfd50d7ca60977c720ae34d77e67506882f6a20ff4f934
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 f9742da247d48c952a0c4ea69eca80b7684a89b5b2adeaf498629897e4cc5fb7
 """Typeset MathML of the functions of `smm_spatial_boom`, read by `symmech report`.
 

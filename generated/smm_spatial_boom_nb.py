@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f7fc693aa167e1117936caacb99dfcbdedd3f3a4ccf347c0badfaadde28aa3c2
-# source key e4600fffb226a1ad053269f7e6de91ea9a587b978b43c57e0f59eece7bfb6090
+# source key 6f3e9e99e4e7ff316ddda7c80ed4f94a3ee49538ee15efe7bbecc85e85140861
 # body sha256 f69f23c8fe61a74f11b2b74bf668b7221688290fd53b2d59efa10eda3fbf2bc6
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ac88689828bd6fadf25a179c07aefd8a217c3fb0b1ae75578a36a63308db3329
-// source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+// source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

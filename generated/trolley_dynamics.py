@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 48dc29d6b9192cffb3398a471470f4d716c55abefe368d6b791fa4c7dc7aa20d
-# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+# source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8d68767d6182eec4ded13f8af22d48aa178724dcc3d2e2abae5a043db59a36c3
-# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+# source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 # body sha256 6e6a32e8ec724103d48590042e9a8769702b691ae458f434357042fd2cc5b6b0
 """Typeset MathML of the functions of `trolley_dynamics`, read by `symmech report`.
 

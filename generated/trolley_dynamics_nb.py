@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 525c82f0cc2904fc0b55a3fb754ff7efe495e47b4b5790781b5c5d70a095dfcd
-# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+# source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a4d1d580ab2bfbfe2b58ab094ff3ce1fc238bfeec0916e35da21fd3303afef94
-// source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+// source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 53326bf74b1ffb62506b0f3e8b497d9ab40278eb38c48f04585cc3e4a8e09ea4
-# source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+# source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 b40c395e491040395bccc5140e363e94df6ddebfea493ae9e3b7fec27b64231c
-// source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+// source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 // body sha256 6d51d4292543679442ae34d3d8f0b5892d984ada68bfb30bb007ba943025b161
 /* Small elastic trolley by Lagrange's equations (test route).
 

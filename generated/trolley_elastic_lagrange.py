@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fd0e7eefe40116ee25d0e9f249e51f729e37930a05fbaa4db91ac79bd0e0ef67
-# source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+# source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 # body sha256 f8f7f1ad15caf6efe47b62c57d3b15e7063c31b04ceaa9199aa2fe2e80cb6877
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0ff432e864fff8a27b922bc76d795467f56b9f0ddb657790111f13a69a722f6a
-# source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+# source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 # body sha256 9e51fdee4777a4ffce3c64f8f45246d579794644070b104b576d994e62545ef4
 """Typeset MathML of the functions of `trolley_elastic_lagrange`, read by `symmech report`.
 

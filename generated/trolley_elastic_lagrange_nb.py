@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 865f1e83a767760a6932af376e6dd65fbe10b08769e32fca0f70a17b969884d5
-# source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+# source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 # body sha256 8f465e3eb75b98da15882d9600c88a5011e851fef26b1138023d0d9b96c480b8
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 70b821f84a8553b1c7c4ca3a17e97b34f98dfcd331c265a57295f75ea699560b
-# source key f54c0a663e7ffc9397fd681a00f04d88b25d5767cb8f09b6a5a56d21fc662488
+# source key 0c23b9d172bf3498396f78bf8a0296e11683c3cd07e31db3f604ca22b1c54414
 # body sha256 bc1b1ccf186be2a1b36eb95a78a9088b8d67dd552b92d8af0529637a52d0c341
 """Typeset MathML of the functions of `trolley_elastic`, read by `symmech report`.
 

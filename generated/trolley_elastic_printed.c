@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5faf39078489b7463c1c4c29b6d57bb802540c7ca712180852430b630d37f68b
-// source key 713fc867c1b55e801d5a5cb8ae4bfbe03da1074fa2a707604c1e280f97a2028f
+// source key edec55614fefcd3fe7c73693b406bebbfbf5e6817de86eb2a6b6a585c3bb5e70
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

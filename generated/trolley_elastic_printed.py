@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f41a59d7394eb661968d36fdf9d647df816cb390d63f0de0bfa0986cec4a4163
-# source key 713fc867c1b55e801d5a5cb8ae4bfbe03da1074fa2a707604c1e280f97a2028f
+# source key edec55614fefcd3fe7c73693b406bebbfbf5e6817de86eb2a6b6a585c3bb5e70
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 dd9c8dbfe7fd9bafcad98ca2a02d07d99b0e5617778ff746b38958b466bf821f
-# source key 713fc867c1b55e801d5a5cb8ae4bfbe03da1074fa2a707604c1e280f97a2028f
+# source key edec55614fefcd3fe7c73693b406bebbfbf5e6817de86eb2a6b6a585c3bb5e70
 # body sha256 ac9027d6a998c9dc48fb2e036e0a0306af780c5533d52d7b039e30a506b83c77
 """Typeset MathML of the functions of `trolley_elastic_printed`, read by `symmech report`.
 

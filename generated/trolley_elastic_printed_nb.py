@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 44ec528fe2bb7ffdb2f99c0bab75257ced43567288fba5d219b628492e15e7d4
-# source key 713fc867c1b55e801d5a5cb8ae4bfbe03da1074fa2a707604c1e280f97a2028f
+# source key edec55614fefcd3fe7c73693b406bebbfbf5e6817de86eb2a6b6a585c3bb5e70
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 58d2b08d2ce68eb5552d00855b2113a6f7a23d35024deb1acd654c46faca74da
-// source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+// source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

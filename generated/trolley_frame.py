@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0109ae53941ab872b8681be5831147aa67a14d50861429fd2d60836d719da7f3
-# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+# source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9344b414d62b9f44410c93d3120811042d65b99559acc078cf211f11f411bb8b
-# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+# source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 # body sha256 236c0e9589b21fc8a2f995370901204a191cea12b4d1e4add458c6fb76ecfcf6
 """Typeset MathML of the functions of `trolley_frame`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5d1c836ee9142d326f385c6eb402b6d31b1d0e4005b3a216c611722b8bd1337f
-# source key 23e7c1aee738025f8c1e95c04aad9ff9615b0a48fcee746a30a0b4fd33deff1f
+# source key b81764c4ce0a49b03d61328c7cf1510481bfca66c9cf0bb85f1439b15129cef0
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1f74efd61bec2a23607289fa6a128197a228785e803e102fb3c021f6fb488c9a
-// source key c870549370df568037f3052d38a1a2c7a715623acf3e340dc8f66f0856b6c87d
+// source key fd154484d5a987e67d3fea4d61e0957b3c13282dbd8ec9d3b05f021cffa9f99f
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 36bc87d62b0fedb420c80484a7146b115cdedce87604a4ccd51e1499eb74baf2
-# source key c870549370df568037f3052d38a1a2c7a715623acf3e340dc8f66f0856b6c87d
+# source key fd154484d5a987e67d3fea4d61e0957b3c13282dbd8ec9d3b05f021cffa9f99f
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bb0a3381776a83860da160b1cf3ca2a32147aadcd30c79937e300942ed63b8f
-# source key c870549370df568037f3052d38a1a2c7a715623acf3e340dc8f66f0856b6c87d
+# source key fd154484d5a987e67d3fea4d61e0957b3c13282dbd8ec9d3b05f021cffa9f99f
 # body sha256 926c2843ac1442f0a9567419bed84a0f5e07f515c4b2f20a5064ab973bf070d8
 """Typeset MathML of the functions of `trolley_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 28083ba06c704529a63784042ba9b582826665f8161642b6ea742896a529db8a
-# source key c870549370df568037f3052d38a1a2c7a715623acf3e340dc8f66f0856b6c87d
+# source key fd154484d5a987e67d3fea4d61e0957b3c13282dbd8ec9d3b05f021cffa9f99f
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 
