@@ -4,7 +4,8 @@ Each bundled scene named is copied into a temporary folder with its mechanism re
 generated module matches it. Per round and per tree (``--base`` and the tree of this file, interleaved), in fresh
 processes with the tree's own ``generated/``, ``templates/`` and ``scenes/`` (:func:`timing.tree_env`): the CPU of
 ``symmech run COPY --report --quiet`` (the children's getrusage), and the CPU (``time.process_time``) of
-``report.write`` alone after ``symmech run COPY --quiet`` in the same process, as ``run --report`` calls it.
+``report.write`` alone after ``symmech run COPY --quiet`` in the same process, as ``run --report`` calls it; and the
+CPU of a plain ``symmech run COPY --quiet`` and of ``symmech report OUT`` on its folder in a later process.
 The numba cache (``NUMBA_CACHE_DIR``) is warmed by one untimed run of each tree.
 
 Run: python benchmarks/bench_report_own.py --base BASE_TREE [--repeats 5] [SCENE ...]
@@ -19,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 from bench_report import run_report_seconds
-from timing import print_base_this, tree_env
+from timing import child_cpu, print_base_this, tree_env
 
 HERE = Path(__file__).resolve().parents[1]
 WRITE = """\
@@ -49,6 +50,15 @@ def _write_seconds(tree: Path, scene: Path, out: Path) -> float:
                                 capture_output=True, text=True).stdout.split()[-1])
 
 
+def _run_then_report_seconds(tree: Path, scene: Path, out: Path) -> tuple[float, float]:
+    """CPU seconds of a plain ``symmech run SCENE`` and of ``symmech report OUT`` after it, in two fresh processes."""
+    def cpu(*command):
+        return child_cpu([sys.executable, "-m", "symmech", *command], cwd=tree, env=tree_env(tree),
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)[0]
+
+    return cpu("run", str(scene), "--out", str(out), "--quiet"), cpu("report", str(out), "--quiet")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     parser.add_argument("--base", type=Path, required=True)
@@ -69,6 +79,9 @@ def main() -> None:
                         run_report_seconds(tree, scene, out / name / scene.stem))
                     samples.setdefault((f"report.write after the run, {scene.stem}", name), []).append(
                         _write_seconds(tree, scene, out / name / f"{scene.stem}_write"))
+                    run, later = _run_then_report_seconds(tree, scene, out / name / f"{scene.stem}_later")
+                    samples.setdefault((f"run {scene.name} (no --report)", name), []).append(run)
+                    samples.setdefault((f"report OUT of {scene.stem}, a later process", name), []).append(later)
     print_base_this(samples, args.repeats)
 
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cac8d123c502d9de0fb43ec86a8e2ca1a2fe496fa78865c5d990d0039755679d
-# source key fbf74013d7080a7f8b6dfbde67286f95abd7702cd490c77b7c1e570bf23f0b4f
+# source key ff32e3ef6b30a2e9f6a52fa7e1746ee599c483ec9d0aabcd8fb97d0c4b9ba5d5
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

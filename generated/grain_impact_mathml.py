@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31de10fa330792b2450c7476a571f8bf73a2450f8002913ed96d3547bad82c11
-# source key fbf74013d7080a7f8b6dfbde67286f95abd7702cd490c77b7c1e570bf23f0b4f
+# source key ff32e3ef6b30a2e9f6a52fa7e1746ee599c483ec9d0aabcd8fb97d0c4b9ba5d5
 # body sha256 9594b976c63432e21bbeb89c4a97890d9dad291cea15e2d86d9968e337185976
 """Typeset MathML of the functions of `grain_impact`, read by `symmech report`.
 

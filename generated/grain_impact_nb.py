@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 454117a88683e6b48a2fbf61eb954bd9ce8354666c964ff1db62375e56efe36d
-# source key fbf74013d7080a7f8b6dfbde67286f95abd7702cd490c77b7c1e570bf23f0b4f
+# source key ff32e3ef6b30a2e9f6a52fa7e1746ee599c483ec9d0aabcd8fb97d0c4b9ba5d5
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

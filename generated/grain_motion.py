@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1fe5379d72002a24f3d2a3462b2626c71f6917cc98bbc7e61c8997e021aa4efe
-# source key f39740384a18d21ca42e525e1224215cba6d45f74cd57df0db9d39a935e00b0e
+# source key 4345457fa99727a6251fabbe18f496f6b791f684b94b7ee5de31b4978b216dcb
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79d68995e2124b0765ebc2ccac2f8312ed97e03fe3ca6f1ee1763f284d2a5c33
-# source key fedd1337132c33808163c4eac22146f9c4e0eed9389e343b8301239718230576
+# source key 7fe0a067b9d2077130ba53f9cb443e3ba3e19c125556bf9680b4bd9f636a309d
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 733321625ccaeafa5e76b660801bbdaf9137399b6dd38a49a234d0f5e71d1d1c
-# source key d714c4c8e5f4a8f85bb61bb056188c89ebbee8de573524784d0a67ad23e7f675
+# source key b9119fe429741cf1410dd1d8b58965e797bab7e5083bf03a28fc687cd8fff7fd
 # body sha256 f755ae7a635c88e9a76acf6601b4613ce6c2481e9a79a9964991ced2a4e0eef6
 """Typeset MathML of the functions of `smm_double_pendulum`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 32047742ceffa84adee7c6df35d301194fb7a7596bf715c022bdfa9cbfa57315
-# source key 21269e52887eb7bdaef3904acdc84320eef22dc3ea22d00bca051da6a6735c30
+# source key fecccf8cf7d8bcbac37682624030dafea53884257efc35cbc563bb29a7bba829
 # body sha256 88274ea598ac4b8680a7c9f909669075054db51475a7d7d6078672e3bc98235c
 """Typeset MathML of the functions of `smm_errata`, read by `symmech report`.
 

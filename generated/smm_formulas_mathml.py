@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e7a7cd025d520897f05994d7987c6e67456a859455acb5a6ccf520c22d1bfef
-# source key 242f9b91e7448ae009d9ca64d104862fb6c813bfd6b98227eab40fa94d19ce6e
+# source key ff3b993df2c984f379db38775131c2daf4df119707ef6d55b8183a97d517e9c9
 # body sha256 de25249eb6fd285ec6985289923852af0e7ea7082917eda44a1f24cb6f4541ed
 """Typeset MathML of the functions of `smm_formulas`, read by `symmech report`.
 

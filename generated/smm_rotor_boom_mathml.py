@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 51f706aca1c2d17b56eba03d72a6f1216053b6f2ee4e4aa4eac65ee2cce58cbb
-# source key d714c4c8e5f4a8f85bb61bb056188c89ebbee8de573524784d0a67ad23e7f675
+# source key b9119fe429741cf1410dd1d8b58965e797bab7e5083bf03a28fc687cd8fff7fd
 # body sha256 e608b677dc4fb26ad6a09fd6cefb35f3a420bf51577f5096c38f5e40f43633f8
 """Typeset MathML of the functions of `smm_rotor_boom`, read by `symmech report`.
 

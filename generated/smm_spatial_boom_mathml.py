@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3b7bd788de08757393bfd50d7ca60977c720ae34d77e67506882f6a20ff4f934
-# source key d714c4c8e5f4a8f85bb61bb056188c89ebbee8de573524784d0a67ad23e7f675
+# source key b9119fe429741cf1410dd1d8b58965e797bab7e5083bf03a28fc687cd8fff7fd
 # body sha256 f9742da247d48c952a0c4ea69eca80b7684a89b5b2adeaf498629897e4cc5fb7
 """Typeset MathML of the functions of `smm_spatial_boom`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a4d1d580ab2bfbfe2b58ab094ff3ce1fc238bfeec0916e35da21fd3303afef94
-// source key 3883aa665cf7ab8b965ea6be14c9e47f0c67dcf90cd1c2353b8d6da61039e4e4
+// source key 95ae17b5c2005c262f66296255fde63c5ab388e7fc03f163332a42cc5940df68
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 70b821f84a8553b1c7c4ca3a17e97b34f98dfcd331c265a57295f75ea699560b
-# source key 3883aa665cf7ab8b965ea6be14c9e47f0c67dcf90cd1c2353b8d6da61039e4e4
+# source key 95ae17b5c2005c262f66296255fde63c5ab388e7fc03f163332a42cc5940df68
 # body sha256 bc1b1ccf186be2a1b36eb95a78a9088b8d67dd552b92d8af0529637a52d0c341
 """Typeset MathML of the functions of `trolley_elastic`, read by `symmech report`.
 

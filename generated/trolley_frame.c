@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 58d2b08d2ce68eb5552d00855b2113a6f7a23d35024deb1acd654c46faca74da
-// source key 20ab9316860927355ec3d1982816b8d2d7b5a61ea9003433c23308d9d7a799d2
+// source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

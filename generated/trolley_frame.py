@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0109ae53941ab872b8681be5831147aa67a14d50861429fd2d60836d719da7f3
-# source key 20ab9316860927355ec3d1982816b8d2d7b5a61ea9003433c23308d9d7a799d2
+# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

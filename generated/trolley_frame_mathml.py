@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9344b414d62b9f44410c93d3120811042d65b99559acc078cf211f11f411bb8b
-# source key 20ab9316860927355ec3d1982816b8d2d7b5a61ea9003433c23308d9d7a799d2
+# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
 # body sha256 236c0e9589b21fc8a2f995370901204a191cea12b4d1e4add458c6fb76ecfcf6
 """Typeset MathML of the functions of `trolley_frame`, read by `symmech report`.
 

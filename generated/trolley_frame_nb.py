@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5d1c836ee9142d326f385c6eb402b6d31b1d0e4005b3a216c611722b8bd1337f
-# source key 20ab9316860927355ec3d1982816b8d2d7b5a61ea9003433c23308d9d7a799d2
+# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 28083ba06c704529a63784042ba9b582826665f8161642b6ea742896a529db8a
-# source key a0b5ea7c70cc51e2e81c737a129ec1a9dbaa082ae1bc467f413dbbc1d74a6cb9
+# source key b002a8b6b73fc68f6ad9781746c58498460e321ee19a734100c689ee08c59d0c
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -15,6 +15,7 @@ modules are named ``<paper>_*`` and its errata are ``symmech.<paper>.errata*``.
 """
 from __future__ import annotations
 
+import ast
 import base64
 import csv
 import datetime
@@ -29,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from symmech import __version__
-from symmech.core import units
+from symmech.core import integrity, units
 from symmech.core.results import VERDICTS, Check, readable
 from symmech.core.scene import SceneError, SymmechError
 
@@ -98,19 +99,34 @@ def _generated(package: str, used: list[str] | None) -> list[str]:
     return [name for name, producer in MODULES.items() if producer in derived]
 
 
+def _typeset_twin(module: Path) -> dict | None:
+    """{function: (meaning, unit, equations, MathML or None)} from the MathML twin a run wrote beside its module
+    ``module`` (``<name>_mathml.py``); None unless the twin is intact (integrity header, this release) and was made
+    for the module text there (its source key is that text's sha256). Parsed as a literal, not executed."""
+    twin = module.with_name(f"{module.stem}_mathml.py")
+    if not module.is_file() or integrity.problem(twin) is not None:
+        return None
+    header, body = integrity.split(twin.read_text(encoding="utf-8"))
+    if header.key != integrity.sha256(module.read_text(encoding="utf-8")):
+        return None
+    for node in ast.parse(body).body:
+        if isinstance(node, ast.Assign) and [t.id for t in node.targets if isinstance(t, ast.Name)] == ["FUNCTIONS"]:
+            return ast.literal_eval(node.value)
+    return None
+
+
 def _own_mechanism(summary: dict, folder: Path | None) -> list[Derivation]:
-    """The matrices of a mechanism scene of the user's own, whose module the run rendered (not in generated/): the
-    run's own spec when this process rendered the module in ``folder`` (``run --report``), else derived again from the
-    resolved scene the run recorded (sympy, seconds)."""
+    """The matrices of a mechanism scene of the user's own, whose module the run rendered (not in generated/): read
+    from the MathML twin the run wrote beside the module in ``folder`` (:func:`_typeset_twin`), else (a twin missing,
+    edited, stale or not the module's) derived again from the resolved scene the run recorded (sympy, seconds)."""
+    module = Path(summary["generated_module"])
+    shown = _typeset_twin(folder / module) if folder else None
+    if shown is not None:
+        return [Derivation(module.stem, name, *row) for name, row in shown.items()]
     from symmech.core import typeset
-    from symmech.smm import scene
+    from symmech.smm import build, derive
 
-    path = folder / summary["generated_module"] if folder else None
-    spec = scene.rendered_spec(path.read_text()) if path and path.is_file() else None
-    if spec is None:
-        from symmech.smm import build, derive
-
-        spec = derive.module_spec(build.model(summary["scene"]))
+    spec = derive.module_spec(build.model(summary["scene"]))
     return [Derivation(spec.name, f.name, f.meaning, f.unit, f.equations, typeset.block(f)) for f in spec.functions]
 
 

@@ -316,6 +316,20 @@ def test_keywords_and_primes_become_identifiers(tmp_path):
     np.testing.assert_allclose(out, [[[10, 2], [1, 5]], [[15, 3], [1, 5]]])
 
 
+def test_the_code_names_matrix_is_renamed_once_and_leaves_equality_alone():
+    """Every target reads one renamed, immutable matrix per NamedMatrix; two equal NamedMatrix stay equal whether or
+    not one has renamed its matrix."""
+    lam, rp = sympy.Symbol("lambda"), sympy.Symbol("R_x'")
+    args = (Arg(lam, "factor", "1"), Arg(rp, "offset", "m"))
+    nm, twin = (NamedMatrix("f", sympy.Matrix([[lam * rp, lam]]), args, "demo", "m") for _ in range(2))
+    renamed = nm.code_matrix
+    lam_, rp_ = sympy.Symbol("lambda_"), sympy.Symbol("R_xp")
+    assert renamed == sympy.ImmutableMatrix([[lam_ * rp_, lam_]]) and isinstance(renamed, sympy.ImmutableMatrix)
+    assert nm == twin and "code_matrix" in vars(nm) and "code_matrix" not in vars(twin)
+    assert nm.code_matrix is renamed and emit.cse_chunks(nm) == emit.cse_chunks(twin)
+    assert NamedMatrix("f", sympy.Matrix([[lam * rp, rp]]), args, "demo", "m") != nm
+
+
 def test_large_outputs_are_chunked(tmp_path):
     """A 12x12 output is split into helper functions and still evaluates exactly."""
     s = sympy.Symbol("s")

@@ -201,9 +201,10 @@ def test_a_matrix_over_the_limit_is_listed_not_typeset():
     assert grain_impact_mathml.FUNCTIONS["H"] == (h.meaning, h.unit, h.equations, None)
 
 
-def test_a_mechanism_of_the_users_own_is_derived_at_report_time(tmp_path):
-    """A mechanism not in generated/ (its module rendered by the run) is typeset from its scene at report time: the
-    rotor boom renamed shows its own module's functions, typeset as codegen typeset the bundled one's."""
+def test_a_mechanism_of_the_users_own_is_typeset_by_its_run(tmp_path):
+    """A mechanism not in generated/ (its module rendered by the run) is typeset by the run into the MathML twin of
+    its module: the rotor boom renamed shows its own module's functions, typeset as codegen typeset the bundled
+    one's."""
     from symmech.generated import smm_rotor_boom_mathml
 
     scene = tmp_path / "my_boom.toml"
@@ -216,7 +217,7 @@ def test_a_mechanism_of_the_users_own_is_derived_at_report_time(tmp_path):
 
 
 def test_run_report_of_a_mechanism_of_the_users_own_derives_it_once(tmp_path, monkeypatch):
-    """`run --report` typesets the spec the run rendered its module from, not a second derivation; its page shows
+    """`run --report` reads the twin the run typeset beside its module, not a second derivation; its page shows
     what a report without the run's folder derives again from the recorded scene."""
     from symmech import report
     from symmech.smm import derive

@@ -6,6 +6,7 @@ here knows about files, numpy or templates.
 """
 from __future__ import annotations
 
+import functools
 import keyword
 import re
 from dataclasses import dataclass, field
@@ -63,9 +64,12 @@ class NamedMatrix:
                 f"{self.name}: free symbols not declared as arguments: {', '.join(missing)}"
             )
 
-    def code_matrix(self) -> sympy.Matrix:
-        """The matrix with every argument symbol renamed to its code name."""
-        return self.matrix.xreplace({a.symbol: sympy.Symbol(a.name) for a in self.args})
+    @functools.cached_property
+    def code_matrix(self) -> sympy.ImmutableMatrix:
+        """The matrix with every argument symbol renamed to its code name. Renamed once per instance (the renaming
+        rebuilds every expression tree, and every target of a module prints it); immutable, so no caller can change
+        what the next one reads. Kept in the instance's ``__dict__``, outside the fields, so equality is unchanged."""
+        return sympy.ImmutableMatrix(self.matrix.xreplace({a.symbol: sympy.Symbol(a.name) for a in self.args}))
 
     @property
     def shape(self) -> tuple[int, ...]:

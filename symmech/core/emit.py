@@ -58,7 +58,7 @@ def cse_chunks(nm: NamedMatrix) -> list[Chunk]:
     clash = {a.name for a in nm.args if re.fullmatch(r"x\d+", a.name)}
     if clash:
         raise ValueError(f"{nm.name}: argument names {sorted(clash)} clash with CSE names x0, x1, ...")
-    matrix = sympy.ImmutableMatrix(nm.code_matrix())
+    matrix = nm.code_matrix
     return list(_cse_chunks(matrix, nm.shape, len(matrix) if nm.whole else CHUNK_ELEMENTS))
 
 

@@ -21,7 +21,6 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -35,9 +34,6 @@ from symmech.smm.chain import chain_spec, exact_omega2
 from symmech.smm.model import Effects, Mechanism
 from symmech.smm.plots import FIGURES, modes_and_responses, precision_plot
 from symmech.smm.schema import SCHEMA
-
-if TYPE_CHECKING:  # sympy's: imported when a run derives
-    from symmech.core.derivation import ModuleSpec
 
 ROLE = "kind"  # found by symmech.core.discovery
 
@@ -137,27 +133,17 @@ def _symbolic_seconds(m: Mechanism) -> float:
     return seconds + (0.0 if "sympy" in sys.modules else SYMPY_IMPORT_SECONDS)
 
 
-# The spec behind the module text this process rendered last, by the text's sha256: the report written right after
-# the run in the same process (`run --report`) typesets it instead of deriving the scene again (only the last one
-# is kept: a sweep renders one per point).
-_rendered: dict[str, ModuleSpec] = {}
-
-
-def rendered_spec(text: str) -> ModuleSpec | None:
-    """The spec this process rendered last as module ``text``, else None."""
-    return _rendered.get(integrity.sha256(text))
-
-
-def _module_text(m: Mechanism) -> tuple[str, str]:
-    """File name and text of the scene's symbolic matrices rendered with the project emitter."""
+def _module_texts(m: Mechanism) -> tuple[str, dict[str, str]]:
+    """File name of the scene's symbolic matrices rendered with the project emitter, and {file name: text} of that
+    module and of its MathML twin (what ``symmech report`` typesets, so that a later report needs no sympy; its
+    source key is the sha256 of the module's text, which ties the twin to the module beside it)."""
     from symmech.core import emit
     from symmech.smm.derive import module_spec
 
     spec = module_spec(m)
     text = emit.render(spec)
-    _rendered.clear()
-    _rendered[integrity.sha256(text)] = spec
-    return f"{spec.name}.py", text
+    name = emit.NUMPY.file(spec.name)
+    return name, {name: text, emit.MATHML.file(spec.name): emit.render(spec, emit.MATHML, integrity.sha256(text))}
 
 
 def _import_text(name: str, text: str):
@@ -203,15 +189,16 @@ def _solved(setup: Setup, ctx) -> Result:
         warnings.append(f"the configuration is not an equilibrium: dPi/dq = {res:.3g} on '{worst}' (eq. (5)); "
                         "set [equilibrium] solve = true or fix the preloads")
     files = {}
+    name = None
     if setup.n <= SYMBOLIC_LIMIT:
-        name, text = _module_text(m)
-        module = _import_text(name, text)
+        name, texts = _module_texts(m)
+        module = _import_text(name, texts[name])
         values = [p.value for p in m.parameters.values()]
         for key, ref in (("a", a), ("b", b), ("c", c)):
             got = getattr(module, key)(*values)
             if not np.allclose(got, ref, rtol=1e-9, atol=1e-12 * max(np.abs(ref).max(), 1.0)):
                 raise RuntimeError(f"generated {key} disagrees with the numeric assembly")  # a bug, not input
-        files[name] = text
+        files.update(texts)
     ctx.tick("modes")
     md = numeric.modes(a, b, c)
     w2 = md.omega2
@@ -250,7 +237,7 @@ def _solved(setup: Setup, ctx) -> Result:
                          "omega2_error_bound_1_per_s2": float(eps * len(w2) * np.abs(w2).max())},
         "damping_ratios": md.zeta,
         "neglected_effects": eff_report,
-        "generated_module": next((k for k in files if k.endswith(".py")), None),
+        "generated_module": name,
         "captions": plotting.captions(FIGURES, sc["output"]),
     }
     checks = [equilibrium, at_most("unstable modes (negative ω²)", cls.count("unstable"), 0),
