@@ -155,9 +155,7 @@ def _named_matrix(name: str):
     if name not in MATRICES:
         raise SymmechError(f"no derived matrix named '{name}'{did_you_mean(name, MATRICES)} "
                            "(see `symmech latex --list`)")
-    producer = MODULES[name.partition(".")[0]]
-    print(f"symmech: deriving {producer} (seconds to a minute)", file=sys.stderr)  # the matrix is shown as derived
-    specs = codegen.derive(producer)[0]
+    specs = codegen.derive(MODULES[name.partition(".")[0]])[0]
     return next(f for s in specs for f in s.functions if f"{s.name}.{f.name}" == name)
 
 
