@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31de10fa330792b2450c7476a571f8bf73a2450f8002913ed96d3547bad82c11
-# source key ff32e3ef6b30a2e9f6a52fa7e1746ee599c483ec9d0aabcd8fb97d0c4b9ba5d5
+# source key 854d05860c5c0860f52b2bf34b2aeb2fce1a1b13027e3b5f23bf68d198d5e065
 # body sha256 9594b976c63432e21bbeb89c4a97890d9dad291cea15e2d86d9968e337185976
 """Typeset MathML of the functions of `grain_impact`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 454117a88683e6b48a2fbf61eb954bd9ce8354666c964ff1db62375e56efe36d
-# source key ff32e3ef6b30a2e9f6a52fa7e1746ee599c483ec9d0aabcd8fb97d0c4b9ba5d5
+# source key 854d05860c5c0860f52b2bf34b2aeb2fce1a1b13027e3b5f23bf68d198d5e065
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 095e8e0c52e8add83490d6d8c4aabc35370abcea71c3d698004d315d37871c1c
-# source key 1d0061eaf113224f5e17b65ce582962e454d5428f5a1b9bd328c3719153aaf2e
+# source key d8b6c26a78a40a1e1a9b0be3458cc501d38ca7d38056c5121b879745564d583b
 # body sha256 f41147c8a23a603be9f5217d9974fcc4edb0467ad4db6750a461ed52b2080d3f
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79d68995e2124b0765ebc2ccac2f8312ed97e03fe3ca6f1ee1763f284d2a5c33
-# source key 7fe0a067b9d2077130ba53f9cb443e3ba3e19c125556bf9680b4bd9f636a309d
+# source key c52e77885b0aacb30d67b9bbed2da951f1f5f94fbc83bc125b04f7420da91534
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c84b317a58b640b878d412fc96ddd4fd93caf060f48a43d01c4f24cfb0e85d2
-// source key 7cfdd2d8d28a0358abe557868e7bc8ae89e75f4f73aeae97ba0538f9218f9a07
+// source key a16582109dfb6a0184cdabd6a95c1a47bbc5032f41f2c6f8813131339b4b5f10
 // body sha256 366b188556699fb09d6eb00c07fa06e0af99a2dd605d3b1658259bf41001d72a
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

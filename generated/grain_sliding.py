@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
-# source key 7cfdd2d8d28a0358abe557868e7bc8ae89e75f4f73aeae97ba0538f9218f9a07
+# source key a16582109dfb6a0184cdabd6a95c1a47bbc5032f41f2c6f8813131339b4b5f10
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 caf956d6f72b9b86a23bb93c88cfa672fc00e5f87a9b7a455a1a8e2eb7890ea4
-# source key b9119fe429741cf1410dd1d8b58965e797bab7e5083bf03a28fc687cd8fff7fd
+# source key 969bdd17672a8aa2751f27953f7554d9eda876413fff37d9822d278a1c11919d
 # body sha256 666baab2b769e706ce555af5534bc12d569eea8686851af223bdff510aa493a0
 """Typeset MathML of the functions of `smm_excavator`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e7a7cd025d520897f05994d7987c6e67456a859455acb5a6ccf520c22d1bfef
-# source key ff3b993df2c984f379db38775131c2daf4df119707ef6d55b8183a97d517e9c9
+# source key 0a4ab003083e865aba35bfb1f106a28e233061ca55122116db38b97b4a0bf3c0
 # body sha256 de25249eb6fd285ec6985289923852af0e7ea7082917eda44a1f24cb6f4541ed
 """Typeset MathML of the functions of `smm_formulas`, read by `symmech report`.
 

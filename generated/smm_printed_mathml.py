@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f153c377311a031a04cc4f2a0f11639ec2794512c1922684e2d7c0f05d83ae4d
-# source key 538d8d5c3ddd006a185e9016a4e9a39ab0f6e46c9d611c19823eefd391b37971
+# source key b3ef44e18eec706a44b89dc64ca637e72b43c60cf1659200a041ca9fd5dba9a1
 # body sha256 93139c4cf9a02d0ec276b142af5fca64a217568d8a8f507db801909239400590
 """Typeset MathML of the functions of `smm_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f7fc693aa167e1117936caacb99dfcbdedd3f3a4ccf347c0badfaadde28aa3c2
-# source key b9119fe429741cf1410dd1d8b58965e797bab7e5083bf03a28fc687cd8fff7fd
+# source key 969bdd17672a8aa2751f27953f7554d9eda876413fff37d9822d278a1c11919d
 # body sha256 f69f23c8fe61a74f11b2b74bf668b7221688290fd53b2d59efa10eda3fbf2bc6
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8d68767d6182eec4ded13f8af22d48aa178724dcc3d2e2abae5a043db59a36c3
-# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
+# source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
 # body sha256 6e6a32e8ec724103d48590042e9a8769702b691ae458f434357042fd2cc5b6b0
 """Typeset MathML of the functions of `trolley_dynamics`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 525c82f0cc2904fc0b55a3fb754ff7efe495e47b4b5790781b5c5d70a095dfcd
-# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
+# source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

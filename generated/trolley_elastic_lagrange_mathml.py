@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0ff432e864fff8a27b922bc76d795467f56b9f0ddb657790111f13a69a722f6a
-# source key 95ae17b5c2005c262f66296255fde63c5ab388e7fc03f163332a42cc5940df68
+# source key a32b94cbe7848d03687ce9d99882ab2f456f07f6dc50098bd96f8f8bf9134e85
 # body sha256 9e51fdee4777a4ffce3c64f8f45246d579794644070b104b576d994e62545ef4
 """Typeset MathML of the functions of `trolley_elastic_lagrange`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9344b414d62b9f44410c93d3120811042d65b99559acc078cf211f11f411bb8b
-# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
+# source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
 # body sha256 236c0e9589b21fc8a2f995370901204a191cea12b4d1e4add458c6fb76ecfcf6
 """Typeset MathML of the functions of `trolley_frame`, read by `symmech report`.
 

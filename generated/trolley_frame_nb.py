@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5d1c836ee9142d326f385c6eb402b6d31b1d0e4005b3a216c611722b8bd1337f
-# source key a787638dbba1603ae7fb457a4bca1428afea1c5af50f30a20e364a82ce79192e
+# source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1f74efd61bec2a23607289fa6a128197a228785e803e102fb3c021f6fb488c9a
-// source key b002a8b6b73fc68f6ad9781746c58498460e321ee19a734100c689ee08c59d0c
+// source key 4bedef79bc38ca8de47a111852e1d0047e14e5b435d1dc34a49238176c8a3e27
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

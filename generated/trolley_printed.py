@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 36bc87d62b0fedb420c80484a7146b115cdedce87604a4ccd51e1499eb74baf2
-# source key b002a8b6b73fc68f6ad9781746c58498460e321ee19a734100c689ee08c59d0c
+# source key 4bedef79bc38ca8de47a111852e1d0047e14e5b435d1dc34a49238176c8a3e27
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

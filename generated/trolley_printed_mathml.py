@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bb0a3381776a83860da160b1cf3ca2a32147aadcd30c79937e300942ed63b8f
-# source key b002a8b6b73fc68f6ad9781746c58498460e321ee19a734100c689ee08c59d0c
+# source key 4bedef79bc38ca8de47a111852e1d0047e14e5b435d1dc34a49238176c8a3e27
 # body sha256 926c2843ac1442f0a9567419bed84a0f5e07f515c4b2f20a5064ab973bf070d8
 """Typeset MathML of the functions of `trolley_printed`, read by `symmech report`.
 

@@ -15,7 +15,6 @@ modules are named ``<paper>_*`` and its errata are ``symmech.<paper>.errata*``.
 """
 from __future__ import annotations
 
-import ast
 import base64
 import csv
 import datetime
@@ -103,16 +102,10 @@ def _typeset_twin(module: Path) -> dict | None:
     """{function: (meaning, unit, equations, MathML or None)} from the MathML twin a run wrote beside its module
     ``module`` (``<name>_mathml.py``); None unless the twin is intact (integrity header, this release) and was made
     for the module text there (its source key is that text's sha256). Parsed as a literal, not executed."""
-    twin = module.with_name(f"{module.stem}_mathml.py")
-    if not module.is_file() or integrity.problem(twin) is not None:
+    read = integrity.literals(module.with_name(f"{module.stem}_mathml.py")) if module.is_file() else None
+    if read is None or read[0].key != integrity.sha256(module.read_text(encoding="utf-8")):
         return None
-    header, body = integrity.split(twin.read_text(encoding="utf-8"))
-    if header.key != integrity.sha256(module.read_text(encoding="utf-8")):
-        return None
-    for node in ast.parse(body).body:
-        if isinstance(node, ast.Assign) and [t.id for t in node.targets if isinstance(t, ast.Name)] == ["FUNCTIONS"]:
-            return ast.literal_eval(node.value)
-    return None
+    return read[1].get("FUNCTIONS")
 
 
 def _own_mechanism(summary: dict, folder: Path | None) -> list[Derivation]:

@@ -235,13 +235,10 @@ class Index:
     @classmethod
     def read(cls, directory: Path) -> Index | None:
         """The index in ``directory``, or None when it is missing, edited or unreadable."""
-        path = Path(directory) / INDEX
-        if integrity.problem(path) is not None:
+        read = integrity.literals(Path(directory) / INDEX)
+        if read is None:
             return None
-        values = {}
-        for node in ast.parse(path.read_text(encoding="utf-8")).body:
-            if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name):
-                values[node.targets[0].id] = ast.literal_eval(node.value)
+        values = read[1]
         return cls(values.get("MODULES", {}), values.get("INPUTS", {}), values.get("MATRICES", {}))
 
     def names(self, producer: str) -> list[str]:

@@ -25,6 +25,7 @@ process.
 """
 from __future__ import annotations
 
+import ast
 import hashlib
 import importlib.abc
 import importlib.machinery
@@ -100,6 +101,16 @@ def _inspect(path: Path) -> tuple[str | None, str | None]:
 def problem(path: Path) -> str | None:
     """Why the generated module at ``path`` cannot be used, or None when it is intact."""
     return _inspect(path)[1]
+
+
+def literals(path: Path) -> tuple[Header, dict] | None:
+    """(header, {name: value}) of the top-level ``NAME = literal`` assignments of the generated file at ``path``,
+    parsed, never executed; None unless it is intact (:func:`problem`)."""
+    if problem(path) is not None:
+        return None
+    header, body = split(Path(path).read_text(encoding="utf-8"))
+    return header, {node.targets[0].id: ast.literal_eval(node.value) for node in ast.parse(body).body
+                    if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name)}
 
 
 _verified: dict[tuple[str, int, int], str] = {}  # (path, mtime ns, size) -> body sha256 of an intact file
