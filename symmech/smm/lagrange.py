@@ -90,7 +90,7 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         energy = ar(b.mass) * grav * height
         Pi += energy if eff.gravity else _first_order(energy, q)
     grad = sympy.Matrix([Pi.diff(s) for s in q])
-    c = sympy.hessian(Pi, q).subs(at0)
+    c = _hessian_of_gradient(grad, q).subs(at0)
     residual = grad.subs(at0)
     if unknown:  # eq. (5) fixes the tensions left to equilibrium: solve on independent rows
         from symmech.smm.numeric import equilibrium_tensions
@@ -113,6 +113,17 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
             Phi += ar(t.coef) * rate**2 / 2
     b = sympy.hessian(Phi, qd) if Phi != 0 else sympy.zeros(n, n)
     return {"a": a, "b": b, "c": c, "residual": residual}
+
+
+def _hessian_of_gradient(grad: sympy.Matrix, q) -> sympy.Matrix:
+    """sympy.hessian's matrix, d(grad_i)/dq_j, each entry the same expression, from the gradient already formed:
+    sympy.hessian differentiates the whole potential again for every entry of its upper triangle."""
+    n = len(q)
+    h = sympy.zeros(n, n)
+    for i in range(n):
+        for j in range(i, n):
+            h[i, j] = h[j, i] = grad[i].diff(q[j])
+    return h
 
 
 def _first_order(expr, q):
