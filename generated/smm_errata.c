@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 69d01375538ee05763ff6a872b31748f01034cf40f7ad431ca61f1478e339b06
-// source key bf48519654bfe51a0b97fec5acdcfe8df08249e6912c833e9063fb4674f3c1b0
+// source key 514d270995d51f736fd1d215de194713a50e571254d0dc71e2737a0e8d4598ab
 // body sha256 c120813920f7d204241a2a875c7e311c679f658730fef504e8c58634d5d943a9
 /* The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 32047742ceffa84adee7c6df35d301194fb7a7596bf715c022bdfa9cbfa57315
-# source key bf48519654bfe51a0b97fec5acdcfe8df08249e6912c833e9063fb4674f3c1b0
+# source key 514d270995d51f736fd1d215de194713a50e571254d0dc71e2737a0e8d4598ab
 # body sha256 88274ea598ac4b8680a7c9f909669075054db51475a7d7d6078672e3bc98235c
 """Typeset MathML of the functions of `smm_errata`, read by `symmech report`.
 
