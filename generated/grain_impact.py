@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cac8d123c502d9de0fb43ec86a8e2ca1a2fe496fa78865c5d990d0039755679d
-# source key 854d05860c5c0860f52b2bf34b2aeb2fce1a1b13027e3b5f23bf68d198d5e065
+# source key 6e94f01ca7b3592783d31ca8d3d085fe7ed6be817ac4345a4a2ee25179727b6d
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

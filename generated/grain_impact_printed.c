@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 aa8237665202607be5395bef1ce27e23289f36574abfaddca58d05443bacead0
-// source key d8b6c26a78a40a1e1a9b0be3458cc501d38ca7d38056c5121b879745564d583b
+// source key d874511fb17058501577d3ac12a20fd98d427c19f6a18b474cd15172a81ac958
 // body sha256 f19ced16afd015af0ba45f11f58625238318692cba1e0e56509e18457b145075
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9b30041e2fd9009cfee00ba11cec5fe4a336e8cc20c17cf7717f881960b562ac
-# source key 880c564881eedd9fb90b92d54f587252241726040e0f55357558709894f206e5
+# source key 657d4c834d91d5840893d6c48a7ce3a4658662708022208d47379c9c416cba86
 # body sha256 cbb0afbf86db27c0be3baf1a804ff9d0050b7de4266931394e3cc89f096d1f30
 """Typeset MathML of the functions of `grain_motion`, read by `symmech report`.
 

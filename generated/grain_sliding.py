@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
-# source key a16582109dfb6a0184cdabd6a95c1a47bbc5032f41f2c6f8813131339b4b5f10
+# source key bffc9be03c158538246e4250f9fc1020fe63f4070c860af8382f5cd3c7e3bf1b
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

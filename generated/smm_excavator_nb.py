@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7c7093f8a16fc61c476627ed4c3aebe863ff626666324103579b7621f2626103
-# source key 969bdd17672a8aa2751f27953f7554d9eda876413fff37d9822d278a1c11919d
+# source key 32b8657cc7bcadeca005e0401a8d128a268cbeeb7c86b46d750b10436b3f522a
 # body sha256 cd85e3f7a47678bf2e63121f111536af09407b57d11dde17c41315bf194fa672
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e7a7cd025d520897f05994d7987c6e67456a859455acb5a6ccf520c22d1bfef
-# source key 0a4ab003083e865aba35bfb1f106a28e233061ca55122116db38b97b4a0bf3c0
+# source key 9a94756b3707a2449b61946bae56ae2173fb8dc7ca8635982733d61c31a2ef63
 # body sha256 de25249eb6fd285ec6985289923852af0e7ea7082917eda44a1f24cb6f4541ed
 """Typeset MathML of the functions of `smm_formulas`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8d68767d6182eec4ded13f8af22d48aa178724dcc3d2e2abae5a043db59a36c3
-# source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
+# source key af476880aea87a5235e7a789b914a07472a882115d1ad52e9edc4d5dcd68b39c
 # body sha256 6e6a32e8ec724103d48590042e9a8769702b691ae458f434357042fd2cc5b6b0
 """Typeset MathML of the functions of `trolley_dynamics`, read by `symmech report`.
 

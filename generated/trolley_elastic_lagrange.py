@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fd0e7eefe40116ee25d0e9f249e51f729e37930a05fbaa4db91ac79bd0e0ef67
-# source key a32b94cbe7848d03687ce9d99882ab2f456f07f6dc50098bd96f8f8bf9134e85
+# source key aa0343984927c3852857208a9142de07c0533bc40c57e37bb6248ad37f616b54
 # body sha256 f8f7f1ad15caf6efe47b62c57d3b15e7063c31b04ceaa9199aa2fe2e80cb6877
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 dd9c8dbfe7fd9bafcad98ca2a02d07d99b0e5617778ff746b38958b466bf821f
-# source key 5bc5c5cd695121cb0ca7354b7baed0415a6242ca90fe18c6d061783fa3f65eea
+# source key d5aa5ea2cd41202012400f470b796d5ef8baede8e2e1486afe9843ce56930dcc
 # body sha256 ac9027d6a998c9dc48fb2e036e0a0306af780c5533d52d7b039e30a506b83c77
 """Typeset MathML of the functions of `trolley_elastic_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 58d2b08d2ce68eb5552d00855b2113a6f7a23d35024deb1acd654c46faca74da
-// source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
+// source key af476880aea87a5235e7a789b914a07472a882115d1ad52e9edc4d5dcd68b39c
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9344b414d62b9f44410c93d3120811042d65b99559acc078cf211f11f411bb8b
-# source key 5904902a51a7e1503b44a8d835d9028a903a9db7c3ba288a69e3111da90d5b21
+# source key af476880aea87a5235e7a789b914a07472a882115d1ad52e9edc4d5dcd68b39c
 # body sha256 236c0e9589b21fc8a2f995370901204a191cea12b4d1e4add458c6fb76ecfcf6
 """Typeset MathML of the functions of `trolley_frame`, read by `symmech report`.
 

@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 import symmech
 from symmech.core import emit
 from symmech.numerics import kernels
-from symmech.core.derivation import Arg, Dynamics, ModuleSpec, args_of
+from symmech.core.derivation import Arg, Dynamics, ModuleSpec, args_of, jacobian
 from symmech.core.scene import scenes_folder
 from symmech.generated import grain_motion as gm
 from symmech.generated import smm_rotor_boom
@@ -331,6 +331,25 @@ def test_declared_dynamics_integrate_to_the_closed_form(tmp_path, target):
     sol = solve_ivp(module.rhs, (0.0, t[-1]), [x0, 0.0], method="Radau", t_eval=t, args=(p,), jac=module.jac,
                     rtol=1e-11, atol=1e-14)
     assert np.abs(sol.y[0] - exact).max() < 1e-8 * np.abs(exact).max()
+
+
+def test_the_jacobian_is_sympys_entry_for_entry():
+    """``derivation.jacobian`` holds the subtrees free of y as symbols while it differentiates: the same
+    expressions as ``Matrix.jacobian`` (structural equality), on a rate that nests y under functions, powers,
+    a Piecewise and an absolute value beside parameter-only subtrees and repeated ones, and on the rotor boom's free
+    motion (coefficients that are large expressions of its parameters)."""
+    x, v, k, m, c = sympy.symbols("x v k m c", real=True)
+    heavy = sympy.sqrt(k**2 + m**2) * sympy.cos(k / m) + sympy.exp(c * k)
+    rate = sympy.Matrix([v * heavy + heavy**2, -k * sympy.sin(x * heavy) / m + sympy.Abs(v) * c,
+                         sympy.Piecewise((x**2 * heavy, x > c), (v, True)), heavy, (x + heavy) ** 3 / (1 + v**2)])
+    y = sympy.Matrix([x, v])
+    assert jacobian(rate, y) == rate.jacobian(y)
+    from symmech.smm import derive
+
+    boom = derive.load_mechanism(scenes_folder() / "smm_rotor_boom.toml")
+    dyn = derive.free_motion(boom, derive.named_matrices(boom))
+    y = sympy.Matrix([a.symbol for a in dyn.state])
+    assert jacobian(dyn.rate, y) == dyn.rate.jacobian(y) and dyn.rate.jacobian(y).shape == (len(y), len(y))
 
 
 def test_dynamics_refuses_a_state_dependent_mass_and_a_wrong_shape():

@@ -185,7 +185,7 @@ class Dynamics:
         out = [NamedMatrix("rate", self.rate, self.args, f"F of M y' = F: rates of {what}",
                            "state unit / s (times M)")]
         if self.jacobian:
-            out.append(NamedMatrix("rate_jacobian", self.rate.jacobian(y), self.args, "dF/dy, rows F, columns y",
+            out.append(NamedMatrix("rate_jacobian", jacobian(self.rate, y), self.args, "dF/dy, rows F, columns y",
                                    "unit of F / unit of y"))
         if self.mass is not None:
             out.append(NamedMatrix("rate_mass", self.mass, self.args, "M of M y' = F", "unit of F / unit of y'"))
@@ -194,3 +194,29 @@ class Dynamics:
                                    "event functions g, one row per event: " + ", ".join(e.name for e in self.events),
                                    ", ".join(e.unit for e in self.events)))
         return tuple(out)
+
+
+def jacobian(rate: sympy.Matrix, y: sympy.Matrix) -> sympy.Matrix:
+    """``rate.jacobian(y)``, entry for entry the same expressions, differentiated with every largest subtree free
+    of ``y`` held as a placeholder symbol: sympy's ``diff`` collects an expression's free symbols at every node it
+    passes, so a rate whose coefficients are large expressions of the parameters (a mechanism's a, b, c) cost
+    seconds to differentiate as it stands."""
+    wrt = set(y)
+    depends: dict[sympy.Basic, bool] = {}
+
+    def on_y(e: sympy.Basic) -> bool:
+        if e not in depends:
+            depends[e] = e in wrt or any([on_y(a) for a in e.args])
+        return depends[e]
+
+    held: dict[sympy.Basic, sympy.Dummy] = {}
+
+    def skeleton(e: sympy.Basic) -> sympy.Basic:
+        if not on_y(e):
+            return e if e.is_Atom else held.setdefault(e, sympy.Dummy())
+        return e if e.is_Atom else e.func(*[skeleton(a) for a in e.args])
+
+    rows = [skeleton(e) for e in rate]
+    back = {v: k for k, v in held.items()}
+    return sympy.Matrix([[r.diff(v).xreplace(back) for v in y] for r in rows])
+
