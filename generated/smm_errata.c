@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 69d01375538ee05763ff6a872b31748f01034cf40f7ad431ca61f1478e339b06
-// source key acfe917c064f1d8ab961a0d9a1621d4baa28b5b4e6c250ed6758a583f4866a06
+// source key 9d708692cae9a40f621e8d4451764b8f22cd2b9755e9a070d3e54e972849a035
 // body sha256 c120813920f7d204241a2a875c7e311c679f658730fef504e8c58634d5d943a9
 /* The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

@@ -44,13 +44,13 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
     n = len(q)
     a = sympy.zeros(n, n)
     for b in m.bodies:
-        J = position(b.com).jacobian(qm).subs(at0)
+        J = position(b.com).jacobian(qm).xreplace(at0)
         a += ar(b.mass) * J.T * J
         R = rot(b.turns)
         # angular velocity omega = sum_a vee(dR/dq_a R^T) q'_a
         W = sympy.zeros(3, n)
         for i, s in enumerate(q):
-            Om = (R.diff(s) * R.T).subs(at0)
+            Om = (R.diff(s) * R.T).xreplace(at0)
             W[:, i] = kin.vee(Om, kin.SYMPY)
         # principal axes (columns of Rp) in equilibrium; the central inertia tensor is Rp diag(J) Rp^T
         Rp = sympy.Matrix([[ar(t) for t in ax] for ax in b.axes]).T if b.axes else sympy.eye(3)
@@ -61,7 +61,7 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
     for s in m.springs:
         d = position(s.b) - position(s.a)
         length = sympy.sqrt(d.dot(d))
-        l_eq = length.subs(at0)
+        l_eq = length.xreplace(at0)
         k = ar(s.coef)
         if s.preload == EQUILIBRIUM:
             tension = unknown.setdefault(s.name, sympy.Symbol(f"T_{s.name}"))
@@ -90,8 +90,8 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
         energy = ar(b.mass) * grav * height
         Pi += energy if eff.gravity else _first_order(energy, q)
     grad = sympy.Matrix([Pi.diff(s) for s in q])
-    c = _hessian_of_gradient(grad, q).subs(at0)
-    residual = grad.subs(at0)
+    c = _hessian_of_gradient(grad, q).xreplace(at0)
+    residual = grad.xreplace(at0)
     if unknown:  # eq. (5) fixes the tensions left to equilibrium: solve on independent rows
         from symmech.smm.numeric import equilibrium_tensions
 
@@ -104,12 +104,12 @@ def matrices(m: Mechanism, effects: Effects | None = None) -> dict[str, sympy.Ma
     if eff.damping:
         for d_ in m.dampers:
             d = position(d_.b) - position(d_.a)
-            grad_l = sympy.Matrix([sympy.sqrt(d.dot(d)).diff(s) for s in q]).subs(at0)
+            grad_l = sympy.Matrix([sympy.sqrt(d.dot(d)).diff(s) for s in q]).xreplace(at0)
             rate = sum(gl * v for gl, v in zip(grad_l, qd))
             Phi += ar(d_.coef) * rate**2 / 2
         for t in m.torsion_dampers:
             tw = _twist(m, t, rot, axis, ar)
-            rate = sum(tw.diff(s).subs(at0) * v for s, v in zip(q, qd))
+            rate = sum(tw.diff(s).xreplace(at0) * v for s, v in zip(q, qd))
             Phi += ar(t.coef) * rate**2 / 2
     b = sympy.hessian(Phi, qd) if Phi != 0 else sympy.zeros(n, n)
     return {"a": a, "b": b, "c": c, "residual": residual}
@@ -129,7 +129,7 @@ def _hessian_of_gradient(grad: sympy.Matrix, q) -> sympy.Matrix:
 def _first_order(expr, q):
     """The part of expr linear in q at q = 0 (keeps the equilibrium force, drops its stiffness)."""
     at0 = {s: 0 for s in q}
-    return sum((expr.diff(s).subs(at0) * s for s in q), sympy.S.Zero)
+    return sum((expr.diff(s).xreplace(at0) * s for s in q), sympy.S.Zero)
 
 
 def _twist(m, t, rot, axis, ar):
