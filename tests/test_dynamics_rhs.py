@@ -349,7 +349,8 @@ def test_the_jacobian_is_sympys_entry_for_entry():
     boom = derive.load_mechanism(scenes_folder() / "smm_rotor_boom.toml")
     dyn = derive.free_motion(boom, derive.named_matrices(boom))
     y = sympy.Matrix([a.symbol for a in dyn.state])
-    assert jacobian(dyn.rate, y) == dyn.rate.jacobian(y) and dyn.rate.jacobian(y).shape == (len(y), len(y))
+    expected = dyn.rate.jacobian(y)
+    assert jacobian(dyn.rate, y) == expected and expected.shape == (len(y), len(y))
 
 
 def test_dynamics_refuses_a_state_dependent_mass_and_a_wrong_shape():
