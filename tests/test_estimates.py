@@ -143,14 +143,15 @@ def test_a_sweep_is_refused_from_its_timed_wave_before_the_rest_runs():
     assert ran == core_sweep.spread(6)[:2] == [0, 4]
 
 
-@pytest.mark.slow  # ~4 s: five runs, the answer, six charts
+@pytest.mark.slow  # ~4 s: five runs, the answer, its two charts
 def test_a_small_trolley_sweep_is_told_an_estimate_that_holds(tmp_path):
-    """Five speeds of a short rigid helix, serial: the last estimate told is within 2x of the sweep's time, and
-    summary.json records it."""
+    """Five speeds of a short rigid helix, serial: the charts counted are the rigid model's two (comfort margin and
+    peak reaction), the last estimate told is within 2x of the sweep's time, and summary.json records it."""
     raw = edited(RIGID, ("time.t_end", 1.0), ("time.steps", 50)) | {
         "sweep": {"x": {"field": "motion.speed_scale", "start": 0.5, "stop": 1.5, "num": 5}}}
     ctx = Told()
     core_sweep.run(raw, tmp_path / "out", ctx, scheduler="synchronous")
+    assert any("up to 2 charts at" in m for m in ctx.told), ctx.told
     assert 0.5 <= told_seconds(ctx) / ctx.elapsed() <= 2.0, ctx.told
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["estimate"]["seconds"] == pytest.approx(told_seconds(ctx), rel=1e-2)  # the last told, recorded

@@ -111,9 +111,9 @@ def test_rigid_comfort_margin_against_the_swept_upper_limit(tmp_path, monkeypatc
     assert flat["value"] == pytest.approx(peak, rel=1e-12) and flat["spread"] == 0.0
     assert "everywhere, within the tolerance" in flat["text"]
     assert any(h.name == "largest roller reaction |P1…P5|" and h.at == "every point" for h in res.headline)
-    # the charts are in the estimate: at 100 s a chart, the sweep of two points is refused under 150 s
+    # the charts are in the estimate, the rigid model's two: at 100 s a chart, two points are refused under 150 s
     monkeypatch.setattr(core_sweep, "chart_seconds", lambda shape: 100.0)
-    with pytest.raises(SymmechError, match=r"estimated sweep time 6\d\d s .* up to 6 charts at 100 s"):
+    with pytest.raises(SymmechError, match=r"estimated sweep time 2\d\d s .* up to 2 charts at 100 s"):
         sweep.compute(p, "synchronous", ctx=Context(quiet=True, max_time=150.0))
 
 

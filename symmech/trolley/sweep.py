@@ -475,12 +475,13 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     if points > 2:
         done[points // 2], took = _timed(p, cells[points // 2], until)
     startup = core_sweep.startup_seconds(scheduler, max(first - took, 0.0))
-    drawing = len(CHARTS) * core_sweep.chart_seconds(p.shape)
+    charts = chart_count(outcome)
+    drawing = charts * core_sweep.chart_seconds(p.shape)
     rest = [k for k in range(points) if k not in done]
     core_sweep.refuse(registry.Estimate(startup + took * len(rest) / processes + drawing,
                                         f"{points} points at {took:.3g} s (timed here) on {processes} "
-                                        f"worker(s), {startup:.3g} s to start them, up to {len(CHARTS)} charts at "
-                                        f"{drawing / len(CHARTS):.3g} s"), ctx)
+                                        f"worker(s), {startup:.3g} s to start them, up to {charts} charts at "
+                                        f"{drawing / max(charts, 1):.3g} s"), ctx)
     import dask  # after the refusals: a refused sweep loads no Dask
 
     shared = dask.delayed(p, pure=True)  # one node of the graph: each task builds its own point scene
@@ -489,6 +490,15 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     values = dict(zip(rest, core_sweep.compute(tasks, scheduler, processes, connect_timeout, ctx,
                                                on_workers=_warm_worker if warm else None, after=drawing)))
     return [done[k] if k in done else values[k] for k in range(points)]
+
+
+def chart_count(outcome) -> int:
+    """The charts a sweep can draw whose first point's :func:`evaluate` gave ``outcome``: those of
+    :data:`CHARTS` its model has (the rigid model two of six); all if it failed."""
+    if outcome[0] != "ok":
+        return len(CHARTS)
+    names = {c.name for c in outcome[1]}
+    return sum(name in names for name, *_ in CHARTS)
 
 
 def _timed(p: Plan, cell: tuple[int, int], until: float):
