@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 454117a88683e6b48a2fbf61eb954bd9ce8354666c964ff1db62375e56efe36d
-# source key 6e94f01ca7b3592783d31ca8d3d085fe7ed6be817ac4345a4a2ee25179727b6d
+# source key bc9340ae5931eee074a8cbe0154d55ba702873ad9d4716bb29f68943f47fc8b1
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3f6f9212a5402cb00fb6e94f5ead239ccadbbf57d3a336f2d8c2fa1703054aa8
-# source key d874511fb17058501577d3ac12a20fd98d427c19f6a18b474cd15172a81ac958
+# source key 5d14a8d5a739bd8fb63179343ee48bb4c3c6ab8a49a222ceb91e497db32f2512
 # body sha256 294c89c01eac0fe0eb73c8e4648aa29275d182972c1574babe896c0df7fc47eb
 """Typeset MathML of the functions of `grain_impact_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 feabbac407e6ccc3993d79bc8f6a498874d4854fa2d92e4c971cdb7c4d9df915
-// source key 657d4c834d91d5840893d6c48a7ce3a4658662708022208d47379c9c416cba86
+// source key 09a117de4897d4cf35db476cc5c6d6b963571c65496e35a8c75defd2e1adfaf8
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

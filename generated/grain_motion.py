@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1fe5379d72002a24f3d2a3462b2626c71f6917cc98bbc7e61c8997e021aa4efe
-# source key 657d4c834d91d5840893d6c48a7ce3a4658662708022208d47379c9c416cba86
+# source key 09a117de4897d4cf35db476cc5c6d6b963571c65496e35a8c75defd2e1adfaf8
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c7c89432e8309f7ed550e8a1453228d7282a0c80862062f37c1db9b2ec13282
-// source key 8baba005a7a48b4e4257aebae1939dc450c628ceb4f0ce117aa06ca297fd204a
+// source key 745d2cf8aa9b01efe4d44b8e9d1fcfb2922928b63397aeb3be8ae32ba768d642
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b4242ef4cf53bf9380cab25d8e34d0f1152458a3c29fe877b2e9e8ec606b561c
-# source key 8baba005a7a48b4e4257aebae1939dc450c628ceb4f0ce117aa06ca297fd204a
+# source key 745d2cf8aa9b01efe4d44b8e9d1fcfb2922928b63397aeb3be8ae32ba768d642
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
-# source key bffc9be03c158538246e4250f9fc1020fe63f4070c860af8382f5cd3c7e3bf1b
+# source key dedeccc82fb5a8359e5dad8a600a9d4e66c198e7490fa6c52e704579119e48a8
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

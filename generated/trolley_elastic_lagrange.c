@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 b40c395e491040395bccc5140e363e94df6ddebfea493ae9e3b7fec27b64231c
-// source key aa0343984927c3852857208a9142de07c0533bc40c57e37bb6248ad37f616b54
+// source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
 // body sha256 6d51d4292543679442ae34d3d8f0b5892d984ada68bfb30bb007ba943025b161
 /* Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fd0e7eefe40116ee25d0e9f249e51f729e37930a05fbaa4db91ac79bd0e0ef67
-# source key aa0343984927c3852857208a9142de07c0533bc40c57e37bb6248ad37f616b54
+# source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
 # body sha256 f8f7f1ad15caf6efe47b62c57d3b15e7063c31b04ceaa9199aa2fe2e80cb6877
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0ff432e864fff8a27b922bc76d795467f56b9f0ddb657790111f13a69a722f6a
-# source key aa0343984927c3852857208a9142de07c0533bc40c57e37bb6248ad37f616b54
+# source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
 # body sha256 9e51fdee4777a4ffce3c64f8f45246d579794644070b104b576d994e62545ef4
 """Typeset MathML of the functions of `trolley_elastic_lagrange`, read by `symmech report`.
 

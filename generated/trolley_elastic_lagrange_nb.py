@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 865f1e83a767760a6932af376e6dd65fbe10b08769e32fca0f70a17b969884d5
-# source key aa0343984927c3852857208a9142de07c0533bc40c57e37bb6248ad37f616b54
+# source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
 # body sha256 8f465e3eb75b98da15882d9600c88a5011e851fef26b1138023d0d9b96c480b8
 """Small elastic trolley by Lagrange's equations (test route).
 

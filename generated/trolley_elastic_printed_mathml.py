@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 dd9c8dbfe7fd9bafcad98ca2a02d07d99b0e5617778ff746b38958b466bf821f
-# source key d5aa5ea2cd41202012400f470b796d5ef8baede8e2e1486afe9843ce56930dcc
+# source key 6a61388c8a56d78576d46b402cc793fafe78b714eadf35a33181c06c6f0dc02b
 # body sha256 ac9027d6a998c9dc48fb2e036e0a0306af780c5533d52d7b039e30a506b83c77
 """Typeset MathML of the functions of `trolley_elastic_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1f74efd61bec2a23607289fa6a128197a228785e803e102fb3c021f6fb488c9a
-// source key 3accd8989fd5976c2737555522a0fc32b8534d86245efc12ed9b9181f4a6ac0c
+// source key f9907ffdcc1f9cdd6083ee3d2848affb0392803e4062090634db76e6c9e410c8
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

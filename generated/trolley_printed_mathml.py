@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bb0a3381776a83860da160b1cf3ca2a32147aadcd30c79937e300942ed63b8f
-# source key 3accd8989fd5976c2737555522a0fc32b8534d86245efc12ed9b9181f4a6ac0c
+# source key f9907ffdcc1f9cdd6083ee3d2848affb0392803e4062090634db76e6c9e410c8
 # body sha256 926c2843ac1442f0a9567419bed84a0f5e07f515c4b2f20a5064ab973bf070d8
 """Typeset MathML of the functions of `trolley_printed`, read by `symmech report`.
 

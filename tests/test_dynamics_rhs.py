@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 import symmech
 from symmech.core import emit
 from symmech.numerics import kernels
-from symmech.core.derivation import Arg, Dynamics, ModuleSpec, args_of, jacobian
+from symmech.core.derivation import Arg, Dynamics, ModuleSpec, NamedMatrix, args_of, jacobian
 from symmech.core.scene import scenes_folder
 from symmech.generated import grain_motion as gm
 from symmech.generated import smm_rotor_boom
@@ -360,6 +360,23 @@ def test_dynamics_refuses_a_state_dependent_mass_and_a_wrong_shape():
         Dynamics(state, (), sympy.Matrix([v, -x]), sympy.diag(1, 1 + x**2))
     with pytest.raises(ValueError, match="rate has shape \\(1, 1\\)"):
         Dynamics(state, (), sympy.Matrix([v]))
+
+
+def test_dynamics_without_its_rates_has_the_layout_alone_in_c_only():
+    """``rates=False``: the module's own function reads (t, y, p) by the layout (its C signature), no ``rate`` or
+    ``rate_mass`` is emitted, and the Python targets, whose rhs calls rate, refuse the module."""
+    oscillator = _oscillator()
+    dyn = oscillator.dynamics
+    both = NamedMatrix("rate_and_mass_block", sympy.Matrix([*dyn.rate, dyn.mass[1, 1]]), dyn.args, "F, then m", "N")
+    spec = ModuleSpec("test_layout_only", "Forced oscillator (tests).", "tests", (both,), dyn, rates=False)
+    assert [f.name for f in spec.functions] == ["rate_and_mass_block"]
+    assert [f.name for f in oscillator.functions] == ["rate", "rate_jacobian", "rate_mass"]
+    text = emit.render(spec, emit.C99)
+    assert "void test_layout_only_rate_and_mass_block(double sm_t, const double *sm_y, const double *sm_p" in text
+    assert "const double x = sm_y[0];" in text and "_rate(" not in text and "rate_mass" not in text
+    for target in (emit.NUMPY, emit.NUMBA):
+        with pytest.raises(ValueError, match="test_layout_only: dynamics without its rate functions have no Python"):
+            emit.render(spec, target)
 
 
 @pytest.mark.parametrize("integrate", [False, pytest.param(True, marks=pytest.mark.slow)],

@@ -69,7 +69,9 @@ class NamedMatrix:
         """The matrix with every argument symbol renamed to its code name. Renamed once per instance (the renaming
         rebuilds every expression tree, and every target of a module prints it); immutable, so no caller can change
         what the next one reads. Kept in the instance's ``__dict__``, outside the fields, so equality is unchanged."""
-        return sympy.ImmutableMatrix(self.matrix.xreplace({a.symbol: sympy.Symbol(a.name) for a in self.args}))
+        renamed = {a.symbol: sympy.Symbol(a.name) for a in self.args}
+        renamed = {symbol: name for symbol, name in renamed.items() if symbol != name}  # xreplace rebuilds on any
+        return sympy.ImmutableMatrix(self.matrix.xreplace(renamed) if renamed else self.matrix)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -87,7 +89,9 @@ class ModuleSpec:
     """A generated module: its name under ``symmech.generated`` and its functions.
 
     With ``dynamics`` the module also holds that ODE's ``rate`` functions (appended to
-    ``functions``) and the solve_ivp-style ``rhs``/``jac`` over the declared layout.
+    ``functions``) and the solve_ivp-style ``rhs``/``jac`` over the declared layout. With ``rates``
+    False it holds the layout alone: a C module whose own functions read (t, y, p) and combine what the
+    rate functions would give (the elastic trolley's F with its mass block under one CSE): no Python rhs.
     """
 
     name: str
@@ -95,10 +99,11 @@ class ModuleSpec:
     source: str
     functions: tuple[NamedMatrix, ...] = field(default_factory=tuple)
     dynamics: Dynamics | None = None  # emitted as rhs(t, y, p), jac(t, y, p), STATE, PARAMS
+    rates: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "functions", tuple(self.functions)
-                           + (self.dynamics.functions() if self.dynamics else ()))
+                           + (self.dynamics.functions() if self.dynamics and self.rates else ()))
         names = [f.name for f in self.functions]
         if len(set(names)) != len(names):
             raise ValueError(f"module {self.name}: duplicate function names")

@@ -308,6 +308,8 @@ NO_KEY = "0" * 64
 
 def render(spec: ModuleSpec, target: Target = NUMPY, key: str = NO_KEY) -> str:
     """Text of the generated module for ``spec`` in ``target``, header included."""
+    if spec.dynamics and not spec.rates and target in (NUMPY, NUMBA):  # their rhs calls rate
+        raise ValueError(f"module {spec.name}: dynamics without its rate functions have no Python rhs")
     env = jinja2.Environment(
         loader=jinja2.FunctionLoader(_template_text),
         keep_trailing_newline=True,

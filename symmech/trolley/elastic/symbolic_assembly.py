@@ -9,12 +9,17 @@ depend on the scene, so the module is derived per model at export time (``symmec
 invariants as numbers: a term whose coefficient is zero is never formed (nine tenths of G on the bundled
 helix), and the emitter's CSE shares the rest. Its text carries the usual hash header.
 
-Functions (C99 via :mod:`symmech.core.emit`): ``rate`` F = (q̇, -R) and ``rate_mass`` M = diag(1, A Gtr Aᵀ) of
-M y' = F over the state y = (q, q̇) with parameters p = (the rollers' stiffnesses, dampings and preloads, the 12 frame
-channels at t: load a0 + g0 ν, ω, ω̇, v0); ``outputs`` (P0…P5, the roller deflections, and per probe its
-displacement, elastic deflection and overload) from (q, q̇, q̈, p); ``rate_and_mass_block`` F, then the block
-of M below its identity rows alone (at a prescribed speed its lower triangle: M(q) is symmetric), from (t, y, p)
-with one CSE over both: what the exported model's solve reads at each rate evaluation.
+Functions (C99 via :mod:`symmech.core.emit`), the two the exported model calls: ``rate_and_mass_block``, F =
+(q̇, -R) of M y' = F with M = diag(1, A Gtr Aᵀ) over the state y = (q, q̇) with parameters p = (the rollers'
+stiffnesses, dampings and preloads, the 12 frame channels at t: load a0 + g0 ν, ω, ω̇, v0), then the block of M
+below its identity rows alone (at a prescribed speed its lower triangle: M(q) is symmetric), from (t, y, p) with
+one CSE over both, what the model's solve reads at each rate evaluation; ``outputs`` (P0…P5, the roller
+deflections, and per probe its displacement, elastic deflection and overload) from (q, q̇, q̈, p). F and M alone
+(``rate``, ``rate_mass``) are not printed: the module has its dynamics' layout, not its rate functions.
+
+Its symbols carry no assumptions and are named as the printed code's arguments, so the emitter prints the
+expressions as derived (renaming real symbols rebuilt every tree, and sympy's assumptions made each product
+cost more to build: together about half the derivation's time).
 
 With traction (:func:`traction_spec`) s and V0 are states, y = (q, s, q̇, V0): the 12 channels follow from the
 15 geometry channels at s (parameters) and V0, V̇0 (the compiled engine's ``_motion``), and q̈, V̇0 solve
@@ -35,9 +40,9 @@ ROLLERS = 5
 
 
 def _symbols(layout) -> tuple:
-    """One real symbol per slot of ``layout``, in its order (``load1``, ``load2``, ... for a field ``load`` of
+    """One symbol per slot of ``layout``, in its order (``load1``, ``load2``, ... for a field ``load`` of
     3), and their arguments (symbol, meaning with the component, unit)."""
-    symbols = tuple(sp.Symbol(f"{f.name}{i + 1}", real=True) for f in layout.fields for i in range(f.size))
+    symbols = tuple(sp.Symbol(f"{f.name}{i + 1}") for f in layout.fields for i in range(f.size))
     rows = [(f.meaning, f.unit, i) for f in layout.fields for i in range(f.size)]
     return symbols, args_of([(x, f"{meaning}, x{i + 1} component", unit)
                              for x, (meaning, unit, i) in zip(symbols, rows)])
@@ -51,9 +56,9 @@ def _by_field(layout, values) -> dict:
 # the frame channels of the table in t and the geometry channels of the traction table in s, as declared
 CHANNELS, CHANNEL_ARGS = _symbols(CHANNEL_LAYOUT)
 GEOMETRY, GEOMETRY_ARGS = _symbols(GEOMETRY_LAYOUT)
-STIFFNESS = sp.symbols(f"roller_k1:{ROLLERS + 1}", real=True)
-DAMPING = sp.symbols(f"roller_c1:{ROLLERS + 1}", real=True)
-PRELOAD = sp.symbols(f"roller_pre1:{ROLLERS + 1}", real=True)
+STIFFNESS = sp.symbols(f"roller_k1:{ROLLERS + 1}")
+DAMPING = sp.symbols(f"roller_c1:{ROLLERS + 1}")
+PRELOAD = sp.symbols(f"roller_pre1:{ROLLERS + 1}")
 ROLLER_ARGS = args_of([(k, f"stiffness of the roller of P{r + 1}", "N/m") for r, k in enumerate(STIFFNESS)]
                       + [(c, f"damping of the roller of P{r + 1}", "N s/m") for r, c in enumerate(DAMPING)]
                       + [(x, f"preload of the roller of P{r + 1} (clamped pair law)", "m")
@@ -81,7 +86,7 @@ def assembly_spec(model: dict, names: list[str], units: list[str]) -> ModuleSpec
     block = M.lower_triangular()
     return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 and outputs, assembled from one "
                       "model's invariants", SOURCE, (outputs, rate_and_mass_block(dynamics, block)),
-                      dynamics)
+                      dynamics, rates=False)
 
 
 def rate_and_mass_block(dynamics: Dynamics, block: sp.Matrix) -> NamedMatrix:
@@ -94,10 +99,10 @@ def rate_and_mass_block(dynamics: Dynamics, block: sp.Matrix) -> NamedMatrix:
 
 
 # the traction law's variables: time and the speed of O along the track
-TIME = sp.Symbol("t", real=True)
-SPEED = sp.Symbol("V0", real=True)
-ARC_LENGTH = sp.Symbol("s", real=True)
-SPEED_RATE = sp.Symbol("dV0", real=True)
+TIME = sp.Symbol("t")
+SPEED = sp.Symbol("V0")
+ARC_LENGTH = sp.Symbol("s")
+SPEED_RATE = sp.Symbol("dV0")
 
 
 def traction_spec(model: dict, names: list[str], units: list[str], law: sp.Expr) -> ModuleSpec:
@@ -131,7 +136,7 @@ def traction_spec(model: dict, names: list[str], units: list[str], law: sp.Expr)
                           "P0…P5, roller deflections d1…d5, per probe u (3), e (3), n (3)", "N, m, g")
     return ModuleSpec(NAME, "The elastic trolley's equations M(q) q'' + R = 0 with F1 = P0(t, V0) and outputs, "
                       "assembled from one model's invariants", SOURCE, (outputs, rate_and_mass_block(dynamics, L)),
-                      dynamics)
+                      dynamics, rates=False)
 
 
 def motion(V, dV, g0) -> tuple:
@@ -147,7 +152,7 @@ def motion(V, dV, g0) -> tuple:
 
 def _coordinates(n: int) -> tuple:
     """Symbols of q, q̇, q̈ (n each)."""
-    return (sp.symbols(f"q0:{n}", real=True), sp.symbols(f"qd0:{n}", real=True), sp.symbols(f"qdd0:{n}", real=True))
+    return (sp.symbols(f"q0:{n}"), sp.symbols(f"qd0:{n}"), sp.symbols(f"qdd0:{n}"))
 
 
 def _state_args(q, qd, names, units) -> tuple:
