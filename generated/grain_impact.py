@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cac8d123c502d9de0fb43ec86a8e2ca1a2fe496fa78865c5d990d0039755679d
-# source key bc9340ae5931eee074a8cbe0154d55ba702873ad9d4716bb29f68943f47fc8b1
+# source key 31eb48be5e846ff5aed5f71fad18cc4cdec78fe437082c947120b3f42c1dd5f3
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 aa8237665202607be5395bef1ce27e23289f36574abfaddca58d05443bacead0
-// source key 5d14a8d5a739bd8fb63179343ee48bb4c3c6ab8a49a222ceb91e497db32f2512
+// source key 10d90faa864ff820ca157798a5b065ee4e1108c3bd300397548c28a8c05f2406
 // body sha256 f19ced16afd015af0ba45f11f58625238318692cba1e0e56509e18457b145075
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

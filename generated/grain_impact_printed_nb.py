@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9ac8da813c32473e514b7a11375003f200f2310be67175cdeb722cca52389f0b
-# source key 5d14a8d5a739bd8fb63179343ee48bb4c3c6ab8a49a222ceb91e497db32f2512
+# source key 10d90faa864ff820ca157798a5b065ee4e1108c3bd300397548c28a8c05f2406
 # body sha256 17686d5ecd709fc01ce8406726493ed87f2bfef80365f2679427f555582ab306
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

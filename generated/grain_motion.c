@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 feabbac407e6ccc3993d79bc8f6a498874d4854fa2d92e4c971cdb7c4d9df915
-// source key 09a117de4897d4cf35db476cc5c6d6b963571c65496e35a8c75defd2e1adfaf8
+// source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

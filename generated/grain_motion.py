@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1fe5379d72002a24f3d2a3462b2626c71f6917cc98bbc7e61c8997e021aa4efe
-# source key 09a117de4897d4cf35db476cc5c6d6b963571c65496e35a8c75defd2e1adfaf8
+# source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5fbbee432ea0e1e754e2e674dc30bc485ad2efab9bb32657fdd34c7f94147084
-# source key 09a117de4897d4cf35db476cc5c6d6b963571c65496e35a8c75defd2e1adfaf8
+# source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

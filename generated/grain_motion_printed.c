@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c7c89432e8309f7ed550e8a1453228d7282a0c80862062f37c1db9b2ec13282
-// source key 745d2cf8aa9b01efe4d44b8e9d1fcfb2922928b63397aeb3be8ae32ba768d642
+// source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79d68995e2124b0765ebc2ccac2f8312ed97e03fe3ca6f1ee1763f284d2a5c33
-# source key 745d2cf8aa9b01efe4d44b8e9d1fcfb2922928b63397aeb3be8ae32ba768d642
+# source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

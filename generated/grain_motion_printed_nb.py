@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b4242ef4cf53bf9380cab25d8e34d0f1152458a3c29fe877b2e9e8ec606b561c
-# source key 745d2cf8aa9b01efe4d44b8e9d1fcfb2922928b63397aeb3be8ae32ba768d642
+# source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c84b317a58b640b878d412fc96ddd4fd93caf060f48a43d01c4f24cfb0e85d2
-// source key dedeccc82fb5a8359e5dad8a600a9d4e66c198e7490fa6c52e704579119e48a8
+// source key 7d86b07290c61fc31585279cc82e40d01396c81bedbde9136d7c116f6e365797
 // body sha256 366b188556699fb09d6eb00c07fa06e0af99a2dd605d3b1658259bf41001d72a
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
-# source key dedeccc82fb5a8359e5dad8a600a9d4e66c198e7490fa6c52e704579119e48a8
+# source key 7d86b07290c61fc31585279cc82e40d01396c81bedbde9136d7c116f6e365797
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

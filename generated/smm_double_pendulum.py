@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cab46f6c0b6893419fc7e3a36bbbbd25bb41f4bcd306e7df1e18792d20c43d76
-# source key 269ef93c36ab2c4349809d024312256840f4f36beb995d79d18651380fea260b
+# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7c7093f8a16fc61c476627ed4c3aebe863ff626666324103579b7621f2626103
-# source key 269ef93c36ab2c4349809d024312256840f4f36beb995d79d18651380fea260b
+# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
 # body sha256 cd85e3f7a47678bf2e63121f111536af09407b57d11dde17c41315bf194fa672
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

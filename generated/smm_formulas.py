@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8eb659fc5758d86ac45d2f5e3a0bd13ad30026da73e5be70bff4d37f622f751d
-# source key dfab6a106d9dfa7139770ff2a7d87fd1579c22a101ad40e53854fad7103bde50
+# source key e9096deceb34bc5bfd15606d9cfaac3bfe9999fd3f2ff96788c7762dde5e806b
 # body sha256 2d2d9f5708fb64021e1c0c77db318a31e37a73055c64403b39e1eabf98eeee19
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

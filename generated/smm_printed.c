@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 74e081f9bdf2d991ec28fc5646c53c09e1b6d2f4af6a6cb40a7a2336b94fa9f0
-// source key e2ef99d0a2e1e3e8516dec7a60ecb665640c14c6c8354a6074d90f4d6d8a6546
+// source key 2f124547703d7409f14789b1a4ed30675a269c2feffb762d83817edf5fd312f5
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f153c377311a031a04cc4f2a0f11639ec2794512c1922684e2d7c0f05d83ae4d
-# source key e2ef99d0a2e1e3e8516dec7a60ecb665640c14c6c8354a6074d90f4d6d8a6546
+# source key 2f124547703d7409f14789b1a4ed30675a269c2feffb762d83817edf5fd312f5
 # body sha256 93139c4cf9a02d0ec276b142af5fca64a217568d8a8f507db801909239400590
 """Typeset MathML of the functions of `smm_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 51f706aca1c2d17b56eba03d72a6f1216053b6f2ee4e4aa4eac65ee2cce58cbb
-# source key 269ef93c36ab2c4349809d024312256840f4f36beb995d79d18651380fea260b
+# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
 # body sha256 e608b677dc4fb26ad6a09fd6cefb35f3a420bf51577f5096c38f5e40f43633f8
 """Typeset MathML of the functions of `smm_rotor_boom`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 525c82f0cc2904fc0b55a3fb754ff7efe495e47b4b5790781b5c5d70a095dfcd
-# source key 2b42153891ceac56bbd801176aae6bb1df8e8d2ad205bac5a2b22f4672742041
+# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

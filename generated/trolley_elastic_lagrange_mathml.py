@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0ff432e864fff8a27b922bc76d795467f56b9f0ddb657790111f13a69a722f6a
-# source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
+# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
 # body sha256 9e51fdee4777a4ffce3c64f8f45246d579794644070b104b576d994e62545ef4
 """Typeset MathML of the functions of `trolley_elastic_lagrange`, read by `symmech report`.
 

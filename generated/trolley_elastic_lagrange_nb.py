@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 865f1e83a767760a6932af376e6dd65fbe10b08769e32fca0f70a17b969884d5
-# source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
+# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
 # body sha256 8f465e3eb75b98da15882d9600c88a5011e851fef26b1138023d0d9b96c480b8
 """Small elastic trolley by Lagrange's equations (test route).
 

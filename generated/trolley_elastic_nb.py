@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1abf229cff7428785f678da9593db17530dcc752780a0851810959b737b3f704
-# source key 1a3964401526a9cd02b2672e83dbb928b2c3db66cb4e4833070f05f1aff7c141
+# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

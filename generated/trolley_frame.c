@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 58d2b08d2ce68eb5552d00855b2113a6f7a23d35024deb1acd654c46faca74da
-// source key 2b42153891ceac56bbd801176aae6bb1df8e8d2ad205bac5a2b22f4672742041
+// source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

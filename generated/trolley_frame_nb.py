@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5d1c836ee9142d326f385c6eb402b6d31b1d0e4005b3a216c611722b8bd1337f
-# source key 2b42153891ceac56bbd801176aae6bb1df8e8d2ad205bac5a2b22f4672742041
+# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

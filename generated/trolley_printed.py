@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 36bc87d62b0fedb420c80484a7146b115cdedce87604a4ccd51e1499eb74baf2
-# source key f9907ffdcc1f9cdd6083ee3d2848affb0392803e4062090634db76e6c9e410c8
+# source key ffce9f59053e459f5c9600db8ca4ccfa20258f3c9e0515272d8039a8a476d642
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bb0a3381776a83860da160b1cf3ca2a32147aadcd30c79937e300942ed63b8f
-# source key f9907ffdcc1f9cdd6083ee3d2848affb0392803e4062090634db76e6c9e410c8
+# source key ffce9f59053e459f5c9600db8ca4ccfa20258f3c9e0515272d8039a8a476d642
 # body sha256 926c2843ac1442f0a9567419bed84a0f5e07f515c4b2f20a5064ab973bf070d8
 """Typeset MathML of the functions of `trolley_printed`, read by `symmech report`.
 

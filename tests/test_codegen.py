@@ -330,6 +330,17 @@ def test_the_code_names_matrix_is_renamed_once_and_leaves_equality_alone():
     assert NamedMatrix("f", sympy.Matrix([[lam * rp, rp]]), args, "demo", "m") != nm
 
 
+def test_the_code_names_matrix_rebuilds_no_tree_with_nothing_to_rename():
+    """Symbols named as their code names, without assumptions, are renamed to themselves: the matrix's own
+    expressions, the same objects (a rename rebuilds each tree it reaches); a real symbol is renamed to a plain one."""
+    a, b = sympy.symbols("a b")
+    plain = NamedMatrix("f", sympy.Matrix([[a * b + 1, a]]), (Arg(a, "a", "1"), Arg(b, "b", "1")), "demo", "1")
+    assert all(x is y for x, y in zip(plain.code_matrix, plain.matrix))
+    r = sympy.Symbol("a", real=True)
+    real = NamedMatrix("f", sympy.Matrix([[r * b + 1, r]]), (Arg(r, "a", "1"), Arg(b, "b", "1")), "demo", "1")
+    assert real.code_matrix == plain.matrix and real.code_matrix != real.matrix
+
+
 def test_large_outputs_are_chunked(tmp_path):
     """A 12x12 output is split into helper functions and still evaluates exactly."""
     s = sympy.Symbol("s")

@@ -70,7 +70,7 @@ class NamedMatrix:
         rebuilds every expression tree, and every target of a module prints it); immutable, so no caller can change
         what the next one reads. Kept in the instance's ``__dict__``, outside the fields, so equality is unchanged."""
         renamed = {a.symbol: sympy.Symbol(a.name) for a in self.args}
-        renamed = {symbol: name for symbol, name in renamed.items() if symbol != name}  # xreplace rebuilds on any
+        renamed = {symbol: name for symbol, name in renamed.items() if symbol != name}  # x -> x rebuilds too
         return sympy.ImmutableMatrix(self.matrix.xreplace(renamed) if renamed else self.matrix)
 
     @property
