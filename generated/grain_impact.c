@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 f504df368415c8b9584181c98594fb76f1d34e12537368a25bc1626b49a61b61
-// source key 31eb48be5e846ff5aed5f71fad18cc4cdec78fe437082c947120b3f42c1dd5f3
+// source key af281e810ce448f7d453fe4f2bdc520fc9fd6192d6b9314f0920ab5729c53e53
 // body sha256 39d67a830d664d5920306a6e0f6387d35cf13c4453badc6c801be4d6bda2c5ca
 /* Impact of an ellipsoidal grain on a plane: derived quantities.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cac8d123c502d9de0fb43ec86a8e2ca1a2fe496fa78865c5d990d0039755679d
-# source key 31eb48be5e846ff5aed5f71fad18cc4cdec78fe437082c947120b3f42c1dd5f3
+# source key af281e810ce448f7d453fe4f2bdc520fc9fd6192d6b9314f0920ab5729c53e53
 # body sha256 d39883721edd3f8fc2ab5f97cf81540458b679fc7e111677b246b69905807e30
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

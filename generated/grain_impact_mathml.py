@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 31de10fa330792b2450c7476a571f8bf73a2450f8002913ed96d3547bad82c11
-# source key 31eb48be5e846ff5aed5f71fad18cc4cdec78fe437082c947120b3f42c1dd5f3
+# source key af281e810ce448f7d453fe4f2bdc520fc9fd6192d6b9314f0920ab5729c53e53
 # body sha256 9594b976c63432e21bbeb89c4a97890d9dad291cea15e2d86d9968e337185976
 """Typeset MathML of the functions of `grain_impact`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 454117a88683e6b48a2fbf61eb954bd9ce8354666c964ff1db62375e56efe36d
-# source key 31eb48be5e846ff5aed5f71fad18cc4cdec78fe437082c947120b3f42c1dd5f3
+# source key af281e810ce448f7d453fe4f2bdc520fc9fd6192d6b9314f0920ab5729c53e53
 # body sha256 d059c7775f9b32961d21915ea02837a6ae4cf577bccd7cae4cacec586f3701a5
 """Impact of an ellipsoidal grain on a plane: derived quantities.
 

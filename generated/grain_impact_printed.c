@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 aa8237665202607be5395bef1ce27e23289f36574abfaddca58d05443bacead0
-// source key 10d90faa864ff820ca157798a5b065ee4e1108c3bd300397548c28a8c05f2406
+// source key b814d4e80d74e75a850e3b6e3a81317ad5bbfcdf19813909198302381d5dd505
 // body sha256 f19ced16afd015af0ba45f11f58625238318692cba1e0e56509e18457b145075
 /* Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 095e8e0c52e8add83490d6d8c4aabc35370abcea71c3d698004d315d37871c1c
-# source key 10d90faa864ff820ca157798a5b065ee4e1108c3bd300397548c28a8c05f2406
+# source key b814d4e80d74e75a850e3b6e3a81317ad5bbfcdf19813909198302381d5dd505
 # body sha256 f41147c8a23a603be9f5217d9974fcc4edb0467ad4db6750a461ed52b2080d3f
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3f6f9212a5402cb00fb6e94f5ead239ccadbbf57d3a336f2d8c2fa1703054aa8
-# source key 10d90faa864ff820ca157798a5b065ee4e1108c3bd300397548c28a8c05f2406
+# source key b814d4e80d74e75a850e3b6e3a81317ad5bbfcdf19813909198302381d5dd505
 # body sha256 294c89c01eac0fe0eb73c8e4648aa29275d182972c1574babe896c0df7fc47eb
 """Typeset MathML of the functions of `grain_impact_printed`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9ac8da813c32473e514b7a11375003f200f2310be67175cdeb722cca52389f0b
-# source key 10d90faa864ff820ca157798a5b065ee4e1108c3bd300397548c28a8c05f2406
+# source key b814d4e80d74e75a850e3b6e3a81317ad5bbfcdf19813909198302381d5dd505
 # body sha256 17686d5ecd709fc01ce8406726493ed87f2bfef80365f2679427f555582ab306
 """Impact of an ellipsoidal grain on a plane: formulas as printed (misprints kept).
 

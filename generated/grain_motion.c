@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 feabbac407e6ccc3993d79bc8f6a498874d4854fa2d92e4c971cdb7c4d9df915
-// source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
+// source key de6cdd25c008b3f33d629b595c8d5a0698dd05f387e31e8771ce16535206827a
 // body sha256 2beff5eccde4f6b127fc8f836ef96550f6b25e9967cb6d7573e0a6c3b07bcb2f
 /* Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1fe5379d72002a24f3d2a3462b2626c71f6917cc98bbc7e61c8997e021aa4efe
-# source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
+# source key de6cdd25c008b3f33d629b595c8d5a0698dd05f387e31e8771ce16535206827a
 # body sha256 293e5694b8f46394e0d914e5a3af3a6e13bf7ca16c4f47fcdcf30f39263db87f
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

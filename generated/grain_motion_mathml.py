@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9b30041e2fd9009cfee00ba11cec5fe4a336e8cc20c17cf7717f881960b562ac
-# source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
+# source key de6cdd25c008b3f33d629b595c8d5a0698dd05f387e31e8771ce16535206827a
 # body sha256 cbb0afbf86db27c0be3baf1a804ff9d0050b7de4266931394e3cc89f096d1f30
 """Typeset MathML of the functions of `grain_motion`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5fbbee432ea0e1e754e2e674dc30bc485ad2efab9bb32657fdd34c7f94147084
-# source key e3ea8c0142295608aa9e346d461c06be31fac6a4699c28a6aa952df3307c870c
+# source key de6cdd25c008b3f33d629b595c8d5a0698dd05f387e31e8771ce16535206827a
 # body sha256 bde9f932629aadd35eb0ab5e47c5ba37a8f54ee7b15bcbab8208c40abb016fe8
 """Grain motion: gravity, surface vibration, exact flight, ellipsoid support distance, torque-free rotation.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c7c89432e8309f7ed550e8a1453228d7282a0c80862062f37c1db9b2ec13282
-// source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
+// source key 36422adac8cf8ec2ca15e21b4a1f23aa946f54a9343b05de7b81064c28ba9358
 // body sha256 75cc4ef63e789510f8eeda41db68f16b6800bdaa261c29aa87e79d734f8a7921
 /* Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 79d68995e2124b0765ebc2ccac2f8312ed97e03fe3ca6f1ee1763f284d2a5c33
-# source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
+# source key 36422adac8cf8ec2ca15e21b4a1f23aa946f54a9343b05de7b81064c28ba9358
 # body sha256 8c28d4de328c92f6de2f81dbdb53143c9009acd1895c74d6183ed32905d6f228
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

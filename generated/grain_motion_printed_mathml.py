@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 151b68d166914ba60769ff842d16ebfe24c387748eab0a79923b21e4c2b22d05
-# source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
+# source key 36422adac8cf8ec2ca15e21b4a1f23aa946f54a9343b05de7b81064c28ba9358
 # body sha256 3b8d3e50c551294d418e57a80f99ad59ecf51f050d177d6899428166a383c477
 """Typeset MathML of the functions of `grain_motion_printed`, read by `symmech report`.
 

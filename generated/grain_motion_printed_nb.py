@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 b4242ef4cf53bf9380cab25d8e34d0f1152458a3c29fe877b2e9e8ec606b561c
-# source key b7648ea7c466ffc6d6b7f288cd04c540b1873f92a906b188255bd81853b521b3
+# source key 36422adac8cf8ec2ca15e21b4a1f23aa946f54a9343b05de7b81064c28ba9358
 # body sha256 b5847b9d9c6f92b0397a527167d787d014874e21008f1d4833397d473ca1228c
 """Grain motion formulas (61)-(63) of paper 1, as printed.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 2c84b317a58b640b878d412fc96ddd4fd93caf060f48a43d01c4f24cfb0e85d2
-// source key 7d86b07290c61fc31585279cc82e40d01396c81bedbde9136d7c116f6e365797
+// source key 83b2d564aeaa1ee005c4afaa5489e2d7fd3c3ac95d3ff8e4af7d0a90d2b1026b
 // body sha256 366b188556699fb09d6eb00c07fa06e0af99a2dd605d3b1658259bf41001d72a
 /* Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

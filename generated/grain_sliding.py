@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 c16170159473f6f373309ffae31795ae299ffbde0cf762b8887c15be17da045b
-# source key 7d86b07290c61fc31585279cc82e40d01396c81bedbde9136d7c116f6e365797
+# source key 83b2d564aeaa1ee005c4afaa5489e2d7fd3c3ac95d3ff8e4af7d0a90d2b1026b
 # body sha256 206b5a1d893d29158f51052e4145603a04c8b5072d5180164d17beb97f5a0ae7
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 22cfba090c66a0209884c82322504defa89eba60fff0e2fb307230876c5fcc02
-# source key 7d86b07290c61fc31585279cc82e40d01396c81bedbde9136d7c116f6e365797
+# source key 83b2d564aeaa1ee005c4afaa5489e2d7fd3c3ac95d3ff8e4af7d0a90d2b1026b
 # body sha256 ce26e98c44d021455381fbc9d083f6e89222ff22dba3e490debcdc54ce00ff0c
 """Typeset MathML of the functions of `grain_sliding`, read by `symmech report`.
 

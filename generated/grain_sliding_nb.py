@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 99200fbfb29c7ad99e09a4cac7ee7c5fe255b0b8d9a0ea9b042e89bc417bad7a
-# source key 7d86b07290c61fc31585279cc82e40d01396c81bedbde9136d7c116f6e365797
+# source key 83b2d564aeaa1ee005c4afaa5489e2d7fd3c3ac95d3ff8e4af7d0a90d2b1026b
 # body sha256 1bab40246e5e6e63f22a9fd8f2a71da862a581c12ea356e37c1e078c16685d09
 """Grain sliding: slip and stick on the vibrating plane, their events and the friction impulse, over the flight's state.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ec7ebd79270eaec2199c40f7f5ca6b20ec7afaee11fc55b996f28525450f234e
-// source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+// source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 // body sha256 7f77c97cf741d40fb26a0510100d233319c470780cbe589ba8812802efb475bf
 /* Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cab46f6c0b6893419fc7e3a36bbbbd25bb41f4bcd306e7df1e18792d20c43d76
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 69ee73b8aa19df650aba6ed5b8d90944f3e2e188a154bd766168233648c40ffd
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

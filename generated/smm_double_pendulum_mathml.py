@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 733321625ccaeafa5e76b660801bbdaf9137399b6dd38a49a234d0f5e71d1d1c
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 f755ae7a635c88e9a76acf6601b4613ce6c2481e9a79a9964991ced2a4e0eef6
 """Typeset MathML of the functions of `smm_double_pendulum`, read by `symmech report`.
 

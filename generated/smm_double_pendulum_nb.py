@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0f3eb9609a62684b43124b5428f951e10701dcb33f337a67052bf25d279e8e47
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 dc40022d9a1ca361dcdc141f2806f7d27cf3e1f8e23655ee2f4fc6c18bd59e23
 """Structural model method matrices of the mechanism 'double_pendulum': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 69d01375538ee05763ff6a872b31748f01034cf40f7ad431ca61f1478e339b06
-// source key bc4298b724fc742e73986423daf664ffd837b6a424afea7e5a19b061ad589356
+// source key fcacc09dfc3428ec32788ea2bbdb126d91d9ce2be9fa0fdb768b019bbfd3e299
 // body sha256 c120813920f7d204241a2a875c7e311c679f658730fef504e8c58634d5d943a9
 /* The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

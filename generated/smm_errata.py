@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 cbc4d809c6176b6209d4a21c9e7ce0c5d7790a32331be993cf05391f21caa1b1
-# source key bc4298b724fc742e73986423daf664ffd837b6a424afea7e5a19b061ad589356
+# source key fcacc09dfc3428ec32788ea2bbdb126d91d9ce2be9fa0fdb768b019bbfd3e299
 # body sha256 6a59ab6d11a24e69f903dc46c98452f3a2b72b10a9d2032f391112f99d8de8f6
 """The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

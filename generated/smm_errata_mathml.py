@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 32047742ceffa84adee7c6df35d301194fb7a7596bf715c022bdfa9cbfa57315
-# source key bc4298b724fc742e73986423daf664ffd837b6a424afea7e5a19b061ad589356
+# source key fcacc09dfc3428ec32788ea2bbdb126d91d9ce2be9fa0fdb768b019bbfd3e299
 # body sha256 88274ea598ac4b8680a7c9f909669075054db51475a7d7d6078672e3bc98235c
 """Typeset MathML of the functions of `smm_errata`, read by `symmech report`.
 

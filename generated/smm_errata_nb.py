@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0e6e60cdedaebf3431b4391d5c28b0a8e3a14a115a4a34f002811e4718185c75
-# source key bc4298b724fc742e73986423daf664ffd837b6a424afea7e5a19b061ad589356
+# source key fcacc09dfc3428ec32788ea2bbdb126d91d9ce2be9fa0fdb768b019bbfd3e299
 # body sha256 9740583351de0ab389ffe27936fe3a35852316b92c67e34fbe3e0b1997d83ffd
 """The SMM factors and Lagrange's matrices of the bundled mechanisms that the errata compare with the printed equations (1)-(11).
 

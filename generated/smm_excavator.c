@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 59ad46b13d89b6646f66380cd41411a63b56703f5235c0ed9aabaf5c6fdc551b
-// source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+// source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 // body sha256 b2631b73347c0819a9d08cd8950e2e20c4f318c20707092a19996e7020e1ef18
 /* Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

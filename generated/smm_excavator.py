@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5389ca09e7839e558a5f7d4114f7be003b6d31f0363d20088e9e1f6c076cd6a9
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 b2d4029e955d04f1c6322e18a27a5f7b540d9994011a5b6612d7af21df438fa8
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 caf956d6f72b9b86a23bb93c88cfa672fc00e5f87a9b7a455a1a8e2eb7890ea4
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 666baab2b769e706ce555af5534bc12d569eea8686851af223bdff510aa493a0
 """Typeset MathML of the functions of `smm_excavator`, read by `symmech report`.
 

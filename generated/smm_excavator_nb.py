@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 7c7093f8a16fc61c476627ed4c3aebe863ff626666324103579b7621f2626103
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 cd85e3f7a47678bf2e63121f111536af09407b57d11dde17c41315bf194fa672
 """Structural model method matrices of the mechanism 'excavator': a q'' + b q' + c q = Q, coordinates (s1, s2, phi3, phi4, phi5).
 

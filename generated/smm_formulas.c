@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 07c1b753daa30709958a25ccaf8d2495c0d03f23290f588ddb900bf8fdf7ec73
-// source key e9096deceb34bc5bfd15606d9cfaac3bfe9999fd3f2ff96788c7762dde5e806b
+// source key 08ab8bd11b9f928af4e84ffa566dd03779b0125b556a86ee47dc44cb5982e296
 // body sha256 1e7ef2233d7ee5664488564dcfa2c034ac5c88873792a114ffe0e0f52c86b00e
 /* The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

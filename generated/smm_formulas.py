@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8eb659fc5758d86ac45d2f5e3a0bd13ad30026da73e5be70bff4d37f622f751d
-# source key e9096deceb34bc5bfd15606d9cfaac3bfe9999fd3f2ff96788c7762dde5e806b
+# source key 08ab8bd11b9f928af4e84ffa566dd03779b0125b556a86ee47dc44cb5982e296
 # body sha256 2d2d9f5708fb64021e1c0c77db318a31e37a73055c64403b39e1eabf98eeee19
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5e7a7cd025d520897f05994d7987c6e67456a859455acb5a6ccf520c22d1bfef
-# source key e9096deceb34bc5bfd15606d9cfaac3bfe9999fd3f2ff96788c7762dde5e806b
+# source key 08ab8bd11b9f928af4e84ffa566dd03779b0125b556a86ee47dc44cb5982e296
 # body sha256 de25249eb6fd285ec6985289923852af0e7ea7082917eda44a1f24cb6f4541ed
 """Typeset MathML of the functions of `smm_formulas`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 a2d43f48a4f64df3957bfc09f0d470279833f565e619335820a62540b74c75fe
-# source key e9096deceb34bc5bfd15606d9cfaac3bfe9999fd3f2ff96788c7762dde5e806b
+# source key 08ab8bd11b9f928af4e84ffa566dd03779b0125b556a86ee47dc44cb5982e296
 # body sha256 9d4b295720c395e7398d72de8d41d2c6aafc27aa5937fc54822ed9c1e5dc9b2a
 """The SMM paper's general formulas derived from their definitions (twins of the printed ones in smm_printed).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 74e081f9bdf2d991ec28fc5646c53c09e1b6d2f4af6a6cb40a7a2336b94fa9f0
-// source key 2f124547703d7409f14789b1a4ed30675a269c2feffb762d83817edf5fd312f5
+// source key 1b64195e3752be67820d0bd79bed2791da0ebc4c2963aa39704357fbf35cf945
 // body sha256 d06efc92b01fccf449846a2b9bde3535247a5c068c450655bd74a3f3bd96f085
 /* Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

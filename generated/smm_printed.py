@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 179e5ea550e2b599880c023437d2d082a29204baded70f8311e7b015d8baa3c1
-# source key 2f124547703d7409f14789b1a4ed30675a269c2feffb762d83817edf5fd312f5
+# source key 1b64195e3752be67820d0bd79bed2791da0ebc4c2963aa39704357fbf35cf945
 # body sha256 efcb0749f0a6f3f9b00c0a4792fdbbedf920ef2c8b9d15b049b9beee9d29aa7a
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

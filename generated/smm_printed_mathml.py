@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f153c377311a031a04cc4f2a0f11639ec2794512c1922684e2d7c0f05d83ae4d
-# source key 2f124547703d7409f14789b1a4ed30675a269c2feffb762d83817edf5fd312f5
+# source key 1b64195e3752be67820d0bd79bed2791da0ebc4c2963aa39704357fbf35cf945
 # body sha256 93139c4cf9a02d0ec276b142af5fca64a217568d8a8f507db801909239400590
 """Typeset MathML of the functions of `smm_printed`, read by `symmech report`.
 

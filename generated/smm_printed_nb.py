@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 50d6825a9714d999fa96a1f8f1f2e29b2854e2b1dc494ca4c53365f4e55c6aa6
-# source key 2f124547703d7409f14789b1a4ed30675a269c2feffb762d83817edf5fd312f5
+# source key 1b64195e3752be67820d0bd79bed2791da0ebc4c2963aa39704357fbf35cf945
 # body sha256 cdab5e79ea47166fbaa24913112d51446870593863c7deb7493c82995cc02780
 """Formulas and matrices of the SMM paper (seed 003) as printed: sections 2-3 (general formulas, Tables 1-2, Fig. 8) and section 5 (legible entries).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 836403c7330e41578b5f4ea29b865bb316cabb683e79b98b573400c80cb4dd19
-// source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+// source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 // body sha256 f0f75a1eacf915e0b7b266e975d21f73353a8b2d3a1fc84050c57b659da22814
 /* Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

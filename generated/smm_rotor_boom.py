@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 029aa6ae1984b4b624b7b513fc01aec605e6f837213a1ddc156ef8fc6b3a2e84
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 83404f36aa8814ef1661602449812010d5e1c797b304b29c1aa3917d8879ea41
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 51f706aca1c2d17b56eba03d72a6f1216053b6f2ee4e4aa4eac65ee2cce58cbb
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 e608b677dc4fb26ad6a09fd6cefb35f3a420bf51577f5096c38f5e40f43633f8
 """Typeset MathML of the functions of `smm_rotor_boom`, read by `symmech report`.
 

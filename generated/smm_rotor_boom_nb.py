@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 06d0fd6d105f28ed6c8877197c74c3e1e6b51346c339d50d86a1ebd78fc2dc7a
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 317c122de6069bc20574ea6526d823a7f4596c3beacd6ee1cc7cacdedd9db823
 """Structural model method matrices of the mechanism 'rotor_boom': a q'' + b q' + c q = Q, coordinates (phi1, phi2).
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 56f52369c0883c8c648d20d159d68510b8354fe1e4836123b6a334bad7cd6366
-// source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+// source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 // body sha256 5d34e517f622bc0632a1f5316e5c3cb956ce44018567395e25ec8d01d327a257
 /* Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 3b7bd788de08757393bfd50d7ca60977c720ae34d77e67506882f6a20ff4f934
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 f9742da247d48c952a0c4ea69eca80b7684a89b5b2adeaf498629897e4cc5fb7
 """Typeset MathML of the functions of `smm_spatial_boom`, read by `symmech report`.
 

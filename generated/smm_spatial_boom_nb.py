@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f7fc693aa167e1117936caacb99dfcbdedd3f3a4ccf347c0badfaadde28aa3c2
-# source key f8403f1c83b63aa42acbc6ee0f2abfd757032a8513285127ed68a2cb65f0cd73
+# source key 74552a1bf957216851e99107a3eabd8ae0e23f9d44dcd022083a9091cb572207
 # body sha256 f69f23c8fe61a74f11b2b74bf668b7221688290fd53b2d59efa10eda3fbf2bc6
 """Structural model method matrices of the mechanism 'spatial_boom': a q'' + b q' + c q = Q, coordinates (phi1, beta1, psi1, phi2).
 

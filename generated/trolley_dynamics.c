@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 ac88689828bd6fadf25a179c07aefd8a217c3fb0b1ae75578a36a63308db3329
-// source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+// source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 // body sha256 7031d03778633ec3a746dd258775bd1d6b60a541cae31ed8ccc58b3d00c25239
 /* Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 48dc29d6b9192cffb3398a471470f4d716c55abefe368d6b791fa4c7dc7aa20d
-# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+# source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 # body sha256 fa14e888a06fd220629b285b35b3d7350e945b0fbe244c4a188d914d4e066d2d
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

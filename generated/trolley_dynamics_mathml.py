@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 8d68767d6182eec4ded13f8af22d48aa178724dcc3d2e2abae5a043db59a36c3
-# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+# source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 # body sha256 6e6a32e8ec724103d48590042e9a8769702b691ae458f434357042fd2cc5b6b0
 """Typeset MathML of the functions of `trolley_dynamics`, read by `symmech report`.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 525c82f0cc2904fc0b55a3fb754ff7efe495e47b4b5790781b5c5d70a095dfcd
-# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+# source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 # body sha256 0bae7d0e2ea46c4e7fa0684580a1626995d8bca3573d16cd1cd9e2ae056698b9
 """Body-point kinematics and the reactions P0…P5 of the rigid trolley.
 

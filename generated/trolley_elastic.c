@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 a4d1d580ab2bfbfe2b58ab094ff3ce1fc238bfeec0916e35da21fd3303afef94
-// source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+// source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 // body sha256 6d152bb86292186df9aca075f94d3be62a36d95f7f7c7ce330fee28023bdc44c
 /* Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

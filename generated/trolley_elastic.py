@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 53326bf74b1ffb62506b0f3e8b497d9ab40278eb38c48f04585cc3e4a8e09ea4
-# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+# source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 # body sha256 fe95494cee28f58f7e21fbdb3cabd93c08ec7c809f2588618b262431ab86394f
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

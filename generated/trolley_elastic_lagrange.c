@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 b40c395e491040395bccc5140e363e94df6ddebfea493ae9e3b7fec27b64231c
-// source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+// source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 // body sha256 6d51d4292543679442ae34d3d8f0b5892d984ada68bfb30bb007ba943025b161
 /* Small elastic trolley by Lagrange's equations (test route).
 

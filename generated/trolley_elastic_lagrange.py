@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 fd0e7eefe40116ee25d0e9f249e51f729e37930a05fbaa4db91ac79bd0e0ef67
-# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+# source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 # body sha256 f8f7f1ad15caf6efe47b62c57d3b15e7063c31b04ceaa9199aa2fe2e80cb6877
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0ff432e864fff8a27b922bc76d795467f56b9f0ddb657790111f13a69a722f6a
-# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+# source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 # body sha256 9e51fdee4777a4ffce3c64f8f45246d579794644070b104b576d994e62545ef4
 """Typeset MathML of the functions of `trolley_elastic_lagrange`, read by `symmech report`.
 

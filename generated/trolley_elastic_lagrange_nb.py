@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 865f1e83a767760a6932af376e6dd65fbe10b08769e32fca0f70a17b969884d5
-# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+# source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 # body sha256 8f465e3eb75b98da15882d9600c88a5011e851fef26b1138023d0d9b96c480b8
 """Small elastic trolley by Lagrange's equations (test route).
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 70b821f84a8553b1c7c4ca3a17e97b34f98dfcd331c265a57295f75ea699560b
-# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+# source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 # body sha256 bc1b1ccf186be2a1b36eb95a78a9088b8d67dd552b92d8af0529637a52d0c341
 """Typeset MathML of the functions of `trolley_elastic`, read by `symmech report`.
 

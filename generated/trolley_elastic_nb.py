@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 1abf229cff7428785f678da9593db17530dcc752780a0851810959b737b3f704
-# source key 1a1ec161fa62bb52498ac1fccd9b92f79fcad903d8d432ea1e334b226e6b6c91
+# source key 2ddcd1374646ce76ddf6106fc68737c7f88b55798c9823651e2f560488dcc5c1
 # body sha256 9f58690e9525c945475e37706dccfee29227e7b21b35f6f960fd2ab5e1ddee68
 """Rigid fields of the roller DOFs, roller deflections and beam Ritz bases of the elastic trolley.
 

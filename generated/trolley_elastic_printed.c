@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 5faf39078489b7463c1c4c29b6d57bb802540c7ca712180852430b630d37f68b
-// source key cdc64645e354fefef5cead7c93823a571ebb13eba1f7a354707bb26ab421cd38
+// source key 1aea76b96d1bd700ee08f4686c87a9b0c452d31bb6ea69fa3fc2f1d50a1acf80
 // body sha256 8c5b66ccd32761d7095ae45530d8d6791b99dbc425b2bdc7c3b9e36cbaf66924
 /* The roller-section fields φ0, ψ0 of seed 002 as printed.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 f41a59d7394eb661968d36fdf9d647df816cb390d63f0de0bfa0986cec4a4163
-# source key cdc64645e354fefef5cead7c93823a571ebb13eba1f7a354707bb26ab421cd38
+# source key 1aea76b96d1bd700ee08f4686c87a9b0c452d31bb6ea69fa3fc2f1d50a1acf80
 # body sha256 1404423bf5d88c2a5969708fb6f6c207b906bbb51d3a43c2b2612abecf23aff6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

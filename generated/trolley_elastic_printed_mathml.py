@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 dd9c8dbfe7fd9bafcad98ca2a02d07d99b0e5617778ff746b38958b466bf821f
-# source key cdc64645e354fefef5cead7c93823a571ebb13eba1f7a354707bb26ab421cd38
+# source key 1aea76b96d1bd700ee08f4686c87a9b0c452d31bb6ea69fa3fc2f1d50a1acf80
 # body sha256 ac9027d6a998c9dc48fb2e036e0a0306af780c5533d52d7b039e30a506b83c77
 """Typeset MathML of the functions of `trolley_elastic_printed`, read by `symmech report`.
 

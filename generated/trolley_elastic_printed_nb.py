@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 44ec528fe2bb7ffdb2f99c0bab75257ced43567288fba5d219b628492e15e7d4
-# source key cdc64645e354fefef5cead7c93823a571ebb13eba1f7a354707bb26ab421cd38
+# source key 1aea76b96d1bd700ee08f4686c87a9b0c452d31bb6ea69fa3fc2f1d50a1acf80
 # body sha256 f774846a60489e9f87b3c9be7c7b6cccc7152edd09ac7e6baac89c31558695b6
 """The roller-section fields φ0, ψ0 of seed 002 as printed.
 

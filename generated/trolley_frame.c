@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 58d2b08d2ce68eb5552d00855b2113a6f7a23d35024deb1acd654c46faca74da
-// source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+// source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 // body sha256 ec62a13220d09291beb95f1e7798725d6e899defc71e8c776463f8265fbffa7e
 /* Frames, angles and angular velocity of the trolley along the track.
 

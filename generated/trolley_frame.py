@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0109ae53941ab872b8681be5831147aa67a14d50861429fd2d60836d719da7f3
-# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+# source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 # body sha256 cb27803fac835ba3a34837ed5c0031b38c4cd1fd6365fb27a443b775e38b8cea
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 9344b414d62b9f44410c93d3120811042d65b99559acc078cf211f11f411bb8b
-# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+# source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 # body sha256 236c0e9589b21fc8a2f995370901204a191cea12b4d1e4add458c6fb76ecfcf6
 """Typeset MathML of the functions of `trolley_frame`, read by `symmech report`.
 

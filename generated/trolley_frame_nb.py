@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 5d1c836ee9142d326f385c6eb402b6d31b1d0e4005b3a216c611722b8bd1337f
-# source key ec075535c0ed4522c663b0f8b67ce32226290496b87734dc291c810c7fc5df49
+# source key 73529119200e1f6520ef089f4e916799075c2d60b383028f77d37bd31c9b5eb1
 # body sha256 81f46887ff5c7af9c8280448eba9ac1290d1ce9cba0577f845a35149b4d80c3a
 """Frames, angles and angular velocity of the trolley along the track.
 

@@ -1,5 +1,5 @@
 // symmech 0.1.0 generated module; inputs sha256 1f74efd61bec2a23607289fa6a128197a228785e803e102fb3c021f6fb488c9a
-// source key ffce9f59053e459f5c9600db8ca4ccfa20258f3c9e0515272d8039a8a476d642
+// source key e1b762ed3c30e374f8df818a073c240450b05c355fb88434ba74793820574d46
 // body sha256 d98255ee539cf91b53d24194404a8c4f713517036e9e9d67247f4780822cdf44
 /* The trolley paper's formulas as printed (hand transcription).
 

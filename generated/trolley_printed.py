@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 36bc87d62b0fedb420c80484a7146b115cdedce87604a4ccd51e1499eb74baf2
-# source key ffce9f59053e459f5c9600db8ca4ccfa20258f3c9e0515272d8039a8a476d642
+# source key e1b762ed3c30e374f8df818a073c240450b05c355fb88434ba74793820574d46
 # body sha256 707bbe82004054a39a0b3fdfc5310afef57bbc94ddb100fe9d978e4298f9007f
 """The trolley paper's formulas as printed (hand transcription).
 

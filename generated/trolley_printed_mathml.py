@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 0bb0a3381776a83860da160b1cf3ca2a32147aadcd30c79937e300942ed63b8f
-# source key ffce9f59053e459f5c9600db8ca4ccfa20258f3c9e0515272d8039a8a476d642
+# source key e1b762ed3c30e374f8df818a073c240450b05c355fb88434ba74793820574d46
 # body sha256 926c2843ac1442f0a9567419bed84a0f5e07f515c4b2f20a5064ab973bf070d8
 """Typeset MathML of the functions of `trolley_printed`, read by `symmech report`.
 

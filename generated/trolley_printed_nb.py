@@ -1,5 +1,5 @@
 # symmech 0.1.0 generated module; inputs sha256 28083ba06c704529a63784042ba9b582826665f8161642b6ea742896a529db8a
-# source key ffce9f59053e459f5c9600db8ca4ccfa20258f3c9e0515272d8039a8a476d642
+# source key e1b762ed3c30e374f8df818a073c240450b05c355fb88434ba74793820574d46
 # body sha256 876159b867663b78d5e93020774c4addc592b224e11db2b58c60a5d5209c83fd
 """The trolley paper's formulas as printed (hand transcription).
 

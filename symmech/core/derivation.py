@@ -66,11 +66,11 @@ class NamedMatrix:
 
     @functools.cached_property
     def code_matrix(self) -> sympy.ImmutableMatrix:
-        """The matrix with every argument symbol renamed to its code name. Renamed once per instance (the renaming
-        rebuilds every expression tree, and every target of a module prints it); immutable, so no caller can change
-        what the next one reads. Kept in the instance's ``__dict__``, outside the fields, so equality is unchanged."""
-        renamed = {a.symbol: sympy.Symbol(a.name) for a in self.args}
-        renamed = {symbol: name for symbol, name in renamed.items() if symbol != name}  # x -> x rebuilds too
+        """The matrix with every argument symbol renamed to its code name; a symbol that already is one is left out,
+        since a rule x -> x rebuilds every tree it reaches too. Renamed once per instance (the renaming rebuilds every
+        expression tree, and every target of a module prints it); immutable, so no caller can change what the next
+        one reads. Kept in the instance's ``__dict__``, outside the fields, so equality is unchanged."""
+        renamed = {a.symbol: sympy.Symbol(a.name) for a in self.args if a.symbol != sympy.Symbol(a.name)}
         return sympy.ImmutableMatrix(self.matrix.xreplace(renamed) if renamed else self.matrix)
 
     @property

@@ -251,7 +251,6 @@ def refuse(cost, ctx, advice: str = "give --scheduler ADDRESS of a larger cluste
     ctx.estimates.append(type(cost)(total, cost.what))
 
 
-
 def process_age() -> float:
     """Wall time [s] since this process started (Linux: /proc; elsewhere 0): what a new worker process spends
     importing what this one imported before its estimate."""
@@ -299,6 +298,7 @@ def chart_seconds(shape: tuple[int, ...]) -> float:
 
     draw()
     return min(timed(), timed())  # a moment's load on a shared machine timed once made a chart 6x its cost
+
 
 def deadline(ctx) -> float:
     """The wall-clock time (``time.time()``, s) at which the sweep of ``ctx`` runs out of ``--max-time``: its

@@ -481,7 +481,7 @@ def compute(p: Plan, scheduler: str | None = None, processes: int = 1,
     core_sweep.refuse(registry.Estimate(startup + took * len(rest) / processes + drawing,
                                         f"{points} points at {took:.3g} s (timed here) on {processes} "
                                         f"worker(s), {startup:.3g} s to start them, up to {charts} charts at "
-                                        f"{drawing / max(charts, 1):.3g} s"), ctx)
+                                        f"{drawing / charts:.3g} s"), ctx)
     import dask  # after the refusals: a refused sweep loads no Dask
 
     shared = dask.delayed(p, pure=True)  # one node of the graph: each task builds its own point scene
