@@ -178,6 +178,7 @@ def test_lu_of_the_slip_iteration_matrix_skips_zero_rows_bit_for_bit():
             assert np.array_equal(piv, ref_piv) and np.array_equal(LU, ref)
 
 
+@pytest.mark.xdist_group("radau_probe")  # one worker compiles the probe's Radau closures (~6 s of CPU) for both
 @pytest.mark.parametrize("lam, order", [(1.0, 5.0), (1e6, 3.0)])
 def test_radau_empirical_order_with_fixed_steps(lam, order):
     """Fixed steps h = 1/4 ... 1/64 over [0, 1], the slope of log error against log h: order 5 (2s - 1,
