@@ -120,13 +120,14 @@ def test_sphere_drop_on_a_still_plate_hits_at_the_closed_form_times():
 def test_rolling_sphere_conveyor_matches_the_python_loop():
     """Sphere with spin on the 30 degree conveyor (lift-off every period, sliding, stick and slip), 4 periods.
 
-    The final state to 1e-6: where the stick force reaches the cone (t = 0.11786 s, and near 0.157 s) a slip starts at
-    2 v_stop (5.4e-12 m/s) along the drive. Its component across the drive is zero in exact arithmetic; a
-    round-off residue of ~1e-18 m/s, which the two loops' stick phases leave or not depending on the machine's
+    The final state to 1e-6: where the stick force reaches the cone (t = 0.11786 s, and near 0.157 s) a slip
+    starts at 2 v_stop (5.4e-12 m/s) along the drive. Its component across the drive is zero in exact arithmetic;
+    a round-off residue of ~1e-18 m/s, which the two loops' stick phases leave or not depending on the machine's
     rounding, excites the friction's relaxation across the slip (rate mu n K / |s|): DOP853 then crawls at its
-    stable step, ~1.5e-9 s, where without the residue it takes one step of 3.8e-5 s (to the chunk's end), and its error over those
-    steps reaches 3e-8 and 1e-7 of |w| at the two starts (measured on an AVX-512 machine: the compiled loop's final w
-    1.4e-7 from the Python loop's and from the converged run at tol 1e-13, the Python loop's 1.7e-10)."""
+    stable step, ~1.5e-9 s, where without the residue it takes one step of 3.8e-5 s (to the chunk's end), and its
+    error over those steps reaches 3e-8 and 1e-7 of |w| at the two starts (measured on an AVX-512 machine: the
+    compiled loop's final w 1.4e-7 from the Python loop's and from the converged run at tol 1e-13, the Python
+    loop's 1.7e-10)."""
     model = conveyor(0.7, rotation=True)
     T = model.period
     num = motion.Numerics(tolerance=1e-10, scan_step=T / 40, sample_interval=T / 20)
