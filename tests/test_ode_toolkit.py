@@ -140,6 +140,47 @@ def test_radau_takes_scipys_steps():
     assert err == pytest.approx(np.max(np.abs(ref.y[0] - np.cos(ref.t))), rel=1e-6)
 
 
+@numba.njit
+def cubic_probe(t, y, args, out):
+    """y' = -lam (y^3 - cos^3 t) - sin t: solution cos t for every lam; stiff and nonlinear, so that a long step
+    from the Jacobian at its start fails the simplified Newton iteration."""
+    out[0] = -args[0] * (y[0] ** 3 - math.cos(t) ** 3) - math.sin(t)
+
+
+@numba.njit
+def cubic_probe_jac(t, y, args, J):
+    J[0, 0] = -3.0 * args[0] * y[0] ** 2
+
+
+@pytest.mark.slow  # compiles two sets of Radau closures of its own (~20 s of CPU; not cacheable across processes)
+def test_radau_holds_the_step_after_a_newton_failure_when_asked():
+    """``hold_after_newton_failure`` (Hairer and Wanner's RADAU5 rule): from the same state, the step taken is
+    scipy's, bit for bit, and the next step proposed is scipy's or, where the Newton iteration shortened the step,
+    capped at the step taken; on the cubic probe (lam = 1e5, rtol 1e-6, over 4 s; scipy's Radau fails the iteration
+    94 times in its 78 steps there) that cap acts on at least one step, and the held solve stays within 2 rtol of
+    cos t at every step end."""
+    lam, rtol, atol, t_end = 1e5, 1e-6, np.array([1e-9]), 4.0
+    args, y, t, f = np.array([lam]), np.array([1.0]), 0.0, np.empty(1)
+    held, scipys = ode.steppers(cubic_probe, cubic_probe_jac, True), stepper_set(cubic_probe, cubic_probe_jac)
+    cubic_probe(t, y, args, f)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
+    st = held.radau_start(t, y, f, t_end, args, rtol, atol, J)
+    capped = unshortened = 0
+    while t < t_end:
+        other, asked = [a.copy() for a in (y, f, st, J, LUr, pr, LUc, pc, Q)], st[radau.ST_AT.h]
+        t_s, y_s, _, ok_s = scipys.radau_step(t, other[0], other[1], t_end, args, rtol, atol, *other[2:])
+        t, y, f, ok = held.radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
+        assert ok and ok_s and (t, y[0]) == (t_s, y_s[0])
+        h_last, proposed = st[radau.ST_AT.h_last], other[2][radau.ST_AT.h]
+        assert st[radau.ST_AT.h] in (proposed, min(proposed, h_last))
+        if h_last >= asked * (1 - 1e-12):  # taken as asked (to the round-off of t + h - t): nothing holds the next
+            assert st[radau.ST_AT.h] == proposed
+            unshortened += 1
+        capped += st[radau.ST_AT.h] < proposed
+        assert abs(y[0] - math.cos(t)) <= 2 * rtol
+    assert capped >= 1 and unshortened >= 10
+
+
 def textbook_lu(A):
     """Doolittle elimination with partial pivoting in numpy, every row updated (the zero multipliers too)."""
     A = A.copy()

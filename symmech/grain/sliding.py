@@ -40,6 +40,8 @@ is integrated with Radau (implicit, order 5) while its speed is below ``s_stiff 
 tol^(1/2) v_scale`` (where DOP853's stability limit ~ |s| / (mu n |B|) binds; the
 power is measured), with DOP853 above ``2 s_stiff`` (the switch is an event, the
 band a hysteresis); stick phases, spheres and point masses always with DOP853.
+This loop takes scipy's Radau; the compiled engine's holds its step after a Newton
+failure (RADAU5's rule), so their stiff slips take different steps, within the tolerance.
 """
 from __future__ import annotations
 

@@ -62,7 +62,7 @@ def make(rhs, jac, events=_no_events) -> SimpleNamespace:
     return steps
 
 
-def steppers(rhs, jac) -> SimpleNamespace:
+def steppers(rhs, jac, hold_after_newton_failure=False) -> SimpleNamespace:
     """The steppers of the right-hand side ``rhs(t, y, args, out)`` with Jacobian ``jac(t, y, args, J)``
     (jitted; see the module docstring), compiled on first call:
 
@@ -70,11 +70,12 @@ def steppers(rhs, jac) -> SimpleNamespace:
       (:mod:`symmech.numerics.first_step`);
     - ``dop_advance``, ``dop_dense``: one accepted DOP853 step and its interpolant (:mod:`symmech.numerics.dop853`);
     - ``radau_start``, ``radau_step``, ``radau_try``, ``radau_error``, ``newton``: Radau IIA
-      (:mod:`symmech.numerics.radau`).
+      (:mod:`symmech.numerics.radau`; ``hold_after_newton_failure``: no step growth right after a step the
+      Newton iteration shortened, RADAU5's rule, else scipy's steps).
 
     rtol is a float, atol an array (n,) [units of y]."""
     dop_advance, dop_dense = dop853.steppers(rhs)
-    radau_start, radau_step, radau_try, radau_error, newton = radau.steppers(rhs, jac)
+    radau_start, radau_step, radau_try, radau_error, newton = radau.steppers(rhs, jac, hold_after_newton_failure)
     return SimpleNamespace(first_step=initial.make(rhs), dop_advance=dop_advance, dop_dense=dop_dense,
                            newton=newton, radau_try=radau_try, radau_error=radau_error, radau_step=radau_step,
                            radau_start=radau_start)

@@ -120,7 +120,7 @@ def radau_dense_until(Y, k, t_eval, t_stop, t_old, h, Q):
     return k
 
 
-def steppers(rhs, jac) -> tuple:
+def steppers(rhs, jac, hold_after_newton_failure=False) -> tuple:
     """(radau_start, radau_step, radau_try, radau_error, newton) of the jitted ``rhs(t, y, args, out)`` with
     Jacobian ``jac(t, y, args, J)``, compiled on first call (closures: :mod:`symmech.numerics.ode`):
 
@@ -129,7 +129,10 @@ def steppers(rhs, jac) -> tuple:
       (t_new, y_new, f_new, ok), its interpolant into Q (1, 4 n) for :func:`radau_dense_at`;
     - ``radau_try(t, y, f, h, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)``: one collocation solve of length h.
 
-    rtol is a float, atol an array (n,) [units of y]."""
+    rtol is a float, atol an array (n,) [units of y]. The step control is scipy's; with
+    ``hold_after_newton_failure`` the step after one the Newton iteration shortened is asked no longer than it
+    (Hairer and Wanner's RADAU5): where the iteration fails again at once after scipy's growth of up to
+    ``RADAU_MAX_FACTOR`` (the grain's slips near zero speed), the next step is not grown into a failure again."""
     first_step = initial.make(rhs)
 
     @inline_closure
@@ -215,7 +218,7 @@ def steppers(rhs, jac) -> tuple:
         h_abs, h_old, err_old = st[ST_AT.h], st[ST_AT.h_old], st[ST_AT.err_old]
         if h_abs < min_step:
             h_abs, h_old, err_old = min_step, -1.0, -1.0
-        rejected = False
+        rejected = shortened = False
         while True:
             if h_abs < min_step:
                 return t, y, f, False
@@ -226,6 +229,7 @@ def steppers(rhs, jac) -> tuple:
             if not converged:
                 h_abs *= 0.5
                 st[ST_AT.lu_valid] = 0.0
+                shortened = True
                 continue
             y_new = y + Z[2]
             err = radau_error(t, y, y_new, f, h, Z, args, rtol, atol, LUr, pr, rejected)
@@ -237,6 +241,8 @@ def steppers(rhs, jac) -> tuple:
             rejected = True
         recompute_jac = n_iter > 2 and rate > 1e-3
         factor_ = min(RADAU_MAX_FACTOR, safety * predict_factor(h_abs, h_old, err, err_old))
+        if hold_after_newton_failure and shortened:  # a Newton failure shortened this step: no growth after it
+            factor_ = min(factor_, 1.0)
         if not recompute_jac and factor_ < 1.2:
             factor_ = 1.0
         else:

@@ -28,7 +28,9 @@ the generated scalar kernels (``grain_motion_nb``, ``grain_impact_nb``):
   terminal events located by Brent on the step; stiff slips (anisotropic, below
   the stiff slip speed) by Radau IIA of order 5 (scipy's ``Radau``, ported:
   step control, simplified Newton on the real / complex split of the collocation
-  system, embedded error estimate, dense output) with the analytic Jacobian of
+  system, embedded error estimate, dense output; unlike scipy, no step growth
+  right after a Newton failure, RADAU5's rule, so its steps differ from the
+  Python loop's within the tolerance) with the analytic Jacobian of
   the slip, switching as ``sliding.slide`` does; lift-off from the root of n(t).
 
 The loop is :mod:`symmech.grain.motion_engine.loop` and the modules beside it, a phase or a concept each

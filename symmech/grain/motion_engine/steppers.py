@@ -1,6 +1,8 @@
 """The right-hand sides of the compiled loop's integrations and :mod:`symmech.numerics.ode`'s steppers compiled for
 them (closures: see that module's docstring): the torque-free rotation of a flight (``ROT``) and the sliding
-contact (``SLIP``, ``STICK``), with the slip's Jacobian for Radau IIA."""
+contact (``SLIP``, ``STICK``), with the slip's Jacobian for Radau IIA. Radau holds its step after a Newton failure
+(RADAU5's rule, :func:`symmech.numerics.radau.steppers`): near zero slip speed scipy's rule grows the step ten-fold
+into the next failure (benchmarks/README.md, "The stiff slips' Radau holds its step after a Newton failure")."""
 from __future__ import annotations
 
 from symmech.numerics import dop853_tableau as tableau, ode
@@ -35,8 +37,8 @@ def jac(t, y, args, J):
     slip_jac(t, y, args[1], J)
 
 
-# The generic DOP853 and Radau IIA code of numerics.ode, compiled for these right-hand sides.
-_steps = ode.steppers(rhs, jac)
+# The generic DOP853 and Radau IIA code of numerics.ode, compiled for these right-hand sides (Radau: RADAU5's hold).
+_steps = ode.steppers(rhs, jac, hold_after_newton_failure=True)
 first_step, dop_advance, dop_dense = _steps.first_step, _steps.dop_advance, _steps.dop_dense
 radau_start, radau_step = _steps.radau_start, _steps.radau_step
 
