@@ -152,33 +152,41 @@ def cubic_probe_jac(t, y, args, J):
     J[0, 0] = -3.0 * args[0] * y[0] ** 2
 
 
-@pytest.mark.slow  # compiles two sets of Radau closures of its own (~20 s of CPU; not cacheable across processes)
-def test_radau_holds_the_step_after_a_newton_failure_when_asked():
-    """``hold_after_newton_failure`` (Hairer and Wanner's RADAU5 rule): from the same state, the step taken is
-    scipy's, bit for bit, and the next step proposed is scipy's or, where the Newton iteration shortened the step,
-    capped at the step taken; on the cubic probe (lam = 1e5, rtol 1e-6, over 4 s; scipy's Radau fails the iteration
-    94 times in its 78 steps there) that cap acts on at least one step, and the held solve stays within 2 rtol of
-    cos t at every step end."""
-    lam, rtol, atol, t_end = 1e5, 1e-6, np.array([1e-9]), 4.0
-    args, y, t, f = np.array([lam]), np.array([1.0]), 0.0, np.empty(1)
-    held, scipys = ode.steppers(cubic_probe, cubic_probe_jac, True), stepper_set(cubic_probe, cubic_probe_jac)
-    cubic_probe(t, y, args, f)
-    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
-    st = held.radau_start(t, y, f, t_end, args, rtol, atol, J)
-    capped = unshortened = 0
+def against_scipys_rule(held, scipys, t, y, f, t_end, args, rtol, atol, st, buffers):
+    """Radau steps of ``held`` (steppers with ``hold_after_newton_failure``) from (t, y), each also taken from the same
+    state by ``scipys`` (scipy's rule): the same step bit for bit, and the next step asked scipy's or capped at the
+    step taken, scipy's where the step was taken as asked (to the round-off of t + h - t: nothing shortened it).
+    Yields (t, y, capped, taken as asked) after each step, until t_end."""
     while t < t_end:
-        other, asked = [a.copy() for a in (y, f, st, J, LUr, pr, LUc, pc, Q)], st[radau.ST_AT.h]
+        other, asked = [a.copy() for a in (y, f, st, *buffers)], st[radau.ST_AT.h]
         t_s, y_s, _, ok_s = scipys.radau_step(t, other[0], other[1], t_end, args, rtol, atol, *other[2:])
-        t, y, f, ok = held.radau_step(t, y, f, t_end, args, rtol, atol, st, J, LUr, pr, LUc, pc, Q)
-        assert ok and ok_s and (t, y[0]) == (t_s, y_s[0])
+        t, y, f, ok = held.radau_step(t, y, f, t_end, args, rtol, atol, st, *buffers)
+        assert ok and ok_s and t == t_s and np.array_equal(y, y_s)
         h_last, proposed = st[radau.ST_AT.h_last], other[2][radau.ST_AT.h]
         assert st[radau.ST_AT.h] in (proposed, min(proposed, h_last))
-        if h_last >= asked * (1 - 1e-12):  # taken as asked (to the round-off of t + h - t): nothing holds the next
-            assert st[radau.ST_AT.h] == proposed
-            unshortened += 1
-        capped += st[radau.ST_AT.h] < proposed
+        as_asked = h_last >= asked * (1 - 1e-12)
+        assert st[radau.ST_AT.h] == proposed or not as_asked
+        yield t, y, st[radau.ST_AT.h] < proposed, as_asked
+
+
+@pytest.mark.slow  # compiles two sets of Radau closures of its own (~20 s of CPU; not cacheable across processes)
+def test_radau_holds_the_step_after_a_newton_failure_when_asked():
+    """``hold_after_newton_failure`` (Hairer and Wanner's RADAU5 rule), step by step against scipy's rule
+    (:func:`against_scipys_rule`): on the cubic probe (lam = 1e5, rtol 1e-6, over 4 s; scipy's Radau fails the
+    iteration 94 times in its 78 steps there) the cap acts on at least one step, at least ten steps are taken as
+    asked, and the held solve stays within 2 rtol of cos t at every step end."""
+    lam, rtol, atol, t_end = 1e5, 1e-6, np.array([1e-9]), 4.0
+    args, y0, f = np.array([lam]), np.array([1.0]), np.empty(1)
+    held, scipys = ode.steppers(cubic_probe, cubic_probe_jac, True), stepper_set(cubic_probe, cubic_probe_jac)
+    cubic_probe(0.0, y0, args, f)
+    J, LUr, pr, LUc, pc, Q = radau.radau_buffers(1)
+    st = held.radau_start(0.0, y0, f, t_end, args, rtol, atol, J)
+    capped = as_asked = 0
+    for t, y, cap, asked in against_scipys_rule(held, scipys, 0.0, y0, f, t_end, args, rtol, atol, st,
+                                                 (J, LUr, pr, LUc, pc, Q)):
         assert abs(y[0] - math.cos(t)) <= 2 * rtol
-    assert capped >= 1 and unshortened >= 10
+        capped, as_asked = capped + cap, as_asked + asked
+    assert capped >= 1 and as_asked >= 10
 
 
 def textbook_lu(A):
