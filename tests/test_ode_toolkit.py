@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 import symmech
-from symmech.numerics import linalg, ode, radau
+from symmech.numerics import brent, linalg, newton, ode, radau
 from symmech.core.scene import SymmechError, scenes_folder
 from symmech.generated import smm_rotor_boom
 
@@ -302,6 +302,106 @@ def test_brentq_and_bounded_min_equal_scipys():
     ref = minimize_scalar(lambda x: (x - 2.0) ** 2 + math.cos(3.0 * x) * 0.01, bounds=(0.0, 5.0),
                           method="bounded", options={"xatol": 1e-12})
     assert x == pytest.approx(ref.x, abs=1e-12) and fx == pytest.approx(ref.fun, abs=1e-14)
+
+
+def counted(fdf):
+    """fdf with its evaluations counted in ``calls``."""
+    calls = []
+
+    def counting(x, args):
+        calls.append(x)
+        return fdf(x, args)
+    return counting, calls
+
+
+def kepler_and_rate(x, args):
+    return x - args[0] * math.sin(x) - args[1], 1.0 - args[0] * math.cos(x)
+
+
+def arctan_and_rate(x, args):
+    """sign atan(x - root) (args: root, sign): Newton from far off overshoots any bracket."""
+    return args[1] * math.atan(x - args[0]), args[1] / (1.0 + (x - args[0]) ** 2)
+
+
+def cube_and_rate(x, args):
+    """(x - root)^3 (args: root): a triple root, where Newton only thirds the error each step."""
+    return (x - args[0]) ** 3, 3.0 * (x - args[0]) ** 2
+
+
+def inside_the_brackets(calls, fdf, args, a, b):
+    """Whether every evaluation lies strictly inside the bracket the ones before it left (by their signs)."""
+    bracket = [a, b]
+    for x in calls:
+        if not min(bracket) < x < max(bracket):
+            return False
+        fx = fdf(x, args)[0]
+        bracket[0 if (fx < 0.0) == (fdf(a, args)[0] < 0.0) else 1] = x
+    return True
+
+
+def wavy_and_rate(x, args):
+    """x - r + c sin(k x) (args: r, c, k): with c k > 1 its slope changes sign, and Newton's step can leave a
+    bracket by less than half the step before."""
+    r, c, k = args
+    return x - r + c * math.sin(k * x), 1.0 + c * k * math.cos(k * x)
+
+
+def test_newton_finds_the_bracketed_root_in_fewer_evaluations_than_brent():
+    """The safeguarded Newton root finder on Kepler's equation E - e sin E = M returns scipy's brentq root to
+    1e-15 in at most 5 evaluations of f and f', fewer than brentq's on the same bracket (which starts from the
+    ends' values too). From far off (atan, bracket [-10, 30] either way round, where Newton's step from the
+    secant point leaves the bracket) it starts at the secant point of the ends, evaluates only strictly inside
+    the bracket left by the evaluations before, and reaches the root within the tolerance in fewer than 60
+    evaluations; on a triple root (Newton slows to a third per step; from either end, with f(a) below 1 too)
+    within 90, and to 1e-16 near 1e-6, where the relative part of the tolerance is 1e-21; where the slope
+    changes sign in the bracket (a wavy f) it finds one of the roots there, again only inside the brackets; an end
+    where f is zero is the root, with no evaluation."""
+    for e, mean, a, b in ((0.3, 1.2, 0.0, math.pi), (0.9, 0.01, 0.0, math.pi), (0.99, 3.0, 0.0, math.pi),
+                          (0.3, 1.2, 0.5, 2.5)):
+        fdf, calls = counted(kepler_and_rate)
+        ends = kepler_and_rate(a, (e, mean))[0], kepler_and_rate(b, (e, mean))[0]
+        root = newton.bracketed_root(fdf)(a, b, *ends, 1e-15, (e, mean))
+        brent_calls = []
+        expected = brentq(lambda x: brent_calls.append(x) or x - e * math.sin(x) - mean, a, b, xtol=1e-15)
+        assert root == pytest.approx(expected, abs=1e-15)
+        assert len(calls) <= 5 and len(calls) < len(brent_calls) - 2
+    for a, b, sign in ((-10.0, 30.0, 1.0), (30.0, -10.0, 1.0), (-10.0, 30.0, -1.0), (-2.0, 30.0, 1.0)):
+        fdf, calls = counted(arctan_and_rate)
+        fa, fb = sign * math.atan(a - 0.3), sign * math.atan(b - 0.3)
+        root = newton.bracketed_root(fdf)(a, b, fa, fb, 1e-13, (0.3, sign))
+        assert abs(root - 0.3) < 1e-13 and len(calls) < 60
+        assert calls[0] == pytest.approx(a + (b - a) * fa / (fa - fb), rel=1e-15)  # the chord's zero
+        assert inside_the_brackets(calls, arctan_and_rate, (0.3, sign), a, b)
+    for a, b, root_at, xtol, error in ((-1.0, 2.0, 0.3, 1e-12, 1e-12), (0.9, -1.0, 0.3, 1e-12, 1e-12),
+                                       (-1.0, 2.0, 1e-6, 1e-17, 1e-16)):
+        fdf, calls = counted(cube_and_rate)
+        root = newton.bracketed_root(fdf)(a, b, (a - root_at) ** 3, (b - root_at) ** 3, xtol, (root_at,))
+        assert abs(root - root_at) < error and len(calls) <= 90  # bisection alone: 42 halvings to 1e-12
+        assert inside_the_brackets(calls, cube_and_rate, (root_at,), a, b)
+    for args, a, b in (((-0.34, 0.68, 11.7), -3.0, 1.3), ((-0.63, 0.19, 8.9), -0.8, 2.4)):
+        fdf, calls = counted(wavy_and_rate)
+        root = newton.bracketed_root(fdf)(a, b, wavy_and_rate(a, args)[0], wavy_and_rate(b, args)[0], 1e-12, args)
+        assert min(a, b) < root < max(a, b) and abs(wavy_and_rate(root, args)[0]) < 1e-11
+        assert inside_the_brackets(calls, wavy_and_rate, args, a, b)
+    fdf, calls = counted(arctan_and_rate)
+    assert newton.bracketed_root(fdf)(0.3, 2.0, 0.0, 1.0, 1e-12, (0.3, 1.0)) == 0.3
+    assert newton.bracketed_root(fdf)(-1.0, 0.3, -1.0, 0.0, 1e-12, (0.3, 1.0)) == 0.3
+    assert calls == []
+
+
+@numba.njit
+def kepler_and_rate_compiled(x, args):
+    return x - args[0] * math.sin(x) - args[1], 1.0 - args[0] * math.cos(x)
+
+
+def test_compiled_newton_is_the_python_one_bit_for_bit():
+    """``brent.newton`` compiles the same function: on Kepler's equation, its root equals the Python one's
+    exactly, from several brackets and tolerances."""
+    compiled = brent.newton(kepler_and_rate_compiled)
+    python = newton.bracketed_root(kepler_and_rate)
+    for e, mean, b, xtol in ((0.3, 1.2, math.pi, 1e-15), (0.9, 0.01, 2.0, 1e-6), (0.99, 3.0, 3.5, 1e-12)):
+        ends = kepler_and_rate(0.0, (e, mean))[0], kepler_and_rate(b, (e, mean))[0]
+        assert compiled(0.0, b, *ends, xtol, np.array([e, mean])) == python(0.0, b, *ends, xtol, (e, mean))
 
 
 # --------------------------------------------------------------------------- a generated module end to end

@@ -499,7 +499,10 @@ SHARDS = {
     # what mutmut mutates in the numba modules: the undecorated Python around the kernels (the closures' bodies
     # and the decorated functions are left alone)
     "brent_closures": ("symmech/numerics/brent.py",
-                       ["tests/test_ode_toolkit.py", "-k", "brentq_and_bounded or grain_flight_at_contact"], ["*"]),
+                       ["tests/test_ode_toolkit.py", "-k",
+                        "brentq_and_bounded or grain_flight_at_contact or compiled_newton"], ["*"]),
+    # the safeguarded Newton root finder: plain Python, which the compiled loop compiles as it is
+    "newton": ("symmech/numerics/newton.py", ["tests/test_ode_toolkit.py", "-k", "newton"], ["*"]),
     "radau_closures": ("symmech/numerics/radau.py",
                        ["tests/test_ode_toolkit.py", "-m", "slow or not slow", "-k", "radau_stiff_prothero"], ["*"]),
     "kernel_twins": ("symmech/numerics/kernels.py", ["tests/test_compiled.py"], ["*"]),
@@ -586,12 +589,15 @@ COVERAGE = {
                                     "at most 3 %; left: 3 survivors of the domain check's minimum search (`|` for `&` "
                                     "picking minima, no xatol, `<` for `<=` at the threshold)"),
     "symmech/numerics/ode.py": "",
-    "symmech/numerics/brent.py": ("whole (shard brent_closures): its 6 mutants, the namespace roots returns; the root "
-                                  "finder and the minimiser are numba closures, which mutmut does not mutate, held "
-                                  "to scipy's brentq and bounded minimiser by tests/test_ode_toolkit.py"),
+    "symmech/numerics/brent.py": ("whole (shard brent_closures): its 8 mutants, the namespace roots returns and the "
+                                  "compiled Newton; the root finder and the minimiser are numba closures, which "
+                                  "mutmut does not mutate, held to scipy's brentq and bounded minimiser by "
+                                  "tests/test_ode_toolkit.py, the compiled Newton to the screened newton.py"),
+    "symmech/numerics/newton.py": "",
     "symmech/numerics/radau.py": ("whole (shard radau_closures): its 2 mutants, the first step's factory in "
                                   "steppers; the rest is numba kernels and closures (not mutated), held to scipy's "
-                                  "Radau steps and collocation conditions by tests/test_ode_toolkit.py"),
+                                  "Radau steps (with RADAU5's hold after a Newton failure: to that rule) and "
+                                  "collocation conditions by tests/test_ode_toolkit.py"),
     "symmech/numerics/kernels.py": "",
     "symmech/numerics/dop853.py, first_step.py, linalg.py": (
         "numba kernels and closures only: mutmut makes no mutant of them; tests/test_ode_toolkit.py holds them to "

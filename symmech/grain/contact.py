@@ -3,11 +3,11 @@
 Accurate mode: the gap is ``h(t) = z_c(t) - |D Q(t)^T e_z|`` (exact support
 distance of the ellipsoid, generated ``grain_motion.support_distance``); the
 first contact is the first root of ``h`` found by scanning at a step and
-refining with Brent's method to ``xtol`` seconds. A grazing contact (``h`` dips
-below zero between two scan points) is caught, in the exact flight
-(:func:`first_contact`), by a bound on the gap's curvature between two samples; in the
-integrated reference flight (:func:`first_root`), by minimising ``h`` around every
-discrete local minimum of the scan.
+refining to ``xtol`` seconds: by Newton's method on ``h`` and its exact rate in the exact
+flight (:func:`first_contact`), by Brent's in the integrated reference flight
+(:func:`first_root`). A grazing contact (``h`` dips below zero between two scan points) is
+caught, in the exact flight, by a bound on the gap's curvature between two samples; in the
+integrated flight, by minimising ``h`` around every discrete local minimum of the scan.
 
 Paper mode, eq. (63): the surface of the body is a set of discrete nodes; the
 contact test uses the node with the smallest z.
@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from symmech.generated import grain_motion as gm
+from symmech.numerics.newton import bracketed_root
 
 
 def support_distance(axes, Q):
@@ -74,14 +75,10 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
     (:func:`clear_span`): the next sample is there, or ``step`` on when that is nearer. Between two positive
     samples a piece is cleared when the lower parabola from either end (from b: ``h(b) - h'(b) s - ...``) stays
     positive on it (concave: checked at its two ends), else halved, down to ``xtol``: a contact deeper than
-    ``curvature xtol^2 / 8`` is never missed (docs/grain-motion.md). A sign change is refined by Brent's method
-    to ``xtol`` seconds.
+    ``curvature xtol^2 / 8`` is never missed (docs/grain-motion.md). A sign change is refined by Newton's method on
+    h and h', safeguarded by the bracket (:mod:`symmech.numerics.newton`), to ``xtol`` seconds.
     """
-    from scipy.optimize import brentq
-
-    def h(t):
-        return gap_and_rate(t)[0]
-
+    root = bracketed_root(lambda t, _: gap_and_rate(t))
     a, (ha, da) = t0, gap_and_rate(t0)
     if ha <= 0.0:
         return t0  # already touching
@@ -90,7 +87,7 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
         b = min(a + max(span, step), t1)
         hb, db = gap_and_rate(b)
         if hb <= 0.0:
-            return brentq(h, a, b, xtol=xtol)
+            return root(a, b, ha, hb, xtol, None)
         pieces = [(a, b, ha, da, hb, db)] if span < b - a else []
         while pieces:
             lo, hi, h_lo, d_lo, h_hi, d_hi = pieces.pop()
@@ -99,7 +96,7 @@ def first_contact(gap_and_rate, curvature: float, t0: float, t1: float, step: fl
             mid = 0.5 * (lo + hi)
             h_mid, d_mid = gap_and_rate(mid)
             if h_mid <= 0.0:
-                return brentq(h, lo, mid, xtol=xtol)
+                return root(lo, mid, h_lo, h_mid, xtol, None)
             pieces += [(mid, hi, h_mid, d_mid, h_hi, d_hi), (lo, mid, h_lo, d_lo, h_mid, d_mid)]  # earlier first
         a, ha, da = b, hb, db
     return None

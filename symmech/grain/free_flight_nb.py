@@ -11,8 +11,9 @@ float64 vectors the caller owns; ``state`` laid out as the engine's ``STATE``: t
 - :func:`gap_curvature_bound` ``(fl, rot) -> m/s^2``: a bound on ``|h''|`` over the whole flight;
 - :func:`next_contact` ``(fl, rot, t_from, t_end, step, xtol, buf) -> t`` or nan: the first root of the gap
   (``gap(t_from) > 0``): samples as far apart as the lower parabola of the curvature bound proves clear, at
-  most ``step`` apart near the plane, pieces between them certified by the same bound, Brent to ``xtol``
-  (as :func:`symmech.grain.contact.first_contact`).
+  most ``step`` apart near the plane, pieces between them certified by the same bound (as
+  :func:`symmech.grain.contact.first_contact`), the root by Newton's method on the gap and its rate, safeguarded by
+  the bracket, to ``xtol`` (the reference's function, :mod:`symmech.numerics.newton`, compiled).
 
 Jacobi's elliptic functions by the descending Landen (AGM) transformation, Carlson's R_F, R_J and R_C by
 duplication: generic numerics, no scipy.
@@ -26,7 +27,7 @@ import numpy as np
 from symmech.generated import grain_motion_nb as gm_nb
 from symmech.grain import free_flight  # module globals: the builds of a compiled caller record their files
 from symmech.grain.motion_engine import layouts
-from symmech.numerics.brent import roots
+from symmech.numerics.brent import newton
 from symmech.numerics.jit import EPS, inline, jit
 
 F_AT, R_AT = free_flight.FLIGHT.slots, free_flight.ROTATION.slots
@@ -392,12 +393,12 @@ def gap_curvature_bound(fl, rot):
 
 
 @inline
-def _gap_of(t, args):
-    """The gap [m] at t, as the root finder calls it (``args`` = (fl, rot, buf))."""
-    return gap(t, args[0], args[1], args[2])[0]
+def _gap_and_rate(t, args):
+    """The gap [m] and its rate [m/s] at t, as the root finder calls them (``args`` = (fl, rot, buf))."""
+    return gap(t, args[0], args[1], args[2])
 
 
-_bracketed = roots(_gap_of).bracketed  # scipy's brentq on the gap (symmech.numerics.brent)
+_bracketed = newton(_gap_and_rate)  # the gap's rate comes with it: Newton, safeguarded (symmech.numerics.brent)
 
 
 @jit

@@ -1,9 +1,11 @@
 """Brent's root finder and bounded minimiser (scipy's ``brentq`` and ``minimize_scalar(method="bounded")``),
-in numba, for any jitted function ``f(x, args) -> float``."""
+in numba, for any jitted function ``f(x, args) -> float``; :func:`newton`, the safeguarded Newton root finder of
+:mod:`symmech.numerics.newton`, for a jitted ``fdf(x, args) -> (f, f')``."""
 import math
 from types import SimpleNamespace
 
 from symmech.numerics.jit import EPS, closure
+from symmech.numerics.newton import bracketed_root
 
 BOUNDED_MAXFUN = 500  # function evaluations of the bounded minimiser at most (scipy's default)
 BRENT_RTOL, BRENT_ITER = 4 * EPS, 100
@@ -125,3 +127,9 @@ def roots(f) -> SimpleNamespace:
         return xf, fx
 
     return SimpleNamespace(brentq=brentq, bracketed=bracketed, bounded_min=bounded_min)
+
+
+def newton(fdf):
+    """:func:`symmech.numerics.newton.bracketed_root` of the jitted ``fdf(x, args) -> (f, f')``, compiled on first
+    call: ``newton(fdf)(a, b, fa, fb, xtol, args)``."""
+    return closure(bracketed_root(fdf))
