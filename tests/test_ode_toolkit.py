@@ -330,12 +330,11 @@ def cube_and_rate(x, args):
 
 def inside_the_brackets(calls, fdf, args, a, b):
     """Whether every evaluation lies strictly inside the bracket the ones before it left (by their signs)."""
-    bracket = [a, b]
+    bracket, a_negative = [a, b], fdf(a, args)[0] < 0.0
     for x in calls:
         if not min(bracket) < x < max(bracket):
             return False
-        fx = fdf(x, args)[0]
-        bracket[0 if (fx < 0.0) == (fdf(a, args)[0] < 0.0) else 1] = x
+        bracket[0 if (fdf(x, args)[0] < 0.0) == a_negative else 1] = x
     return True
 
 
@@ -389,15 +388,10 @@ def test_newton_finds_the_bracketed_root_in_fewer_evaluations_than_brent():
     assert calls == []
 
 
-@numba.njit
-def kepler_and_rate_compiled(x, args):
-    return x - args[0] * math.sin(x) - args[1], 1.0 - args[0] * math.cos(x)
-
-
 def test_compiled_newton_is_the_python_one_bit_for_bit():
     """``brent.newton`` compiles the same function: on Kepler's equation, its root equals the Python one's
     exactly, from several brackets and tolerances."""
-    compiled = brent.newton(kepler_and_rate_compiled)
+    compiled = brent.newton(numba.njit(kepler_and_rate))
     python = newton.bracketed_root(kepler_and_rate)
     for e, mean, b, xtol in ((0.3, 1.2, math.pi, 1e-15), (0.9, 0.01, 2.0, 1e-6), (0.99, 3.0, 3.5, 1e-12)):
         ends = kepler_and_rate(0.0, (e, mean))[0], kepler_and_rate(b, (e, mean))[0]

@@ -4,11 +4,10 @@ in numba, for any jitted function ``f(x, args) -> float``; :func:`newton`, the s
 import math
 from types import SimpleNamespace
 
-from symmech.numerics.jit import EPS, closure
-from symmech.numerics.newton import bracketed_root
+from symmech.numerics.jit import closure
+from symmech.numerics.newton import ITERATIONS, RTOL, bracketed_root
 
 BOUNDED_MAXFUN = 500  # function evaluations of the bounded minimiser at most (scipy's default)
-BRENT_RTOL, BRENT_ITER = 4 * EPS, 100
 
 
 def roots(f) -> SimpleNamespace:
@@ -28,14 +27,14 @@ def roots(f) -> SimpleNamespace:
             return xpre
         if fcur == 0.0:
             return xcur
-        for _ in range(BRENT_ITER):
+        for _ in range(ITERATIONS):
             if fpre != 0.0 and fcur != 0.0 and (fpre < 0.0) != (fcur < 0.0):
                 xblk, fblk = xpre, fpre
                 spre = scur = xcur - xpre
             if abs(fblk) < abs(fcur):
                 xpre, xcur, xblk = xcur, xblk, xcur
                 fpre, fcur, fblk = fcur, fblk, fcur
-            delta = (xtol + BRENT_RTOL * abs(xcur)) / 2
+            delta = (xtol + RTOL * abs(xcur)) / 2
             sbis = (xblk - xcur) / 2
             if fcur == 0.0 or abs(sbis) < delta:
                 return xcur

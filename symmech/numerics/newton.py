@@ -2,8 +2,10 @@
 :func:`symmech.numerics.brent.newton` compiles the same function with numba for the compiled loop."""
 import sys
 
+# both root finders' (this one's and symmech.numerics.brent's): iterations at most, and the relative part of the
+# tolerance, scipy's brentq's
 ITERATIONS = 100
-RTOL = 4 * sys.float_info.epsilon  # the relative part of the tolerance, as Brent's (scipy's brentq)
+RTOL = 4 * sys.float_info.epsilon
 
 
 def bracketed_root(fdf):
