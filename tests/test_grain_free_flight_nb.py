@@ -2,6 +2,7 @@
 forms: special functions, the rotation record and state, the flight state, the gap and the next contact."""
 import math
 
+import mpmath
 import numpy as np
 import pytest
 from scipy.special import ellipj, elliprf, elliprj
@@ -21,8 +22,29 @@ def test_special_functions_match_scipy():
     rng = np.random.default_rng(5)
     for x, y, z, p in rng.uniform(0.01, 3.0, (20, 4)):
         assert nb.carlson_rf(x, y, z) == pytest.approx(float(elliprf(x, y, z)), rel=1e-14)
-        assert nb.carlson_rj(x, y, z, p) == pytest.approx(float(elliprj(x, y, z, p)), rel=1e-14)
+        rf, rj = nb.carlson_rf_rj(x, y, z, p)
+        assert rf == pytest.approx(float(elliprf(x, y, z)), rel=1e-14)
+        assert rj == pytest.approx(float(elliprj(x, y, z, p)), rel=1e-14)
     assert nb.carlson_rf(0.0, 0.5, 1.0) == pytest.approx(float(elliprf(0.0, 0.5, 1.0)), rel=1e-14)
+
+
+def test_closed_form_rc_on_both_sides_of_the_diagonal():
+    """R_C against mpmath at 30 digits: below the diagonal (arctan), above it (the logarithm), on it, within 1e-9
+    of it on both sides (where a naive form cancels), at x = 0 and with y a thousandth of x's square root."""
+    mpmath.mp.dps = 30
+    rng = np.random.default_rng(7)
+    pairs = [tuple(rng.uniform(0.0, 2.0, 2) ** 4) for _ in range(200)]
+    pairs += [(1.0, 1.0), (1.0, 1.0 + 1e-9), (1.0, 1.0 - 1e-9), (0.0, 2.0), (1e-30, 1.0), (1.0, 1e-30), (4.0, 2e-3)]
+    for x, y in pairs:
+        assert nb.carlson_rc(x, y) == pytest.approx(float(mpmath.elliprc(x, y)), rel=2e-15), (x, y)
+
+
+def test_third_kind_integral_against_mpmath():
+    """Pi(n; phi | m) for n <= 0 (the rotation's: n down to -100) and m up to 1 - 1e-9, against mpmath's."""
+    mpmath.mp.dps = 30
+    rng = np.random.default_rng(8)
+    for n, phi, m in zip(-rng.uniform(0, 100, 300), rng.uniform(0, math.pi / 2, 300), rng.uniform(0, 1 - 1e-9, 300)):
+        assert nb.third_kind(n, phi, m) == pytest.approx(float(mpmath.ellippi(n, phi, m)), rel=2e-14), (n, phi, m)
 
 
 @pytest.mark.parametrize("shape", SHAPES)
@@ -32,7 +54,9 @@ def test_rotation_record_and_state_match_the_reference(shape):
     ref = free_flight.ExactRotation(inertia, q0, w0, 0.25)
     rot, out = np.empty(free_flight.ROTATION.size), np.empty(7)
     nb.rotation_setup(inertia, q0, w0, 0.25, rot)
-    np.testing.assert_allclose(rot, ref.record(), rtol=1e-13, atol=1e-14)
+    own = np.ones(rot.size, bool)  # but the Landen ladder, the twin's own (the state below walks it)
+    own[free_flight.ROTATION.slice("landen")] = False
+    np.testing.assert_allclose(rot[own], ref.record()[own], rtol=1e-13, atol=1e-14)
     for t in np.linspace(0.25, 40.0, 9):
         nb.rotation_at(rot, t, out)
         q, w = ref.state(t)
@@ -69,7 +93,9 @@ def test_flight_state_and_gap_match_the_reference():
             np.testing.assert_allclose(out[11:], w, rtol=0, atol=1e-11)
             h, rate = nb.gap(t, fl, rot, buf)
             Q = flight.rotation_matrix(q)
-            assert h == pytest.approx(r[2] - contact.support_distance(axes, Q), abs=1e-17)
+            # the attitude's round-off: phi up to ~10 rad, known to ~1e-14 relative (both Pi's against mpmath),
+            # times semi-axes up to 4 mm
+            assert h == pytest.approx(r[2] - contact.support_distance(axes, Q), abs=2e-16)
             assert rate == pytest.approx(free_flight.gap_rate(v[2], axes, Q[2], w), rel=1e-11, abs=1e-15)
         assert nb.gap_curvature_bound(fl, rot) == pytest.approx(
             free_flight.gap_curvature_bound(g[2], vib, axes, inertia, ref.max_rate), rel=1e-14)

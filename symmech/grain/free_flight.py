@@ -30,6 +30,7 @@ import numpy as np
 from symmech.core.layout import Field, Layout
 from symmech.grain import flight
 
+LADDER = 17  # the Landen ladder's slots: steps, scale and at most 15 ratios
 # The compiled twin's records (float64 vectors), one per flight.
 FLIGHT = Layout("FreeFlight", (
     Field("t0", "s", "start of the flight"),
@@ -65,6 +66,8 @@ ROTATION = Layout("FreeRotation", (
     Field("q_fixed", "1", "quaternion of U, the fixed rotation taking e_z to L", (4,)),
     Field("q_frame", "1", "quaternion of the permutation Pi, body to Euler frame", (4,)),
     Field("max_rate", "rad/s", "bound on |w| over the whole motion"),
+    Field("landen", "1", "the descending Landen ladder of k2 that the compiled twin's ellipj walks back (steps N, "
+                         "scale 2^N a_N, c_i / a_i); 0 in record(): scipy's ellipj needs none", (LADDER,)),
 ))
 
 
@@ -157,7 +160,7 @@ class ExactRotation:
             rest = {f.name: np.zeros(f.shape) for f in ROTATION.fields if f.name not in values}
         else:
             rest = {"frame": self.frame.astype(float), "o_first": float(self.o_first), "q_fixed": self.q_fixed,
-                    "q_frame": self.q_frame, **{name: getattr(self, name) for name in (
+                    "q_frame": self.q_frame, "landen": np.zeros(LADDER), **{name: getattr(self, name) for name in (
                         "mo", "mmid", "mc", "lam", "k2", "K", "n", "u0", "momentum", "precession",
                         "pi_complete", "pi0")}}
         return ROTATION.pack(**values, **rest)

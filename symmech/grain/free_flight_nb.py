@@ -15,8 +15,8 @@ float64 vectors the caller owns; ``state`` laid out as the engine's ``STATE``: t
   :func:`symmech.grain.contact.first_contact`), the root by Newton's method on the gap and its rate, safeguarded by
   the bracket, to ``xtol`` (the reference's function, :mod:`symmech.numerics.newton`, compiled).
 
-Jacobi's elliptic functions by the descending Landen (AGM) transformation, Carlson's R_F, R_J and R_C by
-duplication: generic numerics, no scipy.
+Jacobi's elliptic functions by the descending Landen (AGM) transformation, Carlson's R_F and R_J by duplication
+(the two in one pass where the third-kind integral needs both), R_C in closed form: generic numerics, no scipy.
 """
 from __future__ import annotations
 
@@ -33,14 +33,35 @@ from symmech.numerics.jit import EPS, inline, jit
 F_AT, R_AT = free_flight.FLIGHT.slots, free_flight.ROTATION.slots
 X_AT = layouts.X_AT
 FLIGHT_SIZE, ROTATION_SIZE = free_flight.FLIGHT.size, free_flight.ROTATION.size  # constants of compiled callers
+LADDER_SIZE = free_flight.LADDER
 TWO_PI = 2.0 * math.pi
 
 
 # --------------------------------------------------------------------------- special functions
 
 @jit
-def ellipj(u, m):
-    """Jacobi sn, cn, dn and am(u | m) for 0 <= m < 1 (Abramowitz-Stegun 16.4, the AGM as in Cephes)."""
+def landen_ladder(m, out):
+    """The descending Landen (AGM) ladder of ``m`` into ``out`` (``free_flight.LADDER``,): the steps N, the scale
+    2^N a_N and c_i / a_i for i = 1..N (N <= 15, as Cephes caps it): what :func:`ellipj_on` walks back, the same
+    for every ``u``, so a flight builds it once."""
+    a, b, c = 1.0, math.sqrt(1.0 - m), math.sqrt(m)
+    twon, i = 1.0, 0
+    while abs(c / a) > EPS and i < 15:
+        ai = a
+        i += 1
+        c = 0.5 * (ai - b)
+        t = math.sqrt(ai * b)
+        a = 0.5 * (ai + b)
+        b = t
+        twon *= 2.0
+        out[1 + i] = c / a
+    out[0], out[1] = i, twon * a
+
+
+@jit
+def ellipj_on(u, m, ladder):
+    """Jacobi sn, cn, dn and am(u | m) for 0 <= m < 1 (Abramowitz-Stegun 16.4, as in Cephes), ``ladder`` m's
+    (:func:`landen_ladder`; not read for m < 1e-9 or m >= 1 - 1e-10, where the series serve)."""
     if m < 1e-9:
         t, b = math.sin(u), math.cos(u)
         ai = 0.25 * m * (u - t * b)
@@ -55,27 +76,30 @@ def ellipj(u, m):
         ph = 2.0 * math.atan(math.exp(u)) - 0.5 * math.pi + ai * (twon - u) / b
         ai *= t * phi
         return sn, phi - ai * (twon - u), phi + ai * (twon + u), ph
-    a = np.empty(16)
-    c = np.empty(16)
-    a[0], b, c[0] = 1.0, math.sqrt(1.0 - m), math.sqrt(m)
-    twon, i = 1.0, 0
-    while abs(c[i] / a[i]) > EPS and i < 15:
-        ai = a[i]
-        i += 1
-        c[i] = 0.5 * (ai - b)
-        t = math.sqrt(ai * b)
-        a[i] = 0.5 * (ai + b)
-        b = t
-        twon *= 2.0
-    phi = twon * a[i] * u
+    phi = ladder[1] * u
     b = phi
-    while i > 0:
-        t = c[i] * math.sin(phi) / a[i]
+    for i in range(int(ladder[0]), 0, -1):
         b = phi
-        phi = 0.5 * (math.asin(t) + phi)
-        i -= 1
+        phi = 0.5 * (math.asin(ladder[1 + i] * math.sin(phi)) + phi)
     cn = math.cos(phi)
     return math.sin(phi), cn, cn / math.cos(phi - b), phi
+
+
+@jit
+def ellipj(u, m):
+    """Jacobi sn, cn, dn and am(u | m) for 0 <= m < 1: :func:`ellipj_on` on a ladder built for this call."""
+    ladder = np.empty(LADDER_SIZE)
+    landen_ladder(m, ladder)
+    return ellipj_on(u, m, ladder)
+
+
+@jit
+def _rf_series(x, y, z):
+    """R_F(x, y, z) by its fifth-order series, for x, y, z within 2e-4 of their mean (error below 1e-22)."""
+    mean = (x + y + z) / 3.0
+    dx, dy, dz = 1.0 - x / mean, 1.0 - y / mean, 1.0 - z / mean
+    e2, e3 = dx * dy - dz * dz, dx * dy * dz
+    return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / math.sqrt(mean)
 
 
 @jit
@@ -85,29 +109,28 @@ def carlson_rf(x, y, z):
         lam = math.sqrt(x * y) + math.sqrt(y * z) + math.sqrt(z * x)
         x, y, z = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam)
         mean = (x + y + z) / 3.0
-        dx, dy, dz = 1.0 - x / mean, 1.0 - y / mean, 1.0 - z / mean
-        if max(abs(dx), abs(dy), abs(dz)) < 1e-4:
-            e2, e3 = dx * dy - dz * dz, dx * dy * dz
-            return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / math.sqrt(mean)
+        if max(abs(x - mean), abs(y - mean), abs(z - mean)) < 1e-4 * mean:
+            return _rf_series(x, y, z)
     return math.nan
 
 
 @jit
 def carlson_rc(x, y):
-    """Carlson's R_C(x, y), x >= 0, y > 0."""
-    for _ in range(64):
-        lam = 2.0 * math.sqrt(x * y) + y
-        x, y = 0.25 * (x + lam), 0.25 * (y + lam)
-        mean = (x + 2.0 * y) / 3.0
-        s = (y - mean) / mean
-        if abs(s) < 1e-4:
-            return (1.0 + s * s * (0.3 + s * (1.0 / 7.0 + s * (0.375 + s * 9.0 / 22.0)))) / math.sqrt(mean)
-    return math.nan
+    """Carlson's R_C(x, y), x >= 0, y > 0, in closed form (DLMF 19.2.17-19.2.18): arctan below the diagonal,
+    a logarithm above it written with ``log1p`` so that neither side cancels near ``x = y``."""
+    if x < y:
+        return math.atan(math.sqrt((y - x) / x)) / math.sqrt(y - x) if x > 0.0 else 0.5 * math.pi / math.sqrt(y)
+    if x == y:
+        return 1.0 / math.sqrt(x)
+    d = math.sqrt(x - y)
+    return math.log1p((d + (x - y) / (math.sqrt(x) + math.sqrt(y))) / math.sqrt(y)) / d
 
 
 @jit
-def carlson_rj(x, y, z, p):
-    """Carlson's R_J(x, y, z, p), x, y, z >= 0 (at most one zero), p > 0."""
+def carlson_rf_rj(x, y, z, p):
+    """Carlson's (R_F(x, y, z), R_J(x, y, z, p)), x, y, z >= 0 (at most one zero), p > 0, by one duplication
+    (Carlson 1995): the two share x, y and z's steps, and R_F is invariant under them, so its series is taken
+    where R_J's converged."""
     total, scale = 0.0, 1.0
     for _ in range(64):
         sx, sy, sz = math.sqrt(x), math.sqrt(y), math.sqrt(z)
@@ -128,16 +151,16 @@ def carlson_rj(x, y, z, p):
             series = (1.0 + ed * (-3.0 / 14.0 + 9.0 / 88.0 * ed - 9.0 / 52.0 * ee)
                       + eb * (1.0 / 6.0 + dp * (-6.0 / 22.0 + dp * 3.0 / 26.0))
                       + dp * ea * (1.0 / 3.0 - dp * 3.0 / 22.0) - 1.0 / 3.0 * dp * ec)
-            return 3.0 * total + scale * series / (mean * math.sqrt(mean))
-    return math.nan
+            return _rf_series(x, y, z), 3.0 * total + scale * series / (mean * math.sqrt(mean))
+    return math.nan, math.nan
 
 
 @jit
 def third_kind(n, phi, m):
     """Legendre's Pi(n; phi | m), |phi| <= pi/2, n <= 0."""
     s, c = math.sin(phi), math.cos(phi)
-    delta = 1.0 - m * s * s
-    return s * carlson_rf(c * c, delta, 1.0) + n / 3.0 * s**3 * carlson_rj(c * c, delta, 1.0, 1.0 - n * s * s)
+    rf, rj = carlson_rf_rj(c * c, 1.0 - m * s * s, 1.0, 1.0 - n * s * s)
+    return s * rf + n / 3.0 * s**3 * rj
 
 
 # --------------------------------------------------------------------------- quaternions
@@ -254,9 +277,10 @@ def rotation_setup(inertia, q, w, t0, rot):
     rot[R_AT.mo], rot[R_AT.mmid] = mo, mmid
     rot[R_AT.mc] = sign_c * math.sqrt(Ic * d_o / (Ic - Io))
     rot[R_AT.lam], rot[R_AT.k2], rot[R_AT.K], rot[R_AT.n], rot[R_AT.u0] = lam, k2, K, n, u0
+    landen_ladder(k2, rot[R_AT.landen:R_AT.landen + LADDER_SIZE])
     rot[R_AT.momentum] = M
     rot[R_AT.precession] = M * (Ic - Io) / (Ic * Io)
-    rot[R_AT.pi_complete] = carlson_rf(0.0, 1.0 - k2, 1.0) + n / 3.0 * carlson_rj(0.0, 1.0 - k2, 1.0, 1.0 - n)
+    rot[R_AT.pi_complete] = third_kind(n, 0.5 * math.pi, k2)
     ma, mb, mcv, phi0, pi0 = _euler(rot, 0.0)
     rot[R_AT.pi0] = pi0
     f0, f1, f2, f3 = _permutation_quaternion(a, b, c)
@@ -274,7 +298,7 @@ def _euler(rot, tau):
     K = rot[R_AT.K]
     u = rot[R_AT.u0] + rot[R_AT.lam] * tau
     j = math.floor((u + K) / (2.0 * K))
-    sn, cn, dn, am = ellipj(u - 2.0 * K * j, rot[R_AT.k2])
+    sn, cn, dn, am = ellipj_on(u - 2.0 * K * j, rot[R_AT.k2], rot[R_AT.landen:R_AT.landen + LADDER_SIZE])
     flip = 1.0 - 2.0 * (j - 2.0 * math.floor(0.5 * j))
     m_o, m_mid = rot[R_AT.mo] * cn * flip, rot[R_AT.mmid] * sn * flip
     o_first = rot[R_AT.o_first] == 1.0
@@ -308,8 +332,8 @@ def rotation_tuple(rot, t):
     q = _qmul(p[0], p[1], p[2], p[3], rot[R_AT.q_frame], rot[R_AT.q_frame + 1], rot[R_AT.q_frame + 2],
               rot[R_AT.q_frame + 3])
     a, b, c = int(rot[R_AT.frame]), int(rot[R_AT.frame + 1]), int(rot[R_AT.frame + 2])
-    w = [0.0, 0.0, 0.0]
-    w[a], w[b], w[c] = ma / rot[R_AT.inertia + a], mb / rot[R_AT.inertia + b], mc / rot[R_AT.inertia + c]
+    wa, wb, wc = ma / rot[R_AT.inertia + a], mb / rot[R_AT.inertia + b], mc / rot[R_AT.inertia + c]
+    w = (wc, wa, wb) if c == 0 else (wb, wc, wa) if c == 1 else (wa, wb, wc)  # (a, b, c) = (c+1, c+2, c) mod 3
     return q[0], q[1], q[2], q[3], w[0], w[1], w[2]
 
 
