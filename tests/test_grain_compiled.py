@@ -263,6 +263,18 @@ def test_slip_onset_direction_of_a_turning_ellipsoid():
     assert abs(d[0] * f[1] - d[1] * f[0]) > 1e-3 * np.linalg.norm(d) * np.linalg.norm(f)
 
 
+def test_planar_length_is_hypot_within_two_ulp_and_at_the_extremes():
+    """The slip's |(x, y)| (sqrt of the sum of squares) against math.hypot: within 2 ulp on 10^4 random pairs over
+    40 decades, exact on Pythagorean triples, and where a square would under- or overflow (hypot's own answer)."""
+    rng = np.random.default_rng(4)
+    for x, y in rng.normal(size=(10000, 2)) * 10.0 ** rng.uniform(-20, 20, (10000, 1)):
+        assert slip.planar_length(x, y) == pytest.approx(math.hypot(x, y), rel=2 * EPS, abs=0)
+    assert slip.planar_length(3.0, -4.0) == 5.0 and slip.planar_length(0.0, 0.0) == 0.0
+    for scale in (1e-160, 1e-300, 1e160, 1e300):
+        assert slip.planar_length(3 * scale, 4 * scale) == math.hypot(3 * scale, 4 * scale)
+        assert slip.planar_length(3 * scale, 4 * scale) == pytest.approx(5 * scale, rel=EPS)
+
+
 def test_cold_cache_is_announced_in_the_estimate(tmp_path, monkeypatch):
     """A run that will compile the engine says so, and its estimate carries the one-off compile time."""
     sc = default_scene(tmp_path, 0.05, **{'mode = "accurate"': 'mode = "accurate"\nengine = "compiled"'})
