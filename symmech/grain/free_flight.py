@@ -153,7 +153,8 @@ class ExactRotation:
         self.q_fixed = _quaternion_product(_quaternion_product(self.q0, self.q_frame * conj), q_tilt * conj)
 
     def record(self) -> np.ndarray:
-        """The constants as a :data:`ROTATION` vector (what the compiled twin's ``rotation_setup`` writes)."""
+        """The constants as a :data:`ROTATION` vector: what the compiled twin's ``rotation_setup`` writes, but its
+        own Landen ladder (zeros here)."""
         values = {"t0": self.t0, "q0": self.q0, "w0": self.w0, "inertia": self.inertia,
                   "fixed_axis": float(self.fixed_axis), "max_rate": self.max_rate}
         if self.fixed_axis:
