@@ -66,7 +66,7 @@ ROTATION = Layout("FreeRotation", (
     Field("q_fixed", "1", "quaternion of U, the fixed rotation taking e_z to L", (4,)),
     Field("q_frame", "1", "quaternion of the permutation Pi, body to Euler frame", (4,)),
     Field("max_rate", "rad/s", "bound on |w| over the whole motion"),
-    Field("landen", "1", "the descending Landen ladder of k2 that the compiled twin's ellipj walks back (steps N, "
+    Field("landen", "1", "the descending Landen ladder of k2 that the compiled twin's ellipj_on walks back (steps N, "
                          "scale 2^N a_N, c_i / a_i); 0 in record(): scipy's ellipj needs none", (LADDER,)),
 ))
 

@@ -86,14 +86,6 @@ def ellipj_on(u, m, ladder):
 
 
 @jit
-def ellipj(u, m):
-    """Jacobi sn, cn, dn and am(u | m) for 0 <= m < 1: :func:`ellipj_on` on a ladder built for this call."""
-    ladder = np.empty(LADDER_SIZE)
-    landen_ladder(m, ladder)
-    return ellipj_on(u, m, ladder)
-
-
-@jit
 def _rf_series(x, y, z):
     """R_F(x, y, z) by its fifth-order series, for x, y, z within 2e-4 of their mean (error below 1e-22)."""
     mean = (x + y + z) / 3.0
